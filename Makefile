@@ -1,0 +1,93 @@
+# matremap — build, test, demo, benchmark and install. See README.md.
+#
+#   make            library (build/libmatremap.a) and tools (build/bin/)
+#   make check      the test suite (every tests/test_*.c binary and tests/*.sh script)
+#   make asan       the test suite built with AddressSanitizer + UndefinedBehaviorSanitizer
+#   make demo       renders and compares the demo materials of data/ into out/demo
+#   make bench      benchmarks (prints figures, asserts nothing; see docs/performance.md)
+#   make deps       installs the Debian packages the project needs (scripts/install-deps.sh)
+#   make install PREFIX=/usr/local   tools, static library, public headers and matremap.pc
+
+PREFIX   ?= /usr/local
+BUILD    ?= build
+OPT      ?= -O2 -g
+SAN      ?=
+CC       ?= cc
+CXX      ?= g++
+
+WARN      := -Wall -Wextra -Werror
+CFLAGS    := -std=c11 -pedantic $(WARN) $(OPT) $(SAN) -fopenmp -D_POSIX_C_SOURCE=200809L -Isrc -I/usr/include/OpenEXR
+CXXFLAGS  := -std=c++17 $(WARN) $(OPT) $(SAN) -fopenmp -Isrc $(shell pkg-config --cflags OpenImageIO 2>/dev/null)
+LDFLAGS   := $(SAN) -fopenmp
+LDLIBS    := $(shell pkg-config --libs OpenImageIO nlopt 2>/dev/null) -lOpenEXRCore-3_1 -lm
+
+LIB_C_SRC   := $(filter-out src/cli/%,$(wildcard src/*.c src/*/*.c)) $(wildcard nn/*.c)
+LIB_CXX_SRC := $(wildcard src/*/*.cpp gltf/*.cpp)
+CLI_SRC     := $(wildcard src/cli/*.c)
+TEST_SRC    := $(wildcard tests/test_*.c)
+BENCH_SRC   := $(wildcard tests/bench_*.c)
+
+LIB_OBJ   := $(LIB_C_SRC:%.c=$(BUILD)/obj/%.o) $(LIB_CXX_SRC:%.cpp=$(BUILD)/obj/%.o)
+CLI_OBJ   := $(CLI_SRC:%.c=$(BUILD)/obj/%.o)
+LIB       := $(BUILD)/libmatremap.a
+TOOLS     := $(BUILD)/bin/matremap
+TESTS     := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
+BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
+
+PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h src/render/render.h \
+                  src/io/image_io.h src/metrics/metrics.h
+
+.PHONY: all check asan demo bench deps install clean
+all: $(LIB) $(TOOLS)
+
+$(BUILD)/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -MMD -MP -c $< -o $@
+
+$(BUILD)/obj/%.o: %.cpp
+	@mkdir -p $(dir $@)
+	$(CXX) $(CXXFLAGS) -MMD -MP -c $< -o $@
+
+$(LIB): $(LIB_OBJ)
+	@mkdir -p $(dir $@)
+	rm -f $@
+	ar rcs $@ $^
+
+# The C++ driver links because the image-I/O shim is C++ (OpenImageIO).
+$(BUILD)/bin/matremap: $(CLI_OBJ) $(LIB)
+	@mkdir -p $(dir $@)
+	$(CXX) $(LDFLAGS) $(CLI_OBJ) $(LIB) $(LDLIBS) -o $@
+
+$(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(LIB)
+	@mkdir -p $(dir $@)
+	$(CXX) $(LDFLAGS) $< $(LIB) $(LDLIBS) -o $@
+
+check: all $(TESTS)
+	scripts/run-tests.sh $(BUILD)
+
+asan:
+	$(MAKE) BUILD=build/asan OPT="-O1 -g -fno-omit-frame-pointer" \
+	    SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" check
+
+demo: all
+	scripts/demo.sh $(BUILD)
+
+bench: all $(BENCHES)
+	scripts/bench.sh $(BUILD)
+
+deps:
+	scripts/install-deps.sh
+
+install: all
+	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/include/matremap
+	install -m 755 $(TOOLS) $(DESTDIR)$(PREFIX)/bin/
+	install -m 644 $(LIB) $(DESTDIR)$(PREFIX)/lib/
+	for h in $(PUBLIC_HEADERS); do \
+	    d=$(DESTDIR)$(PREFIX)/include/matremap/$$(dirname $${h#src/}); install -d $$d; install -m 644 $$h $$d/; done
+	sed -e 's|@PREFIX@|$(PREFIX)|' -e "s|@VERSION@|$$(sed -n 's/^#define MR_VERSION_STRING \"\(.*\)\"/\1/p' src/matremap.h)|" \
+	    scripts/matremap.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/matremap.pc
+
+clean:
+	rm -rf build
+
+-include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Installs every Debian package matremap needs, and nothing that is already there.
+# Idempotent: a second run does no network work. Usage: scripts/install-deps.sh [--bench]
+#   --bench  also install the peers the benchmarks time against (Blender for Cycles, hyperfine).
+set -euo pipefail
+
+packages=(
+    build-essential pkg-config
+    libopenexr-dev libopenimageio-dev openimageio-tools
+    libtinygltf-dev nlohmann-json3-dev libstb-dev
+    libnlopt-dev
+    gnuplot-nox
+)
+# node + npm run the independent SSIM implementation (ssim.js) in the tests; the machine may
+# already have a node of its own outside Debian's packages, which is fine.
+command -v node >/dev/null 2>&1 || packages+=(nodejs)
+command -v npm  >/dev/null 2>&1 || packages+=(npm)
+if [ "${1:-}" = "--bench" ]; then
+    packages+=(blender python3-numpy hyperfine)
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+        missing+=("$p")
+    fi
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+
+sudo=""
+[ "$(id -u)" -eq 0 ] || sudo="sudo"
+echo "install-deps: installing ${missing[*]}" >&2
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2

@@ -1,0 +1,156 @@
+/*
+ * brdf.h — BRDF models as const descriptors (design principle 1: models are data).
+ *
+ * Each model lives in one file of src/brdf/ and is described by one `const mr_brdf_model`; registry.c lists
+ * them. Renderer, optimiser, CLI and exporters reach models only through these descriptors: nothing outside
+ * src/brdf switches on a model's name. A family of closely related models (Ward's three normalisations, the
+ * Mitsuba microfacet distributions x Fresnel modes) shares one file and its code, with one descriptor per
+ * member and the member's configuration in `config`.
+ *
+ * Contracts common to every model:
+ *   - Frame: directions are unit vectors in the local shading frame, normal n = (0,0,1), cos(theta) = z.
+ *   - `eval` returns f_r itself, WITHOUT the cosine foreshortening term (unlike Mitsuba's eval(), which
+ *     includes cos(theta_o)). Radiance from a point light is L = f_r * I * cos(theta_light) / d^2.
+ *   - f_r is split into a diffuse and a specular part; full = diffuse + specular, always.
+ *   - Below the horizon (wi.z <= 0 or wo.z <= 0) both parts are 0, unless a model documents a renderer's
+ *     clamping convention (blender-ward clamps cosines as Blender Internal does, but still returns 0 there).
+ *   - Colour: linear RGB; reflectance-like parameters are in [0,1] unless the table says otherwise.
+ *   - Robustness: `prepare` clamps every value into [min, max] (NaN goes to min) and roughness to a documented
+ *     floor, so eval never returns NaN or Inf for any input vector, at any pair of directions with z > 0.
+ *   - Thread safety: descriptors are immutable; prepared state is plain data owned by the caller, so any
+ *     number of threads may evaluate one prepared state at once.
+ *
+ * Parameter vectors: a model's parameters are packed in table order into one `double values[]`, a parameter
+ * with 3 channels taking 3 consecutive slots (R,G,B). mr_brdf_value_count() gives the length and
+ * mr_brdf_param_offset() the slot of a parameter's first channel.
+ */
+#ifndef MR_BRDF_H
+#define MR_BRDF_H
+
+#include <stddef.h>
+
+#include "../mr_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Upper bound on a model's packed value count and on its prepared-state size; descriptors must fit. */
+#define MR_BRDF_MAX_VALUES 16
+#define MR_BRDF_STATE_BYTES 512
+
+/* How f_r depends on a parameter, with all other parameters fixed. The optimiser uses this structure:
+ * for LINEAR/AFFINE parameters the best values for given nonlinear ones are a small linear least-squares
+ * solve (design principle 3). */
+typedef enum mr_param_role {
+    MR_PARAM_LINEAR = 0,  /* f_r (per channel) is proportional to the value: albedo, specular scale */
+    MR_PARAM_AFFINE,      /* f_r (per channel) is affine in the value: Schlick F0, glTF base colour */
+    MR_PARAM_NONLINEAR,   /* roughness, exponent, IOR, metallic ... */
+    MR_PARAM_SWITCH,      /* an integer option (0/1 ...), never optimised: e.g. Mitsuba's energy trimming */
+    MR_PARAM_ROLE_COUNT
+} mr_param_role;
+
+/* Which part of f_r a parameter influences; two-stage fits use it to split the parameters. */
+typedef enum mr_param_lobe {
+    MR_LOBE_DIFFUSE = 1,
+    MR_LOBE_SPECULAR = 2,
+    MR_LOBE_BOTH = 3
+} mr_param_lobe;
+
+/* Bit flags of mr_brdf_param.flags. */
+enum {
+    MR_PARAM_LOG_SCALE = 1 /* the optimiser should search this parameter on a log scale (roughness) */
+};
+
+typedef struct mr_brdf_param {
+    const char *name;     /* lowercase identifier used on the command line: "alpha", "specular" */
+    int channels;         /* 1 or 3 */
+    double default_value; /* the renderer's own default (per channel for RGB parameters) */
+    double min_value;     /* inclusive bounds; prepare() clamps into them */
+    double max_value;
+    mr_param_role role;
+    mr_param_lobe lobe;
+    unsigned flags;
+    const char *meaning;  /* one line: what it is, its parameterisation and the source convention */
+} mr_brdf_param;
+
+/* Bit flags of mr_brdf_model.flags. */
+enum {
+    /* The model legitimately reflects more than it receives for some valid parameters (e.g. Blender
+     * Internal's diffuse has no 1/pi). The white-furnace test skips the energy bound for these and
+     * `models` says so. */
+    MR_BRDF_NOT_ENERGY_CONSERVING = 1
+};
+
+typedef struct mr_brdf_model mr_brdf_model;
+
+struct mr_brdf_model {
+    const char *name;    /* unique, lowercase: "ggx", "ward-duer" */
+    const char *summary; /* one line for `matremap models` */
+    const char *source;  /* where the formula comes from (renderer, file, version) */
+    int param_count;
+    const mr_brdf_param *params;
+    unsigned flags;
+    const void *config;  /* member configuration for families sharing one file; NULL otherwise */
+
+    /* Turn a packed value vector (mr_brdf_value_count doubles) into prepared state: clamp, precompute.
+     * `state` points to MR_BRDF_STATE_BYTES bytes, suitably aligned for double. Never fails. */
+    void (*prepare)(const mr_brdf_model *model, const double *values, void *state);
+
+    /* f_r(wi, wo) for the prepared state, split in diffuse[3] and specular[3] (RGB). Either output may be
+     * NULL when the caller does not need it. Directions are unit vectors in the local frame. */
+    void (*eval)(const void *state, const double wi[3], const double wo[3], double diffuse[3],
+                 double specular[3]);
+
+    /* Optional (NULL if absent): d f_r / d values[j] for every packed slot j, at the given (unclamped but
+     * in-bounds) values. d_diffuse and d_specular each hold value_count*3 doubles, laid out
+     * [j*3 + channel]. Switch parameters have derivative 0. */
+    void (*eval_grad)(const mr_brdf_model *model, const double *values, const double wi[3],
+                      const double wo[3], double *d_diffuse, double *d_specular);
+};
+
+/* A prepared state on the stack: `mr_brdf_state st; model->prepare(model, values, st.bytes);` */
+typedef union mr_brdf_state {
+    double align_double;
+    unsigned char bytes[MR_BRDF_STATE_BYTES];
+} mr_brdf_state;
+
+/* ---- registry (registry.c) ---- */
+
+/* The registered models, in display order, NULL-terminated. */
+const mr_brdf_model *const *mr_brdf_models(void);
+
+/* Number of registered models. */
+int mr_brdf_model_count(void);
+
+/* The model called `name`, or NULL with a message listing the valid names in mr_last_error(). */
+const mr_brdf_model *mr_brdf_find(const char *name);
+
+/* ---- parameter-vector helpers (registry.c) ---- */
+
+/* Total number of packed doubles (sum of channels over the table). */
+int mr_brdf_value_count(const mr_brdf_model *model);
+
+/* Slot of the first channel of parameter `index`; -1 if index is out of range. */
+int mr_brdf_param_offset(const mr_brdf_model *model, int index);
+
+/* Index of the parameter called `name`, or -1. */
+int mr_brdf_param_index(const mr_brdf_model *model, const char *name);
+
+/* Fill values[] with the table defaults. */
+void mr_brdf_default_values(const mr_brdf_model *model, double *values);
+
+/* Parse one "name=value" or "name=r,g,b" assignment into values[]. A single number given to an RGB parameter
+ * sets all three channels. Unknown names (the message lists the valid ones), malformed numbers, wrong channel
+ * counts and values outside [min, max] are MR_ERR_INVALID_ARG. */
+mr_status mr_brdf_parse_assignment(const mr_brdf_model *model, const char *assignment, double *values);
+
+/* Convenience: prepare + eval of the full f_r (diffuse + specular) into rgb[3]. */
+void mr_brdf_eval_full(const mr_brdf_model *model, const double *values, const double wi[3],
+                       const double wo[3], double rgb[3]);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MR_BRDF_H */

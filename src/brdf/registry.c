@@ -1,0 +1,142 @@
+/*
+ * registry.c — the list of registered BRDF models and the parameter-vector helpers (contracts in brdf.h).
+ *
+ * Adding a model: write src/brdf/<name>.c exporting `const mr_brdf_model mr_brdf_<name>`, declare it in
+ * models.h and add it to `registered` below. Every generic test (tests/test_brdf.c) then covers it.
+ */
+#include "brdf.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../mr_internal.h"
+#include "models.h"
+
+static const mr_brdf_model *const registered[] = {
+    MR_BRDF_REGISTERED_MODELS
+    NULL,
+};
+
+const mr_brdf_model *const *mr_brdf_models(void) { return registered; }
+
+int mr_brdf_model_count(void) { return (int)(sizeof registered / sizeof registered[0]) - 1; }
+
+const mr_brdf_model *mr_brdf_find(const char *name) {
+    for (int i = 0; registered[i] != NULL; i++)
+        if (name != NULL && strcmp(registered[i]->name, name) == 0) return registered[i];
+    char list[768];
+    size_t used = 0;
+    list[0] = '\0';
+    for (int i = 0; registered[i] != NULL && used + 2 < sizeof list; i++) {
+        size_t len = strlen(registered[i]->name);
+        if (used + len + 3 >= sizeof list) break;
+        if (i > 0) {
+            memcpy(list + used, ", ", 2);
+            used += 2;
+        }
+        memcpy(list + used, registered[i]->name, len + 1);
+        used += len;
+    }
+    mr_fail(MR_ERR_INVALID_ARG, "unknown BRDF model '%s' (valid: %s)", name ? name : "(null)", list);
+    return NULL;
+}
+
+int mr_brdf_value_count(const mr_brdf_model *model) {
+    int count = 0;
+    for (int i = 0; i < model->param_count; i++) count += model->params[i].channels;
+    return count;
+}
+
+int mr_brdf_param_offset(const mr_brdf_model *model, int index) {
+    if (index < 0 || index >= model->param_count) return -1;
+    int offset = 0;
+    for (int i = 0; i < index; i++) offset += model->params[i].channels;
+    return offset;
+}
+
+int mr_brdf_param_index(const mr_brdf_model *model, const char *name) {
+    for (int i = 0; i < model->param_count; i++)
+        if (strcmp(model->params[i].name, name) == 0) return i;
+    return -1;
+}
+
+void mr_brdf_default_values(const mr_brdf_model *model, double *values) {
+    int slot = 0;
+    for (int i = 0; i < model->param_count; i++)
+        for (int c = 0; c < model->params[i].channels; c++) values[slot++] = model->params[i].default_value;
+}
+
+static mr_status unknown_param(const mr_brdf_model *model, const char *name, size_t name_len) {
+    char list[512];
+    size_t used = 0;
+    list[0] = '\0';
+    for (int i = 0; i < model->param_count; i++) {
+        size_t len = strlen(model->params[i].name);
+        if (used + len + 3 >= sizeof list) break;
+        if (i > 0) {
+            memcpy(list + used, ", ", 2);
+            used += 2;
+        }
+        memcpy(list + used, model->params[i].name, len + 1);
+        used += len;
+    }
+    return mr_fail(MR_ERR_INVALID_ARG, "model '%s' has no parameter '%.*s' (valid: %s)", model->name,
+                   (int)name_len, name, list);
+}
+
+mr_status mr_brdf_parse_assignment(const mr_brdf_model *model, const char *assignment, double *values) {
+    const char *equals = strchr(assignment, '=');
+    if (equals == NULL || equals == assignment)
+        return mr_fail(MR_ERR_INVALID_ARG, "parameter '%s': expected name=value or name=r,g,b", assignment);
+    size_t name_len = (size_t)(equals - assignment);
+    int index = -1;
+    for (int i = 0; i < model->param_count; i++)
+        if (strlen(model->params[i].name) == name_len && strncmp(model->params[i].name, assignment, name_len) == 0)
+            index = i;
+    if (index < 0) return unknown_param(model, assignment, name_len);
+    const mr_brdf_param *param = &model->params[index];
+
+    double parsed[3];
+    int count = 0;
+    const char *cursor = equals + 1;
+    for (;;) {
+        char *end = NULL;
+        errno = 0;
+        double v = strtod(cursor, &end);
+        if (end == cursor || errno == ERANGE || v != v)
+            return mr_fail(MR_ERR_INVALID_ARG, "parameter '%s' of model '%s': '%s' is not a number", param->name,
+                           model->name, equals + 1);
+        if (count == 3)
+            return mr_fail(MR_ERR_INVALID_ARG, "parameter '%s' of model '%s': more than 3 values in '%s'",
+                           param->name, model->name, equals + 1);
+        parsed[count++] = v;
+        if (*end == '\0') break;
+        if (*end != ',')
+            return mr_fail(MR_ERR_INVALID_ARG, "parameter '%s' of model '%s': unexpected '%c' in '%s'", param->name,
+                           model->name, *end, equals + 1);
+        cursor = end + 1;
+    }
+    if (count != 1 && count != param->channels)
+        return mr_fail(MR_ERR_INVALID_ARG, "parameter '%s' of model '%s' takes %d value%s, got %d", param->name,
+                       model->name, param->channels, param->channels == 1 ? "" : "s (or one for all)", count);
+    for (int c = 0; c < count; c++)
+        if (!(parsed[c] >= param->min_value && parsed[c] <= param->max_value))
+            return mr_fail(MR_ERR_INVALID_ARG, "parameter '%s' of model '%s': %g is outside [%g, %g]", param->name,
+                           model->name, parsed[c], param->min_value, param->max_value);
+    if (param->role == MR_PARAM_SWITCH && parsed[0] != (double)(long)parsed[0])
+        return mr_fail(MR_ERR_INVALID_ARG, "parameter '%s' of model '%s' is a switch: %g is not an integer",
+                       param->name, model->name, parsed[0]);
+    int offset = mr_brdf_param_offset(model, index);
+    for (int c = 0; c < param->channels; c++) values[offset + c] = parsed[count == 1 ? 0 : c];
+    return MR_OK;
+}
+
+void mr_brdf_eval_full(const mr_brdf_model *model, const double *values, const double wi[3], const double wo[3],
+                       double rgb[3]) {
+    mr_brdf_state state;
+    double diffuse[3], specular[3];
+    model->prepare(model, values, state.bytes);
+    model->eval(state.bytes, wi, wo, diffuse, specular);
+    for (int c = 0; c < 3; c++) rgb[c] = diffuse[c] + specular[c];
+}

@@ -1,0 +1,58 @@
+/*
+ * cli.h — shared plumbing of the command-line front ends (the only code that prints or exits).
+ *
+ * Exit codes (docs/design.md): 0 ok, 1 usage error, 2 bad input (a file or value the user gave is wrong),
+ * 3 internal or external failure. Messages go to stderr as "matremap CMD: error: what", results to stdout.
+ */
+#ifndef MR_CLI_H
+#define MR_CLI_H
+
+#include <stdio.h>
+
+#include "matremap.h"
+
+enum {
+    CLI_EXIT_OK = 0,
+    CLI_EXIT_USAGE = 1,
+    CLI_EXIT_BAD_INPUT = 2,
+    CLI_EXIT_INTERNAL = 3
+};
+
+/* The exit code for a failed library status: user-side failures are 2, the rest 3. */
+int cli_exit_code(mr_status status);
+
+/* Print "matremap CMD: error: <mr_last_error()>" and return cli_exit_code(status). */
+int cli_fail(const char *command, mr_status status);
+
+/* Print "matremap CMD: <message>" and a hint to --help on stderr; return CLI_EXIT_USAGE. */
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+int cli_usage_error(const char *command, const char *fmt, ...);
+
+/* True if argv[i] is "--help" or "-h". */
+int cli_is_help(const char *arg);
+
+/* Option matching for "--name VALUE" and "--name=VALUE": if argv[*i] is the option, store its value in
+ * *value, advance *i past a separate value and return 1; return -1 (after printing a usage error) if the value
+ * is missing; 0 if argv[*i] is another argument. */
+int cli_take_option(const char *command, int argc, char **argv, int *i, const char *name, const char **value);
+
+/* Parse an integer in [lo, hi]; on error print a usage error naming the option and return 0. */
+int cli_parse_int(const char *command, const char *option, const char *text, int lo, int hi, int *out);
+
+/* Parse a finite double in [lo, hi]; on error print a usage error naming the option and return 0. */
+int cli_parse_double(const char *command, const char *option, const char *text, double lo, double hi,
+                     double *out);
+
+/* Write s as a JSON string literal (quotes and escapes included). */
+void cli_json_string(FILE *out, const char *s);
+
+/* Monotonic wall-clock seconds. */
+double cli_now(void);
+
+int cmd_models(int argc, char **argv);
+int cmd_render(int argc, char **argv);
+int cmd_ssim(int argc, char **argv);
+
+#endif /* MR_CLI_H */

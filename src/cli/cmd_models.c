@@ -1,0 +1,114 @@
+/* cmd_models.c — `matremap models [NAME] [--json]`: the registered BRDF models and their parameters. */
+#include <string.h>
+
+#include "cli.h"
+
+static const char *const role_names[MR_PARAM_ROLE_COUNT] = {"linear", "affine", "nonlinear", "switch"};
+
+static const char *lobe_name(mr_param_lobe lobe) {
+    return lobe == MR_LOBE_DIFFUSE ? "diffuse" : lobe == MR_LOBE_SPECULAR ? "specular" : "both";
+}
+
+static void print_help(void) {
+    printf("Usage: matremap models [NAME] [--json]\n"
+           "\n"
+           "Lists every registered BRDF model with its parameters. With NAME, describes that model in detail:\n"
+           "each parameter's channels, default, range, role and meaning. Parameters are given to other\n"
+           "commands as name=value, or name=r,g,b for RGB ones (a single value sets all three channels).\n"
+           "\n"
+           "Options:\n"
+           "  --json    machine-readable output on stdout\n"
+           "  --help    this text\n");
+}
+
+static void print_json_model(const mr_brdf_model *m) {
+    printf("{\"name\": ");
+    cli_json_string(stdout, m->name);
+    printf(", \"summary\": ");
+    cli_json_string(stdout, m->summary);
+    printf(", \"source\": ");
+    cli_json_string(stdout, m->source);
+    printf(", \"energy_conserving\": %s, \"analytic_gradient\": %s, \"parameters\": [",
+           (m->flags & MR_BRDF_NOT_ENERGY_CONSERVING) ? "false" : "true", m->eval_grad ? "true" : "false");
+    for (int i = 0; i < m->param_count; i++) {
+        const mr_brdf_param *p = &m->params[i];
+        printf("%s{\"name\": ", i ? ", " : "");
+        cli_json_string(stdout, p->name);
+        printf(", \"channels\": %d, \"default\": %.17g, \"min\": %.17g, \"max\": %.17g, \"role\": \"%s\", "
+               "\"lobe\": \"%s\", \"log_scale\": %s, \"meaning\": ",
+               p->channels, p->default_value, p->min_value, p->max_value, role_names[p->role], lobe_name(p->lobe),
+               (p->flags & MR_PARAM_LOG_SCALE) ? "true" : "false");
+        cli_json_string(stdout, p->meaning);
+        printf("}");
+    }
+    printf("]}");
+}
+
+static void print_model_detail(const mr_brdf_model *m) {
+    printf("%s — %s\n", m->name, m->summary);
+    printf("source: %s\n", m->source);
+    if (m->flags & MR_BRDF_NOT_ENERGY_CONSERVING)
+        printf("note: may reflect more energy than it receives (not bounded by the white-furnace test)\n");
+    printf("analytic parameter derivatives: %s\n\n", m->eval_grad ? "yes" : "no");
+    printf("  %-15s %-3s %9s %9s %9s  %-9s %-8s %s\n", "PARAMETER", "CH", "DEFAULT", "MIN", "MAX", "ROLE", "LOBE",
+           "MEANING");
+    for (int i = 0; i < m->param_count; i++) {
+        const mr_brdf_param *p = &m->params[i];
+        printf("  %-15s %-3d %9.4g %9.4g %9.4g  %-9s %-8s %s\n", p->name, p->channels, p->default_value,
+               p->min_value, p->max_value, role_names[p->role], lobe_name(p->lobe), p->meaning);
+    }
+}
+
+int cmd_models(int argc, char **argv) {
+    int json = 0;
+    const char *name = NULL;
+    for (int i = 1; i < argc; i++) {
+        if (cli_is_help(argv[i])) {
+            print_help();
+            return CLI_EXIT_OK;
+        } else if (strcmp(argv[i], "--json") == 0) {
+            json = 1;
+        } else if (argv[i][0] == '-') {
+            return cli_usage_error("models", "unknown option '%s'", argv[i]);
+        } else if (name == NULL) {
+            name = argv[i];
+        } else {
+            return cli_usage_error("models", "unexpected argument '%s'", argv[i]);
+        }
+    }
+    if (name != NULL) {
+        const mr_brdf_model *m = mr_brdf_find(name);
+        if (m == NULL) return cli_fail("models", MR_ERR_INVALID_ARG);
+        if (json) {
+            print_json_model(m);
+            printf("\n");
+        } else {
+            print_model_detail(m);
+        }
+        return CLI_EXIT_OK;
+    }
+    const mr_brdf_model *const *models = mr_brdf_models();
+    if (json) {
+        printf("[");
+        for (int i = 0; models[i] != NULL; i++) {
+            printf("%s\n  ", i ? "," : "");
+            print_json_model(models[i]);
+        }
+        printf("\n]\n");
+        return CLI_EXIT_OK;
+    }
+    printf("%-20s %-48s %s\n", "MODEL", "PARAMETERS", "SUMMARY");
+    for (int i = 0; models[i] != NULL; i++) {
+        const mr_brdf_model *m = models[i];
+        char params[256];
+        size_t used = 0;
+        params[0] = '\0';
+        for (int k = 0; k < m->param_count && used < sizeof params; k++)
+            used += (size_t)snprintf(params + used, sizeof params - used, "%s%s%s", k ? " " : "",
+                                     m->params[k].name, m->params[k].channels == 3 ? "[rgb]" : "");
+        printf("%-20s %-48s %s%s\n", m->name, params, m->summary,
+               (m->flags & MR_BRDF_NOT_ENERGY_CONSERVING) ? " (not energy-conserving)" : "");
+    }
+    printf("\n'matremap models NAME' shows a model's parameters with ranges and meanings.\n");
+    return CLI_EXIT_OK;
+}

@@ -1,0 +1,59 @@
+/*
+ * main.c — the `matremap` command: dispatches to one function per sub-command (cmd_*.c).
+ * Thin by design: commands parse argv into option structs, call the library, print results and map
+ * mr_status to exit codes (cli.h).
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include "cli.h"
+
+typedef struct command {
+    const char *name;
+    int (*run)(int argc, char **argv);
+    const char *summary;
+} command;
+
+static const command commands[] = {
+    {"models", cmd_models, "list the BRDF models and their parameters"},
+    {"render", cmd_render, "render a material in the fit scene to EXR/HDR/PNG"},
+    {"ssim", cmd_ssim, "compare two images: SSIM (display-referred) and RMSE (linear)"},
+};
+
+static void print_usage(FILE *out) {
+    fprintf(out,
+            "matremap %s — translate material appearance between BRDF models by comparing renders\n"
+            "\n"
+            "Usage: matremap COMMAND [ARGS...]\n"
+            "\n"
+            "Commands:\n",
+            mr_version());
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        fprintf(out, "  %-8s %s\n", commands[i].name, commands[i].summary);
+    fprintf(out,
+            "\n"
+            "'matremap COMMAND --help' describes a command.\n"
+            "Exit codes: 0 ok, 1 usage error, 2 bad input, 3 internal or external failure.\n");
+}
+
+int main(int argc, char **argv) {
+    if (argc < 2) {
+        print_usage(stderr);
+        return CLI_EXIT_USAGE;
+    }
+    if (cli_is_help(argv[1]) || strcmp(argv[1], "help") == 0) {
+        print_usage(stdout);
+        return CLI_EXIT_OK;
+    }
+    if (strcmp(argv[1], "--version") == 0) {
+        printf("matremap %s\n", mr_version());
+        return CLI_EXIT_OK;
+    }
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        if (strcmp(argv[1], commands[i].name) == 0) return commands[i].run(argc - 1, argv + 1);
+    fprintf(stderr, "matremap: unknown command '%s' (valid:", argv[1]);
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        fprintf(stderr, "%s %s", i ? "," : "", commands[i].name);
+    fprintf(stderr, ")\nTry 'matremap --help'.\n");
+    return CLI_EXIT_USAGE;
+}

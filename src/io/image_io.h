@@ -1,0 +1,65 @@
+/*
+ * image_io.h — reading and writing images (EXR, Radiance HDR, PNG, JPEG, TIFF).
+ *
+ * Main calls: mr_img_read(path, &opts, &image) ... mr_img_write(path, image, &opts). Free with mr_image_free.
+ *
+ * Colour convention (the only place it is applied): images in memory are linear (mr_image.h).
+ *   - EXR and HDR hold linear floats and are read and written as they are.
+ *   - 8/16-bit files (PNG, JPEG, TIFF) holding colour (MR_IMG_COLOR, the default) are sRGB-decoded on read and
+ *     sRGB-encoded (after clamping to [0,1]) on write. Data maps (MR_IMG_DATA: roughness, metallic, normals)
+ *     are read and written as plain [0,1] values. Alpha is always linear.
+ * Backends: reading goes through OpenImageIO (C++ shim, image_io_oiio.cpp), which decodes every EXR
+ * compression (OpenEXR Core 3.1.5 cannot decode DWAA/DWAB, see ../shared/docs/toolchain.md). EXR writing uses
+ * the OpenEXR Core C API directly (exr_write.c: 32-bit float, ZIP). Other formats are written by OpenImageIO.
+ * Robustness: reads reject images larger than opts.max_dimension on either side before decoding pixels.
+ * Writes go to a temporary file beside the target and are renamed over it only when complete; on failure
+ * no partial output is left behind and an existing target is untouched.
+ * Thread safety: calls on different images may run concurrently.
+ */
+#ifndef MR_IMAGE_IO_H
+#define MR_IMAGE_IO_H
+
+#include "../mr_image.h"
+#include "../mr_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum mr_img_encoding {
+    MR_IMG_COLOR = 0, /* sRGB-encoded in 8/16-bit files (the default) */
+    MR_IMG_DATA       /* linear values in every format */
+} mr_img_encoding;
+
+typedef struct mr_img_read_options {
+    mr_img_encoding encoding; /* how to interpret 8/16-bit files; 0 = MR_IMG_COLOR */
+    int channels;             /* 0 = as stored (1 stays 1, 2 -> 4 as grey+alpha, >= 3 -> 3 or 4); 1, 3 or 4 to
+                                 convert (grey broadcast to RGB, RGB -> luminance is an error, alpha dropped or
+                                 added as 1) */
+    int max_dimension;        /* largest accepted width or height; 0 = 16384 */
+} mr_img_read_options;
+
+typedef struct mr_img_write_options {
+    mr_img_encoding encoding; /* 0 = MR_IMG_COLOR: sRGB-encode for 8/16-bit formats */
+    int bits;                 /* 8/16 for PNG and TIFF, 8 for JPEG, 16 (half) or 32 for EXR; 0 = the format's
+                                 default: 8 for PNG/JPEG/TIFF, 32 for EXR, HDR is always RGBE */
+    int jpeg_quality;         /* 1..100; 0 = 95 */
+} mr_img_write_options;
+
+/* Read `path` into a new image (*out, owned by the caller). opts may be NULL for the defaults. Errors name
+ * the file: MR_ERR_IO (missing, unreadable), MR_ERR_FORMAT (not an image, too large, unsupported layout). */
+mr_status mr_img_read(const char *path, const mr_img_read_options *opts, mr_image **out);
+
+/* Write `image` to `path`; the format follows the extension (.exr .hdr .png .jpg/.jpeg .tif/.tiff, case-
+ * insensitive; anything else is MR_ERR_INVALID_ARG). opts may be NULL. Atomic: see the header comment. */
+mr_status mr_img_write(const char *path, const mr_image *image, const mr_img_write_options *opts);
+
+/* sRGB transfer functions (IEC 61966-2-1), exact piecewise form. */
+float mr_srgb_to_linear(float encoded);
+float mr_linear_to_srgb(float linear);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MR_IMAGE_IO_H */

@@ -1,0 +1,44 @@
+/*
+ * mr_internal.h — helpers shared by the library's translation units; not installed, not public.
+ *
+ * C and C++ (the image-I/O and glTF shims) both include it, so it uses no C-only syntax.
+ */
+#ifndef MR_INTERNAL_H
+#define MR_INTERNAL_H
+
+#include "mr_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* pi to double precision; strict C11 has no M_PI. */
+#define MR_PI 3.14159265358979323846
+#define MR_INV_PI 0.31830988618379067154
+
+/* Record a printf-style message in this thread's last-error buffer and return `status`, so a failure site
+ * reads `return mr_fail(MR_ERR_IO, "image '%s': cannot open: %s", path, strerror(errno));` */
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+mr_status mr_fail(mr_status status, const char *fmt, ...);
+
+/* Prepend context to the message already recorded by a failing callee ("outer: inner") and return `status`. */
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+mr_status mr_fail_context(mr_status status, const char *fmt, ...);
+
+#define MR_MIN(a, b) ((a) < (b) ? (a) : (b))
+#define MR_MAX(a, b) ((a) > (b) ? (a) : (b))
+
+static inline double mr_clampd(double x, double lo, double hi) {
+    /* NaN maps to lo: no NaN may leave a clamp (design principle 6). */
+    return x >= lo ? (x <= hi ? x : hi) : lo;
+}
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MR_INTERNAL_H */

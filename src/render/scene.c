@@ -1,0 +1,115 @@
+/* scene.c — the paper's fit scene, scene validation and the enum names of render.h. */
+#include <math.h>
+#include <string.h>
+
+#include "../mr_internal.h"
+#include "render.h"
+#include "vec3.h"
+
+static const char *const component_names[MR_COMPONENT_COUNT] = {"full", "diffuse", "specular"};
+static const char *const fit_light_names[MR_FIT_LIGHT_COUNT] = {"45", "frontal"};
+
+const char *mr_component_name(mr_component component) {
+    return (unsigned)component < MR_COMPONENT_COUNT ? component_names[component] : NULL;
+}
+
+mr_status mr_component_from_name(const char *name, mr_component *out) {
+    for (int i = 0; i < MR_COMPONENT_COUNT; i++)
+        if (strcmp(name, component_names[i]) == 0) {
+            *out = (mr_component)i;
+            return MR_OK;
+        }
+    return mr_fail(MR_ERR_INVALID_ARG, "unknown component '%s' (valid: full, diffuse, specular)", name);
+}
+
+const char *mr_fit_light_name(mr_fit_light light) {
+    return (unsigned)light < MR_FIT_LIGHT_COUNT ? fit_light_names[light] : NULL;
+}
+
+mr_status mr_fit_light_from_name(const char *name, mr_fit_light *out) {
+    for (int i = 0; i < MR_FIT_LIGHT_COUNT; i++)
+        if (strcmp(name, fit_light_names[i]) == 0) {
+            *out = (mr_fit_light)i;
+            return MR_OK;
+        }
+    return mr_fail(MR_ERR_INVALID_ARG, "unknown light position '%s' (valid: 45, frontal)", name);
+}
+
+/* Fit-scene constants (paper section 4.1 gives the sphere and the light; the camera is ours, see render.h). */
+#define FIT_CAMERA_DISTANCE 4.0
+#define FIT_CAMERA_FOV_Y 35.0
+#define FIT_LIGHT_DISTANCE 3.0
+#define FIT_LIGHT_ANGLE_DEGREES 45.0
+#define FIT_DEFAULT_SIZE 512
+#define FIT_DEFAULT_INTENSITY 10.0
+
+mr_scene mr_scene_fit(const mr_fit_scene_options *opts) {
+    mr_fit_scene_options o = {0};
+    if (opts != NULL) o = *opts;
+    int size = o.size > 0 ? o.size : FIT_DEFAULT_SIZE;
+    double intensity = o.intensity > 0.0 ? o.intensity : FIT_DEFAULT_INTENSITY;
+    double angle = o.light == MR_FIT_LIGHT_FRONTAL ? 0.0 : FIT_LIGHT_ANGLE_DEGREES * MR_PI / 180.0;
+
+    mr_scene scene;
+    memset(&scene, 0, sizeof scene);
+    scene.width = size;
+    scene.height = size;
+    scene.camera = (mr_camera){{0.0, 0.0, FIT_CAMERA_DISTANCE}, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, FIT_CAMERA_FOV_Y};
+    scene.shape = (mr_shape){MR_SHAPE_SPHERE, {0.0, 0.0, 0.0}, 1.0};
+    scene.light_count = 1;
+    scene.lights[0].type = MR_LIGHT_POINT;
+    // The light turns from the view axis (+z, towards the camera) about +y, towards +x (image right).
+    scene.lights[0].position[0] = FIT_LIGHT_DISTANCE * sin(angle);
+    scene.lights[0].position[1] = 0.0;
+    scene.lights[0].position[2] = FIT_LIGHT_DISTANCE * cos(angle);
+    for (int c = 0; c < 3; c++) scene.lights[0].intensity[c] = intensity;
+    return scene;
+}
+
+mr_status mr_scene_validate(const mr_scene *scene) {
+    if (scene->width < 1 || scene->height < 1 || scene->width > MR_RENDER_MAX_SIZE ||
+        scene->height > MR_RENDER_MAX_SIZE)
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: image size %dx%d: each side must be in [1, %d]", scene->width,
+                       scene->height, MR_RENDER_MAX_SIZE);
+    const mr_camera *cam = &scene->camera;
+    if (!vec3_is_finite(cam->position) || !vec3_is_finite(cam->target) || !vec3_is_finite(cam->up))
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: camera position, target and up must be finite");
+    if (!(cam->fov_y_degrees > 0.0 && cam->fov_y_degrees < 180.0))
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: camera field of view %g: expected (0, 180) degrees",
+                       cam->fov_y_degrees);
+    double forward[3], side[3];
+    vec3_sub(cam->target, cam->position, forward);
+    if (vec3_normalize(forward) <= 0.0)
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: camera target equals its position");
+    vec3_cross(forward, cam->up, side);
+    if (vec3_length(side) < 1e-9 * vec3_length(cam->up) || vec3_length(cam->up) == 0.0)
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: camera up vector is zero or parallel to the view direction");
+    if ((unsigned)scene->shape.type >= MR_SHAPE_TYPE_COUNT)
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: unknown shape type %d", (int)scene->shape.type);
+    if (!vec3_is_finite(scene->shape.center) || !(scene->shape.radius > 0.0 && isfinite(scene->shape.radius)))
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: sphere radius %g: expected a finite value > 0",
+                       scene->shape.radius);
+    double to_camera[3];
+    vec3_sub(cam->position, scene->shape.center, to_camera);
+    if (vec3_length(to_camera) <= scene->shape.radius)
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: the camera is inside the sphere");
+    if (scene->light_count < 1 || scene->light_count > MR_SCENE_MAX_LIGHTS)
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: %d lights: expected 1 to %d", scene->light_count,
+                       MR_SCENE_MAX_LIGHTS);
+    for (int i = 0; i < scene->light_count; i++) {
+        const mr_light *light = &scene->lights[i];
+        if ((unsigned)light->type >= MR_LIGHT_TYPE_COUNT)
+            return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d has unknown type %d", i, (int)light->type);
+        if (!vec3_is_finite(light->position) || !vec3_is_finite(light->intensity))
+            return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d: position and intensity must be finite", i);
+        if (light->intensity[0] < 0.0 || light->intensity[1] < 0.0 || light->intensity[2] < 0.0)
+            return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d: negative intensity", i);
+        double to_light[3];
+        vec3_sub(light->position, scene->shape.center, to_light);
+        if (vec3_length(to_light) <= scene->shape.radius)
+            return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d is inside the sphere", i);
+    }
+    if (!vec3_is_finite(scene->background))
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: background radiance must be finite");
+    return MR_OK;
+}

@@ -1,0 +1,99 @@
+/*
+ * harness.h — the project's tiny test harness (after redis' testhelp.h).
+ *
+ * A test file defines cases with MR_TEST(name) { ... } and lists them in MR_TEST_MAIN(case, case, ...).
+ * Checks record a failure with file:line and the values involved, and let the case go on. Each case prints a
+ * numbered "ok"/"FAIL" line; the binary ends with "N passed, N failed" and exits non-zero on any failure.
+ * `tests/test_x NAME` runs only the case called NAME.
+ */
+#ifndef MR_TEST_HARNESS_H
+#define MR_TEST_HARNESS_H
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct mr_test_case {
+    const char *name;
+    void (*run)(void);
+} mr_test_case;
+
+static int mr_test_failures_in_case;
+
+#define MR_TEST(name) static void name(void)
+
+#define MR_CHECK(cond)                                                                   \
+    do {                                                                                 \
+        if (!(cond)) {                                                                   \
+            fprintf(stderr, "    %s:%d: check failed: %s\n", __FILE__, __LINE__, #cond); \
+            mr_test_failures_in_case++;                                                  \
+        }                                                                                \
+    } while (0)
+
+/* Like MR_CHECK, with a printf-style explanation printed on failure. */
+#define MR_CHECK_MSG(cond, ...)                                                          \
+    do {                                                                                 \
+        if (!(cond)) {                                                                   \
+            fprintf(stderr, "    %s:%d: check failed: %s: ", __FILE__, __LINE__, #cond); \
+            fprintf(stderr, __VA_ARGS__);                                                \
+            fputc('\n', stderr);                                                         \
+            mr_test_failures_in_case++;                                                  \
+        }                                                                                \
+    } while (0)
+
+/* |actual - expected| <= tol, and both finite. */
+#define MR_CHECK_NEAR(actual, expected, tol)                                                         \
+    do {                                                                                             \
+        double mr_a_ = (double)(actual), mr_e_ = (double)(expected), mr_t_ = (double)(tol);          \
+        if (!(isfinite(mr_a_) && fabs(mr_a_ - mr_e_) <= mr_t_)) {                                    \
+            fprintf(stderr, "    %s:%d: %s = %.17g, expected %.17g within %.3g\n", __FILE__, __LINE__, \
+                    #actual, mr_a_, mr_e_, mr_t_);                                                   \
+            mr_test_failures_in_case++;                                                              \
+        }                                                                                            \
+    } while (0)
+
+/* An mr_status call that must succeed; prints mr_last_error() otherwise. */
+#define MR_CHECK_OK(call)                                                                          \
+    do {                                                                                           \
+        mr_status mr_s_ = (call);                                                                  \
+        if (mr_s_ != MR_OK) {                                                                      \
+            fprintf(stderr, "    %s:%d: %s -> %s: %s\n", __FILE__, __LINE__, #call, mr_status_str(mr_s_), \
+                    mr_last_error());                                                              \
+            mr_test_failures_in_case++;                                                            \
+        }                                                                                          \
+    } while (0)
+
+static int mr_test_run_all(const mr_test_case *cases, int count, int argc, char **argv) {
+    int passed = 0, failed = 0, number = 0;
+    for (int i = 0; i < count; i++) {
+        if (argc > 1 && strcmp(argv[1], cases[i].name) != 0) continue;
+        mr_test_failures_in_case = 0;
+        cases[i].run();
+        number++;
+        if (mr_test_failures_in_case == 0) {
+            printf("%3d ok    %s\n", number, cases[i].name);
+            passed++;
+        } else {
+            printf("%3d FAIL  %s (%d failed checks)\n", number, cases[i].name, mr_test_failures_in_case);
+            failed++;
+        }
+        fflush(stdout);
+    }
+    if (argc > 1 && number == 0) {
+        fprintf(stderr, "no test case named '%s'\n", argv[1]);
+        return 2;
+    }
+    printf("%d passed, %d failed\n", passed, failed);
+    return failed == 0 ? 0 : 1;
+}
+
+#define MR_TEST_ENTRY(fn) {#fn, fn}
+
+#define MR_TEST_MAIN(...)                                                                   \
+    int main(int argc, char **argv) {                                                       \
+        static const mr_test_case cases[] = {__VA_ARGS__};                                  \
+        return mr_test_run_all(cases, (int)(sizeof cases / sizeof cases[0]), argc, argv); \
+    }
+
+#endif /* MR_TEST_HARNESS_H */
