@@ -62,7 +62,8 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(LIB)
 	@mkdir -p $(dir $@)
 	$(CXX) $(LDFLAGS) $< $(LIB) $(LDLIBS) -o $@
 
-check: all $(TESTS)
+# headers_cpp.o only has to compile: every public header must be valid C++ as well as C.
+check: all $(TESTS) $(BUILD)/obj/tests/headers_cpp.o
 	scripts/run-tests.sh $(BUILD)
 
 asan:

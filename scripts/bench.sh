@@ -1,0 +1,85 @@
+#!/usr/bin/env bash
+# make bench: prints benchmark figures and writes them into docs/performance.md (between the bench:render
+# markers). Asserts nothing. Peers are measured in the same run: Blender Cycles renders the same fit scene with
+# the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to our render time is printed.
+# Usage: scripts/bench.sh BUILD [--quick]
+set -euo pipefail
+build=${1:-build}
+quick=${2:-}
+root=$(cd "$(dirname "$0")/.." && pwd)
+bin="$root/$build/bin/matremap"
+work="$root/$build/bench"
+mkdir -p "$work"
+report="$work/render.md"
+
+median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2}'; }
+
+echo "== fit-scene render time per model (tests/bench_render.c)"
+"$root/$build/tests/bench_render" $quick | tee "$work/render_table.md"
+
+{
+    echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), matremap $("$bin" --version | cut -d' ' -f2)."
+    echo
+    cat "$work/render_table.md"
+    echo
+} > "$report"
+
+if command -v blender >/dev/null 2>&1; then
+    echo
+    echo "== peer: Blender Cycles, Principled BSDF (single-scatter GGX), 16 spp, same fit scene, 2 threads"
+    params="base_color=0.8,0.8,0.8 metallic=0 specular=0.5 roughness=0.5"
+    {
+        echo "Peer, same run: Blender $(blender --version 2>/dev/null | head -1 | cut -d' ' -f2) Cycles renders the fit scene with the Principled BSDF (GGX,"
+        echo "16 spp, 2 threads, box filter, direct light only). 'Cycles render' is Cycles' own render time (scene"
+        echo "built, Blender start-up excluded); 'ours' is \`matremap render cycles-principled\` with the plan prepared"
+        echo "(median of the table above, 2 threads) and as a whole process (start-up, plan, render, EXR write)."
+        echo "SSIM compares the two images (display-referred, docs/metrics.md): the 16-spp noise and the mesh"
+        echo "sphere's silhouette keep it below 1."
+        echo
+        echo "| size | Cycles render ms | Cycles process s | ours render ms | ours process ms | render ratio Cycles/ours | SSIM ours vs Cycles |"
+        echo "|---:|---:|---:|---:|---:|---:|---:|"
+    } >> "$report"
+    for size in 256 512; do
+        cycles_ms=()
+        cycles_total=()
+        for run in 1 2 3; do
+            t0=$(date +%s.%N)
+            "$root/scripts/cycles-render.sh" --size "$size" --samples 16 --threads 2 --light 45 \
+                --material principled --base-color 0.8,0.8,0.8 --metallic 0 --specular 0.5 --roughness 0.5 \
+                --distribution GGX -o "$work/cycles_$size.exr" --timing-json "$work/cycles_$size.json" >/dev/null 2>&1
+            t1=$(date +%s.%N)
+            cycles_ms+=("$(sed -E 's/.*"render_seconds": ([0-9.eE+-]+).*/\1/' "$work/cycles_$size.json" | awk '{print $1 * 1000}')")
+            cycles_total+=("$(awk -v a="$t0" -v b="$t1" 'BEGIN {print b - a}')")
+        done
+        c_ms=$(printf '%s\n' "${cycles_ms[@]}" | median)
+        c_total=$(printf '%s\n' "${cycles_total[@]}" | median)
+        ours_ms=$(grep '^| cycles-principled ' "$work/render_table.md" | awk -F'|' -v col=$([ "$size" = 256 ] && echo 4 || echo 6) '{gsub(/ /, "", $col); print $col}')
+        ours_total=()
+        for run in 1 2 3; do
+            t0=$(date +%s.%N)
+            OMP_NUM_THREADS=2 "$bin" render cycles-principled $params --size "$size" -o "$work/ours_$size.exr" 2>/dev/null
+            t1=$(date +%s.%N)
+            ours_total+=("$(awk -v a="$t0" -v b="$t1" 'BEGIN {print (b - a) * 1000}')")
+        done
+        o_total=$(printf '%s\n' "${ours_total[@]}" | median)
+        ssim=$("$bin" ssim "$work/ours_$size.exr" "$work/cycles_$size.exr")
+        ratio=$(awk -v a="$c_ms" -v b="$ours_ms" 'BEGIN {print a / b}')
+        printf '| %s² | %.0f | %.2f | %.2f | %.0f | %.0f× | %s |\n' "$size" "$c_ms" "$c_total" "$ours_ms" "$o_total" \
+            "$ratio" "$ssim" | tee -a "$report"
+    done
+else
+    echo
+    echo "(Blender not installed: the Cycles peer was skipped; scripts/install-deps.sh --bench installs it)"
+    echo "Cycles peer skipped: Blender was not installed in this run." >> "$report"
+fi
+
+# Replace the section between the markers in docs/performance.md with this run's report.
+perf="$root/docs/performance.md"
+if [ -f "$perf" ] && grep -q '<!-- bench:render:begin -->' "$perf"; then
+    awk -v report="$report" '
+        /<!-- bench:render:begin -->/ { print; while ((getline line < report) > 0) print line; skip = 1; next }
+        /<!-- bench:render:end -->/ { skip = 0 }
+        !skip { print }' "$perf" > "$perf.tmp" && mv "$perf.tmp" "$perf"
+    echo
+    echo "docs/performance.md updated (section bench:render)."
+fi

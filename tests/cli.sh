@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# CLI contract tests for `matremap`: help everywhere, exit codes (0 ok, 1 usage, 2 bad input), messages that
+# name the bad value and list valid ones, render -> file, ssim identities. Ends with "N passed, N failed".
+set -u
+bin="${MR_BUILD:-build}/bin/matremap"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+passed=0
+failed=0
+
+# expect NAME EXPECTED_EXIT GREP_PATTERN(optional, searched in stdout+stderr) -- command...
+expect() {
+    local name=$1 code=$2 pattern=$3
+    shift 4
+    "$@" >"$tmp/out" 2>"$tmp/err"
+    local rc=$?
+    if [ "$rc" -ne "$code" ]; then
+        echo "FAIL  $name: exit $rc, expected $code"; sed 's/^/      /' "$tmp/err" | head -5
+        failed=$((failed + 1)); return
+    fi
+    if [ -n "$pattern" ] && ! cat "$tmp/out" "$tmp/err" | grep -qE -- "$pattern"; then
+        echo "FAIL  $name: output does not match /$pattern/"; cat "$tmp/out" "$tmp/err" | sed 's/^/      /' | head -5
+        failed=$((failed + 1)); return
+    fi
+    echo "ok    $name"
+    passed=$((passed + 1))
+}
+
+expect "no arguments is a usage error" 1 "Usage" -- "$bin"
+expect "top-level help" 0 "Commands:" -- "$bin" --help
+expect "unknown command lists commands" 1 "valid:.*render" -- "$bin" frobnicate
+for cmd in models render ssim; do
+    expect "$cmd --help" 0 "Usage: matremap $cmd" -- "$bin" $cmd --help
+done
+expect "models lists ggx" 0 "^ggx " -- "$bin" models
+expect "models lists every registered model in JSON" 0 '"name": "cycles-principled"' -- "$bin" models --json
+expect "models NAME shows ranges" 0 "roughness" -- "$bin" models gltf
+expect "models unknown name lists valid ones" 2 "unknown BRDF model 'ggxx' \(valid: .*ggx" -- "$bin" models ggxx
+
+expect "render gltf to EXR" 0 "wrote" -- "$bin" render gltf base_color=0.8,0.3,0.1 metallic=0 roughness=0.4 \
+    --size 64 -o "$tmp/x.exr"
+expect "ssim of an image with itself is 1" 0 "^1\.000000$" -- "$bin" ssim "$tmp/x.exr" "$tmp/x.exr"
+expect "ssim --json has ssim and rmse" 0 '"ssim": 1, "rmse": 0' -- "$bin" ssim --json "$tmp/x.exr" "$tmp/x.exr"
+expect "render specular component to PNG" 0 "" -- "$bin" render ggx alpha=0.2 --component specular \
+    --light frontal --size 64 -o "$tmp/s.png"
+expect "ssim between different renders is below 1" 0 "^0\.[0-9]+$" -- "$bin" ssim "$tmp/s.png" "$tmp/x.exr"
+expect "ssim --map writes a picture" 0 "" -- "$bin" ssim "$tmp/s.png" "$tmp/x.exr" --map "$tmp/map.png"
+if [ -s "$tmp/map.png" ]; then echo "ok    ssim map file exists"; passed=$((passed + 1));
+else echo "FAIL  ssim map file missing"; failed=$((failed + 1)); fi
+
+expect "unknown model" 2 "unknown BRDF model 'nope' \(valid:" -- "$bin" render nope -o "$tmp/y.exr"
+expect "unknown parameter lists valid ones" 2 "no parameter 'rough' \(valid: .*roughness" -- \
+    "$bin" render gltf rough=0.5 -o "$tmp/y.exr"
+expect "out-of-range parameter" 2 "outside \[0, 1\]" -- "$bin" render gltf metallic=1.5 -o "$tmp/y.exr"
+expect "malformed parameter" 2 "not a number" -- "$bin" render gltf metallic=abc -o "$tmp/y.exr"
+expect "missing output" 1 "missing -o" -- "$bin" render gltf
+expect "bad size" 1 "--size" -- "$bin" render gltf --size 0 -o "$tmp/y.exr"
+expect "bad light" 1 "valid: 45, frontal" -- "$bin" render gltf --light 30 -o "$tmp/y.exr"
+expect "unknown option" 1 "unknown option '--frob'" -- "$bin" render gltf --frob -o "$tmp/y.exr"
+expect "unknown extension" 2 "y.xyz" -- "$bin" render gltf --size 32 -o "$tmp/y.xyz"
+if ls "$tmp" | grep -q 'y\.'; then echo "FAIL  a failed render left a file behind"; failed=$((failed + 1));
+else echo "ok    failed renders leave no file"; passed=$((passed + 1)); fi
+expect "unwritable directory" 2 "nodir" -- "$bin" render gltf --size 32 -o "$tmp/nodir/y.exr"
+expect "ssim missing file names it" 2 "missing.exr" -- "$bin" ssim "$tmp/missing.exr" "$tmp/x.exr"
+"$bin" render lambert --size 32 -o "$tmp/small.exr" 2>/dev/null
+expect "ssim size mismatch names both files" 2 "small.exr' is 32x32 but .*x.exr' is 64x64" -- \
+    "$bin" ssim "$tmp/small.exr" "$tmp/x.exr"
+expect "ssim needs two images" 1 "two images" -- "$bin" ssim "$tmp/x.exr"
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]

@@ -1,0 +1,12 @@
+// Every public header must compile as C++ too (the glTF and image-I/O shims include them); see also
+// tests/test_headers.c. Built by `make check`; a compile error is the failure.
+#include "matremap.h"
+#include "mr_image.h"
+#include "mr_status.h"
+#include "brdf/brdf.h"
+#include "render/render.h"
+#include "io/image_io.h"
+#include "metrics/metrics.h"
+
+extern "C" int mr_headers_cpp_probe(void);
+int mr_headers_cpp_probe(void) { return MR_STATUS_COUNT + MR_COMPONENT_COUNT; }
