@@ -72,6 +72,9 @@ typedef struct mr_brdf_param {
     mr_param_lobe lobe;
     unsigned flags;
     const char *meaning;  /* one line: what it is, its parameterisation and the source convention */
+    const double *default_rgb; /* optional per-channel defaults of an RGB parameter (a coloured default such
+                                  as Mitsuba's Cu eta and k); NULL: default_value in every channel. When set,
+                                  default_value holds the G channel, for one-number displays. */
 } mr_brdf_param;
 
 /* Bit flags of mr_brdf_model.flags. */
@@ -79,7 +82,13 @@ enum {
     /* The model legitimately reflects more than it receives for some valid parameters (e.g. Blender
      * Internal's diffuse has no 1/pi). The white-furnace test skips the energy bound for these and
      * `models` says so. */
-    MR_BRDF_NOT_ENERGY_CONSERVING = 1
+    MR_BRDF_NOT_ENERGY_CONSERVING = 1,
+    /* f_r = diffuse lobe + specular lobe with independent scales that nothing (Fresnel, trimming) couples, as
+     * in a Mitsuba microfacet plugin with an optional Lambert base added. Each lobe alone conserves energy;
+     * their sum only while the lobe albedos sum to at most 1, which is the caller's choice of parameters.
+     * The white-furnace test checks these models lobe by lobe (unless they are also flagged
+     * MR_BRDF_NOT_ENERGY_CONSERVING); a fit may want to constrain the sum. */
+    MR_BRDF_INDEPENDENT_LOBES = 2
 };
 
 typedef struct mr_brdf_model mr_brdf_model;

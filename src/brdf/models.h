@@ -8,9 +8,39 @@
 #include "brdf.h"
 
 extern const mr_brdf_model mr_brdf_lambert;
+/* ward.c */
+extern const mr_brdf_model mr_brdf_ward;
+extern const mr_brdf_model mr_brdf_ward_duer;
+extern const mr_brdf_model mr_brdf_ward_balanced;
+/* phong.c */
+extern const mr_brdf_model mr_brdf_phong;
+/* microfacet.c */
+extern const mr_brdf_model mr_brdf_beckmann;
+extern const mr_brdf_model mr_brdf_ggx;
+extern const mr_brdf_model mr_brdf_as;
+extern const mr_brdf_model mr_brdf_beckmann_nofresnel;
+extern const mr_brdf_model mr_brdf_ggx_nofresnel;
+extern const mr_brdf_model mr_brdf_as_nofresnel;
+extern const mr_brdf_model mr_brdf_beckmann_conductor;
+extern const mr_brdf_model mr_brdf_ggx_conductor;
+extern const mr_brdf_model mr_brdf_as_conductor;
+extern const mr_brdf_model mr_brdf_beckmann_plastic;
+extern const mr_brdf_model mr_brdf_ggx_plastic;
+extern const mr_brdf_model mr_brdf_as_plastic;
+/* blender_ward.c */
+extern const mr_brdf_model mr_brdf_blender_ward;
+/* gltf.c, gltf_specgloss.c */
+extern const mr_brdf_model mr_brdf_gltf;
+extern const mr_brdf_model mr_brdf_gltf_specgloss;
+/* cycles_principled.c */
+extern const mr_brdf_model mr_brdf_cycles_principled;
 
 /* Display order of `matremap models`; registry.c expands it into its table. */
-#define MR_BRDF_REGISTERED_MODELS \
-    &mr_brdf_lambert,
+#define MR_BRDF_REGISTERED_MODELS                                                                           \
+    &mr_brdf_lambert, &mr_brdf_ward, &mr_brdf_ward_duer, &mr_brdf_ward_balanced, &mr_brdf_phong,             \
+        &mr_brdf_beckmann, &mr_brdf_ggx, &mr_brdf_as, &mr_brdf_beckmann_nofresnel, &mr_brdf_ggx_nofresnel,   \
+        &mr_brdf_as_nofresnel, &mr_brdf_beckmann_conductor, &mr_brdf_ggx_conductor, &mr_brdf_as_conductor,   \
+        &mr_brdf_beckmann_plastic, &mr_brdf_ggx_plastic, &mr_brdf_as_plastic, &mr_brdf_blender_ward,         \
+        &mr_brdf_gltf, &mr_brdf_gltf_specgloss, &mr_brdf_cycles_principled,
 
 #endif /* MR_BRDF_MODELS_H */

@@ -64,7 +64,9 @@ int mr_brdf_param_index(const mr_brdf_model *model, const char *name) {
 void mr_brdf_default_values(const mr_brdf_model *model, double *values) {
     int slot = 0;
     for (int i = 0; i < model->param_count; i++)
-        for (int c = 0; c < model->params[i].channels; c++) values[slot++] = model->params[i].default_value;
+        for (int c = 0; c < model->params[i].channels; c++)
+            values[slot++] = model->params[i].default_rgb ? model->params[i].default_rgb[c]
+                                                          : model->params[i].default_value;
 }
 
 static mr_status unknown_param(const mr_brdf_model *model, const char *name, size_t name_len) {

@@ -9,6 +9,20 @@ static const char *lobe_name(mr_param_lobe lobe) {
     return lobe == MR_LOBE_DIFFUSE ? "diffuse" : lobe == MR_LOBE_SPECULAR ? "specular" : "both";
 }
 
+/* Channel c of a parameter's default (RGB parameters may have a coloured default, brdf.h). */
+static double param_default(const mr_brdf_param *p, int c) {
+    return p->default_rgb ? p->default_rgb[c] : p->default_value;
+}
+
+/* The default as text: one number, or r,g,b when the channels differ. */
+static const char *default_text(const mr_brdf_param *p, char *buf, size_t size) {
+    if (p->channels == 3 && p->default_rgb)
+        snprintf(buf, size, "%.3g,%.3g,%.3g", p->default_rgb[0], p->default_rgb[1], p->default_rgb[2]);
+    else
+        snprintf(buf, size, "%.4g", p->default_value);
+    return buf;
+}
+
 static void print_help(void) {
     printf("Usage: matremap models [NAME] [--json]\n"
            "\n"
@@ -34,9 +48,14 @@ static void print_json_model(const mr_brdf_model *m) {
         const mr_brdf_param *p = &m->params[i];
         printf("%s{\"name\": ", i ? ", " : "");
         cli_json_string(stdout, p->name);
-        printf(", \"channels\": %d, \"default\": %.17g, \"min\": %.17g, \"max\": %.17g, \"role\": \"%s\", "
-               "\"lobe\": \"%s\", \"log_scale\": %s, \"meaning\": ",
-               p->channels, p->default_value, p->min_value, p->max_value, role_names[p->role], lobe_name(p->lobe),
+        printf(", \"channels\": %d, \"default\": ", p->channels);
+        if (p->channels == 3)
+            printf("[%.17g, %.17g, %.17g]", param_default(p, 0), param_default(p, 1), param_default(p, 2));
+        else
+            printf("%.17g", p->default_value);
+        printf(", \"min\": %.17g, \"max\": %.17g, \"role\": \"%s\", \"lobe\": \"%s\", \"log_scale\": %s, "
+               "\"meaning\": ",
+               p->min_value, p->max_value, role_names[p->role], lobe_name(p->lobe),
                (p->flags & MR_PARAM_LOG_SCALE) ? "true" : "false");
         cli_json_string(stdout, p->meaning);
         printf("}");
@@ -50,11 +69,12 @@ static void print_model_detail(const mr_brdf_model *m) {
     if (m->flags & MR_BRDF_NOT_ENERGY_CONSERVING)
         printf("note: may reflect more energy than it receives (not bounded by the white-furnace test)\n");
     printf("analytic parameter derivatives: %s\n\n", m->eval_grad ? "yes" : "no");
-    printf("  %-15s %-3s %9s %9s %9s  %-9s %-8s %s\n", "PARAMETER", "CH", "DEFAULT", "MIN", "MAX", "ROLE", "LOBE",
-           "MEANING");
+    printf("  %-15s %-3s %-17s %7s %7s  %-9s %-8s %s\n", "PARAMETER", "CH", "DEFAULT", "MIN", "MAX", "ROLE",
+           "LOBE", "MEANING");
     for (int i = 0; i < m->param_count; i++) {
         const mr_brdf_param *p = &m->params[i];
-        printf("  %-15s %-3d %9.4g %9.4g %9.4g  %-9s %-8s %s\n", p->name, p->channels, p->default_value,
+        char def[64];
+        printf("  %-15s %-3d %-17s %7.4g %7.4g  %-9s %-8s %s\n", p->name, p->channels, default_text(p, def, sizeof def),
                p->min_value, p->max_value, role_names[p->role], lobe_name(p->lobe), p->meaning);
     }
 }

@@ -1,0 +1,336 @@
+/*
+ * microfacet.c — the Mitsuba 0.5.1+/0.6 microfacet family, isotropic: three distributions x four Fresnel
+ * modes, twelve descriptors sharing this file's code through `config`:
+ *
+ *   beckmann            ggx            as              Schlick F with F0 given (the paper's "pbr" plugin)
+ *   beckmann-nofresnel  ggx-nofresnel  as-nofresnel    F = 1
+ *   beckmann-conductor  ggx-conductor  as-conductor    exact conductor F (Mitsuba roughconductor)
+ *   beckmann-plastic    ggx-plastic    as-plastic      dielectric F over a Lambert base (after roughplastic)
+ *
+ *   f_s = rho_s F(wi.h) D(h) G1(wi) G1(wo) / (4 cos_i cos_o),   h = normalize(wi + wo)
+ *
+ * D (brdf-reference 2.3; Mitsuba sets D = 0 where D cos_h < 1e-20, and so do we):
+ *   beckmann  exp(-tan^2(theta_h)/alpha^2) / (pi alpha^2 cos^4(theta_h))
+ *   ggx       1 / (pi alpha^2 cos^4(theta_h) (1 + tan^2(theta_h)/alpha^2)^2)
+ *   as        (n+2)/(2 pi) cos^n(theta_h), n = 2/alpha^2 - 2 (Walter et al. 2007). Mitsuba 0.5.1+ has no separate
+ *             Ashikhmin-Shirley model: "as" and "phong" both name this EPhong distribution (the anisotropic
+ *             Ashikhmin-Shirley extension of Phong, isotropic here). The authors' "Mitsuba-Pbr-AS" is this.
+ * G1, separable (uncorrelated) Smith, a = 1/(alpha tan(theta_v)):
+ *   beckmann, as  1 if a >= 1.6, else (3.535 a + 2.181 a^2)/(1 + 2.276 a + 2.577 a^2) (rational fit, < 0.35%)
+ *   ggx           2 / (1 + sqrt(1 + alpha^2 tan^2(theta_v)))
+ * F and the extra terms per mode:
+ *   (Schlick)   F = F0 + (1 - F0)(1 - wi.h)^5, rho_s = 1; plus an optional Lambert lobe rho_d/pi
+ *   -nofresnel  F = 1; plus an optional Lambert lobe rho_d/pi
+ *   -conductor  F = exact conductor Fresnel (Mitsuba fresnelConductorExact) per channel, of (eta, k)
+ *   -plastic    F = exact dielectric Fresnel of ior (Mitsuba fresnelDielectricExt), plus
+ *               f_d = rho_d/pi (1 - F(cos_i)) (1 - F(cos_o))
+ *
+ * Parameters (alpha first in every member; RGB parameters take 3 slots):
+ *   alpha     [1e-4, 1]  default 0.1   roughness, log scale; 1e-4 is Mitsuba's own floor
+ *   (Schlick)    f0       RGB [0, 1] default 0.04  Schlick F0 (AFFINE); 0.04 = dielectric of ior 1.5 (the
+ *                                                  authors' plugin takes F0 directly; its default is not stated)
+ *                diffuse  RGB [0, 1] default 0     optional Lambert lobe, off by default = the paper's plugin
+ *   -nofresnel   specular RGB [0, 1] default 1     rho_s;  diffuse RGB [0, 1] default 0 as above
+ *   -conductor   eta      RGB [0, 10] default Cu (0.200438, 0.924033, 1.10221)  real part of the relative index
+ *                k        RGB [0, 10] default Cu (3.91295, 2.45285, 2.14219)    extinction coefficient
+ *                specular RGB [0, 1] default 1     rho_s (Mitsuba specularReflectance)
+ *                The Cu triples are a commonly used RGB reduction of copper's spectral eta and k (they appear as
+ *                Cu_eta/Cu_k in public renderer code); we did not derive them from Mitsuba's Cu.eta.spd/Cu.k.spd.
+ *                Mitsuba 0.6 renders Cu spectrally and divides eta and k by extEta = 1.000277 (air), so its
+ *                colours differ slightly. eta = 0, k = 1 is Mitsuba's material "none" (F = 1).
+ *   -plastic     ior      [1, 3] default 1.49  relative index int/ext. Mitsuba's defaults (polypropylene 1.49 in air
+ *                                              1.000277) give 1.4896; 1.49 is the interior index alone.
+ *                specular RGB [0, 1] default 1     rho_s (Mitsuba specularReflectance)
+ *                diffuse  RGB [0, 1] default 0.5   rho_d (Mitsuba diffuseReflectance)
+ *
+ * -plastic simplifies Mitsuba's roughplastic on purpose. Mitsuba's diffuse term is
+ * rho_d'/pi T(cos_i) T(cos_o) / eta^2 with rough-transmittance tables T and rho_d' = rho_d/(1 - F_dr) (internal
+ * scattering). Here the smooth-interface transmittances 1 - F(cos) replace T, and the 1/eta^2 and 1/(1 - F_dr)
+ * factors are dropped. This keeps f_d linear in rho_d (the optimiser's linear solve), reciprocal, energy-bounded
+ * (f_d <= rho_d/pi), finite as ior -> 1 (where roughplastic's renormalisation is undefined and Mitsuba rejects
+ * int == ext), and needs no 3-D data tables. It is darker than roughplastic (which adds back the light that
+ * scatters inside the coat) and ignores how roughness changes the transmittance.
+ *
+ * Mitsuba trims single textures (roughconductor: rho_s scaled by 0.99/max if max(rho_s) > 1); with rho_s <= 1 as
+ * bounded here that never happens, so there is no trim switch.
+ *
+ * Energy. The Schlick and -nofresnel members are flagged MR_BRDF_INDEPENDENT_LOBES: their optional diffuse lobe is
+ * simply added, so diffuse + specular may exceed 1 if the caller asks for it; each lobe alone is checked.
+ * Beckmann and GGX (single scattering, separable Smith) stay below 1 at every angle and alpha we measured (up to
+ * 89.9 degrees; the F = 1 albedo at normal incidence is 1.00 / 0.99 for alpha = 0.1 and 0.46 / 0.31 for alpha = 1).
+ * The `as` members that can reach F = 1 (`as`, `as-nofresnel`, `as-conductor` with eta = 0, k = 1) are flagged
+ * MR_BRDF_NOT_ENERGY_CONSERVING: Mitsuba gives the Phong distribution the Beckmann rational G1, which was fitted to
+ * the Beckmann distribution and overestimates G for wide Phong lobes, so the F = 1 albedo exceeds 1 at grazing
+ * incidence: 1.02 at 80 degrees and 1.27 at 88 degrees for alpha = 1, 1.05 at 88 degrees for alpha = 0.5. That is
+ * Mitsuba's model. `as-plastic` stays below 1 (F <= 0.25 at normal incidence, and its diffuse lobe loses energy at
+ * the interface).
+ *
+ * Source: Mitsuba 0.6 src/bsdfs/microfacet.h, roughconductor.cpp, roughplastic.cpp, src/libcore/util.cpp
+ * (brdf-reference 2.3-2.5); the authors' pbr.cpp plugin (brdf-reference 1). Mitsuba's eval() includes
+ * cos(theta_o); ours does not (brdf.h).
+ * Limitations: isotropic only; Mitsuba 0.5.0's older "as" (V-groove G, exponent floor 0.1) is not modelled;
+ * single scattering only (energy is lost at high alpha, as in Mitsuba).
+ * Gradient: analytic for every parameter (alpha through D and both G1; eta and k through the exact Fresnel
+ * derivatives; ior through the dielectric Fresnel at wi.h, cos_i and cos_o). One-sided at the G1 switch a = 1.6
+ * and at Mitsuba's D cut-off; where the conductor Fresnel has a square-root branch point (k = 0 and
+ * eta <= sin(theta)) the infinite derivative is reported as 0.
+ */
+#include "brdf_internal.h"
+
+typedef enum mf_fresnel { MF_SCHLICK = 0, MF_NONE, MF_CONDUCTOR, MF_PLASTIC } mf_fresnel;
+
+typedef struct mf_config {
+    mr_mf_dist dist;
+    mf_fresnel fresnel;
+} mf_config;
+
+/* Slots of the packed value vector, per Fresnel mode. */
+enum { MF_ALPHA = 0 };
+enum { MF_SCHLICK_F0 = 1, MF_SCHLICK_DIFFUSE = 4 };
+enum { MF_NONE_SPECULAR = 1, MF_NONE_DIFFUSE = 4 };
+enum { MF_COND_ETA = 1, MF_COND_K = 4, MF_COND_SPECULAR = 7 };
+enum { MF_PLASTIC_IOR = 1, MF_PLASTIC_SPECULAR = 2, MF_PLASTIC_DIFFUSE = 5 };
+
+#define MF_ALPHA_PARAM                                                                                 \
+    {"alpha", 1, 0.1, 1e-4, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, MR_PARAM_LOG_SCALE,            \
+     "microfacet roughness alpha (Mitsuba alpha, isotropic); floored at 1e-4 as Mitsuba", NULL}
+#define MF_DIFFUSE_PARAM(def)                                                                          \
+    {"diffuse", 3, def, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, 0,                                 \
+     "Lambert reflectance rho_d, linear RGB, added to the specular lobe", NULL}
+#define MF_SPECULAR_PARAM                                                                              \
+    {"specular", 3, 1.0, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_SPECULAR, 0,                               \
+     "specular scale rho_s, linear RGB (Mitsuba specularReflectance)", NULL}
+
+static const mr_brdf_param mf_schlick_params[] = {
+    MF_ALPHA_PARAM,
+    {"f0", 3, 0.04, 0.0, 1.0, MR_PARAM_AFFINE, MR_LOBE_SPECULAR, 0,
+     "Schlick reflectance at normal incidence F0, linear RGB (the authors' pbr plugin)", NULL},
+    MF_DIFFUSE_PARAM(0.0),
+};
+
+static const mr_brdf_param mf_none_params[] = {
+    MF_ALPHA_PARAM,
+    MF_SPECULAR_PARAM,
+    MF_DIFFUSE_PARAM(0.0),
+};
+
+static const double cu_eta[3] = {0.200438, 0.924033, 1.10221};
+static const double cu_k[3] = {3.91295, 2.45285, 2.14219};
+
+static const mr_brdf_param mf_conductor_params[] = {
+    MF_ALPHA_PARAM,
+    {"eta", 3, 0.924033, 0.0, 10.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, 0,
+     "conductor index (real part), RGB; default Cu (0.200438, 0.924033, 1.10221)", cu_eta},
+    {"k", 3, 2.45285, 0.0, 10.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, 0,
+     "conductor extinction coefficient, RGB; default Cu (3.91295, 2.45285, 2.14219)", cu_k},
+    MF_SPECULAR_PARAM,
+};
+
+static const mr_brdf_param mf_plastic_params[] = {
+    MF_ALPHA_PARAM,
+    {"ior", 1, 1.49, 1.0, 3.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, 0,
+     "relative index of refraction of the coating (Mitsuba intIOR/extIOR)", NULL},
+    MF_SPECULAR_PARAM,
+    MF_DIFFUSE_PARAM(0.5),
+};
+
+typedef struct mf_state {
+    mr_mf_dist dist;
+    mf_fresnel fresnel;
+    double alpha;
+    double ior;                /* -plastic */
+    double spec[3];            /* F0 (Schlick) or rho_s */
+    double eta[3], k[3];       /* -conductor */
+    double diffuse_over_pi[3]; /* rho_d/pi; 0 for -conductor */
+} mf_state;
+
+_Static_assert(sizeof(mf_state) <= MR_BRDF_STATE_BYTES, "mf_state must fit in MR_BRDF_STATE_BYTES");
+
+/* The slot of the specular reflectance (F0 or rho_s) and of rho_d (-1: none) for a Fresnel mode. */
+static int mf_spec_slot(mf_fresnel fresnel) {
+    switch (fresnel) {
+    case MF_SCHLICK: return MF_SCHLICK_F0;
+    case MF_NONE: return MF_NONE_SPECULAR;
+    case MF_CONDUCTOR: return MF_COND_SPECULAR;
+    default: return MF_PLASTIC_SPECULAR;
+    }
+}
+
+static int mf_diffuse_slot(mf_fresnel fresnel) {
+    switch (fresnel) {
+    case MF_SCHLICK: return MF_SCHLICK_DIFFUSE;
+    case MF_NONE: return MF_NONE_DIFFUSE;
+    case MF_CONDUCTOR: return -1;
+    default: return MF_PLASTIC_DIFFUSE;
+    }
+}
+
+static void mf_prepare(const mr_brdf_model *model, const double *values, void *state_bytes) {
+    const mf_config *config = model->config;
+    mf_state *state = state_bytes;
+    double v[MR_BRDF_MAX_VALUES];
+    mr_brdf_clamp_values(model, values, v);
+    state->dist = config->dist;
+    state->fresnel = config->fresnel;
+    state->alpha = v[MF_ALPHA];
+    state->ior = config->fresnel == MF_PLASTIC ? v[MF_PLASTIC_IOR] : 1.0;
+    int spec = mf_spec_slot(config->fresnel), diffuse = mf_diffuse_slot(config->fresnel);
+    for (int c = 0; c < 3; c++) {
+        state->spec[c] = v[spec + c];
+        state->diffuse_over_pi[c] = diffuse >= 0 ? v[diffuse + c] * MR_INV_PI : 0.0;
+        state->eta[c] = config->fresnel == MF_CONDUCTOR ? v[MF_COND_ETA + c] : 1.0;
+        state->k[c] = config->fresnel == MF_CONDUCTOR ? v[MF_COND_K + c] : 0.0;
+    }
+}
+
+static void mf_eval(const void *state_bytes, const double wi[3], const double wo[3], double diffuse[3],
+                    double specular[3]) {
+    const mf_state *state = state_bytes;
+    mr_brdf_geom g;
+    if (!mr_brdf_geom_init(wi, wo, &g)) {
+        mr_brdf_zero(diffuse, specular);
+        return;
+    }
+    if (diffuse) {
+        double transmit = 1.0; /* -plastic: through the smooth interface, in and out */
+        if (state->fresnel == MF_PLASTIC)
+            transmit = (1.0 - mr_fresnel_dielectric(g.cos_i, state->ior, NULL)) *
+                       (1.0 - mr_fresnel_dielectric(g.cos_o, state->ior, NULL));
+        for (int c = 0; c < 3; c++) diffuse[c] = state->diffuse_over_pi[c] * transmit;
+    }
+    if (specular) {
+        double dg = mr_mf_dg(state->dist, state->alpha, &g, 1, NULL);
+        switch (state->fresnel) {
+        case MF_SCHLICK: {
+            double w = mr_schlick_weight(g.dot_h);
+            for (int c = 0; c < 3; c++) specular[c] = (state->spec[c] + (1.0 - state->spec[c]) * w) * dg;
+            break;
+        }
+        case MF_NONE:
+            for (int c = 0; c < 3; c++) specular[c] = state->spec[c] * dg;
+            break;
+        case MF_CONDUCTOR:
+            for (int c = 0; c < 3; c++)
+                specular[c] = dg > 0.0 ? state->spec[c] *
+                                             mr_fresnel_conductor(g.dot_h, state->eta[c], state->k[c], NULL, NULL) * dg
+                                       : 0.0;
+            break;
+        default: {
+            double F = mr_fresnel_dielectric(g.dot_h, state->ior, NULL);
+            for (int c = 0; c < 3; c++) specular[c] = state->spec[c] * F * dg;
+            break;
+        }
+        }
+    }
+}
+
+static void mf_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3],
+                         const double wo[3], double *d_diffuse, double *d_specular) {
+    const mf_config *config = model->config;
+    mr_brdf_geom g;
+    double v[MR_BRDF_MAX_VALUES];
+    if (!mr_brdf_grad_begin(model, values, wi, wo, d_diffuse, d_specular, &g, v)) return;
+    int spec = mf_spec_slot(config->fresnel), diffuse = mf_diffuse_slot(config->fresnel);
+    double d_dg;
+    double dg = mr_mf_dg(config->dist, v[MF_ALPHA], &g, 1, &d_dg);
+
+    /* specular_c = rho_s F dg; Schlick has no rho_s (1) and its F0 inside F */
+    for (int c = 0; c < 3; c++) {
+        double rho = v[spec + c], F = 1.0;
+        switch (config->fresnel) {
+        case MF_SCHLICK: {
+            double w = mr_schlick_weight(g.dot_h);
+            F = rho + (1.0 - rho) * w;
+            rho = 1.0;
+            d_specular[(spec + c) * 3 + c] = (1.0 - w) * dg; /* dF/dF0 dg */
+            break;
+        }
+        case MF_NONE:
+            d_specular[(spec + c) * 3 + c] = dg;
+            break;
+        case MF_CONDUCTOR: {
+            double dF_deta, dF_dk;
+            F = mr_fresnel_conductor(g.dot_h, v[MF_COND_ETA + c], v[MF_COND_K + c], &dF_deta, &dF_dk);
+            d_specular[(spec + c) * 3 + c] = F * dg;
+            d_specular[(MF_COND_ETA + c) * 3 + c] = rho * dF_deta * dg;
+            d_specular[(MF_COND_K + c) * 3 + c] = rho * dF_dk * dg;
+            break;
+        }
+        default: {
+            double dF_dior;
+            F = mr_fresnel_dielectric(g.dot_h, v[MF_PLASTIC_IOR], &dF_dior);
+            d_specular[(spec + c) * 3 + c] = F * dg;
+            d_specular[MF_PLASTIC_IOR * 3 + c] = rho * dF_dior * dg;
+            break;
+        }
+        }
+        d_specular[MF_ALPHA * 3 + c] = rho * F * d_dg;
+    }
+
+    if (diffuse < 0) return;
+    double transmit = 1.0, d_transmit = 0.0;
+    if (config->fresnel == MF_PLASTIC) {
+        double dFi, dFo;
+        double Fi = mr_fresnel_dielectric(g.cos_i, v[MF_PLASTIC_IOR], &dFi);
+        double Fo = mr_fresnel_dielectric(g.cos_o, v[MF_PLASTIC_IOR], &dFo);
+        transmit = (1.0 - Fi) * (1.0 - Fo);
+        d_transmit = -dFi * (1.0 - Fo) - (1.0 - Fi) * dFo;
+    }
+    for (int c = 0; c < 3; c++) {
+        d_diffuse[(diffuse + c) * 3 + c] = transmit * MR_INV_PI;
+        if (config->fresnel == MF_PLASTIC) d_diffuse[MF_PLASTIC_IOR * 3 + c] = v[diffuse + c] * MR_INV_PI * d_transmit;
+    }
+}
+
+static const mf_config mf_configs[MR_MF_DIST_COUNT][4] = {
+    {{MR_MF_BECKMANN, MF_SCHLICK}, {MR_MF_BECKMANN, MF_NONE}, {MR_MF_BECKMANN, MF_CONDUCTOR},
+     {MR_MF_BECKMANN, MF_PLASTIC}},
+    {{MR_MF_GGX, MF_SCHLICK}, {MR_MF_GGX, MF_NONE}, {MR_MF_GGX, MF_CONDUCTOR}, {MR_MF_GGX, MF_PLASTIC}},
+    {{MR_MF_EPHONG, MF_SCHLICK}, {MR_MF_EPHONG, MF_NONE}, {MR_MF_EPHONG, MF_CONDUCTOR}, {MR_MF_EPHONG, MF_PLASTIC}},
+};
+
+#define MF_DESCRIPTOR(cname, mname, msummary, msource, table, mflags, dist, fresnel)                     \
+    const mr_brdf_model cname = {                                                                        \
+        .name = mname,                                                                                   \
+        .summary = msummary,                                                                             \
+        .source = msource,                                                                               \
+        .param_count = (int)(sizeof table / sizeof table[0]),                                            \
+        .params = table,                                                                                 \
+        .flags = mflags,                                                                                 \
+        .config = &mf_configs[dist][fresnel],                                                            \
+        .prepare = mf_prepare,                                                                           \
+        .eval = mf_eval,                                                                                 \
+        .eval_grad = mf_eval_grad,                                                                       \
+    }
+
+#define MF_SRC_PBR "Mitsuba 0.6 microfacet.h + the authors' pbr.cpp (Schlick F0)"
+#define MF_SRC_NONE "Mitsuba 0.6 microfacet.h (F = 1)"
+#define MF_SRC_COND "Mitsuba 0.6 roughconductor.cpp + microfacet.h"
+#define MF_SRC_PLASTIC "Mitsuba 0.6 microfacet.h + roughplastic.cpp (simplified diffuse)"
+
+MF_DESCRIPTOR(mr_brdf_beckmann, "beckmann", "Beckmann microfacet, Smith G, Schlick F0 (paper's Mitsuba-Pbr-Beckmann)",
+              MF_SRC_PBR, mf_schlick_params, MR_BRDF_INDEPENDENT_LOBES, MR_MF_BECKMANN, MF_SCHLICK);
+MF_DESCRIPTOR(mr_brdf_ggx, "ggx", "GGX microfacet, separable Smith G, Schlick F0 (Mitsuba pbr plugin)", MF_SRC_PBR,
+              mf_schlick_params, MR_BRDF_INDEPENDENT_LOBES, MR_MF_GGX, MF_SCHLICK);
+MF_DESCRIPTOR(mr_brdf_as, "as", "Mitsuba 0.5.1+ EPhong/Ashikhmin-Shirley microfacet, Schlick F0 (Mitsuba-Pbr-AS)",
+              MF_SRC_PBR, mf_schlick_params, MR_BRDF_INDEPENDENT_LOBES | MR_BRDF_NOT_ENERGY_CONSERVING, MR_MF_EPHONG,
+              MF_SCHLICK);
+MF_DESCRIPTOR(mr_brdf_beckmann_nofresnel, "beckmann-nofresnel", "Beckmann microfacet D G, F = 1, specular scale",
+              MF_SRC_NONE, mf_none_params, MR_BRDF_INDEPENDENT_LOBES, MR_MF_BECKMANN, MF_NONE);
+MF_DESCRIPTOR(mr_brdf_ggx_nofresnel, "ggx-nofresnel", "GGX microfacet D G, F = 1, specular scale", MF_SRC_NONE,
+              mf_none_params, MR_BRDF_INDEPENDENT_LOBES, MR_MF_GGX, MF_NONE);
+MF_DESCRIPTOR(mr_brdf_as_nofresnel, "as-nofresnel", "EPhong/AS microfacet D G, F = 1, specular scale", MF_SRC_NONE,
+              mf_none_params, MR_BRDF_INDEPENDENT_LOBES | MR_BRDF_NOT_ENERGY_CONSERVING, MR_MF_EPHONG, MF_NONE);
+MF_DESCRIPTOR(mr_brdf_beckmann_conductor, "beckmann-conductor",
+              "Mitsuba roughconductor, Beckmann, exact Fresnel (eta, k)", MF_SRC_COND, mf_conductor_params, 0,
+              MR_MF_BECKMANN, MF_CONDUCTOR);
+MF_DESCRIPTOR(mr_brdf_ggx_conductor, "ggx-conductor", "Mitsuba roughconductor, GGX, exact Fresnel (eta, k)",
+              MF_SRC_COND, mf_conductor_params, 0, MR_MF_GGX, MF_CONDUCTOR);
+MF_DESCRIPTOR(mr_brdf_as_conductor, "as-conductor", "Mitsuba roughconductor, EPhong/AS, exact Fresnel (eta, k)",
+              MF_SRC_COND, mf_conductor_params, MR_BRDF_NOT_ENERGY_CONSERVING, MR_MF_EPHONG, MF_CONDUCTOR);
+MF_DESCRIPTOR(mr_brdf_beckmann_plastic, "beckmann-plastic", "rough plastic, Beckmann: dielectric Fresnel over Lambert",
+              MF_SRC_PLASTIC, mf_plastic_params, 0, MR_MF_BECKMANN, MF_PLASTIC);
+MF_DESCRIPTOR(mr_brdf_ggx_plastic, "ggx-plastic", "rough plastic, GGX: dielectric Fresnel over Lambert",
+              MF_SRC_PLASTIC, mf_plastic_params, 0, MR_MF_GGX, MF_PLASTIC);
+MF_DESCRIPTOR(mr_brdf_as_plastic, "as-plastic", "rough plastic, EPhong/AS: dielectric Fresnel over Lambert",
+              MF_SRC_PLASTIC, mf_plastic_params, 0, MR_MF_EPHONG, MF_PLASTIC);

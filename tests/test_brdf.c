@@ -1,0 +1,1185 @@
+/*
+ * test_brdf.c — the BRDF models (src/brdf): generic property tests over every registered model, known answers
+ * computed independently of src/brdf, and the registry's parameter parsing.
+ *
+ * Every model returned by mr_brdf_models() is enrolled automatically in: table sanity, non-negativity and
+ * finiteness, reciprocity, below-horizon zeros, robustness at parameter bounds / grazing angles / non-finite
+ * inputs, the white-furnace energy bound, the analytic gradient against central differences, and the truthfulness
+ * of parameter roles (LINEAR, AFFINE) and lobes. Random streams use splitmix64 with fixed seeds, so every run
+ * checks the same points.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "brdf/brdf.h"
+#include "harness.h"
+
+#define PI 3.14159265358979323846
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* helpers */
+
+static uint64_t splitmix64(uint64_t *state) {
+    uint64_t z = (*state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+/* Uniform in [0, 1). */
+static double rnd(uint64_t *state) { return (double)(splitmix64(state) >> 11) * 0x1.0p-53; }
+
+static void dir_from_angles(double theta, double phi, double w[3]) {
+    w[0] = sin(theta) * cos(phi);
+    w[1] = sin(theta) * sin(phi);
+    w[2] = cos(theta);
+}
+
+/* A direction with z uniform in [zmin, 1) and uniform azimuth. */
+static void random_dir(uint64_t *rng, double zmin, double w[3]) {
+    double z = zmin + (1.0 - zmin) * rnd(rng), phi = 2.0 * PI * rnd(rng);
+    double r = sqrt(fmax(1.0 - z * z, 0.0));
+    w[0] = r * cos(phi);
+    w[1] = r * sin(phi);
+    w[2] = z;
+}
+
+static const mr_brdf_param *param_named(const mr_brdf_model *m, const char *name, int *offset) {
+    int i = mr_brdf_param_index(m, name);
+    if (i < 0) return NULL;
+    if (offset) *offset = mr_brdf_param_offset(m, i);
+    return &m->params[i];
+}
+
+/* Sets every channel of parameter `name`. */
+static void set_param(const mr_brdf_model *m, double *values, const char *name, double v) {
+    int offset;
+    const mr_brdf_param *p = param_named(m, name, &offset);
+    MR_CHECK_MSG(p != NULL, "model %s has no parameter %s", m->name, name);
+    if (p)
+        for (int c = 0; c < p->channels; c++) values[offset + c] = v;
+}
+
+static void set_rgb(const mr_brdf_model *m, double *values, const char *name, double r, double g, double b) {
+    int offset;
+    const mr_brdf_param *p = param_named(m, name, &offset);
+    MR_CHECK_MSG(p != NULL && p->channels == 3, "model %s has no RGB parameter %s", m->name, name);
+    if (p && p->channels == 3) {
+        values[offset] = r;
+        values[offset + 1] = g;
+        values[offset + 2] = b;
+    }
+}
+
+static const mr_brdf_model *model_named(const char *name) {
+    const mr_brdf_model *m = mr_brdf_find(name);
+    MR_CHECK_MSG(m != NULL, "model '%s' is not registered: %s", name, mr_last_error());
+    return m;
+}
+
+/* prepare + eval into d[3], s[3]. */
+static void eval_parts(const mr_brdf_model *m, const double *values, const double wi[3], const double wo[3],
+                       double d[3], double s[3]) {
+    mr_brdf_state state;
+    m->prepare(m, values, state.bytes);
+    m->eval(state.bytes, wi, wo, d, s);
+}
+
+/* A random in-bound value for parameter p: switches take an integer value, log-scale parameters are drawn
+ * log-uniformly, the rest uniformly, each within [min + margin, max - margin] of its (log-)range. */
+static double random_value(const mr_brdf_param *p, uint64_t *rng, double margin) {
+    double u = margin + (1.0 - 2.0 * margin) * rnd(rng);
+    if (p->role == MR_PARAM_SWITCH) return floor(p->min_value + u * (p->max_value - p->min_value + 1.0 - 1e-9));
+    if (p->flags & MR_PARAM_LOG_SCALE) return p->min_value * pow(p->max_value / p->min_value, u);
+    return p->min_value + u * (p->max_value - p->min_value);
+}
+
+static void random_values(const mr_brdf_model *m, uint64_t *rng, double margin, double *values) {
+    int slot = 0;
+    for (int i = 0; i < m->param_count; i++)
+        for (int c = 0; c < m->params[i].channels; c++) values[slot++] = random_value(&m->params[i], rng, margin);
+}
+
+/* Every SWITCH parameter at its minimum (for Mitsuba's trim: 0 = off, the case where roles are exact). */
+static void switches_off(const mr_brdf_model *m, double *values) {
+    for (int i = 0; i < m->param_count; i++)
+        if (m->params[i].role == MR_PARAM_SWITCH) set_param(m, values, m->params[i].name, m->params[i].min_value);
+}
+
+static int finite_nonneg3(const double v[3]) {
+    for (int c = 0; c < 3; c++)
+        if (!(isfinite(v[c]) && v[c] >= 0.0)) return 0;
+    return 1;
+}
+
+static int close_rel(double a, double b, double rel) {
+    return fabs(a - b) <= rel * fmax(fabs(a), fabs(b)) + 1e-300;
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* registry and tables */
+
+MR_TEST(registry_tables_are_consistent) {
+    const mr_brdf_model *const *models = mr_brdf_models();
+    int count = mr_brdf_model_count();
+    MR_CHECK(count >= 21);
+    MR_CHECK(models[count] == NULL);
+    for (int k = 0; k < count; k++) {
+        const mr_brdf_model *m = models[k];
+        MR_CHECK(m->name && m->name[0] && m->summary && m->summary[0] && m->source && m->source[0]);
+        MR_CHECK(m->prepare && m->eval && m->params && m->param_count > 0);
+        MR_CHECK_MSG(mr_brdf_find(m->name) == m, "%s", m->name);
+        for (int j = 0; j < k; j++) MR_CHECK_MSG(strcmp(models[j]->name, m->name) != 0, "duplicate %s", m->name);
+        MR_CHECK_MSG((m->flags & ~(unsigned)(MR_BRDF_NOT_ENERGY_CONSERVING | MR_BRDF_INDEPENDENT_LOBES)) == 0, "%s",
+                     m->name);
+        int n = mr_brdf_value_count(m);
+        MR_CHECK_MSG(n >= 1 && n <= MR_BRDF_MAX_VALUES, "%s: %d values", m->name, n);
+        for (int i = 0; i < m->param_count; i++) {
+            const mr_brdf_param *p = &m->params[i];
+            MR_CHECK_MSG(p->name && p->name[0] && p->meaning && p->meaning[0], "%s param %d", m->name, i);
+            MR_CHECK_MSG(p->channels == 1 || p->channels == 3, "%s.%s", m->name, p->name);
+            MR_CHECK_MSG(p->min_value <= p->default_value && p->default_value <= p->max_value, "%s.%s", m->name,
+                         p->name);
+            MR_CHECK_MSG(p->role >= MR_PARAM_LINEAR && p->role < MR_PARAM_ROLE_COUNT, "%s.%s", m->name, p->name);
+            MR_CHECK_MSG(p->lobe == MR_LOBE_DIFFUSE || p->lobe == MR_LOBE_SPECULAR || p->lobe == MR_LOBE_BOTH,
+                         "%s.%s", m->name, p->name);
+            if (p->flags & MR_PARAM_LOG_SCALE) MR_CHECK_MSG(p->min_value > 0.0, "%s.%s", m->name, p->name);
+            if (p->role == MR_PARAM_SWITCH)
+                MR_CHECK_MSG(p->channels == 1 && p->default_value == floor(p->default_value) &&
+                                 p->min_value == floor(p->min_value) && p->max_value == floor(p->max_value),
+                             "%s.%s", m->name, p->name);
+            if (p->default_rgb) {
+                MR_CHECK_MSG(p->channels == 3 && p->default_rgb[1] == p->default_value, "%s.%s", m->name, p->name);
+                for (int c = 0; c < 3; c++)
+                    MR_CHECK_MSG(p->min_value <= p->default_rgb[c] && p->default_rgb[c] <= p->max_value, "%s.%s",
+                                 m->name, p->name);
+            }
+            MR_CHECK_MSG(mr_brdf_param_index(m, p->name) == i, "%s.%s duplicate", m->name, p->name);
+        }
+        MR_CHECK(mr_brdf_param_offset(m, -1) == -1 && mr_brdf_param_offset(m, m->param_count) == -1);
+        MR_CHECK(mr_brdf_param_index(m, "no-such-parameter") == -1);
+    }
+}
+
+MR_TEST(find_unknown_lists_valid_names) {
+    mr_clear_error();
+    MR_CHECK(mr_brdf_find("ggxx") == NULL);
+    const char *msg = mr_last_error();
+    MR_CHECK(strstr(msg, "ggxx") != NULL);
+    for (const mr_brdf_model *const *m = mr_brdf_models(); *m; m++)
+        MR_CHECK_MSG(strstr(msg, (*m)->name) != NULL, "'%s' missing from: %s", (*m)->name, msg);
+    MR_CHECK(mr_brdf_find(NULL) == NULL);
+}
+
+MR_TEST(default_values_use_per_channel_defaults) {
+    const mr_brdf_model *m = model_named("ggx-conductor");
+    if (!m) return;
+    double v[MR_BRDF_MAX_VALUES] = {0};
+    mr_brdf_default_values(m, v);
+    int eta = 0, k = 0;
+    param_named(m, "eta", &eta);
+    param_named(m, "k", &k);
+    MR_CHECK(v[eta] == 0.200438 && v[eta + 1] == 0.924033 && v[eta + 2] == 1.10221);
+    MR_CHECK(v[k] == 3.91295 && v[k + 1] == 2.45285 && v[k + 2] == 2.14219);
+}
+
+MR_TEST(parse_assignment_accepts_and_rejects) {
+    const mr_brdf_model *m = model_named("ward");
+    if (!m) return;
+    double v[MR_BRDF_MAX_VALUES] = {0}, before[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(m, v);
+    int d = 0, a = 0, t = 0;
+    param_named(m, "diffuse", &d);
+    param_named(m, "alpha", &a);
+    param_named(m, "trim", &t);
+
+    MR_CHECK_OK(mr_brdf_parse_assignment(m, "alpha=0.25", v));
+    MR_CHECK(v[a] == 0.25);
+    MR_CHECK_OK(mr_brdf_parse_assignment(m, "diffuse=0.1,0.2,0.3", v));
+    MR_CHECK(v[d] == 0.1 && v[d + 1] == 0.2 && v[d + 2] == 0.3);
+    MR_CHECK_OK(mr_brdf_parse_assignment(m, "diffuse=0.4", v));
+    MR_CHECK(v[d] == 0.4 && v[d + 1] == 0.4 && v[d + 2] == 0.4);
+    MR_CHECK_OK(mr_brdf_parse_assignment(m, "trim=0", v));
+    MR_CHECK(v[t] == 0.0);
+    MR_CHECK_OK(mr_brdf_parse_assignment(m, "alpha=1e-4", v)); /* the inclusive minimum */
+
+    static const char *const bad[] = {
+        "foo=1",               /* unknown parameter */
+        "alpha=5",             /* above max */
+        "alpha=0",             /* below min */
+        "alpha=-1",            /* below min */
+        "alpha=nan",           /* not a number */
+        "alpha=inf",           /* out of range */
+        "alpha=abc",           /* not a number */
+        "alpha=",              /* empty */
+        "=0.1",                /* no name */
+        "alpha",               /* no '=' */
+        "alpha=0.1x",          /* trailing junk */
+        "diffuse=0.1,0.2",     /* wrong channel count */
+        "diffuse=0.1,0.2,0.3,0.4", /* too many */
+        "diffuse=0.1,,0.3",    /* empty channel */
+        "alpha=0.1,0.2,0.3",   /* three values for a scalar */
+        "trim=0.5",            /* switch must be an integer */
+        "trim=2",              /* switch out of range */
+        "diffuse=1e999",       /* overflow */
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        memcpy(before, v, sizeof v);
+        mr_clear_error();
+        mr_status s = mr_brdf_parse_assignment(m, bad[i], v);
+        MR_CHECK_MSG(s == MR_ERR_INVALID_ARG, "'%s' accepted", bad[i]);
+        MR_CHECK_MSG(mr_last_error()[0] != '\0', "'%s': no message", bad[i]);
+        MR_CHECK_MSG(memcmp(before, v, sizeof v) == 0, "'%s' changed the values", bad[i]);
+    }
+    mr_brdf_parse_assignment(m, "foo=1", v);
+    MR_CHECK_MSG(strstr(mr_last_error(), "valid: diffuse, specular, alpha, trim") != NULL, "%s", mr_last_error());
+    mr_brdf_parse_assignment(m, "alpha=5", v);
+    MR_CHECK_MSG(strstr(mr_last_error(), "outside") != NULL, "%s", mr_last_error());
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* generic properties */
+
+MR_TEST(random_values_are_finite_and_nonnegative) {
+    uint64_t rng = 1;
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        int bad = 0, mismatched = 0;
+        for (int k = 0; k < 200; k++) {
+            double v[MR_BRDF_MAX_VALUES] = {0};
+            random_values(m, &rng, 0.0, v);
+            mr_brdf_state state;
+            m->prepare(m, v, state.bytes);
+            for (int j = 0; j < 10; j++) {
+                double wi[3], wo[3], d[3], s[3], d_only[3], s_only[3];
+                random_dir(&rng, 0.0, wi);
+                random_dir(&rng, 0.0, wo);
+                m->eval(state.bytes, wi, wo, d, s);
+                if (!finite_nonneg3(d) || !finite_nonneg3(s)) bad++;
+                /* either output may be NULL, and asking for one part does not change it */
+                m->eval(state.bytes, wi, wo, d_only, NULL);
+                m->eval(state.bytes, wi, wo, NULL, s_only);
+                m->eval(state.bytes, wi, wo, NULL, NULL);
+                if (memcmp(d, d_only, sizeof d) != 0 || memcmp(s, s_only, sizeof s) != 0) mismatched++;
+            }
+        }
+        MR_CHECK_MSG(bad == 0, "%s: %d non-finite or negative values", m->name, bad);
+        MR_CHECK_MSG(mismatched == 0, "%s: %d evals differ with a NULL output", m->name, mismatched);
+    }
+}
+
+MR_TEST(reciprocity) {
+    uint64_t rng = 2;
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        int bad = 0;
+        double worst = 0.0;
+        for (int k = 0; k < 100; k++) {
+            double v[MR_BRDF_MAX_VALUES] = {0};
+            random_values(m, &rng, 0.0, v);
+            for (int j = 0; j < 10; j++) {
+                double wi[3], wo[3], d1[3], s1[3], d2[3], s2[3];
+                random_dir(&rng, 0.0, wi);
+                random_dir(&rng, 0.0, wo);
+                eval_parts(m, v, wi, wo, d1, s1);
+                eval_parts(m, v, wo, wi, d2, s2);
+                for (int c = 0; c < 3; c++) {
+                    if (!close_rel(d1[c], d2[c], 1e-9) || !close_rel(s1[c], s2[c], 1e-9)) bad++;
+                    double scale = fmax(fmax(d1[c], s1[c]), 1e-300);
+                    worst = fmax(worst, fmax(fabs(d1[c] - d2[c]), fabs(s1[c] - s2[c])) / scale);
+                }
+            }
+        }
+        MR_CHECK_MSG(bad == 0, "%s: %d non-reciprocal values (worst relative %.3g)", m->name, bad, worst);
+    }
+}
+
+MR_TEST(below_horizon_is_exactly_zero) {
+    uint64_t rng = 3;
+    const double below[][3] = {{0.6, 0.0, -0.8}, {0.0, 0.0, -1.0}, {1.0, 0.0, 0.0}, {1.0, 0.0, -0.0}};
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        double v[MR_BRDF_MAX_VALUES] = {0};
+        random_values(m, &rng, 0.0, v);
+        int n = mr_brdf_value_count(m);
+        for (size_t b = 0; b < sizeof below / sizeof below[0]; b++) {
+            double up[3], d[3], s[3];
+            random_dir(&rng, 0.0, up);
+            for (int swap = 0; swap < 2; swap++) {
+                const double *wi = swap ? up : below[b], *wo = swap ? below[b] : up;
+                eval_parts(m, v, wi, wo, d, s);
+                for (int c = 0; c < 3; c++)
+                    MR_CHECK_MSG(d[c] == 0.0 && s[c] == 0.0, "%s: %g %g below the horizon", m->name, d[c], s[c]);
+                if (m->eval_grad) {
+                    double gd[MR_BRDF_MAX_VALUES * 3], gs[MR_BRDF_MAX_VALUES * 3];
+                    m->eval_grad(m, v, wi, wo, gd, gs);
+                    for (int j = 0; j < n * 3; j++)
+                        MR_CHECK_MSG(gd[j] == 0.0 && gs[j] == 0.0, "%s: gradient below the horizon", m->name);
+                }
+            }
+        }
+    }
+}
+
+/* Direction pairs that stress grazing angles: cos = 1e-7 for wi, wo or both, in every azimuth relation, plus a
+ * denormal cosine. */
+static int stress_pairs(double wi[][3], double wo[][3]) {
+    const double zs[] = {1e-7, 1e-310, 0.3, 1.0};
+    const double phis[] = {0.0, 0.5 * PI, PI};
+    int n = 0;
+    for (size_t a = 0; a < 4; a++)
+        for (size_t b = 0; b < 4; b++)
+            for (size_t p = 0; p < 3; p++) {
+                double za = zs[a], zb = zs[b];
+                double ra = sqrt(1.0 - za * za), rb = sqrt(1.0 - zb * zb);
+                wi[n][0] = ra, wi[n][1] = 0.0, wi[n][2] = za;
+                wo[n][0] = rb * cos(phis[p]), wo[n][1] = rb * sin(phis[p]), wo[n][2] = zb;
+                n++;
+            }
+    return n;
+}
+
+/* Evaluates at the stress pairs and random pairs; counts non-finite or negative outputs (values and, for in-bound
+ * vectors, gradients). */
+static int count_bad(const mr_brdf_model *m, const double *v, int check_grad, uint64_t *rng) {
+    double wi[64][3], wo[64][3];
+    int n = stress_pairs(wi, wo), bad = 0;
+    for (int k = 0; k < 8; k++, n++) {
+        random_dir(rng, 0.0, wi[n]);
+        random_dir(rng, 0.0, wo[n]);
+    }
+    int count = mr_brdf_value_count(m);
+    for (int k = 0; k < n; k++) {
+        double d[3], s[3];
+        eval_parts(m, v, wi[k], wo[k], d, s);
+        if (!finite_nonneg3(d) || !finite_nonneg3(s)) bad++;
+        if (check_grad && m->eval_grad) {
+            double gd[MR_BRDF_MAX_VALUES * 3], gs[MR_BRDF_MAX_VALUES * 3];
+            m->eval_grad(m, v, wi[k], wo[k], gd, gs);
+            for (int j = 0; j < count * 3; j++)
+                if (!isfinite(gd[j]) || !isfinite(gs[j])) bad++;
+        }
+    }
+    return bad;
+}
+
+MR_TEST(robust_at_bounds_grazing_and_nonfinite_inputs) {
+    uint64_t rng = 4;
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        double def[MR_BRDF_MAX_VALUES] = {0}, v[MR_BRDF_MAX_VALUES];
+        mr_brdf_default_values(m, def);
+        MR_CHECK_MSG(count_bad(m, def, 1, &rng) == 0, "%s: defaults", m->name);
+        /* each parameter at its min and at its max, the others at default */
+        for (int i = 0; i < m->param_count; i++)
+            for (int end = 0; end < 2; end++) {
+                memcpy(v, def, sizeof v);
+                set_param(m, v, m->params[i].name, end ? m->params[i].max_value : m->params[i].min_value);
+                MR_CHECK_MSG(count_bad(m, v, 1, &rng) == 0, "%s: %s at %s", m->name, m->params[i].name,
+                             end ? "max" : "min");
+            }
+        /* every parameter at its min, then every one at its max (minimum roughness with extreme reflectances) */
+        for (int end = 0; end < 2; end++) {
+            for (int i = 0; i < m->param_count; i++)
+                set_param(m, v, m->params[i].name, end ? m->params[i].max_value : m->params[i].min_value);
+            MR_CHECK_MSG(count_bad(m, v, 1, &rng) == 0, "%s: all at %s", m->name, end ? "max" : "min");
+        }
+        /* roughness-like (log-scale) parameters at their min, reflectances at max */
+        memcpy(v, def, sizeof v);
+        for (int i = 0; i < m->param_count; i++) {
+            const mr_brdf_param *p = &m->params[i];
+            if (p->flags & MR_PARAM_LOG_SCALE) set_param(m, v, p->name, p->min_value);
+            else if (p->role == MR_PARAM_LINEAR || p->role == MR_PARAM_AFFINE) set_param(m, v, p->name, p->max_value);
+        }
+        MR_CHECK_MSG(count_bad(m, v, 1, &rng) == 0, "%s: minimum roughness", m->name);
+        /* non-finite inputs are clamped by prepare: NaN -> min, +Inf -> max, -Inf -> min */
+        const double specials[] = {NAN, INFINITY, -INFINITY, DBL_MAX, -DBL_MAX};
+        int slots = mr_brdf_value_count(m);
+        for (int j = 0; j < slots; j++)
+            for (size_t k = 0; k < sizeof specials / sizeof specials[0]; k++) {
+                memcpy(v, def, sizeof v);
+                v[j] = specials[k];
+                MR_CHECK_MSG(count_bad(m, v, 0, &rng) == 0, "%s: slot %d = %g", m->name, j, specials[k]);
+            }
+        /* NaN behaves exactly like the minimum */
+        for (int i = 0; i < m->param_count; i++) {
+            double vn[MR_BRDF_MAX_VALUES] = {0}, vm[MR_BRDF_MAX_VALUES], wi[3], wo[3], d1[3], s1[3], d2[3], s2[3];
+            memcpy(vn, def, sizeof vn);
+            memcpy(vm, def, sizeof vm);
+            set_param(m, vn, m->params[i].name, NAN);
+            set_param(m, vm, m->params[i].name, m->params[i].min_value);
+            random_dir(&rng, 0.05, wi);
+            random_dir(&rng, 0.05, wo);
+            eval_parts(m, vn, wi, wo, d1, s1);
+            eval_parts(m, vm, wi, wo, d2, s2);
+            MR_CHECK_MSG(memcmp(d1, d2, sizeof d1) == 0 && memcmp(s1, s2, sizeof s1) == 0, "%s: %s = NaN", m->name,
+                         m->params[i].name);
+        }
+    }
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* white furnace */
+
+/* Directional albedo a(wi) = integral of f_r cos(theta_o) d omega_o per channel and part, integrated over the
+ * half vector: d omega_o = 4 (wi.h) d omega_h. Every specular lobe here (Ward, microfacet, Phong's mirror lobe) is
+ * centred on h = n, so a grid that is logarithmic in tan(theta_h) resolves lobes of any width from alpha = 1e-4 to
+ * 1 with the same few hundred rings; diffuse lobes are smooth in h too. The models are isotropic and wi lies in the
+ * xz plane, so the azimuth integral covers [0, pi] and doubles. Midpoint rule in both variables; the Lambert model
+ * checks the accuracy (error below 1e-3). */
+#define FURNACE_RINGS 320
+#define FURNACE_SECTORS 40
+#define FURNACE_LOG_TAN_MIN (-14.0) /* tan(theta_h) = 8e-7: far inside the narrowest lobe (alpha = 1e-4) */
+#define FURNACE_LOG_TAN_MAX 6.0     /* tan(theta_h) = 400: beyond any h that reflects wi (<= 85 deg) upwards */
+
+static void furnace(const mr_brdf_model *m, const double *values, double theta_i, double diffuse[3],
+                    double specular[3]) {
+    mr_brdf_state state;
+    m->prepare(m, values, state.bytes);
+    double wi[3];
+    dir_from_angles(theta_i, 0.0, wi);
+    double ds = (FURNACE_LOG_TAN_MAX - FURNACE_LOG_TAN_MIN) / FURNACE_RINGS, dphi = PI / FURNACE_SECTORS;
+    double sum_d[3] = {0, 0, 0}, sum_s[3] = {0, 0, 0};
+    for (int i = 0; i < FURNACE_RINGS; i++) {
+        double t = exp(FURNACE_LOG_TAN_MIN + (i + 0.5) * ds);
+        double cos_h = 1.0 / sqrt(1.0 + t * t), sin_h = t * cos_h;
+        double jac = t * t * cos_h * cos_h * cos_h; /* sin(theta) d theta / ds = t^2/(1+t^2)^(3/2) */
+        for (int j = 0; j < FURNACE_SECTORS; j++) {
+            double phi = (j + 0.5) * dphi;
+            double h[3] = {sin_h * cos(phi), sin_h * sin(phi), cos_h};
+            double dot = wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2];
+            if (dot <= 0.0) continue;
+            double wo[3] = {2.0 * dot * h[0] - wi[0], 2.0 * dot * h[1] - wi[1], 2.0 * dot * h[2] - wi[2]};
+            if (wo[2] <= 0.0) continue;
+            double len = sqrt(wo[0] * wo[0] + wo[1] * wo[1] + wo[2] * wo[2]);
+            for (int c = 0; c < 3; c++) wo[c] /= len;
+            double d[3], s[3];
+            m->eval(state.bytes, wi, wo, d, s);
+            double w = wo[2] * 4.0 * dot * jac;
+            for (int c = 0; c < 3; c++) {
+                sum_d[c] += d[c] * w;
+                sum_s[c] += s[c] * w;
+            }
+        }
+    }
+    for (int c = 0; c < 3; c++) {
+        diffuse[c] = 2.0 * sum_d[c] * ds * dphi;
+        specular[c] = 2.0 * sum_s[c] * ds * dphi;
+    }
+}
+
+MR_TEST(white_furnace_quadrature_is_accurate) {
+    const mr_brdf_model *m = model_named("lambert");
+    if (!m) return;
+    double v[MR_BRDF_MAX_VALUES] = {1.0, 0.5, 0.25};
+    const double angles[] = {0.0, 40.0, 65.0, 80.0, 85.0};
+    for (size_t k = 0; k < sizeof angles / sizeof angles[0]; k++) {
+        double d[3], s[3];
+        furnace(m, v, angles[k] * PI / 180.0, d, s);
+        MR_CHECK_NEAR(d[0], 1.0, 1e-3);
+        MR_CHECK_NEAR(d[1], 0.5, 5e-4);
+        MR_CHECK_NEAR(s[0], 0.0, 0.0);
+    }
+    /* a narrow lobe: the Phong lobe at normal incidence integrates to exactly rho_s */
+    m = model_named("phong");
+    if (!m) return;
+    mr_brdf_default_values(m, v);
+    set_param(m, v, "diffuse", 0.0);
+    set_param(m, v, "specular", 1.0);
+    set_param(m, v, "trim", 0.0);
+    const double exponents[] = {1.0, 30.0, 10000.0};
+    for (size_t k = 0; k < 3; k++) {
+        double d[3], s[3];
+        set_param(m, v, "exponent", exponents[k]);
+        furnace(m, v, 0.0, d, s);
+        MR_CHECK_NEAR(s[1], 1.0, 2e-3);
+    }
+}
+
+/* Reflectance-like parameters (LINEAR/AFFINE) of `lobe_on` at max, those only of the other lobe at min, BOTH-lobe
+ * ones at max; switches at default. */
+enum { CONFIG_ALL = 0, CONFIG_DIFFUSE, CONFIG_SPECULAR, CONFIG_COUNT };
+
+static void energy_config(const mr_brdf_model *m, int config, double *v) {
+    for (int i = 0; i < m->param_count; i++) {
+        const mr_brdf_param *p = &m->params[i];
+        if (p->role != MR_PARAM_LINEAR && p->role != MR_PARAM_AFFINE) continue;
+        int on = config == CONFIG_ALL || p->lobe == MR_LOBE_BOTH ||
+                 (config == CONFIG_DIFFUSE && p->lobe == MR_LOBE_DIFFUSE) ||
+                 (config == CONFIG_SPECULAR && p->lobe == MR_LOBE_SPECULAR);
+        set_param(m, v, p->name, on ? p->max_value : p->min_value);
+    }
+}
+
+/* The parameter settings the energy test visits: all NONLINEAR parameters at default (setting 0), then each one at
+ * its min and at its max (1 .. 2K), then every corner of their box (all at min or max, 2^K settings). */
+static int energy_settings(const mr_brdf_model *m, int nonlinear[], int *k_out) {
+    int k = 0;
+    for (int i = 0; i < m->param_count; i++)
+        if (m->params[i].role == MR_PARAM_NONLINEAR) nonlinear[k++] = i;
+    *k_out = k;
+    return 1 + 2 * k + (1 << k);
+}
+
+static void energy_setting(const mr_brdf_model *m, const int nonlinear[], int k, int setting, double *v) {
+    if (setting == 0) return;
+    if (setting <= 2 * k) {
+        const mr_brdf_param *p = &m->params[nonlinear[(setting - 1) / 2]];
+        set_param(m, v, p->name, (setting - 1) % 2 ? p->max_value : p->min_value);
+        return;
+    }
+    int corner = setting - 1 - 2 * k;
+    for (int b = 0; b < k; b++) {
+        const mr_brdf_param *p = &m->params[nonlinear[b]];
+        set_param(m, v, p->name, (corner >> b) & 1 ? p->max_value : p->min_value);
+    }
+}
+
+MR_TEST(white_furnace_energy_bound) {
+    /* 88 degrees finds the normalisations that blow up towards grazing (ward-duer exceeds 1 from about 85) */
+    const double angles[] = {0.0, 40.0, 65.0, 80.0, 88.0};
+    const double tol = 1.01;
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        int skip = (m->flags & MR_BRDF_NOT_ENERGY_CONSERVING) != 0;
+        int per_lobe = (m->flags & MR_BRDF_INDEPENDENT_LOBES) != 0;
+        int nonlinear[MR_BRDF_MAX_VALUES], k;
+        int settings = energy_settings(m, nonlinear, &k);
+        double max_total = 0.0, max_d = 0.0, max_s = 0.0, at_angle = 0.0;
+        int at_setting = 0, at_config = 0, failures = 0;
+        for (int setting = 0; setting < settings; setting++)
+            for (int config = 0; config < CONFIG_COUNT; config++) {
+                double v[MR_BRDF_MAX_VALUES] = {0};
+                mr_brdf_default_values(m, v);
+                energy_setting(m, nonlinear, k, setting, v);
+                energy_config(m, config, v);
+                for (size_t a = 0; a < sizeof angles / sizeof angles[0]; a++) {
+                    double d[3], s[3];
+                    furnace(m, v, angles[a] * PI / 180.0, d, s);
+                    for (int c = 0; c < 3; c++) {
+                        max_d = fmax(max_d, d[c]);
+                        max_s = fmax(max_s, s[c]);
+                        if (d[c] + s[c] > max_total) {
+                            max_total = d[c] + s[c];
+                            at_angle = angles[a];
+                            at_setting = setting;
+                            at_config = config;
+                        }
+                        int over = per_lobe ? (d[c] > tol || s[c] > tol) : d[c] + s[c] > tol;
+                        if (!skip && over && failures++ < 3)
+                            fprintf(stderr, "    %s: albedo %.4f (diffuse %.4f, specular %.4f) at %g deg, setting %d, "
+                                    "config %d\n", m->name, d[c] + s[c], d[c], s[c], angles[a], setting, config);
+                    }
+                }
+            }
+        MR_CHECK_MSG(failures == 0, "%s: %d albedos above %g", m->name, failures, tol);
+        printf("      %-20s max albedo %.4f at %2.0f deg (setting %d, config %d); max diffuse part %.4f, specular part "
+               "%.4f%s\n", m->name, max_total, at_angle, at_setting, at_config, max_d, max_s,
+               skip       ? "  [NOT_ENERGY_CONSERVING: not checked]"
+               : per_lobe ? "  [INDEPENDENT_LOBES: checked per lobe]"
+                          : "");
+    }
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* gradients */
+
+/* f at v with slot j moved to x: the 6 outputs (diffuse RGB, specular RGB). */
+static void eval6(const mr_brdf_model *m, const double *v, int j, double x, const double wi[3], const double wo[3],
+                  double out[6]) {
+    double w[MR_BRDF_MAX_VALUES];
+    memcpy(w, v, sizeof w);
+    w[j] = x;
+    eval_parts(m, w, wi, wo, out, out + 3);
+}
+
+MR_TEST(gradient_matches_central_differences) {
+    uint64_t rng = 5;
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        if (!m->eval_grad) {
+            printf("      %-20s no analytic gradient\n", m->name);
+            continue;
+        }
+        int n = mr_brdf_value_count(m), checks = 0, kinks = 0, bad = 0;
+        /* slot -> parameter */
+        int param_of[MR_BRDF_MAX_VALUES];
+        for (int i = 0, slot = 0; i < m->param_count; i++)
+            for (int c = 0; c < m->params[i].channels; c++) param_of[slot++] = i;
+        for (int k = 0; k < 60; k++) {
+            double v[MR_BRDF_MAX_VALUES] = {0}, wi[3], wo[3], gd[MR_BRDF_MAX_VALUES * 3], gs[MR_BRDF_MAX_VALUES * 3];
+            random_values(m, &rng, 0.03, v);
+            random_dir(&rng, 0.1, wi);
+            random_dir(&rng, 0.1, wo);
+            m->eval_grad(m, v, wi, wo, gd, gs);
+            double f[6];
+            eval6(m, v, 0, v[0], wi, wo, f);
+            for (int j = 0; j < n; j++) {
+                const mr_brdf_param *p = &m->params[param_of[j]];
+                if (p->role == MR_PARAM_SWITCH) {
+                    for (int c = 0; c < 3; c++)
+                        MR_CHECK_MSG(gd[j * 3 + c] == 0.0 && gs[j * 3 + c] == 0.0, "%s: switch gradient", m->name);
+                    continue;
+                }
+                /* the natural unit of the parameter: its value on a log scale, its range otherwise */
+                double unit = (p->flags & MR_PARAM_LOG_SCALE) ? v[j] : p->max_value - p->min_value;
+                double h = 1e-5 * unit;
+                double fp[6], fm[6], fp2[6], fm2[6];
+                eval6(m, v, j, v[j] + h, wi, wo, fp);
+                eval6(m, v, j, v[j] - h, wi, wo, fm);
+                eval6(m, v, j, v[j] + 0.5 * h, wi, wo, fp2);
+                eval6(m, v, j, v[j] - 0.5 * h, wi, wo, fm2);
+                for (int o = 0; o < 6; o++) {
+                    double fd = (fp[o] - fm[o]) / (2.0 * h), fd2 = (fp2[o] - fm2[o]) / h;
+                    double fd_r = (4.0 * fd2 - fd) / 3.0; /* Richardson: error O(h^4) */
+                    double an = o < 3 ? gd[j * 3 + o] : gs[j * 3 + (o - 3)];
+                    double natural = (fabs(f[o]) + fabs(fp[o]) + fabs(fm[o])) / unit; /* |f| per unit */
+                    checks++;
+                    /* 1e-250: below it the values are denormal-scale and differences carry no digits */
+                    double floor_abs = 1e-9 * natural + 1e-250;
+                    /* a kink (trim boundary, a clamp, the G1 switch) between v - h and v + h: the two step sizes
+                     * disagree far beyond truncation error (steep exponentials like cos^10000 stay below 1e-3) */
+                    if (fabs(fd - fd2) > 1e-3 * fmax(fabs(fd), fabs(fd2)) + floor_abs) {
+                        kinks++;
+                        continue;
+                    }
+                    if (!(fabs(an - fd_r) <= 1e-4 * fmax(fabs(an), fabs(fd_r)) + 100.0 * floor_abs)) {
+                        if (bad < 5)
+                            fprintf(stderr, "    %s: d%s[%d]/d%s(slot %d) analytic %.10g, differences %.10g (f %.6g)\n",
+                                    m->name, o < 3 ? "diffuse" : "specular", o % 3, p->name, j, an, fd_r, f[o]);
+                        bad++;
+                    }
+                }
+            }
+        }
+        printf("      %-20s %d gradient entries checked, %d skipped at kinks\n", m->name, checks - kinks, kinks);
+        MR_CHECK_MSG(bad == 0, "%s: %d of %d gradient entries disagree", m->name, bad, checks);
+        MR_CHECK_MSG(kinks * 20 <= checks, "%s: %d of %d checks skipped as kinks", m->name, kinks, checks);
+    }
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* roles and lobes */
+
+/* Scaling one channel of a LINEAR parameter by t scales that channel of the parts of its lobe by t and leaves the
+ * other channels alone; an AFFINE parameter's midpoint gives the midpoint of the parts. */
+MR_TEST(roles_are_truthful) {
+    uint64_t rng = 6;
+    const double rel = 1e-12;
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        int bad = 0;
+        for (int k = 0; k < 20; k++) {
+            double v[MR_BRDF_MAX_VALUES] = {0};
+            random_values(m, &rng, 0.0, v);
+            switches_off(m, v);
+            double wi[3], wo[3], d0[6];
+            random_dir(&rng, 0.02, wi);
+            random_dir(&rng, 0.02, wo);
+            eval6(m, v, 0, v[0], wi, wo, d0);
+            for (int i = 0; i < m->param_count; i++) {
+                const mr_brdf_param *p = &m->params[i];
+                int off = mr_brdf_param_offset(m, i);
+                if (p->role != MR_PARAM_LINEAR && p->role != MR_PARAM_AFFINE) continue;
+                for (int c = 0; c < p->channels; c++) {
+                    int j = off + c;
+                    double out_a[6], out_b[6], out_mid[6];
+                    if (p->role == MR_PARAM_LINEAR) {
+                        double t = 0.37;
+                        eval6(m, v, j, v[j] * t, wi, wo, out_a);
+                        for (int o = 0; o < 6; o++) {
+                            int in_lobe = o < 3 ? (p->lobe & MR_LOBE_DIFFUSE) : (p->lobe & MR_LOBE_SPECULAR);
+                            int same_channel = p->channels == 1 || o % 3 == c;
+                            double expect = (in_lobe && same_channel) ? t * d0[o] : d0[o];
+                            if (!close_rel(out_a[o], expect, rel)) bad++;
+                        }
+                    } else {
+                        double a = p->min_value, b = p->max_value; /* 0 and 1 for F0, base colour */
+                        eval6(m, v, j, a, wi, wo, out_a);
+                        eval6(m, v, j, b, wi, wo, out_b);
+                        eval6(m, v, j, 0.5 * (a + b), wi, wo, out_mid);
+                        for (int o = 0; o < 6; o++) {
+                            if (!close_rel(out_mid[o], 0.5 * (out_a[o] + out_b[o]), 1e-11)) bad++;
+                            int same_channel = p->channels == 1 || o % 3 == c;
+                            if (!same_channel && !close_rel(out_a[o], d0[o], rel)) bad++;
+                        }
+                    }
+                }
+            }
+        }
+        MR_CHECK_MSG(bad == 0, "%s: %d role violations", m->name, bad);
+    }
+}
+
+/* The LINEAR and AFFINE parameters together: f is jointly affine in them (what the optimiser's linear solve
+ * assumes), so f at the midpoint of two such vectors is the midpoint of f. */
+MR_TEST(linear_and_affine_parameters_are_jointly_affine) {
+    uint64_t rng = 7;
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        int bad = 0;
+        for (int k = 0; k < 20; k++) {
+            double u[MR_BRDF_MAX_VALUES] = {0}, w[MR_BRDF_MAX_VALUES] = {0}, mid[MR_BRDF_MAX_VALUES] = {0};
+            double r[MR_BRDF_MAX_VALUES] = {0};
+            random_values(m, &rng, 0.0, u);
+            switches_off(m, u);
+            memcpy(w, u, sizeof w);
+            random_values(m, &rng, 0.0, r);
+            for (int i = 0; i < m->param_count; i++) {
+                const mr_brdf_param *p = &m->params[i];
+                if (p->role != MR_PARAM_LINEAR && p->role != MR_PARAM_AFFINE) continue;
+                int off = mr_brdf_param_offset(m, i);
+                for (int c = 0; c < p->channels; c++) w[off + c] = r[off + c];
+            }
+            for (int j = 0; j < mr_brdf_value_count(m); j++) mid[j] = 0.5 * (u[j] + w[j]);
+            double wi[3], wo[3], fu[6], fw[6], fm[6];
+            random_dir(&rng, 0.02, wi);
+            random_dir(&rng, 0.02, wo);
+            eval6(m, u, 0, u[0], wi, wo, fu);
+            eval6(m, w, 0, w[0], wi, wo, fw);
+            eval6(m, mid, 0, mid[0], wi, wo, fm);
+            for (int o = 0; o < 6; o++)
+                if (!close_rel(fm[o], 0.5 * (fu[o] + fw[o]), 1e-11)) bad++;
+        }
+        MR_CHECK_MSG(bad == 0, "%s: %d violations of joint affinity", m->name, bad);
+    }
+}
+
+/* A DIFFUSE-lobe parameter never changes the specular part, and a SPECULAR-lobe one never the diffuse part. */
+MR_TEST(lobes_are_truthful) {
+    uint64_t rng = 8;
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        int bad = 0;
+        for (int k = 0; k < 20; k++) {
+            double v[MR_BRDF_MAX_VALUES] = {0}, r[MR_BRDF_MAX_VALUES], wi[3], wo[3], f0[6], f1[6];
+            random_values(m, &rng, 0.0, v);
+            switches_off(m, v);
+            random_values(m, &rng, 0.0, r);
+            random_dir(&rng, 0.02, wi);
+            random_dir(&rng, 0.02, wo);
+            eval6(m, v, 0, v[0], wi, wo, f0);
+            for (int i = 0; i < m->param_count; i++) {
+                const mr_brdf_param *p = &m->params[i];
+                if (p->lobe == MR_LOBE_BOTH || p->role == MR_PARAM_SWITCH) continue;
+                int off = mr_brdf_param_offset(m, i);
+                double w[MR_BRDF_MAX_VALUES];
+                memcpy(w, v, sizeof w);
+                for (int c = 0; c < p->channels; c++) w[off + c] = r[off + c];
+                eval6(m, w, 0, w[0], wi, wo, f1);
+                int fixed = p->lobe == MR_LOBE_DIFFUSE ? 3 : 0; /* the part that must not move */
+                for (int o = fixed; o < fixed + 3; o++)
+                    if (f1[o] != f0[o]) bad++;
+            }
+        }
+        MR_CHECK_MSG(bad == 0, "%s: %d lobe violations", m->name, bad);
+    }
+}
+
+/* ---------------------------------------------------------------------------------------------------------- */
+/* known answers, computed here from the published formulas */
+
+static const double normal[3] = {0.0, 0.0, 1.0};
+
+MR_TEST(known_lambert) {
+    const mr_brdf_model *m = model_named("lambert");
+    if (!m) return;
+    double v[3] = {0.2, 0.5, 0.9}, wi[3], wo[3], d[3], s[3];
+    dir_from_angles(0.7, 0.3, wi);
+    dir_from_angles(1.2, 2.0, wo);
+    eval_parts(m, v, wi, wo, d, s);
+    for (int c = 0; c < 3; c++) {
+        MR_CHECK_NEAR(d[c], v[c] / PI, 1e-15);
+        MR_CHECK(s[c] == 0.0);
+    }
+}
+
+MR_TEST(known_microfacet_normal_incidence) {
+    /* wi = wo = n: h = n, Schlick F = F0, D(n) = 1/(pi alpha^2) for all three distributions (EPhong: (n+2)/(2 pi)
+     * with n = 2/alpha^2 - 2), G1 = 1, so f_s = F0/(4 pi alpha^2). */
+    const char *names[] = {"beckmann", "ggx", "as"};
+    for (int k = 0; k < 3; k++) {
+        const mr_brdf_model *m = model_named(names[k]);
+        if (!m) continue;
+        double v[MR_BRDF_MAX_VALUES] = {0}, d[3], s[3];
+        mr_brdf_default_values(m, v);
+        set_param(m, v, "alpha", 0.3);
+        set_rgb(m, v, "f0", 0.1, 0.5, 0.9);
+        eval_parts(m, v, normal, normal, d, s);
+        const double f0[3] = {0.1, 0.5, 0.9};
+        for (int c = 0; c < 3; c++) {
+            MR_CHECK_NEAR(s[c], f0[c] / (4.0 * PI * 0.09), 1e-12 * s[c]);
+            MR_CHECK(d[c] == 0.0);
+        }
+    }
+}
+
+/* Beckmann's rational Smith G1 (Walter et al. 2007), in terms of a = cot(theta)/alpha. */
+static double beckmann_g1(double theta, double alpha) {
+    double a = cos(theta) / (alpha * sin(theta));
+    return a >= 1.6 ? 1.0 : (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a);
+}
+
+MR_TEST(known_microfacet_off_normal) {
+    double ti = 0.5, to = 0.9, alpha = 0.35, wi[3], wo[3];
+    dir_from_angles(ti, 0.0, wi);
+    dir_from_angles(to, 2.1, wo);
+    double h[3] = {wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]};
+    double hl = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+    double ch = h[2] / hl, th = acos(ch), c_ih = (wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2]) / hl;
+    double a2 = alpha * alpha, t2 = tan(th) * tan(th);
+    double f0 = 0.3, F = f0 + (1.0 - f0) * pow(1.0 - c_ih, 5.0);
+    /* GGX: Karis' forms, D = a^2/(pi ((n.h)^2 (a^2 - 1) + 1)^2), G1 = 2 n.v/(n.v + sqrt(a^2 + (1 - a^2)(n.v)^2)) */
+    double dd = ch * ch * (a2 - 1.0) + 1.0;
+    double D_ggx = a2 / (PI * dd * dd);
+    double g1i = 2.0 * cos(ti) / (cos(ti) + sqrt(a2 + (1.0 - a2) * cos(ti) * cos(ti)));
+    double g1o = 2.0 * cos(to) / (cos(to) + sqrt(a2 + (1.0 - a2) * cos(to) * cos(to)));
+    double ggx = F * D_ggx * g1i * g1o / (4.0 * cos(ti) * cos(to));
+    double D_beck = exp(-t2 / a2) / (PI * a2 * pow(ch, 4.0));
+    double beck = F * D_beck * beckmann_g1(ti, alpha) * beckmann_g1(to, alpha) / (4.0 * cos(ti) * cos(to));
+    double n = 2.0 / a2 - 2.0, D_as = (n + 2.0) / (2.0 * PI) * pow(ch, n);
+    double as = F * D_as * beckmann_g1(ti, alpha) * beckmann_g1(to, alpha) / (4.0 * cos(ti) * cos(to));
+    const char *names[] = {"ggx", "beckmann", "as"};
+    const double expect[] = {ggx, beck, as};
+    for (int k = 0; k < 3; k++) {
+        const mr_brdf_model *m = model_named(names[k]);
+        if (!m) continue;
+        double v[MR_BRDF_MAX_VALUES] = {0}, d[3], s[3];
+        mr_brdf_default_values(m, v);
+        set_param(m, v, "alpha", alpha);
+        set_param(m, v, "f0", f0);
+        eval_parts(m, v, wi, wo, d, s);
+        MR_CHECK_MSG(close_rel(s[1], expect[k], 1e-10), "%s: %.15g vs %.15g", names[k], s[1], expect[k]);
+    }
+}
+
+MR_TEST(known_conductor_fresnel) {
+    const mr_brdf_model *m = model_named("ggx-conductor");
+    const mr_brdf_model *none = model_named("ggx-nofresnel");
+    if (!m || !none) return;
+    uint64_t rng = 9;
+    double v[MR_BRDF_MAX_VALUES] = {0}, vn[MR_BRDF_MAX_VALUES], d[3], s[3], dn[3], sn[3];
+    mr_brdf_default_values(m, v);
+    mr_brdf_default_values(none, vn);
+    set_param(m, v, "alpha", 0.2);
+    set_param(none, vn, "alpha", 0.2);
+    for (int k = 0; k < 20; k++) {
+        double wi[3], wo[3];
+        random_dir(&rng, 0.01, wi);
+        random_dir(&rng, 0.01, wo);
+        /* eta = 1, k = 0: the interface vanishes, F = 0 */
+        set_param(m, v, "eta", 1.0);
+        set_param(m, v, "k", 0.0);
+        eval_parts(m, v, wi, wo, d, s);
+        eval_parts(none, vn, wi, wo, dn, sn);
+        for (int c = 0; c < 3; c++) MR_CHECK(s[c] <= 1e-12 * sn[c]);
+        /* Mitsuba's "none": eta = 0, k = 1 gives F = 1, i.e. the F = 1 model */
+        set_param(m, v, "eta", 0.0);
+        set_param(m, v, "k", 1.0);
+        eval_parts(m, v, wi, wo, d, s);
+        for (int c = 0; c < 3; c++) MR_CHECK_MSG(close_rel(s[c], sn[c], 1e-12), "%.17g vs %.17g", s[c], sn[c]);
+    }
+    /* normal incidence, default Cu: F = ((eta - 1)^2 + k^2)/((eta + 1)^2 + k^2) */
+    mr_brdf_default_values(m, v);
+    set_param(m, v, "alpha", 0.2);
+    eval_parts(m, v, normal, normal, d, s);
+    const double eta[3] = {0.200438, 0.924033, 1.10221}, kk[3] = {3.91295, 2.45285, 2.14219};
+    for (int c = 0; c < 3; c++) {
+        double F = ((eta[c] - 1) * (eta[c] - 1) + kk[c] * kk[c]) / ((eta[c] + 1) * (eta[c] + 1) + kk[c] * kk[c]);
+        MR_CHECK_MSG(close_rel(s[c], F / (4.0 * PI * 0.04), 1e-12), "channel %d: %.17g", c, s[c]);
+        MR_CHECK(d[c] == 0.0);
+    }
+}
+
+MR_TEST(known_plastic) {
+    const mr_brdf_model *m = model_named("beckmann-plastic");
+    if (!m) return;
+    double v[MR_BRDF_MAX_VALUES] = {0}, d[3], s[3];
+    mr_brdf_default_values(m, v);
+    set_param(m, v, "alpha", 0.25);
+    set_rgb(m, v, "diffuse", 0.2, 0.4, 0.6);
+    set_param(m, v, "specular", 0.5);
+    set_param(m, v, "ior", 1.7);
+    eval_parts(m, v, normal, normal, d, s);
+    double F0 = (0.7 / 2.7) * (0.7 / 2.7);
+    const double rd[3] = {0.2, 0.4, 0.6};
+    for (int c = 0; c < 3; c++) {
+        MR_CHECK(close_rel(d[c], rd[c] / PI * (1.0 - F0) * (1.0 - F0), 1e-12));
+        MR_CHECK(close_rel(s[c], 0.5 * F0 / (4.0 * PI * 0.0625), 1e-12));
+    }
+    /* ior = 1: no interface at all, a Lambert base and no specular */
+    set_param(m, v, "ior", 1.0);
+    double wi[3], wo[3];
+    dir_from_angles(1.3, 0.0, wi);
+    dir_from_angles(0.4, 2.5, wo);
+    eval_parts(m, v, wi, wo, d, s);
+    for (int c = 0; c < 3; c++) {
+        MR_CHECK(close_rel(d[c], rd[c] / PI, 1e-12));
+        MR_CHECK(s[c] <= 1e-15);
+    }
+}
+
+MR_TEST(known_ward_variants) {
+    /* wi = wo = n: all three normalisations give rho_s/(4 pi alpha^2) + rho_d/pi */
+    const char *names[] = {"ward", "ward-duer", "ward-balanced"};
+    for (int k = 0; k < 3; k++) {
+        const mr_brdf_model *m = model_named(names[k]);
+        if (!m) continue;
+        double v[MR_BRDF_MAX_VALUES] = {0}, d[3], s[3];
+        mr_brdf_default_values(m, v);
+        set_rgb(m, v, "diffuse", 0.1, 0.2, 0.3);
+        set_rgb(m, v, "specular", 0.3, 0.2, 0.1);
+        set_param(m, v, "alpha", 0.15);
+        eval_parts(m, v, normal, normal, d, s);
+        const double rd[3] = {0.1, 0.2, 0.3}, rs[3] = {0.3, 0.2, 0.1};
+        for (int c = 0; c < 3; c++) {
+            MR_CHECK(close_rel(d[c], rd[c] / PI, 1e-14));
+            MR_CHECK_MSG(close_rel(s[c], rs[c] / (4.0 * PI * 0.0225), 1e-12), "%s %.17g", names[k], s[c]);
+        }
+        /* off-normal, independently: exp(-tan^2(theta_h)/alpha^2) times the variant's normalisation */
+        double wi[3], wo[3];
+        dir_from_angles(0.6, 0.0, wi);
+        dir_from_angles(0.8, 2.8, wo);
+        double H[3] = {wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]};
+        double e = exp(-(H[0] * H[0] + H[1] * H[1]) / (H[2] * H[2]) / 0.0225);
+        double N = k == 0   ? 1.0 / (4.0 * PI * 0.0225 * sqrt(wi[2] * wo[2]))
+                   : k == 1 ? 1.0 / (4.0 * PI * 0.0225 * wi[2] * wo[2])
+                            : (H[0] * H[0] + H[1] * H[1] + H[2] * H[2]) / (PI * 0.0225 * pow(H[2], 4.0));
+        eval_parts(m, v, wi, wo, d, s);
+        MR_CHECK_MSG(close_rel(s[0], 0.3 * N * e, 1e-12), "%s: %.17g vs %.17g", names[k], s[0], 0.3 * N * e);
+    }
+}
+
+MR_TEST(known_trimming) {
+    /* Mitsuba's ensureEnergyConservation: max(rho_d + rho_s) = 1.4 > 1, so both are scaled by 0.99/1.4 */
+    const char *names[] = {"ward", "ward-balanced", "phong"};
+    for (int k = 0; k < 3; k++) {
+        const mr_brdf_model *m = model_named(names[k]);
+        if (!m) continue;
+        double on[MR_BRDF_MAX_VALUES] = {0}, off[MR_BRDF_MAX_VALUES], wi[3], wo[3], d1[3], s1[3], d2[3], s2[3];
+        mr_brdf_default_values(m, on);
+        set_rgb(m, on, "diffuse", 0.8, 0.5, 0.2);
+        set_rgb(m, on, "specular", 0.6, 0.3, 0.1);
+        set_param(m, on, "trim", 1.0);
+        double q = 0.99 / 1.4;
+        memcpy(off, on, sizeof off);
+        set_rgb(m, off, "diffuse", 0.8 * q, 0.5 * q, 0.2 * q);
+        set_rgb(m, off, "specular", 0.6 * q, 0.3 * q, 0.1 * q);
+        set_param(m, off, "trim", 0.0);
+        dir_from_angles(0.3, 0.0, wi);
+        dir_from_angles(0.35, 3.0, wo);
+        eval_parts(m, on, wi, wo, d1, s1);
+        eval_parts(m, off, wi, wo, d2, s2);
+        for (int c = 0; c < 3; c++) MR_CHECK(close_rel(d1[c], d2[c], 1e-14) && close_rel(s1[c], s2[c], 1e-14));
+        /* below the threshold trimming changes nothing */
+        set_rgb(m, on, "diffuse", 0.5, 0.5, 0.5);
+        set_rgb(m, on, "specular", 0.5, 0.2, 0.1);
+        memcpy(off, on, sizeof off);
+        set_param(m, off, "trim", 0.0);
+        eval_parts(m, on, wi, wo, d1, s1);
+        eval_parts(m, off, wi, wo, d2, s2);
+        MR_CHECK(memcmp(d1, d2, sizeof d1) == 0 && memcmp(s1, s2, sizeof s1) == 0);
+    }
+}
+
+MR_TEST(known_phong) {
+    const mr_brdf_model *m = model_named("phong");
+    if (!m) return;
+    double v[MR_BRDF_MAX_VALUES] = {0}, wi[3], wo[3], d[3], s[3];
+    mr_brdf_default_values(m, v);
+    set_param(m, v, "trim", 0.0);
+    set_param(m, v, "exponent", 12.0);
+    set_param(m, v, "specular", 0.4);
+    set_param(m, v, "diffuse", 0.3);
+    eval_parts(m, v, normal, normal, d, s);
+    MR_CHECK(close_rel(s[0], 0.4 * 14.0 / (2.0 * PI), 1e-14));
+    MR_CHECK(close_rel(d[0], 0.3 / PI, 1e-14));
+    /* off the mirror direction: cos(angle to r)^n with r the mirror of wi */
+    dir_from_angles(0.5, 0.0, wi);
+    dir_from_angles(0.6, PI + 0.2, wo);
+    double r[3] = {-wi[0], -wi[1], wi[2]};
+    double c = r[0] * wo[0] + r[1] * wo[1] + r[2] * wo[2];
+    eval_parts(m, v, wi, wo, d, s);
+    MR_CHECK(close_rel(s[0], 0.4 * 14.0 / (2.0 * PI) * pow(c, 12.0), 1e-12));
+    /* behind the mirror lobe (wo.r <= 0): only the diffuse part */
+    dir_from_angles(1.4, 0.0, wi);
+    dir_from_angles(1.4, 0.0, wo);
+    eval_parts(m, v, wi, wo, d, s);
+    MR_CHECK(s[0] == 0.0 && d[0] > 0.0);
+}
+
+MR_TEST(known_blender_ward) {
+    const mr_brdf_model *m = model_named("blender-ward");
+    if (!m) return;
+    double v[MR_BRDF_MAX_VALUES] = {0}, wi[3], wo[3], d[3], s[3];
+    mr_brdf_default_values(m, v);
+    set_param(m, v, "rms", 0.2);
+    eval_parts(m, v, normal, normal, d, s);
+    for (int c = 0; c < 3; c++) {
+        MR_CHECK(close_rel(d[c], 0.64, 1e-15)); /* no 1/pi */
+        MR_CHECK(close_rel(s[c], 0.5 / (4.0 * PI * 0.04), 1e-13));
+    }
+    /* WardIso_Spec / n.l, from its angles: exp(-tan^2(acos(n.h))/rms^2) / (4 pi rms^2 sqrt(n.v n.l)) */
+    dir_from_angles(0.9, 0.0, wi);
+    dir_from_angles(0.4, 2.0, wo);
+    double h[3] = {wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]};
+    double nh = h[2] / sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+    double ang = tan(acos(nh));
+    double expect = 0.5 * exp(-ang * ang / 0.04) / (4.0 * PI * 0.04 * sqrt(wi[2] * wo[2]));
+    eval_parts(m, v, wi, wo, d, s);
+    MR_CHECK_MSG(close_rel(s[2], expect, 1e-10), "%.17g vs %.17g", s[2], expect);
+}
+
+/* glTF Appendix B, written out independently: returns diffuse/specular of the metallic-roughness model with the
+ * KHR_materials_specular/ior extensions. */
+static void gltf_reference(const double base[3], double metallic, double rough, double spec, const double color[3],
+                           double ior, const double wi[3], const double wo[3], double d[3], double s[3]) {
+    double h[3] = {wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]};
+    double hl = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+    double nh = h[2] / hl, vh = (wo[0] * h[0] + wo[1] * h[1] + wo[2] * h[2]) / hl;
+    double nl = wi[2], nv = wo[2], a = rough * rough, a2 = a * a;
+    double dd = nh * nh * (a2 - 1.0) + 1.0, D = a2 / (PI * dd * dd);
+    double V = 0.5 / (nv * sqrt(a2 + (1 - a2) * nl * nl) + nl * sqrt(a2 + (1 - a2) * nv * nv));
+    double w = pow(1.0 - fabs(vh), 5.0), f0i = pow((ior - 1) / (ior + 1), 2.0);
+    double F[3], Fmax = 0.0;
+    for (int c = 0; c < 3; c++) {
+        double f0 = fmin(f0i * color[c], 1.0) * spec;
+        F[c] = f0 + (spec - f0) * w; /* mix(f0, f90 = specular, w) */
+        Fmax = fmax(Fmax, F[c]);
+    }
+    for (int c = 0; c < 3; c++) {
+        double metal = (base[c] + (1.0 - base[c]) * w) * D * V;
+        d[c] = (1.0 - metallic) * (1.0 - Fmax) * base[c] / PI;
+        s[c] = (1.0 - metallic) * F[c] * D * V + metallic * metal;
+    }
+}
+
+MR_TEST(known_gltf) {
+    const mr_brdf_model *m = model_named("gltf");
+    if (!m) return;
+    double v[MR_BRDF_MAX_VALUES] = {0}, d[3], s[3], rd[3], rs[3];
+    const double base[3] = {0.9, 0.5, 0.1}, white[3] = {1, 1, 1};
+    mr_brdf_default_values(m, v);
+    set_rgb(m, v, "base_color", 0.9, 0.5, 0.1);
+    set_param(m, v, "roughness", 0.4);
+    /* metallic = 1 at normal incidence: base D V with D = 1/(pi alpha^2), V = 1/4 */
+    eval_parts(m, v, normal, normal, d, s);
+    for (int c = 0; c < 3; c++) {
+        MR_CHECK(close_rel(s[c], base[c] / (PI * 0.0256) / 4.0, 1e-12));
+        MR_CHECK(d[c] == 0.0);
+    }
+    /* dielectric defaults at normal incidence: F = 0.04 */
+    set_param(m, v, "metallic", 0.0);
+    eval_parts(m, v, normal, normal, d, s);
+    for (int c = 0; c < 3; c++) {
+        MR_CHECK(close_rel(s[c], 0.04 / (PI * 0.0256) / 4.0, 1e-12));
+        MR_CHECK(close_rel(d[c], 0.96 * base[c] / PI, 1e-12));
+    }
+    /* everything at once, off-normal */
+    double wi[3], wo[3];
+    const double color[3] = {2.0, 1.0, 0.5};
+    dir_from_angles(1.1, 0.0, wi);
+    dir_from_angles(0.7, 2.4, wo);
+    set_param(m, v, "metallic", 0.3);
+    set_param(m, v, "specular", 0.8);
+    set_rgb(m, v, "specular_color", 2.0, 1.0, 0.5);
+    set_param(m, v, "ior", 1.8);
+    eval_parts(m, v, wi, wo, d, s);
+    gltf_reference(base, 0.3, 0.4, 0.8, color, 1.8, wi, wo, rd, rs);
+    for (int c = 0; c < 3; c++) {
+        MR_CHECK_MSG(close_rel(d[c], rd[c], 1e-11), "diffuse %d: %.17g vs %.17g", c, d[c], rd[c]);
+        MR_CHECK_MSG(close_rel(s[c], rs[c], 1e-11), "specular %d: %.17g vs %.17g", c, s[c], rs[c]);
+    }
+    /* the core specification (no extensions) is the defaults of the extensions */
+    mr_brdf_default_values(m, v);
+    set_rgb(m, v, "base_color", 0.9, 0.5, 0.1);
+    set_param(m, v, "metallic", 0.6);
+    set_param(m, v, "roughness", 0.7);
+    eval_parts(m, v, wi, wo, d, s);
+    gltf_reference(base, 0.6, 0.7, 1.0, white, 1.5, wi, wo, rd, rs);
+    for (int c = 0; c < 3; c++) MR_CHECK(close_rel(d[c], rd[c], 1e-11) && close_rel(s[c], rs[c], 1e-11));
+}
+
+MR_TEST(known_gltf_specgloss) {
+    const mr_brdf_model *m = model_named("gltf-specgloss");
+    if (!m) return;
+    double v[MR_BRDF_MAX_VALUES] = {0}, d[3], s[3];
+    mr_brdf_default_values(m, v);
+    set_rgb(m, v, "diffuse", 0.8, 0.6, 0.4);
+    set_rgb(m, v, "specular", 0.04, 0.2, 0.1);
+    set_param(m, v, "glossiness", 0.6); /* alpha = 0.16 */
+    eval_parts(m, v, normal, normal, d, s);
+    const double dif[3] = {0.8, 0.6, 0.4}, sp[3] = {0.04, 0.2, 0.1};
+    for (int c = 0; c < 3; c++) {
+        MR_CHECK(close_rel(s[c], sp[c] / (PI * 0.0256) / 4.0, 1e-12));
+        MR_CHECK(close_rel(d[c], (1.0 - sp[c]) * dif[c] * (1.0 - 0.2) / PI, 1e-12));
+    }
+}
+
+MR_TEST(known_cycles_principled) {
+    const mr_brdf_model *m = model_named("cycles-principled");
+    if (!m) return;
+    uint64_t rng = 10;
+    double v[MR_BRDF_MAX_VALUES] = {0}, d[3], s[3], wi[3], wo[3];
+    mr_brdf_default_values(m, v);
+    set_param(m, v, "roughness", 0.3); /* alpha = 0.09 */
+    /* defaults at normal incidence: F = F0 = 0.08 * 0.5; Burley's factor is 1 at normal incidence */
+    eval_parts(m, v, normal, normal, d, s);
+    for (int c = 0; c < 3; c++) {
+        MR_CHECK(close_rel(s[c], 0.04 / (4.0 * PI * 0.0081), 1e-6));
+        MR_CHECK(close_rel(d[c], 0.8 / PI, 1e-14));
+    }
+    /* specular = 0, metallic = 0: no specular reflection at normal incidence (ior = 1, cspec0 = 0) */
+    set_param(m, v, "specular", 0.0);
+    eval_parts(m, v, normal, normal, d, s);
+    for (int c = 0; c < 3; c++) MR_CHECK(s[c] == 0.0);
+    for (int k = 0; k < 10; k++) {
+        random_dir(&rng, 0.01, wi);
+        random_dir(&rng, 0.01, wo);
+        eval_parts(m, v, wi, wo, d, s);
+        for (int c = 0; c < 3; c++) MR_CHECK(s[c] <= 1e-12);
+    }
+    /* metallic = 1 at normal incidence: F = cspec0 = base */
+    set_param(m, v, "metallic", 1.0);
+    set_param(m, v, "specular", 0.5);
+    set_rgb(m, v, "base_color", 0.9, 0.6, 0.3);
+    eval_parts(m, v, normal, normal, d, s);
+    const double base[3] = {0.9, 0.6, 0.3};
+    for (int c = 0; c < 3; c++) {
+        MR_CHECK(close_rel(s[c], base[c] / (4.0 * PI * 0.0081), 1e-12));
+        MR_CHECK(d[c] == 0.0);
+    }
+    /* specular tint = 1: F0 = 0.08 specular base/lum with lum = 0.3 R + 0.6 G + 0.1 B (Cycles 3.x) */
+    set_param(m, v, "metallic", 0.0);
+    set_param(m, v, "specular_tint", 1.0);
+    set_rgb(m, v, "base_color", 0.2, 0.5, 0.8);
+    eval_parts(m, v, normal, normal, d, s);
+    const double b2[3] = {0.2, 0.5, 0.8};
+    double lum = 0.3 * 0.2 + 0.6 * 0.5 + 0.1 * 0.8;
+    for (int c = 0; c < 3; c++) MR_CHECK(close_rel(s[c], 0.04 * b2[c] / lum / (4.0 * PI * 0.0081), 1e-6));
+    /* Burley off-normal: (1 + (F_d90 - 1) F_L)(1 + (F_d90 - 1) F_V), F_d90 = 0.5 + 2 roughness (l.h)^2 */
+    dir_from_angles(1.2, 0.0, wi);
+    dir_from_angles(0.5, 1.0, wo);
+    double h[3] = {wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]};
+    double lh = (wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2]) / sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+    double fd90 = 0.5 + 2.0 * 0.3 * lh * lh, FL = pow(1.0 - wi[2], 5.0), FV = pow(1.0 - wo[2], 5.0);
+    eval_parts(m, v, wi, wo, d, s);
+    for (int c = 0; c < 3; c++)
+        MR_CHECK(close_rel(d[c], b2[c] / PI * (1.0 + (fd90 - 1.0) * FL) * (1.0 + (fd90 - 1.0) * FV), 1e-12));
+}
+
+MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(find_unknown_lists_valid_names),
+             MR_TEST_ENTRY(default_values_use_per_channel_defaults),
+             MR_TEST_ENTRY(parse_assignment_accepts_and_rejects),
+             MR_TEST_ENTRY(random_values_are_finite_and_nonnegative), MR_TEST_ENTRY(reciprocity),
+             MR_TEST_ENTRY(below_horizon_is_exactly_zero), MR_TEST_ENTRY(robust_at_bounds_grazing_and_nonfinite_inputs),
+             MR_TEST_ENTRY(white_furnace_quadrature_is_accurate), MR_TEST_ENTRY(white_furnace_energy_bound),
+             MR_TEST_ENTRY(gradient_matches_central_differences), MR_TEST_ENTRY(roles_are_truthful),
+             MR_TEST_ENTRY(linear_and_affine_parameters_are_jointly_affine), MR_TEST_ENTRY(lobes_are_truthful),
+             MR_TEST_ENTRY(known_lambert), MR_TEST_ENTRY(known_microfacet_normal_incidence),
+             MR_TEST_ENTRY(known_microfacet_off_normal), MR_TEST_ENTRY(known_conductor_fresnel),
+             MR_TEST_ENTRY(known_plastic), MR_TEST_ENTRY(known_ward_variants), MR_TEST_ENTRY(known_trimming),
+             MR_TEST_ENTRY(known_phong), MR_TEST_ENTRY(known_blender_ward), MR_TEST_ENTRY(known_gltf),
+             MR_TEST_ENTRY(known_gltf_specgloss), MR_TEST_ENTRY(known_cycles_principled))
