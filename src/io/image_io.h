@@ -6,14 +6,25 @@
  * Colour convention (the only place it is applied): images in memory are linear (mr_image.h).
  *   - EXR and HDR hold linear floats and are read and written as they are.
  *   - 8/16-bit files (PNG, JPEG, TIFF) holding colour (MR_IMG_COLOR, the default) are sRGB-decoded on read and
- *     sRGB-encoded (after clamping to [0,1]) on write. Data maps (MR_IMG_DATA: roughness, metallic, normals)
- *     are read and written as plain [0,1] values. Alpha is always linear.
+ *     sRGB-encoded (after clamping to [0,1], NaN -> 0) on write, then rounded to the nearest code. Data maps
+ *     (MR_IMG_DATA: roughness, metallic, normals) are read and written as plain [0,1] values. Alpha is always
+ *     linear and never premultiplied (PNG/TIFF store unassociated alpha; EXR alpha is kept as stored).
+ *     On read, the rule follows the stored sample type: integer samples are display-encoded, floating-point
+ *     samples (EXR, HDR, float TIFF) are linear.
  * Backends: reading goes through OpenImageIO (C++ shim, image_io_oiio.cpp), which decodes every EXR
  * compression (OpenEXR Core 3.1.5 cannot decode DWAA/DWAB, see ../shared/docs/toolchain.md). EXR writing uses
- * the OpenEXR Core C API directly (exr_write.c: 32-bit float, ZIP). Other formats are written by OpenImageIO.
- * Robustness: reads reject images larger than opts.max_dimension on either side before decoding pixels.
- * Writes go to a temporary file beside the target and are renamed over it only when complete; on failure
- * no partial output is left behind and an existing target is untouched.
+ * the OpenEXR Core C API directly (exr_write.c: scanline, ZIP, FLOAT or HALF channels R,G,B(,A) or Y). Other
+ * formats are written by OpenImageIO (PNG, JPEG and HDR encoded in memory first: io_internal.h says why).
+ * Format limits: JPEG and Radiance HDR cannot store alpha (4-channel images are MR_ERR_UNSUPPORTED, not
+ * silently flattened); JPEG sides are at most 65500 pixels; HDR stores RGB (a 1-channel image is written as
+ * grey RGB) and has no sign, so negative and NaN values are written as 0.
+ * Robustness: reads reject images larger than opts.max_dimension on either side before decoding pixels, check
+ * a PNG's chunk structure (truncation, CRC) before decoding it, and fail on any error a decoder reports, even
+ * one it treats as a warning (a truncated JPEG). Only the first subimage's data window is read.
+ * Writes go to a temporary file "<path>.tmp.<pid>.<n>" beside the target and are renamed over it only when
+ * every write, flush and fsync succeeded; on failure no partial output is left behind and an existing target
+ * is untouched. New files get mode 0666 minus the umask, like any other output.
+ * Nothing is printed: every failure is a status plus a message naming the file (mr_last_error()).
  * Thread safety: calls on different images may run concurrently.
  */
 #ifndef MR_IMAGE_IO_H
@@ -46,15 +57,22 @@ typedef struct mr_img_write_options {
     int jpeg_quality;         /* 1..100; 0 = 95 */
 } mr_img_write_options;
 
-/* Read `path` into a new image (*out, owned by the caller). opts may be NULL for the defaults. Errors name
- * the file: MR_ERR_IO (missing, unreadable), MR_ERR_FORMAT (not an image, too large, unsupported layout). */
+/* Read `path` into a new image (*out, owned by the caller; untouched on failure). opts may be NULL for the
+ * defaults. Errors name the file: MR_ERR_IO (missing, a directory, unreadable), MR_ERR_FORMAT (not an image,
+ * truncated or corrupt, larger than max_dimension, RGB data when 1 channel was requested, volume or deep
+ * images), MR_ERR_INVALID_ARG (bad options), MR_ERR_NOMEM. */
 mr_status mr_img_read(const char *path, const mr_img_read_options *opts, mr_image **out);
 
 /* Write `image` to `path`; the format follows the extension (.exr .hdr .png .jpg/.jpeg .tif/.tiff, case-
- * insensitive; anything else is MR_ERR_INVALID_ARG). opts may be NULL. Atomic: see the header comment. */
+ * insensitive; anything else is MR_ERR_INVALID_ARG). opts may be NULL. Atomic: see the header comment.
+ * Errors name the file: MR_ERR_INVALID_ARG (extension, bits, quality, encoding, invalid image; checked before
+ * anything touches the disk), MR_ERR_UNSUPPORTED (a format limit above), MR_ERR_IO (the directory is missing
+ * or unwritable, a write or the rename failed: the system's reason is given), MR_ERR_EXTERNAL (an encoder
+ * failed), MR_ERR_NOMEM. */
 mr_status mr_img_write(const char *path, const mr_image *image, const mr_img_write_options *opts);
 
-/* sRGB transfer functions (IEC 61966-2-1), exact piecewise form. */
+/* sRGB transfer functions (IEC 61966-2-1), exact piecewise form evaluated in double. Values outside [0,1]
+ * are mirrored through 0 (odd extension, no clamping); NaN stays NaN. */
 float mr_srgb_to_linear(float encoded);
 float mr_linear_to_srgb(float linear);
 

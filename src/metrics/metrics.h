@@ -3,14 +3,17 @@
  * display-referred images (what reports show).
  *
  * SSIM convention (fixed, documented once here and in docs/metrics.md):
- *   1. display mapping: each linear channel is multiplied by `exposure` (default 1), clamped to [0,1] and
- *      sRGB-encoded (no other tone curve: the fit scene is lit so that diffuse albedos stay below 1);
- *   2. luma: Y' = 0.299 R' + 0.587 G' + 0.114 B' (ITU-R BT.601 on the encoded values, as MATLAB's rgb2gray);
- *      single-channel images are used as they are;
+ *   1. display mapping: each linear channel is multiplied by `exposure` (default 1), clamped to [0,1] (NaN
+ *      counts as 0, +inf as 1) and sRGB-encoded (no other tone curve: the fit scene is lit so that diffuse
+ *      albedos stay below 1);
+ *   2. luma: Y' = 0.299 R' + 0.587 G' + 0.114 B' (ITU-R BT.601 on the encoded values, as MATLAB's rgb2gray,
+ *      kept in double, not rounded to 8-bit levels); single-channel images are used as they are (mapped as
+ *      in step 1); alpha is ignored;
  *   3. SSIM of Wang et al. 2004 on Y' with dynamic range L = 1: Gaussian window 11x11, sigma 1.5, normalised;
  *      K1 = 0.01, K2 = 0.03; population (co)variances; 'valid' filtering, so the map is (w-10)x(h-10);
  *      MSSIM = mean of the map. No automatic downsampling unless opts.downsample asks for MATLAB's rule.
  * Sums are accumulated in double, in a fixed order, so results do not depend on the thread count.
+ * Cross-checked against ssim.js 3.5.0 ('original' mode) to a few 1e-9 (tests/ssim_crosscheck.sh).
  */
 #ifndef MR_METRICS_H
 #define MR_METRICS_H
@@ -23,24 +26,29 @@ extern "C" {
 #endif
 
 typedef struct mr_ssim_options {
-    double exposure; /* linear scale before clamping; 0 = 1.0 */
+    double exposure; /* linear scale before clamping; 0 = 1.0; otherwise positive and finite */
     int downsample;  /* 0 = none; 1 = Wang's MATLAB rule f = max(1, round(min(w,h)/256)), box filter + decimate */
 } mr_ssim_options;
 
-/* Root-mean-square difference over all pixels and the first min(3, channels) channels of two linear images.
- * Sizes and channel counts must match (MR_ERR_INVALID_ARG, naming both sizes). */
+/* Root-mean-square difference over all pixels and the first min(3, channels) channels of two linear images
+ * (alpha is not compared; no clamping). Sizes and channel counts must match (MR_ERR_INVALID_ARG, naming both
+ * sizes). A NaN or infinite pixel is MR_ERR_NUMERIC naming the first such pixel. *out_rmse is untouched on
+ * failure. */
 mr_status mr_rmse(const mr_image *a, const mr_image *b, double *out_rmse);
 
 /* Mean SSIM of a and b (same size and channels; at least 11x11 after downsampling). opts may be NULL.
- * If map_out is not NULL, *map_out receives the 1-channel SSIM map ((w-10)x(h-10), values in [-1,1]),
- * owned by the caller. */
+ * If map_out is not NULL, *map_out receives the 1-channel SSIM map ((w-10)x(h-10) of the possibly downsampled
+ * images, values in [-1,1]), owned by the caller. Errors: MR_ERR_INVALID_ARG (sizes, options), MR_ERR_NOMEM;
+ * the outputs are untouched on failure. A 512x512 RGB pair takes a few milliseconds. */
 mr_status mr_ssim(const mr_image *a, const mr_image *b, const mr_ssim_options *opts, double *out_ssim,
                   mr_image **map_out);
 
 /* A false-colour RGB picture of an SSIM map for people to look at: 1 (identical) is black, lower values
- * rise through a colour ramp to white at `floor` and below (floor 0 = 0.5). The ramp is defined in display
- * (sRGB) values; the returned image holds their linear equivalents, so writing it with mr_img_write as
- * MR_IMG_COLOR reproduces the ramp exactly. *out_rgb is owned by the caller. */
+ * rise through a colour ramp to white at `floor` and below (floor 0 = 0.5; otherwise in [-1, 1)); NaN shows
+ * as white. The ramp is MATLAB's "hot" (black -> red -> yellow -> white) over t = (1 - ssim) / (1 - floor),
+ * defined in display (sRGB) values snapped to 8-bit codes; the returned image holds their linear
+ * equivalents, so writing it with mr_img_write as MR_IMG_COLOR reproduces the ramp exactly. The map must have
+ * 1 channel (MR_ERR_INVALID_ARG). *out_rgb is owned by the caller. */
 mr_status mr_ssim_map_visualise(const mr_image *map, double floor, mr_image **out_rgb);
 
 #ifdef __cplusplus

@@ -1,0 +1,381 @@
+/*
+ * image_io.c — mr_img_read / mr_img_write (contract in image_io.h; internal layout in io_internal.h).
+ *
+ * Reading: check the path (missing, a directory, unreadable: MR_ERR_IO naming it) and, for PNG, the chunk
+ * structure; decode through the OpenImageIO shim, then convert the channel layout and sRGB-decode
+ * integer-stored colour (IEC 61966-2-1).
+ * Writing: check every option before touching the disk, convert to the file's sample type (sRGB-encode after
+ * clamping to [0,1], then round to nearest), and write through the atomic temp-file protocol of
+ * atomic_file.c: OpenEXR Core writes .exr into the temporary file; OpenImageIO encodes every other format
+ * (io_internal.h says how each reaches the disk).
+ */
+#include <ctype.h>
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "../mr_internal.h"
+#include "image_io.h"
+#include "io_internal.h"
+
+#define DEFAULT_MAX_DIMENSION 16384
+#define DEFAULT_JPEG_QUALITY 95
+
+typedef enum file_format { FORMAT_EXR, FORMAT_HDR, FORMAT_PNG, FORMAT_JPEG, FORMAT_TIFF, FORMAT_UNKNOWN } file_format;
+
+static const char *const format_names[] = {"EXR", "Radiance HDR", "PNG", "JPEG", "TIFF", "?"};
+
+/* The format named by the extension of `path` (case-insensitive). */
+static file_format format_of(const char *path) {
+    const char *slash = strrchr(path, '/');
+    const char *dot = strrchr(path, '.');
+    if (dot == NULL || (slash != NULL && dot < slash)) return FORMAT_UNKNOWN;
+    char ext[8];
+    size_t n = strlen(dot + 1);
+    if (n == 0 || n >= sizeof ext) return FORMAT_UNKNOWN;
+    for (size_t i = 0; i <= n; i++) ext[i] = (char)tolower((unsigned char)dot[1 + i]);
+    if (strcmp(ext, "exr") == 0) return FORMAT_EXR;
+    if (strcmp(ext, "hdr") == 0) return FORMAT_HDR;
+    if (strcmp(ext, "png") == 0) return FORMAT_PNG;
+    if (strcmp(ext, "jpg") == 0 || strcmp(ext, "jpeg") == 0) return FORMAT_JPEG;
+    if (strcmp(ext, "tif") == 0 || strcmp(ext, "tiff") == 0) return FORMAT_TIFF;
+    return FORMAT_UNKNOWN;
+}
+
+/* ---- reading ---------------------------------------------------------------------------------------- */
+
+/* CRC-32 as specified for PNG (ISO/IEC 15948:2003, Annex D): reflected polynomial 0xEDB88320. */
+static void crc_table_init(uint32_t table[256]) {
+    for (uint32_t n = 0; n < 256; n++) {
+        uint32_t c = n;
+        for (int k = 0; k < 8; k++) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+        table[n] = c;
+    }
+}
+
+static uint32_t crc_update(const uint32_t table[256], uint32_t crc, const unsigned char *p, size_t n) {
+    for (size_t i = 0; i < n; i++) crc = table[(crc ^ p[i]) & 0xffu] ^ (crc >> 8);
+    return crc;
+}
+
+static uint32_t be32(const unsigned char *p) {
+    return ((uint32_t)p[0] << 24) | ((uint32_t)p[1] << 16) | ((uint32_t)p[2] << 8) | (uint32_t)p[3];
+}
+
+/* If the open file `f` is a PNG (by its signature, whatever the extension), walk its chunk structure
+ * (ISO/IEC 15948 section 5: length, type, data, CRC) up to IEND: IHDR first, every length inside the file,
+ * every CRC right. Why here and not in the decoder: OpenImageIO 2.4's PNG reader leaves libpng's default
+ * error handler in place, which prints "libpng error: ..." on stderr for a truncated or corrupt file, and a
+ * library must not print. This catches truncation and any corruption that a CRC detects (all but
+ * deliberately crafted files) with a message saying where, before libpng sees the file. */
+static mr_status check_png_structure(const char *path, FILE *f) {
+    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    unsigned char head[8];
+    if (fread(head, 1, 8, f) != 8 || memcmp(head, signature, 8) != 0) return MR_OK; /* not a PNG */
+    uint32_t table[256];
+    crc_table_init(table);
+    unsigned char buf[16384];
+    long offset = 8;
+    for (int chunk = 0;; chunk++) {
+        size_t got = fread(head, 1, 8, f);
+        if (got != 8)
+            return mr_fail(MR_ERR_FORMAT, "image '%s': truncated PNG: the file ends at byte %ld, before the IEND chunk",
+                           path, offset + (long)got);
+        const uint32_t length = be32(head);
+        char type[5] = {(char)head[4], (char)head[5], (char)head[6], (char)head[7], '\0'};
+        for (int i = 0; i < 4; i++)
+            if (!isalpha((unsigned char)type[i]))
+                return mr_fail(MR_ERR_FORMAT, "image '%s': corrupt PNG: invalid chunk type at byte %ld", path, offset);
+        if (length > 0x7fffffffu)
+            return mr_fail(MR_ERR_FORMAT, "image '%s': corrupt PNG: chunk '%s' at byte %ld claims %lu bytes", path,
+                           type, offset, (unsigned long)length);
+        if (chunk == 0 && strcmp(type, "IHDR") != 0)
+            return mr_fail(MR_ERR_FORMAT, "image '%s': corrupt PNG: the first chunk is '%s', not IHDR", path, type);
+        uint32_t crc = crc_update(table, 0xffffffffu, head + 4, 4);
+        for (uint32_t left = length; left > 0;) {
+            size_t want = left < sizeof buf ? left : sizeof buf;
+            size_t n = fread(buf, 1, want, f);
+            if (n == 0) {
+                if (ferror(f))
+                    return mr_fail(MR_ERR_IO, "image '%s': read error at byte %ld", path,
+                                   offset + 8 + (long)(length - left));
+                return mr_fail(MR_ERR_FORMAT,
+                               "image '%s': truncated PNG: chunk '%s' at byte %ld needs %lu data bytes, the file ends "
+                               "after %lu",
+                               path, type, offset, (unsigned long)length, (unsigned long)(length - left));
+            }
+            crc = crc_update(table, crc, buf, n);
+            left -= (uint32_t)n;
+        }
+        unsigned char stored[4];
+        if (fread(stored, 1, 4, f) != 4)
+            return mr_fail(MR_ERR_FORMAT, "image '%s': truncated PNG: chunk '%s' at byte %ld lacks its CRC", path, type,
+                           offset);
+        if ((crc ^ 0xffffffffu) != be32(stored))
+            return mr_fail(MR_ERR_FORMAT, "image '%s': corrupt PNG: CRC mismatch in chunk '%s' at byte %ld", path, type,
+                           offset);
+        offset += 12 + (long)length;
+        if (strcmp(type, "IEND") == 0) return MR_OK;
+    }
+}
+
+/* sRGB-decode one stored value. For 8/16-bit storage (max_code 255 or 65535) the integer code is recovered
+ * first, so the result is exactly the decode of code / max_code whichever way OIIO scaled it to float; `lut`
+ * (or NULL) holds the decodes of every code. */
+static float decode_value(float v, const float *lut, int bits, double max_code) {
+    if (bits != 8 && bits != 16) return mr_srgb_to_linear(v);
+    const int code = (int)(mr_clampd(v, 0.0, 1.0) * max_code + 0.5);
+    return lut != NULL ? lut[code] : mr_srgb_to_linear((float)(code / max_code));
+}
+
+/* Fill `image` (already created with its channel count) from the raw layout (grey, grey+alpha, RGB, RGBA).
+ * Returns 0 on allocation failure. For 8/16-bit files with more values than codes, the decodes of all codes
+ * are tabulated once (pow() per value would dominate reading a large PNG). */
+static int convert_channels(const mr_io_raw *raw, mr_image *image, int decode_srgb) {
+    const size_t count = (size_t)raw->width * (size_t)raw->height;
+    const int in_ch = raw->channels, out_ch = image->channels;
+    const int in_alpha = in_ch == 2 || in_ch == 4; /* alpha is the last stored channel */
+    const int in_colour = in_alpha ? in_ch - 1 : in_ch; /* 1 (grey) or 3 (RGB) */
+    float *lut = NULL;
+    const double max_code = raw->bits == 8 ? 255.0 : 65535.0;
+    if (decode_srgb && (raw->bits == 8 || raw->bits == 16) && count * (size_t)in_colour > ((size_t)1 << raw->bits)) {
+        const size_t codes = (size_t)1 << raw->bits;
+        lut = malloc(codes * sizeof(float));
+        if (lut == NULL) return 0;
+        for (size_t q = 0; q < codes; q++) lut[q] = mr_srgb_to_linear((float)((double)q / max_code));
+    }
+    for (size_t p = 0; p < count; p++) {
+        const float *src = raw->pixels + p * (size_t)in_ch;
+        float *dst = image->pixels + p * (size_t)out_ch;
+        float colour[3];
+        if (in_colour == 1) {
+            colour[0] = decode_srgb ? decode_value(src[0], lut, raw->bits, max_code) : src[0];
+            colour[1] = colour[2] = colour[0];
+        } else {
+            for (int c = 0; c < 3; c++) colour[c] = decode_srgb ? decode_value(src[c], lut, raw->bits, max_code) : src[c];
+        }
+        float alpha = in_alpha ? src[in_ch - 1] : 1.0f;
+        if (out_ch == 1) {
+            dst[0] = colour[0];
+        } else {
+            dst[0] = colour[0];
+            dst[1] = colour[1];
+            dst[2] = colour[2];
+            if (out_ch == 4) dst[3] = alpha;
+        }
+    }
+    free(lut);
+    return 1;
+}
+
+mr_status mr_img_read(const char *path, const mr_img_read_options *opts, mr_image **out) {
+    if (path == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mr_img_read: path and out must not be NULL");
+    mr_img_read_options o = {MR_IMG_COLOR, 0, 0};
+    if (opts != NULL) o = *opts;
+    if (o.encoding != MR_IMG_COLOR && o.encoding != MR_IMG_DATA)
+        return mr_fail(MR_ERR_INVALID_ARG, "image '%s': unknown encoding %d (valid: MR_IMG_COLOR, MR_IMG_DATA)", path,
+                       (int)o.encoding);
+    if (o.channels != 0 && o.channels != 1 && o.channels != 3 && o.channels != 4)
+        return mr_fail(MR_ERR_INVALID_ARG, "image '%s': %d channels requested (valid: 0 = as stored, 1, 3, 4)", path,
+                       o.channels);
+    if (o.max_dimension < 0)
+        return mr_fail(MR_ERR_INVALID_ARG, "image '%s': max_dimension %d must be >= 0 (0 = %d)", path,
+                       o.max_dimension, DEFAULT_MAX_DIMENSION);
+    const int max_dimension = o.max_dimension == 0 ? DEFAULT_MAX_DIMENSION : o.max_dimension;
+
+    /* File-system problems are MR_ERR_IO with the system's reason; OIIO would call them "not an image". */
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        int err = errno;
+        return mr_fail(MR_ERR_IO, "image '%s': cannot open: %s", path, strerror(err));
+    }
+    if (S_ISDIR(st.st_mode)) return mr_fail(MR_ERR_IO, "image '%s': cannot open: is a directory", path);
+    FILE *probe = fopen(path, "rb");
+    if (probe == NULL) {
+        int err = errno;
+        return mr_fail(MR_ERR_IO, "image '%s': cannot open: %s", path, strerror(err));
+    }
+    mr_status status = check_png_structure(path, probe);
+    fclose(probe);
+    if (status != MR_OK) return status;
+
+    mr_io_raw raw = {0, 0, 0, 0, 0, NULL};
+    status = mr_io_oiio_read(path, max_dimension, &raw);
+    if (status != MR_OK) return status;
+
+    int out_ch = o.channels;
+    if (out_ch == 0) out_ch = raw.channels == 1 ? 1 : (raw.channels == 3 ? 3 : 4);
+    if (out_ch == 1 && raw.channels >= 3) {
+        free(raw.pixels);
+        return mr_fail(MR_ERR_FORMAT,
+                       "image '%s': holds RGB%s colour but 1 channel was requested (convert to grey explicitly)",
+                       path, raw.channels == 4 ? "A" : "");
+    }
+    mr_image *image = NULL;
+    status = mr_image_create(raw.width, raw.height, out_ch, &image);
+    if (status != MR_OK) {
+        free(raw.pixels);
+        return mr_fail_context(status, "image '%s'", path);
+    }
+    int converted = convert_channels(&raw, image, raw.encoded && o.encoding == MR_IMG_COLOR);
+    free(raw.pixels);
+    if (!converted) {
+        mr_image_free(image);
+        return mr_fail(MR_ERR_NOMEM, "image '%s': out of memory for the sRGB table", path);
+    }
+    *out = image;
+    return MR_OK;
+}
+
+/* ---- writing ---------------------------------------------------------------------------------------- */
+
+/* Display-encode one value for an integer file: clamp to [0,1] (NaN -> 0), sRGB-encode colour, scale to the
+ * integer range and round to nearest. `scale` is 255 or 65535. */
+static unsigned quantise(float v, int srgb, double scale) {
+    double x = mr_clampd(v, 0.0, 1.0);
+    if (srgb) x = mr_linear_to_srgb((float)x);
+    return (unsigned)floor(mr_clampd(x, 0.0, 1.0) * scale + 0.5);
+}
+
+/* A buffer for an 8/16-bit file. Returns NULL on allocation failure. */
+static void *quantised_copy(const mr_image *image, int bits, int srgb) {
+    const size_t n = mr_image_value_count(image);
+    const int ch = image->channels;
+    const int has_alpha = ch == 4;
+    const double scale = bits == 16 ? 65535.0 : 255.0;
+    void *buffer = malloc(n * (bits == 16 ? 2u : 1u));
+    if (buffer == NULL) return NULL;
+    for (size_t i = 0; i < n; i++) {
+        int is_alpha = has_alpha && (int)(i % (size_t)ch) == 3;
+        unsigned q = quantise(image->pixels[i], srgb && !is_alpha, scale);
+        if (bits == 16)
+            ((uint16_t *)buffer)[i] = (uint16_t)q;
+        else
+            ((uint8_t *)buffer)[i] = (uint8_t)q;
+    }
+    return buffer;
+}
+
+/* RGB floats for Radiance HDR: grey broadcast; RGBE has no sign, so negatives and NaN become 0 and +inf the
+ * largest float. Returns NULL on allocation failure. */
+static float *hdr_copy(const mr_image *image) {
+    const size_t count = (size_t)image->width * (size_t)image->height;
+    float *rgb = malloc(count * 3 * sizeof(float));
+    if (rgb == NULL) return NULL;
+    for (size_t p = 0; p < count; p++)
+        for (int c = 0; c < 3; c++) {
+            float v = image->pixels[p * (size_t)image->channels + (size_t)(image->channels == 1 ? 0 : c)];
+            rgb[p * 3 + (size_t)c] = (float)mr_clampd(v, 0.0, FLT_MAX);
+        }
+    return rgb;
+}
+
+static mr_status check_write_options(const char *path, file_format format, const mr_image *image,
+                                     const mr_img_write_options *o, int *bits, int *quality) {
+    if (o->encoding != MR_IMG_COLOR && o->encoding != MR_IMG_DATA)
+        return mr_fail(MR_ERR_INVALID_ARG, "image '%s': unknown encoding %d (valid: MR_IMG_COLOR, MR_IMG_DATA)", path,
+                       (int)o->encoding);
+    *bits = o->bits;
+    switch (format) {
+    case FORMAT_PNG:
+    case FORMAT_TIFF:
+        if (*bits == 0) *bits = 8;
+        if (*bits != 8 && *bits != 16)
+            return mr_fail(MR_ERR_INVALID_ARG, "image '%s': %d bits per sample (valid for %s: 8, 16)", path, o->bits,
+                           format_names[format]);
+        break;
+    case FORMAT_JPEG:
+        if (*bits == 0) *bits = 8;
+        if (*bits != 8)
+            return mr_fail(MR_ERR_INVALID_ARG, "image '%s': %d bits per sample (valid for JPEG: 8)", path, o->bits);
+        break;
+    case FORMAT_EXR:
+        if (*bits == 0) *bits = 32;
+        if (*bits != 16 && *bits != 32)
+            return mr_fail(MR_ERR_INVALID_ARG, "image '%s': %d bits per sample (valid for EXR: 16 = half, 32 = float)",
+                           path, o->bits);
+        break;
+    case FORMAT_HDR:
+        if (*bits != 0 && *bits != 32)
+            return mr_fail(MR_ERR_INVALID_ARG,
+                           "image '%s': %d bits per sample (Radiance HDR is always RGBE; valid: 0 or 32)", path,
+                           o->bits);
+        *bits = 32;
+        break;
+    default: break;
+    }
+    *quality = o->jpeg_quality == 0 ? DEFAULT_JPEG_QUALITY : o->jpeg_quality;
+    if (*quality < 1 || *quality > 100)
+        return mr_fail(MR_ERR_INVALID_ARG, "image '%s': JPEG quality %d (valid: 1..100, 0 = %d)", path,
+                       o->jpeg_quality, DEFAULT_JPEG_QUALITY);
+    /* libjpeg's limit (JPEG_MAX_DIMENSION); OpenImageIO 2.4 leaves libjpeg's exit()ing error handler in place,
+     * so this must be refused here, not discovered by the encoder. */
+    if (format == FORMAT_JPEG && (image->width > 65500 || image->height > 65500))
+        return mr_fail(MR_ERR_UNSUPPORTED, "image '%s': %dx%d exceeds JPEG's limit of 65500 pixels per side", path,
+                       image->width, image->height);
+    if (image->channels == 4 && (format == FORMAT_JPEG || format == FORMAT_HDR))
+        return mr_fail(MR_ERR_UNSUPPORTED,
+                       "image '%s': %s cannot store an alpha channel (drop it, or write PNG, TIFF or EXR)", path,
+                       format_names[format]);
+    return MR_OK;
+}
+
+mr_status mr_img_write(const char *path, const mr_image *image, const mr_img_write_options *opts) {
+    if (path == NULL || image == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "mr_img_write: path and image must not be NULL");
+    if (image->width < 1 || image->height < 1 || image->pixels == NULL ||
+        (image->channels != 1 && image->channels != 3 && image->channels != 4))
+        return mr_fail(MR_ERR_INVALID_ARG, "image '%s': invalid image %dx%d with %d channels", path, image->width,
+                       image->height, image->channels);
+    const file_format format = format_of(path);
+    if (format == FORMAT_UNKNOWN) {
+        const char *dot = strrchr(path, '.');
+        const char *slash = strrchr(path, '/');
+        const char *ext = dot != NULL && (slash == NULL || dot > slash) ? dot : "(none)";
+        return mr_fail(MR_ERR_INVALID_ARG,
+                       "image '%s': unknown extension '%s' (valid: .exr .hdr .png .jpg .jpeg .tif .tiff)", path, ext);
+    }
+    mr_img_write_options o = {MR_IMG_COLOR, 0, 0};
+    if (opts != NULL) o = *opts;
+    int bits = 0, quality = 0;
+    mr_status status = check_write_options(path, format, image, &o, &bits, &quality);
+    if (status != MR_OK) return status;
+
+    if (format == FORMAT_EXR) {
+        /* OpenEXR Core writes the temporary file itself and reports every failed write (EXR_ERR_WRITE_IO). */
+        mr_atomic_file file;
+        status = mr_atomic_begin(path, &file);
+        if (status != MR_OK) return status;
+        status = mr_io_exr_write(path, file.tmp_path, image->width, image->height, image->channels, image->pixels,
+                                 bits == 16);
+        if (status != MR_OK) {
+            mr_atomic_abort(&file);
+            return status;
+        }
+        return mr_atomic_commit(&file);
+    }
+
+    /* Everything else: convert to the file's samples and let OpenImageIO encode them (atomically). */
+    const int srgb = o.encoding == MR_IMG_COLOR;
+    void *buffer = NULL;
+    int out_channels = image->channels;
+    mr_io_sample sample = MR_IO_F32;
+    if (format == FORMAT_HDR) {
+        buffer = hdr_copy(image);
+        out_channels = 3;
+    } else {
+        buffer = quantised_copy(image, bits, srgb);
+        sample = bits == 16 ? MR_IO_U16 : MR_IO_U8;
+    }
+    if (buffer == NULL)
+        return mr_fail(MR_ERR_NOMEM, "image '%s': out of memory for %dx%d pixels", path, image->width, image->height);
+    status = mr_io_oiio_write(path, image->width, image->height, out_channels, sample, buffer,
+                              srgb && format != FORMAT_HDR, quality);
+    free(buffer);
+    return status;
+}

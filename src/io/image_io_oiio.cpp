@@ -1,0 +1,249 @@
+/*
+ * image_io_oiio.cpp — the OpenImageIO side of src/io: the project's only C++ translation unit in src/io.
+ *
+ * Two extern "C" entry points (contracts in io_internal.h): mr_io_oiio_read decodes any format OpenImageIO
+ * 2.4 knows into floats, and mr_io_oiio_write encodes an already-quantised buffer and writes it through the
+ * atomic protocol of atomic_file.c. Everything else (option checks, channel conversion, sRGB coding and
+ * quantisation) is C (image_io.c), so this file stays a thin shim. No C++ exception crosses the boundary:
+ * each entry point catches everything and maps it to an mr_status with a message naming the file.
+ *
+ * OpenImageIO facts relied on (OpenImageIO 2.4 documentation, "ImageInput"/"ImageOutput" and the format
+ * plugin notes):
+ *   - "oiio:UnassociatedAlpha" = 1 in the open() configuration keeps PNG/TIFF alpha unassociated on read
+ *     (otherwise colour is premultiplied); on an output spec it declares our data unassociated, so the PNG
+ *     writer does not divide colour by alpha.
+ *   - The spec is known after open(), before any pixel is decoded: the size limit is enforced there.
+ *   - read_image(subimage, miplevel, chbegin, chend, TypeFloat, ...) converts integer samples to [0,1]
+ *     (v / (2^bits - 1)); floating-point data is returned as stored.
+ *   - Error text accumulates per ImageInput/ImageOutput (geterror()) or, for failed open/create, globally per
+ *     thread (OIIO::geterror()); it is always retrieved, which also clears it.
+ */
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <new>
+#include <string>
+#include <vector>
+
+#include "../mr_internal.h"
+#include "io_internal.h"
+
+namespace {
+
+/* OIIO messages may span lines; mr_last_error is one line. */
+std::string one_line(std::string text) {
+    for (char &ch : text)
+        if (ch == '\n' || ch == '\r') ch = ' ';
+    while (!text.empty() && text.back() == ' ') text.pop_back();
+    if (text.empty()) text = "no reason given";
+    return text;
+}
+
+int find_channel(const OIIO::ImageSpec &spec, const char *name) {
+    for (int c = 0; c < spec.nchannels; c++)
+        if (spec.channel_name(c) == name) return c;
+    return -1;
+}
+
+/* Channel indices of the stored layout to return: grey, grey+alpha, RGB or RGBA (io_internal.h). */
+int choose_channels(const OIIO::ImageSpec &spec, int index[4]) {
+    const int n = spec.nchannels;
+    int alpha = spec.alpha_channel >= 0 && spec.alpha_channel < n ? spec.alpha_channel : find_channel(spec, "A");
+    if (n == 1) {
+        index[0] = 0;
+        return 1;
+    }
+    if (n == 2) {
+        if (alpha < 0) alpha = 1; /* two channels are grey + alpha by convention (PNG, TIFF) */
+        index[0] = alpha == 0 ? 1 : 0;
+        index[1] = alpha;
+        return 2;
+    }
+    int r = find_channel(spec, "R"), g = find_channel(spec, "G"), b = find_channel(spec, "B");
+    if (r < 0 || g < 0 || b < 0) {
+        /* No R,G,B names (e.g. a TIFF with generic names): the first three non-alpha channels. */
+        int k = 0;
+        for (int c = 0; c < n && k < 3; c++)
+            if (c != alpha) index[k++] = c;
+        r = index[0];
+        g = index[1];
+        b = index[2];
+    }
+    index[0] = r;
+    index[1] = g;
+    index[2] = b;
+    if (alpha >= 0) {
+        index[3] = alpha;
+        return 4;
+    }
+    return 3;
+}
+
+OIIO::TypeDesc sample_type(mr_io_sample sample) {
+    switch (sample) {
+    case MR_IO_U8: return OIIO::TypeDesc::UINT8;
+    case MR_IO_U16: return OIIO::TypeDesc::UINT16;
+    default: return OIIO::TypeDesc::FLOAT;
+    }
+}
+
+mr_status read_impl(const char *path, int max_dimension, mr_io_raw *raw) {
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = OIIO::ImageInput::open(path, &config);
+    if (!in) {
+        std::string why = one_line(OIIO::geterror());
+        return mr_fail(MR_ERR_FORMAT, "image '%s': not a readable image: %s", path, why.c_str());
+    }
+    const OIIO::ImageSpec spec = in->spec();
+    if (spec.width < 1 || spec.height < 1 || spec.nchannels < 1)
+        return mr_fail(MR_ERR_FORMAT, "image '%s': empty image (%dx%d, %d channels)", path, spec.width, spec.height,
+                       spec.nchannels);
+    if (spec.width > max_dimension || spec.height > max_dimension)
+        return mr_fail(MR_ERR_FORMAT, "image '%s': %dx%d pixels exceeds the maximum dimension %d", path, spec.width,
+                       spec.height, max_dimension);
+    if (spec.depth > 1)
+        return mr_fail(MR_ERR_FORMAT, "image '%s': volume images (depth %d) are not supported", path, spec.depth);
+    if (spec.deep) return mr_fail(MR_ERR_FORMAT, "image '%s': deep images are not supported", path);
+
+    int index[4] = {0, 0, 0, 0};
+    const int channels = choose_channels(spec, index);
+    int lo = index[0], hi = index[0];
+    for (int k = 1; k < channels; k++) {
+        lo = index[k] < lo ? index[k] : lo;
+        hi = index[k] > hi ? index[k] : hi;
+    }
+    const size_t span = (size_t)(hi - lo + 1);
+    const size_t count = (size_t)spec.width * (size_t)spec.height;
+    if (count > SIZE_MAX / sizeof(float) / span)
+        return mr_fail(MR_ERR_NOMEM, "image '%s': %dx%d pixels do not fit in memory", path, spec.width, spec.height);
+    /* A vector, so an exception thrown by OIIO cannot leak it; `pixels` is malloc'ed only once nothing below
+     * can throw (the caller releases it with free()). */
+    std::vector<float> stored(count * span);
+    if (!in->read_image(0, 0, lo, hi + 1, OIIO::TypeFloat, stored.data())) {
+        std::string why = one_line(in->geterror());
+        return mr_fail(MR_ERR_FORMAT, "image '%s': cannot decode pixels (corrupt or truncated?): %s", path,
+                       why.c_str());
+    }
+    const bool is_exr = std::strcmp(in->format_name(), "openexr") == 0;
+    in->close();
+    /* A decoder may record a failure and still return true: libjpeg's "Premature end of JPEG file" on a
+     * truncated JPEG is only a warning, and the missing rows come back grey. Any pending message fails the
+     * read (this also leaves nothing pending when the ImageInput is destroyed). */
+    std::string pending = in->geterror();
+    if (!pending.empty())
+        return mr_fail(MR_ERR_FORMAT, "image '%s': decoded with errors (corrupt or truncated?): %s", path,
+                       one_line(pending).c_str());
+    float *pixels = static_cast<float *>(std::malloc(count * (size_t)channels * sizeof(float)));
+    if (pixels == nullptr)
+        return mr_fail(MR_ERR_NOMEM, "image '%s': out of memory for %dx%d pixels", path, spec.width, spec.height);
+    for (size_t p = 0; p < count; p++)
+        for (int k = 0; k < channels; k++)
+            pixels[p * (size_t)channels + (size_t)k] = stored[p * span + (size_t)(index[k] - lo)];
+
+    /* Integer storage holds display-encoded values, except in EXR, which is linear whatever the type. */
+    raw->width = spec.width;
+    raw->height = spec.height;
+    raw->channels = channels;
+    raw->encoded = !spec.format.is_floating_point() && !is_exr;
+    raw->bits = spec.format == OIIO::TypeDesc::UINT8 ? 8 : (spec.format == OIIO::TypeDesc::UINT16 ? 16 : 0);
+    raw->pixels = pixels;
+    return MR_OK;
+}
+
+/* Removes the temporary file if the write does not reach commit, even when an exception unwinds. */
+struct atomic_guard {
+    mr_atomic_file file;
+    ~atomic_guard() { mr_atomic_abort(&file); }
+};
+
+/* open + write_image + close, then insist that no error message is pending (some OIIO writers record a
+ * failure and still return true). */
+bool encode(OIIO::ImageOutput &out, const char *name, const OIIO::ImageSpec &spec, OIIO::TypeDesc type,
+            const void *data, std::string &why) {
+    bool ok = out.open(name, spec) && out.write_image(type, data);
+    ok = out.close() && ok;
+    why = out.geterror();
+    return ok && why.empty();
+}
+
+mr_status write_impl(const char *path, int width, int height, int channels, mr_io_sample sample, const void *data,
+                     int srgb_tag, int jpeg_quality) {
+    /* Declared before the writer, so they outlive it whatever path returns. */
+    std::vector<unsigned char> encoded;
+    OIIO::Filesystem::IOVecOutput proxy(encoded);
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) {
+        std::string why = one_line(OIIO::geterror());
+        return mr_fail(MR_ERR_UNSUPPORTED, "image '%s': no OpenImageIO writer for this extension: %s", path,
+                       why.c_str());
+    }
+    const OIIO::TypeDesc type = sample_type(sample);
+    OIIO::ImageSpec spec(width, height, channels, type);
+    spec.alpha_channel = channels == 4 ? 3 : -1;
+    spec.attribute("oiio:UnassociatedAlpha", 1);
+    if (srgb_tag) spec.attribute("oiio:ColorSpace", "sRGB");
+    const std::string format = out->format_name();
+    /* OIIO 2.4.7's TIFF writer reports spurious "failed TIFFWriteCustomDirectory() of the Exif data" errors */
+    if (format == "tiff") spec.attribute("tiff:write_exif", 0);
+    if (format == "jpeg") {
+        spec.attribute("Compression", "jpeg:" + std::to_string(jpeg_quality));
+        spec.attribute("CompressionQuality", jpeg_quality);
+    }
+    std::string why;
+
+    if (format == "tiff") {
+        /* libtiff checks every write itself, but OIIO 2.4.7's TIFF writer cannot target an IOVecOutput set
+         * after create() (the file lacks ImageLength): write the temporary file directly. */
+        atomic_guard guard;
+        mr_status status = mr_atomic_begin(path, &guard.file);
+        if (status != MR_OK) return status;
+        if (!encode(*out, guard.file.tmp_path, spec, type, data, why))
+            return mr_fail(MR_ERR_IO, "image '%s': cannot write %s: %s", path, format.c_str(), one_line(why).c_str());
+        return mr_atomic_commit(&guard.file);
+    }
+
+    /* Everything else is encoded in memory (io_internal.h says why) and written with checked stdio. */
+    if (!out->supports("ioproxy") || !out->set_ioproxy(&proxy)) {
+        (void)out->geterror();
+        return mr_fail(MR_ERR_UNSUPPORTED, "image '%s': the OpenImageIO %s writer cannot encode to memory", path,
+                       format.c_str());
+    }
+    if (!encode(*out, path, spec, type, data, why))
+        return mr_fail(MR_ERR_EXTERNAL, "image '%s': OpenImageIO cannot encode %s: %s", path, format.c_str(),
+                       one_line(why).c_str());
+    if (encoded.empty())
+        return mr_fail(MR_ERR_EXTERNAL, "image '%s': OpenImageIO produced no %s data", path, format.c_str());
+    return mr_atomic_write_bytes(path, encoded.data(), encoded.size());
+}
+
+} // namespace
+
+extern "C" mr_status mr_io_oiio_read(const char *path, int max_dimension, mr_io_raw *raw) {
+    try {
+        return read_impl(path, max_dimension, raw);
+    } catch (const std::bad_alloc &) {
+        return mr_fail(MR_ERR_NOMEM, "image '%s': out of memory while decoding", path);
+    } catch (const std::exception &e) {
+        return mr_fail(MR_ERR_EXTERNAL, "image '%s': OpenImageIO failed: %s", path, e.what());
+    } catch (...) {
+        return mr_fail(MR_ERR_EXTERNAL, "image '%s': OpenImageIO failed with an unknown exception", path);
+    }
+}
+
+extern "C" mr_status mr_io_oiio_write(const char *path, int width, int height, int channels, mr_io_sample sample,
+                                      const void *data, int srgb_tag, int jpeg_quality) {
+    try {
+        return write_impl(path, width, height, channels, sample, data, srgb_tag, jpeg_quality);
+    } catch (const std::bad_alloc &) {
+        return mr_fail(MR_ERR_NOMEM, "image '%s': out of memory while encoding", path);
+    } catch (const std::exception &e) {
+        return mr_fail(MR_ERR_EXTERNAL, "image '%s': OpenImageIO failed: %s", path, e.what());
+    } catch (...) {
+        return mr_fail(MR_ERR_EXTERNAL, "image '%s': OpenImageIO failed with an unknown exception", path);
+    }
+}

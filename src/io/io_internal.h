@@ -1,0 +1,107 @@
+/*
+ * io_internal.h — pieces of src/io shared between its C files and the C++ OpenImageIO shim; not installed.
+ *
+ * Division of labour (the public contract is image_io.h):
+ *   image_io.c          argument checks, extension dispatch, channel conversion, sRGB coding, quantisation,
+ *                       the PNG structure check before decoding;
+ *   image_io_oiio.cpp   the only C++: decodes any format into floats (mr_io_oiio_read) and encodes already
+ *                       quantised 8/16-bit or float buffers (mr_io_oiio_write);
+ *   exr_write.c         EXR encoding through the OpenEXR Core C API (mr_io_exr_write);
+ *   atomic_file.c       the temp-file + rename protocol that every write goes through;
+ *   srgb.c              the IEC 61966-2-1 transfer functions.
+ * C and C++ both include this header, so it uses no C-only syntax.
+ */
+#ifndef MR_IO_INTERNAL_H
+#define MR_IO_INTERNAL_H
+
+#include <stddef.h>
+
+#include "../mr_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- atomic output files (atomic_file.c) -------------------------------------------------------------
+ * Protocol (after redis' rdbSave): mr_atomic_begin() creates an empty, exclusive temporary file beside the
+ * target, named "<target>.tmp.<pid>.<n>" (same directory, so rename(2) cannot cross file systems); the writer
+ * fills tmp_path; mr_atomic_commit() fsyncs it and renames it over the target; on any failure the caller
+ * calls mr_atomic_abort(), which unlinks the temporary file. A target that existed before is never opened
+ * for writing, so a failed write leaves it untouched. */
+typedef struct mr_atomic_file {
+    char tmp_path[4096]; /* the temporary file to write */
+    const char *target;  /* borrowed: the final path */
+    int active;          /* 1 between a successful begin and commit/abort */
+} mr_atomic_file;
+
+/* Create the temporary file for `target`. MR_ERR_IO (naming the target and the reason, e.g. a missing or
+ * unwritable directory) or MR_ERR_INVALID_ARG (path too long). On failure nothing is left on disk. */
+mr_status mr_atomic_begin(const char *target, mr_atomic_file *file);
+
+/* fsync the finished temporary file and rename it to the target. On failure the temporary file is removed
+ * (the caller need not call mr_atomic_abort, though doing so is harmless). */
+mr_status mr_atomic_commit(mr_atomic_file *file);
+
+/* The whole protocol for a file already encoded in memory: begin, fwrite + fflush + fclose (every result
+ * checked), commit; abort on any failure. Errors (MR_ERR_IO) name the target and the system's reason. */
+mr_status mr_atomic_write_bytes(const char *target, const void *bytes, size_t size);
+
+/* Remove the temporary file (if still there). Safe to call twice, and after a successful commit (no-op).
+ * Preserves errno and the recorded last-error message. */
+void mr_atomic_abort(mr_atomic_file *file);
+
+/* ---- decoding through OpenImageIO (image_io_oiio.cpp) ----------------------------------------------- */
+
+/* What the shim hands back: the first subimage's data window as interleaved floats with the stored
+ * channels reduced to one of four layouts, in this order: grey (1), grey+alpha (2), RGB (3), RGBA (4).
+ * `encoded` is 1 when the file stores integers (8/16-bit PNG, JPEG, TIFF, ...), whose values are
+ * display-encoded unless the caller says they are data; 0 for floating-point storage (EXR, HDR, float TIFF),
+ * which is linear by convention. Alpha is unassociated (oiio:UnassociatedAlpha=1: PNG/TIFF alpha is not
+ * premultiplied on read). `pixels` is malloc'ed; free() it. */
+typedef struct mr_io_raw {
+    int width;
+    int height;
+    int channels; /* 1..4 as above */
+    int encoded;
+    int bits;     /* 8 or 16 for 8/16-bit unsigned integer storage (value = code / (2^bits - 1)); else 0 */
+    float *pixels;
+} mr_io_raw;
+
+/* Decode `path` (which the caller has checked exists and is a readable regular file). Rejects images with a
+ * side larger than max_dimension (MR_ERR_FORMAT) before any pixel is decoded. Errors: MR_ERR_FORMAT (not an
+ * image, corrupt or truncated, unsupported layout), MR_ERR_NOMEM, MR_ERR_EXTERNAL (anything else OIIO or
+ * the C++ runtime threw). Messages name the file. */
+mr_status mr_io_oiio_read(const char *path, int max_dimension, mr_io_raw *raw);
+
+/* Sample types for mr_io_oiio_write. */
+typedef enum mr_io_sample {
+    MR_IO_U8 = 0,
+    MR_IO_U16,
+    MR_IO_F32
+} mr_io_sample;
+
+/* Encode the interleaved buffer `data` (width*height*channels samples of `sample`, top-left first) with the
+ * OpenImageIO writer chosen by the extension of `path`, and write it to `path` atomically. PNG, JPEG and HDR
+ * are encoded in memory (an IOVecOutput) and written by mr_atomic_write_bytes, because OpenImageIO 2.4.7's
+ * PNG writer turns a failed write (full disk) into a truncated file and success, and its JPEG writer keeps
+ * libjpeg's default error handler, which exit()s the process on a write error (both seen with a file-size
+ * limit); HDR takes the same path so that only libtiff is trusted with the disk. TIFF is written straight
+ * into the temporary file: libtiff reports failed writes, and OIIO 2.4.7's TIFF writer produces an
+ * unreadable file through an IOVecOutput set after create(). srgb_tag marks the file as sRGB-encoded (PNG
+ * sRGB chunk and the like); jpeg_quality 1..100 is used by JPEG only. Errors name `path`. */
+mr_status mr_io_oiio_write(const char *path, int width, int height, int channels, mr_io_sample sample,
+                           const void *data, int srgb_tag, int jpeg_quality);
+
+/* ---- EXR through OpenEXR Core (exr_write.c) ---------------------------------------------------------- */
+
+/* Write interleaved linear floats (channels 1, 3 or 4; named Y or R,G,B(,A)) as a single-part scanline EXR
+ * with ZIP compression, FLOAT (half = 0) or HALF (half = 1) channels, into `file_path`. Errors name
+ * `name_for_errors` (the target, not the temporary file). */
+mr_status mr_io_exr_write(const char *name_for_errors, const char *file_path, int width, int height,
+                          int channels, const float *pixels, int half);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MR_IO_INTERNAL_H */

@@ -1,0 +1,910 @@
+/*
+ * test_image_io.c — round trips and failure modes of src/io (contract in src/io/image_io.h).
+ *
+ * The main fixture is stb's asymmetric test image (stb tests/image_write_test.c): a 6x5 "F" in red on blue,
+ * with a different colour in every corner, so a vertical or horizontal flip, a transpose or an R/B swap all
+ * change some pixel. Every case works in a private directory from mkdtemp(), removed at exit.
+ * Independent cross-checks: EXR written by OpenEXR Core (ours) is read back through OpenImageIO (the OpenEXR
+ * C++ library), and files written by oiiotool (OpenImageIO + OpenEXR C++ / libpng) are read by mr_img_read.
+ */
+#include <dirent.h>
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "../src/io/image_io.h"
+#include "harness.h"
+
+/* ---- fixtures and helpers ------------------------------------------------------------------------- */
+
+static char test_dir[64];
+
+static void remove_test_dir(void) {
+    if (test_dir[0] == '\0') return;
+    DIR *d = opendir(test_dir);
+    if (d != NULL) {
+        struct dirent *e;
+        char path[512];
+        while ((e = readdir(d)) != NULL) {
+            if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
+            snprintf(path, sizeof path, "%s/%s", test_dir, e->d_name);
+            if (unlink(path) != 0) rmdir(path); /* the directory-as-target fixtures */
+        }
+        closedir(d);
+    }
+    rmdir(test_dir);
+}
+
+/* A path inside the private temporary directory (created on first use). Returned buffer is static per slot. */
+static const char *tmp_path(const char *name) {
+    static char paths[32][512]; /* a ring: callers that keep a path longer copy it */
+    static int slot;
+    if (test_dir[0] == '\0') {
+        strcpy(test_dir, "/tmp/mr_test_io.XXXXXX");
+        if (mkdtemp(test_dir) == NULL) {
+            perror("mkdtemp");
+            exit(2);
+        }
+        atexit(remove_test_dir);
+    }
+    char *p = paths[slot++ % 32];
+    snprintf(p, 512, "%s/%s", test_dir, name);
+    return p;
+}
+
+/* Number of entries in the test directory whose name contains ".tmp". */
+static int count_temporaries(void) {
+    DIR *d = opendir(test_dir);
+    if (d == NULL) return -1;
+    int n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL)
+        if (strstr(e->d_name, ".tmp") != NULL) n++;
+    closedir(d);
+    return n;
+}
+
+static int file_exists(const char *path) {
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+static long read_file(const char *path, unsigned char *buf, long cap) {
+    FILE *f = fopen(path, "rb");
+    if (f == NULL) return -1;
+    long n = (long)fread(buf, 1, (size_t)cap, f);
+    fclose(f);
+    return n;
+}
+
+static int write_file(const char *path, const void *data, size_t n) {
+    FILE *f = fopen(path, "wb");
+    if (f == NULL) return 0;
+    int ok = fwrite(data, 1, n, f) == n;
+    return fclose(f) == 0 && ok;
+}
+
+/* Run a shell command quietly; returns its exit status (or -1). */
+static int run_quiet(const char *cmd) {
+    char full[4096];
+    if (snprintf(full, sizeof full, "%s >/dev/null 2>&1", cmd) >= (int)sizeof full) return -1;
+    int rc = system(full);
+    return rc == -1 ? -1 : (WIFEXITED(rc) ? WEXITSTATUS(rc) : -1);
+}
+
+#define F_W 6
+#define F_H 5
+static const char f_shape[F_H][F_W + 1] = {
+    ".XXXX.",
+    ".X....",
+    ".XXX..",
+    ".X....",
+    ".X....",
+};
+
+/* The F in red (1,0,0) on blue (0,0,1), corners (0,0) (5,0) (0,4) (5,4) distinct. `scale` multiplies every
+ * value (HDR/EXR cases use values above 1). channels 1: grey levels instead of colours; 4: alpha varies. */
+static mr_image *make_f(int channels, float scale) {
+    mr_image *img = NULL;
+    if (mr_image_create(F_W, F_H, channels, &img) != MR_OK) return NULL;
+    static const float corners[4][4] = {
+        {0.25f, 0.5f, 0.75f, 0.5f}, /* top-left */
+        {0.75f, 0.125f, 0.5f, 0.0f}, /* top-right: alpha 0 with colour, catches premultiplication */
+        {0.0625f, 0.875f, 0.25f, 0.25f}, /* bottom-left */
+        {0.5f, 0.375f, 0.0f, 1.0f}, /* bottom-right */
+    };
+    for (int y = 0; y < F_H; y++)
+        for (int x = 0; x < F_W; x++) {
+            float *p = mr_image_at(img, x, y);
+            float rgba[4];
+            int corner = -1;
+            if (x == 0 && y == 0) corner = 0;
+            if (x == F_W - 1 && y == 0) corner = 1;
+            if (x == 0 && y == F_H - 1) corner = 2;
+            if (x == F_W - 1 && y == F_H - 1) corner = 3;
+            if (corner >= 0) {
+                memcpy(rgba, corners[corner], sizeof rgba);
+            } else if (f_shape[y][x] == 'X') {
+                rgba[0] = 1.0f, rgba[1] = 0.0f, rgba[2] = 0.0f, rgba[3] = 1.0f;
+            } else {
+                rgba[0] = 0.0f, rgba[1] = 0.0f, rgba[2] = 1.0f, rgba[3] = 0.75f;
+            }
+            if (channels == 1) {
+                /* grey: F = 1, background 0.125, corners their first value */
+                p[0] = scale * (corner >= 0 ? rgba[0] : (f_shape[y][x] == 'X' ? 1.0f : 0.125f));
+            } else {
+                for (int c = 0; c < 3; c++) p[c] = scale * rgba[c];
+                if (channels == 4) p[3] = rgba[3];
+            }
+        }
+    return img;
+}
+
+/* What an integer file of `bits` stores for linear v and what reading it back must give. */
+static float expected_integer(float v, int bits, int srgb) {
+    double scale = bits == 16 ? 65535.0 : 255.0;
+    double x = v < 0.0f ? 0.0 : (v > 1.0f ? 1.0 : v);
+    if (srgb) x = mr_linear_to_srgb((float)x);
+    double code = floor(x * scale + 0.5);
+    float stored = (float)(code / scale);
+    return srgb ? mr_srgb_to_linear(stored) : stored;
+}
+
+/* Compare b to the expected integer-file decode of a: returns the largest deviation. */
+static double max_integer_error(const mr_image *a, const mr_image *b, int bits, int srgb) {
+    double worst = 0.0;
+    size_t n = mr_image_value_count(a);
+    for (size_t i = 0; i < n; i++) {
+        int alpha = a->channels == 4 && i % 4 == 3;
+        double e = fabs((double)b->pixels[i] - (double)expected_integer(a->pixels[i], bits, srgb && !alpha));
+        if (e > worst || isnan(e)) worst = isnan(e) ? INFINITY : e;
+    }
+    return worst;
+}
+
+static int same_shape(const mr_image *a, const mr_image *b) {
+    return a != NULL && b != NULL && a->width == b->width && a->height == b->height && a->channels == b->channels;
+}
+
+/* Write `img` to `name` and read it back with default options; NULL on failure (checks recorded). */
+static mr_image *round_trip(const char *name, const mr_image *img, const mr_img_write_options *wo,
+                            const mr_img_read_options *ro) {
+    const char *path = tmp_path(name);
+    MR_CHECK_OK(mr_img_write(path, img, wo));
+    mr_image *back = NULL;
+    MR_CHECK_OK(mr_img_read(path, ro, &back));
+    MR_CHECK_MSG(same_shape(img, back), "%s: shape %dx%dx%d -> %dx%dx%d", name, img->width, img->height,
+                 img->channels, back ? back->width : 0, back ? back->height : 0, back ? back->channels : 0);
+    if (!same_shape(img, back)) {
+        mr_image_free(back);
+        return NULL;
+    }
+    return back;
+}
+
+/* ---- sRGB --------------------------------------------------------------------------------------------- */
+
+MR_TEST(srgb_transfer_functions) {
+    MR_CHECK(mr_srgb_to_linear(0.0f) == 0.0f);
+    MR_CHECK(mr_srgb_to_linear(1.0f) == 1.0f);
+    MR_CHECK(mr_linear_to_srgb(0.0f) == 0.0f);
+    MR_CHECK_NEAR(mr_linear_to_srgb(1.0f), 1.0, 1e-7);
+    /* IEC 61966-2-1 values: 0.5 encoded is 0.21404114 linear; the linear segment below 0.04045. */
+    MR_CHECK_NEAR(mr_srgb_to_linear(0.5f), 0.214041140482232, 1e-7);
+    MR_CHECK_NEAR(mr_srgb_to_linear(0.04f), 0.04 / 12.92, 1e-9);
+    MR_CHECK_NEAR(mr_linear_to_srgb(0.002f), 0.002 * 12.92, 1e-8);
+    MR_CHECK_NEAR(mr_linear_to_srgb(0.214041140482232f), 0.5, 1e-7);
+    /* The two segments meet (continuity at the breakpoints to the precision of the published constants). */
+    MR_CHECK_NEAR(mr_srgb_to_linear(0.04045f), 0.0031308, 1e-7);
+    MR_CHECK_NEAR(mr_linear_to_srgb(0.0031308f), 0.04045, 1e-6);
+    /* Every 8-bit and 16-bit code survives decode + encode, and decoding is strictly increasing. */
+    int bad = 0;
+    float prev = -1.0f;
+    for (int q = 0; q <= 65535; q++) {
+        float v = (float)(q / 65535.0);
+        float lin = mr_srgb_to_linear(v);
+        if (!(lin > prev)) bad++;
+        prev = lin;
+        if ((int)floor(mr_linear_to_srgb(lin) * 65535.0 + 0.5) != q) bad++;
+    }
+    MR_CHECK_MSG(bad == 0, "%d 16-bit codes failed", bad);
+    /* Negative values are mirrored, not NaN. */
+    MR_CHECK_NEAR(mr_linear_to_srgb(-0.25f), -mr_linear_to_srgb(0.25f), 0.0);
+    MR_CHECK(isnan(mr_linear_to_srgb(NAN)));
+}
+
+/* ---- round trips -------------------------------------------------------------------------------------- */
+
+MR_TEST(png8_rgb_round_trip) {
+    mr_image *f = make_f(3, 1.0f);
+    mr_image *back = round_trip("f8.png", f, NULL, NULL);
+    if (back) {
+        MR_CHECK_NEAR(max_integer_error(f, back, 8, 1), 0.0, 1e-6);
+        /* and the decode really is sRGB: 0.25 linear is not stored as 64/255 */
+        MR_CHECK_NEAR(mr_image_at(back, 0, 0)[0], 0.25, 0.003);
+        MR_CHECK(mr_image_at(back, 1, 0)[0] == 1.0f && mr_image_at(back, 1, 0)[2] == 0.0f);
+    }
+    /* Read as data: the raw stored codes, code = round(encode(v) * 255). */
+    mr_img_read_options ro = {MR_IMG_DATA, 0, 0};
+    mr_image *raw = NULL;
+    MR_CHECK_OK(mr_img_read(tmp_path("f8.png"), &ro, &raw));
+    if (raw) MR_CHECK_NEAR(raw->pixels[0] * 255.0, floor(mr_linear_to_srgb(0.25f) * 255.0 + 0.5), 1e-4);
+    mr_image_free(raw);
+    mr_image_free(back);
+    mr_image_free(f);
+}
+
+MR_TEST(png16_rgb_round_trip) {
+    mr_image *f = make_f(3, 1.0f);
+    mr_img_write_options wo = {MR_IMG_COLOR, 16, 0};
+    mr_image *back = round_trip("f16.png", f, &wo, NULL);
+    if (back) MR_CHECK_NEAR(max_integer_error(f, back, 16, 1), 0.0, 1e-6);
+    mr_image_free(back);
+    mr_image_free(f);
+}
+
+MR_TEST(large_integer_round_trips) {
+    /* Large enough that reading tabulates the decode of every code (8 and 16 bit), noisy so every code
+     * region is hit; the result must be exactly the per-value decode. */
+    mr_image *noise = NULL, *grey = NULL;
+    MR_CHECK_OK(mr_image_create(160, 160, 3, &noise));
+    MR_CHECK_OK(mr_image_create(160, 160, 1, &grey));
+    unsigned s = 4242;
+    for (size_t i = 0; i < mr_image_value_count(noise); i++) {
+        s = s * 1103515245u + 12345u;
+        noise->pixels[i] = (float)((s >> 8) & 0xffff) / 60000.0f - 0.02f; /* a little below 0 and above 1 */
+    }
+    for (size_t i = 0; i < mr_image_value_count(grey); i++) grey->pixels[i] = noise->pixels[3 * i];
+    for (int bits = 8; bits <= 16; bits += 8) {
+        mr_img_write_options wo = {MR_IMG_COLOR, bits, 0};
+        mr_image *back = round_trip(bits == 8 ? "big8.png" : "big16.png", noise, &wo, NULL);
+        if (back) MR_CHECK_NEAR(max_integer_error(noise, back, bits, 1), 0.0, 0.0);
+        mr_image_free(back);
+        back = round_trip(bits == 8 ? "bigg8.png" : "bigg16.tif", grey, &wo, NULL);
+        if (back) MR_CHECK_NEAR(max_integer_error(grey, back, bits, 1), 0.0, 0.0);
+        mr_image_free(back);
+    }
+    mr_image_free(grey);
+    mr_image_free(noise);
+}
+
+MR_TEST(png_data_encoding_is_linear) {
+    mr_image *f = make_f(3, 1.0f);
+    mr_img_write_options wo = {MR_IMG_DATA, 8, 0};
+    mr_img_read_options ro = {MR_IMG_DATA, 0, 0};
+    mr_image *back = round_trip("data.png", f, &wo, &ro);
+    if (back) {
+        MR_CHECK_NEAR(max_integer_error(f, back, 8, 0), 0.0, 1e-6);
+        MR_CHECK_NEAR(mr_image_at(back, 0, 0)[0], 64.0 / 255.0, 1e-7); /* 0.25 -> code 64 */
+    }
+    mr_image_free(back);
+    mr_image_free(f);
+}
+
+MR_TEST(tiff_round_trips) {
+    mr_image *f = make_f(3, 1.0f);
+    for (int bits = 8; bits <= 16; bits += 8) {
+        mr_img_write_options wo = {MR_IMG_COLOR, bits, 0};
+        mr_image *back = round_trip(bits == 8 ? "f8.tif" : "f16.tiff", f, &wo, NULL);
+        if (back) MR_CHECK_NEAR(max_integer_error(f, back, bits, 1), 0.0, 1e-6);
+        mr_image_free(back);
+    }
+    mr_image_free(f);
+}
+
+MR_TEST(jpeg_round_trip) {
+    /* JPEG is lossy and subsamples chroma: the F scaled 8x (one 8x8 block per cell) and compared at the
+     * cell centres with a loose tolerance that still tells red from blue and every corner colour apart. */
+    const int s = 8;
+    mr_image *f = make_f(3, 1.0f), *big = NULL;
+    MR_CHECK_OK(mr_image_create(F_W * s, F_H * s, 3, &big));
+    for (int y = 0; y < F_H * s; y++)
+        for (int x = 0; x < F_W * s; x++)
+            memcpy(mr_image_at(big, x, y), mr_image_at(f, x / s, y / s), 3 * sizeof(float));
+    mr_img_write_options wo = {MR_IMG_COLOR, 0, 95};
+    mr_image *back = round_trip("f.jpg", big, &wo, NULL);
+    if (back) {
+        double worst = 0.0;
+        for (int cy = 0; cy < F_H; cy++)
+            for (int cx = 0; cx < F_W; cx++)
+                for (int c = 0; c < 3; c++) {
+                    double want = mr_linear_to_srgb(mr_image_at(f, cx, cy)[c]);
+                    double got = mr_linear_to_srgb(mr_image_at(back, cx * s + s / 2, cy * s + s / 2)[c]);
+                    worst = fmax(worst, fabs(want - got));
+                }
+        MR_CHECK_MSG(worst < 0.06, "largest display-value error %.4f", worst);
+    }
+    /* quality is honoured: quality 10 gives a smaller file than 95 */
+    mr_img_write_options low = {MR_IMG_COLOR, 0, 10};
+    MR_CHECK_OK(mr_img_write(tmp_path("low.jpg"), big, &low));
+    struct stat hi_st, lo_st;
+    MR_CHECK(stat(tmp_path("f.jpg"), &hi_st) == 0 && stat(tmp_path("low.jpg"), &lo_st) == 0 &&
+             lo_st.st_size < hi_st.st_size);
+    mr_image_free(back);
+    mr_image_free(big);
+    mr_image_free(f);
+}
+
+MR_TEST(exr_float_round_trip_is_exact) {
+    mr_image *f = make_f(3, 4.0f);
+    /* values an integer format could not hold: negative, tiny, huge, subnormal, non-finite */
+    float *p = mr_image_at(f, 2, 3);
+    p[0] = -0.5f, p[1] = 1e-30f, p[2] = 3.0e38f;
+    p = mr_image_at(f, 3, 3);
+    p[0] = FLT_MIN / 4.0f, p[1] = 123.456f, p[2] = INFINITY;
+    mr_image *back = round_trip("f32.exr", f, NULL, NULL);
+    if (back) MR_CHECK(memcmp(back->pixels, f->pixels, mr_image_value_count(f) * sizeof(float)) == 0);
+    /* NaN survives as NaN */
+    mr_image_at(f, 4, 4)[1] = NAN;
+    mr_image_free(back);
+    back = round_trip("nan.exr", f, NULL, NULL);
+    if (back) MR_CHECK(isnan(mr_image_at(back, 4, 4)[1]));
+    mr_image_free(back);
+    mr_image_free(f);
+}
+
+MR_TEST(exr_half_round_trip) {
+    mr_image *f = make_f(4, 2.0f);
+    mr_image_at(f, 2, 2)[0] = 0.1f;    /* not representable in half */
+    mr_image_at(f, 2, 2)[1] = 1000.3f; /* half spacing at 1000 is 0.5 */
+    mr_img_write_options wo = {MR_IMG_COLOR, 16, 0};
+    mr_image *back = round_trip("f16.exr", f, &wo, NULL);
+    if (back) {
+        int bad = 0;
+        for (size_t i = 0; i < mr_image_value_count(f); i++) {
+            double v = f->pixels[i], got = back->pixels[i];
+            /* round to nearest half: relative error at most 2^-11 */
+            if (fabs(got - v) > fabs(v) * (1.0 / 2048.0)) bad++;
+        }
+        MR_CHECK_MSG(bad == 0, "%d values off by more than half precision", bad);
+        MR_CHECK(mr_image_at(back, 0, 0)[0] == 0.5f && mr_image_at(back, 1, 0)[0] == 2.0f); /* exact in half */
+        MR_CHECK(mr_image_at(back, 2, 2)[0] != 0.1f && fabs(mr_image_at(back, 2, 2)[0] - 0.1) < 0.1 / 2048.0);
+        MR_CHECK(mr_image_at(back, 5, 0)[3] == 0.0f && mr_image_at(back, 5, 0)[0] == 1.5f); /* alpha 0 keeps colour */
+    }
+    mr_image_free(back);
+    mr_image_free(f);
+}
+
+MR_TEST(hdr_round_trip) {
+    mr_image *f = make_f(3, 5.0f);
+    mr_image_at(f, 3, 2)[0] = 0.1f, mr_image_at(f, 3, 2)[1] = 0.1f, mr_image_at(f, 3, 2)[2] = 0.1f;
+    mr_image *back = round_trip("f.hdr", f, NULL, NULL);
+    if (back) {
+        /* RGBE: 8-bit mantissas under a shared exponent, so the error is ~1% of the pixel's largest channel */
+        double worst = 0.0;
+        for (int y = 0; y < F_H; y++)
+            for (int x = 0; x < F_W; x++) {
+                const float *a = mr_image_at(f, x, y), *b = mr_image_at(back, x, y);
+                double m = fmax(a[0], fmax(a[1], a[2]));
+                for (int c = 0; c < 3; c++) worst = fmax(worst, fabs(a[c] - b[c]) / m);
+            }
+        MR_CHECK_MSG(worst <= 0.01, "largest relative RGBE error %.4f", worst);
+        MR_CHECK(mr_image_at(back, 1, 0)[0] == 5.0f && mr_image_at(back, 1, 0)[2] == 0.0f);
+    }
+    mr_image_free(back);
+    /* 1-channel images are stored as grey RGB; alpha cannot be stored */
+    mr_image *g = make_f(1, 2.0f);
+    MR_CHECK_OK(mr_img_write(tmp_path("g.hdr"), g, NULL));
+    mr_image *gb = NULL;
+    MR_CHECK_OK(mr_img_read(tmp_path("g.hdr"), NULL, &gb));
+    if (gb) {
+        MR_CHECK(gb->channels == 3);
+        MR_CHECK(mr_image_at(gb, 1, 0)[0] == 2.0f && mr_image_at(gb, 1, 0)[2] == 2.0f);
+        MR_CHECK_NEAR(mr_image_at(gb, 2, 1)[1], 0.25, 0.0025);
+    }
+    mr_image *rgba = make_f(4, 1.0f);
+    MR_CHECK(mr_img_write(tmp_path("a.hdr"), rgba, NULL) == MR_ERR_UNSUPPORTED);
+    MR_CHECK(strstr(mr_last_error(), "alpha") != NULL);
+    mr_image_free(rgba);
+    mr_image_free(gb);
+    mr_image_free(g);
+    mr_image_free(f);
+}
+
+MR_TEST(one_channel_round_trips) {
+    mr_image *g = make_f(1, 1.0f);
+    mr_image *back = round_trip("g.png", g, NULL, NULL);
+    if (back) MR_CHECK_NEAR(max_integer_error(g, back, 8, 1), 0.0, 1e-6);
+    mr_image_free(back);
+    mr_img_write_options w16 = {MR_IMG_DATA, 16, 0};
+    mr_img_read_options rdata = {MR_IMG_DATA, 0, 0};
+    back = round_trip("g16.tif", g, &w16, &rdata);
+    if (back) MR_CHECK_NEAR(max_integer_error(g, back, 16, 0), 0.0, 1e-7);
+    mr_image_free(back);
+    back = round_trip("g.exr", g, NULL, NULL);
+    if (back) MR_CHECK(memcmp(back->pixels, g->pixels, mr_image_value_count(g) * sizeof(float)) == 0);
+    mr_image_free(back);
+    /* the EXR channel is called Y (oiiotool reads our file independently of mr_img_read) */
+    char cmd[700];
+    snprintf(cmd, sizeof cmd, "iinfo -v '%s' | grep -q 'channel list: Y'", tmp_path("g.exr"));
+    MR_CHECK(run_quiet(cmd) == 0);
+    back = round_trip("g.jpg", g, NULL, NULL);
+    if (back) MR_CHECK_NEAR(mr_linear_to_srgb(mr_image_at(back, 1, 0)[0]), 1.0, 0.05);
+    mr_image_free(back);
+    mr_image_free(g);
+}
+
+MR_TEST(rgba_alpha_is_not_premultiplied) {
+    mr_image *f = make_f(4, 1.0f);
+    for (int bits = 8; bits <= 16; bits += 8) {
+        mr_img_write_options wo = {MR_IMG_COLOR, bits, 0};
+        mr_image *back = round_trip(bits == 8 ? "a8.png" : "a16.png", f, &wo, NULL);
+        if (back) {
+            MR_CHECK_NEAR(max_integer_error(f, back, bits, 1), 0.0, 1e-6);
+            /* top-right has alpha 0 and colour (0.75, 0.125, 0.5): premultiplication would make it black */
+            MR_CHECK_NEAR(mr_image_at(back, 5, 0)[0], 0.75, 0.005);
+            MR_CHECK(mr_image_at(back, 5, 0)[3] == 0.0f);
+            /* alpha is stored linearly (not sRGB-encoded): 0.5 -> code 128 (8-bit) */
+            MR_CHECK_NEAR(mr_image_at(back, 0, 0)[3], bits == 8 ? 128.0 / 255.0 : 32768.0 / 65535.0, 1e-7);
+        }
+        mr_image_free(back);
+    }
+    mr_image *back = round_trip("a.tif", f, NULL, NULL);
+    if (back) MR_CHECK_NEAR(max_integer_error(f, back, 8, 1), 0.0, 1e-6);
+    mr_image_free(back);
+    back = round_trip("a.exr", f, NULL, NULL);
+    if (back) MR_CHECK(memcmp(back->pixels, f->pixels, mr_image_value_count(f) * sizeof(float)) == 0);
+    mr_image_free(back);
+    /* JPEG has no alpha */
+    MR_CHECK(mr_img_write(tmp_path("a.jpg"), f, NULL) == MR_ERR_UNSUPPORTED);
+    mr_image_free(f);
+}
+
+MR_TEST(read_channel_conversions) {
+    mr_image *g = make_f(1, 1.0f), *rgb = make_f(3, 1.0f), *rgba = make_f(4, 1.0f);
+    MR_CHECK_OK(mr_img_write(tmp_path("cg.png"), g, NULL));
+    MR_CHECK_OK(mr_img_write(tmp_path("crgb.png"), rgb, NULL));
+    MR_CHECK_OK(mr_img_write(tmp_path("crgba.exr"), rgba, NULL));
+    mr_image *img = NULL;
+    mr_img_read_options ro = {MR_IMG_COLOR, 3, 0};
+    MR_CHECK_OK(mr_img_read(tmp_path("cg.png"), &ro, &img)); /* grey -> RGB broadcast */
+    if (img) {
+        MR_CHECK(img->channels == 3);
+        const float *p = mr_image_at(img, 5, 4);
+        MR_CHECK(p[0] == p[1] && p[1] == p[2] && fabs(p[0] - 0.5) < 0.005);
+    }
+    mr_image_free(img);
+    img = NULL;
+    ro.channels = 4; /* grey -> RGBA, alpha 1 */
+    MR_CHECK_OK(mr_img_read(tmp_path("cg.png"), &ro, &img));
+    if (img) MR_CHECK(img->channels == 4 && mr_image_at(img, 2, 2)[3] == 1.0f);
+    mr_image_free(img);
+    img = NULL;
+    ro.channels = 3; /* RGBA -> RGB drops alpha */
+    MR_CHECK_OK(mr_img_read(tmp_path("crgba.exr"), &ro, &img));
+    if (img) MR_CHECK(img->channels == 3 && mr_image_at(img, 5, 0)[0] == 0.75f);
+    mr_image_free(img);
+    static mr_image sentinel_image; /* *out must be left untouched on failure */
+    mr_image *const sentinel = &sentinel_image;
+    img = sentinel;
+    ro.channels = 1; /* RGB -> luminance is refused */
+    MR_CHECK(mr_img_read(tmp_path("crgb.png"), &ro, &img) == MR_ERR_FORMAT);
+    MR_CHECK(img == sentinel);
+    MR_CHECK(strstr(mr_last_error(), "crgb.png") != NULL);
+    ro.channels = 2;
+    MR_CHECK(mr_img_read(tmp_path("crgb.png"), &ro, &img) == MR_ERR_INVALID_ARG);
+    MR_CHECK(img == sentinel);
+    /* A grey+alpha PNG written by oiiotool (libpng) reads as RGBA, or grey with channels = 1. */
+    char cmd[700];
+    /* (--attrib keeps oiiotool from un-premultiplying on write: the file holds codes 128 and 64) */
+    snprintf(cmd, sizeof cmd,
+             "oiiotool --create 4x3 2 --fill:color=0.5,0.25 4x3+0+0 --attrib oiio:UnassociatedAlpha 1 -d uint8 "
+             "-o '%s'",
+             tmp_path("ga.png"));
+    MR_CHECK(run_quiet(cmd) == 0);
+    img = NULL;
+    mr_img_read_options data = {MR_IMG_DATA, 0, 0};
+    MR_CHECK_OK(mr_img_read(tmp_path("ga.png"), &data, &img));
+    if (img) {
+        const float *p = mr_image_at(img, 3, 2);
+        MR_CHECK(img->channels == 4);
+        MR_CHECK_NEAR(p[0], 128.0 / 255.0, 1e-7);
+        MR_CHECK(p[0] == p[1] && p[1] == p[2]);
+        MR_CHECK_NEAR(p[3], 64.0 / 255.0, 1e-7); /* unassociated: grey is not multiplied by alpha */
+    }
+    mr_image_free(img);
+    img = NULL;
+    data.channels = 1;
+    MR_CHECK_OK(mr_img_read(tmp_path("ga.png"), &data, &img));
+    if (img) MR_CHECK(img->channels == 1 && fabs(img->pixels[0] - 128.0 / 255.0) < 1e-7);
+    mr_image_free(img);
+    mr_image_free(g);
+    mr_image_free(rgb);
+    mr_image_free(rgba);
+}
+
+/* ---- independent cross-checks with oiiotool ----------------------------------------------------------- */
+
+/* oiiotool arguments drawing make_f(3, scale) with --fill. */
+static void f_fill_args(char *out, size_t cap, float scale) {
+    snprintf(out, cap,
+             "--create %dx%d 3 --fill:color=0,0,%g %dx%d+0+0 "
+             "--fill:color=%g,0,0 1x5+1+0 --fill:color=%g,0,0 3x1+2+0 --fill:color=%g,0,0 2x1+2+2 "
+             "--fill:color=%g,%g,%g 1x1+0+0 --fill:color=%g,%g,%g 1x1+5+0 "
+             "--fill:color=%g,%g,%g 1x1+0+4 --fill:color=%g,%g,%g 1x1+5+4",
+             F_W, F_H, scale, F_W, F_H, scale, scale, scale, 0.25 * scale, 0.5 * scale, 0.75 * scale,
+             0.75 * scale, 0.125 * scale, 0.5 * scale, 0.0625 * scale, 0.875 * scale, 0.25 * scale, 0.5 * scale,
+             0.375 * scale, 0.0 * scale);
+}
+
+MR_TEST(reads_files_written_by_oiiotool) {
+    mr_image *f = make_f(3, 2.0f);
+    char args[1024], cmd[2048];
+    f_fill_args(args, sizeof args, 2.0f);
+    /* EXR written by OpenImageIO through the OpenEXR C++ library (not by our Core writer) */
+    const char *types[2] = {"float", "half"};
+    const char *names[2] = {"oiio32.exr", "oiio16.exr"};
+    for (int k = 0; k < 2; k++) {
+        snprintf(cmd, sizeof cmd, "oiiotool %s -d %s -o '%s'", args, types[k], tmp_path(names[k]));
+        MR_CHECK_MSG(run_quiet(cmd) == 0, "%s", cmd);
+        mr_image *img = NULL;
+        MR_CHECK_OK(mr_img_read(tmp_path(names[k]), NULL, &img));
+        if (img) MR_CHECK_MSG(same_shape(f, img) && memcmp(img->pixels, f->pixels, 6 * 5 * 3 * sizeof(float)) == 0,
+                              "%s differs from the in-memory F", names[k]);
+        mr_image_free(img);
+    }
+    mr_image_free(f);
+    /* PNG written by oiiotool (libpng): codes round(v * 255), decoded from sRGB by default */
+    f = make_f(3, 1.0f);
+    f_fill_args(args, sizeof args, 1.0f);
+    snprintf(cmd, sizeof cmd, "oiiotool %s -d uint8 -o '%s'", args, tmp_path("oiio.png"));
+    MR_CHECK(run_quiet(cmd) == 0);
+    mr_image *img = NULL;
+    MR_CHECK_OK(mr_img_read(tmp_path("oiio.png"), NULL, &img));
+    if (img && same_shape(f, img)) {
+        double worst = 0.0;
+        for (size_t i = 0; i < mr_image_value_count(f); i++) {
+            double code = floor(f->pixels[i] * 255.0 + 0.5); /* oiiotool quantised the values as given */
+            worst = fmax(worst, fabs(img->pixels[i] - mr_srgb_to_linear((float)(code / 255.0))));
+        }
+        MR_CHECK_NEAR(worst, 0.0, 1e-7);
+    }
+    mr_image_free(img);
+    mr_image_free(f);
+}
+
+MR_TEST(oiiotool_reads_our_exr) {
+    /* Our Core-written EXR dumped by oiiotool: the exact values, in the right place. */
+    mr_image *f = make_f(4, 3.0f);
+    MR_CHECK_OK(mr_img_write(tmp_path("dump.exr"), f, NULL));
+    char cmd[700];
+    snprintf(cmd, sizeof cmd, "oiiotool --dumpdata '%s' 2>&1", tmp_path("dump.exr"));
+    FILE *p = popen(cmd, "r");
+    MR_CHECK(p != NULL);
+    int seen = 0, bad = 0;
+    char line[512];
+    while (p != NULL && fgets(line, sizeof line, p) != NULL) {
+        int x, y;
+        float v[4];
+        if (sscanf(line, " Pixel (%d, %d): %f %f %f %f", &x, &y, &v[0], &v[1], &v[2], &v[3]) != 6) continue;
+        seen++;
+        if (x < 0 || x >= F_W || y < 0 || y >= F_H) {
+            bad++;
+            continue;
+        }
+        const float *want = mr_image_at(f, x, y);
+        for (int c = 0; c < 4; c++)
+            if (fabs(v[c] - want[c]) > 1e-6) bad++;
+    }
+    if (p != NULL) MR_CHECK(pclose(p) == 0);
+    MR_CHECK_MSG(seen == F_W * F_H && bad == 0, "%d pixels parsed, %d mismatches", seen, bad);
+    mr_image_free(f);
+}
+
+/* ---- atomicity ---------------------------------------------------------------------------------------- */
+
+MR_TEST(write_into_missing_directory_fails_cleanly) {
+    mr_image *f = make_f(3, 1.0f);
+    const char *exts[3] = {"png", "exr", "hdr"};
+    for (int k = 0; k < 3; k++) {
+        char path[600];
+        snprintf(path, sizeof path, "%s/f.%s", tmp_path("no/such/dir"), exts[k]);
+        MR_CHECK(mr_img_write(path, f, NULL) == MR_ERR_IO);
+        MR_CHECK_MSG(strstr(mr_last_error(), path) != NULL, "message '%s' does not name the file", mr_last_error());
+        MR_CHECK(!file_exists(tmp_path("no")));
+    }
+    MR_CHECK(count_temporaries() == 0);
+    mr_image_free(f);
+}
+
+MR_TEST(failed_write_leaves_target_untouched) {
+    mr_image *f = make_f(3, 1.0f);
+    unsigned char before[65536], after[65536];
+    char target[600];
+    snprintf(target, sizeof target, "%s", tmp_path("keep.jpg"));
+    MR_CHECK_OK(mr_img_write(target, f, NULL));
+    long n_before = read_file(target, before, sizeof before);
+    MR_CHECK(n_before > 0);
+
+    /* 1. rejected before anything is written */
+    mr_img_write_options bad_bits = {MR_IMG_COLOR, 16, 0};
+    MR_CHECK(mr_img_write(target, f, &bad_bits) == MR_ERR_INVALID_ARG);
+    /* 2. a size the format cannot hold is refused up front (libjpeg would otherwise exit() the process) */
+    mr_image *wide = NULL;
+    MR_CHECK_OK(mr_image_create(70000, 1, 3, &wide));
+    MR_CHECK(mr_img_write(target, wide, NULL) == MR_ERR_UNSUPPORTED);
+    MR_CHECK(strstr(mr_last_error(), "keep.jpg") != NULL);
+    long n_after = read_file(target, after, sizeof after);
+    MR_CHECK(n_after == n_before && memcmp(before, after, (size_t)n_before) == 0);
+    MR_CHECK(count_temporaries() == 0);
+
+    /* 3. the rename fails after a complete temporary file: the target is a directory */
+    const char *dirs[3] = {"isdir.png", "isdir.exr", "isdir.tif"};
+    for (int k = 0; k < 3; k++) {
+        MR_CHECK(mkdir(tmp_path(dirs[k]), 0755) == 0);
+        MR_CHECK(mr_img_write(tmp_path(dirs[k]), f, NULL) == MR_ERR_IO);
+        MR_CHECK(strstr(mr_last_error(), dirs[k]) != NULL);
+        struct stat st;
+        MR_CHECK(stat(tmp_path(dirs[k]), &st) == 0 && S_ISDIR(st.st_mode));
+    }
+    MR_CHECK(count_temporaries() == 0);
+
+    /* 4. a successful write replaces the old content */
+    mr_image *g = make_f(3, 0.5f);
+    MR_CHECK_OK(mr_img_write(target, g, NULL));
+    n_after = read_file(target, after, sizeof after);
+    MR_CHECK(n_after > 0 && (n_after != n_before || memcmp(before, after, (size_t)n_before) != 0));
+    MR_CHECK(count_temporaries() == 0);
+    mr_image_free(g);
+    mr_image_free(wide);
+    mr_image_free(f);
+}
+
+MR_TEST(full_disk_fails_cleanly) {
+    /* A file-size limit makes every write past 4 KiB fail with EFBIG, as a full disk would (SIGXFSZ ignored).
+     * Each format must report MR_ERR_IO naming the file, remove its temporary, and keep the old target. */
+    mr_image *noise = NULL;
+    MR_CHECK_OK(mr_image_create(128, 128, 3, &noise));
+    unsigned s = 777;
+    for (size_t i = 0; i < mr_image_value_count(noise); i++) {
+        s = s * 1103515245u + 12345u;
+        noise->pixels[i] = (float)((s >> 8) & 0xffff) / 65535.0f;
+    }
+    mr_image *f = make_f(3, 1.0f);
+    const char *names[5] = {"full.png", "full.tif", "full.jpg", "full.hdr", "full.exr"};
+    unsigned char before[8192], after[8192];
+    long sizes[5];
+    for (int k = 0; k < 5; k++) {
+        MR_CHECK_OK(mr_img_write(tmp_path(names[k]), f, NULL)); /* small: the old content */
+        sizes[k] = read_file(tmp_path(names[k]), before, sizeof before);
+        MR_CHECK(sizes[k] > 0 && sizes[k] < 4096);
+    }
+    void (*old_handler)(int) = signal(SIGXFSZ, SIG_IGN);
+    struct rlimit old_limit, limit;
+    MR_CHECK(getrlimit(RLIMIT_FSIZE, &old_limit) == 0);
+    limit = old_limit;
+    limit.rlim_cur = 4096;
+    MR_CHECK(setrlimit(RLIMIT_FSIZE, &limit) == 0);
+    mr_status results[5];
+    char messages[5][256];
+    for (int k = 0; k < 5; k++) {
+        results[k] = mr_img_write(tmp_path(names[k]), noise, NULL);
+        snprintf(messages[k], sizeof messages[k], "%s", mr_last_error());
+    }
+    MR_CHECK(setrlimit(RLIMIT_FSIZE, &old_limit) == 0);
+    signal(SIGXFSZ, old_handler);
+    for (int k = 0; k < 5; k++) {
+        MR_CHECK_MSG(results[k] == MR_ERR_IO, "%s: %s", names[k], mr_status_str(results[k]));
+        MR_CHECK_MSG(strstr(messages[k], names[k]) != NULL, "message '%s'", messages[k]);
+        /* the old file is intact (same size, and still decodes to the F) */
+        MR_CHECK(read_file(tmp_path(names[k]), after, sizeof after) == sizes[k]);
+        mr_image *back = NULL;
+        MR_CHECK_OK(mr_img_read(tmp_path(names[k]), NULL, &back));
+        MR_CHECK(back != NULL && back->width == F_W && back->height == F_H);
+        mr_image_free(back);
+    }
+    MR_CHECK(count_temporaries() == 0);
+    mr_image_free(f);
+    mr_image_free(noise);
+}
+
+MR_TEST(written_files_have_ordinary_permissions) {
+    /* The temporary file is created 0666 & ~umask like any output, not 0600 as mkstemp would. */
+    mode_t mask = umask(022);
+    umask(mask);
+    mr_image *f = make_f(3, 1.0f);
+    const char *names[2] = {"mode.png", "mode.exr"};
+    for (int k = 0; k < 2; k++) {
+        MR_CHECK_OK(mr_img_write(tmp_path(names[k]), f, NULL));
+        struct stat st;
+        MR_CHECK(stat(tmp_path(names[k]), &st) == 0 && (st.st_mode & 0777) == (0666 & ~mask));
+    }
+    mr_image_free(f);
+}
+
+MR_TEST(concurrent_writes_and_reads) {
+    /* Different files from several threads at once: temporary names must not collide. */
+    (void)tmp_path(""); /* creates test_dir when this case runs alone */
+    mr_image *f = make_f(4, 1.0f);
+    int failures = 0;
+#pragma omp parallel for reduction(+ : failures)
+    for (int i = 0; i < 16; i++) {
+        char name[32];
+        snprintf(name, sizeof name, "par%d.%s", i, i % 2 ? "exr" : "png");
+        char path[600];
+        snprintf(path, sizeof path, "%s/%s", test_dir, name);
+        mr_image *back = NULL;
+        if (mr_img_write(path, f, NULL) != MR_OK || mr_img_read(path, NULL, &back) != MR_OK || back->channels != 4)
+            failures++;
+        mr_image_free(back);
+    }
+    MR_CHECK(failures == 0);
+    MR_CHECK(count_temporaries() == 0);
+    mr_image_free(f);
+}
+
+/* ---- bad inputs --------------------------------------------------------------------------------------- */
+
+MR_TEST(bad_inputs_give_clear_errors) {
+    mr_image *img = NULL;
+    /* missing file */
+    const char *missing = tmp_path("missing.png");
+    MR_CHECK(mr_img_read(missing, NULL, &img) == MR_ERR_IO);
+    MR_CHECK(strstr(mr_last_error(), missing) != NULL && strstr(mr_last_error(), "No such file") != NULL);
+    MR_CHECK(img == NULL);
+    /* a directory */
+    MR_CHECK(mr_img_read(test_dir, NULL, &img) == MR_ERR_IO);
+    /* a text file named .png */
+    const char *text = tmp_path("text.png");
+    const char words[] = "this is not an image\n";
+    MR_CHECK(write_file(text, words, sizeof words - 1));
+    MR_CHECK(mr_img_read(text, NULL, &img) == MR_ERR_FORMAT);
+    MR_CHECK(strstr(mr_last_error(), text) != NULL);
+    MR_CHECK(img == NULL);
+    /* an empty file */
+    MR_CHECK(write_file(tmp_path("empty.exr"), "", 0));
+    MR_CHECK(mr_img_read(tmp_path("empty.exr"), NULL, &img) == MR_ERR_FORMAT);
+    /* a truncated PNG: a noisy 64x64 image cut in half */
+    mr_image *noise = NULL;
+    MR_CHECK_OK(mr_image_create(64, 64, 3, &noise));
+    unsigned s = 12345;
+    for (size_t i = 0; i < mr_image_value_count(noise); i++) {
+        s = s * 1103515245u + 12345u;
+        noise->pixels[i] = (float)((s >> 8) & 0xffff) / 65535.0f;
+    }
+    char full[600], cut[600];
+    snprintf(full, sizeof full, "%s", tmp_path("whole.png"));
+    snprintf(cut, sizeof cut, "%s", tmp_path("cut.png"));
+    MR_CHECK_OK(mr_img_write(full, noise, NULL));
+    static unsigned char bytes[1 << 16];
+    long n = read_file(full, bytes, sizeof bytes);
+    MR_CHECK(n > 1000 && n < (long)sizeof bytes);
+    MR_CHECK(write_file(cut, bytes, (size_t)n / 2));
+    MR_CHECK(mr_img_read(cut, NULL, &img) == MR_ERR_FORMAT);
+    MR_CHECK_MSG(strstr(mr_last_error(), cut) != NULL && strstr(mr_last_error(), "truncated") != NULL, "%s",
+                 mr_last_error());
+    MR_CHECK(img == NULL);
+    /* a PNG with one flipped bit inside its image data: the chunk CRC no longer matches */
+    bytes[n / 2] ^= 0x10;
+    MR_CHECK(write_file(tmp_path("flipped.png"), bytes, (size_t)n));
+    bytes[n / 2] ^= 0x10;
+    MR_CHECK(mr_img_read(tmp_path("flipped.png"), NULL, &img) == MR_ERR_FORMAT);
+    MR_CHECK_MSG(strstr(mr_last_error(), "flipped.png") != NULL && strstr(mr_last_error(), "CRC") != NULL, "%s",
+                 mr_last_error());
+    /* a truncated JPEG: libjpeg only warns ("Premature end of JPEG file") and fills the rest with grey */
+    MR_CHECK_OK(mr_img_write(tmp_path("whole.jpg"), noise, NULL));
+    n = read_file(tmp_path("whole.jpg"), bytes, sizeof bytes);
+    MR_CHECK(n > 1000 && n < (long)sizeof bytes);
+    MR_CHECK(write_file(tmp_path("cut.jpg"), bytes, (size_t)n / 2));
+    MR_CHECK(mr_img_read(tmp_path("cut.jpg"), NULL, &img) == MR_ERR_FORMAT);
+    MR_CHECK_MSG(strstr(mr_last_error(), "cut.jpg") != NULL, "%s", mr_last_error());
+    /* truncated EXR and HDR */
+    const char *others[2] = {"whole.exr", "whole.hdr"};
+    for (int k = 0; k < 2; k++) {
+        MR_CHECK_OK(mr_img_write(tmp_path(others[k]), noise, NULL));
+        n = read_file(tmp_path(others[k]), bytes, sizeof bytes);
+        MR_CHECK(n > 1000 && n < (long)sizeof bytes);
+        char name[32];
+        snprintf(name, sizeof name, "cut_%s", others[k] + 6);
+        MR_CHECK(write_file(tmp_path(name), bytes, (size_t)n / 2));
+        MR_CHECK(mr_img_read(tmp_path(name), NULL, &img) == MR_ERR_FORMAT);
+        MR_CHECK_MSG(strstr(mr_last_error(), name) != NULL, "%s", mr_last_error());
+    }
+    MR_CHECK(img == NULL);
+    /* too large: checked from the header, before decoding */
+    mr_img_read_options small = {MR_IMG_COLOR, 0, 32};
+    MR_CHECK(mr_img_read(full, &small, &img) == MR_ERR_FORMAT);
+    MR_CHECK(strstr(mr_last_error(), full) != NULL && strstr(mr_last_error(), "64x64") != NULL &&
+             strstr(mr_last_error(), "32") != NULL);
+    MR_CHECK(img == NULL);
+    small.max_dimension = 64; /* the limit itself is accepted */
+    MR_CHECK_OK(mr_img_read(full, &small, &img));
+    mr_image_free(img);
+    img = NULL;
+    small.max_dimension = -1;
+    MR_CHECK(mr_img_read(full, &small, &img) == MR_ERR_INVALID_ARG);
+    /* writing: unknown extension, bad options */
+    MR_CHECK(mr_img_write(tmp_path("f.bmpx"), noise, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), ".bmpx") != NULL);
+    MR_CHECK(mr_img_write(tmp_path("noext"), noise, NULL) == MR_ERR_INVALID_ARG);
+    mr_img_write_options wo = {MR_IMG_COLOR, 12, 0};
+    MR_CHECK(mr_img_write(tmp_path("bad.png"), noise, &wo) == MR_ERR_INVALID_ARG);
+    wo.bits = 8;
+    MR_CHECK(mr_img_write(tmp_path("bad.exr"), noise, &wo) == MR_ERR_INVALID_ARG);
+    wo.bits = 0;
+    wo.jpeg_quality = 101;
+    MR_CHECK(mr_img_write(tmp_path("bad.jpg"), noise, &wo) == MR_ERR_INVALID_ARG);
+    wo.jpeg_quality = 0;
+    wo.encoding = (mr_img_encoding)7;
+    MR_CHECK(mr_img_write(tmp_path("bad.tif"), noise, &wo) == MR_ERR_INVALID_ARG);
+    MR_CHECK(!file_exists(tmp_path("bad.png")) && !file_exists(tmp_path("bad.exr")) &&
+             !file_exists(tmp_path("bad.jpg")) && !file_exists(tmp_path("bad.tif")));
+    /* upper-case extensions are fine */
+    MR_CHECK_OK(mr_img_write(tmp_path("UPPER.PNG"), noise, NULL));
+    MR_CHECK(count_temporaries() == 0);
+    mr_image_free(noise);
+}
+
+MR_TEST(library_prints_nothing) {
+    /* Library code never prints (mr_status.h): run the failure paths with stderr and stdout captured. */
+    fflush(stdout);
+    fflush(stderr);
+    char capture[600];
+    snprintf(capture, sizeof capture, "%s", tmp_path("captured.txt"));
+    int saved_out = dup(1), saved_err = dup(2);
+    FILE *sink = fopen(capture, "w");
+    MR_CHECK(sink != NULL && saved_out >= 0 && saved_err >= 0);
+    if (sink == NULL || saved_out < 0 || saved_err < 0) return;
+    dup2(fileno(sink), 1);
+    dup2(fileno(sink), 2);
+
+    mr_image *img = NULL, *noise = NULL;
+    mr_status statuses[8];
+    int k = 0;
+    mr_image_create(40, 30, 3, &noise);
+    for (size_t i = 0; i < mr_image_value_count(noise); i++) noise->pixels[i] = (float)((i * 7919) % 1000) / 1000.0f;
+    static unsigned char bytes[1 << 16];
+    const char *formats[4] = {"png", "jpg", "exr", "tif"};
+    for (int f = 0; f < 4; f++) {
+        char whole[64], cut[64];
+        snprintf(whole, sizeof whole, "quiet.%s", formats[f]);
+        snprintf(cut, sizeof cut, "quiet_cut.%s", formats[f]);
+        mr_img_write(tmp_path(whole), noise, NULL);
+        long n = read_file(tmp_path(whole), bytes, sizeof bytes);
+        write_file(tmp_path(cut), bytes, n > 0 ? (size_t)n / 2 : 0);
+        statuses[k++] = mr_img_read(tmp_path(cut), NULL, &img);
+    }
+    write_file(tmp_path("quiet_text.png"), "not a png", 9);
+    statuses[k++] = mr_img_read(tmp_path("quiet_text.png"), NULL, &img);
+    statuses[k++] = mr_img_read(tmp_path("quiet_missing.exr"), NULL, &img);
+    mr_image *wide = NULL;
+    mr_image_create(70000, 1, 1, &wide);
+    statuses[k++] = mr_img_write(tmp_path("quiet_wide.jpg"), wide, NULL);
+    mr_image_free(wide);
+    mr_image_free(noise);
+
+    fflush(stdout);
+    fflush(stderr);
+    dup2(saved_out, 1);
+    dup2(saved_err, 2);
+    close(saved_out);
+    close(saved_err);
+    fclose(sink);
+    for (int i = 0; i < k; i++) MR_CHECK_MSG(statuses[i] != MR_OK, "failure case %d succeeded", i);
+    MR_CHECK(img == NULL);
+    unsigned char text[512];
+    long printed = read_file(capture, text, sizeof text - 1);
+    if (printed > 0) text[printed] = '\0';
+    MR_CHECK_MSG(printed == 0, "the library printed: %s", printed > 0 ? (const char *)text : "");
+}
+
+MR_TEST_MAIN(MR_TEST_ENTRY(srgb_transfer_functions), MR_TEST_ENTRY(png8_rgb_round_trip),
+             MR_TEST_ENTRY(png16_rgb_round_trip), MR_TEST_ENTRY(large_integer_round_trips),
+             MR_TEST_ENTRY(png_data_encoding_is_linear),
+             MR_TEST_ENTRY(tiff_round_trips), MR_TEST_ENTRY(jpeg_round_trip),
+             MR_TEST_ENTRY(exr_float_round_trip_is_exact), MR_TEST_ENTRY(exr_half_round_trip),
+             MR_TEST_ENTRY(hdr_round_trip), MR_TEST_ENTRY(one_channel_round_trips),
+             MR_TEST_ENTRY(rgba_alpha_is_not_premultiplied), MR_TEST_ENTRY(read_channel_conversions),
+             MR_TEST_ENTRY(reads_files_written_by_oiiotool), MR_TEST_ENTRY(oiiotool_reads_our_exr),
+             MR_TEST_ENTRY(write_into_missing_directory_fails_cleanly),
+             MR_TEST_ENTRY(failed_write_leaves_target_untouched), MR_TEST_ENTRY(full_disk_fails_cleanly),
+             MR_TEST_ENTRY(written_files_have_ordinary_permissions), MR_TEST_ENTRY(concurrent_writes_and_reads),
+             MR_TEST_ENTRY(bad_inputs_give_clear_errors), MR_TEST_ENTRY(library_prints_nothing))
