@@ -38,6 +38,8 @@ PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h 
                   src/io/image_io.h src/metrics/metrics.h
 
 .PHONY: all check asan demo bench deps install clean
+# Keep test objects between runs (they are intermediate files of the test binaries).
+.SECONDARY:
 all: $(LIB) $(TOOLS)
 
 $(BUILD)/obj/%.o: %.c

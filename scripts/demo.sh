@@ -31,11 +31,21 @@ while read -r a b; do
     printf '  %-22s %-22s %8.4f %8.4f\n' "$a" "$b" "$ssim" "$rmse"
 done < "$root/data/demo/comparisons.txt"
 
-if command -v oiiotool >/dev/null 2>&1; then
-    args=()
-    for n in "${names[@]}"; do
-        args+=("$out/$n.png" --text:x=4:y=14:size=12:color=1,1,1 "$n")
-    done
-    oiiotool "${args[@]}" --mosaic:pad=2 5x3 -o "$out/contact_sheet.png" 2>/dev/null &&
-        echo && echo "Contact sheet: out/demo/contact_sheet.png (SSIM maps: out/demo/ssim_*.png)"
-fi
+# Pictures: a contact sheet of every material and one of every comparison (A | B | SSIM map), labelled.
+label() { echo "--text:x=4:y=14:size=12:color=1,1,1:font=DejaVuSans"; }
+sheet=("$out/contact_sheet.png" "$out/comparisons.png")
+args=()
+for n in "${names[@]}"; do args+=("$out/$n.png" "$(label)" "$n"); done
+oiiotool "${args[@]}" --mosaic:pad=2 5x3 -o "${sheet[0]}"
+args=()
+rows=0
+while read -r a b; do
+    case "$a" in ''|'#'*) continue ;; esac
+    args+=("$out/$a.png" "$(label)" "$a" "$out/$b.png" "$(label)" "$b" \
+           "$out/ssim_${a}_vs_${b}.png" "$(label)" "SSIM map")
+    rows=$((rows + 1))
+done < "$root/data/demo/comparisons.txt"
+oiiotool "${args[@]}" --mosaic:pad=2 "3x$rows" -o "${sheet[1]}"
+echo
+echo "Pictures: out/demo/contact_sheet.png (every material), out/demo/comparisons.png (A | B | SSIM map,"
+echo "black = identical), and each render as EXR (linear) and PNG."

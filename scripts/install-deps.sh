@@ -10,6 +10,7 @@ packages=(
     libtinygltf-dev nlohmann-json3-dev libstb-dev
     libnlopt-dev
     gnuplot-nox
+    fonts-dejavu-core  # labels on the demo's contact sheets (oiiotool --text)
 )
 # node + npm run the independent SSIM implementation (ssim.js) in the tests; the machine may
 # already have a node of its own outside Debian's packages, which is fine.
