@@ -16,13 +16,21 @@ CC       ?= cc
 CXX      ?= g++
 
 WARN      := -Wall -Wextra -Werror
-CFLAGS    := -std=c11 -pedantic $(WARN) $(OPT) $(SAN) -fopenmp -D_POSIX_C_SOURCE=200809L -Isrc -I/usr/include/OpenEXR
+MODULE_DIR := $(PREFIX)/lib/matremap
+CFLAGS    := -std=c11 -pedantic $(WARN) $(OPT) $(SAN) -fopenmp -D_POSIX_C_SOURCE=200809L -Isrc -I/usr/include/OpenEXR \
+             -DMR_MODULE_DIR='"$(MODULE_DIR)"'
 CXXFLAGS  := -std=c++17 $(WARN) $(OPT) $(SAN) -fopenmp -Isrc $(shell pkg-config --cflags OpenImageIO 2>/dev/null)
 LDFLAGS   := $(SAN) -fopenmp
-LDLIBS    := $(shell pkg-config --libs OpenImageIO nlopt 2>/dev/null) -lOpenEXRCore-3_1 -lm
+LDLIBS    := $(shell pkg-config --libs nlopt 2>/dev/null) -lOpenEXRCore-3_1 -lm
+
+# OpenImageIO lives in a module loaded on first use (src/io/oiio_module.c says why). It carries its own
+# copies of the status and atomic-file code, compiled position-independent with hidden visibility.
+MODULE      := $(BUILD)/lib/matremap/libmatremap-oiio.so
+MODULE_SRC  := src/io/image_io_oiio.cpp src/status.c src/io/atomic_file.c
+MODULE_OBJ  := $(patsubst %,$(BUILD)/pic/%.o,$(basename $(MODULE_SRC)))
 
 LIB_C_SRC   := $(filter-out src/cli/%,$(wildcard src/*.c src/*/*.c)) $(wildcard nn/*.c)
-LIB_CXX_SRC := $(wildcard src/*/*.cpp gltf/*.cpp)
+LIB_CXX_SRC := $(filter-out src/io/image_io_oiio.cpp,$(wildcard src/*/*.cpp)) $(wildcard gltf/*.cpp)
 CLI_SRC     := $(wildcard src/cli/*.c)
 TEST_SRC    := $(wildcard tests/test_*.c)
 BENCH_SRC   := $(wildcard tests/bench_*.c)
@@ -40,7 +48,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h 
 .PHONY: all check asan demo bench deps install clean
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
-all: $(LIB) $(TOOLS)
+all: $(LIB) $(TOOLS) $(MODULE)
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
@@ -50,19 +58,33 @@ $(BUILD)/obj/%.o: %.cpp
 	@mkdir -p $(dir $@)
 	$(CXX) $(CXXFLAGS) -MMD -MP -c $< -o $@
 
+$(BUILD)/pic/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -fPIC -fvisibility=hidden -MMD -MP -c $< -o $@
+
+$(BUILD)/pic/%.o: %.cpp
+	@mkdir -p $(dir $@)
+	$(CXX) $(CXXFLAGS) -fPIC -fvisibility=hidden -MMD -MP -c $< -o $@
+
+$(MODULE): $(MODULE_OBJ)
+	@mkdir -p $(dir $@)
+	$(CXX) -shared $(LDFLAGS) -Wl,-Bsymbolic -Wl,-z,defs $^ $(shell pkg-config --libs OpenImageIO 2>/dev/null) -o $@
+
 $(LIB): $(LIB_OBJ)
 	@mkdir -p $(dir $@)
 	rm -f $@
 	ar rcs $@ $^
 
-# The C++ driver links because the image-I/O shim is C++ (OpenImageIO).
+# Programs link with the C++ driver only when the library holds C++ objects (the glTF shim).
+LINK := $(if $(LIB_CXX_SRC),$(CXX),$(CC))
+
 $(BUILD)/bin/matremap: $(CLI_OBJ) $(LIB)
 	@mkdir -p $(dir $@)
-	$(CXX) $(LDFLAGS) $(CLI_OBJ) $(LIB) $(LDLIBS) -o $@
+	$(LINK) $(LDFLAGS) $(CLI_OBJ) $(LIB) $(LDLIBS) -o $@
 
 $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(LIB)
 	@mkdir -p $(dir $@)
-	$(CXX) $(LDFLAGS) $< $(LIB) $(LDLIBS) -o $@
+	$(LINK) $(LDFLAGS) $< $(LIB) $(LDLIBS) -o $@
 
 # headers_cpp.o only has to compile: every public header must be valid C++ as well as C.
 check: all $(TESTS) $(BUILD)/obj/tests/headers_cpp.o
@@ -85,6 +107,8 @@ install: all
 	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/include/matremap
 	install -m 755 $(TOOLS) $(DESTDIR)$(PREFIX)/bin/
 	install -m 644 $(LIB) $(DESTDIR)$(PREFIX)/lib/
+	install -d $(DESTDIR)$(MODULE_DIR)
+	install -m 755 $(MODULE) $(DESTDIR)$(MODULE_DIR)/
 	for h in $(PUBLIC_HEADERS); do \
 	    d=$(DESTDIR)$(PREFIX)/include/matremap/$$(dirname $${h#src/}); install -d $$d; install -m 644 $$h $$d/; done
 	sed -e 's|@PREFIX@|$(PREFIX)|' -e "s|@VERSION@|$$(sed -n 's/^#define MR_VERSION_STRING \"\(.*\)\"/\1/p' src/matremap.h)|" \
@@ -93,4 +117,4 @@ install: all
 clean:
 	rm -rf build
 
--include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)
+-include $(shell find $(BUILD)/obj $(BUILD)/pic -name '*.d' 2>/dev/null)

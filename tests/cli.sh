@@ -67,5 +67,12 @@ expect "ssim size mismatch names both files" 2 "small.exr' is 32x32 but .*x.exr'
     "$bin" ssim "$tmp/small.exr" "$tmp/x.exr"
 expect "ssim needs two images" 1 "two images" -- "$bin" ssim "$tmp/x.exr"
 
+# OpenImageIO is a module loaded on first use: commands that need no image decoding never load it, and a
+# missing module is a clear external failure (exit 3), not a crash.
+expect "EXR output does not need the OpenImageIO module" 0 "wrote" -- env MR_OIIO_MODULE=/nonexistent/mod.so \
+    "$bin" render lambert --size 32 -o "$tmp/lazy.exr"
+expect "a missing OpenImageIO module is reported" 3 "cannot load the OpenImageIO module.*mod.so" -- \
+    env MR_OIIO_MODULE=/nonexistent/mod.so "$bin" ssim "$tmp/x.exr" "$tmp/x.exr"
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

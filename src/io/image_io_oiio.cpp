@@ -1,11 +1,18 @@
 /*
  * image_io_oiio.cpp — the OpenImageIO side of src/io: the project's only C++ translation unit in src/io.
  *
- * Two extern "C" entry points (contracts in io_internal.h): mr_io_oiio_read decodes any format OpenImageIO
- * 2.4 knows into floats, and mr_io_oiio_write encodes an already-quantised buffer and writes it through the
- * atomic protocol of atomic_file.c. Everything else (option checks, channel conversion, sRGB coding and
- * quantisation) is C (image_io.c), so this file stays a thin shim. No C++ exception crosses the boundary:
- * each entry point catches everything and maps it to an mr_status with a message naming the file.
+ * It is built as a module of its own (libmatremap-oiio.so) that oiio_module.c loads with dlopen the first time
+ * an image is read or a non-EXR image written: Debian's OpenImageIO pulls in some 250 shared libraries whose
+ * start-up (OpenCV's above all) costs about 0.4 s, which every `matremap` run would otherwise pay, even
+ * `matremap models`. The module exports three extern "C" entry points (contracts of mr_io_oiio_read/write in
+ * io_internal.h): mr_oiio_module_read decodes any format OpenImageIO 2.4 knows into floats,
+ * mr_oiio_module_write encodes an already-quantised buffer and writes it through the atomic protocol of
+ * atomic_file.c (compiled into the module too), and mr_oiio_module_last_error returns the module's own
+ * thread-local message (status.c is compiled into the module with hidden visibility, so the module's
+ * mr_fail writes there; the loader copies it into the library's). Everything else (option checks, channel
+ * conversion, sRGB coding and quantisation) is C (image_io.c), so this file stays a thin shim. No C++
+ * exception crosses the boundary: each entry point catches everything and maps it to an mr_status with a
+ * message naming the file.
  *
  * OpenImageIO facts relied on (OpenImageIO 2.4 documentation, "ImageInput"/"ImageOutput" and the format
  * plugin notes):
@@ -223,7 +230,11 @@ mr_status write_impl(const char *path, int width, int height, int channels, mr_i
 
 } // namespace
 
-extern "C" mr_status mr_io_oiio_read(const char *path, int max_dimension, mr_io_raw *raw) {
+#define MR_MODULE_EXPORT __attribute__((visibility("default")))
+
+extern "C" MR_MODULE_EXPORT const char *mr_oiio_module_last_error(void) { return mr_last_error(); }
+
+extern "C" MR_MODULE_EXPORT mr_status mr_oiio_module_read(const char *path, int max_dimension, mr_io_raw *raw) {
     try {
         return read_impl(path, max_dimension, raw);
     } catch (const std::bad_alloc &) {
@@ -235,8 +246,9 @@ extern "C" mr_status mr_io_oiio_read(const char *path, int max_dimension, mr_io_
     }
 }
 
-extern "C" mr_status mr_io_oiio_write(const char *path, int width, int height, int channels, mr_io_sample sample,
-                                      const void *data, int srgb_tag, int jpeg_quality) {
+extern "C" MR_MODULE_EXPORT mr_status mr_oiio_module_write(const char *path, int width, int height, int channels,
+                                                           mr_io_sample sample, const void *data, int srgb_tag,
+                                                           int jpeg_quality) {
     try {
         return write_impl(path, width, height, channels, sample, data, srgb_tag, jpeg_quality);
     } catch (const std::bad_alloc &) {
