@@ -5,7 +5,9 @@
  *   image_io.c          argument checks, extension dispatch, channel conversion, sRGB coding, quantisation,
  *                       the PNG structure check before decoding;
  *   image_io_oiio.cpp   the only C++: decodes any format into floats (mr_io_oiio_read) and encodes already
- *                       quantised 8/16-bit or float buffers (mr_io_oiio_write);
+ *                       quantised 8/16-bit or float buffers (mr_io_oiio_write); built as the module
+ *                       libmatremap-oiio.so, which oiio_module.c loads on first use and forwards these two
+ *                       calls to (OpenImageIO's dependencies cost ~0.4 s of start-up, see oiio_module.c);
  *   exr_write.c         EXR encoding through the OpenEXR Core C API (mr_io_exr_write);
  *   atomic_file.c       the temp-file + rename protocol that every write goes through;
  *   srgb.c              the IEC 61966-2-1 transfer functions.
