@@ -70,6 +70,15 @@ $(MODULE): $(MODULE_OBJ)
 	@mkdir -p $(dir $@)
 	$(CXX) -shared $(LDFLAGS) -Wl,-Bsymbolic -Wl,-z,defs $^ $(shell pkg-config --libs OpenImageIO 2>/dev/null) -o $@
 
+# The module directory is compiled into oiio_module.o; this stamp changes (and so rebuilds it) when PREFIX does,
+# e.g. for `make install PREFIX=...` after a plain `make`.
+$(BUILD)/module_dir.stamp: FORCE
+	@mkdir -p $(dir $@)
+	@echo '$(MODULE_DIR)' | cmp -s - $@ || echo '$(MODULE_DIR)' > $@
+$(BUILD)/obj/src/io/oiio_module.o: $(BUILD)/module_dir.stamp
+.PHONY: FORCE
+FORCE:
+
 $(LIB): $(LIB_OBJ)
 	@mkdir -p $(dir $@)
 	rm -f $@
