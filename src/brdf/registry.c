@@ -22,22 +22,20 @@ const mr_brdf_model *const *mr_brdf_models(void) { return registered; }
 
 int mr_brdf_model_count(void) { return (int)(sizeof registered / sizeof registered[0]) - 1; }
 
+/* Append `name` to the ", "-separated list in buf (capacity size); names that no longer fit are left out, so
+ * an error message stays one bounded line. */
+static void append_name(char *buf, size_t size, const char *name) {
+    size_t used = strlen(buf), len = strlen(name), sep = used ? 2 : 0;
+    if (used + sep + len + 1 > size) return;
+    memcpy(buf + used, ", ", sep);
+    memcpy(buf + used + sep, name, len + 1);
+}
+
 const mr_brdf_model *mr_brdf_find(const char *name) {
     for (int i = 0; registered[i] != NULL; i++)
         if (name != NULL && strcmp(registered[i]->name, name) == 0) return registered[i];
-    char list[768];
-    size_t used = 0;
-    list[0] = '\0';
-    for (int i = 0; registered[i] != NULL && used + 2 < sizeof list; i++) {
-        size_t len = strlen(registered[i]->name);
-        if (used + len + 3 >= sizeof list) break;
-        if (i > 0) {
-            memcpy(list + used, ", ", 2);
-            used += 2;
-        }
-        memcpy(list + used, registered[i]->name, len + 1);
-        used += len;
-    }
+    char list[768] = "";
+    for (int i = 0; registered[i] != NULL; i++) append_name(list, sizeof list, registered[i]->name);
     mr_fail(MR_ERR_INVALID_ARG, "unknown BRDF model '%s' (valid: %s)", name ? name : "(null)", list);
     return NULL;
 }
@@ -70,19 +68,8 @@ void mr_brdf_default_values(const mr_brdf_model *model, double *values) {
 }
 
 static mr_status unknown_param(const mr_brdf_model *model, const char *name, size_t name_len) {
-    char list[512];
-    size_t used = 0;
-    list[0] = '\0';
-    for (int i = 0; i < model->param_count; i++) {
-        size_t len = strlen(model->params[i].name);
-        if (used + len + 3 >= sizeof list) break;
-        if (i > 0) {
-            memcpy(list + used, ", ", 2);
-            used += 2;
-        }
-        memcpy(list + used, model->params[i].name, len + 1);
-        used += len;
-    }
+    char list[512] = "";
+    for (int i = 0; i < model->param_count; i++) append_name(list, sizeof list, model->params[i].name);
     return mr_fail(MR_ERR_INVALID_ARG, "model '%s' has no parameter '%.*s' (valid: %s)", model->name,
                    (int)name_len, name, list);
 }

@@ -9,17 +9,24 @@
 static const char *const component_names[MR_COMPONENT_COUNT] = {"full", "diffuse", "specular"};
 static const char *const fit_light_names[MR_FIT_LIGHT_COUNT] = {"45", "frontal"};
 
+/* Index of `name` in a name table of `count` entries, or -1. */
+static int find_name(const char *const *names, int count, const char *name) {
+    for (int i = 0; i < count; i++)
+        if (name != NULL && strcmp(name, names[i]) == 0) return i;
+    return -1;
+}
+
 const char *mr_component_name(mr_component component) {
     return (unsigned)component < MR_COMPONENT_COUNT ? component_names[component] : NULL;
 }
 
 mr_status mr_component_from_name(const char *name, mr_component *out) {
-    for (int i = 0; i < MR_COMPONENT_COUNT; i++)
-        if (strcmp(name, component_names[i]) == 0) {
-            *out = (mr_component)i;
-            return MR_OK;
-        }
-    return mr_fail(MR_ERR_INVALID_ARG, "unknown component '%s' (valid: full, diffuse, specular)", name);
+    int index = find_name(component_names, MR_COMPONENT_COUNT, name);
+    if (index < 0)
+        return mr_fail(MR_ERR_INVALID_ARG, "unknown component '%s' (valid: full, diffuse, specular)",
+                       name ? name : "(null)");
+    *out = (mr_component)index;
+    return MR_OK;
 }
 
 const char *mr_fit_light_name(mr_fit_light light) {
@@ -27,12 +34,11 @@ const char *mr_fit_light_name(mr_fit_light light) {
 }
 
 mr_status mr_fit_light_from_name(const char *name, mr_fit_light *out) {
-    for (int i = 0; i < MR_FIT_LIGHT_COUNT; i++)
-        if (strcmp(name, fit_light_names[i]) == 0) {
-            *out = (mr_fit_light)i;
-            return MR_OK;
-        }
-    return mr_fail(MR_ERR_INVALID_ARG, "unknown light position '%s' (valid: 45, frontal)", name);
+    int index = find_name(fit_light_names, MR_FIT_LIGHT_COUNT, name);
+    if (index < 0)
+        return mr_fail(MR_ERR_INVALID_ARG, "unknown light position '%s' (valid: 45, frontal)", name ? name : "(null)");
+    *out = (mr_fit_light)index;
+    return MR_OK;
 }
 
 /* Fit-scene constants (paper section 4.1 gives the sphere and the light; the camera is ours, see render.h). */
