@@ -17,6 +17,10 @@ median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2
 echo "== fit-scene render time per model (tests/bench_render.c)"
 "$root/$build/tests/bench_render" $quick | tee "$work/render_table.md"
 
+echo
+echo "== image metrics (tests/bench_metrics.c)"
+"$root/$build/tests/bench_metrics" | tee "$work/metrics_table.md"
+
 {
     echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), matremap $("$bin" --version | cut -d' ' -f2)."
     echo
@@ -103,13 +107,18 @@ else
     echo "Cycles peer skipped: Blender was not installed in this run." >> "$report"
 fi
 
-# Replace the section between the markers in docs/performance.md with this run's report.
+# Replace the sections between the markers in docs/performance.md with this run's reports.
 perf="$root/docs/performance.md"
-if [ -f "$perf" ] && grep -q '<!-- bench:render:begin -->' "$perf"; then
-    awk -v report="$report" '
-        /<!-- bench:render:begin -->/ { print; while ((getline line < report) > 0) print line; skip = 1; next }
-        /<!-- bench:render:end -->/ { skip = 0 }
+replace_section() { # NAME REPORT
+    grep -q "<!-- bench:$1:begin -->" "$perf" || return 0
+    awk -v report="$2" -v begin="<!-- bench:$1:begin -->" -v end="<!-- bench:$1:end -->" '
+        $0 == begin { print; while ((getline line < report) > 0) print line; skip = 1; next }
+        $0 == end { skip = 0 }
         !skip { print }' "$perf" > "$perf.tmp" && mv "$perf.tmp" "$perf"
+    echo "docs/performance.md updated (section bench:$1)."
+}
+if [ -f "$perf" ]; then
     echo
-    echo "docs/performance.md updated (section bench:render)."
+    replace_section render "$report"
+    replace_section metrics "$work/metrics_table.md"
 fi
