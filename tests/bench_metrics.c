@@ -28,7 +28,8 @@ static mr_image *render(int size, const char *model_name) {
     mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){size, MR_FIT_LIGHT_45, 0});
     mr_render_plan *plan = NULL;
     mr_image *image = NULL;
-    if (mr_render_plan_create(&scene, &plan) != MR_OK || mr_render(plan, model, values, MR_COMPONENT_FULL, &image) != MR_OK) {
+    if (mr_render_plan_create(&scene, &plan) != MR_OK ||
+        mr_render(plan, model, values, MR_COMPONENT_FULL, &image) != MR_OK) {
         fprintf(stderr, "bench_metrics: %s\n", mr_last_error());
         exit(3);
     }

@@ -61,8 +61,10 @@ int main(int argc, char **argv) {
     printf("Fit scene, 45-degree light, default parameters of each model; median ms per render with the\n"
            "geometry plan prepared once (plan: %.1f ms at 256^2 with %d lit pixels, %.1f ms at 512^2 with %d).\n"
            "OpenMP threads 1 and 2; speed-up = 1 thread / 2 threads.\n\n",
-           plan_ms[0], mr_render_plan_lit_pixel_count(plans[0]), plan_ms[1], mr_render_plan_lit_pixel_count(plans[1]));
-    printf("| model | 256² 1 thr | 256² 2 thr | 512² 1 thr | 512² 2 thr | speed-up 512² | Mevals/s 512² 2 thr |\n");
+           plan_ms[0], mr_render_plan_lit_pixel_count(plans[0]), plan_ms[1],
+           mr_render_plan_lit_pixel_count(plans[1]));
+    printf("| model | 256² 1 thr | 256² 2 thr | 512² 1 thr | 512² 2 thr | speed-up 512² "
+           "| Mevals/s 512² 2 thr |\n");
     printf("|---|---:|---:|---:|---:|---:|---:|\n");
     const mr_brdf_model *const *models = mr_brdf_models();
     for (int m = 0; models[m] != NULL; m++) {

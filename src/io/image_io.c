@@ -157,7 +157,8 @@ static int convert_channels(const mr_io_raw *raw, mr_image *image, int decode_sr
             colour[0] = decode_srgb ? decode_value(src[0], lut, raw->bits, max_code) : src[0];
             colour[1] = colour[2] = colour[0];
         } else {
-            for (int c = 0; c < 3; c++) colour[c] = decode_srgb ? decode_value(src[c], lut, raw->bits, max_code) : src[c];
+            for (int c = 0; c < 3; c++)
+                colour[c] = decode_srgb ? decode_value(src[c], lut, raw->bits, max_code) : src[c];
         }
         float alpha = in_alpha ? src[in_ch - 1] : 1.0f;
         if (out_ch == 1) {

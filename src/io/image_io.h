@@ -13,7 +13,8 @@
  *     samples (EXR, HDR, float TIFF) are linear.
  * Backends: reading goes through OpenImageIO (C++ shim, image_io_oiio.cpp, built as the module
  * libmatremap-oiio.so and loaded on first use, see oiio_module.c; MR_OIIO_MODULE overrides where it is
- * looked for, and a missing module is MR_ERR_EXTERNAL), which decodes every EXR compression (OpenEXR Core 3.1.5 cannot decode DWAA/DWAB, see ../shared/docs/toolchain.md). EXR writing uses
+ * looked for, and a missing module is MR_ERR_EXTERNAL), which decodes every EXR compression (OpenEXR Core
+ * 3.1.5 cannot decode DWAA/DWAB, see ../shared/docs/toolchain.md). EXR writing uses
  * the OpenEXR Core C API directly (exr_write.c: scanline, ZIP, FLOAT or HALF channels R,G,B(,A) or Y). Other
  * formats are written by OpenImageIO (PNG, JPEG and HDR encoded in memory first: io_internal.h says why).
  * Format limits: JPEG and Radiance HDR cannot store alpha (4-channel images are MR_ERR_UNSUPPORTED, not
