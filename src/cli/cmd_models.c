@@ -3,6 +3,8 @@
 
 #include "cli.h"
 
+#define MAX_INT(a, b) ((a) > (b) ? (a) : (b))
+
 static const char *const role_names[MR_PARAM_ROLE_COUNT] = {"linear", "affine", "nonlinear", "switch"};
 
 static const char *lobe_name(mr_param_lobe lobe) {
@@ -20,6 +22,16 @@ static const char *default_text(const mr_brdf_param *p, char *buf, size_t size) 
         snprintf(buf, size, "%.3g,%.3g,%.3g", p->default_rgb[0], p->default_rgb[1], p->default_rgb[2]);
     else
         snprintf(buf, size, "%.4g", p->default_value);
+    return buf;
+}
+
+/* "name name[rgb] ..." for the model list. */
+static const char *format_params(const mr_brdf_model *m, char *buf, size_t size) {
+    size_t used = 0;
+    buf[0] = '\0';
+    for (int k = 0; k < m->param_count && used < size; k++)
+        used += (size_t)snprintf(buf + used, size - used, "%s%s%s", k ? " " : "", m->params[k].name,
+                                 m->params[k].channels == 3 ? "[rgb]" : "");
     return buf;
 }
 
@@ -117,17 +129,18 @@ int cmd_models(int argc, char **argv) {
         printf("\n]\n");
         return CLI_EXIT_OK;
     }
-    printf("%-20s %-48s %s\n", "MODEL", "PARAMETERS", "SUMMARY");
+    // Columns as wide as their longest entry, so every summary starts in the same column.
+    char params[256];
+    int name_width = 5, params_width = 10;
+    for (int i = 0; models[i] != NULL; i++) {
+        name_width = MAX_INT(name_width, (int)strlen(models[i]->name));
+        params_width = MAX_INT(params_width, (int)strlen(format_params(models[i], params, sizeof params)));
+    }
+    printf("%-*s  %-*s  %s\n", name_width, "MODEL", params_width, "PARAMETERS", "SUMMARY");
     for (int i = 0; models[i] != NULL; i++) {
         const mr_brdf_model *m = models[i];
-        char params[256];
-        size_t used = 0;
-        params[0] = '\0';
-        for (int k = 0; k < m->param_count && used < sizeof params; k++)
-            used += (size_t)snprintf(params + used, sizeof params - used, "%s%s%s", k ? " " : "",
-                                     m->params[k].name, m->params[k].channels == 3 ? "[rgb]" : "");
-        printf("%-20s %-48s %s%s\n", m->name, params, m->summary,
-               (m->flags & MR_BRDF_NOT_ENERGY_CONSERVING) ? " (not energy-conserving)" : "");
+        printf("%-*s  %-*s  %s%s\n", name_width, m->name, params_width, format_params(m, params, sizeof params),
+               m->summary, (m->flags & MR_BRDF_NOT_ENERGY_CONSERVING) ? " [albedo can exceed 1]" : "");
     }
     printf("\n'matremap models NAME' shows a model's parameters with ranges and meanings.\n");
     return CLI_EXIT_OK;
