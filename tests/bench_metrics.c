@@ -6,20 +6,9 @@
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <time.h>
 
+#include "bench_util.h"
 #include "matremap.h"
-
-static double now_seconds(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int compare_doubles(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 static mr_image *render(int size, const char *model_name) {
     const mr_brdf_model *model = mr_brdf_find(model_name);
@@ -41,17 +30,16 @@ static mr_image *render(int size, const char *model_name) {
 static double time_metric(const mr_image *a, const mr_image *b, int which, int reps) {
     double samples[64];
     for (int r = 0; r < reps; r++) {
-        double value = 0.0, t0 = now_seconds();
+        double value = 0.0, t0 = bench_now();
         mr_image *map = NULL;
         if (which == 2)
             mr_rmse(a, b, &value);
         else
             mr_ssim(a, b, NULL, &value, which == 1 ? &map : NULL);
-        samples[r] = 1e3 * (now_seconds() - t0);
+        samples[r] = 1e3 * (bench_now() - t0);
         mr_image_free(map);
     }
-    qsort(samples, (size_t)reps, sizeof samples[0], compare_doubles);
-    return samples[reps / 2];
+    return bench_median(samples, reps);
 }
 
 int main(void) {

@@ -3,41 +3,29 @@
  *
  * Prints a Markdown table on stdout; asserts nothing. Each figure is the median of repeated renders with a
  * prepared plan (geometry traced once, as the optimiser uses it); the plan's own cost is listed per size, so the
- * saving of "geometry once per scene" can be read off. Usage: bench_render [--quick] [--sizes 256,512]
+ * saving of "geometry once per scene" can be read off. Usage: bench_render [--quick]
  */
 #include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
+#include "bench_util.h"
 #include "matremap.h"
-
-static double now_seconds(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int compare_doubles(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 /* Median wall time of one render in ms: at least `min_reps` renders and at least `min_seconds` in all. */
 static double time_render(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
                           mr_image *image, int min_reps, double min_seconds) {
     double samples[256];
     int count = 0;
-    double start = now_seconds();
+    double start = bench_now();
     mr_render_into(plan, model, values, MR_COMPONENT_FULL, image); // warm caches and thread pool
-    while (count < 256 && (count < min_reps || now_seconds() - start < min_seconds)) {
-        double t0 = now_seconds();
+    while (count < 256 && (count < min_reps || bench_now() - start < min_seconds)) {
+        double t0 = bench_now();
         mr_render_into(plan, model, values, MR_COMPONENT_FULL, image);
-        samples[count++] = 1e3 * (now_seconds() - t0);
+        samples[count++] = 1e3 * (bench_now() - t0);
     }
-    qsort(samples, (size_t)count, sizeof samples[0], compare_doubles);
-    return samples[count / 2];
+    return bench_median(samples, count);
 }
 
 int main(int argc, char **argv) {
@@ -51,12 +39,12 @@ int main(int argc, char **argv) {
     double plan_ms[2];
     for (int s = 0; s < 2; s++) {
         mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){sizes[s], MR_FIT_LIGHT_45, 0});
-        double t0 = now_seconds();
+        double t0 = bench_now();
         if (mr_render_plan_create(&scene, &plans[s]) != MR_OK) {
             fprintf(stderr, "bench_render: %s\n", mr_last_error());
             return 3;
         }
-        plan_ms[s] = 1e3 * (now_seconds() - t0);
+        plan_ms[s] = 1e3 * (bench_now() - t0);
     }
     printf("Fit scene, 45-degree light, default parameters of each model; median ms per render with the\n"
            "geometry plan prepared once (plan: %.1f ms at 256^2 with %d lit pixels, %.1f ms at 512^2 with %d).\n"
