@@ -8,15 +8,14 @@
 #include "harness.h"
 #include "matremap.h"
 
-/* The radiance of a Lambertian sphere at pixel (x, y), computed independently of src/render: the textbook
- * quadratic a t^2 + b t + c = 0 for the camera ray, then L = rho/pi * I * cos(theta_l) / d^2. Returns -1 for
- * a pixel that misses the sphere. */
-static double lambert_reference(const mr_scene *s, int x, int y, double rho) {
+/* The radiance of a Lambertian sphere seen through image position (px, py) (in pixels from the top-left
+ * corner), computed independently of src/render: the textbook quadratic a t^2 + b t + c = 0 for the camera
+ * ray, then L = rho/pi * I * cos(theta_l) / d^2. Returns -1 where the ray misses the sphere. */
+static double lambert_reference(const mr_scene *s, double px, double py, double rho) {
     const double *eye = s->camera.position;
     double tan_half = tan(s->camera.fov_y_degrees * 3.14159265358979323846 / 360.0);
     // Camera at (0,0,4) looking down -z with +y up: right = +x, up = +y.
-    double dir[3] = {(2.0 * (x + 0.5) / s->width - 1.0) * tan_half, (1.0 - 2.0 * (y + 0.5) / s->height) * tan_half,
-                     -1.0};
+    double dir[3] = {(2.0 * px / s->width - 1.0) * tan_half, (1.0 - 2.0 * py / s->height) * tan_half, -1.0};
     double a = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
     double b = 2.0 * (eye[0] * dir[0] + eye[1] * dir[1] + eye[2] * dir[2]);
     double c = eye[0] * eye[0] + eye[1] * eye[1] + eye[2] * eye[2] - 1.0;
@@ -31,43 +30,107 @@ static double lambert_reference(const mr_scene *s, int x, int y, double rho) {
     return rho / 3.14159265358979323846 * s->lights[0].intensity[0] * cos_l / d2;
 }
 
-static mr_render_plan *fit_plan(int size, mr_fit_light light) {
+/* A fit-scene plan; edge_samples 0 is the default silhouette filtering, 1 pixel centres only. */
+static mr_render_plan *fit_plan_edges(int size, mr_fit_light light, int edge_samples) {
     mr_fit_scene_options o = {0};
     o.size = size;
     o.light = light;
     mr_scene scene = mr_scene_fit(&o);
+    scene.edge_samples = edge_samples;
     mr_render_plan *plan = NULL;
     MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
     return plan;
 }
 
+static mr_render_plan *fit_plan(int size, mr_fit_light light) { return fit_plan_edges(size, light, 0); }
+
+/* What a pixel of the Lambert sphere must hold: the centre value inside or outside the silhouette, the box
+ * filter of n x n sub-pixel values on it (misses count as black). The silhouette test is the renderer's rule
+ * (corners and centre disagree), recomputed with the reference's own ray-sphere test. */
+static double lambert_pixel(const mr_scene *s, int x, int y, double rho, int n) {
+    int hits = 0;
+    const double corners[4][2] = {{x, y}, {x + 1, y}, {x, y + 1}, {x + 1, y + 1}};
+    for (int k = 0; k < 4; k++) hits += lambert_reference(s, corners[k][0], corners[k][1], rho) >= 0.0;
+    double centre = lambert_reference(s, x + 0.5, y + 0.5, rho);
+    if (n == 1 || hits == 4 * (centre >= 0.0)) return centre < 0.0 ? 0.0 : centre;
+    double sum = 0.0;
+    for (int j = 0; j < n; j++)
+        for (int i = 0; i < n; i++) sum += fmax(0.0, lambert_reference(s, x + (i + 0.5) / n, y + (j + 0.5) / n, rho));
+    return sum / (n * n);
+}
+
 MR_TEST(lambert_sphere_matches_point_light_formula) {
+    // Every pixel, both light positions, with pixel-centre sampling (1) and with box-filtered edges (4).
     const mr_brdf_model *lambert = mr_brdf_find("lambert");
     double values[3] = {0.25, 0.5, 0.75};
-    for (int light = 0; light < MR_FIT_LIGHT_COUNT; light++) {
-        mr_render_plan *plan = fit_plan(96, (mr_fit_light)light);
-        const mr_scene *scene = mr_render_plan_scene(plan);
-        mr_image *img = NULL;
-        MR_CHECK_OK(mr_render(plan, lambert, values, MR_COMPONENT_FULL, &img));
-        int mismatches = 0, hits = 0;
-        double worst = 0.0;
-        for (int y = 0; y < 96; y++)
-            for (int x = 0; x < 96; x++)
-                for (int ch = 0; ch < 3; ch++) {
-                    double expected = lambert_reference(scene, x, y, values[ch]);
-                    double got = mr_image_at(img, x, y)[ch];
-                    if (expected < 0.0) expected = 0.0; // background is black
-                    else if (ch == 0) hits++;
-                    double err = fabs(got - expected);
-                    if (err > worst) worst = err;
-                    if (err > 1e-6 + 1e-5 * expected) mismatches++;
-                }
-        MR_CHECK_MSG(mismatches == 0, "%d channel values differ from rho/pi*I*cos/d^2 (worst %.3g)", mismatches,
-                     worst);
-        MR_CHECK(hits == mr_render_plan_object_pixel_count(plan));
-        mr_image_free(img);
-        mr_render_plan_free(plan);
+    for (int light = 0; light < MR_FIT_LIGHT_COUNT; light++)
+        for (int n = 1; n <= 4; n += 3) {
+            mr_render_plan *plan = fit_plan_edges(96, (mr_fit_light)light, n);
+            const mr_scene *scene = mr_render_plan_scene(plan);
+            mr_image *img = NULL;
+            MR_CHECK_OK(mr_render(plan, lambert, values, MR_COMPONENT_FULL, &img));
+            int mismatches = 0;
+            double worst = 0.0;
+            for (int y = 0; y < 96; y++)
+                for (int x = 0; x < 96; x++)
+                    for (int ch = 0; ch < 3; ch++) {
+                        double expected = lambert_pixel(scene, x, y, values[ch], n);
+                        double err = fabs(mr_image_at(img, x, y)[ch] - expected);
+                        if (err > worst) worst = err;
+                        if (err > 1e-6 + 1e-5 * expected) mismatches++;
+                    }
+            MR_CHECK_MSG(mismatches == 0, "light %s, %dx%d edge samples: %d channel values differ from "
+                         "rho/pi*I*cos/d^2 (worst %.3g)", mr_fit_light_name(light), n, n, mismatches, worst);
+            mr_image_free(img);
+            mr_render_plan_free(plan);
+        }
+}
+
+MR_TEST(edge_filtering_measures_the_silhouette) {
+    // The coverage of box-filtered edges integrates to the projected disc's area far more closely than
+    // counting pixel centres does, and is 0 or 1 away from the silhouette.
+    int size = 256;
+    double r = tan(asin(0.25)) / tan(17.5 * 3.14159265358979323846 / 180.0) * size / 2.0;
+    double disc = 3.14159265358979323846 * r * r;
+    mr_render_plan *centres = fit_plan_edges(size, MR_FIT_LIGHT_45, 1);
+    mr_render_plan *filtered = fit_plan(size, MR_FIT_LIGHT_45);
+    double sum_centres = 0.0, sum_filtered = 0.0;
+    int partial = 0, bad_values = 0;
+    for (int p = 0; p < size * size; p++) {
+        float c = mr_render_plan_coverage(filtered)[p];
+        sum_centres += mr_render_plan_coverage(centres)[p];
+        sum_filtered += c;
+        if (c > 0.0f && c < 1.0f) partial++;
+        if (!(c >= 0.0f && c <= 1.0f) || fmodf(c * 16.0f, 1.0f) != 0.0f) bad_values++;
     }
+    MR_CHECK_NEAR(sum_filtered / disc, 1.0, 2e-4);
+    MR_CHECK(fabs(sum_filtered / disc - 1.0) < fabs(sum_centres / disc - 1.0));
+    MR_CHECK(bad_values == 0);
+    // Only the silhouette is filtered: about its circumference in pixels, not the whole disc.
+    MR_CHECK(partial > 2.0 * r && partial < 4.0 * 3.14159265358979323846 * r);
+    mr_render_plan_free(centres);
+    mr_render_plan_free(filtered);
+}
+
+MR_TEST(background_fills_the_uncovered_part_of_each_pixel) {
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){64, MR_FIT_LIGHT_FRONTAL, 0});
+    scene.background[0] = 0.5, scene.background[1] = 0.25, scene.background[2] = 0.125;
+    mr_render_plan *plan = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    double black[3] = {0.0, 0.0, 0.0};
+    mr_image *full = NULL, *diffuse = NULL;
+    MR_CHECK_OK(mr_render(plan, mr_brdf_find("lambert"), black, MR_COMPONENT_FULL, &full));
+    MR_CHECK_OK(mr_render(plan, mr_brdf_find("lambert"), black, MR_COMPONENT_DIFFUSE, &diffuse));
+    int bad = 0;
+    for (int p = 0; p < 64 * 64; p++)
+        for (int c = 0; c < 3; c++) {
+            double expected = scene.background[c] * (1.0 - mr_render_plan_coverage(plan)[p]);
+            if (fabs(full->pixels[p * 3 + c] - expected) > 1e-7 || diffuse->pixels[p * 3 + c] != 0.0f) bad++;
+        }
+    MR_CHECK_MSG(bad == 0, "%d values differ from background x (1 - coverage)", bad);
+    mr_image_free(full);
+    mr_image_free(diffuse);
+    mr_render_plan_free(plan);
 }
 
 MR_TEST(frontal_centre_pixel_known_value) {
@@ -216,6 +279,10 @@ MR_TEST(invalid_scenes_are_rejected_with_the_field_named) {
     bad.shape.radius = -1.0;
     MR_CHECK(mr_render_plan_create(&bad, &plan) == MR_ERR_INVALID_ARG);
     bad = scene;
+    bad.edge_samples = 17;
+    MR_CHECK(mr_render_plan_create(&bad, &plan) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "edge_samples") != NULL);
+    bad = scene;
     bad.light_count = 0;
     MR_CHECK(mr_render_plan_create(&bad, &plan) == MR_ERR_INVALID_ARG);
     MR_CHECK(plan == NULL);
@@ -253,6 +320,8 @@ MR_TEST(two_lights_add_up) {
 }
 
 MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
+             MR_TEST_ENTRY(edge_filtering_measures_the_silhouette),
+             MR_TEST_ENTRY(background_fills_the_uncovered_part_of_each_pixel),
              MR_TEST_ENTRY(frontal_centre_pixel_known_value),
              MR_TEST_ENTRY(silhouette_area_matches_projection),
              MR_TEST_ENTRY(diffuse_plus_specular_equals_full_for_every_model),

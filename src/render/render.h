@@ -11,7 +11,9 @@
  *   - A plan is built once per scene. It traces one primary ray through each pixel centre, keeps the pixels
  *     that hit the object, and for each light stores the shading sample: the view and light directions in the
  *     local shading frame and the light's contribution weight I*cos(theta_light)/d^2. Pixels that see the
- *     object but no light are black and carry no sample.
+ *     object but no light are black and carry no sample. Pixels on the silhouette get a fixed grid of
+ *     edge_samples^2 sub-pixel rays instead, each weighted by its share of the pixel, so edges are
+ *     box-filtered (as a path tracer's are) rather than aliased; the rest of the image needs no extra rays.
  *   - Rendering a material is then only BRDF evaluations on the stored samples: radiance = sum over the
  *     pixel's samples of f_r(view, light) * weight. Nothing geometric is recomputed.
  *   - A lone sphere is convex, so nothing can shadow a point it lights: no shadow rays. A point light is a
@@ -88,7 +90,11 @@ typedef struct mr_scene {
     int light_count; /* 1 .. MR_SCENE_MAX_LIGHTS */
     mr_light lights[MR_SCENE_MAX_LIGHTS];
     double background[3]; /* radiance of pixels that miss the object */
+    int edge_samples;     /* silhouette pixels are box-filtered with edge_samples x edge_samples sub-pixel rays;
+                             1 = pixel centres only (aliased edges); 0 = MR_SCENE_DEFAULT_EDGE_SAMPLES; <= 16 */
 } mr_scene;
+
+#define MR_SCENE_DEFAULT_EDGE_SAMPLES 4
 
 #define MR_RENDER_MAX_SIZE 16384
 
@@ -135,8 +141,12 @@ const mr_scene *mr_render_plan_scene(const mr_render_plan *plan);
 /* Number of pixels that see the object and receive light, i.e. the BRDF evaluations per light per render. */
 int mr_render_plan_lit_pixel_count(const mr_render_plan *plan);
 
-/* Number of pixels that see the object at all (lit or not). */
+/* Number of pixels that see the object at all (lit or not, fully or partly covered). */
 int mr_render_plan_object_pixel_count(const mr_render_plan *plan);
+
+/* The fraction of each pixel the object covers (width*height floats, row-major, top-left first): 1 inside the
+ * silhouette, 0 outside, in between on it. Owned by the plan. Useful as a mask for fits and metrics. */
+const float *mr_render_plan_coverage(const mr_render_plan *plan);
 
 /* Render `component` of the material (model, packed values as in brdf.h) into a new RGB image (*out, owned
  * by the caller). values are clamped into the model's bounds by its prepare(). */

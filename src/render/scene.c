@@ -115,6 +115,9 @@ mr_status mr_scene_validate(const mr_scene *scene) {
         if (vec3_length(to_light) <= scene->shape.radius)
             return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d is inside the sphere", i);
     }
+    if (scene->edge_samples < 0 || scene->edge_samples > 16)
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: edge_samples %d: expected 0 (default %d) to 16",
+                       scene->edge_samples, MR_SCENE_DEFAULT_EDGE_SAMPLES);
     if (!vec3_is_finite(scene->background))
         return mr_fail(MR_ERR_INVALID_ARG, "scene: background radiance must be finite");
     return MR_OK;
