@@ -37,8 +37,8 @@ if command -v blender >/dev/null 2>&1; then
         echo "16 spp, 2 threads, box filter, direct light only). 'Cycles render' is Cycles' own render time (scene"
         echo "built, Blender start-up excluded); 'ours' is \`matremap render cycles-principled\` with the plan prepared"
         echo "(median of the table above, 2 threads) and as a whole process (start-up, plan, render, EXR write)."
-        echo "SSIM compares the two images (display-referred, docs/metrics.md): Cycles' 16-spp noise and its"
-        echo "box-filtered silhouette pixels (we shade pixel centres) keep it below 1."
+        echo "SSIM compares the two images (display-referred, docs/metrics.md): Cycles' 16-spp noise keeps it"
+        echo "below 1."
         echo
         echo "| size | Cycles render ms | Cycles process s | ours render ms | ours process ms | render ratio Cycles/ours | SSIM ours vs Cycles |"
         echo "|---:|---:|---:|---:|---:|---:|---:|"

@@ -305,6 +305,8 @@ int mr_render_plan_lit_pixel_count(const mr_render_plan *plan) { return plan->li
 
 int mr_render_plan_object_pixel_count(const mr_render_plan *plan) { return plan->object_pixels; }
 
+long mr_render_plan_sample_count(const mr_render_plan *plan) { return plan->sample_begin[plan->lit_pixels]; }
+
 const float *mr_render_plan_coverage(const mr_render_plan *plan) { return plan->coverage; }
 
 static mr_status check_target(const mr_render_plan *plan, const mr_image *image, const char *what) {

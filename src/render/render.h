@@ -141,6 +141,10 @@ const mr_scene *mr_render_plan_scene(const mr_render_plan *plan);
 /* Number of pixels that see the object and receive light, i.e. the BRDF evaluations per light per render. */
 int mr_render_plan_lit_pixel_count(const mr_render_plan *plan);
 
+/* Number of shading samples, i.e. the BRDF evaluations one render makes (lit pixels x lights, plus the extra
+ * sub-pixel samples of silhouette pixels). */
+long mr_render_plan_sample_count(const mr_render_plan *plan);
+
 /* Number of pixels that see the object at all (lit or not, fully or partly covered). */
 int mr_render_plan_object_pixel_count(const mr_render_plan *plan);
 
