@@ -85,7 +85,7 @@ $(LIB): $(LIB_OBJ)
 	ar rcs $@ $^
 
 # Programs link with the C++ driver only when the library holds C++ objects (the glTF shim).
-LINK := $(if $(LIB_CXX_SRC),$(CXX),$(CC))
+LINK := $(if $(strip $(LIB_CXX_SRC)),$(CXX),$(CC))
 
 $(BUILD)/bin/matremap: $(CLI_OBJ) $(LIB)
 	@mkdir -p $(dir $@)

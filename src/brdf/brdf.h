@@ -59,7 +59,10 @@ typedef enum mr_param_lobe {
 
 /* Bit flags of mr_brdf_param.flags. */
 enum {
-    MR_PARAM_LOG_SCALE = 1 /* the optimiser should search this parameter on a log scale (roughness) */
+    MR_PARAM_LOG_SCALE = 1, /* the optimiser should search this parameter on a log scale (roughness) */
+    MR_PARAM_FIT_FIXED = 2  /* fits hold it at its given value (default: the table's) instead of fitting it:
+                               extension factors such as glTF's KHR_materials_specular, which a remap into the
+                               core material should not invent */
 };
 
 typedef struct mr_brdf_param {

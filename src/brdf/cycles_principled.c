@@ -68,7 +68,7 @@ static const mr_brdf_param cp_params[] = {
     {"metallic", 1, 0.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, 0, "Metallic", NULL},
     {"specular", 1, 0.5, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, 0,
      "Specular: dielectric F0 = 0.08 specular, ior = 2/(1 - sqrt(0.08 specular)) - 1", NULL},
-    {"specular_tint", 1, 0.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, 0,
+    {"specular_tint", 1, 0.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, MR_PARAM_FIT_FIXED,
      "Specular Tint: mixes the dielectric F0 towards base_color / luminance(base_color)", NULL},
     {"roughness", 1, 0.5, 0.01, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_LOG_SCALE,
      "Roughness; GGX alpha = roughness^2, Burley retro-reflection uses roughness itself", NULL},

@@ -61,11 +61,11 @@ static const mr_brdf_param gltf_params[] = {
      "metallicFactor (f is affine in it alone, bilinear with base_color)", NULL},
     {"roughness", 1, 1.0, GLTF_ROUGHNESS_MIN, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, MR_PARAM_LOG_SCALE,
      "roughnessFactor; GGX alpha = roughness^2", NULL},
-    {"specular", 1, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, 0,
+    {"specular", 1, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_FIT_FIXED,
      "KHR_materials_specular specularFactor (dielectric f0 and f90 scale)", NULL},
-    {"specular_color", 3, 1.0, 0.0, 25.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, 0,
+    {"specular_color", 3, 1.0, 0.0, 25.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_FIT_FIXED,
      "KHR_materials_specular specularColorFactor, linear RGB (dielectric f0 tint)", NULL},
-    {"ior", 1, 1.5, 1.0, 5.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, 0,
+    {"ior", 1, 1.5, 1.0, 5.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_FIT_FIXED,
      "KHR_materials_ior index of refraction (dielectric f0 = ((ior-1)/(ior+1))^2); 0 is not supported", NULL},
 };
 

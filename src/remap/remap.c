@@ -1,0 +1,684 @@
+/*
+ * remap.c — uniform image-based remapping (contract and strategies in remap.h).
+ *
+ * The fit works in normalised coordinates u in [0,1] per fitted scalar (log-spaced where the descriptor flags
+ * MR_PARAM_LOG_SCALE), as nlopt's documentation recommends for derivative-free local methods. Two objective
+ * forms share the context below:
+ *   - direct: render the target with every fitted value and sum squared differences (the paper's strategies);
+ *   - projected (AUTO): render the basis images of the affine parameters for the current nonlinear values,
+ *     solve the bounded linear least-squares problem for the affine parameters exactly, and return its
+ *     residual (Golub and Pereyra's variable projection, SIAM J. Numer. Anal. 10(2), 1973).
+ * Sums run over the pixels the object covers, in a fixed order, in double precision.
+ */
+#include "remap.h"
+
+#include <math.h>
+#include <nlopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "../metrics/metrics.h"
+#include "../mr_internal.h"
+
+#define MAX_SLOTS MR_BRDF_MAX_VALUES
+#define DEFAULT_MAX_EVALUATIONS 400
+#define DEFAULT_XTOL 1e-6
+#define DEFAULT_GRID_1D 32
+#define DEFAULT_GRID_2D 12
+#define DEFAULT_STARTS 8
+#define MAX_REFINED_STARTS 3
+/* Outcome thresholds (remap.h): residual RMS above 25 % of the source's RMS radiance is "unreachable" (a model
+ * whose lobe merely has another shape, Ward against GGX tails, typically stays near 10 %); a render
+ * that departs from the affine prediction by more than 1 % of the source's energy means the model rescaled the
+ * solution (Mitsuba's trimming); two minima within 1 % of each other's error but 0.1 apart (normalised) are
+ * ambiguous; a local fit whose linear parameters can be improved by more than 10 % is in a local minimum. */
+#define UNREACHABLE_RELATIVE_RMSE 0.25
+#define PREDICTION_TOLERANCE 0.01
+#define AMBIGUITY_ERROR 0.01
+#define AMBIGUITY_DISTANCE 0.1
+#define LOCAL_MINIMUM_GAIN 0.10
+
+static const char *const strategy_names[MR_REMAP_STRATEGY_COUNT] = {"auto", "single", "two", "three"};
+static const char *const outcome_names[MR_FIT_OUTCOME_COUNT] = {"converged", "at-bound", "unreachable",
+                                                                "local-minimum"};
+
+const char *mr_remap_strategy_name(mr_remap_strategy strategy) {
+    return (unsigned)strategy < MR_REMAP_STRATEGY_COUNT ? strategy_names[strategy] : NULL;
+}
+
+mr_status mr_remap_strategy_from_name(const char *name, mr_remap_strategy *out) {
+    for (int i = 0; i < MR_REMAP_STRATEGY_COUNT; i++)
+        if (name != NULL && strcmp(name, strategy_names[i]) == 0) {
+            *out = (mr_remap_strategy)i;
+            return MR_OK;
+        }
+    return mr_fail(MR_ERR_INVALID_ARG, "unknown strategy '%s' (valid: auto, single, two, three)",
+                   name ? name : "(null)");
+}
+
+const char *mr_fit_outcome_name(mr_fit_outcome outcome) {
+    return (unsigned)outcome < MR_FIT_OUTCOME_COUNT ? outcome_names[outcome] : NULL;
+}
+
+mr_remap_options mr_remap_options_default(void) {
+    mr_remap_options o;
+    memset(&o, 0, sizeof o);
+    o.strategy = MR_REMAP_AUTO;
+    o.max_evaluations = DEFAULT_MAX_EVALUATIONS;
+    o.xtol = DEFAULT_XTOL;
+    o.grid_points = 0;
+    o.starts = DEFAULT_STARTS;
+    o.seed = 1;
+    o.target_values = NULL;
+    return o;
+}
+
+/* ---- the fit context ------------------------------------------------------------------------------------ */
+
+/* One fitted scalar: a packed slot with its bounds and scale. */
+typedef struct fitted_slot {
+    int slot;
+    int param;
+    double lo, hi;
+    int log_scale;
+} fitted_slot;
+
+typedef struct fit_context {
+    const mr_render_plan *plan;
+    const mr_brdf_model *model;
+    mr_remap_options opts;
+    double base[MAX_SLOTS];  /* current full value vector; fixed parameters and switches never change */
+    int value_count;
+
+    fitted_slot nonlinear[MAX_SLOTS]; /* NONLINEAR parameters, fitted */
+    int nonlinear_count;
+    int linear_params[MAX_SLOTS];     /* LINEAR/AFFINE parameter indices, fitted */
+    int linear_param_count;
+    fitted_slot linear[MAX_SLOTS];    /* their slots */
+    int linear_count;
+
+    /* direct objective: which slots vary (pointers into nonlinear/linear) and against which image */
+    const fitted_slot *vary[2 * MAX_SLOTS];
+    int vary_count;
+    const mr_image *goal;
+    mr_component component;
+
+    const int *pixels; /* covered pixels, ascending */
+    int pixel_count;
+    mr_image *scratch;               /* a render */
+    mr_image *basis[MAX_SLOTS + 1];  /* projection: R0 and one render per linear parameter */
+    long renders;
+    mr_status failure;               /* set when a render fails inside an nlopt callback */
+    nlopt_opt running;
+} fit_context;
+
+static double to_value(const fitted_slot *s, double u) {
+    u = mr_clampd(u, 0.0, 1.0);
+    if (s->log_scale) return exp(log(s->lo) + u * (log(s->hi) - log(s->lo)));
+    return s->lo + u * (s->hi - s->lo);
+}
+
+static double to_unit(const fitted_slot *s, double v) {
+    if (!(s->hi > s->lo)) return 0.0;
+    v = mr_clampd(v, s->lo, s->hi);
+    if (s->log_scale) return (log(v) - log(s->lo)) / (log(s->hi) - log(s->lo));
+    return (v - s->lo) / (s->hi - s->lo);
+}
+
+static fitted_slot make_slot(const mr_brdf_model *m, int param, int slot) {
+    const mr_brdf_param *p = &m->params[param];
+    fitted_slot s;
+    s.slot = slot;
+    s.param = param;
+    s.lo = p->min_value;
+    s.hi = p->max_value;
+    s.log_scale = (p->flags & MR_PARAM_LOG_SCALE) && p->min_value > 0.0;
+    return s;
+}
+
+/* Sum of squared differences between `image` and `goal` over the covered pixels. */
+static double sse_against(const fit_context *ctx, const mr_image *image, const mr_image *goal) {
+    double sum = 0.0;
+    for (int i = 0; i < ctx->pixel_count; i++) {
+        const float *a = image->pixels + (size_t)ctx->pixels[i] * 3, *b = goal->pixels + (size_t)ctx->pixels[i] * 3;
+        for (int c = 0; c < 3; c++) {
+            double d = (double)a[c] - (double)b[c];
+            sum += d * d;
+        }
+    }
+    return sum;
+}
+
+static int render_values(fit_context *ctx, const double *values, mr_component component, mr_image *into) {
+    mr_status status = mr_render_into(ctx->plan, ctx->model, values, component, into);
+    ctx->renders++;
+    if (status != MR_OK) {
+        ctx->failure = status;
+        if (ctx->running) nlopt_force_stop(ctx->running);
+        return 0;
+    }
+    return 1;
+}
+
+/* ---- variable projection -------------------------------------------------------------------------------- */
+
+/* Minimise 0.5 b'Gb - h'b over lo <= b <= hi (G symmetric positive semi-definite, k <= 3*MAX_SLOTS) by cyclic
+ * coordinate descent with exact clamped steps; this converges to the global minimum of a convex box-constrained
+ * quadratic. Columns with no energy (G_jj = 0: the parameter does not show in this scene) keep b_j as given. */
+static void box_least_squares(int k, const double *G, const double *h, const double *lo, const double *hi,
+                              double *b) {
+    for (int sweep = 0; sweep < 1000; sweep++) {
+        double largest_step = 0.0;
+        for (int j = 0; j < k; j++) {
+            double gjj = G[j * k + j];
+            if (!(gjj > 0.0)) continue;
+            double r = h[j];
+            for (int i = 0; i < k; i++)
+                if (i != j) r -= G[j * k + i] * b[i];
+            double next = mr_clampd(r / gjj, lo[j], hi[j]);
+            double step = fabs(next - b[j]) / (1.0 + fabs(b[j]));
+            if (step > largest_step) largest_step = step;
+            b[j] = next;
+        }
+        if (largest_step < 1e-13) break;
+    }
+}
+
+/* For the nonlinear values already in ctx->base: render the basis, solve for the linear slots (written into
+ * ctx->base) and return the squared residual against ctx->goal, or NAN if a render failed. */
+static double project(fit_context *ctx) {
+    double values[MAX_SLOTS];
+    memcpy(values, ctx->base, sizeof values);
+    for (int j = 0; j < ctx->linear_count; j++) values[ctx->linear[j].slot] = 0.0;
+    if (!render_values(ctx, values, MR_COMPONENT_FULL, ctx->basis[0])) return NAN;
+    for (int p = 0; p < ctx->linear_param_count; p++) {
+        int param = ctx->linear_params[p];
+        int offset = mr_brdf_param_offset(ctx->model, param);
+        double one[MAX_SLOTS];
+        memcpy(one, values, sizeof one);
+        for (int c = 0; c < ctx->model->params[param].channels; c++) one[offset + c] = 1.0;
+        if (!render_values(ctx, one, MR_COMPONENT_FULL, ctx->basis[p + 1])) return NAN;
+    }
+
+    // Columns: one per linear slot. An RGB parameter's channel c drives image channel c only (the roles
+    // test_brdf checks), so its column is its basis image restricted to that channel.
+    const int k = ctx->linear_count;
+    double G[MAX_SLOTS * MAX_SLOTS] = {0}, h[MAX_SLOTS] = {0}, lo[MAX_SLOTS], hi[MAX_SLOTS], b[MAX_SLOTS];
+    int column_image[MAX_SLOTS], column_channel[MAX_SLOTS];
+    for (int j = 0, p = 0; p < ctx->linear_param_count; p++) {
+        int channels = ctx->model->params[ctx->linear_params[p]].channels;
+        for (int c = 0; c < channels; c++, j++) {
+            column_image[j] = p + 1;
+            column_channel[j] = channels == 3 ? c : -1;
+        }
+    }
+    double constant = 0.0;
+    for (int i = 0; i < ctx->pixel_count; i++) {
+        size_t at = (size_t)ctx->pixels[i] * 3;
+        for (int c = 0; c < 3; c++) {
+            double residual = (double)ctx->goal->pixels[at + c] - (double)ctx->basis[0]->pixels[at + c];
+            constant += residual * residual;
+            double column[MAX_SLOTS];
+            for (int j = 0; j < k; j++) {
+                int ch = column_channel[j];
+                column[j] = (ch < 0 || ch == c)
+                                ? (double)ctx->basis[column_image[j]]->pixels[at + c] - ctx->basis[0]->pixels[at + c]
+                                : 0.0;
+            }
+            for (int a = 0; a < k; a++) {
+                if (column[a] == 0.0) continue;
+                h[a] += column[a] * residual;
+                for (int bb = a; bb < k; bb++) G[a * k + bb] += column[a] * column[bb];
+            }
+        }
+    }
+    for (int a = 0; a < k; a++)
+        for (int bb = 0; bb < a; bb++) G[a * k + bb] = G[bb * k + a];
+    for (int j = 0; j < k; j++) {
+        lo[j] = ctx->linear[j].lo;
+        hi[j] = ctx->linear[j].hi;
+        b[j] = mr_clampd(ctx->base[ctx->linear[j].slot], lo[j], hi[j]);
+    }
+    box_least_squares(k, G, h, lo, hi, b);
+    double sse = constant;
+    for (int a = 0; a < k; a++) {
+        sse -= 2.0 * h[a] * b[a];
+        for (int bb = 0; bb < k; bb++) sse += b[a] * G[a * k + bb] * b[bb];
+    }
+    for (int j = 0; j < k; j++) ctx->base[ctx->linear[j].slot] = b[j];
+    return sse > 0.0 ? sse : 0.0;
+}
+
+static double projected_objective(unsigned n, const double *u, double *grad, void *data) {
+    (void)grad;
+    fit_context *ctx = data;
+    for (unsigned i = 0; i < n; i++) ctx->base[ctx->nonlinear[i].slot] = to_value(&ctx->nonlinear[i], u[i]);
+    double sse = project(ctx);
+    return isnan(sse) ? HUGE_VAL : sse;
+}
+
+static double direct_objective(unsigned n, const double *u, double *grad, void *data) {
+    (void)grad;
+    fit_context *ctx = data;
+    double values[MAX_SLOTS];
+    memcpy(values, ctx->base, sizeof values);
+    for (unsigned i = 0; i < n; i++) values[ctx->vary[i]->slot] = to_value(ctx->vary[i], u[i]);
+    if (!render_values(ctx, values, ctx->component, ctx->scratch)) return HUGE_VAL;
+    return sse_against(ctx, ctx->scratch, ctx->goal);
+}
+
+/* Local bounded minimisation with BOBYQA from u (in/out); returns the minimum or NAN on an nlopt failure. */
+static double local_fit(fit_context *ctx, unsigned n, nlopt_func objective, double *u, double initial_step) {
+    nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, n);
+    if (opt == NULL) {
+        ctx->failure = MR_ERR_NOMEM;
+        return NAN;
+    }
+    double lower[2 * MAX_SLOTS], upper[2 * MAX_SLOTS];
+    for (unsigned i = 0; i < n; i++) {
+        lower[i] = 0.0;
+        upper[i] = 1.0;
+        u[i] = mr_clampd(u[i], 0.0, 1.0);
+    }
+    nlopt_set_lower_bounds(opt, lower);
+    nlopt_set_upper_bounds(opt, upper);
+    nlopt_set_min_objective(opt, objective, ctx);
+    nlopt_set_xtol_rel(opt, ctx->opts.xtol);
+    nlopt_set_xtol_abs1(opt, ctx->opts.xtol);
+    nlopt_set_maxeval(opt, ctx->opts.max_evaluations);
+    nlopt_set_initial_step1(opt, initial_step);
+    double minimum = HUGE_VAL;
+    ctx->running = opt;
+    nlopt_result result = nlopt_optimize(opt, u, &minimum);
+    ctx->running = NULL;
+    nlopt_destroy(opt);
+    if (ctx->failure != MR_OK) return NAN;
+    // Running out of evaluations or rounding-limited steps still leave the best point found, which is what a
+    // bounded-work fit reports; only a failure to run at all is an error.
+    if (result < 0 && result != NLOPT_ROUNDOFF_LIMITED && result != NLOPT_FORCED_STOP) {
+        mr_fail(MR_ERR_EXTERNAL, "remap: nlopt BOBYQA failed: %s", nlopt_result_to_string(result));
+        ctx->failure = MR_ERR_EXTERNAL;
+        return NAN;
+    }
+    return minimum;
+}
+
+/* ---- AUTO: global search over the nonlinear parameters, projected ---------------------------------------- */
+
+typedef struct candidate {
+    double u[MAX_SLOTS];
+    double sse;
+    double values[MAX_SLOTS];
+} candidate;
+
+static int compare_candidates(const void *a, const void *b) {
+    double x = ((const candidate *)a)->sse, y = ((const candidate *)b)->sse;
+    return (x > y) - (x < y);
+}
+
+/* splitmix64: the multi-start points, seeded (remap.h: deterministic). */
+static double next_uniform(unsigned long long *state) {
+    unsigned long long z = (*state += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    z ^= z >> 31;
+    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* Evaluate the grid, keep its local minima (no lower neighbour), best first, in starts[]; returns the count. */
+static int grid_minima(fit_context *ctx, int points, candidate *starts, int max_starts) {
+    const int d = ctx->nonlinear_count;
+    int total = d == 1 ? points : points * points;
+    double *sse = malloc((size_t)total * sizeof *sse);
+    if (sse == NULL) {
+        ctx->failure = MR_ERR_NOMEM;
+        return 0;
+    }
+    for (int g = 0; g < total && ctx->failure == MR_OK; g++) {
+        double u[2] = {(double)(g % points) / (points - 1), (double)(g / points) / (points - 1)};
+        sse[g] = projected_objective((unsigned)d, u, NULL, ctx);
+    }
+    int found = 0;
+    candidate *all = malloc((size_t)total * sizeof *all);
+    if (all == NULL) {
+        free(sse);
+        ctx->failure = MR_ERR_NOMEM;
+        return 0;
+    }
+    for (int g = 0; g < total; g++) {
+        int gx = g % points, gy = g / points, is_minimum = 1;
+        for (int dy = -1; dy <= 1 && is_minimum; dy++)
+            for (int dx = -1; dx <= 1; dx++) {
+                if ((dx == 0 && dy == 0) || (d == 1 && dy != 0)) continue;
+                int nx = gx + dx, ny = gy + dy;
+                if (nx < 0 || nx >= points || ny < 0 || (d == 2 && ny >= points) || (d == 1 && ny != 0)) continue;
+                if (sse[ny * points + nx] < sse[g]) {
+                    is_minimum = 0;
+                    break;
+                }
+            }
+        if (!is_minimum) continue;
+        all[found].u[0] = (double)gx / (points - 1);
+        all[found].u[1] = (double)gy / (points - 1);
+        all[found].sse = sse[g];
+        found++;
+    }
+    qsort(all, (size_t)found, sizeof *all, compare_candidates);
+    int kept = MR_MIN(found, max_starts);
+    memcpy(starts, all, (size_t)kept * sizeof *all);
+    free(all);
+    free(sse);
+    return kept;
+}
+
+/* Fill best (and report whether a distinct, nearly equal minimum exists) with the AUTO search. */
+static void auto_fit(fit_context *ctx, candidate *best, int *ambiguous) {
+    const int d = ctx->nonlinear_count;
+    candidate starts[64];
+    int start_count = 0;
+    double step = 0.05;
+    *ambiguous = 0;
+    if (d == 0) {
+        best->sse = project(ctx);
+        memcpy(best->values, ctx->base, sizeof best->values);
+        return;
+    }
+    if (d <= 2) {
+        int points = ctx->opts.grid_points > 1 ? ctx->opts.grid_points : (d == 1 ? DEFAULT_GRID_1D : DEFAULT_GRID_2D);
+        start_count = grid_minima(ctx, points, starts, MAX_REFINED_STARTS);
+        step = 1.0 / (points - 1);
+    } else {
+        unsigned long long state = ctx->opts.seed;
+        int wanted = MR_MIN(MR_MAX(ctx->opts.starts, 1), 64);
+        for (int s = 0; s < wanted; s++) {
+            for (int i = 0; i < d; i++)
+                starts[s].u[i] = s == 0 ? to_unit(&ctx->nonlinear[i], ctx->base[ctx->nonlinear[i].slot])
+                                        : next_uniform(&state);
+            starts[s].sse = HUGE_VAL;
+        }
+        start_count = wanted;
+        step = 0.1;
+    }
+    double saved_base[MAX_SLOTS];
+    memcpy(saved_base, ctx->base, sizeof saved_base);
+    candidate refined[64];
+    int refined_count = 0;
+    for (int s = 0; s < start_count && ctx->failure == MR_OK; s++) {
+        memcpy(ctx->base, saved_base, sizeof saved_base);
+        candidate *r = &refined[refined_count];
+        memcpy(r->u, starts[s].u, sizeof r->u);
+        r->sse = local_fit(ctx, (unsigned)d, projected_objective, r->u, step);
+        if (isnan(r->sse)) break;
+        // Re-project at the returned point so base holds exactly its linear solution.
+        r->sse = projected_objective((unsigned)d, r->u, NULL, ctx);
+        memcpy(r->values, ctx->base, sizeof r->values);
+        refined_count++;
+    }
+    if (refined_count == 0) {
+        best->sse = NAN;
+        return;
+    }
+    qsort(refined, (size_t)refined_count, sizeof *refined, compare_candidates);
+    *best = refined[0];
+    for (int s = 1; s < refined_count; s++) {
+        double distance = 0.0;
+        for (int i = 0; i < d; i++) distance = fmax(distance, fabs(refined[s].u[i] - best->u[i]));
+        if (distance > AMBIGUITY_DISTANCE && refined[s].sse <= best->sse * (1.0 + AMBIGUITY_ERROR) + 1e-12)
+            *ambiguous = 1;
+    }
+    memcpy(ctx->base, best->values, sizeof ctx->base);
+}
+
+/* ---- the paper's strategies: direct local fits ---------------------------------------------------------- */
+
+/* Fit the slots whose parameter lobe matches `lobes` (any of the bits; 0 = every slot) against `goal`, rendering
+ * `component`, from the current base values. */
+static double direct_stage(fit_context *ctx, unsigned lobes, int exact_lobe, const mr_image *goal,
+                           mr_component component) {
+    ctx->vary_count = 0;
+    const fitted_slot *pools[2] = {ctx->nonlinear, ctx->linear};
+    int counts[2] = {ctx->nonlinear_count, ctx->linear_count};
+    for (int pool = 0; pool < 2; pool++)
+        for (int i = 0; i < counts[pool]; i++) {
+            unsigned lobe = (unsigned)ctx->model->params[pools[pool][i].param].lobe;
+            int match = lobes == 0 || (exact_lobe ? lobe == lobes : (lobe & lobes) != 0);
+            if (match) ctx->vary[ctx->vary_count++] = &pools[pool][i];
+        }
+    if (ctx->vary_count == 0) return 0.0;
+    ctx->goal = goal;
+    ctx->component = component;
+    double u[2 * MAX_SLOTS];
+    for (int i = 0; i < ctx->vary_count; i++) u[i] = to_unit(ctx->vary[i], ctx->base[ctx->vary[i]->slot]);
+    double minimum = local_fit(ctx, (unsigned)ctx->vary_count, direct_objective, u, 0.1);
+    if (isnan(minimum)) return NAN;
+    for (int i = 0; i < ctx->vary_count; i++) ctx->base[ctx->vary[i]->slot] = to_value(ctx->vary[i], u[i]);
+    return minimum;
+}
+
+/* ---- driver --------------------------------------------------------------------------------------------- */
+
+static mr_status check_source_image(const mr_render_plan *plan, const mr_image *image, const char *what) {
+    const mr_scene *scene = mr_render_plan_scene(plan);
+    if (image->width != scene->width || image->height != scene->height || image->channels != 3)
+        return mr_fail(MR_ERR_INVALID_ARG, "remap: the source %s image is %dx%dx%d, the fit scene is %dx%dx3", what,
+                       image->width, image->height, image->channels, scene->width, scene->height);
+    size_t n = mr_image_value_count(image);
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(image->pixels[i]))
+            return mr_fail(MR_ERR_NUMERIC, "remap: the source %s image has a non-finite value at pixel (%d, %d)",
+                           what, (int)(i / 3 % (size_t)image->width), (int)(i / 3 / (size_t)image->width));
+    return MR_OK;
+}
+
+static void free_context(fit_context *ctx) {
+    mr_image_free(ctx->scratch);
+    for (int i = 0; i <= MAX_SLOTS; i++) mr_image_free(ctx->basis[i]);
+    free((void *)ctx->pixels);
+}
+
+static double now_seconds(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Decide the outcome of a finished fit (remap.h) and write its detail line. */
+static void classify(fit_context *ctx, const mr_remap_source *source, double predicted_sse, double actual_sse,
+                     double source_energy, int ambiguous, double projected_gain, mr_remap_result *out) {
+    out->outcome = MR_FIT_CONVERGED;
+    snprintf(out->detail, sizeof out->detail, "converged: relative RMSE %.3g", out->relative_rmse);
+    (void)source;
+    if (!isnan(predicted_sse) && fabs(actual_sse - predicted_sse) > PREDICTION_TOLERANCE * source_energy) {
+        out->outcome = MR_FIT_UNREACHABLE;
+        snprintf(out->detail, sizeof out->detail,
+                 "unreachable: at the solution the target rescales its parameters (e.g. energy trimming when "
+                 "diffuse + specular > 1), so its render departs from the fit by %.3g of the source energy",
+                 fabs(actual_sse - predicted_sse) / source_energy);
+        return;
+    }
+    if (out->relative_rmse > UNREACHABLE_RELATIVE_RMSE) {
+        out->outcome = MR_FIT_UNREACHABLE;
+        snprintf(out->detail, sizeof out->detail,
+                 "unreachable: the best fit leaves a residual of %.1f %% of the source's RMS radiance",
+                 100.0 * out->relative_rmse);
+        return;
+    }
+    if (ambiguous || projected_gain > LOCAL_MINIMUM_GAIN) {
+        out->outcome = MR_FIT_LOCAL_MINIMUM;
+        if (ambiguous)
+            snprintf(out->detail, sizeof out->detail,
+                     "local-minimum: distinct parameter sets fit within %.0f %% of each other's error",
+                     100.0 * AMBIGUITY_ERROR);
+        else
+            snprintf(out->detail, sizeof out->detail,
+                     "local-minimum: re-solving the linear parameters at the fitted roughness lowers the error "
+                     "by %.0f %%", 100.0 * projected_gain);
+        return;
+    }
+    const fitted_slot *pools[2] = {ctx->nonlinear, ctx->linear};
+    int counts[2] = {ctx->nonlinear_count, ctx->linear_count};
+    for (int pool = 0; pool < 2; pool++)
+        for (int i = 0; i < counts[pool]; i++) {
+            const fitted_slot *s = &pools[pool][i];
+            double u = to_unit(s, out->values[s->slot]);
+            // A reflectance at 0 is an absent lobe, not a limit; an upper bound, or any bound of a nonlinear
+            // parameter, means the source asks for a value outside the target's range.
+            int at_upper = u > 1.0 - 1e-6, at_lower = u < 1e-6 && pool == 0;
+            if (at_upper || at_lower) {
+                out->outcome = MR_FIT_AT_BOUND;
+                snprintf(out->detail, sizeof out->detail, "at-bound: %s = %g is the %s of its range",
+                         ctx->model->params[s->param].name, out->values[s->slot], at_upper ? "maximum" : "minimum");
+                return;
+            }
+        }
+}
+
+mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *source, const mr_brdf_model *target,
+                          const mr_remap_options *opts_in, mr_remap_result *out) {
+    if (plan == NULL || source == NULL || source->full == NULL || target == NULL || out == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "remap: NULL plan, source image, target model or result");
+    double start_time = now_seconds();
+    mr_remap_options opts = opts_in ? *opts_in : mr_remap_options_default();
+    if (opts.max_evaluations <= 0) opts.max_evaluations = DEFAULT_MAX_EVALUATIONS;
+    if (!(opts.xtol > 0.0)) opts.xtol = DEFAULT_XTOL;
+    if (opts.starts <= 0) opts.starts = DEFAULT_STARTS;
+    if ((unsigned)opts.strategy >= MR_REMAP_STRATEGY_COUNT)
+        return mr_fail(MR_ERR_INVALID_ARG, "remap: unknown strategy %d", (int)opts.strategy);
+    mr_status status = check_source_image(plan, source->full, "full");
+    if (status != MR_OK) return status;
+    if (opts.strategy == MR_REMAP_TWO || opts.strategy == MR_REMAP_THREE) {
+        if (source->diffuse == NULL || source->specular == NULL)
+            return mr_fail(MR_ERR_INVALID_ARG, "remap: the %s strategy needs the source's diffuse-only and "
+                           "specular-only renders", mr_remap_strategy_name(opts.strategy));
+        if ((status = check_source_image(plan, source->diffuse, "diffuse")) != MR_OK) return status;
+        if ((status = check_source_image(plan, source->specular, "specular")) != MR_OK) return status;
+    }
+
+    fit_context ctx;
+    memset(&ctx, 0, sizeof ctx);
+    ctx.plan = plan;
+    ctx.model = target;
+    ctx.opts = opts;
+    ctx.value_count = mr_brdf_value_count(target);
+    ctx.goal = source->full;
+    ctx.failure = MR_OK;
+    if (opts.target_values)
+        memcpy(ctx.base, opts.target_values, (size_t)ctx.value_count * sizeof(double));
+    else
+        mr_brdf_default_values(target, ctx.base);
+    for (int i = 0; i < target->param_count; i++) {
+        const mr_brdf_param *p = &target->params[i];
+        if (p->role == MR_PARAM_SWITCH || (p->flags & MR_PARAM_FIT_FIXED)) continue;
+        int offset = mr_brdf_param_offset(target, i);
+        if (p->role == MR_PARAM_NONLINEAR) {
+            for (int c = 0; c < p->channels; c++) ctx.nonlinear[ctx.nonlinear_count++] = make_slot(target, i, offset + c);
+        } else {
+            ctx.linear_params[ctx.linear_param_count++] = i;
+            for (int c = 0; c < p->channels; c++) ctx.linear[ctx.linear_count++] = make_slot(target, i, offset + c);
+        }
+    }
+
+    const mr_scene *scene = mr_render_plan_scene(plan);
+    const float *coverage = mr_render_plan_coverage(plan);
+    int *pixels = malloc((size_t)scene->width * (size_t)scene->height * sizeof *pixels);
+    if (pixels == NULL) return mr_fail(MR_ERR_NOMEM, "remap: out of memory");
+    for (int p = 0; p < scene->width * scene->height; p++)
+        if (coverage[p] > 0.0f) pixels[ctx.pixel_count++] = p;
+    ctx.pixels = pixels;
+    status = mr_image_create(scene->width, scene->height, 3, &ctx.scratch);
+    for (int i = 0; status == MR_OK && i <= ctx.linear_param_count; i++)
+        status = mr_image_create(scene->width, scene->height, 3, &ctx.basis[i]);
+    if (status != MR_OK) {
+        free_context(&ctx);
+        return status;
+    }
+
+    double source_energy = 0.0;
+    for (int i = 0; i < ctx.pixel_count; i++)
+        for (int c = 0; c < 3; c++) {
+            double v = source->full->pixels[(size_t)ctx.pixels[i] * 3 + c];
+            source_energy += v * v;
+        }
+
+    double predicted = NAN, projected_gain = 0.0;
+    int ambiguous = 0;
+    if (opts.strategy == MR_REMAP_AUTO) {
+        candidate best;
+        auto_fit(&ctx, &best, &ambiguous);
+        predicted = best.sse;
+    } else {
+        if (opts.strategy == MR_REMAP_TWO || opts.strategy == MR_REMAP_THREE) {
+            direct_stage(&ctx, MR_LOBE_DIFFUSE, 1, source->diffuse, MR_COMPONENT_DIFFUSE);
+            if (ctx.failure == MR_OK) direct_stage(&ctx, MR_LOBE_SPECULAR, 1, source->specular, MR_COMPONENT_SPECULAR);
+            if (ctx.failure == MR_OK) direct_stage(&ctx, MR_LOBE_BOTH, 1, source->full, MR_COMPONENT_FULL);
+        }
+        if (ctx.failure == MR_OK && (opts.strategy == MR_REMAP_SINGLE || opts.strategy == MR_REMAP_THREE))
+            direct_stage(&ctx, 0, 0, source->full, MR_COMPONENT_FULL);
+    }
+    if (ctx.failure != MR_OK) {
+        status = ctx.failure;
+        free_context(&ctx);
+        return status == MR_ERR_EXTERNAL ? status : mr_fail_context(status, "remap to '%s'", target->name);
+    }
+
+    // The verdict render: the target exactly as a renderer would show it.
+    mr_remap_result result;
+    memset(&result, 0, sizeof result);
+    memcpy(result.values, ctx.base, sizeof result.values);
+    if (!render_values(&ctx, result.values, MR_COMPONENT_FULL, ctx.scratch)) {
+        status = ctx.failure;
+        free_context(&ctx);
+        return status;
+    }
+    double actual = sse_against(&ctx, ctx.scratch, source->full);
+    if (opts.strategy != MR_REMAP_AUTO && ctx.nonlinear_count + ctx.linear_count > 0 && actual > 0.0) {
+        // A local fit is in a local minimum if the exact linear solve at its own nonlinear values does better.
+        double saved[MAX_SLOTS];
+        memcpy(saved, ctx.base, sizeof saved);
+        ctx.goal = source->full;
+        double reprojected = project(&ctx);
+        memcpy(ctx.base, saved, sizeof saved);
+        if (!isnan(reprojected)) projected_gain = (actual - reprojected) / actual;
+    }
+    status = mr_rmse(ctx.scratch, source->full, &result.rmse);
+    if (status == MR_OK) status = mr_ssim(ctx.scratch, source->full, NULL, &result.ssim, NULL);
+    if (status != MR_OK) {
+        free_context(&ctx);
+        return status;
+    }
+    double source_rms = ctx.pixel_count > 0 ? sqrt(source_energy / (3.0 * ctx.pixel_count)) : 0.0;
+    double fit_rms = ctx.pixel_count > 0 ? sqrt(actual / (3.0 * ctx.pixel_count)) : 0.0;
+    result.relative_rmse = source_rms > 0.0 ? fit_rms / source_rms : (fit_rms > 0.0 ? HUGE_VAL : 0.0);
+    result.renders = ctx.renders;
+    classify(&ctx, source, predicted, actual, source_energy > 0.0 ? source_energy : 1.0, ambiguous,
+             projected_gain, &result);
+    free_context(&ctx);
+    result.seconds = now_seconds() - start_time;
+    *out = result;
+    return MR_OK;
+}
+
+mr_status mr_remap(const mr_render_plan *plan, const mr_brdf_model *source_model, const double *source_values,
+                   const mr_brdf_model *target, const mr_remap_options *opts, mr_remap_result *out) {
+    if (plan == NULL || source_model == NULL || source_values == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "remap: NULL plan, source model or source values");
+    double start = now_seconds();
+    const mr_scene *scene = mr_render_plan_scene(plan);
+    mr_image *full = NULL, *diffuse = NULL, *specular = NULL;
+    mr_status status = mr_image_create(scene->width, scene->height, 3, &full);
+    if (status == MR_OK) status = mr_image_create(scene->width, scene->height, 3, &diffuse);
+    if (status == MR_OK) status = mr_image_create(scene->width, scene->height, 3, &specular);
+    if (status == MR_OK) status = mr_render_components_into(plan, source_model, source_values, diffuse, specular);
+    if (status == MR_OK) status = mr_render_into(plan, source_model, source_values, MR_COMPONENT_FULL, full);
+    if (status == MR_OK) {
+        mr_remap_source source = {full, diffuse, specular};
+        status = mr_remap_images(plan, &source, target, opts, out);
+        if (status == MR_OK) out->seconds = now_seconds() - start;
+    }
+    mr_image_free(full);
+    mr_image_free(diffuse);
+    mr_image_free(specular);
+    return status;
+}

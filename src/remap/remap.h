@@ -1,0 +1,124 @@
+/*
+ * remap.h — uniform image-based remapping: fit a target BRDF model's parameters so that its render of the fit
+ * scene matches a source's (Sztrajman et al. 2019, sections 3 and 4).
+ *
+ * Main calls:
+ *   mr_render_plan *plan;  mr_render_plan_create(&scene, &plan);          // the fit scene, once
+ *   mr_remap_options o = mr_remap_options_default();                       // strategy, tolerances, seed
+ *   mr_remap_result r;
+ *   mr_remap(plan, source_model, source_values, target_model, &o, &r);     // built-in source
+ *   mr_remap_images(plan, &(mr_remap_source){full, diffuse, specular}, target_model, &o, &r);  // any renderer
+ *
+ * Objective: the L2 difference of linear HDR RGB images over the plan's pixels (the paper's metric).
+ *
+ * Strategies (mr_remap_strategy):
+ *   - SINGLE, TWO, THREE are the paper's schemes (section 3.1), run as the paper ran them: a local bounded
+ *     optimisation (nlopt BOBYQA, parameters normalised to [0,1], log scale where the descriptor says so)
+ *     started from the target's defaults. SINGLE fits every parameter to the full render; TWO fits the
+ *     diffuse-lobe parameters to the diffuse-only render and then the specular-lobe ones to the specular-only
+ *     render (parameters touching both lobes are fitted in the second stage against the full render); THREE
+ *     starts a SINGLE fit from the TWO result. TWO and THREE need the source's component images.
+ *   - AUTO (the default) removes the diffuse/specular coupling that traps the paper's single-stage fits
+ *     (docs/design.md principle 3): for fixed values of the nonlinear parameters (roughness, IOR, metallic)
+ *     the image is affine in the LINEAR/AFFINE parameters (the descriptor's roles), so their best values are a
+ *     small bounded linear least-squares solve over basis renders ("variable projection"). The remaining one
+ *     or two nonlinear parameters are searched on a global grid and the best grid points refined locally
+ *     (BOBYQA); with more than two nonlinear parameters, the refinement is multi-started from seeded points.
+ * Parameters flagged MR_PARAM_FIT_FIXED (e.g. glTF's KHR_materials_specular factors) and switches are held at
+ * the values given in opts->target_values (or the defaults) and not fitted.
+ *
+ * Outcome (mr_fit_outcome): the run finishing is MR_OK; how the fit ended is reported separately:
+ *   CONVERGED, AT_BOUND (a fitted parameter ends on its range's edge: the source wants a value the target
+ *   cannot express), UNREACHABLE (the target cannot reproduce the source: the residual stays above 25 % of the
+ *   source's RMS radiance, or the model's own nonlinearity, such as Mitsuba's energy trimming of Ward with
+ *   diffuse + specular > 1, engaged at the solution so that its render departs from the fit), LOCAL_MINIMUM
+ *   (AUTO found distinct minima with nearly equal error, so the scene does not determine the parameters; or a
+ *   local strategy stopped where re-solving its linear parameters at its own nonlinear values lowers the error
+ *   by more than 10 %: the diffuse/specular coupling trap of the paper's figure 8).
+ * Work is bounded: at most opts->max_evaluations renders per local fit, a fixed grid, a fixed start count.
+ * Deterministic: the same inputs and seed give the same result for any thread count.
+ */
+#ifndef MR_REMAP_H
+#define MR_REMAP_H
+
+#include "../brdf/brdf.h"
+#include "../mr_image.h"
+#include "../mr_status.h"
+#include "../render/render.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum mr_remap_strategy {
+    MR_REMAP_AUTO = 0,
+    MR_REMAP_SINGLE,
+    MR_REMAP_TWO,
+    MR_REMAP_THREE,
+    MR_REMAP_STRATEGY_COUNT
+} mr_remap_strategy;
+
+/* "auto", "single", "two", "three"; NULL outside the enum. */
+const char *mr_remap_strategy_name(mr_remap_strategy strategy);
+/* Parse one of the names above; MR_ERR_INVALID_ARG listing them otherwise. */
+mr_status mr_remap_strategy_from_name(const char *name, mr_remap_strategy *out);
+
+typedef enum mr_fit_outcome {
+    MR_FIT_CONVERGED = 0,
+    MR_FIT_AT_BOUND,
+    MR_FIT_UNREACHABLE,
+    MR_FIT_LOCAL_MINIMUM,
+    MR_FIT_OUTCOME_COUNT
+} mr_fit_outcome;
+
+/* "converged", "at-bound", "unreachable", "local-minimum"; NULL outside the enum. */
+const char *mr_fit_outcome_name(mr_fit_outcome outcome);
+
+typedef struct mr_remap_options {
+    mr_remap_strategy strategy;  /* MR_REMAP_AUTO */
+    int max_evaluations;         /* renders per local fit: 400 */
+    double xtol;                 /* relative step tolerance of local fits, in normalised coordinates: 1e-6 */
+    int grid_points;             /* AUTO's global grid per nonlinear dimension: 32 (1-D), 12 (2-D) if 0 */
+    int starts;                  /* AUTO with > 2 nonlinear parameters: multi-start count: 8 */
+    unsigned long seed;          /* seeds the multi-start points: 1 */
+    const double *target_values; /* optional packed target values: the values of fixed parameters and
+                                    switches (NULL: the target's defaults) */
+} mr_remap_options;
+
+/* The defaults listed beside each field. */
+mr_remap_options mr_remap_options_default(void);
+
+/* Renders of the fit scene by the source. `full` is required; `diffuse` and `specular` (its components) are
+ * needed by the TWO and THREE strategies. All 3-channel, the plan's size, linear radiance. */
+typedef struct mr_remap_source {
+    const mr_image *full;
+    const mr_image *diffuse;
+    const mr_image *specular;
+} mr_remap_source;
+
+typedef struct mr_remap_result {
+    double values[MR_BRDF_MAX_VALUES]; /* the target's packed parameter values */
+    double rmse;                       /* RMS difference of the linear RGB renders, over the whole image */
+    double relative_rmse;              /* rmse / RMS of the source over the pixels the object covers */
+    double ssim;                       /* display-referred SSIM of the two renders (metrics.h) */
+    long renders;                      /* target renders made */
+    double seconds;                    /* wall time of the remap */
+    mr_fit_outcome outcome;
+    char detail[192];                  /* one line: why the outcome is what it is */
+} mr_remap_result;
+
+/* Fit `target` to the source images. opts may be NULL (defaults). Fails (MR_ERR_INVALID_ARG) on images of the
+ * wrong size or channel count, or on a TWO/THREE strategy without component images; MR_ERR_NUMERIC if the
+ * source holds NaN or Inf; MR_ERR_EXTERNAL if nlopt fails. *out is written only on success. */
+mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *source, const mr_brdf_model *target,
+                          const mr_remap_options *opts, mr_remap_result *out);
+
+/* Render the source material (full, diffuse, specular) with `plan` and fit `target` to it. */
+mr_status mr_remap(const mr_render_plan *plan, const mr_brdf_model *source_model, const double *source_values,
+                   const mr_brdf_model *target, const mr_remap_options *opts, mr_remap_result *out);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MR_REMAP_H */
