@@ -43,7 +43,7 @@ TESTS     := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
 
 PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h src/render/render.h \
-                  src/io/image_io.h src/metrics/metrics.h
+                  src/io/image_io.h src/metrics/metrics.h src/remap/remap.h
 
 .PHONY: all check asan demo bench deps install clean
 # Keep test objects between runs (they are intermediate files of the test binaries).

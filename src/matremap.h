@@ -37,6 +37,7 @@
 #include "render/render.h"
 #include "io/image_io.h"
 #include "metrics/metrics.h"
+#include "remap/remap.h"
 
 #ifdef __cplusplus
 extern "C" {

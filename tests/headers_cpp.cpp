@@ -7,6 +7,7 @@
 #include "render/render.h"
 #include "io/image_io.h"
 #include "metrics/metrics.h"
+#include "remap/remap.h"
 
 extern "C" int mr_headers_cpp_probe(void);
 int mr_headers_cpp_probe(void) { return MR_STATUS_COUNT + MR_COMPONENT_COUNT; }

@@ -54,5 +54,6 @@ double cli_now(void);
 int cmd_models(int argc, char **argv);
 int cmd_render(int argc, char **argv);
 int cmd_ssim(int argc, char **argv);
+int cmd_remap(int argc, char **argv);
 
 #endif /* MR_CLI_H */

@@ -18,6 +18,7 @@ static const command commands[] = {
     {"models", cmd_models, "list the BRDF models and their parameters"},
     {"render", cmd_render, "render a material in the fit scene to EXR/HDR/PNG"},
     {"ssim", cmd_ssim, "compare two images: SSIM (display-referred) and RMSE (linear)"},
+    {"remap", cmd_remap, "fit a target model to a source material or to renders of the fit scene"},
 };
 
 static void print_usage(FILE *out) {

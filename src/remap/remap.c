@@ -29,11 +29,14 @@
 #define DEFAULT_GRID_2D 12
 #define DEFAULT_STARTS 8
 #define MAX_REFINED_STARTS 3
-/* Outcome thresholds (remap.h): residual RMS above 25 % of the source's RMS radiance is "unreachable" (a model
- * whose lobe merely has another shape, Ward against GGX tails, typically stays near 10 %); a render
- * that departs from the affine prediction by more than 1 % of the source's energy means the model rescaled the
- * solution (Mitsuba's trimming); two minima within 1 % of each other's error but 0.1 apart (normalised) are
- * ambiguous; a local fit whose linear parameters can be improved by more than 10 % is in a local minimum. */
+/* Outcome thresholds (remap.h):
+ *   - a residual RMS above 25 % of the source's RMS radiance is "unreachable" (a lobe that merely has another
+ *     shape, Ward against GGX's tails, typically stays near 10 %);
+ *   - a residual that departs from the affine prediction by more than 1 % of the source's RMS radiance means
+ *     the model rescaled the solution (Mitsuba's energy trimming);
+ *   - two minima within 1 % of each other's error but 0.1 apart (normalised) are ambiguous;
+ *   - a local fit whose error a better fit (re-solving its linear parameters, or AUTO) lowers by more than 10 %
+ *     stopped in a local minimum. */
 #define UNREACHABLE_RELATIVE_RMSE 0.25
 #define PREDICTION_TOLERANCE 0.01
 #define AMBIGUITY_ERROR 0.01
@@ -457,6 +460,110 @@ static double direct_stage(fit_context *ctx, unsigned lobes, int exact_lobe, con
     return minimum;
 }
 
+/* ---- which parameters the projection may solve for ----------------------------------------------------- */
+
+static void random_direction(unsigned long long *state, double d[3]) {
+    // Cosine-distributed above 0.05 of the horizon: the region a fit scene actually samples.
+    double u = next_uniform(state), v = next_uniform(state);
+    double z = sqrt(0.0025 + (1.0 - 0.0025) * u), r = sqrt(fmax(0.0, 1.0 - z * z)), phi = 2.0 * MR_PI * v;
+    d[0] = r * cos(phi);
+    d[1] = r * sin(phi);
+    d[2] = z;
+}
+
+static void eval_full(const mr_brdf_model *m, const double *values, const double wi[3], const double wo[3],
+                      double f[3]) {
+    mr_brdf_eval_full(m, values, wi, wo, f);
+}
+
+static int close_enough(double a, double b, double scale) { return fabs(a - b) <= 1e-9 * scale + 1e-300; }
+
+/* True if f_r is jointly affine in the parameters with is_linear[i] set, each RGB parameter's channel c
+ * driving output channel c only, for seeded random directions (half of them near the mirror configuration, so
+ * that narrow specular lobes are sampled where they are not zero) and random values of every other free
+ * parameter (fixed ones and switches at `base`). The candidate parameter spans its whole range; the already
+ * linear ones are drawn from the lowest 5 % of theirs, where no clamp or energy trimming engages: what is
+ * checked is the formula, not its safety nets. */
+static int jointly_affine(const mr_brdf_model *m, const double *base, const unsigned char *is_linear,
+                          int candidate) {
+    unsigned long long state = 0x5eedULL;
+    int count = mr_brdf_value_count(m);
+    for (int trial = 0; trial < 48; trial++) {
+        double u[MAX_SLOTS], w[MAX_SLOTS], mid[MAX_SLOTS], wi[3], wo[3], fu[3], fw[3], fm[3];
+        memcpy(u, base, sizeof u);
+        for (int i = 0; i < m->param_count; i++) {
+            const mr_brdf_param *p = &m->params[i];
+            if (p->role == MR_PARAM_SWITCH || (p->flags & MR_PARAM_FIT_FIXED)) continue;
+            int offset = mr_brdf_param_offset(m, i);
+            double span = (is_linear[i] && i != candidate) ? 0.05 : 1.0;
+            for (int c = 0; c < p->channels; c++)
+                u[offset + c] = p->min_value + span * next_uniform(&state) * (p->max_value - p->min_value);
+        }
+        memcpy(w, u, sizeof w);
+        for (int i = 0; i < m->param_count; i++) {
+            if (!is_linear[i]) continue;
+            const mr_brdf_param *p = &m->params[i];
+            int offset = mr_brdf_param_offset(m, i);
+            double span = i == candidate ? 1.0 : 0.05;
+            for (int c = 0; c < p->channels; c++)
+                w[offset + c] = p->min_value + span * next_uniform(&state) * (p->max_value - p->min_value);
+        }
+        for (int j = 0; j < count; j++) mid[j] = 0.5 * (u[j] + w[j]);
+        random_direction(&state, wi);
+        random_direction(&state, wo);
+        if (trial % 2 == 0) {
+            // Near the mirror direction of wi: tilt the mirror by up to ~0.05 rad.
+            wo[0] = -wi[0] + 0.05 * (next_uniform(&state) - 0.5);
+            wo[1] = -wi[1] + 0.05 * (next_uniform(&state) - 0.5);
+            wo[2] = wi[2];
+            double len = sqrt(wo[0] * wo[0] + wo[1] * wo[1] + wo[2] * wo[2]);
+            for (int k = 0; k < 3; k++) wo[k] /= len;
+        }
+        eval_full(m, u, wi, wo, fu);
+        eval_full(m, w, wi, wo, fw);
+        eval_full(m, mid, wi, wo, fm);
+        for (int c = 0; c < 3; c++) {
+            double scale = fabs(fu[c]) + fabs(fw[c]);
+            if (!close_enough(fm[c], 0.5 * (fu[c] + fw[c]), scale)) return 0;
+        }
+        // Channel independence: moving channel k of an RGB linear parameter leaves the other outputs alone.
+        for (int i = 0; i < m->param_count; i++) {
+            if (!is_linear[i] || m->params[i].channels != 3) continue;
+            int offset = mr_brdf_param_offset(m, i);
+            for (int k = 0; k < 3; k++) {
+                double moved[MAX_SLOTS], fk[3];
+                memcpy(moved, u, sizeof moved);
+                moved[offset + k] = w[offset + k];
+                eval_full(m, moved, wi, wo, fk);
+                for (int c = 0; c < 3; c++)
+                    if (c != k && !close_enough(fk[c], fu[c], fabs(fu[c]))) return 0;
+            }
+        }
+    }
+    return 1;
+}
+
+/* The parameters the projection solves for: those the descriptor declares LINEAR or AFFINE, plus any
+ * NONLINEAR parameter that is in fact affine (jointly with the rest) once the fixed parameters hold their
+ * values. Cycles' base colour is the example: its specular tint divides by the colour's luminance, but with
+ * the tint held at 0 the colour enters affinely, and solving for it exactly removes three dimensions from the
+ * nonlinear search. RGB parameters are tried first (they remove the most), then the others in table order. */
+static void choose_linear_parameters(const mr_brdf_model *m, const double *base, unsigned char *is_linear) {
+    memset(is_linear, 0, MAX_SLOTS);
+    for (int i = 0; i < m->param_count; i++) {
+        const mr_brdf_param *p = &m->params[i];
+        is_linear[i] = !(p->flags & MR_PARAM_FIT_FIXED) && (p->role == MR_PARAM_LINEAR || p->role == MR_PARAM_AFFINE);
+    }
+    for (int pass = 0; pass < 2; pass++)
+        for (int i = 0; i < m->param_count; i++) {
+            const mr_brdf_param *p = &m->params[i];
+            if (is_linear[i] || p->role != MR_PARAM_NONLINEAR || (p->flags & MR_PARAM_FIT_FIXED)) continue;
+            if ((pass == 0) != (p->channels == 3)) continue;
+            is_linear[i] = 1;
+            if (!jointly_affine(m, base, is_linear, i)) is_linear[i] = 0;
+        }
+}
+
 /* ---- driver --------------------------------------------------------------------------------------------- */
 
 static mr_status check_source_image(const mr_render_plan *plan, const mr_image *image, const char *what) {
@@ -490,12 +597,14 @@ static void classify(fit_context *ctx, const mr_remap_source *source, double pre
     out->outcome = MR_FIT_CONVERGED;
     snprintf(out->detail, sizeof out->detail, "converged: relative RMSE %.3g", out->relative_rmse);
     (void)source;
-    if (!isnan(predicted_sse) && fabs(actual_sse - predicted_sse) > PREDICTION_TOLERANCE * source_energy) {
+    // The projection predicted the residual from basis renders; if the real render at the solution misses that
+    // prediction, the model does not behave affinely there: it clamped or rescaled the values.
+    double gap = isnan(predicted_sse) ? 0.0 : fabs(sqrt(actual_sse) - sqrt(predicted_sse)) / sqrt(source_energy);
+    if (gap > PREDICTION_TOLERANCE) {
         out->outcome = MR_FIT_UNREACHABLE;
         snprintf(out->detail, sizeof out->detail,
-                 "unreachable: at the solution the target rescales its parameters (e.g. energy trimming when "
-                 "diffuse + specular > 1), so its render departs from the fit by %.3g of the source energy",
-                 fabs(actual_sse - predicted_sse) / source_energy);
+                 "unreachable: the target rescales these values (e.g. energy trimming when diffuse + specular > 1), "
+                 "so its render misses the fit by %.1f %% of the source's RMS radiance", 100.0 * gap);
         return;
     }
     if (out->relative_rmse > UNREACHABLE_RELATIVE_RMSE) {
@@ -513,8 +622,8 @@ static void classify(fit_context *ctx, const mr_remap_source *source, double pre
                      100.0 * AMBIGUITY_ERROR);
         else
             snprintf(out->detail, sizeof out->detail,
-                     "local-minimum: re-solving the linear parameters at the fitted roughness lowers the error "
-                     "by %.0f %%", 100.0 * projected_gain);
+                     "local-minimum: the global search (strategy auto) finds a fit with %.0f %% less squared error",
+                     100.0 * projected_gain);
         return;
     }
     const fitted_slot *pools[2] = {ctx->nonlinear, ctx->linear};
@@ -568,15 +677,19 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
         memcpy(ctx.base, opts.target_values, (size_t)ctx.value_count * sizeof(double));
     else
         mr_brdf_default_values(target, ctx.base);
+    unsigned char is_linear[MAX_SLOTS];
+    choose_linear_parameters(target, ctx.base, is_linear);
     for (int i = 0; i < target->param_count; i++) {
         const mr_brdf_param *p = &target->params[i];
         if (p->role == MR_PARAM_SWITCH || (p->flags & MR_PARAM_FIT_FIXED)) continue;
         int offset = mr_brdf_param_offset(target, i);
-        if (p->role == MR_PARAM_NONLINEAR) {
-            for (int c = 0; c < p->channels; c++) ctx.nonlinear[ctx.nonlinear_count++] = make_slot(target, i, offset + c);
+        if (!is_linear[i]) {
+            for (int c = 0; c < p->channels; c++)
+                ctx.nonlinear[ctx.nonlinear_count++] = make_slot(target, i, offset + c);
         } else {
             ctx.linear_params[ctx.linear_param_count++] = i;
-            for (int c = 0; c < p->channels; c++) ctx.linear[ctx.linear_count++] = make_slot(target, i, offset + c);
+            for (int c = 0; c < p->channels; c++)
+                ctx.linear[ctx.linear_count++] = make_slot(target, i, offset + c);
         }
     }
 
@@ -633,14 +746,27 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
         return status;
     }
     double actual = sse_against(&ctx, ctx.scratch, source->full);
-    if (opts.strategy != MR_REMAP_AUTO && ctx.nonlinear_count + ctx.linear_count > 0 && actual > 0.0) {
-        // A local fit is in a local minimum if the exact linear solve at its own nonlinear values does better.
+    long fit_renders = ctx.renders;
+    if (opts.strategy != MR_REMAP_AUTO && !opts.skip_global_check && actual > 0.0) {
+        // A local fit stopped in a local minimum if the global search does clearly better (remap.h). Its renders
+        // are counted apart, so `renders` stays the strategy's own cost.
         double saved[MAX_SLOTS];
         memcpy(saved, ctx.base, sizeof saved);
+        if (opts.target_values)
+            memcpy(ctx.base, opts.target_values, (size_t)ctx.value_count * sizeof(double));
+        else
+            mr_brdf_default_values(target, ctx.base);
         ctx.goal = source->full;
-        double reprojected = project(&ctx);
+        candidate global;
+        int ignored;
+        auto_fit(&ctx, &global, &ignored);
         memcpy(ctx.base, saved, sizeof saved);
-        if (!isnan(reprojected)) projected_gain = (actual - reprojected) / actual;
+        if (ctx.failure != MR_OK) {
+            status = ctx.failure;
+            free_context(&ctx);
+            return status;
+        }
+        if (!isnan(global.sse) && actual > 0.0) projected_gain = (actual - global.sse) / actual;
     }
     status = mr_rmse(ctx.scratch, source->full, &result.rmse);
     if (status == MR_OK) status = mr_ssim(ctx.scratch, source->full, NULL, &result.ssim, NULL);
@@ -651,7 +777,7 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     double source_rms = ctx.pixel_count > 0 ? sqrt(source_energy / (3.0 * ctx.pixel_count)) : 0.0;
     double fit_rms = ctx.pixel_count > 0 ? sqrt(actual / (3.0 * ctx.pixel_count)) : 0.0;
     result.relative_rmse = source_rms > 0.0 ? fit_rms / source_rms : (fit_rms > 0.0 ? HUGE_VAL : 0.0);
-    result.renders = ctx.renders;
+    result.renders = fit_renders;
     classify(&ctx, source, predicted, actual, source_energy > 0.0 ? source_energy : 1.0, ambiguous,
              projected_gain, &result);
     free_context(&ctx);
@@ -681,4 +807,44 @@ mr_status mr_remap(const mr_render_plan *plan, const mr_brdf_model *source_model
     mr_image_free(diffuse);
     mr_image_free(specular);
     return status;
+}
+
+mr_status mr_irradiance_scale(const mr_render_plan *plan, const mr_image *reference, double albedo,
+                              double *scale) {
+    if (plan == NULL || reference == NULL || scale == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "irradiance matching: NULL plan, reference or output");
+    if (!(albedo > 0.0 && albedo <= 1.0))
+        return mr_fail(MR_ERR_INVALID_ARG, "irradiance matching: reference albedo %g: expected (0, 1]", albedo);
+    mr_status status = check_source_image(plan, reference, "irradiance reference");
+    if (status != MR_OK) return status;
+    const mr_brdf_model *lambert = mr_brdf_find("lambert");
+    if (lambert == NULL) return MR_ERR_UNSUPPORTED;
+    double values[3] = {albedo, albedo, albedo};
+    mr_image *ours = NULL;
+    status = mr_render(plan, lambert, values, MR_COMPONENT_FULL, &ours);
+    if (status != MR_OK) return status;
+    const mr_scene *scene = mr_render_plan_scene(plan);
+    const float *coverage = mr_render_plan_coverage(plan);
+    size_t pixel_count = (size_t)scene->width * (size_t)scene->height;
+    double peak = 0.0;
+    for (size_t i = 0; i < pixel_count * 3; i++) peak = fmax(peak, ours->pixels[i]);
+    double sum_ours = 0.0, sum_reference = 0.0;
+    for (size_t p = 0; p < pixel_count; p++) {
+        if (coverage[p] < 1.0f) continue;
+        for (int c = 0; c < 3; c++) {
+            double v = ours->pixels[p * 3 + c];
+            if (v <= 0.01 * peak) continue;
+            sum_ours += v;
+            sum_reference += reference->pixels[p * 3 + c];
+        }
+    }
+    mr_image_free(ours);
+    if (!(sum_ours > 0.0))
+        return mr_fail(MR_ERR_INVALID_ARG, "irradiance matching: the fit scene has no lit pixels at %dx%d",
+                       scene->width, scene->height);
+    if (!(sum_reference > 1e-6 * sum_ours))
+        return mr_fail(MR_ERR_INVALID_ARG, "irradiance matching: the reference is black where the fit scene's sphere "
+                       "is lit (is it a render of the same scene, with the light at the same position?)");
+    *scale = sum_ours / sum_reference;
+    return MR_OK;
 }

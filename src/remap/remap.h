@@ -33,8 +33,8 @@
  *   source's RMS radiance, or the model's own nonlinearity, such as Mitsuba's energy trimming of Ward with
  *   diffuse + specular > 1, engaged at the solution so that its render departs from the fit), LOCAL_MINIMUM
  *   (AUTO found distinct minima with nearly equal error, so the scene does not determine the parameters; or a
- *   local strategy stopped where re-solving its linear parameters at its own nonlinear values lowers the error
- *   by more than 10 %: the diffuse/specular coupling trap of the paper's figure 8).
+ *   local strategy stopped where AUTO's global search finds more than 10 % less squared error: the
+ *   diffuse/specular coupling trap of the paper's figure 8).
  * Work is bounded: at most opts->max_evaluations renders per local fit, a fixed grid, a fixed start count.
  * Deterministic: the same inputs and seed give the same result for any thread count.
  */
@@ -49,6 +49,11 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* The fit scene's default side in pixels for remaps: chosen from the accuracy/time table of
+ * docs/performance.md ("Uniform remaps"), the smallest size whose fits re-rendered at 512^2 stay within 0.001
+ * SSIM of a 512^2 fit. */
+#define MR_REMAP_DEFAULT_SIZE 128
 
 typedef enum mr_remap_strategy {
     MR_REMAP_AUTO = 0,
@@ -83,6 +88,8 @@ typedef struct mr_remap_options {
     unsigned long seed;          /* seeds the multi-start points: 1 */
     const double *target_values; /* optional packed target values: the values of fixed parameters and
                                     switches (NULL: the target's defaults) */
+    int skip_global_check;       /* SINGLE/TWO/THREE: 0 = also run AUTO's global search to detect a local
+                                    minimum (its renders are not counted in the result); 1 = skip it */
 } mr_remap_options;
 
 /* The defaults listed beside each field. */
@@ -116,6 +123,15 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
 /* Render the source material (full, diffuse, specular) with `plan` and fit `target` to it. */
 mr_status mr_remap(const mr_render_plan *plan, const mr_brdf_model *source_model, const double *source_values,
                    const mr_brdf_model *target, const mr_remap_options *opts, mr_remap_result *out);
+
+/* Irradiance matching (paper section 4): renders by another renderer use its own light units. Given that
+ * renderer's diffuse-only render of a Lambertian sphere of albedo `albedo` in the fit scene (`reference`),
+ * *scale is the factor that brings its images to matremap's units: the ratio of matremap's Lambert render to
+ * the reference, summed over pixels fully inside the silhouette and lit above 1 % of the peak (edges and the
+ * terminator are left out, where filters and shading normals differ most). Multiply the source images by it.
+ * MR_ERR_INVALID_ARG if the reference has the wrong size or is black where matremap's render is lit. */
+mr_status mr_irradiance_scale(const mr_render_plan *plan, const mr_image *reference, double albedo,
+                              double *scale);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,304 @@
+/*
+ * cmd_remap.c — `matremap remap`: fit a target model to a built-in source material, or to renders of the fit
+ * scene made by any renderer (remap.h has the method and the outcome definitions).
+ */
+#include <string.h>
+
+#include "cli.h"
+#include "remap/remap.h"
+
+#define MAX_ASSIGNMENTS 64
+
+static void print_help(void) {
+    printf("Usage: matremap remap --from MODEL [name=value ...] --to MODEL [name=value ...] [options]\n"
+           "       matremap remap --from-images FULL.exr [--diffuse D.exr --specular S.exr]\n"
+           "                      [--match-irradiance REF.exr] --to MODEL [options]\n"
+           "\n"
+           "Finds the parameters of the target model whose render of the fit scene (a unit sphere under a point\n"
+           "light, Sztrajman et al. 2019, section 4.1) matches the source's, by minimising the L2 difference of\n"
+           "linear HDR images. Prints the target parameters, the final RMSE and SSIM, the number of renders, the\n"
+           "wall time, and how the fit ended:\n"
+           "  converged      the fit is good (residual below 25 %% of the source's RMS radiance)\n"
+           "  at-bound       a parameter ends on its range's edge: the source wants more than the target allows\n"
+           "  unreachable    the target cannot reproduce the source (e.g. Ward's energy trimming engages)\n"
+           "  local-minimum  the fit is trapped or ambiguous (see the detail line)\n"
+           "\n"
+           "Source:\n"
+           "  --from MODEL [name=value ...]   a built-in model; unnamed parameters keep their defaults\n"
+           "  --from-images FULL              renders of the fit scene by another renderer (linear EXR/HDR, square,\n"
+           "                                  top row up; docs/cycles-peer.md explains how to make them)\n"
+           "  --diffuse FILE, --specular FILE its diffuse-only and specular-only renders (for --strategy two/three)\n"
+           "  --match-irradiance REF          that renderer's diffuse-only render of a Lambertian sphere of albedo\n"
+           "                                  0.5 (see --reference-albedo) in the same scene: the source images are\n"
+           "                                  scaled by matremap's Lambert render / REF (paper section 4)\n"
+           "  --reference-albedo A            the albedo of that reference sphere (default 0.5)\n"
+           "\n"
+           "Target:\n"
+           "  --to MODEL [name=value ...]     values given here hold fixed parameters (e.g. glTF's ior) and\n"
+           "                                  switches (Ward's trim) at those values\n"
+           "\n"
+           "Options:\n"
+           "  --strategy S       auto (default): affine parameters solved exactly, nonlinear ones searched\n"
+           "                     globally; single, two, three: the paper's local fits from the defaults\n"
+           "  --size N           fit-scene side in pixels (default %d; with --from-images: the images' size)\n"
+           "  --light L          45 (default) or frontal\n"
+           "  --images PREFIX    also write PREFIX_source.png, PREFIX_target.png and PREFIX_ssim.png\n"
+           "  --json             machine-readable result on stdout\n"
+           "  --help             this text\n"
+           "\n"
+           "Examples:\n"
+           "  matremap remap --from as f0=0.9 alpha=0.05 --to ward\n"
+           "  matremap remap --from ggx-plastic ior=1.3 diffuse=0.5 alpha=0.1 --to ward --strategy single --json\n"
+           "  matremap remap --from-images cycles.exr --match-irradiance cycles_lambert.exr --to ggx\n",
+           MR_REMAP_DEFAULT_SIZE);
+}
+
+/* Print the packed values of `model` as name=value words (RGB as r,g,b), the form other commands accept. */
+static void print_values(FILE *out, const mr_brdf_model *model, const double *values, int json) {
+    for (int i = 0; i < model->param_count; i++) {
+        const mr_brdf_param *p = &model->params[i];
+        int offset = mr_brdf_param_offset(model, i);
+        if (json) {
+            fprintf(out, "%s", i ? ", " : "");
+            cli_json_string(out, p->name);
+            if (p->channels == 3)
+                fprintf(out, ": [%.17g, %.17g, %.17g]", values[offset], values[offset + 1], values[offset + 2]);
+            else
+                fprintf(out, ": %.17g", values[offset]);
+        } else if (p->channels == 3) {
+            fprintf(out, " %s=%.6g,%.6g,%.6g", p->name, values[offset], values[offset + 1], values[offset + 2]);
+        } else {
+            fprintf(out, " %s=%.6g", p->name, values[offset]);
+        }
+    }
+}
+
+static int read_source_image(const char *path, mr_image **out) {
+    mr_img_read_options ro = {0};
+    ro.channels = 3;
+    mr_status status = mr_img_read(path, &ro, out);
+    return status == MR_OK ? CLI_EXIT_OK : cli_fail("remap", status);
+}
+
+/* Render the source's and target's full images and the SSIM map as pictures (--images). */
+static mr_status write_pictures(const char *prefix, const mr_render_plan *plan, const mr_image *source,
+                                const mr_brdf_model *target, const double *values) {
+    char path[4096];
+    mr_image *target_image = NULL, *map = NULL, *picture = NULL;
+    double ssim;
+    mr_status status = mr_render(plan, target, values, MR_COMPONENT_FULL, &target_image);
+    if (status == MR_OK) status = mr_ssim(source, target_image, NULL, &ssim, &map);
+    if (status == MR_OK) status = mr_ssim_map_visualise(map, 0.0, &picture);
+    if (status == MR_OK) {
+        snprintf(path, sizeof path, "%s_source.png", prefix);
+        status = mr_img_write(path, source, NULL);
+    }
+    if (status == MR_OK) {
+        snprintf(path, sizeof path, "%s_target.png", prefix);
+        status = mr_img_write(path, target_image, NULL);
+    }
+    if (status == MR_OK) {
+        snprintf(path, sizeof path, "%s_ssim.png", prefix);
+        status = mr_img_write(path, picture, NULL);
+    }
+    mr_image_free(target_image);
+    mr_image_free(map);
+    mr_image_free(picture);
+    return status;
+}
+
+int cmd_remap(int argc, char **argv) {
+    const char *from_name = NULL, *to_name = NULL, *images_prefix = NULL;
+    const char *image_paths[3] = {NULL, NULL, NULL}; /* full, diffuse, specular */
+    const char *reference_path = NULL;
+    double reference_albedo = 0.5;
+    const char *from_assignments[MAX_ASSIGNMENTS], *to_assignments[MAX_ASSIGNMENTS];
+    int from_count = 0, to_count = 0, json = 0, size = 0;
+    mr_fit_scene_options scene_opts = {0};
+    mr_remap_options opts = mr_remap_options_default();
+    enum { NONE, FROM, TO } collecting = NONE;
+
+    for (int i = 1; i < argc; i++) {
+        const char *value = NULL;
+        int taken;
+        if (cli_is_help(argv[i])) {
+            print_help();
+            return CLI_EXIT_OK;
+        }
+        if ((taken = cli_take_option("remap", argc, argv, &i, "--from", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            from_name = value;
+            collecting = FROM;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--to", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            to_name = value;
+            collecting = TO;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--from-images", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            image_paths[0] = value;
+            collecting = NONE;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--diffuse", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            image_paths[1] = value;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--specular", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            image_paths[2] = value;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--match-irradiance", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            reference_path = value;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--reference-albedo", &value))) {
+            if (taken < 0 || !cli_parse_double("remap", "--reference-albedo", value, 1e-3, 1.0, &reference_albedo))
+                return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--strategy", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (mr_remap_strategy_from_name(value, &opts.strategy) != MR_OK)
+                return cli_usage_error("remap", "%s", mr_last_error());
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--size", &value))) {
+            if (taken < 0 || !cli_parse_int("remap", "--size", value, 16, 4096, &size)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--light", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (mr_fit_light_from_name(value, &scene_opts.light) != MR_OK)
+                return cli_usage_error("remap", "%s", mr_last_error());
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--images", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            images_prefix = value;
+        } else if (strcmp(argv[i], "--json") == 0) {
+            json = 1;
+        } else if (argv[i][0] == '-') {
+            return cli_usage_error("remap", "unknown option '%s'", argv[i]);
+        } else if (strchr(argv[i], '=') != NULL && collecting != NONE) {
+            int *count = collecting == FROM ? &from_count : &to_count;
+            if (*count == MAX_ASSIGNMENTS) return cli_usage_error("remap", "too many parameter assignments");
+            (collecting == FROM ? from_assignments : to_assignments)[(*count)++] = argv[i];
+        } else {
+            return cli_usage_error("remap", "unexpected argument '%s' (parameters follow --from MODEL or --to MODEL "
+                                   "as name=value)", argv[i]);
+        }
+    }
+    if (to_name == NULL) return cli_usage_error("remap", "missing --to MODEL");
+    if ((from_name == NULL) == (image_paths[0] == NULL))
+        return cli_usage_error("remap", "give exactly one source: --from MODEL or --from-images FULL.exr");
+    if (from_name != NULL && (image_paths[1] || image_paths[2] || reference_path))
+        return cli_usage_error("remap", "--diffuse, --specular and --match-irradiance go with --from-images");
+    if ((image_paths[1] == NULL) != (image_paths[2] == NULL))
+        return cli_usage_error("remap", "give both --diffuse and --specular, or neither");
+
+    const mr_brdf_model *to = mr_brdf_find(to_name);
+    if (to == NULL) return cli_fail("remap", MR_ERR_INVALID_ARG);
+    double target_values[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(to, target_values);
+    for (int k = 0; k < to_count; k++) {
+        mr_status status = mr_brdf_parse_assignment(to, to_assignments[k], target_values);
+        if (status != MR_OK) return cli_fail("remap", status);
+    }
+    opts.target_values = target_values;
+
+    const mr_brdf_model *from = NULL;
+    double source_values[MR_BRDF_MAX_VALUES];
+    if (from_name != NULL) {
+        from = mr_brdf_find(from_name);
+        if (from == NULL) return cli_fail("remap", MR_ERR_INVALID_ARG);
+        mr_brdf_default_values(from, source_values);
+        for (int k = 0; k < from_count; k++) {
+            mr_status status = mr_brdf_parse_assignment(from, from_assignments[k], source_values);
+            if (status != MR_OK) return cli_fail("remap", status);
+        }
+    }
+
+    // Source images (black-box renders) decide the scene size; they must all agree and be square.
+    mr_image *images[3] = {NULL, NULL, NULL}, *reference = NULL;
+    int exit_code = CLI_EXIT_OK;
+    for (int k = 0; k < 3 && exit_code == CLI_EXIT_OK; k++)
+        if (image_paths[k]) exit_code = read_source_image(image_paths[k], &images[k]);
+    if (exit_code == CLI_EXIT_OK && reference_path) exit_code = read_source_image(reference_path, &reference);
+    if (exit_code == CLI_EXIT_OK && images[0] != NULL) {
+        if (images[0]->width != images[0]->height) {
+            fprintf(stderr, "matremap remap: error: '%s' is %dx%d: fit-scene renders are square\n", image_paths[0],
+                    images[0]->width, images[0]->height);
+            exit_code = CLI_EXIT_BAD_INPUT;
+        }
+        const mr_image *others[3] = {images[1], images[2], reference};
+        const char *other_paths[3] = {image_paths[1], image_paths[2], reference_path};
+        for (int k = 0; k < 3 && exit_code == CLI_EXIT_OK; k++)
+            if (others[k] && (others[k]->width != images[0]->width || others[k]->height != images[0]->height)) {
+                fprintf(stderr, "matremap remap: error: '%s' is %dx%d but '%s' is %dx%d: all renders must have "
+                        "the same size\n", other_paths[k], others[k]->width, others[k]->height, image_paths[0],
+                        images[0]->width, images[0]->height);
+                exit_code = CLI_EXIT_BAD_INPUT;
+            }
+        size = images[0]->width;
+    }
+    mr_render_plan *plan = NULL;
+    mr_remap_result result;
+    double irradiance_scale = 1.0;
+    mr_status status = MR_OK;
+    if (exit_code == CLI_EXIT_OK) {
+        scene_opts.size = size > 0 ? size : MR_REMAP_DEFAULT_SIZE;
+        mr_scene scene = mr_scene_fit(&scene_opts);
+        status = mr_render_plan_create(&scene, &plan);
+        if (status == MR_OK && reference != NULL) {
+            status = mr_irradiance_scale(plan, reference, reference_albedo, &irradiance_scale);
+            for (int k = 0; k < 3 && status == MR_OK; k++)
+                if (images[k])
+                    for (size_t v = 0; v < mr_image_value_count(images[k]); v++)
+                        images[k]->pixels[v] = (float)(images[k]->pixels[v] * irradiance_scale);
+        }
+        if (status == MR_OK) {
+            if (from != NULL) {
+                status = mr_remap(plan, from, source_values, to, &opts, &result);
+            } else {
+                mr_remap_source source = {images[0], images[1], images[2]};
+                status = mr_remap_images(plan, &source, to, &opts, &result);
+            }
+        }
+        if (status == MR_OK && images_prefix != NULL) {
+            mr_image *source_image = images[0];
+            if (source_image == NULL) status = mr_render(plan, from, source_values, MR_COMPONENT_FULL, &images[0]);
+            if (status == MR_OK) status = write_pictures(images_prefix, plan, images[0], to, result.values);
+        }
+        if (status != MR_OK) exit_code = cli_fail("remap", status);
+    }
+
+    if (exit_code == CLI_EXIT_OK) {
+        const char *strategy = mr_remap_strategy_name(opts.strategy);
+        if (json) {
+            printf("{\"to\": ");
+            cli_json_string(stdout, to->name);
+            printf(", \"from\": ");
+            if (from != NULL) {
+                printf("{\"model\": ");
+                cli_json_string(stdout, from->name);
+                printf(", \"values\": {");
+                print_values(stdout, from, source_values, 1);
+                printf("}}");
+            } else {
+                printf("{\"images\": ");
+                cli_json_string(stdout, image_paths[0]);
+                printf(", \"irradiance_scale\": %.17g}", irradiance_scale);
+            }
+            printf(", \"strategy\": \"%s\", \"size\": %d, \"light\": \"%s\", \"values\": {", strategy,
+                   scene_opts.size, mr_fit_light_name(scene_opts.light));
+            print_values(stdout, to, result.values, 1);
+            printf("}, \"rmse\": %.17g, \"relative_rmse\": %.17g, \"ssim\": %.17g, \"renders\": %ld, "
+                   "\"seconds\": %.6f, \"outcome\": \"%s\", \"detail\": ",
+                   result.rmse, result.relative_rmse, result.ssim, result.renders, result.seconds,
+                   mr_fit_outcome_name(result.outcome));
+            cli_json_string(stdout, result.detail);
+            printf("}\n");
+        } else {
+            printf("%s", to->name);
+            print_values(stdout, to, result.values, 0);
+            printf("\n");
+            printf("outcome: %s (%s)\n", mr_fit_outcome_name(result.outcome), result.detail);
+            printf("RMSE %.6g (%.3g %% of the source's RMS radiance), SSIM %.6f, %ld renders, %.1f ms, strategy %s, "
+                   "fit scene %d², light %s\n",
+                   result.rmse, 100.0 * result.relative_rmse, result.ssim, result.renders, 1e3 * result.seconds,
+                   strategy, scene_opts.size, mr_fit_light_name(scene_opts.light));
+            if (reference != NULL) printf("irradiance scale applied to the source images: %.6g\n", irradiance_scale);
+        }
+    }
+    for (int k = 0; k < 3; k++) mr_image_free(images[k]);
+    mr_image_free(reference);
+    mr_render_plan_free(plan);
+    return exit_code;
+}
