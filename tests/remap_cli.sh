@@ -1,0 +1,82 @@
+#!/usr/bin/env bash
+# `matremap remap` from the command line: help, usage errors, bad inputs, and two known answers — a model remapped
+# to itself recovers its parameters, and black-box renders in another renderer's light units (here: ours x 2)
+# recover them too once --match-irradiance brings them back. Ends with "N passed, N failed".
+set -u
+bin="${MR_BUILD:-build}/bin/matremap"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+passed=0
+failed=0
+
+expect() { # NAME EXPECTED_EXIT PATTERN -- command...
+    local name=$1 code=$2 pattern=$3
+    shift 4
+    "$@" >"$tmp/out" 2>"$tmp/err"
+    local rc=$?
+    if [ "$rc" -ne "$code" ]; then
+        echo "FAIL  $name: exit $rc, expected $code"; sed 's/^/      /' "$tmp/err" | head -5
+        failed=$((failed + 1)); return
+    fi
+    if [ -n "$pattern" ] && ! cat "$tmp/out" "$tmp/err" | grep -qE -- "$pattern"; then
+        echo "FAIL  $name: output does not match /$pattern/"; cat "$tmp/out" "$tmp/err" | sed 's/^/      /' | head -5
+        failed=$((failed + 1)); return
+    fi
+    echo "ok    $name"
+    passed=$((passed + 1))
+}
+
+# A JSON number field of the last output.
+field() { sed -E "s/.*\"$1\": \\[?([-0-9.e+]+).*/\\1/" "$tmp/out"; }
+# |a - b| <= tol
+near() { awk -v a="$1" -v b="$2" -v t="$3" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= t) }'; }
+check() { # NAME CONDITION-COMMAND...
+    local name=$1; shift
+    if "$@"; then echo "ok    $name"; passed=$((passed + 1)); else echo "FAIL  $name"; failed=$((failed + 1)); fi
+}
+
+expect "remap --help" 0 "Usage: matremap remap" -- "$bin" remap --help
+expect "missing --to" 1 "missing --to" -- "$bin" remap --from ggx
+expect "no source" 1 "exactly one source" -- "$bin" remap --to ggx
+expect "two sources" 1 "exactly one source" -- "$bin" remap --from ggx --from-images a.exr --to ward
+expect "unknown strategy lists valid ones" 1 "valid: auto, single, two, three" -- \
+    "$bin" remap --from ggx --to ward --strategy best
+expect "unknown target model" 2 "unknown BRDF model 'wrad'" -- "$bin" remap --from ggx --to wrad
+expect "bad source parameter" 2 "no parameter 'roughness'" -- "$bin" remap --from ggx roughness=0.2 --to ward
+expect "components only with images" 1 "go with --from-images" -- \
+    "$bin" remap --from ggx --diffuse d.exr --specular s.exr --to ward
+expect "missing source image names it" 2 "nope.exr" -- "$bin" remap --from-images "$tmp/nope.exr" --to ward
+
+# Known answer 1: a model remapped to itself.
+expect "ggx to ggx (json)" 0 '"outcome": "converged"' -- \
+    "$bin" remap --from ggx alpha=0.2 f0=0.3,0.5,0.7 diffuse=0.2,0.1,0.05 --to ggx --size 64 --json
+check "ggx to ggx recovers alpha" near "$(field alpha)" 0.2 1e-4
+check "ggx to ggx recovers f0 (red)" near "$(sed -E 's/.*"f0": \[([-0-9.e+]+).*/\1/' "$tmp/out")" 0.3 1e-4
+
+# Known answer 2: black-box renders twice too bright, with a Lambert reference in the same units.
+"$bin" render gltf base_color=0.7,0.4,0.2 metallic=0 roughness=0.5 --size 64 --exposure 2 -o "$tmp/src.exr" 2>/dev/null
+"$bin" render gltf base_color=0.7,0.4,0.2 metallic=0 roughness=0.5 --size 64 --exposure 2 \
+    --component diffuse -o "$tmp/src_d.exr" 2>/dev/null
+"$bin" render gltf base_color=0.7,0.4,0.2 metallic=0 roughness=0.5 --size 64 --exposure 2 \
+    --component specular -o "$tmp/src_s.exr" 2>/dev/null
+"$bin" render lambert albedo=0.5 --size 64 --exposure 2 -o "$tmp/ref.exr" 2>/dev/null
+expect "images matched in irradiance" 0 '"irradiance_scale": 0.5' -- \
+    "$bin" remap --from-images "$tmp/src.exr" --match-irradiance "$tmp/ref.exr" --to gltf --json
+check "irradiance-matched fit recovers roughness" near "$(field roughness)" 0.5 1e-3
+check "irradiance-matched fit recovers metallic" near "$(field metallic)" 0 1e-3
+expect "two-stage with component images" 0 '"strategy": "two"' -- \
+    "$bin" remap --from-images "$tmp/src.exr" --diffuse "$tmp/src_d.exr" --specular "$tmp/src_s.exr" \
+    --match-irradiance "$tmp/ref.exr" --to ward --strategy two --json
+expect "two-stage without components" 2 "needs the source's diffuse-only" -- \
+    "$bin" remap --from-images "$tmp/src.exr" --to ward --strategy two
+"$bin" render lambert --size 32 -o "$tmp/small.exr" 2>/dev/null
+expect "size mismatch names both files" 2 "small.exr' is 32x32 but .*src.exr' is 64x64" -- \
+    "$bin" remap --from-images "$tmp/src.exr" --match-irradiance "$tmp/small.exr" --to ward
+expect "pictures written" 0 "" -- "$bin" remap --from as f0=0.9 alpha=0.05 --to ward --size 64 --images "$tmp/pic"
+check "source, target and SSIM pictures exist" test -s "$tmp/pic_source.png" -a -s "$tmp/pic_target.png" \
+    -a -s "$tmp/pic_ssim.png"
+expect "Ward cannot follow a bright conductor" 0 "outcome: unreachable .*trimming" -- \
+    "$bin" remap --from as f0=0.9 alpha=0.05 --to ward --size 64
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
