@@ -27,6 +27,8 @@ extern const mr_brdf_model mr_brdf_as_conductor;
 extern const mr_brdf_model mr_brdf_beckmann_plastic;
 extern const mr_brdf_model mr_brdf_ggx_plastic;
 extern const mr_brdf_model mr_brdf_as_plastic;
+/* ggx_metallic.c */
+extern const mr_brdf_model mr_brdf_ggx_metallic;
 /* blender_ward.c */
 extern const mr_brdf_model mr_brdf_blender_ward;
 /* gltf.c, gltf_specgloss.c */
@@ -40,7 +42,8 @@ extern const mr_brdf_model mr_brdf_cycles_principled;
     &mr_brdf_lambert, &mr_brdf_ward, &mr_brdf_ward_duer, &mr_brdf_ward_balanced, &mr_brdf_phong,             \
         &mr_brdf_beckmann, &mr_brdf_ggx, &mr_brdf_as, &mr_brdf_beckmann_nofresnel, &mr_brdf_ggx_nofresnel,   \
         &mr_brdf_as_nofresnel, &mr_brdf_beckmann_conductor, &mr_brdf_ggx_conductor, &mr_brdf_as_conductor,   \
-        &mr_brdf_beckmann_plastic, &mr_brdf_ggx_plastic, &mr_brdf_as_plastic, &mr_brdf_blender_ward,         \
+        &mr_brdf_beckmann_plastic, &mr_brdf_ggx_plastic, &mr_brdf_as_plastic, &mr_brdf_ggx_metallic,         \
+        &mr_brdf_blender_ward,                                                                               \
         &mr_brdf_gltf, &mr_brdf_gltf_specgloss, &mr_brdf_cycles_principled,
 
 #endif /* MR_BRDF_MODELS_H */

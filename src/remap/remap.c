@@ -32,12 +32,15 @@
 /* Outcome thresholds (remap.h):
  *   - a residual RMS above 25 % of the source's RMS radiance is "unreachable" (a lobe that merely has another
  *     shape, Ward against GGX's tails, typically stays near 10 %);
+ *   - a parameter on its range's edge is "at-bound" only while the residual exceeds 1 %: a bound the fit
+ *     reaches exactly is the source's value;
  *   - a residual that departs from the affine prediction by more than 1 % of the source's RMS radiance means
  *     the model rescaled the solution (Mitsuba's energy trimming);
  *   - two minima within 1 % of each other's error but 0.1 apart (normalised) are ambiguous;
  *   - a local fit whose error a better fit (re-solving its linear parameters, or AUTO) lowers by more than 10 %
  *     stopped in a local minimum. */
 #define UNREACHABLE_RELATIVE_RMSE 0.25
+#define AT_BOUND_RELATIVE_RMSE 0.01
 #define PREDICTION_TOLERANCE 0.01
 #define AMBIGUITY_ERROR 0.01
 #define AMBIGUITY_DISTANCE 0.1
@@ -635,7 +638,9 @@ static void classify(fit_context *ctx, const mr_remap_source *source, double pre
             // A reflectance at 0 is an absent lobe, not a limit; an upper bound, or any bound of a nonlinear
             // parameter, means the source asks for a value outside the target's range.
             int at_upper = u > 1.0 - 1e-6, at_lower = u < 1e-6 && pool == 0;
-            if (at_upper || at_lower) {
+            // A bound the fit reaches exactly (a dielectric's metallic = 0) is a value, not a limit: only an
+            // imperfect fit says the source wants something beyond the range.
+            if ((at_upper || at_lower) && out->relative_rmse > AT_BOUND_RELATIVE_RMSE) {
                 out->outcome = MR_FIT_AT_BOUND;
                 snprintf(out->detail, sizeof out->detail, "at-bound: %s = %g is the %s of its range",
                          ctx->model->params[s->param].name, out->values[s->slot], at_upper ? "maximum" : "minimum");
