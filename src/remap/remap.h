@@ -28,13 +28,15 @@
  * the values given in opts->target_values (or the defaults) and not fitted.
  *
  * Outcome (mr_fit_outcome): the run finishing is MR_OK; how the fit ended is reported separately:
- *   CONVERGED, AT_BOUND (a fitted parameter ends on its range's edge while the residual stays above 1 % of
- *   the source's RMS radiance: the source wants a value the target cannot express), UNREACHABLE (the target
- *   cannot reproduce the source: the residual stays above 25 % of the source's RMS radiance, or the model's own nonlinearity, such as Mitsuba's energy trimming of Ward with
- *   diffuse + specular > 1, engaged at the solution so that its render departs from the fit), LOCAL_MINIMUM
- *   (AUTO found distinct minima with nearly equal error, so the scene does not determine the parameters; or a
- *   local strategy stopped where AUTO's global search finds more than 10 % less squared error: the
- *   diffuse/specular coupling trap of the paper's figure 8).
+ *   - CONVERGED;
+ *   - AT_BOUND: a fitted parameter ends on its range's edge while the residual stays above 1 % of the source's
+ *     RMS radiance: the source wants a value the target cannot express;
+ *   - UNREACHABLE: the target cannot reproduce the source: the residual stays above 25 % of the source's RMS
+ *     radiance, or the model's own nonlinearity (Mitsuba's energy trimming of Ward with diffuse + specular > 1)
+ *     engaged at the solution, so that its render departs from the fit;
+ *   - LOCAL_MINIMUM: AUTO found distinct minima with nearly equal error, so the scene does not determine the
+ *     parameters; or a local strategy stopped where AUTO's global search finds more than 10 % less squared
+ *     error: the diffuse/specular coupling trap of the paper's figure 8.
  * Work is bounded: at most opts->max_evaluations renders per local fit, a fixed grid, a fixed start count.
  * Deterministic: the same inputs and seed give the same result for any thread count.
  */
