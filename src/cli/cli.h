@@ -55,5 +55,6 @@ int cmd_models(int argc, char **argv);
 int cmd_render(int argc, char **argv);
 int cmd_ssim(int argc, char **argv);
 int cmd_remap(int argc, char **argv);
+int cmd_sweep(int argc, char **argv);
 
 #endif /* MR_CLI_H */

@@ -19,6 +19,7 @@ static const command commands[] = {
     {"render", cmd_render, "render a material in the fit scene to EXR/HDR/PNG"},
     {"ssim", cmd_ssim, "compare two images: SSIM (display-referred) and RMSE (linear)"},
     {"remap", cmd_remap, "fit a target model to a source material or to renders of the fit scene"},
+    {"sweep", cmd_sweep, "remap a grid or random sample of source materials into a resumable CSV file"},
 };
 
 static void print_usage(FILE *out) {

@@ -1,0 +1,1077 @@
+/*
+ * sweep.c — parameter sweeps through mr_remap, streamed to a crash-safe, resumable CSV file (contract in
+ * sweep.h).
+ *
+ * Why the file protocol is what it is:
+ *   - O_APPEND + one write() per complete line: the kernel places each write at the end of the file as a unit,
+ *     so rows of different threads never interleave, and a process killed at any instant has written each row
+ *     or not, except that a write can end early: on a full disk (we cut the partial line back ourselves) or,
+ *     in principle, on SIGKILL between two pages of the page cache. Resume removes such a torn tail. stdio
+ *     buffering would split rows across write()s, so it is not used for rows.
+ *   - Rows are written in completion order (threads finish out of order) and sorted once, at the end, by
+ *     writing a temporary file and renaming it over the original (src/io/atomic_file.c), so a crash during the
+ *     rewrite leaves the complete unsorted file, and the next resume sorts it.
+ *   - Numbers use the C numeric locale through uselocale(), which is per thread: a host program that called
+ *     setlocale() with a decimal comma neither breaks our files nor sees its locale changed.
+ */
+#include "sweep.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <locale.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "../io/io_internal.h"
+#include "../matremap.h"
+#include "../mr_internal.h"
+
+#define COMMAND_PREFIX "# command: "
+#define ROW_TAIL_COLUMNS 6 /* rmse, relative_rmse, ssim, outcome, renders, seconds */
+
+/* ---- the C numeric locale, per thread ------------------------------------------------------------------ */
+
+typedef struct c_numeric {
+    locale_t c;
+    locale_t saved;
+} c_numeric;
+
+static mr_status c_numeric_enter(c_numeric *s) {
+    s->saved = (locale_t)0;
+    s->c = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
+    if (s->c == (locale_t)0) return mr_fail(MR_ERR_NOMEM, "sweep: cannot create the C numeric locale");
+    s->saved = uselocale(s->c);
+    return MR_OK;
+}
+
+static void c_numeric_leave(c_numeric *s) {
+    uselocale(s->saved);
+    freelocale(s->c);
+}
+
+/* ---- a growing string ------------------------------------------------------------------------------------ */
+
+typedef struct strbuf {
+    char *text;
+    size_t length, capacity;
+    int failed; /* an allocation failed: the content is incomplete */
+} strbuf;
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+static void sb_printf(strbuf *sb, const char *fmt, ...) {
+    if (sb->failed) return;
+    for (;;) {
+        va_list args;
+        va_start(args, fmt);
+        size_t room = sb->capacity - sb->length;
+        int n = vsnprintf(sb->text ? sb->text + sb->length : NULL, sb->text ? room : 0, fmt, args);
+        va_end(args);
+        if (n < 0) {
+            sb->failed = 1;
+            return;
+        }
+        if (sb->text != NULL && (size_t)n < room) {
+            sb->length += (size_t)n;
+            return;
+        }
+        size_t capacity = MR_MAX(2 * sb->capacity, sb->length + (size_t)n + 256);
+        char *grown = realloc(sb->text, capacity);
+        if (grown == NULL) {
+            sb->failed = 1;
+            return;
+        }
+        sb->text = grown;
+        sb->capacity = capacity;
+    }
+}
+
+/* ---- samples --------------------------------------------------------------------------------------------- */
+
+/* splitmix64 (Steele, Lea, Flood, "Fast splittable pseudorandom number generators", OOPSLA 2014): a bijective
+ * mixer, so distinct (seed, index) start states never coincide for one seed. */
+static uint64_t mix64(uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+
+static uint64_t next64(uint64_t *state) {
+    *state += 0x9e3779b97f4a7c15ULL;
+    return mix64(*state);
+}
+
+/* Uniform in [0, 1): the top 53 bits. */
+static double next_unit(uint64_t *state) { return (double)(next64(state) >> 11) * 0x1p-53; }
+
+static int random_eligible(const mr_sweep_spec *spec, int p) {
+    const mr_brdf_param *param = &spec->source->params[p];
+    return !(spec->held & (1u << p)) && param->role != MR_PARAM_SWITCH && !(param->flags & MR_PARAM_FIT_FIXED) &&
+           param->max_value > param->min_value;
+}
+
+/* Value k of an axis; the endpoints are returned exactly (no lo + 1.0 * (hi - lo) rounding). */
+static double axis_value(const mr_sweep_axis *axis, long k) {
+    if (axis->count <= 1 || k <= 0) return axis->lo;
+    if (k >= axis->count - 1) return axis->hi;
+    double t = (double)k / (double)(axis->count - 1);
+    double v = axis->log_scale ? exp(log(axis->lo) + t * (log(axis->hi) - log(axis->lo)))
+                               : axis->lo + t * (axis->hi - axis->lo);
+    return mr_clampd(v, axis->lo, axis->hi);
+}
+
+static long sample_count_unchecked(const mr_sweep_spec *spec) {
+    if (spec->sampling == MR_SWEEP_RANDOM) return spec->random_count;
+    long total = 1;
+    for (int a = 0; a < spec->axis_count; a++) {
+        if (spec->axes[a].count < 1 || total > MR_SWEEP_MAX_SAMPLES / spec->axes[a].count)
+            return MR_SWEEP_MAX_SAMPLES + 1;
+        total *= spec->axes[a].count;
+    }
+    return total;
+}
+
+static void sample_unchecked(const mr_sweep_spec *spec, long index, double *values) {
+    const mr_brdf_model *m = spec->source;
+    memcpy(values, spec->source_values, (size_t)mr_brdf_value_count(m) * sizeof(double));
+    if (spec->sampling == MR_SWEEP_GRID) {
+        long rest = index;
+        for (int a = spec->axis_count - 1; a >= 0; a--) { /* the last axis is the fastest digit */
+            const mr_sweep_axis *axis = &spec->axes[a];
+            double v = axis_value(axis, rest % axis->count);
+            rest /= axis->count;
+            int offset = mr_brdf_param_offset(m, axis->param);
+            for (int c = 0; c < m->params[axis->param].channels; c++) values[offset + c] = v;
+        }
+        return;
+    }
+    uint64_t state = mix64(mix64((uint64_t)spec->seed) + (uint64_t)index);
+    for (int p = 0; p < m->param_count; p++) {
+        if (!random_eligible(spec, p)) continue;
+        const mr_brdf_param *param = &m->params[p];
+        int offset = mr_brdf_param_offset(m, p);
+        int log_scale = (param->flags & MR_PARAM_LOG_SCALE) && param->min_value > 0.0;
+        for (int c = 0; c < param->channels; c++) {
+            double u = next_unit(&state);
+            double v = log_scale ? exp(log(param->min_value) + u * (log(param->max_value) - log(param->min_value)))
+                                 : param->min_value + u * (param->max_value - param->min_value);
+            values[offset + c] = mr_clampd(v, param->min_value, param->max_value);
+        }
+    }
+}
+
+/* ---- spec ------------------------------------------------------------------------------------------------ */
+
+void mr_sweep_spec_init(mr_sweep_spec *spec, const mr_brdf_model *source, const mr_brdf_model *target) {
+    memset(spec, 0, sizeof *spec);
+    spec->source = source;
+    spec->target = target;
+    if (source != NULL) mr_brdf_default_values(source, spec->source_values);
+    if (target != NULL) mr_brdf_default_values(target, spec->target_values);
+    spec->remap = mr_remap_options_default();
+    spec->remap.target_values = NULL;
+    spec->sampling = MR_SWEEP_GRID;
+    spec->seed = 1;
+}
+
+static void list_params(const mr_brdf_model *m, char *list, size_t size) {
+    size_t used = 0;
+    list[0] = '\0';
+    for (int i = 0; i < m->param_count && used + 1 < size; i++) {
+        int n = snprintf(list + used, size - used, "%s%s", i ? ", " : "", m->params[i].name);
+        if (n < 0) break;
+        used += (size_t)n;
+    }
+}
+
+/* Range and integrality checks of one axis; `what` names it in messages. */
+static mr_status check_axis(const mr_brdf_model *m, const mr_sweep_axis *axis, const char *what) {
+    if (axis->param < 0 || axis->param >= m->param_count)
+        return mr_fail(MR_ERR_INVALID_ARG, "grid %s: parameter index %d is not one of model '%s'", what,
+                       axis->param, m->name);
+    const mr_brdf_param *p = &m->params[axis->param];
+    if (axis->count < 1)
+        return mr_fail(MR_ERR_INVALID_ARG, "grid '%s': n = %ld, expected at least 1", what, axis->count);
+    if (!isfinite(axis->lo) || !isfinite(axis->hi))
+        return mr_fail(MR_ERR_INVALID_ARG, "grid '%s': bounds must be finite numbers", what);
+    if (axis->lo > axis->hi)
+        return mr_fail(MR_ERR_INVALID_ARG, "grid '%s': lo %g is greater than hi %g", what, axis->lo, axis->hi);
+    if (axis->lo < p->min_value || axis->hi > p->max_value)
+        return mr_fail(MR_ERR_INVALID_ARG, "grid '%s': %g is outside %s's range [%g, %g] (model '%s')", what,
+                       axis->lo < p->min_value ? axis->lo : axis->hi, p->name, p->min_value, p->max_value, m->name);
+    if (axis->log_scale && !(axis->lo > 0.0))
+        return mr_fail(MR_ERR_INVALID_ARG, "grid '%s': log spacing needs lo > 0, got %g", what, axis->lo);
+    if (p->role == MR_PARAM_SWITCH) {
+        int integral = axis->lo == floor(axis->lo) && axis->hi == floor(axis->hi) && !axis->log_scale;
+        if (integral && axis->count > 1) integral = fmod(axis->hi - axis->lo, (double)(axis->count - 1)) == 0.0;
+        if (!integral)
+            return mr_fail(MR_ERR_INVALID_ARG,
+                           "grid '%s': %s is a switch, so every grid value must be an integer (e.g. %s=%g:%g:%g, "
+                           "linear)",
+                           what, p->name, p->name, floor(axis->lo), floor(axis->hi),
+                           floor(axis->hi) - floor(axis->lo) + 1.0);
+    }
+    return MR_OK;
+}
+
+mr_status mr_sweep_parse_axis(const mr_brdf_model *source, const char *text, mr_sweep_axis *out) {
+    if (source == NULL || text == NULL || out == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "grid: NULL model, text or output");
+    const char *equals = strchr(text, '=');
+    if (equals == NULL || equals == text)
+        return mr_fail(MR_ERR_INVALID_ARG, "grid '%s': expected name=lo:hi:n or name=lo:hi:n:log", text);
+    size_t name_len = (size_t)(equals - text);
+    mr_sweep_axis axis;
+    memset(&axis, 0, sizeof axis);
+    axis.param = -1;
+    for (int i = 0; i < source->param_count; i++)
+        if (strlen(source->params[i].name) == name_len && strncmp(source->params[i].name, text, name_len) == 0)
+            axis.param = i;
+    if (axis.param < 0) {
+        char list[512];
+        list_params(source, list, sizeof list);
+        return mr_fail(MR_ERR_INVALID_ARG, "grid '%s': source model '%s' has no parameter '%.*s' (valid: %s)", text,
+                       source->name, (int)name_len, text, list);
+    }
+
+    c_numeric cn;
+    mr_status status = c_numeric_enter(&cn);
+    if (status != MR_OK) return status;
+    const char *cursor = equals + 1;
+    char *end = NULL;
+    errno = 0;
+    axis.lo = strtod(cursor, &end);
+    int ok = end != cursor && *end == ':' && errno != ERANGE;
+    if (ok) {
+        cursor = end + 1;
+        errno = 0;
+        axis.hi = strtod(cursor, &end);
+        ok = end != cursor && *end == ':' && errno != ERANGE;
+    }
+    if (ok) {
+        cursor = end + 1;
+        errno = 0;
+        axis.count = strtol(cursor, &end, 10);
+        ok = end != cursor && (*end == '\0' || *end == ':') && errno != ERANGE;
+    }
+    c_numeric_leave(&cn);
+    if (!ok)
+        return mr_fail(MR_ERR_INVALID_ARG,
+                       "grid '%s': expected name=lo:hi:n or name=lo:hi:n:log with numbers lo, hi and an integer n",
+                       text);
+    if (*end == ':') {
+        if (strcmp(end + 1, "log") != 0)
+            return mr_fail(MR_ERR_INVALID_ARG, "grid '%s': unknown spacing '%s' (valid: log; linear is the default)",
+                           text, end + 1);
+        axis.log_scale = 1;
+    }
+    status = check_axis(source, &axis, text);
+    if (status != MR_OK) return status;
+    *out = axis;
+    return MR_OK;
+}
+
+static mr_status check_values(const mr_brdf_model *m, const double *values, const char *which) {
+    int slot = 0;
+    for (int i = 0; i < m->param_count; i++) {
+        const mr_brdf_param *p = &m->params[i];
+        for (int c = 0; c < p->channels; c++, slot++) {
+            double v = values[slot];
+            if (!(v >= p->min_value && v <= p->max_value))
+                return mr_fail(MR_ERR_INVALID_ARG, "%s value %s = %g of model '%s' is outside [%g, %g]", which,
+                               p->name, v, m->name, p->min_value, p->max_value);
+            if (p->role == MR_PARAM_SWITCH && v != floor(v))
+                return mr_fail(MR_ERR_INVALID_ARG, "%s value %s = %g of model '%s' is a switch: not an integer",
+                               which, p->name, v, m->name);
+        }
+    }
+    return MR_OK;
+}
+
+mr_status mr_sweep_check(const mr_sweep_spec *spec) {
+    if (spec == NULL || spec->source == NULL || spec->target == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: NULL spec, source model or target model");
+    const mr_brdf_model *m = spec->source;
+    if (mr_brdf_value_count(m) > MR_BRDF_MAX_VALUES || mr_brdf_value_count(spec->target) > MR_BRDF_MAX_VALUES ||
+        m->param_count > (int)(sizeof spec->held * CHAR_BIT))
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: a model has more values than a sweep can hold");
+    mr_status status = check_values(m, spec->source_values, "source");
+    if (status == MR_OK) status = check_values(spec->target, spec->target_values, "target");
+    if (status != MR_OK) return status;
+    if (m->param_count < (int)(sizeof spec->held * CHAR_BIT) && (spec->held >> m->param_count) != 0)
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: held marks parameters that model '%s' does not have", m->name);
+    const mr_remap_options *r = &spec->remap;
+    if (mr_remap_strategy_name(r->strategy) == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: remap strategy %d is not one of auto, single, two, three",
+                       (int)r->strategy);
+    if (r->max_evaluations < 1 || !(r->xtol >= 0.0 && isfinite(r->xtol)) || r->grid_points < 0 || r->starts < 0)
+        return mr_fail(MR_ERR_INVALID_ARG,
+                       "sweep: remap options out of range (max_evaluations %d >= 1, xtol %g >= 0, grid_points %d "
+                       ">= 0, starts %d >= 0)",
+                       r->max_evaluations, r->xtol, r->grid_points, r->starts);
+    if (spec->scene.size < 0 || spec->scene.size > MR_RENDER_MAX_SIZE)
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: scene size %d: expected 0 (default %d) to %d", spec->scene.size,
+                       MR_REMAP_DEFAULT_SIZE, MR_RENDER_MAX_SIZE);
+    if (mr_fit_light_name(spec->scene.light) == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: fit light %d is not one of 45, frontal", (int)spec->scene.light);
+    if (!(spec->scene.intensity >= 0.0 && isfinite(spec->scene.intensity)))
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: light intensity %g: expected >= 0 (0: default)",
+                       spec->scene.intensity);
+
+    if (spec->sampling == MR_SWEEP_GRID) {
+        if (spec->axis_count < 1 || spec->axis_count > MR_SWEEP_MAX_AXES)
+            return mr_fail(MR_ERR_INVALID_ARG, "sweep: a grid needs 1 to %d axes, got %d", MR_SWEEP_MAX_AXES,
+                           spec->axis_count);
+        for (int a = 0; a < spec->axis_count; a++) {
+            char what[64];
+            int p = spec->axes[a].param;
+            snprintf(what, sizeof what, "%s", p >= 0 && p < m->param_count ? m->params[p].name : "?");
+            status = check_axis(m, &spec->axes[a], what);
+            if (status != MR_OK) return status;
+            for (int b = 0; b < a; b++)
+                if (spec->axes[b].param == p)
+                    return mr_fail(MR_ERR_INVALID_ARG, "sweep: parameter '%s' has two grid axes", what);
+        }
+    } else if (spec->sampling == MR_SWEEP_RANDOM) {
+        if (spec->random_count < 1 || spec->random_count > MR_SWEEP_MAX_SAMPLES)
+            return mr_fail(MR_ERR_INVALID_ARG, "sweep: random sample count %ld: expected 1 to %ld",
+                           spec->random_count, MR_SWEEP_MAX_SAMPLES);
+        int eligible = 0;
+        for (int p = 0; p < m->param_count; p++) eligible += random_eligible(spec, p);
+        if (eligible == 0)
+            return mr_fail(MR_ERR_INVALID_ARG,
+                           "sweep: model '%s' has no parameter left to randomise (switches, fixed extension factors "
+                           "and the values given are held)",
+                           m->name);
+    } else {
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: sampling %d is neither grid nor random", (int)spec->sampling);
+    }
+    if (sample_count_unchecked(spec) > MR_SWEEP_MAX_SAMPLES)
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: the grid has more than %ld samples", MR_SWEEP_MAX_SAMPLES);
+    return MR_OK;
+}
+
+long mr_sweep_sample_count(const mr_sweep_spec *spec) {
+    mr_status status = mr_sweep_check(spec);
+    return status == MR_OK ? sample_count_unchecked(spec) : 0;
+}
+
+mr_status mr_sweep_sample(const mr_sweep_spec *spec, long index, double *values) {
+    mr_status status = mr_sweep_check(spec);
+    if (status != MR_OK) return status;
+    long total = sample_count_unchecked(spec);
+    if (index < 0 || index >= total || values == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: sample %ld: expected 0 to %ld", index, total - 1);
+    sample_unchecked(spec, index, values);
+    return MR_OK;
+}
+
+/* ---- header, columns, rows ---------------------------------------------------------------------------------- */
+
+/* "name=v" per parameter, one value for an RGB parameter whose channels agree (so the line can be pasted back
+ * as arguments). */
+static void append_values(strbuf *sb, const mr_brdf_model *m, const double *values) {
+    int slot = 0;
+    for (int i = 0; i < m->param_count; i++) {
+        const mr_brdf_param *p = &m->params[i];
+        const double *v = values + slot;
+        slot += p->channels;
+        sb_printf(sb, " %s=%.17g", p->name, v[0]);
+        if (p->channels == 3 && !(v[1] == v[0] && v[2] == v[0])) sb_printf(sb, ",%.17g,%.17g", v[1], v[2]);
+    }
+}
+
+static void append_columns(strbuf *sb, const mr_brdf_model *m, const char *prefix) {
+    static const char *const suffix[3] = {"_r", "_g", "_b"};
+    for (int i = 0; i < m->param_count; i++) {
+        const mr_brdf_param *p = &m->params[i];
+        if (p->channels == 1)
+            sb_printf(sb, ",%s%s", prefix, p->name);
+        else
+            for (int c = 0; c < p->channels; c++) sb_printf(sb, ",%s%s%s", prefix, p->name, suffix[c]);
+    }
+}
+
+static mr_scene fit_scene(const mr_sweep_spec *spec) {
+    mr_fit_scene_options o = spec->scene;
+    if (o.size == 0) o.size = MR_REMAP_DEFAULT_SIZE;
+    return mr_scene_fit(&o);
+}
+
+/* The header for this run (every line '\n'-terminated, the column line last), in the C numeric locale. */
+static mr_status build_header(const mr_sweep_spec *spec, const char *command_line, strbuf *sb) {
+    const mr_scene scene = fit_scene(spec);
+    const mr_remap_options *r = &spec->remap;
+    sb_printf(sb, "# matremap %s sweep\n", mr_version());
+    sb_printf(sb, "# from: %s", spec->source->name);
+    append_values(sb, spec->source, spec->source_values);
+    sb_printf(sb, "\n# to: %s", spec->target->name);
+    append_values(sb, spec->target, spec->target_values);
+    sb_printf(sb, "\n# remap: strategy=%s max_evaluations=%d xtol=%.17g grid_points=%d starts=%d seed=%lu\n",
+              mr_remap_strategy_name(r->strategy), r->max_evaluations, r->xtol, r->grid_points, r->starts, r->seed);
+    sb_printf(sb, "# scene: fit size=%d light=%s intensity=%.17g edge_samples=%d\n", scene.width,
+              mr_fit_light_name(spec->scene.light), scene.lights[0].intensity[0],
+              scene.edge_samples > 0 ? scene.edge_samples : MR_SCENE_DEFAULT_EDGE_SAMPLES);
+    if (spec->sampling == MR_SWEEP_GRID) {
+        sb_printf(sb, "# sampling: grid");
+        for (int a = 0; a < spec->axis_count; a++) {
+            const mr_sweep_axis *axis = &spec->axes[a];
+            sb_printf(sb, " %s=%.17g:%.17g:%ld%s", spec->source->params[axis->param].name, axis->lo, axis->hi,
+                      axis->count, axis->log_scale ? ":log" : "");
+        }
+    } else {
+        sb_printf(sb, "# sampling: random=%ld seed=%llu over", spec->random_count, spec->seed);
+        int first = 1;
+        for (int p = 0; p < spec->source->param_count; p++)
+            if (random_eligible(spec, p)) {
+                sb_printf(sb, "%s%s", first ? " " : ",", spec->source->params[p].name);
+                first = 0;
+            }
+    }
+    sb_printf(sb, "\n# samples: %ld\n" COMMAND_PREFIX, sample_count_unchecked(spec));
+    // The command line is informational; a line break in an argument must not start a line of its own.
+    for (const char *c = command_line ? command_line : ""; *c; c++)
+        sb_printf(sb, "%c", *c == '\n' || *c == '\r' ? ' ' : *c);
+    sb_printf(sb, "\nindex");
+    append_columns(sb, spec->source, "");
+    append_columns(sb, spec->target, "to_");
+    sb_printf(sb, ",rmse,relative_rmse,ssim,outcome,renders,seconds\n");
+    return sb->failed ? mr_fail(MR_ERR_NOMEM, "sweep: out of memory building the header") : MR_OK;
+}
+
+/* Row formatting in the current (C) numeric locale. */
+static mr_status format_row(const mr_sweep_spec *spec, const mr_sweep_row *row, char *buf, size_t size,
+                            size_t *length) {
+    const char *outcome = mr_fit_outcome_name(row->outcome);
+    if (outcome == NULL) return mr_fail(MR_ERR_INVALID_ARG, "sweep row %ld: outcome %d out of range", row->index,
+                                        (int)row->outcome);
+    size_t used = 0;
+    int n = snprintf(buf, size, "%ld", row->index);
+    int ns = mr_brdf_value_count(spec->source), nt = mr_brdf_value_count(spec->target);
+    for (int k = 0; n >= 0 && k < ns + nt; k++) {
+        used += (size_t)n;
+        double v = k < ns ? row->source[k] : row->target[k - ns];
+        n = snprintf(buf + MR_MIN(used, size), used < size ? size - used : 0, ",%.17g", v);
+    }
+    if (n >= 0) {
+        used += (size_t)n;
+        n = snprintf(buf + MR_MIN(used, size), used < size ? size - used : 0, ",%.17g,%.17g,%.17g,%s,%ld,%.17g\n",
+                     row->rmse, row->relative_rmse, row->ssim, outcome, row->renders, row->seconds);
+    }
+    if (n < 0 || used + (size_t)n >= size)
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep row %ld: does not fit in a buffer of %zu bytes", row->index, size);
+    if (length != NULL) *length = used + (size_t)n;
+    return MR_OK;
+}
+
+mr_status mr_sweep_format_row(const mr_sweep_spec *spec, const mr_sweep_row *row, char *buf, size_t size,
+                              size_t *length) {
+    if (spec == NULL || spec->source == NULL || spec->target == NULL || row == NULL || buf == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: NULL spec, row or buffer");
+    c_numeric cn;
+    mr_status status = c_numeric_enter(&cn);
+    if (status != MR_OK) return status;
+    status = format_row(spec, row, buf, size, length);
+    c_numeric_leave(&cn);
+    return status;
+}
+
+/* Parse one field [*cursor, end) up to the next ',' (or the end); number fields must be consumed entirely. */
+/* The next ','-separated field of line[0, length) from *at; *at becomes SIZE_MAX after the last field. */
+static int next_field(const char *line, size_t length, size_t *at, const char **field, size_t *field_len) {
+    if (*at > length) return 0;
+    const char *start = line + *at;
+    const char *comma = memchr(start, ',', length - *at);
+    *field = start;
+    *field_len = comma ? (size_t)(comma - start) : length - *at;
+    *at = comma ? (size_t)(comma - line) + 1 : SIZE_MAX;
+    return 1;
+}
+
+static int parse_double_field(const char *field, size_t len, double *out) {
+    char tmp[64];
+    if (len == 0 || len >= sizeof tmp) return 0;
+    memcpy(tmp, field, len);
+    tmp[len] = '\0';
+    char *stop = NULL;
+    double v = strtod(tmp, &stop);
+    if (stop != tmp + len) return 0;
+    *out = v;
+    return 1;
+}
+
+static int parse_long_field(const char *field, size_t len, long *out) {
+    char tmp[32];
+    if (len == 0 || len >= sizeof tmp || field[0] == '-' || field[0] == '+' || field[0] == ' ') return 0;
+    memcpy(tmp, field, len);
+    tmp[len] = '\0';
+    char *stop = NULL;
+    errno = 0;
+    long v = strtol(tmp, &stop, 10);
+    if (stop != tmp + len || errno == ERANGE) return 0;
+    *out = v;
+    return 1;
+}
+
+/* Row parsing in the current (C) numeric locale; `total` bounds the index. */
+static mr_status parse_row(const mr_sweep_spec *spec, long total, const char *line, size_t length,
+                           mr_sweep_row *out) {
+    if (length > 0 && line[length - 1] == '\n') length--;
+    size_t at = 0;
+    const int ns = mr_brdf_value_count(spec->source), nt = mr_brdf_value_count(spec->target);
+    const int columns = 1 + ns + nt + ROW_TAIL_COLUMNS;
+    mr_sweep_row row;
+    memset(&row, 0, sizeof row);
+    const char *field = NULL;
+    size_t len = 0;
+    for (int k = 0; k < columns; k++) {
+        if (!next_field(line, length, &at, &field, &len))
+            return mr_fail(MR_ERR_FORMAT, "row has %d columns, expected %d", k, columns);
+        int ok;
+        if (k == 0) {
+            ok = parse_long_field(field, len, &row.index) && row.index < total;
+            if (!ok)
+                return mr_fail(MR_ERR_FORMAT, "index '%.*s' is not a sample number in [0, %ld]",
+                               (int)MR_MIN(len, 40), field, total - 1);
+            continue;
+        }
+        int c = k - 1;
+        if (c < ns) {
+            ok = parse_double_field(field, len, &row.source[c]);
+        } else if (c < ns + nt) {
+            ok = parse_double_field(field, len, &row.target[c - ns]);
+        } else {
+            switch (c - ns - nt) {
+            case 0: ok = parse_double_field(field, len, &row.rmse); break;
+            case 1: ok = parse_double_field(field, len, &row.relative_rmse); break;
+            case 2: ok = parse_double_field(field, len, &row.ssim); break;
+            case 3:
+                ok = 0;
+                for (int o = 0; o < MR_FIT_OUTCOME_COUNT; o++) {
+                    const char *name = mr_fit_outcome_name((mr_fit_outcome)o);
+                    if (strlen(name) == len && memcmp(name, field, len) == 0) {
+                        row.outcome = (mr_fit_outcome)o;
+                        ok = 1;
+                    }
+                }
+                break;
+            case 4: ok = parse_long_field(field, len, &row.renders); break;
+            default: ok = parse_double_field(field, len, &row.seconds); break;
+            }
+        }
+        if (!ok)
+            return mr_fail(MR_ERR_FORMAT, "column %d: '%.*s' is not a valid value", k + 1, (int)MR_MIN(len, 40),
+                           field);
+    }
+    if (at != SIZE_MAX) return mr_fail(MR_ERR_FORMAT, "row has more than %d columns", columns);
+    *out = row;
+    return MR_OK;
+}
+
+mr_status mr_sweep_parse_row(const mr_sweep_spec *spec, const char *line, size_t length, mr_sweep_row *out) {
+    mr_status status = mr_sweep_check(spec);
+    if (status != MR_OK) return status;
+    if (line == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "sweep: NULL line or output");
+    c_numeric cn;
+    status = c_numeric_enter(&cn);
+    if (status != MR_OK) return status;
+    status = parse_row(spec, sample_count_unchecked(spec), line, length, out);
+    c_numeric_leave(&cn);
+    return status;
+}
+
+/* ---- the file ------------------------------------------------------------------------------------------------ */
+
+static double now_seconds(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* The whole file into a malloc'ed buffer (NUL-terminated for convenience). */
+static mr_status read_all(int fd, const char *path, char **out, size_t *out_size) {
+    struct stat st;
+    if (fstat(fd, &st) != 0) {
+        int err = errno;
+        return mr_fail(MR_ERR_IO, "sweep file '%s': cannot stat: %s", path, strerror(err));
+    }
+    size_t size = (size_t)st.st_size, got = 0;
+    char *data = malloc(size + 1);
+    if (data == NULL) return mr_fail(MR_ERR_NOMEM, "sweep file '%s': out of memory reading %zu bytes", path, size);
+    while (got < size) {
+        ssize_t n = pread(fd, data + got, size - got, (off_t)got);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            int err = n < 0 ? errno : 0;
+            free(data);
+            return mr_fail(MR_ERR_IO, "sweep file '%s': read failed: %s", path, err ? strerror(err) : "file shrank");
+        }
+        got += (size_t)n;
+    }
+    data[size] = '\0';
+    *out = data;
+    *out_size = size;
+    return MR_OK;
+}
+
+/* One write() of the whole buffer at the end of the file (O_APPEND). If the kernel takes only part of it (a
+ * full disk, a file-size limit), the rest is tried once more, which either completes the line or yields the
+ * real errno; in the latter case the partial line is cut back off, so the file keeps only whole lines.
+ * *file_size tracks the size (only this process writes: the lock). */
+static mr_status append_line(int fd, const char *path, const char *line, size_t length, off_t *file_size) {
+    size_t done = 0;
+    int err = 0;
+    for (int attempt = 0; attempt < 2 && done < length; attempt++) {
+        ssize_t n;
+        do {
+            n = write(fd, line + done, length - done);
+        } while (n < 0 && errno == EINTR);
+        if (n < 0) {
+            err = errno;
+            break;
+        }
+        if (n == 0) err = ENOSPC; /* no progress and no errno: call it what it nearly always is */
+        done += (size_t)n;
+    }
+    if (done == length) {
+        *file_size += (off_t)length;
+        return MR_OK;
+    }
+    if (done > 0 && ftruncate(fd, *file_size) != 0) {
+        int cut = errno;
+        return mr_fail(MR_ERR_IO, "sweep file '%s': short write (%zu of %zu bytes: %s) and cannot cut it back: %s",
+                       path, done, length, strerror(err), strerror(cut));
+    }
+    return mr_fail(MR_ERR_IO, "sweep file '%s': cannot append to it: %s", path, strerror(err));
+}
+
+static mr_status lock_file(int fd, const char *path) {
+    struct flock fl;
+    memset(&fl, 0, sizeof fl);
+    fl.l_type = F_WRLCK;
+    fl.l_whence = SEEK_SET;
+    if (fcntl(fd, F_SETLK, &fl) == 0) return MR_OK;
+    int err = errno;
+    if (err == EACCES || err == EAGAIN) {
+        memset(&fl, 0, sizeof fl);
+        fl.l_type = F_WRLCK;
+        fl.l_whence = SEEK_SET;
+        long pid = fcntl(fd, F_GETLK, &fl) == 0 && fl.l_type != F_UNLCK ? (long)fl.l_pid : 0;
+        return mr_fail(MR_ERR_IO, "sweep file '%s' is being written by another process (pid %ld)", path, pid);
+    }
+    return mr_fail(MR_ERR_IO, "sweep file '%s': cannot lock: %s", path, strerror(err));
+}
+
+/* Quote at most 160 characters of a line for a message. */
+static void quote_line(const char *line, size_t len, char *buf, size_t size) {
+    if (len > 0 && line[len - 1] == '\n') len--;
+    snprintf(buf, size, "'%.*s%s'", (int)MR_MIN(len, 160), line, len > 160 ? "..." : "");
+}
+
+typedef struct sweep_file {
+    const char *path;
+    int fd;
+    off_t size;
+    long total;
+    unsigned char *done; /* per sample: already in the file */
+    long done_count;
+    long truncated;
+} sweep_file;
+
+/* Check an existing file against this run's header, collect the samples it holds, and cut off a torn last line
+ * (only after everything else checked out, so a refused file is left exactly as it was). */
+static mr_status adopt_file(const mr_sweep_spec *spec, const strbuf *header, sweep_file *f) {
+    char *data = NULL;
+    size_t size = 0;
+    mr_status status = read_all(f->fd, f->path, &data, &size);
+    if (status != MR_OK) return status;
+    if (size == 0) { /* created but killed before its header went out: start it */
+        free(data);
+        return append_line(f->fd, f->path, header->text, header->length, &f->size);
+    }
+    const char *pos = data, *end = data + size;
+    const char *expected = header->text, *expected_end = header->text + header->length;
+    long line_number = 0;
+    while (expected < expected_end) { /* header, line by line */
+        const char *want_nl = memchr(expected, '\n', (size_t)(expected_end - expected));
+        size_t want_len = (size_t)(want_nl - expected) + 1;
+        const char *nl = memchr(pos, '\n', (size_t)(end - pos));
+        line_number++;
+        if (nl == NULL) {
+            free(data);
+            return mr_fail(MR_ERR_FORMAT,
+                           "sweep file '%s': the header ends early, at line %ld (a torn file?); not touching it "
+                           "(remove it to start afresh)",
+                           f->path, line_number);
+        }
+        size_t have_len = (size_t)(nl - pos) + 1;
+        const size_t prefix = strlen(COMMAND_PREFIX);
+        int is_command = want_len >= prefix && memcmp(expected, COMMAND_PREFIX, prefix) == 0;
+        int same = is_command ? have_len >= prefix && memcmp(pos, COMMAND_PREFIX, prefix) == 0
+                              : have_len == want_len && memcmp(pos, expected, want_len) == 0;
+        if (!same) {
+            char have_q[200], want_q[200];
+            quote_line(pos, have_len, have_q, sizeof have_q);
+            quote_line(expected, want_len, want_q, sizeof want_q);
+            free(data);
+            return mr_fail(MR_ERR_INVALID_ARG,
+                           "sweep file '%s' was made by another sweep: line %ld is %s, this run's is %s; not touching "
+                           "it (use another output file, or remove it)",
+                           f->path, line_number, have_q, want_q);
+        }
+        pos = nl + 1;
+        expected += want_len;
+    }
+
+    double source[MR_BRDF_MAX_VALUES];
+    const int ns = mr_brdf_value_count(spec->source);
+    while (pos < end) { /* rows */
+        const char *nl = memchr(pos, '\n', (size_t)(end - pos));
+        line_number++;
+        if (nl == NULL) { /* torn last line: a write cut short; everything before it is whole */
+            f->truncated = (long)(end - pos);
+            break;
+        }
+        mr_sweep_row row;
+        status = parse_row(spec, f->total, pos, (size_t)(nl - pos) + 1, &row);
+        if (status != MR_OK) {
+            free(data);
+            return mr_fail_context(status, "sweep file '%s': line %ld", f->path, line_number);
+        }
+        if (f->done[row.index]) {
+            free(data);
+            return mr_fail(MR_ERR_FORMAT, "sweep file '%s': line %ld: sample %ld appears a second time", f->path,
+                           line_number, row.index);
+        }
+        sample_unchecked(spec, row.index, source);
+        if (memcmp(source, row.source, (size_t)ns * sizeof(double)) != 0) {
+            free(data);
+            return mr_fail(MR_ERR_FORMAT,
+                           "sweep file '%s': line %ld: the source values of sample %ld are not this sweep's (was the "
+                           "file edited?)",
+                           f->path, line_number, row.index);
+        }
+        f->done[row.index] = 1;
+        f->done_count++;
+        pos = nl + 1;
+    }
+    free(data);
+    if (f->truncated > 0) {
+        off_t keep = (off_t)(size - (size_t)f->truncated);
+        if (ftruncate(f->fd, keep) != 0) {
+            int err = errno;
+            return mr_fail(MR_ERR_IO, "sweep file '%s': cannot remove its torn last line: %s", f->path, strerror(err));
+        }
+        f->size = keep;
+    }
+    return MR_OK;
+}
+
+/* Open (and lock) the file, fresh or resumed. */
+static mr_status open_file(const mr_sweep_spec *spec, const strbuf *header, int resume, sweep_file *f) {
+    int flags = O_RDWR | O_APPEND | O_CREAT | O_CLOEXEC | (resume ? 0 : O_EXCL);
+    f->fd = open(f->path, flags, 0666);
+    if (f->fd < 0) {
+        int err = errno;
+        if (err == EEXIST)
+            return mr_fail(MR_ERR_INVALID_ARG, "sweep file '%s' already exists; not overwriting it (resume it, or "
+                           "remove it)", f->path);
+        return mr_fail(MR_ERR_IO, "sweep file '%s': cannot open: %s", f->path, strerror(err));
+    }
+    struct stat st;
+    if (fstat(f->fd, &st) != 0 || !S_ISREG(st.st_mode))
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep file '%s' is not a regular file", f->path);
+    mr_status status = lock_file(f->fd, f->path);
+    if (status != MR_OK) return status;
+    f->size = st.st_size;
+    if (!resume) return append_line(f->fd, f->path, header->text, header->length, &f->size);
+    return adopt_file(spec, header, f);
+}
+
+/* Every sample is in the file: rewrite it in index order unless it already is (atomic: temporary + rename). */
+static mr_status sort_file(sweep_file *f, long header_lines, int *sorted) {
+    *sorted = 0;
+    char *data = NULL;
+    size_t size = 0;
+    mr_status status = read_all(f->fd, f->path, &data, &size);
+    if (status != MR_OK) return status;
+    const char **lines = calloc((size_t)f->total, sizeof *lines);
+    if (lines == NULL) {
+        free(data);
+        return mr_fail(MR_ERR_NOMEM, "sweep file '%s': out of memory sorting %ld rows", f->path, f->total);
+    }
+    // The file's own header (its command line may differ from this run's) is kept byte for byte.
+    const char *rows = data;
+    for (long h = 0; h < header_lines && rows < data + size; h++) {
+        const char *nl = memchr(rows, '\n', (size_t)(data + size - rows));
+        rows = nl ? nl + 1 : data + size;
+    }
+    const size_t header_length = (size_t)(rows - data);
+    int in_order = 1;
+    long k = 0;
+    // Rows were all validated (or written by us); the index is the text before the first comma. The strtol
+    // cannot run past the buffer: read_all NUL-terminates it.
+    for (const char *pos = rows; pos < data + size && k < f->total; k++) {
+        long index = strtol(pos, NULL, 10);
+        if (index < 0 || index >= f->total) index = 0; /* cannot happen; keeps the array in bounds */
+        lines[index] = pos;
+        in_order &= index == k;
+        const char *nl = memchr(pos, '\n', (size_t)(data + size - pos));
+        pos = nl ? nl + 1 : data + size;
+    }
+    in_order &= k == f->total;
+    for (long i = 0; i < f->total; i++)
+        if (lines[i] == NULL) { /* cannot happen: every sample was checked in; refuse rather than drop rows */
+            free(lines);
+            free(data);
+            return mr_fail(MR_ERR_FORMAT, "sweep file '%s': sample %ld is missing at the end of the run", f->path, i);
+        }
+    if (in_order) {
+        free(lines);
+        free(data);
+        if (fsync(f->fd) != 0) {
+            int err = errno;
+            return mr_fail(MR_ERR_IO, "sweep file '%s': cannot flush: %s", f->path, strerror(err));
+        }
+        return MR_OK;
+    }
+    mr_atomic_file tmp;
+    status = mr_atomic_begin(f->path, &tmp);
+    FILE *out = status == MR_OK ? fopen(tmp.tmp_path, "w") : NULL;
+    if (status == MR_OK && out == NULL) {
+        int err = errno;
+        status = mr_fail(MR_ERR_IO, "sweep file '%s': cannot open temporary file '%s': %s", f->path, tmp.tmp_path,
+                         strerror(err));
+    }
+    if (status == MR_OK) {
+        int ok = fwrite(data, 1, header_length, out) == header_length;
+        for (long i = 0; ok && i < f->total; i++) {
+            const char *nl = strchr(lines[i], '\n');
+            size_t len = (size_t)(nl - lines[i]) + 1;
+            ok = fwrite(lines[i], 1, len, out) == len;
+        }
+        ok = (fflush(out) == 0) & ok;
+        int err = errno;
+        ok = (fclose(out) == 0) & ok;
+        if (!ok)
+            status = mr_fail(MR_ERR_IO, "sweep file '%s': cannot write the sorted copy '%s': %s", f->path,
+                             tmp.tmp_path, strerror(err ? err : errno));
+    }
+    if (status == MR_OK) status = mr_atomic_commit(&tmp);
+    if (status != MR_OK && tmp.active) mr_atomic_abort(&tmp);
+    if (status == MR_OK) *sorted = 1;
+    free(lines);
+    free(data);
+    return status;
+}
+
+/* ---- the run ------------------------------------------------------------------------------------------------- */
+
+typedef struct run_state {
+    const mr_sweep_spec *spec;
+    const mr_sweep_options *opts;
+    sweep_file *file;
+    const mr_render_plan *plan;
+    long run_total, run_done;
+    long outcomes[MR_FIT_OUTCOME_COUNT];
+    int stop;                  /* set (under the file lock) when the file fails: no new samples start */
+    long failed;               /* samples whose remap failed (the others go on: their rows are worth having) */
+    mr_status failure;         /* the failure to report: a file error, else the lowest failed sample's */
+    long failure_index;
+    int file_failed;
+    char failure_message[1024];
+} run_state;
+
+/* Called under the file lock, on the thread that failed (mr_last_error() is per thread). A file error stops the
+ * run; a failed remap is counted and the sweep goes on. The reported failure does not depend on thread timing
+ * unless the file fails: it is the lowest failed index. */
+static void record_failure(run_state *st, mr_status status, long index, int file_error) {
+    if (file_error) {
+#pragma omp atomic write
+        st->stop = 1;
+    } else {
+        st->failed++;
+    }
+    if (st->file_failed || (!file_error && st->failure != MR_OK && st->failure_index < index)) return;
+    st->failure = status;
+    st->failure_index = index;
+    st->file_failed = file_error;
+    snprintf(st->failure_message, sizeof st->failure_message, "%s", mr_last_error());
+}
+
+/* Remap sample `index` and append its row. Runs on a worker thread, in the C numeric locale. */
+static void run_sample(run_state *st, long index) {
+    const mr_sweep_spec *spec = st->spec;
+    mr_sweep_row row;
+    memset(&row, 0, sizeof row);
+    row.index = index;
+    sample_unchecked(spec, index, row.source);
+    mr_remap_options o = spec->remap;
+    o.target_values = spec->target_values;
+    mr_remap_result r;
+    mr_status status = mr_remap(st->plan, spec->source, row.source, spec->target, &o, &r);
+    char line[MR_SWEEP_MAX_LINE];
+    size_t length = 0;
+    if (status == MR_OK) {
+        memcpy(row.target, r.values, (size_t)mr_brdf_value_count(spec->target) * sizeof(double));
+        row.rmse = r.rmse;
+        row.relative_rmse = r.relative_rmse;
+        row.ssim = r.ssim;
+        row.outcome = r.outcome;
+        row.renders = r.renders;
+        row.seconds = r.seconds;
+        status = format_row(spec, &row, line, sizeof line, &length);
+    }
+#pragma omp critical(mr_sweep_file)
+    {
+        if (status != MR_OK) {
+            record_failure(st, status, index, 0);
+        } else if (!st->stop) {
+            status = append_line(st->file->fd, st->file->path, line, length, &st->file->size);
+            if (status != MR_OK) {
+                record_failure(st, status, index, 1);
+            } else {
+                st->file->done_count++;
+                st->run_done++;
+                st->outcomes[row.outcome]++;
+                if (st->opts->progress != NULL) {
+                    mr_sweep_progress p = {st->file->done_count, st->file->total, st->run_done, st->run_total, &row};
+                    st->opts->progress(&p, st->opts->progress_user);
+                }
+            }
+        }
+    }
+}
+
+static mr_status run_pending(run_state *st, const long *pending, long count, int threads) {
+    mr_status locale_status = MR_OK;
+#pragma omp parallel num_threads(threads)
+    {
+#ifdef _OPENMP
+        // Samples are the unit of parallelism: renders and metrics inside a sample must not spawn teams of
+        // their own (2 x 2 threads on 2 cores only thrash). nthreads-var is per task, so this affects only
+        // the regions this thread opens from here, not the caller's settings; it also covers --threads 1,
+        // whose one-thread team is not an active level that max-active-levels would count.
+        omp_set_num_threads(1);
+#endif
+        c_numeric cn;
+        mr_status entered = c_numeric_enter(&cn);
+        if (entered != MR_OK) {
+#pragma omp critical(mr_sweep_file)
+            {
+                locale_status = entered;
+#pragma omp atomic write
+                st->stop = 1;
+            }
+        }
+#pragma omp for schedule(dynamic)
+        for (long k = 0; k < count; k++) {
+            int stopping;
+#pragma omp atomic read
+            stopping = st->stop;
+            if (!stopping) run_sample(st, pending[k]);
+        }
+        if (entered == MR_OK) c_numeric_leave(&cn);
+    }
+    if (locale_status != MR_OK) return mr_fail(locale_status, "sweep: cannot switch a thread to the C locale");
+    if (st->file_failed) return mr_fail(st->failure, "%s", st->failure_message);
+    if (st->failed > 0)
+        return mr_fail(st->failure,
+                       "sweep: %ld of %ld samples failed (the other rows are in '%s'; a resume retries the failed "
+                       "ones); sample %ld: %s",
+                       st->failed, count, st->file->path, st->failure_index, st->failure_message);
+    return MR_OK;
+}
+
+mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_sweep_options *opts,
+                       mr_sweep_summary *out) {
+    double start = now_seconds();
+    mr_sweep_options defaults;
+    memset(&defaults, 0, sizeof defaults);
+    if (opts == NULL) opts = &defaults;
+    mr_status status = mr_sweep_check(spec);
+    if (status != MR_OK) return status;
+    if (path == NULL || path[0] == '\0') return mr_fail(MR_ERR_INVALID_ARG, "sweep: empty output path");
+    if (opts->threads < 0) return mr_fail(MR_ERR_INVALID_ARG, "sweep: threads %d: expected >= 0", opts->threads);
+    int threads = opts->threads;
+#ifdef _OPENMP
+    if (threads == 0) threads = omp_get_max_threads();
+#else
+    threads = 1;
+#endif
+
+    strbuf header = {0};
+    c_numeric cn;
+    status = c_numeric_enter(&cn);
+    if (status != MR_OK) return status;
+    sweep_file f;
+    memset(&f, 0, sizeof f);
+    f.path = path;
+    f.fd = -1;
+    f.total = sample_count_unchecked(spec);
+    f.done = calloc((size_t)f.total, 1);
+    mr_render_plan *plan = NULL;
+    long *pending = NULL;
+    run_state st;
+    memset(&st, 0, sizeof st);
+    if (f.done == NULL) status = mr_fail(MR_ERR_NOMEM, "sweep: out of memory for %ld samples", f.total);
+    if (status == MR_OK) status = build_header(spec, opts->command_line, &header);
+    if (status == MR_OK) status = open_file(spec, &header, opts->resume, &f);
+    c_numeric_leave(&cn);
+    long already = f.done_count;
+
+    long pending_count = 0;
+    if (status == MR_OK && f.done_count < f.total) {
+        pending = malloc((size_t)(f.total - f.done_count) * sizeof *pending);
+        if (pending == NULL) status = mr_fail(MR_ERR_NOMEM, "sweep: out of memory for %ld samples", f.total);
+        for (long i = 0; status == MR_OK && i < f.total; i++)
+            if (!f.done[i]) pending[pending_count++] = i;
+        if (status == MR_OK) {
+            mr_scene scene = fit_scene(spec);
+            status = mr_render_plan_create(&scene, &plan);
+        }
+        if (status == MR_OK) {
+            st.spec = spec;
+            st.opts = opts;
+            st.file = &f;
+            st.plan = plan;
+            st.run_total = pending_count;
+            st.failure = MR_OK;
+            status = run_pending(&st, pending, pending_count, threads);
+        }
+    }
+    int sorted = 0;
+    long header_lines = 0;
+    for (size_t i = 0; i < header.length; i++) header_lines += header.text[i] == '\n';
+    if (status == MR_OK) status = sort_file(&f, header_lines, &sorted);
+    if (f.fd >= 0) close(f.fd); /* releases the lock, after the rename */
+    mr_render_plan_free(plan);
+    free(pending);
+    free(f.done);
+    free(header.text);
+    if (status != MR_OK) return status;
+    if (out != NULL) {
+        memset(out, 0, sizeof *out);
+        out->total = f.total;
+        out->already_done = already;
+        out->computed = st.run_done;
+        memcpy(out->outcomes, st.outcomes, sizeof out->outcomes);
+        out->truncated_bytes = f.truncated;
+        out->sorted = sorted;
+        out->threads = threads;
+        out->seconds = now_seconds() - start;
+    }
+    return MR_OK;
+}
