@@ -115,6 +115,12 @@ typedef struct fit_context {
     int pixel_count;
     mr_image *scratch;               /* a render */
     mr_image *basis[MAX_SLOTS + 1];  /* projection: R0 and one render per linear parameter */
+    /* The projection's fast path: at most one linear parameter per lobe, each in the diffuse or the specular
+     * lobe only, so one render split into components yields both basis images (split_lobes); if moreover the
+     * model renders black with every linear parameter at 0 (homogeneous), R0 needs no render at all. */
+    int split_lobes;
+    int homogeneous;
+    mr_image *lobe_images[4];        /* diffuse and specular at all-zero (0, 1) and all-one (2, 3) values */
     long renders;
     mr_status failure;               /* set when a render fails inside an nlopt callback */
     nlopt_opt running;
@@ -194,18 +200,59 @@ static void box_least_squares(int k, const double *G, const double *h, const dou
 
 /* For the nonlinear values already in ctx->base: render the basis, solve for the linear slots (written into
  * ctx->base) and return the squared residual against ctx->goal, or NAN if a render failed. */
+/* The basis renders with one component render per value vector (the split_lobes fast path): basis[0] is the
+ * render at all-zero linear values, basis[p + 1] the render with parameter p at 1. A parameter confined to one
+ * lobe changes only that component, so its render is its lobe's component plus the other lobe's all-zero one.
+ * The shared render sets every linear parameter to SPLIT_PROBE, not 1, and scales the difference back: with
+ * all of them at 1 at once, Ward's diffuse + specular = 2 would trigger Mitsuba's energy trimming and halve
+ * the basis, while 2 x 0.25 stays in the affine region. */
+#define SPLIT_PROBE 0.25
+static int split_basis(fit_context *ctx, const double *zero, const double *one) {
+    const int n = ctx->pixel_count;
+    if (!ctx->homogeneous) {
+        if (mr_render_components_into(ctx->plan, ctx->model, zero, ctx->lobe_images[0], ctx->lobe_images[1]) != MR_OK)
+            return render_values(ctx, zero, MR_COMPONENT_FULL, ctx->basis[0]); // records the failure
+        ctx->renders++;
+    }
+    if (mr_render_components_into(ctx->plan, ctx->model, one, ctx->lobe_images[2], ctx->lobe_images[3]) != MR_OK)
+        return render_values(ctx, one, MR_COMPONENT_FULL, ctx->basis[0]);
+    ctx->renders++;
+    for (int i = 0; i < n; i++) {
+        size_t at = (size_t)ctx->pixels[i] * 3;
+        for (int c = 0; c < 3; c++) {
+            float d0 = ctx->homogeneous ? 0.0f : ctx->lobe_images[0]->pixels[at + c];
+            float s0 = ctx->homogeneous ? 0.0f : ctx->lobe_images[1]->pixels[at + c];
+            float d1 = d0 + (ctx->lobe_images[2]->pixels[at + c] - d0) / (float)SPLIT_PROBE;
+            float s1 = s0 + (ctx->lobe_images[3]->pixels[at + c] - s0) / (float)SPLIT_PROBE;
+            ctx->basis[0]->pixels[at + c] = d0 + s0;
+            for (int p = 0; p < ctx->linear_param_count; p++) {
+                int diffuse = ctx->model->params[ctx->linear_params[p]].lobe == MR_LOBE_DIFFUSE;
+                ctx->basis[p + 1]->pixels[at + c] = diffuse ? d1 + s0 : d0 + s1;
+            }
+        }
+    }
+    return 1;
+}
+
 static double project(fit_context *ctx) {
     double values[MAX_SLOTS];
     memcpy(values, ctx->base, sizeof values);
     for (int j = 0; j < ctx->linear_count; j++) values[ctx->linear[j].slot] = 0.0;
-    if (!render_values(ctx, values, MR_COMPONENT_FULL, ctx->basis[0])) return NAN;
-    for (int p = 0; p < ctx->linear_param_count; p++) {
-        int param = ctx->linear_params[p];
-        int offset = mr_brdf_param_offset(ctx->model, param);
+    if (ctx->split_lobes) {
         double one[MAX_SLOTS];
         memcpy(one, values, sizeof one);
-        for (int c = 0; c < ctx->model->params[param].channels; c++) one[offset + c] = 1.0;
-        if (!render_values(ctx, one, MR_COMPONENT_FULL, ctx->basis[p + 1])) return NAN;
+        for (int j = 0; j < ctx->linear_count; j++) one[ctx->linear[j].slot] = SPLIT_PROBE;
+        if (!split_basis(ctx, values, one)) return NAN;
+    } else {
+        if (!render_values(ctx, values, MR_COMPONENT_FULL, ctx->basis[0])) return NAN;
+        for (int p = 0; p < ctx->linear_param_count; p++) {
+            int param = ctx->linear_params[p];
+            int offset = mr_brdf_param_offset(ctx->model, param);
+            double one[MAX_SLOTS];
+            memcpy(one, values, sizeof one);
+            for (int c = 0; c < ctx->model->params[param].channels; c++) one[offset + c] = 1.0;
+            if (!render_values(ctx, one, MR_COMPONENT_FULL, ctx->basis[p + 1])) return NAN;
+        }
     }
 
     // Columns: one per linear slot. An RGB parameter's channel c drives image channel c only (the roles
@@ -546,6 +593,50 @@ static int jointly_affine(const mr_brdf_model *m, const double *base, const unsi
     return 1;
 }
 
+/* True if the linear parameters can share one component render (the projection's fast path): at most one per
+ * lobe, each confined to the diffuse or the specular lobe. */
+static int lobes_split(const mr_brdf_model *m, const int *linear_params, int count) {
+    int diffuse = 0, specular = 0;
+    for (int p = 0; p < count; p++) {
+        mr_param_lobe lobe = m->params[linear_params[p]].lobe;
+        if (lobe == MR_LOBE_DIFFUSE)
+            diffuse++;
+        else if (lobe == MR_LOBE_SPECULAR)
+            specular++;
+        else
+            return 0;
+    }
+    return count > 0 && diffuse <= 1 && specular <= 1;
+}
+
+/* True if f_r is exactly 0 with every linear parameter at 0, for seeded random directions and values of the
+ * others (Ward: no diffuse, no specular, no light; GGX with Schlick F0 = 0 still reflects at grazing angles). */
+static int black_without_linear(const mr_brdf_model *m, const double *base, const unsigned char *is_linear) {
+    unsigned long long state = 0xb1ac0ULL;
+    for (int trial = 0; trial < 32; trial++) {
+        double v[MAX_SLOTS], wi[3], wo[3], f[3];
+        memcpy(v, base, sizeof v);
+        for (int i = 0; i < m->param_count; i++) {
+            const mr_brdf_param *p = &m->params[i];
+            if (p->role == MR_PARAM_SWITCH || (p->flags & MR_PARAM_FIT_FIXED)) continue;
+            int offset = mr_brdf_param_offset(m, i);
+            for (int c = 0; c < p->channels; c++)
+                v[offset + c] = is_linear[i] ? 0.0
+                                             : p->min_value + next_uniform(&state) * (p->max_value - p->min_value);
+        }
+        random_direction(&state, wi);
+        random_direction(&state, wo);
+        if (trial % 2 == 0) { // near the mirror configuration, where specular lobes live
+            wo[0] = -wi[0];
+            wo[1] = -wi[1];
+            wo[2] = wi[2];
+        }
+        eval_full(m, v, wi, wo, f);
+        if (f[0] != 0.0 || f[1] != 0.0 || f[2] != 0.0) return 0;
+    }
+    return 1;
+}
+
 /* The parameters the projection solves for: those the descriptor declares LINEAR or AFFINE, plus any
  * NONLINEAR parameter that is in fact affine (jointly with the rest) once the fixed parameters hold their
  * values. Cycles' base colour is the example: its specular tint divides by the colour's luminance, but with
@@ -585,6 +676,7 @@ static mr_status check_source_image(const mr_render_plan *plan, const mr_image *
 static void free_context(fit_context *ctx) {
     mr_image_free(ctx->scratch);
     for (int i = 0; i <= MAX_SLOTS; i++) mr_image_free(ctx->basis[i]);
+    for (int i = 0; i < 4; i++) mr_image_free(ctx->lobe_images[i]);
     free((void *)ctx->pixels);
 }
 
@@ -708,6 +800,10 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     status = mr_image_create(scene->width, scene->height, 3, &ctx.scratch);
     for (int i = 0; status == MR_OK && i <= ctx.linear_param_count; i++)
         status = mr_image_create(scene->width, scene->height, 3, &ctx.basis[i]);
+    ctx.split_lobes = lobes_split(target, ctx.linear_params, ctx.linear_param_count);
+    ctx.homogeneous = ctx.split_lobes && black_without_linear(target, ctx.base, is_linear);
+    for (int i = 0; status == MR_OK && ctx.split_lobes && i < 4; i++)
+        status = mr_image_create(scene->width, scene->height, 3, &ctx.lobe_images[i]);
     if (status != MR_OK) {
         free_context(&ctx);
         return status;
