@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# make bench: prints benchmark figures and writes them into docs/performance.md (between the bench:render
-# markers). Asserts nothing. Peers are measured in the same run: Blender Cycles renders the same fit scene with
-# the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to our render time is printed.
+# make bench: prints benchmark figures and writes them into docs/performance.md (between the bench:render,
+# bench:metrics and bench:remap markers). Asserts nothing. Peers are measured in the same run: Blender Cycles
+# renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
+# our render time is printed.
 # Usage: scripts/bench.sh BUILD [--quick]
 set -euo pipefail
 build=${1:-build}
@@ -20,6 +21,15 @@ echo "== fit-scene render time per model (tests/bench_render.c)"
 echo
 echo "== image metrics (tests/bench_metrics.c)"
 "$root/$build/tests/bench_metrics" | tee "$work/metrics_table.md"
+
+echo
+echo "== uniform remaps: time and accuracy against fit-scene size and strategy, one thread (tests/bench_remap.c)"
+"$root/$build/tests/bench_remap" $quick | tee "$work/remap_table.md"
+{
+    echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), one thread of $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')."
+    echo
+    cat "$work/remap_table.md"
+} > "$work/remap.md"
 
 {
     echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), matremap $("$bin" --version | cut -d' ' -f2)."
@@ -121,4 +131,5 @@ if [ -f "$perf" ]; then
     echo
     replace_section render "$report"
     replace_section metrics "$work/metrics_table.md"
+    replace_section remap "$work/remap.md"
 fi
