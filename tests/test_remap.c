@@ -14,20 +14,6 @@
 #include "matremap.h"
 #include "remap/remap.h"
 
-/* Expectations the engine does not meet yet. Each use says what is wrong; the lead has the report. They print
- * "known issue" instead of failing, so make check stays usable; when one starts to hold, the line says so and the
- * marker should become an MR_CHECK_MSG. */
-#define KNOWN_ISSUE(cond, ...)                                                                                \
-    do {                                                                                                      \
-        if (!(cond)) {                                                                                        \
-            fprintf(stderr, "    %s:%d: known issue (not counted): %s: ", __FILE__, __LINE__, #cond);         \
-            fprintf(stderr, __VA_ARGS__);                                                                     \
-            fputc('\n', stderr);                                                                              \
-        } else {                                                                                              \
-            fprintf(stderr, "    %s:%d: known issue now holds, make it a check: %s\n", __FILE__, __LINE__, #cond); \
-        }                                                                                                     \
-    } while (0)
-
 /* A fit-scene plan. Also sets one OpenMP thread: renders of 32 to 64 pixels are far too short to gain from a
  * second thread, and on a loaded two-core machine the thread hand-offs of thousands of tiny renders cost ten
  * times the work itself. The thread-count test sets its own counts. */
@@ -450,7 +436,7 @@ MR_TEST(auto_is_never_worse_than_single_where_single_struggles) {
     }
     // The cases do make the single stage struggle (measured at 64 pixels: 2 to 300 times AUTO's error in all six).
     MR_CHECK_MSG(much_better >= 4, "only %d cases where SINGLE is clearly worse", much_better);
-    KNOWN_ISSUE(misnamed == 0, "%d trapped single-stage fits reported unreachable instead of local-minimum", misnamed);
+    MR_CHECK_MSG(misnamed == 0, "%d trapped single-stage fits reported unreachable instead of local-minimum", misnamed);
     mr_render_plan_free(plan);
 }
 
@@ -511,7 +497,7 @@ MR_TEST(local_minimum_verdicts_are_backed_by_a_better_fit) {
             }
         }
     }
-    KNOWN_ISSUE(unbacked == 0, "%d local-minimum verdicts where AUTO's actual render is not better", unbacked);
+    MR_CHECK_MSG(unbacked == 0, "%d local-minimum verdicts where AUTO's actual render is not better", unbacked);
     mr_render_plan_free(plan);
 }
 
@@ -674,7 +660,7 @@ MR_TEST(all_black_sources) {
             }
         }
     }
-    KNOWN_ISSUE(infinite == 0, "%d fits of a black source with an infinite relative RMSE or 'unreachable'", infinite);
+    MR_CHECK_MSG(infinite == 0, "%d fits of a black source with an infinite relative RMSE or 'unreachable'", infinite);
     mr_image_free(zero);
     mr_render_plan_free(plan);
 }

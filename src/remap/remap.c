@@ -41,6 +41,7 @@
  *     stopped in a local minimum. */
 #define UNREACHABLE_RELATIVE_RMSE 0.25
 #define AT_BOUND_RELATIVE_RMSE 0.01
+#define RELATIVE_RMS_FLOOR 1e-4
 #define PREDICTION_TOLERANCE 0.01
 #define AMBIGUITY_ERROR 0.01
 #define AMBIGUITY_DISTANCE 0.1
@@ -702,13 +703,6 @@ static void classify(fit_context *ctx, const mr_remap_source *source, double pre
                  "so its render misses the fit by %.1f %% of the source's RMS radiance", 100.0 * gap);
         return;
     }
-    if (out->relative_rmse > UNREACHABLE_RELATIVE_RMSE) {
-        out->outcome = MR_FIT_UNREACHABLE;
-        snprintf(out->detail, sizeof out->detail,
-                 "unreachable: the best fit leaves a residual of %.1f %% of the source's RMS radiance",
-                 100.0 * out->relative_rmse);
-        return;
-    }
     if (ambiguous || projected_gain > LOCAL_MINIMUM_GAIN) {
         out->outcome = MR_FIT_LOCAL_MINIMUM;
         if (ambiguous)
@@ -719,6 +713,14 @@ static void classify(fit_context *ctx, const mr_remap_source *source, double pre
             snprintf(out->detail, sizeof out->detail,
                      "local-minimum: the global search (strategy auto) finds a fit with %.0f %% less squared error",
                      100.0 * projected_gain);
+        return;
+    }
+    // Only a residual that no better fit removes says the target cannot reach the source.
+    if (out->relative_rmse > UNREACHABLE_RELATIVE_RMSE) {
+        out->outcome = MR_FIT_UNREACHABLE;
+        snprintf(out->detail, sizeof out->detail,
+                 "unreachable: the best fit leaves a residual of %.1f %% of the source's RMS radiance",
+                 100.0 * out->relative_rmse);
         return;
     }
     const fitted_slot *pools[2] = {ctx->nonlinear, ctx->linear};
@@ -816,12 +818,28 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
             source_energy += v * v;
         }
 
+    // The source energy that relative figures divide by, floored like relative_rmse so a black source gives
+    // finite ratios.
+    const double energy_scale = fmax(source_energy, 3.0 * ctx.pixel_count * RELATIVE_RMS_FLOOR * RELATIVE_RMS_FLOOR);
     double predicted = NAN, projected_gain = 0.0;
     int ambiguous = 0;
     if (opts.strategy == MR_REMAP_AUTO) {
         candidate best;
         auto_fit(&ctx, &best, &ambiguous);
         predicted = best.sse;
+        // Where the model rescales the solved values (Ward's energy trimming when diffuse + specular > 1), the
+        // affine prediction no longer describes the render: refine every parameter against real renders from
+        // the projected solution, and keep whichever renders closer. The outcome still reports the gap.
+        if (ctx.failure == MR_OK && !isnan(best.sse) &&
+            render_values(&ctx, ctx.base, MR_COMPONENT_FULL, ctx.scratch)) {
+            double projected_actual = sse_against(&ctx, ctx.scratch, source->full);
+            if (fabs(sqrt(projected_actual) - sqrt(best.sse)) > PREDICTION_TOLERANCE * sqrt(energy_scale)) {
+                double kept[MAX_SLOTS];
+                memcpy(kept, ctx.base, sizeof kept);
+                double refined = direct_stage(&ctx, 0, 0, source->full, MR_COMPONENT_FULL);
+                if (ctx.failure == MR_OK && !(refined < projected_actual)) memcpy(ctx.base, kept, sizeof kept);
+            }
+        }
     } else {
         if (opts.strategy == MR_REMAP_TWO || opts.strategy == MR_REMAP_THREE) {
             direct_stage(&ctx, MR_LOBE_DIFFUSE, 1, source->diffuse, MR_COMPONENT_DIFFUSE);
@@ -867,7 +885,17 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
             free_context(&ctx);
             return status;
         }
-        if (!isnan(global.sse) && actual > 0.0) projected_gain = (actual - global.sse) / actual;
+        // Compare real renders, not the projection's prediction: where the target rescales its values (Ward's
+        // trimming), the prediction promises a fit no render delivers.
+        if (!isnan(global.sse)) {
+            if (!render_values(&ctx, global.values, MR_COMPONENT_FULL, ctx.basis[0])) {
+                status = ctx.failure;
+                free_context(&ctx);
+                return status;
+            }
+            double global_actual = sse_against(&ctx, ctx.basis[0], source->full);
+            projected_gain = (actual - global_actual) / actual;
+        }
     }
     status = mr_rmse(ctx.scratch, source->full, &result.rmse);
     if (status == MR_OK) status = mr_ssim(ctx.scratch, source->full, NULL, &result.ssim, NULL);
@@ -877,9 +905,11 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     }
     double source_rms = ctx.pixel_count > 0 ? sqrt(source_energy / (3.0 * ctx.pixel_count)) : 0.0;
     double fit_rms = ctx.pixel_count > 0 ? sqrt(actual / (3.0 * ctx.pixel_count)) : 0.0;
-    result.relative_rmse = source_rms > 0.0 ? fit_rms / source_rms : (fit_rms > 0.0 ? HUGE_VAL : 0.0);
+    // A black source has no radiance to be relative to: RMS radiance is floored at 1e-4 (display value ~0.001,
+    // black to the eye), which keeps the ratio finite and a black fit's float-rounding residue negligible.
+    result.relative_rmse = fit_rms / fmax(source_rms, RELATIVE_RMS_FLOOR);
     result.renders = fit_renders;
-    classify(&ctx, source, predicted, actual, source_energy > 0.0 ? source_energy : 1.0, ambiguous,
+    classify(&ctx, source, predicted, actual, energy_scale, ambiguous,
              projected_gain, &result);
     free_context(&ctx);
     result.seconds = now_seconds() - start_time;

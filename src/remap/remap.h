@@ -55,7 +55,7 @@ extern "C" {
 /* The fit scene's default side in pixels for remaps: chosen from the accuracy/time table of
  * docs/performance.md ("Uniform remaps"), the smallest size whose fits re-rendered at 512^2 stay within 0.001
  * SSIM of a 512^2 fit. */
-#define MR_REMAP_DEFAULT_SIZE 128
+#define MR_REMAP_DEFAULT_SIZE 64
 
 typedef enum mr_remap_strategy {
     MR_REMAP_AUTO = 0,
