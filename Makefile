@@ -45,7 +45,7 @@ BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
 PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h src/render/render.h \
                   src/io/image_io.h src/metrics/metrics.h src/remap/remap.h
 
-.PHONY: all check asan demo bench deps install clean
+.PHONY: all check asan demo bench analyses deps install clean
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
 all: $(LIB) $(TOOLS) $(MODULE)
@@ -108,6 +108,9 @@ demo: all
 
 bench: all $(BENCHES)
 	scripts/bench.sh $(BUILD)
+
+analyses: all
+	scripts/analyses.sh $(BUILD)
 
 deps:
 	scripts/install-deps.sh
