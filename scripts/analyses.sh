@@ -69,7 +69,7 @@ say "== 1. conductors, as -> ward (Mitsuba 'ward', trim=1)"
 for light in 45 frontal; do
     sweep a1_$light --from as diffuse=0 --to ward trim=1 --grid alpha=0.05:0.3:6 f0=0:1:51 --light $light
 done
-for s in single two three; do
+for s in joint single two three; do
     sweep a1s_$s --from as diffuse=0 alpha=0.1 --to ward trim=1 --grid f0=0:1:51 --strategy $s
 done
 # the same with Ward's energy trimming switched off: separates the optimiser from the trimming nonlinearity
@@ -82,7 +82,7 @@ for light in 45 frontal; do
     blocks "$work/a1_$light.txt" 1 > "$work/a1_$light.dat"
 done
 awk '$1 > 0.0999 && $1 < 0.1001' "$work/a1_45.txt" | awk '{print $2, $3, $3, $3, $5}' > "$work/a1s_auto.dat"
-for s in single two three single_trim0 two_trim0 three_trim0; do
+for s in joint single two three single_trim0 two_trim0 three_trim0; do
     cols 'f0_r,mean:to_specular,min:to_specular,max:to_specular,outcome' "$work/a1s_$s.csv" > "$work/a1s_$s.dat"
 done
 say "outcomes (auto, light 45, 6 x 51 samples): $(outcomes "$work/a1_45.csv")"
@@ -107,10 +107,10 @@ for a in $(awk '{print $1}' "$work/a1_45.txt" | uniq); do
     awk -v a="$a" '$1 == a {print $2, $3, $5}' "$work/a1_45.txt" |
         awk -v label="$(printf '  alpha=%.2f smoothness, all 51 points:' "$a")" -f "$helpers/smooth.awk" | cut -c1-260
 done | tee -a "$summary"
-for s in single two three; do say "strategy $s (alpha 0.1, 51 samples): $(outcomes "$work/a1s_$s.csv")"; done
+for s in joint single two three; do say "strategy $s (alpha 0.1, 51 samples): $(outcomes "$work/a1s_$s.csv")"; done
 for s in single two three; do say "strategy $s with trim=0: $(outcomes "$work/a1s_${s}_trim0.csv")"; done
 ref=$(awk '{print $2, $3, $5}' "$work/a1s_auto.dat" | awk -v only=converged -f "$helpers/smooth.awk" | sed 's/.*median_step=\([^ ]*\).*/\1/')
-for s in auto single two three single_trim0 two_trim0 three_trim0; do
+for s in auto joint single two three single_trim0 two_trim0 three_trim0; do
     awk '{print $1, $2, $5}' "$work/a1s_$s.dat" | awk -v label="  smoothness $s (vs auto's median step $ref):" -v ref="$ref" -f "$helpers/smooth.awk" |
         cut -c1-400 | tee -a "$summary"
 done
@@ -164,7 +164,7 @@ say ""
 # ---- 3. Dielectrics AS -> Ward over IOR 1-2 (paper figures 8 and 10) ----------------------------------------------
 say "== 3. dielectrics, as-plastic (diffuse 0.5, alpha 0.1) -> ward, IOR 1..2"
 for light in 45 frontal; do
-    for s in auto single two three; do
+    for s in auto joint single two three; do
         sweep a3_${s}_$light --from as-plastic diffuse=0.5 alpha=0.1 specular=1 --to ward trim=1 --grid ior=1:2:51 \
             --strategy $s --light $light
     done
@@ -175,21 +175,21 @@ for s in single two three; do
         "$work/a3_${s}_trim0.csv" > "$work/a3_${s}_trim0.dat"
 done
 for light in 45 frontal; do
-    for s in auto single two three; do
+    for s in auto joint single two three; do
         cols 'ior,mean:to_specular,min:to_specular,max:to_specular,outcome,to_alpha,mean:to_diffuse,relative_rmse,ssim' \
             "$work/a3_${s}_$light.csv" > "$work/a3_${s}_$light.dat"
     done
 done
-for s in auto single two three; do say "strategy $s: $(outcomes "$work/a3_${s}_45.csv")"; done
+for s in auto joint single two three; do say "strategy $s: $(outcomes "$work/a3_${s}_45.csv")"; done
 ref=$(awk '{print $1, $2, $5}' "$work/a3_auto_45.dat" | awk -f "$helpers/smooth.awk" | sed 's/.*median_step=\([^ ]*\).*/\1/')
-for s in auto single two three; do
+for s in auto joint single two three; do
     awk '{print $1, $2, $5}' "$work/a3_${s}_45.dat" | awk -v label="smoothness $s:" -f "$helpers/smooth.awk" | tee -a "$summary"
 done
 for s in single two three; do
     say "strategy $s with trim=0: $(outcomes "$work/a3_${s}_trim0.csv")"
     awk '{print $1, $2, $5}' "$work/a3_${s}_trim0.dat" | awk -v label="  smoothness $s, trim=0:" -f "$helpers/smooth.awk" | cut -c1-300 | tee -a "$summary"
 done
-for s in single three; do
+for s in joint single three; do
     awk '{print $1, $2, $5}' "$work/a3_${s}_45.dat" |
         awk -v label="  $s against auto's median step $ref:" -v ref="$ref" -f "$helpers/smooth.awk" | cut -c1-300 | tee -a "$summary"
     awk '{ d = $4 - $3; if (d > m) { m = d; at = $1 } } END { printf "  %s: largest RGB spread of the fitted specular (grey source) %.3f at IOR %g\n", s, m, at }' \
@@ -239,7 +239,7 @@ for light in 45 frontal; do
     done | tee -a "$summary"
 done
 for light in 45 frontal; do
-    for s in auto single two three; do
+    for s in auto joint single two three; do
         {
             printf 'dielectrics %s, light %s: %s; ' "$s" "$light" "$(outcomes "$work/a3_${s}_$light.csv")"
             awk '{print $8}' "$work/a3_${s}_$light.dat" | median_of | awk '{printf "median relative RMSE %.4f, ", $1}'
@@ -332,7 +332,7 @@ say ""
 # ---- small copies of the plotted data for the docs -----------------------------------------------------------------
 awk '{printf "%.4g %.4g %.6g %.6g %s %.4g %.4g %.5g\n", $1, $2, $3, $4, $5, $6, $7, $8}' "$work/a1_45.txt" > "$docs/conductors_45.txt"
 awk '{printf "%.4g %.4g %s %.6g %.6g %s %s\n", $1, $2, $3, $4, $5, $6, $7}' "$work/roundtrip.txt" > "$docs/roundtrip.txt"
-for s in auto single two three; do
+for s in auto joint single two three; do
     awk -v s=$s '{printf "%s %.4g %.6g %.6g %.6g %s %.5g %.5g %.4g %.4g\n", s, $1, $2, $3, $4, $5, $6, $7, $8, $9}' "$work/a3_${s}_45.dat"
 done > "$docs/dielectrics_45.txt"
 

@@ -391,11 +391,11 @@ MR_TEST(two_and_three_need_the_component_images) {
 }
 
 /* The paper's figure 8 setting (section 4.1.2): a dielectric (Ashikhmin-Shirley, diffuse 0.5, alpha 0.1) remapped
- * to Mitsuba's Ward (energy trimming on, as Mitsuba ships it), IOR or F0 varied. At 64 pixels the single-stage
- * fit couples diffuse and specular and ends far off (alpha 0.6 to 1 instead of 0.1: the paper's figure 9, bottom
- * row); AUTO solves the reflectances exactly for each roughness and must never do worse. Every such trapped local
- * fit must be reported as a local minimum: AUTO's global search shows that the target can do better. */
-MR_TEST(auto_is_never_worse_than_single_where_single_struggles) {
+ * to Mitsuba's Ward (energy trimming on, as Mitsuba ships it), IOR or F0 varied. JOINT searches the roughness
+ * globally with the reflectances solved exactly, so no local fit may beat it; AUTO takes each lobe's shape from
+ * the source's render of that lobe (remap.h) and may give away a little of the full image's error for that,
+ * never much: measured at 64 pixels, at most 1.2 % more RMSE than JOINT here. */
+MR_TEST(joint_is_never_worse_than_single_and_auto_stays_close) {
     static const struct {
         const char *source, *assignments, *target;
     } cases[] = {
@@ -407,59 +407,54 @@ MR_TEST(auto_is_never_worse_than_single_where_single_struggles) {
         {"as-plastic", "alpha=0.1 diffuse=0.2 ior=1.5", "phong"},
     };
     mr_render_plan *plan = fit_plan(64);
-    int much_better = 0, misnamed = 0;
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
-        mr_remap_options a = options(MR_REMAP_AUTO), s = options(MR_REMAP_SINGLE);
-        mr_remap_result ra, rs;
+        mr_remap_options a = options(MR_REMAP_AUTO), j = options(MR_REMAP_JOINT), s = options(MR_REMAP_SINGLE);
+        mr_remap_result ra, rj, rs;
         char label[160];
         snprintf(label, sizeof label, "%s %s -> %s", cases[k].source, cases[k].assignments, cases[k].target);
         MR_CHECK_OK(remap(plan, cases[k].source, cases[k].assignments, cases[k].target, &a, &ra));
+        MR_CHECK_OK(remap(plan, cases[k].source, cases[k].assignments, cases[k].target, &j, &rj));
         MR_CHECK_OK(remap(plan, cases[k].source, cases[k].assignments, cases[k].target, &s, &rs));
         check_well_defined(label, mr_brdf_find(cases[k].target), &a, &ra);
+        check_well_defined(label, mr_brdf_find(cases[k].target), &j, &rj);
         check_well_defined(label, mr_brdf_find(cases[k].target), &s, &rs);
-        MR_CHECK_MSG(ra.rmse <= rs.rmse * (1.0 + 1e-9) + 1e-12, "%s: AUTO rmse %.6g > SINGLE %.6g", label, ra.rmse,
+        MR_CHECK_MSG(rj.rmse <= rs.rmse * (1.0 + 1e-3) + 1e-12, "%s: JOINT rmse %.6g > SINGLE %.6g", label, rj.rmse,
                      rs.rmse);
+        MR_CHECK_MSG(ra.rmse <= rj.rmse * 1.03 + 1e-12, "%s: AUTO rmse %.6g > 1.03 x JOINT %.6g", label, ra.rmse,
+                     rj.rmse);
         MR_CHECK_MSG(ra.outcome == MR_FIT_CONVERGED, "%s: AUTO %s", label, ra.detail);
-        if (rs.rmse > 1.5 * ra.rmse) {
-            much_better++;
-            // Trapped. The verdict must not be "converged"; it should be "local-minimum" (AUTO reaches the
-            // source within its 25 % threshold, so the target is not what fails). The classifier tests the
-            // residual threshold first, so a trap bad enough to leave > 25 % is called "unreachable".
-            MR_CHECK_MSG(rs.outcome != MR_FIT_CONVERGED, "%s: SINGLE at %.2g x AUTO's error says '%s'", label,
-                         rs.rmse / ra.rmse, rs.detail);
-            if (rs.outcome != MR_FIT_LOCAL_MINIMUM) {
-                misnamed++;
-                fprintf(stderr, "    %s: SINGLE (relative RMSE %.3g, AUTO %.3g) says '%s'\n", label, rs.relative_rmse,
-                        ra.relative_rmse, rs.detail);
-            }
-        }
+        MR_CHECK_MSG(rj.outcome == MR_FIT_CONVERGED, "%s: JOINT %s", label, rj.detail);
     }
-    // The cases do make the single stage struggle (measured at 64 pixels: 2 to 300 times AUTO's error in all six).
-    MR_CHECK_MSG(much_better >= 4, "only %d cases where SINGLE is clearly worse", much_better);
-    MR_CHECK_MSG(misnamed == 0, "%d trapped single-stage fits reported unreachable instead of local-minimum", misnamed);
     mr_render_plan_free(plan);
 }
 
-/* A single-stage fit caught in the diffuse/specular coupling valley: Ashikhmin-Shirley (alpha 0.1, F0 0.02,
- * diffuse 0.5) to balanced Ward without trimming. BOBYQA spends its 400 renders crawling along the valley and stops
- * with the reflectances off (channels unequal for a grey source); AUTO's global search finds ~20 times less
- * error, which the engine reports as a local minimum. */
+/* A single-stage fit caught in the diffuse/specular coupling: Ashikhmin-Shirley (alpha 0.1, F0 0.02, diffuse 0.5)
+ * to balanced Ward without trimming, started with the specular lobe switched off and at the roughest alpha. With
+ * rho_s = 0 the image does not depend on alpha, and with alpha = 1 a little rho_s only brightens the diffuse: BOBYQA
+ * stops at a broad lobe (measured: relative RMSE 0.14 against 0.0003 for the global search), which the engine
+ * reports as a local minimum. From the target's defaults the same fit converges. */
 MR_TEST(a_trapped_single_stage_fit_is_reported_as_a_local_minimum) {
     mr_render_plan *plan = fit_plan(32);
     const mr_brdf_model *target = mr_brdf_find("ward-balanced");
-    double untrimmed[MR_BRDF_MAX_VALUES];
+    double trapping[MR_BRDF_MAX_VALUES], untrimmed[MR_BRDF_MAX_VALUES];
+    target_with(target, "trim=0 alpha=1 specular=0", trapping);
     target_with(target, "trim=0", untrimmed);
-    mr_remap_options s = options(MR_REMAP_SINGLE), a = options(MR_REMAP_AUTO);
-    s.target_values = a.target_values = untrimmed;
-    mr_remap_result rs, ra;
+    mr_remap_options s = options(MR_REMAP_SINGLE), a = options(MR_REMAP_AUTO), d = options(MR_REMAP_SINGLE);
+    s.target_values = a.target_values = trapping;
+    d.target_values = untrimmed;
+    mr_remap_result rs, ra, rd;
     MR_CHECK_OK(remap(plan, "as", "alpha=0.1 f0=0.02 diffuse=0.5", "ward-balanced", &s, &rs));
     MR_CHECK_OK(remap(plan, "as", "alpha=0.1 f0=0.02 diffuse=0.5", "ward-balanced", &a, &ra));
+    MR_CHECK_OK(remap(plan, "as", "alpha=0.1 f0=0.02 diffuse=0.5", "ward-balanced", &d, &rd));
     check_well_defined("single", target, &s, &rs);
     check_well_defined("auto", target, &a, &ra);
+    check_well_defined("single from the defaults", target, &d, &rd);
     MR_CHECK_MSG(rs.outcome == MR_FIT_LOCAL_MINIMUM, "single: %s", rs.detail);
     MR_CHECK_MSG(ra.outcome == MR_FIT_CONVERGED, "auto: %s", ra.detail);
-    MR_CHECK_MSG(ra.rmse < 0.5 * rs.rmse, "auto rmse %g, single %g", ra.rmse, rs.rmse);
+    MR_CHECK_MSG(rd.outcome == MR_FIT_CONVERGED, "single from the defaults: %s", rd.detail);
+    MR_CHECK_MSG(ra.rmse < 0.1 * rs.rmse, "auto rmse %g, single %g", ra.rmse, rs.rmse);
     MR_CHECK_NEAR(value_of(target, ra.values, "alpha", 0), 0.1, 0.01);
+    MR_CHECK_NEAR(value_of(target, rd.values, "alpha", 0), 0.1, 0.01);
     // The check can be skipped (remap.h: skip_global_check); the fit itself is the same.
     s.skip_global_check = 1;
     mr_remap_result rq;
@@ -602,7 +597,9 @@ MR_TEST(plastic_ior_towards_one) {
         check_well_defined(iors[i], ggx, &o, &r);
         for (int c = 0; c < 3; c++) {
             MR_CHECK_NEAR(value_of(ggx, r.values, "diffuse", c), 0.5, 1e-4);
-            MR_CHECK_NEAR(value_of(ggx, r.values, "f0", c), 0.0, 1e-3);
+            // AUTO takes the absent lobe's roughness from the black specular render, where GGX's Schlick term
+            // still shows at grazing angles; the joint solve then leaves a trace of F0 (measured 0.0011).
+            MR_CHECK_NEAR(value_of(ggx, r.values, "f0", c), 0.0, 2e-3);
         }
         MR_CHECK_MSG(r.relative_rmse < 1e-3, "%s: relative RMSE %g", iors[i], r.relative_rmse);
         MR_CHECK_MSG(r.outcome != MR_FIT_UNREACHABLE, "%s: %s", iors[i], r.detail);
@@ -696,6 +693,65 @@ MR_TEST(unreachable_sources_say_why) {
     MR_CHECK_MSG(r.outcome == MR_FIT_UNREACHABLE || (r.outcome == MR_FIT_AT_BOUND && strstr(r.detail, "diffuse")),
                  "%s", r.detail);
     MR_CHECK(r.relative_rmse > 0.25);
+    mr_render_plan_free(plan);
+}
+
+/* The paper's figure 8 sweep (issue 3): a plastic's IOR from 1 to 1.3, remapped to Mitsuba's Ward. The full render's
+ * global optimum switches branch at low IOR (a broad Ward lobe at alpha = 1 shaping the diffuse, then the narrow
+ * highlight: measured at 64 pixels, JOINT's specular jumps 0.33 -> 0.012 at IOR 1.16 -> 1.18); AUTO follows the
+ * source's own lobes, so its specular must rise smoothly: no step above 3 times the median step, every fit
+ * converged, alpha near the source's 0.1 once the highlight shows. */
+MR_TEST(auto_is_smooth_across_a_dielectric_ior_sweep) {
+    enum { STEPS = 16 };
+    mr_render_plan *plan = fit_plan(64);
+    const mr_brdf_model *ward = mr_brdf_find("ward");
+    mr_remap_options o = options(MR_REMAP_AUTO);
+    double specular[STEPS], steps[STEPS - 1];
+    for (int i = 0; i < STEPS; i++) {
+        char assignments[96];
+        double ior = 1.0 + 0.02 * i;
+        snprintf(assignments, sizeof assignments, "diffuse=0.5 alpha=0.1 specular=1 ior=%.2f", ior);
+        mr_remap_result r;
+        MR_CHECK_OK(remap(plan, "as-plastic", assignments, "ward", &o, &r));
+        check_well_defined(assignments, ward, &o, &r);
+        MR_CHECK_MSG(r.outcome == MR_FIT_CONVERGED, "IOR %.2f: %s", ior, r.detail);
+        specular[i] = value_of(ward, r.values, "specular", 0);
+        if (ior >= 1.1) MR_CHECK_NEAR(value_of(ward, r.values, "alpha", 0), 0.1, 0.01);
+        if (i > 0) steps[i - 1] = fabs(specular[i] - specular[i - 1]);
+    }
+    double sorted[STEPS - 1];
+    memcpy(sorted, steps, sizeof sorted);
+    for (int i = 1; i < STEPS - 1; i++)
+        for (int j = i; j > 0 && sorted[j] < sorted[j - 1]; j--) {
+            double t = sorted[j];
+            sorted[j] = sorted[j - 1];
+            sorted[j - 1] = t;
+        }
+    double median = sorted[(STEPS - 1) / 2];
+    for (int i = 0; i < STEPS - 1; i++)
+        MR_CHECK_MSG(steps[i] <= 3.0 * median, "IOR %.2f -> %.2f: step %.4g > 3 x median %.4g", 1.0 + 0.02 * i,
+                     1.02 + 0.02 * i, steps[i], median);
+    MR_CHECK(specular[STEPS - 1] > specular[1] && specular[1] >= specular[0]);
+    mr_render_plan_free(plan);
+}
+
+/* A conductor just above what Ward can reflect (AS F0 0.88, alpha 0.05 needs rho_s ~ 1.04): the affine solution
+ * is trimmed, so AUTO refines against real renders and settles on the edge of the untrimmed region, diffuse +
+ * specular = 1 (a value pinned by Ward's limit, not by the source). That is unreachable, not converged; the
+ * round trip back to AS would otherwise come back 4.7 % low (docs/analyses.md, section 2). */
+MR_TEST(fits_pinned_at_the_trimming_edge_are_unreachable) {
+    mr_render_plan *plan = fit_plan(64);
+    const mr_brdf_model *ward = mr_brdf_find("ward");
+    mr_remap_options o = options(MR_REMAP_AUTO);
+    mr_remap_result r;
+    MR_CHECK_OK(remap(plan, "as", "diffuse=0 alpha=0.05 f0=0.88", "ward", &o, &r));
+    check_well_defined("as F0 0.88 -> ward", ward, &o, &r);
+    double sum = value_of(ward, r.values, "diffuse", 0) + value_of(ward, r.values, "specular", 0);
+    MR_CHECK_MSG(r.outcome == MR_FIT_UNREACHABLE && strstr(r.detail, "rescales"), "d + s = %.4f: %s", sum, r.detail);
+    // Below the edge the same source family converges, with the slope of the linear region.
+    MR_CHECK_OK(remap(plan, "as", "diffuse=0 alpha=0.05 f0=0.5", "ward", &o, &r));
+    MR_CHECK_MSG(r.outcome == MR_FIT_CONVERGED, "F0 0.5: %s", r.detail);
+    MR_CHECK_NEAR(value_of(ward, r.values, "specular", 0) / 0.5, 1.18, 0.02);
     mr_render_plan_free(plan);
 }
 
@@ -864,7 +920,7 @@ MR_TEST_MAIN(MR_TEST_ENTRY(names_round_trip),
              MR_TEST_ENTRY(metallic_workflow_round_trip_follows_equation_2),
              MR_TEST_ENTRY(every_strategy_returns_a_finite_result),
              MR_TEST_ENTRY(two_and_three_need_the_component_images),
-             MR_TEST_ENTRY(auto_is_never_worse_than_single_where_single_struggles),
+             MR_TEST_ENTRY(joint_is_never_worse_than_single_and_auto_stays_close),
              MR_TEST_ENTRY(a_trapped_single_stage_fit_is_reported_as_a_local_minimum),
              MR_TEST_ENTRY(local_minimum_verdicts_are_backed_by_a_better_fit),
              MR_TEST_ENTRY(hard_sources_end_well_defined_under_every_strategy),
@@ -873,6 +929,8 @@ MR_TEST_MAIN(MR_TEST_ENTRY(names_round_trip),
              MR_TEST_ENTRY(plastic_ior_towards_one),
              MR_TEST_ENTRY(all_black_sources),
              MR_TEST_ENTRY(unreachable_sources_say_why),
+             MR_TEST_ENTRY(auto_is_smooth_across_a_dielectric_ior_sweep),
+             MR_TEST_ENTRY(fits_pinned_at_the_trimming_edge_are_unreachable),
              MR_TEST_ENTRY(bad_source_images_are_rejected_with_their_sizes_and_pixels),
              MR_TEST_ENTRY(null_arguments_and_bad_options_are_rejected),
              MR_TEST_ENTRY(work_is_bounded_by_the_options),

@@ -38,9 +38,13 @@ static void print_help(void) {
            "                                  switches (Ward's trim) at those values\n"
            "\n"
            "Options:\n"
-           "  --strategy S       auto (default): affine parameters solved exactly, nonlinear ones searched\n"
-           "                     globally; single, two, three: the paper's local fits from the defaults\n"
+           "  --strategy S       auto (default): affine parameters solved exactly, each lobe's roughness\n"
+           "                     searched globally against that lobe's render (smooth across materials);\n"
+           "                     joint: the same search against the full render only (lowest L2 error);\n"
+           "                     single, two, three: the paper's local fits from the defaults\n"
            "  --size N           fit-scene side in pixels (default %d; with --from-images: the images' size)\n"
+           "  --grid-points N    auto/joint: global grid points per nonlinear parameter (default 32 for one,\n"
+           "                     12 for two, 6 for three; more is slower and misses fewer narrow minima)\n"
            "  --light L          45 (default) or frontal\n"
            "  --images PREFIX    also write PREFIX_source.png, PREFIX_target.png and PREFIX_ssim.png\n"
            "  --json             machine-readable result on stdout\n"
@@ -155,6 +159,9 @@ int cmd_remap(int argc, char **argv) {
                 return cli_usage_error("remap", "%s", mr_last_error());
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--size", &value))) {
             if (taken < 0 || !cli_parse_int("remap", "--size", value, 16, 4096, &size)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--grid-points", &value))) {
+            if (taken < 0 || !cli_parse_int("remap", "--grid-points", value, 2, 64, &opts.grid_points))
+                return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--light", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             if (mr_fit_light_from_name(value, &scene_opts.light) != MR_OK)

@@ -42,7 +42,7 @@ static void print_help(void) {
            "  --resume              continue FILE: its header must match this run exactly (models, values,\n"
            "                        sampling, strategy, scene), a torn last line is removed, and only the\n"
            "                        missing samples run; a missing FILE is started afresh\n"
-           "  --strategy S          auto (default), single, two or three (see 'matremap remap --help')\n"
+           "  --strategy S          auto (default), joint, single, two or three (see 'matremap remap --help')\n"
            "  --size N              fit-scene side in pixels (default %d)\n"
            "  --light L             45 (default) or frontal\n"
            "  --threads T           samples at once (default: all cores); each sample runs single-threaded\n"

@@ -27,6 +27,7 @@
 #define DEFAULT_XTOL 1e-6
 #define DEFAULT_GRID_1D 32
 #define DEFAULT_GRID_2D 12
+#define DEFAULT_GRID_3D 6
 #define DEFAULT_STARTS 8
 #define MAX_REFINED_STARTS 3
 /* Outcome thresholds (remap.h):
@@ -34,11 +35,13 @@
  *     shape, Ward against GGX's tails, typically stays near 10 %);
  *   - a parameter on its range's edge is "at-bound" only while the residual exceeds 1 %: a bound the fit
  *     reaches exactly is the source's value;
- *   - a residual that departs from the affine prediction by more than 1 % of the source's RMS radiance means
- *     the model rescaled the solution (Mitsuba's energy trimming);
+ *   - AUTO refines against real renders when its affine prediction misses the render by more than 1 % of the
+ *     source's RMS radiance (PREDICTION_TOLERANCE); a render that departs from affine behaviour in the linear
+ *     parameters by more than 0.5 % (affine_departure) means the model rescaled the solution (Mitsuba's
+ *     trimming, which engages with a 1 % step: 0.99 / max(rho_d + rho_s));
  *   - two minima within 1 % of each other's error but 0.1 apart (normalised) are ambiguous;
- *   - a local fit whose error a better fit (re-solving its linear parameters, or AUTO) lowers by more than 10 %
- *     stopped in a local minimum. */
+ *   - a local fit whose error the global search lowers by more than 10 % stopped in a local minimum, unless its
+ *     residual is below 0.1 % of the source's RMS radiance already. */
 #define UNREACHABLE_RELATIVE_RMSE 0.25
 #define AT_BOUND_RELATIVE_RMSE 0.01
 #define RELATIVE_RMS_FLOOR 1e-4
@@ -46,8 +49,10 @@
 #define AMBIGUITY_ERROR 0.01
 #define AMBIGUITY_DISTANCE 0.1
 #define LOCAL_MINIMUM_GAIN 0.10
+#define LOCAL_MINIMUM_FLOOR 1e-3
+#define AFFINE_DEPARTURE_TOLERANCE 0.005
 
-static const char *const strategy_names[MR_REMAP_STRATEGY_COUNT] = {"auto", "single", "two", "three"};
+static const char *const strategy_names[MR_REMAP_STRATEGY_COUNT] = {"auto", "single", "two", "three", "joint"};
 static const char *const outcome_names[MR_FIT_OUTCOME_COUNT] = {"converged", "at-bound", "unreachable",
                                                                 "local-minimum"};
 
@@ -61,7 +66,7 @@ mr_status mr_remap_strategy_from_name(const char *name, mr_remap_strategy *out) 
             *out = (mr_remap_strategy)i;
             return MR_OK;
         }
-    return mr_fail(MR_ERR_INVALID_ARG, "unknown strategy '%s' (valid: auto, single, two, three)",
+    return mr_fail(MR_ERR_INVALID_ARG, "unknown strategy '%s' (valid: auto, single, two, three, joint)",
                    name ? name : "(null)");
 }
 
@@ -111,6 +116,9 @@ typedef struct fit_context {
     int vary_count;
     const mr_image *goal;
     mr_component component;
+    /* projection: the component the basis renders show and ctx->goal holds (FULL, or one lobe while AUTO
+     * fits that lobe's shape, lobe_staged_fit) */
+    mr_component projection_component;
 
     const int *pixels; /* covered pixels, ascending */
     int pixel_count;
@@ -225,6 +233,8 @@ static int split_basis(fit_context *ctx, const double *zero, const double *one) 
             float s0 = ctx->homogeneous ? 0.0f : ctx->lobe_images[1]->pixels[at + c];
             float d1 = d0 + (ctx->lobe_images[2]->pixels[at + c] - d0) / (float)SPLIT_PROBE;
             float s1 = s0 + (ctx->lobe_images[3]->pixels[at + c] - s0) / (float)SPLIT_PROBE;
+            if (ctx->projection_component == MR_COMPONENT_SPECULAR) d0 = d1 = 0.0f;
+            if (ctx->projection_component == MR_COMPONENT_DIFFUSE) s0 = s1 = 0.0f;
             ctx->basis[0]->pixels[at + c] = d0 + s0;
             for (int p = 0; p < ctx->linear_param_count; p++) {
                 int diffuse = ctx->model->params[ctx->linear_params[p]].lobe == MR_LOBE_DIFFUSE;
@@ -245,14 +255,14 @@ static double project(fit_context *ctx) {
         for (int j = 0; j < ctx->linear_count; j++) one[ctx->linear[j].slot] = SPLIT_PROBE;
         if (!split_basis(ctx, values, one)) return NAN;
     } else {
-        if (!render_values(ctx, values, MR_COMPONENT_FULL, ctx->basis[0])) return NAN;
+        if (!render_values(ctx, values, ctx->projection_component, ctx->basis[0])) return NAN;
         for (int p = 0; p < ctx->linear_param_count; p++) {
             int param = ctx->linear_params[p];
             int offset = mr_brdf_param_offset(ctx->model, param);
             double one[MAX_SLOTS];
             memcpy(one, values, sizeof one);
             for (int c = 0; c < ctx->model->params[param].channels; c++) one[offset + c] = 1.0;
-            if (!render_values(ctx, one, MR_COMPONENT_FULL, ctx->basis[p + 1])) return NAN;
+            if (!render_values(ctx, one, ctx->projection_component, ctx->basis[p + 1])) return NAN;
         }
     }
 
@@ -323,8 +333,9 @@ static double direct_objective(unsigned n, const double *u, double *grad, void *
     return sse_against(ctx, ctx->scratch, ctx->goal);
 }
 
-/* Local bounded minimisation with BOBYQA from u (in/out); returns the minimum or NAN on an nlopt failure. */
-static double local_fit(fit_context *ctx, unsigned n, nlopt_func objective, double *u, double initial_step) {
+/* Local bounded minimisation with BOBYQA from u (in/out), first steps steps[i] (normalised units); returns the
+ * minimum or NAN on an nlopt failure. */
+static double local_fit(fit_context *ctx, unsigned n, nlopt_func objective, double *u, const double *steps) {
     nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, n);
     if (opt == NULL) {
         ctx->failure = MR_ERR_NOMEM;
@@ -342,7 +353,7 @@ static double local_fit(fit_context *ctx, unsigned n, nlopt_func objective, doub
     nlopt_set_xtol_rel(opt, ctx->opts.xtol);
     nlopt_set_xtol_abs1(opt, ctx->opts.xtol);
     nlopt_set_maxeval(opt, ctx->opts.max_evaluations);
-    nlopt_set_initial_step1(opt, initial_step);
+    nlopt_set_initial_step(opt, steps);
     double minimum = HUGE_VAL;
     ctx->running = opt;
     nlopt_result result = nlopt_optimize(opt, u, &minimum);
@@ -381,41 +392,42 @@ static double next_uniform(unsigned long long *state) {
     return (double)(z >> 11) * (1.0 / 9007199254740992.0);
 }
 
-/* Evaluate the grid, keep its local minima (no lower neighbour), best first, in starts[]; returns the count. */
+/* Evaluate a grid of `points` values per nonlinear dimension (d <= 3, points^d projections), keep its local
+ * minima (no lower neighbour among the 3^d - 1 around), best first, in starts[]; returns the count. */
 static int grid_minima(fit_context *ctx, int points, candidate *starts, int max_starts) {
     const int d = ctx->nonlinear_count;
-    int total = d == 1 ? points : points * points;
+    int total = 1;
+    for (int i = 0; i < d; i++) total *= points;
     double *sse = malloc((size_t)total * sizeof *sse);
-    if (sse == NULL) {
+    candidate *all = malloc((size_t)total * sizeof *all);
+    if (sse == NULL || all == NULL) {
+        free(sse);
+        free(all);
         ctx->failure = MR_ERR_NOMEM;
         return 0;
     }
     for (int g = 0; g < total && ctx->failure == MR_OK; g++) {
-        double u[2] = {(double)(g % points) / (points - 1), (double)(g / points) / (points - 1)};
+        double u[3];
+        for (int i = 0, rest = g; i < d; i++, rest /= points) u[i] = (double)(rest % points) / (points - 1);
         sse[g] = projected_objective((unsigned)d, u, NULL, ctx);
     }
-    int found = 0;
-    candidate *all = malloc((size_t)total * sizeof *all);
-    if (all == NULL) {
-        free(sse);
-        ctx->failure = MR_ERR_NOMEM;
-        return 0;
-    }
-    for (int g = 0; g < total; g++) {
-        int gx = g % points, gy = g / points, is_minimum = 1;
-        for (int dy = -1; dy <= 1 && is_minimum; dy++)
-            for (int dx = -1; dx <= 1; dx++) {
-                if ((dx == 0 && dy == 0) || (d == 1 && dy != 0)) continue;
-                int nx = gx + dx, ny = gy + dy;
-                if (nx < 0 || nx >= points || ny < 0 || (d == 2 && ny >= points) || (d == 1 && ny != 0)) continue;
-                if (sse[ny * points + nx] < sse[g]) {
-                    is_minimum = 0;
-                    break;
-                }
+    int found = 0, neighbourhood = 1;
+    for (int i = 0; i < d; i++) neighbourhood *= 3;
+    for (int g = 0; g < total && ctx->failure == MR_OK; g++) {
+        int at[3], is_minimum = 1;
+        for (int i = 0, rest = g; i < d; i++, rest /= points) at[i] = rest % points;
+        for (int n = 0; n < neighbourhood && is_minimum; n++) {
+            int neighbour = 0, stride = 1, inside = 1, moved = 0;
+            for (int i = 0, rest = n; i < d; i++, rest /= 3, stride *= points) {
+                int coordinate = at[i] + rest % 3 - 1;
+                moved |= rest % 3 != 1;
+                if (coordinate < 0 || coordinate >= points) inside = 0;
+                neighbour += coordinate * stride;
             }
+            if (moved && inside && sse[neighbour] < sse[g]) is_minimum = 0;
+        }
         if (!is_minimum) continue;
-        all[found].u[0] = (double)gx / (points - 1);
-        all[found].u[1] = (double)gy / (points - 1);
+        for (int i = 0; i < d; i++) all[found].u[i] = (double)at[i] / (points - 1);
         all[found].sse = sse[g];
         found++;
     }
@@ -439,8 +451,9 @@ static void auto_fit(fit_context *ctx, candidate *best, int *ambiguous) {
         memcpy(best->values, ctx->base, sizeof best->values);
         return;
     }
-    if (d <= 2) {
-        int points = ctx->opts.grid_points > 1 ? ctx->opts.grid_points : (d == 1 ? DEFAULT_GRID_1D : DEFAULT_GRID_2D);
+    if (d <= 3) {
+        static const int default_points[4] = {0, DEFAULT_GRID_1D, DEFAULT_GRID_2D, DEFAULT_GRID_3D};
+        int points = ctx->opts.grid_points > 1 ? ctx->opts.grid_points : default_points[d];
         start_count = grid_minima(ctx, points, starts, MAX_REFINED_STARTS);
         step = 1.0 / (points - 1);
     } else {
@@ -463,7 +476,9 @@ static void auto_fit(fit_context *ctx, candidate *best, int *ambiguous) {
         memcpy(ctx->base, saved_base, sizeof saved_base);
         candidate *r = &refined[refined_count];
         memcpy(r->u, starts[s].u, sizeof r->u);
-        r->sse = local_fit(ctx, (unsigned)d, projected_objective, r->u, step);
+        double steps[MAX_SLOTS];
+        for (int i = 0; i < d; i++) steps[i] = step;
+        r->sse = local_fit(ctx, (unsigned)d, projected_objective, r->u, steps);
         if (isnan(r->sse)) break;
         // Re-project at the returned point so base holds exactly its linear solution.
         r->sse = projected_objective((unsigned)d, r->u, NULL, ctx);
@@ -485,6 +500,101 @@ static void auto_fit(fit_context *ctx, candidate *best, int *ambiguous) {
     memcpy(ctx->base, best->values, sizeof ctx->base);
 }
 
+/* AUTO lobe by lobe (remap.h): each lobe's shape — its nonlinear parameters — comes from the global search
+ * against the source's render of that lobe alone, with the other lobe's linear parameters at 0 (so that a
+ * coupling such as Ward's trimming cannot enter); then every linear parameter is solved jointly against the
+ * full render with the shapes held. Returns 0 without doing anything unless the source has component images
+ * and every fitted nonlinear parameter belongs to exactly one lobe. */
+static int lobe_staged_fit(fit_context *ctx, const mr_remap_source *source, double source_energy, candidate *best,
+                           int *ambiguous) {
+    if (source->diffuse == NULL || source->specular == NULL || ctx->nonlinear_count == 0) return 0;
+    for (int i = 0; i < ctx->nonlinear_count; i++) {
+        mr_param_lobe lobe = ctx->model->params[ctx->nonlinear[i].param].lobe;
+        if (lobe != MR_LOBE_DIFFUSE && lobe != MR_LOBE_SPECULAR) return 0;
+    }
+    fitted_slot nonlinear[MAX_SLOTS], linear[MAX_SLOTS];
+    int linear_params[MAX_SLOTS];
+    const int nonlinear_count = ctx->nonlinear_count, linear_count = ctx->linear_count;
+    const int linear_param_count = ctx->linear_param_count;
+    memcpy(nonlinear, ctx->nonlinear, sizeof nonlinear);
+    memcpy(linear, ctx->linear, sizeof linear);
+    memcpy(linear_params, ctx->linear_params, sizeof linear_params);
+    *ambiguous = 0;
+    static const mr_param_lobe lobes[2] = {MR_LOBE_SPECULAR, MR_LOBE_DIFFUSE};
+    for (int l = 0; l < 2 && ctx->failure == MR_OK; l++) {
+        const mr_param_lobe lobe = lobes[l];
+        ctx->nonlinear_count = 0;
+        for (int i = 0; i < nonlinear_count; i++)
+            if (ctx->model->params[nonlinear[i].param].lobe == lobe)
+                ctx->nonlinear[ctx->nonlinear_count++] = nonlinear[i];
+        if (ctx->nonlinear_count == 0) continue;
+        ctx->linear_param_count = 0;
+        ctx->linear_count = 0;
+        for (int j = 0; j < linear_count; j++) {
+            if (ctx->model->params[linear[j].param].lobe & lobe)
+                ctx->linear[ctx->linear_count++] = linear[j];
+            else
+                ctx->base[linear[j].slot] = 0.0;
+        }
+        for (int p = 0; p < linear_param_count; p++)
+            if (ctx->model->params[linear_params[p]].lobe & lobe)
+                ctx->linear_params[ctx->linear_param_count++] = linear_params[p];
+        ctx->goal = lobe == MR_LOBE_SPECULAR ? source->specular : source->diffuse;
+        ctx->projection_component = lobe == MR_LOBE_SPECULAR ? MR_COMPONENT_SPECULAR : MR_COMPONENT_DIFFUSE;
+        candidate stage;
+        int stage_ambiguous = 0;
+        auto_fit(ctx, &stage, &stage_ambiguous); // leaves the lobe's best shape in ctx->base
+        // A lobe too faint to see (a dielectric's highlight at IOR 1.01) has an undetermined shape that does
+        // not matter to the image: its ambiguity is not a local minimum. It counts from 0.1 % of the energy.
+        double energy = 0.0;
+        for (int i = 0; i < ctx->pixel_count; i++)
+            for (int c = 0; c < 3; c++) {
+                double v = ctx->goal->pixels[(size_t)ctx->pixels[i] * 3 + c];
+                energy += v * v;
+            }
+        if (stage_ambiguous && energy >= 1e-3 * source_energy) *ambiguous = 1;
+    }
+    ctx->nonlinear_count = nonlinear_count;
+    ctx->linear_count = linear_count;
+    ctx->linear_param_count = linear_param_count;
+    memcpy(ctx->nonlinear, nonlinear, sizeof nonlinear);
+    memcpy(ctx->linear, linear, sizeof linear);
+    memcpy(ctx->linear_params, linear_params, sizeof linear_params);
+    ctx->goal = source->full;
+    ctx->projection_component = MR_COMPONENT_FULL;
+    best->sse = ctx->failure == MR_OK ? project(ctx) : NAN;
+    memcpy(best->values, ctx->base, sizeof best->values);
+    for (int i = 0; i < nonlinear_count; i++) best->u[i] = to_unit(&nonlinear[i], ctx->base[nonlinear[i].slot]);
+    return 1;
+}
+
+/* How far the target's render `rendered` at `values` departs from affine behaviour along the segment from all
+ * linear parameters at 0 to their fitted values: |R(b) - 2 R(b/2) + R(0)|, which is 0 (up to float rounding)
+ * wherever the image is affine in b and is not as soon as the model rescales the values somewhere on the
+ * segment (Ward's trimming: engaged at b but not at b/2, or by another factor). Uses basis[0] and basis[1] as
+ * scratch; 0 when there are no linear parameters; NAN if a render failed. */
+static double affine_departure(fit_context *ctx, const double *values, const mr_image *rendered) {
+    if (ctx->linear_param_count == 0) return 0.0;
+    double half[MAX_SLOTS], zero[MAX_SLOTS];
+    memcpy(half, values, sizeof half);
+    memcpy(zero, values, sizeof zero);
+    for (int j = 0; j < ctx->linear_count; j++) {
+        half[ctx->linear[j].slot] = 0.5 * values[ctx->linear[j].slot];
+        zero[ctx->linear[j].slot] = 0.0;
+    }
+    if (!render_values(ctx, half, MR_COMPONENT_FULL, ctx->basis[0]) ||
+        !render_values(ctx, zero, MR_COMPONENT_FULL, ctx->basis[1]))
+        return NAN;
+    double sum = 0.0;
+    for (int i = 0; i < ctx->pixel_count; i++)
+        for (int c = 0; c < 3; c++) {
+            size_t at = (size_t)ctx->pixels[i] * 3 + c;
+            double d = (double)rendered->pixels[at] - 2.0 * ctx->basis[0]->pixels[at] + ctx->basis[1]->pixels[at];
+            sum += d * d;
+        }
+    return sqrt(sum);
+}
+
 /* ---- the paper's strategies: direct local fits ---------------------------------------------------------- */
 
 /* Fit the slots whose parameter lobe matches `lobes` (any of the bits; 0 = every slot) against `goal`, rendering
@@ -503,9 +613,16 @@ static double direct_stage(fit_context *ctx, unsigned lobes, int exact_lobe, con
     if (ctx->vary_count == 0) return 0.0;
     ctx->goal = goal;
     ctx->component = component;
-    double u[2 * MAX_SLOTS];
-    for (int i = 0; i < ctx->vary_count; i++) u[i] = to_unit(ctx->vary[i], ctx->base[ctx->vary[i]->slot]);
-    double minimum = local_fit(ctx, (unsigned)ctx->vary_count, direct_objective, u, 0.1);
+    double u[2 * MAX_SLOTS], steps[2 * MAX_SLOTS];
+    for (int i = 0; i < ctx->vary_count; i++) {
+        const fitted_slot *v = ctx->vary[i];
+        u[i] = to_unit(v, ctx->base[v->slot]);
+        // First steps of 0.1 of the range, but at most 0.1 in the value's own units: a reflectance allowed up to
+        // 10 (Ward's rho_s) would otherwise first jump by 1.0, straight onto the plateau of Ward's energy
+        // trimming, where the objective is flat in the reflectances' common scale and BOBYQA stalls.
+        steps[i] = v->log_scale ? 0.1 : 0.1 * fmin(1.0, 1.0 / (v->hi - v->lo));
+    }
+    double minimum = local_fit(ctx, (unsigned)ctx->vary_count, direct_objective, u, steps);
     if (isnan(minimum)) return NAN;
     for (int i = 0; i < ctx->vary_count; i++) ctx->base[ctx->vary[i]->slot] = to_value(ctx->vary[i], u[i]);
     return minimum;
@@ -688,22 +805,32 @@ static double now_seconds(void) {
 }
 
 /* Decide the outcome of a finished fit (remap.h) and write its detail line. */
-static void classify(fit_context *ctx, const mr_remap_source *source, double predicted_sse, double actual_sse,
-                     double source_energy, int ambiguous, double projected_gain, mr_remap_result *out) {
+static void classify(fit_context *ctx, double departure, int rescaled_optimum, int ambiguous, double projected_gain,
+                     mr_remap_result *out) {
     out->outcome = MR_FIT_CONVERGED;
     snprintf(out->detail, sizeof out->detail, "converged: relative RMSE %.3g", out->relative_rmse);
-    (void)source;
-    // The projection predicted the residual from basis renders; if the real render at the solution misses that
-    // prediction, the model does not behave affinely there: it clamped or rescaled the values.
-    double gap = isnan(predicted_sse) ? 0.0 : fabs(sqrt(actual_sse) - sqrt(predicted_sse)) / sqrt(source_energy);
-    if (gap > PREDICTION_TOLERANCE) {
+    // The image is affine in the linear parameters unless the model clamps or rescales them: where it does at
+    // the solution, the values are not the ones the render shows (any strategy).
+    if (departure > AFFINE_DEPARTURE_TOLERANCE) {
         out->outcome = MR_FIT_UNREACHABLE;
         snprintf(out->detail, sizeof out->detail,
-                 "unreachable: the target rescales these values (e.g. energy trimming when diffuse + specular > 1), "
-                 "so its render misses the fit by %.1f %% of the source's RMS radiance", 100.0 * gap);
+                 "unreachable: the target rescales these values (e.g. energy trimming when diffuse + specular > 1); "
+                 "its render departs from them by %.1f %% of the source's RMS radiance", 100.0 * departure);
         return;
     }
-    if (ambiguous || projected_gain > LOCAL_MINIMUM_GAIN) {
+    // AUTO's best affine solution lies where the model rescales: the refinement against real renders then
+    // settles on the edge of the region the model leaves alone (Ward: diffuse + specular = 1), a value pinned by
+    // the target's limit, not the source's.
+    if (rescaled_optimum) {
+        out->outcome = MR_FIT_UNREACHABLE;
+        snprintf(out->detail, sizeof out->detail,
+                 "unreachable: the best fit needs values the target rescales (e.g. energy trimming when diffuse + "
+                 "specular > 1); the closest render leaves %.1f %% of the source's RMS radiance",
+                 100.0 * out->relative_rmse);
+        return;
+    }
+    // A residual below 0.1 % of the source's radiance is a match, whatever a global search finds beyond it.
+    if (ambiguous || (projected_gain > LOCAL_MINIMUM_GAIN && out->relative_rmse > LOCAL_MINIMUM_FLOOR)) {
         out->outcome = MR_FIT_LOCAL_MINIMUM;
         if (ambiguous)
             snprintf(out->detail, sizeof out->detail,
@@ -821,12 +948,12 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     // The source energy that relative figures divide by, floored like relative_rmse so a black source gives
     // finite ratios.
     const double energy_scale = fmax(source_energy, 3.0 * ctx.pixel_count * RELATIVE_RMS_FLOOR * RELATIVE_RMS_FLOOR);
-    double predicted = NAN, projected_gain = 0.0;
-    int ambiguous = 0;
-    if (opts.strategy == MR_REMAP_AUTO) {
+    double projected_gain = 0.0;
+    int ambiguous = 0, rescaled_optimum = 0;
+    if (opts.strategy == MR_REMAP_AUTO || opts.strategy == MR_REMAP_JOINT) {
         candidate best;
-        auto_fit(&ctx, &best, &ambiguous);
-        predicted = best.sse;
+        if (!(opts.strategy == MR_REMAP_AUTO && lobe_staged_fit(&ctx, source, source_energy, &best, &ambiguous)))
+            auto_fit(&ctx, &best, &ambiguous);
         // Where the model rescales the solved values (Ward's energy trimming when diffuse + specular > 1), the
         // affine prediction no longer describes the render: refine every parameter against real renders from
         // the projected solution, and keep whichever renders closer. The outcome still reports the gap.
@@ -834,6 +961,7 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
             render_values(&ctx, ctx.base, MR_COMPONENT_FULL, ctx.scratch)) {
             double projected_actual = sse_against(&ctx, ctx.scratch, source->full);
             if (fabs(sqrt(projected_actual) - sqrt(best.sse)) > PREDICTION_TOLERANCE * sqrt(energy_scale)) {
+                rescaled_optimum = 1;
                 double kept[MAX_SLOTS];
                 memcpy(kept, ctx.base, sizeof kept);
                 double refined = direct_stage(&ctx, 0, 0, source->full, MR_COMPONENT_FULL);
@@ -866,7 +994,14 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     }
     double actual = sse_against(&ctx, ctx.scratch, source->full);
     long fit_renders = ctx.renders;
-    if (opts.strategy != MR_REMAP_AUTO && !opts.skip_global_check && actual > 0.0) {
+    double departure = affine_departure(&ctx, result.values, ctx.scratch);
+    if (isnan(departure)) {
+        status = ctx.failure;
+        free_context(&ctx);
+        return status;
+    }
+    int local = opts.strategy != MR_REMAP_AUTO && opts.strategy != MR_REMAP_JOINT;
+    if (local && !opts.skip_global_check && actual > 0.0) {
         // A local fit stopped in a local minimum if the global search does clearly better (remap.h). Its renders
         // are counted apart, so `renders` stays the strategy's own cost.
         double saved[MAX_SLOTS];
@@ -909,8 +1044,7 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     // black to the eye), which keeps the ratio finite and a black fit's float-rounding residue negligible.
     result.relative_rmse = fit_rms / fmax(source_rms, RELATIVE_RMS_FLOOR);
     result.renders = fit_renders;
-    classify(&ctx, source, predicted, actual, energy_scale, ambiguous,
-             projected_gain, &result);
+    classify(&ctx, departure / sqrt(energy_scale), rescaled_optimum, ambiguous, projected_gain, &result);
     free_context(&ctx);
     result.seconds = now_seconds() - start_time;
     *out = result;

@@ -18,12 +18,21 @@
  *     diffuse-lobe parameters to the diffuse-only render and then the specular-lobe ones to the specular-only
  *     render (parameters touching both lobes are fitted in the second stage against the full render); THREE
  *     starts a SINGLE fit from the TWO result. TWO and THREE need the source's component images.
- *   - AUTO (the default) removes the diffuse/specular coupling that traps the paper's single-stage fits
- *     (docs/design.md principle 3): for fixed values of the nonlinear parameters (roughness, IOR, metallic)
- *     the image is affine in the LINEAR/AFFINE parameters (the descriptor's roles), so their best values are a
- *     small bounded linear least-squares solve over basis renders ("variable projection"). The remaining one
- *     or two nonlinear parameters are searched on a global grid and the best grid points refined locally
- *     (BOBYQA); with more than two nonlinear parameters, the refinement is multi-started from seeded points.
+ *   - JOINT removes the diffuse/specular coupling that traps the paper's single-stage fits (docs/design.md
+ *     principle 3): for fixed values of the nonlinear parameters (roughness, IOR, metallic) the image is affine
+ *     in the LINEAR/AFFINE parameters (the descriptor's roles), so their best values are a small bounded linear
+ *     least-squares solve over basis renders ("variable projection"). The remaining one to three nonlinear
+ *     parameters are searched on a global grid and the best grid minima refined locally (BOBYQA); with more
+ *     than three, the refinement is multi-started from seeded points. It finds the global
+ *     L2 optimum of the full render.
+ *   - AUTO (the default) is JOINT lobe by lobe where it can be: when the source has component images and
+ *     every nonlinear target parameter belongs to one lobe (Ward's, GGX's, Phong's roughness), each lobe's
+ *     shape is searched the same way against the source's render of that lobe alone (the paper's two-stage
+ *     idea, without its local fits), then all linear parameters are solved jointly against the full render.
+ *     The full render's global optimum can switch branch as the source varies (a plastic's faint highlight at
+ *     IOR 1.02-1.14 fitted by a broad Ward lobe at alpha = 1 that reshapes the diffuse, then a narrow one):
+ *     remaps of neighbouring texels would then jump. AUTO follows the source's own lobes and so stays smooth,
+ *     for a slightly higher L2 error (docs/analyses.md section 3, docs/performance.md). Otherwise AUTO = JOINT.
  * Parameters flagged MR_PARAM_FIT_FIXED (e.g. glTF's KHR_materials_specular factors) and switches are held at
  * the values given in opts->target_values (or the defaults) and not fitted.
  *
@@ -33,10 +42,16 @@
  *     RMS radiance: the source wants a value the target cannot express;
  *   - UNREACHABLE: the target cannot reproduce the source: the residual stays above 25 % of the source's RMS
  *     radiance, or the model's own nonlinearity (Mitsuba's energy trimming of Ward with diffuse + specular > 1)
- *     engaged at the solution, so that its render departs from the fit;
- *   - LOCAL_MINIMUM: AUTO found distinct minima with nearly equal error, so the scene does not determine the
- *     parameters; or a local strategy stopped where AUTO's global search finds more than 10 % less squared
- *     error: the diffuse/specular coupling trap of the paper's figure 8.
+ *     engaged at the solution, so that its render departs from the fit, or (AUTO/JOINT) the best affine
+ *     solution lies where the model rescales, so that the refined fit is pinned at the edge of that region;
+ *   - LOCAL_MINIMUM: AUTO/JOINT found distinct minima with nearly equal error, so the scene does not determine
+ *     the parameters (not counted for a lobe carrying under 0.1 % of the energy, whose shape does not show); or
+ *     a local strategy stopped where JOINT's global search, rendered, has more than 10 % less squared error
+ *     (the diffuse/specular coupling trap of the paper's figure 8), unless its residual is already under
+ *     0.1 % of the source's RMS radiance.
+ * UNREACHABLE's rescaling test is the same for every strategy: the render at the solution must be affine in the
+ * linear parameters along the segment from 0 to their values (R(b) - 2 R(b/2) + R(0) under 0.5 % of the
+ * source's RMS radiance; two extra renders, not counted in `renders`).
  * Work is bounded: at most opts->max_evaluations renders per local fit, a fixed grid, a fixed start count.
  * Deterministic: the same inputs and seed give the same result for any thread count.
  */
@@ -63,10 +78,11 @@ typedef enum mr_remap_strategy {
     MR_REMAP_SINGLE,
     MR_REMAP_TWO,
     MR_REMAP_THREE,
+    MR_REMAP_JOINT,
     MR_REMAP_STRATEGY_COUNT
 } mr_remap_strategy;
 
-/* "auto", "single", "two", "three"; NULL outside the enum. */
+/* "auto", "single", "two", "three", "joint"; NULL outside the enum. */
 const char *mr_remap_strategy_name(mr_remap_strategy strategy);
 /* Parse one of the names above; MR_ERR_INVALID_ARG listing them otherwise. */
 mr_status mr_remap_strategy_from_name(const char *name, mr_remap_strategy *out);
@@ -86,7 +102,8 @@ typedef struct mr_remap_options {
     mr_remap_strategy strategy;  /* MR_REMAP_AUTO */
     int max_evaluations;         /* renders per local fit: 400 */
     double xtol;                 /* relative step tolerance of local fits, in normalised coordinates: 1e-6 */
-    int grid_points;             /* AUTO's global grid per nonlinear dimension: 32 (1-D), 12 (2-D) if 0 */
+    int grid_points;             /* AUTO's global grid per nonlinear dimension: 32 (1-D), 12 (2-D), 6 (3-D)
+                                    if 0 */
     int starts;                  /* AUTO with > 2 nonlinear parameters: multi-start count: 8 */
     unsigned long seed;          /* seeds the multi-start points: 1 */
     const double *target_values; /* optional packed target values: the values of fixed parameters and
