@@ -17,9 +17,9 @@ CXX      ?= g++
 
 WARN      := -Wall -Wextra -Werror
 MODULE_DIR := $(PREFIX)/lib/matremap
-CFLAGS    := -std=c11 -pedantic $(WARN) $(OPT) $(SAN) -fopenmp -D_POSIX_C_SOURCE=200809L -Isrc -I/usr/include/OpenEXR \
+CFLAGS    := -std=c11 -pedantic $(WARN) $(OPT) $(SAN) -fopenmp -D_POSIX_C_SOURCE=200809L -Isrc -I. -I/usr/include/OpenEXR \
              -DMR_MODULE_DIR='"$(MODULE_DIR)"'
-CXXFLAGS  := -std=c++17 $(WARN) $(OPT) $(SAN) -fopenmp -Isrc $(shell pkg-config --cflags OpenImageIO 2>/dev/null)
+CXXFLAGS  := -std=c++17 $(WARN) $(OPT) $(SAN) -fopenmp -Isrc -I. $(shell pkg-config --cflags OpenImageIO 2>/dev/null)
 LDFLAGS   := $(SAN) -fopenmp
 LDLIBS    := $(shell pkg-config --libs nlopt 2>/dev/null) -lOpenEXRCore-3_1 -lm
 
@@ -43,7 +43,8 @@ TESTS     := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
 
 PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h src/render/render.h \
-                  src/io/image_io.h src/metrics/metrics.h src/remap/remap.h
+                  src/io/image_io.h src/metrics/metrics.h src/remap/remap.h src/workflow/workflow.h \
+                  src/workflow/dataset.h nn/mlp.h
 
 .PHONY: all check asan demo bench analyses deps install clean
 # Keep test objects between runs (they are intermediate files of the test binaries).

@@ -38,6 +38,9 @@
 #include "io/image_io.h"
 #include "metrics/metrics.h"
 #include "remap/remap.h"
+#include "workflow/workflow.h"
+#include "workflow/dataset.h"
+#include "nn/mlp.h"
 
 #ifdef __cplusplus
 extern "C" {

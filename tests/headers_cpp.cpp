@@ -8,6 +8,9 @@
 #include "io/image_io.h"
 #include "metrics/metrics.h"
 #include "remap/remap.h"
+#include "workflow/workflow.h"
+#include "workflow/dataset.h"
+#include "nn/mlp.h"
 
 extern "C" int mr_headers_cpp_probe(void);
 int mr_headers_cpp_probe(void) { return MR_STATUS_COUNT + MR_COMPONENT_COUNT; }

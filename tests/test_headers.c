@@ -7,6 +7,9 @@
 #include "io/image_io.h"
 #include "metrics/metrics.h"
 #include "render/render.h"
+#include "workflow/workflow.h"
+#include "workflow/dataset.h"
+#include "nn/mlp.h"
 #include "matremap.h"
 
 #include <omp.h>

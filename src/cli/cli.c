@@ -35,6 +35,27 @@ int cli_usage_error(const char *command, const char *fmt, ...) {
     return CLI_EXIT_USAGE;
 }
 
+int cli_parse_held(const char *command, const mr_brdf_model *model, const char *list, unsigned *held) {
+    const char *name = list;
+    while (*name) {
+        size_t length = strcspn(name, ",");
+        int found = -1;
+        for (int p = 0; p < model->param_count && p < 32; p++)
+            if (strlen(model->params[p].name) == length && strncmp(model->params[p].name, name, length) == 0) found = p;
+        if (found < 0) {
+            char valid[512] = "";
+            for (int p = 0; p < model->param_count; p++)
+                snprintf(valid + strlen(valid), sizeof valid - strlen(valid), "%s%s", p ? ", " : "",
+                         model->params[p].name);
+            return cli_usage_error(command, "--hold: '%.*s' is not a parameter of '%s' (valid: %s)", (int)length, name,
+                                   model->name, valid) == 0;
+        }
+        *held |= 1u << found;
+        name += length + (name[length] == ',');
+    }
+    return 1;
+}
+
 int cli_is_help(const char *arg) { return strcmp(arg, "--help") == 0 || strcmp(arg, "-h") == 0; }
 
 int cli_take_option(const char *command, int argc, char **argv, int *i, const char *name, const char **value) {

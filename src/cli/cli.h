@@ -45,6 +45,10 @@ int cli_parse_int(const char *command, const char *option, const char *text, int
 int cli_parse_double(const char *command, const char *option, const char *text, double lo, double hi,
                      double *out);
 
+/* Parse "--hold NAME[,NAME...]": parameters of `model` to hold instead of fit (mr_remap_options.held); on an
+ * unknown name print a usage error listing the model's parameters and return 0. */
+int cli_parse_held(const char *command, const mr_brdf_model *model, const char *list, unsigned *held);
+
 /* Write s as a JSON string literal (quotes and escapes included). */
 void cli_json_string(FILE *out, const char *s);
 

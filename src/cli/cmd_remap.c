@@ -35,7 +35,9 @@ static void print_help(void) {
            "\n"
            "Target:\n"
            "  --to MODEL [name=value ...]     values given here hold fixed parameters (e.g. glTF's ior) and\n"
-           "                                  switches (Ward's trim) at those values\n"
+           "                                  switches (Ward's trim) at those values, and start the others\n"
+           "  --hold NAME[,NAME]              hold these target parameters at their given (or default) values\n"
+           "                                  instead of fitting them, e.g. a roughness both models share\n"
            "\n"
            "Options:\n"
            "  --strategy S       auto (default): affine parameters solved exactly, each lobe's roughness\n"
@@ -114,7 +116,7 @@ static mr_status write_pictures(const char *prefix, const mr_render_plan *plan, 
 int cmd_remap(int argc, char **argv) {
     const char *from_name = NULL, *to_name = NULL, *images_prefix = NULL;
     const char *image_paths[3] = {NULL, NULL, NULL}; /* full, diffuse, specular */
-    const char *reference_path = NULL;
+    const char *reference_path = NULL, *hold_list = NULL;
     double reference_albedo = 0.5;
     const char *from_assignments[MAX_ASSIGNMENTS], *to_assignments[MAX_ASSIGNMENTS];
     int from_count = 0, to_count = 0, json = 0, size = 0;
@@ -159,6 +161,9 @@ int cmd_remap(int argc, char **argv) {
                 return cli_usage_error("remap", "%s", mr_last_error());
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--size", &value))) {
             if (taken < 0 || !cli_parse_int("remap", "--size", value, 16, 4096, &size)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--hold", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            hold_list = value;
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--grid-points", &value))) {
             if (taken < 0 || !cli_parse_int("remap", "--grid-points", value, 2, 64, &opts.grid_points))
                 return CLI_EXIT_USAGE;
@@ -199,6 +204,7 @@ int cmd_remap(int argc, char **argv) {
         if (status != MR_OK) return cli_fail("remap", status);
     }
     opts.target_values = target_values;
+    if (hold_list != NULL && !cli_parse_held("remap", to, hold_list, &opts.held)) return CLI_EXIT_USAGE;
 
     const mr_brdf_model *from = NULL;
     double source_values[MR_BRDF_MAX_VALUES];

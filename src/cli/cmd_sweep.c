@@ -35,7 +35,8 @@ static void print_help(void) {
            "                              fixed extension factors are held\n"
            "  --seed S                    seed of --random (default 1); sample i depends only on (S, i)\n"
            "Values given after --from hold for every sample; a grid axis overrides them. Values given after --to\n"
-           "hold the target's fixed parameters and switches (e.g. Ward's trim), as in 'matremap remap'.\n"
+           "hold the target's fixed parameters and switches (e.g. Ward's trim), as in 'matremap remap';\n"
+           "--hold NAME[,NAME] holds target parameters at those values instead of fitting them.\n"
            "\n"
            "Options:\n"
            "  -o, --output FILE     the CSV file (required); it must not exist unless --resume is given\n"
@@ -153,7 +154,7 @@ static int parse_seed(const char *text, unsigned long long *out) {
 }
 
 int cmd_sweep(int argc, char **argv) {
-    const char *from_name = NULL, *to_name = NULL, *output = NULL;
+    const char *from_name = NULL, *to_name = NULL, *output = NULL, *hold_list = NULL;
     const char *from_assignments[MAX_ASSIGNMENTS], *to_assignments[MAX_ASSIGNMENTS];
     const char *grid_axes[MR_SWEEP_MAX_AXES];
     int from_count = 0, to_count = 0, axis_count = 0, random_count = 0, seed_given = 0, resume = 0, threads = 0;
@@ -185,6 +186,9 @@ int cmd_sweep(int argc, char **argv) {
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--random", &value))) {
             if (taken < 0 || !cli_parse_int("sweep", "--random", value, 1, (int)MR_SWEEP_MAX_SAMPLES, &random_count))
                 return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--hold", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            hold_list = value;
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--seed", &value))) {
             if (taken < 0 || !parse_seed(value, &seed)) return CLI_EXIT_USAGE;
             seed_given = 1;
@@ -251,6 +255,7 @@ int cmd_sweep(int argc, char **argv) {
         if (status != MR_OK) return cli_fail("sweep", status);
     }
     spec.remap.strategy = strategy;
+    if (hold_list != NULL && !cli_parse_held("sweep", to, hold_list, &spec.remap.held)) return CLI_EXIT_USAGE;
     spec.scene = scene;
     if (random_count > 0) {
         spec.sampling = MR_SWEEP_RANDOM;

@@ -652,7 +652,14 @@ static int close_enough(double a, double b, double scale) { return fabs(a - b) <
  * parameter (fixed ones and switches at `base`). The candidate parameter spans its whole range; the already
  * linear ones are drawn from the lowest 5 % of theirs, where no clamp or energy trimming engages: what is
  * checked is the formula, not its safety nets. */
-static int jointly_affine(const mr_brdf_model *m, const double *base, const unsigned char *is_linear,
+/* True if parameter i is not fitted: a switch, a parameter the descriptor holds (MR_PARAM_FIT_FIXED), or one the
+ * caller holds (bit i of mr_remap_options.held). */
+static int held_fixed(const mr_brdf_model *m, unsigned held, int i) {
+    const mr_brdf_param *p = &m->params[i];
+    return p->role == MR_PARAM_SWITCH || (p->flags & MR_PARAM_FIT_FIXED) || (i < 32 && ((held >> i) & 1u));
+}
+
+static int jointly_affine(const mr_brdf_model *m, unsigned held, const double *base, const unsigned char *is_linear,
                           int candidate) {
     unsigned long long state = 0x5eedULL;
     int count = mr_brdf_value_count(m);
@@ -661,7 +668,7 @@ static int jointly_affine(const mr_brdf_model *m, const double *base, const unsi
         memcpy(u, base, sizeof u);
         for (int i = 0; i < m->param_count; i++) {
             const mr_brdf_param *p = &m->params[i];
-            if (p->role == MR_PARAM_SWITCH || (p->flags & MR_PARAM_FIT_FIXED)) continue;
+            if (held_fixed(m, held, i)) continue;
             int offset = mr_brdf_param_offset(m, i);
             double span = (is_linear[i] && i != candidate) ? 0.05 : 1.0;
             for (int c = 0; c < p->channels; c++)
@@ -729,14 +736,15 @@ static int lobes_split(const mr_brdf_model *m, const int *linear_params, int cou
 
 /* True if f_r is exactly 0 with every linear parameter at 0, for seeded random directions and values of the
  * others (Ward: no diffuse, no specular, no light; GGX with Schlick F0 = 0 still reflects at grazing angles). */
-static int black_without_linear(const mr_brdf_model *m, const double *base, const unsigned char *is_linear) {
+static int black_without_linear(const mr_brdf_model *m, unsigned held, const double *base,
+                                const unsigned char *is_linear) {
     unsigned long long state = 0xb1ac0ULL;
     for (int trial = 0; trial < 32; trial++) {
         double v[MAX_SLOTS], wi[3], wo[3], f[3];
         memcpy(v, base, sizeof v);
         for (int i = 0; i < m->param_count; i++) {
             const mr_brdf_param *p = &m->params[i];
-            if (p->role == MR_PARAM_SWITCH || (p->flags & MR_PARAM_FIT_FIXED)) continue;
+            if (held_fixed(m, held, i)) continue;
             int offset = mr_brdf_param_offset(m, i);
             for (int c = 0; c < p->channels; c++)
                 v[offset + c] = is_linear[i] ? 0.0
@@ -760,19 +768,20 @@ static int black_without_linear(const mr_brdf_model *m, const double *base, cons
  * values. Cycles' base colour is the example: its specular tint divides by the colour's luminance, but with
  * the tint held at 0 the colour enters affinely, and solving for it exactly removes three dimensions from the
  * nonlinear search. RGB parameters are tried first (they remove the most), then the others in table order. */
-static void choose_linear_parameters(const mr_brdf_model *m, const double *base, unsigned char *is_linear) {
+static void choose_linear_parameters(const mr_brdf_model *m, unsigned held, const double *base,
+                                     unsigned char *is_linear) {
     memset(is_linear, 0, MAX_SLOTS);
     for (int i = 0; i < m->param_count; i++) {
         const mr_brdf_param *p = &m->params[i];
-        is_linear[i] = !(p->flags & MR_PARAM_FIT_FIXED) && (p->role == MR_PARAM_LINEAR || p->role == MR_PARAM_AFFINE);
+        is_linear[i] = !held_fixed(m, held, i) && (p->role == MR_PARAM_LINEAR || p->role == MR_PARAM_AFFINE);
     }
     for (int pass = 0; pass < 2; pass++)
         for (int i = 0; i < m->param_count; i++) {
             const mr_brdf_param *p = &m->params[i];
-            if (is_linear[i] || p->role != MR_PARAM_NONLINEAR || (p->flags & MR_PARAM_FIT_FIXED)) continue;
+            if (is_linear[i] || p->role != MR_PARAM_NONLINEAR || held_fixed(m, held, i)) continue;
             if ((pass == 0) != (p->channels == 3)) continue;
             is_linear[i] = 1;
-            if (!jointly_affine(m, base, is_linear, i)) is_linear[i] = 0;
+            if (!jointly_affine(m, held, base, is_linear, i)) is_linear[i] = 0;
         }
 }
 
@@ -904,10 +913,10 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     else
         mr_brdf_default_values(target, ctx.base);
     unsigned char is_linear[MAX_SLOTS];
-    choose_linear_parameters(target, ctx.base, is_linear);
+    choose_linear_parameters(target, opts.held, ctx.base, is_linear);
     for (int i = 0; i < target->param_count; i++) {
         const mr_brdf_param *p = &target->params[i];
-        if (p->role == MR_PARAM_SWITCH || (p->flags & MR_PARAM_FIT_FIXED)) continue;
+        if (held_fixed(target, opts.held, i)) continue;
         int offset = mr_brdf_param_offset(target, i);
         if (!is_linear[i]) {
             for (int c = 0; c < p->channels; c++)
@@ -930,7 +939,7 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     for (int i = 0; status == MR_OK && i <= ctx.linear_param_count; i++)
         status = mr_image_create(scene->width, scene->height, 3, &ctx.basis[i]);
     ctx.split_lobes = lobes_split(target, ctx.linear_params, ctx.linear_param_count);
-    ctx.homogeneous = ctx.split_lobes && black_without_linear(target, ctx.base, is_linear);
+    ctx.homogeneous = ctx.split_lobes && black_without_linear(target, opts.held, ctx.base, is_linear);
     for (int i = 0; status == MR_OK && ctx.split_lobes && i < 4; i++)
         status = mr_image_create(scene->width, scene->height, 3, &ctx.lobe_images[i]);
     if (status != MR_OK) {

@@ -33,8 +33,8 @@
  *     IOR 1.02-1.14 fitted by a broad Ward lobe at alpha = 1 that reshapes the diffuse, then a narrow one):
  *     remaps of neighbouring texels would then jump. AUTO follows the source's own lobes and so stays smooth,
  *     for a slightly higher L2 error (docs/analyses.md section 3, docs/performance.md). Otherwise AUTO = JOINT.
- * Parameters flagged MR_PARAM_FIT_FIXED (e.g. glTF's KHR_materials_specular factors) and switches are held at
- * the values given in opts->target_values (or the defaults) and not fitted.
+ * Parameters flagged MR_PARAM_FIT_FIXED (e.g. glTF's KHR_materials_specular factors), switches and the parameters
+ * the caller holds (opts->held) keep the values given in opts->target_values (or the defaults) and are not fitted.
  *
  * Outcome (mr_fit_outcome): the run finishing is MR_OK; how the fit ended is reported separately:
  *   - CONVERGED;
@@ -110,6 +110,8 @@ typedef struct mr_remap_options {
                                     switches (NULL: the target's defaults) */
     int skip_global_check;       /* SINGLE/TWO/THREE: 0 = also run AUTO's global search to detect a local
                                     minimum (its renders are not counted in the result); 1 = skip it */
+    unsigned held;               /* bit p set: the target's parameter p is held at its target_values value (or
+                                    default) instead of fitted, e.g. a roughness both sides share: 0 */
 } mr_remap_options;
 
 /* The defaults listed beside each field. */

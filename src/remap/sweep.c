@@ -419,8 +419,15 @@ static mr_status build_header(const mr_sweep_spec *spec, const char *command_lin
     append_values(sb, spec->source, spec->source_values);
     sb_printf(sb, "\n# to: %s", spec->target->name);
     append_values(sb, spec->target, spec->target_values);
-    sb_printf(sb, "\n# remap: strategy=%s max_evaluations=%d xtol=%.17g grid_points=%d starts=%d seed=%lu\n",
+    sb_printf(sb, "\n# remap: strategy=%s max_evaluations=%d xtol=%.17g grid_points=%d starts=%d seed=%lu",
               mr_remap_strategy_name(r->strategy), r->max_evaluations, r->xtol, r->grid_points, r->starts, r->seed);
+    // Held target parameters are named only when there are some, so files written before --hold still resume.
+    for (int p = 0, first = 1; p < spec->target->param_count && p < 32; p++)
+        if ((r->held >> p) & 1u) {
+            sb_printf(sb, "%s%s", first ? " held=" : ",", spec->target->params[p].name);
+            first = 0;
+        }
+    sb_printf(sb, "\n");
     sb_printf(sb, "# scene: fit size=%d light=%s intensity=%.17g edge_samples=%d\n", scene.width,
               mr_fit_light_name(spec->scene.light), scene.lights[0].intensity[0],
               scene.edge_samples > 0 ? scene.edge_samples : MR_SCENE_DEFAULT_EDGE_SAMPLES);

@@ -1,0 +1,388 @@
+/*
+ * weights.c — the MLP weight file (format in mlp.h): writing through the atomic temp-file + rename protocol of
+ * src/io/atomic_file.c, and a strict line-by-line reader.
+ *
+ * Hexadecimal floats ("%a") are exact: a float promoted to double prints every significant bit, and strtod
+ * reads it back to the same double, whose conversion to float is exact. Both printf's and strtod's radix
+ * character follow LC_NUMERIC, so each call switches its own thread to the C numeric locale with uselocale()
+ * (per thread, so a host program's locale is neither used nor changed), as src/remap/sweep.c does. The whole
+ * file is formatted in memory and handed to mr_atomic_write_bytes(), and read whole before parsing, so the
+ * parser (mr_mlp_parse) works on bytes and can be tested and fuzzed without files.
+ */
+#include "mlp_internal.h"
+
+#include <errno.h>
+#include <float.h>
+#include <locale.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../src/io/io_internal.h"
+#include "../src/mr_internal.h"
+
+/* Hidden and output activations: the only pair version 1 knows. */
+#define ACTIVATIONS "relu linear"
+/* Longest number token the reader accepts ("-0x1.fffffep+127" has 16 characters). */
+#define MAX_TOKEN 63
+/* Longest file the reader loads: MR_MLP_MAX_PARAMS numbers at 24 bytes, plus slack. */
+#define MAX_FILE_BYTES ((size_t)MR_MLP_MAX_PARAMS * 24 + ((size_t)1 << 20))
+
+/* ---- the C numeric locale, per thread --------------------------------------------------------------------- */
+
+typedef struct c_numeric {
+    locale_t c;
+    locale_t saved;
+} c_numeric;
+
+static mr_status c_numeric_enter(c_numeric *s, const char *what) {
+    s->saved = (locale_t)0;
+    s->c = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
+    if (s->c == (locale_t)0) return mr_fail(MR_ERR_NOMEM, "%s: cannot create the C numeric locale", what);
+    s->saved = uselocale(s->c);
+    return MR_OK;
+}
+
+static void c_numeric_leave(c_numeric *s) {
+    uselocale(s->saved);
+    freelocale(s->c);
+}
+
+/* ---- writing ---------------------------------------------------------------------------------------------- */
+
+typedef struct out_text {
+    char *text;
+    size_t length, capacity;
+} out_text;
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+static int put(out_text *o, const char *fmt, ...) {
+    va_list args;
+    va_start(args, fmt);
+    int n = vsnprintf(o->text + o->length, o->capacity - o->length, fmt, args);
+    va_end(args);
+    if (n < 0 || (size_t)n >= o->capacity - o->length) return -1;
+    o->length += (size_t)n;
+    return 0;
+}
+
+/* "key v v v\n" */
+static int put_line(out_text *o, const char *key, const float *v, size_t count) {
+    if (put(o, "%s", key) != 0) return -1;
+    for (size_t q = 0; q < count; q++)
+        if (put(o, " %a", (double)v[q]) != 0) return -1;
+    return put(o, "\n");
+}
+
+static mr_status check_values(const mr_mlp *net, const char *path) {
+    mr_status status = mr_mlp_check_dims("mlp write", net->n_in, net->n_hidden, net->n_out);
+    if (status != MR_OK) return status;
+    const size_t I = (size_t)net->n_in, H = (size_t)net->n_hidden, O = (size_t)net->n_out;
+    const struct {
+        const char *name;
+        const float *v;
+        size_t count;
+        int positive;
+    } arrays[8] = {
+        {"w1", net->w1, I * H, 0},         {"b1", net->b1, H, 0},
+        {"w2", net->w2, O * H, 0},         {"b2", net->b2, O, 0},
+        {"in_mean", net->in_mean, I, 0},   {"in_std", net->in_std, I, 1},
+        {"out_mean", net->out_mean, O, 0}, {"out_std", net->out_std, O, 1},
+    };
+    for (int a = 0; a < 8; a++) {
+        if (arrays[a].v == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mlp write '%s': %s is NULL", path, arrays[a].name);
+        for (size_t q = 0; q < arrays[a].count; q++) {
+            float v = arrays[a].v[q];
+            if (!isfinite(v) || (arrays[a].positive && !(v > 0.0f)))
+                return mr_fail(MR_ERR_INVALID_ARG, "mlp write '%s': %s[%zu] is %g (expected a finite value%s)", path,
+                               arrays[a].name, q, (double)v, arrays[a].positive ? " > 0" : "");
+        }
+    }
+    return MR_OK;
+}
+
+static mr_status format_net(const mr_mlp *net, out_text *o) {
+    const size_t I = (size_t)net->n_in, H = (size_t)net->n_hidden, O = (size_t)net->n_out;
+    // Every number takes at most 17 characters with its space ("-0x1.fffffep+127"); lines add a key each.
+    o->capacity = ((I + O + 2) * H + 2 * (I + O) + O) * 17 + (I + O + 16) * 16 + 256;
+    o->length = 0;
+    o->text = malloc(o->capacity);
+    if (o->text == NULL) return mr_fail(MR_ERR_NOMEM, "mlp write: out of memory (%zu bytes)", o->capacity);
+    int bad = put(o, "%s %d\nn_in %d\nn_hidden %d\nn_out %d\nactivation %s\n", MR_MLP_FILE_MAGIC, MR_MLP_FILE_VERSION,
+                  net->n_in, net->n_hidden, net->n_out, ACTIVATIONS);
+    bad = bad || put_line(o, "in_mean", net->in_mean, I) || put_line(o, "in_std", net->in_std, I);
+    bad = bad || put_line(o, "out_mean", net->out_mean, O) || put_line(o, "out_std", net->out_std, O);
+    for (size_t i = 0; i < I && !bad; i++) bad = put_line(o, "w1", net->w1 + i * H, H);
+    bad = bad || put_line(o, "b1", net->b1, H);
+    for (size_t k = 0; k < O && !bad; k++) bad = put_line(o, "w2", net->w2 + k * H, H);
+    bad = bad || put_line(o, "b2", net->b2, O) || put(o, "end\n");
+    if (bad) {
+        free(o->text);
+        o->text = NULL;
+        return mr_fail(MR_ERR_INVALID_ARG, "mlp write: formatting failed (internal size estimate too small)");
+    }
+    return MR_OK;
+}
+
+mr_status mr_mlp_write(const mr_mlp *net, const char *path) {
+    if (path == NULL || path[0] == '\0') return mr_fail(MR_ERR_INVALID_ARG, "mlp write: empty path");
+    if (net == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mlp write '%s': NULL network", path);
+    mr_status status = check_values(net, path);
+    if (status != MR_OK) return status;
+    c_numeric locale;
+    status = c_numeric_enter(&locale, "mlp write");
+    if (status != MR_OK) return status;
+    out_text o = {NULL, 0, 0};
+    status = format_net(net, &o);
+    c_numeric_leave(&locale);
+    if (status != MR_OK) return status;
+    status = mr_atomic_write_bytes(path, o.text, o.length);
+    free(o.text);
+    return status;
+}
+
+/* ---- reading ---------------------------------------------------------------------------------------------- */
+
+typedef struct parser {
+    const char *name;
+    const char *p, *end; /* the unread bytes */
+    long line;           /* number of the current line (1-based) */
+    const char *s, *e;   /* the current line's unread part, without its '\n' */
+} parser;
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+static mr_status bad(const parser *ps, const char *fmt, ...) {
+    char why[512];
+    va_list args;
+    va_start(args, fmt);
+    vsnprintf(why, sizeof why, fmt, args);
+    va_end(args);
+    return mr_fail(MR_ERR_FORMAT, "mlp weights '%s': line %ld: %s", ps->name, ps->line, why);
+}
+
+/* Step to the next line; `expected` names what should be there (for the end-of-file message). */
+static mr_status next_line(parser *ps, const char *expected) {
+    ps->line++;
+    if (ps->p >= ps->end) return bad(ps, "unexpected end of file (expected %s; truncated file?)", expected);
+    const char *nl = memchr(ps->p, '\n', (size_t)(ps->end - ps->p));
+    if (nl == NULL) return bad(ps, "last line has no end of line (truncated file?)");
+    ps->s = ps->p;
+    ps->e = nl;
+    ps->p = nl + 1;
+    return MR_OK;
+}
+
+/* The next space-separated token of the line into *tok / *len; 0 at the end of the line. */
+static int token(parser *ps, const char **tok, size_t *len) {
+    while (ps->s < ps->e && *ps->s == ' ') ps->s++;
+    if (ps->s >= ps->e) return 0;
+    const char *start = ps->s;
+    while (ps->s < ps->e && *ps->s != ' ') ps->s++;
+    *tok = start;
+    *len = (size_t)(ps->s - start);
+    return 1;
+}
+
+static int token_is(const char *tok, size_t len, const char *word) {
+    return len == strlen(word) && memcmp(tok, word, len) == 0;
+}
+
+/* Printable excerpt of a token for messages. */
+static const char *excerpt(const char *tok, size_t len, char *buf, size_t size) {
+    size_t n = MR_MIN(len, size - 4);
+    for (size_t c = 0; c < n; c++) buf[c] = (tok[c] >= 32 && tok[c] < 127) ? tok[c] : '?';
+    if (n < len) {
+        memcpy(buf + n, "...", 3);
+        n += 3;
+    }
+    buf[n] = '\0';
+    return buf;
+}
+
+/* A line "key" followed by exactly `count` finite floats into v. */
+static mr_status read_values(parser *ps, const char *key, float *v, size_t count, int positive) {
+    mr_status status = next_line(ps, key);
+    if (status != MR_OK) return status;
+    const char *tok = ps->s;
+    size_t len = 0;
+    char shown[40];
+    if (!token(ps, &tok, &len) || !token_is(tok, len, key))
+        return bad(ps, "expected '%s', found '%s'", key, excerpt(tok, len, shown, sizeof shown));
+    size_t q = 0;
+    for (; token(ps, &tok, &len); q++) {
+        if (q == count) return bad(ps, "more than %zu values after '%s'", count, key);
+        char buf[MAX_TOKEN + 1];
+        if (len > MAX_TOKEN) return bad(ps, "value %zu of '%s' is not a number: '%s'", q, key,
+                                        excerpt(tok, len, shown, sizeof shown));
+        memcpy(buf, tok, len);
+        buf[len] = '\0';
+        char *stop = NULL;
+        double d = strtod(buf, &stop);
+        if (stop != buf + len || len == 0)
+            return bad(ps, "value %zu of '%s' is not a number: '%s'", q, key, excerpt(tok, len, shown, sizeof shown));
+        if (!(fabs(d) <= FLT_MAX))
+            return bad(ps, "value %zu of '%s' is %s (expected a finite float)", q, key, buf);
+        float f = (float)d;
+        if (positive && !(f > 0.0f)) return bad(ps, "value %zu of '%s' is %s (expected a value > 0)", q, key, buf);
+        v[q] = f;
+    }
+    if (q != count) return bad(ps, "%zu values after '%s' (expected %zu)", q, key, count);
+    return MR_OK;
+}
+
+/* A line "key N" with 1 <= N <= limit. */
+static mr_status read_size(parser *ps, const char *key, int limit, int *out) {
+    mr_status status = next_line(ps, key);
+    if (status != MR_OK) return status;
+    const char *tok = ps->s;
+    size_t len = 0;
+    char shown[40];
+    if (!token(ps, &tok, &len) || !token_is(tok, len, key))
+        return bad(ps, "expected '%s N', found '%s'", key, excerpt(tok, len, shown, sizeof shown));
+    if (!token(ps, &tok, &len)) return bad(ps, "'%s' without a value", key);
+    long value = 0;
+    for (size_t c = 0; c < len; c++) {
+        if (tok[c] < '0' || tok[c] > '9' || value > (long)limit)
+            return bad(ps, "'%s %s' is not a size from 1 to %d", key, excerpt(tok, len, shown, sizeof shown), limit);
+        value = value * 10 + (tok[c] - '0');
+    }
+    if (value < 1 || value > (long)limit)
+        return bad(ps, "'%s %s' is not a size from 1 to %d", key, excerpt(tok, len, shown, sizeof shown), limit);
+    if (token(ps, &tok, &len)) return bad(ps, "more than one value after '%s'", key);
+    *out = (int)value;
+    return MR_OK;
+}
+
+/* The first line: magic and version. */
+static mr_status read_magic(parser *ps) {
+    mr_status status = next_line(ps, "'" MR_MLP_FILE_MAGIC " 1'");
+    if (status != MR_OK) return status;
+    const char *tok = ps->s;
+    size_t len = 0;
+    char shown[40];
+    if (!token(ps, &tok, &len) || !token_is(tok, len, MR_MLP_FILE_MAGIC))
+        return bad(ps, "not an MLP weight file (expected '%s %d', found '%s')", MR_MLP_FILE_MAGIC, MR_MLP_FILE_VERSION,
+                   excerpt(tok, len, shown, sizeof shown));
+    if (!token(ps, &tok, &len)) return bad(ps, "no version after '%s'", MR_MLP_FILE_MAGIC);
+    char version[16];
+    snprintf(version, sizeof version, "%d", MR_MLP_FILE_VERSION);
+    if (!token_is(tok, len, version))
+        return bad(ps, "unsupported version '%s' (this build reads version %d)", excerpt(tok, len, shown, sizeof shown),
+                   MR_MLP_FILE_VERSION);
+    if (token(ps, &tok, &len))
+        return bad(ps, "unexpected '%s' after the version", excerpt(tok, len, shown, sizeof shown));
+    return MR_OK;
+}
+
+static mr_status parse_net(parser *ps, mr_mlp **out) {
+    mr_status status = read_magic(ps);
+    int n_in = 0, n_hidden = 0, n_out = 0;
+    if (status == MR_OK) status = read_size(ps, "n_in", MR_MLP_MAX_IO, &n_in);
+    if (status == MR_OK) status = read_size(ps, "n_hidden", MR_MLP_MAX_HIDDEN, &n_hidden);
+    if (status == MR_OK) status = read_size(ps, "n_out", MR_MLP_MAX_IO, &n_out);
+    if (status != MR_OK) return status;
+    mr_status fits = mr_mlp_check_dims("shape", n_in, n_hidden, n_out);
+    if (fits != MR_OK) return bad(ps, "%s", mr_last_error());
+    status = next_line(ps, "'activation " ACTIVATIONS "'");
+    if (status != MR_OK) return status;
+    static const char *const activation_words[] = {"activation", "relu", "linear"};
+    for (int w = 0; w < 4; w++) {
+        const char *tok = ps->s;
+        size_t len = 0;
+        char shown[40];
+        int got = token(ps, &tok, &len);
+        if (w == 3 ? got : !got || !token_is(tok, len, activation_words[w]))
+            return bad(ps, "unsupported activations (expected 'activation " ACTIVATIONS "', found '%s')",
+                       excerpt(tok, len, shown, sizeof shown));
+    }
+    mr_mlp *net = NULL;
+    status = mr_mlp_create(n_in, n_hidden, n_out, &net);
+    if (status != MR_OK) return status;
+    const size_t I = (size_t)n_in, H = (size_t)n_hidden, O = (size_t)n_out;
+    status = read_values(ps, "in_mean", net->in_mean, I, 0);
+    if (status == MR_OK) status = read_values(ps, "in_std", net->in_std, I, 1);
+    if (status == MR_OK) status = read_values(ps, "out_mean", net->out_mean, O, 0);
+    if (status == MR_OK) status = read_values(ps, "out_std", net->out_std, O, 1);
+    for (size_t i = 0; i < I && status == MR_OK; i++) status = read_values(ps, "w1", net->w1 + i * H, H, 0);
+    if (status == MR_OK) status = read_values(ps, "b1", net->b1, H, 0);
+    for (size_t k = 0; k < O && status == MR_OK; k++) status = read_values(ps, "w2", net->w2 + k * H, H, 0);
+    if (status == MR_OK) status = read_values(ps, "b2", net->b2, O, 0);
+    if (status == MR_OK) status = next_line(ps, "'end'");
+    if (status == MR_OK && !token_is(ps->s, (size_t)(ps->e - ps->s), "end")) {
+        char shown[40];
+        status = bad(ps, "expected 'end', found '%s'", excerpt(ps->s, (size_t)(ps->e - ps->s), shown, sizeof shown));
+    }
+    if (status == MR_OK && ps->p < ps->end) {
+        ps->line++;
+        status = bad(ps, "unexpected content after 'end'");
+    }
+    if (status != MR_OK) {
+        mr_mlp_free(net);
+        return status;
+    }
+    *out = net;
+    return MR_OK;
+}
+
+mr_status mr_mlp_parse(const char *text, size_t size, const char *name, mr_mlp **out) {
+    if (name == NULL) name = "<memory>";
+    if (out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mlp weights '%s': NULL output pointer", name);
+    if (text == NULL && size > 0) return mr_fail(MR_ERR_INVALID_ARG, "mlp weights '%s': NULL text", name);
+    if (text == NULL) text = "";
+    parser ps = {name, text, text + size, 0, NULL, NULL};
+    c_numeric locale;
+    mr_status status = c_numeric_enter(&locale, "mlp read");
+    if (status != MR_OK) return status;
+    status = parse_net(&ps, out);
+    c_numeric_leave(&locale);
+    return status;
+}
+
+mr_status mr_mlp_read(const char *path, mr_mlp **out) {
+    if (path == NULL || path[0] == '\0') return mr_fail(MR_ERR_INVALID_ARG, "mlp read: empty path");
+    if (out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mlp read '%s': NULL output pointer", path);
+    FILE *in = fopen(path, "rb");
+    if (in == NULL) {
+        int err = errno;
+        return mr_fail(MR_ERR_IO, "mlp weights '%s': cannot open: %s", path, strerror(err));
+    }
+    size_t length = 0, capacity = 1 << 16;
+    char *text = malloc(capacity);
+    mr_status status = MR_OK;
+    for (;;) {
+        if (text == NULL) {
+            status = mr_fail(MR_ERR_NOMEM, "mlp weights '%s': out of memory (%zu bytes)", path, capacity);
+            break;
+        }
+        errno = 0;
+        size_t got = fread(text + length, 1, capacity - length, in);
+        length += got;
+        if (got == 0 || length < capacity) {
+            if (ferror(in)) {
+                int err = errno ? errno : EIO;
+                status = mr_fail(MR_ERR_IO, "mlp weights '%s': cannot read: %s", path, strerror(err));
+            }
+            if (status == MR_OK && !feof(in)) continue;
+            break;
+        }
+        if (capacity >= MAX_FILE_BYTES) {
+            status = mr_fail(MR_ERR_FORMAT, "mlp weights '%s': larger than %zu bytes, the most a network within the "
+                             "size limits takes", path, (size_t)MAX_FILE_BYTES);
+            break;
+        }
+        char *grown = realloc(text, MR_MIN(2 * capacity, (size_t)MAX_FILE_BYTES));
+        if (grown == NULL) free(text);
+        text = grown;
+        capacity = MR_MIN(2 * capacity, (size_t)MAX_FILE_BYTES);
+    }
+    fclose(in);
+    if (status == MR_OK) status = mr_mlp_parse(text, length, path, out);
+    free(text);
+    return status;
+}

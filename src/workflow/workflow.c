@@ -1,0 +1,289 @@
+/*
+ * workflow.c — metallic <-> specular workflow conversions: Eq. 2, the generalised Eq. 3 with the MEAN and
+ * WEIGHTED single-metallic choices, the dispatch to the Khronos converter (khronos.c) and to a CUSTOM callback,
+ * input sanitising and flags, and the OpenMP batch over planar maps. The contract is in workflow.h; the
+ * derivations are in docs/workflow.md.
+ *
+ * Every texel goes through one pure function of its own inputs (metal_to_spec_texel, spec_to_metal_texel) in
+ * double precision; the per-texel API and the batch both call it, so they agree bit for bit and the batch does not
+ * depend on the thread count.
+ */
+#include "workflow.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "../mr_internal.h"
+#include "workflow_internal.h"
+
+static const char *const method_names[MR_WF_METHOD_COUNT] = {"mean", "weighted", "khronos", "custom"};
+
+const char *mr_wf_method_name(mr_wf_method method) {
+    return (unsigned)method < MR_WF_METHOD_COUNT ? method_names[method] : NULL;
+}
+
+mr_status mr_wf_method_from_name(const char *name, mr_wf_method *out) {
+    if (out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "workflow method: NULL output");
+    for (int i = 0; i < MR_WF_METHOD_COUNT; i++)
+        if (name != NULL && strcmp(name, method_names[i]) == 0) {
+            *out = (mr_wf_method)i;
+            return MR_OK;
+        }
+    return mr_fail(MR_ERR_INVALID_ARG, "workflow method '%s': unknown (valid: mean, weighted, khronos, custom)",
+                   name ? name : "(null)");
+}
+
+mr_wf_options mr_wf_options_default(void) {
+    mr_wf_options o;
+    memset(&o, 0, sizeof o);
+    o.dielectric_f0 = MR_WF_F0_GLTF;
+    o.method = MR_WF_WEIGHTED;
+    o.eps = MR_WF_DEFAULT_EPS;
+    o.custom = NULL;
+    o.custom_data = NULL;
+    return o;
+}
+
+mr_status mr_wf_options_check(const mr_wf_options *opts) {
+    if (opts == NULL) return MR_OK;
+    if (!(opts->dielectric_f0 >= 0.0 && opts->dielectric_f0 < 1.0)) // also rejects NaN
+        return mr_fail(MR_ERR_INVALID_ARG, "workflow options: dielectric_f0 %g: expected a value in [0, 1)",
+                       opts->dielectric_f0);
+    if (!(opts->eps >= 0.0 && opts->eps < 1.0))
+        return mr_fail(MR_ERR_INVALID_ARG, "workflow options: eps %g: expected a value in [0, 1)", opts->eps);
+    if ((unsigned)opts->method >= MR_WF_METHOD_COUNT)
+        return mr_fail(MR_ERR_INVALID_ARG, "workflow options: method %d: unknown (valid: 0 to %d)",
+                       (int)opts->method, MR_WF_METHOD_COUNT - 1);
+    if (opts->method == MR_WF_CUSTOM && opts->custom == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "workflow options: method custom: no callback in opts->custom");
+    if (opts->method == MR_WF_KHRONOS && opts->dielectric_f0 != MR_WF_KHRONOS_F0)
+        return mr_fail(MR_ERR_INVALID_ARG,
+                       "workflow options: method khronos: dielectric_f0 %g: the Khronos converter fixes it at 0.04",
+                       opts->dielectric_f0);
+    return MR_OK;
+}
+
+/* ---- per texel ------------------------------------------------------------------------------------------------ */
+
+/* A value read into [0, 1]: non-finite -> 0, outside -> clamped; flags say which happened. */
+static double sanitise(double x, unsigned *flags) {
+    if (!isfinite(x)) {
+        *flags |= MR_WF_NONFINITE_INPUT;
+        return 0.0;
+    }
+    if (x < 0.0 || x > 1.0) {
+        *flags |= MR_WF_CLAMPED_INPUT;
+        return x < 0.0 ? 0.0 : 1.0;
+    }
+    return x;
+}
+
+/* Eq. 2 for one channel. */
+static void eq2(double albedo, double metallic, double f0, double *diffuse, double *specular) {
+    *diffuse = albedo * (1.0 - metallic);
+    *specular = f0 * (1.0 - metallic) + metallic * albedo;
+}
+
+/* Eq. 3 for one channel, generalised to any F0d (workflow.h; derivation in docs/workflow.md): the least metallic
+ * (A, m), m in [0, 1], with A^2 - (s + d) A + F0d d = 0. */
+static void eq3(double d, double s, double f0, double eps, double *albedo, double *metallic) {
+    double sum = s + d;
+    double discriminant = sum * sum - 4.0 * f0 * d;
+    if (discriminant < 0.0) discriminant = 0.0; // no exact solution: the nearest, double, root
+    double big = 0.5 * (sum + sqrt(discriminant));
+    if (big > f0 + eps) { // the only root with m >= 0 (the other one, F0d d / big < d, has m < 0)
+        *albedo = big;
+        *metallic = mr_clampd(1.0 - d / big, 0.0, 1.0);
+    } else if (f0 > 0.0) { // two exact solutions; the smaller root is the less metallic one
+        *albedo = big > 0.0 ? f0 * d / big : 0.0;
+        *metallic = mr_clampd(1.0 - big / f0, 0.0, 1.0);
+    } else { // F0d = 0 and a black channel: any metallic reproduces it; the least metallic is 0
+        *albedo = d;
+        *metallic = 0.0;
+    }
+}
+
+/* The albedo of one channel that best reproduces (d, s) through Eq. 2 with metallic m (least squares), clamped.
+ * The normal equation of min_A (A (1 - m) - d)^2 + (F0d (1 - m) + m A - s)^2; its denominator is >= 1/2. */
+static double best_albedo(double d, double s, double f0, double m) {
+    double k = 1.0 - m;
+    return mr_clampd((k * d + m * (s - f0 * k)) / (k * k + m * m), 0.0, 1.0);
+}
+
+static unsigned metal_to_spec_texel(const mr_wf_options *o, const double albedo_in[3], double metallic_in,
+                                    double diffuse[3], double specular[3]) {
+    unsigned flags = 0;
+    double albedo[3];
+    for (int c = 0; c < 3; c++) albedo[c] = sanitise(albedo_in[c], &flags);
+    double m = sanitise(metallic_in, &flags);
+    if (o->method == MR_WF_KHRONOS) {
+        mr_wf_khronos_metal_to_spec(albedo, m, diffuse, specular);
+    } else {
+        for (int c = 0; c < 3; c++) eq2(albedo[c], m, o->dielectric_f0, &diffuse[c], &specular[c]);
+    }
+    // Both are within [0, 1] in exact arithmetic; rounding is not (Khronos's diffuse for an albedo channel of 1 is
+    // 0.96 (1 - m) / (1 - (0.04 + 0.96 m)), which comes out up to ~1e-12 above 1).
+    for (int c = 0; c < 3; c++) {
+        diffuse[c] = mr_clampd(diffuse[c], 0.0, 1.0);
+        specular[c] = mr_clampd(specular[c], 0.0, 1.0);
+    }
+    return flags;
+}
+
+/* Eq. 3 per channel and the MEAN or WEIGHTED single metallic. */
+static void analytic_spec_to_metal(const mr_wf_options *o, const double d[3], const double s[3], double albedo[3],
+                                   double *metallic) {
+    double a[3], mc[3];
+    for (int c = 0; c < 3; c++) eq3(d[c], s[c], o->dielectric_f0, o->eps, &a[c], &mc[c]);
+    double m = (mc[0] + mc[1] + mc[2]) / 3.0;
+    if (o->method == MR_WF_WEIGHTED) {
+        double weight = a[0] + a[1] + a[2];
+        if (weight > o->eps) m = (a[0] * mc[0] + a[1] * mc[1] + a[2] * mc[2]) / weight;
+    }
+    m = mr_clampd(m, 0.0, 1.0); // rounding could leave the weighted mean an ulp outside
+    for (int c = 0; c < 3; c++) albedo[c] = best_albedo(d[c], s[c], o->dielectric_f0, m);
+    *metallic = m;
+}
+
+/* A CUSTOM callback's answer, sanitised; METHOD_FAILED when it failed or needed sanitising. */
+static unsigned custom_spec_to_metal(const mr_wf_options *o, const double d[3], const double s[3], double albedo[3],
+                                     double *metallic) {
+    double a[3] = {0.0, 0.0, 0.0}, m = 0.0;
+    if (o->custom(o, d, s, a, &m) != 0) {
+        albedo[0] = albedo[1] = albedo[2] = 0.0;
+        *metallic = 0.0;
+        return MR_WF_METHOD_FAILED;
+    }
+    unsigned flags = 0;
+    for (int c = 0; c < 3; c++) albedo[c] = sanitise(a[c], &flags);
+    *metallic = sanitise(m, &flags);
+    return flags != 0 ? MR_WF_METHOD_FAILED : 0u;
+}
+
+static unsigned spec_to_metal_texel(const mr_wf_options *o, const double diffuse_in[3], const double specular_in[3],
+                                    double albedo[3], double *metallic) {
+    unsigned flags = 0;
+    double d[3], s[3];
+    for (int c = 0; c < 3; c++) {
+        d[c] = sanitise(diffuse_in[c], &flags);
+        s[c] = sanitise(specular_in[c], &flags);
+    }
+    double back_d[3], back_s[3]; // the result put through the method's forward conversion
+    if (o->method == MR_WF_KHRONOS) {
+        mr_wf_khronos_spec_to_metal(d, s, albedo, metallic);
+        mr_wf_khronos_metal_to_spec(albedo, *metallic, back_d, back_s);
+    } else {
+        if (o->method == MR_WF_CUSTOM)
+            flags |= custom_spec_to_metal(o, d, s, albedo, metallic);
+        else
+            analytic_spec_to_metal(o, d, s, albedo, metallic);
+        for (int c = 0; c < 3; c++) eq2(albedo[c], *metallic, o->dielectric_f0, &back_d[c], &back_s[c]);
+    }
+    for (int c = 0; c < 3; c++)
+        if (!(fabs(back_d[c] - d[c]) <= o->eps && fabs(back_s[c] - s[c]) <= o->eps)) flags |= MR_WF_OFF_MANIFOLD;
+    return flags;
+}
+
+mr_status mr_wf_metal_to_spec(const mr_wf_metal *in, const mr_wf_options *opts, mr_wf_spec *out, unsigned *flags) {
+    if (in == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "metal -> spec: NULL input or output texel");
+    mr_status status = mr_wf_options_check(opts);
+    if (status != MR_OK) return status;
+    mr_wf_options o = opts ? *opts : mr_wf_options_default();
+    mr_wf_spec result;
+    unsigned f = metal_to_spec_texel(&o, in->albedo, in->metallic, result.diffuse, result.specular);
+    result.roughness = sanitise(in->roughness, &f);
+    *out = result;
+    if (flags) *flags = f;
+    return MR_OK;
+}
+
+mr_status mr_wf_spec_to_metal(const mr_wf_spec *in, const mr_wf_options *opts, mr_wf_metal *out, unsigned *flags) {
+    if (in == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "spec -> metal: NULL input or output texel");
+    mr_status status = mr_wf_options_check(opts);
+    if (status != MR_OK) return status;
+    mr_wf_options o = opts ? *opts : mr_wf_options_default();
+    mr_wf_metal result;
+    unsigned f = spec_to_metal_texel(&o, in->diffuse, in->specular, result.albedo, &result.metallic);
+    result.roughness = sanitise(in->roughness, &f);
+    *out = result;
+    if (flags) *flags = f;
+    return MR_OK;
+}
+
+/* ---- batches -------------------------------------------------------------------------------------------------- */
+
+/* The checks both batches share: n, options, and the roughness pairing. */
+static mr_status check_batch(const char *what, size_t n, const mr_wf_options *opts, const float *rough_in,
+                             const float *rough_out) {
+    if (n > SIZE_MAX / (3 * sizeof(float)))
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: %zu texels: more than an RGB map can address", what, n);
+    mr_status status = mr_wf_options_check(opts);
+    if (status != MR_OK) return status;
+    if (n > 0 && (rough_in == NULL) != (rough_out == NULL))
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: roughness map given for the %s only (give both or neither)", what,
+                       rough_in == NULL ? "output" : "input");
+    return MR_OK;
+}
+
+mr_status mr_wf_metal_to_spec_batch(const mr_wf_metal_maps *in, size_t n, const mr_wf_options *opts,
+                                    const mr_wf_spec_maps *out, uint8_t *flags) {
+    const char *what = "metal -> spec batch";
+    if (in == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL input or output maps", what);
+    if (n > 0 && (in->albedo == NULL || in->metallic == NULL))
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL %s map", what, in->albedo == NULL ? "albedo" : "metallic");
+    if (n > 0 && (out->diffuse == NULL || out->specular == NULL))
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL %s map", what, out->diffuse == NULL ? "diffuse" : "specular");
+    mr_status status = check_batch(what, n, opts, in->roughness, out->roughness);
+    if (status != MR_OK) return status;
+    mr_wf_options o = opts ? *opts : mr_wf_options_default();
+    const float *albedo = in->albedo, *metallic = in->metallic, *rough_in = in->roughness;
+    float *diffuse = out->diffuse, *specular = out->specular, *rough_out = out->roughness;
+
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; i++) {
+        double a[3] = {albedo[3 * i], albedo[3 * i + 1], albedo[3 * i + 2]};
+        double m = metallic[i];
+        double rough = rough_in ? rough_in[i] : 0.0;
+        double d[3], s[3];
+        unsigned f = metal_to_spec_texel(&o, a, m, d, s);
+        rough = sanitise(rough, &f);
+        for (int c = 0; c < 3; c++) {
+            diffuse[3 * i + c] = (float)d[c];
+            specular[3 * i + c] = (float)s[c];
+        }
+        if (rough_out) rough_out[i] = (float)rough;
+        if (flags) flags[i] = (uint8_t)f;
+    }
+    return MR_OK;
+}
+
+mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_maps *in, size_t n, const mr_wf_options *opts,
+                                    const mr_wf_metal_maps *out, uint8_t *flags) {
+    const char *what = "spec -> metal batch";
+    if (in == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL input or output maps", what);
+    if (n > 0 && (in->diffuse == NULL || in->specular == NULL))
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL %s map", what, in->diffuse == NULL ? "diffuse" : "specular");
+    if (n > 0 && (out->albedo == NULL || out->metallic == NULL))
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL %s map", what, out->albedo == NULL ? "albedo" : "metallic");
+    mr_status status = check_batch(what, n, opts, in->roughness, out->roughness);
+    if (status != MR_OK) return status;
+    mr_wf_options o = opts ? *opts : mr_wf_options_default();
+    const float *diffuse = in->diffuse, *specular = in->specular, *rough_in = in->roughness;
+    float *albedo = out->albedo, *metallic = out->metallic, *rough_out = out->roughness;
+
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; i++) {
+        double d[3] = {diffuse[3 * i], diffuse[3 * i + 1], diffuse[3 * i + 2]};
+        double s[3] = {specular[3 * i], specular[3 * i + 1], specular[3 * i + 2]};
+        double rough = rough_in ? rough_in[i] : 0.0;
+        double a[3], m;
+        unsigned f = spec_to_metal_texel(&o, d, s, a, &m);
+        rough = sanitise(rough, &f);
+        for (int c = 0; c < 3; c++) albedo[3 * i + c] = (float)a[c];
+        metallic[i] = (float)m;
+        if (rough_out) rough_out[i] = (float)rough;
+        if (flags) flags[i] = (uint8_t)f;
+    }
+    return MR_OK;
+}

@@ -1,0 +1,186 @@
+/*
+ * workflow.h — analytic conversions between the metallic and the specular workflow (Sztrajman et al. 2019,
+ * section 8, Eq. 2 and Eq. 3; the Khronos glTF converter as a third baseline). docs/workflow.md has the
+ * derivations and the hard-case table.
+ *
+ * Main calls:
+ *   mr_wf_options o = mr_wf_options_default();          // F0d 0.04 (glTF), WEIGHTED, eps 1e-6
+ *   o.dielectric_f0 = MR_WF_F0_PAPER;                    // ... or the paper's 0.03
+ *   mr_wf_spec s;  unsigned flags;
+ *   mr_wf_metal_to_spec(&(mr_wf_metal){{0.9, 0.5, 0.2}, 0.7, 0.3}, &o, &s, &flags);   // one texel
+ *   mr_wf_spec_to_metal_batch(&spec_maps, n, &o, &metal_maps, flags8);                  // n texels
+ *
+ * The two workflows (values are linear reflectances in [0, 1]; RGB in the order R, G, B):
+ *   metallic: albedo A (RGB), metallic m (scalar), roughness;
+ *   specular: diffuse d (RGB), specular F0 s (RGB), roughness.
+ * They describe the same BRDF (the `ggx` / `ggx-metallic` pair of src/brdf, glTF's metal-rough and spec-gloss),
+ * so they share the roughness parameterisation: roughness passes through unchanged (clamped to [0, 1] like every
+ * input). A spec-gloss target stores glossiness = 1 - roughness; that is the caller's business.
+ *
+ * Methods (mr_wf_method), spec -> metal; metal -> spec is Eq. 2 for all of them except KHRONOS:
+ *   - Eq. 2 (metal -> spec):  d_c = A_c (1 - m),  s_c = F0d (1 - m) + m A_c.
+ *   - Per channel, Eq. 3 generalised to any F0d: A_c is the root of A^2 - (s_c + d_c) A + F0d d_c = 0,
+ *       A_c = ((s_c + d_c) + sqrt(max((s_c + d_c)^2 - 4 F0d d_c, 0))) / 2,   m_c = 1 - d_c / A_c,
+ *     which is the paper's (s+d)/2 (1 + sqrt(1 - 4 F0d d/(s+d)^2)) and (s - F0d)/(A - F0d) without their divisions
+ *     by s + d and A - F0d. A negative discriminant (no exact solution: s + d < 2 sqrt(F0d d)) is clamped to 0.
+ *     Where that root is A_c <= F0d + eps, the channel has two exact solutions (A_c, m_c) and
+ *     (F0d d_c / A_c, 1 - A_c / F0d) (the roots multiply to F0d d_c): the second, less metallic one is taken (also,
+ *     as the nearest reading, when the discriminant was clamped). It is m_c = 0 for every dark
+ *     dielectric (albedo <= F0d, m = 0, which Eq. 3's root would read as m = 1 - d/F0d), and it makes black
+ *     (d = s = 0) albedo 0 with metallic 1: the only metallic material that renders black (a dielectric
+ *     reflects F0d). m_c is clamped to [0, 1] (it is negative only off the manifold, where d_c > A_c).
+ *   - MEAN:     m = (m_r + m_g + m_b) / 3                                    (the paper's strategy 1)
+ *   - WEIGHTED: m = sum_c A_c m_c / sum_c A_c, or MEAN when sum_c A_c <= eps (the paper's strategy 2). On the
+ *     manifold A_c m_c = A_c - d_c, so m = 1 - sum d / sum A: the metallic that keeps the channel-summed diffuse
+ *     exact; dark channels, whose m_c is ill-conditioned (dm = -dd / A) or ambiguous, count little.
+ *   - then, for the one chosen m, each channel's albedo is the least-squares fit of Eq. 2 to (d_c, s_c),
+ *       A_c = clamp(((1 - m) d_c + m (s_c - F0d (1 - m))) / ((1 - m)^2 + m^2), 0, 1),
+ *     which returns the exact albedo whenever (d_c, s_c) is reachable with this m.
+ *   - KHRONOS: the glTF project's converter (KHR_materials_pbrSpecularGlossiness, convert-between-workflows,
+ *     three.pbrUtilities.js) in both directions, operation for operation in double precision: perceived
+ *     brightness instead of channels, diffuse renormalised by (1 - max_c s_c) / (1 - 0.04), its own epsilon 1e-6.
+ *     Its F0d is the constant 0.04: opts->dielectric_f0 must be 0.04 (MR_ERR_INVALID_ARG otherwise).
+ *   - CUSTOM: opts->custom converts one texel (the slot for a learned converter such as nn/'s MLP; see
+ *     mr_wf_custom_fn). Its outputs are sanitised like inputs (non-finite -> 0, clamped to [0, 1]).
+ *
+ * Hard cases (never an error, never NaN: every output is finite and in [0, 1]; metal -> spec results are clamped
+ * to it, which only removes rounding excess, e.g. Khronos's diffuse for an albedo channel of 1 can come out
+ * ~1e-12 above 1); per-texel flags (mr_wf_flag):
+ *   - an input outside [0, 1] is clamped to it (MR_WF_CLAMPED_INPUT);
+ *   - a NaN or infinite input is read as 0 (MR_WF_NONFINITE_INPUT);
+ *   - MR_WF_OFF_MANIFOLD (spec -> metal): the result, put through the method's forward conversion (Eq. 2;
+ *     Khronos's own for KHRONOS), misses the sanitised input by more than eps in some value. That is: the input
+ *     is not reachable with one metallic (a coloured dielectric F0, specular above what the albedo allows, a
+ *     negative discriminant), or the single-metallic choice missed an exact solution (a metal with a channel
+ *     darker than F0d, whose ambiguous channel reads less metallic).
+ *   - MR_WF_METHOD_FAILED: the CUSTOM callback returned non-zero (the texel is then albedo 0, metallic 0) or a
+ *     value outside [0, 1] or non-finite (sanitised).
+ * metal -> spec is a closed formula (Eq. 2 is exact) and never sets OFF_MANIFOLD.
+ *
+ * Batched layout (mr_wf_*_maps): planar, one array per texture map, n texels each; an RGB map holds 3n floats,
+ * channels interleaved per texel (texel i at [3i, 3i + 3), the pixel buffer of a 3-channel mr_image); a scalar map
+ * holds n floats. Roughness maps are optional: both NULL, or both given (copied, clamped). Inputs are only read.
+ * An output map may be the very same array as an input map of the same size (in place: each texel reads all its
+ * inputs before writing); any other overlap is undefined. Values are computed in double and rounded to float.
+ *
+ * Arguments: opts may be NULL (the defaults). Invalid arguments (NULL pointers, dielectric_f0 outside [0, 1) or
+ * not finite, eps outside [0, 1), an unknown method, CUSTOM without a callback, KHRONOS with F0d != 0.04, n too
+ * large) return MR_ERR_INVALID_ARG with mr_last_error() naming the value; outputs are then untouched.
+ * Threads: the batch functions run an OpenMP parallel for over texels; every texel is a pure function of its own
+ * inputs, so results are bit-identical for any thread count and equal to the per-texel functions' (rounded to
+ * float). All functions are reentrant. Ownership: nothing is allocated; the caller owns every array.
+ * The library never prints, exits or aborts.
+ */
+#ifndef MR_WORKFLOW_H
+#define MR_WORKFLOW_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../mr_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Dielectric F0 conventions: glTF's (ior 1.5; the default) and the paper's. */
+#define MR_WF_F0_GLTF 0.04
+#define MR_WF_F0_PAPER 0.03
+/* The default absolute reflectance tolerance (mr_wf_options.eps): about 16 float ulps at 1, far below an 8-bit
+ * step (1/255), so a float round trip is exact within it. */
+#define MR_WF_DEFAULT_EPS 1e-6
+
+/* Spec -> metal methods. Values are append-only. */
+typedef enum mr_wf_method {
+    MR_WF_MEAN = 0, /* Eq. 3 per channel, mean metallic */
+    MR_WF_WEIGHTED, /* Eq. 3 per channel, albedo-weighted mean metallic (the default) */
+    MR_WF_KHRONOS,  /* the Khronos glTF converter, both directions */
+    MR_WF_CUSTOM,   /* opts->custom (spec -> metal); Eq. 2 for metal -> spec */
+    MR_WF_METHOD_COUNT
+} mr_wf_method;
+
+/* "mean", "weighted", "khronos", "custom"; NULL outside the enum. */
+const char *mr_wf_method_name(mr_wf_method method);
+/* Parse one of the names above into *out; MR_ERR_INVALID_ARG listing them otherwise (*out untouched). */
+mr_status mr_wf_method_from_name(const char *name, mr_wf_method *out);
+
+/* Per-texel flag bits (a texel's flags are their OR; 0 = clean). */
+typedef enum mr_wf_flag {
+    MR_WF_CLAMPED_INPUT = 1u << 0,   /* an input was outside [0, 1] and was clamped */
+    MR_WF_NONFINITE_INPUT = 1u << 1, /* an input was NaN or infinite and was read as 0 */
+    MR_WF_OFF_MANIFOLD = 1u << 2,    /* spec -> metal result misses the input by more than eps */
+    MR_WF_METHOD_FAILED = 1u << 3    /* the CUSTOM callback failed or returned values outside [0, 1] */
+} mr_wf_flag;
+
+/* One texel of each workflow. */
+typedef struct mr_wf_metal {
+    double albedo[3]; /* base colour, linear RGB */
+    double metallic;
+    double roughness; /* passes through */
+} mr_wf_metal;
+
+typedef struct mr_wf_spec {
+    double diffuse[3];  /* linear RGB */
+    double specular[3]; /* F0, linear RGB */
+    double roughness;   /* passes through */
+} mr_wf_spec;
+
+struct mr_wf_options;
+
+/* A caller-supplied spec -> metal converter for MR_WF_CUSTOM (the slot for nn/'s MLP). It gets the sanitised
+ * texel (values in [0, 1]) and the options (dielectric_f0, custom_data), writes albedo[3] and *metallic, and
+ * returns 0 on success. The batch functions call it from several OpenMP threads at once: it must be reentrant,
+ * and deterministic if the results are to be. It must not call back into the batch functions. */
+typedef int (*mr_wf_custom_fn)(const struct mr_wf_options *opts, const double diffuse[3], const double specular[3],
+                               double albedo[3], double *metallic);
+
+typedef struct mr_wf_options {
+    double dielectric_f0;   /* F0d of Eq. 2 and 3, in [0, 1); default MR_WF_F0_GLTF (0.04); paper: 0.03 */
+    mr_wf_method method;    /* default MR_WF_WEIGHTED */
+    double eps;             /* absolute reflectance tolerance in [0, 1), default MR_WF_DEFAULT_EPS: an Eq. 3 root
+                               within eps of F0d counts as ambiguous, albedos summing to <= eps fall back to MEAN,
+                               a residual above eps sets MR_WF_OFF_MANIFOLD. 0 makes the flag see rounding. */
+    mr_wf_custom_fn custom; /* MR_WF_CUSTOM only; default NULL */
+    void *custom_data;      /* passed through to custom (via opts); default NULL */
+} mr_wf_options;
+
+/* The defaults listed above. (A zero-initialised struct is valid but means F0d 0 and MEAN.) */
+mr_wf_options mr_wf_options_default(void);
+
+/* MR_OK, or MR_ERR_INVALID_ARG with the message every conversion would give for these options (CUSTOM needs its
+ * callback in both directions, although metal -> spec does not call it). NULL is the defaults (MR_OK). */
+mr_status mr_wf_options_check(const mr_wf_options *opts);
+
+/* Metallic -> specular for one texel: Eq. 2 (KHRONOS: Khronos's converter). *out and *flags (which may be NULL)
+ * are written on success. */
+mr_status mr_wf_metal_to_spec(const mr_wf_metal *in, const mr_wf_options *opts, mr_wf_spec *out, unsigned *flags);
+
+/* Specular -> metallic for one texel by opts->method. *out and *flags (may be NULL) are written on success. */
+mr_status mr_wf_spec_to_metal(const mr_wf_spec *in, const mr_wf_options *opts, mr_wf_metal *out, unsigned *flags);
+
+/* Planar texture maps of n texels (see "Batched layout" above). */
+typedef struct mr_wf_metal_maps {
+    float *albedo;    /* 3n: RGB interleaved */
+    float *metallic;  /* n */
+    float *roughness; /* n, or NULL */
+} mr_wf_metal_maps;
+
+typedef struct mr_wf_spec_maps {
+    float *diffuse;   /* 3n: RGB interleaved */
+    float *specular;  /* 3n: RGB interleaved */
+    float *roughness; /* n, or NULL */
+} mr_wf_spec_maps;
+
+/* Convert n texels; flags (n bytes, may be NULL) receives each texel's mr_wf_flag bits. n = 0 is a no-op (map
+ * pointers may then be NULL). Every required map must be non-NULL, and out->roughness non-NULL exactly when
+ * in->roughness is. */
+mr_status mr_wf_metal_to_spec_batch(const mr_wf_metal_maps *in, size_t n, const mr_wf_options *opts,
+                                    const mr_wf_spec_maps *out, uint8_t *flags);
+mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_maps *in, size_t n, const mr_wf_options *opts,
+                                    const mr_wf_metal_maps *out, uint8_t *flags);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MR_WORKFLOW_H */

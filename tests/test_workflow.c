@@ -1,0 +1,861 @@
+/*
+ * test_workflow.c — the metallic <-> specular workflow converters (src/workflow/workflow.h): Eq. 2 known answers,
+ * exact round trips, Eq. 3 against the paper's closed form, the MEAN and WEIGHTED single-metallic formulas, the
+ * Khronos converter against its JS, every hard case, the custom-method slot, batch == per texel, thread-count
+ * independence and argument errors.
+ *
+ * Expected values are written out here independently of the library (the paper's division forms of Eq. 3, the
+ * JS's formulas), never by calling it.
+ */
+#include <math.h>
+#include <omp.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "harness.h"
+#include "matremap.h"
+#include "workflow/workflow.h"
+
+static mr_wf_options options(mr_wf_method method, double f0) {
+    mr_wf_options o = mr_wf_options_default();
+    o.method = method;
+    o.dielectric_f0 = f0;
+    return o;
+}
+
+static mr_wf_spec to_spec(const mr_wf_options *o, double r, double g, double b, double m, unsigned *flags) {
+    mr_wf_metal in = {{r, g, b}, m, 0.5};
+    mr_wf_spec out;
+    memset(&out, 0, sizeof out);
+    MR_CHECK_OK(mr_wf_metal_to_spec(&in, o, &out, flags));
+    return out;
+}
+
+static mr_wf_metal to_metal(const mr_wf_options *o, const double d[3], const double s[3], unsigned *flags) {
+    mr_wf_spec in = {{d[0], d[1], d[2]}, {s[0], s[1], s[2]}, 0.5};
+    mr_wf_metal out;
+    memset(&out, 0, sizeof out);
+    MR_CHECK_OK(mr_wf_spec_to_metal(&in, o, &out, flags));
+    return out;
+}
+
+/* Every output value finite and in [0, 1]. */
+static int metal_in_range(const mr_wf_metal *m) {
+    int ok = isfinite(m->metallic) && m->metallic >= 0.0 && m->metallic <= 1.0 && isfinite(m->roughness);
+    for (int c = 0; c < 3; c++) ok = ok && isfinite(m->albedo[c]) && m->albedo[c] >= 0.0 && m->albedo[c] <= 1.0;
+    return ok;
+}
+
+static int spec_in_range(const mr_wf_spec *s) {
+    int ok = isfinite(s->roughness);
+    for (int c = 0; c < 3; c++)
+        ok = ok && isfinite(s->diffuse[c]) && s->diffuse[c] >= 0.0 && s->diffuse[c] <= 1.0 && isfinite(s->specular[c])
+             && s->specular[c] >= 0.0 && s->specular[c] <= 1.0;
+    return ok;
+}
+
+/* splitmix64: a deterministic stream of doubles in [0, 1). */
+static double uniform(uint64_t *state) {
+    uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    return (double)(z >> 11) * 0x1.0p-53;
+}
+
+/* A texel value: mostly in [0, 1], sometimes a hard one (0, 1, F0d, outside [0, 1], NaN, infinities). */
+static float texel_value(uint64_t *state) {
+    double u = uniform(state), v = uniform(state);
+    if (u < 0.85) return (float)v;
+    static const float hard[] = {0.0f, 1.0f, 0.04f, 0.03f, 0.02f, -0.5f, 1.5f, NAN, INFINITY, -INFINITY};
+    return hard[(int)(v * (sizeof hard / sizeof hard[0]))];
+}
+
+/* ---- names and defaults --------------------------------------------------------------------------------------- */
+
+MR_TEST(method_names_round_trip) {
+    for (int i = 0; i < MR_WF_METHOD_COUNT; i++) {
+        const char *name = mr_wf_method_name((mr_wf_method)i);
+        MR_CHECK(name != NULL);
+        mr_wf_method back = MR_WF_METHOD_COUNT;
+        MR_CHECK_OK(mr_wf_method_from_name(name, &back));
+        MR_CHECK(back == (mr_wf_method)i);
+    }
+    MR_CHECK(strcmp(mr_wf_method_name(MR_WF_WEIGHTED), "weighted") == 0);
+    MR_CHECK(mr_wf_method_name(MR_WF_METHOD_COUNT) == NULL);
+    MR_CHECK(mr_wf_method_name((mr_wf_method)-1) == NULL);
+    mr_wf_method untouched = MR_WF_KHRONOS;
+    MR_CHECK(mr_wf_method_from_name("mlp", &untouched) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strstr(mr_last_error(), "'mlp'") && strstr(mr_last_error(), "weighted"), "%s", mr_last_error());
+    MR_CHECK(untouched == MR_WF_KHRONOS);
+    MR_CHECK(mr_wf_method_from_name(NULL, &untouched) == MR_ERR_INVALID_ARG);
+}
+
+MR_TEST(default_options_are_the_documented_ones) {
+    mr_wf_options o = mr_wf_options_default();
+    MR_CHECK(o.dielectric_f0 == 0.04 && MR_WF_F0_GLTF == 0.04 && MR_WF_F0_PAPER == 0.03);
+    MR_CHECK(o.method == MR_WF_WEIGHTED);
+    MR_CHECK(o.eps == 1e-6 && MR_WF_DEFAULT_EPS == 1e-6);
+    MR_CHECK(o.custom == NULL && o.custom_data == NULL);
+    MR_CHECK_OK(mr_wf_options_check(&o));
+    MR_CHECK_OK(mr_wf_options_check(NULL));
+    // NULL options are the defaults.
+    double d[3] = {0.3, 0.2, 0.1}, s[3] = {0.1, 0.3, 0.05};
+    mr_wf_spec in = {{d[0], d[1], d[2]}, {s[0], s[1], s[2]}, 0.25};
+    mr_wf_metal a, b;
+    unsigned fa = 99, fb = 98;
+    MR_CHECK_OK(mr_wf_spec_to_metal(&in, NULL, &a, &fa));
+    MR_CHECK_OK(mr_wf_spec_to_metal(&in, &o, &b, &fb));
+    MR_CHECK(memcmp(&a, &b, sizeof a) == 0 && fa == fb);
+}
+
+/* ---- Eq. 2 ---------------------------------------------------------------------------------------------------- */
+
+MR_TEST(equation_2_known_answers) {
+    unsigned flags = 99;
+    // albedo (0.9, 0.5, 0.2), m 0.7, F0d 0.04: d = A * 0.3; s = 0.04 * 0.3 + 0.7 A = 0.012 + 0.7 A.
+    mr_wf_options gltf = options(MR_WF_WEIGHTED, 0.04);
+    mr_wf_spec s = to_spec(&gltf, 0.9, 0.5, 0.2, 0.7, &flags);
+    MR_CHECK(flags == 0);
+    MR_CHECK_NEAR(s.diffuse[0], 0.27, 1e-15);
+    MR_CHECK_NEAR(s.diffuse[1], 0.15, 1e-15);
+    MR_CHECK_NEAR(s.diffuse[2], 0.06, 1e-15);
+    MR_CHECK_NEAR(s.specular[0], 0.642, 1e-15);
+    MR_CHECK_NEAR(s.specular[1], 0.362, 1e-15);
+    MR_CHECK_NEAR(s.specular[2], 0.152, 1e-15);
+    MR_CHECK(s.roughness == 0.5);
+    // The paper's F0d 0.03, m 0.5, albedo (1, 0, 0.5): d = (0.5, 0, 0.25), s = 0.015 + (0.5, 0, 0.25).
+    mr_wf_options paper = options(MR_WF_MEAN, 0.03);
+    s = to_spec(&paper, 1.0, 0.0, 0.5, 0.5, &flags);
+    MR_CHECK_NEAR(s.diffuse[0], 0.5, 1e-15);
+    MR_CHECK_NEAR(s.diffuse[1], 0.0, 1e-15);
+    MR_CHECK_NEAR(s.diffuse[2], 0.25, 1e-15);
+    MR_CHECK_NEAR(s.specular[0], 0.515, 1e-15);
+    MR_CHECK_NEAR(s.specular[1], 0.015, 1e-15);
+    MR_CHECK_NEAR(s.specular[2], 0.265, 1e-15);
+    // A dielectric: diffuse = albedo, specular = F0d; a metal: no diffuse, specular = albedo.
+    s = to_spec(&paper, 0.8, 0.6, 0.4, 0.0, &flags);
+    for (int c = 0; c < 3; c++) MR_CHECK(s.specular[c] == 0.03);
+    MR_CHECK(s.diffuse[0] == 0.8 && s.diffuse[1] == 0.6 && s.diffuse[2] == 0.4);
+    s = to_spec(&gltf, 0.95, 0.64, 0.54, 1.0, &flags);
+    for (int c = 0; c < 3; c++) MR_CHECK(s.diffuse[c] == 0.0);
+    MR_CHECK(s.specular[0] == 0.95 && s.specular[1] == 0.64 && s.specular[2] == 0.54);
+    MR_CHECK(flags == 0);
+    // Every analytic method and CUSTOM share Eq. 2 for metal -> spec.
+    mr_wf_options mean = options(MR_WF_MEAN, 0.04);
+    mr_wf_spec t = to_spec(&mean, 0.9, 0.5, 0.2, 0.7, NULL);
+    s = to_spec(&gltf, 0.9, 0.5, 0.2, 0.7, NULL);
+    MR_CHECK(memcmp(&s, &t, sizeof s) == 0);
+}
+
+/* ---- Eq. 3 ---------------------------------------------------------------------------------------------------- */
+
+MR_TEST(round_trip_is_exact_for_mean_and_weighted) {
+    static const double albedos[] = {0.05, 0.1, 0.2, 0.35, 0.5, 0.65, 0.8, 0.95, 1.0};
+    static const double f0s[] = {MR_WF_F0_GLTF, MR_WF_F0_PAPER};
+    const int na = (int)(sizeof albedos / sizeof albedos[0]);
+    for (int f = 0; f < 2; f++)
+        for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++) {
+            mr_wf_options o = options((mr_wf_method)method, f0s[f]);
+            double worst = 0.0;
+            int flagged = 0;
+            for (int r = 0; r < na; r++)
+                for (int g = 0; g < na; g++)
+                    for (int b = 0; b < na; b++)
+                        for (int k = 0; k <= 10; k++) {
+                            double m = k / 10.0;
+                            unsigned f1, f2;
+                            mr_wf_spec s = to_spec(&o, albedos[r], albedos[g], albedos[b], m, &f1);
+                            mr_wf_metal back = to_metal(&o, s.diffuse, s.specular, &f2);
+                            worst = fmax(worst, fabs(back.metallic - m));
+                            worst = fmax(worst, fabs(back.albedo[0] - albedos[r]));
+                            worst = fmax(worst, fabs(back.albedo[1] - albedos[g]));
+                            worst = fmax(worst, fabs(back.albedo[2] - albedos[b]));
+                            flagged += (f1 | f2) != 0;
+                        }
+            MR_CHECK_MSG(worst <= 1e-12, "%s F0d %g: worst round-trip error %g", mr_wf_method_name(o.method),
+                         o.dielectric_f0, worst);
+            MR_CHECK_MSG(flagged == 0, "%s F0d %g: %d texels flagged", mr_wf_method_name(o.method),
+                         o.dielectric_f0, flagged);
+        }
+}
+
+MR_TEST(float_batch_round_trip_is_exact_within_float_rounding) {
+    enum { N = 2000 };
+    static float albedo[3 * N], metallic[N], diffuse[3 * N], specular[3 * N], albedo2[3 * N], metallic2[N];
+    static uint8_t flags[N];
+    uint64_t rng = 7;
+    for (int i = 0; i < N; i++) {
+        for (int c = 0; c < 3; c++) albedo[3 * i + c] = (float)(0.05 + 0.95 * uniform(&rng));
+        metallic[i] = (float)uniform(&rng);
+    }
+    for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++) {
+        mr_wf_options o = options((mr_wf_method)method, MR_WF_F0_PAPER);
+        mr_wf_metal_maps metal = {albedo, metallic, NULL}, back = {albedo2, metallic2, NULL};
+        mr_wf_spec_maps spec = {diffuse, specular, NULL};
+        MR_CHECK_OK(mr_wf_metal_to_spec_batch(&metal, N, &o, &spec, flags));
+        MR_CHECK_OK(mr_wf_spec_to_metal_batch(&spec, N, &o, &back, flags));
+        double worst = 0.0;
+        int flagged = 0;
+        for (int i = 0; i < N; i++) {
+            worst = fmax(worst, fabs(metallic2[i] - metallic[i]));
+            for (int c = 0; c < 3; c++) worst = fmax(worst, fabs(albedo2[3 * i + c] - albedo[3 * i + c]));
+            flagged += flags[i] != 0;
+        }
+        MR_CHECK_MSG(worst <= 1e-6, "%s: worst float round-trip error %g", mr_wf_method_name(o.method), worst);
+        MR_CHECK_MSG(flagged == 0, "%s: %d texels flagged", mr_wf_method_name(o.method), flagged);
+    }
+}
+
+/* The paper's Eq. 3 with F0d = 0.03 in the closed form of brdf-reference 5.4 "[derived]", divisions and all. */
+static void paper_eq3(double d, double s, double *albedo, double *metallic) {
+    *albedo = (s + d) / 2.0 * (1.0 + sqrt(1.0 - 0.12 * d / ((s + d) * (s + d))));
+    *metallic = (s - 0.03) / (*albedo - 0.03);
+}
+
+MR_TEST(equation_3_matches_the_closed_form_with_the_papers_f0) {
+    // Grey texels: every (d, s) whose Eq. 3 solution is a metallic material (A in (0.03, 1], m in [0, 1]) is on
+    // the manifold, so both methods must return the closed form exactly.
+    int compared = 0;
+    for (int i = 0; i <= 40; i++)
+        for (int j = 0; j <= 40; j++) {
+            double d = i / 40.0, s = j / 40.0;
+            if (s + d == 0.0 || 1.0 - 0.12 * d / ((s + d) * (s + d)) < 0.0) continue;
+            double a, m;
+            paper_eq3(d, s, &a, &m);
+            if (!(a > 0.03 + 1e-3 && a <= 1.0 && m >= 0.0 && m <= 1.0)) continue;
+            for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++) {
+                mr_wf_options o = options((mr_wf_method)method, MR_WF_F0_PAPER);
+                double dd[3] = {d, d, d}, ss[3] = {s, s, s};
+                unsigned flags;
+                mr_wf_metal out = to_metal(&o, dd, ss, &flags);
+                MR_CHECK_NEAR(out.metallic, m, 1e-12);
+                for (int c = 0; c < 3; c++) MR_CHECK_NEAR(out.albedo[c], a, 1e-12);
+                MR_CHECK_MSG(flags == 0, "d %g s %g: flags %u", d, s, flags);
+            }
+            compared++;
+        }
+    MR_CHECK_MSG(compared > 300, "only %d grey texels in the domain", compared);
+}
+
+/* Residual of Eq. 2 with albedo a and metallic m against (d, s), F0d f0. */
+static double eq2_residual(double a, double m, double f0, double d, double s) {
+    double rd = a * (1.0 - m) - d, rs = f0 + m * (a - f0) - s;
+    return rd * rd + rs * rs;
+}
+
+MR_TEST(mean_and_weighted_follow_their_formulas_off_the_manifold) {
+    // A coloured texel whose channels want different metallic values (off the manifold); each channel's Eq. 3
+    // solution is in the ordinary region (A > 0.03, m in [0, 1]).
+    double d[3] = {0.5, 0.2, 0.05}, s[3] = {0.3, 0.1, 0.6};
+    double a[3], m[3];
+    for (int c = 0; c < 3; c++) {
+        paper_eq3(d[c], s[c], &a[c], &m[c]);
+        MR_CHECK(a[c] > 0.03 && m[c] >= 0.0 && m[c] <= 1.0);
+    }
+    double mean = (m[0] + m[1] + m[2]) / 3.0;
+    double weighted = (a[0] * m[0] + a[1] * m[1] + a[2] * m[2]) / (a[0] + a[1] + a[2]);
+    // On Eq. 3's solutions A m = A - d, so the weighted mean is also 1 - sum d / sum A.
+    MR_CHECK_NEAR(weighted, 1.0 - (d[0] + d[1] + d[2]) / (a[0] + a[1] + a[2]), 1e-12);
+    for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++) {
+        mr_wf_options o = options((mr_wf_method)method, MR_WF_F0_PAPER);
+        unsigned flags;
+        mr_wf_metal out = to_metal(&o, d, s, &flags);
+        double want = method == MR_WF_MEAN ? mean : weighted;
+        MR_CHECK_NEAR(out.metallic, want, 1e-12);
+        MR_CHECK(flags == MR_WF_OFF_MANIFOLD);
+        for (int c = 0; c < 3; c++) {
+            // The albedo is the least-squares fit of Eq. 2 for that metallic, clamped to [0, 1].
+            double k = 1.0 - want;
+            double lsq = (k * d[c] + want * (s[c] - 0.03 * k)) / (k * k + want * want);
+            MR_CHECK_NEAR(out.albedo[c], fmin(fmax(lsq, 0.0), 1.0), 1e-12);
+            // ... and no nearby albedo does better.
+            if (lsq > 1e-3 && lsq < 1.0 - 1e-3) {
+                double best = eq2_residual(out.albedo[c], want, 0.03, d[c], s[c]);
+                MR_CHECK(best <= eq2_residual(out.albedo[c] + 1e-3, want, 0.03, d[c], s[c]));
+                MR_CHECK(best <= eq2_residual(out.albedo[c] - 1e-3, want, 0.03, d[c], s[c]));
+            }
+        }
+    }
+}
+
+/* ---- Khronos -------------------------------------------------------------------------------------------------- */
+
+/* The JS's formulas written out for one texel (brdf-reference 5.4), independently of src/workflow/khronos.c. */
+static double js_brightness(const double c[3]) {
+    return sqrt(0.299 * c[0] * c[0] + 0.587 * c[1] * c[1] + 0.114 * c[2] * c[2]);
+}
+
+static void js_spec_to_metal(const double diffuse[3], const double specular[3], double base[3], double *metallic) {
+    double o = 1.0 - fmax(specular[0], fmax(specular[1], specular[2]));
+    double s = js_brightness(specular), d = js_brightness(diffuse), m = 0.0;
+    if (s >= 0.04) {
+        double b = d * o / 0.96 + s - 0.08, c = 0.04 - s;
+        m = (-b + sqrt(fmax(b * b - 0.16 * c, 0.0))) / 0.08;
+        m = fmin(fmax(m, 0.0), 1.0);
+    }
+    for (int k = 0; k < 3; k++) {
+        double from_diffuse = diffuse[k] * o / 0.96 / fmax(1.0 - m, 1e-6);
+        double from_specular = (specular[k] - 0.04 * (1.0 - m)) / fmax(m, 1e-6);
+        base[k] = fmin(fmax(from_diffuse + (from_specular - from_diffuse) * m * m, 0.0), 1.0);
+    }
+    *metallic = m;
+}
+
+MR_TEST(khronos_matches_its_javascript) {
+    mr_wf_options o = options(MR_WF_KHRONOS, 0.04);
+    // metal -> spec. Literals: the archived three.pbrUtilities.js run under node 20 with a three.js Color shim
+    // (17 significant digits). The formulas are also written out for the first texel.
+    static const struct {
+        double base[3], metallic, diffuse[3], specular[3];
+    } forward[] = {
+        {{0.9, 0.5, 0.2}, 0.7, {0.72402234636871521, 0.40223463687150846, 0.16089385474860340}, {0.642, 0.362, 0.152}},
+        {{0.8, 0.2, 0.1}, 0.0, {0.8, 0.2, 0.1}, {0.04, 0.04, 0.04}},
+        {{1.0, 0.78, 0.34}, 1.0, {0.0, 0.0, 0.0}, {1.0, 0.78, 0.34}},
+        {{0.3, 0.6, 0.9}, 0.35, {0.28406676783004547, 0.56813353566009095, 0.85220030349013653},
+         {0.131, 0.236, 0.341}},
+    };
+    // specular = lerp(0.04, base, 0.7) = (0.642, 0.362, 0.152); diffuse = base * 0.96 * 0.3 / (1 - 0.642).
+    MR_CHECK_NEAR(forward[0].diffuse[0], 0.9 * 0.96 * 0.3 / 0.358, 1e-15);
+    MR_CHECK_NEAR(forward[0].diffuse[2], 0.2 * 0.96 * 0.3 / 0.358, 1e-15);
+    for (size_t i = 0; i < sizeof forward / sizeof forward[0]; i++) {
+        unsigned flags;
+        mr_wf_spec s = to_spec(&o, forward[i].base[0], forward[i].base[1], forward[i].base[2], forward[i].metallic,
+                               &flags);
+        MR_CHECK(flags == 0);
+        for (int c = 0; c < 3; c++) {
+            MR_CHECK_NEAR(s.diffuse[c], forward[i].diffuse[c], 1e-15);
+            MR_CHECK_NEAR(s.specular[c], forward[i].specular[c], 1e-15);
+        }
+    }
+    // spec -> metal, the same way; plus the formulas above for each texel.
+    static const struct {
+        double diffuse[3], specular[3], base[3], metallic;
+    } backward[] = {
+        {{0.5, 0.3, 0.1}, {0.04, 0.04, 0.04}, {0.5, 0.3, 0.1}, 0.0},
+        {{0.1, 0.1, 0.2}, {0.5, 0.4, 0.3}, {0.53011266092627907, 0.44272753139521870, 0.45293882349491893},
+         0.87385129531060357},
+        {{0.2, 0.1, 0.05}, {0.03, 0.02, 0.01}, {0.20208333333333336, 0.10104166666666668, 0.050520833333333341}, 0.0},
+        {{0.0, 0.0, 0.0}, {0.95, 0.64, 0.54}, {0.94999999999999951, 0.63999999999999979, 0.53999999999999981},
+         0.99999999999999944},
+    };
+    for (size_t i = 0; i < sizeof backward / sizeof backward[0]; i++) {
+        unsigned flags;
+        mr_wf_metal m = to_metal(&o, backward[i].diffuse, backward[i].specular, &flags);
+        double base[3], metallic;
+        js_spec_to_metal(backward[i].diffuse, backward[i].specular, base, &metallic);
+        MR_CHECK_NEAR(m.metallic, backward[i].metallic, 1e-14);
+        MR_CHECK_NEAR(m.metallic, metallic, 1e-14);
+        for (int c = 0; c < 3; c++) {
+            MR_CHECK_NEAR(m.albedo[c], backward[i].base[c], 1e-12);
+            MR_CHECK_NEAR(m.albedo[c], base[c], 1e-12);
+        }
+        MR_CHECK(metal_in_range(&m));
+    }
+    // An albedo channel of 1 makes the JS's diffuse 0.96 (1 - m) / (1 - (0.04 + 0.96 m)), 1 in exact arithmetic
+    // but up to ~1e-12 above it in doubles; the library's results stay within [0, 1].
+    for (int k = 0; k <= 1000; k++) {
+        mr_wf_spec s = to_spec(&o, 1.0, 0.3, 0.7, k / 1000.0, NULL);
+        MR_CHECK_MSG(spec_in_range(&s), "metallic %g: diffuse %.17g", k / 1000.0, s.diffuse[0]);
+        MR_CHECK_NEAR(s.diffuse[0], k == 1000 ? 0.0 : 1.0, 1e-11);
+    }
+    // The specular below 0.04 of the third texel is not reachable by Khronos's forward conversion.
+    unsigned flags;
+    to_metal(&o, backward[2].diffuse, backward[2].specular, &flags);
+    MR_CHECK(flags == MR_WF_OFF_MANIFOLD);
+}
+
+MR_TEST(khronos_round_trip_within_its_known_tolerance) {
+    // Khronos's inverse works on perceived brightness, a norm that is linear along grey only: its round trip is
+    // exact for grey bases and at metallic 0 and 1, and lossy for coloured partial metals. Over this grid
+    // (channels in [0.05, 1]) the loss is at most 0.055 in metallic and 0.036 in base colour.
+    static const double vals[] = {0.05, 0.1, 0.2, 0.35, 0.5, 0.65, 0.8, 0.9, 1.0};
+    const int nv = (int)(sizeof vals / sizeof vals[0]);
+    mr_wf_options o = options(MR_WF_KHRONOS, 0.04);
+    double worst_m = 0.0, worst_a = 0.0, worst_exact = 0.0;
+    for (int r = 0; r < nv; r++)
+        for (int g = 0; g < nv; g++)
+            for (int b = 0; b < nv; b++)
+                for (int k = 0; k <= 10; k++) {
+                    double m = k / 10.0;
+                    mr_wf_spec s = to_spec(&o, vals[r], vals[g], vals[b], m, NULL);
+                    mr_wf_metal back = to_metal(&o, s.diffuse, s.specular, NULL);
+                    double em = fabs(back.metallic - m), ea = 0.0;
+                    ea = fmax(ea, fabs(back.albedo[0] - vals[r]));
+                    ea = fmax(ea, fabs(back.albedo[1] - vals[g]));
+                    ea = fmax(ea, fabs(back.albedo[2] - vals[b]));
+                    worst_m = fmax(worst_m, em);
+                    worst_a = fmax(worst_a, ea);
+                    if ((r == g && g == b) || k == 0 || k == 10) worst_exact = fmax(worst_exact, fmax(em, ea));
+                }
+    MR_CHECK_MSG(worst_exact <= 1e-9, "grey / m in {0, 1}: worst %g", worst_exact);
+    MR_CHECK_MSG(worst_m <= 0.06, "worst metallic error %g", worst_m);
+    MR_CHECK_MSG(worst_a <= 0.04, "worst base colour error %g", worst_a);
+    MR_CHECK_MSG(worst_m >= 0.01, "worst metallic error %g: the known loss vanished?", worst_m);
+}
+
+/* ---- hard cases ----------------------------------------------------------------------------------------------- */
+
+MR_TEST(black_is_a_black_metal) {
+    // d = s = 0 is reachable only with albedo 0 and metallic 1 (a dielectric always reflects F0d).
+    double zero[3] = {0.0, 0.0, 0.0};
+    static const double f0s[] = {0.04, 0.03};
+    for (int f = 0; f < 2; f++)
+        for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++) {
+            mr_wf_options o = options((mr_wf_method)method, f0s[f]);
+            unsigned flags;
+            mr_wf_metal m = to_metal(&o, zero, zero, &flags);
+            MR_CHECK(m.metallic == 1.0 && m.albedo[0] == 0.0 && m.albedo[1] == 0.0 && m.albedo[2] == 0.0);
+            MR_CHECK(flags == 0);
+            mr_wf_spec s = to_spec(&o, m.albedo[0], m.albedo[1], m.albedo[2], m.metallic, NULL);
+            for (int c = 0; c < 3; c++) MR_CHECK(s.diffuse[c] == 0.0 && s.specular[c] == 0.0);
+        }
+    // With F0d = 0 black is albedo 0 with any metallic; the least metallic, 0, is returned.
+    mr_wf_options o = options(MR_WF_WEIGHTED, 0.0);
+    unsigned flags;
+    mr_wf_metal m = to_metal(&o, zero, zero, &flags);
+    MR_CHECK(m.metallic == 0.0 && m.albedo[0] == 0.0 && flags == 0);
+    // Khronos reads black as a black dielectric (it cannot reproduce it: F0 0.04).
+    o = options(MR_WF_KHRONOS, 0.04);
+    m = to_metal(&o, zero, zero, &flags);
+    MR_CHECK(m.metallic == 0.0 && m.albedo[0] == 0.0 && flags == MR_WF_OFF_MANIFOLD);
+    // Nearly black, unreachable inputs stay finite and flagged.
+    double tiny[3] = {1e-7, 1e-7, 1e-7};
+    for (int method = MR_WF_MEAN; method < MR_WF_CUSTOM; method++) {
+        o = options((mr_wf_method)method, 0.04);
+        m = to_metal(&o, tiny, tiny, &flags);
+        MR_CHECK(metal_in_range(&m));
+    }
+}
+
+MR_TEST(albedo_at_or_below_the_dielectric_f0) {
+    // Dark dielectrics (albedo <= F0d, m = 0): Eq. 3's root is F0d itself, whose m = 1 - d/F0d would call them
+    // metals; the channel is ambiguous and the less metallic solution, m = 0 with A = d, is taken.
+    for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++)
+        for (int f = 0; f < 2; f++) {
+            double f0 = f == 0 ? 0.04 : 0.03;
+            mr_wf_options o = options((mr_wf_method)method, f0);
+            static const double darks[][3] = {{0.02, 0.02, 0.02}, {0.0, 0.0, 0.0}, {0.8, 0.01, 0.02},
+                                              {0.03, 0.03, 0.03}, {0.04, 0.04, 0.04}, {0.5, 0.3, 0.0}};
+            for (size_t i = 0; i < sizeof darks / sizeof darks[0]; i++) {
+                unsigned f1, f2;
+                mr_wf_spec s = to_spec(&o, darks[i][0], darks[i][1], darks[i][2], 0.0, &f1);
+                mr_wf_metal m = to_metal(&o, s.diffuse, s.specular, &f2);
+                MR_CHECK_MSG(m.metallic <= 1e-9, "%s F0d %g texel %zu: metallic %g", mr_wf_method_name(o.method), f0,
+                             i, m.metallic);
+                for (int c = 0; c < 3; c++) MR_CHECK_NEAR(m.albedo[c], darks[i][c], 1e-9);
+                MR_CHECK(f1 == 0 && f2 == 0);
+            }
+            // ... also through float storage, where 0.04f is not 0.04 (eps absorbs it).
+            float alb[3] = {0.02f, 0.8f, 0.01f}, met = 0.0f, d[3], sp[3], a2[3], m2;
+            uint8_t fl;
+            mr_wf_metal_maps in = {alb, &met, NULL}, back = {a2, &m2, NULL};
+            mr_wf_spec_maps spec = {d, sp, NULL};
+            MR_CHECK_OK(mr_wf_metal_to_spec_batch(&in, 1, &o, &spec, &fl));
+            MR_CHECK_OK(mr_wf_spec_to_metal_batch(&spec, 1, &o, &back, &fl));
+            MR_CHECK(m2 <= 1e-6f && fabsf(a2[0] - 0.02f) <= 1e-6f && fabsf(a2[2] - 0.01f) <= 1e-6f && fl == 0);
+        }
+    // A partial metal darker than F0d on the double root: (A 0.02, m 0.5) is the only solution, recovered exactly.
+    mr_wf_options o = options(MR_WF_MEAN, 0.04);
+    unsigned flags;
+    mr_wf_spec s = to_spec(&o, 0.02, 0.02, 0.02, 0.5, NULL);
+    mr_wf_metal m = to_metal(&o, s.diffuse, s.specular, &flags);
+    MR_CHECK_NEAR(m.metallic, 0.5, 1e-6);
+    MR_CHECK_NEAR(m.albedo[0], 0.02, 1e-6);
+    MR_CHECK(flags == 0);
+    // A metal darker than F0d: d = 0, s = 0.02 is also (A 0, m 0.5); the less metallic twin is returned, and it
+    // renders the same (no flag).
+    s = to_spec(&o, 0.02, 0.02, 0.02, 1.0, NULL);
+    m = to_metal(&o, s.diffuse, s.specular, &flags);
+    MR_CHECK_NEAR(m.metallic, 0.5, 1e-12);
+    MR_CHECK_NEAR(m.albedo[0], 0.0, 1e-12);
+    MR_CHECK(flags == 0);
+    // Such a channel in a bright metal: the weighted mean gives it weight A_c = 0 and stays exact; the plain mean
+    // averages in its 0.5 and misses (flagged).
+    s = to_spec(&o, 0.9, 0.6, 0.02, 1.0, NULL);
+    o.method = MR_WF_WEIGHTED;
+    m = to_metal(&o, s.diffuse, s.specular, &flags);
+    MR_CHECK_NEAR(m.metallic, 1.0, 1e-12);
+    MR_CHECK_NEAR(m.albedo[2], 0.02, 1e-12);
+    MR_CHECK(flags == 0);
+    o.method = MR_WF_MEAN;
+    m = to_metal(&o, s.diffuse, s.specular, &flags);
+    MR_CHECK_NEAR(m.metallic, 2.5 / 3.0, 1e-12);
+    MR_CHECK(flags == MR_WF_OFF_MANIFOLD && metal_in_range(&m));
+}
+
+MR_TEST(negative_discriminant_and_specular_above_albedo) {
+    mr_wf_options o = options(MR_WF_MEAN, 0.04);
+    unsigned flags;
+    // (s + d)^2 < 4 F0d d: no exact solution. The discriminant is clamped to 0, A = (s + d)/2 = 0.0205 <= F0d, so
+    // the less metallic reading m = 1 - A/F0d applies.
+    double d[3] = {0.02, 0.02, 0.02}, s[3] = {0.021, 0.021, 0.021};
+    MR_CHECK((0.041 * 0.041) - 4.0 * 0.04 * 0.02 < 0.0);
+    mr_wf_metal m = to_metal(&o, d, s, &flags);
+    MR_CHECK_NEAR(m.metallic, 1.0 - 0.0205 / 0.04, 1e-12);
+    MR_CHECK(metal_in_range(&m) && flags == MR_WF_OFF_MANIFOLD);
+    // A negative discriminant with A > F0d: m_c = 1 - d/A < 0 is clamped to 0.
+    double d2[3] = {0.1, 0.1, 0.1}, s2[3] = {0.0, 0.0, 0.0};
+    m = to_metal(&o, d2, s2, &flags);
+    MR_CHECK(m.metallic == 0.0 && metal_in_range(&m) && flags == MR_WF_OFF_MANIFOLD);
+    MR_CHECK_NEAR(m.albedo[0], 0.1, 1e-12);
+    // Specular far above what the albedo allows (Eq. 2 would need albedo 1.39): the least-squares albedo exceeds 1
+    // and is clamped. Khronos's model, whose diffuse is renormalised by (1 - max s)/0.96, does reach this texel
+    // (base 0.950, metallic 0.945), so it is not flagged there.
+    double d3[3] = {0.5, 0.5, 0.5}, s3[3] = {0.9, 0.9, 0.9};
+    for (int method = MR_WF_MEAN; method < MR_WF_CUSTOM; method++) {
+        o = options((mr_wf_method)method, 0.04);
+        m = to_metal(&o, d3, s3, &flags);
+        MR_CHECK(metal_in_range(&m));
+        if (method != MR_WF_KHRONOS) MR_CHECK(m.albedo[0] == 1.0 && flags == MR_WF_OFF_MANIFOLD);
+        if (method == MR_WF_KHRONOS) MR_CHECK_NEAR(m.albedo[0], 0.94989009714781059, 1e-12);
+        if (method == MR_WF_KHRONOS) MR_CHECK(flags == 0);
+    }
+    // A white Lambertian with no specular: a dielectric must reflect F0d, so it is read as m = 0, albedo 1.
+    double d4[3] = {1.0, 1.0, 1.0}, s4[3] = {0.0, 0.0, 0.0};
+    o = options(MR_WF_WEIGHTED, 0.04);
+    m = to_metal(&o, d4, s4, &flags);
+    MR_CHECK(m.metallic == 0.0 && m.albedo[0] == 1.0 && flags == MR_WF_OFF_MANIFOLD);
+}
+
+MR_TEST(inputs_outside_0_1_are_clamped_and_flagged) {
+    for (int method = MR_WF_MEAN; method < MR_WF_CUSTOM; method++) {
+        mr_wf_options o = options((mr_wf_method)method, 0.04);
+        unsigned flags, clean_flags;
+        mr_wf_spec in = {{1.5, -0.2, 0.5}, {0.3, 2.0, -1e30}, 7.0};
+        mr_wf_spec clamped = {{1.0, 0.0, 0.5}, {0.3, 1.0, 0.0}, 1.0};
+        mr_wf_metal a, b;
+        MR_CHECK_OK(mr_wf_spec_to_metal(&in, &o, &a, &flags));
+        MR_CHECK_OK(mr_wf_spec_to_metal(&clamped, &o, &b, &clean_flags));
+        MR_CHECK(memcmp(&a, &b, sizeof a) == 0 && a.roughness == 1.0);
+        MR_CHECK(flags == (clean_flags | MR_WF_CLAMPED_INPUT));
+        MR_CHECK(metal_in_range(&a));
+
+        mr_wf_metal min = {{2.0, 0.5, -3.0}, -1.0, -0.5}, mclamped = {{1.0, 0.5, 0.0}, 0.0, 0.0};
+        mr_wf_spec sa, sb;
+        MR_CHECK_OK(mr_wf_metal_to_spec(&min, &o, &sa, &flags));
+        MR_CHECK_OK(mr_wf_metal_to_spec(&mclamped, &o, &sb, &clean_flags));
+        MR_CHECK(memcmp(&sa, &sb, sizeof sa) == 0 && flags == MR_WF_CLAMPED_INPUT && clean_flags == 0);
+        MR_CHECK(spec_in_range(&sa));
+        // Only the roughness out of range.
+        mr_wf_metal rough = {{0.5, 0.5, 0.5}, 0.5, 1.25};
+        MR_CHECK_OK(mr_wf_metal_to_spec(&rough, &o, &sa, &flags));
+        MR_CHECK(flags == MR_WF_CLAMPED_INPUT && sa.roughness == 1.0);
+    }
+}
+
+MR_TEST(non_finite_inputs_are_flagged_and_read_as_zero) {
+    static const double bad[] = {NAN, INFINITY, -INFINITY};
+    for (int method = MR_WF_MEAN; method < MR_WF_CUSTOM; method++) {
+        mr_wf_options o = options((mr_wf_method)method, 0.04);
+        for (int k = 0; k < 3; k++)
+            for (int slot = 0; slot < 7; slot++) {
+                // spec -> metal: the bad value in each of the 7 inputs.
+                mr_wf_spec in = {{0.3, 0.2, 0.1}, {0.5, 0.4, 0.3}, 0.6};
+                double *v = slot < 3 ? &in.diffuse[slot] : slot < 6 ? &in.specular[slot - 3] : &in.roughness;
+                mr_wf_spec zeroed = in;
+                double *z = slot < 3   ? &zeroed.diffuse[slot]
+                            : slot < 6 ? &zeroed.specular[slot - 3]
+                                       : &zeroed.roughness;
+                *v = bad[k];
+                *z = 0.0;
+                mr_wf_metal a, b;
+                unsigned flags, zero_flags;
+                MR_CHECK_OK(mr_wf_spec_to_metal(&in, &o, &a, &flags));
+                MR_CHECK_OK(mr_wf_spec_to_metal(&zeroed, &o, &b, &zero_flags));
+                MR_CHECK(metal_in_range(&a) && memcmp(&a, &b, sizeof a) == 0);
+                MR_CHECK_MSG(flags == (zero_flags | MR_WF_NONFINITE_INPUT), "%s slot %d: flags %u",
+                             mr_wf_method_name(o.method), slot, flags);
+            }
+        for (int k = 0; k < 3; k++)
+            for (int slot = 0; slot < 5; slot++) {
+                mr_wf_metal in = {{0.9, 0.5, 0.2}, 0.7, 0.4};
+                double *v = slot < 3 ? &in.albedo[slot] : slot == 3 ? &in.metallic : &in.roughness;
+                *v = bad[k];
+                mr_wf_spec s;
+                unsigned flags;
+                MR_CHECK_OK(mr_wf_metal_to_spec(&in, &o, &s, &flags));
+                MR_CHECK(spec_in_range(&s) && flags == MR_WF_NONFINITE_INPUT);
+            }
+        // Everything NaN: a defined, finite texel.
+        mr_wf_spec all = {{NAN, NAN, NAN}, {NAN, NAN, NAN}, NAN};
+        mr_wf_metal m;
+        unsigned flags;
+        MR_CHECK_OK(mr_wf_spec_to_metal(&all, &o, &m, &flags));
+        MR_CHECK(metal_in_range(&m) && (flags & MR_WF_NONFINITE_INPUT) && m.roughness == 0.0);
+    }
+}
+
+/* ---- the custom-method slot ----------------------------------------------------------------------------------- */
+
+typedef struct custom_probe {
+    int calls;
+    int mode; /* 0: return the weighted answer; 1: fail; 2: return garbage */
+    double seen_f0;
+} custom_probe;
+
+static int probe_method(const mr_wf_options *opts, const double diffuse[3], const double specular[3],
+                        double albedo[3], double *metallic) {
+    custom_probe *p = opts->custom_data;
+    p->calls++;
+    p->seen_f0 = opts->dielectric_f0;
+    if (p->mode == 1) return 3;
+    if (p->mode == 2) {
+        albedo[0] = NAN;
+        albedo[1] = 2.0;
+        albedo[2] = 0.5;
+        *metallic = -1.0;
+        return 0;
+    }
+    mr_wf_options w = *opts;
+    w.method = MR_WF_WEIGHTED;
+    mr_wf_spec in = {{diffuse[0], diffuse[1], diffuse[2]}, {specular[0], specular[1], specular[2]}, 0.0};
+    mr_wf_metal out;
+    if (mr_wf_spec_to_metal(&in, &w, &out, NULL) != MR_OK) return 1;
+    memcpy(albedo, out.albedo, sizeof out.albedo);
+    *metallic = out.metallic;
+    return 0;
+}
+
+MR_TEST(the_custom_slot_calls_back_and_sanitises) {
+    custom_probe probe = {0, 0, 0.0};
+    mr_wf_options o = options(MR_WF_CUSTOM, 0.03);
+    o.custom = probe_method;
+    o.custom_data = &probe;
+    mr_wf_options w = options(MR_WF_WEIGHTED, 0.03);
+    double d[3] = {0.3, 0.2, 0.1}, s[3] = {0.2, 0.1, 0.4};
+    unsigned fc, fw;
+    mr_wf_metal a = to_metal(&o, d, s, &fc), b = to_metal(&w, d, s, &fw);
+    MR_CHECK(probe.calls == 1 && probe.seen_f0 == 0.03);
+    MR_CHECK(memcmp(&a, &b, sizeof a) == 0 && fc == fw);
+    // It receives sanitised inputs.
+    double dn[3] = {NAN, 2.0, 0.1};
+    to_metal(&o, dn, s, &fc);
+    MR_CHECK(fc & MR_WF_NONFINITE_INPUT && fc & MR_WF_CLAMPED_INPUT);
+    // A failure zeroes the texel; garbage is sanitised; both are flagged.
+    probe.mode = 1;
+    a = to_metal(&o, d, s, &fc);
+    MR_CHECK(a.metallic == 0.0 && a.albedo[0] == 0.0 && a.albedo[1] == 0.0 && a.albedo[2] == 0.0);
+    MR_CHECK(fc & MR_WF_METHOD_FAILED);
+    probe.mode = 2;
+    a = to_metal(&o, d, s, &fc);
+    MR_CHECK(metal_in_range(&a) && a.albedo[0] == 0.0 && a.albedo[1] == 1.0 && a.metallic == 0.0);
+    MR_CHECK(fc & MR_WF_METHOD_FAILED);
+    // metal -> spec under CUSTOM is Eq. 2 and does not call back.
+    int calls = probe.calls;
+    mr_wf_spec sc = to_spec(&o, 0.9, 0.5, 0.2, 0.7, NULL), sw = to_spec(&w, 0.9, 0.5, 0.2, 0.7, NULL);
+    MR_CHECK(memcmp(&sc, &sw, sizeof sc) == 0 && probe.calls == calls);
+}
+
+/* ---- batches -------------------------------------------------------------------------------------------------- */
+
+enum { BATCH_N = 3000 };
+
+typedef struct batch_data {
+    float albedo[3 * BATCH_N], metallic[BATCH_N], rough[BATCH_N];
+    float diffuse[3 * BATCH_N], specular[3 * BATCH_N];
+} batch_data;
+
+static void fill(batch_data *b, uint64_t seed) {
+    uint64_t rng = seed;
+    for (int i = 0; i < 3 * BATCH_N; i++) {
+        b->albedo[i] = texel_value(&rng);
+        b->diffuse[i] = texel_value(&rng);
+        b->specular[i] = texel_value(&rng);
+    }
+    for (int i = 0; i < BATCH_N; i++) {
+        b->metallic[i] = texel_value(&rng);
+        b->rough[i] = texel_value(&rng);
+    }
+}
+
+MR_TEST(batch_equals_per_texel) {
+    static batch_data in, out;
+    static uint8_t flags[BATCH_N];
+    fill(&in, 11);
+    custom_probe probe = {0, 0, 0.0};
+    for (int method = 0; method < MR_WF_METHOD_COUNT; method++) {
+        mr_wf_options o = options((mr_wf_method)method, 0.04);
+        o.custom = probe_method;
+        o.custom_data = &probe;
+        mr_wf_metal_maps metal_in = {in.albedo, in.metallic, in.rough};
+        mr_wf_spec_maps spec_out = {out.diffuse, out.specular, out.rough};
+        MR_CHECK_OK(mr_wf_metal_to_spec_batch(&metal_in, BATCH_N, &o, &spec_out, flags));
+        int mismatches = 0;
+        for (int i = 0; i < BATCH_N; i++) {
+            mr_wf_metal t = {{in.albedo[3 * i], in.albedo[3 * i + 1], in.albedo[3 * i + 2]}, in.metallic[i],
+                             in.rough[i]};
+            mr_wf_spec s;
+            unsigned f;
+            MR_CHECK_OK(mr_wf_metal_to_spec(&t, &o, &s, &f));
+            int same = flags[i] == f && out.rough[i] == (float)s.roughness;
+            for (int c = 0; c < 3; c++)
+                same = same && out.diffuse[3 * i + c] == (float)s.diffuse[c]
+                       && out.specular[3 * i + c] == (float)s.specular[c];
+            mismatches += !same;
+        }
+        MR_CHECK_MSG(mismatches == 0, "%s metal -> spec: %d texels differ", mr_wf_method_name(o.method), mismatches);
+
+        mr_wf_spec_maps spec_in = {in.diffuse, in.specular, in.rough};
+        mr_wf_metal_maps metal_out = {out.albedo, out.metallic, out.rough};
+        MR_CHECK_OK(mr_wf_spec_to_metal_batch(&spec_in, BATCH_N, &o, &metal_out, flags));
+        mismatches = 0;
+        int flagged = 0;
+        for (int i = 0; i < BATCH_N; i++) {
+            mr_wf_spec t = {{in.diffuse[3 * i], in.diffuse[3 * i + 1], in.diffuse[3 * i + 2]},
+                            {in.specular[3 * i], in.specular[3 * i + 1], in.specular[3 * i + 2]},
+                            in.rough[i]};
+            mr_wf_metal m;
+            unsigned f;
+            MR_CHECK_OK(mr_wf_spec_to_metal(&t, &o, &m, &f));
+            int same = flags[i] == f && out.rough[i] == (float)m.roughness && out.metallic[i] == (float)m.metallic;
+            for (int c = 0; c < 3; c++) same = same && out.albedo[3 * i + c] == (float)m.albedo[c];
+            mismatches += !same;
+            flagged += (flags[i] & (MR_WF_NONFINITE_INPUT | MR_WF_CLAMPED_INPUT)) != 0;
+        }
+        MR_CHECK_MSG(mismatches == 0, "%s spec -> metal: %d texels differ", mr_wf_method_name(o.method), mismatches);
+        MR_CHECK(flagged > 100); // the hard values are there
+    }
+    // Without roughness maps and without flags; in place (albedo over diffuse, both 3n) gives the same.
+    mr_wf_options o = mr_wf_options_default();
+    static float diffuse_copy[3 * BATCH_N], metallic2[BATCH_N];
+    memcpy(diffuse_copy, in.diffuse, sizeof diffuse_copy);
+    mr_wf_spec_maps spec_in = {in.diffuse, in.specular, NULL};
+    mr_wf_metal_maps metal_out = {out.albedo, out.metallic, NULL};
+    MR_CHECK_OK(mr_wf_spec_to_metal_batch(&spec_in, BATCH_N, &o, &metal_out, NULL));
+    mr_wf_spec_maps in_place_in = {diffuse_copy, in.specular, NULL};
+    mr_wf_metal_maps in_place_out = {diffuse_copy, metallic2, NULL};
+    MR_CHECK_OK(mr_wf_spec_to_metal_batch(&in_place_in, BATCH_N, &o, &in_place_out, NULL));
+    MR_CHECK(memcmp(diffuse_copy, out.albedo, sizeof diffuse_copy) == 0);
+    MR_CHECK(memcmp(metallic2, out.metallic, sizeof metallic2) == 0);
+    // n = 0 does nothing, even with no maps.
+    mr_wf_spec_maps none = {NULL, NULL, NULL};
+    mr_wf_metal_maps none_out = {NULL, NULL, NULL};
+    MR_CHECK_OK(mr_wf_spec_to_metal_batch(&none, 0, &o, &none_out, NULL));
+}
+
+MR_TEST(results_are_identical_for_one_and_two_threads) {
+    static batch_data in, one, two;
+    static uint8_t flags_one[2 * BATCH_N], flags_two[2 * BATCH_N];
+    fill(&in, 23);
+    int saved = omp_get_max_threads();
+    for (int method = 0; method < MR_WF_CUSTOM; method++) {
+        mr_wf_options o = options((mr_wf_method)method, 0.04);
+        for (int pass = 0; pass < 2; pass++) {
+            batch_data *out = pass == 0 ? &one : &two;
+            uint8_t *flags = pass == 0 ? flags_one : flags_two;
+            omp_set_num_threads(pass + 1);
+            mr_wf_spec_maps spec_in = {in.diffuse, in.specular, in.rough};
+            mr_wf_metal_maps metal_out = {out->albedo, out->metallic, out->rough};
+            MR_CHECK_OK(mr_wf_spec_to_metal_batch(&spec_in, BATCH_N, &o, &metal_out, flags));
+            mr_wf_metal_maps metal_in = {in.albedo, in.metallic, in.rough};
+            mr_wf_spec_maps spec_out = {out->diffuse, out->specular, out->rough};
+            MR_CHECK_OK(mr_wf_metal_to_spec_batch(&metal_in, BATCH_N, &o, &spec_out, flags + BATCH_N));
+        }
+        MR_CHECK(memcmp(&one, &two, sizeof one) == 0);
+        MR_CHECK(memcmp(flags_one, flags_two, sizeof flags_one) == 0);
+    }
+    omp_set_num_threads(saved);
+}
+
+/* ---- errors --------------------------------------------------------------------------------------------------- */
+
+/* Expect MR_ERR_INVALID_ARG with `needle` in the message. */
+#define CHECK_REJECTED(call, needle)                                                                  \
+    do {                                                                                              \
+        mr_clear_error();                                                                             \
+        mr_status s_ = (call);                                                                        \
+        MR_CHECK_MSG(s_ == MR_ERR_INVALID_ARG, "%s -> %s", #call, mr_status_str(s_));                 \
+        MR_CHECK_MSG(strstr(mr_last_error(), needle) != NULL, "%s: message '%s' lacks '%s'", #call,   \
+                     mr_last_error(), needle);                                                        \
+    } while (0)
+
+MR_TEST(bad_arguments_are_rejected_with_a_message) {
+    mr_wf_options o = mr_wf_options_default();
+    mr_wf_spec spec = {{0.3, 0.2, 0.1}, {0.04, 0.04, 0.04}, 0.5};
+    mr_wf_metal metal = {{0.5, 0.5, 0.5}, 0.5, 0.5};
+    mr_wf_metal out_m;
+    mr_wf_spec out_s;
+    memset(&out_m, 0x5a, sizeof out_m);
+    memset(&out_s, 0x5a, sizeof out_s);
+    unsigned char before_m[sizeof out_m], before_s[sizeof out_s];
+    memcpy(before_m, &out_m, sizeof out_m);
+    memcpy(before_s, &out_s, sizeof out_s);
+    unsigned flags = 12345;
+
+    CHECK_REJECTED(mr_wf_spec_to_metal(NULL, &o, &out_m, &flags), "NULL");
+    CHECK_REJECTED(mr_wf_spec_to_metal(&spec, &o, NULL, &flags), "NULL");
+    CHECK_REJECTED(mr_wf_metal_to_spec(NULL, &o, &out_s, &flags), "NULL");
+    CHECK_REJECTED(mr_wf_metal_to_spec(&metal, &o, NULL, &flags), "NULL");
+
+    static const double bad_f0[] = {1.0, -0.01, 1.5, NAN, INFINITY};
+    for (size_t i = 0; i < sizeof bad_f0 / sizeof bad_f0[0]; i++) {
+        o = mr_wf_options_default();
+        o.dielectric_f0 = bad_f0[i];
+        CHECK_REJECTED(mr_wf_spec_to_metal(&spec, &o, &out_m, &flags), "dielectric_f0");
+        CHECK_REJECTED(mr_wf_metal_to_spec(&metal, &o, &out_s, &flags), "dielectric_f0");
+        CHECK_REJECTED(mr_wf_options_check(&o), "[0, 1)");
+    }
+    o = mr_wf_options_default();
+    o.eps = -1e-9;
+    CHECK_REJECTED(mr_wf_spec_to_metal(&spec, &o, &out_m, &flags), "eps");
+    o.eps = NAN;
+    CHECK_REJECTED(mr_wf_spec_to_metal(&spec, &o, &out_m, &flags), "eps");
+    o = mr_wf_options_default();
+    o.method = MR_WF_METHOD_COUNT;
+    CHECK_REJECTED(mr_wf_spec_to_metal(&spec, &o, &out_m, &flags), "method");
+    o.method = MR_WF_CUSTOM;
+    CHECK_REJECTED(mr_wf_spec_to_metal(&spec, &o, &out_m, &flags), "callback");
+    CHECK_REJECTED(mr_wf_metal_to_spec(&metal, &o, &out_s, &flags), "callback");
+    o = options(MR_WF_KHRONOS, MR_WF_F0_PAPER);
+    CHECK_REJECTED(mr_wf_spec_to_metal(&spec, &o, &out_m, &flags), "0.04");
+    MR_CHECK(memcmp(before_m, &out_m, sizeof out_m) == 0);
+    MR_CHECK(memcmp(before_s, &out_s, sizeof out_s) == 0);
+    MR_CHECK(flags == 12345);
+    // The edges of the valid ranges are fine.
+    o = options(MR_WF_WEIGHTED, 0.0);
+    o.eps = 0.0;
+    MR_CHECK_OK(mr_wf_spec_to_metal(&spec, &o, &out_m, &flags));
+    o.dielectric_f0 = 0.999;
+    MR_CHECK_OK(mr_wf_spec_to_metal(&spec, &o, &out_m, &flags));
+    MR_CHECK(metal_in_range(&out_m));
+
+    // Batches.
+    o = mr_wf_options_default();
+    float d[6] = {0.1f, 0.2f, 0.3f, 0.4f, 0.5f, 0.6f}, s[6] = {0}, a[6], m[2], r[2] = {0.5f, 0.5f};
+    mr_wf_spec_maps sin = {d, s, NULL}, s_no_d = {NULL, s, NULL}, s_rough = {d, s, r};
+    mr_wf_metal_maps mout = {a, m, NULL}, m_no_m = {a, NULL, NULL}, m_rough = {a, m, r};
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(NULL, 2, &o, &mout, NULL), "NULL");
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(&sin, 2, &o, NULL, NULL), "NULL");
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(&s_no_d, 2, &o, &mout, NULL), "diffuse");
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(&sin, 2, &o, &m_no_m, NULL), "metallic");
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(&sin, 2, &o, &m_rough, NULL), "roughness");
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(&s_rough, 2, &o, &mout, NULL), "roughness");
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(&sin, SIZE_MAX / 2, &o, &mout, NULL), "texels");
+    mr_wf_metal_maps min = {a, m, NULL}, m_no_a = {NULL, m, NULL};
+    mr_wf_spec_maps sout = {d, s, NULL}, s_no_s = {d, NULL, NULL};
+    CHECK_REJECTED(mr_wf_metal_to_spec_batch(&m_no_a, 2, &o, &sout, NULL), "albedo");
+    CHECK_REJECTED(mr_wf_metal_to_spec_batch(&min, 2, &o, &s_no_s, NULL), "specular");
+    o.dielectric_f0 = 2.0;
+    CHECK_REJECTED(mr_wf_metal_to_spec_batch(&min, 2, &o, &sout, NULL), "dielectric_f0");
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(&sin, 2, &o, &mout, NULL), "dielectric_f0");
+}
+
+MR_TEST_MAIN(MR_TEST_ENTRY(method_names_round_trip),
+             MR_TEST_ENTRY(default_options_are_the_documented_ones),
+             MR_TEST_ENTRY(equation_2_known_answers),
+             MR_TEST_ENTRY(round_trip_is_exact_for_mean_and_weighted),
+             MR_TEST_ENTRY(float_batch_round_trip_is_exact_within_float_rounding),
+             MR_TEST_ENTRY(equation_3_matches_the_closed_form_with_the_papers_f0),
+             MR_TEST_ENTRY(mean_and_weighted_follow_their_formulas_off_the_manifold),
+             MR_TEST_ENTRY(khronos_matches_its_javascript),
+             MR_TEST_ENTRY(khronos_round_trip_within_its_known_tolerance),
+             MR_TEST_ENTRY(black_is_a_black_metal),
+             MR_TEST_ENTRY(albedo_at_or_below_the_dielectric_f0),
+             MR_TEST_ENTRY(negative_discriminant_and_specular_above_albedo),
+             MR_TEST_ENTRY(inputs_outside_0_1_are_clamped_and_flagged),
+             MR_TEST_ENTRY(non_finite_inputs_are_flagged_and_read_as_zero),
+             MR_TEST_ENTRY(the_custom_slot_calls_back_and_sanitises),
+             MR_TEST_ENTRY(batch_equals_per_texel),
+             MR_TEST_ENTRY(results_are_identical_for_one_and_two_threads),
+             MR_TEST_ENTRY(bad_arguments_are_rejected_with_a_message))
