@@ -5,6 +5,8 @@
 #   make asan       the test suite built with AddressSanitizer + UndefinedBehaviorSanitizer
 #   make demo       renders and compares the demo materials of data/ into out/demo
 #   make bench      benchmarks (prints figures, asserts nothing; see docs/performance.md)
+#   make analyses   the paper's stability analyses (docs/analyses.md)
+#   make dataset    the specular -> metallic training set (build/dataset); make train: data/spec2metal.mlp
 #   make deps       installs the Debian packages the project needs (scripts/install-deps.sh)
 #   make install PREFIX=/usr/local   tools, static library, public headers and matremap.pc
 
@@ -46,7 +48,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h 
                   src/io/image_io.h src/metrics/metrics.h src/remap/remap.h src/workflow/workflow.h \
                   src/workflow/dataset.h nn/mlp.h
 
-.PHONY: all check asan demo bench analyses deps install clean
+.PHONY: all check asan demo bench analyses dataset train deps install clean
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
 all: $(LIB) $(TOOLS) $(MODULE)
@@ -112,6 +114,18 @@ bench: all $(BENCHES)
 
 analyses: all
 	scripts/analyses.sh $(BUILD)
+
+# The specular -> metallic dataset (resumable sweeps, a few minutes on 2 cores) and the default network trained
+# on it (docs/workflow.md, "The default network"). `make train` reproduces data/spec2metal.mlp bit for bit.
+DATASET := $(BUILD)/dataset
+dataset: all
+	scripts/dataset.sh $(BUILD) $(DATASET)
+
+train: dataset
+	@mkdir -p docs/training
+	$(BUILD)/bin/matremap train $(DATASET)/on-manifold.csv $(DATASET)/off-manifold.csv --seed 1 \
+	    -o data/spec2metal.mlp --loss-curve docs/training/spec2metal_loss \
+	    --test $(DATASET)/test-on-manifold.csv --test $(DATASET)/test-off-manifold.csv | tee docs/training/spec2metal.txt
 
 deps:
 	scripts/install-deps.sh

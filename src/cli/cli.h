@@ -60,5 +60,6 @@ int cmd_render(int argc, char **argv);
 int cmd_ssim(int argc, char **argv);
 int cmd_remap(int argc, char **argv);
 int cmd_sweep(int argc, char **argv);
+int cmd_train(int argc, char **argv);
 
 #endif /* MR_CLI_H */

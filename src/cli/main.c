@@ -20,6 +20,7 @@ static const command commands[] = {
     {"ssim", cmd_ssim, "compare two images: SSIM (display-referred) and RMSE (linear)"},
     {"remap", cmd_remap, "fit a target model to a source material or to renders of the fit scene"},
     {"sweep", cmd_sweep, "remap a grid or random sample of source materials into a resumable CSV file"},
+    {"train", cmd_train, "train the specular -> metallic network on sweep files (the dataset)"},
 };
 
 static void print_usage(FILE *out) {

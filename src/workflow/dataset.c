@@ -169,8 +169,9 @@ static mr_status load_file(const char *path, const mr_wf_dataset_options *opts, 
             break;
         }
         const char *outcome = fields[c.outcome];
-        int good = strcmp(outcome, "converged") == 0 || strcmp(outcome, "at-bound") == 0;
-        int bad = strcmp(outcome, "unreachable") == 0 || strcmp(outcome, "local-minimum") == 0;
+        int good = strcmp(outcome, "converged") == 0 || strcmp(outcome, "at-bound") == 0 ||
+                   strcmp(outcome, "unreachable") == 0;
+        int bad = strcmp(outcome, "local-minimum") == 0;
         if (!good && !bad) {
             status = mr_fail(MR_ERR_FORMAT, "%s:%ld: unknown outcome '%s'", path, line_number, outcome);
             break;

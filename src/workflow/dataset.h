@@ -17,9 +17,11 @@
  *     material the sweep rendered;
  *   - output: the target columns to_albedo_r/g/b and to_metallic.
  * A file with neither input form, or without the output columns, is MR_ERR_FORMAT naming the file. Rows are read
- * in file order, files in the order given. By default only rows whose outcome is `converged` or `at-bound` are
- * kept (at-bound: metallic pinned at 0 or 1 by an imperfect fit, still the best the target does); `unreachable`
- * and `local-minimum` rows are counted in `skipped`. A row with a non-finite value, a missing field or an
+ * in file order, files in the order given. By default rows whose outcome is `local-minimum` (the optimiser may
+ * have stopped short of the best fit) are left out and counted in `skipped`; `converged`, `at-bound` (metallic
+ * pinned at 0 or 1) and `unreachable` rows are kept: an unreachable specular material (bright diffuse and bright
+ * specular at once, which no single metallic reproduces within 25 %) still has a best metallic approximation,
+ * which is what the regressor must learn there (paper section 8). A row with a non-finite value, a missing field or an
  * unknown outcome is MR_ERR_FORMAT naming the file and line.
  * Ownership: d owns x and y (one free: mr_wf_dataset_free, which also zeroes d). Nothing is printed.
  */
@@ -38,7 +40,7 @@ extern "C" {
 #define MR_WF_DATASET_OUTPUTS 4 /* albedo RGB, metallic */
 
 typedef struct mr_wf_dataset_options {
-    int keep_all_outcomes; /* 1: keep unreachable and local-minimum rows too; default 0 */
+    int keep_all_outcomes; /* 1: keep local-minimum rows too; default 0 */
 } mr_wf_dataset_options;
 
 typedef struct mr_wf_dataset {

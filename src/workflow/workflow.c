@@ -12,9 +12,11 @@
 
 #include <math.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "../mr_internal.h"
+#include "nn/mlp.h"
 #include "workflow_internal.h"
 
 static const char *const method_names[MR_WF_METHOD_COUNT] = {"mean", "weighted", "khronos", "custom"};
@@ -286,4 +288,71 @@ mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_maps *in, size_t n, const m
         if (flags) flags[i] = (uint8_t)f;
     }
     return MR_OK;
+}
+
+/* ---- the learned method (nn/mlp.h) ---------------------------------------------------------------------------- */
+
+#define MLP_BLOCK 65536 /* texels per network call: 2.6 MB of inputs and outputs */
+
+mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps *in, size_t n,
+                                        const mr_wf_options *opts, const mr_wf_metal_maps *out, uint8_t *flags) {
+    const char *what = "spec -> metal batch (mlp)";
+    if (net == NULL || in == NULL || out == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL network, input or output maps", what);
+    if (net->n_in != 6 || net->n_out != 4)
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: the network maps %d inputs to %d outputs; expected 6 (diffuse RGB, "
+                       "specular RGB) to 4 (albedo RGB, metallic)", what, net->n_in, net->n_out);
+    if (n > 0 && (in->diffuse == NULL || in->specular == NULL))
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL %s map", what, in->diffuse == NULL ? "diffuse" : "specular");
+    if (n > 0 && (out->albedo == NULL || out->metallic == NULL))
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL %s map", what, out->albedo == NULL ? "albedo" : "metallic");
+    mr_wf_options o = opts ? *opts : mr_wf_options_default();
+    o.method = MR_WF_MEAN; // the analytic method is not used; only the shared checks apply
+    mr_status status = check_batch(what, n, &o, in->roughness, out->roughness);
+    if (status != MR_OK) return status;
+    size_t block = n < MLP_BLOCK ? n : MLP_BLOCK;
+    float *x = malloc(block * 6 * sizeof *x), *y = malloc(block * 4 * sizeof *y);
+    if (n > 0 && (x == NULL || y == NULL)) {
+        free(x);
+        free(y);
+        return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %zu texels", what, block);
+    }
+    for (size_t start = 0; start < n && status == MR_OK; start += block) {
+        size_t count = n - start < block ? n - start : block;
+#pragma omp parallel for schedule(static)
+        for (size_t r = 0; r < count; r++) {
+            size_t i = start + r;
+            unsigned f = 0;
+            for (int c = 0; c < 3; c++) {
+                x[6 * r + c] = (float)sanitise(in->diffuse[3 * i + c], &f);
+                x[6 * r + 3 + c] = (float)sanitise(in->specular[3 * i + c], &f);
+            }
+            if (flags) flags[i] = (uint8_t)f;
+        }
+        status = mr_mlp_predict(net, x, count, y);
+        if (status != MR_OK) break;
+#pragma omp parallel for schedule(static)
+        for (size_t r = 0; r < count; r++) {
+            size_t i = start + r;
+            unsigned f = flags ? flags[i] : 0;
+            for (int k = 0; k < 4; k++) {
+                double v = y[4 * r + k];
+                if (!isfinite(v) || v < 0.0 || v > 1.0) {
+                    // Outputs slightly outside [0, 1] are the regressor's normal overshoot; only non-finite
+                    // ones mean it failed.
+                    if (!isfinite(v)) f |= MR_WF_METHOD_FAILED;
+                    v = isfinite(v) ? (v < 0.0 ? 0.0 : 1.0) : 0.0;
+                }
+                if (k < 3)
+                    out->albedo[3 * i + k] = (float)v;
+                else
+                    out->metallic[i] = (float)v;
+            }
+            if (out->roughness) out->roughness[i] = (float)sanitise(in->roughness[i], &f);
+            if (flags) flags[i] = (uint8_t)f;
+        }
+    }
+    free(x);
+    free(y);
+    return status;
 }

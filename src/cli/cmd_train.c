@@ -1,0 +1,310 @@
+/*
+ * cmd_train.c — `matremap train`: fit the specular -> metallic MLP (nn/mlp.h) to sweep files of specular
+ * materials remapped to metallic ones (src/workflow/dataset.h; scripts/dataset.sh makes them), write the weight
+ * file, the loss curve (CSV + SVG plot) and, with --test, the errors of every method on held-out sweep files.
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "cli.h"
+
+#define MAX_FILES 64
+
+static void print_help(void) {
+    printf("Usage: matremap train DATASET.csv [DATASET.csv ...] -o WEIGHTS.mlp [options]\n"
+           "\n"
+           "Trains the specular -> metallic network: 6 inputs (diffuse RGB, specular F0 RGB) -> one hidden layer of\n"
+           "ReLU units -> 4 outputs (albedo RGB, metallic), on the pairs of 'matremap sweep' files of specular\n"
+           "materials remapped into the metallic workflow (a ggx or ggx-metallic source, a ggx-metallic target;\n"
+           "'make dataset' makes the default set). Rows whose outcome is local-minimum are left out.\n"
+           "Training: Adam on minibatches, inputs and outputs normalised, a seeded validation split and early\n"
+           "stopping that keeps the best epoch (nn/mlp.h). Deterministic for a seed on any thread count.\n"
+           "\n"
+           "Options:\n"
+           "  -o, --output FILE    the weight file (required; written atomically)\n"
+           "  --hidden N           hidden units (default 300)\n"
+           "  --epochs N           most epochs (default 200)\n"
+           "  --patience N         stop after N epochs without a better validation loss (default 20)\n"
+           "  --batch N            rows per Adam step (default 64)\n"
+           "  --lr X               Adam learning rate (default 0.001)\n"
+           "  --validation F       share of the rows held out for early stopping (default 0.1)\n"
+           "  --seed S             split, initialisation and shuffles (default 1)\n"
+           "  --threads T          OpenMP threads (default: all cores; the result does not depend on it)\n"
+           "  --loss-curve PREFIX  write PREFIX.csv (epoch, train and validation loss) and PREFIX.svg (a plot, when\n"
+           "                       gnuplot is installed); default: WEIGHTS without its extension + '_loss'\n"
+           "  --test FILE.csv      held-out sweep files (repeatable): print each method's error on them\n"
+           "                       (mlp, weighted, mean, khronos) against the optimiser's metallic parameters\n"
+           "  --json               the summary as JSON on stdout\n"
+           "  --help               this text\n"
+           "\n"
+           "Losses are mean squared errors of the normalised outputs (each output scaled by its standard deviation\n"
+           "over the training split). Progress goes to stderr when it is a terminal.\n"
+           "\n"
+           "Examples:\n"
+           "  matremap train build/dataset/on-manifold.csv build/dataset/off-manifold.csv -o data/spec2metal.mlp\n"
+           "  matremap train sweep.csv -o small.mlp --hidden 32 --test test.csv --json\n");
+}
+
+/* Per-epoch state: the loss curve in memory and the terminal progress line. */
+typedef struct curve {
+    int count, capacity;
+    mr_mlp_epoch *epochs;
+    int draw;
+    double started;
+} curve;
+
+static int record_epoch(const mr_mlp_epoch *epoch, void *user) {
+    curve *c = user;
+    if (c->count == c->capacity) {
+        int grown = c->capacity ? 2 * c->capacity : 256;
+        mr_mlp_epoch *more = realloc(c->epochs, (size_t)grown * sizeof *more);
+        if (more == NULL) return 1; // stops training with the best weights so far; reported by the caller
+        c->epochs = more;
+        c->capacity = grown;
+    }
+    c->epochs[c->count++] = *epoch;
+    if (c->draw)
+        fprintf(stderr, "\rtrain: epoch %d/%d  train %.5f  validation %.5f  best %.5f (epoch %d)  %.0f s ",
+                epoch->epoch, epoch->max_epochs, epoch->train_loss, epoch->validation_loss,
+                epoch->best_validation_loss, epoch->best_epoch, cli_now() - c->started);
+    return 0;
+}
+
+/* PREFIX.csv and, if gnuplot runs, PREFIX.svg. Returns 0 and prints why on failure of the CSV. */
+static int write_curve(const curve *c, const char *prefix, const char *title) {
+    char path[4096];
+    snprintf(path, sizeof path, "%s.csv", prefix);
+    FILE *f = fopen(path, "w");
+    if (f == NULL) {
+        fprintf(stderr, "matremap train: error: cannot write '%s': %s\n", path, strerror(errno));
+        return 0;
+    }
+    fprintf(f, "epoch,train_loss,validation_loss,best_epoch\n");
+    for (int i = 0; i < c->count; i++)
+        fprintf(f, "%d,%.9g,%.9g,%d\n", c->epochs[i].epoch, c->epochs[i].train_loss, c->epochs[i].validation_loss,
+                c->epochs[i].best_epoch);
+    if (fclose(f) != 0) {
+        fprintf(stderr, "matremap train: error: cannot write '%s': %s\n", path, strerror(errno));
+        return 0;
+    }
+    // The plot is a convenience: without gnuplot the CSV is the curve.
+    FILE *plot = popen("gnuplot 2>/dev/null", "w");
+    if (plot == NULL) return 1;
+    fprintf(plot, "set terminal svg size 800,480 dynamic font 'Helvetica,12' background rgb 'white'\n"
+                  "set output '%s.svg'\nset datafile separator ','\nset logscale y\nset grid\n"
+                  "set xlabel 'epoch'\nset ylabel 'loss (MSE of normalised outputs)'\nset title '%s' noenhanced\n"
+                  "plot '%s' using 1:2 skip 1 with lines lw 2 title 'train', "
+                  "'' using 1:3 skip 1 with lines lw 2 title 'validation'\n",
+            prefix, title, path);
+    if (pclose(plot) != 0)
+        fprintf(stderr, "matremap train: note: no plot (gnuplot missing or failed); the curve is in %s\n", path);
+    return 1;
+}
+
+typedef struct method_error {
+    const char *name;
+    double albedo_rmse, metallic_rmse, metallic_max;
+} method_error;
+
+/* Each method's error on the test pairs against the optimiser's labels. */
+static mr_status test_methods(const mr_mlp *net, const mr_wf_dataset *test, method_error errors[4]) {
+    size_t n = test->n;
+    float *diffuse = malloc(n * 3 * sizeof *diffuse), *specular = malloc(n * 3 * sizeof *specular);
+    float *albedo = malloc(n * 3 * sizeof *albedo), *metallic = malloc(n * sizeof *metallic);
+    mr_status status = (diffuse && specular && albedo && metallic) ? MR_OK : MR_ERR_NOMEM;
+    for (size_t i = 0; status == MR_OK && i < n; i++)
+        for (int c = 0; c < 3; c++) {
+            diffuse[3 * i + c] = test->x[6 * i + c];
+            specular[3 * i + c] = test->x[6 * i + 3 + c];
+        }
+    static const char *const names[4] = {"mlp", "weighted", "mean", "khronos"};
+    static const mr_wf_method methods[4] = {MR_WF_CUSTOM, MR_WF_WEIGHTED, MR_WF_MEAN, MR_WF_KHRONOS};
+    for (int m = 0; status == MR_OK && m < 4; m++) {
+        mr_wf_spec_maps in = {diffuse, specular, NULL};
+        mr_wf_metal_maps out = {albedo, metallic, NULL};
+        mr_wf_options o = mr_wf_options_default();
+        o.method = methods[m];
+        status = m == 0 ? mr_wf_spec_to_metal_mlp_batch(net, &in, n, &o, &out, NULL)
+                        : mr_wf_spec_to_metal_batch(&in, n, &o, &out, NULL);
+        double sa = 0.0, sm = 0.0, worst = 0.0;
+        for (size_t i = 0; status == MR_OK && i < n; i++) {
+            for (int c = 0; c < 3; c++) {
+                double d = albedo[3 * i + c] - test->y[4 * i + c];
+                sa += d * d;
+            }
+            double d = metallic[i] - test->y[4 * i + 3];
+            sm += d * d;
+            worst = fmax(worst, fabs(d));
+        }
+        errors[m].name = names[m];
+        errors[m].albedo_rmse = n ? sqrt(sa / (3.0 * (double)n)) : 0.0;
+        errors[m].metallic_rmse = n ? sqrt(sm / (double)n) : 0.0;
+        errors[m].metallic_max = worst;
+    }
+    free(diffuse);
+    free(specular);
+    free(albedo);
+    free(metallic);
+    return status;
+}
+
+int cmd_train(int argc, char **argv) {
+    const char *files[MAX_FILES], *tests[MAX_FILES], *output = NULL, *curve_prefix = NULL;
+    int file_count = 0, test_count = 0, json = 0, threads = 0;
+    mr_mlp_train_options opts;
+    memset(&opts, 0, sizeof opts);
+    opts.seed = 1;
+    for (int i = 1; i < argc; i++) {
+        const char *value = NULL;
+        int taken, number;
+        if (cli_is_help(argv[i])) {
+            print_help();
+            return CLI_EXIT_OK;
+        }
+        if ((taken = cli_take_option("train", argc, argv, &i, "--output", &value)) ||
+            (taken = cli_take_option("train", argc, argv, &i, "-o", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            output = value;
+        } else if ((taken = cli_take_option("train", argc, argv, &i, "--hidden", &value))) {
+            if (taken < 0 || !cli_parse_int("train", "--hidden", value, 1, MR_MLP_MAX_HIDDEN, &opts.n_hidden))
+                return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("train", argc, argv, &i, "--epochs", &value))) {
+            if (taken < 0 || !cli_parse_int("train", "--epochs", value, 1, 1000000, &opts.max_epochs))
+                return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("train", argc, argv, &i, "--patience", &value))) {
+            if (taken < 0 || !cli_parse_int("train", "--patience", value, 1, 1000000, &opts.patience))
+                return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("train", argc, argv, &i, "--batch", &value))) {
+            if (taken < 0 || !cli_parse_int("train", "--batch", value, 1, 1 << 20, &opts.batch_size))
+                return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("train", argc, argv, &i, "--lr", &value))) {
+            if (taken < 0 || !cli_parse_double("train", "--lr", value, 1e-9, 1.0, &opts.learning_rate))
+                return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("train", argc, argv, &i, "--validation", &value))) {
+            if (taken < 0 ||
+                !cli_parse_double("train", "--validation", value, 1e-3, 0.9, &opts.validation_fraction))
+                return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("train", argc, argv, &i, "--seed", &value))) {
+            if (taken < 0 || !cli_parse_int("train", "--seed", value, 0, 2147483647, &number)) return CLI_EXIT_USAGE;
+            opts.seed = (unsigned long long)number;
+        } else if ((taken = cli_take_option("train", argc, argv, &i, "--threads", &value))) {
+            if (taken < 0 || !cli_parse_int("train", "--threads", value, 1, 1024, &threads)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("train", argc, argv, &i, "--loss-curve", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            curve_prefix = value;
+        } else if ((taken = cli_take_option("train", argc, argv, &i, "--test", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (test_count == MAX_FILES) return cli_usage_error("train", "more than %d --test files", MAX_FILES);
+            tests[test_count++] = value;
+        } else if (strcmp(argv[i], "--json") == 0) {
+            json = 1;
+        } else if (argv[i][0] == '-') {
+            return cli_usage_error("train", "unknown option '%s'", argv[i]);
+        } else {
+            if (file_count == MAX_FILES) return cli_usage_error("train", "more than %d dataset files", MAX_FILES);
+            files[file_count++] = argv[i];
+        }
+    }
+    if (file_count == 0) return cli_usage_error("train", "no dataset file (sweep CSV) given");
+    if (output == NULL) return cli_usage_error("train", "missing -o WEIGHTS");
+    for (int i = 0; i < file_count; i++)
+        if (strcmp(files[i], output) == 0)
+            return cli_usage_error("train", "-o %s would overwrite a dataset file", output);
+    char default_prefix[4096];
+    if (curve_prefix == NULL) {
+        snprintf(default_prefix, sizeof default_prefix, "%s", output);
+        char *dot = strrchr(default_prefix, '.'), *slash = strrchr(default_prefix, '/');
+        if (dot != NULL && (slash == NULL || dot > slash)) *dot = '\0';
+        strncat(default_prefix, "_loss", sizeof default_prefix - strlen(default_prefix) - 1);
+        curve_prefix = default_prefix;
+    }
+    opts.threads = threads;
+
+    double started = cli_now();
+    mr_wf_dataset data, test[MAX_FILES];
+    memset(test, 0, sizeof test);
+    mr_status status = mr_wf_dataset_load(files, file_count, NULL, &data);
+    if (status != MR_OK) return cli_fail("train", status);
+    for (int t = 0; t < test_count && status == MR_OK; t++) status = mr_wf_dataset_load(&tests[t], 1, NULL, &test[t]);
+    if (status != MR_OK) {
+        mr_wf_dataset_free(&data);
+        for (int t = 0; t < test_count; t++) mr_wf_dataset_free(&test[t]);
+        return cli_fail("train", status);
+    }
+    if (data.n < 2) {
+        mr_wf_dataset_free(&data);
+        for (int t = 0; t < test_count; t++) mr_wf_dataset_free(&test[t]);
+        fprintf(stderr, "matremap train: error: %zu usable pairs in the dataset (%zu rows left out for their "
+                        "outcome): need at least 2\n", data.n, data.skipped);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    curve c = {0, 0, NULL, isatty(STDERR_FILENO), cli_now()};
+    opts.epoch_fn = record_epoch;
+    opts.epoch_user = &c;
+    mr_mlp *net = NULL;
+    mr_mlp_train_report report;
+    status = mr_mlp_train(data.x, data.y, data.n, MR_WF_DATASET_INPUTS, MR_WF_DATASET_OUTPUTS, &opts, &net,
+                          &report);
+    if (c.draw) fputc('\n', stderr);
+    double train_seconds = cli_now() - c.started;
+    method_error errors[MAX_FILES][4];
+    if (status == MR_OK && report.stop == MR_MLP_STOP_CALLBACK) status = MR_ERR_NOMEM; // the curve's realloc
+    if (status == MR_OK) status = mr_mlp_write(net, output);
+    for (int t = 0; t < test_count && status == MR_OK; t++) status = test_methods(net, &test[t], errors[t]);
+    char title[256];
+    snprintf(title, sizeof title, "matremap train: %zu pairs, %d hidden units, seed %llu", data.n,
+             net ? net->n_hidden : 0, opts.seed);
+    int curve_ok = status == MR_OK && write_curve(&c, curve_prefix, title);
+    free(c.epochs);
+    mr_mlp_free(net);
+    if (status != MR_OK || !curve_ok) {
+        mr_wf_dataset_free(&data);
+        for (int t = 0; t < test_count; t++) mr_wf_dataset_free(&test[t]);
+        return status != MR_OK ? cli_fail("train", status) : CLI_EXIT_INTERNAL;
+    }
+    double seconds = cli_now() - started;
+    if (json) {
+        printf("{\"weights\": ");
+        cli_json_string(stdout, output);
+        printf(", \"pairs\": %zu, \"skipped\": %zu, \"train\": %zu, \"validation\": %zu, \"hidden\": %d, "
+               "\"seed\": %llu, \"epochs\": %d, \"best_epoch\": %d, \"initial_validation_loss\": %.9g, "
+               "\"best_validation_loss\": %.9g, \"stop\": \"%s\", \"train_seconds\": %.3f, \"seconds\": %.3f",
+               data.n, data.skipped, report.n_train, report.n_validation,
+               opts.n_hidden ? opts.n_hidden : MR_MLP_DEFAULT_HIDDEN, opts.seed, report.epochs, report.best_epoch,
+               report.initial_validation_loss, report.best_validation_loss, mr_mlp_stop_str(report.stop),
+               train_seconds, seconds);
+        printf(", \"tests\": [");
+        for (int t = 0; t < test_count; t++) {
+            printf("%s{\"file\": ", t ? ", " : "");
+            cli_json_string(stdout, tests[t]);
+            printf(", \"pairs\": %zu", test[t].n);
+            for (int m = 0; m < 4; m++)
+                printf(", \"%s\": {\"albedo_rmse\": %.6g, \"metallic_rmse\": %.6g, \"metallic_max_error\": %.6g}",
+                       errors[t][m].name, errors[t][m].albedo_rmse, errors[t][m].metallic_rmse,
+                       errors[t][m].metallic_max);
+            printf("}");
+        }
+        printf("]}\n");
+    } else {
+        printf("%s: %d hidden units, %zu pairs (%zu left out for their outcome; %zu train, %zu validation), "
+               "seed %llu\n", output, opts.n_hidden ? opts.n_hidden : MR_MLP_DEFAULT_HIDDEN, data.n, data.skipped,
+               report.n_train, report.n_validation, opts.seed);
+        printf("validation loss %.6g -> %.6g (best epoch %d of %d, stopped: %s), %.1f s training\n",
+               report.initial_validation_loss, report.best_validation_loss, report.best_epoch, report.epochs,
+               mr_mlp_stop_str(report.stop), train_seconds);
+        printf("loss curve: %s.csv, %s.svg\n", curve_prefix, curve_prefix);
+        for (int t = 0; t < test_count; t++) {
+            printf("test %s (%zu pairs): error against the optimiser's metallic parameters\n", tests[t], test[t].n);
+            printf("  %-9s %12s %14s %14s\n", "method", "albedo RMSE", "metallic RMSE", "metallic max");
+            for (int m = 0; m < 4; m++)
+                printf("  %-9s %12.5f %14.5f %14.5f\n", errors[t][m].name, errors[t][m].albedo_rmse,
+                       errors[t][m].metallic_rmse, errors[t][m].metallic_max);
+        }
+    }
+    mr_wf_dataset_free(&data);
+    for (int t = 0; t < test_count; t++) mr_wf_dataset_free(&test[t]);
+    return CLI_EXIT_OK;
+}

@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# `matremap train` and the dataset files it reads: a tiny seeded dataset (two sweeps at 16 pixels), training that
+# reproduces its weights byte for byte, a loss curve, a held-out evaluation of every method, the shipped network's
+# shape, and the errors a user can make. Ends with "N passed, N failed".
+set -u
+bin="${MR_BUILD:-build}/bin/matremap"
+root=$(cd "$(dirname "$0")/.." && pwd)
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+passed=0
+failed=0
+
+expect() { # NAME EXPECTED_EXIT PATTERN -- command...
+    local name=$1 code=$2 pattern=$3
+    shift 4
+    "$@" >"$tmp/out" 2>"$tmp/err"
+    local rc=$?
+    if [ "$rc" -ne "$code" ]; then
+        echo "FAIL  $name: exit $rc, expected $code"; sed 's/^/      /' "$tmp/err" | head -5
+        failed=$((failed + 1)); return
+    fi
+    if [ -n "$pattern" ] && ! cat "$tmp/out" "$tmp/err" | grep -qE -- "$pattern"; then
+        echo "FAIL  $name: output does not match /$pattern/"; cat "$tmp/out" "$tmp/err" | sed 's/^/      /' | head -5
+        failed=$((failed + 1)); return
+    fi
+    echo "ok    $name"
+    passed=$((passed + 1))
+}
+check() { # NAME CONDITION-COMMAND...
+    local name=$1; shift
+    if "$@"; then echo "ok    $name"; passed=$((passed + 1)); else echo "FAIL  $name"; failed=$((failed + 1)); fi
+}
+
+sweep() { # SOURCE COUNT SEED FILE
+    "$bin" sweep --from "$1" alpha=0.2 --to ggx-metallic alpha=0.2 --hold alpha --random "$2" --seed "$3" --size 16 \
+        --threads 2 -o "$tmp/$4" 2>/dev/null
+}
+sweep ggx-metallic 60 1 on.csv && sweep ggx 60 2 off.csv && sweep ggx-metallic 30 3 test.csv
+check "the tiny dataset is made" test -s "$tmp/on.csv" -a -s "$tmp/off.csv" -a -s "$tmp/test.csv"
+
+expect "train --help" 0 "Usage: matremap train" -- "$bin" train --help
+expect "train: no dataset" 1 "no dataset" -- "$bin" train -o "$tmp/x.mlp"
+expect "train: no output" 1 "missing -o" -- "$bin" train "$tmp/on.csv"
+expect "train: -o over a dataset file" 1 "overwrite a dataset" -- "$bin" train "$tmp/on.csv" -o "$tmp/on.csv"
+expect "train: missing file" 2 "nope.csv" -- "$bin" train "$tmp/nope.csv" -o "$tmp/x.mlp"
+"$bin" sweep --from ggx --to ward --random 3 --size 16 -o "$tmp/ward.csv" 2>/dev/null
+expect "train: a sweep into another workflow" 2 "to_albedo" -- "$bin" train "$tmp/ward.csv" -o "$tmp/x.mlp"
+head -c 2000 "$tmp/on.csv" > "$tmp/torn.csv"
+expect "train: a torn file names its line" 2 "torn.csv:[0-9]+" -- "$bin" train "$tmp/torn.csv" -o "$tmp/x.mlp"
+expect "train: --hidden 0" 1 "--hidden" -- "$bin" train "$tmp/on.csv" -o "$tmp/x.mlp" --hidden 0
+
+expect "train a small network" 0 "validation loss" -- \
+    "$bin" train "$tmp/on.csv" "$tmp/off.csv" -o "$tmp/a.mlp" --hidden 8 --epochs 40 --seed 3 --test "$tmp/test.csv"
+check "the weight file starts with its magic" grep -q "^matremap-mlp 1$" "$tmp/a.mlp"
+check "the loss curve is written next to it" test -s "$tmp/a_loss.csv"
+check "the loss curve has a row per epoch" test "$(wc -l < "$tmp/a_loss.csv")" -ge 3
+check "the test table lists every method" grep -qE "^  khronos " "$tmp/out"
+# weighted is exact on the Eq. 2 manifold up to the optimiser's labels
+check "weighted is near exact on manifold test pairs" \
+    awk '$1 == "weighted" { exit !($3 < 0.02) }' "$tmp/out"
+"$bin" train "$tmp/on.csv" "$tmp/off.csv" -o "$tmp/b.mlp" --hidden 8 --epochs 40 --seed 3 --threads 1 >/dev/null
+check "training is reproducible byte for byte (2 threads vs 1)" cmp -s "$tmp/a.mlp" "$tmp/b.mlp"
+"$bin" train "$tmp/on.csv" "$tmp/off.csv" -o "$tmp/c.mlp" --hidden 8 --epochs 40 --seed 4 >/dev/null
+check "another seed gives another network" bash -c "! cmp -s '$tmp/a.mlp' '$tmp/c.mlp'"
+expect "train --json" 0 '"best_validation_loss": [0-9]' -- \
+    "$bin" train "$tmp/on.csv" -o "$tmp/d.mlp" --hidden 4 --epochs 3 --json --loss-curve "$tmp/curve"
+check "--loss-curve PREFIX" test -s "$tmp/curve.csv"
+
+check "the shipped network is 6 x 300 x 4" bash -c \
+    "grep -q '^n_in 6$' $root/data/spec2metal.mlp && grep -q '^n_hidden 300$' $root/data/spec2metal.mlp && grep -q '^n_out 4$' $root/data/spec2metal.mlp"
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
