@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # make bench: prints benchmark figures and writes them into docs/performance.md (between the bench:render,
-# bench:metrics and bench:remap markers). Asserts nothing. Peers are measured in the same run: Blender Cycles
+# bench:metrics, bench:remap and bench:workflow markers). Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
 # Usage: scripts/bench.sh BUILD [--quick]
@@ -30,6 +30,15 @@ echo "== uniform remaps: time and accuracy against fit-scene size and strategy, 
     echo
     cat "$work/remap_table.md"
 } > "$work/remap.md"
+
+echo
+echo "== workflow conversion: methods, accuracy, MLP width (tests/bench_workflow.c)"
+[ -s "$root/$build/dataset/test-off-manifold.csv" ] || echo "(no dataset in $build/dataset: make dataset first for the accuracy tables)"
+{
+    echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'))."
+    echo
+    "$root/$build/tests/bench_workflow" "$root/data/spec2metal.mlp" "$root/$build/dataset" $quick
+} | tee "$work/workflow.md"
 
 {
     echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), matremap $("$bin" --version | cut -d' ' -f2)."
@@ -132,4 +141,5 @@ if [ -f "$perf" ]; then
     replace_section render "$report"
     replace_section metrics "$work/metrics_table.md"
     replace_section remap "$work/remap.md"
+    replace_section workflow "$work/workflow.md"
 fi
