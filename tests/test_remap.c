@@ -748,6 +748,10 @@ MR_TEST(fits_pinned_at_the_trimming_edge_are_unreachable) {
     check_well_defined("as F0 0.88 -> ward", ward, &o, &r);
     double sum = value_of(ward, r.values, "diffuse", 0) + value_of(ward, r.values, "specular", 0);
     MR_CHECK_MSG(r.outcome == MR_FIT_UNREACHABLE && strstr(r.detail, "rescales"), "d + s = %.4f: %s", sum, r.detail);
+    // The local strategies get the same verdict: TWO ends on the edge too (specular 0.99-1.0 per channel).
+    mr_remap_options two = options(MR_REMAP_TWO);
+    MR_CHECK_OK(remap(plan, "as", "diffuse=0 alpha=0.05 f0=0.88", "ward", &two, &r));
+    MR_CHECK_MSG(r.outcome == MR_FIT_UNREACHABLE && strstr(r.detail, "rescales"), "two: %s", r.detail);
     // Below the edge the same source family converges, with the slope of the linear region.
     MR_CHECK_OK(remap(plan, "as", "diffuse=0 alpha=0.05 f0=0.5", "ward", &o, &r));
     MR_CHECK_MSG(r.outcome == MR_FIT_CONVERGED, "F0 0.5: %s", r.detail);

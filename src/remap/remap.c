@@ -595,6 +595,26 @@ static double affine_departure(fit_context *ctx, const double *values, const mr_
     return sqrt(sum);
 }
 
+/* Whether the affine optimum at the fit's nonlinear values is one the model rescales: the projection's solution,
+ * rendered, misses its prediction (remap.h, UNREACHABLE). For the local strategies, whose own fits never see a
+ * prediction (AUTO and JOINT check it while fitting). Uses the basis images; leaves ctx->base as it was; 0 when
+ * a render fails (ctx->failure says so). */
+static int affine_optimum_rescaled(fit_context *ctx, const mr_image *full, double energy_scale) {
+    if (ctx->linear_count == 0) return 0;
+    double saved[MAX_SLOTS];
+    memcpy(saved, ctx->base, sizeof saved);
+    ctx->goal = full;
+    ctx->projection_component = MR_COMPONENT_FULL;
+    double predicted = project(ctx);
+    int rescaled = 0;
+    if (!isnan(predicted) && render_values(ctx, ctx->base, MR_COMPONENT_FULL, ctx->basis[0])) {
+        double actual = sse_against(ctx, ctx->basis[0], full);
+        rescaled = fabs(sqrt(actual) - sqrt(predicted)) > PREDICTION_TOLERANCE * sqrt(energy_scale);
+    }
+    memcpy(ctx->base, saved, sizeof saved);
+    return rescaled;
+}
+
 /* ---- the paper's strategies: direct local fits ---------------------------------------------------------- */
 
 /* Fit the slots whose parameter lobe matches `lobes` (any of the bits; 0 = every slot) against `goal`, rendering
@@ -847,7 +867,7 @@ static void classify(fit_context *ctx, double departure, int rescaled_optimum, i
                      100.0 * AMBIGUITY_ERROR);
         else
             snprintf(out->detail, sizeof out->detail,
-                     "local-minimum: the global search (strategy auto) finds a fit with %.0f %% less squared error",
+                     "local-minimum: the global search (strategy joint) finds a fit with %.0f %% less squared error",
                      100.0 * projected_gain);
         return;
     }
@@ -1010,6 +1030,12 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
         return status;
     }
     int local = opts.strategy != MR_REMAP_AUTO && opts.strategy != MR_REMAP_JOINT;
+    if (local && affine_optimum_rescaled(&ctx, source->full, energy_scale)) rescaled_optimum = 1;
+    if (ctx.failure != MR_OK) {
+        status = ctx.failure;
+        free_context(&ctx);
+        return status;
+    }
     if (local && !opts.skip_global_check && actual > 0.0) {
         // A local fit stopped in a local minimum if the global search does clearly better (remap.h). Its renders
         // are counted apart, so `renders` stays the strategy's own cost.

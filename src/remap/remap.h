@@ -42,8 +42,9 @@
  *     RMS radiance: the source wants a value the target cannot express;
  *   - UNREACHABLE: the target cannot reproduce the source: the residual stays above 25 % of the source's RMS
  *     radiance, or the model's own nonlinearity (Mitsuba's energy trimming of Ward with diffuse + specular > 1)
- *     engaged at the solution, so that its render departs from the fit, or (AUTO/JOINT) the best affine
- *     solution lies where the model rescales, so that the refined fit is pinned at the edge of that region;
+ *     engaged at the solution, so that its render departs from the fit, or the best affine solution at the
+ *     fit's nonlinear values lies where the model rescales, so that the fit is pinned at the edge of that
+ *     region (AUTO/JOINT see this while fitting; for SINGLE/TWO/THREE one projection checks it afterwards);
  *   - LOCAL_MINIMUM: AUTO/JOINT found distinct minima with nearly equal error, so the scene does not determine
  *     the parameters (not counted for a lobe carrying under 0.1 % of the energy, whose shape does not show); or
  *     a local strategy stopped where JOINT's global search, rendered, has more than 10 % less squared error
