@@ -111,8 +111,9 @@ static accuracy judge(const mr_render_plan *plan, const mr_mlp *net, mr_wf_metho
         double ssim = 0.0, rmse = 0.0, rms = 0.0;
         if (mr_render(plan, ggx, source, MR_COMPONENT_FULL, &a_img) == MR_OK &&
             mr_render(plan, metal, target, MR_COMPONENT_FULL, &b_img) == MR_OK &&
-            mr_image_create(FIT_SIZE, FIT_SIZE, 3, &black) == MR_OK && mr_ssim(a_img, b_img, NULL, &ssim, NULL) == MR_OK &&
-            mr_rmse(a_img, b_img, &rmse) == MR_OK && mr_rmse(a_img, black, &rms) == MR_OK) {
+            mr_image_create(FIT_SIZE, FIT_SIZE, 3, &black) == MR_OK &&
+            mr_ssim(a_img, b_img, NULL, &ssim, NULL) == MR_OK && mr_rmse(a_img, b_img, &rmse) == MR_OK &&
+            mr_rmse(a_img, black, &rms) == MR_OK) {
             ssim_sum += ssim;
             rel_sum += rmse / fmax(rms, 1e-4);
         }
@@ -173,7 +174,8 @@ int main(int argc, char **argv) {
     snprintf(train_paths[1], sizeof train_paths[1], "%s/off-manifold.csv", argv[2]);
     const char *on_files[1] = {on_path}, *off_files[1] = {off_path}, *train_files[2] = {train_paths[0], train_paths[1]};
     mr_wf_dataset on, off, train;
-    if (mr_wf_dataset_load(on_files, 1, NULL, &on) != MR_OK || mr_wf_dataset_load(off_files, 1, NULL, &off) != MR_OK ||
+    if (mr_wf_dataset_load(on_files, 1, NULL, &on) != MR_OK ||
+        mr_wf_dataset_load(off_files, 1, NULL, &off) != MR_OK ||
         mr_wf_dataset_load(train_files, 2, NULL, &train) != MR_OK) {
         printf("\n(accuracy and width tables skipped: %s; run make dataset)\n", mr_last_error());
         mr_mlp_free(net);
