@@ -190,8 +190,8 @@ int main(int argc, char **argv) {
     printf("%zu materials on the Eq. 2 manifold and %zu off it (`make dataset`, test files). SSIM and relative RMSE: "
            "the converted metallic material's render against the specular source's; metallic RMSE: against the "
            "image-based optimiser's metallic.\n\n", on.n, off.n);
-    printf("| method | on: SSIM | on: rel. RMSE | on: metallic RMSE | off: SSIM | off: rel. RMSE | off: metallic RMSE |\n"
-           "|---|---|---|---|---|---|---|\n");
+    printf("| method | on: SSIM | on: rel. RMSE | on: metallic RMSE | off: SSIM | off: rel. RMSE "
+           "| off: metallic RMSE |\n|---|---|---|---|---|---|---|\n");
     for (int m = 0; m < METHOD_COUNT; m++) {
         fprintf(stderr, "accuracy: %s\n", methods[m].name);
         accuracy a = judge(plan, net, methods[m].method, &on), b = judge(plan, net, methods[m].method, &off);
