@@ -1,14 +1,17 @@
 /*
- * cmd_render.c — `matremap render MODEL [name=value ...] [--size N] [--light 45|frontal]
+ * cmd_render.c — `matremap render MODEL [name=value|name=@MAP ...] [--size N] [--light 45|frontal]
+ *                [--env FILE [--env-rotation DEG] [--env-samples N] [--env-scale S]]
  *                [--component full|diffuse|specular] [--exposure E] -o OUT`
- * Renders a material in the paper's fit scene (render.h) and writes it in the format of OUT's extension.
+ * Renders a material in the paper's fit scene (render.h), or under an environment map, optionally with
+ * parameters from texture maps over the sphere, and writes it in the format of OUT's extension.
  */
+#include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
 
 static void print_help(void) {
-    printf("Usage: matremap render MODEL [name=value ...] [options] -o OUT.exr|.hdr|.png|.jpg|.tif\n"
+    printf("Usage: matremap render MODEL [name=value|name=@MAP ...] [options] -o OUT.exr|.hdr|.png|.jpg|.tif\n"
            "\n"
            "Renders MODEL with the given parameters in the fit scene of Sztrajman et al. (section 4.1): a unit\n"
            "sphere at the origin, a point light (10 W/sr) at distance 3, 45 degrees from the view direction,\n"
@@ -16,10 +19,28 @@ static void print_help(void) {
            "their defaults ('matremap models MODEL' lists them); RGB parameters take name=r,g,b or one value.\n"
            "EXR and HDR files hold linear radiance; 8/16-bit formats are clamped to [0,1] and sRGB-encoded.\n"
            "\n"
+           "Textures: name=@MAP takes the parameter from an image wrapped over the sphere (its centre faces the\n"
+           "camera, its top row is the north pole; docs/rendering.md). Values are the model's own: colour\n"
+           "parameters (RGB, range within [0,1]) are sRGB-decoded from 8/16-bit files, every other parameter is\n"
+           "read linearly; EXR/HDR/float files are always linear. A scalar parameter reads a grey image, or one\n"
+           "channel of a colour image chosen with name=@MAP:r, :g, :b or :a (glTF packs roughness in g and\n"
+           "metallic in b; a glTF roughness must still be squared into an alpha). Maps are sampled bilinearly,\n"
+           "wrapping around the sphere and clamped at the poles, without mipmaps.\n"
+           "\n"
+           "Environment lighting: --env FILE lights the sphere with an equirectangular HDR map (its centre lies\n"
+           "behind the sphere, straight ahead of the camera; the background stays black), sampled with a fixed\n"
+           "pattern of N directions importance-sampled by luminance, the same for every pixel: no noise, a\n"
+           "bias that shrinks as N grows. --env replaces the point light unless --light is also given.\n"
+           "\n"
            "Options:\n"
            "  -o, --output FILE     output image (required)\n"
            "  --size N              image side in pixels (default 512)\n"
            "  --light 45|frontal    point-light position (default 45)\n"
+           "  --env FILE            environment map (.hdr, .exr, ...): no point light unless --light is given\n"
+           "  --env-rotation DEG    turn the map about the vertical axis, counter-clockwise seen from above\n"
+           "                        (default 0)\n"
+           "  --env-samples N       directions of the sample pattern, 1-65536 (default %d)\n"
+           "  --env-scale S         multiply the map's radiance by S (default 1)\n"
            "  --component C         full, diffuse or specular (default full)\n"
            "  --exposure E          multiply radiance by E before writing (default 1)\n"
            "  --edge-samples N      silhouette pixels are box-filtered with NxN rays (default 4; 1 = pixel\n"
@@ -27,19 +48,102 @@ static void print_help(void) {
            "  --bits B              8 or 16 for PNG/TIFF, 16 (half) or 32 for EXR (default: 8, 32)\n"
            "  --help                this text\n"
            "\n"
-           "Example:\n"
-           "  matremap render gltf base_color=0.8,0.2,0.1 metallic=0 roughness=0.4 -o sphere.exr\n");
+           "Examples:\n"
+           "  matremap render gltf base_color=0.8,0.2,0.1 metallic=0 roughness=0.4 -o sphere.exr\n"
+           "  matremap render ggx diffuse=@d.png f0=@s.png alpha=0.2 --env studio.hdr --size 256 -o x.exr\n"
+           "  matremap render ggx-metallic albedo=@base.png metallic=@orm.png:b alpha=@alpha.exr --env studio.hdr \\\n"
+           "      --env-rotation 90 -o y.png\n",
+           MR_ENV_DEFAULT_SAMPLES);
+}
+
+/* A parameter taken from a map: "name=@FILE" or "name=@FILE:c". */
+typedef struct map_input {
+    const char *assignment;
+    char *name;    /* owned copies */
+    char *path;
+    int channel;   /* -1: not given */
+    mr_image *image;
+} map_input;
+
+#define MAX_ASSIGNMENTS 64
+
+/* Split "name=@FILE[:c]" into its parts; returns 0 (after a usage error) if it is malformed. */
+static int parse_map_assignment(const char *assignment, map_input *map) {
+    const char *eq = strchr(assignment, '=');
+    size_t name_length = (size_t)(eq - assignment);
+    const char *file = eq + 2;
+    size_t file_length = strlen(file);
+    map->assignment = assignment;
+    map->channel = -1;
+    if (file_length >= 3 && file[file_length - 2] == ':') {
+        const char *letters = "rgba";
+        const char *hit = strchr(letters, file[file_length - 1]);
+        if (hit != NULL && *hit != '\0') {
+            map->channel = (int)(hit - letters);
+            file_length -= 2;
+        }
+    }
+    if (name_length == 0 || file_length == 0) {
+        cli_usage_error("render", "'%s': expected name=@FILE or name=@FILE:r|g|b|a", assignment);
+        return 0;
+    }
+    map->name = malloc(name_length + 1);
+    map->path = malloc(file_length + 1);
+    if (map->name == NULL || map->path == NULL) {
+        cli_usage_error("render", "out of memory");
+        return 0;
+    }
+    memcpy(map->name, assignment, name_length);
+    map->name[name_length] = '\0';
+    memcpy(map->path, file, file_length);
+    map->path[file_length] = '\0';
+    return 1;
+}
+
+/* Read one map the way its parameter needs it and bind it; returns a CLI exit code (CLI_EXIT_OK on success). */
+static int load_map(const mr_brdf_model *model, map_input *map, mr_param_textures *textures) {
+    int index = mr_brdf_param_index(model, map->name);
+    if (index < 0) return cli_fail("render", mr_param_textures_set(textures, model, map->name, NULL, 0));
+    const mr_brdf_param *param = &model->params[index];
+    int colour = param->channels == 3 && param->min_value >= 0.0 && param->max_value <= 1.0;
+    if (param->channels == 3 && map->channel >= 0)
+        return cli_usage_error("render", "'%s': %s is an RGB parameter and takes the whole image (no :%c)",
+                               map->assignment, param->name, "rgba"[map->channel]);
+    mr_img_read_options read = {colour ? MR_IMG_COLOR : MR_IMG_DATA, 0, 0};
+    mr_status status = mr_img_read(map->path, &read, &map->image);
+    if (status != MR_OK) return cli_fail("render", status);
+    int channel = map->channel;
+    if (param->channels == 1 && channel < 0) {
+        channel = 0;
+        if (map->image->channels >= 3) {
+            // A grey picture saved as RGB is fine; real colour needs the user to say which channel to use.
+            size_t pixels = (size_t)map->image->width * (size_t)map->image->height;
+            const float *px = map->image->pixels;
+            for (size_t p = 0; p < pixels; p++, px += map->image->channels)
+                if (px[0] != px[1] || px[0] != px[2])
+                    return cli_usage_error("render", "'%s': %s holds colour, but %s takes one value: pick a channel "
+                                           "with @%s:r, :g, :b or :a", map->assignment, map->path, param->name,
+                                           map->path);
+        }
+    }
+    status = mr_param_textures_set(textures, model, map->name, map->image, channel);
+    if (status != MR_OK) return cli_fail("render", status);
+    return CLI_EXIT_OK;
 }
 
 int cmd_render(int argc, char **argv) {
-    const char *model_name = NULL, *output = NULL;
+    const char *model_name = NULL, *output = NULL, *env_path = NULL;
     mr_fit_scene_options scene_opts = {0};
+    int light_given = 0, env_option = 0, env_samples = 0;
+    double env_rotation = 0.0, env_scale = 1.0;
     mr_component component = MR_COMPONENT_FULL;
     double exposure = 1.0;
     int edge_samples = 0;
     mr_img_write_options write_opts = {0};
-    const char *assignments[64];
+    const char *assignments[MAX_ASSIGNMENTS];
     int assignment_count = 0;
+    map_input maps[MAX_ASSIGNMENTS];
+    int map_count = 0;
 
     for (int i = 1; i < argc; i++) {
         const char *value = NULL;
@@ -59,6 +163,23 @@ int cmd_render(int argc, char **argv) {
             if (taken < 0) return CLI_EXIT_USAGE;
             if (mr_fit_light_from_name(value, &scene_opts.light) != MR_OK)
                 return cli_usage_error("render", "%s", mr_last_error());
+            light_given = 1;
+        } else if ((taken = cli_take_option("render", argc, argv, &i, "--env", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            env_path = value;
+        } else if ((taken = cli_take_option("render", argc, argv, &i, "--env-rotation", &value))) {
+            if (taken < 0 || !cli_parse_double("render", "--env-rotation", value, -1e6, 1e6, &env_rotation))
+                return CLI_EXIT_USAGE;
+            env_option = 1;
+        } else if ((taken = cli_take_option("render", argc, argv, &i, "--env-samples", &value))) {
+            if (taken < 0 ||
+                !cli_parse_int("render", "--env-samples", value, 1, MR_ENV_MAX_SAMPLES, &env_samples))
+                return CLI_EXIT_USAGE;
+            env_option = 1;
+        } else if ((taken = cli_take_option("render", argc, argv, &i, "--env-scale", &value))) {
+            if (taken < 0 || !cli_parse_double("render", "--env-scale", value, 0.0, 1e9, &env_scale))
+                return CLI_EXIT_USAGE;
+            env_option = 1;
         } else if ((taken = cli_take_option("render", argc, argv, &i, "--component", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             if (mr_component_from_name(value, &component) != MR_OK)
@@ -76,8 +197,7 @@ int cmd_render(int argc, char **argv) {
         } else if (model_name == NULL) {
             model_name = argv[i];
         } else if (strchr(argv[i], '=') != NULL) {
-            if (assignment_count == (int)(sizeof assignments / sizeof assignments[0]))
-                return cli_usage_error("render", "too many parameter assignments");
+            if (assignment_count == MAX_ASSIGNMENTS) return cli_usage_error("render", "too many parameter assignments");
             assignments[assignment_count++] = argv[i];
         } else {
             return cli_usage_error("render", "unexpected argument '%s' (parameters are name=value)", argv[i]);
@@ -85,34 +205,66 @@ int cmd_render(int argc, char **argv) {
     }
     if (model_name == NULL) return cli_usage_error("render", "missing MODEL ('matremap models' lists them)");
     if (output == NULL) return cli_usage_error("render", "missing -o OUT (an .exr, .hdr, .png, .jpg or .tif file)");
+    if (env_option && env_path == NULL)
+        return cli_usage_error("render", "--env-rotation, --env-samples and --env-scale need --env FILE");
 
     const mr_brdf_model *model = mr_brdf_find(model_name);
     if (model == NULL) return cli_fail("render", MR_ERR_INVALID_ARG);
     double values[MR_BRDF_MAX_VALUES];
     mr_brdf_default_values(model, values);
-    for (int k = 0; k < assignment_count; k++) {
+    mr_param_textures textures = {0};
+    int code = CLI_EXIT_OK;
+    for (int k = 0; k < assignment_count && code == CLI_EXIT_OK; k++) {
+        if (strchr(assignments[k], '=')[1] == '@') {
+            map_input *map = &maps[map_count++];
+            memset(map, 0, sizeof *map);
+            code = parse_map_assignment(assignments[k], map) ? load_map(model, map, &textures) : CLI_EXIT_USAGE;
+            continue;
+        }
         mr_status status = mr_brdf_parse_assignment(model, assignments[k], values);
-        if (status != MR_OK) return cli_fail("render", status);
+        if (status != MR_OK) code = cli_fail("render", status);
     }
 
-    double start = cli_now();
+    mr_image *env = NULL, *image = NULL;
+    mr_render_plan *plan = NULL;
+    mr_status status = MR_OK;
+    if (code == CLI_EXIT_OK && env_path != NULL) {
+        status = mr_img_read(env_path, NULL, &env);
+        if (status != MR_OK) code = cli_fail("render", status);
+    }
+    double start = cli_now(), plan_seconds = 0.0;
     mr_scene scene = mr_scene_fit(&scene_opts);
     scene.edge_samples = edge_samples;
-    mr_render_plan *plan = NULL;
-    mr_image *image = NULL;
-    mr_status status = mr_render_plan_create(&scene, &plan);
-    if (status == MR_OK) status = mr_render(plan, model, values, component, &image);
-    if (status == MR_OK && exposure != 1.0) {
-        size_t n = mr_image_value_count(image);
-        for (size_t p = 0; p < n; p++) image->pixels[p] = (float)(image->pixels[p] * exposure);
+    if (env != NULL) {
+        // --env alone lights with the map only; with an explicit --light the point light stays as well.
+        int slot = light_given ? scene.light_count++ : 0;
+        scene.lights[slot] = mr_light_environment(env, env_scale, env_rotation, env_samples);
     }
-    double render_seconds = cli_now() - start;
-    if (status == MR_OK) status = mr_img_write(output, image, &write_opts);
-    if (status == MR_OK)
-        fprintf(stderr, "matremap render: wrote %s (%s, %dx%d, %d lit pixels, rendered in %.1f ms)\n", output,
-                mr_component_name(component), scene.width, scene.height, mr_render_plan_lit_pixel_count(plan),
-                1e3 * render_seconds);
+    if (code == CLI_EXIT_OK) {
+        status = mr_render_plan_create(&scene, &plan);
+        plan_seconds = cli_now() - start;
+        if (status == MR_OK) status = mr_render_textured(plan, model, values, &textures, component, &image);
+        if (status == MR_OK && exposure != 1.0) {
+            size_t n = mr_image_value_count(image);
+            for (size_t p = 0; p < n; p++) image->pixels[p] = (float)(image->pixels[p] * exposure);
+        }
+        double render_seconds = cli_now() - start - plan_seconds;
+        if (status == MR_OK) status = mr_img_write(output, image, &write_opts);
+        if (status == MR_OK)
+            fprintf(stderr, "matremap render: wrote %s (%s, %dx%d, %d lit pixels, %ld shading samples, plan %.1f ms, "
+                    "rendered in %.1f ms)\n", output, mr_component_name(component), scene.width, scene.height,
+                    mr_render_plan_lit_pixel_count(plan), mr_render_plan_sample_count(plan), 1e3 * plan_seconds,
+                    1e3 * render_seconds);
+        else
+            code = cli_fail("render", status);
+    }
     mr_image_free(image);
     mr_render_plan_free(plan);
-    return status == MR_OK ? CLI_EXIT_OK : cli_fail("render", status);
+    mr_image_free(env);
+    for (int k = 0; k < map_count; k++) {
+        free(maps[k].name);
+        free(maps[k].path);
+        mr_image_free(maps[k].image);
+    }
+    return code;
 }

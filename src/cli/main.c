@@ -21,6 +21,8 @@ static const command commands[] = {
     {"remap", cmd_remap, "fit a target model to a source material or to renders of the fit scene"},
     {"sweep", cmd_sweep, "remap a grid or random sample of source materials into a resumable CSV file"},
     {"train", cmd_train, "train the specular -> metallic network on sweep files (the dataset)"},
+    {"spec2metal", cmd_spec2metal, "convert specular-workflow texture maps to metallic ones (also a command)"},
+    {"metal2spec", cmd_metal2spec, "convert metallic-workflow texture maps to specular ones (also a command)"},
 };
 
 static void print_usage(FILE *out) {
@@ -32,7 +34,7 @@ static void print_usage(FILE *out) {
             "Commands:\n",
             mr_version());
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        fprintf(out, "  %-8s %s\n", commands[i].name, commands[i].summary);
+        fprintf(out, "  %-10s %s\n", commands[i].name, commands[i].summary);
     fprintf(out,
             "\n"
             "'matremap COMMAND --help' describes a command.\n"
@@ -40,6 +42,9 @@ static void print_usage(FILE *out) {
 }
 
 int main(int argc, char **argv) {
+    const char *self = argc > 0 && argv[0] ? (strrchr(argv[0], '/') ? strrchr(argv[0], '/') + 1 : argv[0]) : "";
+    if (strcmp(self, "spec2metal") == 0) return cmd_spec2metal(argc, argv); // `ln -s matremap spec2metal`
+    if (strcmp(self, "metal2spec") == 0) return cmd_metal2spec(argc, argv);
     if (argc < 2) {
         print_usage(stderr);
         return CLI_EXIT_USAGE;

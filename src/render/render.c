@@ -1,17 +1,22 @@
 /*
  * render.c — render plans (geometry traced once per scene) and material renders (BRDF evaluations only).
- * Contract and design in render.h.
+ * Contract and design in render.h; the environment estimator in docs/rendering.md.
  *
  * A plan is built in two stages, kept apart so later object and light types slot in without touching the
  * other stage or mr_render:
  *   1. primary visibility: a ray through each pixel centre (n x n sub-pixel rays on the silhouette) -> hit
- *      records (position, shading frame, view direction); the intersector is chosen by the shape type;
- *   2. lighting: each light type turns hit records into shading samples (local view and light directions and a
- *      weight); a point light gives at most one sample per hit and needs no shadow ray on a convex object.
+ *      records (position, shading frame, view direction, texture coordinates); the intersector is chosen by the
+ *      shape type;
+ *   2. lighting: each light type turns hit records into shading samples. A point light gives at most one sample
+ *      per hit (local light direction and weight) and needs no shadow ray on a convex object. An environment
+ *      light gives the indices of its fixed directions above the hit's horizon; the directions and their
+ *      L/(pdf N) weights are tabled once per plan (env_setup).
  * Rows are traced in parallel into per-row buffers and concatenated in image order, so the plan is identical
  * for any thread count.
  */
 #include <limits.h>
+#include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -25,13 +30,32 @@ typedef struct hit_record {
     double tangent[3];
     double bitangent[3];
     double view_local[3]; /* unit direction towards the camera, in the shading frame */
+    double uv[2];         /* sphere texture coordinates (render.h) */
 } hit_record;
 
-typedef struct shading_sample {
-    double view[3];   /* local frame, unit, z > 0 */
+/* A point-light sample: radiance += f_r(hit view, light) * weight. */
+typedef struct point_sample {
     double light[3];  /* local frame, unit, z > 0 */
-    double weight[3]; /* radiance = f_r(view, light) * weight, per RGB channel */
-} shading_sample;
+    double weight[3]; /* I * cos(theta_l) / d^2 * the hit's share of its pixel, per RGB channel */
+} point_sample;
+
+/* A lit hit: what the render needs of the geometry. Environment samples are direction indices; the frame turns
+ * the tabled world directions into local ones. */
+typedef struct plan_hit {
+    double view[3];                         /* local frame, unit, z > 0 */
+    double tangent[3], bitangent[3], normal[3]; /* the shading frame, world space */
+    double uv[2];
+    double share;      /* the hit's share of its pixel: 1, or 1/n^2 for a silhouette sub-pixel ray */
+    int point_begin;   /* its point samples: point_samples[point_begin .. next hit's point_begin - 1] */
+    size_t env_begin;  /* its environment samples: env_samples[env_begin .. next hit's env_begin - 1] */
+} plan_hit;
+
+/* The fixed directions of every environment light of the scene, concatenated in light order. */
+typedef struct env_table {
+    int count;
+    double (*direction)[3]; /* world space, unit */
+    double (*weight)[3];    /* L(w) * scale / (pdf(w) * N) per RGB channel; 0 for directions never used */
+} env_table;
 
 struct mr_render_plan {
     mr_scene scene;
@@ -39,8 +63,12 @@ struct mr_render_plan {
     int object_pixels;    /* pixels with coverage > 0 */
     int lit_pixels;
     int *lit_pixel_index; /* [lit_pixels]: image pixel of each lit pixel, ascending */
-    int *sample_begin;    /* [lit_pixels + 1]: samples of lit pixel i are sample_begin[i] .. [i+1]-1 */
-    shading_sample *samples;
+    int *hit_begin;       /* [lit_pixels + 1]: hits of lit pixel i are hits[hit_begin[i] .. hit_begin[i+1]-1] */
+    int hit_count;
+    plan_hit *hits;       /* [hit_count + 1]: the last one only holds the end offsets of the sample arrays */
+    point_sample *point_samples;
+    uint16_t *env_samples; /* direction indices into env */
+    env_table env;
 };
 
 /* The camera as the primary-ray generator needs it. */
@@ -110,6 +138,13 @@ static int intersect_sphere(const mr_shape *sphere, const double origin[3], cons
     return 1;
 }
 
+/* The sphere's texture coordinates at unit normal n (render.h): u from the azimuth about +y, 0.5 at +z and
+ * growing towards +x, the seam at -z; v from the polar angle, 0 at +y. */
+static void sphere_uv(const double n[3], double uv[2]) {
+    uv[0] = 0.5 + atan2(n[0], n[2]) * (0.5 * MR_INV_PI);
+    uv[1] = acos(mr_clampd(n[1], -1.0, 1.0)) * MR_INV_PI;
+}
+
 /* Stage 1: the primary ray through image position (px, py). Returns 1 and fills *hit (if not NULL) when it
  * meets the object. The intersector is the place where other shape types (triangle meshes) plug in. */
 static int trace_primary(const mr_scene *scene, const camera_frame *cf, double px, double py, hit_record *hit) {
@@ -125,12 +160,13 @@ static int trace_primary(const mr_scene *scene, const camera_frame *cf, double p
     frame_from_normal(hit->normal, hit->tangent, hit->bitangent);
     double to_camera[3] = {-dir[0], -dir[1], -dir[2]};
     to_local(hit, to_camera, hit->view_local);
+    sphere_uv(hit->normal, hit->uv);
     return 1;
 }
 
 /* Stage 2 for a point light: the exact contribution I*cos(theta_l)/d^2, no shadow ray (convex object). Returns
  * 1 and fills *sample if the point is lit and seen from the front, 0 otherwise. */
-static int point_light_sample(const mr_light *light, const hit_record *hit, shading_sample *sample) {
+static int point_light_sample(const mr_light *light, const hit_record *hit, point_sample *sample) {
     if (!(hit->view_local[2] > 0.0)) return 0;
     double to_light[3];
     vec3_sub(light->position, hit->position, to_light);
@@ -141,37 +177,240 @@ static int point_light_sample(const mr_light *light, const hit_record *hit, shad
     if (!(local[2] > 0.0)) return 0;
     double falloff = local[2] / (distance * distance);
     for (int k = 0; k < 3; k++) {
-        sample->view[k] = hit->view_local[k];
         sample->light[k] = local[k];
         sample->weight[k] = light->intensity[k] * falloff;
     }
     return 1;
 }
 
-/* What one image row contributes to the plan; rows are traced in parallel and concatenated in order. */
+/* ---- environment lights: the fixed sample pattern ----------------------------------------------------------- */
+
+/* Number of directions of an environment light's pattern. */
+static int env_light_samples(const mr_light *light) {
+    return light->samples > 0 ? light->samples : MR_ENV_DEFAULT_SAMPLES;
+}
+
+/* Van der Corput radical inverse of i in base 2, in [0, 1): the second coordinate of the Hammersley set. */
+static double radical_inverse2(uint32_t i) {
+    i = (i << 16) | (i >> 16);
+    i = ((i & 0x55555555u) << 1) | ((i & 0xAAAAAAAAu) >> 1);
+    i = ((i & 0x33333333u) << 2) | ((i & 0xCCCCCCCCu) >> 2);
+    i = ((i & 0x0F0F0F0Fu) << 4) | ((i & 0xF0F0F0F0u) >> 4);
+    i = ((i & 0x00FF00FFu) << 8) | ((i & 0xFF00FF00u) >> 8);
+    return (double)i * (1.0 / 4294967296.0);
+}
+
+/* The bin of a piecewise-constant distribution holding xi: cdf[0] = 0 <= xi < cdf[n] = 1, the result b has
+ * cdf[b] <= xi < cdf[b+1], so empty bins are never chosen. */
+static int cdf_find(const double *cdf, int n, double xi) {
+    int lo = 0, hi = n;
+    while (hi - lo > 1) {
+        int mid = lo + (hi - lo) / 2;
+        if (cdf[mid] <= xi)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* Rec. 709 luminance of a map pixel (a grey map is its own luminance): what the pattern importance-samples. */
+static double env_luminance(const float *px, int channels) {
+    if (channels == 1) return px[0];
+    return 0.2126 * px[0] + 0.7152 * px[1] + 0.0722 * px[2];
+}
+
+/* Fill the n directions and weights of one environment light (docs/rendering.md, "The estimator"): the
+ * Hammersley point (xi1, xi2) = ((k + 0.5)/n, radical_inverse(k)) picks a map row from the marginal of
+ * p(row, column) = luminance * sin(theta_row) and a column from that row's conditional (continuous inversion
+ * inside the chosen texel), so pdf_uv = p / mean(p) over the unit square and, in solid angle,
+ * pdf(w) = pdf_uv / (2 pi^2 sin theta). The weight is L(w) * scale / (pdf(w) n), with L the chosen texel (the
+ * map is piecewise constant, like the pdf). xi1 grows with k, so rows come in order and each row's conditional
+ * is built once, in a buffer of one row: O(width * height) time, O(width + height) memory. Returns 0 on
+ * allocation failure. */
+static int env_fill(const mr_light *light, int n, double (*direction)[3], double (*weight)[3]) {
+    const mr_image *map = light->environment;
+    const int width = map->width, height = map->height, channels = map->channels;
+    double *row_cdf = malloc((size_t)(height + 1) * sizeof *row_cdf);
+    double *col_cdf = malloc((size_t)(width + 1) * sizeof *col_cdf);
+    if (row_cdf == NULL || col_cdf == NULL) {
+        free(row_cdf);
+        free(col_cdf);
+        return 0;
+    }
+    row_cdf[0] = 0.0;
+    for (int j = 0; j < height; j++) {
+        double sum = 0.0;
+        for (int i = 0; i < width; i++) sum += env_luminance(mr_image_at(map, i, j), channels);
+        row_cdf[j + 1] = row_cdf[j] + sum * sin(MR_PI * (j + 0.5) / height);
+    }
+    const double total = row_cdf[height];
+    if (!(total > 0.0 && isfinite(total))) {
+        // A black map: no direction carries light (weight 0: the plan stores none of them).
+        for (int k = 0; k < n; k++)
+            for (int c = 0; c < 3; c++) {
+                direction[k][c] = c == 1 ? 1.0 : 0.0;
+                weight[k][c] = 0.0;
+            }
+        free(row_cdf);
+        free(col_cdf);
+        return 1;
+    }
+    for (int j = 1; j < height; j++) row_cdf[j] /= total;
+    row_cdf[height] = 1.0;
+
+    // fmod first, so that whole turns (360, -720 ...) are the identity exactly.
+    const double turn = fmod(light->rotation_degrees, 360.0) * MR_PI / 180.0;
+    const double cos_turn = cos(turn), sin_turn = sin(turn);
+    int row = -1;
+    for (int k = 0; k < n; k++) {
+        double xi1 = (k + 0.5) / n, xi2 = radical_inverse2((uint32_t)k);
+        int j = cdf_find(row_cdf, height, xi1);
+        if (j != row) {
+            row = j;
+            col_cdf[0] = 0.0;
+            for (int i = 0; i < width; i++)
+                col_cdf[i + 1] = col_cdf[i] + env_luminance(mr_image_at(map, i, j), channels);
+            double row_total = col_cdf[width];
+            for (int i = 1; i < width; i++) col_cdf[i] /= row_total;
+            col_cdf[width] = 1.0;
+        }
+        int i = cdf_find(col_cdf, width, xi2);
+        double dv = (xi1 - row_cdf[j]) / (row_cdf[j + 1] - row_cdf[j]);
+        double du = (xi2 - col_cdf[i]) / (col_cdf[i + 1] - col_cdf[i]);
+        double u = (i + du) / width, v = (j + dv) / height;
+        double theta = MR_PI * v, phi = 2.0 * MR_PI * (u - 0.5);
+        double sin_theta = sin(theta);
+        double x = sin_theta * sin(phi), y = cos(theta), z = -sin_theta * cos(phi);
+        direction[k][0] = x * cos_turn + z * sin_turn;
+        direction[k][1] = y;
+        direction[k][2] = -x * sin_turn + z * cos_turn;
+
+        const float *px = mr_image_at(map, i, j);
+        double pdf_uv = env_luminance(px, channels) * sin(MR_PI * (j + 0.5) / height) * width * height / total;
+        double factor = pdf_uv > 0.0 && sin_theta > 0.0 ? 2.0 * MR_PI * MR_PI * sin_theta / (pdf_uv * n) : 0.0;
+        for (int c = 0; c < 3; c++)
+            weight[k][c] = (double)px[channels == 1 ? 0 : c] * light->intensity[c] * factor;
+    }
+    free(row_cdf);
+    free(col_cdf);
+    return 1;
+}
+
+static void env_table_free(env_table *env) {
+    free(env->direction);
+    free(env->weight);
+    env->direction = NULL;
+    env->weight = NULL;
+    env->count = 0;
+}
+
+/* The directions of every environment light of the scene, concatenated in light order. */
+static mr_status env_setup(const mr_scene *scene, env_table *env) {
+    int total = 0;
+    for (int l = 0; l < scene->light_count; l++)
+        if (scene->lights[l].type == MR_LIGHT_ENVIRONMENT) total += env_light_samples(&scene->lights[l]);
+    env->count = total;
+    if (total == 0) return MR_OK;
+    env->direction = malloc((size_t)total * sizeof *env->direction);
+    env->weight = malloc((size_t)total * sizeof *env->weight);
+    if (env->direction == NULL || env->weight == NULL) goto oom;
+    int offset = 0;
+    for (int l = 0; l < scene->light_count; l++) {
+        const mr_light *light = &scene->lights[l];
+        if (light->type != MR_LIGHT_ENVIRONMENT) continue;
+        int n = env_light_samples(light);
+        if (!env_fill(light, n, env->direction + offset, env->weight + offset)) goto oom;
+        offset += n;
+    }
+    return MR_OK;
+oom:
+    env_table_free(env);
+    return mr_fail(MR_ERR_NOMEM, "render plan: out of memory for %d environment directions", total);
+}
+
+/* ---- stage 2 over a row of hits, and the plan ---------------------------------------------------------------- */
+
+/* What one image row contributes to the plan; rows are traced in parallel and concatenated in order. Sample
+ * offsets inside the row's hits are relative to the row until the concatenation. */
 typedef struct row_result {
     int object_pixels;
     int lit;
     int *pixels;      /* [lit] image pixel of each lit pixel */
-    int *counts;      /* [lit] samples of each lit pixel */
-    shading_sample *samples;
-    int sample_count;
-    int sample_capacity;
+    int *hit_counts;  /* [lit] hits of each lit pixel */
+    plan_hit *hits;
+    size_t hit_count, hit_capacity;
+    point_sample *points;
+    size_t point_count, point_capacity;
+    uint16_t *env;
+    size_t env_count, env_capacity;
 } row_result;
 
 static void row_result_free(row_result *row) {
     free(row->pixels);
-    free(row->counts);
-    free(row->samples);
+    free(row->hit_counts);
+    free(row->hits);
+    free(row->points);
+    free(row->env);
 }
 
-static int row_reserve(row_result *row, int extra) {
-    if (row->sample_count + extra <= row->sample_capacity) return 1;
-    int capacity = MR_MAX(2 * row->sample_capacity, row->sample_count + extra);
-    shading_sample *grown = realloc(row->samples, (size_t)capacity * sizeof *grown);
+/* Make room for `needed` elements of `size` bytes in *buffer (capacity in elements); 0 on allocation failure. */
+static int reserve(void **buffer, size_t *capacity, size_t needed, size_t size) {
+    if (needed <= *capacity) return 1;
+    size_t grown_capacity = MR_MAX(2 * *capacity, needed);
+    void *grown = realloc(*buffer, grown_capacity * size);
     if (grown == NULL) return 0;
-    row->samples = grown;
-    row->sample_capacity = capacity;
+    *buffer = grown;
+    *capacity = grown_capacity;
+    return 1;
+}
+
+/* Stage 2 for one hit carrying `share` of its pixel: its samples from every light, in light order; the hit is
+ * kept if any light reaches it. Returns 0 on allocation failure. */
+static int add_hit(const mr_scene *scene, const env_table *env, const hit_record *hit, double share,
+                   row_result *row) {
+    const size_t points_before = row->point_count, env_before = row->env_count;
+    if (!reserve((void **)&row->points, &row->point_capacity, row->point_count + (size_t)scene->light_count,
+                 sizeof *row->points))
+        return 0;
+    int env_offset = 0;
+    for (int l = 0; l < scene->light_count; l++) {
+        const mr_light *light = &scene->lights[l];
+        if (light->type == MR_LIGHT_POINT) {
+            point_sample *sample = &row->points[row->point_count];
+            if (!point_light_sample(light, hit, sample)) continue;
+            for (int k = 0; k < 3; k++) sample->weight[k] *= share;
+            row->point_count++;
+            continue;
+        }
+        // An environment light: its directions above the hit's horizon (a convex object cannot occlude
+        // itself, so this is the whole visibility test) that carry light.
+        int n = env_light_samples(light);
+        if (hit->view_local[2] > 0.0) {
+            if (!reserve((void **)&row->env, &row->env_capacity, row->env_count + (size_t)n, sizeof *row->env))
+                return 0;
+            for (int k = env_offset; k < env_offset + n; k++) {
+                const double *w = env->weight[k];
+                if (w[0] == 0.0 && w[1] == 0.0 && w[2] == 0.0) continue;
+                if (vec3_dot(hit->normal, env->direction[k]) > 0.0) row->env[row->env_count++] = (uint16_t)k;
+            }
+        }
+        env_offset += n;
+    }
+    if (row->point_count == points_before && row->env_count == env_before) return 1;
+    if (!reserve((void **)&row->hits, &row->hit_capacity, row->hit_count + 1, sizeof *row->hits)) return 0;
+    plan_hit *kept = &row->hits[row->hit_count++];
+    for (int k = 0; k < 3; k++) {
+        kept->view[k] = hit->view_local[k];
+        kept->tangent[k] = hit->tangent[k];
+        kept->bitangent[k] = hit->bitangent[k];
+        kept->normal[k] = hit->normal[k];
+    }
+    kept->uv[0] = hit->uv[0];
+    kept->uv[1] = hit->uv[1];
+    kept->share = share;
+    kept->point_begin = (int)points_before; // row-relative; the plan's concatenation checks the total
+    kept->env_begin = env_before;
     return 1;
 }
 
@@ -179,12 +418,12 @@ static int row_reserve(row_result *row, int extra) {
  * primary ray through their centre; pixels on the silhouette get n x n rays on a regular sub-pixel grid, each
  * weighted 1/n^2, so they are box-filtered like a path tracer's pixels instead of aliased (docs/design.md
  * principle 2: the extra rays go only where the image has an edge). Returns 0 on allocation failure. */
-static int trace_row(const mr_scene *scene, const camera_frame *cf, const unsigned char *corner_hit, int edge_n,
-                     int y, float *coverage, row_result *row) {
+static int trace_row(const mr_scene *scene, const env_table *env, const camera_frame *cf,
+                     const unsigned char *corner_hit, int edge_n, int y, float *coverage, row_result *row) {
     const int width = scene->width;
     row->pixels = malloc((size_t)width * sizeof *row->pixels);
-    row->counts = malloc((size_t)width * sizeof *row->counts);
-    if (row->pixels == NULL || row->counts == NULL || !row_reserve(row, width * scene->light_count)) return 0;
+    row->hit_counts = malloc((size_t)width * sizeof *row->hit_counts);
+    if (row->pixels == NULL || row->hit_counts == NULL) return 0;
     for (int x = 0; x < width; x++) {
         const unsigned char *top = corner_hit + (size_t)y * (size_t)(width + 1) + (size_t)x;
         const unsigned char *bottom = top + width + 1;
@@ -193,26 +432,21 @@ static int trace_row(const mr_scene *scene, const camera_frame *cf, const unsign
         int corners = top[0] + top[1] + bottom[0] + bottom[1];
         int n = (corners == 4 * centre) ? 1 : edge_n;
         double weight = 1.0 / ((double)n * n);
-        int first = row->sample_count, hits = 0;
+        size_t first = row->hit_count;
+        int hits = 0;
         for (int j = 0; j < n; j++)
             for (int i = 0; i < n; i++) {
                 if (n > 1 && !trace_primary(scene, cf, x + (i + 0.5) / n, y + (j + 0.5) / n, &hit)) continue;
                 if (n == 1 && !centre) continue;
                 hits++;
-                if (!row_reserve(row, scene->light_count)) return 0;
-                for (int l = 0; l < scene->light_count; l++) {
-                    shading_sample *sample = &row->samples[row->sample_count];
-                    if (!point_light_sample(&scene->lights[l], &hit, sample)) continue;
-                    for (int k = 0; k < 3; k++) sample->weight[k] *= weight;
-                    row->sample_count++;
-                }
+                if (!add_hit(scene, env, &hit, weight, row)) return 0;
             }
         int pixel = y * width + x;
         coverage[pixel] = (float)(hits * weight);
         if (hits > 0) row->object_pixels++;
-        if (row->sample_count > first) {
+        if (row->hit_count > first) {
             row->pixels[row->lit] = pixel;
-            row->counts[row->lit] = row->sample_count - first;
+            row->hit_counts[row->lit] = (int)(row->hit_count - first);
             row->lit++;
         }
     }
@@ -223,8 +457,11 @@ void mr_render_plan_free(mr_render_plan *plan) {
     if (plan == NULL) return;
     free(plan->coverage);
     free(plan->lit_pixel_index);
-    free(plan->sample_begin);
-    free(plan->samples);
+    free(plan->hit_begin);
+    free(plan->hits);
+    free(plan->point_samples);
+    free(plan->env_samples);
+    env_table_free(&plan->env);
     free(plan);
 }
 
@@ -245,6 +482,8 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     plan->scene = *scene;
     plan->coverage = calloc((size_t)width * (size_t)height, sizeof *plan->coverage);
     if (plan->coverage == NULL) goto oom;
+    status = env_setup(scene, &plan->env);
+    if (status != MR_OK) goto fail;
 
     // Which pixel corners see the object: a pixel whose corners and centre agree is entirely inside or
     // outside the silhouette (the projected sphere is convex and, at these sizes, far wider than a pixel).
@@ -256,33 +495,54 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
 
 #pragma omp parallel for schedule(dynamic, 4) reduction(| : failed)
     for (int y = 0; y < height; y++)
-        if (!trace_row(scene, &cf, corner_hit, edge_n, y, plan->coverage, &rows[y])) failed = 1;
+        if (!trace_row(scene, &plan->env, &cf, corner_hit, edge_n, y, plan->coverage, &rows[y])) failed = 1;
     if (failed) goto oom;
 
     // Concatenate the rows in image order: the plan, and so every render, is the same for any thread count.
-    size_t lit = 0, samples = 0;
+    size_t lit = 0, hits = 0, points = 0, envs = 0;
     for (int y = 0; y < height; y++) {
         lit += (size_t)rows[y].lit;
-        samples += (size_t)rows[y].sample_count;
+        hits += rows[y].hit_count;
+        points += rows[y].point_count;
+        envs += rows[y].env_count;
         plan->object_pixels += rows[y].object_pixels;
     }
-    if (samples > (size_t)INT_MAX) goto oom;
+    if (hits >= (size_t)INT_MAX || points > (size_t)INT_MAX) goto oom;
     plan->lit_pixel_index = malloc((lit + 1) * sizeof *plan->lit_pixel_index);
-    plan->sample_begin = malloc((lit + 1) * sizeof *plan->sample_begin);
-    plan->samples = malloc((samples + 1) * sizeof *plan->samples);
-    if (plan->lit_pixel_index == NULL || plan->sample_begin == NULL || plan->samples == NULL) goto oom;
-    int next_lit = 0, next_sample = 0;
+    plan->hit_begin = malloc((lit + 1) * sizeof *plan->hit_begin);
+    plan->hits = malloc((hits + 1) * sizeof *plan->hits);
+    plan->point_samples = malloc((points + 1) * sizeof *plan->point_samples);
+    plan->env_samples = malloc((envs + 1) * sizeof *plan->env_samples);
+    if (plan->lit_pixel_index == NULL || plan->hit_begin == NULL || plan->hits == NULL ||
+        plan->point_samples == NULL || plan->env_samples == NULL)
+        goto oom;
+    int next_lit = 0, next_hit = 0;
+    size_t next_point = 0, next_env = 0;
     for (int y = 0; y < height; y++) {
         const row_result *row = &rows[y];
-        memcpy(plan->samples + next_sample, row->samples, (size_t)row->sample_count * sizeof *row->samples);
+        if (row->point_count > 0)
+            memcpy(plan->point_samples + next_point, row->points, row->point_count * sizeof *row->points);
+        if (row->env_count > 0) memcpy(plan->env_samples + next_env, row->env, row->env_count * sizeof *row->env);
+        for (size_t h = 0; h < row->hit_count; h++) {
+            plan_hit *hit = &plan->hits[next_hit + (int)h];
+            *hit = row->hits[h];
+            hit->point_begin += (int)next_point;
+            hit->env_begin += next_env;
+        }
         for (int i = 0; i < row->lit; i++) {
             plan->lit_pixel_index[next_lit] = row->pixels[i];
-            plan->sample_begin[next_lit] = next_sample;
-            next_sample += row->counts[i];
+            plan->hit_begin[next_lit] = next_hit;
+            next_hit += row->hit_counts[i];
             next_lit++;
         }
+        next_point += row->point_count;
+        next_env += row->env_count;
     }
-    plan->sample_begin[next_lit] = next_sample;
+    plan->hit_begin[next_lit] = next_hit;
+    memset(&plan->hits[next_hit], 0, sizeof plan->hits[next_hit]);
+    plan->hits[next_hit].point_begin = (int)next_point;
+    plan->hits[next_hit].env_begin = next_env;
+    plan->hit_count = next_hit;
     plan->lit_pixels = next_lit;
     for (int y = 0; y < height; y++) row_result_free(&rows[y]);
     free(rows);
@@ -291,12 +551,14 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     return MR_OK;
 
 oom:
+    status = mr_fail(MR_ERR_NOMEM, "render plan: out of memory for a %dx%d scene", width, height);
+fail:
     if (rows != NULL)
         for (int y = 0; y < height; y++) row_result_free(&rows[y]);
     free(rows);
     free(corner_hit);
     mr_render_plan_free(plan);
-    return mr_fail(MR_ERR_NOMEM, "render plan: out of memory for a %dx%d scene", width, height);
+    return status;
 }
 
 const mr_scene *mr_render_plan_scene(const mr_render_plan *plan) { return &plan->scene; }
@@ -305,9 +567,101 @@ int mr_render_plan_lit_pixel_count(const mr_render_plan *plan) { return plan->li
 
 int mr_render_plan_object_pixel_count(const mr_render_plan *plan) { return plan->object_pixels; }
 
-long mr_render_plan_sample_count(const mr_render_plan *plan) { return plan->sample_begin[plan->lit_pixels]; }
+long mr_render_plan_env_sample_count(const mr_render_plan *plan) {
+    return (long)plan->hits[plan->hit_count].env_begin;
+}
+
+long mr_render_plan_sample_count(const mr_render_plan *plan) {
+    return (long)plan->hits[plan->hit_count].point_begin + mr_render_plan_env_sample_count(plan);
+}
+
+size_t mr_render_plan_bytes(const mr_render_plan *plan) {
+    size_t pixels = (size_t)plan->scene.width * (size_t)plan->scene.height;
+    size_t lit = (size_t)plan->lit_pixels, hits = (size_t)plan->hit_count;
+    return sizeof *plan + pixels * sizeof *plan->coverage + (lit + 1) * (sizeof *plan->lit_pixel_index +
+           sizeof *plan->hit_begin) + (hits + 1) * sizeof *plan->hits +
+           ((size_t)plan->hits[hits].point_begin + 1) * sizeof *plan->point_samples +
+           (plan->hits[hits].env_begin + 1) * sizeof *plan->env_samples +
+           (size_t)plan->env.count * (sizeof *plan->env.direction + sizeof *plan->env.weight);
+}
 
 const float *mr_render_plan_coverage(const mr_render_plan *plan) { return plan->coverage; }
+
+/* ---- textures ------------------------------------------------------------------------------------------------ */
+
+/* Can parameter `index` of `model` come from `map`, read at `channel`? */
+static mr_status check_texture(const mr_brdf_model *model, int index, const mr_image *map, int channel) {
+    const mr_brdf_param *param = &model->params[index];
+    if (param->role == MR_PARAM_SWITCH)
+        return mr_fail(MR_ERR_INVALID_ARG, "texture for %s parameter '%s': a switch cannot come from a map",
+                       model->name, param->name);
+    if (map->width < 1 || map->height < 1 || map->pixels == NULL ||
+        (map->channels != 1 && map->channels != 3 && map->channels != 4))
+        return mr_fail(MR_ERR_INVALID_ARG, "texture for %s parameter '%s': not a valid image (%dx%d, %d channels)",
+                       model->name, param->name, map->width, map->height, map->channels);
+    if (param->channels == 3 && channel != 0)
+        return mr_fail(MR_ERR_INVALID_ARG, "texture for %s parameter '%s': an RGB parameter reads channels 0-2 "
+                       "(or a grey map), so its channel must be 0, not %d", model->name, param->name, channel);
+    if (param->channels == 1 && (channel < 0 || channel >= map->channels))
+        return mr_fail(MR_ERR_INVALID_ARG, "texture for %s parameter '%s': channel %d requested of a %d-channel map",
+                       model->name, param->name, channel, map->channels);
+    return MR_OK;
+}
+
+mr_status mr_param_textures_set(mr_param_textures *textures, const mr_brdf_model *model, const char *name,
+                                const mr_image *map, int channel) {
+    if (textures == NULL || model == NULL || name == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "textures: NULL textures, model or parameter name");
+    int index = mr_brdf_param_index(model, name);
+    if (index < 0) {
+        char valid[256] = "";
+        size_t used = 0;
+        for (int p = 0; p < model->param_count && used < sizeof valid; p++)
+            used += (size_t)snprintf(valid + used, sizeof valid - used, "%s%s", p ? ", " : "", model->params[p].name);
+        return mr_fail(MR_ERR_INVALID_ARG, "textures: model %s has no parameter '%s' (valid: %s)", model->name, name,
+                       valid);
+    }
+    if (map != NULL) {
+        mr_status status = check_texture(model, index, map, channel);
+        if (status != MR_OK) return status;
+    }
+    textures->maps[index] = map;
+    textures->channel[index] = map != NULL ? channel : 0;
+    return MR_OK;
+}
+
+/* A map bound to packed value slots, as the render loop reads it. */
+typedef struct texture_binding {
+    const mr_image *map;
+    int slot;    /* first packed value it sets */
+    int count;   /* 1 or 3 values */
+    int channel; /* first map channel read (a grey map is read at 0 for every value) */
+} texture_binding;
+
+/* Bilinear lookup of `count` values at (u, v): texel centres at ((i + 0.5)/width, (j + 0.5)/height), wrap in u,
+ * clamp in v. Each lerp is a + t (b - a), so a constant map gives its value exactly. */
+static void texture_sample(const texture_binding *binding, const double uv[2], double *out) {
+    const mr_image *map = binding->map;
+    double x = uv[0] * map->width - 0.5, y = uv[1] * map->height - 0.5;
+    double x0 = floor(x), y0 = floor(y);
+    double fx = x - x0, fy = y - y0;
+    long i0 = (long)x0 % map->width;
+    if (i0 < 0) i0 += map->width;
+    long i1 = i0 + 1 == map->width ? 0 : i0 + 1;
+    long j0 = (long)mr_clampd(y0, 0.0, map->height - 1.0), j1 = (long)mr_clampd(y0 + 1.0, 0.0, map->height - 1.0);
+    const size_t stride = (size_t)map->channels;
+    const float *r0 = map->pixels + (size_t)j0 * (size_t)map->width * stride;
+    const float *r1 = map->pixels + (size_t)j1 * (size_t)map->width * stride;
+    for (int k = 0; k < binding->count; k++) {
+        size_t c = map->channels == 1 ? 0 : (size_t)(binding->channel + k);
+        double a = r0[(size_t)i0 * stride + c], b = r0[(size_t)i1 * stride + c];
+        double d = r1[(size_t)i0 * stride + c], e = r1[(size_t)i1 * stride + c];
+        double top = a + fx * (b - a), bottom = d + fx * (e - d);
+        out[k] = top + fy * (bottom - top);
+    }
+}
+
+/* ---- renders ------------------------------------------------------------------------------------------------- */
 
 static mr_status check_target(const mr_render_plan *plan, const mr_image *image, const char *what) {
     if (image == NULL) return MR_OK;
@@ -327,87 +681,149 @@ static void fill_unlit(const mr_render_plan *plan, mr_image *image, int with_bac
     }
 }
 
-mr_status mr_render_components_into(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
-                                    mr_image *diffuse, mr_image *specular) {
-    if (plan == NULL || model == NULL || values == NULL)
-        return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan, model or values");
-    mr_status status = check_target(plan, diffuse, "diffuse");
+/* One sample's contribution: into sum_full (full renders, f_d + f_s summed first) or into sum_d / sum_s (the
+ * components that are asked for). */
+static inline void accumulate(const mr_brdf_model *model, const void *state, const double view[3],
+                              const double light[3], const double weight[3], double *sum_full, double *sum_d,
+                              double *sum_s) {
+    double fd[3], fs[3];
+    if (sum_full != NULL) {
+        model->eval(state, view, light, fd, fs);
+        for (int c = 0; c < 3; c++) sum_full[c] += (fd[c] + fs[c]) * weight[c];
+        return;
+    }
+    model->eval(state, view, light, sum_d ? fd : NULL, sum_s ? fs : NULL);
+    for (int c = 0; c < 3; c++) {
+        if (sum_d) sum_d[c] += fd[c] * weight[c];
+        if (sum_s) sum_s[c] += fs[c] * weight[c];
+    }
+}
+
+#define MAX_BINDINGS MR_BRDF_MAX_VALUES
+
+/* Every render: `full` alone, or either or both of `diffuse` and `specular`. Each lit pixel sums its hits'
+ * samples in plan order (the same for any thread count); a textured render prepares the BRDF state per hit. */
+static mr_status render_core(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
+                             const mr_param_textures *textures, mr_image *full, mr_image *diffuse,
+                             mr_image *specular) {
+    mr_status status = check_target(plan, full, "output");
+    if (status == MR_OK) status = check_target(plan, diffuse, "diffuse");
     if (status == MR_OK) status = check_target(plan, specular, "specular");
     if (status != MR_OK) return status;
+    texture_binding bindings[MAX_BINDINGS];
+    int binding_count = 0;
+    for (int p = 0; textures != NULL && p < model->param_count && p < MAX_BINDINGS; p++) {
+        if (textures->maps[p] == NULL) continue;
+        status = check_texture(model, p, textures->maps[p], textures->channel[p]);
+        if (status != MR_OK) return status;
+        const int channels = model->params[p].channels;
+        bindings[binding_count++] = (texture_binding){textures->maps[p], mr_brdf_param_offset(model, p), channels,
+                                                      channels == 1 ? textures->channel[p] : 0};
+    }
+    const int value_count = mr_brdf_value_count(model);
 
-    mr_brdf_state state;
-    model->prepare(model, values, state.bytes);
+    mr_brdf_state shared;
+    model->prepare(model, values, shared.bytes);
     // The background is light that never met the material; it belongs to the full render only, and a
     // diffuse-only or specular-only render is black there, so diffuse + specular = full on the object.
+    if (full) fill_unlit(plan, full, 1);
     if (diffuse) fill_unlit(plan, diffuse, 0);
     if (specular) fill_unlit(plan, specular, 0);
 
     const int lit = plan->lit_pixels;
-#pragma omp parallel for schedule(static)
+    // Pixels cost from one BRDF evaluation (a point light) to N * edge_samples^2 (an environment on the
+    // silhouette): small dynamic chunks keep both threads busy. The order inside a pixel is fixed.
+#pragma omp parallel for schedule(dynamic, 64)
     for (int i = 0; i < lit; i++) {
-        double sum_d[3] = {0.0, 0.0, 0.0}, sum_s[3] = {0.0, 0.0, 0.0};
-        for (int s = plan->sample_begin[i]; s < plan->sample_begin[i + 1]; s++) {
-            const shading_sample *sample = &plan->samples[s];
-            double fd[3], fs[3];
-            model->eval(state.bytes, sample->view, sample->light, diffuse ? fd : NULL, specular ? fs : NULL);
-            for (int c = 0; c < 3; c++) {
-                if (diffuse) sum_d[c] += fd[c] * sample->weight[c];
-                if (specular) sum_s[c] += fs[c] * sample->weight[c];
+        double sum_f[3] = {0.0, 0.0, 0.0}, sum_d[3] = {0.0, 0.0, 0.0}, sum_s[3] = {0.0, 0.0, 0.0};
+        double *acc_f = full ? sum_f : NULL, *acc_d = diffuse ? sum_d : NULL, *acc_s = specular ? sum_s : NULL;
+        mr_brdf_state local;
+        const void *state = shared.bytes;
+        for (int h = plan->hit_begin[i]; h < plan->hit_begin[i + 1]; h++) {
+            const plan_hit *hit = &plan->hits[h];
+            if (binding_count > 0) {
+                double hit_values[MR_BRDF_MAX_VALUES];
+                memcpy(hit_values, values, (size_t)value_count * sizeof *hit_values);
+                for (int b = 0; b < binding_count; b++)
+                    texture_sample(&bindings[b], hit->uv, hit_values + bindings[b].slot);
+                model->prepare(model, hit_values, local.bytes);
+                state = local.bytes;
+            }
+            for (int s = hit->point_begin; s < hit[1].point_begin; s++) {
+                const point_sample *sample = &plan->point_samples[s];
+                accumulate(model, state, hit->view, sample->light, sample->weight, acc_f, acc_d, acc_s);
+            }
+            for (size_t e = hit->env_begin; e < hit[1].env_begin; e++) {
+                const int k = plan->env_samples[e];
+                const double *d = plan->env.direction[k];
+                double light[3] = {vec3_dot(hit->tangent, d), vec3_dot(hit->bitangent, d), vec3_dot(hit->normal, d)};
+                double cos_share = light[2] * hit->share;
+                double weight[3];
+                for (int c = 0; c < 3; c++) weight[c] = plan->env.weight[k][c] * cos_share;
+                accumulate(model, state, hit->view, light, weight, acc_f, acc_d, acc_s);
             }
         }
-        size_t p = (size_t)plan->lit_pixel_index[i] * 3;
+        size_t pixel = (size_t)plan->lit_pixel_index[i];
+        if (full) {
+            double uncovered = 1.0 - plan->coverage[pixel];
+            for (int c = 0; c < 3; c++)
+                full->pixels[pixel * 3 + c] = (float)(sum_f[c] + plan->scene.background[c] * uncovered);
+        }
         for (int c = 0; c < 3; c++) {
-            if (diffuse) diffuse->pixels[p + c] = (float)sum_d[c];
-            if (specular) specular->pixels[p + c] = (float)sum_s[c];
+            if (diffuse) diffuse->pixels[pixel * 3 + c] = (float)sum_d[c];
+            if (specular) specular->pixels[pixel * 3 + c] = (float)sum_s[c];
         }
     }
     return MR_OK;
+}
+
+mr_status mr_render_textured_components_into(const mr_render_plan *plan, const mr_brdf_model *model,
+                                              const double *values, const mr_param_textures *textures,
+                                              mr_image *diffuse, mr_image *specular) {
+    if (plan == NULL || model == NULL || values == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan, model or values");
+    if (diffuse == NULL && specular == NULL) return MR_OK;
+    return render_core(plan, model, values, textures, NULL, diffuse, specular);
+}
+
+mr_status mr_render_components_into(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
+                                    mr_image *diffuse, mr_image *specular) {
+    return mr_render_textured_components_into(plan, model, values, NULL, diffuse, specular);
+}
+
+mr_status mr_render_textured_into(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
+                                  const mr_param_textures *textures, mr_component component, mr_image *image) {
+    if (plan == NULL || model == NULL || values == NULL || image == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan, model, values or image");
+    switch (component) {
+    case MR_COMPONENT_FULL: return render_core(plan, model, values, textures, image, NULL, NULL);
+    case MR_COMPONENT_DIFFUSE: return render_core(plan, model, values, textures, NULL, image, NULL);
+    case MR_COMPONENT_SPECULAR: return render_core(plan, model, values, textures, NULL, NULL, image);
+    default: return mr_fail(MR_ERR_INVALID_ARG, "render: unknown component %d", (int)component);
+    }
 }
 
 mr_status mr_render_into(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
                          mr_component component, mr_image *image) {
-    if (plan == NULL || model == NULL || values == NULL || image == NULL)
-        return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan, model, values or image");
-    if (component != MR_COMPONENT_FULL) {
-        if (component == MR_COMPONENT_DIFFUSE) return mr_render_components_into(plan, model, values, image, NULL);
-        if (component == MR_COMPONENT_SPECULAR) return mr_render_components_into(plan, model, values, NULL, image);
-        return mr_fail(MR_ERR_INVALID_ARG, "render: unknown component %d", (int)component);
-    }
-    mr_status status = check_target(plan, image, "output");
-    if (status != MR_OK) return status;
-
-    mr_brdf_state state;
-    model->prepare(model, values, state.bytes);
-    fill_unlit(plan, image, 1);
-    const int lit = plan->lit_pixels;
-#pragma omp parallel for schedule(static)
-    for (int i = 0; i < lit; i++) {
-        double sum[3] = {0.0, 0.0, 0.0};
-        for (int s = plan->sample_begin[i]; s < plan->sample_begin[i + 1]; s++) {
-            const shading_sample *sample = &plan->samples[s];
-            double fd[3], fs[3];
-            model->eval(state.bytes, sample->view, sample->light, fd, fs);
-            for (int c = 0; c < 3; c++) sum[c] += (fd[c] + fs[c]) * sample->weight[c];
-        }
-        size_t pixel = (size_t)plan->lit_pixel_index[i];
-        double uncovered = 1.0 - plan->coverage[pixel];
-        for (int c = 0; c < 3; c++)
-            image->pixels[pixel * 3 + c] = (float)(sum[c] + plan->scene.background[c] * uncovered);
-    }
-    return MR_OK;
+    return mr_render_textured_into(plan, model, values, NULL, component, image);
 }
 
-mr_status mr_render(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
-                    mr_component component, mr_image **out) {
+mr_status mr_render_textured(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
+                             const mr_param_textures *textures, mr_component component, mr_image **out) {
     if (plan == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan or output");
     mr_image *image = NULL;
     mr_status status = mr_image_create(plan->scene.width, plan->scene.height, 3, &image);
     if (status != MR_OK) return status;
-    status = mr_render_into(plan, model, values, component, image);
+    status = mr_render_textured_into(plan, model, values, textures, component, image);
     if (status != MR_OK) {
         mr_image_free(image);
         return status;
     }
     *out = image;
     return MR_OK;
+}
+
+mr_status mr_render(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
+                    mr_component component, mr_image **out) {
+    return mr_render_textured(plan, model, values, NULL, component, out);
 }

@@ -5,26 +5,52 @@
  *   mr_scene scene = mr_scene_fit(NULL);          // the paper's fit scene (section 4.1), or fill in your own
  *   mr_render_plan *plan; mr_render_plan_create(&scene, &plan);
  *   mr_image *img; mr_render(plan, model, values, MR_COMPONENT_FULL, &img);   // as often as needed
+ *   mr_render_textured(plan, model, values, &textures, MR_COMPONENT_FULL, &img); // parameters from maps
  *   mr_render_plan_free(plan);
+ * Environment lighting: scene.lights[i] = mr_light_environment(map, 1.0, 0.0, 0) (an equirectangular HDR
+ * image, e.g. read with mr_img_read) in place of, or beside, the point light. docs/rendering.md has the details.
  *
  * Design (docs/design.md principle 2, "simulate only the effects a scene calls for"):
- *   - A plan is built once per scene. It traces one primary ray through each pixel centre, keeps the pixels
- *     that hit the object, and for each light stores the shading sample: the view and light directions in the
- *     local shading frame and the light's contribution weight I*cos(theta_light)/d^2. Pixels that see the
- *     object but no light are black and carry no sample. Pixels on the silhouette get a fixed grid of
- *     edge_samples^2 sub-pixel rays instead, each weighted by its share of the pixel, so edges are
+ *   - A plan is built once per scene. It traces one primary ray through each pixel centre and keeps the hits on
+ *     the object that receive light: the view direction in the local shading frame, the frame itself and the
+ *     sphere's texture coordinates (u, v). For each light it stores the hit's shading samples. Pixels that see
+ *     the object but no light are black and carry no sample. Pixels on the silhouette get a fixed grid of
+ *     edge_samples^2 sub-pixel rays (hits) instead, each weighted by its share of the pixel, so edges are
  *     box-filtered (as a path tracer's are) rather than aliased; the rest of the image needs no extra rays.
  *   - Rendering a material is then only BRDF evaluations on the stored samples: radiance = sum over the
- *     pixel's samples of f_r(view, light) * weight. Nothing geometric is recomputed.
+ *     pixel's samples of f_r(view, light) * weight. Nothing geometric is traced again.
  *   - A lone sphere is convex, so nothing can shadow a point it lights: no shadow rays. A point light is a
- *     delta: no sampling, each lit pixel is evaluated exactly. Primary rays are never jittered, so renders are
- *     noise-free and deterministic, and the optimiser sees a smooth objective.
- *   - Extension points: new object types add an intersector producing hit records (position, shading frame);
- *     new light types (environment maps with a fixed sample pattern) add a sample generator over those hit
- *     records; objects that can occlude themselves (triangle meshes) add shadow rays in that generator.
- *     Nothing in mr_render changes.
- * Units: light intensity is radiant intensity in W/sr per RGB channel (Mitsuba's point emitter); pixels hold
- * radiance. World space is right-handed with +y up; the default camera looks down -z.
+ *     delta: no sampling, each lit pixel is evaluated exactly; its sample holds the local light direction and
+ *     the weight I*cos(theta_light)/d^2. Primary rays are never jittered, so renders are noise-free and
+ *     deterministic, and the optimiser sees a smooth objective.
+ *   - An environment light is sampled with one fixed set of N directions, the same for every pixel:
+ *     Hammersley points warped by the map's luminance x sin(theta) (importance sampling), each direction
+ *     carrying L(w) / (pdf(w) N). A hit keeps the directions above its horizon (cos > 0, the only visibility
+ *     test a convex object needs). Such a sample is stored as the direction's 2-byte index: the render turns
+ *     it into the local light direction (3 dot products with the hit's frame) and the weight
+ *     L/(pdf N) * cos * share, far cheaper than the BRDF evaluation it feeds, and 20-40 times less memory
+ *     than storing directions and weights. The pattern does not change between renders, so images have no
+ *     noise; its error is a fixed bias that shrinks as N grows (docs/rendering.md has the estimator, its error
+ *     against N and the cost).
+ *   - Extension points: new object types add an intersector producing hit records (position, shading frame,
+ *     texture coordinates); new light types add a sample generator over those hit records; objects that can
+ *     occlude themselves (triangle meshes) add shadow rays in that generator. Nothing in mr_render changes.
+ * Units: point-light intensity is radiant intensity in W/sr per RGB channel (Mitsuba's point emitter); an
+ * environment map holds radiance; pixels hold radiance. World space is right-handed with +y up; the default
+ * camera looks down -z.
+ * Coordinate conventions (docs/rendering.md draws them):
+ *   - Environment maps are equirectangular, seen from inside like a panorama: column u in [0,1) is the azimuth,
+ *     row v in [0,1] the polar angle from +y (top row = up). The map's centre (u = 0.5, v = 0.5) lies in
+ *     direction -z, straight ahead of the default camera (behind the sphere), and u grows towards +x (the
+ *     camera's right), so the panorama reads as the camera would see it; the seam u = 0 = 1 lies at +z,
+ *     behind the camera. Direction of (u, v): theta = pi v, phi = 2 pi (u - 0.5),
+ *     w = (sin theta sin phi, cos theta, -sin theta cos phi). A rotation of R degrees then turns the map about
+ *     +y, right-handed (counter-clockwise seen from above: what lay at +z moves towards +x for R = 90).
+ *   - The sphere's texture coordinates come from its unit normal n (world axes; the sphere does not rotate),
+ *     seen from outside: u = 0.5 + atan2(n.x, n.z) / (2 pi), v = acos(n.y) / pi. The texture's centre faces
+ *     +z (the default camera), u grows to the right of the image (+x), v = 0 (the texture's top row) is the
+ *     north pole (+y); the seam u = 0 = 1 is the meridian at -z, hidden from the default camera, which sees
+ *     u in [0.25, 0.75].
  * Threads: mr_render parallelises over pixels with OpenMP; each pixel is summed in a fixed order, so output is
  * bit-identical for any thread count. A plan is immutable after creation and may be shared between threads.
  */
@@ -60,14 +86,34 @@ typedef struct mr_camera {
 
 typedef enum mr_light_type {
     MR_LIGHT_POINT = 0,
+    MR_LIGHT_ENVIRONMENT, /* an equirectangular radiance map at infinity, sampled with a fixed pattern */
     MR_LIGHT_TYPE_COUNT
 } mr_light_type;
 
 typedef struct mr_light {
     mr_light_type type;
-    double position[3];
-    double intensity[3]; /* radiant intensity, W/sr, linear RGB */
+    double position[3];  /* MR_LIGHT_POINT: world position; ignored by environment lights */
+    double intensity[3]; /* MR_LIGHT_POINT: radiant intensity, W/sr, linear RGB;
+                            MR_LIGHT_ENVIRONMENT: RGB factor on the map's radiance (1,1,1 = as stored) */
+    /* MR_LIGHT_ENVIRONMENT only (ignored by point lights): */
+    const mr_image *environment; /* equirectangular radiance map (conventions in the header comment), linear,
+                                    1 (grey), 3 or 4 channels (alpha ignored), finite and >= 0. Borrowed: it is
+                                    read by mr_render_plan_create only; the plan keeps no reference to it (the
+                                    copy in mr_render_plan_scene() is the caller's pointer, maybe stale) */
+    double rotation_degrees;     /* turns the map about +y (right-handed); any finite value, 360 = 0 exactly */
+    int samples;                 /* N, directions of the fixed sample pattern; 0 = MR_ENV_DEFAULT_SAMPLES;
+                                    1 .. MR_ENV_MAX_SAMPLES, and all environment lights of a scene together
+                                    at most MR_ENV_MAX_SAMPLES */
 } mr_light;
+
+/* Environment-light sample counts (docs/rendering.md tables error and time against N). */
+#define MR_ENV_DEFAULT_SAMPLES 256
+#define MR_ENV_MAX_SAMPLES 65536
+
+/* An environment light: `map` (borrowed, see mr_light) times `scale` in every channel, turned by
+ * rotation_degrees about +y, sampled with `samples` directions (0 = MR_ENV_DEFAULT_SAMPLES). Values are checked
+ * by mr_scene_validate, not here. */
+mr_light mr_light_environment(const mr_image *map, double scale, double rotation_degrees, int samples);
 
 typedef enum mr_shape_type {
     MR_SHAPE_SPHERE = 0,
@@ -138,12 +184,20 @@ void mr_render_plan_free(mr_render_plan *plan);
 /* The scene the plan was built from. */
 const mr_scene *mr_render_plan_scene(const mr_render_plan *plan);
 
-/* Number of pixels that see the object and receive light, i.e. the BRDF evaluations per light per render. */
+/* Number of pixels that see the object and receive light (from any light). */
 int mr_render_plan_lit_pixel_count(const mr_render_plan *plan);
 
-/* Number of shading samples, i.e. the BRDF evaluations one render makes (lit pixels x lights, plus the extra
- * sub-pixel samples of silhouette pixels). */
+/* Number of shading samples, i.e. the BRDF evaluations one render makes: for each lit hit (one per lit pixel,
+ * edge_samples^2 on the silhouette) one per point light that reaches it plus one per environment direction
+ * above its horizon. */
 long mr_render_plan_sample_count(const mr_render_plan *plan);
+
+/* Number of environment-light shading samples among mr_render_plan_sample_count() (0 without environment
+ * lights). */
+long mr_render_plan_env_sample_count(const mr_render_plan *plan);
+
+/* Bytes the plan holds (geometry, samples, coverage, direction tables), for memory budgets. */
+size_t mr_render_plan_bytes(const mr_render_plan *plan);
 
 /* Number of pixels that see the object at all (lit or not, fully or partly covered). */
 int mr_render_plan_object_pixel_count(const mr_render_plan *plan);
@@ -166,6 +220,45 @@ mr_status mr_render_into(const mr_render_plan *plan, const mr_brdf_model *model,
  * full = diffuse + specular pixel by pixel, up to float rounding. */
 mr_status mr_render_components_into(const mr_render_plan *plan, const mr_brdf_model *model,
                                     const double *values, mr_image *diffuse, mr_image *specular);
+
+/* ---- textured spheres: parameters from maps over the sphere's (u, v) (conventions in the header comment) ---- */
+
+/* Which parameters come from maps. Zero-initialise it ({0}: no maps, every parameter from values[]) and set
+ * maps by parameter index (model table order) or with mr_param_textures_set(). The images are borrowed for the
+ * duration of each render call. A map holds the parameter's own values in the model's units (linear: colour
+ * maps are sRGB-decoded when read, image_io.h; glTF roughness must be squared into alpha by the caller), and is
+ * sampled bilinearly at the hit's (u, v) with texel centres at ((i + 0.5)/width, (j + 0.5)/height), wrapping in
+ * u and clamping in v, without mipmaps (a map much finer than the sphere's pixels aliases; shrink it first).
+ * Sampled values are clamped into the model's bounds by its prepare(), like constant values. */
+typedef struct mr_param_textures {
+    const mr_image *maps[MR_BRDF_MAX_VALUES]; /* maps[i]: parameter i's map; NULL = values[] constant. An RGB
+                                                 parameter reads channels 0-2 of a 3- or 4-channel map, or the
+                                                 single channel of a grey one; a scalar parameter reads
+                                                 channel[i] */
+    int channel[MR_BRDF_MAX_VALUES];          /* scalar parameters: the map channel holding the value (0 = the
+                                                 first: grey, or R; glTF packs roughness in 1 = G, metallic in
+                                                 2 = B); must be 0 for RGB parameters */
+} mr_param_textures;
+
+/* Set parameter `name`'s map (NULL clears it) and channel, after checking that `model` has the parameter, that
+ * it is not a switch, and that the map's channels suit it (see mr_param_textures). MR_ERR_INVALID_ARG naming
+ * the parameter otherwise; *textures is unchanged then. */
+mr_status mr_param_textures_set(mr_param_textures *textures, const mr_brdf_model *model, const char *name,
+                                const mr_image *map, int channel);
+
+/* Like mr_render, mr_render_into and mr_render_components_into, with the parameters that have a map in
+ * `textures` read from it at each hit (each silhouette sub-pixel hit at its own (u, v)); values[] gives the
+ * others (and must hold a full vector: mapped slots are ignored). textures == NULL, or one without maps, is
+ * exactly mr_render*; maps of a single value render bit-identically to that value passed in values[] (when it
+ * is representable as a float). Textures cost one bilinear lookup per map and one prepare() per hit, on top of
+ * the BRDF evaluations. MR_ERR_INVALID_ARG for unsuitable maps, as mr_param_textures_set. */
+mr_status mr_render_textured(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
+                             const mr_param_textures *textures, mr_component component, mr_image **out);
+mr_status mr_render_textured_into(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
+                                  const mr_param_textures *textures, mr_component component, mr_image *image);
+mr_status mr_render_textured_components_into(const mr_render_plan *plan, const mr_brdf_model *model,
+                                              const double *values, const mr_param_textures *textures,
+                                              mr_image *diffuse, mr_image *specular);
 
 #ifdef __cplusplus
 }

@@ -1,4 +1,4 @@
-/* scene.c — the paper's fit scene, scene validation and the enum names of render.h. */
+/* scene.c — the paper's fit scene, environment lights, scene validation and the enum names of render.h. */
 #include <math.h>
 #include <string.h>
 
@@ -72,6 +72,43 @@ mr_scene mr_scene_fit(const mr_fit_scene_options *opts) {
     return scene;
 }
 
+mr_light mr_light_environment(const mr_image *map, double scale, double rotation_degrees, int samples) {
+    mr_light light;
+    memset(&light, 0, sizeof light);
+    light.type = MR_LIGHT_ENVIRONMENT;
+    for (int c = 0; c < 3; c++) light.intensity[c] = scale;
+    light.environment = map;
+    light.rotation_degrees = rotation_degrees;
+    light.samples = samples;
+    return light;
+}
+
+/* An environment light's own values: the map (size, channels, every value finite and >= 0), rotation and
+ * sample count. */
+static mr_status validate_environment(int index, const mr_light *light) {
+    const mr_image *map = light->environment;
+    if (map == NULL || map->pixels == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d is an environment light without a map", index);
+    if (map->width < 1 || map->height < 1 || (map->channels != 1 && map->channels != 3 && map->channels != 4))
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d: environment map %dx%d with %d channels: expected 1, 3 "
+                       "or 4 channels", index, map->width, map->height, map->channels);
+    if (!isfinite(light->rotation_degrees))
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d: environment rotation must be finite", index);
+    if (light->samples < 0 || light->samples > MR_ENV_MAX_SAMPLES)
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d: %d environment samples: expected 0 (default %d) to %d",
+                       index, light->samples, MR_ENV_DEFAULT_SAMPLES, MR_ENV_MAX_SAMPLES);
+    const int colour_channels = map->channels == 1 ? 1 : 3;
+    for (int y = 0; y < map->height; y++)
+        for (int x = 0; x < map->width; x++) {
+            const float *px = mr_image_at(map, x, y);
+            for (int c = 0; c < colour_channels; c++)
+                if (!(isfinite(px[c]) && px[c] >= 0.0f))
+                    return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d: environment map value %g at pixel (%d, %d): "
+                                   "expected finite radiance >= 0", index, (double)px[c], x, y);
+        }
+    return MR_OK;
+}
+
 mr_status mr_scene_validate(const mr_scene *scene) {
     if (scene->width < 1 || scene->height < 1 || scene->width > MR_RENDER_MAX_SIZE ||
         scene->height > MR_RENDER_MAX_SIZE)
@@ -102,10 +139,23 @@ mr_status mr_scene_validate(const mr_scene *scene) {
     if (scene->light_count < 1 || scene->light_count > MR_SCENE_MAX_LIGHTS)
         return mr_fail(MR_ERR_INVALID_ARG, "scene: %d lights: expected 1 to %d", scene->light_count,
                        MR_SCENE_MAX_LIGHTS);
+    long env_samples = 0;
     for (int i = 0; i < scene->light_count; i++) {
         const mr_light *light = &scene->lights[i];
         if ((unsigned)light->type >= MR_LIGHT_TYPE_COUNT)
             return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d has unknown type %d", i, (int)light->type);
+        if (light->type == MR_LIGHT_ENVIRONMENT) {
+            if (!vec3_is_finite(light->intensity) || light->intensity[0] < 0.0 || light->intensity[1] < 0.0 ||
+                light->intensity[2] < 0.0)
+                return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d: environment scale must be finite and >= 0", i);
+            mr_status status = validate_environment(i, light);
+            if (status != MR_OK) return status;
+            env_samples += light->samples > 0 ? light->samples : MR_ENV_DEFAULT_SAMPLES;
+            if (env_samples > MR_ENV_MAX_SAMPLES)
+                return mr_fail(MR_ERR_INVALID_ARG, "scene: the environment lights take %ld samples together: at most "
+                               "%d", env_samples, MR_ENV_MAX_SAMPLES);
+            continue;
+        }
         if (!vec3_is_finite(light->position) || !vec3_is_finite(light->intensity))
             return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d: position and intensity must be finite", i);
         if (light->intensity[0] < 0.0 || light->intensity[1] < 0.0 || light->intensity[2] < 0.0)

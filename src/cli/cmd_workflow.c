@@ -1,0 +1,999 @@
+/*
+ * cmd_workflow.c — `matremap spec2metal` and `matremap metal2spec`, also commands of their own (main.c dispatches
+ * on the program's name, so `ln -s matremap spec2metal` works): texture maps of one workflow in, the other's out,
+ * through the converters of src/workflow/workflow.h (and a network of nn/mlp.h for spec2metal --method mlp).
+ *
+ * Both commands run the same steps:
+ *   1. parse the maps: each is an image file or a constant (one number, or R,G,B for a colour map);
+ *   2. name the outputs and refuse any that is one of the inputs (inputs are never overwritten);
+ *   3. read the files (colour maps sRGB-decoded from 8/16-bit files, data maps linear: image_io.h) and check
+ *      they all have one size (constants broadcast to it; all constants make a single texel);
+ *   4. convert planar arrays in one batch call (per-texel flags);
+ *   5. write the outputs (each atomically) and print one summary line (or JSON): size, method, the read,
+ *      convert and write times, and how many texels carry each flag.
+ */
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "cli.h"
+
+#define NETWORK_FILE "spec2metal.mlp"
+#define MAX_MAPS 5
+#define MAX_OUTPUTS 3
+#define PATH_SIZE 4096
+
+/* ---- maps given on the command line ----------------------------------------------------------------------- */
+
+typedef enum map_kind {
+    MAP_COLOR,  /* RGB(A) colour; a constant is one number (grey) or R,G,B */
+    MAP_DATA,   /* one linear value per texel (a grey RGB file will do); a constant is one number */
+    MAP_PACKED  /* channels read by index (--specular-glossiness, --metallic-roughness); files only */
+} map_kind;
+
+typedef struct map_arg {
+    const char *option;       /* "--diffuse": names the map in messages */
+    map_kind kind;
+    mr_img_encoding encoding; /* how 8/16-bit files are decoded */
+    int min_channels;         /* MAP_PACKED: the channels it must have (3 or 4) */
+    const char *layout;       /* MAP_PACKED: what those channels hold, for messages */
+    const char *text;         /* as given; NULL when absent */
+    int is_constant;
+    double constant[3];       /* grey broadcast */
+    mr_image *image;          /* the file, once read */
+} map_arg;
+
+static map_arg map_colour(const char *option) {
+    return (map_arg){.option = option, .kind = MAP_COLOR, .encoding = MR_IMG_COLOR};
+}
+static map_arg map_data(const char *option) {
+    return (map_arg){.option = option, .kind = MAP_DATA, .encoding = MR_IMG_DATA};
+}
+static map_arg map_packed(const char *option, mr_img_encoding encoding, int channels, const char *layout) {
+    return (map_arg){.option = option, .kind = MAP_PACKED, .encoding = encoding, .min_channels = channels,
+                     .layout = layout};
+}
+
+/* Take the text of a map option: a constant (text made only of number characters: one number, or R,G,B for a
+ * colour map, in [0, 1]) or a file name ("./0.5" names a file). Returns 0 and prints a usage error for a
+ * malformed constant, a second use of the option, or a constant where only files will do. */
+static int set_map(const char *command, map_arg *m, const char *text) {
+    if (m->text != NULL) return cli_usage_error(command, "%s given twice", m->option) == 0;
+    m->text = text;
+    if (text[0] == '\0' || strspn(text, "0123456789.,+-eE") != strlen(text)) return 1;
+    if (m->kind == MAP_PACKED)
+        return cli_usage_error(command, "%s '%s': expected an image file (%s)", m->option, text, m->layout) == 0;
+    int count = 0;
+    for (const char *p = text;;) {
+        char *end = NULL;
+        errno = 0;
+        double v = strtod(p, &end);
+        if (end == p || errno == ERANGE || !isfinite(v) || count == 3 || (*end != ',' && *end != '\0')) {
+            count = -1;
+            break;
+        }
+        if (v < 0.0 || v > 1.0)
+            return cli_usage_error(command, "%s '%s': %g is outside [0, 1]", m->option, text, v) == 0;
+        m->constant[count++] = v;
+        if (*end == '\0') break;
+        p = end + 1;
+    }
+    if (count == 1) m->constant[1] = m->constant[2] = m->constant[0];
+    if (count == 1 || (count == 3 && m->kind == MAP_COLOR)) {
+        m->is_constant = 1;
+        return 1;
+    }
+    return cli_usage_error(command, "%s '%s': expected an image file or %s", m->option, text,
+                           m->kind == MAP_COLOR ? "a constant (one number or R,G,B in [0, 1])"
+                                                : "a constant (one number in [0, 1])") == 0;
+}
+
+static int is_file(const map_arg *m) { return m->text != NULL && !m->is_constant; }
+
+/* Read a map's file and check its channels. Returns an exit code (messages printed). */
+static int read_map(const char *command, map_arg *m) {
+    if (!is_file(m)) return CLI_EXIT_OK;
+    mr_img_read_options ro = {0};
+    ro.encoding = m->encoding;
+    mr_status status = mr_img_read(m->text, &ro, &m->image);
+    if (status != MR_OK) return cli_fail(command, status);
+    const mr_image *im = m->image;
+    if (m->kind == MAP_PACKED && im->channels < m->min_channels) {
+        fprintf(stderr, "matremap %s: error: %s '%s' has %s; expected %s\n", command, m->option, m->text,
+                im->channels == 1 ? "one channel" : "no alpha channel", m->layout);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    if (m->kind == MAP_DATA && im->channels >= 3) {
+        size_t n = (size_t)im->width * (size_t)im->height;
+        for (size_t i = 0; i < n; i++) {
+            const float *p = im->pixels + i * (size_t)im->channels;
+            if (p[0] != p[1] || p[0] != p[2]) {
+                fprintf(stderr, "matremap %s: error: %s '%s' is a colour image (pixel %zu, %zu is %g, %g, %g); "
+                        "expected one channel, or grey%s\n", command, m->option, m->text, i % (size_t)im->width,
+                        i / (size_t)im->width, p[0], p[1], p[2],
+                        strcmp(m->option, "--glossiness") == 0 ? " (an RGBA spec-gloss texture goes to "
+                                                                 "--specular-glossiness)" : "");
+                return CLI_EXIT_BAD_INPUT;
+            }
+        }
+    }
+    return CLI_EXIT_OK;
+}
+
+/* Read every map and check the files have one size; *width x *height is it (1 x 1 if all are constants). */
+static int read_maps(const char *command, map_arg *const *maps, int count, int *width, int *height) {
+    const map_arg *first = NULL;
+    for (int k = 0; k < count; k++) {
+        int code = read_map(command, maps[k]);
+        if (code != CLI_EXIT_OK) return code;
+        const mr_image *im = maps[k]->image;
+        if (im == NULL) continue;
+        if (first == NULL) {
+            first = maps[k];
+        } else if (im->width != first->image->width || im->height != first->image->height) {
+            fprintf(stderr, "matremap %s: error: %s '%s' is %dx%d but %s '%s' is %dx%d: maps must have the same "
+                    "size (constants broadcast)\n", command, maps[k]->option, maps[k]->text, im->width, im->height,
+                    first->option, first->text, first->image->width, first->image->height);
+            return CLI_EXIT_BAD_INPUT;
+        }
+    }
+    *width = first ? first->image->width : 1;
+    *height = first ? first->image->height : 1;
+    return CLI_EXIT_OK;
+}
+
+/* n texels of RGB, interleaved: the map's colour channels (grey broadcast) or its constant. */
+static void fill_rgb(const map_arg *m, size_t n, float *dst) {
+    const mr_image *im = m->image;
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++)
+            dst[3 * i + (size_t)c] = im ? im->pixels[i * (size_t)im->channels + (im->channels == 1 ? 0 : (size_t)c)]
+                                        : (float)m->constant[c];
+}
+
+/* n texels of one channel of the map (a data map's first) or its constant. */
+static void fill_channel(const map_arg *m, int channel, size_t n, float *dst) {
+    const mr_image *im = m->image;
+    for (size_t i = 0; i < n; i++)
+        dst[i] = im ? im->pixels[i * (size_t)im->channels + (size_t)channel] : (float)m->constant[0];
+}
+
+/* The colour map's alpha (n values), or NULL when it has none (or on allocation failure: *failed is set). */
+static float *take_alpha(const map_arg *m, size_t n, int *failed) {
+    if (m->image == NULL || m->image->channels != 4) return NULL;
+    float *alpha = malloc(n * sizeof *alpha);
+    if (alpha == NULL) {
+        *failed = 1;
+        return NULL;
+    }
+    fill_channel(m, 3, n, alpha);
+    return alpha;
+}
+
+static void free_maps(map_arg *const *maps, int count) {
+    for (int k = 0; k < count; k++) {
+        mr_image_free(maps[k]->image);
+        maps[k]->image = NULL;
+    }
+}
+
+/* ---- outputs ---------------------------------------------------------------------------------------------- */
+
+typedef struct output {
+    char path[PATH_SIZE];
+    mr_image *image;
+    mr_img_encoding encoding;
+} output;
+
+/* The shared output options. */
+typedef struct out_options {
+    const char *prefix;     /* NULL: print only (every map a constant) */
+    const char *format;     /* png, exr, tif; NULL = from the first input file */
+    const char *flags_path; /* --flags */
+    int bits, pack, json;
+} out_options;
+
+/* "png", "exr" or "tif" for a format name or extension (case-insensitive; "tiff" too), NULL for others. */
+static const char *format_from_name(const char *text) {
+    static const char *const formats[] = {"png", "exr", "tif", "tiff"};
+    for (int k = 0; k < 4; k++)
+        if (strcasecmp(text, formats[k]) == 0) return formats[k < 3 ? k : 2];
+    return NULL;
+}
+
+/* The format of the first input file if it is png, exr or tif; png otherwise. */
+static const char *default_format(map_arg *const *maps, int count) {
+    for (int k = 0; k < count; k++) {
+        if (!is_file(maps[k])) continue;
+        const char *dot = strrchr(maps[k]->text, '.');
+        const char *format = dot != NULL && strchr(dot, '/') == NULL ? format_from_name(dot + 1) : NULL;
+        return format ? format : "png";
+    }
+    return "png";
+}
+
+/* 1 if a and b name the same existing file (st_dev and st_ino: links and other spellings included). */
+static int same_file(const char *a, const char *b) {
+    struct stat sa, sb;
+    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+/* Name the outputs PREFIX_<name>.EXT and check the options; refuse (usage error) an output that is an input, or
+ * the flag map named like an output. */
+static int plan_outputs(const char *command, out_options *o, map_arg *const *maps, int map_count,
+                        const char *const *names, output *outputs, int count) {
+    if (o->format == NULL) o->format = default_format(maps, map_count);
+    if (o->bits != 0) {
+        int exr = strcmp(o->format, "exr") == 0;
+        if (exr ? (o->bits != 16 && o->bits != 32) : (o->bits != 8 && o->bits != 16))
+            return cli_usage_error(command, "--bits %d: %s files take %s", o->bits, o->format,
+                                   exr ? "16 (half) or 32 (float)" : "8 or 16");
+    }
+    if (o->prefix == NULL) return CLI_EXIT_OK; // nothing is written
+    for (int k = 0; k < count; k++) {
+        int length = snprintf(outputs[k].path, sizeof outputs[k].path, "%s_%s.%s", o->prefix, names[k], o->format);
+        if (length < 0 || (size_t)length >= sizeof outputs[k].path)
+            return cli_usage_error(command, "-o '%s': the prefix is too long", o->prefix);
+    }
+    for (int k = 0; k <= count; k++) {
+        const char *path = k < count ? outputs[k].path : o->flags_path;
+        if (path == NULL) continue;
+        for (int m = 0; m < map_count; m++)
+            if (is_file(maps[m]) && (strcmp(path, maps[m]->text) == 0 || same_file(path, maps[m]->text)))
+                return cli_usage_error(command, "the output '%s' is the input %s '%s': inputs are never "
+                                       "overwritten (choose another %s)", path, maps[m]->option, maps[m]->text,
+                                       k < count ? "-o PREFIX" : "--flags FILE");
+        for (int j = 0; k == count && j < count; j++)
+            if (strcmp(path, outputs[j].path) == 0 || same_file(path, outputs[j].path))
+                return cli_usage_error(command, "--flags '%s' is also the output '%s'", path, outputs[j].path);
+    }
+    return CLI_EXIT_OK;
+}
+
+static void free_outputs(output *outputs, int count) {
+    for (int k = 0; k < count; k++) {
+        mr_image_free(outputs[k].image);
+        outputs[k].image = NULL;
+    }
+}
+
+/* An image of `channels` channels whose channel c is planes[c] (n values each, or, when `stride` is 3, the
+ * channel of 3-interleaved values at offsets[c]); a NULL plane is filled with `fill`. */
+typedef struct plane {
+    const float *values;
+    int stride, offset;
+} plane;
+
+static mr_status compose(int width, int height, int channels, const plane *planes, float fill, mr_image **out) {
+    mr_status status = mr_image_create(width, height, channels, out);
+    if (status != MR_OK) return status;
+    size_t n = (size_t)width * (size_t)height;
+    float *dst = (*out)->pixels;
+    for (int c = 0; c < channels; c++) {
+        const plane *p = &planes[c];
+        for (size_t i = 0; i < n; i++)
+            dst[i * (size_t)channels + (size_t)c] =
+                p->values ? p->values[i * (size_t)p->stride + (size_t)p->offset] : fill;
+    }
+    return MR_OK;
+}
+
+/* The false-colour flag map: black for a clean texel, else the colour of its most severe flag. */
+static const struct flag_colour {
+    unsigned flag;
+    float rgb[3];
+} flag_colours[] = {
+    {MR_WF_METHOD_FAILED, {1.0f, 0.0f, 0.0f}},   /* red */
+    {MR_WF_NONFINITE_INPUT, {1.0f, 0.0f, 1.0f}}, /* magenta */
+    {MR_WF_CLAMPED_INPUT, {0.0f, 0.5f, 1.0f}},   /* blue */
+    {MR_WF_OFF_MANIFOLD, {1.0f, 0.5f, 0.0f}},    /* orange */
+};
+
+static mr_status flag_picture(int width, int height, const uint8_t *flags, mr_image **out) {
+    mr_status status = mr_image_create(width, height, 3, out);
+    if (status != MR_OK) return status;
+    size_t n = (size_t)width * (size_t)height;
+    for (size_t i = 0; i < n; i++)
+        for (size_t k = 0; k < sizeof flag_colours / sizeof flag_colours[0]; k++)
+            if (flags[i] & flag_colours[k].flag) {
+                memcpy((*out)->pixels + 3 * i, flag_colours[k].rgb, sizeof flag_colours[k].rgb);
+                break;
+            }
+    return MR_OK;
+}
+
+/* Write the outputs and the flag map (if asked). Returns an exit code (messages printed). */
+static int write_outputs(const char *command, const out_options *o, output *outputs, int count, int width,
+                         int height, const uint8_t *flags) {
+    for (int k = 0; k < count; k++) {
+        mr_img_write_options wo = {0};
+        wo.encoding = outputs[k].encoding;
+        wo.bits = o->bits;
+        mr_status status = mr_img_write(outputs[k].path, outputs[k].image, &wo);
+        if (status != MR_OK) return cli_fail(command, status);
+    }
+    if (o->flags_path != NULL) {
+        mr_image *picture = NULL;
+        mr_img_write_options wo = {0};
+        wo.encoding = MR_IMG_DATA; // the exact colours of flag_colours
+        mr_status status = flag_picture(width, height, flags, &picture);
+        if (status == MR_OK) status = mr_img_write(o->flags_path, picture, &wo);
+        mr_image_free(picture);
+        if (status != MR_OK) return cli_fail(command, status);
+    }
+    return CLI_EXIT_OK;
+}
+
+/* ---- the summary ------------------------------------------------------------------------------------------- */
+
+typedef struct quantity {
+    const char *name;
+    const float *values;
+    int channels; /* 1 or 3 */
+} quantity;
+
+typedef struct summary {
+    const char *command, *method, *weights;
+    double f0;           /* < 0: not applicable (mlp) */
+    int off_manifold;    /* 0: the method does not compute the flag */
+    int width, height;
+    double seconds[3];   /* read, convert, write */
+    const uint8_t *flags;
+    quantity values[3];
+} summary;
+
+static size_t count_flag(const uint8_t *flags, size_t n, unsigned flag) {
+    size_t count = 0;
+    for (size_t i = 0; i < n; i++) count += (flags[i] & flag) != 0;
+    return count;
+}
+
+static void print_summary(const summary *s, const out_options *o, const output *outputs, int count) {
+    size_t n = (size_t)s->width * (size_t)s->height;
+    size_t clamped = count_flag(s->flags, n, MR_WF_CLAMPED_INPUT);
+    size_t nonfinite = count_flag(s->flags, n, MR_WF_NONFINITE_INPUT);
+    size_t off = count_flag(s->flags, n, MR_WF_OFF_MANIFOLD);
+    size_t failed = count_flag(s->flags, n, MR_WF_METHOD_FAILED);
+    if (!o->json) {
+        printf("%s: %dx%d = %zu texel%s, method %s", s->command, s->width, s->height, n, n == 1 ? "" : "s",
+               s->method);
+        if (s->weights) printf(" (%s)", s->weights);
+        if (s->f0 >= 0.0) printf(" (F0 %g)", s->f0);
+        printf(": read %.3f s, convert %.3f s, write %.3f s; flagged: %zu clamped input, %zu non-finite input",
+               s->seconds[0], s->seconds[1], s->seconds[2], clamped, nonfinite);
+        if (strcmp(s->command, "spec2metal") == 0) { // metal -> spec is a closed formula: neither flag applies
+            if (s->off_manifold)
+                printf(", %zu off-manifold", off);
+            else
+                printf(", off-manifold not computed");
+            printf(", %zu method failed", failed);
+        }
+        printf("\n");
+        if (n == 1) { // a single texel (constants): its values, in the name=value form of other commands
+            for (int q = 0; q < 3; q++) {
+                const quantity *v = &s->values[q];
+                if (v->channels == 3)
+                    printf("%s%s=%.6g,%.6g,%.6g", q ? " " : "", v->name, v->values[0], v->values[1], v->values[2]);
+                else
+                    printf("%s%s=%.6g", q ? " " : "", v->name, v->values[0]);
+            }
+            printf("\n");
+        }
+        if (o->prefix != NULL) {
+            fprintf(stderr, "matremap %s: wrote", s->command);
+            for (int k = 0; k < count; k++) fprintf(stderr, " %s", outputs[k].path);
+            if (o->flags_path) fprintf(stderr, " %s", o->flags_path);
+            fprintf(stderr, "\n");
+        }
+        return;
+    }
+    printf("{\"command\": \"%s\", \"width\": %d, \"height\": %d, \"texels\": %zu, \"method\": \"%s\", \"weights\": ",
+           s->command, s->width, s->height, n, s->method);
+    if (s->weights)
+        cli_json_string(stdout, s->weights);
+    else
+        printf("null");
+    if (s->f0 >= 0.0)
+        printf(", \"f0\": %.17g", s->f0);
+    else
+        printf(", \"f0\": null");
+    printf(", \"seconds\": {\"read\": %.6f, \"convert\": %.6f, \"write\": %.6f}", s->seconds[0], s->seconds[1],
+           s->seconds[2]);
+    printf(", \"flags\": {\"clamped_input\": %zu, \"nonfinite_input\": %zu, \"off_manifold\": ", clamped, nonfinite);
+    if (s->off_manifold)
+        printf("%zu", off);
+    else
+        printf("null");
+    printf(", \"method_failed\": %zu}, \"outputs\": [", failed);
+    for (int k = 0; o->prefix != NULL && k < count; k++) {
+        printf("%s", k ? ", " : "");
+        cli_json_string(stdout, outputs[k].path);
+    }
+    if (o->flags_path) {
+        printf("%s", o->prefix != NULL && count ? ", " : "");
+        cli_json_string(stdout, o->flags_path);
+    }
+    printf("], \"values\": {");
+    // Each quantity's minimum, mean and maximum as converted (before the files' quantisation).
+    for (int q = 0; q < 3; q++) {
+        const quantity *v = &s->values[q];
+        double lo[3], hi[3], sum[3];
+        for (int c = 0; c < v->channels; c++) {
+            lo[c] = INFINITY;
+            hi[c] = -INFINITY;
+            sum[c] = 0.0;
+        }
+        for (size_t i = 0; i < n; i++)
+            for (int c = 0; c < v->channels; c++) {
+                double x = v->values[i * (size_t)v->channels + (size_t)c];
+                lo[c] = x < lo[c] ? x : lo[c];
+                hi[c] = x > hi[c] ? x : hi[c];
+                sum[c] += x;
+            }
+        printf("%s\"%s\": {", q ? ", " : "", v->name);
+        const char *keys[3] = {"min", "mean", "max"};
+        for (int k = 0; k < 3; k++) {
+            printf("%s\"%s\": %s", k ? ", " : "", keys[k], v->channels == 3 ? "[" : "");
+            for (int c = 0; c < v->channels; c++)
+                printf("%s%.9g", c ? ", " : "", k == 0 ? lo[c] : (k == 1 ? sum[c] / (double)n : hi[c]));
+            printf("%s", v->channels == 3 ? "]" : "");
+        }
+        printf("}");
+    }
+    printf("}}\n");
+}
+
+/* ---- the network for spec2metal --method mlp ---------------------------------------------------------------- */
+
+/* Cut the last path component off `path` in place; 0 if there is none. */
+static int cut_last(char *path) {
+    char *slash = strrchr(path, '/');
+    if (slash == NULL) return 0;
+    *slash = '\0';
+    return 1;
+}
+
+/* Load the network: --weights FILE, else $MATREMAP_WEIGHTS, else the first of these that exists:
+ * <dir of the executable>/../../data/spec2metal.mlp (the source tree: build/bin/matremap -> data/),
+ * <dir of the executable>/../share/matremap/spec2metal.mlp (an installed tree: PREFIX/bin -> PREFIX/share) and
+ * MR_DATA_DIR/spec2metal.mlp (when the build defines MR_DATA_DIR). `used` receives the path. */
+static int load_network(const char *command, const char *weights, mr_mlp **net, char *used, size_t used_size) {
+    char tried[3][PATH_MAX + 64];
+    int tried_count = 0;
+    const char *chosen = weights, *source = "--weights";
+    const char *env = getenv("MATREMAP_WEIGHTS");
+    if (chosen == NULL && env != NULL && env[0] != '\0') {
+        chosen = env;
+        source = "MATREMAP_WEIGHTS";
+    }
+    if (chosen == NULL) {
+        char exe[PATH_MAX];
+        ssize_t length = readlink("/proc/self/exe", exe, sizeof exe - 1);
+        if (length > 0) {
+            exe[length] = '\0';
+            char up[PATH_MAX]; // the executable's directory's parent, then its grandparent
+            memcpy(up, exe, (size_t)length + 1);
+            if (cut_last(up) && cut_last(up)) {
+                char parent[PATH_MAX];
+                memcpy(parent, up, sizeof parent);
+                if (cut_last(up)) snprintf(tried[tried_count++], sizeof tried[0], "%s/data/" NETWORK_FILE, up);
+                snprintf(tried[tried_count++], sizeof tried[0], "%s/share/matremap/" NETWORK_FILE, parent);
+            }
+        }
+#ifdef MR_DATA_DIR
+        snprintf(tried[tried_count++], sizeof tried[0], "%s/" NETWORK_FILE, MR_DATA_DIR);
+#endif
+        for (int k = 0; k < tried_count && chosen == NULL; k++)
+            if (access(tried[k], F_OK) == 0) chosen = tried[k];
+        if (chosen == NULL) {
+            fprintf(stderr, "matremap %s: error: --method mlp: no network found (tried", command);
+            for (int k = 0; k < tried_count; k++) fprintf(stderr, "%s %s", k ? "," : "", tried[k]);
+            fprintf(stderr, "%s); give --weights FILE or set MATREMAP_WEIGHTS, or choose an analytic --method "
+                    "(weighted, mean, khronos)\n", tried_count ? "" : " nothing");
+            return CLI_EXIT_BAD_INPUT;
+        }
+        source = NULL;
+    }
+    mr_status status = mr_mlp_read(chosen, net);
+    if (status != MR_OK) {
+        fprintf(stderr, "matremap %s: error: %s%s%s%s\n", command, mr_last_error(), source ? " (given by " : "",
+                source ? source : "", source ? ")" : "");
+        return cli_exit_code(status);
+    }
+    if ((*net)->n_in != 6 || (*net)->n_out != 4) {
+        fprintf(stderr, "matremap %s: error: network '%s' maps %d inputs to %d outputs; expected 6 (diffuse RGB, "
+                "specular RGB) to 4 (albedo RGB, metallic)\n", command, chosen, (*net)->n_in, (*net)->n_out);
+        mr_mlp_free(*net);
+        *net = NULL;
+        return CLI_EXIT_BAD_INPUT;
+    }
+    size_t length = strlen(chosen) < used_size ? strlen(chosen) : used_size - 1;
+    memcpy(used, chosen, length);
+    used[length] = '\0';
+    return CLI_EXIT_OK;
+}
+
+/* ---- options both commands share --------------------------------------------------------------------------- */
+
+/* Take one of the output options at argv[*i]. Returns 1 if taken, 0 if argv[*i] is something else, -1 after a
+ * usage error. */
+static int take_output_option(const char *command, int argc, char **argv, int *i, out_options *o) {
+    const char *value = NULL;
+    int taken;
+    if ((taken = cli_take_option(command, argc, argv, i, "--output", &value)) ||
+        (taken = cli_take_option(command, argc, argv, i, "-o", &value))) {
+        if (taken > 0) o->prefix = value;
+    } else if ((taken = cli_take_option(command, argc, argv, i, "--format", &value))) {
+        if (taken > 0 && (o->format = format_from_name(value)) == NULL) {
+            cli_usage_error(command, "--format '%s': unknown format (valid: png, exr, tif)", value);
+            taken = -1;
+        }
+    } else if ((taken = cli_take_option(command, argc, argv, i, "--bits", &value))) {
+        if (taken > 0 && !cli_parse_int(command, "--bits", value, 8, 32, &o->bits)) taken = -1;
+    } else if ((taken = cli_take_option(command, argc, argv, i, "--flags", &value))) {
+        if (taken > 0) o->flags_path = value;
+    } else if (strcmp(argv[*i], "--pack") == 0) {
+        o->pack = taken = 1;
+    } else if (strcmp(argv[*i], "--json") == 0) {
+        o->json = taken = 1;
+    }
+    return taken;
+}
+
+/* -o is required unless every map is a constant (then the single texel is printed). */
+static int check_prefix(const char *command, const out_options *o, map_arg *const *maps, int count) {
+    if (o->prefix != NULL) return CLI_EXIT_OK;
+    for (int k = 0; k < count; k++)
+        if (is_file(maps[k])) return cli_usage_error(command, "missing -o PREFIX");
+    if (o->flags_path != NULL || o->pack || o->format != NULL || o->bits != 0)
+        return cli_usage_error(command, "--flags, --pack, --format and --bits need -o PREFIX");
+    return CLI_EXIT_OK;
+}
+
+/* ---- spec2metal --------------------------------------------------------------------------------------------- */
+
+static void print_spec2metal_help(void) {
+    printf("Usage: matremap spec2metal --diffuse MAP --specular MAP (--glossiness MAP | --roughness MAP)\n"
+           "                           -o PREFIX [options]\n"
+           "       matremap spec2metal --diffuse MAP --specular-glossiness SG.png -o PREFIX [options]\n"
+           "       (also a command of its own: 'spec2metal ARGS' is 'matremap spec2metal ARGS')\n"
+           "\n"
+           "Converts specular-workflow texture maps (diffuse colour, specular F0 colour, glossiness or roughness)\n"
+           "into metallic-workflow ones (base colour, metallic, roughness), texel by texel (docs/workflow.md).\n"
+           "\n"
+           "A MAP is an image file or a constant: one number, or R,G,B for a colour, linear in [0, 1] (a file named\n"
+           "like a number is written ./0.5). Colour maps (diffuse, specular, base colour) are sRGB-encoded in\n"
+           "8/16-bit files and linear in EXR; data maps (glossiness, roughness, metallic) are linear in every\n"
+           "format, and a grey RGB file serves as one. Files must have the same size and constants broadcast to it;\n"
+           "with constants only, the one texel is converted and printed. roughness = 1 - glossiness (the\n"
+           "spec-gloss convention). The diffuse map's alpha, if it has one, becomes the base colour's alpha.\n"
+           "\n"
+           "Inputs:\n"
+           "  --diffuse MAP              diffuse colour, RGB or RGBA\n"
+           "  --specular MAP             specular colour (F0)\n"
+           "  --glossiness MAP           glossiness\n"
+           "  --roughness MAP            roughness (passes through)\n"
+           "  --specular-glossiness SG   the KHR_materials_pbrSpecularGlossiness texture: RGB specular (sRGB in\n"
+           "                             8/16-bit files) and A glossiness (linear); replaces --specular and\n"
+           "                             --glossiness\n"
+           "\n");
+    printf("Method:\n"
+           "  --method M        mlp (default): the trained network (6 x 300 x 4, docs/workflow.md);\n"
+           "                    weighted: Eq. 3 per channel, one albedo-weighted metallic (the paper's strategy 2);\n"
+           "                    mean: Eq. 3 per channel, the mean metallic (strategy 1);\n"
+           "                    khronos: the glTF project's converter (perceived brightness)\n"
+           "  --weights FILE    the network for mlp; default: $MATREMAP_WEIGHTS, else " NETWORK_FILE " in the\n"
+           "                    source tree's data/ or in share/matremap/ of the installed tree\n"
+           "  --f0 F            the dielectric F0 of weighted and mean: 0.04 (default, glTF) or the paper's 0.03;\n"
+           "                    khronos takes only 0.04, and mlp learned its own from its training data\n"
+           "  --eps E           the reflectance tolerance of weighted, mean and khronos (default 1e-6): a texel is\n"
+           "                    off-manifold when converting it back misses it by more than E, and an Eq. 3 root\n"
+           "                    within E of F0 is ambiguous; 8-bit maps are rarely exact within 1e-6, and\n"
+           "                    --eps 0.004 (one 8-bit step) flags only what quantisation cannot explain\n"
+           "\n");
+    printf("Output:\n"
+           "  -o, --output PREFIX   PREFIX_basecolor.EXT (RGB, or RGBA with the diffuse's alpha), PREFIX_metallic.EXT\n"
+           "                        and PREFIX_roughness.EXT; required unless every MAP is a constant\n"
+           "  --pack                glTF packing: PREFIX_basecolor.EXT and PREFIX_metallicRoughness.EXT\n"
+           "                        (R 0, G roughness, B metallic)\n"
+           "  --format F            png, exr or tif (default: the first input file's, if one of these; else png)\n"
+           "  --bits N              8 (default) or 16 for png and tif; 16 (half) or 32 (default) for exr\n"
+           "  --flags FILE          a picture of the flagged texels: black clean, red method failed, magenta\n"
+           "                        non-finite input, blue clamped input, orange off-manifold (a texel with several\n"
+           "                        flags takes the first of these colours)\n"
+           "  --json                the summary as JSON on stdout (with each output's minimum, mean and maximum)\n"
+           "  --help                this text\n"
+           "\n");
+    printf("Prints one line: the size, the method, the read, convert and write times, and the texels flagged as\n"
+           "clamped input (a value outside [0, 1]), non-finite input (NaN or infinity, from EXR), off-manifold (no\n"
+           "metallic material has exactly these maps: a coloured dielectric specular, specular above the albedo;\n"
+           "not computed for mlp) and method failed (the network returned NaN). The inputs are never overwritten.\n"
+           "\n"
+           "Examples:\n"
+           "  matremap spec2metal --diffuse Avocado_diffuse.png --specular-glossiness Avocado_specularGlossiness.png\n"
+           "                      -o avocado --pack\n"
+           "  matremap spec2metal --diffuse d.exr --specular 0.04 --roughness r.exr --method weighted -o out\n"
+           "  spec2metal --diffuse 0.5,0.2,0.1 --specular 0.04 --glossiness 0.6 --method weighted\n");
+}
+
+int cmd_spec2metal(int argc, char **argv) {
+    const char *command = "spec2metal";
+    map_arg diffuse = map_colour("--diffuse"), specular = map_colour("--specular");
+    map_arg glossiness = map_data("--glossiness"), roughness = map_data("--roughness");
+    map_arg packed = map_packed("--specular-glossiness", MR_IMG_COLOR, 4, "RGBA: specular RGB, glossiness A");
+    map_arg *all[] = {&diffuse, &specular, &glossiness, &roughness, &packed};
+    const char *weights = NULL, *method_name = "mlp";
+    double f0 = MR_WF_F0_GLTF;
+    double eps = MR_WF_DEFAULT_EPS;
+    int f0_given = 0;
+    out_options o = {0};
+
+    for (int i = 1; i < argc; i++) {
+        const char *value = NULL;
+        int taken;
+        if (cli_is_help(argv[i])) {
+            print_spec2metal_help();
+            return CLI_EXIT_OK;
+        }
+        if ((taken = take_output_option(command, argc, argv, &i, &o))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            continue;
+        }
+        map_arg *target = NULL;
+        for (int k = 0; k < 5 && target == NULL; k++)
+            if ((taken = cli_take_option(command, argc, argv, &i, all[k]->option, &value))) target = all[k];
+        if (target != NULL) {
+            if (taken < 0 || !set_map(command, target, value)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option(command, argc, argv, &i, "--method", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            method_name = value;
+        } else if ((taken = cli_take_option(command, argc, argv, &i, "--weights", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            weights = value;
+        } else if ((taken = cli_take_option(command, argc, argv, &i, "--f0", &value))) {
+            if (taken < 0 || !cli_parse_double(command, "--f0", value, 0.0, 0.999, &f0)) return CLI_EXIT_USAGE;
+            f0_given = 1;
+        } else if ((taken = cli_take_option(command, argc, argv, &i, "--eps", &value))) {
+            if (taken < 0 || !cli_parse_double(command, "--eps", value, 0.0, 0.5, &eps)) return CLI_EXIT_USAGE;
+        } else if (argv[i][0] == '-') {
+            return cli_usage_error(command, "unknown option '%s'", argv[i]);
+        } else {
+            return cli_usage_error(command, "unexpected argument '%s' (maps are given as options, e.g. --diffuse "
+                                   "D.png)", argv[i]);
+        }
+    }
+    int use_mlp = strcmp(method_name, "mlp") == 0;
+    mr_wf_options wf = mr_wf_options_default();
+    wf.dielectric_f0 = f0;
+    wf.eps = eps;
+    if (!use_mlp) {
+        if (mr_wf_method_from_name(method_name, &wf.method) != MR_OK || wf.method == MR_WF_CUSTOM)
+            return cli_usage_error(command, "--method '%s': unknown method (valid: mlp, weighted, mean, khronos)",
+                                   method_name);
+        if (mr_wf_options_check(&wf) != MR_OK)
+            return cli_usage_error(command, "--f0 %g with --method %s: %s", f0, method_name, mr_last_error());
+    } else if (f0_given) {
+        return cli_usage_error(command, "--f0 applies to the analytic methods (weighted, mean, khronos); the network "
+                               "of --method mlp learned the F0 of its training data");
+    } else if (weights != NULL && weights[0] == '\0') {
+        return cli_usage_error(command, "--weights: empty file name");
+    }
+    if (!use_mlp && weights != NULL)
+        return cli_usage_error(command, "--weights goes with --method mlp, not %s", method_name);
+    if (diffuse.text == NULL) return cli_usage_error(command, "missing --diffuse MAP");
+    if ((specular.text != NULL) + (packed.text != NULL) != 1)
+        return cli_usage_error(command, "give the specular colour once: --specular MAP or --specular-glossiness SG");
+    if ((glossiness.text != NULL) + (roughness.text != NULL) + (packed.text != NULL) != 1)
+        return cli_usage_error(command, "give exactly one of --glossiness, --roughness and --specular-glossiness");
+    int code = check_prefix(command, &o, all, 5);
+    if (code != CLI_EXIT_OK) return code;
+    static const char *const names[] = {"basecolor", "metallic", "roughness"};
+    static const char *const packed_names[] = {"basecolor", "metallicRoughness"};
+    output outputs[MAX_OUTPUTS];
+    memset(outputs, 0, sizeof outputs);
+    int output_count = o.pack ? 2 : 3;
+    code = plan_outputs(command, &o, all, 5, o.pack ? packed_names : names, outputs, output_count);
+    if (code != CLI_EXIT_OK) return code;
+
+    // Read.
+    double started = cli_now(), seconds[3] = {0.0, 0.0, 0.0};
+    int width = 1, height = 1;
+    mr_mlp *net = NULL;
+    char net_path[PATH_MAX + 64] = "";
+    float *in_diffuse = NULL, *in_specular = NULL, *in_rough = NULL, *alpha = NULL;
+    float *albedo = NULL, *metallic = NULL, *out_rough = NULL;
+    uint8_t *flags = NULL;
+    if (use_mlp) code = load_network(command, weights, &net, net_path, sizeof net_path);
+    if (code == CLI_EXIT_OK) code = read_maps(command, all, 5, &width, &height);
+    size_t n = (size_t)width * (size_t)height;
+    int failed = 0;
+    if (code == CLI_EXIT_OK) {
+        in_diffuse = malloc(3 * n * sizeof(float));
+        in_specular = malloc(3 * n * sizeof(float));
+        in_rough = malloc(n * sizeof(float));
+        albedo = malloc(3 * n * sizeof(float));
+        metallic = malloc(n * sizeof(float));
+        out_rough = malloc(n * sizeof(float));
+        flags = malloc(n);
+        alpha = take_alpha(&diffuse, n, &failed);
+        failed |= !in_diffuse || !in_specular || !in_rough || !albedo || !metallic || !out_rough || !flags;
+        if (failed) {
+            fprintf(stderr, "matremap %s: error: out of memory for %dx%d texels\n", command, width, height);
+            code = CLI_EXIT_INTERNAL;
+        }
+    }
+    if (code == CLI_EXIT_OK) {
+        fill_rgb(&diffuse, n, in_diffuse);
+        if (packed.text != NULL) {
+            fill_rgb(&packed, n, in_specular);
+            fill_channel(&packed, 3, n, in_rough);
+        } else {
+            fill_rgb(&specular, n, in_specular);
+            fill_channel(roughness.text ? &roughness : &glossiness, 0, n, in_rough);
+        }
+        if (roughness.text == NULL) // glossiness -> roughness; NaN stays NaN (read as 0 and flagged)
+            for (size_t i = 0; i < n; i++) in_rough[i] = 1.0f - in_rough[i];
+        free_maps(all, 5);
+    }
+    seconds[0] = cli_now() - started;
+
+    // Convert.
+    started = cli_now();
+    if (code == CLI_EXIT_OK) {
+        mr_wf_spec_maps in = {in_diffuse, in_specular, in_rough};
+        mr_wf_metal_maps out = {albedo, metallic, out_rough};
+        mr_status status = use_mlp ? mr_wf_spec_to_metal_mlp_batch(net, &in, n, &wf, &out, flags)
+                                   : mr_wf_spec_to_metal_batch(&in, n, &wf, &out, flags);
+        if (status != MR_OK) code = cli_fail(command, status);
+    }
+    seconds[1] = cli_now() - started;
+
+    // Write.
+    started = cli_now();
+    if (code == CLI_EXIT_OK && o.prefix != NULL) {
+        mr_status status = MR_OK;
+        plane colour[4] = {{albedo, 3, 0}, {albedo, 3, 1}, {albedo, 3, 2}, {alpha, 1, 0}};
+        status = compose(width, height, alpha ? 4 : 3, colour, 1.0f, &outputs[0].image);
+        outputs[0].encoding = MR_IMG_COLOR;
+        if (status == MR_OK && o.pack) {
+            plane mr[3] = {{NULL, 1, 0}, {out_rough, 1, 0}, {metallic, 1, 0}};
+            status = compose(width, height, 3, mr, 0.0f, &outputs[1].image);
+            outputs[1].encoding = MR_IMG_DATA;
+        } else if (status == MR_OK) {
+            plane m[1] = {{metallic, 1, 0}}, r[1] = {{out_rough, 1, 0}};
+            status = compose(width, height, 1, m, 0.0f, &outputs[1].image);
+            if (status == MR_OK) status = compose(width, height, 1, r, 0.0f, &outputs[2].image);
+            outputs[1].encoding = outputs[2].encoding = MR_IMG_DATA;
+        }
+        code = status != MR_OK ? cli_fail(command, status)
+                               : write_outputs(command, &o, outputs, output_count, width, height, flags);
+    }
+    seconds[2] = cli_now() - started;
+
+    if (code == CLI_EXIT_OK) {
+        summary s = {command, use_mlp ? "mlp" : mr_wf_method_name(wf.method), use_mlp ? net_path : NULL,
+                     use_mlp ? -1.0 : wf.dielectric_f0, !use_mlp, width, height,
+                     {seconds[0], seconds[1], seconds[2]}, flags,
+                     {{"basecolor", albedo, 3}, {"metallic", metallic, 1}, {"roughness", out_rough, 1}}};
+        print_summary(&s, &o, outputs, output_count);
+    }
+    free_outputs(outputs, MAX_OUTPUTS);
+    free_maps(all, 5);
+    mr_mlp_free(net);
+    free(in_diffuse);
+    free(in_specular);
+    free(in_rough);
+    free(alpha);
+    free(albedo);
+    free(metallic);
+    free(out_rough);
+    free(flags);
+    return code;
+}
+
+/* ---- metal2spec --------------------------------------------------------------------------------------------- */
+
+static void print_metal2spec_help(void) {
+    printf("Usage: matremap metal2spec --basecolor MAP --metallic MAP --roughness MAP -o PREFIX [options]\n"
+           "       matremap metal2spec --basecolor MAP --metallic-roughness MR.png -o PREFIX [options]\n"
+           "       (also a command of its own: 'metal2spec ARGS' is 'matremap metal2spec ARGS')\n"
+           "\n"
+           "Converts metallic-workflow texture maps (base colour, metallic, roughness) into specular-workflow ones\n"
+           "(diffuse colour, specular F0 colour, glossiness), texel by texel (docs/workflow.md):\n"
+           "  diffuse = basecolor (1 - metallic),  specular = F0 (1 - metallic) + metallic basecolor  (Eq. 2),\n"
+           "  glossiness = 1 - roughness.\n"
+           "\n"
+           "A MAP is an image file or a constant: one number, or R,G,B for a colour, linear in [0, 1] (a file named\n"
+           "like a number is written ./0.5). Colour maps (base colour, diffuse, specular) are sRGB-encoded in\n"
+           "8/16-bit files and linear in EXR; data maps (metallic, roughness, glossiness) are linear in every\n"
+           "format, and a grey RGB file serves as one. Files must have the same size and constants broadcast to it;\n"
+           "with constants only, the one texel is converted and printed. The base colour's alpha, if it has one,\n"
+           "becomes the diffuse map's alpha.\n"
+           "\n"
+           "Inputs:\n"
+           "  --basecolor MAP            base colour, RGB or RGBA\n"
+           "  --metallic MAP             metallic\n"
+           "  --roughness MAP            roughness\n"
+           "  --metallic-roughness MR    the glTF metallicRoughness texture (linear): G roughness, B metallic;\n"
+           "                             replaces --metallic and --roughness\n"
+           "\n");
+    printf("Method:\n"
+           "  --method M        eq2 (default): the paper's Eq. 2, exact; khronos: the glTF project's converter\n"
+           "                    (its diffuse is renormalised by (1 - max specular) / (1 - 0.04))\n"
+           "  --f0 F            the dielectric F0 of eq2: 0.04 (default, glTF) or the paper's 0.03; khronos takes\n"
+           "                    only 0.04\n"
+           "\n");
+    printf("Output:\n"
+           "  -o, --output PREFIX   PREFIX_diffuse.EXT (RGB, or RGBA with the base colour's alpha),\n"
+           "                        PREFIX_specular.EXT and PREFIX_glossiness.EXT; required unless every MAP is a\n"
+           "                        constant\n"
+           "  --pack                KHR_materials_pbrSpecularGlossiness packing: PREFIX_diffuse.EXT and\n"
+           "                        PREFIX_specularGlossiness.EXT (RGB specular, sRGB in png/tif; A glossiness,\n"
+           "                        linear)\n"
+           "  --format F            png, exr or tif (default: the first input file's, if one of these; else png)\n"
+           "  --bits N              8 (default) or 16 for png and tif; 16 (half) or 32 (default) for exr\n"
+           "  --flags FILE          a picture of the flagged texels: black clean, blue clamped input, magenta\n"
+           "                        non-finite input\n"
+           "  --json                the summary as JSON on stdout (with each output's minimum, mean and maximum)\n"
+           "  --help                this text\n"
+           "\n");
+    printf("Prints one line: the size, the method, the read, convert and write times, and the texels flagged as\n"
+           "clamped input (a value outside [0, 1]) or non-finite input (NaN or infinity, from EXR). The inputs are\n"
+           "never overwritten.\n"
+           "\n"
+           "Examples:\n"
+           "  matremap metal2spec --basecolor Avocado_baseColor.png --metallic-roughness Avocado_roughnessMetallic.png\n"
+           "                      -o avocado --pack\n"
+           "  matremap metal2spec --basecolor b.exr --metallic 1 --roughness 0.3 -o gold --format exr\n"
+           "  metal2spec --basecolor 0.9,0.6,0.2 --metallic 1 --roughness 0.3\n");
+}
+
+int cmd_metal2spec(int argc, char **argv) {
+    const char *command = "metal2spec";
+    map_arg basecolor = map_colour("--basecolor");
+    map_arg metallic = map_data("--metallic"), roughness = map_data("--roughness");
+    map_arg packed = map_packed("--metallic-roughness", MR_IMG_DATA, 3, "RGB: G roughness, B metallic");
+    map_arg *all[] = {&basecolor, &metallic, &roughness, &packed};
+    const char *method_name = "eq2";
+    double f0 = MR_WF_F0_GLTF;
+    out_options o = {0};
+
+    for (int i = 1; i < argc; i++) {
+        const char *value = NULL;
+        int taken;
+        if (cli_is_help(argv[i])) {
+            print_metal2spec_help();
+            return CLI_EXIT_OK;
+        }
+        if ((taken = take_output_option(command, argc, argv, &i, &o))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            continue;
+        }
+        map_arg *target = NULL;
+        for (int k = 0; k < 4 && target == NULL; k++)
+            if ((taken = cli_take_option(command, argc, argv, &i, all[k]->option, &value))) target = all[k];
+        if (target != NULL) {
+            if (taken < 0 || !set_map(command, target, value)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option(command, argc, argv, &i, "--method", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            method_name = value;
+        } else if ((taken = cli_take_option(command, argc, argv, &i, "--f0", &value))) {
+            if (taken < 0 || !cli_parse_double(command, "--f0", value, 0.0, 0.999, &f0)) return CLI_EXIT_USAGE;
+        } else if (argv[i][0] == '-') {
+            return cli_usage_error(command, "unknown option '%s'", argv[i]);
+        } else {
+            return cli_usage_error(command, "unexpected argument '%s' (maps are given as options, e.g. --basecolor "
+                                   "B.png)", argv[i]);
+        }
+    }
+    mr_wf_options wf = mr_wf_options_default(); // metal -> spec is Eq. 2 for every method but KHRONOS
+    wf.dielectric_f0 = f0;
+    if (strcmp(method_name, "khronos") == 0)
+        wf.method = MR_WF_KHRONOS;
+    else if (strcmp(method_name, "eq2") != 0)
+        return cli_usage_error(command, "--method '%s': unknown method (valid: eq2, khronos)", method_name);
+    if (mr_wf_options_check(&wf) != MR_OK)
+        return cli_usage_error(command, "--f0 %g with --method %s: %s", f0, method_name, mr_last_error());
+    if (basecolor.text == NULL) return cli_usage_error(command, "missing --basecolor MAP");
+    if (packed.text != NULL ? (metallic.text || roughness.text) : (!metallic.text || !roughness.text))
+        return cli_usage_error(command, "give --metallic MAP and --roughness MAP, or --metallic-roughness MR");
+    int code = check_prefix(command, &o, all, 4);
+    if (code != CLI_EXIT_OK) return code;
+    static const char *const names[] = {"diffuse", "specular", "glossiness"};
+    static const char *const packed_names[] = {"diffuse", "specularGlossiness"};
+    output outputs[MAX_OUTPUTS];
+    memset(outputs, 0, sizeof outputs);
+    int output_count = o.pack ? 2 : 3;
+    code = plan_outputs(command, &o, all, 4, o.pack ? packed_names : names, outputs, output_count);
+    if (code != CLI_EXIT_OK) return code;
+
+    // Read.
+    double started = cli_now(), seconds[3] = {0.0, 0.0, 0.0};
+    int width = 1, height = 1;
+    float *in_albedo = NULL, *in_metallic = NULL, *in_rough = NULL, *alpha = NULL;
+    float *diffuse = NULL, *specular = NULL, *glossiness = NULL;
+    uint8_t *flags = NULL;
+    code = read_maps(command, all, 4, &width, &height);
+    size_t n = (size_t)width * (size_t)height;
+    int failed = 0;
+    if (code == CLI_EXIT_OK) {
+        in_albedo = malloc(3 * n * sizeof(float));
+        in_metallic = malloc(n * sizeof(float));
+        in_rough = malloc(n * sizeof(float));
+        diffuse = malloc(3 * n * sizeof(float));
+        specular = malloc(3 * n * sizeof(float));
+        glossiness = malloc(n * sizeof(float));
+        flags = malloc(n);
+        alpha = take_alpha(&basecolor, n, &failed);
+        failed |= !in_albedo || !in_metallic || !in_rough || !diffuse || !specular || !glossiness || !flags;
+        if (failed) {
+            fprintf(stderr, "matremap %s: error: out of memory for %dx%d texels\n", command, width, height);
+            code = CLI_EXIT_INTERNAL;
+        }
+    }
+    if (code == CLI_EXIT_OK) {
+        fill_rgb(&basecolor, n, in_albedo);
+        fill_channel(packed.text ? &packed : &metallic, packed.text ? 2 : 0, n, in_metallic);
+        fill_channel(packed.text ? &packed : &roughness, packed.text ? 1 : 0, n, in_rough);
+        free_maps(all, 4);
+    }
+    seconds[0] = cli_now() - started;
+
+    // Convert: the roughness comes back sanitised in `glossiness` and is turned into glossiness there.
+    started = cli_now();
+    if (code == CLI_EXIT_OK) {
+        mr_wf_metal_maps in = {in_albedo, in_metallic, in_rough};
+        mr_wf_spec_maps out = {diffuse, specular, glossiness};
+        mr_status status = mr_wf_metal_to_spec_batch(&in, n, &wf, &out, flags);
+        if (status != MR_OK) code = cli_fail(command, status);
+        for (size_t i = 0; code == CLI_EXIT_OK && i < n; i++) glossiness[i] = 1.0f - glossiness[i];
+    }
+    seconds[1] = cli_now() - started;
+
+    // Write.
+    started = cli_now();
+    if (code == CLI_EXIT_OK && o.prefix != NULL) {
+        plane colour[4] = {{diffuse, 3, 0}, {diffuse, 3, 1}, {diffuse, 3, 2}, {alpha, 1, 0}};
+        mr_status status = compose(width, height, alpha ? 4 : 3, colour, 1.0f, &outputs[0].image);
+        outputs[0].encoding = MR_IMG_COLOR;
+        if (status == MR_OK && o.pack) {
+            // RGB sRGB-encoded, A linear: what image_io does for a colour image with alpha.
+            plane sg[4] = {{specular, 3, 0}, {specular, 3, 1}, {specular, 3, 2}, {glossiness, 1, 0}};
+            status = compose(width, height, 4, sg, 0.0f, &outputs[1].image);
+            outputs[1].encoding = MR_IMG_COLOR;
+        } else if (status == MR_OK) {
+            plane s[3] = {{specular, 3, 0}, {specular, 3, 1}, {specular, 3, 2}}, g[1] = {{glossiness, 1, 0}};
+            status = compose(width, height, 3, s, 0.0f, &outputs[1].image);
+            if (status == MR_OK) status = compose(width, height, 1, g, 0.0f, &outputs[2].image);
+            outputs[1].encoding = MR_IMG_COLOR;
+            outputs[2].encoding = MR_IMG_DATA;
+        }
+        code = status != MR_OK ? cli_fail(command, status)
+                               : write_outputs(command, &o, outputs, output_count, width, height, flags);
+    }
+    seconds[2] = cli_now() - started;
+
+    if (code == CLI_EXIT_OK) {
+        summary s = {command, wf.method == MR_WF_KHRONOS ? "khronos" : "eq2", NULL, wf.dielectric_f0, 0, width,
+                     height, {seconds[0], seconds[1], seconds[2]}, flags,
+                     {{"diffuse", diffuse, 3}, {"specular", specular, 3}, {"glossiness", glossiness, 1}}};
+        print_summary(&s, &o, outputs, output_count);
+    }
+    free_outputs(outputs, MAX_OUTPUTS);
+    free_maps(all, 4);
+    free(in_albedo);
+    free(in_metallic);
+    free(in_rough);
+    free(alpha);
+    free(diffuse);
+    free(specular);
+    free(glossiness);
+    free(flags);
+    return code;
+}
