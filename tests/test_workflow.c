@@ -15,6 +15,7 @@
 #include "harness.h"
 #include "matremap.h"
 #include "workflow/workflow.h"
+#include "nn/mlp.h"
 
 static mr_wf_options options(mr_wf_method method, double f0) {
     mr_wf_options o = mr_wf_options_default();
@@ -841,6 +842,165 @@ MR_TEST(bad_arguments_are_rejected_with_a_message) {
     CHECK_REJECTED(mr_wf_spec_to_metal_batch(&sin, 2, &o, &mout, NULL), "dielectric_f0");
 }
 
+/* ---- the spec-gloss diffuse convention (MR_WF_DIFFUSE_SPECGLOSS) --------------------------------------------- */
+
+MR_TEST(specgloss_convention_known_answers_and_names) {
+    MR_CHECK(strcmp(mr_wf_diffuse_name(MR_WF_DIFFUSE_PLAIN), "plain") == 0);
+    MR_CHECK(strcmp(mr_wf_diffuse_name(MR_WF_DIFFUSE_SPECGLOSS), "specgloss") == 0);
+    MR_CHECK(mr_wf_diffuse_name(MR_WF_DIFFUSE_COUNT) == NULL);
+    MR_CHECK(mr_wf_options_default().spec_diffuse == MR_WF_DIFFUSE_PLAIN);
+    mr_wf_options o = options(MR_WF_WEIGHTED, 0.04);
+    o.spec_diffuse = MR_WF_DIFFUSE_COUNT;
+    MR_CHECK(mr_wf_options_check(&o) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strstr(mr_last_error(), "spec_diffuse"), "%s", mr_last_error());
+
+    o.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
+    // A grey dielectric: the lobe A (1 - m) = 0.5 is d (1 - 0.04), so d = 0.5 / 0.96.
+    unsigned flags = 99;
+    mr_wf_spec s = to_spec(&o, 0.5, 0.5, 0.5, 0.0, &flags);
+    MR_CHECK(flags == 0);
+    for (int c = 0; c < 3; c++) {
+        MR_CHECK_NEAR(s.diffuse[c], 0.5 / 0.96, 1e-15);
+        MR_CHECK_NEAR(s.specular[c], 0.04, 1e-15);
+    }
+    mr_wf_metal m = to_metal(&o, s.diffuse, s.specular, &flags);
+    MR_CHECK(flags == 0);
+    MR_CHECK_NEAR(m.metallic, 0.0, 1e-12);
+    for (int c = 0; c < 3; c++) MR_CHECK_NEAR(m.albedo[c], 0.5, 1e-12);
+    // A coloured partial metal: d = A (1 - m) / (1 - max s), s = lerp(0.04, A, m).
+    s = to_spec(&o, 0.9, 0.5, 0.2, 0.4, &flags);
+    double max_s = 0.04 * 0.6 + 0.4 * 0.9;
+    MR_CHECK(flags == 0);
+    MR_CHECK_NEAR(s.specular[0], max_s, 1e-15);
+    MR_CHECK_NEAR(s.diffuse[1], 0.5 * 0.6 / (1.0 - max_s), 1e-15);
+    // A white dielectric needs a spec-gloss diffuse of 1/0.96: clamped to 1 and flagged (plain is exact).
+    s = to_spec(&o, 1.0, 1.0, 1.0, 0.0, &flags);
+    MR_CHECK(flags == MR_WF_OFF_MANIFOLD);
+    MR_CHECK(s.diffuse[0] == 1.0 && spec_in_range(&s));
+    mr_wf_options plain = options(MR_WF_WEIGHTED, 0.04);
+    s = to_spec(&plain, 1.0, 1.0, 1.0, 0.0, &flags);
+    MR_CHECK(flags == 0 && s.diffuse[0] == 1.0);
+    // A pure white metal: max s = 1 and no diffuse lobe: d = 0, clean (no division by 1 - max s = 0).
+    s = to_spec(&o, 1.0, 1.0, 1.0, 1.0, &flags);
+    MR_CHECK(flags == 0 && s.diffuse[0] == 0.0 && s.specular[0] == 1.0);
+    // Spec -> metal with max s = 1 and a diffuse: the lobe is d * 0 = 0, a white metal.
+    double d1[3] = {0.7, 0.7, 0.7}, s1[3] = {1.0, 1.0, 1.0};
+    m = to_metal(&o, d1, s1, &flags);
+    MR_CHECK(metal_in_range(&m));
+    MR_CHECK_NEAR(m.metallic, 1.0, 1e-12);
+    // KHRONOS ignores the option (it renormalises its own way).
+    mr_wf_options k = options(MR_WF_KHRONOS, 0.04), k_sg = k;
+    k_sg.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
+    double d2[3] = {0.3, 0.4, 0.5}, s2[3] = {0.2, 0.2, 0.3};
+    mr_wf_metal a = to_metal(&k, d2, s2, NULL), b = to_metal(&k_sg, d2, s2, NULL);
+    MR_CHECK(memcmp(&a, &b, sizeof a) == 0);
+}
+
+MR_TEST(specgloss_round_trip_is_exact_where_representable) {
+    uint64_t rng = 42;
+    int checked = 0;
+    for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++) {
+        mr_wf_options o = options((mr_wf_method)method, 0.04);
+        o.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
+        for (int i = 0; i < 2000; i++) {
+            double g = uniform(&rng), m = uniform(&rng) < 0.3 ? (uniform(&rng) < 0.5 ? 0.0 : 1.0) : uniform(&rng);
+            // A grey-ish albedo above F0d in every channel, so that no channel is ambiguous (docs/workflow.md).
+            double albedo[3] = {0.05 + 0.95 * g, 0.05 + 0.95 * uniform(&rng), 0.05 + 0.95 * uniform(&rng)};
+            unsigned flags;
+            mr_wf_spec s = to_spec(&o, albedo[0], albedo[1], albedo[2], m, &flags);
+            if (flags != 0) continue; // the spec-gloss diffuse would exceed 1
+            mr_wf_metal back = to_metal(&o, s.diffuse, s.specular, &flags);
+            MR_CHECK_MSG(flags == 0, "flags %u for A (%g, %g, %g) m %g", flags, albedo[0], albedo[1], albedo[2], m);
+            if (method == MR_WF_MEAN && m > 0.0 && m < 1.0) continue; // MEAN weighs ill-conditioned channels
+            MR_CHECK_NEAR(back.metallic, m, 1e-9);
+            for (int c = 0; c < 3; c++) MR_CHECK_NEAR(back.albedo[c], albedo[c], 1e-9);
+            checked++;
+        }
+    }
+    MR_CHECK_MSG(checked > 2000, "only %d texels checked", checked);
+}
+
+/* f_r of a model at (wi, wo), summed over its parts, per channel. */
+static void eval_model(const char *name, const double *values, const double wi[3], const double wo[3],
+                       double out[3]) {
+    const mr_brdf_model *model = mr_brdf_find(name);
+    MR_CHECK(model != NULL);
+    if (model == NULL) return;
+    mr_brdf_state state;
+    model->prepare(model, values, state.bytes);
+    double d[3], s[3];
+    model->eval(state.bytes, wi, wo, d, s);
+    for (int c = 0; c < 3; c++) out[c] = d[c] + s[c];
+}
+
+/* The converted texel renders like the source through the glTF models (gltf-specgloss and gltf, brdf/): exactly
+ * at metallic 0 and 1, where glTF's normative mix and spec-gloss's single lobe agree; the plain reading misses
+ * the dielectric's diffuse by its factor 1 - 0.04. */
+MR_TEST(specgloss_convention_matches_the_gltf_brdfs) {
+    mr_wf_options sg = options(MR_WF_WEIGHTED, 0.04), plain = sg;
+    sg.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
+    const double roughness = 0.5;
+    const double wi[3] = {0.3, -0.2, sqrt(1.0 - 0.13)}, wo[3] = {-0.5, 0.1, sqrt(1.0 - 0.26)};
+    const double albedos[3][3] = {{0.8, 0.3, 0.1}, {0.5, 0.5, 0.5}, {0.95, 0.64, 0.54}};
+    double worst_sg = 0.0, worst_plain = 0.0;
+    for (int a = 0; a < 3; a++)
+        for (int metal = 0; metal <= 1; metal++) {
+            const double *A = albedos[a];
+            double mr_values[10] = {A[0], A[1], A[2], metal, roughness, 1.0, 1.0, 1.0, 1.0, 1.5};
+            double reference[3];
+            eval_model("gltf", mr_values, wi, wo, reference);
+            for (int pass = 0; pass < 2; pass++) {
+                mr_wf_spec s = to_spec(pass ? &plain : &sg, A[0], A[1], A[2], metal, NULL);
+                double sg_values[7] = {s.diffuse[0], s.diffuse[1], s.diffuse[2], s.specular[0], s.specular[1],
+                                       s.specular[2], 1.0 - roughness};
+                double f[3];
+                eval_model("gltf-specgloss", sg_values, wi, wo, f);
+                for (int c = 0; c < 3; c++) {
+                    double rel = fabs(f[c] - reference[c]) / reference[c];
+                    if (pass)
+                        worst_plain = fmax(worst_plain, rel);
+                    else
+                        worst_sg = fmax(worst_sg, rel);
+                }
+            }
+        }
+    MR_CHECK_MSG(worst_sg < 1e-12, "spec-gloss reading: relative difference %g", worst_sg);
+    MR_CHECK_MSG(worst_plain > 1e-3, "the plain reading should miss: %g", worst_plain);
+}
+
+/* The network sees the diffuse lobe: SPECGLOSS on (d, s) equals PLAIN on (d (1 - max s), s). */
+MR_TEST(mlp_batch_reads_the_specgloss_diffuse_lobe) {
+    mr_mlp *net = NULL;
+    MR_CHECK_OK(mr_mlp_create(6, 8, 4, &net));
+    if (net == NULL) return;
+    uint64_t rng = 7;
+    for (size_t i = 0; i < net->data_count; i++) net->data[i] = (float)(uniform(&rng) - 0.5);
+    for (int i = 0; i < 6; i++) net->in_std[i] = 1.0f;
+    for (int i = 0; i < 4; i++) net->out_std[i] = 1.0f;
+    enum { N = 64 };
+    float d[3 * N], dim[3 * N], s[3 * N], a1[3 * N], a2[3 * N], m1[N], m2[N];
+    for (int i = 0; i < N; i++) {
+        float max_s = 0.0f;
+        for (int c = 0; c < 3; c++) {
+            d[3 * i + c] = (float)uniform(&rng);
+            s[3 * i + c] = (float)uniform(&rng);
+            max_s = fmaxf(max_s, s[3 * i + c]);
+        }
+        for (int c = 0; c < 3; c++) dim[3 * i + c] = (float)((double)d[3 * i + c] * (1.0 - (double)max_s));
+    }
+    mr_wf_options sg = mr_wf_options_default(), plain = sg;
+    sg.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
+    mr_wf_spec_maps in_sg = {d, s, NULL}, in_plain = {dim, s, NULL};
+    mr_wf_metal_maps out1 = {a1, m1, NULL}, out2 = {a2, m2, NULL};
+    MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in_sg, N, &sg, &out1, NULL));
+    MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in_plain, N, &plain, &out2, NULL));
+    MR_CHECK(memcmp(a1, a2, sizeof a1) == 0 && memcmp(m1, m2, sizeof m1) == 0);
+    mr_wf_metal_maps out3 = {a2, m2, NULL};
+    MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in_sg, N, &plain, &out3, NULL));
+    MR_CHECK(memcmp(a1, a2, sizeof a1) != 0); // and the option does change the answer
+    mr_mlp_free(net);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(method_names_round_trip),
              MR_TEST_ENTRY(default_options_are_the_documented_ones),
              MR_TEST_ENTRY(equation_2_known_answers),
@@ -858,4 +1018,8 @@ MR_TEST_MAIN(MR_TEST_ENTRY(method_names_round_trip),
              MR_TEST_ENTRY(the_custom_slot_calls_back_and_sanitises),
              MR_TEST_ENTRY(batch_equals_per_texel),
              MR_TEST_ENTRY(results_are_identical_for_one_and_two_threads),
-             MR_TEST_ENTRY(bad_arguments_are_rejected_with_a_message))
+             MR_TEST_ENTRY(bad_arguments_are_rejected_with_a_message),
+             MR_TEST_ENTRY(specgloss_convention_known_answers_and_names),
+             MR_TEST_ENTRY(specgloss_round_trip_is_exact_where_representable),
+             MR_TEST_ENTRY(specgloss_convention_matches_the_gltf_brdfs),
+             MR_TEST_ENTRY(mlp_batch_reads_the_specgloss_diffuse_lobe))

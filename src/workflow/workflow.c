@@ -20,6 +20,11 @@
 #include "workflow_internal.h"
 
 static const char *const method_names[MR_WF_METHOD_COUNT] = {"mean", "weighted", "khronos", "custom"};
+static const char *const diffuse_names[MR_WF_DIFFUSE_COUNT] = {"plain", "specgloss"};
+
+const char *mr_wf_diffuse_name(mr_wf_diffuse diffuse) {
+    return (unsigned)diffuse < MR_WF_DIFFUSE_COUNT ? diffuse_names[diffuse] : NULL;
+}
 
 const char *mr_wf_method_name(mr_wf_method method) {
     return (unsigned)method < MR_WF_METHOD_COUNT ? method_names[method] : NULL;
@@ -44,6 +49,7 @@ mr_wf_options mr_wf_options_default(void) {
     o.eps = MR_WF_DEFAULT_EPS;
     o.custom = NULL;
     o.custom_data = NULL;
+    o.spec_diffuse = MR_WF_DIFFUSE_PLAIN;
     return o;
 }
 
@@ -57,6 +63,9 @@ mr_status mr_wf_options_check(const mr_wf_options *opts) {
     if ((unsigned)opts->method >= MR_WF_METHOD_COUNT)
         return mr_fail(MR_ERR_INVALID_ARG, "workflow options: method %d: unknown (valid: 0 to %d)",
                        (int)opts->method, MR_WF_METHOD_COUNT - 1);
+    if ((unsigned)opts->spec_diffuse >= MR_WF_DIFFUSE_COUNT)
+        return mr_fail(MR_ERR_INVALID_ARG, "workflow options: spec_diffuse %d: unknown (valid: 0 plain, 1 specgloss)",
+                       (int)opts->spec_diffuse);
     if (opts->method == MR_WF_CUSTOM && opts->custom == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "workflow options: method custom: no callback in opts->custom");
     if (opts->method == MR_WF_KHRONOS && opts->dielectric_f0 != MR_WF_KHRONOS_F0)
@@ -113,6 +122,37 @@ static double best_albedo(double d, double s, double f0, double m) {
     return mr_clampd((k * d + m * (s - f0 * k)) / (k * k + m * m), 0.0, 1.0);
 }
 
+/* 1 - max_c s_c: the factor KHR_materials_pbrSpecularGlossiness puts on its diffuse lobe. */
+static double specgloss_diffuse_factor(const double s[3]) { return 1.0 - fmax(fmax(s[0], s[1]), s[2]); }
+
+/* Does the specular side's diffuse carry spec-gloss's factor here? (KHRONOS applies its own.) */
+static int reads_specgloss(const mr_wf_options *o) {
+    return o->spec_diffuse == MR_WF_DIFFUSE_SPECGLOSS && o->method != MR_WF_KHRONOS;
+}
+
+/* The diffuse lobe of a sanitised spec-gloss texel, in place: d (1 - max_c s_c), in [0, 1]. */
+static void specgloss_dim(double d[3], const double s[3]) {
+    double k = specgloss_diffuse_factor(s);
+    for (int c = 0; c < 3; c++) d[c] *= k;
+}
+
+/* The spec-gloss diffuse whose lobe is the plain diffuse d, in place: d / (1 - max_c s_c). A lobe that needs a
+ * diffuse above 1 (or any lobe at all when max_c s_c = 1) is clamped to 1 and returns MR_WF_OFF_MANIFOLD. */
+static unsigned specgloss_undim(double d[3], const double s[3]) {
+    double k = specgloss_diffuse_factor(s);
+    unsigned flags = 0;
+    for (int c = 0; c < 3; c++) {
+        if (d[c] <= 0.0) continue;
+        if (d[c] > k) { // d / k > 1, written without dividing by a k that may be 0
+            if (d[c] - k > 1e-12) flags |= MR_WF_OFF_MANIFOLD; // beyond rounding
+            d[c] = 1.0;
+        } else {
+            d[c] /= k;
+        }
+    }
+    return flags;
+}
+
 static unsigned metal_to_spec_texel(const mr_wf_options *o, const double albedo_in[3], double metallic_in,
                                     double diffuse[3], double specular[3]) {
     unsigned flags = 0;
@@ -123,6 +163,7 @@ static unsigned metal_to_spec_texel(const mr_wf_options *o, const double albedo_
         mr_wf_khronos_metal_to_spec(albedo, m, diffuse, specular);
     } else {
         for (int c = 0; c < 3; c++) eq2(albedo[c], m, o->dielectric_f0, &diffuse[c], &specular[c]);
+        if (reads_specgloss(o)) flags |= specgloss_undim(diffuse, specular);
     }
     // Both are within [0, 1] in exact arithmetic; rounding is not (Khronos's diffuse for an albedo channel of 1 is
     // 0.96 (1 - m) / (1 - (0.04 + 0.96 m)), which comes out up to ~1e-12 above 1).
@@ -171,6 +212,7 @@ static unsigned spec_to_metal_texel(const mr_wf_options *o, const double diffuse
         d[c] = sanitise(diffuse_in[c], &flags);
         s[c] = sanitise(specular_in[c], &flags);
     }
+    if (reads_specgloss(o)) specgloss_dim(d, s); // from here on, d is the diffuse lobe Eq. 2 describes
     double back_d[3], back_s[3]; // the result put through the method's forward conversion
     if (o->method == MR_WF_KHRONOS) {
         mr_wf_khronos_spec_to_metal(d, s, albedo, metallic);
@@ -323,9 +365,15 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
         for (size_t r = 0; r < count; r++) {
             size_t i = start + r;
             unsigned f = 0;
+            double d[3], s[3];
             for (int c = 0; c < 3; c++) {
-                x[6 * r + c] = (float)sanitise(in->diffuse[3 * i + c], &f);
-                x[6 * r + 3 + c] = (float)sanitise(in->specular[3 * i + c], &f);
+                d[c] = sanitise(in->diffuse[3 * i + c], &f);
+                s[c] = sanitise(in->specular[3 * i + c], &f);
+            }
+            if (reads_specgloss(&o)) specgloss_dim(d, s); // the network learned Eq. 2's plain diffuse lobe
+            for (int c = 0; c < 3; c++) {
+                x[6 * r + c] = (float)d[c];
+                x[6 * r + 3 + c] = (float)s[c];
             }
             if (flags) flags[i] = (uint8_t)f;
         }

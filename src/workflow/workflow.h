@@ -55,7 +55,8 @@
  *     darker than F0d, whose ambiguous channel reads less metallic).
  *   - MR_WF_METHOD_FAILED: the CUSTOM callback returned non-zero (the texel is then albedo 0, metallic 0) or a
  *     value outside [0, 1] or non-finite (sanitised).
- * metal -> spec is a closed formula (Eq. 2 is exact) and never sets OFF_MANIFOLD.
+ * metal -> spec is a closed formula (Eq. 2 is exact) and sets OFF_MANIFOLD only under MR_WF_DIFFUSE_SPECGLOSS, for
+ * a texel whose spec-gloss diffuse would have to exceed 1.
  *
  * Batched layout (mr_wf_*_maps): planar, one array per texture map, n texels each; an RGB map holds 3n floats,
  * channels interleaved per texel (texel i at [3i, 3i + 3), the pixel buffer of a 3-channel mr_image); a scalar map
@@ -98,6 +99,21 @@ typedef enum mr_wf_method {
     MR_WF_CUSTOM,   /* opts->custom (spec -> metal); Eq. 2 for metal -> spec */
     MR_WF_METHOD_COUNT
 } mr_wf_method;
+
+/* What the specular workflow's diffuse map means. The two workflows share one BRDF only when the specular
+ * material's diffuse lobe is read the same way on both sides of the conversion. Values are append-only. */
+typedef enum mr_wf_diffuse {
+    MR_WF_DIFFUSE_PLAIN = 0, /* the diffuse lobe is d itself: Lambert + GGX, the paper's `ggx` / `ggx-metallic`
+                                pair and Eq. 2 as printed (the default) */
+    MR_WF_DIFFUSE_SPECGLOSS, /* glTF KHR_materials_pbrSpecularGlossiness: the lobe is d (1 - max_c s_c), and glTF
+                                metal-rough's is A (1 - m). Spec -> metal converts d (1 - max_c s_c); metal -> spec
+                                divides Eq. 2's diffuse by (1 - max_c s_c) (where that exceeds 1, e.g. a white
+                                dielectric, it is clamped to 1 and the texel flagged MR_WF_OFF_MANIFOLD) */
+    MR_WF_DIFFUSE_COUNT
+} mr_wf_diffuse;
+
+/* "plain", "specgloss"; NULL outside the enum. */
+const char *mr_wf_diffuse_name(mr_wf_diffuse diffuse);
 
 /* "mean", "weighted", "khronos", "custom"; NULL outside the enum. */
 const char *mr_wf_method_name(mr_wf_method method);
@@ -142,6 +158,8 @@ typedef struct mr_wf_options {
                                a residual above eps sets MR_WF_OFF_MANIFOLD. 0 makes the flag see rounding. */
     mr_wf_custom_fn custom; /* MR_WF_CUSTOM only; default NULL */
     void *custom_data;      /* passed through to custom (via opts); default NULL */
+    mr_wf_diffuse spec_diffuse; /* how the specular side's diffuse is read; default MR_WF_DIFFUSE_PLAIN. KHRONOS
+                                   always reads it as spec-gloss (its own renormalisation) and ignores this */
 } mr_wf_options;
 
 /* The defaults listed above. (A zero-initialised struct is valid but means F0d 0 and MEAN.) */
