@@ -126,6 +126,65 @@ else
     echo "Cycles peer skipped: Blender was not installed in this run." >> "$report"
 fi
 
+echo
+echo "== spec2metal / metal2spec end to end on a real 2048² texture set (read, convert, write)"
+# The Avocado spec-gloss maps (2048², 8-bit PNG) of ../shared/assets, converted by the command a user runs, against
+# a peer measured in the same run: oiiotool reading the same two files and writing the same number of PNG outputs
+# (pure image I/O, no conversion), so the ratio is what the conversion adds to the files' own cost.
+shared=${MR_SHARED:-$root/../shared}
+avocado="$shared/assets/specgloss/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness"
+e2e="$work/e2e.md"
+if [ -f "$avocado/Avocado_diffuse.png" ]; then
+    runs=3
+    [ "$quick" = "--quick" ] && runs=1
+    seconds_of() { local t0 t1; t0=$(date +%s.%N); "$@" >/dev/null 2>&1; t1=$(date +%s.%N); awk -v a="$t0" -v b="$t1" 'BEGIN {print b - a}'; }
+    peer=()
+    for run in $(seq "$runs"); do
+        peer+=("$(seconds_of oiiotool --iconfig oiio:UnassociatedAlpha 1 "$avocado/Avocado_diffuse.png" -o "$work/e2e_peer_a.png" \
+            "$avocado/Avocado_specularGlossiness.png" --ch R,G,B -o "$work/e2e_peer_b.png")")
+    done
+    peer_s=$(printf '%s\n' "${peer[@]}" | median)
+    {
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores: \`matremap spec2metal --diffuse Avocado_diffuse.png"
+        echo "--specular-glossiness Avocado_specularGlossiness.png --pack -o PREFIX\` (2048², 4.2 M texels, two 8-bit PNG"
+        echo "inputs, two PNG outputs) per method, and \`metal2spec\` on WaterBottle's maps; median of $runs runs of the whole"
+        echo "process. Read / convert / write are the command's own split (its --json). Peer: oiiotool reading the"
+        echo "same two files and writing two PNGs, ${peer_s} s in this run; the ratio is ours over the peer."
+        echo
+        echo "| command | method | total s | read s | convert s | write s | M texels/s (convert) | ratio to oiiotool I/O |"
+        echo "|---|---|---:|---:|---:|---:|---:|---:|"
+    } > "$e2e"
+    e2e_row() { # LABEL METHOD COMMAND...
+        local label=$1 method=$2; shift 2
+        local totals=() json=""
+        for run in $(seq "$runs"); do
+            local t0 t1
+            t0=$(date +%s.%N)
+            json=$("$@" --json 2>/dev/null)
+            t1=$(date +%s.%N)
+            totals+=("$(awk -v a="$t0" -v b="$t1" 'BEGIN {print b - a}')")
+        done
+        local total read convert write
+        total=$(printf '%s\n' "${totals[@]}" | median)
+        read=$(echo "$json" | sed -E 's/.*"read": ([0-9.]+).*/\1/')
+        convert=$(echo "$json" | sed -E 's/.*"convert": ([0-9.]+).*/\1/')
+        write=$(echo "$json" | sed -E 's/.*"write": ([0-9.]+).*/\1/')
+        printf '| %s | %s | %.2f | %.2f | %.3f | %.2f | %.1f | %.2f |\n' "$label" "$method" "$total" "$read" "$convert" \
+            "$write" "$(awk -v c="$convert" 'BEGIN {print 4194304 / c / 1e6}')" \
+            "$(awk -v a="$total" -v b="$peer_s" 'BEGIN {print a / b}')" | tee -a "$e2e"
+    }
+    for method in mlp weighted mean khronos; do
+        e2e_row spec2metal "$method" "$bin" spec2metal --diffuse "$avocado/Avocado_diffuse.png" \
+            --specular-glossiness "$avocado/Avocado_specularGlossiness.png" --method "$method" --pack -o "$work/e2e_$method"
+    done
+    bottle="$shared/assets/metalrough/WaterBottle/glTF"
+    e2e_row metal2spec eq2 "$bin" metal2spec --basecolor "$bottle/WaterBottle_baseColor.png" \
+        --metallic-roughness "$bottle/WaterBottle_occlusionRoughnessMetallic.png" --pack -o "$work/e2e_m2s"
+else
+    echo "(no assets at $shared/assets: the end-to-end conversion was skipped)"
+    echo "End-to-end conversion skipped: ../shared/assets was not found in this run." > "$e2e"
+fi
+
 # Replace the sections between the markers in docs/performance.md with this run's reports.
 perf="$root/docs/performance.md"
 replace_section() { # NAME REPORT
@@ -142,4 +201,5 @@ if [ -f "$perf" ]; then
     replace_section metrics "$work/metrics_table.md"
     replace_section remap "$work/remap.md"
     replace_section workflow "$work/workflow.md"
+    replace_section workflow-e2e "$work/e2e.md"
 fi
