@@ -8,6 +8,7 @@
 #include "harness.h"
 #include "matremap.h"
 
+
 /* The radiance of a Lambertian sphere seen through image position (px, py) (in pixels from the top-left
  * corner), computed independently of src/render: the textbook quadratic a t^2 + b t + c = 0 for the camera
  * ray, then L = rho/pi * I * cos(theta_l) / d^2. Returns -1 where the ray misses the sphere. */
@@ -319,6 +320,826 @@ MR_TEST(two_lights_add_up) {
     mr_render_plan_free(pboth);
 }
 
+/* ---- environment lights ------------------------------------------------------------------------------------ */
+
+#define TEST_PI 3.14159265358979323846
+
+/* A width x height map with `channels` channels, every value `value`. */
+static mr_image *constant_map(int width, int height, int channels, float value) {
+    mr_image *map = NULL;
+    MR_CHECK_OK(mr_image_create(width, height, channels, &map));
+    if (map == NULL) return NULL;
+    for (size_t i = 0; i < mr_image_value_count(map); i++) map->pixels[i] = value;
+    return map;
+}
+
+static int same_pixels(const mr_image *a, const mr_image *b) {
+    return a != NULL && b != NULL && a->width == b->width && a->height == b->height && a->channels == b->channels &&
+           memcmp(a->pixels, b->pixels, mr_image_value_count(a) * sizeof(float)) == 0;
+}
+
+/* The direction of map position (u, v) turned by `degrees` about +y, from render.h's header comment alone:
+ * theta = pi v, phi = 2 pi (u - 0.5), w = (sin theta sin phi, cos theta, -sin theta cos phi), then the
+ * right-handed rotation about +y (+z goes to +x for 90 degrees). */
+static void map_direction(double u, double v, double degrees, double w[3]) {
+    double theta = TEST_PI * v, phi = 2.0 * TEST_PI * (u - 0.5), a = degrees * TEST_PI / 180.0;
+    double x = sin(theta) * sin(phi), y = cos(theta), z = -sin(theta) * cos(phi);
+    w[0] = x * cos(a) + z * sin(a);
+    w[1] = y;
+    w[2] = -x * sin(a) + z * cos(a);
+}
+
+/* The fit scene's camera and sphere with the point light replaced by one environment light. */
+static mr_scene env_scene(int size, const mr_image *map, double rotation, int samples) {
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){size, MR_FIT_LIGHT_45, 0});
+    scene.lights[0] = mr_light_environment(map, 1.0, rotation, samples);
+    return scene;
+}
+
+static mr_render_plan *env_plan(int size, const mr_image *map, double rotation, int samples) {
+    mr_scene scene = env_scene(size, map, rotation, samples);
+    mr_render_plan *plan = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    return plan;
+}
+
+/* World normal and unit direction towards the camera of the point seen through image position (px, py), with
+ * the textbook ray-sphere quadratic (as lambert_reference). Returns 0 on a miss. */
+static int pixel_geometry(const mr_scene *s, double px, double py, double n[3], double view[3]) {
+    const double *eye = s->camera.position;
+    double tan_half = tan(s->camera.fov_y_degrees * TEST_PI / 360.0);
+    double dir[3] = {(2.0 * px / s->width - 1.0) * tan_half, (1.0 - 2.0 * py / s->height) * tan_half, -1.0};
+    double len = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    for (int k = 0; k < 3; k++) dir[k] /= len;
+    double b = eye[0] * dir[0] + eye[1] * dir[1] + eye[2] * dir[2];
+    double c = eye[0] * eye[0] + eye[1] * eye[1] + eye[2] * eye[2] - 1.0;
+    if (b * b - c < 0.0) return 0;
+    double t = -b - sqrt(b * b - c);
+    for (int k = 0; k < 3; k++) {
+        n[k] = eye[k] + t * dir[k];
+        view[k] = -dir[k];
+    }
+    return 1;
+}
+
+/* Whether pixel (x, y) lies inside the silhouette by the renderer's rule (all four corners see the sphere):
+ * then its value is that of the single ray through its centre, not a box filter of sub-pixel rays. */
+static int interior_pixel(const mr_scene *s, int x, int y) {
+    double n[3], view[3];
+    return pixel_geometry(s, x, y, n, view) && pixel_geometry(s, x + 1, y, n, view) &&
+           pixel_geometry(s, x, y + 1, n, view) && pixel_geometry(s, x + 1, y + 1, n, view);
+}
+
+/* The radiance the environment map reflects towards `view` at a point of normal n, by brute force over the
+ * map's texels, independent of the renderer's sampler: each texel (piecewise-constant radiance) is cut into
+ * sub x sub cells, each cell contributing f_r * L * cos * (its exact solid angle), f_r and cos taken at the
+ * cell's centre. The BRDF's frame is any orthonormal frame around n (isotropic models only). */
+static void env_brute_force(const mr_brdf_model *model, const double *values, const mr_image *map, double scale,
+                            double rotation, const double n[3], const double view[3], int sub, double out[3]) {
+    double t[3], b[3];
+    double helper[3] = {fabs(n[0]) < 0.9 ? 1.0 : 0.0, fabs(n[0]) < 0.9 ? 0.0 : 1.0, 0.0};
+    t[0] = helper[1] * n[2] - helper[2] * n[1];
+    t[1] = helper[2] * n[0] - helper[0] * n[2];
+    t[2] = helper[0] * n[1] - helper[1] * n[0];
+    double tl = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+    for (int k = 0; k < 3; k++) t[k] /= tl;
+    b[0] = n[1] * t[2] - n[2] * t[1];
+    b[1] = n[2] * t[0] - n[0] * t[2];
+    b[2] = n[0] * t[1] - n[1] * t[0];
+    double wo[3] = {t[0] * view[0] + t[1] * view[1] + t[2] * view[2], b[0] * view[0] + b[1] * view[1] +
+                    b[2] * view[2], n[0] * view[0] + n[1] * view[1] + n[2] * view[2]};
+    mr_brdf_state state;
+    model->prepare(model, values, state.bytes);
+    const int cols = map->width * sub, rows = map->height * sub;
+    double sum[3] = {0.0, 0.0, 0.0};
+    for (int r = 0; r < rows; r++) {
+        double solid = 2.0 * TEST_PI / cols * (cos(TEST_PI * r / rows) - cos(TEST_PI * (r + 1) / rows));
+        for (int q = 0; q < cols; q++) {
+            double w[3];
+            map_direction((q + 0.5) / cols, (r + 0.5) / rows, rotation, w);
+            double cos_n = n[0] * w[0] + n[1] * w[1] + n[2] * w[2];
+            if (cos_n <= 0.0) continue;
+            double wi[3] = {t[0] * w[0] + t[1] * w[1] + t[2] * w[2], b[0] * w[0] + b[1] * w[1] + b[2] * w[2],
+                            cos_n};
+            double fd[3], fs[3];
+            model->eval(state.bytes, wi, wo, fd, fs);
+            const float *px = mr_image_at(map, q / sub, r / sub);
+            for (int c = 0; c < 3; c++) sum[c] += (fd[c] + fs[c]) * px[map->channels == 1 ? 0 : c] * cos_n * solid;
+        }
+    }
+    for (int c = 0; c < 3; c++) out[c] = sum[c] * scale;
+}
+
+/* Largest error over every pixel that sees the sphere, relative to albedo * L, of a Lambert sphere under a
+ * constant environment L with background radiance `bg`: each hit reflects albedo * L, so a pixel holds
+ * coverage * albedo * L + (1 - coverage) * bg, silhouette pixels included. */
+static double constant_env_error(const mr_render_plan *plan, const mr_image *img, const double *albedo, double L,
+                                 double bg, int *covered) {
+    const mr_scene *s = mr_render_plan_scene(plan);
+    const float *coverage = mr_render_plan_coverage(plan);
+    double worst = 0.0;
+    *covered = 0;
+    for (int p = 0; p < s->width * s->height; p++) {
+        if (coverage[p] == 0.0f) continue;
+        (*covered)++;
+        for (int c = 0; c < 3; c++) {
+            double expected = coverage[p] * albedo[c] * L + (1.0 - coverage[p]) * bg;
+            worst = fmax(worst, fabs(img->pixels[(size_t)p * 3 + c] - expected) / (albedo[c] * L));
+        }
+    }
+    return worst;
+}
+
+MR_TEST(env_constant_map_lambert_known_answer) {
+    // A Lambertian sphere under a constant environment of radiance L reflects albedo * L everywhere: the
+    // estimator's error is then the pattern's alone. It must be small and shrink as N grows. Every pixel that
+    // sees the sphere is checked (64^2 image, silhouette pixels against their coverage, over a grey background).
+    // Limits: the measured worst relative errors (2.74e-2, 8.05e-3, 4.86e-4) with a 1.5x margin.
+    const int ns[] = {64, 256, 4096};
+    const double limits[] = {0.041, 0.012, 7.3e-4};
+    const mr_brdf_model *lambert = mr_brdf_find("lambert");
+    double albedo[3] = {0.25, 0.5, 0.75};
+    const double L = 2.5, bg = 0.1;
+    mr_image *map = constant_map(32, 16, 3, (float)L);
+    double previous = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        mr_scene scene = env_scene(64, map, 0.0, ns[k]);
+        scene.background[0] = scene.background[1] = scene.background[2] = bg;
+        mr_render_plan *plan = NULL;
+        MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+        if (plan == NULL) continue;
+        mr_image *img = NULL;
+        MR_CHECK_OK(mr_render(plan, lambert, albedo, MR_COMPONENT_FULL, &img));
+        int covered = 0;
+        double err = img != NULL ? constant_env_error(plan, img, albedo, L, bg, &covered) : INFINITY;
+        MR_CHECK(covered == mr_render_plan_object_pixel_count(plan) && covered > 2000);
+        MR_CHECK_MSG(err <= limits[k], "N %d: worst relative error %.3g > %.3g", ns[k], err, limits[k]);
+        MR_CHECK_MSG(err < previous, "N %d: error %.3g does not shrink (%.3g before)", ns[k], err, previous);
+        previous = err;
+        mr_image_free(img);
+        mr_render_plan_free(plan);
+    }
+    mr_image_free(map);
+}
+
+MR_TEST(env_map_channels_scale_and_sample_counts) {
+    // A grey map, the same map as RGB and as RGBA (alpha ignored, even NaN), and half the radiance at scale 2
+    // all light the sphere alike (to float rounding of the luminance weights); the plan keeps, per hit, the
+    // directions above its horizon: about N/2 for a constant map.
+    const int N = 1024;
+    mr_image *grey = constant_map(16, 8, 1, 0.0f), *rgb = constant_map(16, 8, 3, 0.0f);
+    mr_image *rgba = constant_map(16, 8, 4, 0.0f), *half = constant_map(16, 8, 3, 0.0f);
+    for (int j = 0; j < 8; j++)
+        for (int i = 0; i < 16; i++) {
+            float value = (float)(0.5 + 0.25 * ((i * 7 + j * 3) % 5)); // uneven, so the pattern has structure
+            mr_image_at(grey, i, j)[0] = value;
+            for (int c = 0; c < 3; c++) {
+                mr_image_at(rgb, i, j)[c] = mr_image_at(rgba, i, j)[c] = value;
+                mr_image_at(half, i, j)[c] = 0.5f * value;
+            }
+            mr_image_at(rgba, i, j)[3] = (i + j) % 2 ? NAN : -1.0f;
+        }
+    const mr_brdf_model *ggx = mr_brdf_find("ggx");
+    double values[7] = {0.2, 0.3, 0.3, 0.3, 0.4, 0.3, 0.2};
+    mr_image *img[4] = {NULL, NULL, NULL, NULL};
+    const mr_image *maps[4] = {grey, rgb, rgba, half};
+    for (int k = 0; k < 4; k++) {
+        mr_scene scene = env_scene(48, maps[k], 15.0, N);
+        for (int c = 0; c < 3; c++) scene.lights[0].intensity[c] = k == 3 ? 2.0 : 1.0;
+        scene.edge_samples = 1;
+        mr_render_plan *plan = NULL;
+        MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+        if (plan == NULL) continue;
+        double per_hit = (double)mr_render_plan_env_sample_count(plan) / mr_render_plan_lit_pixel_count(plan);
+        MR_CHECK_MSG(fabs(per_hit / N - 0.5) < 0.02, "map %d: %.1f directions per hit of %d", k, per_hit, N);
+        MR_CHECK(mr_render_plan_sample_count(plan) == mr_render_plan_env_sample_count(plan));
+        MR_CHECK(mr_render_plan_bytes(plan) > (size_t)mr_render_plan_env_sample_count(plan) * 2);
+        MR_CHECK_OK(mr_render(plan, ggx, values, MR_COMPONENT_FULL, &img[k]));
+        mr_render_plan_free(plan);
+    }
+    MR_CHECK(same_pixels(img[1], img[2]));
+    for (int k = 0; k < 4; k += 3) {
+        if (img[k] == NULL || img[1] == NULL) continue;
+        double worst = 0.0;
+        for (size_t i = 0; i < mr_image_value_count(img[1]); i++)
+            worst = fmax(worst, fabs(img[k]->pixels[i] - img[1]->pixels[i]) / (1e-3 + img[1]->pixels[i]));
+        MR_CHECK_MSG(worst < 1e-5, "map %d differs from the RGB map by %.3g", k, worst);
+    }
+    for (int k = 0; k < 4; k++) mr_image_free(img[k]);
+    mr_image_free(grey);
+    mr_image_free(rgb);
+    mr_image_free(rgba);
+    mr_image_free(half);
+}
+
+/* Map whose texel centres hold R = 1 + w.y, G = 1 + 0.8 w.x, B = 1.2 - w.z (w the texel centre's direction
+ * by render.h's convention): smooth, different in every channel and every axis. */
+static mr_image *linear_map(int width, int height) {
+    mr_image *map = NULL;
+    MR_CHECK_OK(mr_image_create(width, height, 3, &map));
+    if (map == NULL) return NULL;
+    for (int j = 0; j < height; j++)
+        for (int i = 0; i < width; i++) {
+            double w[3];
+            map_direction((i + 0.5) / width, (j + 0.5) / height, 0.0, w);
+            float *px = mr_image_at(map, i, j);
+            px[0] = (float)(1.0 + w[1]);
+            px[1] = (float)(1.0 + 0.8 * w[0]);
+            px[2] = (float)(1.2 - w[2]);
+        }
+    return map;
+}
+
+/* Map of dim grey 0.02 with one bright coloured patch of 4x3 texels (u 0.875-0.9375, v 0.31-0.41 on a 64x32
+ * map: above the camera's right shoulder, in front of the sphere). */
+static mr_image *patch_map(void) {
+    mr_image *map = constant_map(64, 32, 3, 0.02f);
+    if (map == NULL) return NULL;
+    for (int j = 10; j < 13; j++)
+        for (int i = 56; i < 60; i++) {
+            float *px = mr_image_at(map, i, j);
+            px[0] = 40.0f, px[1] = 30.0f, px[2] = 20.0f;
+        }
+    return map;
+}
+
+/* Pixels inside the silhouette of a 64^2 fit-scene image spread over the sphere: centre, the four sides, diagonals and
+ * two near the silhouette. */
+static const int probe_pixels[][2] = {{32, 32}, {18, 32}, {46, 32}, {32, 17}, {32, 47}, {22, 22},
+                                      {43, 42}, {24, 44}, {41, 21}, {9, 32}, {32, 55}};
+#define PROBE_COUNT ((int)(sizeof probe_pixels / sizeof probe_pixels[0]))
+
+/* Largest error of the renderer's probe pixels against env_brute_force, for one map, model and rotation at N
+ * samples, relative to max(reference, 5 % of the brightest reference value among the probes): relative where
+ * the sphere is bright, and without letting dark pixels (a few samples of a dim background) dominate. */
+static double env_probe_error(const mr_image *map, double rotation, int samples, const mr_brdf_model *model,
+                              const double *values) {
+    mr_render_plan *plan = env_plan(64, map, rotation, samples);
+    if (plan == NULL) return INFINITY;
+    const mr_scene *scene = mr_render_plan_scene(plan);
+    mr_image *img = NULL;
+    MR_CHECK_OK(mr_render(plan, model, values, MR_COMPONENT_FULL, &img));
+    double ref[PROBE_COUNT][3], peak = 0.0;
+    for (int k = 0; k < PROBE_COUNT; k++) {
+        int x = probe_pixels[k][0], y = probe_pixels[k][1];
+        MR_CHECK_MSG(interior_pixel(scene, x, y), "probe (%d, %d) is not inside the silhouette", x, y);
+        double n[3], view[3];
+        MR_CHECK(pixel_geometry(scene, x + 0.5, y + 0.5, n, view));
+        env_brute_force(model, values, map, 1.0, rotation, n, view, 8, ref[k]);
+        for (int c = 0; c < 3; c++) peak = fmax(peak, ref[k][c]);
+    }
+    double worst = img == NULL ? INFINITY : 0.0;
+    for (int k = 0; k < PROBE_COUNT && img != NULL; k++)
+        for (int c = 0; c < 3; c++) {
+            double r = mr_image_at(img, probe_pixels[k][0], probe_pixels[k][1])[c];
+            worst = fmax(worst, fabs(r - ref[k][c]) / fmax(ref[k][c], 0.05 * peak));
+        }
+    mr_image_free(img);
+    mr_render_plan_free(plan);
+    return worst;
+}
+
+MR_TEST(env_brute_force_matches_the_lambert_integral) {
+    // First the reference itself: for L(w) = a + b.w the Lambertian integral is exact,
+    // albedo/pi * E = albedo * (a + 2/3 b.n); the texel discretisation of a 64x32 map costs ~1e-3.
+    mr_image *map = linear_map(64, 32);
+    mr_scene scene = env_scene(64, map, 0.0, 0);
+    const mr_brdf_model *lambert = mr_brdf_find("lambert");
+    double albedo[3] = {0.5, 0.5, 0.5};
+    double worst = 0.0;
+    for (int k = 0; k < PROBE_COUNT; k++) {
+        double n[3], view[3], ref[3];
+        MR_CHECK(pixel_geometry(&scene, probe_pixels[k][0] + 0.5, probe_pixels[k][1] + 0.5, n, view));
+        env_brute_force(lambert, albedo, map, 1.0, 0.0, n, view, 8, ref);
+        double exact[3] = {0.5 * (1.0 + 2.0 / 3.0 * n[1]), 0.5 * (1.0 + 0.8 * 2.0 / 3.0 * n[0]),
+                           0.5 * (1.2 - 2.0 / 3.0 * n[2])};
+        for (int c = 0; c < 3; c++) worst = fmax(worst, fabs(ref[c] - exact[c]) / exact[c]);
+    }
+    MR_CHECK_MSG(worst < 2e-3, "brute force vs analytic Lambert integral: %.3g", worst);
+    mr_image_free(map);
+}
+
+MR_TEST(env_render_matches_brute_force_integral) {
+    // The renderer against the sampler-independent integral at the default N and at N = 4096, for a smooth map
+    // and a map lit by one small bright patch, for Lambert and for a glossy GGX (alpha 0.3, f0 0.5, no diffuse).
+    // The patch takes most of the pattern's directions, so the dim rest of the map (all that lights the probes
+    // facing away from the patch) is sampled coarsely: the error measure caps its weight (env_probe_error).
+    const mr_brdf_model *lambert = mr_brdf_find("lambert"), *ggx = mr_brdf_find("ggx");
+    double albedo[3] = {0.6, 0.6, 0.6};
+    double glossy[7] = {0.3, 0.5, 0.5, 0.5, 0.0, 0.0, 0.0}; // alpha, f0, diffuse
+    mr_image *smooth = linear_map(64, 32), *patch = patch_map();
+    const struct {
+        const char *what;
+        const mr_image *map;
+        const mr_brdf_model *model;
+        const double *values;
+        double limit_default, limit_4096; // measured worst errors x 1.5
+    } cases[] = {
+        {"smooth map, lambert", smooth, lambert, albedo, 0.016, 1.5e-3},      // 1.03e-2, 9.5e-4
+        {"smooth map, ggx alpha 0.3", smooth, ggx, glossy, 0.07, 2.5e-3},     // 4.64e-2, 1.66e-3
+        {"patch map, lambert", patch, lambert, albedo, 0.053, 8e-4},          // 3.52e-2, 5.2e-4
+        {"patch map, ggx alpha 0.3", patch, ggx, glossy, 0.16, 3e-3},         // 0.104, 1.98e-3
+    };
+    for (int k = 0; k < (int)(sizeof cases / sizeof cases[0]); k++) {
+        double err = env_probe_error(cases[k].map, 0.0, 0, cases[k].model, cases[k].values);
+        MR_CHECK_MSG(err <= cases[k].limit_default, "%s, default N: worst relative error %.3g > %.3g", cases[k].what,
+                     err, cases[k].limit_default);
+        double err_4096 = env_probe_error(cases[k].map, 0.0, 4096, cases[k].model, cases[k].values);
+        MR_CHECK_MSG(err_4096 <= cases[k].limit_4096 && err_4096 < err, "%s, N 4096: worst relative error %.3g > "
+                     "%.3g (default N: %.3g)", cases[k].what, err_4096, cases[k].limit_4096, err);
+    }
+    mr_image_free(smooth);
+    mr_image_free(patch);
+}
+
+/* Map of 64x32 black texels but a bright 2x2 patch straddling the seam at the horizon: u = 0 = 1, v = 0.5,
+ * i.e. direction +z (behind the camera) before rotation. */
+static mr_image *seam_patch_map(void) {
+    mr_image *map = constant_map(64, 32, 3, 0.0f);
+    if (map == NULL) return NULL;
+    const int columns[2] = {0, 63};
+    for (int j = 15; j < 17; j++)
+        for (int k = 0; k < 2; k++) {
+            float *px = mr_image_at(map, columns[k], j);
+            px[0] = px[1] = px[2] = 100.0f;
+        }
+    return map;
+}
+
+/* Luminance-weighted mean column of an image: where its light is, left (small) to right. */
+static double brightness_centroid_x(const mr_image *img) {
+    double sum = 0.0, weighted = 0.0;
+    for (int y = 0; y < img->height; y++)
+        for (int x = 0; x < img->width; x++) {
+            const float *px = mr_image_at(img, x, y);
+            double lum = px[0] + px[1] + px[2];
+            sum += lum;
+            weighted += lum * (x + 0.5);
+        }
+    return sum > 0.0 ? weighted / sum : -1.0;
+}
+
+static mr_image *render_env(const mr_image *map, double rotation, int samples, const mr_brdf_model *model,
+                            const double *values) {
+    mr_render_plan *plan = env_plan(64, map, rotation, samples);
+    mr_image *img = NULL;
+    if (plan != NULL) MR_CHECK_OK(mr_render(plan, model, values, MR_COMPONENT_FULL, &img));
+    mr_render_plan_free(plan);
+    return img;
+}
+
+MR_TEST(env_rotation_by_whole_turns_is_the_identity) {
+    const mr_brdf_model *ggx = mr_brdf_find("ggx");
+    double values[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(ggx, values);
+    values[4] = values[5] = values[6] = 0.3; // some diffuse as well
+    mr_image *map = patch_map();
+    mr_image *zero = render_env(map, 0.0, 0, ggx, values);
+    const double turns[] = {360.0, -360.0, 720.0, 3600.0};
+    for (int k = 0; k < 4; k++) {
+        mr_image *img = render_env(map, turns[k], 0, ggx, values);
+        MR_CHECK_MSG(same_pixels(zero, img), "rotation %g differs from 0", turns[k]);
+        mr_image_free(img);
+    }
+    // A non-trivial rotation does change the image (the patch is not on the axis).
+    mr_image *quarter = render_env(map, 90.0, 0, ggx, values);
+    MR_CHECK(!same_pixels(zero, quarter));
+    mr_image_free(quarter);
+    mr_image_free(zero);
+    mr_image_free(map);
+}
+
+MR_TEST(env_constant_map_is_rotation_invariant) {
+    // The pattern turns with the map, so the images differ by the pattern's error only: at most twice the
+    // known-answer bound at the default N (1.2 % of albedo * L), as both images carry it.
+    const mr_brdf_model *lambert = mr_brdf_find("lambert");
+    double albedo[3] = {0.5, 0.5, 0.5};
+    mr_image *map = constant_map(32, 16, 1, 1.0f);
+    mr_image *zero = render_env(map, 0.0, 0, lambert, albedo);
+    const double angles[] = {37.0, 90.0, -123.0};
+    for (int k = 0; k < 3 && zero != NULL; k++) {
+        mr_image *img = render_env(map, angles[k], 0, lambert, albedo);
+        if (img == NULL) continue;
+        double worst = 0.0;
+        for (size_t i = 0; i < mr_image_value_count(img); i++)
+            worst = fmax(worst, fabs(img->pixels[i] - zero->pixels[i]));
+        MR_CHECK_MSG(worst <= 2.0 * 0.012 * 0.5, "rotation %g: difference %.3g", angles[k], worst); // measured 4.1e-3
+        mr_image_free(img);
+    }
+    mr_image_free(zero);
+    mr_image_free(map);
+}
+
+MR_TEST(env_rotation_moves_light_from_plus_z_to_plus_x) {
+    // render.h: a rotation of +90 degrees takes what lay at +z (behind the camera: the sphere's front is lit)
+    // towards +x (the camera's right: the right half is lit); -90 towards -x.
+    const mr_brdf_model *lambert = mr_brdf_find("lambert");
+    double albedo[3] = {0.5, 0.5, 0.5};
+    mr_image *map = seam_patch_map();
+    mr_image *front = render_env(map, 0.0, 0, lambert, albedo);
+    mr_image *right = render_env(map, 90.0, 0, lambert, albedo);
+    mr_image *left = render_env(map, -90.0, 0, lambert, albedo);
+    if (front != NULL && right != NULL && left != NULL) {
+        double cf = brightness_centroid_x(front), cr = brightness_centroid_x(right), cl = brightness_centroid_x(left);
+        MR_CHECK_MSG(fabs(cf - 32.0) < 1.0, "unrotated: light centroid at column %.2f, expected the centre", cf);
+        MR_CHECK_MSG(cr > 40.0, "+90 degrees: light centroid at column %.2f, expected the right (+x)", cr);
+        MR_CHECK_MSG(cl < 24.0, "-90 degrees: light centroid at column %.2f, expected the left (-x)", cl);
+        MR_CHECK_NEAR(cr - 32.0, 32.0 - cl, 0.05);
+        // At +90 the sphere's left limb (normal -x) faces away from the light: black.
+        MR_CHECK(mr_image_at(right, 9, 32)[1] == 0.0f && mr_image_at(right, 54, 32)[1] > 0.0f);
+    }
+    // The same rotations against the brute-force integral of the documented direction and rotation formulas,
+    // also for an angle that is not a quarter turn (a wrong sign or axis gives errors of order 1).
+    double err_right = env_probe_error(map, 90.0, 4096, lambert, albedo);
+    double err_odd = env_probe_error(map, -37.0, 4096, lambert, albedo);
+    // Limit 6e-3: the measured 2.1e-3 (+90), 3.5e-5 (-37) and 4.1e-3 (glossy, -60) with margin.
+    MR_CHECK_MSG(err_right < 6e-3 && err_odd < 6e-3,
+                 "rotated patch vs brute force: %.3g (+90), %.3g (-37)", err_right, err_odd);
+    mr_image *patch = patch_map();
+    const mr_brdf_model *ggx = mr_brdf_find("ggx");
+    double glossy[7] = {0.3, 0.5, 0.5, 0.5, 0.0, 0.0, 0.0};
+    double err_glossy = env_probe_error(patch, -60.0, 4096, ggx, glossy);
+    MR_CHECK_MSG(err_glossy < 6e-3, "patch map at -60 degrees, ggx: %.3g", err_glossy);
+
+    mr_image_free(patch);
+    mr_image_free(front);
+    mr_image_free(right);
+    mr_image_free(left);
+    mr_image_free(map);
+}
+
+MR_TEST(env_renders_are_identical_for_one_and_two_threads) {
+    // Plan creation and render, environment + point light, a textured parameter: byte-identical for 1 and 2
+    // OpenMP threads.
+    mr_image *map = patch_map(), *alpha_map = linear_map(16, 8);
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){96, MR_FIT_LIGHT_45, 0});
+    scene.light_count = 2;
+    scene.lights[1] = mr_light_environment(map, 0.5, 30.0, 1024);
+    const mr_brdf_model *ggx = mr_brdf_find("ggx");
+    double values[7] = {0.2, 0.04, 0.04, 0.04, 0.3, 0.2, 0.1};
+    mr_param_textures textures = {0};
+    MR_CHECK_OK(mr_param_textures_set(&textures, ggx, "alpha", alpha_map, 2)); // B = 1.2 - w.z: 0.2 .. 2.2
+    int saved = omp_get_max_threads();
+    mr_image *img[2] = {NULL, NULL};
+    long samples[2] = {0, 0};
+    for (int t = 0; t < 2; t++) {
+        omp_set_num_threads(t + 1);
+        mr_render_plan *plan = NULL;
+        MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+        if (plan == NULL) continue;
+        samples[t] = mr_render_plan_sample_count(plan);
+        MR_CHECK_OK(mr_render_textured(plan, ggx, values, &textures, MR_COMPONENT_FULL, &img[t]));
+        mr_render_plan_free(plan);
+    }
+    omp_set_num_threads(saved);
+    MR_CHECK(samples[0] == samples[1] && samples[0] > 0);
+    MR_CHECK(same_pixels(img[0], img[1]));
+    mr_image_free(img[0]);
+    mr_image_free(img[1]);
+    mr_image_free(map);
+    mr_image_free(alpha_map);
+}
+
+MR_TEST(env_and_point_light_add_up) {
+    // An environment light beside the point light adds its own render; a black environment adds nothing.
+    mr_image *map = linear_map(32, 16), *black = constant_map(32, 16, 3, 0.0f);
+    mr_scene point = mr_scene_fit(&(mr_fit_scene_options){48, MR_FIT_LIGHT_45, 0});
+    mr_scene env = point, both = point, point_black = point;
+    env.lights[0] = mr_light_environment(map, 0.7, 10.0, 512);
+    both.light_count = 2;
+    both.lights[1] = env.lights[0];
+    point_black.light_count = 2;
+    point_black.lights[1] = mr_light_environment(black, 1.0, 0.0, 0);
+    const mr_brdf_model *ggx = mr_brdf_find("ggx");
+    double values[7] = {0.2, 0.5, 0.3, 0.1, 0.3, 0.2, 0.1};
+    mr_image *ip = NULL, *ie = NULL, *iboth = NULL, *iblack = NULL;
+    mr_render_plan *plan = NULL;
+    const mr_scene *scenes[4] = {&point, &env, &both, &point_black};
+    mr_image **outs[4] = {&ip, &ie, &iboth, &iblack};
+    for (int k = 0; k < 4; k++) {
+        plan = NULL;
+        MR_CHECK_OK(mr_render_plan_create(scenes[k], &plan));
+        if (plan != NULL) MR_CHECK_OK(mr_render(plan, ggx, values, MR_COMPONENT_FULL, outs[k]));
+        mr_render_plan_free(plan);
+    }
+    if (ip != NULL && ie != NULL && iboth != NULL) {
+        double worst = 0.0;
+        for (size_t i = 0; i < mr_image_value_count(ip); i++)
+            worst = fmax(worst, fabs((double)ip->pixels[i] + ie->pixels[i] - iboth->pixels[i]) /
+                                    (1e-3 + iboth->pixels[i]));
+        MR_CHECK_NEAR(worst, 0.0, 1e-6);
+    }
+    MR_CHECK(same_pixels(ip, iblack));
+    mr_image_free(ip);
+    mr_image_free(ie);
+    mr_image_free(iboth);
+    mr_image_free(iblack);
+    mr_image_free(map);
+    mr_image_free(black);
+}
+
+MR_TEST(env_black_map_renders_black) {
+    // No direction carries light: no pixel is lit, the image is the (black) background, finite everywhere, for
+    // every model; grey and RGBA maps too.
+    const int channels[3] = {1, 3, 4};
+    for (int k = 0; k < 3; k++) {
+        mr_image *black = constant_map(16, 8, channels[k], 0.0f);
+        mr_render_plan *plan = env_plan(32, black, 45.0, 0);
+        if (plan == NULL) {
+            mr_image_free(black);
+            continue;
+        }
+        MR_CHECK(mr_render_plan_lit_pixel_count(plan) == 0);
+        MR_CHECK(mr_render_plan_env_sample_count(plan) == 0);
+        MR_CHECK(mr_render_plan_object_pixel_count(plan) > 0);
+        const mr_brdf_model *const *models = mr_brdf_models();
+        for (int m = 0; models[m] != NULL; m++) {
+            double values[MR_BRDF_MAX_VALUES];
+            mr_brdf_default_values(models[m], values);
+            mr_image *img = NULL;
+            MR_CHECK_OK(mr_render(plan, models[m], values, MR_COMPONENT_FULL, &img));
+            int bad = img == NULL;
+            for (size_t i = 0; img != NULL && i < mr_image_value_count(img); i++) bad += img->pixels[i] != 0.0f;
+            MR_CHECK_MSG(bad == 0, "%s, %d-channel black map: %d non-black values", models[m]->name, channels[k], bad);
+            mr_image_free(img);
+        }
+        mr_render_plan_free(plan);
+        mr_image_free(black);
+    }
+}
+
+/* mr_render_plan_create must fail with MR_ERR_INVALID_ARG, a message containing `needle`, and no plan. */
+static void expect_invalid_scene(const mr_scene *scene, const char *needle, const char *what) {
+    mr_render_plan *plan = NULL;
+    mr_status status = mr_render_plan_create(scene, &plan);
+    MR_CHECK_MSG(status == MR_ERR_INVALID_ARG && plan == NULL, "%s: status %s", what, mr_status_str(status));
+    MR_CHECK_MSG(strstr(mr_last_error(), needle) != NULL, "%s: message '%s' lacks '%s'", what, mr_last_error(),
+                 needle);
+    mr_render_plan_free(plan);
+}
+
+MR_TEST(env_bad_inputs_are_rejected) {
+    mr_image *map = constant_map(8, 4, 3, 1.0f);
+    mr_image *bad = constant_map(8, 4, 3, 1.0f);
+    mr_scene scene = env_scene(16, map, 0.0, 0);
+    mr_scene s = scene;
+    s.lights[0].environment = NULL;
+    expect_invalid_scene(&s, "without a map", "NULL map");
+    mr_image_at(bad, 3, 2)[1] = NAN;
+    s = env_scene(16, bad, 0.0, 0);
+    expect_invalid_scene(&s, "(3, 2)", "NaN texel");
+    mr_image_at(bad, 3, 2)[1] = INFINITY;
+    expect_invalid_scene(&s, "(3, 2)", "infinite texel");
+    mr_image_at(bad, 3, 2)[1] = -0.5f;
+    expect_invalid_scene(&s, "-0.5", "negative texel");
+    mr_image_at(bad, 3, 2)[1] = 1.0f;
+    bad->channels = 2; // a 2-channel view of the buffer (mr_image_create makes none)
+    expect_invalid_scene(&s, "2 channels", "2-channel map");
+    bad->channels = 3;
+    s = scene;
+    s.lights[0].samples = -1;
+    expect_invalid_scene(&s, "-1 environment samples", "negative samples");
+    s.lights[0].samples = MR_ENV_MAX_SAMPLES + 1;
+    expect_invalid_scene(&s, "65537 environment samples", "samples over the maximum");
+    s = scene;
+    s.light_count = 3;
+    s.lights[0].samples = MR_ENV_MAX_SAMPLES / 2;
+    s.lights[1] = mr_light_environment(map, 1.0, 0.0, MR_ENV_MAX_SAMPLES / 2);
+    s.lights[2] = mr_light_environment(map, 1.0, 90.0, 0);
+    expect_invalid_scene(&s, "at most 65536", "total samples over the maximum");
+    s.light_count = 2; // exactly the maximum is fine
+    mr_render_plan *plan = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&s, &plan));
+    mr_render_plan_free(plan);
+    s = scene;
+    s.lights[0].rotation_degrees = NAN;
+    expect_invalid_scene(&s, "rotation", "NaN rotation");
+    s.lights[0].rotation_degrees = INFINITY;
+    expect_invalid_scene(&s, "rotation", "infinite rotation");
+    s = scene;
+    s.lights[0].intensity[2] = -1.0;
+    expect_invalid_scene(&s, "scale", "negative scale");
+    s.lights[0].intensity[2] = NAN;
+    expect_invalid_scene(&s, "scale", "NaN scale");
+    mr_image_free(map);
+    mr_image_free(bad);
+}
+
+/* ---- textured spheres ---------------------------------------------------------------------------------------- */
+
+MR_TEST(texture_constant_maps_render_like_values) {
+    // render.h: a map of one value renders bit-identically to that value in values[], under a point light and
+    // under an environment, including a grey map for an RGB parameter and a channel other than 0.
+    const mr_brdf_model *ggx = mr_brdf_find("ggx");
+    mr_image *env = linear_map(32, 16);
+    mr_scene point_scene = mr_scene_fit(&(mr_fit_scene_options){48, MR_FIT_LIGHT_45, 0});
+    mr_scene env_only = env_scene(48, env, 20.0, 512);
+    const mr_scene *scenes[2] = {&point_scene, &env_only};
+    double values[7] = {0.25, 0.5, 0.375, 0.125, 0.75, 0.5, 0.25};
+    mr_image *f0_grey = constant_map(8, 4, 1, 0.375f), *alpha_rgb = constant_map(8, 4, 4, 0.9f);
+    mr_image *diffuse_rgb = constant_map(5, 3, 3, 0.0f);
+    for (int p = 0; p < 45; p++) diffuse_rgb->pixels[p] = (float)values[4 + p % 3];
+    for (int p = 0; p < 32; p++) alpha_rgb->pixels[p * 4 + 2] = 0.25f; // alpha read from channel 2 (B)
+    double f0_grey_values[7] = {0.25, 0.375, 0.375, 0.375, 0.75, 0.5, 0.25};
+    for (int k = 0; k < 2; k++) {
+        mr_render_plan *plan = NULL;
+        MR_CHECK_OK(mr_render_plan_create(scenes[k], &plan));
+        if (plan == NULL) continue;
+        mr_image *plain = NULL, *grey_plain = NULL, *textured = NULL, *grey = NULL, *none = NULL, *null = NULL;
+        MR_CHECK_OK(mr_render(plan, ggx, values, MR_COMPONENT_FULL, &plain));
+        MR_CHECK_OK(mr_render(plan, ggx, f0_grey_values, MR_COMPONENT_FULL, &grey_plain));
+        mr_param_textures textures = {0};
+        MR_CHECK_OK(mr_render_textured(plan, ggx, values, &textures, MR_COMPONENT_FULL, &none));
+        MR_CHECK_OK(mr_render_textured(plan, ggx, values, NULL, MR_COMPONENT_FULL, &null));
+        MR_CHECK_OK(mr_param_textures_set(&textures, ggx, "alpha", alpha_rgb, 2));
+        MR_CHECK_OK(mr_param_textures_set(&textures, ggx, "diffuse", diffuse_rgb, 0));
+        double junk[7] = {0.9, 0.5, 0.375, 0.125, 0.1, 0.1, 0.1}; // mapped slots are ignored
+        MR_CHECK_OK(mr_render_textured(plan, ggx, junk, &textures, MR_COMPONENT_FULL, &textured));
+        MR_CHECK_OK(mr_param_textures_set(&textures, ggx, "f0", f0_grey, 0));
+        MR_CHECK_OK(mr_render_textured(plan, ggx, junk, &textures, MR_COMPONENT_FULL, &grey));
+        const char *what = k == 0 ? "point light" : "environment";
+        MR_CHECK_MSG(same_pixels(plain, none) && same_pixels(plain, null), "%s: empty textures differ", what);
+        MR_CHECK_MSG(same_pixels(plain, textured), "%s: constant alpha (channel 2) and diffuse maps differ", what);
+        MR_CHECK_MSG(same_pixels(grey_plain, grey), "%s: a grey f0 map differs from f0 = 0.375", what);
+        mr_image_free(plain);
+        mr_image_free(grey_plain);
+        mr_image_free(textured);
+        mr_image_free(grey);
+        mr_image_free(none);
+        mr_image_free(null);
+        mr_render_plan_free(plan);
+    }
+    mr_image_free(env);
+    mr_image_free(f0_grey);
+    mr_image_free(alpha_rgb);
+    mr_image_free(diffuse_rgb);
+}
+
+MR_TEST(texture_coordinates_follow_the_documented_layout) {
+    // Albedo map R = u, G = v at texel centres (ramps, which bilinear filtering reproduces exactly away from the
+    // wrap), B = 0.5: every pixel inside the silhouette (box-filtered edge pixels aside) of a frontally lit Lambert
+    // sphere must then show rho/pi * I * cos / d^2 with rho = (u, v, 0.5) at its centre, by the documented mapping
+    // u = 0.5 + atan2(n.x, n.z) / 2 pi, v = acos(n.y) / pi. So u grows to the right (+x), u = 0.5 faces the
+    // camera, v = 0 is up.
+    const int W = 64, H = 32;
+    mr_image *map = constant_map(W, H, 3, 0.5f);
+    for (int j = 0; j < H; j++)
+        for (int i = 0; i < W; i++) {
+            mr_image_at(map, i, j)[0] = (float)((i + 0.5) / W);
+            mr_image_at(map, i, j)[1] = (float)((j + 0.5) / H);
+        }
+    mr_render_plan *plan = fit_plan(64, MR_FIT_LIGHT_FRONTAL);
+    const mr_scene *scene = mr_render_plan_scene(plan);
+    const mr_brdf_model *lambert = mr_brdf_find("lambert");
+    double values[3] = {0.1, 0.1, 0.1};
+    mr_param_textures textures = {0};
+    MR_CHECK_OK(mr_param_textures_set(&textures, lambert, "albedo", map, 0));
+    mr_image *img = NULL;
+    MR_CHECK_OK(mr_render_textured(plan, lambert, values, &textures, MR_COMPONENT_FULL, &img));
+    int checked = 0, bad = 0, left = 0, right = 0;
+    double worst = 0.0;
+    for (int y = 0; y < 64 && img != NULL; y++)
+        for (int x = 0; x < 64; x++) {
+            if (!interior_pixel(scene, x, y)) continue;
+            double n[3], view[3];
+            if (!pixel_geometry(scene, x + 0.5, y + 0.5, n, view)) continue;
+            double u = 0.5 + atan2(n[0], n[2]) / (2.0 * TEST_PI), v = acos(n[1]) / TEST_PI;
+            double rho[3] = {u, v, 0.5};
+            for (int c = 0; c < 3; c++) {
+                double expected = lambert_reference(scene, x + 0.5, y + 0.5, rho[c]);
+                double err = fabs(mr_image_at(img, x, y)[c] - expected);
+                worst = fmax(worst, err / expected);
+                bad += err > 1e-6 + 1e-5 * expected;
+            }
+            checked++;
+            left += x < 32 && u < 0.5;
+            right += x >= 32 && u > 0.5;
+        }
+    MR_CHECK(checked > 1500 && left + right == checked);
+    MR_CHECK_MSG(bad == 0, "%d channel values differ from the (u, v) ramps (worst relative %.3g)", bad, worst);
+    // The image's centre shows u = 0.5 (the map's middle column) and v = 0.5 (the equator).
+    if (img != NULL) {
+        double centre = lambert_reference(scene, 32.0, 32.0, 1.0);
+        MR_CHECK_NEAR((mr_image_at(img, 31, 31)[0] + mr_image_at(img, 32, 32)[0]) / 2.0 / centre, 0.5, 0.01);
+    }
+    mr_image_free(img);
+    mr_image_free(map);
+    mr_render_plan_free(plan);
+}
+
+MR_TEST(texture_halves_land_on_their_sides) {
+    // A map whose left half (u < 0.5) holds 0.2 and right half 0.8 paints the sphere's left half (image left)
+    // 0.2 and its right half 0.8, away from the seam's bilinear blend; same for a top/bottom split in v.
+    mr_image *lr = constant_map(16, 8, 1, 0.2f), *tb = constant_map(16, 8, 1, 0.2f);
+    for (int j = 0; j < 8; j++)
+        for (int i = 0; i < 16; i++) {
+            if (i >= 8) mr_image_at(lr, i, j)[0] = 0.8f;
+            if (j >= 4) mr_image_at(tb, i, j)[0] = 0.8f;
+        }
+    mr_render_plan *plan = fit_plan(64, MR_FIT_LIGHT_FRONTAL);
+    const mr_scene *scene = mr_render_plan_scene(plan);
+    const mr_brdf_model *lambert = mr_brdf_find("lambert");
+    double values[3] = {0.5, 0.5, 0.5};
+    mr_param_textures textures = {0};
+    MR_CHECK_OK(mr_param_textures_set(&textures, lambert, "albedo", lr, 0));
+    mr_image *img_lr = NULL, *img_tb = NULL;
+    MR_CHECK_OK(mr_render_textured(plan, lambert, values, &textures, MR_COMPONENT_FULL, &img_lr));
+    MR_CHECK_OK(mr_param_textures_set(&textures, lambert, "albedo", tb, 0));
+    MR_CHECK_OK(mr_render_textured(plan, lambert, values, &textures, MR_COMPONENT_FULL, &img_tb));
+    // Pixels 10 columns (rows) from the centre: u (v) about 0.5 -/+ 0.07, well past the blend of +-1/16.
+    const int probes[4][2] = {{22, 32}, {42, 32}, {32, 22}, {32, 42}};
+    const double expected_rho[4] = {0.2, 0.8, 0.2, 0.8};
+    for (int k = 0; k < 4 && img_lr != NULL && img_tb != NULL; k++) {
+        const mr_image *img = k < 2 ? img_lr : img_tb;
+        int x = probes[k][0], y = probes[k][1];
+        double expected = lambert_reference(scene, x + 0.5, y + 0.5, expected_rho[k]);
+        MR_CHECK_MSG(fabs(mr_image_at(img, x, y)[1] - expected) < 1e-5 * expected, "pixel (%d, %d): %.6g, "
+                     "expected albedo %.1f: %.6g", x, y, mr_image_at(img, x, y)[1], expected_rho[k], expected);
+    }
+    mr_image_free(img_lr);
+    mr_image_free(img_tb);
+    mr_image_free(lr);
+    mr_image_free(tb);
+    mr_render_plan_free(plan);
+}
+
+MR_TEST(texture_bad_inputs_are_rejected) {
+    const mr_brdf_model *ward = mr_brdf_find("ward"), *ggx = mr_brdf_find("ggx");
+    mr_image *rgb = constant_map(4, 4, 3, 0.5f), *grey = constant_map(4, 4, 1, 0.5f);
+    mr_param_textures textures = {0};
+    MR_CHECK(mr_param_textures_set(&textures, ward, "trim", grey, 0) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "trim") != NULL && strstr(mr_last_error(), "switch") != NULL);
+    MR_CHECK(mr_param_textures_set(&textures, ggx, "roughness", grey, 0) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "roughness") != NULL && strstr(mr_last_error(), "alpha") != NULL);
+    MR_CHECK(mr_param_textures_set(&textures, ggx, "alpha", rgb, 3) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "channel 3") != NULL);
+    MR_CHECK(mr_param_textures_set(&textures, ggx, "alpha", rgb, -1) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_param_textures_set(&textures, ggx, "alpha", grey, 1) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_param_textures_set(&textures, ggx, "f0", rgb, 1) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "f0") != NULL);
+    rgb->channels = 2;
+    MR_CHECK(mr_param_textures_set(&textures, ggx, "alpha", rgb, 0) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "2 channels") != NULL);
+    rgb->channels = 3;
+    MR_CHECK(mr_param_textures_set(NULL, ggx, "alpha", rgb, 0) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_param_textures_set(&textures, ggx, NULL, rgb, 0) == MR_ERR_INVALID_ARG);
+    // Failed calls left the textures empty.
+    for (int p = 0; p < MR_BRDF_MAX_VALUES; p++) MR_CHECK(textures.maps[p] == NULL && textures.channel[p] == 0);
+    // A textures struct filled by hand is checked by the render as well, and nothing is written.
+    mr_render_plan *plan = fit_plan(16, MR_FIT_LIGHT_45);
+    double values[7] = {0.2, 0.04, 0.04, 0.04, 0.5, 0.5, 0.5};
+    mr_image *img = NULL;
+    textures.maps[0] = rgb;
+    textures.channel[0] = 5;
+    MR_CHECK(mr_render_textured(plan, ggx, values, &textures, MR_COMPONENT_FULL, &img) == MR_ERR_INVALID_ARG);
+    MR_CHECK(img == NULL && strstr(mr_last_error(), "channel 5") != NULL);
+    textures.channel[0] = 0;
+    textures.maps[1] = rgb;
+    textures.channel[1] = 1;
+    MR_CHECK(mr_render_textured(plan, ggx, values, &textures, MR_COMPONENT_FULL, &img) == MR_ERR_INVALID_ARG);
+    MR_CHECK(img == NULL);
+    // Setting NULL clears a map.
+    MR_CHECK_OK(mr_param_textures_set(&textures, ggx, "f0", NULL, 0));
+    MR_CHECK(textures.maps[1] == NULL);
+    MR_CHECK_OK(mr_render_textured(plan, ggx, values, &textures, MR_COMPONENT_FULL, &img));
+    mr_image_free(img);
+    mr_render_plan_free(plan);
+    mr_image_free(rgb);
+    mr_image_free(grey);
+}
+
+MR_TEST(texture_non_finite_texels_render_finite) {
+    // Design principle 6: a NaN or infinite texel is clamped by prepare() like any value; no NaN leaves.
+    const mr_brdf_model *ggx = mr_brdf_find("ggx");
+    mr_image *alpha = constant_map(8, 4, 1, 0.3f), *f0 = constant_map(8, 4, 3, 0.5f);
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 8; i++) {
+            mr_image_at(alpha, i, j)[0] = (i + j) % 2 ? NAN : INFINITY;
+            mr_image_at(f0, i, j)[1] = (i + j) % 2 ? -INFINITY : NAN;
+        }
+    mr_image *env = linear_map(16, 8);
+    mr_scene scene = env_scene(32, env, 0.0, 128);
+    scene.light_count = 2;
+    scene.lights[1] = mr_scene_fit(NULL).lights[0];
+    mr_render_plan *plan = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    mr_param_textures textures = {0};
+    MR_CHECK_OK(mr_param_textures_set(&textures, ggx, "alpha", alpha, 0));
+    MR_CHECK_OK(mr_param_textures_set(&textures, ggx, "f0", f0, 0));
+    double values[7] = {0.2, 0.04, 0.04, 0.04, 0.5, 0.5, 0.5};
+    mr_image *img = NULL;
+    if (plan != NULL) MR_CHECK_OK(mr_render_textured(plan, ggx, values, &textures, MR_COMPONENT_FULL, &img));
+    int bad = img == NULL;
+    for (size_t i = 0; img != NULL && i < mr_image_value_count(img); i++)
+        bad += !(isfinite(img->pixels[i]) && img->pixels[i] >= 0.0f);
+    MR_CHECK_MSG(bad == 0, "%d non-finite or negative values", bad);
+    mr_image_free(img);
+    mr_render_plan_free(plan);
+    mr_image_free(alpha);
+    mr_image_free(f0);
+    mr_image_free(env);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
              MR_TEST_ENTRY(edge_filtering_measures_the_silhouette),
              MR_TEST_ENTRY(background_fills_the_uncovered_part_of_each_pixel),
@@ -329,4 +1150,20 @@ MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
              MR_TEST_ENTRY(renders_are_identical_for_any_thread_count_and_plan_reuse),
              MR_TEST_ENTRY(render_into_rejects_wrong_image_size),
              MR_TEST_ENTRY(invalid_scenes_are_rejected_with_the_field_named),
-             MR_TEST_ENTRY(two_lights_add_up))
+             MR_TEST_ENTRY(two_lights_add_up),
+             MR_TEST_ENTRY(env_constant_map_lambert_known_answer),
+             MR_TEST_ENTRY(env_map_channels_scale_and_sample_counts),
+             MR_TEST_ENTRY(env_brute_force_matches_the_lambert_integral),
+             MR_TEST_ENTRY(env_render_matches_brute_force_integral),
+             MR_TEST_ENTRY(env_rotation_by_whole_turns_is_the_identity),
+             MR_TEST_ENTRY(env_constant_map_is_rotation_invariant),
+             MR_TEST_ENTRY(env_rotation_moves_light_from_plus_z_to_plus_x),
+             MR_TEST_ENTRY(env_renders_are_identical_for_one_and_two_threads),
+             MR_TEST_ENTRY(env_and_point_light_add_up),
+             MR_TEST_ENTRY(env_black_map_renders_black),
+             MR_TEST_ENTRY(env_bad_inputs_are_rejected),
+             MR_TEST_ENTRY(texture_constant_maps_render_like_values),
+             MR_TEST_ENTRY(texture_coordinates_follow_the_documented_layout),
+             MR_TEST_ENTRY(texture_halves_land_on_their_sides),
+             MR_TEST_ENTRY(texture_bad_inputs_are_rejected),
+             MR_TEST_ENTRY(texture_non_finite_texels_render_finite))

@@ -50,7 +50,7 @@
  *     seen from outside: u = 0.5 + atan2(n.x, n.z) / (2 pi), v = acos(n.y) / pi. The texture's centre faces
  *     +z (the default camera), u grows to the right of the image (+x), v = 0 (the texture's top row) is the
  *     north pole (+y); the seam u = 0 = 1 is the meridian at -z, hidden from the default camera, which sees
- *     u in [0.25, 0.75].
+ *     the cap within 75.5 degrees of +z (u in [0.29, 0.71] along the equator).
  * Threads: mr_render parallelises over pixels with OpenMP; each pixel is summed in a fixed order, so output is
  * bit-identical for any thread count. A plan is immutable after creation and may be shared between threads.
  */
