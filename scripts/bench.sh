@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # make bench: prints benchmark figures and writes them into docs/performance.md (between the bench:render,
-# bench:metrics, bench:remap and bench:workflow markers). Asserts nothing. Peers are measured in the same run: Blender Cycles
+# bench:metrics, bench:remap and bench:workflow markers) and docs/rendering.md (bench:envlight).
+# Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
 # Usage: scripts/bench.sh BUILD [--quick]
@@ -39,6 +40,14 @@ echo "== workflow conversion: methods, accuracy, MLP width (tests/bench_workflow
     echo
     "$root/$build/tests/bench_workflow" "$root/data/spec2metal.mlp" "$root/$build/dataset" $quick
 } | tee "$work/workflow.md"
+
+echo
+echo "== environment lights: error and cost against the pattern size N (tests/bench_envlight.c)"
+{
+    echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'))."
+    echo
+    "$root/$build/tests/bench_envlight" "${MR_SHARED:-$root/../shared}/assets/hdri" $quick
+} | tee "$work/envlight.md"
 
 {
     echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), matremap $("$bin" --version | cut -d' ' -f2)."
@@ -185,15 +194,16 @@ else
     echo "End-to-end conversion skipped: ../shared/assets was not found in this run." > "$e2e"
 fi
 
-# Replace the sections between the markers in docs/performance.md with this run's reports.
+# Replace the sections between the markers in docs/performance.md (or DOC) with this run's reports.
 perf="$root/docs/performance.md"
-replace_section() { # NAME REPORT
-    grep -q "<!-- bench:$1:begin -->" "$perf" || return 0
+replace_section() { # NAME REPORT [DOC]
+    local doc=${3:-$perf}
+    [ -f "$doc" ] && grep -q "<!-- bench:$1:begin -->" "$doc" || return 0
     awk -v report="$2" -v begin="<!-- bench:$1:begin -->" -v end="<!-- bench:$1:end -->" '
         $0 == begin { print; while ((getline line < report) > 0) print line; skip = 1; next }
         $0 == end { skip = 0 }
-        !skip { print }' "$perf" > "$perf.tmp" && mv "$perf.tmp" "$perf"
-    echo "docs/performance.md updated (section bench:$1)."
+        !skip { print }' "$doc" > "$doc.tmp" && mv "$doc.tmp" "$doc"
+    echo "${doc#"$root"/} updated (section bench:$1)."
 }
 if [ -f "$perf" ]; then
     echo
