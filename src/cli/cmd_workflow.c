@@ -9,8 +9,9 @@
  *   3. read the files (colour maps sRGB-decoded from 8/16-bit files, data maps linear: image_io.h) and check
  *      they all have one size (constants broadcast to it; all constants make a single texel);
  *   4. convert planar arrays in one batch call (per-texel flags);
- *   5. write the outputs (each atomically) and print one summary line (or JSON): size, method, the read,
- *      convert and write times, and how many texels carry each flag.
+ *   5. write the outputs (each atomically; when one fails, those already written are removed) and print one
+ *      summary line (or JSON): size, method, the read, convert and write times, and how many texels carry each
+ *      flag.
  */
 #include <errno.h>
 #include <limits.h>
@@ -224,6 +225,20 @@ static int same_file(const char *a, const char *b) {
     return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
 }
 
+/* 1 if a and b name one file, existing or still to be written: the same text, the same existing file, or the same
+ * name in the same existing directory ("./x_diffuse.png" and "x_diffuse.png" before either is written). */
+static int same_path(const char *a, const char *b) {
+    if (strcmp(a, b) == 0 || same_file(a, b)) return 1;
+    const char *name_a = strrchr(a, '/'), *name_b = strrchr(b, '/');
+    name_a = name_a ? name_a + 1 : a;
+    name_b = name_b ? name_b + 1 : b;
+    if (strcmp(name_a, name_b) != 0) return 0;
+    char dir_a[PATH_SIZE], dir_b[PATH_SIZE]; // "dir/" or "." for a bare name
+    snprintf(dir_a, sizeof dir_a, "%.*s", name_a > a ? (int)(name_a - a) : 1, name_a > a ? a : ".");
+    snprintf(dir_b, sizeof dir_b, "%.*s", name_b > b ? (int)(name_b - b) : 1, name_b > b ? b : ".");
+    return same_file(dir_a, dir_b);
+}
+
 /* Name the outputs PREFIX_<name>.EXT and check the options; refuse (usage error) an output that is an input, or
  * the flag map named like an output. */
 static int plan_outputs(const char *command, out_options *o, map_arg *const *maps, int map_count,
@@ -245,12 +260,12 @@ static int plan_outputs(const char *command, out_options *o, map_arg *const *map
         const char *path = k < count ? outputs[k].path : o->flags_path;
         if (path == NULL) continue;
         for (int m = 0; m < map_count; m++)
-            if (is_file(maps[m]) && (strcmp(path, maps[m]->text) == 0 || same_file(path, maps[m]->text)))
+            if (is_file(maps[m]) && same_path(path, maps[m]->text))
                 return cli_usage_error(command, "the output '%s' is the input %s '%s': inputs are never "
                                        "overwritten (choose another %s)", path, maps[m]->option, maps[m]->text,
                                        k < count ? "-o PREFIX" : "--flags FILE");
         for (int j = 0; k == count && j < count; j++)
-            if (strcmp(path, outputs[j].path) == 0 || same_file(path, outputs[j].path))
+            if (same_path(path, outputs[j].path))
                 return cli_usage_error(command, "--flags '%s' is also the output '%s'", path, outputs[j].path);
     }
     return CLI_EXIT_OK;
@@ -308,26 +323,36 @@ static mr_status flag_picture(int width, int height, const uint8_t *flags, mr_im
     return MR_OK;
 }
 
-/* Write the outputs and the flag map (if asked). Returns an exit code (messages printed). */
+/* Write the outputs and the flag map (if asked), all or none: when a write fails (the --flags directory does not
+ * exist, a directory is in an output's way), the outputs this call already wrote are removed again, so a failed
+ * run leaves no half set behind (a file one of them had replaced stays lost). Returns an exit code (messages
+ * printed). */
 static int write_outputs(const char *command, const out_options *o, output *outputs, int count, int width,
                          int height, const uint8_t *flags) {
-    for (int k = 0; k < count; k++) {
+    mr_status status = MR_OK;
+    int written = 0;
+    for (; written < count; written++) {
         mr_img_write_options wo = {0};
-        wo.encoding = outputs[k].encoding;
+        wo.encoding = outputs[written].encoding;
         wo.bits = o->bits;
-        mr_status status = mr_img_write(outputs[k].path, outputs[k].image, &wo);
-        if (status != MR_OK) return cli_fail(command, status);
+        status = mr_img_write(outputs[written].path, outputs[written].image, &wo);
+        if (status != MR_OK) break;
     }
-    if (o->flags_path != NULL) {
+    if (status == MR_OK && o->flags_path != NULL) {
         mr_image *picture = NULL;
         mr_img_write_options wo = {0};
         wo.encoding = MR_IMG_DATA; // the exact colours of flag_colours
-        mr_status status = flag_picture(width, height, flags, &picture);
+        status = flag_picture(width, height, flags, &picture);
         if (status == MR_OK) status = mr_img_write(o->flags_path, picture, &wo);
         mr_image_free(picture);
-        if (status != MR_OK) return cli_fail(command, status);
     }
-    return CLI_EXIT_OK;
+    if (status == MR_OK) return CLI_EXIT_OK;
+    int code = cli_fail(command, status);
+    for (int k = 0; k < written; k++) remove(outputs[k].path);
+    if (written > 0)
+        fprintf(stderr, "matremap %s: removed the %d output%s written before the failure\n", command, written,
+                written == 1 ? "" : "s");
+    return code;
 }
 
 /* ---- the summary ------------------------------------------------------------------------------------------- */
@@ -848,7 +873,8 @@ static void print_metal2spec_help(void) {
            "never overwritten.\n"
            "\n"
            "Examples:\n"
-           "  matremap metal2spec --basecolor Avocado_baseColor.png --metallic-roughness Avocado_roughnessMetallic.png\n"
+           "  matremap metal2spec --basecolor Avocado_baseColor.png "
+           "--metallic-roughness Avocado_roughnessMetallic.png\n"
            "                      -o avocado --pack\n"
            "  matremap metal2spec --basecolor b.exr --metallic 1 --roughness 0.3 -o gold --format exr\n"
            "  metal2spec --basecolor 0.9,0.6,0.2 --metallic 1 --roughness 0.3\n");
