@@ -8,7 +8,7 @@
 #   make analyses   the paper's stability analyses (docs/analyses.md)
 #   make dataset    the specular -> metallic training set (build/dataset); make train: data/spec2metal.mlp
 #   make deps       installs the Debian packages the project needs (scripts/install-deps.sh)
-#   make install PREFIX=/usr/local   tools, static library, public headers and matremap.pc
+#   make install PREFIX=/usr/local   tools, static library, public headers, matremap.pc and the network
 
 PREFIX   ?= /usr/local
 BUILD    ?= build
@@ -41,6 +41,11 @@ LIB_OBJ   := $(LIB_C_SRC:%.c=$(BUILD)/obj/%.o) $(LIB_CXX_SRC:%.cpp=$(BUILD)/obj/
 CLI_OBJ   := $(CLI_SRC:%.c=$(BUILD)/obj/%.o)
 LIB       := $(BUILD)/libmatremap.a
 TOOLS     := $(BUILD)/bin/matremap
+# spec2metal and metal2spec are matremap under another name (main.c dispatches on the program's name).
+TOOL_LINKS := $(BUILD)/bin/spec2metal $(BUILD)/bin/metal2spec
+# The network of `spec2metal --method mlp`, where cmd_workflow.c looks for it beside an installed tree
+# (PREFIX/bin -> PREFIX/share/matremap); the build tree gets a copy in the same place, so every BUILD finds it.
+NETWORK   := $(BUILD)/share/matremap/spec2metal.mlp
 TESTS     := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
 
@@ -51,7 +56,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h 
 .PHONY: all check asan demo bench analyses dataset train deps install clean
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
-all: $(LIB) $(TOOLS) $(MODULE)
+all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE)
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
@@ -94,6 +99,13 @@ $(BUILD)/bin/matremap: $(CLI_OBJ) $(LIB)
 	@mkdir -p $(dir $@)
 	$(LINK) $(LDFLAGS) $(CLI_OBJ) $(LIB) $(LDLIBS) -o $@
 
+$(TOOL_LINKS): $(BUILD)/bin/matremap
+	ln -sfn matremap $@
+
+$(NETWORK): data/spec2metal.mlp
+	@mkdir -p $(dir $@)
+	cp $< $@
+
 $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(LIB)
 	@mkdir -p $(dir $@)
 	$(LINK) $(LDFLAGS) $< $(LIB) $(LDLIBS) -o $@
@@ -133,6 +145,9 @@ deps:
 install: all
 	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/include/matremap
 	install -m 755 $(TOOLS) $(DESTDIR)$(PREFIX)/bin/
+	for l in $(notdir $(TOOL_LINKS)); do ln -sfn matremap $(DESTDIR)$(PREFIX)/bin/$$l; done
+	install -d $(DESTDIR)$(PREFIX)/share/matremap
+	install -m 644 data/spec2metal.mlp $(DESTDIR)$(PREFIX)/share/matremap/
 	install -m 644 $(LIB) $(DESTDIR)$(PREFIX)/lib/
 	install -d $(DESTDIR)$(MODULE_DIR)
 	install -m 755 $(MODULE) $(DESTDIR)$(MODULE_DIR)/
