@@ -76,7 +76,11 @@ static int record_epoch(const mr_mlp_epoch *epoch, void *user) {
 /* PREFIX.csv and, if gnuplot runs, PREFIX.svg. Returns 0 and prints why on failure of the CSV. */
 static int write_curve(const curve *c, const char *prefix, const char *title) {
     char path[4096];
-    snprintf(path, sizeof path, "%s.csv", prefix);
+    int length = snprintf(path, sizeof path, "%s.csv", prefix);
+    if (length < 0 || (size_t)length >= sizeof path) {
+        fprintf(stderr, "matremap train: error: --loss-curve '%s': the name is too long\n", prefix);
+        return 0;
+    }
     FILE *f = fopen(path, "w");
     if (f == NULL) {
         fprintf(stderr, "matremap train: error: cannot write '%s': %s\n", path, strerror(errno));
