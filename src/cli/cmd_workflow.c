@@ -97,14 +97,10 @@ static int set_map(const char *command, map_arg *m, const char *text) {
 
 static int is_file(const map_arg *m) { return m->text != NULL && !m->is_constant; }
 
-/* Read a map's file and check its channels. Returns an exit code (messages printed). */
-static int read_map(const char *command, map_arg *m) {
-    if (!is_file(m)) return CLI_EXIT_OK;
-    mr_img_read_options ro = {0};
-    ro.encoding = m->encoding;
-    mr_status status = mr_img_read(m->text, &ro, &m->image);
-    if (status != MR_OK) return cli_fail(command, status);
+/* Check a map's channels once its file is read. Returns an exit code (messages printed). */
+static int check_map(const char *command, const map_arg *m) {
     const mr_image *im = m->image;
+    if (im == NULL) return CLI_EXIT_OK;
     if (m->kind == MAP_PACKED && im->channels < m->min_channels) {
         fprintf(stderr, "matremap %s: error: %s '%s' has %s; expected %s\n", command, m->option, m->text,
                 im->channels == 1 ? "one channel" : "no alpha channel", m->layout);
@@ -127,11 +123,30 @@ static int read_map(const char *command, map_arg *m) {
     return CLI_EXIT_OK;
 }
 
-/* Read every map and check the files have one size; *width x *height is it (1 x 1 if all are constants). */
+/* Read every map and check the files have one size; *width x *height is it (1 x 1 if all are constants). The
+ * files are decoded in parallel (PNG decoding is a third of a 2048² conversion); the first failure in option order
+ * is the one reported. */
 static int read_maps(const char *command, map_arg *const *maps, int count, int *width, int *height) {
+    mr_status statuses[MAX_MAPS];
+    char messages[MAX_MAPS][1024]; // mr_last_error() is per thread
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int k = 0; k < count; k++) {
+        statuses[k] = MR_OK;
+        messages[k][0] = '\0';
+        if (!is_file(maps[k])) continue;
+        mr_img_read_options ro = {0};
+        ro.encoding = maps[k]->encoding;
+        statuses[k] = mr_img_read(maps[k]->text, &ro, &maps[k]->image);
+        if (statuses[k] != MR_OK) snprintf(messages[k], sizeof messages[k], "%s", mr_last_error());
+    }
     const map_arg *first = NULL;
     for (int k = 0; k < count; k++) {
-        int code = read_map(command, maps[k]);
+        if (statuses[k] != MR_OK) {
+            fprintf(stderr, "matremap %s: error: %s\n", command,
+                    messages[k][0] ? messages[k] : mr_status_str(statuses[k]));
+            return cli_exit_code(statuses[k]);
+        }
+        int code = check_map(command, maps[k]);
         if (code != CLI_EXIT_OK) return code;
         const mr_image *im = maps[k]->image;
         if (im == NULL) continue;
@@ -324,35 +339,55 @@ static mr_status flag_picture(int width, int height, const uint8_t *flags, mr_im
 }
 
 /* Write the outputs and the flag map (if asked), all or none: when a write fails (the --flags directory does not
- * exist, a directory is in an output's way), the outputs this call already wrote are removed again, so a failed
- * run leaves no half set behind (a file one of them had replaced stays lost). Returns an exit code (messages
- * printed). */
+ * exist, a directory is in an output's way), the outputs this call did write are removed again, so a failed run
+ * leaves no half set behind (a file one of them had replaced stays lost). The files are encoded in parallel
+ * (PNG compression is most of a 2048² conversion's time; image_io is thread-safe); the first failure in output
+ * order is the one reported. Returns an exit code (messages printed). */
 static int write_outputs(const char *command, const out_options *o, output *outputs, int count, int width,
                          int height, const uint8_t *flags) {
-    mr_status status = MR_OK;
-    int written = 0;
-    for (; written < count; written++) {
-        mr_img_write_options wo = {0};
-        wo.encoding = outputs[written].encoding;
-        wo.bits = o->bits;
-        status = mr_img_write(outputs[written].path, outputs[written].image, &wo);
-        if (status != MR_OK) break;
+    struct write_job {
+        const char *path;
+        const mr_image *image;
+        mr_img_encoding encoding;
+        mr_status status;
+        char message[1024]; /* mr_last_error() is per thread: kept for the report */
+    } jobs[MAX_OUTPUTS + 1];
+    int job_count = 0;
+    for (int k = 0; k < count; k++)
+        jobs[job_count++] = (struct write_job){outputs[k].path, outputs[k].image, outputs[k].encoding, MR_OK, ""};
+    mr_image *picture = NULL;
+    if (o->flags_path != NULL) {
+        mr_status status = flag_picture(width, height, flags, &picture);
+        if (status != MR_OK) return cli_fail(command, status);
+        // MR_IMG_DATA: the exact colours of flag_colours.
+        jobs[job_count++] = (struct write_job){o->flags_path, picture, MR_IMG_DATA, MR_OK, ""};
     }
-    if (status == MR_OK && o->flags_path != NULL) {
-        mr_image *picture = NULL;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int k = 0; k < job_count; k++) {
         mr_img_write_options wo = {0};
-        wo.encoding = MR_IMG_DATA; // the exact colours of flag_colours
-        status = flag_picture(width, height, flags, &picture);
-        if (status == MR_OK) status = mr_img_write(o->flags_path, picture, &wo);
-        mr_image_free(picture);
+        wo.encoding = jobs[k].encoding;
+        wo.bits = jobs[k].image == picture ? 0 : o->bits;
+        jobs[k].status = mr_img_write(jobs[k].path, jobs[k].image, &wo);
+        if (jobs[k].status != MR_OK) snprintf(jobs[k].message, sizeof jobs[k].message, "%s", mr_last_error());
     }
-    if (status == MR_OK) return CLI_EXIT_OK;
-    int code = cli_fail(command, status);
-    for (int k = 0; k < written; k++) remove(outputs[k].path);
+    mr_image_free(picture);
+    int first_failed = -1, written = 0;
+    for (int k = 0; k < job_count; k++) {
+        if (jobs[k].status == MR_OK)
+            written++;
+        else if (first_failed < 0)
+            first_failed = k;
+    }
+    if (first_failed < 0) return CLI_EXIT_OK;
+    const struct write_job *failure = &jobs[first_failed];
+    fprintf(stderr, "matremap %s: error: %s\n", command,
+            failure->message[0] ? failure->message : mr_status_str(failure->status));
+    for (int k = 0; k < job_count; k++)
+        if (jobs[k].status == MR_OK) remove(jobs[k].path);
     if (written > 0)
-        fprintf(stderr, "matremap %s: removed the %d output%s written before the failure\n", command, written,
+        fprintf(stderr, "matremap %s: removed the %d output%s written beside the failure\n", command, written,
                 written == 1 ? "" : "s");
-    return code;
+    return cli_exit_code(failure->status);
 }
 
 /* ---- the summary ------------------------------------------------------------------------------------------- */
@@ -365,6 +400,7 @@ typedef struct quantity {
 
 typedef struct summary {
     const char *command, *method, *weights;
+    const char *convention; /* "gltf" or "paper"; NULL where it does not apply (khronos) */
     double f0;           /* < 0: not applicable (mlp) */
     int off_manifold;    /* 0: the method does not compute the flag */
     int width, height;
@@ -390,6 +426,7 @@ static void print_summary(const summary *s, const out_options *o, const output *
                s->method);
         if (s->weights) printf(" (%s)", s->weights);
         if (s->f0 >= 0.0) printf(" (F0 %g)", s->f0);
+        if (s->convention) printf(", %s convention", s->convention);
         printf(": read %.3f s, convert %.3f s, write %.3f s; flagged: %zu clamped input, %zu non-finite input",
                s->seconds[0], s->seconds[1], s->seconds[2], clamped, nonfinite);
         if (strcmp(s->command, "spec2metal") == 0) { // metal -> spec is a closed formula: neither flag applies
@@ -398,6 +435,8 @@ static void print_summary(const summary *s, const out_options *o, const output *
             else
                 printf(", off-manifold not computed");
             printf(", %zu method failed", failed);
+        } else if (s->off_manifold) { // metal2spec, glTF convention: diffuse that spec-gloss cannot store
+            printf(", %zu off-manifold (spec-gloss diffuse above 1, clamped)", off);
         }
         printf("\n");
         if (n == 1) { // a single texel (constants): its values, in the name=value form of other commands
@@ -428,6 +467,11 @@ static void print_summary(const summary *s, const out_options *o, const output *
         printf(", \"f0\": %.17g", s->f0);
     else
         printf(", \"f0\": null");
+    printf(", \"convention\": ");
+    if (s->convention)
+        cli_json_string(stdout, s->convention);
+    else
+        printf("null");
     printf(", \"seconds\": {\"read\": %.6f, \"convert\": %.6f, \"write\": %.6f}", s->seconds[0], s->seconds[1],
            s->seconds[2]);
     printf(", \"flags\": {\"clamped_input\": %zu, \"nonfinite_input\": %zu, \"off_manifold\": ", clamped, nonfinite);
@@ -544,6 +588,27 @@ static int load_network(const char *command, const char *weights, mr_mlp **net, 
     return CLI_EXIT_OK;
 }
 
+/* ---- the diffuse convention (--convention) ------------------------------------------------------------------ */
+
+/* "gltf": the specular side's diffuse is glTF spec-gloss's, whose lobe is d (1 - max s) (the default: these are
+ * glTF maps); "paper": d is the Lambert lobe itself, Eq. 2 as printed (docs/workflow.md, "The spec-gloss diffuse
+ * convention"). Returns 0 after a usage error. */
+static int parse_convention(const char *command, const char *value, mr_wf_diffuse *out) {
+    if (strcmp(value, "gltf") == 0)
+        *out = MR_WF_DIFFUSE_SPECGLOSS;
+    else if (strcmp(value, "paper") == 0)
+        *out = MR_WF_DIFFUSE_PLAIN;
+    else
+        return cli_usage_error(command, "--convention '%s': expected gltf (the spec-gloss diffuse is dimmed by "
+                               "1 - max specular, as glTF renders it) or paper (the diffuse is the Lambert lobe)",
+                               value) == 0;
+    return 1;
+}
+
+static const char *convention_name(mr_wf_diffuse diffuse) {
+    return diffuse == MR_WF_DIFFUSE_SPECGLOSS ? "gltf" : "paper";
+}
+
 /* ---- options both commands share --------------------------------------------------------------------------- */
 
 /* Take one of the output options at argv[*i]. Returns 1 if taken, 0 if argv[*i] is something else, -1 after a
@@ -621,6 +686,9 @@ static void print_spec2metal_help(void) {
            "                    off-manifold when converting it back misses it by more than E, and an Eq. 3 root\n"
            "                    within E of F0 is ambiguous; 8-bit maps are rarely exact within 1e-6, and\n"
            "                    --eps 0.004 (one 8-bit step) flags only what quantisation cannot explain\n"
+           "  --convention C    how the diffuse map is read: gltf (default): as glTF renders spec-gloss, dimmed by\n"
+           "                    1 - max specular, so the result looks the same in a glTF renderer; paper: as the\n"
+           "                    Lambert lobe itself (Eq. 2 as printed, the `ggx` model). khronos has its own\n"
            "\n");
     printf("Output:\n"
            "  -o, --output PREFIX   PREFIX_basecolor.EXT (RGB, or RGBA with the diffuse's alpha), PREFIX_metallic.EXT\n"
@@ -657,6 +725,7 @@ int cmd_spec2metal(int argc, char **argv) {
     double f0 = MR_WF_F0_GLTF;
     double eps = MR_WF_DEFAULT_EPS;
     int f0_given = 0;
+    mr_wf_diffuse convention = MR_WF_DIFFUSE_SPECGLOSS;
     out_options o = {0};
 
     for (int i = 1; i < argc; i++) {
@@ -686,6 +755,8 @@ int cmd_spec2metal(int argc, char **argv) {
             f0_given = 1;
         } else if ((taken = cli_take_option(command, argc, argv, &i, "--eps", &value))) {
             if (taken < 0 || !cli_parse_double(command, "--eps", value, 0.0, 0.5, &eps)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option(command, argc, argv, &i, "--convention", &value))) {
+            if (taken < 0 || !parse_convention(command, value, &convention)) return CLI_EXIT_USAGE;
         } else if (argv[i][0] == '-') {
             return cli_usage_error(command, "unknown option '%s'", argv[i]);
         } else {
@@ -697,6 +768,7 @@ int cmd_spec2metal(int argc, char **argv) {
     mr_wf_options wf = mr_wf_options_default();
     wf.dielectric_f0 = f0;
     wf.eps = eps;
+    wf.spec_diffuse = convention;
     if (!use_mlp) {
         if (mr_wf_method_from_name(method_name, &wf.method) != MR_OK || wf.method == MR_WF_CUSTOM)
             return cli_usage_error(command, "--method '%s': unknown method (valid: mlp, weighted, mean, khronos)",
@@ -803,6 +875,7 @@ int cmd_spec2metal(int argc, char **argv) {
 
     if (code == CLI_EXIT_OK) {
         summary s = {command, use_mlp ? "mlp" : mr_wf_method_name(wf.method), use_mlp ? net_path : NULL,
+                     wf.method == MR_WF_KHRONOS && !use_mlp ? NULL : convention_name(wf.spec_diffuse),
                      use_mlp ? -1.0 : wf.dielectric_f0, !use_mlp, width, height,
                      {seconds[0], seconds[1], seconds[2]}, flags,
                      {{"basecolor", albedo, 3}, {"metallic", metallic, 1}, {"roughness", out_rough, 1}}};
@@ -853,6 +926,10 @@ static void print_metal2spec_help(void) {
            "                    (its diffuse is renormalised by (1 - max specular) / (1 - 0.04))\n"
            "  --f0 F            the dielectric F0 of eq2: 0.04 (default, glTF) or the paper's 0.03; khronos takes\n"
            "                    only 0.04\n"
+           "  --convention C    how the diffuse map is written: gltf (default): for glTF spec-gloss, which dims it\n"
+           "                    by 1 - max specular, so eq2's diffuse is divided by that (a texel needing more\n"
+           "                    than 1, e.g. a white dielectric, is clamped and flagged off-manifold); paper: Eq. 2's\n"
+           "                    diffuse as it is. khronos has its own\n"
            "\n");
     printf("Output:\n"
            "  -o, --output PREFIX   PREFIX_diffuse.EXT (RGB, or RGBA with the base colour's alpha),\n"
@@ -863,14 +940,15 @@ static void print_metal2spec_help(void) {
            "                        linear)\n"
            "  --format F            png, exr or tif (default: the first input file's, if one of these; else png)\n"
            "  --bits N              8 (default) or 16 for png and tif; 16 (half) or 32 (default) for exr\n"
-           "  --flags FILE          a picture of the flagged texels: black clean, blue clamped input, magenta\n"
-           "                        non-finite input\n"
+           "  --flags FILE          a picture of the flagged texels: black clean, magenta non-finite input, blue\n"
+           "                        clamped input, orange off-manifold\n"
            "  --json                the summary as JSON on stdout (with each output's minimum, mean and maximum)\n"
            "  --help                this text\n"
            "\n");
     printf("Prints one line: the size, the method, the read, convert and write times, and the texels flagged as\n"
-           "clamped input (a value outside [0, 1]) or non-finite input (NaN or infinity, from EXR). The inputs are\n"
-           "never overwritten.\n"
+           "clamped input (a value outside [0, 1]), non-finite input (NaN or infinity, from EXR) and, with the gltf\n"
+           "convention, off-manifold (a diffuse spec-gloss cannot store: clamped to 1). The inputs are never\n"
+           "overwritten.\n"
            "\n"
            "Examples:\n"
            "  matremap metal2spec --basecolor Avocado_baseColor.png "
@@ -888,6 +966,7 @@ int cmd_metal2spec(int argc, char **argv) {
     map_arg *all[] = {&basecolor, &metallic, &roughness, &packed};
     const char *method_name = "eq2";
     double f0 = MR_WF_F0_GLTF;
+    mr_wf_diffuse convention = MR_WF_DIFFUSE_SPECGLOSS;
     out_options o = {0};
 
     for (int i = 1; i < argc; i++) {
@@ -911,6 +990,8 @@ int cmd_metal2spec(int argc, char **argv) {
             method_name = value;
         } else if ((taken = cli_take_option(command, argc, argv, &i, "--f0", &value))) {
             if (taken < 0 || !cli_parse_double(command, "--f0", value, 0.0, 0.999, &f0)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option(command, argc, argv, &i, "--convention", &value))) {
+            if (taken < 0 || !parse_convention(command, value, &convention)) return CLI_EXIT_USAGE;
         } else if (argv[i][0] == '-') {
             return cli_usage_error(command, "unknown option '%s'", argv[i]);
         } else {
@@ -920,6 +1001,7 @@ int cmd_metal2spec(int argc, char **argv) {
     }
     mr_wf_options wf = mr_wf_options_default(); // metal -> spec is Eq. 2 for every method but KHRONOS
     wf.dielectric_f0 = f0;
+    wf.spec_diffuse = convention;
     if (strcmp(method_name, "khronos") == 0)
         wf.method = MR_WF_KHRONOS;
     else if (strcmp(method_name, "eq2") != 0)
@@ -1006,7 +1088,10 @@ int cmd_metal2spec(int argc, char **argv) {
     seconds[2] = cli_now() - started;
 
     if (code == CLI_EXIT_OK) {
-        summary s = {command, wf.method == MR_WF_KHRONOS ? "khronos" : "eq2", NULL, wf.dielectric_f0, 0, width,
+        int specgloss = wf.method != MR_WF_KHRONOS && wf.spec_diffuse == MR_WF_DIFFUSE_SPECGLOSS;
+        summary s = {command, wf.method == MR_WF_KHRONOS ? "khronos" : "eq2", NULL,
+                     wf.method == MR_WF_KHRONOS ? NULL : convention_name(wf.spec_diffuse), wf.dielectric_f0,
+                     specgloss, width,
                      height, {seconds[0], seconds[1], seconds[2]}, flags,
                      {{"diffuse", diffuse, 3}, {"specular", specular, 3}, {"glossiness", glossiness, 1}}};
         print_summary(&s, &o, outputs, output_count);
