@@ -3,33 +3,12 @@
 # name the bad value and list valid ones, render -> file, ssim identities. Ends with "N passed, N failed".
 set -u
 bin="${MR_BUILD:-build}/bin/matremap"
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-passed=0
-failed=0
-
-# expect NAME EXPECTED_EXIT GREP_PATTERN(optional, searched in stdout+stderr) -- command...
-expect() {
-    local name=$1 code=$2 pattern=$3
-    shift 4
-    "$@" >"$tmp/out" 2>"$tmp/err"
-    local rc=$?
-    if [ "$rc" -ne "$code" ]; then
-        echo "FAIL  $name: exit $rc, expected $code"; sed 's/^/      /' "$tmp/err" | head -5
-        failed=$((failed + 1)); return
-    fi
-    if [ -n "$pattern" ] && ! cat "$tmp/out" "$tmp/err" | grep -qE -- "$pattern"; then
-        echo "FAIL  $name: output does not match /$pattern/"; cat "$tmp/out" "$tmp/err" | sed 's/^/      /' | head -5
-        failed=$((failed + 1)); return
-    fi
-    echo "ok    $name"
-    passed=$((passed + 1))
-}
+source "$(dirname "$0")/lib/cli_harness.sh"
 
 expect "no arguments is a usage error" 1 "Usage" -- "$bin"
 expect "top-level help" 0 "Commands:" -- "$bin" --help
 expect "unknown command lists commands" 1 "valid:.*render" -- "$bin" frobnicate
-for cmd in models render ssim remap sweep; do
+for cmd in models render ssim remap sweep train spec2metal metal2spec; do
     expect "$cmd --help" 0 "Usage: matremap $cmd" -- "$bin" $cmd --help
 done
 expect "models lists ggx" 0 "^ggx " -- "$bin" models
@@ -74,5 +53,4 @@ expect "EXR output does not need the OpenImageIO module" 0 "wrote" -- env MR_OII
 expect "a missing OpenImageIO module is reported" 3 "cannot load the OpenImageIO module.*mod.so" -- \
     env MR_OIIO_MODULE=/nonexistent/mod.so "$bin" ssim "$tmp/x.exr" "$tmp/x.exr"
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish

@@ -4,36 +4,12 @@
 # recover them too once --match-irradiance brings them back. Ends with "N passed, N failed".
 set -u
 bin="${MR_BUILD:-build}/bin/matremap"
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-passed=0
-failed=0
-
-expect() { # NAME EXPECTED_EXIT PATTERN -- command...
-    local name=$1 code=$2 pattern=$3
-    shift 4
-    "$@" >"$tmp/out" 2>"$tmp/err"
-    local rc=$?
-    if [ "$rc" -ne "$code" ]; then
-        echo "FAIL  $name: exit $rc, expected $code"; sed 's/^/      /' "$tmp/err" | head -5
-        failed=$((failed + 1)); return
-    fi
-    if [ -n "$pattern" ] && ! cat "$tmp/out" "$tmp/err" | grep -qE -- "$pattern"; then
-        echo "FAIL  $name: output does not match /$pattern/"; cat "$tmp/out" "$tmp/err" | sed 's/^/      /' | head -5
-        failed=$((failed + 1)); return
-    fi
-    echo "ok    $name"
-    passed=$((passed + 1))
-}
+source "$(dirname "$0")/lib/cli_harness.sh"
 
 # A JSON number field of the last output.
 field() { sed -E "s/.*\"$1\": \\[?([-0-9.e+]+).*/\\1/" "$tmp/out"; }
 # |a - b| <= tol
 near() { awk -v a="$1" -v b="$2" -v t="$3" 'BEGIN { d = a - b; if (d < 0) d = -d; exit !(d <= t) }'; }
-check() { # NAME CONDITION-COMMAND...
-    local name=$1; shift
-    if "$@"; then echo "ok    $name"; passed=$((passed + 1)); else echo "FAIL  $name"; failed=$((failed + 1)); fi
-}
 
 expect "remap --help" 0 "Usage: matremap remap" -- "$bin" remap --help
 expect "missing --to" 1 "missing --to" -- "$bin" remap --from ggx
@@ -78,5 +54,4 @@ check "source, target and SSIM pictures exist" test -s "$tmp/pic_source.png" -a 
 expect "Ward cannot follow a bright conductor" 0 "outcome: unreachable .*trimming" -- \
     "$bin" remap --from as f0=0.9 alpha=0.05 --to ward --size 64
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish

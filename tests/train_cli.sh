@@ -5,31 +5,7 @@
 set -u
 bin="${MR_BUILD:-build}/bin/matremap"
 root=$(cd "$(dirname "$0")/.." && pwd)
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-passed=0
-failed=0
-
-expect() { # NAME EXPECTED_EXIT PATTERN -- command...
-    local name=$1 code=$2 pattern=$3
-    shift 4
-    "$@" >"$tmp/out" 2>"$tmp/err"
-    local rc=$?
-    if [ "$rc" -ne "$code" ]; then
-        echo "FAIL  $name: exit $rc, expected $code"; sed 's/^/      /' "$tmp/err" | head -5
-        failed=$((failed + 1)); return
-    fi
-    if [ -n "$pattern" ] && ! cat "$tmp/out" "$tmp/err" | grep -qE -- "$pattern"; then
-        echo "FAIL  $name: output does not match /$pattern/"; cat "$tmp/out" "$tmp/err" | sed 's/^/      /' | head -5
-        failed=$((failed + 1)); return
-    fi
-    echo "ok    $name"
-    passed=$((passed + 1))
-}
-check() { # NAME CONDITION-COMMAND...
-    local name=$1; shift
-    if "$@"; then echo "ok    $name"; passed=$((passed + 1)); else echo "FAIL  $name"; failed=$((failed + 1)); fi
-}
+source "$(dirname "$0")/lib/cli_harness.sh"
 
 sweep() { # SOURCE COUNT SEED FILE
     "$bin" sweep --from "$1" alpha=0.2 --to ggx-metallic alpha=0.2 --hold alpha --random "$2" --seed "$3" --size 16 \
@@ -69,5 +45,4 @@ check "--loss-curve PREFIX" test -s "$tmp/curve.csv"
 check "the shipped network is 6 x 300 x 4" bash -c \
     "grep -q '^n_in 6$' $root/data/spec2metal.mlp && grep -q '^n_hidden 300$' $root/data/spec2metal.mlp && grep -q '^n_out 4$' $root/data/spec2metal.mlp"
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish

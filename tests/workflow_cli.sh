@@ -11,32 +11,8 @@ bin="$build/bin/matremap"
 root="${MR_ROOT:-$(cd "$(dirname "$0")/.." && pwd)}"
 shared="${MR_SHARED:-$root/../shared}"
 bottle="$shared/assets/metalrough/WaterBottle/glTF"
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
 unset MATREMAP_WEIGHTS
-passed=0
-failed=0
-
-expect() { # NAME EXPECTED_EXIT PATTERN -- command...
-    local name=$1 code=$2 pattern=$3
-    shift 4
-    "$@" >"$tmp/out" 2>"$tmp/err"
-    local rc=$?
-    if [ "$rc" -ne "$code" ]; then
-        echo "FAIL  $name: exit $rc, expected $code"; sed 's/^/      /' "$tmp/err" | head -5
-        failed=$((failed + 1)); return
-    fi
-    if [ -n "$pattern" ] && ! cat "$tmp/out" "$tmp/err" | grep -qE -- "$pattern"; then
-        echo "FAIL  $name: output does not match /$pattern/"; cat "$tmp/out" "$tmp/err" | sed 's/^/      /' | head -5
-        failed=$((failed + 1)); return
-    fi
-    echo "ok    $name"
-    passed=$((passed + 1))
-}
-check() { # NAME CONDITION-COMMAND...
-    local name=$1; shift
-    if "$@"; then echo "ok    $name"; passed=$((passed + 1)); else echo "FAIL  $name"; failed=$((failed + 1)); fi
-}
+source "$(dirname "$0")/lib/cli_harness.sh"
 
 # NAME=VALUE of the single-texel line of the last output ("basecolor=0.9,0.6,0.2 metallic=1 roughness=0.3").
 val() { sed -nE "s/.*(^| )$1=([^ ]*).*/\\2/p" "$tmp/out" | tail -n 1; }
@@ -513,5 +489,4 @@ expect "metal2spec --json --convention paper" 0 "" -- "$bin" metal2spec --baseco
 check "JSON: Eq. 2 as printed has no off-manifold count" test \
     "$(json '(d["convention"], d["flags"]["off_manifold"])')" = "('paper', None)"
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish
