@@ -112,7 +112,7 @@ static int load_map(const mr_brdf_model *model, map_input *map, mr_param_texture
     mr_img_read_options read = {colour ? MR_IMG_COLOR : MR_IMG_DATA, 0, 0};
     mr_status status = mr_img_read(map->path, &read, &map->image);
     if (status != MR_OK) return cli_fail("render", status);
-    int channel = map->channel;
+    int channel = param->channels == 3 ? 0 : map->channel; // an RGB parameter reads channels 0-2
     if (param->channels == 1 && channel < 0) {
         channel = 0;
         if (map->image->channels >= 3) {

@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# `matremap render` with environment lighting (--env ...) and parameters from texture maps (name=@MAP[:c]): known
+# answers (a constant map renders like the constant; a grey environment map like its level), channel selection,
+# and the errors a user meets (missing files named, a colour map for a scalar parameter, option misuse). Needs
+# oiiotool. Ends with "N passed, N failed".
+set -u
+bin="${MR_BUILD:-build}/bin/matremap"
+source "$(dirname "$0")/lib/cli_harness.sh"
+
+# max |A - B| over all pixel values of two images (idiff's "Max error").
+maxdiff() { idiff -v -fail 1e9 "$1" "$2" 2>&1 | sed -nE 's/.*Max error += ([-0-9.e+]+).*/\1/p'; }
+below() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a != "" && a + 0 < b + 0) }'; }
+
+oiiotool --pattern constant:color=0.25,0.5,0.75 16x8 3 -d float -o "$tmp/colour.exr"
+oiiotool --pattern constant:color=0.2,0.7,0.4 16x8 3 -d float -o "$tmp/packed.exr"
+oiiotool --pattern constant:color=1,1,1 32x16 3 -d float -o "$tmp/white_env.exr"
+
+# A constant RGB map (all three channels read) renders exactly like the constant.
+expect "RGB parameter from a map" 0 "wrote" -- "$bin" render ggx diffuse=@"$tmp/colour.exr" f0=0.04 alpha=0.3 \
+    --size 64 -o "$tmp/map.exr"
+expect "the same constant" 0 "wrote" -- "$bin" render ggx diffuse=0.25,0.5,0.75 f0=0.04 alpha=0.3 --size 64 \
+    -o "$tmp/const.exr"
+d=$(maxdiff "$tmp/map.exr" "$tmp/const.exr")
+check "a constant RGB map renders like the constant (max diff $d)" below "$d" 1e-7
+# A scalar parameter from one channel of a packed map: :g is 0.7.
+expect "scalar parameter from channel g" 0 "wrote" -- "$bin" render gltf base_color=0.8,0.2,0.1 \
+    metallic=@"$tmp/packed.exr":b roughness=@"$tmp/packed.exr":g --size 64 -o "$tmp/packed_render.exr"
+"$bin" render gltf base_color=0.8,0.2,0.1 metallic=0.4 roughness=0.7 --size 64 -o "$tmp/packed_const.exr" 2>/dev/null
+d=$(maxdiff "$tmp/packed_render.exr" "$tmp/packed_const.exr")
+check "channels b and g read metallic 0.4 and roughness 0.7 (max diff $d)" below "$d" 1e-6
+# A white Lambertian sphere under a uniform environment of radiance 1 shows radiance 1 (to the pattern's bias).
+expect "uniform environment" 0 "shading samples" -- "$bin" render lambert albedo=1 --env "$tmp/white_env.exr" \
+    --env-samples 4096 --size 32 -o "$tmp/furnace.exr"
+centre=$(oiiotool "$tmp/furnace.exr" --cut 14,14,17,17 --printstats 2>/dev/null |
+    sed -nE 's/.*Stats Avg: ([0-9.e+-]+).*/\1/p')
+check "furnace: the centre pixels are 1 within 0.002 ($centre)" \
+    awk -v v="$centre" 'BEGIN { exit !(v > 0.998 && v < 1.002) }'
+expect "--env-scale 0.5 halves it" 0 "" -- "$bin" render lambert albedo=1 --env "$tmp/white_env.exr" \
+    --env-samples 4096 --env-scale 0.5 --size 32 -o "$tmp/half.exr"
+oiiotool "$tmp/furnace.exr" --mulc 0.5 -o "$tmp/furnace_half.exr"
+d=$(maxdiff "$tmp/half.exr" "$tmp/furnace_half.exr")
+check "--env-scale is linear (max diff $d)" below "$d" 1e-6
+expect "a whole turn changes nothing" 0 "" -- "$bin" render lambert albedo=1 --env "$tmp/white_env.exr" \
+    --env-samples 4096 --env-rotation 360 --size 32 -o "$tmp/turn.exr"
+d=$(maxdiff "$tmp/turn.exr" "$tmp/furnace.exr")
+check "--env-rotation 360 is bit-identical (max diff $d)" below "$d" 1e-30
+
+# Errors: the file or value named, nothing written.
+expect "a missing map is named" 2 "nomap.png" -- "$bin" render ggx diffuse=@"$tmp/nomap.png" -o "$tmp/e1.exr"
+expect "a missing environment is named" 2 "noenv.hdr" -- "$bin" render ggx --env "$tmp/noenv.hdr" -o "$tmp/e2.exr"
+check "no output after a failure" test ! -e "$tmp/e1.exr" -a ! -e "$tmp/e2.exr"
+expect "a colour map for a scalar needs a channel" 1 "pick a channel" -- "$bin" render ggx alpha=@"$tmp/colour.exr" \
+    -o "$tmp/e3.exr"
+expect "an RGB parameter takes no channel" 1 "takes the whole image" -- "$bin" render ggx \
+    diffuse=@"$tmp/colour.exr":r -o "$tmp/e4.exr"
+expect "an unknown parameter" 2 "no parameter 'shine'" -- "$bin" render ggx shine=@"$tmp/colour.exr" -o "$tmp/e5.exr"
+expect "--env-samples 0" 1 "env-samples" -- "$bin" render ggx --env "$tmp/white_env.exr" --env-samples 0 \
+    -o "$tmp/e6.exr"
+expect "--env-rotation without --env" 1 "need --env" -- "$bin" render ggx --env-rotation 30 -o "$tmp/e7.exr"
+oiiotool --pattern constant:color=1,-1,1 8x4 3 -d float -o "$tmp/negative_env.exr"
+expect "a negative environment value is named" 2 "environment map value -1 at pixel" -- "$bin" render ggx \
+    --env "$tmp/negative_env.exr" -o "$tmp/e8.exr"
+
+finish
