@@ -213,3 +213,4 @@ if [ -f "$perf" ]; then
     replace_section workflow "$work/workflow.md"
     replace_section workflow-e2e "$work/e2e.md"
 fi
+replace_section envlight "$work/envlight.md" "$root/docs/rendering.md"
