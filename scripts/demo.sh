@@ -46,6 +46,37 @@ while read -r a b; do
     rows=$((rows + 1))
 done < "$root/data/demo/comparisons.txt"
 oiiotool "${args[@]}" --mosaic:pad=2 "3x$rows" -o "${sheet[1]}"
+# Workflow conversion: a real spec-gloss texture set (the Avocado's maps, shrunk to 256², data/README.md) to
+# metal-rough with every spec2metal method, each rendered on a sphere under a studio HDR map beside the original.
+maps="$root/data/demo/avocado"
+env_map="$root/data/demo/studio_small_03_256.hdr"
+light=(--env "$env_map" --env-scale 0.5 --env-samples 1024 --size "$size")
+echo
+echo "Spec-gloss -> metal-rough: the Avocado's 256² maps (data/demo/avocado) through spec2metal, each result"
+echo "rendered on a sphere under a studio HDR map and compared with the spec-gloss original (SSIM, 1 = identical)"
+"$bin" render gltf-specgloss diffuse=@"$maps/diffuse.png" specular=@"$maps/specular.png" \
+    glossiness=@"$maps/glossiness.png" "${light[@]}" -o "$out/avocado_original.exr" 2>/dev/null
+"$bin" render gltf-specgloss diffuse=@"$maps/diffuse.png" specular=@"$maps/specular.png" \
+    glossiness=@"$maps/glossiness.png" "${light[@]}" -o "$out/avocado_original.png" 2>/dev/null
+printf '  %-10s %8s %10s\n' method SSIM "convert ms"
+args=("$out/avocado_original.png" "$(label)" "spec-gloss original")
+for method in mlp weighted mean khronos; do
+    json=$("$bin" spec2metal --diffuse "$maps/diffuse.png" --specular "$maps/specular.png" \
+        --glossiness "$maps/glossiness.png" --method "$method" --pack -o "$out/avocado_$method" --json 2>/dev/null)
+    for ext in exr png; do
+        "$bin" render gltf base_color=@"$out/avocado_${method}_basecolor.png" \
+            metallic=@"$out/avocado_${method}_metallicRoughness.png":b \
+            roughness=@"$out/avocado_${method}_metallicRoughness.png":g "${light[@]}" \
+            -o "$out/avocado_$method.$ext" 2>/dev/null
+    done
+    ssim=$("$bin" ssim "$out/avocado_original.exr" "$out/avocado_$method.exr")
+    ms=$(echo "$json" | sed -E 's/.*"convert": ([0-9.]+).*/\1/' | awk '{printf "%.1f", $1 * 1000}')
+    printf '  %-10s %8.4f %10s\n' "$method" "$ssim" "$ms"
+    args+=("$out/avocado_$method.png" "$(label)" "$method")
+done
+oiiotool "${args[@]}" --mosaic:pad=2 5x1 -o "$out/workflow.png"
+
 echo
 echo "Pictures: out/demo/contact_sheet.png (every material), out/demo/comparisons.png (A | B | SSIM map,"
-echo "black = identical), and each render as EXR (linear) and PNG."
+echo "black = identical), out/demo/workflow.png (the Avocado's spec-gloss original and each method's"
+echo "metal-rough conversion), and each render as EXR (linear) and PNG."
