@@ -636,6 +636,44 @@ static int take_output_option(const char *command, int argc, char **argv, int *i
     return taken;
 }
 
+/* The method options both commands take: --method NAME, --f0 F, --convention gltf|paper. */
+typedef struct method_options {
+    const char *name;         /* as given; the command checks it */
+    double f0;                /* default MR_WF_F0_GLTF */
+    int f0_given;
+    mr_wf_diffuse convention; /* default MR_WF_DIFFUSE_SPECGLOSS (--convention gltf) */
+} method_options;
+
+/* Take one option both commands share at argv[*i]: an output option, one of the `count` maps, or a method option.
+ * Returns 1 if taken, 0 if argv[*i] is something else, -1 after a usage error. */
+static int take_common_option(const char *command, int argc, char **argv, int *i, out_options *o,
+                              map_arg *const *maps, int count, method_options *m) {
+    const char *value = NULL;
+    int taken = take_output_option(command, argc, argv, i, o);
+    if (taken) return taken;
+    for (int k = 0; k < count; k++)
+        if ((taken = cli_take_option(command, argc, argv, i, maps[k]->option, &value)))
+            return taken < 0 || !set_map(command, maps[k], value) ? -1 : 1;
+    if ((taken = cli_take_option(command, argc, argv, i, "--method", &value))) {
+        if (taken > 0) m->name = value;
+        return taken;
+    }
+    if ((taken = cli_take_option(command, argc, argv, i, "--f0", &value))) {
+        if (taken < 0 || !cli_parse_double(command, "--f0", value, 0.0, 0.999, &m->f0)) return -1;
+        m->f0_given = 1;
+        return 1;
+    }
+    if ((taken = cli_take_option(command, argc, argv, i, "--convention", &value)))
+        return taken < 0 || !parse_convention(command, value, &m->convention) ? -1 : 1;
+    return 0;
+}
+
+/* The usage error for an argument neither command knows; `example` shows how a map is given. */
+static int unknown_argument(const char *command, const char *arg, const char *example) {
+    if (arg[0] == '-') return cli_usage_error(command, "unknown option '%s'", arg);
+    return cli_usage_error(command, "unexpected argument '%s' (maps are given as options, e.g. %s)", arg, example);
+}
+
 /* -o is required unless every map is a constant (then the single texel is printed). */
 static int check_prefix(const char *command, const out_options *o, map_arg *const *maps, int count) {
     if (o->prefix != NULL) return CLI_EXIT_OK;
@@ -721,61 +759,43 @@ int cmd_spec2metal(int argc, char **argv) {
     map_arg glossiness = map_data("--glossiness"), roughness = map_data("--roughness");
     map_arg packed = map_packed("--specular-glossiness", MR_IMG_COLOR, 4, "RGBA: specular RGB, glossiness A");
     map_arg *all[] = {&diffuse, &specular, &glossiness, &roughness, &packed};
-    const char *weights = NULL, *method_name = "mlp";
-    double f0 = MR_WF_F0_GLTF;
+    const char *weights = NULL;
     double eps = MR_WF_DEFAULT_EPS;
-    int f0_given = 0;
-    mr_wf_diffuse convention = MR_WF_DIFFUSE_SPECGLOSS;
+    method_options m = {"mlp", MR_WF_F0_GLTF, 0, MR_WF_DIFFUSE_SPECGLOSS};
     out_options o = {0};
 
     for (int i = 1; i < argc; i++) {
         const char *value = NULL;
-        int taken;
         if (cli_is_help(argv[i])) {
             print_spec2metal_help();
             return CLI_EXIT_OK;
         }
-        if ((taken = take_output_option(command, argc, argv, &i, &o))) {
-            if (taken < 0) return CLI_EXIT_USAGE;
-            continue;
-        }
-        map_arg *target = NULL;
-        for (int k = 0; k < 5 && target == NULL; k++)
-            if ((taken = cli_take_option(command, argc, argv, &i, all[k]->option, &value))) target = all[k];
-        if (target != NULL) {
-            if (taken < 0 || !set_map(command, target, value)) return CLI_EXIT_USAGE;
-        } else if ((taken = cli_take_option(command, argc, argv, &i, "--method", &value))) {
-            if (taken < 0) return CLI_EXIT_USAGE;
-            method_name = value;
-        } else if ((taken = cli_take_option(command, argc, argv, &i, "--weights", &value))) {
+        int taken = take_common_option(command, argc, argv, &i, &o, all, 5, &m);
+        if (taken < 0) return CLI_EXIT_USAGE;
+        if (taken) continue;
+        if ((taken = cli_take_option(command, argc, argv, &i, "--weights", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             weights = value;
-        } else if ((taken = cli_take_option(command, argc, argv, &i, "--f0", &value))) {
-            if (taken < 0 || !cli_parse_double(command, "--f0", value, 0.0, 0.999, &f0)) return CLI_EXIT_USAGE;
-            f0_given = 1;
         } else if ((taken = cli_take_option(command, argc, argv, &i, "--eps", &value))) {
             if (taken < 0 || !cli_parse_double(command, "--eps", value, 0.0, 0.5, &eps)) return CLI_EXIT_USAGE;
-        } else if ((taken = cli_take_option(command, argc, argv, &i, "--convention", &value))) {
-            if (taken < 0 || !parse_convention(command, value, &convention)) return CLI_EXIT_USAGE;
-        } else if (argv[i][0] == '-') {
-            return cli_usage_error(command, "unknown option '%s'", argv[i]);
         } else {
-            return cli_usage_error(command, "unexpected argument '%s' (maps are given as options, e.g. --diffuse "
-                                   "D.png)", argv[i]);
+            return unknown_argument(command, argv[i], "--diffuse D.png");
         }
     }
+    const char *method_name = m.name;
+    const double f0 = m.f0;
     int use_mlp = strcmp(method_name, "mlp") == 0;
     mr_wf_options wf = mr_wf_options_default();
     wf.dielectric_f0 = f0;
     wf.eps = eps;
-    wf.spec_diffuse = convention;
+    wf.spec_diffuse = m.convention;
     if (!use_mlp) {
         if (mr_wf_method_from_name(method_name, &wf.method) != MR_OK || wf.method == MR_WF_CUSTOM)
             return cli_usage_error(command, "--method '%s': unknown method (valid: mlp, weighted, mean, khronos)",
                                    method_name);
         if (mr_wf_options_check(&wf) != MR_OK)
             return cli_usage_error(command, "--f0 %g with --method %s: %s", f0, method_name, mr_last_error());
-    } else if (f0_given) {
+    } else if (m.f0_given) {
         return cli_usage_error(command, "--f0 applies to the analytic methods (weighted, mean, khronos); the network "
                                "of --method mlp learned the F0 of its training data");
     } else if (weights != NULL && weights[0] == '\0') {
@@ -964,44 +984,23 @@ int cmd_metal2spec(int argc, char **argv) {
     map_arg metallic = map_data("--metallic"), roughness = map_data("--roughness");
     map_arg packed = map_packed("--metallic-roughness", MR_IMG_DATA, 3, "RGB: G roughness, B metallic");
     map_arg *all[] = {&basecolor, &metallic, &roughness, &packed};
-    const char *method_name = "eq2";
-    double f0 = MR_WF_F0_GLTF;
-    mr_wf_diffuse convention = MR_WF_DIFFUSE_SPECGLOSS;
+    method_options m = {"eq2", MR_WF_F0_GLTF, 0, MR_WF_DIFFUSE_SPECGLOSS};
     out_options o = {0};
 
     for (int i = 1; i < argc; i++) {
-        const char *value = NULL;
-        int taken;
         if (cli_is_help(argv[i])) {
             print_metal2spec_help();
             return CLI_EXIT_OK;
         }
-        if ((taken = take_output_option(command, argc, argv, &i, &o))) {
-            if (taken < 0) return CLI_EXIT_USAGE;
-            continue;
-        }
-        map_arg *target = NULL;
-        for (int k = 0; k < 4 && target == NULL; k++)
-            if ((taken = cli_take_option(command, argc, argv, &i, all[k]->option, &value))) target = all[k];
-        if (target != NULL) {
-            if (taken < 0 || !set_map(command, target, value)) return CLI_EXIT_USAGE;
-        } else if ((taken = cli_take_option(command, argc, argv, &i, "--method", &value))) {
-            if (taken < 0) return CLI_EXIT_USAGE;
-            method_name = value;
-        } else if ((taken = cli_take_option(command, argc, argv, &i, "--f0", &value))) {
-            if (taken < 0 || !cli_parse_double(command, "--f0", value, 0.0, 0.999, &f0)) return CLI_EXIT_USAGE;
-        } else if ((taken = cli_take_option(command, argc, argv, &i, "--convention", &value))) {
-            if (taken < 0 || !parse_convention(command, value, &convention)) return CLI_EXIT_USAGE;
-        } else if (argv[i][0] == '-') {
-            return cli_usage_error(command, "unknown option '%s'", argv[i]);
-        } else {
-            return cli_usage_error(command, "unexpected argument '%s' (maps are given as options, e.g. --basecolor "
-                                   "B.png)", argv[i]);
-        }
+        int taken = take_common_option(command, argc, argv, &i, &o, all, 4, &m);
+        if (taken < 0) return CLI_EXIT_USAGE;
+        if (!taken) return unknown_argument(command, argv[i], "--basecolor B.png");
     }
+    const char *method_name = m.name;
+    const double f0 = m.f0;
     mr_wf_options wf = mr_wf_options_default(); // metal -> spec is Eq. 2 for every method but KHRONOS
     wf.dielectric_f0 = f0;
-    wf.spec_diffuse = convention;
+    wf.spec_diffuse = m.convention;
     if (strcmp(method_name, "khronos") == 0)
         wf.method = MR_WF_KHRONOS;
     else if (strcmp(method_name, "eq2") != 0)
