@@ -55,6 +55,33 @@ void cli_json_string(FILE *out, const char *s);
 /* Monotonic wall-clock seconds. */
 double cli_now(void);
 
+/* ---- materials given on the command line: MODEL name=value ... name=@MAP[:r|g|b|a] ... (cli_material.c) ---- */
+
+#define CLI_MAX_ASSIGNMENTS 64
+
+/* A parameter taken from a map. */
+typedef struct cli_material_map {
+    const char *assignment; /* as given: "roughness=@orm.png:g" */
+    char *name, *path;      /* owned copies */
+    int param;              /* the parameter's index in the model's table */
+    int channel;            /* the map channel read (0 for RGB parameters) */
+    mr_image *image;        /* the map, read as the parameter needs it */
+} cli_material_map;
+
+typedef struct cli_material {
+    const mr_brdf_model *model;
+    double values[MR_BRDF_MAX_VALUES]; /* defaults, then the name=value assignments */
+    mr_param_textures textures;        /* the maps, bound to their parameters */
+    int map_count;
+    cli_material_map maps[CLI_MAX_ASSIGNMENTS];
+} cli_material;
+
+/* Build *m from MODEL and its assignments: values parsed, maps read and bound. Returns a CLI exit code (messages
+ * printed, naming `command`); call cli_material_free(m) in any case. */
+int cli_material_load(const char *command, const char *model_name, const char *const *assignments, int count,
+                      cli_material *m);
+void cli_material_free(cli_material *m);
+
 int cmd_models(int argc, char **argv);
 int cmd_render(int argc, char **argv);
 int cmd_ssim(int argc, char **argv);

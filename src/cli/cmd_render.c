@@ -5,7 +5,6 @@
  * Renders a material in the paper's fit scene (render.h), or under an environment map, optionally with
  * parameters from texture maps over the sphere, and writes it in the format of OUT's extension.
  */
-#include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
@@ -56,81 +55,6 @@ static void print_help(void) {
            MR_ENV_DEFAULT_SAMPLES);
 }
 
-/* A parameter taken from a map: "name=@FILE" or "name=@FILE:c". */
-typedef struct map_input {
-    const char *assignment;
-    char *name;    /* owned copies */
-    char *path;
-    int channel;   /* -1: not given */
-    mr_image *image;
-} map_input;
-
-#define MAX_ASSIGNMENTS 64
-
-/* Split "name=@FILE[:c]" into its parts; returns 0 (after a usage error) if it is malformed. */
-static int parse_map_assignment(const char *assignment, map_input *map) {
-    const char *eq = strchr(assignment, '=');
-    size_t name_length = (size_t)(eq - assignment);
-    const char *file = eq + 2;
-    size_t file_length = strlen(file);
-    map->assignment = assignment;
-    map->channel = -1;
-    if (file_length >= 3 && file[file_length - 2] == ':') {
-        const char *letters = "rgba";
-        const char *hit = strchr(letters, file[file_length - 1]);
-        if (hit != NULL && *hit != '\0') {
-            map->channel = (int)(hit - letters);
-            file_length -= 2;
-        }
-    }
-    if (name_length == 0 || file_length == 0) {
-        cli_usage_error("render", "'%s': expected name=@FILE or name=@FILE:r|g|b|a", assignment);
-        return 0;
-    }
-    map->name = malloc(name_length + 1);
-    map->path = malloc(file_length + 1);
-    if (map->name == NULL || map->path == NULL) {
-        cli_usage_error("render", "out of memory");
-        return 0;
-    }
-    memcpy(map->name, assignment, name_length);
-    map->name[name_length] = '\0';
-    memcpy(map->path, file, file_length);
-    map->path[file_length] = '\0';
-    return 1;
-}
-
-/* Read one map the way its parameter needs it and bind it; returns a CLI exit code (CLI_EXIT_OK on success). */
-static int load_map(const mr_brdf_model *model, map_input *map, mr_param_textures *textures) {
-    int index = mr_brdf_param_index(model, map->name);
-    if (index < 0) return cli_fail("render", mr_param_textures_set(textures, model, map->name, NULL, 0));
-    const mr_brdf_param *param = &model->params[index];
-    int colour = param->channels == 3 && param->min_value >= 0.0 && param->max_value <= 1.0;
-    if (param->channels == 3 && map->channel >= 0)
-        return cli_usage_error("render", "'%s': %s is an RGB parameter and takes the whole image (no :%c)",
-                               map->assignment, param->name, "rgba"[map->channel]);
-    mr_img_read_options read = {colour ? MR_IMG_COLOR : MR_IMG_DATA, 0, 0};
-    mr_status status = mr_img_read(map->path, &read, &map->image);
-    if (status != MR_OK) return cli_fail("render", status);
-    int channel = param->channels == 3 ? 0 : map->channel; // an RGB parameter reads channels 0-2
-    if (param->channels == 1 && channel < 0) {
-        channel = 0;
-        if (map->image->channels >= 3) {
-            // A grey picture saved as RGB is fine; real colour needs the user to say which channel to use.
-            size_t pixels = (size_t)map->image->width * (size_t)map->image->height;
-            const float *px = map->image->pixels;
-            for (size_t p = 0; p < pixels; p++, px += map->image->channels)
-                if (px[0] != px[1] || px[0] != px[2])
-                    return cli_usage_error("render", "'%s': %s holds colour, but %s takes one value: pick a channel "
-                                           "with @%s:r, :g, :b or :a", map->assignment, map->path, param->name,
-                                           map->path);
-        }
-    }
-    status = mr_param_textures_set(textures, model, map->name, map->image, channel);
-    if (status != MR_OK) return cli_fail("render", status);
-    return CLI_EXIT_OK;
-}
-
 int cmd_render(int argc, char **argv) {
     const char *model_name = NULL, *output = NULL, *env_path = NULL;
     mr_fit_scene_options scene_opts = {0};
@@ -140,10 +64,8 @@ int cmd_render(int argc, char **argv) {
     double exposure = 1.0;
     int edge_samples = 0;
     mr_img_write_options write_opts = {0};
-    const char *assignments[MAX_ASSIGNMENTS];
+    const char *assignments[CLI_MAX_ASSIGNMENTS];
     int assignment_count = 0;
-    map_input maps[MAX_ASSIGNMENTS];
-    int map_count = 0;
 
     for (int i = 1; i < argc; i++) {
         const char *value = NULL;
@@ -197,7 +119,8 @@ int cmd_render(int argc, char **argv) {
         } else if (model_name == NULL) {
             model_name = argv[i];
         } else if (strchr(argv[i], '=') != NULL) {
-            if (assignment_count == MAX_ASSIGNMENTS) return cli_usage_error("render", "too many parameter assignments");
+            if (assignment_count == CLI_MAX_ASSIGNMENTS)
+                return cli_usage_error("render", "too many parameter assignments");
             assignments[assignment_count++] = argv[i];
         } else {
             return cli_usage_error("render", "unexpected argument '%s' (parameters are name=value)", argv[i]);
@@ -208,22 +131,8 @@ int cmd_render(int argc, char **argv) {
     if (env_option && env_path == NULL)
         return cli_usage_error("render", "--env-rotation, --env-samples and --env-scale need --env FILE");
 
-    const mr_brdf_model *model = mr_brdf_find(model_name);
-    if (model == NULL) return cli_fail("render", MR_ERR_INVALID_ARG);
-    double values[MR_BRDF_MAX_VALUES];
-    mr_brdf_default_values(model, values);
-    mr_param_textures textures = {0};
-    int code = CLI_EXIT_OK;
-    for (int k = 0; k < assignment_count && code == CLI_EXIT_OK; k++) {
-        if (strchr(assignments[k], '=')[1] == '@') {
-            map_input *map = &maps[map_count++];
-            memset(map, 0, sizeof *map);
-            code = parse_map_assignment(assignments[k], map) ? load_map(model, map, &textures) : CLI_EXIT_USAGE;
-            continue;
-        }
-        mr_status status = mr_brdf_parse_assignment(model, assignments[k], values);
-        if (status != MR_OK) code = cli_fail("render", status);
-    }
+    cli_material material;
+    int code = cli_material_load("render", model_name, assignments, assignment_count, &material);
 
     mr_image *env = NULL, *image = NULL;
     mr_render_plan *plan = NULL;
@@ -243,7 +152,9 @@ int cmd_render(int argc, char **argv) {
     if (code == CLI_EXIT_OK) {
         status = mr_render_plan_create(&scene, &plan);
         plan_seconds = cli_now() - start;
-        if (status == MR_OK) status = mr_render_textured(plan, model, values, &textures, component, &image);
+        if (status == MR_OK)
+            status = mr_render_textured(plan, material.model, material.values, &material.textures, component,
+                                        &image);
         if (status == MR_OK && exposure != 1.0) {
             size_t n = mr_image_value_count(image);
             for (size_t p = 0; p < n; p++) image->pixels[p] = (float)(image->pixels[p] * exposure);
@@ -261,10 +172,6 @@ int cmd_render(int argc, char **argv) {
     mr_image_free(image);
     mr_render_plan_free(plan);
     mr_image_free(env);
-    for (int k = 0; k < map_count; k++) {
-        free(maps[k].name);
-        free(maps[k].path);
-        mr_image_free(maps[k].image);
-    }
+    cli_material_free(&material);
     return code;
 }
