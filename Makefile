@@ -24,7 +24,8 @@ CFLAGS    := -std=c11 -pedantic $(WARN) $(OPT) $(SAN) -fopenmp -D_POSIX_C_SOURCE
              -DMR_MODULE_DIR='"$(MODULE_DIR)"'
 CXXFLAGS  := -std=c++17 $(WARN) $(OPT) $(SAN) -fopenmp -Isrc -I. $(shell pkg-config --cflags OpenImageIO 2>/dev/null)
 LDFLAGS   := $(SAN) -fopenmp
-LDLIBS    := $(shell pkg-config --libs nlopt 2>/dev/null) -lOpenEXRCore-3_1 -lm
+# -ltinygltf: the glTF shim (gltf/*.cpp) links Debian's compiled tinygltf.
+LDLIBS    := $(shell pkg-config --libs nlopt 2>/dev/null) -lOpenEXRCore-3_1 -ltinygltf -lm
 
 # OpenImageIO lives in a module loaded on first use (src/io/oiio_module.c says why). It carries its own
 # copies of the status and atomic-file code, compiled position-independent with hidden visibility.
@@ -52,7 +53,7 @@ BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
 
 PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h src/render/render.h \
                   src/io/image_io.h src/metrics/metrics.h src/remap/remap.h src/workflow/workflow.h \
-                  src/workflow/dataset.h nn/mlp.h
+                  src/workflow/dataset.h nn/mlp.h gltf/mr_gltf.h
 
 .PHONY: all check asan demo bench analyses evaluation dataset train deps install clean
 # Keep test objects between runs (they are intermediate files of the test binaries).

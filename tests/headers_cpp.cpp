@@ -11,6 +11,7 @@
 #include "workflow/workflow.h"
 #include "workflow/dataset.h"
 #include "nn/mlp.h"
+#include "gltf/mr_gltf.h"
 
 extern "C" int mr_headers_cpp_probe(void);
 int mr_headers_cpp_probe(void) { return MR_STATUS_COUNT + MR_COMPONENT_COUNT; }

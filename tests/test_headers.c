@@ -10,6 +10,7 @@
 #include "workflow/workflow.h"
 #include "workflow/dataset.h"
 #include "nn/mlp.h"
+#include "gltf/mr_gltf.h"
 #include "matremap.h"
 
 #include <omp.h>

@@ -1,0 +1,1063 @@
+// gltf.cpp — the tinygltf shim behind gltf/mr_gltf.h (contract there; coverage and limits in gltf/README.md).
+//
+// tinygltf 2.7 (Debian's libtinygltf) parses and serialises the JSON; this file keeps images undecoded (its
+// image loader callback stores the encoded bytes), maps materials to and from mr_gltf_material, and writes
+// the output itself: tinygltf's file writer is neither atomic nor careful about input files, so the shim
+// serialises to memory, fixes up the buffers[] and images[] entries, and writes every file through the
+// project's atomic-file protocol. No exception crosses the C boundary.
+#include "gltf/mr_gltf.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <tiny_gltf.h>
+
+#include "io/io_internal.h"
+#include "mr_internal.h"
+
+using tinygltf::Value;
+typedef Value::Object Object;
+
+struct mr_gltf {
+    tinygltf::Model model;
+    std::string path;                     // the file read
+    std::string base_dir;                 // its directory ("." if none)
+    std::vector<std::string> image_paths; // per image: resolved source file ("" for embedded images)
+    std::vector<std::string> buffer_paths; // per buffer: resolved source file ("" for embedded buffers)
+};
+
+namespace {
+
+const char *const EXT_SPEC_GLOSS = "KHR_materials_pbrSpecularGlossiness";
+const char *const EXT_SPECULAR = "KHR_materials_specular";
+const char *const EXT_IOR = "KHR_materials_ior";
+const char *const EXT_TRANSFORM = "KHR_texture_transform";
+
+// ---- small helpers ------------------------------------------------------------------------------------
+
+std::string first_line(const std::string &s) {
+    std::string t = s;
+    while (!t.empty() && (t.back() == '\n' || t.back() == '\r')) t.pop_back();
+    for (char &c : t) {
+        if (c == '\n') c = ';';
+    }
+    return t;
+}
+
+std::string dir_of(const std::string &path) {
+    size_t slash = path.find_last_of('/');
+    if (slash == std::string::npos) return ".";
+    if (slash == 0) return "/";
+    return path.substr(0, slash);
+}
+
+std::string join_path(const std::string &dir, const std::string &rel) {
+    if (dir.empty() || dir == ".") return rel;
+    if (dir.back() == '/') return dir + rel;
+    return dir + "/" + rel;
+}
+
+bool is_data_uri(const std::string &uri) { return uri.compare(0, 5, "data:") == 0; }
+
+std::string url_decode(const std::string &s) {
+    std::string out;
+    for (size_t i = 0; i < s.size(); i++) {
+        if (s[i] == '%' && i + 2 < s.size() && isxdigit((unsigned char)s[i + 1]) &&
+            isxdigit((unsigned char)s[i + 2])) {
+            out += (char)strtol(s.substr(i + 1, 2).c_str(), NULL, 16);
+            i += 2;
+        } else {
+            out += s[i];
+        }
+    }
+    return out;
+}
+
+// A relative URI that stays inside the output directory: not absolute, no scheme, no ".." segment.
+bool is_safe_relative(const std::string &decoded) {
+    if (decoded.empty() || decoded[0] == '/' || decoded.find("://") != std::string::npos) return false;
+    std::stringstream ss(decoded);
+    std::string seg;
+    while (std::getline(ss, seg, '/')) {
+        if (seg == "..") return false;
+    }
+    return decoded.back() != '/';
+}
+
+std::string real_path(const std::string &path) {
+    char buf[PATH_MAX];
+    if (realpath(path.c_str(), buf) == NULL) return "";
+    return buf;
+}
+
+std::string base64_encode(const unsigned char *p, size_t n) {
+    static const char table[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    out.reserve((n + 2) / 3 * 4);
+    for (size_t i = 0; i < n; i += 3) {
+        unsigned v = (unsigned)p[i] << 16;
+        if (i + 1 < n) v |= (unsigned)p[i + 1] << 8;
+        if (i + 2 < n) v |= p[i + 2];
+        out += table[(v >> 18) & 63];
+        out += table[(v >> 12) & 63];
+        out += i + 1 < n ? table[(v >> 6) & 63] : '=';
+        out += i + 2 < n ? table[v & 63] : '=';
+    }
+    return out;
+}
+
+std::string sniff_mime(const std::vector<unsigned char> &b) {
+    if (b.size() >= 8 && b[0] == 0x89 && b[1] == 'P' && b[2] == 'N' && b[3] == 'G') return "image/png";
+    if (b.size() >= 3 && b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF) return "image/jpeg";
+    if (b.size() >= 4 && b[0] == 0x76 && b[1] == 0x2f && b[2] == 0x31 && b[3] == 0x01) return "image/x-exr";
+    if (b.size() >= 12 && memcmp(b.data(), "RIFF", 4) == 0 && memcmp(b.data() + 8, "WEBP", 4) == 0)
+        return "image/webp";
+    if (b.size() >= 4 && b[0] == 0xAB && b[1] == 'K' && b[2] == 'T' && b[3] == 'X') return "image/ktx2";
+    return "";
+}
+
+mr_status read_file(const std::string &path, std::vector<unsigned char> *out, const char *what) {
+    FILE *f = fopen(path.c_str(), "rb");
+    if (f == NULL) return mr_fail(MR_ERR_IO, "%s '%s': cannot open: %s", what, path.c_str(), strerror(errno));
+    std::vector<unsigned char> bytes;
+    unsigned char chunk[65536];
+    size_t n;
+    while ((n = fread(chunk, 1, sizeof chunk, f)) > 0) bytes.insert(bytes.end(), chunk, chunk + n);
+    int failed = ferror(f);
+    fclose(f);
+    if (failed) return mr_fail(MR_ERR_IO, "%s '%s': read error", what, path.c_str());
+    out->swap(bytes);
+    return MR_OK;
+}
+
+// tinygltf's image callback: keep the encoded bytes, decode nothing.
+bool keep_image_bytes(tinygltf::Image *image, const int, std::string *, std::string *, int, int,
+                      const unsigned char *bytes, int size, void *) {
+    image->image.assign(bytes, bytes + size);
+    image->as_is = true;
+    image->width = image->height = image->component = image->bits = -1;
+    if (image->mimeType.empty()) image->mimeType = sniff_mime(image->image);
+    return true;
+}
+
+// tinygltf's image writer callback: write nothing (the shim writes images itself).
+bool skip_image_write(const std::string *, const std::string *, const tinygltf::Image *, bool, std::string *,
+                      void *) {
+    return false;
+}
+
+// ---- values ------------------------------------------------------------------------------------------
+
+double get_num(const Object &o, const char *key, double def) {
+    auto it = o.find(key);
+    if (it == o.end() || !it->second.IsNumber()) return def;
+    return it->second.GetNumberAsDouble();
+}
+
+void get_nums(const Object &o, const char *key, double *out, int n, const double *def) {
+    for (int i = 0; i < n; i++) out[i] = def[i];
+    auto it = o.find(key);
+    if (it == o.end() || !it->second.IsArray() || (int)it->second.ArrayLen() != n) return;
+    for (int i = 0; i < n; i++) {
+        const Value &v = it->second.Get(i);
+        if (v.IsNumber()) out[i] = v.GetNumberAsDouble();
+    }
+}
+
+// Writes key only when the value differs from what the object means now (explicit values stay explicit).
+void set_num(Object &o, const char *key, double value, double def) {
+    if (get_num(o, key, def) == value && (o.count(key) || value == def)) return;
+    o[key] = Value(value);
+}
+
+void set_nums(Object &o, const char *key, const double *value, int n, const double *def) {
+    double now[4];
+    get_nums(o, key, now, n, def);
+    bool same = true, is_def = true;
+    for (int i = 0; i < n; i++) {
+        same = same && now[i] == value[i];
+        is_def = is_def && value[i] == def[i];
+    }
+    if (same && (o.count(key) || is_def)) return;
+    Value::Array a;
+    for (int i = 0; i < n; i++) a.push_back(Value(value[i]));
+    o[key] = Value(std::move(a));
+}
+
+Object *as_object(Value &v) {
+    if (!v.IsObject()) v = Value(Object());
+    return &v.Get<Object>();
+}
+
+const double ZERO2[2] = {0, 0}, ONE2[2] = {1, 1}, ONE3[3] = {1, 1, 1}, ONE4[4] = {1, 1, 1, 1};
+const double ZERO3[3] = {0, 0, 0};
+
+void read_transform(const tinygltf::ExtensionMap &exts, mr_gltf_texture_ref *r) {
+    auto it = exts.find(EXT_TRANSFORM);
+    if (it == exts.end() || !it->second.IsObject()) return;
+    const Object &t = it->second.Get<Object>();
+    r->has_transform = 1;
+    get_nums(t, "offset", r->offset, 2, ZERO2);
+    r->rotation = get_num(t, "rotation", 0.0);
+    get_nums(t, "scale", r->scale, 2, ONE2);
+    r->transform_tex_coord = (int)get_num(t, "texCoord", -1.0);
+}
+
+void write_transform(tinygltf::ExtensionMap &exts, const mr_gltf_texture_ref *r) {
+    if (!r->has_transform) {
+        exts.erase(EXT_TRANSFORM);
+        return;
+    }
+    Object *t = as_object(exts[EXT_TRANSFORM]);
+    set_nums(*t, "offset", r->offset, 2, ZERO2);
+    set_num(*t, "rotation", r->rotation, 0.0);
+    set_nums(*t, "scale", r->scale, 2, ONE2);
+    if (r->transform_tex_coord >= 0) {
+        set_num(*t, "texCoord", r->transform_tex_coord, -1.0);
+        (*t)["texCoord"] = Value(r->transform_tex_coord);
+    } else {
+        t->erase("texCoord");
+    }
+}
+
+template <typename Info> void read_core_tex(const Info &info, mr_gltf_texture_ref *r) {
+    mr_gltf_texture_ref_none(r);
+    if (info.index < 0) return;
+    r->index = info.index;
+    r->tex_coord = info.texCoord;
+    read_transform(info.extensions, r);
+}
+
+template <typename Info> void write_core_tex(Info &info, const mr_gltf_texture_ref *r) {
+    if (r->index < 0) {
+        info = Info();
+        return;
+    }
+    info.index = r->index;
+    info.texCoord = r->tex_coord;
+    write_transform(info.extensions, r);
+}
+
+// A textureInfo stored as a JSON object inside an extension.
+void read_value_tex(const Object &ext, const char *key, mr_gltf_texture_ref *r) {
+    mr_gltf_texture_ref_none(r);
+    auto it = ext.find(key);
+    if (it == ext.end() || !it->second.IsObject()) return;
+    const Object &t = it->second.Get<Object>();
+    r->index = (int)get_num(t, "index", -1.0);
+    r->tex_coord = (int)get_num(t, "texCoord", 0.0);
+    auto e = t.find("extensions");
+    if (e != t.end() && e->second.IsObject()) read_transform(e->second.Get<Object>(), r);
+}
+
+void write_value_tex(Object &ext, const char *key, const mr_gltf_texture_ref *r) {
+    if (r->index < 0) {
+        ext.erase(key);
+        return;
+    }
+    Object *t = as_object(ext[key]);
+    (*t)["index"] = Value(r->index);
+    if (r->tex_coord != 0 || t->count("texCoord")) (*t)["texCoord"] = Value(r->tex_coord);
+    Object *exts = as_object((*t)["extensions"]);
+    write_transform(*exts, r);
+    if (exts->empty()) t->erase("extensions");
+}
+
+mr_status check_tex(const mr_gltf *g, const mr_gltf_texture_ref *r, const char *what) {
+    if (r->index < -1 || r->index >= (int)g->model.textures.size())
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF '%s': %s texture %d does not exist (the asset has %zu)",
+                       g->path.c_str(), what, r->index, g->model.textures.size());
+    if (r->index >= 0 && r->tex_coord < 0)
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF '%s': %s texCoord %d is negative", g->path.c_str(), what,
+                       r->tex_coord);
+    return MR_OK;
+}
+
+// Whether a Value tree holds an "extensions" object with key `name` (texture transforms inside extensions).
+bool value_uses(const Value &v, const char *name) {
+    if (v.IsObject()) {
+        const Object &o = v.Get<Object>();
+        for (const auto &kv : o) {
+            if (kv.first == "extensions" && kv.second.IsObject() && kv.second.Get<Object>().count(name)) return true;
+            if (value_uses(kv.second, name)) return true;
+        }
+    } else if (v.IsArray()) {
+        for (size_t i = 0; i < v.ArrayLen(); i++) {
+            if (value_uses(v.Get((int)i), name)) return true;
+        }
+    }
+    return false;
+}
+
+bool material_uses(const tinygltf::Material &m, const char *name) {
+    if (m.extensions.count(name)) return true;
+    const tinygltf::ExtensionMap *maps[] = {&m.pbrMetallicRoughness.baseColorTexture.extensions,
+                                            &m.pbrMetallicRoughness.metallicRoughnessTexture.extensions,
+                                            &m.normalTexture.extensions, &m.occlusionTexture.extensions,
+                                            &m.emissiveTexture.extensions};
+    for (const auto *map : maps) {
+        if (map->count(name)) return true;
+    }
+    for (const auto &kv : m.extensions) {
+        if (value_uses(kv.second, name)) return true;
+    }
+    return false;
+}
+
+bool list_has(const std::vector<std::string> &list, const char *name) {
+    return std::find(list.begin(), list.end(), name) != list.end();
+}
+
+nlohmann::json to_json(const Value &v) {
+    switch (v.Type()) {
+    case tinygltf::BOOL_TYPE: return v.Get<bool>();
+    case tinygltf::INT_TYPE: return v.Get<int>();
+    case tinygltf::REAL_TYPE: return v.Get<double>();
+    case tinygltf::STRING_TYPE: return v.Get<std::string>();
+    case tinygltf::ARRAY_TYPE: {
+        nlohmann::json a = nlohmann::json::array();
+        for (size_t i = 0; i < v.ArrayLen(); i++) a.push_back(to_json(v.Get((int)i)));
+        return a;
+    }
+    case tinygltf::OBJECT_TYPE: {
+        nlohmann::json o = nlohmann::json::object();
+        for (const auto &kv : v.Get<Object>()) o[kv.first] = to_json(kv.second);
+        return o;
+    }
+    default: return nullptr;
+    }
+}
+
+// ---- saving --------------------------------------------------------------------------------------------
+
+struct pending_file {
+    std::string rel;                 // relative path under the output directory (decoded)
+    const std::vector<unsigned char> *bytes;
+    std::string source;              // real path of the file these bytes came from, "" if none
+    std::string target;              // full path
+    bool skip = false;               // the target is this resource's own unchanged source
+};
+
+std::string with_suffix(const std::string &rel, int n) {
+    size_t slash = rel.find_last_of('/');
+    size_t dot = rel.find_last_of('.');
+    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) dot = rel.size();
+    return rel.substr(0, dot) + "_" + std::to_string(n) + rel.substr(dot);
+}
+
+std::string uri_encode_spaces(const std::string &rel) {
+    std::string out;
+    for (char c : rel) {
+        if (c == ' ') out += "%20";
+        else if (c == '%') out += "%25";
+        else out += c;
+    }
+    return out;
+}
+
+mr_status make_dirs(const std::string &dir, std::vector<std::string> *created) {
+    if (dir.empty() || dir == "." || dir == "/") return MR_OK;
+    struct stat st;
+    if (stat(dir.c_str(), &st) == 0) {
+        if (S_ISDIR(st.st_mode)) return MR_OK;
+        return mr_fail(MR_ERR_IO, "output directory '%s': exists and is not a directory", dir.c_str());
+    }
+    mr_status s = make_dirs(dir_of(dir), created);
+    if (s != MR_OK) return s;
+    if (mkdir(dir.c_str(), 0777) != 0 && errno != EEXIST)
+        return mr_fail(MR_ERR_IO, "output directory '%s': cannot create: %s", dir.c_str(), strerror(errno));
+    created->push_back(dir);
+    return MR_OK;
+}
+
+std::vector<unsigned char> make_glb(const std::string &json, const std::vector<unsigned char> *bin) {
+    std::string j = json;
+    while (j.size() % 4) j += ' ';
+    size_t bin_len = bin ? (bin->size() + 3) / 4 * 4 : 0;
+    size_t total = 12 + 8 + j.size() + (bin ? 8 + bin_len : 0);
+    std::vector<unsigned char> out;
+    out.reserve(total);
+    auto u32 = [&out](uint32_t v) {
+        for (int i = 0; i < 4; i++) out.push_back((unsigned char)(v >> (8 * i)));
+    };
+    out.insert(out.end(), {'g', 'l', 'T', 'F'});
+    u32(2);
+    u32((uint32_t)total);
+    u32((uint32_t)j.size());
+    out.insert(out.end(), {'J', 'S', 'O', 'N'});
+    out.insert(out.end(), j.begin(), j.end());
+    if (bin) {
+        u32((uint32_t)bin_len);
+        out.insert(out.end(), {'B', 'I', 'N', '\0'});
+        out.insert(out.end(), bin->begin(), bin->end());
+        out.resize(out.size() + (bin_len - bin->size()), 0);
+    }
+    return out;
+}
+
+bool ends_with(const std::string &s, const char *suffix) {
+    size_t n = strlen(suffix);
+    if (s.size() < n) return false;
+    return strcasecmp(s.c_str() + s.size() - n, suffix) == 0;
+}
+
+mr_status save_impl(mr_gltf *g, const char *path_c) {
+    const std::string out_path = path_c;
+    bool binary;
+    if (ends_with(out_path, ".glb")) binary = true;
+    else if (ends_with(out_path, ".gltf")) binary = false;
+    else
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF output '%s': unknown extension (expected .gltf or .glb)",
+                       out_path.c_str());
+    const std::string out_dir = dir_of(out_path);
+    struct stat dir_st;
+    if (stat(out_dir.c_str(), &dir_st) != 0 || !S_ISDIR(dir_st.st_mode))
+        return mr_fail(MR_ERR_IO, "glTF output '%s': directory '%s' does not exist", out_path.c_str(),
+                       out_dir.c_str());
+
+    // Input files the output must never replace.
+    std::set<std::string> inputs;
+    inputs.insert(real_path(g->path));
+    for (const auto &p : g->buffer_paths) {
+        if (!p.empty()) inputs.insert(real_path(p));
+    }
+    for (const auto &p : g->image_paths) {
+        if (!p.empty()) inputs.insert(real_path(p));
+    }
+    inputs.erase("");
+    std::string out_real = real_path(out_path);
+    if (!out_real.empty() && inputs.count(out_real))
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF output '%s': is a file the asset was read from ('%s')",
+                       out_path.c_str(), g->path.c_str());
+
+    mr_gltf_sync_extensions(g);
+    tinygltf::Model &m = g->model;
+
+    // Serialise everything but buffers[] and images[] with tinygltf, then set those two ourselves.
+    tinygltf::TinyGLTF writer;
+    writer.SetImageWriter(skip_image_write, NULL);
+    std::ostringstream ss;
+    if (!writer.WriteGltfSceneToStream(&m, ss, false, false))
+        return mr_fail(MR_ERR_EXTERNAL, "glTF output '%s': tinygltf could not serialise the asset", out_path.c_str());
+    nlohmann::json doc = nlohmann::json::parse(ss.str());
+
+    // What tinygltf 2.7's writer leaves out: a sampler's name and extensions.
+    for (size_t i = 0; i < m.samplers.size(); i++) {
+        const tinygltf::Sampler &smp = m.samplers[i];
+        if (!smp.name.empty()) doc["samplers"][i]["name"] = smp.name;
+        if (!smp.extensions.empty()) {
+            nlohmann::json exts = nlohmann::json::object();
+            for (const auto &kv : smp.extensions) {
+                nlohmann::json e = to_json(kv.second);
+                exts[kv.first] = e.is_null() ? nlohmann::json::object() : e;
+            }
+            doc["samplers"][i]["extensions"] = exts;
+        }
+    }
+
+    std::string stem = out_path.substr(out_path.find_last_of('/') == std::string::npos
+                                           ? 0 : out_path.find_last_of('/') + 1);
+    stem = stem.substr(0, stem.find_last_of('.'));
+    std::vector<pending_file> files;
+    std::vector<std::pair<nlohmann::json *, size_t>> uri_slots; // JSON object, index into files
+    const std::vector<unsigned char> *glb_bin = NULL;
+
+    for (size_t i = 0; i < m.buffers.size(); i++) {
+        nlohmann::json &b = doc["buffers"][i];
+        const tinygltf::Buffer &buf = m.buffers[i];
+        b["byteLength"] = buf.data.size();
+        if (binary && i == 0 && buf.uri.empty()) {
+            b.erase("uri");
+            glb_bin = &buf.data;
+            continue;
+        }
+        if (is_data_uri(buf.uri)) continue; // tinygltf wrote it as a data URI again
+        pending_file f;
+        f.bytes = &buf.data;
+        std::string decoded = url_decode(buf.uri);
+        if (!buf.uri.empty() && is_safe_relative(decoded)) {
+            f.rel = decoded;
+            f.source = real_path(g->buffer_paths[i]);
+        } else {
+            f.rel = stem + (i == 0 ? "" : "_" + std::to_string(i)) + ".bin";
+            f.source = buf.uri.empty() ? "" : real_path(g->buffer_paths[i]);
+        }
+        uri_slots.push_back({&b, files.size()});
+        files.push_back(f);
+    }
+    for (size_t i = 0; i < m.images.size(); i++) {
+        nlohmann::json &o = doc["images"][i];
+        const tinygltf::Image &im = m.images[i];
+        o.erase("uri");
+        o.erase("bufferView");
+        o.erase("mimeType");
+        if (im.bufferView >= 0) {
+            o["bufferView"] = im.bufferView;
+            o["mimeType"] = im.mimeType.empty() ? sniff_mime(im.image) : im.mimeType;
+            continue;
+        }
+        if (im.uri.empty()) { // a data URI when read
+            std::string mime = im.mimeType.empty() ? "application/octet-stream" : im.mimeType;
+            o["uri"] = "data:" + mime + ";base64," + base64_encode(im.image.data(), im.image.size());
+            continue;
+        }
+        if (im.image.empty())
+            return mr_fail(MR_ERR_IO, "glTF output '%s': image %zu ('%s') has no data to write", out_path.c_str(),
+                           i, im.uri.c_str());
+        pending_file f;
+        f.bytes = &im.image;
+        std::string decoded = url_decode(im.uri);
+        f.rel = is_safe_relative(decoded) ? decoded : "image_" + std::to_string(i) + "." +
+                                                          (im.mimeType == "image/jpeg" ? "jpg" : "png");
+        f.source = real_path(g->image_paths[i]);
+        uri_slots.push_back({&o, files.size()});
+        files.push_back(f);
+    }
+
+    // Targets: an unchanged resource landing on its own source stays; one landing on another input file, on
+    // the output itself or on another resource's target gets a fresh name.
+    std::set<std::string> taken;
+    taken.insert(out_real.empty() ? out_path : out_real);
+    for (pending_file &f : files) {
+        for (int n = 0;; n++) {
+            std::string rel = n == 0 ? f.rel : with_suffix(f.rel, n);
+            std::string target = join_path(out_dir, rel);
+            std::string real = real_path(target);
+            std::string key = real.empty() ? target : real;
+            bool duplicate = false;
+            for (const pending_file &p : files) {
+                if (&p == &f) break;
+                if (p.target == target) duplicate = true;
+            }
+            if (duplicate) {
+                // Same bytes already written under this name (two references to one file): share it.
+                for (const pending_file &p : files) {
+                    if (&p == &f) break;
+                    if (p.target == target && *p.bytes == *f.bytes) {
+                        f.rel = rel;
+                        f.target = target;
+                        f.skip = true;
+                    }
+                }
+                if (f.skip) break;
+                continue;
+            }
+            if (!real.empty() && inputs.count(real)) {
+                if (real == f.source) {
+                    f.rel = rel;
+                    f.target = target;
+                    f.skip = true;
+                    break;
+                }
+                continue;
+            }
+            if (taken.count(key)) continue;
+            taken.insert(key);
+            f.rel = rel;
+            f.target = target;
+            break;
+        }
+    }
+    for (auto &slot : uri_slots) (*slot.first)["uri"] = uri_encode_spaces(files[slot.second].rel);
+
+    std::string json_text = binary ? doc.dump() : doc.dump(2) + "\n";
+    std::vector<unsigned char> main_bytes;
+    if (binary) main_bytes = make_glb(json_text, glb_bin);
+    else main_bytes.assign(json_text.begin(), json_text.end());
+
+    // Write the resources, then the main file; on failure remove what this call created.
+    std::vector<std::string> created_files, created_dirs;
+    mr_status status = MR_OK;
+    for (const pending_file &f : files) {
+        if (f.skip) continue;
+        status = make_dirs(dir_of(f.target), &created_dirs);
+        if (status != MR_OK) break;
+        struct stat st;
+        bool existed = stat(f.target.c_str(), &st) == 0;
+        status = mr_atomic_write_bytes(f.target.c_str(), f.bytes->data(), f.bytes->size());
+        if (status != MR_OK) break;
+        if (!existed) created_files.push_back(f.target);
+    }
+    if (status == MR_OK) status = mr_atomic_write_bytes(out_path.c_str(), main_bytes.data(), main_bytes.size());
+    if (status != MR_OK) {
+        for (const auto &f : created_files) unlink(f.c_str());
+        for (auto it = created_dirs.rbegin(); it != created_dirs.rend(); ++it) rmdir(it->c_str());
+        return mr_fail_context(status, "glTF output '%s'", out_path.c_str());
+    }
+    return MR_OK;
+}
+
+mr_status load_impl(const char *path_c, mr_gltf **out) {
+    const std::string path = path_c;
+    std::vector<unsigned char> bytes;
+    mr_status s = read_file(path, &bytes, "glTF");
+    if (s != MR_OK) return s;
+    struct stat st;
+    if (stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+        return mr_fail(MR_ERR_IO, "glTF '%s': is a directory", path.c_str());
+
+    mr_gltf *g = new mr_gltf();
+    g->path = path;
+    g->base_dir = dir_of(path);
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(keep_image_bytes, NULL);
+    std::string err, warn;
+    bool ok;
+    bool is_glb = bytes.size() >= 4 && memcmp(bytes.data(), "glTF", 4) == 0;
+    if (is_glb) {
+        ok = loader.LoadBinaryFromMemory(&g->model, &err, &warn, bytes.data(), (unsigned)bytes.size(),
+                                         g->base_dir);
+    } else {
+        ok = loader.LoadASCIIFromString(&g->model, &err, &warn, (const char *)bytes.data(),
+                                        (unsigned)bytes.size(), g->base_dir);
+    }
+    if (!ok) {
+        mr_status code = err.find("not found") != std::string::npos || err.find("Failed to load") != std::string::npos
+                             ? MR_ERR_IO : MR_ERR_FORMAT;
+        std::string why = first_line(err.empty() ? warn : err);
+        if (why.empty()) why = is_glb ? "not a valid binary glTF" : "not a valid glTF";
+        delete g;
+        return mr_fail(code, "glTF '%s': %s", path.c_str(), why.c_str());
+    }
+    // tinygltf 2.7 fills in bufferView.target from the meshes' use of each view; keep the file's own (absent
+    // stays absent), so a round trip does not add fields.
+    {
+        std::string json_text;
+        if (is_glb && bytes.size() >= 20) {
+            uint32_t len = (uint32_t)bytes[12] | (uint32_t)bytes[13] << 8 | (uint32_t)bytes[14] << 16 |
+                           (uint32_t)bytes[15] << 24;
+            if (len <= bytes.size() - 20) json_text.assign((const char *)bytes.data() + 20, len);
+        } else {
+            json_text.assign((const char *)bytes.data(), bytes.size());
+        }
+        nlohmann::json doc = nlohmann::json::parse(json_text, nullptr, false);
+        if (!doc.is_discarded() && doc.is_object() && doc.contains("bufferViews") && doc["bufferViews"].is_array()) {
+            const nlohmann::json &views = doc["bufferViews"];
+            for (size_t i = 0; i < views.size() && i < g->model.bufferViews.size(); i++) {
+                if (views[i].is_object() && !views[i].contains("target")) g->model.bufferViews[i].target = 0;
+            }
+        }
+    }
+    for (size_t i = 0; i < g->model.buffers.size(); i++) {
+        const std::string &uri = g->model.buffers[i].uri;
+        g->buffer_paths.push_back(uri.empty() || is_data_uri(uri) ? "" : join_path(g->base_dir, url_decode(uri)));
+    }
+    for (size_t i = 0; i < g->model.images.size(); i++) {
+        const tinygltf::Image &im = g->model.images[i];
+        bool external = im.bufferView < 0 && !im.uri.empty();
+        std::string p = external ? join_path(g->base_dir, url_decode(im.uri)) : "";
+        if (external && im.image.empty()) {
+            std::vector<unsigned char> probe;
+            mr_status rs = read_file(p, &probe, "glTF image");
+            delete g;
+            if (rs != MR_OK) return mr_fail_context(rs, "glTF '%s': image %zu", path.c_str(), i);
+            return mr_fail(MR_ERR_FORMAT, "glTF '%s': image %zu ('%s') is empty", path.c_str(), i, p.c_str());
+        }
+        g->image_paths.push_back(p);
+    }
+    *out = g;
+    return MR_OK;
+}
+
+mr_status check_material(const mr_gltf *g, int material) {
+    if (g == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL asset");
+    if (material < 0 || material >= (int)g->model.materials.size())
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF '%s': material %d does not exist (the asset has %zu)",
+                       g->path.c_str(), material, g->model.materials.size());
+    return MR_OK;
+}
+
+void get_material_impl(const mr_gltf *g, int index, mr_gltf_material *out) {
+    const tinygltf::Material &m = g->model.materials[index];
+    mr_gltf_material r;
+    mr_gltf_material_defaults(&r);
+    r.name = m.name.c_str();
+    const tinygltf::PbrMetallicRoughness &pbr = m.pbrMetallicRoughness;
+    for (int i = 0; i < 4 && i < (int)pbr.baseColorFactor.size(); i++) r.base_color_factor[i] = pbr.baseColorFactor[i];
+    r.metallic_factor = pbr.metallicFactor;
+    r.roughness_factor = pbr.roughnessFactor;
+    read_core_tex(pbr.baseColorTexture, &r.base_color_texture);
+    read_core_tex(pbr.metallicRoughnessTexture, &r.metallic_roughness_texture);
+    read_core_tex(m.normalTexture, &r.normal_texture);
+    if (r.normal_texture.index >= 0) r.normal_texture.value = m.normalTexture.scale;
+    read_core_tex(m.occlusionTexture, &r.occlusion_texture);
+    if (r.occlusion_texture.index >= 0) r.occlusion_texture.value = m.occlusionTexture.strength;
+    read_core_tex(m.emissiveTexture, &r.emissive_texture);
+    for (int i = 0; i < 3 && i < (int)m.emissiveFactor.size(); i++) r.emissive_factor[i] = m.emissiveFactor[i];
+    r.alpha_mode = m.alphaMode == "MASK" ? MR_GLTF_ALPHA_MASK
+                   : m.alphaMode == "BLEND" ? MR_GLTF_ALPHA_BLEND : MR_GLTF_ALPHA_OPAQUE;
+    r.alpha_cutoff = m.alphaCutoff;
+    r.double_sided = m.doubleSided ? 1 : 0;
+
+    auto sg = m.extensions.find(EXT_SPEC_GLOSS);
+    if (sg != m.extensions.end()) {
+        static const Object empty;
+        const Object &o = sg->second.IsObject() ? sg->second.Get<Object>() : empty;
+        r.has_spec_gloss = 1;
+        get_nums(o, "diffuseFactor", r.diffuse_factor, 4, ONE4);
+        get_nums(o, "specularFactor", r.specular_factor, 3, ONE3);
+        r.glossiness_factor = get_num(o, "glossinessFactor", 1.0);
+        read_value_tex(o, "diffuseTexture", &r.diffuse_texture);
+        read_value_tex(o, "specularGlossinessTexture", &r.specular_glossiness_texture);
+    }
+    auto sp = m.extensions.find(EXT_SPECULAR);
+    if (sp != m.extensions.end()) {
+        static const Object empty;
+        const Object &o = sp->second.IsObject() ? sp->second.Get<Object>() : empty;
+        r.has_specular = 1;
+        r.specular_strength = get_num(o, "specularFactor", 1.0);
+        get_nums(o, "specularColorFactor", r.specular_color_factor, 3, ONE3);
+        read_value_tex(o, "specularTexture", &r.specular_texture);
+        read_value_tex(o, "specularColorTexture", &r.specular_color_texture);
+    }
+    auto io = m.extensions.find(EXT_IOR);
+    if (io != m.extensions.end()) {
+        static const Object empty;
+        r.has_ior = 1;
+        r.ior = get_num(io->second.IsObject() ? io->second.Get<Object>() : empty, "ior", 1.5);
+    }
+    *out = r;
+}
+
+mr_status set_material_impl(mr_gltf *g, int index, const mr_gltf_material *in) {
+    const mr_gltf_texture_ref *refs[] = {&in->base_color_texture, &in->metallic_roughness_texture,
+                                         &in->normal_texture, &in->occlusion_texture, &in->emissive_texture,
+                                         &in->diffuse_texture, &in->specular_glossiness_texture,
+                                         &in->specular_texture, &in->specular_color_texture};
+    const char *names[] = {"baseColorTexture", "metallicRoughnessTexture", "normalTexture", "occlusionTexture",
+                           "emissiveTexture", "diffuseTexture", "specularGlossinessTexture", "specularTexture",
+                           "specularColorTexture"};
+    for (int i = 0; i < 9; i++) {
+        mr_status s = check_tex(g, refs[i], names[i]);
+        if (s != MR_OK) return mr_fail_context(s, "material %d", index);
+    }
+    if (in->alpha_mode < MR_GLTF_ALPHA_OPAQUE || in->alpha_mode > MR_GLTF_ALPHA_BLEND)
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF '%s': material %d: alpha mode %d is not OPAQUE, MASK or BLEND",
+                       g->path.c_str(), index, (int)in->alpha_mode);
+    const double *all[] = {in->base_color_factor, in->emissive_factor, in->diffuse_factor, in->specular_factor,
+                           in->specular_color_factor};
+    const int lens[] = {4, 3, 4, 3, 3};
+    for (int a = 0; a < 5; a++) {
+        for (int i = 0; i < lens[a]; i++) {
+            if (!std::isfinite(all[a][i]))
+                return mr_fail(MR_ERR_INVALID_ARG, "glTF '%s': material %d: a factor is not finite",
+                               g->path.c_str(), index);
+        }
+    }
+    double scalars[] = {in->metallic_factor, in->roughness_factor, in->alpha_cutoff, in->glossiness_factor,
+                        in->specular_strength, in->ior, in->normal_texture.value, in->occlusion_texture.value};
+    for (double v : scalars) {
+        if (!std::isfinite(v))
+            return mr_fail(MR_ERR_INVALID_ARG, "glTF '%s': material %d: a factor is not finite", g->path.c_str(),
+                           index);
+    }
+
+    tinygltf::Material &m = g->model.materials[index];
+    m.name = in->name ? in->name : "";
+    tinygltf::PbrMetallicRoughness &pbr = m.pbrMetallicRoughness;
+    pbr.baseColorFactor.assign(in->base_color_factor, in->base_color_factor + 4);
+    pbr.metallicFactor = in->metallic_factor;
+    pbr.roughnessFactor = in->roughness_factor;
+    write_core_tex(pbr.baseColorTexture, &in->base_color_texture);
+    write_core_tex(pbr.metallicRoughnessTexture, &in->metallic_roughness_texture);
+    write_core_tex(m.normalTexture, &in->normal_texture);
+    if (in->normal_texture.index >= 0) m.normalTexture.scale = in->normal_texture.value;
+    write_core_tex(m.occlusionTexture, &in->occlusion_texture);
+    if (in->occlusion_texture.index >= 0) m.occlusionTexture.strength = in->occlusion_texture.value;
+    write_core_tex(m.emissiveTexture, &in->emissive_texture);
+    m.emissiveFactor.assign(in->emissive_factor, in->emissive_factor + 3);
+    m.alphaMode = in->alpha_mode == MR_GLTF_ALPHA_MASK ? "MASK" : in->alpha_mode == MR_GLTF_ALPHA_BLEND ? "BLEND"
+                                                                                                       : "OPAQUE";
+    m.alphaCutoff = in->alpha_cutoff;
+    m.doubleSided = in->double_sided != 0;
+
+    if (!in->has_spec_gloss) {
+        m.extensions.erase(EXT_SPEC_GLOSS);
+    } else {
+        Object *o = as_object(m.extensions[EXT_SPEC_GLOSS]);
+        set_nums(*o, "diffuseFactor", in->diffuse_factor, 4, ONE4);
+        set_nums(*o, "specularFactor", in->specular_factor, 3, ONE3);
+        set_num(*o, "glossinessFactor", in->glossiness_factor, 1.0);
+        write_value_tex(*o, "diffuseTexture", &in->diffuse_texture);
+        write_value_tex(*o, "specularGlossinessTexture", &in->specular_glossiness_texture);
+    }
+    if (!in->has_specular) {
+        m.extensions.erase(EXT_SPECULAR);
+    } else {
+        Object *o = as_object(m.extensions[EXT_SPECULAR]);
+        set_num(*o, "specularFactor", in->specular_strength, 1.0);
+        set_nums(*o, "specularColorFactor", in->specular_color_factor, 3, ONE3);
+        write_value_tex(*o, "specularTexture", &in->specular_texture);
+        write_value_tex(*o, "specularColorTexture", &in->specular_color_texture);
+    }
+    if (!in->has_ior) {
+        m.extensions.erase(EXT_IOR);
+    } else {
+        Object *o = as_object(m.extensions[EXT_IOR]);
+        set_num(*o, "ior", in->ior, 1.5);
+    }
+    return MR_OK;
+}
+
+} // namespace
+
+// ---- the C API -------------------------------------------------------------------------------------------
+
+#define MR_GLTF_GUARD(label, body)                                                                 \
+    try {                                                                                         \
+        body                                                                                      \
+    } catch (const std::bad_alloc &) {                                                            \
+        return mr_fail(MR_ERR_NOMEM, "%s: out of memory", label);                                  \
+    } catch (const std::exception &e) {                                                           \
+        return mr_fail(MR_ERR_EXTERNAL, "%s: %s", label, e.what());                                \
+    } catch (...) {                                                                               \
+        return mr_fail(MR_ERR_EXTERNAL, "%s: unexpected exception", label);                        \
+    }
+
+extern "C" {
+
+mr_status mr_gltf_load(const char *path, mr_gltf **out) {
+    if (path == NULL || path[0] == '\0' || out == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF: empty path or NULL output");
+    MR_GLTF_GUARD(path, return load_impl(path, out);)
+}
+
+void mr_gltf_free(mr_gltf *asset) { delete asset; }
+
+const char *mr_gltf_path(const mr_gltf *asset) { return asset ? asset->path.c_str() : ""; }
+
+void mr_gltf_get_counts(const mr_gltf *g, mr_gltf_counts *out) {
+    const tinygltf::Model &m = g->model;
+    out->materials = (int)m.materials.size();
+    out->textures = (int)m.textures.size();
+    out->images = (int)m.images.size();
+    out->samplers = (int)m.samplers.size();
+    out->meshes = (int)m.meshes.size();
+    out->nodes = (int)m.nodes.size();
+    out->scenes = (int)m.scenes.size();
+    out->accessors = (int)m.accessors.size();
+    out->buffer_views = (int)m.bufferViews.size();
+    out->buffers = (int)m.buffers.size();
+    out->animations = (int)m.animations.size();
+    out->skins = (int)m.skins.size();
+    out->cameras = (int)m.cameras.size();
+}
+
+void mr_gltf_texture_ref_none(mr_gltf_texture_ref *r) {
+    r->index = -1;
+    r->tex_coord = 0;
+    r->value = 1.0;
+    r->has_transform = 0;
+    r->offset[0] = r->offset[1] = 0.0;
+    r->rotation = 0.0;
+    r->scale[0] = r->scale[1] = 1.0;
+    r->transform_tex_coord = -1;
+}
+
+void mr_gltf_material_defaults(mr_gltf_material *m) {
+    memset(m, 0, sizeof *m);
+    m->name = "";
+    for (int i = 0; i < 4; i++) m->base_color_factor[i] = m->diffuse_factor[i] = 1.0;
+    for (int i = 0; i < 3; i++) m->specular_factor[i] = m->specular_color_factor[i] = 1.0;
+    m->metallic_factor = m->roughness_factor = 1.0;
+    m->alpha_mode = MR_GLTF_ALPHA_OPAQUE;
+    m->alpha_cutoff = 0.5;
+    m->glossiness_factor = 1.0;
+    m->specular_strength = 1.0;
+    m->ior = 1.5;
+    mr_gltf_texture_ref *refs[] = {&m->base_color_texture, &m->metallic_roughness_texture, &m->normal_texture,
+                                   &m->occlusion_texture, &m->emissive_texture, &m->diffuse_texture,
+                                   &m->specular_glossiness_texture, &m->specular_texture,
+                                   &m->specular_color_texture};
+    for (auto *r : refs) mr_gltf_texture_ref_none(r);
+}
+
+mr_status mr_gltf_get_material(const mr_gltf *g, int material, mr_gltf_material *out) {
+    mr_status s = check_material(g, material);
+    if (s != MR_OK) return s;
+    if (out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL material output");
+    MR_GLTF_GUARD(g->path.c_str(), get_material_impl(g, material, out); return MR_OK;)
+}
+
+mr_status mr_gltf_set_material(mr_gltf *g, int material, const mr_gltf_material *in) {
+    mr_status s = check_material(g, material);
+    if (s != MR_OK) return s;
+    if (in == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL material");
+    MR_GLTF_GUARD(g->path.c_str(), return set_material_impl(g, material, in);)
+}
+
+mr_status mr_gltf_remove_material_extension(mr_gltf *g, int material, const char *name, int *removed) {
+    mr_status s = check_material(g, material);
+    if (s != MR_OK) return s;
+    if (name == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL extension name");
+    size_t n = g->model.materials[material].extensions.erase(name);
+    if (removed) *removed = n > 0;
+    return MR_OK;
+}
+
+int mr_gltf_material_has_extension(const mr_gltf *g, int material, const char *name) {
+    if (g == NULL || name == NULL || material < 0 || material >= (int)g->model.materials.size()) return 0;
+    return g->model.materials[material].extensions.count(name) > 0;
+}
+
+mr_status mr_gltf_get_texture(const mr_gltf *g, int texture, mr_gltf_texture *out) {
+    if (g == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL argument");
+    if (texture < 0 || texture >= (int)g->model.textures.size())
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF '%s': texture %d does not exist (the asset has %zu)",
+                       g->path.c_str(), texture, g->model.textures.size());
+    const tinygltf::Texture &t = g->model.textures[texture];
+    mr_gltf_texture r;
+    r.image = t.source;
+    r.sampler = t.sampler;
+    r.params.mag_filter = r.params.min_filter = -1;
+    r.params.wrap_s = r.params.wrap_t = 10497;
+    if (t.sampler >= 0 && t.sampler < (int)g->model.samplers.size()) {
+        const tinygltf::Sampler &s = g->model.samplers[t.sampler];
+        r.params.mag_filter = s.magFilter;
+        r.params.min_filter = s.minFilter;
+        r.params.wrap_s = s.wrapS;
+        r.params.wrap_t = s.wrapT;
+    }
+    *out = r;
+    return MR_OK;
+}
+
+mr_status mr_gltf_get_image(const mr_gltf *g, int image, mr_gltf_image *out) {
+    if (g == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL argument");
+    if (image < 0 || image >= (int)g->model.images.size())
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF '%s': image %d does not exist (the asset has %zu)",
+                       g->path.c_str(), image, g->model.images.size());
+    const tinygltf::Image &im = g->model.images[image];
+    out->bytes = im.image.empty() ? NULL : im.image.data();
+    out->size = im.image.size();
+    out->mime_type = im.mimeType.c_str();
+    out->uri = im.uri.c_str();
+    out->path = g->image_paths[image].c_str();
+    out->buffer_view = im.bufferView;
+    return MR_OK;
+}
+
+mr_status mr_gltf_image_write_file(const mr_gltf *g, int image, const char *path) {
+    mr_gltf_image im;
+    mr_status s = mr_gltf_get_image(g, image, &im);
+    if (s != MR_OK) return s;
+    if (path == NULL || path[0] == '\0') return mr_fail(MR_ERR_INVALID_ARG, "glTF: empty image output path");
+    MR_GLTF_GUARD(path, {
+        std::string real = real_path(path);
+        if (!real.empty()) {
+            if (real == real_path(g->path)) goto is_input;
+            for (const auto &p : g->image_paths) {
+                if (!p.empty() && real == real_path(p)) goto is_input;
+            }
+            for (const auto &p : g->buffer_paths) {
+                if (!p.empty() && real == real_path(p)) goto is_input;
+            }
+        }
+        return mr_atomic_write_bytes(path, im.bytes, im.size);
+    is_input:
+        return mr_fail(MR_ERR_INVALID_ARG, "image output '%s': is a file the asset '%s' was read from", path,
+                       g->path.c_str());
+    })
+}
+
+mr_status mr_gltf_add_image_file(mr_gltf *g, const char *file, const char *uri, int *out_image) {
+    if (g == NULL || file == NULL || uri == NULL || out_image == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL argument");
+    MR_GLTF_GUARD(file, {
+        if (!is_safe_relative(uri) || is_data_uri(uri))
+            return mr_fail(MR_ERR_INVALID_ARG, "glTF image URI '%s': expected a relative path inside the output "
+                           "directory (no '..', not absolute)", uri);
+        tinygltf::Image im;
+        mr_status s = read_file(file, &im.image, "image");
+        if (s != MR_OK) return s;
+        im.mimeType = sniff_mime(im.image);
+        if (im.mimeType.empty())
+            return mr_fail(MR_ERR_FORMAT, "image '%s': not a PNG, JPEG or EXR file", file);
+        im.as_is = true;
+        im.uri = uri_encode_spaces(uri);
+        g->model.images.push_back(std::move(im));
+        g->image_paths.push_back(file);
+        *out_image = (int)g->model.images.size() - 1;
+        return MR_OK;
+    })
+}
+
+mr_status mr_gltf_add_texture(mr_gltf *g, int image, const mr_gltf_sampler *sampler, int *out_texture) {
+    if (g == NULL || out_texture == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL argument");
+    if (image < 0 || image >= (int)g->model.images.size())
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF '%s': image %d does not exist (the asset has %zu)",
+                       g->path.c_str(), image, g->model.images.size());
+    MR_GLTF_GUARD(g->path.c_str(), {
+        tinygltf::Texture t;
+        t.source = image;
+        if (sampler != NULL) {
+            int found = -1;
+            for (size_t i = 0; i < g->model.samplers.size() && found < 0; i++) {
+                const tinygltf::Sampler &s = g->model.samplers[i];
+                if (s.magFilter == sampler->mag_filter && s.minFilter == sampler->min_filter &&
+                    s.wrapS == sampler->wrap_s && s.wrapT == sampler->wrap_t && s.name.empty() &&
+                    s.extras.Type() == tinygltf::NULL_TYPE && s.extensions.empty())
+                    found = (int)i;
+            }
+            if (found < 0) {
+                tinygltf::Sampler s;
+                s.magFilter = sampler->mag_filter;
+                s.minFilter = sampler->min_filter;
+                s.wrapS = sampler->wrap_s;
+                s.wrapT = sampler->wrap_t;
+                g->model.samplers.push_back(s);
+                found = (int)g->model.samplers.size() - 1;
+            }
+            t.sampler = found;
+        }
+        g->model.textures.push_back(t);
+        *out_texture = (int)g->model.textures.size() - 1;
+        return MR_OK;
+    })
+}
+
+void mr_gltf_sync_extensions(mr_gltf *g) {
+    if (g == NULL) return;
+    const char *managed[] = {EXT_SPEC_GLOSS, EXT_SPECULAR, EXT_IOR, EXT_TRANSFORM};
+    tinygltf::Model &m = g->model;
+    for (const char *name : managed) {
+        bool used = false;
+        for (const auto &mat : m.materials) used = used || material_uses(mat, name);
+        auto &u = m.extensionsUsed;
+        auto &r = m.extensionsRequired;
+        if (used && !list_has(u, name)) u.push_back(name);
+        if (!used) {
+            u.erase(std::remove(u.begin(), u.end(), name), u.end());
+            r.erase(std::remove(r.begin(), r.end(), name), r.end());
+        }
+    }
+}
+
+int mr_gltf_extension_used(const mr_gltf *g, const char *name) {
+    return g != NULL && name != NULL && list_has(g->model.extensionsUsed, name);
+}
+
+int mr_gltf_extension_required(const mr_gltf *g, const char *name) {
+    return g != NULL && name != NULL && list_has(g->model.extensionsRequired, name);
+}
+
+mr_status mr_gltf_save(mr_gltf *g, const char *path) {
+    if (g == NULL || path == NULL || path[0] == '\0')
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL asset or empty output path");
+    MR_GLTF_GUARD(path, return save_impl(g, path);)
+}
+
+} // extern "C"

@@ -1,0 +1,206 @@
+/*
+ * mr_gltf.h — glTF 2.0 assets in and out: PBR materials, textures, samplers and images (C API over tinygltf).
+ *
+ * Usage:
+ *     mr_gltf *asset = NULL;
+ *     if (mr_gltf_load("in.gltf", &asset) != MR_OK) { fprintf(stderr, "%s\n", mr_last_error()); ... }
+ *     mr_gltf_material m;
+ *     mr_gltf_get_material(asset, 0, &m);          // every field, glTF defaults where the file has none
+ *     m.has_spec_gloss = 0;                         // drop KHR_materials_pbrSpecularGlossiness
+ *     m.metallic_factor = 0.0;
+ *     mr_gltf_set_material(asset, 0, &m);
+ *     mr_gltf_save(asset, "out/out.gltf");          // or .glb; buffers and images written beside it
+ *     mr_gltf_free(asset);
+ *
+ * Ownership: mr_gltf_load creates the asset, mr_gltf_free (NULL-safe) releases it and everything reachable from
+ * it. Strings and byte pointers handed out (material names, image bytes, mime types, paths) belong to the asset
+ * and stay valid until the asset is modified or freed.
+ *
+ * Images are never decoded: the encoded bytes (PNG, JPEG, ...) of every image are kept as read and written back
+ * unchanged. A caller that needs pixels writes them to a file (mr_gltf_image_write_file) or uses the resolved
+ * path (mr_gltf_image_info) and decodes with mr_img_read.
+ *
+ * Saving (mr_gltf_save) picks the container from the extension (.gltf or .glb). A .gltf is written with its
+ * resources beside it: external buffers and images under their original relative URIs (or a fresh name when
+ * the URI is absolute or leaves the output directory), data-URI buffers and images kept as data URIs, images
+ * stored in buffer views kept there; a .glb's binary chunk becomes "<name>.bin" beside a .gltf output. A .glb
+ * output holds the first buffer in its binary chunk when it has no URI (an asset read from a .glb) and
+ * otherwise the same external files as a .gltf. Every file is written to a temporary name and renamed when
+ * complete; on failure the files this call created are removed. The output and its resources are never
+ * written over a file the asset was read from (an unchanged resource that would land on its own source is
+ * left in place). extensionsUsed/extensionsRequired are brought up to date first (mr_gltf_sync_extensions).
+ *
+ * Everything this API does not touch (meshes, nodes, animations, skins, cameras, scenes, extras, other
+ * extensions) is kept as tinygltf holds it; see gltf/README.md for what tinygltf 2.7 does not keep.
+ *
+ * Threading: an asset may be used by one thread at a time; distinct assets are independent. Errors follow
+ * mr_status.h: a status, and a one-line message naming the file and the value in mr_last_error().
+ */
+#ifndef MR_GLTF_H
+#define MR_GLTF_H
+
+#include <stddef.h>
+
+#include "mr_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct mr_gltf mr_gltf;
+
+/* A texture reference (glTF textureInfo) with its KHR_texture_transform. index -1 = no texture. */
+typedef struct mr_gltf_texture_ref {
+    int index;               /* textures[] index, -1 = none */
+    int tex_coord;           /* TEXCOORD_n set, default 0 */
+    double value;            /* normalTexture.scale / occlusionTexture.strength (default 1); unused elsewhere */
+    int has_transform;       /* KHR_texture_transform present */
+    double offset[2];        /* default 0,0 */
+    double rotation;         /* radians, default 0 */
+    double scale[2];         /* default 1,1 */
+    int transform_tex_coord; /* the transform's texCoord override, -1 = none */
+} mr_gltf_texture_ref;
+
+typedef enum mr_gltf_alpha_mode {
+    MR_GLTF_ALPHA_OPAQUE = 0,
+    MR_GLTF_ALPHA_MASK,
+    MR_GLTF_ALPHA_BLEND
+} mr_gltf_alpha_mode;
+
+/* Every material field this API reads and writes. mr_gltf_material_defaults() gives glTF's defaults. */
+typedef struct mr_gltf_material {
+    const char *name; /* "" if none; owned by the asset on get, copied on set (NULL = "") */
+
+    /* core pbrMetallicRoughness */
+    double base_color_factor[4];                    /* default 1,1,1,1 */
+    double metallic_factor;                         /* default 1 */
+    double roughness_factor;                        /* default 1 */
+    mr_gltf_texture_ref base_color_texture;
+    mr_gltf_texture_ref metallic_roughness_texture; /* G = roughness, B = metallic */
+
+    mr_gltf_texture_ref normal_texture;    /* value = scale */
+    mr_gltf_texture_ref occlusion_texture; /* value = strength, R channel */
+    mr_gltf_texture_ref emissive_texture;
+    double emissive_factor[3]; /* default 0,0,0 */
+    mr_gltf_alpha_mode alpha_mode;
+    double alpha_cutoff; /* default 0.5 */
+    int double_sided;
+
+    /* KHR_materials_pbrSpecularGlossiness (has_spec_gloss = 0: absent; set removes it) */
+    int has_spec_gloss;
+    double diffuse_factor[4];  /* default 1,1,1,1 */
+    double specular_factor[3]; /* default 1,1,1 */
+    double glossiness_factor;  /* default 1 */
+    mr_gltf_texture_ref diffuse_texture;
+    mr_gltf_texture_ref specular_glossiness_texture; /* RGB = specular, A = glossiness */
+
+    /* KHR_materials_specular */
+    int has_specular;
+    double specular_strength;        /* the extension's specularFactor, default 1 */
+    double specular_color_factor[3]; /* default 1,1,1 */
+    mr_gltf_texture_ref specular_texture;       /* A = strength */
+    mr_gltf_texture_ref specular_color_texture; /* RGB */
+
+    /* KHR_materials_ior */
+    int has_ior;
+    double ior; /* default 1.5 */
+} mr_gltf_material;
+
+/* A texture's sampler. Filters: 9728 NEAREST, 9729 LINEAR, 9984-9987 mipmap modes, -1 = unset.
+ * Wraps: 33071 CLAMP_TO_EDGE, 33648 MIRRORED_REPEAT, 10497 REPEAT (default). */
+typedef struct mr_gltf_sampler {
+    int mag_filter;
+    int min_filter;
+    int wrap_s;
+    int wrap_t;
+} mr_gltf_sampler;
+
+/* What a texture points at. */
+typedef struct mr_gltf_texture {
+    int image;               /* images[] index, -1 if the texture has no source */
+    int sampler;             /* samplers[] index, -1 = default sampler */
+    mr_gltf_sampler params;  /* the sampler's values (defaults when sampler is -1) */
+} mr_gltf_texture;
+
+/* An image's encoded bytes and where they came from. Pointers belong to the asset. */
+typedef struct mr_gltf_image {
+    const unsigned char *bytes; /* encoded (PNG/JPEG/...) bytes, NULL if none could be read */
+    size_t size;
+    const char *mime_type; /* "image/png", "image/jpeg", ... ("" if unknown) */
+    const char *uri;       /* the URI as in the file ("" for buffer views and data URIs) */
+    const char *path;      /* the resolved file of an external image, "" otherwise */
+    int buffer_view;       /* bufferViews[] index, -1 if none */
+} mr_gltf_image;
+
+/* Counts of the asset's top-level arrays. */
+typedef struct mr_gltf_counts {
+    int materials, textures, images, samplers;
+    int meshes, nodes, scenes, accessors, buffer_views, buffers;
+    int animations, skins, cameras;
+} mr_gltf_counts;
+
+/* Reads a .gltf or .glb (by content: a binary glTF starts with "glTF") with its buffers and images: external
+ * files relative to the asset, data URIs and GLB chunks. Missing or unreadable buffers and images, malformed
+ * JSON and truncated containers fail with MR_ERR_IO / MR_ERR_FORMAT and a message naming the file. */
+mr_status mr_gltf_load(const char *path, mr_gltf **out);
+
+void mr_gltf_free(mr_gltf *asset);
+
+/* The file the asset was read from. */
+const char *mr_gltf_path(const mr_gltf *asset);
+
+void mr_gltf_get_counts(const mr_gltf *asset, mr_gltf_counts *out);
+
+/* glTF's default material (no name, no textures, no extensions). */
+void mr_gltf_material_defaults(mr_gltf_material *out);
+
+/* A texture reference with no texture (index -1) and identity transform. */
+void mr_gltf_texture_ref_none(mr_gltf_texture_ref *out);
+
+mr_status mr_gltf_get_material(const mr_gltf *asset, int material, mr_gltf_material *out);
+
+/* Writes every field of *in into the material. Extensions whose has_* flag is 0 are removed (their fields in *in
+ * are ignored, and read back as defaults); present ones are updated in place (keys this API does not know, e.g.
+ * extras, are kept; a value equal to what the file means already is left as written). Texture indices must
+ * exist and factors be finite (MR_ERR_INVALID_ARG, nothing changed). */
+mr_status mr_gltf_set_material(mr_gltf *asset, int material, const mr_gltf_material *in);
+
+/* Removes extension `name` (any extension) from a material; MR_OK (and *removed = 0) if it was absent.
+ * removed may be NULL. */
+mr_status mr_gltf_remove_material_extension(mr_gltf *asset, int material, const char *name, int *removed);
+
+/* Whether a material carries extension `name` (0 or 1; 0 for a bad index). */
+int mr_gltf_material_has_extension(const mr_gltf *asset, int material, const char *name);
+
+mr_status mr_gltf_get_texture(const mr_gltf *asset, int texture, mr_gltf_texture *out);
+
+mr_status mr_gltf_get_image(const mr_gltf *asset, int image, mr_gltf_image *out);
+
+/* Writes an image's encoded bytes to `path` (atomically; never over the asset's input files). */
+mr_status mr_gltf_image_write_file(const mr_gltf *asset, int image, const char *path);
+
+/* Adds an image read from `file` (PNG, JPEG or EXR by content), saved beside the output under the relative
+ * `uri` (no "..", not absolute). *out_image receives its index. */
+mr_status mr_gltf_add_image_file(mr_gltf *asset, const char *file, const char *uri, int *out_image);
+
+/* Adds a texture of `image` with `sampler` (NULL = no sampler, i.e. glTF's defaults); an identical sampler
+ * already in the asset is reused. *out_texture receives its index. */
+mr_status mr_gltf_add_texture(mr_gltf *asset, int image, const mr_gltf_sampler *sampler, int *out_texture);
+
+/* Brings extensionsUsed up to date for the extensions this API manages (KHR_materials_pbrSpecularGlossiness,
+ * KHR_materials_specular, KHR_materials_ior, KHR_texture_transform): adds those in use, drops those no longer
+ * used from extensionsUsed and extensionsRequired. Other extensions are left alone. */
+void mr_gltf_sync_extensions(mr_gltf *asset);
+
+/* extensionsUsed / extensionsRequired membership (0 or 1). */
+int mr_gltf_extension_used(const mr_gltf *asset, const char *name);
+int mr_gltf_extension_required(const mr_gltf *asset, const char *name);
+
+/* Writes the asset to `path` (.gltf or .glb, see the top of this header). */
+mr_status mr_gltf_save(mr_gltf *asset, const char *path);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MR_GLTF_H */
