@@ -11,9 +11,10 @@ packages=(
     libnlopt-dev
     gnuplot-nox
     fonts-dejavu-core  # labels on the demo's contact sheets (oiiotool --text)
+    python3            # tests/gltf_validate.sh compares glTF JSON (tests/lib/gltf_json_compare.py)
 )
-# node + npm run the independent SSIM implementation (ssim.js) in the tests; the machine may
-# already have a node of its own outside Debian's packages, which is fine.
+# node + npm run the independent SSIM implementation (ssim.js) and the Khronos glTF validator in the tests;
+# the machine may already have a node of its own outside Debian's packages, which is fine.
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm  >/dev/null 2>&1 || packages+=(npm)
 if [ "${1:-}" = "--bench" ]; then
