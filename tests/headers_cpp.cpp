@@ -10,6 +10,7 @@
 #include "remap/remap.h"
 #include "workflow/workflow.h"
 #include "workflow/dataset.h"
+#include "report/report.h"
 #include "nn/mlp.h"
 #include "gltf/mr_gltf.h"
 

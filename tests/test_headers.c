@@ -9,6 +9,7 @@
 #include "render/render.h"
 #include "workflow/workflow.h"
 #include "workflow/dataset.h"
+#include "report/report.h"
 #include "nn/mlp.h"
 #include "gltf/mr_gltf.h"
 #include "matremap.h"

@@ -89,6 +89,7 @@ int cmd_remap(int argc, char **argv);
 int cmd_sweep(int argc, char **argv);
 int cmd_train(int argc, char **argv);
 int cmd_spec2metal(int argc, char **argv);
+int cmd_report(int argc, char **argv);
 int cmd_metal2spec(int argc, char **argv);
 
 #endif /* MR_CLI_H */

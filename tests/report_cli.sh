@@ -1,0 +1,89 @@
+#!/usr/bin/env bash
+# `matremap report`: the folder it writes (index.html, every picture the page shows, summary.json with known
+# answers: a material compared with itself has SSIM 1 and relative RMSE 0), environment views and map thumbnails,
+# HTML escaping, its errors, and the page opened in headless Chromium (a screenshot that is not blank). Needs
+# oiiotool, python3 and chromium (scripts/install-deps.sh). Ends with "N passed, N failed".
+set -u
+bin="${MR_BUILD:-build}/bin/matremap"
+source "$(dirname "$0")/lib/cli_harness.sh"
+
+# A Python expression over summary.json `d` of report folder $1.
+summary() { python3 -c 'import json, sys; d = json.load(open(sys.argv[1] + "/summary.json")); print(eval(sys.argv[2]))' \
+    "$1" "$2"; }
+# Every src="..." of index.html names a file of the folder.
+all_pictures_exist() {
+    python3 - "$1" <<'PY'
+import html.parser, os, sys, urllib.parse
+folder = sys.argv[1]
+class Pictures(html.parser.HTMLParser):
+    def __init__(self):
+        super().__init__(); self.sources = []
+    def handle_starttag(self, tag, attrs):
+        self.sources += [urllib.parse.unquote(v) for k, v in attrs if tag == "img" and k == "src"]
+p = Pictures(); p.feed(open(os.path.join(folder, "index.html"), encoding="utf-8").read())
+missing = [s for s in p.sources if not os.path.isfile(os.path.join(folder, s))]
+print(len(p.sources), "pictures", "missing: " + ", ".join(missing) if missing else "")
+sys.exit(1 if missing or not p.sources else 0)
+PY
+}
+
+# ---- the fit scene: a material against itself and against another roughness --------------------------------------
+expect "report --help" 0 "Usage: matremap report" -- "$bin" report --help
+expect "three materials in the fit scene" 0 "report: $tmp/fit/index.html" -- "$bin" report -o "$tmp/fit" --size 64 \
+    --title "GGX roughness" ggx alpha=0.2 f0=0.5 -- --label same ggx alpha=0.2 f0=0.5 -- --label rougher ggx \
+    alpha=0.4 f0=0.5
+check "index.html and summary.json written" test -s "$tmp/fit/index.html" -a -s "$tmp/fit/summary.json"
+check "every picture of the page exists" all_pictures_exist "$tmp/fit"
+check "one view, named" test "$(summary "$tmp/fit" 'd["views"]')" = "['fit scene']"
+check "a material against itself: SSIM 1, relative RMSE 0" test \
+    "$(summary "$tmp/fit" '(d["materials"][1]["mean_ssim"], d["materials"][1]["mean_relative_rmse"])')" = "(1, 0)"
+check "another roughness: SSIM below 0.999" test "$(summary "$tmp/fit" 'd["materials"][2]["mean_ssim"] < 0.999')" = True
+check "the reference carries no SSIM" test "$(summary "$tmp/fit" '"ssim" in d["materials"][0]')" = False
+check "labels: given, or the model" test "$(summary "$tmp/fit" '[m["label"] for m in d["materials"]]')" = \
+    "['ggx', 'same', 'rougher']"
+check "the title is on the page" grep -q "<title>GGX roughness</title>" "$tmp/fit/index.html"
+
+# ---- an environment seen from two directions, with maps ---------------------------------------------------------
+oiiotool --pattern fill:top=1,0.9,0.8:bottom=0.1,0.1,0.2 64x32 3 -d float -o "$tmp/sky.exr"
+oiiotool --pattern checker:width=8:height=8:color1=0.8,0.2,0.1:color2=0.1,0.3,0.8 64x64 3 -o "$tmp/albedo.png"
+oiiotool --pattern constant:color=0.4,0.6,0.2 8x8 3 -d float -o "$tmp/mr.exr"
+expect "two views under an environment, maps" 0 "" -- "$bin" report -o "$tmp/env" --size 64 --env "$tmp/sky.exr" \
+    --rotations 2 --env-samples 256 --label "<b>&amp" gltf base_color=@"$tmp/albedo.png" metallic=@"$tmp/mr.exr":b \
+    roughness=@"$tmp/mr.exr":g -- gltf base_color=0.5 metallic=0.2 roughness=0.6
+check "two views, 180° apart" test "$(summary "$tmp/env" 'd["views"]')" = "['rotation 0°', 'rotation 180°']"
+check "every picture of the page exists" all_pictures_exist "$tmp/env"
+check "three map thumbnails for the textured material" test \
+    "$(summary "$tmp/env" '[t["label"] for t in d["materials"][0]["thumbnails"]]')" = \
+    "['base_color ($tmp/albedo.png)', 'metallic ($tmp/mr.exr, channel B)', 'roughness ($tmp/mr.exr, channel G)']"
+check "a thumbnail is at most 128 pixels" test "$(oiiotool --info "$tmp/env/map_material0_0.png" | grep -c '64 x   64')" = 1
+check "the label is escaped in HTML" grep -q "&lt;b&gt;&amp;amp" "$tmp/env/index.html"
+check "... and kept as it is in JSON" test "$(summary "$tmp/env" 'd["materials"][0]["label"]')" = "<b>&amp"
+
+# ---- errors: usage (1), bad input (2), nothing half-written -------------------------------------------------------
+expect "missing -o" 1 "missing -o DIR" -- "$bin" report ggx
+expect "no material" 1 "missing the reference MODEL" -- "$bin" report -o "$tmp/e1"
+expect "'--' without a model" 1 "without a MODEL" -- "$bin" report -o "$tmp/e2" ggx --
+expect "--rotations without --env" 1 "needs --env" -- "$bin" report -o "$tmp/e3" --rotations 3 ggx
+expect "an unknown model" 2 "frobnicate" -- "$bin" report -o "$tmp/e4" frobnicate
+expect "a missing map is named" 2 "nomap.png" -- "$bin" report -o "$tmp/e5" ggx diffuse=@"$tmp/nomap.png"
+expect "a missing environment is named" 2 "nosky.hdr" -- "$bin" report -o "$tmp/e6" --env "$tmp/nosky.hdr" ggx
+check "no folder after a failure" test ! -e "$tmp/e4" -a ! -e "$tmp/e5" -a ! -e "$tmp/e6"
+touch "$tmp/afile"
+expect "-o naming a file" 2 "not a folder" -- "$bin" report -o "$tmp/afile" ggx
+
+# ---- the page in a browser --------------------------------------------------------------------------------------
+browser=$(command -v chromium || command -v chromium-browser || true)
+if [ -z "$browser" ]; then
+    check "chromium is installed (scripts/install-deps.sh)" false
+else
+    timeout 120 "$browser" --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
+        --disable-background-networking --disable-component-update --disable-sync --user-data-dir="$tmp/chromium" \
+        --window-size=1200,1600 --screenshot="$tmp/shot.png" "file://$tmp/env/index.html" >"$tmp/browser.log" 2>&1
+    check "Chromium renders the page to a screenshot" test -s "$tmp/shot.png"
+    # Not blank: the page's pictures and text make the screenshot's values vary.
+    deviation=$(oiiotool "$tmp/shot.png" --printstats 2>/dev/null | sed -nE 's/.*Stats StdDev: ([0-9.e+-]+).*/\1/p')
+    check "the screenshot is not blank (standard deviation ${deviation:-none})" \
+        awk -v d="${deviation:-0}" 'BEGIN { exit !(d > 0.05) }'
+fi
+
+finish
