@@ -37,6 +37,7 @@ struct mr_gltf {
     std::string base_dir;                 // its directory ("." if none)
     std::vector<std::string> image_paths; // per image: resolved source file ("" for embedded images)
     std::vector<std::string> buffer_paths; // per buffer: resolved source file ("" for embedded buffers)
+    nlohmann::json original;               // the file's JSON, for what tinygltf does not keep (merge_original)
 };
 
 namespace {
@@ -341,6 +342,58 @@ nlohmann::json to_json(const Value &v) {
     }
 }
 
+// Adds to `out` every key of `orig` it lacks, recursively (arrays element by element when their lengths
+// agree). Never overwrites a value.
+void merge_missing(nlohmann::json &out, const nlohmann::json &orig) {
+    if (out.is_object() && orig.is_object()) {
+        for (auto it = orig.begin(); it != orig.end(); ++it) {
+            if (!out.contains(it.key())) out[it.key()] = it.value();
+            else merge_missing(out[it.key()], it.value());
+        }
+    } else if (out.is_array() && orig.is_array() && out.size() == orig.size()) {
+        for (size_t i = 0; i < out.size(); i++) merge_missing(out[i], orig[i]);
+    }
+}
+
+// What tinygltf 2.7 parses but does not write back (asset.minVersion, skins' extras, properties outside the
+// schema such as unknown top-level keys) and the default values its writer drops, taken from the file's own
+// JSON. Only keys the output lacks are added, so nothing the model holds is overridden. Sections this API
+// edits are limited: a material gets back only keys outside the material schema (a removed extension, texture
+// or default-valued factor must stay removed), buffers and images never get their uri/bufferView/mimeType
+// back (the writer decides those), and extensionsUsed/Required are left to mr_gltf_sync_extensions.
+void merge_original(nlohmann::json &doc, const nlohmann::json &orig) {
+    if (!orig.is_object()) return;
+    static const std::set<std::string> material_keys = {
+        "name", "extensions", "extras", "pbrMetallicRoughness", "normalTexture", "occlusionTexture",
+        "emissiveTexture", "emissiveFactor", "alphaMode", "alphaCutoff", "doubleSided"};
+    for (auto it = orig.begin(); it != orig.end(); ++it) {
+        const std::string &key = it.key();
+        const nlohmann::json &value = it.value();
+        if (key == "extensionsUsed" || key == "extensionsRequired") continue;
+        if (!doc.contains(key)) {
+            if (key != "materials" && key != "buffers" && key != "images") doc[key] = value;
+            continue;
+        }
+        nlohmann::json &out = doc[key];
+        if (key == "materials" || key == "buffers" || key == "images") {
+            if (!out.is_array() || !value.is_array()) continue;
+            for (size_t i = 0; i < out.size() && i < value.size(); i++) {
+                if (!out[i].is_object() || !value[i].is_object()) continue;
+                for (auto f = value[i].begin(); f != value[i].end(); ++f) {
+                    bool managed = key == "materials" ? material_keys.count(f.key()) > 0
+                                                      : f.key() == "uri" || f.key() == "bufferView" ||
+                                                            f.key() == "mimeType" || f.key() == "byteLength";
+                    if (managed) continue;
+                    if (!out[i].contains(f.key())) out[i][f.key()] = f.value();
+                    else merge_missing(out[i][f.key()], f.value());
+                }
+            }
+            continue;
+        }
+        merge_missing(out, value);
+    }
+}
+
 // ---- saving --------------------------------------------------------------------------------------------
 
 struct pending_file {
@@ -467,6 +520,8 @@ mr_status save_impl(mr_gltf *g, const char *path_c) {
             doc["samplers"][i]["extensions"] = exts;
         }
     }
+
+    merge_original(doc, g->original);
 
     std::string stem = out_path.substr(out_path.find_last_of('/') == std::string::npos
                                            ? 0 : out_path.find_last_of('/') + 1);
@@ -649,6 +704,16 @@ mr_status load_impl(const char *path_c, mr_gltf **out) {
             for (size_t i = 0; i < views.size() && i < g->model.bufferViews.size(); i++) {
                 if (views[i].is_object() && !views[i].contains("target")) g->model.bufferViews[i].target = 0;
             }
+        }
+        if (!doc.is_discarded() && doc.is_object()) {
+            // Base64 payloads are not needed again: the buffers and images are written from the model.
+            for (const char *key : {"buffers", "images"}) {
+                if (!doc.contains(key) || !doc[key].is_array()) continue;
+                for (auto &item : doc[key]) {
+                    if (item.is_object()) item.erase("uri");
+                }
+            }
+            g->original = std::move(doc);
         }
     }
     for (size_t i = 0; i < g->model.buffers.size(); i++) {

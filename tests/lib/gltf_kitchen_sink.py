@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """gltf_kitchen_sink.py OUT.gltf — writes a small, valid glTF holding what the material shim must pass through
-untouched (tests/gltf_validate.sh): extras and extensions on the asset, nodes, meshes, samplers and materials,
+untouched (tests/gltf_validate.sh): extras and extensions on the asset, nodes, meshes, samplers, skins and
+materials, asset.minVersion, a property outside the schema (a validator warning, not an error),
 an unknown material extension with a transformed texture, KHR_lights_punctual, KHR_materials_emissive_strength,
 a camera, a skin, an animation, morph targets, a sparse accessor, named samplers, data-URI buffer and image."""
 import base64
@@ -43,7 +44,7 @@ def view(part, **extra):
 
 
 gltf = {
-    "asset": {"version": "2.0", "generator": "matremap kitchen sink", "copyright": "CC0",
+    "asset": {"version": "2.0", "minVersion": "2.0", "generator": "matremap kitchen sink", "copyright": "CC0",
               "extras": {"note": "asset extras"}},
     "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_clearcoat",
                        "KHR_texture_transform"],
@@ -54,7 +55,7 @@ gltf = {
     "scenes": [{"name": "main", "nodes": [0, 2, 3], "extras": {"s": 1}}],
     "nodes": [
         {"name": "triangle", "mesh": 0, "skin": 0, "translation": [1, 2, 3], "children": [1],
-         "extras": {"id": 42}},
+         "extras": {"id": 42}, "xNotInTheSchema": [1, 2]},
         {"name": "joint", "rotation": [0, 0, 0, 1]},
         {"name": "camera", "camera": 0, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 5, 1]},
         {"name": "light", "extensions": {"KHR_lights_punctual": {"light": 0}}},
@@ -65,7 +66,7 @@ gltf = {
                 "primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1, "JOINTS_0": 5, "WEIGHTS_0": 6},
                                 "material": 0, "targets": [{"POSITION": 7}], "extras": {"p": True}}],
                 "extras": {"m": "mesh"}}],
-    "skins": [{"name": "skin", "joints": [1], "inverseBindMatrices": 4}],
+    "skins": [{"name": "skin", "joints": [1], "inverseBindMatrices": 4, "extras": {"rig": "a"}}],
     "animations": [{"name": "spin",
                     "channels": [{"sampler": 0, "target": {"node": 1, "path": "rotation"}}],
                     "samplers": [{"input": 2, "output": 3, "interpolation": "STEP"}]}],
