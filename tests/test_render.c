@@ -3,6 +3,8 @@
  */
 #include <math.h>
 #include <omp.h>
+#include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "harness.h"
@@ -1140,6 +1142,560 @@ MR_TEST(texture_non_finite_texels_render_finite) {
     mr_image_free(env);
 }
 
+/* ---- triangle meshes ------------------------------------------------------------------------------------------ */
+
+/* A mesh with its own arrays (the test's side of the borrowed mr_mesh). */
+typedef struct test_mesh {
+    mr_mesh mesh;
+    float *positions, *normals, *uvs, *tangents;
+    uint32_t *indices;
+} test_mesh;
+
+static void test_mesh_free(test_mesh *m) {
+    free(m->positions);
+    free(m->normals);
+    free(m->uvs);
+    free(m->tangents);
+    free(m->indices);
+    memset(m, 0, sizeof *m);
+}
+
+static void test_mesh_alloc(test_mesh *m, int vertices, int triangles) {
+    memset(m, 0, sizeof *m);
+    m->positions = calloc((size_t)vertices * 3, sizeof(float));
+    m->normals = calloc((size_t)vertices * 3, sizeof(float));
+    m->uvs = calloc((size_t)vertices * 2, sizeof(float));
+    m->tangents = calloc((size_t)vertices * 4, sizeof(float));
+    m->indices = calloc((size_t)triangles * 3, sizeof(uint32_t));
+    m->mesh.vertex_count = vertices;
+    m->mesh.triangle_count = triangles;
+    m->mesh.positions = m->positions;
+    m->mesh.indices = m->indices;
+}
+
+/* A unit UV sphere at the origin in the sphere's own texture layout (render.h): vertex (i, j) at v = i/stacks,
+ * u = j/slices, theta = pi v, phi = 2 pi (u - 0.5), p = (sin theta sin phi, cos theta, sin theta cos phi);
+ * exact normals (= p) and UVs; the seam and pole vertices are duplicated, pole rows are single triangles.
+ * welded != 0: no UVs or normals, one vertex per pole and none duplicated on the seam (generated normals). */
+static test_mesh uv_sphere(int stacks, int slices, int welded) {
+    test_mesh m;
+    int columns = welded ? slices : slices + 1;
+    int vertices = welded ? (stacks - 1) * slices + 2 : (stacks + 1) * columns;
+    test_mesh_alloc(&m, vertices, 2 * stacks * slices - 2 * slices);
+    for (int i = 0; i <= stacks; i++)
+        for (int j = 0; j < columns; j++) {
+            int index = welded ? (i == 0 ? 0 : i == stacks ? vertices - 1 : 1 + (i - 1) * slices + j) : i * columns + j;
+            if (welded && (i == 0 || i == stacks) && j > 0) continue;
+            double theta = TEST_PI * i / stacks, phi = 2.0 * TEST_PI * ((double)j / slices - 0.5);
+            double p[3] = {sin(theta) * sin(phi), cos(theta), sin(theta) * cos(phi)};
+            if (i == 0 || i == stacks) p[0] = 0.0, p[2] = 0.0, p[1] = i == 0 ? 1.0 : -1.0;
+            for (int k = 0; k < 3; k++) m.positions[3 * index + k] = m.normals[3 * index + k] = (float)p[k];
+            m.uvs[2 * index] = (float)j / slices;
+            m.uvs[2 * index + 1] = (float)i / stacks;
+        }
+    int t = 0;
+    for (int i = 0; i < stacks; i++)
+        for (int j = 0; j < slices; j++) {
+            int jn = welded ? (j + 1) % slices : j + 1;
+            uint32_t a, b, c, d; // a top-left, b bottom-left, c bottom-right, d top-right (seen from outside)
+            if (welded) {
+                a = i == 0 ? 0 : (uint32_t)(1 + (i - 1) * slices + j);
+                d = i == 0 ? 0 : (uint32_t)(1 + (i - 1) * slices + jn);
+                b = i + 1 == stacks ? (uint32_t)vertices - 1 : (uint32_t)(1 + i * slices + j);
+                c = i + 1 == stacks ? (uint32_t)vertices - 1 : (uint32_t)(1 + i * slices + jn);
+            } else {
+                a = (uint32_t)(i * columns + j), d = (uint32_t)(i * columns + jn);
+                b = (uint32_t)((i + 1) * columns + j), c = (uint32_t)((i + 1) * columns + jn);
+            }
+            if (i + 1 < stacks) m.indices[3 * t] = a, m.indices[3 * t + 1] = b, m.indices[3 * t + 2] = c, t++;
+            if (i > 0) m.indices[3 * t] = a, m.indices[3 * t + 1] = c, m.indices[3 * t + 2] = d, t++;
+        }
+    if (!welded) {
+        m.mesh.normals = m.normals;
+        m.mesh.uvs = m.uvs;
+    }
+    return m;
+}
+
+/* Add an axis-aligned rectangle in the plane y = height, x and z in [lo, hi], facing +y (CCW seen from above),
+ * as vertices 4q..4q+3 and triangles 2q, 2q+1; UVs: u along +x, v along +z (0..1). */
+static void add_floor_quad(test_mesh *m, int q, double height, double lo, double hi) {
+    const double corner[4][2] = {{lo, lo}, {lo, hi}, {hi, hi}, {hi, lo}};
+    for (int k = 0; k < 4; k++) {
+        float *p = m->positions + 3 * (4 * q + k);
+        p[0] = (float)corner[k][0], p[1] = (float)height, p[2] = (float)corner[k][1];
+        m->uvs[2 * (4 * q + k)] = corner[k][0] == lo ? 0.0f : 1.0f;
+        m->uvs[2 * (4 * q + k) + 1] = corner[k][1] == lo ? 0.0f : 1.0f;
+    }
+    const uint32_t base = (uint32_t)(4 * q), tri[6] = {0, 1, 2, 0, 2, 3};
+    for (int k = 0; k < 6; k++) m->indices[6 * q + k] = base + tri[k];
+}
+
+/* A scene showing `mesh` with the fit scene's camera and light (size x size). */
+static mr_scene mesh_fit_scene(const test_mesh *m, int size, mr_fit_light light) {
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){size, light, 0});
+    scene.shape.type = MR_SHAPE_MESH;
+    scene.shape.mesh = &m->mesh;
+    return scene;
+}
+
+/* Max |a - b| over the pixels both objects cover fully (the silhouette's pixels are filtered only where the
+ * corner test finds an edge, so a sub-pixel shift there can switch a pixel between 1 and 16 samples), relative
+ * to the largest value of a; the RMSE over every pixel either image covers, relative to a's mean there. */
+static void image_difference(const mr_image *a, const mr_image *b, const float *cover_a, const float *cover_b,
+                             double *max_rel, double *rmse_rel) {
+    double peak = 0.0, max_diff = 0.0, sum2 = 0.0, sum = 0.0;
+    long count = 0;
+    for (size_t i = 0; i < mr_image_value_count(a); i++) {
+        peak = fmax(peak, a->pixels[i]);
+        double d = fabs((double)a->pixels[i] - b->pixels[i]);
+        if (cover_a[i / 3] == 1.0f && cover_b[i / 3] == 1.0f) max_diff = fmax(max_diff, d);
+        if (a->pixels[i] > 0.0f || b->pixels[i] > 0.0f) sum2 += d * d, sum += a->pixels[i], count++;
+    }
+    *max_rel = max_diff / peak;
+    *rmse_rel = count ? sqrt(sum2 / count) / (sum / count) : 0.0;
+}
+
+/* Render `model` at its defaults on the analytic sphere and on the mesh with the same scene; returns the
+ * differences (image_difference). */
+static void mesh_vs_sphere(const test_mesh *m, int size, const mr_light *light, const mr_brdf_model *model,
+                           int edge_samples, double *max_rel, double *rmse_rel) {
+    mr_scene sphere = mr_scene_fit(&(mr_fit_scene_options){size, MR_FIT_LIGHT_45, 0});
+    sphere.edge_samples = edge_samples;
+    if (light != NULL) sphere.lights[0] = *light;
+    mr_scene mesh = sphere;
+    mesh.shape.type = MR_SHAPE_MESH;
+    mesh.shape.mesh = &m->mesh;
+    double values[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(model, values);
+    mr_render_plan *ps = NULL, *pm = NULL;
+    mr_image *is = NULL, *im = NULL;
+    *max_rel = *rmse_rel = INFINITY;
+    MR_CHECK_OK(mr_render_plan_create(&sphere, &ps));
+    MR_CHECK_OK(mr_render_plan_create(&mesh, &pm));
+    if (ps && pm) {
+        MR_CHECK_OK(mr_render(ps, model, values, MR_COMPONENT_FULL, &is));
+        MR_CHECK_OK(mr_render(pm, model, values, MR_COMPONENT_FULL, &im));
+        MR_CHECK(mr_render_plan_shadow_ray_count(pm) == 0 && !mr_render_plan_self_occluding(pm));
+    }
+    if (is && im)
+        image_difference(is, im, mr_render_plan_coverage(ps), mr_render_plan_coverage(pm), max_rel, rmse_rel);
+    mr_image_free(is);
+    mr_image_free(im);
+    mr_render_plan_free(ps);
+    mr_render_plan_free(pm);
+}
+
+MR_TEST(mesh_sphere_matches_the_analytic_sphere) {
+    // A 256 x 512 UV sphere (261k triangles) with exact normals, and a welded one with generated normals,
+    // against the analytic unit sphere: point light (Lambert, GGX) and environment light, silhouettes filtered.
+    test_mesh fine = uv_sphere(256, 512, 0), welded = uv_sphere(128, 256, 1);
+    mr_image *map = linear_map(32, 16);
+    mr_light env = mr_light_environment(map, 1.0, 30.0, 256);
+    const mr_brdf_model *lambert = mr_brdf_find("lambert");
+    const mr_brdf_model *ggx = mr_brdf_find("ggx") ? mr_brdf_find("ggx") : lambert;
+    struct {
+        const test_mesh *mesh;
+        const mr_light *light;
+        const mr_brdf_model *model;
+        double max_rel, rmse_rel; // thresholds: measured values (docs/rendering.md) with margin
+    } cases[] = {
+        {&fine, NULL, lambert, 1e-3, 4e-3},  // measured 2.6e-4, 2.2e-3
+        {&fine, NULL, ggx, 1e-3, 4e-3},      // measured 3.4e-4, 1.6e-3
+        {&fine, &env, lambert, 1e-3, 4e-3},  // measured 9.8e-5, 2.4e-3
+        {&welded, NULL, lambert, 4e-3, 5e-3}, // measured 1.1e-3, 2.6e-3 (128 x 256, generated normals)
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        double max_rel, rmse_rel;
+        mesh_vs_sphere(cases[k].mesh, 128, cases[k].light, cases[k].model, 0, &max_rel, &rmse_rel);
+        printf("    case %zu (%s, %s, %s normals): max %.3g of peak, RMSE %.3g of mean\n", k, cases[k].model->name,
+               cases[k].light ? "environment" : "point light", cases[k].mesh == &fine ? "given" : "generated",
+               max_rel, rmse_rel);
+        MR_CHECK_MSG(max_rel < cases[k].max_rel && rmse_rel < cases[k].rmse_rel, "case %zu: max %.3g, RMSE %.3g",
+                     k, max_rel, rmse_rel);
+    }
+    // A coarse sphere must not pass: the test can tell a faceted mesh from the sphere.
+    test_mesh coarse = uv_sphere(8, 16, 0);
+    double max_rel, rmse_rel;
+    mesh_vs_sphere(&coarse, 128, NULL, lambert, 0, &max_rel, &rmse_rel);
+    printf("    coarse 8 x 16 sphere: max %.3g of peak, RMSE %.3g of mean\n", max_rel, rmse_rel);
+    MR_CHECK_MSG(max_rel > 4e-3 && rmse_rel > 5e-3, "coarse: max %.3g, RMSE %.3g", max_rel, rmse_rel);
+    test_mesh_free(&coarse);
+    test_mesh_free(&fine);
+    test_mesh_free(&welded);
+    mr_image_free(map);
+}
+
+/* xorshift64*: the tests' own deterministic random numbers in [0, 1). */
+static double test_random(uint64_t *state) {
+    *state ^= *state >> 12;
+    *state ^= *state << 25;
+    *state ^= *state >> 27;
+    return (double)((*state * 2685821657736338717ull) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+MR_TEST(mesh_bvh_agrees_with_brute_force) {
+    // A sphere plus 400 random triangles (overlapping, thin, some degenerate): 5000 random rays, half of them
+    // aimed at a random point of a random triangle. Hit or miss and the nearest t must agree exactly.
+    test_mesh sphere = uv_sphere(24, 48, 0);
+    const int extra = 400, nv = sphere.mesh.vertex_count + 3 * extra, nt = sphere.mesh.triangle_count + extra;
+    test_mesh m;
+    test_mesh_alloc(&m, nv, nt);
+    memcpy(m.positions, sphere.positions, (size_t)sphere.mesh.vertex_count * 3 * sizeof(float));
+    memcpy(m.indices, sphere.indices, (size_t)sphere.mesh.triangle_count * 3 * sizeof(uint32_t));
+    uint64_t seed = 0x9E3779B97F4A7C15ull;
+    for (int k = 0; k < extra; k++) {
+        double c[3];
+        for (int i = 0; i < 3; i++) c[i] = 4.0 * test_random(&seed) - 2.0;
+        for (int v = 0; v < 3; v++) {
+            int index = sphere.mesh.vertex_count + 3 * k + v;
+            for (int i = 0; i < 3; i++)
+                m.positions[3 * index + i] = (float)(c[i] + (k % 10 == 0 ? 0.0 : 0.6 * test_random(&seed) - 0.3));
+            m.indices[3 * (sphere.mesh.triangle_count + k) + v] = (uint32_t)index;
+        }
+    }
+    mr_scene scene = mesh_fit_scene(&m, 8, MR_FIT_LIGHT_45);
+    scene.camera.position[2] = 10.0;
+    mr_render_plan *plan = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    int hits = 0, disagreements = 0;
+    for (int r = 0; r < 5000 && plan != NULL; r++) {
+        double origin[3], dir[3];
+        for (int i = 0; i < 3; i++) origin[i] = 8.0 * test_random(&seed) - 4.0;
+        if (r % 2 == 0) {
+            for (int i = 0; i < 3; i++) dir[i] = 2.0 * test_random(&seed) - 1.0;
+        } else {
+            int f = (int)(test_random(&seed) * nt);
+            double a = test_random(&seed), b = test_random(&seed);
+            if (a + b > 1.0) a = 1.0 - a, b = 1.0 - b;
+            for (int i = 0; i < 3; i++) {
+                double p0 = m.positions[3 * m.indices[3 * f] + i], p1 = m.positions[3 * m.indices[3 * f + 1] + i];
+                double p2 = m.positions[3 * m.indices[3 * f + 2] + i];
+                dir[i] = p0 + a * (p1 - p0) + b * (p2 - p0) - origin[i];
+            }
+        }
+        double t_bvh = -1.0, t_brute = -1.0;
+        int f_bvh = -1, f_brute = -1;
+        int h_bvh = mr_render_plan_trace_mesh(plan, origin, dir, 0, &t_bvh, &f_bvh);
+        int h_brute = mr_render_plan_trace_mesh(plan, origin, dir, 1, &t_brute, &f_brute);
+        hits += h_brute;
+        if (h_bvh != h_brute || t_bvh != t_brute) {
+            if (disagreements++ < 5)
+                fprintf(stderr, "    ray %d: bvh %d t %.17g (triangle %d), brute force %d t %.17g (triangle %d)\n", r,
+                        h_bvh, t_bvh, f_bvh, h_brute, t_brute, f_brute);
+        }
+    }
+    MR_CHECK_MSG(disagreements == 0, "%d of 5000 rays disagree", disagreements);
+    MR_CHECK_MSG(hits > 2500 && hits < 5000, "%d hits: the rays should both hit and miss", hits);
+    mr_render_plan_free(plan);
+    test_mesh_free(&m);
+    test_mesh_free(&sphere);
+}
+
+/* A 2 x 2 floor (y = 0, x and z in [-2, 2]) and a 1 x 1 plate floating above it (y = 1, [-0.5, 0.5]),
+ * both facing up: a mesh that shadows itself. */
+static test_mesh floor_and_plate(void) {
+    test_mesh m;
+    test_mesh_alloc(&m, 8, 4);
+    add_floor_quad(&m, 0, 0.0, -2.0, 2.0);
+    add_floor_quad(&m, 1, 1.0, -0.5, 0.5);
+    return m;
+}
+
+/* Unit direction of the ray through pixel centre (x + 0.5, y + 0.5), from render.h's camera model alone:
+ * forward = target - position, right = forward x up, true up = right x forward. */
+static void test_camera_ray(const mr_scene *s, double px, double py, double dir[3]) {
+    const mr_camera *c = &s->camera;
+    double f[3], r[3], u[3];
+    for (int i = 0; i < 3; i++) f[i] = c->target[i] - c->position[i];
+    double lf = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+    for (int i = 0; i < 3; i++) f[i] /= lf;
+    r[0] = f[1] * c->up[2] - f[2] * c->up[1], r[1] = f[2] * c->up[0] - f[0] * c->up[2];
+    r[2] = f[0] * c->up[1] - f[1] * c->up[0];
+    double lr = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    for (int i = 0; i < 3; i++) r[i] /= lr;
+    u[0] = r[1] * f[2] - r[2] * f[1], u[1] = r[2] * f[0] - r[0] * f[2], u[2] = r[0] * f[1] - r[1] * f[0];
+    double th = tan(c->fov_y_degrees * TEST_PI / 360.0), aspect = (double)s->width / s->height;
+    double a = (2.0 * px / s->width - 1.0) * th * aspect, b = (1.0 - 2.0 * py / s->height) * th;
+    for (int i = 0; i < 3; i++) dir[i] = f[i] + a * r[i] + b * u[i];
+}
+
+MR_TEST(mesh_convex_needs_no_shadow_rays_concave_gets_them) {
+    // Convex: a sphere and a flat-shaded cube (24 vertices, normals per face); no shadow rays, under a point
+    // light and an environment light. The floor with a plate above it is not convex: it traces them.
+    test_mesh sphere = uv_sphere(16, 32, 0), cube;
+    test_mesh_alloc(&cube, 24, 12);
+    for (int face = 0; face < 6; face++) {
+        int axis = face / 2;
+        double sign = face % 2 ? -1.0 : 1.0;
+        int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+        const double corner[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+        for (int k = 0; k < 4; k++) {
+            float *p = cube.positions + 3 * (4 * face + k), *n = cube.normals + 3 * (4 * face + k);
+            p[axis] = (float)sign, n[axis] = (float)sign;
+            p[a1] = (float)corner[k][0], p[a2] = (float)(corner[k][1] * sign); // CCW seen from outside
+        }
+        const uint32_t tri[6] = {0, 1, 2, 0, 2, 3};
+        for (int k = 0; k < 6; k++) cube.indices[6 * face + k] = (uint32_t)(4 * face) + tri[k];
+    }
+    cube.mesh.normals = cube.normals;
+    test_mesh plate = floor_and_plate();
+    mr_image *map = constant_map(16, 8, 1, 1.0f);
+    const test_mesh *meshes[3] = {&sphere, &cube, &plate};
+    for (int k = 0; k < 3; k++)
+        for (int with_env = 0; with_env < 2; with_env++) {
+            mr_scene scene = mesh_fit_scene(meshes[k], 32, MR_FIT_LIGHT_45);
+            scene.camera.position[1] = 3.0; // look down a little, so the floor shows
+            if (with_env) scene.lights[scene.light_count++] = mr_light_environment(map, 1.0, 0.0, 64);
+            mr_render_plan *plan = NULL;
+            MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+            if (plan == NULL) continue;
+            long rays = mr_render_plan_shadow_ray_count(plan);
+            MR_CHECK_MSG(mr_render_plan_object_pixel_count(plan) > 100, "mesh %d: object not seen", k);
+            MR_CHECK_MSG(k < 2 ? rays == 0 : rays > 0, "mesh %d, env %d: %ld shadow rays", k, with_env, rays);
+            MR_CHECK(mr_render_plan_self_occluding(plan) == (k == 2));
+            mr_render_plan_free(plan);
+        }
+    mr_image_free(map);
+    test_mesh_free(&sphere);
+    test_mesh_free(&cube);
+    test_mesh_free(&plate);
+}
+
+MR_TEST(mesh_shadow_of_a_plate_under_a_point_light) {
+    // Point light at (0, 3, 0) above the plate: the plate's shadow on the floor is the square |x|, |z| < 0.75
+    // (similar triangles: 0.5 * 3 / (3 - 1)). Floor pixels well inside it are black, floor pixels well outside
+    // hold the Lambert answer rho/pi * I * cos / d^2 = rho/pi * I * 3 / d^3, pixel centres only.
+    test_mesh m = floor_and_plate();
+    mr_scene scene = mesh_fit_scene(&m, 65, MR_FIT_LIGHT_45);
+    scene.edge_samples = 1;
+    scene.camera = (mr_camera){{0.0, 4.0, 4.5}, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, 50.0};
+    scene.lights[0].position[0] = 0.0, scene.lights[0].position[1] = 3.0, scene.lights[0].position[2] = 0.0;
+    mr_render_plan *plan = NULL;
+    mr_image *img = NULL;
+    const double rho = 0.5, values[3] = {rho, rho, rho}, intensity = scene.lights[0].intensity[0];
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    if (plan) MR_CHECK_OK(mr_render(plan, mr_brdf_find("lambert"), values, MR_COMPONENT_FULL, &img));
+    int dark = 0, lit = 0, wrong = 0;
+    for (int y = 0; y < 65 && img != NULL; y++)
+        for (int x = 0; x < 65; x++) {
+            double dir[3];
+            test_camera_ray(&scene, x + 0.5, y + 0.5, dir);
+            const double *o = scene.camera.position;
+            double tp = (1.0 - o[1]) / dir[1], px = o[0] + tp * dir[0], pz = o[2] + tp * dir[2];
+            if (tp > 0.0 && fabs(px) <= 0.52 && fabs(pz) <= 0.52) continue; // the plate, or close to its edge
+            double tf = -o[1] / dir[1], fx = o[0] + tf * dir[0], fz = o[2] + tf * dir[2];
+            double reach = fmax(fabs(fx), fabs(fz));
+            if (!(tf > 0.0) || reach > 1.95 || (reach > 0.72 && reach < 0.78)) continue;
+            double value = mr_image_at(img, x, y)[0], expected = 0.0;
+            if (reach < 0.75) {
+                dark++;
+            } else {
+                double d = sqrt(fx * fx + 9.0 + fz * fz);
+                expected = rho / TEST_PI * intensity * 3.0 / (d * d * d);
+                lit++;
+            }
+            if (fabs(value - expected) > 1e-5 * fmax(expected, 1e-3) && wrong++ < 5)
+                fprintf(stderr, "    pixel (%d, %d), floor (%.3f, %.3f): %.7g, expected %.7g\n", x, y, fx, fz, value,
+                        expected);
+        }
+    MR_CHECK_MSG(wrong == 0, "%d floor pixels off the known answer", wrong);
+    MR_CHECK_MSG(dark > 40 && lit > 400, "%d shadowed and %d lit floor pixels checked", dark, lit);
+    mr_image_free(img);
+    mr_render_plan_free(plan);
+    test_mesh_free(&m);
+}
+
+MR_TEST(mesh_plate_occludes_a_constant_environment) {
+    // Under a constant environment L, a Lambertian floor point directly below the plate's centre receives
+    // E = pi L (1 - F), F the view factor of the 1 x 1 plate at height 1: four corner rectangles A = B = 0.5,
+    // F = 4 / (2 pi) [A / sqrt(1 + A^2) atan(B / sqrt(1 + A^2)) + (A <-> B)] = 0.2394; radiance rho L (1 - F).
+    test_mesh m = floor_and_plate();
+    mr_image *map = constant_map(64, 32, 1, 1.0f);
+    mr_scene scene = mesh_fit_scene(&m, 65, MR_FIT_LIGHT_45);
+    scene.camera = (mr_camera){{0.0, 0.6, 5.0}, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, 30.0};
+    scene.lights[0] = mr_light_environment(map, 1.0, 0.0, 4096);
+    mr_render_plan *plan = NULL;
+    mr_image *img = NULL;
+    const double rho = 0.5, values[3] = {rho, rho, rho};
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    if (plan) MR_CHECK_OK(mr_render(plan, mr_brdf_find("lambert"), values, MR_COMPONENT_FULL, &img));
+    double a = 0.5, s = sqrt(1.0 + a * a);
+    double view_factor = 4.0 / (2.0 * TEST_PI) * 2.0 * (a / s * atan(a / s));
+    if (img != NULL) {
+        double centre = mr_image_at(img, 32, 32)[0], expected = rho * (1.0 - view_factor);
+        printf("    under the plate: %.5f, expected %.5f (view factor %.4f), error %.2g\n", centre, expected,
+               view_factor, fabs(centre / expected - 1.0));
+        MR_CHECK_NEAR(centre, expected, 0.01 * expected);
+        MR_CHECK(mr_render_plan_shadow_ray_count(plan) > 0);
+    }
+    mr_image_free(img);
+    mr_render_plan_free(plan);
+    mr_image_free(map);
+    test_mesh_free(&m);
+}
+
+MR_TEST(mesh_renders_are_identical_for_one_and_two_threads) {
+    // Plan (with shadow rays) and render, under one thread and under two: the same bytes.
+    test_mesh m = floor_and_plate();
+    mr_image *map = linear_map(32, 16);
+    mr_scene scene = mesh_fit_scene(&m, 48, MR_FIT_LIGHT_45);
+    scene.camera.position[1] = 3.0;
+    scene.lights[1] = mr_light_environment(map, 1.0, 20.0, 128);
+    scene.light_count = 2;
+    const mr_brdf_model *model = mr_brdf_find("ggx") ? mr_brdf_find("ggx") : mr_brdf_find("lambert");
+    double values[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(model, values);
+    int saved = omp_get_max_threads();
+    mr_image *img[2] = {NULL, NULL};
+    long rays[2] = {-1, -2};
+    for (int k = 0; k < 2; k++) {
+        omp_set_num_threads(k + 1);
+        mr_render_plan *plan = NULL;
+        MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+        if (plan) {
+            MR_CHECK_OK(mr_render(plan, model, values, MR_COMPONENT_FULL, &img[k]));
+            rays[k] = mr_render_plan_shadow_ray_count(plan);
+        }
+        mr_render_plan_free(plan);
+    }
+    omp_set_num_threads(saved);
+    MR_CHECK(rays[0] == rays[1] && rays[0] > 0);
+    MR_CHECK(same_pixels(img[0], img[1]));
+    mr_image_free(img[0]);
+    mr_image_free(img[1]);
+    mr_image_free(map);
+    test_mesh_free(&m);
+}
+
+MR_TEST(mesh_textures_sample_the_mesh_uvs) {
+    // A quad facing the camera, UV (0, 0) at its top-left and (1, 1) at its bottom-right; an albedo map whose
+    // left half is red and right half blue paints the quad's left half red and its right half blue.
+    test_mesh m;
+    test_mesh_alloc(&m, 4, 2);
+    const float pos[4][3] = {{-1, 1, 0}, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}};
+    const float uv[4][2] = {{0, 0}, {0, 1}, {1, 1}, {1, 0}};
+    for (int k = 0; k < 4; k++) {
+        memcpy(m.positions + 3 * k, pos[k], sizeof pos[k]);
+        memcpy(m.uvs + 2 * k, uv[k], sizeof uv[k]);
+    }
+    const uint32_t tri[6] = {0, 1, 2, 0, 2, 3};
+    memcpy(m.indices, tri, sizeof tri);
+    m.mesh.uvs = m.uvs;
+    mr_image *map = constant_map(16, 8, 3, 0.0f);
+    for (int j = 0; j < 8; j++)
+        for (int i = 0; i < 16; i++) mr_image_at(map, i, j)[i < 8 ? 0 : 2] = 1.0f;
+    mr_scene scene = mesh_fit_scene(&m, 64, MR_FIT_LIGHT_FRONTAL);
+    const mr_brdf_model *lambert = mr_brdf_find("lambert");
+    double values[3] = {0.5, 0.5, 0.5};
+    mr_param_textures textures = {0};
+    MR_CHECK_OK(mr_param_textures_set(&textures, lambert, "albedo", map, 0));
+    mr_render_plan *plan = NULL;
+    mr_image *img = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    if (plan) MR_CHECK_OK(mr_render_textured(plan, lambert, values, &textures, MR_COMPONENT_FULL, &img));
+    // The quad spans pixels 32 -+ 32 / (4 tan 17.5) = 32 -+ 25.4: probe 10 pixels either side of the centre.
+    const int probes[4][2] = {{22, 20}, {22, 44}, {42, 20}, {42, 44}};
+    for (int k = 0; k < 4 && img != NULL; k++) {
+        const float *px = mr_image_at(img, probes[k][0], probes[k][1]);
+        int left = k < 2;
+        MR_CHECK_MSG(px[left ? 0 : 2] > 0.1f && px[left ? 2 : 0] == 0.0f && px[1] == 0.0f,
+                     "pixel (%d, %d): %g %g %g, expected %s", probes[k][0], probes[k][1], px[0], px[1], px[2],
+                     left ? "red" : "blue");
+    }
+    mr_image_free(img);
+    mr_image_free(map);
+    mr_render_plan_free(plan);
+    test_mesh_free(&m);
+}
+
+MR_TEST(mesh_bad_meshes_are_rejected_with_messages) {
+    test_mesh m = floor_and_plate();
+    mr_scene scene = mesh_fit_scene(&m, 16, MR_FIT_LIGHT_45);
+    mr_render_plan *plan = NULL;
+    struct {
+        const char *what, *message;
+    } expect[] = {
+        {"index", "triangle 1: index 8 out of range (8 vertices)"},
+        {"nan", "vertex 5: position ("},
+        {"zero", "0 triangles: expected at least 1"},
+        {"degenerate", "all 4 triangles are degenerate"},
+        {"tangent", "vertex 0: tangent"},
+        {"normal", "vertex 3: normal (0, 0, 0)"},
+        {"singular", "transform is singular"},
+        {"null", "mesh shape without a mesh"},
+    };
+    for (size_t k = 0; k < sizeof expect / sizeof expect[0]; k++) {
+        test_mesh bad = floor_and_plate();
+        scene.shape.mesh = &bad.mesh;
+        if (k == 0) bad.indices[4] = 8;
+        if (k == 1) bad.positions[3 * 5 + 1] = NAN;
+        if (k == 2) bad.mesh.triangle_count = 0;
+        if (k == 3)
+            for (int v = 0; v < 8; v++) bad.positions[3 * v] = 0.0f; // every vertex on the line x = 0, y
+        if (k == 3)
+            for (int v = 0; v < 8; v++) bad.positions[3 * v + 2] = 0.0f;
+        if (k == 4) bad.mesh.tangents = bad.tangents; // all zero: w = 0
+        if (k == 5) {
+            for (int v = 0; v < 8; v++) bad.normals[3 * v + 1] = v == 3 ? 0.0f : 1.0f;
+            bad.mesh.normals = bad.normals;
+        }
+        if (k == 6) bad.mesh.has_transform = 1; // an all-zero matrix
+        if (k == 6) bad.mesh.transform[15] = 1.0;
+        if (k == 7) scene.shape.mesh = NULL;
+        MR_CHECK(mr_render_plan_create(&scene, &plan) == MR_ERR_INVALID_ARG && plan == NULL);
+        MR_CHECK_MSG(strstr(mr_last_error(), expect[k].message) != NULL, "%s: '%s'", expect[k].what, mr_last_error());
+        test_mesh_free(&bad);
+    }
+    MR_CHECK(mr_mesh_validate(&m.mesh) == MR_OK);
+    MR_CHECK(mr_mesh_validate(NULL) == MR_ERR_INVALID_ARG);
+    test_mesh_free(&m);
+}
+
+MR_TEST(mesh_camera_framing_fits_the_bounding_sphere) {
+    // The unit sphere mesh (its bounding sphere is the unit sphere: poles and equator points are vertices),
+    // scaled by 2 and moved to (5, 0, 0): the camera looks at (5, 0, 0) from +z at 2 / sin(0.9 * 17.5 deg),
+    // and the render shows the whole sphere with a margin.
+    test_mesh m = uv_sphere(32, 64, 0);
+    m.mesh.has_transform = 1;
+    const double matrix[16] = {2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 5, 0, 0, 1};
+    memcpy(m.mesh.transform, matrix, sizeof matrix);
+    mr_camera camera;
+    MR_CHECK_OK(mr_camera_frame_mesh(&m.mesh, NULL, &camera));
+    double distance = 2.0 / sin(0.9 * 17.5 * TEST_PI / 180.0);
+    MR_CHECK_NEAR(camera.position[0], 5.0, 1e-6);
+    MR_CHECK_NEAR(camera.position[2], distance, 1e-6);
+    MR_CHECK_NEAR(camera.target[0], 5.0, 1e-6);
+    MR_CHECK_NEAR(camera.fov_y_degrees, 35.0, 0.0);
+    mr_frame_options wide = {64, 32, 0.0, {0.0, 1.0, 0.0}, 0.5};
+    mr_camera above;
+    MR_CHECK_OK(mr_camera_frame_mesh(&m.mesh, &wide, &above));
+    MR_CHECK_NEAR(above.position[1], 2.0 / sin(0.5 * 17.5 * TEST_PI / 180.0), 1e-6);
+    MR_CHECK(above.up[2] != 0.0);
+    wide.fill = 2.0;
+    MR_CHECK(mr_camera_frame_mesh(&m.mesh, &wide, &above) == MR_ERR_INVALID_ARG);
+    mr_scene scene = mesh_fit_scene(&m, 64, MR_FIT_LIGHT_FRONTAL);
+    scene.camera = camera;
+    scene.lights[0].position[0] = 5.0, scene.lights[0].position[2] = 20.0;
+    mr_render_plan *plan = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    if (plan != NULL) {
+        const float *coverage = mr_render_plan_coverage(plan);
+        double border = 0.0, total = 0.0;
+        for (int y = 0; y < 64; y++)
+            for (int x = 0; x < 64; x++) {
+                total += coverage[y * 64 + x];
+                if (x < 2 || y < 2 || x > 61 || y > 61) border += coverage[y * 64 + x];
+            }
+        // The sphere spans 0.9 of the frame: a disc of radius about 0.9 * 32 pixels (perspective makes it a
+        // little wider than the angular ratio), nothing on the border.
+        MR_CHECK_MSG(border == 0.0, "coverage %g on the border", border);
+        MR_CHECK_MSG(total > 2000.0 && total < 3000.0, "coverage %g pixels", total);
+    }
+    mr_render_plan_free(plan);
+    test_mesh_free(&m);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
              MR_TEST_ENTRY(edge_filtering_measures_the_silhouette),
              MR_TEST_ENTRY(background_fills_the_uncovered_part_of_each_pixel),
@@ -1166,4 +1722,13 @@ MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
              MR_TEST_ENTRY(texture_coordinates_follow_the_documented_layout),
              MR_TEST_ENTRY(texture_halves_land_on_their_sides),
              MR_TEST_ENTRY(texture_bad_inputs_are_rejected),
-             MR_TEST_ENTRY(texture_non_finite_texels_render_finite))
+             MR_TEST_ENTRY(texture_non_finite_texels_render_finite),
+             MR_TEST_ENTRY(mesh_sphere_matches_the_analytic_sphere),
+             MR_TEST_ENTRY(mesh_bvh_agrees_with_brute_force),
+             MR_TEST_ENTRY(mesh_convex_needs_no_shadow_rays_concave_gets_them),
+             MR_TEST_ENTRY(mesh_shadow_of_a_plate_under_a_point_light),
+             MR_TEST_ENTRY(mesh_plate_occludes_a_constant_environment),
+             MR_TEST_ENTRY(mesh_renders_are_identical_for_one_and_two_threads),
+             MR_TEST_ENTRY(mesh_textures_sample_the_mesh_uvs),
+             MR_TEST_ENTRY(mesh_bad_meshes_are_rejected_with_messages),
+             MR_TEST_ENTRY(mesh_camera_framing_fits_the_bounding_sphere))

@@ -21,6 +21,7 @@
 #include <string.h>
 
 #include "../mr_internal.h"
+#include "mesh.h"
 #include "render.h"
 #include "vec3.h"
 
@@ -30,7 +31,9 @@ typedef struct hit_record {
     double tangent[3];
     double bitangent[3];
     double view_local[3]; /* unit direction towards the camera, in the shading frame */
-    double uv[2];         /* sphere texture coordinates (render.h) */
+    double uv[2];         /* sphere texture coordinates or the mesh's TEXCOORD_0 (render.h) */
+    double geometric[3];  /* meshes: the hit triangle's unit normal (by its winding) */
+    int triangle;         /* meshes: the hit triangle; -1 on a sphere */
 } hit_record;
 
 /* A point-light sample: radiance += f_r(hit view, light) * weight. */
@@ -69,6 +72,8 @@ struct mr_render_plan {
     point_sample *point_samples;
     uint16_t *env_samples; /* direction indices into env */
     env_table env;
+    mesh_world mesh;       /* MR_SHAPE_MESH: the world-space mesh and its BVH; zero otherwise */
+    long shadow_rays;      /* traced while building the plan */
 };
 
 /* The camera as the primary-ray generator needs it. */
@@ -99,21 +104,6 @@ static void camera_ray(const camera_frame *cf, double px, double py, double dir[
     double v = (1.0 - 2.0 * py / cf->height) * cf->tan_half;
     for (int k = 0; k < 3; k++) dir[k] = cf->forward[k] + u * cf->right[k] + v * cf->up[k];
     vec3_normalize(dir);
-}
-
-/* Orthonormal basis with n as third axis, continuous except at n.z = -1 (Duff et al., "Building an
- * Orthonormal Basis, Revisited", JCGT 6(1), 2017). Isotropic models only need n; the tangents give
- * anisotropic models and normal maps a defined frame later. */
-static void frame_from_normal(const double n[3], double t[3], double b[3]) {
-    double sign = n[2] >= 0.0 ? 1.0 : -1.0;
-    double a = -1.0 / (sign + n[2]);
-    double c = n[0] * n[1] * a;
-    t[0] = 1.0 + sign * n[0] * n[0] * a;
-    t[1] = sign * c;
-    t[2] = -sign * n[0];
-    b[0] = c;
-    b[1] = sign + n[1] * n[1] * a;
-    b[2] = -n[1];
 }
 
 static void to_local(const hit_record *hit, const double world[3], double local[3]) {
@@ -147,20 +137,34 @@ static void sphere_uv(const double n[3], double uv[2]) {
 
 /* Stage 1: the primary ray through image position (px, py). Returns 1 and fills *hit (if not NULL) when it
  * meets the object. The intersector is the place where other shape types (triangle meshes) plug in. */
-static int trace_primary(const mr_scene *scene, const camera_frame *cf, double px, double py, hit_record *hit) {
+static int trace_primary(const mr_scene *scene, const mesh_world *mesh, const camera_frame *cf, double px,
+                         double py, hit_record *hit) {
     double dir[3], t;
     camera_ray(cf, px, py, dir);
+    if (scene->shape.type == MR_SHAPE_MESH) {
+        mesh_hit mh;
+        if (!mesh_intersect(mesh, cf->origin, dir, INFINITY, -1, &mh)) return 0;
+        if (hit == NULL) return 1;
+        for (int k = 0; k < 3; k++) hit->position[k] = cf->origin[k] + mh.t * dir[k];
+        mesh_shade(mesh, &mh, hit->normal, hit->tangent, hit->bitangent, hit->geometric, hit->uv);
+        hit->triangle = mh.triangle;
+        double to_camera[3] = {-dir[0], -dir[1], -dir[2]};
+        to_local(hit, to_camera, hit->view_local);
+        return 1;
+    }
     if (!intersect_sphere(&scene->shape, cf->origin, dir, &t)) return 0;
     if (hit == NULL) return 1;
+    hit->triangle = -1;
     for (int k = 0; k < 3; k++) {
         hit->position[k] = cf->origin[k] + t * dir[k];
         hit->normal[k] = (hit->position[k] - scene->shape.center[k]) / scene->shape.radius;
     }
     vec3_normalize(hit->normal);
-    frame_from_normal(hit->normal, hit->tangent, hit->bitangent);
+    vec3_frame_from_normal(hit->normal, hit->tangent, hit->bitangent);
     double to_camera[3] = {-dir[0], -dir[1], -dir[2]};
     to_local(hit, to_camera, hit->view_local);
     sphere_uv(hit->normal, hit->uv);
+    for (int k = 0; k < 3; k++) hit->geometric[k] = hit->normal[k];
     return 1;
 }
 
@@ -181,6 +185,16 @@ static int point_light_sample(const mr_light *light, const hit_record *hit, poin
         sample->weight[k] = light->intensity[k] * falloff;
     }
     return 1;
+}
+
+/* Shadow rays (self-occluding meshes only): does the mesh block the way from the hit along unit dir within
+ * `distance`? The ray starts a hair (1e-9 of the mesh's size) off the hit triangle's plane on dir's side and
+ * skips that triangle, so it never finds the surface it leaves. */
+static int shadowed(const mesh_world *mesh, const hit_record *hit, const double dir[3], double distance) {
+    double offset = (vec3_dot(hit->geometric, dir) >= 0.0 ? 1e-9 : -1e-9) * mesh->scale;
+    double origin[3];
+    for (int k = 0; k < 3; k++) origin[k] = hit->position[k] + offset * hit->geometric[k];
+    return mesh_occluded(mesh, origin, dir, distance, hit->triangle);
 }
 
 /* ---- environment lights: the fixed sample pattern ----------------------------------------------------------- */
@@ -344,6 +358,7 @@ typedef struct row_result {
     size_t point_count, point_capacity;
     uint16_t *env;
     size_t env_count, env_capacity;
+    long shadow_rays;
 } row_result;
 
 static void row_result_free(row_result *row) {
@@ -366,9 +381,10 @@ static int reserve(void **buffer, size_t *capacity, size_t needed, size_t size) 
 }
 
 /* Stage 2 for one hit carrying `share` of its pixel: its samples from every light, in light order; the hit is
- * kept if any light reaches it. Returns 0 on allocation failure. */
-static int add_hit(const mr_scene *scene, const env_table *env, const hit_record *hit, double share,
-                   row_result *row) {
+ * kept if any light reaches it. `occluder` is the mesh when it can occlude itself (then every sample is kept
+ * only if its shadow ray is clear), NULL otherwise. Returns 0 on allocation failure. */
+static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world *occluder, const hit_record *hit,
+                   double share, row_result *row) {
     const size_t points_before = row->point_count, env_before = row->env_count;
     if (!reserve((void **)&row->points, &row->point_capacity, row->point_count + (size_t)scene->light_count,
                  sizeof *row->points))
@@ -379,12 +395,20 @@ static int add_hit(const mr_scene *scene, const env_table *env, const hit_record
         if (light->type == MR_LIGHT_POINT) {
             point_sample *sample = &row->points[row->point_count];
             if (!point_light_sample(light, hit, sample)) continue;
+            if (occluder != NULL) {
+                double to_light[3];
+                vec3_sub(light->position, hit->position, to_light);
+                double distance = vec3_normalize(to_light);
+                row->shadow_rays++;
+                if (shadowed(occluder, hit, to_light, distance)) continue;
+            }
             for (int k = 0; k < 3; k++) sample->weight[k] *= share;
             row->point_count++;
             continue;
         }
         // An environment light: its directions above the hit's horizon (a convex object cannot occlude
-        // itself, so this is the whole visibility test) that carry light.
+        // itself, so this is the whole visibility test) that carry light; on a self-occluding mesh, those
+        // whose shadow ray escapes.
         int n = env_light_samples(light);
         if (hit->view_local[2] > 0.0) {
             if (!reserve((void **)&row->env, &row->env_capacity, row->env_count + (size_t)n, sizeof *row->env))
@@ -392,7 +416,12 @@ static int add_hit(const mr_scene *scene, const env_table *env, const hit_record
             for (int k = env_offset; k < env_offset + n; k++) {
                 const double *w = env->weight[k];
                 if (w[0] == 0.0 && w[1] == 0.0 && w[2] == 0.0) continue;
-                if (vec3_dot(hit->normal, env->direction[k]) > 0.0) row->env[row->env_count++] = (uint16_t)k;
+                if (!(vec3_dot(hit->normal, env->direction[k]) > 0.0)) continue;
+                if (occluder != NULL) {
+                    row->shadow_rays++;
+                    if (shadowed(occluder, hit, env->direction[k], INFINITY)) continue;
+                }
+                row->env[row->env_count++] = (uint16_t)k;
             }
         }
         env_offset += n;
@@ -418,8 +447,9 @@ static int add_hit(const mr_scene *scene, const env_table *env, const hit_record
  * primary ray through their centre; pixels on the silhouette get n x n rays on a regular sub-pixel grid, each
  * weighted 1/n^2, so they are box-filtered like a path tracer's pixels instead of aliased (docs/design.md
  * principle 2: the extra rays go only where the image has an edge). Returns 0 on allocation failure. */
-static int trace_row(const mr_scene *scene, const env_table *env, const camera_frame *cf,
+static int trace_row(const mr_scene *scene, const env_table *env, const mesh_world *mesh, const camera_frame *cf,
                      const unsigned char *corner_hit, int edge_n, int y, float *coverage, row_result *row) {
+    const mesh_world *occluder = scene->shape.type == MR_SHAPE_MESH && !mesh->convex ? mesh : NULL;
     const int width = scene->width;
     row->pixels = malloc((size_t)width * sizeof *row->pixels);
     row->hit_counts = malloc((size_t)width * sizeof *row->hit_counts);
@@ -428,7 +458,7 @@ static int trace_row(const mr_scene *scene, const env_table *env, const camera_f
         const unsigned char *top = corner_hit + (size_t)y * (size_t)(width + 1) + (size_t)x;
         const unsigned char *bottom = top + width + 1;
         hit_record hit;
-        int centre = trace_primary(scene, cf, x + 0.5, y + 0.5, &hit);
+        int centre = trace_primary(scene, mesh, cf, x + 0.5, y + 0.5, &hit);
         int corners = top[0] + top[1] + bottom[0] + bottom[1];
         int n = (corners == 4 * centre) ? 1 : edge_n;
         double weight = 1.0 / ((double)n * n);
@@ -436,10 +466,10 @@ static int trace_row(const mr_scene *scene, const env_table *env, const camera_f
         int hits = 0;
         for (int j = 0; j < n; j++)
             for (int i = 0; i < n; i++) {
-                if (n > 1 && !trace_primary(scene, cf, x + (i + 0.5) / n, y + (j + 0.5) / n, &hit)) continue;
+                if (n > 1 && !trace_primary(scene, mesh, cf, x + (i + 0.5) / n, y + (j + 0.5) / n, &hit)) continue;
                 if (n == 1 && !centre) continue;
                 hits++;
-                if (!add_hit(scene, env, &hit, weight, row)) return 0;
+                if (!add_hit(scene, env, occluder, &hit, weight, row)) return 0;
             }
         int pixel = y * width + x;
         coverage[pixel] = (float)(hits * weight);
@@ -462,6 +492,7 @@ void mr_render_plan_free(mr_render_plan *plan) {
     free(plan->point_samples);
     free(plan->env_samples);
     env_table_free(&plan->env);
+    mesh_world_free(&plan->mesh);
     free(plan);
 }
 
@@ -484,18 +515,25 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     if (plan->coverage == NULL) goto oom;
     status = env_setup(scene, &plan->env);
     if (status != MR_OK) goto fail;
+    if (scene->shape.type == MR_SHAPE_MESH) {
+        status = mesh_world_build(scene->shape.mesh, &plan->mesh);
+        if (status != MR_OK) goto fail;
+    }
 
     // Which pixel corners see the object: a pixel whose corners and centre agree is entirely inside or
-    // outside the silhouette (the projected sphere is convex and, at these sizes, far wider than a pixel).
+    // outside the silhouette (the projected sphere is convex and, at these sizes, far wider than a pixel; a
+    // mesh's silhouette is handled alike, so only features thinner than a pixel that slip between its corners
+    // and centre escape the filter).
 #pragma omp parallel for schedule(static)
     for (int y = 0; y <= height; y++)
         for (int x = 0; x <= width; x++)
             corner_hit[(size_t)y * (size_t)(width + 1) + (size_t)x] =
-                (unsigned char)trace_primary(scene, &cf, x, y, NULL);
+                (unsigned char)trace_primary(scene, &plan->mesh, &cf, x, y, NULL);
 
 #pragma omp parallel for schedule(dynamic, 4) reduction(| : failed)
     for (int y = 0; y < height; y++)
-        if (!trace_row(scene, &plan->env, &cf, corner_hit, edge_n, y, plan->coverage, &rows[y])) failed = 1;
+        if (!trace_row(scene, &plan->env, &plan->mesh, &cf, corner_hit, edge_n, y, plan->coverage, &rows[y]))
+            failed = 1;
     if (failed) goto oom;
 
     // Concatenate the rows in image order: the plan, and so every render, is the same for any thread count.
@@ -506,6 +544,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
         points += rows[y].point_count;
         envs += rows[y].env_count;
         plan->object_pixels += rows[y].object_pixels;
+        plan->shadow_rays += rows[y].shadow_rays;
     }
     if (hits >= (size_t)INT_MAX || points > (size_t)INT_MAX) goto oom;
     plan->lit_pixel_index = malloc((lit + 1) * sizeof *plan->lit_pixel_index);
@@ -582,10 +621,29 @@ size_t mr_render_plan_bytes(const mr_render_plan *plan) {
            sizeof *plan->hit_begin) + (hits + 1) * sizeof *plan->hits +
            ((size_t)plan->hits[hits].point_begin + 1) * sizeof *plan->point_samples +
            (plan->hits[hits].env_begin + 1) * sizeof *plan->env_samples +
-           (size_t)plan->env.count * (sizeof *plan->env.direction + sizeof *plan->env.weight);
+           (size_t)plan->env.count * (sizeof *plan->env.direction + sizeof *plan->env.weight) +
+           mesh_world_bytes(&plan->mesh);
 }
 
 const float *mr_render_plan_coverage(const mr_render_plan *plan) { return plan->coverage; }
+
+long mr_render_plan_shadow_ray_count(const mr_render_plan *plan) { return plan->shadow_rays; }
+
+int mr_render_plan_self_occluding(const mr_render_plan *plan) {
+    return plan->scene.shape.type == MR_SHAPE_MESH && !plan->mesh.convex;
+}
+
+int mr_render_plan_trace_mesh(const mr_render_plan *plan, const double origin[3], const double dir[3],
+                              int brute_force, double *t, int *triangle) {
+    if (plan == NULL || plan->scene.shape.type != MR_SHAPE_MESH || origin == NULL || dir == NULL) return 0;
+    mesh_hit hit;
+    int found = brute_force ? mesh_intersect_brute(&plan->mesh, origin, dir, INFINITY, -1, &hit)
+                            : mesh_intersect(&plan->mesh, origin, dir, INFINITY, -1, &hit);
+    if (!found) return 0;
+    if (t != NULL) *t = hit.t;
+    if (triangle != NULL) *triangle = hit.triangle;
+    return 1;
+}
 
 /* ---- textures ------------------------------------------------------------------------------------------------ */
 

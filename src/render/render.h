@@ -61,6 +61,8 @@
 #include "../mr_image.h"
 #include "../mr_status.h"
 
+#include <stdint.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -115,16 +117,67 @@ typedef struct mr_light {
  * by mr_scene_validate, not here. */
 mr_light mr_light_environment(const mr_image *map, double scale, double rotation_degrees, int samples);
 
+/* ---- triangle meshes (MR_SHAPE_MESH) ----------------------------------------------------------------------
+ * A mesh is plain data the caller owns (the glTF loader fills one per primitive): flat float arrays as glTF
+ * accessors hold them, 32-bit triangle indices, and an object-to-world transform. mr_render_plan_create reads
+ * it once into the plan's own world-space copy (positions transformed, normals by the inverse transpose,
+ * tangents by the matrix with their handedness flipped by a mirroring transform) and keeps no reference, like
+ * environment maps. Missing attributes are generated in world space:
+ *   - normals: smooth vertex normals, each face's unit normal weighted by the vertex's corner angle
+ *     (Thuermer and Wuethrich 1998), so the result does not depend on how a face is split into triangles;
+ *   - tangents (only with UVs): per-triangle tangents along +u and bitangents along -v (glTF's v grows
+ *     downwards, normal maps' +y is up), each normalised and weighted by the corner angle, accumulated per
+ *     vertex, made orthogonal to the normal; w = -1 where the accumulated bitangent is on the side of
+ *     -cross(n, t) (mirrored UVs). MikkTSpace-like, not bit-compatible with MikkTSpace (no vertex splitting).
+ * Shading at a hit interpolates normal, tangent and UV with the barycentrics; the frame is
+ * (t orthogonalised against n, w * cross(n, t), n), or an arbitrary frame about n without tangents. UVs
+ * (TEXCOORD_0) feed mr_param_textures maps (0, 0 without UVs). A hit whose interpolated normal faces away
+ * from the camera is covered but unlit (black), like the back of a single-sided glTF material. */
+typedef struct mr_mesh {
+    int vertex_count;        /* >= 3 */
+    const float *positions;  /* [vertex_count * 3], object space, finite; required */
+    const float *normals;    /* [vertex_count * 3], object space, non-zero; NULL = generated (smooth) */
+    const float *tangents;   /* [vertex_count * 4], xyz object space, w = +-1 (bitangent = w cross(n, t));
+                                NULL = generated from the UVs when there are UVs */
+    const float *uvs;        /* [vertex_count * 2], TEXCOORD_0 (u right, v down, as glTF); NULL = none */
+    int triangle_count;      /* >= 1; at least one triangle must have a non-zero area */
+    const uint32_t *indices; /* [triangle_count * 3], each < vertex_count; counter-clockwise seen from the
+                                front (the side the generated normals face) */
+    int has_transform;       /* 0: identity (transform ignored) */
+    double transform[16];    /* object to world, a 4x4 column-major matrix as glTF's node.matrix; affine
+                                (last row 0 0 0 1), finite, invertible */
+} mr_mesh;
+
+/* Check a mesh (NULL arrays, counts, indices in range, finite values, non-zero normals, tangent w, the
+ * transform, not every triangle degenerate). MR_ERR_INVALID_ARG naming the vertex, triangle or field. */
+mr_status mr_mesh_validate(const mr_mesh *mesh);
+
 typedef enum mr_shape_type {
     MR_SHAPE_SPHERE = 0,
+    MR_SHAPE_MESH,
     MR_SHAPE_TYPE_COUNT
 } mr_shape_type;
 
 typedef struct mr_shape {
     mr_shape_type type;
-    double center[3];
-    double radius;
+    double center[3];     /* MR_SHAPE_SPHERE */
+    double radius;        /* MR_SHAPE_SPHERE */
+    const mr_mesh *mesh;  /* MR_SHAPE_MESH: borrowed, read by mr_render_plan_create only (see mr_mesh) */
 } mr_shape;
+
+/* How mr_camera_frame_mesh frames a mesh. Zero-initialise for the defaults. */
+typedef struct mr_frame_options {
+    int width, height;    /* the image the camera will render; 0 = square */
+    double fov_y_degrees; /* 0 = 35, the fit scene's */
+    double from[3];       /* direction from the mesh towards the camera; zero = +z (the fit camera's side) */
+    double fill;          /* the bounding sphere's angular diameter over the narrower field of view; 0 = 0.9 */
+} mr_frame_options;
+
+/* A camera that looks at the centre of the mesh's bounding sphere (world space: the centre of its bounding
+ * box, the radius to its farthest vertex) from direction `from`, at the distance where the sphere spans `fill`
+ * of the narrower of the vertical and horizontal fields of view, with +y up (+z when `from` is along y).
+ * opts may be NULL. MR_ERR_INVALID_ARG for an invalid mesh (mr_mesh_validate) or options. */
+mr_status mr_camera_frame_mesh(const mr_mesh *mesh, const mr_frame_options *opts, mr_camera *out);
 
 #define MR_SCENE_MAX_LIGHTS 8
 
@@ -195,6 +248,23 @@ long mr_render_plan_sample_count(const mr_render_plan *plan);
 /* Number of environment-light shading samples among mr_render_plan_sample_count() (0 without environment
  * lights). */
 long mr_render_plan_env_sample_count(const mr_render_plan *plan);
+
+/* Number of shadow rays the plan traced (once, at creation): 0 for a sphere and for a convex mesh, which
+ * cannot occlude itself (every vertex lies on the inner side of every face's plane, within 1e-6 of the mesh's
+ * size, and every face's winding agrees with its vertex normals); otherwise one per point light and one per
+ * environment direction above the horizon, for each lit hit. The plan keeps only the samples that see their
+ * light, so renders cost the same BRDF evaluations either way. */
+long mr_render_plan_shadow_ray_count(const mr_render_plan *plan);
+
+/* 1 if the plan's object can occlude itself (a non-convex mesh: shadow rays were traced), 0 otherwise. */
+int mr_render_plan_self_occluding(const mr_render_plan *plan);
+
+/* Trace one ray (world space; dir need not be unit) against the plan's mesh: the nearest hit at distance
+ * t > 0 (in units of |dir|) through the BVH, or with brute_force != 0 by testing every triangle (tests and
+ * debugging; both give the same nearest t). Returns 1 and fills *t and *triangle (either may be NULL) on a
+ * hit, 0 on a miss or when the plan's object is not a mesh. */
+int mr_render_plan_trace_mesh(const mr_render_plan *plan, const double origin[3], const double dir[3],
+                              int brute_force, double *t, int *triangle);
 
 /* Bytes the plan holds (geometry, samples, coverage, direction tables), for memory budgets. */
 size_t mr_render_plan_bytes(const mr_render_plan *plan);

@@ -61,7 +61,7 @@ mr_scene mr_scene_fit(const mr_fit_scene_options *opts) {
     scene.width = size;
     scene.height = size;
     scene.camera = (mr_camera){{0.0, 0.0, FIT_CAMERA_DISTANCE}, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, FIT_CAMERA_FOV_Y};
-    scene.shape = (mr_shape){MR_SHAPE_SPHERE, {0.0, 0.0, 0.0}, 1.0};
+    scene.shape = (mr_shape){MR_SHAPE_SPHERE, {0.0, 0.0, 0.0}, 1.0, NULL};
     scene.light_count = 1;
     scene.lights[0].type = MR_LIGHT_POINT;
     // The light turns from the view axis (+z, towards the camera) about +y, towards +x (image right).
@@ -129,13 +129,21 @@ mr_status mr_scene_validate(const mr_scene *scene) {
         return mr_fail(MR_ERR_INVALID_ARG, "scene: camera up vector is zero or parallel to the view direction");
     if ((unsigned)scene->shape.type >= MR_SHAPE_TYPE_COUNT)
         return mr_fail(MR_ERR_INVALID_ARG, "scene: unknown shape type %d", (int)scene->shape.type);
-    if (!vec3_is_finite(scene->shape.center) || !(scene->shape.radius > 0.0 && isfinite(scene->shape.radius)))
-        return mr_fail(MR_ERR_INVALID_ARG, "scene: sphere radius %g: expected a finite value > 0",
-                       scene->shape.radius);
-    double to_camera[3];
-    vec3_sub(cam->position, scene->shape.center, to_camera);
-    if (vec3_length(to_camera) <= scene->shape.radius)
-        return mr_fail(MR_ERR_INVALID_ARG, "scene: the camera is inside the sphere");
+    const int sphere = scene->shape.type == MR_SHAPE_SPHERE;
+    if (sphere) {
+        if (!vec3_is_finite(scene->shape.center) || !(scene->shape.radius > 0.0 && isfinite(scene->shape.radius)))
+            return mr_fail(MR_ERR_INVALID_ARG, "scene: sphere radius %g: expected a finite value > 0",
+                           scene->shape.radius);
+        double to_camera[3];
+        vec3_sub(cam->position, scene->shape.center, to_camera);
+        if (vec3_length(to_camera) <= scene->shape.radius)
+            return mr_fail(MR_ERR_INVALID_ARG, "scene: the camera is inside the sphere");
+    } else {
+        // A mesh may surround the camera (an interior); the primary rays simply see its inside.
+        if (scene->shape.mesh == NULL) return mr_fail(MR_ERR_INVALID_ARG, "scene: mesh shape without a mesh");
+        mr_status status = mr_mesh_validate(scene->shape.mesh);
+        if (status != MR_OK) return mr_fail_context(status, "scene");
+    }
     if (scene->light_count < 1 || scene->light_count > MR_SCENE_MAX_LIGHTS)
         return mr_fail(MR_ERR_INVALID_ARG, "scene: %d lights: expected 1 to %d", scene->light_count,
                        MR_SCENE_MAX_LIGHTS);
@@ -162,7 +170,7 @@ mr_status mr_scene_validate(const mr_scene *scene) {
             return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d: negative intensity", i);
         double to_light[3];
         vec3_sub(light->position, scene->shape.center, to_light);
-        if (vec3_length(to_light) <= scene->shape.radius)
+        if (sphere && vec3_length(to_light) <= scene->shape.radius)
             return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d is inside the sphere", i);
     }
     if (scene->edge_samples < 0 || scene->edge_samples > 16)

@@ -36,4 +36,19 @@ static inline double vec3_normalize(double a[3]) {
 
 static inline int vec3_is_finite(const double a[3]) { return isfinite(a[0]) && isfinite(a[1]) && isfinite(a[2]); }
 
+/* Orthonormal basis with n as third axis, continuous except at n.z = -1 (Duff et al., "Building an
+ * Orthonormal Basis, Revisited", JCGT 6(1), 2017). Isotropic models only need n; the tangents give
+ * anisotropic models and normal maps a defined frame where a surface has no tangents of its own. */
+static inline void vec3_frame_from_normal(const double n[3], double t[3], double b[3]) {
+    double sign = n[2] >= 0.0 ? 1.0 : -1.0;
+    double a = -1.0 / (sign + n[2]);
+    double c = n[0] * n[1] * a;
+    t[0] = 1.0 + sign * n[0] * n[0] * a;
+    t[1] = sign * c;
+    t[2] = -sign * n[0];
+    b[0] = c;
+    b[1] = sign + n[1] * n[1] * a;
+    b[2] = -n[1];
+}
+
 #endif /* MR_VEC3_H */

@@ -1,0 +1,60 @@
+/* mesh.h — the render plan's world-space triangle mesh and its BVH (internal; the public mr_mesh is in
+ * render.h). Built once per plan by mesh_world_build, immutable afterwards, so any number of threads may trace
+ * rays through it. */
+#ifndef MR_MESH_H
+#define MR_MESH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "render.h"
+
+/* A BVH node: an interior node's children are nodes[first] and nodes[first + 1]; a leaf (count > 0) holds
+ * triangles order[first .. first + count - 1]. */
+typedef struct bvh_node {
+    double lo[3], hi[3];
+    int first;
+    int count;
+} bvh_node;
+
+typedef struct mesh_world {
+    int vertex_count, triangle_count;
+    double (*position)[3];  /* world space */
+    double (*normal)[3];    /* world space, unit (given or generated) */
+    double (*tangent)[4];   /* world space xyz + handedness w; NULL without tangents and UVs */
+    double (*uv)[2];        /* NULL without TEXCOORD_0 */
+    uint32_t (*triangle)[3];
+    bvh_node *nodes;
+    int node_count;
+    int *order;             /* triangle indices in leaf order */
+    double scale;           /* bounding-box diagonal: the unit of the geometric tolerances */
+    int convex;             /* 1: cannot occlude itself, no shadow rays */
+} mesh_world;
+
+/* A ray's hit: distance, triangle and barycentrics (u at vertex 1, v at vertex 2). */
+typedef struct mesh_hit {
+    double t, u, v;
+    int triangle;
+} mesh_hit;
+
+/* Build *mesh (zeroed by the caller) from a validated mr_mesh: world-space attributes, generated normals and
+ * tangents, the BVH, the convexity test. MR_ERR_NOMEM (mesh_world_free cleans up) or MR_ERR_INVALID_ARG. */
+mr_status mesh_world_build(const mr_mesh *src, mesh_world *mesh);
+void mesh_world_free(mesh_world *mesh);
+size_t mesh_world_bytes(const mesh_world *mesh);
+
+/* Nearest hit with 0 < t < t_max (dir need not be unit); skip = a triangle to ignore, or -1. */
+int mesh_intersect(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip,
+                   mesh_hit *hit);
+/* The same by testing every triangle. */
+int mesh_intersect_brute(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max,
+                         int skip, mesh_hit *hit);
+/* Any hit with 0 < t < t_max, skipping triangle `skip`. */
+int mesh_occluded(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip);
+
+/* The shading attributes at a hit: unit shading normal, tangent and bitangent (a frame), unit geometric normal
+ * (by the winding), texture coordinates. */
+void mesh_shade(const mesh_world *mesh, const mesh_hit *hit, double normal[3], double tangent[3],
+                double bitangent[3], double geometric[3], double uv[2]);
+
+#endif /* MR_MESH_H */
