@@ -394,6 +394,54 @@ void merge_original(nlohmann::json &doc, const nlohmann::json &orig) {
     }
 }
 
+// A self-contained .glb: every buffer concatenated (4-byte aligned) into the binary chunk, the buffer views
+// moved accordingly, and every image that is not in a buffer view yet appended to it with a view of its own.
+// Only the first buffer's name and extras survive (there is one buffer left).
+void pack_glb(const tinygltf::Model &m, nlohmann::json &doc, std::vector<unsigned char> *blob) {
+    auto align = [blob]() {
+        while (blob->size() % 4) blob->push_back(0);
+    };
+    std::vector<size_t> offsets;
+    for (const tinygltf::Buffer &b : m.buffers) {
+        align();
+        offsets.push_back(blob->size());
+        blob->insert(blob->end(), b.data.begin(), b.data.end());
+    }
+    if (doc.contains("bufferViews")) {
+        for (auto &v : doc["bufferViews"]) {
+            size_t buffer = v.value("buffer", (size_t)0);
+            size_t offset = v.value("byteOffset", (size_t)0) + (buffer < offsets.size() ? offsets[buffer] : 0);
+            v["buffer"] = 0;
+            if (offset > 0) v["byteOffset"] = offset;
+        }
+    }
+    for (size_t i = 0; i < m.images.size(); i++) {
+        const tinygltf::Image &im = m.images[i];
+        nlohmann::json &o = doc["images"][i];
+        o.erase("uri");
+        int view = im.bufferView;
+        if (view < 0) {
+            align();
+            nlohmann::json v = {{"buffer", 0}, {"byteLength", im.image.size()}};
+            if (!blob->empty()) v["byteOffset"] = blob->size();
+            blob->insert(blob->end(), im.image.begin(), im.image.end());
+            doc["bufferViews"].push_back(v);
+            view = (int)doc["bufferViews"].size() - 1;
+        }
+        o["bufferView"] = view;
+        o["mimeType"] = im.mimeType.empty() ? sniff_mime(im.image) : im.mimeType;
+    }
+    if (blob->empty()) {
+        doc.erase("buffers");
+        return;
+    }
+    nlohmann::json first = doc.contains("buffers") && !doc["buffers"].empty() ? doc["buffers"][0]
+                                                                              : nlohmann::json::object();
+    first.erase("uri");
+    first["byteLength"] = blob->size();
+    doc["buffers"] = nlohmann::json::array({first});
+}
+
 // ---- saving --------------------------------------------------------------------------------------------
 
 struct pending_file {
@@ -529,8 +577,15 @@ mr_status save_impl(mr_gltf *g, const char *path_c) {
     std::vector<pending_file> files;
     std::vector<std::pair<nlohmann::json *, size_t>> uri_slots; // JSON object, index into files
     const std::vector<unsigned char> *glb_bin = NULL;
+    // A .glb holds everything, unless an extension points into buffers by index (meshopt compression).
+    std::vector<unsigned char> packed;
+    bool pack = binary && !list_has(m.extensionsUsed, "EXT_meshopt_compression");
+    if (pack) {
+        pack_glb(m, doc, &packed);
+        if (!packed.empty()) glb_bin = &packed;
+    }
 
-    for (size_t i = 0; i < m.buffers.size(); i++) {
+    for (size_t i = 0; i < m.buffers.size() && !pack; i++) {
         nlohmann::json &b = doc["buffers"][i];
         const tinygltf::Buffer &buf = m.buffers[i];
         b["byteLength"] = buf.data.size();
@@ -553,7 +608,7 @@ mr_status save_impl(mr_gltf *g, const char *path_c) {
         uri_slots.push_back({&b, files.size()});
         files.push_back(f);
     }
-    for (size_t i = 0; i < m.images.size(); i++) {
+    for (size_t i = 0; i < m.images.size() && !pack; i++) {
         nlohmann::json &o = doc["images"][i];
         const tinygltf::Image &im = m.images[i];
         o.erase("uri");

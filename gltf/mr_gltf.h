@@ -24,14 +24,18 @@
  * resources beside it: external buffers and images under their original relative URIs (or a fresh name when
  * the URI is absolute or leaves the output directory), data-URI buffers and images kept as data URIs, images
  * stored in buffer views kept there; a .glb's binary chunk becomes "<name>.bin" beside a .gltf output. A .glb
- * output holds the first buffer in its binary chunk when it has no URI (an asset read from a .glb) and
- * otherwise the same external files as a .gltf. Every file is written to a temporary name and renamed when
+ * output is self-contained: every buffer is packed into its binary chunk (views moved accordingly; one buffer
+ * is left, with the first one's name and extras) and every image gets a buffer view there, its bytes
+ * unchanged (an asset using EXT_meshopt_compression, which points into buffers by index, is not packed and
+ * keeps external files like a .gltf). Every file is written to a temporary name and renamed when
  * complete; on failure the files this call created are removed. The output and its resources are never
  * written over a file the asset was read from (an unchanged resource that would land on its own source is
  * left in place). extensionsUsed/extensionsRequired are brought up to date first (mr_gltf_sync_extensions).
  *
  * Everything this API does not touch (meshes, nodes, animations, skins, cameras, scenes, extras, other
- * extensions) is kept as tinygltf holds it; see gltf/README.md for what tinygltf 2.7 does not keep.
+ * extensions, properties outside the schema) is written back: what tinygltf 2.7 parses but does not write
+ * (asset.minVersion, skins' extras, unknown properties, default values) is restored from the file's own JSON,
+ * except inside what this API edits (see gltf/README.md).
  *
  * Threading: an asset may be used by one thread at a time; distinct assets are independent. Errors follow
  * mr_status.h: a status, and a one-line message naming the file and the value in mr_last_error().

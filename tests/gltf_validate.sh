@@ -4,7 +4,7 @@
 #   1. build/tests/test_gltf round-trips every asset of $MR_SHARED/assets (specgloss/*, metalrough/*) through
 #      mr_gltf_load -> mr_gltf_save as .gltf and .glb (MR_GLTF_KEEP keeps the copies), and a generated
 #      "kitchen sink" (tests/lib/gltf_kitchen_sink.py: extras and extensions everywhere, lights, camera, skin,
-#      animation, morph target, sparse accessor, named sampler, data URIs) as .gltf; and keeps the edited
+#      animation, morph target, sparse accessor, named sampler, data URIs) as .gltf and .glb; and keeps the edited
 #      FloppyDisk of test_gltf's drop_spec_gloss_set_metal_rough_add_texture case.
 #   2. The Khronos validator (npm gltf-validator, pinned in tests/node/package-lock.json; tests/node/
 #      gltf_validate.js, external resources resolved) must report 0 errors on every copy.
@@ -43,13 +43,16 @@ fi
 mkdir -p "$tmp/keep"
 expect "round trip of every asset (test_gltf)" 0 "1 passed, 0 failed" -- \
     env MR_SHARED="$shared" MR_GLTF_KEEP="$tmp/keep" "$build/tests/test_gltf" round_trip_every_asset
-expect "edited FloppyDisk (SG dropped; MR, specular, ior, transforms, a new image) kept" 0 "1 passed, 0 failed" -- \
-    env MR_SHARED="$shared" MR_GLTF_KEEP="$tmp/keep" "$build/tests/test_gltf" drop_spec_gloss_set_metal_rough_add_texture
+expect "edited FloppyDisk (SG dropped; MR, specular, ior, transforms, a new image) kept" 0 "1 passed, 0 failed" \
+    -- env MR_SHARED="$shared" MR_GLTF_KEEP="$tmp/keep" "$build/tests/test_gltf" \
+    drop_spec_gloss_set_metal_rough_add_texture
 python3 "$root/tests/lib/gltf_kitchen_sink.py" "$tmp/sink.gltf"
 mkdir -p "$tmp/keep/KitchenSink"
-expect "round trip of the kitchen sink (test_gltf)" 0 "1 passed, 0 failed" -- \
-    env MR_GLTF_IN="$tmp/sink.gltf" MR_GLTF_OUT="$tmp/keep/KitchenSink/KitchenSink.gltf" \
-    "$build/tests/test_gltf" round_trip_file_from_env
+for ext in gltf glb; do
+    expect "round trip of the kitchen sink as .$ext (test_gltf)" 0 "1 passed, 0 failed" -- \
+        env MR_GLTF_IN="$tmp/sink.gltf" MR_GLTF_OUT="$tmp/keep/KitchenSink/KitchenSink.$ext" \
+        "$build/tests/test_gltf" round_trip_file_from_env
+done
 
 declare -A original=(
     [Avocado]=specgloss/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Avocado.gltf
