@@ -227,7 +227,6 @@ void write_transform(tinygltf::ExtensionMap &exts, const mr_gltf_texture_ref *r)
     set_num(*t, "rotation", r->rotation, 0.0);
     set_nums(*t, "scale", r->scale, 2, ONE2);
     if (r->transform_tex_coord >= 0) {
-        set_num(*t, "texCoord", r->transform_tex_coord, -1.0);
         (*t)["texCoord"] = Value(r->transform_tex_coord);
     } else {
         t->erase("texCoord");
@@ -712,12 +711,12 @@ mr_status save_impl(mr_gltf *g, const char *path_c) {
 
 mr_status load_impl(const char *path_c, mr_gltf **out) {
     const std::string path = path_c;
-    std::vector<unsigned char> bytes;
-    mr_status s = read_file(path, &bytes, "glTF");
-    if (s != MR_OK) return s;
     struct stat st;
     if (stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
         return mr_fail(MR_ERR_IO, "glTF '%s': is a directory", path.c_str());
+    std::vector<unsigned char> bytes;
+    mr_status s = read_file(path, &bytes, "glTF");
+    if (s != MR_OK) return s;
 
     mr_gltf *g = new mr_gltf();
     g->path = path;
@@ -739,6 +738,8 @@ mr_status load_impl(const char *path_c, mr_gltf **out) {
                              ? MR_ERR_IO : MR_ERR_FORMAT;
         std::string why = first_line(err.empty() ? warn : err);
         if (why.empty()) why = is_glb ? "not a valid binary glTF" : "not a valid glTF";
+        if (code == MR_ERR_IO) why += " (resources are looked up relative to '" + g->base_dir + "')";
+        else if (is_glb) why += " (" + std::to_string(bytes.size()) + " bytes read; truncated?)";
         delete g;
         return mr_fail(code, "glTF '%s': %s", path.c_str(), why.c_str());
     }
@@ -960,6 +961,8 @@ void mr_gltf_free(mr_gltf *asset) { delete asset; }
 const char *mr_gltf_path(const mr_gltf *asset) { return asset ? asset->path.c_str() : ""; }
 
 void mr_gltf_get_counts(const mr_gltf *g, mr_gltf_counts *out) {
+    memset(out, 0, sizeof *out);
+    if (g == NULL) return;
     const tinygltf::Model &m = g->model;
     out->materials = (int)m.materials.size();
     out->textures = (int)m.textures.size();

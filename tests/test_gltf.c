@@ -699,6 +699,7 @@ MR_TEST(bad_inputs) {
     const char *empty = tmp_path("empty.gltf");
     MR_CHECK(write_bytes(empty, "", 0));
     expect_load_error(empty, MR_ERR_FORMAT, NULL);
+    expect_load_error(test_dir, MR_ERR_IO, "directory");
 
     /* A buffer URI that does not exist. */
     const char *nobuf = tmp_path("nobuf.gltf");
