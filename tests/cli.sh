@@ -8,7 +8,7 @@ source "$(dirname "$0")/lib/cli_harness.sh"
 expect "no arguments is a usage error" 1 "Usage" -- "$bin"
 expect "top-level help" 0 "Commands:" -- "$bin" --help
 expect "unknown command lists commands" 1 "valid:.*render" -- "$bin" frobnicate
-for cmd in models render ssim remap sweep train spec2metal metal2spec report; do
+for cmd in models render ssim remap sweep train spec2metal metal2spec report gltf; do
     expect "$cmd --help" 0 "Usage: matremap $cmd" -- "$bin" $cmd --help
 done
 expect "models lists ggx" 0 "^ggx " -- "$bin" models

@@ -82,6 +82,11 @@ int cli_material_load(const char *command, const char *model_name, const char *c
                       cli_material *m);
 void cli_material_free(cli_material *m);
 
+/* Load the specular -> metallic network: `weights` (a path; NULL = $MATREMAP_WEIGHTS, else spec2metal.mlp beside
+ * the source tree or the installed tree, cmd_workflow.c). `used` receives the path. Returns an exit code (messages
+ * printed, naming `command` and where it looked). */
+int cli_load_network(const char *command, const char *weights, mr_mlp **net, char *used, size_t used_size);
+
 int cmd_models(int argc, char **argv);
 int cmd_render(int argc, char **argv);
 int cmd_ssim(int argc, char **argv);
@@ -90,6 +95,7 @@ int cmd_sweep(int argc, char **argv);
 int cmd_train(int argc, char **argv);
 int cmd_spec2metal(int argc, char **argv);
 int cmd_report(int argc, char **argv);
+int cmd_gltf(int argc, char **argv);
 int cmd_metal2spec(int argc, char **argv);
 
 #endif /* MR_CLI_H */

@@ -532,7 +532,7 @@ static int cut_last(char *path) {
  * <dir of the executable>/../../data/spec2metal.mlp (the source tree: build/bin/matremap -> data/),
  * <dir of the executable>/../share/matremap/spec2metal.mlp (an installed tree: PREFIX/bin -> PREFIX/share) and
  * MR_DATA_DIR/spec2metal.mlp (when the build defines MR_DATA_DIR). `used` receives the path. */
-static int load_network(const char *command, const char *weights, mr_mlp **net, char *used, size_t used_size) {
+int cli_load_network(const char *command, const char *weights, mr_mlp **net, char *used, size_t used_size) {
     char tried[3][PATH_MAX + 64];
     int tried_count = 0;
     const char *chosen = weights, *source = "--weights";
@@ -826,7 +826,7 @@ int cmd_spec2metal(int argc, char **argv) {
     float *in_diffuse = NULL, *in_specular = NULL, *in_rough = NULL, *alpha = NULL;
     float *albedo = NULL, *metallic = NULL, *out_rough = NULL;
     uint8_t *flags = NULL;
-    if (use_mlp) code = load_network(command, weights, &net, net_path, sizeof net_path);
+    if (use_mlp) code = cli_load_network(command, weights, &net, net_path, sizeof net_path);
     if (code == CLI_EXIT_OK) code = read_maps(command, all, 5, &width, &height);
     size_t n = (size_t)width * (size_t)height;
     int failed = 0;

@@ -23,6 +23,7 @@ static const command commands[] = {
     {"train", cmd_train, "train the specular -> metallic network on sweep files (the dataset)"},
     {"spec2metal", cmd_spec2metal, "convert specular-workflow texture maps to metallic ones (also a command)"},
     {"metal2spec", cmd_metal2spec, "convert metallic-workflow texture maps to specular ones (also a command)"},
+    {"gltf", cmd_gltf, "convert a glTF asset's materials: gltf spec2metal|metal2spec IN -o OUT"},
     {"report", cmd_report, "render materials under an HDR map and compare them in an HTML report (SSIM)"},
 };
 

@@ -1,0 +1,609 @@
+/*
+ * cmd_gltf.c — `matremap gltf spec2metal|metal2spec IN -o OUT [options]`: converts the materials of a glTF asset
+ * between KHR_materials_pbrSpecularGlossiness and core pbrMetallicRoughness through the workflow converters
+ * (src/workflow/workflow.h, the network of nn/ for --method mlp), texel by texel, and saves the asset with its new
+ * textures beside it (gltf/mr_gltf.h). Everything else in the asset is left as it was.
+ *
+ * Per material (spec2metal): the spec-gloss factors multiply their textures in linear values (colour textures
+ * sRGB-decoded, glossiness linear, glTF's rule), the product is converted with glossiness -> roughness = 1 -
+ * glossiness and the spec-gloss diffuse read as glTF renders it (--convention), and the result becomes
+ * factors alone (no textures) or a base-colour texture (RGBA when the diffuse has alpha) plus a packed
+ * metallic-roughness texture (G roughness, B metallic) with factors 1. Both textures keep the UV set,
+ * KHR_texture_transform and sampler of the source textures; the two source textures must share their UV mapping
+ * (they do in practice: one texel of each describes one surface point) and are brought to one size (bilinear).
+ * metal2spec is the inverse: the spec-gloss extension is added beside the core material, which stays as the
+ * fallback glTF asks for.
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "gltf/mr_gltf.h"
+
+#define PATH_SIZE 4096
+
+static void print_help(void) {
+    printf("Usage: matremap gltf spec2metal IN.gltf|IN.glb -o OUT.gltf|OUT.glb [options]\n"
+           "       matremap gltf metal2spec IN.gltf|IN.glb -o OUT.gltf|OUT.glb [options]\n"
+           "\n"
+           "spec2metal converts every KHR_materials_pbrSpecularGlossiness material of a glTF asset to core\n"
+           "metallic-roughness: factors times textures, texel by texel, with the converters of 'matremap\n"
+           "spec2metal' (docs/workflow.md). New textures (PNG, or EXR with --format exr) are written beside OUT;\n"
+           "extensionsUsed/Required are updated; meshes, nodes, animations and other extensions are kept.\n"
+           "metal2spec adds the spec-gloss extension to every metal-rough material (Eq. 2), keeping the core\n"
+           "material as the fallback.\n"
+           "\n"
+           "Options:\n"
+           "  -o, --output OUT      the converted asset (.gltf with its files beside it, or .glb); never an input\n"
+           "  --method M            spec2metal: mlp (default), weighted, mean, khronos; metal2spec: eq2 (default),\n"
+           "                        khronos\n"
+           "  --weights FILE        the network for mlp (default: the shipped one, as 'matremap spec2metal')\n"
+           "  --convention C        gltf (default) or paper: how the spec-gloss diffuse is read (docs/workflow.md)\n"
+           "  --fallback F          spec2metal, for materials that already carry core metal-rough values beside\n"
+           "                        spec-gloss (Avocado): replace (default: convert and overwrite them) or keep\n"
+           "                        (keep the asset's own and only drop the extension)\n"
+           "  --keep-specgloss      spec2metal: keep the spec-gloss extension in the output beside the new core\n"
+           "                        material (default: remove it, so engines without it read the core material)\n"
+           "  --format F            png (default) or exr for the new textures\n"
+           "  --json                a JSON summary on stdout\n"
+           "  --help                this text\n"
+           "\n"
+           "Prints one line per material (what was converted, texture size, flagged texels, time) and a total.\n"
+           "\n"
+           "Example:\n"
+           "  matremap gltf spec2metal FloppyDisk/scene.gltf -o out/floppy.gltf --method weighted\n");
+}
+
+typedef struct options {
+    const char *direction, *input, *output, *method, *weights, *format;
+    mr_wf_diffuse convention;
+    int keep_fallback, keep_specgloss, json;
+} options;
+
+/* ---- textures ----------------------------------------------------------------------------------------------- */
+
+/* Decode the image of texture `ref` (colour: RGB sRGB-decoded, alpha linear; data: all linear). Returns an exit
+ * code (messages printed). */
+static int read_texture(const mr_gltf *asset, const mr_gltf_texture_ref *ref, mr_img_encoding encoding,
+                        const char *scratch, mr_image **out) {
+    mr_gltf_texture texture;
+    mr_gltf_image image;
+    mr_status status = mr_gltf_get_texture(asset, ref->index, &texture);
+    if (status != MR_OK) return cli_fail("gltf", status);
+    if (texture.image < 0) {
+        fprintf(stderr, "matremap gltf: error: '%s': texture %d has no image\n", mr_gltf_path(asset), ref->index);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    status = mr_gltf_get_image(asset, texture.image, &image);
+    if (status != MR_OK) return cli_fail("gltf", status);
+    mr_img_read_options ro = {0};
+    ro.encoding = encoding;
+    if (image.path[0] != '\0') {
+        status = mr_img_read(image.path, &ro, out);
+    } else { // an embedded image (data URI or buffer view): decoded from a scratch file named by its type
+        char path[PATH_SIZE];
+        snprintf(path, sizeof path, "%s/image%d%s", scratch, texture.image,
+                 strstr(image.mime_type, "jpeg") ? ".jpg" : ".png");
+        status = mr_gltf_image_write_file(asset, texture.image, path);
+        if (status == MR_OK) status = mr_img_read(path, &ro, out);
+        remove(path);
+    }
+    return status == MR_OK ? CLI_EXIT_OK : cli_fail("gltf", status);
+}
+
+/* Channel c of `im` at texel (x, y) of a width x height grid, bilinear when the sizes differ (texel centres
+ * aligned, clamped at the edges); a grey image answers every colour channel, a missing alpha is 1. */
+static float sample(const mr_image *im, int c, int x, int y, int width, int height) {
+    if (c == 3 && im->channels != 4) return 1.0f;
+    int channel = im->channels < 3 ? 0 : c;
+    if (im->width == width && im->height == height) return mr_image_at(im, x, y)[channel];
+    double u = (x + 0.5) * im->width / width - 0.5, v = (y + 0.5) * im->height / height - 0.5;
+    int x0 = (int)floor(u), y0 = (int)floor(v);
+    double fx = u - x0, fy = v - y0;
+    int xa = x0 < 0 ? 0 : x0, xb = x0 + 1 >= im->width ? im->width - 1 : x0 + 1;
+    int ya = y0 < 0 ? 0 : y0, yb = y0 + 1 >= im->height ? im->height - 1 : y0 + 1;
+    if (xa >= im->width) xa = im->width - 1;
+    if (ya >= im->height) ya = im->height - 1;
+    double top = mr_image_at(im, xa, ya)[channel] * (1 - fx) + mr_image_at(im, xb, ya)[channel] * fx;
+    double bottom = mr_image_at(im, xa, yb)[channel] * (1 - fx) + mr_image_at(im, xb, yb)[channel] * fx;
+    return (float)(top * (1 - fy) + bottom * fy);
+}
+
+/* Two texture references map texels to the surface the same way. */
+static int same_mapping(const mr_gltf_texture_ref *a, const mr_gltf_texture_ref *b) {
+    return a->tex_coord == b->tex_coord && a->has_transform == b->has_transform &&
+           (!a->has_transform || (a->offset[0] == b->offset[0] && a->offset[1] == b->offset[1] &&
+                                  a->rotation == b->rotation && a->scale[0] == b->scale[0] &&
+                                  a->scale[1] == b->scale[1] && a->transform_tex_coord == b->transform_tex_coord));
+}
+
+/* Write `image` as PREFIX_NAME.EXT (a scratch file), add it to the asset under the URI OUTBASE_mK_NAME.EXT and
+ * make a texture of it with the sampler of texture `like` (or none). Returns a status; *texture is its index. */
+static mr_status add_texture(mr_gltf *asset, const mr_image *image, mr_img_encoding encoding, const options *o,
+                             const char *scratch, const char *outbase, int material, const char *name, int like,
+                             int *texture) {
+    char file[PATH_SIZE], uri[PATH_SIZE / 2];
+    int length = snprintf(uri, sizeof uri, "%s_m%d_%s.%s", outbase, material, name, o->format);
+    int total = length < 0 || (size_t)length >= sizeof uri ? -1 : snprintf(file, sizeof file, "%s/%s", scratch, uri);
+    if (total < 0 || (size_t)total >= sizeof file) {
+        fprintf(stderr, "matremap gltf: error: -o '%s': the output's name is too long\n", o->output);
+        return MR_ERR_INVALID_ARG;
+    }
+    mr_img_write_options wo = {0};
+    wo.encoding = encoding;
+    mr_status status = mr_img_write(file, image, &wo);
+    int index = -1;
+    if (status == MR_OK) status = mr_gltf_add_image_file(asset, file, uri, &index);
+    remove(file);
+    if (status != MR_OK) return status;
+    mr_gltf_sampler sampler, *sampler_ptr = NULL;
+    mr_gltf_texture source;
+    if (like >= 0 && mr_gltf_get_texture(asset, like, &source) == MR_OK && source.sampler >= 0) {
+        sampler = source.params;
+        sampler_ptr = &sampler;
+    }
+    return mr_gltf_add_texture(asset, index, sampler_ptr, texture);
+}
+
+/* ---- one material ------------------------------------------------------------------------------------------- */
+
+/* What happened to a material, for the summary. */
+typedef struct outcome {
+    const char *what;  /* "converted", or why not */
+    int width, height; /* texture size, 0 when factors only */
+    size_t flagged;    /* texels with any workflow flag */
+    double seconds;
+} outcome;
+
+/* Planar buffers of n texels for one conversion. */
+typedef struct buffers {
+    float *in_rgb, *in_rgb2, *in_scalar, *alpha; /* inputs: colour, second colour (specular), roughness */
+    float *out_rgb, *out_rgb2, *out_scalar, *out_scalar2;
+    uint8_t *flags;
+} buffers;
+
+static int buffers_alloc(buffers *b, size_t n) {
+    memset(b, 0, sizeof *b);
+    b->in_rgb = malloc(3 * n * sizeof(float));
+    b->in_rgb2 = malloc(3 * n * sizeof(float));
+    b->in_scalar = malloc(n * sizeof(float));
+    b->alpha = malloc(n * sizeof(float));
+    b->out_rgb = malloc(3 * n * sizeof(float));
+    b->out_rgb2 = malloc(3 * n * sizeof(float));
+    b->out_scalar = malloc(n * sizeof(float));
+    b->out_scalar2 = malloc(n * sizeof(float));
+    b->flags = malloc(n);
+    return b->in_rgb && b->in_rgb2 && b->in_scalar && b->alpha && b->out_rgb && b->out_rgb2 && b->out_scalar &&
+           b->out_scalar2 && b->flags;
+}
+
+static void buffers_free(buffers *b) {
+    free(b->in_rgb);
+    free(b->in_rgb2);
+    free(b->in_scalar);
+    free(b->alpha);
+    free(b->out_rgb);
+    free(b->out_rgb2);
+    free(b->out_scalar);
+    free(b->out_scalar2);
+    free(b->flags);
+}
+
+/* A 3- or 4-channel image of n = width x height texels from RGB values and an optional fourth channel. */
+static mr_status compose(int width, int height, const float *rgb, const float *fourth, mr_image **out) {
+    mr_status status = mr_image_create(width, height, fourth ? 4 : 3, out);
+    if (status != MR_OK) return status;
+    size_t n = (size_t)width * (size_t)height;
+    int channels = fourth ? 4 : 3;
+    for (size_t i = 0; i < n; i++) {
+        for (int c = 0; c < 3; c++) (*out)->pixels[i * (size_t)channels + (size_t)c] = rgb[3 * i + (size_t)c];
+        if (fourth) (*out)->pixels[i * 4 + 3] = fourth[i];
+    }
+    return MR_OK;
+}
+
+/* Read the two source textures of a material (either may be absent: index -1) and settle the grid they are
+ * converted on: the larger texture's size, 1 x 1 without textures. Returns an exit code. */
+static int read_pair(const mr_gltf *asset, int k, const char *name, const mr_gltf_texture_ref *a,
+                     mr_img_encoding a_encoding, const mr_gltf_texture_ref *b, mr_img_encoding b_encoding,
+                     const char *scratch, mr_image **a_image, mr_image **b_image, int *width, int *height) {
+    if (a->index >= 0 && b->index >= 0 && !same_mapping(a, b)) {
+        fprintf(stderr, "matremap gltf: error: material %d '%s': its two textures map onto the surface differently "
+                "(UV set or KHR_texture_transform), so their texels cannot be converted pairwise\n", k, name);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    int code = CLI_EXIT_OK;
+    if (a->index >= 0) code = read_texture(asset, a, a_encoding, scratch, a_image);
+    if (code == CLI_EXIT_OK && b->index >= 0) code = read_texture(asset, b, b_encoding, scratch, b_image);
+    if (code != CLI_EXIT_OK) return code;
+    *width = *height = 1;
+    const mr_image *images[2] = {*a_image, *b_image};
+    for (int i = 0; i < 2; i++)
+        if (images[i] != NULL) {
+            if (images[i]->width > *width) *width = images[i]->width;
+            if (images[i]->height > *height) *height = images[i]->height;
+        }
+    return CLI_EXIT_OK;
+}
+
+/* Does the material carry core metal-rough values of its own (textures or non-default factors)? */
+static int has_core_values(const mr_gltf_material *m) {
+    return m->base_color_texture.index >= 0 || m->metallic_roughness_texture.index >= 0 ||
+           m->metallic_factor != 1.0 || m->roughness_factor != 1.0 || m->base_color_factor[0] != 1.0 ||
+           m->base_color_factor[1] != 1.0 || m->base_color_factor[2] != 1.0 || m->base_color_factor[3] != 1.0;
+}
+
+static int spec2metal_material(mr_gltf *asset, int k, const options *o, const mr_mlp *net, const mr_wf_options *wf,
+                               const char *scratch, const char *outbase, outcome *r) {
+    mr_gltf_material m;
+    mr_status status = mr_gltf_get_material(asset, k, &m);
+    if (status != MR_OK) return cli_fail("gltf", status);
+    if (!m.has_spec_gloss) {
+        r->what = "no spec-gloss extension: left as it is";
+        return CLI_EXIT_OK;
+    }
+    if (o->keep_fallback && has_core_values(&m)) {
+        m.has_spec_gloss = o->keep_specgloss;
+        status = mr_gltf_set_material(asset, k, &m);
+        r->what = "kept its own metal-rough values (--fallback keep)";
+        return status == MR_OK ? CLI_EXIT_OK : cli_fail("gltf", status);
+    }
+    double started = cli_now();
+    const mr_gltf_texture_ref *dref = &m.diffuse_texture, *sref = &m.specular_glossiness_texture;
+    mr_image *dimg = NULL, *simg = NULL, *base = NULL, *packed = NULL;
+    int width = 1, height = 1;
+    int code = read_pair(asset, k, m.name, dref, MR_IMG_COLOR, sref, MR_IMG_COLOR, scratch, &dimg, &simg, &width,
+                         &height);
+    size_t n = (size_t)width * (size_t)height;
+    buffers b;
+    if (code == CLI_EXIT_OK && !buffers_alloc(&b, n)) {
+        fprintf(stderr, "matremap gltf: error: out of memory for %dx%d texels\n", width, height);
+        code = CLI_EXIT_INTERNAL;
+    }
+    if (code != CLI_EXIT_OK) {
+        mr_image_free(dimg);
+        mr_image_free(simg);
+        return code;
+    }
+    // Factors times textures, in linear values (glTF multiplies them so).
+    int has_alpha = 0;
+#pragma omp parallel for schedule(static) reduction(| : has_alpha)
+    for (int y = 0; y < height; y++)
+        for (int x = 0; x < width; x++) {
+            size_t i = (size_t)y * (size_t)width + (size_t)x;
+            for (int c = 0; c < 3; c++) {
+                b.in_rgb[3 * i + c] = (float)((dimg ? sample(dimg, c, x, y, width, height) : 1.0f) *
+                                              m.diffuse_factor[c]);
+                b.in_rgb2[3 * i + c] = (float)((simg ? sample(simg, c, x, y, width, height) : 1.0f) *
+                                               m.specular_factor[c]);
+            }
+            b.alpha[i] = (float)((dimg ? sample(dimg, 3, x, y, width, height) : 1.0f) * m.diffuse_factor[3]);
+            has_alpha |= b.alpha[i] != 1.0f;
+            b.in_scalar[i] = (float)(1.0 - (simg ? sample(simg, 3, x, y, width, height) : 1.0f) *
+                                               m.glossiness_factor);
+        }
+    mr_wf_spec_maps in = {b.in_rgb, b.in_rgb2, b.in_scalar};
+    mr_wf_metal_maps out = {b.out_rgb, b.out_scalar, b.out_scalar2};
+    status = net ? mr_wf_spec_to_metal_mlp_batch(net, &in, n, wf, &out, b.flags)
+                 : mr_wf_spec_to_metal_batch(&in, n, wf, &out, b.flags);
+    for (size_t i = 0; status == MR_OK && i < n; i++) r->flagged += b.flags[i] != 0;
+    if (status == MR_OK && dimg == NULL && simg == NULL) { // factors only
+        for (int c = 0; c < 3; c++) m.base_color_factor[c] = b.out_rgb[c];
+        m.base_color_factor[3] = b.alpha[0];
+        m.metallic_factor = b.out_scalar[0];
+        m.roughness_factor = b.out_scalar2[0];
+        mr_gltf_texture_ref_none(&m.base_color_texture);
+        mr_gltf_texture_ref_none(&m.metallic_roughness_texture);
+    } else if (status == MR_OK) {
+        // R of the packed texture is unused by glTF (occlusion often lives there in ORM textures): 0.
+        for (size_t i = 0; i < n; i++) {
+            b.out_rgb2[3 * i] = 0.0f;
+            b.out_rgb2[3 * i + 1] = b.out_scalar2[i];
+            b.out_rgb2[3 * i + 2] = b.out_scalar[i];
+        }
+        int like = dref->index >= 0 ? dref->index : sref->index, base_index = -1, packed_index = -1;
+        mr_gltf_texture_ref mapping = dref->index >= 0 ? *dref : *sref;
+        status = compose(width, height, b.out_rgb, has_alpha ? b.alpha : NULL, &base);
+        if (status == MR_OK) status = compose(width, height, b.out_rgb2, NULL, &packed);
+        if (status == MR_OK)
+            status = add_texture(asset, base, MR_IMG_COLOR, o, scratch, outbase, k, "basecolor", like, &base_index);
+        if (status == MR_OK)
+            status = add_texture(asset, packed, MR_IMG_DATA, o, scratch, outbase, k, "metallicRoughness", like,
+                                 &packed_index);
+        m.base_color_texture = mapping;
+        m.base_color_texture.index = base_index;
+        m.metallic_roughness_texture = mapping;
+        m.metallic_roughness_texture.index = packed_index;
+        for (int c = 0; c < 4; c++) m.base_color_factor[c] = 1.0;
+        m.metallic_factor = m.roughness_factor = 1.0;
+        r->width = width;
+        r->height = height;
+    }
+    m.has_spec_gloss = o->keep_specgloss;
+    if (status == MR_OK) status = mr_gltf_set_material(asset, k, &m);
+    r->what = "converted";
+    r->seconds = cli_now() - started;
+    mr_image_free(dimg);
+    mr_image_free(simg);
+    mr_image_free(base);
+    mr_image_free(packed);
+    buffers_free(&b);
+    return status == MR_OK ? CLI_EXIT_OK : cli_fail("gltf", status);
+}
+
+static int metal2spec_material(mr_gltf *asset, int k, const options *o, const mr_wf_options *wf,
+                               const char *scratch, const char *outbase, outcome *r) {
+    mr_gltf_material m;
+    mr_status status = mr_gltf_get_material(asset, k, &m);
+    if (status != MR_OK) return cli_fail("gltf", status);
+    if (m.has_spec_gloss) {
+        r->what = "already carries spec-gloss: left as it is";
+        return CLI_EXIT_OK;
+    }
+    double started = cli_now();
+    const mr_gltf_texture_ref *bref = &m.base_color_texture, *mref = &m.metallic_roughness_texture;
+    mr_image *bimg = NULL, *mimg = NULL, *diffuse = NULL, *specgloss = NULL;
+    int width = 1, height = 1;
+    int code = read_pair(asset, k, m.name, bref, MR_IMG_COLOR, mref, MR_IMG_DATA, scratch, &bimg, &mimg, &width,
+                         &height);
+    size_t n = (size_t)width * (size_t)height;
+    buffers b;
+    if (code == CLI_EXIT_OK && !buffers_alloc(&b, n)) {
+        fprintf(stderr, "matremap gltf: error: out of memory for %dx%d texels\n", width, height);
+        code = CLI_EXIT_INTERNAL;
+    }
+    if (code != CLI_EXIT_OK) {
+        mr_image_free(bimg);
+        mr_image_free(mimg);
+        return code;
+    }
+    int has_alpha = 0;
+#pragma omp parallel for schedule(static) reduction(| : has_alpha)
+    for (int y = 0; y < height; y++)
+        for (int x = 0; x < width; x++) {
+            size_t i = (size_t)y * (size_t)width + (size_t)x;
+            for (int c = 0; c < 3; c++)
+                b.in_rgb[3 * i + c] = (float)((bimg ? sample(bimg, c, x, y, width, height) : 1.0f) *
+                                              m.base_color_factor[c]);
+            // The base colour's alpha travels to the diffuse.
+            b.alpha[i] = (float)((bimg ? sample(bimg, 3, x, y, width, height) : 1.0f) * m.base_color_factor[3]);
+            has_alpha |= b.alpha[i] != 1.0f;
+            b.in_scalar[i] = (float)((mimg ? sample(mimg, 2, x, y, width, height) : 1.0f) * m.metallic_factor);
+            b.out_scalar2[i] = (float)((mimg ? sample(mimg, 1, x, y, width, height) : 1.0f) * m.roughness_factor);
+        }
+    mr_wf_metal_maps in = {b.in_rgb, b.in_scalar, b.out_scalar2};
+    mr_wf_spec_maps out = {b.out_rgb, b.out_rgb2, b.out_scalar};
+    status = mr_wf_metal_to_spec_batch(&in, n, wf, &out, b.flags);
+    for (size_t i = 0; status == MR_OK && i < n; i++) {
+        r->flagged += b.flags[i] != 0;
+        b.out_scalar[i] = 1.0f - b.out_scalar[i]; // glossiness
+    }
+    if (status == MR_OK && bimg == NULL && mimg == NULL) {
+        for (int c = 0; c < 3; c++) {
+            m.diffuse_factor[c] = b.out_rgb[c];
+            m.specular_factor[c] = b.out_rgb2[c];
+        }
+        m.diffuse_factor[3] = b.alpha[0];
+        m.glossiness_factor = b.out_scalar[0];
+        mr_gltf_texture_ref_none(&m.diffuse_texture);
+        mr_gltf_texture_ref_none(&m.specular_glossiness_texture);
+    } else if (status == MR_OK) {
+        int like = bref->index >= 0 ? bref->index : mref->index, diffuse_index = -1, sg_index = -1;
+        mr_gltf_texture_ref mapping = bref->index >= 0 ? *bref : *mref;
+        status = compose(width, height, b.out_rgb, has_alpha ? b.alpha : NULL, &diffuse);
+        // RGB specular sRGB-encoded, A glossiness linear: what the image writer does for a colour image with alpha.
+        if (status == MR_OK) status = compose(width, height, b.out_rgb2, b.out_scalar, &specgloss);
+        if (status == MR_OK)
+            status = add_texture(asset, diffuse, MR_IMG_COLOR, o, scratch, outbase, k, "diffuse", like, &diffuse_index);
+        if (status == MR_OK)
+            status = add_texture(asset, specgloss, MR_IMG_COLOR, o, scratch, outbase, k, "specularGlossiness", like,
+                                 &sg_index);
+        m.diffuse_texture = mapping;
+        m.diffuse_texture.index = diffuse_index;
+        m.specular_glossiness_texture = mapping;
+        m.specular_glossiness_texture.index = sg_index;
+        for (int c = 0; c < 4; c++) m.diffuse_factor[c] = 1.0;
+        for (int c = 0; c < 3; c++) m.specular_factor[c] = 1.0;
+        m.glossiness_factor = 1.0;
+        r->width = width;
+        r->height = height;
+    }
+    m.has_spec_gloss = 1; // the core material stays as the fallback
+    if (status == MR_OK) status = mr_gltf_set_material(asset, k, &m);
+    r->what = "converted";
+    r->seconds = cli_now() - started;
+    mr_image_free(bimg);
+    mr_image_free(mimg);
+    mr_image_free(diffuse);
+    mr_image_free(specgloss);
+    buffers_free(&b);
+    return status == MR_OK ? CLI_EXIT_OK : cli_fail("gltf", status);
+}
+
+/* ---- the command -------------------------------------------------------------------------------------------- */
+
+static int parse(int argc, char **argv, options *o) {
+    for (int i = 1; i < argc; i++) {
+        const char *value = NULL;
+        int taken;
+        if ((taken = cli_take_option("gltf", argc, argv, &i, "--output", &value)) ||
+            (taken = cli_take_option("gltf", argc, argv, &i, "-o", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            o->output = value;
+        } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--method", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            o->method = value;
+        } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--weights", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            o->weights = value;
+        } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--format", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (strcmp(value, "png") != 0 && strcmp(value, "exr") != 0)
+                return cli_usage_error("gltf", "--format '%s': expected png or exr", value);
+            o->format = value;
+        } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--convention", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (strcmp(value, "gltf") == 0)
+                o->convention = MR_WF_DIFFUSE_SPECGLOSS;
+            else if (strcmp(value, "paper") == 0)
+                o->convention = MR_WF_DIFFUSE_PLAIN;
+            else
+                return cli_usage_error("gltf", "--convention '%s': expected gltf or paper", value);
+        } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--fallback", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (strcmp(value, "keep") != 0 && strcmp(value, "replace") != 0)
+                return cli_usage_error("gltf", "--fallback '%s': expected replace or keep", value);
+            o->keep_fallback = strcmp(value, "keep") == 0;
+        } else if (strcmp(argv[i], "--keep-specgloss") == 0) {
+            o->keep_specgloss = 1;
+        } else if (strcmp(argv[i], "--json") == 0) {
+            o->json = 1;
+        } else if (argv[i][0] == '-') {
+            return cli_usage_error("gltf", "unknown option '%s'", argv[i]);
+        } else if (o->direction == NULL) {
+            o->direction = argv[i];
+        } else if (o->input == NULL) {
+            o->input = argv[i];
+        } else {
+            return cli_usage_error("gltf", "unexpected argument '%s' (one input asset)", argv[i]);
+        }
+    }
+    if (o->direction == NULL) return cli_usage_error("gltf", "missing spec2metal or metal2spec");
+    int to_metal = strcmp(o->direction, "spec2metal") == 0;
+    if (!to_metal && strcmp(o->direction, "metal2spec") != 0)
+        return cli_usage_error("gltf", "'%s': expected spec2metal or metal2spec", o->direction);
+    if (o->input == NULL) return cli_usage_error("gltf", "missing the input asset (.gltf or .glb)");
+    if (o->output == NULL) return cli_usage_error("gltf", "missing -o OUT (.gltf or .glb)");
+    if (o->method == NULL) o->method = to_metal ? "mlp" : "eq2";
+    if (o->format == NULL) o->format = "png";
+    if (!to_metal && (o->weights || o->keep_fallback || o->keep_specgloss))
+        return cli_usage_error("gltf", "--weights, --fallback and --keep-specgloss go with spec2metal");
+    return CLI_EXIT_OK;
+}
+
+/* The output's file name without folder and extension: the stem of the new textures' names. */
+static void output_stem(const char *output, char *stem, size_t size) {
+    const char *slash = strrchr(output, '/');
+    snprintf(stem, size, "%s", slash ? slash + 1 : output);
+    char *dot = strrchr(stem, '.');
+    if (dot != NULL && dot != stem) *dot = '\0';
+}
+
+/* The folder of the output, where the new textures are staged before the asset copies them beside it. */
+static void output_folder(const char *output, char *folder, size_t size) {
+    const char *slash = strrchr(output, '/');
+    if (slash == NULL)
+        snprintf(folder, size, ".");
+    else
+        snprintf(folder, size, "%.*s", (int)(slash - output), output);
+}
+
+int cmd_gltf(int argc, char **argv) {
+    for (int i = 1; i < argc; i++)
+        if (cli_is_help(argv[i])) {
+            print_help();
+            return CLI_EXIT_OK;
+        }
+    options o;
+    memset(&o, 0, sizeof o);
+    o.convention = MR_WF_DIFFUSE_SPECGLOSS;
+    int code = parse(argc, argv, &o);
+    if (code != CLI_EXIT_OK) return code;
+    int to_metal = strcmp(o.direction, "spec2metal") == 0;
+
+    mr_wf_options wf = mr_wf_options_default();
+    wf.spec_diffuse = o.convention;
+    int use_mlp = to_metal && strcmp(o.method, "mlp") == 0;
+    if (to_metal && !use_mlp) {
+        if (mr_wf_method_from_name(o.method, &wf.method) != MR_OK || wf.method == MR_WF_CUSTOM)
+            return cli_usage_error("gltf", "--method '%s': expected mlp, weighted, mean or khronos", o.method);
+    } else if (!to_metal) {
+        if (strcmp(o.method, "khronos") == 0)
+            wf.method = MR_WF_KHRONOS;
+        else if (strcmp(o.method, "eq2") != 0)
+            return cli_usage_error("gltf", "--method '%s': expected eq2 or khronos", o.method);
+    }
+
+    mr_mlp *net = NULL;
+    char net_path[PATH_SIZE] = "";
+    if (use_mlp) code = cli_load_network("gltf", o.weights, &net, net_path, sizeof net_path);
+    mr_gltf *asset = NULL;
+    if (code == CLI_EXIT_OK) {
+        mr_status status = mr_gltf_load(o.input, &asset);
+        if (status != MR_OK) code = cli_fail("gltf", status);
+    }
+    // New textures are staged in a scratch folder beside the output; the asset copies them when it is saved.
+    char folder[PATH_SIZE], scratch[PATH_SIZE], stem[PATH_SIZE];
+    output_folder(o.output, folder, sizeof folder);
+    output_stem(o.output, stem, sizeof stem);
+    scratch[0] = '\0';
+    if (code == CLI_EXIT_OK) {
+        int length = snprintf(scratch, sizeof scratch, "%s/.matremap-gltf-XXXXXX", folder);
+        if (length < 0 || (size_t)length >= sizeof scratch || mkdtemp(scratch) == NULL) {
+            fprintf(stderr, "matremap gltf: error: cannot write in '%s': %s\n", folder, strerror(errno));
+            scratch[0] = '\0';
+            code = CLI_EXIT_BAD_INPUT;
+        }
+    }
+    double started = cli_now();
+    mr_gltf_counts counts = {0};
+    if (asset) mr_gltf_get_counts(asset, &counts);
+    outcome *outcomes = calloc((size_t)(counts.materials > 0 ? counts.materials : 1), sizeof *outcomes);
+    if (outcomes == NULL && code == CLI_EXIT_OK) code = CLI_EXIT_INTERNAL;
+    int converted = 0;
+    for (int k = 0; k < counts.materials && code == CLI_EXIT_OK; k++) {
+        code = to_metal ? spec2metal_material(asset, k, &o, net, &wf, scratch, stem, &outcomes[k])
+                        : metal2spec_material(asset, k, &o, &wf, scratch, stem, &outcomes[k]);
+        converted += code == CLI_EXIT_OK && strcmp(outcomes[k].what, "converted") == 0;
+    }
+    if (code == CLI_EXIT_OK) {
+        mr_gltf_sync_extensions(asset);
+        mr_status status = mr_gltf_save(asset, o.output);
+        if (status != MR_OK) code = cli_fail("gltf", status);
+    }
+    double seconds = cli_now() - started;
+    if (code == CLI_EXIT_OK && !o.json) {
+        for (int k = 0; k < counts.materials; k++) {
+            mr_gltf_material m;
+            mr_gltf_get_material(asset, k, &m);
+            printf("material %d '%s': %s", k, m.name, outcomes[k].what);
+            if (strcmp(outcomes[k].what, "converted") == 0) {
+                if (outcomes[k].width > 0)
+                    printf(", %dx%d textures", outcomes[k].width, outcomes[k].height);
+                else
+                    printf(", factors only");
+                printf(", %zu texel%s flagged, %.3f s", outcomes[k].flagged, outcomes[k].flagged == 1 ? "" : "s",
+                       outcomes[k].seconds);
+            }
+            printf("\n");
+        }
+        printf("gltf %s: %d of %d materials converted with %s%s%s in %.2f s; wrote %s\n", o.direction, converted,
+               counts.materials, o.method, use_mlp ? " " : "", use_mlp ? net_path : "", seconds, o.output);
+    } else if (code == CLI_EXIT_OK) {
+        printf("{\"command\": \"gltf %s\", \"input\": ", o.direction);
+        cli_json_string(stdout, o.input);
+        printf(", \"output\": ");
+        cli_json_string(stdout, o.output);
+        printf(", \"method\": \"%s\", \"seconds\": %.6f, \"materials\": [", o.method, seconds);
+        for (int k = 0; k < counts.materials; k++) {
+            mr_gltf_material m;
+            mr_gltf_get_material(asset, k, &m);
+            printf("%s{\"index\": %d, \"name\": ", k ? ", " : "", k);
+            cli_json_string(stdout, m.name);
+            printf(", \"outcome\": ");
+            cli_json_string(stdout, outcomes[k].what);
+            printf(", \"width\": %d, \"height\": %d, \"flagged\": %zu, \"seconds\": %.6f}", outcomes[k].width,
+                   outcomes[k].height, outcomes[k].flagged, outcomes[k].seconds);
+        }
+        printf("]}\n");
+    }
+    if (scratch[0] != '\0') rmdir(scratch);
+    free(outcomes);
+    mr_gltf_free(asset);
+    mr_mlp_free(net);
+    return code;
+}

@@ -1,0 +1,161 @@
+#!/usr/bin/env bash
+# `matremap gltf spec2metal|metal2spec` on the real assets of ../shared/assets: every output passes the Khronos glTF
+# validator with 0 errors; the spec-gloss extension leaves the materials and extensionsUsed/Required; the new
+# textures equal what `matremap spec2metal` makes of the same maps; factor-only materials get the factors
+# `spec2metal` computes; --fallback keep and --keep-specgloss; metal2spec and back on the WaterBottle within
+# 8-bit rounding; samplers and UV mappings carried over; usage errors and inputs never overwritten. Needs node/npm
+# (the validator, tests/node), python3 and idiff. Ends with "N passed, N failed".
+set -u
+root=$(cd "$(dirname "$0")/.." && pwd)
+build="${MR_BUILD:-$root/build}"
+bin="$build/bin/matremap"
+shared="${MR_SHARED:-$root/../shared}/assets"
+node_dir=$root/tests/node
+source "$(dirname "$0")/lib/cli_harness.sh"
+
+floppy="$shared/specgloss/FloppyDisk-sketchfab/scene.gltf"
+avocado_dir="$shared/specgloss/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness"
+avocado="$avocado_dir/Avocado.gltf"
+truck="$shared/specgloss/CesiumMilkTruck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/CesiumMilkTruck.gltf"
+duck="$shared/specgloss/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Duck.gltf"
+bottle="$shared/metalrough/WaterBottle/glTF/WaterBottle.gltf"
+settings="$shared/metalrough/TextureSettingsTest/glTF/TextureSettingsTest.gltf"
+
+# A Python expression over the glTF JSON `d` of file $1.
+# In the expression: SG is the extension's name, m(k) material k, pbr(k) its pbrMetallicRoughness, ext(k) its
+# spec-gloss extension, uri(t) the image URI of texture t.
+gltf() {
+    python3 -c 'import json, sys
+d = json.load(open(sys.argv[1]))
+SG = "KHR_materials_pbrSpecularGlossiness"
+m = lambda k: d["materials"][k]
+pbr = lambda k: m(k).get("pbrMetallicRoughness", {})
+ext = lambda k: m(k)["extensions"][SG]
+uri = lambda t: d["images"][d["textures"][t]["source"]]["uri"]
+print(eval(sys.argv[2]))' "$1" "$2"
+}
+below() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a != "" && a + 0 < b + 0) }'; }
+# idiff mean and max error of two images.
+meandiff() { idiff -v -fail 1e9 "$1" "$2" 2>&1 | sed -nE 's/.*Mean error = ([-0-9.e+]+).*/\1/p'; }
+maxdiff() { idiff -v -fail 1e9 "$1" "$2" 2>&1 | sed -nE 's/.*Max error += ([-0-9.e+]+).*/\1/p'; }
+
+# ---- usage and bad inputs ---------------------------------------------------------------------------------------
+expect "gltf --help" 0 "Usage: matremap gltf spec2metal" -- "$bin" gltf --help
+expect "no direction" 1 "missing spec2metal or metal2spec" -- "$bin" gltf
+expect "an unknown direction" 1 "expected spec2metal or metal2spec" -- "$bin" gltf spec2gloss "$floppy" -o "$tmp/x.gltf"
+expect "no output" 1 "missing -o" -- "$bin" gltf spec2metal "$floppy"
+expect "an unknown method" 1 "--method 'eq3'" -- "$bin" gltf spec2metal "$floppy" -o "$tmp/x.gltf" --method eq3
+expect "metal2spec takes no --fallback" 1 "go with spec2metal" -- "$bin" gltf metal2spec "$bottle" -o "$tmp/x.gltf" \
+    --fallback keep
+expect "a missing asset is named" 2 "nothere.gltf" -- "$bin" gltf spec2metal "$tmp/nothere.gltf" -o "$tmp/x.gltf"
+cp "$shared/specgloss/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/"* "$tmp/"
+sum_before=$(cat "$tmp/Duck.gltf" "$tmp/DuckCM.png" | md5sum)
+expect "the output may not be the input" 2 "" -- "$bin" gltf spec2metal "$tmp/Duck.gltf" -o "$tmp/Duck.gltf" \
+    --method weighted
+check "... and the input is unchanged" test "$(cat "$tmp/Duck.gltf" "$tmp/DuckCM.png" | md5sum)" = "$sum_before"
+
+# ---- spec2metal -------------------------------------------------------------------------------------------------
+mkdir -p "$tmp/floppy" "$tmp/avocado" "$tmp/keep" "$tmp/sg" "$tmp/truck" "$tmp/duck" "$tmp/bottle" "$tmp/back" \
+    "$tmp/settings"
+expect "FloppyDisk, weighted" 0 "1 of 1 materials converted" -- "$bin" gltf spec2metal "$floppy" \
+    -o "$tmp/floppy/floppy.gltf" --method weighted
+out="$tmp/floppy/floppy.gltf"
+check "the spec-gloss extension is gone from the material" test \
+    "$(gltf "$out" '"KHR_materials_pbrSpecularGlossiness" in d["materials"][0].get("extensions", {})')" = False
+check "... and from extensionsUsed and extensionsRequired" test \
+    "$(gltf "$out" '[e for e in d.get("extensionsUsed", []) + d.get("extensionsRequired", []) if e == SG]')" = "[]"
+check "core base colour and metallic-roughness textures" test \
+    "$(gltf "$out" 'sorted(d["materials"][0]["pbrMetallicRoughness"])')" = \
+    "['baseColorTexture', 'metallicRoughnessTexture']"
+check "the normal map, meshes and nodes are kept" test \
+    "$(gltf "$out" '(d["materials"][0]["normalTexture"]["index"], len(d["meshes"]), len(d["nodes"]))')" = \
+    "$(gltf "$floppy" '(d["materials"][0]["normalTexture"]["index"], len(d["meshes"]), len(d["nodes"]))')"
+
+# The same maps through `matremap spec2metal` give the same texels (Avocado's material has no factors).
+expect "Avocado, weighted" 0 "1 of 1 materials converted" -- "$bin" gltf spec2metal "$avocado" \
+    -o "$tmp/avocado/avocado.gltf" --method weighted
+expect "the maps through spec2metal" 0 "" -- "$bin" spec2metal --diffuse "$avocado_dir/Avocado_diffuse.png" \
+    --specular-glossiness "$avocado_dir/Avocado_specularGlossiness.png" --method weighted --pack -o "$tmp/maps"
+d=$(maxdiff "$tmp/maps_basecolor.png" "$tmp/avocado/avocado_m0_basecolor.png")
+check "base colour texture = spec2metal's (max error $d)" below "$d" 1e-6
+d=$(maxdiff "$tmp/maps_metallicRoughness.png" "$tmp/avocado/avocado_m0_metallicRoughness.png")
+check "metallic-roughness texture = spec2metal's (max error $d)" below "$d" 1e-6
+expect "--fallback keep" 0 "kept its own metal-rough" -- "$bin" gltf spec2metal "$avocado" -o "$tmp/keep/a.gltf" \
+    --fallback keep
+check "--fallback keep: the asset's own base colour texture" test \
+    "$(gltf "$tmp/keep/a.gltf" 'uri(pbr(0)["baseColorTexture"]["index"])')" = \
+    "Avocado_baseColor.png"
+expect "--keep-specgloss" 0 "converted" -- "$bin" gltf spec2metal "$avocado" -o "$tmp/sg/a.gltf" --method mean \
+    --keep-specgloss
+check "--keep-specgloss: the extension stays, used but not required" test \
+    "$(gltf "$tmp/sg/a.gltf" '(SG in d["extensionsUsed"], SG in d.get("extensionsRequired", []))')" = \
+    "(True, False)"
+
+# Factor-only materials: the factors spec2metal computes for the same constants.
+expect "CesiumMilkTruck, weighted" 0 "4 of 4 materials converted" -- "$bin" gltf spec2metal "$truck" \
+    -o "$tmp/truck/truck.gltf" --method weighted
+spec=$(gltf "$truck" '",".join("%.9g" % v for v in ext(1)["specularFactor"])')
+diffuse=$(gltf "$truck" '",".join("%.9g" % v for v in ext(1)["diffuseFactor"][:3])')
+"$bin" spec2metal --diffuse "$diffuse" --specular "$spec" --glossiness 1 --method weighted >"$tmp/glass.txt" 2>/dev/null
+expected=$(sed -nE 's/^basecolor=([^ ]*) metallic=([^ ]*) roughness=([^ ]*)$/\1,\2,\3/p' "$tmp/glass.txt")
+got=$(gltf "$tmp/truck/truck.gltf" \
+    '",".join("%.6g" % v for v in pbr(1)["baseColorFactor"][:3] + [pbr(1).get(k, 1) for k in ("metallicFactor",
+                                                                                         "roughnessFactor")])')
+check "the glass's factors are spec2metal's ($got vs $expected)" awk -v a="$got" -v b="$expected" 'BEGIN {
+    n = split(a, x, ","); if (n != 5 || split(b, y, ",") != 5) exit 1
+    for (i = 1; i <= n; i++) { e = x[i] - y[i]; if (e < 0) e = -e; if (e > 1e-5) exit 1 } }'
+expect "Duck, the network" 0 "1 of 1 materials converted with mlp" -- "$bin" gltf spec2metal "$duck" \
+    -o "$tmp/duck/duck.glb"
+check "a .glb output" test "$(head -c 4 "$tmp/duck/duck.glb")" = glTF
+
+# ---- metal2spec and back ----------------------------------------------------------------------------------------
+expect "WaterBottle, metal2spec" 0 "1 of 1 materials converted" -- "$bin" gltf metal2spec "$bottle" \
+    -o "$tmp/bottle/bottle.gltf"
+check "spec-gloss added, the core material kept as the fallback" test \
+    "$(gltf "$tmp/bottle/bottle.gltf" '(SG in m(0)["extensions"], "metallicRoughnessTexture" in pbr(0),
+                                        SG in d.get("extensionsRequired", []))')" = \
+    "(True, True, False)"
+expect "... and back with weighted" 0 "1 of 1 materials converted" -- "$bin" gltf spec2metal \
+    "$tmp/bottle/bottle.gltf" -o "$tmp/back/back.gltf" --method weighted
+oiiotool "$(dirname "$bottle")/WaterBottle_occlusionRoughnessMetallic.png" --ch B -o "$tmp/metal_orig.png"
+oiiotool "$tmp/back/back_m0_metallicRoughness.png" --ch B -o "$tmp/metal_back.png"
+m=$(meandiff "$tmp/metal_orig.png" "$tmp/metal_back.png")
+check "the round trip's metallic: mean error $m < 0.01 (8-bit rounding, docs/workflow.md)" below "$m" 0.01
+m=$(meandiff "$(dirname "$bottle")/WaterBottle_baseColor.png" "$tmp/back/back_m0_basecolor.png")
+check "the round trip's base colour: mean error $m < 0.003" below "$m" 0.003
+expect "TextureSettingsTest, metal2spec" 0 "10 of 10 materials converted" -- "$bin" gltf metal2spec "$settings" \
+    -o "$tmp/settings/settings.gltf"
+check "every new texture keeps its source's sampler and UV set" \
+    python3 - "$settings" "$tmp/settings/settings.gltf" <<'PY'
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+def sampler(d, t):
+    s = d["textures"][t].get("sampler")
+    return None if s is None else {k: v for k, v in d["samplers"][s].items() if k != "name"}
+checked = 0
+for ma, mb in zip(a["materials"], b["materials"]):
+    src = ma.get("pbrMetallicRoughness", {}).get("baseColorTexture")
+    if src is None:  # a factor-only material gets factors only
+        assert "diffuseTexture" not in mb["extensions"]["KHR_materials_pbrSpecularGlossiness"], ma["name"]
+        continue
+    new = mb["extensions"]["KHR_materials_pbrSpecularGlossiness"]["diffuseTexture"]
+    assert sampler(a, src["index"]) == sampler(b, new["index"]), (ma["name"], sampler(a, src["index"]))
+    assert src.get("texCoord", 0) == new.get("texCoord", 0)
+    checked += 1
+assert checked >= 4, checked
+PY
+
+# ---- the Khronos validator --------------------------------------------------------------------------------------
+if [ ! -f "$node_dir/node_modules/gltf-validator/package.json" ]; then
+    (cd "$node_dir" && npm ci --no-audit --no-fund --loglevel=error) >"$tmp/npm.log" 2>&1 ||
+        echo "      npm ci failed: $(tail -n 3 "$tmp/npm.log" | tr '\n' ' ')"
+fi
+for f in "$tmp/floppy/floppy.gltf" "$tmp/avocado/avocado.gltf" "$tmp/keep/a.gltf" "$tmp/sg/a.gltf" \
+         "$tmp/truck/truck.gltf" "$tmp/duck/duck.glb" "$tmp/bottle/bottle.gltf" "$tmp/back/back.gltf" \
+         "$tmp/settings/settings.gltf"; do
+    result=$(node "$node_dir/gltf_validate.js" "$f" 2>&1 | head -n 1)
+    errors=$(echo "$result" | sed -nE 's/.* errors=([0-9]+) .*/\1/p')
+    check "validator: ${f#"$tmp/"}: errors=${result##* errors=}" test "$errors" = 0
+done
+
+finish
