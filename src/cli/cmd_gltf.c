@@ -121,32 +121,49 @@ static int same_mapping(const mr_gltf_texture_ref *a, const mr_gltf_texture_ref 
                                   a->scale[1] == b->scale[1] && a->transform_tex_coord == b->transform_tex_coord));
 }
 
-/* Write `image` as PREFIX_NAME.EXT (a scratch file), add it to the asset under the URI OUTBASE_mK_NAME.EXT and
- * make a texture of it with the sampler of texture `like` (or none). Returns a status; *texture is its index. */
-static mr_status add_texture(mr_gltf *asset, const mr_image *image, mr_img_encoding encoding, const options *o,
-                             const char *scratch, const char *outbase, int material, const char *name, int like,
-                             int *texture) {
-    char file[PATH_SIZE], uri[PATH_SIZE / 2];
-    int length = snprintf(uri, sizeof uri, "%s_m%d_%s.%s", outbase, material, name, o->format);
-    int total = length < 0 || (size_t)length >= sizeof uri ? -1 : snprintf(file, sizeof file, "%s/%s", scratch, uri);
-    if (total < 0 || (size_t)total >= sizeof file) {
-        fprintf(stderr, "matremap gltf: error: -o '%s': the output's name is too long\n", o->output);
-        return MR_ERR_INVALID_ARG;
+/* Write the two new textures of material `material` (named OUTBASE_mK_NAME.EXT) to the scratch folder, encoded in
+ * parallel, then add them to the asset under those relative URIs as textures with the sampler of texture `like`
+ * (none if it has none). Returns a status; texture[] receives the indices. */
+static mr_status add_textures(mr_gltf *asset, mr_image *const images[2], const mr_img_encoding encodings[2],
+                              const char *const names[2], const options *o, const char *scratch,
+                              const char *outbase, int material, int like, int texture[2]) {
+    char files[2][PATH_SIZE], uris[2][PATH_SIZE / 2];
+    for (int t = 0; t < 2; t++) {
+        int length = snprintf(uris[t], sizeof uris[t], "%s_m%d_%s.%s", outbase, material, names[t], o->format);
+        int total = length < 0 || (size_t)length >= sizeof uris[t]
+                        ? -1 : snprintf(files[t], sizeof files[t], "%s/%s", scratch, uris[t]);
+        if (total < 0 || (size_t)total >= sizeof files[t]) {
+            fprintf(stderr, "matremap gltf: error: -o '%s': the output's name is too long\n", o->output);
+            return MR_ERR_INVALID_ARG;
+        }
     }
-    mr_img_write_options wo = {0};
-    wo.encoding = encoding;
-    mr_status status = mr_img_write(file, image, &wo);
-    int index = -1;
-    if (status == MR_OK) status = mr_gltf_add_image_file(asset, file, uri, &index);
-    remove(file);
-    if (status != MR_OK) return status;
+    mr_status statuses[2];
+    char messages[2][1024]; // mr_last_error() is per thread
+#pragma omp parallel for schedule(static, 1)
+    for (int t = 0; t < 2; t++) {
+        mr_img_write_options wo = {0};
+        wo.encoding = encodings[t];
+        statuses[t] = mr_img_write(files[t], images[t], &wo);
+        snprintf(messages[t], sizeof messages[t], "%s", statuses[t] == MR_OK ? "" : mr_last_error());
+    }
     mr_gltf_sampler sampler, *sampler_ptr = NULL;
     mr_gltf_texture source;
     if (like >= 0 && mr_gltf_get_texture(asset, like, &source) == MR_OK && source.sampler >= 0) {
         sampler = source.params;
         sampler_ptr = &sampler;
     }
-    return mr_gltf_add_texture(asset, index, sampler_ptr, texture);
+    mr_status status = MR_OK;
+    for (int t = 0; t < 2; t++) {
+        int image = -1;
+        if (status == MR_OK && statuses[t] != MR_OK) {
+            fprintf(stderr, "matremap gltf: error: %s\n", messages[t]);
+            status = statuses[t];
+        }
+        if (status == MR_OK) status = mr_gltf_add_image_file(asset, files[t], uris[t], &image);
+        if (status == MR_OK) status = mr_gltf_add_texture(asset, image, sampler_ptr, &texture[t]);
+        remove(files[t]);
+    }
+    return status;
 }
 
 /* ---- one material ------------------------------------------------------------------------------------------- */
@@ -309,11 +326,15 @@ static int spec2metal_material(mr_gltf *asset, int k, const options *o, const mr
         mr_gltf_texture_ref mapping = dref->index >= 0 ? *dref : *sref;
         status = compose(width, height, b.out_rgb, has_alpha ? b.alpha : NULL, &base);
         if (status == MR_OK) status = compose(width, height, b.out_rgb2, NULL, &packed);
-        if (status == MR_OK)
-            status = add_texture(asset, base, MR_IMG_COLOR, o, scratch, outbase, k, "basecolor", like, &base_index);
-        if (status == MR_OK)
-            status = add_texture(asset, packed, MR_IMG_DATA, o, scratch, outbase, k, "metallicRoughness", like,
-                                 &packed_index);
+        int indices[2] = {-1, -1};
+        if (status == MR_OK) {
+            mr_image *const images[2] = {base, packed};
+            static const mr_img_encoding encodings[2] = {MR_IMG_COLOR, MR_IMG_DATA};
+            static const char *const names[2] = {"basecolor", "metallicRoughness"};
+            status = add_textures(asset, images, encodings, names, o, scratch, outbase, k, like, indices);
+        }
+        base_index = indices[0];
+        packed_index = indices[1];
         m.base_color_texture = mapping;
         m.base_color_texture.index = base_index;
         m.metallic_roughness_texture = mapping;
@@ -397,11 +418,15 @@ static int metal2spec_material(mr_gltf *asset, int k, const options *o, const mr
         status = compose(width, height, b.out_rgb, has_alpha ? b.alpha : NULL, &diffuse);
         // RGB specular sRGB-encoded, A glossiness linear: what the image writer does for a colour image with alpha.
         if (status == MR_OK) status = compose(width, height, b.out_rgb2, b.out_scalar, &specgloss);
-        if (status == MR_OK)
-            status = add_texture(asset, diffuse, MR_IMG_COLOR, o, scratch, outbase, k, "diffuse", like, &diffuse_index);
-        if (status == MR_OK)
-            status = add_texture(asset, specgloss, MR_IMG_COLOR, o, scratch, outbase, k, "specularGlossiness", like,
-                                 &sg_index);
+        int indices[2] = {-1, -1};
+        if (status == MR_OK) {
+            mr_image *const images[2] = {diffuse, specgloss};
+            static const mr_img_encoding encodings[2] = {MR_IMG_COLOR, MR_IMG_COLOR};
+            static const char *const names[2] = {"diffuse", "specularGlossiness"};
+            status = add_textures(asset, images, encodings, names, o, scratch, outbase, k, like, indices);
+        }
+        diffuse_index = indices[0];
+        sg_index = indices[1];
         m.diffuse_texture = mapping;
         m.diffuse_texture.index = diffuse_index;
         m.specular_glossiness_texture = mapping;
