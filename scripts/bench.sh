@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # make bench: prints benchmark figures and writes them into docs/performance.md (between the bench:render,
-# bench:metrics, bench:remap and bench:workflow markers) and docs/rendering.md (bench:envlight).
+# bench:metrics, bench:remap and bench:workflow markers) and docs/rendering.md (bench:envlight, bench:mesh).
 # Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
@@ -15,6 +15,14 @@ mkdir -p "$work"
 report="$work/render.md"
 
 median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2}'; }
+# Wall-clock seconds of a whole command (its output discarded).
+seconds_of() {
+    local t0 t1
+    t0=$(date +%s.%N)
+    "$@" >/dev/null 2>&1
+    t1=$(date +%s.%N)
+    awk -v a="$t0" -v b="$t1" 'BEGIN {print b - a}'
+}
 
 echo "== fit-scene render time per model (tests/bench_render.c)"
 "$root/$build/tests/bench_render" $quick | tee "$work/render_table.md"
@@ -48,6 +56,14 @@ echo "== environment lights: error and cost against the pattern size N (tests/be
     echo
     "$root/$build/tests/bench_envlight" "${MR_SHARED:-$root/../shared}/assets/hdri" $quick
 } | tee "$work/envlight.md"
+
+echo
+echo "== triangle meshes: plan, render and BVH cost against the triangle count (tests/bench_mesh.c)"
+{
+    echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'))."
+    echo
+    "$root/$build/tests/bench_mesh" "${MR_SHARED:-$root/../shared}/assets/hdri" $quick
+} | tee "$work/mesh.md"
 
 {
     echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), matremap $("$bin" --version | cut -d' ' -f2)."
@@ -146,7 +162,6 @@ e2e="$work/e2e.md"
 if [ -f "$avocado/Avocado_diffuse.png" ]; then
     runs=3
     [ "$quick" = "--quick" ] && runs=1
-    seconds_of() { local t0 t1; t0=$(date +%s.%N); "$@" >/dev/null 2>&1; t1=$(date +%s.%N); awk -v a="$t0" -v b="$t1" 'BEGIN {print b - a}'; }
     peer=()
     for run in $(seq "$runs"); do
         peer+=("$(seconds_of oiiotool --iconfig oiio:UnassociatedAlpha 1 "$avocado/Avocado_diffuse.png" -o "$work/e2e_peer_a.png" \
@@ -214,3 +229,4 @@ if [ -f "$perf" ]; then
     replace_section workflow-e2e "$work/e2e.md"
 fi
 replace_section envlight "$work/envlight.md" "$root/docs/rendering.md"
+replace_section mesh "$work/mesh.md" "$root/docs/rendering.md"

@@ -379,8 +379,9 @@ done:
     return ok;
 }
 
-/* Slab test, conservative: the ray's parameter interval inside the box is widened by a few ulps. */
-static int box_hit(const bvh_node *node, const double origin[3], const double inv[3], double t_max) {
+/* Slab test, conservative: the ray's parameter interval inside the box is widened by a few ulps. Returns 1 and
+ * the entry distance (0 from inside) when the ray meets the box before t_max. */
+static int box_hit(const bvh_node *node, const double origin[3], const double inv[3], double t_max, double *entry) {
     double t0 = 0.0, t1 = t_max;
     for (int i = 0; i < 3; i++) {
         if (isinf(inv[i])) {
@@ -398,6 +399,7 @@ static int box_hit(const bvh_node *node, const double origin[3], const double in
         if (b < t1) t1 = b;
         if (t0 > t1) return 0;
     }
+    *entry = t0;
     return 1;
 }
 
@@ -432,15 +434,32 @@ static int bvh_trace(const mesh_world *mesh, const double origin[3], const doubl
                      int any_hit, mesh_hit *hit) {
     double inv[3];
     for (int i = 0; i < 3; i++) inv[i] = 1.0 / dir[i]; // +-inf for a zero component: box_hit handles it
+    // Children are visited nearer first, so the nearest hit shrinks `best` early; a popped node whose box the
+    // ray enters beyond the current `best` is skipped.
     int stack[BVH_STACK], top = 0, found = 0;
-    double best = t_max;
-    stack[top++] = 0;
+    double stack_entry[BVH_STACK];
+    double best = t_max, entry;
+    if (!box_hit(&mesh->nodes[0], origin, inv, best, &entry)) return 0;
+    stack[top] = 0;
+    stack_entry[top++] = entry;
     while (top > 0) {
-        const bvh_node *node = &mesh->nodes[stack[--top]];
-        if (!box_hit(node, origin, inv, best)) continue;
+        --top;
+        if (stack_entry[top] > best) continue;
+        const bvh_node *node = &mesh->nodes[stack[top]];
         if (node->count == 0) {
-            stack[top++] = node->first;
-            stack[top++] = node->first + 1;
+            double e0, e1;
+            int h0 = box_hit(&mesh->nodes[node->first], origin, inv, best, &e0);
+            int h1 = box_hit(&mesh->nodes[node->first + 1], origin, inv, best, &e1);
+            if (h0 && h1) {
+                int near_first = e0 <= e1;
+                stack[top] = near_first ? node->first + 1 : node->first;
+                stack_entry[top++] = near_first ? e1 : e0;
+                stack[top] = near_first ? node->first : node->first + 1;
+                stack_entry[top++] = near_first ? e0 : e1;
+            } else if (h0 || h1) {
+                stack[top] = h0 ? node->first : node->first + 1;
+                stack_entry[top++] = h0 ? e0 : e1;
+            }
             continue;
         }
         for (int k = node->first; k < node->first + node->count; k++) {
