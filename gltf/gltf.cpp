@@ -1169,6 +1169,21 @@ void mr_gltf_sync_extensions(mr_gltf *g) {
     }
 }
 
+mr_status mr_gltf_set_extension_required(mr_gltf *g, const char *name, int required) {
+    if (g == NULL || name == NULL || name[0] == '\0') return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL or empty name");
+    MR_GLTF_GUARD(name, {
+        auto &u = g->model.extensionsUsed;
+        auto &r = g->model.extensionsRequired;
+        if (required) {
+            if (!list_has(u, name)) u.push_back(name);
+            if (!list_has(r, name)) r.push_back(name);
+        } else {
+            r.erase(std::remove(r.begin(), r.end(), name), r.end());
+        }
+        return MR_OK;
+    })
+}
+
 int mr_gltf_extension_used(const mr_gltf *g, const char *name) {
     return g != NULL && name != NULL && list_has(g->model.extensionsUsed, name);
 }

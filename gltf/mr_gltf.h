@@ -196,6 +196,11 @@ mr_status mr_gltf_add_texture(mr_gltf *asset, int image, const mr_gltf_sampler *
  * used from extensionsUsed and extensionsRequired. Other extensions are left alone. */
 void mr_gltf_sync_extensions(mr_gltf *asset);
 
+/* Adds `name` to extensionsRequired (and extensionsUsed) when required is non-zero, removes it from
+ * extensionsRequired otherwise (e.g. a spec-gloss material that gained a metallic-roughness fallback). The sync
+ * on save still drops a managed extension no material uses. */
+mr_status mr_gltf_set_extension_required(mr_gltf *asset, const char *name, int required);
+
 /* extensionsUsed / extensionsRequired membership (0 or 1). */
 int mr_gltf_extension_used(const mr_gltf *asset, const char *name);
 int mr_gltf_extension_required(const mr_gltf *asset, const char *name);

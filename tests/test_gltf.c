@@ -264,6 +264,14 @@ MR_TEST(floppy_disk_spec_gloss_factors) {
     MR_CHECK(m.base_color_texture.index == -1 && m.metallic_roughness_texture.index == -1);
     MR_CHECK(mr_gltf_extension_used(g, "KHR_materials_pbrSpecularGlossiness"));
     MR_CHECK(mr_gltf_extension_required(g, "KHR_materials_pbrSpecularGlossiness"));
+    /* A fallback added: the extension stays used, no longer required (and back). */
+    MR_CHECK_OK(mr_gltf_set_extension_required(g, "KHR_materials_pbrSpecularGlossiness", 0));
+    MR_CHECK(!mr_gltf_extension_required(g, "KHR_materials_pbrSpecularGlossiness"));
+    MR_CHECK(mr_gltf_extension_used(g, "KHR_materials_pbrSpecularGlossiness"));
+    MR_CHECK_OK(mr_gltf_set_extension_required(g, "KHR_materials_pbrSpecularGlossiness", 1));
+    MR_CHECK(mr_gltf_extension_required(g, "KHR_materials_pbrSpecularGlossiness"));
+    MR_CHECK_OK(mr_gltf_set_extension_required(g, "EXT_new", 1));
+    MR_CHECK(mr_gltf_extension_used(g, "EXT_new") && mr_gltf_extension_required(g, "EXT_new"));
     mr_gltf_texture t;
     MR_CHECK_OK(mr_gltf_get_texture(g, 1, &t));
     MR_CHECK(t.image == 1 && t.sampler == 0 && t.params.mag_filter == 9729 && t.params.min_filter == 9987);
