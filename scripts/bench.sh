@@ -209,6 +209,49 @@ else
     echo "End-to-end conversion skipped: ../shared/assets was not found in this run." > "$e2e"
 fi
 
+echo
+echo "== glTF assets: matremap gltf spec2metal against gltf-transform metalrough (same assets, same run)"
+# gltf-transform's `metalrough` is the lossless route (KHR_materials_specular + KHR_materials_ior: textures
+# rearranged, nothing converted per texel); ours converts every texel. Both write a .gltf with its textures.
+gt="$root/scripts/gltf-transform"
+gltf_report="$work/gltf.md"
+if [ ! -x "$gt/node_modules/.bin/gltf-transform" ]; then
+    (cd "$gt" && npm ci --no-audit --no-fund --loglevel=error) >"$work/gltf-transform-npm.log" 2>&1 || true
+fi
+if [ -x "$gt/node_modules/.bin/gltf-transform" ] && [ -d "$shared/assets/specgloss" ]; then
+    runs=3
+    [ "$quick" = "--quick" ] && runs=1
+    {
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores: whole processes, median of $runs runs;"
+        echo "gltf-transform $("$gt/node_modules/.bin/gltf-transform" --version 2>/dev/null | tail -n 1) (node $(node --version))."
+        echo
+        echo "| asset | materials | matremap weighted (s) | matremap mlp (s) | gltf-transform metalrough (s) | ratio weighted / gltf-transform |"
+        echo "|---|---:|---:|---:|---:|---:|"
+    } > "$gltf_report"
+    for asset in "$shared"/assets/specgloss/*/*/*.gltf "$shared"/assets/specgloss/FloppyDisk-sketchfab/scene.gltf; do
+        [ -f "$asset" ] || continue
+        name=$(basename "$(dirname "$asset")")
+        [ "$name" = glTF-pbrSpecularGlossiness ] && name=$(basename "$(dirname "$(dirname "$asset")")")
+        out="$work/gltf/$name"
+        rm -rf "$out" && mkdir -p "$out/w" "$out/m" "$out/g"
+        ours=() mlp=() peer=()
+        for run in $(seq "$runs"); do
+            ours+=("$(seconds_of "$bin" gltf spec2metal "$asset" -o "$out/w/out.gltf" --method weighted)")
+            mlp+=("$(seconds_of "$bin" gltf spec2metal "$asset" -o "$out/m/out.gltf" --method mlp)")
+            peer+=("$(seconds_of "$gt/node_modules/.bin/gltf-transform" metalrough "$asset" "$out/g/out.gltf")")
+        done
+        o_s=$(printf '%s\n' "${ours[@]}" | median)
+        m_s=$(printf '%s\n' "${mlp[@]}" | median)
+        p_s=$(printf '%s\n' "${peer[@]}" | median)
+        materials=$(python3 -c 'import json, sys; print(len(json.load(open(sys.argv[1]))["materials"]))' "$asset")
+        printf '| %s | %s | %.2f | %.2f | %.2f | %.2f× |\n' "$name" "$materials" "$o_s" "$m_s" "$p_s" \
+            "$(awk -v a="$o_s" -v b="$p_s" 'BEGIN {print a / b}')" | tee -a "$gltf_report"
+    done
+else
+    echo "(gltf-transform could not be installed from the npm registry, or no assets: the glTF comparison was skipped)"
+    echo "glTF comparison skipped: gltf-transform or ../shared/assets missing in this run." > "$gltf_report"
+fi
+
 # Replace the sections between the markers in docs/performance.md (or DOC) with this run's reports.
 perf="$root/docs/performance.md"
 replace_section() { # NAME REPORT [DOC]
@@ -227,6 +270,7 @@ if [ -f "$perf" ]; then
     replace_section remap "$work/remap.md"
     replace_section workflow "$work/workflow.md"
     replace_section workflow-e2e "$work/e2e.md"
+    replace_section gltf "$work/gltf.md"
 fi
 replace_section envlight "$work/envlight.md" "$root/docs/rendering.md"
 replace_section mesh "$work/mesh.md" "$root/docs/rendering.md"
