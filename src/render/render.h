@@ -9,18 +9,24 @@
  *   mr_render_plan_free(plan);
  * Environment lighting: scene.lights[i] = mr_light_environment(map, 1.0, 0.0, 0) (an equirectangular HDR
  * image, e.g. read with mr_img_read) in place of, or beside, the point light. docs/rendering.md has the details.
+ * Triangle meshes: scene.shape.type = MR_SHAPE_MESH, scene.shape.mesh = &mesh (an mr_mesh the caller fills, e.g.
+ * from a glTF primitive), and mr_camera_frame_mesh(&mesh, NULL, &scene.camera) to frame it.
  *
  * Design (docs/design.md principle 2, "simulate only the effects a scene calls for"):
  *   - A plan is built once per scene. It traces one primary ray through each pixel centre and keeps the hits on
  *     the object that receive light: the view direction in the local shading frame, the frame itself and the
- *     sphere's texture coordinates (u, v). For each light it stores the hit's shading samples. Pixels that see
- *     the object but no light are black and carry no sample. Pixels on the silhouette get a fixed grid of
+ *     texture coordinates (u, v) (the sphere's, or a mesh's TEXCOORD_0). For each light it stores the hit's
+ *     shading samples. Pixels that see the object but no light are black and carry no sample. Pixels on the
+ *     silhouette get a fixed grid of
  *     edge_samples^2 sub-pixel rays (hits) instead, each weighted by its share of the pixel, so edges are
  *     box-filtered (as a path tracer's are) rather than aliased; the rest of the image needs no extra rays.
  *   - Rendering a material is then only BRDF evaluations on the stored samples: radiance = sum over the
  *     pixel's samples of f_r(view, light) * weight. Nothing geometric is traced again.
- *   - A lone sphere is convex, so nothing can shadow a point it lights: no shadow rays. A point light is a
- *     delta: no sampling, each lit pixel is evaluated exactly; its sample holds the local light direction and
+ *   - A lone sphere is convex, so nothing can shadow a point it lights: no shadow rays; nor for a convex mesh.
+ *     A mesh that can occlude itself gets shadow rays, traced once in the plan, which keeps only the samples
+ *     that see their light, so renders still cost only BRDF evaluations (mr_render_plan_shadow_ray_count,
+ *     docs/rendering.md "Triangle meshes"). A point light is a delta: no sampling, each lit pixel is
+ *     evaluated exactly; its sample holds the local light direction and
  *     the weight I*cos(theta_light)/d^2. Primary rays are never jittered, so renders are noise-free and
  *     deterministic, and the optimiser sees a smooth objective.
  *   - An environment light is sampled with one fixed set of N directions, the same for every pixel:
@@ -34,7 +40,8 @@
  *     against N and the cost).
  *   - Extension points: new object types add an intersector producing hit records (position, shading frame,
  *     texture coordinates); new light types add a sample generator over those hit records; objects that can
- *     occlude themselves (triangle meshes) add shadow rays in that generator. Nothing in mr_render changes.
+ *     occlude themselves (non-convex triangle meshes, through their BVH) add shadow rays in that generator.
+ *     Nothing in mr_render changes.
  * Units: point-light intensity is radiant intensity in W/sr per RGB channel (Mitsuba's point emitter); an
  * environment map holds radiance; pixels hold radiance. World space is right-handed with +y up; the default
  * camera looks down -z.
@@ -162,7 +169,8 @@ typedef struct mr_shape {
     mr_shape_type type;
     double center[3];     /* MR_SHAPE_SPHERE */
     double radius;        /* MR_SHAPE_SPHERE */
-    const mr_mesh *mesh;  /* MR_SHAPE_MESH: borrowed, read by mr_render_plan_create only (see mr_mesh) */
+    const mr_mesh *mesh;  /* MR_SHAPE_MESH: borrowed, read by mr_render_plan_create only (see mr_mesh); the
+                             copy in mr_render_plan_scene() is the caller's pointer, maybe stale */
 } mr_shape;
 
 /* How mr_camera_frame_mesh frames a mesh. Zero-initialise for the defaults. */
