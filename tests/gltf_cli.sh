@@ -108,6 +108,22 @@ expect "Duck, the network" 0 "1 of 1 materials converted with mlp" -- "$bin" glt
     -o "$tmp/duck/duck.glb"
 check "a .glb output" test "$(head -c 4 "$tmp/duck/duck.glb")" = glTF
 
+# The lossless extension route: nothing converted, the spec-gloss textures reused, glossiness as roughness.
+mkdir -p "$tmp/ext"
+expect "FloppyDisk, --method extension" 0 "1 of 1 materials converted with extension" -- "$bin" gltf spec2metal \
+    "$floppy" -o "$tmp/ext/ext.gltf" --method extension
+check "specular colour 0.89, ior 1000, metallic 0, the diffuse as base colour" test \
+    "$(gltf "$tmp/ext/ext.gltf" '(m(0)["extensions"]["KHR_materials_specular"]["specularColorFactor"],
+        m(0)["extensions"]["KHR_materials_ior"]["ior"], pbr(0)["metallicFactor"], pbr(0)["baseColorFactor"][:3],
+        uri(pbr(0)["baseColorTexture"]["index"]))')" = \
+    "([0.89, 0.89, 0.89], 1000.0, 0.0, [0.93, 0.93, 0.93], 'textures/material_0_diffuse.png')"
+oiiotool --iconfig oiio:UnassociatedAlpha 1 "$(dirname "$floppy")/textures/material_0_specularGlossiness.png" \
+    --ch A -d float --mulc 0.91 --mulc -1 --addc 1 -o "$tmp/rough_expected.exr"
+oiiotool "$tmp/ext/$(gltf "$tmp/ext/ext.gltf" 'uri(pbr(0)["metallicRoughnessTexture"]["index"])')" --ch G -d float \
+    -o "$tmp/rough_got.exr"
+d=$(maxdiff "$tmp/rough_expected.exr" "$tmp/rough_got.exr")
+check "roughness texture = 1 - 0.91 glossiness within an 8-bit step (max error $d)" below "$d" 0.0021
+
 # ---- metal2spec and back ----------------------------------------------------------------------------------------
 expect "WaterBottle, metal2spec" 0 "1 of 1 materials converted" -- "$bin" gltf metal2spec "$bottle" \
     -o "$tmp/bottle/bottle.gltf"
@@ -150,7 +166,7 @@ if [ ! -f "$node_dir/node_modules/gltf-validator/package.json" ]; then
     (cd "$node_dir" && npm ci --no-audit --no-fund --loglevel=error) >"$tmp/npm.log" 2>&1 ||
         echo "      npm ci failed: $(tail -n 3 "$tmp/npm.log" | tr '\n' ' ')"
 fi
-for f in "$tmp/floppy/floppy.gltf" "$tmp/avocado/avocado.gltf" "$tmp/keep/a.gltf" "$tmp/sg/a.gltf" \
+for f in "$tmp/floppy/floppy.gltf" "$tmp/ext/ext.gltf" "$tmp/avocado/avocado.gltf" "$tmp/keep/a.gltf" "$tmp/sg/a.gltf" \
          "$tmp/truck/truck.gltf" "$tmp/duck/duck.glb" "$tmp/bottle/bottle.gltf" "$tmp/back/back.gltf" \
          "$tmp/settings/settings.gltf"; do
     result=$(node "$node_dir/gltf_validate.js" "$f" 2>&1 | head -n 1)

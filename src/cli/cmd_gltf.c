@@ -39,8 +39,9 @@ static void print_help(void) {
            "\n"
            "Options:\n"
            "  -o, --output OUT      the converted asset (.gltf with its files beside it, or .glb); never an input\n"
-           "  --method M            spec2metal: mlp (default), weighted, mean, khronos; metal2spec: eq2 (default),\n"
-           "                        khronos\n"
+           "  --method M            spec2metal: mlp (default), weighted, mean, khronos, or extension: the lossless\n"
+           "                        route of KHR_materials_specular + KHR_materials_ior (ior 1000, textures reused,\n"
+           "                        metallic 0; for engines that support both); metal2spec: eq2 (default), khronos\n"
            "  --weights FILE        the network for mlp (default: the shipped one, as 'matremap spec2metal')\n"
            "  --convention C        gltf (default) or paper: how the spec-gloss diffuse is read (docs/workflow.md)\n"
            "  --fallback F          spec2metal, for materials that already carry core metal-rough values beside\n"
@@ -121,14 +122,14 @@ static int same_mapping(const mr_gltf_texture_ref *a, const mr_gltf_texture_ref 
                                   a->scale[1] == b->scale[1] && a->transform_tex_coord == b->transform_tex_coord));
 }
 
-/* Write the two new textures of material `material` (named OUTBASE_mK_NAME.EXT) to the scratch folder, encoded in
- * parallel, then add them to the asset under those relative URIs as textures with the sampler of texture `like`
- * (none if it has none). Returns a status; texture[] receives the indices. */
-static mr_status add_textures(mr_gltf *asset, mr_image *const images[2], const mr_img_encoding encodings[2],
-                              const char *const names[2], const options *o, const char *scratch,
-                              const char *outbase, int material, int like, int texture[2]) {
+/* Write the `count` (1 or 2) new textures of material `material` (named OUTBASE_mK_NAME.EXT) to the scratch
+ * folder, encoded in parallel, then add them to the asset under those relative URIs as textures with the sampler
+ * of texture `like` (none if it has none). Returns a status; texture[] receives the indices. */
+static mr_status add_textures(mr_gltf *asset, int count, mr_image *const images[2],
+                              const mr_img_encoding encodings[2], const char *const names[2], const options *o,
+                              const char *scratch, const char *outbase, int material, int like, int texture[2]) {
     char files[2][PATH_SIZE], uris[2][PATH_SIZE / 2];
-    for (int t = 0; t < 2; t++) {
+    for (int t = 0; t < count; t++) {
         int length = snprintf(uris[t], sizeof uris[t], "%s_m%d_%s.%s", outbase, material, names[t], o->format);
         int total = length < 0 || (size_t)length >= sizeof uris[t]
                         ? -1 : snprintf(files[t], sizeof files[t], "%s/%s", scratch, uris[t]);
@@ -140,7 +141,7 @@ static mr_status add_textures(mr_gltf *asset, mr_image *const images[2], const m
     mr_status statuses[2];
     char messages[2][1024]; // mr_last_error() is per thread
 #pragma omp parallel for schedule(static, 1)
-    for (int t = 0; t < 2; t++) {
+    for (int t = 0; t < count; t++) {
         mr_img_write_options wo = {0};
         wo.encoding = encodings[t];
         statuses[t] = mr_img_write(files[t], images[t], &wo);
@@ -153,7 +154,7 @@ static mr_status add_textures(mr_gltf *asset, mr_image *const images[2], const m
         sampler_ptr = &sampler;
     }
     mr_status status = MR_OK;
-    for (int t = 0; t < 2; t++) {
+    for (int t = 0; t < count; t++) {
         int image = -1;
         if (status == MR_OK && statuses[t] != MR_OK) {
             fprintf(stderr, "matremap gltf: error: %s\n", messages[t]);
@@ -254,6 +255,64 @@ static int has_core_values(const mr_gltf_material *m) {
            m->base_color_factor[1] != 1.0 || m->base_color_factor[2] != 1.0 || m->base_color_factor[3] != 1.0;
 }
 
+/* --method extension: the lossless route of KHR_materials_specular + KHR_materials_ior (what gltf-transform's
+ * `metalrough` does). Nothing is converted per texel: the diffuse becomes the base colour (metallic 0), the
+ * specular colour becomes the specular extension's colour (factor and texture reused), ior 1000 makes the
+ * dielectric's F0 that colour (((1000 - 1)/(1000 + 1))^2 = 0.996), and glossiness becomes a roughness texture
+ * (G = 1 - glossiness, the only new texture) or factor. Engines without the two extensions see a plain
+ * dielectric with the diffuse as its colour. */
+static int extension_material(mr_gltf *asset, int k, const options *o, mr_gltf_material *m, const char *scratch,
+                              const char *outbase, outcome *r) {
+    double started = cli_now();
+    const mr_gltf_texture_ref diffuse = m->diffuse_texture, sg = m->specular_glossiness_texture;
+    mr_status status = MR_OK;
+    m->base_color_texture = diffuse;
+    for (int c = 0; c < 4; c++) m->base_color_factor[c] = m->diffuse_factor[c];
+    m->metallic_factor = 0.0;
+    m->has_specular = 1;
+    m->specular_strength = 1.0;
+    for (int c = 0; c < 3; c++) m->specular_color_factor[c] = m->specular_factor[c];
+    m->specular_color_texture = sg;
+    mr_gltf_texture_ref_none(&m->specular_texture);
+    m->has_ior = 1;
+    m->ior = 1000.0;
+    if (sg.index < 0) { // glossiness is a factor: roughness is one too
+        m->roughness_factor = 1.0 - m->glossiness_factor;
+        mr_gltf_texture_ref_none(&m->metallic_roughness_texture);
+    } else {
+        mr_image *sg_image = NULL, *rough = NULL;
+        int code = read_texture(asset, &sg, MR_IMG_COLOR, scratch, &sg_image);
+        if (code != CLI_EXIT_OK) return code;
+        status = mr_image_create(sg_image->width, sg_image->height, 3, &rough);
+        size_t n = (size_t)sg_image->width * (size_t)sg_image->height;
+        for (size_t i = 0; status == MR_OK && i < n; i++) {
+            float gloss = sg_image->channels == 4 ? sg_image->pixels[4 * i + 3] : 1.0f;
+            rough->pixels[3 * i] = 0.0f;
+            rough->pixels[3 * i + 1] = (float)(1.0 - gloss * m->glossiness_factor);
+            rough->pixels[3 * i + 2] = 0.0f;
+        }
+        int index[2] = {-1, -1};
+        if (status == MR_OK) {
+            mr_image *const images[2] = {rough, NULL};
+            static const mr_img_encoding encodings[2] = {MR_IMG_DATA, MR_IMG_DATA};
+            static const char *const names[2] = {"roughness", NULL};
+            status = add_textures(asset, 1, images, encodings, names, o, scratch, outbase, k, sg.index, index);
+        }
+        m->metallic_roughness_texture = sg;
+        m->metallic_roughness_texture.index = index[0];
+        m->roughness_factor = 1.0;
+        r->width = sg_image->width;
+        r->height = sg_image->height;
+        mr_image_free(sg_image);
+        mr_image_free(rough);
+    }
+    m->has_spec_gloss = o->keep_specgloss;
+    if (status == MR_OK) status = mr_gltf_set_material(asset, k, m);
+    r->what = "converted";
+    r->seconds = cli_now() - started;
+    return status == MR_OK ? CLI_EXIT_OK : cli_fail("gltf", status);
+}
+
 static int spec2metal_material(mr_gltf *asset, int k, const options *o, const mr_mlp *net, const mr_wf_options *wf,
                                const char *scratch, const char *outbase, outcome *r) {
     mr_gltf_material m;
@@ -269,6 +328,7 @@ static int spec2metal_material(mr_gltf *asset, int k, const options *o, const mr
         r->what = "kept its own metal-rough values (--fallback keep)";
         return status == MR_OK ? CLI_EXIT_OK : cli_fail("gltf", status);
     }
+    if (strcmp(o->method, "extension") == 0) return extension_material(asset, k, o, &m, scratch, outbase, r);
     double started = cli_now();
     const mr_gltf_texture_ref *dref = &m.diffuse_texture, *sref = &m.specular_glossiness_texture;
     mr_image *dimg = NULL, *simg = NULL, *base = NULL, *packed = NULL;
@@ -331,7 +391,7 @@ static int spec2metal_material(mr_gltf *asset, int k, const options *o, const mr
             mr_image *const images[2] = {base, packed};
             static const mr_img_encoding encodings[2] = {MR_IMG_COLOR, MR_IMG_DATA};
             static const char *const names[2] = {"basecolor", "metallicRoughness"};
-            status = add_textures(asset, images, encodings, names, o, scratch, outbase, k, like, indices);
+            status = add_textures(asset, 2, images, encodings, names, o, scratch, outbase, k, like, indices);
         }
         base_index = indices[0];
         packed_index = indices[1];
@@ -423,7 +483,7 @@ static int metal2spec_material(mr_gltf *asset, int k, const options *o, const mr
             mr_image *const images[2] = {diffuse, specgloss};
             static const mr_img_encoding encodings[2] = {MR_IMG_COLOR, MR_IMG_COLOR};
             static const char *const names[2] = {"diffuse", "specularGlossiness"};
-            status = add_textures(asset, images, encodings, names, o, scratch, outbase, k, like, indices);
+            status = add_textures(asset, 2, images, encodings, names, o, scratch, outbase, k, like, indices);
         }
         diffuse_index = indices[0];
         sg_index = indices[1];
@@ -543,9 +603,12 @@ int cmd_gltf(int argc, char **argv) {
     mr_wf_options wf = mr_wf_options_default();
     wf.spec_diffuse = o.convention;
     int use_mlp = to_metal && strcmp(o.method, "mlp") == 0;
-    if (to_metal && !use_mlp) {
+    if (to_metal && strcmp(o.method, "extension") == 0) {
+        // no converter: the material is rewritten with extensions (extension_material)
+    } else if (to_metal && !use_mlp) {
         if (mr_wf_method_from_name(o.method, &wf.method) != MR_OK || wf.method == MR_WF_CUSTOM)
-            return cli_usage_error("gltf", "--method '%s': expected mlp, weighted, mean or khronos", o.method);
+            return cli_usage_error("gltf", "--method '%s': expected mlp, weighted, mean, khronos or extension",
+                                   o.method);
     } else if (!to_metal) {
         if (strcmp(o.method, "khronos") == 0)
             wf.method = MR_WF_KHRONOS;
