@@ -124,6 +124,12 @@ oiiotool "$tmp/ext/$(gltf "$tmp/ext/ext.gltf" 'uri(pbr(0)["metallicRoughnessText
 d=$(maxdiff "$tmp/rough_expected.exr" "$tmp/rough_got.exr")
 check "roughness texture = 1 - 0.91 glossiness within an 8-bit step (max error $d)" below "$d" 0.0021
 
+expect "FloppyDisk, --keep-specgloss" 0 "converted" -- "$bin" gltf spec2metal "$floppy" -o "$tmp/ext/kept.gltf" \
+    --method weighted --keep-specgloss
+check "a kept spec-gloss extension beside the new core material is no longer required" test \
+    "$(gltf "$tmp/ext/kept.gltf" '(SG in d["extensionsUsed"], SG in d.get("extensionsRequired", []))')" = \
+    "(True, False)"
+
 # ---- metal2spec and back ----------------------------------------------------------------------------------------
 expect "WaterBottle, metal2spec" 0 "1 of 1 materials converted" -- "$bin" gltf metal2spec "$bottle" \
     -o "$tmp/bottle/bottle.gltf"
@@ -166,7 +172,7 @@ if [ ! -f "$node_dir/node_modules/gltf-validator/package.json" ]; then
     (cd "$node_dir" && npm ci --no-audit --no-fund --loglevel=error) >"$tmp/npm.log" 2>&1 ||
         echo "      npm ci failed: $(tail -n 3 "$tmp/npm.log" | tr '\n' ' ')"
 fi
-for f in "$tmp/floppy/floppy.gltf" "$tmp/ext/ext.gltf" "$tmp/avocado/avocado.gltf" "$tmp/keep/a.gltf" "$tmp/sg/a.gltf" \
+for f in "$tmp/floppy/floppy.gltf" "$tmp/ext/ext.gltf" "$tmp/ext/kept.gltf" "$tmp/avocado/avocado.gltf" "$tmp/keep/a.gltf" "$tmp/sg/a.gltf" \
          "$tmp/truck/truck.gltf" "$tmp/duck/duck.glb" "$tmp/bottle/bottle.gltf" "$tmp/back/back.gltf" \
          "$tmp/settings/settings.gltf"; do
     result=$(node "$node_dir/gltf_validate.js" "$f" 2>&1 | head -n 1)

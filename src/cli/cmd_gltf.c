@@ -49,7 +49,8 @@ static void print_help(void) {
            "                        (keep the asset's own and only drop the extension)\n"
            "  --keep-specgloss      spec2metal: keep the spec-gloss extension in the output beside the new core\n"
            "                        material (default: remove it, so engines without it read the core material)\n"
-           "  --format F            png (default) or exr for the new textures\n"
+           "  --format F            png (default) or exr for the new textures (EXR is not a core glTF image\n"
+           "                        type: the validator reports it and many viewers cannot read it)\n"
            "  --json                a JSON summary on stdout\n"
            "  --help                this text\n"
            "\n"
@@ -649,8 +650,13 @@ int cmd_gltf(int argc, char **argv) {
         converted += code == CLI_EXIT_OK && strcmp(outcomes[k].what, "converted") == 0;
     }
     if (code == CLI_EXIT_OK) {
+        // Spec-gloss kept beside a new core material (--keep-specgloss, or metal2spec's fallback): engines without
+        // the extension read the core material, so it must not be required (FloppyDisk requires it).
+        mr_status status = MR_OK;
+        if (o.keep_specgloss || !to_metal)
+            status = mr_gltf_set_extension_required(asset, "KHR_materials_pbrSpecularGlossiness", 0);
         mr_gltf_sync_extensions(asset);
-        mr_status status = mr_gltf_save(asset, o.output);
+        if (status == MR_OK) status = mr_gltf_save(asset, o.output);
         if (status != MR_OK) code = cli_fail("gltf", status);
     }
     double seconds = cli_now() - started;
