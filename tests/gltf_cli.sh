@@ -172,9 +172,9 @@ if [ ! -f "$node_dir/node_modules/gltf-validator/package.json" ]; then
     (cd "$node_dir" && npm ci --no-audit --no-fund --loglevel=error) >"$tmp/npm.log" 2>&1 ||
         echo "      npm ci failed: $(tail -n 3 "$tmp/npm.log" | tr '\n' ' ')"
 fi
-for f in "$tmp/floppy/floppy.gltf" "$tmp/ext/ext.gltf" "$tmp/ext/kept.gltf" "$tmp/avocado/avocado.gltf" "$tmp/keep/a.gltf" "$tmp/sg/a.gltf" \
-         "$tmp/truck/truck.gltf" "$tmp/duck/duck.glb" "$tmp/bottle/bottle.gltf" "$tmp/back/back.gltf" \
-         "$tmp/settings/settings.gltf"; do
+for f in "$tmp/floppy/floppy.gltf" "$tmp/ext/ext.gltf" "$tmp/ext/kept.gltf" "$tmp/avocado/avocado.gltf" \
+         "$tmp/keep/a.gltf" "$tmp/sg/a.gltf" "$tmp/truck/truck.gltf" "$tmp/duck/duck.glb" \
+         "$tmp/bottle/bottle.gltf" "$tmp/back/back.gltf" "$tmp/settings/settings.gltf"; do
     result=$(node "$node_dir/gltf_validate.js" "$f" 2>&1 | head -n 1)
     errors=$(echo "$result" | sed -nE 's/.* errors=([0-9]+) .*/\1/p')
     check "validator: ${f#"$tmp/"}: errors=${result##* errors=}" test "$errors" = 0
