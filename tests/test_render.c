@@ -1751,6 +1751,55 @@ MR_TEST(mesh_generated_normals_and_tangents_follow_the_surface) {
     test_mesh_free(&sphere);
 }
 
+MR_TEST(mesh_double_sided_backs_are_shaded_as_fronts) {
+    // A quad facing the camera, and the same quad wound the other way (its back towards the camera): single-
+    // sided, the back is covered but black; double-sided, it renders like the front. A double-sided flat quad
+    // needs no shadow rays; a double-sided closed sphere does (its inside could be seen, and shadowed).
+    const float pos[4][3] = {{-1, 1, 0}, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}};
+    const uint32_t front[6] = {0, 1, 2, 0, 2, 3}, back[6] = {0, 2, 1, 0, 3, 2};
+    test_mesh m[2];
+    for (int k = 0; k < 2; k++) {
+        test_mesh_alloc(&m[k], 4, 2);
+        memcpy(m[k].positions, pos, sizeof pos);
+        memcpy(m[k].indices, k == 0 ? front : back, sizeof front);
+    }
+    const mr_brdf_model *lambert = mr_brdf_find("lambert");
+    double values[3] = {0.5, 0.5, 0.5};
+    mr_image *img[3] = {NULL, NULL, NULL};
+    long rays[3] = {-1, -1, -1};
+    int lit[3] = {-1, -1, -1};
+    for (int k = 0; k < 3; k++) { // front; back single-sided; back double-sided
+        test_mesh *mesh = &m[k == 0 ? 0 : 1];
+        mesh->mesh.double_sided = k == 2;
+        mr_scene scene = mesh_fit_scene(mesh, 32, MR_FIT_LIGHT_45);
+        mr_render_plan *plan = NULL;
+        MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+        if (plan == NULL) continue;
+        MR_CHECK_OK(mr_render(plan, lambert, values, MR_COMPONENT_FULL, &img[k]));
+        rays[k] = mr_render_plan_shadow_ray_count(plan);
+        lit[k] = mr_render_plan_lit_pixel_count(plan);
+        MR_CHECK(mr_render_plan_object_pixel_count(plan) > 500);
+        mr_render_plan_free(plan);
+    }
+    MR_CHECK_MSG(lit[0] > 500 && lit[1] == 0 && lit[2] == lit[0], "lit pixels %d %d %d", lit[0], lit[1], lit[2]);
+    MR_CHECK(rays[0] == 0 && rays[1] == 0 && rays[2] == 0);
+    double worst = 0.0;
+    for (size_t i = 0; img[0] && img[2] && i < mr_image_value_count(img[0]); i++)
+        worst = fmax(worst, fabs((double)img[0]->pixels[i] - img[2]->pixels[i]));
+    MR_CHECK_MSG(img[0] && img[2] && worst <= 1e-7, "double-sided back differs from the front by %.3g", worst);
+    for (int k = 0; k < 3; k++) mr_image_free(img[k]);
+    test_mesh_free(&m[0]);
+    test_mesh_free(&m[1]);
+    test_mesh box = uv_sphere(4, 8, 0); // closed and convex
+    box.mesh.double_sided = 1;
+    mr_scene scene = mesh_fit_scene(&box, 16, MR_FIT_LIGHT_45);
+    mr_render_plan *plan = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    MR_CHECK(plan != NULL && mr_render_plan_self_occluding(plan) && mr_render_plan_shadow_ray_count(plan) > 0);
+    mr_render_plan_free(plan);
+    test_mesh_free(&box);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
              MR_TEST_ENTRY(edge_filtering_measures_the_silhouette),
              MR_TEST_ENTRY(background_fills_the_uncovered_part_of_each_pixel),
@@ -1787,4 +1836,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
              MR_TEST_ENTRY(mesh_textures_sample_the_mesh_uvs),
              MR_TEST_ENTRY(mesh_bad_meshes_are_rejected_with_messages),
              MR_TEST_ENTRY(mesh_camera_framing_fits_the_bounding_sphere),
-             MR_TEST_ENTRY(mesh_generated_normals_and_tangents_follow_the_surface))
+             MR_TEST_ENTRY(mesh_generated_normals_and_tangents_follow_the_surface),
+             MR_TEST_ENTRY(mesh_double_sided_backs_are_shaded_as_fronts))

@@ -525,7 +525,9 @@ static int any_vertex_in_front(const mesh_world *mesh, const double n[3], double
 }
 
 /* Convex (render.h, mr_render_plan_shadow_ray_count): each non-degenerate face's plane has every vertex on its
- * inner side (against the winding's normal), and the winding agrees with the face's vertex normals. */
+ * inner side (against the winding's normal), and the winding agrees with the face's vertex normals. A
+ * double-sided mesh shows its backs too, which face the rest of a convex mesh: it must then be flat (every
+ * vertex on both sides, i.e. on every face's plane) to need no shadow rays. */
 static int mesh_is_convex(const mesh_world *mesh) {
     const double tol = CONVEX_TOLERANCE * mesh->scale;
     int convex = 1;
@@ -543,6 +545,8 @@ static int mesh_is_convex(const mesh_world *mesh) {
         for (int c = 0; c < 3; c++)
             for (int i = 0; i < 3; i++) mean[i] += mesh->normal[tri[c]][i];
         if (vec3_dot(mean, n) <= 0.0 || any_vertex_in_front(mesh, n, vec3_dot(n, p0), tol)) convex = 0;
+        double back[3] = {-n[0], -n[1], -n[2]};
+        if (convex && mesh->double_sided && any_vertex_in_front(mesh, back, vec3_dot(back, p0), tol)) convex = 0;
     }
     return convex;
 }
@@ -580,6 +584,7 @@ mr_status mesh_world_build(const mr_mesh *src, mesh_world *mesh) {
     double (*scratch)[3] = NULL;
     mesh->vertex_count = nv;
     mesh->triangle_count = nt;
+    mesh->double_sided = src->double_sided != 0;
     mesh->position = malloc(v * sizeof *mesh->position);
     mesh->normal = malloc(v * sizeof *mesh->normal);
     mesh->triangle = malloc((size_t)nt * sizeof *mesh->triangle);

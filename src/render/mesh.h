@@ -29,6 +29,7 @@ typedef struct mesh_world {
     int *order;             /* triangle indices in leaf order */
     double scale;           /* bounding-box diagonal: the unit of the geometric tolerances */
     int convex;             /* 1: cannot occlude itself, no shadow rays */
+    int double_sided;       /* mr_mesh.double_sided */
 } mesh_world;
 
 /* A ray's hit: distance, triangle and barycentrics (u at vertex 1, v at vertex 2). */

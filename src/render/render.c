@@ -149,6 +149,12 @@ static int trace_primary(const mr_scene *scene, const mesh_world *mesh, const ca
         mesh_shade(mesh, &mh, hit->normal, hit->tangent, hit->bitangent, hit->geometric, hit->uv);
         hit->triangle = mh.triangle;
         double to_camera[3] = {-dir[0], -dir[1], -dir[2]};
+        if (mesh->double_sided && vec3_dot(hit->geometric, to_camera) < 0.0)
+            for (int k = 0; k < 3; k++) { // the back of a double-sided triangle: shade it as a front
+                hit->normal[k] = -hit->normal[k];
+                hit->bitangent[k] = -hit->bitangent[k];
+                hit->geometric[k] = -hit->geometric[k];
+            }
         to_local(hit, to_camera, hit->view_local);
         return 1;
     }

@@ -139,7 +139,9 @@ mr_light mr_light_environment(const mr_image *map, double scale, double rotation
  * Shading at a hit interpolates normal, tangent and UV with the barycentrics; the frame is
  * (t orthogonalised against n, w * cross(n, t), n), or an arbitrary frame about n without tangents. UVs
  * (TEXCOORD_0) feed mr_param_textures maps (0, 0 without UVs). A hit whose interpolated normal faces away
- * from the camera is covered but unlit (black), like the back of a single-sided glTF material. */
+ * from the camera is covered but unlit (black), like the back of a single-sided glTF material; with
+ * double_sided set, a hit on a triangle's back (its winding seen clockwise from the camera) has its normal and
+ * bitangent reversed first, as glTF's doubleSided materials ask. */
 typedef struct mr_mesh {
     int vertex_count;        /* >= 3 */
     const float *positions;  /* [vertex_count * 3], object space, finite; required */
@@ -150,6 +152,7 @@ typedef struct mr_mesh {
     int triangle_count;      /* >= 1; at least one triangle must have a non-zero area */
     const uint32_t *indices; /* [triangle_count * 3], each < vertex_count; counter-clockwise seen from the
                                 front (the side the generated normals face) */
+    int double_sided;        /* 0: backs of triangles are not shaded (glTF's default); 1: lit like fronts */
     int has_transform;       /* 0: identity (transform ignored) */
     double transform[16];    /* object to world, a 4x4 column-major matrix as glTF's node.matrix; affine
                                 (last row 0 0 0 1), finite, invertible */
@@ -259,9 +262,9 @@ long mr_render_plan_env_sample_count(const mr_render_plan *plan);
 
 /* Number of shadow rays the plan traced (once, at creation): 0 for a sphere and for a convex mesh, which
  * cannot occlude itself (every vertex lies on the inner side of every face's plane, within 1e-6 of the mesh's
- * size, and every face's winding agrees with its vertex normals); otherwise one per point light and one per
- * environment direction above the horizon, for each lit hit. The plan keeps only the samples that see their
- * light, so renders cost the same BRDF evaluations either way. */
+ * size, and every face's winding agrees with its vertex normals; a double-sided mesh must be flat); otherwise
+ * one per point light and one per environment direction above the horizon, for each lit hit. The plan keeps
+ * only the samples that see their light, so renders cost the same BRDF evaluations either way. */
 long mr_render_plan_shadow_ray_count(const mr_render_plan *plan);
 
 /* 1 if the plan's object can occlude itself (a non-convex mesh: shadow rays were traced), 0 otherwise. */
