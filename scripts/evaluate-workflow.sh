@@ -173,6 +173,54 @@ for convention in gltf paper; do
     compare_all floppy "$convention" floppy_original
 done
 
+# ---- gltf-transform's metalrough: the lossless extension route, rendered as what it means ------------------------
+# It keeps the diffuse as the base colour (metallic 0), the specular colour in KHR_materials_specular and sets
+# KHR_materials_ior's ior to 1000, whose dielectric F0 is 0.996 x the specular colour. Our `gltf` model spans
+# ior 1..5, and F0 depends only on F0(ior) x specular colour, so the same material renders at ior 5 with the
+# specular colour scaled by F0(1000)/F0(5) = 2.241. Factors are folded into linear EXR maps as for the floppy.
+gt="$root/scripts/gltf-transform"
+if [ ! -x "$gt/node_modules/.bin/gltf-transform" ]; then
+    (cd "$gt" && npm ci --no-audit --no-fund --loglevel=error) >"$work/gltf-transform-npm.log" 2>&1 || true
+fi
+if [ -x "$gt/node_modules/.bin/gltf-transform" ]; then
+    echo "== gltf-transform metalrough on the spec-gloss assets"
+    for set in avocado floppy; do
+        case $set in
+            avocado) source_gltf="$avocado/Avocado.gltf" ;;
+            floppy) source_gltf="$(dirname "$floppy")/scene.gltf" ;;
+        esac
+        out="$work/gt_$set"
+        mkdir -p "$out"
+        "$gt/node_modules/.bin/gltf-transform" metalrough "$source_gltf" "$out/out.gltf" >/dev/null 2>&1
+        # base URI, base factor r g b, specular-colour URI, factor r g b, metallic-roughness URI, roughness, ior
+        read -r base_uri br bg bb spec_uri sr sg sb mr_uri rough ior < <(python3 - "$out/out.gltf" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+m = d["materials"][0]
+p, e = m.get("pbrMetallicRoughness", {}), m["extensions"]
+uri = lambda ref: d["images"][d["textures"][ref["index"]]["source"]]["uri"]
+spec = e["KHR_materials_specular"]
+print(uri(p["baseColorTexture"]), *p.get("baseColorFactor", [1, 1, 1, 1])[:3], uri(spec["specularColorTexture"]),
+      *spec.get("specularColorFactor", [1, 1, 1]), uri(p["metallicRoughnessTexture"]), p.get("roughnessFactor", 1),
+      e["KHR_materials_ior"]["ior"])
+PY
+        )
+        k=$(awk -v n="$ior" 'BEGIN { f = ((n - 1) / (n + 1)) ^ 2; print f / (4.0 / 9.0) }')
+        oiiotool "${unassoc[@]}" "$out/$base_uri" --ch R,G,B --colorconvert sRGB linear --mulc "$br,$bg,$bb" -d float \
+            --resize:filter=triangle "${map_size}x${map_size}" -o "$out/b.exr"
+        oiiotool "${unassoc[@]}" "$out/$spec_uri" --ch R,G,B --colorconvert sRGB linear \
+            --mulc "$(awk -v a="$sr" -v b="$sg" -v c="$sb" -v k="$k" 'BEGIN { print a * k "," b * k "," c * k }')" \
+            -d float --resize:filter=triangle "${map_size}x${map_size}" -o "$out/s.exr"
+        oiiotool "${unassoc[@]}" "$out/$mr_uri" --ch G --mulc "$rough" -d float \
+            --resize:filter=triangle "${map_size}x${map_size}" -o "$out/r.exr"
+        render "${set}_ext_gltf-transform" gltf "base_color=@$out/b.exr" metallic=0 "roughness=@$out/r.exr" \
+            "specular_color=@$out/s.exr" ior=5 specular=1
+        compare "$set" extension gltf-transform "${set}_ext_gltf-transform" "${set}_original" -
+    done
+else
+    echo "(gltf-transform could not be installed from the npm registry: its rows are missing)"
+fi
+
 # ---- WaterBottle: metal-rough maps -> metal2spec -> spec2metal with every method ------------------------------
 echo "== WaterBottle (metal-rough 2048² maps -> spec-gloss -> metal-rough)"
 shrink "$bottle/WaterBottle_baseColor.png" "$work/bottle_b_small.png"
