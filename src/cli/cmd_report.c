@@ -314,7 +314,7 @@ int cmd_report(int argc, char **argv) {
             return CLI_EXIT_OK;
         }
     options o = {NULL, NULL, NULL, 0, 0, 256, 0.0, 0.0};
-    static group groups[MAX_MATERIALS];
+    static group groups[MAX_MATERIALS]; // these three are large (maps, picture names): kept off the stack
     int count = 0;
     int code = parse(argc, argv, &o, groups, &count);
     if (code != CLI_EXIT_OK) return code;
