@@ -249,6 +249,25 @@ static int read_pair(const mr_gltf *asset, int k, const char *name, const mr_glt
     return CLI_EXIT_OK;
 }
 
+/* read_pair, then the buffers for the grid's texels; on failure nothing is left allocated. Returns an exit code. */
+static int prepare(const mr_gltf *asset, int k, const char *name, const mr_gltf_texture_ref *a,
+                   mr_img_encoding a_encoding, const mr_gltf_texture_ref *b, mr_img_encoding b_encoding,
+                   const char *scratch, mr_image **a_image, mr_image **b_image, int *width, int *height,
+                   buffers *bufs) {
+    int code = read_pair(asset, k, name, a, a_encoding, b, b_encoding, scratch, a_image, b_image, width, height);
+    if (code == CLI_EXIT_OK && !buffers_alloc(bufs, (size_t)*width * (size_t)*height)) {
+        buffers_free(bufs);
+        fprintf(stderr, "matremap gltf: error: out of memory for %dx%d texels\n", *width, *height);
+        code = CLI_EXIT_INTERNAL;
+    }
+    if (code != CLI_EXIT_OK) {
+        mr_image_free(*a_image);
+        mr_image_free(*b_image);
+        *a_image = *b_image = NULL;
+    }
+    return code;
+}
+
 /* Does the material carry core metal-rough values of its own (textures or non-default factors)? */
 static int has_core_values(const mr_gltf_material *m) {
     return m->base_color_texture.index >= 0 || m->metallic_roughness_texture.index >= 0 ||
@@ -334,19 +353,11 @@ static int spec2metal_material(mr_gltf *asset, int k, const options *o, const mr
     const mr_gltf_texture_ref *dref = &m.diffuse_texture, *sref = &m.specular_glossiness_texture;
     mr_image *dimg = NULL, *simg = NULL, *base = NULL, *packed = NULL;
     int width = 1, height = 1;
-    int code = read_pair(asset, k, m.name, dref, MR_IMG_COLOR, sref, MR_IMG_COLOR, scratch, &dimg, &simg, &width,
-                         &height);
-    size_t n = (size_t)width * (size_t)height;
     buffers b;
-    if (code == CLI_EXIT_OK && !buffers_alloc(&b, n)) {
-        fprintf(stderr, "matremap gltf: error: out of memory for %dx%d texels\n", width, height);
-        code = CLI_EXIT_INTERNAL;
-    }
-    if (code != CLI_EXIT_OK) {
-        mr_image_free(dimg);
-        mr_image_free(simg);
-        return code;
-    }
+    int code = prepare(asset, k, m.name, dref, MR_IMG_COLOR, sref, MR_IMG_COLOR, scratch, &dimg, &simg, &width,
+                       &height, &b);
+    if (code != CLI_EXIT_OK) return code;
+    size_t n = (size_t)width * (size_t)height;
     // Factors times textures, in linear values (glTF multiplies them so).
     int has_alpha = 0;
 #pragma omp parallel for schedule(static) reduction(| : has_alpha)
@@ -430,19 +441,11 @@ static int metal2spec_material(mr_gltf *asset, int k, const options *o, const mr
     const mr_gltf_texture_ref *bref = &m.base_color_texture, *mref = &m.metallic_roughness_texture;
     mr_image *bimg = NULL, *mimg = NULL, *diffuse = NULL, *specgloss = NULL;
     int width = 1, height = 1;
-    int code = read_pair(asset, k, m.name, bref, MR_IMG_COLOR, mref, MR_IMG_DATA, scratch, &bimg, &mimg, &width,
-                         &height);
-    size_t n = (size_t)width * (size_t)height;
     buffers b;
-    if (code == CLI_EXIT_OK && !buffers_alloc(&b, n)) {
-        fprintf(stderr, "matremap gltf: error: out of memory for %dx%d texels\n", width, height);
-        code = CLI_EXIT_INTERNAL;
-    }
-    if (code != CLI_EXIT_OK) {
-        mr_image_free(bimg);
-        mr_image_free(mimg);
-        return code;
-    }
+    int code = prepare(asset, k, m.name, bref, MR_IMG_COLOR, mref, MR_IMG_DATA, scratch, &bimg, &mimg, &width,
+                       &height, &b);
+    if (code != CLI_EXIT_OK) return code;
+    size_t n = (size_t)width * (size_t)height;
     int has_alpha = 0;
 #pragma omp parallel for schedule(static) reduction(| : has_alpha)
     for (int y = 0; y < height; y++)
