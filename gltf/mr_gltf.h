@@ -14,7 +14,8 @@
  *
  * Ownership: mr_gltf_load creates the asset, mr_gltf_free (NULL-safe) releases it and everything reachable from
  * it. Strings and byte pointers handed out (material names, image bytes, mime types, paths) belong to the asset
- * and stay valid until the asset is modified or freed.
+ * and stay valid until the asset is modified or freed. The exception is geometry: mr_gltf_get_triangles returns a
+ * copy the caller owns and releases with mr_gltf_triangles_free (see "Geometry" below).
  *
  * Images are never decoded: the encoded bytes (PNG, JPEG, ...) of every image are kept as read and written back
  * unchanged. A caller that needs pixels writes them to a file (mr_gltf_image_write_file) or uses the resolved
@@ -44,6 +45,7 @@
 #define MR_GLTF_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "mr_status.h"
 
@@ -204,6 +206,77 @@ mr_status mr_gltf_set_extension_required(mr_gltf *asset, const char *name, int r
 /* extensionsUsed / extensionsRequired membership (0 or 1). */
 int mr_gltf_extension_used(const mr_gltf *asset, const char *name);
 int mr_gltf_extension_required(const mr_gltf *asset, const char *name);
+
+/* ---- Geometry ------------------------------------------------------------------------------------------
+ * mr_gltf_get_triangles gives the world-space triangles of a scene, grouped by material, in arrays an mr_mesh
+ * (src/render/render.h) takes as they are: positions/normals/tangents/uv0 -> mr_mesh positions/normals/
+ * tangents/uvs, indices and counts alike, has_transform = 0 (the vertices are already in world space).
+ *
+ * Every mesh primitive reachable from the scene's root nodes is included once per node instancing its mesh,
+ * under the node's world matrix (matrix, or T * R * S, composed from the root down). Modes TRIANGLES (4, the
+ * default), TRIANGLE_STRIP (5) and TRIANGLE_FAN (6) become triangle lists (a strip's odd triangles reordered to
+ * keep the winding); POINTS and LINES* are skipped and counted. Attributes: POSITION (required, float VEC3)
+ * transformed by the matrix; NORMAL by its inverse transpose, renormalised; TANGENT xyz by the matrix,
+ * renormalised, w kept as +-1 except under a mirroring transform (negative determinant), where w is negated so
+ * that the world bitangent w * cross(n, t) is still the transformed bitangent; TEXCOORD_0/1 as floats or
+ * normalized unsigned bytes/shorts. Any component type, byteStride, byteOffset and sparse accessors are read;
+ * min/max are ignored. Indices are u8/u16/u32 accessors or, without one, 0, 1, 2, ...
+ *
+ * Winding: triangles always come out counter-clockwise seen from their front in world space: under a
+ * negative-determinant transform (which glTF says turns a primitive's winding clockwise) each triangle's last
+ * two indices are swapped (counted in flipped_primitives).
+ *
+ * A group holds the primitives with one material and the same set of attributes (a material whose primitives
+ * differ, some with normals and some without, say, gets one group per set), vertices concatenated. An absent
+ * attribute is a NULL array with its has_* flag 0: a renderer generates normals (and tangents from UVs).
+ * Integer positions, normals and tangents (KHR_mesh_quantization) are read as their (normalized) values.
+ * Strips and fans keep their degenerate triangles. A normal or tangent set with a non-finite or zero vector, or
+ * a UV set with a non-finite value, is dropped for that primitive (has_* 0: generated). An instance under a
+ * zero-determinant transform (a zero scale hides it) and a primitive without POSITION are skipped and counted.
+ *
+ * Not applied: morph targets (weights ignored) and skins (the bind pose as stored, under the node's own
+ * transform); KHR_texture_transform belongs to the material. Draco (KHR_draco_mesh_compression) is
+ * MR_ERR_UNSUPPORTED, a meshopt-compressed buffer view (EXT_meshopt_compression) MR_ERR_FORMAT. Errors are
+ * MR_ERR_FORMAT naming the file, mesh and primitive: accessors or buffer views out of range or of the wrong
+ * type, indices past the vertex count, non-finite positions, attributes of different counts; a scene or node
+ * naming a node or mesh that does not exist, and a node cycle, name the scene or node. A bad scene index is
+ * MR_ERR_INVALID_ARG. */
+typedef struct mr_gltf_triangle_group {
+    int material;       /* materials[] index, -1 = glTF's default material */
+    int vertex_count;
+    int triangle_count;
+    float *positions;   /* [vertex_count * 3], world space, finite */
+    float *normals;     /* [vertex_count * 3], world space, unit; NULL when has_normals is 0 */
+    float *tangents;    /* [vertex_count * 4], world xyz unit, w = +-1; NULL when has_tangents is 0 */
+    float *uv0;         /* [vertex_count * 2], TEXCOORD_0 (glTF's u right, v down); NULL when has_uv0 is 0 */
+    float *uv1;         /* [vertex_count * 2], TEXCOORD_1; NULL when has_uv1 is 0 */
+    uint32_t *indices;  /* [triangle_count * 3] into this group's vertices, counter-clockwise from the front */
+    int has_normals, has_tangents, has_uv0, has_uv1;
+    int primitive_count; /* primitive instances merged into the group */
+} mr_gltf_triangle_group;
+
+typedef struct mr_gltf_triangles {
+    int group_count;
+    mr_gltf_triangle_group *groups;
+    int scene;              /* the scene read, -1 if the asset has none (then nothing is read) */
+    int vertex_count;       /* over all groups */
+    int triangle_count;     /* over all groups */
+    int primitive_count;    /* triangle primitive instances read */
+    int skipped_primitives; /* point and line primitive instances */
+    int flipped_primitives; /* instances under a negative-determinant transform (winding reversed) */
+    double bbox_min[3], bbox_max[3]; /* world box of every vertex; 0 when there are none */
+} mr_gltf_triangles;
+
+/* World-space triangles of scene `scene` (-1: the asset's default scene, or scene 0 if none) into *out
+ * (caller-owned: mr_gltf_triangles_free). An asset without scenes gives an empty set. On error *out is NULL. */
+mr_status mr_gltf_get_triangles(const mr_gltf *asset, int scene, mr_gltf_triangles **out);
+
+/* NULL-safe. */
+void mr_gltf_triangles_free(mr_gltf_triangles *triangles);
+
+/* The world-space bounding box of the scene's triangle vertices (as mr_gltf_get_triangles, whose errors it
+ * returns), e.g. to frame a camera. *count receives the vertex count (0: empty scene, box 0); count may be NULL. */
+mr_status mr_gltf_get_bounds(const mr_gltf *asset, int scene, double lo[3], double hi[3], int *count);
 
 /* Writes the asset to `path` (.gltf or .glb, see the top of this header). */
 mr_status mr_gltf_save(mr_gltf *asset, const char *path);
