@@ -1175,6 +1175,65 @@ MR_TEST(geometry_hand_made_asset) {
     mr_gltf_free(g);
 }
 
+/* Under any affine node matrix, mirroring or not, non-uniform and sheared, the mirrored-quad group stays
+ * consistent: each triangle's winding normal equals its vertices' normals (inverse transpose, flipped winding),
+ * tangents lie in the plane, and w * cross(n, t) points along the transformed bitangent M (0,1,0). */
+MR_TEST(geometry_general_transforms) {
+    const char *matrices[] = {"[1, 0.3, 0.4, 0, 0.5, 2, 0.2, 0, 0.2, 0.1, 0.7, 0, 5, -6, 7, 1]",
+                              "[1, 0.3, 0.4, 0, 0.5, -2, 0.2, 0, 0.2, 0.1, 0.7, 0, 5, -6, 7, 1]",
+                              "[0, 0, 3, 0, 0, 1, 0, 0, 1, 0, 0, 0, 0, 0, 0, 1]"};
+    const double by[3][3] = {{0.5, 2, 0.2}, {0.5, -2, 0.2}, {0, 1, 0}}; /* M (0,1,0): the second column */
+    for (int mi = 0; mi < 3; mi++) {
+        char node[200];
+        snprintf(node, sizeof node, "{\"matrix\": %s, \"mesh\": 2}", matrices[mi]);
+        const char *path = write_geo("geo_matrix.gltf", "{\"scale\": [-1, 1, 1], \"mesh\": 2}", node);
+        mr_gltf *g = NULL;
+        MR_CHECK_OK(mr_gltf_load(path, &g));
+        mr_gltf_triangles *t = NULL;
+        if (g != NULL) MR_CHECK_OK(mr_gltf_get_triangles(g, 1, &t));
+        if (t != NULL && t->group_count == 1 && t->groups[0].has_normals && t->groups[0].has_tangents) {
+            const mr_gltf_triangle_group *q = &t->groups[0];
+            MR_CHECK(t->flipped_primitives == (mi == 0 ? 0 : 1));
+            for (int tri = 0; tri < q->triangle_count; tri++) {
+                const float *p[3];
+                for (int k = 0; k < 3; k++) p[k] = q->positions + 3 * q->indices[3 * tri + k];
+                double e1[3], e2[3], f[3];
+                for (int k = 0; k < 3; k++) e1[k] = p[1][k] - p[0][k], e2[k] = p[2][k] - p[0][k];
+                f[0] = e1[1] * e2[2] - e1[2] * e2[1];
+                f[1] = e1[2] * e2[0] - e1[0] * e2[2];
+                f[2] = e1[0] * e2[1] - e1[1] * e2[0];
+                double len = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+                for (int k = 0; k < 3; k++) {
+                    const float *n = q->normals + 3 * q->indices[3 * tri + k];
+                    const float *a = q->tangents + 4 * q->indices[3 * tri + k];
+                    MR_CHECK_NEAR((f[0] * n[0] + f[1] * n[1] + f[2] * n[2]) / len, 1.0, 1e-5);
+                    MR_CHECK_NEAR(a[0] * n[0] + a[1] * n[1] + a[2] * n[2], 0.0, 1e-5);
+                    double b[3] = {a[3] * (n[1] * a[2] - n[2] * a[1]), a[3] * (n[2] * a[0] - n[0] * a[2]),
+                                   a[3] * (n[0] * a[1] - n[1] * a[0])};
+                    MR_CHECK_MSG(b[0] * by[mi][0] + b[1] * by[mi][1] + b[2] * by[mi][2] > 0,
+                                 "matrix %d: the bitangent is reversed", mi);
+                }
+            }
+        } else {
+            MR_CHECK_MSG(0, "matrix %d: no normals and tangents", mi);
+        }
+        mr_gltf_triangles_free(t);
+        mr_gltf_free(g);
+    }
+    /* An asset without scenes gives nothing, box 0. */
+    const char *path = write_geo("geo_none.gltf", "\"scene\": 0,\n\"scenes\": [{\"nodes\": [0, 2, 3, 4]}, "
+                                 "{\"nodes\": [2]}],", "");
+    mr_gltf *g = NULL;
+    MR_CHECK_OK(mr_gltf_load(path, &g));
+    mr_gltf_triangles *t = NULL;
+    if (g != NULL) MR_CHECK_OK(mr_gltf_get_triangles(g, -1, &t));
+    if (t != NULL)
+        MR_CHECK(t->scene == -1 && t->group_count == 0 && t->triangle_count == 0 && t->bbox_min[0] == 0 &&
+                 t->bbox_max[2] == 0);
+    mr_gltf_triangles_free(t);
+    mr_gltf_free(g);
+}
+
 /* Each bad asset fails with MR_ERR_FORMAT and a message naming the file and `needle` (mesh and primitive). */
 static void expect_geometry_error(const char *name, const char *from, const char *to, const char *needle) {
     const char *path = write_geo(name, from, to);
@@ -1260,4 +1319,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(every_asset_loads), MR_TEST_ENTRY(floppy_disk_spec_gl
              MR_TEST_ENTRY(bad_inputs), MR_TEST_ENTRY(mutated_inputs_fail_cleanly),
              MR_TEST_ENTRY(no_partial_output_no_input_overwrite), MR_TEST_ENTRY(geometry_every_asset),
              MR_TEST_ENTRY(geometry_water_bottle_and_duck), MR_TEST_ENTRY(geometry_hand_made_asset),
+             MR_TEST_ENTRY(geometry_general_transforms),
              MR_TEST_ENTRY(geometry_bad_inputs), MR_TEST_ENTRY(geometry_mutated_buffers))
