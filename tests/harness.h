@@ -88,6 +88,45 @@ static int mr_test_run_all(const mr_test_case *cases, int count, int argc, char 
     return failed == 0 ? 0 : 1;
 }
 
+/* ---- a private scratch folder ---------------------------------------------------------------------------- */
+
+static inline char *mr_test_scratch_buffer(void) {
+    static char dir[256];
+    return dir;
+}
+
+static inline void mr_test_scratch_remove(void) {
+    const char *dir = mr_test_scratch_buffer();
+    if (dir[0] == '\0') return;
+    char cmd[300];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", dir);
+}
+
+/* The test binary's scratch folder in /tmp, created on first use and removed with everything in it at exit. */
+static inline const char *mr_test_scratch_dir(void) {
+    char *dir = mr_test_scratch_buffer();
+    if (dir[0] == '\0') {
+        strcpy(dir, "/tmp/mr_test.XXXXXX");
+        if (mkdtemp(dir) == NULL) {
+            perror("mkdtemp");
+            exit(2);
+        }
+        atexit(mr_test_scratch_remove);
+    }
+    return dir;
+}
+
+/* A path inside the scratch folder, from a ring of 32 buffers (a caller that keeps a path longer copies it). */
+static inline const char *mr_test_tmp_path(const char *name) {
+    static char paths[32][512];
+    static int slot;
+    const char *dir = mr_test_scratch_dir();
+    char *p = paths[slot++ % 32];
+    snprintf(p, 512, "%s/%s", dir, name);
+    return p;
+}
+
 #define MR_TEST_ENTRY(fn) {#fn, fn}
 
 #define MR_TEST_MAIN(...)                                                                   \

@@ -19,30 +19,6 @@
 #include "harness.h"
 #include "render/render.h"
 
-static char test_dir[256];
-
-static void remove_test_dir(void) {
-    if (test_dir[0] == '\0') return;
-    char cmd[512];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", test_dir);
-    if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", test_dir);
-}
-
-static const char *tmp_path(const char *name) {
-    static char paths[32][512];
-    static int slot;
-    if (test_dir[0] == '\0') {
-        strcpy(test_dir, "/tmp/mr_test_gltf.XXXXXX");
-        if (mkdtemp(test_dir) == NULL) {
-            perror("mkdtemp");
-            exit(2);
-        }
-        atexit(remove_test_dir);
-    }
-    char *p = paths[slot++ % 32];
-    snprintf(p, 512, "%s/%s", test_dir, name);
-    return p;
-}
 
 static const char *asset_path(const char *rel) {
     static char paths[8][1024];
@@ -394,7 +370,7 @@ MR_TEST(round_trip_every_asset) {
         for (int f = 0; f < 2; f++) {
             char dir[512], out[600];
             if (keep != NULL) snprintf(dir, sizeof dir, "%s/%s", keep, ASSETS[i].name);
-            else snprintf(dir, sizeof dir, "%s", tmp_path(ASSETS[i].name));
+            else snprintf(dir, sizeof dir, "%s", mr_test_tmp_path(ASSETS[i].name));
             mkdir(dir, 0777);
             snprintf(out, sizeof out, "%s/%s.%s", dir, ASSETS[i].name, fmts[f]);
             MR_CHECK_OK(mr_gltf_save(a, out));
@@ -462,7 +438,7 @@ MR_TEST(glb_embedded_resources) {
     memcpy(glb + 20, json, (size_t)n);
     memcpy(glb + 20 + n, bc, 8);
     memcpy(glb + 28 + n, im.bytes, im.size);
-    const char *in = tmp_path("embedded.glb");
+    const char *in = mr_test_tmp_path("embedded.glb");
     MR_CHECK(write_bytes(in, glb, total));
     mr_gltf *g = NULL;
     MR_CHECK_OK(mr_gltf_load(in, &g));
@@ -473,20 +449,20 @@ MR_TEST(glb_embedded_resources) {
         MR_CHECK(strcmp(e.mime_type, "image/png") == 0 && e.path[0] == '\0');
         const char *outs[] = {"embedded_out.glb", "embedded_out.gltf"};
         for (int f = 0; f < 2; f++) {
-            MR_CHECK_OK(mr_gltf_save(g, tmp_path(outs[f])));
+            MR_CHECK_OK(mr_gltf_save(g, mr_test_tmp_path(outs[f])));
             mr_gltf *b = NULL;
-            MR_CHECK_OK(mr_gltf_load(tmp_path(outs[f]), &b));
+            MR_CHECK_OK(mr_gltf_load(mr_test_tmp_path(outs[f]), &b));
             if (b != NULL) check_same_asset_as(g, b, outs[f], f == 0);
             mr_gltf_free(b);
         }
         /* A .glb of a .gltf with external files holds them all: nothing beside it. */
-        MR_CHECK(mkdir(tmp_path("packed"), 0777) == 0);
+        MR_CHECK(mkdir(mr_test_tmp_path("packed"), 0777) == 0);
         mr_gltf *floppy = load_asset("FloppyDisk");
         if (floppy != NULL) {
-            MR_CHECK_OK(mr_gltf_save(floppy, tmp_path("packed/floppy.glb")));
-            MR_CHECK(count_entries(tmp_path("packed")) == 1);
+            MR_CHECK_OK(mr_gltf_save(floppy, mr_test_tmp_path("packed/floppy.glb")));
+            MR_CHECK(count_entries(mr_test_tmp_path("packed")) == 1);
             mr_gltf *b = NULL;
-            MR_CHECK_OK(mr_gltf_load(tmp_path("packed/floppy.glb"), &b));
+            MR_CHECK_OK(mr_gltf_load(mr_test_tmp_path("packed/floppy.glb"), &b));
             if (b != NULL) {
                 check_same_asset_as(floppy, b, "packed FloppyDisk", 1);
                 mr_gltf_image pi;
@@ -497,10 +473,10 @@ MR_TEST(glb_embedded_resources) {
             mr_gltf_free(floppy);
         }
         /* The .gltf holds the binary chunk as a file beside it. */
-        MR_CHECK(file_size(tmp_path("embedded_out.bin")) == (long)bin);
+        MR_CHECK(file_size(mr_test_tmp_path("embedded_out.bin")) == (long)bin);
         /* Decoding goes through a file: the image's bytes written out. */
-        MR_CHECK_OK(mr_gltf_image_write_file(g, 0, tmp_path("embedded_image.png")));
-        MR_CHECK(file_size(tmp_path("embedded_image.png")) == (long)im.size);
+        MR_CHECK_OK(mr_gltf_image_write_file(g, 0, mr_test_tmp_path("embedded_image.png")));
+        MR_CHECK(file_size(mr_test_tmp_path("embedded_image.png")) == (long)im.size);
         MR_CHECK(mr_gltf_image_write_file(g, 0, in) == MR_ERR_INVALID_ARG);
     }
     free(glb);
@@ -526,7 +502,7 @@ MR_TEST(data_uri_resources) {
              "\"texCoord\":0}}},\"extras\":{\"keep\":\"me\"}}],\"extensionsUsed\":[\"KHR_texture_transform\"],"
              "\"nodes\":[{\"name\":\"n\",\"extras\":{\"id\":7}}],\"scenes\":[{\"nodes\":[0]}],\"scene\":0}\n",
              png);
-    const char *in = tmp_path("datauri.gltf");
+    const char *in = mr_test_tmp_path("datauri.gltf");
     MR_CHECK(write_bytes(in, json, strlen(json)));
     mr_gltf *g = NULL;
     MR_CHECK_OK(mr_gltf_load(in, &g));
@@ -542,7 +518,7 @@ MR_TEST(data_uri_resources) {
     mr_gltf_texture t;
     MR_CHECK_OK(mr_gltf_get_texture(g, 0, &t));
     MR_CHECK(t.params.wrap_s == 33071 && t.params.wrap_t == 10497);
-    const char *out = tmp_path("datauri_out.gltf");
+    const char *out = mr_test_tmp_path("datauri_out.gltf");
     MR_CHECK_OK(mr_gltf_save(g, out));
     long size;
     char *text = (char *)slurp(out, &size);
@@ -555,7 +531,7 @@ MR_TEST(data_uri_resources) {
         free(text);
     }
     /* Only the .gltf itself (and the input) in the directory: no side files for data URIs. */
-    MR_CHECK(!file_exists(tmp_path("datauri_out.bin")));
+    MR_CHECK(!file_exists(mr_test_tmp_path("datauri_out.bin")));
     mr_gltf *b = NULL;
     MR_CHECK_OK(mr_gltf_load(out, &b));
     if (b != NULL) check_same_asset(g, b, "data URIs");
@@ -624,17 +600,17 @@ MR_TEST(drop_spec_gloss_set_metal_rough_add_texture) {
     MR_CHECK(!mr_gltf_material_has_extension(g, 0, "KHR_materials_pbrSpecularGlossiness"));
     MR_CHECK(mr_gltf_material_has_extension(g, 0, "KHR_materials_ior"));
 
-    MR_CHECK(mkdir(tmp_path("edit"), 0777) == 0);
-    const char *out = tmp_path("edit/floppy.gltf");
+    MR_CHECK(mkdir(mr_test_tmp_path("edit"), 0777) == 0);
+    const char *out = mr_test_tmp_path("edit/floppy.gltf");
     MR_CHECK_OK(mr_gltf_save(g, out));
     /* extensionsUsed/Required follow the materials. */
     MR_CHECK(!mr_gltf_extension_used(g, "KHR_materials_pbrSpecularGlossiness"));
     MR_CHECK(!mr_gltf_extension_required(g, "KHR_materials_pbrSpecularGlossiness"));
     MR_CHECK(mr_gltf_extension_used(g, "KHR_materials_specular") && mr_gltf_extension_used(g, "KHR_materials_ior"));
     MR_CHECK(mr_gltf_extension_used(g, "KHR_texture_transform"));
-    MR_CHECK(file_size(tmp_path("edit/maps/base color.png")) == (long)diffuse.size);
-    MR_CHECK(file_exists(tmp_path("edit/textures/material_0_normal.png")));
-    MR_CHECK(file_exists(tmp_path("edit/scene.bin")));
+    MR_CHECK(file_size(mr_test_tmp_path("edit/maps/base color.png")) == (long)diffuse.size);
+    MR_CHECK(file_exists(mr_test_tmp_path("edit/textures/material_0_normal.png")));
+    MR_CHECK(file_exists(mr_test_tmp_path("edit/scene.bin")));
     const char *keep = getenv("MR_GLTF_KEEP");
     if (keep != NULL) { /* for the validator (tests/gltf_validate.sh) */
         char dir[512], kept[600];
@@ -682,7 +658,7 @@ MR_TEST(drop_spec_gloss_set_metal_rough_add_texture) {
     MR_CHECK(back.metallic_factor == 0.125);
     MR_CHECK(mr_gltf_get_material(g, 1, &m) == MR_ERR_INVALID_ARG);
     MR_CHECK(mr_gltf_add_image_file(g, diffuse.path, "../escape.png", &image) == MR_ERR_INVALID_ARG);
-    MR_CHECK(mr_gltf_add_image_file(g, tmp_path("missing.png"), "x.png", &image) == MR_ERR_IO);
+    MR_CHECK(mr_gltf_add_image_file(g, mr_test_tmp_path("missing.png"), "x.png", &image) == MR_ERR_IO);
     mr_gltf_free(g);
 }
 
@@ -701,22 +677,22 @@ static void expect_load_error(const char *path, mr_status expected, const char *
 }
 
 MR_TEST(bad_inputs) {
-    expect_load_error(tmp_path("missing.gltf"), MR_ERR_IO, NULL);
-    const char *bad_json = tmp_path("bad.gltf");
+    expect_load_error(mr_test_tmp_path("missing.gltf"), MR_ERR_IO, NULL);
+    const char *bad_json = mr_test_tmp_path("bad.gltf");
     MR_CHECK(write_bytes(bad_json, "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [", 40));
     expect_load_error(bad_json, MR_ERR_FORMAT, NULL);
-    const char *empty = tmp_path("empty.gltf");
+    const char *empty = mr_test_tmp_path("empty.gltf");
     MR_CHECK(write_bytes(empty, "", 0));
     expect_load_error(empty, MR_ERR_FORMAT, NULL);
-    expect_load_error(test_dir, MR_ERR_IO, "directory");
+    expect_load_error(mr_test_scratch_dir(), MR_ERR_IO, "directory");
 
     /* A buffer URI that does not exist. */
-    const char *nobuf = tmp_path("nobuf.gltf");
+    const char *nobuf = mr_test_tmp_path("nobuf.gltf");
     const char *j = "{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"byteLength\":12,\"uri\":\"gone.bin\"}]}";
     MR_CHECK(write_bytes(nobuf, j, strlen(j)));
     expect_load_error(nobuf, MR_ERR_IO, "gone.bin");
     /* An image file that does not exist. */
-    const char *noimg = tmp_path("noimg.gltf");
+    const char *noimg = mr_test_tmp_path("noimg.gltf");
     j = "{\"asset\":{\"version\":\"2.0\"},\"images\":[{\"uri\":\"gone.png\"}]}";
     MR_CHECK(write_bytes(noimg, j, strlen(j)));
     expect_load_error(noimg, MR_ERR_IO, "gone.png");
@@ -724,12 +700,12 @@ MR_TEST(bad_inputs) {
     /* Truncated .glb: a valid one cut in half, then cut inside its header. */
     mr_gltf *g = load_asset("Duck");
     if (g == NULL) return;
-    const char *glb = tmp_path("duck.glb");
+    const char *glb = mr_test_tmp_path("duck.glb");
     MR_CHECK_OK(mr_gltf_save(g, glb));
     long size;
     unsigned char *bytes = slurp(glb, &size);
     if (bytes != NULL) {
-        const char *cut = tmp_path("cut.glb");
+        const char *cut = mr_test_tmp_path("cut.glb");
         MR_CHECK(write_bytes(cut, bytes, (size_t)size / 2));
         expect_load_error(cut, MR_ERR_FORMAT, NULL);
         MR_CHECK(write_bytes(cut, bytes, 10));
@@ -738,11 +714,11 @@ MR_TEST(bad_inputs) {
     }
 
     /* Saving: unknown extension, over the input, into a missing directory. */
-    MR_CHECK(mr_gltf_save(g, tmp_path("x.obj")) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_gltf_save(g, mr_test_tmp_path("x.obj")) == MR_ERR_INVALID_ARG);
     MR_CHECK(mr_gltf_save(g, mr_gltf_path(g)) == MR_ERR_INVALID_ARG);
     MR_CHECK(strstr(mr_last_error(), "read from") != NULL);
-    MR_CHECK(mr_gltf_save(g, tmp_path("no/such/dir/x.gltf")) == MR_ERR_IO);
-    MR_CHECK(!file_exists(tmp_path("no")));
+    MR_CHECK(mr_gltf_save(g, mr_test_tmp_path("no/such/dir/x.gltf")) == MR_ERR_IO);
+    MR_CHECK(!file_exists(mr_test_tmp_path("no")));
     mr_gltf_free(g);
 }
 
@@ -751,14 +727,14 @@ MR_TEST(bad_inputs) {
 MR_TEST(mutated_inputs_fail_cleanly) {
     mr_gltf *g = load_asset("Duck");
     if (g == NULL) return;
-    const char *sources[] = {tmp_path("fuzz_src.glb"), tmp_path("fuzz_src.gltf")};
-    const char *mutants[] = {tmp_path("fuzz.glb"), tmp_path("fuzz.gltf")};
+    const char *sources[] = {mr_test_tmp_path("fuzz_src.glb"), mr_test_tmp_path("fuzz_src.gltf")};
+    const char *mutants[] = {mr_test_tmp_path("fuzz.glb"), mr_test_tmp_path("fuzz.gltf")};
     MR_CHECK_OK(mr_gltf_save(g, sources[0]));
-    MR_CHECK(mkdir(tmp_path("fuzzdir"), 0777) == 0);
-    MR_CHECK_OK(mr_gltf_save(g, tmp_path("fuzzdir/Duck.gltf")));
-    MR_CHECK(copy_file(tmp_path("fuzzdir/Duck.gltf"), sources[1]));
-    MR_CHECK(copy_file(tmp_path("fuzzdir/Duck0.bin"), tmp_path("Duck0.bin")));
-    MR_CHECK(copy_file(tmp_path("fuzzdir/DuckCM.png"), tmp_path("DuckCM.png")));
+    MR_CHECK(mkdir(mr_test_tmp_path("fuzzdir"), 0777) == 0);
+    MR_CHECK_OK(mr_gltf_save(g, mr_test_tmp_path("fuzzdir/Duck.gltf")));
+    MR_CHECK(copy_file(mr_test_tmp_path("fuzzdir/Duck.gltf"), sources[1]));
+    MR_CHECK(copy_file(mr_test_tmp_path("fuzzdir/Duck0.bin"), mr_test_tmp_path("Duck0.bin")));
+    MR_CHECK(copy_file(mr_test_tmp_path("fuzzdir/DuckCM.png"), mr_test_tmp_path("DuckCM.png")));
     mr_gltf_free(g);
     unsigned seed = 12345;
     for (int s = 0; s < 2; s++) {
@@ -810,39 +786,39 @@ MR_TEST(mutated_inputs_fail_cleanly) {
 
 /* A failed save leaves nothing behind, and never writes over the asset's own files. */
 MR_TEST(no_partial_output_no_input_overwrite) {
-    MR_CHECK(mkdir(tmp_path("duck"), 0777) == 0);
+    MR_CHECK(mkdir(mr_test_tmp_path("duck"), 0777) == 0);
     const char *dir = asset_path("specgloss/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness");
     const char *names[] = {"Duck.gltf", "Duck0.bin", "DuckCM.png"};
     for (int i = 0; i < 3; i++) {
         char from[1200], to[600];
         snprintf(from, sizeof from, "%s/%s", dir, names[i]);
-        snprintf(to, sizeof to, "%s", tmp_path("duck"));
+        snprintf(to, sizeof to, "%s", mr_test_tmp_path("duck"));
         strncat(to, "/", sizeof to - strlen(to) - 1);
         strncat(to, names[i], sizeof to - strlen(to) - 1);
         MR_CHECK(copy_file(from, to));
     }
     mr_gltf *g = NULL;
-    MR_CHECK_OK(mr_gltf_load(tmp_path("duck/Duck.gltf"), &g));
+    MR_CHECK_OK(mr_gltf_load(mr_test_tmp_path("duck/Duck.gltf"), &g));
     if (g == NULL) return;
     /* The output's name is taken by a directory: the rename fails, the side files written go again. */
-    MR_CHECK(mkdir(tmp_path("blocked"), 0777) == 0);
-    MR_CHECK(mkdir(tmp_path("blocked/out.gltf"), 0777) == 0);
-    MR_CHECK(mr_gltf_save(g, tmp_path("blocked/out.gltf")) == MR_ERR_IO);
+    MR_CHECK(mkdir(mr_test_tmp_path("blocked"), 0777) == 0);
+    MR_CHECK(mkdir(mr_test_tmp_path("blocked/out.gltf"), 0777) == 0);
+    MR_CHECK(mr_gltf_save(g, mr_test_tmp_path("blocked/out.gltf")) == MR_ERR_IO);
     MR_CHECK_MSG(strstr(mr_last_error(), "out.gltf") != NULL, "%s", mr_last_error());
-    MR_CHECK(count_entries(tmp_path("blocked")) == 1);
+    MR_CHECK(count_entries(mr_test_tmp_path("blocked")) == 1);
 
     /* Beside the input: the unchanged .bin and .png are the inputs' own, left in place. */
-    long bin_before = file_size(tmp_path("duck/Duck0.bin"));
-    MR_CHECK_OK(mr_gltf_save(g, tmp_path("duck/Duck_copy.gltf")));
-    MR_CHECK(count_entries(tmp_path("duck")) == 4);
-    MR_CHECK(file_size(tmp_path("duck/Duck0.bin")) == bin_before);
+    long bin_before = file_size(mr_test_tmp_path("duck/Duck0.bin"));
+    MR_CHECK_OK(mr_gltf_save(g, mr_test_tmp_path("duck/Duck_copy.gltf")));
+    MR_CHECK(count_entries(mr_test_tmp_path("duck")) == 4);
+    MR_CHECK(file_size(mr_test_tmp_path("duck/Duck0.bin")) == bin_before);
     mr_gltf *b = NULL;
-    MR_CHECK_OK(mr_gltf_load(tmp_path("duck/Duck_copy.gltf"), &b));
+    MR_CHECK_OK(mr_gltf_load(mr_test_tmp_path("duck/Duck_copy.gltf"), &b));
     if (b != NULL) check_same_asset(g, b, "Duck beside itself");
     mr_gltf_free(b);
     /* A .glb beside it holds its buffer and image: one more file. */
-    MR_CHECK_OK(mr_gltf_save(g, tmp_path("duck/Duck_copy.glb")));
-    MR_CHECK(count_entries(tmp_path("duck")) == 5);
+    MR_CHECK_OK(mr_gltf_save(g, mr_test_tmp_path("duck/Duck_copy.glb")));
+    MR_CHECK(count_entries(mr_test_tmp_path("duck")) == 5);
     mr_gltf_free(g);
 }
 
@@ -1059,8 +1035,8 @@ static const char *write_geo(const char *name, const char *from, const char *to)
     }
     unsigned char bin[280];
     size_t n = geo_buffer(bin);
-    MR_CHECK(write_bytes(tmp_path("geo.bin"), bin, n));
-    const char *path = tmp_path(name);
+    MR_CHECK(write_bytes(mr_test_tmp_path("geo.bin"), bin, n));
+    const char *path = mr_test_tmp_path(name);
     MR_CHECK(write_bytes(path, json, strlen(json)));
     return path;
 }
@@ -1279,7 +1255,7 @@ MR_TEST(geometry_bad_inputs) {
 MR_TEST(geometry_mutated_buffers) {
     char path[512], bin_path[512]; /* tmp_path's slots are reused */
     snprintf(path, sizeof path, "%s", write_geo("geo_fuzz.gltf", NULL, NULL));
-    snprintf(bin_path, sizeof bin_path, "%s", tmp_path("geo.bin"));
+    snprintf(bin_path, sizeof bin_path, "%s", mr_test_tmp_path("geo.bin"));
     unsigned char bin[280];
     geo_buffer(bin);
     unsigned seed = 777;

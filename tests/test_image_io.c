@@ -25,44 +25,9 @@
 
 /* ---- fixtures and helpers ------------------------------------------------------------------------- */
 
-static char test_dir[64];
-
-static void remove_test_dir(void) {
-    if (test_dir[0] == '\0') return;
-    DIR *d = opendir(test_dir);
-    if (d != NULL) {
-        struct dirent *e;
-        char path[512];
-        while ((e = readdir(d)) != NULL) {
-            if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
-            snprintf(path, sizeof path, "%s/%s", test_dir, e->d_name);
-            if (unlink(path) != 0) rmdir(path); /* the directory-as-target fixtures */
-        }
-        closedir(d);
-    }
-    rmdir(test_dir);
-}
-
-/* A path inside the private temporary directory (created on first use). Returned buffer is static per slot. */
-static const char *tmp_path(const char *name) {
-    static char paths[32][512]; /* a ring: callers that keep a path longer copy it */
-    static int slot;
-    if (test_dir[0] == '\0') {
-        strcpy(test_dir, "/tmp/mr_test_io.XXXXXX");
-        if (mkdtemp(test_dir) == NULL) {
-            perror("mkdtemp");
-            exit(2);
-        }
-        atexit(remove_test_dir);
-    }
-    char *p = paths[slot++ % 32];
-    snprintf(p, 512, "%s/%s", test_dir, name);
-    return p;
-}
-
 /* Number of entries in the test directory whose name contains ".tmp". */
 static int count_temporaries(void) {
-    DIR *d = opendir(test_dir);
+    DIR *d = opendir(mr_test_scratch_dir());
     if (d == NULL) return -1;
     int n = 0;
     struct dirent *e;
@@ -177,7 +142,7 @@ static int same_shape(const mr_image *a, const mr_image *b) {
 /* Write `img` to `name` and read it back with default options; NULL on failure (checks recorded). */
 static mr_image *round_trip(const char *name, const mr_image *img, const mr_img_write_options *wo,
                             const mr_img_read_options *ro) {
-    const char *path = tmp_path(name);
+    const char *path = mr_test_tmp_path(name);
     MR_CHECK_OK(mr_img_write(path, img, wo));
     mr_image *back = NULL;
     MR_CHECK_OK(mr_img_read(path, ro, &back));
@@ -235,7 +200,7 @@ MR_TEST(png8_rgb_round_trip) {
     /* Read as data: the raw stored codes, code = round(encode(v) * 255). */
     mr_img_read_options ro = {MR_IMG_DATA, 0, 0};
     mr_image *raw = NULL;
-    MR_CHECK_OK(mr_img_read(tmp_path("f8.png"), &ro, &raw));
+    MR_CHECK_OK(mr_img_read(mr_test_tmp_path("f8.png"), &ro, &raw));
     if (raw) MR_CHECK_NEAR(raw->pixels[0] * 255.0, floor(mr_linear_to_srgb(0.25f) * 255.0 + 0.5), 1e-4);
     mr_image_free(raw);
     mr_image_free(back);
@@ -324,9 +289,9 @@ MR_TEST(jpeg_round_trip) {
     }
     /* quality is honoured: quality 10 gives a smaller file than 95 */
     mr_img_write_options low = {MR_IMG_COLOR, 0, 10};
-    MR_CHECK_OK(mr_img_write(tmp_path("low.jpg"), big, &low));
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("low.jpg"), big, &low));
     struct stat hi_st, lo_st;
-    MR_CHECK(stat(tmp_path("f.jpg"), &hi_st) == 0 && stat(tmp_path("low.jpg"), &lo_st) == 0 &&
+    MR_CHECK(stat(mr_test_tmp_path("f.jpg"), &hi_st) == 0 && stat(mr_test_tmp_path("low.jpg"), &lo_st) == 0 &&
              lo_st.st_size < hi_st.st_size);
     mr_image_free(back);
     mr_image_free(big);
@@ -392,16 +357,16 @@ MR_TEST(hdr_round_trip) {
     mr_image_free(back);
     /* 1-channel images are stored as grey RGB; alpha cannot be stored */
     mr_image *g = make_f(1, 2.0f);
-    MR_CHECK_OK(mr_img_write(tmp_path("g.hdr"), g, NULL));
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("g.hdr"), g, NULL));
     mr_image *gb = NULL;
-    MR_CHECK_OK(mr_img_read(tmp_path("g.hdr"), NULL, &gb));
+    MR_CHECK_OK(mr_img_read(mr_test_tmp_path("g.hdr"), NULL, &gb));
     if (gb) {
         MR_CHECK(gb->channels == 3);
         MR_CHECK(mr_image_at(gb, 1, 0)[0] == 2.0f && mr_image_at(gb, 1, 0)[2] == 2.0f);
         MR_CHECK_NEAR(mr_image_at(gb, 2, 1)[1], 0.25, 0.0025);
     }
     mr_image *rgba = make_f(4, 1.0f);
-    MR_CHECK(mr_img_write(tmp_path("a.hdr"), rgba, NULL) == MR_ERR_UNSUPPORTED);
+    MR_CHECK(mr_img_write(mr_test_tmp_path("a.hdr"), rgba, NULL) == MR_ERR_UNSUPPORTED);
     MR_CHECK(strstr(mr_last_error(), "alpha") != NULL);
     mr_image_free(rgba);
     mr_image_free(gb);
@@ -424,7 +389,7 @@ MR_TEST(one_channel_round_trips) {
     mr_image_free(back);
     /* the EXR channel is called Y (oiiotool reads our file independently of mr_img_read) */
     char cmd[700];
-    snprintf(cmd, sizeof cmd, "iinfo -v '%s' | grep -q 'channel list: Y'", tmp_path("g.exr"));
+    snprintf(cmd, sizeof cmd, "iinfo -v '%s' | grep -q 'channel list: Y'", mr_test_tmp_path("g.exr"));
     MR_CHECK(run_quiet(cmd) == 0);
     back = round_trip("g.jpg", g, NULL, NULL);
     if (back) MR_CHECK_NEAR(mr_linear_to_srgb(mr_image_at(back, 1, 0)[0]), 1.0, 0.05);
@@ -454,18 +419,18 @@ MR_TEST(rgba_alpha_is_not_premultiplied) {
     if (back) MR_CHECK(memcmp(back->pixels, f->pixels, mr_image_value_count(f) * sizeof(float)) == 0);
     mr_image_free(back);
     /* JPEG has no alpha */
-    MR_CHECK(mr_img_write(tmp_path("a.jpg"), f, NULL) == MR_ERR_UNSUPPORTED);
+    MR_CHECK(mr_img_write(mr_test_tmp_path("a.jpg"), f, NULL) == MR_ERR_UNSUPPORTED);
     mr_image_free(f);
 }
 
 MR_TEST(read_channel_conversions) {
     mr_image *g = make_f(1, 1.0f), *rgb = make_f(3, 1.0f), *rgba = make_f(4, 1.0f);
-    MR_CHECK_OK(mr_img_write(tmp_path("cg.png"), g, NULL));
-    MR_CHECK_OK(mr_img_write(tmp_path("crgb.png"), rgb, NULL));
-    MR_CHECK_OK(mr_img_write(tmp_path("crgba.exr"), rgba, NULL));
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("cg.png"), g, NULL));
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("crgb.png"), rgb, NULL));
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("crgba.exr"), rgba, NULL));
     mr_image *img = NULL;
     mr_img_read_options ro = {MR_IMG_COLOR, 3, 0};
-    MR_CHECK_OK(mr_img_read(tmp_path("cg.png"), &ro, &img)); /* grey -> RGB broadcast */
+    MR_CHECK_OK(mr_img_read(mr_test_tmp_path("cg.png"), &ro, &img)); /* grey -> RGB broadcast */
     if (img) {
         MR_CHECK(img->channels == 3);
         const float *p = mr_image_at(img, 5, 4);
@@ -474,23 +439,23 @@ MR_TEST(read_channel_conversions) {
     mr_image_free(img);
     img = NULL;
     ro.channels = 4; /* grey -> RGBA, alpha 1 */
-    MR_CHECK_OK(mr_img_read(tmp_path("cg.png"), &ro, &img));
+    MR_CHECK_OK(mr_img_read(mr_test_tmp_path("cg.png"), &ro, &img));
     if (img) MR_CHECK(img->channels == 4 && mr_image_at(img, 2, 2)[3] == 1.0f);
     mr_image_free(img);
     img = NULL;
     ro.channels = 3; /* RGBA -> RGB drops alpha */
-    MR_CHECK_OK(mr_img_read(tmp_path("crgba.exr"), &ro, &img));
+    MR_CHECK_OK(mr_img_read(mr_test_tmp_path("crgba.exr"), &ro, &img));
     if (img) MR_CHECK(img->channels == 3 && mr_image_at(img, 5, 0)[0] == 0.75f);
     mr_image_free(img);
     static mr_image sentinel_image; /* *out must be left untouched on failure */
     mr_image *const sentinel = &sentinel_image;
     img = sentinel;
     ro.channels = 1; /* RGB -> luminance is refused */
-    MR_CHECK(mr_img_read(tmp_path("crgb.png"), &ro, &img) == MR_ERR_FORMAT);
+    MR_CHECK(mr_img_read(mr_test_tmp_path("crgb.png"), &ro, &img) == MR_ERR_FORMAT);
     MR_CHECK(img == sentinel);
     MR_CHECK(strstr(mr_last_error(), "crgb.png") != NULL);
     ro.channels = 2;
-    MR_CHECK(mr_img_read(tmp_path("crgb.png"), &ro, &img) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_img_read(mr_test_tmp_path("crgb.png"), &ro, &img) == MR_ERR_INVALID_ARG);
     MR_CHECK(img == sentinel);
     /* A grey+alpha PNG written by oiiotool (libpng) reads as RGBA, or grey with channels = 1. */
     char cmd[700];
@@ -498,11 +463,11 @@ MR_TEST(read_channel_conversions) {
     snprintf(cmd, sizeof cmd,
              "oiiotool --create 4x3 2 --fill:color=0.5,0.25 4x3+0+0 --attrib oiio:UnassociatedAlpha 1 -d uint8 "
              "-o '%s'",
-             tmp_path("ga.png"));
+             mr_test_tmp_path("ga.png"));
     MR_CHECK(run_quiet(cmd) == 0);
     img = NULL;
     mr_img_read_options data = {MR_IMG_DATA, 0, 0};
-    MR_CHECK_OK(mr_img_read(tmp_path("ga.png"), &data, &img));
+    MR_CHECK_OK(mr_img_read(mr_test_tmp_path("ga.png"), &data, &img));
     if (img) {
         const float *p = mr_image_at(img, 3, 2);
         MR_CHECK(img->channels == 4);
@@ -513,7 +478,7 @@ MR_TEST(read_channel_conversions) {
     mr_image_free(img);
     img = NULL;
     data.channels = 1;
-    MR_CHECK_OK(mr_img_read(tmp_path("ga.png"), &data, &img));
+    MR_CHECK_OK(mr_img_read(mr_test_tmp_path("ga.png"), &data, &img));
     if (img) MR_CHECK(img->channels == 1 && fabs(img->pixels[0] - 128.0 / 255.0) < 1e-7);
     mr_image_free(img);
     mr_image_free(g);
@@ -543,10 +508,10 @@ MR_TEST(reads_files_written_by_oiiotool) {
     const char *types[2] = {"float", "half"};
     const char *names[2] = {"oiio32.exr", "oiio16.exr"};
     for (int k = 0; k < 2; k++) {
-        snprintf(cmd, sizeof cmd, "oiiotool %s -d %s -o '%s'", args, types[k], tmp_path(names[k]));
+        snprintf(cmd, sizeof cmd, "oiiotool %s -d %s -o '%s'", args, types[k], mr_test_tmp_path(names[k]));
         MR_CHECK_MSG(run_quiet(cmd) == 0, "%s", cmd);
         mr_image *img = NULL;
-        MR_CHECK_OK(mr_img_read(tmp_path(names[k]), NULL, &img));
+        MR_CHECK_OK(mr_img_read(mr_test_tmp_path(names[k]), NULL, &img));
         if (img) MR_CHECK_MSG(same_shape(f, img) && memcmp(img->pixels, f->pixels, 6 * 5 * 3 * sizeof(float)) == 0,
                               "%s differs from the in-memory F", names[k]);
         mr_image_free(img);
@@ -555,10 +520,10 @@ MR_TEST(reads_files_written_by_oiiotool) {
     /* PNG written by oiiotool (libpng): codes round(v * 255), decoded from sRGB by default */
     f = make_f(3, 1.0f);
     f_fill_args(args, sizeof args, 1.0f);
-    snprintf(cmd, sizeof cmd, "oiiotool %s -d uint8 -o '%s'", args, tmp_path("oiio.png"));
+    snprintf(cmd, sizeof cmd, "oiiotool %s -d uint8 -o '%s'", args, mr_test_tmp_path("oiio.png"));
     MR_CHECK(run_quiet(cmd) == 0);
     mr_image *img = NULL;
-    MR_CHECK_OK(mr_img_read(tmp_path("oiio.png"), NULL, &img));
+    MR_CHECK_OK(mr_img_read(mr_test_tmp_path("oiio.png"), NULL, &img));
     if (img && same_shape(f, img)) {
         double worst = 0.0;
         for (size_t i = 0; i < mr_image_value_count(f); i++) {
@@ -574,9 +539,9 @@ MR_TEST(reads_files_written_by_oiiotool) {
 MR_TEST(oiiotool_reads_our_exr) {
     /* Our Core-written EXR dumped by oiiotool: the exact values, in the right place. */
     mr_image *f = make_f(4, 3.0f);
-    MR_CHECK_OK(mr_img_write(tmp_path("dump.exr"), f, NULL));
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("dump.exr"), f, NULL));
     char cmd[700];
-    snprintf(cmd, sizeof cmd, "oiiotool --dumpdata '%s' 2>&1", tmp_path("dump.exr"));
+    snprintf(cmd, sizeof cmd, "oiiotool --dumpdata '%s' 2>&1", mr_test_tmp_path("dump.exr"));
     FILE *p = popen(cmd, "r");
     MR_CHECK(p != NULL);
     int seen = 0, bad = 0;
@@ -606,10 +571,10 @@ MR_TEST(write_into_missing_directory_fails_cleanly) {
     const char *exts[3] = {"png", "exr", "hdr"};
     for (int k = 0; k < 3; k++) {
         char path[600];
-        snprintf(path, sizeof path, "%s/f.%s", tmp_path("no/such/dir"), exts[k]);
+        snprintf(path, sizeof path, "%s/f.%s", mr_test_tmp_path("no/such/dir"), exts[k]);
         MR_CHECK(mr_img_write(path, f, NULL) == MR_ERR_IO);
         MR_CHECK_MSG(strstr(mr_last_error(), path) != NULL, "message '%s' does not name the file", mr_last_error());
-        MR_CHECK(!file_exists(tmp_path("no")));
+        MR_CHECK(!file_exists(mr_test_tmp_path("no")));
     }
     MR_CHECK(count_temporaries() == 0);
     mr_image_free(f);
@@ -619,7 +584,7 @@ MR_TEST(failed_write_leaves_target_untouched) {
     mr_image *f = make_f(3, 1.0f);
     unsigned char before[65536], after[65536];
     char target[600];
-    snprintf(target, sizeof target, "%s", tmp_path("keep.jpg"));
+    snprintf(target, sizeof target, "%s", mr_test_tmp_path("keep.jpg"));
     MR_CHECK_OK(mr_img_write(target, f, NULL));
     long n_before = read_file(target, before, sizeof before);
     MR_CHECK(n_before > 0);
@@ -639,11 +604,11 @@ MR_TEST(failed_write_leaves_target_untouched) {
     /* 3. the rename fails after a complete temporary file: the target is a directory */
     const char *dirs[3] = {"isdir.png", "isdir.exr", "isdir.tif"};
     for (int k = 0; k < 3; k++) {
-        MR_CHECK(mkdir(tmp_path(dirs[k]), 0755) == 0);
-        MR_CHECK(mr_img_write(tmp_path(dirs[k]), f, NULL) == MR_ERR_IO);
+        MR_CHECK(mkdir(mr_test_tmp_path(dirs[k]), 0755) == 0);
+        MR_CHECK(mr_img_write(mr_test_tmp_path(dirs[k]), f, NULL) == MR_ERR_IO);
         MR_CHECK(strstr(mr_last_error(), dirs[k]) != NULL);
         struct stat st;
-        MR_CHECK(stat(tmp_path(dirs[k]), &st) == 0 && S_ISDIR(st.st_mode));
+        MR_CHECK(stat(mr_test_tmp_path(dirs[k]), &st) == 0 && S_ISDIR(st.st_mode));
     }
     MR_CHECK(count_temporaries() == 0);
 
@@ -673,8 +638,8 @@ MR_TEST(full_disk_fails_cleanly) {
     unsigned char before[8192], after[8192];
     long sizes[5];
     for (int k = 0; k < 5; k++) {
-        MR_CHECK_OK(mr_img_write(tmp_path(names[k]), f, NULL)); /* small: the old content */
-        sizes[k] = read_file(tmp_path(names[k]), before, sizeof before);
+        MR_CHECK_OK(mr_img_write(mr_test_tmp_path(names[k]), f, NULL)); /* small: the old content */
+        sizes[k] = read_file(mr_test_tmp_path(names[k]), before, sizeof before);
         MR_CHECK(sizes[k] > 0 && sizes[k] < 4096);
     }
     void (*old_handler)(int) = signal(SIGXFSZ, SIG_IGN);
@@ -686,7 +651,7 @@ MR_TEST(full_disk_fails_cleanly) {
     mr_status results[5];
     char messages[5][256];
     for (int k = 0; k < 5; k++) {
-        results[k] = mr_img_write(tmp_path(names[k]), noise, NULL);
+        results[k] = mr_img_write(mr_test_tmp_path(names[k]), noise, NULL);
         snprintf(messages[k], sizeof messages[k], "%s", mr_last_error());
     }
     MR_CHECK(setrlimit(RLIMIT_FSIZE, &old_limit) == 0);
@@ -695,9 +660,9 @@ MR_TEST(full_disk_fails_cleanly) {
         MR_CHECK_MSG(results[k] == MR_ERR_IO, "%s: %s", names[k], mr_status_str(results[k]));
         MR_CHECK_MSG(strstr(messages[k], names[k]) != NULL, "message '%s'", messages[k]);
         /* the old file is intact (same size, and still decodes to the F) */
-        MR_CHECK(read_file(tmp_path(names[k]), after, sizeof after) == sizes[k]);
+        MR_CHECK(read_file(mr_test_tmp_path(names[k]), after, sizeof after) == sizes[k]);
         mr_image *back = NULL;
-        MR_CHECK_OK(mr_img_read(tmp_path(names[k]), NULL, &back));
+        MR_CHECK_OK(mr_img_read(mr_test_tmp_path(names[k]), NULL, &back));
         MR_CHECK(back != NULL && back->width == F_W && back->height == F_H);
         mr_image_free(back);
     }
@@ -713,16 +678,15 @@ MR_TEST(written_files_have_ordinary_permissions) {
     mr_image *f = make_f(3, 1.0f);
     const char *names[2] = {"mode.png", "mode.exr"};
     for (int k = 0; k < 2; k++) {
-        MR_CHECK_OK(mr_img_write(tmp_path(names[k]), f, NULL));
+        MR_CHECK_OK(mr_img_write(mr_test_tmp_path(names[k]), f, NULL));
         struct stat st;
-        MR_CHECK(stat(tmp_path(names[k]), &st) == 0 && (st.st_mode & 0777) == (0666 & ~mask));
+        MR_CHECK(stat(mr_test_tmp_path(names[k]), &st) == 0 && (st.st_mode & 0777) == (0666 & ~mask));
     }
     mr_image_free(f);
 }
 
 MR_TEST(concurrent_writes_and_reads) {
     /* Different files from several threads at once: temporary names must not collide. */
-    (void)tmp_path(""); /* creates test_dir when this case runs alone */
     mr_image *f = make_f(4, 1.0f);
     int failures = 0;
 #pragma omp parallel for reduction(+ : failures)
@@ -730,7 +694,7 @@ MR_TEST(concurrent_writes_and_reads) {
         char name[32];
         snprintf(name, sizeof name, "par%d.%s", i, i % 2 ? "exr" : "png");
         char path[600];
-        snprintf(path, sizeof path, "%s/%s", test_dir, name);
+        snprintf(path, sizeof path, "%s/%s", mr_test_scratch_dir(), name);
         mr_image *back = NULL;
         if (mr_img_write(path, f, NULL) != MR_OK || mr_img_read(path, NULL, &back) != MR_OK || back->channels != 4)
             failures++;
@@ -746,22 +710,22 @@ MR_TEST(concurrent_writes_and_reads) {
 MR_TEST(bad_inputs_give_clear_errors) {
     mr_image *img = NULL;
     /* missing file */
-    const char *missing = tmp_path("missing.png");
+    const char *missing = mr_test_tmp_path("missing.png");
     MR_CHECK(mr_img_read(missing, NULL, &img) == MR_ERR_IO);
     MR_CHECK(strstr(mr_last_error(), missing) != NULL && strstr(mr_last_error(), "No such file") != NULL);
     MR_CHECK(img == NULL);
     /* a directory */
-    MR_CHECK(mr_img_read(test_dir, NULL, &img) == MR_ERR_IO);
+    MR_CHECK(mr_img_read(mr_test_scratch_dir(), NULL, &img) == MR_ERR_IO);
     /* a text file named .png */
-    const char *text = tmp_path("text.png");
+    const char *text = mr_test_tmp_path("text.png");
     const char words[] = "this is not an image\n";
     MR_CHECK(write_file(text, words, sizeof words - 1));
     MR_CHECK(mr_img_read(text, NULL, &img) == MR_ERR_FORMAT);
     MR_CHECK(strstr(mr_last_error(), text) != NULL);
     MR_CHECK(img == NULL);
     /* an empty file */
-    MR_CHECK(write_file(tmp_path("empty.exr"), "", 0));
-    MR_CHECK(mr_img_read(tmp_path("empty.exr"), NULL, &img) == MR_ERR_FORMAT);
+    MR_CHECK(write_file(mr_test_tmp_path("empty.exr"), "", 0));
+    MR_CHECK(mr_img_read(mr_test_tmp_path("empty.exr"), NULL, &img) == MR_ERR_FORMAT);
     /* a truncated PNG: a noisy 64x64 image cut in half */
     mr_image *noise = NULL;
     MR_CHECK_OK(mr_image_create(64, 64, 3, &noise));
@@ -771,8 +735,8 @@ MR_TEST(bad_inputs_give_clear_errors) {
         noise->pixels[i] = (float)((s >> 8) & 0xffff) / 65535.0f;
     }
     char full[600], cut[600];
-    snprintf(full, sizeof full, "%s", tmp_path("whole.png"));
-    snprintf(cut, sizeof cut, "%s", tmp_path("cut.png"));
+    snprintf(full, sizeof full, "%s", mr_test_tmp_path("whole.png"));
+    snprintf(cut, sizeof cut, "%s", mr_test_tmp_path("cut.png"));
     MR_CHECK_OK(mr_img_write(full, noise, NULL));
     static unsigned char bytes[1 << 16];
     long n = read_file(full, bytes, sizeof bytes);
@@ -784,28 +748,28 @@ MR_TEST(bad_inputs_give_clear_errors) {
     MR_CHECK(img == NULL);
     /* a PNG with one flipped bit inside its image data: the chunk CRC no longer matches */
     bytes[n / 2] ^= 0x10;
-    MR_CHECK(write_file(tmp_path("flipped.png"), bytes, (size_t)n));
+    MR_CHECK(write_file(mr_test_tmp_path("flipped.png"), bytes, (size_t)n));
     bytes[n / 2] ^= 0x10;
-    MR_CHECK(mr_img_read(tmp_path("flipped.png"), NULL, &img) == MR_ERR_FORMAT);
+    MR_CHECK(mr_img_read(mr_test_tmp_path("flipped.png"), NULL, &img) == MR_ERR_FORMAT);
     MR_CHECK_MSG(strstr(mr_last_error(), "flipped.png") != NULL && strstr(mr_last_error(), "CRC") != NULL, "%s",
                  mr_last_error());
     /* a truncated JPEG: libjpeg only warns ("Premature end of JPEG file") and fills the rest with grey */
-    MR_CHECK_OK(mr_img_write(tmp_path("whole.jpg"), noise, NULL));
-    n = read_file(tmp_path("whole.jpg"), bytes, sizeof bytes);
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("whole.jpg"), noise, NULL));
+    n = read_file(mr_test_tmp_path("whole.jpg"), bytes, sizeof bytes);
     MR_CHECK(n > 1000 && n < (long)sizeof bytes);
-    MR_CHECK(write_file(tmp_path("cut.jpg"), bytes, (size_t)n / 2));
-    MR_CHECK(mr_img_read(tmp_path("cut.jpg"), NULL, &img) == MR_ERR_FORMAT);
+    MR_CHECK(write_file(mr_test_tmp_path("cut.jpg"), bytes, (size_t)n / 2));
+    MR_CHECK(mr_img_read(mr_test_tmp_path("cut.jpg"), NULL, &img) == MR_ERR_FORMAT);
     MR_CHECK_MSG(strstr(mr_last_error(), "cut.jpg") != NULL, "%s", mr_last_error());
     /* truncated EXR and HDR */
     const char *others[2] = {"whole.exr", "whole.hdr"};
     for (int k = 0; k < 2; k++) {
-        MR_CHECK_OK(mr_img_write(tmp_path(others[k]), noise, NULL));
-        n = read_file(tmp_path(others[k]), bytes, sizeof bytes);
+        MR_CHECK_OK(mr_img_write(mr_test_tmp_path(others[k]), noise, NULL));
+        n = read_file(mr_test_tmp_path(others[k]), bytes, sizeof bytes);
         MR_CHECK(n > 1000 && n < (long)sizeof bytes);
         char name[32];
         snprintf(name, sizeof name, "cut_%s", others[k] + 6);
-        MR_CHECK(write_file(tmp_path(name), bytes, (size_t)n / 2));
-        MR_CHECK(mr_img_read(tmp_path(name), NULL, &img) == MR_ERR_FORMAT);
+        MR_CHECK(write_file(mr_test_tmp_path(name), bytes, (size_t)n / 2));
+        MR_CHECK(mr_img_read(mr_test_tmp_path(name), NULL, &img) == MR_ERR_FORMAT);
         MR_CHECK_MSG(strstr(mr_last_error(), name) != NULL, "%s", mr_last_error());
     }
     MR_CHECK(img == NULL);
@@ -822,23 +786,23 @@ MR_TEST(bad_inputs_give_clear_errors) {
     small.max_dimension = -1;
     MR_CHECK(mr_img_read(full, &small, &img) == MR_ERR_INVALID_ARG);
     /* writing: unknown extension, bad options */
-    MR_CHECK(mr_img_write(tmp_path("f.bmpx"), noise, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_img_write(mr_test_tmp_path("f.bmpx"), noise, NULL) == MR_ERR_INVALID_ARG);
     MR_CHECK(strstr(mr_last_error(), ".bmpx") != NULL);
-    MR_CHECK(mr_img_write(tmp_path("noext"), noise, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_img_write(mr_test_tmp_path("noext"), noise, NULL) == MR_ERR_INVALID_ARG);
     mr_img_write_options wo = {MR_IMG_COLOR, 12, 0};
-    MR_CHECK(mr_img_write(tmp_path("bad.png"), noise, &wo) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_img_write(mr_test_tmp_path("bad.png"), noise, &wo) == MR_ERR_INVALID_ARG);
     wo.bits = 8;
-    MR_CHECK(mr_img_write(tmp_path("bad.exr"), noise, &wo) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_img_write(mr_test_tmp_path("bad.exr"), noise, &wo) == MR_ERR_INVALID_ARG);
     wo.bits = 0;
     wo.jpeg_quality = 101;
-    MR_CHECK(mr_img_write(tmp_path("bad.jpg"), noise, &wo) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_img_write(mr_test_tmp_path("bad.jpg"), noise, &wo) == MR_ERR_INVALID_ARG);
     wo.jpeg_quality = 0;
     wo.encoding = (mr_img_encoding)7;
-    MR_CHECK(mr_img_write(tmp_path("bad.tif"), noise, &wo) == MR_ERR_INVALID_ARG);
-    MR_CHECK(!file_exists(tmp_path("bad.png")) && !file_exists(tmp_path("bad.exr")) &&
-             !file_exists(tmp_path("bad.jpg")) && !file_exists(tmp_path("bad.tif")));
+    MR_CHECK(mr_img_write(mr_test_tmp_path("bad.tif"), noise, &wo) == MR_ERR_INVALID_ARG);
+    MR_CHECK(!file_exists(mr_test_tmp_path("bad.png")) && !file_exists(mr_test_tmp_path("bad.exr")) &&
+             !file_exists(mr_test_tmp_path("bad.jpg")) && !file_exists(mr_test_tmp_path("bad.tif")));
     /* upper-case extensions are fine */
-    MR_CHECK_OK(mr_img_write(tmp_path("UPPER.PNG"), noise, NULL));
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("UPPER.PNG"), noise, NULL));
     MR_CHECK(count_temporaries() == 0);
     mr_image_free(noise);
 }
@@ -848,7 +812,7 @@ MR_TEST(library_prints_nothing) {
     fflush(stdout);
     fflush(stderr);
     char capture[600];
-    snprintf(capture, sizeof capture, "%s", tmp_path("captured.txt"));
+    snprintf(capture, sizeof capture, "%s", mr_test_tmp_path("captured.txt"));
     int saved_out = dup(1), saved_err = dup(2);
     FILE *sink = fopen(capture, "w");
     MR_CHECK(sink != NULL && saved_out >= 0 && saved_err >= 0);
@@ -867,17 +831,17 @@ MR_TEST(library_prints_nothing) {
         char whole[64], cut[64];
         snprintf(whole, sizeof whole, "quiet.%s", formats[f]);
         snprintf(cut, sizeof cut, "quiet_cut.%s", formats[f]);
-        mr_img_write(tmp_path(whole), noise, NULL);
-        long n = read_file(tmp_path(whole), bytes, sizeof bytes);
-        write_file(tmp_path(cut), bytes, n > 0 ? (size_t)n / 2 : 0);
-        statuses[k++] = mr_img_read(tmp_path(cut), NULL, &img);
+        mr_img_write(mr_test_tmp_path(whole), noise, NULL);
+        long n = read_file(mr_test_tmp_path(whole), bytes, sizeof bytes);
+        write_file(mr_test_tmp_path(cut), bytes, n > 0 ? (size_t)n / 2 : 0);
+        statuses[k++] = mr_img_read(mr_test_tmp_path(cut), NULL, &img);
     }
-    write_file(tmp_path("quiet_text.png"), "not a png", 9);
-    statuses[k++] = mr_img_read(tmp_path("quiet_text.png"), NULL, &img);
-    statuses[k++] = mr_img_read(tmp_path("quiet_missing.exr"), NULL, &img);
+    write_file(mr_test_tmp_path("quiet_text.png"), "not a png", 9);
+    statuses[k++] = mr_img_read(mr_test_tmp_path("quiet_text.png"), NULL, &img);
+    statuses[k++] = mr_img_read(mr_test_tmp_path("quiet_missing.exr"), NULL, &img);
     mr_image *wide = NULL;
     mr_image_create(70000, 1, 1, &wide);
-    statuses[k++] = mr_img_write(tmp_path("quiet_wide.jpg"), wide, NULL);
+    statuses[k++] = mr_img_write(mr_test_tmp_path("quiet_wide.jpg"), wide, NULL);
     mr_image_free(wide);
     mr_image_free(noise);
 
