@@ -8,8 +8,10 @@ bin="${MR_BUILD:-build}/bin/matremap"
 source "$(dirname "$0")/lib/cli_harness.sh"
 
 # A Python expression over summary.json `d` of report folder $1.
-summary() { python3 -c 'import json, sys; d = json.load(open(sys.argv[1] + "/summary.json")); print(eval(sys.argv[2]))' \
-    "$1" "$2"; }
+summary() {
+    python3 -c 'import json, sys; d = json.load(open(sys.argv[1] + "/summary.json")); print(eval(sys.argv[2]))' \
+        "$1" "$2"
+}
 # Every src="..." of index.html names a file of the folder.
 all_pictures_exist() {
     python3 - "$1" <<'PY'
@@ -55,7 +57,8 @@ check "every picture of the page exists" all_pictures_exist "$tmp/env"
 check "three map thumbnails for the textured material" test \
     "$(summary "$tmp/env" '[t["label"] for t in d["materials"][0]["thumbnails"]]')" = \
     "['base_color ($tmp/albedo.png)', 'metallic ($tmp/mr.exr, channel B)', 'roughness ($tmp/mr.exr, channel G)']"
-check "a thumbnail is at most 128 pixels" test "$(oiiotool --info "$tmp/env/map_material0_0.png" | grep -c '64 x   64')" = 1
+check "a thumbnail is at most 128 pixels" test \
+    "$(oiiotool --info "$tmp/env/map_material0_0.png" | grep -c '64 x   64')" = 1
 check "the label is escaped in HTML" grep -q "&lt;b&gt;&amp;amp" "$tmp/env/index.html"
 check "... and kept as it is in JSON" test "$(summary "$tmp/env" 'd["materials"][0]["label"]')" = "<b>&amp"
 
@@ -70,6 +73,30 @@ expect "a missing environment is named" 2 "nosky.hdr" -- "$bin" report -o "$tmp/
 check "no folder after a failure" test ! -e "$tmp/e4" -a ! -e "$tmp/e5" -a ! -e "$tmp/e6"
 touch "$tmp/afile"
 expect "-o naming a file" 2 "not a folder" -- "$bin" report -o "$tmp/afile" ggx
+
+# ---- glTF assets rendered as their meshes ------------------------------------------------------------------------
+shared="${MR_SHARED:-$(cd "$(dirname "$0")/.." && pwd)/../shared}/assets"
+duck="$shared/specgloss/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Duck.gltf"
+mkdir -p "$tmp/duck"
+"$bin" gltf spec2metal "$duck" -o "$tmp/duck/duck.gltf" --method weighted >/dev/null 2>&1
+expect "glTF assets: the Duck, itself and converted" 0 "report: $tmp/gl/index.html" -- "$bin" report -o "$tmp/gl" \
+    --size 96 --env "$tmp/sky.exr" --rotations 2 --env-samples 128 --label original "$duck" -- --label same "$duck" \
+    -- --label weighted "$tmp/duck/duck.gltf"
+check "an asset against itself: SSIM 1" test "$(summary "$tmp/gl" 'd["materials"][1]["mean_ssim"]')" = 1
+check "the converted Duck: SSIM between 0.95 and 1" test \
+    "$(summary "$tmp/gl" '0.95 < d["materials"][2]["mean_ssim"] < 1')" = True
+check "the spec-gloss original is rendered with gltf-specgloss, the conversion with gltf" test \
+    "$(summary "$tmp/gl" '[m["description"].split()[-2] for m in d["materials"]]')" = \
+    "['gltf-specgloss', 'gltf-specgloss', 'gltf']"
+check "every picture of the page exists" all_pictures_exist "$tmp/gl"
+# The mesh is in the picture: the object covers a good part of the frame.
+covered=$(oiiotool "$tmp/gl/view0_material0.png" --ch R,G,B --chsum --printstats 2>/dev/null |
+    sed -nE 's/.*Stats Avg: ([0-9.e+-]+).*/\1/p')
+check "the Duck is in the picture (mean luminance $covered > 0)" awk -v v="${covered:-0}" 'BEGIN { exit !(v > 0.01) }'
+truck="$shared/specgloss/CesiumMilkTruck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/CesiumMilkTruck.gltf"
+expect "a multi-material asset is refused, named" 2 "CesiumMilkTruck.gltf' has [0-9]+ material groups" -- \
+    "$bin" report -o "$tmp/e7" "$truck"
+expect "materials and assets are not mixed" 1 "not both" -- "$bin" report -o "$tmp/e8" "$duck" -- ggx
 
 # ---- the page in a browser --------------------------------------------------------------------------------------
 browser=$(command -v chromium || command -v chromium-browser || true)

@@ -87,6 +87,13 @@ void cli_material_free(cli_material *m);
  * printed, naming `command` and where it looked). */
 int cli_load_network(const char *command, const char *weights, mr_mlp **net, char *used, size_t used_size);
 
+struct mr_gltf;
+struct mr_gltf_texture_ref;
+/* Decode the image of a glTF texture reference (colour: RGB sRGB-decoded, alpha linear; data: all linear); an
+ * embedded image goes through a file in the folder `scratch`. Returns an exit code (messages printed). */
+int cli_gltf_read_texture(const struct mr_gltf *asset, const struct mr_gltf_texture_ref *ref,
+                          mr_img_encoding encoding, const char *scratch, mr_image **out);
+
 int cmd_models(int argc, char **argv);
 int cmd_render(int argc, char **argv);
 int cmd_ssim(int argc, char **argv);

@@ -70,8 +70,8 @@ typedef struct options {
 
 /* Decode the image of texture `ref` (colour: RGB sRGB-decoded, alpha linear; data: all linear). Returns an exit
  * code (messages printed). */
-static int read_texture(const mr_gltf *asset, const mr_gltf_texture_ref *ref, mr_img_encoding encoding,
-                        const char *scratch, mr_image **out) {
+int cli_gltf_read_texture(const mr_gltf *asset, const mr_gltf_texture_ref *ref, mr_img_encoding encoding,
+                          const char *scratch, mr_image **out) {
     mr_gltf_texture texture;
     mr_gltf_image image;
     mr_status status = mr_gltf_get_texture(asset, ref->index, &texture);
@@ -236,8 +236,8 @@ static int read_pair(const mr_gltf *asset, int k, const char *name, const mr_glt
         return CLI_EXIT_BAD_INPUT;
     }
     int code = CLI_EXIT_OK;
-    if (a->index >= 0) code = read_texture(asset, a, a_encoding, scratch, a_image);
-    if (code == CLI_EXIT_OK && b->index >= 0) code = read_texture(asset, b, b_encoding, scratch, b_image);
+    if (a->index >= 0) code = cli_gltf_read_texture(asset, a, a_encoding, scratch, a_image);
+    if (code == CLI_EXIT_OK && b->index >= 0) code = cli_gltf_read_texture(asset, b, b_encoding, scratch, b_image);
     if (code != CLI_EXIT_OK) return code;
     *width = *height = 1;
     const mr_image *images[2] = {*a_image, *b_image};
@@ -301,7 +301,7 @@ static int extension_material(mr_gltf *asset, int k, const options *o, mr_gltf_m
         mr_gltf_texture_ref_none(&m->metallic_roughness_texture);
     } else {
         mr_image *sg_image = NULL, *rough = NULL;
-        int code = read_texture(asset, &sg, MR_IMG_COLOR, scratch, &sg_image);
+        int code = cli_gltf_read_texture(asset, &sg, MR_IMG_COLOR, scratch, &sg_image);
         if (code != CLI_EXIT_OK) return code;
         status = mr_image_create(sg_image->width, sg_image->height, 3, &rough);
         size_t n = (size_t)sg_image->width * (size_t)sg_image->height;

@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "gltf/mr_gltf.h"
 #include "report/report.h"
 
 #define MAX_MATERIALS 16
@@ -26,6 +27,7 @@
 static void print_help(void) {
     printf("Usage: matremap report -o DIR [options] MODEL [name=value|name=@MAP ...]\n"
            "                       [-- [--label TEXT] MODEL [name=value|name=@MAP ...]] ...\n"
+           "       matremap report -o DIR [options] A.gltf [-- [--label TEXT] B.gltf] ...\n"
            "\n"
            "Renders each material on a sphere under an HDR environment map, seen with the map turned to N\n"
            "directions (or once in the fit scene without --env), compares every material with the first (the\n"
@@ -33,7 +35,10 @@ static void print_help(void) {
            "(renders side by side, SSIM maps, a summary table, each material's parameters and map thumbnails),\n"
            "the pictures as PNG, and summary.json with the numbers. Materials are separated by '--' and written\n"
            "as for 'matremap render': parameters as name=value, or name=@MAP[:r|g|b|a] from a texture wrapped\n"
-           "over the sphere (docs/rendering.md).\n"
+           "over the sphere (docs/rendering.md). glTF assets (.gltf, .glb) are rendered as their triangles with\n"
+           "their material (spec-gloss when the material carries it, else metal-rough with KHR_materials_specular\n"
+           "and _ior), factors times textures, seen from a three-quarter view onto the reference's broadest side;\n"
+           "single-material assets so far.\n"
            "\n"
            "Options:\n"
            "  -o, --output DIR     the report folder (created if missing; its files are replaced)\n"
@@ -253,9 +258,152 @@ static void describe(const group *g, char *out, size_t size) {
         used += (size_t)snprintf(out + used, size - used, " %s", g->assignments[k]);
 }
 
+/* ---- glTF assets as report entries ------------------------------------------------------------------------- */
+
+/* The geometry of a glTF entry; materials[k] holds its BRDF model, values and (folded) maps. */
+typedef struct asset_entry {
+    mr_gltf *asset;
+    mr_gltf_triangles *triangles;
+    mr_mesh mesh;
+} asset_entry;
+
+static int is_gltf_path(const char *text) {
+    size_t n = strlen(text);
+    return (n > 5 && strcmp(text + n - 5, ".gltf") == 0) || (n > 4 && strcmp(text + n - 4, ".glb") == 0);
+}
+
+/* A map for parameter `name` of m's model: channels `first`.. of `source` (count 1 or 3; a grey source answers
+ * every channel) times `factor[]`, as a new image the material owns. Returns an exit code. */
+static int fold_map(cli_material *m, const char *name, const char *label, const mr_image *source, int first,
+                    int count, const double *factor) {
+    if (m->map_count == CLI_MAX_ASSIGNMENTS) return CLI_EXIT_INTERNAL;
+    cli_material_map *map = &m->maps[m->map_count];
+    memset(map, 0, sizeof *map);
+    mr_status status = mr_image_create(source->width, source->height, count, &map->image);
+    if (status != MR_OK) return cli_fail("report", status);
+    m->map_count++;
+    size_t n = (size_t)source->width * (size_t)source->height;
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < count; c++) {
+            int from = source->channels == 1 ? 0 : first + c;
+            float value = from < source->channels ? source->pixels[i * (size_t)source->channels + (size_t)from]
+                                                  : 1.0f; // a missing alpha is 1
+            map->image->pixels[i * (size_t)count + (size_t)c] = (float)(value * factor[c]);
+        }
+    map->name = strdup(name);
+    map->path = strdup(label);
+    map->param = mr_brdf_param_index(m->model, name);
+    map->channel = 0;
+    if (map->name == NULL || map->path == NULL) return CLI_EXIT_INTERNAL;
+    status = mr_param_textures_set(&m->textures, m->model, name, map->image, 0);
+    return status == MR_OK ? CLI_EXIT_OK : cli_fail("report", status);
+}
+
+/* Set parameter `name` of m to `count` values. */
+static void set_values(cli_material *m, const char *name, const double *v, int count) {
+    int p = mr_brdf_param_index(m->model, name);
+    int offset = mr_brdf_param_offset(m->model, p);
+    for (int c = 0; c < count; c++) m->values[offset + c] = v[c];
+}
+
+/* Load a glTF asset as a report entry: its triangles (one material group: single-material assets) as a mesh,
+ * its material as `gltf-specgloss` when it carries KHR_materials_pbrSpecularGlossiness (what an engine that
+ * supports the extension renders) and as `gltf` otherwise (core metal-rough, KHR_materials_specular factors and
+ * colour texture, KHR_materials_ior; an ior above 5, the model's bound, is rendered at 5 with the specular colour
+ * scaled to the same F0). Factors are folded into the maps. Returns an exit code. */
+static int load_gltf_entry(const char *path, const char *scratch, asset_entry *a, cli_material *m) {
+    memset(m, 0, sizeof *m);
+    mr_status status = mr_gltf_load(path, &a->asset);
+    if (status == MR_OK) status = mr_gltf_get_triangles(a->asset, -1, &a->triangles);
+    if (status != MR_OK) return cli_fail("report", status);
+    if (a->triangles->group_count != 1) {
+        fprintf(stderr, "matremap report: error: '%s' has %d material groups (materials, or attribute sets); the "
+                "report renders single-material assets so far\n", path, a->triangles->group_count);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    const mr_gltf_triangle_group *g = &a->triangles->groups[0];
+    mr_gltf_material mat;
+    if (g->material >= 0) {
+        status = mr_gltf_get_material(a->asset, g->material, &mat);
+        if (status != MR_OK) return cli_fail("report", status);
+    } else {
+        mr_gltf_material_defaults(&mat);
+    }
+    a->mesh = (mr_mesh){g->vertex_count, g->positions, g->normals, g->tangents, g->uv0, g->triangle_count,
+                        g->indices, mat.double_sided, 0, {0}};
+    int code = CLI_EXIT_OK;
+    mr_image *image = NULL;
+    if (mat.has_spec_gloss) {
+        m->model = mr_brdf_find("gltf-specgloss");
+        mr_brdf_default_values(m->model, m->values);
+        set_values(m, "diffuse", mat.diffuse_factor, 3);
+        set_values(m, "specular", mat.specular_factor, 3);
+        set_values(m, "glossiness", &mat.glossiness_factor, 1);
+        if (mat.diffuse_texture.index >= 0) {
+            code = cli_gltf_read_texture(a->asset, &mat.diffuse_texture, MR_IMG_COLOR, scratch, &image);
+            if (code == CLI_EXIT_OK) code = fold_map(m, "diffuse", "diffuseTexture", image, 0, 3, mat.diffuse_factor);
+            mr_image_free(image);
+            image = NULL;
+        }
+        if (code == CLI_EXIT_OK && mat.specular_glossiness_texture.index >= 0) {
+            code = cli_gltf_read_texture(a->asset, &mat.specular_glossiness_texture, MR_IMG_COLOR, scratch, &image);
+            if (code == CLI_EXIT_OK)
+                code = fold_map(m, "specular", "specularGlossinessTexture RGB", image, 0, 3, mat.specular_factor);
+            if (code == CLI_EXIT_OK)
+                code = fold_map(m, "glossiness", "specularGlossinessTexture A", image, 3, 1, &mat.glossiness_factor);
+            mr_image_free(image);
+        }
+        return code;
+    }
+    m->model = mr_brdf_find("gltf");
+    mr_brdf_default_values(m->model, m->values);
+    double ior = mat.has_ior ? mat.ior : 1.5, rendered_ior = ior > 5.0 ? 5.0 : (ior < 1.0 ? 1.0 : ior);
+    double f0 = pow((ior - 1.0) / (ior + 1.0), 2.0);
+    double rendered_f0 = pow((rendered_ior - 1.0) / (rendered_ior + 1.0), 2.0);
+    double scale = rendered_f0 > 0.0 ? f0 / rendered_f0 : 1.0;
+    double colour[3];
+    for (int c = 0; c < 3; c++) colour[c] = (mat.has_specular ? mat.specular_color_factor[c] : 1.0) * scale;
+    double strength = mat.has_specular ? mat.specular_strength : 1.0;
+    set_values(m, "base_color", mat.base_color_factor, 3);
+    set_values(m, "metallic", &mat.metallic_factor, 1);
+    set_values(m, "roughness", &mat.roughness_factor, 1);
+    set_values(m, "specular", &strength, 1);
+    set_values(m, "specular_color", colour, 3);
+    set_values(m, "ior", &rendered_ior, 1);
+    if (mat.base_color_texture.index >= 0) {
+        code = cli_gltf_read_texture(a->asset, &mat.base_color_texture, MR_IMG_COLOR, scratch, &image);
+        if (code == CLI_EXIT_OK)
+            code = fold_map(m, "base_color", "baseColorTexture", image, 0, 3, mat.base_color_factor);
+        mr_image_free(image);
+        image = NULL;
+    }
+    if (code == CLI_EXIT_OK && mat.metallic_roughness_texture.index >= 0) {
+        code = cli_gltf_read_texture(a->asset, &mat.metallic_roughness_texture, MR_IMG_DATA, scratch, &image);
+        if (code == CLI_EXIT_OK)
+            code = fold_map(m, "metallic", "metallicRoughnessTexture B", image, 2, 1, &mat.metallic_factor);
+        if (code == CLI_EXIT_OK)
+            code = fold_map(m, "roughness", "metallicRoughnessTexture G", image, 1, 1, &mat.roughness_factor);
+        mr_image_free(image);
+        image = NULL;
+    }
+    if (code == CLI_EXIT_OK && mat.has_specular && mat.specular_color_texture.index >= 0) {
+        code = cli_gltf_read_texture(a->asset, &mat.specular_color_texture, MR_IMG_COLOR, scratch, &image);
+        if (code == CLI_EXIT_OK)
+            code = fold_map(m, "specular_color", "specularColorTexture", image, 0, 3, colour);
+        mr_image_free(image);
+    }
+    return code;
+}
+
+static void asset_entry_free(asset_entry *a) {
+    mr_gltf_triangles_free(a->triangles);
+    mr_gltf_free(a->asset);
+    memset(a, 0, sizeof *a);
+}
+
 /* Render every material for every view, write the pictures and compare. Returns an exit code. */
 static int render_views(const options *o, const mr_image *env, double env_scale, cli_material *materials,
-                        entry *entries, int count, int views, double *exposure) {
+                        const asset_entry *assets, entry *entries, int count, int views, double *exposure) {
     for (int v = 0; v < views; v++) {
         if (isatty(STDERR_FILENO)) fprintf(stderr, "\rmatremap report: view %d/%d ", v + 1, views);
         mr_fit_scene_options fit = {0};
@@ -263,11 +411,32 @@ static int render_views(const options *o, const mr_image *env, double env_scale,
         mr_scene scene = mr_scene_fit(&fit);
         if (env != NULL)
             scene.lights[0] = mr_light_environment(env, env_scale, 360.0 * v / views, o->env_samples);
+        mr_status status = MR_OK;
+        if (assets != NULL) { // every entry's mesh seen by the camera that frames the reference's
+            scene.shape.type = MR_SHAPE_MESH;
+            scene.shape.mesh = &assets[0].mesh;
+            // A three-quarter view onto the asset's broadest side: along the axis of its smallest extent, raised
+            // and turned a little (a flat asset seen edge-on shows nothing of its material).
+            const double *lo = assets[0].triangles->bbox_min, *hi = assets[0].triangles->bbox_max;
+            int thin = 0;
+            for (int c = 1; c < 3; c++)
+                if (hi[c] - lo[c] < hi[thin] - lo[thin]) thin = c;
+            mr_frame_options frame = {0};
+            for (int c = 0; c < 3; c++) frame.from[c] = c == thin ? 1.0 : 0.35;
+            status = mr_camera_frame_mesh(&assets[0].mesh, &frame, &scene.camera);
+        }
         mr_render_plan *plan = NULL;
-        mr_status status = mr_render_plan_create(&scene, &plan);
+        if (status == MR_OK) status = mr_render_plan_create(&scene, &plan);
         mr_image *reference = NULL;
         for (int k = 0; k < count && status == MR_OK; k++) {
             mr_image *image = NULL;
+            if (assets != NULL && k > 0) { // an asset's own geometry: its own plan
+                mr_render_plan_free(plan);
+                plan = NULL;
+                scene.shape.mesh = &assets[k].mesh;
+                status = mr_render_plan_create(&scene, &plan);
+                if (status != MR_OK) break;
+            }
             double started = cli_now();
             status = mr_render_textured(plan, materials[k].model, materials[k].values, &materials[k].textures,
                                         MR_COMPONENT_FULL, &image);
@@ -325,10 +494,30 @@ int cmd_report(int argc, char **argv) {
     static cli_material materials[MAX_MATERIALS];
     static entry entries[MAX_MATERIALS];
     memset(entries, 0, sizeof entries);
+    // Entries are all materials on the sphere, or all glTF assets (rendered as their meshes).
+    static asset_entry asset_storage[MAX_MATERIALS];
+    int gltf_entries = 0;
+    for (int k = 0; k < count; k++) gltf_entries += is_gltf_path(groups[k].model_name);
+    if (gltf_entries > 0 && gltf_entries < count)
+        return cli_usage_error("report", "give either materials (MODEL name=value ...) or glTF assets, not both");
+    for (int k = 0; gltf_entries > 0 && k < count; k++)
+        if (groups[k].count > 0)
+            return cli_usage_error("report", "'%s': a glTF asset takes no name=value parameters",
+                                   groups[k].assignments[0]);
+    asset_entry *assets = gltf_entries > 0 ? asset_storage : NULL;
+    char scratch[64] = "";
+    if (assets != NULL) {
+        snprintf(scratch, sizeof scratch, "/tmp/matremap-report-XXXXXX");
+        if (mkdtemp(scratch) == NULL) {
+            fprintf(stderr, "matremap report: error: cannot create a scratch folder in /tmp: %s\n", strerror(errno));
+            return CLI_EXIT_INTERNAL;
+        }
+    }
     int loaded = 0;
     for (; loaded < count && code == CLI_EXIT_OK; loaded++)
-        code = cli_material_load("report", groups[loaded].model_name, groups[loaded].assignments,
-                                 groups[loaded].count, &materials[loaded]);
+        code = assets ? load_gltf_entry(groups[loaded].model_name, scratch, &assets[loaded], &materials[loaded])
+                      : cli_material_load("report", groups[loaded].model_name, groups[loaded].assignments,
+                                          groups[loaded].count, &materials[loaded]);
     mr_image *env = NULL;
     double env_scale = o.env_scale;
     if (code == CLI_EXIT_OK && o.env_path != NULL) {
@@ -339,7 +528,8 @@ int cmd_report(int argc, char **argv) {
     if (code == CLI_EXIT_OK) code = make_folder(o.dir);
 
     double exposure = o.exposure;
-    if (code == CLI_EXIT_OK) code = render_views(&o, env, env_scale, materials, entries, count, views, &exposure);
+    if (code == CLI_EXIT_OK)
+        code = render_views(&o, env, env_scale, materials, assets, entries, count, views, &exposure);
 
     // Thumbnails of every map, and the page.
     char view_names[MAX_VIEWS][64];
@@ -357,6 +547,9 @@ int cmd_report(int argc, char **argv) {
         const cli_material *m = &materials[k];
         snprintf(e->label, sizeof e->label, "%s", groups[k].label ? groups[k].label : groups[k].model_name);
         describe(&groups[k], e->description, sizeof e->description);
+        if (assets != NULL)
+            snprintf(e->description, sizeof e->description, "%s: %d triangles, rendered with the %s model",
+                     groups[k].model_name, assets[k].mesh.triangle_count, m->model->name);
         for (int t = 0; t < m->map_count && code == CLI_EXIT_OK; t++) {
             const mr_brdf_param *param = &m->model->params[m->maps[t].param];
             int rgb = param->channels == 3;
@@ -380,13 +573,14 @@ int cmd_report(int argc, char **argv) {
     }
     if (code == CLI_EXIT_OK) {
         char scene[1024];
+        const char *object = assets ? "Each asset's triangles, framed as the reference's" : "Unit sphere";
         if (env != NULL)
-            snprintf(scene, sizeof scene, "Unit sphere, %d² pixels, lit by %s (radiance x %.4g, %d fixed directions), "
-                     "turned in %d steps of %g°; pictures at exposure %.4g.", o.size, o.env_path, env_scale,
+            snprintf(scene, sizeof scene, "%s, %d² pixels, lit by %s (radiance x %.4g, %d fixed directions), "
+                     "turned in %d steps of %g°; pictures at exposure %.4g.", object, o.size, o.env_path, env_scale,
                      o.env_samples, views, 360.0 / views, exposure);
         else
-            snprintf(scene, sizeof scene, "The fit scene: unit sphere, %d² pixels, point light at 45°; pictures at "
-                     "exposure %.4g.", o.size, exposure);
+            snprintf(scene, sizeof scene, "The fit scene's point light at 45°: %s, %d² pixels; pictures at exposure "
+                     "%.4g.", object, o.size, exposure);
         mr_report report = {o.title ? o.title : "matremap report", scene, views, view_ptrs, count, report_materials,
                             "render time (all views)"};
         mr_status status = mr_report_write(&report, o.dir);
@@ -407,7 +601,11 @@ int cmd_report(int argc, char **argv) {
         }
         printf("report: %s/index.html\n", o.dir);
     }
-    for (int k = 0; k < loaded; k++) cli_material_free(&materials[k]);
+    for (int k = 0; k < loaded; k++) {
+        cli_material_free(&materials[k]);
+        if (assets) asset_entry_free(&assets[k]);
+    }
+    if (scratch[0] != '\0') rmdir(scratch);
     mr_image_free(env);
     return code;
 }
