@@ -10,6 +10,7 @@
  */
 #include <errno.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -395,6 +396,27 @@ static int load_gltf_entry(const char *path, const char *scratch, asset_entry *a
     return code;
 }
 
+/* Do two meshes hold the same triangles (every array equal, or absent in both)? */
+static int same_mesh(const mr_mesh *a, const mr_mesh *b) {
+    if (a->vertex_count != b->vertex_count || a->triangle_count != b->triangle_count ||
+        a->double_sided != b->double_sided)
+        return 0;
+    size_t v = (size_t)a->vertex_count, t = (size_t)a->triangle_count;
+    const struct {
+        const void *x, *y;
+        size_t bytes;
+    } arrays[5] = {{a->positions, b->positions, v * 3 * sizeof(float)},
+                   {a->normals, b->normals, v * 3 * sizeof(float)},
+                   {a->tangents, b->tangents, v * 4 * sizeof(float)},
+                   {a->uvs, b->uvs, v * 2 * sizeof(float)},
+                   {a->indices, b->indices, t * 3 * sizeof(uint32_t)}};
+    for (int i = 0; i < 5; i++) {
+        if ((arrays[i].x == NULL) != (arrays[i].y == NULL)) return 0;
+        if (arrays[i].x != NULL && memcmp(arrays[i].x, arrays[i].y, arrays[i].bytes) != 0) return 0;
+    }
+    return 1;
+}
+
 static void asset_entry_free(asset_entry *a) {
     mr_gltf_triangles_free(a->triangles);
     mr_gltf_free(a->asset);
@@ -430,7 +452,9 @@ static int render_views(const options *o, const mr_image *env, double env_scale,
         mr_image *reference = NULL;
         for (int k = 0; k < count && status == MR_OK; k++) {
             mr_image *image = NULL;
-            if (assets != NULL && k > 0) { // an asset's own geometry: its own plan
+            if (assets != NULL && k > 0 && !same_mesh(&assets[k].mesh, scene.shape.mesh)) {
+                // An asset with geometry of its own gets its own plan; a conversion of the reference (the same
+                // triangles) shares the reference's, shadow rays included.
                 mr_render_plan_free(plan);
                 plan = NULL;
                 scene.shape.mesh = &assets[k].mesh;
