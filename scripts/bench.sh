@@ -14,15 +14,8 @@ work="$root/$build/bench"
 mkdir -p "$work"
 report="$work/render.md"
 
-median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2}'; }
-# Wall-clock seconds of a whole command (its output discarded).
-seconds_of() {
-    local t0 t1
-    t0=$(date +%s.%N)
-    "$@" >/dev/null 2>&1
-    t1=$(date +%s.%N)
-    awk -v a="$t0" -v b="$t1" 'BEGIN {print b - a}'
-}
+# shellcheck source=scripts/lib/timing.sh
+. "$root/scripts/lib/timing.sh"
 
 echo "== fit-scene render time per model (tests/bench_render.c)"
 "$root/$build/tests/bench_render" $quick | tee "$work/render_table.md"

@@ -22,13 +22,8 @@ if [ ! -x "$gt/node_modules/.bin/gltf-transform" ]; then
 fi
 rm -rf "$work"
 mkdir -p "$work" "$root/docs/evaluation"
-seconds_of() {
-    local t0 t1
-    t0=$(date +%s.%N)
-    "$@" >/dev/null 2>&1
-    t1=$(date +%s.%N)
-    awk -v a="$t0" -v b="$t1" 'BEGIN {printf "%.2f", b - a}'
-}
+# shellcheck source=scripts/lib/timing.sh
+. "$root/scripts/lib/timing.sh"
 table="$work/table.md"
 {
     echo "Measured by \`make evaluation-gltf\` on $(date -u +%Y-%m-%d), matremap $("$bin" --version | cut -d' ' -f2),"
