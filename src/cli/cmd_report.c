@@ -36,10 +36,11 @@ static void print_help(void) {
            "(renders side by side, SSIM maps, a summary table, each material's parameters and map thumbnails),\n"
            "the pictures as PNG, and summary.json with the numbers. Materials are separated by '--' and written\n"
            "as for 'matremap render': parameters as name=value, or name=@MAP[:r|g|b|a] from a texture wrapped\n"
-           "over the sphere (docs/rendering.md). glTF assets (.gltf, .glb) are rendered as their triangles with\n"
-           "their material (spec-gloss when the material carries it, else metal-rough with KHR_materials_specular\n"
-           "and _ior), factors times textures, seen from a three-quarter view onto the reference's broadest side;\n"
-           "single-material assets so far.\n"
+           "over the sphere (docs/rendering.md). glTF assets (.gltf, .glb) are rendered as their scene's triangles,\n"
+           "each with its material (spec-gloss when the material carries it, else metal-rough with\n"
+           "KHR_materials_specular and _ior), factors times textures through their samplers (wrap modes,\n"
+           "TEXCOORD_0/1, KHR_texture_transform), with normal, occlusion and emissive maps, single-sided backs\n"
+           "culled, seen from a three-quarter view onto the reference's broadest side (docs/report.md).\n"
            "\n"
            "Options:\n"
            "  -o, --output DIR     the report folder (created if missing; its files are replaced)\n"
@@ -194,9 +195,8 @@ static mr_status write_picture(const char *dir, const char *name, const mr_image
 
 /* A thumbnail of a material's map, as its parameter reads it (the RGB, or the one channel), box-filtered to at
  * most THUMBNAIL_SIDE pixels on its longer side, written to dir/name. */
-static mr_status write_thumbnail(const char *dir, const char *name, const cli_material_map *map, int rgb,
+static mr_status write_thumbnail(const char *dir, const char *name, const mr_image *im, int channel, int rgb,
                                  int colour) {
-    const mr_image *im = map->image;
     int longest = im->width > im->height ? im->width : im->height;
     int factor = (longest + THUMBNAIL_SIDE - 1) / THUMBNAIL_SIDE;
     int width = (im->width + factor - 1) / factor, height = (im->height + factor - 1) / factor;
@@ -207,7 +207,7 @@ static mr_status write_thumbnail(const char *dir, const char *name, const cli_ma
     for (int y = 0; y < height; y++)
         for (int x = 0; x < width; x++)
             for (int c = 0; c < channels; c++) {
-                int source = im->channels == 1 ? 0 : (rgb ? c : map->channel);
+                int source = im->channels == 1 ? 0 : (rgb ? c : channel);
                 double sum = 0.0;
                 int count = 0;
                 for (int j = y * factor; j < (y + 1) * factor && j < im->height; j++)
@@ -261,11 +261,22 @@ static void describe(const group *g, char *out, size_t size) {
 
 /* ---- glTF assets as report entries ------------------------------------------------------------------------- */
 
-/* The geometry of a glTF entry; materials[k] holds its BRDF model, values and (folded) maps. */
+/* A glTF entry: its triangles merged into one mesh whose triangles carry material slots, and per slot the BRDF
+ * material (model, values, folded maps) and the surface (normal, occlusion, emissive maps). */
 typedef struct asset_entry {
     mr_gltf *asset;
     mr_gltf_triangles *triangles;
+    float *positions, *normals, *tangents, *uvs, *uvs1; /* merged over the groups (owned) */
+    uint32_t *indices;
+    uint16_t *triangle_materials;
     mr_mesh mesh;
+    int material_count;
+    int *gltf_material;            /* [material_count] materials[] index in the asset, -1 = glTF's default */
+    char (*material_names)[128];   /* [material_count] */
+    cli_material *materials;       /* [material_count] */
+    mr_surface *surfaces;          /* [material_count] */
+    mr_image **surface_maps;       /* [3 * material_count]: normal, occlusion, emissive (owned, maybe NULL) */
+    mr_material_binding *bindings; /* [material_count] */
 } asset_entry;
 
 static int is_gltf_path(const char *text) {
@@ -273,10 +284,38 @@ static int is_gltf_path(const char *text) {
     return (n > 5 && strcmp(text + n - 5, ".gltf") == 0) || (n > 4 && strcmp(text + n - 4, ".glb") == 0);
 }
 
+/* How the renderer samples a glTF texture reference: its sampler's wrap modes, its coordinate set and its
+ * KHR_texture_transform. Returns an exit code (a coordinate set past TEXCOORD_1 is refused with the file). */
+static int gltf_sampling(const char *path, const mr_gltf *asset, const mr_gltf_texture_ref *ref, const char *what,
+                         mr_texture_sampling *out) {
+    memset(out, 0, sizeof *out);
+    mr_gltf_texture texture;
+    mr_status status = mr_gltf_get_texture(asset, ref->index, &texture);
+    if (status != MR_OK) return cli_fail("report", status);
+    const int wraps[2] = {texture.params.wrap_s, texture.params.wrap_t};
+    mr_wrap *modes[2] = {&out->wrap_u, &out->wrap_v};
+    for (int k = 0; k < 2; k++)
+        *modes[k] = wraps[k] == 33071 ? MR_WRAP_CLAMP : (wraps[k] == 33648 ? MR_WRAP_MIRROR : MR_WRAP_REPEAT);
+    out->texcoord = ref->has_transform && ref->transform_tex_coord >= 0 ? ref->transform_tex_coord : ref->tex_coord;
+    if (out->texcoord > 1) {
+        fprintf(stderr, "matremap report: error: '%s': %s reads TEXCOORD_%d; the renderer reads TEXCOORD_0 and _1\n",
+                path, what, out->texcoord);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    out->has_transform = ref->has_transform;
+    out->offset[0] = ref->offset[0];
+    out->offset[1] = ref->offset[1];
+    out->rotation = ref->rotation;
+    out->scale[0] = ref->scale[0];
+    out->scale[1] = ref->scale[1];
+    return CLI_EXIT_OK;
+}
+
 /* A map for parameter `name` of m's model: channels `first`.. of `source` (count 1 or 3; a grey source answers
- * every channel) times `factor[]`, as a new image the material owns. Returns an exit code. */
+ * every channel) times `factor[]`, as a new image the material owns, sampled as `sampling` says. Returns an exit
+ * code. */
 static int fold_map(cli_material *m, const char *name, const char *label, const mr_image *source, int first,
-                    int count, const double *factor) {
+                    int count, const double *factor, const mr_texture_sampling *sampling) {
     if (m->map_count == CLI_MAX_ASSIGNMENTS) return CLI_EXIT_INTERNAL;
     cli_material_map *map = &m->maps[m->map_count];
     memset(map, 0, sizeof *map);
@@ -297,7 +336,9 @@ static int fold_map(cli_material *m, const char *name, const char *label, const 
     map->channel = 0;
     if (map->name == NULL || map->path == NULL) return CLI_EXIT_INTERNAL;
     status = mr_param_textures_set(&m->textures, m->model, name, map->image, 0);
-    return status == MR_OK ? CLI_EXIT_OK : cli_fail("report", status);
+    if (status != MR_OK) return cli_fail("report", status);
+    m->textures.sampling[map->param] = *sampling;
+    return CLI_EXIT_OK;
 }
 
 /* Set parameter `name` of m to `count` values. */
@@ -307,117 +348,287 @@ static void set_values(cli_material *m, const char *name, const double *v, int c
     for (int c = 0; c < count; c++) m->values[offset + c] = v[c];
 }
 
-/* Load a glTF asset as a report entry: its triangles (one material group: single-material assets) as a mesh,
- * its material as `gltf-specgloss` when it carries KHR_materials_pbrSpecularGlossiness (what an engine that
- * supports the extension renders) and as `gltf` otherwise (core metal-rough, KHR_materials_specular factors and
- * colour texture, KHR_materials_ior; an ior above 5, the model's bound, is rendered at 5 with the specular colour
- * scaled to the same F0). Factors are folded into the maps. Returns an exit code. */
-static int load_gltf_entry(const char *path, const char *scratch, asset_entry *a, cli_material *m) {
-    memset(m, 0, sizeof *m);
-    mr_status status = mr_gltf_load(path, &a->asset);
-    if (status == MR_OK) status = mr_gltf_get_triangles(a->asset, -1, &a->triangles);
-    if (status != MR_OK) return cli_fail("report", status);
-    if (a->triangles->group_count != 1) {
-        fprintf(stderr, "matremap report: error: '%s' has %d material groups (materials, or attribute sets); the "
-                "report renders single-material assets so far\n", path, a->triangles->group_count);
-        return CLI_EXIT_BAD_INPUT;
-    }
-    const mr_gltf_triangle_group *g = &a->triangles->groups[0];
-    mr_gltf_material mat;
-    if (g->material >= 0) {
-        status = mr_gltf_get_material(a->asset, g->material, &mat);
-        if (status != MR_OK) return cli_fail("report", status);
-    } else {
-        mr_gltf_material_defaults(&mat);
-    }
-    a->mesh = (mr_mesh){g->vertex_count, g->positions, g->normals, g->tangents, g->uv0, g->triangle_count,
-                        g->indices, mat.double_sided, 0, {0}};
-    int code = CLI_EXIT_OK;
+/* Fold texture `ref` of the asset (decoded with `encoding`) into parameter `name`: channels first.., times
+ * factor. No texture: nothing to do. Returns an exit code. */
+static int fold_texture(const char *path, const mr_gltf *asset, const mr_gltf_texture_ref *ref,
+                        mr_img_encoding encoding, const char *scratch, cli_material *m, const char *name,
+                        const char *label, int first, int count, const double *factor) {
+    if (ref->index < 0) return CLI_EXIT_OK;
+    mr_texture_sampling sampling;
+    int code = gltf_sampling(path, asset, ref, label, &sampling);
     mr_image *image = NULL;
-    if (mat.has_spec_gloss) {
+    if (code == CLI_EXIT_OK) code = cli_gltf_read_texture(asset, ref, encoding, scratch, &image);
+    if (code == CLI_EXIT_OK) code = fold_map(m, name, label, image, first, count, factor, &sampling);
+    mr_image_free(image);
+    return code;
+}
+
+/* One glTF material as a BRDF material: `gltf-specgloss` when it carries KHR_materials_pbrSpecularGlossiness
+ * (what an engine that supports the extension renders) and `gltf` otherwise (core metal-rough,
+ * KHR_materials_specular factors and colour texture, KHR_materials_ior; an ior above 5, the model's bound, is
+ * rendered at 5 with the specular colour scaled to the same F0). Factors are folded into the maps. Returns an
+ * exit code. */
+static int load_gltf_brdf(const char *path, const mr_gltf *asset, const mr_gltf_material *mat, const char *scratch,
+                          cli_material *m) {
+    memset(m, 0, sizeof *m);
+    if (mat->has_spec_gloss) {
         m->model = mr_brdf_find("gltf-specgloss");
         mr_brdf_default_values(m->model, m->values);
-        set_values(m, "diffuse", mat.diffuse_factor, 3);
-        set_values(m, "specular", mat.specular_factor, 3);
-        set_values(m, "glossiness", &mat.glossiness_factor, 1);
-        if (mat.diffuse_texture.index >= 0) {
-            code = cli_gltf_read_texture(a->asset, &mat.diffuse_texture, MR_IMG_COLOR, scratch, &image);
-            if (code == CLI_EXIT_OK) code = fold_map(m, "diffuse", "diffuseTexture", image, 0, 3, mat.diffuse_factor);
-            mr_image_free(image);
-            image = NULL;
-        }
-        if (code == CLI_EXIT_OK && mat.specular_glossiness_texture.index >= 0) {
-            code = cli_gltf_read_texture(a->asset, &mat.specular_glossiness_texture, MR_IMG_COLOR, scratch, &image);
-            if (code == CLI_EXIT_OK)
-                code = fold_map(m, "specular", "specularGlossinessTexture RGB", image, 0, 3, mat.specular_factor);
-            if (code == CLI_EXIT_OK)
-                code = fold_map(m, "glossiness", "specularGlossinessTexture A", image, 3, 1, &mat.glossiness_factor);
-            mr_image_free(image);
-        }
+        set_values(m, "diffuse", mat->diffuse_factor, 3);
+        set_values(m, "specular", mat->specular_factor, 3);
+        set_values(m, "glossiness", &mat->glossiness_factor, 1);
+        int code = fold_texture(path, asset, &mat->diffuse_texture, MR_IMG_COLOR, scratch, m, "diffuse",
+                                "diffuseTexture", 0, 3, mat->diffuse_factor);
+        if (code == CLI_EXIT_OK)
+            code = fold_texture(path, asset, &mat->specular_glossiness_texture, MR_IMG_COLOR, scratch, m, "specular",
+                                "specularGlossinessTexture RGB", 0, 3, mat->specular_factor);
+        if (code == CLI_EXIT_OK)
+            code = fold_texture(path, asset, &mat->specular_glossiness_texture, MR_IMG_COLOR, scratch, m,
+                                "glossiness", "specularGlossinessTexture A", 3, 1, &mat->glossiness_factor);
         return code;
     }
     m->model = mr_brdf_find("gltf");
     mr_brdf_default_values(m->model, m->values);
-    double ior = mat.has_ior ? mat.ior : 1.5, rendered_ior = ior > 5.0 ? 5.0 : (ior < 1.0 ? 1.0 : ior);
+    double ior = mat->has_ior ? mat->ior : 1.5, rendered_ior = ior > 5.0 ? 5.0 : (ior < 1.0 ? 1.0 : ior);
     double f0 = pow((ior - 1.0) / (ior + 1.0), 2.0);
     double rendered_f0 = pow((rendered_ior - 1.0) / (rendered_ior + 1.0), 2.0);
     double scale = rendered_f0 > 0.0 ? f0 / rendered_f0 : 1.0;
     double colour[3];
-    for (int c = 0; c < 3; c++) colour[c] = (mat.has_specular ? mat.specular_color_factor[c] : 1.0) * scale;
-    double strength = mat.has_specular ? mat.specular_strength : 1.0;
-    set_values(m, "base_color", mat.base_color_factor, 3);
-    set_values(m, "metallic", &mat.metallic_factor, 1);
-    set_values(m, "roughness", &mat.roughness_factor, 1);
+    for (int c = 0; c < 3; c++) colour[c] = (mat->has_specular ? mat->specular_color_factor[c] : 1.0) * scale;
+    double strength = mat->has_specular ? mat->specular_strength : 1.0;
+    set_values(m, "base_color", mat->base_color_factor, 3);
+    set_values(m, "metallic", &mat->metallic_factor, 1);
+    set_values(m, "roughness", &mat->roughness_factor, 1);
     set_values(m, "specular", &strength, 1);
     set_values(m, "specular_color", colour, 3);
     set_values(m, "ior", &rendered_ior, 1);
-    if (mat.base_color_texture.index >= 0) {
-        code = cli_gltf_read_texture(a->asset, &mat.base_color_texture, MR_IMG_COLOR, scratch, &image);
-        if (code == CLI_EXIT_OK)
-            code = fold_map(m, "base_color", "baseColorTexture", image, 0, 3, mat.base_color_factor);
-        mr_image_free(image);
-        image = NULL;
-    }
-    if (code == CLI_EXIT_OK && mat.metallic_roughness_texture.index >= 0) {
-        code = cli_gltf_read_texture(a->asset, &mat.metallic_roughness_texture, MR_IMG_DATA, scratch, &image);
-        if (code == CLI_EXIT_OK)
-            code = fold_map(m, "metallic", "metallicRoughnessTexture B", image, 2, 1, &mat.metallic_factor);
-        if (code == CLI_EXIT_OK)
-            code = fold_map(m, "roughness", "metallicRoughnessTexture G", image, 1, 1, &mat.roughness_factor);
-        mr_image_free(image);
-        image = NULL;
-    }
-    if (code == CLI_EXIT_OK && mat.has_specular && mat.specular_color_texture.index >= 0) {
-        code = cli_gltf_read_texture(a->asset, &mat.specular_color_texture, MR_IMG_COLOR, scratch, &image);
-        if (code == CLI_EXIT_OK)
-            code = fold_map(m, "specular_color", "specularColorTexture", image, 0, 3, colour);
-        mr_image_free(image);
-    }
+    int code = fold_texture(path, asset, &mat->base_color_texture, MR_IMG_COLOR, scratch, m, "base_color",
+                            "baseColorTexture", 0, 3, mat->base_color_factor);
+    if (code == CLI_EXIT_OK)
+        code = fold_texture(path, asset, &mat->metallic_roughness_texture, MR_IMG_DATA, scratch, m, "metallic",
+                            "metallicRoughnessTexture B", 2, 1, &mat->metallic_factor);
+    if (code == CLI_EXIT_OK)
+        code = fold_texture(path, asset, &mat->metallic_roughness_texture, MR_IMG_DATA, scratch, m, "roughness",
+                            "metallicRoughnessTexture G", 1, 1, &mat->roughness_factor);
+    if (code == CLI_EXIT_OK && mat->has_specular)
+        code = fold_texture(path, asset, &mat->specular_color_texture, MR_IMG_COLOR, scratch, m, "specular_color",
+                            "specularColorTexture", 0, 3, colour);
+    if (code == CLI_EXIT_OK && mat->has_specular)
+        code = fold_texture(path, asset, &mat->specular_texture, MR_IMG_DATA, scratch, m, "specular",
+                            "specularTexture A", 3, 1, &strength);
     return code;
 }
 
-/* Do two meshes hold the same triangles (every array equal, or absent in both)? */
-static int same_mesh(const mr_mesh *a, const mr_mesh *b) {
+/* The material's surface: sidedness, normal map and scale, occlusion map and strength, emission (factor times
+ * map). Decoded maps go to maps[0..2] (owned by the entry). Returns an exit code. */
+static int load_gltf_surface(const char *path, const mr_gltf *asset, const mr_gltf_material *mat,
+                             const char *scratch, mr_surface *surface, mr_image **maps) {
+    memset(surface, 0, sizeof *surface);
+    surface->double_sided = mat->double_sided;
+    surface->normal_scale = mat->normal_texture.value;
+    surface->occlusion_strength = mat->occlusion_texture.value;
+    for (int c = 0; c < 3; c++) surface->emission[c] = mat->emissive_factor[c];
+    const struct {
+        const mr_gltf_texture_ref *ref;
+        mr_img_encoding encoding;
+        const char *what;
+        const mr_image **map;
+        mr_texture_sampling *sampling;
+    } textures[3] = {
+        {&mat->normal_texture, MR_IMG_DATA, "normalTexture", &surface->normal_map, &surface->normal_sampling},
+        {&mat->occlusion_texture, MR_IMG_DATA, "occlusionTexture", &surface->occlusion_map,
+         &surface->occlusion_sampling},
+        {&mat->emissive_texture, MR_IMG_COLOR, "emissiveTexture", &surface->emissive_map,
+         &surface->emissive_sampling},
+    };
+    for (int k = 0; k < 3; k++) {
+        if (textures[k].ref->index < 0) continue;
+        if (k == 2 && !(surface->emission[0] > 0.0 || surface->emission[1] > 0.0 || surface->emission[2] > 0.0))
+            continue; // a black emissive factor: the map changes nothing
+        int code = gltf_sampling(path, asset, textures[k].ref, textures[k].what, textures[k].sampling);
+        if (code == CLI_EXIT_OK) code = cli_gltf_read_texture(asset, textures[k].ref, textures[k].encoding, scratch,
+                                                              &maps[k]);
+        if (code != CLI_EXIT_OK) return code;
+        if (k == 0 && maps[k]->channels < 3) {
+            fprintf(stderr, "matremap report: error: '%s': normalTexture has %d channel(s), expected RGB\n", path,
+                    maps[k]->channels);
+            return CLI_EXIT_BAD_INPUT;
+        }
+        *textures[k].map = maps[k];
+    }
+    return CLI_EXIT_OK;
+}
+
+/* Concatenate the groups' vertices into the entry's mesh (an attribute some groups lack is zero there: normals
+ * and tangents generated by the renderer, UVs (0, 0)); triangle material = the slot of the group's material. */
+static int merge_groups(const char *path, asset_entry *a, const int *slot_of_group) {
+    const mr_gltf_triangles *t = a->triangles;
+    const size_t nv = (size_t)t->vertex_count, nt = (size_t)t->triangle_count;
+    int any_normals = 0, any_tangents = 0, any_uv0 = 0, any_uv1 = 0;
+    for (int g = 0; g < t->group_count; g++) {
+        any_normals |= t->groups[g].has_normals;
+        any_tangents |= t->groups[g].has_tangents;
+        any_uv0 |= t->groups[g].has_uv0;
+        any_uv1 |= t->groups[g].has_uv1;
+    }
+    a->positions = malloc(nv * 3 * sizeof(float));
+    a->indices = malloc(nt * 3 * sizeof(uint32_t));
+    a->triangle_materials = malloc(nt * sizeof(uint16_t));
+    if (any_normals) a->normals = calloc(nv * 3, sizeof(float));
+    if (any_tangents) a->tangents = calloc(nv * 4, sizeof(float));
+    if (any_uv0) a->uvs = calloc(nv * 2, sizeof(float));
+    if (any_uv1) a->uvs1 = calloc(nv * 2, sizeof(float));
+    if (!a->positions || !a->indices || !a->triangle_materials || (any_normals && !a->normals) ||
+        (any_tangents && !a->tangents) || (any_uv0 && !a->uvs) || (any_uv1 && !a->uvs1)) {
+        fprintf(stderr, "matremap report: error: '%s': out of memory for %zu vertices\n", path, nv);
+        return CLI_EXIT_INTERNAL;
+    }
+    size_t vertex_base = 0, triangle_base = 0;
+    for (int g = 0; g < t->group_count; g++) {
+        const mr_gltf_triangle_group *group = &t->groups[g];
+        const size_t v = (size_t)group->vertex_count, f = (size_t)group->triangle_count;
+        memcpy(a->positions + 3 * vertex_base, group->positions, v * 3 * sizeof(float));
+        if (group->has_normals) memcpy(a->normals + 3 * vertex_base, group->normals, v * 3 * sizeof(float));
+        if (group->has_tangents) memcpy(a->tangents + 4 * vertex_base, group->tangents, v * 4 * sizeof(float));
+        if (group->has_uv0) memcpy(a->uvs + 2 * vertex_base, group->uv0, v * 2 * sizeof(float));
+        if (group->has_uv1) memcpy(a->uvs1 + 2 * vertex_base, group->uv1, v * 2 * sizeof(float));
+        for (size_t i = 0; i < 3 * f; i++)
+            a->indices[3 * triangle_base + i] = group->indices[i] + (uint32_t)vertex_base;
+        for (size_t i = 0; i < f; i++) a->triangle_materials[triangle_base + i] = (uint16_t)slot_of_group[g];
+        vertex_base += v;
+        triangle_base += f;
+    }
+    memset(&a->mesh, 0, sizeof a->mesh);
+    a->mesh.vertex_count = t->vertex_count;
+    a->mesh.positions = a->positions;
+    a->mesh.normals = a->normals;
+    a->mesh.tangents = a->tangents;
+    a->mesh.uvs = a->uvs;
+    a->mesh.uvs1 = a->uvs1;
+    a->mesh.triangle_count = t->triangle_count;
+    a->mesh.indices = a->indices;
+    a->mesh.material_count = a->material_count;
+    a->mesh.triangle_materials = a->triangle_materials;
+    a->mesh.surfaces = a->surfaces;
+    return CLI_EXIT_OK;
+}
+
+/* Load a glTF asset as a report entry: its scene's triangles as one mesh, each material (load_gltf_brdf) with
+ * its surface (load_gltf_surface). Returns an exit code. */
+static int load_gltf_entry(const char *path, const char *scratch, asset_entry *a) {
+    memset(a, 0, sizeof *a);
+    mr_status status = mr_gltf_load(path, &a->asset);
+    if (status == MR_OK) status = mr_gltf_get_triangles(a->asset, -1, &a->triangles);
+    if (status != MR_OK) return cli_fail("report", status);
+    const mr_gltf_triangles *t = a->triangles;
+    if (t->triangle_count == 0) {
+        fprintf(stderr, "matremap report: error: '%s': its scene has no triangles to render\n", path);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    // One slot per distinct material (groups of one material with different attribute sets share it).
+    int *slot_of_group = malloc((size_t)t->group_count * sizeof *slot_of_group);
+    a->gltf_material = malloc((size_t)t->group_count * sizeof *a->gltf_material);
+    if (slot_of_group == NULL || a->gltf_material == NULL) {
+        free(slot_of_group);
+        return CLI_EXIT_INTERNAL;
+    }
+    for (int g = 0; g < t->group_count; g++) {
+        int slot = 0;
+        while (slot < a->material_count && a->gltf_material[slot] != t->groups[g].material) slot++;
+        if (slot == a->material_count) a->gltf_material[a->material_count++] = t->groups[g].material;
+        slot_of_group[g] = slot;
+    }
+    const int n = a->material_count;
+    a->materials = calloc((size_t)n, sizeof *a->materials);
+    a->surfaces = calloc((size_t)n, sizeof *a->surfaces);
+    a->surface_maps = calloc((size_t)n * 3, sizeof *a->surface_maps);
+    a->bindings = calloc((size_t)n, sizeof *a->bindings);
+    a->material_names = calloc((size_t)n, sizeof *a->material_names);
+    int code = a->materials && a->surfaces && a->surface_maps && a->bindings && a->material_names ? CLI_EXIT_OK
+                                                                                                 : CLI_EXIT_INTERNAL;
+    for (int k = 0; k < n && code == CLI_EXIT_OK; k++) {
+        mr_gltf_material mat;
+        if (a->gltf_material[k] >= 0) {
+            status = mr_gltf_get_material(a->asset, a->gltf_material[k], &mat);
+            if (status != MR_OK) code = cli_fail("report", status);
+        } else {
+            mr_gltf_material_defaults(&mat);
+        }
+        if (code != CLI_EXIT_OK) break;
+        if (mat.name != NULL && mat.name[0] != '\0')
+            snprintf(a->material_names[k], sizeof a->material_names[k], "%s", mat.name);
+        else
+            snprintf(a->material_names[k], sizeof a->material_names[k], "material %d", a->gltf_material[k]);
+        code = load_gltf_brdf(path, a->asset, &mat, scratch, &a->materials[k]);
+        if (code == CLI_EXIT_OK)
+            code = load_gltf_surface(path, a->asset, &mat, scratch, &a->surfaces[k], a->surface_maps + 3 * k);
+        a->bindings[k] = (mr_material_binding){a->materials[k].model, a->materials[k].values,
+                                               &a->materials[k].textures};
+    }
+    if (code == CLI_EXIT_OK) code = merge_groups(path, a, slot_of_group);
+    free(slot_of_group);
+    return code;
+}
+
+static int same_image(const mr_image *a, const mr_image *b) {
+    if (a == NULL || b == NULL) return a == b;
+    return a->width == b->width && a->height == b->height && a->channels == b->channels &&
+           memcmp(a->pixels, b->pixels, mr_image_value_count(a) * sizeof *a->pixels) == 0;
+}
+
+/* Do two entries' meshes give the same render plan: the same triangles (every array equal, or absent in both),
+ * materials of the triangles, and surfaces (the plan samples them)? */
+static int same_mesh(const asset_entry *ea, const asset_entry *eb) {
+    const mr_mesh *a = &ea->mesh, *b = &eb->mesh;
     if (a->vertex_count != b->vertex_count || a->triangle_count != b->triangle_count ||
-        a->double_sided != b->double_sided)
+        a->material_count != b->material_count)
         return 0;
     size_t v = (size_t)a->vertex_count, t = (size_t)a->triangle_count;
     const struct {
         const void *x, *y;
         size_t bytes;
-    } arrays[5] = {{a->positions, b->positions, v * 3 * sizeof(float)},
+    } arrays[7] = {{a->positions, b->positions, v * 3 * sizeof(float)},
                    {a->normals, b->normals, v * 3 * sizeof(float)},
                    {a->tangents, b->tangents, v * 4 * sizeof(float)},
                    {a->uvs, b->uvs, v * 2 * sizeof(float)},
-                   {a->indices, b->indices, t * 3 * sizeof(uint32_t)}};
-    for (int i = 0; i < 5; i++) {
+                   {a->uvs1, b->uvs1, v * 2 * sizeof(float)},
+                   {a->indices, b->indices, t * 3 * sizeof(uint32_t)},
+                   {a->triangle_materials, b->triangle_materials, t * sizeof(uint16_t)}};
+    for (int i = 0; i < 7; i++) {
         if ((arrays[i].x == NULL) != (arrays[i].y == NULL)) return 0;
         if (arrays[i].x != NULL && memcmp(arrays[i].x, arrays[i].y, arrays[i].bytes) != 0) return 0;
+    }
+    for (int k = 0; k < a->material_count; k++) {
+        const mr_surface *x = &a->surfaces[k], *y = &b->surfaces[k];
+        if (x->double_sided != y->double_sided || x->normal_scale != y->normal_scale ||
+            x->occlusion_strength != y->occlusion_strength ||
+            memcmp(x->emission, y->emission, sizeof x->emission) != 0 ||
+            memcmp(&x->normal_sampling, &y->normal_sampling, sizeof x->normal_sampling) != 0 ||
+            memcmp(&x->occlusion_sampling, &y->occlusion_sampling, sizeof x->occlusion_sampling) != 0 ||
+            memcmp(&x->emissive_sampling, &y->emissive_sampling, sizeof x->emissive_sampling) != 0 ||
+            !same_image(x->normal_map, y->normal_map) || !same_image(x->occlusion_map, y->occlusion_map) ||
+            !same_image(x->emissive_map, y->emissive_map))
+            return 0;
     }
     return 1;
 }
 
 static void asset_entry_free(asset_entry *a) {
+    for (int k = 0; a->materials != NULL && k < a->material_count; k++) cli_material_free(&a->materials[k]);
+    for (int k = 0; a->surface_maps != NULL && k < 3 * a->material_count; k++) mr_image_free(a->surface_maps[k]);
+    free(a->materials);
+    free(a->surfaces);
+    free(a->surface_maps);
+    free(a->bindings);
+    free(a->material_names);
+    free(a->gltf_material);
+    free(a->positions);
+    free(a->normals);
+    free(a->tangents);
+    free(a->uvs);
+    free(a->uvs1);
+    free(a->indices);
+    free(a->triangle_materials);
     mr_gltf_triangles_free(a->triangles);
     mr_gltf_free(a->asset);
     memset(a, 0, sizeof *a);
@@ -450,20 +661,26 @@ static int render_views(const options *o, const mr_image *env, double env_scale,
         mr_render_plan *plan = NULL;
         if (status == MR_OK) status = mr_render_plan_create(&scene, &plan);
         mr_image *reference = NULL;
+        int plan_entry = 0; // the entry whose mesh the plan holds
         for (int k = 0; k < count && status == MR_OK; k++) {
             mr_image *image = NULL;
-            if (assets != NULL && k > 0 && !same_mesh(&assets[k].mesh, scene.shape.mesh)) {
+            if (assets != NULL && k > 0 && !same_mesh(&assets[k], &assets[plan_entry])) {
                 // An asset with geometry of its own gets its own plan; a conversion of the reference (the same
-                // triangles) shares the reference's, shadow rays included.
+                // triangles and surfaces) shares the reference's, shadow rays included.
                 mr_render_plan_free(plan);
                 plan = NULL;
                 scene.shape.mesh = &assets[k].mesh;
+                plan_entry = k;
                 status = mr_render_plan_create(&scene, &plan);
                 if (status != MR_OK) break;
             }
             double started = cli_now();
-            status = mr_render_textured(plan, materials[k].model, materials[k].values, &materials[k].textures,
-                                        MR_COMPONENT_FULL, &image);
+            if (assets != NULL)
+                status = mr_render_materials(plan, assets[k].bindings, assets[k].material_count, MR_COMPONENT_FULL,
+                                             &image);
+            else
+                status = mr_render_textured(plan, materials[k].model, materials[k].values, &materials[k].textures,
+                                            MR_COMPONENT_FULL, &image);
             entries[k].seconds += cli_now() - started;
             if (status != MR_OK) break;
             if (k == 0 && v == 0 && *exposure <= 0.0) *exposure = auto_exposure(plan, image);
@@ -539,7 +756,7 @@ int cmd_report(int argc, char **argv) {
     }
     int loaded = 0;
     for (; loaded < count && code == CLI_EXIT_OK; loaded++)
-        code = assets ? load_gltf_entry(groups[loaded].model_name, scratch, &assets[loaded], &materials[loaded])
+        code = assets ? load_gltf_entry(groups[loaded].model_name, scratch, &assets[loaded])
                       : cli_material_load("report", groups[loaded].model_name, groups[loaded].assignments,
                                           groups[loaded].count, &materials[loaded]);
     mr_image *env = NULL;
@@ -568,28 +785,56 @@ int cmd_report(int argc, char **argv) {
     mr_report_material report_materials[MAX_MATERIALS];
     for (int k = 0; k < count && code == CLI_EXIT_OK; k++) {
         entry *e = &entries[k];
-        const cli_material *m = &materials[k];
         snprintf(e->label, sizeof e->label, "%s", groups[k].label ? groups[k].label : groups[k].model_name);
         describe(&groups[k], e->description, sizeof e->description);
-        if (assets != NULL)
-            snprintf(e->description, sizeof e->description, "%s: %d triangles, rendered with the %s model",
-                     groups[k].model_name, assets[k].mesh.triangle_count, m->model->name);
-        for (int t = 0; t < m->map_count && code == CLI_EXIT_OK; t++) {
-            const mr_brdf_param *param = &m->model->params[m->maps[t].param];
-            int rgb = param->channels == 3;
-            int colour = rgb && param->min_value >= 0.0 && param->max_value <= 1.0;
-            snprintf(e->thumb_names[t], sizeof e->thumb_names[t], "map_material%d_%d.png", k, t);
-            if (rgb)
-                snprintf(e->thumb_labels[t], sizeof e->thumb_labels[t], "%s (%s)", param->name, m->maps[t].path);
-            else
-                snprintf(e->thumb_labels[t], sizeof e->thumb_labels[t], "%s (%s, channel %c)", param->name,
-                         m->maps[t].path, "RGBA"[m->maps[t].channel]);
-            e->thumbs[t] = e->thumb_names[t];
-            e->thumb_label_ptrs[t] = e->thumb_labels[t];
-            mr_status status = write_thumbnail(o.dir, e->thumb_names[t], &m->maps[t], rgb, colour);
-            if (status != MR_OK) code = cli_fail("report", status);
+        const int slots = assets ? assets[k].material_count : 1;
+        if (assets != NULL) {
+            size_t used = (size_t)snprintf(e->description, sizeof e->description, "%s: %d triangles, %d material%s:",
+                                           groups[k].model_name, assets[k].mesh.triangle_count, slots,
+                                           slots == 1 ? "" : "s");
+            for (int m = 0; m < slots && used < sizeof e->description; m++)
+                used += (size_t)snprintf(e->description + used, sizeof e->description - used, "%s %s (%s model)",
+                                         m ? "," : "", assets[k].material_names[m], assets[k].materials[m].model->name);
         }
-        e->thumb_count = m->map_count;
+        // Thumbnails of every map: each material's BRDF maps, then (glTF) its normal, occlusion and emissive maps.
+        e->thumb_count = 0;
+        for (int slot = 0; slot < slots && code == CLI_EXIT_OK; slot++) {
+            const cli_material *m = assets ? &assets[k].materials[slot] : &materials[k];
+            char prefix[140] = "";
+            if (slots > 1) snprintf(prefix, sizeof prefix, "%s: ", assets[k].material_names[slot]);
+            for (int t = 0; t < m->map_count + 3 && code == CLI_EXIT_OK; t++) {
+                const mr_image *im;
+                int channel = 0, rgb, colour;
+                char what[300];
+                if (t < m->map_count) {
+                    const mr_brdf_param *param = &m->model->params[m->maps[t].param];
+                    im = m->maps[t].image;
+                    channel = m->maps[t].channel;
+                    rgb = param->channels == 3;
+                    colour = rgb && param->min_value >= 0.0 && param->max_value <= 1.0;
+                    if (rgb || im->channels == 1) // a one-channel map (a folded glTF map) says its source itself
+                        snprintf(what, sizeof what, "%s (%s)", param->name, m->maps[t].path);
+                    else
+                        snprintf(what, sizeof what, "%s (%s, channel %c)", param->name, m->maps[t].path,
+                                 "RGBA"[channel]);
+                } else {
+                    static const char *const surface_names[3] = {"normal map", "occlusion (channel R)",
+                                                                 "emissive map"};
+                    if (assets == NULL || (im = assets[k].surface_maps[3 * slot + t - m->map_count]) == NULL) continue;
+                    rgb = t - m->map_count != 1;
+                    colour = t - m->map_count == 2;
+                    snprintf(what, sizeof what, "%s", surface_names[t - m->map_count]);
+                }
+                if (e->thumb_count == CLI_MAX_ASSIGNMENTS) break;
+                const int n = e->thumb_count++;
+                snprintf(e->thumb_names[n], sizeof e->thumb_names[n], "map_material%d_%d.png", k, n);
+                snprintf(e->thumb_labels[n], sizeof e->thumb_labels[n], "%s%s", prefix, what);
+                e->thumbs[n] = e->thumb_names[n];
+                e->thumb_label_ptrs[n] = e->thumb_labels[n];
+                mr_status status = write_thumbnail(o.dir, e->thumb_names[n], im, channel, rgb, colour);
+                if (status != MR_OK) code = cli_fail("report", status);
+            }
+        }
         report_materials[k] = (mr_report_material){e->label, e->description, e->seconds, e->renders,
                                                    k ? e->ssim_maps : NULL, k ? e->ssim : NULL,
                                                    k ? e->relative_rmse : NULL, e->thumb_count, e->thumbs,
@@ -626,8 +871,10 @@ int cmd_report(int argc, char **argv) {
         printf("report: %s/index.html\n", o.dir);
     }
     for (int k = 0; k < loaded; k++) {
-        cli_material_free(&materials[k]);
-        if (assets) asset_entry_free(&assets[k]);
+        if (assets)
+            asset_entry_free(&assets[k]);
+        else
+            cli_material_free(&materials[k]);
     }
     if (scratch[0] != '\0') rmdir(scratch);
     mr_image_free(env);

@@ -12,6 +12,7 @@
  */
 #include <float.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -40,6 +41,49 @@ static double det3(const double m[16]) {
            m[8] * (m[1] * m[6] - m[5] * m[2]);
 }
 
+/* A surface map: a usable image (at least `min_channels`, or a grey one when that is allowed) sampled validly. */
+static mr_status validate_surface_map(const mr_image *map, const mr_texture_sampling *sampling, int min_channels,
+                                      int material, const char *what) {
+    char name[64];
+    snprintf(name, sizeof name, "mesh: material %d: %s", material, what);
+    if (map == NULL) return MR_OK;
+    if (map->width < 1 || map->height < 1 || map->pixels == NULL ||
+        (map->channels != 1 && map->channels != 3 && map->channels != 4) || map->channels < min_channels)
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: not a usable image (%dx%d, %d channels; %s)", name, map->width,
+                       map->height, map->channels, min_channels > 1 ? "3 or 4 channels" : "1, 3 or 4 channels");
+    return mr_texture_sampling_validate(sampling, name);
+}
+
+/* Material indices in range and every surface usable. */
+static mr_status validate_materials(const mr_mesh *mesh) {
+    if (mesh->material_count < 0 || mesh->material_count > MR_MESH_MAX_MATERIALS)
+        return mr_fail(MR_ERR_INVALID_ARG, "mesh: %d materials: expected 0 to %d", mesh->material_count,
+                       MR_MESH_MAX_MATERIALS);
+    const int count = mesh->material_count > 0 ? mesh->material_count : 1;
+    if (mesh->triangle_materials != NULL)
+        for (int f = 0; f < mesh->triangle_count; f++)
+            if (mesh->triangle_materials[f] >= count)
+                return mr_fail(MR_ERR_INVALID_ARG, "mesh: triangle %d: material %d out of range (%d materials)", f,
+                               (int)mesh->triangle_materials[f], count);
+    for (int m = 0; mesh->surfaces != NULL && m < count; m++) {
+        const mr_surface *surface = &mesh->surfaces[m];
+        mr_status status = validate_surface_map(surface->normal_map, &surface->normal_sampling, 3, m, "normal map");
+        if (status == MR_OK)
+            status = validate_surface_map(surface->occlusion_map, &surface->occlusion_sampling, 1, m, "occlusion map");
+        if (status == MR_OK)
+            status = validate_surface_map(surface->emissive_map, &surface->emissive_sampling, 1, m, "emissive map");
+        if (status != MR_OK) return status;
+        if (!isfinite(surface->normal_scale) || !isfinite(surface->occlusion_strength))
+            return mr_fail(MR_ERR_INVALID_ARG, "mesh: material %d: normal scale %g or occlusion strength %g is not "
+                           "finite", m, surface->normal_scale, surface->occlusion_strength);
+        for (int c = 0; c < 3; c++)
+            if (!(isfinite(surface->emission[c]) && surface->emission[c] >= 0.0))
+                return mr_fail(MR_ERR_INVALID_ARG, "mesh: material %d: emission (%g, %g, %g): expected finite and "
+                               ">= 0", m, surface->emission[0], surface->emission[1], surface->emission[2]);
+    }
+    return MR_OK;
+}
+
 mr_status mr_mesh_validate(const mr_mesh *mesh) {
     if (mesh == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mesh: NULL mesh");
     if (mesh->vertex_count < 3)
@@ -58,19 +102,24 @@ mr_status mr_mesh_validate(const mr_mesh *mesh) {
                            (double)mesh->positions[3 * (size_t)v + 2]);
         if (mesh->normals != NULL) {
             const float *n = mesh->normals + 3 * (size_t)v;
-            if (!finite_floats(n, 3) || (n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f))
-                return mr_fail(MR_ERR_INVALID_ARG, "mesh: vertex %d: normal (%g, %g, %g): expected finite and "
-                               "non-zero", v, (double)n[0], (double)n[1], (double)n[2]);
+            if (!finite_floats(n, 3))
+                return mr_fail(MR_ERR_INVALID_ARG, "mesh: vertex %d: normal (%g, %g, %g) is not finite", v,
+                               (double)n[0], (double)n[1], (double)n[2]);
         }
         if (mesh->tangents != NULL) {
             const float *t = mesh->tangents + 4 * (size_t)v;
-            if (!finite_floats(t, 4) || (t[3] != 1.0f && t[3] != -1.0f))
+            if (!finite_floats(t, 4) || (t[3] != 1.0f && t[3] != -1.0f && t[3] != 0.0f))
                 return mr_fail(MR_ERR_INVALID_ARG, "mesh: vertex %d: tangent (%g, %g, %g, %g): expected finite "
-                               "xyz and w = +1 or -1", v, (double)t[0], (double)t[1], (double)t[2], (double)t[3]);
+                               "xyz and w = +1 or -1 (or 0: generated)", v, (double)t[0], (double)t[1],
+                               (double)t[2], (double)t[3]);
         }
         if (mesh->uvs != NULL && !finite_floats(mesh->uvs + 2 * (size_t)v, 2))
             return mr_fail(MR_ERR_INVALID_ARG, "mesh: vertex %d: texture coordinates are not finite", v);
+        if (mesh->uvs1 != NULL && !finite_floats(mesh->uvs1 + 2 * (size_t)v, 2))
+            return mr_fail(MR_ERR_INVALID_ARG, "mesh: vertex %d: TEXCOORD_1 is not finite", v);
     }
+    mr_status status = validate_materials(mesh);
+    if (status != MR_OK) return status;
     int area = 0;
     for (int f = 0; f < mesh->triangle_count; f++) {
         const uint32_t *tri = mesh->indices + 3 * (size_t)f;
@@ -140,10 +189,12 @@ static double corner_angle(const double a[3], const double b[3], const double c[
     return s > 0.0 ? atan2(s, d) : 0.0;
 }
 
-/* Smooth normals: the unit face normals weighted by corner angle. Vertices only in degenerate triangles keep
- * +y (no ray ever hits them: a degenerate triangle has no area). */
-static void generate_normals(mesh_world *mesh) {
-    memset(mesh->normal, 0, (size_t)mesh->vertex_count * sizeof *mesh->normal);
+/* Smooth normals: the unit face normals weighted by corner angle, for the vertices with missing[v] set (every
+ * vertex when missing is NULL); the others keep theirs. Vertices only in degenerate triangles get +y (no ray
+ * ever hits them: a degenerate triangle has no area). */
+static void generate_normals(mesh_world *mesh, const unsigned char *missing) {
+    for (int v = 0; v < mesh->vertex_count; v++)
+        if (missing == NULL || missing[v]) mesh->normal[v][0] = mesh->normal[v][1] = mesh->normal[v][2] = 0.0;
     for (int f = 0; f < mesh->triangle_count; f++) {
         const uint32_t *tri = mesh->triangle[f];
         const double *p0 = mesh->position[tri[0]], *p1 = mesh->position[tri[1]], *p2 = mesh->position[tri[2]];
@@ -154,19 +205,23 @@ static void generate_normals(mesh_world *mesh) {
         if (!(vec3_normalize(n) > 0.0)) continue;
         double angle[3] = {corner_angle(p0, p1, p2), corner_angle(p1, p2, p0), corner_angle(p2, p0, p1)};
         for (int k = 0; k < 3; k++)
-            for (int i = 0; i < 3; i++) mesh->normal[tri[k]][i] += angle[k] * n[i];
+            if (missing == NULL || missing[tri[k]])
+                for (int i = 0; i < 3; i++) mesh->normal[tri[k]][i] += angle[k] * n[i];
     }
     for (int v = 0; v < mesh->vertex_count; v++)
-        if (!(vec3_normalize(mesh->normal[v]) > 0.0)) {
+        if ((missing == NULL || missing[v]) && !(vec3_normalize(mesh->normal[v]) > 0.0)) {
             mesh->normal[v][0] = 0.0, mesh->normal[v][1] = 1.0, mesh->normal[v][2] = 0.0;
         }
 }
 
 /* Tangents from the UVs (render.h, mr_mesh): per triangle, dP/du and -dP/dv, normalised and weighted by the
- * corner angle; per vertex, t orthogonalised against n and w from the accumulated bitangent. `bitangent` is
- * scratch space of vertex_count entries. */
-static void generate_tangents(mesh_world *mesh, double (*bitangent)[3]) {
-    memset(mesh->tangent, 0, (size_t)mesh->vertex_count * sizeof *mesh->tangent);
+ * corner angle; per vertex, t orthogonalised against n and w from the accumulated bitangent. Only vertices
+ * with missing[v] set are written (all when missing is NULL). `bitangent` is scratch space of vertex_count
+ * entries. */
+static void generate_tangents(mesh_world *mesh, double (*bitangent)[3], const unsigned char *missing) {
+    for (int v = 0; v < mesh->vertex_count; v++)
+        if (missing == NULL || missing[v])
+            mesh->tangent[v][0] = mesh->tangent[v][1] = mesh->tangent[v][2] = mesh->tangent[v][3] = 0.0;
     memset(bitangent, 0, (size_t)mesh->vertex_count * sizeof *bitangent);
     for (int f = 0; f < mesh->triangle_count; f++) {
         const uint32_t *tri = mesh->triangle[f];
@@ -193,6 +248,7 @@ static void generate_tangents(mesh_world *mesh, double (*bitangent)[3]) {
             }
     }
     for (int v = 0; v < mesh->vertex_count; v++) {
+        if (missing != NULL && !missing[v]) continue;
         double *t = mesh->tangent[v];
         const double *n = mesh->normal[v];
         double d = vec3_dot(n, t);
@@ -403,9 +459,10 @@ static int box_hit(const bvh_node *node, const double origin[3], const double in
     return 1;
 }
 
-/* Moeller-Trumbore; 1 with *t, *u, *v when the ray meets the triangle at 0 < t < t_max. */
+/* Moeller-Trumbore; 1 with *t, *u, *v when the ray meets the triangle at 0 < t < t_max. With cull set, the back
+ * of a single-sided triangle is not hit (det = -dir . (e1 x e2) < 0: the ray runs along the winding's normal). */
 static int triangle_hit(const mesh_world *mesh, int f, const double origin[3], const double dir[3], double t_max,
-                        double *t_out, double *u_out, double *v_out) {
+                        int cull, double *t_out, double *u_out, double *v_out) {
     const uint32_t *tri = mesh->triangle[f];
     const double *p0 = mesh->position[tri[0]], *p1 = mesh->position[tri[1]], *p2 = mesh->position[tri[2]];
     double e1[3], e2[3], pv[3], tv[3], qv[3];
@@ -414,6 +471,7 @@ static int triangle_hit(const mesh_world *mesh, int f, const double origin[3], c
     vec3_cross(dir, e2, pv);
     double det = vec3_dot(e1, pv);
     if (det == 0.0 || !isfinite(det)) return 0;
+    if (cull && det < 0.0 && !mesh_double_sided(mesh, f)) return 0;
     double inv_det = 1.0 / det;
     vec3_sub(origin, p0, tv);
     double u = vec3_dot(tv, pv) * inv_det;
@@ -431,7 +489,7 @@ static int triangle_hit(const mesh_world *mesh, int f, const double origin[3], c
 
 /* The traversal shared by nearest-hit (any_hit 0) and occlusion (any_hit 1) queries. */
 static int bvh_trace(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip,
-                     int any_hit, mesh_hit *hit) {
+                     int any_hit, int cull, mesh_hit *hit) {
     double inv[3];
     for (int i = 0; i < 3; i++) inv[i] = 1.0 / dir[i]; // +-inf for a zero component: box_hit handles it
     // Children are visited nearer first, so the nearest hit shrinks `best` early; a popped node whose box the
@@ -465,7 +523,7 @@ static int bvh_trace(const mesh_world *mesh, const double origin[3], const doubl
         for (int k = node->first; k < node->first + node->count; k++) {
             int f = mesh->order[k];
             double t, u, v;
-            if (f == skip || !triangle_hit(mesh, f, origin, dir, best, &t, &u, &v)) continue;
+            if (f == skip || !triangle_hit(mesh, f, origin, dir, best, cull, &t, &u, &v)) continue;
             if (any_hit) return 1;
             best = t;
             found = 1;
@@ -476,21 +534,21 @@ static int bvh_trace(const mesh_world *mesh, const double origin[3], const doubl
 }
 
 int mesh_intersect(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip,
-                   mesh_hit *hit) {
-    return bvh_trace(mesh, origin, dir, t_max, skip, 0, hit);
+                   int cull, mesh_hit *hit) {
+    return bvh_trace(mesh, origin, dir, t_max, skip, 0, cull, hit);
 }
 
 int mesh_occluded(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip) {
-    return bvh_trace(mesh, origin, dir, t_max, skip, 1, NULL);
+    return bvh_trace(mesh, origin, dir, t_max, skip, 1, 0, NULL);
 }
 
 int mesh_intersect_brute(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max,
-                         int skip, mesh_hit *hit) {
+                         int skip, int cull, mesh_hit *hit) {
     double best = t_max;
     int found = 0;
     for (int f = 0; f < mesh->triangle_count; f++) {
         double t, u, v;
-        if (f == skip || !triangle_hit(mesh, f, origin, dir, best, &t, &u, &v)) continue;
+        if (f == skip || !triangle_hit(mesh, f, origin, dir, best, cull, &t, &u, &v)) continue;
         best = t;
         found = 1;
         hit->t = t, hit->u = u, hit->v = v, hit->triangle = f;
@@ -546,7 +604,8 @@ static int mesh_is_convex(const mesh_world *mesh) {
             for (int i = 0; i < 3; i++) mean[i] += mesh->normal[tri[c]][i];
         if (vec3_dot(mean, n) <= 0.0 || any_vertex_in_front(mesh, n, vec3_dot(n, p0), tol)) convex = 0;
         double back[3] = {-n[0], -n[1], -n[2]};
-        if (convex && mesh->double_sided && any_vertex_in_front(mesh, back, vec3_dot(back, p0), tol)) convex = 0;
+        if (convex && mesh_double_sided(mesh, f) && any_vertex_in_front(mesh, back, vec3_dot(back, p0), tol))
+            convex = 0;
     }
     return convex;
 }
@@ -559,6 +618,9 @@ void mesh_world_free(mesh_world *mesh) {
     free(mesh->normal);
     free(mesh->tangent);
     free(mesh->uv);
+    free(mesh->uv1);
+    free(mesh->material);
+    free(mesh->material_double_sided);
     free(mesh->triangle);
     free(mesh->nodes);
     free(mesh->order);
@@ -568,8 +630,10 @@ void mesh_world_free(mesh_world *mesh) {
 size_t mesh_world_bytes(const mesh_world *mesh) {
     size_t v = (size_t)mesh->vertex_count;
     return v * (sizeof *mesh->position + sizeof *mesh->normal) + (mesh->tangent ? v * sizeof *mesh->tangent : 0) +
-           (mesh->uv ? v * sizeof *mesh->uv : 0) + (size_t)mesh->triangle_count * (sizeof *mesh->triangle +
-           sizeof *mesh->order) + (size_t)mesh->node_count * sizeof *mesh->nodes;
+           (mesh->uv ? v * sizeof *mesh->uv : 0) + (mesh->uv1 ? v * sizeof *mesh->uv1 : 0) +
+           (size_t)mesh->triangle_count * (sizeof *mesh->triangle + sizeof *mesh->order +
+           (mesh->material ? sizeof *mesh->material : 0)) + (size_t)mesh->node_count * sizeof *mesh->nodes +
+           (size_t)mesh->material_count;
 }
 
 mr_status mesh_world_build(const mr_mesh *src, mesh_world *mesh) {
@@ -582,17 +646,32 @@ mr_status mesh_world_build(const mr_mesh *src, mesh_world *mesh) {
     normal_matrix(m, nm);
     const double handedness = det3(m) < 0.0 ? -1.0 : 1.0;
     double (*scratch)[3] = NULL;
+    unsigned char *missing_normal = NULL, *missing_tangent = NULL;
+    int missing_normals = 0, missing_tangents = 0;
     mesh->vertex_count = nv;
     mesh->triangle_count = nt;
-    mesh->double_sided = src->double_sided != 0;
+    mesh->material_count = src->material_count > 0 ? src->material_count : 1;
+    mesh->material_double_sided = malloc((size_t)mesh->material_count);
+    if (src->triangle_materials != NULL) mesh->material = malloc((size_t)nt * sizeof *mesh->material);
+    if (src->uvs1 != NULL) mesh->uv1 = malloc(v * sizeof *mesh->uv1);
+    if (!mesh->material_double_sided || (src->triangle_materials && !mesh->material) || (src->uvs1 && !mesh->uv1))
+        goto oom;
+    for (int k = 0; k < mesh->material_count; k++)
+        mesh->material_double_sided[k] = (unsigned char)((src->surfaces ? src->surfaces[k].double_sided
+                                                                         : src->double_sided) != 0);
+    if (src->triangle_materials != NULL)
+        memcpy(mesh->material, src->triangle_materials, (size_t)nt * sizeof *mesh->material);
     mesh->position = malloc(v * sizeof *mesh->position);
     mesh->normal = malloc(v * sizeof *mesh->normal);
     mesh->triangle = malloc((size_t)nt * sizeof *mesh->triangle);
     if (src->uvs != NULL) mesh->uv = malloc(v * sizeof *mesh->uv);
     if (src->tangents != NULL || src->uvs != NULL) mesh->tangent = malloc(v * sizeof *mesh->tangent);
-    if (src->tangents == NULL && src->uvs != NULL) scratch = malloc(v * sizeof *scratch);
+    if (src->uvs != NULL) scratch = malloc(v * sizeof *scratch);
+    if (src->normals != NULL) missing_normal = calloc(v, 1);
+    if (src->tangents != NULL) missing_tangent = calloc(v, 1);
     if (!mesh->position || !mesh->normal || !mesh->triangle || (src->uvs && !mesh->uv) ||
-        ((src->tangents || src->uvs) && !mesh->tangent) || (src->tangents == NULL && src->uvs && !scratch))
+        ((src->tangents || src->uvs) && !mesh->tangent) || (src->uvs && !scratch) ||
+        (src->normals && !missing_normal) || (src->tangents && !missing_tangent))
         goto oom;
     memcpy(mesh->triangle, src->indices, (size_t)nt * sizeof *mesh->triangle);
     box all;
@@ -604,13 +683,25 @@ mr_status mesh_world_build(const mr_mesh *src, mesh_world *mesh) {
             mesh->uv[i][0] = src->uvs[2 * (size_t)i];
             mesh->uv[i][1] = src->uvs[2 * (size_t)i + 1];
         }
+        if (src->uvs1 != NULL) {
+            mesh->uv1[i][0] = src->uvs1[2 * (size_t)i];
+            mesh->uv1[i][1] = src->uvs1[2 * (size_t)i + 1];
+        }
         if (src->normals != NULL) {
             const float *n = src->normals + 3 * (size_t)i;
             double on[3] = {n[0], n[1], n[2]};
+            if (n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f) { // generated below
+                missing_normal[i] = 1;
+                missing_normals++;
+                on[1] = 1.0;
+            }
             transform_vector(nm, on, mesh->normal[i]);
             if (!(vec3_normalize(mesh->normal[i]) > 0.0)) goto degenerate;
         }
-        if (src->tangents != NULL) {
+        if (src->tangents != NULL && src->tangents[4 * (size_t)i + 3] == 0.0f) {
+            missing_tangent[i] = 1;
+            missing_tangents++;
+        } else if (src->tangents != NULL) {
             const float *t = src->tangents + 4 * (size_t)i;
             double ot[3] = {t[0], t[1], t[2]};
             transform_vector(m, ot, mesh->tangent[i]);
@@ -620,25 +711,43 @@ mr_status mesh_world_build(const mr_mesh *src, mesh_world *mesh) {
     double diagonal[3];
     vec3_sub(all.hi, all.lo, diagonal);
     mesh->scale = vec3_length(diagonal);
-    if (!(mesh->scale > 0.0 && isfinite(mesh->scale)))
-        return mr_fail(MR_ERR_INVALID_ARG, "mesh: the transformed mesh has no extent or overflows");
-    if (src->normals == NULL) generate_normals(mesh);
-    if (src->tangents == NULL && src->uvs != NULL) generate_tangents(mesh, scratch);
+    if (!(mesh->scale > 0.0 && isfinite(mesh->scale))) goto no_extent;
+    if (src->normals == NULL || missing_normals > 0) generate_normals(mesh, missing_normal);
+    if (src->uvs != NULL && (src->tangents == NULL || missing_tangents > 0))
+        generate_tangents(mesh, scratch, missing_tangent);
+    else if (missing_tangents > 0) // no UVs to derive them from: the shading frame falls back
+        for (int i = 0; i < nv; i++)
+            if (missing_tangent[i]) {
+                mesh->tangent[i][0] = mesh->tangent[i][1] = mesh->tangent[i][2] = 0.0;
+                mesh->tangent[i][3] = 1.0;
+            }
     free(scratch);
+    free(missing_normal);
+    free(missing_tangent);
     scratch = NULL;
+    missing_normal = missing_tangent = NULL;
     if (!bvh_build(mesh)) goto oom;
     mesh->convex = mesh_is_convex(mesh);
     return MR_OK;
+no_extent:
+    free(scratch);
+    free(missing_normal);
+    free(missing_tangent);
+    return mr_fail(MR_ERR_INVALID_ARG, "mesh: the transformed mesh has no extent or overflows");
 degenerate:
     free(scratch);
+    free(missing_normal);
+    free(missing_tangent);
     return mr_fail(MR_ERR_INVALID_ARG, "mesh: a normal vanishes under the transform");
 oom:
     free(scratch);
+    free(missing_normal);
+    free(missing_tangent);
     return mr_fail(MR_ERR_NOMEM, "mesh: out of memory for %d vertices, %d triangles", nv, nt);
 }
 
 void mesh_shade(const mesh_world *mesh, const mesh_hit *hit, double normal[3], double tangent[3],
-                double bitangent[3], double geometric[3], double uv[2]) {
+                double bitangent[3], double geometric[3], double uv[2], double uv1[2]) {
     const uint32_t *tri = mesh->triangle[hit->triangle];
     const double w[3] = {1.0 - hit->u - hit->v, hit->u, hit->v};
     double e1[3], e2[3];
@@ -654,6 +763,10 @@ void mesh_shade(const mesh_world *mesh, const mesh_hit *hit, double normal[3], d
     if (mesh->uv != NULL)
         for (int k = 0; k < 2; k++)
             uv[k] = w[0] * mesh->uv[tri[0]][k] + w[1] * mesh->uv[tri[1]][k] + w[2] * mesh->uv[tri[2]][k];
+    uv1[0] = uv1[1] = 0.0;
+    if (mesh->uv1 != NULL)
+        for (int k = 0; k < 2; k++)
+            uv1[k] = w[0] * mesh->uv1[tri[0]][k] + w[1] * mesh->uv1[tri[1]][k] + w[2] * mesh->uv1[tri[2]][k];
     if (mesh->tangent != NULL) {
         for (int i = 0; i < 3; i++)
             tangent[i] = w[0] * mesh->tangent[tri[0]][i] + w[1] * mesh->tangent[tri[1]][i] +

@@ -23,14 +23,25 @@ typedef struct mesh_world {
     double (*normal)[3];    /* world space, unit (given or generated) */
     double (*tangent)[4];   /* world space xyz + handedness w; NULL without tangents and UVs */
     double (*uv)[2];        /* NULL without TEXCOORD_0 */
+    double (*uv1)[2];       /* NULL without TEXCOORD_1 */
+    uint16_t *material;     /* [triangle_count] material of each triangle; NULL = all 0 */
+    int material_count;     /* >= 1 */
+    unsigned char *material_double_sided; /* [material_count] */
     uint32_t (*triangle)[3];
     bvh_node *nodes;
     int node_count;
     int *order;             /* triangle indices in leaf order */
     double scale;           /* bounding-box diagonal: the unit of the geometric tolerances */
     int convex;             /* 1: cannot occlude itself, no shadow rays */
-    int double_sided;       /* mr_mesh.double_sided */
 } mesh_world;
+
+/* Is triangle f shaded on both sides (its material's surface, or mr_mesh.double_sided)? */
+static inline int mesh_double_sided(const mesh_world *mesh, int f) {
+    return mesh->material_double_sided[mesh->material != NULL ? mesh->material[f] : 0];
+}
+
+/* Material of triangle f. */
+static inline int mesh_material(const mesh_world *mesh, int f) { return mesh->material ? mesh->material[f] : 0; }
 
 /* A ray's hit: distance, triangle and barycentrics (u at vertex 1, v at vertex 2). */
 typedef struct mesh_hit {
@@ -44,18 +55,19 @@ mr_status mesh_world_build(const mr_mesh *src, mesh_world *mesh);
 void mesh_world_free(mesh_world *mesh);
 size_t mesh_world_bytes(const mesh_world *mesh);
 
-/* Nearest hit with 0 < t < t_max (dir need not be unit); skip = a triangle to ignore, or -1. */
+/* Nearest hit with 0 < t < t_max (dir need not be unit); skip = a triangle to ignore, or -1; cull != 0: the
+ * backs of single-sided triangles are not seen (glTF's back-face culling, for camera rays). */
 int mesh_intersect(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip,
-                   mesh_hit *hit);
+                   int cull, mesh_hit *hit);
 /* The same by testing every triangle. */
 int mesh_intersect_brute(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max,
-                         int skip, mesh_hit *hit);
-/* Any hit with 0 < t < t_max, skipping triangle `skip`. */
+                         int skip, int cull, mesh_hit *hit);
+/* Any hit with 0 < t < t_max, skipping triangle `skip`; both sides of every triangle block light. */
 int mesh_occluded(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip);
 
 /* The shading attributes at a hit: unit shading normal, tangent and bitangent (a frame), unit geometric normal
- * (by the winding), texture coordinates. */
+ * (by the winding), texture coordinates of both sets ((0, 0) for a set the mesh lacks). */
 void mesh_shade(const mesh_world *mesh, const mesh_hit *hit, double normal[3], double tangent[3],
-                double bitangent[3], double geometric[3], double uv[2]);
+                double bitangent[3], double geometric[3], double uv[2], double uv1[2]);
 
 #endif /* MR_MESH_H */

@@ -23,6 +23,7 @@
 #include "../mr_internal.h"
 #include "mesh.h"
 #include "render.h"
+#include "texture.h"
 #include "vec3.h"
 
 typedef struct hit_record {
@@ -32,8 +33,12 @@ typedef struct hit_record {
     double bitangent[3];
     double view_local[3]; /* unit direction towards the camera, in the shading frame */
     double uv[2];         /* sphere texture coordinates or the mesh's TEXCOORD_0 (render.h) */
+    double uv1[2];        /* the mesh's TEXCOORD_1; (0, 0) without */
     double geometric[3];  /* meshes: the hit triangle's unit normal (by its winding) */
     int triangle;         /* meshes: the hit triangle; -1 on a sphere */
+    int material;         /* meshes: the triangle's material; 0 on a sphere */
+    double occlusion;     /* the surface's ambient occlusion ao' (1 without a map) */
+    double emission[3];   /* the surface's emitted radiance (0 without) */
 } hit_record;
 
 /* A point-light sample: radiance += f_r(hit view, light) * weight. */
@@ -47,8 +52,11 @@ typedef struct point_sample {
 typedef struct plan_hit {
     double view[3];                         /* local frame, unit, z > 0 */
     double tangent[3], bitangent[3], normal[3]; /* the shading frame, world space */
-    double uv[2];
+    double uv[2], uv1[2];
     double share;      /* the hit's share of its pixel: 1, or 1/n^2 for a silhouette sub-pixel ray */
+    double env_share;  /* share x the surface's ambient occlusion: what environment samples are weighted by */
+    double emission[3]; /* emitted radiance x share (full renders add it) */
+    int material;      /* index into the materials of mr_render_materials */
     int point_begin;   /* its point samples: point_samples[point_begin .. next hit's point_begin - 1] */
     size_t env_begin;  /* its environment samples: env_samples[env_begin .. next hit's env_begin - 1] */
 } plan_hit;
@@ -106,6 +114,21 @@ static void camera_ray(const camera_frame *cf, double px, double py, double dir[
     vec3_normalize(dir);
 }
 
+/* A mesh material's surface maps, prepared for lookups during the plan's creation. */
+typedef struct surface_sampler {
+    const mr_surface *surface;
+    texture_sampler normal, occlusion, emissive;
+} surface_sampler;
+
+/* What primary rays need: the scene, its world-space mesh (meshes only), the camera and the mesh's surfaces
+ * (NULL without). */
+typedef struct tracer {
+    const mr_scene *scene;
+    const mesh_world *mesh;
+    camera_frame camera;
+    const surface_sampler *surfaces;
+} tracer;
+
 static void to_local(const hit_record *hit, const double world[3], double local[3]) {
     local[0] = vec3_dot(hit->tangent, world);
     local[1] = vec3_dot(hit->bitangent, world);
@@ -135,35 +158,97 @@ static void sphere_uv(const double n[3], double uv[2]) {
     uv[1] = acos(mr_clampd(n[1], -1.0, 1.0)) * MR_INV_PI;
 }
 
+/* How far above the view horizon a normal-mapped normal is kept (render.h, "surfaces"). */
+#define NORMAL_MAP_MIN_COS 0.01
+
+/* The shading normal tilted by a normal-map texel (render.h): the frame follows, keeping its handedness. */
+static void tilt_normal(const surface_sampler *ss, hit_record *hit, const double to_camera[3]) {
+    double texel[3];
+    texture_sampler_read(&ss->normal, hit->uv, hit->uv1, texel);
+    const double scale = ss->surface->normal_scale;
+    const double x = (2.0 * texel[0] - 1.0) * scale, y = (2.0 * texel[1] - 1.0) * scale, z = 2.0 * texel[2] - 1.0;
+    double n[3];
+    for (int k = 0; k < 3; k++) n[k] = x * hit->tangent[k] + y * hit->bitangent[k] + z * hit->normal[k];
+    if (!(vec3_normalize(n) > 1e-12)) return; // a (0.5, 0.5, 0.5) texel has no direction: keep the normal
+    const double facing = vec3_dot(n, to_camera);
+    if (vec3_dot(hit->normal, to_camera) > 0.0 && facing < NORMAL_MAP_MIN_COS) {
+        // Bend it back over the view horizon, keeping its azimuth about the view direction.
+        double across[3];
+        for (int k = 0; k < 3; k++) across[k] = n[k] - facing * to_camera[k];
+        double keep = vec3_normalize(across) > 1e-12 ? sqrt(1.0 - NORMAL_MAP_MIN_COS * NORMAL_MAP_MIN_COS) : 0.0;
+        for (int k = 0; k < 3; k++) n[k] = keep * across[k] + (keep > 0.0 ? NORMAL_MAP_MIN_COS : 1.0) * to_camera[k];
+        vec3_normalize(n);
+    }
+    double handed_axis[3];
+    vec3_cross(hit->normal, hit->tangent, handed_axis);
+    const double handedness = vec3_dot(handed_axis, hit->bitangent) < 0.0 ? -1.0 : 1.0;
+    double t[3];
+    const double along = vec3_dot(hit->tangent, n);
+    for (int k = 0; k < 3; k++) t[k] = hit->tangent[k] - along * n[k];
+    for (int k = 0; k < 3; k++) hit->normal[k] = n[k];
+    if (!(vec3_normalize(t) > 1e-6)) {
+        vec3_frame_from_normal(hit->normal, hit->tangent, hit->bitangent);
+        return;
+    }
+    for (int k = 0; k < 3; k++) hit->tangent[k] = t[k];
+    vec3_cross(hit->normal, hit->tangent, hit->bitangent);
+    for (int k = 0; k < 3; k++) hit->bitangent[k] *= handedness;
+}
+
+/* The hit's surface maps (render.h, "surfaces"): the normal map tilts the frame, occlusion and emission are
+ * read for the plan. */
+static void apply_surface(const surface_sampler *ss, hit_record *hit, const double to_camera[3]) {
+    hit->occlusion = 1.0;
+    for (int c = 0; c < 3; c++) hit->emission[c] = 0.0;
+    if (ss == NULL) return;
+    const mr_surface *surface = ss->surface;
+    if (surface->normal_map != NULL) tilt_normal(ss, hit, to_camera);
+    if (surface->occlusion_map != NULL) {
+        double ao;
+        texture_sampler_read(&ss->occlusion, hit->uv, hit->uv1, &ao);
+        hit->occlusion = MR_MAX(0.0, 1.0 + surface->occlusion_strength * (ao - 1.0));
+    }
+    double texel[3] = {1.0, 1.0, 1.0};
+    if (surface->emissive_map != NULL) texture_sampler_read(&ss->emissive, hit->uv, hit->uv1, texel);
+    for (int c = 0; c < 3; c++) hit->emission[c] = MR_MAX(0.0, surface->emission[c] * texel[c]);
+}
+
 /* Stage 1: the primary ray through image position (px, py). Returns 1 and fills *hit (if not NULL) when it
  * meets the object. The intersector is the place where other shape types (triangle meshes) plug in. */
-static int trace_primary(const mr_scene *scene, const mesh_world *mesh, const camera_frame *cf, double px,
-                         double py, hit_record *hit) {
+static int trace_primary(const tracer *tr, double px, double py, hit_record *hit) {
+    const camera_frame *cf = &tr->camera;
+    const mesh_world *mesh = tr->mesh;
     double dir[3], t;
     camera_ray(cf, px, py, dir);
-    if (scene->shape.type == MR_SHAPE_MESH) {
+    if (tr->scene->shape.type == MR_SHAPE_MESH) {
         mesh_hit mh;
-        if (!mesh_intersect(mesh, cf->origin, dir, INFINITY, -1, &mh)) return 0;
+        if (!mesh_intersect(mesh, cf->origin, dir, INFINITY, -1, 1, &mh)) return 0;
         if (hit == NULL) return 1;
         for (int k = 0; k < 3; k++) hit->position[k] = cf->origin[k] + mh.t * dir[k];
-        mesh_shade(mesh, &mh, hit->normal, hit->tangent, hit->bitangent, hit->geometric, hit->uv);
+        mesh_shade(mesh, &mh, hit->normal, hit->tangent, hit->bitangent, hit->geometric, hit->uv, hit->uv1);
         hit->triangle = mh.triangle;
+        hit->material = mesh_material(mesh, mh.triangle);
         double to_camera[3] = {-dir[0], -dir[1], -dir[2]};
-        if (mesh->double_sided && vec3_dot(hit->geometric, to_camera) < 0.0)
+        if (mesh_double_sided(mesh, mh.triangle) && vec3_dot(hit->geometric, to_camera) < 0.0)
             for (int k = 0; k < 3; k++) { // the back of a double-sided triangle: shade it as a front
                 hit->normal[k] = -hit->normal[k];
                 hit->bitangent[k] = -hit->bitangent[k];
                 hit->geometric[k] = -hit->geometric[k];
             }
+        apply_surface(tr->surfaces ? &tr->surfaces[hit->material] : NULL, hit, to_camera);
         to_local(hit, to_camera, hit->view_local);
         return 1;
     }
-    if (!intersect_sphere(&scene->shape, cf->origin, dir, &t)) return 0;
+    if (!intersect_sphere(&tr->scene->shape, cf->origin, dir, &t)) return 0;
     if (hit == NULL) return 1;
     hit->triangle = -1;
+    hit->material = 0;
+    hit->occlusion = 1.0;
+    hit->uv1[0] = hit->uv1[1] = 0.0;
+    for (int k = 0; k < 3; k++) hit->emission[k] = 0.0;
     for (int k = 0; k < 3; k++) {
         hit->position[k] = cf->origin[k] + t * dir[k];
-        hit->normal[k] = (hit->position[k] - scene->shape.center[k]) / scene->shape.radius;
+        hit->normal[k] = (hit->position[k] - tr->scene->shape.center[k]) / tr->scene->shape.radius;
     }
     vec3_normalize(hit->normal);
     vec3_frame_from_normal(hit->normal, hit->tangent, hit->bitangent);
@@ -432,7 +517,9 @@ static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world
         }
         env_offset += n;
     }
-    if (row->point_count == points_before && row->env_count == env_before) return 1;
+    const int emits = hit->view_local[2] > 0.0 &&
+                      (hit->emission[0] > 0.0 || hit->emission[1] > 0.0 || hit->emission[2] > 0.0);
+    if (row->point_count == points_before && row->env_count == env_before && !emits) return 1;
     if (!reserve((void **)&row->hits, &row->hit_capacity, row->hit_count + 1, sizeof *row->hits)) return 0;
     plan_hit *kept = &row->hits[row->hit_count++];
     for (int k = 0; k < 3; k++) {
@@ -443,7 +530,12 @@ static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world
     }
     kept->uv[0] = hit->uv[0];
     kept->uv[1] = hit->uv[1];
+    kept->uv1[0] = hit->uv1[0];
+    kept->uv1[1] = hit->uv1[1];
     kept->share = share;
+    kept->env_share = share * hit->occlusion;
+    for (int c = 0; c < 3; c++) kept->emission[c] = emits ? hit->emission[c] * share : 0.0;
+    kept->material = hit->material;
     kept->point_begin = (int)points_before; // row-relative; the plan's concatenation checks the total
     kept->env_begin = env_before;
     return 1;
@@ -453,9 +545,10 @@ static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world
  * primary ray through their centre; pixels on the silhouette get n x n rays on a regular sub-pixel grid, each
  * weighted 1/n^2, so they are box-filtered like a path tracer's pixels instead of aliased (docs/design.md
  * principle 2: the extra rays go only where the image has an edge). Returns 0 on allocation failure. */
-static int trace_row(const mr_scene *scene, const env_table *env, const mesh_world *mesh, const camera_frame *cf,
-                     const unsigned char *corner_hit, int edge_n, int y, float *coverage, row_result *row) {
-    const mesh_world *occluder = scene->shape.type == MR_SHAPE_MESH && !mesh->convex ? mesh : NULL;
+static int trace_row(const tracer *tr, const env_table *env, const unsigned char *corner_hit, int edge_n, int y,
+                     float *coverage, row_result *row) {
+    const mr_scene *scene = tr->scene;
+    const mesh_world *occluder = scene->shape.type == MR_SHAPE_MESH && !tr->mesh->convex ? tr->mesh : NULL;
     const int width = scene->width;
     row->pixels = malloc((size_t)width * sizeof *row->pixels);
     row->hit_counts = malloc((size_t)width * sizeof *row->hit_counts);
@@ -464,7 +557,7 @@ static int trace_row(const mr_scene *scene, const env_table *env, const mesh_wor
         const unsigned char *top = corner_hit + (size_t)y * (size_t)(width + 1) + (size_t)x;
         const unsigned char *bottom = top + width + 1;
         hit_record hit;
-        int centre = trace_primary(scene, mesh, cf, x + 0.5, y + 0.5, &hit);
+        int centre = trace_primary(tr, x + 0.5, y + 0.5, &hit);
         int corners = top[0] + top[1] + bottom[0] + bottom[1];
         int n = (corners == 4 * centre) ? 1 : edge_n;
         double weight = 1.0 / ((double)n * n);
@@ -472,7 +565,7 @@ static int trace_row(const mr_scene *scene, const env_table *env, const mesh_wor
         int hits = 0;
         for (int j = 0; j < n; j++)
             for (int i = 0; i < n; i++) {
-                if (n > 1 && !trace_primary(scene, mesh, cf, x + (i + 0.5) / n, y + (j + 0.5) / n, &hit)) continue;
+                if (n > 1 && !trace_primary(tr, x + (i + 0.5) / n, y + (j + 0.5) / n, &hit)) continue;
                 if (n == 1 && !centre) continue;
                 hits++;
                 if (!add_hit(scene, env, occluder, &hit, weight, row)) return 0;
@@ -509,8 +602,11 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
 
     const int width = scene->width, height = scene->height;
     const int edge_n = scene->edge_samples > 0 ? scene->edge_samples : MR_SCENE_DEFAULT_EDGE_SAMPLES;
-    camera_frame cf;
-    camera_frame_init(scene, &cf);
+    tracer tr;
+    memset(&tr, 0, sizeof tr);
+    tr.scene = scene;
+    camera_frame_init(scene, &tr.camera);
+    surface_sampler *surfaces = NULL;
     mr_render_plan *plan = calloc(1, sizeof *plan);
     unsigned char *corner_hit = malloc((size_t)(width + 1) * (size_t)(height + 1));
     row_result *rows = calloc((size_t)height, sizeof *rows);
@@ -521,9 +617,28 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     if (plan->coverage == NULL) goto oom;
     status = env_setup(scene, &plan->env);
     if (status != MR_OK) goto fail;
+    tr.mesh = &plan->mesh;
     if (scene->shape.type == MR_SHAPE_MESH) {
         status = mesh_world_build(scene->shape.mesh, &plan->mesh);
         if (status != MR_OK) goto fail;
+        const mr_mesh *src = scene->shape.mesh;
+        if (src->surfaces != NULL) {
+            surfaces = calloc((size_t)plan->mesh.material_count, sizeof *surfaces);
+            if (surfaces == NULL) goto oom;
+            for (int m = 0; m < plan->mesh.material_count; m++) {
+                const mr_surface *surface = &src->surfaces[m];
+                surfaces[m].surface = surface;
+                if (surface->normal_map)
+                    texture_sampler_init(&surfaces[m].normal, surface->normal_map, &surface->normal_sampling, 0, 3);
+                if (surface->occlusion_map)
+                    texture_sampler_init(&surfaces[m].occlusion, surface->occlusion_map,
+                                         &surface->occlusion_sampling, 0, 1);
+                if (surface->emissive_map)
+                    texture_sampler_init(&surfaces[m].emissive, surface->emissive_map, &surface->emissive_sampling,
+                                         0, 3);
+            }
+            tr.surfaces = surfaces;
+        }
     }
 
     // Which pixel corners see the object: a pixel whose corners and centre agree is entirely inside or
@@ -534,11 +649,11 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     for (int y = 0; y <= height; y++)
         for (int x = 0; x <= width; x++)
             corner_hit[(size_t)y * (size_t)(width + 1) + (size_t)x] =
-                (unsigned char)trace_primary(scene, &plan->mesh, &cf, x, y, NULL);
+                (unsigned char)trace_primary(&tr, x, y, NULL);
 
 #pragma omp parallel for schedule(dynamic, 4) reduction(| : failed)
     for (int y = 0; y < height; y++)
-        if (!trace_row(scene, &plan->env, &plan->mesh, &cf, corner_hit, edge_n, y, plan->coverage, &rows[y]))
+        if (!trace_row(&tr, &plan->env, corner_hit, edge_n, y, plan->coverage, &rows[y]))
             failed = 1;
     if (failed) goto oom;
 
@@ -592,6 +707,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     for (int y = 0; y < height; y++) row_result_free(&rows[y]);
     free(rows);
     free(corner_hit);
+    free(surfaces);
     *out = plan;
     return MR_OK;
 
@@ -602,6 +718,7 @@ fail:
         for (int y = 0; y < height; y++) row_result_free(&rows[y]);
     free(rows);
     free(corner_hit);
+    free(surfaces);
     mr_render_plan_free(plan);
     return status;
 }
@@ -643,8 +760,8 @@ int mr_render_plan_trace_mesh(const mr_render_plan *plan, const double origin[3]
                               int brute_force, double *t, int *triangle) {
     if (plan == NULL || plan->scene.shape.type != MR_SHAPE_MESH || origin == NULL || dir == NULL) return 0;
     mesh_hit hit;
-    int found = brute_force ? mesh_intersect_brute(&plan->mesh, origin, dir, INFINITY, -1, &hit)
-                            : mesh_intersect(&plan->mesh, origin, dir, INFINITY, -1, &hit);
+    int found = brute_force ? mesh_intersect_brute(&plan->mesh, origin, dir, INFINITY, -1, 0, &hit)
+                            : mesh_intersect(&plan->mesh, origin, dir, INFINITY, -1, 0, &hit);
     if (!found) return 0;
     if (t != NULL) *t = hit.t;
     if (triangle != NULL) *triangle = hit.triangle;
@@ -694,37 +811,6 @@ mr_status mr_param_textures_set(mr_param_textures *textures, const mr_brdf_model
     return MR_OK;
 }
 
-/* A map bound to packed value slots, as the render loop reads it. */
-typedef struct texture_binding {
-    const mr_image *map;
-    int slot;    /* first packed value it sets */
-    int count;   /* 1 or 3 values */
-    int channel; /* first map channel read (a grey map is read at 0 for every value) */
-} texture_binding;
-
-/* Bilinear lookup of `count` values at (u, v): texel centres at ((i + 0.5)/width, (j + 0.5)/height), wrap in u,
- * clamp in v. Each lerp is a + t (b - a), so a constant map gives its value exactly. */
-static void texture_sample(const texture_binding *binding, const double uv[2], double *out) {
-    const mr_image *map = binding->map;
-    double x = uv[0] * map->width - 0.5, y = uv[1] * map->height - 0.5;
-    double x0 = floor(x), y0 = floor(y);
-    double fx = x - x0, fy = y - y0;
-    long i0 = (long)x0 % map->width;
-    if (i0 < 0) i0 += map->width;
-    long i1 = i0 + 1 == map->width ? 0 : i0 + 1;
-    long j0 = (long)mr_clampd(y0, 0.0, map->height - 1.0), j1 = (long)mr_clampd(y0 + 1.0, 0.0, map->height - 1.0);
-    const size_t stride = (size_t)map->channels;
-    const float *r0 = map->pixels + (size_t)j0 * (size_t)map->width * stride;
-    const float *r1 = map->pixels + (size_t)j1 * (size_t)map->width * stride;
-    for (int k = 0; k < binding->count; k++) {
-        size_t c = map->channels == 1 ? 0 : (size_t)(binding->channel + k);
-        double a = r0[(size_t)i0 * stride + c], b = r0[(size_t)i1 * stride + c];
-        double d = r1[(size_t)i0 * stride + c], e = r1[(size_t)i1 * stride + c];
-        double top = a + fx * (b - a), bottom = d + fx * (e - d);
-        out[k] = top + fy * (bottom - top);
-    }
-}
-
 /* ---- renders ------------------------------------------------------------------------------------------------- */
 
 static mr_status check_target(const mr_render_plan *plan, const mr_image *image, const char *what) {
@@ -763,31 +849,71 @@ static inline void accumulate(const mr_brdf_model *model, const void *state, con
     }
 }
 
-#define MAX_BINDINGS MR_BRDF_MAX_VALUES
+/* A map bound to packed value slots, as the render loop reads it. */
+typedef struct texture_binding {
+    texture_sampler sampler; /* reads `count` values from the map */
+    int slot;                /* first packed value it sets */
+} texture_binding;
 
-/* Every render: `full` alone, or either or both of `diffuse` and `specular`. Each lit pixel sums its hits'
- * samples in plan order (the same for any thread count); a textured render prepares the BRDF state per hit. */
-static mr_status render_core(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
-                             const mr_param_textures *textures, mr_image *full, mr_image *diffuse,
-                             mr_image *specular) {
+/* One material as the render loop uses it: its state for constant values, and its maps. */
+typedef struct material_state {
+    const mr_brdf_model *model;
+    const double *values;
+    int value_count;
+    int binding_count;
+    texture_binding bindings[MR_BRDF_MAX_VALUES];
+    mr_brdf_state shared; /* prepared from values (the state of every hit when there are no maps) */
+} material_state;
+
+/* Check a material and prepare its state. `index` names it in errors. */
+static mr_status material_state_init(const mr_material_binding *material, int index, material_state *ms) {
+    const mr_brdf_model *model = material->model;
+    const mr_param_textures *textures = material->textures;
+    if (model == NULL || material->values == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "render: material %d: NULL model or values", index);
+    ms->model = model;
+    ms->values = material->values;
+    ms->value_count = mr_brdf_value_count(model);
+    ms->binding_count = 0;
+    for (int p = 0; textures != NULL && p < model->param_count && p < MR_BRDF_MAX_VALUES; p++) {
+        if (textures->maps[p] == NULL) continue;
+        mr_status status = check_texture(model, p, textures->maps[p], textures->channel[p]);
+        if (status == MR_OK) status = mr_texture_sampling_validate(&textures->sampling[p], "render: texture sampling");
+        if (status != MR_OK) return status;
+        const int channels = model->params[p].channels;
+        texture_binding *binding = &ms->bindings[ms->binding_count++];
+        texture_sampler_init(&binding->sampler, textures->maps[p], &textures->sampling[p],
+                             channels == 1 ? textures->channel[p] : 0, channels);
+        binding->slot = mr_brdf_param_offset(model, p);
+    }
+    model->prepare(model, material->values, ms->shared.bytes);
+    return MR_OK;
+}
+
+/* Every render: `full` alone, or either or both of `diffuse` and `specular`, with one material for every hit
+ * (count 1) or materials[hit's material]. Each lit pixel sums its hits' samples in plan order (the same for any
+ * thread count); a textured material prepares the BRDF state per hit. */
+static mr_status render_core(const mr_render_plan *plan, const mr_material_binding *materials, int count,
+                             mr_image *full, mr_image *diffuse, mr_image *specular) {
     mr_status status = check_target(plan, full, "output");
     if (status == MR_OK) status = check_target(plan, diffuse, "diffuse");
     if (status == MR_OK) status = check_target(plan, specular, "specular");
     if (status != MR_OK) return status;
-    texture_binding bindings[MAX_BINDINGS];
-    int binding_count = 0;
-    for (int p = 0; textures != NULL && p < model->param_count && p < MAX_BINDINGS; p++) {
-        if (textures->maps[p] == NULL) continue;
-        status = check_texture(model, p, textures->maps[p], textures->channel[p]);
-        if (status != MR_OK) return status;
-        const int channels = model->params[p].channels;
-        bindings[binding_count++] = (texture_binding){textures->maps[p], mr_brdf_param_offset(model, p), channels,
-                                                      channels == 1 ? textures->channel[p] : 0};
+    const int needed = mr_render_plan_material_count(plan);
+    if (materials == NULL || count < 1 || (count != 1 && count < needed))
+        return mr_fail(MR_ERR_INVALID_ARG, "render: %d materials given, the plan's mesh uses %d (give them all, or "
+                       "one for every triangle)", materials == NULL ? 0 : count, needed);
+    const int used = count == 1 ? 1 : needed;
+    material_state *states = malloc((size_t)used * sizeof *states);
+    if (states == NULL) return mr_fail(MR_ERR_NOMEM, "render: out of memory for %d materials", used);
+    for (int m = 0; m < used; m++) {
+        status = material_state_init(&materials[m], m, &states[m]);
+        if (status != MR_OK) {
+            free(states);
+            return status;
+        }
     }
-    const int value_count = mr_brdf_value_count(model);
 
-    mr_brdf_state shared;
-    model->prepare(model, values, shared.bytes);
     // The background is light that never met the material; it belongs to the full render only, and a
     // diffuse-only or specular-only render is black there, so diffuse + specular = full on the object.
     if (full) fill_unlit(plan, full, 1);
@@ -802,14 +928,17 @@ static mr_status render_core(const mr_render_plan *plan, const mr_brdf_model *mo
         double sum_f[3] = {0.0, 0.0, 0.0}, sum_d[3] = {0.0, 0.0, 0.0}, sum_s[3] = {0.0, 0.0, 0.0};
         double *acc_f = full ? sum_f : NULL, *acc_d = diffuse ? sum_d : NULL, *acc_s = specular ? sum_s : NULL;
         mr_brdf_state local;
-        const void *state = shared.bytes;
         for (int h = plan->hit_begin[i]; h < plan->hit_begin[i + 1]; h++) {
             const plan_hit *hit = &plan->hits[h];
-            if (binding_count > 0) {
+            const material_state *ms = &states[used == 1 ? 0 : hit->material];
+            const mr_brdf_model *model = ms->model;
+            const void *state = ms->shared.bytes;
+            if (ms->binding_count > 0) {
                 double hit_values[MR_BRDF_MAX_VALUES];
-                memcpy(hit_values, values, (size_t)value_count * sizeof *hit_values);
-                for (int b = 0; b < binding_count; b++)
-                    texture_sample(&bindings[b], hit->uv, hit_values + bindings[b].slot);
+                memcpy(hit_values, ms->values, (size_t)ms->value_count * sizeof *hit_values);
+                for (int b = 0; b < ms->binding_count; b++)
+                    texture_sampler_read(&ms->bindings[b].sampler, hit->uv, hit->uv1,
+                                         hit_values + ms->bindings[b].slot);
                 model->prepare(model, hit_values, local.bytes);
                 state = local.bytes;
             }
@@ -821,11 +950,13 @@ static mr_status render_core(const mr_render_plan *plan, const mr_brdf_model *mo
                 const int k = plan->env_samples[e];
                 const double *d = plan->env.direction[k];
                 double light[3] = {vec3_dot(hit->tangent, d), vec3_dot(hit->bitangent, d), vec3_dot(hit->normal, d)};
-                double cos_share = light[2] * hit->share;
+                double cos_share = light[2] * hit->env_share;
                 double weight[3];
                 for (int c = 0; c < 3; c++) weight[c] = plan->env.weight[k][c] * cos_share;
                 accumulate(model, state, hit->view, light, weight, acc_f, acc_d, acc_s);
             }
+            if (acc_f)
+                for (int c = 0; c < 3; c++) sum_f[c] += hit->emission[c];
         }
         size_t pixel = (size_t)plan->lit_pixel_index[i];
         if (full) {
@@ -838,6 +969,46 @@ static mr_status render_core(const mr_render_plan *plan, const mr_brdf_model *mo
             if (specular) specular->pixels[pixel * 3 + c] = (float)sum_s[c];
         }
     }
+    free(states);
+    return MR_OK;
+}
+
+/* The single-material calls as a one-material render. */
+static mr_status render_one(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
+                            const mr_param_textures *textures, mr_image *full, mr_image *diffuse,
+                            mr_image *specular) {
+    mr_material_binding material = {model, values, textures};
+    return render_core(plan, &material, 1, full, diffuse, specular);
+}
+
+int mr_render_plan_material_count(const mr_render_plan *plan) {
+    return plan->scene.shape.type == MR_SHAPE_MESH ? plan->mesh.material_count : 1;
+}
+
+mr_status mr_render_materials_into(const mr_render_plan *plan, const mr_material_binding *materials, int count,
+                                   mr_component component, mr_image *image) {
+    if (plan == NULL || materials == NULL || image == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan, materials or image");
+    switch (component) {
+    case MR_COMPONENT_FULL: return render_core(plan, materials, count, image, NULL, NULL);
+    case MR_COMPONENT_DIFFUSE: return render_core(plan, materials, count, NULL, image, NULL);
+    case MR_COMPONENT_SPECULAR: return render_core(plan, materials, count, NULL, NULL, image);
+    default: return mr_fail(MR_ERR_INVALID_ARG, "render: unknown component %d", (int)component);
+    }
+}
+
+mr_status mr_render_materials(const mr_render_plan *plan, const mr_material_binding *materials, int count,
+                              mr_component component, mr_image **out) {
+    if (plan == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan or output");
+    mr_image *image = NULL;
+    mr_status status = mr_image_create(plan->scene.width, plan->scene.height, 3, &image);
+    if (status != MR_OK) return status;
+    status = mr_render_materials_into(plan, materials, count, component, image);
+    if (status != MR_OK) {
+        mr_image_free(image);
+        return status;
+    }
+    *out = image;
     return MR_OK;
 }
 
@@ -847,7 +1018,7 @@ mr_status mr_render_textured_components_into(const mr_render_plan *plan, const m
     if (plan == NULL || model == NULL || values == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan, model or values");
     if (diffuse == NULL && specular == NULL) return MR_OK;
-    return render_core(plan, model, values, textures, NULL, diffuse, specular);
+    return render_one(plan, model, values, textures, NULL, diffuse, specular);
 }
 
 mr_status mr_render_components_into(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
@@ -860,9 +1031,9 @@ mr_status mr_render_textured_into(const mr_render_plan *plan, const mr_brdf_mode
     if (plan == NULL || model == NULL || values == NULL || image == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan, model, values or image");
     switch (component) {
-    case MR_COMPONENT_FULL: return render_core(plan, model, values, textures, image, NULL, NULL);
-    case MR_COMPONENT_DIFFUSE: return render_core(plan, model, values, textures, NULL, image, NULL);
-    case MR_COMPONENT_SPECULAR: return render_core(plan, model, values, textures, NULL, NULL, image);
+    case MR_COMPONENT_FULL: return render_one(plan, model, values, textures, image, NULL, NULL);
+    case MR_COMPONENT_DIFFUSE: return render_one(plan, model, values, textures, NULL, image, NULL);
+    case MR_COMPONENT_SPECULAR: return render_one(plan, model, values, textures, NULL, NULL, image);
     default: return mr_fail(MR_ERR_INVALID_ARG, "render: unknown component %d", (int)component);
     }
 }

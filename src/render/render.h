@@ -138,21 +138,85 @@ mr_light mr_light_environment(const mr_image *map, double scale, double rotation
  *     -cross(n, t) (mirrored UVs). MikkTSpace-like, not bit-compatible with MikkTSpace (no vertex splitting).
  * Shading at a hit interpolates normal, tangent and UV with the barycentrics; the frame is
  * (t orthogonalised against n, w * cross(n, t), n), or an arbitrary frame about n without tangents. UVs
- * (TEXCOORD_0) feed mr_param_textures maps (0, 0 without UVs). A hit whose interpolated normal faces away
- * from the camera is covered but unlit (black), like the back of a single-sided glTF material; with
- * double_sided set, a hit on a triangle's back (its winding seen clockwise from the camera) has its normal and
- * bitangent reversed first, as glTF's doubleSided materials ask. */
+ * (TEXCOORD_0) feed mr_param_textures maps (0, 0 without UVs). Camera rays do not see the back of a
+ * single-sided triangle (its winding seen clockwise from the camera): they pass through to what lies behind, as
+ * glTF's back-face culling asks (shadow rays are blocked by both sides). A hit whose interpolated normal faces
+ * away from the camera is covered but unlit (black); with double_sided set, a hit on a triangle's back has its
+ * normal and bitangent reversed first, as glTF's doubleSided materials ask.
+ * With surfaces, each hit then reads its triangle's material's surface (mr_surface):
+ *   - a normal map tilts the shading frame: n' = normalize(s x t + s y b + z n) with (x, y, z) = 2 texel - 1 and
+ *     s = normal_scale; the tangent is made orthogonal to n' again and the bitangent follows. A tilted normal
+ *     that faces away from the camera while the surface faces it is bent back towards the camera until
+ *     n'.view = 0.01 (else grazing pixels of bumpy surfaces turn black).
+ *   - occlusion multiplies the environment light's samples at the hit by ao' (glTF applies occlusion to the
+ *     ambient, image-based light; point lights are not occluded by it);
+ *   - emission adds emission x map radiance at the hit to full renders (not to component renders, so diffuse
+ *     + specular = full holds for non-emissive surfaces only). An emitting hit is kept even when no light
+ *     reaches it. */
+/* ---- texture sampling (BRDF parameter maps and mesh surface maps) --------------------------------------------
+ * Every map is sampled bilinearly, texel centres at ((i + 0.5)/width, (j + 0.5)/height), without mipmaps (a map
+ * much finer than the object's pixels aliases; shrink it first), at the hit's texture coordinates after the map's
+ * mr_texture_sampling: the coordinate set, KHR_texture_transform, then the wrap mode of each axis applied to the
+ * texel indices. A zero-initialised mr_texture_sampling is the sphere's convention: TEXCOORD_0, no transform,
+ * repeat along u (the seam) and clamp along v (the poles). */
+typedef enum mr_wrap {
+    MR_WRAP_DEFAULT = 0, /* repeat along u, clamp along v */
+    MR_WRAP_REPEAT,      /* glTF 10497 */
+    MR_WRAP_CLAMP,       /* glTF 33071, CLAMP_TO_EDGE */
+    MR_WRAP_MIRROR,      /* glTF 33648, MIRRORED_REPEAT */
+    MR_WRAP_COUNT
+} mr_wrap;
+
+typedef struct mr_texture_sampling {
+    mr_wrap wrap_u, wrap_v;
+    int texcoord;        /* 0: TEXCOORD_0 (a sphere's (u, v)); 1: a mesh's TEXCOORD_1 ((0, 0) where it has none) */
+    int has_transform;   /* KHR_texture_transform: uv' = offset + R(rotation) (scale * uv), with
+                            R(r) (x, y) = (cos r x + sin r y, -sin r x + cos r y) (rotation in radians) */
+    double offset[2], rotation, scale[2];
+} mr_texture_sampling;
+
+/* MR_ERR_INVALID_ARG naming `what` for an unknown wrap mode, a texcoord other than 0 or 1, or a non-finite
+ * transform. */
+mr_status mr_texture_sampling_validate(const mr_texture_sampling *sampling, const char *what);
+
+/* ---- surfaces: what a mesh material adds to its BRDF (glTF's normal, occlusion and emissive textures) --------
+ * A mesh may carry several materials (triangle_materials); each has a surface. Surfaces are geometry as far as
+ * the renderer is concerned: the plan samples them once at every hit (like the shading frame), so renders still
+ * cost only BRDF evaluations, and every material rendered on the plan shares them (a conversion of an asset
+ * keeps its normal, occlusion and emissive textures). */
+typedef struct mr_surface {
+    int double_sided;               /* as mr_mesh.double_sided, for this material's triangles */
+    const mr_image *normal_map;     /* tangent-space normals, linear RGB (channels 0-2; 2c - 1 per axis, +y up as
+                                       glTF), on the mesh's tangent frame; NULL = none */
+    mr_texture_sampling normal_sampling;
+    double normal_scale;            /* glTF normalTexture.scale, on x and y; used as given (glTF's default: 1) */
+    const mr_image *occlusion_map;  /* ambient occlusion in channel 0 (R), linear; NULL = none */
+    mr_texture_sampling occlusion_sampling;
+    double occlusion_strength;      /* ao' = 1 + strength (ao - 1); as given (glTF's default: 1) */
+    double emission[3];             /* emitted radiance, linear RGB (glTF emissiveFactor x emissive strength) */
+    const mr_image *emissive_map;   /* multiplies emission: linear RGB (sRGB-decoded when read); NULL = none */
+    mr_texture_sampling emissive_sampling;
+} mr_surface;
+
 typedef struct mr_mesh {
     int vertex_count;        /* >= 3 */
     const float *positions;  /* [vertex_count * 3], object space, finite; required */
-    const float *normals;    /* [vertex_count * 3], object space, non-zero; NULL = generated (smooth) */
+    const float *normals;    /* [vertex_count * 3], object space; NULL = generated (smooth); a vertex whose
+                                normal is (0, 0, 0) gets a generated one (merged primitives, some without) */
     const float *tangents;   /* [vertex_count * 4], xyz object space, w = +-1 (bitangent = w cross(n, t));
-                                NULL = generated from the UVs when there are UVs */
+                                NULL = generated from the UVs when there are UVs; a vertex with w = 0 gets a
+                                generated one */
     const float *uvs;        /* [vertex_count * 2], TEXCOORD_0 (u right, v down, as glTF); NULL = none */
+    const float *uvs1;       /* [vertex_count * 2], TEXCOORD_1, for maps that ask for it; NULL = none */
     int triangle_count;      /* >= 1; at least one triangle must have a non-zero area */
     const uint32_t *indices; /* [triangle_count * 3], each < vertex_count; counter-clockwise seen from the
                                 front (the side the generated normals face) */
-    int double_sided;        /* 0: backs of triangles are not shaded (glTF's default); 1: lit like fronts */
+    int double_sided;        /* 0: backs of triangles are not shaded (glTF's default); 1: lit like fronts.
+                                Ignored when surfaces is set (each surface says it for its triangles) */
+    int material_count;      /* materials the triangles use; 0 = 1; <= MR_MESH_MAX_MATERIALS */
+    const uint16_t *triangle_materials; /* [triangle_count] each < material_count; NULL = every triangle 0 */
+    const mr_surface *surfaces;         /* [material_count] (1 when material_count is 0); NULL = no maps and
+                                           double_sided for all */
     int has_transform;       /* 0: identity (transform ignored) */
     double transform[16];    /* object to world, a 4x4 column-major matrix as glTF's node.matrix; affine
                                 (last row 0 0 0 1), finite, invertible */
@@ -161,6 +225,8 @@ typedef struct mr_mesh {
 /* Check a mesh (NULL arrays, counts, indices in range, finite values, non-zero normals, tangent w, the
  * transform, not every triangle degenerate). MR_ERR_INVALID_ARG naming the vertex, triangle or field. */
 mr_status mr_mesh_validate(const mr_mesh *mesh);
+
+#define MR_MESH_MAX_MATERIALS 4096
 
 typedef enum mr_shape_type {
     MR_SHAPE_SPHERE = 0,
@@ -309,7 +375,8 @@ mr_status mr_render_components_into(const mr_render_plan *plan, const mr_brdf_mo
  * duration of each render call. A map holds the parameter's own values in the model's units (linear: colour
  * maps are sRGB-decoded when read, image_io.h; glTF roughness must be squared into alpha by the caller), and is
  * sampled bilinearly at the hit's (u, v) with texel centres at ((i + 0.5)/width, (j + 0.5)/height), wrapping in
- * u and clamping in v, without mipmaps (a map much finer than the sphere's pixels aliases; shrink it first).
+ * u and clamping in v unless textures->sampling says otherwise (see mr_texture_sampling), without mipmaps (a map
+ * much finer than the sphere's pixels aliases; shrink it first).
  * Sampled values are clamped into the model's bounds by its prepare(), like constant values. */
 typedef struct mr_param_textures {
     const mr_image *maps[MR_BRDF_MAX_VALUES]; /* maps[i]: parameter i's map; NULL = values[] constant. An RGB
@@ -319,6 +386,8 @@ typedef struct mr_param_textures {
     int channel[MR_BRDF_MAX_VALUES];          /* scalar parameters: the map channel holding the value (0 = the
                                                  first: grey, or R; glTF packs roughness in 1 = G, metallic in
                                                  2 = B); must be 0 for RGB parameters */
+    mr_texture_sampling sampling[MR_BRDF_MAX_VALUES]; /* how maps[i] is read (coordinate set, transform, wrap
+                                                         modes); zero = the sphere's convention */
 } mr_param_textures;
 
 /* Set parameter `name`'s map (NULL clears it) and channel, after checking that `model` has the parameter, that
@@ -340,6 +409,28 @@ mr_status mr_render_textured_into(const mr_render_plan *plan, const mr_brdf_mode
 mr_status mr_render_textured_components_into(const mr_render_plan *plan, const mr_brdf_model *model,
                                               const double *values, const mr_param_textures *textures,
                                               mr_image *diffuse, mr_image *specular);
+
+/* ---- meshes with several materials -------------------------------------------------------------------------- */
+
+/* One material of a multi-material render: its model, a full value vector and its maps (NULL = none). */
+typedef struct mr_material_binding {
+    const mr_brdf_model *model;
+    const double *values;
+    const mr_param_textures *textures;
+} mr_material_binding;
+
+/* Materials the plan's object uses: its mesh's material_count (1 for a sphere or a mesh without materials). */
+int mr_render_plan_material_count(const mr_render_plan *plan);
+
+/* Render a mesh whose triangles carry several materials (mr_mesh.triangle_materials): every hit is shaded with
+ * materials[its triangle's material], each material with its own model, values and maps; hits of different
+ * materials in one silhouette pixel are box-filtered together. count is mr_render_plan_material_count(plan) or
+ * more (extra ones are unused), or 1: every hit with materials[0], which is what mr_render_textured does on any
+ * plan. Otherwise MR_ERR_INVALID_ARG, as for unsuitable maps (mr_param_textures_set). */
+mr_status mr_render_materials_into(const mr_render_plan *plan, const mr_material_binding *materials, int count,
+                                   mr_component component, mr_image *image);
+mr_status mr_render_materials(const mr_render_plan *plan, const mr_material_binding *materials, int count,
+                              mr_component component, mr_image **out);
 
 #ifdef __cplusplus
 }
