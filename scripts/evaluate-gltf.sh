@@ -36,6 +36,7 @@ table="$work/table.md"
     echo "|---|---|---:|---:|---:|---:|"
 } > "$table"
 for asset in Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Avocado.gltf \
+             CesiumMilkTruck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/CesiumMilkTruck.gltf \
              Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Duck.gltf FloppyDisk-sketchfab/scene.gltf; do
     source_gltf="$assets/specgloss/$asset"
     name=${asset%%-*}

@@ -122,6 +122,15 @@ check "TextureSettingsTest: Test green $test_green ~ Sample green $sample_green"
     -v s="$sample_green" 'BEGIN { exit !(s > 500 && t > 0.89 * s && t < 1.05 * s) }'
 check "TextureSettingsTest: its 10 materials rendered" test "$(summary "$tmp/settings" \
     're.search(r"(\d+) materials", d["materials"][0]["description"]).group(1)')" = 10
+# Seen head-on (--from) under the fit scene's point light: the culled polygon casts no shadow either.
+"$bin" report -o "$tmp/settings2" --size 384 --from 0,0,1 "$settings" >/dev/null 2>&1 &&
+    oiiotool "$tmp/settings2/view0_material0.png" -o "$tmp/settings2.ppm" 2>/dev/null
+read -r _ red _ test_green _ sample_green < <(python3 "$(dirname "$0")/lib/checker_columns.py" "$tmp/settings2.ppm" \
+    2>/dev/null || echo "red -1 test 0 sample 0")
+check "head-on, point light: no red mark ($red), Test green $test_green ~ Sample green $sample_green" awk \
+    -v r="$red" -v t="$test_green" -v s="$sample_green" 'BEGIN { exit !(r == 0 && s > 500 && t > 0.95 * s) }'
+expect "--from needs three numbers" 1 "expected three numbers" -- "$bin" report -o "$tmp/e9" --from 1,2 "$settings"
+expect "--from is for glTF assets" 1 "spheres use the fit camera" -- "$bin" report -o "$tmp/e9" --from 0,0,1 ggx
 # WaterBottle: normal, occlusion and emissive maps are read and shown beside the BRDF maps.
 bottle="$shared/metalrough/WaterBottle/glTF/WaterBottle.gltf"
 expect "an asset with normal, occlusion and emissive maps" 0 "report: $tmp/bottle/index.html" -- "$bin" report \

@@ -2138,6 +2138,37 @@ MR_TEST(mesh_zero_normals_and_tangents_are_generated_per_vertex) {
     test_mesh_free(&m);
 }
 
+MR_TEST(mesh_single_sided_backs_let_light_through) {
+    // The floor and plate under a point light above them, the plate turned upside down: single-sided, the camera
+    // above and the light both see its back, so it is culled for both and the render is the floor's alone (no
+    // shadow); double-sided, it is seen and casts its shadow.
+    test_mesh floor_only = floor_and_plate(), flipped = floor_and_plate();
+    floor_only.mesh.triangle_count = 2;
+    const uint32_t turned[6] = {4, 6, 5, 4, 7, 6};
+    memcpy(flipped.indices + 6, turned, sizeof turned);
+    mr_image *img[3] = {NULL, NULL, NULL};
+    long rays[3] = {0, 0, 0};
+    const double values[3] = {0.5, 0.5, 0.5};
+    for (int k = 0; k < 3; k++) { // floor alone; flipped single-sided plate; flipped double-sided plate
+        test_mesh *m = k == 0 ? &floor_only : &flipped;
+        m->mesh.double_sided = k == 2;
+        mr_scene scene = mesh_fit_scene(m, 48, MR_FIT_LIGHT_45);
+        scene.camera = (mr_camera){{0.0, 4.0, 4.5}, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, 50.0};
+        scene.lights[0].position[0] = 0.0, scene.lights[0].position[1] = 3.0, scene.lights[0].position[2] = 0.0;
+        mr_render_plan *plan = NULL;
+        MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+        if (plan) MR_CHECK_OK(mr_render(plan, mr_brdf_find("lambert"), values, MR_COMPONENT_FULL, &img[k]));
+        if (plan) rays[k] = mr_render_plan_shadow_ray_count(plan);
+        mr_render_plan_free(plan);
+    }
+    MR_CHECK_MSG(rays[0] == 0 && rays[1] > 0 && rays[2] > 0, "shadow rays %ld %ld %ld", rays[0], rays[1], rays[2]);
+    MR_CHECK(same_pixels(img[0], img[1]));
+    MR_CHECK(img[2] != NULL && !same_pixels(img[0], img[2]));
+    for (int k = 0; k < 3; k++) mr_image_free(img[k]);
+    test_mesh_free(&floor_only);
+    test_mesh_free(&flipped);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
              MR_TEST_ENTRY(edge_filtering_measures_the_silhouette),
              MR_TEST_ENTRY(background_fills_the_uncovered_part_of_each_pixel),
@@ -2179,5 +2210,6 @@ MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
              MR_TEST_ENTRY(texture_wrap_modes_coordinate_sets_and_transform_known_answers),
              MR_TEST_ENTRY(mesh_materials_shade_their_own_triangles),
              MR_TEST_ENTRY(mesh_single_sided_backs_are_culled_double_sided_ones_seen),
+             MR_TEST_ENTRY(mesh_single_sided_backs_let_light_through),
              MR_TEST_ENTRY(mesh_surfaces_normal_occlusion_and_emission_known_answers),
              MR_TEST_ENTRY(mesh_zero_normals_and_tangents_are_generated_per_vertex))

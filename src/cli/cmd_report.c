@@ -49,6 +49,8 @@ static void print_help(void) {
            "  --env-scale S        radiance scale (default: the map's mean luminance brought to 0.5)\n"
            "  --env-samples N      environment directions (default 1024, 1-%d)\n"
            "  --size N             render side in pixels (default 256)\n"
+           "  --from X,Y,Z         glTF assets: the direction from the reference's centre to the camera (default:\n"
+           "                       a three-quarter view onto its broadest side); the camera frames its bounds\n"
            "  --exposure E         display exposure of the pictures and of SSIM (default: the reference's\n"
            "                       object pixels in the first view to a mean luminance of 0.18)\n"
            "  --title TEXT         the page's title\n"
@@ -76,7 +78,28 @@ typedef struct options {
     const char *dir, *env_path, *title;
     int rotations, env_samples, size;
     double env_scale, exposure; /* 0: automatic */
+    int has_from;
+    double from[3];             /* --from: camera direction for glTF assets */
 } options;
+
+/* Parse "X,Y,Z" (a non-zero direction) for `option`. Returns 1, or 0 after printing a usage error. */
+static int parse_direction(const char *option, const char *text, double out[3]) {
+    const char *p = text;
+    for (int k = 0; k < 3; k++) {
+        char *end = NULL;
+        out[k] = strtod(p, &end);
+        if (end == p || !isfinite(out[k]) || *end != (k < 2 ? ',' : '\0')) {
+            cli_usage_error("report", "%s '%s': expected three numbers X,Y,Z", option, text);
+            return 0;
+        }
+        p = end + 1;
+    }
+    if (out[0] == 0.0 && out[1] == 0.0 && out[2] == 0.0) {
+        cli_usage_error("report", "%s '%s': the direction must not be zero", option, text);
+        return 0;
+    }
+    return 1;
+}
 
 /* Parse argv into options and groups. Returns an exit code. */
 static int parse(int argc, char **argv, options *o, group *groups, int *group_count) {
@@ -114,6 +137,9 @@ static int parse(int argc, char **argv, options *o, group *groups, int *group_co
         } else if ((taken = cli_take_option("report", argc, argv, &i, "--size", &value))) {
             if (taken < 0 || !cli_parse_int("report", "--size", value, 16, MR_RENDER_MAX_SIZE, &o->size))
                 return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("report", argc, argv, &i, "--from", &value))) {
+            if (taken < 0 || !parse_direction("--from", value, o->from)) return CLI_EXIT_USAGE;
+            o->has_from = 1;
         } else if ((taken = cli_take_option("report", argc, argv, &i, "--env-scale", &value))) {
             if (taken < 0 || !cli_parse_double("report", "--env-scale", value, 1e-12, 1e12, &o->env_scale))
                 return CLI_EXIT_USAGE;
@@ -655,7 +681,7 @@ static int render_views(const options *o, const mr_image *env, double env_scale,
             for (int c = 1; c < 3; c++)
                 if (hi[c] - lo[c] < hi[thin] - lo[thin]) thin = c;
             mr_frame_options frame = {0};
-            for (int c = 0; c < 3; c++) frame.from[c] = c == thin ? 1.0 : 0.35;
+            for (int c = 0; c < 3; c++) frame.from[c] = o->has_from ? o->from[c] : (c == thin ? 1.0 : 0.35);
             status = mr_camera_frame_mesh(&assets[0].mesh, &frame, &scene.camera);
         }
         mr_render_plan *plan = NULL;
@@ -723,7 +749,7 @@ int cmd_report(int argc, char **argv) {
             print_help();
             return CLI_EXIT_OK;
         }
-    options o = {NULL, NULL, NULL, 0, 0, 256, 0.0, 0.0};
+    options o = {NULL, NULL, NULL, 0, 0, 256, 0.0, 0.0, 0, {0.0, 0.0, 0.0}};
     static group groups[MAX_MATERIALS]; // these three are large (maps, picture names): kept off the stack
     int count = 0;
     int code = parse(argc, argv, &o, groups, &count);
@@ -745,6 +771,8 @@ int cmd_report(int argc, char **argv) {
         if (groups[k].count > 0)
             return cli_usage_error("report", "'%s': a glTF asset takes no name=value parameters",
                                    groups[k].assignments[0]);
+    if (o.has_from && gltf_entries == 0)
+        return cli_usage_error("report", "--from places the camera for glTF assets; spheres use the fit camera");
     asset_entry *assets = gltf_entries > 0 ? asset_storage : NULL;
     char scratch[64] = "";
     if (assets != NULL) {

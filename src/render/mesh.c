@@ -459,8 +459,10 @@ static int box_hit(const bvh_node *node, const double origin[3], const double in
     return 1;
 }
 
-/* Moeller-Trumbore; 1 with *t, *u, *v when the ray meets the triangle at 0 < t < t_max. With cull set, the back
- * of a single-sided triangle is not hit (det = -dir . (e1 x e2) < 0: the ray runs along the winding's normal). */
+/* Moeller-Trumbore; 1 with *t, *u, *v when the ray meets the triangle at 0 < t < t_max. det = -dir . (e1 x e2)
+ * says which side the ray meets: det < 0, it runs along the winding's normal (it sees the back). A single-sided
+ * triangle is culled, for cull = CULL_CAMERA, where the ray sees its back, and for cull = CULL_LIGHT (shadow rays
+ * run from the surface towards the light) where the light sees its back (det > 0). */
 static int triangle_hit(const mesh_world *mesh, int f, const double origin[3], const double dir[3], double t_max,
                         int cull, double *t_out, double *u_out, double *v_out) {
     const uint32_t *tri = mesh->triangle[f];
@@ -471,7 +473,7 @@ static int triangle_hit(const mesh_world *mesh, int f, const double origin[3], c
     vec3_cross(dir, e2, pv);
     double det = vec3_dot(e1, pv);
     if (det == 0.0 || !isfinite(det)) return 0;
-    if (cull && det < 0.0 && !mesh_double_sided(mesh, f)) return 0;
+    if (cull != CULL_NONE && det * cull < 0.0 && !mesh_double_sided(mesh, f)) return 0;
     double inv_det = 1.0 / det;
     vec3_sub(origin, p0, tv);
     double u = vec3_dot(tv, pv) * inv_det;
@@ -539,7 +541,7 @@ int mesh_intersect(const mesh_world *mesh, const double origin[3], const double 
 }
 
 int mesh_occluded(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip) {
-    return bvh_trace(mesh, origin, dir, t_max, skip, 1, 0, NULL);
+    return bvh_trace(mesh, origin, dir, t_max, skip, 1, CULL_LIGHT, NULL);
 }
 
 int mesh_intersect_brute(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max,

@@ -55,14 +55,20 @@ mr_status mesh_world_build(const mr_mesh *src, mesh_world *mesh);
 void mesh_world_free(mesh_world *mesh);
 size_t mesh_world_bytes(const mesh_world *mesh);
 
-/* Nearest hit with 0 < t < t_max (dir need not be unit); skip = a triangle to ignore, or -1; cull != 0: the
- * backs of single-sided triangles are not seen (glTF's back-face culling, for camera rays). */
+/* Which single-sided triangles a ray passes through (glTF's back-face culling). */
+enum { CULL_NONE = 0, CULL_CAMERA = 1 /* those it sees from behind */, CULL_LIGHT = -1 /* those the light, at the
+                                                                          ray's far end, sees from behind */ };
+
+/* Nearest hit with 0 < t < t_max (dir need not be unit); skip = a triangle to ignore, or -1; cull: CULL_NONE, or
+ * CULL_CAMERA for camera rays. */
 int mesh_intersect(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip,
                    int cull, mesh_hit *hit);
 /* The same by testing every triangle. */
 int mesh_intersect_brute(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max,
                          int skip, int cull, mesh_hit *hit);
-/* Any hit with 0 < t < t_max, skipping triangle `skip`; both sides of every triangle block light. */
+/* Any hit with 0 < t < t_max, skipping triangle `skip`: a shadow ray from a surface towards a light at the ray's
+ * far end. The light passes through single-sided triangles it sees from behind (CULL_LIGHT), as through those the
+ * camera sees from behind: a closed mesh still shadows, by the faces the light sees from the front. */
 int mesh_occluded(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip);
 
 /* The shading attributes at a hit: unit shading normal, tangent and bitangent (a frame), unit geometric normal

@@ -222,7 +222,7 @@ static int trace_primary(const tracer *tr, double px, double py, hit_record *hit
     camera_ray(cf, px, py, dir);
     if (tr->scene->shape.type == MR_SHAPE_MESH) {
         mesh_hit mh;
-        if (!mesh_intersect(mesh, cf->origin, dir, INFINITY, -1, 1, &mh)) return 0;
+        if (!mesh_intersect(mesh, cf->origin, dir, INFINITY, -1, CULL_CAMERA, &mh)) return 0;
         if (hit == NULL) return 1;
         for (int k = 0; k < 3; k++) hit->position[k] = cf->origin[k] + mh.t * dir[k];
         mesh_shade(mesh, &mh, hit->normal, hit->tangent, hit->bitangent, hit->geometric, hit->uv, hit->uv1);
@@ -760,8 +760,8 @@ int mr_render_plan_trace_mesh(const mr_render_plan *plan, const double origin[3]
                               int brute_force, double *t, int *triangle) {
     if (plan == NULL || plan->scene.shape.type != MR_SHAPE_MESH || origin == NULL || dir == NULL) return 0;
     mesh_hit hit;
-    int found = brute_force ? mesh_intersect_brute(&plan->mesh, origin, dir, INFINITY, -1, 0, &hit)
-                            : mesh_intersect(&plan->mesh, origin, dir, INFINITY, -1, 0, &hit);
+    int found = brute_force ? mesh_intersect_brute(&plan->mesh, origin, dir, INFINITY, -1, CULL_NONE, &hit)
+                            : mesh_intersect(&plan->mesh, origin, dir, INFINITY, -1, CULL_NONE, &hit);
     if (!found) return 0;
     if (t != NULL) *t = hit.t;
     if (triangle != NULL) *triangle = hit.triangle;

@@ -140,9 +140,10 @@ mr_light mr_light_environment(const mr_image *map, double scale, double rotation
  * (t orthogonalised against n, w * cross(n, t), n), or an arbitrary frame about n without tangents. UVs
  * (TEXCOORD_0) feed mr_param_textures maps (0, 0 without UVs). Camera rays do not see the back of a
  * single-sided triangle (its winding seen clockwise from the camera): they pass through to what lies behind, as
- * glTF's back-face culling asks (shadow rays are blocked by both sides). A hit whose interpolated normal faces
- * away from the camera is covered but unlit (black); with double_sided set, a hit on a triangle's back has its
- * normal and bitangent reversed first, as glTF's doubleSided materials ask.
+ * glTF's back-face culling asks, and light passes through the single-sided triangles it sees from behind (a
+ * closed mesh still shadows itself, through the faces the light sees from the front). A hit whose interpolated
+ * normal faces away from the camera is covered but unlit (black); with double_sided set, a hit on a triangle's
+ * back has its normal and bitangent reversed first, as glTF's doubleSided materials ask.
  * With surfaces, each hit then reads its triangle's material's surface (mr_surface):
  *   - a normal map tilts the shading frame: n' = normalize(s x t + s y b + z n) with (x, y, z) = 2 texel - 1 and
  *     s = normal_scale; the tangent is made orthogonal to n' again and the bitangent follows. A tilted normal
