@@ -230,8 +230,10 @@ int mr_gltf_extension_required(const mr_gltf *asset, const char *name);
  * leaves that view (and its bytes) in the buffer: buffer views are not renumbered. extensionsUsed is not
  * changed for extensions only the removed objects used (mr_gltf_sync_extensions handles the four it manages).
  *
- * *stats (may be NULL) receives the counts removed and how many objects stay only because of an uncertain
- * reference. On failure (MR_ERR_NOMEM) the asset is unchanged and *stats is zero. */
+ * Texture, image and sampler indices and pointers obtained before (mr_gltf_image's bytes, uri, path) are
+ * stale afterwards; read them again. *stats (may be NULL) receives the counts removed and how many objects stay
+ * only because of an uncertain reference. A NULL asset is MR_ERR_INVALID_ARG; on failure (also MR_ERR_NOMEM)
+ * the asset is unchanged and *stats is zero. */
 typedef struct mr_gltf_prune_stats {
     int textures;  /* textures removed */
     int images;    /* images removed */
