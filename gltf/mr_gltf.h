@@ -207,6 +207,42 @@ mr_status mr_gltf_set_extension_required(mr_gltf *asset, const char *name, int r
 int mr_gltf_extension_used(const mr_gltf *asset, const char *name);
 int mr_gltf_extension_required(const mr_gltf *asset, const char *name);
 
+/* ---- Pruning -------------------------------------------------------------------------------------------
+ * mr_gltf_prune_unused removes the textures no material or other object refers to any more, then the images
+ * no remaining texture refers to, then the samplers no remaining texture uses, and renumbers every reference
+ * to those that stay. Removed images are not written by mr_gltf_save. It is meant for after an edit (e.g.
+ * replacing spec-gloss materials by metal-rough ones leaves diffuseTexture and specularGlossinessTexture
+ * unreferenced) but removes every unused texture, image and sampler, whether the edit or the file left it so.
+ *
+ * It is conservative: a texture is referenced by any material textureInfo (core, normal, occlusion,
+ * emissive, any extension) and by any textureInfo-like object anywhere in the asset's extensions and extras,
+ * including extensions this API does not know and properties outside the schema. In those JSON trees:
+ *   - known references are kept and renumbered: an object with an integer "index" under a key ending in
+ *     "Texture" or "Textures" (how every Khronos and vendor material extension names its textureInfos), a
+ *     "source" inside a texture's extensions (KHR_texture_basisu, EXT_texture_webp, EXT_texture_avif,
+ *     MSFT_texture_dds), and a "pointer" string "/textures/N...", "/images/N..." or "/samplers/N..."
+ *     (KHR_animation_pointer);
+ *   - anything else that may be an index (an "index" under another key; an integer under a key naming an
+ *     image, texture, sampler, or "source"; a pointer-like string under another key; e.g.
+ *     EXT_lights_image_based's specularImages) is uncertain: nothing at or below the largest such value is
+ *     removed, so it never needs renumbering and stays right whatever it means.
+ * A removed texture's own references do not keep an image or sampler. An image stored in a buffer view
+ * leaves that view (and its bytes) in the buffer: buffer views are not renumbered. extensionsUsed is not
+ * changed for extensions only the removed objects used (mr_gltf_sync_extensions handles the four it manages).
+ *
+ * Texture, image and sampler indices and pointers obtained before (mr_gltf_image's bytes, uri, path) are
+ * stale afterwards; read them again. *stats (may be NULL) receives the counts removed and how many objects stay
+ * only because of an uncertain reference. A NULL asset is MR_ERR_INVALID_ARG; on failure (also MR_ERR_NOMEM)
+ * the asset is unchanged and *stats is zero. */
+typedef struct mr_gltf_prune_stats {
+    int textures;  /* textures removed */
+    int images;    /* images removed */
+    int samplers;  /* samplers removed */
+    int uncertain; /* textures, images and samplers kept without a known reference to them */
+} mr_gltf_prune_stats;
+
+mr_status mr_gltf_prune_unused(mr_gltf *asset, mr_gltf_prune_stats *stats);
+
 /* ---- Geometry ------------------------------------------------------------------------------------------
  * mr_gltf_get_triangles gives the world-space triangles of a scene, grouped by material, in arrays an mr_mesh
  * (src/render/render.h) takes as they are: positions/normals/tangents/uv0 -> mr_mesh positions/normals/

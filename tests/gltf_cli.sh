@@ -3,8 +3,10 @@
 # validator with 0 errors; the spec-gloss extension leaves the materials and extensionsUsed/Required; the new
 # textures equal what `matremap spec2metal` makes of the same maps; factor-only materials get the factors
 # `spec2metal` computes; --fallback keep and --keep-specgloss; metal2spec and back on the WaterBottle within
-# 8-bit rounding; samplers and UV mappings carried over; usage errors and inputs never overwritten. Needs node/npm
-# (the validator, tests/node), python3 and idiff. Ends with "N passed, N failed".
+# 8-bit rounding; samplers and UV mappings carried over; textures, images and samplers that nothing refers to after
+# the conversion are pruned (counts printed, their files not written, no UNUSED_OBJECT from the validator) unless
+# --keep-unused; usage errors and inputs never overwritten. Needs node/npm (the validator, tests/node), python3 and
+# idiff. Ends with "N passed, N failed".
 set -u
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="${MR_BUILD:-$root/build}"
@@ -60,6 +62,10 @@ mkdir -p "$tmp/floppy" "$tmp/avocado" "$tmp/keep" "$tmp/sg" "$tmp/truck" "$tmp/d
 expect "FloppyDisk, weighted" 0 "1 of 1 materials converted" -- "$bin" gltf spec2metal "$floppy" \
     -o "$tmp/floppy/floppy.gltf" --method weighted
 out="$tmp/floppy/floppy.gltf"
+check "FloppyDisk: its diffuse and specular-glossiness textures pruned" \
+    grep -q "^pruned 2 textures, 2 images and 0 samplers that nothing refers to$" "$tmp/out"
+check "... their files not written, the normal map's is" test \
+    "$(cd "$tmp/floppy/textures" && echo *)" = "material_0_normal.png"
 check "the spec-gloss extension is gone from the material" test \
     "$(gltf "$out" '"KHR_materials_pbrSpecularGlossiness" in d["materials"][0].get("extensions", {})')" = False
 check "... and from extensionsUsed and extensionsRequired" test \
@@ -67,13 +73,28 @@ check "... and from extensionsUsed and extensionsRequired" test \
 check "core base colour and metallic-roughness textures" test \
     "$(gltf "$out" 'sorted(d["materials"][0]["pbrMetallicRoughness"])')" = \
     "['baseColorTexture', 'metallicRoughnessTexture']"
-check "the normal map, meshes and nodes are kept" test \
-    "$(gltf "$out" '(d["materials"][0]["normalTexture"]["index"], len(d["meshes"]), len(d["nodes"]))')" = \
-    "$(gltf "$floppy" '(d["materials"][0]["normalTexture"]["index"], len(d["meshes"]), len(d["nodes"]))')"
+check "the normal map (renumbered: the textures before it were pruned), meshes and nodes are kept" test \
+    "$(gltf "$out" '(m(0)["normalTexture"]["index"], uri(m(0)["normalTexture"]["index"]), len(d["meshes"]),
+                     len(d["nodes"]))')" = \
+    "$(gltf "$floppy" '(0, uri(m(0)["normalTexture"]["index"]), len(d["meshes"]), len(d["nodes"]))')"
 
 # The same maps through `matremap spec2metal` give the same texels (Avocado's material has no factors).
 expect "Avocado, weighted" 0 "1 of 1 materials converted" -- "$bin" gltf spec2metal "$avocado" \
     -o "$tmp/avocado/avocado.gltf" --method weighted
+check "Avocado: the spec-gloss and the replaced core textures pruned" \
+    grep -q "^pruned 4 textures, 4 images and 0 samplers" "$tmp/out"
+check "... the remaining textures are the normal map and the new ones" test \
+    "$(gltf "$tmp/avocado/avocado.gltf" '[d["images"][t["source"]]["uri"] for t in d["textures"]]')" = \
+    "['Avocado_normal.png', 'avocado_m0_basecolor.png', 'avocado_m0_metallicRoughness.png']"
+check "... and the output folder has no dead images" test \
+    "$(cd "$tmp/avocado" && echo *.png)" = \
+    "Avocado_normal.png avocado_m0_basecolor.png avocado_m0_metallicRoughness.png"
+mkdir -p "$tmp/unused"
+expect "Avocado, --keep-unused --json" 0 '"keep_unused": true, "pruned": \{"textures": 0, "images": 0' -- \
+    "$bin" gltf spec2metal "$avocado" -o "$tmp/unused/a.gltf" --method mean --keep-unused --json
+old_files=$(ls "$tmp/unused" | grep -c '^Avocado_.*png')
+check "--keep-unused: the old textures and their 5 files stay" test \
+    "$(gltf "$tmp/unused/a.gltf" 'len(d["textures"]), len(d["images"])') $old_files" = "(7, 7) 5"
 expect "the maps through spec2metal" 0 "" -- "$bin" spec2metal --diffuse "$avocado_dir/Avocado_diffuse.png" \
     --specular-glossiness "$avocado_dir/Avocado_specularGlossiness.png" --method weighted --pack -o "$tmp/maps"
 d=$(maxdiff "$tmp/maps_basecolor.png" "$tmp/avocado/avocado_m0_basecolor.png")
@@ -85,15 +106,24 @@ expect "--fallback keep" 0 "kept its own metal-rough" -- "$bin" gltf spec2metal 
 check "--fallback keep: the asset's own base colour texture" test \
     "$(gltf "$tmp/keep/a.gltf" 'uri(pbr(0)["baseColorTexture"]["index"])')" = \
     "Avocado_baseColor.png"
+check "--fallback keep: only the spec-gloss textures pruned" test \
+    "$(gltf "$tmp/keep/a.gltf" '[d["images"][t["source"]]["uri"] for t in d["textures"]]')" = \
+    "['Avocado_baseColor.png', 'Avocado_roughnessMetallic.png', 'Avocado_normal.png']"
 expect "--keep-specgloss" 0 "converted" -- "$bin" gltf spec2metal "$avocado" -o "$tmp/sg/a.gltf" --method mean \
     --keep-specgloss
 check "--keep-specgloss: the extension stays, used but not required" test \
     "$(gltf "$tmp/sg/a.gltf" '(SG in d["extensionsUsed"], SG in d.get("extensionsRequired", []))')" = \
     "(True, False)"
+check "--keep-specgloss: its textures stay referenced (only the replaced core ones pruned)" test \
+    "$(gltf "$tmp/sg/a.gltf" '(uri(ext(0)["diffuseTexture"]["index"]),
+        uri(ext(0)["specularGlossinessTexture"]["index"]), len(d["textures"]), len(d["images"]))')" = \
+    "('Avocado_diffuse.png', 'Avocado_specularGlossiness.png', 5, 5)"
 
 # Factor-only materials: the factors spec2metal computes for the same constants.
 expect "CesiumMilkTruck, weighted" 0 "4 of 4 materials converted" -- "$bin" gltf spec2metal "$truck" \
     -o "$tmp/truck/truck.gltf" --method weighted
+check "CesiumMilkTruck: the two diffuse textures of its one image pruned" \
+    grep -q "^pruned 2 textures, 1 image and 0 samplers" "$tmp/out"
 spec=$(gltf "$truck" '",".join("%.9g" % v for v in ext(1)["specularFactor"])')
 diffuse=$(gltf "$truck" '",".join("%.9g" % v for v in ext(1)["diffuseFactor"][:3])')
 "$bin" spec2metal --diffuse "$diffuse" --specular "$spec" --glossiness 1 --method weighted >"$tmp/glass.txt" 2>/dev/null
@@ -107,6 +137,12 @@ check "the glass's factors are spec2metal's ($got vs $expected)" awk -v a="$got"
 expect "Duck, the network" 0 "1 of 1 materials converted with mlp" -- "$bin" gltf spec2metal "$duck" \
     -o "$tmp/duck/duck.glb"
 check "a .glb output" test "$(head -c 4 "$tmp/duck/duck.glb")" = glTF
+check "Duck: its diffuse texture pruned" grep -q "^pruned 1 texture, 1 image and 0 samplers" "$tmp/out"
+# 2 new textures; 3 views of the Duck's own and one per new image.
+check "... and not packed into the .glb" test "$(python3 -c 'import json, struct, sys
+b = open(sys.argv[1], "rb").read(); n = struct.unpack("<I", b[12:16])[0]; d = json.loads(b[20:20 + n])
+print(len(d["textures"]), len(d["images"]), len(d["bufferViews"]))' "$tmp/duck/duck.glb")" = \
+    "2 2 5"
 
 # The lossless extension route: nothing converted, the spec-gloss textures reused, glossiness as roughness.
 mkdir -p "$tmp/ext"
@@ -133,6 +169,8 @@ check "a kept spec-gloss extension beside the new core material is no longer req
 # ---- metal2spec and back ----------------------------------------------------------------------------------------
 expect "WaterBottle, metal2spec" 0 "1 of 1 materials converted" -- "$bin" gltf metal2spec "$bottle" \
     -o "$tmp/bottle/bottle.gltf"
+check "metal2spec keeps the core textures as the fallback: nothing pruned" \
+    grep -q "^pruned 0 textures, 0 images and 0 samplers" "$tmp/out"
 check "spec-gloss added, the core material kept as the fallback" test \
     "$(gltf "$tmp/bottle/bottle.gltf" '(SG in m(0)["extensions"], "metallicRoughnessTexture" in pbr(0),
                                         SG in d.get("extensionsRequired", []))')" = \
@@ -172,12 +210,20 @@ if [ ! -f "$node_dir/node_modules/gltf-validator/package.json" ]; then
     (cd "$node_dir" && npm ci --no-audit --no-fund --loglevel=error) >"$tmp/npm.log" 2>&1 ||
         echo "      npm ci failed: $(tail -n 3 "$tmp/npm.log" | tr '\n' ' ')"
 fi
+# Every output: 0 errors, and (pruned by default) no texture or image the validator finds unused.
 for f in "$tmp/floppy/floppy.gltf" "$tmp/ext/ext.gltf" "$tmp/ext/kept.gltf" "$tmp/avocado/avocado.gltf" \
          "$tmp/keep/a.gltf" "$tmp/sg/a.gltf" "$tmp/truck/truck.gltf" "$tmp/duck/duck.glb" \
          "$tmp/bottle/bottle.gltf" "$tmp/back/back.gltf" "$tmp/settings/settings.gltf"; do
-    result=$(node "$node_dir/gltf_validate.js" "$f" 2>&1 | head -n 1)
+    node "$node_dir/gltf_validate.js" --all "$f" >"$tmp/validator.txt" 2>&1
+    result=$(head -n 1 "$tmp/validator.txt")
     errors=$(echo "$result" | sed -nE 's/.* errors=([0-9]+) .*/\1/p')
-    check "validator: ${f#"$tmp/"}: errors=${result##* errors=}" test "$errors" = 0
+    unused=$(grep -cE 'UNUSED_OBJECT /(textures|images)/' "$tmp/validator.txt")
+    check "validator: ${f#"$tmp/"}: errors=${result##* errors=}, $unused unused textures/images" \
+        test "$errors" = 0 -a "$unused" = 0
 done
+node "$node_dir/gltf_validate.js" --all "$tmp/unused/a.gltf" >"$tmp/validator.txt" 2>&1
+check "validator: --keep-unused keeps Avocado's 4 old textures (UNUSED_OBJECT), 0 errors" test \
+    "$(grep -cE 'UNUSED_OBJECT /textures/' "$tmp/validator.txt") $(sed -nE '1s/.* errors=([0-9]+) .*/\1/p' \
+    "$tmp/validator.txt")" = "4 0"
 
 finish

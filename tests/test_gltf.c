@@ -1286,6 +1286,201 @@ MR_TEST(geometry_mutated_buffers) {
                  "%d ok, %d failed, %d without MR_ERR_FORMAT and the file", ok, failed, bad);
 }
 
+/* ---- pruning ------------------------------------------------------------------------------------------- */
+
+/* A 1x1 PNG (never decoded: the shim keeps the bytes). */
+static const unsigned char PNG_1X1[] = {
+    0x89, 'P', 'N', 'G', 0x0d, 0x0a, 0x1a, 0x0a, 0, 0, 0, 0x0d, 'I', 'H', 'D', 'R', 0, 0, 0, 1, 0, 0, 0, 1, 8,
+    2, 0, 0, 0, 0x90, 0x77, 0x53, 0xde, 0, 0, 0, 0x0c, 'I', 'D', 'A', 'T', 0x78, 0x9c, 0x63, 0xf8, 0xcf, 0xc0,
+    0, 0, 0x03, 0x01, 0x01, 0x00, 0xc9, 0xfe, 0x92, 0xef, 0, 0, 0, 0, 'I', 'E', 'N', 'D', 0xae, 0x42, 0x60,
+    0x82};
+
+/* The image URI of texture t ("" when it has none or on error). */
+static const char *texture_uri(const mr_gltf *g, int t) {
+    mr_gltf_texture tex;
+    mr_gltf_image im;
+    if (mr_gltf_get_texture(g, t, &tex) != MR_OK || tex.image < 0 || mr_gltf_get_image(g, tex.image, &im) != MR_OK)
+        return "";
+    return im.uri;
+}
+
+/* The file's text without whitespace (NULL if unreadable; caller frees), to look for compact JSON. */
+static char *squeezed_text(const char *path) {
+    long size;
+    char *text = (char *)slurp(path, &size);
+    if (text == NULL) return NULL;
+    long n = 0;
+    for (long i = 0; i < size; i++)
+        if (text[i] != ' ' && text[i] != '\n' && text[i] != '\t' && text[i] != '\r') text[n++] = text[i];
+    char *out = realloc(text, (size_t)n + 1);
+    if (out == NULL) {
+        free(text);
+        return NULL;
+    }
+    out[n] = '\0';
+    return out;
+}
+
+/* A hand-made asset with every kind of reference mr_gltf_prune_unused knows, and known answers. Images
+ * a..f.png, samplers s0..s3 (told apart by their filters), textures:
+ *   t0 a s0   referenced by nothing, but below an uncertain reference: kept
+ *   t1 b      an uncertain reference (material extras "myThing": {"index": 1}): kept
+ *   t2 f s1   referenced by nothing: removed, and with it f.png and s1
+ *   t3 d s2   normalTexture
+ *   t4 c s3   clearcoatTexture of an extension the shim does not know; KHR_texture_basisu source e.png
+ *   t5 d      referenced by nothing: removed (d.png stays, t3 uses it)
+ *   t6 e      a KHR_animation_pointer-style "pointer" in a node extension
+ *   t7 a      a material property outside the schema ("customTexture", kept only in the file's JSON)
+ * After pruning: t0 t1 t3 t4 t6 t7 -> 0..5; images a b c d e -> 0..4; samplers s0 s2 s3 -> 0..2. */
+MR_TEST(prune_unused_hand_made) {
+    mkdir(mr_test_tmp_path("prune_in"), 0777);
+    mkdir(mr_test_tmp_path("prune_out"), 0777);
+    const char *names[] = {"a", "b", "c", "d", "e", "f"};
+    for (int i = 0; i < 6; i++) {
+        char rel[64];
+        snprintf(rel, sizeof rel, "prune_in/%s.png", names[i]);
+        MR_CHECK(write_bytes(mr_test_tmp_path(rel), PNG_1X1, sizeof PNG_1X1));
+    }
+    const char *json =
+        "{\"asset\":{\"version\":\"2.0\"},"
+        "\"images\":[{\"uri\":\"a.png\"},{\"uri\":\"f.png\"},{\"uri\":\"b.png\"},{\"uri\":\"c.png\"},"
+        "{\"uri\":\"d.png\"},{\"uri\":\"e.png\"}],"
+        "\"samplers\":[{\"magFilter\":9728},{\"magFilter\":9729},{\"minFilter\":9728},{\"minFilter\":9729}],"
+        "\"textures\":[{\"source\":0,\"sampler\":0},{\"source\":2},{\"source\":1,\"sampler\":1},"
+        "{\"source\":4,\"sampler\":2},"
+        "{\"source\":3,\"sampler\":3,\"extensions\":{\"KHR_texture_basisu\":{\"source\":5}}},"
+        "{\"source\":4},{\"source\":5},{\"source\":0}],"
+        "\"materials\":[{\"name\":\"m\",\"normalTexture\":{\"index\":3},"
+        "\"extensions\":{\"KHR_materials_clearcoat\":{\"clearcoatFactor\":1,\"clearcoatTexture\":{\"index\":4}}},"
+        "\"extras\":{\"myThing\":{\"index\":1}},\"customTexture\":{\"index\":7}}],"
+        "\"nodes\":[{\"name\":\"n\",\"extensions\":{\"EXT_test_pointer\":{\"pointer\":\"/textures/6/extras/x\"}}}],"
+        "\"scenes\":[{\"nodes\":[0]}],\"scene\":0,"
+        "\"extensionsUsed\":[\"KHR_materials_clearcoat\",\"KHR_texture_basisu\",\"EXT_test_pointer\"]}\n";
+    const char *in = mr_test_tmp_path("prune_in/in.gltf");
+    MR_CHECK(write_bytes(in, json, strlen(json)));
+    mr_gltf *g = NULL;
+    MR_CHECK_OK(mr_gltf_load(in, &g));
+    if (g == NULL) return;
+    mr_gltf_prune_stats st;
+    MR_CHECK_OK(mr_gltf_prune_unused(g, &st));
+    MR_CHECK_MSG(st.textures == 2 && st.images == 1 && st.samplers == 1 && st.uncertain == 2,
+                 "removed %d textures, %d images, %d samplers; %d uncertain", st.textures, st.images, st.samplers,
+                 st.uncertain);
+    mr_gltf_counts c;
+    mr_gltf_get_counts(g, &c);
+    MR_CHECK(c.textures == 6 && c.images == 5 && c.samplers == 3);
+    static const char *const uris[6] = {"a.png", "b.png", "d.png", "c.png", "e.png", "a.png"};
+    for (int t = 0; t < 6 && t < c.textures; t++)
+        MR_CHECK_MSG(strcmp(texture_uri(g, t), uris[t]) == 0, "texture %d: '%s', expected '%s'", t,
+                     texture_uri(g, t), uris[t]);
+    /* Samplers renumbered with their textures: s0, s2 (min NEAREST), s3 (min LINEAR). */
+    mr_gltf_texture tex;
+    MR_CHECK_OK(mr_gltf_get_texture(g, 0, &tex));
+    MR_CHECK(tex.sampler == 0 && tex.params.mag_filter == 9728);
+    MR_CHECK_OK(mr_gltf_get_texture(g, 2, &tex));
+    MR_CHECK(tex.sampler == 1 && tex.params.min_filter == 9728);
+    MR_CHECK_OK(mr_gltf_get_texture(g, 3, &tex));
+    MR_CHECK(tex.sampler == 2 && tex.params.min_filter == 9729);
+    MR_CHECK_OK(mr_gltf_get_texture(g, 1, &tex));
+    MR_CHECK(tex.sampler == -1);
+    mr_gltf_material m;
+    MR_CHECK_OK(mr_gltf_get_material(g, 0, &m));
+    MR_CHECK(m.normal_texture.index == 2);
+
+    /* Nothing is left to remove. */
+    mr_gltf_prune_stats again;
+    MR_CHECK_OK(mr_gltf_prune_unused(g, &again));
+    MR_CHECK(again.textures == 0 && again.images == 0 && again.samplers == 0);
+
+    /* Saved: the references inside the JSON trees renumbered, f.png not written. */
+    const char *out = mr_test_tmp_path("prune_out/out.gltf");
+    MR_CHECK_OK(mr_gltf_save(g, out));
+    mr_gltf_free(g);
+    char *text = squeezed_text(out);
+    MR_CHECK(text != NULL);
+    if (text != NULL) {
+        const char *expect[] = {"\"clearcoatTexture\":{\"index\":3}", "\"KHR_texture_basisu\":{\"source\":4}",
+                                "\"pointer\":\"/textures/4/extras/x\"", "\"customTexture\":{\"index\":5}",
+                                "\"myThing\":{\"index\":1}", "\"normalTexture\":{\"index\":2}"};
+        for (size_t i = 0; i < sizeof expect / sizeof expect[0]; i++)
+            MR_CHECK_MSG(strstr(text, expect[i]) != NULL, "%s not in %s", expect[i], text);
+        free(text);
+    }
+    MR_CHECK(!file_exists(mr_test_tmp_path("prune_out/f.png")));
+    MR_CHECK(file_exists(mr_test_tmp_path("prune_out/a.png")) && file_exists(mr_test_tmp_path("prune_out/e.png")));
+    MR_CHECK(count_entries(mr_test_tmp_path("prune_out")) == 6);
+    g = NULL;
+    MR_CHECK_OK(mr_gltf_load(out, &g));
+    if (g != NULL) {
+        mr_gltf_get_counts(g, &c);
+        MR_CHECK(c.textures == 6 && c.images == 5 && c.samplers == 3);
+        for (int t = 0; t < 6 && t < c.textures; t++) MR_CHECK(strcmp(texture_uri(g, t), uris[t]) == 0);
+    }
+    mr_gltf_free(g);
+    MR_CHECK(mr_gltf_prune_unused(NULL, &st) == MR_ERR_INVALID_ARG && st.textures == 0);
+}
+
+/* An uncertain image reference (EXT_lights_image_based's specularImages) pins the images at and below it;
+ * an unused texture above it still goes. */
+MR_TEST(prune_unused_uncertain_images) {
+    mkdir(mr_test_tmp_path("ibl"), 0777);
+    const char *names[] = {"ibl/p.png", "ibl/q.png", "ibl/r.png"};
+    for (int i = 0; i < 3; i++) MR_CHECK(write_bytes(mr_test_tmp_path(names[i]), PNG_1X1, sizeof PNG_1X1));
+    const char *json =
+        "{\"asset\":{\"version\":\"2.0\"},\"images\":[{\"uri\":\"p.png\"},{\"uri\":\"q.png\"},{\"uri\":\"r.png\"}],"
+        "\"textures\":[{\"source\":2},{\"source\":0}],\"materials\":[{\"emissiveTexture\":{\"index\":0}}],"
+        "\"extensions\":{\"EXT_lights_image_based\":{\"lights\":[{\"specularImages\":[[1,1,1,1,1,1]]}]}},"
+        "\"extensionsUsed\":[\"EXT_lights_image_based\"]}\n";
+    const char *in = mr_test_tmp_path("ibl/ibl.gltf");
+    MR_CHECK(write_bytes(in, json, strlen(json)));
+    mr_gltf *g = NULL;
+    MR_CHECK_OK(mr_gltf_load(in, &g));
+    if (g == NULL) return;
+    mr_gltf_prune_stats st;
+    MR_CHECK_OK(mr_gltf_prune_unused(g, &st));
+    /* t1 (p.png) goes; p.png is below the light's image 1, so it stays with q.png; r.png is t0's. */
+    MR_CHECK_MSG(st.textures == 1 && st.images == 0 && st.uncertain == 2, "%d textures, %d images, %d uncertain",
+                 st.textures, st.images, st.uncertain);
+    mr_gltf_counts c;
+    mr_gltf_get_counts(g, &c);
+    MR_CHECK(c.textures == 1 && c.images == 3 && strcmp(texture_uri(g, 0), "r.png") == 0);
+    mr_gltf_free(g);
+}
+
+/* The conversions' case on a real asset: Avocado without its core textures keeps the spec-gloss ones, renumbered
+ * inside the extension; without the extension, the spec-gloss textures go. */
+MR_TEST(prune_unused_avocado) {
+    for (int drop_sg = 0; drop_sg < 2; drop_sg++) {
+        mr_gltf *g = load_asset("Avocado");
+        if (g == NULL) return;
+        mr_gltf_material m;
+        MR_CHECK_OK(mr_gltf_get_material(g, 0, &m));
+        if (drop_sg) {
+            m.has_spec_gloss = 0;
+        } else {
+            mr_gltf_texture_ref_none(&m.base_color_texture);
+            mr_gltf_texture_ref_none(&m.metallic_roughness_texture);
+        }
+        MR_CHECK_OK(mr_gltf_set_material(g, 0, &m));
+        mr_gltf_prune_stats st;
+        MR_CHECK_OK(mr_gltf_prune_unused(g, &st));
+        MR_CHECK(st.textures == 2 && st.images == 2 && st.samplers == 0 && st.uncertain == 0);
+        MR_CHECK_OK(mr_gltf_get_material(g, 0, &m));
+        if (drop_sg) {
+            MR_CHECK(m.base_color_texture.index == 0 && m.metallic_roughness_texture.index == 1);
+            MR_CHECK(strcmp(texture_uri(g, 0), "Avocado_baseColor.png") == 0);
+            MR_CHECK(strcmp(texture_uri(g, 1), "Avocado_roughnessMetallic.png") == 0);
+        } else {
+            MR_CHECK(m.normal_texture.index == 0 && m.diffuse_texture.index == 1 &&
+                     m.specular_glossiness_texture.index == 2);
+            MR_CHECK(strcmp(texture_uri(g, 1), "Avocado_diffuse.png") == 0);
+            MR_CHECK(strcmp(texture_uri(g, 2), "Avocado_specularGlossiness.png") == 0);
+        }
+        MR_CHECK(strcmp(texture_uri(g, m.normal_texture.index), "Avocado_normal.png") == 0);
+        mr_gltf_free(g);
+    }
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(every_asset_loads), MR_TEST_ENTRY(floppy_disk_spec_gloss_factors),
              MR_TEST_ENTRY(avocado_carries_both_workflows), MR_TEST_ENTRY(water_bottle_packed_orm),
              MR_TEST_ENTRY(texture_settings_samplers), MR_TEST_ENTRY(duck_and_truck),
@@ -1296,4 +1491,6 @@ MR_TEST_MAIN(MR_TEST_ENTRY(every_asset_loads), MR_TEST_ENTRY(floppy_disk_spec_gl
              MR_TEST_ENTRY(no_partial_output_no_input_overwrite), MR_TEST_ENTRY(geometry_every_asset),
              MR_TEST_ENTRY(geometry_water_bottle_and_duck), MR_TEST_ENTRY(geometry_hand_made_asset),
              MR_TEST_ENTRY(geometry_general_transforms),
-             MR_TEST_ENTRY(geometry_bad_inputs), MR_TEST_ENTRY(geometry_mutated_buffers))
+             MR_TEST_ENTRY(geometry_bad_inputs), MR_TEST_ENTRY(geometry_mutated_buffers),
+             MR_TEST_ENTRY(prune_unused_hand_made), MR_TEST_ENTRY(prune_unused_uncertain_images),
+             MR_TEST_ENTRY(prune_unused_avocado))

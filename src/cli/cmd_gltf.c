@@ -36,6 +36,10 @@ static void print_help(void) {
            "extensionsUsed/Required are updated; meshes, nodes, animations and other extensions are kept.\n"
            "metal2spec adds the spec-gloss extension to every metal-rough material (Eq. 2), keeping the core\n"
            "material as the fallback.\n"
+           "After converting, every texture, image and sampler that nothing in the asset refers to any more is\n"
+           "removed (spec2metal's old diffuse and specular-glossiness textures, but also any the input left\n"
+           "unused), and its image file is not written beside OUT; references are renumbered. What an unknown\n"
+           "extension might refer to is kept (gltf/mr_gltf.h, mr_gltf_prune_unused).\n"
            "\n"
            "Options:\n"
            "  -o, --output OUT      the converted asset (.gltf with its files beside it, or .glb); never an input\n"
@@ -51,10 +55,12 @@ static void print_help(void) {
            "                        material (default: remove it, so engines without it read the core material)\n"
            "  --format F            png (default) or exr for the new textures (EXR is not a core glTF image\n"
            "                        type: the validator reports it and many viewers cannot read it)\n"
+           "  --keep-unused         keep unreferenced textures, images and samplers (default: remove them)\n"
            "  --json                a JSON summary on stdout\n"
            "  --help                this text\n"
            "\n"
-           "Prints one line per material (what was converted, texture size, flagged texels, time) and a total.\n"
+           "Prints one line per material (what was converted, texture size, flagged texels, time), a total and what\n"
+           "was removed.\n"
            "\n"
            "Example:\n"
            "  matremap gltf spec2metal FloppyDisk/scene.gltf -o out/floppy.gltf --method weighted\n");
@@ -63,7 +69,7 @@ static void print_help(void) {
 typedef struct options {
     const char *direction, *input, *output, *method, *weights, *format;
     mr_wf_diffuse convention;
-    int keep_fallback, keep_specgloss, json;
+    int keep_fallback, keep_specgloss, keep_unused, json;
 } options;
 
 /* ---- textures ----------------------------------------------------------------------------------------------- */
@@ -549,6 +555,8 @@ static int parse(int argc, char **argv, options *o) {
             o->keep_fallback = strcmp(value, "keep") == 0;
         } else if (strcmp(argv[i], "--keep-specgloss") == 0) {
             o->keep_specgloss = 1;
+        } else if (strcmp(argv[i], "--keep-unused") == 0) {
+            o->keep_unused = 1;
         } else if (strcmp(argv[i], "--json") == 0) {
             o->json = 1;
         } else if (argv[i][0] == '-') {
@@ -652,6 +660,14 @@ int cmd_gltf(int argc, char **argv) {
                         : metal2spec_material(asset, k, &o, &wf, scratch, stem, &outcomes[k]);
         converted += code == CLI_EXIT_OK && strcmp(outcomes[k].what, "converted") == 0;
     }
+    mr_gltf_prune_stats pruned = {0};
+    if (code == CLI_EXIT_OK && !o.keep_unused) {
+        // Converted materials no longer point at their old textures (spec2metal's diffuse and
+        // specular-glossiness ones, the replaced core ones); left in, they are dead files beside the output and
+        // the validator's UNUSED_OBJECT infos.
+        mr_status status = mr_gltf_prune_unused(asset, &pruned);
+        if (status != MR_OK) code = cli_fail("gltf", status);
+    }
     if (code == CLI_EXIT_OK) {
         // Spec-gloss kept beside a new core material (--keep-specgloss, or metal2spec's fallback): engines without
         // the extension read the core material, so it must not be required (FloppyDisk requires it).
@@ -680,6 +696,17 @@ int cmd_gltf(int argc, char **argv) {
         }
         printf("gltf %s: %d of %d materials converted with %s%s%s in %.2f s; wrote %s\n", o.direction, converted,
                counts.materials, o.method, use_mlp ? " " : "", use_mlp ? net_path : "", seconds, o.output);
+        if (o.keep_unused) {
+            printf("unreferenced textures, images and samplers kept (--keep-unused)\n");
+        } else {
+            printf("pruned %d texture%s, %d image%s and %d sampler%s that nothing refers to", pruned.textures,
+                   pruned.textures == 1 ? "" : "s", pruned.images, pruned.images == 1 ? "" : "s", pruned.samplers,
+                   pruned.samplers == 1 ? "" : "s");
+            if (pruned.uncertain > 0)
+                printf(" (%d kept that only extensions or extras this tool cannot read may refer to)",
+                       pruned.uncertain);
+            printf("\n");
+        }
     } else if (code == CLI_EXIT_OK) {
         printf("{\"command\": \"gltf %s\", \"input\": ", o.direction);
         cli_json_string(stdout, o.input);
@@ -696,7 +723,9 @@ int cmd_gltf(int argc, char **argv) {
             printf(", \"width\": %d, \"height\": %d, \"flagged\": %zu, \"seconds\": %.6f}", outcomes[k].width,
                    outcomes[k].height, outcomes[k].flagged, outcomes[k].seconds);
         }
-        printf("]}\n");
+        printf("], \"keep_unused\": %s, \"pruned\": {\"textures\": %d, \"images\": %d, \"samplers\": %d, "
+               "\"uncertain\": %d}}\n", o.keep_unused ? "true" : "false", pruned.textures, pruned.images,
+               pruned.samplers, pruned.uncertain);
     }
     if (scratch[0] != '\0') rmdir(scratch);
     free(outcomes);

@@ -1,16 +1,19 @@
 // gltf_validate.js — the Khronos glTF validator (npm gltf-validator, pinned in package-lock.json) over files.
 //
-// Usage: node gltf_validate.js FILE.gltf|FILE.glb ...
+// Usage: node gltf_validate.js [--all] FILE.gltf|FILE.glb ...
 // External buffers and images are resolved relative to each file (URIs percent-decoded) and validated too.
 // Prints one line per file: "FILE errors=N warnings=N infos=N hints=N", followed by one indented line per
-// error (severity 0) with its code, JSON pointer and message. Exit status 1 if any file has an error or
+// error (severity 0) with its code, JSON pointer and message (with --all, one per issue of any severity:
+// error, warning, info, hint; e.g. to look for UNUSED_OBJECT infos). Exit status 1 if any file has an error or
 // cannot be read, 0 otherwise.
 'use strict';
 const fs = require('fs');
 const path = require('path');
 const validator = require('gltf-validator');
 
-async function validate(file) {
+const SEVERITY = ['error', 'warning', 'info', 'hint'];
+
+async function validate(file, all) {
     const bytes = new Uint8Array(fs.readFileSync(file));
     const dir = path.dirname(file);
     const report = await validator.validateBytes(bytes, {
@@ -28,16 +31,19 @@ async function validate(file) {
     console.log(`${file} errors=${issues.numErrors} warnings=${issues.numWarnings} infos=${issues.numInfos} ` +
                 `hints=${issues.numHints}`);
     for (const m of issues.messages) {
-        if (m.severity === 0) console.log(`    error ${m.code} ${m.pointer || ''}: ${m.message}`);
+        if (m.severity === 0 || all)
+            console.log(`    ${SEVERITY[m.severity] || m.severity} ${m.code} ${m.pointer || ''}: ${m.message}`);
     }
     return issues.numErrors;
 }
 
 (async () => {
     let bad = 0;
-    for (const file of process.argv.slice(2)) {
+    const args = process.argv.slice(2);
+    const all = args.includes('--all');
+    for (const file of args.filter((a) => a !== '--all')) {
         try {
-            if (await validate(file) > 0) bad++;
+            if (await validate(file, all) > 0) bad++;
         } catch (e) {
             console.log(`${file} unreadable: ${e}`);
             bad++;
