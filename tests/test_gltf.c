@@ -1321,6 +1321,17 @@ static char *squeezed_text(const char *path) {
     return out;
 }
 
+/* Write `json` to the test folder's `name`, load it and prune it into *st; the asset, or NULL after a failed
+ * check. */
+static mr_gltf *load_and_prune(const char *name, const char *json, mr_gltf_prune_stats *st) {
+    const char *in = mr_test_tmp_path(name);
+    MR_CHECK(write_bytes(in, json, strlen(json)));
+    mr_gltf *g = NULL;
+    MR_CHECK_OK(mr_gltf_load(in, &g));
+    if (g != NULL) MR_CHECK_OK(mr_gltf_prune_unused(g, st));
+    return g;
+}
+
 /* A hand-made asset with every kind of reference mr_gltf_prune_unused knows, and known answers. Images
  * a..f.png, samplers s0..s3 (told apart by their filters), textures:
  *   t0 a s0   referenced by nothing, but below an uncertain reference: kept
@@ -1356,13 +1367,9 @@ MR_TEST(prune_unused_hand_made) {
         "\"nodes\":[{\"name\":\"n\",\"extensions\":{\"EXT_test_pointer\":{\"pointer\":\"/textures/6/extras/x\"}}}],"
         "\"scenes\":[{\"nodes\":[0]}],\"scene\":0,"
         "\"extensionsUsed\":[\"KHR_materials_clearcoat\",\"KHR_texture_basisu\",\"EXT_test_pointer\"]}\n";
-    const char *in = mr_test_tmp_path("prune_in/in.gltf");
-    MR_CHECK(write_bytes(in, json, strlen(json)));
-    mr_gltf *g = NULL;
-    MR_CHECK_OK(mr_gltf_load(in, &g));
-    if (g == NULL) return;
     mr_gltf_prune_stats st;
-    MR_CHECK_OK(mr_gltf_prune_unused(g, &st));
+    mr_gltf *g = load_and_prune("prune_in/in.gltf", json, &st);
+    if (g == NULL) return;
     MR_CHECK_MSG(st.textures == 2 && st.images == 1 && st.samplers == 1 && st.uncertain == 2,
                  "removed %d textures, %d images, %d samplers; %d uncertain", st.textures, st.images, st.samplers,
                  st.uncertain);
@@ -1431,13 +1438,9 @@ MR_TEST(prune_unused_uncertain_images) {
         "\"textures\":[{\"source\":2},{\"source\":0}],\"materials\":[{\"emissiveTexture\":{\"index\":0}}],"
         "\"extensions\":{\"EXT_lights_image_based\":{\"lights\":[{\"specularImages\":[[1,1,1,1,1,1]]}]}},"
         "\"extensionsUsed\":[\"EXT_lights_image_based\"]}\n";
-    const char *in = mr_test_tmp_path("ibl/ibl.gltf");
-    MR_CHECK(write_bytes(in, json, strlen(json)));
-    mr_gltf *g = NULL;
-    MR_CHECK_OK(mr_gltf_load(in, &g));
-    if (g == NULL) return;
     mr_gltf_prune_stats st;
-    MR_CHECK_OK(mr_gltf_prune_unused(g, &st));
+    mr_gltf *g = load_and_prune("ibl/ibl.gltf", json, &st);
+    if (g == NULL) return;
     /* t1 (p.png) goes; p.png is below the light's image 1, so it stays with q.png; r.png is t0's. */
     MR_CHECK_MSG(st.textures == 1 && st.images == 0 && st.uncertain == 2, "%d textures, %d images, %d uncertain",
                  st.textures, st.images, st.uncertain);
