@@ -4,7 +4,8 @@
 #   make check      the test suite (every tests/test_*.c binary and tests/*.sh script)
 #   make asan       the test suite built with AddressSanitizer + UndefinedBehaviorSanitizer
 #   make demo       renders and compares the demo materials of data/ into out/demo
-#   make bench      benchmarks (prints figures, asserts nothing; see docs/performance.md)
+#   make bench      benchmarks (prints figures, asserts nothing; see docs/performance.md); one section:
+#                   make bench BENCH_ARGS="--only report-accuracy"
 #   make analyses   the paper's stability analyses (docs/analyses.md)
 #   make evaluation the workflow converters on the real texture sets of ../shared/assets (docs/evaluation.md)
 #   make evaluation-gltf   the glTF conversions and gltf-transform's, rendered as meshes (docs/evaluation.md)
@@ -124,8 +125,10 @@ asan:
 demo: all
 	scripts/demo.sh $(BUILD)
 
+# BENCH_ARGS: e.g. "--only report-accuracy" runs one section of scripts/bench.sh (the whole run takes long).
+BENCH_ARGS ?=
 bench: all $(BENCHES)
-	scripts/bench.sh $(BUILD)
+	scripts/bench.sh $(BUILD) $(BENCH_ARGS)
 
 analyses: all
 	scripts/analyses.sh $(BUILD)

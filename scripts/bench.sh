@@ -1,13 +1,25 @@
 #!/usr/bin/env bash
 # make bench: prints benchmark figures and writes them into docs/performance.md (between the bench:render,
-# bench:metrics, bench:remap and bench:workflow markers) and docs/rendering.md (bench:envlight, bench:mesh).
-# Asserts nothing. Peers are measured in the same run: Blender Cycles
+# bench:metrics, bench:remap, bench:workflow, bench:gltf and bench:report-accuracy markers) and docs/rendering.md
+# (bench:envlight, bench:mesh). Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
-# Usage: scripts/bench.sh BUILD [--quick]
+# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy]
+#   --only NAME runs one section and rewrites only its markers (the full run takes long; sections written as
+#   functions below can be run alone). From make: make bench BENCH_ARGS="--only report-accuracy".
 set -euo pipefail
 build=${1:-build}
-quick=${2:-}
+shift || true
+quick=
+only=
+while [ $# -gt 0 ]; do
+    case $1 in
+        --quick) quick=--quick ;;
+        --only) only=${2:?--only needs a section name}; shift ;;
+        *) echo "bench.sh: unknown argument '$1'" >&2; exit 1 ;;
+    esac
+    shift
+done
 root=$(cd "$(dirname "$0")/.." && pwd)
 bin="$root/$build/bin/matremap"
 work="$root/$build/bench"
@@ -16,6 +28,261 @@ report="$work/render.md"
 
 # shellcheck source=scripts/lib/timing.sh
 . "$root/scripts/lib/timing.sh"
+
+# Replace the sections between the markers in docs/performance.md (or DOC) with this run's reports.
+perf="$root/docs/performance.md"
+replace_section() { # NAME REPORT [DOC]
+    local doc=${3:-$perf}
+    [ -f "$doc" ] && grep -q "<!-- bench:$1:begin -->" "$doc" || return 0
+    awk -v report="$2" -v begin="<!-- bench:$1:begin -->" -v end="<!-- bench:$1:end -->" '
+        $0 == begin { print; while ((getline line < report) > 0) print line; skip = 1; next }
+        $0 == end { skip = 0 }
+        !skip { print }' "$doc" > "$doc.tmp" && mv "$doc.tmp" "$doc"
+    echo "${doc#"$root"/} updated (section bench:$1)."
+}
+
+# What accuracy costs in `matremap report` (docs/performance.md, bench:report-accuracy): each single-material
+# spec-gloss asset of ../shared/assets against its `gltf spec2metal --method weighted` conversion, rendered as
+# meshes under the studio map in 4 rotations, at environment sample counts N (size 256) and at sizes S (N 1024).
+# Per run: the report's time for the original and the weighted conversion (the whole process, less the render
+# of a third material, below), its render time (summary.json), the rest (load, plans, pictures, SSIM), the
+# report's SSIM and its distance from the converged evaluation (N 16384 at the same size; S 512 at the same N),
+# and the original's own pictures against the converged ones (matremap ssim on the PNGs the report writes).
+# The `mean` conversion rides along as a third material (it shares the plan; only its render is extra): it is
+# further from the original (SSIM 0.994 on the Duck against weighted's 0.9993), so it shows whether a larger
+# difference is as stable. CesiumMilkTruck is left out: the report refuses multi-material assets.
+bench_report_accuracy() {
+    echo
+    echo "== matremap report on glTF meshes: time and SSIM stability against --env-samples and --size"
+    local shared=${MR_SHARED:-$root/../shared}
+    local env_map="$shared/assets/hdri/studio_small_03_1k.hdr" out="$work/report-accuracy"
+    local table="$work/report-accuracy.md" rows="$work/report-accuracy/rows.tsv"
+    local ns=(64 128 256 512 1024 2048 4096) sizes=(128 192 256 384 512)
+    local default_n=1024 default_size=256 converged_n=16384 thresholds="0.002 0.0002"
+    # Candidate defaults N:S, each checked against N = default_n at its size and at the largest size.
+    local candidates=(256:384)
+    [ "$quick" = --quick ] && ns=(64 256 1024) sizes=(128 256 384) converged_n=4096
+    local assets=(Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Avocado.gltf
+                  Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Duck.gltf FloppyDisk-sketchfab/scene.gltf)
+    if [ ! -f "$env_map" ] || [ ! -d "$shared/assets/specgloss" ]; then
+        echo "(no assets at $shared/assets: the report accuracy section was skipped)"
+        echo "Report accuracy skipped: ../shared/assets was not found in this run." > "$table"
+        replace_section report-accuracy "$table"
+        return 0
+    fi
+    # BENCH_REUSE=1 keeps the report folders of an earlier run, their times included, and redoes only what is
+    # missing and the tables (for work on the tables; a real measurement starts afresh).
+    [ -n "${BENCH_REUSE:-}" ] || rm -rf "$out"
+    mkdir -p "$out"
+    "$bin" render lambert --exposure 0 --size "$default_size" -o "$out/black.png" >/dev/null # RMS = RMSE to black
+    # One report (NAME SOURCE N SIZE) into $out/NAME/nN_sSIZE, once per folder (the default setting is in both
+    # sweeps); its wall and CPU seconds, medians of 3 runs unless the first takes 10 s or more (then the noise is
+    # a few per cent of the time and the runs would dominate the bench), go to the folder's `seconds`. A failed
+    # run is shown and tried once more: on a machine shared with other jobs a run can be killed for memory.
+    accuracy_report() {
+        local dir="$out/$1/n$3_s$4" walls=() cpus=() t run tries=0
+        [ -f "$dir/seconds" ] && return 0
+        for run in 1 2 3; do
+            until t=$(times_of "$out/report.log" "$bin" report -o "$dir" --env "$env_map" --env-samples "$3" \
+                      --size "$4" --label original "$2" -- --label weighted "$out/$1/weighted/out.gltf" \
+                      -- --label mean "$out/$1/mean/out.gltf"); do
+                echo "bench.sh: matremap report failed for $1 (N $3, size $4):" >&2
+                tail -n 5 "$out/report.log" >&2
+                tries=$((tries + 1))
+                [ "$tries" -lt 2 ] || exit 1
+            done
+            walls+=("${t% *}")
+            cpus+=("${t#* }")
+            if [ "$quick" = --quick ] || awk -v t="${t% *}" 'BEGIN { exit !(t >= 10) }'; then break; fi
+        done
+        echo "$(printf '%s\n' "${walls[@]}" | median) $(printf '%s\n' "${cpus[@]}" | median)" > "$dir/seconds"
+    }
+    # The original's pictures in DIR against those in REF (same size), on the 8-bit PNGs the report shows (each
+    # at its own automatic exposure): mean and lowest SSIM over the views and mean relative RMSE, as
+    # "MEAN MIN REL". The lowest view catches a highlight the pattern puts where the converged render has none.
+    picture_error() {
+        local v json rms lines=""
+        for v in 0 1 2 3; do
+            json=$("$bin" ssim --json "$1/view${v}_material0.png" "$2/view${v}_material0.png")
+            rms=$("$bin" ssim --json "$2/view${v}_material0.png" "$out/black.png" | sed -E 's/.*"rmse": ([^}]*)}.*/\1/')
+            lines+="$(echo "$json" | sed -E 's/.*"ssim": ([^,]*), "rmse": ([^}]*)}.*/\1 \2/') $rms"$'\n'
+        done
+        printf '%s' "$lines" | awk '{ s += $1; m = (NR == 1 || $1 < m) ? $1 : m; r += $2 / $3 }
+            END { printf "%.6f %.6f %.6f\n", s / NR, m, r / NR }'
+    }
+    # One line of $rows: NAME SWEEP N SIZE "PICTURE_SSIM PICTURE_MIN PICTURE_REL" and the report's own numbers.
+    accuracy_row() {
+        local dir="$out/$1/n$3_s$4" picture
+        read -r -a picture <<< "$5"
+        python3 -c 'import json, sys
+d = json.load(open(sys.argv[1]))
+m = d["materials"]
+print("%.6f\t%.6f\t%.9f\t%.9f" % (m[0]["seconds"] + m[1]["seconds"], m[2]["seconds"], m[1]["mean_ssim"],
+                                   m[2]["mean_ssim"]))' "$dir/summary.json" | {
+            IFS=$'\t' read -r render extra ssim ssim_mean
+            # The third material's render is taken off the wall time, and off the CPU time in the same proportion.
+            printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$1" "$2" "$3" "$4" \
+                "$(awk -v x="$extra" '{ printf "%.3f\t%.3f", $1 - x, $2 * ($1 - x) / $1 }' "$dir/seconds")" \
+                "$render" "$ssim" "$ssim_mean" "${picture[0]}" "${picture[1]}" "${picture[2]}"
+        } >> "$rows"
+    }
+    printf 'asset\tsweep\tn\tsize\tseconds\tcpu\trender\tssim\tssim_mean\tpicture_ssim\tpicture_min\tpicture_rel\n' \
+        > "$rows"
+    local asset source name n size method candidate
+    for asset in "${assets[@]}"; do
+        source="$shared/assets/specgloss/$asset"
+        name=${asset%%-*}
+        echo "-- $name"
+        for method in weighted mean; do
+            mkdir -p "$out/$name/$method"
+            "$bin" gltf spec2metal "$source" -o "$out/$name/$method/out.gltf" --method "$method" >/dev/null
+        done
+        for n in "${ns[@]}" "$converged_n"; do
+            accuracy_report "$name" "$source" "$n" "$default_size"
+        done
+        for size in "${sizes[@]}"; do
+            accuracy_report "$name" "$source" "$default_n" "$size"
+        done
+        for candidate in "${candidates[@]}"; do
+            accuracy_report "$name" "$source" "${candidate%:*}" "${candidate#*:}"
+            accuracy_report "$name" "$source" "$default_n" "${candidate#*:}"
+        done
+        for n in "${ns[@]}" "$converged_n"; do
+            accuracy_row "$name" n "$n" "$default_size" \
+                "$(picture_error "$out/$name/n${n}_s$default_size" "$out/$name/n${converged_n}_s$default_size")"
+        done
+        for size in "${sizes[@]}"; do
+            accuracy_row "$name" s "$default_n" "$size" "- - -"
+        done
+        for candidate in "${candidates[@]}"; do
+            accuracy_row "$name" c "${candidate%:*}" "${candidate#*:}" "- - -"
+            [[ " ${sizes[*]} " == *" ${candidate#*:} "* ]] ||
+                accuracy_row "$name" c "$default_n" "${candidate#*:}" "- - -"
+        done
+    done
+    {
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), matremap $("$bin" --version | cut -d' ' -f2)."
+        echo
+        python3 - "$rows" "$default_n" "$default_size" "$converged_n" "$thresholds" <<'PY'
+import csv, sys
+rows = list(csv.DictReader(open(sys.argv[1]), delimiter="\t"))
+default_n, default_size, converged_n = int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4])
+thresholds = [float(t) for t in sys.argv[5].split()]
+assets = list(dict.fromkeys(r["asset"] for r in rows))
+for r in rows:
+    for k in ("n", "size"):
+        r[k] = int(r[k])
+    for k in ("seconds", "cpu", "render", "ssim", "ssim_mean"):
+        r[k] = float(r[k])
+
+def sweep(kind):
+    """{asset: rows of the sweep in increasing order}, each with its |dSSIM| (both conversions) from the sweep's
+    converged row, and the larger of the two as `worst`."""
+    out = {}
+    for a in assets:
+        rs = [r for r in rows if r["asset"] == a and r["sweep"] == kind]
+        rs.sort(key=lambda r: r["n"] if kind == "n" else r["size"])
+        for r in rs:
+            r["delta"] = abs(r["ssim"] - rs[-1]["ssim"])
+            r["delta_mean"] = abs(r["ssim_mean"] - rs[-1]["ssim_mean"])
+            r["worst"] = max(r["delta"], r["delta_mean"])
+        out[a] = rs
+    return out
+
+def cheapest(by_asset, key, threshold):
+    """The smallest setting from which every larger one keeps |dSSIM| < threshold on every asset."""
+    settings = sorted({r[key] for rs in by_asset.values() for r in rs})
+    good = [all(r["worst"] < threshold for rs in by_asset.values() for r in rs if r[key] == s) for s in settings]
+    for i, s in enumerate(settings):
+        if all(good[i:]):
+            return s
+    return None
+
+n_sweep, s_sweep = sweep("n"), sweep("s")
+largest = max(r["size"] for r in rows if r["sweep"] == "s")
+print("`matremap report ORIGINAL.gltf -- WEIGHTED.gltf -- MEAN.gltf --env studio_small_03_1k.hdr` (4 rotations) "
+      "on each asset\nand its `gltf spec2metal` conversions. *report s*: the whole process, wall clock, less the "
+      "third material's\nrender (what a report of the original and one conversion costs; median of 3 runs under "
+      "10 s, one run above);\n*CPU s*: its user + system time (scaled the same way), the work done, which other "
+      "jobs on the machine inflate\nless than the wall clock; *render s*: the renders of the original and the "
+      "weighted conversion over the 4 views\n(the report's own timer, wall clock); *rest s*: report s less render "
+      "s: loading, one render plan per view\n(with shadow rays where the mesh hides itself), pictures, SSIM. "
+      "*SSIM w / m*: the report's mean SSIM of the\nweighted / mean conversion against the original; *|ΔSSIM|*: "
+      "its distance from the converged evaluation.\n*picture SSIM / worst view / rel. RMSE*: the original's own "
+      "pictures (the report's 8-bit PNGs) against its\npictures at N = %d: mean and lowest SSIM over the 4 views, "
+      "mean relative RMSE.\n" % converged_n)
+print("Environment sample count N at --size %d (converged: N = %d):\n" % (default_size, converged_n))
+print("| asset | N | report s | CPU s | render s | rest s | SSIM w | \\|ΔSSIM\\| w | SSIM m | \\|ΔSSIM\\| m | "
+      "picture SSIM | worst view | picture rel. RMSE |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+for a in assets:
+    for r in n_sweep[a]:
+        print("| %s | %d%s | %.2f | %.2f | %.2f | %.2f | %.5f | %.5f | %.5f | %.5f | %.5f | %.4f | %.4f |" % (
+            a, r["n"], " (converged)" if r["n"] == converged_n else "", r["seconds"], r["cpu"], r["render"],
+            r["seconds"] - r["render"], r["ssim"], r["delta"], r["ssim_mean"], r["delta_mean"],
+            float(r["picture_ssim"]), float(r["picture_min"]), float(r["picture_rel"])))
+print("\nImage size S at --env-samples %d (converged: S = %d; SSIM is measured at each size, so the distance "
+      "includes\nwhat the size itself changes in the SSIM, not only sampling):\n" % (default_n, largest))
+print("| asset | S | report s | CPU s | render s | rest s | SSIM w | \\|ΔSSIM\\| w | SSIM m | \\|ΔSSIM\\| m |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+for a in assets:
+    for r in s_sweep[a]:
+        print("| %s | %d² | %.2f | %.2f | %.2f | %.2f | %.5f | %.5f | %.5f | %.5f |" % (
+            a, r["size"], r["seconds"], r["cpu"], r["render"], r["seconds"] - r["render"], r["ssim"], r["delta"],
+            r["ssim_mean"], r["delta_mean"]))
+def find(a, n, size):
+    """The row of asset a at (n, size) from any sweep."""
+    return next((r for r in rows if r["asset"] == a and r["n"] == n and r["size"] == size), None)
+
+cands = sorted({(r["n"], r["size"]) for r in rows if r["sweep"] == "c" and r["n"] != default_n})
+if cands:
+    print("\nCandidate defaults against the current one (N %d, %d²): *|ΔSSIM| N*: the larger of the two "
+          "conversions'\ndistances from N = %d at the same size (what the smaller N changes); *|ΔSSIM| to %d²*: "
+          "from N = %d at\n%d² (what the size changes, against the largest size measured):\n"
+          % (default_n, default_size, default_n, largest, default_n, largest))
+    print("| asset | setting | report s | CPU s | SSIM w | SSIM m | \\|ΔSSIM\\| N | \\|ΔSSIM\\| to %d² |" % largest)
+    print("|---|---|---:|---:|---:|---:|---:|---:|")
+    for a in assets:
+        top = find(a, default_n, largest)
+        for n, size in [(default_n, default_size)] + cands:
+            r, same = find(a, n, size), find(a, default_n, size)
+            dn = max(abs(r["ssim"] - same["ssim"]), abs(r["ssim_mean"] - same["ssim_mean"]))
+            ds = max(abs(r["ssim"] - top["ssim"]), abs(r["ssim_mean"] - top["ssim_mean"]))
+            print("| %s | N %d, %d²%s | %.2f | %.2f | %.5f | %.5f | %.5f | %.5f |" % (
+                a, n, size, " (current)" if (n, size) == (default_n, default_size) else "", r["seconds"], r["cpu"],
+                r["ssim"], r["ssim_mean"], dn, ds))
+print("\nWorst case per setting over the three assets (largest |ΔSSIM| of either conversion, lowest picture SSIM "
+      "of a\nview, slowest report):\n")
+print("| setting | max \\|ΔSSIM\\| | worst picture view | max report s | max CPU s |")
+print("|---|---:|---:|---:|---:|")
+for n in sorted({r["n"] for rs in n_sweep.values() for r in rs}):
+    at = [r for rs in n_sweep.values() for r in rs if r["n"] == n]
+    print("| N %d, %d² | %.5f | %.5f | %.2f | %.2f |" % (n, default_size, max(r["worst"] for r in at),
+                                                     min(float(r["picture_min"]) for r in at),
+                                                     max(r["seconds"] for r in at), max(r["cpu"] for r in at)))
+for s in sorted({r["size"] for rs in s_sweep.values() for r in rs}):
+    at = [r for rs in s_sweep.values() for r in rs if r["size"] == s]
+    print("| N %d, %d² | %.5f | - | %.2f | %.2f |" % (default_n, s, max(r["worst"] for r in at),
+                                                 max(r["seconds"] for r in at), max(r["cpu"] for r in at)))
+print()
+for t in thresholds:
+    n, s = cheapest(n_sweep, "n", t), cheapest(s_sweep, "size", t)
+    print("Cheapest setting with |ΔSSIM| < %g for both conversions of every asset (and at every larger setting): "
+          "N = %s at %d², S = %s at N = %d.  " % (t, n if n is not None else "none measured", default_size,
+                                                 "%d²" % s if s is not None else "none measured", default_n))
+PY
+    } | tee "$table"
+    replace_section report-accuracy "$table"
+}
+
+if [ -n "$only" ]; then
+    case $only in
+        report-accuracy) bench_report_accuracy ;;
+        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy)" >&2; exit 1 ;;
+    esac
+    exit 0
+fi
+
 
 echo "== fit-scene render time per model (tests/bench_render.c)"
 "$root/$build/tests/bench_render" $quick | tee "$work/render_table.md"
@@ -245,17 +512,8 @@ else
     echo "glTF comparison skipped: gltf-transform or ../shared/assets missing in this run." > "$gltf_report"
 fi
 
-# Replace the sections between the markers in docs/performance.md (or DOC) with this run's reports.
-perf="$root/docs/performance.md"
-replace_section() { # NAME REPORT [DOC]
-    local doc=${3:-$perf}
-    [ -f "$doc" ] && grep -q "<!-- bench:$1:begin -->" "$doc" || return 0
-    awk -v report="$2" -v begin="<!-- bench:$1:begin -->" -v end="<!-- bench:$1:end -->" '
-        $0 == begin { print; while ((getline line < report) > 0) print line; skip = 1; next }
-        $0 == end { skip = 0 }
-        !skip { print }' "$doc" > "$doc.tmp" && mv "$doc.tmp" "$doc"
-    echo "${doc#"$root"/} updated (section bench:$1)."
-}
+bench_report_accuracy
+
 if [ -f "$perf" ]; then
     echo
     replace_section render "$report"

@@ -1,6 +1,9 @@
 # timing.sh — what the benchmark and evaluation scripts share (sourced).
 #   median            the median of the numbers on stdin, one per line
 #   seconds_of CMD... wall-clock seconds of a whole command, its output discarded
+#   times_of LOG CMD... "WALL CPU": wall-clock and CPU (user + system, children included) seconds of a whole
+#                     command, its output in LOG; returns the command's status. CPU time is the work done, which
+#                     other jobs on a shared machine inflate much less than the wall clock.
 median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2}'; }
 
 seconds_of() {
@@ -9,4 +12,12 @@ seconds_of() {
     "$@" >/dev/null 2>&1
     t1=$(date +%s.%N)
     awk -v a="$t0" -v b="$t1" 'BEGIN {print b - a}'
+}
+
+times_of() {
+    local log=$1 TIMEFORMAT='%R %U %S' t status=0
+    shift
+    t=$({ time "$@" >"$log" 2>&1; } 2>&1) || status=$?
+    echo "$t" | awk '{ print $1, $2 + $3 }'
+    return "$status"
 }
