@@ -374,17 +374,26 @@ static void set_values(cli_material *m, const char *name, const double *v, int c
     for (int c = 0; c < count; c++) m->values[offset + c] = v[c];
 }
 
-/* Fold texture `ref` of the asset (decoded with `encoding`) into parameter `name`: channels first.., times
- * factor. No texture: nothing to do. Returns an exit code. */
+/* One parameter's share of a texture: channels first.. (count 1 or 3) times factor. */
+typedef struct texture_fold {
+    const char *name, *label;
+    int first, count;
+    const double *factor;
+} texture_fold;
+
+/* Decode texture `ref` of the asset once (with `encoding`) and fold it into the `fold_count` parameters that read
+ * it (a packed texture feeds two). No texture: nothing to do. Returns an exit code. */
 static int fold_texture(const char *path, const mr_gltf *asset, const mr_gltf_texture_ref *ref,
-                        mr_img_encoding encoding, const char *scratch, cli_material *m, const char *name,
-                        const char *label, int first, int count, const double *factor) {
+                        mr_img_encoding encoding, const char *scratch, cli_material *m, const texture_fold *folds,
+                        int fold_count) {
     if (ref->index < 0) return CLI_EXIT_OK;
     mr_texture_sampling sampling;
-    int code = gltf_sampling(path, asset, ref, label, &sampling);
+    int code = gltf_sampling(path, asset, ref, folds[0].label, &sampling);
     mr_image *image = NULL;
     if (code == CLI_EXIT_OK) code = cli_gltf_read_texture(asset, ref, encoding, scratch, &image);
-    if (code == CLI_EXIT_OK) code = fold_map(m, name, label, image, first, count, factor, &sampling);
+    for (int f = 0; f < fold_count && code == CLI_EXIT_OK; f++)
+        code = fold_map(m, folds[f].name, folds[f].label, image, folds[f].first, folds[f].count, folds[f].factor,
+                        &sampling);
     mr_image_free(image);
     return code;
 }
@@ -403,14 +412,14 @@ static int load_gltf_brdf(const char *path, const mr_gltf *asset, const mr_gltf_
         set_values(m, "diffuse", mat->diffuse_factor, 3);
         set_values(m, "specular", mat->specular_factor, 3);
         set_values(m, "glossiness", &mat->glossiness_factor, 1);
-        int code = fold_texture(path, asset, &mat->diffuse_texture, MR_IMG_COLOR, scratch, m, "diffuse",
-                                "diffuseTexture", 0, 3, mat->diffuse_factor);
+        const texture_fold diffuse = {"diffuse", "diffuseTexture", 0, 3, mat->diffuse_factor};
+        const texture_fold specgloss[2] = {
+            {"specular", "specularGlossinessTexture RGB", 0, 3, mat->specular_factor},
+            {"glossiness", "specularGlossinessTexture A", 3, 1, &mat->glossiness_factor}};
+        int code = fold_texture(path, asset, &mat->diffuse_texture, MR_IMG_COLOR, scratch, m, &diffuse, 1);
         if (code == CLI_EXIT_OK)
-            code = fold_texture(path, asset, &mat->specular_glossiness_texture, MR_IMG_COLOR, scratch, m, "specular",
-                                "specularGlossinessTexture RGB", 0, 3, mat->specular_factor);
-        if (code == CLI_EXIT_OK)
-            code = fold_texture(path, asset, &mat->specular_glossiness_texture, MR_IMG_COLOR, scratch, m,
-                                "glossiness", "specularGlossinessTexture A", 3, 1, &mat->glossiness_factor);
+            code = fold_texture(path, asset, &mat->specular_glossiness_texture, MR_IMG_COLOR, scratch, m, specgloss,
+                                2);
         return code;
     }
     m->model = mr_brdf_find("gltf");
@@ -428,20 +437,19 @@ static int load_gltf_brdf(const char *path, const mr_gltf *asset, const mr_gltf_
     set_values(m, "specular", &strength, 1);
     set_values(m, "specular_color", colour, 3);
     set_values(m, "ior", &rendered_ior, 1);
-    int code = fold_texture(path, asset, &mat->base_color_texture, MR_IMG_COLOR, scratch, m, "base_color",
-                            "baseColorTexture", 0, 3, mat->base_color_factor);
+    const texture_fold base = {"base_color", "baseColorTexture", 0, 3, mat->base_color_factor};
+    const texture_fold metal_rough[2] = {
+        {"metallic", "metallicRoughnessTexture B", 2, 1, &mat->metallic_factor},
+        {"roughness", "metallicRoughnessTexture G", 1, 1, &mat->roughness_factor}};
+    const texture_fold specular_colour = {"specular_color", "specularColorTexture", 0, 3, colour};
+    const texture_fold specular = {"specular", "specularTexture A", 3, 1, &strength};
+    int code = fold_texture(path, asset, &mat->base_color_texture, MR_IMG_COLOR, scratch, m, &base, 1);
     if (code == CLI_EXIT_OK)
-        code = fold_texture(path, asset, &mat->metallic_roughness_texture, MR_IMG_DATA, scratch, m, "metallic",
-                            "metallicRoughnessTexture B", 2, 1, &mat->metallic_factor);
-    if (code == CLI_EXIT_OK)
-        code = fold_texture(path, asset, &mat->metallic_roughness_texture, MR_IMG_DATA, scratch, m, "roughness",
-                            "metallicRoughnessTexture G", 1, 1, &mat->roughness_factor);
+        code = fold_texture(path, asset, &mat->metallic_roughness_texture, MR_IMG_DATA, scratch, m, metal_rough, 2);
     if (code == CLI_EXIT_OK && mat->has_specular)
-        code = fold_texture(path, asset, &mat->specular_color_texture, MR_IMG_COLOR, scratch, m, "specular_color",
-                            "specularColorTexture", 0, 3, colour);
+        code = fold_texture(path, asset, &mat->specular_color_texture, MR_IMG_COLOR, scratch, m, &specular_colour, 1);
     if (code == CLI_EXIT_OK && mat->has_specular)
-        code = fold_texture(path, asset, &mat->specular_texture, MR_IMG_DATA, scratch, m, "specular",
-                            "specularTexture A", 3, 1, &strength);
+        code = fold_texture(path, asset, &mat->specular_texture, MR_IMG_DATA, scratch, m, &specular, 1);
     return code;
 }
 

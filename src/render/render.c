@@ -904,12 +904,13 @@ static mr_status render_core(const mr_render_plan *plan, const mr_material_bindi
         return mr_fail(MR_ERR_INVALID_ARG, "render: %d materials given, the plan's mesh uses %d (give them all, or "
                        "one for every triangle)", materials == NULL ? 0 : count, needed);
     const int used = count == 1 ? 1 : needed;
-    material_state *states = malloc((size_t)used * sizeof *states);
+    // One material (every render of the optimiser's loop) stays on the stack; a scene's materials go to the heap.
+    material_state single, *states = used == 1 ? &single : malloc((size_t)used * sizeof *states);
     if (states == NULL) return mr_fail(MR_ERR_NOMEM, "render: out of memory for %d materials", used);
     for (int m = 0; m < used; m++) {
         status = material_state_init(&materials[m], m, &states[m]);
         if (status != MR_OK) {
-            free(states);
+            if (states != &single) free(states);
             return status;
         }
     }
@@ -969,7 +970,7 @@ static mr_status render_core(const mr_render_plan *plan, const mr_material_bindi
             if (specular) specular->pixels[pixel * 3 + c] = (float)sum_s[c];
         }
     }
-    free(states);
+    if (states != &single) free(states);
     return MR_OK;
 }
 
