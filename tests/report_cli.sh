@@ -107,6 +107,18 @@ check "the converted truck: SSIM between 0.95 and 1" test \
 check "thumbnails name their material" test \
     "$(summary "$tmp/truck" '[t["label"].split(":")[0] for t in d["materials"][0]["thumbnails"]]')" = \
     "['truck', 'wheels']"
+# A texture read through TEXCOORD_2 (the renderer reads sets 0 and 1): refused, naming the file, the map and the set.
+mkdir -p "$tmp/uv2"
+cp "$(dirname "$duck")"/Duck0.bin "$(dirname "$duck")"/DuckCM.png "$tmp/uv2/"
+python3 - "$duck" "$tmp/uv2/duck.gltf" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+d["materials"][0]["extensions"]["KHR_materials_pbrSpecularGlossiness"]["diffuseTexture"]["texCoord"] = 2
+json.dump(d, open(sys.argv[2], "w"))
+PY
+expect "a texture on TEXCOORD_2 is refused, naming the file" 2 "$tmp/uv2/duck.gltf.*TEXCOORD_2" -- "$bin" report \
+    -o "$tmp/e7" --size 32 "$tmp/uv2/duck.gltf"
+check "no folder after the refusal" test ! -e "$tmp/e7"
 # Khronos' TextureSettingsTest: single-sided polygons seen from behind are culled and the samplers' REPEAT,
 # CLAMP_TO_EDGE and MIRRORED_REPEAT modes are honoured exactly when no red failure mark shows and every box of the
 # "Test" column is a green mark like its "Sample pass" neighbour (the Test column is a little smaller on screen;

@@ -24,6 +24,11 @@
 #define MAX_VIEWS 36
 #define MAX_ARGS 64
 #define THUMBNAIL_SIDE 128
+/* Defaults chosen from `make bench BENCH_ARGS="--only report-accuracy"` (docs/performance.md, "Defaults for
+ * matremap report"): from N = 256 every view of the textured assets is within SSIM 0.997 of N = 16384 and the
+ * report's SSIM within 0.0001; 384² is within 0.002 of 512² and keeps its ranking. Cheaper than 1024 at 256². */
+#define DEFAULT_ENV_SAMPLES 256
+#define DEFAULT_SIZE 384
 
 static void print_help(void) {
     printf("Usage: matremap report -o DIR [options] MODEL [name=value|name=@MAP ...]\n"
@@ -47,8 +52,8 @@ static void print_help(void) {
            "  --env FILE           equirectangular HDR map (.hdr, .exr); without it, the fit scene's point light\n"
            "  --rotations N        views: the map turned by 360/N degrees each (default 4; 1 without --env)\n"
            "  --env-scale S        radiance scale (default: the map's mean luminance brought to 0.5)\n"
-           "  --env-samples N      environment directions (default 1024, 1-%d)\n"
-           "  --size N             render side in pixels (default 256)\n"
+           "  --env-samples N      environment directions (default %d, 1-%d)\n"
+           "  --size N             render side in pixels (default %d)\n"
            "  --from X,Y,Z         glTF assets: the direction from the reference's centre to the camera (default:\n"
            "                       a three-quarter view onto its broadest side); the camera frames its bounds\n"
            "  --exposure E         display exposure of the pictures and of SSIM (default: the reference's\n"
@@ -63,7 +68,7 @@ static void print_help(void) {
            "  matremap report -o out/avocado --env studio.hdr \\\n"
            "      --label original gltf-specgloss diffuse=@d.png specular=@s.png glossiness=@g.png \\\n"
            "      -- --label weighted gltf base_color=@w_basecolor.png metallic=@w_mr.png:b roughness=@w_mr.png:g\n",
-           MR_ENV_MAX_SAMPLES);
+           DEFAULT_ENV_SAMPLES, MR_ENV_MAX_SAMPLES, DEFAULT_SIZE);
 }
 
 /* One material's group on the command line. */
@@ -757,13 +762,13 @@ int cmd_report(int argc, char **argv) {
             print_help();
             return CLI_EXIT_OK;
         }
-    options o = {NULL, NULL, NULL, 0, 0, 256, 0.0, 0.0, 0, {0.0, 0.0, 0.0}};
+    options o = {NULL, NULL, NULL, 0, 0, DEFAULT_SIZE, 0.0, 0.0, 0, {0.0, 0.0, 0.0}};
     static group groups[MAX_MATERIALS]; // these three are large (maps, picture names): kept off the stack
     int count = 0;
     int code = parse(argc, argv, &o, groups, &count);
     if (code != CLI_EXIT_OK) return code;
     if (o.rotations == 0) o.rotations = o.env_path ? 4 : 1;
-    if (o.env_samples == 0) o.env_samples = 1024;
+    if (o.env_samples == 0) o.env_samples = DEFAULT_ENV_SAMPLES;
     int views = o.rotations;
 
     static cli_material materials[MAX_MATERIALS];
