@@ -28,9 +28,10 @@ table="$work/table.md"
 {
     echo "Measured by \`make evaluation-gltf\` on $(date -u +%Y-%m-%d), matremap $("$bin" --version | cut -d' ' -f2),"
     echo "gltf-transform $("$gt/node_modules/.bin/gltf-transform" --version 2>/dev/null | tail -n 1): each asset's mesh,"
-    echo "${size}², under studio_small_03 turned in 4 steps of 90° (\`matremap report\`); SSIM (display-referred, at"
-    echo "the original's mid-grey exposure) and relative RMSE against the spec-gloss original, means over the four"
-    echo "views; conversion time = the whole conversion process, read to written."
+    echo "${size}², under studio_small_03 turned in 4 steps of 90° (\`matremap report\`, its default 256 environment"
+    echo "directions); SSIM (display-referred, at the original's mid-grey exposure) and relative RMSE against the"
+    echo "spec-gloss original, means over the four views; conversion time = the whole conversion process, read to"
+    echo "written."
     echo
     echo "| asset | conversion | mean SSIM | mean rel. RMSE | conversion s | time vs gltf-transform |"
     echo "|---|---|---:|---:|---:|---:|"
