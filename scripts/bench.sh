@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # make bench: prints benchmark figures and writes them into docs/performance.md (between the bench:render,
 # bench:metrics, bench:remap, bench:workflow, bench:gltf and bench:report-accuracy markers) and docs/rendering.md
-# (bench:envlight, bench:mesh). Asserts nothing. Peers are measured in the same run: Blender Cycles
+# (bench:envlight, bench:mesh, bench:reflection). Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
-# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy]
+# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection]
 #   --only NAME runs one section and rewrites only its markers (the full run takes long; sections written as
 #   functions below can be run alone). From make: make bench BENCH_ARGS="--only report-accuracy".
 set -euo pipefail
@@ -279,10 +279,100 @@ PY
     replace_section report-accuracy "$table"
 }
 
+# Reflection samples (docs/rendering.md, bench:reflection): what M directions about each pixel's mirror
+# direction buy and cost. (1) A GGX sphere (f0 0.9/0.6/0.3, dark diffuse) under the studio map at N 256, 256²,
+# for alpha from the models' floor to 0.3 and M = 0 ... 160, against N 16384 with M 1000: SSIM (display, the
+# map scaled to the report's mean luminance 0.5), relative RMSE, plan and render ms (the tool's own timers,
+# one run each: they are below a second). (2) The CesiumMilkTruck, whose four materials are all glossiness 1,
+# in `matremap report` at its defaults but M: the original's pictures against a report at N 4096 and M 1000,
+# the weighted conversion's report SSIM, and the report's wall and CPU seconds (medians of 3 runs).
+bench_reflection() {
+    echo
+    echo "== reflection samples: smooth materials under an environment map, accuracy and cost against M"
+    local shared=${MR_SHARED:-$root/../shared}
+    local env_map="$shared/assets/hdri/studio_small_03_1k.hdr" out="$work/reflection" table="$work/reflection.md"
+    local truck="$shared/assets/specgloss/CesiumMilkTruck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/CesiumMilkTruck.gltf"
+    if [ ! -f "$env_map" ] || [ ! -f "$truck" ]; then
+        echo "(no assets at $shared/assets: the reflection section was skipped)"
+        echo "Reflection samples skipped: ../shared/assets was not found in this run." > "$table"
+        replace_section reflection "$table" "$root/docs/rendering.md"
+        return 0
+    fi
+    rm -rf "$out"
+    mkdir -p "$out"
+    local alphas=(0.0001 0.003 0.02 0.1 0.3) ms=(0 10 40 160) scale=0.2706 alpha m log t
+    [ "$quick" = --quick ] && alphas=(0.0001 0.02 0.3) ms=(0 40)
+    sphere() { # ALPHA N M OUT: one render, prints "PLAN_MS RENDER_MS"
+        "$bin" render ggx alpha="$1" f0=0.9,0.6,0.3 diffuse=0.02,0.02,0.02 --env "$env_map" --env-scale "$scale" \
+            --env-samples "$2" --env-reflection-samples "$3" --size 256 -o "$4" 2>&1 |
+            sed -nE 's/.*plan ([0-9.]+) ms, rendered in ([0-9.]+) ms.*/\1 \2/p'
+    }
+    "$bin" render lambert --exposure 0 --size 256 -o "$out/black.exr" >/dev/null
+    {
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), matremap $("$bin" --version | cut -d' ' -f2)."
+        echo
+        echo "A GGX sphere (f0 0.9, 0.6, 0.3; diffuse 0.02) under studio_small_03 (scaled to mean luminance 0.5), 256²,"
+        echo "N = 256 pattern directions and M reflection samples, against N = 16384 with M = 1000. SSIM on the display"
+        echo "(sRGB luma), relative RMSE on linear RGB; plan and render: the tool's timers, 2 threads."
+        echo
+        echo "| GGX alpha | M | SSIM | rel. RMSE | plan ms | render ms |"
+        echo "|---:|---:|---:|---:|---:|---:|"
+    } > "$table"
+    for alpha in "${alphas[@]}"; do
+        sphere "$alpha" 16384 1000 "$out/ref_$alpha.exr" >/dev/null
+        local rms
+        rms=$("$bin" ssim --json "$out/ref_$alpha.exr" "$out/black.exr" | sed -E 's/.*"rmse": ([^}]*)}.*/\1/')
+        for m in "${ms[@]}"; do
+            read -r plan_ms render_ms < <(sphere "$alpha" 256 "$m" "$out/s_${alpha}_$m.exr")
+            "$bin" ssim --json "$out/s_${alpha}_$m.exr" "$out/ref_$alpha.exr" |
+                sed -E 's/.*"ssim": ([^,]*), "rmse": ([^}]*)}.*/\1 \2/' |
+                awk -v a="$alpha" -v m="$m" -v rms="$rms" -v p="$plan_ms" -v r="$render_ms" \
+                    '{ printf "| %g | %d | %.4f | %.4f | %.0f | %.0f |\n", a, m, $1, $2 / rms, p, r }' | tee -a "$table"
+        done
+    done
+    # The truck: the original against its weighted conversion, as `matremap report` shows them.
+    local weighted="$out/truck_weighted.gltf" v
+    "$bin" gltf spec2metal "$truck" -o "$weighted" --method weighted >/dev/null
+    "$bin" report -o "$out/truck_ref" --env "$env_map" --env-samples 4096 --reflection-samples 1000 "$truck" \
+        -- "$weighted" >/dev/null
+    {
+        echo
+        echo "CesiumMilkTruck (every material glossiness 1) in \`matremap report\` at its defaults (N 256, 384², 4 views) but M,"
+        echo "with its weighted conversion: the original's pictures against a report at N 4096, M 1000 (mean and worst"
+        echo "view), the conversion's report SSIM, and the whole report's time (median of 3 runs):"
+        echo
+        echo "| M | picture SSIM | worst view | report SSIM (weighted) | report s | CPU s |"
+        echo "|---:|---:|---:|---:|---:|---:|"
+    } >> "$table"
+    for m in 0 10 40 160; do
+        local walls=() cpus=() run
+        for run in 1 2 3; do
+            t=$(times_of "$out/report.log" "$bin" report -o "$out/truck_$m" --env "$env_map" --reflection-samples "$m" \
+                "$truck" -- "$weighted")
+            walls+=("${t% *}")
+            cpus+=("${t#* }")
+            [ "$quick" = --quick ] && break
+        done
+        local lines=""
+        for v in 0 1 2 3; do
+            lines+="$("$bin" ssim --json "$out/truck_$m/view${v}_material0.png" "$out/truck_ref/view${v}_material0.png" |
+                sed -E 's/.*"ssim": ([^,]*),.*/\1/')"$'\n'
+        done
+        local report_ssim
+        report_ssim=$(python3 -c 'import json, sys; print("%.5f" % json.load(open(sys.argv[1]))["materials"][1]["mean_ssim"])' \
+            "$out/truck_$m/summary.json")
+        printf '%s' "$lines" | awk -v m="$m" -v r="$report_ssim" -v w="$(printf '%s\n' "${walls[@]}" | median)" \
+            -v c="$(printf '%s\n' "${cpus[@]}" | median)" '{ s += $1; lo = (NR == 1 || $1 < lo) ? $1 : lo }
+            END { printf "| %d | %.4f | %.4f | %s | %.2f | %.2f |\n", m, s / NR, lo, r, w, c }' | tee -a "$table"
+    done
+    replace_section reflection "$table" "$root/docs/rendering.md"
+}
+
 if [ -n "$only" ]; then
     case $only in
         report-accuracy) bench_report_accuracy ;;
-        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy)" >&2; exit 1 ;;
+        reflection) bench_reflection ;;
+        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection)" >&2; exit 1 ;;
     esac
     exit 0
 fi
@@ -517,6 +607,7 @@ else
 fi
 
 bench_report_accuracy
+bench_reflection
 
 if [ -f "$perf" ]; then
     echo

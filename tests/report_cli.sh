@@ -67,6 +67,7 @@ expect "missing -o" 1 "missing -o DIR" -- "$bin" report ggx
 expect "no material" 1 "missing the reference MODEL" -- "$bin" report -o "$tmp/e1"
 expect "'--' without a model" 1 "without a MODEL" -- "$bin" report -o "$tmp/e2" ggx --
 expect "--rotations without --env" 1 "needs --env" -- "$bin" report -o "$tmp/e3" --rotations 3 ggx
+expect "--reflection-samples without --env" 1 "need --env" -- "$bin" report -o "$tmp/e3" --reflection-samples 8 ggx
 expect "an unknown model" 2 "frobnicate" -- "$bin" report -o "$tmp/e4" frobnicate
 expect "a missing map is named" 2 "nomap.png" -- "$bin" report -o "$tmp/e5" ggx diffuse=@"$tmp/nomap.png"
 expect "a missing environment is named" 2 "nosky.hdr" -- "$bin" report -o "$tmp/e6" --env "$tmp/nosky.hdr" ggx
@@ -104,6 +105,8 @@ check "its four materials, each with its model" test "$(summary "$tmp/truck" \
     "('wheels', 'gltf')]]")"
 check "the converted truck: SSIM between 0.95 and 1" test \
     "$(summary "$tmp/truck" '0.95 < d["materials"][1]["mean_ssim"] < 1')" = True
+check "the page says how the light was sampled" test \
+    "$(summary "$tmp/truck" '"128 fixed directions and 40 about each pixel" in d["scene"]')" = True
 check "thumbnails name their material" test \
     "$(summary "$tmp/truck" '[t["label"].split(":")[0] for t in d["materials"][0]["thumbnails"]]')" = \
     "['truck', 'wheels']"

@@ -1,6 +1,6 @@
 /*
  * cmd_render.c — `matremap render MODEL [name=value|name=@MAP ...] [--size N] [--light 45|frontal]
- *                [--env FILE [--env-rotation DEG] [--env-samples N] [--env-scale S]]
+ *                [--env FILE [--env-rotation DEG] [--env-samples N] [--env-reflection-samples M] [--env-scale S]]
  *                [--component full|diffuse|specular] [--exposure E] -o OUT`
  * Renders a material in the paper's fit scene (render.h), or under an environment map, optionally with
  * parameters from texture maps over the sphere, and writes it in the format of OUT's extension.
@@ -39,6 +39,10 @@ static void print_help(void) {
            "  --env-rotation DEG    turn the map about the vertical axis, counter-clockwise seen from above\n"
            "                        (default 0)\n"
            "  --env-samples N       directions of the sample pattern, 1-65536 (default %d)\n"
+           "  --env-reflection-samples M\n"
+           "                        M more directions per pixel around the mirror direction, combined with the\n"
+           "                        pattern by MIS: smooth materials (GGX alpha < ~0.1) reflect the map instead\n"
+           "                        of showing the pattern's directions as sparkles; 0-%d (default 0)\n"
            "  --env-scale S         multiply the map's radiance by S (default 1)\n"
            "  --component C         full, diffuse or specular (default full)\n"
            "  --exposure E          multiply radiance by E before writing (default 1)\n"
@@ -52,13 +56,13 @@ static void print_help(void) {
            "  matremap render ggx diffuse=@d.png f0=@s.png alpha=0.2 --env studio.hdr --size 256 -o x.exr\n"
            "  matremap render ggx-metallic albedo=@base.png metallic=@orm.png:b alpha=@alpha.exr --env studio.hdr \\\n"
            "      --env-rotation 90 -o y.png\n",
-           MR_ENV_DEFAULT_SAMPLES);
+           MR_ENV_DEFAULT_SAMPLES, MR_ENV_MAX_REFLECTION_SAMPLES);
 }
 
 int cmd_render(int argc, char **argv) {
     const char *model_name = NULL, *output = NULL, *env_path = NULL;
     mr_fit_scene_options scene_opts = {0};
-    int light_given = 0, env_option = 0, env_samples = 0;
+    int light_given = 0, env_option = 0, env_samples = 0, reflection_samples = 0;
     double env_rotation = 0.0, env_scale = 1.0;
     mr_component component = MR_COMPONENT_FULL;
     double exposure = 1.0;
@@ -98,6 +102,11 @@ int cmd_render(int argc, char **argv) {
                 !cli_parse_int("render", "--env-samples", value, 1, MR_ENV_MAX_SAMPLES, &env_samples))
                 return CLI_EXIT_USAGE;
             env_option = 1;
+        } else if ((taken = cli_take_option("render", argc, argv, &i, "--env-reflection-samples", &value))) {
+            if (taken < 0 || !cli_parse_int("render", "--env-reflection-samples", value, 0,
+                                            MR_ENV_MAX_REFLECTION_SAMPLES, &reflection_samples))
+                return CLI_EXIT_USAGE;
+            env_option = 1;
         } else if ((taken = cli_take_option("render", argc, argv, &i, "--env-scale", &value))) {
             if (taken < 0 || !cli_parse_double("render", "--env-scale", value, 0.0, 1e9, &env_scale))
                 return CLI_EXIT_USAGE;
@@ -129,7 +138,8 @@ int cmd_render(int argc, char **argv) {
     if (model_name == NULL) return cli_usage_error("render", "missing MODEL ('matremap models' lists them)");
     if (output == NULL) return cli_usage_error("render", "missing -o OUT (an .exr, .hdr, .png, .jpg or .tif file)");
     if (env_option && env_path == NULL)
-        return cli_usage_error("render", "--env-rotation, --env-samples and --env-scale need --env FILE");
+        return cli_usage_error("render", "--env-rotation, --env-samples, --env-reflection-samples and --env-scale need "
+                               "--env FILE");
 
     cli_material material;
     int code = cli_material_load("render", model_name, assignments, assignment_count, &material);
@@ -148,6 +158,7 @@ int cmd_render(int argc, char **argv) {
         // --env alone lights with the map only; with an explicit --light the point light stays as well.
         int slot = light_given ? scene.light_count++ : 0;
         scene.lights[slot] = mr_light_environment(env, env_scale, env_rotation, env_samples);
+        scene.lights[slot].reflection_samples = reflection_samples;
     }
     if (code == CLI_EXIT_OK) {
         status = mr_render_plan_create(&scene, &plan);

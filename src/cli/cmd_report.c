@@ -29,6 +29,10 @@
  * report's SSIM within 0.0001; 384² is within 0.002 of 512² and keeps its ranking. Cheaper than 1024 at 256². */
 #define DEFAULT_ENV_SAMPLES 256
 #define DEFAULT_SIZE 384
+/* Directions about each pixel's mirror direction (mr_light.reflection_samples): without them a smooth material
+ * (the CesiumMilkTruck's glossiness 1) shows the pattern's directions as sparkles instead of the map (docs/
+ * performance.md, "Reflection samples in matremap report"). */
+#define DEFAULT_REFLECTION_SAMPLES 40
 
 static void print_help(void) {
     printf("Usage: matremap report -o DIR [options] MODEL [name=value|name=@MAP ...]\n"
@@ -53,6 +57,9 @@ static void print_help(void) {
            "  --rotations N        views: the map turned by 360/N degrees each (default 4; 1 without --env)\n"
            "  --env-scale S        radiance scale (default: the map's mean luminance brought to 0.5)\n"
            "  --env-samples N      environment directions (default %d, 1-%d)\n"
+           "  --reflection-samples M  directions about each pixel's mirror direction, combined with the\n"
+           "                       environment's by MIS, so that smooth materials reflect the map (default %d,\n"
+           "                       0-%d; 0 = the environment's pattern alone)\n"
            "  --size N             render side in pixels (default %d)\n"
            "  --from X,Y,Z         glTF assets: the direction from the reference's centre to the camera (default:\n"
            "                       a three-quarter view onto its broadest side); the camera frames its bounds\n"
@@ -68,7 +75,8 @@ static void print_help(void) {
            "  matremap report -o out/avocado --env studio.hdr \\\n"
            "      --label original gltf-specgloss diffuse=@d.png specular=@s.png glossiness=@g.png \\\n"
            "      -- --label weighted gltf base_color=@w_basecolor.png metallic=@w_mr.png:b roughness=@w_mr.png:g\n",
-           DEFAULT_ENV_SAMPLES, MR_ENV_MAX_SAMPLES, DEFAULT_SIZE);
+           DEFAULT_ENV_SAMPLES, MR_ENV_MAX_SAMPLES, DEFAULT_REFLECTION_SAMPLES, MR_ENV_MAX_REFLECTION_SAMPLES,
+           DEFAULT_SIZE);
 }
 
 /* One material's group on the command line. */
@@ -85,6 +93,7 @@ typedef struct options {
     double env_scale, exposure; /* 0: automatic */
     int has_from;
     double from[3];             /* --from: camera direction for glTF assets */
+    int reflection_samples;     /* -1: DEFAULT_REFLECTION_SAMPLES */
 } options;
 
 /* Parse "X,Y,Z" (a non-zero direction) for `option`. Returns 1, or 0 after printing a usage error. */
@@ -139,6 +148,10 @@ static int parse(int argc, char **argv, options *o, group *groups, int *group_co
         } else if ((taken = cli_take_option("report", argc, argv, &i, "--env-samples", &value))) {
             if (taken < 0 || !cli_parse_int("report", "--env-samples", value, 1, MR_ENV_MAX_SAMPLES, &o->env_samples))
                 return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("report", argc, argv, &i, "--reflection-samples", &value))) {
+            if (taken < 0 || !cli_parse_int("report", "--reflection-samples", value, 0, MR_ENV_MAX_REFLECTION_SAMPLES,
+                                            &o->reflection_samples))
+                return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("report", argc, argv, &i, "--size", &value))) {
             if (taken < 0 || !cli_parse_int("report", "--size", value, 16, MR_RENDER_MAX_SIZE, &o->size))
                 return CLI_EXIT_USAGE;
@@ -168,8 +181,8 @@ static int parse(int argc, char **argv, options *o, group *groups, int *group_co
         return cli_usage_error("report", n == 1 ? "missing the reference MODEL" : "'--' without a MODEL after it");
     if (o->env_path == NULL && o->rotations > 1)
         return cli_usage_error("report", "--rotations %d needs --env FILE (the fit scene has one view)", o->rotations);
-    if (o->env_path == NULL && (o->env_scale > 0.0 || o->env_samples > 0))
-        return cli_usage_error("report", "--env-scale and --env-samples need --env FILE");
+    if (o->env_path == NULL && (o->env_scale > 0.0 || o->env_samples > 0 || o->reflection_samples >= 0))
+        return cli_usage_error("report", "--env-scale, --env-samples and --reflection-samples need --env FILE");
     *group_count = n;
     return CLI_EXIT_OK;
 }
@@ -681,8 +694,10 @@ static int render_views(const options *o, const mr_image *env, double env_scale,
         mr_fit_scene_options fit = {0};
         fit.size = o->size;
         mr_scene scene = mr_scene_fit(&fit);
-        if (env != NULL)
+        if (env != NULL) {
             scene.lights[0] = mr_light_environment(env, env_scale, 360.0 * v / views, o->env_samples);
+            scene.lights[0].reflection_samples = o->reflection_samples;
+        }
         mr_status status = MR_OK;
         if (assets != NULL) { // every entry's mesh seen by the camera that frames the reference's
             scene.shape.type = MR_SHAPE_MESH;
@@ -762,13 +777,14 @@ int cmd_report(int argc, char **argv) {
             print_help();
             return CLI_EXIT_OK;
         }
-    options o = {NULL, NULL, NULL, 0, 0, DEFAULT_SIZE, 0.0, 0.0, 0, {0.0, 0.0, 0.0}};
+    options o = {NULL, NULL, NULL, 0, 0, DEFAULT_SIZE, 0.0, 0.0, 0, {0.0, 0.0, 0.0}, -1};
     static group groups[MAX_MATERIALS]; // these three are large (maps, picture names): kept off the stack
     int count = 0;
     int code = parse(argc, argv, &o, groups, &count);
     if (code != CLI_EXIT_OK) return code;
     if (o.rotations == 0) o.rotations = o.env_path ? 4 : 1;
     if (o.env_samples == 0) o.env_samples = DEFAULT_ENV_SAMPLES;
+    if (o.reflection_samples < 0) o.reflection_samples = DEFAULT_REFLECTION_SAMPLES;
     int views = o.rotations;
 
     static cli_material materials[MAX_MATERIALS];
@@ -885,9 +901,10 @@ int cmd_report(int argc, char **argv) {
         char scene[1024];
         const char *object = assets ? "Each asset's triangles, framed as the reference's" : "Unit sphere";
         if (env != NULL)
-            snprintf(scene, sizeof scene, "%s, %d² pixels, lit by %s (radiance x %.4g, %d fixed directions), "
-                     "turned in %d steps of %g°; pictures at exposure %.4g.", object, o.size, o.env_path, env_scale,
-                     o.env_samples, views, 360.0 / views, exposure);
+            snprintf(scene, sizeof scene, "%s, %d² pixels, lit by %s (radiance x %.4g, %d fixed directions and %d "
+                     "about each pixel's mirror direction), turned in %d steps of %g°; pictures at exposure %.4g.",
+                     object, o.size, o.env_path, env_scale, o.env_samples, o.reflection_samples, views, 360.0 / views,
+                     exposure);
         else
             snprintf(scene, sizeof scene, "The fit scene's point light at 45°: %s, %d² pixels; pictures at exposure "
                      "%.4g.", object, o.size, exposure);

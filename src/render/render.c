@@ -10,7 +10,9 @@
  *   2. lighting: each light type turns hit records into shading samples. A point light gives at most one sample
  *      per hit (local light direction and weight) and needs no shadow ray on a convex object. An environment
  *      light gives the indices of its fixed directions above the hit's horizon; the directions and their
- *      L/(pdf N) weights are tabled once per plan (env_setup).
+ *      L/(pdf N) weights are tabled once per plan (env_setup). With reflection samples, each hit also gets M
+ *      directions drawn around its mirror direction, with their weights; both sets are combined by multiple
+ *      importance sampling (the pattern's factor is computed by the render, from the hit's mirror direction).
  * Rows are traced in parallel into per-row buffers and concatenated in image order, so the plan is identical
  * for any thread count.
  */
@@ -47,6 +49,16 @@ typedef struct point_sample {
     double weight[3]; /* I * cos(theta_l) / d^2 * the hit's share of its pixel, per RGB channel */
 } point_sample;
 
+/* Where a hit's reflection samples go (world space): r, the view reflected about the shading normal; a, the
+ * unit direction perpendicular to r in the plane of r and the normal; b = r x a; and squash = n.v (at least
+ * 0.02). A GGX lobe about the normal of width alpha reflects to a lobe about r of width 2 alpha along a and
+ * 2 alpha n.v along b: tilting the half vector out of the plane of incidence turns the reflection by only
+ * 2 (v.h) times the tilt. */
+struct reflection_frame {
+    double r[3], a[3], b[3];
+    double squash;
+};
+
 /* A lit hit: what the render needs of the geometry. Environment samples are direction indices; the frame turns
  * the tabled world directions into local ones. */
 typedef struct plan_hit {
@@ -56,16 +68,52 @@ typedef struct plan_hit {
     double share;      /* the hit's share of its pixel: 1, or 1/n^2 for a silhouette sub-pixel ray */
     double env_share;  /* share x the surface's ambient occlusion: what environment samples are weighted by */
     double emission[3]; /* emitted radiance x share (full renders add it) */
+    struct reflection_frame mirror; /* with reflection samples: the hit's mirror direction and lobe frame */
     int material;      /* index into the materials of mr_render_materials */
     int point_begin;   /* its point samples: point_samples[point_begin .. next hit's point_begin - 1] */
     size_t env_begin;  /* its environment samples: env_samples[env_begin .. next hit's env_begin - 1] */
+    size_t reflection_begin; /* its reflection samples: reflection_samples[reflection_begin .. next hit's - 1] */
 } plan_hit;
+
+/* A direction drawn around a hit's mirror direction: radiance += f_r(view, light) * weight * cos * env_share. */
+typedef struct reflection_sample {
+    float light[3];  /* local frame, unit, z > 0 */
+    float weight[3]; /* sum over the lights that take reflection samples of L(w) / (N pdf(w) + M q(w)) */
+} reflection_sample;
+
+/* What a direction that is not in the pattern needs of an environment light: its radiance and pattern pdf.
+ * The map is borrowed while the plan is built and forgotten afterwards. */
+typedef struct env_source {
+    const mr_image *map;
+    double total;               /* sum of luminance * sin(theta_row) over the map: the pattern's normaliser */
+    int n;                      /* the light's pattern size N */
+    double cos_turn, sin_turn;  /* its rotation about +y */
+    double intensity[3];
+    int reflections;            /* 1 if it takes part in the reflection samples' MIS */
+} env_source;
+
+/* The reflection samples' distribution q: an equal mixture of lobes about the mirror direction r, each shaped
+ * like an anisotropic GGX distribution of normals about r, of widths beta along the frame's a and
+ * beta * squash along b (struct reflection_frame): in slopes (x/z, y/z) of a direction (x, y, z) in the frame
+ * (a, b, r), q = P22(slopes) / z^3 with P22 = 1 / (pi bx by (1 + (x/z)^2 / bx^2 + (y/z)^2 / by^2)^2) (the
+ * hemisphere about r). Near r a GGX material of roughness alpha reflects a lobe of this shape with beta ~
+ * 2 alpha, heavy tails included, so the widths run from 2e-4 (alpha 1e-4, the models' floor) to 0.125
+ * (alpha ~ 0.06): a lobe much wider than the pattern's spacing is already well sampled by the pattern, whose
+ * MIS weight then dominates. */
+#define REFLECTION_LOBES 5
+static const double reflection_beta[REFLECTION_LOBES] = {0.125, 0.025, 0.005, 0.001, 0.0002};
 
 /* The fixed directions of every environment light of the scene, concatenated in light order. */
 typedef struct env_table {
     int count;
     double (*direction)[3]; /* world space, unit */
     double (*weight)[3];    /* L(w) * scale / (pdf(w) * N) per RGB channel; 0 for directions never used */
+    double *mis_npdf;       /* N pdf(w) of a direction whose light takes reflection samples, 0 otherwise */
+    int reflections;        /* M: reflection samples per hit (0: none, and mis_npdf is NULL) */
+    int per_lobe[REFLECTION_LOBES]; /* how many of the M each lobe of q draws */
+    double (*unit_slopes)[2]; /* [M]: the lobes' directions as slopes of a unit-width lobe, lobe by lobe */
+    int source_count;
+    env_source *sources;    /* [source_count], while the plan is built only */
 } env_table;
 
 struct mr_render_plan {
@@ -79,6 +127,7 @@ struct mr_render_plan {
     plan_hit *hits;       /* [hit_count + 1]: the last one only holds the end offsets of the sample arrays */
     point_sample *point_samples;
     uint16_t *env_samples; /* direction indices into env */
+    reflection_sample *reflection_samples;
     env_table env;
     mesh_world mesh;       /* MR_SHAPE_MESH: the world-space mesh and its BVH; zero otherwise */
     long shadow_rays;      /* traced while building the plan */
@@ -331,9 +380,11 @@ static double env_luminance(const float *px, int channels) {
  * inside the chosen texel), so pdf_uv = p / mean(p) over the unit square and, in solid angle,
  * pdf(w) = pdf_uv / (2 pi^2 sin theta). The weight is L(w) * scale / (pdf(w) n), with L the chosen texel (the
  * map is piecewise constant, like the pdf). xi1 grows with k, so rows come in order and each row's conditional
- * is built once, in a buffer of one row: O(width * height) time, O(width + height) memory. Returns 0 on
- * allocation failure. */
-static int env_fill(const mr_light *light, int n, double (*direction)[3], double (*weight)[3]) {
+ * is built once, in a buffer of one row: O(width * height) time, O(width + height) memory. With npdf, each
+ * direction's N pdf(w) (what MIS weighs the pattern by) goes there; *total gets the normaliser (0: a black map).
+ * Returns 0 on allocation failure. */
+static int env_fill(const mr_light *light, int n, double (*direction)[3], double (*weight)[3], double *npdf,
+                    double *total_out) {
     const mr_image *map = light->environment;
     const int width = map->width, height = map->height, channels = map->channels;
     double *row_cdf = malloc((size_t)(height + 1) * sizeof *row_cdf);
@@ -350,19 +401,23 @@ static int env_fill(const mr_light *light, int n, double (*direction)[3], double
         row_cdf[j + 1] = row_cdf[j] + sum * sin(MR_PI * (j + 0.5) / height);
     }
     const double total = row_cdf[height];
+    *total_out = 0.0;
     if (!(total > 0.0 && isfinite(total))) {
         // A black map: no direction carries light (weight 0: the plan stores none of them).
-        for (int k = 0; k < n; k++)
+        for (int k = 0; k < n; k++) {
             for (int c = 0; c < 3; c++) {
                 direction[k][c] = c == 1 ? 1.0 : 0.0;
                 weight[k][c] = 0.0;
             }
+            if (npdf) npdf[k] = 0.0;
+        }
         free(row_cdf);
         free(col_cdf);
         return 1;
     }
     for (int j = 1; j < height; j++) row_cdf[j] /= total;
     row_cdf[height] = 1.0;
+    *total_out = total;
 
     // fmod first, so that whole turns (360, -720 ...) are the identity exactly.
     const double turn = fmod(light->rotation_degrees, 360.0) * MR_PI / 180.0;
@@ -396,36 +451,133 @@ static int env_fill(const mr_light *light, int n, double (*direction)[3], double
         double factor = pdf_uv > 0.0 && sin_theta > 0.0 ? 2.0 * MR_PI * MR_PI * sin_theta / (pdf_uv * n) : 0.0;
         for (int c = 0; c < 3; c++)
             weight[k][c] = (double)px[channels == 1 ? 0 : c] * light->intensity[c] * factor;
+        if (npdf) npdf[k] = factor > 0.0 ? 1.0 / factor : 0.0;
     }
     free(row_cdf);
     free(col_cdf);
     return 1;
 }
 
+/* ---- reflection samples: directions about the mirror direction, combined with the pattern by MIS ------------- */
+
+/* M q(w): the reflection samples' density at unit direction w, times their number. The slopes come from dot
+ * products with a and b, which keep their precision at the narrowest lobe (1 - r.w would cancel). q is taken as
+ * 0 more than acos(REFLECTION_CONE_COS) = 53 degrees from r (about 10 widths of the widest lobe): the MIS weights
+ * stay a partition of unity as long as the pattern's factor and the reflection samples' weights use the same q
+ * (a reflection sample out there would weigh 0; none of the fixed ones is), and the render skips the lobes for
+ * most pattern directions with one dot product. */
+#define REFLECTION_CONE_COS 0.6
+static double reflection_density(const env_table *env, const struct reflection_frame *f, const double w[3]) {
+    const double z = vec3_dot(f->r, w);
+    if (!(z > REFLECTION_CONE_COS)) return 0.0;
+    const double sx = vec3_dot(f->a, w) / z, sy = vec3_dot(f->b, w) / z, z3 = z * z * z;
+    double sum = 0.0;
+    for (int j = 0; j < REFLECTION_LOBES; j++) {
+        const double bx = reflection_beta[j], by = reflection_beta[j] * f->squash;
+        const double d = 1.0 + sx * sx / (bx * bx) + sy * sy / (by * by);
+        sum += env->per_lobe[j] / (MR_PI * bx * by * z3 * d * d);
+    }
+    return sum;
+}
+
+/* The radiance of `source` along world direction w (unit), into L (RGB, intensity included), and N pdf(w) of
+ * its pattern: the inverse of env_fill's mapping, with the same piecewise-constant texel and pdf. */
+static double env_source_lookup(const env_source *source, const double w[3], double L[3]) {
+    const mr_image *map = source->map;
+    // Undo the rotation about +y, then the map's angles (env_fill: x = sin t sin p, y = cos t, z = -sin t cos p).
+    double x = w[0] * source->cos_turn - w[2] * source->sin_turn;
+    double z = w[0] * source->sin_turn + w[2] * source->cos_turn;
+    double y = w[1] < -1.0 ? -1.0 : w[1] > 1.0 ? 1.0 : w[1];
+    double theta = acos(y), phi = atan2(x, -z), sin_theta = hypot(x, z);
+    double u = phi / (2.0 * MR_PI) + 0.5, v = theta / MR_PI;
+    int i = (int)(u * map->width), j = (int)(v * map->height);
+    i = i < 0 ? 0 : i >= map->width ? map->width - 1 : i;
+    j = j < 0 ? 0 : j >= map->height ? map->height - 1 : j;
+    const float *px = mr_image_at(map, i, j);
+    for (int c = 0; c < 3; c++) L[c] = (double)px[map->channels == 1 ? 0 : c] * source->intensity[c];
+    if (!(sin_theta > 1e-12)) return INFINITY; // the poles: a set of measure zero the pattern never leaves empty
+    double pdf_uv = env_luminance(px, map->channels) * sin(MR_PI * (j + 0.5) / map->height) * map->width *
+                    map->height / source->total;
+    return source->n * pdf_uv / (2.0 * MR_PI * MR_PI * sin_theta);
+}
+
+/* An orthonormal pair (a, b) perpendicular to unit r (Duff et al. 2017, "Building an orthonormal basis,
+ * revisited"). */
+static void perpendicular_pair(const double r[3], double a[3], double b[3]) {
+    const double sign = copysign(1.0, r[2]);
+    const double p = -1.0 / (sign + r[2]), q = r[0] * r[1] * p;
+    a[0] = 1.0 + sign * r[0] * r[0] * p;
+    a[1] = sign * q;
+    a[2] = -sign * r[0];
+    b[0] = q;
+    b[1] = sign + r[1] * r[1] * p;
+    b[2] = -r[1];
+}
+
+/* Direction k of the m of lobe j, as slopes of a lobe of unit widths: a Hammersley point mapped through the unit
+ * GGX slope distribution's inverse CDF (radius^2 = xi / (1 - xi)), each lobe turned by a golden-ratio fraction of
+ * a turn so that no two lobes line up. The same for every hit: tabled once per plan. */
+static void reflection_unit_slopes(int j, int k, int m, double slopes[2]) {
+    const double xi1 = (k + 0.5) / m, xi2 = fmod(radical_inverse2((uint32_t)k) + 0.6180339887498949 * j, 1.0);
+    const double radius = sqrt(xi1 / (1.0 - xi1)), phi = 2.0 * MR_PI * xi2;
+    slopes[0] = radius * cos(phi);
+    slopes[1] = radius * sin(phi);
+}
+
 static void env_table_free(env_table *env) {
     free(env->direction);
     free(env->weight);
-    env->direction = NULL;
-    env->weight = NULL;
-    env->count = 0;
+    free(env->mis_npdf);
+    free(env->unit_slopes);
+    free(env->sources);
+    memset(env, 0, sizeof *env);
 }
 
 /* The directions of every environment light of the scene, concatenated in light order. */
 static mr_status env_setup(const mr_scene *scene, env_table *env) {
-    int total = 0;
+    int total = 0, lights = 0, reflections = 0;
     for (int l = 0; l < scene->light_count; l++)
-        if (scene->lights[l].type == MR_LIGHT_ENVIRONMENT) total += env_light_samples(&scene->lights[l]);
+        if (scene->lights[l].type == MR_LIGHT_ENVIRONMENT) {
+            total += env_light_samples(&scene->lights[l]);
+            lights++;
+            reflections = MR_MAX(reflections, scene->lights[l].reflection_samples);
+        }
     env->count = total;
     if (total == 0) return MR_OK;
     env->direction = malloc((size_t)total * sizeof *env->direction);
     env->weight = malloc((size_t)total * sizeof *env->weight);
-    if (env->direction == NULL || env->weight == NULL) goto oom;
+    env->sources = calloc((size_t)lights, sizeof *env->sources);
+    if (env->direction == NULL || env->weight == NULL || env->sources == NULL) goto oom;
+    if (reflections > 0) {
+        env->mis_npdf = malloc((size_t)total * sizeof *env->mis_npdf);
+        env->unit_slopes = malloc((size_t)reflections * sizeof *env->unit_slopes);
+        if (env->mis_npdf == NULL || env->unit_slopes == NULL) goto oom;
+        env->reflections = reflections;
+        int next = 0;
+        for (int j = 0; j < REFLECTION_LOBES; j++) {
+            env->per_lobe[j] = reflections / REFLECTION_LOBES + (j < reflections % REFLECTION_LOBES);
+            for (int k = 0; k < env->per_lobe[j]; k++)
+                reflection_unit_slopes(j, k, env->per_lobe[j], env->unit_slopes[next++]);
+        }
+    }
     int offset = 0;
     for (int l = 0; l < scene->light_count; l++) {
         const mr_light *light = &scene->lights[l];
         if (light->type != MR_LIGHT_ENVIRONMENT) continue;
         int n = env_light_samples(light);
-        if (!env_fill(light, n, env->direction + offset, env->weight + offset)) goto oom;
+        env_source *source = &env->sources[env->source_count++];
+        source->map = light->environment;
+        source->n = n;
+        const double turn = fmod(light->rotation_degrees, 360.0) * MR_PI / 180.0;
+        source->cos_turn = cos(turn);
+        source->sin_turn = sin(turn);
+        for (int c = 0; c < 3; c++) source->intensity[c] = light->intensity[c];
+        source->reflections = reflections > 0 && light->reflection_samples > 0;
+        double *npdf = env->mis_npdf ? env->mis_npdf + offset : NULL;
+        if (!env_fill(light, n, env->direction + offset, env->weight + offset, npdf, &source->total)) goto oom;
+        if (npdf && !source->reflections)
+            for (int k = 0; k < n; k++) npdf[k] = 0.0; // this light's pattern keeps its plain weights
+        if (!(source->total > 0.0)) source->reflections = 0;
         offset += n;
     }
     return MR_OK;
@@ -449,6 +601,8 @@ typedef struct row_result {
     size_t point_count, point_capacity;
     uint16_t *env;
     size_t env_count, env_capacity;
+    reflection_sample *reflections;
+    size_t reflection_count, reflection_capacity;
     long shadow_rays;
 } row_result;
 
@@ -458,6 +612,7 @@ static void row_result_free(row_result *row) {
     free(row->hits);
     free(row->points);
     free(row->env);
+    free(row->reflections);
 }
 
 /* Make room for `needed` elements of `size` bytes in *buffer (capacity in elements); 0 on allocation failure. */
@@ -471,12 +626,57 @@ static int reserve(void **buffer, size_t *capacity, size_t needed, size_t size) 
     return 1;
 }
 
+/* The hit's reflection samples (env->reflections of them, fewer below the horizon, in the shadow or where no
+ * light shines): directions about its mirror direction (frame f), each weighted by the balance
+ * heuristic's sum over the lights that take part, L(w) / (N pdf(w) + M q(w)). Returns 0 on allocation
+ * failure. */
+static int add_reflection_samples(const env_table *env, const mesh_world *occluder, const hit_record *hit,
+                                  const struct reflection_frame *f, row_result *row) {
+    if (!reserve((void **)&row->reflections, &row->reflection_capacity,
+                 row->reflection_count + (size_t)env->reflections, sizeof *row->reflections))
+        return 0;
+    for (int j = 0, next = 0; j < REFLECTION_LOBES; j++)
+        for (int k = 0; k < env->per_lobe[j]; k++, next++) {
+            // w = normalize(sx a + sy b + r), the unit slopes stretched by the lobe's widths.
+            const double sx = reflection_beta[j] * env->unit_slopes[next][0];
+            const double sy = reflection_beta[j] * f->squash * env->unit_slopes[next][1];
+            double w[3];
+            for (int c = 0; c < 3; c++) w[c] = sx * f->a[c] + sy * f->b[c] + f->r[c];
+            vec3_normalize(w);
+            if (!(vec3_dot(hit->normal, w) > 0.0)) continue;
+            const double mq = reflection_density(env, f, w);
+            if (!(mq > 0.0)) continue; // outside q's cone: the pattern alone weighs this direction
+            double weight[3] = {0.0, 0.0, 0.0};
+            for (int l = 0; l < env->source_count; l++) {
+                const env_source *source = &env->sources[l];
+                if (!source->reflections) continue;
+                double L[3];
+                const double npdf = env_source_lookup(source, w, L);
+                for (int c = 0; c < 3; c++) weight[c] += L[c] / (npdf + mq);
+            }
+            if (weight[0] == 0.0 && weight[1] == 0.0 && weight[2] == 0.0) continue;
+            if (occluder != NULL) {
+                row->shadow_rays++;
+                if (shadowed(occluder, hit, w, INFINITY)) continue;
+            }
+            double local[3];
+            to_local(hit, w, local);
+            reflection_sample *sample = &row->reflections[row->reflection_count++];
+            for (int c = 0; c < 3; c++) {
+                sample->light[c] = (float)local[c];
+                sample->weight[c] = (float)weight[c];
+            }
+        }
+    return 1;
+}
+
 /* Stage 2 for one hit carrying `share` of its pixel: its samples from every light, in light order; the hit is
  * kept if any light reaches it. `occluder` is the mesh when it can occlude itself (then every sample is kept
  * only if its shadow ray is clear), NULL otherwise. Returns 0 on allocation failure. */
 static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world *occluder, const hit_record *hit,
                    double share, row_result *row) {
     const size_t points_before = row->point_count, env_before = row->env_count;
+    const size_t reflections_before = row->reflection_count;
     if (!reserve((void **)&row->points, &row->point_capacity, row->point_count + (size_t)scene->light_count,
                  sizeof *row->points))
         return 0;
@@ -517,9 +717,30 @@ static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world
         }
         env_offset += n;
     }
+    // The view reflected about the shading normal, r = 2 (n.v) n - v (v the view in world space), and the
+    // lobe frame: a = the normal's part perpendicular to r (any perpendicular at normal incidence), b = r x a.
+    struct reflection_frame mirror;
+    memset(&mirror, 0, sizeof mirror);
+    if (env->reflections > 0 && hit->view_local[2] > 0.0) {
+        const double nv = hit->view_local[2];
+        for (int c = 0; c < 3; c++) {
+            double v = hit->view_local[0] * hit->tangent[c] + hit->view_local[1] * hit->bitangent[c] +
+                       nv * hit->normal[c];
+            mirror.r[c] = 2.0 * nv * hit->normal[c] - v;
+        }
+        vec3_normalize(mirror.r);
+        const double nr = vec3_dot(hit->normal, mirror.r);
+        for (int c = 0; c < 3; c++) mirror.a[c] = hit->normal[c] - nr * mirror.r[c];
+        if (vec3_normalize(mirror.a) < 1e-9) perpendicular_pair(mirror.r, mirror.a, mirror.b);
+        vec3_cross(mirror.r, mirror.a, mirror.b);
+        mirror.squash = MR_MAX(nv, 0.02);
+        if (!add_reflection_samples(env, occluder, hit, &mirror, row)) return 0;
+    }
     const int emits = hit->view_local[2] > 0.0 &&
                       (hit->emission[0] > 0.0 || hit->emission[1] > 0.0 || hit->emission[2] > 0.0);
-    if (row->point_count == points_before && row->env_count == env_before && !emits) return 1;
+    if (row->point_count == points_before && row->env_count == env_before &&
+        row->reflection_count == reflections_before && !emits)
+        return 1;
     if (!reserve((void **)&row->hits, &row->hit_capacity, row->hit_count + 1, sizeof *row->hits)) return 0;
     plan_hit *kept = &row->hits[row->hit_count++];
     for (int k = 0; k < 3; k++) {
@@ -536,8 +757,10 @@ static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world
     kept->env_share = share * hit->occlusion;
     for (int c = 0; c < 3; c++) kept->emission[c] = emits ? hit->emission[c] * share : 0.0;
     kept->material = hit->material;
+    kept->mirror = mirror;
     kept->point_begin = (int)points_before; // row-relative; the plan's concatenation checks the total
     kept->env_begin = env_before;
+    kept->reflection_begin = reflections_before;
     return 1;
 }
 
@@ -590,6 +813,7 @@ void mr_render_plan_free(mr_render_plan *plan) {
     free(plan->hits);
     free(plan->point_samples);
     free(plan->env_samples);
+    free(plan->reflection_samples);
     env_table_free(&plan->env);
     mesh_world_free(&plan->mesh);
     free(plan);
@@ -658,12 +882,13 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     if (failed) goto oom;
 
     // Concatenate the rows in image order: the plan, and so every render, is the same for any thread count.
-    size_t lit = 0, hits = 0, points = 0, envs = 0;
+    size_t lit = 0, hits = 0, points = 0, envs = 0, reflections = 0;
     for (int y = 0; y < height; y++) {
         lit += (size_t)rows[y].lit;
         hits += rows[y].hit_count;
         points += rows[y].point_count;
         envs += rows[y].env_count;
+        reflections += rows[y].reflection_count;
         plan->object_pixels += rows[y].object_pixels;
         plan->shadow_rays += rows[y].shadow_rays;
     }
@@ -673,21 +898,26 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     plan->hits = malloc((hits + 1) * sizeof *plan->hits);
     plan->point_samples = malloc((points + 1) * sizeof *plan->point_samples);
     plan->env_samples = malloc((envs + 1) * sizeof *plan->env_samples);
+    plan->reflection_samples = malloc((reflections + 1) * sizeof *plan->reflection_samples);
     if (plan->lit_pixel_index == NULL || plan->hit_begin == NULL || plan->hits == NULL ||
-        plan->point_samples == NULL || plan->env_samples == NULL)
+        plan->point_samples == NULL || plan->env_samples == NULL || plan->reflection_samples == NULL)
         goto oom;
     int next_lit = 0, next_hit = 0;
-    size_t next_point = 0, next_env = 0;
+    size_t next_point = 0, next_env = 0, next_reflection = 0;
     for (int y = 0; y < height; y++) {
         const row_result *row = &rows[y];
         if (row->point_count > 0)
             memcpy(plan->point_samples + next_point, row->points, row->point_count * sizeof *row->points);
         if (row->env_count > 0) memcpy(plan->env_samples + next_env, row->env, row->env_count * sizeof *row->env);
+        if (row->reflection_count > 0)
+            memcpy(plan->reflection_samples + next_reflection, row->reflections,
+                   row->reflection_count * sizeof *row->reflections);
         for (size_t h = 0; h < row->hit_count; h++) {
             plan_hit *hit = &plan->hits[next_hit + (int)h];
             *hit = row->hits[h];
             hit->point_begin += (int)next_point;
             hit->env_begin += next_env;
+            hit->reflection_begin += next_reflection;
         }
         for (int i = 0; i < row->lit; i++) {
             plan->lit_pixel_index[next_lit] = row->pixels[i];
@@ -697,12 +927,18 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
         }
         next_point += row->point_count;
         next_env += row->env_count;
+        next_reflection += row->reflection_count;
     }
     plan->hit_begin[next_lit] = next_hit;
     memset(&plan->hits[next_hit], 0, sizeof plan->hits[next_hit]);
     plan->hits[next_hit].point_begin = (int)next_point;
     plan->hits[next_hit].env_begin = next_env;
+    plan->hits[next_hit].reflection_begin = next_reflection;
     plan->hit_count = next_hit;
+    // The maps were borrowed for the reflection samples' weights; the plan keeps no reference to them.
+    free(plan->env.sources);
+    plan->env.sources = NULL;
+    plan->env.source_count = 0;
     plan->lit_pixels = next_lit;
     for (int y = 0; y < height; y++) row_result_free(&rows[y]);
     free(rows);
@@ -730,7 +966,11 @@ int mr_render_plan_lit_pixel_count(const mr_render_plan *plan) { return plan->li
 int mr_render_plan_object_pixel_count(const mr_render_plan *plan) { return plan->object_pixels; }
 
 long mr_render_plan_env_sample_count(const mr_render_plan *plan) {
-    return (long)plan->hits[plan->hit_count].env_begin;
+    return (long)plan->hits[plan->hit_count].env_begin + (long)plan->hits[plan->hit_count].reflection_begin;
+}
+
+long mr_render_plan_reflection_sample_count(const mr_render_plan *plan) {
+    return (long)plan->hits[plan->hit_count].reflection_begin;
 }
 
 long mr_render_plan_sample_count(const mr_render_plan *plan) {
@@ -744,7 +984,9 @@ size_t mr_render_plan_bytes(const mr_render_plan *plan) {
            sizeof *plan->hit_begin) + (hits + 1) * sizeof *plan->hits +
            ((size_t)plan->hits[hits].point_begin + 1) * sizeof *plan->point_samples +
            (plan->hits[hits].env_begin + 1) * sizeof *plan->env_samples +
-           (size_t)plan->env.count * (sizeof *plan->env.direction + sizeof *plan->env.weight) +
+           (plan->hits[hits].reflection_begin + 1) * sizeof *plan->reflection_samples +
+           (size_t)plan->env.count * (sizeof *plan->env.direction + sizeof *plan->env.weight +
+                                      (plan->env.mis_npdf ? sizeof *plan->env.mis_npdf : 0)) +
            mesh_world_bytes(&plan->mesh);
 }
 
@@ -952,8 +1194,20 @@ static mr_status render_core(const mr_render_plan *plan, const mr_material_bindi
                 const double *d = plan->env.direction[k];
                 double light[3] = {vec3_dot(hit->tangent, d), vec3_dot(hit->bitangent, d), vec3_dot(hit->normal, d)};
                 double cos_share = light[2] * hit->env_share;
+                // With reflection samples: the balance heuristic's share of the pattern, N p / (N p + M q).
+                if (plan->env.mis_npdf != NULL && plan->env.mis_npdf[k] > 0.0) {
+                    const double npdf = plan->env.mis_npdf[k];
+                    cos_share *= npdf / (npdf + reflection_density(&plan->env, &hit->mirror, d));
+                }
                 double weight[3];
                 for (int c = 0; c < 3; c++) weight[c] = plan->env.weight[k][c] * cos_share;
+                accumulate(model, state, hit->view, light, weight, acc_f, acc_d, acc_s);
+            }
+            for (size_t e = hit->reflection_begin; e < hit[1].reflection_begin; e++) {
+                const reflection_sample *sample = &plan->reflection_samples[e];
+                double light[3] = {sample->light[0], sample->light[1], sample->light[2]};
+                double cos_share = light[2] * hit->env_share, weight[3];
+                for (int c = 0; c < 3; c++) weight[c] = sample->weight[c] * cos_share;
                 accumulate(model, state, hit->view, light, weight, acc_f, acc_d, acc_s);
             }
             if (acc_f)

@@ -113,11 +113,19 @@ typedef struct mr_light {
     int samples;                 /* N, directions of the fixed sample pattern; 0 = MR_ENV_DEFAULT_SAMPLES;
                                     1 .. MR_ENV_MAX_SAMPLES, and all environment lights of a scene together
                                     at most MR_ENV_MAX_SAMPLES */
+    int reflection_samples;      /* M, directions drawn around each hit's mirror direction (the view reflected
+                                    about the shading normal) in addition to the pattern, both combined by
+                                    multiple importance sampling (balance heuristic; docs/rendering.md,
+                                    "Reflection samples"). They find the lobes of smooth materials (GGX alpha
+                                    down to 1e-4) that the pattern misses. 0 = the pattern alone (default);
+                                    0 .. MR_ENV_MAX_REFLECTION_SAMPLES; a scene uses the largest M of its
+                                    environment lights for every light that asks for reflection samples. */
 } mr_light;
 
 /* Environment-light sample counts (docs/rendering.md tables error and time against N). */
 #define MR_ENV_DEFAULT_SAMPLES 256
 #define MR_ENV_MAX_SAMPLES 65536
+#define MR_ENV_MAX_REFLECTION_SAMPLES 1024
 
 /* An environment light: `map` (borrowed, see mr_light) times `scale` in every channel, turned by
  * rotation_degrees about +y, sampled with `samples` directions (0 = MR_ENV_DEFAULT_SAMPLES). Values are checked
@@ -320,17 +328,22 @@ int mr_render_plan_lit_pixel_count(const mr_render_plan *plan);
 
 /* Number of shading samples, i.e. the BRDF evaluations one render makes: for each lit hit (one per lit pixel,
  * edge_samples^2 on the silhouette) one per point light that reaches it plus one per environment direction
- * above its horizon. */
+ * above its horizon (pattern and reflection samples). */
 long mr_render_plan_sample_count(const mr_render_plan *plan);
 
 /* Number of environment-light shading samples among mr_render_plan_sample_count() (0 without environment
- * lights). */
+ * lights): pattern directions and reflection samples. */
 long mr_render_plan_env_sample_count(const mr_render_plan *plan);
+
+/* Number of reflection samples among mr_render_plan_env_sample_count() (0 unless an environment light asks for
+ * them, mr_light.reflection_samples). */
+long mr_render_plan_reflection_sample_count(const mr_render_plan *plan);
 
 /* Number of shadow rays the plan traced (once, at creation): 0 for a sphere and for a convex mesh, which
  * cannot occlude itself (every vertex lies on the inner side of every face's plane, within 1e-6 of the mesh's
  * size, and every face's winding agrees with its vertex normals; a double-sided mesh must be flat); otherwise
- * one per point light and one per environment direction above the horizon, for each lit hit. The plan keeps
+ * one per point light, one per environment direction above the horizon and one per reflection sample above it,
+ * for each lit hit. The plan keeps
  * only the samples that see their light, so renders cost the same BRDF evaluations either way. */
 long mr_render_plan_shadow_ray_count(const mr_render_plan *plan);
 

@@ -97,6 +97,9 @@ static mr_status validate_environment(int index, const mr_light *light) {
     if (light->samples < 0 || light->samples > MR_ENV_MAX_SAMPLES)
         return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d: %d environment samples: expected 0 (default %d) to %d",
                        index, light->samples, MR_ENV_DEFAULT_SAMPLES, MR_ENV_MAX_SAMPLES);
+    if (light->reflection_samples < 0 || light->reflection_samples > MR_ENV_MAX_REFLECTION_SAMPLES)
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d: %d reflection samples: expected 0 (none) to %d", index,
+                       light->reflection_samples, MR_ENV_MAX_REFLECTION_SAMPLES);
     const int colour_channels = map->channels == 1 ? 1 : 3;
     for (int y = 0; y < map->height; y++)
         for (int x = 0; x < map->width; x++) {
