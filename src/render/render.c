@@ -501,19 +501,6 @@ static double env_source_lookup(const env_source *source, const double w[3], dou
     return source->n * pdf_uv / (2.0 * MR_PI * MR_PI * sin_theta);
 }
 
-/* An orthonormal pair (a, b) perpendicular to unit r (Duff et al. 2017, "Building an orthonormal basis,
- * revisited"). */
-static void perpendicular_pair(const double r[3], double a[3], double b[3]) {
-    const double sign = copysign(1.0, r[2]);
-    const double p = -1.0 / (sign + r[2]), q = r[0] * r[1] * p;
-    a[0] = 1.0 + sign * r[0] * r[0] * p;
-    a[1] = sign * q;
-    a[2] = -sign * r[0];
-    b[0] = q;
-    b[1] = sign + r[1] * r[1] * p;
-    b[2] = -r[1];
-}
-
 /* Direction k of the m of lobe j, as slopes of a lobe of unit widths: a Hammersley point mapped through the unit
  * GGX slope distribution's inverse CDF (radius^2 = xi / (1 - xi)), each lobe turned by a golden-ratio fraction of
  * a turn so that no two lobes line up. The same for every hit: tabled once per plan. */
@@ -731,7 +718,7 @@ static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world
         vec3_normalize(mirror.r);
         const double nr = vec3_dot(hit->normal, mirror.r);
         for (int c = 0; c < 3; c++) mirror.a[c] = hit->normal[c] - nr * mirror.r[c];
-        if (vec3_normalize(mirror.a) < 1e-9) perpendicular_pair(mirror.r, mirror.a, mirror.b);
+        if (vec3_normalize(mirror.a) < 1e-9) vec3_frame_from_normal(mirror.r, mirror.a, mirror.b);
         vec3_cross(mirror.r, mirror.a, mirror.b);
         mirror.squash = MR_MAX(nv, 0.02);
         if (!add_reflection_samples(env, occluder, hit, &mirror, row)) return 0;
