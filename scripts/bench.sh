@@ -43,7 +43,8 @@ replace_section() { # NAME REPORT [DOC]
 
 # What accuracy costs in `matremap report` (docs/performance.md, bench:report-accuracy): each spec-gloss
 # asset of ../shared/assets against its `gltf spec2metal --method weighted` conversion, rendered as
-# meshes under the studio map in 4 rotations, at environment sample counts N (size 256) and at sizes S (N 1024).
+# meshes under the studio map in 4 rotations, at environment sample counts N (size 256) and at sizes S (N 1024),
+# each with the report's default reflection samples.
 # Per run: the report's time for the original and the weighted conversion (the whole process, less the render
 # of a third material, below), its render time (summary.json), the rest (load, plans, pictures, SSIM), the
 # report's SSIM and its distance from the converged evaluation (N 16384 at the same size; S 512 at the same N),

@@ -25,8 +25,8 @@
 #define MAX_ARGS 64
 #define THUMBNAIL_SIDE 128
 /* Defaults chosen from `make bench BENCH_ARGS="--only report-accuracy"` (docs/performance.md, "Defaults for
- * matremap report"): from N = 256 every view of the textured assets is within SSIM 0.997 of N = 16384 and the
- * report's SSIM within 0.0001; 384² is within 0.002 of 512² and keeps its ranking. Cheaper than 1024 at 256². */
+ * matremap report"): from N = 256 every view of the assets is within SSIM 0.9966 of N = 16384 and the report's
+ * SSIM within 0.0001; 384² is within 0.002 of 512² and keeps its ranking. Cheaper than 1024 at 256². */
 #define DEFAULT_ENV_SAMPLES 256
 #define DEFAULT_SIZE 384
 /* Directions about each pixel's mirror direction (mr_light.reflection_samples): without them a smooth material
