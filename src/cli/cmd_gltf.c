@@ -231,6 +231,29 @@ static mr_status compose(int width, int height, const float *rgb, const float *f
     return MR_OK;
 }
 
+/* The two new textures of a per-texel conversion: images from rgb[t] (with fourth[t] as alpha when not NULL),
+ * written and added like `mapping`'s texture (mapping is the first of the source textures that exists), and
+ * refs[t] set to `mapping` (texCoord, transform) with the new texture's index. */
+static mr_status add_converted_textures(mr_gltf *asset, int material, const options *o, const char *scratch,
+                                        const char *outbase, int width, int height, const float *const rgb[2],
+                                        const float *const fourth[2], const mr_img_encoding encodings[2],
+                                        const char *const names[2], const mr_gltf_texture_ref *mapping,
+                                        mr_gltf_texture_ref *const refs[2]) {
+    mr_image *images[2] = {NULL, NULL};
+    int indices[2] = {-1, -1};
+    mr_status status = compose(width, height, rgb[0], fourth[0], &images[0]);
+    if (status == MR_OK) status = compose(width, height, rgb[1], fourth[1], &images[1]);
+    if (status == MR_OK)
+        status = add_textures(asset, 2, images, encodings, names, o, scratch, outbase, material, mapping->index,
+                              indices);
+    for (int t = 0; t < 2; t++) {
+        *refs[t] = *mapping;
+        refs[t]->index = indices[t];
+        mr_image_free(images[t]);
+    }
+    return status;
+}
+
 /* Read the two source textures of a material (either may be absent: index -1) and settle the grid they are
  * converted on: the larger texture's size, 1 x 1 without textures. Returns an exit code. */
 static int read_pair(const mr_gltf *asset, int k, const char *name, const mr_gltf_texture_ref *a,
@@ -357,7 +380,7 @@ static int spec2metal_material(mr_gltf *asset, int k, const options *o, const mr
     if (strcmp(o->method, "extension") == 0) return extension_material(asset, k, o, &m, scratch, outbase, r);
     double started = cli_now();
     const mr_gltf_texture_ref *dref = &m.diffuse_texture, *sref = &m.specular_glossiness_texture;
-    mr_image *dimg = NULL, *simg = NULL, *base = NULL, *packed = NULL;
+    mr_image *dimg = NULL, *simg = NULL;
     int width = 1, height = 1;
     buffers b;
     int code = prepare(asset, k, m.name, dref, MR_IMG_COLOR, sref, MR_IMG_COLOR, scratch, &dimg, &simg, &width,
@@ -400,23 +423,13 @@ static int spec2metal_material(mr_gltf *asset, int k, const options *o, const mr
             b.out_rgb2[3 * i + 1] = b.out_scalar2[i];
             b.out_rgb2[3 * i + 2] = b.out_scalar[i];
         }
-        int like = dref->index >= 0 ? dref->index : sref->index, base_index = -1, packed_index = -1;
-        mr_gltf_texture_ref mapping = dref->index >= 0 ? *dref : *sref;
-        status = compose(width, height, b.out_rgb, has_alpha ? b.alpha : NULL, &base);
-        if (status == MR_OK) status = compose(width, height, b.out_rgb2, NULL, &packed);
-        int indices[2] = {-1, -1};
-        if (status == MR_OK) {
-            mr_image *const images[2] = {base, packed};
-            static const mr_img_encoding encodings[2] = {MR_IMG_COLOR, MR_IMG_DATA};
-            static const char *const names[2] = {"basecolor", "metallicRoughness"};
-            status = add_textures(asset, 2, images, encodings, names, o, scratch, outbase, k, like, indices);
-        }
-        base_index = indices[0];
-        packed_index = indices[1];
-        m.base_color_texture = mapping;
-        m.base_color_texture.index = base_index;
-        m.metallic_roughness_texture = mapping;
-        m.metallic_roughness_texture.index = packed_index;
+        const mr_gltf_texture_ref mapping = dref->index >= 0 ? *dref : *sref;
+        const float *const rgb[2] = {b.out_rgb, b.out_rgb2}, *const fourth[2] = {has_alpha ? b.alpha : NULL, NULL};
+        static const mr_img_encoding encodings[2] = {MR_IMG_COLOR, MR_IMG_DATA};
+        static const char *const names[2] = {"basecolor", "metallicRoughness"};
+        mr_gltf_texture_ref *const refs[2] = {&m.base_color_texture, &m.metallic_roughness_texture};
+        status = add_converted_textures(asset, k, o, scratch, outbase, width, height, rgb, fourth, encodings, names,
+                                        &mapping, refs);
         for (int c = 0; c < 4; c++) m.base_color_factor[c] = 1.0;
         m.metallic_factor = m.roughness_factor = 1.0;
         r->width = width;
@@ -428,8 +441,6 @@ static int spec2metal_material(mr_gltf *asset, int k, const options *o, const mr
     r->seconds = cli_now() - started;
     mr_image_free(dimg);
     mr_image_free(simg);
-    mr_image_free(base);
-    mr_image_free(packed);
     buffers_free(&b);
     return status == MR_OK ? CLI_EXIT_OK : cli_fail("gltf", status);
 }
@@ -445,7 +456,7 @@ static int metal2spec_material(mr_gltf *asset, int k, const options *o, const mr
     }
     double started = cli_now();
     const mr_gltf_texture_ref *bref = &m.base_color_texture, *mref = &m.metallic_roughness_texture;
-    mr_image *bimg = NULL, *mimg = NULL, *diffuse = NULL, *specgloss = NULL;
+    mr_image *bimg = NULL, *mimg = NULL;
     int width = 1, height = 1;
     buffers b;
     int code = prepare(asset, k, m.name, bref, MR_IMG_COLOR, mref, MR_IMG_DATA, scratch, &bimg, &mimg, &width,
@@ -483,24 +494,15 @@ static int metal2spec_material(mr_gltf *asset, int k, const options *o, const mr
         mr_gltf_texture_ref_none(&m.diffuse_texture);
         mr_gltf_texture_ref_none(&m.specular_glossiness_texture);
     } else if (status == MR_OK) {
-        int like = bref->index >= 0 ? bref->index : mref->index, diffuse_index = -1, sg_index = -1;
-        mr_gltf_texture_ref mapping = bref->index >= 0 ? *bref : *mref;
-        status = compose(width, height, b.out_rgb, has_alpha ? b.alpha : NULL, &diffuse);
+        const mr_gltf_texture_ref mapping = bref->index >= 0 ? *bref : *mref;
         // RGB specular sRGB-encoded, A glossiness linear: what the image writer does for a colour image with alpha.
-        if (status == MR_OK) status = compose(width, height, b.out_rgb2, b.out_scalar, &specgloss);
-        int indices[2] = {-1, -1};
-        if (status == MR_OK) {
-            mr_image *const images[2] = {diffuse, specgloss};
-            static const mr_img_encoding encodings[2] = {MR_IMG_COLOR, MR_IMG_COLOR};
-            static const char *const names[2] = {"diffuse", "specularGlossiness"};
-            status = add_textures(asset, 2, images, encodings, names, o, scratch, outbase, k, like, indices);
-        }
-        diffuse_index = indices[0];
-        sg_index = indices[1];
-        m.diffuse_texture = mapping;
-        m.diffuse_texture.index = diffuse_index;
-        m.specular_glossiness_texture = mapping;
-        m.specular_glossiness_texture.index = sg_index;
+        const float *const rgb[2] = {b.out_rgb, b.out_rgb2};
+        const float *const fourth[2] = {has_alpha ? b.alpha : NULL, b.out_scalar};
+        static const mr_img_encoding encodings[2] = {MR_IMG_COLOR, MR_IMG_COLOR};
+        static const char *const names[2] = {"diffuse", "specularGlossiness"};
+        mr_gltf_texture_ref *const refs[2] = {&m.diffuse_texture, &m.specular_glossiness_texture};
+        status = add_converted_textures(asset, k, o, scratch, outbase, width, height, rgb, fourth, encodings, names,
+                                        &mapping, refs);
         for (int c = 0; c < 4; c++) m.diffuse_factor[c] = 1.0;
         for (int c = 0; c < 3; c++) m.specular_factor[c] = 1.0;
         m.glossiness_factor = 1.0;
@@ -513,8 +515,6 @@ static int metal2spec_material(mr_gltf *asset, int k, const options *o, const mr
     r->seconds = cli_now() - started;
     mr_image_free(bimg);
     mr_image_free(mimg);
-    mr_image_free(diffuse);
-    mr_image_free(specgloss);
     buffers_free(&b);
     return status == MR_OK ? CLI_EXIT_OK : cli_fail("gltf", status);
 }
