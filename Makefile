@@ -139,17 +139,17 @@ evaluation: all
 evaluation-gltf: all
 	scripts/evaluate-gltf.sh $(BUILD)
 
-# The specular -> metallic dataset (resumable sweeps, a few minutes on 2 cores) and the default network trained
-# on it (docs/workflow.md, "The default network"). `make train` reproduces data/spec2metal.mlp bit for bit.
+# The specular -> metallic dataset (image-objective labels, a few minutes on 2 cores) and the network trained on
+# it (docs/training.md). `make train` reproduces data/spec2metal.mlp bit for bit.
 DATASET := $(BUILD)/dataset
 dataset: all
 	scripts/dataset.sh $(BUILD) $(DATASET)
 
 train: dataset
 	@mkdir -p docs/training
-	$(BUILD)/bin/matremap train $(DATASET)/on-manifold.csv $(DATASET)/off-manifold.csv --seed 1 \
+	$(BUILD)/bin/matremap train $(DATASET)/pairs.csv --seed 1 --form residual \
 	    -o data/spec2metal.mlp --loss-curve docs/training/spec2metal_loss \
-	    --test $(DATASET)/test-on-manifold.csv --test $(DATASET)/test-off-manifold.csv | tee docs/training/spec2metal.txt
+	    --test $(DATASET)/test-pairs.csv | tee docs/training/spec2metal.txt
 
 deps:
 	scripts/install-deps.sh

@@ -75,15 +75,17 @@
  * released, with everything it points to, by mr_mlp_free() (NULL-safe). Its values may be changed in place;
  * its pointers and sizes may not. The library keeps no pointer to caller arrays after a call returns.
  *
- * The weight file (mr_mlp_write / mr_mlp_read), version 1. Text, '\n' line ends, ASCII, one key per line
+ * The weight file (mr_mlp_write / mr_mlp_read), versions 1 and 2. Text, '\n' line ends, ASCII, one key per line
  * followed by its values separated by single spaces, every number a C99 hexadecimal float ("%a" of the float:
  * -0x1.8p+3, 0x0p+0), which reads back bit for bit (and is independent of the process locale: the library
  * switches its own thread to the C numeric locale while reading or writing):
- *   matremap-mlp 1                  magic and version
+ *   matremap-mlp 1                  magic and version (2 for a network with a kind)
  *   n_in 6
  *   n_hidden 300
  *   n_out 4
  *   activation relu linear          hidden and output activations (the only pair this version knows)
+ *   kind WORD                       version 2 only: mr_mlp.kind (a network with an empty kind is written as
+ *                                   version 1, without this line, so plain networks keep their files)
  *   in_mean m_0 ... m_{n_in-1}
  *   in_std s_0 ... s_{n_in-1}       each > 0
  *   out_mean ...                    n_out values
@@ -112,7 +114,8 @@ extern "C" {
 #endif
 
 #define MR_MLP_FILE_MAGIC "matremap-mlp"
-#define MR_MLP_FILE_VERSION 1
+#define MR_MLP_FILE_VERSION 2 /* the newest version written; version 1 files (no kind) are read too */
+#define MR_MLP_KIND_MAX 32     /* bytes of mr_mlp.kind, its terminating zero included */
 
 #define MR_MLP_MAX_IO 4096           /* largest n_in or n_out */
 #define MR_MLP_MAX_HIDDEN 65536      /* largest n_hidden */
@@ -142,6 +145,9 @@ typedef struct mr_mlp {
     float *out_std;   /* [n_out], > 0 */
     float *data;      /* all of the above, in this order */
     size_t data_count;
+    char kind[MR_MLP_KIND_MAX]; /* "" (plain) or a word naming how the application reads the outputs (e.g.
+                                   "spec2metal-residual", src/workflow/workflow.h): letters, digits, '.', '_',
+                                   '-'; saved in the file (version 2). The network itself ignores it */
 } mr_mlp;
 
 /* A network of the given sizes with zero weights and biases, means 0 and standard deviations 1 (it predicts

@@ -78,9 +78,21 @@ static int put_line(out_text *o, const char *key, const float *v, size_t count) 
     return put(o, "\n");
 }
 
+/* A kind is a word of letters, digits, '.', '_' and '-' (mr_mlp.kind), shorter than MR_MLP_KIND_MAX. */
+static int kind_char(char ch) {
+    return (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') || ch == '.' ||
+           ch == '_' || ch == '-';
+}
+
 static mr_status check_values(const mr_mlp *net, const char *path) {
     mr_status status = mr_mlp_check_dims("mlp write", net->n_in, net->n_hidden, net->n_out);
     if (status != MR_OK) return status;
+    size_t kind_len = strnlen(net->kind, MR_MLP_KIND_MAX);
+    int kind_ok = kind_len < MR_MLP_KIND_MAX;
+    for (size_t q = 0; kind_ok && q < kind_len; q++) kind_ok = kind_char(net->kind[q]);
+    if (!kind_ok)
+        return mr_fail(MR_ERR_INVALID_ARG, "mlp write '%s': kind is not a word of at most %d letters, digits, "
+                       "'.', '_' or '-'", path, MR_MLP_KIND_MAX - 1);
     const size_t I = (size_t)net->n_in, H = (size_t)net->n_hidden, O = (size_t)net->n_out;
     const struct {
         const char *name;
@@ -112,8 +124,9 @@ static mr_status format_net(const mr_mlp *net, out_text *o) {
     o->length = 0;
     o->text = malloc(o->capacity);
     if (o->text == NULL) return mr_fail(MR_ERR_NOMEM, "mlp write: out of memory (%zu bytes)", o->capacity);
-    int bad = put(o, "%s %d\nn_in %d\nn_hidden %d\nn_out %d\nactivation %s\n", MR_MLP_FILE_MAGIC, MR_MLP_FILE_VERSION,
-                  net->n_in, net->n_hidden, net->n_out, ACTIVATIONS);
+    int bad = put(o, "%s %d\nn_in %d\nn_hidden %d\nn_out %d\nactivation %s\n", MR_MLP_FILE_MAGIC,
+                  net->kind[0] ? 2 : 1, net->n_in, net->n_hidden, net->n_out, ACTIVATIONS);
+    if (net->kind[0]) bad = bad || put(o, "kind %s\n", net->kind);
     bad = bad || put_line(o, "in_mean", net->in_mean, I) || put_line(o, "in_std", net->in_std, I);
     bad = bad || put_line(o, "out_mean", net->out_mean, O) || put_line(o, "out_std", net->out_std, O);
     for (size_t i = 0; i < I && !bad; i++) bad = put_line(o, "w1", net->w1 + i * H, H);
@@ -260,7 +273,7 @@ static mr_status read_size(parser *ps, const char *key, int limit, int *out) {
 }
 
 /* The first line: magic and version. */
-static mr_status read_magic(parser *ps) {
+static mr_status read_magic(parser *ps, int *version_out) {
     mr_status status = next_line(ps, "'" MR_MLP_FILE_MAGIC " 1'");
     if (status != MR_OK) return status;
     const char *tok = ps->s;
@@ -270,18 +283,21 @@ static mr_status read_magic(parser *ps) {
         return bad(ps, "not an MLP weight file (expected '%s %d', found '%s')", MR_MLP_FILE_MAGIC, MR_MLP_FILE_VERSION,
                    excerpt(tok, len, shown, sizeof shown));
     if (!token(ps, &tok, &len)) return bad(ps, "no version after '%s'", MR_MLP_FILE_MAGIC);
-    char version[16];
-    snprintf(version, sizeof version, "%d", MR_MLP_FILE_VERSION);
-    if (!token_is(tok, len, version))
-        return bad(ps, "unsupported version '%s' (this build reads version %d)", excerpt(tok, len, shown, sizeof shown),
-                   MR_MLP_FILE_VERSION);
+    if (token_is(tok, len, "1"))
+        *version_out = 1;
+    else if (token_is(tok, len, "2"))
+        *version_out = 2;
+    else
+        return bad(ps, "unsupported version '%s' (this build reads versions 1 to %d)",
+                   excerpt(tok, len, shown, sizeof shown), MR_MLP_FILE_VERSION);
     if (token(ps, &tok, &len))
         return bad(ps, "unexpected '%s' after the version", excerpt(tok, len, shown, sizeof shown));
     return MR_OK;
 }
 
 static mr_status parse_net(parser *ps, mr_mlp **out) {
-    mr_status status = read_magic(ps);
+    int version = 0;
+    mr_status status = read_magic(ps, &version);
     int n_in = 0, n_hidden = 0, n_out = 0;
     if (status == MR_OK) status = read_size(ps, "n_in", MR_MLP_MAX_IO, &n_in);
     if (status == MR_OK) status = read_size(ps, "n_hidden", MR_MLP_MAX_HIDDEN, &n_hidden);
@@ -301,9 +317,26 @@ static mr_status parse_net(parser *ps, mr_mlp **out) {
             return bad(ps, "unsupported activations (expected 'activation " ACTIVATIONS "', found '%s')",
                        excerpt(tok, len, shown, sizeof shown));
     }
+    char kind[MR_MLP_KIND_MAX] = "";
+    if (version == 2) {
+        status = next_line(ps, "'kind WORD'");
+        if (status != MR_OK) return status;
+        const char *tok = ps->s, *word = NULL;
+        size_t len = 0, word_len = 0;
+        char shown[40];
+        int ok = token(ps, &tok, &len) && token_is(tok, len, "kind") && token(ps, &word, &word_len) &&
+                 word_len < MR_MLP_KIND_MAX && !token(ps, &tok, &len);
+        for (size_t q = 0; ok && q < word_len; q++) ok = kind_char(word[q]);
+        if (!ok)
+            return bad(ps, "expected 'kind WORD' (a word of at most %d letters, digits, '.', '_' or '-'), found '%s'",
+                       MR_MLP_KIND_MAX - 1, excerpt(ps->s - len, len, shown, sizeof shown));
+        memcpy(kind, word, word_len);
+        kind[word_len] = '\0';
+    }
     mr_mlp *net = NULL;
     status = mr_mlp_create(n_in, n_hidden, n_out, &net);
     if (status != MR_OK) return status;
+    memcpy(net->kind, kind, sizeof kind);
     const size_t I = (size_t)n_in, H = (size_t)n_hidden, O = (size_t)n_out;
     status = read_values(ps, "in_mean", net->in_mean, I, 0);
     if (status == MR_OK) status = read_values(ps, "in_std", net->in_std, I, 1);

@@ -1,37 +1,37 @@
 #!/usr/bin/env bash
-# make dataset: the specular -> metallic training set of paper section 8 (docs/workflow.md, "The dataset").
-# Two seeded, resumable `matremap sweep` runs into DIR (default build/dataset), GGX throughout, roughness held
-# at alpha 0.2 on both sides (the MLP sees no roughness: the conversion must not trade it for colour):
-#   on-manifold.csv   metallic materials (albedo RGB, metallic drawn uniformly) rendered as the specular
-#                     material Eq. 2 makes of them (`ggx-metallic` renders exactly that `ggx` material), remapped
-#                     back to metallic parameters by the image-based optimiser;
-#   off-manifold.csv  specular materials (diffuse RGB, F0 RGB drawn uniformly, each channel independently) that
-#                     Eq. 2 mostly cannot produce, remapped the same way: the visually best metallic approximation.
-#   test-on-manifold.csv, test-off-manifold.csv   the same with other seeds: held out for evaluation
-#                     (`matremap train --test`), never trained on.
-# Usage: scripts/dataset.sh [BUILD] [DIR]. Environment: DATASET_ON, DATASET_OFF (sample counts, default 6000
-# each), DATASET_TEST (each test file, default 1000), DATASET_THREADS (default: all cores), DATASET_SIZE
-# (fit-scene side, default 64).
-# A killed run continues where it stopped when started again (--resume); a finished file is left as it is.
+# make dataset: the specular -> metallic training set of the learned converter (docs/training.md).
+# `matremap dataset` draws spec-gloss texels as 8-bit textures store them (uniform codes, the dielectric F0 band
+# with dark and saturated diffuse, grey inputs, metals, Eq. 2 of partly metallic texels, and texels of three of
+# the shared spec-gloss assets) and labels each with the glTF metal-rough material that renders most like it
+# under two synthetic grey environments at four glossinesses, by the display-referred objective (chosen by
+# `make objectives`, docs/training.md). Held out of everything here, for evaluation only: the FloppyDisk asset
+# and both shared HDR maps.
+#   pairs.csv        training pairs (seed 1)
+#   test-pairs.csv   held-out pairs (seed 2, other texels of the same mixture): `matremap train --test`
+# Usage: scripts/dataset.sh [BUILD] [DIR]. Environment: DATASET_SAMPLES (default 16000), DATASET_TEST (default
+# 2000), DATASET_THREADS (default: all cores). Each file is a pure function of its seed (any thread count);
+# a finished file is left as it is.
 set -euo pipefail
 build=${1:-build}
 dir=${2:-$build/dataset}
 bin="$build/bin/matremap"
-on=${DATASET_ON:-6000}
-off=${DATASET_OFF:-6000}
-test=${DATASET_TEST:-1000}
-size=${DATASET_SIZE:-64}
+samples=${DATASET_SAMPLES:-16000}
+test=${DATASET_TEST:-2000}
 threads=${DATASET_THREADS:-$(nproc)}
+root=$(cd "$(dirname "$0")/.." && pwd)
+assets="$root/../shared/assets/specgloss"
 [ -x "$bin" ] || { echo "dataset: $bin is missing (run make first)" >&2; exit 1; }
+[ -d "$assets" ] || { echo "dataset: $assets is missing (../shared beside the project)" >&2; exit 1; }
 mkdir -p "$dir"
 start=$SECONDS
-# sweep SOURCE-MODEL COUNT SEED FILE
-sweep() {
-    "$bin" sweep --from "$1" alpha=0.2 --to ggx-metallic alpha=0.2 --hold alpha --random "$2" --seed "$3" \
-        --size "$size" --threads "$threads" --resume -o "$dir/$4"
+# make FILE SAMPLES SEED
+make_pairs() {
+    if [ -f "$dir/$1" ]; then echo "dataset: $dir/$1 exists, kept"; return; fi
+    "$bin" dataset -o "$dir/$1" --samples "$2" --seed "$3" --threads "$threads" \
+        --asset "$assets/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Avocado.gltf" \
+        --asset "$assets/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Duck.gltf" \
+        --asset "$assets/CesiumMilkTruck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/CesiumMilkTruck.gltf"
 }
-sweep ggx-metallic "$on" 1 on-manifold.csv
-sweep ggx "$off" 2 off-manifold.csv
-sweep ggx-metallic "$test" 3 test-on-manifold.csv
-sweep ggx "$test" 4 test-off-manifold.csv
-echo "dataset: $dir: $on + $off training samples, 2 x $test test samples, in $((SECONDS - start)) s"
+make_pairs pairs.csv "$samples" 1
+make_pairs test-pairs.csv "$test" 2
+echo "dataset: $dir: $samples training pairs, $test test pairs, in $((SECONDS - start)) s"

@@ -99,6 +99,7 @@ int cmd_render(int argc, char **argv);
 int cmd_ssim(int argc, char **argv);
 int cmd_remap(int argc, char **argv);
 int cmd_sweep(int argc, char **argv);
+int cmd_dataset(int argc, char **argv);
 int cmd_train(int argc, char **argv);
 int cmd_spec2metal(int argc, char **argv);
 int cmd_report(int argc, char **argv);

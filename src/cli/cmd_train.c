@@ -32,6 +32,9 @@ static void print_help(void) {
            "  --lr X               Adam learning rate (default 0.001)\n"
            "  --validation F       share of the rows held out for early stopping (default 0.1)\n"
            "  --seed S             split, initialisation and shuffles (default 1)\n"
+           "  --form F             residual (default): the network learns the correction to the albedo-weighted\n"
+           "                       inverse, applied gated (zero where Eq. 2 is exactly invertible) and colour-\n"
+           "                       neutral (src/workflow/workflow.h); plain: it learns the labels themselves\n"
            "  --threads T          OpenMP threads (default: all cores; the result does not depend on it)\n"
            "  --loss-curve PREFIX  write PREFIX.csv (epoch, train and validation loss) and PREFIX.svg (a plot, when\n"
            "                       gnuplot is installed); default: WEIGHTS without its extension + '_loss'\n"
@@ -157,7 +160,7 @@ static mr_status test_methods(const mr_mlp *net, const mr_wf_dataset *test, meth
 
 int cmd_train(int argc, char **argv) {
     const char *files[MAX_FILES], *tests[MAX_FILES], *output = NULL, *curve_prefix = NULL;
-    int file_count = 0, test_count = 0, json = 0, threads = 0;
+    int file_count = 0, test_count = 0, json = 0, threads = 0, residual = 1;
     mr_mlp_train_options opts;
     memset(&opts, 0, sizeof opts);
     opts.seed = 1;
@@ -194,6 +197,11 @@ int cmd_train(int argc, char **argv) {
         } else if ((taken = cli_take_option("train", argc, argv, &i, "--seed", &value))) {
             if (taken < 0 || !cli_parse_int("train", "--seed", value, 0, 2147483647, &number)) return CLI_EXIT_USAGE;
             opts.seed = (unsigned long long)number;
+        } else if ((taken = cli_take_option("train", argc, argv, &i, "--form", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (strcmp(value, "residual") != 0 && strcmp(value, "plain") != 0)
+                return cli_usage_error("train", "--form '%s': expected residual or plain", value);
+            residual = strcmp(value, "residual") == 0;
         } else if ((taken = cli_take_option("train", argc, argv, &i, "--threads", &value))) {
             if (taken < 0 || !cli_parse_int("train", "--threads", value, 1, 1024, &threads)) return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("train", argc, argv, &i, "--loss-curve", &value))) {
@@ -245,6 +253,18 @@ int cmd_train(int argc, char **argv) {
                         "outcome): need at least 2\n", data.n, data.skipped);
         return CLI_EXIT_BAD_INPUT;
     }
+    if (residual) // the targets become the labels' corrections to the analytic anchor (workflow.h)
+        for (size_t r = 0; r < data.n; r++) {
+            double lobe[3], spec[3];
+            for (int k = 0; k < 3; k++) {
+                lobe[k] = fmin(1.0, fmax(0.0, data.x[6 * r + k]));
+                spec[k] = fmin(1.0, fmax(0.0, data.x[6 * r + 3 + k]));
+            }
+            mr_wf_residual_anchor a;
+            mr_wf_residual_anchor_of(lobe, spec, &a);
+            for (int k = 0; k < 3; k++) data.y[4 * r + k] -= (float)a.albedo[k];
+            data.y[4 * r + 3] -= (float)a.metallic;
+        }
     curve c = {0, 0, NULL, isatty(STDERR_FILENO), cli_now()};
     opts.epoch_fn = record_epoch;
     opts.epoch_user = &c;
@@ -256,6 +276,7 @@ int cmd_train(int argc, char **argv) {
     double train_seconds = cli_now() - c.started;
     method_error errors[MAX_FILES][4];
     if (status == MR_OK && report.stop == MR_MLP_STOP_CALLBACK) status = MR_ERR_NOMEM; // the curve's realloc
+    if (status == MR_OK && residual) snprintf(net->kind, sizeof net->kind, "%s", MR_WF_MLP_RESIDUAL_KIND);
     if (status == MR_OK) status = mr_mlp_write(net, output);
     for (int t = 0; t < test_count && status == MR_OK; t++) status = test_methods(net, &test[t], errors[t]);
     char title[256];

@@ -336,6 +336,26 @@ mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_maps *in, size_t n, const m
 
 #define MLP_BLOCK 65536 /* texels per network call: 2.6 MB of inputs and outputs */
 
+void mr_wf_residual_anchor_of(const double lobe[3], const double specular[3], mr_wf_residual_anchor *out) {
+    mr_wf_options o = mr_wf_options_default();
+    o.method = MR_WF_WEIGHTED;
+    analytic_spec_to_metal(&o, lobe, specular, out->albedo, &out->metallic);
+    double r = 0.0, dm = 0.0, sm = 0.0, dc = 0.0, sc = 0.0;
+    for (int c = 0; c < 3; c++) {
+        double back_d, back_s;
+        eq2(out->albedo[c], out->metallic, o.dielectric_f0, &back_d, &back_s);
+        r = fmax(r, fmax(fabs(back_d - lobe[c]), fabs(back_s - specular[c])));
+        dm += lobe[c] / 3.0;
+        sm += specular[c] / 3.0;
+    }
+    for (int c = 0; c < 3; c++) {
+        dc = fmax(dc, fabs(lobe[c] - dm));
+        sc = fmax(sc, fabs(specular[c] - sm));
+    }
+    out->gate = fmin(1.0, r / MR_WF_RESIDUAL_GATE);
+    out->chroma = fmin(1.0, (dc + sc) / MR_WF_RESIDUAL_CHROMA);
+}
+
 mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps *in, size_t n,
                                         const mr_wf_options *opts, const mr_wf_metal_maps *out, uint8_t *flags) {
     const char *what = "spec -> metal batch (mlp)";
@@ -352,11 +372,17 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
     o.method = MR_WF_MEAN; // the analytic method is not used; only the shared checks apply
     mr_status status = check_batch(what, n, &o, in->roughness, out->roughness);
     if (status != MR_OK) return status;
+    int residual = strcmp(net->kind, MR_WF_MLP_RESIDUAL_KIND) == 0;
+    if (!residual && net->kind[0] != '\0')
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: the network's kind '%s' is not a spec -> metal form this build knows "
+                       "(plain or " MR_WF_MLP_RESIDUAL_KIND ")", what, net->kind);
     size_t block = n < MLP_BLOCK ? n : MLP_BLOCK;
     float *x = malloc(block * 6 * sizeof *x), *y = malloc(block * 4 * sizeof *y);
-    if (n > 0 && (x == NULL || y == NULL)) {
+    mr_wf_residual_anchor *anchors = residual && n > 0 ? malloc(block * sizeof *anchors) : NULL;
+    if (n > 0 && (x == NULL || y == NULL || (residual && anchors == NULL))) {
         free(x);
         free(y);
+        free(anchors);
         return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %zu texels", what, block);
     }
     for (size_t start = 0; start < n && status == MR_OK; start += block) {
@@ -375,6 +401,7 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
                 x[6 * r + c] = (float)d[c];
                 x[6 * r + 3 + c] = (float)s[c];
             }
+            if (residual) mr_wf_residual_anchor_of(d, s, &anchors[r]);
             if (flags) flags[i] = (uint8_t)f;
         }
         status = mr_mlp_predict(net, x, count, y);
@@ -383,8 +410,16 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
         for (size_t r = 0; r < count; r++) {
             size_t i = start + r;
             unsigned f = flags ? flags[i] : 0;
+            double v4[4];
+            for (int k = 0; k < 4; k++) v4[k] = y[4 * r + k];
+            if (residual) { // the correction to W, gated and made neutral (workflow.h)
+                const mr_wf_residual_anchor *a = &anchors[r];
+                double mean = (v4[0] + v4[1] + v4[2]) / 3.0;
+                for (int c = 0; c < 3; c++) v4[c] = a->albedo[c] + a->gate * (mean + a->chroma * (v4[c] - mean));
+                v4[3] = a->metallic + a->gate * v4[3];
+            }
             for (int k = 0; k < 4; k++) {
-                double v = y[4 * r + k];
+                double v = v4[k];
                 if (!isfinite(v) || v < 0.0 || v > 1.0) {
                     // Outputs slightly outside [0, 1] are the regressor's normal overshoot; only non-finite
                     // ones mean it failed.
@@ -402,5 +437,6 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
     }
     free(x);
     free(y);
+    free(anchors);
     return status;
 }

@@ -199,8 +199,31 @@ mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_maps *in, size_t n, const m
 
 struct mr_mlp;
 
+/* The residual form of a spec -> metal network (mr_mlp.kind == MR_WF_MLP_RESIDUAL_KIND; docs/training.md). Its four
+ * outputs are a correction delta to the albedo-weighted inverse W (Eq. 3, F0d 0.04, of the diffuse lobe), applied as
+ *     albedo_c = W_c + gate (mean(delta_rgb) + chroma (delta_c - mean(delta_rgb))),   metallic = W_m + gate delta_m
+ * (clamped to [0, 1]), where
+ *   gate   = min(1, r / MR_WF_RESIDUAL_GATE), r = the largest |Eq. 2 of W - input| over the six values: 0 where
+ *            Eq. 2 is exactly invertible, so texels on the manifold (any metal-rough texel converted by Eq. 2)
+ *            come out exactly as the analytic inverse;
+ *   chroma = min(1, c / MR_WF_RESIDUAL_CHROMA), c = max_ch |lobe_ch - mean lobe| + max_ch |s_ch - mean s|: a grey
+ *            input (c = 0) gets the same correction in every channel, so grey in is grey out (W is grey there).
+ * Training targets are the label minus W (matremap train --form residual). */
+#define MR_WF_MLP_RESIDUAL_KIND "spec2metal-residual"
+#define MR_WF_RESIDUAL_GATE 0.01
+#define MR_WF_RESIDUAL_CHROMA 0.02
+
+typedef struct mr_wf_residual_anchor {
+    double albedo[3], metallic; /* W */
+    double gate, chroma;        /* as above, in [0, 1] */
+} mr_wf_residual_anchor;
+
+/* The anchor of one texel: `lobe` the diffuse lobe (the network's input, d (1 - max s) for glTF spec-gloss) and
+ * `specular`, both already in [0, 1]. Pure and reentrant. */
+void mr_wf_residual_anchor_of(const double lobe[3], const double specular[3], mr_wf_residual_anchor *out);
+
 /* Specular -> metallic by a trained network (nn/mlp.h: 6 inputs diffuse RGB + specular RGB, 4 outputs albedo RGB
- * + metallic, e.g. data/spec2metal.mlp), batched: inputs are sanitised like the other methods' (clamped to
+ * + metallic, e.g. data/spec2metal.mlp; read as the residual form above when its kind says so), batched: inputs are sanitised like the other methods' (clamped to
  * [0, 1], non-finite read as 0, flagged), the network runs in blocks (its own OpenMP rows), outputs are clamped
  * to [0, 1] (a non-finite output becomes 0 and sets MR_WF_METHOD_FAILED). OFF_MANIFOLD is not computed (a
  * regressor never reproduces its input exactly). opts: only eps and the roughness pairing matter; may be NULL.

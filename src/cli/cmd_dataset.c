@@ -1,0 +1,701 @@
+/*
+ * cmd_dataset.c — `matremap dataset`: training pairs for the learned spec -> metal converter, labelled by the
+ * image objective of src/workflow/labels.h (docs/training.md), and `matremap dataset --compare`: how well each
+ * objective's labels, and each converter, keep the look under other lights (object SSIM of spheres).
+ *
+ * Inputs are spec-gloss texels as 8-bit textures store them (sRGB codes decoded to linear), drawn from a
+ * mixture that covers real textures (draw_texel says which and why), plus texels of glTF assets given with
+ * --asset. Each sample is a pure function of (seed, index), so files do not depend on the thread count.
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <omp.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "gltf/mr_gltf.h"
+#include "metrics/metrics.h"
+#include "workflow/labels.h"
+
+#define MAX_ASSETS 16
+#define MAX_ENVS 4
+#define MAX_WEIGHTS 4
+#define ASSET_TEXELS 4096 /* texels sampled from each asset's spec-gloss maps */
+
+static void print_help(void) {
+    printf("Usage: matremap dataset -o PAIRS.csv [options]\n"
+           "       matremap dataset --compare --env MAP.hdr [--env MAP.hdr ...] [options]\n"
+           "\n"
+           "Makes training pairs for the specular -> metallic network: spec-gloss texels (diffuse, specular) and\n"
+           "the glTF metal-rough material (base colour, metallic) that renders most like each one, on a sphere\n"
+           "under two synthetic grey environments (a studio and a sky, none of the maps evaluations use) at four\n"
+           "glossinesses (0.3, 0.6, 0.8, 0.95), by an image objective (docs/training.md). Texels are drawn as\n"
+           "8-bit textures store them: uniform codes, the dielectric F0 band (specular 40-70/255) with dark and\n"
+           "saturated diffuse, grey inputs, metals, partly metallic texels of Eq. 2, and texels of --asset files.\n"
+           "The file loads in 'matremap train' (its diffuse columns hold the diffuse lobe d (1 - max specular)).\n"
+           "\n"
+           "With --compare, fits the labels of every objective for a set of texels (the named hard cases, texels\n"
+           "of --asset files and drawn ones), and prints a table of how close each objective's labels, each\n"
+           "analytic inverse and each --weights network render to the original under the --env maps: SSIM over\n"
+           "the sphere's inner square (the object's pixels), mean and worst over texels.\n"
+           "\n"
+           "Options:\n"
+           "  -o, --output FILE     the pairs (CSV, written atomically); with --compare, the table (markdown)\n"
+           "  --samples N           drawn texels (default 16000; --compare: 400)\n"
+           "  --seed S              seed of the draws (default 1); sample i depends only on (S, i)\n"
+           "  --objective O         luma (default), exposed, display, log or linear (labels.h)\n"
+           "  --asset FILE.gltf     spec-gloss assets whose texels join the mixture (repeatable; 30 %% of the\n"
+           "                        samples, shared equally)\n"
+           "  --size N              label sphere side in pixels (default 32)\n"
+           "  --label-env FILE      an environment the labels are made under, instead of the built-in synthetic\n"
+           "                        studio and sky (repeatable, at most %d)\n"
+           "  --chroma-weight W     luma objective: weight of the per-channel colour term (default 0.1)\n"
+           "  --regularisation L    pull towards the analytic answer (default 1e-4, labels.h)\n"
+           "  --threads T           OpenMP threads (default: all cores; the result does not depend on it)\n"
+           "  --compare             the objective comparison (needs --env)\n"
+           "  --env FILE            an environment map for --compare (repeatable, at most %d)\n"
+           "  --weights FILE        a network to compare too (repeatable, at most %d)\n"
+           "  --help                this text\n"
+           "\n"
+           "Exit status: 0 success, 1 bad input file, 2 usage error, 3 internal failure.\n"
+           "\n"
+           "Examples:\n"
+           "  matremap dataset -o build/dataset/pairs.csv --asset ../shared/assets/specgloss/Duck-pbrSpecularGlossiness/glTF/Duck.gltf\n"
+           "  matremap dataset --compare --env studio.hdr --env tabac.hdr --weights data/spec2metal.mlp\n",
+           MAX_ENVS, MAX_ENVS, MAX_WEIGHTS);
+}
+
+/* ---- drawing texels ------------------------------------------------------------------------------------------ */
+
+static uint64_t mix64(uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+
+typedef struct rng {
+    uint64_t state;
+} rng;
+
+static double uniform(rng *r) {
+    r->state += 0x9e3779b97f4a7c15ULL;
+    return (double)(mix64(r->state) >> 11) * 0x1.0p-53;
+}
+
+static int code_between(rng *r, int lo, int hi) {
+    int v = lo + (int)(uniform(r) * (hi - lo + 1));
+    return v > hi ? hi : v;
+}
+
+/* An 8-bit sRGB code's linear value (glTF colour textures: diffuse, specular). */
+static double srgb_code(int code) {
+    double v = code / 255.0;
+    return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
+}
+
+static int srgb_encode_code(double linear) {
+    double v = linear <= 0.0031308 ? 12.92 * linear : 1.055 * pow(linear, 1.0 / 2.4) - 0.055;
+    int code = (int)lround(v * 255.0);
+    return code < 0 ? 0 : code > 255 ? 255 : code;
+}
+
+/* A colour of 8-bit codes: dark (codes 0-40), saturated (one or two channels high, the others low), or uniform. */
+static void diffuse_colour(rng *r, double d[3]) {
+    double kind = uniform(r);
+    if (kind < 0.3) {
+        for (int c = 0; c < 3; c++) d[c] = srgb_code(code_between(r, 0, 40));
+    } else if (kind < 0.65) {
+        int high = code_between(r, 0, 2), second = uniform(r) < 0.4 ? (high + 1 + code_between(r, 0, 1)) % 3 : -1;
+        for (int c = 0; c < 3; c++)
+            d[c] = srgb_code(c == high || c == second ? code_between(r, 120, 255) : code_between(r, 0, 50));
+    } else {
+        for (int c = 0; c < 3; c++) d[c] = srgb_code(code_between(r, 0, 255));
+    }
+}
+
+typedef enum category {
+    CAT_UNIFORM = 0, /* every code equally likely, channels independent (coloured specular too) */
+    CAT_DIELECTRIC,  /* specular in the 8-bit dielectric band 40-70 (grey, sometimes a code or two apart) */
+    CAT_GREY,        /* grey diffuse and grey specular */
+    CAT_METAL,       /* dark diffuse, bright (tinted) specular */
+    CAT_MIXED,       /* Eq. 2 of a partly metallic texel, stored in 8 bits */
+    CAT_ASSET,       /* a texel of an --asset */
+    CAT_COUNT
+} category;
+
+static const char *const category_names[CAT_COUNT] = {"uniform", "dielectric", "grey", "metal", "mixed", "asset"};
+
+typedef struct texel_pool {
+    float *texels; /* count x 6: diffuse RGB, specular RGB (linear spec-gloss values) */
+    size_t count;
+    int assets;
+} texel_pool;
+
+/* Sample i: its category by a fixed mixture (asset texels 30 % when there are any), then its values. */
+static category draw_texel(uint64_t seed, size_t i, const texel_pool *pool, mr_wf_spec *t) {
+    rng r = {mix64(seed * 0x9e3779b97f4a7c15ULL + 0x632be59bd9b4e019ULL) ^ mix64((uint64_t)i + 1)};
+    double u = uniform(&r);
+    category cat;
+    if (pool->count > 0 && u < 0.3)
+        cat = CAT_ASSET;
+    else {
+        double v = pool->count > 0 ? (u - 0.3) / 0.7 : u;
+        cat = v < 0.25 ? CAT_UNIFORM : v < 0.55 ? CAT_DIELECTRIC : v < 0.67 ? CAT_GREY : v < 0.82 ? CAT_METAL
+                                                                                          : CAT_MIXED;
+    }
+    memset(t, 0, sizeof *t);
+    switch (cat) {
+    case CAT_UNIFORM:
+        for (int c = 0; c < 3; c++) {
+            t->diffuse[c] = srgb_code(code_between(&r, 0, 255));
+            t->specular[c] = srgb_code(code_between(&r, 0, 255));
+        }
+        break;
+    case CAT_DIELECTRIC: {
+        int code = code_between(&r, 40, 70);
+        int jitter = uniform(&r) < 0.3;
+        diffuse_colour(&r, t->diffuse);
+        for (int c = 0; c < 3; c++) t->specular[c] = srgb_code(code + (jitter ? code_between(&r, -3, 3) : 0));
+        break;
+    }
+    case CAT_GREY: {
+        int dc = code_between(&r, 0, 255), sc = code_between(&r, 0, 255);
+        for (int c = 0; c < 3; c++) {
+            t->diffuse[c] = srgb_code(dc);
+            t->specular[c] = srgb_code(sc);
+        }
+        break;
+    }
+    case CAT_METAL: {
+        int base = code_between(&r, 120, 255);
+        for (int c = 0; c < 3; c++) {
+            t->diffuse[c] = srgb_code(code_between(&r, 0, 12));
+            int code = base - code_between(&r, 0, 80);
+            t->specular[c] = srgb_code(code < 60 ? 60 : code);
+        }
+        break;
+    }
+    case CAT_MIXED: {
+        mr_wf_metal m = {{0, 0, 0}, uniform(&r), 0};
+        double a[3];
+        diffuse_colour(&r, a);
+        for (int c = 0; c < 3; c++) m.albedo[c] = a[c];
+        mr_wf_options o = mr_wf_options_default();
+        o.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
+        mr_wf_spec s;
+        if (mr_wf_metal_to_spec(&m, &o, &s, NULL) == MR_OK)
+            for (int c = 0; c < 3; c++) {
+                t->diffuse[c] = srgb_code(srgb_encode_code(s.diffuse[c]));
+                t->specular[c] = srgb_code(srgb_encode_code(s.specular[c]));
+            }
+        break;
+    }
+    default: {
+        size_t k = (size_t)(uniform(&r) * (double)pool->count);
+        if (k >= pool->count) k = pool->count - 1;
+        for (int c = 0; c < 3; c++) {
+            t->diffuse[c] = pool->texels[6 * k + c];
+            t->specular[c] = pool->texels[6 * k + 3 + c];
+        }
+        break;
+    }
+    }
+    return cat;
+}
+
+/* ---- texels of glTF assets ----------------------------------------------------------------------------------- */
+
+/* Value of channel c of `image` at the relative position (u, v) (nearest texel), or 1 without an image. */
+static double texel_at(const mr_image *image, double u, double v, int c) {
+    if (image == NULL) return 1.0;
+    int x = (int)(u * image->width), y = (int)(v * image->height);
+    if (x >= image->width) x = image->width - 1;
+    if (y >= image->height) y = image->height - 1;
+    int ch = c < image->channels ? c : 0;
+    return image->pixels[((size_t)y * image->width + x) * image->channels + ch];
+}
+
+/* ASSET_TEXELS texels of every spec-gloss material of `path`, shared equally among its materials: diffuse and
+ * specular maps (sRGB-decoded) times their factors, at the same relative position in both. Returns an exit code. */
+static int add_asset_texels(const char *path, const char *scratch, uint64_t seed, texel_pool *pool) {
+    mr_gltf *asset = NULL;
+    mr_status status = mr_gltf_load(path, &asset);
+    if (status != MR_OK) return cli_fail("dataset", status);
+    mr_gltf_counts counts;
+    mr_gltf_get_counts(asset, &counts);
+    int sg_materials = 0;
+    for (int k = 0; k < counts.materials; k++) {
+        mr_gltf_material m;
+        if (mr_gltf_get_material(asset, k, &m) == MR_OK && m.has_spec_gloss) sg_materials++;
+    }
+    if (sg_materials == 0) {
+        mr_gltf_free(asset);
+        fprintf(stderr, "matremap dataset: error: --asset %s: no material carries KHR_materials_pbrSpecularGlossiness\n",
+                path);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    size_t per = ASSET_TEXELS / (size_t)sg_materials;
+    float *grown = realloc(pool->texels, (pool->count + per * (size_t)sg_materials) * 6 * sizeof *grown);
+    if (grown == NULL) {
+        mr_gltf_free(asset);
+        fprintf(stderr, "matremap dataset: error: out of memory\n");
+        return CLI_EXIT_INTERNAL;
+    }
+    pool->texels = grown;
+    int code = CLI_EXIT_OK;
+    rng r = {mix64(seed ^ 0xa5a5a5a5ULL) ^ mix64((uint64_t)pool->assets + 77)};
+    for (int k = 0; code == CLI_EXIT_OK && k < counts.materials; k++) {
+        mr_gltf_material m;
+        if (mr_gltf_get_material(asset, k, &m) != MR_OK || !m.has_spec_gloss) continue;
+        mr_image *diffuse = NULL, *sg = NULL;
+        if (m.diffuse_texture.index >= 0)
+            code = cli_gltf_read_texture(asset, &m.diffuse_texture, MR_IMG_COLOR, scratch, &diffuse);
+        if (code == CLI_EXIT_OK && m.specular_glossiness_texture.index >= 0)
+            code = cli_gltf_read_texture(asset, &m.specular_glossiness_texture, MR_IMG_COLOR, scratch, &sg);
+        for (size_t j = 0; code == CLI_EXIT_OK && j < per; j++) {
+            double u = uniform(&r), v = uniform(&r);
+            float *t = pool->texels + 6 * pool->count++;
+            for (int c = 0; c < 3; c++) {
+                t[c] = (float)fmin(1.0, fmax(0.0, texel_at(diffuse, u, v, c) * m.diffuse_factor[c]));
+                t[3 + c] = (float)fmin(1.0, fmax(0.0, texel_at(sg, u, v, c) * m.specular_factor[c]));
+            }
+        }
+        mr_image_free(diffuse);
+        mr_image_free(sg);
+    }
+    pool->assets++;
+    mr_gltf_free(asset);
+    return code;
+}
+
+/* ---- the pairs ----------------------------------------------------------------------------------------------- */
+
+typedef struct pair {
+    mr_wf_spec in;
+    mr_wf_metal label;
+    mr_wf_label_result result;
+    category cat;
+} pair;
+
+static void progress(const char *what, size_t done, size_t total, double started) {
+    fprintf(stderr, "\rdataset: %s %zu/%zu  %.0f s ", what, done, total, cli_now() - started);
+}
+
+/* Label every pair (OpenMP over pairs, dynamic: texels differ in cost). */
+static mr_status label_pairs(const mr_wf_label_scene *scene, pair *pairs, size_t n, const char *what) {
+    mr_status status = MR_OK;
+    int draw = isatty(STDERR_FILENO);
+    double started = cli_now();
+    size_t done = 0;
+#pragma omp parallel for schedule(dynamic, 16)
+    for (size_t i = 0; i < n; i++) {
+        mr_status s = mr_wf_label_fit(scene, &pairs[i].in, &pairs[i].label, &pairs[i].result);
+        size_t now;
+#pragma omp atomic capture
+        now = ++done;
+        if (s != MR_OK) {
+#pragma omp critical(dataset_status)
+            status = s;
+        }
+        if (draw && (now % 256 == 0 || now == n)) {
+#pragma omp critical(dataset_progress)
+            progress(what, now, n, started);
+        }
+    }
+    if (draw) fputc('\n', stderr);
+    return status;
+}
+
+/* The diffuse lobe the network reads (glTF's reading of a spec-gloss diffuse: d (1 - max s)). */
+static void lobe(const mr_wf_spec *in, double d[3]) {
+    double smax = fmax(in->specular[0], fmax(in->specular[1], in->specular[2]));
+    for (int c = 0; c < 3; c++) d[c] = in->diffuse[c] * (1.0 - smax);
+}
+
+static int write_pairs(const char *path, const pair *pairs, size_t n, const char *objective, uint64_t seed) {
+    char tmp[4200];
+    snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid());
+    FILE *f = fopen(tmp, "w");
+    if (f == NULL) {
+        fprintf(stderr, "matremap dataset: error: cannot write '%s': %s\n", tmp, strerror(errno));
+        return CLI_EXIT_BAD_INPUT;
+    }
+    fprintf(f, "# matremap dataset: objective %s, seed %llu, %zu pairs (docs/training.md)\n", objective,
+            (unsigned long long)seed, n);
+    fprintf(f, "index,category,sg_diffuse_r,sg_diffuse_g,sg_diffuse_b,diffuse_r,diffuse_g,diffuse_b,f0_r,f0_g,f0_b,"
+               "to_albedo_r,to_albedo_g,to_albedo_b,to_metallic,loss,analytic_loss,kept_analytic,outcome\n");
+    for (size_t i = 0; i < n; i++) {
+        const pair *p = &pairs[i];
+        double d[3];
+        lobe(&p->in, d);
+        fprintf(f, "%zu,%s,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%d,converged\n",
+                i, category_names[p->cat], p->in.diffuse[0], p->in.diffuse[1], p->in.diffuse[2], d[0], d[1], d[2],
+                p->in.specular[0], p->in.specular[1], p->in.specular[2], p->label.albedo[0], p->label.albedo[1],
+                p->label.albedo[2], p->label.metallic, p->result.loss, p->result.analytic_loss,
+                p->result.kept_analytic);
+    }
+    int bad = ferror(f);
+    if (fclose(f) != 0 || bad || rename(tmp, path) != 0) {
+        fprintf(stderr, "matremap dataset: error: cannot write '%s': %s\n", path, strerror(errno));
+        unlink(tmp);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    return CLI_EXIT_OK;
+}
+
+/* ---- --compare ------------------------------------------------------------------------------------------------ */
+
+/* The named hard cases (spec-gloss values; specular codes of the 8-bit dielectric band). */
+typedef struct named_texel {
+    const char *name;
+    int diffuse[3], specular[3]; /* sRGB codes */
+} named_texel;
+
+static const named_texel hard_cases[] = {
+    {"black plastic", {12, 12, 12}, {56, 56, 56}},     {"dark grey plastic", {40, 40, 40}, {56, 56, 56}},
+    {"mid grey plastic", {128, 128, 128}, {56, 56, 56}}, {"white plastic", {250, 250, 250}, {56, 56, 56}},
+    {"dark dielectric F0 40", {20, 20, 20}, {40, 40, 40}}, {"bright dielectric F0 70", {220, 220, 220}, {70, 70, 70}},
+    {"red cap", {200, 20, 15}, {56, 56, 56}},           {"green paint", {20, 160, 30}, {56, 56, 56}},
+    {"blue paint", {15, 30, 190}, {56, 56, 56}},        {"yellow plastic", {230, 200, 10}, {56, 56, 56}},
+    {"grey in (1, 0)", {255, 255, 255}, {0, 0, 0}},      {"grey half/half", {128, 128, 128}, {128, 128, 128}},
+    {"gold", {0, 0, 0}, {255, 220, 130}},               {"copper", {0, 0, 0}, {250, 208, 192}},
+    {"silver", {0, 0, 0}, {252, 250, 245}},             {"iron", {0, 0, 0}, {196, 199, 199}},
+    {"half metal red", {100, 10, 8}, {170, 90, 80}},    {"coloured spec on grey", {128, 128, 128}, {230, 120, 120}},
+    {"dark spec 20", {128, 128, 128}, {20, 20, 20}},    {"bright diffuse + bright spec", {230, 230, 230}, {200, 200, 200}},
+};
+#define HARD_CASES ((int)(sizeof hard_cases / sizeof hard_cases[0]))
+
+/* Luma of a linear RGB pixel after sRGB encoding is what SSIM sees; the exposure brings the source crop's mean
+ * Rec. 709 luminance to 0.18, as the evaluation does. */
+static double crop_exposure(const mr_image *img) {
+    double sum = 0.0;
+    size_t n = (size_t)img->width * img->height;
+    for (size_t i = 0; i < n; i++)
+        sum += 0.2126 * img->pixels[3 * i] + 0.7152 * img->pixels[3 * i + 1] + 0.0722 * img->pixels[3 * i + 2];
+    return sum > 0.0 ? 0.18 * (double)n / sum : 1.0;
+}
+
+/* The largest square inside the sphere's coverage, centred. */
+static mr_status crop_inner(const mr_image *img, const float *coverage, mr_image *out) {
+    int size = img->width, side = out->width, x0 = (size - side) / 2;
+    for (int y = 0; y < side; y++)
+        for (int x = 0; x < side; x++) {
+            size_t src = (size_t)(y + x0) * size + (x + x0);
+            if (coverage[src] < 1.0f) return MR_ERR_INVALID_ARG; /* inner_side() chose a square inside */
+            for (int c = 0; c < 3; c++) out->pixels[3 * ((size_t)y * side + x) + c] = img->pixels[3 * src + c];
+        }
+    return MR_OK;
+}
+
+static int inner_side(const mr_wf_label_scene *scene) {
+    const float *cov = mr_wf_label_coverage(scene);
+    int size = mr_wf_label_size(scene);
+    for (int side = size; side >= 11; side--) {
+        int x0 = (size - side) / 2, ok = 1;
+        for (int y = 0; y < side && ok; y++)
+            for (int x = 0; x < side && ok; x++)
+                if (cov[(size_t)(y + x0) * size + (x + x0)] < 1.0f) ok = 0;
+        if (ok) return side;
+    }
+    return 0;
+}
+
+/* Mean object SSIM of `metal` against the source texel over the evaluation scene's views. */
+static mr_status texel_ssim(const mr_wf_label_scene *eval, int side, const mr_wf_spec *in, const mr_wf_metal *metal,
+                            double *out) {
+    int size = mr_wf_label_size(eval);
+    mr_image *src = NULL, *dst = NULL, *a = NULL, *b = NULL;
+    mr_status status = mr_image_create(size, size, 3, &src);
+    if (status == MR_OK) status = mr_image_create(size, size, 3, &dst);
+    if (status == MR_OK) status = mr_image_create(side, side, 3, &a);
+    if (status == MR_OK) status = mr_image_create(side, side, 3, &b);
+    double sum = 0.0;
+    int views = mr_wf_label_view_count(eval);
+    for (int v = 0; status == MR_OK && v < views; v++) {
+        status = mr_wf_label_render(eval, v, in, NULL, src);
+        if (status == MR_OK) status = mr_wf_label_render(eval, v, NULL, metal, dst);
+        if (status == MR_OK) status = crop_inner(src, mr_wf_label_coverage(eval), a);
+        if (status == MR_OK) status = crop_inner(dst, mr_wf_label_coverage(eval), b);
+        double s = 0.0;
+        mr_ssim_options o = {crop_exposure(a), 0};
+        if (status == MR_OK) status = mr_ssim(a, b, &o, &s, NULL);
+        sum += s;
+    }
+    mr_image_free(src);
+    mr_image_free(dst);
+    mr_image_free(a);
+    mr_image_free(b);
+    *out = views ? sum / views : 0.0;
+    return status;
+}
+
+typedef struct column {
+    char name[96];
+    double *ssim; /* per texel */
+} column;
+
+/* Converters in columns: label objectives (fitted under the synthetic lights), the analytic inverses (glTF
+ * reading of the diffuse), networks. */
+static int compare(pair *texels, size_t n, const char **names, const mr_image *const *envs, int env_count,
+                   const char *const *weights, int weight_count, const mr_wf_label_options *label_opts,
+                   const char *output) {
+    mr_wf_label_options eo = mr_wf_label_options_default();
+    eo.size = 96;
+    eo.env_count = env_count;
+    for (int e = 0; e < env_count; e++) eo.envs[e] = envs[e];
+    eo.glossiness_count = 3;
+    eo.glossiness[0] = 0.3;
+    eo.glossiness[1] = 0.6;
+    eo.glossiness[2] = 0.9;
+    mr_wf_label_scene *eval = NULL;
+    mr_status status = mr_wf_label_scene_create(&eo, &eval);
+    if (status != MR_OK) return cli_fail("dataset", status);
+    int side = inner_side(eval);
+    column cols[MR_WF_OBJECTIVE_COUNT + 3 + MAX_WEIGHTS];
+    int ncol = 0;
+    mr_wf_metal *answers = malloc(n * sizeof *answers);
+    float *dif = malloc(n * 3 * sizeof *dif), *spe = malloc(n * 3 * sizeof *spe);
+    float *alb = malloc(n * 3 * sizeof *alb), *met = malloc(n * sizeof *met);
+    if (answers == NULL || dif == NULL || spe == NULL || alb == NULL || met == NULL) status = MR_ERR_NOMEM;
+    for (size_t i = 0; status == MR_OK && i < n; i++)
+        for (int c = 0; c < 3; c++) {
+            dif[3 * i + c] = (float)texels[i].in.diffuse[c];
+            spe[3 * i + c] = (float)texels[i].in.specular[c];
+        }
+    int total = MR_WF_OBJECTIVE_COUNT + 3 + weight_count;
+    for (int k = 0; status == MR_OK && k < total; k++) {
+        column *col = &cols[ncol];
+        col->ssim = malloc(n * sizeof *col->ssim);
+        if (col->ssim == NULL) {
+            status = MR_ERR_NOMEM;
+            break;
+        }
+        ncol++;
+        if (k < MR_WF_OBJECTIVE_COUNT) {
+            mr_wf_label_options lo = *label_opts;
+            lo.objective = (mr_wf_objective)k;
+            mr_wf_label_scene *scene = NULL;
+            snprintf(col->name, sizeof col->name, "labels: %s", mr_wf_objective_name(lo.objective));
+            status = mr_wf_label_scene_create(&lo, &scene);
+            if (status == MR_OK) status = label_pairs(scene, texels, n, col->name);
+            for (size_t i = 0; i < n; i++) answers[i] = texels[i].label;
+            mr_wf_label_scene_free(scene);
+        } else {
+            mr_wf_spec_maps in = {dif, spe, NULL};
+            mr_wf_metal_maps out = {alb, met, NULL};
+            mr_wf_options o = mr_wf_options_default();
+            o.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
+            int a = k - MR_WF_OBJECTIVE_COUNT;
+            if (a < 3) {
+                static const mr_wf_method methods[3] = {MR_WF_WEIGHTED, MR_WF_MEAN, MR_WF_KHRONOS};
+                o.method = methods[a];
+                snprintf(col->name, sizeof col->name, "%s", mr_wf_method_name(o.method));
+                status = mr_wf_spec_to_metal_batch(&in, n, &o, &out, NULL);
+            } else {
+                mr_mlp *net = NULL;
+                const char *w = weights[a - 3];
+                status = mr_mlp_read(w, &net);
+                snprintf(col->name, sizeof col->name, "mlp %s", strrchr(w, '/') ? strrchr(w, '/') + 1 : w);
+                if (status == MR_OK) status = mr_wf_spec_to_metal_mlp_batch(net, &in, n, &o, &out, NULL);
+                mr_mlp_free(net);
+            }
+            for (size_t i = 0; status == MR_OK && i < n; i++) {
+                for (int c = 0; c < 3; c++) answers[i].albedo[c] = alb[3 * i + c];
+                answers[i].metallic = met[i];
+            }
+        }
+#pragma omp parallel for schedule(dynamic, 8)
+        for (size_t i = 0; i < n; i++) {
+            if (status != MR_OK) continue;
+            mr_status s = texel_ssim(eval, side, &texels[i].in, &answers[i], &col->ssim[i]);
+            if (s != MR_OK) {
+#pragma omp critical(dataset_status)
+                status = s;
+            }
+        }
+    }
+    FILE *f = status == MR_OK ? (output ? fopen(output, "w") : stdout) : NULL;
+    if (status == MR_OK && f == NULL) {
+        fprintf(stderr, "matremap dataset: error: cannot write '%s': %s\n", output, strerror(errno));
+        status = MR_ERR_IO;
+    }
+    if (status == MR_OK) {
+        fprintf(f, "| texel | diffuse codes | specular codes |");
+        for (int k = 0; k < ncol; k++) fprintf(f, " %s |", cols[k].name);
+        fprintf(f, "\n|---|---|---|");
+        for (int k = 0; k < ncol; k++) fprintf(f, "---:|");
+        fprintf(f, "\n");
+        for (size_t i = 0; i < (size_t)HARD_CASES && i < n; i++) {
+            const named_texel *h = &hard_cases[i];
+            fprintf(f, "| %s | %d,%d,%d | %d,%d,%d |", names[i], h->diffuse[0], h->diffuse[1], h->diffuse[2],
+                    h->specular[0], h->specular[1], h->specular[2]);
+            for (int k = 0; k < ncol; k++) fprintf(f, " %.4f |", cols[k].ssim[i]);
+            fprintf(f, "\n");
+        }
+        for (int cat = 0; cat < CAT_COUNT; cat++) { /* the drawn texels by category */
+            size_t count = 0;
+            for (size_t i = (size_t)HARD_CASES; i < n; i++) count += texels[i].cat == (category)cat;
+            if (count == 0) continue;
+            fprintf(f, "| *drawn: %s, mean* (%zu) | | |", category_names[cat], count);
+            for (int k = 0; k < ncol; k++) {
+                double sum = 0.0;
+                for (size_t i = (size_t)HARD_CASES; i < n; i++)
+                    if (texels[i].cat == (category)cat) sum += cols[k].ssim[i];
+                fprintf(f, " %.4f |", sum / (double)count);
+            }
+            fprintf(f, "\n");
+        }
+        const char *groups[3] = {"hard cases: mean", "all texels: mean", "all texels: worst"};
+        for (int g = 0; g < 3; g++) {
+            fprintf(f, "| **%s** (%zu) | | |", groups[g], g == 0 ? (size_t)HARD_CASES : n);
+            for (int k = 0; k < ncol; k++) {
+                double sum = 0.0, worst = 1.0;
+                size_t count = g == 0 ? (size_t)HARD_CASES : n;
+                for (size_t i = 0; i < count; i++) {
+                    sum += cols[k].ssim[i];
+                    worst = fmin(worst, cols[k].ssim[i]);
+                }
+                fprintf(f, " %.4f |", g == 2 ? worst : sum / (double)count);
+            }
+            fprintf(f, "\n");
+        }
+        if (output) fclose(f);
+    }
+    for (int k = 0; k < ncol; k++) free(cols[k].ssim);
+    free(answers);
+    free(dif);
+    free(spe);
+    free(alb);
+    free(met);
+    mr_wf_label_scene_free(eval);
+    return status == MR_OK ? CLI_EXIT_OK : cli_fail("dataset", status);
+}
+
+int cmd_dataset(int argc, char **argv) {
+    const char *output = NULL, *assets[MAX_ASSETS], *env_paths[MAX_ENVS], *weights[MAX_WEIGHTS];
+    const char *label_env_paths[MAX_ENVS];
+    int asset_count = 0, env_count = 0, label_env_count = 0, weight_count = 0, samples = -1, seed = 1, threads = 0, do_compare = 0;
+    mr_wf_label_options lo = mr_wf_label_options_default();
+    for (int i = 1; i < argc; i++) {
+        const char *value = NULL;
+        int taken;
+        if (cli_is_help(argv[i])) {
+            print_help();
+            return CLI_EXIT_OK;
+        }
+        if ((taken = cli_take_option("dataset", argc, argv, &i, "--output", &value)) ||
+            (taken = cli_take_option("dataset", argc, argv, &i, "-o", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            output = value;
+        } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--samples", &value))) {
+            if (taken < 0 || !cli_parse_int("dataset", "--samples", value, 1, 10000000, &samples)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--seed", &value))) {
+            if (taken < 0 || !cli_parse_int("dataset", "--seed", value, 0, 2147483647, &seed)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--objective", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (mr_wf_objective_from_name(value, &lo.objective) != MR_OK)
+                return cli_usage_error("dataset", "--objective '%s': expected luma, exposed, display, log or linear", value);
+        } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--asset", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (asset_count == MAX_ASSETS) return cli_usage_error("dataset", "more than %d --asset files", MAX_ASSETS);
+            assets[asset_count++] = value;
+        } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--env", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (env_count == MAX_ENVS) return cli_usage_error("dataset", "more than %d --env maps", MAX_ENVS);
+            env_paths[env_count++] = value;
+        } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--label-env", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (label_env_count == MAX_ENVS) return cli_usage_error("dataset", "more than %d --label-env maps", MAX_ENVS);
+            label_env_paths[label_env_count++] = value;
+        } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--weights", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (weight_count == MAX_WEIGHTS) return cli_usage_error("dataset", "more than %d --weights", MAX_WEIGHTS);
+            weights[weight_count++] = value;
+        } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--size", &value))) {
+            if (taken < 0 || !cli_parse_int("dataset", "--size", value, 16, 1024, &lo.size)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--regularisation", &value))) {
+            if (taken < 0 || !cli_parse_double("dataset", "--regularisation", value, 0.0, 1.0, &lo.regularisation))
+                return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--chroma-weight", &value))) {
+            if (taken < 0 || !cli_parse_double("dataset", "--chroma-weight", value, 0.0, 100.0, &lo.chroma_weight))
+                return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--threads", &value))) {
+            if (taken < 0 || !cli_parse_int("dataset", "--threads", value, 1, 1024, &threads)) return CLI_EXIT_USAGE;
+        } else if (strcmp(argv[i], "--compare") == 0) {
+            do_compare = 1;
+        } else {
+            return cli_usage_error("dataset", "unexpected argument '%s'", argv[i]);
+        }
+    }
+    if (!do_compare && output == NULL) return cli_usage_error("dataset", "missing -o PAIRS.csv");
+    if (do_compare && env_count == 0) return cli_usage_error("dataset", "--compare needs at least one --env map");
+    if (!do_compare && (env_count || weight_count))
+        return cli_usage_error("dataset", "--env and --weights go with --compare");
+    if (samples < 0) samples = do_compare ? 400 : 16000;
+    if (threads > 0) omp_set_num_threads(threads);
+
+    char scratch[64] = "/tmp/matremap-dataset-XXXXXX";
+    if (asset_count > 0 && mkdtemp(scratch) == NULL) {
+        fprintf(stderr, "matremap dataset: error: cannot create a scratch folder in /tmp: %s\n", strerror(errno));
+        return CLI_EXIT_INTERNAL;
+    }
+    texel_pool pool = {NULL, 0, 0};
+    int code = CLI_EXIT_OK;
+    for (int a = 0; code == CLI_EXIT_OK && a < asset_count; a++)
+        code = add_asset_texels(assets[a], scratch, (uint64_t)seed, &pool);
+    if (asset_count > 0) rmdir(scratch);
+    size_t extra = do_compare ? (size_t)HARD_CASES : 0, n = extra + (size_t)samples;
+    pair *pairs = code == CLI_EXIT_OK ? calloc(n, sizeof *pairs) : NULL;
+    const char **names = code == CLI_EXIT_OK ? calloc(n, sizeof *names) : NULL;
+    if (code == CLI_EXIT_OK && (pairs == NULL || names == NULL)) {
+        fprintf(stderr, "matremap dataset: error: out of memory for %zu pairs\n", n);
+        code = CLI_EXIT_INTERNAL;
+    }
+    for (size_t i = 0; code == CLI_EXIT_OK && i < n; i++) {
+        if (i < extra) {
+            for (int c = 0; c < 3; c++) {
+                pairs[i].in.diffuse[c] = srgb_code(hard_cases[i].diffuse[c]);
+                pairs[i].in.specular[c] = srgb_code(hard_cases[i].specular[c]);
+            }
+            names[i] = hard_cases[i].name;
+            pairs[i].cat = CAT_UNIFORM;
+        } else {
+            pairs[i].cat = draw_texel((uint64_t)seed, i - extra, &pool, &pairs[i].in);
+            names[i] = category_names[pairs[i].cat];
+        }
+    }
+    free(pool.texels);
+    mr_image *label_envs[MAX_ENVS] = {NULL};
+    for (int e = 0; code == CLI_EXIT_OK && e < label_env_count; e++) {
+        mr_img_read_options ro = {MR_IMG_DATA, 3, 0};
+        mr_status status = mr_img_read(label_env_paths[e], &ro, &label_envs[e]);
+        if (status != MR_OK) code = cli_fail("dataset", status);
+        lo.envs[e] = label_envs[e];
+        lo.env_count = e + 1;
+    }
+    if (code == CLI_EXIT_OK && do_compare) {
+        mr_image *envs[MAX_ENVS] = {NULL};
+        for (int e = 0; code == CLI_EXIT_OK && e < env_count; e++) {
+            mr_img_read_options ro = {MR_IMG_DATA, 3, 0};
+            mr_status status = mr_img_read(env_paths[e], &ro, &envs[e]);
+            if (status != MR_OK) code = cli_fail("dataset", status);
+        }
+        if (code == CLI_EXIT_OK)
+            code = compare(pairs, n, names, (const mr_image *const *)envs, env_count, weights, weight_count, &lo, output);
+        for (int e = 0; e < env_count; e++) mr_image_free(envs[e]);
+    } else if (code == CLI_EXIT_OK) {
+        mr_wf_label_scene *scene = NULL;
+        mr_status status = mr_wf_label_scene_create(&lo, &scene);
+        if (status == MR_OK) status = label_pairs(scene, pairs, n, "labels");
+        mr_wf_label_scene_free(scene);
+        code = status == MR_OK ? write_pairs(output, pairs, n, mr_wf_objective_name(lo.objective), (uint64_t)seed)
+                               : cli_fail("dataset", status);
+    }
+    for (int e = 0; e < label_env_count; e++) mr_image_free(label_envs[e]);
+    free(pairs);
+    free(names);
+    return code;
+}
