@@ -9,7 +9,8 @@
 #   make analyses   the paper's stability analyses (docs/analyses.md)
 #   make evaluation the workflow converters on the real texture sets of ../shared/assets (docs/evaluation.md)
 #   make evaluation-gltf   the glTF conversions and gltf-transform's, rendered as meshes (docs/evaluation.md)
-#   make dataset    the specular -> metallic training set (build/dataset); make train: data/spec2metal.mlp
+#   make dataset    the specular -> metallic training set (build/dataset); make train: data/spec2metal.mlp;
+#                   make objectives: which label objective agrees with object SSIM (docs/training.md)
 #   make deps       installs the Debian packages the project needs (scripts/install-deps.sh)
 #   make install PREFIX=/usr/local   tools, static library, public headers, matremap.pc and the network
 
@@ -55,9 +56,9 @@ BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
 
 PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h src/render/render.h \
                   src/io/image_io.h src/metrics/metrics.h src/remap/remap.h src/workflow/workflow.h \
-                  src/workflow/dataset.h src/report/report.h nn/mlp.h gltf/mr_gltf.h
+                  src/workflow/dataset.h src/workflow/labels.h src/report/report.h nn/mlp.h gltf/mr_gltf.h
 
-.PHONY: all check asan demo bench analyses evaluation evaluation-gltf dataset train deps install clean
+.PHONY: all check asan demo bench analyses evaluation evaluation-gltf dataset train objectives deps install clean
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
 all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE)
@@ -150,6 +151,10 @@ train: dataset
 	$(BUILD)/bin/matremap train $(DATASET)/pairs.csv --seed 1 --form residual \
 	    -o data/spec2metal.mlp --loss-curve docs/training/spec2metal_loss \
 	    --test $(DATASET)/test-pairs.csv | tee docs/training/spec2metal.txt
+
+# Which label objective agrees with object SSIM under held-out lights (docs/training.md, "Objectives").
+objectives: all
+	scripts/objectives.sh $(BUILD)
 
 deps:
 	scripts/install-deps.sh

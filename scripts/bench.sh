@@ -397,11 +397,12 @@ echo "== uniform remaps: time and accuracy against fit-scene size and strategy, 
 
 echo
 echo "== workflow conversion: methods, accuracy, MLP width (tests/bench_workflow.c)"
-[ -s "$root/$build/dataset/test-off-manifold.csv" ] || echo "(no dataset in $build/dataset: make dataset first for the accuracy tables)"
+[ -s "$root/$build/dataset/test-pairs.csv" ] || echo "(no dataset in $build/dataset: make dataset first for the accuracy tables)"
 {
     echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'))."
     echo
-    "$root/$build/tests/bench_workflow" "$root/data/spec2metal.mlp" "$root/$build/dataset" $quick
+    "$root/$build/tests/bench_workflow" "$root/data/spec2metal.mlp" "$root/$build/dataset" \
+        "$root/../shared/assets/hdri/studio_small_03_1k.hdr" "$root/../shared/assets/hdri/tabac_plant_vogl.hdr" $quick
 } | tee "$work/workflow.md"
 
 echo

@@ -40,6 +40,7 @@
 #include "remap/remap.h"
 #include "workflow/workflow.h"
 #include "workflow/dataset.h"
+#include "workflow/labels.h"
 #include "nn/mlp.h"
 
 #ifdef __cplusplus

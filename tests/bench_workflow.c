@@ -5,13 +5,14 @@
  * 1. Throughput: every method converts the same 2048^2 texture of seeded random specular texels (diffuse and F0
  *    uniform in [0, 1] per channel) on 1 and 2 threads; texels/s, best of 3, and the ratio to WEIGHTED (the
  *    analytic peer) measured in the same run.
- * 2. Accuracy: on the held-out sweep files of `make dataset` (test-on-manifold.csv, test-off-manifold.csv) every
- *    method's metallic parameters are rendered with `ggx-metallic` in the fit scene (64^2, alpha 0.2, the
- *    dataset's) against the source specular material rendered with `ggx`: mean SSIM and mean relative RMSE, and
- *    the RMSE of metallic against the optimiser's labels.
+ * 2. Accuracy: on the held-out pairs of `make dataset` (test-pairs.csv) every method's answer and the labels
+ *    themselves, rendered on a sphere under both shared HDR maps (held out of training) at glossiness 0.3, 0.6
+ *    and 0.9: object SSIM against the spec-gloss texel (mr_wf_label_ssim), mean and worst, and the RMSE of
+ *    metallic against the labels.
  * 3. MLP width: networks of 16, 32, 64, 128 and 300 hidden units trained as `make train` trains the default one
- *    (seed 1, same data), with their training time, accuracy as in 2 and inference throughput on 2 threads.
- * Usage: bench_workflow WEIGHTS DATASET_DIR [--quick]. Without the dataset, 2 and 3 are skipped (said so).
+ *    (residual form, seed 1, same data), with their training time, accuracy as in 2 and inference throughput on
+ *    2 threads.
+ * Usage: bench_workflow WEIGHTS DATASET_DIR HDR HDR [--quick]. Without the dataset, 2 and 3 are skipped.
  * Prints Markdown on stdout, progress on stderr; asserts nothing.
  */
 #include <math.h>
@@ -68,63 +69,55 @@ static double throughput(const mr_mlp *net, mr_wf_method m, const float *diffuse
 }
 
 typedef struct accuracy {
-    double ssim, relative_rmse, metallic_rmse;
+    double ssim, worst, metallic_rmse;
 } accuracy;
 
-/* Render every test pair's source (ggx) and the method's conversion (ggx-metallic) in the fit scene. */
-static accuracy judge(const mr_render_plan *plan, const mr_mlp *net, mr_wf_method m, const mr_wf_dataset *test) {
-    accuracy a = {0, 0, 0};
+/* The spec-gloss texel of a pair: the dataset holds the diffuse lobe d (1 - max s); d is recovered from it. */
+static mr_wf_spec pair_texel(const mr_wf_dataset *d, size_t i) {
+    mr_wf_spec t = {{0, 0, 0}, {0, 0, 0}, 0};
+    double smax = fmax(d->x[6 * i + 3], fmax(d->x[6 * i + 4], d->x[6 * i + 5]));
+    for (int c = 0; c < 3; c++) {
+        t.specular[c] = d->x[6 * i + 3 + c];
+        t.diffuse[c] = smax < 1.0 ? fmin(1.0, d->x[6 * i + c] / (1.0 - smax)) : 0.0;
+    }
+    return t;
+}
+
+/* Every test pair converted by the method (net == NULL and m == MR_WF_METHOD_COUNT: the labels), judged by object
+ * SSIM under the evaluation scene. */
+static accuracy judge(const mr_wf_label_scene *eval, const mr_mlp *net, mr_wf_method m, const mr_wf_dataset *test) {
+    accuracy a = {0, 1, 0};
     size_t n = test->n;
     float *diffuse = malloc(n * 3 * sizeof *diffuse), *specular = malloc(n * 3 * sizeof *specular);
     float *albedo = malloc(n * 3 * sizeof *albedo), *metallic = malloc(n * sizeof *metallic);
-    for (size_t i = 0; i < n; i++)
+    for (size_t i = 0; i < n; i++) {
         for (int c = 0; c < 3; c++) {
             diffuse[3 * i + c] = test->x[6 * i + c];
             specular[3 * i + c] = test->x[6 * i + 3 + c];
+            albedo[3 * i + c] = test->y[4 * i + c];
         }
+        metallic[i] = test->y[4 * i + 3];
+    }
     omp_set_num_threads(2);
-    if (convert(net, m, diffuse, specular, n, albedo, metallic) != MR_OK) {
+    if (m != MR_WF_METHOD_COUNT && convert(net, m, diffuse, specular, n, albedo, metallic) != MR_OK) {
         a.ssim = NAN;
         return a;
     }
-    const mr_brdf_model *ggx = mr_brdf_find("ggx"), *metal = mr_brdf_find("ggx-metallic");
-    double source[MR_BRDF_MAX_VALUES], target[MR_BRDF_MAX_VALUES];
-    mr_brdf_default_values(ggx, source);
-    mr_brdf_default_values(metal, target);
-    int s_alpha = mr_brdf_param_offset(ggx, mr_brdf_param_index(ggx, "alpha"));
-    int s_f0 = mr_brdf_param_offset(ggx, mr_brdf_param_index(ggx, "f0"));
-    int s_diffuse = mr_brdf_param_offset(ggx, mr_brdf_param_index(ggx, "diffuse"));
-    int t_albedo = mr_brdf_param_offset(metal, mr_brdf_param_index(metal, "albedo"));
-    int t_metallic = mr_brdf_param_offset(metal, mr_brdf_param_index(metal, "metallic"));
-    int t_alpha = mr_brdf_param_offset(metal, mr_brdf_param_index(metal, "alpha"));
-    source[s_alpha] = target[t_alpha] = ALPHA;
-    double ssim_sum = 0.0, rel_sum = 0.0, metal_sq = 0.0;
-#pragma omp parallel for reduction(+ : ssim_sum, rel_sum, metal_sq) schedule(dynamic) firstprivate(source, target)
+    double ssim_sum = 0.0, worst = 1.0, metal_sq = 0.0;
+#pragma omp parallel for reduction(+ : ssim_sum, metal_sq) reduction(min : worst) schedule(dynamic)
     for (size_t i = 0; i < n; i++) {
-        for (int c = 0; c < 3; c++) {
-            source[s_f0 + c] = specular[3 * i + c];
-            source[s_diffuse + c] = diffuse[3 * i + c];
-            target[t_albedo + c] = albedo[3 * i + c];
-        }
-        target[t_metallic] = metallic[i];
-        mr_image *a_img = NULL, *b_img = NULL, *black = NULL;
-        double ssim = 0.0, rmse = 0.0, rms = 0.0;
-        if (mr_render(plan, ggx, source, MR_COMPONENT_FULL, &a_img) == MR_OK &&
-            mr_render(plan, metal, target, MR_COMPONENT_FULL, &b_img) == MR_OK &&
-            mr_image_create(FIT_SIZE, FIT_SIZE, 3, &black) == MR_OK &&
-            mr_ssim(a_img, b_img, NULL, &ssim, NULL) == MR_OK && mr_rmse(a_img, b_img, &rmse) == MR_OK &&
-            mr_rmse(a_img, black, &rms) == MR_OK) {
+        mr_wf_spec t = pair_texel(test, i);
+        mr_wf_metal answer = {{albedo[3 * i], albedo[3 * i + 1], albedo[3 * i + 2]}, metallic[i], 0};
+        double ssim = 0.0;
+        if (mr_wf_label_ssim(eval, &t, &answer, &ssim) == MR_OK) {
             ssim_sum += ssim;
-            rel_sum += rmse / fmax(rms, 1e-4);
+            worst = fmin(worst, ssim);
         }
         double d = metallic[i] - test->y[4 * i + 3];
         metal_sq += d * d;
-        mr_image_free(a_img);
-        mr_image_free(b_img);
-        mr_image_free(black);
     }
     a.ssim = ssim_sum / (double)n;
-    a.relative_rmse = rel_sum / (double)n;
+    a.worst = worst;
     a.metallic_rmse = sqrt(metal_sq / (double)n);
     free(diffuse);
     free(specular);
@@ -135,10 +128,10 @@ static accuracy judge(const mr_render_plan *plan, const mr_mlp *net, mr_wf_metho
 
 int main(int argc, char **argv) {
     if (argc < 3) {
-        fprintf(stderr, "usage: bench_workflow WEIGHTS DATASET_DIR [--quick]\n");
+        fprintf(stderr, "usage: bench_workflow WEIGHTS DATASET_DIR HDR HDR [--quick]\n");
         return 1;
     }
-    int quick = argc > 3 && strcmp(argv[3], "--quick") == 0;
+    int quick = argc > 5 && strcmp(argv[5], "--quick") == 0;
     mr_mlp *net = NULL;
     if (mr_mlp_read(argv[1], &net) != MR_OK) {
         fprintf(stderr, "bench_workflow: %s\n", mr_last_error());
@@ -167,43 +160,51 @@ int main(int argc, char **argv) {
         printf("| %s | %.1f | %.1f | %.0f | %.2f× |\n", methods[m].name, rate[m][0] / 1e6, rate[m][1] / 1e6,
                1e3 * (double)SIDE * SIDE / rate[m][1], rate[1][1] / rate[m][1]);
 
-    char on_path[4096], off_path[4096], train_paths[2][4096];
-    snprintf(on_path, sizeof on_path, "%s/test-on-manifold.csv", argv[2]);
-    snprintf(off_path, sizeof off_path, "%s/test-off-manifold.csv", argv[2]);
-    snprintf(train_paths[0], sizeof train_paths[0], "%s/on-manifold.csv", argv[2]);
-    snprintf(train_paths[1], sizeof train_paths[1], "%s/off-manifold.csv", argv[2]);
-    const char *on_files[1] = {on_path}, *off_files[1] = {off_path}, *train_files[2] = {train_paths[0], train_paths[1]};
-    mr_wf_dataset on, off, train;
-    if (mr_wf_dataset_load(on_files, 1, NULL, &on) != MR_OK ||
-        mr_wf_dataset_load(off_files, 1, NULL, &off) != MR_OK ||
-        mr_wf_dataset_load(train_files, 2, NULL, &train) != MR_OK) {
+    char test_path[4096], train_path[4096];
+    snprintf(test_path, sizeof test_path, "%s/test-pairs.csv", argv[2]);
+    snprintf(train_path, sizeof train_path, "%s/pairs.csv", argv[2]);
+    const char *test_files[1] = {test_path}, *train_files[1] = {train_path};
+    mr_wf_dataset test, train;
+    mr_img_read_options ro = {MR_IMG_DATA, 3, 0};
+    mr_image *envs[2] = {NULL, NULL};
+    if (mr_wf_dataset_load(test_files, 1, NULL, &test) != MR_OK ||
+        mr_wf_dataset_load(train_files, 1, NULL, &train) != MR_OK || argc < 5 ||
+        mr_img_read(argv[3], &ro, &envs[0]) != MR_OK || mr_img_read(argv[4], &ro, &envs[1]) != MR_OK) {
         printf("\n(accuracy and width tables skipped: %s; run make dataset)\n", mr_last_error());
         mr_mlp_free(net);
         return 0;
     }
-    mr_fit_scene_options so = {FIT_SIZE, MR_FIT_LIGHT_45, 0};
-    mr_scene scene = mr_scene_fit(&so);
-    mr_render_plan *plan = NULL;
-    if (mr_render_plan_create(&scene, &plan) != MR_OK) return 1;
+    if (quick) test.n = test.n < 200 ? test.n : 200;
+    mr_wf_label_options eo = mr_wf_label_options_default();
+    eo.size = 64;
+    eo.env_count = 2;
+    eo.envs[0] = envs[0];
+    eo.envs[1] = envs[1];
+    eo.glossiness_count = 3;
+    eo.glossiness[0] = 0.3;
+    eo.glossiness[1] = 0.6;
+    eo.glossiness[2] = 0.9;
+    mr_wf_label_scene *eval = NULL;
+    if (mr_wf_label_scene_create(&eo, &eval) != MR_OK) return 1;
 
-    printf("\n### Accuracy on held-out materials (fit scene %d², GGX alpha %.1f, light 45°)\n\n", FIT_SIZE, ALPHA);
-    printf("%zu materials on the Eq. 2 manifold and %zu off it (`make dataset`, test files). SSIM and relative RMSE: "
-           "the converted metallic material's render against the specular source's; metallic RMSE: against the "
-           "image-based optimiser's metallic.\n\n", on.n, off.n);
-    printf("| method | on: SSIM | on: rel. RMSE | on: metallic RMSE | off: SSIM | off: rel. RMSE "
-           "| off: metallic RMSE |\n|---|---|---|---|---|---|---|\n");
+    printf("\n### Accuracy on held-out texels (object SSIM under the shared HDR maps)\n\n");
+    printf("%zu held-out pairs of `make dataset` (test-pairs.csv, seed 2). Each answer rendered on a 64² sphere under "
+           "both shared HDR maps (held out of training) at glossiness 0.3, 0.6, 0.9: SSIM over the sphere's inner "
+           "square against the spec-gloss texel, mean and worst; metallic RMSE against the labels.\n\n", test.n);
+    printf("| method | object SSIM (mean) | object SSIM (worst) | metallic RMSE vs labels |\n|---|---|---|---|\n");
+    accuracy lab = judge(eval, NULL, MR_WF_METHOD_COUNT, &test);
+    printf("| labels (the optimum the network learns) | %.5f | %.4f | 0 |\n", lab.ssim, lab.worst);
     for (int m = 0; m < METHOD_COUNT; m++) {
         fprintf(stderr, "accuracy: %s\n", methods[m].name);
-        accuracy a = judge(plan, net, methods[m].method, &on), b = judge(plan, net, methods[m].method, &off);
-        printf("| %s | %.5f | %.4f | %.4f | %.5f | %.4f | %.4f |\n", methods[m].name, a.ssim, a.relative_rmse,
-               a.metallic_rmse, b.ssim, b.relative_rmse, b.metallic_rmse);
+        accuracy a = judge(eval, net, methods[m].method, &test);
+        printf("| %s | %.5f | %.4f | %.4f |\n", methods[m].name, a.ssim, a.worst, a.metallic_rmse);
     }
-
     static const int widths[] = {16, 32, 64, 128, 300};
     int width_count = quick ? 2 : 5;
     printf("\n### MLP width (trained like `make train`: seed 1, %zu pairs)\n\n", train.n);
-    printf("| hidden units | training (s) | epochs | off: SSIM | off: metallic RMSE | on: SSIM | inference, 2 threads "
-           "(M texels/s) |\n|---|---|---|---|---|---|---|\n");
+    printf("| hidden units | training (s) | epochs | object SSIM (mean) | object SSIM (worst) | metallic RMSE | "
+           "inference, 2 threads (M texels/s) |\n|---|---|---|---|---|---|---|\n");
+    mr_wf_residual_targets(train.x, train.y, train.n);
     for (int w = 0; w < width_count; w++) {
         fprintf(stderr, "width %d\n", widths[w]);
         mr_mlp_train_options o;
@@ -214,16 +215,18 @@ int main(int argc, char **argv) {
         mr_mlp_train_report r;
         double t0 = bench_now();
         if (mr_mlp_train(train.x, train.y, train.n, 6, 4, &o, &trained, &r) != MR_OK) return 1;
+        snprintf(trained->kind, sizeof trained->kind, "%s", MR_WF_MLP_RESIDUAL_KIND);
         double seconds = bench_now() - t0;
-        accuracy a = judge(plan, trained, MR_WF_CUSTOM, &on), b = judge(plan, trained, MR_WF_CUSTOM, &off);
+        accuracy a = judge(eval, trained, MR_WF_CUSTOM, &test);
         double speed = throughput(trained, MR_WF_CUSTOM, diffuse, specular, n, albedo, metallic, 2);
-        printf("| %d | %.1f | %d | %.5f | %.4f | %.5f | %.1f |\n", widths[w], seconds, r.epochs, b.ssim,
-               b.metallic_rmse, a.ssim, speed / 1e6);
+        printf("| %d | %.1f | %d | %.5f | %.4f | %.4f | %.1f |\n", widths[w], seconds, r.epochs, a.ssim, a.worst,
+               a.metallic_rmse, speed / 1e6);
         mr_mlp_free(trained);
     }
-    mr_render_plan_free(plan);
-    mr_wf_dataset_free(&on);
-    mr_wf_dataset_free(&off);
+    mr_wf_label_scene_free(eval);
+    mr_image_free(envs[0]);
+    mr_image_free(envs[1]);
+    mr_wf_dataset_free(&test);
     mr_wf_dataset_free(&train);
     mr_mlp_free(net);
     free(diffuse);

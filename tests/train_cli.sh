@@ -27,7 +27,8 @@ expect "train: --hidden 0" 1 "--hidden" -- "$bin" train "$tmp/on.csv" -o "$tmp/x
 
 expect "train a small network" 0 "validation loss" -- \
     "$bin" train "$tmp/on.csv" "$tmp/off.csv" -o "$tmp/a.mlp" --hidden 8 --epochs 40 --seed 3 --test "$tmp/test.csv"
-check "the weight file starts with its magic" grep -q "^matremap-mlp 1$" "$tmp/a.mlp"
+check "the default (residual) network is a version 2 file" grep -q "^matremap-mlp 2$" "$tmp/a.mlp"
+check "... of kind spec2metal-residual" grep -q "^kind spec2metal-residual$" "$tmp/a.mlp"
 check "the loss curve is written next to it" test -s "$tmp/a_loss.csv"
 check "the loss curve has a row per epoch" test "$(wc -l < "$tmp/a_loss.csv")" -ge 3
 check "the test table lists every method" grep -qE "^  khronos " "$tmp/out"
@@ -38,6 +39,10 @@ check "weighted is near exact on manifold test pairs" \
 check "training is reproducible byte for byte (2 threads vs 1)" cmp -s "$tmp/a.mlp" "$tmp/b.mlp"
 "$bin" train "$tmp/on.csv" "$tmp/off.csv" -o "$tmp/c.mlp" --hidden 8 --epochs 40 --seed 4 >/dev/null
 check "another seed gives another network" bash -c "! cmp -s '$tmp/a.mlp' '$tmp/c.mlp'"
+"$bin" train "$tmp/on.csv" -o "$tmp/plain.mlp" --hidden 4 --epochs 3 --form plain >/dev/null
+check "--form plain writes a version 1 file without a kind" bash -c \
+    "grep -q '^matremap-mlp 1$' '$tmp/plain.mlp' && ! grep -q '^kind' '$tmp/plain.mlp'"
+expect "train: --form other" 1 "--form 'other'" -- "$bin" train "$tmp/on.csv" -o "$tmp/x.mlp" --form other
 expect "train --json" 0 '"best_validation_loss": [0-9]' -- \
     "$bin" train "$tmp/on.csv" -o "$tmp/d.mlp" --hidden 4 --epochs 3 --json --loss-curve "$tmp/curve"
 check "--loss-curve PREFIX" test -s "$tmp/curve.csv"

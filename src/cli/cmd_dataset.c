@@ -17,7 +17,6 @@
 
 #include "cli.h"
 #include "gltf/mr_gltf.h"
-#include "metrics/metrics.h"
 #include "workflow/labels.h"
 
 #define MAX_ASSETS 16
@@ -60,7 +59,8 @@ static void print_help(void) {
            "  --weights FILE        a network to compare too (repeatable, at most %d)\n"
            "  --help                this text\n"
            "\n"
-           "Exit status: 0 success, 1 bad input file, 2 usage error, 3 internal failure.\n"
+           "Exit codes: 0 done, 1 usage error, 2 bad input (an asset or map that cannot be read, an asset without\n"
+           "spec-gloss materials, an output that cannot be written), 3 internal failure.\n"
            "\n"
            "Examples:\n"
            "  matremap dataset -o build/dataset/pairs.csv --asset ../shared/assets/specgloss/Duck-pbrSpecularGlossiness/glTF/Duck.gltf\n"
@@ -368,70 +368,6 @@ static const named_texel hard_cases[] = {
 };
 #define HARD_CASES ((int)(sizeof hard_cases / sizeof hard_cases[0]))
 
-/* Luma of a linear RGB pixel after sRGB encoding is what SSIM sees; the exposure brings the source crop's mean
- * Rec. 709 luminance to 0.18, as the evaluation does. */
-static double crop_exposure(const mr_image *img) {
-    double sum = 0.0;
-    size_t n = (size_t)img->width * img->height;
-    for (size_t i = 0; i < n; i++)
-        sum += 0.2126 * img->pixels[3 * i] + 0.7152 * img->pixels[3 * i + 1] + 0.0722 * img->pixels[3 * i + 2];
-    return sum > 0.0 ? 0.18 * (double)n / sum : 1.0;
-}
-
-/* The largest square inside the sphere's coverage, centred. */
-static mr_status crop_inner(const mr_image *img, const float *coverage, mr_image *out) {
-    int size = img->width, side = out->width, x0 = (size - side) / 2;
-    for (int y = 0; y < side; y++)
-        for (int x = 0; x < side; x++) {
-            size_t src = (size_t)(y + x0) * size + (x + x0);
-            if (coverage[src] < 1.0f) return MR_ERR_INVALID_ARG; /* inner_side() chose a square inside */
-            for (int c = 0; c < 3; c++) out->pixels[3 * ((size_t)y * side + x) + c] = img->pixels[3 * src + c];
-        }
-    return MR_OK;
-}
-
-static int inner_side(const mr_wf_label_scene *scene) {
-    const float *cov = mr_wf_label_coverage(scene);
-    int size = mr_wf_label_size(scene);
-    for (int side = size; side >= 11; side--) {
-        int x0 = (size - side) / 2, ok = 1;
-        for (int y = 0; y < side && ok; y++)
-            for (int x = 0; x < side && ok; x++)
-                if (cov[(size_t)(y + x0) * size + (x + x0)] < 1.0f) ok = 0;
-        if (ok) return side;
-    }
-    return 0;
-}
-
-/* Mean object SSIM of `metal` against the source texel over the evaluation scene's views. */
-static mr_status texel_ssim(const mr_wf_label_scene *eval, int side, const mr_wf_spec *in, const mr_wf_metal *metal,
-                            double *out) {
-    int size = mr_wf_label_size(eval);
-    mr_image *src = NULL, *dst = NULL, *a = NULL, *b = NULL;
-    mr_status status = mr_image_create(size, size, 3, &src);
-    if (status == MR_OK) status = mr_image_create(size, size, 3, &dst);
-    if (status == MR_OK) status = mr_image_create(side, side, 3, &a);
-    if (status == MR_OK) status = mr_image_create(side, side, 3, &b);
-    double sum = 0.0;
-    int views = mr_wf_label_view_count(eval);
-    for (int v = 0; status == MR_OK && v < views; v++) {
-        status = mr_wf_label_render(eval, v, in, NULL, src);
-        if (status == MR_OK) status = mr_wf_label_render(eval, v, NULL, metal, dst);
-        if (status == MR_OK) status = crop_inner(src, mr_wf_label_coverage(eval), a);
-        if (status == MR_OK) status = crop_inner(dst, mr_wf_label_coverage(eval), b);
-        double s = 0.0;
-        mr_ssim_options o = {crop_exposure(a), 0};
-        if (status == MR_OK) status = mr_ssim(a, b, &o, &s, NULL);
-        sum += s;
-    }
-    mr_image_free(src);
-    mr_image_free(dst);
-    mr_image_free(a);
-    mr_image_free(b);
-    *out = views ? sum / views : 0.0;
-    return status;
-}
-
 typedef struct column {
     char name[96];
     double *ssim; /* per texel */
@@ -453,7 +389,6 @@ static int compare(pair *texels, size_t n, const char **names, const mr_image *c
     mr_wf_label_scene *eval = NULL;
     mr_status status = mr_wf_label_scene_create(&eo, &eval);
     if (status != MR_OK) return cli_fail("dataset", status);
-    int side = inner_side(eval);
     column cols[MR_WF_OBJECTIVE_COUNT + 3 + MAX_WEIGHTS];
     int ncol = 0;
     mr_wf_metal *answers = malloc(n * sizeof *answers);
@@ -510,7 +445,7 @@ static int compare(pair *texels, size_t n, const char **names, const mr_image *c
 #pragma omp parallel for schedule(dynamic, 8)
         for (size_t i = 0; i < n; i++) {
             if (status != MR_OK) continue;
-            mr_status s = texel_ssim(eval, side, &texels[i].in, &answers[i], &col->ssim[i]);
+            mr_status s = mr_wf_label_ssim(eval, &texels[i].in, &answers[i], &col->ssim[i]);
             if (s != MR_OK) {
 #pragma omp critical(dataset_status)
                 status = s;

@@ -17,9 +17,10 @@ static void print_help(void) {
     printf("Usage: matremap train DATASET.csv [DATASET.csv ...] -o WEIGHTS.mlp [options]\n"
            "\n"
            "Trains the specular -> metallic network: 6 inputs (diffuse RGB, specular F0 RGB) -> one hidden layer of\n"
-           "ReLU units -> 4 outputs (albedo RGB, metallic), on the pairs of 'matremap sweep' files of specular\n"
-           "materials remapped into the metallic workflow (a ggx or ggx-metallic source, a ggx-metallic target;\n"
-           "'make dataset' makes the default set). Rows whose outcome is local-minimum are left out.\n"
+           "ReLU units -> 4 outputs (albedo RGB, metallic), on the pairs of 'matremap dataset' files (image-objective\n"
+           "labels; 'make dataset' makes the default set, docs/training.md) or of 'matremap sweep' files of specular\n"
+           "materials remapped into the metallic workflow (a ggx or ggx-metallic source, a ggx-metallic target).\n"
+           "Rows whose outcome is local-minimum are left out.\n"
            "Training: Adam on minibatches, inputs and outputs normalised, a seeded validation split and early\n"
            "stopping that keeps the best epoch (nn/mlp.h). Deterministic for a seed on any thread count.\n"
            "\n"
@@ -39,7 +40,7 @@ static void print_help(void) {
            "  --loss-curve PREFIX  write PREFIX.csv (epoch, train and validation loss) and PREFIX.svg (a plot, when\n"
            "                       gnuplot is installed); default: WEIGHTS without its extension + '_loss'\n"
            "  --test FILE.csv      held-out sweep files (repeatable): print each method's error on them\n"
-           "                       (mlp, weighted, mean, khronos) against the optimiser's metallic parameters\n"
+           "                       (mlp, weighted, mean, khronos) against the labels (the fitted metal-rough answers)\n"
            "  --json               the summary as JSON on stdout\n"
            "  --help               this text\n"
            "\n"
@@ -116,7 +117,7 @@ typedef struct method_error {
     double albedo_rmse, metallic_rmse, metallic_max;
 } method_error;
 
-/* Each method's error on the test pairs against the optimiser's labels. */
+/* Each method's error on the test pairs against their labels. */
 static mr_status test_methods(const mr_mlp *net, const mr_wf_dataset *test, method_error errors[4]) {
     size_t n = test->n;
     float *diffuse = malloc(n * 3 * sizeof *diffuse), *specular = malloc(n * 3 * sizeof *specular);
@@ -253,18 +254,7 @@ int cmd_train(int argc, char **argv) {
                         "outcome): need at least 2\n", data.n, data.skipped);
         return CLI_EXIT_BAD_INPUT;
     }
-    if (residual) // the targets become the labels' corrections to the analytic anchor (workflow.h)
-        for (size_t r = 0; r < data.n; r++) {
-            double lobe[3], spec[3];
-            for (int k = 0; k < 3; k++) {
-                lobe[k] = fmin(1.0, fmax(0.0, data.x[6 * r + k]));
-                spec[k] = fmin(1.0, fmax(0.0, data.x[6 * r + 3 + k]));
-            }
-            mr_wf_residual_anchor a;
-            mr_wf_residual_anchor_of(lobe, spec, &a);
-            for (int k = 0; k < 3; k++) data.y[4 * r + k] -= (float)a.albedo[k];
-            data.y[4 * r + 3] -= (float)a.metallic;
-        }
+    if (residual) mr_wf_residual_targets(data.x, data.y, data.n); // corrections to the analytic anchor
     curve c = {0, 0, NULL, isatty(STDERR_FILENO), cli_now()};
     opts.epoch_fn = record_epoch;
     opts.epoch_user = &c;
@@ -322,7 +312,7 @@ int cmd_train(int argc, char **argv) {
                mr_mlp_stop_str(report.stop), train_seconds);
         printf("loss curve: %s.csv, %s.svg\n", curve_prefix, curve_prefix);
         for (int t = 0; t < test_count; t++) {
-            printf("test %s (%zu pairs): error against the optimiser's metallic parameters\n", tests[t], test[t].n);
+            printf("test %s (%zu pairs): error against the labels\n", tests[t], test[t].n);
             printf("  %-9s %12s %14s %14s\n", "method", "albedo RMSE", "metallic RMSE", "metallic max");
             for (int m = 0; m < 4; m++)
                 printf("  %-9s %12.5f %14.5f %14.5f\n", errors[t][m].name, errors[t][m].albedo_rmse,

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "brdf/brdf.h"
+#include "metrics/metrics.h"
 #include "mr_internal.h"
 #include "render/render.h"
 
@@ -305,6 +306,7 @@ static const double REC709[3] = {0.2126, 0.7152, 0.0722};
 typedef struct texel {
     double a[3], s[3]; /* source: a_c P + s_c Q0 + Q1 */
     double exposure[MAX_VIEWS]; /* e per view: the view's, or (EXPOSED) the source's mean luminance to 0.18 */
+    double *source_t; /* LUMA: per view and interior pixel, T of the source's luminance and of its 3 channels */
     double anchor_albedo[3], anchor_metallic;
 } texel;
 
@@ -405,23 +407,22 @@ static double luma_loss(const mr_wf_label_scene *sc, const texel *t, const doubl
         double e = t->exposure[v];
         for (int k = 0; k < sc->interior_count; k++) {
             const size_t i = 3 * (size_t)sc->interior[k];
-            double src[3], tgt[3], u[3], ys = 0.0, yt = 0.0;
+            const double *ts = t->source_t + 4 * ((size_t)v * sc->interior_count + k);
+            double tgt[3], u[3], yt = 0.0;
             for (int c = 0; c < 3; c++) {
                 double P = view->p[i + c], Q0 = view->q0[i + c], Q1 = view->q1[i + c];
-                src[c] = e * (t->a[c] * P + t->s[c] * Q0 + Q1);
                 tgt[c] = e * (kp[c] * P + kq[c] * Q0 + Q1);
                 u[c] = e * (dkp * P + dkq * Q0);
-                ys += REC709[c] * src[c];
                 yt += REC709[c] * tgt[c];
             }
-            double dts, dtt;
-            double r = transform(MR_WF_OBJECTIVE_LUMA, yt, &dtt) - transform(MR_WF_OBJECTIVE_LUMA, ys, &dts);
+            double dtt;
+            double r = transform(MR_WF_OBJECTIVE_LUMA, yt, &dtt) - ts[0];
             sum += r * r;
             double j[3];
             for (int c = 0; c < 3; c++) j[c] = dtt * REC709[c] * u[c];
             for (int c = 0; c < 3; c++) {
-                double dc, ds;
-                double rc = transform(MR_WF_OBJECTIVE_LUMA, tgt[c], &dc) - transform(MR_WF_OBJECTIVE_LUMA, src[c], &ds);
+                double dc;
+                double rc = transform(MR_WF_OBJECTIVE_LUMA, tgt[c], &dc) - ts[1 + c];
                 sum += kc * rc * rc;
                 if (g) {
                     double jc = dc * u[c];
@@ -511,7 +512,7 @@ static double plain_loss(const mr_wf_label_scene *sc, const texel *t, const doub
 static double sanitised(double x) { return isfinite(x) ? mr_clampd(x, 0.0, 1.0) : 0.0; }
 
 /* The texel's source coefficients and its analytic anchor (WEIGHTED, glTF reading of the diffuse). */
-static mr_status texel_init(const mr_wf_label_scene *sc, const mr_wf_spec *in, texel *t) {
+static mr_status texel_coefficients(const mr_wf_spec *in, texel *t) {
     mr_wf_spec s = *in;
     double smax = 0.0;
     for (int c = 0; c < 3; c++) {
@@ -532,6 +533,15 @@ static mr_status texel_init(const mr_wf_label_scene *sc, const mr_wf_spec *in, t
     if (status != MR_OK) return status;
     for (int c = 0; c < 3; c++) t->anchor_albedo[c] = w.albedo[c];
     t->anchor_metallic = w.metallic;
+    t->source_t = NULL;
+    return MR_OK;
+}
+
+/* texel_coefficients, then the per-view exposures and (LUMA) the source's transformed pixels; the caller frees
+ * t->source_t. */
+static mr_status texel_init(const mr_wf_label_scene *sc, const mr_wf_spec *in, texel *t) {
+    mr_status status = texel_coefficients(in, t);
+    if (status != MR_OK) return status;
     for (int v = 0; v < sc->view_count; v++) {
         const label_view *view = &sc->views[v];
         t->exposure[v] = view->exposure;
@@ -543,6 +553,22 @@ static mr_status texel_init(const mr_wf_label_scene *sc, const mr_wf_spec *in, t
                 sum += REC709[c] * (t->a[c] * view->p[i] + t->s[c] * view->q0[i] + view->q1[i]);
             }
         if (sum > 0.0) t->exposure[v] = 0.18 * sc->interior_count / sum;
+    }
+    if (sc->opts.objective != MR_WF_OBJECTIVE_LUMA) return MR_OK;
+    t->source_t = malloc(4 * (size_t)sc->view_count * (size_t)sc->interior_count * sizeof *t->source_t);
+    if (t->source_t == NULL) return mr_fail(MR_ERR_NOMEM, "label fit: out of memory");
+    for (int v = 0; v < sc->view_count; v++) {
+        const label_view *view = &sc->views[v];
+        for (int k = 0; k < sc->interior_count; k++) {
+            const size_t i = 3 * (size_t)sc->interior[k];
+            double *ts = t->source_t + 4 * ((size_t)v * sc->interior_count + k), y = 0.0, d;
+            for (int c = 0; c < 3; c++) {
+                double x = t->exposure[v] * (t->a[c] * view->p[i + c] + t->s[c] * view->q0[i + c] + view->q1[i + c]);
+                ts[1 + c] = transform(MR_WF_OBJECTIVE_LUMA, x, &d);
+                y += REC709[c] * x;
+            }
+            ts[0] = transform(MR_WF_OBJECTIVE_LUMA, y, &d);
+        }
     }
     return MR_OK;
 }
@@ -615,6 +641,7 @@ mr_status mr_wf_label_fit(const mr_wf_label_scene *scene, const mr_wf_spec *in, 
         result->analytic_loss = plain_loss(scene, &t, t.anchor_albedo, t.anchor_metallic);
         result->kept_analytic = best_index < 0;
     }
+    free(t.source_t);
     return MR_OK;
 }
 
@@ -628,6 +655,7 @@ mr_status mr_wf_label_loss(const mr_wf_label_scene *scene, const mr_wf_spec *in,
     double albedo[3];
     for (int c = 0; c < 3; c++) albedo[c] = sanitised(metal->albedo[c]);
     *loss = plain_loss(scene, &t, albedo, sanitised(metal->metallic));
+    free(t.source_t);
     return MR_OK;
 }
 
@@ -642,7 +670,7 @@ mr_status mr_wf_label_render(const mr_wf_label_scene *scene, int view, const mr_
     double kp[3], kq[3];
     if (spec) {
         texel t;
-        mr_status status = texel_init(scene, spec, &t);
+        mr_status status = texel_coefficients(spec, &t);
         if (status != MR_OK) return status;
         for (int c = 0; c < 3; c++) {
             kp[c] = t.a[c];
@@ -664,4 +692,60 @@ mr_status mr_wf_label_render(const mr_wf_label_scene *scene, int view, const mr_
             image->pixels[j] = (float)(kp[c] * v->p[j] + kq[c] * v->q0[j] + v->q1[j]);
         }
     return MR_OK;
+}
+
+/* ---- object SSIM --------------------------------------------------------------------------------------------- */
+
+/* The side of the largest centred square of whole pixels inside the sphere (0 if none of 11 pixels fits). */
+static int inner_side(const mr_wf_label_scene *scene) {
+    int size = scene->size;
+    for (int side = size; side >= 11; side--) {
+        int x0 = (size - side) / 2, ok = 1;
+        for (int y = 0; y < side && ok; y++)
+            for (int x = 0; x < side && ok; x++)
+                if (scene->coverage[(size_t)(y + x0) * size + (x + x0)] < 1.0f) ok = 0;
+        if (ok) return side;
+    }
+    return 0;
+}
+
+static void crop_centre(const mr_image *img, mr_image *out) {
+    int x0 = (img->width - out->width) / 2;
+    for (int y = 0; y < out->height; y++)
+        memcpy(out->pixels + 3 * (size_t)y * out->width, img->pixels + 3 * ((size_t)(y + x0) * img->width + x0),
+               3 * (size_t)out->width * sizeof *out->pixels);
+}
+
+mr_status mr_wf_label_ssim(const mr_wf_label_scene *scene, const mr_wf_spec *spec, const mr_wf_metal *metal,
+                           double *ssim) {
+    if (scene == NULL || spec == NULL || metal == NULL || ssim == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "label ssim: NULL argument");
+    int side = inner_side(scene), size = scene->size;
+    if (side < 11) return mr_fail(MR_ERR_INVALID_ARG, "label ssim: a %d-pixel sphere holds no 11 x 11 square", size);
+    mr_image *src = NULL, *dst = NULL, *a = NULL, *b = NULL;
+    mr_status status = mr_image_create(size, size, 3, &src);
+    if (status == MR_OK) status = mr_image_create(size, size, 3, &dst);
+    if (status == MR_OK) status = mr_image_create(side, side, 3, &a);
+    if (status == MR_OK) status = mr_image_create(side, side, 3, &b);
+    double sum = 0.0;
+    for (int v = 0; status == MR_OK && v < scene->view_count; v++) {
+        status = mr_wf_label_render(scene, v, spec, NULL, src);
+        if (status == MR_OK) status = mr_wf_label_render(scene, v, NULL, metal, dst);
+        if (status != MR_OK) break;
+        crop_centre(src, a);
+        crop_centre(dst, b);
+        double lum = 0.0;
+        for (size_t i = 0; i < (size_t)side * side; i++)
+            for (int c = 0; c < 3; c++) lum += REC709[c] * a->pixels[3 * i + c];
+        mr_ssim_options o = {lum > 0.0 ? 0.18 * side * side / lum : 1.0, 0};
+        double s = 0.0;
+        status = mr_ssim(a, b, &o, &s, NULL);
+        sum += s;
+    }
+    mr_image_free(src);
+    mr_image_free(dst);
+    mr_image_free(a);
+    mr_image_free(b);
+    if (status == MR_OK) *ssim = sum / scene->view_count;
+    return status;
 }

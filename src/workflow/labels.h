@@ -130,6 +130,13 @@ mr_status mr_wf_label_render(const mr_wf_label_scene *scene, int view, const mr_
                              const mr_wf_metal *metal, mr_image *image);
 const float *mr_wf_label_coverage(const mr_wf_label_scene *scene);
 
+/* How close a metal-rough answer looks to the spec-gloss texel where people look: SSIM (metrics.h) over the largest
+ * square inside the sphere (object pixels only, no background), each picture exposed so that the source's square
+ * has a mean luminance of 0.18 (as the evaluations do), averaged over the scene's views. MR_ERR_INVALID_ARG for
+ * NULL arguments or a sphere too small for an 11 x 11 square (size < 24). */
+mr_status mr_wf_label_ssim(const mr_wf_label_scene *scene, const mr_wf_spec *spec, const mr_wf_metal *metal,
+                           double *ssim);
+
 /* The two built-in synthetic environments (grey, 512 x 256, equirectangular), index 0 (studio) or 1 (sky), in
  * *out (the caller's). */
 mr_status mr_wf_label_builtin_env(int index, mr_image **out);

@@ -356,6 +356,20 @@ void mr_wf_residual_anchor_of(const double lobe[3], const double specular[3], mr
     out->chroma = fmin(1.0, (dc + sc) / MR_WF_RESIDUAL_CHROMA);
 }
 
+void mr_wf_residual_targets(const float *x, float *y, size_t n) {
+    for (size_t r = 0; r < n; r++) {
+        double lobe[3], spec[3];
+        for (int k = 0; k < 3; k++) {
+            lobe[k] = mr_clampd(x[6 * r + k], 0.0, 1.0);
+            spec[k] = mr_clampd(x[6 * r + 3 + k], 0.0, 1.0);
+        }
+        mr_wf_residual_anchor a;
+        mr_wf_residual_anchor_of(lobe, spec, &a);
+        for (int k = 0; k < 3; k++) y[4 * r + k] -= (float)a.albedo[k];
+        y[4 * r + 3] -= (float)a.metallic;
+    }
+}
+
 mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps *in, size_t n,
                                         const mr_wf_options *opts, const mr_wf_metal_maps *out, uint8_t *flags) {
     const char *what = "spec -> metal batch (mlp)";

@@ -222,6 +222,10 @@ typedef struct mr_wf_residual_anchor {
  * `specular`, both already in [0, 1]. Pure and reentrant. */
 void mr_wf_residual_anchor_of(const double lobe[3], const double specular[3], mr_wf_residual_anchor *out);
 
+/* Training pairs (x: n x 6 lobe RGB + specular RGB, y: n x 4 albedo RGB + metallic, as mr_wf_dataset holds them)
+ * turned into the residual form's targets in place: y minus the anchor W of each row's x (clamped to [0, 1]). */
+void mr_wf_residual_targets(const float *x, float *y, size_t n);
+
 /* Specular -> metallic by a trained network (nn/mlp.h: 6 inputs diffuse RGB + specular RGB, 4 outputs albedo RGB
  * + metallic, e.g. data/spec2metal.mlp; read as the residual form above when its kind says so), batched: inputs are sanitised like the other methods' (clamped to
  * [0, 1], non-finite read as 0, flagged), the network runs in blocks (its own OpenMP rows), outputs are clamped
