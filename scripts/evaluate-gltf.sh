@@ -29,8 +29,8 @@ rm -rf "$work"
 mkdir -p "$work" "$pics"
 # shellcheck source=scripts/lib/timing.sh
 . "$root/scripts/lib/timing.sh"
-# shellcheck source=scripts/lib/docs.sh
-. "$root/scripts/lib/docs.sh"
+# shellcheck source=scripts/lib/evaluation.sh
+. "$root/scripts/lib/evaluation.sh"
 table="$work/table.md"
 {
     echo "Measured by \`make evaluation-gltf\` on $(date -u +%Y-%m-%d), matremap $("$bin" --version | cut -d' ' -f2),"

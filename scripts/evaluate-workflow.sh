@@ -28,8 +28,8 @@ map_size=${EVAL_MAP_SIZE:-1024}
 only=${EVAL_ONLY:-}
 export LC_ALL=C
 want() { [ -z "$only" ] || [[ " $only " == *" $1 "* ]]; }
-# shellcheck source=scripts/lib/docs.sh
-. "$root/scripts/lib/docs.sh"
+# shellcheck source=scripts/lib/evaluation.sh
+. "$root/scripts/lib/evaluation.sh"
 if [ -n "$only" ]; then pics="$work/pictures"; fi # a smoke run writes nothing into docs/
 
 [ -x "$bin" ] || { echo "evaluation: $bin is missing (run make first)" >&2; exit 1; }
@@ -46,7 +46,6 @@ avocado="$assets/specgloss/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossin
 floppy="$assets/specgloss/FloppyDisk-sketchfab/textures"
 bottle="$assets/metalrough/WaterBottle/glTF"
 envs=(studio tabac)
-env_file() { case $1 in studio) echo "$assets/hdri/studio_small_03_1k.hdr" ;; tabac) echo "$assets/hdri/tabac_plant_vogl.hdr" ;; esac; }
 methods=(mlp weighted mean khronos)
 
 # The maps' RGB and alpha read as stored: OpenImageIO premultiplies PNG alpha unless told not to.
