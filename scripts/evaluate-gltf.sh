@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # make evaluation-gltf: the spec-gloss glTF assets of ../shared/assets converted by `matremap gltf spec2metal` with
 # every method and by gltf-transform's `metalrough` (npm, scripts/gltf-transform), each rendered as its mesh under
-# the studio HDR map from four sides by `matremap report` and compared with the spec-gloss original (SSIM,
-# relative RMSE), with each conversion's time measured in the same run. The table goes into docs/evaluation.md
-# between the eval-gltf markers, one picture per asset (the first view of every conversion) into
-# docs/evaluation/, the report folders into BUILD/evaluation-gltf/.
-# Usage: scripts/evaluate-gltf.sh [BUILD]. Environment: EVAL_SIZE (default 384), MR_SHARED.
+# the studio HDR map from four sides by `matremap report` and compared with the spec-gloss original (SSIM and
+# relative RMSE over the object's pixels, the report's headline, and the whole frame's beside them), with each
+# conversion's time measured in the same run. The table goes into docs/evaluation.md between the eval-gltf
+# markers, one picture per asset (the first view of every conversion) into docs/evaluation/, the report folders
+# into BUILD/evaluation-gltf/.
+# Usage: scripts/evaluate-gltf.sh [BUILD]. Environment: EVAL_SIZE (default 384), MR_SHARED, EVAL_ONLY (a smoke
+# run: only these assets, e.g. "Duck", and docs/ is left alone).
 set -euo pipefail
 build=${1:-build}
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -15,26 +17,34 @@ work="$root/$build/evaluation-gltf"
 size=${EVAL_SIZE:-384}
 env_map="$assets/hdri/studio_small_03_1k.hdr"
 gt="$root/scripts/gltf-transform"
+only=${EVAL_ONLY:-}
+pics="$root/docs/evaluation"
+if [ -n "$only" ]; then pics="$work/pictures"; fi
 export LC_ALL=C
 [ -x "$bin" ] || { echo "evaluation-gltf: $bin is missing (run make first)" >&2; exit 1; }
 if [ ! -x "$gt/node_modules/.bin/gltf-transform" ]; then
     (cd "$gt" && npm ci --no-audit --no-fund --loglevel=error) >&2
 fi
 rm -rf "$work"
-mkdir -p "$work" "$root/docs/evaluation"
+mkdir -p "$work" "$pics"
 # shellcheck source=scripts/lib/timing.sh
 . "$root/scripts/lib/timing.sh"
+# shellcheck source=scripts/lib/evaluation.sh
+. "$root/scripts/lib/evaluation.sh"
 table="$work/table.md"
 {
     echo "Measured by \`make evaluation-gltf\` on $(date -u +%Y-%m-%d), matremap $("$bin" --version | cut -d' ' -f2),"
     echo "gltf-transform $("$gt/node_modules/.bin/gltf-transform" --version 2>/dev/null | tail -n 1): each asset's mesh,"
     echo "${size}², under studio_small_03 turned in 4 steps of 90° (\`matremap report\`, its default 256 environment"
     echo "directions); SSIM (display-referred, at the original's mid-grey exposure) and relative RMSE against the"
-    echo "spec-gloss original, means over the four views; conversion time = the whole conversion process, read to"
-    echo "written."
+    echo "spec-gloss original, means over the four views, **over the object** (SSIM over the pixels whose window"
+    echo "touches it, relative RMSE over its pixels as a fraction of the original's mean radiance there) and over the"
+    echo "whole frame beside them (background included; relative RMSE over the original's RMS); conversion time ="
+    echo "the whole conversion process, read to written."
     echo
-    echo "| asset | conversion | mean SSIM | mean rel. RMSE | conversion s | time vs gltf-transform |"
-    echo "|---|---|---:|---:|---:|---:|"
+    echo -n "| asset | conversion | object SSIM | object rel. RMSE | whole-frame SSIM | whole-frame rel. RMSE "
+    echo "| conversion s | time vs gltf-transform |"
+    echo "|---|---|---:|---:|---:|---:|---:|---:|"
 } > "$table"
 for asset in Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Avocado.gltf \
              CesiumMilkTruck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/CesiumMilkTruck.gltf \
@@ -42,6 +52,7 @@ for asset in Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Avocado.gl
     source_gltf="$assets/specgloss/$asset"
     name=${asset%%-*}
     name=${name%%/*}
+    if [ -n "$only" ] && [[ " $only " != *" $name "* ]]; then continue; fi
     echo "== $name"
     declare -A seconds=()
     args=(--label "spec-gloss original" "$source_gltf")
@@ -66,8 +77,9 @@ name = sys.argv[2]
 times = dict(zip(["mlp", "weighted", "mean", "khronos", "extension", "gltf-transform"], map(float, sys.argv[3:9])))
 for m in d["materials"][1:]:
     t = times[m["label"]]
-    print("| %s | %s | %.4f | %.4f | %.2f | %.2f× |" % (name, m["label"], m["mean_ssim"], m["mean_relative_rmse"], t,
-                                                     t / times["gltf-transform"]))
+    print("| %s | %s | %.4f | %.4f | %.4f | %.4f | %.2f | %.2f× |" % (
+        name, m["label"], m["mean_object_ssim"], m["mean_object_relative_rmse"], m["mean_ssim"],
+        m["mean_relative_rmse"], t, t / times["gltf-transform"]))
 PY
     # One picture: the first view of the original and of every conversion, labelled.
     pictures=()
@@ -76,14 +88,9 @@ PY
         pictures+=("$work/$name/report/view0_material$k.png"
                    "--text:x=6:y=18:size=16:color=1,1,1:font=DejaVuSans" "${labels[$k]}")
     done
-    oiiotool "${pictures[@]}" --mosaic:pad=4 7x1 -o "$root/docs/evaluation/gltf_$name.png"
+    oiiotool "${pictures[@]}" --mosaic:pad=4 7x1 -o "$pics/gltf_$name.png"
 done
 cat "$table"
-doc="$root/docs/evaluation.md"
-if grep -q '<!-- eval-gltf:begin -->' "$doc"; then
-    awk -v table="$table" '
-        /<!-- eval-gltf:begin -->/ { print; while ((getline line < table) > 0) print line; skip = 1; next }
-        /<!-- eval-gltf:end -->/ { skip = 0 }
-        !skip' "$doc" > "$doc.tmp" && mv "$doc.tmp" "$doc"
+if [ -z "$only" ] && splice_table "$root/docs/evaluation.md" eval-gltf "$table"; then
     echo "evaluation-gltf: table written into docs/evaluation.md, pictures into docs/evaluation/gltf_*.png"
 fi

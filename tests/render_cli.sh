@@ -60,6 +60,39 @@ check "--env-reflection-samples 40: the mirror's centre holds 1 ($lo .. $hi)" aw
 read -r lo hi < <(centre_range "$tmp/mirror0.exr")
 check "the pattern alone: far from 1 somewhere ($lo .. $hi)" awk -v a="$lo" -v b="$hi" 'BEGIN { exit !(a < 0.5 || b > 2) }'
 
+# Coverage masks (--mask) and comparisons over them (ssim --mask; metrics.h).
+expect "--mask writes the object's coverage" 0 "wrote" -- "$bin" render lambert albedo=0.5 --size 64 \
+    -o "$tmp/lam.exr" --mask "$tmp/mask.exr"
+"$bin" render ggx diffuse=0.2 f0=0.04 alpha=0.3 --size 64 -o "$tmp/ggx.exr" --mask "$tmp/mask2.exr" 2>/dev/null
+"$bin" render ggx diffuse=0.2 f0=0.04 alpha=0.3 --size 64 -o "$tmp/ggx.png" --mask "$tmp/mask.png" 2>/dev/null
+check "the mask is one channel of the render's size" test "$(oiiotool --info "$tmp/mask.exr" | grep -c '64 x   64, 1 channel')" = 1
+# Its sum is the projected disc's area: radius tan(asin(1/4)) / tan(17.5°) x 32 pixels (render.h, the fit camera).
+area=$(oiiotool "$tmp/mask.exr" --printstats 2>/dev/null | sed -nE 's/.*Stats Avg: ([0-9.e+-]+).*/\1/p')
+check "its sum ($area x 64²) is the sphere's projected area within 0.5 %" awk -v a="${area:-0}" 'BEGIN {
+    r = (0.25 / sqrt(1 - 0.0625)) / (sin(17.5 * 3.14159265358979 / 180) / cos(17.5 * 3.14159265358979 / 180)) * 32
+    d = a * 4096 / (3.14159265358979 * r * r); exit !(d > 0.995 && d < 1.005) }'
+check "the same mask for any material" below "$(maxdiff "$tmp/mask.exr" "$tmp/mask2.exr")" 1e-30
+check "... and as an 8-bit PNG, within one code (linear, not sRGB)" below "$(maxdiff "$tmp/mask.exr" "$tmp/mask.png")" 0.0021
+expect "ssim --mask of an image with itself is 1" 0 "^1\.000000$" -- "$bin" ssim "$tmp/lam.exr" "$tmp/lam.exr" \
+    --mask "$tmp/mask.exr"
+expect "ssim --mask --json adds the object's figures" 0 \
+    '^\{"ssim": [0-9.e-]+, "rmse": [0-9.e-]+, "object_ssim": [0-9.e-]+, "object_rmse": [0-9.e-]+, "object_relative_rmse": [0-9.e-]+\}$' \
+    -- "$bin" ssim --json "$tmp/lam.exr" "$tmp/ggx.exr" --mask "$tmp/mask.png"
+read -r whole object < <(sed -E 's/.*"ssim": ([^,]*),.*"object_ssim": ([^,]*),.*/\1 \2/' "$tmp/out")
+check "over the object the difference weighs more: SSIM $object < $whole" awk -v o="${object:-1}" -v w="${whole:-0}" \
+    'BEGIN { exit !(o < w && w < 1) }'
+oiiotool --pattern constant:color=1 64x64 1 -d float -o "$tmp/ones.exr"
+check "a mask of ones gives the whole-frame SSIM" test "$("$bin" ssim "$tmp/lam.exr" "$tmp/ggx.exr" --mask "$tmp/ones.exr")" = \
+    "$("$bin" ssim "$tmp/lam.exr" "$tmp/ggx.exr")"
+expect "--mask with --downsample" 1 "cannot be combined" -- "$bin" ssim "$tmp/lam.exr" "$tmp/ggx.exr" \
+    --mask "$tmp/mask.exr" --downsample
+oiiotool --pattern constant:color=1 32x16 1 -d float -o "$tmp/small_mask.exr"
+expect "a mask of another size is refused, with both sizes" 2 "32x16x1; expected 64x64x1" -- "$bin" ssim \
+    "$tmp/lam.exr" "$tmp/ggx.exr" --mask "$tmp/small_mask.exr"
+expect "an RGB mask is refused, naming the file" 2 "white_env.exr.*1 channel" -- "$bin" ssim "$tmp/lam.exr" \
+    "$tmp/ggx.exr" --mask "$tmp/white_env.exr"
+expect "a missing mask is named" 2 "nomask.exr" -- "$bin" ssim "$tmp/lam.exr" "$tmp/ggx.exr" --mask "$tmp/nomask.exr"
+
 # Errors: the file or value named, nothing written.
 expect "a missing map is named" 2 "nomap.png" -- "$bin" render ggx diffuse=@"$tmp/nomap.png" -o "$tmp/e1.exr"
 expect "a missing environment is named" 2 "noenv.hdr" -- "$bin" render ggx --env "$tmp/noenv.hdr" -o "$tmp/e2.exr"

@@ -40,6 +40,21 @@ check "one view, named" test "$(summary "$tmp/fit" 'd["views"]')" = "['fit scene
 check "a material against itself: SSIM 1, relative RMSE 0" test \
     "$(summary "$tmp/fit" '(d["materials"][1]["mean_ssim"], d["materials"][1]["mean_relative_rmse"])')" = "(1, 0)"
 check "another roughness: SSIM below 0.999" test "$(summary "$tmp/fit" 'd["materials"][2]["mean_ssim"] < 0.999')" = True
+check "itself over the object: SSIM 1, relative RMSE 0" test "$(summary "$tmp/fit" \
+    '(d["materials"][1]["mean_object_ssim"], d["materials"][1]["mean_object_relative_rmse"])')" = "(1, 0)"
+# The renders differ only on the sphere, so the object's SSIM is below the whole frame's, which counts the
+# background's identical windows too; its relative RMSE (over the object's mean radiance) is above the frame's.
+check "another roughness: object SSIM < whole-frame SSIM, object rel. RMSE > whole-frame" test "$(summary "$tmp/fit" \
+    '(lambda m: m["mean_object_ssim"] < m["mean_ssim"] and m["object_ssim"][0] == m["mean_object_ssim"] and
+      m["mean_object_relative_rmse"] > m["mean_relative_rmse"] > 0)(d["materials"][2])')" = True
+check "the page's summary leads with the object's SSIM" python3 -c '
+import re, sys
+page = open(sys.argv[1], encoding="utf-8").read()
+heads = re.findall(r"<th>([^<]*)</th>", page.split("<h2>Summary</h2>")[1].split("</tr>")[0])
+sys.exit(0 if heads[:2] == ["object SSIM (mean)", "object rel. RMSE (mean)"] and
+         "whole-frame SSIM (mean)" in heads else 1)' "$tmp/fit/index.html"
+check "the printed table: object SSIM first, the whole frame beside it" grep -qE \
+    "^material +object SSIM +object rel. RMSE +frame SSIM +frame rel. RMSE +render s$" "$tmp/out"
 check "the reference carries no SSIM" test "$(summary "$tmp/fit" '"ssim" in d["materials"][0]')" = False
 check "labels: given, or the model" test "$(summary "$tmp/fit" '[m["label"] for m in d["materials"]]')" = \
     "['ggx', 'same', 'rougher']"
@@ -94,6 +109,20 @@ check "every picture of the page exists" all_pictures_exist "$tmp/gl"
 covered=$(oiiotool "$tmp/gl/view0_material0.png" --ch R,G,B --chsum --printstats 2>/dev/null |
     sed -nE 's/.*Stats Avg: ([0-9.e+-]+).*/\1/p')
 check "the Duck is in the picture (mean luminance $covered > 0)" awk -v v="${covered:-0}" 'BEGIN { exit !(v > 0.01) }'
+# An asset with geometry of its own (the Duck moved sideways by a tenth of its size) gets its own plan, and is
+# compared over both objects' coverage: the moved parts count, so the object's SSIM is far below the frame's.
+mkdir -p "$tmp/moved"
+cp "$(dirname "$duck")"/Duck0.bin "$(dirname "$duck")"/DuckCM.png "$tmp/moved/"
+python3 - "$duck" "$tmp/moved/duck.gltf" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+d["nodes"][0]["matrix"][12] += 0.15
+json.dump(d, open(sys.argv[2], "w"))
+PY
+expect "an asset with other geometry" 0 "report: $tmp/moved/r/index.html" -- "$bin" report -o "$tmp/moved/r" \
+    --size 64 --env "$tmp/sky.exr" --rotations 1 --env-samples 64 "$duck" -- "$tmp/moved/duck.gltf"
+check "... is compared over both objects: object SSIM < whole-frame SSIM < 0.95" test "$(summary "$tmp/moved/r" \
+    '(lambda m: m["mean_object_ssim"] < m["mean_ssim"] < 0.95)(d["materials"][1])')" = True
 truck="$shared/specgloss/CesiumMilkTruck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/CesiumMilkTruck.gltf"
 "$bin" gltf spec2metal "$truck" -o "$tmp/duck/truck.gltf" --method weighted >/dev/null 2>&1
 expect "a multi-material asset: the truck and its conversion" 0 "report: $tmp/truck/index.html" -- "$bin" report \

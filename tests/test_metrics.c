@@ -246,7 +246,7 @@ MR_TEST(ssim_matches_brute_force_reference) {
     for (int k = 0; k < 4; k++) {
         mr_image *a = make_scene(cases[k].w, cases[k].h, cases[k].channels, 0.3, 10 + (uint64_t)k);
         mr_image *b = with_noise(a, 0.4, 20 + (uint64_t)k);
-        mr_ssim_options o = {cases[k].exposure, 0};
+        mr_ssim_options o = {cases[k].exposure, 0, NULL};
         double s = 0.0;
         mr_image *map = NULL;
         MR_CHECK_OK(mr_ssim(a, b, &o, &s, &map));
@@ -306,7 +306,7 @@ MR_TEST(exposure_and_alpha) {
         b2->pixels[i] *= 2.0f;
     }
     double s_exp = 0.0, s_pre = 0.0, s_default = 0.0, s_one = 0.0;
-    mr_ssim_options two = {2.0, 0}, one = {1.0, 0}, zero = {0.0, 0};
+    mr_ssim_options two = {2.0, 0, NULL}, one = {1.0, 0, NULL}, zero = {0.0, 0, NULL};
     MR_CHECK_OK(mr_ssim(a, b, &two, &s_exp, NULL));
     MR_CHECK_OK(mr_ssim(a2, b2, NULL, &s_pre, NULL));
     MR_CHECK(s_exp == s_pre);
@@ -319,7 +319,7 @@ MR_TEST(exposure_and_alpha) {
     MR_CHECK_OK(mr_ssim(a, b, &one, &s_alpha, NULL));
     MR_CHECK(s_alpha == s_one);
     /* invalid options */
-    mr_ssim_options bad = {-1.0, 0};
+    mr_ssim_options bad = {-1.0, 0, NULL};
     double untouched = 42.0;
     MR_CHECK(mr_ssim(a, b, &bad, &untouched, NULL) == MR_ERR_INVALID_ARG);
     bad.exposure = NAN;
@@ -417,7 +417,7 @@ MR_TEST(matlab_downsampling) {
     for (int k = 0; k < 4; k++) {
         mr_image *a = make_scene(sizes[k][0], sizes[k][1], 3, 0.2, 30 + (uint64_t)k);
         mr_image *b = with_noise(a, 0.3, 40 + (uint64_t)k);
-        mr_ssim_options o = {1.0, 1}, plain = {1.0, 0};
+        mr_ssim_options o = {1.0, 1, NULL}, plain = {1.0, 0, NULL};
         double s = 0.0, s_plain = 0.0;
         mr_image *map = NULL;
         MR_CHECK_OK(mr_ssim(a, b, &o, &s, &map));
@@ -440,7 +440,7 @@ MR_TEST(matlab_downsampling) {
     const int thin_sizes[2][2] = {{1000, 20}, {5000, 520}};
     for (int k = 0; k < 2; k++) {
         mr_image *thin = make_scene(thin_sizes[k][0], thin_sizes[k][1], 1, 0.1, 50);
-        mr_ssim_options o = {1.0, 1};
+        mr_ssim_options o = {1.0, 1, NULL};
         double s = 0.0;
         mr_image *map = NULL;
         MR_CHECK_OK(mr_ssim(thin, thin, &o, &s, &map));
@@ -479,6 +479,241 @@ MR_TEST(rmse_known_answers) {
     MR_CHECK(mr_rmse(a, b, NULL) == MR_ERR_INVALID_ARG);
     mr_image_free(a);
     mr_image_free(b);
+}
+
+/* ---- SSIM and RMSE over an object mask ------------------------------------------------------------------ */
+
+/* A disc of radius r (pixels) centred at (cx, cy) as a coverage mask: 1 inside, 0 outside, the fraction of a
+ * 4x4 sub-pixel grid on the edge (a render plan's convention). */
+static mr_image *disc_mask(int w, int h, double cx, double cy, double r) {
+    mr_image *m = NULL;
+    if (mr_image_create(w, h, 1, &m) != MR_OK) return NULL;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            int inside = 0;
+            for (int j = 0; j < 4; j++)
+                for (int i = 0; i < 4; i++) {
+                    double u = x + (i + 0.5) / 4 - cx, v = y + (j + 0.5) / 4 - cy;
+                    inside += u * u + v * v < r * r;
+                }
+            m->pixels[(size_t)y * (size_t)w + (size_t)x] = (float)(inside / 16.0);
+        }
+    return m;
+}
+
+/* The masked mean of a reference map, from the definition in metrics.h: map pixel (x, y) counts when any
+ * mask pixel of columns x..x+10, rows y..y+10 is > 0. *counted receives how many do. */
+static double ref_masked_mean(const double *map, const mr_image *mask, long *counted) {
+    const int w = mask->width, ow = w - 10, oh = mask->height - 10;
+    double sum = 0.0;
+    long n = 0;
+    for (int y = 0; y < oh; y++)
+        for (int x = 0; x < ow; x++) {
+            int touches = 0;
+            for (int j = 0; j < 11 && !touches; j++)
+                for (int i = 0; i < 11 && !touches; i++)
+                    touches = mask->pixels[(size_t)(y + j) * (size_t)w + (size_t)(x + i)] > 0.0f;
+            if (!touches) continue;
+            sum += map[(size_t)y * (size_t)ow + (size_t)x];
+            n++;
+        }
+    *counted = n;
+    return sum / (double)n;
+}
+
+MR_TEST(masked_ssim_matches_definition) {
+    /* a disc inside the frame, one touching the border, and a single pixel */
+    const double discs[3][3] = {{30.5, 26.0, 11.3}, {4.0, 44.0, 9.0}, {40.5, 10.5, 0.3}};
+    mr_image *a = make_scene(64, 52, 3, 0.1, 60), *b = with_noise(a, 0.2, 61);
+    double *map = malloc(54 * 42 * sizeof(double));
+    ref_ssim(a, b, 1.0, 0, map);
+    for (int k = 0; k < 3; k++) {
+        mr_image *mask = disc_mask(64, 52, discs[k][0], discs[k][1], discs[k][2]);
+        long counted = 0;
+        double expected = ref_masked_mean(map, mask, &counted);
+        mr_ssim_options o = {1.0, 0, mask};
+        double s = 0.0;
+        MR_CHECK_OK(mr_ssim(a, b, &o, &s, NULL));
+        MR_CHECK_NEAR(s, expected, 1e-12);
+        MR_CHECK_MSG(counted > 0 && counted < 54 * 42, "disc %d: %ld map pixels counted", k, counted);
+        if (k == 2) MR_CHECK_MSG(counted == 121, "a single pixel touches 11 x 11 windows, not %ld", counted);
+        mr_image_free(mask);
+    }
+    free(map);
+    mr_image_free(a);
+    mr_image_free(b);
+}
+
+MR_TEST(mask_of_ones_is_the_whole_frame) {
+    mr_image *a = make_scene(71, 53, 3, 0.1, 62), *b = with_noise(a, 0.3, 63), *ones = NULL;
+    MR_CHECK_OK(mr_image_create(71, 53, 1, &ones));
+    for (size_t i = 0; i < mr_image_value_count(ones); i++) ones->pixels[i] = 1.0f;
+    mr_ssim_options whole = {1.5, 0, NULL}, masked = {1.5, 0, ones};
+    double s_whole = 0.0, s_masked = 0.0, r_whole = 0.0, r_masked = 0.0, r_null = 0.0, mean = 0.0;
+    MR_CHECK_OK(mr_ssim(a, b, &whole, &s_whole, NULL));
+    MR_CHECK_OK(mr_ssim(a, b, &masked, &s_masked, NULL));
+    MR_CHECK_MSG(s_whole == s_masked, "%.17g vs %.17g", s_whole, s_masked);
+    MR_CHECK_OK(mr_rmse(a, b, &r_whole));
+    MR_CHECK_OK(mr_rmse_masked(a, b, ones, &r_masked, &mean));
+    MR_CHECK_OK(mr_rmse_masked(a, b, NULL, &r_null, NULL));
+    MR_CHECK(r_whole == r_masked && r_whole == r_null);
+    double sum = 0.0;
+    for (size_t i = 0; i < mr_image_value_count(a); i++) sum += a->pixels[i];
+    MR_CHECK_NEAR(mean, sum / (double)mr_image_value_count(a), 1e-12);
+    mr_image_free(a);
+    mr_image_free(b);
+    mr_image_free(ones);
+}
+
+/* A copy of src with uniform noise of amplitude `amplitude` on the pixels that are the object's (mask > 0, far 0)
+ * or that lie `far` or more pixels (Chebyshev distance) from every object pixel (far > 0). */
+static mr_image *with_noise_where(const mr_image *src, const mr_image *mask, int far, double amplitude,
+                                  uint64_t seed) {
+    mr_image *out = NULL;
+    if (mr_image_clone(src, &out) != MR_OK) return NULL;
+    rng_state = seed;
+    const int w = src->width, h = src->height;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            int near = 0;
+            for (int j = y - (far - 1); far > 0 && j <= y + far - 1 && !near; j++)
+                for (int i = x - (far - 1); i <= x + far - 1 && !near; i++)
+                    near = i >= 0 && j >= 0 && i < w && j < h && mask->pixels[(size_t)j * (size_t)w + (size_t)i] > 0;
+            if (far > 0 ? near : !(mask->pixels[(size_t)y * (size_t)w + (size_t)x] > 0.0f)) continue;
+            for (int c = 0; c < src->channels; c++)
+                mr_image_at(out, x, y)[c] += (float)(amplitude * (rng_uniform() - 0.5));
+        }
+    return out;
+}
+
+MR_TEST(background_difference_leaves_object_figures) {
+    /* b differs from a only 11 or more pixels away from the object: no window that touches the object sees it */
+    const int w = 80, h = 60;
+    mr_image *a = make_scene(w, h, 3, 0.05, 64), *mask = disc_mask(w, h, 40.0, 30.0, 12.0);
+    mr_image *b = with_noise_where(a, mask, 11, 0.6, 65);
+    mr_ssim_options whole = {1.0, 0, NULL}, object = {1.0, 0, mask};
+    double s_whole = 0.0, s_object = 0.0, r_whole = 0.0, r_object = -1.0;
+    MR_CHECK_OK(mr_ssim(a, b, &whole, &s_whole, NULL));
+    MR_CHECK_OK(mr_ssim(a, b, &object, &s_object, NULL));
+    MR_CHECK_OK(mr_rmse(a, b, &r_whole));
+    MR_CHECK_OK(mr_rmse_masked(a, b, mask, &r_object, NULL));
+    MR_CHECK_MSG(s_whole < 0.99 && s_object == 1.0, "whole frame %.6f, object %.17g", s_whole, s_object);
+    MR_CHECK_MSG(r_whole > 0.01 && r_object == 0.0, "whole frame %g, object %g", r_whole, r_object);
+    /* one pixel nearer (10 from the object) is inside a counted window: the object's SSIM sees it */
+    mr_image *nearer = with_noise_where(a, mask, 10, 0.6, 65);
+    MR_CHECK_OK(mr_ssim(a, nearer, &object, &s_object, NULL));
+    MR_CHECK_MSG(s_object < 1.0, "object %.17g", s_object);
+    mr_image_free(a);
+    mr_image_free(b);
+    mr_image_free(nearer);
+    mr_image_free(mask);
+}
+
+MR_TEST(object_difference_weighs_more_on_the_object) {
+    /* b differs from a only on the object. Every window that does not touch the object compares identical
+     * pixels (SSIM exactly 1), so 1 - whole = (1 - object) x counted / all, exactly up to rounding. */
+    const int w = 90, h = 70;
+    mr_image *a = make_scene(w, h, 3, 0.05, 66), *mask = disc_mask(w, h, 45.0, 35.0, 10.0);
+    mr_image *b = with_noise_where(a, mask, 0, 0.3, 67);
+    double *map = malloc((size_t)(w - 10) * (size_t)(h - 10) * sizeof(double));
+    ref_ssim(a, b, 1.0, 0, map);
+    long counted = 0;
+    ref_masked_mean(map, mask, &counted);
+    free(map);
+    mr_ssim_options whole = {1.0, 0, NULL}, object = {1.0, 0, mask};
+    double s_whole = 0.0, s_object = 0.0;
+    MR_CHECK_OK(mr_ssim(a, b, &whole, &s_whole, NULL));
+    MR_CHECK_OK(mr_ssim(a, b, &object, &s_object, NULL));
+    MR_CHECK_MSG(s_object < s_whole && s_whole < 1.0, "object %.6f, whole frame %.6f", s_object, s_whole);
+    MR_CHECK_NEAR(1.0 - s_whole, (1.0 - s_object) * (double)counted / ((w - 10.0) * (h - 10.0)), 1e-12);
+    /* RMSE: the same squared error over fewer pixels; relative to a's mean over the object */
+    double r_whole = 0.0, r_object = 0.0, mean = 0.0, sum = 0.0, sum_a = 0.0;
+    long pixels = 0;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            if (!(mask->pixels[(size_t)y * (size_t)w + (size_t)x] > 0.0f)) continue;
+            pixels++;
+            for (int c = 0; c < 3; c++) {
+                double d = (double)mr_image_at(a, x, y)[c] - mr_image_at(b, x, y)[c];
+                sum += d * d;
+                sum_a += mr_image_at(a, x, y)[c];
+            }
+        }
+    MR_CHECK_OK(mr_rmse(a, b, &r_whole));
+    MR_CHECK_OK(mr_rmse_masked(a, b, mask, &r_object, &mean));
+    MR_CHECK_NEAR(r_object, sqrt(sum / (3.0 * pixels)), 1e-12);
+    MR_CHECK_NEAR(mean, sum_a / (3.0 * pixels), 1e-12);
+    MR_CHECK_NEAR(r_whole * r_whole * w * h, r_object * r_object * pixels, 1e-9);
+#ifdef _OPENMP
+    /* bit-identical for any thread count, like the whole-frame figures */
+    int saved = omp_get_max_threads();
+    for (int threads = 1; threads <= 3; threads += 2) {
+        omp_set_num_threads(threads);
+        double s = 0.0, r = 0.0;
+        MR_CHECK_OK(mr_ssim(a, b, &object, &s, NULL));
+        MR_CHECK_OK(mr_rmse_masked(a, b, mask, &r, NULL));
+        MR_CHECK_MSG(s == s_object && r == r_object, "%d threads", threads);
+    }
+    omp_set_num_threads(saved);
+#endif
+    mr_image_free(a);
+    mr_image_free(b);
+    mr_image_free(mask);
+}
+
+MR_TEST(mask_errors) {
+    mr_image *a = make_scene(30, 20, 3, 0.1, 68), *b = with_noise(a, 0.1, 69);
+    mr_image *small = NULL, *rgb = NULL, *mask = NULL, *empty = NULL;
+    MR_CHECK_OK(mr_image_create(30, 19, 1, &small));
+    MR_CHECK_OK(mr_image_create(30, 20, 3, &rgb));
+    MR_CHECK_OK(mr_image_create(30, 20, 1, &empty));
+    mask = disc_mask(30, 20, 15.0, 10.0, 5.0);
+    double s = 42.0, r = 42.0, mean = 42.0;
+    static mr_image sentinel_image;
+    mr_image *const sentinel = &sentinel_image;
+    mr_image *map = sentinel;
+    mr_ssim_options o = {1.0, 0, small};
+    MR_CHECK(mr_ssim(a, b, &o, &s, &map) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strstr(mr_last_error(), "30x19x1") != NULL, "%s", mr_last_error());
+    MR_CHECK(mr_rmse_masked(a, b, small, &r, &mean) == MR_ERR_INVALID_ARG);
+    o.mask = rgb;
+    MR_CHECK(mr_ssim(a, b, &o, &s, &map) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_rmse_masked(a, b, rgb, &r, &mean) == MR_ERR_INVALID_ARG);
+    o.mask = empty; /* no object pixel: no figure to give */
+    MR_CHECK(mr_ssim(a, b, &o, &s, &map) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_rmse_masked(a, b, empty, &r, &mean) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strstr(mr_last_error(), "covers no pixel") != NULL, "%s", mr_last_error());
+    mask->pixels[3 * 30 + 7] = 1.5f;
+    o.mask = mask;
+    MR_CHECK(mr_ssim(a, b, &o, &s, &map) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strstr(mr_last_error(), "(7, 3)") != NULL, "%s", mr_last_error());
+    mask->pixels[3 * 30 + 7] = NAN;
+    MR_CHECK(mr_rmse_masked(a, b, mask, &r, &mean) == MR_ERR_INVALID_ARG);
+    mask->pixels[3 * 30 + 7] = 0.0f;
+    o.downsample = 1; /* a mask is at full resolution */
+    MR_CHECK(mr_ssim(a, b, &o, &s, &map) == MR_ERR_INVALID_ARG);
+    MR_CHECK(s == 42.0 && r == 42.0 && mean == 42.0 && map == sentinel);
+    /* the map is the whole map with a mask too */
+    o.downsample = 0;
+    map = NULL;
+    MR_CHECK_OK(mr_ssim(a, b, &o, &s, &map));
+    MR_CHECK(map != NULL && map->width == 20 && map->height == 10);
+    mr_image_free(map);
+    /* an object pixel outside the valid map still counts through the windows that reach it */
+    for (size_t i = 0; i < mr_image_value_count(empty); i++) empty->pixels[i] = 0.0f;
+    empty->pixels[0] = 0.25f; /* pixel (0, 0): only map pixel (0, 0)'s window holds it */
+    o.mask = empty;
+    map = NULL;
+    MR_CHECK_OK(mr_ssim(a, b, &o, &s, &map));
+    MR_CHECK(map != NULL);
+    if (map != NULL) MR_CHECK_NEAR(s, map->pixels[0], 1e-7); /* the map holds floats */
+    mr_image_free(map);
+    mr_image_free(a);
+    mr_image_free(b);
+    mr_image_free(small);
+    mr_image_free(rgb);
+    mr_image_free(mask);
+    mr_image_free(empty);
 }
 
 /* ---- the SSIM map picture ------------------------------------------------------------------------------ */
@@ -543,4 +778,8 @@ MR_TEST_MAIN(MR_TEST_ENTRY(ssim_of_an_image_with_itself_is_exactly_one), MR_TEST
              MR_TEST_ENTRY(ssim_matches_brute_force_reference), MR_TEST_ENTRY(map_has_valid_size_and_mean),
              MR_TEST_ENTRY(exposure_and_alpha), MR_TEST_ENTRY(non_finite_pixels), MR_TEST_ENTRY(size_errors),
              MR_TEST_ENTRY(deterministic_across_thread_counts), MR_TEST_ENTRY(matlab_downsampling),
-             MR_TEST_ENTRY(rmse_known_answers), MR_TEST_ENTRY(map_visualisation))
+             MR_TEST_ENTRY(rmse_known_answers), MR_TEST_ENTRY(masked_ssim_matches_definition),
+             MR_TEST_ENTRY(mask_of_ones_is_the_whole_frame),
+             MR_TEST_ENTRY(background_difference_leaves_object_figures),
+             MR_TEST_ENTRY(object_difference_weighs_more_on_the_object), MR_TEST_ENTRY(mask_errors),
+             MR_TEST_ENTRY(map_visualisation))

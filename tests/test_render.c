@@ -117,6 +117,35 @@ MR_TEST(edge_filtering_measures_the_silhouette) {
     mr_render_plan_free(filtered);
 }
 
+MR_TEST(coverage_mask_is_the_plans_coverage) {
+    // The mask image holds the plan's coverage bit for bit; the unlit part of the sphere (the point light at 45°
+    // leaves a crescent dark) is covered although it renders black, and the mask is the same for any material.
+    mr_render_plan *plan = fit_plan(64, MR_FIT_LIGHT_45);
+    mr_image *mask = NULL, *image = NULL;
+    MR_CHECK_OK(mr_render_plan_coverage_mask(plan, &mask));
+    MR_CHECK(mask != NULL && mask->width == 64 && mask->height == 64 && mask->channels == 1);
+    if (mask != NULL)
+        MR_CHECK(memcmp(mask->pixels, mr_render_plan_coverage(plan), 64 * 64 * sizeof(float)) == 0);
+    double rho[3] = {0.5, 0.5, 0.5};
+    MR_CHECK_OK(mr_render(plan, mr_brdf_find("lambert"), rho, MR_COMPONENT_FULL, &image));
+    int dark_covered = 0, lit_uncovered = 0;
+    for (int p = 0; mask != NULL && image != NULL && p < 64 * 64; p++) {
+        float m = mask->pixels[p], v = image->pixels[3 * p];
+        dark_covered += m == 1.0f && v == 0.0f;
+        lit_uncovered += m == 0.0f && v != 0.0f;
+    }
+    MR_CHECK_MSG(dark_covered > 50 && lit_uncovered == 0, "%d covered pixels are unlit, %d lit ones uncovered",
+                 dark_covered, lit_uncovered);
+    static mr_image sentinel; // *out stays untouched on failure
+    mr_image *untouched = &sentinel;
+    MR_CHECK(mr_render_plan_coverage_mask(NULL, &untouched) == MR_ERR_INVALID_ARG);
+    MR_CHECK(untouched == &sentinel);
+    MR_CHECK(mr_render_plan_coverage_mask(plan, NULL) == MR_ERR_INVALID_ARG);
+    mr_image_free(mask);
+    mr_image_free(image);
+    mr_render_plan_free(plan);
+}
+
 MR_TEST(background_fills_the_uncovered_part_of_each_pixel) {
     mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){64, MR_FIT_LIGHT_FRONTAL, 0});
     scene.background[0] = 0.5, scene.background[1] = 0.25, scene.background[2] = 0.125;
@@ -2289,6 +2318,7 @@ MR_TEST(mesh_single_sided_backs_let_light_through) {
 
 MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
              MR_TEST_ENTRY(edge_filtering_measures_the_silhouette),
+             MR_TEST_ENTRY(coverage_mask_is_the_plans_coverage),
              MR_TEST_ENTRY(background_fills_the_uncovered_part_of_each_pixel),
              MR_TEST_ENTRY(frontal_centre_pixel_known_value),
              MR_TEST_ENTRY(silhouette_area_matches_projection),

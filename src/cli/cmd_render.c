@@ -1,9 +1,10 @@
 /*
  * cmd_render.c — `matremap render MODEL [name=value|name=@MAP ...] [--size N] [--light 45|frontal]
  *                [--env FILE [--env-rotation DEG] [--env-samples N] [--env-reflection-samples M] [--env-scale S]]
- *                [--component full|diffuse|specular] [--exposure E] -o OUT`
+ *                [--component full|diffuse|specular] [--exposure E] [--mask FILE] -o OUT`
  * Renders a material in the paper's fit scene (render.h), or under an environment map, optionally with
- * parameters from texture maps over the sphere, and writes it in the format of OUT's extension.
+ * parameters from texture maps over the sphere, and writes it in the format of OUT's extension; --mask writes
+ * the plan's coverage (mr_render_plan_coverage_mask), the object mask `matremap ssim --mask` takes.
  */
 #include <string.h>
 
@@ -49,6 +50,11 @@ static void print_help(void) {
            "  --edge-samples N      silhouette pixels are box-filtered with NxN rays (default 4; 1 = pixel\n"
            "                        centres only, aliased edges); other pixels always take one ray\n"
            "  --bits B              8 or 16 for PNG/TIFF, 16 (half) or 32 for EXR (default: 8, 32)\n"
+           "  --mask FILE           also write the object's coverage: one channel, the fraction of each pixel\n"
+           "                        the sphere covers (1 inside, 0 outside, k/N^2 on the silhouette with\n"
+           "                        --edge-samples N), lit or not, the same for every material; linear in every\n"
+           "                        format (EXR keeps it exact). 'matremap ssim A B --mask FILE' compares renders\n"
+           "                        over it (docs/metrics.md)\n"
            "  --help                this text\n"
            "\n"
            "Examples:\n"
@@ -60,7 +66,7 @@ static void print_help(void) {
 }
 
 int cmd_render(int argc, char **argv) {
-    const char *model_name = NULL, *output = NULL, *env_path = NULL;
+    const char *model_name = NULL, *output = NULL, *env_path = NULL, *mask_path = NULL;
     mr_fit_scene_options scene_opts = {0};
     int light_given = 0, env_option = 0, env_samples = 0, reflection_samples = 0;
     double env_rotation = 0.0, env_scale = 1.0;
@@ -121,6 +127,9 @@ int cmd_render(int argc, char **argv) {
         } else if ((taken = cli_take_option("render", argc, argv, &i, "--edge-samples", &value))) {
             if (taken < 0 || !cli_parse_int("render", "--edge-samples", value, 1, 16, &edge_samples))
                 return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("render", argc, argv, &i, "--mask", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            mask_path = value;
         } else if ((taken = cli_take_option("render", argc, argv, &i, "--bits", &value))) {
             if (taken < 0 || !cli_parse_int("render", "--bits", value, 8, 32, &write_opts.bits)) return CLI_EXIT_USAGE;
         } else if (argv[i][0] == '-') {
@@ -172,6 +181,14 @@ int cmd_render(int argc, char **argv) {
         }
         double render_seconds = cli_now() - start - plan_seconds;
         if (status == MR_OK) status = mr_img_write(output, image, &write_opts);
+        if (status == MR_OK && mask_path != NULL) {
+            mr_image *mask = NULL;
+            mr_img_write_options mask_opts = {0};
+            mask_opts.encoding = MR_IMG_DATA; // a fraction, not a colour
+            status = mr_render_plan_coverage_mask(plan, &mask);
+            if (status == MR_OK) status = mr_img_write(mask_path, mask, &mask_opts);
+            mr_image_free(mask);
+        }
         if (status == MR_OK)
             fprintf(stderr, "matremap render: wrote %s (%s, %dx%d, %d lit pixels, %ld shading samples, plan %.1f ms, "
                     "rendered in %.1f ms)\n", output, mr_component_name(component), scene.width, scene.height,

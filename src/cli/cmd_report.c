@@ -216,6 +216,19 @@ static double auto_exposure(const mr_render_plan *plan, const mr_image *image) {
     return count > 0 && sum > 0.0 ? 0.18 * (double)count / sum : 1.0;
 }
 
+/* The mask a candidate is compared over: the reference's coverage, or, when the candidate has a plan of its own
+ * (other geometry), the union (per-pixel maximum) of both, so that what either shows counts. */
+static mr_status comparison_mask(const mr_image *reference_mask, const mr_render_plan *plan, int own_plan,
+                                 mr_image **out) {
+    mr_status status = mr_image_clone(reference_mask, out);
+    if (status != MR_OK || !own_plan) return status;
+    const float *coverage = mr_render_plan_coverage(plan);
+    size_t n = mr_image_value_count(*out);
+    for (size_t i = 0; i < n; i++)
+        if (coverage[i] > (*out)->pixels[i]) (*out)->pixels[i] = coverage[i];
+    return MR_OK;
+}
+
 /* Root mean square of an image's RGB values. */
 static double rms(const mr_image *image) {
     double sum = 0.0;
@@ -290,7 +303,8 @@ typedef struct entry {
     char description[2048];
     char render_names[MAX_VIEWS][64], map_names[MAX_VIEWS][64];
     const char *renders[MAX_VIEWS], *ssim_maps[MAX_VIEWS];
-    double ssim[MAX_VIEWS], relative_rmse[MAX_VIEWS];
+    double ssim[MAX_VIEWS], relative_rmse[MAX_VIEWS];               /* the whole frame */
+    double object_ssim[MAX_VIEWS], object_relative_rmse[MAX_VIEWS]; /* the object (metrics.h, masks) */
     double seconds;
     char thumb_names[CLI_MAX_ASSIGNMENTS][64], thumb_labels[CLI_MAX_ASSIGNMENTS][512];
     const char *thumbs[CLI_MAX_ASSIGNMENTS], *thumb_label_ptrs[CLI_MAX_ASSIGNMENTS];
@@ -714,8 +728,9 @@ static int render_views(const options *o, const mr_image *env, double env_scale,
             status = mr_camera_frame_mesh(&assets[0].mesh, &frame, &scene.camera);
         }
         mr_render_plan *plan = NULL;
+        mr_image *reference = NULL, *reference_mask = NULL; // the reference's render and coverage
         if (status == MR_OK) status = mr_render_plan_create(&scene, &plan);
-        mr_image *reference = NULL;
+        if (status == MR_OK) status = mr_render_plan_coverage_mask(plan, &reference_mask);
         int plan_entry = 0; // the entry whose mesh the plan holds
         for (int k = 0; k < count && status == MR_OK; k++) {
             mr_image *image = NULL;
@@ -743,12 +758,19 @@ static int render_views(const options *o, const mr_image *env, double env_scale,
             entries[k].renders[v] = entries[k].render_names[v];
             status = write_picture(o->dir, entries[k].render_names[v], image, *exposure);
             if (status == MR_OK && k > 0) {
-                mr_ssim_options so = {*exposure, 0};
-                mr_image *map = NULL, *picture = NULL;
-                double rmse = 0.0, reference_rms = rms(reference);
+                mr_ssim_options so = {*exposure, 0, NULL};
+                mr_image *map = NULL, *picture = NULL, *mask = NULL;
+                double rmse = 0.0, reference_rms = rms(reference), object_rmse = 0.0, object_mean = 0.0;
                 status = mr_ssim(reference, image, &so, &entries[k].ssim[v], &map);
                 if (status == MR_OK) status = mr_rmse(reference, image, &rmse);
                 entries[k].relative_rmse[v] = reference_rms > 0.0 ? rmse / reference_rms : rmse;
+                // The same over the object: what a viewer looks at (metrics.h, masks).
+                if (status == MR_OK) status = comparison_mask(reference_mask, plan, plan_entry != 0, &mask);
+                so.mask = mask;
+                if (status == MR_OK) status = mr_ssim(reference, image, &so, &entries[k].object_ssim[v], NULL);
+                if (status == MR_OK) status = mr_rmse_masked(reference, image, mask, &object_rmse, &object_mean);
+                entries[k].object_relative_rmse[v] = object_mean > 0.0 ? object_rmse / object_mean : object_rmse;
+                mr_image_free(mask);
                 if (status == MR_OK) status = mr_ssim_map_visualise(map, 0.0, &picture);
                 snprintf(entries[k].map_names[v], sizeof entries[k].map_names[v], "ssim_view%d_material%d.png", v, k);
                 entries[k].ssim_maps[v] = entries[k].map_names[v];
@@ -762,6 +784,7 @@ static int render_views(const options *o, const mr_image *env, double env_scale,
                 mr_image_free(image);
         }
         mr_image_free(reference);
+        mr_image_free(reference_mask);
         mr_render_plan_free(plan);
         if (status != MR_OK) {
             if (isatty(STDERR_FILENO)) fputc('\n', stderr);
@@ -896,7 +919,8 @@ int cmd_report(int argc, char **argv) {
         report_materials[k] = (mr_report_material){e->label, e->description, e->seconds, e->renders,
                                                    k ? e->ssim_maps : NULL, k ? e->ssim : NULL,
                                                    k ? e->relative_rmse : NULL, e->thumb_count, e->thumbs,
-                                                   e->thumb_label_ptrs};
+                                                   e->thumb_label_ptrs, k ? e->object_ssim : NULL,
+                                                   k ? e->object_relative_rmse : NULL};
     }
     if (code == CLI_EXIT_OK) {
         char scene[1024];
@@ -915,17 +939,21 @@ int cmd_report(int argc, char **argv) {
         if (status != MR_OK) code = cli_fail("report", status);
     }
     if (code == CLI_EXIT_OK) {
-        printf("%-24s %10s %14s %10s\n", "material", "mean SSIM", "mean rel. RMSE", "render s");
+        // Means over the views: the object's figures first, the whole frame's beside them.
+        printf("%-24s %11s %16s %10s %15s %9s\n", "material", "object SSIM", "object rel. RMSE", "frame SSIM",
+               "frame rel. RMSE", "render s");
         for (int k = 0; k < count; k++) {
-            double ssim = 0.0, rmse = 0.0;
-            for (int v = 0; v < views; v++) {
-                ssim += k > 0 ? entries[k].ssim[v] : 1.0;
-                rmse += k > 0 ? entries[k].relative_rmse[v] : 0.0;
+            const entry *e = &entries[k];
+            double sums[4] = {0.0, 0.0, 0.0, 0.0};
+            for (int v = 0; v < views && k > 0; v++) {
+                sums[0] += e->object_ssim[v];
+                sums[1] += e->object_relative_rmse[v];
+                sums[2] += e->ssim[v];
+                sums[3] += e->relative_rmse[v];
             }
-            ssim /= views;
-            rmse /= views;
-            printf("%-24s %10.4f %14.4f %10.3f%s\n", entries[k].label, ssim, rmse, entries[k].seconds,
-                   k == 0 ? "  (reference)" : "");
+            if (k == 0) sums[0] = sums[2] = views;
+            printf("%-24s %11.4f %16.4f %10.4f %15.4f %9.3f%s\n", e->label, sums[0] / views, sums[1] / views,
+                   sums[2] / views, sums[3] / views, e->seconds, k == 0 ? "  (reference)" : "");
         }
         printf("report: %s/index.html\n", o.dir);
     }

@@ -300,13 +300,16 @@ static void horizontal_row(const luma_source *src, int r, int ow, const double g
     filter_row(x, y, ow, g, slot, slot + n, slot + 2 * n, slot + 3 * n, slot + 4 * n);
 }
 
-/* SSIM of two w x h luma sources. map (optional) receives (w-10)x(h-10) floats. Returns 0 on OOM.
+/* SSIM of two w x h luma sources. map (optional) receives (w-10)x(h-10) floats. counted (optional, (w-10) x
+ * (h-10) flags) restricts the mean to the map pixels flagged non-zero (there must be at least one); NULL = all.
+ * Returns 0 on OOM.
  * The output rows are cut into one contiguous band per thread; each band streams through its rows keeping the
  * last 11 horizontal rows in a ring, so memory is ~57 rows of doubles per thread instead of whole planes
  * (no page faults for megabytes of temporaries, and the working set stays in cache). A band recomputes the 10
  * horizontal rows it shares with its neighbour, by the same code on the same inputs, so every value, and the
  * result, is the same for any number of threads or bands. */
-static int ssim_stream(const luma_source *src, int w, int h, float *map, double *out) {
+static int ssim_stream(const luma_source *src, int w, int h, const unsigned char *counted, float *map,
+                       double *out) {
     const int ow = w - (SSIM_WIN - 1), oh = h - (SSIM_WIN - 1);
     double g[SSIM_WIN];
     gaussian_taps(g);
@@ -322,9 +325,11 @@ static int ssim_stream(const luma_source *src, int w, int h, float *map, double 
     const size_t per_thread = 2 * (size_t)w + SSIM_WIN * slot_size + (size_t)ow;
     double *scratch = malloc((size_t)threads * per_thread * sizeof(double));
     double *row_sums = malloc((size_t)oh * sizeof(double));
-    if (scratch == NULL || row_sums == NULL) {
+    size_t *row_counts = malloc((size_t)oh * sizeof(size_t));
+    if (scratch == NULL || row_sums == NULL || row_counts == NULL) {
         free(scratch);
         free(row_sums);
+        free(row_counts);
         return 0;
     }
 
@@ -349,8 +354,20 @@ static int ssim_stream(const luma_source *src, int w, int h, float *map, double 
                 for (int k = 0; k < SSIM_WIN; k++) rows[k] = ring + (size_t)((r + k) % SSIM_WIN) * slot_size;
                 ssim_row(rows, ow, g, c1, c2, srow);
                 double sum = 0.0; /* in index order, whatever the thread */
-                for (int j = 0; j < ow; j++) sum += srow[j];
+                size_t n = (size_t)ow;
+                if (counted == NULL) {
+                    for (int j = 0; j < ow; j++) sum += srow[j];
+                } else { /* the same additions, in the same order, over the flagged values only */
+                    const unsigned char *flags = counted + (size_t)r * (size_t)ow;
+                    n = 0;
+                    for (int j = 0; j < ow; j++)
+                        if (flags[j]) {
+                            sum += srow[j];
+                            n++;
+                        }
+                }
                 row_sums[r] = sum;
+                row_counts[r] = n;
                 if (map != NULL) {
                     float *map_row = map + (size_t)r * (size_t)ow;
                     for (int j = 0; j < ow; j++) map_row[j] = (float)srow[j];
@@ -360,11 +377,73 @@ static int ssim_stream(const luma_source *src, int w, int h, float *map, double 
     }
 
     double total = 0.0;
-    for (int r = 0; r < oh; r++) total += row_sums[r];
-    *out = total / ((double)ow * (double)oh);
+    size_t count = 0;
+    for (int r = 0; r < oh; r++) {
+        total += row_sums[r];
+        count += row_counts[r];
+    }
+    /* count is ow * oh without flags, so the whole-frame mean is the division it always was */
+    *out = counted == NULL ? total / ((double)ow * (double)oh) : total / (double)count;
     free(scratch);
     free(row_sums);
+    free(row_counts);
     return 1;
+}
+
+/* ---- object masks (metrics.h) ------------------------------------------------------------------------ */
+
+/* A mask for images of w x h: 1 channel, that size, every value finite and in [0, 1]. */
+static mr_status check_mask(const char *what, const mr_image *mask, int w, int h) {
+    if (mask->pixels == NULL || mask->channels != 1 || mask->width != w || mask->height != h)
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: the mask is %dx%dx%d; expected %dx%dx1 (the images' size, one "
+                       "channel)", what, mask->width, mask->height, mask->channels, w, h);
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            const float v = mask->pixels[(size_t)y * (size_t)w + (size_t)x];
+            if (!(v >= 0.0f && v <= 1.0f))
+                return mr_fail(MR_ERR_INVALID_ARG, "%s: mask value %g at pixel (%d, %d) is outside [0, 1]", what,
+                               (double)v, x, y);
+        }
+    return MR_OK;
+}
+
+/* The map pixels whose 11 x 11 window holds an object pixel (mask > 0): the mask dilated by SSIM_RADIUS in
+ * both directions, at the 'valid' centres. Separable: a horizontal "any" over 11 columns, then a vertical one
+ * over 11 rows. Returns a new (w-10) x (h-10) flag array and the number of flags set, or NULL on OOM. */
+static unsigned char *window_support(const mr_image *mask, size_t *out_count) {
+    const int w = mask->width, h = mask->height, ow = w - (SSIM_WIN - 1), oh = h - (SSIM_WIN - 1);
+    unsigned char *across = malloc((size_t)ow * (size_t)h);
+    unsigned char *flags = malloc((size_t)ow * (size_t)oh);
+    if (across == NULL || flags == NULL) {
+        free(across);
+        free(flags);
+        return NULL;
+    }
+    for (int y = 0; y < h; y++) {
+        const float *row = mask->pixels + (size_t)y * (size_t)w;
+        // Distance-based running "any": last = the latest object column seen so far.
+        int last = -SSIM_WIN;
+        for (int x = 0; x < w; x++) {
+            if (row[x] > 0.0f) last = x;
+            if (x >= SSIM_WIN - 1) across[(size_t)y * (size_t)ow + (size_t)(x - (SSIM_WIN - 1))] =
+                (unsigned char)(x - last < SSIM_WIN);
+        }
+    }
+    size_t count = 0;
+    for (int x = 0; x < ow; x++) {
+        int last = -SSIM_WIN;
+        for (int y = 0; y < h; y++) {
+            if (across[(size_t)y * (size_t)ow + (size_t)x]) last = y;
+            if (y >= SSIM_WIN - 1) {
+                const unsigned char f = (unsigned char)(y - last < SSIM_WIN);
+                flags[(size_t)(y - (SSIM_WIN - 1)) * (size_t)ow + (size_t)x] = f;
+                count += f;
+            }
+        }
+    }
+    free(across);
+    *out_count = count;
+    return flags;
 }
 
 static mr_status check_pair(const char *what, const mr_image *a, const mr_image *b) {
@@ -386,7 +465,7 @@ mr_status mr_ssim(const mr_image *a, const mr_image *b, const mr_ssim_options *o
     mr_status status = check_pair("ssim", a, b);
     if (status != MR_OK) return status;
     if (out_ssim == NULL) return mr_fail(MR_ERR_INVALID_ARG, "ssim: out_ssim must not be NULL");
-    mr_ssim_options o = {0.0, 0};
+    mr_ssim_options o = {0.0, 0, NULL};
     if (opts != NULL) o = *opts;
     const double exposure = o.exposure == 0.0 ? 1.0 : o.exposure;
     if (!(exposure > 0.0) || !isfinite(exposure))
@@ -395,6 +474,13 @@ mr_status mr_ssim(const mr_image *a, const mr_image *b, const mr_ssim_options *o
         return mr_fail(MR_ERR_INVALID_ARG, "ssim: downsample %d (valid: 0 = none, 1 = MATLAB rule)", o.downsample);
 
     const int w = a->width, h = a->height;
+    if (o.mask != NULL) {
+        if (o.downsample)
+            return mr_fail(MR_ERR_INVALID_ARG, "ssim: a mask and downsampling cannot be combined (the mask is at "
+                           "full resolution)");
+        status = check_mask("ssim", o.mask, w, h);
+        if (status != MR_OK) return status;
+    }
     const int f = o.downsample ? downsample_factor(w, h) : 1;
     const int dw = (w + f - 1) / f, dh = (h + f - 1) / f;
     /* (Downsampling keeps at least ~171 pixels per side, since f = round(min(w,h)/256), so only the input
@@ -403,13 +489,28 @@ mr_status mr_ssim(const mr_image *a, const mr_image *b, const mr_ssim_options *o
         return mr_fail(MR_ERR_INVALID_ARG, "ssim: images of %dx%d are smaller than the %dx%d SSIM window", w, h,
                        SSIM_WIN, SSIM_WIN);
 
+    unsigned char *counted = NULL;
+    if (o.mask != NULL) {
+        size_t count = 0;
+        counted = window_support(o.mask, &count);
+        if (counted == NULL) return mr_fail(MR_ERR_NOMEM, "ssim: out of memory for a %dx%d mask", w, h);
+        if (count == 0) {
+            free(counted);
+            return mr_fail(MR_ERR_INVALID_ARG, "ssim: the mask has no object pixel within the SSIM windows of "
+                           "the %dx%d images", w, h);
+        }
+    }
     mr_image *map = NULL;
     if (map_out != NULL) {
         status = mr_image_create(dw - (SSIM_WIN - 1), dh - (SSIM_WIN - 1), 1, &map);
-        if (status != MR_OK) return mr_fail_context(status, "ssim map");
+        if (status != MR_OK) {
+            free(counted);
+            return mr_fail_context(status, "ssim map");
+        }
     }
     srgb_encoder enc;
     if (!encoder_init(&enc)) {
+        free(counted);
         mr_image_free(map);
         return mr_fail(MR_ERR_NOMEM, "ssim: out of memory");
     }
@@ -435,7 +536,8 @@ mr_status mr_ssim(const mr_image *a, const mr_image *b, const mr_ssim_options *o
         src.w = dw;
     }
     double value = 0.0;
-    int ok = ssim_stream(&src, dw, dh, map != NULL ? map->pixels : NULL, &value);
+    int ok = ssim_stream(&src, dw, dh, counted, map != NULL ? map->pixels : NULL, &value);
+    free(counted);
     free(planes);
     encoder_free(&enc);
     if (!ok) {
@@ -450,41 +552,63 @@ mr_status mr_ssim(const mr_image *a, const mr_image *b, const mr_ssim_options *o
 /* ---- RMSE ------------------------------------------------------------------------------------------- */
 
 mr_status mr_rmse(const mr_image *a, const mr_image *b, double *out_rmse) {
+    return mr_rmse_masked(a, b, NULL, out_rmse, NULL);
+}
+
+mr_status mr_rmse_masked(const mr_image *a, const mr_image *b, const mr_image *mask, double *out_rmse,
+                         double *out_mean_a) {
     mr_status status = check_pair("rmse", a, b);
     if (status != MR_OK) return status;
     if (out_rmse == NULL) return mr_fail(MR_ERR_INVALID_ARG, "rmse: out_rmse must not be NULL");
     const int w = a->width, h = a->height, ch = a->channels, used = MR_MIN(3, ch);
-    double *row_sums = malloc((size_t)h * sizeof(double));
+    if (mask != NULL && (status = check_mask("rmse", mask, w, h)) != MR_OK) return status;
+    double *row_sums = malloc(3 * (size_t)h * sizeof(double)); /* squared differences, a's values, pixels */
     if (row_sums == NULL) return mr_fail(MR_ERR_NOMEM, "rmse: out of memory");
+    double *row_a = row_sums + h, *row_pixels = row_a + h;
 #pragma omp parallel for schedule(static)
     for (int y = 0; y < h; y++) {
         const float *pa = a->pixels + (size_t)y * (size_t)w * (size_t)ch;
         const float *pb = b->pixels + (size_t)y * (size_t)w * (size_t)ch;
-        double sum = 0.0;
-        for (int x = 0; x < w; x++)
+        const float *pm = mask != NULL ? mask->pixels + (size_t)y * (size_t)w : NULL;
+        double sum = 0.0, sum_a = 0.0, pixels = 0.0;
+        for (int x = 0; x < w; x++) {
+            if (pm != NULL && !(pm[x] > 0.0f)) continue;
+            pixels += 1.0;
             for (int c = 0; c < used; c++) {
                 const size_t i = (size_t)x * (size_t)ch + (size_t)c;
                 const double d = (double)pa[i] - (double)pb[i];
                 sum += d * d;
+                sum_a += (double)pa[i];
             }
+        }
         row_sums[y] = sum;
+        row_a[y] = sum_a;
+        row_pixels[y] = pixels;
     }
-    double total = 0.0;
-    for (int y = 0; y < h; y++) total += row_sums[y];
+    double total = 0.0, total_a = 0.0, pixels = 0.0;
+    for (int y = 0; y < h; y++) {
+        total += row_sums[y];
+        total_a += row_a[y];
+        pixels += row_pixels[y];
+    }
     free(row_sums);
-    if (!isfinite(total)) {
+    if (!isfinite(total) || !isfinite(total_a)) {
         /* Name the first offending pixel: a NaN/inf in a render is a bug worth locating. */
         for (int y = 0; y < h; y++)
             for (int x = 0; x < w; x++)
                 for (int c = 0; c < used; c++) {
                     size_t i = ((size_t)y * (size_t)w + (size_t)x) * (size_t)ch + (size_t)c;
+                    if (mask != NULL && !(mask->pixels[(size_t)y * (size_t)w + (size_t)x] > 0.0f)) continue;
                     if (!isfinite(a->pixels[i]) || !isfinite(b->pixels[i]))
                         return mr_fail(MR_ERR_NUMERIC, "rmse: non-finite value at pixel (%d, %d) channel %d: %g vs %g",
                                        x, y, c, (double)a->pixels[i], (double)b->pixels[i]);
                 }
         return mr_fail(MR_ERR_NUMERIC, "rmse: the squared differences overflow a double");
     }
-    *out_rmse = sqrt(total / ((double)w * (double)h * (double)used));
+    if (pixels == 0.0) return mr_fail(MR_ERR_INVALID_ARG, "rmse: the mask covers no pixel of the %dx%d images", w, h);
+    /* without a mask, pixels = w * h exactly (a sum of ones below 2^53) */
+    *out_rmse = sqrt(total / (pixels * (double)used));
+    if (out_mean_a != NULL) *out_mean_a = total_a / (pixels * (double)used);
     return MR_OK;
 }
 

@@ -14,6 +14,22 @@
  *      MSSIM = mean of the map. No automatic downsampling unless opts.downsample asks for MATLAB's rule.
  * Sums are accumulated in double, in a fixed order, so results do not depend on the thread count.
  * Cross-checked against ssim.js 3.5.0 ('original' mode) to a few 1e-9 (tests/ssim_crosscheck.sh).
+ *
+ * Object masks (what a viewer looks at: a rendered object, not the background around it). A mask is a
+ * 1-channel image of the images' size holding, per pixel, the fraction the object covers, in [0, 1] (a render
+ * plan's coverage, mr_render_plan_coverage_mask in render.h); a pixel with a value > 0 belongs to the object.
+ *   - SSIM over a mask (mr_ssim_options.mask) is the mean of the same SSIM map over the map pixels whose 11x11
+ *     window holds at least one object pixel: the mask dilated by the window's radius, 5 pixels, in the
+ *     Chebyshev (square) sense. Map pixel (x, y) is centred on image pixel (x + 5, y + 5) and its window spans
+ *     image columns x .. x + 10 and rows y .. y + 10, so it counts when any of those is an object pixel. Why
+ *     that set: the window is every pixel a map value depends on, so these are exactly the values the object
+ *     influences, including the windows that straddle its silhouette (where its outline stands against the
+ *     background); every other window sees background only, identical in renders of one scene (SSIM exactly
+ *     1), which would only dilute the figure in proportion to the frame's emptiness. Each counted value has
+ *     weight 1 (not the coverage).
+ *   - RMSE over a mask (mr_rmse_masked) is over the object pixels (value > 0), each counted once, and the
+ *     reference's mean over the same pixels and channels is its natural denominator (relative RMSE).
+ * A mask of all ones gives the whole-frame figures bit for bit.
  */
 #ifndef MR_METRICS_H
 #define MR_METRICS_H
@@ -26,8 +42,12 @@ extern "C" {
 #endif
 
 typedef struct mr_ssim_options {
-    double exposure; /* linear scale before clamping; 0 = 1.0; otherwise positive and finite */
-    int downsample;  /* 0 = none; 1 = Wang's MATLAB rule f = max(1, round(min(w,h)/256)), box filter + decimate */
+    double exposure;      /* linear scale before clamping; 0 = 1.0; otherwise positive and finite */
+    int downsample;       /* 0 = none; 1 = Wang's MATLAB rule f = max(1, round(min(w,h)/256)), box filter +
+                             decimate; not with a mask */
+    const mr_image *mask; /* NULL = the whole frame (every map pixel); otherwise the object's coverage (see the
+                             header comment): 1 channel, the images' size, values in [0, 1]; the mean is taken
+                             over the map pixels whose window holds an object pixel (> 0). Borrowed. */
 } mr_ssim_options;
 
 /* Root-mean-square difference over all pixels and the first min(3, channels) channels of two linear images
@@ -36,10 +56,22 @@ typedef struct mr_ssim_options {
  * failure. */
 mr_status mr_rmse(const mr_image *a, const mr_image *b, double *out_rmse);
 
+/* Like mr_rmse, over the pixels where mask > 0 only (mask NULL: every pixel, exactly mr_rmse), each counted
+ * once, and, if out_mean_a is not NULL, the mean of a's values over the same pixels and channels: with the
+ * reference as a, rmse / mean is the RMSE relative to the reference's mean radiance on the object. The mask is
+ * as for SSIM (header comment). Errors as mr_rmse, and MR_ERR_INVALID_ARG for a mask of the wrong size or
+ * channels, a value outside [0, 1] (naming the pixel), or a mask that covers no pixel. The outputs are
+ * untouched on failure. */
+mr_status mr_rmse_masked(const mr_image *a, const mr_image *b, const mr_image *mask, double *out_rmse,
+                         double *out_mean_a);
+
 /* Mean SSIM of a and b (same size and channels; at least 11x11 after downsampling). opts may be NULL.
+ * With opts->mask, the mean over the map pixels whose window touches the object (header comment).
  * If map_out is not NULL, *map_out receives the 1-channel SSIM map ((w-10)x(h-10) of the possibly downsampled
- * images, values in [-1,1]), owned by the caller. Errors: MR_ERR_INVALID_ARG (sizes, options), MR_ERR_NOMEM;
- * the outputs are untouched on failure. A 512x512 RGB pair takes a few milliseconds. */
+ * images, values in [-1,1]; the whole map, with or without a mask), owned by the caller. Errors:
+ * MR_ERR_INVALID_ARG (sizes, options; a mask of the wrong size or channels, with a value outside [0, 1], with
+ * downsampling, or whose dilation reaches no map pixel), MR_ERR_NOMEM; the outputs are untouched on failure.
+ * A 512x512 RGB pair takes a few milliseconds. */
 mr_status mr_ssim(const mr_image *a, const mr_image *b, const mr_ssim_options *opts, double *out_ssim,
                   mr_image **map_out);
 

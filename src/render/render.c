@@ -979,6 +979,16 @@ size_t mr_render_plan_bytes(const mr_render_plan *plan) {
 
 const float *mr_render_plan_coverage(const mr_render_plan *plan) { return plan->coverage; }
 
+mr_status mr_render_plan_coverage_mask(const mr_render_plan *plan, mr_image **out) {
+    if (plan == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "coverage mask: NULL plan or output");
+    mr_image *mask = NULL;
+    mr_status status = mr_image_create(plan->scene.width, plan->scene.height, 1, &mask);
+    if (status != MR_OK) return mr_fail_context(status, "coverage mask");
+    memcpy(mask->pixels, plan->coverage, mr_image_value_count(mask) * sizeof *mask->pixels);
+    *out = mask;
+    return MR_OK;
+}
+
 long mr_render_plan_shadow_ray_count(const mr_render_plan *plan) { return plan->shadow_rays; }
 
 int mr_render_plan_self_occluding(const mr_render_plan *plan) {

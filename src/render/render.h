@@ -364,8 +364,19 @@ size_t mr_render_plan_bytes(const mr_render_plan *plan);
 int mr_render_plan_object_pixel_count(const mr_render_plan *plan);
 
 /* The fraction of each pixel the object covers (width*height floats, row-major, top-left first): 1 inside the
- * silhouette, 0 outside, in between on it. Owned by the plan. Useful as a mask for fits and metrics. */
+ * silhouette, 0 outside, in between on it. Owned by the plan. Useful as a mask for fits and metrics.
+ * Contract: a pixel whose primary rays all agree (its centre and four corners all hit, or all miss) holds 1 or
+ * 0; a silhouette pixel holds k / edge_samples^2, k of its sub-pixel rays hitting. A hit counts whether or not
+ * light reaches it (an unlit or shadowed part of the object is black in renders but covered), and whatever its
+ * material; what a ray passes through (a single-sided triangle seen from behind) does not cover. Thin
+ * features that slip between a pixel's corners and centre are missed (see mr_render_plan_create). */
 const float *mr_render_plan_coverage(const mr_render_plan *plan);
+
+/* The coverage above as a new 1-channel image of the plan's size (*out, owned by the caller; untouched on
+ * failure): the object mask of a render, as SSIM and RMSE over the object take it (metrics.h: pixels > 0 are
+ * the object's). Every render of the plan, whatever its material, has this coverage. MR_ERR_INVALID_ARG for
+ * NULL arguments, MR_ERR_NOMEM. */
+mr_status mr_render_plan_coverage_mask(const mr_render_plan *plan, mr_image **out);
 
 /* Render `component` of the material (model, packed values as in brdf.h) into a new RGB image (*out, owned
  * by the caller). values are clamped into the model's bounds by its prepare(). */

@@ -66,6 +66,9 @@ static void json_string(FILE *out, const char *s) {
 
 /* ---- checks ------------------------------------------------------------------------------------------------ */
 
+/* Whether the candidates carry figures over the object (all or none do: check_report). */
+static int has_object(const mr_report *r) { return r->material_count > 1 && r->materials[1].object_ssim != NULL; }
+
 static mr_status check_report(const mr_report *r, const char *dir) {
     if (r == NULL || dir == NULL) return mr_fail(MR_ERR_INVALID_ARG, "report: NULL report or folder");
     if (r->view_count < 1 || r->views == NULL)
@@ -86,6 +89,9 @@ static mr_status check_report(const mr_report *r, const char *dir) {
         if (k > 0 && (m->ssim == NULL || m->relative_rmse == NULL || m->ssim_maps == NULL))
             return mr_fail(MR_ERR_INVALID_ARG, "report: material '%s' needs SSIM, relative RMSE and SSIM maps "
                            "against the reference", label);
+        if (k > 0 && ((m->object_ssim != NULL) != has_object(r) || (m->object_relative_rmse != NULL) != has_object(r)))
+            return mr_fail(MR_ERR_INVALID_ARG, "report: material '%s': object SSIM and relative RMSE must be given "
+                           "for every candidate or for none", label);
         if (!isfinite(m->seconds))
             return mr_fail(MR_ERR_INVALID_ARG, "report: material '%s': time is not finite", label);
         for (int v = 0; v < r->view_count; v++) {
@@ -95,6 +101,10 @@ static mr_status check_report(const mr_report *r, const char *dir) {
             if (k > 0 && !(isfinite(m->ssim[v]) && isfinite(m->relative_rmse[v])))
                 return mr_fail(MR_ERR_INVALID_ARG, "report: material '%s', view '%s': SSIM %g, relative RMSE %g: "
                                "expected finite values", label, r->views[v], m->ssim[v], m->relative_rmse[v]);
+            if (k > 0 && has_object(r) && !(isfinite(m->object_ssim[v]) && isfinite(m->object_relative_rmse[v])))
+                return mr_fail(MR_ERR_INVALID_ARG, "report: material '%s', view '%s': object SSIM %g, relative RMSE "
+                               "%g: expected finite values", label, r->views[v], m->object_ssim[v],
+                               m->object_relative_rmse[v]);
         }
         for (int t = 0; t < m->thumbnail_count; t++)
             if (m->thumbnails[t] == NULL || m->thumbnail_labels[t] == NULL)
@@ -108,6 +118,11 @@ static double mean(const double *x, int n) {
     double sum = 0.0;
     for (int i = 0; i < n; i++) sum += x[i];
     return sum / n;
+}
+
+/* The SSIM a candidate is ranked and captioned by: over the object when the report has it. */
+static const double *headline_ssim(const mr_report *r, int k) {
+    return has_object(r) ? r->materials[k].object_ssim : r->materials[k].ssim;
 }
 
 /* ---- the page ---------------------------------------------------------------------------------------------- */
@@ -147,22 +162,34 @@ static void write_page(FILE *out, const mr_report *r) {
         html_text(out, r->scene);
         fputs("</p>\n", out);
     }
+    const int object = has_object(r);
     fprintf(out, "<p class=\"scene\">Made by matremap %s. SSIM: 1 = identical to the reference (display-referred "
-                 "luma, docs/metrics.md); relative RMSE: linear RGB, over the reference's RMS. SSIM maps: black = "
-                 "identical, brighter = lower SSIM.</p>\n", mr_version());
+                 "luma, docs/metrics.md); relative RMSE: linear RGB. SSIM maps: black = identical, brighter = lower "
+                 "SSIM.</p>\n", mr_version());
+    if (object)
+        fputs("<p class=\"scene\">Object figures (first) look only where the object is: SSIM averaged over the "
+              "pixels whose 11×11 SSIM window touches it (its coverage dilated by 5 pixels), relative RMSE over "
+              "its pixels as a fraction of the reference's mean radiance there. Whole-frame figures (beside them) "
+              "count every pixel, the black background included (relative RMSE over the reference's RMS); "
+              "they dilute differences by the frame's emptiness.</p>\n", out);
+    else
+        fputs("<p class=\"scene\">Over the whole frame, background included; relative RMSE over the reference's "
+              "RMS.</p>\n", out);
 
-    // Summary: the best mean SSIM among the candidates in bold.
+    // Summary: the best mean headline SSIM (the object's when there is one) among the candidates in bold.
     int best = -1;
     for (int k = 1; k < r->material_count; k++)
-        if (best < 0 || mean(r->materials[k].ssim, r->view_count) > mean(r->materials[best].ssim, r->view_count))
+        if (best < 0 || mean(headline_ssim(r, k), r->view_count) > mean(headline_ssim(r, best), r->view_count))
             best = k;
-    fputs("<h2>Summary</h2>\n<table>\n<tr><th class=\"name\">material</th><th>mean SSIM</th>"
-          "<th>mean rel. RMSE</th>", out);
+    fputs("<h2>Summary</h2>\n<table>\n<tr><th class=\"name\">material</th>", out);
+    if (object) fputs("<th>object SSIM (mean)</th><th>object rel. RMSE (mean)</th>", out);
+    else fputs("<th>mean SSIM</th><th>mean rel. RMSE</th>", out);
     for (int v = 0; v < r->view_count; v++) {
-        fputs("<th>SSIM ", out);
+        fputs(object ? "<th>object SSIM " : "<th>SSIM ", out);
         html_text(out, r->views[v]);
         fputs("</th>", out);
     }
+    if (object) fputs("<th>whole-frame SSIM (mean)</th><th>whole-frame rel. RMSE (mean)</th>", out);
     fputs("<th>", out);
     html_text(out, r->time_label ? r->time_label : "time");
     fputs("</th></tr>\n", out);
@@ -173,10 +200,14 @@ static void write_page(FILE *out, const mr_report *r) {
         if (k == 0) {
             fputs(" (reference)</td><td>1</td><td>0</td>", out);
             for (int v = 0; v < r->view_count; v++) fputs("<td>1</td>", out);
+            if (object) fputs("<td>1</td><td>0</td>", out);
         } else {
-            fprintf(out, "</td><td>%.4f</td><td>%.4f</td>", mean(m->ssim, r->view_count),
-                    mean(m->relative_rmse, r->view_count));
-            for (int v = 0; v < r->view_count; v++) fprintf(out, "<td>%.4f</td>", m->ssim[v]);
+            fprintf(out, "</td><td>%.4f</td><td>%.4f</td>", mean(headline_ssim(r, k), r->view_count),
+                    mean(object ? m->object_relative_rmse : m->relative_rmse, r->view_count));
+            for (int v = 0; v < r->view_count; v++) fprintf(out, "<td>%.4f</td>", headline_ssim(r, k)[v]);
+            if (object)
+                fprintf(out, "<td>%.4f</td><td>%.4f</td>", mean(m->ssim, r->view_count),
+                        mean(m->relative_rmse, r->view_count));
         }
         if (m->seconds >= 0.0)
             fprintf(out, "<td>%.3f s</td></tr>\n", m->seconds);
@@ -195,6 +226,9 @@ static void write_page(FILE *out, const mr_report *r) {
             char caption[512];
             if (k == 0)
                 snprintf(caption, sizeof caption, "%s (reference)", m->label);
+            else if (object)
+                snprintf(caption, sizeof caption, "%s: object SSIM %.4f (whole frame %.4f)", m->label,
+                         m->object_ssim[v], m->ssim[v]);
             else
                 snprintf(caption, sizeof caption, "%s: SSIM %.4f", m->label, m->ssim[v]);
             figure(out, m->renders[v], caption, NULL);
@@ -232,6 +266,13 @@ static void write_page(FILE *out, const mr_report *r) {
 
 /* ---- the summary ------------------------------------------------------------------------------------------- */
 
+/* `, "key": [v0, v1, ...]` with %.9g numbers. */
+static void json_numbers(FILE *out, const char *key, const double *values, int count) {
+    fprintf(out, ", \"%s\": [", key);
+    for (int v = 0; v < count; v++) fprintf(out, "%s%.9g", v ? ", " : "", values[v]);
+    fputc(']', out);
+}
+
 static void write_summary(FILE *out, const mr_report *r) {
     fputs("{\n  \"matremap\": ", out);
     json_string(out, mr_version());
@@ -266,13 +307,18 @@ static void write_summary(FILE *out, const mr_report *r) {
         }
         fputs("]", out);
         if (k > 0) {
+            // The whole-frame figures keep their keys; the object's are added beside them.
             fprintf(out, ", \"mean_ssim\": %.9g, \"mean_relative_rmse\": %.9g", mean(m->ssim, r->view_count),
                     mean(m->relative_rmse, r->view_count));
-            fputs(", \"ssim\": [", out);
-            for (int v = 0; v < r->view_count; v++) fprintf(out, "%s%.9g", v ? ", " : "", m->ssim[v]);
-            fputs("], \"relative_rmse\": [", out);
-            for (int v = 0; v < r->view_count; v++) fprintf(out, "%s%.9g", v ? ", " : "", m->relative_rmse[v]);
-            fputs("], \"ssim_maps\": [", out);
+            json_numbers(out, "ssim", m->ssim, r->view_count);
+            json_numbers(out, "relative_rmse", m->relative_rmse, r->view_count);
+            if (has_object(r)) {
+                fprintf(out, ", \"mean_object_ssim\": %.9g, \"mean_object_relative_rmse\": %.9g",
+                        mean(m->object_ssim, r->view_count), mean(m->object_relative_rmse, r->view_count));
+                json_numbers(out, "object_ssim", m->object_ssim, r->view_count);
+                json_numbers(out, "object_relative_rmse", m->object_relative_rmse, r->view_count);
+            }
+            fputs(", \"ssim_maps\": [", out);
             for (int v = 0; v < r->view_count; v++) {
                 fputs(v ? ", " : "", out);
                 json_string(out, m->ssim_maps[v]);

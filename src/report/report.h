@@ -12,6 +12,13 @@
  * renders side by side over their SSIM maps, then each material's parameters and map thumbnails. Nothing is
  * fetched from elsewhere: the page works offline and when the folder is moved.
  *
+ * Object and whole-frame figures: when the materials carry object_ssim and object_relative_rmse (SSIM and
+ * relative RMSE over the object's pixels, metrics.h), the page leads with them (the summary's first columns,
+ * the best candidate chosen by them, the captions) and shows the whole-frame ssim and relative_rmse beside
+ * them; summary.json keeps the whole-frame figures under their old keys (ssim, mean_ssim, relative_rmse,
+ * mean_relative_rmse) and adds object_ssim, mean_object_ssim, object_relative_rmse, mean_object_relative_rmse.
+ * Without them the page is the whole-frame one it always was.
+ *
  * Contract: every string is UTF-8 and is escaped for HTML and JSON here; numbers must be finite (NaN and infinity
  * are MR_ERR_INVALID_ARG naming the material and view). Both files are written atomically (the folder must
  * exist). The library never prints. Thread-safe (no global state besides the thread-local last error).
@@ -37,6 +44,10 @@ typedef struct mr_report_material {
     int thumbnail_count;
     const char *const *thumbnails;       /* [thumbnail_count] parameter-map pictures */
     const char *const *thumbnail_labels; /* [thumbnail_count] what each shows: "base_color (b.png)" */
+    const double *object_ssim;           /* [view_count] SSIM over the object (metrics.h, mask); NULL for the
+                                            reference, or for every material of a whole-frame report */
+    const double *object_relative_rmse;  /* [view_count] RMSE over the object / the reference's mean radiance
+                                            there; NULL exactly when object_ssim is */
 } mr_report_material;
 
 typedef struct mr_report {
@@ -50,7 +61,8 @@ typedef struct mr_report {
 } mr_report;
 
 /* Write DIR/index.html and DIR/summary.json. MR_ERR_INVALID_ARG for a malformed report (counts, NULL arrays
- * where values are needed, non-finite numbers), MR_ERR_IO naming the file, MR_ERR_NOMEM. */
+ * where values are needed, object figures on some candidates but not all, non-finite numbers), MR_ERR_IO naming
+ * the file, MR_ERR_NOMEM. */
 mr_status mr_report_write(const mr_report *report, const char *dir);
 
 #ifdef __cplusplus
