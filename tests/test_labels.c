@@ -246,6 +246,30 @@ MR_TEST(residual_form_is_colour_neutral) {
     mr_mlp_free(net);
 }
 
+/* Texels whose gate is shut skip the network; the others must come out as if each were converted alone. */
+MR_TEST(residual_form_batch_equals_single_texels) {
+    mr_mlp *net = random_residual_net(13);
+    if (net == NULL) return;
+    enum { N = 6 };
+    float dif[3 * N] = {0, 0, 0, 0.5f, 0.2f, 0.1f, 0, 0, 0, 0.3f, 0.3f, 0.3f, 0.9f, 0.1f, 0.4f, 0, 0, 0};
+    float spe[3 * N] = {0.5f, 0.5f, 0.5f, 0.9f, 0.3f, 0.2f, 0.25f, 0.25f, 0.25f,
+                        0.7f, 0.7f, 0.7f, 0.02f, 0.02f, 0.02f, 1, 1, 1};
+    float alb[3 * N], met[N];
+    mr_wf_spec_maps in = {dif, spe, NULL};
+    mr_wf_metal_maps out = {alb, met, NULL};
+    MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in, N, NULL, &out, NULL));
+    for (int i = 0; i < N; i++) {
+        float a[3], m;
+        mr_wf_spec_maps one = {dif + 3 * i, spe + 3 * i, NULL};
+        mr_wf_metal_maps o = {a, &m, NULL};
+        MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &one, 1, NULL, &o, NULL));
+        MR_CHECK_MSG(memcmp(a, alb + 3 * i, sizeof a) == 0 && m == met[i], "texel %d differs alone", i);
+    }
+    /* the pure metals (gate shut) are exactly WEIGHTED: albedo = specular, metallic 1 */
+    MR_CHECK(met[0] == 1.0f && alb[0] == 0.5f && met[2] == 1.0f && alb[6] == 0.25f);
+    mr_mlp_free(net);
+}
+
 /* The kind survives the weight file (version 2); plain networks keep version 1; a bad kind is refused. */
 MR_TEST(network_kind_round_trip) {
     mr_mlp *net = random_residual_net(5), *back = NULL;
@@ -279,6 +303,7 @@ MR_TEST(network_kind_round_trip) {
 }
 
 MR_TEST_MAIN(MR_TEST_ENTRY(residual_form_is_exact_on_the_manifold), MR_TEST_ENTRY(residual_form_is_colour_neutral),
+             MR_TEST_ENTRY(residual_form_batch_equals_single_texels),
              MR_TEST_ENTRY(network_kind_round_trip), MR_TEST_ENTRY(basis_matches_renderer), MR_TEST_ENTRY(manifold_texels_keep_the_analytic_answer),
              MR_TEST_ENTRY(grey_in_grey_out), MR_TEST_ENTRY(label_beats_analytic_off_manifold),
              MR_TEST_ENTRY(bad_options_are_refused))

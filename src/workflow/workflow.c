@@ -393,10 +393,14 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
     size_t block = n < MLP_BLOCK ? n : MLP_BLOCK;
     float *x = malloc(block * 6 * sizeof *x), *y = malloc(block * 4 * sizeof *y);
     mr_wf_residual_anchor *anchors = residual && n > 0 ? malloc(block * sizeof *anchors) : NULL;
-    if (n > 0 && (x == NULL || y == NULL || (residual && anchors == NULL))) {
+    /* residual form: the row of y holding each texel's correction, or -1 where the gate is shut (the network's
+     * answer could not change the texel, so it is not asked: real textures have many such texels) */
+    long *slot = residual && n > 0 ? malloc(block * sizeof *slot) : NULL;
+    if (n > 0 && (x == NULL || y == NULL || (residual && (anchors == NULL || slot == NULL)))) {
         free(x);
         free(y);
         free(anchors);
+        free(slot);
         return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %zu texels", what, block);
     }
     for (size_t start = 0; start < n && status == MR_OK; start += block) {
@@ -418,14 +422,24 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
             if (residual) mr_wf_residual_anchor_of(d, s, &anchors[r]);
             if (flags) flags[i] = (uint8_t)f;
         }
-        status = mr_mlp_predict(net, x, count, y);
+        size_t rows = count;
+        if (residual) { // compact the rows the network must see; a row's outputs do not depend on the others
+            rows = 0;
+            for (size_t r = 0; r < count; r++) {
+                slot[r] = anchors[r].gate > 0.0 ? (long)rows : -1;
+                if (anchors[r].gate > 0.0 && rows++ != r) memcpy(x + 6 * (rows - 1), x + 6 * r, 6 * sizeof *x);
+            }
+        }
+        status = rows > 0 ? mr_mlp_predict(net, x, rows, y) : MR_OK;
         if (status != MR_OK) break;
 #pragma omp parallel for schedule(static)
         for (size_t r = 0; r < count; r++) {
             size_t i = start + r;
             unsigned f = flags ? flags[i] : 0;
-            double v4[4];
-            for (int k = 0; k < 4; k++) v4[k] = y[4 * r + k];
+            double v4[4] = {0.0, 0.0, 0.0, 0.0};
+            size_t row = residual ? (size_t)(slot[r] < 0 ? 0 : slot[r]) : r;
+            if (!residual || slot[r] >= 0)
+                for (int k = 0; k < 4; k++) v4[k] = y[4 * row + k];
             if (residual) { // the correction to W, gated and made neutral (workflow.h)
                 const mr_wf_residual_anchor *a = &anchors[r];
                 double mean = (v4[0] + v4[1] + v4[2]) / 3.0;
@@ -452,5 +466,6 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
     free(x);
     free(y);
     free(anchors);
+    free(slot);
     return status;
 }
