@@ -140,7 +140,8 @@ print("%.6f\t%.6f\t%.9f\t%.9f" % (m[0]["seconds"] + m[1]["seconds"], m[2]["secon
         echo "-- $name"
         for method in weighted mean; do
             mkdir -p "$out/$name/$method"
-            "$bin" gltf spec2metal "$source" -o "$out/$name/$method/out.gltf" --method "$method" >/dev/null
+            "$bin" gltf spec2metal "$source" -o "$out/$name/$method/out.gltf" --method "$method" \
+                --overwrite-metal-rough >/dev/null # the conversion, not the artists' own metal-rough values
         done
         for n in "${ns[@]}" "$converged_n"; do
             accuracy_report "$name" "$source" "$n" "$default_size"
@@ -333,7 +334,7 @@ bench_reflection() {
     done
     # The truck: the original against its weighted conversion, as `matremap report` shows them.
     local weighted="$out/truck_weighted.gltf" v
-    "$bin" gltf spec2metal "$truck" -o "$weighted" --method weighted >/dev/null
+    "$bin" gltf spec2metal "$truck" -o "$weighted" --method weighted --overwrite-metal-rough >/dev/null
     "$bin" report -o "$out/truck_ref" --env "$env_map" --env-samples 4096 --reflection-samples 1000 "$truck" \
         -- "$weighted" >/dev/null
     {
@@ -592,8 +593,10 @@ if [ -x "$gt/node_modules/.bin/gltf-transform" ] && [ -d "$shared/assets/specglo
         rm -rf "$out" && mkdir -p "$out/w" "$out/m" "$out/g"
         ours=() mlp=() peer=()
         for run in $(seq "$runs"); do
-            ours+=("$(seconds_of "$bin" gltf spec2metal "$asset" -o "$out/w/out.gltf" --method weighted)")
-            mlp+=("$(seconds_of "$bin" gltf spec2metal "$asset" -o "$out/m/out.gltf" --method mlp)")
+            ours+=("$(seconds_of "$bin" gltf spec2metal "$asset" -o "$out/w/out.gltf" --method weighted \
+                --overwrite-metal-rough)")
+            mlp+=("$(seconds_of "$bin" gltf spec2metal "$asset" -o "$out/m/out.gltf" --method mlp \
+                --overwrite-metal-rough)")
             peer+=("$(seconds_of "$gt/node_modules/.bin/gltf-transform" metalrough "$asset" "$out/g/out.gltf")")
         done
         o_s=$(printf '%s\n' "${ours[@]}" | median)

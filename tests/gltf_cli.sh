@@ -2,10 +2,12 @@
 # `matremap gltf spec2metal|metal2spec` on the real assets of ../shared/assets: every output passes the Khronos glTF
 # validator with 0 errors; the spec-gloss extension leaves the materials and extensionsUsed/Required; the new
 # textures equal what `matremap spec2metal` makes of the same maps; factor-only materials get the factors
-# `spec2metal` computes; --fallback keep and --keep-specgloss; metal2spec and back on the WaterBottle within
-# 8-bit rounding; samplers and UV mappings carried over; textures, images and samplers that nothing refers to after
-# the conversion are pruned (counts printed, their files not written, no UNUSED_OBJECT from the validator) unless
-# --keep-unused; usage errors and inputs never overwritten. Needs node/npm (the validator, tests/node), python3 and
+# `spec2metal` computes; materials with metal-rough values of their own kept by default and said so (human and
+# JSON), converted with --overwrite-metal-rough; --keep-specgloss; metal2spec and back on the WaterBottle within
+# 8-bit rounding, with the off-manifold tolerance of its 8-bit textures (and --eps); a non-finite glossiness
+# (EXR textures) converted as roughness 1 and flagged; samplers and UV mappings carried over; textures, images
+# and samplers that nothing refers to after the conversion are pruned (counts printed, their files not written, no
+# UNUSED_OBJECT from the validator) unless --keep-unused; usage errors and inputs never overwritten. Needs node/npm (the validator, tests/node), python3 and
 # idiff. Ends with "N passed, N failed".
 set -u
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -37,6 +39,12 @@ uri = lambda t: d["images"][d["textures"][t]["source"]]["uri"]
 print(eval(sys.argv[2]))' "$1" "$2"
 }
 below() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a != "" && a + 0 < b + 0) }'; }
+# A Python expression over the last command's JSON summary `d`, with m its first material.
+summary() {
+    python3 -c 'import json, sys
+d = json.load(open(sys.argv[1])); m = d["materials"][0]
+print(eval(sys.argv[2]))' "$tmp/out" "$1"
+}
 # idiff mean and max error of two images.
 meandiff() { idiff -v -fail 1e9 "$1" "$2" 2>&1 | sed -nE 's/.*Mean error = ([-0-9.e+]+).*/\1/p'; }
 maxdiff() { idiff -v -fail 1e9 "$1" "$2" 2>&1 | sed -nE 's/.*Max error += ([-0-9.e+]+).*/\1/p'; }
@@ -47,8 +55,15 @@ expect "no direction" 1 "missing spec2metal or metal2spec" -- "$bin" gltf
 expect "an unknown direction" 1 "expected spec2metal or metal2spec" -- "$bin" gltf spec2gloss "$floppy" -o "$tmp/x.gltf"
 expect "no output" 1 "missing -o" -- "$bin" gltf spec2metal "$floppy"
 expect "an unknown method" 1 "--method 'eq3'" -- "$bin" gltf spec2metal "$floppy" -o "$tmp/x.gltf" --method eq3
-expect "metal2spec takes no --fallback" 1 "go with spec2metal" -- "$bin" gltf metal2spec "$bottle" -o "$tmp/x.gltf" \
-    --fallback keep
+expect "metal2spec takes no --overwrite-metal-rough" 1 "go with spec2metal" -- "$bin" gltf metal2spec "$bottle" \
+    -o "$tmp/x.gltf" --overwrite-metal-rough
+expect "metal2spec takes no --eps" 1 "go with spec2metal" -- "$bin" gltf metal2spec "$bottle" -o "$tmp/x.gltf" \
+    --eps 0.01
+expect "--eps with mlp: refused" 1 "--eps applies to the analytic methods" -- "$bin" gltf spec2metal "$floppy" \
+    -o "$tmp/x.gltf" --eps 0.01
+expect "--eps out of range" 1 "--eps" -- "$bin" gltf spec2metal "$floppy" -o "$tmp/x.gltf" --method weighted --eps 2
+expect "--fallback is gone, and says what replaced it" 1 "--overwrite-metal-rough" -- "$bin" gltf spec2metal \
+    "$floppy" -o "$tmp/x.gltf" --fallback replace
 expect "a missing asset is named" 2 "nothere.gltf" -- "$bin" gltf spec2metal "$tmp/nothere.gltf" -o "$tmp/x.gltf"
 cp "$shared/specgloss/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/"* "$tmp/"
 sum_before=$(cat "$tmp/Duck.gltf" "$tmp/DuckCM.png" | md5sum)
@@ -59,9 +74,12 @@ check "... and the input is unchanged" test "$(cat "$tmp/Duck.gltf" "$tmp/DuckCM
 # ---- spec2metal -------------------------------------------------------------------------------------------------
 mkdir -p "$tmp/floppy" "$tmp/avocado" "$tmp/keep" "$tmp/sg" "$tmp/truck" "$tmp/duck" "$tmp/bottle" "$tmp/back" \
     "$tmp/settings"
-expect "FloppyDisk, weighted" 0 "1 of 1 materials converted" -- "$bin" gltf spec2metal "$floppy" \
-    -o "$tmp/floppy/floppy.gltf" --method weighted
+expect "FloppyDisk (spec-gloss only), weighted" 0 "1 of 1 materials converted with weighted" -- "$bin" gltf \
+    spec2metal "$floppy" -o "$tmp/floppy/floppy.gltf" --method weighted
 out="$tmp/floppy/floppy.gltf"
+check "FloppyDisk: its material converted, its texels flagged by kind" grep -q \
+    "^material 0 'material_0': converted, 2048x2048 textures, [0-9]* texels flagged .[0-9]* off-manifold, 0 non-f" \
+    "$tmp/out"
 check "FloppyDisk: its diffuse and specular-glossiness textures pruned" \
     grep -q "^pruned 2 textures, 2 images and 0 samplers that nothing refers to$" "$tmp/out"
 check "... their files not written, the normal map's is" test \
@@ -78,9 +96,47 @@ check "the normal map (renumbered: the textures before it were pruned), meshes a
                      len(d["nodes"]))')" = \
     "$(gltf "$floppy" '(0, uri(m(0)["normalTexture"]["index"]), len(d["meshes"]), len(d["nodes"]))')"
 
-# The same maps through `matremap spec2metal` give the same texels (Avocado's material has no factors).
-expect "Avocado, weighted" 0 "1 of 1 materials converted" -- "$bin" gltf spec2metal "$avocado" \
-    -o "$tmp/avocado/avocado.gltf" --method weighted
+# The Avocado carries both workflows: its own metal-rough textures are kept by default, and the output says so
+# per material (human and JSON); the spec-gloss extension goes like a converted material's.
+kept_line="material 0 '2256_Avocado_d': kept, not converted: it has metal-rough values of its own: "
+kept_line+="baseColorTexture, metallicRoughnessTexture; its spec-gloss extension removed"
+expect "Avocado: kept by default" 0 "$kept_line" -- "$bin" gltf spec2metal "$avocado" -o "$tmp/keep/a.gltf" \
+    --method weighted
+check "... and the total counts it" \
+    grep -q "^gltf spec2metal: 0 of 1 materials converted, 1 kept with metal-rough values of its own" "$tmp/out"
+check "kept: the asset's own base colour texture" test \
+    "$(gltf "$tmp/keep/a.gltf" 'uri(pbr(0)["baseColorTexture"]["index"])')" = \
+    "Avocado_baseColor.png"
+check "kept: only the spec-gloss textures pruned" test \
+    "$(gltf "$tmp/keep/a.gltf" '[d["images"][t["source"]]["uri"] for t in d["textures"]]')" = \
+    "['Avocado_baseColor.png', 'Avocado_roughnessMetallic.png', 'Avocado_normal.png']"
+check "kept: the spec-gloss extension is gone" test \
+    "$(gltf "$tmp/keep/a.gltf" '(SG in m(0).get("extensions", {}), SG in d.get("extensionsUsed", []))')" = \
+    "(False, False)"
+mkdir -p "$tmp/keepj"
+expect "Avocado --json: kept, with the reason" 0 '"kept": \[0\]' -- "$bin" gltf spec2metal "$avocado" \
+    -o "$tmp/keepj/a.gltf" --method weighted --json
+check "... converted [], kept [0], the material's outcome and reason" test \
+    "$(summary '(d["converted"], d["kept"], m["outcome"], m["reason"], m["flags"]["off_manifold"])')" = \
+    "([], [0], 'kept', 'it has metal-rough values of its own: baseColorTexture, metallicRoughnessTexture', None)"
+mkdir -p "$tmp/keepsg"
+expect "Avocado kept, --keep-specgloss" 0 "its spec-gloss extension kept \\(--keep-specgloss\\)" -- "$bin" gltf \
+    spec2metal "$avocado" -o "$tmp/keepsg/a.gltf" --method weighted --keep-specgloss
+check "... both workflows stay, untouched" test \
+    "$(gltf "$tmp/keepsg/a.gltf" '(uri(pbr(0)["baseColorTexture"]["index"]),
+                                  uri(ext(0)["diffuseTexture"]["index"]))')" = \
+    "('Avocado_baseColor.png', 'Avocado_diffuse.png')"
+mkdir -p "$tmp/floppyj"
+expect "FloppyDisk --json: converted" 0 '"converted": \[0\], "kept": \[\]' -- "$bin" gltf spec2metal "$floppy" \
+    -o "$tmp/floppyj/f.gltf" --method weighted --json
+check "... its outcome, no reason, the flags by kind" test \
+    "$(summary '(m["outcome"], m["reason"], sorted(m["flags"]), d["tolerance"])')" = \
+    "('converted', None, ['clamped_input', 'method_failed', 'nonfinite_input', 'off_manifold'], 'encoding')"
+
+# The same maps through `matremap spec2metal` give the same texels (Avocado's material has no factors);
+# --overwrite-metal-rough converts it in spite of its own metal-rough values.
+expect "Avocado, weighted, --overwrite-metal-rough" 0 "1 of 1 materials converted" -- "$bin" gltf spec2metal \
+    "$avocado" -o "$tmp/avocado/avocado.gltf" --method weighted --overwrite-metal-rough
 check "Avocado: the spec-gloss and the replaced core textures pruned" \
     grep -q "^pruned 4 textures, 4 images and 0 samplers" "$tmp/out"
 check "... the remaining textures are the normal map and the new ones" test \
@@ -91,7 +147,8 @@ check "... and the output folder has no dead images" test \
     "Avocado_normal.png avocado_m0_basecolor.png avocado_m0_metallicRoughness.png"
 mkdir -p "$tmp/unused"
 expect "Avocado, --keep-unused --json" 0 '"keep_unused": true, "pruned": \{"textures": 0, "images": 0' -- \
-    "$bin" gltf spec2metal "$avocado" -o "$tmp/unused/a.gltf" --method mean --keep-unused --json
+    "$bin" gltf spec2metal "$avocado" -o "$tmp/unused/a.gltf" --method mean --keep-unused --json \
+    --overwrite-metal-rough
 old_files=$(ls "$tmp/unused" | grep -c '^Avocado_.*png')
 check "--keep-unused: the old textures and their 5 files stay" test \
     "$(gltf "$tmp/unused/a.gltf" 'len(d["textures"]), len(d["images"])') $old_files" = "(7, 7) 5"
@@ -101,16 +158,8 @@ d=$(maxdiff "$tmp/maps_basecolor.png" "$tmp/avocado/avocado_m0_basecolor.png")
 check "base colour texture = spec2metal's (max error $d)" below "$d" 1e-6
 d=$(maxdiff "$tmp/maps_metallicRoughness.png" "$tmp/avocado/avocado_m0_metallicRoughness.png")
 check "metallic-roughness texture = spec2metal's (max error $d)" below "$d" 1e-6
-expect "--fallback keep" 0 "kept its own metal-rough" -- "$bin" gltf spec2metal "$avocado" -o "$tmp/keep/a.gltf" \
-    --fallback keep
-check "--fallback keep: the asset's own base colour texture" test \
-    "$(gltf "$tmp/keep/a.gltf" 'uri(pbr(0)["baseColorTexture"]["index"])')" = \
-    "Avocado_baseColor.png"
-check "--fallback keep: only the spec-gloss textures pruned" test \
-    "$(gltf "$tmp/keep/a.gltf" '[d["images"][t["source"]]["uri"] for t in d["textures"]]')" = \
-    "['Avocado_baseColor.png', 'Avocado_roughnessMetallic.png', 'Avocado_normal.png']"
 expect "--keep-specgloss" 0 "converted" -- "$bin" gltf spec2metal "$avocado" -o "$tmp/sg/a.gltf" --method mean \
-    --keep-specgloss
+    --keep-specgloss --overwrite-metal-rough
 check "--keep-specgloss: the extension stays, used but not required" test \
     "$(gltf "$tmp/sg/a.gltf" '(SG in d["extensionsUsed"], SG in d.get("extensionsRequired", []))')" = \
     "(True, False)"
@@ -119,9 +168,10 @@ check "--keep-specgloss: its textures stay referenced (only the replaced core on
         uri(ext(0)["specularGlossinessTexture"]["index"]), len(d["textures"]), len(d["images"]))')" = \
     "('Avocado_diffuse.png', 'Avocado_specularGlossiness.png', 5, 5)"
 
-# Factor-only materials: the factors spec2metal computes for the same constants.
+# Factor-only materials: the factors spec2metal computes for the same constants. (The truck's materials carry
+# metal-rough values of their own too: kept unless --overwrite-metal-rough.)
 expect "CesiumMilkTruck, weighted" 0 "4 of 4 materials converted" -- "$bin" gltf spec2metal "$truck" \
-    -o "$tmp/truck/truck.gltf" --method weighted
+    -o "$tmp/truck/truck.gltf" --method weighted --overwrite-metal-rough
 check "CesiumMilkTruck: the two diffuse textures of its one image pruned" \
     grep -q "^pruned 2 textures, 1 image and 0 samplers" "$tmp/out"
 spec=$(gltf "$truck" '",".join("%.9g" % v for v in ext(1)["specularFactor"])')
@@ -135,7 +185,7 @@ check "the glass's factors are spec2metal's ($got vs $expected)" awk -v a="$got"
     n = split(a, x, ","); if (n != 5 || split(b, y, ",") != 5) exit 1
     for (i = 1; i <= n; i++) { e = x[i] - y[i]; if (e < 0) e = -e; if (e > 1e-5) exit 1 } }'
 expect "Duck, the network" 0 "1 of 1 materials converted with mlp" -- "$bin" gltf spec2metal "$duck" \
-    -o "$tmp/duck/duck.glb"
+    -o "$tmp/duck/duck.glb" --overwrite-metal-rough
 check "a .glb output" test "$(head -c 4 "$tmp/duck/duck.glb")" = glTF
 check "Duck: its diffuse texture pruned" grep -q "^pruned 1 texture, 1 image and 0 samplers" "$tmp/out"
 # 2 new textures; 3 views of the Duck's own and one per new image.
@@ -175,8 +225,19 @@ check "spec-gloss added, the core material kept as the fallback" test \
     "$(gltf "$tmp/bottle/bottle.gltf" '(SG in m(0)["extensions"], "metallicRoughnessTexture" in pbr(0),
                                         SG in d.get("extensionsRequired", []))')" = \
     "(True, True, False)"
-expect "... and back with weighted" 0 "1 of 1 materials converted" -- "$bin" gltf spec2metal \
-    "$tmp/bottle/bottle.gltf" -o "$tmp/back/back.gltf" --method weighted
+expect "... and back: its metal-rough fallback is kept by default" 0 "0 of 1 materials converted, 1 kept" -- \
+    "$bin" gltf spec2metal "$tmp/bottle/bottle.gltf" -o "$tmp/x.gltf" --method weighted
+expect "... and back with weighted, --overwrite-metal-rough" 0 '"converted": \[0\]' -- "$bin" gltf spec2metal \
+    "$tmp/bottle/bottle.gltf" -o "$tmp/back/back.gltf" --method weighted --overwrite-metal-rough --json
+# Its textures are 8-bit: each value is known to half a code, and what that explains is not flagged (measured:
+# 722 of 4194304 texels, 0.017 %, near-black slightly metallic texels; at --eps 1e-6, 2930937, 70 %).
+offm=$(summary 'm["flags"]["off_manifold"]')
+check "WaterBottle back: $offm of 4194304 texels off-manifold (< 0.1 %)" test "$offm" -lt 4194
+mkdir -p "$tmp/backe"
+expect "... and with --eps 1e-6" 0 "" -- "$bin" gltf spec2metal "$tmp/bottle/bottle.gltf" -o "$tmp/backe/b.gltf" \
+    --method weighted --overwrite-metal-rough --eps 1e-6 --json
+offe=$(summary 'm["flags"]["off_manifold"]')
+check "WaterBottle back at --eps 1e-6: $offe texels off-manifold (> 50 %)" test "$offe" -gt 2097152
 oiiotool "$(dirname "$bottle")/WaterBottle_occlusionRoughnessMetallic.png" --ch B -o "$tmp/metal_orig.png"
 oiiotool "$tmp/back/back_m0_metallicRoughness.png" --ch B -o "$tmp/metal_back.png"
 m=$(meandiff "$tmp/metal_orig.png" "$tmp/metal_back.png")
@@ -204,6 +265,31 @@ for ma, mb in zip(a["materials"], b["materials"]):
     checked += 1
 assert checked >= 4, checked
 PY
+
+# ---- non-finite glossiness ---------------------------------------------------------------------------------------
+# EXR textures (core glTF has no float images, but the command reads them): glossiness NaN, +inf, -inf, 0.6 in the
+# alpha of the specular-glossiness texture. Every route converts a non-finite glossiness as 0: roughness 1, flagged.
+mkdir -p "$tmp/nf/out"
+oiiotool --pattern constant:color=0.5,0.5,0.5 4x1 3 -d float -o "$tmp/nf/d.exr"
+oiiotool --pattern constant:color=0.04,0.04,0.04,nan 1x1 4 -d float \
+    --pattern constant:color=0.04,0.04,0.04,inf 1x1 4 -d float \
+    --pattern constant:color=0.04,0.04,0.04,inf 1x1 4 -d float --mulc 1,1,1,-1 \
+    --pattern constant:color=0.04,0.04,0.04,0.6 4x1 4 -d float --paste +2+0 --paste +1+0 --paste +0+0 \
+    -o "$tmp/nf/sg.exr"
+cat >"$tmp/nf/nf.gltf" <<'JSON'
+{"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_materials_pbrSpecularGlossiness"],
+ "images": [{"uri": "d.exr"}, {"uri": "sg.exr"}], "textures": [{"source": 0}, {"source": 1}],
+ "materials": [{"name": "nan gloss", "extensions": {"KHR_materials_pbrSpecularGlossiness": {
+     "diffuseTexture": {"index": 0}, "specularGlossinessTexture": {"index": 1}}}}]}
+JSON
+for method in weighted mlp extension; do
+    expect "non-finite glossiness, $method" 0 '"nonfinite_input": 3' -- "$bin" gltf spec2metal "$tmp/nf/nf.gltf" \
+        -o "$tmp/nf/out/$method.gltf" --method $method --json
+    texture=$(gltf "$tmp/nf/out/$method.gltf" 'uri(pbr(0)["metallicRoughnessTexture"]["index"])')
+    check "$method: roughness (G) 255, 255, 255 and 102 (1 - 0.6)" test \
+        "$(oiiotool --dumpdata "$tmp/nf/out/$texture" | sed -nE 's/.*Pixel \([0-9]+, 0\): [0-9]+ ([0-9]+) .*/\1/p' |
+           tr '\n' ' ')" = "255 255 255 102 "
+done
 
 # ---- the Khronos validator --------------------------------------------------------------------------------------
 if [ ! -f "$node_dir/node_modules/gltf-validator/package.json" ]; then

@@ -860,6 +860,90 @@ MR_TEST(library_prints_nothing) {
     MR_CHECK_MSG(printed == 0, "the library printed: %s", printed > 0 ? (const char *)text : "");
 }
 
+/* ---- what a file stored, and how precisely ------------------------------------------------------------- */
+
+/* The sRGB decode of an 8/16-bit code, in double, written out independently of srgb.c. */
+static double decode(double code, double max) {
+    double v = code / max;
+    return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
+}
+
+MR_TEST(read_stored_says_how_the_file_stored_its_samples) {
+    mr_image *f = make_f(3, 1.0f);
+    struct {
+        const char *name;
+        int bits;
+        mr_img_encoding write, read;
+        int want_bits;
+        mr_img_encoding want_encoding;
+    } cases[] = {
+        {"s8.png", 8, MR_IMG_COLOR, MR_IMG_COLOR, 8, MR_IMG_COLOR},
+        {"s8d.png", 8, MR_IMG_DATA, MR_IMG_DATA, 8, MR_IMG_DATA},
+        {"s16.png", 16, MR_IMG_COLOR, MR_IMG_COLOR, 16, MR_IMG_COLOR},
+        {"s16.tif", 16, MR_IMG_COLOR, MR_IMG_DATA, 16, MR_IMG_DATA},
+        {"s32.exr", 32, MR_IMG_COLOR, MR_IMG_COLOR, 0, MR_IMG_DATA}, /* floats: never decoded */
+        {"s16.exr", 16, MR_IMG_COLOR, MR_IMG_COLOR, 0, MR_IMG_DATA},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        mr_img_write_options wo = {cases[k].write, cases[k].bits, 0};
+        mr_img_read_options ro = {cases[k].read, 0, 0};
+        const char *path = mr_test_tmp_path(cases[k].name);
+        MR_CHECK_OK(mr_img_write(path, f, &wo));
+        mr_image *back = NULL;
+        mr_img_stored stored = {-1, (mr_img_encoding)-1};
+        MR_CHECK_OK(mr_img_read_stored(path, &ro, &back, &stored));
+        MR_CHECK_MSG(stored.bits == cases[k].want_bits && stored.encoding == cases[k].want_encoding,
+                     "%s: bits %d encoding %d", cases[k].name, stored.bits, (int)stored.encoding);
+        mr_image_free(back);
+    }
+    /* A failed read leaves *stored untouched. */
+    mr_image *none = NULL;
+    mr_img_stored untouched = {77, MR_IMG_COLOR};
+    MR_CHECK(mr_img_read_stored(mr_test_tmp_path("nothere.png"), NULL, &none, &untouched) == MR_ERR_IO);
+    MR_CHECK(untouched.bits == 77 && none == NULL);
+    mr_image_free(f);
+}
+
+/* The larger distance from the decode of code q to the decodes of q +- 1/2 (clamped to [0, max]). */
+static double half_step(double q, double max) {
+    return fmax(decode(fmin(q + 0.5, max), max) - decode(q, max), decode(q, max) - decode(fmax(q - 0.5, 0.0), max));
+}
+
+MR_TEST(half_step_is_half_a_code_value) {
+    /* sRGB, 8 bits: at the code of the value. */
+    const int codes[] = {0, 1, 10, 56, 128, 200, 254, 255};
+    for (size_t k = 0; k < sizeof codes / sizeof codes[0]; k++) {
+        double q = codes[k];
+        double want = half_step(q, 255.0);
+        /* in the interior, that is half the code's interval within 1 % */
+        if (q > 0 && q < 255) MR_CHECK(fabs(want / (0.5 * (decode(q + 0.5, 255) - decode(q - 0.5, 255))) - 1) < 0.01);
+        double at = mr_img_half_step(decode(q, 255.0), 8, MR_IMG_COLOR);
+        MR_CHECK_MSG(fabs(at - want) <= 1e-9, "code %d: %.9g, expected %.9g", codes[k], at, want);
+        /* Any value that stores as this code has the same step: a third of the way to either neighbour. */
+        if (q > 0 && q < 255) {
+            double lo = decode(q - 1.0 / 3.0, 255.0), hi = decode(q + 1.0 / 3.0, 255.0);
+            MR_CHECK(fabs(mr_img_half_step(lo, 8, MR_IMG_COLOR) - want) <= 1e-9);
+            MR_CHECK(fabs(mr_img_half_step(hi, 8, MR_IMG_COLOR) - want) <= 1e-9);
+        }
+    }
+    /* Known magnitudes: the whole first half code at the bottom (0.5 / 255 / 12.92: only values above 0 store as
+     * 0), likewise 0.0045 at the top, 0.00068 at code 56 (0.0396: the 8-bit store of a dielectric's 0.04). */
+    MR_CHECK_NEAR(mr_img_half_step(0.0, 8, MR_IMG_COLOR), 0.5 / 255.0 / 12.92, 1e-12);
+    MR_CHECK(mr_img_half_step(1.0, 8, MR_IMG_COLOR) > 0.0044 && mr_img_half_step(1.0, 8, MR_IMG_COLOR) < 0.0045);
+    MR_CHECK(mr_img_half_step(0.04, 8, MR_IMG_COLOR) > 0.00066 && mr_img_half_step(0.04, 8, MR_IMG_COLOR) < 0.0007);
+    /* 16 bits: the same formula on 65535 codes. */
+    MR_CHECK_NEAR(mr_img_half_step(decode(30000.0, 65535.0), 16, MR_IMG_COLOR), half_step(30000.0, 65535.0), 1e-12);
+    MR_CHECK_NEAR(mr_img_half_step(decode(3.0, 65535.0), 16, MR_IMG_COLOR), 0.5 / 65535.0 / 12.92, 1e-15);
+    /* Linear codes: half a code everywhere. */
+    MR_CHECK(mr_img_half_step(0.3, 8, MR_IMG_DATA) == 0.5 / 255.0);
+    MR_CHECK(mr_img_half_step(0.0, 16, MR_IMG_DATA) == 0.5 / 65535.0);
+    /* Floats and nonsense: 0. Out-of-range values are the end codes'. */
+    MR_CHECK(mr_img_half_step(0.3, 0, MR_IMG_COLOR) == 0.0 && mr_img_half_step(0.3, 32, MR_IMG_COLOR) == 0.0);
+    MR_CHECK(mr_img_half_step(NAN, 8, MR_IMG_COLOR) == 0.0 && mr_img_half_step(INFINITY, 8, MR_IMG_DATA) == 0.0);
+    MR_CHECK(mr_img_half_step(1.5, 8, MR_IMG_COLOR) == mr_img_half_step(1.0, 8, MR_IMG_COLOR));
+    MR_CHECK(mr_img_half_step(-0.5, 8, MR_IMG_COLOR) == mr_img_half_step(0.0, 8, MR_IMG_COLOR));
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(srgb_transfer_functions), MR_TEST_ENTRY(png8_rgb_round_trip),
              MR_TEST_ENTRY(png16_rgb_round_trip), MR_TEST_ENTRY(large_integer_round_trips),
              MR_TEST_ENTRY(png_data_encoding_is_linear),
@@ -871,4 +955,6 @@ MR_TEST_MAIN(MR_TEST_ENTRY(srgb_transfer_functions), MR_TEST_ENTRY(png8_rgb_roun
              MR_TEST_ENTRY(write_into_missing_directory_fails_cleanly),
              MR_TEST_ENTRY(failed_write_leaves_target_untouched), MR_TEST_ENTRY(full_disk_fails_cleanly),
              MR_TEST_ENTRY(written_files_have_ordinary_permissions), MR_TEST_ENTRY(concurrent_writes_and_reads),
-             MR_TEST_ENTRY(bad_inputs_give_clear_errors), MR_TEST_ENTRY(library_prints_nothing))
+             MR_TEST_ENTRY(bad_inputs_give_clear_errors), MR_TEST_ENTRY(library_prints_nothing),
+             MR_TEST_ENTRY(read_stored_says_how_the_file_stored_its_samples),
+             MR_TEST_ENTRY(half_step_is_half_a_code_value))

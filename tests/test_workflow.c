@@ -429,6 +429,21 @@ MR_TEST(black_is_a_black_metal) {
     }
 }
 
+/* metal -> spec -> metal of albedo (r, g, b) and metallic m is exact and clean under MEAN and WEIGHTED. */
+static void exact_under_mean_and_weighted(double r, double g, double b, double m) {
+    for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++) {
+        mr_wf_options o = options((mr_wf_method)method, 0.04);
+        unsigned flags;
+        mr_wf_spec s = to_spec(&o, r, g, b, m, NULL);
+        mr_wf_metal back = to_metal(&o, s.diffuse, s.specular, &flags);
+        MR_CHECK_NEAR(back.metallic, m, 1e-12);
+        MR_CHECK_NEAR(back.albedo[0], r, 1e-12);
+        MR_CHECK_NEAR(back.albedo[1], g, 1e-12);
+        MR_CHECK_NEAR(back.albedo[2], b, 1e-12);
+        MR_CHECK(flags == 0);
+    }
+}
+
 MR_TEST(albedo_at_or_below_the_dielectric_f0) {
     // Dark dielectrics (albedo <= F0d, m = 0): Eq. 3's root is F0d itself, whose m = 1 - d/F0d would call them
     // metals; the channel is ambiguous and the less metallic solution, m = 0 with A = d, is taken.
@@ -471,18 +486,19 @@ MR_TEST(albedo_at_or_below_the_dielectric_f0) {
     MR_CHECK_NEAR(m.metallic, 0.5, 1e-12);
     MR_CHECK_NEAR(m.albedo[0], 0.0, 1e-12);
     MR_CHECK(flags == 0);
-    // Such a channel in a bright metal: the weighted mean gives it weight A_c = 0 and stays exact; the plain mean
-    // averages in its 0.5 and misses (flagged).
-    s = to_spec(&o, 0.9, 0.6, 0.02, 1.0, NULL);
-    o.method = MR_WF_WEIGHTED;
+    // Such a channel in a bright metal: ambiguous, it takes the reading the other channels agree with (1, not its
+    // twin's 0.5), so both single-metallic choices stay exact (the plain mean used to average in the 0.5).
+    exact_under_mean_and_weighted(0.9, 0.6, 0.02, 1.0);
+    // ... and in a partial metal: albedo (0.6, 0.3, 0.03), m 0.5 gives blue (d 0.015, s 0.035), whose roots are
+    // 0.03 (m 0.5) and 0.02 (m 0.25); the red and green channels say 0.5, so blue takes 0.5 and the texel is exact.
+    exact_under_mean_and_weighted(0.6, 0.3, 0.03, 0.5);
+    // Every channel ambiguous: nothing to follow, the less metallic reading stays (a dark grey metal, A 0.03, m 1:
+    // d 0, s 0.03, read as its twin A 0, m 0.25; it renders the same).
+    s = to_spec(&o, 0.03, 0.03, 0.03, 1.0, NULL);
     m = to_metal(&o, s.diffuse, s.specular, &flags);
-    MR_CHECK_NEAR(m.metallic, 1.0, 1e-12);
-    MR_CHECK_NEAR(m.albedo[2], 0.02, 1e-12);
+    MR_CHECK_NEAR(m.metallic, 0.25, 1e-12);
+    MR_CHECK_NEAR(m.albedo[0], 0.0, 1e-12);
     MR_CHECK(flags == 0);
-    o.method = MR_WF_MEAN;
-    m = to_metal(&o, s.diffuse, s.specular, &flags);
-    MR_CHECK_NEAR(m.metallic, 2.5 / 3.0, 1e-12);
-    MR_CHECK(flags == MR_WF_OFF_MANIFOLD && metal_in_range(&m));
 }
 
 MR_TEST(negative_discriminant_and_specular_above_albedo) {
@@ -545,6 +561,7 @@ MR_TEST(inputs_outside_0_1_are_clamped_and_flagged) {
     }
 }
 
+/* Non-finite colours and metallic read as 0; a non-finite roughness as 1 (fully rough, never a mirror). */
 MR_TEST(non_finite_inputs_are_flagged_and_read_as_zero) {
     static const double bad[] = {NAN, INFINITY, -INFINITY};
     for (int method = MR_WF_MEAN; method < MR_WF_CUSTOM; method++) {
@@ -559,7 +576,7 @@ MR_TEST(non_finite_inputs_are_flagged_and_read_as_zero) {
                             : slot < 6 ? &zeroed.specular[slot - 3]
                                        : &zeroed.roughness;
                 *v = bad[k];
-                *z = 0.0;
+                *z = slot == 6 ? 1.0 : 0.0;
                 mr_wf_metal a, b;
                 unsigned flags, zero_flags;
                 MR_CHECK_OK(mr_wf_spec_to_metal(&in, &o, &a, &flags));
@@ -577,14 +594,45 @@ MR_TEST(non_finite_inputs_are_flagged_and_read_as_zero) {
                 unsigned flags;
                 MR_CHECK_OK(mr_wf_metal_to_spec(&in, &o, &s, &flags));
                 MR_CHECK(spec_in_range(&s) && flags == MR_WF_NONFINITE_INPUT);
+                MR_CHECK(s.roughness == (slot == 4 ? 1.0 : 0.4));
             }
         // Everything NaN: a defined, finite texel.
         mr_wf_spec all = {{NAN, NAN, NAN}, {NAN, NAN, NAN}, NAN};
         mr_wf_metal m;
         unsigned flags;
         MR_CHECK_OK(mr_wf_spec_to_metal(&all, &o, &m, &flags));
-        MR_CHECK(metal_in_range(&m) && (flags & MR_WF_NONFINITE_INPUT) && m.roughness == 0.0);
+        MR_CHECK(metal_in_range(&m) && (flags & MR_WF_NONFINITE_INPUT) && m.roughness == 1.0);
     }
+    // The batches too, spec -> metal (the analytic methods and the network) and metal -> spec: NaN and both
+    // infinities in the roughness map become 1 and are flagged; a finite one passes through.
+    float d[12] = {0.3f, 0.2f, 0.1f, 0.3f, 0.2f, 0.1f, 0.3f, 0.2f, 0.1f, 0.3f, 0.2f, 0.1f}, sp[12];
+    float rough[4] = {NAN, INFINITY, -INFINITY, 0.25f}, a[12], m[4], r[4];
+    uint8_t flags[4];
+    for (int i = 0; i < 12; i++) sp[i] = 0.04f;
+    mr_wf_spec_maps in = {d, sp, rough};
+    mr_wf_metal_maps out = {a, m, r};
+    MR_CHECK_OK(mr_wf_spec_to_metal_batch(&in, 4, NULL, &out, flags));
+    for (int i = 0; i < 4; i++) {
+        MR_CHECK_MSG(r[i] == (i < 3 ? 1.0f : 0.25f), "texel %d: roughness %g", i, (double)r[i]);
+        MR_CHECK(((flags[i] & MR_WF_NONFINITE_INPUT) != 0) == (i < 3));
+    }
+    mr_mlp *net = NULL;
+    MR_CHECK_OK(mr_mlp_create(6, 4, 4, &net));
+    if (net != NULL) {
+        for (int i = 0; i < 6; i++) net->in_std[i] = 1.0f;
+        for (int i = 0; i < 4; i++) net->out_std[i] = 1.0f;
+        memset(r, 0, sizeof r);
+        MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in, 4, NULL, &out, flags));
+        for (int i = 0; i < 4; i++)
+            MR_CHECK(r[i] == (i < 3 ? 1.0f : 0.25f) && ((flags[i] & MR_WF_NONFINITE_INPUT) != 0) == (i < 3));
+        mr_mlp_free(net);
+    }
+    mr_wf_metal_maps metal = {a, m, rough};
+    mr_wf_spec_maps spec = {d, sp, r};
+    for (int i = 0; i < 4; i++) m[i] = 0.5f;
+    MR_CHECK_OK(mr_wf_metal_to_spec_batch(&metal, 4, NULL, &spec, flags));
+    for (int i = 0; i < 4; i++)
+        MR_CHECK(r[i] == (i < 3 ? 1.0f : 0.25f) && ((flags[i] & MR_WF_NONFINITE_INPUT) != 0) == (i < 3));
 }
 
 /* ---- the custom-method slot ----------------------------------------------------------------------------------- */
@@ -1001,6 +1049,194 @@ MR_TEST(mlp_batch_reads_the_specgloss_diffuse_lobe) {
     mr_mlp_free(net);
 }
 
+/* ---- quantised inputs: tolerances (workflow.h, "Tolerances") --------------------------------------------------- */
+
+/* What an 8-bit sRGB texture stores for v, decoded as mr_img_read decodes it: the code the writer rounds to. */
+static float store8(float v) {
+    double code = floor(fmin(fmax(mr_linear_to_srgb(v), 0.0f), 1.0f) * 255.0 + 0.5);
+    return mr_srgb_to_linear((float)(code / 255.0));
+}
+
+static mr_wf_quantisation srgb8(void) {
+    mr_wf_quantisation q = {8, 1, {1.0, 1.0, 1.0}};
+    return q;
+}
+
+/* A clean metal-rough texture set, written as an 8-bit spec-gloss one (diffuse and specular quantised as PNG
+ * stores them) and converted back: with each input's quantisation WEIGHTED flags nothing, at the default eps most
+ * texels. The set: every albedo with channels in {0, 0.01, 0.03, 0.04, 0.05, 0.2, 0.5, 0.8, 0.95} at metallic 0,
+ * 0.3, 0.7 and 1, less the texels spec-gloss cannot store (metal -> spec flags them: a white dielectric's diffuse
+ * above 1), and less the near-black partial metals (every channel <= 0.05), whose metallic a code of diffuse
+ * moves by several hundredths: some of those are flagged (docs/workflow.md, "Tolerances"). MEAN and KHRONOS flag
+ * nothing on the dielectrics and metals; on partial metals they have their known misses (MEAN averages
+ * ill-conditioned dark channels in, KHRONOS is lossy for coloured partial metals), and KHRONOS reads a metal whose
+ * perceived brightness is below 0.04 as a black dielectric. */
+MR_TEST(clean_8bit_exports_flag_nothing) {
+    static const float levels[] = {0.0f, 0.01f, 0.03f, 0.04f, 0.05f, 0.2f, 0.5f, 0.8f, 0.95f};
+    static const float metals[] = {0.0f, 0.3f, 0.7f, 1.0f};
+    enum { L = 9, N = L * L * L * 4 };
+    static float albedo[3 * N], metallic[N], diffuse[3 * N], specular[3 * N], back_albedo[3 * N], back_metal[N];
+    static uint8_t flags[N];
+    int n = 0;
+    for (int m = 0; m < 4; m++)
+        for (int r = 0; r < L; r++)
+            for (int g = 0; g < L; g++)
+                for (int b = 0; b < L; b++) {
+                    float a[3] = {levels[r], levels[g], levels[b]};
+                    int dark = a[0] <= 0.05f && a[1] <= 0.05f && a[2] <= 0.05f;
+                    if (dark && metals[m] > 0.0f && metals[m] < 1.0f) continue;
+                    memcpy(&albedo[3 * n], a, sizeof a);
+                    metallic[n++] = metals[m];
+                }
+    for (int method = MR_WF_MEAN; method <= MR_WF_KHRONOS; method++) {
+        mr_wf_options o = options((mr_wf_method)method, 0.04);
+        o.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS; // as the spec2metal commands read glTF maps
+        mr_wf_metal_maps metal_in = {albedo, metallic, NULL};
+        mr_wf_spec_maps spec = {diffuse, specular, NULL};
+        MR_CHECK_OK(mr_wf_metal_to_spec_batch(&metal_in, (size_t)n, &o, &spec, flags));
+        int kept = 0;
+        for (int i = 0; i < n; i++) { // keep what spec-gloss can store, quantised
+            int partial = metallic[i] > 0.0f && metallic[i] < 1.0f;
+            const float *a = &albedo[3 * i];
+            int dark_metal = metallic[i] == 1.0f && a[0] <= 0.05f && a[1] <= 0.05f && a[2] <= 0.05f;
+            if (flags[i] != 0 || (partial && method != MR_WF_WEIGHTED) || (dark_metal && method == MR_WF_KHRONOS))
+                continue;
+            for (int c = 0; c < 3; c++) {
+                diffuse[3 * kept + c] = store8(diffuse[3 * i + c]);
+                specular[3 * kept + c] = store8(specular[3 * i + c]);
+            }
+            kept++;
+        }
+        MR_CHECK(kept > (method == MR_WF_WEIGHTED ? 2000 : 1000));
+        mr_wf_metal_maps metal_out = {back_albedo, back_metal, NULL};
+        int off[2] = {0, 0};
+        for (int quantised = 0; quantised < 2; quantised++) {
+            if (quantised) o.diffuse_quantisation = o.specular_quantisation = srgb8();
+            MR_CHECK_OK(mr_wf_spec_to_metal_batch(&spec, (size_t)kept, &o, &metal_out, flags));
+            for (int i = 0; i < kept; i++) off[quantised] += (flags[i] & MR_WF_OFF_MANIFOLD) != 0;
+        }
+        MR_CHECK_MSG(off[1] == 0, "%s: %d of %d texels flagged with 8-bit tolerances", mr_wf_method_name(o.method),
+                     off[1], kept);
+        MR_CHECK_MSG(off[0] > kept / 3, "%s: only %d of %d texels flagged at eps 1e-6", mr_wf_method_name(o.method),
+                     off[0], kept);
+    }
+}
+
+MR_TEST(quantisation_known_answers) {
+    mr_wf_options exact = options(MR_WF_WEIGHTED, 0.04), q8 = exact;
+    q8.diffuse_quantisation = q8.specular_quantisation = srgb8();
+    unsigned flags;
+    // A dark grey dielectric (albedo 0.035) as 8-bit stores it: specular 0.04 -> code 56 = 0.0395. Read exactly,
+    // the discriminant is negative, the readings are m = 1 - ((s + d) / 2) / F0d = 0.068 and 1 - 2 d / (s + d) =
+    // 0.061, neither exact, and the closest fit is between them, flagged; with its
+    // 8-bit tolerance (0.00068 at code 56) the specular is within reach of F0d: a dielectric, m = 0, A = d, clean.
+    double s56 = mr_srgb_to_linear(56.0f / 255.0f), d = 0.035;
+    MR_CHECK(fabs(s56 - 0.04) > 4e-4 && fabs(s56 - 0.04) < 5e-4);
+    double dd[3] = {d, d, d}, ss[3] = {s56, s56, s56};
+    mr_wf_metal m = to_metal(&exact, dd, ss, &flags);
+    MR_CHECK_MSG(m.metallic > 0.06 && m.metallic < 0.07, "metallic %g", m.metallic);
+    MR_CHECK(flags == MR_WF_OFF_MANIFOLD);
+    m = to_metal(&q8, dd, ss, &flags);
+    MR_CHECK(m.metallic == 0.0 && flags == 0);
+    for (int c = 0; c < 3; c++) MR_CHECK_NEAR(m.albedo[c], d, 1e-12);
+    // Genuinely off the manifold stays flagged: a coloured specular (0.9, 0.2, 0.2) over a diffuse of 0.5 misses by
+    // far more than half a code.
+    double d2[3] = {store8(0.5f), store8(0.5f), store8(0.5f)};
+    double s2[3] = {store8(0.9f), store8(0.2f), store8(0.2f)};
+    for (int method = MR_WF_MEAN; method <= MR_WF_KHRONOS; method++) {
+        q8.method = (mr_wf_method)method;
+        to_metal(&q8, d2, s2, &flags);
+        MR_CHECK_MSG(flags == MR_WF_OFF_MANIFOLD, "%s: flags %u", mr_wf_method_name(q8.method), flags);
+    }
+    // The tolerance is each value's own and scales with the factor: a grey dielectric whose specular is 0.0015
+    // under F0d, with linear 8-bit codes (half a code 0.00196 on each input): both values may miss by the sum
+    // 0.0039 (not flagged); with factors 0.25 (0.00098) it is flagged; on the specular alone at scale 1 and the
+    // diffuse exact (0.00196 + 1e-6), still not.
+    mr_wf_options lin = options(MR_WF_WEIGHTED, 0.04);
+    lin.diffuse_quantisation.bits = lin.specular_quantisation.bits = 8;
+    double d3[3] = {0.5, 0.5, 0.5}, s3[3] = {0.0385, 0.0385, 0.0385};
+    to_metal(&lin, d3, s3, &flags);
+    MR_CHECK(flags == 0);
+    for (int c = 0; c < 3; c++) lin.diffuse_quantisation.scale[c] = lin.specular_quantisation.scale[c] = 0.25;
+    to_metal(&lin, d3, s3, &flags);
+    MR_CHECK(flags == MR_WF_OFF_MANIFOLD);
+    lin.diffuse_quantisation.bits = 0;
+    for (int c = 0; c < 3; c++) lin.specular_quantisation.scale[c] = 1.0;
+    to_metal(&lin, d3, s3, &flags);
+    MR_CHECK(flags == 0);
+    lin.specular_quantisation.bits = 16; // 16-bit codes are 257 times finer: flagged
+    to_metal(&lin, d3, s3, &flags);
+    MR_CHECK(flags == MR_WF_OFF_MANIFOLD);
+    // Bad quantisations are rejected with a message, outputs untouched.
+    mr_wf_options bad = q8;
+    bad.specular_quantisation.bits = 12;
+    mr_wf_metal untouched = {{7, 7, 7}, 7, 7};
+    mr_wf_spec in = {{0.5, 0.5, 0.5}, {0.04, 0.04, 0.04}, 0.5};
+    MR_CHECK(mr_wf_spec_to_metal(&in, &bad, &untouched, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strstr(mr_last_error(), "specular_quantisation.bits 12") != NULL, "%s", mr_last_error());
+    bad = q8;
+    bad.diffuse_quantisation.scale[1] = NAN;
+    MR_CHECK(mr_wf_spec_to_metal(&in, &bad, &untouched, NULL) == MR_ERR_INVALID_ARG);
+    bad.diffuse_quantisation.scale[1] = -0.5;
+    MR_CHECK(mr_wf_spec_to_metal(&in, &bad, &untouched, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(untouched.metallic == 7.0);
+    // The defaults: exact inputs, scale 1.
+    mr_wf_options def = mr_wf_options_default();
+    MR_CHECK(def.diffuse_quantisation.bits == 0 && def.specular_quantisation.bits == 0);
+    MR_CHECK(def.diffuse_quantisation.scale[0] == 1.0 && def.specular_quantisation.scale[2] == 1.0);
+}
+
+/* The batch looks tolerances up in tables; the per-texel API computes them. Same answers, bit for bit, for 8 and
+ * 16-bit sRGB and linear codes with factors, on values at and around every code's interval edges. */
+MR_TEST(quantised_batch_equals_per_texel) {
+    enum { N = 4096 };
+    static float d[3 * N], sp[3 * N], a[3 * N], m[N];
+    static uint8_t flags[N];
+    uint64_t rng = 5;
+    for (int bits = 8; bits <= 16; bits += 8)
+        for (int srgb = 0; srgb < 2; srgb++) {
+            double max = bits == 8 ? 255.0 : 65535.0;
+            for (int i = 0; i < 3 * N; i++) {
+                // half the texels on the manifold (a grey metal-rough texel through Eq. 2), the other half
+                // anywhere; half the diffuse values on an interval edge (q + 1/2) or a float step beside it
+                double q = floor(uniform(&rng) * max);
+                float edge = mr_srgb_to_linear((float)((q + 0.5) / max));
+                int k = (int)(uniform(&rng) * 4.0);
+                if (i / 3 % 2 == 0 && i % 3 == 0) {
+                    double albedo = uniform(&rng), metal = uniform(&rng) < 0.5 ? 0.0 : uniform(&rng);
+                    for (int c = 0; c < 3; c++) {
+                        d[i + c] = (float)(albedo * (1.0 - metal));
+                        sp[i + c] = (float)(0.04 * (1.0 - metal) + metal * albedo);
+                    }
+                }
+                if (i / 3 % 2 == 1) {
+                    d[i] = (float)uniform(&rng);
+                    sp[i] = k == 2 ? edge : (float)(uniform(&rng) * 0.3);
+                }
+                if (k < 2) d[i] = k == 0 ? edge : nextafterf(edge, 0.0f);
+            }
+            mr_wf_options o = options(MR_WF_WEIGHTED, 0.04);
+            mr_wf_quantisation q = {bits, srgb, {1.0, 0.8, 0.5}};
+            o.diffuse_quantisation = o.specular_quantisation = q;
+            mr_wf_spec_maps in = {d, sp, NULL};
+            mr_wf_metal_maps out = {a, m, NULL};
+            MR_CHECK_OK(mr_wf_spec_to_metal_batch(&in, N, &o, &out, flags));
+            int mismatches = 0, flagged = 0;
+            for (int i = 0; i < N; i++) {
+                double di[3] = {d[3 * i], d[3 * i + 1], d[3 * i + 2]};
+                double si[3] = {sp[3 * i], sp[3 * i + 1], sp[3 * i + 2]};
+                unsigned f;
+                mr_wf_metal t = to_metal(&o, di, si, &f);
+                int same = f == flags[i] && (float)t.metallic == m[i];
+                for (int c = 0; c < 3; c++) same = same && (float)t.albedo[c] == a[3 * i + c];
+                mismatches += !same;
+                flagged += f != 0;
+            }
+            MR_CHECK_MSG(mismatches == 0, "%d bits, srgb %d: %d texels differ", bits, srgb, mismatches);
+            MR_CHECK(flagged > 0 && flagged < N); // both kinds are there
+        }
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(method_names_round_trip),
              MR_TEST_ENTRY(default_options_are_the_documented_ones),
              MR_TEST_ENTRY(equation_2_known_answers),
@@ -1022,4 +1258,7 @@ MR_TEST_MAIN(MR_TEST_ENTRY(method_names_round_trip),
              MR_TEST_ENTRY(specgloss_convention_known_answers_and_names),
              MR_TEST_ENTRY(specgloss_round_trip_is_exact_where_representable),
              MR_TEST_ENTRY(specgloss_convention_matches_the_gltf_brdfs),
-             MR_TEST_ENTRY(mlp_batch_reads_the_specgloss_diffuse_lobe))
+             MR_TEST_ENTRY(mlp_batch_reads_the_specgloss_diffuse_lobe),
+             MR_TEST_ENTRY(clean_8bit_exports_flag_nothing),
+             MR_TEST_ENTRY(quantisation_known_answers),
+             MR_TEST_ENTRY(quantised_batch_equals_per_texel))

@@ -118,3 +118,12 @@ double cli_now(void) {
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
+
+mr_wf_quantisation cli_quantisation(const mr_img_stored *stored, const double *scale) {
+    mr_wf_quantisation q = {0, 0, {1.0, 1.0, 1.0}};
+    if (stored == NULL || stored->bits == 0) return q;
+    q.bits = stored->bits;
+    q.srgb = stored->encoding == MR_IMG_COLOR;
+    for (int c = 0; scale != NULL && c < 3; c++) q.scale[c] = scale[c];
+    return q;
+}

@@ -55,6 +55,11 @@ void cli_json_string(FILE *out, const char *s);
 /* Monotonic wall-clock seconds. */
 double cli_now(void);
 
+/* How a spec2metal input map was stored, for the converters' off-manifold tolerance (workflow.h, "Tolerances"):
+ * the 8/16-bit codes of a file as *stored says (sRGB or linear), multiplied by scale[c] (glTF's factors; NULL:
+ * 1, 1, 1); exact (bits 0: opts->eps) for stored NULL (a constant, or no texture) and for float files. */
+mr_wf_quantisation cli_quantisation(const mr_img_stored *stored, const double *scale);
+
 /* ---- materials given on the command line: MODEL name=value ... name=@MAP[:r|g|b|a] ... (cli_material.c) ---- */
 
 #define CLI_MAX_ASSIGNMENTS 64
@@ -93,6 +98,10 @@ struct mr_gltf_texture_ref;
  * embedded image goes through a file in the folder `scratch`. Returns an exit code (messages printed). */
 int cli_gltf_read_texture(const struct mr_gltf *asset, const struct mr_gltf_texture_ref *ref,
                           mr_img_encoding encoding, const char *scratch, mr_image **out);
+/* The same, and *stored (may be NULL) says how the image file stored its samples (mr_img_read_stored). */
+int cli_gltf_read_texture_stored(const struct mr_gltf *asset, const struct mr_gltf_texture_ref *ref,
+                                 mr_img_encoding encoding, const char *scratch, mr_image **out,
+                                 mr_img_stored *stored);
 
 int cmd_models(int argc, char **argv);
 int cmd_render(int argc, char **argv);

@@ -11,8 +11,11 @@
  * metallic-roughness texture (G roughness, B metallic) with factors 1. Both textures keep the UV set,
  * KHR_texture_transform and sampler of the source textures; the two source textures must share their UV mapping
  * (they do in practice: one texel of each describes one surface point) and are brought to one size (bilinear).
- * metal2spec is the inverse: the spec-gloss extension is added beside the core material, which stays as the
- * fallback glTF asks for.
+ * A spec-gloss material that carries core metal-rough values of its own (the authors' fallback) is kept, not
+ * converted, unless --overwrite-metal-rough; the output says so per material. The off-manifold tolerance of each
+ * input value follows its texture's encoding (half a code, times the factor; workflow.h, "Tolerances") unless
+ * --eps. metal2spec is the inverse: the spec-gloss extension is added beside the core material, which stays as
+ * the fallback glTF asks for.
  */
 #include <errno.h>
 #include <math.h>
@@ -34,6 +37,10 @@ static void print_help(void) {
            "metallic-roughness: factors times textures, texel by texel, with the converters of 'matremap\n"
            "spec2metal' (docs/workflow.md). New textures (PNG, or EXR with --format exr) are written beside OUT;\n"
            "extensionsUsed/Required are updated; meshes, nodes, animations and other extensions are kept.\n"
+           "A material that already carries core metal-rough values of its own beside spec-gloss (a\n"
+           "baseColorTexture or metallicRoughnessTexture, or factors other than 1: the artist's own fallback, as\n"
+           "in the Avocado) is kept as it is and not converted, and the output says so; its spec-gloss extension\n"
+           "goes like the converted ones' (--keep-specgloss keeps it). --overwrite-metal-rough converts it anyway.\n"
            "metal2spec adds the spec-gloss extension to every metal-rough material (Eq. 2), keeping the core\n"
            "material as the fallback.\n"
            "After converting, every texture, image and sampler that nothing in the asset refers to any more is\n"
@@ -48,9 +55,11 @@ static void print_help(void) {
            "                        metallic 0; for engines that support both); metal2spec: eq2 (default), khronos\n"
            "  --weights FILE        the network for mlp (default: the shipped one, as 'matremap spec2metal')\n"
            "  --convention C        gltf (default) or paper: how the spec-gloss diffuse is read (docs/workflow.md)\n"
-           "  --fallback F          spec2metal, for materials that already carry core metal-rough values beside\n"
-           "                        spec-gloss (Avocado): replace (default: convert and overwrite them) or keep\n"
-           "                        (keep the asset's own and only drop the extension)\n"
+           "  --overwrite-metal-rough  spec2metal: also convert materials that carry metal-rough values of their\n"
+           "                        own beside spec-gloss, overwriting them (default: keep them, and say so)\n"
+           "  --eps E               spec2metal, weighted/mean/khronos: the off-manifold tolerance, for every value\n"
+           "                        (default: per texel, half a code value of the texture it comes from, times its\n"
+           "                        factor, at least 1e-6: a clean 8-bit export flags nothing; docs/workflow.md)\n"
            "  --keep-specgloss      spec2metal: keep the spec-gloss extension in the output beside the new core\n"
            "                        material (default: remove it, so engines without it read the core material)\n"
            "  --format F            png (default) or exr for the new textures (EXR is not a core glTF image\n"
@@ -59,8 +68,9 @@ static void print_help(void) {
            "  --json                a JSON summary on stdout\n"
            "  --help                this text\n"
            "\n"
-           "Prints one line per material (what was converted, texture size, flagged texels, time), a total and what\n"
-           "was removed.\n"
+           "Prints one line per material (converted: texture size, flagged texels by flag, time; kept or left as it\n"
+           "is: why), a total and what was removed; --json gives the same, with the lists of converted and kept\n"
+           "materials.\n"
            "\n"
            "Example:\n"
            "  matremap gltf spec2metal FloppyDisk/scene.gltf -o out/floppy.gltf --method weighted\n");
@@ -69,7 +79,9 @@ static void print_help(void) {
 typedef struct options {
     const char *direction, *input, *output, *method, *weights, *format;
     mr_wf_diffuse convention;
-    int keep_fallback, keep_specgloss, keep_unused, json;
+    double eps;    /* --eps, when eps_given */
+    int eps_given; /* else each input's tolerance follows its texture's encoding */
+    int overwrite, keep_specgloss, keep_unused, json;
 } options;
 
 /* ---- textures ----------------------------------------------------------------------------------------------- */
@@ -78,6 +90,11 @@ typedef struct options {
  * code (messages printed). */
 int cli_gltf_read_texture(const mr_gltf *asset, const mr_gltf_texture_ref *ref, mr_img_encoding encoding,
                           const char *scratch, mr_image **out) {
+    return cli_gltf_read_texture_stored(asset, ref, encoding, scratch, out, NULL);
+}
+
+int cli_gltf_read_texture_stored(const mr_gltf *asset, const mr_gltf_texture_ref *ref, mr_img_encoding encoding,
+                                 const char *scratch, mr_image **out, mr_img_stored *stored) {
     mr_gltf_texture texture;
     mr_gltf_image image;
     mr_status status = mr_gltf_get_texture(asset, ref->index, &texture);
@@ -91,13 +108,13 @@ int cli_gltf_read_texture(const mr_gltf *asset, const mr_gltf_texture_ref *ref, 
     mr_img_read_options ro = {0};
     ro.encoding = encoding;
     if (image.path[0] != '\0') {
-        status = mr_img_read(image.path, &ro, out);
+        status = mr_img_read_stored(image.path, &ro, out, stored);
     } else { // an embedded image (data URI or buffer view): decoded from a scratch file named by its type
         char path[PATH_SIZE];
         snprintf(path, sizeof path, "%s/image%d%s", scratch, texture.image,
                  strstr(image.mime_type, "jpeg") ? ".jpg" : ".png");
         status = mr_gltf_image_write_file(asset, texture.image, path);
-        if (status == MR_OK) status = mr_img_read(path, &ro, out);
+        if (status == MR_OK) status = mr_img_read_stored(path, &ro, out, stored);
         remove(path);
     }
     return status == MR_OK ? CLI_EXIT_OK : cli_fail("gltf", status);
@@ -177,12 +194,31 @@ static mr_status add_textures(mr_gltf *asset, int count, mr_image *const images[
 /* ---- one material ------------------------------------------------------------------------------------------- */
 
 /* What happened to a material, for the summary. */
+typedef enum outcome_kind {
+    OUTCOME_SKIPPED = 0, /* nothing to convert (no spec-gloss extension, or metal2spec: it has one already) */
+    OUTCOME_CONVERTED,
+    OUTCOME_KEPT         /* spec2metal: its own metal-rough values kept (--overwrite-metal-rough converts) */
+} outcome_kind;
+
 typedef struct outcome {
-    const char *what;  /* "converted", or why not */
+    outcome_kind kind;
+    char reason[256];  /* why kept or skipped; "" when converted */
     int width, height; /* texture size, 0 when factors only */
     size_t flagged;    /* texels with any workflow flag */
+    size_t off_manifold, nonfinite, clamped, failed; /* texels with each flag */
     double seconds;
 } outcome;
+
+/* Count the n texels' flags into r. */
+static void count_flags(outcome *r, const uint8_t *flags, size_t n) {
+    for (size_t i = 0; i < n; i++) {
+        r->flagged += flags[i] != 0;
+        r->off_manifold += (flags[i] & MR_WF_OFF_MANIFOLD) != 0;
+        r->nonfinite += (flags[i] & MR_WF_NONFINITE_INPUT) != 0;
+        r->clamped += (flags[i] & MR_WF_CLAMPED_INPUT) != 0;
+        r->failed += (flags[i] & MR_WF_METHOD_FAILED) != 0;
+    }
+}
 
 /* Planar buffers of n texels for one conversion. */
 typedef struct buffers {
@@ -258,15 +294,17 @@ static mr_status add_converted_textures(mr_gltf *asset, int material, const opti
  * converted on: the larger texture's size, 1 x 1 without textures. Returns an exit code. */
 static int read_pair(const mr_gltf *asset, int k, const char *name, const mr_gltf_texture_ref *a,
                      mr_img_encoding a_encoding, const mr_gltf_texture_ref *b, mr_img_encoding b_encoding,
-                     const char *scratch, mr_image **a_image, mr_image **b_image, int *width, int *height) {
+                     const char *scratch, mr_image **a_image, mr_image **b_image, mr_img_stored stored[2],
+                     int *width, int *height) {
     if (a->index >= 0 && b->index >= 0 && !same_mapping(a, b)) {
         fprintf(stderr, "matremap gltf: error: material %d '%s': its two textures map onto the surface differently "
                 "(UV set or KHR_texture_transform), so their texels cannot be converted pairwise\n", k, name);
         return CLI_EXIT_BAD_INPUT;
     }
     int code = CLI_EXIT_OK;
-    if (a->index >= 0) code = cli_gltf_read_texture(asset, a, a_encoding, scratch, a_image);
-    if (code == CLI_EXIT_OK && b->index >= 0) code = cli_gltf_read_texture(asset, b, b_encoding, scratch, b_image);
+    if (a->index >= 0) code = cli_gltf_read_texture_stored(asset, a, a_encoding, scratch, a_image, &stored[0]);
+    if (code == CLI_EXIT_OK && b->index >= 0)
+        code = cli_gltf_read_texture_stored(asset, b, b_encoding, scratch, b_image, &stored[1]);
     if (code != CLI_EXIT_OK) return code;
     *width = *height = 1;
     const mr_image *images[2] = {*a_image, *b_image};
@@ -278,12 +316,15 @@ static int read_pair(const mr_gltf *asset, int k, const char *name, const mr_glt
     return CLI_EXIT_OK;
 }
 
-/* read_pair, then the buffers for the grid's texels; on failure nothing is left allocated. Returns an exit code. */
+/* read_pair, then the buffers for the grid's texels; on failure nothing is left allocated. stored[t] says how
+ * each texture's file stored its samples (stored[t].bits 0 for an absent texture). Returns an exit code. */
 static int prepare(const mr_gltf *asset, int k, const char *name, const mr_gltf_texture_ref *a,
                    mr_img_encoding a_encoding, const mr_gltf_texture_ref *b, mr_img_encoding b_encoding,
-                   const char *scratch, mr_image **a_image, mr_image **b_image, int *width, int *height,
-                   buffers *bufs) {
-    int code = read_pair(asset, k, name, a, a_encoding, b, b_encoding, scratch, a_image, b_image, width, height);
+                   const char *scratch, mr_image **a_image, mr_image **b_image, mr_img_stored stored[2], int *width,
+                   int *height, buffers *bufs) {
+    memset(stored, 0, 2 * sizeof *stored);
+    int code = read_pair(asset, k, name, a, a_encoding, b, b_encoding, scratch, a_image, b_image, stored, width,
+                         height);
     if (code == CLI_EXIT_OK && !buffers_alloc(bufs, (size_t)*width * (size_t)*height)) {
         buffers_free(bufs);
         fprintf(stderr, "matremap gltf: error: out of memory for %dx%d texels\n", *width, *height);
@@ -297,11 +338,22 @@ static int prepare(const mr_gltf *asset, int k, const char *name, const mr_gltf_
     return code;
 }
 
-/* Does the material carry core metal-rough values of its own (textures or non-default factors)? */
-static int has_core_values(const mr_gltf_material *m) {
-    return m->base_color_texture.index >= 0 || m->metallic_roughness_texture.index >= 0 ||
-           m->metallic_factor != 1.0 || m->roughness_factor != 1.0 || m->base_color_factor[0] != 1.0 ||
-           m->base_color_factor[1] != 1.0 || m->base_color_factor[2] != 1.0 || m->base_color_factor[3] != 1.0;
+/* The core metal-rough values a material carries of its own (textures, or factors other than glTF's defaults
+ * 1,1,1,1 / 1 / 1), named in `list` ("baseColorTexture, metallicFactor"); returns how many. */
+static int core_values(const mr_gltf_material *m, char *list, size_t size) {
+    const char *names[5];
+    int count = 0;
+    if (m->base_color_texture.index >= 0) names[count++] = "baseColorTexture";
+    if (m->metallic_roughness_texture.index >= 0) names[count++] = "metallicRoughnessTexture";
+    if (m->base_color_factor[0] != 1.0 || m->base_color_factor[1] != 1.0 || m->base_color_factor[2] != 1.0 ||
+        m->base_color_factor[3] != 1.0)
+        names[count++] = "baseColorFactor";
+    if (m->metallic_factor != 1.0) names[count++] = "metallicFactor";
+    if (m->roughness_factor != 1.0) names[count++] = "roughnessFactor";
+    list[0] = '\0';
+    for (int k = 0; k < count; k++)
+        snprintf(list + strlen(list), size - strlen(list), "%s%s", k ? ", " : "", names[k]);
+    return count;
 }
 
 /* --method extension: the lossless route of KHR_materials_specular + KHR_materials_ior (what gltf-transform's
@@ -336,8 +388,15 @@ static int extension_material(mr_gltf *asset, int k, const options *o, mr_gltf_m
         size_t n = (size_t)sg_image->width * (size_t)sg_image->height;
         for (size_t i = 0; status == MR_OK && i < n; i++) {
             float gloss = sg_image->channels == 4 ? sg_image->pixels[4 * i + 3] : 1.0f;
+            double roughness = 1.0 - gloss * m->glossiness_factor;
             rough->pixels[3 * i] = 0.0f;
-            rough->pixels[3 * i + 1] = (float)(1.0 - gloss * m->glossiness_factor);
+            // A non-finite glossiness is glossiness 0 (docs/workflow.md), as in the per-texel conversions.
+            if (!isfinite(roughness)) {
+                roughness = 1.0;
+                r->nonfinite++;
+                r->flagged++;
+            }
+            rough->pixels[3 * i + 1] = (float)roughness;
             rough->pixels[3 * i + 2] = 0.0f;
         }
         int index[2] = {-1, -1};
@@ -357,7 +416,7 @@ static int extension_material(mr_gltf *asset, int k, const options *o, mr_gltf_m
     }
     m->has_spec_gloss = o->keep_specgloss;
     if (status == MR_OK) status = mr_gltf_set_material(asset, k, m);
-    r->what = "converted";
+    r->kind = OUTCOME_CONVERTED;
     r->seconds = cli_now() - started;
     return status == MR_OK ? CLI_EXIT_OK : cli_fail("gltf", status);
 }
@@ -368,13 +427,18 @@ static int spec2metal_material(mr_gltf *asset, int k, const options *o, const mr
     mr_status status = mr_gltf_get_material(asset, k, &m);
     if (status != MR_OK) return cli_fail("gltf", status);
     if (!m.has_spec_gloss) {
-        r->what = "no spec-gloss extension: left as it is";
+        snprintf(r->reason, sizeof r->reason, "no spec-gloss extension");
         return CLI_EXIT_OK;
     }
-    if (o->keep_fallback && has_core_values(&m)) {
+    char own[128];
+    if (!o->overwrite && core_values(&m, own, sizeof own) > 0) {
+        // The artist's own metal-rough version of the material (glTF's recommended fallback beside spec-gloss):
+        // kept, not overwritten by a conversion. The extension goes like every converted material's (this is a
+        // metal-rough asset now), unless --keep-specgloss; the message says so.
         m.has_spec_gloss = o->keep_specgloss;
         status = mr_gltf_set_material(asset, k, &m);
-        r->what = "kept its own metal-rough values (--fallback keep)";
+        r->kind = OUTCOME_KEPT;
+        snprintf(r->reason, sizeof r->reason, "it has metal-rough values of its own: %s", own);
         return status == MR_OK ? CLI_EXIT_OK : cli_fail("gltf", status);
     }
     if (strcmp(o->method, "extension") == 0) return extension_material(asset, k, o, &m, scratch, outbase, r);
@@ -383,8 +447,9 @@ static int spec2metal_material(mr_gltf *asset, int k, const options *o, const mr
     mr_image *dimg = NULL, *simg = NULL;
     int width = 1, height = 1;
     buffers b;
-    int code = prepare(asset, k, m.name, dref, MR_IMG_COLOR, sref, MR_IMG_COLOR, scratch, &dimg, &simg, &width,
-                       &height, &b);
+    mr_img_stored stored[2];
+    int code = prepare(asset, k, m.name, dref, MR_IMG_COLOR, sref, MR_IMG_COLOR, scratch, &dimg, &simg, stored,
+                       &width, &height, &b);
     if (code != CLI_EXIT_OK) return code;
     size_t n = (size_t)width * (size_t)height;
     // Factors times textures, in linear values (glTF multiplies them so).
@@ -406,9 +471,14 @@ static int spec2metal_material(mr_gltf *asset, int k, const options *o, const mr
         }
     mr_wf_spec_maps in = {b.in_rgb, b.in_rgb2, b.in_scalar};
     mr_wf_metal_maps out = {b.out_rgb, b.out_scalar, b.out_scalar2};
-    status = net ? mr_wf_spec_to_metal_mlp_batch(net, &in, n, wf, &out, b.flags)
-                 : mr_wf_spec_to_metal_batch(&in, n, wf, &out, b.flags);
-    for (size_t i = 0; status == MR_OK && i < n; i++) r->flagged += b.flags[i] != 0;
+    mr_wf_options wfm = *wf;
+    if (!o->eps_given) { // each value is known to half a code of its texture, times the factor (docs/workflow.md)
+        wfm.diffuse_quantisation = cli_quantisation(dimg ? &stored[0] : NULL, m.diffuse_factor);
+        wfm.specular_quantisation = cli_quantisation(simg ? &stored[1] : NULL, m.specular_factor);
+    }
+    status = net ? mr_wf_spec_to_metal_mlp_batch(net, &in, n, &wfm, &out, b.flags)
+                 : mr_wf_spec_to_metal_batch(&in, n, &wfm, &out, b.flags);
+    if (status == MR_OK) count_flags(r, b.flags, n);
     if (status == MR_OK && dimg == NULL && simg == NULL) { // factors only
         for (int c = 0; c < 3; c++) m.base_color_factor[c] = b.out_rgb[c];
         m.base_color_factor[3] = b.alpha[0];
@@ -437,7 +507,7 @@ static int spec2metal_material(mr_gltf *asset, int k, const options *o, const mr
     }
     m.has_spec_gloss = o->keep_specgloss;
     if (status == MR_OK) status = mr_gltf_set_material(asset, k, &m);
-    r->what = "converted";
+    r->kind = OUTCOME_CONVERTED;
     r->seconds = cli_now() - started;
     mr_image_free(dimg);
     mr_image_free(simg);
@@ -451,7 +521,7 @@ static int metal2spec_material(mr_gltf *asset, int k, const options *o, const mr
     mr_status status = mr_gltf_get_material(asset, k, &m);
     if (status != MR_OK) return cli_fail("gltf", status);
     if (m.has_spec_gloss) {
-        r->what = "already carries spec-gloss: left as it is";
+        snprintf(r->reason, sizeof r->reason, "it carries spec-gloss already");
         return CLI_EXIT_OK;
     }
     double started = cli_now();
@@ -459,8 +529,9 @@ static int metal2spec_material(mr_gltf *asset, int k, const options *o, const mr
     mr_image *bimg = NULL, *mimg = NULL;
     int width = 1, height = 1;
     buffers b;
-    int code = prepare(asset, k, m.name, bref, MR_IMG_COLOR, mref, MR_IMG_DATA, scratch, &bimg, &mimg, &width,
-                       &height, &b);
+    mr_img_stored stored[2];
+    int code = prepare(asset, k, m.name, bref, MR_IMG_COLOR, mref, MR_IMG_DATA, scratch, &bimg, &mimg, stored,
+                       &width, &height, &b);
     if (code != CLI_EXIT_OK) return code;
     size_t n = (size_t)width * (size_t)height;
     int has_alpha = 0;
@@ -480,10 +551,8 @@ static int metal2spec_material(mr_gltf *asset, int k, const options *o, const mr
     mr_wf_metal_maps in = {b.in_rgb, b.in_scalar, b.out_scalar2};
     mr_wf_spec_maps out = {b.out_rgb, b.out_rgb2, b.out_scalar};
     status = mr_wf_metal_to_spec_batch(&in, n, wf, &out, b.flags);
-    for (size_t i = 0; status == MR_OK && i < n; i++) {
-        r->flagged += b.flags[i] != 0;
-        b.out_scalar[i] = 1.0f - b.out_scalar[i]; // glossiness
-    }
+    if (status == MR_OK) count_flags(r, b.flags, n);
+    for (size_t i = 0; status == MR_OK && i < n; i++) b.out_scalar[i] = 1.0f - b.out_scalar[i]; // glossiness
     if (status == MR_OK && bimg == NULL && mimg == NULL) {
         for (int c = 0; c < 3; c++) {
             m.diffuse_factor[c] = b.out_rgb[c];
@@ -511,7 +580,7 @@ static int metal2spec_material(mr_gltf *asset, int k, const options *o, const mr
     }
     m.has_spec_gloss = 1; // the core material stays as the fallback
     if (status == MR_OK) status = mr_gltf_set_material(asset, k, &m);
-    r->what = "converted";
+    r->kind = OUTCOME_CONVERTED;
     r->seconds = cli_now() - started;
     mr_image_free(bimg);
     mr_image_free(mimg);
@@ -549,10 +618,13 @@ static int parse(int argc, char **argv, options *o) {
             else
                 return cli_usage_error("gltf", "--convention '%s': expected gltf or paper", value);
         } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--fallback", &value))) {
-            if (taken < 0) return CLI_EXIT_USAGE;
-            if (strcmp(value, "keep") != 0 && strcmp(value, "replace") != 0)
-                return cli_usage_error("gltf", "--fallback '%s': expected replace or keep", value);
-            o->keep_fallback = strcmp(value, "keep") == 0;
+            return cli_usage_error("gltf", "--fallback is gone: a material's own metal-rough values are kept by "
+                                   "default; --overwrite-metal-rough converts them instead");
+        } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--eps", &value))) {
+            if (taken < 0 || !cli_parse_double("gltf", "--eps", value, 0.0, 0.5, &o->eps)) return CLI_EXIT_USAGE;
+            o->eps_given = 1;
+        } else if (strcmp(argv[i], "--overwrite-metal-rough") == 0) {
+            o->overwrite = 1;
         } else if (strcmp(argv[i], "--keep-specgloss") == 0) {
             o->keep_specgloss = 1;
         } else if (strcmp(argv[i], "--keep-unused") == 0) {
@@ -577,8 +649,12 @@ static int parse(int argc, char **argv, options *o) {
     if (o->output == NULL) return cli_usage_error("gltf", "missing -o OUT (.gltf or .glb)");
     if (o->method == NULL) o->method = to_metal ? "mlp" : "eq2";
     if (o->format == NULL) o->format = "png";
-    if (!to_metal && (o->weights || o->keep_fallback || o->keep_specgloss))
-        return cli_usage_error("gltf", "--weights, --fallback and --keep-specgloss go with spec2metal");
+    if (!to_metal && (o->weights || o->overwrite || o->keep_specgloss || o->eps_given))
+        return cli_usage_error("gltf", "--weights, --eps, --overwrite-metal-rough and --keep-specgloss go with "
+                               "spec2metal");
+    if (o->eps_given && (strcmp(o->method, "mlp") == 0 || strcmp(o->method, "extension") == 0))
+        return cli_usage_error("gltf", "--eps applies to the analytic methods (weighted, mean, khronos); --method %s "
+                               "computes no off-manifold flag", o->method);
     return CLI_EXIT_OK;
 }
 
@@ -614,6 +690,7 @@ int cmd_gltf(int argc, char **argv) {
 
     mr_wf_options wf = mr_wf_options_default();
     wf.spec_diffuse = o.convention;
+    if (o.eps_given) wf.eps = o.eps;
     int use_mlp = to_metal && strcmp(o.method, "mlp") == 0;
     if (to_metal && strcmp(o.method, "extension") == 0) {
         // no converter: the material is rewritten with extensions (extension_material)
@@ -654,12 +731,16 @@ int cmd_gltf(int argc, char **argv) {
     if (asset) mr_gltf_get_counts(asset, &counts);
     outcome *outcomes = calloc((size_t)(counts.materials > 0 ? counts.materials : 1), sizeof *outcomes);
     if (outcomes == NULL && code == CLI_EXIT_OK) code = CLI_EXIT_INTERNAL;
-    int converted = 0;
+    int converted = 0, kept = 0;
     for (int k = 0; k < counts.materials && code == CLI_EXIT_OK; k++) {
         code = to_metal ? spec2metal_material(asset, k, &o, net, &wf, scratch, stem, &outcomes[k])
                         : metal2spec_material(asset, k, &o, &wf, scratch, stem, &outcomes[k]);
-        converted += code == CLI_EXIT_OK && strcmp(outcomes[k].what, "converted") == 0;
+        converted += code == CLI_EXIT_OK && outcomes[k].kind == OUTCOME_CONVERTED;
+        kept += code == CLI_EXIT_OK && outcomes[k].kind == OUTCOME_KEPT;
     }
+    // The off-manifold tolerance, where one is computed (analytic spec2metal methods).
+    const char *tolerance = !to_metal || use_mlp || strcmp(o.method, "extension") == 0 ? NULL
+                            : o.eps_given ? "eps" : "encoding";
     mr_gltf_prune_stats pruned = {0};
     if (code == CLI_EXIT_OK && !o.keep_unused) {
         // Converted materials no longer point at their old textures (spec2metal's diffuse and
@@ -681,21 +762,42 @@ int cmd_gltf(int argc, char **argv) {
     double seconds = cli_now() - started;
     if (code == CLI_EXIT_OK && !o.json) {
         for (int k = 0; k < counts.materials; k++) {
+            const outcome *r = &outcomes[k];
             mr_gltf_material m;
             mr_gltf_get_material(asset, k, &m);
-            printf("material %d '%s': %s", k, m.name, outcomes[k].what);
-            if (strcmp(outcomes[k].what, "converted") == 0) {
-                if (outcomes[k].width > 0)
-                    printf(", %dx%d textures", outcomes[k].width, outcomes[k].height);
-                else
-                    printf(", factors only");
-                printf(", %zu texel%s flagged, %.3f s", outcomes[k].flagged, outcomes[k].flagged == 1 ? "" : "s",
-                       outcomes[k].seconds);
+            printf("material %d '%s': ", k, m.name);
+            if (r->kind == OUTCOME_KEPT) {
+                printf("kept, not converted: %s; its spec-gloss extension %s; --overwrite-metal-rough converts it "
+                       "instead\n", r->reason, o.keep_specgloss ? "kept (--keep-specgloss)" : "removed");
+                continue;
             }
-            printf("\n");
+            if (r->kind == OUTCOME_SKIPPED) {
+                printf("left as it is: %s\n", r->reason);
+                continue;
+            }
+            printf("converted, ");
+            if (r->width > 0)
+                printf("%dx%d textures", r->width, r->height);
+            else
+                printf("factors only");
+            printf(", %zu texel%s flagged", r->flagged, r->flagged == 1 ? "" : "s");
+            if (r->flagged > 0) {
+                printf(" (");
+                if (tolerance) printf("%zu off-manifold, ", r->off_manifold);
+                printf("%zu non-finite input, %zu clamped input", r->nonfinite, r->clamped);
+                if (r->failed) printf(", %zu method failed", r->failed);
+                printf(")");
+            }
+            printf(", %.3f s\n", r->seconds);
         }
-        printf("gltf %s: %d of %d materials converted with %s%s%s in %.2f s; wrote %s\n", o.direction, converted,
-               counts.materials, o.method, use_mlp ? " " : "", use_mlp ? net_path : "", seconds, o.output);
+        printf("gltf %s: %d of %d materials converted", o.direction, converted, counts.materials);
+        if (kept > 0) printf(", %d kept with metal-rough values of %s own", kept, kept == 1 ? "its" : "their");
+        printf(" with %s%s%s", o.method, use_mlp ? " " : "", use_mlp ? net_path : "");
+        if (tolerance && o.eps_given)
+            printf(" (off-manifold tolerance %g)", o.eps);
+        else if (tolerance)
+            printf(" (off-manifold tolerance: half a code value of each texture, times its factor)");
+        printf(" in %.2f s; wrote %s\n", seconds, o.output);
         if (o.keep_unused) {
             printf("unreferenced textures, images and samplers kept (--keep-unused)\n");
         } else {
@@ -708,20 +810,45 @@ int cmd_gltf(int argc, char **argv) {
             printf("\n");
         }
     } else if (code == CLI_EXIT_OK) {
+        static const char *const kinds[] = {"skipped", "converted", "kept"};
         printf("{\"command\": \"gltf %s\", \"input\": ", o.direction);
         cli_json_string(stdout, o.input);
         printf(", \"output\": ");
         cli_json_string(stdout, o.output);
-        printf(", \"method\": \"%s\", \"seconds\": %.6f, \"materials\": [", o.method, seconds);
+        printf(", \"method\": \"%s\", \"seconds\": %.6f, \"tolerance\": ", o.method, seconds);
+        if (tolerance)
+            printf("\"%s\", \"eps\": %.17g", tolerance, o.eps_given ? o.eps : MR_WF_DEFAULT_EPS);
+        else
+            printf("null, \"eps\": null");
+        for (int kind = OUTCOME_CONVERTED; kind <= OUTCOME_KEPT; kind++) {
+            printf(", \"%s\": [", kinds[kind]);
+            for (int k = 0, first = 1; k < counts.materials; k++)
+                if (outcomes[k].kind == (outcome_kind)kind) {
+                    printf("%s%d", first ? "" : ", ", k);
+                    first = 0;
+                }
+            printf("]");
+        }
+        printf(", \"materials\": [");
         for (int k = 0; k < counts.materials; k++) {
+            const outcome *r = &outcomes[k];
             mr_gltf_material m;
             mr_gltf_get_material(asset, k, &m);
             printf("%s{\"index\": %d, \"name\": ", k ? ", " : "", k);
             cli_json_string(stdout, m.name);
-            printf(", \"outcome\": ");
-            cli_json_string(stdout, outcomes[k].what);
-            printf(", \"width\": %d, \"height\": %d, \"flagged\": %zu, \"seconds\": %.6f}", outcomes[k].width,
-                   outcomes[k].height, outcomes[k].flagged, outcomes[k].seconds);
+            printf(", \"outcome\": \"%s\", \"reason\": ", kinds[r->kind]);
+            if (r->kind == OUTCOME_CONVERTED)
+                printf("null");
+            else
+                cli_json_string(stdout, r->reason);
+            printf(", \"width\": %d, \"height\": %d, \"flagged\": %zu, \"flags\": {\"off_manifold\": ", r->width,
+                   r->height, r->flagged);
+            if (tolerance && r->kind == OUTCOME_CONVERTED)
+                printf("%zu", r->off_manifold);
+            else
+                printf("null");
+            printf(", \"nonfinite_input\": %zu, \"clamped_input\": %zu, \"method_failed\": %zu}, \"seconds\": %.6f}",
+                   r->nonfinite, r->clamped, r->failed, r->seconds);
         }
         printf("], \"keep_unused\": %s, \"pruned\": {\"textures\": %d, \"images\": %d, \"samplers\": %d, "
                "\"uncertain\": %d}}\n", o.keep_unused ? "true" : "false", pruned.textures, pruned.images,

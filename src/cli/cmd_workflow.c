@@ -48,6 +48,7 @@ typedef struct map_arg {
     int is_constant;
     double constant[3];       /* grey broadcast */
     mr_image *image;          /* the file, once read */
+    mr_img_stored stored;     /* how the file stored its samples (spec2metal's tolerances) */
 } map_arg;
 
 static map_arg map_colour(const char *option) {
@@ -136,7 +137,7 @@ static int read_maps(const char *command, map_arg *const *maps, int count, int *
         if (!is_file(maps[k])) continue;
         mr_img_read_options ro = {0};
         ro.encoding = maps[k]->encoding;
-        statuses[k] = mr_img_read(maps[k]->text, &ro, &maps[k]->image);
+        statuses[k] = mr_img_read_stored(maps[k]->text, &ro, &maps[k]->image, &maps[k]->stored);
         if (statuses[k] != MR_OK) snprintf(messages[k], sizeof messages[k], "%s", mr_last_error());
     }
     const map_arg *first = NULL;
@@ -407,6 +408,8 @@ typedef struct summary {
     double seconds[3];   /* read, convert, write */
     const uint8_t *flags;
     quantity values[3];
+    int input_tolerances; /* spec2metal: off-manifold tolerances from the inputs' encodings (else eps) */
+    double eps;           /* spec2metal: the tolerance given by --eps */
 } summary;
 
 static size_t count_flag(const uint8_t *flags, size_t n, unsigned flag) {
@@ -430,8 +433,10 @@ static void print_summary(const summary *s, const out_options *o, const output *
         printf(": read %.3f s, convert %.3f s, write %.3f s; flagged: %zu clamped input, %zu non-finite input",
                s->seconds[0], s->seconds[1], s->seconds[2], clamped, nonfinite);
         if (strcmp(s->command, "spec2metal") == 0) { // metal -> spec is a closed formula: neither flag applies
-            if (s->off_manifold)
-                printf(", %zu off-manifold", off);
+            if (s->off_manifold && s->input_tolerances)
+                printf(", %zu off-manifold (tolerance from each input's encoding)", off);
+            else if (s->off_manifold)
+                printf(", %zu off-manifold (tolerance %g)", off, s->eps);
             else
                 printf(", off-manifold not computed");
             printf(", %zu method failed", failed);
@@ -474,6 +479,11 @@ static void print_summary(const summary *s, const out_options *o, const output *
         printf("null");
     printf(", \"seconds\": {\"read\": %.6f, \"convert\": %.6f, \"write\": %.6f}", s->seconds[0], s->seconds[1],
            s->seconds[2]);
+    if (strcmp(s->command, "spec2metal") == 0 && s->off_manifold)
+        printf(", \"tolerance\": \"%s\", \"eps\": %.17g", s->input_tolerances ? "encoding" : "eps",
+               s->input_tolerances ? MR_WF_DEFAULT_EPS : s->eps);
+    else
+        printf(", \"tolerance\": null, \"eps\": null");
     printf(", \"flags\": {\"clamped_input\": %zu, \"nonfinite_input\": %zu, \"off_manifold\": ", clamped, nonfinite);
     if (s->off_manifold)
         printf("%zu", off);
@@ -720,10 +730,12 @@ static void print_spec2metal_help(void) {
            "                    source tree's data/ or in share/matremap/ of the installed tree\n"
            "  --f0 F            the dielectric F0 of weighted and mean: 0.04 (default, glTF) or the paper's 0.03;\n"
            "                    khronos takes only 0.04, and mlp learned its own from its training data\n"
-           "  --eps E           the reflectance tolerance of weighted, mean and khronos (default 1e-6): a texel is\n"
-           "                    off-manifold when converting it back misses it by more than E, and an Eq. 3 root\n"
-           "                    within E of F0 is ambiguous; 8-bit maps are rarely exact within 1e-6, and\n"
-           "                    --eps 0.004 (one 8-bit step) flags only what quantisation cannot explain\n"
+           "  --eps E           the reflectance tolerance of weighted, mean and khronos, for every value: a texel\n"
+           "                    is off-manifold when converting it back misses it by more than the tolerances of\n"
+           "                    its diffuse and specular, and an Eq. 3 root within E of F0 is ambiguous. Default:\n"
+           "                    each value's own, half a code value of its file at that texel (8/16-bit, sRGB\n"
+           "                    or linear), at least 1e-6 (float files and constants), so a clean 8-bit\n"
+           "                    metal-rough export flags nothing (docs/workflow.md, \"Tolerances\")\n"
            "  --convention C    how the diffuse map is read: gltf (default): as glTF renders spec-gloss, dimmed by\n"
            "                    1 - max specular, so the result looks the same in a glTF renderer; paper: as the\n"
            "                    Lambert lobe itself (Eq. 2 as printed, the `ggx` model). khronos has its own\n"
@@ -742,9 +754,10 @@ static void print_spec2metal_help(void) {
            "  --help                this text\n"
            "\n");
     printf("Prints one line: the size, the method, the read, convert and write times, and the texels flagged as\n"
-           "clamped input (a value outside [0, 1]), non-finite input (NaN or infinity, from EXR), off-manifold (no\n"
-           "metallic material has exactly these maps: a coloured dielectric specular, specular above the albedo;\n"
-           "not computed for mlp) and method failed (the network returned NaN). The inputs are never overwritten.\n"
+           "clamped input (a value outside [0, 1]), non-finite input (NaN or infinity, from EXR: read as 0, and a\n"
+           "non-finite glossiness or roughness as roughness 1), off-manifold (no metallic material has these maps\n"
+           "within their tolerance: a coloured dielectric specular, specular above the albedo or below F0; not\n"
+           "computed for mlp) and method failed (the network returned NaN). The inputs are never overwritten.\n"
            "\n"
            "Examples:\n"
            "  matremap spec2metal --diffuse Avocado_diffuse.png --specular-glossiness Avocado_specularGlossiness.png\n"
@@ -761,6 +774,7 @@ int cmd_spec2metal(int argc, char **argv) {
     map_arg *all[] = {&diffuse, &specular, &glossiness, &roughness, &packed};
     const char *weights = NULL;
     double eps = MR_WF_DEFAULT_EPS;
+    int eps_given = 0;
     method_options m = {"mlp", MR_WF_F0_GLTF, 0, MR_WF_DIFFUSE_SPECGLOSS};
     out_options o = {0};
 
@@ -778,6 +792,7 @@ int cmd_spec2metal(int argc, char **argv) {
             weights = value;
         } else if ((taken = cli_take_option(command, argc, argv, &i, "--eps", &value))) {
             if (taken < 0 || !cli_parse_double(command, "--eps", value, 0.0, 0.5, &eps)) return CLI_EXIT_USAGE;
+            eps_given = 1;
         } else {
             return unknown_argument(command, argv[i], "--diffuse D.png");
         }
@@ -798,6 +813,9 @@ int cmd_spec2metal(int argc, char **argv) {
     } else if (m.f0_given) {
         return cli_usage_error(command, "--f0 applies to the analytic methods (weighted, mean, khronos); the network "
                                "of --method mlp learned the F0 of its training data");
+    } else if (eps_given) {
+        return cli_usage_error(command, "--eps applies to the analytic methods (weighted, mean, khronos); --method "
+                               "mlp computes no off-manifold flag");
     } else if (weights != NULL && weights[0] == '\0') {
         return cli_usage_error(command, "--weights: empty file name");
     }
@@ -825,6 +843,7 @@ int cmd_spec2metal(int argc, char **argv) {
     char net_path[PATH_MAX + 64] = "";
     float *in_diffuse = NULL, *in_specular = NULL, *in_rough = NULL, *alpha = NULL;
     float *albedo = NULL, *metallic = NULL, *out_rough = NULL;
+    const int input_tolerances = !use_mlp && !eps_given; // tolerances from the inputs' quantisation
     uint8_t *flags = NULL;
     if (use_mlp) code = cli_load_network(command, weights, &net, net_path, sizeof net_path);
     if (code == CLI_EXIT_OK) code = read_maps(command, all, 5, &width, &height);
@@ -840,22 +859,28 @@ int cmd_spec2metal(int argc, char **argv) {
         flags = malloc(n);
         alpha = take_alpha(&diffuse, n, &failed);
         failed |= !in_diffuse || !in_specular || !in_rough || !albedo || !metallic || !out_rough || !flags;
+
         if (failed) {
             fprintf(stderr, "matremap %s: error: out of memory for %dx%d texels\n", command, width, height);
             code = CLI_EXIT_INTERNAL;
         }
     }
     if (code == CLI_EXIT_OK) {
+        const map_arg *spec_map = packed.text != NULL ? &packed : &specular;
         fill_rgb(&diffuse, n, in_diffuse);
-        if (packed.text != NULL) {
-            fill_rgb(&packed, n, in_specular);
+        fill_rgb(spec_map, n, in_specular);
+        if (packed.text != NULL)
             fill_channel(&packed, 3, n, in_rough);
-        } else {
-            fill_rgb(&specular, n, in_specular);
+        else
             fill_channel(roughness.text ? &roughness : &glossiness, 0, n, in_rough);
-        }
-        if (roughness.text == NULL) // glossiness -> roughness; NaN stays NaN (read as 0 and flagged)
+        // glossiness -> roughness; NaN and infinities stay non-finite, which the library reads as roughness 1
+        // (flagged): a non-finite glossiness converts as glossiness 0.
+        if (roughness.text == NULL)
             for (size_t i = 0; i < n; i++) in_rough[i] = 1.0f - in_rough[i];
+        if (input_tolerances) {
+            wf.diffuse_quantisation = cli_quantisation(is_file(&diffuse) ? &diffuse.stored : NULL, NULL);
+            wf.specular_quantisation = cli_quantisation(is_file(spec_map) ? &spec_map->stored : NULL, NULL);
+        }
         free_maps(all, 5);
     }
     seconds[0] = cli_now() - started;
@@ -898,12 +923,14 @@ int cmd_spec2metal(int argc, char **argv) {
                      wf.method == MR_WF_KHRONOS && !use_mlp ? NULL : convention_name(wf.spec_diffuse),
                      use_mlp ? -1.0 : wf.dielectric_f0, !use_mlp, width, height,
                      {seconds[0], seconds[1], seconds[2]}, flags,
-                     {{"basecolor", albedo, 3}, {"metallic", metallic, 1}, {"roughness", out_rough, 1}}};
+                     {{"basecolor", albedo, 3}, {"metallic", metallic, 1}, {"roughness", out_rough, 1}},
+                     input_tolerances, eps};
         print_summary(&s, &o, outputs, output_count);
     }
     free_outputs(outputs, MAX_OUTPUTS);
     free_maps(all, 5);
     mr_mlp_free(net);
+
     free(in_diffuse);
     free(in_specular);
     free(in_rough);
@@ -1092,7 +1119,7 @@ int cmd_metal2spec(int argc, char **argv) {
                      wf.method == MR_WF_KHRONOS ? NULL : convention_name(wf.spec_diffuse), wf.dielectric_f0,
                      specgloss, width,
                      height, {seconds[0], seconds[1], seconds[2]}, flags,
-                     {{"diffuse", diffuse, 3}, {"specular", specular, 3}, {"glossiness", glossiness, 1}}};
+                     {{"diffuse", diffuse, 3}, {"specular", specular, 3}, {"glossiness", glossiness, 1}}, 0, 0.0};
         print_summary(&s, &o, outputs, output_count);
     }
     free_outputs(outputs, MAX_OUTPUTS);

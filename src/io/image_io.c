@@ -175,6 +175,11 @@ static int convert_channels(const mr_io_raw *raw, mr_image *image, int decode_sr
 }
 
 mr_status mr_img_read(const char *path, const mr_img_read_options *opts, mr_image **out) {
+    return mr_img_read_stored(path, opts, out, NULL);
+}
+
+mr_status mr_img_read_stored(const char *path, const mr_img_read_options *opts, mr_image **out,
+                             mr_img_stored *stored) {
     if (path == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mr_img_read: path and out must not be NULL");
     mr_img_read_options o = {MR_IMG_COLOR, 0, 0};
     if (opts != NULL) o = *opts;
@@ -223,14 +228,42 @@ mr_status mr_img_read(const char *path, const mr_img_read_options *opts, mr_imag
         free(raw.pixels);
         return mr_fail_context(status, "image '%s'", path);
     }
-    int converted = convert_channels(&raw, image, raw.encoded && o.encoding == MR_IMG_COLOR);
+    const int decode_srgb = raw.encoded && o.encoding == MR_IMG_COLOR;
+    int converted = convert_channels(&raw, image, decode_srgb);
     free(raw.pixels);
     if (!converted) {
         mr_image_free(image);
         return mr_fail(MR_ERR_NOMEM, "image '%s': out of memory for the sRGB table", path);
     }
     *out = image;
+    if (stored != NULL) {
+        stored->bits = raw.bits == 8 || raw.bits == 16 ? raw.bits : 0;
+        stored->encoding = decode_srgb ? MR_IMG_COLOR : MR_IMG_DATA;
+    }
     return MR_OK;
+}
+
+/* The decode of the point `code` (a half-integer at an interval's edge), clamped to [0, max_code]: rounded to
+ * float like every decoded value, so that it decides which side of an edge a decoded value lies on exactly. */
+static double decode_edge(double code, int max_code) {
+    return mr_srgb_to_linear((float)(mr_clampd(code, 0.0, max_code) / max_code));
+}
+
+double mr_img_half_step(double value, int bits, mr_img_encoding encoding) {
+    if ((bits != 8 && bits != 16) || !isfinite(value)) return 0.0;
+    const int max_code = bits == 8 ? 255 : 65535;
+    if (encoding != MR_IMG_COLOR) return 0.5 / max_code;
+    const double v = mr_clampd(value, 0.0, 1.0);
+    // The code whose decode interval [lin((q - 1/2) / max), lin((q + 1/2) / max)) holds v: the writer's rounding
+    // (quantise()) first, then settled against the interval's edges, which decide a value at a midpoint.
+    int q = (int)floor(mr_clampd(mr_linear_to_srgb((float)v), 0.0, 1.0) * max_code + 0.5);
+    while ((q > 0 && v < decode_edge(q - 0.5, max_code)) || (q < max_code && v >= decode_edge(q + 0.5, max_code)))
+        q += v < decode_edge(q - 0.5, max_code) ? -1 : 1;
+    // The farther edge from the code's own decode, in double (differences of floats would lose digits at 16 bits).
+    const double centre = mr_srgb_decode_double((double)q / max_code);
+    const double lo = mr_srgb_decode_double(mr_clampd(q - 0.5, 0.0, max_code) / max_code);
+    const double hi = mr_srgb_decode_double(mr_clampd(q + 0.5, 0.0, max_code) / max_code);
+    return fmax(hi - centre, centre - lo);
 }
 
 /* ---- writing ---------------------------------------------------------------------------------------- */

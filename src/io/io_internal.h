@@ -52,6 +52,11 @@ mr_status mr_atomic_write_bytes(const char *target, const void *bytes, size_t si
  * Preserves errno and the recorded last-error message. */
 void mr_atomic_abort(mr_atomic_file *file);
 
+/* ---- sRGB (srgb.c) ------------------------------------------------------------------------------------ */
+
+/* mr_srgb_to_linear in double, not rounded to float (mr_img_half_step's differences of decodes need it). */
+double mr_srgb_decode_double(double encoded);
+
 /* ---- decoding through OpenImageIO (image_io_oiio.cpp) ----------------------------------------------- */
 
 /* What the shim hands back: the first subimage's data window as interleaved floats with the stored

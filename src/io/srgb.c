@@ -11,12 +11,15 @@
 #include <math.h>
 
 #include "image_io.h"
+#include "io_internal.h"
 
-float mr_srgb_to_linear(float encoded) {
-    double v = encoded, a = fabs(v);
+double mr_srgb_decode_double(double v) {
+    double a = fabs(v);
     double l = a <= 0.04045 ? a / 12.92 : pow((a + 0.055) / 1.055, 2.4);
-    return (float)(v < 0.0 ? -l : (v >= 0.0 ? l : v));
+    return v < 0.0 ? -l : (v >= 0.0 ? l : v);
 }
+
+float mr_srgb_to_linear(float encoded) { return (float)mr_srgb_decode_double(encoded); }
 
 float mr_linear_to_srgb(float linear) {
     double l = linear, a = fabs(l);

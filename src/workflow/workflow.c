@@ -15,6 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../io/image_io.h"
 #include "../mr_internal.h"
 #include "nn/mlp.h"
 #include "workflow_internal.h"
@@ -50,7 +51,19 @@ mr_wf_options mr_wf_options_default(void) {
     o.custom = NULL;
     o.custom_data = NULL;
     o.spec_diffuse = MR_WF_DIFFUSE_PLAIN;
+    for (int c = 0; c < 3; c++) o.diffuse_quantisation.scale[c] = o.specular_quantisation.scale[c] = 1.0;
     return o;
+}
+
+/* MR_OK or MR_ERR_INVALID_ARG for one of the two quantisations. */
+static mr_status check_quantisation(const char *name, const mr_wf_quantisation *q) {
+    if (q->bits != 0 && q->bits != 8 && q->bits != 16)
+        return mr_fail(MR_ERR_INVALID_ARG, "workflow options: %s.bits %d: expected 0 (exact), 8 or 16", name, q->bits);
+    for (int c = 0; q->bits != 0 && c < 3; c++)
+        if (!(q->scale[c] >= 0.0 && isfinite(q->scale[c])))
+            return mr_fail(MR_ERR_INVALID_ARG, "workflow options: %s.scale[%d] %g: expected a finite factor >= 0",
+                           name, c, q->scale[c]);
+    return MR_OK;
 }
 
 mr_status mr_wf_options_check(const mr_wf_options *opts) {
@@ -66,6 +79,9 @@ mr_status mr_wf_options_check(const mr_wf_options *opts) {
     if ((unsigned)opts->spec_diffuse >= MR_WF_DIFFUSE_COUNT)
         return mr_fail(MR_ERR_INVALID_ARG, "workflow options: spec_diffuse %d: unknown (valid: 0 plain, 1 specgloss)",
                        (int)opts->spec_diffuse);
+    mr_status status = check_quantisation("diffuse_quantisation", &opts->diffuse_quantisation);
+    if (status == MR_OK) status = check_quantisation("specular_quantisation", &opts->specular_quantisation);
+    if (status != MR_OK) return status;
     if (opts->method == MR_WF_CUSTOM && opts->custom == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "workflow options: method custom: no callback in opts->custom");
     if (opts->method == MR_WF_KHRONOS && opts->dielectric_f0 != MR_WF_KHRONOS_F0)
@@ -90,29 +106,56 @@ static double sanitise(double x, unsigned *flags) {
     return x;
 }
 
+/* A roughness read into [0, 1]: like sanitise, but non-finite -> 1 (fully rough: a broken texel must not become a
+ * mirror; glossiness 0 gives the same). */
+static double sanitise_roughness(double x, unsigned *flags) {
+    if (!isfinite(x)) {
+        *flags |= MR_WF_NONFINITE_INPUT;
+        return 1.0;
+    }
+    return sanitise(x, flags);
+}
+
 /* Eq. 2 for one channel. */
 static void eq2(double albedo, double metallic, double f0, double *diffuse, double *specular) {
     *diffuse = albedo * (1.0 - metallic);
     *specular = f0 * (1.0 - metallic) + metallic * albedo;
 }
 
-/* Eq. 3 for one channel, generalised to any F0d (workflow.h; derivation in docs/workflow.md): the least metallic
- * (A, m), m in [0, 1], with A^2 - (s + d) A + F0d d = 0. */
-static void eq3(double d, double s, double f0, double eps, double *albedo, double *metallic) {
+/* Eq. 3 for one channel, generalised to any F0d (workflow.h; derivation in docs/workflow.md): the (A, m), m in
+ * [0, 1], with A^2 - (s + d) A + F0d d = 0. Usually one root has m >= 0 (lo = hi, ambiguous 0). Where the larger
+ * root is within eps (the specular's tolerance) of F0d or below, both roots reproduce the channel (ambiguous 1):
+ * lo is the less metallic reading, hi the more metallic one; an ambiguous channel whose specular is within eps of
+ * F0d has the dielectric it may be (A = d, m = 0) as its lo. */
+typedef struct eq3_readings {
+    double a_lo, m_lo, a_hi, m_hi;
+    int ambiguous;
+} eq3_readings;
+
+static eq3_readings eq3(double d, double s, double f0, double eps) {
     double sum = s + d;
     double discriminant = sum * sum - 4.0 * f0 * d;
     if (discriminant < 0.0) discriminant = 0.0; // no exact solution: the nearest, double, root
     double big = 0.5 * (sum + sqrt(discriminant));
+    eq3_readings r = {big, big > 0.0 ? mr_clampd(1.0 - d / big, 0.0, 1.0) : 0.0, 0.0, 0.0, 0};
     if (big > f0 + eps) { // the only root with m >= 0 (the other one, F0d d / big < d, has m < 0)
-        *albedo = big;
-        *metallic = mr_clampd(1.0 - d / big, 0.0, 1.0);
+    } else if (fabs(s - f0) <= eps) { // a dielectric (A = d, m = 0: s = F0d) within the tolerance. Near the double
+        // root the less metallic root is ill-conditioned (dm/ds is infinite): an 8-bit dielectric specular
+        // 0.0395 beside a diffuse of 0.035 would read as m = 0.06 there.
+        r.a_lo = d;
+        r.m_lo = 0.0;
+        r.ambiguous = 1;
     } else if (f0 > 0.0) { // two exact solutions; the smaller root is the less metallic one
-        *albedo = big > 0.0 ? f0 * d / big : 0.0;
-        *metallic = mr_clampd(1.0 - big / f0, 0.0, 1.0);
+        r.a_lo = big > 0.0 ? f0 * d / big : 0.0;
+        r.m_lo = mr_clampd(1.0 - big / f0, 0.0, 1.0);
+        r.ambiguous = 1;
     } else { // F0d = 0 and a black channel: any metallic reproduces it; the least metallic is 0
-        *albedo = d;
-        *metallic = 0.0;
+        r.a_lo = d;
+        r.m_lo = 0.0;
     }
+    r.a_hi = r.ambiguous ? big : r.a_lo;
+    r.m_hi = r.ambiguous ? (big > 0.0 ? mr_clampd(1.0 - d / big, 0.0, 1.0) : 1.0) : r.m_lo;
+    return r;
 }
 
 /* The albedo of one channel that best reproduces (d, s) through Eq. 2 with metallic m (least squares), clamped.
@@ -174,19 +217,55 @@ static unsigned metal_to_spec_texel(const mr_wf_options *o, const double albedo_
     return flags;
 }
 
-/* Eq. 3 per channel and the MEAN or WEIGHTED single metallic. */
-static void analytic_spec_to_metal(const mr_wf_options *o, const double d[3], const double s[3], double albedo[3],
-                                   double *metallic) {
-    double a[3], mc[3];
-    for (int c = 0; c < 3; c++) eq3(d[c], s[c], o->dielectric_f0, o->eps, &a[c], &mc[c]);
-    double m = (mc[0] + mc[1] + mc[2]) / 3.0;
-    if (o->method == MR_WF_WEIGHTED) {
-        double weight = a[0] + a[1] + a[2];
-        if (weight > o->eps) m = (a[0] * mc[0] + a[1] * mc[1] + a[2] * mc[2]) / weight;
+/* How far the Eq. 2 fit with metallic m misses (d, s) beyond the tolerance tol[c] of channel c (both values of a
+ * channel may miss by it: workflow.h, "Tolerances"): the largest miss - tol, <= 0 when everything is within. The
+ * least-squares albedos go to albedo[]. */
+static double excess_miss(const double d[3], const double s[3], const double tol[3], double f0, double m,
+                          double albedo[3]) {
+    double worst = -INFINITY;
+    for (int c = 0; c < 3; c++) {
+        double back_d, back_s;
+        albedo[c] = best_albedo(d[c], s[c], f0, m);
+        eq2(albedo[c], m, f0, &back_d, &back_s);
+        worst = fmax(worst, fmax(fabs(back_d - d[c]), fabs(back_s - s[c])) - tol[c]);
     }
-    m = mr_clampd(m, 0.0, 1.0); // rounding could leave the weighted mean an ulp outside
-    for (int c = 0; c < 3; c++) albedo[c] = best_albedo(d[c], s[c], o->dielectric_f0, m);
-    *metallic = m;
+    return worst;
+}
+
+/* Eq. 3 per channel, the MEAN or WEIGHTED single metallic, and the least-squares albedos for it. ts: the specular
+ * values' tolerances (the ambiguity test's), tol: each channel's (the fit's). An ambiguous channel has two readings;
+ * of the up to 8 combinations the least metallic whose fit is within tol is taken, else the one that misses least
+ * (every channel ambiguous and grey: the less metallic twin, as before; a dark coloured metal: its own readings,
+ * which agree; a channel darker than F0d in a brighter metal: the reading the other channels agree with). */
+static void analytic_spec_to_metal(const mr_wf_options *o, const double d[3], const double s[3], const double ts[3],
+                                   const double tol[3], double albedo[3], double *metallic) {
+    eq3_readings r[3];
+    unsigned ambiguous = 0;
+    for (int c = 0; c < 3; c++) {
+        r[c] = eq3(d[c], s[c], o->dielectric_f0, ts[c]);
+        if (r[c].ambiguous) ambiguous |= 1u << c;
+    }
+    double best_m = 0.0, best_excess = INFINITY;
+    for (unsigned hi = 0; hi < 8; hi++) {
+        if (hi & ~ambiguous) continue; // only ambiguous channels have a second reading
+        double a[3], mc[3], fit[3];
+        for (int c = 0; c < 3; c++) {
+            a[c] = hi & (1u << c) ? r[c].a_hi : r[c].a_lo;
+            mc[c] = hi & (1u << c) ? r[c].m_hi : r[c].m_lo;
+        }
+        double sum = mc[0] + mc[1] + mc[2], weight = a[0] + a[1] + a[2];
+        double m = sum / 3.0;
+        if (o->method == MR_WF_WEIGHTED && weight > o->eps) m = (a[0] * mc[0] + a[1] * mc[1] + a[2] * mc[2]) / weight;
+        m = mr_clampd(m, 0.0, 1.0); // rounding could leave the weighted mean an ulp outside
+        double excess = excess_miss(d, s, tol, o->dielectric_f0, m, fit);
+        int better = excess <= 0.0 ? best_excess > 0.0 || m < best_m : best_excess > 0.0 && excess < best_excess;
+        if (better) {
+            best_m = m;
+            best_excess = excess;
+            memcpy(albedo, fit, sizeof fit);
+        }
+    }
+    *metallic = best_m;
 }
 
 /* A CUSTOM callback's answer, sanitised; METHOD_FAILED when it failed or needed sanitising. */
@@ -204,15 +283,110 @@ static unsigned custom_spec_to_metal(const mr_wf_options *o, const double d[3], 
     return flags != 0 ? MR_WF_METHOD_FAILED : 0u;
 }
 
-static unsigned spec_to_metal_texel(const mr_wf_options *o, const double diffuse_in[3], const double specular_in[3],
-                                    double albedo[3], double *metallic) {
+/* ---- tolerances (workflow.h, "Tolerances") -------------------------------------------------------------------- */
+
+/* An input's quantisation, ready to answer per value. For sRGB codes a batch tabulates, per code q, the decode of
+ * q + 1/2 (upper[q], increasing: a value's code is the first q with value < upper[q]) and mr_img_half_step at q
+ * (half[q]), and per bucket k of [0, 1] in equal parts the code of k / buckets (start[k]; a bucket spans at most
+ * 7 codes, where they are densest, near 0), so a value costs a few comparisons instead of three pow() calls;
+ * without tables (upper NULL: the per-texel API) mr_img_half_step is called. 16-bit tables take 1 MB, kept that
+ * small because each value looks them up at random. */
+typedef struct quantisation {
+    const mr_wf_quantisation *q;
+    int max_code;      /* 255 or 65535; 0 when bits is 0 */
+    int buckets;       /* 4096 for 8 bits, 131072 for 16 */
+    float *upper;      /* max_code values (decodes are floats), or NULL */
+    double *half;      /* max_code + 1 values, or NULL */
+    uint16_t *start;   /* buckets values, or NULL */
+} quantisation;
+
+static quantisation quantisation_plain(const mr_wf_quantisation *q) {
+    int max_code = q->bits == 0 ? 0 : (1 << q->bits) - 1;
+    quantisation t = {q, max_code, q->bits == 8 ? 4096 : 131072, NULL, NULL, NULL};
+    return t;
+}
+
+/* The tables for sRGB codes (nothing to tabulate for linear ones or bits 0). MR_ERR_NOMEM (t left plain). */
+static mr_status quantisation_tabulate(const mr_wf_quantisation *q, quantisation *t) {
+    *t = quantisation_plain(q);
+    if (t->max_code == 0 || !q->srgb) return MR_OK;
+    float *upper = malloc((size_t)t->max_code * sizeof *upper);
+    double *half = malloc(((size_t)t->max_code + 1) * sizeof *half);
+    uint16_t *start = malloc((size_t)t->buckets * sizeof *start);
+    if (upper == NULL || half == NULL || start == NULL) {
+        free(upper);
+        free(half);
+        free(start);
+        return mr_fail(MR_ERR_NOMEM, "spec -> metal batch: out of memory for a %d-bit sRGB tolerance table", q->bits);
+    }
+    for (int code = 0; code <= t->max_code; code++) {
+        // The same decodes mr_img_half_step compares with, so the table answers exactly what it would.
+        half[code] = mr_img_half_step(mr_srgb_to_linear((float)((double)code / t->max_code)), q->bits, MR_IMG_COLOR);
+        if (code < t->max_code) upper[code] = mr_srgb_to_linear((float)((code + 0.5) / t->max_code));
+    }
+    for (int k = 0, code = 0; k < t->buckets; k++) {
+        while (code < t->max_code && (double)k / t->buckets >= upper[code]) code++;
+        start[k] = (uint16_t)code;
+    }
+    t->upper = upper;
+    t->half = half;
+    t->start = start;
+    return MR_OK;
+}
+
+static void quantisation_free(quantisation *t) {
+    free(t->upper);
+    free(t->half);
+    free(t->start);
+    t->upper = NULL;
+    t->half = NULL;
+    t->start = NULL;
+}
+
+/* The tolerance of value v (sanitised) of channel c: max(eps, scale[c] x half a code at v / scale[c]). */
+static double tolerance(const quantisation *t, int c, double v, double eps) {
+    const mr_wf_quantisation *q = t->q;
+    if (t->max_code == 0 || q->scale[c] <= 0.0) return eps;
+    double step;
+    if (!q->srgb) {
+        step = 0.5 / t->max_code;
+    } else if (t->upper == NULL) {
+        step = mr_img_half_step(v / q->scale[c], q->bits, MR_IMG_COLOR);
+    } else {
+        double x = mr_clampd(v / q->scale[c], 0.0, 1.0);
+        int k = (int)(x * t->buckets);
+        int code = t->start[k < t->buckets ? k : t->buckets - 1]; // the code of the bucket's start: <= x's
+        while (code < t->max_code && x >= t->upper[code]) code++;
+        step = t->half[code];
+    }
+    step *= q->scale[c];
+    return step > eps ? step : eps;
+}
+
+/* ---- spec -> metal -------------------------------------------------------------------------------------------- */
+
+/* One texel spec -> metal; qd and qs: how its diffuse and specular were stored. */
+static unsigned spec_to_metal_texel(const mr_wf_options *o, const quantisation *qd, const quantisation *qs,
+                                    const double diffuse_in[3], const double specular_in[3], double albedo[3],
+                                    double *metallic) {
     unsigned flags = 0;
-    double d[3], s[3];
+    double d[3], s[3], tol_d[3], ts[3]; // the values and their tolerances
     for (int c = 0; c < 3; c++) {
         d[c] = sanitise(diffuse_in[c], &flags);
         s[c] = sanitise(specular_in[c], &flags);
+        tol_d[c] = tolerance(qd, c, d[c], o->eps);
+        ts[c] = tolerance(qs, c, s[c], o->eps);
     }
-    if (reads_specgloss(o)) specgloss_dim(d, s); // from here on, d is the diffuse lobe Eq. 2 describes
+    if (reads_specgloss(o)) { // from here on, d is the diffuse lobe Eq. 2 describes
+        // Its tolerance, to first order: d (1 - s_k) moves by t_d (1 - s_k) + d t_s[k], k the channel of max s.
+        int k = s[1] > s[0] ? 1 : 0;
+        k = s[2] > s[k] ? 2 : k;
+        double factor = specgloss_diffuse_factor(s);
+        for (int c = 0; c < 3; c++) tol_d[c] = tol_d[c] * factor + d[c] * ts[k];
+        specgloss_dim(d, s);
+    }
+    // Both values of channel c may miss by both tolerances: a fit spreads an error in either over both.
+    double tol[3] = {tol_d[0] + ts[0], tol_d[1] + ts[1], tol_d[2] + ts[2]};
     double back_d[3], back_s[3]; // the result put through the method's forward conversion
     if (o->method == MR_WF_KHRONOS) {
         mr_wf_khronos_spec_to_metal(d, s, albedo, metallic);
@@ -221,11 +395,11 @@ static unsigned spec_to_metal_texel(const mr_wf_options *o, const double diffuse
         if (o->method == MR_WF_CUSTOM)
             flags |= custom_spec_to_metal(o, d, s, albedo, metallic);
         else
-            analytic_spec_to_metal(o, d, s, albedo, metallic);
+            analytic_spec_to_metal(o, d, s, ts, tol, albedo, metallic);
         for (int c = 0; c < 3; c++) eq2(albedo[c], *metallic, o->dielectric_f0, &back_d[c], &back_s[c]);
     }
     for (int c = 0; c < 3; c++)
-        if (!(fabs(back_d[c] - d[c]) <= o->eps && fabs(back_s[c] - s[c]) <= o->eps)) flags |= MR_WF_OFF_MANIFOLD;
+        if (!(fabs(back_d[c] - d[c]) <= tol[c] && fabs(back_s[c] - s[c]) <= tol[c])) flags |= MR_WF_OFF_MANIFOLD;
     return flags;
 }
 
@@ -236,7 +410,7 @@ mr_status mr_wf_metal_to_spec(const mr_wf_metal *in, const mr_wf_options *opts, 
     mr_wf_options o = opts ? *opts : mr_wf_options_default();
     mr_wf_spec result;
     unsigned f = metal_to_spec_texel(&o, in->albedo, in->metallic, result.diffuse, result.specular);
-    result.roughness = sanitise(in->roughness, &f);
+    result.roughness = sanitise_roughness(in->roughness, &f);
     *out = result;
     if (flags) *flags = f;
     return MR_OK;
@@ -248,8 +422,9 @@ mr_status mr_wf_spec_to_metal(const mr_wf_spec *in, const mr_wf_options *opts, m
     if (status != MR_OK) return status;
     mr_wf_options o = opts ? *opts : mr_wf_options_default();
     mr_wf_metal result;
-    unsigned f = spec_to_metal_texel(&o, in->diffuse, in->specular, result.albedo, &result.metallic);
-    result.roughness = sanitise(in->roughness, &f);
+    quantisation qd = quantisation_plain(&o.diffuse_quantisation), qs = quantisation_plain(&o.specular_quantisation);
+    unsigned f = spec_to_metal_texel(&o, &qd, &qs, in->diffuse, in->specular, result.albedo, &result.metallic);
+    result.roughness = sanitise_roughness(in->roughness, &f);
     *out = result;
     if (flags) *flags = f;
     return MR_OK;
@@ -291,7 +466,7 @@ mr_status mr_wf_metal_to_spec_batch(const mr_wf_metal_maps *in, size_t n, const 
         double rough = rough_in ? rough_in[i] : 0.0;
         double d[3], s[3];
         unsigned f = metal_to_spec_texel(&o, a, m, d, s);
-        rough = sanitise(rough, &f);
+        rough = sanitise_roughness(rough, &f);
         for (int c = 0; c < 3; c++) {
             diffuse[3 * i + c] = (float)d[c];
             specular[3 * i + c] = (float)s[c];
@@ -313,6 +488,13 @@ mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_maps *in, size_t n, const m
     mr_status status = check_batch(what, n, opts, in->roughness, out->roughness);
     if (status != MR_OK) return status;
     mr_wf_options o = opts ? *opts : mr_wf_options_default();
+    quantisation qd, qs = quantisation_plain(&o.specular_quantisation);
+    status = quantisation_tabulate(&o.diffuse_quantisation, &qd);
+    if (status == MR_OK) status = quantisation_tabulate(&o.specular_quantisation, &qs);
+    if (status != MR_OK) {
+        quantisation_free(&qd);
+        return status;
+    }
     const float *diffuse = in->diffuse, *specular = in->specular, *rough_in = in->roughness;
     float *albedo = out->albedo, *metallic = out->metallic, *rough_out = out->roughness;
 
@@ -322,13 +504,15 @@ mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_maps *in, size_t n, const m
         double s[3] = {specular[3 * i], specular[3 * i + 1], specular[3 * i + 2]};
         double rough = rough_in ? rough_in[i] : 0.0;
         double a[3], m;
-        unsigned f = spec_to_metal_texel(&o, d, s, a, &m);
-        rough = sanitise(rough, &f);
+        unsigned f = spec_to_metal_texel(&o, &qd, &qs, d, s, a, &m);
+        rough = sanitise_roughness(rough, &f);
         for (int c = 0; c < 3; c++) albedo[3 * i + c] = (float)a[c];
         metallic[i] = (float)m;
         if (rough_out) rough_out[i] = (float)rough;
         if (flags) flags[i] = (uint8_t)f;
     }
+    quantisation_free(&qd);
+    quantisation_free(&qs);
     return MR_OK;
 }
 
@@ -459,7 +643,7 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
                 else
                     out->metallic[i] = (float)v;
             }
-            if (out->roughness) out->roughness[i] = (float)sanitise(in->roughness[i], &f);
+            if (out->roughness) out->roughness[i] = (float)sanitise_roughness(in->roughness[i], &f);
             if (flags) flags[i] = (uint8_t)f;
         }
     }

@@ -6,6 +6,8 @@
  * Main calls:
  *   mr_wf_options o = mr_wf_options_default();          // F0d 0.04 (glTF), WEIGHTED, eps 1e-6
  *   o.dielectric_f0 = MR_WF_F0_PAPER;                    // ... or the paper's 0.03
+ *   o.diffuse_quantisation = (mr_wf_quantisation){8, 1, {1, 1, 1}};  // from an 8-bit sRGB texture: the
+ *   o.specular_quantisation = o.diffuse_quantisation;                // flags allow half a code ("Tolerances")
  *   mr_wf_spec s;  unsigned flags;
  *   mr_wf_metal_to_spec(&(mr_wf_metal){{0.9, 0.5, 0.2}, 0.7, 0.3}, &o, &s, &flags);   // one texel
  *   mr_wf_spec_to_metal_batch(&spec_maps, n, &o, &metal_maps, flags8);                  // n texels
@@ -23,12 +25,16 @@
  *       A_c = ((s_c + d_c) + sqrt(max((s_c + d_c)^2 - 4 F0d d_c, 0))) / 2,   m_c = 1 - d_c / A_c,
  *     which is the paper's (s+d)/2 (1 + sqrt(1 - 4 F0d d/(s+d)^2)) and (s - F0d)/(A - F0d) without their divisions
  *     by s + d and A - F0d. A negative discriminant (no exact solution: s + d < 2 sqrt(F0d d)) is clamped to 0.
- *     Where that root is A_c <= F0d + eps, the channel has two exact solutions (A_c, m_c) and
- *     (F0d d_c / A_c, 1 - A_c / F0d) (the roots multiply to F0d d_c): the second, less metallic one is taken (also,
- *     as the nearest reading, when the discriminant was clamped). It is m_c = 0 for every dark
- *     dielectric (albedo <= F0d, m = 0, which Eq. 3's root would read as m = 1 - d/F0d), and it makes black
- *     (d = s = 0) albedo 0 with metallic 1: the only metallic material that renders black (a dielectric
- *     reflects F0d). m_c is clamped to [0, 1] (it is negative only off the manifold, where d_c > A_c).
+ *     Where that root is A_c <= F0d + t_s (t_s: the specular value's tolerance, eps by default), the channel is
+ *     ambiguous: it has two exact readings, (A_c, m_c) and the less metallic (F0d d_c / A_c, 1 - A_c / F0d) (the
+ *     roots multiply to F0d d_c; also, as the nearest readings, when the discriminant was clamped). The less
+ *     metallic one is m_c = 0 for every dark dielectric (albedo <= F0d, m = 0, which the larger root would read as
+ *     m = 1 - d/F0d), and albedo 0 with metallic 1 for black (d = s = 0): the only metallic material that renders
+ *     black (a dielectric reflects F0d). If moreover |s_c - F0d| <= t_s, the less metallic reading is the
+ *     dielectric (A_c = d_c, m_c = 0), which reproduces the channel within its tolerance: near the double root the
+ *     second root is ill-conditioned (dm/ds is infinite there), and an 8-bit dielectric specular (0.0395 for
+ *     0.04) beside a diffuse of 0.035 would read as m = 0.068. m_c is clamped to [0, 1] (it is negative only off
+ *     the manifold, where d_c > A_c).
  *   - MEAN:     m = (m_r + m_g + m_b) / 3                                    (the paper's strategy 1)
  *   - WEIGHTED: m = sum_c A_c m_c / sum_c A_c, or MEAN when sum_c A_c <= eps (the paper's strategy 2). On the
  *     manifold A_c m_c = A_c - d_c, so m = 1 - sum d / sum A: the metallic that keeps the channel-summed diffuse
@@ -36,6 +42,11 @@
  *   - then, for the one chosen m, each channel's albedo is the least-squares fit of Eq. 2 to (d_c, s_c),
  *       A_c = clamp(((1 - m) d_c + m (s_c - F0d (1 - m))) / ((1 - m)^2 + m^2), 0, 1),
  *     which returns the exact albedo whenever (d_c, s_c) is reachable with this m.
+ *   - ambiguous channels: each combination of their readings (at most 8) gives an m and a fit; the least metallic
+ *     combination whose fit reproduces the texel within its tolerance T_c (below) is taken, else the one that
+ *     misses by least. So a channel darker than F0d in a brighter metal takes the reading the other channels
+ *     agree with (the texel stays exact), and a texel ambiguous in every channel keeps its less metallic readings
+ *     where they agree (dark dielectrics; a dark grey metal reads as its twin, which renders alike).
  *   - KHRONOS: the glTF project's converter (KHR_materials_pbrSpecularGlossiness, convert-between-workflows,
  *     three.pbrUtilities.js) in both directions, operation for operation in double precision: perceived
  *     brightness instead of channels, diffuse renormalised by (1 - max_c s_c) / (1 - 0.04), its own epsilon 1e-6.
@@ -47,16 +58,45 @@
  * to it, which only removes rounding excess, e.g. Khronos's diffuse for an albedo channel of 1 can come out
  * ~1e-12 above 1); per-texel flags (mr_wf_flag):
  *   - an input outside [0, 1] is clamped to it (MR_WF_CLAMPED_INPUT);
- *   - a NaN or infinite input is read as 0 (MR_WF_NONFINITE_INPUT);
+ *   - a NaN or infinite input is read as 0, a roughness as 1 (below) (MR_WF_NONFINITE_INPUT);
  *   - MR_WF_OFF_MANIFOLD (spec -> metal): the result, put through the method's forward conversion (Eq. 2;
- *     Khronos's own for KHRONOS), misses the sanitised input by more than eps in some value. That is: the input
- *     is not reachable with one metallic (a coloured dielectric F0, specular above what the albedo allows, a
- *     negative discriminant), or the single-metallic choice missed an exact solution (a metal with a channel
- *     darker than F0d, whose ambiguous channel reads less metallic).
+ *     Khronos's own for KHRONOS), misses the sanitised input by more than its tolerance T_c ("Tolerances" below:
+ *     2 eps by default) in some value. That is: the input is not reachable with one metallic (a coloured
+ *     dielectric F0, specular above what the albedo allows or below F0d, a negative discriminant), or the
+ *     single-metallic choice missed one (MEAN averaging a dark channel's noisy m_c in; KHRONOS's own losses).
  *   - MR_WF_METHOD_FAILED: the CUSTOM callback returned non-zero (the texel is then albedo 0, metallic 0) or a
  *     value outside [0, 1] or non-finite (sanitised).
  * metal -> spec is a closed formula (Eq. 2 is exact) and sets OFF_MANIFOLD only under MR_WF_DIFFUSE_SPECGLOSS, for
  * a texel whose spec-gloss diffuse would have to exceed 1.
+ * Roughness (either direction) is the exception to "non-finite is read as 0": a NaN or infinite roughness is read
+ * as 1, fully rough (flagged MR_WF_NONFINITE_INPUT), so a broken texel never becomes a mirror. A caller turning
+ * glossiness into roughness = 1 - glossiness keeps NaN and infinities non-finite, and gets the same texel as a
+ * non-finite glossiness read as 0.
+ *
+ * Tolerances. OFF_MANIFOLD asks whether the input could be a metallic material's, up to how precisely the input
+ * is known. By default every value is taken as exact to opts->eps (1e-6: float rounding). A value decoded from an
+ * 8-bit texture is only known to half a code value (up to 0.0044 in linear units), and at 1e-6 the flag marks most
+ * texels of a clean metal-rough export. opts->diffuse_quantisation and opts->specular_quantisation say how each
+ * input map was stored (mr_wf_quantisation: bits, sRGB or linear codes, the factor applied after decoding); the
+ * tolerance of a value v of that map, channel c, is then
+ *     t = max(eps, scale[c] * mr_img_half_step(v / scale[c], bits, sRGB or linear))
+ * (image_io.h: half a code value at the code nearest to v / scale[c]), so it varies per texel and per value; with
+ * bits 0 (the default) t = eps. With t_d (the diffuse value's) and t_s (the specular's), per channel c:
+ *   - the compared diffuse is the lobe d (1 - max s) under MR_WF_DIFFUSE_SPECGLOSS, so its own tolerance is
+ *     t_d[c] (1 - max s) + d[c] t_s[k], k the channel of max s (first-order propagation); plain: t_d[c];
+ *   - both forward-converted values of channel c, diffuse and specular, may miss their inputs by
+ *     T_c = t_d'[c] + t_s[c] (t_d' the diffuse's own, as above): the result depends on both inputs, and a fit
+ *     spreads an error in either over both (on channel c's manifold line, an input error (e_d, e_s) leaves the
+ *     residual (m e_d - (1 - m) e_s) (m, -(1 - m)) / (m^2 + (1 - m)^2), each component at most |e_d| + |e_s| / 2;
+ *     the single metallic's own error adds to it). With the default eps this is 2 eps (plain convention);
+ *   - the Eq. 3 ambiguity test is A_c <= F0d + t_s[c]: the root moves with the specular by dA/ds = A/sqrt(disc),
+ *     about 1 for a dark channel (d << F0d), and hardly with the diffuse there, so a dark dielectric whose
+ *     quantised specular lands a code above F0d still reads as m = 0 rather than as a half metal.
+ * The WEIGHTED "black texel" test (sum of albedos <= eps) always uses eps: it guards a division, not a precision.
+ * mr_wf_spec_to_metal_mlp_batch computes no OFF_MANIFOLD and ignores the quantisations. The batch tabulates sRGB
+ * quantisations (8 bits: 11 KB; 16 bits: 1 MB, allocated per call: MR_ERR_NOMEM) and answers exactly what the
+ * per-texel functions, which call mr_img_half_step, answer. Near-black partial metals (every channel <= ~0.05)
+ * can still be flagged: one code of diffuse moves their metallic by hundredths (docs/workflow.md has figures).
  *
  * Batched layout (mr_wf_*_maps): planar, one array per texture map, n texels each; an RGB map holds 3n floats,
  * channels interleaved per texel (texel i at [3i, 3i + 3), the pixel buffer of a 3-channel mr_image); a scalar map
@@ -66,10 +106,12 @@
  *
  * Arguments: opts may be NULL (the defaults). Invalid arguments (NULL pointers, dielectric_f0 outside [0, 1) or
  * not finite, eps outside [0, 1), an unknown method, CUSTOM without a callback, KHRONOS with F0d != 0.04, n too
- * large) return MR_ERR_INVALID_ARG with mr_last_error() naming the value; outputs are then untouched.
+ * large, a quantisation with bits other than 0, 8 or 16 or a negative or non-finite scale) return
+ * MR_ERR_INVALID_ARG with mr_last_error() naming the value; outputs are then untouched.
  * Threads: the batch functions run an OpenMP parallel for over texels; every texel is a pure function of its own
  * inputs, so results are bit-identical for any thread count and equal to the per-texel functions' (rounded to
- * float). All functions are reentrant. Ownership: nothing is allocated; the caller owns every array.
+ * float). All functions are reentrant. Ownership: the caller owns every array; the only allocations are the
+ * spec -> metal batch's tolerance tables (freed before it returns) and the network's blocks.
  * The library never prints, exits or aborts.
  */
 #ifndef MR_WORKFLOW_H
@@ -123,8 +165,8 @@ mr_status mr_wf_method_from_name(const char *name, mr_wf_method *out);
 /* Per-texel flag bits (a texel's flags are their OR; 0 = clean). */
 typedef enum mr_wf_flag {
     MR_WF_CLAMPED_INPUT = 1u << 0,   /* an input was outside [0, 1] and was clamped */
-    MR_WF_NONFINITE_INPUT = 1u << 1, /* an input was NaN or infinite and was read as 0 */
-    MR_WF_OFF_MANIFOLD = 1u << 2,    /* spec -> metal result misses the input by more than eps */
+    MR_WF_NONFINITE_INPUT = 1u << 1, /* an input was NaN or infinite and was read as 0 (a roughness: as 1) */
+    MR_WF_OFF_MANIFOLD = 1u << 2,    /* spec -> metal result misses the input by more than its tolerance */
     MR_WF_METHOD_FAILED = 1u << 3    /* the CUSTOM callback failed or returned values outside [0, 1] */
 } mr_wf_flag;
 
@@ -141,6 +183,16 @@ typedef struct mr_wf_spec {
     double roughness;   /* passes through */
 } mr_wf_spec;
 
+/* How an input map of spec -> metal was stored, which bounds how precisely its values are known (see
+ * "Tolerances" above). mr_wf_options_default() gives bits 0 and scale 1, 1, 1. */
+typedef struct mr_wf_quantisation {
+    int bits;        /* 0: exact to opts->eps (float maps, constants; the default); 8 or 16: each value was decoded
+                        from an unsigned integer code of that many bits, then multiplied by scale[c] */
+    int srgb;        /* with bits 8/16: 1 = sRGB-encoded codes (colour textures), 0 = linear codes */
+    double scale[3]; /* with bits 8/16: the factor (finite, >= 0) that multiplied each channel's decoded value
+                        (glTF's factors), default 1; a value of channel c is known to scale[c] times half a code */
+} mr_wf_quantisation;
+
 struct mr_wf_options;
 
 /* A caller-supplied spec -> metal converter for MR_WF_CUSTOM (the slot for nn/'s MLP). It gets the sanitised
@@ -155,11 +207,15 @@ typedef struct mr_wf_options {
     mr_wf_method method;    /* default MR_WF_WEIGHTED */
     double eps;             /* absolute reflectance tolerance in [0, 1), default MR_WF_DEFAULT_EPS: an Eq. 3 root
                                within eps of F0d counts as ambiguous, albedos summing to <= eps fall back to MEAN,
-                               a residual above eps sets MR_WF_OFF_MANIFOLD. 0 makes the flag see rounding. */
+                               a residual above 2 eps sets MR_WF_OFF_MANIFOLD (eps on each input). 0 makes the flag
+                               see rounding. The quantisations below raise it per value (see "Tolerances") */
     mr_wf_custom_fn custom; /* MR_WF_CUSTOM only; default NULL */
     void *custom_data;      /* passed through to custom (via opts); default NULL */
     mr_wf_diffuse spec_diffuse; /* how the specular side's diffuse is read; default MR_WF_DIFFUSE_PLAIN. KHRONOS
                                    always reads it as spec-gloss (its own renormalisation) and ignores this */
+    mr_wf_quantisation diffuse_quantisation;  /* spec -> metal: how the diffuse input was stored; default exact
+                                                 (bits 0: tolerance eps). See "Tolerances" above */
+    mr_wf_quantisation specular_quantisation; /* the same for the specular input */
 } mr_wf_options;
 
 /* The defaults listed above. (A zero-initialised struct is valid but means F0d 0 and MEAN.) */
