@@ -523,7 +523,9 @@ mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_maps *in, size_t n, const m
 void mr_wf_residual_anchor_of(const double lobe[3], const double specular[3], mr_wf_residual_anchor *out) {
     mr_wf_options o = mr_wf_options_default();
     o.method = MR_WF_WEIGHTED;
-    analytic_spec_to_metal(&o, lobe, specular, out->albedo, &out->metallic);
+    // float inputs: every value's tolerance is eps, so both values of a channel together may miss by 2 eps
+    const double ts[3] = {o.eps, o.eps, o.eps}, tol[3] = {2.0 * o.eps, 2.0 * o.eps, 2.0 * o.eps};
+    analytic_spec_to_metal(&o, lobe, specular, ts, tol, out->albedo, &out->metallic);
     double r = 0.0, dm = 0.0, sm = 0.0, dc = 0.0, sc = 0.0;
     for (int c = 0; c < 3; c++) {
         double back_d, back_s;
