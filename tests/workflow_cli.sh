@@ -562,4 +562,19 @@ diffstats "$avocado/Avocado_roughnessMetallic.png" "$tmp/avocado_metallicRoughne
 check "khronos = the asset's metallic-roughness map within one step (max error $maxerr)" below "$maxerr" 0.0040
 check "... and no texel more than one step off ($over %)" below "$over" 0.000001
 
+# Issue 12's known answers for the default (the shipped network): a black glossy dielectric stays a grey
+# dielectric, a grey input gives a grey output (the residual form: exact where Eq. 2 is, neutral on grey).
+grey_and_below() { # LINE MAX_METALLIC: base colour channels equal within 1e-3 and metallic <= MAX
+    awk -v max="$2" '{ for (i = 1; i <= NF; i++) { split($i, kv, "="); v[kv[1]] = kv[2] } }
+        END { split(v["basecolor"], c, ","); m = v["metallic"] + 0
+              d = (c[1] > c[2] ? c[1] - c[2] : c[2] - c[1]) + (c[1] > c[3] ? c[1] - c[3] : c[3] - c[1])
+              exit !(d <= 1e-3 && m <= max) }' <<<"$1"
+}
+line=$("$bin" spec2metal --diffuse 0.0037 --specular 0.04 --glossiness 0.97 2>/dev/null | tail -n 1)
+check "default: black glossy plastic stays a grey dielectric ($line)" grey_and_below "$line" 0.02
+line=$("$bin" spec2metal --diffuse 1 --specular 0 --glossiness 0.5 2>/dev/null | tail -n 1)
+check "default: diffuse 1, specular 0 gives a grey base colour ($line)" grey_and_below "$line" 1
+line=$("$bin" spec2metal --diffuse 0.3 --specular 0.5 --glossiness 0.5 2>/dev/null | tail -n 1)
+check "default: a grey off-manifold texel stays grey ($line)" grey_and_below "$line" 1
+
 finish

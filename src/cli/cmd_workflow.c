@@ -722,7 +722,9 @@ static void print_spec2metal_help(void) {
            "                             --glossiness\n"
            "\n");
     printf("Method:\n"
-           "  --method M        mlp (default): the trained network (6 x 300 x 4, docs/workflow.md);\n"
+           "  --method M        mlp (default): the trained network (6 x 300 x 4, docs/training.md): weighted\n"
+           "                    wherever Eq. 2 is exactly invertible, a learned correction off it (first on the\n"
+           "                    shared assets by object SSIM, docs/evaluation.md);\n"
            "                    weighted: Eq. 3 per channel, one albedo-weighted metallic (the paper's strategy 2);\n"
            "                    mean: Eq. 3 per channel, the mean metallic (strategy 1);\n"
            "                    khronos: the glTF project's converter (perceived brightness)\n"
