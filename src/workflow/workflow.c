@@ -245,27 +245,47 @@ static void analytic_spec_to_metal(const mr_wf_options *o, const double d[3], co
         r[c] = eq3(d[c], s[c], o->dielectric_f0, ts[c]);
         if (r[c].ambiguous) ambiguous |= 1u << c;
     }
-    double best_m = 0.0, best_excess = INFINITY;
+    // Each combination's single m (cheap), then the fits (dearer) in order of increasing m: the first that fits
+    // is the answer. Ties in m keep the order of `hi`, so the answer does not depend on the search.
+    double cand_m[8];
+    unsigned cand_hi[8], count = 0;
     for (unsigned hi = 0; hi < 8; hi++) {
         if (hi & ~ambiguous) continue; // only ambiguous channels have a second reading
-        double a[3], mc[3], fit[3];
+        double a[3], mc[3];
         for (int c = 0; c < 3; c++) {
             a[c] = hi & (1u << c) ? r[c].a_hi : r[c].a_lo;
             mc[c] = hi & (1u << c) ? r[c].m_hi : r[c].m_lo;
         }
-        double sum = mc[0] + mc[1] + mc[2], weight = a[0] + a[1] + a[2];
-        double m = sum / 3.0;
+        double weight = a[0] + a[1] + a[2];
+        double m = (mc[0] + mc[1] + mc[2]) / 3.0;
         if (o->method == MR_WF_WEIGHTED && weight > o->eps) m = (a[0] * mc[0] + a[1] * mc[1] + a[2] * mc[2]) / weight;
         m = mr_clampd(m, 0.0, 1.0); // rounding could leave the weighted mean an ulp outside
-        double excess = excess_miss(d, s, tol, o->dielectric_f0, m, fit);
-        int better = excess <= 0.0 ? best_excess > 0.0 || m < best_m : best_excess > 0.0 && excess < best_excess;
-        if (better) {
-            best_m = m;
+        unsigned k = count++;
+        for (; k > 0 && cand_m[k - 1] > m; k--) { // insertion sort by m, stable
+            cand_m[k] = cand_m[k - 1];
+            cand_hi[k] = cand_hi[k - 1];
+        }
+        cand_m[k] = m;
+        cand_hi[k] = hi;
+    }
+    if (count == 1) { // nothing is ambiguous: the one combination, no fit to compare
+        for (int c = 0; c < 3; c++) albedo[c] = best_albedo(d[c], s[c], o->dielectric_f0, cand_m[0]);
+        *metallic = cand_m[0];
+        return;
+    }
+    double best_excess = INFINITY;
+    unsigned best_hi = 8;
+    for (unsigned k = 0; k < count; k++) {
+        double fit[3];
+        double excess = excess_miss(d, s, tol, o->dielectric_f0, cand_m[k], fit);
+        if (excess < best_excess || (excess == best_excess && cand_hi[k] < best_hi)) {
             best_excess = excess;
+            best_hi = cand_hi[k];
+            *metallic = cand_m[k];
             memcpy(albedo, fit, sizeof fit);
         }
+        if (excess <= 0.0) return; // the least metallic combination that fits
     }
-    *metallic = best_m;
 }
 
 /* A CUSTOM callback's answer, sanitised; METHOD_FAILED when it failed or needed sanitising. */
@@ -344,7 +364,7 @@ static void quantisation_free(quantisation *t) {
 }
 
 /* The tolerance of value v (sanitised) of channel c: max(eps, scale[c] x half a code at v / scale[c]). */
-static double tolerance(const quantisation *t, int c, double v, double eps) {
+static inline double tolerance(const quantisation *t, int c, double v, double eps) {
     const mr_wf_quantisation *q = t->q;
     if (t->max_code == 0 || q->scale[c] <= 0.0) return eps;
     double step;
@@ -353,7 +373,7 @@ static double tolerance(const quantisation *t, int c, double v, double eps) {
     } else if (t->upper == NULL) {
         step = mr_img_half_step(v / q->scale[c], q->bits, MR_IMG_COLOR);
     } else {
-        double x = mr_clampd(v / q->scale[c], 0.0, 1.0);
+        double x = mr_clampd(q->scale[c] == 1.0 ? v : v / q->scale[c], 0.0, 1.0);
         int k = (int)(x * t->buckets);
         int code = t->start[k < t->buckets ? k : t->buckets - 1]; // the code of the bucket's start: <= x's
         while (code < t->max_code && x >= t->upper[code]) code++;

@@ -75,7 +75,7 @@
  *
  * Tolerances. OFF_MANIFOLD asks whether the input could be a metallic material's, up to how precisely the input
  * is known. By default every value is taken as exact to opts->eps (1e-6: float rounding). A value decoded from an
- * 8-bit texture is only known to half a code value (up to 0.0044 in linear units), and at 1e-6 the flag marks most
+ * 8-bit texture is only known to half a code value (up to 0.0045 in linear units), and at 1e-6 the flag marks most
  * texels of a clean metal-rough export. opts->diffuse_quantisation and opts->specular_quantisation say how each
  * input map was stored (mr_wf_quantisation: bits, sRGB or linear codes, the factor applied after decoding); the
  * tolerance of a value v of that map, channel c, is then
@@ -88,10 +88,12 @@
  *     T_c = t_d'[c] + t_s[c] (t_d' the diffuse's own, as above): the result depends on both inputs, and a fit
  *     spreads an error in either over both (on channel c's manifold line, an input error (e_d, e_s) leaves the
  *     residual (m e_d - (1 - m) e_s) (m, -(1 - m)) / (m^2 + (1 - m)^2), each component at most |e_d| + |e_s| / 2;
- *     the single metallic's own error adds to it). With the default eps this is 2 eps (plain convention);
- *   - the Eq. 3 ambiguity test is A_c <= F0d + t_s[c]: the root moves with the specular by dA/ds = A/sqrt(disc),
- *     about 1 for a dark channel (d << F0d), and hardly with the diffuse there, so a dark dielectric whose
- *     quantised specular lands a code above F0d still reads as m = 0 rather than as a half metal.
+ *     the single metallic's own error adds to it). With the default eps this is 2 eps (plain convention). The
+ *     choice among ambiguous channels' readings (above) asks the same question of each combination;
+ *   - the Eq. 3 ambiguity test is A_c <= F0d + t_s[c], and the dielectric reading |s_c - F0d| <= t_s[c]: the
+ *     root moves with the specular by dA/ds = A/sqrt(disc), about 1 for a dark channel (d << F0d), and hardly
+ *     with the diffuse there, so a dark dielectric whose quantised specular lands a code above or below F0d still
+ *     reads as m = 0 rather than as a half metal or m = 0.068.
  * The WEIGHTED "black texel" test (sum of albedos <= eps) always uses eps: it guards a division, not a precision.
  * mr_wf_spec_to_metal_mlp_batch computes no OFF_MANIFOLD and ignores the quantisations. The batch tabulates sRGB
  * quantisations (8 bits: 11 KB; 16 bits: 1 MB, allocated per call: MR_ERR_NOMEM) and answers exactly what the
