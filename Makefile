@@ -9,6 +9,8 @@
 #   make analyses   the paper's stability analyses (docs/analyses.md)
 #   make evaluation the workflow converters on the real texture sets of ../shared/assets (docs/evaluation.md)
 #   make evaluation-gltf   the glTF conversions and gltf-transform's, rendered as meshes (docs/evaluation.md)
+#   make evaluation-viewers   the same conversions in the viewers people use: Blender Cycles and three.js in
+#                   headless Chromium (docs/evaluation.md, "What viewers show"; installs Blender, Chromium, npm pins)
 #   make dataset    the specular -> metallic training set (build/dataset); make train: data/spec2metal.mlp
 #   make deps       installs the Debian packages the project needs (scripts/install-deps.sh)
 #   make install PREFIX=/usr/local   tools, static library, public headers, matremap.pc and the network
@@ -57,7 +59,8 @@ PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h 
                   src/io/image_io.h src/metrics/metrics.h src/remap/remap.h src/workflow/workflow.h \
                   src/workflow/dataset.h src/report/report.h nn/mlp.h gltf/mr_gltf.h
 
-.PHONY: all check asan demo bench analyses evaluation evaluation-gltf dataset train deps install clean
+.PHONY: all check asan demo bench analyses evaluation evaluation-gltf evaluation-viewers dataset train deps install \
+        clean
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
 all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE)
@@ -138,6 +141,15 @@ evaluation: all
 
 evaluation-gltf: all
 	scripts/evaluate-gltf.sh $(BUILD)
+
+# object_metrics: SSIM and luminance over a render's object pixels (its alpha), from mr_ssim's map.
+OBJECT_METRICS := $(BUILD)/tools/object_metrics
+$(OBJECT_METRICS): $(BUILD)/obj/scripts/viewers/object_metrics.o $(LIB)
+	@mkdir -p $(dir $@)
+	$(LINK) $(LDFLAGS) $< $(LIB) $(LDLIBS) -o $@
+
+evaluation-viewers: all $(OBJECT_METRICS)
+	scripts/evaluate-viewers.sh $(BUILD)
 
 # The specular -> metallic dataset (resumable sweeps, a few minutes on 2 cores) and the default network trained
 # on it (docs/workflow.md, "The default network"). `make train` reproduces data/spec2metal.mlp bit for bit.
