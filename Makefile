@@ -10,6 +10,8 @@
 #   make evaluation the workflow converters on the real texture sets of ../shared/assets (docs/evaluation.md)
 #   make evaluation-gltf   the glTF conversions and gltf-transform's, rendered as meshes (docs/evaluation.md)
 #   make evaluation-hardcases   every spec2metal method on single hard texels, on spheres (docs/evaluation.md)
+#   make evaluation-viewers   the same conversions in the viewers people use: Blender Cycles and three.js in
+#                   headless Chromium (docs/evaluation.md, "What viewers show"; installs Blender, Chromium, npm pins)
 #   make dataset    the specular -> metallic training set (build/dataset); make train: data/spec2metal.mlp;
 #                   make objectives: which label objective agrees with object SSIM (docs/training.md)
 #   make deps       installs the Debian packages the project needs (scripts/install-deps.sh)
@@ -59,8 +61,8 @@ PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h 
                   src/io/image_io.h src/metrics/metrics.h src/remap/remap.h src/workflow/workflow.h \
                   src/workflow/dataset.h src/workflow/labels.h src/report/report.h nn/mlp.h gltf/mr_gltf.h
 
-.PHONY: all check asan demo bench analyses evaluation evaluation-gltf evaluation-hardcases dataset train objectives \
-        deps install clean
+.PHONY: all check asan demo bench analyses evaluation evaluation-gltf evaluation-hardcases evaluation-viewers dataset \
+        train objectives deps install clean
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
 all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE)
@@ -144,6 +146,15 @@ evaluation-gltf: all
 
 evaluation-hardcases: all
 	scripts/evaluate-hardcases.sh $(BUILD)
+
+# object_metrics: SSIM and luminance over a render's object pixels (its alpha), from mr_ssim's map.
+OBJECT_METRICS := $(BUILD)/tools/object_metrics
+$(OBJECT_METRICS): $(BUILD)/obj/scripts/viewers/object_metrics.o $(LIB)
+	@mkdir -p $(dir $@)
+	$(LINK) $(LDFLAGS) $< $(LIB) $(LDLIBS) -o $@
+
+evaluation-viewers: all $(OBJECT_METRICS)
+	scripts/evaluate-viewers.sh $(BUILD)
 
 # The specular -> metallic dataset (image-objective labels, a few minutes on 2 cores) and the network trained on
 # it (docs/training.md). `make train` reproduces data/spec2metal.mlp bit for bit.
