@@ -304,6 +304,7 @@ MR_TEST(network_kind_round_trip) {
 
 MR_TEST_MAIN(MR_TEST_ENTRY(residual_form_is_exact_on_the_manifold), MR_TEST_ENTRY(residual_form_is_colour_neutral),
              MR_TEST_ENTRY(residual_form_batch_equals_single_texels),
-             MR_TEST_ENTRY(network_kind_round_trip), MR_TEST_ENTRY(basis_matches_renderer), MR_TEST_ENTRY(manifold_texels_keep_the_analytic_answer),
+             MR_TEST_ENTRY(network_kind_round_trip), MR_TEST_ENTRY(basis_matches_renderer),
+             MR_TEST_ENTRY(manifold_texels_keep_the_analytic_answer),
              MR_TEST_ENTRY(grey_in_grey_out), MR_TEST_ENTRY(label_beats_analytic_off_manifold),
              MR_TEST_ENTRY(bad_options_are_refused))

@@ -324,8 +324,11 @@ MR_TEST(bad_weight_files_are_rejected) {
 
     small_file(text, sizeof text, 1, "matremap-nn 1", NULL);
     expect_rejected(text, "not an MLP weight file", 1);
+    small_file(text, sizeof text, 1, "matremap-mlp 3", NULL);
+    expect_rejected(text, "unsupported version '3'", 1);
+    /* version 2 must say its kind on the line after the activations */
     small_file(text, sizeof text, 1, "matremap-mlp 2", NULL);
-    expect_rejected(text, "unsupported version '2'", 1);
+    expect_rejected(text, "expected 'kind WORD'", 6);
     small_file(text, sizeof text, 1, "matremap-mlp", NULL);
     expect_rejected(text, "no version", 1);
     small_file(text, sizeof text, 3, "n_hidden 0", NULL);

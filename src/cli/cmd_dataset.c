@@ -63,7 +63,7 @@ static void print_help(void) {
            "spec-gloss materials, an output that cannot be written), 3 internal failure.\n"
            "\n"
            "Examples:\n"
-           "  matremap dataset -o build/dataset/pairs.csv --asset ../shared/assets/specgloss/Duck-pbrSpecularGlossiness/glTF/Duck.gltf\n"
+           "  matremap dataset -o pairs.csv --samples 2000 --asset Duck.gltf --asset Avocado.gltf\n"
            "  matremap dataset --compare --env studio.hdr --env tabac.hdr --weights data/spec2metal.mlp\n",
            MAX_ENVS, MAX_ENVS, MAX_WEIGHTS);
 }
@@ -233,7 +233,8 @@ static int add_asset_texels(const char *path, const char *scratch, uint64_t seed
     }
     if (sg_materials == 0) {
         mr_gltf_free(asset);
-        fprintf(stderr, "matremap dataset: error: --asset %s: no material carries KHR_materials_pbrSpecularGlossiness\n",
+        fprintf(stderr,
+                "matremap dataset: error: --asset %s: no material carries KHR_materials_pbrSpecularGlossiness\n",
                 path);
         return CLI_EXIT_BAD_INPUT;
     }
@@ -364,7 +365,8 @@ static const named_texel hard_cases[] = {
     {"gold", {0, 0, 0}, {255, 220, 130}},               {"copper", {0, 0, 0}, {250, 208, 192}},
     {"silver", {0, 0, 0}, {252, 250, 245}},             {"iron", {0, 0, 0}, {196, 199, 199}},
     {"half metal red", {100, 10, 8}, {170, 90, 80}},    {"coloured spec on grey", {128, 128, 128}, {230, 120, 120}},
-    {"dark spec 20", {128, 128, 128}, {20, 20, 20}},    {"bright diffuse + bright spec", {230, 230, 230}, {200, 200, 200}},
+    {"dark spec 20", {128, 128, 128}, {20, 20, 20}},
+    {"bright diffuse + bright spec", {230, 230, 230}, {200, 200, 200}},
 };
 #define HARD_CASES ((int)(sizeof hard_cases / sizeof hard_cases[0]))
 
@@ -512,7 +514,8 @@ static int compare(pair *texels, size_t n, const char **names, const mr_image *c
 int cmd_dataset(int argc, char **argv) {
     const char *output = NULL, *assets[MAX_ASSETS], *env_paths[MAX_ENVS], *weights[MAX_WEIGHTS];
     const char *label_env_paths[MAX_ENVS];
-    int asset_count = 0, env_count = 0, label_env_count = 0, weight_count = 0, samples = -1, seed = 1, threads = 0, do_compare = 0;
+    int asset_count = 0, env_count = 0, label_env_count = 0, weight_count = 0;
+    int samples = -1, seed = 1, threads = 0, do_compare = 0;
     mr_wf_label_options lo = mr_wf_label_options_default();
     for (int i = 1; i < argc; i++) {
         const char *value = NULL;
@@ -526,13 +529,15 @@ int cmd_dataset(int argc, char **argv) {
             if (taken < 0) return CLI_EXIT_USAGE;
             output = value;
         } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--samples", &value))) {
-            if (taken < 0 || !cli_parse_int("dataset", "--samples", value, 1, 10000000, &samples)) return CLI_EXIT_USAGE;
+            if (taken < 0 || !cli_parse_int("dataset", "--samples", value, 1, 10000000, &samples))
+                return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--seed", &value))) {
             if (taken < 0 || !cli_parse_int("dataset", "--seed", value, 0, 2147483647, &seed)) return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--objective", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             if (mr_wf_objective_from_name(value, &lo.objective) != MR_OK)
-                return cli_usage_error("dataset", "--objective '%s': expected luma, exposed, display, log or linear", value);
+                return cli_usage_error("dataset", "--objective '%s': expected luma, exposed, display, log or linear",
+                                       value);
         } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--asset", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             if (asset_count == MAX_ASSETS) return cli_usage_error("dataset", "more than %d --asset files", MAX_ASSETS);
@@ -543,7 +548,8 @@ int cmd_dataset(int argc, char **argv) {
             env_paths[env_count++] = value;
         } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--label-env", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
-            if (label_env_count == MAX_ENVS) return cli_usage_error("dataset", "more than %d --label-env maps", MAX_ENVS);
+            if (label_env_count == MAX_ENVS)
+                return cli_usage_error("dataset", "more than %d --label-env maps", MAX_ENVS);
             label_env_paths[label_env_count++] = value;
         } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--weights", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
@@ -619,7 +625,8 @@ int cmd_dataset(int argc, char **argv) {
             if (status != MR_OK) code = cli_fail("dataset", status);
         }
         if (code == CLI_EXIT_OK)
-            code = compare(pairs, n, names, (const mr_image *const *)envs, env_count, weights, weight_count, &lo, output);
+            code = compare(pairs, n, names, (const mr_image *const *)envs, env_count, weights, weight_count, &lo,
+                           output);
         for (int e = 0; e < env_count; e++) mr_image_free(envs[e]);
     } else if (code == CLI_EXIT_OK) {
         mr_wf_label_scene *scene = NULL;

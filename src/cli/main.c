@@ -20,7 +20,7 @@ static const command commands[] = {
     {"ssim", cmd_ssim, "compare two images: SSIM (display-referred) and RMSE (linear)"},
     {"remap", cmd_remap, "fit a target model to a source material or to renders of the fit scene"},
     {"sweep", cmd_sweep, "remap a grid or random sample of source materials into a resumable CSV file"},
-    {"dataset", cmd_dataset, "make the specular -> metallic training pairs (image-objective labels); compare objectives"},
+    {"dataset", cmd_dataset, "make the specular -> metallic training pairs (image labels); compare objectives"},
     {"train", cmd_train, "train the specular -> metallic network on sweep files (the dataset)"},
     {"spec2metal", cmd_spec2metal, "convert specular-workflow texture maps to metallic ones (also a command)"},
     {"metal2spec", cmd_metal2spec, "convert metallic-workflow texture maps to specular ones (also a command)"},

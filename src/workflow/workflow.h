@@ -285,9 +285,10 @@ void mr_wf_residual_anchor_of(const double lobe[3], const double specular[3], mr
 void mr_wf_residual_targets(const float *x, float *y, size_t n);
 
 /* Specular -> metallic by a trained network (nn/mlp.h: 6 inputs diffuse RGB + specular RGB, 4 outputs albedo RGB
- * + metallic, e.g. data/spec2metal.mlp; read as the residual form above when its kind says so), batched: inputs are sanitised like the other methods' (clamped to
- * [0, 1], non-finite read as 0, flagged), the network runs in blocks (its own OpenMP rows), outputs are clamped
- * to [0, 1] (a non-finite output becomes 0 and sets MR_WF_METHOD_FAILED). OFF_MANIFOLD is not computed (a
+ * + metallic, e.g. data/spec2metal.mlp; read as the residual form above when its kind says so), batched: inputs
+ * are sanitised like the other methods' (clamped to [0, 1], non-finite read as 0, flagged), the network runs in
+ * blocks (its own OpenMP rows; in the residual form only on texels whose gate is open), outputs are clamped to
+ * [0, 1] (a non-finite output becomes 0 and sets MR_WF_METHOD_FAILED). OFF_MANIFOLD is not computed (a
  * regressor never reproduces its input exactly). opts: only eps and the roughness pairing matter; may be NULL.
  * MR_ERR_INVALID_ARG for a network of another shape; MR_ERR_NOMEM. Deterministic for any thread count. */
 mr_status mr_wf_spec_to_metal_mlp_batch(const struct mr_mlp *net, const mr_wf_spec_maps *in, size_t n,
