@@ -19,6 +19,11 @@ expect "dataset: an asset without spec-gloss names the file" 2 "WaterBottle.gltf
 expect "dataset: a missing asset names the file" 2 "nope.gltf" -- \
     "$bin" dataset -o "$tmp/x.csv" --samples 3 --asset "$tmp/nope.gltf"
 check "nothing is left behind on failure" test ! -e "$tmp/x.csv"
+expect "dataset: an output folder that does not exist is named" 2 "nowhere" -- \
+    "$bin" dataset -o "$tmp/nowhere/x.csv" --samples 3
+expect "dataset --compare: a missing map names the file" 2 "nope.hdr" -- \
+    "$bin" dataset --compare --samples 2 --env "$tmp/nope.hdr" -o "$tmp/t.md"
+check "... and writes no table" test ! -e "$tmp/t.md"
 
 duck="$shared/assets/specgloss/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Duck.gltf"
 expect "dataset: 60 pairs" 0 "" -- "$bin" dataset -o "$tmp/a.csv" --samples 60 --seed 5 --threads 2 --asset "$duck"
@@ -34,6 +39,12 @@ check "labels are in [0, 1] and no worse than the analytic answer" awk -F, '
     /^#/ || $1 == "index" { next }
     { for (k = 12; k <= 15; k++) if ($k < 0 || $k > 1) exit 1; if ($16 > $17 * (1 + 1e-9) + 1e-15) exit 1 }' "$tmp/a.csv"
 expect "train reads the pairs" 0 "validation loss" -- "$bin" train "$tmp/a.csv" -o "$tmp/a.mlp" --hidden 8 --epochs 5
+head -c $(($(wc -c <"$tmp/a.mlp") / 2)) "$tmp/a.mlp" >"$tmp/torn.mlp"
+expect "dataset --compare: a torn network names the file" 2 "torn.mlp" -- "$bin" dataset --compare --samples 2 \
+    --env "$shared/assets/hdri/studio_small_03_1k.hdr" --weights "$tmp/torn.mlp" -o "$tmp/t.md"
+check "... and writes no table" test ! -e "$tmp/t.md"
+ls "$tmp" | grep -q '\.tmp\.' && leftover=yes || leftover=no
+check "no temporary file is left behind" test "$leftover" = no
 
 expect "dataset --compare (hard cases, 4 drawn texels)" 0 "" -- "$bin" dataset --compare --samples 4 \
     --env "$shared/assets/hdri/studio_small_03_1k.hdr" -o "$tmp/table.md"

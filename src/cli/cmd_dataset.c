@@ -17,6 +17,7 @@
 
 #include "cli.h"
 #include "gltf/mr_gltf.h"
+#include "io/io_internal.h"
 #include "workflow/labels.h"
 
 #define MAX_ASSETS 16
@@ -316,14 +317,36 @@ static void lobe(const mr_wf_spec *in, double d[3]) {
     for (int c = 0; c < 3; c++) d[c] = in->diffuse[c] * (1.0 - smax);
 }
 
-static int write_pairs(const char *path, const pair *pairs, size_t n, const char *objective, uint64_t seed) {
-    char tmp[4200];
-    snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid());
-    FILE *f = fopen(tmp, "w");
-    if (f == NULL) {
-        fprintf(stderr, "matremap dataset: error: cannot write '%s': %s\n", tmp, strerror(errno));
+/* The library's atomic-file protocol (io_internal.h): the output is written to a temporary file beside `path`,
+ * renamed over it only when complete. NULL (with the message printed) when the temporary file cannot be made. */
+static FILE *begin_output(const char *path, mr_atomic_file *file) {
+    mr_status status = mr_atomic_begin(path, file);
+    FILE *f = status == MR_OK ? fopen(file->tmp_path, "w") : NULL;
+    if (status != MR_OK)
+        cli_fail("dataset", status);
+    else if (f == NULL) {
+        fprintf(stderr, "matremap dataset: error: cannot write '%s': %s\n", path, strerror(errno));
+        mr_atomic_abort(file);
+    }
+    return f;
+}
+
+/* Close and commit what begin_output opened (abort on any write error). Returns an exit code. */
+static int finish_output(FILE *f, mr_atomic_file *file) {
+    int bad = ferror(f);
+    if (fclose(f) != 0 || bad) {
+        fprintf(stderr, "matremap dataset: error: cannot write '%s': %s\n", file->target, strerror(errno));
+        mr_atomic_abort(file);
         return CLI_EXIT_BAD_INPUT;
     }
+    mr_status status = mr_atomic_commit(file);
+    return status == MR_OK ? CLI_EXIT_OK : cli_fail("dataset", status);
+}
+
+static int write_pairs(const char *path, const pair *pairs, size_t n, const char *objective, uint64_t seed) {
+    mr_atomic_file file;
+    FILE *f = begin_output(path, &file);
+    if (f == NULL) return CLI_EXIT_BAD_INPUT;
     fprintf(f, "# matremap dataset: objective %s, seed %llu, %zu pairs (docs/training.md)\n", objective,
             (unsigned long long)seed, n);
     fprintf(f, "index,category,sg_diffuse_r,sg_diffuse_g,sg_diffuse_b,diffuse_r,diffuse_g,diffuse_b,f0_r,f0_g,f0_b,"
@@ -338,13 +361,7 @@ static int write_pairs(const char *path, const pair *pairs, size_t n, const char
                 p->label.albedo[2], p->label.metallic, p->result.loss, p->result.analytic_loss,
                 p->result.kept_analytic);
     }
-    int bad = ferror(f);
-    if (fclose(f) != 0 || bad || rename(tmp, path) != 0) {
-        fprintf(stderr, "matremap dataset: error: cannot write '%s': %s\n", path, strerror(errno));
-        unlink(tmp);
-        return CLI_EXIT_BAD_INPUT;
-    }
-    return CLI_EXIT_OK;
+    return finish_output(f, &file);
 }
 
 /* ---- --compare ------------------------------------------------------------------------------------------------ */
@@ -454,12 +471,10 @@ static int compare(pair *texels, size_t n, const char **names, const mr_image *c
             }
         }
     }
-    FILE *f = status == MR_OK ? (output ? fopen(output, "w") : stdout) : NULL;
-    if (status == MR_OK && f == NULL) {
-        fprintf(stderr, "matremap dataset: error: cannot write '%s': %s\n", output, strerror(errno));
-        status = MR_ERR_IO;
-    }
-    if (status == MR_OK) {
+    mr_atomic_file file;
+    FILE *f = status == MR_OK ? (output ? begin_output(output, &file) : stdout) : NULL;
+    int code = status == MR_OK ? (f ? CLI_EXIT_OK : CLI_EXIT_BAD_INPUT) : cli_fail("dataset", status);
+    if (f != NULL) {
         fprintf(f, "| texel | diffuse codes | specular codes |");
         for (int k = 0; k < ncol; k++) fprintf(f, " %s |", cols[k].name);
         fprintf(f, "\n|---|---|---|");
@@ -499,7 +514,7 @@ static int compare(pair *texels, size_t n, const char **names, const mr_image *c
             }
             fprintf(f, "\n");
         }
-        if (output) fclose(f);
+        if (output) code = finish_output(f, &file);
     }
     for (int k = 0; k < ncol; k++) free(cols[k].ssim);
     free(answers);
@@ -508,7 +523,7 @@ static int compare(pair *texels, size_t n, const char **names, const mr_image *c
     free(alb);
     free(met);
     mr_wf_label_scene_free(eval);
-    return status == MR_OK ? CLI_EXIT_OK : cli_fail("dataset", status);
+    return code;
 }
 
 int cmd_dataset(int argc, char **argv) {
