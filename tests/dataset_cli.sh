@@ -38,6 +38,11 @@ check "every category of the mixture is drawn" bash -c \
 check "labels are in [0, 1] and no worse than the analytic answer" awk -F, '
     /^#/ || $1 == "index" { next }
     { for (k = 12; k <= 15; k++) if ($k < 0 || $k > 1) exit 1; if ($16 > $17 * (1 + 1e-9) + 1e-15) exit 1 }' "$tmp/a.csv"
+# outcomes: on-manifold texels (metals, the Eq. 2 texels) converge, texels no metal-rough material matches do not
+check "metals converge" awk -F, '$2 == "metal" && $19 != "converged" { bad = 1 } END { exit bad }' "$tmp/a.csv"
+check "some pairs are unreachable, and those have a loss above one 8-bit code" awk -F, '
+    $19 == "unreachable" { n++; if ($16 <= 1 / 65025) bad = 1 } $19 == "converged" && $16 > 1 / 65025 { bad = 1 }
+    END { exit bad || n == 0 }' "$tmp/a.csv"
 expect "train reads the pairs" 0 "validation loss" -- "$bin" train "$tmp/a.csv" -o "$tmp/a.mlp" --hidden 8 --epochs 5
 head -c $(($(wc -c <"$tmp/a.mlp") / 2)) "$tmp/a.mlp" >"$tmp/torn.mlp"
 expect "dataset --compare: a torn network names the file" 2 "torn.mlp" -- "$bin" dataset --compare --samples 2 \

@@ -36,6 +36,8 @@ static void print_help(void) {
            "8-bit textures store them: uniform codes, the dielectric F0 band (specular 40-70/255) with dark and\n"
            "saturated diffuse, grey inputs, metals, partly metallic texels of Eq. 2, and texels of --asset files.\n"
            "The file loads in 'matremap train' (its diffuse columns hold the diffuse lobe d (1 - max specular)).\n"
+           "A pair's outcome is converged when the label renders like the texel within one 8-bit code (rms),\n"
+           "else unreachable (no metal-rough material matches it; the label is the closest one).\n"
            "\n"
            "With --compare, fits the labels of every objective for a set of texels (the named hard cases, texels\n"
            "of --asset files and drawn ones), and prints a table of how close each objective's labels, each\n"
@@ -343,6 +345,11 @@ static int finish_output(FILE *f, mr_atomic_file *file) {
     return status == MR_OK ? CLI_EXIT_OK : cli_fail("dataset", status);
 }
 
+/* A label "converged" when its render matches the texel's within one 8-bit code (root mean square, in the
+ * objective's display units); else "unreachable": the best metal-rough answer, which no metal-rough material
+ * matches (e.g. a specular below the 0.04 every glTF dielectric reflects). `matremap train` keeps both. */
+#define CONVERGED_LOSS (1.0 / (255.0 * 255.0))
+
 static int write_pairs(const char *path, const pair *pairs, size_t n, const char *objective, uint64_t seed) {
     mr_atomic_file file;
     FILE *f = begin_output(path, &file);
@@ -355,11 +362,11 @@ static int write_pairs(const char *path, const pair *pairs, size_t n, const char
         const pair *p = &pairs[i];
         double d[3];
         lobe(&p->in, d);
-        fprintf(f, "%zu,%s,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%d,converged\n",
+        fprintf(f, "%zu,%s,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%.6g,%d,%s\n",
                 i, category_names[p->cat], p->in.diffuse[0], p->in.diffuse[1], p->in.diffuse[2], d[0], d[1], d[2],
                 p->in.specular[0], p->in.specular[1], p->in.specular[2], p->label.albedo[0], p->label.albedo[1],
                 p->label.albedo[2], p->label.metallic, p->result.loss, p->result.analytic_loss,
-                p->result.kept_analytic);
+                p->result.kept_analytic, p->result.loss <= CONVERGED_LOSS ? "converged" : "unreachable");
     }
     return finish_output(f, &file);
 }
