@@ -68,7 +68,8 @@
  * differ only in vector width); across machines only libm can differ (the initialisation uses log and cos).
  *
  * Threads. mr_mlp_train runs the chunks of a minibatch and of the loss passes on opts->threads OpenMP
- * threads; mr_mlp_predict splits rows in blocks over omp_get_max_threads() threads; mr_mlp_evaluate likewise.
+ * threads; mr_mlp_predict splits rows in blocks over omp_get_max_threads() threads, one per 256 rows at most (a
+ * team costs more than fewer rows save); mr_mlp_evaluate likewise.
  * All functions are reentrant and a network may be shared by threads for reading (predict, evaluate, write).
  *
  * Ownership. One owner, one free: a network returned through `mr_mlp **out` belongs to the caller and is

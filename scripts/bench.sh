@@ -4,7 +4,7 @@
 # (bench:envlight, bench:mesh, bench:reflection). Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
-# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection]
+# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow]
 #   --only NAME runs one section and rewrites only its markers (the full run takes long; sections written as
 #   functions below can be run alone). From make: make bench BENCH_ARGS="--only report-accuracy".
 set -euo pipefail
@@ -31,6 +31,7 @@ report="$work/render.md"
 
 # Replace the sections between the markers in docs/performance.md (or DOC) with this run's reports.
 perf="$root/docs/performance.md"
+shared=${MR_SHARED:-$root/../shared}
 replace_section() { # NAME REPORT [DOC]
     local doc=${3:-$perf}
     [ -f "$doc" ] && grep -q "<!-- bench:$1:begin -->" "$doc" || return 0
@@ -370,11 +371,102 @@ bench_reflection() {
     replace_section reflection "$table" "$root/docs/rendering.md"
 }
 
+# The workflow converters' speed and accuracy (docs/performance.md, bench:workflow): tests/bench_workflow.c on
+# random texels and on two real texture sets (Avocado, used in training's asset texels, and FloppyDisk, held out),
+# the first shipped network (git history, cc66767) measured beside the default as the peer when git has it.
+bench_workflow() {
+    local shared=${MR_SHARED:-$root/../shared} first="$work/first-network.mlp" extra=()
+    local avocado="$shared/assets/specgloss/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness"
+    local floppy="$shared/assets/specgloss/FloppyDisk-sketchfab/textures"
+    echo
+    echo "== workflow conversion: methods, accuracy, MLP width (tests/bench_workflow.c)"
+    [ -s "$root/$build/dataset/test-pairs.csv" ] || echo "(no dataset in $build/dataset: make dataset first for the accuracy tables)"
+    if git -C "$root" show cc66767:data/spec2metal.mlp >"$first" 2>/dev/null; then
+        extra+=(--peer "first network (plain form, cc66767)" "$first")
+    fi
+    [ -f "$avocado/Avocado_diffuse.png" ] &&
+        extra+=(--texture "Avocado" "$avocado/Avocado_diffuse.png" "$avocado/Avocado_specularGlossiness.png")
+    [ -f "$floppy/material_0_diffuse.png" ] &&
+        extra+=(--texture "FloppyDisk (held out)" "$floppy/material_0_diffuse.png" "$floppy/material_0_specularGlossiness.png")
+    {
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'))."
+        echo
+        "$root/$build/tests/bench_workflow" "$root/data/spec2metal.mlp" "$root/$build/dataset" \
+            "$shared/assets/hdri/studio_small_03_1k.hdr" "$shared/assets/hdri/tabac_plant_vogl.hdr" $quick "${extra[@]}"
+    } | tee "$work/workflow.md"
+}
+
+# spec2metal / metal2spec end to end (docs/performance.md, bench:workflow-e2e).
+bench_workflow_e2e() {
+    echo
+    echo "== spec2metal / metal2spec end to end on a real 2048² texture set (read, convert, write)"
+    # The Avocado spec-gloss maps (2048², 8-bit PNG) of ../shared/assets, converted by the command a user runs, against
+    # a peer measured in the same run: oiiotool reading the same two files and writing the same number of PNG outputs
+    # (pure image I/O, no conversion), so the ratio is what the conversion adds to the files' own cost.
+    local avocado="$shared/assets/specgloss/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness"
+    e2e="$work/e2e.md"
+    if [ -f "$avocado/Avocado_diffuse.png" ]; then
+        runs=3
+        [ "$quick" = "--quick" ] && runs=1
+        peer=()
+        for run in $(seq "$runs"); do
+            peer+=("$(seconds_of oiiotool --iconfig oiio:UnassociatedAlpha 1 "$avocado/Avocado_diffuse.png" -o "$work/e2e_peer_a.png" \
+                "$avocado/Avocado_specularGlossiness.png" --ch R,G,B -o "$work/e2e_peer_b.png")")
+        done
+        peer_s=$(printf '%s\n' "${peer[@]}" | median)
+        {
+            echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores: \`matremap spec2metal --diffuse Avocado_diffuse.png"
+            echo "--specular-glossiness Avocado_specularGlossiness.png --pack -o PREFIX\` (2048², 4.2 M texels, two 8-bit PNG"
+            echo "inputs, two PNG outputs) per method, and \`metal2spec\` on WaterBottle's maps; median of $runs runs of the whole"
+            echo "process. Read / convert / write are the command's own split (its --json). Peer: oiiotool reading the"
+            echo "same two files and writing two PNGs, ${peer_s} s in this run; the ratio is ours over the peer."
+            echo
+            echo "| command | method | total s | read s | convert s | write s | M texels/s (convert) | ratio to oiiotool I/O |"
+            echo "|---|---|---:|---:|---:|---:|---:|---:|"
+        } > "$e2e"
+        e2e_row() { # LABEL METHOD COMMAND...
+            local label=$1 method=$2; shift 2
+            local totals=() json=""
+            for run in $(seq "$runs"); do
+                local t0 t1
+                t0=$(date +%s.%N)
+                json=$("$@" --json 2>/dev/null)
+                t1=$(date +%s.%N)
+                totals+=("$(awk -v a="$t0" -v b="$t1" 'BEGIN {print b - a}')")
+            done
+            local total read convert write
+            total=$(printf '%s\n' "${totals[@]}" | median)
+            read=$(echo "$json" | sed -E 's/.*"read": ([0-9.]+).*/\1/')
+            convert=$(echo "$json" | sed -E 's/.*"convert": ([0-9.]+).*/\1/')
+            write=$(echo "$json" | sed -E 's/.*"write": ([0-9.]+).*/\1/')
+            printf '| %s | %s | %.2f | %.2f | %.3f | %.2f | %.1f | %.2f |\n' "$label" "$method" "$total" "$read" "$convert" \
+                "$write" "$(awk -v c="$convert" 'BEGIN {print 4194304 / c / 1e6}')" \
+                "$(awk -v a="$total" -v b="$peer_s" 'BEGIN {print a / b}')" | tee -a "$e2e"
+        }
+        for method in mlp weighted mean khronos; do
+            e2e_row spec2metal "$method" "$bin" spec2metal --diffuse "$avocado/Avocado_diffuse.png" \
+                --specular-glossiness "$avocado/Avocado_specularGlossiness.png" --method "$method" --pack -o "$work/e2e_$method"
+        done
+        bottle="$shared/assets/metalrough/WaterBottle/glTF"
+        e2e_row metal2spec eq2 "$bin" metal2spec --basecolor "$bottle/WaterBottle_baseColor.png" \
+            --metallic-roughness "$bottle/WaterBottle_occlusionRoughnessMetallic.png" --pack -o "$work/e2e_m2s"
+    else
+        echo "(no assets at $shared/assets: the end-to-end conversion was skipped)"
+        echo "End-to-end conversion skipped: ../shared/assets was not found in this run." > "$e2e"
+    fi
+}
+
 if [ -n "$only" ]; then
     case $only in
         report-accuracy) bench_report_accuracy ;;
         reflection) bench_reflection ;;
-        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection)" >&2; exit 1 ;;
+        workflow)
+            bench_workflow
+            bench_workflow_e2e
+            replace_section workflow "$work/workflow.md"
+            replace_section workflow-e2e "$work/e2e.md"
+            ;;
+        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow)" >&2; exit 1 ;;
     esac
     exit 0
 fi
@@ -396,15 +488,7 @@ echo "== uniform remaps: time and accuracy against fit-scene size and strategy, 
     cat "$work/remap_table.md"
 } > "$work/remap.md"
 
-echo
-echo "== workflow conversion: methods, accuracy, MLP width (tests/bench_workflow.c)"
-[ -s "$root/$build/dataset/test-pairs.csv" ] || echo "(no dataset in $build/dataset: make dataset first for the accuracy tables)"
-{
-    echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'))."
-    echo
-    "$root/$build/tests/bench_workflow" "$root/data/spec2metal.mlp" "$root/$build/dataset" \
-        "$root/../shared/assets/hdri/studio_small_03_1k.hdr" "$root/../shared/assets/hdri/tabac_plant_vogl.hdr" $quick
-} | tee "$work/workflow.md"
+bench_workflow
 
 echo
 echo "== environment lights: error and cost against the pattern size N (tests/bench_envlight.c)"
@@ -508,63 +592,7 @@ else
     echo "Cycles peer skipped: Blender was not installed in this run." >> "$report"
 fi
 
-echo
-echo "== spec2metal / metal2spec end to end on a real 2048² texture set (read, convert, write)"
-# The Avocado spec-gloss maps (2048², 8-bit PNG) of ../shared/assets, converted by the command a user runs, against
-# a peer measured in the same run: oiiotool reading the same two files and writing the same number of PNG outputs
-# (pure image I/O, no conversion), so the ratio is what the conversion adds to the files' own cost.
-shared=${MR_SHARED:-$root/../shared}
-avocado="$shared/assets/specgloss/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness"
-e2e="$work/e2e.md"
-if [ -f "$avocado/Avocado_diffuse.png" ]; then
-    runs=3
-    [ "$quick" = "--quick" ] && runs=1
-    peer=()
-    for run in $(seq "$runs"); do
-        peer+=("$(seconds_of oiiotool --iconfig oiio:UnassociatedAlpha 1 "$avocado/Avocado_diffuse.png" -o "$work/e2e_peer_a.png" \
-            "$avocado/Avocado_specularGlossiness.png" --ch R,G,B -o "$work/e2e_peer_b.png")")
-    done
-    peer_s=$(printf '%s\n' "${peer[@]}" | median)
-    {
-        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores: \`matremap spec2metal --diffuse Avocado_diffuse.png"
-        echo "--specular-glossiness Avocado_specularGlossiness.png --pack -o PREFIX\` (2048², 4.2 M texels, two 8-bit PNG"
-        echo "inputs, two PNG outputs) per method, and \`metal2spec\` on WaterBottle's maps; median of $runs runs of the whole"
-        echo "process. Read / convert / write are the command's own split (its --json). Peer: oiiotool reading the"
-        echo "same two files and writing two PNGs, ${peer_s} s in this run; the ratio is ours over the peer."
-        echo
-        echo "| command | method | total s | read s | convert s | write s | M texels/s (convert) | ratio to oiiotool I/O |"
-        echo "|---|---|---:|---:|---:|---:|---:|---:|"
-    } > "$e2e"
-    e2e_row() { # LABEL METHOD COMMAND...
-        local label=$1 method=$2; shift 2
-        local totals=() json=""
-        for run in $(seq "$runs"); do
-            local t0 t1
-            t0=$(date +%s.%N)
-            json=$("$@" --json 2>/dev/null)
-            t1=$(date +%s.%N)
-            totals+=("$(awk -v a="$t0" -v b="$t1" 'BEGIN {print b - a}')")
-        done
-        local total read convert write
-        total=$(printf '%s\n' "${totals[@]}" | median)
-        read=$(echo "$json" | sed -E 's/.*"read": ([0-9.]+).*/\1/')
-        convert=$(echo "$json" | sed -E 's/.*"convert": ([0-9.]+).*/\1/')
-        write=$(echo "$json" | sed -E 's/.*"write": ([0-9.]+).*/\1/')
-        printf '| %s | %s | %.2f | %.2f | %.3f | %.2f | %.1f | %.2f |\n' "$label" "$method" "$total" "$read" "$convert" \
-            "$write" "$(awk -v c="$convert" 'BEGIN {print 4194304 / c / 1e6}')" \
-            "$(awk -v a="$total" -v b="$peer_s" 'BEGIN {print a / b}')" | tee -a "$e2e"
-    }
-    for method in mlp weighted mean khronos; do
-        e2e_row spec2metal "$method" "$bin" spec2metal --diffuse "$avocado/Avocado_diffuse.png" \
-            --specular-glossiness "$avocado/Avocado_specularGlossiness.png" --method "$method" --pack -o "$work/e2e_$method"
-    done
-    bottle="$shared/assets/metalrough/WaterBottle/glTF"
-    e2e_row metal2spec eq2 "$bin" metal2spec --basecolor "$bottle/WaterBottle_baseColor.png" \
-        --metallic-roughness "$bottle/WaterBottle_occlusionRoughnessMetallic.png" --pack -o "$work/e2e_m2s"
-else
-    echo "(no assets at $shared/assets: the end-to-end conversion was skipped)"
-    echo "End-to-end conversion skipped: ../shared/assets was not found in this run." > "$e2e"
-fi
+bench_workflow_e2e
 
 echo
 echo "== glTF assets: matremap gltf spec2metal against gltf-transform metalrough (same assets, same run)"

@@ -2,9 +2,12 @@
  * bench_workflow.c — what the specular -> metallic conversion's accuracy costs in time (make bench;
  * docs/performance.md, "Workflow conversion").
  *
- * 1. Throughput: every method converts the same 2048^2 texture of seeded random specular texels (diffuse and F0
- *    uniform in [0, 1] per channel) on 1 and 2 threads; texels/s, best of 3, and the ratio to WEIGHTED (the
- *    analytic peer) measured in the same run.
+ * 1. Throughput: every method converts the same texels on 1 and 2 threads; texels/s, best of 3, and the ratio to
+ *    WEIGHTED (the analytic peer) measured in the same run. Inputs: 2048^2 seeded random specular texels (diffuse
+ *    and F0 uniform in [0, 1] per channel: every texel distinct and off the manifold, the network's worst case),
+ *    and each --texture's real spec-gloss maps (read as glTF spec-gloss: the diffuse dimmed by 1 - max specular),
+ *    which repeat their values as real textures do. --peer: a second network (the first one shipped) measured
+ *    beside the default on the same texels.
  * 2. Accuracy: on the held-out pairs of `make dataset` (test-pairs.csv) every method's answer and the labels
  *    themselves, rendered on a sphere under both shared HDR maps (held out of training) at glossiness 0.3, 0.6
  *    and 0.9: object SSIM against the spec-gloss texel (mr_wf_label_ssim), mean and worst, and the RMSE of
@@ -12,7 +15,9 @@
  * 3. MLP width: networks of 16, 32, 64, 128 and 300 hidden units trained as `make train` trains the default one
  *    (residual form, seed 1, same data), with their training time, accuracy as in 2 and inference throughput on
  *    2 threads.
- * Usage: bench_workflow WEIGHTS DATASET_DIR HDR HDR [--quick]. Without the dataset, 2 and 3 are skipped.
+ * Usage: bench_workflow WEIGHTS DATASET_DIR HDR HDR [--quick] [--peer NAME WEIGHTS]
+ *                       [--texture NAME DIFFUSE SPECULAR_GLOSSINESS]...
+ * Without the dataset or the HDR maps, 2 and 3 are skipped.
  * Prints Markdown on stdout, progress on stderr; asserts nothing.
  */
 #include <math.h>
@@ -36,6 +41,15 @@ typedef struct method {
 static const method methods[] = {
     {"mlp (6x300x4)", MR_WF_CUSTOM}, {"weighted", MR_WF_WEIGHTED}, {"mean", MR_WF_MEAN}, {"khronos", MR_WF_KHRONOS}};
 #define METHOD_COUNT ((int)(sizeof methods / sizeof methods[0]))
+#define MAX_TEXTURES 4
+
+/* One set of texels to convert. */
+typedef struct texel_set {
+    char name[128];
+    float *diffuse, *specular;
+    size_t n;
+    mr_wf_diffuse spec_diffuse; /* how the diffuse is read */
+} texel_set;
 
 static double uniform(unsigned long long *state) {
     unsigned long long z = (*state += 0x9e3779b97f4a7c15ULL);
@@ -45,27 +59,96 @@ static double uniform(unsigned long long *state) {
     return (double)(z >> 11) * (1.0 / 9007199254740992.0);
 }
 
-static mr_status convert(const mr_mlp *net, mr_wf_method m, const float *diffuse, const float *specular, size_t n,
-                         float *albedo, float *metallic) {
+static mr_status convert_as(const mr_mlp *net, mr_wf_method m, mr_wf_diffuse spec_diffuse, const float *diffuse,
+                            const float *specular, size_t n, float *albedo, float *metallic) {
     mr_wf_spec_maps in = {(float *)diffuse, (float *)specular, NULL};
     mr_wf_metal_maps out = {albedo, metallic, NULL};
     mr_wf_options o = mr_wf_options_default();
     o.method = m == MR_WF_CUSTOM ? MR_WF_WEIGHTED : m;
+    o.spec_diffuse = spec_diffuse;
     return m == MR_WF_CUSTOM ? mr_wf_spec_to_metal_mlp_batch(net, &in, n, &o, &out, NULL)
                              : mr_wf_spec_to_metal_batch(&in, n, &o, &out, NULL);
 }
 
+static mr_status convert(const mr_mlp *net, mr_wf_method m, const float *diffuse, const float *specular, size_t n,
+                         float *albedo, float *metallic) {
+    return convert_as(net, m, MR_WF_DIFFUSE_PLAIN, diffuse, specular, n, albedo, metallic);
+}
+
 /* Best-of-3 texels per second. */
-static double throughput(const mr_mlp *net, mr_wf_method m, const float *diffuse, const float *specular, size_t n,
-                         float *albedo, float *metallic, int threads) {
+static double throughput_of(const mr_mlp *net, mr_wf_method m, const texel_set *t, float *albedo, float *metallic,
+                            int threads) {
     omp_set_num_threads(threads);
     double best = HUGE_VAL;
     for (int run = 0; run < 3; run++) {
         double t0 = bench_now();
-        if (convert(net, m, diffuse, specular, n, albedo, metallic) != MR_OK) return NAN;
+        if (convert_as(net, m, t->spec_diffuse, t->diffuse, t->specular, t->n, albedo, metallic) != MR_OK) return NAN;
         best = fmin(best, bench_now() - t0);
     }
-    return (double)n / best;
+    return (double)t->n / best;
+}
+
+static double throughput(const mr_mlp *net, mr_wf_method m, const float *diffuse, const float *specular, size_t n,
+                         float *albedo, float *metallic, int threads) {
+    texel_set t = {"", (float *)diffuse, (float *)specular, n, MR_WF_DIFFUSE_PLAIN};
+    return throughput_of(net, m, &t, albedo, metallic, threads);
+}
+
+static int compare_texel(const void *a, const void *b) { return memcmp(a, b, 6 * sizeof(float)); }
+
+/* What makes a texel set easy or hard for the network: the share of distinct (diffuse, specular) values and, of
+ * the texels, the share whose residual gate is open (those the network is asked about). */
+static void texel_stats(const texel_set *t, double *distinct, double *gated) {
+    float *rows = malloc(t->n * 6 * sizeof *rows);
+    size_t open = 0;
+    for (size_t i = 0; i < t->n; i++) {
+        double lobe[3], spec[3], smax = 0.0;
+        for (int c = 0; c < 3; c++) {
+            rows[6 * i + c] = t->diffuse[3 * i + c];
+            rows[6 * i + 3 + c] = t->specular[3 * i + c];
+            spec[c] = fmin(1.0, fmax(0.0, t->specular[3 * i + c]));
+            smax = fmax(smax, spec[c]);
+        }
+        for (int c = 0; c < 3; c++) {
+            lobe[c] = fmin(1.0, fmax(0.0, t->diffuse[3 * i + c]));
+            if (t->spec_diffuse == MR_WF_DIFFUSE_SPECGLOSS) lobe[c] *= 1.0 - smax;
+        }
+        mr_wf_residual_anchor a;
+        mr_wf_residual_anchor_of(lobe, spec, &a);
+        open += a.gate > 0.0;
+    }
+    qsort(rows, t->n, 6 * sizeof *rows, compare_texel);
+    size_t unique = t->n > 0;
+    for (size_t i = 1; i < t->n; i++) unique += memcmp(rows + 6 * i, rows + 6 * (i - 1), 6 * sizeof *rows) != 0;
+    free(rows);
+    *distinct = (double)unique / (double)t->n;
+    *gated = (double)open / (double)t->n;
+}
+
+/* A texture's spec-gloss maps as a texel set: the diffuse map's RGB and the specular-glossiness map's RGB. */
+static int load_texture(const char *name, const char *diffuse_path, const char *specular_path, texel_set *t) {
+    mr_img_read_options ro = {MR_IMG_COLOR, 3, 0};
+    mr_image *d = NULL, *s = NULL;
+    if (mr_img_read(diffuse_path, &ro, &d) != MR_OK || mr_img_read(specular_path, &ro, &s) != MR_OK) {
+        fprintf(stderr, "bench_workflow: %s\n", mr_last_error());
+        mr_image_free(d);
+        return -1;
+    }
+    if (d->width != s->width || d->height != s->height) {
+        fprintf(stderr, "bench_workflow: %s: the maps differ in size\n", name);
+        mr_image_free(d);
+        mr_image_free(s);
+        return -1;
+    }
+    snprintf(t->name, sizeof t->name, "%s %dx%d", name, d->width, d->height);
+    t->n = (size_t)d->width * (size_t)d->height;
+    t->diffuse = d->pixels;
+    t->specular = s->pixels;
+    t->spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
+    d->pixels = s->pixels = NULL;
+    mr_image_free(d);
+    mr_image_free(s);
+    return 0;
 }
 
 typedef struct accuracy {
@@ -128,37 +211,103 @@ static accuracy judge(const mr_wf_label_scene *eval, const mr_mlp *net, mr_wf_me
 
 int main(int argc, char **argv) {
     if (argc < 3) {
-        fprintf(stderr, "usage: bench_workflow WEIGHTS DATASET_DIR HDR HDR [--quick]\n");
+        fprintf(stderr, "usage: bench_workflow WEIGHTS DATASET_DIR HDR HDR [--quick] [--peer NAME WEIGHTS] "
+                        "[--texture NAME DIFFUSE SPECULAR_GLOSSINESS]...\n");
         return 1;
     }
-    int quick = argc > 5 && strcmp(argv[5], "--quick") == 0;
-    mr_mlp *net = NULL;
-    if (mr_mlp_read(argv[1], &net) != MR_OK) {
+    int quick = 0;
+    const char *peer_name = NULL, *peer_path = NULL;
+    texel_set sets[1 + MAX_TEXTURES];
+    int set_count = 1;
+    for (int i = 5; i < argc; i++) {
+        if (strcmp(argv[i], "--quick") == 0) {
+            quick = 1;
+        } else if (strcmp(argv[i], "--peer") == 0 && i + 2 < argc) {
+            peer_name = argv[i + 1];
+            peer_path = argv[i + 2];
+            i += 2;
+        } else if (strcmp(argv[i], "--texture") == 0 && i + 3 < argc && set_count <= MAX_TEXTURES) {
+            if (load_texture(argv[i + 1], argv[i + 2], argv[i + 3], &sets[set_count]) != 0) return 1;
+            set_count++;
+            i += 3;
+        } else {
+            fprintf(stderr, "bench_workflow: unknown or incomplete option '%s'\n", argv[i]);
+            return 1;
+        }
+    }
+    mr_mlp *net = NULL, *peer = NULL;
+    if (mr_mlp_read(argv[1], &net) != MR_OK || (peer_path && mr_mlp_read(peer_path, &peer) != MR_OK)) {
         fprintf(stderr, "bench_workflow: %s\n", mr_last_error());
         return 1;
     }
-    size_t n = quick ? (size_t)512 * 512 : (size_t)SIDE * SIDE;
+    size_t n = quick ? (size_t)512 * 512 : (size_t)SIDE * SIDE, most = n;
+    for (int t = 1; t < set_count; t++) most = sets[t].n > most ? sets[t].n : most;
     float *diffuse = malloc(n * 3 * sizeof *diffuse), *specular = malloc(n * 3 * sizeof *specular);
-    float *albedo = malloc(n * 3 * sizeof *albedo), *metallic = malloc(n * sizeof *metallic);
+    float *albedo = malloc(most * 3 * sizeof *albedo), *metallic = malloc(most * sizeof *metallic);
     if (!diffuse || !specular || !albedo || !metallic) return 1;
     unsigned long long state = 42;
     for (size_t i = 0; i < 3 * n; i++) {
         diffuse[i] = (float)uniform(&state);
         specular[i] = (float)uniform(&state);
     }
+    sets[0] = (texel_set){"", diffuse, specular, n, MR_WF_DIFFUSE_PLAIN};
+    snprintf(sets[0].name, sizeof sets[0].name, "random texels %zu", n);
 
-    printf("### Throughput (%zu texels, random specular texels)\n\n", n);
-    printf("| method | 1 thread (M texels/s) | 2 threads (M texels/s) | 2048² texture, 2 threads (ms) | "
-           "time vs weighted (2 threads) |\n|---|---|---|---|---|\n");
-    double rate[METHOD_COUNT][2];
-    for (int m = 0; m < METHOD_COUNT; m++) {
-        fprintf(stderr, "throughput: %s\n", methods[m].name);
-        for (int t = 0; t < 2; t++)
-            rate[m][t] = throughput(net, methods[m].method, diffuse, specular, n, albedo, metallic, t + 1);
+    printf("### Throughput\n\n");
+    printf("M texels/s, best of 3; every method on the same texels. Random texels: diffuse and F0 uniform in [0, 1] "
+           "per channel, every texel distinct and off the Eq. 2 manifold (the network's worst case: it runs on "
+           "every one). Textures: real 8-bit spec-gloss maps read as glTF spec-gloss, which repeat their values "
+           "(the network runs once per distinct value whose gate is open).%s\n\n",
+           peer ? " The peer network is measured on the same texels in the same run." : "");
+    for (int t = 0; t < set_count; t++) {
+        double distinct, gated;
+        texel_stats(&sets[t], &distinct, &gated);
+        printf("**%s** (%.1f %% distinct values, gate open on %.1f %% of texels)\n\n", sets[t].name,
+               100.0 * distinct, 100.0 * gated);
+        printf("| method | 1 thread | 2 threads | 2048² texture, 2 threads (ms) | time vs weighted (2 threads) |\n"
+               "|---|---|---|---|---|\n");
+        double rate[METHOD_COUNT + 1][2];
+        for (int m = 0; m <= METHOD_COUNT; m++) {
+            if (m == METHOD_COUNT && !peer) break;
+            fprintf(stderr, "throughput: %s, %s\n", sets[t].name, m < METHOD_COUNT ? methods[m].name : peer_name);
+            for (int k = 0; k < 2; k++)
+                rate[m][k] = throughput_of(m < METHOD_COUNT ? net : peer, m < METHOD_COUNT ? methods[m].method
+                                           : MR_WF_CUSTOM, &sets[t], albedo, metallic, k + 1);
+        }
+        for (int m = 0; m <= METHOD_COUNT; m++) {
+            if (m == METHOD_COUNT && !peer) break;
+            printf("| %s | %.1f | %.1f | %.0f | %.2f× |\n", m < METHOD_COUNT ? methods[m].name : peer_name,
+                   rate[m][0] / 1e6, rate[m][1] / 1e6, 1e3 * (double)SIDE * SIDE / rate[m][1], rate[1][1] / rate[m][1]);
+        }
+        if (t == 0) { // the network's own arithmetic on these rows: the ceiling of any texel-by-texel path
+            float *rows = malloc(sets[0].n * 6 * sizeof *rows), *y = malloc(sets[0].n * 4 * sizeof *y);
+            double best[2] = {HUGE_VAL, HUGE_VAL};
+            for (size_t i = 0; rows && i < sets[0].n; i++)
+                for (int c = 0; c < 3; c++) {
+                    rows[6 * i + c] = sets[0].diffuse[3 * i + c];
+                    rows[6 * i + 3 + c] = sets[0].specular[3 * i + c];
+                }
+            for (int k = 0; rows && y && k < 2; k++) {
+                omp_set_num_threads(k + 1);
+                for (int run = 0; run < 3; run++) {
+                    double t0 = bench_now();
+                    if (mr_mlp_predict(net, rows, sets[0].n, y) != MR_OK) break;
+                    best[k] = fmin(best[k], bench_now() - t0);
+                }
+            }
+            printf("\nThe 6x300x4 network's prediction alone (mr_mlp_predict) on the same rows: %.1f M rows/s on 1 "
+                   "thread, %.1f on 2: no texel-by-texel path through it can be faster here.\n",
+                   (double)sets[0].n / best[0] / 1e6, (double)sets[0].n / best[1] / 1e6);
+            free(rows);
+            free(y);
+        }
+        printf("\n");
     }
-    for (int m = 0; m < METHOD_COUNT; m++)
-        printf("| %s | %.1f | %.1f | %.0f | %.2f× |\n", methods[m].name, rate[m][0] / 1e6, rate[m][1] / 1e6,
-               1e3 * (double)SIDE * SIDE / rate[m][1], rate[1][1] / rate[m][1]);
+    for (int t = 1; t < set_count; t++) {
+        free(sets[t].diffuse);
+        free(sets[t].specular);
+    }
+    mr_mlp_free(peer);
 
     char test_path[4096], train_path[4096];
     snprintf(test_path, sizeof test_path, "%s/test-pairs.csv", argv[2]);
@@ -170,7 +319,7 @@ int main(int argc, char **argv) {
     if (mr_wf_dataset_load(test_files, 1, NULL, &test) != MR_OK ||
         mr_wf_dataset_load(train_files, 1, NULL, &train) != MR_OK || argc < 5 ||
         mr_img_read(argv[3], &ro, &envs[0]) != MR_OK || mr_img_read(argv[4], &ro, &envs[1]) != MR_OK) {
-        printf("\n(accuracy and width tables skipped: %s; run make dataset)\n", mr_last_error());
+        printf("(accuracy and width tables skipped: %s; run make dataset)\n", mr_last_error());
         mr_mlp_free(net);
         return 0;
     }
@@ -187,7 +336,7 @@ int main(int argc, char **argv) {
     mr_wf_label_scene *eval = NULL;
     if (mr_wf_label_scene_create(&eo, &eval) != MR_OK) return 1;
 
-    printf("\n### Accuracy on held-out texels (object SSIM under the shared HDR maps)\n\n");
+    printf("### Accuracy on held-out texels (object SSIM under the shared HDR maps)\n\n");
     printf("%zu held-out pairs of `make dataset` (test-pairs.csv, seed 2). Each answer rendered on a 64² sphere under "
            "both shared HDR maps (held out of training) at glossiness 0.3, 0.6, 0.9: SSIM over the sphere's inner "
            "square against the spec-gloss texel, mean and worst; metallic RMSE against the labels.\n\n", test.n);

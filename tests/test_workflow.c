@@ -1049,6 +1049,75 @@ MR_TEST(mlp_batch_reads_the_specgloss_diffuse_lobe) {
     mr_mlp_free(net);
 }
 
+/* The network batch converts each distinct value once and copies the answer (workflow.c): over several blocks,
+ * parts that repeat a few values (with -0, NaN, out-of-range and dimmed spec-gloss texels among them) and parts of
+ * distinct values (where it stops looking values up), for 1-3 threads and in place, it must give exactly the
+ * bits and flags of converting every texel alone. */
+MR_TEST(mlp_batch_of_repeated_values_equals_texel_by_texel) {
+    enum { N = 150000, PALETTE = 40 };
+    static float d[3 * N], s[3 * N], rough[N], a[3 * N], m[N], r[N], ref_a[3 * N], ref_m[N], ref_r[N];
+    static float d2[3 * N], rough2[N];
+    static uint8_t flags[N], ref_flags[N];
+    float palette[PALETTE][6];
+    uint64_t rng = 11;
+    for (int k = 0; k < PALETTE; k++)
+        for (int c = 0; c < 6; c++) palette[k][c] = (float)uniform(&rng);
+    palette[1][0] = -0.0f;
+    palette[2][0] = 0.0f; // the same value as palette[1] but other bits: its own row, the same answer
+    palette[3][4] = NAN;
+    palette[4][1] = 1.5f;
+    palette[5][3] = -0.25f;
+    palette[6][3] = palette[6][4] = palette[6][5] = 0.04f;
+    for (size_t i = 0; i < N; i++) {
+        // 65536..100000 (the second block's first part, whatever the thread count): distinct values, where the
+        // lookups stop; elsewhere the palette
+        int distinct = i >= 65536 && i < 100000;
+        int k = (int)(uniform(&rng) * PALETTE);
+        for (int c = 0; c < 3; c++) {
+            d[3 * i + c] = distinct ? (float)uniform(&rng) : palette[k][c];
+            s[3 * i + c] = distinct ? (float)uniform(&rng) : palette[k][3 + c];
+        }
+        rough[i] = (float)(uniform(&rng) * 1.2 - 0.1);
+    }
+    for (int form = 0; form < 2; form++) {
+        mr_mlp *net = NULL;
+        MR_CHECK_OK(mr_mlp_create(6, 16, 4, &net));
+        if (net == NULL) return;
+        for (size_t i = 0; i < net->data_count; i++) net->data[i] = (float)(uniform(&rng) - 0.5);
+        for (int i = 0; i < 6; i++) net->in_std[i] = 1.0f;
+        for (int i = 0; i < 4; i++) net->out_std[i] = 0.1f;
+        if (form == 1) snprintf(net->kind, sizeof net->kind, "%s", MR_WF_MLP_RESIDUAL_KIND);
+        mr_wf_options o = mr_wf_options_default();
+        o.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
+        for (size_t i = 0; i < N; i++) {
+            mr_wf_spec_maps in = {d + 3 * i, s + 3 * i, rough + i};
+            mr_wf_metal_maps out = {ref_a + 3 * i, ref_m + i, ref_r + i};
+            MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in, 1, &o, &out, ref_flags + i));
+        }
+        int saved = omp_get_max_threads();
+        for (int threads = 1; threads <= 3; threads++) {
+            omp_set_num_threads(threads);
+            mr_wf_spec_maps in = {d, s, rough};
+            mr_wf_metal_maps out = {a, m, r};
+            MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in, N, &o, &out, flags));
+            MR_CHECK_MSG(memcmp(a, ref_a, sizeof a) == 0 && memcmp(m, ref_m, sizeof m) == 0 &&
+                         memcmp(r, ref_r, sizeof r) == 0 && memcmp(flags, ref_flags, sizeof flags) == 0,
+                         "form %d, %d threads: the batch differs from texel by texel", form, threads);
+            // in place: the albedo over the diffuse, the metallic over the roughness it reads
+            memcpy(d2, d, sizeof d2);
+            memcpy(rough2, rough, sizeof rough2);
+            mr_wf_spec_maps in2 = {d2, s, rough2};
+            mr_wf_metal_maps out2 = {d2, rough2, r};
+            MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in2, N, &o, &out2, flags));
+            MR_CHECK_MSG(memcmp(d2, ref_a, sizeof d2) == 0 && memcmp(rough2, ref_m, sizeof rough2) == 0 &&
+                         memcmp(r, ref_r, sizeof r) == 0,
+                         "form %d, %d threads: in place differs from texel by texel", form, threads);
+        }
+        omp_set_num_threads(saved);
+        mr_mlp_free(net);
+    }
+}
+
 /* ---- quantised inputs: tolerances (workflow.h, "Tolerances") --------------------------------------------------- */
 
 /* What an 8-bit sRGB texture stores for v, decoded as mr_img_read decodes it: the code the writer rounds to. */
@@ -1259,6 +1328,7 @@ MR_TEST_MAIN(MR_TEST_ENTRY(method_names_round_trip),
              MR_TEST_ENTRY(specgloss_round_trip_is_exact_where_representable),
              MR_TEST_ENTRY(specgloss_convention_matches_the_gltf_brdfs),
              MR_TEST_ENTRY(mlp_batch_reads_the_specgloss_diffuse_lobe),
+             MR_TEST_ENTRY(mlp_batch_of_repeated_values_equals_texel_by_texel),
              MR_TEST_ENTRY(clean_8bit_exports_flag_nothing),
              MR_TEST_ENTRY(quantisation_known_answers),
              MR_TEST_ENTRY(quantised_batch_equals_per_texel))

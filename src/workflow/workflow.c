@@ -20,6 +20,10 @@
 #include "nn/mlp.h"
 #include "workflow_internal.h"
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 static const char *const method_names[MR_WF_METHOD_COUNT] = {"mean", "weighted", "khronos", "custom"};
 static const char *const diffuse_names[MR_WF_DIFFUSE_COUNT] = {"plain", "specgloss"};
 
@@ -539,30 +543,46 @@ mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_maps *in, size_t n, const m
 /* ---- the learned method (nn/mlp.h) ---------------------------------------------------------------------------- */
 
 #define MLP_BLOCK 65536 /* texels per network call: 2.6 MB of inputs and outputs */
+#define MLP_DEDUPE_PROBE 4096 /* texels of a part looked up before deciding whether looking up pays */
+#define MLP_PARALLEL_ROWS 2048 /* fewer distinct rows than this: one thread (a team costs more than they do) */
 
-void mr_wf_residual_anchor_of(const double lobe[3], const double specular[3], mr_wf_residual_anchor *out) {
-    mr_wf_options o = mr_wf_options_default();
-    o.method = MR_WF_WEIGHTED;
+static inline double max2(double a, double b) { return a > b ? a : b; } /* no NaN here: inputs are sanitised */
+
+/* The anchor with W's options given (the batch builds them once; mr_wf_options_default is not free). */
+static void residual_anchor(const mr_wf_options *o, const double lobe[3], const double specular[3],
+                            mr_wf_residual_anchor *out) {
     // float inputs: every value's tolerance is eps, so both values of a channel together may miss by 2 eps
-    const double ts[3] = {o.eps, o.eps, o.eps}, tol[3] = {2.0 * o.eps, 2.0 * o.eps, 2.0 * o.eps};
-    analytic_spec_to_metal(&o, lobe, specular, ts, tol, out->albedo, &out->metallic);
+    const double ts[3] = {o->eps, o->eps, o->eps}, tol[3] = {2.0 * o->eps, 2.0 * o->eps, 2.0 * o->eps};
+    analytic_spec_to_metal(o, lobe, specular, ts, tol, out->albedo, &out->metallic);
     double r = 0.0, dm = 0.0, sm = 0.0, dc = 0.0, sc = 0.0;
     for (int c = 0; c < 3; c++) {
         double back_d, back_s;
-        eq2(out->albedo[c], out->metallic, o.dielectric_f0, &back_d, &back_s);
-        r = fmax(r, fmax(fabs(back_d - lobe[c]), fabs(back_s - specular[c])));
+        eq2(out->albedo[c], out->metallic, o->dielectric_f0, &back_d, &back_s);
+        r = max2(r, max2(fabs(back_d - lobe[c]), fabs(back_s - specular[c])));
         dm += lobe[c] / 3.0;
         sm += specular[c] / 3.0;
     }
     for (int c = 0; c < 3; c++) {
-        dc = fmax(dc, fabs(lobe[c] - dm));
-        sc = fmax(sc, fabs(specular[c] - sm));
+        dc = max2(dc, fabs(lobe[c] - dm));
+        sc = max2(sc, fabs(specular[c] - sm));
     }
-    out->gate = fmin(1.0, r / MR_WF_RESIDUAL_GATE);
-    out->chroma = fmin(1.0, (dc + sc) / MR_WF_RESIDUAL_CHROMA);
+    out->gate = r < MR_WF_RESIDUAL_GATE ? r / MR_WF_RESIDUAL_GATE : 1.0;
+    out->chroma = dc + sc < MR_WF_RESIDUAL_CHROMA ? (dc + sc) / MR_WF_RESIDUAL_CHROMA : 1.0;
+}
+
+static mr_wf_options residual_anchor_options(void) {
+    mr_wf_options o = mr_wf_options_default();
+    o.method = MR_WF_WEIGHTED;
+    return o;
+}
+
+void mr_wf_residual_anchor_of(const double lobe[3], const double specular[3], mr_wf_residual_anchor *out) {
+    mr_wf_options o = residual_anchor_options();
+    residual_anchor(&o, lobe, specular, out);
 }
 
 void mr_wf_residual_targets(const float *x, float *y, size_t n) {
+    mr_wf_options o = residual_anchor_options();
     for (size_t r = 0; r < n; r++) {
         double lobe[3], spec[3];
         for (int k = 0; k < 3; k++) {
@@ -570,10 +590,145 @@ void mr_wf_residual_targets(const float *x, float *y, size_t n) {
             spec[k] = mr_clampd(x[6 * r + 3 + k], 0.0, 1.0);
         }
         mr_wf_residual_anchor a;
-        mr_wf_residual_anchor_of(lobe, spec, &a);
+        residual_anchor(&o, lobe, spec, &a);
         for (int k = 0; k < 3; k++) y[4 * r + k] -= (float)a.albedo[k];
         y[4 * r + 3] -= (float)a.metallic;
     }
+}
+
+/* The network batch works on the distinct texels of a block: real textures repeat their values (a 2048^2 8-bit
+ * spec-gloss set holds ~5 % distinct (diffuse, specular) pairs: Avocado 4.7 %, FloppyDisk 5.5 %), and a texel's
+ * answer is a pure function of its inputs, so each distinct pair is sanitised, anchored and run through the
+ * network once and its answer copied to every texel that holds it: the same bits as converting every texel.
+ * A block is split into `parts` contiguous ranges, each deduplicated on its own (one thread per part, no locks;
+ * a value repeated across parts is computed once per part), by the bit patterns of the six input floats. */
+typedef struct mlp_block {
+    size_t parts;
+    float *x, *y;                   /* distinct rows: network inputs (block x 6), outputs (block x 4) */
+    mr_wf_residual_anchor *anchors; /* per distinct row (residual form) */
+    long *slot;                     /* per distinct row: its row among those the network sees, or -1 */
+    float *answer;                  /* per distinct row: albedo RGB, metallic, final */
+    uint8_t *row_flags;             /* per distinct row */
+    uint32_t *first;                /* per distinct row, at the part's rows: its first texel, block-relative */
+    uint32_t *row_of;               /* per texel: its distinct row, counted from its part's first row */
+    uint32_t *table;                /* parts x table_size hash slots: part-local row + 1, 0 empty */
+    size_t table_size;              /* a power of two >= twice a part's texels */
+    size_t *distinct;               /* per part: its number of distinct rows, then their first row in x */
+} mlp_block;
+
+static void mlp_block_free(mlp_block *b) {
+    free(b->x);
+    free(b->y);
+    free(b->anchors);
+    free(b->slot);
+    free(b->answer);
+    free(b->row_flags);
+    free(b->first);
+    free(b->row_of);
+    free(b->table);
+    free(b->distinct);
+}
+
+static mr_status mlp_block_alloc(size_t block, mlp_block *b) {
+    memset(b, 0, sizeof *b);
+#ifdef _OPENMP
+    b->parts = (size_t)omp_get_max_threads();
+#else
+    b->parts = 1;
+#endif
+    if (b->parts > block / MLP_PARALLEL_ROWS) b->parts = block / MLP_PARALLEL_ROWS; // small batches: fewer threads
+    if (b->parts == 0) b->parts = 1;
+    size_t part_max = (block + b->parts - 1) / b->parts;
+    for (b->table_size = 16; b->table_size < 2 * part_max; b->table_size *= 2) {
+    }
+    b->x = malloc(block * 6 * sizeof *b->x);
+    b->y = malloc(block * 4 * sizeof *b->y);
+    b->anchors = malloc(block * sizeof *b->anchors);
+    b->slot = malloc(block * sizeof *b->slot);
+    b->answer = malloc(block * 4 * sizeof *b->answer);
+    b->row_flags = malloc(block);
+    b->first = malloc(block * sizeof *b->first);
+    b->row_of = malloc(block * sizeof *b->row_of);
+    b->table = malloc(b->parts * b->table_size * sizeof *b->table);
+    b->distinct = malloc(b->parts * sizeof *b->distinct);
+    if (!b->x || !b->y || !b->anchors || !b->slot || !b->answer || !b->row_flags || !b->first || !b->row_of ||
+        !b->table || !b->distinct) {
+        mlp_block_free(b);
+        return MR_ERR_NOMEM;
+    }
+    return MR_OK;
+}
+
+/* Part p of a block of `count` texels: [count p / parts, count (p + 1) / parts). */
+static size_t part_start(size_t count, size_t parts, size_t p) { return count * p / parts; }
+
+static inline uint32_t texel_hash(const uint32_t k[6]) {
+    uint64_t h = 0x9e3779b97f4a7c15ULL;
+    for (int i = 0; i < 6; i++) {
+        h = (h ^ k[i]) * 0xbf58476d1ce4e5b9ULL;
+        h ^= h >> 29;
+    }
+    return (uint32_t)(h >> 32);
+}
+
+/* The six input floats of texel i, as bits (two texels with equal bits get equal answers). */
+static inline void texel_key(const mr_wf_spec_maps *in, size_t i, uint32_t k[6]) {
+    memcpy(k, in->diffuse + 3 * i, 3 * sizeof *k);
+    memcpy(k + 3, in->specular + 3 * i, 3 * sizeof *k);
+}
+
+/* A new distinct row for texel r of the block: sanitised (and dimmed) into x, with its anchor computed from the
+ * double values, as the per-texel path computes it, when anchor_options is not NULL. */
+static void mlp_new_row(const mr_wf_spec_maps *in, const mr_wf_options *o, const mr_wf_options *anchor_options,
+                        size_t i, mlp_block *b, size_t row) {
+    unsigned f = 0;
+    double d[3], s[3];
+    for (int c = 0; c < 3; c++) {
+        d[c] = sanitise(in->diffuse[3 * i + c], &f);
+        s[c] = sanitise(in->specular[3 * i + c], &f);
+    }
+    if (reads_specgloss(o)) specgloss_dim(d, s); // the network learned Eq. 2's plain diffuse lobe
+    for (int c = 0; c < 3; c++) {
+        b->x[6 * row + c] = (float)d[c];
+        b->x[6 * row + 3 + c] = (float)s[c];
+    }
+    b->row_flags[row] = (uint8_t)f;
+    if (anchor_options) residual_anchor(anchor_options, d, s, &b->anchors[row]);
+}
+
+/* Deduplicates part p of the block starting at texel `start`: its distinct values become rows lo, lo + 1, ... (lo
+ * the part's first texel), every texel's part-local row goes to row_of. A part whose first MLP_DEDUPE_PROBE
+ * texels are mostly distinct (noise, float data) stops looking values up: hashing would only cost. */
+static void mlp_dedupe_part(const mr_wf_spec_maps *in, const mr_wf_options *o, const mr_wf_options *anchor_options,
+                            size_t start, size_t count, mlp_block *b, size_t p) {
+    size_t lo = part_start(count, b->parts, p), hi = part_start(count, b->parts, p + 1);
+    uint32_t *table = b->table + p * b->table_size;
+    memset(table, 0, b->table_size * sizeof *table);
+    size_t mask = b->table_size - 1, rows = 0;
+    int hashing = 1;
+    for (size_t r = lo; r < hi; r++) {
+        if (r - lo == MLP_DEDUPE_PROBE && 4 * rows > 3 * MLP_DEDUPE_PROBE) hashing = 0;
+        uint32_t key[6], other[6];
+        size_t h = 0;
+        if (hashing) {
+            texel_key(in, start + r, key);
+            for (h = texel_hash(key) & mask; table[h] != 0; h = (h + 1) & mask) {
+                size_t row = lo + table[h] - 1;
+                texel_key(in, start + b->first[row], other);
+                if (memcmp(key, other, sizeof key) == 0) break;
+            }
+            if (table[h] != 0) { // seen before in this part
+                b->row_of[r] = table[h] - 1;
+                continue;
+            }
+        }
+        size_t row = lo + rows++;
+        if (hashing) table[h] = (uint32_t)(row - lo + 1);
+        b->first[row] = (uint32_t)r;
+        b->row_of[r] = (uint32_t)(row - lo);
+        mlp_new_row(in, o, anchor_options, start + r, b, row);
+    }
+    b->distinct[p] = rows;
 }
 
 mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps *in, size_t n,
@@ -596,58 +751,55 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
     if (!residual && net->kind[0] != '\0')
         return mr_fail(MR_ERR_INVALID_ARG, "%s: the network's kind '%s' is not a spec -> metal form this build knows "
                        "(plain or " MR_WF_MLP_RESIDUAL_KIND ")", what, net->kind);
+    if (n == 0) return MR_OK;
+    const mr_wf_options anchor_options = residual_anchor_options();
     size_t block = n < MLP_BLOCK ? n : MLP_BLOCK;
-    float *x = malloc(block * 6 * sizeof *x), *y = malloc(block * 4 * sizeof *y);
-    mr_wf_residual_anchor *anchors = residual && n > 0 ? malloc(block * sizeof *anchors) : NULL;
-    /* residual form: the row of y holding each texel's correction, or -1 where the gate is shut (the network's
-     * answer could not change the texel, so it is not asked: real textures have many such texels) */
-    long *slot = residual && n > 0 ? malloc(block * sizeof *slot) : NULL;
-    if (n > 0 && (x == NULL || y == NULL || (residual && (anchors == NULL || slot == NULL)))) {
-        free(x);
-        free(y);
-        free(anchors);
-        free(slot);
+    mlp_block b;
+    if (mlp_block_alloc(block, &b) != MR_OK)
         return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %zu texels", what, block);
-    }
+    const long parts = (long)b.parts;
     for (size_t start = 0; start < n && status == MR_OK; start += block) {
         size_t count = n - start < block ? n - start : block;
-#pragma omp parallel for schedule(static)
-        for (size_t r = 0; r < count; r++) {
-            size_t i = start + r;
-            unsigned f = 0;
-            double d[3], s[3];
-            for (int c = 0; c < 3; c++) {
-                d[c] = sanitise(in->diffuse[3 * i + c], &f);
-                s[c] = sanitise(in->specular[3 * i + c], &f);
+        // 1. The distinct values of each part (all of the block's inputs are read here, before any output is
+        //    written: in-place conversion stays correct).
+#pragma omp parallel for schedule(static, 1) num_threads(parts) if (parts > 1)
+        for (long p = 0; p < parts; p++)
+            mlp_dedupe_part(in, &o, residual ? &anchor_options : NULL, start, count, &b, (size_t)p);
+        // 2. The parts' rows made contiguous; distinct[p] becomes the part's offset.
+        size_t rows = 0;
+        for (size_t p = 0; p < b.parts; p++) {
+            size_t lo = part_start(count, b.parts, p), k = b.distinct[p];
+            if (rows != lo) {
+                memmove(b.x + 6 * rows, b.x + 6 * lo, k * 6 * sizeof *b.x);
+                memmove(b.row_flags + rows, b.row_flags + lo, k);
+                if (residual) memmove(b.anchors + rows, b.anchors + lo, k * sizeof *b.anchors);
             }
-            if (reads_specgloss(&o)) specgloss_dim(d, s); // the network learned Eq. 2's plain diffuse lobe
-            for (int c = 0; c < 3; c++) {
-                x[6 * r + c] = (float)d[c];
-                x[6 * r + 3 + c] = (float)s[c];
-            }
-            if (residual) mr_wf_residual_anchor_of(d, s, &anchors[r]);
-            if (flags) flags[i] = (uint8_t)f;
+            b.distinct[p] = rows;
+            rows += k;
         }
-        size_t rows = count;
-        if (residual) { // compact the rows the network must see; a row's outputs do not depend on the others
-            rows = 0;
-            for (size_t r = 0; r < count; r++) {
-                slot[r] = anchors[r].gate > 0.0 ? (long)rows : -1;
-                if (anchors[r].gate > 0.0 && rows++ != r) memcpy(x + 6 * (rows - 1), x + 6 * r, 6 * sizeof *x);
+        // 3. The network on the distinct rows (residual form: only where the gate is open; the others' answer is
+        //    the anchor, whatever the network says).
+        size_t seen = rows;
+        if (residual) {
+            seen = 0;
+            for (size_t r = 0; r < rows; r++) {
+                b.slot[r] = b.anchors[r].gate > 0.0 ? (long)seen : -1;
+                if (b.anchors[r].gate > 0.0 && seen++ != r) memcpy(b.x + 6 * (seen - 1), b.x + 6 * r, 6 * sizeof *b.x);
             }
         }
-        status = rows > 0 ? mr_mlp_predict(net, x, rows, y) : MR_OK;
+        status = seen > 0 ? mr_mlp_predict(net, b.x, seen, b.y) : MR_OK;
         if (status != MR_OK) break;
-#pragma omp parallel for schedule(static)
-        for (size_t r = 0; r < count; r++) {
-            size_t i = start + r;
-            unsigned f = flags ? flags[i] : 0;
+        // 4. Each distinct row's answer.
+#pragma omp parallel for schedule(static) if (rows >= MLP_PARALLEL_ROWS)
+        for (size_t r = 0; r < rows; r++) {
+            unsigned f = b.row_flags[r];
             double v4[4] = {0.0, 0.0, 0.0, 0.0};
-            size_t row = residual ? (size_t)(slot[r] < 0 ? 0 : slot[r]) : r;
-            if (!residual || slot[r] >= 0)
-                for (int k = 0; k < 4; k++) v4[k] = y[4 * row + k];
+            if (!residual || b.slot[r] >= 0) {
+                size_t row = residual ? (size_t)b.slot[r] : r;
+                for (int k = 0; k < 4; k++) v4[k] = b.y[4 * row + k];
+            }
             if (residual) { // the correction to W, gated and made neutral (workflow.h)
-                const mr_wf_residual_anchor *a = &anchors[r];
+                const mr_wf_residual_anchor *a = &b.anchors[r];
                 double mean = (v4[0] + v4[1] + v4[2]) / 3.0;
                 for (int c = 0; c < 3; c++) v4[c] = a->albedo[c] + a->gate * (mean + a->chroma * (v4[c] - mean));
                 v4[3] = a->metallic + a->gate * v4[3];
@@ -660,18 +812,26 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
                     if (!isfinite(v)) f |= MR_WF_METHOD_FAILED;
                     v = isfinite(v) ? (v < 0.0 ? 0.0 : 1.0) : 0.0;
                 }
-                if (k < 3)
-                    out->albedo[3 * i + k] = (float)v;
-                else
-                    out->metallic[i] = (float)v;
+                b.answer[4 * r + k] = (float)v;
             }
-            if (out->roughness) out->roughness[i] = (float)sanitise_roughness(in->roughness[i], &f);
-            if (flags) flags[i] = (uint8_t)f;
+            b.row_flags[r] = (uint8_t)f;
+        }
+        // 5. Every texel gets its row's answer (and its own roughness).
+#pragma omp parallel for schedule(static, 1) num_threads(parts) if (parts > 1)
+        for (long p = 0; p < parts; p++) {
+            size_t lo = part_start(count, b.parts, (size_t)p), hi = part_start(count, b.parts, (size_t)p + 1);
+            for (size_t r = lo; r < hi; r++) {
+                size_t i = start + r, row = b.distinct[p] + b.row_of[r];
+                unsigned f = b.row_flags[row];
+                // roughness read before any write: metallic may be the very array roughness came in
+                float roughness = out->roughness ? (float)sanitise_roughness(in->roughness[i], &f) : 0.0f;
+                for (int c = 0; c < 3; c++) out->albedo[3 * i + c] = b.answer[4 * row + c];
+                out->metallic[i] = b.answer[4 * row + 3];
+                if (out->roughness) out->roughness[i] = roughness;
+                if (flags) flags[i] = (uint8_t)f;
+            }
         }
     }
-    free(x);
-    free(y);
-    free(anchors);
-    free(slot);
+    mlp_block_free(&b);
     return status;
 }
