@@ -275,6 +275,10 @@ static void predict_dispatch(const predict_job *job) {
 }
 
 mr_status mr_mlp_predict(const mr_mlp *net, const float *in, size_t n, float *out) {
+    return mr_mlp_predict_threads(net, in, n, out, 0);
+}
+
+mr_status mr_mlp_predict_threads(const mr_mlp *net, const float *in, size_t n, float *out, int max_team) {
     mr_status status = check_net("mlp predict", net);
     if (status != MR_OK) return status;
     if (n == 0) return MR_OK;
@@ -282,7 +286,7 @@ mr_status mr_mlp_predict(const mr_mlp *net, const float *in, size_t n, float *ou
     size_t widest = (size_t)MR_MAX(net->n_in, net->n_out);
     if (n > SIZE_MAX / widest) return mr_fail(MR_ERR_INVALID_ARG, "mlp predict: %zu rows overflow size_t", n);
     // A thread per PREDICT_ROWS_PER_THREAD rows at most: for fewer, starting a team costs more than it saves.
-    int threads = max_threads();
+    int threads = max_team > 0 ? max_team : max_threads();
     if ((size_t)threads > n / PREDICT_ROWS_PER_THREAD) threads = (int)(n / PREDICT_ROWS_PER_THREAD);
     if (threads < 1) threads = 1;
     float *ws = malloc((size_t)threads * (size_t)(net->n_in + net->n_out) * MAX_LANES * sizeof(float));

@@ -169,6 +169,9 @@ size_t mr_mlp_param_count(const mr_mlp *net);
  * (a small per-thread workspace); out is untouched on failure. */
 mr_status mr_mlp_predict(const mr_mlp *net, const float *in, size_t n, float *out);
 
+/* mr_mlp_predict on at most max_team threads (0 = omp_get_max_threads()), still one per 256 rows at most. */
+mr_status mr_mlp_predict_threads(const mr_mlp *net, const float *in, size_t n, float *out, int max_team);
+
 /* The loss of `net` on n rows (x: n x n_in raw inputs, y: n x n_out raw targets): the mean over rows and
  * outputs of ((prediction - y) / out_std)^2, accumulated in double in row order (the same for any thread
  * count). This is the training loss measured on the float network. Rows with NaN make it NaN. Errors as for

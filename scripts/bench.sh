@@ -4,7 +4,7 @@
 # (bench:envlight, bench:mesh, bench:reflection). Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
-# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow]
+# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|remap|remap-processes]
 #   --only NAME runs one section and rewrites only its markers (the full run takes long; sections written as
 #   functions below can be run alone). From make: make bench BENCH_ARGS="--only report-accuracy".
 set -euo pipefail
@@ -123,8 +123,9 @@ bench_report_accuracy() {
         python3 -c 'import json, sys
 d = json.load(open(sys.argv[1]))
 m = d["materials"]
-print("%.6f\t%.6f\t%.9f\t%.9f" % (m[0]["seconds"] + m[1]["seconds"], m[2]["seconds"], m[1]["mean_ssim"],
-                                   m[2]["mean_ssim"]))' "$dir/summary.json" | {
+key = "mean_object_ssim" if "mean_object_ssim" in m[1] else "mean_ssim"  # over the object (issue 12)
+print("%.6f\t%.6f\t%.9f\t%.9f" % (m[0]["seconds"] + m[1]["seconds"], m[2]["seconds"], m[1][key], m[2][key]))' \
+            "$dir/summary.json" | {
             IFS=$'\t' read -r render extra ssim ssim_mean
             # The third material's render is taken off the wall time, and off the CPU time in the same proportion.
             printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$1" "$2" "$3" "$4" \
@@ -214,7 +215,8 @@ print("`matremap report ORIGINAL.gltf -- WEIGHTED.gltf -- MEAN.gltf --env studio
       "jobs on the machine inflate\nless than the wall clock; *render s*: the renders of the original and the "
       "weighted conversion over the 4 views\n(the report's own timer, wall clock); *rest s*: report s less render "
       "s: loading, one render plan per view\n(with shadow rays where the mesh hides itself), pictures, SSIM. "
-      "*SSIM w / m*: the report's mean SSIM of the\nweighted / mean conversion against the original; *|ΔSSIM|*: "
+      "*SSIM w / m*: the report's mean object SSIM (over the\nobject's pixels) of the weighted / mean conversion "
+      "against the original; *|ΔSSIM|*: "
       "its distance from the converged evaluation.\n*picture SSIM / worst view / rel. RMSE*: the original's own "
       "pictures (the report's 8-bit PNGs) against its\npictures at N = %d: mean and lowest SSIM over the 4 views, "
       "mean relative RMSE.\n" % converged_n)
@@ -371,6 +373,56 @@ bench_reflection() {
     replace_section reflection "$table" "$root/docs/rendering.md"
 }
 
+# Uniform remaps against fit-scene size and strategy (docs/performance.md, bench:remap).
+bench_remap_table() {
+    echo "== uniform remaps: time and accuracy against fit-scene size and strategy, one thread (tests/bench_remap.c)"
+    "$root/$build/tests/bench_remap" $quick | tee "$work/remap_table.md"
+    {
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), one thread of $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')."
+        echo
+        cat "$work/remap_table.md"
+    } > "$work/remap.md"
+}
+
+# Remaps as users run them (docs/performance.md, bench:remap-processes): whole `matremap remap` processes at the
+# default size, alone and two started together, with the default (automatic) threads, with --threads 2 (a team for
+# every render, as before issue 13), and with OMP_NUM_THREADS=1 (the old workaround). Median of 21 runs each; the
+# pair's figure is each process's own wall time.
+bench_remap_processes() {
+    echo
+    echo "== remap processes: alone and two side by side (whole processes, default size)"
+    local out="$work/remap_processes.md" runs=21 cmd=("$bin" remap --from ggx alpha=0.2 f0=0.04 diffuse=0.3 --to ward)
+    [ "$quick" = "--quick" ] && runs=5
+    one_ms() { local s e; s=$(date +%s%N); "$@" >/dev/null 2>&1; e=$(date +%s%N); echo $(((e - s) / 1000)); }
+    alone() { for _ in $(seq "$runs"); do one_ms "$@"; done | median; }
+    together() {
+        for _ in $(seq "$runs"); do
+            one_ms "$@" >"$work/pair_a" &
+            one_ms "$@" >"$work/pair_b"
+            wait
+            cat "$work/pair_a" "$work/pair_b"
+        done | median
+    }
+    {
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), load $(cut -d' ' -f1 /proc/loadavg) at the start:"
+        echo "\`${cmd[*]#"$root/"}\` (64², the 45° light), median of $runs whole processes (process start, plan, fit and"
+        echo "verdict), alone and two started together (each process's own time)."
+        echo
+        echo "| threads | alone (ms) | two together, each (ms) | together / alone |"
+        echo "|---|---:|---:|---:|"
+        local a t
+        a=$(alone "${cmd[@]}"); t=$(together "${cmd[@]}")
+        printf '| automatic (default) | %.1f | %.1f | %.2f× |\n' "$(awk -v x="$a" 'BEGIN {print x / 1000}')" \
+            "$(awk -v x="$t" 'BEGIN {print x / 1000}')" "$(awk -v a="$a" -v t="$t" 'BEGIN {print t / a}')"
+        a=$(alone "${cmd[@]}" --threads 2); t=$(together "${cmd[@]}" --threads 2)
+        printf '| --threads 2 (a team per render) | %.1f | %.1f | %.2f× |\n' "$(awk -v x="$a" 'BEGIN {print x / 1000}')" \
+            "$(awk -v x="$t" 'BEGIN {print x / 1000}')" "$(awk -v a="$a" -v t="$t" 'BEGIN {print t / a}')"
+        a=$(OMP_NUM_THREADS=1 alone "${cmd[@]}"); t=$(OMP_NUM_THREADS=1 together "${cmd[@]}")
+        printf '| OMP_NUM_THREADS=1 | %.1f | %.1f | %.2f× |\n' "$(awk -v x="$a" 'BEGIN {print x / 1000}')" \
+            "$(awk -v x="$t" 'BEGIN {print x / 1000}')" "$(awk -v a="$a" -v t="$t" 'BEGIN {print t / a}')"
+    } | tee "$out"
+}
+
 # The workflow converters' speed and accuracy (docs/performance.md, bench:workflow): tests/bench_workflow.c on
 # random texels and on two real texture sets (Avocado, used in training's asset texels, and FloppyDisk, held out),
 # the first shipped network (git history, cc66767) measured beside the default as the peer when git has it.
@@ -460,13 +512,23 @@ if [ -n "$only" ]; then
     case $only in
         report-accuracy) bench_report_accuracy ;;
         reflection) bench_reflection ;;
+        remap)
+            bench_remap_table
+            bench_remap_processes
+            replace_section remap "$work/remap.md"
+            replace_section remap-processes "$work/remap_processes.md"
+            ;;
+        remap-processes)
+            bench_remap_processes
+            replace_section remap-processes "$work/remap_processes.md"
+            ;;
         workflow)
             bench_workflow
             bench_workflow_e2e
             replace_section workflow "$work/workflow.md"
             replace_section workflow-e2e "$work/e2e.md"
             ;;
-        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow)" >&2; exit 1 ;;
+        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, remap, remap-processes)" >&2; exit 1 ;;
     esac
     exit 0
 fi
@@ -480,13 +542,8 @@ echo "== image metrics (tests/bench_metrics.c)"
 "$root/$build/tests/bench_metrics" | tee "$work/metrics_table.md"
 
 echo
-echo "== uniform remaps: time and accuracy against fit-scene size and strategy, one thread (tests/bench_remap.c)"
-"$root/$build/tests/bench_remap" $quick | tee "$work/remap_table.md"
-{
-    echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), one thread of $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')."
-    echo
-    cat "$work/remap_table.md"
-} > "$work/remap.md"
+bench_remap_table
+bench_remap_processes
 
 bench_workflow
 
@@ -647,6 +704,7 @@ if [ -f "$perf" ]; then
     replace_section render "$report"
     replace_section metrics "$work/metrics_table.md"
     replace_section remap "$work/remap.md"
+    replace_section remap-processes "$work/remap_processes.md"
     replace_section workflow "$work/workflow.md"
     replace_section workflow-e2e "$work/e2e.md"
     replace_section gltf "$work/gltf.md"

@@ -48,6 +48,20 @@ expect "two-stage without components" 2 "needs the source's diffuse-only" -- \
 "$bin" render lambert --size 32 -o "$tmp/small.exr" 2>/dev/null
 expect "size mismatch names both files" 2 "small.exr' is 32x32 but .*src.exr' is 64x64" -- \
     "$bin" remap --from-images "$tmp/src.exr" --match-irradiance "$tmp/small.exr" --to ward
+# Renders that are not radiance are bad input (exit 2), named with the pixel: a NaN at (3, 5), an infinity in a
+# component image, a negative value.
+oiiotool --pattern constant:color=nan,nan,nan 1x1 3 -d float --pattern constant:color=0.2,0.2,0.2 64x64 3 -d float \
+    --paste +3+5 -o "$tmp/nan.exr"
+oiiotool --pattern constant:color=0.1,inf,0.1 1x1 3 -d float --pattern constant:color=0.2,0.2,0.2 64x64 3 -d float \
+    --paste +10+2 -o "$tmp/inf.exr"
+oiiotool --pattern constant:color=0.1,0.1,-0.3 1x1 3 -d float --pattern constant:color=0.2,0.2,0.2 64x64 3 -d float \
+    --paste +0+63 -o "$tmp/negative.exr"
+expect "a NaN pixel is bad input, named" 2 "nan.exr': pixel \(3, 5\), channel 0 holds nan" -- \
+    "$bin" remap --from-images "$tmp/nan.exr" --to ward
+expect "an infinite component pixel is bad input, named" 2 "inf.exr': pixel \(10, 2\), channel 1 holds inf" -- \
+    "$bin" remap --from-images "$tmp/src.exr" --diffuse "$tmp/inf.exr" --specular "$tmp/src_s.exr" --to ward
+expect "a negative pixel is bad input, named" 2 "negative.exr': pixel \(0, 63\), channel 2 holds -0.3" -- \
+    "$bin" remap --from-images "$tmp/negative.exr" --to ward
 expect "pictures written" 0 "" -- "$bin" remap --from as f0=0.9 alpha=0.05 --to ward --size 64 --images "$tmp/pic"
 check "source, target and SSIM pictures exist" test -s "$tmp/pic_source.png" -a -s "$tmp/pic_target.png" \
     -a -s "$tmp/pic_ssim.png"

@@ -60,6 +60,8 @@ static void print_help(void) {
            "  --eps E               spec2metal, weighted/mean/khronos: the off-manifold tolerance, for every value\n"
            "                        (default: per texel, half a code value of the texture it comes from, times its\n"
            "                        factor, at least 1e-6: a clean 8-bit export flags nothing; docs/workflow.md)\n"
+           "  --threads N           OpenMP threads of the conversion (default 0: automatic, a team for textures of\n"
+           "                        16384 texels or more)\n"
            "  --keep-specgloss      spec2metal: keep the spec-gloss extension in the output beside the new core\n"
            "                        material (default: remove it, so engines without it read the core material)\n"
            "  --format F            png (default) or exr for the new textures (EXR is not a core glTF image\n"
@@ -81,6 +83,7 @@ typedef struct options {
     mr_wf_diffuse convention;
     double eps;    /* --eps, when eps_given */
     int eps_given; /* else each input's tolerance follows its texture's encoding */
+    int threads;   /* --threads: mr_wf_options.threads (0 automatic) */
     int overwrite, keep_specgloss, keep_unused, json;
 } options;
 
@@ -623,6 +626,8 @@ static int parse(int argc, char **argv, options *o) {
         } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--eps", &value))) {
             if (taken < 0 || !cli_parse_double("gltf", "--eps", value, 0.0, 0.5, &o->eps)) return CLI_EXIT_USAGE;
             o->eps_given = 1;
+        } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--threads", &value))) {
+            if (taken < 0 || !cli_parse_int("gltf", "--threads", value, 0, 1024, &o->threads)) return CLI_EXIT_USAGE;
         } else if (strcmp(argv[i], "--overwrite-metal-rough") == 0) {
             o->overwrite = 1;
         } else if (strcmp(argv[i], "--keep-specgloss") == 0) {
@@ -690,6 +695,7 @@ int cmd_gltf(int argc, char **argv) {
 
     mr_wf_options wf = mr_wf_options_default();
     wf.spec_diffuse = o.convention;
+    wf.threads = o.threads;
     if (o.eps_given) wf.eps = o.eps;
     int use_mlp = to_metal && strcmp(o.method, "mlp") == 0;
     if (to_metal && strcmp(o.method, "extension") == 0) {

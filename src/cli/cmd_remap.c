@@ -2,6 +2,7 @@
  * cmd_remap.c — `matremap remap`: fit a target model to a built-in source material, or to renders of the fit
  * scene made by any renderer (remap.h has the method and the outcome definitions).
  */
+#include <math.h>
 #include <string.h>
 
 #include "cli.h"
@@ -48,6 +49,8 @@ static void print_help(void) {
            "  --grid-points N    auto/joint: global grid points per nonlinear parameter (default 32 for one,\n"
            "                     12 for two, 6 for three; more is slower and misses fewer narrow minima)\n"
            "  --light L          45 (default) or frontal\n"
+           "  --threads N        OpenMP threads of the fit's renders (default 0: automatic, one thread at the\n"
+           "                     default size, where a team costs more than it saves; copies run side by side)\n"
            "  --images PREFIX    also write PREFIX_source.png, PREFIX_target.png and PREFIX_ssim.png\n"
            "  --json             machine-readable result on stdout\n"
            "  --help             this text\n"
@@ -79,11 +82,22 @@ static void print_values(FILE *out, const mr_brdf_model *model, const double *va
     }
 }
 
+/* A render to fit: read as RGB, every value finite and >= 0 (radiance), or exit 2 naming the file and pixel. */
 static int read_source_image(const char *path, mr_image **out) {
     mr_img_read_options ro = {0};
     ro.channels = 3;
     mr_status status = mr_img_read(path, &ro, out);
-    return status == MR_OK ? CLI_EXIT_OK : cli_fail("remap", status);
+    if (status != MR_OK) return cli_fail("remap", status);
+    const mr_image *image = *out;
+    for (size_t i = 0; i < mr_image_value_count(image); i++) {
+        const float v = image->pixels[i];
+        if (isfinite(v) && v >= 0.0f) continue;
+        fprintf(stderr, "matremap remap: error: '%s': pixel (%d, %d), channel %d holds %g: a render to fit must hold "
+                "finite radiance >= 0\n", path, (int)(i / 3 % (size_t)image->width),
+                (int)(i / 3 / (size_t)image->width), (int)(i % 3), (double)v);
+        return CLI_EXIT_BAD_INPUT;
+    }
+    return CLI_EXIT_OK;
 }
 
 /* Render the source's and target's full images and the SSIM map as pictures (--images). */
@@ -159,6 +173,8 @@ int cmd_remap(int argc, char **argv) {
             if (taken < 0) return CLI_EXIT_USAGE;
             if (mr_remap_strategy_from_name(value, &opts.strategy) != MR_OK)
                 return cli_usage_error("remap", "%s", mr_last_error());
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--threads", &value))) {
+            if (taken < 0 || !cli_parse_int("remap", "--threads", value, 0, 1024, &opts.threads)) return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--size", &value))) {
             if (taken < 0 || !cli_parse_int("remap", "--size", value, 16, 4096, &size)) return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--hold", &value))) {

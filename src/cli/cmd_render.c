@@ -49,6 +49,8 @@ static void print_help(void) {
            "  --exposure E          multiply radiance by E before writing (default 1)\n"
            "  --edge-samples N      silhouette pixels are box-filtered with NxN rays (default 4; 1 = pixel\n"
            "                        centres only, aliased edges); other pixels always take one ray\n"
+           "  --threads N           OpenMP threads (default 0: automatic, a team only for renders of 32768 or\n"
+           "                        more shading samples, e.g. 512^2; 64^2 renders on one thread)\n"
            "  --bits B              8 or 16 for PNG/TIFF, 16 (half) or 32 for EXR (default: 8, 32)\n"
            "  --mask FILE           also write the object's coverage: one channel, the fraction of each pixel\n"
            "                        the sphere covers (1 inside, 0 outside, k/N^2 on the silhouette with\n"
@@ -72,7 +74,7 @@ int cmd_render(int argc, char **argv) {
     double env_rotation = 0.0, env_scale = 1.0;
     mr_component component = MR_COMPONENT_FULL;
     double exposure = 1.0;
-    int edge_samples = 0;
+    int edge_samples = 0, threads = 0;
     mr_img_write_options write_opts = {0};
     const char *assignments[CLI_MAX_ASSIGNMENTS];
     int assignment_count = 0;
@@ -124,6 +126,8 @@ int cmd_render(int argc, char **argv) {
         } else if ((taken = cli_take_option("render", argc, argv, &i, "--exposure", &value))) {
             if (taken < 0 || !cli_parse_double("render", "--exposure", value, 0.0, 1e9, &exposure))
                 return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("render", argc, argv, &i, "--threads", &value))) {
+            if (taken < 0 || !cli_parse_int("render", "--threads", value, 0, 1024, &threads)) return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("render", argc, argv, &i, "--edge-samples", &value))) {
             if (taken < 0 || !cli_parse_int("render", "--edge-samples", value, 1, 16, &edge_samples))
                 return CLI_EXIT_USAGE;
@@ -163,6 +167,7 @@ int cmd_render(int argc, char **argv) {
     double start = cli_now(), plan_seconds = 0.0;
     mr_scene scene = mr_scene_fit(&scene_opts);
     scene.edge_samples = edge_samples;
+    scene.threads = threads;
     if (env != NULL) {
         // --env alone lights with the map only; with an explicit --light the point light stays as well.
         int slot = light_given ? scene.light_count++ : 0;

@@ -62,6 +62,8 @@ static void print_help(void) {
            "                       environment's by MIS, so that smooth materials reflect the map (default %d,\n"
            "                       0-%d; 0 = the environment's pattern alone)\n"
            "  --size N             render side in pixels (default %d)\n"
+           "  --threads N          OpenMP threads of plans and renders (default 0: automatic, a team for work\n"
+           "                       large enough to gain from it)\n"
            "  --from X,Y,Z         glTF assets: the direction from the reference's centre to the camera (default:\n"
            "                       a three-quarter view onto its broadest side); the camera frames its bounds\n"
            "  --exposure E         display exposure of the pictures and of SSIM (default: the reference's\n"
@@ -95,6 +97,7 @@ typedef struct options {
     int has_from;
     double from[3];             /* --from: camera direction for glTF assets */
     int reflection_samples;     /* -1: DEFAULT_REFLECTION_SAMPLES */
+    int threads;                /* mr_scene.threads: 0 automatic */
 } options;
 
 /* Parse "X,Y,Z" (a non-zero direction) for `option`. Returns 1, or 0 after printing a usage error. */
@@ -149,6 +152,8 @@ static int parse(int argc, char **argv, options *o, group *groups, int *group_co
         } else if ((taken = cli_take_option("report", argc, argv, &i, "--env-samples", &value))) {
             if (taken < 0 || !cli_parse_int("report", "--env-samples", value, 1, MR_ENV_MAX_SAMPLES, &o->env_samples))
                 return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("report", argc, argv, &i, "--threads", &value))) {
+            if (taken < 0 || !cli_parse_int("report", "--threads", value, 0, 1024, &o->threads)) return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("report", argc, argv, &i, "--reflection-samples", &value))) {
             if (taken < 0 || !cli_parse_int("report", "--reflection-samples", value, 0, MR_ENV_MAX_REFLECTION_SAMPLES,
                                             &o->reflection_samples))
@@ -709,6 +714,7 @@ static int render_views(const options *o, const mr_image *env, double env_scale,
         mr_fit_scene_options fit = {0};
         fit.size = o->size;
         mr_scene scene = mr_scene_fit(&fit);
+        scene.threads = o->threads;
         if (env != NULL) {
             scene.lights[0] = mr_light_environment(env, env_scale, 360.0 * v / views, o->env_samples);
             scene.lights[0].reflection_samples = o->reflection_samples;
@@ -801,7 +807,7 @@ int cmd_report(int argc, char **argv) {
             print_help();
             return CLI_EXIT_OK;
         }
-    options o = {NULL, NULL, NULL, 0, 0, DEFAULT_SIZE, 0.0, 0.0, 0, {0.0, 0.0, 0.0}, -1};
+    options o = {NULL, NULL, NULL, 0, 0, DEFAULT_SIZE, 0.0, 0.0, 0, {0.0, 0.0, 0.0}, -1, 0};
     static group groups[MAX_MATERIALS]; // these three are large (maps, picture names): kept off the stack
     int count = 0;
     int code = parse(argc, argv, &o, groups, &count);

@@ -214,6 +214,7 @@ typedef struct out_options {
     const char *format;     /* png, exr, tif; NULL = from the first input file */
     const char *flags_path; /* --flags */
     int bits, pack, json;
+    int threads;            /* --threads: mr_wf_options.threads (0 automatic) */
 } out_options;
 
 /* "png", "exr" or "tif" for a format name or extension (case-insensitive; "tiff" too), NULL for others. */
@@ -638,6 +639,8 @@ static int take_output_option(const char *command, int argc, char **argv, int *i
         if (taken > 0 && !cli_parse_int(command, "--bits", value, 8, 32, &o->bits)) taken = -1;
     } else if ((taken = cli_take_option(command, argc, argv, i, "--flags", &value))) {
         if (taken > 0) o->flags_path = value;
+    } else if ((taken = cli_take_option(command, argc, argv, i, "--threads", &value))) {
+        if (taken > 0 && !cli_parse_int(command, "--threads", value, 0, 1024, &o->threads)) taken = -1;
     } else if (strcmp(argv[*i], "--pack") == 0) {
         o->pack = taken = 1;
     } else if (strcmp(argv[*i], "--json") == 0) {
@@ -753,6 +756,7 @@ static void print_spec2metal_help(void) {
            "                        non-finite input, blue clamped input, orange off-manifold (a texel with several\n"
            "                        flags takes the first of these colours)\n"
            "  --json                the summary as JSON on stdout (with each output's minimum, mean and maximum)\n"
+           "  --threads N           OpenMP threads (default 0: automatic, a team for maps of 16384 texels or more)\n"
            "  --help                this text\n"
            "\n");
     printf("Prints one line: the size, the method, the read, convert and write times, and the texels flagged as\n"
@@ -803,6 +807,7 @@ int cmd_spec2metal(int argc, char **argv) {
     const double f0 = m.f0;
     int use_mlp = strcmp(method_name, "mlp") == 0;
     mr_wf_options wf = mr_wf_options_default();
+    wf.threads = o.threads;
     wf.dielectric_f0 = f0;
     wf.eps = eps;
     wf.spec_diffuse = m.convention;
@@ -992,6 +997,7 @@ static void print_metal2spec_help(void) {
            "  --flags FILE          a picture of the flagged texels: black clean, magenta non-finite input, blue\n"
            "                        clamped input, orange off-manifold\n"
            "  --json                the summary as JSON on stdout (with each output's minimum, mean and maximum)\n"
+           "  --threads N           OpenMP threads (default 0: automatic, a team for maps of 16384 texels or more)\n"
            "  --help                this text\n"
            "\n");
     printf("Prints one line: the size, the method, the read, convert and write times, and the texels flagged as\n"
@@ -1028,6 +1034,7 @@ int cmd_metal2spec(int argc, char **argv) {
     const char *method_name = m.name;
     const double f0 = m.f0;
     mr_wf_options wf = mr_wf_options_default(); // metal -> spec is Eq. 2 for every method but KHRONOS
+    wf.threads = o.threads;
     wf.dielectric_f0 = f0;
     wf.spec_diffuse = m.convention;
     if (strcmp(method_name, "khronos") == 0)

@@ -43,6 +43,19 @@
 
 #include "../mr_internal.h"
 
+/* Images smaller than this are measured on one thread: a team costs more than it saves (a remap measures its
+ * 64^2 fit once per run; many run side by side). Results do not depend on the thread count. */
+#define METRICS_PARALLEL_PIXELS 65536
+
+static int metrics_threads(long pixels) {
+#ifdef _OPENMP
+    return pixels >= METRICS_PARALLEL_PIXELS ? omp_get_max_threads() : 1;
+#else
+    (void)pixels;
+    return 1;
+#endif
+}
+
 #define SSIM_WIN 11
 #define SSIM_RADIUS 5
 #define SSIM_SIGMA 1.5
@@ -160,8 +173,8 @@ static void luma_row(const float *src, int w, int ch, double exposure, const dou
 
 /* The display-referred luma plane of `image` (w*h doubles, row-major). */
 static void luma_plane(const mr_image *image, double exposure, const srgb_encoder *enc, double *out) {
-    const int w = image->width, h = image->height, ch = image->channels;
-#pragma omp parallel for schedule(static)
+    const int w = image->width, h = image->height, ch = image->channels, threads = metrics_threads((long)w * h);
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
     for (int y = 0; y < h; y++)
         luma_row(image->pixels + (size_t)y * (size_t)w * (size_t)ch, w, ch, exposure, enc->base, enc->inv,
                  (int64_t)enc->first, out + (size_t)y * (size_t)w);
@@ -179,7 +192,8 @@ static int mirror_index(int i, int n) {
 static void downsample_plane(const double *src, int w, int h, int f, double *dst, int dw, int dh) {
     const int before = (f + 1) / 2 - 1; /* MATLAB's kernel origin is floor((f+1)/2) (1-based) */
     const double area = (double)f * (double)f;
-#pragma omp parallel for schedule(static)
+    const int threads = metrics_threads((long)w * h);
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
     for (int i = 0; i < dh; i++) {
         for (int j = 0; j < dw; j++) {
             double sum = 0.0;
@@ -316,10 +330,7 @@ static int ssim_stream(const luma_source *src, int w, int h, const unsigned char
     const double c1 = (SSIM_K1 * SSIM_L) * (SSIM_K1 * SSIM_L);
     const double c2 = (SSIM_K2 * SSIM_L) * (SSIM_K2 * SSIM_L);
 
-    int threads = 1;
-#ifdef _OPENMP
-    threads = omp_get_max_threads();
-#endif
+    const int threads = metrics_threads((long)w * h);
     const int bands = MR_MIN(threads, oh);
     const size_t slot_size = 5 * (size_t)ow;
     const size_t per_thread = 2 * (size_t)w + SSIM_WIN * slot_size + (size_t)ow;
@@ -565,7 +576,8 @@ mr_status mr_rmse_masked(const mr_image *a, const mr_image *b, const mr_image *m
     double *row_sums = malloc(3 * (size_t)h * sizeof(double)); /* squared differences, a's values, pixels */
     if (row_sums == NULL) return mr_fail(MR_ERR_NOMEM, "rmse: out of memory");
     double *row_a = row_sums + h, *row_pixels = row_a + h;
-#pragma omp parallel for schedule(static)
+    const int threads = metrics_threads((long)w * h);
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
     for (int y = 0; y < h; y++) {
         const float *pa = a->pixels + (size_t)y * (size_t)w * (size_t)ch;
         const float *pb = b->pixels + (size_t)y * (size_t)w * (size_t)ch;

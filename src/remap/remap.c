@@ -21,6 +21,7 @@
 
 #include "../metrics/metrics.h"
 #include "../mr_internal.h"
+#include "../render/render_internal.h"
 
 #define MAX_SLOTS MR_BRDF_MAX_VALUES
 #define DEFAULT_MAX_EVALUATIONS 400
@@ -51,10 +52,18 @@
 #define LOCAL_MINIMUM_GAIN 0.10
 #define LOCAL_MINIMUM_FLOOR 1e-3
 #define AFFINE_DEPARTURE_TOLERANCE 0.005
+/* Resolution (remap.h, UNDER_RESOLVED): a shape parameter is only bounded when values whose lobes are a factor
+ * RESOLUTION_RANGE apart in width render within RESOLUTION_TOLERANCE of the source's RMS radiance of each other;
+ * lobes under LOBE_ENERGY_FLOOR of the fitted render's energy have no shape to resolve. The range is walked in
+ * factors of 2, at most RESOLUTION_STEPS each way. */
+#define RESOLUTION_TOLERANCE 0.005
+#define RESOLUTION_RANGE 4.0
+#define RESOLUTION_STEPS 12
+#define LOBE_ENERGY_FLOOR 1e-3
 
 static const char *const strategy_names[MR_REMAP_STRATEGY_COUNT] = {"auto", "single", "two", "three", "joint"};
 static const char *const outcome_names[MR_FIT_OUTCOME_COUNT] = {"converged", "at-bound", "unreachable",
-                                                                "local-minimum"};
+                                                                "local-minimum", "under-resolved"};
 
 const char *mr_remap_strategy_name(mr_remap_strategy strategy) {
     return (unsigned)strategy < MR_REMAP_STRATEGY_COUNT ? strategy_names[strategy] : NULL;
@@ -173,7 +182,7 @@ static double sse_against(const fit_context *ctx, const mr_image *image, const m
 }
 
 static int render_values(fit_context *ctx, const double *values, mr_component component, mr_image *into) {
-    mr_status status = mr_render_into(ctx->plan, ctx->model, values, component, into);
+    mr_status status = mr_render_into_threads(ctx->plan, ctx->opts.threads, ctx->model, values, component, into);
     ctx->renders++;
     if (status != MR_OK) {
         ctx->failure = status;
@@ -219,11 +228,13 @@ static void box_least_squares(int k, const double *G, const double *h, const dou
 static int split_basis(fit_context *ctx, const double *zero, const double *one) {
     const int n = ctx->pixel_count;
     if (!ctx->homogeneous) {
-        if (mr_render_components_into(ctx->plan, ctx->model, zero, ctx->lobe_images[0], ctx->lobe_images[1]) != MR_OK)
+        if (mr_render_components_into_threads(ctx->plan, ctx->opts.threads, ctx->model, zero, ctx->lobe_images[0],
+                                              ctx->lobe_images[1]) != MR_OK)
             return render_values(ctx, zero, MR_COMPONENT_FULL, ctx->basis[0]); // records the failure
         ctx->renders++;
     }
-    if (mr_render_components_into(ctx->plan, ctx->model, one, ctx->lobe_images[2], ctx->lobe_images[3]) != MR_OK)
+    if (mr_render_components_into_threads(ctx->plan, ctx->opts.threads, ctx->model, one, ctx->lobe_images[2],
+                                          ctx->lobe_images[3]) != MR_OK)
         return render_values(ctx, one, MR_COMPONENT_FULL, ctx->basis[0]);
     ctx->renders++;
     for (int i = 0; i < n; i++) {
@@ -814,9 +825,10 @@ static mr_status check_source_image(const mr_render_plan *plan, const mr_image *
                        image->width, image->height, image->channels, scene->width, scene->height);
     size_t n = mr_image_value_count(image);
     for (size_t i = 0; i < n; i++)
-        if (!isfinite(image->pixels[i]))
-            return mr_fail(MR_ERR_NUMERIC, "remap: the source %s image has a non-finite value at pixel (%d, %d)",
-                           what, (int)(i / 3 % (size_t)image->width), (int)(i / 3 / (size_t)image->width));
+        if (!isfinite(image->pixels[i]) || image->pixels[i] < 0.0f)
+            return mr_fail(MR_ERR_INVALID_ARG, "remap: the source %s image holds %g at pixel (%d, %d), channel %d: "
+                           "expected finite radiance >= 0", what, (double)image->pixels[i],
+                           (int)(i / 3 % (size_t)image->width), (int)(i / 3 / (size_t)image->width), (int)(i % 3));
     return MR_OK;
 }
 
@@ -899,6 +911,135 @@ static void classify(fit_context *ctx, double departure, int rescaled_optimum, i
         }
 }
 
+/* ---- resolution: what the scene can and cannot tell apart ------------------------------------------------ */
+
+/* How a shape parameter's value maps to its lobe's width, width ~ value^k: alphas and Blender's rms are widths;
+ * glTF and Cycles roughness are sqrt(alpha); a Phong exponent n gives a width ~ 1 / sqrt(n). */
+static double lobe_width_power(const char *name) {
+    if (strcmp(name, "roughness") == 0) return 2.0;
+    if (strcmp(name, "exponent") == 0) return -0.5;
+    return 1.0;
+}
+
+/* Energy (sum of squares over the covered pixels) of a render. */
+static double image_energy(const fit_context *ctx, const mr_image *image) {
+    double sum = 0.0;
+    for (int i = 0; i < ctx->pixel_count; i++)
+        for (int c = 0; c < 3; c++) {
+            double v = image->pixels[(size_t)ctx->pixels[i] * 3 + c];
+            sum += v * v;
+        }
+    return sum;
+}
+
+/* The range [lo, hi] of fitted slot s's values, walked from `values` in factors of 2 within its bounds, over
+ * which the full render stays within tol_sse (squared error) of `fitted`; beyond[0] and beyond[1], the first
+ * values below and above it whose render differs (the range's own ends where nothing did). 0 if a render
+ * failed. */
+static int shape_range(fit_context *ctx, const double *values, const fitted_slot *s, const mr_image *fitted,
+                       mr_image *scratch, double tol_sse, double *lo, double *hi, double beyond[2]) {
+    double trial[MAX_SLOTS];
+    const double v = values[s->slot];
+    *lo = *hi = v;
+    for (int direction = -1; direction <= 1; direction += 2) {
+        double *end = direction < 0 ? lo : hi;
+        beyond[direction > 0] = *end;
+        for (int step = 1; step <= RESOLUTION_STEPS; step++) {
+            double candidate = mr_clampd(v * pow(2.0, direction * step), s->lo, s->hi);
+            if (candidate == *end) break; // the parameter's bound
+            memcpy(trial, values, sizeof trial);
+            trial[s->slot] = candidate;
+            if (!render_values(ctx, trial, MR_COMPONENT_FULL, scratch)) return 0;
+            beyond[direction > 0] = candidate;
+            if (sse_against(ctx, scratch, fitted) > tol_sse) break;
+            *end = candidate;
+        }
+    }
+    return 1;
+}
+
+/* Refine a CONVERGED or ambiguous LOCAL_MINIMUM verdict (remap.h): a black source or a shapeless lobe is
+ * CONVERGED, a shape only bounded is UNDER_RESOLVED. `fitted` is the render at out->values. Returns 0 if a
+ * render failed (ctx->failure says why). */
+static int check_resolution(fit_context *ctx, double source_rms, const mr_image *fitted, int ambiguous,
+                            mr_remap_result *out) {
+    // A black source fitted by a render as black to the eye (its RMS under the same floor): nothing to bound,
+    // nothing at a limit (GGX cannot be black: Schlick's term leaves a faint highlight, at any alpha).
+    if (source_rms < RELATIVE_RMS_FLOOR && out->relative_rmse <= 1.0) {
+        out->outcome = MR_FIT_CONVERGED;
+        snprintf(out->detail, sizeof out->detail,
+                 "converged: the source is black (RMS radiance %.2g) and so is the fit (RMS %.2g)", source_rms,
+                 out->relative_rmse * RELATIVE_RMS_FLOOR);
+        return 1;
+    }
+    const int local_minimum_by_ambiguity = out->outcome == MR_FIT_LOCAL_MINIMUM && ambiguous;
+    if (out->outcome != MR_FIT_CONVERGED && !local_minimum_by_ambiguity) return 1;
+    // Which lobes show: the fitted render's components.
+    mr_image *diffuse = NULL, *specular = NULL, *scratch = NULL;
+    const mr_scene *scene = mr_render_plan_scene(ctx->plan);
+    mr_status status = mr_image_create(scene->width, scene->height, 3, &diffuse);
+    if (status == MR_OK) status = mr_image_create(scene->width, scene->height, 3, &specular);
+    if (status == MR_OK) status = mr_image_create(scene->width, scene->height, 3, &scratch);
+    if (status == MR_OK)
+        status = mr_render_components_into_threads(ctx->plan, ctx->opts.threads, ctx->model, out->values, diffuse,
+                                                   specular);
+    ctx->renders++;
+    if (status != MR_OK) {
+        ctx->failure = status;
+        mr_image_free(diffuse);
+        mr_image_free(specular);
+        mr_image_free(scratch);
+        return 0;
+    }
+    const double e_diffuse = image_energy(ctx, diffuse), e_specular = image_energy(ctx, specular);
+    const double e_total = fmax(e_diffuse + e_specular, 1e-300);
+    const double tol_sse = 3.0 * ctx->pixel_count * pow(RESOLUTION_TOLERANCE * source_rms, 2.0);
+    int shown = 0, unresolved = 0, ok = 1;
+    double worst_ratio = 0.0;
+    for (int i = 0; i < ctx->nonlinear_count && ok; i++) {
+        const fitted_slot *s = &ctx->nonlinear[i];
+        const mr_brdf_param *p = &ctx->model->params[s->param];
+        double lobe_energy = p->lobe == MR_LOBE_DIFFUSE    ? e_diffuse
+                             : p->lobe == MR_LOBE_SPECULAR ? e_specular
+                                                           : e_total;
+        if (lobe_energy < LOBE_ENERGY_FLOOR * e_total) continue; // a lobe that does not show has no shape
+        shown++;
+        if (!s->log_scale) continue; // only roughness-like parameters narrow below a pixel
+        double lo, hi, beyond[2];
+        if (!(ok = shape_range(ctx, out->values, s, fitted, scratch, tol_sse, &lo, &hi, beyond))) break;
+        // The range as lobe widths (a factor 2 in glTF roughness is a factor 4 in alpha).
+        const double k = lobe_width_power(p->name), widths = pow(hi / lo, fabs(k));
+        if (!(widths >= RESOLUTION_RANGE) || widths <= worst_ratio) continue;
+        worst_ratio = widths;
+        unresolved = 1;
+        // The fit scene that shows the value found as wide as the first lobe outside the range, wider than its
+        // widest, shows now (pixels scale with the lobe's width).
+        const double v = out->values[s->slot];
+        const double resolved = k > 0.0 ? beyond[1] : beyond[0], grow = pow(resolved / v, k);
+        char size[48];
+        if (scene->width * grow <= MR_RENDER_MAX_SIZE)
+            snprintf(size, sizeof size, "about %.0f^2", ceil(scene->width * grow));
+        else
+            snprintf(size, sizeof size, "more than %d^2", MR_RENDER_MAX_SIZE);
+        out->outcome = MR_FIT_UNDER_RESOLVED;
+        snprintf(out->detail, sizeof out->detail,
+                 "under-resolved: %s anywhere in [%.3g, %.3g] renders the same at %d^2 (a lobe narrower than the "
+                 "pixels); %s would resolve %s = %.3g",
+                 p->name, lo, hi, scene->width, size, p->name, v);
+    }
+    mr_image_free(diffuse);
+    mr_image_free(specular);
+    mr_image_free(scratch);
+    if (!ok) return 0;
+    if (local_minimum_by_ambiguity && !unresolved && shown == 0) { // the ambiguity lies in shapes nothing shows
+        out->outcome = MR_FIT_CONVERGED;
+        snprintf(out->detail, sizeof out->detail,
+                 "converged: relative RMSE %.3g (the lobes whose shape differs between equal fits carry under "
+                 "%.1f %% of the energy)", out->relative_rmse, 100.0 * LOBE_ENERGY_FLOOR);
+    }
+    return 1;
+}
+
 mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *source, const mr_brdf_model *target,
                           const mr_remap_options *opts_in, mr_remap_result *out) {
     if (plan == NULL || source == NULL || source->full == NULL || target == NULL || out == NULL)
@@ -910,6 +1051,8 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     if (opts.starts <= 0) opts.starts = DEFAULT_STARTS;
     if ((unsigned)opts.strategy >= MR_REMAP_STRATEGY_COUNT)
         return mr_fail(MR_ERR_INVALID_ARG, "remap: unknown strategy %d", (int)opts.strategy);
+    if (opts.threads < 0 || opts.threads > 1024)
+        return mr_fail(MR_ERR_INVALID_ARG, "remap: threads %d: expected 0 (the plan's rule) to 1024", opts.threads);
     mr_status status = check_source_image(plan, source->full, "full");
     if (status != MR_OK) return status;
     if (opts.strategy == MR_REMAP_TWO || opts.strategy == MR_REMAP_THREE) {
@@ -1080,6 +1223,13 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     result.relative_rmse = fit_rms / fmax(source_rms, RELATIVE_RMS_FLOOR);
     result.renders = fit_renders;
     classify(&ctx, departure / sqrt(energy_scale), rescaled_optimum, ambiguous, projected_gain, &result);
+    // The verdict render again (the checks above reused the scratch image), for the resolution check.
+    if (!render_values(&ctx, result.values, MR_COMPONENT_FULL, ctx.scratch) ||
+        !check_resolution(&ctx, source_rms, ctx.scratch, ambiguous, &result)) {
+        status = ctx.failure;
+        free_context(&ctx);
+        return status;
+    }
     free_context(&ctx);
     result.seconds = now_seconds() - start_time;
     *out = result;
@@ -1096,8 +1246,11 @@ mr_status mr_remap(const mr_render_plan *plan, const mr_brdf_model *source_model
     mr_status status = mr_image_create(scene->width, scene->height, 3, &full);
     if (status == MR_OK) status = mr_image_create(scene->width, scene->height, 3, &diffuse);
     if (status == MR_OK) status = mr_image_create(scene->width, scene->height, 3, &specular);
-    if (status == MR_OK) status = mr_render_components_into(plan, source_model, source_values, diffuse, specular);
-    if (status == MR_OK) status = mr_render_into(plan, source_model, source_values, MR_COMPONENT_FULL, full);
+    const int threads = opts ? opts->threads : 0;
+    if (status == MR_OK)
+        status = mr_render_components_into_threads(plan, threads, source_model, source_values, diffuse, specular);
+    if (status == MR_OK)
+        status = mr_render_into_threads(plan, threads, source_model, source_values, MR_COMPONENT_FULL, full);
     if (status == MR_OK) {
         mr_remap_source source = {full, diffuse, specular};
         status = mr_remap_images(plan, &source, target, opts, out);

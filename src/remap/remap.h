@@ -50,6 +50,15 @@
  *     a local strategy stopped where JOINT's global search, rendered, has more than 10 % less squared error
  *     (the diffuse/specular coupling trap of the paper's figure 8), unless its residual is already under
  *     0.1 % of the source's RMS radiance.
+   - UNDER_RESOLVED: the render matches, but a roughness-like parameter (a nonlinear one searched on a log
+ *     scale) of a lobe that shows (at least 0.1 % of the fitted render's energy) is only bounded: every value in
+ *     a range whose lobes differ 4 times in width renders within 0.5 % of the source's RMS radiance of the fit
+ *     (the lobe is narrower than the scene's pixels resolve). The detail names the range and the fit-scene size
+ *     that would resolve the value found (pixels scale with the lobe's width). It replaces CONVERGED and a
+ *     LOCAL_MINIMUM whose only ambiguity is such a parameter.
+ * A black source (RMS radiance under 1e-4) or a lobe carrying under 0.1 % of the fitted render's energy has no
+ * shape to determine: the fit is CONVERGED with the reflectances it solved (zero for a black source), whatever
+ * distinct shapes fit equally well.
  * UNREACHABLE's rescaling test is the same for every strategy: the render at the solution must be affine in the
  * linear parameters along the segment from 0 to their values (R(b) - 2 R(b/2) + R(0) under 0.5 % of the
  * source's RMS radiance; two extra renders, not counted in `renders`).
@@ -70,8 +79,10 @@ extern "C" {
 
 /* The fit scene's default side in pixels for remaps, chosen from the accuracy/time table of docs/performance.md
  * ("Uniform remaps"): the smallest size whose median remap takes <= 50 ms on one core while its fits,
- * re-rendered at 512^2, stay within 0.001 SSIM (mean over materials) of a 512^2 fit. Narrow lobes (alpha below
- * about 0.06) are better served by 128. */
+ * re-rendered at 512^2, stay within 0.001 SSIM (mean over materials) of a 512^2 fit. Lobes narrower than its
+ * pixels keep their light (the fit scene integrates the pixels about the highlight: render.h,
+ * mr_scene.highlight_samples), so their reflectance is fitted; their roughness is only bounded, and the outcome
+ * says so (MR_FIT_UNDER_RESOLVED, naming the size that would resolve it). */
 #define MR_REMAP_DEFAULT_SIZE 64
 
 typedef enum mr_remap_strategy {
@@ -93,10 +104,11 @@ typedef enum mr_fit_outcome {
     MR_FIT_AT_BOUND,
     MR_FIT_UNREACHABLE,
     MR_FIT_LOCAL_MINIMUM,
+    MR_FIT_UNDER_RESOLVED,
     MR_FIT_OUTCOME_COUNT
 } mr_fit_outcome;
 
-/* "converged", "at-bound", "unreachable", "local-minimum"; NULL outside the enum. */
+/* "converged", "at-bound", "unreachable", "local-minimum", "under-resolved"; NULL outside the enum. */
 const char *mr_fit_outcome_name(mr_fit_outcome outcome);
 
 typedef struct mr_remap_options {
@@ -113,6 +125,9 @@ typedef struct mr_remap_options {
                                     minimum (its renders are not counted in the result); 1 = skip it */
     unsigned held;               /* bit p set: the target's parameter p is held at its target_values value (or
                                     default) instead of fitted, e.g. a roughness both sides share: 0 */
+    int threads;                 /* OpenMP threads of the remap's renders: 0 = the plan's rule (render.h,
+                                    mr_scene.threads: automatic by default, one thread for the default 64^2
+                                    fit scene); n >= 1: n. The result does not depend on it */
 } mr_remap_options;
 
 /* The defaults listed beside each field. */
@@ -138,8 +153,9 @@ typedef struct mr_remap_result {
 } mr_remap_result;
 
 /* Fit `target` to the source images. opts may be NULL (defaults). Fails (MR_ERR_INVALID_ARG) on images of the
- * wrong size or channel count, or on a TWO/THREE strategy without component images; MR_ERR_NUMERIC if the
- * source holds NaN or Inf; MR_ERR_EXTERNAL if nlopt fails. *out is written only on success. */
+ * wrong size or channel count, on a value that is not finite radiance >= 0 (NaN, Inf, negative: the message
+ * names the pixel and channel), or on a TWO/THREE strategy without component images; MR_ERR_EXTERNAL if nlopt
+ * fails. *out is written only on success. */
 mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *source, const mr_brdf_model *target,
                           const mr_remap_options *opts, mr_remap_result *out);
 

@@ -428,9 +428,12 @@ static mr_status build_header(const mr_sweep_spec *spec, const char *command_lin
             first = 0;
         }
     sb_printf(sb, "\n");
-    sb_printf(sb, "# scene: fit size=%d light=%s intensity=%.17g edge_samples=%d\n", scene.width,
-              mr_fit_light_name(spec->scene.light), scene.lights[0].intensity[0],
-              scene.edge_samples > 0 ? scene.edge_samples : MR_SCENE_DEFAULT_EDGE_SAMPLES);
+    // highlight_samples: rows fitted before the pixels about the highlight were integrated (issue 13) are not
+    // comparable with today's, so a sweep written then does not resume now (its header differs)
+    sb_printf(sb, "# scene: fit size=%d light=%s intensity=%.17g edge_samples=%d highlight_samples=%s\n",
+              scene.width, mr_fit_light_name(spec->scene.light), scene.lights[0].intensity[0],
+              scene.edge_samples > 0 ? scene.edge_samples : MR_SCENE_DEFAULT_EDGE_SAMPLES,
+              scene.highlight_samples == 0 ? "integrated" : "centres");
     if (spec->sampling == MR_SWEEP_GRID) {
         sb_printf(sb, "# sampling: grid");
         for (int a = 0; a < spec->axis_count; a++) {

@@ -22,9 +22,15 @@
 #include <stdlib.h>
 #include <string.h>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "../mr_internal.h"
+#include "highlight.h"
 #include "mesh.h"
 #include "render.h"
+#include "render_internal.h"
 #include "texture.h"
 #include "vec3.h"
 
@@ -131,7 +137,20 @@ struct mr_render_plan {
     env_table env;
     mesh_world mesh;       /* MR_SHAPE_MESH: the world-space mesh and its BVH; zero otherwise */
     long shadow_rays;      /* traced while building the plan */
+    int render_threads;    /* OpenMP threads a render uses (render.h, mr_scene.threads) */
 };
+
+/* Threads for `work` units against the automatic rule's `threshold` (render.h, mr_scene.threads). */
+static int threads_for(const mr_scene *scene, long work, long threshold) {
+    if (scene->threads > 0) return scene->threads;
+#ifdef _OPENMP
+    return work >= threshold ? omp_get_max_threads() : 1;
+#else
+    (void)work;
+    (void)threshold;
+    return 1;
+#endif
+}
 
 /* The camera as the primary-ray generator needs it. */
 typedef struct camera_frame {
@@ -176,6 +195,8 @@ typedef struct tracer {
     const mesh_world *mesh;
     camera_frame camera;
     const surface_sampler *surfaces;
+    int highlight_count;                              /* discs around point-light highlights (spheres only) */
+    highlight_disc highlights[HIGHLIGHT_MAX_DISCS];
 } tracer;
 
 static void to_local(const hit_record *hit, const double world[3], double local[3]) {
@@ -751,6 +772,86 @@ static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world
     return 1;
 }
 
+/* Where the sphere shows the point light's mirror reflection, the centre of every highlight the light makes
+ * (a lobe peaks where the half vector is the normal): the point whose normal bisects the directions to the camera
+ * and to the light, found by bisection on the great circle through them, projected to the image. Returns 0 when
+ * that point is not seen lit (the light behind the sphere) or falls outside the image. */
+static int sphere_highlight(const mr_scene *scene, const camera_frame *cf, const mr_light *light, double *px,
+                            double *py) {
+    const double *centre = scene->shape.center, radius = scene->shape.radius;
+    double e[3], l[3], across[3];
+    vec3_sub(cf->origin, centre, e);
+    vec3_normalize(e);
+    vec3_sub(light->position, centre, l);
+    if (!(vec3_normalize(l) > radius)) return 0; // a light inside the sphere lights nothing we see
+    const double el = mr_clampd(vec3_dot(e, l), -1.0, 1.0);
+    for (int k = 0; k < 3; k++) across[k] = l[k] - el * e[k];
+    const double theta_light = acos(el);
+    if (vec3_normalize(across) < 1e-12) { // light and camera on one axis: the point facing both (or none)
+        if (el < 0.0) return 0;
+        vec3_frame_from_normal(e, across, l); // any direction across; theta stays 0
+    }
+    double lo = 0.0, hi = theta_light, p[3], n[3];
+    for (int it = 0; it < 200 && hi - lo > 1e-15; it++) {
+        const double theta = 0.5 * (lo + hi);
+        double to_camera[3], to_light[3];
+        for (int k = 0; k < 3; k++) {
+            n[k] = cos(theta) * e[k] + sin(theta) * across[k];
+            p[k] = centre[k] + radius * n[k];
+        }
+        vec3_sub(cf->origin, p, to_camera);
+        vec3_sub(light->position, p, to_light);
+        vec3_normalize(to_camera);
+        vec3_normalize(to_light);
+        // the angle to the camera grows with theta, the angle to the light shrinks: equal at the mirror point
+        if (vec3_dot(n, to_camera) > vec3_dot(n, to_light))
+            lo = theta;
+        else
+            hi = theta;
+    }
+    const double theta = 0.5 * (lo + hi);
+    double to_camera[3], to_light[3], d[3];
+    for (int k = 0; k < 3; k++) {
+        n[k] = cos(theta) * e[k] + sin(theta) * across[k];
+        p[k] = centre[k] + radius * n[k];
+    }
+    vec3_sub(cf->origin, p, to_camera);
+    vec3_sub(light->position, p, to_light);
+    if (!(vec3_dot(n, to_camera) > 0.0) || !(vec3_dot(n, to_light) > 0.0)) return 0;
+    vec3_sub(p, cf->origin, d);
+    const double z = vec3_dot(d, cf->forward);
+    if (!(z > 0.0)) return 0;
+    const double u = vec3_dot(d, cf->right) / z, v = vec3_dot(d, cf->up) / z;
+    *px = (u / (cf->tan_half * cf->aspect) + 1.0) * 0.5 * cf->width;
+    *py = (1.0 - v / cf->tan_half) * 0.5 * cf->height;
+    return *px >= 0.0 && *px <= cf->width && *py >= 0.0 && *py <= cf->height;
+}
+
+/* The discs of the scene's highlights (render.h, mr_scene.highlight_samples): one per point light on a sphere,
+ * HIGHLIGHT_RADIUS wide, shrunk to half the distance between two that would overlap. */
+static void find_highlights(const mr_scene *scene, tracer *tr) {
+    tr->highlight_count = 0;
+    if (scene->shape.type != MR_SHAPE_SPHERE || scene->highlight_samples == 1) return;
+    for (int l = 0; l < scene->light_count && tr->highlight_count < HIGHLIGHT_MAX_DISCS; l++) {
+        double px, py;
+        const mr_light *light = &scene->lights[l];
+        if (light->type != MR_LIGHT_POINT || !sphere_highlight(scene, &tr->camera, light, &px, &py)) continue;
+        tr->highlights[tr->highlight_count++] = (highlight_disc){px, py, HIGHLIGHT_RADIUS};
+    }
+    for (int a = 0; a < tr->highlight_count; a++)
+        for (int b = a + 1; b < tr->highlight_count; b++) {
+            highlight_disc *da = &tr->highlights[a], *db = &tr->highlights[b];
+            const double half = 0.5 * hypot(da->cx - db->cx, da->cy - db->cy);
+            da->radius = MR_MIN(da->radius, half);
+            db->radius = MR_MIN(db->radius, half);
+        }
+    // Two lights whose highlights coincide share one disc (a disc of radius 0 samples nothing).
+    int kept = 0;
+    for (int a = 0; a < tr->highlight_count; a++)
+        if (tr->highlights[a].radius > 2.0 * HIGHLIGHT_INNER) tr->highlights[kept++] = tr->highlights[a];
+    tr->highlight_count = kept;
+}
+
 /* Trace row y: pixels well inside or outside the silhouette (all four corners and the centre agree) get one
  * primary ray through their centre; pixels on the silhouette get n x n rays on a regular sub-pixel grid, each
  * weighted 1/n^2, so they are box-filtered like a path tracer's pixels instead of aliased (docs/design.md
@@ -763,7 +864,36 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
     row->pixels = malloc((size_t)width * sizeof *row->pixels);
     row->hit_counts = malloc((size_t)width * sizeof *row->hit_counts);
     if (row->pixels == NULL || row->hit_counts == NULL) return 0;
+    highlight_sample *samples = NULL;
+    if (tr->highlight_count > 0) {
+        samples = malloc((size_t)highlight_max_samples(tr->highlight_count) * sizeof *samples);
+        if (samples == NULL) return 0;
+    }
     for (int x = 0; x < width; x++) {
+        const int pixel = y * width + x;
+        const int sample_count = samples ? highlight_pixel_samples(tr->highlights, tr->highlight_count, x, y, samples)
+                                         : -1;
+        if (sample_count >= 0) { // around a highlight: the quadrature of highlight.h instead of the centre
+            size_t first = row->hit_count;
+            double covered = 0.0;
+            hit_record hit;
+            for (int k = 0; k < sample_count; k++) {
+                if (!trace_primary(tr, samples[k].x, samples[k].y, &hit)) continue;
+                covered += samples[k].weight;
+                if (!add_hit(scene, env, occluder, &hit, samples[k].weight, row)) {
+                    free(samples);
+                    return 0;
+                }
+            }
+            coverage[pixel] = (float)MR_MIN(covered, 1.0);
+            if (covered > 0.0) row->object_pixels++;
+            if (row->hit_count > first) {
+                row->pixels[row->lit] = pixel;
+                row->hit_counts[row->lit] = (int)(row->hit_count - first);
+                row->lit++;
+            }
+            continue;
+        }
         const unsigned char *top = corner_hit + (size_t)y * (size_t)(width + 1) + (size_t)x;
         const unsigned char *bottom = top + width + 1;
         hit_record hit;
@@ -778,9 +908,11 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
                 if (n > 1 && !trace_primary(tr, x + (i + 0.5) / n, y + (j + 0.5) / n, &hit)) continue;
                 if (n == 1 && !centre) continue;
                 hits++;
-                if (!add_hit(scene, env, occluder, &hit, weight, row)) return 0;
+                if (!add_hit(scene, env, occluder, &hit, weight, row)) {
+                    free(samples);
+                    return 0;
+                }
             }
-        int pixel = y * width + x;
         coverage[pixel] = (float)(hits * weight);
         if (hits > 0) row->object_pixels++;
         if (row->hit_count > first) {
@@ -789,6 +921,7 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
             row->lit++;
         }
     }
+    free(samples);
     return 1;
 }
 
@@ -817,6 +950,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     memset(&tr, 0, sizeof tr);
     tr.scene = scene;
     camera_frame_init(scene, &tr.camera);
+    find_highlights(scene, &tr);
     surface_sampler *surfaces = NULL;
     mr_render_plan *plan = calloc(1, sizeof *plan);
     unsigned char *corner_hit = malloc((size_t)(width + 1) * (size_t)(height + 1));
@@ -856,13 +990,16 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     // outside the silhouette (the projected sphere is convex and, at these sizes, far wider than a pixel; a
     // mesh's silhouette is handled alike, so only features thinner than a pixel that slip between its corners
     // and centre escape the filter).
-#pragma omp parallel for schedule(static)
+    // A mesh's rays cost a BVH walk each: a plan of a mesh counts its pixels four times.
+    const long trace_work = (long)width * height * (scene->shape.type == MR_SHAPE_MESH ? 4 : 1);
+    const int plan_threads = threads_for(scene, trace_work, MR_RENDER_PARALLEL_PIXELS);
+#pragma omp parallel for schedule(static) num_threads(plan_threads) if (plan_threads > 1)
     for (int y = 0; y <= height; y++)
         for (int x = 0; x <= width; x++)
             corner_hit[(size_t)y * (size_t)(width + 1) + (size_t)x] =
                 (unsigned char)trace_primary(&tr, x, y, NULL);
 
-#pragma omp parallel for schedule(dynamic, 4) reduction(| : failed)
+#pragma omp parallel for schedule(dynamic, 4) reduction(| : failed) num_threads(plan_threads) if (plan_threads > 1)
     for (int y = 0; y < height; y++)
         if (!trace_row(&tr, &plan->env, corner_hit, edge_n, y, plan->coverage, &rows[y]))
             failed = 1;
@@ -927,6 +1064,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     plan->env.sources = NULL;
     plan->env.source_count = 0;
     plan->lit_pixels = next_lit;
+    plan->render_threads = threads_for(scene, mr_render_plan_sample_count(plan), MR_RENDER_PARALLEL_SAMPLES);
     for (int y = 0; y < height; y++) row_result_free(&rows[y]);
     free(rows);
     free(corner_hit);
@@ -949,6 +1087,8 @@ fail:
 const mr_scene *mr_render_plan_scene(const mr_render_plan *plan) { return &plan->scene; }
 
 int mr_render_plan_lit_pixel_count(const mr_render_plan *plan) { return plan->lit_pixels; }
+
+int mr_render_plan_threads(const mr_render_plan *plan) { return plan->render_threads; }
 
 int mr_render_plan_object_pixel_count(const mr_render_plan *plan) { return plan->object_pixels; }
 
@@ -1132,8 +1272,8 @@ static mr_status material_state_init(const mr_material_binding *material, int in
 /* Every render: `full` alone, or either or both of `diffuse` and `specular`, with one material for every hit
  * (count 1) or materials[hit's material]. Each lit pixel sums its hits' samples in plan order (the same for any
  * thread count); a textured material prepares the BRDF state per hit. */
-static mr_status render_core(const mr_render_plan *plan, const mr_material_binding *materials, int count,
-                             mr_image *full, mr_image *diffuse, mr_image *specular) {
+static mr_status render_core(const mr_render_plan *plan, int threads, const mr_material_binding *materials,
+                             int count, mr_image *full, mr_image *diffuse, mr_image *specular) {
     mr_status status = check_target(plan, full, "output");
     if (status == MR_OK) status = check_target(plan, diffuse, "diffuse");
     if (status == MR_OK) status = check_target(plan, specular, "specular");
@@ -1163,7 +1303,8 @@ static mr_status render_core(const mr_render_plan *plan, const mr_material_bindi
     const int lit = plan->lit_pixels;
     // Pixels cost from one BRDF evaluation (a point light) to N * edge_samples^2 (an environment on the
     // silhouette): small dynamic chunks keep both threads busy. The order inside a pixel is fixed.
-#pragma omp parallel for schedule(dynamic, 64)
+    if (threads <= 0) threads = plan->render_threads;
+#pragma omp parallel for schedule(dynamic, 64) num_threads(threads) if (threads > 1)
     for (int i = 0; i < lit; i++) {
         double sum_f[3] = {0.0, 0.0, 0.0}, sum_d[3] = {0.0, 0.0, 0.0}, sum_s[3] = {0.0, 0.0, 0.0};
         double *acc_f = full ? sum_f : NULL, *acc_d = diffuse ? sum_d : NULL, *acc_s = specular ? sum_s : NULL;
@@ -1226,11 +1367,11 @@ static mr_status render_core(const mr_render_plan *plan, const mr_material_bindi
 }
 
 /* The single-material calls as a one-material render. */
-static mr_status render_one(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
-                            const mr_param_textures *textures, mr_image *full, mr_image *diffuse,
-                            mr_image *specular) {
+static mr_status render_one(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
+                            const double *values, const mr_param_textures *textures, mr_image *full,
+                            mr_image *diffuse, mr_image *specular) {
     mr_material_binding material = {model, values, textures};
-    return render_core(plan, &material, 1, full, diffuse, specular);
+    return render_core(plan, threads, &material, 1, full, diffuse, specular);
 }
 
 int mr_render_plan_material_count(const mr_render_plan *plan) {
@@ -1242,9 +1383,9 @@ mr_status mr_render_materials_into(const mr_render_plan *plan, const mr_material
     if (plan == NULL || materials == NULL || image == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan, materials or image");
     switch (component) {
-    case MR_COMPONENT_FULL: return render_core(plan, materials, count, image, NULL, NULL);
-    case MR_COMPONENT_DIFFUSE: return render_core(plan, materials, count, NULL, image, NULL);
-    case MR_COMPONENT_SPECULAR: return render_core(plan, materials, count, NULL, NULL, image);
+    case MR_COMPONENT_FULL: return render_core(plan, 0, materials, count, image, NULL, NULL);
+    case MR_COMPONENT_DIFFUSE: return render_core(plan, 0, materials, count, NULL, image, NULL);
+    case MR_COMPONENT_SPECULAR: return render_core(plan, 0, materials, count, NULL, NULL, image);
     default: return mr_fail(MR_ERR_INVALID_ARG, "render: unknown component %d", (int)component);
     }
 }
@@ -1264,35 +1405,57 @@ mr_status mr_render_materials(const mr_render_plan *plan, const mr_material_bind
     return MR_OK;
 }
 
-mr_status mr_render_textured_components_into(const mr_render_plan *plan, const mr_brdf_model *model,
-                                              const double *values, const mr_param_textures *textures,
-                                              mr_image *diffuse, mr_image *specular) {
+static mr_status components_into(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
+                                  const double *values, const mr_param_textures *textures, mr_image *diffuse,
+                                  mr_image *specular) {
     if (plan == NULL || model == NULL || values == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan, model or values");
     if (diffuse == NULL && specular == NULL) return MR_OK;
-    return render_one(plan, model, values, textures, NULL, diffuse, specular);
+    return render_one(plan, threads, model, values, textures, NULL, diffuse, specular);
+}
+
+mr_status mr_render_textured_components_into(const mr_render_plan *plan, const mr_brdf_model *model,
+                                              const double *values, const mr_param_textures *textures,
+                                              mr_image *diffuse, mr_image *specular) {
+    return components_into(plan, 0, model, values, textures, diffuse, specular);
 }
 
 mr_status mr_render_components_into(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
                                     mr_image *diffuse, mr_image *specular) {
-    return mr_render_textured_components_into(plan, model, values, NULL, diffuse, specular);
+    return components_into(plan, 0, model, values, NULL, diffuse, specular);
 }
 
-mr_status mr_render_textured_into(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
-                                  const mr_param_textures *textures, mr_component component, mr_image *image) {
+mr_status mr_render_components_into_threads(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
+                                            const double *values, mr_image *diffuse, mr_image *specular) {
+    return components_into(plan, threads, model, values, NULL, diffuse, specular);
+}
+
+static mr_status textured_into(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
+                               const double *values, const mr_param_textures *textures, mr_component component,
+                               mr_image *image) {
     if (plan == NULL || model == NULL || values == NULL || image == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan, model, values or image");
     switch (component) {
-    case MR_COMPONENT_FULL: return render_one(plan, model, values, textures, image, NULL, NULL);
-    case MR_COMPONENT_DIFFUSE: return render_one(plan, model, values, textures, NULL, image, NULL);
-    case MR_COMPONENT_SPECULAR: return render_one(plan, model, values, textures, NULL, NULL, image);
+    case MR_COMPONENT_FULL: return render_one(plan, threads, model, values, textures, image, NULL, NULL);
+    case MR_COMPONENT_DIFFUSE: return render_one(plan, threads, model, values, textures, NULL, image, NULL);
+    case MR_COMPONENT_SPECULAR: return render_one(plan, threads, model, values, textures, NULL, NULL, image);
     default: return mr_fail(MR_ERR_INVALID_ARG, "render: unknown component %d", (int)component);
     }
 }
 
+mr_status mr_render_textured_into(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
+                                  const mr_param_textures *textures, mr_component component, mr_image *image) {
+    return textured_into(plan, 0, model, values, textures, component, image);
+}
+
 mr_status mr_render_into(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
                          mr_component component, mr_image *image) {
-    return mr_render_textured_into(plan, model, values, NULL, component, image);
+    return textured_into(plan, 0, model, values, NULL, component, image);
+}
+
+mr_status mr_render_into_threads(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
+                                 const double *values, mr_component component, mr_image *image) {
+    return textured_into(plan, threads, model, values, NULL, component, image);
 }
 
 mr_status mr_render_textured(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,

@@ -58,8 +58,10 @@
  *     +z (the default camera), u grows to the right of the image (+x), v = 0 (the texture's top row) is the
  *     north pole (+y); the seam u = 0 = 1 is the meridian at -z, hidden from the default camera, which sees
  *     the cap within 75.5 degrees of +z (u in [0.29, 0.71] along the equator).
- * Threads: mr_render parallelises over pixels with OpenMP; each pixel is summed in a fixed order, so output is
- * bit-identical for any thread count. A plan is immutable after creation and may be shared between threads.
+ * Threads: the plan's creation and mr_render parallelise over pixels with OpenMP, as many threads as
+ * mr_scene.threads says (by default a team only for work large enough to gain from it); each pixel is summed in a
+ * fixed order, so output is bit-identical for any thread count. A plan is immutable after creation and may be
+ * shared between threads.
  */
 #ifndef MR_RENDER_H
 #define MR_RENDER_H
@@ -277,7 +279,23 @@ typedef struct mr_scene {
     double background[3]; /* radiance of pixels that miss the object */
     int edge_samples;     /* silhouette pixels are box-filtered with edge_samples x edge_samples sub-pixel rays;
                              1 = pixel centres only (aliased edges); 0 = MR_SCENE_DEFAULT_EDGE_SAMPLES; <= 16 */
+    int highlight_samples; /* 0 (default): on a sphere, the pixels around each point light's mirror point are
+                              integrated over their area (log-polar rings about the highlight's centre plus a
+                              grid for the rest: docs/rendering.md, "Narrow highlights"), so a lobe narrower
+                              than a pixel, down to the models' alpha 1e-4, keeps its energy; 1 = pixel
+                              centres only there too. Meshes and environment lights ignore it */
+    int threads;           /* OpenMP threads for building the plan and for every render on it: 0 (default) =
+                              automatic, a team of omp_get_max_threads() only for work large enough to gain
+                              from one (a plan of at least MR_RENDER_PARALLEL_PIXELS traced pixels, a render of
+                              at least MR_RENDER_PARALLEL_SAMPLES shading samples; the remaps' 64^2 renders are
+                              not), one thread otherwise; n >= 1: n threads for all of it. <= 1024 */
 } mr_scene;
+
+/* The automatic thread rule's thresholds (mr_scene.threads = 0), measured on 2 cores (docs/performance.md,
+ * "Threads"): below them a second thread costs more to start than it saves, and copies that run side by side
+ * (sweeps, scripts, farms) would fight over the cores for nothing. */
+#define MR_RENDER_PARALLEL_SAMPLES 32768
+#define MR_RENDER_PARALLEL_PIXELS 16384
 
 #define MR_SCENE_DEFAULT_EDGE_SAMPLES 4
 
@@ -322,6 +340,9 @@ void mr_render_plan_free(mr_render_plan *plan);
 
 /* The scene the plan was built from. */
 const mr_scene *mr_render_plan_scene(const mr_render_plan *plan);
+
+/* The OpenMP threads a render on this plan uses (mr_scene.threads: its value, or the automatic rule's choice). */
+int mr_render_plan_threads(const mr_render_plan *plan);
 
 /* Number of pixels that see the object and receive light (from any light). */
 int mr_render_plan_lit_pixel_count(const mr_render_plan *plan);

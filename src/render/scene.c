@@ -176,6 +176,11 @@ mr_status mr_scene_validate(const mr_scene *scene) {
         if (sphere && vec3_length(to_light) <= scene->shape.radius)
             return mr_fail(MR_ERR_INVALID_ARG, "scene: light %d is inside the sphere", i);
     }
+    if (scene->threads < 0 || scene->threads > 1024)
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: threads %d: expected 0 (automatic) to 1024", scene->threads);
+    if (scene->highlight_samples != 0 && scene->highlight_samples != 1)
+        return mr_fail(MR_ERR_INVALID_ARG, "scene: highlight_samples %d: expected 0 (on) or 1 (off)",
+                       scene->highlight_samples);
     if (scene->edge_samples < 0 || scene->edge_samples > 16)
         return mr_fail(MR_ERR_INVALID_ARG, "scene: edge_samples %d: expected 0 (default %d) to 16",
                        scene->edge_samples, MR_SCENE_DEFAULT_EDGE_SAMPLES);

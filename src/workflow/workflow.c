@@ -59,6 +59,17 @@ mr_wf_options mr_wf_options_default(void) {
     return o;
 }
 
+/* The batches' threads for n texels (workflow.h, mr_wf_options.threads). */
+static int batch_threads(const mr_wf_options *o, size_t n) {
+    if (o->threads > 0) return o->threads;
+#ifdef _OPENMP
+    return n >= MR_WF_PARALLEL_TEXELS ? omp_get_max_threads() : 1;
+#else
+    (void)n;
+    return 1;
+#endif
+}
+
 /* MR_OK or MR_ERR_INVALID_ARG for one of the two quantisations. */
 static mr_status check_quantisation(const char *name, const mr_wf_quantisation *q) {
     if (q->bits != 0 && q->bits != 8 && q->bits != 16)
@@ -72,6 +83,9 @@ static mr_status check_quantisation(const char *name, const mr_wf_quantisation *
 
 mr_status mr_wf_options_check(const mr_wf_options *opts) {
     if (opts == NULL) return MR_OK;
+    if (opts->threads < 0 || opts->threads > 1024)
+        return mr_fail(MR_ERR_INVALID_ARG, "workflow options: threads %d: expected 0 (automatic) to 1024",
+                       opts->threads);
     if (!(opts->dielectric_f0 >= 0.0 && opts->dielectric_f0 < 1.0)) // also rejects NaN
         return mr_fail(MR_ERR_INVALID_ARG, "workflow options: dielectric_f0 %g: expected a value in [0, 1)",
                        opts->dielectric_f0);
@@ -483,7 +497,8 @@ mr_status mr_wf_metal_to_spec_batch(const mr_wf_metal_maps *in, size_t n, const 
     const float *albedo = in->albedo, *metallic = in->metallic, *rough_in = in->roughness;
     float *diffuse = out->diffuse, *specular = out->specular, *rough_out = out->roughness;
 
-#pragma omp parallel for schedule(static)
+    const int threads = batch_threads(&o, n);
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
     for (size_t i = 0; i < n; i++) {
         double a[3] = {albedo[3 * i], albedo[3 * i + 1], albedo[3 * i + 2]};
         double m = metallic[i];
@@ -522,7 +537,8 @@ mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_maps *in, size_t n, const m
     const float *diffuse = in->diffuse, *specular = in->specular, *rough_in = in->roughness;
     float *albedo = out->albedo, *metallic = out->metallic, *rough_out = out->roughness;
 
-#pragma omp parallel for schedule(static)
+    const int threads = batch_threads(&o, n);
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
     for (size_t i = 0; i < n; i++) {
         double d[3] = {diffuse[3 * i], diffuse[3 * i + 1], diffuse[3 * i + 2]};
         double s[3] = {specular[3 * i], specular[3 * i + 1], specular[3 * i + 2]};
@@ -629,13 +645,9 @@ static void mlp_block_free(mlp_block *b) {
     free(b->distinct);
 }
 
-static mr_status mlp_block_alloc(size_t block, mlp_block *b) {
+static mr_status mlp_block_alloc(size_t block, int threads, mlp_block *b) {
     memset(b, 0, sizeof *b);
-#ifdef _OPENMP
-    b->parts = (size_t)omp_get_max_threads();
-#else
-    b->parts = 1;
-#endif
+    b->parts = (size_t)threads;
     if (b->parts > block / MLP_PARALLEL_ROWS) b->parts = block / MLP_PARALLEL_ROWS; // small batches: fewer threads
     if (b->parts == 0) b->parts = 1;
     size_t part_max = (block + b->parts - 1) / b->parts;
@@ -755,7 +767,8 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
     const mr_wf_options anchor_options = residual_anchor_options();
     size_t block = n < MLP_BLOCK ? n : MLP_BLOCK;
     mlp_block b;
-    if (mlp_block_alloc(block, &b) != MR_OK)
+    const int threads = batch_threads(&o, n);
+    if (mlp_block_alloc(block, threads, &b) != MR_OK)
         return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %zu texels", what, block);
     const long parts = (long)b.parts;
     for (size_t start = 0; start < n && status == MR_OK; start += block) {
@@ -787,10 +800,10 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
                 if (b.anchors[r].gate > 0.0 && seen++ != r) memcpy(b.x + 6 * (seen - 1), b.x + 6 * r, 6 * sizeof *b.x);
             }
         }
-        status = seen > 0 ? mr_mlp_predict(net, b.x, seen, b.y) : MR_OK;
+        status = seen > 0 ? mr_mlp_predict_threads(net, b.x, seen, b.y, threads) : MR_OK;
         if (status != MR_OK) break;
         // 4. Each distinct row's answer.
-#pragma omp parallel for schedule(static) if (rows >= MLP_PARALLEL_ROWS)
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && rows >= MLP_PARALLEL_ROWS)
         for (size_t r = 0; r < rows; r++) {
             unsigned f = b.row_flags[r];
             double v4[4] = {0.0, 0.0, 0.0, 0.0};

@@ -218,7 +218,13 @@ typedef struct mr_wf_options {
     mr_wf_quantisation diffuse_quantisation;  /* spec -> metal: how the diffuse input was stored; default exact
                                                  (bits 0: tolerance eps). See "Tolerances" above */
     mr_wf_quantisation specular_quantisation; /* the same for the specular input */
+    int threads;            /* the batches' OpenMP threads: 0 (default) = automatic, a team only for at least
+                               MR_WF_PARALLEL_TEXELS texels (a 2048^2 map; not one texel or a dataset's few);
+                               n >= 1: n (<= 1024). Results do not depend on it */
 } mr_wf_options;
+
+/* The automatic thread rule's threshold (mr_wf_options.threads = 0): below it a team costs more than it saves. */
+#define MR_WF_PARALLEL_TEXELS 16384
 
 /* The defaults listed above. (A zero-initialised struct is valid but means F0d 0 and MEAN.) */
 mr_wf_options mr_wf_options_default(void);

@@ -1,0 +1,227 @@
+/*
+ * highlight.c — sub-pixel quadrature around a point light's highlight (contract and rationale in highlight.h).
+ */
+#include "highlight.h"
+
+#include <math.h>
+
+#include "../mr_internal.h"
+
+/* Each ring sector is cut into SPLIT x SPLIT parts (in ln r and in angle) only to share it out between the
+ * pixels it straddles; a pixel gets one sample per sector, at the centroid of the parts it holds. */
+#define SPLIT 8
+/* Points per side of a grid cell that a disc cuts, to place the cell's sample in the part outside the disc. */
+#define CELL_PROBES 32
+
+/* The radii bounding the rings: HIGHLIGHT_INNER * ratio^k while rings are thinner than HIGHLIGHT_SPACING, then
+ * HIGHLIGHT_SPACING apart, the last one clipped to the disc's radius. Returns the number of rings (radii has one
+ * more entry). */
+static int ring_radii(double radius, double radii[64]) {
+    int rings = 0;
+    radii[0] = HIGHLIGHT_INNER;
+    while (radii[rings] < radius && rings < 62) {
+        const double next = MR_MIN(radii[rings] * HIGHLIGHT_RING_RATIO, radii[rings] + HIGHLIGHT_SPACING);
+        radii[rings + 1] = MR_MIN(next, radius);
+        rings++;
+    }
+    return rings;
+}
+
+/* Sectors of a ring whose outer radius is r: HIGHLIGHT_ANGLES, or more where their arcs would be longer than
+ * HIGHLIGHT_SPACING. */
+static int ring_angles(double r) { return MR_MAX(HIGHLIGHT_ANGLES, (int)ceil(2.0 * MR_PI * r / HIGHLIGHT_SPACING)); }
+
+int highlight_max_samples(int count) {
+    return HIGHLIGHT_GRID * HIGHLIGHT_GRID + count * (62 * ring_angles(HIGHLIGHT_RADIUS) + 2);
+}
+
+int highlight_touches(const highlight_disc *discs, int count, int x, int y) {
+    for (int d = 0; d < count; d++) {
+        double nx = mr_clampd(discs[d].cx, x, x + 1.0) - discs[d].cx;
+        double ny = mr_clampd(discs[d].cy, y, y + 1.0) - discs[d].cy;
+        if (nx * nx + ny * ny < discs[d].radius * discs[d].radius) return 1;
+    }
+    return 0;
+}
+
+/* The integral of sqrt(r^2 - x^2) from 0 to x, |x| <= r. */
+static double half_chord_integral(double x, double r) {
+    x = mr_clampd(x, -r, r);
+    return 0.5 * (x * sqrt(MR_MAX(0.0, r * r - x * x)) + r * r * asin(x / r));
+}
+
+double highlight_disc_rect_area(double cx, double cy, double r, double x0, double y0, double x1, double y1) {
+    if (!(r > 0.0)) return 0.0;
+    x0 = MR_MAX(x0 - cx, -r);
+    x1 = MR_MIN(x1 - cx, r);
+    y0 -= cy;
+    y1 -= cy;
+    if (!(x1 > x0) || !(y1 > y0)) return 0.0;
+    // Between consecutive breakpoints (where the circle crosses y0 or y1) the chord's clipped ends follow one
+    // branch each, the circle or a line, so each piece integrates in closed form.
+    double cuts[6] = {x0, x1, 0, 0, 0, 0};
+    int n = 2;
+    const double ys[2] = {y0, y1};
+    for (int k = 0; k < 2; k++)
+        if (fabs(ys[k]) < r) {
+            double xb = sqrt(r * r - ys[k] * ys[k]);
+            if (xb > x0 && xb < x1) cuts[n++] = xb;
+            if (-xb > x0 && -xb < x1) cuts[n++] = -xb;
+        }
+    for (int i = 1; i < n; i++) // insertion sort: at most six values
+        for (int j = i; j > 0 && cuts[j - 1] > cuts[j]; j--) {
+            double t = cuts[j];
+            cuts[j] = cuts[j - 1];
+            cuts[j - 1] = t;
+        }
+    double area = 0.0;
+    for (int i = 0; i + 1 < n; i++) {
+        double a = cuts[i], b = cuts[i + 1];
+        if (!(b > a)) continue;
+        double mid = 0.5 * (a + b), s = sqrt(MR_MAX(0.0, r * r - mid * mid));
+        double top_mid = MR_MIN(y1, s), bottom_mid = MR_MAX(y0, -s);
+        if (!(top_mid > bottom_mid)) continue;
+        double chord = half_chord_integral(b, r) - half_chord_integral(a, r);
+        double top = y1 < s ? y1 * (b - a) : chord;
+        double bottom = y0 > -s ? y0 * (b - a) : -chord;
+        area += top - bottom;
+    }
+    return MR_MAX(area, 0.0);
+}
+
+/* The bounding box {x0, y0, x1, y1} of the ring sector [ra, rb] x [phi0, phi1] of the disc: its four corners and
+ * the outer arc's extremes where it crosses an axis. */
+static void sector_box(const highlight_disc *disc, double ra, double rb, double phi0, double phi1, double box[4]) {
+    box[0] = box[1] = INFINITY;
+    box[2] = box[3] = -INFINITY;
+    const double phis[2] = {phi0, phi1}, rs[2] = {ra, rb};
+    for (int a = 0; a < 2; a++)
+        for (int b = 0; b < 2; b++) {
+            const double px = disc->cx + rs[b] * cos(phis[a]), py = disc->cy + rs[b] * sin(phis[a]);
+            box[0] = MR_MIN(box[0], px);
+            box[1] = MR_MIN(box[1], py);
+            box[2] = MR_MAX(box[2], px);
+            box[3] = MR_MAX(box[3], py);
+        }
+    for (int q = 0; q <= 4; q++) { // axis directions 0, pi/2, pi, 3pi/2, 2pi inside the arc
+        const double axis = 0.5 * MR_PI * q;
+        if (axis <= phi0 || axis >= phi1) continue;
+        const double px = disc->cx + rb * cos(axis), py = disc->cy + rb * sin(axis);
+        box[0] = MR_MIN(box[0], px);
+        box[1] = MR_MIN(box[1], py);
+        box[2] = MR_MAX(box[2], px);
+        box[3] = MR_MAX(box[3], py);
+    }
+}
+
+/* The disc's sectors' samples in pixel (x, y), appended to out; their weights scaled to the disc's exact area
+ * in the pixel. Returns the new count. */
+static int disc_samples(const highlight_disc *disc, int x, int y, highlight_sample *out, int n) {
+    const double exact = highlight_disc_rect_area(disc->cx, disc->cy, disc->radius, x, y, x + 1.0, y + 1.0);
+    if (!(exact > 0.0)) return n;
+    const int first = n;
+    double radii[64];
+    const int rings = ring_radii(disc->radius, radii);
+    // The innermost disc, r < HIGHLIGHT_INNER: one sample at the centre, in the pixel that holds it.
+    if ((int)floor(disc->cx) == x && (int)floor(disc->cy) == y)
+        out[n++] = (highlight_sample){disc->cx, disc->cy, MR_PI * radii[0] * radii[0]};
+    for (int k = 0; k < rings; k++) {
+        const double ratio = pow(radii[k + 1] / radii[k], 1.0 / SPLIT);
+        const int angles = ring_angles(radii[k + 1]);
+        const double step = 2.0 * MR_PI / angles;
+        for (int j = 0; j < angles; j++) {
+            // Most sectors lie in one pixel: their bounding box decides without cutting them up.
+            double box[4];
+            sector_box(disc, radii[k], radii[k + 1], step * j, step * (j + 1), box);
+            if (box[2] <= x || box[0] >= x + 1.0 || box[3] <= y || box[1] >= y + 1.0) continue; // elsewhere
+            if (box[0] >= x && box[2] <= x + 1.0 && box[1] >= y && box[3] <= y + 1.0) { // wholly in this pixel
+                const double ra = radii[k], rb = radii[k + 1], half = 0.5 * step, phi = step * (j + 0.5);
+                const double rc = 2.0 / 3.0 * (rb * rb * rb - ra * ra * ra) / (rb * rb - ra * ra) * sin(half) / half;
+                out[n++] = (highlight_sample){disc->cx + rc * cos(phi), disc->cy + rc * sin(phi),
+                                              0.5 * (rb * rb - ra * ra) * step};
+                continue;
+            }
+            double weight = 0.0, sx = 0.0, sy = 0.0;
+            double ra = radii[k];
+            for (int a = 0; a < SPLIT; a++, ra *= ratio) {
+                const double rb = a == SPLIT - 1 ? radii[k + 1] : ra * ratio, half = 0.5 * step / SPLIT;
+                const double part = 0.5 * (rb * rb - ra * ra) * (step / SPLIT);
+                // the part's centroid: the sectors' samples sit at the centroid of what they cover, so a shading
+                // that varies linearly across the pixel is integrated exactly
+                const double rc = 2.0 / 3.0 * (rb * rb * rb - ra * ra * ra) / (rb * rb - ra * ra) * sin(half) / half;
+                for (int b = 0; b < SPLIT; b++) {
+                    const double phi = step * (j + (b + 0.5) / SPLIT);
+                    const double px = disc->cx + rc * cos(phi), py = disc->cy + rc * sin(phi);
+                    if ((int)floor(px) != x || (int)floor(py) != y) continue;
+                    weight += part;
+                    sx += part * px;
+                    sy += part * py;
+                }
+            }
+            if (weight > 0.0) out[n++] = (highlight_sample){sx / weight, sy / weight, weight};
+        }
+    }
+    double sum = 0.0;
+    for (int i = first; i < n; i++) sum += out[i].weight;
+    if (sum > 0.0) {
+        for (int i = first; i < n; i++) out[i].weight *= exact / sum;
+    } else { // a sliver of the disc no sector's centre falls in: one sample where the pixel comes nearest
+        double px = mr_clampd(disc->cx, x, x + 1.0), py = mr_clampd(disc->cy, y, y + 1.0);
+        out[n++] = (highlight_sample){px, py, exact};
+    }
+    return n;
+}
+
+int highlight_pixel_samples(const highlight_disc *discs, int count, int x, int y, highlight_sample *out) {
+    if (!highlight_touches(discs, count, x, y)) return -1;
+    int n = 0;
+    const double cell = 1.0 / HIGHLIGHT_GRID;
+    for (int j = 0; j < HIGHLIGHT_GRID; j++)
+        for (int i = 0; i < HIGHLIGHT_GRID; i++) {
+            const double x0 = x + i * cell, y0 = y + j * cell;
+            double inside = 0.0;
+            for (int d = 0; d < count; d++)
+                inside += highlight_disc_rect_area(discs[d].cx, discs[d].cy, discs[d].radius, x0, y0, x0 + cell,
+                                                   y0 + cell);
+            const double outside = cell * cell - inside;
+            if (!(outside > 1e-12)) continue;
+            double sx = x0 + 0.5 * cell, sy = y0 + 0.5 * cell;
+            if (inside > 0.0) { // the centroid of the probes outside every disc
+                double px = 0.0, py = 0.0;
+                int kept = 0;
+                for (int b = 0; b < CELL_PROBES; b++)
+                    for (int a = 0; a < CELL_PROBES; a++) {
+                        const double qx = x0 + (a + 0.5) * cell / CELL_PROBES, qy = y0 + (b + 0.5) * cell / CELL_PROBES;
+                        int in_disc = 0;
+                        for (int d = 0; d < count && !in_disc; d++) {
+                            double dx = qx - discs[d].cx, dy = qy - discs[d].cy;
+                            in_disc = dx * dx + dy * dy < discs[d].radius * discs[d].radius;
+                        }
+                        if (in_disc) continue;
+                        px += qx;
+                        py += qy;
+                        kept++;
+                    }
+                if (kept > 0) {
+                    sx = px / kept;
+                    sy = py / kept;
+                } else { // a sliver no probe sees: the cell's corner farthest from the discs
+                    double best = -1.0;
+                    for (int c = 0; c < 4; c++) {
+                        const double qx = x0 + (c & 1) * cell, qy = y0 + (c >> 1) * cell;
+                        double nearest = INFINITY;
+                        for (int d = 0; d < count; d++)
+                            nearest = MR_MIN(nearest, hypot(qx - discs[d].cx, qy - discs[d].cy) - discs[d].radius);
+                        if (nearest > best) {
+                            best = nearest;
+                            sx = qx;
+                            sy = qy;
+                        }
+                    }
+                }
+            }
+            out[n++] = (highlight_sample){sx, sy, outside};
+        }
+    for (int d = 0; d < count; d++) n = disc_samples(&discs[d], x, y, out, n);
+    return n;
+}
