@@ -499,25 +499,43 @@ MR_TEST(local_minimum_verdicts_are_backed_by_a_better_fit) {
 /* The issue's list of hard sources, under every strategy with a reduced budget: whatever happens, the run ends
  * with finite values inside the target's bounds, held parameters untouched, a defined outcome with its reason,
  * and no more renders than the options allow (check_well_defined). */
+/* Outcome sets for the hard cases below. */
+#define OUT(o) (1u << (o))
+#define CONVERGED_OR_TRAPPED (OUT(MR_FIT_CONVERGED) | OUT(MR_FIT_LOCAL_MINIMUM))
+
 MR_TEST(hard_sources_end_well_defined_under_every_strategy) {
+    // Each case's verdict is asserted: AUTO and JOINT give `global`; the paper's local strategies (SINGLE, TWO,
+    // THREE) one of `local`, where "local-minimum" is a local fit the global search beats (the test
+    // local_minimum_verdicts_are_backed_by_a_better_fit checks that it does).
     static const struct {
         const char *source, *assignments, *target;
+        mr_fit_outcome global;
+        unsigned local;
     } cases[] = {
-        {"ggx", "alpha=1e-4 f0=0.04 diffuse=0.5", "ward"},  /* roughness at its minimum */
-        {"ggx", "alpha=1 f0=0.04 diffuse=0.5", "ward"},     /* ... and maximum */
-        {"ward", "alpha=1e-4 diffuse=0.3 specular=0.5", "ggx"},
-        {"ward", "alpha=1 diffuse=0.3 specular=0.5", "ggx"},
-        {"ggx", "alpha=0.2 f0=0 diffuse=0.5", "ward"},      /* F0 = 0 */
-        {"ggx", "alpha=0.2 f0=1 diffuse=0", "ward"},        /* F0 = 1 */
-        {"ggx", "alpha=0.2 f0=1 diffuse=0.5", "beckmann"},
-        {"as-plastic", "ior=1 diffuse=0.5", "ward"},        /* IOR -> 1: no specular at all */
-        {"as-plastic", "ior=1.0001 diffuse=0.5", "ggx"},
-        {"lambert", "albedo=0", "ggx"},                     /* all black */
-        {"lambert", "albedo=0", "ward"},
-        {"as", "f0=1 alpha=1e-3", "ward"},                  /* Ward with trimming cannot reach it */
-        {"as", "f0=1 alpha=0.05", "ward"},
-        {"blender-ward", "diffuse=1 specular=0.5", "ggx"}, /* diffuse pi times brighter than any Lambert */
-        {"gltf", "base_color=1 metallic=0.5 roughness=0.3", "gltf-specgloss"},
+        /* roughness at its minimum: the light is fitted, the roughness only bounded; local fits miss the lobe */
+        {"ggx", "alpha=1e-4 f0=0.04 diffuse=0.5", "ward", MR_FIT_UNDER_RESOLVED, OUT(MR_FIT_LOCAL_MINIMUM)},
+        {"ggx", "alpha=1 f0=0.04 diffuse=0.5", "ward", MR_FIT_CONVERGED, OUT(MR_FIT_LOCAL_MINIMUM)}, /* maximum */
+        {"ward", "alpha=1e-4 diffuse=0.3 specular=0.5", "ggx", MR_FIT_CONVERGED, CONVERGED_OR_TRAPPED},
+        {"ward", "alpha=1 diffuse=0.3 specular=0.5", "ggx", MR_FIT_CONVERGED, CONVERGED_OR_TRAPPED},
+        {"ggx", "alpha=0.2 f0=0 diffuse=0.5", "ward", MR_FIT_CONVERGED, CONVERGED_OR_TRAPPED}, /* F0 = 0 */
+        /* F0 = 1: Ward would need diffuse + specular > 1, which it trims */
+        {"ggx", "alpha=0.2 f0=1 diffuse=0", "ward", MR_FIT_UNREACHABLE, OUT(MR_FIT_UNREACHABLE)},
+        {"ggx", "alpha=0.2 f0=1 diffuse=0.5", "beckmann", MR_FIT_CONVERGED, CONVERGED_OR_TRAPPED},
+        /* IOR -> 1: no specular at all */
+        {"as-plastic", "ior=1 diffuse=0.5", "ward", MR_FIT_CONVERGED, CONVERGED_OR_TRAPPED},
+        {"as-plastic", "ior=1.0001 diffuse=0.5", "ggx", MR_FIT_CONVERGED, OUT(MR_FIT_CONVERGED)},
+        /* all black: a black fit, whatever shape it leaves */
+        {"lambert", "albedo=0", "ggx", MR_FIT_CONVERGED, OUT(MR_FIT_CONVERGED)},
+        {"lambert", "albedo=0", "ward", MR_FIT_CONVERGED, CONVERGED_OR_TRAPPED},
+        /* Ward with trimming cannot reach a white conductor */
+        {"as", "f0=1 alpha=1e-3", "ward", MR_FIT_UNREACHABLE, OUT(MR_FIT_UNREACHABLE)},
+        {"as", "f0=1 alpha=0.05", "ward", MR_FIT_UNREACHABLE, OUT(MR_FIT_UNREACHABLE)},
+        /* Blender's Ward diffuse is pi times brighter than any Lambert: half the radiance stays unmatched */
+        {"blender-ward", "diffuse=1 specular=0.5", "ggx", MR_FIT_UNREACHABLE,
+         OUT(MR_FIT_UNREACHABLE) | OUT(MR_FIT_LOCAL_MINIMUM)},
+        /* a white half metal needs a spec-gloss diffuse above 1 */
+        {"gltf", "base_color=1 metallic=0.5 roughness=0.3", "gltf-specgloss", MR_FIT_AT_BOUND,
+         OUT(MR_FIT_AT_BOUND) | OUT(MR_FIT_LOCAL_MINIMUM)},
     };
     mr_render_plan *plan = fit_plan(32);
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++)
@@ -531,6 +549,9 @@ MR_TEST(hard_sources_end_well_defined_under_every_strategy) {
                      mr_remap_strategy_name((mr_remap_strategy)s));
             MR_CHECK_OK(remap(plan, cases[k].source, cases[k].assignments, cases[k].target, &o, &r));
             check_well_defined(label, mr_brdf_find(cases[k].target), &o, &r);
+            const int global = s == MR_REMAP_AUTO || s == MR_REMAP_JOINT;
+            const unsigned allowed = global ? OUT(cases[k].global) : cases[k].local;
+            MR_CHECK_MSG((allowed & OUT(r.outcome)) != 0, "%s: '%s'", label, r.detail);
         }
     mr_render_plan_free(plan);
 }
@@ -607,10 +628,9 @@ MR_TEST(plastic_ior_towards_one) {
         MR_CHECK(value_of(ward, r.values, "specular", 0) < 1e-3);
         MR_CHECK_MSG(r.relative_rmse < 1e-3, "%s: relative RMSE %g", iors[i], r.relative_rmse);
         // With the specular lobe gone, Ward's alpha does not show in the image and may end anywhere, a bound
-        // included; that is no limit of the target (at-bound), and two equally good alphas are what remap.h calls
-        // a local minimum (a scene that does not determine the parameters).
-        MR_CHECK_MSG(r.outcome == MR_FIT_CONVERGED || r.outcome == MR_FIT_LOCAL_MINIMUM, "%s -> ward: %s", iors[i],
-                     r.detail);
+        // included; that is no limit of the target (at-bound), nor an ambiguity (remap.h: a lobe under 0.1 % of
+        // the energy has no shape to determine): converged.
+        MR_CHECK_MSG(r.outcome == MR_FIT_CONVERGED, "%s -> ward: %s", iors[i], r.detail);
     }
     mr_render_plan_free(plan);
 }
