@@ -55,7 +55,9 @@
  *     a range whose lobes differ 4 times in width renders within 0.5 % of the source's RMS radiance of the fit
  *     (the lobe is narrower than the scene's pixels resolve). The detail names the range and the fit-scene size
  *     that would resolve the value found (pixels scale with the lobe's width). It replaces CONVERGED and a
- *     LOCAL_MINIMUM whose only ambiguity is such a parameter.
+ *     LOCAL_MINIMUM whose only ambiguity is such a parameter. The check walks each such parameter in factors of
+ *     2 until the render changes: a components render and two renders per parameter for a resolved lobe, up to
+ *     25 for one that is not, not counted in `renders`.
  * A black source (RMS radiance under 1e-4) or a lobe carrying under 0.1 % of the fitted render's energy has no
  * shape to determine: the fit is CONVERGED with the reflectances it solved (zero for a black source), whatever
  * distinct shapes fit equally well.
