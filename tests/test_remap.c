@@ -807,6 +807,13 @@ MR_TEST(outcomes_say_what_the_scene_shows) {
     // A resolved glossy lobe stays converged (the check only speaks where the scene cannot tell).
     MR_CHECK_OK(remap(plan, "ggx", "alpha=0.2 f0=0.04 diffuse=0.3", "ward", &o, &r));
     MR_CHECK_MSG(r.outcome == MR_FIT_CONVERGED, "ggx alpha 0.2 -> ward: '%s'", r.detail);
+    // A glossy GGX lobe (alpha 0.0044, a tenth of a pixel wide) into Ward: the 64^2 image is matched (relative
+    // RMSE 0.3 %) by a Ward lobe twice as wide, GGX's tails spreading light over the neighbouring pixels; the
+    // closer look (8 times closer to the highlight) sees the shapes differ by 45 %: under-resolved, not converged.
+    MR_CHECK_OK(remap(plan, "ggx", "alpha=0.0044 f0=0.1 diffuse=0.05", "ward", &o, &r));
+    MR_CHECK_MSG(r.outcome == MR_FIT_UNDER_RESOLVED && strstr(r.detail, "times closer") != NULL &&
+                     r.relative_rmse < 0.01,
+                 "glossy ggx -> ward: '%s'", r.detail);
     // Two-stage into trimmed Ward, a strong narrow highlight: once the highlight's light is in the image the
     // specular stage finds it (Ward's specular 0.7 / cos t, below 1: no trimming) instead of stopping at
     // (0.96, 1.09, 0.96), "unreachable" with 9.7 % left.

@@ -60,6 +60,12 @@
 #define RESOLUTION_RANGE 4.0
 #define RESOLUTION_STEPS 12
 #define LOBE_ENERGY_FLOOR 1e-3
+/* mr_remap's closer look (remap.h, UNDER_RESOLVED): the highlight ZOOM times closer; a fit whose render there
+ * misses the source's by more than ZOOM_RELATIVE_RMSE and ZOOM_GAIN times its own relative RMSE (at least 1 %)
+ * matched a lobe the fit scene's pixels do not resolve. */
+#define ZOOM 8.0
+#define ZOOM_RELATIVE_RMSE 0.05
+#define ZOOM_GAIN 3.0
 
 static const char *const strategy_names[MR_REMAP_STRATEGY_COUNT] = {"auto", "single", "two", "three", "joint"};
 static const char *const outcome_names[MR_FIT_OUTCOME_COUNT] = {"converged", "at-bound", "unreachable",
@@ -1236,6 +1242,66 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     return MR_OK;
 }
 
+/* Relative RMSE of `fit` against `source` over the pixels the plan's object covers, as mr_remap_result's: the
+ * source's RMS radiance floored at RELATIVE_RMS_FLOOR (a black source gives a finite ratio). */
+static double covered_relative_rmse(const mr_render_plan *plan, const mr_image *fit, const mr_image *source) {
+    const mr_scene *scene = mr_render_plan_scene(plan);
+    const float *coverage = mr_render_plan_coverage(plan);
+    double diff = 0.0, energy = 0.0;
+    long values = 0;
+    for (int p = 0; p < scene->width * scene->height; p++) {
+        if (!(coverage[p] > 0.0f)) continue;
+        for (int c = 0; c < 3; c++, values++) {
+            const double a = fit->pixels[(size_t)p * 3 + c], b = source->pixels[(size_t)p * 3 + c];
+            diff += (a - b) * (a - b);
+            energy += b * b;
+        }
+    }
+    if (values == 0) return 0.0;
+    return sqrt(diff / (double)values) / fmax(sqrt(energy / (double)values), RELATIVE_RMS_FLOOR);
+}
+
+/* The closer look of remap.h (UNDER_RESOLVED, model sources): a CONVERGED fit of a source that is not black
+ * (`full`, its render in the fit scene) rendered with the source ZOOM times closer to the highlight. */
+static mr_status zoom_check(const mr_render_plan *plan, const mr_brdf_model *source_model, const double *source_values,
+                            const mr_image *full, const mr_brdf_model *target, int threads, mr_remap_result *out) {
+    mr_scene zoomed;
+    const mr_scene *scene = mr_render_plan_scene(plan);
+    if (out->outcome != MR_FIT_CONVERGED || !mr_scene_zoom_on_highlight(scene, ZOOM, &zoomed)) return MR_OK;
+    const float *coverage = mr_render_plan_coverage(plan);
+    double energy = 0.0;
+    long values = 0;
+    for (int p = 0; p < scene->width * scene->height; p++)
+        if (coverage[p] > 0.0f)
+            for (int c = 0; c < 3; c++, values++) {
+                const double v = full->pixels[(size_t)p * 3 + c];
+                energy += v * v;
+            }
+    if (values == 0 || sqrt(energy / (double)values) < RELATIVE_RMS_FLOOR) return MR_OK; // black: nothing to look at
+    mr_render_plan *closer = NULL;
+    mr_image *source = NULL, *fit = NULL;
+    mr_status status = mr_render_plan_create(&zoomed, &closer);
+    if (status == MR_OK) status = mr_image_create(zoomed.width, zoomed.height, 3, &source);
+    if (status == MR_OK) status = mr_image_create(zoomed.width, zoomed.height, 3, &fit);
+    if (status == MR_OK)
+        status = mr_render_into_threads(closer, threads, source_model, source_values, MR_COMPONENT_FULL, source);
+    if (status == MR_OK) status = mr_render_into_threads(closer, threads, target, out->values, MR_COMPONENT_FULL, fit);
+    if (status == MR_OK) {
+        const double closer_rmse = covered_relative_rmse(closer, fit, source);
+        if (closer_rmse > ZOOM_RELATIVE_RMSE && closer_rmse > ZOOM_GAIN * fmax(out->relative_rmse, 0.01)) {
+            out->outcome = MR_FIT_UNDER_RESOLVED;
+            snprintf(out->detail, sizeof out->detail,
+                     "under-resolved: the fit matches at %d^2 (relative RMSE %.3g) but %.0f times closer to the "
+                     "highlight it misses by %.0f %%: a lobe narrower than the pixels; about %.0f^2 would resolve it",
+                     scene->width, out->relative_rmse, ZOOM, 100.0 * closer_rmse, ZOOM * scene->width);
+        }
+    }
+    mr_image_free(source);
+    mr_image_free(fit);
+    mr_render_plan_free(closer);
+    return status;
+}
+
 mr_status mr_remap(const mr_render_plan *plan, const mr_brdf_model *source_model, const double *source_values,
                    const mr_brdf_model *target, const mr_remap_options *opts, mr_remap_result *out) {
     if (plan == NULL || source_model == NULL || source_values == NULL)
@@ -1254,6 +1320,7 @@ mr_status mr_remap(const mr_render_plan *plan, const mr_brdf_model *source_model
     if (status == MR_OK) {
         mr_remap_source source = {full, diffuse, specular};
         status = mr_remap_images(plan, &source, target, opts, out);
+        if (status == MR_OK) status = zoom_check(plan, source_model, source_values, full, target, threads, out);
         if (status == MR_OK) out->seconds = now_seconds() - start;
     }
     mr_image_free(full);

@@ -57,7 +57,12 @@
  *     that would resolve the value found (pixels scale with the lobe's width). It replaces CONVERGED and a
  *     LOCAL_MINIMUM whose only ambiguity is such a parameter. The check walks each such parameter in factors of
  *     2 until the render changes: a components render and two renders per parameter for a resolved lobe, up to
- *     25 for one that is not, not counted in `renders`.
+ *     25 for one that is not, not counted in `renders`. mr_remap (a model source, which can be rendered anew)
+ *     also looks closer: a CONVERGED fit of a source that is not black is rendered with the source 8 times
+ *     closer to the first point light's highlight (same image size); if it misses there by more than 5 % and by
+ *     3 times its own relative RMSE (at least 1 %), the fit matched the pixels but not the lobe (GGX's narrow
+ *     lobe imitated by a wider Ward one whose spread over the pixels looks the same): UNDER_RESOLVED, naming a
+ *     size 8 times larger. A plan and two renders, not counted in `renders`.
  * A black source (RMS radiance under 1e-4) or a lobe carrying under 0.1 % of the fitted render's energy has no
  * shape to determine: the fit is CONVERGED with the reflectances it solved (zero for a black source), whatever
  * distinct shapes fit equally well.

@@ -827,6 +827,25 @@ static int sphere_highlight(const mr_scene *scene, const camera_frame *cf, const
     return *px >= 0.0 && *px <= cf->width && *py >= 0.0 && *py <= cf->height;
 }
 
+int mr_scene_zoom_on_highlight(const mr_scene *scene, double zoom, mr_scene *out) {
+    if (scene == NULL || out == NULL || !(zoom >= 1.0) || scene->shape.type != MR_SHAPE_SPHERE) return 0;
+    camera_frame cf;
+    camera_frame_init(scene, &cf);
+    for (int l = 0; l < scene->light_count; l++) {
+        double px, py, dir[3];
+        if (scene->lights[l].type != MR_LIGHT_POINT || !sphere_highlight(scene, &cf, &scene->lights[l], &px, &py))
+            continue;
+        camera_ray(&cf, px, py, dir);
+        mr_scene zoomed = *scene;
+        for (int k = 0; k < 3; k++) zoomed.camera.target[k] = scene->camera.position[k] + dir[k];
+        const double half = atan(tan(0.5 * scene->camera.fov_y_degrees * MR_PI / 180.0) / zoom);
+        zoomed.camera.fov_y_degrees = 2.0 * half * 180.0 / MR_PI;
+        *out = zoomed;
+        return 1;
+    }
+    return 0;
+}
+
 /* The discs of the scene's highlights (render.h, mr_scene.highlight_samples): one per point light on a sphere,
  * HIGHLIGHT_RADIUS wide, shrunk to half the distance between two that would overlap. */
 static void find_highlights(const mr_scene *scene, tracer *tr) {
