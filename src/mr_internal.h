@@ -32,6 +32,12 @@ mr_status mr_fail_context(mr_status status, const char *fmt, ...);
 #define MR_MIN(a, b) ((a) < (b) ? (a) : (b))
 #define MR_MAX(a, b) ((a) > (b) ? (a) : (b))
 
+/* OpenMP threads for a piece of work: `requested` when it is > 0 (an option the caller set), else the automatic
+ * rule: a team of omp_get_max_threads() when `work` reaches `threshold` (work too small to gain from a second
+ * thread stays on one: copies run side by side), 1 otherwise. The thresholds are the callers' (render.h,
+ * workflow.h, metrics.c). */
+int mr_auto_threads(int requested, long work, long threshold);
+
 static inline double mr_clampd(double x, double lo, double hi) {
     /* NaN maps to lo: no NaN may leave a clamp (design principle 6). */
     return x >= lo ? (x <= hi ? x : hi) : lo;

@@ -21,6 +21,10 @@ expect "unknown target model" 2 "unknown BRDF model 'wrad'" -- "$bin" remap --fr
 expect "bad source parameter" 2 "no parameter 'roughness'" -- "$bin" remap --from ggx roughness=0.2 --to ward
 expect "components only with images" 1 "go with --from-images" -- \
     "$bin" remap --from ggx --diffuse d.exr --specular s.exr --to ward
+expect "threads out of range" 1 "--threads '-1': expected an integer in \\[0, 1024\\]" -- \
+    "$bin" remap --from ggx --to ward --threads -1
+expect "threads given are used, same answer" 0 '"outcome": "converged"' -- \
+    "$bin" remap --from ggx alpha=0.2 f0=0.3 --to ggx --threads 2 --json
 expect "missing source image names it" 2 "nope.exr" -- "$bin" remap --from-images "$tmp/nope.exr" --to ward
 
 # Known answer 1: a model remapped to itself.

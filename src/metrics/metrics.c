@@ -47,14 +47,7 @@
  * 64^2 fit once per run; many run side by side). Results do not depend on the thread count. */
 #define METRICS_PARALLEL_PIXELS 65536
 
-static int metrics_threads(long pixels) {
-#ifdef _OPENMP
-    return pixels >= METRICS_PARALLEL_PIXELS ? omp_get_max_threads() : 1;
-#else
-    (void)pixels;
-    return 1;
-#endif
-}
+static int metrics_threads(long pixels) { return mr_auto_threads(0, pixels, METRICS_PARALLEL_PIXELS); }
 
 #define SSIM_WIN 11
 #define SSIM_RADIUS 5

@@ -1116,12 +1116,7 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
         return status;
     }
 
-    double source_energy = 0.0;
-    for (int i = 0; i < ctx.pixel_count; i++)
-        for (int c = 0; c < 3; c++) {
-            double v = source->full->pixels[(size_t)ctx.pixels[i] * 3 + c];
-            source_energy += v * v;
-        }
+    const double source_energy = image_energy(&ctx, source->full);
 
     // The source energy that relative figures divide by, floored like relative_rmse so a black source gives
     // finite ratios.

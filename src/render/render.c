@@ -22,10 +22,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 #include "../mr_internal.h"
 #include "highlight.h"
 #include "mesh.h"
@@ -140,17 +136,6 @@ struct mr_render_plan {
     int render_threads;    /* OpenMP threads a render uses (render.h, mr_scene.threads) */
 };
 
-/* Threads for `work` units against the automatic rule's `threshold` (render.h, mr_scene.threads). */
-static int threads_for(const mr_scene *scene, long work, long threshold) {
-    if (scene->threads > 0) return scene->threads;
-#ifdef _OPENMP
-    return work >= threshold ? omp_get_max_threads() : 1;
-#else
-    (void)work;
-    (void)threshold;
-    return 1;
-#endif
-}
 
 /* The camera as the primary-ray generator needs it. */
 typedef struct camera_frame {
@@ -1011,7 +996,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     // and centre escape the filter).
     // A mesh's rays cost a BVH walk each: a plan of a mesh counts its pixels four times.
     const long trace_work = (long)width * height * (scene->shape.type == MR_SHAPE_MESH ? 4 : 1);
-    const int plan_threads = threads_for(scene, trace_work, MR_RENDER_PARALLEL_PIXELS);
+    const int plan_threads = mr_auto_threads(scene->threads, trace_work, MR_RENDER_PARALLEL_PIXELS);
 #pragma omp parallel for schedule(static) num_threads(plan_threads) if (plan_threads > 1)
     for (int y = 0; y <= height; y++)
         for (int x = 0; x <= width; x++)
@@ -1083,7 +1068,8 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     plan->env.sources = NULL;
     plan->env.source_count = 0;
     plan->lit_pixels = next_lit;
-    plan->render_threads = threads_for(scene, mr_render_plan_sample_count(plan), MR_RENDER_PARALLEL_SAMPLES);
+    plan->render_threads =
+        mr_auto_threads(scene->threads, mr_render_plan_sample_count(plan), MR_RENDER_PARALLEL_SAMPLES);
     for (int y = 0; y < height; y++) row_result_free(&rows[y]);
     free(rows);
     free(corner_hit);

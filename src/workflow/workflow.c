@@ -10,6 +10,7 @@
  */
 #include "workflow.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -19,10 +20,6 @@
 #include "../mr_internal.h"
 #include "nn/mlp.h"
 #include "workflow_internal.h"
-
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 static const char *const method_names[MR_WF_METHOD_COUNT] = {"mean", "weighted", "khronos", "custom"};
 static const char *const diffuse_names[MR_WF_DIFFUSE_COUNT] = {"plain", "specgloss"};
@@ -61,13 +58,7 @@ mr_wf_options mr_wf_options_default(void) {
 
 /* The batches' threads for n texels (workflow.h, mr_wf_options.threads). */
 static int batch_threads(const mr_wf_options *o, size_t n) {
-    if (o->threads > 0) return o->threads;
-#ifdef _OPENMP
-    return n >= MR_WF_PARALLEL_TEXELS ? omp_get_max_threads() : 1;
-#else
-    (void)n;
-    return 1;
-#endif
+    return mr_auto_threads(o->threads, n > (size_t)LONG_MAX ? LONG_MAX : (long)n, MR_WF_PARALLEL_TEXELS);
 }
 
 /* MR_OK or MR_ERR_INVALID_ARG for one of the two quantisations. */
@@ -562,8 +553,6 @@ mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_maps *in, size_t n, const m
 #define MLP_DEDUPE_PROBE 4096 /* texels of a part looked up before deciding whether looking up pays */
 #define MLP_PARALLEL_ROWS 2048 /* fewer distinct rows than this: one thread (a team costs more than they do) */
 
-static inline double max2(double a, double b) { return a > b ? a : b; } /* no NaN here: inputs are sanitised */
-
 /* The anchor with W's options given (the batch builds them once; mr_wf_options_default is not free). */
 static void residual_anchor(const mr_wf_options *o, const double lobe[3], const double specular[3],
                             mr_wf_residual_anchor *out) {
@@ -574,13 +563,13 @@ static void residual_anchor(const mr_wf_options *o, const double lobe[3], const 
     for (int c = 0; c < 3; c++) {
         double back_d, back_s;
         eq2(out->albedo[c], out->metallic, o->dielectric_f0, &back_d, &back_s);
-        r = max2(r, max2(fabs(back_d - lobe[c]), fabs(back_s - specular[c])));
+        r = MR_MAX(r, MR_MAX(fabs(back_d - lobe[c]), fabs(back_s - specular[c])));
         dm += lobe[c] / 3.0;
         sm += specular[c] / 3.0;
     }
     for (int c = 0; c < 3; c++) {
-        dc = max2(dc, fabs(lobe[c] - dm));
-        sc = max2(sc, fabs(specular[c] - sm));
+        dc = MR_MAX(dc, fabs(lobe[c] - dm));
+        sc = MR_MAX(sc, fabs(specular[c] - sm));
     }
     out->gate = r < MR_WF_RESIDUAL_GATE ? r / MR_WF_RESIDUAL_GATE : 1.0;
     out->chroma = dc + sc < MR_WF_RESIDUAL_CHROMA ? (dc + sc) / MR_WF_RESIDUAL_CHROMA : 1.0;
