@@ -183,6 +183,16 @@ static void mf_prepare(const mr_brdf_model *model, const double *values, void *s
     }
 }
 
+/* mr_mf_dg with a constant distribution in each branch, so that each copy is specialised for it (the render
+ * loop's hot path; a call with the distribution as a variable was not inlined). */
+static double mf_dg(mr_mf_dist dist, double alpha, const mr_brdf_geom *g) {
+    switch (dist) {
+    case MR_MF_GGX: return mr_mf_dg(MR_MF_GGX, alpha, g, 1, NULL);
+    case MR_MF_BECKMANN: return mr_mf_dg(MR_MF_BECKMANN, alpha, g, 1, NULL);
+    default: return mr_mf_dg(MR_MF_EPHONG, alpha, g, 1, NULL);
+    }
+}
+
 static void mf_eval(const void *state_bytes, const double wi[3], const double wo[3], double diffuse[3],
                     double specular[3]) {
     const mf_state *state = state_bytes;
@@ -199,7 +209,7 @@ static void mf_eval(const void *state_bytes, const double wi[3], const double wo
         for (int c = 0; c < 3; c++) diffuse[c] = state->diffuse_over_pi[c] * transmit;
     }
     if (specular) {
-        double dg = mr_mf_dg(state->dist, state->alpha, &g, 1, NULL);
+        double dg = mf_dg(state->dist, state->alpha, &g);
         switch (state->fresnel) {
         case MF_SCHLICK: {
             double w = mr_schlick_weight(g.dot_h);

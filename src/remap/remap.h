@@ -122,8 +122,8 @@ typedef struct mr_remap_options {
     mr_remap_strategy strategy;  /* MR_REMAP_AUTO */
     int max_evaluations;         /* renders per local fit: 400 */
     double xtol;                 /* relative step tolerance of local fits, in normalised coordinates: 1e-6 */
-    int grid_points;             /* AUTO's global grid per nonlinear dimension: 32 (1-D), 12 (2-D), 6 (3-D)
-                                    if 0 */
+    int grid_points;             /* AUTO's global grid per nonlinear dimension: 16 (1-D), 8 (2-D), 6 (3-D)
+                                    if 0 (docs/performance.md: finer grids found the same fits) */
     int starts;                  /* AUTO with > 2 nonlinear parameters: multi-start count: 8 */
     unsigned long seed;          /* seeds the multi-start points: 1 */
     const double *target_values; /* optional packed target values: the values of fixed parameters and

@@ -1209,6 +1209,12 @@ static mr_status check_target(const mr_render_plan *plan, const mr_image *image,
  * renders: black. Lit pixels are then overwritten (full renders add their background share again). */
 static void fill_unlit(const mr_render_plan *plan, mr_image *image, int with_background) {
     size_t pixel_count = (size_t)plan->scene.width * (size_t)plan->scene.height;
+    const double *bg = plan->scene.background;
+    // A black background (the fit scene's) is a memset: the fill was 8 % of a remap as a per-value loop.
+    if (!with_background || (bg[0] == 0.0 && bg[1] == 0.0 && bg[2] == 0.0)) {
+        memset(image->pixels, 0, pixel_count * 3 * sizeof *image->pixels);
+        return;
+    }
     for (size_t p = 0; p < pixel_count; p++) {
         double uncovered = with_background ? 1.0 - plan->coverage[p] : 0.0;
         for (int c = 0; c < 3; c++) image->pixels[p * 3 + c] = (float)(plan->scene.background[c] * uncovered);
