@@ -32,6 +32,14 @@ mr_status mr_fail_context(mr_status status, const char *fmt, ...);
 #define MR_MIN(a, b) ((a) < (b) ? (a) : (b))
 #define MR_MAX(a, b) ((a) > (b) ? (a) : (b))
 
+/* For a hot helper called with constant arguments that must be specialised at each call (GCC and Clang; a
+ * plain `inline` elsewhere): the compiler otherwise clones it once for all callers. */
+#if defined(__GNUC__)
+#define MR_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define MR_ALWAYS_INLINE inline
+#endif
+
 /* OpenMP threads for a piece of work: `requested` when it is > 0 (an option the caller set), else the automatic
  * rule: a team of omp_get_max_threads() when `work` reaches `threshold` (work too small to gain from a second
  * thread stays on one: copies run side by side), 1 otherwise. The thresholds are the callers' (render.h,

@@ -224,15 +224,15 @@ static void box_least_squares(int k, const double *G, const double *h, const dou
 
 /* For the nonlinear values already in ctx->base: render the basis, solve for the linear slots (written into
  * ctx->base) and return the squared residual against ctx->goal, or NAN if a render failed. */
-/* The basis renders with one component render per value vector (the split_lobes fast path): basis[0] is the
- * render at all-zero linear values, basis[p + 1] the render with parameter p at 1. A parameter confined to one
- * lobe changes only that component, so its render is its lobe's component plus the other lobe's all-zero one.
+/* The basis renders with one component render per value vector (the split_lobes fast path): the render at
+ * all-zero linear values, R0, and for each parameter p the render with p at 1, R_p. A parameter confined to one
+ * lobe changes only that component, so R_p is its lobe's component plus the other lobe's all-zero one
+ * (split_value builds both per pixel from ctx->lobe_images; no basis image is written).
  * The shared render sets every linear parameter to SPLIT_PROBE, not 1, and scales the difference back: with
  * all of them at 1 at once, Ward's diffuse + specular = 2 would trigger Mitsuba's energy trimming and halve
  * the basis, while 2 x 0.25 stays in the affine region. */
 #define SPLIT_PROBE 0.25
 static int split_basis(fit_context *ctx, const double *zero, const double *one) {
-    const int n = ctx->pixel_count;
     if (!ctx->homogeneous) {
         if (mr_render_components_into_threads(ctx->plan, ctx->opts.threads, ctx->model, zero, ctx->lobe_images[0],
                                               ctx->lobe_images[1]) != MR_OK)
@@ -243,23 +243,57 @@ static int split_basis(fit_context *ctx, const double *zero, const double *one) 
                                           ctx->lobe_images[3]) != MR_OK)
         return render_values(ctx, one, MR_COMPONENT_FULL, ctx->basis[0]);
     ctx->renders++;
-    for (int i = 0; i < n; i++) {
-        size_t at = (size_t)ctx->pixels[i] * 3;
+    return 1;
+}
+
+/* R0 and the R_p of split_basis at value index `at` (pixel * 3 + channel): R0 returned, R_p into r[p]. */
+static MR_ALWAYS_INLINE float split_value(const fit_context *ctx, const unsigned char *diffuse_param, const int P,
+                                          size_t at, float *r) {
+    float d0 = ctx->homogeneous ? 0.0f : ctx->lobe_images[0]->pixels[at];
+    float s0 = ctx->homogeneous ? 0.0f : ctx->lobe_images[1]->pixels[at];
+    float d1 = d0 + (ctx->lobe_images[2]->pixels[at] - d0) / (float)SPLIT_PROBE;
+    float s1 = s0 + (ctx->lobe_images[3]->pixels[at] - s0) / (float)SPLIT_PROBE;
+    if (ctx->projection_component == MR_COMPONENT_SPECULAR) d0 = d1 = 0.0f;
+    if (ctx->projection_component == MR_COMPONENT_DIFFUSE) s0 = s1 = 0.0f;
+    for (int p = 0; p < P; p++) r[p] = diffuse_param[p] ? d1 + s0 : d0 + s1;
+    return d0 + s0;
+}
+
+/* The projection's sums over the covered pixels, per image channel c and basis render p, q < P (P the linear
+ * parameter count): H[c][p] = sum d_p (goal - R0), S[c][p][q] = sum d_p d_q (q <= p) with d_p = R_p - R0, and
+ * *constant = sum (goal - R0)^2 over all channels. */
+static MR_ALWAYS_INLINE void projection_sums(const fit_context *ctx, const int P, double *constant,
+                                             double H[3][MAX_SLOTS], double S[3][MAX_SLOTS][MAX_SLOTS]) {
+    unsigned char diffuse_param[MAX_SLOTS];
+    for (int p = 0; p < P; p++) diffuse_param[p] = ctx->model->params[ctx->linear_params[p]].lobe == MR_LOBE_DIFFUSE;
+    double sum = 0.0, h[3][MAX_SLOTS] = {{0}}, g[3][MAX_SLOTS][MAX_SLOTS] = {{{0}}};
+    const float *goal = ctx->goal->pixels;
+    for (int i = 0; i < ctx->pixel_count; i++) {
+        const size_t at = (size_t)ctx->pixels[i] * 3;
         for (int c = 0; c < 3; c++) {
-            float d0 = ctx->homogeneous ? 0.0f : ctx->lobe_images[0]->pixels[at + c];
-            float s0 = ctx->homogeneous ? 0.0f : ctx->lobe_images[1]->pixels[at + c];
-            float d1 = d0 + (ctx->lobe_images[2]->pixels[at + c] - d0) / (float)SPLIT_PROBE;
-            float s1 = s0 + (ctx->lobe_images[3]->pixels[at + c] - s0) / (float)SPLIT_PROBE;
-            if (ctx->projection_component == MR_COMPONENT_SPECULAR) d0 = d1 = 0.0f;
-            if (ctx->projection_component == MR_COMPONENT_DIFFUSE) s0 = s1 = 0.0f;
-            ctx->basis[0]->pixels[at + c] = d0 + s0;
-            for (int p = 0; p < ctx->linear_param_count; p++) {
-                int diffuse = ctx->model->params[ctx->linear_params[p]].lobe == MR_LOBE_DIFFUSE;
-                ctx->basis[p + 1]->pixels[at + c] = diffuse ? d1 + s0 : d0 + s1;
+            float r[MAX_SLOTS], r0;
+            if (ctx->split_lobes) {
+                r0 = split_value(ctx, diffuse_param, P, at + c, r);
+            } else {
+                r0 = ctx->basis[0]->pixels[at + c];
+                for (int p = 0; p < P; p++) r[p] = ctx->basis[p + 1]->pixels[at + c];
+            }
+            const double base = r0, residual = (double)goal[at + c] - base;
+            double d[MAX_SLOTS];
+            sum += residual * residual;
+            for (int p = 0; p < P; p++) {
+                d[p] = (double)r[p] - base;
+                h[c][p] += d[p] * residual;
+                for (int q = 0; q <= p; q++) g[c][p][q] += d[p] * d[q];
             }
         }
     }
-    return 1;
+    *constant = sum;
+    for (int c = 0; c < 3; c++)
+        for (int p = 0; p < P; p++) {
+            H[c][p] = h[c][p];
+            for (int q = 0; q <= p; q++) S[c][p][q] = g[c][p][q];
+        }
 }
 
 static double project(fit_context *ctx) {
@@ -300,19 +334,10 @@ static double project(fit_context *ctx) {
     // column-by-column products did with mostly zero factors (it was 14 % of a remap).
     const int P = ctx->linear_param_count;
     double constant = 0.0, S[3][MAX_SLOTS][MAX_SLOTS] = {{{0}}}, H[3][MAX_SLOTS] = {{0}};
-    const float *b0 = ctx->basis[0]->pixels, *goal = ctx->goal->pixels;
-    for (int i = 0; i < ctx->pixel_count; i++) {
-        const size_t at = (size_t)ctx->pixels[i] * 3;
-        for (int c = 0; c < 3; c++) {
-            const double base = b0[at + c], residual = (double)goal[at + c] - base;
-            double d[MAX_SLOTS];
-            constant += residual * residual;
-            for (int p = 0; p < P; p++) {
-                d[p] = (double)ctx->basis[p + 1]->pixels[at + c] - base;
-                H[c][p] += d[p] * residual;
-                for (int q = 0; q <= p; q++) S[c][p][q] += d[p] * d[q];
-            }
-        }
+    switch (P) { // constant counts let the compiler keep the sums in registers (the common models have 1 or 2)
+    case 1: projection_sums(ctx, 1, &constant, H, S); break;
+    case 2: projection_sums(ctx, 2, &constant, H, S); break;
+    default: projection_sums(ctx, P, &constant, H, S); break;
     }
     for (int a = 0; a < k; a++) {
         const int pa = column_image[a] - 1;

@@ -64,17 +64,19 @@ struct reflection_frame {
 /* A lit hit: what the render needs of the geometry. Environment samples are direction indices; the frame turns
  * the tabled world directions into local ones. */
 typedef struct plan_hit {
+    /* What every render reads of every hit comes first, in one cache line with the next hit's sample offsets
+     * (the fields after `emission` are read only where maps or environment samples ask for them). */
     double view[3];                         /* local frame, unit, z > 0 */
+    int point_begin;   /* its point samples: point_samples[point_begin .. next hit's point_begin - 1] */
+    int material;      /* index into the materials of mr_render_materials */
+    size_t env_begin;  /* its environment samples: env_samples[env_begin .. next hit's env_begin - 1] */
+    size_t reflection_begin; /* its reflection samples: reflection_samples[reflection_begin .. next hit's - 1] */
+    double emission[3]; /* emitted radiance x share (full renders add it) */
     double tangent[3], bitangent[3], normal[3]; /* the shading frame, world space */
     double uv[2], uv1[2];
     double share;      /* the hit's share of its pixel: 1, or 1/n^2 for a silhouette sub-pixel ray */
     double env_share;  /* share x the surface's ambient occlusion: what environment samples are weighted by */
-    double emission[3]; /* emitted radiance x share (full renders add it) */
     struct reflection_frame mirror; /* with reflection samples: the hit's mirror direction and lobe frame */
-    int material;      /* index into the materials of mr_render_materials */
-    int point_begin;   /* its point samples: point_samples[point_begin .. next hit's point_begin - 1] */
-    size_t env_begin;  /* its environment samples: env_samples[env_begin .. next hit's env_begin - 1] */
-    size_t reflection_begin; /* its reflection samples: reflection_samples[reflection_begin .. next hit's - 1] */
 } plan_hit;
 
 /* A direction drawn around a hit's mirror direction: radiance += f_r(view, light) * weight * cos * env_share. */
@@ -134,6 +136,7 @@ struct mr_render_plan {
     mesh_world mesh;       /* MR_SHAPE_MESH: the world-space mesh and its BVH; zero otherwise */
     long shadow_rays;      /* traced while building the plan */
     int render_threads;    /* OpenMP threads a render uses (render.h, mr_scene.threads) */
+    int emits;             /* some hit has emission (else renders skip adding it) */
 };
 
 
@@ -1046,6 +1049,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
             hit->point_begin += (int)next_point;
             hit->env_begin += next_env;
             hit->reflection_begin += next_reflection;
+            if (hit->emission[0] != 0.0 || hit->emission[1] != 0.0 || hit->emission[2] != 0.0) plan->emits = 1;
         }
         for (int i = 0; i < row->lit; i++) {
             plan->lit_pixel_index[next_lit] = row->pixels[i];
@@ -1359,7 +1363,7 @@ static mr_status render_core(const mr_render_plan *plan, int threads, const mr_m
                 for (int c = 0; c < 3; c++) weight[c] = sample->weight[c] * cos_share;
                 accumulate(model, state, hit->view, light, weight, acc_f, acc_d, acc_s);
             }
-            if (acc_f)
+            if (acc_f && plan->emits)
                 for (int c = 0; c < 3; c++) sum_f[c] += hit->emission[c];
         }
         size_t pixel = (size_t)plan->lit_pixel_index[i];
