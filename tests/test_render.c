@@ -11,6 +11,7 @@
 #include "matremap.h"
 #include "render/highlight.h"
 #include "render/mesh.h"
+#include "render/render_internal.h"
 #include "render/texture.h"
 
 
@@ -2491,7 +2492,34 @@ MR_TEST(narrow_highlights_keep_their_energy) {
     mr_render_plan_free(centres);
 }
 
+/* The closer look of remaps (render_internal.h): one plan, built by whichever thread asks first, the same for
+ * every later caller, with the zoomed camera, and freed with its plan (ASan's leak check in make asan). */
+MR_TEST(closer_look_plan_is_built_once_and_shared) {
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){64, MR_FIT_LIGHT_45, 0});
+    mr_render_plan *plan = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    if (plan == NULL) return;
+    const mr_render_plan *seen[2] = {NULL, NULL};
+    mr_status status[2] = {MR_ERR_CANCELLED, MR_ERR_CANCELLED}; // neither yet
+#pragma omp parallel for num_threads(2)
+    for (int t = 0; t < 2; t++) status[t] = mr_render_plan_zoomed(plan, 8.0, &seen[t]);
+    MR_CHECK(status[0] == MR_OK && status[1] == MR_OK);
+    MR_CHECK(seen[0] != NULL && seen[0] == seen[1]);
+    if (seen[0] != NULL) {
+        const mr_scene *zoomed = mr_render_plan_scene(seen[0]);
+        MR_CHECK(zoomed->width == 64 && zoomed->height == 64);
+        MR_CHECK(zoomed->camera.fov_y_degrees < scene.camera.fov_y_degrees / 4.0);
+    }
+    const mr_render_plan *again = NULL;
+    MR_CHECK_OK(mr_render_plan_zoomed(plan, 8.0, &again));
+    MR_CHECK(again == seen[0]);
+    MR_CHECK(mr_render_plan_zoomed(plan, 4.0, &again) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_render_plan_bytes(plan) > mr_render_plan_bytes(seen[0]));
+    mr_render_plan_free(plan);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
+             MR_TEST_ENTRY(closer_look_plan_is_built_once_and_shared),
              MR_TEST_ENTRY(highlight_quadrature_shares_each_pixel_exactly),
              MR_TEST_ENTRY(narrow_highlights_keep_their_energy),
              MR_TEST_ENTRY(threads_follow_the_scene_and_the_work),

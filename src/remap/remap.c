@@ -1296,9 +1296,8 @@ static double covered_relative_rmse(const mr_render_plan *plan, const mr_image *
  * (`full`, its render in the fit scene) rendered with the source ZOOM times closer to the highlight. */
 static mr_status zoom_check(const mr_render_plan *plan, const mr_brdf_model *source_model, const double *source_values,
                             const mr_image *full, const mr_brdf_model *target, int threads, mr_remap_result *out) {
-    mr_scene zoomed;
+    if (out->outcome != MR_FIT_CONVERGED) return MR_OK;
     const mr_scene *scene = mr_render_plan_scene(plan);
-    if (out->outcome != MR_FIT_CONVERGED || !mr_scene_zoom_on_highlight(scene, ZOOM, &zoomed)) return MR_OK;
     const float *coverage = mr_render_plan_coverage(plan);
     double energy = 0.0;
     long values = 0;
@@ -1309,11 +1308,13 @@ static mr_status zoom_check(const mr_render_plan *plan, const mr_brdf_model *sou
                 energy += v * v;
             }
     if (values == 0 || sqrt(energy / (double)values) < RELATIVE_RMS_FLOOR) return MR_OK; // black: nothing to look at
-    mr_render_plan *closer = NULL;
+    const mr_render_plan *closer = NULL; // kept by `plan`: built by the first remap that asks
+    mr_status status = mr_render_plan_zoomed(plan, ZOOM, &closer);
+    if (status != MR_OK || closer == NULL) return status;
+    const mr_scene *zoomed = mr_render_plan_scene(closer);
     mr_image *source = NULL, *fit = NULL;
-    mr_status status = mr_render_plan_create(&zoomed, &closer);
-    if (status == MR_OK) status = mr_image_create(zoomed.width, zoomed.height, 3, &source);
-    if (status == MR_OK) status = mr_image_create(zoomed.width, zoomed.height, 3, &fit);
+    status = mr_image_create(zoomed->width, zoomed->height, 3, &source);
+    if (status == MR_OK) status = mr_image_create(zoomed->width, zoomed->height, 3, &fit);
     if (status == MR_OK)
         status = mr_render_into_threads(closer, threads, source_model, source_values, MR_COMPONENT_FULL, source);
     if (status == MR_OK) status = mr_render_into_threads(closer, threads, target, out->values, MR_COMPONENT_FULL, fit);
@@ -1329,7 +1330,6 @@ static mr_status zoom_check(const mr_render_plan *plan, const mr_brdf_model *sou
     }
     mr_image_free(source);
     mr_image_free(fit);
-    mr_render_plan_free(closer);
     return status;
 }
 

@@ -62,7 +62,8 @@
  *     closer to the first point light's highlight (same image size); if it misses there by more than 5 % and by
  *     3 times its own relative RMSE (at least 1 %), the fit matched the pixels but not the lobe (GGX's narrow
  *     lobe imitated by a wider Ward one whose spread over the pixels looks the same): UNDER_RESOLVED, naming a
- *     size 8 times larger. A plan and two renders, not counted in `renders`.
+ *     size 8 times larger. Two renders, not counted in `renders`, and the closer plan, which `plan` keeps
+ *     (built by the first remap that needs it, shared by later ones and by concurrent threads, freed with it).
  * A black source (RMS radiance under 1e-4) or a lobe carrying under 0.1 % of the fitted render's energy has no
  * shape to determine: the fit is CONVERGED with the reflectances it solved (zero for a black source), whatever
  * distinct shapes fit equally well.

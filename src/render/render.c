@@ -17,6 +17,7 @@
  * for any thread count.
  */
 #include <limits.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -137,6 +138,10 @@ struct mr_render_plan {
     long shadow_rays;      /* traced while building the plan */
     int render_threads;    /* OpenMP threads a render uses (render.h, mr_scene.threads) */
     int emits;             /* some hit has emission (else renders skip adding it) */
+    /* The closer look (render_internal.h, mr_render_plan_zoomed): built on first use by whichever thread asks
+     * first, installed with a compare-and-swap (a thread that loses frees its copy), freed with this plan. */
+    _Atomic(struct mr_render_plan *) zoomed;
+    double zoom;           /* of a plan made by mr_render_plan_zoomed: its zoom factor */
 };
 
 
@@ -934,6 +939,7 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
 
 void mr_render_plan_free(mr_render_plan *plan) {
     if (plan == NULL) return;
+    mr_render_plan_free(atomic_load(&plan->zoomed));
     free(plan->coverage);
     free(plan->lit_pixel_index);
     free(plan->hit_begin);
@@ -964,6 +970,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     row_result *rows = calloc((size_t)height, sizeof *rows);
     int failed = 0;
     if (plan == NULL || corner_hit == NULL || rows == NULL) goto oom;
+    atomic_init(&plan->zoomed, NULL);
     plan->scene = *scene;
     plan->coverage = calloc((size_t)width * (size_t)height, sizeof *plan->coverage);
     if (plan->coverage == NULL) goto oom;
@@ -1123,7 +1130,35 @@ size_t mr_render_plan_bytes(const mr_render_plan *plan) {
            (plan->hits[hits].reflection_begin + 1) * sizeof *plan->reflection_samples +
            (size_t)plan->env.count * (sizeof *plan->env.direction + sizeof *plan->env.weight +
                                       (plan->env.mis_npdf ? sizeof *plan->env.mis_npdf : 0)) +
-           mesh_world_bytes(&plan->mesh);
+           mesh_world_bytes(&plan->mesh) + (atomic_load(&plan->zoomed) ? mr_render_plan_bytes(plan->zoomed) : 0);
+}
+
+mr_status mr_render_plan_zoomed(const mr_render_plan *plan, double zoom, const mr_render_plan **out) {
+    if (plan == NULL || out == NULL || !(zoom > 0.0))
+        return mr_fail(MR_ERR_INVALID_ARG, "render plan: closer look: NULL plan or output, or zoom %g", zoom);
+    *out = NULL;
+    // The plan is const to its users; its cache slot is the one field that changes, atomically (the object
+    // itself was allocated writable by mr_render_plan_create).
+    _Atomic(mr_render_plan *) *slot = &((mr_render_plan *)plan)->zoomed;
+    mr_render_plan *made = atomic_load_explicit(slot, memory_order_acquire);
+    if (made == NULL) {
+        mr_scene scene;
+        if (!mr_scene_zoom_on_highlight(&plan->scene, zoom, &scene)) return MR_OK; // no highlight to look at
+        mr_status status = mr_render_plan_create(&scene, &made);
+        if (status != MR_OK) return mr_fail_context(status, "render plan: closer look");
+        made->zoom = zoom;
+        mr_render_plan *expected = NULL;
+        if (!atomic_compare_exchange_strong_explicit(slot, &expected, made, memory_order_acq_rel,
+                                                     memory_order_acquire)) {
+            mr_render_plan_free(made); // another thread installed its copy first
+            made = expected;
+        }
+    }
+    if (made->zoom != zoom)
+        return mr_fail(MR_ERR_INVALID_ARG, "render plan: closer look %g times: this plan keeps the one of %g times",
+                       zoom, made->zoom);
+    *out = made;
+    return MR_OK;
 }
 
 const float *mr_render_plan_coverage(const mr_render_plan *plan) { return plan->coverage; }

@@ -19,4 +19,10 @@ mr_status mr_render_components_into_threads(const mr_render_plan *plan, int thre
  * highlight is seen. */
 int mr_scene_zoom_on_highlight(const mr_scene *scene, double zoom, mr_scene *out);
 
+/* The plan of `plan`'s scene zoomed on its highlight (mr_scene_zoom_on_highlight), built on the first call and
+ * kept by `plan` (freed with it; safe to call from several threads at once), so that repeated remaps with one
+ * plan (sweeps) build it once. *out = NULL with MR_OK when the scene has no highlight to look at. A plan keeps
+ * one zoom factor: a later call with another fails (MR_ERR_INVALID_ARG). */
+mr_status mr_render_plan_zoomed(const mr_render_plan *plan, double zoom, const mr_render_plan **out);
+
 #endif /* MR_RENDER_INTERNAL_H */
