@@ -13,13 +13,13 @@
 
 #include <errno.h>
 #include <float.h>
-#include <locale.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "../src/c_locale.h"
 #include "../src/io/io_internal.h"
 #include "../src/mr_internal.h"
 
@@ -29,26 +29,6 @@
 #define MAX_TOKEN 63
 /* Longest file the reader loads: MR_MLP_MAX_PARAMS numbers at 24 bytes, plus slack. */
 #define MAX_FILE_BYTES ((size_t)MR_MLP_MAX_PARAMS * 24 + ((size_t)1 << 20))
-
-/* ---- the C numeric locale, per thread --------------------------------------------------------------------- */
-
-typedef struct c_numeric {
-    locale_t c;
-    locale_t saved;
-} c_numeric;
-
-static mr_status c_numeric_enter(c_numeric *s, const char *what) {
-    s->saved = (locale_t)0;
-    s->c = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
-    if (s->c == (locale_t)0) return mr_fail(MR_ERR_NOMEM, "%s: cannot create the C numeric locale", what);
-    s->saved = uselocale(s->c);
-    return MR_OK;
-}
-
-static void c_numeric_leave(c_numeric *s) {
-    uselocale(s->saved);
-    freelocale(s->c);
-}
 
 /* ---- writing ---------------------------------------------------------------------------------------------- */
 
@@ -146,12 +126,12 @@ mr_status mr_mlp_write(const mr_mlp *net, const char *path) {
     if (net == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mlp write '%s': NULL network", path);
     mr_status status = check_values(net, path);
     if (status != MR_OK) return status;
-    c_numeric locale;
-    status = c_numeric_enter(&locale, "mlp write");
+    mr_c_numeric locale;
+    status = mr_c_numeric_enter(&locale, "mlp write");
     if (status != MR_OK) return status;
     out_text o = {NULL, 0, 0};
     status = format_net(net, &o);
-    c_numeric_leave(&locale);
+    mr_c_numeric_leave(&locale);
     if (status != MR_OK) return status;
     status = mr_atomic_write_bytes(path, o.text, o.length);
     free(o.text);
@@ -369,11 +349,11 @@ mr_status mr_mlp_parse(const char *text, size_t size, const char *name, mr_mlp *
     if (text == NULL && size > 0) return mr_fail(MR_ERR_INVALID_ARG, "mlp weights '%s': NULL text", name);
     if (text == NULL) text = "";
     parser ps = {name, text, text + size, 0, NULL, NULL};
-    c_numeric locale;
-    mr_status status = c_numeric_enter(&locale, "mlp read");
+    mr_c_numeric locale;
+    mr_status status = mr_c_numeric_enter(&locale, "mlp read");
     if (status != MR_OK) return status;
     status = parse_net(&ps, out);
-    c_numeric_leave(&locale);
+    mr_c_numeric_leave(&locale);
     return status;
 }
 

@@ -12,6 +12,7 @@ packages=(
     gnuplot-nox
     fonts-dejavu-core  # labels on the demo's contact sheets (oiiotool --text)
     python3            # tests/gltf_validate.sh compares glTF JSON (tests/lib/gltf_json_compare.py)
+    locales            # tests/test_locale.c builds a decimal-comma locale (de_DE) with localedef from its data
     chromium           # tests/report_cli.sh opens a report page headless and checks its screenshot
 )
 # node + npm run the independent SSIM implementation (ssim.js) and the Khronos glTF validator in the tests;

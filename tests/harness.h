@@ -53,6 +53,25 @@ static int mr_test_failures_in_case;
         }                                                                                            \
     } while (0)
 
+/* The whole file at `path`, NUL-terminated (so text can be searched as a string; binary files too), its length
+ * into *size (may be NULL); NULL if it cannot be read. The caller frees it. */
+static inline char *mr_test_read_file(const char *path, size_t *size) {
+    FILE *f = fopen(path, "rb");
+    if (f == NULL) return NULL;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *bytes = n >= 0 ? malloc((size_t)n + 1) : NULL;
+    if (bytes != NULL && fread(bytes, 1, (size_t)n, f) != (size_t)n) {
+        free(bytes);
+        bytes = NULL;
+    }
+    fclose(f);
+    if (bytes != NULL) bytes[n] = '\0';
+    if (size != NULL) *size = bytes != NULL ? (size_t)n : 0;
+    return bytes;
+}
+
 /* An mr_status call that must succeed; prints mr_last_error() otherwise. */
 #define MR_CHECK_OK(call)                                                                          \
     do {                                                                                           \

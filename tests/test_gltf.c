@@ -39,22 +39,6 @@ static long file_size(const char *path) {
     return stat(path, &st) == 0 ? (long)st.st_size : -1;
 }
 
-static unsigned char *slurp(const char *path, long *size) {
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *buf = malloc(n > 0 ? (size_t)n : 1);
-    if (buf != NULL && fread(buf, 1, (size_t)n, f) != (size_t)n) {
-        free(buf);
-        buf = NULL;
-    }
-    fclose(f);
-    *size = n;
-    return buf;
-}
-
 static int write_bytes(const char *path, const void *bytes, size_t n) {
     FILE *f = fopen(path, "wb");
     if (f == NULL) return 0;
@@ -63,10 +47,10 @@ static int write_bytes(const char *path, const void *bytes, size_t n) {
 }
 
 static int copy_file(const char *from, const char *to) {
-    long n;
-    unsigned char *b = slurp(from, &n);
+    size_t n;
+    char *b = mr_test_read_file(from, &n);
     if (b == NULL) return 0;
-    int ok = write_bytes(to, b, (size_t)n);
+    int ok = write_bytes(to, b, n);
     free(b);
     return ok;
 }
@@ -520,11 +504,8 @@ MR_TEST(data_uri_resources) {
     MR_CHECK(t.params.wrap_s == 33071 && t.params.wrap_t == 10497);
     const char *out = mr_test_tmp_path("datauri_out.gltf");
     MR_CHECK_OK(mr_gltf_save(g, out));
-    long size;
-    char *text = (char *)slurp(out, &size);
+    char *text = mr_test_read_file(out, NULL);
     if (text != NULL) {
-        text = realloc(text, (size_t)size + 1);
-        text[size] = '\0';
         MR_CHECK(strstr(text, "data:application/octet-stream;base64,AACAPwAAAEAAAEBA") != NULL);
         MR_CHECK(strstr(text, png) != NULL && strstr(text, "data:image/png;base64,") != NULL);
         MR_CHECK(strstr(text, "\"keep\": \"me\"") != NULL && strstr(text, "\"id\": 7") != NULL);
@@ -702,8 +683,8 @@ MR_TEST(bad_inputs) {
     if (g == NULL) return;
     const char *glb = mr_test_tmp_path("duck.glb");
     MR_CHECK_OK(mr_gltf_save(g, glb));
-    long size;
-    unsigned char *bytes = slurp(glb, &size);
+    size_t size;
+    char *bytes = mr_test_read_file(glb, &size);
     if (bytes != NULL) {
         const char *cut = mr_test_tmp_path("cut.glb");
         MR_CHECK(write_bytes(cut, bytes, (size_t)size / 2));
@@ -738,8 +719,8 @@ MR_TEST(mutated_inputs_fail_cleanly) {
     mr_gltf_free(g);
     unsigned seed = 12345;
     for (int s = 0; s < 2; s++) {
-        long n;
-        unsigned char *bytes = slurp(sources[s], &n);
+        size_t n;
+        unsigned char *bytes = (unsigned char *)mr_test_read_file(sources[s], &n);
         if (bytes == NULL || n < 16) {
             MR_CHECK(0);
             free(bytes);
@@ -1306,11 +1287,11 @@ static const char *texture_uri(const mr_gltf *g, int t) {
 
 /* The file's text without whitespace (NULL if unreadable; caller frees), to look for compact JSON. */
 static char *squeezed_text(const char *path) {
-    long size;
-    char *text = (char *)slurp(path, &size);
+    size_t size;
+    char *text = mr_test_read_file(path, &size);
     if (text == NULL) return NULL;
-    long n = 0;
-    for (long i = 0; i < size; i++)
+    size_t n = 0;
+    for (size_t i = 0; i < size; i++)
         if (text[i] != ' ' && text[i] != '\n' && text[i] != '\t' && text[i] != '\r') text[n++] = text[i];
     char *out = realloc(text, (size_t)n + 1);
     if (out == NULL) {

@@ -88,21 +88,6 @@ static void write_text(const char *path, const char *text, size_t size) {
     fclose(f);
 }
 
-static char *read_text(const char *path, size_t *size) {
-    FILE *f = fopen(path, "rb");
-    MR_CHECK(f != NULL);
-    if (f == NULL) return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *text = malloc((size_t)n + 1);
-    MR_CHECK(fread(text, 1, (size_t)n, f) == (size_t)n);
-    text[n] = '\0';
-    fclose(f);
-    *size = (size_t)n;
-    return text;
-}
-
 /* Two networks with the same shape and the same bits everywhere. */
 static int same_net(const mr_mlp *a, const mr_mlp *b) {
     return a != NULL && b != NULL && a->n_in == b->n_in && a->n_hidden == b->n_hidden && a->n_out == b->n_out &&
@@ -265,9 +250,9 @@ MR_TEST(weight_file_round_trips_bit_exactly) {
     MR_CHECK(memcmp(y1, y2, n * 4 * sizeof(float)) == 0);
     // Writing what was read gives the same bytes; the file starts with the magic line.
     size_t size1 = 0, size2 = 0;
-    char *text1 = read_text(path, &size1);
+    char *text1 = mr_test_read_file(path, &size1);
     MR_CHECK_OK(mr_mlp_write(back, path));
-    char *text2 = read_text(path, &size2);
+    char *text2 = mr_test_read_file(path, &size2);
     MR_CHECK(text1 != NULL && text2 != NULL && size1 == size2 && memcmp(text1, text2, size1) == 0);
     if (text1 != NULL) MR_CHECK(strncmp(text1, "matremap-mlp 1\nn_in 6\nn_hidden 300\nn_out 4\n", 43) == 0);
     // mr_mlp_parse on the bytes is mr_mlp_read.
@@ -398,7 +383,7 @@ MR_TEST(bad_writes_leave_files_alone) {
     const char *path = scratch_path("keep.mlp");
     MR_CHECK_OK(mr_mlp_write(net, path));
     size_t size_before = 0;
-    char *before = read_text(path, &size_before);
+    char *before = mr_test_read_file(path, &size_before);
     net->b1[2] = NAN;
     MR_CHECK(mr_mlp_write(net, path) == MR_ERR_INVALID_ARG);
     MR_CHECK(strstr(mr_last_error(), "b1[2]") != NULL);
@@ -407,7 +392,7 @@ MR_TEST(bad_writes_leave_files_alone) {
     MR_CHECK(mr_mlp_write(net, path) == MR_ERR_INVALID_ARG);
     MR_CHECK(strstr(mr_last_error(), "out_std[0]") != NULL);
     size_t size_after = 0;
-    char *after = read_text(path, &size_after);
+    char *after = mr_test_read_file(path, &size_after);
     MR_CHECK(before != NULL && after != NULL && size_before == size_after && memcmp(before, after, size_after) == 0);
     net->out_std[0] = 1.0f;
     MR_CHECK(mr_mlp_write(net, scratch_path("no/such/dir.mlp")) == MR_ERR_IO);

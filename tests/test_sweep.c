@@ -43,22 +43,6 @@ static const char *tmp_path(const char *name) {
     return p;
 }
 
-static char *read_text(const char *path) {
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) return NULL;
-    fseek(f, 0, SEEK_END);
-    long size = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *text = malloc((size_t)size + 1);
-    if (text != NULL && fread(text, 1, (size_t)size, f) != (size_t)size) {
-        free(text);
-        text = NULL;
-    }
-    if (text != NULL) text[size] = '\0';
-    fclose(f);
-    return text;
-}
-
 static void write_text(const char *path, const char *text, size_t length) {
     FILE *f = fopen(path, "wb");
     if (f == NULL) return;
@@ -320,7 +304,7 @@ MR_TEST(one_and_two_threads_write_the_same_file) {
     MR_CHECK_OK(run(&spec, one, 0, 1, &s1));
     MR_CHECK_OK(run(&spec, two, 0, 2, &s2));
     MR_CHECK(s1.computed == 6 && s2.computed == 6 && s1.threads == 1 && s2.threads == 2);
-    char *a = read_text(one), *b = read_text(two);
+    char *a = mr_test_read_file(one, NULL), *b = mr_test_read_file(two, NULL);
     MR_CHECK(a != NULL && b != NULL);
     if (a && b) {
         char *ca = comparable(a), *cb = comparable(b);
@@ -351,8 +335,8 @@ MR_TEST(one_and_two_threads_write_the_same_file) {
     unlink(two);
     MR_CHECK_OK(run(&spec, one, 0, 1, NULL));
     MR_CHECK_OK(run(&spec, two, 0, 2, NULL));
-    a = read_text(one);
-    b = read_text(two);
+    a = mr_test_read_file(one, NULL);
+    b = mr_test_read_file(two, NULL);
     if (a && b) {
         char *ca = comparable(a), *cb = comparable(b);
         MR_CHECK(strcmp(ca, cb) == 0);
@@ -368,7 +352,7 @@ MR_TEST(an_existing_file_is_never_overwritten_and_a_mismatching_one_never_touche
     const char *path = tmp_path("mismatch.csv");
     unlink(path);
     MR_CHECK_OK(run(&spec, path, 0, 1, NULL));
-    char *before = read_text(path);
+    char *before = mr_test_read_file(path, NULL);
     MR_CHECK(before != NULL);
 
     MR_CHECK(run(&spec, path, 0, 1, NULL) == MR_ERR_INVALID_ARG);
@@ -397,7 +381,7 @@ MR_TEST(an_existing_file_is_never_overwritten_and_a_mismatching_one_never_touche
     mr_sweep_summary s;
     MR_CHECK_OK(mr_sweep_run(&spec, path, &o, &s));
     MR_CHECK(s.computed == 0 && s.already_done == 3 && s.sorted == 0 && s.truncated_bytes == 0);
-    char *after = read_text(path);
+    char *after = mr_test_read_file(path, NULL);
     MR_CHECK(after != NULL && before != NULL && strcmp(before, after) == 0);
     free(after);
 
@@ -427,7 +411,7 @@ MR_TEST(resume_cuts_a_torn_line_and_ends_with_the_uninterrupted_file) {
     const char *reference = tmp_path("reference.csv"), *path = tmp_path("torn.csv");
     unlink(reference);
     MR_CHECK_OK(run(&spec, reference, 0, 2, NULL));
-    char *full = read_text(reference);
+    char *full = mr_test_read_file(reference, NULL);
     MR_CHECK(full != NULL);
     if (full == NULL) return;
     // The header, rows 4 and 1 (out of order, as threads finish), and half of row 2: a kill during a write.
@@ -454,7 +438,7 @@ MR_TEST(resume_cuts_a_torn_line_and_ends_with_the_uninterrupted_file) {
     mr_sweep_summary s;
     MR_CHECK_OK(run(&spec, path, 1, 2, &s));
     MR_CHECK(s.already_done == 2 && s.computed == 4 && s.truncated_bytes == 17 && s.sorted == 1 && s.total == 6);
-    char *resumed = read_text(path);
+    char *resumed = mr_test_read_file(path, NULL);
     MR_CHECK(resumed != NULL);
     if (resumed != NULL) {
         char *a = comparable(full), *b = comparable(resumed);
@@ -471,7 +455,7 @@ MR_TEST(resume_cuts_a_torn_line_and_ends_with_the_uninterrupted_file) {
     MR_CHECK_OK(run(&spec, path, 1, 1, &s));
     MR_CHECK(s.computed == 6);
     free(resumed);
-    resumed = read_text(path);
+    resumed = mr_test_read_file(path, NULL);
     if (resumed != NULL) {
         char *a = comparable(full), *b = comparable(resumed);
         MR_CHECK(strcmp(a, b) == 0);
@@ -493,7 +477,7 @@ MR_TEST(a_full_disk_leaves_whole_rows_and_the_sweep_resumes) {
     unlink(reference);
     unlink(path);
     MR_CHECK_OK(run(&spec, reference, 0, 1, NULL));
-    char *full = read_text(reference);
+    char *full = mr_test_read_file(reference, NULL);
     if (full == NULL) {
         MR_CHECK(full != NULL);
         return;
@@ -511,7 +495,7 @@ MR_TEST(a_full_disk_leaves_whole_rows_and_the_sweep_resumes) {
     signal(SIGXFSZ, previous);
     MR_CHECK_MSG(s == MR_ERR_IO && strstr(mr_last_error(), "File too large") != NULL, "%s: %s", mr_status_str(s),
                  mr_last_error());
-    char *cut = read_text(path);
+    char *cut = mr_test_read_file(path, NULL);
     // The header and row 0 stayed, the 25 bytes of row 1 were cut back off (seconds aside, row 0 is the reference's).
     MR_CHECK(cut != NULL && strlen(cut) > 0 && cut[strlen(cut) - 1] == '\n');
     if (cut != NULL) {
@@ -523,7 +507,7 @@ MR_TEST(a_full_disk_leaves_whole_rows_and_the_sweep_resumes) {
     mr_sweep_summary summary;
     MR_CHECK_OK(run(&spec, path, 1, 1, &summary));
     MR_CHECK(summary.already_done == 1 && summary.computed == 3 && summary.truncated_bytes == 0);
-    char *resumed = read_text(path);
+    char *resumed = mr_test_read_file(path, NULL);
     if (resumed != NULL) {
         char *a = comparable(full), *b = comparable(resumed);
         MR_CHECK(strcmp(a, b) == 0);

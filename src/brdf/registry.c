@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../c_locale.h"
 #include "../mr_internal.h"
 #include "models.h"
 
@@ -74,7 +75,7 @@ static mr_status unknown_param(const mr_brdf_model *model, const char *name, siz
                    (int)name_len, name, list);
 }
 
-mr_status mr_brdf_parse_assignment(const mr_brdf_model *model, const char *assignment, double *values) {
+static mr_status parse_assignment(const mr_brdf_model *model, const char *assignment, double *values) {
     const char *equals = strchr(assignment, '=');
     if (equals == NULL || equals == assignment)
         return mr_fail(MR_ERR_INVALID_ARG, "parameter '%s': expected name=value or name=r,g,b", assignment);
@@ -119,6 +120,18 @@ mr_status mr_brdf_parse_assignment(const mr_brdf_model *model, const char *assig
     int offset = mr_brdf_param_offset(model, index);
     for (int c = 0; c < param->channels; c++) values[offset + c] = parsed[count == 1 ? 0 : c];
     return MR_OK;
+}
+
+/* "0.5" is a number in any host locale (c_locale.h). */
+mr_status mr_brdf_parse_assignment(const mr_brdf_model *model, const char *assignment, double *values) {
+    if (model == NULL || assignment == NULL || values == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "parameter assignment: NULL model, text or values");
+    mr_c_numeric locale;
+    mr_status status = mr_c_numeric_enter(&locale, "parameter assignment");
+    if (status != MR_OK) return status;
+    status = parse_assignment(model, assignment, values);
+    mr_c_numeric_leave(&locale);
+    return status;
 }
 
 void mr_brdf_eval_full(const mr_brdf_model *model, const double *values, const double wi[3], const double wo[3],

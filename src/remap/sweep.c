@@ -19,7 +19,6 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
-#include <locale.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
@@ -33,32 +32,13 @@
 #include <omp.h>
 #endif
 
+#include "../c_locale.h"
 #include "../io/io_internal.h"
 #include "../matremap.h"
 #include "../mr_internal.h"
 
 #define COMMAND_PREFIX "# command: "
 #define ROW_TAIL_COLUMNS 6 /* rmse, relative_rmse, ssim, outcome, renders, seconds */
-
-/* ---- the C numeric locale, per thread ------------------------------------------------------------------ */
-
-typedef struct c_numeric {
-    locale_t c;
-    locale_t saved;
-} c_numeric;
-
-static mr_status c_numeric_enter(c_numeric *s) {
-    s->saved = (locale_t)0;
-    s->c = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
-    if (s->c == (locale_t)0) return mr_fail(MR_ERR_NOMEM, "sweep: cannot create the C numeric locale");
-    s->saved = uselocale(s->c);
-    return MR_OK;
-}
-
-static void c_numeric_leave(c_numeric *s) {
-    uselocale(s->saved);
-    freelocale(s->c);
-}
 
 /* ---- a growing string ------------------------------------------------------------------------------------ */
 
@@ -246,8 +226,8 @@ mr_status mr_sweep_parse_axis(const mr_brdf_model *source, const char *text, mr_
                        source->name, (int)name_len, text, list);
     }
 
-    c_numeric cn;
-    mr_status status = c_numeric_enter(&cn);
+    mr_c_numeric cn;
+    mr_status status = mr_c_numeric_enter(&cn, "sweep");
     if (status != MR_OK) return status;
     const char *cursor = equals + 1;
     char *end = NULL;
@@ -266,7 +246,7 @@ mr_status mr_sweep_parse_axis(const mr_brdf_model *source, const char *text, mr_
         axis.count = strtol(cursor, &end, 10);
         ok = end != cursor && (*end == '\0' || *end == ':') && errno != ERANGE;
     }
-    c_numeric_leave(&cn);
+    mr_c_numeric_leave(&cn);
     if (!ok)
         return mr_fail(MR_ERR_INVALID_ARG,
                        "grid '%s': expected name=lo:hi:n or name=lo:hi:n:log with numbers lo, hi and an integer n",
@@ -490,11 +470,11 @@ mr_status mr_sweep_format_row(const mr_sweep_spec *spec, const mr_sweep_row *row
                               size_t *length) {
     if (spec == NULL || spec->source == NULL || spec->target == NULL || row == NULL || buf == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "sweep: NULL spec, row or buffer");
-    c_numeric cn;
-    mr_status status = c_numeric_enter(&cn);
+    mr_c_numeric cn;
+    mr_status status = mr_c_numeric_enter(&cn, "sweep");
     if (status != MR_OK) return status;
     status = format_row(spec, row, buf, size, length);
-    c_numeric_leave(&cn);
+    mr_c_numeric_leave(&cn);
     return status;
 }
 
@@ -594,11 +574,11 @@ mr_status mr_sweep_parse_row(const mr_sweep_spec *spec, const char *line, size_t
     mr_status status = mr_sweep_check(spec);
     if (status != MR_OK) return status;
     if (line == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "sweep: NULL line or output");
-    c_numeric cn;
-    status = c_numeric_enter(&cn);
+    mr_c_numeric cn;
+    status = mr_c_numeric_enter(&cn, "sweep");
     if (status != MR_OK) return status;
     status = parse_row(spec, sample_count_unchecked(spec), line, length, out);
-    c_numeric_leave(&cn);
+    mr_c_numeric_leave(&cn);
     return status;
 }
 
@@ -976,8 +956,8 @@ static mr_status run_pending(run_state *st, const long *pending, long count, int
         // whose one-thread team is not an active level that max-active-levels would count.
         omp_set_num_threads(1);
 #endif
-        c_numeric cn;
-        mr_status entered = c_numeric_enter(&cn);
+        mr_c_numeric cn;
+        mr_status entered = mr_c_numeric_enter(&cn, "sweep");
         if (entered != MR_OK) {
 #pragma omp critical(mr_sweep_file)
             {
@@ -993,7 +973,7 @@ static mr_status run_pending(run_state *st, const long *pending, long count, int
             stopping = st->stop;
             if (!stopping) run_sample(st, pending[k]);
         }
-        if (entered == MR_OK) c_numeric_leave(&cn);
+        if (entered == MR_OK) mr_c_numeric_leave(&cn);
     }
     if (locale_status != MR_OK) return mr_fail(locale_status, "sweep: cannot switch a thread to the C locale");
     if (st->file_failed) return mr_fail(st->failure, "%s", st->failure_message);
@@ -1023,8 +1003,8 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
 #endif
 
     strbuf header = {0};
-    c_numeric cn;
-    status = c_numeric_enter(&cn);
+    mr_c_numeric cn;
+    status = mr_c_numeric_enter(&cn, "sweep");
     if (status != MR_OK) return status;
     sweep_file f;
     memset(&f, 0, sizeof f);
@@ -1039,7 +1019,7 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
     if (f.done == NULL) status = mr_fail(MR_ERR_NOMEM, "sweep: out of memory for %ld samples", f.total);
     if (status == MR_OK) status = build_header(spec, opts->command_line, &header);
     if (status == MR_OK) status = open_file(spec, &header, opts->resume, &f);
-    c_numeric_leave(&cn);
+    mr_c_numeric_leave(&cn);
     long already = f.done_count;
 
     long pending_count = 0;

@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../c_locale.h"
 #include "../io/io_internal.h"
 #include "../matremap.h"
 #include "../mr_internal.h"
@@ -367,7 +368,11 @@ static mr_status store(const char *dir, const char *name, void (*write)(FILE *, 
 
 mr_status mr_report_write(const mr_report *report, const char *dir) {
     mr_status status = check_report(report, dir);
-    if (status == MR_OK) status = store(dir, "index.html", write_page, report);
+    if (status != MR_OK) return status;
+    mr_c_numeric locale; // summary.json's numbers are JSON's, "0.99", in any host locale (c_locale.h)
+    if ((status = mr_c_numeric_enter(&locale, "report")) != MR_OK) return status;
+    status = store(dir, "index.html", write_page, report);
     if (status == MR_OK) status = store(dir, "summary.json", write_summary, report);
+    mr_c_numeric_leave(&locale);
     return status;
 }

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../c_locale.h"
 #include "../mr_internal.h"
 #include "workflow.h"
 
@@ -190,8 +191,8 @@ static mr_status load_file(const char *path, const mr_wf_dataset_options *opts, 
     return status;
 }
 
-mr_status mr_wf_dataset_load(const char *const *paths, int count, const mr_wf_dataset_options *opts,
-                             mr_wf_dataset *out) {
+static mr_status dataset_load(const char *const *paths, int count, const mr_wf_dataset_options *opts,
+                              mr_wf_dataset *out) {
     if (out == NULL || (count > 0 && paths == NULL) || count < 0)
         return mr_fail(MR_ERR_INVALID_ARG, "dataset: NULL output or file list");
     memset(out, 0, sizeof *out);
@@ -212,4 +213,15 @@ void mr_wf_dataset_free(mr_wf_dataset *d) {
     free(d->x);
     free(d->y);
     memset(d, 0, sizeof *d);
+}
+
+/* Sweep files hold C-locale numbers, read as such in any host locale (c_locale.h). */
+mr_status mr_wf_dataset_load(const char *const *paths, int count, const mr_wf_dataset_options *opts,
+                             mr_wf_dataset *out) {
+    mr_c_numeric locale;
+    mr_status status = mr_c_numeric_enter(&locale, "dataset");
+    if (status != MR_OK) return status;
+    status = dataset_load(paths, count, opts, out);
+    mr_c_numeric_leave(&locale);
+    return status;
 }
