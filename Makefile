@@ -19,19 +19,52 @@
 
 PREFIX   ?= /usr/local
 BUILD    ?= build
-OPT      ?= -O2 -g
 SAN      ?=
 CC       ?= cc
 CXX      ?= g++
 
-WARN      := -Wall -Wextra -Werror
+# Your CFLAGS, CXXFLAGS, CPPFLAGS, LDFLAGS and LDLIBS are used as given (optimisation and debug flags belong there;
+# the default is -O2 -g); the project's own flags come from the MR_* variables below and go first.
+CFLAGS   ?= -O2 -g
+CXXFLAGS ?= -O2 -g
+# -Werror where warnings must fail the build: the test builds (make check, make asan; CI runs make check on a clean
+# clone, so every object there is built with it) and WERROR=-Werror on any command line. Release builds (make,
+# make install) only warn: a newer compiler's new warning must not break a user's build.
+ifneq ($(filter check asan,$(MAKECMDGOALS)),)
+WERROR   ?= -Werror
+endif
+WERROR   ?=
+WARN     := -Wall -Wextra $(WERROR)
+
+# Dependencies through pkg-config (Debian's packages; scripts/install-deps.sh installs them). A build goal stops
+# at once, naming the package, when one is missing; `make deps` and `make clean` do not need them.
+PKG_CONFIG ?= pkg-config
+NEEDS_DEPS := $(if $(MAKECMDGOALS),$(filter-out deps clean,$(MAKECMDGOALS)),all)
+ifneq ($(NEEDS_DEPS),)
+missing = $(foreach p,$(1),$(if $(shell $(PKG_CONFIG) --exists $(word 1,$(subst :, ,$(p))) && echo y),,$(p)))
+MISSING := $(call missing,nlopt:libnlopt-dev OpenEXR:libopenexr-dev tinygltf:libtinygltf-dev \
+                          OpenImageIO:libopenimageio-dev)
+ifneq ($(strip $(MISSING)),)
+$(error pkg-config cannot find $(foreach p,$(MISSING),$(word 1,$(subst :, ,$(p))) (Debian package \
+        $(word 2,$(subst :, ,$(p))))); run scripts/install-deps.sh (or make deps))
+endif
+endif
+DEP_CFLAGS := $(shell $(PKG_CONFIG) --cflags nlopt OpenEXR tinygltf 2>/dev/null)
+# --as-needed keeps only the libraries the objects use: OpenEXR's .pc lists its C++ libraries as well, of which
+# the library reads and writes through OpenEXRCore alone (each shared library costs start-up time).
+DEP_LIBS   := -Wl,--as-needed $(shell $(PKG_CONFIG) --libs nlopt OpenEXR tinygltf 2>/dev/null) -lm
+
 MODULE_DIR := $(PREFIX)/lib/matremap
-CFLAGS    := -std=c11 -pedantic $(WARN) $(OPT) $(SAN) -fopenmp -D_POSIX_C_SOURCE=200809L -Isrc -I. -I/usr/include/OpenEXR \
-             -DMR_MODULE_DIR='"$(MODULE_DIR)"'
-CXXFLAGS  := -std=c++17 $(WARN) $(OPT) $(SAN) -fopenmp -Isrc -I. $(shell pkg-config --cflags OpenImageIO 2>/dev/null)
-LDFLAGS   := $(SAN) -fopenmp
-# -ltinygltf: the glTF shim (gltf/*.cpp) links Debian's compiled tinygltf.
-LDLIBS    := $(shell pkg-config --libs nlopt 2>/dev/null) -lOpenEXRCore-3_1 -ltinygltf -lm
+DATA_DIR   := $(PREFIX)/share/matremap
+MR_CPPFLAGS := -D_POSIX_C_SOURCE=200809L -Isrc -I. $(DEP_CFLAGS) -DMR_MODULE_DIR='"$(MODULE_DIR)"' \
+               -DMR_DATA_DIR='"$(DATA_DIR)"'
+MR_CFLAGS   := -std=c11 -pedantic $(WARN) $(SAN) -fopenmp
+MR_CXXFLAGS := -std=c++17 $(WARN) $(SAN) -fopenmp -Isrc -I. $(shell $(PKG_CONFIG) --cflags OpenImageIO 2>/dev/null)
+MR_LDFLAGS  := $(SAN) -fopenmp
+ALL_CFLAGS   = $(MR_CPPFLAGS) $(CPPFLAGS) $(MR_CFLAGS) $(CFLAGS)
+ALL_CXXFLAGS = $(CPPFLAGS) $(MR_CXXFLAGS) $(CXXFLAGS)
+ALL_LDFLAGS  = $(MR_LDFLAGS) $(LDFLAGS)
+ALL_LDLIBS   = $(DEP_LIBS) $(LDLIBS)
 
 # OpenImageIO lives in a module loaded on first use (src/io/oiio_module.c says why). It carries its own
 # copies of the status and atomic-file code, compiled position-independent with hidden visibility.
@@ -58,7 +91,7 @@ TESTS     := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
 
 PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h src/render/render.h \
-                  src/io/image_io.h src/metrics/metrics.h src/remap/remap.h src/workflow/workflow.h \
+                  src/io/image_io.h src/metrics/metrics.h src/remap/remap.h src/remap/sweep.h src/workflow/workflow.h \
                   src/workflow/dataset.h src/workflow/labels.h src/report/report.h nn/mlp.h gltf/mr_gltf.h
 
 .PHONY: all check asan demo bench analyses evaluation evaluation-gltf evaluation-hardcases evaluation-viewers dataset \
@@ -69,30 +102,30 @@ all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE)
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS) -MMD -MP -c $< -o $@
+	$(CC) $(ALL_CFLAGS) -MMD -MP -c $< -o $@
 
 $(BUILD)/obj/%.o: %.cpp
 	@mkdir -p $(dir $@)
-	$(CXX) $(CXXFLAGS) -MMD -MP -c $< -o $@
+	$(CXX) $(ALL_CXXFLAGS) -MMD -MP -c $< -o $@
 
 $(BUILD)/pic/%.o: %.c
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS) -fPIC -fvisibility=hidden -MMD -MP -c $< -o $@
+	$(CC) $(ALL_CFLAGS) -fPIC -fvisibility=hidden -MMD -MP -c $< -o $@
 
 $(BUILD)/pic/%.o: %.cpp
 	@mkdir -p $(dir $@)
-	$(CXX) $(CXXFLAGS) -fPIC -fvisibility=hidden -MMD -MP -c $< -o $@
+	$(CXX) $(ALL_CXXFLAGS) -fPIC -fvisibility=hidden -MMD -MP -c $< -o $@
 
 $(MODULE): $(MODULE_OBJ)
 	@mkdir -p $(dir $@)
-	$(CXX) -shared $(LDFLAGS) -Wl,-Bsymbolic -Wl,-z,defs $^ $(shell pkg-config --libs OpenImageIO 2>/dev/null) -o $@
+	$(CXX) -shared $(ALL_LDFLAGS) -Wl,-Bsymbolic -Wl,-z,defs $^ $(shell $(PKG_CONFIG) --libs OpenImageIO 2>/dev/null) -o $@
 
-# The module directory is compiled into oiio_module.o; this stamp changes (and so rebuilds it) when PREFIX does,
-# e.g. for `make install PREFIX=...` after a plain `make`.
+# The module and data directories are compiled into oiio_module.o and cmd_workflow.o (the network); this stamp
+# changes (and so rebuilds them) when PREFIX does, e.g. for `make install PREFIX=...` after a plain `make`.
 $(BUILD)/module_dir.stamp: FORCE
 	@mkdir -p $(dir $@)
-	@echo '$(MODULE_DIR)' | cmp -s - $@ || echo '$(MODULE_DIR)' > $@
-$(BUILD)/obj/src/io/oiio_module.o: $(BUILD)/module_dir.stamp
+	@echo '$(MODULE_DIR) $(DATA_DIR)' | cmp -s - $@ || echo '$(MODULE_DIR) $(DATA_DIR)' > $@
+$(BUILD)/obj/src/io/oiio_module.o $(BUILD)/obj/src/cli/cmd_workflow.o: $(BUILD)/module_dir.stamp
 .PHONY: FORCE
 FORCE:
 
@@ -106,7 +139,7 @@ LINK := $(if $(strip $(LIB_CXX_SRC)),$(CXX),$(CC))
 
 $(BUILD)/bin/matremap: $(CLI_OBJ) $(LIB)
 	@mkdir -p $(dir $@)
-	$(LINK) $(LDFLAGS) $(CLI_OBJ) $(LIB) $(LDLIBS) -o $@
+	$(LINK) $(ALL_LDFLAGS) $(CLI_OBJ) $(LIB) $(ALL_LDLIBS) -o $@
 
 $(TOOL_LINKS): $(BUILD)/bin/matremap
 	ln -sfn matremap $@
@@ -117,14 +150,14 @@ $(NETWORK): data/spec2metal.mlp
 
 $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(LIB)
 	@mkdir -p $(dir $@)
-	$(LINK) $(LDFLAGS) $< $(LIB) $(LDLIBS) -o $@
+	$(LINK) $(ALL_LDFLAGS) $< $(LIB) $(ALL_LDLIBS) -o $@
 
 # headers_cpp.o only has to compile: every public header must be valid C++ as well as C.
 check: all $(TESTS) $(BUILD)/obj/tests/headers_cpp.o
 	scripts/run-tests.sh $(BUILD)
 
 asan:
-	$(MAKE) BUILD=build/asan OPT="-O1 -g -fno-omit-frame-pointer" \
+	$(MAKE) BUILD=build/asan CFLAGS="-O1 -g -fno-omit-frame-pointer" CXXFLAGS="-O1 -g -fno-omit-frame-pointer" \
 	    SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" check
 
 demo: all
@@ -151,7 +184,7 @@ evaluation-hardcases: all
 OBJECT_METRICS := $(BUILD)/tools/object_metrics
 $(OBJECT_METRICS): $(BUILD)/obj/scripts/viewers/object_metrics.o $(LIB)
 	@mkdir -p $(dir $@)
-	$(LINK) $(LDFLAGS) $< $(LIB) $(LDLIBS) -o $@
+	$(LINK) $(ALL_LDFLAGS) $< $(LIB) $(ALL_LDLIBS) -o $@
 
 evaluation-viewers: all $(OBJECT_METRICS)
 	scripts/evaluate-viewers.sh $(BUILD)

@@ -5,16 +5,24 @@
  * images (Sztrajman, Krivanek, Wilkie, Weyrich, "Image-based Remapping of Spatially Varying Material
  * Appearance", JCGT 8(4), 2019).
  *
- * Typical use:
- *   const mr_brdf_model *m = mr_brdf_find("ggx");            // src/brdf/brdf.h: models as descriptors
- *   double v[MR_BRDF_MAX_VALUES]; mr_brdf_default_values(m, v);
- *   mr_brdf_parse_assignment(m, "alpha=0.2", v);
- *   mr_scene scene = mr_scene_fit_default();                   // src/render/render.h: the paper's fit scene
- *   mr_render_plan *plan; mr_render_plan_create(&scene, &plan);  // geometry once per scene
- *   mr_image *img; mr_render(plan, m, v, MR_COMPONENT_FULL, &img);  // BRDF evaluations only
- *   mr_img_write("sphere.exr", img, NULL);                    // src/io/image_io.h
- *   double s; mr_ssim(img, other, NULL, &s, NULL);            // src/metrics/metrics.h
- *   mr_image_free(img); mr_render_plan_free(plan);
+ * Typical use (tests/install_cli.sh compiles and runs exactly these lines, in main(), against an installed tree):
+ *   const mr_brdf_model *ward = mr_brdf_find("ward"), *ggx = mr_brdf_find("ggx"); // brdf/brdf.h: descriptors
+ *   double v[MR_BRDF_MAX_VALUES];
+ *   mr_brdf_default_values(ward, v);
+ *   if (mr_brdf_parse_assignment(ward, "alpha=0.2", v) != MR_OK) return 1;
+ *   mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){MR_REMAP_DEFAULT_SIZE, MR_FIT_LIGHT_45, 0});
+ *   mr_render_plan *plan = NULL;                                   // render/render.h: geometry once per scene
+ *   if (mr_render_plan_create(&scene, &plan) != MR_OK) return 1;
+ *   mr_remap_result r;                                              // remap/remap.h: Ward's look in GGX
+ *   mr_status s = mr_remap(plan, ward, v, ggx, NULL, &r);
+ *   mr_image *img = NULL;                                          // the GGX fit, rendered
+ *   if (s == MR_OK) s = mr_render(plan, ggx, r.values, MR_COMPONENT_FULL, &img);
+ *   if (s == MR_OK) s = mr_img_write("ggx.exr", img, NULL);       // io/image_io.h
+ *   if (s == MR_OK) printf("%s, SSIM %.4f\n", mr_fit_outcome_name(r.outcome), r.ssim);
+ *   else fprintf(stderr, "%s\n", mr_last_error());
+ *   mr_image_free(img);
+ *   mr_render_plan_free(plan);
+ *   return s == MR_OK ? 0 : 1;
  *
  * Errors: every fallible call returns mr_status (mr_status.h); mr_last_error() says what went wrong. The library
  * never prints, exits or aborts on bad input.
@@ -38,10 +46,13 @@
 #include "io/image_io.h"
 #include "metrics/metrics.h"
 #include "remap/remap.h"
+#include "remap/sweep.h"
+#include "report/report.h"
 #include "workflow/workflow.h"
 #include "workflow/dataset.h"
 #include "workflow/labels.h"
 #include "nn/mlp.h"
+#include "gltf/mr_gltf.h"
 
 #ifdef __cplusplus
 extern "C" {
