@@ -1900,18 +1900,18 @@ MR_TEST(mesh_generated_normals_and_tangents_follow_the_surface) {
     test_mesh welded = uv_sphere(32, 64, 1), sphere = uv_sphere(32, 64, 0);
     mesh_world w;
     memset(&w, 0, sizeof w);
-    MR_CHECK_OK(mesh_world_build(&welded.mesh, &w));
+    MR_CHECK_OK(mr_mesh_world_build(&welded.mesh, &w));
     double worst_normal = 0.0;
     for (int v = 0; v < w.vertex_count && w.normal != NULL; v++)
         for (int k = 0; k < 3; k++) worst_normal = fmax(worst_normal, fabs(w.normal[v][k] - w.position[v][k]));
     MR_CHECK_MSG(worst_normal < 3e-3, "generated normals off by %.3g", worst_normal);
     MR_CHECK(w.convex == 1 && w.tangent == NULL);
-    mesh_world_free(&w);
+    mr_mesh_world_free(&w);
     for (int mirrored = 0; mirrored < 2; mirrored++) {
         if (mirrored)
             for (int v = 0; v < sphere.mesh.vertex_count; v++) sphere.uvs[2 * v] = 1.0f - sphere.uvs[2 * v];
         memset(&w, 0, sizeof w);
-        MR_CHECK_OK(mesh_world_build(&sphere.mesh, &w));
+        MR_CHECK_OK(mr_mesh_world_build(&sphere.mesh, &w));
         double worst = 0.0;
         int wrong_sign = 0;
         for (int v = 0; v < w.vertex_count && w.tangent != NULL; v++) {
@@ -1931,14 +1931,14 @@ MR_TEST(mesh_generated_normals_and_tangents_follow_the_surface) {
                      worst, wrong_sign);
         mesh_hit hit = {0.0, 0.3, 0.2, 1000};
         double n[3], t[3], b[3], g[3], uv[2], uv1[2], nxt[3];
-        mesh_shade(&w, &hit, n, t, b, g, uv, uv1);
+        mr_mesh_shade(&w, &hit, n, t, b, g, uv, uv1);
         nxt[0] = n[1] * t[2] - n[2] * t[1], nxt[1] = n[2] * t[0] - n[0] * t[2], nxt[2] = n[0] * t[1] - n[1] * t[0];
         double sign = mirrored ? -1.0 : 1.0;
         MR_CHECK_NEAR(n[0] * t[0] + n[1] * t[1] + n[2] * t[2], 0.0, 1e-12);
         MR_CHECK_NEAR(t[0] * t[0] + t[1] * t[1] + t[2] * t[2], 1.0, 1e-12);
         for (int k = 0; k < 3; k++) MR_CHECK_NEAR(b[k], sign * nxt[k], 1e-12);
         MR_CHECK(n[0] * g[0] + n[1] * g[1] + n[2] * g[2] > 0.99);
-        mesh_world_free(&w);
+        mr_mesh_world_free(&w);
     }
     test_mesh_free(&welded);
     test_mesh_free(&sphere);
@@ -2015,9 +2015,9 @@ MR_TEST(texture_wrap_modes_coordinate_sets_and_transform_known_answers) {
         mr_texture_sampling sampling = {0};
         sampling.wrap_u = cases[k].wrap;
         texture_sampler sampler;
-        texture_sampler_init(&sampler, map, &sampling, 0, 1);
+        mr_texture_sampler_init(&sampler, map, &sampling, 0, 1);
         double uv[2] = {cases[k].u, 0.5}, value = -1.0;
-        texture_sampler_read(&sampler, uv, uv1, &value);
+        mr_texture_sampler_read(&sampler, uv, uv1, &value);
         MR_CHECK_MSG(value == cases[k].expected, "wrap %d at u = %g: %g, expected %g", (int)cases[k].wrap,
                      cases[k].u, value, cases[k].expected);
     }
@@ -2034,9 +2034,9 @@ MR_TEST(texture_wrap_modes_coordinate_sets_and_transform_known_answers) {
     } transformed[] = {{&second, 0.0, 0.0, 2.0}, {&scaled, 0.25, 0.0, 1.0}, {&turned, 0.3, 0.625, 2.0}};
     for (size_t k = 0; map != NULL && k < 3; k++) {
         texture_sampler sampler;
-        texture_sampler_init(&sampler, map, transformed[k].sampling, 0, 1);
+        mr_texture_sampler_init(&sampler, map, transformed[k].sampling, 0, 1);
         double uv[2] = {transformed[k].u, transformed[k].v}, value = -1.0;
-        texture_sampler_read(&sampler, uv, uv1, &value);
+        mr_texture_sampler_read(&sampler, uv, uv1, &value);
         MR_CHECK_MSG(fabs(value - transformed[k].expected) < 1e-12, "case %zu: %g, expected %g", k, value,
                      transformed[k].expected);
     }
@@ -2299,17 +2299,17 @@ MR_TEST(mesh_zero_normals_and_tangents_are_generated_per_vertex) {
     memset(&zeros, 0, sizeof zeros);
     memset(&half, 0, sizeof half);
     m.mesh.normals = NULL;
-    MR_CHECK_OK(mesh_world_build(&m.mesh, &generated));
+    MR_CHECK_OK(mr_mesh_world_build(&m.mesh, &generated));
     float *given = m.normals;
     float *none = calloc((size_t)m.mesh.vertex_count * 3, sizeof(float));
     float *no_tangents = calloc((size_t)m.mesh.vertex_count * 4, sizeof(float));
     m.mesh.normals = none;
     m.mesh.tangents = no_tangents;
-    MR_CHECK_OK(mesh_world_build(&m.mesh, &zeros));
+    MR_CHECK_OK(mr_mesh_world_build(&m.mesh, &zeros));
     const int nv = m.mesh.vertex_count;
     for (int v = nv / 2; v < nv; v++) given[3 * v] = given[3 * v + 1] = given[3 * v + 2] = 0.0f;
     m.mesh.normals = given;
-    MR_CHECK_OK(mesh_world_build(&m.mesh, &half));
+    MR_CHECK_OK(mr_mesh_world_build(&m.mesh, &half));
     int same = 1, kept = 1;
     for (int v = 0; v < nv && generated.normal && zeros.normal && half.normal; v++)
         for (int k = 0; k < 3; k++) {
@@ -2320,9 +2320,9 @@ MR_TEST(mesh_zero_normals_and_tangents_are_generated_per_vertex) {
     for (int v = 0; v < nv && generated.tangent && zeros.tangent; v++)
         for (int k = 0; k < 4; k++) same &= zeros.tangent[v][k] == generated.tangent[v][k];
     MR_CHECK(same && kept);
-    mesh_world_free(&generated);
-    mesh_world_free(&zeros);
-    mesh_world_free(&half);
+    mr_mesh_world_free(&generated);
+    mr_mesh_world_free(&zeros);
+    mr_mesh_world_free(&half);
     free(none);
     free(no_tangents);
     test_mesh_free(&m);
@@ -2364,11 +2364,11 @@ MR_TEST(mesh_single_sided_backs_let_light_through) {
 MR_TEST(highlight_quadrature_shares_each_pixel_exactly) {
     // The disc-rectangle area in closed form: known answers, then a fine grid count.
     const double pi = 3.14159265358979323846;
-    MR_CHECK_NEAR(highlight_disc_rect_area(0.5, 0.5, 0.3, 0, 0, 1, 1), pi * 0.09, 1e-14);      // inside
-    MR_CHECK_NEAR(highlight_disc_rect_area(1.0, 1.0, 0.3, 0, 0, 1, 1), pi * 0.09 / 4, 1e-14);  // a quadrant
-    MR_CHECK_NEAR(highlight_disc_rect_area(1.0, 0.5, 0.3, 0, 0, 1, 1), pi * 0.09 / 2, 1e-14);  // a half
-    MR_CHECK_NEAR(highlight_disc_rect_area(3.0, 3.0, 0.3, 0, 0, 1, 1), 0.0, 0.0);             // apart
-    MR_CHECK_NEAR(highlight_disc_rect_area(0.5, 0.5, 2.0, 0, 0, 1, 1), 1.0, 1e-14);           // covering
+    MR_CHECK_NEAR(mr_highlight_disc_rect_area(0.5, 0.5, 0.3, 0, 0, 1, 1), pi * 0.09, 1e-14);      // inside
+    MR_CHECK_NEAR(mr_highlight_disc_rect_area(1.0, 1.0, 0.3, 0, 0, 1, 1), pi * 0.09 / 4, 1e-14);  // a quadrant
+    MR_CHECK_NEAR(mr_highlight_disc_rect_area(1.0, 0.5, 0.3, 0, 0, 1, 1), pi * 0.09 / 2, 1e-14);  // a half
+    MR_CHECK_NEAR(mr_highlight_disc_rect_area(3.0, 3.0, 0.3, 0, 0, 1, 1), 0.0, 0.0);             // apart
+    MR_CHECK_NEAR(mr_highlight_disc_rect_area(0.5, 0.5, 2.0, 0, 0, 1, 1), 1.0, 1e-14);           // covering
     uint64_t rng = 5;
     for (int k = 0; k < 40; k++) {
         double cx = 1.5 * test_random(&rng) - 0.25, cy = 1.5 * test_random(&rng) - 0.25, r = 0.05 + test_random(&rng);
@@ -2379,18 +2379,18 @@ MR_TEST(highlight_quadrature_shares_each_pixel_exactly) {
                 double x = (i + 0.5) / n - cx, y = (j + 0.5) / n - cy;
                 inside += x * x + y * y < r * r;
             }
-        double exact = highlight_disc_rect_area(cx, cy, r, 0, 0, 1, 1), counted = (double)inside / ((double)n * n);
+        double exact = mr_highlight_disc_rect_area(cx, cy, r, 0, 0, 1, 1), counted = (double)inside / ((double)n * n);
         MR_CHECK_MSG(fabs(exact - counted) < 3e-3, "disc (%g, %g, %g): %g against a %d^2 grid's %g", cx, cy, r,
                      exact, n, counted);
     }
     // A pixel's samples: inside the pixel, weights adding up to 1, for discs anywhere about it.
-    highlight_sample *samples = malloc((size_t)highlight_max_samples(2) * sizeof *samples);
+    highlight_sample *samples = malloc((size_t)mr_highlight_max_samples(2) * sizeof *samples);
     for (int k = 0; k < 200 && samples != NULL; k++) {
         highlight_disc discs[2] = {{10.0 + 3.0 * test_random(&rng), 10.0 + 3.0 * test_random(&rng), HIGHLIGHT_RADIUS},
                                    {20.0, 20.0, HIGHLIGHT_RADIUS}};
         for (int y = 8; y < 15; y++)
             for (int x = 8; x < 15; x++) {
-                int count = highlight_pixel_samples(discs, 2, x, y, samples);
+                int count = mr_highlight_pixel_samples(discs, 2, x, y, samples);
                 if (count < 0) continue;
                 double sum = 0.0;
                 int outside = 0;
@@ -2399,7 +2399,7 @@ MR_TEST(highlight_quadrature_shares_each_pixel_exactly) {
                     const highlight_sample *q = &samples[i];
                     outside += !(q->x >= x && q->x <= x + 1 && q->y >= y && q->y <= y + 1);
                 }
-                MR_CHECK_MSG(fabs(sum - 1.0) < 1e-12 && outside == 0 && count <= highlight_max_samples(2),
+                MR_CHECK_MSG(fabs(sum - 1.0) < 1e-12 && outside == 0 && count <= mr_highlight_max_samples(2),
                              "disc at (%g, %g), pixel (%d, %d): %d samples, weights sum to %.15g, %d outside",
                              discs[0].cx, discs[0].cy, x, y, count, sum, outside);
             }

@@ -31,11 +31,11 @@ static int ring_radii(double radius, double radii[64]) {
  * HIGHLIGHT_SPACING. */
 static int ring_angles(double r) { return MR_MAX(HIGHLIGHT_ANGLES, (int)ceil(2.0 * MR_PI * r / HIGHLIGHT_SPACING)); }
 
-int highlight_max_samples(int count) {
+int mr_highlight_max_samples(int count) {
     return HIGHLIGHT_GRID * HIGHLIGHT_GRID + count * (62 * ring_angles(HIGHLIGHT_RADIUS) + 2);
 }
 
-int highlight_touches(const highlight_disc *discs, int count, int x, int y) {
+int mr_highlight_touches(const highlight_disc *discs, int count, int x, int y) {
     for (int d = 0; d < count; d++) {
         double nx = mr_clampd(discs[d].cx, x, x + 1.0) - discs[d].cx;
         double ny = mr_clampd(discs[d].cy, y, y + 1.0) - discs[d].cy;
@@ -50,7 +50,7 @@ static double half_chord_integral(double x, double r) {
     return 0.5 * (x * sqrt(MR_MAX(0.0, r * r - x * x)) + r * r * asin(x / r));
 }
 
-double highlight_disc_rect_area(double cx, double cy, double r, double x0, double y0, double x1, double y1) {
+double mr_highlight_disc_rect_area(double cx, double cy, double r, double x0, double y0, double x1, double y1) {
     if (!(r > 0.0)) return 0.0;
     x0 = MR_MAX(x0 - cx, -r);
     x1 = MR_MIN(x1 - cx, r);
@@ -117,7 +117,7 @@ static void sector_box(const highlight_disc *disc, double ra, double rb, double 
 /* The disc's sectors' samples in pixel (x, y), appended to out; their weights scaled to the disc's exact area
  * in the pixel. Returns the new count. */
 static int disc_samples(const highlight_disc *disc, int x, int y, highlight_sample *out, int n) {
-    const double exact = highlight_disc_rect_area(disc->cx, disc->cy, disc->radius, x, y, x + 1.0, y + 1.0);
+    const double exact = mr_highlight_disc_rect_area(disc->cx, disc->cy, disc->radius, x, y, x + 1.0, y + 1.0);
     if (!(exact > 0.0)) return n;
     const int first = n;
     double radii[64];
@@ -172,8 +172,8 @@ static int disc_samples(const highlight_disc *disc, int x, int y, highlight_samp
     return n;
 }
 
-int highlight_pixel_samples(const highlight_disc *discs, int count, int x, int y, highlight_sample *out) {
-    if (!highlight_touches(discs, count, x, y)) return -1;
+int mr_highlight_pixel_samples(const highlight_disc *discs, int count, int x, int y, highlight_sample *out) {
+    if (!mr_highlight_touches(discs, count, x, y)) return -1;
     int n = 0;
     const double cell = 1.0 / HIGHLIGHT_GRID;
     for (int j = 0; j < HIGHLIGHT_GRID; j++)
@@ -181,7 +181,7 @@ int highlight_pixel_samples(const highlight_disc *discs, int count, int x, int y
             const double x0 = x + i * cell, y0 = y + j * cell;
             double inside = 0.0;
             for (int d = 0; d < count; d++)
-                inside += highlight_disc_rect_area(discs[d].cx, discs[d].cy, discs[d].radius, x0, y0, x0 + cell,
+                inside += mr_highlight_disc_rect_area(discs[d].cx, discs[d].cy, discs[d].radius, x0, y0, x0 + cell,
                                                    y0 + cell);
             const double outside = cell * cell - inside;
             if (!(outside > 1e-12)) continue;

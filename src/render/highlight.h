@@ -38,17 +38,17 @@ typedef struct highlight_sample {
 } highlight_sample;
 
 /* Does the pixel (x, y) (the square [x, x + 1] x [y, y + 1]) meet any of the discs? */
-int highlight_touches(const highlight_disc *discs, int count, int x, int y);
+int mr_highlight_touches(const highlight_disc *discs, int count, int x, int y);
 
 /* The samples of pixel (x, y): the ring sectors of every disc that fall in it and the grid cells' parts outside
  * all discs, weights adding up to 1. Discs must not overlap each other. Returns the number written to `out`
- * (at most highlight_max_samples()), or -1 if the pixel meets no disc. */
-int highlight_pixel_samples(const highlight_disc *discs, int count, int x, int y, highlight_sample *out);
+ * (at most mr_highlight_max_samples()), or -1 if the pixel meets no disc. */
+int mr_highlight_pixel_samples(const highlight_disc *discs, int count, int x, int y, highlight_sample *out);
 
-/* An upper bound of highlight_pixel_samples' count for `count` discs. */
-int highlight_max_samples(int count);
+/* An upper bound of mr_highlight_pixel_samples' count for `count` discs. */
+int mr_highlight_max_samples(int count);
 
 /* The area of the disc (cx, cy, r) inside the rectangle [x0, x1] x [y0, y1], in closed form. */
-double highlight_disc_rect_area(double cx, double cy, double r, double x0, double y0, double x1, double y1);
+double mr_highlight_disc_rect_area(double cx, double cy, double r, double x0, double y0, double x1, double y1);
 
 #endif /* MR_RENDER_HIGHLIGHT_H */

@@ -535,16 +535,16 @@ static int bvh_trace(const mesh_world *mesh, const double origin[3], const doubl
     return found;
 }
 
-int mesh_intersect(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip,
+int mr_mesh_intersect(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip,
                    int cull, mesh_hit *hit) {
     return bvh_trace(mesh, origin, dir, t_max, skip, 0, cull, hit);
 }
 
-int mesh_occluded(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip) {
+int mr_mesh_occluded(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip) {
     return bvh_trace(mesh, origin, dir, t_max, skip, 1, CULL_LIGHT, NULL);
 }
 
-int mesh_intersect_brute(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max,
+int mr_mesh_intersect_brute(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max,
                          int skip, int cull, mesh_hit *hit) {
     double best = t_max;
     int found = 0;
@@ -614,7 +614,7 @@ static int mesh_is_convex(const mesh_world *mesh) {
 
 /* ---- the plan's mesh ----------------------------------------------------------------------------------------- */
 
-void mesh_world_free(mesh_world *mesh) {
+void mr_mesh_world_free(mesh_world *mesh) {
     if (mesh == NULL) return;
     free(mesh->position);
     free(mesh->normal);
@@ -629,7 +629,7 @@ void mesh_world_free(mesh_world *mesh) {
     memset(mesh, 0, sizeof *mesh);
 }
 
-size_t mesh_world_bytes(const mesh_world *mesh) {
+size_t mr_mesh_world_bytes(const mesh_world *mesh) {
     size_t v = (size_t)mesh->vertex_count;
     return v * (sizeof *mesh->position + sizeof *mesh->normal) + (mesh->tangent ? v * sizeof *mesh->tangent : 0) +
            (mesh->uv ? v * sizeof *mesh->uv : 0) + (mesh->uv1 ? v * sizeof *mesh->uv1 : 0) +
@@ -638,7 +638,7 @@ size_t mesh_world_bytes(const mesh_world *mesh) {
            (size_t)mesh->material_count;
 }
 
-mr_status mesh_world_build(const mr_mesh *src, mesh_world *mesh) {
+mr_status mr_mesh_world_build(const mr_mesh *src, mesh_world *mesh) {
     mr_status status = mr_mesh_validate(src);
     if (status != MR_OK) return status;
     const int nv = src->vertex_count, nt = src->triangle_count;
@@ -748,7 +748,7 @@ oom:
     return mr_fail(MR_ERR_NOMEM, "mesh: out of memory for %d vertices, %d triangles", nv, nt);
 }
 
-void mesh_shade(const mesh_world *mesh, const mesh_hit *hit, double normal[3], double tangent[3],
+void mr_mesh_shade(const mesh_world *mesh, const mesh_hit *hit, double normal[3], double tangent[3],
                 double bitangent[3], double geometric[3], double uv[2], double uv1[2]) {
     const uint32_t *tri = mesh->triangle[hit->triangle];
     const double w[3] = {1.0 - hit->u - hit->v, hit->u, hit->v};

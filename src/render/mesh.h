@@ -1,5 +1,5 @@
 /* mesh.h — the render plan's world-space triangle mesh and its BVH (internal; the public mr_mesh is in
- * render.h). Built once per plan by mesh_world_build, immutable afterwards, so any number of threads may trace
+ * render.h). Built once per plan by mr_mesh_world_build, immutable afterwards, so any number of threads may trace
  * rays through it. */
 #ifndef MR_MESH_H
 #define MR_MESH_H
@@ -50,10 +50,10 @@ typedef struct mesh_hit {
 } mesh_hit;
 
 /* Build *mesh (zeroed by the caller) from a validated mr_mesh: world-space attributes, generated normals and
- * tangents, the BVH, the convexity test. MR_ERR_NOMEM (mesh_world_free cleans up) or MR_ERR_INVALID_ARG. */
-mr_status mesh_world_build(const mr_mesh *src, mesh_world *mesh);
-void mesh_world_free(mesh_world *mesh);
-size_t mesh_world_bytes(const mesh_world *mesh);
+ * tangents, the BVH, the convexity test. MR_ERR_NOMEM (mr_mesh_world_free cleans up) or MR_ERR_INVALID_ARG. */
+mr_status mr_mesh_world_build(const mr_mesh *src, mesh_world *mesh);
+void mr_mesh_world_free(mesh_world *mesh);
+size_t mr_mesh_world_bytes(const mesh_world *mesh);
 
 /* Which single-sided triangles a ray passes through (glTF's back-face culling). */
 enum { CULL_NONE = 0, CULL_CAMERA = 1 /* those it sees from behind */, CULL_LIGHT = -1 /* those the light, at the
@@ -61,19 +61,19 @@ enum { CULL_NONE = 0, CULL_CAMERA = 1 /* those it sees from behind */, CULL_LIGH
 
 /* Nearest hit with 0 < t < t_max (dir need not be unit); skip = a triangle to ignore, or -1; cull: CULL_NONE, or
  * CULL_CAMERA for camera rays. */
-int mesh_intersect(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip,
+int mr_mesh_intersect(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip,
                    int cull, mesh_hit *hit);
 /* The same by testing every triangle. */
-int mesh_intersect_brute(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max,
+int mr_mesh_intersect_brute(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max,
                          int skip, int cull, mesh_hit *hit);
 /* Any hit with 0 < t < t_max, skipping triangle `skip`: a shadow ray from a surface towards a light at the ray's
  * far end. The light passes through single-sided triangles it sees from behind (CULL_LIGHT), as through those the
  * camera sees from behind: a closed mesh still shadows, by the faces the light sees from the front. */
-int mesh_occluded(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip);
+int mr_mesh_occluded(const mesh_world *mesh, const double origin[3], const double dir[3], double t_max, int skip);
 
 /* The shading attributes at a hit: unit shading normal, tangent and bitangent (a frame), unit geometric normal
  * (by the winding), texture coordinates of both sets ((0, 0) for a set the mesh lacks). */
-void mesh_shade(const mesh_world *mesh, const mesh_hit *hit, double normal[3], double tangent[3],
+void mr_mesh_shade(const mesh_world *mesh, const mesh_hit *hit, double normal[3], double tangent[3],
                 double bitangent[3], double geometric[3], double uv[2], double uv1[2]);
 
 #endif /* MR_MESH_H */

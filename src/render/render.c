@@ -227,7 +227,7 @@ static void sphere_uv(const double n[3], double uv[2]) {
 /* The shading normal tilted by a normal-map texel (render.h): the frame follows, keeping its handedness. */
 static void tilt_normal(const surface_sampler *ss, hit_record *hit, const double to_camera[3]) {
     double texel[3];
-    texture_sampler_read(&ss->normal, hit->uv, hit->uv1, texel);
+    mr_texture_sampler_read(&ss->normal, hit->uv, hit->uv1, texel);
     const double scale = ss->surface->normal_scale;
     const double x = (2.0 * texel[0] - 1.0) * scale, y = (2.0 * texel[1] - 1.0) * scale, z = 2.0 * texel[2] - 1.0;
     double n[3];
@@ -268,11 +268,11 @@ static void apply_surface(const surface_sampler *ss, hit_record *hit, const doub
     if (surface->normal_map != NULL) tilt_normal(ss, hit, to_camera);
     if (surface->occlusion_map != NULL) {
         double ao;
-        texture_sampler_read(&ss->occlusion, hit->uv, hit->uv1, &ao);
+        mr_texture_sampler_read(&ss->occlusion, hit->uv, hit->uv1, &ao);
         hit->occlusion = MR_MAX(0.0, 1.0 + surface->occlusion_strength * (ao - 1.0));
     }
     double texel[3] = {1.0, 1.0, 1.0};
-    if (surface->emissive_map != NULL) texture_sampler_read(&ss->emissive, hit->uv, hit->uv1, texel);
+    if (surface->emissive_map != NULL) mr_texture_sampler_read(&ss->emissive, hit->uv, hit->uv1, texel);
     for (int c = 0; c < 3; c++) hit->emission[c] = MR_MAX(0.0, surface->emission[c] * texel[c]);
 }
 
@@ -285,10 +285,10 @@ static int trace_primary(const tracer *tr, double px, double py, hit_record *hit
     camera_ray(cf, px, py, dir);
     if (tr->scene->shape.type == MR_SHAPE_MESH) {
         mesh_hit mh;
-        if (!mesh_intersect(mesh, cf->origin, dir, INFINITY, -1, CULL_CAMERA, &mh)) return 0;
+        if (!mr_mesh_intersect(mesh, cf->origin, dir, INFINITY, -1, CULL_CAMERA, &mh)) return 0;
         if (hit == NULL) return 1;
         for (int k = 0; k < 3; k++) hit->position[k] = cf->origin[k] + mh.t * dir[k];
-        mesh_shade(mesh, &mh, hit->normal, hit->tangent, hit->bitangent, hit->geometric, hit->uv, hit->uv1);
+        mr_mesh_shade(mesh, &mh, hit->normal, hit->tangent, hit->bitangent, hit->geometric, hit->uv, hit->uv1);
         hit->triangle = mh.triangle;
         hit->material = mesh_material(mesh, mh.triangle);
         double to_camera[3] = {-dir[0], -dir[1], -dir[2]};
@@ -348,7 +348,7 @@ static int shadowed(const mesh_world *mesh, const hit_record *hit, const double 
     double offset = (vec3_dot(hit->geometric, dir) >= 0.0 ? 1e-9 : -1e-9) * mesh->scale;
     double origin[3];
     for (int k = 0; k < 3; k++) origin[k] = hit->position[k] + offset * hit->geometric[k];
-    return mesh_occluded(mesh, origin, dir, distance, hit->triangle);
+    return mr_mesh_occluded(mesh, origin, dir, distance, hit->triangle);
 }
 
 /* ---- environment lights: the fixed sample pattern ----------------------------------------------------------- */
@@ -878,13 +878,13 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
     if (row->pixels == NULL || row->hit_counts == NULL) return 0;
     highlight_sample *samples = NULL;
     if (tr->highlight_count > 0) {
-        samples = malloc((size_t)highlight_max_samples(tr->highlight_count) * sizeof *samples);
+        samples = malloc((size_t)mr_highlight_max_samples(tr->highlight_count) * sizeof *samples);
         if (samples == NULL) return 0;
     }
     for (int x = 0; x < width; x++) {
         const int pixel = y * width + x;
-        const int sample_count = samples ? highlight_pixel_samples(tr->highlights, tr->highlight_count, x, y, samples)
-                                         : -1;
+        const int sample_count =
+            samples ? mr_highlight_pixel_samples(tr->highlights, tr->highlight_count, x, y, samples) : -1;
         if (sample_count >= 0) { // around a highlight: the quadrature of highlight.h instead of the centre
             size_t first = row->hit_count;
             double covered = 0.0;
@@ -948,7 +948,7 @@ void mr_render_plan_free(mr_render_plan *plan) {
     free(plan->env_samples);
     free(plan->reflection_samples);
     env_table_free(&plan->env);
-    mesh_world_free(&plan->mesh);
+    mr_mesh_world_free(&plan->mesh);
     free(plan);
 }
 
@@ -978,7 +978,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     if (status != MR_OK) goto fail;
     tr.mesh = &plan->mesh;
     if (scene->shape.type == MR_SHAPE_MESH) {
-        status = mesh_world_build(scene->shape.mesh, &plan->mesh);
+        status = mr_mesh_world_build(scene->shape.mesh, &plan->mesh);
         if (status != MR_OK) goto fail;
         const mr_mesh *src = scene->shape.mesh;
         if (src->surfaces != NULL) {
@@ -988,12 +988,12 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
                 const mr_surface *surface = &src->surfaces[m];
                 surfaces[m].surface = surface;
                 if (surface->normal_map)
-                    texture_sampler_init(&surfaces[m].normal, surface->normal_map, &surface->normal_sampling, 0, 3);
+                    mr_texture_sampler_init(&surfaces[m].normal, surface->normal_map, &surface->normal_sampling, 0, 3);
                 if (surface->occlusion_map)
-                    texture_sampler_init(&surfaces[m].occlusion, surface->occlusion_map,
+                    mr_texture_sampler_init(&surfaces[m].occlusion, surface->occlusion_map,
                                          &surface->occlusion_sampling, 0, 1);
                 if (surface->emissive_map)
-                    texture_sampler_init(&surfaces[m].emissive, surface->emissive_map, &surface->emissive_sampling,
+                    mr_texture_sampler_init(&surfaces[m].emissive, surface->emissive_map, &surface->emissive_sampling,
                                          0, 3);
             }
             tr.surfaces = surfaces;
@@ -1130,7 +1130,7 @@ size_t mr_render_plan_bytes(const mr_render_plan *plan) {
            (plan->hits[hits].reflection_begin + 1) * sizeof *plan->reflection_samples +
            (size_t)plan->env.count * (sizeof *plan->env.direction + sizeof *plan->env.weight +
                                       (plan->env.mis_npdf ? sizeof *plan->env.mis_npdf : 0)) +
-           mesh_world_bytes(&plan->mesh) + (atomic_load(&plan->zoomed) ? mr_render_plan_bytes(plan->zoomed) : 0);
+           mr_mesh_world_bytes(&plan->mesh) + (atomic_load(&plan->zoomed) ? mr_render_plan_bytes(plan->zoomed) : 0);
 }
 
 mr_status mr_render_plan_zoomed(const mr_render_plan *plan, double zoom, const mr_render_plan **out) {
@@ -1183,8 +1183,8 @@ int mr_render_plan_trace_mesh(const mr_render_plan *plan, const double origin[3]
                               int brute_force, double *t, int *triangle) {
     if (plan == NULL || plan->scene.shape.type != MR_SHAPE_MESH || origin == NULL || dir == NULL) return 0;
     mesh_hit hit;
-    int found = brute_force ? mesh_intersect_brute(&plan->mesh, origin, dir, INFINITY, -1, CULL_NONE, &hit)
-                            : mesh_intersect(&plan->mesh, origin, dir, INFINITY, -1, CULL_NONE, &hit);
+    int found = brute_force ? mr_mesh_intersect_brute(&plan->mesh, origin, dir, INFINITY, -1, CULL_NONE, &hit)
+                            : mr_mesh_intersect(&plan->mesh, origin, dir, INFINITY, -1, CULL_NONE, &hit);
     if (!found) return 0;
     if (t != NULL) *t = hit.t;
     if (triangle != NULL) *triangle = hit.triangle;
@@ -1311,7 +1311,7 @@ static mr_status material_state_init(const mr_material_binding *material, int in
         if (status != MR_OK) return status;
         const int channels = model->params[p].channels;
         texture_binding *binding = &ms->bindings[ms->binding_count++];
-        texture_sampler_init(&binding->sampler, textures->maps[p], &textures->sampling[p],
+        mr_texture_sampler_init(&binding->sampler, textures->maps[p], &textures->sampling[p],
                              channels == 1 ? textures->channel[p] : 0, channels);
         binding->slot = mr_brdf_param_offset(model, p);
     }
@@ -1368,7 +1368,7 @@ static mr_status render_core(const mr_render_plan *plan, int threads, const mr_m
                 double hit_values[MR_BRDF_MAX_VALUES];
                 memcpy(hit_values, ms->values, (size_t)ms->value_count * sizeof *hit_values);
                 for (int b = 0; b < ms->binding_count; b++)
-                    texture_sampler_read(&ms->bindings[b].sampler, hit->uv, hit->uv1,
+                    mr_texture_sampler_read(&ms->bindings[b].sampler, hit->uv, hit->uv1,
                                          hit_values + ms->bindings[b].slot);
                 model->prepare(model, hit_values, local.bytes);
                 state = local.bytes;

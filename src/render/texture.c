@@ -26,7 +26,7 @@ mr_status mr_texture_sampling_validate(const mr_texture_sampling *sampling, cons
     return MR_OK;
 }
 
-void texture_sampler_init(texture_sampler *sampler, const mr_image *map, const mr_texture_sampling *sampling,
+void mr_texture_sampler_init(texture_sampler *sampler, const mr_image *map, const mr_texture_sampling *sampling,
                           int channel, int count) {
     static const mr_texture_sampling defaults;
     if (sampling == NULL) sampling = &defaults;
@@ -63,7 +63,7 @@ static long wrap_index(long i, long n, mr_wrap mode) {
  * far out has lost every fractional bit of its coordinate anyway. */
 #define TEXEL_LIMIT 1e15
 
-void texture_sampler_read(const texture_sampler *sampler, const double uv0[2], const double uv1[2], double *out) {
+void mr_texture_sampler_read(const texture_sampler *sampler, const double uv0[2], const double uv1[2], double *out) {
     const mr_image *map = sampler->map;
     const double *uv = sampler->texcoord == 1 ? uv1 : uv0;
     double u = uv[0], v = uv[1];

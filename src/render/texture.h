@@ -18,11 +18,11 @@ typedef struct texture_sampler {
 
 /* Prepare a sampler of `count` values from `channel` on (sampling NULL = the zero default). The sampling must
  * be valid (mr_texture_sampling_validate). */
-void texture_sampler_init(texture_sampler *sampler, const mr_image *map, const mr_texture_sampling *sampling,
+void mr_texture_sampler_init(texture_sampler *sampler, const mr_image *map, const mr_texture_sampling *sampling,
                           int channel, int count);
 
 /* The bilinear lookup at the hit's TEXCOORD_0 uv0 or TEXCOORD_1 uv1 (render.h, "texture sampling"). Each lerp
  * is a + t (b - a), so a constant map gives its value exactly. */
-void texture_sampler_read(const texture_sampler *sampler, const double uv0[2], const double uv1[2], double *out);
+void mr_texture_sampler_read(const texture_sampler *sampler, const double uv0[2], const double uv1[2], double *out);
 
 #endif /* MR_TEXTURE_H */
