@@ -891,9 +891,18 @@ MR_TEST(bad_arguments_are_rejected_with_a_message) {
 /* ---- the spec-gloss diffuse convention (MR_WF_DIFFUSE_SPECGLOSS) --------------------------------------------- */
 
 MR_TEST(specgloss_convention_known_answers_and_names) {
-    MR_CHECK(strcmp(mr_wf_diffuse_name(MR_WF_DIFFUSE_PLAIN), "plain") == 0);
-    MR_CHECK(strcmp(mr_wf_diffuse_name(MR_WF_DIFFUSE_SPECGLOSS), "specgloss") == 0);
+    MR_CHECK(strcmp(mr_wf_diffuse_name(MR_WF_DIFFUSE_PLAIN), "paper") == 0);
+    MR_CHECK(strcmp(mr_wf_diffuse_name(MR_WF_DIFFUSE_SPECGLOSS), "gltf") == 0);
     MR_CHECK(mr_wf_diffuse_name(MR_WF_DIFFUSE_COUNT) == NULL);
+    for (int d = 0; d < MR_WF_DIFFUSE_COUNT; d++) { // the names round-trip
+        mr_wf_diffuse back = MR_WF_DIFFUSE_COUNT;
+        MR_CHECK_OK(mr_wf_diffuse_from_name(mr_wf_diffuse_name((mr_wf_diffuse)d), &back));
+        MR_CHECK(back == (mr_wf_diffuse)d);
+    }
+    mr_wf_diffuse untouched = MR_WF_DIFFUSE_SPECGLOSS;
+    MR_CHECK(mr_wf_diffuse_from_name("specgloss", &untouched) == MR_ERR_INVALID_ARG);
+    MR_CHECK(untouched == MR_WF_DIFFUSE_SPECGLOSS);
+    MR_CHECK(strstr(mr_last_error(), "expected gltf") != NULL);
     MR_CHECK(mr_wf_options_default().spec_diffuse == MR_WF_DIFFUSE_PLAIN);
     mr_wf_options o = options(MR_WF_WEIGHTED, 0.04);
     o.spec_diffuse = MR_WF_DIFFUSE_COUNT;

@@ -185,9 +185,9 @@ check "paper convention: diffuse = base colour (Eq. 2)" near "$(val diffuse)" 0.
 expect "metal2spec: a white dielectric is off-manifold in spec-gloss" 0 " 1 off-manifold" -- "$bin" metal2spec \
     --basecolor 1 --metallic 0 --roughness 0.3
 check "white dielectric: diffuse clamped to 1" near "$(val diffuse)" 1,1,1 1e-7
-expect "--convention takes gltf or paper" 1 "--convention 'ggx': expected gltf" -- "$bin" metal2spec \
+expect "--convention takes gltf or paper" 1 "--convention: 'ggx' is not a diffuse convention: expected gltf" -- "$bin" metal2spec \
     --basecolor 1 --metallic 0 --roughness 0.3 --convention ggx
-expect "spec2metal --convention takes gltf or paper" 1 "--convention 'x': expected gltf" -- "$bin" spec2metal \
+expect "spec2metal --convention takes gltf or paper" 1 "--convention: 'x' is not a diffuse convention: expected gltf" -- "$bin" spec2metal \
     --diffuse 0.5 --specular 0.04 --glossiness 0.5 --convention x
 expect "metal2spec --f0 0.03" 0 "F0 0.03" -- "$bin" metal2spec --basecolor 0.5 --metallic 0 --roughness 0.3 --f0 0.03
 check "dielectric --f0 0.03: specular 0.03" near "$(val specular)" 0.03,0.03,0.03 1e-7

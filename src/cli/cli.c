@@ -127,3 +127,12 @@ mr_wf_quantisation cli_quantisation(const mr_img_stored *stored, const double *s
     for (int c = 0; scale != NULL && c < 3; c++) q.scale[c] = scale[c];
     return q;
 }
+
+/* The names are the library's (mr_wf_diffuse_name): "gltf", the specular side's diffuse is glTF spec-gloss's, whose
+ * lobe is d (1 - max s) (the default: these are glTF maps); "paper", d is the Lambert lobe itself, Eq. 2 as printed
+ * (docs/workflow.md, "The spec-gloss diffuse convention"). Returns 0 after a usage error. */
+int cli_parse_convention(const char *command, const char *value, mr_wf_diffuse *out) {
+    if (mr_wf_diffuse_from_name(value, out) != MR_OK)
+        return cli_usage_error(command, "--convention: %s", mr_last_error()) == 0;
+    return 1;
+}

@@ -45,6 +45,9 @@ int cli_parse_int(const char *command, const char *option, const char *text, int
 int cli_parse_double(const char *command, const char *option, const char *text, double lo, double hi,
                      double *out);
 
+/* --convention gltf|paper (mr_wf_diffuse_from_name) into *out; 0 after a usage error naming `command`. */
+int cli_parse_convention(const char *command, const char *value, mr_wf_diffuse *out);
+
 /* Parse "--hold NAME[,NAME...]": parameters of `model` to hold instead of fit (mr_remap_options.held); on an
  * unknown name print a usage error listing the model's parameters and return 0. */
 int cli_parse_held(const char *command, const mr_brdf_model *model, const char *list, unsigned *held);

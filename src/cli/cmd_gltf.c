@@ -613,13 +613,7 @@ static int parse(int argc, char **argv, options *o) {
                 return cli_usage_error("gltf", "--format '%s': expected png or exr", value);
             o->format = value;
         } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--convention", &value))) {
-            if (taken < 0) return CLI_EXIT_USAGE;
-            if (strcmp(value, "gltf") == 0)
-                o->convention = MR_WF_DIFFUSE_SPECGLOSS;
-            else if (strcmp(value, "paper") == 0)
-                o->convention = MR_WF_DIFFUSE_PLAIN;
-            else
-                return cli_usage_error("gltf", "--convention '%s': expected gltf or paper", value);
+            if (taken < 0 || !cli_parse_convention("gltf", value, &o->convention)) return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--fallback", &value))) {
             return cli_usage_error("gltf", "--fallback is gone: a material's own metal-rough values are kept by "
                                    "default; --overwrite-metal-rough converts them instead");

@@ -599,27 +599,6 @@ int cli_load_network(const char *command, const char *weights, mr_mlp **net, cha
     return CLI_EXIT_OK;
 }
 
-/* ---- the diffuse convention (--convention) ------------------------------------------------------------------ */
-
-/* "gltf": the specular side's diffuse is glTF spec-gloss's, whose lobe is d (1 - max s) (the default: these are
- * glTF maps); "paper": d is the Lambert lobe itself, Eq. 2 as printed (docs/workflow.md, "The spec-gloss diffuse
- * convention"). Returns 0 after a usage error. */
-static int parse_convention(const char *command, const char *value, mr_wf_diffuse *out) {
-    if (strcmp(value, "gltf") == 0)
-        *out = MR_WF_DIFFUSE_SPECGLOSS;
-    else if (strcmp(value, "paper") == 0)
-        *out = MR_WF_DIFFUSE_PLAIN;
-    else
-        return cli_usage_error(command, "--convention '%s': expected gltf (the spec-gloss diffuse is dimmed by "
-                               "1 - max specular, as glTF renders it) or paper (the diffuse is the Lambert lobe)",
-                               value) == 0;
-    return 1;
-}
-
-static const char *convention_name(mr_wf_diffuse diffuse) {
-    return diffuse == MR_WF_DIFFUSE_SPECGLOSS ? "gltf" : "paper";
-}
-
 /* ---- options both commands share --------------------------------------------------------------------------- */
 
 /* Take one of the output options at argv[*i]. Returns 1 if taken, 0 if argv[*i] is something else, -1 after a
@@ -677,7 +656,7 @@ static int take_common_option(const char *command, int argc, char **argv, int *i
         return 1;
     }
     if ((taken = cli_take_option(command, argc, argv, i, "--convention", &value)))
-        return taken < 0 || !parse_convention(command, value, &m->convention) ? -1 : 1;
+        return taken < 0 || !cli_parse_convention(command, value, &m->convention) ? -1 : 1;
     return 0;
 }
 
@@ -927,7 +906,7 @@ int cmd_spec2metal(int argc, char **argv) {
 
     if (code == CLI_EXIT_OK) {
         summary s = {command, use_mlp ? "mlp" : mr_wf_method_name(wf.method), use_mlp ? net_path : NULL,
-                     wf.method == MR_WF_KHRONOS && !use_mlp ? NULL : convention_name(wf.spec_diffuse),
+                     wf.method == MR_WF_KHRONOS && !use_mlp ? NULL : mr_wf_diffuse_name(wf.spec_diffuse),
                      use_mlp ? -1.0 : wf.dielectric_f0, !use_mlp, width, height,
                      {seconds[0], seconds[1], seconds[2]}, flags,
                      {{"basecolor", albedo, 3}, {"metallic", metallic, 1}, {"roughness", out_rough, 1}},
@@ -1125,7 +1104,7 @@ int cmd_metal2spec(int argc, char **argv) {
     if (code == CLI_EXIT_OK) {
         int specgloss = wf.method != MR_WF_KHRONOS && wf.spec_diffuse == MR_WF_DIFFUSE_SPECGLOSS;
         summary s = {command, wf.method == MR_WF_KHRONOS ? "khronos" : "eq2", NULL,
-                     wf.method == MR_WF_KHRONOS ? NULL : convention_name(wf.spec_diffuse), wf.dielectric_f0,
+                     wf.method == MR_WF_KHRONOS ? NULL : mr_wf_diffuse_name(wf.spec_diffuse), wf.dielectric_f0,
                      specgloss, width,
                      height, {seconds[0], seconds[1], seconds[2]}, flags,
                      {{"diffuse", diffuse, 3}, {"specular", specular, 3}, {"glossiness", glossiness, 1}}, 0, 0.0};

@@ -22,10 +22,23 @@
 #include "workflow_internal.h"
 
 static const char *const method_names[MR_WF_METHOD_COUNT] = {"mean", "weighted", "khronos", "custom"};
-static const char *const diffuse_names[MR_WF_DIFFUSE_COUNT] = {"plain", "specgloss"};
+// The names of the CLI's --convention: one naming for library and tool (workflow.h).
+static const char *const diffuse_names[MR_WF_DIFFUSE_COUNT] = {"paper", "gltf"};
 
 const char *mr_wf_diffuse_name(mr_wf_diffuse diffuse) {
     return (unsigned)diffuse < MR_WF_DIFFUSE_COUNT ? diffuse_names[diffuse] : NULL;
+}
+
+mr_status mr_wf_diffuse_from_name(const char *name, mr_wf_diffuse *out) {
+    if (out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "diffuse convention: NULL output");
+    for (int i = 0; i < MR_WF_DIFFUSE_COUNT; i++)
+        if (name != NULL && strcmp(name, diffuse_names[i]) == 0) {
+            *out = (mr_wf_diffuse)i;
+            return MR_OK;
+        }
+    return mr_fail(MR_ERR_INVALID_ARG, "'%s' is not a diffuse convention: expected gltf (the spec-gloss diffuse is "
+                   "dimmed by 1 - max specular, as glTF renders it) or paper (the diffuse is the Lambert lobe)",
+                   name ? name : "(null)");
 }
 
 const char *mr_wf_method_name(mr_wf_method method) {

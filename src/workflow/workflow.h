@@ -156,8 +156,10 @@ typedef enum mr_wf_diffuse {
     MR_WF_DIFFUSE_COUNT
 } mr_wf_diffuse;
 
-/* "plain", "specgloss"; NULL outside the enum. */
+/* "paper" (PLAIN), "gltf" (SPECGLOSS): the names of `--convention`; NULL outside the enum. */
 const char *mr_wf_diffuse_name(mr_wf_diffuse diffuse);
+/* Parse one of the names above into *out; MR_ERR_INVALID_ARG saying what each means otherwise (*out untouched). */
+mr_status mr_wf_diffuse_from_name(const char *name, mr_wf_diffuse *out);
 
 /* "mean", "weighted", "khronos", "custom"; NULL outside the enum. */
 const char *mr_wf_method_name(mr_wf_method method);
