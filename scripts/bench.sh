@@ -338,7 +338,7 @@ bench_reflection() {
     # The truck: the original against its weighted conversion, as `matremap report` shows them.
     local weighted="$out/truck_weighted.gltf" v
     "$bin" gltf spec2metal "$truck" -o "$weighted" --method weighted --overwrite-metal-rough >/dev/null
-    "$bin" report -o "$out/truck_ref" --env "$env_map" --env-samples 4096 --reflection-samples 1000 "$truck" \
+    "$bin" report -o "$out/truck_ref" --env "$env_map" --env-samples 4096 --env-reflection-samples 1000 "$truck" \
         -- "$weighted" >/dev/null
     {
         echo
@@ -352,7 +352,7 @@ bench_reflection() {
     for m in 0 10 40 160; do
         local walls=() cpus=() run
         for run in 1 2 3; do
-            t=$(times_of "$out/report.log" "$bin" report -o "$out/truck_$m" --env "$env_map" --reflection-samples "$m" \
+            t=$(times_of "$out/report.log" "$bin" report -o "$out/truck_$m" --env "$env_map" --env-reflection-samples "$m" \
                 "$truck" -- "$weighted")
             walls+=("${t% *}")
             cpus+=("${t#* }")

@@ -82,7 +82,9 @@ expect "missing -o" 1 "missing -o DIR" -- "$bin" report ggx
 expect "no material" 1 "missing the reference MODEL" -- "$bin" report -o "$tmp/e1"
 expect "'--' without a model" 1 "without a MODEL" -- "$bin" report -o "$tmp/e2" ggx --
 expect "--rotations without --env" 1 "needs --env" -- "$bin" report -o "$tmp/e3" --rotations 3 ggx
-expect "--reflection-samples without --env" 1 "need --env" -- "$bin" report -o "$tmp/e3" --reflection-samples 8 ggx
+expect "--env-reflection-samples without --env" 1 "need --env" -- "$bin" report -o "$tmp/e3" --env-reflection-samples 8 ggx
+expect "--reflection-samples is renamed" 1 "is now --env-reflection-samples" -- "$bin" report -o "$tmp/e3" --reflection-samples 8 ggx
+expect "--from is renamed" 1 "is now --camera-direction" -- "$bin" report -o "$tmp/e3" --from 0,0,1 ggx
 expect "an unknown model" 2 "frobnicate" -- "$bin" report -o "$tmp/e4" frobnicate
 expect "a missing map is named" 2 "nomap.png" -- "$bin" report -o "$tmp/e5" ggx diffuse=@"$tmp/nomap.png"
 expect "a missing environment is named" 2 "nosky.hdr" -- "$bin" report -o "$tmp/e6" --env "$tmp/nosky.hdr" ggx
@@ -168,14 +170,16 @@ check "TextureSettingsTest: Test green $test_green ~ Sample green $sample_green"
 check "TextureSettingsTest: its 10 materials rendered" test "$(summary "$tmp/settings" \
     're.search(r"(\d+) materials", d["materials"][0]["description"]).group(1)')" = 10
 # Seen head-on (--from) under the fit scene's point light: the culled polygon casts no shadow either.
-"$bin" report -o "$tmp/settings2" --size 384 --from 0,0,1 "$settings" >/dev/null 2>&1 &&
+"$bin" report -o "$tmp/settings2" --size 384 --camera-direction 0,0,1 "$settings" >/dev/null 2>&1 &&
     oiiotool "$tmp/settings2/view0_material0.png" -o "$tmp/settings2.ppm" 2>/dev/null
 read -r _ red _ test_green _ sample_green < <(python3 "$(dirname "$0")/lib/checker_columns.py" "$tmp/settings2.ppm" \
     2>/dev/null || echo "red -1 test 0 sample 0")
 check "head-on, point light: no red mark ($red), Test green $test_green ~ Sample green $sample_green" awk \
     -v r="$red" -v t="$test_green" -v s="$sample_green" 'BEGIN { exit !(r == 0 && s > 500 && t > 0.95 * s) }'
-expect "--from needs three numbers" 1 "expected three numbers" -- "$bin" report -o "$tmp/e9" --from 1,2 "$settings"
-expect "--from is for glTF assets" 1 "spheres use the fit camera" -- "$bin" report -o "$tmp/e9" --from 0,0,1 ggx
+expect "--camera-direction needs three numbers" 1 "expected three numbers" -- "$bin" report -o "$tmp/e9" \
+    --camera-direction 1,2 "$settings"
+expect "--camera-direction is for glTF assets" 1 "spheres use the fit camera" -- "$bin" report -o "$tmp/e9" \
+    --camera-direction 0,0,1 ggx
 # WaterBottle: normal, occlusion and emissive maps are read and shown beside the BRDF maps.
 bottle="$shared/metalrough/WaterBottle/glTF/WaterBottle.gltf"
 expect "an asset with normal, occlusion and emissive maps" 0 "report: $tmp/bottle/index.html" -- "$bin" report \

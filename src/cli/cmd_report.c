@@ -58,14 +58,15 @@ static void print_help(void) {
            "  --rotations N        views: the map turned by 360/N degrees each (default 4; 1 without --env)\n"
            "  --env-scale S        radiance scale (default: the map's mean luminance brought to 0.5)\n"
            "  --env-samples N      environment directions (default %d, 1-%d)\n"
-           "  --reflection-samples M  directions about each pixel's mirror direction, combined with the\n"
+           "  --env-reflection-samples M  directions about each pixel's mirror direction, combined with the\n"
            "                       environment's by MIS, so that smooth materials reflect the map (default %d,\n"
-           "                       0-%d; 0 = the environment's pattern alone)\n"
+           "                       0-%d; 0 = the environment's pattern alone; the option of `render`)\n"
            "  --size N             render side in pixels (default %d)\n"
            "  --threads N          OpenMP threads of plans and renders (default 0: automatic, a team for work\n"
            "                       large enough to gain from it)\n"
-           "  --from X,Y,Z         glTF assets: the direction from the reference's centre to the camera (default:\n"
-           "                       a three-quarter view onto its broadest side); the camera frames its bounds\n"
+           "  --camera-direction X,Y,Z  glTF assets: the direction from the reference's centre to the camera\n"
+           "                       (default: a three-quarter view onto its broadest side); the camera frames its\n"
+           "                       bounds\n"
            "  --exposure E         display exposure of the pictures and of SSIM (default: the reference's\n"
            "                       object pixels in the first view to a mean luminance of 0.18)\n"
            "  --title TEXT         the page's title\n"
@@ -95,7 +96,7 @@ typedef struct options {
     int rotations, env_samples, size;
     double env_scale, exposure; /* 0: automatic */
     int has_from;
-    double from[3];             /* --from: camera direction for glTF assets */
+    double from[3];             /* --camera-direction: for glTF assets */
     int reflection_samples;     /* -1: DEFAULT_REFLECTION_SAMPLES */
     int threads;                /* mr_scene.threads: 0 automatic */
 } options;
@@ -154,15 +155,20 @@ static int parse(int argc, char **argv, options *o, group *groups, int *group_co
                 return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("report", argc, argv, &i, "--threads", &value))) {
             if (taken < 0 || !cli_parse_int("report", "--threads", value, 0, 1024, &o->threads)) return CLI_EXIT_USAGE;
-        } else if ((taken = cli_take_option("report", argc, argv, &i, "--reflection-samples", &value))) {
-            if (taken < 0 || !cli_parse_int("report", "--reflection-samples", value, 0, MR_ENV_MAX_REFLECTION_SAMPLES,
-                                            &o->reflection_samples))
+        } else if ((taken = cli_take_option("report", argc, argv, &i, "--env-reflection-samples", &value))) {
+            if (taken < 0 || !cli_parse_int("report", "--env-reflection-samples", value, 0,
+                                            MR_ENV_MAX_REFLECTION_SAMPLES, &o->reflection_samples))
                 return CLI_EXIT_USAGE;
+        } else if (strcmp(argv[i], "--reflection-samples") == 0 || strcmp(argv[i], "--from") == 0) {
+            // Renamed so that one name means one thing in every command (render's --env-reflection-samples;
+            // --from names a source model in remap and sweep).
+            return cli_usage_error("report", "%s is now %s", argv[i],
+                                   argv[i][2] == 'r' ? "--env-reflection-samples (as in render)" : "--camera-direction");
         } else if ((taken = cli_take_option("report", argc, argv, &i, "--size", &value))) {
             if (taken < 0 || !cli_parse_int("report", "--size", value, 16, MR_RENDER_MAX_SIZE, &o->size))
                 return CLI_EXIT_USAGE;
-        } else if ((taken = cli_take_option("report", argc, argv, &i, "--from", &value))) {
-            if (taken < 0 || !parse_direction("--from", value, o->from)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("report", argc, argv, &i, "--camera-direction", &value))) {
+            if (taken < 0 || !parse_direction("--camera-direction", value, o->from)) return CLI_EXIT_USAGE;
             o->has_from = 1;
         } else if ((taken = cli_take_option("report", argc, argv, &i, "--env-scale", &value))) {
             if (taken < 0 || !cli_parse_double("report", "--env-scale", value, 1e-12, 1e12, &o->env_scale))
@@ -188,7 +194,7 @@ static int parse(int argc, char **argv, options *o, group *groups, int *group_co
     if (o->env_path == NULL && o->rotations > 1)
         return cli_usage_error("report", "--rotations %d needs --env FILE (the fit scene has one view)", o->rotations);
     if (o->env_path == NULL && (o->env_scale > 0.0 || o->env_samples > 0 || o->reflection_samples >= 0))
-        return cli_usage_error("report", "--env-scale, --env-samples and --reflection-samples need --env FILE");
+        return cli_usage_error("report", "--env-scale, --env-samples and --env-reflection-samples need --env FILE");
     *group_count = n;
     return CLI_EXIT_OK;
 }
@@ -831,7 +837,8 @@ int cmd_report(int argc, char **argv) {
             return cli_usage_error("report", "'%s': a glTF asset takes no name=value parameters",
                                    groups[k].assignments[0]);
     if (o.has_from && gltf_entries == 0)
-        return cli_usage_error("report", "--from places the camera for glTF assets; spheres use the fit camera");
+        return cli_usage_error("report", "--camera-direction places the camera for glTF assets; spheres use the fit "
+                               "camera");
     asset_entry *assets = gltf_entries > 0 ? asset_storage : NULL;
     char scratch[64] = "";
     if (assets != NULL) {
