@@ -162,8 +162,9 @@ static int parse(int argc, char **argv, options *o, group *groups, int *group_co
         } else if (strcmp(argv[i], "--reflection-samples") == 0 || strcmp(argv[i], "--from") == 0) {
             // Renamed so that one name means one thing in every command (render's --env-reflection-samples;
             // --from names a source model in remap and sweep).
+            const int reflections = argv[i][2] == 'r';
             return cli_usage_error("report", "%s is now %s", argv[i],
-                                   argv[i][2] == 'r' ? "--env-reflection-samples (as in render)" : "--camera-direction");
+                                   reflections ? "--env-reflection-samples (as in render)" : "--camera-direction");
         } else if ((taken = cli_take_option("report", argc, argv, &i, "--size", &value))) {
             if (taken < 0 || !cli_parse_int("report", "--size", value, 16, MR_RENDER_MAX_SIZE, &o->size))
                 return CLI_EXIT_USAGE;
