@@ -4,7 +4,7 @@
 # (bench:envlight, bench:mesh, bench:reflection). Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
-# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|remap|remap-processes]
+# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|png|remap|remap-processes]
 #   --only NAME runs one section and rewrites only its markers (the full run takes long; sections written as
 #   functions below can be run alone). From make: make bench BENCH_ARGS="--only report-accuracy".
 set -euo pipefail
@@ -508,6 +508,29 @@ bench_workflow_e2e() {
     fi
 }
 
+# PNG read and write (docs/performance.md, bench:png): tests/bench_png.c on the 2048^2 spec-gloss textures of
+# ../shared/assets, libpng against OpenImageIO and the writer's settings (file size against speed).
+bench_png() {
+    echo
+    echo "== PNG read and write: libpng against OpenImageIO, writer settings (tests/bench_png.c)"
+    local shared=${MR_SHARED:-$root/../shared} files=()
+    if [ -d "$shared/assets/specgloss" ]; then
+        while IFS= read -r f; do
+            # the 2048-pixel-wide ones (IHDR width, bytes 16-19)
+            [ "$(od -An -tu1 -j16 -N4 "$f" | tr -s ' ' | sed 's/^ //')" = "0 0 8 0" ] && files+=("$f")
+        done < <(find "$shared/assets/specgloss" -name '*.png' | sort)
+    fi
+    if [ ${#files[@]} -eq 0 ]; then
+        echo "PNG comparison skipped: no 2048² PNG in ../shared/assets/specgloss in this run." | tee "$work/png.md"
+        return
+    fi
+    {
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')."
+        echo
+        "$root/$build/tests/bench_png" "${files[@]}"
+    } | tee "$work/png.md"
+}
+
 if [ -n "$only" ]; then
     case $only in
         report-accuracy) bench_report_accuracy ;;
@@ -522,13 +545,17 @@ if [ -n "$only" ]; then
             bench_remap_processes
             replace_section remap-processes "$work/remap_processes.md"
             ;;
+        png)
+            bench_png
+            replace_section png "$work/png.md"
+            ;;
         workflow)
             bench_workflow
             bench_workflow_e2e
             replace_section workflow "$work/workflow.md"
             replace_section workflow-e2e "$work/e2e.md"
             ;;
-        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, remap, remap-processes)" >&2; exit 1 ;;
+        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, png, remap, remap-processes)" >&2; exit 1 ;;
     esac
     exit 0
 fi
@@ -698,6 +725,7 @@ fi
 
 bench_report_accuracy
 bench_reflection
+bench_png
 
 if [ -f "$perf" ]; then
     echo
@@ -708,6 +736,7 @@ if [ -f "$perf" ]; then
     replace_section workflow "$work/workflow.md"
     replace_section workflow-e2e "$work/e2e.md"
     replace_section gltf "$work/gltf.md"
+    replace_section png "$work/png.md"
 fi
 replace_section envlight "$work/envlight.md" "$root/docs/rendering.md"
 replace_section mesh "$work/mesh.md" "$root/docs/rendering.md"

@@ -8,6 +8,8 @@
  * C++ library), and files written by oiiotool (OpenImageIO + OpenEXR C++ / libpng) are read by mr_img_read.
  */
 #include <dirent.h>
+#include <png.h>
+#include <setjmp.h>
 #include <errno.h>
 #include <float.h>
 #include <math.h>
@@ -21,6 +23,7 @@
 #include <unistd.h>
 
 #include "../src/io/image_io.h"
+#include "../src/io/io_internal.h"
 #include "harness.h"
 
 /* ---- fixtures and helpers ------------------------------------------------------------------------- */
@@ -484,6 +487,81 @@ MR_TEST(read_channel_conversions) {
     mr_image_free(g);
     mr_image_free(rgb);
     mr_image_free(rgba);
+}
+
+/* The PNG reader (libpng, png_io.c) returns what the OpenImageIO reader returns for the same file, bit for bit:
+ * layouts written by oiiotool (grey, grey + alpha, RGB, RGBA at 8 and 16 bits), an Adam7-interlaced RGBA file
+ * written here with libpng, and real textures of ../shared/assets (RGB and palette PNGs up to 2048^2). */
+static void same_raw(const char *path) {
+    mr_io_raw a = {0, 0, 0, 0, 0, NULL}, b = {0, 0, 0, 0, 0, NULL};
+    MR_CHECK_OK(mr_io_png_read(path, 16384, &a));
+    MR_CHECK_OK(mr_io_oiio_read(path, 16384, &b));
+    if (a.pixels != NULL && b.pixels != NULL) {
+        MR_CHECK_MSG(a.width == b.width && a.height == b.height && a.channels == b.channels && a.bits == b.bits &&
+                         a.encoded == b.encoded,
+                     "%s: libpng %dx%dx%d %d bits, OpenImageIO %dx%dx%d %d bits", path, a.width, a.height,
+                     a.channels, a.bits, b.width, b.height, b.channels, b.bits);
+        size_t n = (size_t)a.width * (size_t)a.height * (size_t)a.channels, differ = 0;
+        if (a.width == b.width && a.height == b.height && a.channels == b.channels)
+            for (size_t i = 0; i < n; i++) differ += memcmp(&a.pixels[i], &b.pixels[i], sizeof(float)) != 0;
+        MR_CHECK_MSG(differ == 0, "%s: %zu of %zu values differ", path, differ, n);
+    }
+    free(a.pixels);
+    free(b.pixels);
+}
+
+MR_TEST(png_reader_matches_openimageio) {
+    static const char *const layouts[][2] = {
+        {"grey8.png", "--ch R -d uint8"},         {"ga8.png", "--ch R,A -d uint8"},
+        {"rgb8.png", "--ch R,G,B -d uint8"},      {"rgba8.png", "-d uint8"},
+        {"grey16.png", "--ch R -d uint16"},       {"rgba16.png", "-d uint16"},
+    };
+    for (size_t k = 0; k < sizeof layouts / sizeof layouts[0]; k++) {
+        char cmd[1024];
+        snprintf(cmd, sizeof cmd, "oiiotool --pattern fill:topleft=0.1,0.9,0.3,1:topright=0.8,0.2,0.6,0.5:"
+                 "bottomleft=0,0.5,1,0.25:bottomright=1,1,0,0 37x23 4 --attrib oiio:UnassociatedAlpha 1 %s -o '%s'",
+                 layouts[k][1], mr_test_tmp_path(layouts[k][0]));
+        MR_CHECK_MSG(run_quiet(cmd) == 0, "%s", cmd);
+        same_raw(mr_test_tmp_path(layouts[k][0]));
+    }
+    // Adam7 (oiiotool cannot write it): 16-bit RGBA rows of a ramp, interlaced by libpng itself.
+    FILE *f = fopen(mr_test_tmp_path("adam7.png"), "wb");
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+    png_infop info = png ? png_create_info_struct(png) : NULL;
+    MR_CHECK(f != NULL && png != NULL && info != NULL);
+    if (f != NULL && png != NULL && info != NULL && setjmp(png_jmpbuf(png)) == 0) {
+        enum { W = 29, H = 19 };
+        static unsigned char rows[H][W * 8];
+        png_bytep pointers[H];
+        for (int y = 0; y < H; y++) {
+            for (int b = 0; b < W * 8; b++) rows[y][b] = (unsigned char)(y * 37 + b * 11);
+            pointers[y] = rows[y];
+        }
+        png_init_io(png, f);
+        png_set_IHDR(png, info, W, H, 16, PNG_COLOR_TYPE_RGB_ALPHA, PNG_INTERLACE_ADAM7, PNG_COMPRESSION_TYPE_DEFAULT,
+                     PNG_FILTER_TYPE_DEFAULT);
+        png_write_info(png, info);
+        png_set_interlace_handling(png);
+        png_write_image(png, pointers);
+        png_write_end(png, NULL);
+    }
+    png_destroy_write_struct(png ? &png : NULL, info ? &info : NULL);
+    if (f != NULL) fclose(f);
+    same_raw(mr_test_tmp_path("adam7.png"));
+
+    const char *shared = getenv("MR_SHARED");
+    char root[1024];
+    snprintf(root, sizeof root, "%s/assets", shared ? shared : "../shared");
+    static const char *const assets[] = {
+        "specgloss/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/DuckCM.png", // palette
+        "specgloss/CesiumMilkTruck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/CesiumMilkTruck.png",
+        "metalrough/TextureSettingsTest/glTF/CheckAndX.png",
+    };
+    for (size_t k = 0; k < sizeof assets / sizeof assets[0]; k++) {
+        char path[1400];
+        snprintf(path, sizeof path, "%s/%s", root, assets[k]);
+        same_raw(path);
+    }
 }
 
 /* ---- independent cross-checks with oiiotool ----------------------------------------------------------- */
@@ -951,7 +1029,8 @@ MR_TEST_MAIN(MR_TEST_ENTRY(srgb_transfer_functions), MR_TEST_ENTRY(png8_rgb_roun
              MR_TEST_ENTRY(exr_float_round_trip_is_exact), MR_TEST_ENTRY(exr_half_round_trip),
              MR_TEST_ENTRY(hdr_round_trip), MR_TEST_ENTRY(one_channel_round_trips),
              MR_TEST_ENTRY(rgba_alpha_is_not_premultiplied), MR_TEST_ENTRY(read_channel_conversions),
-             MR_TEST_ENTRY(reads_files_written_by_oiiotool), MR_TEST_ENTRY(oiiotool_reads_our_exr),
+             MR_TEST_ENTRY(reads_files_written_by_oiiotool), MR_TEST_ENTRY(png_reader_matches_openimageio),
+             MR_TEST_ENTRY(oiiotool_reads_our_exr),
              MR_TEST_ENTRY(write_into_missing_directory_fails_cleanly),
              MR_TEST_ENTRY(failed_write_leaves_target_untouched), MR_TEST_ENTRY(full_disk_fails_cleanly),
              MR_TEST_ENTRY(written_files_have_ordinary_permissions), MR_TEST_ENTRY(concurrent_writes_and_reads),

@@ -73,10 +73,11 @@ static uint32_t be32(const unsigned char *p) {
  * error handler in place, which prints "libpng error: ..." on stderr for a truncated or corrupt file, and a
  * library must not print. This catches truncation and any corruption that a CRC detects (all but
  * deliberately crafted files) with a message saying where, before libpng sees the file. */
+static const unsigned char png_signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+
 static mr_status check_png_structure(const char *path, FILE *f) {
-    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
     unsigned char head[8];
-    if (fread(head, 1, 8, f) != 8 || memcmp(head, signature, 8) != 0) return MR_OK; /* not a PNG */
+    if (fread(head, 1, 8, f) != 8 || memcmp(head, png_signature, 8) != 0) return MR_OK; /* not a PNG */
     uint32_t table[256];
     crc_table_init(table);
     unsigned char buf[16384];
@@ -206,12 +207,17 @@ mr_status mr_img_read_stored(const char *path, const mr_img_read_options *opts, 
         int err = errno;
         return mr_fail(MR_ERR_IO, "image '%s': cannot open: %s", path, strerror(err));
     }
+    unsigned char head[8];
+    const int is_png = fread(head, 1, 8, probe) == 8 && memcmp(head, png_signature, 8) == 0;
+    rewind(probe);
     mr_status status = check_png_structure(path, probe);
     fclose(probe);
     if (status != MR_OK) return status;
 
     mr_io_raw raw = {0, 0, 0, 0, 0, NULL};
-    status = mr_io_oiio_read(path, max_dimension, &raw);
+    // PNG (by its signature: nearly every glTF texture) through libpng; the rest through the OpenImageIO module,
+    // loaded on first use.
+    status = is_png ? mr_io_png_read(path, max_dimension, &raw) : mr_io_oiio_read(path, max_dimension, &raw);
     if (status != MR_OK) return status;
 
     int out_ch = o.channels;
@@ -408,8 +414,13 @@ mr_status mr_img_write(const char *path, const mr_image *image, const mr_img_wri
     }
     if (buffer == NULL)
         return mr_fail(MR_ERR_NOMEM, "image '%s': out of memory for %dx%d pixels", path, image->width, image->height);
-    status = mr_io_oiio_write(path, image->width, image->height, out_channels, sample, buffer,
-                              srgb && format != FORMAT_HDR, quality);
+    if (format == FORMAT_PNG) {
+        const mr_io_png_settings settings = MR_IO_PNG_DEFAULT;
+        status = mr_io_png_write(path, image->width, image->height, out_channels, bits, buffer, srgb, &settings);
+    } else {
+        status = mr_io_oiio_write(path, image->width, image->height, out_channels, sample, buffer,
+                                  srgb && format != FORMAT_HDR, quality);
+    }
     free(buffer);
     return status;
 }

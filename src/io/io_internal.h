@@ -99,6 +99,27 @@ typedef enum mr_io_sample {
 mr_status mr_io_oiio_write(const char *path, int width, int height, int channels, mr_io_sample sample,
                            const void *data, int srgb_tag, int jpeg_quality);
 
+/* ---- PNG through libpng (png_io.c) -------------------------------------------------------------------- */
+
+/* mr_io_oiio_read for a PNG, without OpenImageIO: the same layouts and values (png_io.c). */
+mr_status mr_io_png_read(const char *path, int max_dimension, mr_io_raw *raw);
+
+/* How the PNG writer compresses: a zlib level (0-9) and libpng's filter set (PNG_FILTER_* bits, or PNG_ALL_FILTERS
+ * for its adaptive choice per row). MR_IO_PNG_DEFAULT is the default of mr_img_write (docs/performance.md, "PNG
+ * settings": the fastest whose files are at most 15 % larger than OpenImageIO's level 6). */
+typedef struct mr_io_png_settings {
+    int level;
+    int filters;
+} mr_io_png_settings;
+#define MR_IO_PNG_ALL_FILTERS 0xf8 /* PNG_ALL_FILTERS of png.h (this header does not include it) */
+#define MR_IO_PNG_DEFAULT {3, MR_IO_PNG_ALL_FILTERS}
+
+/* Encode `data` (width*height*channels unsigned samples of `bits` 8 or 16, host order, top-left first; channels
+ * 1 grey, 2 grey + alpha, 3 RGB, 4 RGBA) as a PNG in memory and write it to `path` atomically; srgb_tag adds the
+ * sRGB, gAMA and cHRM chunks. Errors name `path`. */
+mr_status mr_io_png_write(const char *path, int width, int height, int channels, int bits, const void *data,
+                          int srgb_tag, const mr_io_png_settings *settings);
+
 /* ---- EXR through OpenEXR Core (exr_write.c) ---------------------------------------------------------- */
 
 /* Write interleaved linear floats (channels 1, 3 or 4; named Y or R,G,B(,A)) as a single-part scanline EXR

@@ -1,0 +1,213 @@
+/*
+ * png_io.c — PNG read and write through libpng, without OpenImageIO (io_internal.h, "PNG").
+ *
+ * PNG is the format of nearly every glTF texture, and a texture-set conversion reads and writes several 2048^2
+ * maps: going through OpenImageIO cost the loading of its ~250 libraries (the module, io/oiio_module.c) and its
+ * default deflate level. This reader returns what mr_io_oiio_read returns for a PNG (the same channel layout: grey,
+ * grey + alpha, RGB, RGBA; palettes, low bit depths and tRNS expanded; 8 or 16 bits; values code / (2^bits - 1);
+ * display-encoded), and the writer encodes in memory and writes atomically as the OpenImageIO path does.
+ *
+ * libpng reports errors by longjmp out of its calls: what the callbacks change and the code after a jump reads
+ * (the message, the growing output) lives on the heap behind a `volatile` pointer, as C requires of objects
+ * changed between setjmp and longjmp. Messages are recorded, never printed (libpng's default prints "libpng
+ * error: ..." on stderr).
+ */
+#include <png.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../mr_internal.h"
+#include "io_internal.h"
+
+/* One read or write: the first error the callbacks record (warnings are dropped: a PNG that decodes is taken, as
+ * OpenImageIO takes it) and, when writing, the encoded file grown in memory (written at the end in one checked
+ * atomic write, so that a full disk fails cleanly). */
+typedef struct png_session {
+    char error[256];
+    unsigned char *data;
+    size_t size, capacity;
+    int out_of_memory;
+} png_session;
+
+static void on_error(png_structp png, png_const_charp message) {
+    png_session *m = png_get_error_ptr(png);
+    if (m != NULL && m->error[0] == '\0') snprintf(m->error, sizeof m->error, "%s", message ? message : "");
+    png_longjmp(png, 1);
+}
+
+static void on_warning(png_structp png, png_const_charp message) {
+    (void)png;
+    (void)message;
+}
+
+mr_status mr_io_png_read(const char *path, int max_dimension, mr_io_raw *raw) {
+    FILE *file = fopen(path, "rb");
+    if (file == NULL) return mr_fail(MR_ERR_IO, "image '%s': cannot open", path);
+    png_session *volatile session = calloc(1, sizeof *session);
+    png_structp png = session ? png_create_read_struct(PNG_LIBPNG_VER_STRING, session, on_error, on_warning) : NULL;
+    png_infop info = png != NULL ? png_create_info_struct(png) : NULL;
+    if (png == NULL || info == NULL) {
+        png_destroy_read_struct(png ? &png : NULL, NULL, NULL);
+        fclose(file);
+        free(session);
+        return mr_fail(MR_ERR_NOMEM, "image '%s': out of memory for the PNG decoder", path);
+    }
+    unsigned char *volatile bytes = NULL;
+    png_bytep *volatile rows = NULL;
+    volatile mr_status failure = MR_ERR_FORMAT; // with own_message: a failure of ours, not libpng's
+    volatile int own_message = 0;
+    if (setjmp(png_jmpbuf(png))) {
+        png_destroy_read_struct(&png, &info, NULL);
+        fclose(file);
+        free(bytes);
+        free(rows);
+        char why[sizeof session->error];
+        memcpy(why, session->error, sizeof why);
+        free(session);
+        if (own_message) return mr_fail(failure, "image '%s': %s", path, why);
+        return mr_fail(MR_ERR_FORMAT, "image '%s': cannot decode PNG (corrupt or truncated?): %s", path, why);
+    }
+    png_init_io(png, file);
+    png_set_user_limits(png, 0x7fffffff, 0x7fffffff); // ours is checked below, with our message
+    png_read_info(png, info);
+    const png_uint_32 width = png_get_image_width(png, info), height = png_get_image_height(png, info);
+    if ((long)width > max_dimension || (long)height > max_dimension) {
+        own_message = 1;
+        snprintf(session->error, sizeof session->error, "%lux%lu pixels exceeds the maximum dimension %d",
+                 (unsigned long)width, (unsigned long)height, max_dimension);
+        png_longjmp(png, 1);
+    }
+    png_set_expand(png); // palette -> RGB, grey below 8 bits -> 8, tRNS -> alpha
+    if (png_get_bit_depth(png, info) == 16) png_set_swap(png); // to host order (x86: little-endian)
+    png_set_interlace_handling(png);
+    png_read_update_info(png, info);
+    const int channels = png_get_channels(png, info), bits = png_get_bit_depth(png, info);
+    const size_t row_bytes = png_get_rowbytes(png, info);
+    if ((bits != 8 && bits != 16) || channels < 1 || channels > 4) {
+        own_message = 1;
+        snprintf(session->error, sizeof session->error, "unsupported layout (%d channels of %d bits)", channels, bits);
+        png_longjmp(png, 1);
+    }
+    const size_t count = (size_t)width * (size_t)height;
+    if (count > SIZE_MAX / sizeof(float) / (size_t)channels || row_bytes > SIZE_MAX / height) {
+        failure = MR_ERR_NOMEM;
+        own_message = 1;
+        snprintf(session->error, sizeof session->error, "%lux%lu pixels do not fit in memory", (unsigned long)width,
+                 (unsigned long)height);
+        png_longjmp(png, 1);
+    }
+    bytes = malloc(row_bytes * height);
+    rows = malloc(height * sizeof *rows);
+    if (bytes == NULL || rows == NULL) {
+        failure = MR_ERR_NOMEM;
+        own_message = 1;
+        snprintf(session->error, sizeof session->error, "out of memory for %lux%lu pixels", (unsigned long)width,
+                 (unsigned long)height);
+        png_longjmp(png, 1);
+    }
+    for (png_uint_32 y = 0; y < height; y++) rows[y] = bytes + (size_t)y * row_bytes;
+    png_read_image(png, rows);
+    png_read_end(png, NULL);
+    float *pixels = malloc(count * (size_t)channels * sizeof *pixels);
+    if (pixels == NULL) {
+        failure = MR_ERR_NOMEM;
+        own_message = 1;
+        snprintf(session->error, sizeof session->error, "out of memory for %lux%lu pixels", (unsigned long)width,
+                 (unsigned long)height);
+        png_longjmp(png, 1);
+    }
+    // code / (2^bits - 1), as OpenImageIO converts unsigned integers to float (multiplied by the reciprocal).
+    if (bits == 8) {
+        const float scale = 1.0f / 255.0f;
+        for (size_t y = 0, at = 0; y < height; y++)
+            for (size_t x = 0; x < width * (size_t)channels; x++, at++) pixels[at] = (float)rows[y][x] * scale;
+    } else {
+        const float scale = 1.0f / 65535.0f;
+        for (size_t y = 0, at = 0; y < height; y++) {
+            const uint16_t *row = (const uint16_t *)(const void *)rows[y];
+            for (size_t x = 0; x < width * (size_t)channels; x++, at++) pixels[at] = (float)row[x] * scale;
+        }
+    }
+    png_destroy_read_struct(&png, &info, NULL);
+    fclose(file);
+    free(bytes);
+    free(rows);
+    free(session);
+    raw->width = (int)width;
+    raw->height = (int)height;
+    raw->channels = channels;
+    raw->encoded = 1;
+    raw->bits = bits;
+    raw->pixels = pixels;
+    return MR_OK;
+}
+
+/* ---- writing ------------------------------------------------------------------------------------------------ */
+
+static void buffer_write(png_structp png, png_bytep data, size_t length) {
+    png_session *b = png_get_io_ptr(png);
+    if (b->size + length > b->capacity) {
+        size_t capacity = b->capacity ? b->capacity : 1 << 16;
+        while (capacity < b->size + length) capacity *= 2;
+        unsigned char *grown = realloc(b->data, capacity);
+        if (grown == NULL) {
+            b->out_of_memory = 1;
+            png_error(png, "out of memory for the encoded file");
+        }
+        b->data = grown;
+        b->capacity = capacity;
+    }
+    memcpy(b->data + b->size, data, length);
+    b->size += length;
+}
+
+static void buffer_flush(png_structp png) { (void)png; }
+
+mr_status mr_io_png_write(const char *path, int width, int height, int channels, int bits, const void *data,
+                          int srgb_tag, const mr_io_png_settings *settings) {
+    static const int color_types[5] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA, PNG_COLOR_TYPE_RGB,
+                                       PNG_COLOR_TYPE_RGB_ALPHA};
+    if (width < 1 || height < 1 || channels < 1 || channels > 4 || (bits != 8 && bits != 16) || data == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "image '%s': cannot write %dx%d pixels of %d channels at %d bits as PNG",
+                       path, width, height, channels, bits);
+    png_session *volatile session = calloc(1, sizeof *session);
+    png_structp png = session ? png_create_write_struct(PNG_LIBPNG_VER_STRING, session, on_error, on_warning) : NULL;
+    png_infop info = png != NULL ? png_create_info_struct(png) : NULL;
+    png_bytep *volatile rows = malloc((size_t)height * sizeof *rows);
+    if (png == NULL || info == NULL || rows == NULL) {
+        png_destroy_write_struct(png ? &png : NULL, info ? &info : NULL);
+        free(rows);
+        free(session);
+        return mr_fail(MR_ERR_NOMEM, "image '%s': out of memory for the PNG encoder", path);
+    }
+    if (setjmp(png_jmpbuf(png))) {
+        png_destroy_write_struct(&png, &info);
+        free(rows);
+        mr_status status = mr_fail(session->out_of_memory ? MR_ERR_NOMEM : MR_ERR_EXTERNAL,
+                                   "image '%s': PNG encoding failed: %s", path, session->error);
+        free(session->data);
+        free(session);
+        return status;
+    }
+    png_set_write_fn(png, session, buffer_write, buffer_flush);
+    png_set_IHDR(png, info, (png_uint_32)width, (png_uint_32)height, bits, color_types[channels], PNG_INTERLACE_NONE,
+                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    if (srgb_tag) png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+    png_set_compression_level(png, settings->level);
+    png_set_filter(png, PNG_FILTER_TYPE_BASE, settings->filters);
+    png_write_info(png, info);
+    if (bits == 16) png_set_swap(png); // host order in, big-endian in the file
+    const size_t row_bytes = (size_t)width * (size_t)channels * (size_t)(bits / 8);
+    for (int y = 0; y < height; y++) rows[y] = (png_bytep)((const unsigned char *)data + (size_t)y * row_bytes);
+    png_write_image(png, rows);
+    png_write_end(png, NULL);
+    png_destroy_write_struct(&png, &info);
+    free(rows);
+    mr_status status = mr_atomic_write_bytes(path, session->data, session->size);
+    free(session->data);
+    free(session);
+    return status;
+}
