@@ -43,6 +43,12 @@ static void on_warning(png_structp png, png_const_charp message) {
     (void)message;
 }
 
+/* PNG stores 16-bit samples big-endian; png_set_swap makes them little-endian: host order on such hosts only. */
+static int host_is_little_endian(void) {
+    const uint16_t probe = 1;
+    return *(const unsigned char *)&probe == 1;
+}
+
 mr_status mr_io_png_read(const char *path, int max_dimension, mr_io_raw *raw) {
     FILE *file = fopen(path, "rb");
     if (file == NULL) return mr_fail(MR_ERR_IO, "image '%s': cannot open", path);
@@ -81,7 +87,7 @@ mr_status mr_io_png_read(const char *path, int max_dimension, mr_io_raw *raw) {
         png_longjmp(png, 1);
     }
     png_set_expand(png); // palette -> RGB, grey below 8 bits -> 8, tRNS -> alpha
-    if (png_get_bit_depth(png, info) == 16) png_set_swap(png); // to host order (x86: little-endian)
+    if (png_get_bit_depth(png, info) == 16 && host_is_little_endian()) png_set_swap(png); // to host order
     png_set_interlace_handling(png);
     png_read_update_info(png, info);
     const int channels = png_get_channels(png, info), bits = png_get_bit_depth(png, info);
@@ -199,7 +205,7 @@ mr_status mr_io_png_write(const char *path, int width, int height, int channels,
     png_set_compression_level(png, settings->level);
     png_set_filter(png, PNG_FILTER_TYPE_BASE, settings->filters);
     png_write_info(png, info);
-    if (bits == 16) png_set_swap(png); // host order in, big-endian in the file
+    if (bits == 16 && host_is_little_endian()) png_set_swap(png); // host order in, big-endian in the file
     const size_t row_bytes = (size_t)width * (size_t)channels * (size_t)(bits / 8);
     for (int y = 0; y < height; y++) rows[y] = (png_bytep)((const unsigned char *)data + (size_t)y * row_bytes);
     png_write_image(png, rows);
