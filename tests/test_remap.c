@@ -1090,7 +1090,27 @@ MR_TEST(fixed_parameters_and_switches_keep_their_given_values) {
     mr_render_plan_free(plan);
 }
 
-MR_TEST_MAIN(MR_TEST_ENTRY(names_round_trip),
+/* A zeroed mr_remap_options is the defaults, the seed of the multi-start included (a conductor target has seven
+ * nonlinear parameters: AUTO starts from seeded random points). */
+MR_TEST(zeroed_options_are_the_defaults) {
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){32, MR_FIT_LIGHT_45, 0});
+    mr_render_plan *plan = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    if (plan == NULL) return;
+    const mr_brdf_model *source = mr_brdf_find("ggx"), *target = mr_brdf_find("ggx-conductor");
+    double values[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(source, values);
+    MR_CHECK_OK(mr_brdf_parse_assignment(source, "f0=0.9,0.6,0.3", values));
+    mr_remap_options zeroed, defaults = mr_remap_options_default();
+    memset(&zeroed, 0, sizeof zeroed);
+    mr_remap_result a, b;
+    MR_CHECK_OK(mr_remap(plan, source, values, target, &zeroed, &a));
+    MR_CHECK_OK(mr_remap(plan, source, values, target, &defaults, &b));
+    MR_CHECK(memcmp(a.values, b.values, sizeof a.values) == 0 && a.outcome == b.outcome && a.renders == b.renders);
+    mr_render_plan_free(plan);
+}
+
+MR_TEST_MAIN(MR_TEST_ENTRY(names_round_trip), MR_TEST_ENTRY(zeroed_options_are_the_defaults),
              MR_TEST_ENTRY(glossy_sources_keep_their_reflectance_at_the_default_size),
              MR_TEST_ENTRY(outcomes_say_what_the_scene_shows),
              MR_TEST_ENTRY(default_options_are_the_documented_ones),

@@ -30,6 +30,7 @@
 #define DEFAULT_GRID_2D 8
 #define DEFAULT_GRID_3D 6
 #define DEFAULT_STARTS 8
+#define DEFAULT_SEED 1
 #define MAX_REFINED_STARTS 3
 /* Outcome thresholds (remap.h):
  *   - a residual RMS above 25 % of the source's RMS radiance is "unreachable" (a lobe that merely has another
@@ -97,7 +98,7 @@ mr_remap_options mr_remap_options_default(void) {
     o.xtol = DEFAULT_XTOL;
     o.grid_points = 0;
     o.starts = DEFAULT_STARTS;
-    o.seed = 1;
+    o.seed = DEFAULT_SEED;
     o.target_values = NULL;
     return o;
 }
@@ -1091,6 +1092,7 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     if (opts.max_evaluations <= 0) opts.max_evaluations = DEFAULT_MAX_EVALUATIONS;
     if (!(opts.xtol > 0.0)) opts.xtol = DEFAULT_XTOL;
     if (opts.starts <= 0) opts.starts = DEFAULT_STARTS;
+    if (opts.seed == 0) opts.seed = DEFAULT_SEED; // so that a zeroed struct is the defaults, as everywhere
     if ((unsigned)opts.strategy >= MR_REMAP_STRATEGY_COUNT)
         return mr_fail(MR_ERR_INVALID_ARG, "remap: unknown strategy %d", (int)opts.strategy);
     if (opts.threads < 0 || opts.threads > 1024)

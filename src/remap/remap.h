@@ -126,7 +126,7 @@ typedef struct mr_remap_options {
     int grid_points;             /* AUTO's global grid per nonlinear dimension: 16 (1-D), 8 (2-D), 6 (3-D)
                                     if 0 (docs/performance.md: finer grids found the same fits) */
     int starts;                  /* AUTO with > 2 nonlinear parameters: multi-start count: 8 */
-    unsigned long seed;          /* seeds the multi-start points: 1 */
+    unsigned long seed;          /* seeds the multi-start points: 1 (0 = 1: a zeroed struct is the defaults) */
     const double *target_values; /* optional packed target values: the values of fixed parameters and
                                     switches (NULL: the target's defaults) */
     int skip_global_check;       /* SINGLE/TWO/THREE: 0 = also run AUTO's global search to detect a local
