@@ -67,17 +67,17 @@ static uint32_t be32(const unsigned char *p) {
     return ((uint32_t)p[0] << 24) | ((uint32_t)p[1] << 16) | ((uint32_t)p[2] << 8) | (uint32_t)p[3];
 }
 
-/* If the open file `f` is a PNG (by its signature, whatever the extension), walk its chunk structure
- * (ISO/IEC 15948 section 5: length, type, data, CRC) up to IEND: IHDR first, every length inside the file,
- * every CRC right. Why here and not in the decoder: OpenImageIO 2.4's PNG reader leaves libpng's default
- * error handler in place, which prints "libpng error: ..." on stderr for a truncated or corrupt file, and a
- * library must not print. This catches truncation and any corruption that a CRC detects (all but
- * deliberately crafted files) with a message saying where, before libpng sees the file. */
-static const unsigned char png_signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-
-static mr_status check_png_structure(const char *path, FILE *f) {
+/* If the open file `f` is a PNG (by its signature, whatever the extension: *is_png says), walk its chunk
+ * structure (ISO/IEC 15948 section 5: length, type, data, CRC) up to IEND: IHDR first, every length inside the
+ * file, every CRC right. Why here and not in the decoder: libpng's own messages do not say where a file went wrong
+ * (and OpenImageIO's PNG reader, which a PNG no longer reaches, printed them on stderr). This catches truncation
+ * and any corruption that a CRC detects (all but deliberately crafted files) with a message saying where, before
+ * libpng sees the file. */
+static mr_status check_png_structure(const char *path, FILE *f, int *is_png) {
+    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
     unsigned char head[8];
-    if (fread(head, 1, 8, f) != 8 || memcmp(head, png_signature, 8) != 0) return MR_OK; /* not a PNG */
+    *is_png = fread(head, 1, 8, f) == 8 && memcmp(head, signature, 8) == 0;
+    if (!*is_png) return MR_OK;
     uint32_t table[256];
     crc_table_init(table);
     unsigned char buf[16384];
@@ -207,10 +207,8 @@ mr_status mr_img_read_stored(const char *path, const mr_img_read_options *opts, 
         int err = errno;
         return mr_fail(MR_ERR_IO, "image '%s': cannot open: %s", path, strerror(err));
     }
-    unsigned char head[8];
-    const int is_png = fread(head, 1, 8, probe) == 8 && memcmp(head, png_signature, 8) == 0;
-    rewind(probe);
-    mr_status status = check_png_structure(path, probe);
+    int is_png = 0;
+    mr_status status = check_png_structure(path, probe, &is_png);
     fclose(probe);
     if (status != MR_OK) return status;
 

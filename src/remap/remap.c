@@ -188,6 +188,17 @@ static double sse_against(const fit_context *ctx, const mr_image *image, const m
     return sum;
 }
 
+/* Energy (sum of squares over the covered pixels) of a render. */
+static double image_energy(const fit_context *ctx, const mr_image *image) {
+    double sum = 0.0;
+    for (int i = 0; i < ctx->pixel_count; i++)
+        for (int c = 0; c < 3; c++) {
+            double v = image->pixels[(size_t)ctx->pixels[i] * 3 + c];
+            sum += v * v;
+        }
+    return sum;
+}
+
 static int render_values(fit_context *ctx, const double *values, mr_component component, mr_image *into) {
     mr_status status = mr_render_into_threads(ctx->plan, ctx->opts.threads, ctx->model, values, component, into);
     ctx->renders++;
@@ -600,13 +611,7 @@ static int lobe_staged_fit(fit_context *ctx, const mr_remap_source *source, doub
         auto_fit(ctx, &stage, &stage_ambiguous); // leaves the lobe's best shape in ctx->base
         // A lobe too faint to see (a dielectric's highlight at IOR 1.01) has an undetermined shape that does
         // not matter to the image: its ambiguity is not a local minimum. It counts from 0.1 % of the energy.
-        double energy = 0.0;
-        for (int i = 0; i < ctx->pixel_count; i++)
-            for (int c = 0; c < 3; c++) {
-                double v = ctx->goal->pixels[(size_t)ctx->pixels[i] * 3 + c];
-                energy += v * v;
-            }
-        if (stage_ambiguous && energy >= 1e-3 * source_energy) *ambiguous = 1;
+        if (stage_ambiguous && image_energy(ctx, ctx->goal) >= 1e-3 * source_energy) *ambiguous = 1;
     }
     ctx->nonlinear_count = nonlinear_count;
     ctx->linear_count = linear_count;
@@ -964,17 +969,6 @@ static double lobe_width_power(const char *name) {
     return 1.0;
 }
 
-/* Energy (sum of squares over the covered pixels) of a render. */
-static double image_energy(const fit_context *ctx, const mr_image *image) {
-    double sum = 0.0;
-    for (int i = 0; i < ctx->pixel_count; i++)
-        for (int c = 0; c < 3; c++) {
-            double v = image->pixels[(size_t)ctx->pixels[i] * 3 + c];
-            sum += v * v;
-        }
-    return sum;
-}
-
 /* The range [lo, hi] of fitted slot s's values, walked from `values` in factors of 2 within its bounds, over
  * which the full render stays within tol_sse (squared error) of `fitted`; beyond[0] and beyond[1], the first
  * values below and above it whose render differs (the range's own ends where nothing did). 0 if a render
@@ -1275,23 +1269,28 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     return MR_OK;
 }
 
-/* Relative RMSE of `fit` against `source` over the pixels the plan's object covers, as mr_remap_result's: the
- * source's RMS radiance floored at RELATIVE_RMS_FLOOR (a black source gives a finite ratio). */
-static double covered_relative_rmse(const mr_render_plan *plan, const mr_image *fit, const mr_image *source) {
+/* Mean square of a - b (b NULL: of a) over the values of the pixels the plan's object covers; 0 if none. Unlike
+ * image_energy, for a plan without a fit context (the closer look's). */
+static double covered_mean_square(const mr_render_plan *plan, const mr_image *a, const mr_image *b) {
     const mr_scene *scene = mr_render_plan_scene(plan);
     const float *coverage = mr_render_plan_coverage(plan);
-    double diff = 0.0, energy = 0.0;
+    double sum = 0.0;
     long values = 0;
     for (int p = 0; p < scene->width * scene->height; p++) {
         if (!(coverage[p] > 0.0f)) continue;
         for (int c = 0; c < 3; c++, values++) {
-            const double a = fit->pixels[(size_t)p * 3 + c], b = source->pixels[(size_t)p * 3 + c];
-            diff += (a - b) * (a - b);
-            energy += b * b;
+            const double d = (double)a->pixels[(size_t)p * 3 + c] - (b ? (double)b->pixels[(size_t)p * 3 + c] : 0.0);
+            sum += d * d;
         }
     }
-    if (values == 0) return 0.0;
-    return sqrt(diff / (double)values) / fmax(sqrt(energy / (double)values), RELATIVE_RMS_FLOOR);
+    return values > 0 ? sum / (double)values : 0.0;
+}
+
+/* Relative RMSE of `fit` against `source` over the pixels the plan's object covers, as mr_remap_result's: the
+ * source's RMS radiance floored at RELATIVE_RMS_FLOOR (a black source gives a finite ratio). */
+static double covered_relative_rmse(const mr_render_plan *plan, const mr_image *fit, const mr_image *source) {
+    return sqrt(covered_mean_square(plan, fit, source)) /
+           fmax(sqrt(covered_mean_square(plan, source, NULL)), RELATIVE_RMS_FLOOR);
 }
 
 /* The closer look of remap.h (UNDER_RESOLVED, model sources): a CONVERGED fit of a source that is not black
@@ -1300,16 +1299,7 @@ static mr_status zoom_check(const mr_render_plan *plan, const mr_brdf_model *sou
                             const mr_image *full, const mr_brdf_model *target, int threads, mr_remap_result *out) {
     if (out->outcome != MR_FIT_CONVERGED) return MR_OK;
     const mr_scene *scene = mr_render_plan_scene(plan);
-    const float *coverage = mr_render_plan_coverage(plan);
-    double energy = 0.0;
-    long values = 0;
-    for (int p = 0; p < scene->width * scene->height; p++)
-        if (coverage[p] > 0.0f)
-            for (int c = 0; c < 3; c++, values++) {
-                const double v = full->pixels[(size_t)p * 3 + c];
-                energy += v * v;
-            }
-    if (values == 0 || sqrt(energy / (double)values) < RELATIVE_RMS_FLOOR) return MR_OK; // black: nothing to look at
+    if (sqrt(covered_mean_square(plan, full, NULL)) < RELATIVE_RMS_FLOOR) return MR_OK; // black: nothing to look at
     const mr_render_plan *closer = NULL; // kept by `plan`: built by the first remap that asks
     mr_status status = mr_render_plan_zoomed(plan, ZOOM, &closer);
     if (status != MR_OK || closer == NULL) return status;

@@ -864,6 +864,18 @@ static void find_highlights(const mr_scene *scene, tracer *tr) {
     tr->highlight_count = kept;
 }
 
+/* Close pixel `pixel` of a row: `covered`, the share of it the object covers (at most 1, up to rounding), and its
+ * hits, those the row gained since `first`, which make it a lit pixel. */
+static void finish_pixel(row_result *row, float *coverage, int pixel, double covered, size_t first) {
+    coverage[pixel] = (float)MR_MIN(covered, 1.0);
+    if (covered > 0.0) row->object_pixels++;
+    if (row->hit_count > first) {
+        row->pixels[row->lit] = pixel;
+        row->hit_counts[row->lit] = (int)(row->hit_count - first);
+        row->lit++;
+    }
+}
+
 /* Trace row y: pixels well inside or outside the silhouette (all four corners and the centre agree) get one
  * primary ray through their centre; pixels on the silhouette get n x n rays on a regular sub-pixel grid, each
  * weighted 1/n^2, so they are box-filtered like a path tracer's pixels instead of aliased (docs/design.md
@@ -897,13 +909,7 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
                     return 0;
                 }
             }
-            coverage[pixel] = (float)MR_MIN(covered, 1.0);
-            if (covered > 0.0) row->object_pixels++;
-            if (row->hit_count > first) {
-                row->pixels[row->lit] = pixel;
-                row->hit_counts[row->lit] = (int)(row->hit_count - first);
-                row->lit++;
-            }
+            finish_pixel(row, coverage, pixel, covered, first);
             continue;
         }
         const unsigned char *top = corner_hit + (size_t)y * (size_t)(width + 1) + (size_t)x;
@@ -925,13 +931,7 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
                     return 0;
                 }
             }
-        coverage[pixel] = (float)(hits * weight);
-        if (hits > 0) row->object_pixels++;
-        if (row->hit_count > first) {
-            row->pixels[row->lit] = pixel;
-            row->hit_counts[row->lit] = (int)(row->hit_count - first);
-            row->lit++;
-        }
+        finish_pixel(row, coverage, pixel, hits * weight, first);
     }
     free(samples);
     return 1;
@@ -1121,6 +1121,7 @@ long mr_render_plan_sample_count(const mr_render_plan *plan) {
 }
 
 size_t mr_render_plan_bytes(const mr_render_plan *plan) {
+    const mr_render_plan *zoomed = atomic_load(&plan->zoomed); // the closer look it keeps, if built
     size_t pixels = (size_t)plan->scene.width * (size_t)plan->scene.height;
     size_t lit = (size_t)plan->lit_pixels, hits = (size_t)plan->hit_count;
     return sizeof *plan + pixels * sizeof *plan->coverage + (lit + 1) * (sizeof *plan->lit_pixel_index +
@@ -1130,7 +1131,7 @@ size_t mr_render_plan_bytes(const mr_render_plan *plan) {
            (plan->hits[hits].reflection_begin + 1) * sizeof *plan->reflection_samples +
            (size_t)plan->env.count * (sizeof *plan->env.direction + sizeof *plan->env.weight +
                                       (plan->env.mis_npdf ? sizeof *plan->env.mis_npdf : 0)) +
-           mr_mesh_world_bytes(&plan->mesh) + (atomic_load(&plan->zoomed) ? mr_render_plan_bytes(plan->zoomed) : 0);
+           mr_mesh_world_bytes(&plan->mesh) + (zoomed ? mr_render_plan_bytes(zoomed) : 0);
 }
 
 mr_status mr_render_plan_zoomed(const mr_render_plan *plan, double zoom, const mr_render_plan **out) {
@@ -1255,8 +1256,8 @@ static void fill_unlit(const mr_render_plan *plan, mr_image *image, int with_bac
         return;
     }
     for (size_t p = 0; p < pixel_count; p++) {
-        double uncovered = with_background ? 1.0 - plan->coverage[p] : 0.0;
-        for (int c = 0; c < 3; c++) image->pixels[p * 3 + c] = (float)(plan->scene.background[c] * uncovered);
+        double uncovered = 1.0 - plan->coverage[p];
+        for (int c = 0; c < 3; c++) image->pixels[p * 3 + c] = (float)(bg[c] * uncovered);
     }
 }
 
