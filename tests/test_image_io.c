@@ -845,6 +845,34 @@ MR_TEST(bad_inputs_give_clear_errors) {
     MR_CHECK(mr_img_read(mr_test_tmp_path("flipped.png"), NULL, &img) == MR_ERR_FORMAT);
     MR_CHECK_MSG(strstr(mr_last_error(), "flipped.png") != NULL && strstr(mr_last_error(), "CRC") != NULL, "%s",
                  mr_last_error());
+    /* a PNG whose image data is not zlib data but carries a correct CRC (so only the decoder, libpng through
+     * png_io.c, can tell): a clear error naming the file, no image */
+    long idat = -1;
+    for (long i = 8; i + 8 <= n; i++)
+        if (memcmp(bytes + i, "IDAT", 4) == 0) {
+            idat = i;
+            break;
+        }
+    MR_CHECK(idat > 0);
+    if (idat > 0) {
+        const uint32_t length = (uint32_t)bytes[idat - 4] << 24 | (uint32_t)bytes[idat - 3] << 16 |
+                                (uint32_t)bytes[idat - 2] << 8 | bytes[idat - 1];
+        memset(bytes + idat + 4, 0xff, length); // 0xff 0xff is no zlib header
+        uint32_t crc = 0xffffffffu; // CRC-32 of the type and data (ISO/IEC 15948, Annex D), bit by bit
+        for (uint32_t k = 0; k < length + 4; k++) {
+            crc ^= bytes[idat + k];
+            for (int b = 0; b < 8; b++) crc = crc & 1 ? (crc >> 1) ^ 0xedb88320u : crc >> 1;
+        }
+        crc ^= 0xffffffffu;
+        for (int b = 0; b < 4; b++) bytes[idat + 4 + length + b] = (unsigned char)(crc >> (24 - 8 * b));
+        MR_CHECK(write_file(mr_test_tmp_path("undecodable.png"), bytes, (size_t)n));
+        img = NULL;
+        MR_CHECK(mr_img_read(mr_test_tmp_path("undecodable.png"), NULL, &img) == MR_ERR_FORMAT);
+        MR_CHECK_MSG(strstr(mr_last_error(), "undecodable.png") != NULL &&
+                         strstr(mr_last_error(), "cannot decode PNG") != NULL,
+                     "%s", mr_last_error());
+        MR_CHECK(img == NULL);
+    }
     /* a truncated JPEG: libjpeg only warns ("Premature end of JPEG file") and fills the rest with grey */
     MR_CHECK_OK(mr_img_write(mr_test_tmp_path("whole.jpg"), noise, NULL));
     n = read_file(mr_test_tmp_path("whole.jpg"), bytes, sizeof bytes);
