@@ -72,7 +72,7 @@ MODULE      := $(BUILD)/lib/matremap/libmatremap-oiio.so
 MODULE_SRC  := src/io/image_io_oiio.cpp src/status.c src/io/atomic_file.c
 MODULE_OBJ  := $(patsubst %,$(BUILD)/pic/%.o,$(basename $(MODULE_SRC)))
 
-LIB_C_SRC   := $(filter-out src/cli/%,$(wildcard src/*.c src/*/*.c)) $(wildcard nn/*.c)
+LIB_C_SRC   := $(filter-out src/cli/%,$(wildcard src/*.c src/*/*.c)) $(wildcard nn/*.c gltf/*.c)
 LIB_CXX_SRC := $(filter-out src/io/image_io_oiio.cpp,$(wildcard src/*/*.cpp)) $(wildcard gltf/*.cpp)
 CLI_SRC     := $(wildcard src/cli/*.c)
 TEST_SRC    := $(wildcard tests/test_*.c)

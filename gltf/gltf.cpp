@@ -2003,6 +2003,28 @@ mr_status mr_gltf_add_image_file(mr_gltf *g, const char *file, const char *uri, 
     })
 }
 
+mr_status mr_gltf_add_image_bytes(mr_gltf *g, const void *bytes, size_t size, const char *uri, int *out_image) {
+    if (g == NULL || (bytes == NULL && size > 0) || uri == NULL || out_image == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL argument");
+    MR_GLTF_GUARD(uri, {
+        if (!is_safe_relative(uri) || is_data_uri(uri))
+            return mr_fail(MR_ERR_INVALID_ARG, "glTF image URI '%s': expected a relative path inside the output "
+                           "directory (no '..', not absolute)", uri);
+        tinygltf::Image im;
+        const unsigned char *p = static_cast<const unsigned char *>(bytes);
+        im.image.assign(p, p + size);
+        im.mimeType = sniff_mime(im.image);
+        if (im.mimeType.empty())
+            return mr_fail(MR_ERR_FORMAT, "image '%s': not a PNG, JPEG or EXR file", uri);
+        im.as_is = true;
+        im.uri = uri_encode_spaces(uri);
+        g->model.images.push_back(std::move(im));
+        g->image_paths.push_back("");
+        *out_image = (int)g->model.images.size() - 1;
+        return MR_OK;
+    })
+}
+
 mr_status mr_gltf_add_texture(mr_gltf *g, int image, const mr_gltf_sampler *sampler, int *out_texture) {
     if (g == NULL || out_texture == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL argument");
     if (image < 0 || image >= (int)g->model.images.size())

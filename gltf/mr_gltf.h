@@ -47,6 +47,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "io/image_io.h"
 #include "mr_status.h"
 
 #ifdef __cplusplus
@@ -188,6 +189,20 @@ mr_status mr_gltf_image_write_file(const mr_gltf *asset, int image, const char *
 /* Adds an image read from `file` (PNG, JPEG or EXR by content), saved beside the output under the relative
  * `uri` (no "..", not absolute). *out_image receives its index. */
 mr_status mr_gltf_add_image_file(mr_gltf *asset, const char *file, const char *uri, int *out_image);
+
+/* Adds an image from its encoded bytes (PNG, JPEG or EXR by content; copied), saved beside the output under the
+ * relative `uri` (no "..", not absolute). *out_image receives its index. */
+mr_status mr_gltf_add_image_bytes(mr_gltf *asset, const void *bytes, size_t size, const char *uri, int *out_image);
+
+/* Decodes image `image` (mr_img_read_stored's conventions: opts may be NULL, *stored may be NULL): an external image
+ * from its file, an embedded one (data URI, buffer view) from the asset's bytes. Errors name the asset and the
+ * image index. */
+mr_status mr_gltf_image_read(const mr_gltf *asset, int image, const mr_img_read_options *opts, mr_image **out,
+                             mr_img_stored *stored);
+
+/* The same for the image of texture `texture`; a texture without an image is MR_ERR_FORMAT naming it. */
+mr_status mr_gltf_texture_read(const mr_gltf *asset, int texture, const mr_img_read_options *opts, mr_image **out,
+                               mr_img_stored *stored);
 
 /* Adds a texture of `image` with `sampler` (NULL = no sampler, i.e. glTF's defaults); an identical sampler
  * already in the asset is reused. *out_texture receives its index. */

@@ -98,28 +98,10 @@ int cli_gltf_read_texture(const mr_gltf *asset, const mr_gltf_texture_ref *ref, 
 
 int cli_gltf_read_texture_stored(const mr_gltf *asset, const mr_gltf_texture_ref *ref, mr_img_encoding encoding,
                                  const char *scratch, mr_image **out, mr_img_stored *stored) {
-    mr_gltf_texture texture;
-    mr_gltf_image image;
-    mr_status status = mr_gltf_get_texture(asset, ref->index, &texture);
-    if (status != MR_OK) return cli_fail("gltf", status);
-    if (texture.image < 0) {
-        fprintf(stderr, "matremap gltf: error: '%s': texture %d has no image\n", mr_gltf_path(asset), ref->index);
-        return CLI_EXIT_BAD_INPUT;
-    }
-    status = mr_gltf_get_image(asset, texture.image, &image);
-    if (status != MR_OK) return cli_fail("gltf", status);
+    (void)scratch;
     mr_img_read_options ro = {0};
     ro.encoding = encoding;
-    if (image.path[0] != '\0') {
-        status = mr_img_read_stored(image.path, &ro, out, stored);
-    } else { // an embedded image (data URI or buffer view): decoded from a scratch file named by its type
-        char path[PATH_SIZE];
-        snprintf(path, sizeof path, "%s/image%d%s", scratch, texture.image,
-                 strstr(image.mime_type, "jpeg") ? ".jpg" : ".png");
-        status = mr_gltf_image_write_file(asset, texture.image, path);
-        if (status == MR_OK) status = mr_img_read_stored(path, &ro, out, stored);
-        remove(path);
-    }
+    mr_status status = mr_gltf_texture_read(asset, ref->index, &ro, out, stored);
     return status == MR_OK ? CLI_EXIT_OK : cli_fail("gltf", status);
 }
 
