@@ -39,6 +39,8 @@
 #define MR_VERSION_PATCH 0
 #define MR_VERSION_STRING "0.1.0"
 
+#include <stddef.h>
+
 #include "mr_status.h"
 #include "mr_image.h"
 #include "brdf/brdf.h"
@@ -51,6 +53,7 @@
 #include "workflow/workflow.h"
 #include "workflow/dataset.h"
 #include "workflow/labels.h"
+#include "transform/transform.h"
 #include "nn/mlp.h"
 #include "gltf/mr_gltf.h"
 
@@ -60,6 +63,11 @@ extern "C" {
 
 /* The library's version string, MR_VERSION_STRING of the build it was compiled from. */
 const char *mr_version(void);
+
+/* The path of the installed data file `file` (e.g. "spec2metal.mlp") in out[size]: beside the running executable
+ * (PREFIX/bin -> PREFIX/share/matremap/, or a build tree's build/bin -> data/), else the install directory fixed at
+ * build time (MR_DATA_DIR). MR_ERR_IO listing the places tried when none has it. */
+mr_status mr_data_path(const char *file, char *out, size_t size);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,161 @@
+/*
+ * transform.h — per-texel transforms from one BRDF model's parameters to another's, as const descriptors (design
+ * principle 1, like src/brdf): the workflow converters of paper section 8 (Eq. 2; Eq. 3 with the mean and the
+ * albedo-weighted metallic; the Khronos converter), the learned spec -> metal network, and the lossless route of
+ * KHR_materials_specular + KHR_materials_ior. docs/architecture.md shows where they sit in a conversion.
+ *
+ * Main calls:
+ *   const mr_transform_kind *kind = mr_transform_find("gltf-specgloss", "gltf", "weighted");
+ *   mr_transform *t;  mr_transform_create(kind, NULL, &t);           // NULL: documented defaults
+ *   mr_transform_batch b = {0};
+ *   b.n = texels;  b.in[0] = diffuse;  b.in[1] = specular;  b.in[2] = glossiness;    // kind->inputs[] order
+ *   b.out[0] = base_color;  b.out[1] = metallic;  b.out[2] = roughness;               // kind->outputs[] order
+ *   mr_transform_apply(t, &b);
+ *   mr_transform_free(t);
+ *
+ * Planes. A transform reads and writes planes of floats, one per slot: a slot is one parameter of the source
+ * (inputs) or target (outputs) model of src/brdf, named as the model names it, with its channel count; a 3-channel
+ * plane is RGB interleaved (3n floats). An optional input slot may be NULL: the model's default value is used. An
+ * output plane may be NULL when the caller does not want it. Every kind clamps inputs outside a slot's domain [min, max]
+ * and reads NaN and infinities as the slot's `nonfinite` value, flagging both. Input and output planes may
+ * be the same arrays (in-place conversion is allowed when the channel counts match).
+ *
+ * Flags: mr_wf_flag bits per texel (workflow.h: CLAMPED_INPUT, NONFINITE_INPUT, OFF_MANIFOLD, METHOD_FAILED).
+ *
+ * Repeated values. Real 8-bit texture sets hold few distinct texels (~5 % of a 2048^2 set). For a kind flagged
+ * MR_TRANSFORM_PER_TEXEL (every output a function of the same texel's inputs and nothing else), apply evaluates
+ * each distinct input value of a block once and copies its answer (bit-identical to evaluating every texel).
+ *
+ * Nothing outside src/transform switches on a transform's name: callers find kinds by (source, target, name) and
+ * read what they need from the descriptor. Threads: a created transform is immutable; apply may be called from
+ * several threads at once. Ownership: one owner, one free (mr_transform_free, NULL-safe). Nothing is printed.
+ */
+#ifndef MR_TRANSFORM_H
+#define MR_TRANSFORM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../mr_status.h"
+#include "../workflow/workflow.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MR_TRANSFORM_MAX_SLOTS 8
+
+/* Bit flags of mr_transform_slot.flags. */
+enum {
+    MR_SLOT_OPTIONAL = 1, /* input: may be NULL (the model's default is used) */
+    MR_SLOT_CONSTANT = 2  /* output: the same value for every texel (`value`), whatever the inputs */
+};
+
+/* One parameter a transform reads or writes. */
+typedef struct mr_transform_slot {
+    const char *name;  /* the model's parameter name: "diffuse", "glossiness", "base_color" */
+    int channels;      /* 1 or 3 */
+    double min, max;   /* domain: inputs are clamped into it (flagged) */
+    double nonfinite;  /* inputs: the value NaN and infinities are read as (flagged); outputs: unused */
+    unsigned flags;    /* MR_SLOT_* */
+    double value;      /* MR_SLOT_CONSTANT outputs: the value */
+    int copy_of;       /* outputs: the input slot this output repeats unchanged (after sanitising), or -1. A caller
+                          converting textures may reuse the input's texture instead (the extension route does) */
+} mr_transform_slot;
+
+/* Bit flags of mr_transform_kind.flags. */
+enum {
+    MR_TRANSFORM_PER_TEXEL = 1,     /* outputs depend on the same texel's inputs only (repeated values evaluated once) */
+    MR_TRANSFORM_NEEDS_NETWORK = 2, /* create needs mr_transform_options.network (or the installed default) */
+    MR_TRANSFORM_TOLERANCES = 4,    /* OFF_MANIFOLD is computed, with mr_transform_batch.stored tolerances */
+    MR_TRANSFORM_USES_F0 = 8        /* mr_transform_options.dielectric_f0 applies */
+};
+
+typedef struct mr_transform mr_transform;
+typedef struct mr_transform_kind mr_transform_kind;
+struct mr_mlp;
+
+/* Options of mr_transform_create; a zeroed struct (or NULL) is the documented defaults. */
+typedef struct mr_transform_options {
+    double dielectric_f0;           /* MR_TRANSFORM_USES_F0 kinds: F0d of Eq. 2 and 3, in (0, 1); 0 = the kind's
+                                       default (MR_WF_F0_GLTF; the Khronos kinds accept only it) */
+    double eps;                     /* absolute tolerance (workflow.h, mr_wf_options.eps); 0 = MR_WF_DEFAULT_EPS */
+    const struct mr_mlp *network;   /* NEEDS_NETWORK kinds: borrowed, must outlive the transform; NULL = the
+                                       installed network (mr_wf_network_path) loaded and owned by the transform */
+    int threads;                    /* 0 = automatic (a team only for large batches); n >= 1: n. Results do not
+                                       depend on it */
+} mr_transform_options;
+
+/* One call's planes. in[i] / out[j] follow kind->inputs[] / kind->outputs[]. */
+typedef struct mr_transform_batch {
+    size_t n;                                          /* texels */
+    const float *in[MR_TRANSFORM_MAX_SLOTS];
+    float *out[MR_TRANSFORM_MAX_SLOTS];
+    mr_wf_quantisation stored[MR_TRANSFORM_MAX_SLOTS]; /* how each input plane was stored (TOLERANCES kinds: the
+                                                          off-manifold tolerance, workflow.h); zeroed: exact */
+    uint8_t *flags;                                    /* n mr_wf_flag bytes, or NULL */
+    int threads;                                       /* 0: the transform's option; n >= 1: n for this call */
+} mr_transform_batch;
+
+struct mr_transform_kind {
+    const char *name;    /* unique for its (source, target) pair: "weighted", "mlp", "extension", "eq2" */
+    const char *summary; /* one line: what it does and where it comes from */
+    const char *source;  /* source model (src/brdf registry name): "gltf-specgloss" */
+    const char *target;  /* target model: "gltf" */
+    int input_count;
+    const mr_transform_slot *inputs;
+    int output_count;
+    const mr_transform_slot *outputs;
+    unsigned flags;      /* MR_TRANSFORM_* */
+    const void *config;  /* member configuration of a family sharing one file's code */
+
+    /* Build the state (*state may stay NULL); options already defaulted and checked against the kind's flags. */
+    mr_status (*create)(const mr_transform_kind *kind, const mr_transform_options *opts, void **state);
+    void (*destroy)(void *state); /* NULL-safe; may be NULL when create keeps no state */
+    /* Convert b->n texels: every output plane non-NULL (apply supplies scratch for the ones the caller dropped),
+     * optional inputs non-NULL (apply fills the default), flags non-NULL. */
+    mr_status (*apply)(const mr_transform *t, const mr_transform_batch *b);
+};
+
+/* ---- registry (transform.c) ---- */
+
+/* The registered kinds, NULL-terminated. */
+const mr_transform_kind *const *mr_transforms(void);
+
+/* The kind converting `source` to `target` called `name` (NULL: the pair's default, its first registered kind), or
+ * NULL with a message in mr_last_error() naming the pair's kinds (or the pairs that have some). */
+const mr_transform_kind *mr_transform_find(const char *source, const char *target, const char *name);
+
+/* Index of slot `name` in the kind's inputs (outputs), or -1. */
+int mr_transform_input_index(const mr_transform_kind *kind, const char *name);
+int mr_transform_output_index(const mr_transform_kind *kind, const char *name);
+
+/* ---- instances ---- */
+
+/* MR_ERR_INVALID_ARG naming the field for options outside their ranges or not applying to the kind (a network for
+ * an analytic kind, an F0 other than 0.04 for a Khronos kind); the network's errors (MR_ERR_IO, MR_ERR_FORMAT
+ * naming the file); MR_ERR_NOMEM. */
+mr_status mr_transform_create(const mr_transform_kind *kind, const mr_transform_options *opts, mr_transform **out);
+void mr_transform_free(mr_transform *t);
+
+const mr_transform_kind *mr_transform_kind_of(const mr_transform *t);
+/* The options in force (defaults filled in); for a network kind, the network used. */
+const mr_transform_options *mr_transform_options_of(const mr_transform *t);
+/* A network kind's weights file when the transform loaded the installed one, else "" (a borrowed network). */
+const char *mr_transform_network_path(const mr_transform *t);
+
+/* Convert b->n texels (n = 0 is a no-op). MR_ERR_INVALID_ARG for a NULL required input plane. Deterministic for
+ * any thread count. */
+mr_status mr_transform_apply(const mr_transform *t, const mr_transform_batch *b);
+
+/* One texel through doubles (constants, scripts): in[] / out[] packed in slot order (channels consecutive). */
+mr_status mr_transform_apply_values(const mr_transform *t, const double *in, double *out, unsigned *flags);
+
+/* For the kinds' own files (transform_internal.h would hold only this): the state create made. */
+void *mr_transform_state(const mr_transform *t);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MR_TRANSFORM_H */

@@ -1,0 +1,181 @@
+/*
+ * test_transform.c — transforms as descriptors (src/transform/transform.h): every kind names real model
+ * parameters, the repeated-value path gives the bits of the per-texel converters, the extension route moves values,
+ * Eq. 2 and Eq. 3 invert each other through the descriptors, and bad input is refused with a message.
+ */
+#include <stdint.h>
+
+#include "harness.h"
+#include "matremap.h"
+
+/* Every kind's slots are parameters of its models, with the models' channel counts. */
+MR_TEST(kinds_name_model_parameters) {
+    int kinds = 0;
+    for (const mr_transform_kind *const *k = mr_transforms(); *k != NULL; k++, kinds++) {
+        const mr_brdf_model *src = mr_brdf_find((*k)->source), *dst = mr_brdf_find((*k)->target);
+        MR_CHECK_MSG(src != NULL && dst != NULL, "%s: models %s -> %s", (*k)->name, (*k)->source, (*k)->target);
+        if (src == NULL || dst == NULL) continue;
+        for (int i = 0; i < (*k)->input_count; i++) {
+            int p = mr_brdf_param_index(src, (*k)->inputs[i].name);
+            MR_CHECK_MSG(p >= 0 && src->params[p].channels == (*k)->inputs[i].channels, "%s: input %s of %s",
+                         (*k)->name, (*k)->inputs[i].name, src->name);
+        }
+        for (int j = 0; j < (*k)->output_count; j++) {
+            int p = mr_brdf_param_index(dst, (*k)->outputs[j].name);
+            MR_CHECK_MSG(p >= 0 && dst->params[p].channels == (*k)->outputs[j].channels, "%s: output %s of %s",
+                         (*k)->name, (*k)->outputs[j].name, dst->name);
+            int from = (*k)->outputs[j].copy_of;
+            MR_CHECK(from < (*k)->input_count);
+            if (from >= 0) MR_CHECK((*k)->inputs[from].channels == (*k)->outputs[j].channels);
+        }
+        MR_CHECK(mr_transform_find((*k)->source, (*k)->target, (*k)->name) == *k);
+    }
+    MR_CHECK(kinds >= 11);
+    MR_CHECK(strcmp(mr_transform_find("gltf-specgloss", "gltf", NULL)->name, "weighted") == 0);
+    MR_CHECK(mr_transform_find("gltf-specgloss", "gltf", "bogus") == NULL);
+    MR_CHECK_MSG(strstr(mr_last_error(), "valid: weighted, mlp, mean, khronos, extension") != NULL, "%s",
+                 mr_last_error());
+    MR_CHECK(mr_transform_find("ward", "ggx", NULL) == NULL);
+    MR_CHECK_MSG(strstr(mr_last_error(), "no transform from ward to ggx") != NULL, "%s", mr_last_error());
+}
+
+static uint32_t next_random(uint32_t *state) {
+    *state = *state * 1664525u + 1013904223u;
+    return *state >> 8;
+}
+
+/* 8-bit values (repeated often) with a few hard ones: NaN, out of range, black. */
+static float texel_value(uint32_t *state, size_t i) {
+    if (i % 9973 == 5) return NAN;
+    if (i % 7919 == 3) return 1.5f;
+    return (float)(next_random(state) % 24) / 23.0f;
+}
+
+/* The deduplicated path of `weighted` gives the bits of mr_wf_spec_to_metal_batch, flags included, for one and two
+ * threads and quantised inputs. */
+MR_TEST(repeated_values_give_the_per_texel_bits) {
+    const size_t n = 200000;
+    float *d = malloc(3 * n * sizeof *d), *s = malloc(3 * n * sizeof *s), *g = malloc(n * sizeof *g);
+    float *rough = malloc(n * sizeof *rough), *a = malloc(3 * n * sizeof *a), *m = malloc(n * sizeof *m);
+    float *a2 = malloc(3 * n * sizeof *a2), *m2 = malloc(n * sizeof *m2), *r2 = malloc(n * sizeof *r2);
+    uint8_t *f = malloc(n), *f2 = malloc(n);
+    uint32_t state = 7;
+    for (size_t i = 0; i < 3 * n; i++) {
+        d[i] = texel_value(&state, i);
+        s[i] = texel_value(&state, i + 1) * 0.5f;
+    }
+    for (size_t i = 0; i < n; i++) g[i] = texel_value(&state, i + 2);
+    mr_wf_options w = mr_wf_options_default();
+    w.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
+    w.diffuse_quantisation = (mr_wf_quantisation){8, 1, {1, 1, 1}};
+    for (size_t i = 0; i < n; i++) rough[i] = 1.0f - g[i];
+    mr_wf_spec_maps in = {d, s, rough};
+    mr_wf_metal_maps out = {a, m, rough};
+    MR_CHECK(mr_wf_spec_to_metal_batch(&in, n, &w, &out, f) == MR_OK);
+
+    mr_transform *t = NULL;
+    MR_CHECK(mr_transform_create(mr_transform_find("gltf-specgloss", "gltf", "weighted"), NULL, &t) == MR_OK);
+    for (int threads = 1; t != NULL && threads <= 2; threads++) {
+        mr_transform_batch b = {0};
+        b.n = n;
+        b.in[0] = d;
+        b.in[1] = s;
+        b.in[2] = g;
+        b.out[0] = a2;
+        b.out[1] = m2;
+        b.out[2] = r2;
+        b.stored[0] = w.diffuse_quantisation;
+        b.flags = f2;
+        b.threads = threads;
+        MR_CHECK(mr_transform_apply(t, &b) == MR_OK);
+        MR_CHECK(memcmp(a, a2, 3 * n * sizeof *a) == 0);
+        MR_CHECK(memcmp(m, m2, n * sizeof *m) == 0);
+        MR_CHECK(memcmp(rough, r2, n * sizeof *r2) == 0);
+        MR_CHECK(memcmp(f, f2, n) == 0);
+    }
+    mr_transform_free(t);
+    free(d), free(s), free(g), free(rough), free(a), free(m), free(a2), free(m2), free(r2), free(f), free(f2);
+}
+
+/* The extension route moves values and sanitises them; its constants are the same for every texel. */
+MR_TEST(extension_route_moves_values) {
+    const mr_transform_kind *kind = mr_transform_find("gltf-specgloss", "gltf", "extension");
+    mr_transform *t = NULL;
+    MR_CHECK(kind != NULL && mr_transform_create(kind, NULL, &t) == MR_OK);
+    if (t == NULL) return;
+    double in[7] = {0.5, 0.25, 2.0, 0.9, 0.8, 0.7, NAN}, out[12];
+    unsigned flags = 0;
+    MR_CHECK(mr_transform_apply_values(t, in, out, &flags) == MR_OK);
+    MR_CHECK(out[0] == 0.5 && out[1] == 0.25 && out[2] == 1.0); // base colour: the diffuse, clamped
+    MR_CHECK(out[3] == 0.0);                                     // metallic
+    MR_CHECK(out[4] == 1.0);                                     // a NaN glossiness is glossiness 0
+    MR_CHECK(out[5] == 1.0);                                     // specular strength
+    MR_CHECK_NEAR(out[6], 0.9, 1e-7);                            // specular colour: the specular
+    MR_CHECK(out[9] == 1000.0);                                  // ior
+    MR_CHECK(flags == (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT));
+    MR_CHECK(kind->outputs[0].copy_of == 0 && kind->outputs[4].copy_of == 1);
+    mr_transform_free(t);
+}
+
+/* Eq. 2 then Eq. 3 through the descriptors gives the metallic texel back (glTF and paper pairs), and the
+ * glossiness of the glTF pair is 1 - roughness. */
+MR_TEST(eq2_and_eq3_invert_each_other) {
+    const char *const pairs[2][2] = {{"gltf", "gltf-specgloss"}, {"ggx-metallic", "ggx"}};
+    for (int p = 0; p < 2; p++) {
+        mr_transform *forward = NULL, *back = NULL;
+        MR_CHECK(mr_transform_create(mr_transform_find(pairs[p][0], pairs[p][1], "eq2"), NULL, &forward) == MR_OK);
+        MR_CHECK(mr_transform_create(mr_transform_find(pairs[p][1], pairs[p][0], "weighted"), NULL, &back) == MR_OK);
+        if (forward == NULL || back == NULL) continue;
+        double metal[5] = {0.9, 0.6, 0.2, 0.7, 0.3}, spec[7], again[5];
+        unsigned flags = 1;
+        MR_CHECK(mr_transform_apply_values(forward, metal, spec, &flags) == MR_OK && flags == 0);
+        MR_CHECK(mr_transform_apply_values(back, spec, again, &flags) == MR_OK);
+        MR_CHECK_MSG(flags == 0, "flags %u", flags);
+        for (int k = 0; k < 5; k++) MR_CHECK_NEAR(again[k], metal[k], 2e-6);
+        MR_CHECK_NEAR(spec[6], p == 0 ? 0.7 : 0.3, 1e-7); // glossiness 1 - 0.3, or alpha passed through
+        mr_transform_free(forward);
+        mr_transform_free(back);
+    }
+}
+
+/* Options that do not apply, and a network that cannot be found, are refused with a message naming them. */
+MR_TEST(bad_options_are_refused) {
+    mr_transform *t = NULL;
+    mr_transform_options o = {0};
+    o.dielectric_f0 = 0.03;
+    MR_CHECK(mr_transform_create(mr_transform_find("gltf-specgloss", "gltf", "extension"), &o, &t) ==
+             MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "takes no dielectric F0") != NULL && t == NULL);
+    MR_CHECK(mr_transform_create(mr_transform_find("gltf-specgloss", "gltf", "khronos"), &o, &t) ==
+             MR_ERR_INVALID_ARG); // Khronos's F0 is 0.04
+    MR_CHECK_MSG(strstr(mr_last_error(), "transform khronos") != NULL && strstr(mr_last_error(), "0.04") != NULL,
+                 "%s", mr_last_error());
+    o.dielectric_f0 = 0.04;
+    MR_CHECK(mr_transform_create(mr_transform_find("gltf-specgloss", "gltf", "khronos"), &o, &t) == MR_OK);
+    mr_transform_batch b = {0};
+    float one[3] = {0.5f, 0.5f, 0.5f}, out[3];
+    b.n = 1;
+    b.in[0] = one;
+    b.out[0] = out;
+    MR_CHECK(mr_transform_apply(t, &b) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "input plane 'specular' is NULL") != NULL);
+    mr_transform_free(t);
+    o.dielectric_f0 = 1.5;
+    MR_CHECK(mr_transform_create(mr_transform_find("gltf-specgloss", "gltf", "weighted"), &o, &t) ==
+             MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "dielectric_f0 1.5") != NULL);
+    setenv("MATREMAP_WEIGHTS", "/nonexistent/net.mlp", 1);
+    MR_CHECK(mr_transform_create(mr_transform_find("gltf-specgloss", "gltf", "mlp"), NULL, &t) == MR_ERR_IO);
+    MR_CHECK_MSG(strstr(mr_last_error(), "/nonexistent/net.mlp") != NULL, "%s", mr_last_error());
+    unsetenv("MATREMAP_WEIGHTS");
+    char path[4096];
+    MR_CHECK(mr_data_path("spec2metal.mlp", path, sizeof path) == MR_OK); // the source tree's data/
+    MR_CHECK(mr_data_path("no-such-file.bin", path, sizeof path) == MR_ERR_IO);
+    MR_CHECK(strstr(mr_last_error(), "no-such-file.bin") != NULL);
+}
+
+MR_TEST_MAIN(MR_TEST_ENTRY(kinds_name_model_parameters),
+             MR_TEST_ENTRY(repeated_values_give_the_per_texel_bits),
+             MR_TEST_ENTRY(extension_route_moves_values),
+             MR_TEST_ENTRY(eq2_and_eq3_invert_each_other),
+             MR_TEST_ENTRY(bad_options_are_refused))
