@@ -56,6 +56,7 @@
 #include "transform/transform.h"
 #include "nn/mlp.h"
 #include "gltf/mr_gltf.h"
+#include "gltf/mr_gltf_convert.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -119,15 +119,6 @@ double cli_now(void) {
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-mr_wf_quantisation cli_quantisation(const mr_img_stored *stored, const double *scale) {
-    mr_wf_quantisation q = {0, 0, {1.0, 1.0, 1.0}};
-    if (stored == NULL || stored->bits == 0) return q;
-    q.bits = stored->bits;
-    q.srgb = stored->encoding == MR_IMG_COLOR;
-    for (int c = 0; scale != NULL && c < 3; c++) q.scale[c] = scale[c];
-    return q;
-}
-
 /* The names are the library's (mr_wf_diffuse_name): "gltf", the specular side's diffuse is glTF spec-gloss's, whose
  * lobe is d (1 - max s) (the default: these are glTF maps); "paper", d is the Lambert lobe itself, Eq. 2 as printed
  * (docs/workflow.md, "The spec-gloss diffuse convention"). Returns 0 after a usage error. */

@@ -58,11 +58,6 @@ void cli_json_string(FILE *out, const char *s);
 /* Monotonic wall-clock seconds. */
 double cli_now(void);
 
-/* How a spec2metal input map was stored, for the converters' off-manifold tolerance (workflow.h, "Tolerances"):
- * the 8/16-bit codes of a file as *stored says (sRGB or linear), multiplied by scale[c] (glTF's factors; NULL:
- * 1, 1, 1); exact (bits 0: opts->eps) for stored NULL (a constant, or no texture) and for float files. */
-mr_wf_quantisation cli_quantisation(const mr_img_stored *stored, const double *scale);
-
 /* ---- materials given on the command line: MODEL name=value ... name=@MAP[:r|g|b|a] ... (cli_material.c) ---- */
 
 #define CLI_MAX_ASSIGNMENTS 64
@@ -89,11 +84,6 @@ typedef struct cli_material {
 int cli_material_load(const char *command, const char *model_name, const char *const *assignments, int count,
                       cli_material *m);
 void cli_material_free(cli_material *m);
-
-/* Load the specular -> metallic network: `weights` (a path; NULL = $MATREMAP_WEIGHTS, else spec2metal.mlp beside
- * the source tree or the installed tree, cmd_workflow.c). `used` receives the path. Returns an exit code (messages
- * printed, naming `command` and where it looked). */
-int cli_load_network(const char *command, const char *weights, mr_mlp **net, char *used, size_t used_size);
 
 struct mr_gltf;
 struct mr_gltf_texture_ref;

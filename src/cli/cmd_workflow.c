@@ -14,6 +14,7 @@
  *      flag.
  */
 #include <errno.h>
+#include <float.h>
 #include <limits.h>
 #include <math.h>
 #include <stdint.h>
@@ -529,76 +530,6 @@ static void print_summary(const summary *s, const out_options *o, const output *
     printf("}}\n");
 }
 
-/* ---- the network for spec2metal --method mlp ---------------------------------------------------------------- */
-
-/* Cut the last path component off `path` in place; 0 if there is none. */
-static int cut_last(char *path) {
-    char *slash = strrchr(path, '/');
-    if (slash == NULL) return 0;
-    *slash = '\0';
-    return 1;
-}
-
-/* Load the network: --weights FILE, else $MATREMAP_WEIGHTS, else the first of these that exists:
- * <dir of the executable>/../../data/spec2metal.mlp (the source tree: build/bin/matremap -> data/),
- * <dir of the executable>/../share/matremap/spec2metal.mlp (an installed tree: PREFIX/bin -> PREFIX/share) and
- * MR_DATA_DIR/spec2metal.mlp (when the build defines MR_DATA_DIR). `used` receives the path. */
-int cli_load_network(const char *command, const char *weights, mr_mlp **net, char *used, size_t used_size) {
-    char tried[3][PATH_MAX + 64];
-    int tried_count = 0;
-    const char *chosen = weights, *source = "--weights";
-    const char *env = getenv("MATREMAP_WEIGHTS");
-    if (chosen == NULL && env != NULL && env[0] != '\0') {
-        chosen = env;
-        source = "MATREMAP_WEIGHTS";
-    }
-    if (chosen == NULL) {
-        char exe[PATH_MAX];
-        ssize_t length = readlink("/proc/self/exe", exe, sizeof exe - 1);
-        if (length > 0) {
-            exe[length] = '\0';
-            char up[PATH_MAX]; // the executable's directory's parent, then its grandparent
-            memcpy(up, exe, (size_t)length + 1);
-            if (cut_last(up) && cut_last(up)) {
-                char parent[PATH_MAX];
-                memcpy(parent, up, sizeof parent);
-                if (cut_last(up)) snprintf(tried[tried_count++], sizeof tried[0], "%s/data/" NETWORK_FILE, up);
-                snprintf(tried[tried_count++], sizeof tried[0], "%s/share/matremap/" NETWORK_FILE, parent);
-            }
-        }
-#ifdef MR_DATA_DIR
-        snprintf(tried[tried_count++], sizeof tried[0], "%s/" NETWORK_FILE, MR_DATA_DIR);
-#endif
-        for (int k = 0; k < tried_count && chosen == NULL; k++)
-            if (access(tried[k], F_OK) == 0) chosen = tried[k];
-        if (chosen == NULL) {
-            fprintf(stderr, "matremap %s: error: --method mlp: no network found (tried", command);
-            for (int k = 0; k < tried_count; k++) fprintf(stderr, "%s %s", k ? "," : "", tried[k]);
-            fprintf(stderr, "%s); give --weights FILE or set MATREMAP_WEIGHTS, or choose an analytic --method "
-                    "(weighted, mean, khronos)\n", tried_count ? "" : " nothing");
-            return CLI_EXIT_BAD_INPUT;
-        }
-        source = NULL;
-    }
-    mr_status status = mr_mlp_read(chosen, net);
-    if (status != MR_OK) {
-        fprintf(stderr, "matremap %s: error: %s%s%s%s\n", command, mr_last_error(), source ? " (given by " : "",
-                source ? source : "", source ? ")" : "");
-        return cli_exit_code(status);
-    }
-    if ((*net)->n_in != 6 || (*net)->n_out != 4) {
-        fprintf(stderr, "matremap %s: error: network '%s' maps %d inputs to %d outputs; expected 6 (diffuse RGB, "
-                "specular RGB) to 4 (albedo RGB, metallic)\n", command, chosen, (*net)->n_in, (*net)->n_out);
-        mr_mlp_free(*net);
-        *net = NULL;
-        return CLI_EXIT_BAD_INPUT;
-    }
-    size_t length = strlen(chosen) < used_size ? strlen(chosen) : used_size - 1;
-    memcpy(used, chosen, length);
-    used[length] = '\0';
-    return CLI_EXIT_OK;
-}
-
 /* ---- options both commands share --------------------------------------------------------------------------- */
 
 /* Take one of the output options at argv[*i]. Returns 1 if taken, 0 if argv[*i] is something else, -1 after a
@@ -751,6 +682,202 @@ static void print_spec2metal_help(void) {
            "  spec2metal --diffuse 0.5,0.2,0.1 --specular 0.04 --glossiness 0.6 --method weighted\n");
 }
 
+/* ---- one conversion, either direction ---------------------------------------------------------------------- */
+
+/* Where a transform input's values come from: map `map` (of the command's list), its colour channels (channel -1)
+ * or one channel; complement: 1 - value (a roughness map for a glossiness slot). */
+typedef struct slot_source {
+    int map, channel, complement;
+} slot_source;
+
+/* One output file: its name, how it is encoded, and per channel the transform output slot (and that slot's
+ * channel) written there; LAYOUT_ZERO writes 0, LAYOUT_ALPHA the first map's alpha (the channel exists only when
+ * that map has one). */
+enum { LAYOUT_ZERO = -1, LAYOUT_ALPHA = -2 };
+typedef struct output_layout {
+    const char *name;
+    mr_img_encoding encoding;
+    int channels;
+    int slot[4], channel[4];
+} output_layout;
+
+/* What a command converts: the transform's models, its maps and how they feed the slots, its outputs. */
+typedef struct conversion {
+    const char *command, *source, *target;
+    map_arg *const *maps;
+    int map_count;
+    slot_source inputs[3];
+    const output_layout *layouts; /* unpacked: one file per output slot (their names name the printed values) */
+    int layout_count;
+    const output_layout *packed; /* --pack */
+    int packed_count;
+} conversion;
+
+/* Convert as `cv` says with the method options `m`, the output options `o`, the network file `weights` (NULL:
+ * the installed one) and the tolerance `eps` (when eps_given). Returns an exit code. */
+static int run_conversion(const conversion *cv, const method_options *m, out_options *o, const char *weights,
+                          double eps, int eps_given) {
+    const char *command = cv->command;
+    const mr_transform_kind *kind = mr_transform_find(cv->source, cv->target, m->name);
+    if (kind == NULL) return cli_usage_error(command, "--method '%s': %s", m->name, mr_last_error());
+    for (int j = 0; j < kind->output_count; j++) { // every computed output must have a file to go to
+        int placed = (kind->outputs[j].flags & MR_SLOT_CONSTANT) != 0;
+        for (int l = 0; l < cv->layout_count && !placed; l++) placed = cv->layouts[l].slot[0] == j;
+        if (!placed)
+            return cli_usage_error(command, "--method %s writes %s, which texture maps here cannot hold (it is a "
+                                   "glTF route: matremap gltf %s --method %s)", m->name, kind->outputs[j].name,
+                                   command, m->name);
+    }
+    if (m->f0_given && !(kind->flags & MR_TRANSFORM_USES_F0))
+        return cli_usage_error(command, "--f0 applies to the analytic methods (weighted, mean, khronos); the network "
+                               "of --method %s learned the F0 of its training data", m->name);
+    if (eps_given && !(kind->flags & MR_TRANSFORM_TOLERANCES))
+        return cli_usage_error(command, "--eps applies to the analytic methods (weighted, mean, khronos); --method "
+                               "%s computes no off-manifold flag", m->name);
+    if (weights != NULL && !(kind->flags & MR_TRANSFORM_NEEDS_NETWORK))
+        return cli_usage_error(command, "--weights goes with --method mlp, not %s", m->name);
+    if (weights != NULL && weights[0] == '\0') return cli_usage_error(command, "--weights: empty file name");
+    mr_transform_options to = {0};
+    to.threads = o->threads;
+    to.dielectric_f0 = m->f0_given ? m->f0 : 0.0;
+    if (m->f0_given && m->f0 == 0.0) return cli_usage_error(command, "--f0 0: expected a dielectric F0 above 0");
+    if (eps_given) to.eps = eps > 0.0 ? eps : DBL_MIN; // --eps 0: no tolerance but float rounding
+    to.plain_diffuse = m->convention == MR_WF_DIFFUSE_PLAIN;
+    mr_transform *t = NULL;
+    mr_mlp *net = NULL;
+    mr_status status = MR_OK;
+    if (weights != NULL && (status = mr_mlp_read(weights, &net)) != MR_OK) {
+        fprintf(stderr, "matremap %s: error: %s (given by --weights)\n", command, mr_last_error());
+        return cli_exit_code(status);
+    }
+    to.network = net;
+    status = mr_transform_create(kind, &to, &t);
+    if (status != MR_OK) {
+        mr_mlp_free(net);
+        if (status == MR_ERR_INVALID_ARG && m->f0_given)
+            return cli_usage_error(command, "--f0 %g with --method %s: %s", m->f0, m->name, mr_last_error());
+        const char *hint = "; give --weights FILE or set MATREMAP_WEIGHTS, or choose an analytic --method (weighted, "
+                           "mean, khronos)";
+        fprintf(stderr, "matremap %s: error: %s%s\n", command, mr_last_error(),
+                kind->flags & MR_TRANSFORM_NEEDS_NETWORK ? hint : "");
+        return cli_exit_code(status);
+    }
+    const output_layout *layouts = o->pack ? cv->packed : cv->layouts;
+    const int output_count = o->pack ? cv->packed_count : cv->layout_count;
+    const char *names[MAX_OUTPUTS];
+    for (int l = 0; l < output_count; l++) names[l] = layouts[l].name;
+    output outputs[MAX_OUTPUTS];
+    memset(outputs, 0, sizeof outputs);
+    int code = check_prefix(command, o, cv->maps, cv->map_count);
+    if (code == CLI_EXIT_OK) code = plan_outputs(command, o, cv->maps, cv->map_count, names, outputs, output_count);
+
+    // Read: the maps into the transform's input planes.
+    double started = cli_now(), seconds[3] = {0.0, 0.0, 0.0};
+    int width = 1, height = 1;
+    if (code == CLI_EXIT_OK) code = read_maps(command, cv->maps, cv->map_count, &width, &height);
+    const size_t n = (size_t)width * (size_t)height;
+    mr_transform_batch b = {0};
+    float *planes[2 * MR_TRANSFORM_MAX_SLOTS] = {NULL}, *alpha = NULL;
+    uint8_t *flags = NULL;
+    int failed = 0;
+    if (code == CLI_EXIT_OK) {
+        for (int i = 0; i < kind->input_count; i++)
+            failed |= (planes[i] = malloc(n * (size_t)kind->inputs[i].channels * sizeof(float))) == NULL;
+        for (int j = 0; j < kind->output_count; j++)
+            failed |= (planes[kind->input_count + j] = malloc(n * (size_t)kind->outputs[j].channels * sizeof(float)))
+                      == NULL;
+        failed |= (flags = malloc(n)) == NULL;
+        alpha = take_alpha(cv->maps[0], n, &failed);
+        if (failed) {
+            fprintf(stderr, "matremap %s: error: out of memory for %dx%d texels\n", command, width, height);
+            code = CLI_EXIT_INTERNAL;
+        }
+    }
+    if (code == CLI_EXIT_OK) {
+        b.n = n;
+        b.flags = flags;
+        for (int i = 0; i < kind->input_count; i++) {
+            const slot_source *from = &cv->inputs[i];
+            const map_arg *map = cv->maps[from->map];
+            if (from->channel < 0)
+                fill_rgb(map, n, planes[i]);
+            else
+                fill_channel(map, from->channel, n, planes[i]);
+            // NaN and infinities stay non-finite: the transform reads them (flagged) as its slot says.
+            for (size_t k = 0; from->complement && k < n; k++) planes[i][k] = 1.0f - planes[i][k];
+            b.in[i] = planes[i];
+            if (!eps_given) // each value known to half a code of its file (workflow.h, "Tolerances")
+                b.stored[i] = mr_wf_quantisation_of(is_file(map) ? &map->stored : NULL, NULL);
+        }
+        for (int j = 0; j < kind->output_count; j++) b.out[j] = planes[kind->input_count + j];
+        free_maps(cv->maps, cv->map_count);
+    }
+    seconds[0] = cli_now() - started;
+
+    // Convert.
+    started = cli_now();
+    if (code == CLI_EXIT_OK && (status = mr_transform_apply(t, &b)) != MR_OK) code = cli_fail(command, status);
+    seconds[1] = cli_now() - started;
+
+    // Write.
+    started = cli_now();
+    if (code == CLI_EXIT_OK && o->prefix != NULL) {
+        for (int l = 0; l < output_count && status == MR_OK; l++) {
+            const output_layout *lay = &layouts[l];
+            plane p[4];
+            int channels = lay->channels - (lay->slot[lay->channels - 1] == LAYOUT_ALPHA && alpha == NULL);
+            for (int c = 0; c < channels; c++) {
+                int j = lay->slot[c];
+                p[c] = j == LAYOUT_ALPHA ? (plane){alpha, 1, 0}
+                       : j == LAYOUT_ZERO ? (plane){NULL, 1, 0}
+                                          : (plane){b.out[j], kind->outputs[j].channels, lay->channel[c]};
+            }
+            status = compose(width, height, channels, p, 0.0f, &outputs[l].image);
+            outputs[l].encoding = lay->encoding;
+        }
+        code = status != MR_OK ? cli_fail(command, status)
+                               : write_outputs(command, o, outputs, output_count, width, height, flags);
+    }
+    seconds[2] = cli_now() - started;
+
+    if (code == CLI_EXIT_OK) {
+        const mr_transform_options *used = mr_transform_options_of(t);
+        const int convention = (kind->flags & MR_TRANSFORM_CONVENTION) != 0;
+        summary s = {command, kind->name,
+                     kind->flags & MR_TRANSFORM_NEEDS_NETWORK ? (weights ? weights : mr_transform_network_path(t))
+                                                              : NULL,
+                     convention ? mr_wf_diffuse_name(m->convention) : NULL,
+                     kind->flags & MR_TRANSFORM_USES_F0 ? used->dielectric_f0 : -1.0,
+                     (kind->flags & MR_TRANSFORM_TOLERANCES) ||
+                         (convention && m->convention == MR_WF_DIFFUSE_SPECGLOSS && strcmp(command, "metal2spec") == 0),
+                     width, height, {seconds[0], seconds[1], seconds[2]}, flags,
+                     {{cv->layouts[0].name, b.out[0], 3}, {cv->layouts[1].name, b.out[1], kind->outputs[1].channels},
+                      {cv->layouts[2].name, b.out[2], 1}},
+                     !eps_given, eps};
+        print_summary(&s, o, outputs, output_count);
+    }
+    free_outputs(outputs, MAX_OUTPUTS);
+    free_maps(cv->maps, cv->map_count);
+    for (int k = 0; k < 2 * MR_TRANSFORM_MAX_SLOTS; k++) free(planes[k]);
+    free(alpha);
+    free(flags);
+    mr_transform_free(t);
+    mr_mlp_free(net);
+    return code;
+}
+
+/* ---- spec2metal --------------------------------------------------------------------------------------------- */
+
+static const output_layout metal_layouts[] = {
+    {"basecolor", MR_IMG_COLOR, 4, {0, 0, 0, LAYOUT_ALPHA}, {0, 1, 2, 0}},
+    {"metallic", MR_IMG_DATA, 1, {1}, {0}},
+    {"roughness", MR_IMG_DATA, 1, {2}, {0}},
+};
+static const output_layout metal_packed[] = {
+    {"basecolor", MR_IMG_COLOR, 4, {0, 0, 0, LAYOUT_ALPHA}, {0, 1, 2, 0}},
+    {"metallicRoughness", MR_IMG_DATA, 3, {LAYOUT_ZERO, 2, 1}, {0, 0, 0}}, // glTF: G roughness, B metallic
+};
+
 int cmd_spec2metal(int argc, char **argv) {
     const char *command = "spec2metal";
     map_arg diffuse = map_colour("--diffuse"), specular = map_colour("--specular");
@@ -782,150 +909,18 @@ int cmd_spec2metal(int argc, char **argv) {
             return unknown_argument(command, argv[i], "--diffuse D.png");
         }
     }
-    const char *method_name = m.name;
-    const double f0 = m.f0;
-    int use_mlp = strcmp(method_name, "mlp") == 0;
-    mr_wf_options wf = mr_wf_options_default();
-    wf.threads = o.threads;
-    wf.dielectric_f0 = f0;
-    wf.eps = eps;
-    wf.spec_diffuse = m.convention;
-    if (!use_mlp) {
-        if (mr_wf_method_from_name(method_name, &wf.method) != MR_OK || wf.method == MR_WF_CUSTOM)
-            return cli_usage_error(command, "--method '%s': unknown method (valid: mlp, weighted, mean, khronos)",
-                                   method_name);
-        if (mr_wf_options_check(&wf) != MR_OK)
-            return cli_usage_error(command, "--f0 %g with --method %s: %s", f0, method_name, mr_last_error());
-    } else if (m.f0_given) {
-        return cli_usage_error(command, "--f0 applies to the analytic methods (weighted, mean, khronos); the network "
-                               "of --method mlp learned the F0 of its training data");
-    } else if (eps_given) {
-        return cli_usage_error(command, "--eps applies to the analytic methods (weighted, mean, khronos); --method "
-                               "mlp computes no off-manifold flag");
-    } else if (weights != NULL && weights[0] == '\0') {
-        return cli_usage_error(command, "--weights: empty file name");
-    }
-    if (!use_mlp && weights != NULL)
-        return cli_usage_error(command, "--weights goes with --method mlp, not %s", method_name);
     if (diffuse.text == NULL) return cli_usage_error(command, "missing --diffuse MAP");
     if ((specular.text != NULL) + (packed.text != NULL) != 1)
         return cli_usage_error(command, "give the specular colour once: --specular MAP or --specular-glossiness SG");
     if ((glossiness.text != NULL) + (roughness.text != NULL) + (packed.text != NULL) != 1)
         return cli_usage_error(command, "give exactly one of --glossiness, --roughness and --specular-glossiness");
-    int code = check_prefix(command, &o, all, 5);
-    if (code != CLI_EXIT_OK) return code;
-    static const char *const names[] = {"basecolor", "metallic", "roughness"};
-    static const char *const packed_names[] = {"basecolor", "metallicRoughness"};
-    output outputs[MAX_OUTPUTS];
-    memset(outputs, 0, sizeof outputs);
-    int output_count = o.pack ? 2 : 3;
-    code = plan_outputs(command, &o, all, 5, o.pack ? packed_names : names, outputs, output_count);
-    if (code != CLI_EXIT_OK) return code;
-
-    // Read.
-    double started = cli_now(), seconds[3] = {0.0, 0.0, 0.0};
-    int width = 1, height = 1;
-    mr_mlp *net = NULL;
-    char net_path[PATH_MAX + 64] = "";
-    float *in_diffuse = NULL, *in_specular = NULL, *in_rough = NULL, *alpha = NULL;
-    float *albedo = NULL, *metallic = NULL, *out_rough = NULL;
-    const int input_tolerances = !use_mlp && !eps_given; // tolerances from the inputs' quantisation
-    uint8_t *flags = NULL;
-    if (use_mlp) code = cli_load_network(command, weights, &net, net_path, sizeof net_path);
-    if (code == CLI_EXIT_OK) code = read_maps(command, all, 5, &width, &height);
-    size_t n = (size_t)width * (size_t)height;
-    int failed = 0;
-    if (code == CLI_EXIT_OK) {
-        in_diffuse = malloc(3 * n * sizeof(float));
-        in_specular = malloc(3 * n * sizeof(float));
-        in_rough = malloc(n * sizeof(float));
-        albedo = malloc(3 * n * sizeof(float));
-        metallic = malloc(n * sizeof(float));
-        out_rough = malloc(n * sizeof(float));
-        flags = malloc(n);
-        alpha = take_alpha(&diffuse, n, &failed);
-        failed |= !in_diffuse || !in_specular || !in_rough || !albedo || !metallic || !out_rough || !flags;
-
-        if (failed) {
-            fprintf(stderr, "matremap %s: error: out of memory for %dx%d texels\n", command, width, height);
-            code = CLI_EXIT_INTERNAL;
-        }
-    }
-    if (code == CLI_EXIT_OK) {
-        const map_arg *spec_map = packed.text != NULL ? &packed : &specular;
-        fill_rgb(&diffuse, n, in_diffuse);
-        fill_rgb(spec_map, n, in_specular);
-        if (packed.text != NULL)
-            fill_channel(&packed, 3, n, in_rough);
-        else
-            fill_channel(roughness.text ? &roughness : &glossiness, 0, n, in_rough);
-        // glossiness -> roughness; NaN and infinities stay non-finite, which the library reads as roughness 1
-        // (flagged): a non-finite glossiness converts as glossiness 0.
-        if (roughness.text == NULL)
-            for (size_t i = 0; i < n; i++) in_rough[i] = 1.0f - in_rough[i];
-        if (input_tolerances) {
-            wf.diffuse_quantisation = cli_quantisation(is_file(&diffuse) ? &diffuse.stored : NULL, NULL);
-            wf.specular_quantisation = cli_quantisation(is_file(spec_map) ? &spec_map->stored : NULL, NULL);
-        }
-        free_maps(all, 5);
-    }
-    seconds[0] = cli_now() - started;
-
-    // Convert.
-    started = cli_now();
-    if (code == CLI_EXIT_OK) {
-        mr_wf_spec_maps in = {in_diffuse, in_specular, in_rough};
-        mr_wf_metal_maps out = {albedo, metallic, out_rough};
-        mr_status status = use_mlp ? mr_wf_spec_to_metal_mlp_batch(net, &in, n, &wf, &out, flags)
-                                   : mr_wf_spec_to_metal_batch(&in, n, &wf, &out, flags);
-        if (status != MR_OK) code = cli_fail(command, status);
-    }
-    seconds[1] = cli_now() - started;
-
-    // Write.
-    started = cli_now();
-    if (code == CLI_EXIT_OK && o.prefix != NULL) {
-        mr_status status = MR_OK;
-        plane colour[4] = {{albedo, 3, 0}, {albedo, 3, 1}, {albedo, 3, 2}, {alpha, 1, 0}};
-        status = compose(width, height, alpha ? 4 : 3, colour, 1.0f, &outputs[0].image);
-        outputs[0].encoding = MR_IMG_COLOR;
-        if (status == MR_OK && o.pack) {
-            plane mr[3] = {{NULL, 1, 0}, {out_rough, 1, 0}, {metallic, 1, 0}};
-            status = compose(width, height, 3, mr, 0.0f, &outputs[1].image);
-            outputs[1].encoding = MR_IMG_DATA;
-        } else if (status == MR_OK) {
-            plane m[1] = {{metallic, 1, 0}}, r[1] = {{out_rough, 1, 0}};
-            status = compose(width, height, 1, m, 0.0f, &outputs[1].image);
-            if (status == MR_OK) status = compose(width, height, 1, r, 0.0f, &outputs[2].image);
-            outputs[1].encoding = outputs[2].encoding = MR_IMG_DATA;
-        }
-        code = status != MR_OK ? cli_fail(command, status)
-                               : write_outputs(command, &o, outputs, output_count, width, height, flags);
-    }
-    seconds[2] = cli_now() - started;
-
-    if (code == CLI_EXIT_OK) {
-        summary s = {command, use_mlp ? "mlp" : mr_wf_method_name(wf.method), use_mlp ? net_path : NULL,
-                     wf.method == MR_WF_KHRONOS && !use_mlp ? NULL : mr_wf_diffuse_name(wf.spec_diffuse),
-                     use_mlp ? -1.0 : wf.dielectric_f0, !use_mlp, width, height,
-                     {seconds[0], seconds[1], seconds[2]}, flags,
-                     {{"basecolor", albedo, 3}, {"metallic", metallic, 1}, {"roughness", out_rough, 1}},
-                     input_tolerances, eps};
-        print_summary(&s, &o, outputs, output_count);
-    }
-    free_outputs(outputs, MAX_OUTPUTS);
-    free_maps(all, 5);
-    mr_mlp_free(net);
-
-    free(in_diffuse);
-    free(in_specular);
-    free(in_rough);
-    free(alpha);
-    free(albedo);
-    free(metallic);
-    free(out_rough);
-    free(flags);
-    return code;
+    // The gltf-specgloss -> gltf transforms; --convention paper reads the diffuse as Eq. 2 prints it.
+    conversion cv = {command, "gltf-specgloss", "gltf", all, 5,
+                     {{0, -1, 0}, {packed.text ? 4 : 1, -1, 0},
+                      packed.text ? (slot_source){4, 3, 0} : glossiness.text ? (slot_source){2, 0, 0}
+                                                                             : (slot_source){3, 0, 1}},
+                     metal_layouts, 3, metal_packed, 2};
+    return run_conversion(&cv, &m, &o, weights, eps, eps_given);
 }
 
 /* ---- metal2spec --------------------------------------------------------------------------------------------- */
@@ -992,6 +987,17 @@ static void print_metal2spec_help(void) {
            "  metal2spec --basecolor 0.9,0.6,0.2 --metallic 1 --roughness 0.3\n");
 }
 
+static const output_layout spec_layouts[] = {
+    {"diffuse", MR_IMG_COLOR, 4, {0, 0, 0, LAYOUT_ALPHA}, {0, 1, 2, 0}},
+    {"specular", MR_IMG_COLOR, 3, {1, 1, 1}, {0, 1, 2}},
+    {"glossiness", MR_IMG_DATA, 1, {2}, {0}},
+};
+static const output_layout spec_packed[] = {
+    {"diffuse", MR_IMG_COLOR, 4, {0, 0, 0, LAYOUT_ALPHA}, {0, 1, 2, 0}},
+    // RGB specular sRGB-encoded, A glossiness linear: what image_io does for a colour image with alpha.
+    {"specularGlossiness", MR_IMG_COLOR, 4, {1, 1, 1, 2}, {0, 1, 2, 0}},
+};
+
 int cmd_metal2spec(int argc, char **argv) {
     const char *command = "metal2spec";
     map_arg basecolor = map_colour("--basecolor");
@@ -1010,115 +1016,12 @@ int cmd_metal2spec(int argc, char **argv) {
         if (taken < 0) return CLI_EXIT_USAGE;
         if (!taken) return unknown_argument(command, argv[i], "--basecolor B.png");
     }
-    const char *method_name = m.name;
-    const double f0 = m.f0;
-    mr_wf_options wf = mr_wf_options_default(); // metal -> spec is Eq. 2 for every method but KHRONOS
-    wf.threads = o.threads;
-    wf.dielectric_f0 = f0;
-    wf.spec_diffuse = m.convention;
-    if (strcmp(method_name, "khronos") == 0)
-        wf.method = MR_WF_KHRONOS;
-    else if (strcmp(method_name, "eq2") != 0)
-        return cli_usage_error(command, "--method '%s': unknown method (valid: eq2, khronos)", method_name);
-    if (mr_wf_options_check(&wf) != MR_OK)
-        return cli_usage_error(command, "--f0 %g with --method %s: %s", f0, method_name, mr_last_error());
     if (basecolor.text == NULL) return cli_usage_error(command, "missing --basecolor MAP");
     if (packed.text != NULL ? (metallic.text || roughness.text) : (!metallic.text || !roughness.text))
         return cli_usage_error(command, "give --metallic MAP and --roughness MAP, or --metallic-roughness MR");
-    int code = check_prefix(command, &o, all, 4);
-    if (code != CLI_EXIT_OK) return code;
-    static const char *const names[] = {"diffuse", "specular", "glossiness"};
-    static const char *const packed_names[] = {"diffuse", "specularGlossiness"};
-    output outputs[MAX_OUTPUTS];
-    memset(outputs, 0, sizeof outputs);
-    int output_count = o.pack ? 2 : 3;
-    code = plan_outputs(command, &o, all, 4, o.pack ? packed_names : names, outputs, output_count);
-    if (code != CLI_EXIT_OK) return code;
-
-    // Read.
-    double started = cli_now(), seconds[3] = {0.0, 0.0, 0.0};
-    int width = 1, height = 1;
-    float *in_albedo = NULL, *in_metallic = NULL, *in_rough = NULL, *alpha = NULL;
-    float *diffuse = NULL, *specular = NULL, *glossiness = NULL;
-    uint8_t *flags = NULL;
-    code = read_maps(command, all, 4, &width, &height);
-    size_t n = (size_t)width * (size_t)height;
-    int failed = 0;
-    if (code == CLI_EXIT_OK) {
-        in_albedo = malloc(3 * n * sizeof(float));
-        in_metallic = malloc(n * sizeof(float));
-        in_rough = malloc(n * sizeof(float));
-        diffuse = malloc(3 * n * sizeof(float));
-        specular = malloc(3 * n * sizeof(float));
-        glossiness = malloc(n * sizeof(float));
-        flags = malloc(n);
-        alpha = take_alpha(&basecolor, n, &failed);
-        failed |= !in_albedo || !in_metallic || !in_rough || !diffuse || !specular || !glossiness || !flags;
-        if (failed) {
-            fprintf(stderr, "matremap %s: error: out of memory for %dx%d texels\n", command, width, height);
-            code = CLI_EXIT_INTERNAL;
-        }
-    }
-    if (code == CLI_EXIT_OK) {
-        fill_rgb(&basecolor, n, in_albedo);
-        fill_channel(packed.text ? &packed : &metallic, packed.text ? 2 : 0, n, in_metallic);
-        fill_channel(packed.text ? &packed : &roughness, packed.text ? 1 : 0, n, in_rough);
-        free_maps(all, 4);
-    }
-    seconds[0] = cli_now() - started;
-
-    // Convert: the roughness comes back sanitised in `glossiness` and is turned into glossiness there.
-    started = cli_now();
-    if (code == CLI_EXIT_OK) {
-        mr_wf_metal_maps in = {in_albedo, in_metallic, in_rough};
-        mr_wf_spec_maps out = {diffuse, specular, glossiness};
-        mr_status status = mr_wf_metal_to_spec_batch(&in, n, &wf, &out, flags);
-        if (status != MR_OK) code = cli_fail(command, status);
-        for (size_t i = 0; code == CLI_EXIT_OK && i < n; i++) glossiness[i] = 1.0f - glossiness[i];
-    }
-    seconds[1] = cli_now() - started;
-
-    // Write.
-    started = cli_now();
-    if (code == CLI_EXIT_OK && o.prefix != NULL) {
-        plane colour[4] = {{diffuse, 3, 0}, {diffuse, 3, 1}, {diffuse, 3, 2}, {alpha, 1, 0}};
-        mr_status status = compose(width, height, alpha ? 4 : 3, colour, 1.0f, &outputs[0].image);
-        outputs[0].encoding = MR_IMG_COLOR;
-        if (status == MR_OK && o.pack) {
-            // RGB sRGB-encoded, A linear: what image_io does for a colour image with alpha.
-            plane sg[4] = {{specular, 3, 0}, {specular, 3, 1}, {specular, 3, 2}, {glossiness, 1, 0}};
-            status = compose(width, height, 4, sg, 0.0f, &outputs[1].image);
-            outputs[1].encoding = MR_IMG_COLOR;
-        } else if (status == MR_OK) {
-            plane s[3] = {{specular, 3, 0}, {specular, 3, 1}, {specular, 3, 2}}, g[1] = {{glossiness, 1, 0}};
-            status = compose(width, height, 3, s, 0.0f, &outputs[1].image);
-            if (status == MR_OK) status = compose(width, height, 1, g, 0.0f, &outputs[2].image);
-            outputs[1].encoding = MR_IMG_COLOR;
-            outputs[2].encoding = MR_IMG_DATA;
-        }
-        code = status != MR_OK ? cli_fail(command, status)
-                               : write_outputs(command, &o, outputs, output_count, width, height, flags);
-    }
-    seconds[2] = cli_now() - started;
-
-    if (code == CLI_EXIT_OK) {
-        int specgloss = wf.method != MR_WF_KHRONOS && wf.spec_diffuse == MR_WF_DIFFUSE_SPECGLOSS;
-        summary s = {command, wf.method == MR_WF_KHRONOS ? "khronos" : "eq2", NULL,
-                     wf.method == MR_WF_KHRONOS ? NULL : mr_wf_diffuse_name(wf.spec_diffuse), wf.dielectric_f0,
-                     specgloss, width,
-                     height, {seconds[0], seconds[1], seconds[2]}, flags,
-                     {{"diffuse", diffuse, 3}, {"specular", specular, 3}, {"glossiness", glossiness, 1}}, 0, 0.0};
-        print_summary(&s, &o, outputs, output_count);
-    }
-    free_outputs(outputs, MAX_OUTPUTS);
-    free_maps(all, 4);
-    free(in_albedo);
-    free(in_metallic);
-    free(in_rough);
-    free(alpha);
-    free(diffuse);
-    free(specular);
-    free(glossiness);
-    free(flags);
-    return code;
+    conversion cv = {command, "gltf", "gltf-specgloss", all, 4,
+                     {{0, -1, 0}, packed.text ? (slot_source){3, 2, 0} : (slot_source){1, 0, 0},
+                      packed.text ? (slot_source){3, 1, 0} : (slot_source){2, 0, 0}},
+                     spec_layouts, 3, spec_packed, 2};
+    return run_conversion(&cv, &m, &o, NULL, 0.0, 0);
 }

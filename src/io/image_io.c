@@ -288,6 +288,15 @@ static void *quantised_copy(const mr_image *image, int bits, int srgb) {
     const double scale = bits == 16 ? 65535.0 : 255.0;
     void *buffer = malloc(n * (bits == 16 ? 2u : 1u));
     if (buffer == NULL) return NULL;
+    if (bits == 8 && srgb) { // the common case (colour textures) by table: no pow per value
+        mr_srgb8_init();
+        uint8_t *out = buffer;
+        for (size_t i = 0; i < n; i++) {
+            int is_alpha = has_alpha && (int)(i % (size_t)ch) == 3;
+            out[i] = is_alpha ? (uint8_t)quantise(image->pixels[i], 0, scale) : mr_srgb8_encode(image->pixels[i]);
+        }
+        return buffer;
+    }
     for (size_t i = 0; i < n; i++) {
         int is_alpha = has_alpha && (int)(i % (size_t)ch) == 3;
         unsigned q = quantise(image->pixels[i], srgb && !is_alpha, scale);

@@ -57,6 +57,12 @@ void mr_atomic_abort(mr_atomic_file *file);
 /* mr_srgb_to_linear in double, not rounded to float (mr_img_half_step's differences of decodes need it). */
 double mr_srgb_decode_double(double encoded);
 
+/* The 8-bit sRGB code the image writer stores for a linear value (clamped to [0, 1], NaN -> 0): exactly
+ * floor(clamp(mr_linear_to_srgb(v)) * 255 + 0.5), by table (srgb.c). Call mr_srgb8_init() once before (thread-safe,
+ * idempotent). */
+void mr_srgb8_init(void);
+unsigned char mr_srgb8_encode(float linear);
+
 /* ---- decoding through OpenImageIO (image_io_oiio.cpp) ----------------------------------------------- */
 
 /* What the shim hands back: the first subimage's data window as interleaved floats with the stored
@@ -119,6 +125,11 @@ typedef struct mr_io_png_settings {
  * sRGB, gAMA and cHRM chunks. Errors name `path`. */
 mr_status mr_io_png_write(const char *path, int width, int height, int channels, int bits, const void *data,
                           int srgb_tag, const mr_io_png_settings *settings);
+
+/* The same encoding into memory: *bytes (malloc'ed, the caller frees it) and *size; `name` names the image in
+ * errors. */
+mr_status mr_io_png_encode(const char *name, int width, int height, int channels, int bits, const void *data,
+                           int srgb_tag, const mr_io_png_settings *settings, unsigned char **bytes, size_t *size);
 
 /* ---- EXR through OpenEXR Core (exr_write.c) ---------------------------------------------------------- */
 

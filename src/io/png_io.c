@@ -172,8 +172,8 @@ static void buffer_write(png_structp png, png_bytep data, size_t length) {
 
 static void buffer_flush(png_structp png) { (void)png; }
 
-mr_status mr_io_png_write(const char *path, int width, int height, int channels, int bits, const void *data,
-                          int srgb_tag, const mr_io_png_settings *settings) {
+mr_status mr_io_png_encode(const char *path, int width, int height, int channels, int bits, const void *data,
+                           int srgb_tag, const mr_io_png_settings *settings, unsigned char **bytes, size_t *size) {
     static const int color_types[5] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA, PNG_COLOR_TYPE_RGB,
                                        PNG_COLOR_TYPE_RGB_ALPHA};
     if (width < 1 || height < 1 || channels < 1 || channels > 4 || (bits != 8 && bits != 16) || data == NULL)
@@ -212,8 +212,18 @@ mr_status mr_io_png_write(const char *path, int width, int height, int channels,
     png_write_end(png, NULL);
     png_destroy_write_struct(&png, &info);
     free(rows);
-    mr_status status = mr_atomic_write_bytes(path, session->data, session->size);
-    free(session->data);
+    *bytes = session->data;
+    *size = session->size;
     free(session);
+    return MR_OK;
+}
+
+mr_status mr_io_png_write(const char *path, int width, int height, int channels, int bits, const void *data,
+                          int srgb_tag, const mr_io_png_settings *settings) {
+    unsigned char *bytes = NULL;
+    size_t size = 0;
+    mr_status status = mr_io_png_encode(path, width, height, channels, bits, data, srgb_tag, settings, &bytes, &size);
+    if (status == MR_OK) status = mr_atomic_write_bytes(path, bytes, size);
+    free(bytes);
     return status;
 }

@@ -112,18 +112,17 @@ mr_status mr_transform_create(const mr_transform_kind *kind, const mr_transform_
     t->kind = kind;
     mr_status status = MR_OK;
     if ((kind->flags & MR_TRANSFORM_NEEDS_NETWORK) && o.network == NULL) {
+        // $MATREMAP_WEIGHTS, else the installed network.
         const char *env = getenv("MATREMAP_WEIGHTS");
         if (env != NULL && env[0] != '\0') {
-            if (strlen(env) >= sizeof t->network_path)
-                status = mr_fail(MR_ERR_INVALID_ARG, "MATREMAP_WEIGHTS: path too long");
-            else
-                memcpy(t->network_path, env, strlen(env) + 1);
+            snprintf(t->network_path, sizeof t->network_path, "%s", env);
+            status = mr_mlp_read(t->network_path, &t->owned_network);
+            if (status != MR_OK) mr_fail_context(status, "transform %s: the network given by MATREMAP_WEIGHTS", name);
         } else {
             status = mr_data_path(NETWORK_FILE, t->network_path, sizeof t->network_path);
-            if (status != MR_OK)
-                mr_fail_context(status, "transform %s: no network (give one, or set MATREMAP_WEIGHTS)", name);
+            if (status != MR_OK) mr_fail_context(status, "transform %s: no network", name);
+            if (status == MR_OK) status = mr_mlp_read(t->network_path, &t->owned_network); // its errors name the file
         }
-        if (status == MR_OK) status = mr_mlp_read(t->network_path, &t->owned_network); // its errors name the file
         o.network = t->owned_network;
     }
     t->opts = o;

@@ -16,8 +16,8 @@
  * Planes. A transform reads and writes planes of floats, one per slot: a slot is one parameter of the source
  * (inputs) or target (outputs) model of src/brdf, named as the model names it, with its channel count; a 3-channel
  * plane is RGB interleaved (3n floats). An optional input slot may be NULL: the model's default value is used. An
- * output plane may be NULL when the caller does not want it. Every kind clamps inputs outside a slot's domain [min, max]
- * and reads NaN and infinities as the slot's `nonfinite` value, flagging both. Input and output planes may
+ * output plane may be NULL when the caller does not want it. Every kind clamps inputs outside a slot's domain
+ * [min, max] and reads NaN and infinities as the slot's `nonfinite` value, flagging both. Input and output planes may
  * be the same arrays (in-place conversion is allowed when the channel counts match).
  *
  * Flags: mr_wf_flag bits per texel (workflow.h: CLAMPED_INPUT, NONFINITE_INPUT, OFF_MANIFOLD, METHOD_FAILED).
@@ -65,10 +65,11 @@ typedef struct mr_transform_slot {
 
 /* Bit flags of mr_transform_kind.flags. */
 enum {
-    MR_TRANSFORM_PER_TEXEL = 1,     /* outputs depend on the same texel's inputs only (repeated values evaluated once) */
+    MR_TRANSFORM_PER_TEXEL = 1,     /* outputs depend on the same texel's inputs only (repeats evaluated once) */
     MR_TRANSFORM_NEEDS_NETWORK = 2, /* create needs mr_transform_options.network (or the installed default) */
     MR_TRANSFORM_TOLERANCES = 4,    /* OFF_MANIFOLD is computed, with mr_transform_batch.stored tolerances */
-    MR_TRANSFORM_USES_F0 = 8        /* mr_transform_options.dielectric_f0 applies */
+    MR_TRANSFORM_USES_F0 = 8,       /* mr_transform_options.dielectric_f0 applies */
+    MR_TRANSFORM_CONVENTION = 16    /* mr_transform_options.plain_diffuse applies (how a spec-gloss diffuse is read) */
 };
 
 typedef struct mr_transform mr_transform;
@@ -84,6 +85,9 @@ typedef struct mr_transform_options {
                                        installed network (mr_wf_network_path) loaded and owned by the transform */
     int threads;                    /* 0 = automatic (a team only for large batches); n >= 1: n. Results do not
                                        depend on it */
+    int plain_diffuse;              /* glTF-pair workflow kinds but Khronos: read the spec-gloss diffuse as the
+                                       Lambert lobe itself, Eq. 2 as printed (MR_WF_DIFFUSE_PLAIN), not as glTF's
+                                       d (1 - max s); default 0 */
 } mr_transform_options;
 
 /* One call's planes. in[i] / out[j] follow kind->inputs[] / kind->outputs[]. */

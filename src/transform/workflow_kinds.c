@@ -59,7 +59,7 @@ static mr_wf_options workflow_options(const mr_transform *t, const mr_transform_
     const mr_transform_options *o = mr_transform_options_of(t);
     mr_wf_options w = mr_wf_options_default();
     w.method = config->method;
-    w.spec_diffuse = config->diffuse;
+    w.spec_diffuse = o->plain_diffuse ? MR_WF_DIFFUSE_PLAIN : config->diffuse;
     w.dielectric_f0 = o->dielectric_f0;
     w.eps = o->eps;
     w.threads = b->threads > 0 ? b->threads : o->threads;
@@ -72,7 +72,7 @@ static mr_status workflow_create(const mr_transform_kind *kind, const mr_transfo
     const workflow_config *config = kind->config;
     mr_wf_options w = mr_wf_options_default();
     w.method = config->method;
-    w.spec_diffuse = config->diffuse;
+    w.spec_diffuse = opts->plain_diffuse ? MR_WF_DIFFUSE_PLAIN : config->diffuse;
     w.dielectric_f0 = opts->dielectric_f0;
     w.eps = opts->eps;
     mr_status status = mr_wf_options_check(&w);
@@ -156,16 +156,18 @@ static mr_status extension_apply(const mr_transform *t, const mr_transform_batch
 
 #define ANALYTIC (MR_TRANSFORM_PER_TEXEL | MR_TRANSFORM_TOLERANCES | MR_TRANSFORM_USES_F0)
 #define CLOSED_FORM (MR_TRANSFORM_PER_TEXEL | MR_TRANSFORM_USES_F0)
+#define GLTF_CONVENTION MR_TRANSFORM_CONVENTION /* glTF-pair kinds that read the diffuse (Khronos has its own) */
 
 KIND(mr_transform_spec2metal_weighted, "weighted",
      "Eq. 3 per channel, the albedo-weighted mean metallic (paper section 8, strategy 2)", "gltf-specgloss", "gltf",
-     gltf_spec_in, gltf_metal_out, ANALYTIC, spec_to_metal_apply, 1, MR_WF_WEIGHTED, MR_WF_DIFFUSE_SPECGLOSS, 0, 1);
-KIND(mr_transform_spec2metal_mlp, "mlp", "the learned network (data/spec2metal.mlp, docs/training.md)",
-     "gltf-specgloss", "gltf", gltf_spec_in, gltf_metal_out, MR_TRANSFORM_NEEDS_NETWORK, spec_to_metal_apply, 1,
-     MR_WF_WEIGHTED, MR_WF_DIFFUSE_SPECGLOSS, 1, 1);
-KIND(mr_transform_spec2metal_mean, "mean", "Eq. 3 per channel, the mean metallic (paper section 8, strategy 1)",
-     "gltf-specgloss", "gltf", gltf_spec_in, gltf_metal_out, ANALYTIC, spec_to_metal_apply, 1, MR_WF_MEAN,
+     gltf_spec_in, gltf_metal_out, ANALYTIC | GLTF_CONVENTION, spec_to_metal_apply, 1, MR_WF_WEIGHTED,
      MR_WF_DIFFUSE_SPECGLOSS, 0, 1);
+KIND(mr_transform_spec2metal_mlp, "mlp", "the learned network (data/spec2metal.mlp, docs/training.md)",
+     "gltf-specgloss", "gltf", gltf_spec_in, gltf_metal_out, MR_TRANSFORM_NEEDS_NETWORK | GLTF_CONVENTION,
+     spec_to_metal_apply, 1, MR_WF_WEIGHTED, MR_WF_DIFFUSE_SPECGLOSS, 1, 1);
+KIND(mr_transform_spec2metal_mean, "mean", "Eq. 3 per channel, the mean metallic (paper section 8, strategy 1)",
+     "gltf-specgloss", "gltf", gltf_spec_in, gltf_metal_out, ANALYTIC | GLTF_CONVENTION, spec_to_metal_apply, 1,
+     MR_WF_MEAN, MR_WF_DIFFUSE_SPECGLOSS, 0, 1);
 KIND(mr_transform_spec2metal_khronos, "khronos",
      "the glTF project's converter (three.pbrUtilities.js): perceived brightness, F0 0.04", "gltf-specgloss", "gltf",
      gltf_spec_in, gltf_metal_out, ANALYTIC, spec_to_metal_apply, 1, MR_WF_KHRONOS, MR_WF_DIFFUSE_SPECGLOSS, 0, 1);
@@ -174,7 +176,8 @@ KIND(mr_transform_spec2metal_extension, "extension",
      "gltf-specgloss", "gltf", gltf_spec_in, extension_out, MR_TRANSFORM_PER_TEXEL, extension_apply, 1,
      MR_WF_WEIGHTED, MR_WF_DIFFUSE_SPECGLOSS, 0, 1);
 KIND(mr_transform_metal2spec_eq2, "eq2", "paper Eq. 2, exact", "gltf", "gltf-specgloss", gltf_metal_in,
-     gltf_spec_out, CLOSED_FORM, metal_to_spec_apply, 0, MR_WF_WEIGHTED, MR_WF_DIFFUSE_SPECGLOSS, 0, 1);
+     gltf_spec_out, CLOSED_FORM | GLTF_CONVENTION, metal_to_spec_apply, 0, MR_WF_WEIGHTED, MR_WF_DIFFUSE_SPECGLOSS,
+     0, 1);
 KIND(mr_transform_metal2spec_khronos, "khronos", "the glTF project's converter (three.pbrUtilities.js), F0 0.04",
      "gltf", "gltf-specgloss", gltf_metal_in, gltf_spec_out, CLOSED_FORM, metal_to_spec_apply, 0, MR_WF_KHRONOS,
      MR_WF_DIFFUSE_SPECGLOSS, 0, 1);

@@ -850,3 +850,12 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
     mlp_block_free(&b);
     return status;
 }
+
+mr_wf_quantisation mr_wf_quantisation_of(const mr_img_stored *stored, const double *scale) {
+    mr_wf_quantisation q = {0, 0, {1.0, 1.0, 1.0}};
+    if (stored == NULL || stored->bits == 0) return q;
+    q.bits = stored->bits;
+    q.srgb = stored->encoding == MR_IMG_COLOR;
+    for (int c = 0; scale != NULL && c < 3; c++) q.scale[c] = scale[c];
+    return q;
+}

@@ -197,6 +197,11 @@ typedef struct mr_wf_quantisation {
                         (glTF's factors), default 1; a value of channel c is known to scale[c] times half a code */
 } mr_wf_quantisation;
 
+struct mr_img_stored;
+/* How a map was stored as mr_img_read_stored says (*stored; NULL: a constant, exact), times scale[c] (glTF's factors;
+ * NULL: 1, 1, 1): the 8/16-bit codes of a file (sRGB or linear), or exact (bits 0) for float files and constants. */
+mr_wf_quantisation mr_wf_quantisation_of(const struct mr_img_stored *stored, const double *scale);
+
 struct mr_wf_options;
 
 /* A caller-supplied spec -> metal converter for MR_WF_CUSTOM (the slot for nn/'s MLP). It gets the sanitised

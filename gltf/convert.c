@@ -1,0 +1,731 @@
+/*
+ * convert.c — a glTF asset's materials converted between the PBR workflows through a transform (contract in
+ * mr_gltf_convert.h). Per material: read the source textures, then, band of rows by band of rows, factors x texels
+ * into the transform's input planes, the transform, and its outputs packed into the target's 8-bit textures; the
+ * textures encoded in memory (PNG) and added to the asset.
+ */
+#include "gltf/mr_gltf_convert.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "io/io_internal.h"
+#include "mr_internal.h"
+
+/* Texels per band: the band's planes (about 20 floats a texel) stay within a few MB. */
+#define BAND_TEXELS 131072
+
+/* Where an input plane comes from: channels [first, first + count) of source texture `texture` (0 or 1), times
+ * factors; a missing texture reads 1 (and a missing alpha channel 1). */
+typedef struct input_source {
+    int texture, first, count;
+} input_source;
+
+/* One workflow side as glTF stores it. */
+typedef struct workflow_side {
+    const char *model;               /* the transform's model name */
+    const char *texture_names[2];    /* new images' names */
+    mr_img_encoding encodings[2];    /* how the two textures are read and written */
+    input_source inputs[3];          /* the model's three slots, in the transform's order */
+    const char *slots[2][4];         /* per texture, per channel: the slot written there; "" = 0, "alpha" */
+} workflow_side;
+
+static const workflow_side specgloss_side = {
+    "gltf-specgloss",
+    {"diffuse", "specularGlossiness"},
+    {MR_IMG_COLOR, MR_IMG_COLOR},
+    {{0, 0, 3}, {1, 0, 3}, {1, 3, 1}},
+    {{"diffuse", "diffuse", "diffuse", "alpha"}, {"specular", "specular", "specular", "glossiness"}},
+};
+
+static const workflow_side metalrough_side = {
+    "gltf",
+    {"basecolor", "metallicRoughness"},
+    {MR_IMG_COLOR, MR_IMG_DATA},
+    {{0, 0, 3}, {1, 2, 1}, {1, 1, 1}},
+    {{"base_color", "base_color", "base_color", "alpha"}, {"", "roughness", "metallic", NULL}},
+};
+
+/* A material's sources: the two textures and the factors of the three inputs and alpha. */
+typedef struct sources {
+    mr_gltf_texture_ref refs[2];
+    double factors[3][3]; /* per input, per channel */
+    double alpha_factor;
+    int images[2];        /* image indices, -1 = none (with the samplers and mapping: what decides that two
+                             materials share a conversion) */
+    int samplers[2];      /* sampler indices, -1 = none */
+    mr_gltf_sampler sampler_params[2];
+} sources;
+
+static void sources_of(const mr_gltf_material *m, int to_metal, sources *s) {
+    memset(s, 0, sizeof *s);
+    if (to_metal) {
+        s->refs[0] = m->diffuse_texture;
+        s->refs[1] = m->specular_glossiness_texture;
+        for (int c = 0; c < 3; c++) {
+            s->factors[0][c] = m->diffuse_factor[c];
+            s->factors[1][c] = m->specular_factor[c];
+        }
+        s->factors[2][0] = m->glossiness_factor;
+        s->alpha_factor = m->diffuse_factor[3];
+    } else {
+        s->refs[0] = m->base_color_texture;
+        s->refs[1] = m->metallic_roughness_texture;
+        for (int c = 0; c < 3; c++) s->factors[0][c] = m->base_color_factor[c];
+        s->factors[1][0] = m->metallic_factor;
+        s->factors[2][0] = m->roughness_factor;
+        s->alpha_factor = m->base_color_factor[3];
+    }
+}
+
+/* The textures a conversion made, for materials with the same sources. */
+typedef struct made {
+    sources key;
+    int textures[2]; /* -1 = none made */
+    int has_alpha;
+    double values[3 * MR_TRANSFORM_MAX_SLOTS]; /* the outputs where they are one value: factors-only conversions
+                                                  (the one texel), and the slots of a uniform texture */
+    double alpha;                              /* the alpha of a uniform first texture */
+    mr_gltf_material_report report;
+} made;
+
+static int same_sources(const sources *a, const sources *b) {
+    if (a->images[0] != b->images[0] || a->images[1] != b->images[1] || a->alpha_factor != b->alpha_factor)
+        return 0;
+    for (int t = 0; t < 2; t++)
+        if ((a->samplers[t] < 0) != (b->samplers[t] < 0) ||
+            memcmp(&a->sampler_params[t], &b->sampler_params[t], sizeof a->sampler_params[t]) != 0)
+            return 0;
+    for (int i = 0; i < 3; i++)
+        for (int c = 0; c < 3; c++)
+            if (a->factors[i][c] != b->factors[i][c]) return 0;
+    for (int t = 0; t < 2; t++) {
+        const mr_gltf_texture_ref *x = &a->refs[t], *y = &b->refs[t];
+        if (x->tex_coord != y->tex_coord || x->has_transform != y->has_transform) return 0;
+        if (x->has_transform && (x->offset[0] != y->offset[0] || x->offset[1] != y->offset[1] ||
+                                 x->rotation != y->rotation || x->scale[0] != y->scale[0] ||
+                                 x->scale[1] != y->scale[1] || x->transform_tex_coord != y->transform_tex_coord))
+            return 0;
+    }
+    return 1;
+}
+
+/* Two texture references map texels to the surface the same way. */
+static int same_mapping(const mr_gltf_texture_ref *a, const mr_gltf_texture_ref *b) {
+    return a->tex_coord == b->tex_coord && a->has_transform == b->has_transform &&
+           (!a->has_transform || (a->offset[0] == b->offset[0] && a->offset[1] == b->offset[1] &&
+                                  a->rotation == b->rotation && a->scale[0] == b->scale[0] &&
+                                  a->scale[1] == b->scale[1] && a->transform_tex_coord == b->transform_tex_coord));
+}
+
+/* Channel c of `im` at texel (x, y) of a width x height grid, bilinear when the sizes differ (texel centres
+ * aligned, clamped at the edges); a grey image answers every colour channel, a missing alpha is 1. */
+static float sample(const mr_image *im, int c, int x, int y, int width, int height) {
+    if (c == 3 && im->channels != 4) return 1.0f;
+    int channel = im->channels < 3 ? 0 : c;
+    if (im->width == width && im->height == height) return mr_image_at(im, x, y)[channel];
+    double u = (x + 0.5) * im->width / width - 0.5, v = (y + 0.5) * im->height / height - 0.5;
+    int x0 = (int)floor(u), y0 = (int)floor(v);
+    double fx = u - x0, fy = v - y0;
+    int xa = x0 < 0 ? 0 : x0 >= im->width ? im->width - 1 : x0, xb = x0 + 1 >= im->width ? im->width - 1 : x0 + 1;
+    int ya = y0 < 0 ? 0 : y0 >= im->height ? im->height - 1 : y0, yb = y0 + 1 >= im->height ? im->height - 1 : y0 + 1;
+    double top = mr_image_at(im, xa, ya)[channel] * (1 - fx) + mr_image_at(im, xb, ya)[channel] * fx;
+    double bottom = mr_image_at(im, xa, yb)[channel] * (1 - fx) + mr_image_at(im, xb, yb)[channel] * fx;
+    return (float)(top * (1 - fy) + bottom * fy);
+}
+
+static double now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ---- one conversion ----------------------------------------------------------------------------------------- */
+
+typedef struct conversion {
+    mr_gltf *asset;
+    const mr_gltf_convert_options *opts;
+    const mr_transform_kind *kind;
+    const workflow_side *from, *to;
+    int material;
+    const char *name;
+} conversion;
+
+/* Where output slot `name` of the kind goes, or -1. */
+static int output_of(const mr_transform_kind *kind, const char *name) {
+    return name && name[0] && strcmp(name, "alpha") != 0 ? mr_transform_output_index(kind, name) : -1;
+}
+
+/* Does texture t of the target side hold a computed output (not a constant, not a copy of an input)? */
+static int texture_needed(const mr_transform_kind *kind, const workflow_side *to, int t) {
+    for (int c = 0; c < 4; c++) {
+        int j = output_of(kind, to->slots[t][c]);
+        if (j >= 0 && !(kind->outputs[j].flags & MR_SLOT_CONSTANT) && kind->outputs[j].copy_of < 0) return 1;
+    }
+    return 0;
+}
+
+/* The texel of output slot j's channel c for texel i of the band. */
+static float output_value(const mr_transform_kind *kind, const mr_transform_batch *b, int j, int c, size_t i) {
+    // A constant is its factor; the texel is 1 (0 for 0, so that the texture alone reads right too).
+    if (kind->outputs[j].flags & MR_SLOT_CONSTANT) return kind->outputs[j].value == 0.0 ? 0.0f : 1.0f;
+    return b->out[j][(size_t)kind->outputs[j].channels * i + (size_t)(kind->outputs[j].channels == 3 ? c : 0)];
+}
+
+static inline uint8_t linear8(float v) { return (uint8_t)floor(mr_clampd(v, 0.0, 1.0) * 255.0 + 0.5); }
+
+static void count_flags(mr_gltf_material_report *r, const uint8_t *flags, size_t n) {
+    for (size_t i = 0; i < n; i++) {
+        r->flagged += flags[i] != 0;
+        r->off_manifold += (flags[i] & MR_WF_OFF_MANIFOLD) != 0;
+        r->nonfinite += (flags[i] & MR_WF_NONFINITE_INPUT) != 0;
+        r->clamped += (flags[i] & MR_WF_CLAMPED_INPUT) != 0;
+        r->failed += (flags[i] & MR_WF_METHOD_FAILED) != 0;
+    }
+}
+
+/* A new texture, encoded: PNG bytes in memory, or an EXR in a temporary file. */
+typedef struct encoded_texture {
+    char uri[512];
+    unsigned char *bytes;
+    size_t size;
+    char path[1024]; /* "" for PNG */
+} encoded_texture;
+
+/* Encode texture t (PNG from 8-bit texels, or EXR from floats); touches nothing shared, so textures encode in
+ * parallel. */
+static mr_status encode_texture(const conversion *cv, int t, int width, int height, int channels,
+                                const uint8_t *bytes8, const float *floats, encoded_texture *e) {
+    const mr_gltf_convert_options *o = cv->opts;
+    snprintf(e->uri, sizeof e->uri, "%s_m%d_%s.%s", o->image_prefix ? o->image_prefix : "converted", cv->material,
+             cv->to->texture_names[t], floats ? "exr" : "png");
+    if (floats == NULL) {
+        const mr_io_png_settings settings = MR_IO_PNG_DEFAULT;
+        return mr_io_png_encode(e->uri, width, height, channels, 8, bytes8, cv->to->encodings[t] == MR_IMG_COLOR,
+                                &settings, &e->bytes, &e->size);
+    }
+    mr_image im = {width, height, channels, (float *)floats};
+    const char *dir = getenv("TMPDIR");
+    snprintf(e->path, sizeof e->path, "%s/matremap-%ld-%d-%d.exr", dir && dir[0] ? dir : "/tmp", (long)getpid(),
+             cv->material, t);
+    mr_img_write_options wo = {0};
+    wo.encoding = cv->to->encodings[t];
+    return mr_img_write(e->path, &im, &wo);
+}
+
+/* Add an encoded texture to the asset, with the sampler of texture `like` (-1: none); releases e's resources. */
+static mr_status add_texture(const conversion *cv, encoded_texture *e, int like, int *texture) {
+    int image = -1;
+    mr_status status = e->path[0] ? mr_gltf_add_image_file(cv->asset, e->path, e->uri, &image)
+                                  : mr_gltf_add_image_bytes(cv->asset, e->bytes, e->size, e->uri, &image);
+    mr_gltf_sampler sampler, *sampler_ptr = NULL;
+    mr_gltf_texture source;
+    if (like >= 0 && mr_gltf_get_texture(cv->asset, like, &source) == MR_OK && source.sampler >= 0) {
+        sampler = source.params;
+        sampler_ptr = &sampler;
+    }
+    if (status == MR_OK) status = mr_gltf_add_texture(cv->asset, image, sampler_ptr, texture);
+    if (status != MR_OK)
+        mr_fail_context(status, "glTF '%s': material %d '%s': new texture '%s'", mr_gltf_path(cv->asset), cv->material,
+                        cv->name, e->uri);
+    return status;
+}
+
+static void encoded_texture_release(encoded_texture *e) {
+    free(e->bytes);
+    e->bytes = NULL;
+    if (e->path[0]) remove(e->path);
+    e->path[0] = '\0';
+}
+
+/* What every band of one conversion shares. */
+typedef struct band_context {
+    const conversion *cv;
+    const sources *src;
+    mr_image *const *images;
+    const mr_img_stored *stored;
+    int width, height, band_rows;
+    const int *need, *channels;
+    void *const *texels;
+    int exr;
+    int values;       /* output channels, then alpha: what uniformity is tracked for */
+    float *firsts;    /* [band][values]: the band's first texel */
+    uint8_t *uniform; /* [band][values]: 1 when every texel of the band has its first texel's value */
+} band_context;
+
+/* One thread's planes for a band: alpha, then the transform's inputs and outputs. */
+typedef struct band_work {
+    float *planes;
+    uint8_t *flags;
+    mr_transform_batch batch;
+} band_work;
+
+static mr_status band_work_alloc(const mr_transform_kind *kind, size_t band, band_work *w) {
+    memset(w, 0, sizeof *w);
+    size_t floats = 1;
+    for (int i = 0; i < kind->input_count; i++) floats += (size_t)kind->inputs[i].channels;
+    for (int j = 0; j < kind->output_count; j++) floats += (size_t)kind->outputs[j].channels;
+    w->planes = malloc(band * floats * sizeof *w->planes);
+    w->flags = malloc(band);
+    if (w->planes == NULL || w->flags == NULL) return MR_ERR_NOMEM;
+    float *p = w->planes + band;
+    for (int i = 0; i < kind->input_count; i++) {
+        w->batch.in[i] = p;
+        p += band * (size_t)kind->inputs[i].channels;
+    }
+    for (int j = 0; j < kind->output_count; j++) {
+        w->batch.out[j] = p;
+        p += band * (size_t)kind->outputs[j].channels;
+    }
+    w->batch.flags = w->flags;
+    w->batch.threads = 1;
+    return MR_OK;
+}
+
+static void band_work_free(band_work *w) {
+    free(w->planes);
+    free(w->flags);
+}
+
+/* Texel (x, y) of a same-size image, channel c (a grey image answers every colour channel, a missing alpha 1). */
+static inline float texel_at(const mr_image *im, int c, size_t at) {
+    if (c == 3 && im->channels != 4) return 1.0f;
+    return im->pixels[at * (size_t)im->channels + (size_t)(im->channels < 3 ? 0 : c)];
+}
+
+/* Rows [y0, y0 + band_rows) of the grid: inputs, transform, packed outputs. */
+static mr_status convert_band(const band_context *ctx, int y0, band_work *w, mr_gltf_material_report *counts) {
+    const conversion *cv = ctx->cv;
+    const mr_transform_kind *kind = cv->kind;
+    const workflow_side *from = cv->from, *to = cv->to;
+    const int width = ctx->width, height = ctx->height;
+    const int rows = height - y0 < ctx->band_rows ? height - y0 : ctx->band_rows;
+    mr_transform_batch b = w->batch;
+    b.n = (size_t)rows * (size_t)width;
+    for (int i = 0; i < kind->input_count && !cv->opts->exact_inputs; i++) {
+        int tex = from->inputs[i].texture;
+        b.stored[i] = mr_wf_quantisation_of(ctx->images[tex] ? &ctx->stored[tex] : NULL, ctx->src->factors[i]);
+    }
+    // 1. Inputs: factors x texels, in linear values (glTF multiplies them so); the alpha plane first.
+    for (int i = -1; i < kind->input_count; i++) {
+        const input_source alpha_source = {0, 3, 1};
+        const input_source *in = i < 0 ? &alpha_source : &from->inputs[i];
+        const double *factors = i < 0 ? &ctx->src->alpha_factor : ctx->src->factors[i];
+        const mr_image *im = ctx->images[in->texture];
+        float *dst = i < 0 ? w->planes : (float *)b.in[i];
+        const int same = im != NULL && im->width == width && im->height == height;
+        for (int y = 0; y < rows; y++)
+            for (int x = 0; x < width; x++) {
+                const size_t at = (size_t)(y0 + y) * (size_t)width + (size_t)x;
+                for (int c = 0; c < in->count; c++) {
+                    float v = im == NULL ? 1.0f : same ? texel_at(im, in->first + c, at)
+                                                       : sample(im, in->first + c, x, y0 + y, width, height);
+                    *dst++ = (float)(v * factors[c]);
+                }
+            }
+    }
+    // 2. The transform.
+    mr_status status = mr_transform_apply(cv->opts->transform, &b);
+    if (status != MR_OK) return status;
+    count_flags(counts, b.flags, b.n);
+    // Uniformity (a texture whose texels are all one value becomes factors): per output channel and alpha.
+    float *first = ctx->firsts + (size_t)(y0 / ctx->band_rows) * (size_t)ctx->values;
+    uint8_t *uniform = ctx->uniform + (size_t)(y0 / ctx->band_rows) * (size_t)ctx->values;
+    for (int j = 0, v = 0; j <= kind->output_count; j++) {
+        const int ch = j < kind->output_count ? kind->outputs[j].channels : 1;
+        const float *plane = j < kind->output_count ? b.out[j] : w->planes;
+        for (int c = 0; c < ch; c++, v++) {
+            first[v] = plane[c];
+            uniform[v] = 1;
+            for (size_t i = 1; i < b.n && uniform[v]; i++)
+                uniform[v] = memcmp(&plane[(size_t)ch * i + (size_t)c], &first[v], sizeof first[v]) == 0;
+        }
+    }
+    // 3. Its outputs packed as glTF packs them.
+    for (int t = 0; t < 2; t++) {
+        if (!ctx->need[t]) continue;
+        const size_t ch = (size_t)ctx->channels[t], first = (size_t)y0 * (size_t)width * ch;
+        for (size_t c = 0; c < ch; c++) {
+            const char *slot = to->slots[t][c];
+            const int j = output_of(kind, slot), is_alpha = slot && strcmp(slot, "alpha") == 0;
+            const int colour = to->encodings[t] == MR_IMG_COLOR && c < 3;
+            for (size_t i = 0; i < b.n; i++) {
+                float v = is_alpha ? w->planes[i] : j >= 0 ? output_value(kind, &b, j, (int)c, i) : 0.0f;
+                if (ctx->exr)
+                    ((float *)ctx->texels[t])[first + ch * i + c] = v;
+                else
+                    ((uint8_t *)ctx->texels[t])[first + ch * i + c] = colour ? mr_srgb8_encode(v) : linear8(v);
+            }
+        }
+    }
+    return MR_OK;
+}
+
+/* Band by band: factors x texels into the input planes, the transform, its outputs into the target's textures
+ * (8-bit, or floats for EXR). images[t] NULL = no texture t. */
+static mr_status convert_texels(const conversion *cv, const sources *src, mr_image *const images[2],
+                                const mr_img_stored stored[2], int width, int height, made *mk) {
+    const mr_transform_kind *kind = cv->kind;
+    const workflow_side *to = cv->to;
+    const int exr = cv->opts->image_format != NULL && strcmp(cv->opts->image_format, "exr") == 0;
+    const size_t n = (size_t)width * (size_t)height;
+    // Alpha travels from the source's first texture to the target's (written only when some texel has it; bilinear
+    // resampling of alphas that are all 1 gives 1).
+    const mr_image *first = images[0];
+    mk->has_alpha = (float)src->alpha_factor != 1.0f;
+    for (size_t i = 0; first && first->channels == 4 && !mk->has_alpha && i < mr_image_value_count(first) / 4; i++)
+        mk->has_alpha = (float)(first->pixels[4 * i + 3] * src->alpha_factor) != 1.0f;
+    int need[2], channels[2];
+    void *texels[2] = {NULL, NULL};
+    mr_status status = MR_OK;
+    for (int t = 0; t < 2; t++) {
+        need[t] = texture_needed(kind, to, t);
+        channels[t] = to->slots[t][3] == NULL || (strcmp(to->slots[t][3], "alpha") == 0 && !mk->has_alpha) ? 3 : 4;
+        if (need[t] && (texels[t] = malloc(n * (size_t)channels[t] * (exr ? sizeof(float) : 1))) == NULL)
+            status = MR_ERR_NOMEM;
+    }
+    // Bands of rows, side by side: each thread its own planes; the transform runs on one thread per band.
+    const int band_rows = width >= BAND_TEXELS ? 1 : BAND_TEXELS / width;
+    const int bands = (height + band_rows - 1) / band_rows;
+    const int threads = mr_auto_threads(mr_transform_options_of(cv->opts->transform)->threads, (long)MR_MIN(n, 1u << 30),
+                                        MR_WF_PARALLEL_TEXELS);
+    const int team = MR_MIN(threads, bands);
+    char message[1024] = "";
+    band_context ctx = {cv, src, images, stored, width, height, band_rows, need, channels, texels, exr, 1, NULL, NULL};
+    for (int j = 0; j < kind->output_count; j++) ctx.values += kind->outputs[j].channels;
+    ctx.firsts = malloc((size_t)bands * (size_t)ctx.values * sizeof *ctx.firsts);
+    ctx.uniform = malloc((size_t)bands * (size_t)ctx.values);
+    if (ctx.firsts == NULL || ctx.uniform == NULL) status = MR_ERR_NOMEM;
+    if (status == MR_OK) mr_srgb8_init();
+#pragma omp parallel num_threads(team) if (team > 1)
+    {
+        band_work w;
+        mr_status mine = status == MR_OK ? band_work_alloc(cv->kind, (size_t)band_rows * (size_t)width, &w)
+                                         : MR_ERR_NOMEM;
+        mr_gltf_material_report counts;
+        memset(&counts, 0, sizeof counts);
+#pragma omp for schedule(dynamic, 1)
+        for (int k = 0; k < bands; k++)
+            if (mine == MR_OK) mine = convert_band(&ctx, k * band_rows, &w, &counts);
+        band_work_free(&w);
+#pragma omp critical(mr_gltf_convert_band)
+        {
+            mk->report.flagged += counts.flagged;
+            mk->report.off_manifold += counts.off_manifold;
+            mk->report.nonfinite += counts.nonfinite;
+            mk->report.clamped += counts.clamped;
+            mk->report.failed += counts.failed;
+            if (mine != MR_OK && status == MR_OK) {
+                status = mine;
+                snprintf(message, sizeof message, "%s", mine == MR_ERR_NOMEM ? "out of memory" : mr_last_error());
+            }
+        }
+    }
+    if (status == MR_ERR_NOMEM)
+        status = mr_fail(status, "glTF '%s': material %d '%s': out of memory for %dx%d texels", mr_gltf_path(cv->asset),
+                         cv->material, cv->name, width, height);
+    else if (status != MR_OK)
+        status = mr_fail(status, "%s", message);
+    // Textures whose every channel is one value everywhere become factors (a constant roughness beside a diffuse
+    // texture, say): no image, and exactly the converted value.
+    for (int v = 0; status == MR_OK && v < ctx.values; v++) {
+        int one = 1;
+        for (int k = 0; k < bands && one; k++)
+            one = ctx.uniform[(size_t)k * (size_t)ctx.values + (size_t)v] &&
+                  memcmp(&ctx.firsts[(size_t)k * (size_t)ctx.values + (size_t)v], &ctx.firsts[v], sizeof(float)) == 0;
+        ctx.uniform[v] = (uint8_t)one;
+        if (v < ctx.values - 1)
+            mk->values[v] = ctx.firsts[v];
+        else
+            mk->alpha = ctx.firsts[v];
+    }
+    for (int t = 0; status == MR_OK && t < 2; t++) {
+        int all_uniform = need[t];
+        for (int c = 0; c < channels[t] && all_uniform; c++) {
+            const char *slot = to->slots[t][c];
+            int j = output_of(kind, slot), v = 0;
+            if (slot != NULL && strcmp(slot, "alpha") == 0) {
+                all_uniform = ctx.uniform[ctx.values - 1];
+                continue;
+            }
+            if (j < 0 || (kind->outputs[j].flags & MR_SLOT_CONSTANT)) continue;
+            for (int k = 0; k < j; k++) v += kind->outputs[k].channels;
+            all_uniform = ctx.uniform[v + (kind->outputs[j].channels == 3 ? c : 0)];
+        }
+        if (all_uniform) need[t] = 0; // mk->textures[t] stays -1: set_outputs writes mk->values
+    }
+    free(ctx.firsts);
+    free(ctx.uniform);
+    // 4. The textures, encoded side by side (each its own thread's last error).
+    mr_status statuses[2] = {MR_OK, MR_OK};
+    char messages[2][1024] = {"", ""};
+    encoded_texture encoded[2];
+    memset(encoded, 0, sizeof encoded);
+    if (status == MR_OK) {
+#pragma omp parallel for schedule(static, 1) num_threads(2) if (need[0] && need[1])
+        for (int t = 0; t < 2; t++) {
+            if (!need[t]) continue;
+            statuses[t] = encode_texture(cv, t, width, height, channels[t], exr ? NULL : texels[t],
+                                         exr ? texels[t] : NULL, &encoded[t]);
+            if (statuses[t] != MR_OK) snprintf(messages[t], sizeof messages[t], "%s", mr_last_error());
+        }
+        for (int t = 0; t < 2 && status == MR_OK; t++)
+            if (statuses[t] != MR_OK) status = mr_fail(statuses[t], "%s", messages[t]);
+        for (int t = 0; t < 2 && status == MR_OK; t++)
+            if (need[t]) // the sampler of the source texture in the same place, else of the other one
+                status = add_texture(cv, &encoded[t], src->refs[src->refs[t].index >= 0 ? t : 1 - t].index,
+                                     &mk->textures[t]);
+    }
+    for (int t = 0; t < 2; t++) {
+        encoded_texture_release(&encoded[t]);
+        free(texels[t]);
+    }
+    return status;
+}
+
+/* ---- the material ------------------------------------------------------------------------------------------- */
+
+/* Where an output slot lives in mr_gltf_material: its factor (channels doubles) and texture reference. */
+typedef struct material_field {
+    const char *slot;
+    size_t factor, ref; /* offsetof into mr_gltf_material; ref SIZE_MAX = none */
+    int texture;        /* the target side's texture (0 or 1) holding it, -1 = an extension's own texture */
+} material_field;
+
+#define FIELD(slot, factor, ref, t) {slot, offsetof(mr_gltf_material, factor), offsetof(mr_gltf_material, ref), t}
+static const material_field metalrough_fields[] = {
+    FIELD("base_color", base_color_factor, base_color_texture, 0),
+    FIELD("metallic", metallic_factor, metallic_roughness_texture, 1),
+    FIELD("roughness", roughness_factor, metallic_roughness_texture, 1),
+    FIELD("specular", specular_strength, specular_texture, -1),
+    FIELD("specular_color", specular_color_factor, specular_color_texture, -1),
+    {"ior", offsetof(mr_gltf_material, ior), SIZE_MAX, -1},
+};
+static const material_field specgloss_fields[] = {
+    FIELD("diffuse", diffuse_factor, diffuse_texture, 0),
+    FIELD("specular", specular_factor, specular_glossiness_texture, 1),
+    FIELD("glossiness", glossiness_factor, specular_glossiness_texture, 1),
+};
+
+static const material_field *field_of(const workflow_side *side, const char *slot) {
+    const material_field *fields = side == &metalrough_side ? metalrough_fields : specgloss_fields;
+    size_t count = side == &metalrough_side ? sizeof metalrough_fields / sizeof *fields
+                                            : sizeof specgloss_fields / sizeof *fields;
+    for (size_t k = 0; k < count; k++)
+        if (strcmp(fields[k].slot, slot) == 0) return &fields[k];
+    return NULL;
+}
+
+/* Write a conversion's result into material m: per output, a copied source texture and factor, a constant factor, a
+ * made texture (factor 1), or (factors only) the value. */
+static void set_outputs(const conversion *cv, const sources *src, const made *mk, int textured, mr_gltf_material *m) {
+    const mr_transform_kind *kind = cv->kind;
+    const mr_gltf_texture_ref mapping = src->refs[src->refs[0].index >= 0 ? 0 : 1];
+    size_t value = 0;
+    for (int j = 0; j < kind->output_count; value += (size_t)kind->outputs[j].channels, j++) {
+        const mr_transform_slot *slot = &kind->outputs[j];
+        const material_field *f = field_of(cv->to, slot->name);
+        if (f == NULL) continue; // a target parameter glTF does not store
+        double *factor = (double *)((char *)m + f->factor);
+        mr_gltf_texture_ref *ref = f->ref == SIZE_MAX ? NULL : (mr_gltf_texture_ref *)((char *)m + f->ref);
+        const int made_texture = f->texture >= 0 && mk->textures[f->texture] >= 0;
+        for (int c = 0; c < slot->channels; c++) {
+            if (slot->flags & MR_SLOT_CONSTANT)
+                factor[c] = slot->value; // a made texture holds 1 there (0 for 0: output_value)
+            else if (slot->copy_of >= 0)
+                factor[c] = src->factors[slot->copy_of][c];
+            else
+                factor[c] = made_texture ? 1.0 : mk->values[value + (size_t)c];
+        }
+        if (ref == NULL) continue;
+        if (made_texture) {
+            *ref = mapping;
+            ref->index = mk->textures[f->texture];
+        } else if (slot->copy_of >= 0) {
+            *ref = src->refs[cv->from->inputs[slot->copy_of].texture];
+        } else {
+            mr_gltf_texture_ref_none(ref);
+        }
+        if (strcmp(slot->name, "specular") == 0 || strcmp(slot->name, "specular_color") == 0) m->has_specular = 1;
+    }
+    if (mr_transform_output_index(kind, "ior") >= 0 && cv->to == &metalrough_side) m->has_ior = 1;
+    if (cv->to == &metalrough_side && mr_transform_output_index(kind, "specular_color") >= 0 &&
+        mr_transform_output_index(kind, "specular") < 0)
+        m->specular_strength = 1.0;
+    // Alpha: in the made first texture (factor 1), or the source's alpha factor where the colour was copied.
+    double *colour = (double *)((char *)m + field_of(cv->to, cv->to->slots[0][0])->factor);
+    const int copied = cv->kind->outputs[0].copy_of >= 0;
+    colour[3] = mk->textures[0] >= 0 ? 1.0 : textured && !copied ? mk->alpha : src->alpha_factor;
+}
+
+/* The core metal-rough values a material carries of its own (textures, or factors other than glTF's defaults
+ * 1,1,1,1 / 1 / 1), named in `list` ("baseColorTexture, metallicFactor"); returns how many. */
+static int core_values(const mr_gltf_material *m, char *list, size_t size) {
+    const char *names[5];
+    int count = 0;
+    if (m->base_color_texture.index >= 0) names[count++] = "baseColorTexture";
+    if (m->metallic_roughness_texture.index >= 0) names[count++] = "metallicRoughnessTexture";
+    if (m->base_color_factor[0] != 1.0 || m->base_color_factor[1] != 1.0 || m->base_color_factor[2] != 1.0 ||
+        m->base_color_factor[3] != 1.0)
+        names[count++] = "baseColorFactor";
+    if (m->metallic_factor != 1.0) names[count++] = "metallicFactor";
+    if (m->roughness_factor != 1.0) names[count++] = "roughnessFactor";
+    list[0] = '\0';
+    for (int k = 0; k < count; k++)
+        snprintf(list + strlen(list), size - strlen(list), "%s%s", k ? ", " : "", names[k]);
+    return count;
+}
+
+/* Read the material's source textures (side by side) and settle the grid: the larger texture's size. */
+static mr_status read_sources(const conversion *cv, const sources *src, mr_image *images[2], mr_img_stored stored[2],
+                              int *width, int *height) {
+    if (src->refs[0].index >= 0 && src->refs[1].index >= 0 && !same_mapping(&src->refs[0], &src->refs[1]))
+        return mr_fail(MR_ERR_FORMAT, "glTF '%s': material %d '%s': its two textures map onto the surface differently "
+                       "(UV set or KHR_texture_transform), so their texels cannot be converted pairwise",
+                       mr_gltf_path(cv->asset), cv->material, cv->name);
+    mr_status statuses[2] = {MR_OK, MR_OK};
+    char messages[2][1024] = {"", ""};
+    const int both = src->refs[0].index >= 0 && src->refs[1].index >= 0;
+#pragma omp parallel for schedule(static, 1) num_threads(2) if (both)
+    for (int t = 0; t < 2; t++) {
+        if (src->refs[t].index < 0) continue;
+        mr_img_read_options ro = {0};
+        ro.encoding = cv->from->encodings[t];
+        statuses[t] = mr_gltf_texture_read(cv->asset, src->refs[t].index, &ro, &images[t], &stored[t]);
+        if (statuses[t] != MR_OK) snprintf(messages[t], sizeof messages[t], "%s", mr_last_error());
+    }
+    for (int t = 0; t < 2; t++)
+        if (statuses[t] != MR_OK)
+            return mr_fail(statuses[t], "material %d '%s': %s", cv->material, cv->name, messages[t]);
+    *width = *height = 1;
+    for (int t = 0; t < 2; t++)
+        if (images[t] != NULL) {
+            *width = MR_MAX(*width, images[t]->width);
+            *height = MR_MAX(*height, images[t]->height);
+        }
+    return MR_OK;
+}
+
+/* Convert material cv->material (unless an earlier one with the same sources did: `cache`). */
+static mr_status convert_material(conversion *cv, made *cache, int *cached, mr_gltf_material_report *r) {
+    mr_gltf_material m;
+    mr_status status = mr_gltf_get_material(cv->asset, cv->material, &m);
+    if (status != MR_OK) return status;
+    cv->name = m.name;
+    const int to_metal = cv->to == &metalrough_side;
+    if (to_metal && !m.has_spec_gloss) {
+        snprintf(r->reason, sizeof r->reason, "no spec-gloss extension");
+        return MR_OK;
+    }
+    if (!to_metal && m.has_spec_gloss) {
+        snprintf(r->reason, sizeof r->reason, "it carries spec-gloss already");
+        return MR_OK;
+    }
+    char own[128];
+    if (to_metal && !cv->opts->overwrite && core_values(&m, own, sizeof own) > 0) {
+        // The artist's own metal-rough version of the material (glTF's recommended fallback beside spec-gloss): kept,
+        // not overwritten by a conversion. The extension goes like every converted material's unless keep_source.
+        m.has_spec_gloss = cv->opts->keep_source;
+        r->outcome = MR_GLTF_KEPT;
+        snprintf(r->reason, sizeof r->reason, "it has metal-rough values of its own: %s", own);
+        return mr_gltf_set_material(cv->asset, cv->material, &m);
+    }
+    const double started = now();
+    sources src;
+    sources_of(&m, to_metal, &src);
+    for (int t = 0; t < 2; t++) {
+        mr_gltf_texture texture;
+        int known = src.refs[t].index >= 0 && mr_gltf_get_texture(cv->asset, src.refs[t].index, &texture) == MR_OK;
+        src.images[t] = known ? texture.image : -1;
+        src.samplers[t] = known ? texture.sampler : -1;
+        if (known) src.sampler_params[t] = texture.params;
+    }
+    made *mk = NULL;
+    for (int k = 0; k < *cached && mk == NULL; k++)
+        if (same_sources(&cache[k].key, &src)) mk = &cache[k];
+    int textured = src.refs[0].index >= 0 || src.refs[1].index >= 0;
+    if (mk != NULL) {
+        *r = mk->report;
+        r->outcome = MR_GLTF_SHARED;
+    } else {
+        mk = &cache[(*cached)++];
+        memset(mk, 0, sizeof *mk);
+        mk->key = src;
+        mk->textures[0] = mk->textures[1] = -1;
+        mr_image *images[2] = {NULL, NULL};
+        mr_img_stored stored[2];
+        memset(stored, 0, sizeof stored);
+        int width = 1, height = 1;
+        status = read_sources(cv, &src, images, stored, &width, &height);
+        if (status == MR_OK && textured) {
+            status = convert_texels(cv, &src, images, stored, width, height, mk);
+            mk->report.width = width;
+            mk->report.height = height;
+        } else if (status == MR_OK) { // factors only: one texel
+            double in[3 * MR_TRANSFORM_MAX_SLOTS];
+            size_t k = 0;
+            for (int i = 0; i < cv->kind->input_count; i++)
+                for (int c = 0; c < cv->kind->inputs[i].channels; c++) in[k++] = src.factors[i][c];
+            unsigned flags = 0;
+            status = mr_transform_apply_values(cv->opts->transform, in, mk->values, &flags);
+            uint8_t f = (uint8_t)flags;
+            count_flags(&mk->report, &f, 1);
+        }
+        mr_image_free(images[0]);
+        mr_image_free(images[1]);
+        if (status != MR_OK) {
+            (*cached)--;
+            return status;
+        }
+        mk->report.outcome = MR_GLTF_CONVERTED;
+        mk->report.seconds = now() - started;
+        *r = mk->report;
+    }
+    set_outputs(cv, &src, mk, textured, &m);
+    if (to_metal) m.has_spec_gloss = cv->opts->keep_source;
+    else m.has_spec_gloss = 1; // the core material stays as the fallback
+    status = mr_gltf_set_material(cv->asset, cv->material, &m);
+    r->seconds = now() - started;
+    return status;
+}
+
+mr_status mr_gltf_convert(mr_gltf *asset, const mr_gltf_convert_options *opts, mr_gltf_material_report *reports) {
+    if (asset == NULL || opts == NULL || opts->transform == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF conversion: NULL asset, options or transform");
+    const mr_transform_kind *kind = mr_transform_kind_of(opts->transform);
+    conversion cv = {asset, opts, kind, NULL, NULL, 0, ""};
+    if (strcmp(kind->source, specgloss_side.model) == 0 && strcmp(kind->target, metalrough_side.model) == 0) {
+        cv.from = &specgloss_side;
+        cv.to = &metalrough_side;
+    } else if (strcmp(kind->source, metalrough_side.model) == 0 && strcmp(kind->target, specgloss_side.model) == 0) {
+        cv.from = &metalrough_side;
+        cv.to = &specgloss_side;
+    } else {
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF '%s': transform %s converts %s to %s; a glTF asset converts between "
+                       "gltf-specgloss and gltf", mr_gltf_path(asset), kind->name, kind->source, kind->target);
+    }
+    if (opts->image_format != NULL && strcmp(opts->image_format, "png") != 0 && strcmp(opts->image_format, "exr"))
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF conversion: image format '%s': expected png or exr",
+                       opts->image_format);
+    mr_gltf_counts counts;
+    mr_gltf_get_counts(asset, &counts);
+    made *cache = calloc((size_t)MR_MAX(counts.materials, 1), sizeof *cache);
+    if (cache == NULL) return mr_fail(MR_ERR_NOMEM, "glTF '%s': out of memory", mr_gltf_path(asset));
+    int cached = 0;
+    mr_status status = MR_OK;
+    for (int k = 0; k < counts.materials && status == MR_OK; k++) {
+        mr_gltf_material_report r;
+        memset(&r, 0, sizeof r);
+        cv.material = k;
+        status = convert_material(&cv, cache, &cached, &r);
+        if (reports != NULL) reports[k] = r;
+        if (opts->progress != NULL) opts->progress(opts->progress_user, k, counts.materials);
+    }
+    free(cache);
+    return status;
+}

@@ -1,0 +1,83 @@
+/*
+ * mr_gltf_convert.h — a glTF asset's materials converted between the PBR workflows through a transform
+ * (src/transform/transform.h): metal-rough from KHR_materials_pbrSpecularGlossiness (gltf-specgloss -> gltf), or
+ * spec-gloss beside metal-rough (gltf -> gltf-specgloss). What `matremap gltf` does; docs/architecture.md draws it.
+ *
+ *   mr_gltf *asset;  mr_gltf_load("in.gltf", &asset);
+ *   mr_transform *t;  mr_transform_create(mr_transform_find("gltf-specgloss", "gltf", "weighted"), NULL, &t);
+ *   mr_gltf_convert_options o = {0};  o.transform = t;
+ *   mr_gltf_convert(asset, &o, NULL);
+ *   mr_gltf_prune_unused(asset, NULL);  mr_gltf_save(asset, "out/out.gltf");
+ *
+ * Per material: the source workflow's factors times its textures, in linear values (colour textures sRGB-decoded,
+ * glossiness and alpha linear), on the grid of the larger source texture (the smaller resampled bilinearly, texel
+ * centres aligned), through the transform; the target's textures are new PNG (or EXR) images packed as glTF packs
+ * them (metal-rough: base colour RGB + the diffuse's alpha, metallicRoughness G = roughness, B = metallic, R = 0;
+ * spec-gloss: diffuse RGB + the base colour's alpha, specularGlossiness RGB = specular, A = glossiness), with the
+ * sampler and texture transform of the first source texture and factors 1. A material without textures gets
+ * factors only. An output the transform repeats unchanged (mr_transform_slot.copy_of) reuses the source texture and
+ * factor instead of a new image, and a constant output becomes a factor (the extension route: KHR_materials_specular
+ * and KHR_materials_ior, no texel converted but glossiness). Materials whose sources are the same images with the
+ * same factors share one conversion and its textures.
+ *
+ * Which materials: gltf-specgloss -> gltf converts every material carrying the spec-gloss extension, except (unless
+ * `overwrite`) those with metal-rough values of their own (textures or factors other than glTF's defaults: the
+ * artist's fallback is kept); the extension is then removed unless `keep_source`. gltf -> gltf-specgloss converts
+ * every material without the extension and keeps the metal-rough core as the fallback.
+ *
+ * Threads: the transform's option. Memory: the decoded source textures, the 8-bit target textures, and planes of one
+ * band of rows. Errors name the asset, the material and the texture; on failure the asset may hold some converted
+ * materials (load it again to retry). Nothing is printed.
+ */
+#ifndef MR_GLTF_CONVERT_H
+#define MR_GLTF_CONVERT_H
+
+#include <stddef.h>
+
+#include "gltf/mr_gltf.h"
+#include "transform/transform.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct mr_gltf_convert_options {
+    const mr_transform *transform; /* required: gltf-specgloss -> gltf, or gltf -> gltf-specgloss */
+    const char *image_format;      /* "png" (default) or "exr" for the new images */
+    const char *image_prefix;      /* new images are PREFIX_mK_NAME.EXT beside the output; NULL = "converted" */
+    int overwrite;                 /* 1: convert spec-gloss materials that have metal-rough values of their own */
+    int keep_source;               /* 1: keep the spec-gloss extension on converted materials */
+    int exact_inputs;              /* 1: inputs exact to the transform's eps; 0 (default): each value known to half a
+                                      code of its texture, times its factor (workflow.h, "Tolerances") */
+    void (*progress)(void *user, int material, int material_count); /* after each material; may be NULL */
+    void *progress_user;
+} mr_gltf_convert_options;
+
+typedef enum mr_gltf_convert_outcome {
+    MR_GLTF_SKIPPED = 0, /* nothing to convert (no spec-gloss extension; or gltf -> gltf-specgloss: it has one) */
+    MR_GLTF_CONVERTED,
+    MR_GLTF_KEPT,        /* its own metal-rough values kept (overwrite converts them) */
+    MR_GLTF_SHARED       /* converted, sharing the conversion of an earlier material with the same sources */
+} mr_gltf_convert_outcome;
+
+/* What happened to one material. */
+typedef struct mr_gltf_material_report {
+    mr_gltf_convert_outcome outcome;
+    char reason[256];  /* why kept or skipped; "" otherwise */
+    int width, height; /* texture grid, 0 when factors only */
+    size_t flagged;    /* texels with any mr_wf_flag */
+    size_t off_manifold, nonfinite, clamped, failed; /* texels with each flag */
+    double seconds;
+} mr_gltf_material_report;
+
+/* Convert the asset's materials in place. reports: NULL or one per material (mr_gltf_get_counts). MR_ERR_INVALID_ARG
+ * for a missing transform or one between other models, an unknown image format; the texture readers' errors
+ * (naming asset and image); MR_ERR_FORMAT for a material whose two source textures map onto the surface
+ * differently (texture coordinates or transform); MR_ERR_NOMEM. */
+mr_status mr_gltf_convert(mr_gltf *asset, const mr_gltf_convert_options *opts, mr_gltf_material_report *reports);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MR_GLTF_CONVERT_H */

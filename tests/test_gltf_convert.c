@@ -1,0 +1,169 @@
+/*
+ * test_gltf_convert.c — glTF asset conversion in the library (gltf/mr_gltf_convert.h): the new textures hold what
+ * the workflow converters give texel by texel, materials with the same sources share one conversion, the extension
+ * route reuses textures and turns a uniform result into factors, and bad options are refused.
+ */
+#include <stdint.h>
+
+#include "harness.h"
+#include "matremap.h"
+
+static const char *asset_path(const char *rel) {
+    static char p[1024];
+    const char *shared = getenv("MR_SHARED");
+    snprintf(p, sizeof p, "%s/assets/specgloss/%s", shared ? shared : "../shared", rel);
+    return p;
+}
+
+#define DUCK "Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Duck.gltf"
+#define TRUCK "CesiumMilkTruck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/CesiumMilkTruck.gltf"
+
+static mr_transform *make_transform(const char *source, const char *target, const char *name) {
+    mr_transform *t = NULL;
+    const mr_transform_kind *kind = mr_transform_find(source, target, name);
+    MR_CHECK(kind != NULL && mr_transform_create(kind, NULL, &t) == MR_OK);
+    return t;
+}
+
+/* The Duck (512², diffuse texture, specular and glossiness factors) through `weighted`: the new base colour and
+ * metallic-roughness textures decode to mr_wf_spec_to_metal_batch's answers within half a code. */
+MR_TEST(duck_textures_hold_the_converters_answers) {
+    mr_gltf *asset = NULL;
+    mr_transform *t = make_transform("gltf-specgloss", "gltf", "weighted");
+    MR_CHECK(mr_gltf_load(asset_path(DUCK), &asset) == MR_OK);
+    if (asset == NULL || t == NULL) return;
+    mr_gltf_material before;
+    MR_CHECK(mr_gltf_get_material(asset, 0, &before) == MR_OK);
+    mr_image *diffuse = NULL;
+    mr_img_stored stored;
+    MR_CHECK(mr_gltf_texture_read(asset, before.diffuse_texture.index, NULL, &diffuse, &stored) == MR_OK);
+    mr_gltf_convert_options o = {0};
+    o.transform = t;
+    o.overwrite = 1;
+    mr_gltf_material_report report;
+    MR_CHECK(mr_gltf_convert(asset, &o, &report) == MR_OK);
+    MR_CHECK(report.outcome == MR_GLTF_CONVERTED && report.width == 512 && report.height == 512);
+    mr_gltf_material after;
+    MR_CHECK(mr_gltf_get_material(asset, 0, &after) == MR_OK);
+    MR_CHECK(!after.has_spec_gloss && after.base_color_texture.index >= 0 &&
+             after.metallic_roughness_texture.index >= 0);
+    mr_image *base = NULL, *mr = NULL;
+    mr_img_read_options data = {0};
+    data.encoding = MR_IMG_DATA;
+    MR_CHECK(mr_gltf_texture_read(asset, after.base_color_texture.index, NULL, &base, NULL) == MR_OK);
+    MR_CHECK(mr_gltf_texture_read(asset, after.metallic_roughness_texture.index, &data, &mr, NULL) == MR_OK);
+    if (diffuse != NULL && base != NULL && mr != NULL) {
+        const size_t n = 512 * 512;
+        float *d = malloc(3 * n * sizeof *d), *s = calloc(3 * n, sizeof *s), *r = malloc(n * sizeof *r);
+        float *a = malloc(3 * n * sizeof *a), *m = malloc(n * sizeof *m);
+        for (size_t i = 0; i < n; i++) {
+            for (int c = 0; c < 3; c++) {
+                d[3 * i + c] = (float)(diffuse->pixels[i * (size_t)diffuse->channels + (size_t)c] *
+                                       before.diffuse_factor[c]);
+                s[3 * i + c] = (float)(1.0f * before.specular_factor[c]);
+            }
+            r[i] = (float)(1.0 - 1.0f * before.glossiness_factor);
+        }
+        mr_wf_options w = mr_wf_options_default();
+        w.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
+        w.diffuse_quantisation = mr_wf_quantisation_of(&stored, before.diffuse_factor);
+        MR_CHECK(mr_wf_spec_to_metal_batch(&(mr_wf_spec_maps){d, s, r}, n, &w, &(mr_wf_metal_maps){a, m, r}, NULL) ==
+                 MR_OK);
+        double worst_colour = 0.0, worst_data = 0.0;
+        for (size_t i = 0; i < n; i++) {
+            for (int c = 0; c < 3; c++)
+                worst_colour = fmax(worst_colour, fabs(base->pixels[(size_t)base->channels * i + c] - a[3 * i + c]));
+            worst_data = fmax(worst_data, fabs(mr->pixels[3 * i + 2] - m[i]));
+            worst_data = fmax(worst_data, fabs(mr->pixels[3 * i + 1] - r[i]));
+        }
+        MR_CHECK_MSG(worst_colour <= 0.0046, "base colour off by %g", worst_colour); // half an sRGB code at 1
+        MR_CHECK_MSG(worst_data <= 0.5 / 255 + 1e-6, "metallic or roughness off by %g", worst_data);
+        free(d), free(s), free(r), free(a), free(m);
+    }
+    mr_image_free(diffuse);
+    mr_image_free(base);
+    mr_image_free(mr);
+    mr_gltf_free(asset);
+    mr_transform_free(t);
+}
+
+/* The CesiumMilkTruck: 'truck' and 'wheels' use two textures of one image with the same factors (one conversion,
+ * shared textures); 'glass' has factors only. */
+MR_TEST(truck_materials_share_a_conversion) {
+    mr_gltf *asset = NULL;
+    mr_transform *t = make_transform("gltf-specgloss", "gltf", "mean");
+    MR_CHECK(mr_gltf_load(asset_path(TRUCK), &asset) == MR_OK);
+    if (asset == NULL || t == NULL) return;
+    mr_gltf_convert_options o = {0};
+    o.transform = t;
+    o.overwrite = 1;
+    mr_gltf_material_report reports[4];
+    MR_CHECK(mr_gltf_convert(asset, &o, reports) == MR_OK);
+    MR_CHECK(reports[0].outcome == MR_GLTF_CONVERTED && reports[0].width == 2048);
+    MR_CHECK(reports[1].outcome == MR_GLTF_CONVERTED && reports[1].width == 0); // glass: factors only
+    MR_CHECK(reports[3].outcome == MR_GLTF_SHARED);
+    mr_gltf_material truck, glass, wheels;
+    MR_CHECK(mr_gltf_get_material(asset, 0, &truck) == MR_OK && mr_gltf_get_material(asset, 1, &glass) == MR_OK &&
+             mr_gltf_get_material(asset, 3, &wheels) == MR_OK);
+    MR_CHECK(truck.base_color_texture.index >= 0 && truck.base_color_texture.index == wheels.base_color_texture.index);
+    MR_CHECK(truck.metallic_roughness_texture.index == wheels.metallic_roughness_texture.index);
+    MR_CHECK(glass.base_color_texture.index < 0 && glass.metallic_factor > 0.5); // specular 0.65: a metal
+    mr_gltf_free(asset);
+    mr_transform_free(t);
+}
+
+/* The extension route on the Duck: the diffuse texture becomes the base colour as it is, the specular factor the
+ * specular colour, and the roughness, one value everywhere, a factor (no image). */
+MR_TEST(extension_route_reuses_textures_and_makes_factors) {
+    mr_gltf *asset = NULL;
+    mr_transform *t = make_transform("gltf-specgloss", "gltf", "extension");
+    MR_CHECK(mr_gltf_load(asset_path(DUCK), &asset) == MR_OK);
+    if (asset == NULL || t == NULL) return;
+    mr_gltf_counts before;
+    mr_gltf_get_counts(asset, &before);
+    mr_gltf_material m;
+    MR_CHECK(mr_gltf_get_material(asset, 0, &m) == MR_OK);
+    const int diffuse_texture = m.diffuse_texture.index;
+    mr_gltf_convert_options o = {0};
+    o.transform = t;
+    o.overwrite = 1;
+    MR_CHECK(mr_gltf_convert(asset, &o, NULL) == MR_OK);
+    MR_CHECK(mr_gltf_get_material(asset, 0, &m) == MR_OK);
+    MR_CHECK(m.base_color_texture.index == diffuse_texture && m.metallic_factor == 0.0);
+    MR_CHECK(m.metallic_roughness_texture.index < 0);
+    MR_CHECK_NEAR(m.roughness_factor, 0.7, 1e-7);
+    MR_CHECK(m.has_specular && m.specular_strength == 1.0 && m.specular_color_factor[0] == 0.0);
+    MR_CHECK(m.has_ior && m.ior == 1000.0);
+    mr_gltf_counts after;
+    mr_gltf_get_counts(asset, &after);
+    MR_CHECK(after.images == before.images); // no new image
+    mr_gltf_free(asset);
+    mr_transform_free(t);
+}
+
+/* A transform between other models, or an unknown image format, is refused before anything changes. */
+MR_TEST(bad_options_are_refused) {
+    mr_gltf *asset = NULL;
+    MR_CHECK(mr_gltf_load(asset_path(DUCK), &asset) == MR_OK);
+    if (asset == NULL) return;
+    mr_transform *paper = make_transform("ggx", "ggx-metallic", "weighted");
+    mr_gltf_convert_options o = {0};
+    o.transform = paper;
+    MR_CHECK(mr_gltf_convert(asset, &o, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strstr(mr_last_error(), "converts ggx to ggx-metallic") != NULL, "%s", mr_last_error());
+    mr_transform *t = make_transform("gltf-specgloss", "gltf", "weighted");
+    o.transform = t;
+    o.image_format = "jpg";
+    MR_CHECK(mr_gltf_convert(asset, &o, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "'jpg'") != NULL);
+    o.transform = NULL;
+    MR_CHECK(mr_gltf_convert(asset, &o, NULL) == MR_ERR_INVALID_ARG);
+    mr_transform_free(paper);
+    mr_transform_free(t);
+    mr_gltf_free(asset);
+}
+
+MR_TEST_MAIN(MR_TEST_ENTRY(duck_textures_hold_the_converters_answers),
+             MR_TEST_ENTRY(truck_materials_share_a_conversion),
+             MR_TEST_ENTRY(extension_route_reuses_textures_and_makes_factors),
+             MR_TEST_ENTRY(bad_options_are_refused))
