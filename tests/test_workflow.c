@@ -7,6 +7,7 @@
  * Expected values are written out here independently of the library (the paper's division forms of Eq. 3, the
  * JS's formulas), never by calling it.
  */
+#include <float.h>
 #include <math.h>
 #include <omp.h>
 #include <stdint.h>
@@ -156,7 +157,7 @@ MR_TEST(round_trip_is_exact_for_mean_and_weighted) {
     static const double f0s[] = {MR_WF_F0_GLTF, MR_WF_F0_PAPER};
     const int na = (int)(sizeof albedos / sizeof albedos[0]);
     for (int f = 0; f < 2; f++)
-        for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++) {
+        for (int method = MR_WF_WEIGHTED; method <= MR_WF_MEAN; method++) {
             mr_wf_options o = options((mr_wf_method)method, f0s[f]);
             double worst = 0.0;
             int flagged = 0;
@@ -190,7 +191,7 @@ MR_TEST(float_batch_round_trip_is_exact_within_float_rounding) {
         for (int c = 0; c < 3; c++) albedo[3 * i + c] = (float)(0.05 + 0.95 * uniform(&rng));
         metallic[i] = (float)uniform(&rng);
     }
-    for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++) {
+    for (int method = MR_WF_WEIGHTED; method <= MR_WF_MEAN; method++) {
         mr_wf_options o = options((mr_wf_method)method, MR_WF_F0_PAPER);
         mr_wf_metal_maps metal = {albedo, metallic, NULL}, back = {albedo2, metallic2, NULL};
         mr_wf_spec_maps spec = {diffuse, specular, NULL};
@@ -225,7 +226,7 @@ MR_TEST(equation_3_matches_the_closed_form_with_the_papers_f0) {
             double a, m;
             paper_eq3(d, s, &a, &m);
             if (!(a > 0.03 + 1e-3 && a <= 1.0 && m >= 0.0 && m <= 1.0)) continue;
-            for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++) {
+            for (int method = MR_WF_WEIGHTED; method <= MR_WF_MEAN; method++) {
                 mr_wf_options o = options((mr_wf_method)method, MR_WF_F0_PAPER);
                 double dd[3] = {d, d, d}, ss[3] = {s, s, s};
                 unsigned flags;
@@ -258,7 +259,7 @@ MR_TEST(mean_and_weighted_follow_their_formulas_off_the_manifold) {
     double weighted = (a[0] * m[0] + a[1] * m[1] + a[2] * m[2]) / (a[0] + a[1] + a[2]);
     // On Eq. 3's solutions A m = A - d, so the weighted mean is also 1 - sum d / sum A.
     MR_CHECK_NEAR(weighted, 1.0 - (d[0] + d[1] + d[2]) / (a[0] + a[1] + a[2]), 1e-12);
-    for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++) {
+    for (int method = MR_WF_WEIGHTED; method <= MR_WF_MEAN; method++) {
         mr_wf_options o = options((mr_wf_method)method, MR_WF_F0_PAPER);
         unsigned flags;
         mr_wf_metal out = to_metal(&o, d, s, &flags);
@@ -402,7 +403,7 @@ MR_TEST(black_is_a_black_metal) {
     double zero[3] = {0.0, 0.0, 0.0};
     static const double f0s[] = {0.04, 0.03};
     for (int f = 0; f < 2; f++)
-        for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++) {
+        for (int method = MR_WF_WEIGHTED; method <= MR_WF_MEAN; method++) {
             mr_wf_options o = options((mr_wf_method)method, f0s[f]);
             unsigned flags;
             mr_wf_metal m = to_metal(&o, zero, zero, &flags);
@@ -411,8 +412,9 @@ MR_TEST(black_is_a_black_metal) {
             mr_wf_spec s = to_spec(&o, m.albedo[0], m.albedo[1], m.albedo[2], m.metallic, NULL);
             for (int c = 0; c < 3; c++) MR_CHECK(s.diffuse[c] == 0.0 && s.specular[c] == 0.0);
         }
-    // With F0d = 0 black is albedo 0 with any metallic; the least metallic, 0, is returned.
-    mr_wf_options o = options(MR_WF_WEIGHTED, 0.0);
+    // With a vanishing F0d (DBL_MIN; 0 is the default 0.04) black is albedo 0 with any metallic; the least
+    // metallic, 0, is returned.
+    mr_wf_options o = options(MR_WF_WEIGHTED, DBL_MIN);
     unsigned flags;
     mr_wf_metal m = to_metal(&o, zero, zero, &flags);
     MR_CHECK(m.metallic == 0.0 && m.albedo[0] == 0.0 && flags == 0);
@@ -422,7 +424,7 @@ MR_TEST(black_is_a_black_metal) {
     MR_CHECK(m.metallic == 0.0 && m.albedo[0] == 0.0 && flags == MR_WF_OFF_MANIFOLD);
     // Nearly black, unreachable inputs stay finite and flagged.
     double tiny[3] = {1e-7, 1e-7, 1e-7};
-    for (int method = MR_WF_MEAN; method < MR_WF_CUSTOM; method++) {
+    for (int method = MR_WF_WEIGHTED; method < MR_WF_CUSTOM; method++) {
         o = options((mr_wf_method)method, 0.04);
         m = to_metal(&o, tiny, tiny, &flags);
         MR_CHECK(metal_in_range(&m));
@@ -431,8 +433,10 @@ MR_TEST(black_is_a_black_metal) {
 
 /* metal -> spec -> metal of albedo (r, g, b) and metallic m is exact and clean under MEAN and WEIGHTED. */
 static void exact_under_mean_and_weighted(double r, double g, double b, double m) {
-    for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++) {
-        mr_wf_options o = options((mr_wf_method)method, 0.04);
+    static const mr_wf_method methods[2] = {MR_WF_MEAN, MR_WF_WEIGHTED};
+    for (int k = 0; k < 2; k++) {
+        const mr_wf_method method = methods[k];
+        mr_wf_options o = options(method, 0.04);
         unsigned flags;
         mr_wf_spec s = to_spec(&o, r, g, b, m, NULL);
         mr_wf_metal back = to_metal(&o, s.diffuse, s.specular, &flags);
@@ -447,7 +451,7 @@ static void exact_under_mean_and_weighted(double r, double g, double b, double m
 MR_TEST(albedo_at_or_below_the_dielectric_f0) {
     // Dark dielectrics (albedo <= F0d, m = 0): Eq. 3's root is F0d itself, whose m = 1 - d/F0d would call them
     // metals; the channel is ambiguous and the less metallic solution, m = 0 with A = d, is taken.
-    for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++)
+    for (int method = MR_WF_WEIGHTED; method <= MR_WF_MEAN; method++)
         for (int f = 0; f < 2; f++) {
             double f0 = f == 0 ? 0.04 : 0.03;
             mr_wf_options o = options((mr_wf_method)method, f0);
@@ -520,7 +524,7 @@ MR_TEST(negative_discriminant_and_specular_above_albedo) {
     // and is clamped. Khronos's model, whose diffuse is renormalised by (1 - max s)/0.96, does reach this texel
     // (base 0.950, metallic 0.945), so it is not flagged there.
     double d3[3] = {0.5, 0.5, 0.5}, s3[3] = {0.9, 0.9, 0.9};
-    for (int method = MR_WF_MEAN; method < MR_WF_CUSTOM; method++) {
+    for (int method = MR_WF_WEIGHTED; method < MR_WF_CUSTOM; method++) {
         o = options((mr_wf_method)method, 0.04);
         m = to_metal(&o, d3, s3, &flags);
         MR_CHECK(metal_in_range(&m));
@@ -536,7 +540,7 @@ MR_TEST(negative_discriminant_and_specular_above_albedo) {
 }
 
 MR_TEST(inputs_outside_0_1_are_clamped_and_flagged) {
-    for (int method = MR_WF_MEAN; method < MR_WF_CUSTOM; method++) {
+    for (int method = MR_WF_WEIGHTED; method < MR_WF_CUSTOM; method++) {
         mr_wf_options o = options((mr_wf_method)method, 0.04);
         unsigned flags, clean_flags;
         mr_wf_spec in = {{1.5, -0.2, 0.5}, {0.3, 2.0, -1e30}, 7.0};
@@ -564,7 +568,7 @@ MR_TEST(inputs_outside_0_1_are_clamped_and_flagged) {
 /* Non-finite colours and metallic read as 0; a non-finite roughness as 1 (fully rough, never a mirror). */
 MR_TEST(non_finite_inputs_are_flagged_and_read_as_zero) {
     static const double bad[] = {NAN, INFINITY, -INFINITY};
-    for (int method = MR_WF_MEAN; method < MR_WF_CUSTOM; method++) {
+    for (int method = MR_WF_WEIGHTED; method < MR_WF_CUSTOM; method++) {
         mr_wf_options o = options((mr_wf_method)method, 0.04);
         for (int k = 0; k < 3; k++)
             for (int slot = 0; slot < 7; slot++) {
@@ -841,7 +845,7 @@ MR_TEST(bad_arguments_are_rejected_with_a_message) {
         o.dielectric_f0 = bad_f0[i];
         CHECK_REJECTED(mr_wf_spec_to_metal(&spec, &o, &out_m, &flags), "dielectric_f0");
         CHECK_REJECTED(mr_wf_metal_to_spec(&metal, &o, &out_s, &flags), "dielectric_f0");
-        CHECK_REJECTED(mr_wf_options_check(&o), "[0, 1)");
+        CHECK_REJECTED(mr_wf_options_check(&o), "(0, 1)");
     }
     o = mr_wf_options_default();
     o.eps = -1e-9;
@@ -860,8 +864,8 @@ MR_TEST(bad_arguments_are_rejected_with_a_message) {
     MR_CHECK(memcmp(before_s, &out_s, sizeof out_s) == 0);
     MR_CHECK(flags == 12345);
     // The edges of the valid ranges are fine.
-    o = options(MR_WF_WEIGHTED, 0.0);
-    o.eps = 0.0;
+    o = options(MR_WF_WEIGHTED, DBL_MIN);
+    o.eps = DBL_MIN;
     MR_CHECK_OK(mr_wf_spec_to_metal(&spec, &o, &out_m, &flags));
     o.dielectric_f0 = 0.999;
     MR_CHECK_OK(mr_wf_spec_to_metal(&spec, &o, &out_m, &flags));
@@ -954,8 +958,10 @@ MR_TEST(specgloss_convention_known_answers_and_names) {
 MR_TEST(specgloss_round_trip_is_exact_where_representable) {
     uint64_t rng = 42;
     int checked = 0;
-    for (int method = MR_WF_MEAN; method <= MR_WF_WEIGHTED; method++) {
-        mr_wf_options o = options((mr_wf_method)method, 0.04);
+    static const mr_wf_method methods[2] = {MR_WF_MEAN, MR_WF_WEIGHTED};
+    for (int k = 0; k < 2; k++) {
+        const mr_wf_method method = methods[k];
+        mr_wf_options o = options(method, 0.04);
         o.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
         for (int i = 0; i < 2000; i++) {
             double g = uniform(&rng), m = uniform(&rng) < 0.3 ? (uniform(&rng) < 0.5 ? 0.0 : 1.0) : uniform(&rng);
@@ -1164,7 +1170,7 @@ MR_TEST(clean_8bit_exports_flag_nothing) {
                     memcpy(&albedo[3 * n], a, sizeof a);
                     metallic[n++] = metals[m];
                 }
-    for (int method = MR_WF_MEAN; method <= MR_WF_KHRONOS; method++) {
+    for (int method = MR_WF_WEIGHTED; method <= MR_WF_KHRONOS; method++) {
         mr_wf_options o = options((mr_wf_method)method, 0.04);
         o.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS; // as the spec2metal commands read glTF maps
         mr_wf_metal_maps metal_in = {albedo, metallic, NULL};
@@ -1219,7 +1225,7 @@ MR_TEST(quantisation_known_answers) {
     // far more than half a code.
     double d2[3] = {store8(0.5f), store8(0.5f), store8(0.5f)};
     double s2[3] = {store8(0.9f), store8(0.2f), store8(0.2f)};
-    for (int method = MR_WF_MEAN; method <= MR_WF_KHRONOS; method++) {
+    for (int method = MR_WF_WEIGHTED; method <= MR_WF_KHRONOS; method++) {
         q8.method = (mr_wf_method)method;
         to_metal(&q8, d2, s2, &flags);
         MR_CHECK_MSG(flags == MR_WF_OFF_MANIFOLD, "%s: flags %u", mr_wf_method_name(q8.method), flags);
@@ -1313,6 +1319,27 @@ MR_TEST(quantised_batch_equals_per_texel) {
         }
 }
 
+/* A zeroed mr_wf_options is the defaults (F0d 0.04, WEIGHTED, eps 1e-6): the same bits on a batch with hard texels. */
+MR_TEST(zeroed_options_are_the_defaults) {
+    enum { N = 64 };
+    float d[3 * N], s[3 * N], a1[3 * N], a2[3 * N], m1[N], m2[N];
+    uint8_t f1[N], f2[N];
+    for (int i = 0; i < 3 * N; i++) {
+        d[i] = (float)((i * 37) % 101) / 100.0f;
+        s[i] = i % 7 == 0 ? 0.04f : (float)((i * 53) % 97) / 96.0f;
+    }
+    mr_wf_options zeroed;
+    memset(&zeroed, 0, sizeof zeroed);
+    const mr_wf_options defaults = mr_wf_options_default();
+    MR_CHECK(mr_wf_options_check(&zeroed) == MR_OK);
+    MR_CHECK(mr_wf_spec_to_metal_batch(&(mr_wf_spec_maps){d, s, NULL}, N, &zeroed, &(mr_wf_metal_maps){a1, m1, NULL},
+                                       f1) == MR_OK);
+    MR_CHECK(mr_wf_spec_to_metal_batch(&(mr_wf_spec_maps){d, s, NULL}, N, &defaults,
+                                       &(mr_wf_metal_maps){a2, m2, NULL}, f2) == MR_OK);
+    MR_CHECK(memcmp(a1, a2, sizeof a1) == 0 && memcmp(m1, m2, sizeof m1) == 0 && memcmp(f1, f2, sizeof f1) == 0);
+    MR_CHECK(strcmp(mr_wf_method_name(zeroed.method), "weighted") == 0);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(method_names_round_trip),
              MR_TEST_ENTRY(default_options_are_the_documented_ones),
              MR_TEST_ENTRY(equation_2_known_answers),
@@ -1338,4 +1365,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(method_names_round_trip),
              MR_TEST_ENTRY(mlp_batch_of_repeated_values_equals_texel_by_texel),
              MR_TEST_ENTRY(clean_8bit_exports_flag_nothing),
              MR_TEST_ENTRY(quantisation_known_answers),
-             MR_TEST_ENTRY(quantised_batch_equals_per_texel))
+             MR_TEST_ENTRY(quantised_batch_equals_per_texel),
+             MR_TEST_ENTRY(zeroed_options_are_the_defaults))

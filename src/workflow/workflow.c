@@ -21,7 +21,8 @@
 #include "nn/mlp.h"
 #include "workflow_internal.h"
 
-static const char *const method_names[MR_WF_METHOD_COUNT] = {"mean", "weighted", "khronos", "custom"};
+static const char *const method_names[MR_WF_METHOD_COUNT] = {
+    [MR_WF_WEIGHTED] = "weighted", [MR_WF_MEAN] = "mean", [MR_WF_KHRONOS] = "khronos", [MR_WF_CUSTOM] = "custom"};
 // The names of the CLI's --convention: one naming for library and tool (workflow.h).
 static const char *const diffuse_names[MR_WF_DIFFUSE_COUNT] = {"paper", "gltf"};
 
@@ -52,7 +53,7 @@ mr_status mr_wf_method_from_name(const char *name, mr_wf_method *out) {
             *out = (mr_wf_method)i;
             return MR_OK;
         }
-    return mr_fail(MR_ERR_INVALID_ARG, "workflow method '%s': unknown (valid: mean, weighted, khronos, custom)",
+    return mr_fail(MR_ERR_INVALID_ARG, "workflow method '%s': unknown (valid: weighted, mean, khronos, custom)",
                    name ? name : "(null)");
 }
 
@@ -66,6 +67,16 @@ mr_wf_options mr_wf_options_default(void) {
     o.custom_data = NULL;
     o.spec_diffuse = MR_WF_DIFFUSE_PLAIN;
     for (int c = 0; c < 3; c++) o.diffuse_quantisation.scale[c] = o.specular_quantisation.scale[c] = 1.0;
+    return o;
+}
+
+/* The options in force: *opts (NULL: the defaults) with its zero fields read as their defaults, so a zeroed struct
+ * is mr_wf_options_default() (workflow.h). */
+static mr_wf_options options_in_force(const mr_wf_options *opts) {
+    if (opts == NULL) return mr_wf_options_default();
+    mr_wf_options o = *opts;
+    if (o.dielectric_f0 == 0.0) o.dielectric_f0 = MR_WF_F0_GLTF;
+    if (o.eps == 0.0) o.eps = MR_WF_DEFAULT_EPS;
     return o;
 }
 
@@ -85,16 +96,18 @@ static mr_status check_quantisation(const char *name, const mr_wf_quantisation *
     return MR_OK;
 }
 
-mr_status mr_wf_options_check(const mr_wf_options *opts) {
-    if (opts == NULL) return MR_OK;
+mr_status mr_wf_options_check(const mr_wf_options *given) {
+    if (given == NULL) return MR_OK;
+    const mr_wf_options in_force = options_in_force(given), *opts = &in_force;
     if (opts->threads < 0 || opts->threads > 1024)
         return mr_fail(MR_ERR_INVALID_ARG, "workflow options: threads %d: expected 0 (automatic) to 1024",
                        opts->threads);
-    if (!(opts->dielectric_f0 >= 0.0 && opts->dielectric_f0 < 1.0)) // also rejects NaN
-        return mr_fail(MR_ERR_INVALID_ARG, "workflow options: dielectric_f0 %g: expected a value in [0, 1)",
-                       opts->dielectric_f0);
-    if (!(opts->eps >= 0.0 && opts->eps < 1.0))
-        return mr_fail(MR_ERR_INVALID_ARG, "workflow options: eps %g: expected a value in [0, 1)", opts->eps);
+    if (!(opts->dielectric_f0 > 0.0 && opts->dielectric_f0 < 1.0)) // also rejects NaN
+        return mr_fail(MR_ERR_INVALID_ARG, "workflow options: dielectric_f0 %g: expected a value in (0, 1) (0: the "
+                       "default)", opts->dielectric_f0);
+    if (!(opts->eps > 0.0 && opts->eps < 1.0))
+        return mr_fail(MR_ERR_INVALID_ARG, "workflow options: eps %g: expected a value in (0, 1) (0: the default)",
+                       opts->eps);
     if ((unsigned)opts->method >= MR_WF_METHOD_COUNT)
         return mr_fail(MR_ERR_INVALID_ARG, "workflow options: method %d: unknown (valid: 0 to %d)",
                        (int)opts->method, MR_WF_METHOD_COUNT - 1);
@@ -449,7 +462,7 @@ mr_status mr_wf_metal_to_spec(const mr_wf_metal *in, const mr_wf_options *opts, 
     if (in == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "metal -> spec: NULL input or output texel");
     mr_status status = mr_wf_options_check(opts);
     if (status != MR_OK) return status;
-    mr_wf_options o = opts ? *opts : mr_wf_options_default();
+    mr_wf_options o = options_in_force(opts);
     mr_wf_spec result;
     unsigned f = metal_to_spec_texel(&o, in->albedo, in->metallic, result.diffuse, result.specular);
     result.roughness = sanitise_roughness(in->roughness, &f);
@@ -462,7 +475,7 @@ mr_status mr_wf_spec_to_metal(const mr_wf_spec *in, const mr_wf_options *opts, m
     if (in == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "spec -> metal: NULL input or output texel");
     mr_status status = mr_wf_options_check(opts);
     if (status != MR_OK) return status;
-    mr_wf_options o = opts ? *opts : mr_wf_options_default();
+    mr_wf_options o = options_in_force(opts);
     mr_wf_metal result;
     quantisation qd = quantisation_plain(&o.diffuse_quantisation), qs = quantisation_plain(&o.specular_quantisation);
     unsigned f = spec_to_metal_texel(&o, &qd, &qs, in->diffuse, in->specular, result.albedo, &result.metallic);
@@ -497,7 +510,7 @@ mr_status mr_wf_metal_to_spec_batch(const mr_wf_metal_maps *in, size_t n, const 
         return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL %s map", what, out->diffuse == NULL ? "diffuse" : "specular");
     mr_status status = check_batch(what, n, opts, in->roughness, out->roughness);
     if (status != MR_OK) return status;
-    mr_wf_options o = opts ? *opts : mr_wf_options_default();
+    mr_wf_options o = options_in_force(opts);
     const float *albedo = in->albedo, *metallic = in->metallic, *rough_in = in->roughness;
     float *diffuse = out->diffuse, *specular = out->specular, *rough_out = out->roughness;
 
@@ -530,7 +543,7 @@ mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_maps *in, size_t n, const m
         return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL %s map", what, out->albedo == NULL ? "albedo" : "metallic");
     mr_status status = check_batch(what, n, opts, in->roughness, out->roughness);
     if (status != MR_OK) return status;
-    mr_wf_options o = opts ? *opts : mr_wf_options_default();
+    mr_wf_options o = options_in_force(opts);
     quantisation qd, qs = quantisation_plain(&o.specular_quantisation);
     status = quantisation_tabulate(&o.diffuse_quantisation, &qd);
     if (status == MR_OK) status = quantisation_tabulate(&o.specular_quantisation, &qs);
@@ -757,7 +770,7 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps
         return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL %s map", what, in->diffuse == NULL ? "diffuse" : "specular");
     if (n > 0 && (out->albedo == NULL || out->metallic == NULL))
         return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL %s map", what, out->albedo == NULL ? "albedo" : "metallic");
-    mr_wf_options o = opts ? *opts : mr_wf_options_default();
+    mr_wf_options o = options_in_force(opts);
     o.method = MR_WF_MEAN; // the analytic method is not used; only the shared checks apply
     mr_status status = check_batch(what, n, &o, in->roughness, out->roughness);
     if (status != MR_OK) return status;

@@ -135,10 +135,11 @@ extern "C" {
  * step (1/255), so a float round trip is exact within it. */
 #define MR_WF_DEFAULT_EPS 1e-6
 
-/* Spec -> metal methods. Values are append-only. */
+/* Spec -> metal methods. The default is 0 (so a zeroed mr_wf_options means it); values are append-only from here
+ * (WEIGHTED and MEAN swapped places in 0.1.0 for that). */
 typedef enum mr_wf_method {
-    MR_WF_MEAN = 0, /* Eq. 3 per channel, mean metallic */
-    MR_WF_WEIGHTED, /* Eq. 3 per channel, albedo-weighted mean metallic (the default) */
+    MR_WF_WEIGHTED = 0, /* Eq. 3 per channel, albedo-weighted mean metallic (the default) */
+    MR_WF_MEAN,         /* Eq. 3 per channel, mean metallic */
     MR_WF_KHRONOS,  /* the Khronos glTF converter, both directions */
     MR_WF_CUSTOM,   /* opts->custom (spec -> metal); Eq. 2 for metal -> spec */
     MR_WF_METHOD_COUNT
@@ -212,12 +213,13 @@ typedef int (*mr_wf_custom_fn)(const struct mr_wf_options *opts, const double di
                                double albedo[3], double *metallic);
 
 typedef struct mr_wf_options {
-    double dielectric_f0;   /* F0d of Eq. 2 and 3, in [0, 1); default MR_WF_F0_GLTF (0.04); paper: 0.03 */
+    double dielectric_f0;   /* F0d of Eq. 2 and 3, in (0, 1); 0 = the default MR_WF_F0_GLTF (0.04); paper: 0.03 */
     mr_wf_method method;    /* default MR_WF_WEIGHTED */
-    double eps;             /* absolute reflectance tolerance in [0, 1), default MR_WF_DEFAULT_EPS: an Eq. 3 root
-                               within eps of F0d counts as ambiguous, albedos summing to <= eps fall back to MEAN,
-                               a residual above 2 eps sets MR_WF_OFF_MANIFOLD (eps on each input). 0 makes the flag
-                               see rounding. The quantisations below raise it per value (see "Tolerances") */
+    double eps;             /* absolute reflectance tolerance in (0, 1); 0 = the default MR_WF_DEFAULT_EPS: an Eq. 3
+                               root within eps of F0d counts as ambiguous, albedos summing to <= eps fall back to
+                               MEAN, a residual above 2 eps sets MR_WF_OFF_MANIFOLD (eps on each input). DBL_MIN
+                               makes the flag see rounding. The quantisations below raise it per value
+                               ("Tolerances") */
     mr_wf_custom_fn custom; /* MR_WF_CUSTOM only; default NULL */
     void *custom_data;      /* passed through to custom (via opts); default NULL */
     mr_wf_diffuse spec_diffuse; /* how the specular side's diffuse is read; default MR_WF_DIFFUSE_PLAIN. KHRONOS
@@ -233,7 +235,7 @@ typedef struct mr_wf_options {
 /* The automatic thread rule's threshold (mr_wf_options.threads = 0): below it a team costs more than it saves. */
 #define MR_WF_PARALLEL_TEXELS 16384
 
-/* The defaults listed above. (A zero-initialised struct is valid but means F0d 0 and MEAN.) */
+/* The defaults listed above; a zero-initialised struct means the same (its zero F0d and eps read as the defaults). */
 mr_wf_options mr_wf_options_default(void);
 
 /* MR_OK, or MR_ERR_INVALID_ARG with the message every conversion would give for these options (CUSTOM needs its
