@@ -392,8 +392,8 @@ static mr_status convert_texels(const conversion *cv, const sources *src, mr_ima
     // Bands of rows, side by side: each thread its own planes; the transform runs on one thread per band.
     const int band_rows = width >= BAND_TEXELS ? 1 : BAND_TEXELS / width;
     const int bands = (height + band_rows - 1) / band_rows;
-    const int threads = mr_auto_threads(mr_transform_options_of(cv->opts->transform)->threads, (long)MR_MIN(n, 1u << 30),
-                                        MR_WF_PARALLEL_TEXELS);
+    const int requested = mr_transform_options_of(cv->opts->transform)->threads;
+    const int threads = mr_auto_threads(requested, (long)MR_MIN(n, 1u << 30), MR_WF_PARALLEL_TEXELS);
     const int team = MR_MIN(threads, bands);
     char message[1024] = "";
     band_context ctx = {cv, src, images, stored, width, height, band_rows, need, channels, texels, exr, 1, NULL, NULL};
