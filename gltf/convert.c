@@ -723,9 +723,64 @@ mr_status mr_gltf_convert(mr_gltf *asset, const mr_gltf_convert_options *opts, m
         memset(&r, 0, sizeof r);
         cv.material = k;
         status = convert_material(&cv, cache, &cached, &r);
+        mr_gltf_material m;
+        if (mr_gltf_get_material(asset, k, &m) == MR_OK) snprintf(r.name, sizeof r.name, "%s", m.name);
         if (reports != NULL) reports[k] = r;
         if (opts->progress != NULL) opts->progress(opts->progress_user, k, counts.materials);
     }
     free(cache);
     return status;
+}
+
+mr_status mr_gltf_convert_file(const char *input, const char *output, const mr_gltf_convert_options *opts,
+                               mr_gltf_convert_result *result) {
+    if (result != NULL) memset(result, 0, sizeof *result);
+    if (input == NULL || output == NULL || opts == NULL || opts->transform == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF conversion: NULL input, output, options or transform");
+    // New images are named after the output (out/avocado.gltf: avocado_m0_basecolor.png) unless told otherwise.
+    mr_gltf_convert_options o = *opts;
+    char stem[512];
+    if (o.image_prefix == NULL) {
+        const char *slash = strrchr(output, '/');
+        snprintf(stem, sizeof stem, "%s", slash ? slash + 1 : output);
+        char *dot = strrchr(stem, '.');
+        if (dot != NULL && dot != stem) *dot = '\0';
+        o.image_prefix = stem;
+    }
+    opts = &o;
+    mr_gltf *asset = NULL;
+    mr_status status = mr_gltf_load(input, &asset);
+    if (status != MR_OK) return status;
+    mr_gltf_counts counts;
+    mr_gltf_get_counts(asset, &counts);
+    mr_gltf_material_report *reports = calloc((size_t)MR_MAX(counts.materials, 1), sizeof *reports);
+    if (reports == NULL) status = mr_fail(MR_ERR_NOMEM, "glTF '%s': out of memory", input);
+    if (status == MR_OK) status = mr_gltf_convert(asset, opts, reports);
+    mr_gltf_prune_stats pruned = {0, 0, 0, 0};
+    // Converted materials no longer point at their old textures; left in, they are dead files beside the output.
+    if (status == MR_OK && !opts->keep_unused) status = mr_gltf_prune_unused(asset, &pruned);
+    // Spec-gloss kept beside a new core material: engines without the extension read the core material, so it must
+    // not be required (FloppyDisk requires it).
+    const int to_specgloss = strcmp(mr_transform_kind_of(opts->transform)->target, specgloss_side.model) == 0;
+    if (status == MR_OK && (opts->keep_source || to_specgloss))
+        status = mr_gltf_set_extension_required(asset, "KHR_materials_pbrSpecularGlossiness", 0);
+    if (status == MR_OK) {
+        mr_gltf_sync_extensions(asset);
+        status = mr_gltf_save(asset, output);
+    }
+    mr_gltf_free(asset);
+    if (status != MR_OK || result == NULL) {
+        free(reports);
+        return status;
+    }
+    result->material_count = counts.materials;
+    result->materials = reports;
+    result->pruned = pruned;
+    return MR_OK;
+}
+
+void mr_gltf_convert_result_free(mr_gltf_convert_result *result) {
+    if (result == NULL) return;
+    free(result->materials);
+    memset(result, 0, sizeof *result);
 }

@@ -8,6 +8,8 @@
  *   mr_gltf_convert_options o = {0};  o.transform = t;
  *   mr_gltf_convert(asset, &o, NULL);
  *   mr_gltf_prune_unused(asset, NULL);  mr_gltf_save(asset, "out/out.gltf");
+ * or all of it, load to save, in one call: mr_gltf_convert_file("in.gltf", "out/out.gltf", &o, &result)
+ * (docs/examples/convert_asset.c).
  *
  * Per material: the source workflow's factors times its textures, in linear values (colour textures sRGB-decoded,
  * glossiness and alpha linear), on the grid of the larger source texture (the smaller resampled bilinearly, texel
@@ -44,11 +46,14 @@ extern "C" {
 typedef struct mr_gltf_convert_options {
     const mr_transform *transform; /* required: gltf-specgloss -> gltf, or gltf -> gltf-specgloss */
     const char *image_format;      /* "png" (default) or "exr" for the new images */
-    const char *image_prefix;      /* new images are PREFIX_mK_NAME.EXT beside the output; NULL = "converted" */
+    const char *image_prefix;      /* new images are PREFIX_mK_NAME.EXT beside the output; NULL = "converted", or
+                                      for mr_gltf_convert_file the output's name without its extension */
     int overwrite;                 /* 1: convert spec-gloss materials that have metal-rough values of their own */
     int keep_source;               /* 1: keep the spec-gloss extension on converted materials */
     int exact_inputs;              /* 1: inputs exact to the transform's eps; 0 (default): each value known to half a
                                       code of its texture, times its factor (workflow.h, "Tolerances") */
+    int keep_unused;               /* mr_gltf_convert_file: 1 keeps textures, images and samplers nothing refers to
+                                      any more; 0 (default) prunes them (mr_gltf_prune_unused) */
     void (*progress)(void *user, int material, int material_count); /* after each material; may be NULL */
     void *progress_user;
 } mr_gltf_convert_options;
@@ -62,6 +67,7 @@ typedef enum mr_gltf_convert_outcome {
 
 /* What happened to one material. */
 typedef struct mr_gltf_material_report {
+    char name[128];    /* the material's name ("" if none; truncated) */
     mr_gltf_convert_outcome outcome;
     char reason[256];  /* why kept or skipped; "" otherwise */
     int width, height; /* texture grid, 0 when factors only */
@@ -75,6 +81,24 @@ typedef struct mr_gltf_material_report {
  * (naming asset and image); MR_ERR_FORMAT for a material whose two source textures map onto the surface
  * differently (texture coordinates or transform); MR_ERR_NOMEM. */
 mr_status mr_gltf_convert(mr_gltf *asset, const mr_gltf_convert_options *opts, mr_gltf_material_report *reports);
+
+/* What mr_gltf_convert_file did. */
+typedef struct mr_gltf_convert_result {
+    int material_count;
+    mr_gltf_material_report *materials; /* [material_count]; owned, released by mr_gltf_convert_result_free */
+    mr_gltf_prune_stats pruned;          /* what pruning removed (zeros with keep_unused) */
+} mr_gltf_convert_result;
+
+/* The whole job in one call: load `input`, convert (mr_gltf_convert), prune what nothing refers to any more (unless
+ * keep_unused), and save `output` (.gltf with its files beside it, or .glb; never over an input file). A spec-gloss
+ * extension kept beside the new core material (keep_source, or gltf -> gltf-specgloss) is made optional, so engines
+ * without it read the core material. *result (may be NULL) is filled on success and zeroed on failure. Errors are
+ * mr_gltf_load's, mr_gltf_convert's and mr_gltf_save's. */
+mr_status mr_gltf_convert_file(const char *input, const char *output, const mr_gltf_convert_options *opts,
+                               mr_gltf_convert_result *result);
+
+/* Releases result->materials and zeroes *result; NULL-safe. */
+void mr_gltf_convert_result_free(mr_gltf_convert_result *result);
 
 #ifdef __cplusplus
 }

@@ -50,4 +50,15 @@ expect "the typical use compiles with pkg-config --cflags --libs matremap" 0 "" 
 expect "the typical use runs: Ward remapped into GGX" 0 \
     "^(converged|at-bound|unreachable|local-minimum|under-resolved), SSIM 0\.9[0-9]+$" -- bash -c "cd '$tmp' && ./typical"
 check "... ggx.exr is written" test -s "$tmp/ggx.exr"
+
+# The example program of docs/examples: a glTF asset converted in one call, through the installed library.
+expect "docs/examples/convert_asset.c compiles with pkg-config --cflags --libs matremap" 0 "" -- \
+    cc -std=c11 -Wall -Wextra -Werror "$root/docs/examples/convert_asset.c" -o "$tmp/convert_asset" $cflags $libs
+duck="$(cd "$root/.." && pwd)/shared/assets/specgloss/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Duck.gltf"
+mkdir -p "$tmp/duck"
+expect "... and converts the Duck with weighted" 0 "^material 0 'blinn3-fx': converted, 512x512, [0-9]+ texels flagged$" \
+    -- "$tmp/convert_asset" "$duck" "$tmp/duck/duck.gltf" weighted
+check "... writing the asset and its new textures" test -s "$tmp/duck/duck.gltf" -a -s "$tmp/duck/duck_m0_basecolor.png"
+expect "... and names a method it does not know" 1 "unknown \\(valid: weighted, mlp, mean, khronos, extension\\)" -- \
+    "$tmp/convert_asset" "$duck" "$tmp/duck/x.gltf" nope
 finish

@@ -28,7 +28,6 @@
 #include "cli.h"
 #include "gltf/mr_gltf.h"
 
-#define PATH_SIZE 4096
 
 static void print_help(void) {
     printf("Usage: matremap gltf spec2metal IN.gltf|IN.glb -o OUT.gltf|OUT.glb [options]\n"
@@ -170,15 +169,6 @@ static int parse(int argc, char **argv, options *o) {
     return CLI_EXIT_OK;
 }
 
-/* The output's file name without folder and extension: the stem of the new textures' names. */
-static void output_stem(const char *output, char *stem, size_t size) {
-    const char *slash = strrchr(output, '/');
-    snprintf(stem, size, "%s", slash ? slash + 1 : output);
-    char *dot = strrchr(stem, '.');
-    if (dot != NULL && dot != stem) *dot = '\0';
-}
-
-/* The folder of the output, where the new textures are staged before the asset copies them beside it. */
 int cmd_gltf(int argc, char **argv) {
     for (int i = 1; i < argc; i++)
         if (cli_is_help(argv[i])) {
@@ -217,63 +207,34 @@ int cmd_gltf(int argc, char **argv) {
         if (status != MR_OK) code = cli_fail("gltf", status);
     }
     const char *net_path = o.weights ? o.weights : transform ? mr_transform_network_path(transform) : "";
-    mr_gltf *asset = NULL;
-    if (code == CLI_EXIT_OK) {
-        mr_status status = mr_gltf_load(o.input, &asset);
-        if (status != MR_OK) code = cli_fail("gltf", status);
-    }
-    char stem[PATH_SIZE];
-    output_stem(o.output, stem, sizeof stem);
     double started = cli_now();
-    mr_gltf_counts counts = {0};
-    if (asset) mr_gltf_get_counts(asset, &counts);
-    mr_gltf_material_report *outcomes = calloc((size_t)(counts.materials > 0 ? counts.materials : 1),
-                                               sizeof *outcomes);
-    if (outcomes == NULL && code == CLI_EXIT_OK) code = CLI_EXIT_INTERNAL;
+    mr_gltf_convert_result result = {0, NULL, {0, 0, 0, 0}};
     if (code == CLI_EXIT_OK) {
         mr_gltf_convert_options co = {0};
         co.transform = transform;
         co.image_format = o.format;
-        co.image_prefix = stem;
         co.overwrite = o.overwrite;
         co.keep_source = o.keep_specgloss;
         co.exact_inputs = o.eps_given;
-        mr_status status = mr_gltf_convert(asset, &co, outcomes);
+        co.keep_unused = o.keep_unused;
+        mr_status status = mr_gltf_convert_file(o.input, o.output, &co, &result);
         if (status != MR_OK) code = cli_fail("gltf", status);
     }
+    const mr_gltf_material_report *outcomes = result.materials;
+    const mr_gltf_prune_stats pruned = result.pruned;
     int converted = 0, kept = 0;
-    for (int k = 0; k < counts.materials && code == CLI_EXIT_OK; k++) {
+    for (int k = 0; k < result.material_count; k++) {
         converted += outcomes[k].outcome == MR_GLTF_CONVERTED || outcomes[k].outcome == MR_GLTF_SHARED;
         kept += outcomes[k].outcome == MR_GLTF_KEPT;
     }
     // The off-manifold tolerance, where one is computed (analytic spec2metal methods).
     const char *tolerance = !(kind->flags & MR_TRANSFORM_TOLERANCES) ? NULL : o.eps_given ? "eps" : "encoding";
     const int use_mlp = (kind->flags & MR_TRANSFORM_NEEDS_NETWORK) != 0;
-    mr_gltf_prune_stats pruned = {0};
-    if (code == CLI_EXIT_OK && !o.keep_unused) {
-        // Converted materials no longer point at their old textures (spec2metal's diffuse and
-        // specular-glossiness ones, the replaced core ones); left in, they are dead files beside the output and
-        // the validator's UNUSED_OBJECT infos.
-        mr_status status = mr_gltf_prune_unused(asset, &pruned);
-        if (status != MR_OK) code = cli_fail("gltf", status);
-    }
-    if (code == CLI_EXIT_OK) {
-        // Spec-gloss kept beside a new core material (--keep-specgloss, or metal2spec's fallback): engines without
-        // the extension read the core material, so it must not be required (FloppyDisk requires it).
-        mr_status status = MR_OK;
-        if (o.keep_specgloss || !to_metal)
-            status = mr_gltf_set_extension_required(asset, "KHR_materials_pbrSpecularGlossiness", 0);
-        mr_gltf_sync_extensions(asset);
-        if (status == MR_OK) status = mr_gltf_save(asset, o.output);
-        if (status != MR_OK) code = cli_fail("gltf", status);
-    }
     double seconds = cli_now() - started;
     if (code == CLI_EXIT_OK && !o.json) {
-        for (int k = 0; k < counts.materials; k++) {
+        for (int k = 0; k < result.material_count; k++) {
             const mr_gltf_material_report *r = &outcomes[k];
-            mr_gltf_material m;
-            mr_gltf_get_material(asset, k, &m);
-            printf("material %d '%s': ", k, m.name);
+            printf("material %d '%s': ", k, r->name);
             if (r->outcome == MR_GLTF_KEPT) {
                 printf("kept, not converted: %s; its spec-gloss extension %s; --overwrite-metal-rough converts it "
                        "instead\n", r->reason, o.keep_specgloss ? "kept (--keep-specgloss)" : "removed");
@@ -300,7 +261,7 @@ int cmd_gltf(int argc, char **argv) {
                    r->outcome == MR_GLTF_SHARED ? " (the same sources as an earlier material: its textures reused)"
                                                 : "");
         }
-        printf("gltf %s: %d of %d materials converted", o.direction, converted, counts.materials);
+        printf("gltf %s: %d of %d materials converted", o.direction, converted, result.material_count);
         if (kept > 0) printf(", %d kept with metal-rough values of %s own", kept, kept == 1 ? "its" : "their");
         printf(" with %s%s%s", o.method, use_mlp ? " " : "", use_mlp ? net_path : "");
         if (tolerance && o.eps_given)
@@ -332,7 +293,7 @@ int cmd_gltf(int argc, char **argv) {
             printf("null, \"eps\": null");
         for (int which = MR_GLTF_CONVERTED; which <= MR_GLTF_KEPT; which++) {
             printf(", \"%s\": [", kinds[which]);
-            for (int k = 0, first = 1; k < counts.materials; k++)
+            for (int k = 0, first = 1; k < result.material_count; k++)
                 if (outcomes[k].outcome == (mr_gltf_convert_outcome)which ||
                     (which == MR_GLTF_CONVERTED && outcomes[k].outcome == MR_GLTF_SHARED)) {
                     printf("%s%d", first ? "" : ", ", k);
@@ -341,12 +302,10 @@ int cmd_gltf(int argc, char **argv) {
             printf("]");
         }
         printf(", \"materials\": [");
-        for (int k = 0; k < counts.materials; k++) {
+        for (int k = 0; k < result.material_count; k++) {
             const mr_gltf_material_report *r = &outcomes[k];
-            mr_gltf_material m;
-            mr_gltf_get_material(asset, k, &m);
             printf("%s{\"index\": %d, \"name\": ", k ? ", " : "", k);
-            cli_json_string(stdout, m.name);
+            cli_json_string(stdout, r->name);
             printf(", \"outcome\": \"%s\", \"reason\": ", kinds[r->outcome]);
             if (r->outcome == MR_GLTF_CONVERTED || r->outcome == MR_GLTF_SHARED)
                 printf("null");
@@ -365,8 +324,7 @@ int cmd_gltf(int argc, char **argv) {
                "\"uncertain\": %d}}\n", o.keep_unused ? "true" : "false", pruned.textures, pruned.images,
                pruned.samplers, pruned.uncertain);
     }
-    free(outcomes);
-    mr_gltf_free(asset);
+    mr_gltf_convert_result_free(&result);
     mr_transform_free(transform);
     mr_mlp_free(net);
     return code;
