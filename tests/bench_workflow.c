@@ -61,7 +61,7 @@ static double uniform(unsigned long long *state) {
 
 static mr_status convert_as(const mr_mlp *net, mr_wf_method m, mr_wf_diffuse spec_diffuse, const float *diffuse,
                             const float *specular, size_t n, float *albedo, float *metallic) {
-    mr_wf_spec_maps in = {(float *)diffuse, (float *)specular, NULL};
+    mr_wf_spec_input in = {(float *)diffuse, (float *)specular, NULL};
     mr_wf_metal_maps out = {albedo, metallic, NULL};
     mr_wf_options o = mr_wf_options_default();
     o.method = m == MR_WF_CUSTOM ? MR_WF_WEIGHTED : m;

@@ -67,7 +67,7 @@ MR_TEST(duck_textures_hold_the_converters_answers) {
         mr_wf_options w = mr_wf_options_default();
         w.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
         w.diffuse_quantisation = mr_wf_quantisation_of(&stored, before.diffuse_factor);
-        MR_CHECK(mr_wf_spec_to_metal_batch(&(mr_wf_spec_maps){d, s, r}, n, &w, &(mr_wf_metal_maps){a, m, r}, NULL) ==
+        MR_CHECK(mr_wf_spec_to_metal_batch(&(mr_wf_spec_input){d, s, r}, n, &w, &(mr_wf_metal_maps){a, m, r}, NULL) ==
                  MR_OK);
         double worst_colour = 0.0, worst_data = 0.0;
         for (size_t i = 0; i < n; i++) {

@@ -5,6 +5,10 @@
  */
 #include "harness.h"
 
+/* A batch's read-only input view of maps (workflow.h, mr_wf_spec_input / mr_wf_metal_input). */
+#define SPEC_IN(m) (&(mr_wf_spec_input){(m).diffuse, (m).specular, (m).roughness})
+#define METAL_IN(m) (&(mr_wf_metal_input){(m).albedo, (m).metallic, (m).roughness})
+
 #include "brdf/brdf.h"
 #include "nn/mlp.h"
 #include "render/render.h"
@@ -200,7 +204,7 @@ MR_TEST(residual_form_is_exact_on_the_manifold) {
             spe[3 * i + c] = (float)s.specular[c];
         }
     }
-    mr_wf_spec_maps in = {dif, spe, NULL};
+    mr_wf_spec_input in = {dif, spe, NULL};
     mr_wf_metal_maps out = {alb, met, NULL}, wout = {walb, wmet, NULL};
     MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in, N, NULL, &out, NULL));
     MR_CHECK_OK(mr_wf_spec_to_metal_batch(&in, N, NULL, &wout, NULL));
@@ -227,7 +231,7 @@ MR_TEST(residual_form_is_colour_neutral) {
         }
     mr_wf_spec_maps in = {dif, spe, NULL};
     mr_wf_metal_maps out = {alb, met, NULL};
-    MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in, N, NULL, &out, NULL));
+    MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, SPEC_IN(in), N, NULL, &out, NULL));
     double worst = 0.0, moved = 0.0;
     for (int i = 0; i < N; i++) {
         worst = fmax(worst, fmax(fabs(alb[3 * i + 1] - alb[3 * i]), fabs(alb[3 * i + 2] - alb[3 * i])));
@@ -236,7 +240,7 @@ MR_TEST(residual_form_is_colour_neutral) {
     MR_CHECK_MSG(worst <= 1e-7, "a grey input came out coloured by %g", worst);
     /* a coloured input may come out with channels moved differently (the form does not freeze colour) */
     float cd[3] = {0.8f, 0.2f, 0.1f}, cs[3] = {0.9f, 0.3f, 0.3f}, ca[3], cm;
-    mr_wf_spec_maps cin = {cd, cs, NULL};
+    mr_wf_spec_input cin = {cd, cs, NULL};
     mr_wf_metal_maps cout_ = {ca, &cm, NULL};
     MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &cin, 1, NULL, &cout_, NULL));
     float wa[3], wm;
@@ -257,10 +261,10 @@ MR_TEST(residual_form_batch_equals_single_texels) {
     float alb[3 * N], met[N];
     mr_wf_spec_maps in = {dif, spe, NULL};
     mr_wf_metal_maps out = {alb, met, NULL};
-    MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in, N, NULL, &out, NULL));
+    MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, SPEC_IN(in), N, NULL, &out, NULL));
     for (int i = 0; i < N; i++) {
         float a[3], m;
-        mr_wf_spec_maps one = {dif + 3 * i, spe + 3 * i, NULL};
+        mr_wf_spec_input one = {dif + 3 * i, spe + 3 * i, NULL};
         mr_wf_metal_maps o = {a, &m, NULL};
         MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &one, 1, NULL, &o, NULL));
         MR_CHECK_MSG(memcmp(a, alb + 3 * i, sizeof a) == 0 && m == met[i], "texel %d differs alone", i);
@@ -298,7 +302,7 @@ MR_TEST(network_kind_round_trip) {
     float d[3] = {0.5f, 0.5f, 0.5f}, s[3] = {0.04f, 0.04f, 0.04f}, a[3], m;
     mr_wf_spec_maps in = {d, s, NULL};
     mr_wf_metal_maps out = {a, &m, NULL};
-    MR_CHECK(mr_wf_spec_to_metal_mlp_batch(net, &in, 1, NULL, &out, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_wf_spec_to_metal_mlp_batch(net, SPEC_IN(in), 1, NULL, &out, NULL) == MR_ERR_INVALID_ARG);
     mr_mlp_free(net);
 }
 

@@ -8,6 +8,10 @@
 #include "harness.h"
 #include "matremap.h"
 
+/* A batch's read-only input view of maps (workflow.h, mr_wf_spec_input / mr_wf_metal_input). */
+#define SPEC_IN(m) (&(mr_wf_spec_input){(m).diffuse, (m).specular, (m).roughness})
+#define METAL_IN(m) (&(mr_wf_metal_input){(m).albedo, (m).metallic, (m).roughness})
+
 /* Every kind's slots are parameters of its models, with the models' channel counts. */
 MR_TEST(kinds_name_model_parameters) {
     int kinds = 0;
@@ -71,7 +75,7 @@ MR_TEST(repeated_values_give_the_per_texel_bits) {
     for (size_t i = 0; i < n; i++) rough[i] = 1.0f - g[i];
     mr_wf_spec_maps in = {d, s, rough};
     mr_wf_metal_maps out = {a, m, rough};
-    MR_CHECK(mr_wf_spec_to_metal_batch(&in, n, &w, &out, f) == MR_OK);
+    MR_CHECK(mr_wf_spec_to_metal_batch(SPEC_IN(in), n, &w, &out, f) == MR_OK);
 
     mr_transform *t = NULL;
     MR_CHECK(mr_transform_create(mr_transform_find("gltf-specgloss", "gltf", "weighted"), NULL, &t) == MR_OK);

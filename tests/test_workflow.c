@@ -18,6 +18,10 @@
 #include "workflow/workflow.h"
 #include "nn/mlp.h"
 
+/* A batch's read-only input view of maps (workflow.h, mr_wf_spec_input / mr_wf_metal_input). */
+#define SPEC_IN(m) (&(mr_wf_spec_input){(m).diffuse, (m).specular, (m).roughness})
+#define METAL_IN(m) (&(mr_wf_metal_input){(m).albedo, (m).metallic, (m).roughness})
+
 static mr_wf_options options(mr_wf_method method, double f0) {
     mr_wf_options o = mr_wf_options_default();
     o.method = method;
@@ -195,8 +199,8 @@ MR_TEST(float_batch_round_trip_is_exact_within_float_rounding) {
         mr_wf_options o = options((mr_wf_method)method, MR_WF_F0_PAPER);
         mr_wf_metal_maps metal = {albedo, metallic, NULL}, back = {albedo2, metallic2, NULL};
         mr_wf_spec_maps spec = {diffuse, specular, NULL};
-        MR_CHECK_OK(mr_wf_metal_to_spec_batch(&metal, N, &o, &spec, flags));
-        MR_CHECK_OK(mr_wf_spec_to_metal_batch(&spec, N, &o, &back, flags));
+        MR_CHECK_OK(mr_wf_metal_to_spec_batch(METAL_IN(metal), N, &o, &spec, flags));
+        MR_CHECK_OK(mr_wf_spec_to_metal_batch(SPEC_IN(spec), N, &o, &back, flags));
         double worst = 0.0;
         int flagged = 0;
         for (int i = 0; i < N; i++) {
@@ -471,8 +475,8 @@ MR_TEST(albedo_at_or_below_the_dielectric_f0) {
             uint8_t fl;
             mr_wf_metal_maps in = {alb, &met, NULL}, back = {a2, &m2, NULL};
             mr_wf_spec_maps spec = {d, sp, NULL};
-            MR_CHECK_OK(mr_wf_metal_to_spec_batch(&in, 1, &o, &spec, &fl));
-            MR_CHECK_OK(mr_wf_spec_to_metal_batch(&spec, 1, &o, &back, &fl));
+            MR_CHECK_OK(mr_wf_metal_to_spec_batch(METAL_IN(in), 1, &o, &spec, &fl));
+            MR_CHECK_OK(mr_wf_spec_to_metal_batch(SPEC_IN(spec), 1, &o, &back, &fl));
             MR_CHECK(m2 <= 1e-6f && fabsf(a2[0] - 0.02f) <= 1e-6f && fabsf(a2[2] - 0.01f) <= 1e-6f && fl == 0);
         }
     // A partial metal darker than F0d on the double root: (A 0.02, m 0.5) is the only solution, recovered exactly.
@@ -615,7 +619,7 @@ MR_TEST(non_finite_inputs_are_flagged_and_read_as_zero) {
     for (int i = 0; i < 12; i++) sp[i] = 0.04f;
     mr_wf_spec_maps in = {d, sp, rough};
     mr_wf_metal_maps out = {a, m, r};
-    MR_CHECK_OK(mr_wf_spec_to_metal_batch(&in, 4, NULL, &out, flags));
+    MR_CHECK_OK(mr_wf_spec_to_metal_batch(SPEC_IN(in), 4, NULL, &out, flags));
     for (int i = 0; i < 4; i++) {
         MR_CHECK_MSG(r[i] == (i < 3 ? 1.0f : 0.25f), "texel %d: roughness %g", i, (double)r[i]);
         MR_CHECK(((flags[i] & MR_WF_NONFINITE_INPUT) != 0) == (i < 3));
@@ -626,15 +630,16 @@ MR_TEST(non_finite_inputs_are_flagged_and_read_as_zero) {
         for (int i = 0; i < 6; i++) net->in_std[i] = 1.0f;
         for (int i = 0; i < 4; i++) net->out_std[i] = 1.0f;
         memset(r, 0, sizeof r);
-        MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in, 4, NULL, &out, flags));
+        MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, SPEC_IN(in), 4, NULL, &out, flags));
         for (int i = 0; i < 4; i++)
             MR_CHECK(r[i] == (i < 3 ? 1.0f : 0.25f) && ((flags[i] & MR_WF_NONFINITE_INPUT) != 0) == (i < 3));
         mr_mlp_free(net);
     }
     mr_wf_metal_maps metal = {a, m, rough};
     mr_wf_spec_maps spec = {d, sp, r};
-    for (int i = 0; i < 4; i++) m[i] = 0.5f;
-    MR_CHECK_OK(mr_wf_metal_to_spec_batch(&metal, 4, NULL, &spec, flags));
+    for (int i = 0; i < 4; i++)
+        m[i] = 0.5f;
+    MR_CHECK_OK(mr_wf_metal_to_spec_batch(METAL_IN(metal), 4, NULL, &spec, flags));
     for (int i = 0; i < 4; i++)
         MR_CHECK(r[i] == (i < 3 ? 1.0f : 0.25f) && ((flags[i] & MR_WF_NONFINITE_INPUT) != 0) == (i < 3));
 }
@@ -733,7 +738,7 @@ MR_TEST(batch_equals_per_texel) {
         o.custom_data = &probe;
         mr_wf_metal_maps metal_in = {in.albedo, in.metallic, in.rough};
         mr_wf_spec_maps spec_out = {out.diffuse, out.specular, out.rough};
-        MR_CHECK_OK(mr_wf_metal_to_spec_batch(&metal_in, BATCH_N, &o, &spec_out, flags));
+        MR_CHECK_OK(mr_wf_metal_to_spec_batch(METAL_IN(metal_in), BATCH_N, &o, &spec_out, flags));
         int mismatches = 0;
         for (int i = 0; i < BATCH_N; i++) {
             mr_wf_metal t = {{in.albedo[3 * i], in.albedo[3 * i + 1], in.albedo[3 * i + 2]}, in.metallic[i],
@@ -751,7 +756,7 @@ MR_TEST(batch_equals_per_texel) {
 
         mr_wf_spec_maps spec_in = {in.diffuse, in.specular, in.rough};
         mr_wf_metal_maps metal_out = {out.albedo, out.metallic, out.rough};
-        MR_CHECK_OK(mr_wf_spec_to_metal_batch(&spec_in, BATCH_N, &o, &metal_out, flags));
+        MR_CHECK_OK(mr_wf_spec_to_metal_batch(SPEC_IN(spec_in), BATCH_N, &o, &metal_out, flags));
         mismatches = 0;
         int flagged = 0;
         for (int i = 0; i < BATCH_N; i++) {
@@ -775,16 +780,16 @@ MR_TEST(batch_equals_per_texel) {
     memcpy(diffuse_copy, in.diffuse, sizeof diffuse_copy);
     mr_wf_spec_maps spec_in = {in.diffuse, in.specular, NULL};
     mr_wf_metal_maps metal_out = {out.albedo, out.metallic, NULL};
-    MR_CHECK_OK(mr_wf_spec_to_metal_batch(&spec_in, BATCH_N, &o, &metal_out, NULL));
+    MR_CHECK_OK(mr_wf_spec_to_metal_batch(SPEC_IN(spec_in), BATCH_N, &o, &metal_out, NULL));
     mr_wf_spec_maps in_place_in = {diffuse_copy, in.specular, NULL};
     mr_wf_metal_maps in_place_out = {diffuse_copy, metallic2, NULL};
-    MR_CHECK_OK(mr_wf_spec_to_metal_batch(&in_place_in, BATCH_N, &o, &in_place_out, NULL));
+    MR_CHECK_OK(mr_wf_spec_to_metal_batch(SPEC_IN(in_place_in), BATCH_N, &o, &in_place_out, NULL));
     MR_CHECK(memcmp(diffuse_copy, out.albedo, sizeof diffuse_copy) == 0);
     MR_CHECK(memcmp(metallic2, out.metallic, sizeof metallic2) == 0);
     // n = 0 does nothing, even with no maps.
     mr_wf_spec_maps none = {NULL, NULL, NULL};
     mr_wf_metal_maps none_out = {NULL, NULL, NULL};
-    MR_CHECK_OK(mr_wf_spec_to_metal_batch(&none, 0, &o, &none_out, NULL));
+    MR_CHECK_OK(mr_wf_spec_to_metal_batch(SPEC_IN(none), 0, &o, &none_out, NULL));
 }
 
 MR_TEST(results_are_identical_for_one_and_two_threads) {
@@ -799,10 +804,10 @@ MR_TEST(results_are_identical_for_one_and_two_threads) {
             o.threads = pass + 1; // a count given (the automatic rule keeps small batches on one thread)
             mr_wf_spec_maps spec_in = {in.diffuse, in.specular, in.rough};
             mr_wf_metal_maps metal_out = {out->albedo, out->metallic, out->rough};
-            MR_CHECK_OK(mr_wf_spec_to_metal_batch(&spec_in, BATCH_N, &o, &metal_out, flags));
+            MR_CHECK_OK(mr_wf_spec_to_metal_batch(SPEC_IN(spec_in), BATCH_N, &o, &metal_out, flags));
             mr_wf_metal_maps metal_in = {in.albedo, in.metallic, in.rough};
             mr_wf_spec_maps spec_out = {out->diffuse, out->specular, out->rough};
-            MR_CHECK_OK(mr_wf_metal_to_spec_batch(&metal_in, BATCH_N, &o, &spec_out, flags + BATCH_N));
+            MR_CHECK_OK(mr_wf_metal_to_spec_batch(METAL_IN(metal_in), BATCH_N, &o, &spec_out, flags + BATCH_N));
         }
         MR_CHECK(memcmp(&one, &two, sizeof one) == 0);
         MR_CHECK(memcmp(flags_one, flags_two, sizeof flags_one) == 0);
@@ -877,19 +882,19 @@ MR_TEST(bad_arguments_are_rejected_with_a_message) {
     mr_wf_spec_maps sin = {d, s, NULL}, s_no_d = {NULL, s, NULL}, s_rough = {d, s, r};
     mr_wf_metal_maps mout = {a, m, NULL}, m_no_m = {a, NULL, NULL}, m_rough = {a, m, r};
     CHECK_REJECTED(mr_wf_spec_to_metal_batch(NULL, 2, &o, &mout, NULL), "NULL");
-    CHECK_REJECTED(mr_wf_spec_to_metal_batch(&sin, 2, &o, NULL, NULL), "NULL");
-    CHECK_REJECTED(mr_wf_spec_to_metal_batch(&s_no_d, 2, &o, &mout, NULL), "diffuse");
-    CHECK_REJECTED(mr_wf_spec_to_metal_batch(&sin, 2, &o, &m_no_m, NULL), "metallic");
-    CHECK_REJECTED(mr_wf_spec_to_metal_batch(&sin, 2, &o, &m_rough, NULL), "roughness");
-    CHECK_REJECTED(mr_wf_spec_to_metal_batch(&s_rough, 2, &o, &mout, NULL), "roughness");
-    CHECK_REJECTED(mr_wf_spec_to_metal_batch(&sin, SIZE_MAX / 2, &o, &mout, NULL), "texels");
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(SPEC_IN(sin), 2, &o, NULL, NULL), "NULL");
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(SPEC_IN(s_no_d), 2, &o, &mout, NULL), "diffuse");
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(SPEC_IN(sin), 2, &o, &m_no_m, NULL), "metallic");
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(SPEC_IN(sin), 2, &o, &m_rough, NULL), "roughness");
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(SPEC_IN(s_rough), 2, &o, &mout, NULL), "roughness");
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(SPEC_IN(sin), SIZE_MAX / 2, &o, &mout, NULL), "texels");
     mr_wf_metal_maps min = {a, m, NULL}, m_no_a = {NULL, m, NULL};
     mr_wf_spec_maps sout = {d, s, NULL}, s_no_s = {d, NULL, NULL};
-    CHECK_REJECTED(mr_wf_metal_to_spec_batch(&m_no_a, 2, &o, &sout, NULL), "albedo");
-    CHECK_REJECTED(mr_wf_metal_to_spec_batch(&min, 2, &o, &s_no_s, NULL), "specular");
+    CHECK_REJECTED(mr_wf_metal_to_spec_batch(METAL_IN(m_no_a), 2, &o, &sout, NULL), "albedo");
+    CHECK_REJECTED(mr_wf_metal_to_spec_batch(METAL_IN(min), 2, &o, &s_no_s, NULL), "specular");
     o.dielectric_f0 = 2.0;
-    CHECK_REJECTED(mr_wf_metal_to_spec_batch(&min, 2, &o, &sout, NULL), "dielectric_f0");
-    CHECK_REJECTED(mr_wf_spec_to_metal_batch(&sin, 2, &o, &mout, NULL), "dielectric_f0");
+    CHECK_REJECTED(mr_wf_metal_to_spec_batch(METAL_IN(min), 2, &o, &sout, NULL), "dielectric_f0");
+    CHECK_REJECTED(mr_wf_spec_to_metal_batch(SPEC_IN(sin), 2, &o, &mout, NULL), "dielectric_f0");
 }
 
 /* ---- the spec-gloss diffuse convention (MR_WF_DIFFUSE_SPECGLOSS) --------------------------------------------- */
@@ -1053,11 +1058,11 @@ MR_TEST(mlp_batch_reads_the_specgloss_diffuse_lobe) {
     sg.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
     mr_wf_spec_maps in_sg = {d, s, NULL}, in_plain = {dim, s, NULL};
     mr_wf_metal_maps out1 = {a1, m1, NULL}, out2 = {a2, m2, NULL};
-    MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in_sg, N, &sg, &out1, NULL));
-    MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in_plain, N, &plain, &out2, NULL));
+    MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, SPEC_IN(in_sg), N, &sg, &out1, NULL));
+    MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, SPEC_IN(in_plain), N, &plain, &out2, NULL));
     MR_CHECK(memcmp(a1, a2, sizeof a1) == 0 && memcmp(m1, m2, sizeof m1) == 0);
     mr_wf_metal_maps out3 = {a2, m2, NULL};
-    MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in_sg, N, &plain, &out3, NULL));
+    MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, SPEC_IN(in_sg), N, &plain, &out3, NULL));
     MR_CHECK(memcmp(a1, a2, sizeof a1) != 0); // and the option does change the answer
     mr_mlp_free(net);
 }
@@ -1105,25 +1110,25 @@ MR_TEST(mlp_batch_of_repeated_values_equals_texel_by_texel) {
         for (size_t i = 0; i < N; i++) {
             mr_wf_spec_maps in = {d + 3 * i, s + 3 * i, rough + i};
             mr_wf_metal_maps out = {ref_a + 3 * i, ref_m + i, ref_r + i};
-            MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in, 1, &o, &out, ref_flags + i));
+            MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, SPEC_IN(in), 1, &o, &out, ref_flags + i));
         }
         int saved = omp_get_max_threads();
         for (int threads = 1; threads <= 3; threads++) {
             omp_set_num_threads(threads);
             mr_wf_spec_maps in = {d, s, rough};
             mr_wf_metal_maps out = {a, m, r};
-            MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in, N, &o, &out, flags));
+            MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, SPEC_IN(in), N, &o, &out, flags));
             MR_CHECK_MSG(memcmp(a, ref_a, sizeof a) == 0 && memcmp(m, ref_m, sizeof m) == 0 &&
-                         memcmp(r, ref_r, sizeof r) == 0 && memcmp(flags, ref_flags, sizeof flags) == 0,
+                             memcmp(r, ref_r, sizeof r) == 0 && memcmp(flags, ref_flags, sizeof flags) == 0,
                          "form %d, %d threads: the batch differs from texel by texel", form, threads);
             // in place: the albedo over the diffuse, the metallic over the roughness it reads
             memcpy(d2, d, sizeof d2);
             memcpy(rough2, rough, sizeof rough2);
             mr_wf_spec_maps in2 = {d2, s, rough2};
             mr_wf_metal_maps out2 = {d2, rough2, r};
-            MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, &in2, N, &o, &out2, flags));
+            MR_CHECK_OK(mr_wf_spec_to_metal_mlp_batch(net, SPEC_IN(in2), N, &o, &out2, flags));
             MR_CHECK_MSG(memcmp(d2, ref_a, sizeof d2) == 0 && memcmp(rough2, ref_m, sizeof rough2) == 0 &&
-                         memcmp(r, ref_r, sizeof r) == 0,
+                             memcmp(r, ref_r, sizeof r) == 0,
                          "form %d, %d threads: in place differs from texel by texel", form, threads);
         }
         omp_set_num_threads(saved);
@@ -1175,7 +1180,7 @@ MR_TEST(clean_8bit_exports_flag_nothing) {
         o.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS; // as the spec2metal commands read glTF maps
         mr_wf_metal_maps metal_in = {albedo, metallic, NULL};
         mr_wf_spec_maps spec = {diffuse, specular, NULL};
-        MR_CHECK_OK(mr_wf_metal_to_spec_batch(&metal_in, (size_t)n, &o, &spec, flags));
+        MR_CHECK_OK(mr_wf_metal_to_spec_batch(METAL_IN(metal_in), (size_t)n, &o, &spec, flags));
         int kept = 0;
         for (int i = 0; i < n; i++) { // keep what spec-gloss can store, quantised
             int partial = metallic[i] > 0.0f && metallic[i] < 1.0f;
@@ -1193,9 +1198,11 @@ MR_TEST(clean_8bit_exports_flag_nothing) {
         mr_wf_metal_maps metal_out = {back_albedo, back_metal, NULL};
         int off[2] = {0, 0};
         for (int quantised = 0; quantised < 2; quantised++) {
-            if (quantised) o.diffuse_quantisation = o.specular_quantisation = srgb8();
-            MR_CHECK_OK(mr_wf_spec_to_metal_batch(&spec, (size_t)kept, &o, &metal_out, flags));
-            for (int i = 0; i < kept; i++) off[quantised] += (flags[i] & MR_WF_OFF_MANIFOLD) != 0;
+            if (quantised)
+                o.diffuse_quantisation = o.specular_quantisation = srgb8();
+            MR_CHECK_OK(mr_wf_spec_to_metal_batch(SPEC_IN(spec), (size_t)kept, &o, &metal_out, flags));
+            for (int i = 0; i < kept; i++)
+                off[quantised] += (flags[i] & MR_WF_OFF_MANIFOLD) != 0;
         }
         MR_CHECK_MSG(off[1] == 0, "%s: %d of %d texels flagged with 8-bit tolerances", mr_wf_method_name(o.method),
                      off[1], kept);
@@ -1302,7 +1309,7 @@ MR_TEST(quantised_batch_equals_per_texel) {
             o.diffuse_quantisation = o.specular_quantisation = q;
             mr_wf_spec_maps in = {d, sp, NULL};
             mr_wf_metal_maps out = {a, m, NULL};
-            MR_CHECK_OK(mr_wf_spec_to_metal_batch(&in, N, &o, &out, flags));
+            MR_CHECK_OK(mr_wf_spec_to_metal_batch(SPEC_IN(in), N, &o, &out, flags));
             int mismatches = 0, flagged = 0;
             for (int i = 0; i < N; i++) {
                 double di[3] = {d[3 * i], d[3 * i + 1], d[3 * i + 2]};
@@ -1332,9 +1339,9 @@ MR_TEST(zeroed_options_are_the_defaults) {
     memset(&zeroed, 0, sizeof zeroed);
     const mr_wf_options defaults = mr_wf_options_default();
     MR_CHECK(mr_wf_options_check(&zeroed) == MR_OK);
-    MR_CHECK(mr_wf_spec_to_metal_batch(&(mr_wf_spec_maps){d, s, NULL}, N, &zeroed, &(mr_wf_metal_maps){a1, m1, NULL},
+    MR_CHECK(mr_wf_spec_to_metal_batch(&(mr_wf_spec_input){d, s, NULL}, N, &zeroed, &(mr_wf_metal_maps){a1, m1, NULL},
                                        f1) == MR_OK);
-    MR_CHECK(mr_wf_spec_to_metal_batch(&(mr_wf_spec_maps){d, s, NULL}, N, &defaults,
+    MR_CHECK(mr_wf_spec_to_metal_batch(&(mr_wf_spec_input){d, s, NULL}, N, &defaults,
                                        &(mr_wf_metal_maps){a2, m2, NULL}, f2) == MR_OK);
     MR_CHECK(memcmp(a1, a2, sizeof a1) == 0 && memcmp(m1, m2, sizeof m1) == 0 && memcmp(f1, f2, sizeof f1) == 0);
     MR_CHECK(strcmp(mr_wf_method_name(zeroed.method), "weighted") == 0);

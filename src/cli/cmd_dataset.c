@@ -445,7 +445,7 @@ static int compare(pair *texels, size_t n, const char **names, const mr_image *c
             for (size_t i = 0; i < n; i++) answers[i] = texels[i].label;
             mr_wf_label_scene_free(scene);
         } else {
-            mr_wf_spec_maps in = {dif, spe, NULL};
+            mr_wf_spec_input in = {dif, spe, NULL};
             mr_wf_metal_maps out = {alb, met, NULL};
             mr_wf_options o = mr_wf_options_default();
             o.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;

@@ -131,7 +131,7 @@ static mr_status test_methods(const mr_mlp *net, const mr_wf_dataset *test, meth
     static const char *const names[4] = {"mlp", "weighted", "mean", "khronos"};
     static const mr_wf_method methods[4] = {MR_WF_CUSTOM, MR_WF_WEIGHTED, MR_WF_MEAN, MR_WF_KHRONOS};
     for (int m = 0; status == MR_OK && m < 4; m++) {
-        mr_wf_spec_maps in = {diffuse, specular, NULL};
+        mr_wf_spec_input in = {diffuse, specular, NULL};
         mr_wf_metal_maps out = {albedo, metallic, NULL};
         mr_wf_options o = mr_wf_options_default();
         o.method = methods[m];

@@ -93,7 +93,7 @@ static mr_status spec_to_metal_apply(const mr_transform *t, const mr_transform_b
         complement(b->in[2], roughness, b->n);
     else if (roughness != b->in[2])
         memcpy(roughness, b->in[2], b->n * sizeof *roughness);
-    const mr_wf_spec_maps in = {(float *)b->in[0], (float *)b->in[1], roughness};
+    const mr_wf_spec_input in = {b->in[0], b->in[1], roughness};
     const mr_wf_metal_maps out = {b->out[0], b->out[1], roughness};
     if (config->network)
         return mr_wf_spec_to_metal_mlp_batch(mr_transform_options_of(t)->network, &in, b->n, &w, &out, b->flags);
@@ -107,7 +107,7 @@ static mr_status metal_to_spec_apply(const mr_transform *t, const mr_transform_b
     const mr_wf_options w = workflow_options(t, b);
     float *roughness = b->out[2];
     if (roughness != b->in[2]) memcpy(roughness, b->in[2], b->n * sizeof *roughness);
-    const mr_wf_metal_maps in = {(float *)b->in[0], (float *)b->in[1], roughness};
+    const mr_wf_metal_input in = {b->in[0], b->in[1], roughness};
     const mr_wf_spec_maps out = {b->out[0], b->out[1], roughness};
     mr_status status = mr_wf_metal_to_spec_batch(&in, b->n, &w, &out, b->flags);
     if (status == MR_OK && config->glossiness) complement(roughness, roughness, b->n);

@@ -500,7 +500,7 @@ static mr_status check_batch(const char *what, size_t n, const mr_wf_options *op
     return MR_OK;
 }
 
-mr_status mr_wf_metal_to_spec_batch(const mr_wf_metal_maps *in, size_t n, const mr_wf_options *opts,
+mr_status mr_wf_metal_to_spec_batch(const mr_wf_metal_input *in, size_t n, const mr_wf_options *opts,
                                     const mr_wf_spec_maps *out, uint8_t *flags) {
     const char *what = "metal -> spec batch";
     if (in == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL input or output maps", what);
@@ -533,7 +533,7 @@ mr_status mr_wf_metal_to_spec_batch(const mr_wf_metal_maps *in, size_t n, const 
     return MR_OK;
 }
 
-mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_maps *in, size_t n, const mr_wf_options *opts,
+mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_input *in, size_t n, const mr_wf_options *opts,
                                     const mr_wf_metal_maps *out, uint8_t *flags) {
     const char *what = "spec -> metal batch";
     if (in == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL input or output maps", what);
@@ -699,14 +699,14 @@ static inline uint32_t texel_hash(const uint32_t k[6]) {
 }
 
 /* The six input floats of texel i, as bits (two texels with equal bits get equal answers). */
-static inline void texel_key(const mr_wf_spec_maps *in, size_t i, uint32_t k[6]) {
+static inline void texel_key(const mr_wf_spec_input *in, size_t i, uint32_t k[6]) {
     memcpy(k, in->diffuse + 3 * i, 3 * sizeof *k);
     memcpy(k + 3, in->specular + 3 * i, 3 * sizeof *k);
 }
 
 /* A new distinct row for texel r of the block: sanitised (and dimmed) into x, with its anchor computed from the
  * double values, as the per-texel path computes it, when anchor_options is not NULL. */
-static void mlp_new_row(const mr_wf_spec_maps *in, const mr_wf_options *o, const mr_wf_options *anchor_options,
+static void mlp_new_row(const mr_wf_spec_input *in, const mr_wf_options *o, const mr_wf_options *anchor_options,
                         size_t i, mlp_block *b, size_t row) {
     unsigned f = 0;
     double d[3], s[3];
@@ -726,7 +726,7 @@ static void mlp_new_row(const mr_wf_spec_maps *in, const mr_wf_options *o, const
 /* Deduplicates part p of the block starting at texel `start`: its distinct values become rows lo, lo + 1, ... (lo
  * the part's first texel), every texel's part-local row goes to row_of. A part whose first MLP_DEDUPE_PROBE
  * texels are mostly distinct (noise, float data) stops looking values up: hashing would only cost. */
-static void mlp_dedupe_part(const mr_wf_spec_maps *in, const mr_wf_options *o, const mr_wf_options *anchor_options,
+static void mlp_dedupe_part(const mr_wf_spec_input *in, const mr_wf_options *o, const mr_wf_options *anchor_options,
                             size_t start, size_t count, mlp_block *b, size_t p) {
     size_t lo = part_start(count, b->parts, p), hi = part_start(count, b->parts, p + 1);
     uint32_t *table = b->table + p * b->table_size;
@@ -758,7 +758,7 @@ static void mlp_dedupe_part(const mr_wf_spec_maps *in, const mr_wf_options *o, c
     b->distinct[p] = rows;
 }
 
-mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_maps *in, size_t n,
+mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_input *in, size_t n,
                                         const mr_wf_options *opts, const mr_wf_metal_maps *out, uint8_t *flags) {
     const char *what = "spec -> metal batch (mlp)";
     if (net == NULL || in == NULL || out == NULL)

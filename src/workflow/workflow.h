@@ -262,12 +262,21 @@ typedef struct mr_wf_spec_maps {
     float *roughness; /* n, or NULL */
 } mr_wf_spec_maps;
 
+/* The same maps as a batch's input, read only (they may be an output's arrays: conversion in place is allowed). */
+typedef struct mr_wf_metal_input {
+    const float *albedo, *metallic, *roughness;
+} mr_wf_metal_input;
+
+typedef struct mr_wf_spec_input {
+    const float *diffuse, *specular, *roughness;
+} mr_wf_spec_input;
+
 /* Convert n texels; flags (n bytes, may be NULL) receives each texel's mr_wf_flag bits. n = 0 is a no-op (map
  * pointers may then be NULL). Every required map must be non-NULL, and out->roughness non-NULL exactly when
  * in->roughness is. */
-mr_status mr_wf_metal_to_spec_batch(const mr_wf_metal_maps *in, size_t n, const mr_wf_options *opts,
+mr_status mr_wf_metal_to_spec_batch(const mr_wf_metal_input *in, size_t n, const mr_wf_options *opts,
                                     const mr_wf_spec_maps *out, uint8_t *flags);
-mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_maps *in, size_t n, const mr_wf_options *opts,
+mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_input *in, size_t n, const mr_wf_options *opts,
                                     const mr_wf_metal_maps *out, uint8_t *flags);
 
 struct mr_mlp;
@@ -309,7 +318,7 @@ void mr_wf_residual_targets(const float *x, float *y, size_t n);
  * copied to the texels that repeat it (real 8-bit texture sets hold ~5 % distinct values); the answers are the
  * bits of converting every texel alone. Threads: at most OpenMP's count, one per 2048 texels.
  * MR_ERR_INVALID_ARG for a network of another shape; MR_ERR_NOMEM. Deterministic for any thread count. */
-mr_status mr_wf_spec_to_metal_mlp_batch(const struct mr_mlp *net, const mr_wf_spec_maps *in, size_t n,
+mr_status mr_wf_spec_to_metal_mlp_batch(const struct mr_mlp *net, const mr_wf_spec_input *in, size_t n,
                                         const mr_wf_options *opts, const mr_wf_metal_maps *out, uint8_t *flags);
 
 #ifdef __cplusplus
