@@ -163,9 +163,6 @@ static int parse(int argc, char **argv, options *o) {
     if (!to_metal && (o->weights || o->overwrite || o->keep_specgloss || o->eps_given))
         return cli_usage_error("gltf", "--weights, --eps, --overwrite-metal-rough and --keep-specgloss go with "
                                "spec2metal");
-    if (o->eps_given && (strcmp(o->method, "mlp") == 0 || strcmp(o->method, "extension") == 0))
-        return cli_usage_error("gltf", "--eps applies to the analytic methods (weighted, mean, khronos); --method %s "
-                               "computes no off-manifold flag", o->method);
     return CLI_EXIT_OK;
 }
 
