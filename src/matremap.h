@@ -53,6 +53,7 @@
 #include "workflow/labels.h"
 #include "nn/mlp.h"
 #include "gltf/mr_gltf.h"
+#include "gltf/mr_gltf_scene.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -67,28 +67,11 @@ mr_wf_quantisation cli_quantisation(const mr_img_stored *stored, const double *s
 
 #define CLI_MAX_ASSIGNMENTS 64
 
-/* A parameter taken from a map. */
-typedef struct cli_material_map {
-    const char *assignment; /* as given: "roughness=@orm.png:g" */
-    char *name, *path;      /* owned copies */
-    int param;              /* the parameter's index in the model's table */
-    int channel;            /* the map channel read (0 for RGB parameters) */
-    mr_image *image;        /* the map, read as the parameter needs it */
-} cli_material_map;
-
-typedef struct cli_material {
-    const mr_brdf_model *model;
-    double values[MR_BRDF_MAX_VALUES]; /* defaults, then the name=value assignments */
-    mr_param_textures textures;        /* the maps, bound to their parameters */
-    int map_count;
-    cli_material_map maps[CLI_MAX_ASSIGNMENTS];
-} cli_material;
-
-/* Build *m from MODEL and its assignments: values parsed, maps read and bound. Returns a CLI exit code (messages
- * printed, naming `command`); call cli_material_free(m) in any case. */
+/* Build *out (an mr_material, render/render.h: mr_material_free) from MODEL and its assignments: values parsed,
+ * maps read and bound. Returns a CLI exit code (messages printed, naming `command`); *out is NULL unless it is
+ * CLI_EXIT_OK. */
 int cli_material_load(const char *command, const char *model_name, const char *const *assignments, int count,
-                      cli_material *m);
-void cli_material_free(cli_material *m);
+                      mr_material **out);
 
 /* Load the specular -> metallic network: `weights` (a path; NULL = $MATREMAP_WEIGHTS, else spec2metal.mlp beside
  * the source tree or the installed tree, cmd_workflow.c). `used` receives the path. Returns an exit code (messages
