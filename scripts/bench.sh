@@ -62,7 +62,7 @@ bench_report_accuracy() {
     local table="$work/report-accuracy.md" rows="$work/report-accuracy/rows.tsv"
     local ns=(64 128 256 512 1024 2048 4096) sizes=(128 192 256 384 512)
     # The sweeps are centred on the report's earlier defaults (N 1024, 256²), from which the table chose the
-    # present ones (cmd_report.c: N 256, 384²); candidates N:S are each checked against N = default_n at their
+    # present ones (report.h: N 256, 384²); candidates N:S are each checked against N = default_n at their
     # size and at the largest size.
     local default_n=1024 default_size=256 converged_n=16384 thresholds="0.002 0.0002"
     local candidates=(256:384)
@@ -245,7 +245,7 @@ def find(a, n, size):
 
 cands = sorted({(r["n"], r["size"]) for r in rows if r["sweep"] == "c" and r["n"] != default_n})
 if cands:
-    print("\nThe report's defaults (cmd_report.c) against the earlier ones (N %d, %d²): *|ΔSSIM| N*: the "
+    print("\nThe report's defaults (report.h) against the earlier ones (N %d, %d²): *|ΔSSIM| N*: the "
           "larger of the two\nconversions' distances from N = %d at the same size (what the smaller N changes); "
           "*|ΔSSIM| to %d²*: from\nN = %d at %d² (what the size changes, against the largest size measured):\n"
           % (default_n, default_size, default_n, largest, default_n, largest))

@@ -57,6 +57,7 @@
 #include "nn/mlp.h"
 #include "gltf/mr_gltf.h"
 #include "gltf/mr_gltf_convert.h"
+#include "gltf/mr_gltf_scene.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -46,6 +46,9 @@ mr_status mr_fail_context(mr_status status, const char *fmt, ...);
  * workflow.h, metrics.c). */
 int mr_auto_threads(int requested, long work, long threshold);
 
+/* Seconds on the monotonic clock (an arbitrary origin): for durations the library reports. */
+double mr_now_seconds(void);
+
 static inline double mr_clampd(double x, double lo, double hi) {
     /* NaN maps to lo: no NaN may leave a clamp (design principle 6). */
     return x >= lo ? (x <= hi ? x : hi) : lo;

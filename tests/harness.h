@@ -146,6 +146,17 @@ static inline const char *mr_test_tmp_path(const char *name) {
     return p;
 }
 
+/* The path of `rel` among the shared test assets: $MR_SHARED/assets/rel, or ../shared/assets/rel (the project root
+ * is the working folder of `make check`). From a ring of 8 buffers. */
+static inline const char *mr_test_asset_path(const char *rel) {
+    static char paths[8][1024];
+    static int slot;
+    const char *shared = getenv("MR_SHARED");
+    char *p = paths[slot++ % 8];
+    snprintf(p, 1024, "%s/assets/%s", shared ? shared : "../shared", rel);
+    return p;
+}
+
 #define MR_TEST_ENTRY(fn) {#fn, fn}
 
 #define MR_TEST_MAIN(...)                                                                   \

@@ -14,6 +14,7 @@
 #include "report/report.h"
 #include "nn/mlp.h"
 #include "gltf/mr_gltf.h"
+#include "gltf/mr_gltf_scene.h"
 
 extern "C" int mr_headers_cpp_probe(void);
 int mr_headers_cpp_probe(void) { return MR_STATUS_COUNT + MR_COMPONENT_COUNT; }

@@ -20,14 +20,7 @@
 #include "render/render.h"
 
 
-static const char *asset_path(const char *rel) {
-    static char paths[8][1024];
-    static int slot;
-    const char *shared = getenv("MR_SHARED");
-    char *p = paths[slot++ % 8];
-    snprintf(p, 1024, "%s/assets/%s", shared ? shared : "../shared", rel);
-    return p;
-}
+static const char *asset_path(const char *rel) { return mr_test_asset_path(rel); }
 
 static int file_exists(const char *path) {
     struct stat st;

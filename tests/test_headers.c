@@ -13,6 +13,7 @@
 #include "report/report.h"
 #include "nn/mlp.h"
 #include "gltf/mr_gltf.h"
+#include "gltf/mr_gltf_scene.h"
 #include "matremap.h"
 
 #include <omp.h>

@@ -62,39 +62,11 @@ double cli_now(void);
 
 #define CLI_MAX_ASSIGNMENTS 64
 
-/* A parameter taken from a map. */
-typedef struct cli_material_map {
-    const char *assignment; /* as given: "roughness=@orm.png:g" */
-    char *name, *path;      /* owned copies */
-    int param;              /* the parameter's index in the model's table */
-    int channel;            /* the map channel read (0 for RGB parameters) */
-    mr_image *image;        /* the map, read as the parameter needs it */
-} cli_material_map;
-
-typedef struct cli_material {
-    const mr_brdf_model *model;
-    double values[MR_BRDF_MAX_VALUES]; /* defaults, then the name=value assignments */
-    mr_param_textures textures;        /* the maps, bound to their parameters */
-    int map_count;
-    cli_material_map maps[CLI_MAX_ASSIGNMENTS];
-} cli_material;
-
-/* Build *m from MODEL and its assignments: values parsed, maps read and bound. Returns a CLI exit code (messages
- * printed, naming `command`); call cli_material_free(m) in any case. */
+/* Build *out (an mr_material, render/render.h: mr_material_free) from MODEL and its assignments: values parsed,
+ * maps read and bound. Returns a CLI exit code (messages printed, naming `command`); *out is NULL unless it is
+ * CLI_EXIT_OK. */
 int cli_material_load(const char *command, const char *model_name, const char *const *assignments, int count,
-                      cli_material *m);
-void cli_material_free(cli_material *m);
-
-struct mr_gltf;
-struct mr_gltf_texture_ref;
-/* Decode the image of a glTF texture reference (colour: RGB sRGB-decoded, alpha linear; data: all linear); an
- * embedded image goes through a file in the folder `scratch`. Returns an exit code (messages printed). */
-int cli_gltf_read_texture(const struct mr_gltf *asset, const struct mr_gltf_texture_ref *ref,
-                          mr_img_encoding encoding, const char *scratch, mr_image **out);
-/* The same, and *stored (may be NULL) says how the image file stored its samples (mr_img_read_stored). */
-int cli_gltf_read_texture_stored(const struct mr_gltf *asset, const struct mr_gltf_texture_ref *ref,
-                                 mr_img_encoding encoding, const char *scratch, mr_image **out,
-                                 mr_img_stored *stored);
+                      mr_material **out);
 
 int cmd_models(int argc, char **argv);
 int cmd_render(int argc, char **argv);

@@ -1,20 +1,28 @@
 /*
  * cli_material.c — a material given on the command line, as `render` and `report` take it: MODEL followed by
  * name=value and name=@MAP[:r|g|b|a] assignments (cli.h). Maps are read the way their parameter needs them:
- * colour parameters (RGB, range within [0,1]) sRGB-decoded from 8/16-bit files, everything else linear.
+ * colour parameters (RGB, range within [0,1]) sRGB-decoded from 8/16-bit files, everything else linear. The
+ * result is the library's mr_material (render/render.h), which owns the maps; this file only parses and reads.
  */
 #include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
 
+/* A map assignment split up: "name=@FILE[:c]". */
+typedef struct map_assignment {
+    const char *text; /* as given: "roughness=@orm.png:g" */
+    char *name, *path; /* owned copies */
+    int channel;       /* -1: none given */
+} map_assignment;
+
 /* Split "name=@FILE[:c]" into map's name, path and channel; returns 0 (after a usage error) if malformed. */
-static int parse_map_assignment(const char *command, const char *assignment, cli_material_map *map) {
+static int parse_map_assignment(const char *command, const char *assignment, map_assignment *map) {
     const char *eq = strchr(assignment, '=');
     size_t name_length = (size_t)(eq - assignment);
     const char *file = eq + 2;
     size_t file_length = strlen(file);
-    map->assignment = assignment;
+    map->text = assignment;
     map->channel = -1;
     if (file_length >= 3 && file[file_length - 2] == ':') {
         const char *letters = "rgba";
@@ -41,67 +49,76 @@ static int parse_map_assignment(const char *command, const char *assignment, cli
     return 1;
 }
 
-/* Read one map the way its parameter needs it and bind it; returns a CLI exit code (CLI_EXIT_OK on success). */
-static int load_map(const char *command, const mr_brdf_model *model, cli_material_map *map,
-                    mr_param_textures *textures) {
+/* Read one map the way its parameter needs it and bind it to m (which then owns the image); returns a CLI exit
+ * code (CLI_EXIT_OK on success). */
+static int load_map(const char *command, mr_material *m, const map_assignment *map) {
+    const mr_brdf_model *model = m->model;
     int index = mr_brdf_param_index(model, map->name);
-    if (index < 0) return cli_fail(command, mr_param_textures_set(textures, model, map->name, NULL, 0));
+    if (index < 0) {
+        mr_param_textures unused = {0};
+        return cli_fail(command, mr_param_textures_set(&unused, model, map->name, NULL, 0));
+    }
     const mr_brdf_param *param = &model->params[index];
     int colour = param->channels == 3 && param->min_value >= 0.0 && param->max_value <= 1.0;
     if (param->channels == 3 && map->channel >= 0)
         return cli_usage_error(command, "'%s': %s is an RGB parameter and takes the whole image (no :%c)",
-                               map->assignment, param->name, "rgba"[map->channel]);
+                               map->text, param->name, "rgba"[map->channel]);
     mr_img_read_options read = {colour ? MR_IMG_COLOR : MR_IMG_DATA, 0, 0};
-    mr_status status = mr_img_read(map->path, &read, &map->image);
+    mr_image *image = NULL;
+    mr_status status = mr_img_read(map->path, &read, &image);
     if (status != MR_OK) return cli_fail(command, status);
     int channel = param->channels == 3 ? 0 : map->channel; // an RGB parameter reads channels 0-2
     if (param->channels == 1 && channel < 0) {
         channel = 0;
-        if (map->image->channels >= 3) {
+        if (image->channels >= 3) {
             // A grey picture saved as RGB is fine; real colour needs the user to say which channel to use.
-            size_t pixels = (size_t)map->image->width * (size_t)map->image->height;
-            const float *px = map->image->pixels;
-            for (size_t p = 0; p < pixels; p++, px += map->image->channels)
-                if (px[0] != px[1] || px[0] != px[2])
-                    return cli_usage_error(command, "'%s': %s holds colour, but %s takes one value: pick a channel "
-                                           "with @%s:r, :g, :b or :a", map->assignment, map->path, param->name,
+            size_t pixels = (size_t)image->width * (size_t)image->height;
+            const float *px = image->pixels;
+            for (size_t p = 0; p < pixels; p++, px += image->channels)
+                if (px[0] != px[1] || px[0] != px[2]) {
+                    mr_image_free(image);
+                    return cli_usage_error(command, "'%s': %s holds colour, but %s takes one value: pick a "
+                                           "channel with @%s:r, :g, :b or :a", map->text, map->path, param->name,
                                            map->path);
+                }
         }
     }
-    map->param = index;
-    map->channel = channel;
-    status = mr_param_textures_set(textures, model, map->name, map->image, channel);
-    if (status != MR_OK) return cli_fail(command, status);
+    status = mr_material_add_map(m, map->name, image, channel, map->path, NULL);
+    if (status != MR_OK) {
+        mr_image_free(image);
+        return cli_fail(command, status);
+    }
     return CLI_EXIT_OK;
+}
+
+/* One name=value or name=@MAP[:c] assignment into m; returns a CLI exit code. */
+static int assign(const char *command, mr_material *m, const char *assignment) {
+    if (strchr(assignment, '=')[1] != '@') {
+        mr_status status = mr_brdf_parse_assignment(m->model, assignment, m->values);
+        return status == MR_OK ? CLI_EXIT_OK : cli_fail(command, status);
+    }
+    map_assignment map = {0};
+    int code = parse_map_assignment(command, assignment, &map) ? load_map(command, m, &map) : CLI_EXIT_USAGE;
+    free(map.name);
+    free(map.path);
+    return code;
 }
 
 int cli_material_load(const char *command, const char *model_name, const char *const *assignments, int count,
-                      cli_material *m) {
-    memset(m, 0, sizeof *m);
+                      mr_material **out) {
+    *out = NULL;
     if (count > CLI_MAX_ASSIGNMENTS) return cli_usage_error(command, "too many parameter assignments");
-    m->model = mr_brdf_find(model_name);
-    if (m->model == NULL) return cli_fail(command, MR_ERR_INVALID_ARG);
-    mr_brdf_default_values(m->model, m->values);
-    for (int k = 0; k < count; k++) {
-        int code = CLI_EXIT_OK;
-        if (strchr(assignments[k], '=')[1] == '@') {
-            cli_material_map *map = &m->maps[m->map_count++];
-            code = parse_map_assignment(command, assignments[k], map)
-                       ? load_map(command, m->model, map, &m->textures) : CLI_EXIT_USAGE;
-        } else {
-            mr_status status = mr_brdf_parse_assignment(m->model, assignments[k], m->values);
-            if (status != MR_OK) code = cli_fail(command, status);
-        }
-        if (code != CLI_EXIT_OK) return code;
+    const mr_brdf_model *model = mr_brdf_find(model_name);
+    if (model == NULL) return cli_fail(command, MR_ERR_INVALID_ARG);
+    mr_material *m = NULL;
+    mr_status status = mr_material_create(model, &m);
+    if (status != MR_OK) return cli_fail(command, status);
+    int code = CLI_EXIT_OK;
+    for (int k = 0; k < count && code == CLI_EXIT_OK; k++) code = assign(command, m, assignments[k]);
+    if (code != CLI_EXIT_OK) {
+        mr_material_free(m);
+        return code;
     }
+    *out = m;
     return CLI_EXIT_OK;
-}
-
-void cli_material_free(cli_material *m) {
-    for (int k = 0; k < m->map_count; k++) {
-        free(m->maps[k].name);
-        free(m->maps[k].path);
-        mr_image_free(m->maps[k].image);
-    }
-    m->map_count = 0;
 }

@@ -223,7 +223,7 @@ static double texel_at(const mr_image *image, double u, double v, int c) {
 
 /* ASSET_TEXELS texels of every spec-gloss material of `path`, shared equally among its materials: diffuse and
  * specular maps (sRGB-decoded) times their factors, at the same relative position in both. Returns an exit code. */
-static int add_asset_texels(const char *path, const char *scratch, uint64_t seed, texel_pool *pool) {
+static int add_asset_texels(const char *path, uint64_t seed, texel_pool *pool) {
     mr_gltf *asset = NULL;
     mr_status status = mr_gltf_load(path, &asset);
     if (status != MR_OK) return cli_fail("dataset", status);
@@ -255,10 +255,12 @@ static int add_asset_texels(const char *path, const char *scratch, uint64_t seed
         mr_gltf_material m;
         if (mr_gltf_get_material(asset, k, &m) != MR_OK || !m.has_spec_gloss) continue;
         mr_image *diffuse = NULL, *sg = NULL;
+        mr_status status = MR_OK; // colour textures: the reader's default
         if (m.diffuse_texture.index >= 0)
-            code = cli_gltf_read_texture(asset, &m.diffuse_texture, MR_IMG_COLOR, scratch, &diffuse);
-        if (code == CLI_EXIT_OK && m.specular_glossiness_texture.index >= 0)
-            code = cli_gltf_read_texture(asset, &m.specular_glossiness_texture, MR_IMG_COLOR, scratch, &sg);
+            status = mr_gltf_texture_read(asset, m.diffuse_texture.index, NULL, &diffuse, NULL);
+        if (status == MR_OK && m.specular_glossiness_texture.index >= 0)
+            status = mr_gltf_texture_read(asset, m.specular_glossiness_texture.index, NULL, &sg, NULL);
+        if (status != MR_OK) code = cli_fail("dataset", status);
         for (size_t j = 0; code == CLI_EXIT_OK && j < per; j++) {
             double u = uniform(&r), v = uniform(&r);
             float *t = pool->texels + 6 * pool->count++;
@@ -600,16 +602,10 @@ int cmd_dataset(int argc, char **argv) {
     if (samples < 0) samples = do_compare ? 400 : 16000;
     if (threads > 0) omp_set_num_threads(threads);
 
-    char scratch[64] = "/tmp/matremap-dataset-XXXXXX";
-    if (asset_count > 0 && mkdtemp(scratch) == NULL) {
-        fprintf(stderr, "matremap dataset: error: cannot create a scratch folder in /tmp: %s\n", strerror(errno));
-        return CLI_EXIT_INTERNAL;
-    }
     texel_pool pool = {NULL, 0, 0};
     int code = CLI_EXIT_OK;
     for (int a = 0; code == CLI_EXIT_OK && a < asset_count; a++)
-        code = add_asset_texels(assets[a], scratch, (uint64_t)seed, &pool);
-    if (asset_count > 0) rmdir(scratch);
+        code = add_asset_texels(assets[a], (uint64_t)seed, &pool);
     size_t extra = do_compare ? (size_t)HARD_CASES : 0, n = extra + (size_t)samples;
     pair *pairs = code == CLI_EXIT_OK ? calloc(n, sizeof *pairs) : NULL;
     const char **names = code == CLI_EXIT_OK ? calloc(n, sizeof *names) : NULL;

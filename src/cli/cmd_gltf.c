@@ -87,22 +87,6 @@ typedef struct options {
     int overwrite, keep_specgloss, keep_unused, json;
 } options;
 
-/* ---- textures ----------------------------------------------------------------------------------------------- */
-
-int cli_gltf_read_texture(const mr_gltf *asset, const mr_gltf_texture_ref *ref, mr_img_encoding encoding,
-                          const char *scratch, mr_image **out) {
-    return cli_gltf_read_texture_stored(asset, ref, encoding, scratch, out, NULL);
-}
-
-int cli_gltf_read_texture_stored(const mr_gltf *asset, const mr_gltf_texture_ref *ref, mr_img_encoding encoding,
-                                 const char *scratch, mr_image **out, mr_img_stored *stored) {
-    (void)scratch;
-    mr_img_read_options ro = {0};
-    ro.encoding = encoding;
-    mr_status status = mr_gltf_texture_read(asset, ref->index, &ro, out, stored);
-    return status == MR_OK ? CLI_EXIT_OK : cli_fail("gltf", status);
-}
-
 /* ---- the command -------------------------------------------------------------------------------------------- */
 
 static int parse(int argc, char **argv, options *o) {

@@ -154,7 +154,7 @@ int cmd_render(int argc, char **argv) {
         return cli_usage_error("render", "--env-rotation, --env-samples, --env-reflection-samples and --env-scale need "
                                "--env FILE");
 
-    cli_material material;
+    mr_material *material = NULL;
     int code = cli_material_load("render", model_name, assignments, assignment_count, &material);
 
     mr_image *env = NULL, *image = NULL;
@@ -178,7 +178,7 @@ int cmd_render(int argc, char **argv) {
         status = mr_render_plan_create(&scene, &plan);
         plan_seconds = cli_now() - start;
         if (status == MR_OK)
-            status = mr_render_textured(plan, material.model, material.values, &material.textures, component,
+            status = mr_render_textured(plan, material->model, material->values, &material->textures, component,
                                         &image);
         if (status == MR_OK && exposure != 1.0) {
             size_t n = mr_image_value_count(image);
@@ -205,6 +205,6 @@ int cmd_render(int argc, char **argv) {
     mr_image_free(image);
     mr_render_plan_free(plan);
     mr_image_free(env);
-    cli_material_free(&material);
+    mr_material_free(material);
     return code;
 }

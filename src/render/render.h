@@ -478,6 +478,51 @@ mr_status mr_render_materials_into(const mr_render_plan *plan, const mr_material
 mr_status mr_render_materials(const mr_render_plan *plan, const mr_material_binding *materials, int count,
                               mr_component component, mr_image **out);
 
+/* ---- materials that own their maps ----------------------------------------------------------------------------
+ * An mr_material is a model, a full value vector and the maps bound to its parameters, all in one object: what a
+ * material given on the command line (`MODEL name=value name=@MAP`) or a glTF material becomes, and what
+ * mr_report_make (report/report.h) takes. The maps are images the material owns; textures.maps[] point at them.
+ *
+ *   mr_material *m = NULL;
+ *   mr_material_create(mr_brdf_find("gltf"), &m);       // the model's defaults
+ *   mr_brdf_parse_assignment(m->model, "roughness=0.4", m->values);
+ *   mr_material_add_map(m, "base_color", image, 0, "albedo.png", NULL);   // m now owns image
+ *   mr_render_textured(plan, m->model, m->values, &m->textures, MR_COMPONENT_FULL, &out);
+ *   mr_material_free(m);
+ */
+typedef struct mr_material_map {
+    int param;       /* the parameter's index in the model's table */
+    int channel;     /* the map channel read (0 for RGB parameters and for one-channel maps) */
+    mr_image *image; /* owned by the material */
+    char *source;    /* where the map came from, for people: a file, "baseColorTexture" (owned) */
+} mr_material_map;
+
+typedef struct mr_material {
+    const mr_brdf_model *model;
+    double values[MR_BRDF_MAX_VALUES]; /* a full vector: the model's defaults until the caller changes them */
+    mr_param_textures textures;        /* the maps bound to their parameters (textures.maps[] point into maps[]) */
+    int map_count;
+    mr_material_map *maps;             /* [map_count], in the order they were added; a later map of the same
+                                          parameter is the one bound, the earlier stays listed */
+} mr_material;
+
+/* A material of `model` with its default values and no maps into *out (caller-owned: mr_material_free).
+ * MR_ERR_INVALID_ARG for a NULL model, MR_ERR_NOMEM. */
+mr_status mr_material_create(const mr_brdf_model *model, mr_material **out);
+
+/* Bind `image` to parameter `param` (by name), reading `channel` (as mr_param_textures_set checks it), sampled as
+ * `sampling` says (NULL = the sphere's convention), and record `source` (copied; NULL = ""). On success the
+ * material owns the image; on failure (MR_ERR_INVALID_ARG naming the parameter, MR_ERR_NOMEM) the caller still
+ * does and the material is unchanged. */
+mr_status mr_material_add_map(mr_material *material, const char *param, mr_image *image, int channel,
+                              const char *source, const mr_texture_sampling *sampling);
+
+/* The material as mr_render_materials takes it (pointers into *material). */
+mr_material_binding mr_material_binding_of(const mr_material *material);
+
+/* Releases the material and its maps; NULL-safe. */
+void mr_material_free(mr_material *material);
+
 #ifdef __cplusplus
 }
 #endif
