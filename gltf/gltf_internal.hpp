@@ -21,7 +21,12 @@ struct mr_gltf {
     std::string base_dir;                 // its directory ("." if none)
     std::vector<std::string> image_paths; // per image: resolved source file ("" for embedded images)
     std::vector<std::string> buffer_paths; // per buffer: resolved source file ("" for embedded buffers)
-    nlohmann::json original;               // the file's JSON, for what tinygltf does not keep (merge_original)
+    // The file's JSON, for what tinygltf does not keep: merge_original restores it on save, and
+    // mr_gltf_prune_unused renumbers references in it. Loading keeps only its text; original_json parses it on
+    // first use, so that a read-only use (loading an asset to render it) parses the JSON once, in tinygltf.
+    std::string original_text;
+    nlohmann::json original;
+    bool original_parsed = false;
 };
 
 namespace mr_gltf_internal {
@@ -54,6 +59,10 @@ nlohmann::json to_json(const Value &v);
 
 // The keys of the material schema (the model holds them; the file's own are stale once a material is set).
 bool is_material_key(const std::string &key);
+
+// The asset's original JSON (struct mr_gltf), parsed from original_text on the first call; null if the text is
+// not a JSON object. Buffers' and images' "uri" are dropped: their payloads are written from the model.
+nlohmann::json &original_json(mr_gltf *g);
 
 } // namespace mr_gltf_internal
 

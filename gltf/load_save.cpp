@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <memory>
 #include <set>
 #include <sstream>
 
@@ -139,6 +140,18 @@ void merge_original(nlohmann::json &doc, const nlohmann::json &orig) {
             continue;
         }
         merge_missing(out, value);
+    }
+}
+
+// tinygltf 2.7 fills in bufferView.target from the meshes' use of each view when it loads; the file's own is
+// kept (absent stays absent), so that a round trip does not add fields.
+void drop_inferred_targets(nlohmann::json &doc, const nlohmann::json &orig) {
+    if (!orig.is_object() || !orig.contains("bufferViews") || !orig["bufferViews"].is_array()) return;
+    if (!doc.contains("bufferViews") || !doc["bufferViews"].is_array()) return;
+    const nlohmann::json &views = orig["bufferViews"];
+    nlohmann::json &out = doc["bufferViews"];
+    for (size_t i = 0; i < views.size() && i < out.size(); i++) {
+        if (views[i].is_object() && !views[i].contains("target") && out[i].is_object()) out[i].erase("target");
     }
 }
 
@@ -307,7 +320,9 @@ mr_status save_impl(mr_gltf *g, const char *path_c) {
         }
     }
 
-    merge_original(doc, g->original);
+    const nlohmann::json &original = original_json(g);
+    drop_inferred_targets(doc, original);
+    merge_original(doc, original);
 
     std::string stem = out_path.substr(out_path.find_last_of('/') == std::string::npos
                                            ? 0 : out_path.find_last_of('/') + 1);
@@ -460,7 +475,7 @@ mr_status load_impl(const char *path_c, mr_gltf **out) {
     mr_status s = read_file(path, &bytes, "glTF");
     if (s != MR_OK) return s;
 
-    mr_gltf *g = new mr_gltf();
+    std::unique_ptr<mr_gltf> g(new mr_gltf()); // released to the caller on success, freed on any other way out
     g->path = path;
     g->base_dir = dir_of(path);
     tinygltf::TinyGLTF loader;
@@ -482,37 +497,15 @@ mr_status load_impl(const char *path_c, mr_gltf **out) {
         if (why.empty()) why = is_glb ? "not a valid binary glTF" : "not a valid glTF";
         if (code == MR_ERR_IO) why += " (resources are looked up relative to '" + g->base_dir + "')";
         else if (is_glb) why += " (" + std::to_string(bytes.size()) + " bytes read; truncated?)";
-        delete g;
         return mr_fail(code, "glTF '%s': %s", path.c_str(), why.c_str());
     }
-    // tinygltf 2.7 fills in bufferView.target from the meshes' use of each view; keep the file's own (absent
-    // stays absent), so a round trip does not add fields.
-    {
-        std::string json_text;
-        if (is_glb && bytes.size() >= 20) {
-            uint32_t len = (uint32_t)bytes[12] | (uint32_t)bytes[13] << 8 | (uint32_t)bytes[14] << 16 |
-                           (uint32_t)bytes[15] << 24;
-            if (len <= bytes.size() - 20) json_text.assign((const char *)bytes.data() + 20, len);
-        } else {
-            json_text.assign((const char *)bytes.data(), bytes.size());
-        }
-        nlohmann::json doc = nlohmann::json::parse(json_text, nullptr, false);
-        if (!doc.is_discarded() && doc.is_object() && doc.contains("bufferViews") && doc["bufferViews"].is_array()) {
-            const nlohmann::json &views = doc["bufferViews"];
-            for (size_t i = 0; i < views.size() && i < g->model.bufferViews.size(); i++) {
-                if (views[i].is_object() && !views[i].contains("target")) g->model.bufferViews[i].target = 0;
-            }
-        }
-        if (!doc.is_discarded() && doc.is_object()) {
-            // Base64 payloads are not needed again: the buffers and images are written from the model.
-            for (const char *key : {"buffers", "images"}) {
-                if (!doc.contains(key) || !doc[key].is_array()) continue;
-                for (auto &item : doc[key]) {
-                    if (item.is_object()) item.erase("uri");
-                }
-            }
-            g->original = std::move(doc);
-        }
+    // The JSON text is kept for what tinygltf drops, and parsed only if it is needed (original_json).
+    if (is_glb && bytes.size() >= 20) {
+        uint32_t len = (uint32_t)bytes[12] | (uint32_t)bytes[13] << 8 | (uint32_t)bytes[14] << 16 |
+                       (uint32_t)bytes[15] << 24;
+        if (len <= bytes.size() - 20) g->original_text.assign((const char *)bytes.data() + 20, len);
+    } else if (!is_glb) {
+        g->original_text.assign((const char *)bytes.data(), bytes.size());
     }
     for (size_t i = 0; i < g->model.buffers.size(); i++) {
         const std::string &uri = g->model.buffers[i].uri;
@@ -525,13 +518,12 @@ mr_status load_impl(const char *path_c, mr_gltf **out) {
         if (external && im.image.empty()) {
             std::vector<unsigned char> probe;
             mr_status rs = read_file(p, &probe, "glTF image");
-            delete g;
             if (rs != MR_OK) return mr_fail_context(rs, "glTF '%s': image %zu", path.c_str(), i);
             return mr_fail(MR_ERR_FORMAT, "glTF '%s': image %zu ('%s') is empty", path.c_str(), i, p.c_str());
         }
         g->image_paths.push_back(p);
     }
-    *out = g;
+    *out = g.release();
     return MR_OK;
 }
 

@@ -362,7 +362,8 @@ mr_status prune_impl(mr_gltf *g, mr_gltf_prune_stats *stats) {
     a.init(m);
     scan_typed(m, a, NULL);
     scan_values(m, a, NULL, NULL);
-    scan_original(g->original, a, NULL);
+    nlohmann::json &orig = original_json(g);
+    scan_original(orig, a, NULL);
     std::vector<char> remove[KIND_COUNT];
     remove[KIND_TEXTURE].assign(m.textures.size(), 0);
     for (size_t i = 0; i < m.textures.size(); i++)
@@ -375,7 +376,7 @@ mr_status prune_impl(mr_gltf *g, mr_gltf_prune_stats *stats) {
     b.init(m);
     scan_typed(m, b, remove);
     scan_values(m, b, remove, NULL);
-    scan_original(g->original, b, remove);
+    scan_original(orig, b, remove);
     for (int k = KIND_IMAGE; k <= KIND_SAMPLER; k++)
         for (size_t i = 0; i < b.size[k]; i++) remove[k][i] = !b.used[k][i] && (long long)i > b.pin[k];
 
@@ -405,7 +406,7 @@ mr_status prune_impl(mr_gltf *g, mr_gltf_prune_stats *stats) {
     if (st.textures + st.images + st.samplers > 0) {
         std::vector<std::pair<Value *, Value>> rewritten;
         scan_values(m, c, remove, &rewritten);
-        nlohmann::json original = g->original;
+        nlohmann::json original = orig;
         if (original.is_object()) {
             for (int k = 0; k < KIND_COUNT; k++)
                 if (original.contains(KIND_ARRAYS[k])) compact_json(original[KIND_ARRAYS[k]], keep[k]);
@@ -421,7 +422,7 @@ mr_status prune_impl(mr_gltf *g, mr_gltf_prune_stats *stats) {
         compact(m.images, keep[KIND_IMAGE]);
         compact(m.samplers, keep[KIND_SAMPLER]);
         g->image_paths.swap(image_paths);
-        g->original.swap(original);
+        orig.swap(original);
     }
     if (stats != NULL) *stats = st;
     return MR_OK;

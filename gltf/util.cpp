@@ -95,4 +95,22 @@ bool is_material_key(const std::string &key) {
     return keys.count(key) > 0;
 }
 
+nlohmann::json &original_json(mr_gltf *g) {
+    if (g->original_parsed) return g->original;
+    nlohmann::json doc = nlohmann::json::parse(g->original_text, nullptr, false);
+    if (!doc.is_discarded() && doc.is_object()) {
+        // Base64 payloads are not needed again: the buffers and images are written from the model.
+        for (const char *key : {"buffers", "images"}) {
+            if (!doc.contains(key) || !doc[key].is_array()) continue;
+            for (auto &item : doc[key]) {
+                if (item.is_object()) item.erase("uri");
+            }
+        }
+        g->original = std::move(doc);
+    }
+    g->original_parsed = true;
+    std::string().swap(g->original_text);
+    return g->original;
+}
+
 } // namespace mr_gltf_internal
