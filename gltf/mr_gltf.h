@@ -17,9 +17,10 @@
  * and stay valid until the asset is modified or freed. The exception is geometry: mr_gltf_get_triangles returns a
  * copy the caller owns and releases with mr_gltf_triangles_free (see "Geometry" below).
  *
- * Images are never decoded: the encoded bytes (PNG, JPEG, ...) of every image are kept as read and written back
- * unchanged. A caller that needs pixels writes them to a file (mr_gltf_image_write_file) or uses the resolved
- * path (mr_gltf_image_info) and decodes with mr_img_read.
+ * Images are never decoded on load or save: the encoded bytes (PNG, JPEG, ...) of every image are kept as read and
+ * written back unchanged. A caller that needs pixels decodes them with mr_gltf_image_read / mr_gltf_texture_read
+ * (external images from their file, embedded ones from memory), or takes the bytes (mr_gltf_get_image, written to
+ * a file by mr_gltf_image_write_file) to a decoder of its own.
  *
  * Saving (mr_gltf_save) picks the container from the extension (.gltf or .glb). A .gltf is written with its
  * resources beside it: external buffers and images under their original relative URIs (or a fresh name when
@@ -195,8 +196,9 @@ mr_status mr_gltf_add_image_file(mr_gltf *asset, const char *file, const char *u
 mr_status mr_gltf_add_image_bytes(mr_gltf *asset, const void *bytes, size_t size, const char *uri, int *out_image);
 
 /* Decodes image `image` (mr_img_read_stored's conventions: opts may be NULL, *stored may be NULL): an external image
- * from its file, an embedded one (data URI, buffer view) from the asset's bytes. Errors name the asset and the
- * image index. */
+ * from its file, an embedded one (data URI, buffer view) from the asset's bytes in memory (mr_img_read_memory;
+ * nothing is written to disk). Errors name the asset and the image index ("glTF 'a.gltf' image 3: truncated PNG:
+ * ..."; an external image's also name its file). */
 mr_status mr_gltf_image_read(const mr_gltf *asset, int image, const mr_img_read_options *opts, mr_image **out,
                              mr_img_stored *stored);
 

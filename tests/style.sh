@@ -16,7 +16,7 @@ check() { # NAME PATTERN-DESCRIPTION COMMAND...
         echo "ok    $name"; passed=$((passed + 1))
     fi
 }
-mapfile -t files < <(git ls-files 'src/*' 'tests/*' 'nn/*' 'gltf/*' | grep -E '\.(c|h|cpp)$')
+mapfile -t files < <(git ls-files 'src/*' 'tests/*' 'nn/*' 'gltf/*' | grep -E '\.(c|h|cpp|hpp)$')
 check "no tabs" grep -nP '\t' "${files[@]}"
 check "no trailing whitespace" grep -nP ' +$' "${files[@]}"
 check "LF line endings" grep -nlP '\r' "${files[@]}"

@@ -2,8 +2,9 @@
  * test_gltf.c — the glTF shim (contract in gltf/mr_gltf.h): every asset of ../shared/assets loads, with known
  * answers read from each; read -> write -> read keeps every material field, the images' bytes and the counts of
  * everything else, as .gltf and as .glb; data-URI and GLB-embedded resources; material edits (drop SG, set MR
- * factors, add a texture, KHR_materials_specular/ior, texture transforms) read back; bad inputs fail with a
- * message naming the file and leave no output. Every case works in a private mkdtemp() directory.
+ * factors, add a texture, KHR_materials_specular/ior, texture transforms) read back; embedded images decode from
+ * memory to what their files decode to; bad inputs fail with a message naming the file and leave no output. Every
+ * case works in a private mkdtemp() directory.
  *
  * MR_GLTF_KEEP=DIR keeps the round-tripped copies of every asset in DIR/<asset>/ and the edited FloppyDisk in
  * DIR/Edited/, and MR_GLTF_IN/MR_GLTF_OUT
@@ -511,6 +512,135 @@ MR_TEST(data_uri_resources) {
     if (b != NULL) check_same_asset(g, b, "data URIs");
     mr_gltf_free(b);
     mr_gltf_free(g);
+}
+
+/* ---- decoding an asset's images ------------------------------------------------------------------------- */
+
+static char *base64(const unsigned char *p, size_t n) {
+    static const char table[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    char *out = malloc((n + 2) / 3 * 4 + 1), *o = out;
+    if (out == NULL) return NULL;
+    for (size_t i = 0; i < n; i += 3) {
+        unsigned v = (unsigned)p[i] << 16 | (i + 1 < n ? (unsigned)p[i + 1] << 8 : 0) | (i + 2 < n ? p[i + 2] : 0);
+        *o++ = table[(v >> 18) & 63];
+        *o++ = table[(v >> 12) & 63];
+        *o++ = i + 1 < n ? table[(v >> 6) & 63] : '=';
+        *o++ = i + 2 < n ? table[v & 63] : '=';
+    }
+    *o = '\0';
+    return out;
+}
+
+/* mr_gltf_image_read of `image` equals mr_img_read_stored of `file`, bit for bit, as colour and as data. */
+static void image_reads_as(const mr_gltf *g, int image, const char *file) {
+    for (int e = 0; e < 2; e++) {
+        mr_img_read_options ro = {e == 0 ? MR_IMG_COLOR : MR_IMG_DATA, 0, 0};
+        mr_image *a = NULL, *b = NULL;
+        mr_img_stored sa = {-1, MR_IMG_COLOR}, sb = {-2, MR_IMG_DATA};
+        MR_CHECK_OK(mr_gltf_image_read(g, image, &ro, &a, &sa));
+        MR_CHECK_OK(mr_img_read_stored(file, &ro, &b, &sb));
+        int same = a != NULL && b != NULL && a->width == b->width && a->height == b->height &&
+                   a->channels == b->channels &&
+                   memcmp(a->pixels, b->pixels, mr_image_value_count(a) * sizeof(float)) == 0;
+        MR_CHECK_MSG(same && sa.bits == sb.bits && sa.encoding == sb.encoding, "image %d differs from %s", image,
+                     file);
+        mr_image_free(a);
+        mr_image_free(b);
+    }
+}
+
+/* Embedded images (data URIs and buffer views, PNG and JPEG) decode from memory to what their files decode to,
+ * with nowhere to write a temporary file; a corrupt one fails naming the asset and the image index. */
+MR_TEST(embedded_images_decode_from_memory) {
+    /* A PNG of the shared assets and a JPEG the library writes from it, embedded in a .gltf. */
+    char png_path[1024], jpg_path[512];
+    snprintf(png_path, sizeof png_path, "%s", asset_path("metalrough/TextureSettingsTest/glTF/CheckAndX.png"));
+    snprintf(jpg_path, sizeof jpg_path, "%s", mr_test_tmp_path("ref.jpg"));
+    mr_image *check = NULL;
+    MR_CHECK_OK(mr_img_read(png_path, NULL, &check));
+    MR_CHECK_OK(mr_img_write(jpg_path, check, NULL));
+    mr_image_free(check);
+    size_t png_n = 0, jpg_n = 0;
+    char *png = mr_test_read_file(png_path, &png_n), *jpg = mr_test_read_file(jpg_path, &jpg_n);
+    MR_CHECK(png != NULL && jpg != NULL && png_n > 100 && jpg_n > 100);
+    if (png == NULL || jpg == NULL || png_n <= 100 || jpg_n <= 100) {
+        free(png);
+        free(jpg);
+        return;
+    }
+    MR_CHECK(write_bytes(mr_test_tmp_path("ref.png"), png, png_n)); /* the external image, beside the asset */
+    /* images.bin: the PNG, the JPEG and 64 bytes of garbage (4-byte aligned views) */
+    size_t jpg_at = (png_n + 3) / 4 * 4, junk_at = (jpg_at + jpg_n + 3) / 4 * 4, bin_n = junk_at + 64;
+    unsigned char *bin = calloc(bin_n, 1);
+    memcpy(bin, png, png_n);
+    memcpy(bin + jpg_at, jpg, jpg_n);
+    memset(bin + junk_at, 0x5a, 64);
+    MR_CHECK(write_bytes(mr_test_tmp_path("images.bin"), bin, bin_n));
+    char *png64 = base64((const unsigned char *)png, png_n), *jpg64 = base64((const unsigned char *)jpg, jpg_n);
+    char *cut64 = base64((const unsigned char *)png, png_n / 2);
+    size_t cap = strlen(png64) + strlen(jpg64) + strlen(cut64) + 4096;
+    char *json = malloc(cap);
+    snprintf(json, cap,
+             "{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"byteLength\":%zu,\"uri\":\"images.bin\"}],"
+             "\"bufferViews\":[{\"buffer\":0,\"byteLength\":%zu},{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu},"
+             "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":64}],"
+             "\"images\":[{\"uri\":\"data:image/png;base64,%s\"},{\"bufferView\":0,\"mimeType\":\"image/png\"},"
+             "{\"uri\":\"data:image/jpeg;base64,%s\"},{\"bufferView\":1,\"mimeType\":\"image/jpeg\"},"
+             "{\"uri\":\"ref.png\"},{\"uri\":\"data:image/png;base64,%s\"},"
+             "{\"bufferView\":2,\"mimeType\":\"image/png\"}],"
+             "\"textures\":[{\"source\":1},{\"source\":5}]}\n",
+             bin_n, png_n, jpg_at, jpg_n, junk_at, png64, jpg64, cut64);
+    const char *in = mr_test_tmp_path("embedded_images.gltf");
+    MR_CHECK(write_bytes(in, json, strlen(json)));
+    mr_gltf *g = NULL;
+    MR_CHECK_OK(mr_gltf_load(in, &g));
+    if (g != NULL) {
+        /* Nowhere to put a temporary file: decoding must not need one. */
+        const char *tmpdir = getenv("TMPDIR");
+        char saved[1024] = "";
+        if (tmpdir != NULL) snprintf(saved, sizeof saved, "%s", tmpdir);
+        setenv("TMPDIR", "/nonexistent/matremap-tmp", 1);
+        image_reads_as(g, 0, png_path);
+        image_reads_as(g, 1, png_path);
+        image_reads_as(g, 2, jpg_path);
+        image_reads_as(g, 3, jpg_path);
+        image_reads_as(g, 4, png_path);
+        mr_image *img = NULL;
+        MR_CHECK_OK(mr_gltf_texture_read(g, 0, NULL, &img, NULL));
+        MR_CHECK(img != NULL && img->width == 512 && img->height == 512 && img->channels == 3);
+        mr_image_free(img);
+        img = NULL;
+        /* Corrupt: half a PNG as a data URI, garbage in a buffer view. The message names the asset and the
+         * image, and no temporary file. */
+        char want[1200];
+        const int corrupt[2] = {5, 6};
+        for (int k = 0; k < 2; k++) {
+            MR_CHECK(mr_gltf_image_read(g, corrupt[k], NULL, &img, NULL) == MR_ERR_FORMAT && img == NULL);
+            snprintf(want, sizeof want, "glTF '%s' image %d", in, corrupt[k]);
+            MR_CHECK_MSG(strstr(mr_last_error(), want) != NULL && strstr(mr_last_error(), "matremap-") == NULL &&
+                             strstr(mr_last_error(), k == 0 ? "truncated PNG" : "not an image") != NULL,
+                         "%s", mr_last_error());
+        }
+        MR_CHECK(mr_gltf_texture_read(g, 1, NULL, &img, NULL) == MR_ERR_FORMAT && img == NULL);
+        snprintf(want, sizeof want, "glTF '%s' image 5", in);
+        MR_CHECK_MSG(strstr(mr_last_error(), want) != NULL, "%s", mr_last_error());
+        /* An external image's errors name the asset and the image too. */
+        MR_CHECK(write_bytes(mr_test_tmp_path("ref.png"), png, png_n / 2));
+        MR_CHECK(mr_gltf_image_read(g, 4, NULL, &img, NULL) == MR_ERR_FORMAT && img == NULL);
+        snprintf(want, sizeof want, "glTF '%s': image 4: image '", in);
+        MR_CHECK_MSG(strstr(mr_last_error(), want) != NULL && strstr(mr_last_error(), "ref.png") != NULL, "%s",
+                     mr_last_error());
+        if (tmpdir != NULL) setenv("TMPDIR", saved, 1);
+        else unsetenv("TMPDIR");
+    }
+    mr_gltf_free(g);
+    free(json);
+    free(png64);
+    free(jpg64);
+    free(cut64);
+    free(bin);
+    free(png);
+    free(jpg);
 }
 
 /* ---- edits ------------------------------------------------------------------------------------------------ */
@@ -1463,7 +1593,8 @@ MR_TEST_MAIN(MR_TEST_ENTRY(every_asset_loads), MR_TEST_ENTRY(floppy_disk_spec_gl
              MR_TEST_ENTRY(texture_settings_samplers), MR_TEST_ENTRY(duck_and_truck),
              MR_TEST_ENTRY(round_trip_every_asset), MR_TEST_ENTRY(round_trip_file_from_env),
              MR_TEST_ENTRY(glb_embedded_resources),
-             MR_TEST_ENTRY(data_uri_resources), MR_TEST_ENTRY(drop_spec_gloss_set_metal_rough_add_texture),
+             MR_TEST_ENTRY(data_uri_resources), MR_TEST_ENTRY(embedded_images_decode_from_memory),
+             MR_TEST_ENTRY(drop_spec_gloss_set_metal_rough_add_texture),
              MR_TEST_ENTRY(bad_inputs), MR_TEST_ENTRY(mutated_inputs_fail_cleanly),
              MR_TEST_ENTRY(no_partial_output_no_input_overwrite), MR_TEST_ENTRY(geometry_every_asset),
              MR_TEST_ENTRY(geometry_water_bottle_and_duck), MR_TEST_ENTRY(geometry_hand_made_asset),

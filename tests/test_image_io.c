@@ -6,6 +6,7 @@
  * change some pixel. Every case works in a private directory from mkdtemp(), removed at exit.
  * Independent cross-checks: EXR written by OpenEXR Core (ours) is read back through OpenImageIO (the OpenEXR
  * C++ library), and files written by oiiotool (OpenImageIO + OpenEXR C++ / libpng) are read by mr_img_read.
+ * Reading from memory (mr_img_read_memory) gives what reading the same bytes from a file gives, bit for bit.
  */
 #include <dirent.h>
 #include <png.h>
@@ -114,6 +115,18 @@ static mr_image *make_f(int channels, float scale) {
             }
         }
     return img;
+}
+
+/* A width x height RGB image of pseudo-random values in [0,1] from `seed` (incompressible: a truncated file of it
+ * loses pixel data, not padding). NULL on allocation failure. */
+static mr_image *make_noise(int width, int height, unsigned seed) {
+    mr_image *noise = NULL;
+    if (mr_image_create(width, height, 3, &noise) != MR_OK) return NULL;
+    for (size_t i = 0; i < mr_image_value_count(noise); i++) {
+        seed = seed * 1103515245u + 12345u;
+        noise->pixels[i] = (float)((seed >> 8) & 0xffff) / 65535.0f;
+    }
+    return noise;
 }
 
 /* What an integer file of `bits` stores for linear v and what reading it back must give. */
@@ -578,6 +591,126 @@ MR_TEST(png_reader_matches_openimageio) {
     }
 }
 
+/* ---- reading from memory ------------------------------------------------------------------------------ */
+
+/* The image mr_img_read_memory decodes from the bytes of `path` equals what mr_img_read_stored reads from the file
+ * itself, bit for bit (size, channels, every value, the stored description), under the options `ro`. */
+static void same_as_file(const char *path, const mr_img_read_options *ro) {
+    size_t size = 0;
+    char *bytes = mr_test_read_file(path, &size);
+    MR_CHECK_MSG(bytes != NULL && size > 0, "%s: cannot read it", path);
+    if (bytes == NULL) return;
+    mr_image *from_file = NULL, *from_memory = NULL;
+    mr_img_stored a = {-1, MR_IMG_COLOR}, b = {-2, MR_IMG_DATA};
+    MR_CHECK_OK(mr_img_read_stored(path, ro, &from_file, &a));
+    MR_CHECK_OK(mr_img_read_memory(bytes, size, "test bytes", ro, &from_memory, &b));
+    MR_CHECK_MSG(same_shape(from_file, from_memory), "%s: file %dx%dx%d, memory %dx%dx%d", path,
+                 from_file ? from_file->width : 0, from_file ? from_file->height : 0,
+                 from_file ? from_file->channels : 0, from_memory ? from_memory->width : 0,
+                 from_memory ? from_memory->height : 0, from_memory ? from_memory->channels : 0);
+    if (same_shape(from_file, from_memory))
+        MR_CHECK_MSG(memcmp(from_file->pixels, from_memory->pixels, mr_image_value_count(from_file) * sizeof(float)) ==
+                         0, "%s: the values differ", path);
+    MR_CHECK_MSG(a.bits == b.bits && a.encoding == b.encoding, "%s: stored %d bits/%d vs %d bits/%d", path, a.bits,
+                 (int)a.encoding, b.bits, (int)b.encoding);
+    mr_image_free(from_file);
+    mr_image_free(from_memory);
+    free(bytes);
+}
+
+MR_TEST(read_memory_matches_the_file) {
+    mr_image *rgb = make_f(3, 1.0f), *rgba = make_f(4, 1.0f), *grey = make_f(1, 1.0f), *bright = make_f(3, 4.0f);
+    struct {
+        const char *name;
+        const mr_image *image;
+        int bits;
+    } files[] = {
+        {"mem8.png", rgb, 8},   {"mem16.png", rgb, 16},  {"mem16a.png", rgba, 16}, {"memg8.png", grey, 8},
+        {"mem.jpg", rgb, 8},    {"memg.jpg", grey, 8},   {"mem16.tif", rgba, 16},  {"mem.exr", bright, 32},
+        {"memh.exr", rgba, 16}, {"mem.hdr", bright, 0},
+    };
+    const mr_img_read_options as_data = {MR_IMG_DATA, 4, 0}, as_rgb = {MR_IMG_COLOR, 3, 0};
+    for (size_t k = 0; k < sizeof files / sizeof files[0]; k++) {
+        mr_img_write_options wo = {MR_IMG_COLOR, files[k].bits, 0};
+        const char *path = mr_test_tmp_path(files[k].name);
+        MR_CHECK_OK(mr_img_write(path, files[k].image, &wo));
+        same_as_file(path, NULL);
+        same_as_file(path, &as_data);
+        same_as_file(path, &as_rgb);
+    }
+    /* Real textures: palette and RGB PNGs of ../shared/assets (the Duck's is 512^2, CheckAndX has an sRGB chunk). */
+    const char *shared = getenv("MR_SHARED");
+    char path[1400];
+    snprintf(path, sizeof path, "%s/assets/specgloss/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/DuckCM.png",
+             shared ? shared : "../shared");
+    same_as_file(path, NULL);
+    snprintf(path, sizeof path, "%s/assets/metalrough/TextureSettingsTest/glTF/CheckAndX.png",
+             shared ? shared : "../shared");
+    same_as_file(path, NULL);
+    mr_image_free(rgb);
+    mr_image_free(rgba);
+    mr_image_free(grey);
+    mr_image_free(bright);
+}
+
+/* A failed read from memory: `want`, a message naming `name` and containing `words` (if not NULL), no image. */
+static void memory_fails(const void *bytes, size_t size, const char *name, const mr_img_read_options *ro,
+                         mr_status want, const char *words) {
+    mr_image *img = NULL;
+    mr_status got = mr_img_read_memory(bytes, size, name, ro, &img, NULL);
+    MR_CHECK_MSG(got == want, "%s: %s, expected %s (%s)", name, mr_status_str(got), mr_status_str(want),
+                 mr_last_error());
+    MR_CHECK_MSG(strstr(mr_last_error(), name) != NULL, "%s: message '%s'", name, mr_last_error());
+    if (words != NULL) MR_CHECK_MSG(strstr(mr_last_error(), words) != NULL, "%s: message '%s'", name, mr_last_error());
+    MR_CHECK(img == NULL);
+    mr_image_free(img);
+}
+
+MR_TEST(read_memory_bad_bytes_fail_clearly) {
+    mr_image *noise = make_noise(64, 64, 777);
+    MR_CHECK(noise != NULL);
+    static unsigned char bytes[1 << 16];
+    /* garbage: text, random bytes, an empty buffer */
+    const char text[] = "this is not an image at all\n";
+    memory_fails(text, sizeof text - 1, "glTF 'x.gltf' image 3", NULL, MR_ERR_FORMAT, "not an image");
+    unsigned s = 4711;
+    for (size_t i = 0; i < 3000; i++) {
+        s = s * 1103515245u + 12345u;
+        bytes[i] = (unsigned char)(s >> 16);
+    }
+    memory_fails(bytes, 3000, "random bytes", NULL, MR_ERR_FORMAT, NULL);
+    memory_fails(text, 0, "no bytes", NULL, MR_ERR_FORMAT, NULL);
+    /* truncated: every format cut in half, and a PNG with a flipped bit (its CRC no longer matches) */
+    const char *formats[] = {"png", "jpg", "exr", "hdr", "tif"};
+    for (int f = 0; f < 5; f++) {
+        char name[64];
+        snprintf(name, sizeof name, "memcut.%s", formats[f]);
+        MR_CHECK_OK(mr_img_write(mr_test_tmp_path(name), noise, NULL));
+        long n = read_file(mr_test_tmp_path(name), bytes, sizeof bytes);
+        MR_CHECK(n > 1000 && n < (long)sizeof bytes);
+        snprintf(name, sizeof name, "half a %s", formats[f]);
+        memory_fails(bytes, (size_t)n / 2, name, NULL, MR_ERR_FORMAT, f == 0 ? "truncated PNG" : NULL);
+        if (f == 0) {
+            bytes[n / 2] ^= 0x10;
+            memory_fails(bytes, (size_t)n, "a flipped PNG", NULL, MR_ERR_FORMAT, "CRC");
+            bytes[n / 2] ^= 0x10;
+            /* the checks of mr_img_read_stored: size, channels, options */
+            mr_img_read_options small = {MR_IMG_COLOR, 0, 32}, grey = {MR_IMG_COLOR, 1, 0}, bad = {MR_IMG_COLOR, 2, 0};
+            memory_fails(bytes, (size_t)n, "a large PNG", &small, MR_ERR_FORMAT, "64x64");
+            memory_fails(bytes, (size_t)n, "an RGB PNG", &grey, MR_ERR_FORMAT, "1 channel");
+            memory_fails(bytes, (size_t)n, "two channels", &bad, MR_ERR_INVALID_ARG, NULL);
+        }
+    }
+    /* arguments */
+    mr_image *img = NULL;
+    MR_CHECK(mr_img_read_memory(NULL, 10, "x", NULL, &img, NULL) == MR_ERR_INVALID_ARG && img == NULL);
+    MR_CHECK(mr_img_read_memory(text, 4, "x", NULL, NULL, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_img_read_memory(text, 4, NULL, NULL, &img, NULL) == MR_ERR_FORMAT && img == NULL);
+    MR_CHECK(strstr(mr_last_error(), "image in memory") != NULL);
+    MR_CHECK(count_temporaries() == 0);
+    mr_image_free(noise);
+}
+
 /* ---- independent cross-checks with oiiotool ----------------------------------------------------------- */
 
 /* oiiotool arguments drawing make_f(3, scale) with --fill. */
@@ -718,13 +851,8 @@ MR_TEST(failed_write_leaves_target_untouched) {
 MR_TEST(full_disk_fails_cleanly) {
     /* A file-size limit makes every write past 4 KiB fail with EFBIG, as a full disk would (SIGXFSZ ignored).
      * Each format must report MR_ERR_IO naming the file, remove its temporary, and keep the old target. */
-    mr_image *noise = NULL;
-    MR_CHECK_OK(mr_image_create(128, 128, 3, &noise));
-    unsigned s = 777;
-    for (size_t i = 0; i < mr_image_value_count(noise); i++) {
-        s = s * 1103515245u + 12345u;
-        noise->pixels[i] = (float)((s >> 8) & 0xffff) / 65535.0f;
-    }
+    mr_image *noise = make_noise(128, 128, 777);
+    MR_CHECK(noise != NULL);
     mr_image *f = make_f(3, 1.0f);
     const char *names[5] = {"full.png", "full.tif", "full.jpg", "full.hdr", "full.exr"};
     unsigned char before[8192], after[8192];
@@ -819,13 +947,8 @@ MR_TEST(bad_inputs_give_clear_errors) {
     MR_CHECK(write_file(mr_test_tmp_path("empty.exr"), "", 0));
     MR_CHECK(mr_img_read(mr_test_tmp_path("empty.exr"), NULL, &img) == MR_ERR_FORMAT);
     /* a truncated PNG: a noisy 64x64 image cut in half */
-    mr_image *noise = NULL;
-    MR_CHECK_OK(mr_image_create(64, 64, 3, &noise));
-    unsigned s = 12345;
-    for (size_t i = 0; i < mr_image_value_count(noise); i++) {
-        s = s * 1103515245u + 12345u;
-        noise->pixels[i] = (float)((s >> 8) & 0xffff) / 65535.0f;
-    }
+    mr_image *noise = make_noise(64, 64, 12345);
+    MR_CHECK(noise != NULL);
     char full[600], cut[600];
     snprintf(full, sizeof full, "%s", mr_test_tmp_path("whole.png"));
     snprintf(cut, sizeof cut, "%s", mr_test_tmp_path("cut.png"));
@@ -941,7 +1064,7 @@ MR_TEST(library_prints_nothing) {
     dup2(fileno(sink), 2);
 
     mr_image *img = NULL, *noise = NULL;
-    mr_status statuses[8];
+    mr_status statuses[16];
     int k = 0;
     mr_image_create(40, 30, 3, &noise);
     for (size_t i = 0; i < mr_image_value_count(noise); i++) noise->pixels[i] = (float)((i * 7919) % 1000) / 1000.0f;
@@ -955,7 +1078,9 @@ MR_TEST(library_prints_nothing) {
         long n = read_file(mr_test_tmp_path(whole), bytes, sizeof bytes);
         write_file(mr_test_tmp_path(cut), bytes, n > 0 ? (size_t)n / 2 : 0);
         statuses[k++] = mr_img_read(mr_test_tmp_path(cut), NULL, &img);
+        statuses[k++] = mr_img_read_memory(bytes, n > 0 ? (size_t)n / 2 : 0, cut, NULL, &img, NULL);
     }
+    statuses[k++] = mr_img_read_memory("not an image", 12, "quiet text", NULL, &img, NULL);
     write_file(mr_test_tmp_path("quiet_text.png"), "not a png", 9);
     statuses[k++] = mr_img_read(mr_test_tmp_path("quiet_text.png"), NULL, &img);
     statuses[k++] = mr_img_read(mr_test_tmp_path("quiet_missing.exr"), NULL, &img);
@@ -1073,6 +1198,7 @@ MR_TEST_MAIN(MR_TEST_ENTRY(openimageio_module_loads_first), MR_TEST_ENTRY(srgb_t
              MR_TEST_ENTRY(hdr_round_trip), MR_TEST_ENTRY(one_channel_round_trips),
              MR_TEST_ENTRY(rgba_alpha_is_not_premultiplied), MR_TEST_ENTRY(read_channel_conversions),
              MR_TEST_ENTRY(reads_files_written_by_oiiotool), MR_TEST_ENTRY(png_reader_matches_openimageio),
+             MR_TEST_ENTRY(read_memory_matches_the_file), MR_TEST_ENTRY(read_memory_bad_bytes_fail_clearly),
              MR_TEST_ENTRY(oiiotool_reads_our_exr),
              MR_TEST_ENTRY(write_into_missing_directory_fails_cleanly),
              MR_TEST_ENTRY(failed_write_leaves_target_untouched), MR_TEST_ENTRY(full_disk_fails_cleanly),

@@ -2,8 +2,10 @@
  * image_io.c — mr_img_read / mr_img_write (contract in image_io.h; internal layout in io_internal.h).
  *
  * Reading: check the path (missing, a directory, unreadable: MR_ERR_IO naming it) and, for PNG, the chunk
- * structure; decode through the OpenImageIO shim, then convert the channel layout and sRGB-decode
- * integer-stored colour (IEC 61966-2-1).
+ * structure; decode a PNG through libpng (png_io.c) and anything else through the OpenImageIO shim, then convert
+ * the channel layout and sRGB-decode integer-stored colour (IEC 61966-2-1). Bytes in memory (mr_img_read_memory)
+ * take the same path from the chunk check on: fmemopen gives the check and libpng the same stdio stream a file
+ * gives them, and OpenImageIO reads them through an IOMemReader.
  * Writing: check every option before touching the disk, convert to the file's sample type (sRGB-encode after
  * clamping to [0,1], then round to nearest), and write through the atomic temp-file protocol of
  * atomic_file.c: OpenEXR Core writes .exr into the temporary file; OpenImageIO encodes every other format
@@ -67,13 +69,13 @@ static uint32_t be32(const unsigned char *p) {
     return ((uint32_t)p[0] << 24) | ((uint32_t)p[1] << 16) | ((uint32_t)p[2] << 8) | (uint32_t)p[3];
 }
 
-/* If the open file `f` is a PNG (by its signature, whatever the extension: *is_png says), walk its chunk
+/* If the open stream `f` is a PNG (by its signature, whatever the extension: *is_png says), walk its chunk
  * structure (ISO/IEC 15948 section 5: length, type, data, CRC) up to IEND: IHDR first, every length inside the
  * file, every CRC right. Why here and not in the decoder: libpng's own messages do not say where a file went wrong
  * (and OpenImageIO's PNG reader, which a PNG no longer reaches, printed them on stderr). This catches truncation
  * and any corruption that a CRC detects (all but deliberately crafted files) with a message saying where, before
  * libpng sees the file. */
-static mr_status check_png_structure(const char *path, FILE *f, int *is_png) {
+static mr_status check_png_structure(const char *label, FILE *f, int *is_png) {
     static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
     unsigned char head[8];
     *is_png = fread(head, 1, 8, f) == 8 && memcmp(head, signature, 8) == 0;
@@ -85,40 +87,40 @@ static mr_status check_png_structure(const char *path, FILE *f, int *is_png) {
     for (int chunk = 0;; chunk++) {
         size_t got = fread(head, 1, 8, f);
         if (got != 8)
-            return mr_fail(MR_ERR_FORMAT, "image '%s': truncated PNG: the file ends at byte %ld, before the IEND chunk",
-                           path, offset + (long)got);
+            return mr_fail(MR_ERR_FORMAT, "%s: truncated PNG: the file ends at byte %ld, before the IEND chunk",
+                           label, offset + (long)got);
         const uint32_t length = be32(head);
         char type[5] = {(char)head[4], (char)head[5], (char)head[6], (char)head[7], '\0'};
         for (int i = 0; i < 4; i++)
             if (!isalpha((unsigned char)type[i]))
-                return mr_fail(MR_ERR_FORMAT, "image '%s': corrupt PNG: invalid chunk type at byte %ld", path, offset);
+                return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: invalid chunk type at byte %ld", label, offset);
         if (length > 0x7fffffffu)
-            return mr_fail(MR_ERR_FORMAT, "image '%s': corrupt PNG: chunk '%s' at byte %ld claims %lu bytes", path,
+            return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: chunk '%s' at byte %ld claims %lu bytes", label,
                            type, offset, (unsigned long)length);
         if (chunk == 0 && strcmp(type, "IHDR") != 0)
-            return mr_fail(MR_ERR_FORMAT, "image '%s': corrupt PNG: the first chunk is '%s', not IHDR", path, type);
+            return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: the first chunk is '%s', not IHDR", label, type);
         uint32_t crc = crc_update(table, 0xffffffffu, head + 4, 4);
         for (uint32_t left = length; left > 0;) {
             size_t want = left < sizeof buf ? left : sizeof buf;
             size_t n = fread(buf, 1, want, f);
             if (n == 0) {
                 if (ferror(f))
-                    return mr_fail(MR_ERR_IO, "image '%s': read error at byte %ld", path,
+                    return mr_fail(MR_ERR_IO, "%s: read error at byte %ld", label,
                                    offset + 8 + (long)(length - left));
                 return mr_fail(MR_ERR_FORMAT,
-                               "image '%s': truncated PNG: chunk '%s' at byte %ld needs %lu data bytes, the file ends "
+                               "%s: truncated PNG: chunk '%s' at byte %ld needs %lu data bytes, the file ends "
                                "after %lu",
-                               path, type, offset, (unsigned long)length, (unsigned long)(length - left));
+                               label, type, offset, (unsigned long)length, (unsigned long)(length - left));
             }
             crc = crc_update(table, crc, buf, n);
             left -= (uint32_t)n;
         }
         unsigned char stored[4];
         if (fread(stored, 1, 4, f) != 4)
-            return mr_fail(MR_ERR_FORMAT, "image '%s': truncated PNG: chunk '%s' at byte %ld lacks its CRC", path, type,
+            return mr_fail(MR_ERR_FORMAT, "%s: truncated PNG: chunk '%s' at byte %ld lacks its CRC", label, type,
                            offset);
         if ((crc ^ 0xffffffffu) != be32(stored))
-            return mr_fail(MR_ERR_FORMAT, "image '%s': corrupt PNG: CRC mismatch in chunk '%s' at byte %ld", path, type,
+            return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: CRC mismatch in chunk '%s' at byte %ld", label, type,
                            offset);
         offset += 12 + (long)length;
         if (strcmp(type, "IEND") == 0) return MR_OK;
@@ -175,69 +177,88 @@ static int convert_channels(const mr_io_raw *raw, mr_image *image, int decode_sr
     return 1;
 }
 
-mr_status mr_img_read(const char *path, const mr_img_read_options *opts, mr_image **out) {
-    return mr_img_read_stored(path, opts, out, NULL);
+/* The read options with their defaults filled in (max_dimension 0 -> the default); messages name `label`. */
+static mr_status read_options(const char *label, const mr_img_read_options *opts, mr_img_read_options *o) {
+    const mr_img_read_options defaults = {MR_IMG_COLOR, 0, 0};
+    *o = opts != NULL ? *opts : defaults;
+    if (o->encoding != MR_IMG_COLOR && o->encoding != MR_IMG_DATA)
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: unknown encoding %d (valid: MR_IMG_COLOR, MR_IMG_DATA)", label,
+                       (int)o->encoding);
+    if (o->channels != 0 && o->channels != 1 && o->channels != 3 && o->channels != 4)
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: %d channels requested (valid: 0 = as stored, 1, 3, 4)", label,
+                       o->channels);
+    if (o->max_dimension < 0)
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: max_dimension %d must be >= 0 (0 = %d)", label, o->max_dimension,
+                       DEFAULT_MAX_DIMENSION);
+    if (o->max_dimension == 0) o->max_dimension = DEFAULT_MAX_DIMENSION;
+    return MR_OK;
 }
 
-mr_status mr_img_read_stored(const char *path, const mr_img_read_options *opts, mr_image **out,
-                             mr_img_stored *stored) {
-    if (path == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mr_img_read: path and out must not be NULL");
-    mr_img_read_options o = {MR_IMG_COLOR, 0, 0};
-    if (opts != NULL) o = *opts;
-    if (o.encoding != MR_IMG_COLOR && o.encoding != MR_IMG_DATA)
-        return mr_fail(MR_ERR_INVALID_ARG, "image '%s': unknown encoding %d (valid: MR_IMG_COLOR, MR_IMG_DATA)", path,
-                       (int)o.encoding);
-    if (o.channels != 0 && o.channels != 1 && o.channels != 3 && o.channels != 4)
-        return mr_fail(MR_ERR_INVALID_ARG, "image '%s': %d channels requested (valid: 0 = as stored, 1, 3, 4)", path,
-                       o.channels);
-    if (o.max_dimension < 0)
-        return mr_fail(MR_ERR_INVALID_ARG, "image '%s': max_dimension %d must be >= 0 (0 = %d)", path,
-                       o.max_dimension, DEFAULT_MAX_DIMENSION);
-    const int max_dimension = o.max_dimension == 0 ? DEFAULT_MAX_DIMENSION : o.max_dimension;
+/* OpenImageIO's reader for encoded bytes, by their signature ("" if none matches). A file needs none of this:
+ * OpenImageIO recognises it by its extension and, failing that, by trying every reader, which bytes in memory
+ * cannot afford (some readers print when they fail). */
+static const char *oiio_format_of(const unsigned char *bytes, size_t size) {
+    static const struct {
+        const char *magic;
+        size_t length, offset;
+        const char *format;
+    } signatures[] = {
+        {"\xff\xd8\xff", 3, 0, "jpeg"}, {"\x76\x2f\x31\x01", 4, 0, "openexr"}, {"#?", 2, 0, "hdr"},
+        {"II*\0", 4, 0, "tiff"}, {"MM\0*", 4, 0, "tiff"}, {"WEBP", 4, 8, "webp"} /* after "RIFF" and a size */,
+        {"GIF8", 4, 0, "gif"}, {"BM", 2, 0, "bmp"},
+    };
+    for (size_t i = 0; i < sizeof signatures / sizeof signatures[0]; i++)
+        if (size >= signatures[i].offset + signatures[i].length &&
+            memcmp(bytes + signatures[i].offset, signatures[i].magic, signatures[i].length) == 0)
+            return signatures[i].format;
+    return "";
+}
 
-    /* File-system problems are MR_ERR_IO with the system's reason; OIIO would call them "not an image". */
-    struct stat st;
-    if (stat(path, &st) != 0) {
-        int err = errno;
-        return mr_fail(MR_ERR_IO, "image '%s': cannot open: %s", path, strerror(err));
-    }
-    if (S_ISDIR(st.st_mode)) return mr_fail(MR_ERR_IO, "image '%s': cannot open: is a directory", path);
-    FILE *probe = fopen(path, "rb");
-    if (probe == NULL) {
-        int err = errno;
-        return mr_fail(MR_ERR_IO, "image '%s': cannot open: %s", path, strerror(err));
-    }
+/* The read itself, shared by a file (path) and bytes in memory (path NULL, bytes and size): `stream` is open at
+ * the start of either and is closed here; `label` is what messages call the image; *o has its defaults. */
+static mr_status read_stream(const char *path, const unsigned char *bytes, size_t size, FILE *stream,
+                             const char *label, const mr_img_read_options *o, mr_image **out, mr_img_stored *stored) {
     int is_png = 0;
-    mr_status status = check_png_structure(path, probe, &is_png);
-    fclose(probe);
-    if (status != MR_OK) return status;
-
     mr_io_raw raw = {0, 0, 0, 0, 0, NULL};
+    mr_status status = check_png_structure(label, stream, &is_png);
     // PNG (by its signature: nearly every glTF texture) through libpng; the rest through the OpenImageIO module,
     // loaded on first use.
-    status = is_png ? mr_io_png_read(path, max_dimension, &raw) : mr_io_oiio_read(path, max_dimension, &raw);
+    if (status == MR_OK && is_png) {
+        rewind(stream);
+        status = mr_io_png_read_stream(stream, label, o->max_dimension, &raw);
+    }
+    fclose(stream);
+    if (status != MR_OK) return status;
+    if (!is_png && path != NULL) {
+        status = mr_io_oiio_read(path, o->max_dimension, &raw);
+    } else if (!is_png) {
+        const char *format = oiio_format_of(bytes, size);
+        if (format[0] == '\0')
+            return mr_fail(MR_ERR_FORMAT, "%s: not an image this reader knows from memory (by its first bytes: PNG, "
+                           "JPEG, EXR, Radiance HDR, TIFF, WebP, GIF or BMP)", label);
+        status = mr_io_oiio_read_memory(bytes, size, format, label, o->max_dimension, &raw);
+    }
     if (status != MR_OK) return status;
 
-    int out_ch = o.channels;
+    int out_ch = o->channels;
     if (out_ch == 0) out_ch = raw.channels == 1 ? 1 : (raw.channels == 3 ? 3 : 4);
     if (out_ch == 1 && raw.channels >= 3) {
         free(raw.pixels);
-        return mr_fail(MR_ERR_FORMAT,
-                       "image '%s': holds RGB%s colour but 1 channel was requested (convert to grey explicitly)",
-                       path, raw.channels == 4 ? "A" : "");
+        return mr_fail(MR_ERR_FORMAT, "%s: holds RGB%s colour but 1 channel was requested (convert to grey explicitly)",
+                       label, raw.channels == 4 ? "A" : "");
     }
     mr_image *image = NULL;
     status = mr_image_create(raw.width, raw.height, out_ch, &image);
     if (status != MR_OK) {
         free(raw.pixels);
-        return mr_fail_context(status, "image '%s'", path);
+        return mr_fail_context(status, "%s", label);
     }
-    const int decode_srgb = raw.encoded && o.encoding == MR_IMG_COLOR;
+    const int decode_srgb = raw.encoded && o->encoding == MR_IMG_COLOR;
     int converted = convert_channels(&raw, image, decode_srgb);
     free(raw.pixels);
     if (!converted) {
         mr_image_free(image);
-        return mr_fail(MR_ERR_NOMEM, "image '%s': out of memory for the sRGB table", path);
+        return mr_fail(MR_ERR_NOMEM, "%s: out of memory for the sRGB table", label);
     }
     *out = image;
     if (stored != NULL) {
@@ -245,6 +266,52 @@ mr_status mr_img_read_stored(const char *path, const mr_img_read_options *opts, 
         stored->encoding = decode_srgb ? MR_IMG_COLOR : MR_IMG_DATA;
     }
     return MR_OK;
+}
+
+mr_status mr_img_read(const char *path, const mr_img_read_options *opts, mr_image **out) {
+    return mr_img_read_stored(path, opts, out, NULL);
+}
+
+mr_status mr_img_read_stored(const char *path, const mr_img_read_options *opts, mr_image **out,
+                             mr_img_stored *stored) {
+    if (path == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mr_img_read: path and out must not be NULL");
+    char label[MR_IO_LABEL_SIZE];
+    mr_io_file_label(label, path);
+    mr_img_read_options o;
+    mr_status status = read_options(label, opts, &o);
+    if (status != MR_OK) return status;
+
+    /* File-system problems are MR_ERR_IO with the system's reason; OIIO would call them "not an image". */
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        int err = errno;
+        return mr_fail(MR_ERR_IO, "%s: cannot open: %s", label, strerror(err));
+    }
+    if (S_ISDIR(st.st_mode)) return mr_fail(MR_ERR_IO, "%s: cannot open: is a directory", label);
+    FILE *file = fopen(path, "rb");
+    if (file == NULL) {
+        int err = errno;
+        return mr_fail(MR_ERR_IO, "%s: cannot open: %s", label, strerror(err));
+    }
+    return read_stream(path, NULL, 0, file, label, &o, out, stored);
+}
+
+mr_status mr_img_read_memory(const void *bytes, size_t size, const char *name, const mr_img_read_options *opts,
+                             mr_image **out, mr_img_stored *stored) {
+    if (out == NULL || (bytes == NULL && size > 0))
+        return mr_fail(MR_ERR_INVALID_ARG, "mr_img_read_memory: out must not be NULL, nor bytes with a size");
+    const char *label = name != NULL && name[0] != '\0' ? name : "image in memory";
+    mr_img_read_options o;
+    mr_status status = read_options(label, opts, &o);
+    if (status != MR_OK) return status;
+    if (size == 0) return mr_fail(MR_ERR_FORMAT, "%s: no bytes (an empty image)", label);
+    /* Mode "r": fmemopen only reads the buffer, so casting away its const is safe. */
+    FILE *stream = fmemopen((void *)bytes, size, "r");
+    if (stream == NULL) {
+        int err = errno;
+        return mr_fail(MR_ERR_NOMEM, "%s: cannot open the bytes as a stream: %s", label, strerror(err));
+    }
+    return read_stream(NULL, bytes, size, stream, label, &o, out, stored);
 }
 
 /* The decode of the point `code` (a half-integer at an interval's edge), clamped to [0, max_code]: rounded to

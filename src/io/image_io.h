@@ -2,6 +2,7 @@
  * image_io.h — reading and writing images (EXR, Radiance HDR, PNG, JPEG, TIFF).
  *
  * Main calls: mr_img_read(path, &opts, &image) ... mr_img_write(path, image, &opts). Free with mr_image_free.
+ * mr_img_read_memory decodes an encoded image already in memory (e.g. embedded in a glTF asset) the same way.
  *
  * Colour convention (the only place it is applied): images in memory are linear (mr_image.h).
  *   - EXR and HDR hold linear floats and are read and written as they are.
@@ -11,10 +12,10 @@
  *     linear and never premultiplied (PNG/TIFF store unassociated alpha; EXR alpha is kept as stored).
  *     On read, the rule follows the stored sample type: integer samples are display-encoded, floating-point
  *     samples (EXR, HDR, float TIFF) are linear.
- * Backends: reading goes through OpenImageIO (C++ shim, image_io_oiio.cpp, built as the module
- * libmatremap-oiio.so and loaded on first use, see oiio_module.c; MR_OIIO_MODULE overrides where it is
- * looked for, and a missing module is MR_ERR_EXTERNAL), which decodes every EXR compression (OpenEXR Core
- * 3.1.5 cannot decode DWAA/DWAB, see ../shared/docs/toolchain.md). EXR writing uses
+ * Backends: PNG is read through libpng (png_io.c); reading anything else goes through OpenImageIO (C++ shim,
+ * image_io_oiio.cpp, built as the module libmatremap-oiio.so and loaded on first use, see oiio_module.c;
+ * MR_OIIO_MODULE overrides where it is looked for, and a missing module is MR_ERR_EXTERNAL), which decodes every
+ * EXR compression (OpenEXR Core 3.1.5 cannot decode DWAA/DWAB, see ../shared/docs/toolchain.md). EXR writing uses
  * the OpenEXR Core C API directly (exr_write.c: scanline, ZIP, FLOAT or HALF channels R,G,B(,A) or Y). Other
  * formats are written by OpenImageIO (PNG, JPEG and HDR encoded in memory first: io_internal.h says why).
  * Format limits: JPEG and Radiance HDR cannot store alpha (4-channel images are MR_ERR_UNSUPPORTED, not
@@ -78,6 +79,18 @@ typedef struct mr_img_stored {
  * mr_img_half_step. */
 mr_status mr_img_read_stored(const char *path, const mr_img_read_options *opts, mr_image **out,
                              mr_img_stored *stored);
+
+/* mr_img_read_stored for an encoded image in memory: `size` bytes at `bytes` (e.g. an image embedded in a glTF
+ * asset, as a data URI or in a buffer view), with the same options, conventions, checks and results as reading
+ * the same bytes from a file, bit for bit; nothing touches the disk. The format is recognised by the first bytes:
+ * PNG (libpng, as for a file), JPEG, EXR, Radiance HDR, TIFF, WebP, GIF and BMP (OpenImageIO). Messages call the
+ * data `name` (e.g. "glTF 'x.gltf' image 3"; NULL or "" = "image in memory"). *out is owned by the caller and
+ * untouched on failure; *stored (may be NULL) as for mr_img_read_stored. Errors: MR_ERR_FORMAT (no bytes, another
+ * format, truncated or corrupt, larger than max_dimension, RGB data when 1 channel was requested),
+ * MR_ERR_INVALID_ARG (out NULL, bytes NULL with a size, bad options), MR_ERR_NOMEM, MR_ERR_EXTERNAL (the
+ * OpenImageIO module cannot be loaded). The bytes are only read, and may be freed once the call returns. */
+mr_status mr_img_read_memory(const void *bytes, size_t size, const char *name, const mr_img_read_options *opts,
+                             mr_image **out, mr_img_stored *stored);
 
 /* How far from `value` (a decoded value: linear for MR_IMG_COLOR, as stored for MR_IMG_DATA) the value an
  * integer file of `bits` bits stored as it may have been: half a code value, in decoded units. bits 8 or 16,

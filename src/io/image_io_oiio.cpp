@@ -4,15 +4,16 @@
  * It is built as a module of its own (libmatremap-oiio.so) that oiio_module.c loads with dlopen the first time
  * an image is read or a non-EXR image written: Debian's OpenImageIO pulls in some 250 shared libraries whose
  * start-up (OpenCV's above all) costs about 0.4 s, which every `matremap` run would otherwise pay, even
- * `matremap models`. The module exports three extern "C" entry points (contracts of mr_io_oiio_read/write in
- * io_internal.h): mr_oiio_module_read decodes any format OpenImageIO 2.4 knows into floats,
- * mr_oiio_module_write encodes an already-quantised buffer and writes it through the atomic protocol of
+ * `matremap models`. The module exports four extern "C" entry points (contracts of mr_io_oiio_read,
+ * mr_io_oiio_read_memory and mr_io_oiio_write in io_internal.h): mr_oiio_module_read decodes a file of any format
+ * OpenImageIO 2.4 knows into floats, mr_oiio_module_read_memory does the same for encoded bytes in memory (an
+ * IOMemReader), mr_oiio_module_write encodes an already-quantised buffer and writes it through the atomic protocol of
  * atomic_file.c (compiled into the module too), and mr_oiio_module_last_error returns the module's own
  * thread-local message (status.c is compiled into the module with hidden visibility, so the module's
  * mr_fail writes there; the loader copies it into the library's). Everything else (option checks, channel
  * conversion, sRGB coding and quantisation) is C (image_io.c), so this file stays a thin shim. No C++
  * exception crosses the boundary: each entry point catches everything and maps it to an mr_status with a
- * message naming the file.
+ * message naming the file (or the name the caller gives bytes in memory).
  *
  * OpenImageIO facts relied on (OpenImageIO 2.4 documentation, "ImageInput"/"ImageOutput" and the format
  * plugin notes):
@@ -22,6 +23,9 @@
  *   - The spec is known after open(), before any pixel is decoded: the size limit is enforced there.
  *   - read_image(subimage, miplevel, chbegin, chend, TypeFloat, ...) converts integer samples to [0,1]
  *     (v / (2^bits - 1)); floating-point data is returned as stored.
+ *   - A reader reads from memory when its open() configuration carries the IOProxy as "oiio:ioproxy" (a proxy
+ *     given to create() alone is dropped by open(), which then looks for a file); PNG, JPEG, TIFF, OpenEXR, HDR,
+ *     WebP, GIF and BMP support it (supports("ioproxy"), checked on OpenImageIO 2.4.7).
  *   - Error text accumulates per ImageInput/ImageOutput (geterror()) or, for failed open/create, globally per
  *     thread (OIIO::geterror()); it is always retrieved, which also clears it.
  */
@@ -98,24 +102,18 @@ OIIO::TypeDesc sample_type(mr_io_sample sample) {
     }
 }
 
-mr_status read_impl(const char *path, int max_dimension, mr_io_raw *raw) {
-    OIIO::ImageSpec config;
-    config.attribute("oiio:UnassociatedAlpha", 1);
-    auto in = OIIO::ImageInput::open(path, &config);
-    if (!in) {
-        std::string why = one_line(OIIO::geterror());
-        return mr_fail(MR_ERR_FORMAT, "image '%s': not a readable image: %s", path, why.c_str());
-    }
+/* The first subimage of the opened `in` into *raw; messages call the image `label`. */
+mr_status decode(OIIO::ImageInput *in, const char *label, int max_dimension, mr_io_raw *raw) {
     const OIIO::ImageSpec spec = in->spec();
     if (spec.width < 1 || spec.height < 1 || spec.nchannels < 1)
-        return mr_fail(MR_ERR_FORMAT, "image '%s': empty image (%dx%d, %d channels)", path, spec.width, spec.height,
+        return mr_fail(MR_ERR_FORMAT, "%s: empty image (%dx%d, %d channels)", label, spec.width, spec.height,
                        spec.nchannels);
     if (spec.width > max_dimension || spec.height > max_dimension)
-        return mr_fail(MR_ERR_FORMAT, "image '%s': %dx%d pixels exceeds the maximum dimension %d", path, spec.width,
+        return mr_fail(MR_ERR_FORMAT, "%s: %dx%d pixels exceeds the maximum dimension %d", label, spec.width,
                        spec.height, max_dimension);
     if (spec.depth > 1)
-        return mr_fail(MR_ERR_FORMAT, "image '%s': volume images (depth %d) are not supported", path, spec.depth);
-    if (spec.deep) return mr_fail(MR_ERR_FORMAT, "image '%s': deep images are not supported", path);
+        return mr_fail(MR_ERR_FORMAT, "%s: volume images (depth %d) are not supported", label, spec.depth);
+    if (spec.deep) return mr_fail(MR_ERR_FORMAT, "%s: deep images are not supported", label);
 
     int index[4] = {0, 0, 0, 0};
     const int channels = choose_channels(spec, index);
@@ -127,13 +125,13 @@ mr_status read_impl(const char *path, int max_dimension, mr_io_raw *raw) {
     const size_t span = (size_t)(hi - lo + 1);
     const size_t count = (size_t)spec.width * (size_t)spec.height;
     if (count > SIZE_MAX / sizeof(float) / span)
-        return mr_fail(MR_ERR_NOMEM, "image '%s': %dx%d pixels do not fit in memory", path, spec.width, spec.height);
+        return mr_fail(MR_ERR_NOMEM, "%s: %dx%d pixels do not fit in memory", label, spec.width, spec.height);
     /* A vector, so an exception thrown by OIIO cannot leak it; `pixels` is malloc'ed only once nothing below
      * can throw (the caller releases it with free()). */
     std::vector<float> stored(count * span);
     if (!in->read_image(0, 0, lo, hi + 1, OIIO::TypeFloat, stored.data())) {
         std::string why = one_line(in->geterror());
-        return mr_fail(MR_ERR_FORMAT, "image '%s': cannot decode pixels (corrupt or truncated?): %s", path,
+        return mr_fail(MR_ERR_FORMAT, "%s: cannot decode pixels (corrupt or truncated?): %s", label,
                        why.c_str());
     }
     const bool is_exr = std::strcmp(in->format_name(), "openexr") == 0;
@@ -143,11 +141,11 @@ mr_status read_impl(const char *path, int max_dimension, mr_io_raw *raw) {
      * read (this also leaves nothing pending when the ImageInput is destroyed). */
     std::string pending = in->geterror();
     if (!pending.empty())
-        return mr_fail(MR_ERR_FORMAT, "image '%s': decoded with errors (corrupt or truncated?): %s", path,
+        return mr_fail(MR_ERR_FORMAT, "%s: decoded with errors (corrupt or truncated?): %s", label,
                        one_line(pending).c_str());
     float *pixels = static_cast<float *>(std::malloc(count * (size_t)channels * sizeof(float)));
     if (pixels == nullptr)
-        return mr_fail(MR_ERR_NOMEM, "image '%s': out of memory for %dx%d pixels", path, spec.width, spec.height);
+        return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %dx%d pixels", label, spec.width, spec.height);
     for (size_t p = 0; p < count; p++)
         for (int k = 0; k < channels; k++)
             pixels[p * (size_t)channels + (size_t)k] = stored[p * span + (size_t)(index[k] - lo)];
@@ -160,6 +158,48 @@ mr_status read_impl(const char *path, int max_dimension, mr_io_raw *raw) {
     raw->bits = spec.format == OIIO::TypeDesc::UINT8 ? 8 : (spec.format == OIIO::TypeDesc::UINT16 ? 16 : 0);
     raw->pixels = pixels;
     return MR_OK;
+}
+
+/* Reading configuration: alpha unassociated (PNG/TIFF colour is not premultiplied on read). */
+OIIO::ImageSpec read_config() {
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    return config;
+}
+
+mr_status read_impl(const char *path, const char *label, int max_dimension, mr_io_raw *raw) {
+    const OIIO::ImageSpec config = read_config();
+    auto in = OIIO::ImageInput::open(path, &config);
+    if (!in) {
+        std::string why = one_line(OIIO::geterror());
+        return mr_fail(MR_ERR_FORMAT, "%s: not a readable image: %s", label, why.c_str());
+    }
+    return decode(in.get(), label, max_dimension, raw);
+}
+
+/* Bytes in memory through an IOMemReader, which must outlive the reader (declared first). The proxy goes in the
+ * configuration ("oiio:ioproxy"): open() takes it from there, and without it OIIO 2.4.7 looks for a file named
+ * `label`. The reader is chosen by name, as bytes have no extension for OpenImageIO to go by. */
+mr_status read_memory_impl(const void *bytes, size_t size, const char *format, const char *label, int max_dimension,
+                           mr_io_raw *raw) {
+    OIIO::Filesystem::IOMemReader memory(bytes, size);
+    OIIO::ImageSpec config = read_config();
+    void *proxy = &memory;
+    config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+    auto in = OIIO::ImageInput::create(format, false, &config, &memory);
+    if (!in) {
+        std::string why = one_line(OIIO::geterror());
+        return mr_fail(MR_ERR_EXTERNAL, "%s: OpenImageIO has no %s reader: %s", label, format, why.c_str());
+    }
+    if (!in->supports("ioproxy"))
+        return mr_fail(MR_ERR_UNSUPPORTED, "%s: the OpenImageIO %s reader cannot read from memory", label, format);
+    OIIO::ImageSpec opened;
+    if (!in->open(label, opened, config)) {
+        std::string why = one_line(in->geterror());
+        (void)OIIO::geterror();
+        return mr_fail(MR_ERR_FORMAT, "%s: not a readable %s image: %s", label, in->format_name(), why.c_str());
+    }
+    return decode(in.get(), label, max_dimension, raw);
 }
 
 /* Removes the temporary file if the write does not reach commit, even when an exception unwinds. */
@@ -228,6 +268,20 @@ mr_status write_impl(const char *path, int width, int height, int channels, mr_i
     return mr_atomic_write_bytes(path, encoded.data(), encoded.size());
 }
 
+/* Runs `body` (returning an mr_status) so that no exception leaves the module: each becomes a status and a message
+ * naming `label` and what was being done ("decoding", "encoding"). */
+template <typename F> mr_status guarded(const char *label, const char *doing, F body) {
+    try {
+        return body();
+    } catch (const std::bad_alloc &) {
+        return mr_fail(MR_ERR_NOMEM, "%s: out of memory while %s", label, doing);
+    } catch (const std::exception &e) {
+        return mr_fail(MR_ERR_EXTERNAL, "%s: OpenImageIO failed: %s", label, e.what());
+    } catch (...) {
+        return mr_fail(MR_ERR_EXTERNAL, "%s: OpenImageIO failed with an unknown exception", label);
+    }
+}
+
 } // namespace
 
 #define MR_MODULE_EXPORT __attribute__((visibility("default")))
@@ -235,27 +289,23 @@ mr_status write_impl(const char *path, int width, int height, int channels, mr_i
 extern "C" MR_MODULE_EXPORT const char *mr_oiio_module_last_error(void) { return mr_last_error(); }
 
 extern "C" MR_MODULE_EXPORT mr_status mr_oiio_module_read(const char *path, int max_dimension, mr_io_raw *raw) {
-    try {
-        return read_impl(path, max_dimension, raw);
-    } catch (const std::bad_alloc &) {
-        return mr_fail(MR_ERR_NOMEM, "image '%s': out of memory while decoding", path);
-    } catch (const std::exception &e) {
-        return mr_fail(MR_ERR_EXTERNAL, "image '%s': OpenImageIO failed: %s", path, e.what());
-    } catch (...) {
-        return mr_fail(MR_ERR_EXTERNAL, "image '%s': OpenImageIO failed with an unknown exception", path);
-    }
+    char label[MR_IO_LABEL_SIZE];
+    mr_io_file_label(label, path);
+    return guarded(label, "decoding", [&] { return read_impl(path, label, max_dimension, raw); });
+}
+
+extern "C" MR_MODULE_EXPORT mr_status mr_oiio_module_read_memory(const void *bytes, size_t size, const char *format,
+                                                                 const char *label, int max_dimension,
+                                                                 mr_io_raw *raw) {
+    return guarded(label, "decoding",
+                   [&] { return read_memory_impl(bytes, size, format, label, max_dimension, raw); });
 }
 
 extern "C" MR_MODULE_EXPORT mr_status mr_oiio_module_write(const char *path, int width, int height, int channels,
                                                            mr_io_sample sample, const void *data, int srgb_tag,
                                                            int jpeg_quality) {
-    try {
-        return write_impl(path, width, height, channels, sample, data, srgb_tag, jpeg_quality);
-    } catch (const std::bad_alloc &) {
-        return mr_fail(MR_ERR_NOMEM, "image '%s': out of memory while encoding", path);
-    } catch (const std::exception &e) {
-        return mr_fail(MR_ERR_EXTERNAL, "image '%s': OpenImageIO failed: %s", path, e.what());
-    } catch (...) {
-        return mr_fail(MR_ERR_EXTERNAL, "image '%s': OpenImageIO failed with an unknown exception", path);
-    }
+    char label[MR_IO_LABEL_SIZE];
+    mr_io_file_label(label, path);
+    return guarded(label, "encoding",
+                   [&] { return write_impl(path, width, height, channels, sample, data, srgb_tag, jpeg_quality); });
 }

@@ -2,12 +2,14 @@
  * io_internal.h — pieces of src/io shared between its C files and the C++ OpenImageIO shim; not installed.
  *
  * Division of labour (the public contract is image_io.h):
- *   image_io.c          argument checks, extension dispatch, channel conversion, sRGB coding, quantisation,
- *                       the PNG structure check before decoding;
- *   image_io_oiio.cpp   the only C++: decodes any format into floats (mr_io_oiio_read) and encodes already
- *                       quantised 8/16-bit or float buffers (mr_io_oiio_write); built as the module
- *                       libmatremap-oiio.so, which oiio_module.c loads on first use and forwards these two
- *                       calls to (OpenImageIO's dependencies cost ~0.4 s of start-up, see oiio_module.c);
+ *   image_io.c          argument checks, extension and signature dispatch, channel conversion, sRGB coding,
+ *                       quantisation, the PNG structure check before decoding;
+ *   png_io.c            PNG decoding and encoding through libpng;
+ *   image_io_oiio.cpp   the only C++: decodes any format into floats, from a file (mr_io_oiio_read) or from
+ *                       memory (mr_io_oiio_read_memory), and encodes already quantised 8/16-bit or float buffers
+ *                       (mr_io_oiio_write); built as the module libmatremap-oiio.so, which oiio_module.c loads on
+ *                       first use and forwards these calls to (OpenImageIO's dependencies cost ~0.4 s of
+ *                       start-up, see oiio_module.c);
  *   exr_write.c         EXR encoding through the OpenEXR Core C API (mr_io_exr_write);
  *   atomic_file.c       the temp-file + rename protocol that every write goes through;
  *   srgb.c              the IEC 61966-2-1 transfer functions.
@@ -17,6 +19,7 @@
 #define MR_IO_INTERNAL_H
 
 #include <stddef.h>
+#include <stdio.h>
 
 #include "../mr_status.h"
 
@@ -52,6 +55,18 @@ mr_status mr_atomic_write_bytes(const char *target, const void *bytes, size_t si
  * Preserves errno and the recorded last-error message. */
 void mr_atomic_abort(mr_atomic_file *file);
 
+/* ---- what messages call an image ---------------------------------------------------------------------- */
+
+/* A read's messages name what it reads: "image '<path>'" for a file, the caller's name for bytes in memory
+ * (mr_img_read_memory). Longer labels are cut to the size of mr_last_error's buffer, which would cut them anyway. */
+#define MR_IO_LABEL_SIZE 1024
+
+/* "image '<path>'" into label[MR_IO_LABEL_SIZE]; returns label. Inline: the OpenImageIO module needs it too. */
+static inline const char *mr_io_file_label(char *label, const char *path) {
+    snprintf(label, MR_IO_LABEL_SIZE, "image '%s'", path);
+    return label;
+}
+
 /* ---- sRGB (srgb.c) ------------------------------------------------------------------------------------ */
 
 /* mr_srgb_to_linear in double, not rounded to float (mr_img_half_step's differences of decodes need it). */
@@ -86,6 +101,13 @@ typedef struct mr_io_raw {
  * the C++ runtime threw). Messages name the file. */
 mr_status mr_io_oiio_read(const char *path, int max_dimension, mr_io_raw *raw);
 
+/* mr_io_oiio_read for `size` encoded bytes at `bytes` (an OpenImageIO IOMemReader: nothing touches the disk),
+ * decoded by OpenImageIO's reader `format` ("jpeg", "openexr", "hdr", "tiff", ...: the caller recognised it by
+ * the bytes' signature; OpenImageIO recognises a file by its extension, which bytes lack). Messages call the
+ * image `label`. Same errors; MR_ERR_UNSUPPORTED if that reader cannot read from memory. */
+mr_status mr_io_oiio_read_memory(const void *bytes, size_t size, const char *format, const char *label,
+                                 int max_dimension, mr_io_raw *raw);
+
 /* Sample types for mr_io_oiio_write. */
 typedef enum mr_io_sample {
     MR_IO_U8 = 0,
@@ -109,6 +131,10 @@ mr_status mr_io_oiio_write(const char *path, int width, int height, int channels
 
 /* mr_io_oiio_read for a PNG, without OpenImageIO: the same layouts and values (png_io.c). */
 mr_status mr_io_png_read(const char *path, int max_dimension, mr_io_raw *raw);
+
+/* The same from `file`, open at the PNG's first byte (a file, or bytes in memory through fmemopen) and left open;
+ * messages call it `label`. */
+mr_status mr_io_png_read_stream(FILE *file, const char *label, int max_dimension, mr_io_raw *raw);
 
 /* How the PNG writer compresses: a zlib level (0-9) and libpng's filter set (PNG_FILTER_* bits, or PNG_ALL_FILTERS
  * for its adaptive choice per row). MR_IO_PNG_DEFAULT is the default of mr_img_write (docs/performance.md, "PNG

@@ -1,6 +1,6 @@
 /*
  * oiio_module.c — loads the OpenImageIO shim (libmatremap-oiio.so, image_io_oiio.cpp) on first use and
- * forwards mr_io_oiio_read / mr_io_oiio_write to it (contracts in io_internal.h).
+ * forwards mr_io_oiio_read / mr_io_oiio_read_memory / mr_io_oiio_write to it (contracts in io_internal.h).
  *
  * Why a module: linking OpenImageIO into every program costs ~0.4 s of start-up on Debian 12 (its ~250
  * dependent libraries run their static initialisers, OpenCV's videoio alone 0.2 s), paid even by commands
@@ -33,11 +33,13 @@
 #define MODULE_FILE "libmatremap-oiio.so"
 
 typedef mr_status (*module_read_fn)(const char *, int, mr_io_raw *);
+typedef mr_status (*module_read_memory_fn)(const void *, size_t, const char *, const char *, int, mr_io_raw *);
 typedef mr_status (*module_write_fn)(const char *, int, int, int, mr_io_sample, const void *, int, int);
 typedef const char *(*module_error_fn)(void);
 
 static pthread_once_t load_once = PTHREAD_ONCE_INIT;
 static module_read_fn module_read;
+static module_read_memory_fn module_read_memory;
 static module_write_fn module_write;
 static module_error_fn module_error;
 static char load_failure[2048]; /* why loading failed; written once inside pthread_once */
@@ -52,9 +54,10 @@ static int try_load(const char *path) {
     }
     // POSIX allows converting dlsym's void * to a function pointer; ISO C does not, hence the memcpy.
     void *read_sym = dlsym(handle, "mr_oiio_module_read");
+    void *read_memory_sym = dlsym(handle, "mr_oiio_module_read_memory");
     void *write_sym = dlsym(handle, "mr_oiio_module_write");
     void *error_sym = dlsym(handle, "mr_oiio_module_last_error");
-    if (read_sym == NULL || write_sym == NULL || error_sym == NULL) {
+    if (read_sym == NULL || read_memory_sym == NULL || write_sym == NULL || error_sym == NULL) {
         size_t used = strlen(load_failure);
         snprintf(load_failure + used, sizeof load_failure - used, "%s%s: not a matremap image module",
                  used ? "; " : "", path);
@@ -62,6 +65,7 @@ static int try_load(const char *path) {
         return 0;
     }
     memcpy(&module_read, &read_sym, sizeof read_sym);
+    memcpy(&module_read_memory, &read_memory_sym, sizeof read_memory_sym);
     memcpy(&module_write, &write_sym, sizeof write_sym);
     memcpy(&module_error, &error_sym, sizeof error_sym);
     return 1;
@@ -88,14 +92,15 @@ static void load_module(void) {
     try_load(MR_MODULE_DIR "/" MODULE_FILE);
 }
 
-static mr_status ensure_loaded(const char *path) {
+/* `label` names the image the module is loaded for (io_internal.h, "what messages call an image"). */
+static mr_status ensure_loaded(const char *label) {
     pthread_once(&load_once, load_module);
     if (module_read != NULL) return MR_OK;
     return mr_fail(MR_ERR_EXTERNAL,
-                   "image '%s': cannot load the OpenImageIO module " MODULE_FILE
+                   "%s: cannot load the OpenImageIO module " MODULE_FILE
                    " (looked beside the executable in ../lib/matremap and in " MR_MODULE_DIR
                    "; set MR_OIIO_MODULE to its path): %s",
-                   path, load_failure);
+                   label, load_failure);
 }
 
 /* The module records failures in its own thread-local buffer; carry the message over to ours. */
@@ -105,14 +110,23 @@ static mr_status forward_status(mr_status status) {
 }
 
 mr_status mr_io_oiio_read(const char *path, int max_dimension, mr_io_raw *raw) {
-    mr_status status = ensure_loaded(path);
+    char label[MR_IO_LABEL_SIZE];
+    mr_status status = ensure_loaded(mr_io_file_label(label, path));
     if (status != MR_OK) return status;
     return forward_status(module_read(path, max_dimension, raw));
 }
 
+mr_status mr_io_oiio_read_memory(const void *bytes, size_t size, const char *format, const char *label,
+                                 int max_dimension, mr_io_raw *raw) {
+    mr_status status = ensure_loaded(label);
+    if (status != MR_OK) return status;
+    return forward_status(module_read_memory(bytes, size, format, label, max_dimension, raw));
+}
+
 mr_status mr_io_oiio_write(const char *path, int width, int height, int channels, mr_io_sample sample,
                            const void *data, int srgb_tag, int jpeg_quality) {
-    mr_status status = ensure_loaded(path);
+    char label[MR_IO_LABEL_SIZE];
+    mr_status status = ensure_loaded(mr_io_file_label(label, path));
     if (status != MR_OK) return status;
     return forward_status(module_write(path, width, height, channels, sample, data, srgb_tag, jpeg_quality));
 }

@@ -5,7 +5,9 @@
  * maps: going through OpenImageIO cost the loading of its ~250 libraries (the module, io/oiio_module.c) and its
  * default deflate level. This reader returns what mr_io_oiio_read returns for a PNG (the same channel layout: grey,
  * grey + alpha, RGB, RGBA; palettes, low bit depths and tRNS expanded; 8 or 16 bits; values code / (2^bits - 1);
- * display-encoded), and the writer encodes in memory and writes atomically as the OpenImageIO path does.
+ * display-encoded), and the writer encodes in memory and writes atomically as the OpenImageIO path does. The reader
+ * takes any stdio stream: a file, or an image in memory that image_io.c opens with fmemopen (mr_img_read_memory), so
+ * both go through the same libpng calls and give the same values.
  *
  * libpng reports errors by longjmp out of its calls: what the callbacks change and the code after a jump reads
  * (the message, the growing output) lives on the heap behind a `volatile` pointer, as C requires of objects
@@ -50,16 +52,23 @@ static int host_is_little_endian(void) {
 }
 
 mr_status mr_io_png_read(const char *path, int max_dimension, mr_io_raw *raw) {
+    char label[MR_IO_LABEL_SIZE];
+    mr_io_file_label(label, path);
     FILE *file = fopen(path, "rb");
-    if (file == NULL) return mr_fail(MR_ERR_IO, "image '%s': cannot open", path);
+    if (file == NULL) return mr_fail(MR_ERR_IO, "%s: cannot open", label);
+    mr_status status = mr_io_png_read_stream(file, label, max_dimension, raw);
+    fclose(file);
+    return status;
+}
+
+mr_status mr_io_png_read_stream(FILE *file, const char *label, int max_dimension, mr_io_raw *raw) {
     png_session *volatile session = calloc(1, sizeof *session);
     png_structp png = session ? png_create_read_struct(PNG_LIBPNG_VER_STRING, session, on_error, on_warning) : NULL;
     png_infop info = png != NULL ? png_create_info_struct(png) : NULL;
     if (png == NULL || info == NULL) {
         png_destroy_read_struct(png ? &png : NULL, NULL, NULL);
-        fclose(file);
         free(session);
-        return mr_fail(MR_ERR_NOMEM, "image '%s': out of memory for the PNG decoder", path);
+        return mr_fail(MR_ERR_NOMEM, "%s: out of memory for the PNG decoder", label);
     }
     unsigned char *volatile bytes = NULL;
     png_bytep *volatile rows = NULL;
@@ -67,14 +76,13 @@ mr_status mr_io_png_read(const char *path, int max_dimension, mr_io_raw *raw) {
     volatile int own_message = 0;
     if (setjmp(png_jmpbuf(png))) {
         png_destroy_read_struct(&png, &info, NULL);
-        fclose(file);
         free(bytes);
         free(rows);
         char why[sizeof session->error];
         memcpy(why, session->error, sizeof why);
         free(session);
-        if (own_message) return mr_fail(failure, "image '%s': %s", path, why);
-        return mr_fail(MR_ERR_FORMAT, "image '%s': cannot decode PNG (corrupt or truncated?): %s", path, why);
+        if (own_message) return mr_fail(failure, "%s: %s", label, why);
+        return mr_fail(MR_ERR_FORMAT, "%s: cannot decode PNG (corrupt or truncated?): %s", label, why);
     }
     png_init_io(png, file);
     png_set_user_limits(png, 0x7fffffff, 0x7fffffff); // ours is checked below, with our message
@@ -138,7 +146,6 @@ mr_status mr_io_png_read(const char *path, int max_dimension, mr_io_raw *raw) {
         }
     }
     png_destroy_read_struct(&png, &info, NULL);
-    fclose(file);
     free(bytes);
     free(rows);
     free(session);

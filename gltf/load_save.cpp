@@ -1,0 +1,571 @@
+// load_save.cpp — the glTF shim's file I/O (contract in gltf/mr_gltf.h, coverage in gltf/README.md): loading
+// through tinygltf 2.7 with images kept undecoded (its image loader callback stores the encoded bytes), saving
+// .gltf and .glb (GLB packing), and restoring what tinygltf's writer drops from the file's own JSON. tinygltf's
+// file writer is neither atomic nor careful about input files, so the shim serialises to memory, fixes up the
+// buffers[] and images[] entries, and writes every file through the project's atomic-file protocol.
+#include "gltf/gltf_internal.hpp"
+
+#include <errno.h>
+#include <stdint.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <memory>
+#include <set>
+#include <sstream>
+
+#include "io/io_internal.h"
+
+using namespace mr_gltf_internal;
+
+namespace {
+
+// ---- small helpers ------------------------------------------------------------------------------------
+
+std::string first_line(const std::string &s) {
+    std::string t = s;
+    while (!t.empty() && (t.back() == '\n' || t.back() == '\r')) t.pop_back();
+    for (char &c : t) {
+        if (c == '\n') c = ';';
+    }
+    return t;
+}
+
+std::string dir_of(const std::string &path) {
+    size_t slash = path.find_last_of('/');
+    if (slash == std::string::npos) return ".";
+    if (slash == 0) return "/";
+    return path.substr(0, slash);
+}
+
+std::string join_path(const std::string &dir, const std::string &rel) {
+    if (dir.empty() || dir == ".") return rel;
+    if (dir.back() == '/') return dir + rel;
+    return dir + "/" + rel;
+}
+
+std::string url_decode(const std::string &s) {
+    std::string out;
+    for (size_t i = 0; i < s.size(); i++) {
+        if (s[i] == '%' && i + 2 < s.size() && isxdigit((unsigned char)s[i + 1]) &&
+            isxdigit((unsigned char)s[i + 2])) {
+            out += (char)strtol(s.substr(i + 1, 2).c_str(), NULL, 16);
+            i += 2;
+        } else {
+            out += s[i];
+        }
+    }
+    return out;
+}
+
+std::string base64_encode(const unsigned char *p, size_t n) {
+    static const char table[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    out.reserve((n + 2) / 3 * 4);
+    for (size_t i = 0; i < n; i += 3) {
+        unsigned v = (unsigned)p[i] << 16;
+        if (i + 1 < n) v |= (unsigned)p[i + 1] << 8;
+        if (i + 2 < n) v |= p[i + 2];
+        out += table[(v >> 18) & 63];
+        out += table[(v >> 12) & 63];
+        out += i + 1 < n ? table[(v >> 6) & 63] : '=';
+        out += i + 2 < n ? table[v & 63] : '=';
+    }
+    return out;
+}
+
+// tinygltf's image callback: keep the encoded bytes, decode nothing.
+bool keep_image_bytes(tinygltf::Image *image, const int, std::string *, std::string *, int, int,
+                      const unsigned char *bytes, int size, void *) {
+    image->image.assign(bytes, bytes + size);
+    image->as_is = true;
+    image->width = image->height = image->component = image->bits = -1;
+    if (image->mimeType.empty()) image->mimeType = sniff_mime(image->image);
+    return true;
+}
+
+// tinygltf's image writer callback: write nothing (the shim writes images itself).
+bool skip_image_write(const std::string *, const std::string *, const tinygltf::Image *, bool, std::string *,
+                      void *) {
+    return false;
+}
+
+// ---- restoring what tinygltf's writer drops; GLB packing -------------------------------------------------
+
+// Adds to `out` every key of `orig` it lacks, recursively (arrays element by element when their lengths
+// agree). Never overwrites a value.
+void merge_missing(nlohmann::json &out, const nlohmann::json &orig) {
+    if (out.is_object() && orig.is_object()) {
+        for (auto it = orig.begin(); it != orig.end(); ++it) {
+            if (!out.contains(it.key())) out[it.key()] = it.value();
+            else merge_missing(out[it.key()], it.value());
+        }
+    } else if (out.is_array() && orig.is_array() && out.size() == orig.size()) {
+        for (size_t i = 0; i < out.size(); i++) merge_missing(out[i], orig[i]);
+    }
+}
+
+// What tinygltf 2.7 parses but does not write back (asset.minVersion, skins' extras, properties outside the
+// schema such as unknown top-level keys) and the default values its writer drops, taken from the file's own
+// JSON. Only keys the output lacks are added, so nothing the model holds is overridden. Sections this API
+// edits are limited: a material gets back only keys outside the material schema (a removed extension, texture
+// or default-valued factor must stay removed), buffers and images never get their uri/bufferView/mimeType
+// back (the writer decides those), and extensionsUsed/Required are left to mr_gltf_sync_extensions.
+void merge_original(nlohmann::json &doc, const nlohmann::json &orig) {
+    if (!orig.is_object()) return;
+    for (auto it = orig.begin(); it != orig.end(); ++it) {
+        const std::string &key = it.key();
+        const nlohmann::json &value = it.value();
+        if (key == "extensionsUsed" || key == "extensionsRequired") continue;
+        if (!doc.contains(key)) {
+            if (key != "materials" && key != "buffers" && key != "images") doc[key] = value;
+            continue;
+        }
+        nlohmann::json &out = doc[key];
+        if (key == "materials" || key == "buffers" || key == "images") {
+            if (!out.is_array() || !value.is_array()) continue;
+            for (size_t i = 0; i < out.size() && i < value.size(); i++) {
+                if (!out[i].is_object() || !value[i].is_object()) continue;
+                for (auto f = value[i].begin(); f != value[i].end(); ++f) {
+                    bool managed = key == "materials" ? is_material_key(f.key())
+                                                      : f.key() == "uri" || f.key() == "bufferView" ||
+                                                            f.key() == "mimeType" || f.key() == "byteLength";
+                    if (managed) continue;
+                    if (!out[i].contains(f.key())) out[i][f.key()] = f.value();
+                    else merge_missing(out[i][f.key()], f.value());
+                }
+            }
+            continue;
+        }
+        merge_missing(out, value);
+    }
+}
+
+// tinygltf 2.7 fills in bufferView.target from the meshes' use of each view when it loads; the file's own is
+// kept (absent stays absent), so that a round trip does not add fields.
+void drop_inferred_targets(nlohmann::json &doc, const nlohmann::json &orig) {
+    if (!orig.is_object() || !orig.contains("bufferViews") || !orig["bufferViews"].is_array()) return;
+    if (!doc.contains("bufferViews") || !doc["bufferViews"].is_array()) return;
+    const nlohmann::json &views = orig["bufferViews"];
+    nlohmann::json &out = doc["bufferViews"];
+    for (size_t i = 0; i < views.size() && i < out.size(); i++) {
+        if (views[i].is_object() && !views[i].contains("target") && out[i].is_object()) out[i].erase("target");
+    }
+}
+
+// A self-contained .glb: every buffer concatenated (4-byte aligned) into the binary chunk, the buffer views
+// moved accordingly, and every image that is not in a buffer view yet appended to it with a view of its own.
+// Only the first buffer's name and extras survive (there is one buffer left).
+void pack_glb(const tinygltf::Model &m, nlohmann::json &doc, std::vector<unsigned char> *blob) {
+    auto align = [blob]() {
+        while (blob->size() % 4) blob->push_back(0);
+    };
+    std::vector<size_t> offsets;
+    for (const tinygltf::Buffer &b : m.buffers) {
+        align();
+        offsets.push_back(blob->size());
+        blob->insert(blob->end(), b.data.begin(), b.data.end());
+    }
+    if (doc.contains("bufferViews")) {
+        for (auto &v : doc["bufferViews"]) {
+            size_t buffer = v.value("buffer", (size_t)0);
+            size_t offset = v.value("byteOffset", (size_t)0) + (buffer < offsets.size() ? offsets[buffer] : 0);
+            v["buffer"] = 0;
+            if (offset > 0) v["byteOffset"] = offset;
+        }
+    }
+    for (size_t i = 0; i < m.images.size(); i++) {
+        const tinygltf::Image &im = m.images[i];
+        nlohmann::json &o = doc["images"][i];
+        o.erase("uri");
+        int view = im.bufferView;
+        if (view < 0) {
+            align();
+            nlohmann::json v = {{"buffer", 0}, {"byteLength", im.image.size()}};
+            if (!blob->empty()) v["byteOffset"] = blob->size();
+            blob->insert(blob->end(), im.image.begin(), im.image.end());
+            doc["bufferViews"].push_back(v);
+            view = (int)doc["bufferViews"].size() - 1;
+        }
+        o["bufferView"] = view;
+        o["mimeType"] = im.mimeType.empty() ? sniff_mime(im.image) : im.mimeType;
+    }
+    if (blob->empty()) {
+        doc.erase("buffers");
+        return;
+    }
+    nlohmann::json first = doc.contains("buffers") && !doc["buffers"].empty() ? doc["buffers"][0]
+                                                                              : nlohmann::json::object();
+    first.erase("uri");
+    first["byteLength"] = blob->size();
+    doc["buffers"] = nlohmann::json::array({first});
+}
+
+// ---- saving --------------------------------------------------------------------------------------------
+
+struct pending_file {
+    std::string rel;                 // relative path under the output directory (decoded)
+    const std::vector<unsigned char> *bytes;
+    std::string source;              // real path of the file these bytes came from, "" if none
+    std::string target;              // full path
+    bool skip = false;               // the target is this resource's own unchanged source
+};
+
+std::string with_suffix(const std::string &rel, int n) {
+    size_t slash = rel.find_last_of('/');
+    size_t dot = rel.find_last_of('.');
+    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) dot = rel.size();
+    return rel.substr(0, dot) + "_" + std::to_string(n) + rel.substr(dot);
+}
+
+mr_status make_dirs(const std::string &dir, std::vector<std::string> *created) {
+    if (dir.empty() || dir == "." || dir == "/") return MR_OK;
+    struct stat st;
+    if (stat(dir.c_str(), &st) == 0) {
+        if (S_ISDIR(st.st_mode)) return MR_OK;
+        return mr_fail(MR_ERR_IO, "output directory '%s': exists and is not a directory", dir.c_str());
+    }
+    mr_status s = make_dirs(dir_of(dir), created);
+    if (s != MR_OK) return s;
+    if (mkdir(dir.c_str(), 0777) != 0 && errno != EEXIST)
+        return mr_fail(MR_ERR_IO, "output directory '%s': cannot create: %s", dir.c_str(), strerror(errno));
+    created->push_back(dir);
+    return MR_OK;
+}
+
+std::vector<unsigned char> make_glb(const std::string &json, const std::vector<unsigned char> *bin) {
+    std::string j = json;
+    while (j.size() % 4) j += ' ';
+    size_t bin_len = bin ? (bin->size() + 3) / 4 * 4 : 0;
+    size_t total = 12 + 8 + j.size() + (bin ? 8 + bin_len : 0);
+    std::vector<unsigned char> out;
+    out.reserve(total);
+    auto u32 = [&out](uint32_t v) {
+        for (int i = 0; i < 4; i++) out.push_back((unsigned char)(v >> (8 * i)));
+    };
+    out.insert(out.end(), {'g', 'l', 'T', 'F'});
+    u32(2);
+    u32((uint32_t)total);
+    u32((uint32_t)j.size());
+    out.insert(out.end(), {'J', 'S', 'O', 'N'});
+    out.insert(out.end(), j.begin(), j.end());
+    if (bin) {
+        u32((uint32_t)bin_len);
+        out.insert(out.end(), {'B', 'I', 'N', '\0'});
+        out.insert(out.end(), bin->begin(), bin->end());
+        out.resize(out.size() + (bin_len - bin->size()), 0);
+    }
+    return out;
+}
+
+bool ends_with(const std::string &s, const char *suffix) {
+    size_t n = strlen(suffix);
+    if (s.size() < n) return false;
+    return strcasecmp(s.c_str() + s.size() - n, suffix) == 0;
+}
+
+mr_status save_impl(mr_gltf *g, const char *path_c) {
+    const std::string out_path = path_c;
+    bool binary;
+    if (ends_with(out_path, ".glb")) binary = true;
+    else if (ends_with(out_path, ".gltf")) binary = false;
+    else
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF output '%s': unknown extension (expected .gltf or .glb)",
+                       out_path.c_str());
+    const std::string out_dir = dir_of(out_path);
+    struct stat dir_st;
+    if (stat(out_dir.c_str(), &dir_st) != 0 || !S_ISDIR(dir_st.st_mode))
+        return mr_fail(MR_ERR_IO, "glTF output '%s': directory '%s' does not exist", out_path.c_str(),
+                       out_dir.c_str());
+
+    // Input files the output must never replace.
+    std::set<std::string> inputs;
+    inputs.insert(real_path(g->path));
+    for (const auto &p : g->buffer_paths) {
+        if (!p.empty()) inputs.insert(real_path(p));
+    }
+    for (const auto &p : g->image_paths) {
+        if (!p.empty()) inputs.insert(real_path(p));
+    }
+    inputs.erase("");
+    std::string out_real = real_path(out_path);
+    if (!out_real.empty() && inputs.count(out_real))
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF output '%s': is a file the asset was read from ('%s')",
+                       out_path.c_str(), g->path.c_str());
+
+    mr_gltf_sync_extensions(g);
+    tinygltf::Model &m = g->model;
+
+    // Serialise everything but buffers[] and images[] with tinygltf, then set those two ourselves.
+    tinygltf::TinyGLTF writer;
+    writer.SetImageWriter(skip_image_write, NULL);
+    std::ostringstream ss;
+    if (!writer.WriteGltfSceneToStream(&m, ss, false, false))
+        return mr_fail(MR_ERR_EXTERNAL, "glTF output '%s': tinygltf could not serialise the asset", out_path.c_str());
+    nlohmann::json doc = nlohmann::json::parse(ss.str());
+
+    // What tinygltf 2.7's writer leaves out: a sampler's name and extensions.
+    for (size_t i = 0; i < m.samplers.size(); i++) {
+        const tinygltf::Sampler &smp = m.samplers[i];
+        if (!smp.name.empty()) doc["samplers"][i]["name"] = smp.name;
+        if (!smp.extensions.empty()) {
+            nlohmann::json exts = nlohmann::json::object();
+            for (const auto &kv : smp.extensions) {
+                nlohmann::json e = to_json(kv.second);
+                exts[kv.first] = e.is_null() ? nlohmann::json::object() : e;
+            }
+            doc["samplers"][i]["extensions"] = exts;
+        }
+    }
+
+    const nlohmann::json &original = original_json(g);
+    drop_inferred_targets(doc, original);
+    merge_original(doc, original);
+
+    std::string stem = out_path.substr(out_path.find_last_of('/') == std::string::npos
+                                           ? 0 : out_path.find_last_of('/') + 1);
+    stem = stem.substr(0, stem.find_last_of('.'));
+    std::vector<pending_file> files;
+    std::vector<std::pair<nlohmann::json *, size_t>> uri_slots; // JSON object, index into files
+    const std::vector<unsigned char> *glb_bin = NULL;
+    // A .glb holds everything, unless an extension points into buffers by index (meshopt compression).
+    std::vector<unsigned char> packed;
+    bool pack = binary && !list_has(m.extensionsUsed, "EXT_meshopt_compression");
+    if (pack) {
+        pack_glb(m, doc, &packed);
+        if (!packed.empty()) glb_bin = &packed;
+    }
+
+    for (size_t i = 0; i < m.buffers.size() && !pack; i++) {
+        nlohmann::json &b = doc["buffers"][i];
+        const tinygltf::Buffer &buf = m.buffers[i];
+        b["byteLength"] = buf.data.size();
+        if (binary && i == 0 && buf.uri.empty()) {
+            b.erase("uri");
+            glb_bin = &buf.data;
+            continue;
+        }
+        if (is_data_uri(buf.uri)) continue; // tinygltf wrote it as a data URI again
+        pending_file f;
+        f.bytes = &buf.data;
+        std::string decoded = url_decode(buf.uri);
+        if (!buf.uri.empty() && is_safe_relative(decoded)) {
+            f.rel = decoded;
+            f.source = real_path(g->buffer_paths[i]);
+        } else {
+            f.rel = stem + (i == 0 ? "" : "_" + std::to_string(i)) + ".bin";
+            f.source = buf.uri.empty() ? "" : real_path(g->buffer_paths[i]);
+        }
+        uri_slots.push_back({&b, files.size()});
+        files.push_back(f);
+    }
+    for (size_t i = 0; i < m.images.size() && !pack; i++) {
+        nlohmann::json &o = doc["images"][i];
+        const tinygltf::Image &im = m.images[i];
+        o.erase("uri");
+        o.erase("bufferView");
+        o.erase("mimeType");
+        if (im.bufferView >= 0) {
+            o["bufferView"] = im.bufferView;
+            o["mimeType"] = im.mimeType.empty() ? sniff_mime(im.image) : im.mimeType;
+            continue;
+        }
+        if (im.uri.empty()) { // a data URI when read
+            std::string mime = im.mimeType.empty() ? "application/octet-stream" : im.mimeType;
+            o["uri"] = "data:" + mime + ";base64," + base64_encode(im.image.data(), im.image.size());
+            continue;
+        }
+        if (im.image.empty())
+            return mr_fail(MR_ERR_IO, "glTF output '%s': image %zu ('%s') has no data to write", out_path.c_str(),
+                           i, im.uri.c_str());
+        pending_file f;
+        f.bytes = &im.image;
+        std::string decoded = url_decode(im.uri);
+        f.rel = is_safe_relative(decoded) ? decoded : "image_" + std::to_string(i) + "." +
+                                                          (im.mimeType == "image/jpeg" ? "jpg" : "png");
+        f.source = real_path(g->image_paths[i]);
+        uri_slots.push_back({&o, files.size()});
+        files.push_back(f);
+    }
+
+    // Targets: an unchanged resource landing on its own source stays; one landing on another input file, on
+    // the output itself or on another resource's target gets a fresh name.
+    std::set<std::string> taken;
+    taken.insert(out_real.empty() ? out_path : out_real);
+    for (pending_file &f : files) {
+        for (int n = 0;; n++) {
+            std::string rel = n == 0 ? f.rel : with_suffix(f.rel, n);
+            std::string target = join_path(out_dir, rel);
+            std::string real = real_path(target);
+            std::string key = real.empty() ? target : real;
+            bool duplicate = false;
+            for (const pending_file &p : files) {
+                if (&p == &f) break;
+                if (p.target == target) duplicate = true;
+            }
+            if (duplicate) {
+                // Same bytes already written under this name (two references to one file): share it.
+                for (const pending_file &p : files) {
+                    if (&p == &f) break;
+                    if (p.target == target && *p.bytes == *f.bytes) {
+                        f.rel = rel;
+                        f.target = target;
+                        f.skip = true;
+                    }
+                }
+                if (f.skip) break;
+                continue;
+            }
+            if (!real.empty() && inputs.count(real)) {
+                if (real == f.source) {
+                    f.rel = rel;
+                    f.target = target;
+                    f.skip = true;
+                    break;
+                }
+                continue;
+            }
+            if (taken.count(key)) continue;
+            taken.insert(key);
+            f.rel = rel;
+            f.target = target;
+            break;
+        }
+    }
+    for (auto &slot : uri_slots) (*slot.first)["uri"] = uri_encode_spaces(files[slot.second].rel);
+
+    std::string json_text = binary ? doc.dump() : doc.dump(2) + "\n";
+    std::vector<unsigned char> main_bytes;
+    if (binary) main_bytes = make_glb(json_text, glb_bin);
+    else main_bytes.assign(json_text.begin(), json_text.end());
+
+    // Write the resources, then the main file; on failure remove what this call created.
+    std::vector<std::string> created_files, created_dirs;
+    mr_status status = MR_OK;
+    for (const pending_file &f : files) {
+        if (f.skip) continue;
+        status = make_dirs(dir_of(f.target), &created_dirs);
+        if (status != MR_OK) break;
+        struct stat st;
+        bool existed = stat(f.target.c_str(), &st) == 0;
+        status = mr_atomic_write_bytes(f.target.c_str(), f.bytes->data(), f.bytes->size());
+        if (status != MR_OK) break;
+        if (!existed) created_files.push_back(f.target);
+    }
+    if (status == MR_OK) status = mr_atomic_write_bytes(out_path.c_str(), main_bytes.data(), main_bytes.size());
+    if (status != MR_OK) {
+        for (const auto &f : created_files) unlink(f.c_str());
+        for (auto it = created_dirs.rbegin(); it != created_dirs.rend(); ++it) rmdir(it->c_str());
+        return mr_fail_context(status, "glTF output '%s'", out_path.c_str());
+    }
+    return MR_OK;
+}
+
+
+// ---- loading -------------------------------------------------------------------------------------------
+
+mr_status load_impl(const char *path_c, mr_gltf **out) {
+    const std::string path = path_c;
+    struct stat st;
+    if (stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+        return mr_fail(MR_ERR_IO, "glTF '%s': is a directory", path.c_str());
+    std::vector<unsigned char> bytes;
+    mr_status s = read_file(path, &bytes, "glTF");
+    if (s != MR_OK) return s;
+
+    std::unique_ptr<mr_gltf> g(new mr_gltf()); // released to the caller on success, freed on any other way out
+    g->path = path;
+    g->base_dir = dir_of(path);
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(keep_image_bytes, NULL);
+    std::string err, warn;
+    bool ok;
+    bool is_glb = bytes.size() >= 4 && memcmp(bytes.data(), "glTF", 4) == 0;
+    if (is_glb) {
+        ok = loader.LoadBinaryFromMemory(&g->model, &err, &warn, bytes.data(), (unsigned)bytes.size(),
+                                         g->base_dir);
+    } else {
+        ok = loader.LoadASCIIFromString(&g->model, &err, &warn, (const char *)bytes.data(),
+                                        (unsigned)bytes.size(), g->base_dir);
+    }
+    if (!ok) {
+        mr_status code = err.find("not found") != std::string::npos || err.find("Failed to load") != std::string::npos
+                             ? MR_ERR_IO : MR_ERR_FORMAT;
+        std::string why = first_line(err.empty() ? warn : err);
+        if (why.empty()) why = is_glb ? "not a valid binary glTF" : "not a valid glTF";
+        if (code == MR_ERR_IO) why += " (resources are looked up relative to '" + g->base_dir + "')";
+        else if (is_glb) why += " (" + std::to_string(bytes.size()) + " bytes read; truncated?)";
+        return mr_fail(code, "glTF '%s': %s", path.c_str(), why.c_str());
+    }
+    // The JSON text is kept for what tinygltf drops, and parsed only if it is needed (original_json).
+    if (is_glb && bytes.size() >= 20) {
+        uint32_t len = (uint32_t)bytes[12] | (uint32_t)bytes[13] << 8 | (uint32_t)bytes[14] << 16 |
+                       (uint32_t)bytes[15] << 24;
+        if (len <= bytes.size() - 20) g->original_text.assign((const char *)bytes.data() + 20, len);
+    } else if (!is_glb) {
+        g->original_text.assign((const char *)bytes.data(), bytes.size());
+    }
+    for (size_t i = 0; i < g->model.buffers.size(); i++) {
+        const std::string &uri = g->model.buffers[i].uri;
+        g->buffer_paths.push_back(uri.empty() || is_data_uri(uri) ? "" : join_path(g->base_dir, url_decode(uri)));
+    }
+    for (size_t i = 0; i < g->model.images.size(); i++) {
+        const tinygltf::Image &im = g->model.images[i];
+        bool external = im.bufferView < 0 && !im.uri.empty();
+        std::string p = external ? join_path(g->base_dir, url_decode(im.uri)) : "";
+        if (external && im.image.empty()) {
+            std::vector<unsigned char> probe;
+            mr_status rs = read_file(p, &probe, "glTF image");
+            if (rs != MR_OK) return mr_fail_context(rs, "glTF '%s': image %zu", path.c_str(), i);
+            return mr_fail(MR_ERR_FORMAT, "glTF '%s': image %zu ('%s') is empty", path.c_str(), i, p.c_str());
+        }
+        g->image_paths.push_back(p);
+    }
+    *out = g.release();
+    return MR_OK;
+}
+
+} // namespace
+
+// ---- the C API -------------------------------------------------------------------------------------------
+
+extern "C" {
+
+mr_status mr_gltf_load(const char *path, mr_gltf **out) {
+    if (path == NULL || path[0] == '\0' || out == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF: empty path or NULL output");
+    MR_GLTF_GUARD(path, return load_impl(path, out);)
+}
+
+void mr_gltf_free(mr_gltf *asset) { delete asset; }
+
+const char *mr_gltf_path(const mr_gltf *asset) { return asset ? asset->path.c_str() : ""; }
+
+void mr_gltf_get_counts(const mr_gltf *g, mr_gltf_counts *out) {
+    memset(out, 0, sizeof *out);
+    if (g == NULL) return;
+    const tinygltf::Model &m = g->model;
+    out->materials = (int)m.materials.size();
+    out->textures = (int)m.textures.size();
+    out->images = (int)m.images.size();
+    out->samplers = (int)m.samplers.size();
+    out->meshes = (int)m.meshes.size();
+    out->nodes = (int)m.nodes.size();
+    out->scenes = (int)m.scenes.size();
+    out->accessors = (int)m.accessors.size();
+    out->buffer_views = (int)m.bufferViews.size();
+    out->buffers = (int)m.buffers.size();
+    out->animations = (int)m.animations.size();
+    out->skins = (int)m.skins.size();
+    out->cameras = (int)m.cameras.size();
+}
+
+mr_status mr_gltf_save(mr_gltf *g, const char *path) {
+    if (g == NULL || path == NULL || path[0] == '\0')
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL asset or empty output path");
+    MR_GLTF_GUARD(path, return save_impl(g, path);)
+}
+
+} // extern "C"
