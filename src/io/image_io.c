@@ -136,7 +136,8 @@ static float decode_value(float v, const float *lut, int bits, double max_code) 
     return lut != NULL ? lut[code] : mr_srgb_to_linear((float)(code / max_code));
 }
 
-/* Fill `image` (already created with its channel count) from the raw layout (grey, grey+alpha, RGB, RGBA).
+/* Fill `image` (already created with its channel count) from the raw layout (grey, grey+alpha, RGB, RGBA); `image`
+ * may be the raw buffer itself when the channel counts match (each pixel is read before it is written).
  * Returns 0 on allocation failure. For 8/16-bit files with more values than codes, the decodes of all codes
  * are tabulated once (pow() per value would dominate reading a large PNG). */
 static int convert_channels(const mr_io_raw *raw, mr_image *image, int decode_srgb) {
@@ -248,14 +249,22 @@ static mr_status read_stream(const char *path, const unsigned char *bytes, size_
                        label, raw.channels == 4 ? "A" : "");
     }
     mr_image *image = NULL;
-    status = mr_image_create(raw.width, raw.height, out_ch, &image);
+    if (out_ch == raw.channels) {
+        // The same layout: converted in place and the decoder's buffer adopted (one copy of a 2048² texture, not
+        // two, at the peak; convert_channels reads each pixel before writing it).
+        image = malloc(sizeof *image);
+        if (image != NULL) *image = (mr_image){raw.width, raw.height, out_ch, raw.pixels};
+        status = image != NULL ? MR_OK : MR_ERR_NOMEM;
+    } else {
+        status = mr_image_create(raw.width, raw.height, out_ch, &image);
+    }
     if (status != MR_OK) {
         free(raw.pixels);
         return mr_fail_context(status, "%s", label);
     }
     const int decode_srgb = raw.encoded && o->encoding == MR_IMG_COLOR;
     int converted = convert_channels(&raw, image, decode_srgb);
-    free(raw.pixels);
+    if (image->pixels != raw.pixels) free(raw.pixels);
     if (!converted) {
         mr_image_free(image);
         return mr_fail(MR_ERR_NOMEM, "%s: out of memory for the sRGB table", label);
