@@ -197,13 +197,17 @@ typedef struct encoded_texture {
     char path[1024]; /* "" for PNG */
 } encoded_texture;
 
+/* New images are named PREFIX_mK_NAME.EXT (K the material, NAME the target texture's). */
+static void texture_uri(const conversion *cv, int t, const char *extension, encoded_texture *e) {
+    const char *prefix = cv->opts->image_prefix ? cv->opts->image_prefix : "converted";
+    snprintf(e->uri, sizeof e->uri, "%s_m%d_%s.%s", prefix, cv->material, cv->to->texture_names[t], extension);
+}
+
 /* Encode texture t (PNG from 8-bit texels, or EXR from floats); touches nothing shared, so textures encode in
  * parallel. */
 static mr_status encode_texture(const conversion *cv, int t, int width, int height, int channels,
                                 const uint8_t *bytes8, const float *floats, encoded_texture *e) {
-    const mr_gltf_convert_options *o = cv->opts;
-    snprintf(e->uri, sizeof e->uri, "%s_m%d_%s.%s", o->image_prefix ? o->image_prefix : "converted", cv->material,
-             cv->to->texture_names[t], floats ? "exr" : "png");
+    texture_uri(cv, t, floats ? "exr" : "png", e);
     if (floats == NULL) {
         const mr_io_png_settings settings = MR_IO_PNG_DEFAULT;
         return mr_io_png_encode(e->uri, width, height, channels, 8, bytes8, cv->to->encodings[t] == MR_IMG_COLOR,
@@ -366,6 +370,29 @@ static mr_status convert_band(const band_context *ctx, int y0, band_work *w, mr_
     return MR_OK;
 }
 
+/* Which values are one value everywhere: uniform[v] over the output channels, then alpha (last). A target texture
+ * whose every channel is uniform (or constant, or 0) is not needed: its slots become factors (mk->values). */
+static void drop_uniform_textures(const mr_transform_kind *kind, const workflow_side *to, const int channels[2],
+                                  const uint8_t *uniform, int need[2]) {
+    int values = 0;
+    for (int j = 0; j < kind->output_count; j++) values += kind->outputs[j].channels;
+    for (int t = 0; t < 2; t++) {
+        int all_uniform = need[t];
+        for (int c = 0; c < channels[t] && all_uniform; c++) {
+            const char *slot = to->slots[t][c];
+            int j = output_of(kind, slot), v = 0;
+            if (slot != NULL && strcmp(slot, "alpha") == 0) {
+                all_uniform = uniform[values];
+                continue;
+            }
+            if (j < 0 || (kind->outputs[j].flags & MR_SLOT_CONSTANT)) continue;
+            for (int k = 0; k < j; k++) v += kind->outputs[k].channels;
+            all_uniform = uniform[v + (kind->outputs[j].channels == 3 ? c : 0)];
+        }
+        if (all_uniform) need[t] = 0; // its mk->textures[t] stays -1: set_outputs writes mk->values
+    }
+}
+
 /* Band by band: factors x texels into the input planes, the transform, its outputs into the target's textures
  * (8-bit, or floats for EXR). images[t] NULL = no texture t. */
 static mr_status convert_texels(const conversion *cv, const sources *src, mr_image *const images[2],
@@ -444,21 +471,7 @@ static mr_status convert_texels(const conversion *cv, const sources *src, mr_ima
         else
             mk->alpha = ctx.firsts[v];
     }
-    for (int t = 0; status == MR_OK && t < 2; t++) {
-        int all_uniform = need[t];
-        for (int c = 0; c < channels[t] && all_uniform; c++) {
-            const char *slot = to->slots[t][c];
-            int j = output_of(kind, slot), v = 0;
-            if (slot != NULL && strcmp(slot, "alpha") == 0) {
-                all_uniform = ctx.uniform[ctx.values - 1];
-                continue;
-            }
-            if (j < 0 || (kind->outputs[j].flags & MR_SLOT_CONSTANT)) continue;
-            for (int k = 0; k < j; k++) v += kind->outputs[k].channels;
-            all_uniform = ctx.uniform[v + (kind->outputs[j].channels == 3 ? c : 0)];
-        }
-        if (all_uniform) need[t] = 0; // mk->textures[t] stays -1: set_outputs writes mk->values
-    }
+    if (status == MR_OK) drop_uniform_textures(kind, to, channels, ctx.uniform, need);
     free(ctx.firsts);
     free(ctx.uniform);
     // 4. The textures, encoded side by side (each its own thread's last error).
@@ -486,6 +499,114 @@ static mr_status convert_texels(const conversion *cv, const sources *src, mr_ima
         free(texels[t]);
     }
     return status;
+}
+
+/* A paletted PNG source converts by converting its palette (io_internal.h, "Paletted PNG"): when it is the material's
+ * only texture (the other inputs factors), every texel of one index gets one answer, so each target texture is the
+ * same index stream under a converted palette; no texel is decoded, filtered or deflated, and the answers are those
+ * of the texel-by-texel path (the same decoded values through the same transform, the same 8-bit codes). Returns
+ * 0 when the material does not qualify (then nothing is changed), else 1 with *status set. */
+static int convert_palette(const conversion *cv, const sources *src, made *mk, mr_status *status) {
+    const int t = src->refs[0].index >= 0 ? 0 : 1;
+    mr_gltf_image im;
+    const int exr = cv->opts->image_format != NULL && strcmp(cv->opts->image_format, "exr") == 0;
+    if (exr || src->refs[1 - t].index >= 0 || src->images[t] < 0 ||
+        mr_gltf_get_image(cv->asset, src->images[t], &im) != MR_OK || !mr_io_png_is_paletted(im.bytes, im.size))
+        return 0;
+    const mr_transform_kind *kind = cv->kind;
+    const workflow_side *from = cv->from, *to = cv->to;
+    char label[600];
+    snprintf(label, sizeof label, "glTF '%s' image %d", mr_gltf_path(cv->asset), src->images[t]);
+    mr_io_png_palette p;
+    if ((*status = mr_io_png_palette_read(im.bytes, im.size, label, &p)) != MR_OK) return 1;
+    // The entries as the reader decodes texels (colour channels sRGB-decoded for a colour texture, alpha linear).
+    enum { MAX_VALUES = 3 * MR_TRANSFORM_MAX_SLOTS };
+    static const mr_wf_quantisation exact = {0, 0, {1.0, 1.0, 1.0}};
+    float inputs[MR_TRANSFORM_MAX_SLOTS][3 * 256], outputs[MR_TRANSFORM_MAX_SLOTS][3 * 256], alpha[256];
+    uint8_t flags[256];
+    mr_transform_batch b = {0};
+    b.n = (size_t)p.entries;
+    b.flags = flags;
+    b.threads = 1;
+    const int colour = from->encodings[t] == MR_IMG_COLOR;
+    for (int e = 0; e < p.entries; e++)
+        alpha[e] = (float)((t == 0 ? mr_io_decode_code(p.alpha[e], 8, 0) : 1.0f) * src->alpha_factor);
+    for (int i = 0; i < kind->input_count; i++) {
+        const input_source *in = &from->inputs[i];
+        for (int e = 0; e < p.entries; e++)
+            for (int c = 0; c < in->count; c++) {
+                const int channel = in->first + c;
+                float v = in->texture != t ? 1.0f
+                          : channel < 3    ? mr_io_decode_code(p.rgb[e][channel], 8, colour)
+                                           : mr_io_decode_code(p.alpha[e], 8, 0);
+                inputs[i][in->count * e + c] = (float)(v * src->factors[i][c]);
+            }
+        b.in[i] = inputs[i];
+        const mr_img_stored stored = {8, from->encodings[t]};
+        b.stored[i] = in->texture == t && !cv->opts->exact_inputs ? mr_wf_quantisation_of(&stored, src->factors[i])
+                                                                   : exact;
+    }
+    for (int j = 0; j < kind->output_count; j++) b.out[j] = outputs[j];
+    if ((*status = mr_transform_apply(cv->opts->transform, &b)) != MR_OK) {
+        mr_io_png_palette_free(&p);
+        return 1;
+    }
+    // Flags and uniformity over the entries the texels use.
+    uint8_t uniform[MAX_VALUES + 1];
+    int first_used = -1;
+    memset(uniform, 1, sizeof uniform);
+    mk->has_alpha = 0;
+    for (int e = 0; e < p.entries; e++) {
+        if (p.counts[e] == 0) continue;
+        if (first_used < 0) first_used = e;
+        for (size_t k = 0; k < p.counts[e]; k++) count_flags(&mk->report, &flags[e], 1);
+        mk->has_alpha |= alpha[e] != 1.0f;
+        for (int j = 0, v = 0; j <= kind->output_count; j++) {
+            const int ch = j < kind->output_count ? kind->outputs[j].channels : 1;
+            const float *plane = j < kind->output_count ? outputs[j] : alpha;
+            for (int c = 0; c < ch; c++, v++)
+                uniform[v] &= memcmp(&plane[ch * e + c], &plane[ch * first_used + c], sizeof(float)) == 0;
+        }
+    }
+    for (int j = 0, v = 0; j < kind->output_count; j++)
+        for (int c = 0; c < kind->outputs[j].channels; c++, v++)
+            mk->values[v] = outputs[j][kind->outputs[j].channels * first_used + c];
+    mk->alpha = alpha[first_used];
+    int need[2], channels[2];
+    for (int tt = 0; tt < 2; tt++) {
+        need[tt] = texture_needed(kind, to, tt);
+        channels[tt] =
+            to->slots[tt][3] == NULL || (strcmp(to->slots[tt][3], "alpha") == 0 && !mk->has_alpha) ? 3 : 4;
+    }
+    drop_uniform_textures(kind, to, channels, uniform, need);
+    // The target textures: the index stream under the converted palette.
+    mr_srgb8_init();
+    for (int tt = 0; tt < 2 && *status == MR_OK; tt++) {
+        if (!need[tt]) continue;
+        unsigned char rgb[256][3], trns[256];
+        for (int e = 0; e < p.entries; e++) {
+            trns[e] = 255;
+            for (int c = 0; c < channels[tt]; c++) {
+                const char *slot = to->slots[tt][c];
+                const int j = output_of(kind, slot), is_alpha = slot && strcmp(slot, "alpha") == 0;
+                const float v = is_alpha ? alpha[e] : j >= 0 ? output_value(kind, &b, j, c, (size_t)e) : 0.0f;
+                const unsigned char code = to->encodings[tt] == MR_IMG_COLOR && c < 3 ? mr_srgb8_encode(v) : linear8(v);
+                if (c < 3) rgb[e][c] = code;
+                else trns[e] = code;
+            }
+        }
+        encoded_texture e;
+        memset(&e, 0, sizeof e);
+        texture_uri(cv, tt, "png", &e);
+        *status = mr_io_png_palette_write(&p, (const unsigned char(*)[3])rgb, channels[tt] == 4 ? trns : NULL,
+                                          to->encodings[tt] == MR_IMG_COLOR, &e.bytes, &e.size);
+        if (*status == MR_OK) *status = add_texture(cv, &e, src->refs[t].index, &mk->textures[tt]);
+        encoded_texture_release(&e);
+    }
+    mk->report.width = p.width;
+    mk->report.height = p.height;
+    mr_io_png_palette_free(&p);
+    return 1;
 }
 
 /* ---- the material ------------------------------------------------------------------------------------------- */
@@ -661,8 +782,10 @@ static mr_status convert_material(conversion *cv, made *cache, int *cached, mr_g
         mr_img_stored stored[2];
         memset(stored, 0, sizeof stored);
         int width = 1, height = 1;
-        status = read_sources(cv, &src, images, stored, &width, &height);
-        if (status == MR_OK && textured) {
+        const int by_palette = textured && convert_palette(cv, &src, mk, &status);
+        if (by_palette) {
+            // done: a paletted texture converted through its palette
+        } else if ((status = read_sources(cv, &src, images, stored, &width, &height)) == MR_OK && textured) {
             status = convert_texels(cv, &src, images, stored, width, height, mk);
             mk->report.width = width;
             mk->report.height = height;

@@ -133,7 +133,14 @@ static mr_status check_png_structure(const char *label, FILE *f, int *is_png) {
 static float decode_value(float v, const float *lut, int bits, double max_code) {
     if (bits != 8 && bits != 16) return mr_srgb_to_linear(v);
     const int code = (int)(mr_clampd(v, 0.0, 1.0) * max_code + 0.5);
-    return lut != NULL ? lut[code] : mr_srgb_to_linear((float)(code / max_code));
+    return lut != NULL ? lut[code] : mr_io_decode_code((unsigned)code, bits, 1);
+}
+
+float mr_io_decode_code(unsigned code, int bits, int srgb) {
+    const double max_code = bits == 16 ? 65535.0 : 255.0;
+    // Data: the decoders' own scaling (png_io.c multiplies by 1 / max_code in float).
+    if (!srgb) return (float)code * (float)(1.0 / max_code);
+    return mr_srgb_to_linear((float)((double)code / max_code));
 }
 
 /* Fill `image` (already created with its channel count) from the raw layout (grey, grey+alpha, RGB, RGBA); `image`
@@ -151,7 +158,7 @@ static int convert_channels(const mr_io_raw *raw, mr_image *image, int decode_sr
         const size_t codes = (size_t)1 << raw->bits;
         lut = malloc(codes * sizeof(float));
         if (lut == NULL) return 0;
-        for (size_t q = 0; q < codes; q++) lut[q] = mr_srgb_to_linear((float)((double)q / max_code));
+        for (size_t q = 0; q < codes; q++) lut[q] = mr_io_decode_code((unsigned)q, raw->bits, 1);
     }
     for (size_t p = 0; p < count; p++) {
         const float *src = raw->pixels + p * (size_t)in_ch;

@@ -157,6 +157,39 @@ mr_status mr_io_png_write(const char *path, int width, int height, int channels,
 mr_status mr_io_png_encode(const char *name, int width, int height, int channels, int bits, const void *data,
                            int srgb_tag, const mr_io_png_settings *settings, unsigned char **bytes, size_t *size);
 
+/* ---- Paletted PNG (png_palette.c) --------------------------------------------------------------------- */
+
+/* A non-interlaced paletted PNG taken apart: its header, palette, index stream and index histogram. */
+typedef struct mr_io_png_palette {
+    int width, height, bit_depth;  /* bit depth 1, 2, 4 or 8 */
+    unsigned char ihdr[13];        /* the IHDR data, copied into the rewritten file */
+    int entries;                   /* PLTE entries, 1 .. 2^bit_depth */
+    unsigned char rgb[256][3];     /* PLTE */
+    unsigned char alpha[256];      /* tRNS, 255 past it or without one */
+    int has_alpha;                 /* a tRNS chunk was present */
+    size_t counts[256];            /* texels per entry */
+    unsigned char *idat;           /* the IDAT data, concatenated (owned: mr_io_png_palette_free) */
+    size_t idat_size;
+} mr_io_png_palette;
+
+/* 1 when `bytes` start as a non-interlaced paletted PNG (signature and IHDR only: a sniff, not a check). */
+int mr_io_png_is_paletted(const unsigned char *bytes, size_t size);
+
+/* Take the PNG in bytes[size] apart: every chunk's length and CRC checked, the index stream inflated once for the
+ * histogram. MR_ERR_FORMAT naming `label` for anything else or anything broken; MR_ERR_NOMEM. */
+mr_status mr_io_png_palette_read(const unsigned char *bytes, size_t size, const char *label, mr_io_png_palette *out);
+void mr_io_png_palette_free(mr_io_png_palette *p);
+
+/* The PNG of p's header and index stream under the palette rgb[p->entries] and alpha (NULL: opaque; tRNS written up
+ * to the last entry that is not 255), with the sRGB chunks the writer adds when srgb_tag is set; *bytes is malloc'ed
+ * (the caller frees it). */
+mr_status mr_io_png_palette_write(const mr_io_png_palette *p, const unsigned char rgb[][3],
+                                  const unsigned char *alpha, int srgb_tag, unsigned char **bytes, size_t *size);
+
+/* The value the image reader gives a stored integer code of `bits` (8 or 16) bits: sRGB-decoded for colour (srgb 1)
+ * or code / (2^bits - 1) as data, exactly as mr_img_read_stored computes it. */
+float mr_io_decode_code(unsigned code, int bits, int srgb);
+
 /* ---- EXR through OpenEXR Core (exr_write.c) ---------------------------------------------------------- */
 
 /* Write interleaved linear floats (channels 1, 3 or 4; named Y or R,G,B(,A)) as a single-part scanline EXR
