@@ -296,12 +296,6 @@ static void band_work_free(band_work *w) {
     free(w->flags);
 }
 
-/* Texel (x, y) of a same-size image, channel c (a grey image answers every colour channel, a missing alpha 1). */
-static inline float texel_at(const mr_image *im, int c, size_t at) {
-    if (c == 3 && im->channels != 4) return 1.0f;
-    return im->pixels[at * (size_t)im->channels + (size_t)(im->channels < 3 ? 0 : c)];
-}
-
 /* Rows [y0, y0 + band_rows) of the grid: inputs, transform, packed outputs. */
 static mr_status convert_band(const band_context *ctx, int y0, band_work *w, mr_gltf_material_report *counts) {
     const conversion *cv = ctx->cv;
@@ -322,16 +316,25 @@ static mr_status convert_band(const band_context *ctx, int y0, band_work *w, mr_
         const double *factors = i < 0 ? &ctx->src->alpha_factor : ctx->src->factors[i];
         const mr_image *im = ctx->images[in->texture];
         float *dst = i < 0 ? w->planes : (float *)b.in[i];
-        const int same = im != NULL && im->width == width && im->height == height;
+        if (im != NULL && im->width == width && im->height == height) { // the common case, without per-value tests
+            const size_t ch = (size_t)im->channels;
+            const float *px = im->pixels + (size_t)y0 * (size_t)width * ch;
+            int at[3]; // per channel, the pixel's value read (-1: a missing alpha, 1)
+            for (int c = 0; c < in->count; c++) {
+                const int channel = in->first + c;
+                at[c] = channel == 3 ? (ch == 4 ? 3 : -1) : ch < 3 ? 0 : channel;
+            }
+            for (size_t k = 0; k < b.n; k++, px += ch)
+                for (int c = 0; c < in->count; c++)
+                    *dst++ = (float)((at[c] < 0 ? 1.0f : px[at[c]]) * factors[c]);
+            continue;
+        }
         for (int y = 0; y < rows; y++)
-            for (int x = 0; x < width; x++) {
-                const size_t at = (size_t)(y0 + y) * (size_t)width + (size_t)x;
+            for (int x = 0; x < width; x++)
                 for (int c = 0; c < in->count; c++) {
-                    float v = im == NULL ? 1.0f : same ? texel_at(im, in->first + c, at)
-                                                       : sample(im, in->first + c, x, y0 + y, width, height);
+                    float v = im == NULL ? 1.0f : sample(im, in->first + c, x, y0 + y, width, height);
                     *dst++ = (float)(v * factors[c]);
                 }
-            }
     }
     // 2. The transform.
     mr_status status = mr_transform_apply(cv->opts->transform, &b);
@@ -355,15 +358,30 @@ static mr_status convert_band(const band_context *ctx, int y0, band_work *w, mr_
         if (!ctx->need[t]) continue;
         const size_t ch = (size_t)ctx->channels[t], first = (size_t)y0 * (size_t)width * ch;
         for (size_t c = 0; c < ch; c++) {
+            // Where channel c comes from: a plane with a stride, or one value.
             const char *slot = to->slots[t][c];
             const int j = output_of(kind, slot), is_alpha = slot && strcmp(slot, "alpha") == 0;
             const int colour = to->encodings[t] == MR_IMG_COLOR && c < 3;
-            for (size_t i = 0; i < b.n; i++) {
-                float v = is_alpha ? w->planes[i] : j >= 0 ? output_value(kind, &b, j, (int)c, i) : 0.0f;
-                if (ctx->exr)
-                    ((float *)ctx->texels[t])[first + ch * i + c] = v;
-                else
-                    ((uint8_t *)ctx->texels[t])[first + ch * i + c] = colour ? mr_srgb8_encode(v) : linear8(v);
+            const float *plane = NULL;
+            size_t stride = 1;
+            float value = 0.0f;
+            if (is_alpha) {
+                plane = w->planes;
+            } else if (j >= 0 && (kind->outputs[j].flags & MR_SLOT_CONSTANT)) {
+                value = output_value(kind, &b, j, (int)c, 0);
+            } else if (j >= 0) {
+                stride = (size_t)kind->outputs[j].channels;
+                plane = b.out[j] + (stride == 3 ? c : 0);
+            }
+            if (ctx->exr) {
+                float *out = (float *)ctx->texels[t] + first + c;
+                for (size_t i = 0; i < b.n; i++) out[ch * i] = plane ? plane[stride * i] : value;
+            } else {
+                uint8_t *out = (uint8_t *)ctx->texels[t] + first + c;
+                for (size_t i = 0; i < b.n; i++) {
+                    const float v = plane ? plane[stride * i] : value;
+                    out[ch * i] = colour ? mr_srgb8_encode(v) : linear8(v);
+                }
             }
         }
     }

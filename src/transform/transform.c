@@ -166,15 +166,25 @@ static inline uint32_t key_hash(const uint32_t *k, int length) {
     return (uint32_t)(h >> 32);
 }
 
-/* The bits of texel i's input values, slot after slot. */
+/* The bits of texel i's input values, slot after slot (constant-size copies: this runs once per texel). */
 static inline int texel_key(const mr_transform_kind *kind, const mr_transform_batch *b, size_t i, uint32_t *key) {
     int length = 0;
     for (int s = 0; s < kind->input_count; s++) {
-        int ch = kind->inputs[s].channels;
-        memcpy(key + length, b->in[s] + (size_t)ch * i, (size_t)ch * sizeof *key);
-        length += ch;
+        if (kind->inputs[s].channels == 3) {
+            memcpy(key + length, b->in[s] + 3 * i, 3 * sizeof *key);
+            length += 3;
+        } else {
+            memcpy(key + length, b->in[s] + i, sizeof *key);
+            length += 1;
+        }
     }
     return length;
+}
+
+static inline int same_key(const uint32_t *a, const uint32_t *b, int length) {
+    uint32_t differ = 0;
+    for (int k = 0; k < length; k++) differ |= a[k] ^ b[k];
+    return differ == 0;
 }
 
 /* The sub-batch of texels [start, start + count) of b. */
@@ -235,7 +245,7 @@ static mr_status dedupe_block(const mr_transform *t, const mr_transform_batch *b
         size_t h = key_hash(key, length) & mask;
         for (; w->table[h] != 0; h = (h + 1) & mask) {
             texel_key(kind, block, w->first[w->table[h] - 1], other);
-            if (memcmp(key, other, (size_t)length * sizeof *key) == 0) break;
+            if (same_key(key, other, length)) break;
         }
         if (w->table[h] == 0) {
             w->table[h] = (uint32_t)(rows + 1);
@@ -250,7 +260,10 @@ static mr_status dedupe_block(const mr_transform *t, const mr_transform_batch *b
     float *p = w->planes;
     for (int s = 0; s < kind->input_count; s++) {
         const size_t ch = (size_t)kind->inputs[s].channels;
-        for (size_t r = 0; r < rows; r++) memcpy(p + ch * r, block->in[s] + ch * w->first[r], ch * sizeof *p);
+        if (ch == 1)
+            for (size_t r = 0; r < rows; r++) p[r] = block->in[s][w->first[r]];
+        else
+            for (size_t r = 0; r < rows; r++) memcpy(p + 3 * r, block->in[s] + 3 * (size_t)w->first[r], 3 * sizeof *p);
         c.in[s] = p;
         p += ch * BLOCK;
     }
@@ -267,7 +280,7 @@ static mr_status dedupe_block(const mr_transform *t, const mr_transform_batch *b
         if (ch == 1)
             for (size_t i = 0; i < n; i++) dst[i] = src[w->row_of[i]];
         else
-            for (size_t i = 0; i < n; i++) memcpy(dst + ch * i, src + ch * w->row_of[i], ch * sizeof *dst);
+            for (size_t i = 0; i < n; i++) memcpy(dst + 3 * i, src + 3 * (size_t)w->row_of[i], 3 * sizeof *dst);
     }
     for (size_t i = 0; i < n; i++) block->flags[i] = w->flags[w->row_of[i]];
     return MR_OK;
