@@ -88,7 +88,8 @@ MR_TEST(broken_palettes_are_refused) {
     free(rewritten);
     mr_io_png_palette_free(&p);
     free(bytes);
-    const char *rgb_png = asset("specgloss/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Avocado_normal.png");
+    const char *rgb_png =
+        asset("specgloss/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Avocado_normal.png");
     unsigned char *other = (unsigned char *)mr_test_read_file(rgb_png, &size);
     MR_CHECK(other != NULL && !mr_io_png_is_paletted(other, size));
     free(other);
@@ -111,7 +112,8 @@ MR_TEST(codes_decode_as_the_reader_decodes_them) {
         mr_image *read = NULL;
         MR_CHECK(mr_img_read_memory(png, size, "ramp", &o, &read, NULL) == MR_OK);
         int wrong = 0;
-        for (int q = 0; read != NULL && q < 256; q++) wrong += read->pixels[q] != mr_io_decode_code((unsigned)q, 8, srgb);
+        for (int q = 0; read != NULL && q < 256; q++)
+            wrong += read->pixels[q] != mr_io_decode_code((unsigned)q, 8, srgb);
         MR_CHECK_MSG(wrong == 0, "%d codes decode otherwise (%s)", wrong, srgb ? "colour" : "data");
         mr_image_free(read);
     }
