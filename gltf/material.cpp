@@ -317,6 +317,21 @@ mr_status set_material_impl(mr_gltf *g, int index, const mr_gltf_material *in) {
     return MR_OK;
 }
 
+// Samplers: the file's GL numbers <-> mr_gltf_filter / mr_wrap (mr_gltf.h). -1 is glTF's "unset" in tinygltf.
+const int gl_filters[MR_GLTF_FILTER_COUNT] = {-1, 9728, 9729, 9984, 9985, 9986, 9987};
+
+mr_gltf_filter filter_of_gl(int gl) {
+    for (int f = 1; f < MR_GLTF_FILTER_COUNT; f++)
+        if (gl_filters[f] == gl) return (mr_gltf_filter)f;
+    return MR_GLTF_FILTER_UNSET;
+}
+
+int gl_of_filter(mr_gltf_filter f) { return (unsigned)f < MR_GLTF_FILTER_COUNT ? gl_filters[f] : -1; }
+
+mr_wrap wrap_of_gl(int gl) { return gl == 33071 ? MR_WRAP_CLAMP : gl == 33648 ? MR_WRAP_MIRROR : MR_WRAP_REPEAT; }
+
+int gl_of_wrap(mr_wrap w) { return w == MR_WRAP_CLAMP ? 33071 : w == MR_WRAP_MIRROR ? 33648 : 10497; }
+
 } // namespace
 
 // ---- the C API -------------------------------------------------------------------------------------------
@@ -389,14 +404,14 @@ mr_status mr_gltf_get_texture(const mr_gltf *g, int texture, mr_gltf_texture *ou
     mr_gltf_texture r;
     r.image = t.source;
     r.sampler = t.sampler;
-    r.params.mag_filter = r.params.min_filter = -1;
-    r.params.wrap_s = r.params.wrap_t = 10497;
+    r.params.mag_filter = r.params.min_filter = MR_GLTF_FILTER_UNSET;
+    r.params.wrap_s = r.params.wrap_t = MR_WRAP_REPEAT;
     if (t.sampler >= 0 && t.sampler < (int)g->model.samplers.size()) {
         const tinygltf::Sampler &s = g->model.samplers[t.sampler];
-        r.params.mag_filter = s.magFilter;
-        r.params.min_filter = s.minFilter;
-        r.params.wrap_s = s.wrapS;
-        r.params.wrap_t = s.wrapT;
+        r.params.mag_filter = filter_of_gl(s.magFilter);
+        r.params.min_filter = filter_of_gl(s.minFilter);
+        r.params.wrap_s = wrap_of_gl(s.wrapS);
+        r.params.wrap_t = wrap_of_gl(s.wrapT);
     }
     *out = r;
     return MR_OK;
@@ -496,17 +511,18 @@ mr_status mr_gltf_add_texture(mr_gltf *g, int image, const mr_gltf_sampler *samp
             int found = -1;
             for (size_t i = 0; i < g->model.samplers.size() && found < 0; i++) {
                 const tinygltf::Sampler &s = g->model.samplers[i];
-                if (s.magFilter == sampler->mag_filter && s.minFilter == sampler->min_filter &&
-                    s.wrapS == sampler->wrap_s && s.wrapT == sampler->wrap_t && s.name.empty() &&
+                if (s.magFilter == gl_of_filter(sampler->mag_filter) &&
+                    s.minFilter == gl_of_filter(sampler->min_filter) && s.wrapS == gl_of_wrap(sampler->wrap_s) &&
+                    s.wrapT == gl_of_wrap(sampler->wrap_t) && s.name.empty() &&
                     s.extras.Type() == tinygltf::NULL_TYPE && s.extensions.empty())
                     found = (int)i;
             }
             if (found < 0) {
                 tinygltf::Sampler s;
-                s.magFilter = sampler->mag_filter;
-                s.minFilter = sampler->min_filter;
-                s.wrapS = sampler->wrap_s;
-                s.wrapT = sampler->wrap_t;
+                s.magFilter = gl_of_filter(sampler->mag_filter);
+                s.minFilter = gl_of_filter(sampler->min_filter);
+                s.wrapS = gl_of_wrap(sampler->wrap_s);
+                s.wrapT = gl_of_wrap(sampler->wrap_t);
                 g->model.samplers.push_back(s);
                 found = (int)g->model.samplers.size() - 1;
             }

@@ -50,6 +50,7 @@
 
 #include "io/image_io.h"
 #include "mr_status.h"
+#include "render/render.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -114,13 +115,26 @@ typedef struct mr_gltf_material {
     double ior; /* default 1.5 */
 } mr_gltf_material;
 
-/* A texture's sampler. Filters: 9728 NEAREST, 9729 LINEAR, 9984-9987 mipmap modes, -1 = unset.
- * Wraps: 33071 CLAMP_TO_EDGE, 33648 MIRRORED_REPEAT, 10497 REPEAT (default). */
+/* A sampler's filters (glTF's GL numbers only in the file: 9728 NEAREST, 9729 LINEAR, 9984-9987 the mipmap modes). */
+typedef enum mr_gltf_filter {
+    MR_GLTF_FILTER_UNSET = 0,           /* absent: the viewer chooses */
+    MR_GLTF_FILTER_NEAREST,             /* 9728 */
+    MR_GLTF_FILTER_LINEAR,              /* 9729 */
+    MR_GLTF_FILTER_NEAREST_MIPMAP_NEAREST, /* 9984 */
+    MR_GLTF_FILTER_LINEAR_MIPMAP_NEAREST,  /* 9985 */
+    MR_GLTF_FILTER_NEAREST_MIPMAP_LINEAR,  /* 9986 */
+    MR_GLTF_FILTER_LINEAR_MIPMAP_LINEAR,   /* 9987 */
+    MR_GLTF_FILTER_COUNT
+} mr_gltf_filter;
+
+/* A texture's sampler, in the renderer's terms (render/render.h): wraps are mr_wrap (MR_WRAP_REPEAT is glTF's
+ * default 10497, MR_WRAP_CLAMP 33071 CLAMP_TO_EDGE, MR_WRAP_MIRROR 33648 MIRRORED_REPEAT; MR_WRAP_DEFAULT, a zeroed
+ * sampler's, is written as REPEAT). A value the file holds that glTF does not define reads as UNSET / REPEAT. */
 typedef struct mr_gltf_sampler {
-    int mag_filter;
-    int min_filter;
-    int wrap_s;
-    int wrap_t;
+    mr_gltf_filter mag_filter;
+    mr_gltf_filter min_filter;
+    mr_wrap wrap_s;
+    mr_wrap wrap_t;
 } mr_gltf_sampler;
 
 /* What a texture points at. */

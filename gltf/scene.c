@@ -31,10 +31,9 @@ static mr_status texture_sampling(const load_context *ctx, const mr_gltf_texture
     mr_status status = mr_gltf_get_texture(ctx->asset, ref->index, &texture);
     if (status != MR_OK)
         return mr_fail_context(status, "glTF '%s': material '%s': %s", ctx->path, ctx->material, what);
-    const int wraps[2] = {texture.params.wrap_s, texture.params.wrap_t};
-    mr_wrap *modes[2] = {&out->wrap_u, &out->wrap_v};
-    for (int k = 0; k < 2; k++)
-        *modes[k] = wraps[k] == 33071 ? MR_WRAP_CLAMP : (wraps[k] == 33648 ? MR_WRAP_MIRROR : MR_WRAP_REPEAT);
+    // glTF's default is REPEAT on both axes (the renderer's MR_WRAP_DEFAULT is the sphere's convention).
+    out->wrap_u = texture.params.wrap_s == MR_WRAP_DEFAULT ? MR_WRAP_REPEAT : texture.params.wrap_s;
+    out->wrap_v = texture.params.wrap_t == MR_WRAP_DEFAULT ? MR_WRAP_REPEAT : texture.params.wrap_t;
     out->texcoord = ref->has_transform && ref->transform_tex_coord >= 0 ? ref->transform_tex_coord : ref->tex_coord;
     if (out->texcoord > 1)
         return mr_fail(MR_ERR_UNSUPPORTED, "glTF '%s': material '%s': %s reads TEXCOORD_%d; the renderer reads "

@@ -229,7 +229,8 @@ MR_TEST(floppy_disk_spec_gloss_factors) {
     MR_CHECK(mr_gltf_extension_used(g, "EXT_new") && mr_gltf_extension_required(g, "EXT_new"));
     mr_gltf_texture t;
     MR_CHECK_OK(mr_gltf_get_texture(g, 1, &t));
-    MR_CHECK(t.image == 1 && t.sampler == 0 && t.params.mag_filter == 9729 && t.params.min_filter == 9987);
+    MR_CHECK(t.image == 1 && t.sampler == 0 && t.params.mag_filter == MR_GLTF_FILTER_LINEAR &&
+             t.params.min_filter == MR_GLTF_FILTER_LINEAR_MIPMAP_LINEAR);
     mr_gltf_image im;
     MR_CHECK_OK(mr_gltf_get_image(g, 1, &im));
     MR_CHECK(strcmp(im.uri, "textures/material_0_specularGlossiness.png") == 0);
@@ -251,7 +252,8 @@ MR_TEST(avocado_carries_both_workflows) {
     MR_CHECK(!mr_gltf_extension_required(g, "KHR_materials_pbrSpecularGlossiness"));
     mr_gltf_texture t;
     MR_CHECK_OK(mr_gltf_get_texture(g, 4, &t));
-    MR_CHECK(t.image == 4 && t.sampler == -1 && t.params.wrap_s == 10497 && t.params.min_filter == -1);
+    MR_CHECK(t.image == 4 && t.sampler == -1 && t.params.wrap_s == MR_WRAP_REPEAT &&
+             t.params.min_filter == MR_GLTF_FILTER_UNSET);
     mr_gltf_free(g);
 }
 
@@ -280,13 +282,15 @@ MR_TEST(texture_settings_samplers) {
     mr_gltf_get_counts(g, &c);
     MR_CHECK(c.materials == 10 && c.textures == 9 && c.samplers == 5 && c.images == 3);
     /* texture -> expected wrapS, wrapT (TextureSettingsTest.gltf's samplers by name) */
-    const int wraps[][3] = {{0, 10497, 33648}, {1, 33648, 10497}, {2, 33071, 10497}, {3, 10497, 33071},
-                            {6, 10497, 10497}};
+    const int wraps[][3] = {{0, MR_WRAP_REPEAT, MR_WRAP_MIRROR}, {1, MR_WRAP_MIRROR, MR_WRAP_REPEAT},
+                            {2, MR_WRAP_CLAMP, MR_WRAP_REPEAT}, {3, MR_WRAP_REPEAT, MR_WRAP_CLAMP},
+                            {6, MR_WRAP_REPEAT, MR_WRAP_REPEAT}};
     for (int i = 0; i < 5; i++) {
         mr_gltf_texture t;
         MR_CHECK_OK(mr_gltf_get_texture(g, wraps[i][0], &t));
-        MR_CHECK_MSG(t.params.wrap_s == wraps[i][1] && t.params.wrap_t == wraps[i][2] &&
-                         t.params.mag_filter == 9729 && t.params.min_filter == 9986,
+        MR_CHECK_MSG((int)t.params.wrap_s == wraps[i][1] && (int)t.params.wrap_t == wraps[i][2] &&
+                         t.params.mag_filter == MR_GLTF_FILTER_LINEAR &&
+                         t.params.min_filter == MR_GLTF_FILTER_NEAREST_MIPMAP_LINEAR,
                      "texture %d: wrap %d/%d", wraps[i][0], t.params.wrap_s, t.params.wrap_t);
     }
     int double_sided = 0;
@@ -495,7 +499,7 @@ MR_TEST(data_uri_resources) {
     MR_CHECK(m.emissive_texture.scale[1] == 3.0 && m.emissive_texture.transform_tex_coord == 0);
     mr_gltf_texture t;
     MR_CHECK_OK(mr_gltf_get_texture(g, 0, &t));
-    MR_CHECK(t.params.wrap_s == 33071 && t.params.wrap_t == 10497);
+    MR_CHECK(t.params.wrap_s == MR_WRAP_CLAMP && t.params.wrap_t == MR_WRAP_REPEAT);
     const char *out = mr_test_tmp_path("datauri_out.gltf");
     MR_CHECK_OK(mr_gltf_save(g, out));
     char *text = mr_test_read_file(out, NULL);
@@ -680,7 +684,7 @@ MR_TEST(drop_spec_gloss_set_metal_rough_add_texture) {
     mr_gltf_counts c;
     mr_gltf_get_counts(g, &c);
     MR_CHECK(c.samplers == 1); /* the identical sampler was reused */
-    mr_gltf_sampler clamp = {9729, 9729, 33071, 33071};
+    mr_gltf_sampler clamp = {MR_GLTF_FILTER_LINEAR, MR_GLTF_FILTER_LINEAR, MR_WRAP_CLAMP, MR_WRAP_CLAMP};
     MR_CHECK_OK(mr_gltf_add_texture(g, 1, &clamp, &texture2));
     mr_gltf_get_counts(g, &c);
     MR_CHECK(c.samplers == 2 && texture2 == 4);
@@ -1487,11 +1491,11 @@ MR_TEST(prune_unused_hand_made) {
     /* Samplers renumbered with their textures: s0, s2 (min NEAREST), s3 (min LINEAR). */
     mr_gltf_texture tex;
     MR_CHECK_OK(mr_gltf_get_texture(g, 0, &tex));
-    MR_CHECK(tex.sampler == 0 && tex.params.mag_filter == 9728);
+    MR_CHECK(tex.sampler == 0 && tex.params.mag_filter == MR_GLTF_FILTER_NEAREST);
     MR_CHECK_OK(mr_gltf_get_texture(g, 2, &tex));
-    MR_CHECK(tex.sampler == 1 && tex.params.min_filter == 9728);
+    MR_CHECK(tex.sampler == 1 && tex.params.min_filter == MR_GLTF_FILTER_NEAREST);
     MR_CHECK_OK(mr_gltf_get_texture(g, 3, &tex));
-    MR_CHECK(tex.sampler == 2 && tex.params.min_filter == 9729);
+    MR_CHECK(tex.sampler == 2 && tex.params.min_filter == MR_GLTF_FILTER_LINEAR);
     MR_CHECK_OK(mr_gltf_get_texture(g, 1, &tex));
     MR_CHECK(tex.sampler == -1);
     mr_gltf_material m;
