@@ -1,17 +1,12 @@
 /*
  * cmd_workflow.c — `matremap spec2metal` and `matremap metal2spec`, also commands of their own (main.c dispatches
  * on the program's name, so `ln -s matremap spec2metal` works): texture maps of one workflow in, the other's out,
- * through the converters of src/workflow/workflow.h (and a network of nn/mlp.h for spec2metal --method mlp).
+ * through a transform of src/transform (docs/architecture.md, "A conversion").
  *
- * Both commands run the same steps:
- *   1. parse the maps: each is an image file or a constant (one number, or R,G,B for a colour map);
- *   2. name the outputs and refuse any that is one of the inputs (inputs are never overwritten);
- *   3. read the files (colour maps sRGB-decoded from 8/16-bit files, data maps linear: image_io.h) and check
- *      they all have one size (constants broadcast to it; all constants make a single texel);
- *   4. convert planar arrays in one batch call (per-texel flags);
- *   5. write the outputs (each atomically; when one fails, those already written are removed) and print one
- *      summary line (or JSON): size, method, the read, convert and write times, and how many texels carry each
- *      flag.
+ * One driver serves both directions (run_conversion), told by a `conversion` table which maps feed the
+ * transform's input slots and how its output slots are packed into files. The steps: parse the maps (an image
+ * file or a constant each), name the outputs and refuse any that is an input, read the files (one size; constants
+ * broadcast), convert in one mr_transform_apply, write the outputs (all or none), print one summary line or JSON.
  */
 #include <errno.h>
 #include <float.h>
