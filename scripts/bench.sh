@@ -4,7 +4,7 @@
 # (bench:envlight, bench:mesh, bench:reflection). Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
-# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|png|remap|remap-processes]
+# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|png|gltf|remap|remap-processes]
 #   --only NAME runs one section and rewrites only its markers (the full run takes long; sections written as
 #   functions below can be run alone). From make: make bench BENCH_ARGS="--only report-accuracy".
 set -euo pipefail
@@ -531,9 +531,79 @@ bench_png() {
     } | tee "$work/png.md"
 }
 
+# glTF assets (docs/performance.md, bench:gltf): matremap gltf spec2metal against gltf-transform metalrough, whole
+# processes, wall clock and peak memory, same assets, same run.
+bench_gltf() {
+    echo
+    echo "== glTF assets: matremap gltf spec2metal against gltf-transform metalrough (same assets, same run)"
+    # gltf-transform's `metalrough` is the lossless route (KHR_materials_specular + KHR_materials_ior: textures
+    # rearranged, nothing converted per texel); ours converts every texel. Both write a .gltf with its textures.
+    gt="$root/scripts/gltf-transform"
+    gltf_report="$work/gltf.md"
+    if [ ! -x "$gt/node_modules/.bin/gltf-transform" ]; then
+        (cd "$gt" && npm ci --no-audit --no-fund --loglevel=error) >"$work/gltf-transform-npm.log" 2>&1 || true
+    fi
+    if [ -x "$gt/node_modules/.bin/gltf-transform" ] && [ -d "$shared/assets/specgloss" ]; then
+        runs=3
+        [ "$quick" = "--quick" ] && runs=1
+        {
+            echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores: whole processes, wall clock and peak"
+            echo "resident memory (medians of $runs runs), \`--overwrite-metal-rough\` so that every material converts;"
+            echo "gltf-transform $("$gt/node_modules/.bin/gltf-transform" --version 2>/dev/null | tail -n 1) (node $(node --version))."
+            echo
+            echo "| asset | texture | matremap weighted: s, MB | matremap mlp: s, MB | gltf-transform metalrough: s, MB | speed-up of weighted | its memory / gltf-transform's |"
+            echo "|---|---|---:|---:|---:|---:|---:|"
+        } > "$gltf_report"
+        for asset in "$shared"/assets/specgloss/*/*/*.gltf "$shared"/assets/specgloss/FloppyDisk-sketchfab/scene.gltf; do
+            [ -f "$asset" ] || continue
+            name=$(basename "$(dirname "$asset")")
+            [ "$name" = glTF-pbrSpecularGlossiness ] && name=$(basename "$(dirname "$(dirname "$asset")")")
+            out="$work/gltf/$name"
+            rm -rf "$out" && mkdir -p "$out/w" "$out/m" "$out/g"
+            ours=() ours_mb=() mlp=() mlp_mb=() peer=() peer_mb=()
+            for run in $(seq "$runs"); do
+                read -r s mb < <(wall_peak_of "$bin" gltf spec2metal "$asset" -o "$out/w/out.gltf" --method weighted \
+                    --overwrite-metal-rough)
+                ours+=("$s") ours_mb+=("$mb")
+                read -r s mb < <(wall_peak_of "$bin" gltf spec2metal "$asset" -o "$out/m/out.gltf" --method mlp \
+                    --overwrite-metal-rough)
+                mlp+=("$s") mlp_mb+=("$mb")
+                read -r s mb < <(wall_peak_of "$gt/node_modules/.bin/gltf-transform" metalrough "$asset" "$out/g/out.gltf")
+                peer+=("$s") peer_mb+=("$mb")
+            done
+            o_s=$(printf '%s\n' "${ours[@]}" | median) o_mb=$(printf '%s\n' "${ours_mb[@]}" | median)
+            m_s=$(printf '%s\n' "${mlp[@]}" | median) m_mb=$(printf '%s\n' "${mlp_mb[@]}" | median)
+            p_s=$(printf '%s\n' "${peer[@]}" | median) p_mb=$(printf '%s\n' "${peer_mb[@]}" | median)
+            texture=$(python3 - "$asset" <<'PY'
+import json, os, struct, sys
+d = json.load(open(sys.argv[1]))
+sizes = []
+for im in d.get("images", []):
+    with open(os.path.join(os.path.dirname(sys.argv[1]), im["uri"]), "rb") as f:
+        head = f.read(33)
+    if head[:8] == b"\x89PNG\r\n\x1a\n":
+        sizes.append((struct.unpack(">II", head[16:24]), head[25] == 3))
+(w, h), paletted = max(sizes) if sizes else ((0, 0), False)
+print("%dx%d%s" % (w, h, " paletted" if paletted else ""))
+PY
+            )
+            printf '| %s | %s | %.2f, %.0f | %.2f, %.0f | %.2f, %.0f | %.2f× | %.2f |\n' "$name" "$texture" "$o_s" "$o_mb" \
+                "$m_s" "$m_mb" "$p_s" "$p_mb" "$(awk -v a="$p_s" -v b="$o_s" 'BEGIN {print a / b}')" \
+                "$(awk -v a="$o_mb" -v b="$p_mb" 'BEGIN {print a / b}')" | tee -a "$gltf_report"
+        done
+    else
+        echo "(gltf-transform could not be installed from the npm registry, or no assets: the glTF comparison was skipped)"
+        echo "glTF comparison skipped: gltf-transform or ../shared/assets missing in this run." > "$gltf_report"
+    fi
+}
+
 if [ -n "$only" ]; then
     case $only in
         report-accuracy) bench_report_accuracy ;;
+        gltf)
+            bench_gltf
+            replace_section gltf "$work/gltf.md"
+            ;;
         reflection) bench_reflection ;;
         remap)
             bench_remap_table
@@ -555,7 +625,7 @@ if [ -n "$only" ]; then
             replace_section workflow "$work/workflow.md"
             replace_section workflow-e2e "$work/e2e.md"
             ;;
-        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, png, remap, remap-processes)" >&2; exit 1 ;;
+        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, png, gltf, remap, remap-processes)" >&2; exit 1 ;;
     esac
     exit 0
 fi
@@ -678,51 +748,7 @@ fi
 
 bench_workflow_e2e
 
-echo
-echo "== glTF assets: matremap gltf spec2metal against gltf-transform metalrough (same assets, same run)"
-# gltf-transform's `metalrough` is the lossless route (KHR_materials_specular + KHR_materials_ior: textures
-# rearranged, nothing converted per texel); ours converts every texel. Both write a .gltf with its textures.
-gt="$root/scripts/gltf-transform"
-gltf_report="$work/gltf.md"
-if [ ! -x "$gt/node_modules/.bin/gltf-transform" ]; then
-    (cd "$gt" && npm ci --no-audit --no-fund --loglevel=error) >"$work/gltf-transform-npm.log" 2>&1 || true
-fi
-if [ -x "$gt/node_modules/.bin/gltf-transform" ] && [ -d "$shared/assets/specgloss" ]; then
-    runs=3
-    [ "$quick" = "--quick" ] && runs=1
-    {
-        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores: whole processes, median of $runs runs;"
-        echo "gltf-transform $("$gt/node_modules/.bin/gltf-transform" --version 2>/dev/null | tail -n 1) (node $(node --version))."
-        echo
-        echo "| asset | materials | matremap weighted (s) | matremap mlp (s) | gltf-transform metalrough (s) | ratio weighted / gltf-transform |"
-        echo "|---|---:|---:|---:|---:|---:|"
-    } > "$gltf_report"
-    for asset in "$shared"/assets/specgloss/*/*/*.gltf "$shared"/assets/specgloss/FloppyDisk-sketchfab/scene.gltf; do
-        [ -f "$asset" ] || continue
-        name=$(basename "$(dirname "$asset")")
-        [ "$name" = glTF-pbrSpecularGlossiness ] && name=$(basename "$(dirname "$(dirname "$asset")")")
-        out="$work/gltf/$name"
-        rm -rf "$out" && mkdir -p "$out/w" "$out/m" "$out/g"
-        ours=() mlp=() peer=()
-        for run in $(seq "$runs"); do
-            ours+=("$(seconds_of "$bin" gltf spec2metal "$asset" -o "$out/w/out.gltf" --method weighted \
-                --overwrite-metal-rough)")
-            mlp+=("$(seconds_of "$bin" gltf spec2metal "$asset" -o "$out/m/out.gltf" --method mlp \
-                --overwrite-metal-rough)")
-            peer+=("$(seconds_of "$gt/node_modules/.bin/gltf-transform" metalrough "$asset" "$out/g/out.gltf")")
-        done
-        o_s=$(printf '%s\n' "${ours[@]}" | median)
-        m_s=$(printf '%s\n' "${mlp[@]}" | median)
-        p_s=$(printf '%s\n' "${peer[@]}" | median)
-        materials=$(python3 -c 'import json, sys; print(len(json.load(open(sys.argv[1]))["materials"]))' "$asset")
-        printf '| %s | %s | %.2f | %.2f | %.2f | %.2f× |\n' "$name" "$materials" "$o_s" "$m_s" "$p_s" \
-            "$(awk -v a="$o_s" -v b="$p_s" 'BEGIN {print a / b}')" | tee -a "$gltf_report"
-    done
-else
-    echo "(gltf-transform could not be installed from the npm registry, or no assets: the glTF comparison was skipped)"
-    echo "glTF comparison skipped: gltf-transform or ../shared/assets missing in this run." > "$gltf_report"
-fi
-
+bench_gltf
 bench_report_accuracy
 bench_reflection
 bench_png
