@@ -9,15 +9,8 @@
 #include "io/io_internal.h"
 #include "matremap.h"
 
-static const char *asset_path(const char *rel) {
-    static char p[1024];
-    const char *shared = getenv("MR_SHARED");
-    snprintf(p, sizeof p, "%s/assets/specgloss/%s", shared ? shared : "../shared", rel);
-    return p;
-}
-
-#define DUCK "Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Duck.gltf"
-#define TRUCK "CesiumMilkTruck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/CesiumMilkTruck.gltf"
+#define DUCK "specgloss/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Duck.gltf"
+#define TRUCK "specgloss/CesiumMilkTruck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/CesiumMilkTruck.gltf"
 
 static mr_transform *make_transform(const char *source, const char *target, const char *name) {
     mr_transform *t = NULL;
@@ -32,7 +25,7 @@ static mr_transform *make_transform(const char *source, const char *target, cons
 MR_TEST(duck_textures_hold_the_converters_answers) {
     mr_gltf *asset = NULL;
     mr_transform *t = make_transform("gltf-specgloss", "gltf", "weighted");
-    MR_CHECK(mr_gltf_load(asset_path(DUCK), &asset) == MR_OK);
+    MR_CHECK(mr_gltf_load(mr_test_asset_path(DUCK), &asset) == MR_OK);
     if (asset == NULL || t == NULL) return;
     mr_gltf_material before;
     MR_CHECK(mr_gltf_get_material(asset, 0, &before) == MR_OK);
@@ -97,7 +90,7 @@ MR_TEST(duck_textures_hold_the_converters_answers) {
 MR_TEST(truck_materials_share_a_conversion) {
     mr_gltf *asset = NULL;
     mr_transform *t = make_transform("gltf-specgloss", "gltf", "mean");
-    MR_CHECK(mr_gltf_load(asset_path(TRUCK), &asset) == MR_OK);
+    MR_CHECK(mr_gltf_load(mr_test_asset_path(TRUCK), &asset) == MR_OK);
     if (asset == NULL || t == NULL) return;
     mr_gltf_convert_options o = {0};
     o.transform = t;
@@ -122,7 +115,7 @@ MR_TEST(truck_materials_share_a_conversion) {
 MR_TEST(extension_route_reuses_textures_and_makes_factors) {
     mr_gltf *asset = NULL;
     mr_transform *t = make_transform("gltf-specgloss", "gltf", "extension");
-    MR_CHECK(mr_gltf_load(asset_path(DUCK), &asset) == MR_OK);
+    MR_CHECK(mr_gltf_load(mr_test_asset_path(DUCK), &asset) == MR_OK);
     if (asset == NULL || t == NULL) return;
     mr_gltf_counts before;
     mr_gltf_get_counts(asset, &before);
@@ -149,7 +142,7 @@ MR_TEST(extension_route_reuses_textures_and_makes_factors) {
 /* A transform between other models, or an unknown image format, is refused before anything changes. */
 MR_TEST(bad_options_are_refused) {
     mr_gltf *asset = NULL;
-    MR_CHECK(mr_gltf_load(asset_path(DUCK), &asset) == MR_OK);
+    MR_CHECK(mr_gltf_load(mr_test_asset_path(DUCK), &asset) == MR_OK);
     if (asset == NULL) return;
     mr_transform *paper = make_transform("ggx", "ggx-metallic", "weighted");
     mr_gltf_convert_options o = {0};

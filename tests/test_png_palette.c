@@ -9,20 +9,13 @@
 #include "io/io_internal.h"
 #include "matremap.h"
 
-static const char *asset(const char *rel) {
-    static char p[1024];
-    const char *shared = getenv("MR_SHARED");
-    snprintf(p, sizeof p, "%s/assets/%s", shared ? shared : "../shared", rel);
-    return p;
-}
-
 #define DUCK_PNG "specgloss/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/DuckCM.png"
 
 /* The Duck's texture apart and together again, with its own palette: the same pixels through the image reader; with
  * every entry darkened, each texel follows its entry. */
 MR_TEST(palette_round_trip_keeps_the_pixels) {
     size_t size = 0;
-    unsigned char *bytes = (unsigned char *)mr_test_read_file(asset(DUCK_PNG), &size);
+    unsigned char *bytes = (unsigned char *)mr_test_read_file(mr_test_asset_path(DUCK_PNG), &size);
     MR_CHECK(bytes != NULL && mr_io_png_is_paletted(bytes, size));
     if (bytes == NULL) return;
     mr_io_png_palette p;
@@ -64,7 +57,7 @@ MR_TEST(palette_round_trip_keeps_the_pixels) {
 /* A broken CRC, an index past the palette and a PNG of another colour type are refused naming the data. */
 MR_TEST(broken_palettes_are_refused) {
     size_t size = 0;
-    unsigned char *bytes = (unsigned char *)mr_test_read_file(asset(DUCK_PNG), &size);
+    unsigned char *bytes = (unsigned char *)mr_test_read_file(mr_test_asset_path(DUCK_PNG), &size);
     if (bytes == NULL) return;
     mr_io_png_palette p;
     bytes[40] ^= 0x5a; // inside the first chunk after IHDR
@@ -89,7 +82,7 @@ MR_TEST(broken_palettes_are_refused) {
     mr_io_png_palette_free(&p);
     free(bytes);
     const char *rgb_png =
-        asset("specgloss/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Avocado_normal.png");
+        mr_test_asset_path("specgloss/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Avocado_normal.png");
     unsigned char *other = (unsigned char *)mr_test_read_file(rgb_png, &size);
     MR_CHECK(other != NULL && !mr_io_png_is_paletted(other, size));
     free(other);
