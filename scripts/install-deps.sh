@@ -10,6 +10,7 @@ packages=(
     libtinygltf-dev nlohmann-json3-dev libstb-dev
     libnlopt-dev
     libpng-dev         # PNG read and write without OpenImageIO (src/io/png_io.c)
+    libdeflate-dev     # PNG's zlib streams, compressed and inflated whole (src/io/png_deflate.c)
     gnuplot-nox
     fonts-dejavu-core  # labels on the demo's contact sheets (oiiotool --text)
     python3            # tests/gltf_validate.sh compares glTF JSON (tests/lib/gltf_json_compare.py)
