@@ -4,8 +4,8 @@
  * Why not libpng alone: libpng drives zlib through its streaming interface, a few kilobytes at a time, and zlib's
  * deflate and inflate are what a texture-set conversion spent most of its PNG time in (docs/performance.md, "PNG
  * read and write"). libdeflate compresses and decompresses whole buffers, faster than zlib for files of the same
- * size (several times so when compressing: the measurements are there), but it knows nothing of PNG. This file does the PNG around it
- * (ISO/IEC 15948:2003, the W3C PNG Specification, second edition: "§" below):
+ * size (several times so when compressing: the measurements are there), but it knows nothing of PNG. This file
+ * does the PNG around it (ISO/IEC 15948:2003, the W3C PNG Specification, second edition: "§" below):
  *
  *   - the datastream layout of §5: the 8-byte signature, then chunks of length, type, data and CRC-32 (Annex D,
  *     computed with libdeflate_crc32);
