@@ -10,7 +10,7 @@ packages=(
     libtinygltf-dev nlohmann-json3-dev libstb-dev
     libnlopt-dev
     libpng-dev         # PNG read and write without OpenImageIO (src/io/png_io.c)
-    zlib1g-dev         # paletted PNGs rewritten with a new palette (src/io/png_palette.c)
+    libdeflate-dev     # PNG's zlib streams, compressed and inflated whole (src/io/png_deflate.c, png_palette.c)
     gnuplot-nox
     fonts-dejavu-core  # labels on the demo's contact sheets (oiiotool --text)
     python3            # tests/gltf_validate.sh compares glTF JSON (tests/lib/gltf_json_compare.py)

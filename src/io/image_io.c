@@ -2,18 +2,19 @@
  * image_io.c — mr_img_read / mr_img_write (contract in image_io.h; internal layout in io_internal.h).
  *
  * Reading: check the path (missing, a directory, unreadable: MR_ERR_IO naming it) and, for PNG, the chunk
- * structure; decode a PNG through libpng (png_io.c) and anything else through the OpenImageIO shim, then convert
- * the channel layout and sRGB-decode integer-stored colour (IEC 61966-2-1). Bytes in memory (mr_img_read_memory)
- * take the same path from the chunk check on: fmemopen gives the check and libpng the same stdio stream a file
- * gives them, and OpenImageIO reads them through an IOMemReader.
+ * structure; decode a PNG through png_io.c (libdeflate, libpng) and anything else through the OpenImageIO shim,
+ * then convert the channel layout and sRGB-decode integer-stored colour (IEC 61966-2-1). Bytes in memory
+ * (mr_img_read_memory) take the same path from the chunk check on: fmemopen gives the check and the decoder the
+ * same stdio stream a file gives them, and OpenImageIO reads them through an IOMemReader.
  * Writing: check every option before touching the disk, convert to the file's sample type (sRGB-encode after
  * clamping to [0,1], then round to nearest), and write through the atomic temp-file protocol of
- * atomic_file.c: OpenEXR Core writes .exr into the temporary file; OpenImageIO encodes every other format
- * (io_internal.h says how each reaches the disk).
+ * atomic_file.c: OpenEXR Core writes .exr into the temporary file, png_io.c encodes PNG, OpenImageIO every other
+ * format (io_internal.h says how each reaches the disk).
  */
 #include <ctype.h>
 #include <errno.h>
 #include <float.h>
+#include <libdeflate.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -51,37 +52,22 @@ static file_format format_of(const char *path) {
 
 /* ---- reading ---------------------------------------------------------------------------------------- */
 
-/* CRC-32 as specified for PNG (ISO/IEC 15948:2003, Annex D): reflected polynomial 0xEDB88320. */
-static void crc_table_init(uint32_t table[256]) {
-    for (uint32_t n = 0; n < 256; n++) {
-        uint32_t c = n;
-        for (int k = 0; k < 8; k++) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-        table[n] = c;
-    }
-}
-
-static uint32_t crc_update(const uint32_t table[256], uint32_t crc, const unsigned char *p, size_t n) {
-    for (size_t i = 0; i < n; i++) crc = table[(crc ^ p[i]) & 0xffu] ^ (crc >> 8);
-    return crc;
-}
-
 static uint32_t be32(const unsigned char *p) {
     return ((uint32_t)p[0] << 24) | ((uint32_t)p[1] << 16) | ((uint32_t)p[2] << 8) | (uint32_t)p[3];
 }
 
 /* If the open stream `f` is a PNG (by its signature, whatever the extension: *is_png says), walk its chunk
  * structure (ISO/IEC 15948 section 5: length, type, data, CRC) up to IEND: IHDR first, every length inside the
- * file, every CRC right. Why here and not in the decoder: libpng's own messages do not say where a file went wrong
+ * file, every CRC right. Why here and not in the decoder: libpng's messages (png_io.c decodes with it what
+ * png_deflate.c does not take, and png_deflate.c leaves it every malformed file) do not say where a file went wrong
  * (and OpenImageIO's PNG reader, which a PNG no longer reaches, printed them on stderr). This catches truncation
  * and any corruption that a CRC detects (all but deliberately crafted files) with a message saying where, before
- * libpng sees the file. */
+ * any decoder sees the file. */
 static mr_status check_png_structure(const char *label, FILE *f, int *is_png) {
     static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
     unsigned char head[8];
     *is_png = fread(head, 1, 8, f) == 8 && memcmp(head, signature, 8) == 0;
     if (!*is_png) return MR_OK;
-    uint32_t table[256];
-    crc_table_init(table);
     unsigned char buf[16384];
     long offset = 8;
     for (int chunk = 0;; chunk++) {
@@ -99,7 +85,7 @@ static mr_status check_png_structure(const char *label, FILE *f, int *is_png) {
                            type, offset, (unsigned long)length);
         if (chunk == 0 && strcmp(type, "IHDR") != 0)
             return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: the first chunk is '%s', not IHDR", label, type);
-        uint32_t crc = crc_update(table, 0xffffffffu, head + 4, 4);
+        uint32_t crc = libdeflate_crc32(0, head + 4, 4); // CRC-32 of ISO/IEC 15948:2003, Annex D
         for (uint32_t left = length; left > 0;) {
             size_t want = left < sizeof buf ? left : sizeof buf;
             size_t n = fread(buf, 1, want, f);
@@ -112,14 +98,14 @@ static mr_status check_png_structure(const char *label, FILE *f, int *is_png) {
                                "after %lu",
                                label, type, offset, (unsigned long)length, (unsigned long)(length - left));
             }
-            crc = crc_update(table, crc, buf, n);
+            crc = libdeflate_crc32(crc, buf, n);
             left -= (uint32_t)n;
         }
         unsigned char stored[4];
         if (fread(stored, 1, 4, f) != 4)
             return mr_fail(MR_ERR_FORMAT, "%s: truncated PNG: chunk '%s' at byte %ld lacks its CRC", label, type,
                            offset);
-        if ((crc ^ 0xffffffffu) != be32(stored))
+        if (crc != be32(stored))
             return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: CRC mismatch in chunk '%s' at byte %ld", label, type,
                            offset);
         offset += 12 + (long)length;
@@ -229,7 +215,7 @@ static mr_status read_stream(const char *path, const unsigned char *bytes, size_
     int is_png = 0;
     mr_io_raw raw = {0, 0, 0, 0, 0, NULL};
     mr_status status = check_png_structure(label, stream, &is_png);
-    // PNG (by its signature: nearly every glTF texture) through libpng; the rest through the OpenImageIO module,
+    // PNG (by its signature: nearly every glTF texture) through png_io.c; the rest through the OpenImageIO module,
     // loaded on first use.
     if (status == MR_OK && is_png) {
         rewind(stream);

@@ -12,12 +12,13 @@
  *     linear and never premultiplied (PNG/TIFF store unassociated alpha; EXR alpha is kept as stored).
  *     On read, the rule follows the stored sample type: integer samples are display-encoded, floating-point
  *     samples (EXR, HDR, float TIFF) are linear.
- * Backends: PNG is read through libpng (png_io.c); reading anything else goes through OpenImageIO (C++ shim,
- * image_io_oiio.cpp, built as the module libmatremap-oiio.so and loaded on first use, see oiio_module.c;
- * MR_OIIO_MODULE overrides where it is looked for, and a missing module is MR_ERR_EXTERNAL), which decodes every
- * EXR compression (OpenEXR Core 3.1.5 cannot decode DWAA/DWAB, see ../shared/docs/toolchain.md). EXR writing uses
- * the OpenEXR Core C API directly (exr_write.c: scanline, ZIP, FLOAT or HALF channels R,G,B(,A) or Y). Other
- * formats are written by OpenImageIO (PNG, JPEG and HDR encoded in memory first: io_internal.h says why).
+ * Backends: PNG is read and written without OpenImageIO (png_deflate.c: libdeflate inflates and deflates its
+ * image data; png_io.c: libpng decodes what png_deflate.c leaves, e.g. Adam7); anything else goes through
+ * OpenImageIO (C++ shim, image_io_oiio.cpp, built as the module libmatremap-oiio.so and loaded on first use, see
+ * oiio_module.c; MR_OIIO_MODULE overrides where it is looked for, and a missing module is MR_ERR_EXTERNAL), which
+ * decodes every EXR compression (OpenEXR Core 3.1.5 cannot decode DWAA/DWAB, see ../shared/docs/toolchain.md).
+ * EXR writing uses the OpenEXR Core C API directly (exr_write.c: scanline, ZIP, FLOAT or HALF channels R,G,B(,A)
+ * or Y). Other formats are written by OpenImageIO (JPEG and HDR encoded in memory first: io_internal.h says why).
  * Format limits: JPEG and Radiance HDR cannot store alpha (4-channel images are MR_ERR_UNSUPPORTED, not
  * silently flattened); JPEG sides are at most 65500 pixels; HDR stores RGB (a 1-channel image is written as
  * grey RGB) and has no sign, so negative and NaN values are written as 0.
@@ -83,7 +84,7 @@ mr_status mr_img_read_stored(const char *path, const mr_img_read_options *opts, 
 /* mr_img_read_stored for an encoded image in memory: `size` bytes at `bytes` (e.g. an image embedded in a glTF
  * asset, as a data URI or in a buffer view), with the same options, conventions, checks and results as reading
  * the same bytes from a file, bit for bit; nothing touches the disk. The format is recognised by the first bytes:
- * PNG (libpng, as for a file), JPEG, EXR, Radiance HDR, TIFF, WebP, GIF and BMP (OpenImageIO). Messages call the
+ * PNG (as for a file), JPEG, EXR, Radiance HDR, TIFF, WebP, GIF and BMP (OpenImageIO). Messages call the
  * data `name` (e.g. "glTF 'x.gltf' image 3"; NULL or "" = "image in memory"). *out is owned by the caller and
  * untouched on failure; *stored (may be NULL) as for mr_img_read_stored. Errors: MR_ERR_FORMAT (no bytes, another
  * format, truncated or corrupt, larger than max_dimension, RGB data when 1 channel was requested),

@@ -4,7 +4,8 @@
  * Division of labour (the public contract is image_io.h):
  *   image_io.c          argument checks, extension and signature dispatch, channel conversion, sRGB coding,
  *                       quantisation, the PNG structure check before decoding;
- *   png_io.c            PNG decoding and encoding through libpng;
+ *   png_io.c            PNG decoding and encoding through libpng, and the choice between it and png_deflate.c;
+ *   png_deflate.c       PNG decoding and encoding around libdeflate (the default for both);
  *   image_io_oiio.cpp   the only C++: decodes any format into floats, from a file (mr_io_oiio_read) or from
  *                       memory (mr_io_oiio_read_memory), and encodes already quantised 8/16-bit or float buffers
  *                       (mr_io_oiio_write); built as the module libmatremap-oiio.so, which oiio_module.c loads on
@@ -127,24 +128,44 @@ typedef enum mr_io_sample {
 mr_status mr_io_oiio_write(const char *path, int width, int height, int channels, mr_io_sample sample,
                            const void *data, int srgb_tag, int jpeg_quality);
 
-/* ---- PNG through libpng (png_io.c) -------------------------------------------------------------------- */
+/* ---- PNG (png_io.c: libpng; png_deflate.c: libdeflate) ------------------------------------------------ */
 
 /* mr_io_oiio_read for a PNG, without OpenImageIO: the same layouts and values (png_io.c). */
 mr_status mr_io_png_read(const char *path, int max_dimension, mr_io_raw *raw);
 
 /* The same from `file`, open at the PNG's first byte (a file, or bytes in memory through fmemopen) and left open;
- * messages call it `label`. */
+ * messages call it `label`. Non-interlaced files decode through libdeflate (png_deflate.c); whatever that decoder
+ * does not take (Adam7, anything malformed) through libpng, from the same start (the stream must be seekable). */
 mr_status mr_io_png_read_stream(FILE *file, const char *label, int max_dimension, mr_io_raw *raw);
 
-/* How the PNG writer compresses: a zlib level (0-9) and libpng's filter set (PNG_FILTER_* bits, or PNG_ALL_FILTERS
- * for its adaptive choice per row). MR_IO_PNG_DEFAULT is the default of mr_img_write (docs/performance.md, "PNG
- * settings": the fastest whose files are at most 15 % larger than OpenImageIO's level 6). */
+/* The reference decoder: mr_io_png_read_stream through libpng alone (the libdeflate decoder gives the same bit
+ * for bit: tests/test_image_io.c compares them). */
+mr_status mr_io_png_read_stream_libpng(FILE *file, const char *label, int max_dimension, mr_io_raw *raw);
+
+/* png_deflate.c's decoder: *handled = 1 when it decoded the file into *raw or failed with a status of its own
+ * (max_dimension, memory); *handled = 0 (status MR_OK, *raw untouched) when the file is one it leaves to libpng,
+ * the stream then somewhere after its start. */
+mr_status mr_io_png_deflate_read(FILE *file, const char *label, int max_dimension, mr_io_raw *raw, int *handled);
+
+/* How the PNG writer compresses. `filters` is a set of PNG filter types (§9 of the PNG spec; the bits of libpng's
+ * PNG_FILTER_*): one type filters every row; several choose per row the one whose bytes, read as signed, have
+ * the smallest sum of absolute values (libpng's heuristic; MR_IO_PNG_ALL_FILTERS: all five). With libpng = 0
+ * the writer is png_deflate.c's, `level` libdeflate's 0-12 (1 fastest, 6 its default, 12 smallest); with
+ * libpng = 1 it is libpng + zlib (png_io.c, the writer before libdeflate, kept for comparisons), level zlib's 0-9.
+ * MR_IO_PNG_DEFAULT is the default of mr_img_write and of glTF conversions (docs/performance.md, "PNG read and
+ * write": the fastest setting whose files are at most 15 % larger than OpenImageIO's, zlib level 6). */
 typedef struct mr_io_png_settings {
     int level;
     int filters;
+    int libpng;
 } mr_io_png_settings;
-#define MR_IO_PNG_ALL_FILTERS 0xf8 /* PNG_ALL_FILTERS of png.h (this header does not include it) */
-#define MR_IO_PNG_DEFAULT {3, MR_IO_PNG_ALL_FILTERS}
+#define MR_IO_PNG_FILTER_NONE 0x08  /* PNG_FILTER_NONE of png.h (this header does not include it) */
+#define MR_IO_PNG_FILTER_SUB 0x10
+#define MR_IO_PNG_FILTER_UP 0x20
+#define MR_IO_PNG_FILTER_AVG 0x40
+#define MR_IO_PNG_FILTER_PAETH 0x80
+#define MR_IO_PNG_ALL_FILTERS 0xf8
+#define MR_IO_PNG_DEFAULT {1, MR_IO_PNG_ALL_FILTERS, 0}
 
 /* Encode `data` (width*height*channels unsigned samples of `bits` 8 or 16, host order, top-left first; channels
  * 1 grey, 2 grey + alpha, 3 RGB, 4 RGBA) as a PNG in memory and write it to `path` atomically; srgb_tag adds the
@@ -156,6 +177,11 @@ mr_status mr_io_png_write(const char *path, int width, int height, int channels,
  * errors. */
 mr_status mr_io_png_encode(const char *name, int width, int height, int channels, int bits, const void *data,
                            int srgb_tag, const mr_io_png_settings *settings, unsigned char **bytes, size_t *size);
+
+/* png_deflate.c's encoder behind mr_io_png_encode (which checks the arguments first). */
+mr_status mr_io_png_deflate_encode(const char *name, int width, int height, int channels, int bits, const void *data,
+                                   int srgb_tag, const mr_io_png_settings *settings, unsigned char **bytes,
+                                   size_t *size);
 
 /* ---- Paletted PNG (png_palette.c) --------------------------------------------------------------------- */
 

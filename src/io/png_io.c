@@ -1,13 +1,18 @@
 /*
- * png_io.c — PNG read and write through libpng, without OpenImageIO (io_internal.h, "PNG").
+ * png_io.c — PNG read and write without OpenImageIO (io_internal.h, "PNG"): the choice between libdeflate
+ * (png_deflate.c, the default both ways) and libpng, and the libpng paths themselves.
  *
  * PNG is the format of nearly every glTF texture, and a texture-set conversion reads and writes several 2048^2
  * maps: going through OpenImageIO cost the loading of its ~250 libraries (the module, io/oiio_module.c) and its
  * default deflate level. This reader returns what mr_io_oiio_read returns for a PNG (the same channel layout: grey,
  * grey + alpha, RGB, RGBA; palettes, low bit depths and tRNS expanded; 8 or 16 bits; values code / (2^bits - 1);
  * display-encoded), and the writer encodes in memory and writes atomically as the OpenImageIO path does. The reader
- * takes any stdio stream: a file, or an image in memory that image_io.c opens with fmemopen (mr_img_read_memory), so
- * both go through the same libpng calls and give the same values.
+ * takes any seekable stdio stream: a file, or an image in memory that image_io.c opens with fmemopen
+ * (mr_img_read_memory), so both go through the same calls and give the same values. png_deflate.c decodes what it
+ * takes (non-interlaced, well-formed files: nearly all) and hands the rest back; libpng then decodes it from the
+ * start, so those files give the values and errors they always gave. libpng's reader is the reference that
+ * png_deflate.c's output is tested against, bit for bit; its writer (libpng + zlib) stays for comparisons
+ * (tests/bench_png.c) behind mr_io_png_settings.libpng.
  *
  * libpng reports errors by longjmp out of its calls: what the callbacks change and the code after a jump reads
  * (the message, the growing output) lives on the heap behind a `volatile` pointer, as C requires of objects
@@ -62,6 +67,19 @@ mr_status mr_io_png_read(const char *path, int max_dimension, mr_io_raw *raw) {
 }
 
 mr_status mr_io_png_read_stream(FILE *file, const char *label, int max_dimension, mr_io_raw *raw) {
+    const long start = ftell(file);
+    if (start >= 0) { // else (a pipe) libpng alone, which does not need to go back
+        int handled = 0;
+        mr_status status = mr_io_png_deflate_read(file, label, max_dimension, raw, &handled);
+        if (handled) return status;
+        clearerr(file);
+        if (fseek(file, start, SEEK_SET) != 0)
+            return mr_fail(MR_ERR_IO, "%s: cannot seek back to the PNG's start", label);
+    }
+    return mr_io_png_read_stream_libpng(file, label, max_dimension, raw);
+}
+
+mr_status mr_io_png_read_stream_libpng(FILE *file, const char *label, int max_dimension, mr_io_raw *raw) {
     png_session *volatile session = calloc(1, sizeof *session);
     png_structp png = session ? png_create_read_struct(PNG_LIBPNG_VER_STRING, session, on_error, on_warning) : NULL;
     png_infop info = png != NULL ? png_create_info_struct(png) : NULL;
@@ -179,13 +197,10 @@ static void buffer_write(png_structp png, png_bytep data, size_t length) {
 
 static void buffer_flush(png_structp png) { (void)png; }
 
-mr_status mr_io_png_encode(const char *path, int width, int height, int channels, int bits, const void *data,
-                           int srgb_tag, const mr_io_png_settings *settings, unsigned char **bytes, size_t *size) {
+static mr_status libpng_encode(const char *path, int width, int height, int channels, int bits, const void *data,
+                               int srgb_tag, const mr_io_png_settings *settings, unsigned char **bytes, size_t *size) {
     static const int color_types[5] = {0, PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA, PNG_COLOR_TYPE_RGB,
                                        PNG_COLOR_TYPE_RGB_ALPHA};
-    if (width < 1 || height < 1 || channels < 1 || channels > 4 || (bits != 8 && bits != 16) || data == NULL)
-        return mr_fail(MR_ERR_INVALID_ARG, "image '%s': cannot write %dx%d pixels of %d channels at %d bits as PNG",
-                       path, width, height, channels, bits);
     png_session *volatile session = calloc(1, sizeof *session);
     png_structp png = session ? png_create_write_struct(PNG_LIBPNG_VER_STRING, session, on_error, on_warning) : NULL;
     png_infop info = png != NULL ? png_create_info_struct(png) : NULL;
@@ -223,6 +238,21 @@ mr_status mr_io_png_encode(const char *path, int width, int height, int channels
     *size = session->size;
     free(session);
     return MR_OK;
+}
+
+mr_status mr_io_png_encode(const char *path, int width, int height, int channels, int bits, const void *data,
+                           int srgb_tag, const mr_io_png_settings *settings, unsigned char **bytes, size_t *size) {
+    if (width < 1 || height < 1 || channels < 1 || channels > 4 || (bits != 8 && bits != 16) || data == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "image '%s': cannot write %dx%d pixels of %d channels at %d bits as PNG",
+                       path, width, height, channels, bits);
+    const int most = settings->libpng ? 9 : 12;
+    if (settings->level < 0 || settings->level > most || settings->filters == 0 ||
+        (settings->filters & ~MR_IO_PNG_ALL_FILTERS) != 0)
+        return mr_fail(MR_ERR_INVALID_ARG, "image '%s': PNG level %d, filters 0x%x (valid: level 0-%d for %s, "
+                       "filters a non-empty set of 0x08 none, 0x10 sub, 0x20 up, 0x40 average, 0x80 Paeth)", path,
+                       settings->level, (unsigned)settings->filters, most, settings->libpng ? "zlib" : "libdeflate");
+    return (settings->libpng ? libpng_encode : mr_io_png_deflate_encode)(path, width, height, channels, bits, data,
+                                                                          srgb_tag, settings, bytes, size);
 }
 
 mr_status mr_io_png_write(const char *path, int width, int height, int channels, int bits, const void *data,

@@ -12,7 +12,7 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
-#include <zlib.h>
+#include <libdeflate.h>
 
 #include "../mr_internal.h"
 #include "io_internal.h"
@@ -92,7 +92,7 @@ mr_status mr_io_png_palette_read(const unsigned char *bytes, size_t size, const 
             if (length > size - offset - 12)
                 return mr_fail(MR_ERR_FORMAT, "%s: truncated PNG: chunk '%.4s' at byte %zu claims %lu bytes", label,
                                (const char *)type, offset, (unsigned long)length);
-            if (pass == 0 && (uint32_t)crc32(crc32(0L, Z_NULL, 0), type, length + 4) != be32(data + length))
+            if (pass == 0 && libdeflate_crc32(0, type, (size_t)length + 4) != be32(data + length))
                 return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: CRC mismatch in chunk '%.4s' at byte %zu", label,
                                (const char *)type, offset);
             if (memcmp(type, "IDAT", 4) == 0) {
@@ -123,14 +123,20 @@ mr_status mr_io_png_palette_read(const unsigned char *bytes, size_t size, const 
     const size_t row_bytes = ((size_t)out->width * (size_t)depth + 7) / 8;
     const size_t raw_size = (size_t)out->height * (row_bytes + 1);
     unsigned char *raw = malloc(raw_size);
-    uLongf got = (uLongf)raw_size;
-    int z = raw ? uncompress(raw, &got, out->idat, (uLong)idat_size) : Z_MEM_ERROR;
-    if (z != Z_OK || got != raw_size || !unfilter(raw, out->height, row_bytes)) {
+    struct libdeflate_decompressor *inflater = raw ? libdeflate_alloc_decompressor() : NULL;
+    if (inflater == NULL) {
         free(raw);
         mr_io_png_palette_free(out);
-        return z == Z_MEM_ERROR ? mr_fail(MR_ERR_NOMEM, "%s: out of memory for the index stream", label)
-                                : mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: the image data does not inflate to %dx%d "
-                                          "filtered indices", label, out->width, out->height);
+        return mr_fail(MR_ERR_NOMEM, "%s: out of memory for the index stream", label);
+    }
+    size_t got = 0;
+    enum libdeflate_result z = libdeflate_zlib_decompress(inflater, out->idat, idat_size, raw, raw_size, &got);
+    libdeflate_free_decompressor(inflater);
+    if (z != LIBDEFLATE_SUCCESS || got != raw_size || !unfilter(raw, out->height, row_bytes)) {
+        free(raw);
+        mr_io_png_palette_free(out);
+        return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: the image data does not inflate to %dx%d filtered indices",
+                       label, out->width, out->height);
     }
     const int per_byte = 8 / depth, mask = (1 << depth) - 1;
     for (int y = 0; y < out->height; y++) {
@@ -161,7 +167,7 @@ static void put_chunk(unsigned char *buffer, size_t *at, const char *type, const
     put_be32(p, (uint32_t)length);
     memcpy(p + 4, type, 4);
     if (length > 0) memcpy(p + 8, data, length);
-    put_be32(p + 8 + length, (uint32_t)crc32(crc32(0L, Z_NULL, 0), p + 4, (uInt)(length + 4)));
+    put_be32(p + 8 + length, libdeflate_crc32(0, p + 4, length + 4));
     *at += 12 + length;
 }
 
