@@ -251,7 +251,9 @@ static void encoded_texture_release(encoded_texture *e) {
 typedef struct band_context {
     const conversion *cv;
     const sources *src;
-    mr_image *const *images;
+    mr_image *const *images;   /* decoded textures (NULL: none, or read as codes) */
+    const mr_io_codes *codes;  /* [2] 8-bit textures read undecoded (codes NULL: none) */
+    const float *luts[2];      /* a code's value as the reader decodes it: [0] data and alpha, [1] sRGB colour */
     const mr_img_stored *stored;
     int width, height, band_rows;
     const int *need, *channels;
@@ -307,7 +309,8 @@ static mr_status convert_band(const band_context *ctx, int y0, band_work *w, mr_
     b.n = (size_t)rows * (size_t)width;
     for (int i = 0; i < kind->input_count && !cv->opts->exact_inputs; i++) {
         int tex = from->inputs[i].texture;
-        b.stored[i] = mr_wf_quantisation_of(ctx->images[tex] ? &ctx->stored[tex] : NULL, ctx->src->factors[i]);
+        const int present = ctx->images[tex] != NULL || ctx->codes[tex].codes != NULL;
+        b.stored[i] = mr_wf_quantisation_of(present ? &ctx->stored[tex] : NULL, ctx->src->factors[i]);
     }
     // 1. Inputs: factors x texels, in linear values (glTF multiplies them so); the alpha plane first.
     for (int i = -1; i < kind->input_count; i++) {
@@ -315,7 +318,23 @@ static mr_status convert_band(const band_context *ctx, int y0, band_work *w, mr_
         const input_source *in = i < 0 ? &alpha_source : &from->inputs[i];
         const double *factors = i < 0 ? &ctx->src->alpha_factor : ctx->src->factors[i];
         const mr_image *im = ctx->images[in->texture];
+        const mr_io_codes *codes = &ctx->codes[in->texture];
         float *dst = i < 0 ? w->planes : (float *)b.in[i];
+        if (codes->codes != NULL) { // 8-bit samples through the reader's decode, by table (the same floats)
+            const size_t ch = (size_t)codes->channels;
+            const uint8_t *px = codes->codes + (size_t)y0 * (size_t)width * ch;
+            int at[3];
+            const float *lut[3];
+            for (int c = 0; c < in->count; c++) {
+                const int channel = in->first + c, has_alpha = ch == 2 || ch == 4;
+                at[c] = channel == 3 ? (has_alpha ? (int)ch - 1 : -1) : ch < 3 ? 0 : channel;
+                lut[c] = ctx->luts[channel < 3 && ctx->cv->from->encodings[in->texture] == MR_IMG_COLOR];
+            }
+            for (size_t k = 0; k < b.n; k++, px += ch)
+                for (int c = 0; c < in->count; c++)
+                    *dst++ = (float)((at[c] < 0 ? 1.0f : lut[c][px[at[c]]]) * factors[c]);
+            continue;
+        }
         if (im != NULL && im->width == width && im->height == height) { // the common case, without per-value tests
             const size_t ch = (size_t)im->channels;
             const float *px = im->pixels + (size_t)y0 * (size_t)width * ch;
@@ -414,7 +433,8 @@ static void drop_uniform_textures(const mr_transform_kind *kind, const workflow_
 /* Band by band: factors x texels into the input planes, the transform, its outputs into the target's textures
  * (8-bit, or floats for EXR). images[t] NULL = no texture t. */
 static mr_status convert_texels(const conversion *cv, const sources *src, mr_image *const images[2],
-                                const mr_img_stored stored[2], int width, int height, made *mk) {
+                                const mr_io_codes codes[2], const mr_img_stored stored[2], int width, int height,
+                                made *mk) {
     const mr_transform_kind *kind = cv->kind;
     const workflow_side *to = cv->to;
     const int exr = cv->opts->image_format != NULL && strcmp(cv->opts->image_format, "exr") == 0;
@@ -422,9 +442,19 @@ static mr_status convert_texels(const conversion *cv, const sources *src, mr_ima
     // Alpha travels from the source's first texture to the target's (written only when some texel has it; bilinear
     // resampling of alphas that are all 1 gives 1).
     const mr_image *first = images[0];
+    float luts[2][256];
+    for (unsigned q = 0; q < 256; q++) {
+        luts[0][q] = mr_io_decode_code(q, 8, 0);
+        luts[1][q] = mr_io_decode_code(q, 8, 1);
+    }
     mk->has_alpha = (float)src->alpha_factor != 1.0f;
     for (size_t i = 0; first && first->channels == 4 && !mk->has_alpha && i < mr_image_value_count(first) / 4; i++)
         mk->has_alpha = (float)(first->pixels[4 * i + 3] * src->alpha_factor) != 1.0f;
+    const int coded_alpha = codes[0].codes != NULL && (codes[0].channels == 2 || codes[0].channels == 4);
+    for (size_t i = 0; coded_alpha && !mk->has_alpha && i < (size_t)width * (size_t)height; i++) {
+        const uint8_t alpha = codes[0].codes[i * (size_t)codes[0].channels + (size_t)codes[0].channels - 1];
+        mk->has_alpha = (float)(luts[0][alpha] * src->alpha_factor) != 1.0f;
+    }
     int need[2], channels[2];
     void *texels[2] = {NULL, NULL};
     mr_status status = MR_OK;
@@ -441,7 +471,8 @@ static mr_status convert_texels(const conversion *cv, const sources *src, mr_ima
     const int threads = mr_auto_threads(requested, (long)MR_MIN(n, 1u << 30), MR_WF_PARALLEL_TEXELS);
     const int team = MR_MIN(threads, bands);
     char message[1024] = "";
-    band_context ctx = {cv, src, images, stored, width, height, band_rows, need, channels, texels, exr, 1, NULL, NULL};
+    band_context ctx = {cv,    src,        images,   codes,    {luts[0], luts[1]}, stored, width, height,
+                        band_rows, need, channels, texels, exr,    1,     NULL,   NULL};
     for (int j = 0; j < kind->output_count; j++) ctx.values += kind->outputs[j].channels;
     ctx.firsts = malloc((size_t)bands * (size_t)ctx.values * sizeof *ctx.firsts);
     ctx.uniform = malloc((size_t)bands * (size_t)ctx.values);
@@ -750,6 +781,52 @@ static mr_status read_sources(const conversion *cv, const sources *src, mr_image
     return MR_OK;
 }
 
+/* The material's textures as 8-bit codes, undecoded (a quarter of the floats' memory; mr_io_png_deflate_read_codes),
+ * side by side: when every texture is a non-palette 8-bit PNG and all have one size. Returns 0 (nothing kept) when
+ * they are not, else 1 with *status (a decoding failure names the asset, the image and the material). */
+static int read_codes(const conversion *cv, const sources *src, mr_io_codes codes[2], mr_img_stored stored[2],
+                      int *width, int *height, mr_status *status) {
+    mr_gltf_image im[2];
+    for (int t = 0; t < 2; t++) {
+        if (src->refs[t].index < 0) continue;
+        if (src->images[t] < 0 || mr_gltf_get_image(cv->asset, src->images[t], &im[t]) != MR_OK ||
+            im[t].bytes == NULL || im[t].size < 8 || memcmp(im[t].bytes, "\x89PNG", 4) != 0 ||
+            mr_io_png_is_paletted(im[t].bytes, im[t].size))
+            return 0;
+    }
+    mr_status statuses[2] = {MR_OK, MR_OK};
+    int handled[2] = {1, 1};
+    char messages[2][1024] = {"", ""};
+    const int both = src->refs[0].index >= 0 && src->refs[1].index >= 0;
+#pragma omp parallel for schedule(static, 1) num_threads(2) if (both)
+    for (int t = 0; t < 2; t++) {
+        if (src->refs[t].index < 0) continue;
+        char label[600];
+        snprintf(label, sizeof label, "glTF '%s' image %d", mr_gltf_path(cv->asset), src->images[t]);
+        FILE *f = fmemopen((void *)im[t].bytes, im[t].size, "rb");
+        statuses[t] = f ? mr_io_png_deflate_read_codes(f, label, 16384, &codes[t], &handled[t])
+                        : mr_fail(MR_ERR_NOMEM, "%s: cannot open the bytes as a stream", label);
+        if (f != NULL) fclose(f);
+        if (statuses[t] != MR_OK) snprintf(messages[t], sizeof messages[t], "%s", mr_last_error());
+    }
+    const int same_size = !both || (codes[0].width == codes[1].width && codes[0].height == codes[1].height);
+    if (statuses[0] == MR_OK && statuses[1] == MR_OK && (!handled[0] || !handled[1] || !same_size)) {
+        free(codes[0].codes);
+        free(codes[1].codes);
+        memset(codes, 0, 2 * sizeof *codes);
+        return 0; // decoded to floats instead (resampled when the sizes differ)
+    }
+    *status = MR_OK;
+    for (int t = 0; t < 2 && *status == MR_OK; t++)
+        if (statuses[t] != MR_OK)
+            *status = mr_fail(statuses[t], "material %d '%s': %s", cv->material, cv->name, messages[t]);
+    const int t = src->refs[0].index >= 0 ? 0 : 1;
+    *width = codes[t].width;
+    *height = codes[t].height;
+    for (int k = 0; k < 2; k++) stored[k] = (mr_img_stored){8, cv->from->encodings[k]};
+    return 1;
+}
+
 /* Convert material cv->material (unless an earlier one with the same sources did: `cache`). */
 static mr_status convert_material(conversion *cv, made *cache, int *cached, mr_gltf_material_report *r) {
     mr_gltf_material m;
@@ -800,11 +877,15 @@ static mr_status convert_material(conversion *cv, made *cache, int *cached, mr_g
         mr_img_stored stored[2];
         memset(stored, 0, sizeof stored);
         int width = 1, height = 1;
+        mr_io_codes codes[2];
+        memset(codes, 0, sizeof codes);
         const int by_palette = textured && convert_palette(cv, &src, mk, &status);
-        if (by_palette) {
-            // done: a paletted texture converted through its palette
-        } else if ((status = read_sources(cv, &src, images, stored, &width, &height)) == MR_OK && textured) {
-            status = convert_texels(cv, &src, images, stored, width, height, mk);
+        const int by_codes = textured && !by_palette && read_codes(cv, &src, codes, stored, &width, &height, &status);
+        if (by_palette || (by_codes && status != MR_OK)) {
+            // done: a paletted texture converted through its palette (or a failure reading the codes)
+        } else if (by_codes || ((status = read_sources(cv, &src, images, stored, &width, &height)) == MR_OK &&
+                                textured)) {
+            status = convert_texels(cv, &src, images, codes, stored, width, height, mk);
             mk->report.width = width;
             mk->report.height = height;
         } else if (status == MR_OK) { // factors only: one texel
@@ -819,6 +900,8 @@ static mr_status convert_material(conversion *cv, made *cache, int *cached, mr_g
         }
         mr_image_free(images[0]);
         mr_image_free(images[1]);
+        free(codes[0].codes);
+        free(codes[1].codes);
         if (status != MR_OK) {
             (*cached)--;
             return status;

@@ -10,6 +10,7 @@
 #include "matremap.h"
 
 #define DUCK "specgloss/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Duck.gltf"
+#define FLOPPY "specgloss/FloppyDisk-sketchfab/scene.gltf"
 #define TRUCK "specgloss/CesiumMilkTruck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/CesiumMilkTruck.gltf"
 
 static mr_transform *make_transform(const char *source, const char *target, const char *name) {
@@ -19,71 +20,84 @@ static mr_transform *make_transform(const char *source, const char *target, cons
     return t;
 }
 
-/* The Duck (512², a paletted diffuse texture, specular and glossiness factors) through `weighted`: the new base
- * colour and metallic-roughness textures (made by converting the palette) hold exactly the 8-bit codes of
- * mr_wf_spec_to_metal_batch's answers texel by texel, as the image writer would store them. */
-MR_TEST(duck_textures_hold_the_converters_answers) {
+/* Asset `rel` (one spec-gloss material, textures of one size) through `weighted`: the new base colour and
+ * metallic-roughness textures hold exactly the 8-bit codes of mr_wf_spec_to_metal_batch's answers texel by texel
+ * (inputs decoded to floats by the image reader, factors applied as glTF says), as the image writer stores them.
+ * Whichever route the conversion took (palette, 8-bit codes, floats) must give these. */
+static void check_codes_against_the_batch(const char *rel, int size) {
     mr_gltf *asset = NULL;
     mr_transform *t = make_transform("gltf-specgloss", "gltf", "weighted");
-    MR_CHECK(mr_gltf_load(mr_test_asset_path(DUCK), &asset) == MR_OK);
+    MR_CHECK(mr_gltf_load(mr_test_asset_path(rel), &asset) == MR_OK);
     if (asset == NULL || t == NULL) return;
-    mr_gltf_material before;
+    mr_gltf_material before, after;
     MR_CHECK(mr_gltf_get_material(asset, 0, &before) == MR_OK);
-    mr_image *diffuse = NULL;
-    mr_img_stored stored;
-    MR_CHECK(mr_gltf_texture_read(asset, before.diffuse_texture.index, NULL, &diffuse, &stored) == MR_OK);
+    mr_image *tex[2] = {NULL, NULL}, *base = NULL, *mr = NULL;
+    mr_img_stored stored[2];
+    const mr_gltf_texture_ref *refs[2] = {&before.diffuse_texture, &before.specular_glossiness_texture};
+    for (int k = 0; k < 2; k++)
+        if (refs[k]->index >= 0) MR_CHECK(mr_gltf_texture_read(asset, refs[k]->index, NULL, &tex[k], &stored[k]) == 0);
     mr_gltf_convert_options o = {0};
     o.transform = t;
     o.overwrite = 1;
     mr_gltf_material_report report;
     MR_CHECK(mr_gltf_convert(asset, &o, &report) == MR_OK);
-    MR_CHECK(report.outcome == MR_GLTF_CONVERTED && report.width == 512 && report.height == 512);
-    mr_gltf_material after;
+    MR_CHECK(report.outcome == MR_GLTF_CONVERTED && report.width == size && report.height == size);
     MR_CHECK(mr_gltf_get_material(asset, 0, &after) == MR_OK);
     MR_CHECK(!after.has_spec_gloss && after.base_color_texture.index >= 0 &&
              after.metallic_roughness_texture.index >= 0);
-    mr_image *base = NULL, *mr = NULL;
     mr_img_read_options data = {0};
-    data.encoding = MR_IMG_DATA;
-    MR_CHECK(mr_gltf_texture_read(asset, after.base_color_texture.index, &data, &base, NULL) == MR_OK); // codes
+    data.encoding = MR_IMG_DATA; // the stored codes
+    MR_CHECK(mr_gltf_texture_read(asset, after.base_color_texture.index, &data, &base, NULL) == MR_OK);
     MR_CHECK(mr_gltf_texture_read(asset, after.metallic_roughness_texture.index, &data, &mr, NULL) == MR_OK);
-    if (diffuse != NULL && base != NULL && mr != NULL) {
-        const size_t n = 512 * 512;
-        float *d = malloc(3 * n * sizeof *d), *s = calloc(3 * n, sizeof *s), *r = malloc(n * sizeof *r);
-        float *a = malloc(3 * n * sizeof *a), *m = malloc(n * sizeof *m);
-        for (size_t i = 0; i < n; i++) {
-            for (int c = 0; c < 3; c++) {
-                d[3 * i + c] = (float)(diffuse->pixels[i * (size_t)diffuse->channels + (size_t)c] *
-                                       before.diffuse_factor[c]);
-                s[3 * i + c] = (float)(1.0f * before.specular_factor[c]);
-            }
-            r[i] = (float)(1.0 - 1.0f * before.glossiness_factor);
+    const size_t n = (size_t)size * (size_t)size;
+    float *d = malloc(3 * n * sizeof *d), *s = malloc(3 * n * sizeof *s), *r = malloc(n * sizeof *r);
+    float *a = malloc(3 * n * sizeof *a), *m = malloc(n * sizeof *m);
+    for (size_t i = 0; base != NULL && mr != NULL && i < n; i++) {
+        float px[2][4] = {{1, 1, 1, 1}, {1, 1, 1, 1}};
+        for (int k = 0; k < 2; k++)
+            for (int c = 0; tex[k] != NULL && c < 4; c++)
+                px[k][c] = c == 3 ? (tex[k]->channels == 4 ? tex[k]->pixels[4 * i + 3] : 1.0f)
+                                  : tex[k]->pixels[i * (size_t)tex[k]->channels + (tex[k]->channels < 3 ? 0 : c)];
+        for (int c = 0; c < 3; c++) {
+            d[3 * i + c] = (float)(px[0][c] * before.diffuse_factor[c]);
+            s[3 * i + c] = (float)(px[1][c] * before.specular_factor[c]);
         }
-        mr_wf_options w = mr_wf_options_default();
-        w.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
-        w.diffuse_quantisation = mr_wf_quantisation_of(&stored, before.diffuse_factor);
-        MR_CHECK(mr_wf_spec_to_metal_batch(&(mr_wf_spec_input){d, s, r}, n, &w, &(mr_wf_metal_maps){a, m, r}, NULL) ==
-                 MR_OK);
-        mr_srgb8_init();
-        size_t wrong_colour = 0, wrong_data = 0;
-        for (size_t i = 0; i < n; i++) {
-            for (int c = 0; c < 3; c++) {
-                const long code = lrint(base->pixels[(size_t)base->channels * i + c] * 255.0);
-                wrong_colour += code != mr_srgb8_encode(a[3 * i + c]);
-            }
-            wrong_data += lrint(mr->pixels[3 * i + 2] * 255.0) != lrint(fmin(fmax(m[i], 0.0f), 1.0f) * 255.0);
-            wrong_data += lrint(mr->pixels[3 * i + 1] * 255.0) != lrint(fmin(fmax(r[i], 0.0f), 1.0f) * 255.0);
-        }
-        MR_CHECK_MSG(wrong_colour == 0, "%zu base colour codes differ", wrong_colour);
-        MR_CHECK_MSG(wrong_data == 0, "%zu metallic or roughness codes differ", wrong_data);
-        free(d), free(s), free(r), free(a), free(m);
+        r[i] = 1.0f - (float)(px[1][3] * before.glossiness_factor);
     }
-    mr_image_free(diffuse);
+    mr_wf_options w = mr_wf_options_default();
+    w.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
+    if (tex[0] != NULL) w.diffuse_quantisation = mr_wf_quantisation_of(&stored[0], before.diffuse_factor);
+    if (tex[1] != NULL) w.specular_quantisation = mr_wf_quantisation_of(&stored[1], before.specular_factor);
+    MR_CHECK(mr_wf_spec_to_metal_batch(&(mr_wf_spec_input){d, s, r}, n, &w, &(mr_wf_metal_maps){a, m, r}, NULL) ==
+             MR_OK);
+    mr_srgb8_init();
+    size_t wrong_colour = 0, wrong_data = 0;
+    for (size_t i = 0; base != NULL && mr != NULL && i < n; i++) {
+        for (int c = 0; c < 3; c++) {
+            const long code = lrint(base->pixels[(size_t)base->channels * i + c] * 255.0);
+            wrong_colour += code != mr_srgb8_encode(a[3 * i + c]);
+        }
+        wrong_data += lrint(mr->pixels[3 * i + 2] * 255.0) != (long)floor(fmin(fmax(m[i], 0.0f), 1.0f) * 255.0 + 0.5);
+        wrong_data += lrint(mr->pixels[3 * i + 1] * 255.0) != (long)floor(fmin(fmax(r[i], 0.0f), 1.0f) * 255.0 + 0.5);
+    }
+    MR_CHECK_MSG(wrong_colour == 0, "%s: %zu base colour codes differ", rel, wrong_colour);
+    MR_CHECK_MSG(wrong_data == 0, "%s: %zu metallic or roughness codes differ", rel, wrong_data);
+    free(d), free(s), free(r), free(a), free(m);
+    mr_image_free(tex[0]);
+    mr_image_free(tex[1]);
     mr_image_free(base);
     mr_image_free(mr);
     mr_gltf_free(asset);
     mr_transform_free(t);
 }
+
+/* The Duck (512²): a paletted diffuse texture beside specular and glossiness factors, converted through its
+ * palette. */
+MR_TEST(duck_palette_route_gives_the_converters_codes) { check_codes_against_the_batch(DUCK, 512); }
+
+/* The FloppyDisk (2048²): RGB diffuse and RGBA specular-glossiness textures under factors, converted from their
+ * 8-bit codes. */
+MR_TEST(floppy_code_route_gives_the_converters_codes) { check_codes_against_the_batch(FLOPPY, 2048); }
 
 /* The CesiumMilkTruck: 'truck' and 'wheels' use two textures of one image with the same factors (one conversion,
  * shared textures); 'glass' has factors only. */
@@ -161,7 +175,8 @@ MR_TEST(bad_options_are_refused) {
     mr_gltf_free(asset);
 }
 
-MR_TEST_MAIN(MR_TEST_ENTRY(duck_textures_hold_the_converters_answers),
+MR_TEST_MAIN(MR_TEST_ENTRY(duck_palette_route_gives_the_converters_codes),
+             MR_TEST_ENTRY(floppy_code_route_gives_the_converters_codes),
              MR_TEST_ENTRY(truck_materials_share_a_conversion),
              MR_TEST_ENTRY(extension_route_reuses_textures_and_makes_factors),
              MR_TEST_ENTRY(bad_options_are_refused))

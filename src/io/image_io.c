@@ -124,8 +124,8 @@ static float decode_value(float v, const float *lut, int bits, double max_code) 
 
 float mr_io_decode_code(unsigned code, int bits, int srgb) {
     const double max_code = bits == 16 ? 65535.0 : 255.0;
-    // Data: the decoders' own scaling (png_io.c multiplies by 1 / max_code in float).
-    if (!srgb) return (float)code * (float)(1.0 / max_code);
+    // Data: the decoders' own scaling (png_io.c and png_deflate.c multiply by 1 / max_code computed in float).
+    if (!srgb) return (float)code * (bits == 16 ? 1.0f / 65535.0f : 1.0f / 255.0f);
     return mr_srgb_to_linear((float)((double)code / max_code));
 }
 

@@ -20,6 +20,7 @@
 #define MR_IO_INTERNAL_H
 
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 
 #include "../mr_status.h"
@@ -146,6 +147,19 @@ mr_status mr_io_png_read_stream_libpng(FILE *file, const char *label, int max_di
  * (max_dimension, memory); *handled = 0 (status MR_OK, *raw untouched) when the file is one it leaves to libpng,
  * the stream then somewhere after its start. */
 mr_status mr_io_png_deflate_read(FILE *file, const char *label, int max_dimension, mr_io_raw *raw, int *handled);
+
+/* An 8-bit image's stored samples, undecoded: what a texture conversion reads (a quarter of the floats' memory). */
+typedef struct mr_io_codes {
+    int width, height;
+    int channels;   /* the stored layout: 1 grey, 2 grey + alpha, 3 RGB, 4 RGBA */
+    uint8_t *codes; /* width * height * channels, top-left first; malloc'ed, the caller frees it */
+} mr_io_codes;
+
+/* The same decoder, giving the codes of an 8-bit non-palette PNG without a tRNS key (*handled = 1, or a status of
+ * its own); *handled = 0 for any other PNG (then decode it to floats). mr_io_decode_code gives a code's value as
+ * the readers decode it. */
+mr_status mr_io_png_deflate_read_codes(FILE *file, const char *label, int max_dimension, mr_io_codes *codes,
+                                       int *handled);
 
 /* How the PNG writer compresses. `filters` is a set of PNG filter types (§9 of the PNG spec; the bits of libpng's
  * PNG_FILTER_*): one type filters every row; several choose per row the one whose bytes, read as signed, have

@@ -465,42 +465,41 @@ static int read_chunks(FILE *file, const char *label, int max_dimension, png_inf
     }
 }
 
-mr_status mr_io_png_deflate_read(FILE *file, const char *label, int max_dimension, mr_io_raw *raw, int *handled) {
-    *handled = 0;
+/* The decoder's common part: the chunks, the inflated and unfiltered rows (*rows: row y's samples at
+ * *rows + y * (row_bytes + 1), without its filter byte at the start of each stride; freed by the caller) and *info.
+ * Returns 1 when it decoded them or failed with a status of its own (*status), 0 when the file is one it leaves to
+ * libpng. */
+static int decode_rows(FILE *file, const char *label, int max_dimension, png_info **info_out, uint8_t **rows_out,
+                       mr_status *status) {
+    *status = MR_OK;
+    *rows_out = NULL;
+    *info_out = NULL;
     unsigned char head[8];
-    if (!read_exact(file, head, 8) || memcmp(head, signature, 8) != 0) return MR_OK;
+    if (!read_exact(file, head, 8) || memcmp(head, signature, 8) != 0) return 0;
     png_info *info = calloc(1, sizeof *info);
-    if (info == NULL) return MR_OK; // libpng will say it has no memory either
+    if (info == NULL) return 0; // libpng will say it has no memory either
     unsigned char *idat = NULL;
     size_t idat_size = 0;
-    mr_status status = MR_OK;
-    if (!read_chunks(file, label, max_dimension, info, &idat, &idat_size, &status) || status != MR_OK) {
-        *handled = status != MR_OK;
+    if (!read_chunks(file, label, max_dimension, info, &idat, &idat_size, status) || *status != MR_OK) {
         free(idat);
         free(info);
-        return status;
+        return *status != MR_OK;
     }
-    const int channels = info->colour == 3 ? (info->trns ? 4 : 3) : info->samples + (info->trns != 0);
-    const int bits = info->depth == 16 ? 16 : 8;
     const size_t stride = info->row_bytes + 1, inflated = stride * info->height;
-    const size_t values = (size_t)info->width * info->height * (size_t)channels;
     if (inflated / 1032 > idat_size) { // deflate expands at most 1032-fold (258 bytes for 2 bits): libpng says why
         free(idat);
         free(info);
-        return MR_OK;
+        return 0;
     }
     uint8_t *rows = malloc(inflated + info->row_bytes); // and a row of zeros above the first (§9.2)
-    float *pixels = rows != NULL ? malloc(values * sizeof *pixels) : NULL;
-    struct libdeflate_decompressor *inflater = pixels != NULL ? libdeflate_alloc_decompressor() : NULL;
+    struct libdeflate_decompressor *inflater = rows != NULL ? libdeflate_alloc_decompressor() : NULL;
     if (inflater == NULL) {
-        status = mr_fail(MR_ERR_NOMEM, "%s: out of memory for %lux%lu pixels", label, (unsigned long)info->width,
-                         (unsigned long)info->height);
+        *status = mr_fail(MR_ERR_NOMEM, "%s: out of memory for %lux%lu pixels", label, (unsigned long)info->width,
+                          (unsigned long)info->height);
         free(rows);
-        free(pixels);
         free(idat);
         free(info);
-        *handled = 1;
-        return status;
+        return 1;
     }
     // Exactly the image's bytes, or libpng decides (it takes, with a warning, a stream holding more than the image,
     // and one whose Adler-32 is wrong: it reads that only after the last row).
@@ -509,36 +508,81 @@ mr_status mr_io_png_deflate_read(FILE *file, const char *label, int max_dimensio
     libdeflate_free_decompressor(inflater);
     free(idat);
     int ok = result == LIBDEFLATE_SUCCESS;
-    if (ok) {
-        float lut8[256], pal[256 * 4];
-        for (int i = 0; i < 256; i++) lut8[i] = (float)i * (1.0f / 255.0f); // as png_io.c scales
-        // libpng keeps 256 palette entries, zero beyond PLTE's, and alpha 255 beyond tRNS's.
-        for (int i = 0; i < 256; i++) {
-            for (int k = 0; k < 3; k++) pal[4 * i + k] = i < info->palette_size ? lut8[info->palette[i][k]] : 0.0f;
-            pal[4 * i + 3] = lut8[i < info->trns ? info->trns_alpha[i] : 255];
-        }
-        memset(rows, 0, info->row_bytes);
-        const size_t out_row = (size_t)info->width * (size_t)channels;
-        for (uint32_t y = 0; y < info->height && ok; y++) {
-            uint8_t *row = rows + info->row_bytes + (size_t)y * stride;
-            const uint8_t *prev = y > 0 ? row - stride + 1 : rows;
-            ok = unfilter_row(row[0], row + 1, prev, info->row_bytes, info->bpp); // in place
-            if (ok) row_to_floats(info, row + 1, lut8, pal, pixels + (size_t)y * out_row);
-        }
+    memset(rows, 0, info->row_bytes);
+    for (uint32_t y = 0; y < info->height && ok; y++) {
+        uint8_t *row = rows + info->row_bytes + (size_t)y * stride;
+        const uint8_t *prev = y > 0 ? row - stride + 1 : rows;
+        ok = unfilter_row(row[0], row + 1, prev, info->row_bytes, info->bpp); // in place
     }
-    free(rows);
     if (!ok) { // not zlib data of exactly the image's size, or a filter type outside 0-4: libpng decides
-        free(pixels);
+        free(rows);
         free(info);
-        return MR_OK;
+        return 0;
     }
+    *rows_out = rows;
+    *info_out = info;
+    return 1;
+}
+
+mr_status mr_io_png_deflate_read(FILE *file, const char *label, int max_dimension, mr_io_raw *raw, int *handled) {
+    png_info *info = NULL;
+    uint8_t *rows = NULL;
+    mr_status status = MR_OK;
+    *handled = decode_rows(file, label, max_dimension, &info, &rows, &status);
+    if (!*handled || status != MR_OK) return status;
+    const int channels = info->colour == 3 ? (info->trns ? 4 : 3) : info->samples + (info->trns != 0);
+    const size_t values = (size_t)info->width * info->height * (size_t)channels;
+    float *pixels = malloc(values * sizeof *pixels);
+    if (pixels == NULL) {
+        status = mr_fail(MR_ERR_NOMEM, "%s: out of memory for %lux%lu pixels", label, (unsigned long)info->width,
+                         (unsigned long)info->height);
+        free(rows);
+        free(info);
+        return status;
+    }
+    float lut8[256], pal[256 * 4];
+    for (int i = 0; i < 256; i++) lut8[i] = (float)i * (1.0f / 255.0f); // as png_io.c scales
+    // libpng keeps 256 palette entries, zero beyond PLTE's, and alpha 255 beyond tRNS's.
+    for (int i = 0; i < 256; i++) {
+        for (int k = 0; k < 3; k++) pal[4 * i + k] = i < info->palette_size ? lut8[info->palette[i][k]] : 0.0f;
+        pal[4 * i + 3] = lut8[i < info->trns ? info->trns_alpha[i] : 255];
+    }
+    const size_t stride = info->row_bytes + 1, out_row = (size_t)info->width * (size_t)channels;
+    for (uint32_t y = 0; y < info->height; y++)
+        row_to_floats(info, rows + info->row_bytes + (size_t)y * stride + 1, lut8, pal, pixels + (size_t)y * out_row);
+    free(rows);
     raw->width = (int)info->width;
     raw->height = (int)info->height;
     raw->channels = channels;
     raw->encoded = 1;
-    raw->bits = bits;
+    raw->bits = info->depth == 16 ? 16 : 8;
     raw->pixels = pixels;
     free(info);
-    *handled = 1;
+    return MR_OK;
+}
+
+mr_status mr_io_png_deflate_read_codes(FILE *file, const char *label, int max_dimension, mr_io_codes *codes,
+                                       int *handled) {
+    png_info *info = NULL;
+    uint8_t *rows = NULL;
+    mr_status status = MR_OK;
+    *handled = decode_rows(file, label, max_dimension, &info, &rows, &status);
+    if (!*handled || status != MR_OK) return status;
+    // 8-bit grey, grey + alpha, RGB or RGBA without a tRNS key: the samples are the codes. Others are left to
+    // mr_io_png_deflate_read (*handled = 0).
+    if (info->depth != 8 || info->colour == 3 || info->trns) {
+        *handled = 0;
+        free(rows);
+        free(info);
+        return MR_OK;
+    }
+    const size_t stride = info->row_bytes + 1;
+    for (uint32_t y = 0; y < info->height; y++) // the rows packed together, over the filter bytes
+        memmove(rows + (size_t)y * info->row_bytes, rows + info->row_bytes + (size_t)y * stride + 1, info->row_bytes);
+    codes->width = (int)info->width;
+    codes->height = (int)info->height;
+    codes->channels = info->samples;
+    codes->codes = rows;
+    free(info);
     return MR_OK;
 }
