@@ -148,6 +148,14 @@ static inline const char *mr_test_tmp_path(const char *name) {
 
 /* The path of `rel` among the shared test assets: $MR_SHARED/assets/rel, or ../shared/assets/rel (the project root
  * is the working folder of `make check`). From a ring of 8 buffers. */
+/* Write n bytes to `path` (created or truncated); 1 on success. */
+static inline int mr_test_write_file(const char *path, const void *data, size_t n) {
+    FILE *f = fopen(path, "wb");
+    if (f == NULL) return 0;
+    int ok = fwrite(data, 1, n, f) == n;
+    return fclose(f) == 0 && ok;
+}
+
 static inline const char *mr_test_asset_path(const char *rel) {
     static char paths[8][1024];
     static int slot;
