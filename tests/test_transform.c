@@ -178,8 +178,55 @@ MR_TEST(bad_options_are_refused) {
     MR_CHECK(strstr(mr_last_error(), "no-such-file.bin") != NULL);
 }
 
+/* Texture-set conversion: maps (images and constants, a roughness map complemented into the glossiness slot) give
+ * each texel what mr_transform_apply_values gives it; maps of different sizes and missing channels are refused. */
+MR_TEST(maps_convert_texel_by_texel) {
+    mr_transform *t = NULL;
+    MR_CHECK(mr_transform_create(mr_transform_find("gltf-specgloss", "gltf", "weighted"), NULL, &t) == MR_OK);
+    mr_image *diffuse = NULL, *rough = NULL, *small = NULL;
+    MR_CHECK(mr_image_create(3, 2, 3, &diffuse) == MR_OK && mr_image_create(3, 2, 1, &rough) == MR_OK &&
+             mr_image_create(2, 2, 1, &small) == MR_OK);
+    if (t == NULL || diffuse == NULL || rough == NULL || small == NULL) return;
+    for (int k = 0; k < 18; k++) diffuse->pixels[k] = (float)(k % 7) / 7.0f;
+    for (int k = 0; k < 6; k++) rough->pixels[k] = (float)k / 5.0f;
+    mr_transform_map in[3] = {{diffuse, 0, 0, {0, 0, 0}, {0, 0, {1, 1, 1}}},
+                              {NULL, 0, 0, {0.5, 0.3, 0.04}, {0, 0, {1, 1, 1}}},
+                              {rough, 0, 1, {0, 0, 0}, {0, 0, {1, 1, 1}}}};
+    mr_image *out[3] = {NULL, NULL, NULL};
+    uint8_t *flags = NULL;
+    MR_CHECK(mr_transform_convert_maps(t, in, out, &flags) == MR_OK);
+    for (int k = 0; out[0] != NULL && k < 6; k++) {
+        double texel[7] = {diffuse->pixels[3 * k], diffuse->pixels[3 * k + 1], diffuse->pixels[3 * k + 2], 0.5, 0.3,
+                           0.04, 1.0f - rough->pixels[k]};
+        double expected[5];
+        unsigned f = 0;
+        MR_CHECK(mr_transform_apply_values(t, texel, expected, &f) == MR_OK);
+        for (int c = 0; c < 3; c++) MR_CHECK(out[0]->pixels[3 * k + c] == (float)expected[c]);
+        MR_CHECK(out[1]->pixels[k] == (float)expected[3] && out[2]->pixels[k] == (float)expected[4]);
+        MR_CHECK(flags[k] == f);
+    }
+    MR_CHECK(out[0] != NULL && out[0]->width == 3 && out[0]->height == 2 && out[1]->channels == 1);
+    for (int j = 0; j < 3; j++) {
+        mr_image_free(out[j]);
+        out[j] = NULL;
+    }
+    free(flags);
+    in[2].image = small;
+    MR_CHECK(mr_transform_convert_maps(t, in, out, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strstr(mr_last_error(), "'glossiness' is 2x2") != NULL, "%s", mr_last_error());
+    in[2].image = rough;
+    in[2].channel = 2;
+    MR_CHECK(mr_transform_convert_maps(t, in, out, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "channel 2") != NULL && out[0] == NULL);
+    mr_image_free(diffuse);
+    mr_image_free(rough);
+    mr_image_free(small);
+    mr_transform_free(t);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(kinds_name_model_parameters),
              MR_TEST_ENTRY(repeated_values_give_the_per_texel_bits),
              MR_TEST_ENTRY(extension_route_moves_values),
              MR_TEST_ENTRY(eq2_and_eq3_invert_each_other),
-             MR_TEST_ENTRY(bad_options_are_refused))
+             MR_TEST_ENTRY(bad_options_are_refused),
+             MR_TEST_ENTRY(maps_convert_texel_by_texel))

@@ -161,15 +161,6 @@ static int read_maps(const char *command, map_arg *const *maps, int count, int *
     return CLI_EXIT_OK;
 }
 
-/* n texels of RGB, interleaved: the map's colour channels (grey broadcast) or its constant. */
-static void fill_rgb(const map_arg *m, size_t n, float *dst) {
-    const mr_image *im = m->image;
-    for (size_t i = 0; i < n; i++)
-        for (int c = 0; c < 3; c++)
-            dst[3 * i + (size_t)c] = im ? im->pixels[i * (size_t)im->channels + (im->channels == 1 ? 0 : (size_t)c)]
-                                        : (float)m->constant[c];
-}
-
 /* n texels of one channel of the map (a data map's first) or its constant. */
 static void fill_channel(const map_arg *m, int channel, size_t n, float *dst) {
     const mr_image *im = m->image;
@@ -771,47 +762,35 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
     int width = 1, height = 1;
     if (code == CLI_EXIT_OK) code = read_maps(command, cv->maps, cv->map_count, &width, &height);
     const size_t n = (size_t)width * (size_t)height;
-    mr_transform_batch b = {0};
-    float *planes[2 * MR_TRANSFORM_MAX_SLOTS] = {NULL}, *alpha = NULL;
+    mr_transform_map in[MR_TRANSFORM_MAX_SLOTS];
+    mr_image *converted[MR_TRANSFORM_MAX_SLOTS] = {NULL};
+    float *alpha = NULL;
     uint8_t *flags = NULL;
     int failed = 0;
     if (code == CLI_EXIT_OK) {
-        for (int i = 0; i < kind->input_count; i++)
-            failed |= (planes[i] = malloc(n * (size_t)kind->inputs[i].channels * sizeof(float))) == NULL;
-        for (int j = 0; j < kind->output_count; j++)
-            failed |= (planes[kind->input_count + j] = malloc(n * (size_t)kind->outputs[j].channels * sizeof(float)))
-                      == NULL;
-        failed |= (flags = malloc(n)) == NULL;
         alpha = take_alpha(cv->maps[0], n, &failed);
         if (failed) {
             fprintf(stderr, "matremap %s: error: out of memory for %dx%d texels\n", command, width, height);
             code = CLI_EXIT_INTERNAL;
         }
-    }
-    if (code == CLI_EXIT_OK) {
-        b.n = n;
-        b.flags = flags;
         for (int i = 0; i < kind->input_count; i++) {
             const slot_source *from = &cv->inputs[i];
             const map_arg *map = cv->maps[from->map];
-            if (from->channel < 0)
-                fill_rgb(map, n, planes[i]);
-            else
-                fill_channel(map, from->channel, n, planes[i]);
-            // NaN and infinities stay non-finite: the transform reads them (flagged) as its slot says.
-            for (size_t k = 0; from->complement && k < n; k++) planes[i][k] = 1.0f - planes[i][k];
-            b.in[i] = planes[i];
+            // NaN and infinities stay non-finite through the complement: the transform reads them (flagged).
+            in[i] = (mr_transform_map){map->image, from->channel < 0 ? 0 : from->channel, from->complement,
+                                       {map->constant[0], map->constant[1], map->constant[2]},
+                                       {0, 0, {1.0, 1.0, 1.0}}};
             if (!eps_given) // each value known to half a code of its file (workflow.h, "Tolerances")
-                b.stored[i] = mr_wf_quantisation_of(is_file(map) ? &map->stored : NULL, NULL);
+                in[i].stored = mr_wf_quantisation_of(is_file(map) ? &map->stored : NULL, NULL);
         }
-        for (int j = 0; j < kind->output_count; j++) b.out[j] = planes[kind->input_count + j];
-        free_maps(cv->maps, cv->map_count);
     }
     seconds[0] = cli_now() - started;
 
-    // Convert.
+    // Convert: the library's texture-set conversion.
     started = cli_now();
-    if (code == CLI_EXIT_OK && (status = mr_transform_apply(t, &b)) != MR_OK) code = cli_fail(command, status);
+    if (code == CLI_EXIT_OK && (status = mr_transform_convert_maps(t, in, converted, &flags)) != MR_OK)
+        code = cli_fail(command, status);
+    free_maps(cv->maps, cv->map_count);
     seconds[1] = cli_now() - started;
 
     // Write.
@@ -825,7 +804,7 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
                 int j = lay->slot[c];
                 p[c] = j == LAYOUT_ALPHA ? (plane){alpha, 1, 0}
                        : j == LAYOUT_ZERO ? (plane){NULL, 1, 0}
-                                          : (plane){b.out[j], kind->outputs[j].channels, lay->channel[c]};
+                                          : (plane){converted[j]->pixels, kind->outputs[j].channels, lay->channel[c]};
             }
             status = compose(width, height, channels, p, 0.0f, &outputs[l].image);
             outputs[l].encoding = lay->encoding;
@@ -846,14 +825,15 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
                      (kind->flags & MR_TRANSFORM_TOLERANCES) ||
                          (convention && m->convention == MR_WF_DIFFUSE_SPECGLOSS && strcmp(command, "metal2spec") == 0),
                      width, height, {seconds[0], seconds[1], seconds[2]}, flags,
-                     {{cv->layouts[0].name, b.out[0], 3}, {cv->layouts[1].name, b.out[1], kind->outputs[1].channels},
-                      {cv->layouts[2].name, b.out[2], 1}},
+                     {{cv->layouts[0].name, converted[0]->pixels, 3},
+                      {cv->layouts[1].name, converted[1]->pixels, kind->outputs[1].channels},
+                      {cv->layouts[2].name, converted[2]->pixels, 1}},
                      !eps_given, eps};
         print_summary(&s, o, outputs, output_count);
     }
     free_outputs(outputs, MAX_OUTPUTS);
     free_maps(cv->maps, cv->map_count);
-    for (int k = 0; k < 2 * MR_TRANSFORM_MAX_SLOTS; k++) free(planes[k]);
+    for (int j = 0; j < MR_TRANSFORM_MAX_SLOTS; j++) mr_image_free(converted[j]);
     free(alpha);
     free(flags);
     mr_transform_free(t);

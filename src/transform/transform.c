@@ -365,6 +365,75 @@ mr_status mr_transform_apply(const mr_transform *t, const mr_transform_batch *b)
     return status;
 }
 
+mr_status mr_transform_convert_maps(const mr_transform *t, const mr_transform_map *in, mr_image **out,
+                                    uint8_t **flags_out) {
+    if (t == NULL || in == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "transform: NULL argument");
+    const mr_transform_kind *kind = t->kind;
+    // The grid: the images' one size (1 x 1 for constants alone).
+    int width = 1, height = 1, sized = -1;
+    for (int i = 0; i < kind->input_count; i++) {
+        const mr_image *im = in[i].image;
+        if (im == NULL) continue;
+        if (sized >= 0 && (im->width != width || im->height != height))
+            return mr_fail(MR_ERR_INVALID_ARG, "transform %s: map '%s' is %dx%d but map '%s' is %dx%d", kind->name,
+                           kind->inputs[i].name, im->width, im->height, kind->inputs[sized].name, width, height);
+        const int channel = kind->inputs[i].channels == 3 ? (im->channels == 1 ? 0 : 2) : in[i].channel;
+        if (channel < 0 || channel >= im->channels)
+            return mr_fail(MR_ERR_INVALID_ARG, "transform %s: map '%s' has %d channel%s; channel %d was asked for",
+                           kind->name, kind->inputs[i].name, im->channels, im->channels == 1 ? "" : "s", channel);
+        width = im->width;
+        height = im->height;
+        sized = i;
+    }
+    const size_t n = (size_t)width * (size_t)height;
+    float *planes[MR_TRANSFORM_MAX_SLOTS] = {NULL};
+    uint8_t *flags = malloc(n);
+    mr_status status = flags != NULL ? MR_OK : MR_ERR_NOMEM;
+    for (int j = 0; j < kind->output_count; j++) out[j] = NULL;
+    for (int j = 0; j < kind->output_count && status == MR_OK; j++)
+        status = mr_image_create(width, height, kind->outputs[j].channels, &out[j]);
+    mr_transform_batch b = {0};
+    for (int i = 0; i < kind->input_count && status == MR_OK; i++) {
+        const int ch = kind->inputs[i].channels;
+        float *p = planes[i] = malloc(n * (size_t)ch * sizeof *p);
+        if (p == NULL) {
+            status = MR_ERR_NOMEM;
+            break;
+        }
+        const mr_image *im = in[i].image;
+        for (size_t k = 0; k < n; k++)
+            for (int c = 0; c < ch; c++) {
+                const int from = ch == 3 ? (im && im->channels == 1 ? 0 : c) : in[i].channel;
+                const float v = im ? im->pixels[k * (size_t)im->channels + (size_t)from] : (float)in[i].value[c];
+                p[k * (size_t)ch + (size_t)c] = in[i].complement ? 1.0f - v : v;
+            }
+        b.in[i] = p;
+        b.stored[i] = in[i].stored;
+    }
+    if (status == MR_OK) {
+        b.n = n;
+        b.flags = flags;
+        for (int j = 0; j < kind->output_count; j++) b.out[j] = out[j]->pixels;
+        status = mr_transform_apply(t, &b);
+    } else {
+        status = mr_fail(status, "transform %s: out of memory for %dx%d texels", kind->name, width, height);
+    }
+    for (int i = 0; i < kind->input_count; i++) free(planes[i]);
+    if (status != MR_OK) {
+        for (int j = 0; j < kind->output_count; j++) {
+            mr_image_free(out[j]);
+            out[j] = NULL;
+        }
+        free(flags);
+        return status;
+    }
+    if (flags_out != NULL)
+        *flags_out = flags;
+    else
+        free(flags);
+    return MR_OK;
+}
+
 mr_status mr_transform_apply_values(const mr_transform *t, const double *in, double *out, unsigned *flags) {
     if (t == NULL || in == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "transform: NULL argument");
     const mr_transform_kind *kind = t->kind;

@@ -36,6 +36,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "../mr_image.h"
 #include "../mr_status.h"
 #include "../workflow/workflow.h"
 
@@ -151,6 +152,26 @@ const char *mr_transform_network_path(const mr_transform *t);
 /* Convert b->n texels (n = 0 is a no-op). MR_ERR_INVALID_ARG for a NULL required input plane. Deterministic for
  * any thread count. */
 mr_status mr_transform_apply(const mr_transform *t, const mr_transform_batch *b);
+
+/* ---- texture sets ---- */
+
+/* One input map of a texture-set conversion: an image or a constant. */
+typedef struct mr_transform_map {
+    const mr_image *image;     /* NULL: `value` everywhere. Images of one conversion share one size */
+    int channel;               /* 1-channel slots: the image channel read (0 for a grey image); RGB slots read
+                                  channels 0-2 (a grey image's one channel broadcast) */
+    int complement;            /* 1: 1 - value (a roughness map for a glossiness slot); NaN stays NaN */
+    double value[3];           /* the constant (RGB slots: R, G, B) */
+    mr_wf_quantisation stored; /* how the image stored its values (TOLERANCES kinds); zeroed: exact */
+} mr_transform_map;
+
+/* Texture-set conversion: in[i] (one per kind->inputs[i]; an optional slot may be a constant of its default) through
+ * t, texel by texel, into out[j] (one new image per kind->outputs[j], 1 or 3 channels, the maps' size, 1 x 1 when
+ * every map is a constant: the caller frees them) and *flags (width x height mr_wf_flag bytes, malloc'ed; flags may
+ * be NULL). MR_ERR_INVALID_ARG naming the slots for maps of different sizes or a channel the image lacks;
+ * MR_ERR_NOMEM. On failure nothing is returned. */
+mr_status mr_transform_convert_maps(const mr_transform *t, const mr_transform_map *in, mr_image **out,
+                                    uint8_t **flags);
 
 /* One texel through doubles (constants, scripts): in[] / out[] packed in slot order (channels consecutive). */
 mr_status mr_transform_apply_values(const mr_transform *t, const double *in, double *out, unsigned *flags);
