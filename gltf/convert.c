@@ -11,7 +11,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
 
 #include "io/io_internal.h"
@@ -94,6 +93,14 @@ typedef struct made {
     mr_gltf_material_report report;
 } made;
 
+/* Two texture references map texels to the surface the same way. */
+static int same_mapping(const mr_gltf_texture_ref *a, const mr_gltf_texture_ref *b) {
+    return a->tex_coord == b->tex_coord && a->has_transform == b->has_transform &&
+           (!a->has_transform || (a->offset[0] == b->offset[0] && a->offset[1] == b->offset[1] &&
+                                  a->rotation == b->rotation && a->scale[0] == b->scale[0] &&
+                                  a->scale[1] == b->scale[1] && a->transform_tex_coord == b->transform_tex_coord));
+}
+
 static int same_sources(const sources *a, const sources *b) {
     if (a->images[0] != b->images[0] || a->images[1] != b->images[1] || a->alpha_factor != b->alpha_factor)
         return 0;
@@ -104,23 +111,7 @@ static int same_sources(const sources *a, const sources *b) {
     for (int i = 0; i < 3; i++)
         for (int c = 0; c < 3; c++)
             if (a->factors[i][c] != b->factors[i][c]) return 0;
-    for (int t = 0; t < 2; t++) {
-        const mr_gltf_texture_ref *x = &a->refs[t], *y = &b->refs[t];
-        if (x->tex_coord != y->tex_coord || x->has_transform != y->has_transform) return 0;
-        if (x->has_transform && (x->offset[0] != y->offset[0] || x->offset[1] != y->offset[1] ||
-                                 x->rotation != y->rotation || x->scale[0] != y->scale[0] ||
-                                 x->scale[1] != y->scale[1] || x->transform_tex_coord != y->transform_tex_coord))
-            return 0;
-    }
-    return 1;
-}
-
-/* Two texture references map texels to the surface the same way. */
-static int same_mapping(const mr_gltf_texture_ref *a, const mr_gltf_texture_ref *b) {
-    return a->tex_coord == b->tex_coord && a->has_transform == b->has_transform &&
-           (!a->has_transform || (a->offset[0] == b->offset[0] && a->offset[1] == b->offset[1] &&
-                                  a->rotation == b->rotation && a->scale[0] == b->scale[0] &&
-                                  a->scale[1] == b->scale[1] && a->transform_tex_coord == b->transform_tex_coord));
+    return same_mapping(&a->refs[0], &b->refs[0]) && same_mapping(&a->refs[1], &b->refs[1]);
 }
 
 /* Channel c of `im` at texel (x, y) of a width x height grid, bilinear when the sizes differ (texel centres
@@ -137,12 +128,6 @@ static float sample(const mr_image *im, int c, int x, int y, int width, int heig
     double top = mr_image_at(im, xa, ya)[channel] * (1 - fx) + mr_image_at(im, xb, ya)[channel] * fx;
     double bottom = mr_image_at(im, xa, yb)[channel] * (1 - fx) + mr_image_at(im, xb, yb)[channel] * fx;
     return (float)(top * (1 - fy) + bottom * fy);
-}
-
-static double now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 /* ---- one conversion ----------------------------------------------------------------------------------------- */
@@ -851,7 +836,7 @@ static mr_status convert_material(conversion *cv, made *cache, int *cached, mr_g
         snprintf(r->reason, sizeof r->reason, "it has metal-rough values of its own: %s", own);
         return mr_gltf_set_material(cv->asset, cv->material, &m);
     }
-    const double started = now();
+    const double started = mr_now_seconds();
     sources src;
     sources_of(&m, to_metal, &src);
     for (int t = 0; t < 2; t++) {
@@ -907,14 +892,14 @@ static mr_status convert_material(conversion *cv, made *cache, int *cached, mr_g
             return status;
         }
         mk->report.outcome = MR_GLTF_CONVERTED;
-        mk->report.seconds = now() - started;
+        mk->report.seconds = mr_now_seconds() - started;
         *r = mk->report;
     }
     set_outputs(cv, &src, mk, textured, &m);
     if (to_metal) m.has_spec_gloss = cv->opts->keep_source;
     else m.has_spec_gloss = 1; // the core material stays as the fallback
     status = mr_gltf_set_material(cv->asset, cv->material, &m);
-    r->seconds = now() - started;
+    r->seconds = mr_now_seconds() - started;
     return status;
 }
 
