@@ -207,7 +207,7 @@ static mr_status encode_texture(const conversion *cv, int t, int width, int heig
     return mr_img_write(e->path, &im, &wo);
 }
 
-/* Add an encoded texture to the asset, with the sampler of texture `like` (-1: none); releases e's resources. */
+/* Add an encoded texture to the asset (its bytes are copied), with the sampler of texture `like` (-1: none). */
 static mr_status add_texture(const conversion *cv, encoded_texture *e, int like, int *texture) {
     int image = -1;
     mr_status status = e->path[0] ? mr_gltf_add_image_file(cv->asset, e->path, e->uri, &image)
