@@ -401,11 +401,24 @@ mr_status mr_transform_convert_maps(const mr_transform *t, const mr_transform_ma
             break;
         }
         const mr_image *im = in[i].image;
-        for (size_t k = 0; k < n; k++)
+        int from[3]; // per slot channel, the image channel read
+        float value[3];
+        for (int c = 0; c < ch; c++) {
+            from[c] = ch == 3 ? (im && im->channels == 1 ? 0 : c) : in[i].channel;
+            value[c] = in[i].complement ? 1.0f - (float)in[i].value[c] : (float)in[i].value[c];
+        }
+        const size_t stride = im ? (size_t)im->channels : 0;
+        const int complement = in[i].complement;
+        const int threads = mr_auto_threads(t->opts.threads, (long)MR_MIN(n, 1u << 30), MR_WF_PARALLEL_TEXELS);
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
+        for (long k = 0; k < (long)n; k++)
             for (int c = 0; c < ch; c++) {
-                const int from = ch == 3 ? (im && im->channels == 1 ? 0 : c) : in[i].channel;
-                const float v = im ? im->pixels[k * (size_t)im->channels + (size_t)from] : (float)in[i].value[c];
-                p[k * (size_t)ch + (size_t)c] = in[i].complement ? 1.0f - v : v;
+                float v = value[c];
+                if (im != NULL) {
+                    v = im->pixels[(size_t)k * stride + (size_t)from[c]];
+                    if (complement) v = 1.0f - v;
+                }
+                p[(size_t)k * (size_t)ch + (size_t)c] = v;
             }
         b.in[i] = p;
         b.stored[i] = in[i].stored;
