@@ -4,6 +4,7 @@
  * into the transform's input planes, the transform, and its outputs packed into the target's 8-bit textures; the
  * textures encoded in memory (PNG) and added to the asset.
  */
+#define _DEFAULT_SOURCE /* mkstemps */
 #include "gltf/mr_gltf_convert.h"
 
 #include <math.h>
@@ -198,10 +199,18 @@ static mr_status encode_texture(const conversion *cv, int t, int width, int heig
         return mr_io_png_encode(e->uri, width, height, channels, 8, bytes8, cv->to->encodings[t] == MR_IMG_COLOR,
                                 &settings, &e->bytes, &e->size);
     }
+    // EXR through a private temporary file (the writer is OpenEXR Core's, to a path), its name made by mkstemps.
     mr_image im = {width, height, channels, (float *)floats};
     const char *dir = getenv("TMPDIR");
-    snprintf(e->path, sizeof e->path, "%s/matremap-%ld-%d-%d.exr", dir && dir[0] ? dir : "/tmp", (long)getpid(),
-             cv->material, t);
+    snprintf(e->path, sizeof e->path, "%s/matremap-texture-XXXXXX.exr", dir && dir[0] ? dir : "/tmp");
+    const int fd = mkstemps(e->path, 4);
+    if (fd < 0) {
+        mr_status status = mr_fail(MR_ERR_IO, "glTF '%s': material %d: cannot create a temporary file for '%s'",
+                                   mr_gltf_path(cv->asset), cv->material, e->uri);
+        e->path[0] = '\0';
+        return status;
+    }
+    close(fd);
     mr_img_write_options wo = {0};
     wo.encoding = cv->to->encodings[t];
     return mr_img_write(e->path, &im, &wo);

@@ -197,6 +197,13 @@ mr_status mr_io_png_deflate_encode(const char *name, int width, int height, int 
                                    int srgb_tag, const mr_io_png_settings *settings, unsigned char **bytes,
                                    size_t *size);
 
+/* A big-endian 32-bit value (PNG's byte order, §7.1). */
+uint32_t mr_io_be32(const unsigned char *p);
+
+/* Write a PNG chunk (§5.3: length, type, data, CRC of type and data) at `at`, which has 12 + length bytes; returns
+ * the byte after it (png_deflate.c). */
+unsigned char *mr_io_png_put_chunk(unsigned char *at, const char *type, const void *data, size_t length);
+
 /* ---- Paletted PNG (png_palette.c) --------------------------------------------------------------------- */
 
 /* A non-interlaced paletted PNG taken apart: its header, palette, index stream and index histogram. */

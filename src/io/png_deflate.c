@@ -36,7 +36,7 @@
 
 static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
 
-static uint32_t get32(const unsigned char *p) {
+uint32_t mr_io_be32(const unsigned char *p) {
     return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | (uint32_t)p[3];
 }
 
@@ -141,8 +141,7 @@ static int unfilter_row(int type, uint8_t *restrict x, const uint8_t *restrict p
  * hold a chunk whole, at 12 bytes per MiB. */
 #define IDAT_MAX ((size_t)1 << 20)
 
-/* Write a chunk (§5.3: length, type, data, CRC of type and data) at `at`; returns the byte after it. */
-static unsigned char *put_chunk(unsigned char *at, const char *type, const void *data, size_t length) {
+unsigned char *mr_io_png_put_chunk(unsigned char *at, const char *type, const void *data, size_t length) {
     put32(at, (uint32_t)length);
     memcpy(at + 4, type, 4);
     if (length > 0) memcpy(at + 8, data, length);
@@ -233,7 +232,7 @@ mr_status mr_io_png_deflate_encode(const char *name, int width, int height, int 
     ihdr[9] = colour_types[channels];
     ihdr[10] = ihdr[11] = ihdr[12] = 0; // deflate, adaptive filtering (method 0), no interlace
     memcpy(at, signature, 8);
-    at = put_chunk(at + 8, "IHDR", ihdr, 13);
+    at = mr_io_png_put_chunk(at + 8, "IHDR", ihdr, 13);
     if (srgb_tag) {
         // libpng's png_set_sRGB_gAMA_and_cHRM(PNG_sRGB_INTENT_PERCEPTUAL), in its order: gAMA 1/2.2 (45455 in
         // units of 1e-5), sRGB rendering intent 0, cHRM with the sRGB white point and primaries (§11.3.3).
@@ -241,13 +240,13 @@ mr_status mr_io_png_deflate_encode(const char *name, int width, int height, int 
         static const uint32_t chrm_values[8] = {31270, 32900, 64000, 33000, 30000, 60000, 15000, 6000};
         unsigned char chrm[32];
         for (int i = 0; i < 8; i++) put32(chrm + 4 * i, chrm_values[i]);
-        at = put_chunk(at, "gAMA", gama, 4);
-        at = put_chunk(at, "sRGB", srgb, 1);
-        at = put_chunk(at, "cHRM", chrm, 32);
+        at = mr_io_png_put_chunk(at, "gAMA", gama, 4);
+        at = mr_io_png_put_chunk(at, "sRGB", srgb, 1);
+        at = mr_io_png_put_chunk(at, "cHRM", chrm, 32);
     }
     for (size_t done = 0; done < z_size; done += IDAT_MAX)
-        at = put_chunk(at, "IDAT", z + done, z_size - done < IDAT_MAX ? z_size - done : IDAT_MAX);
-    at = put_chunk(at, "IEND", NULL, 0);
+        at = mr_io_png_put_chunk(at, "IDAT", z + done, z_size - done < IDAT_MAX ? z_size - done : IDAT_MAX);
+    at = mr_io_png_put_chunk(at, "IEND", NULL, 0);
     free(z);
     *bytes = file;
     *size = (size_t)(at - file);
@@ -273,8 +272,8 @@ typedef struct png_info {
  * filter method 0, no interlace. 0 for anything else (libpng decides). */
 static int parse_ihdr(const unsigned char *d, png_info *info) {
     static const int samples[7] = {1, 0, 3, 1, 2, 0, 4};
-    info->width = get32(d);
-    info->height = get32(d + 4);
+    info->width = mr_io_be32(d);
+    info->height = mr_io_be32(d + 4);
     info->depth = d[8];
     info->colour = d[9];
     if (info->width == 0 || info->height == 0 || info->width > 0x7fffffffu || info->height > 0x7fffffffu) return 0;
@@ -369,7 +368,7 @@ static int read_chunks(FILE *file, const char *label, int max_dimension, png_inf
     int seen_idat = 0, after_idat = 0;
     for (int chunk = 0;; chunk++) {
         if (!read_exact(file, head, 8)) return 0;
-        const uint32_t length = get32(head);
+        const uint32_t length = mr_io_be32(head);
         const unsigned char *type = head + 4;
         if (length > 0x7fffffffu) return 0;
         for (int i = 0; i < 4; i++)
@@ -460,7 +459,7 @@ static int read_chunks(FILE *file, const char *label, int max_dimension, png_inf
             }
         }
         unsigned char stored[4];
-        if (!read_exact(file, stored, 4) || get32(stored) != crc) return 0;
+        if (!read_exact(file, stored, 4) || mr_io_be32(stored) != crc) return 0;
         if (memcmp(type, "IEND", 4) == 0) return 1;
     }
 }

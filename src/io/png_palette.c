@@ -19,20 +19,9 @@
 
 static const unsigned char png_signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
 
-static uint32_t be32(const unsigned char *p) {
-    return ((uint32_t)p[0] << 24) | ((uint32_t)p[1] << 16) | ((uint32_t)p[2] << 8) | (uint32_t)p[3];
-}
-
-static void put_be32(unsigned char *p, uint32_t v) {
-    p[0] = (unsigned char)(v >> 24);
-    p[1] = (unsigned char)(v >> 16);
-    p[2] = (unsigned char)(v >> 8);
-    p[3] = (unsigned char)v;
-}
-
 int mr_io_png_is_paletted(const unsigned char *bytes, size_t size) {
     // Signature, then IHDR first (length 13): colour type is byte 25, interlace byte 28.
-    return bytes != NULL && size >= 33 && memcmp(bytes, png_signature, 8) == 0 && be32(bytes + 8) == 13 &&
+    return bytes != NULL && size >= 33 && memcmp(bytes, png_signature, 8) == 0 && mr_io_be32(bytes + 8) == 13 &&
            memcmp(bytes + 12, "IHDR", 4) == 0 && bytes[25] == 3 && bytes[28] == 0;
 }
 
@@ -69,8 +58,8 @@ mr_status mr_io_png_palette_read(const unsigned char *bytes, size_t size, const 
     if (!mr_io_png_is_paletted(bytes, size))
         return mr_fail(MR_ERR_FORMAT, "%s: not a non-interlaced paletted PNG", label);
     memcpy(out->ihdr, bytes + 16, 13);
-    out->width = (int)be32(bytes + 16);
-    out->height = (int)be32(bytes + 20);
+    out->width = (int)mr_io_be32(bytes + 16);
+    out->height = (int)mr_io_be32(bytes + 20);
     out->bit_depth = bytes[24];
     const int depth = out->bit_depth;
     if (out->width < 1 || out->height < 1 || (depth != 1 && depth != 2 && depth != 4 && depth != 8))
@@ -87,12 +76,12 @@ mr_status mr_io_png_palette_read(const unsigned char *bytes, size_t size, const 
         for (offset = 8; !ended;) {
             if (size - offset < 12)
                 return mr_fail(MR_ERR_FORMAT, "%s: truncated PNG: chunk at byte %zu", label, offset);
-            const uint32_t length = be32(bytes + offset);
+            const uint32_t length = mr_io_be32(bytes + offset);
             const unsigned char *type = bytes + offset + 4, *data = type + 4;
             if (length > size - offset - 12)
                 return mr_fail(MR_ERR_FORMAT, "%s: truncated PNG: chunk '%.4s' at byte %zu claims %lu bytes", label,
                                (const char *)type, offset, (unsigned long)length);
-            if (pass == 0 && libdeflate_crc32(0, type, (size_t)length + 4) != be32(data + length))
+            if (pass == 0 && libdeflate_crc32(0, type, (size_t)length + 4) != mr_io_be32(data + length))
                 return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: CRC mismatch in chunk '%.4s' at byte %zu", label,
                                (const char *)type, offset);
             if (memcmp(type, "IDAT", 4) == 0) {
@@ -161,16 +150,6 @@ void mr_io_png_palette_free(mr_io_png_palette *p) {
     p->idat = NULL;
 }
 
-/* Append one chunk (length, type, data, CRC) at *at. */
-static void put_chunk(unsigned char *buffer, size_t *at, const char *type, const unsigned char *data, size_t length) {
-    unsigned char *p = buffer + *at;
-    put_be32(p, (uint32_t)length);
-    memcpy(p + 4, type, 4);
-    if (length > 0) memcpy(p + 8, data, length);
-    put_be32(p + 8 + length, libdeflate_crc32(0, p + 4, length + 4));
-    *at += 12 + length;
-}
-
 mr_status mr_io_png_palette_write(const mr_io_png_palette *p, const unsigned char rgb[][3],
                                   const unsigned char *alpha, int srgb_tag, unsigned char **bytes, size_t *size) {
     // tRNS holds the entries up to the last one that is not opaque.
@@ -185,20 +164,20 @@ mr_status mr_io_png_palette_write(const mr_io_png_palette *p, const unsigned cha
                          (transparent ? 12 + (size_t)transparent : 0) + (12 + p->idat_size) + 12;
     unsigned char *buffer = malloc(total), packed[3 * 256];
     if (buffer == NULL) return mr_fail(MR_ERR_NOMEM, "paletted PNG: out of memory for %zu bytes", total);
-    size_t at = 8;
+    unsigned char *at = buffer + 8;
     memcpy(buffer, png_signature, 8);
-    put_chunk(buffer, &at, "IHDR", p->ihdr, 13);
+    at = mr_io_png_put_chunk(at, "IHDR", p->ihdr, 13);
     if (srgb_tag) {
-        put_chunk(buffer, &at, "gAMA", gama, 4);
-        put_chunk(buffer, &at, "cHRM", chrm, 32);
-        put_chunk(buffer, &at, "sRGB", srgb, 1);
+        at = mr_io_png_put_chunk(at, "gAMA", gama, 4);
+        at = mr_io_png_put_chunk(at, "cHRM", chrm, 32);
+        at = mr_io_png_put_chunk(at, "sRGB", srgb, 1);
     }
     for (int e = 0; e < p->entries; e++) memcpy(packed + 3 * e, rgb[e], 3);
-    put_chunk(buffer, &at, "PLTE", packed, 3 * (size_t)p->entries);
-    if (transparent) put_chunk(buffer, &at, "tRNS", alpha, (size_t)transparent);
-    put_chunk(buffer, &at, "IDAT", p->idat, p->idat_size);
-    put_chunk(buffer, &at, "IEND", NULL, 0);
+    at = mr_io_png_put_chunk(at, "PLTE", packed, 3 * (size_t)p->entries);
+    if (transparent) at = mr_io_png_put_chunk(at, "tRNS", alpha, (size_t)transparent);
+    at = mr_io_png_put_chunk(at, "IDAT", p->idat, p->idat_size);
+    at = mr_io_png_put_chunk(at, "IEND", NULL, 0);
     *bytes = buffer;
-    *size = at;
+    *size = (size_t)(at - buffer);
     return MR_OK;
 }
