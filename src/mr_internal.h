@@ -6,6 +6,8 @@
 #ifndef MR_INTERNAL_H
 #define MR_INTERNAL_H
 
+#include <stdint.h>
+
 #include "mr_status.h"
 
 #ifdef __cplusplus
@@ -48,6 +50,17 @@ int mr_auto_threads(int requested, long work, long threshold);
 
 /* Seconds on the monotonic clock (an arbitrary origin): for durations the library reports. */
 double mr_now_seconds(void);
+
+/* A 32-bit hash of n words (splitmix64's mixing, word by word): the deduplication tables of the batch converters
+ * (transform.c, workflow.c) key texels by the bits of their values. */
+static inline uint32_t mr_hash_words(const uint32_t *k, int n) {
+    uint64_t h = 0x9e3779b97f4a7c15ULL;
+    for (int i = 0; i < n; i++) {
+        h = (h ^ k[i]) * 0xbf58476d1ce4e5b9ULL;
+        h ^= h >> 29;
+    }
+    return (uint32_t)(h >> 32);
+}
 
 static inline double mr_clampd(double x, double lo, double hi) {
     /* NaN maps to lo: no NaN may leave a clamp (design principle 6). */

@@ -200,6 +200,10 @@ mr_status mr_io_png_deflate_encode(const char *name, int width, int height, int 
 /* A big-endian 32-bit value (PNG's byte order, §7.1). */
 uint32_t mr_io_be32(const unsigned char *p);
 
+/* Undo filter `type` (§9: 0-4) of one scanline x[n] in place, `prev` the unfiltered line above (zeros above the
+ * first), bpp its bytes per pixel (at least 1); 0 for an unknown type (png_deflate.c). */
+int mr_io_png_unfilter_row(int type, uint8_t *x, const uint8_t *prev, size_t n, size_t bpp);
+
 /* Write a PNG chunk (§5.3: length, type, data, CRC of type and data) at `at`, which has 12 + length bytes; returns
  * the byte after it (png_deflate.c). */
 unsigned char *mr_io_png_put_chunk(unsigned char *at, const char *type, const void *data, size_t length);

@@ -110,7 +110,7 @@ static uint64_t filter_cost(const uint8_t *f, size_t n) {
 }
 
 /* Undo filter `type` on row `x` in place (above it `prev`, already decoded); 0 for a type outside 0-4. */
-static int unfilter_row(int type, uint8_t *restrict x, const uint8_t *restrict prev, size_t n, size_t bpp) {
+int mr_io_png_unfilter_row(int type, uint8_t *restrict x, const uint8_t *restrict prev, size_t n, size_t bpp) {
     const size_t lead = bpp < n ? bpp : n;
     switch (type) {
     case 0:
@@ -511,7 +511,7 @@ static int decode_rows(FILE *file, const char *label, int max_dimension, png_inf
     for (uint32_t y = 0; y < info->height && ok; y++) {
         uint8_t *row = rows + info->row_bytes + (size_t)y * stride;
         const uint8_t *prev = y > 0 ? row - stride + 1 : rows;
-        ok = unfilter_row(row[0], row + 1, prev, info->row_bytes, info->bpp); // in place
+        ok = mr_io_png_unfilter_row(row[0], row + 1, prev, info->row_bytes, info->bpp); // in place
     }
     if (!ok) { // not zlib data of exactly the image's size, or a filter type outside 0-4: libpng decides
         free(rows);

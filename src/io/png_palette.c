@@ -25,34 +25,6 @@ int mr_io_png_is_paletted(const unsigned char *bytes, size_t size) {
            memcmp(bytes + 12, "IHDR", 4) == 0 && bytes[25] == 3 && bytes[28] == 0;
 }
 
-/* Paeth predictor (PNG 9.4). */
-static unsigned char paeth(int a, int b, int c) {
-    int p = a + b - c, pa = abs(p - a), pb = abs(p - b), pc = abs(p - c);
-    return (unsigned char)(pa <= pb && pa <= pc ? a : pb <= pc ? b : c);
-}
-
-/* Undo the filters of `height` scanlines of `row_bytes` bytes each (1 filter-type byte first), bpp 1, in place;
- * 0 for an unknown filter type. */
-static int unfilter(unsigned char *data, int height, size_t row_bytes) {
-    const unsigned char *previous = NULL;
-    for (int y = 0; y < height; y++) {
-        unsigned char *row = data + (size_t)y * (row_bytes + 1), type = row[0], *x = row + 1;
-        for (size_t i = 0; i < row_bytes; i++) {
-            int a = i > 0 ? x[i - 1] : 0, b = previous ? previous[i] : 0, c = previous && i > 0 ? previous[i - 1] : 0;
-            switch (type) {
-            case 0: break;
-            case 1: x[i] = (unsigned char)(x[i] + a); break;
-            case 2: x[i] = (unsigned char)(x[i] + b); break;
-            case 3: x[i] = (unsigned char)(x[i] + ((a + b) >> 1)); break;
-            case 4: x[i] = (unsigned char)(x[i] + paeth(a, b, c)); break;
-            default: return 0;
-            }
-        }
-        previous = x;
-    }
-    return 1;
-}
-
 mr_status mr_io_png_palette_read(const unsigned char *bytes, size_t size, const char *label, mr_io_png_palette *out) {
     memset(out, 0, sizeof *out);
     if (!mr_io_png_is_paletted(bytes, size))
@@ -111,7 +83,7 @@ mr_status mr_io_png_palette_read(const unsigned char *bytes, size_t size, const 
     // The index histogram: inflate, unfilter, count (an index past the palette is an error, as in libpng).
     const size_t row_bytes = ((size_t)out->width * (size_t)depth + 7) / 8;
     const size_t raw_size = (size_t)out->height * (row_bytes + 1);
-    unsigned char *raw = malloc(raw_size);
+    unsigned char *raw = calloc(raw_size + row_bytes, 1);
     struct libdeflate_decompressor *inflater = raw ? libdeflate_alloc_decompressor() : NULL;
     if (inflater == NULL) {
         free(raw);
@@ -121,7 +93,14 @@ mr_status mr_io_png_palette_read(const unsigned char *bytes, size_t size, const 
     size_t got = 0;
     enum libdeflate_result z = libdeflate_zlib_decompress(inflater, out->idat, idat_size, raw, raw_size, &got);
     libdeflate_free_decompressor(inflater);
-    if (z != LIBDEFLATE_SUCCESS || got != raw_size || !unfilter(raw, out->height, row_bytes)) {
+    int ok = z == LIBDEFLATE_SUCCESS && got == raw_size;
+    const unsigned char *previous = raw + raw_size; // the zero row above the first
+    for (int y = 0; y < out->height && ok; y++) {
+        unsigned char *row = raw + (size_t)y * (row_bytes + 1);
+        ok = mr_io_png_unfilter_row(row[0], row + 1, previous, row_bytes, 1); // bpp 1: a paletted image's bytes
+        previous = row + 1;
+    }
+    if (!ok) {
         free(raw);
         mr_io_png_palette_free(out);
         return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: the image data does not inflate to %dx%d filtered indices",

@@ -157,15 +157,6 @@ void *mr_transform_state(const mr_transform *t) { return t ? t->state : NULL; }
 #define PROBE 4096
 #define MAX_KEY (3 * MR_TRANSFORM_MAX_SLOTS)
 
-static inline uint32_t key_hash(const uint32_t *k, int length) {
-    uint64_t h = 0x9e3779b97f4a7c15ULL;
-    for (int i = 0; i < length; i++) {
-        h = (h ^ k[i]) * 0xbf58476d1ce4e5b9ULL;
-        h ^= h >> 29;
-    }
-    return (uint32_t)(h >> 32);
-}
-
 /* The bits of texel i's input values, slot after slot (constant-size copies: this runs once per texel). */
 static inline int texel_key(const mr_transform_kind *kind, const mr_transform_batch *b, size_t i, uint32_t *key) {
     int length = 0;
@@ -242,7 +233,7 @@ static mr_status dedupe_block(const mr_transform *t, const mr_transform_batch *b
     for (size_t i = 0; i < n; i++) {
         if (i == PROBE && 4 * rows > 3 * PROBE) return kind->apply(t, block);
         int length = texel_key(kind, block, i, key);
-        size_t h = key_hash(key, length) & mask;
+        size_t h = mr_hash_words(key, length) & mask;
         for (; w->table[h] != 0; h = (h + 1) & mask) {
             texel_key(kind, block, w->first[w->table[h] - 1], other);
             if (same_key(key, other, length)) break;

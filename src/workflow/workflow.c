@@ -689,15 +689,6 @@ static mr_status mlp_block_alloc(size_t block, int threads, mlp_block *b) {
 /* Part p of a block of `count` texels: [count p / parts, count (p + 1) / parts). */
 static size_t part_start(size_t count, size_t parts, size_t p) { return count * p / parts; }
 
-static inline uint32_t texel_hash(const uint32_t k[6]) {
-    uint64_t h = 0x9e3779b97f4a7c15ULL;
-    for (int i = 0; i < 6; i++) {
-        h = (h ^ k[i]) * 0xbf58476d1ce4e5b9ULL;
-        h ^= h >> 29;
-    }
-    return (uint32_t)(h >> 32);
-}
-
 /* The six input floats of texel i, as bits (two texels with equal bits get equal answers). */
 static inline void texel_key(const mr_wf_spec_input *in, size_t i, uint32_t k[6]) {
     memcpy(k, in->diffuse + 3 * i, 3 * sizeof *k);
@@ -739,7 +730,7 @@ static void mlp_dedupe_part(const mr_wf_spec_input *in, const mr_wf_options *o, 
         size_t h = 0;
         if (hashing) {
             texel_key(in, start + r, key);
-            for (h = texel_hash(key) & mask; table[h] != 0; h = (h + 1) & mask) {
+            for (h = mr_hash_words(key, 6) & mask; table[h] != 0; h = (h + 1) & mask) {
                 size_t row = lo + table[h] - 1;
                 texel_key(in, start + b->first[row], other);
                 if (memcmp(key, other, sizeof key) == 0) break;
