@@ -156,14 +156,59 @@ static int texture_needed(const mr_transform_kind *kind, const workflow_side *to
     return 0;
 }
 
-/* The texel of output slot j's channel c for texel i of the band. */
-static float output_value(const mr_transform_kind *kind, const mr_transform_batch *b, int j, int c, size_t i) {
-    // A constant is its factor; the texel is 1 (0 for 0, so that the texture alone reads right too).
-    if (kind->outputs[j].flags & MR_SLOT_CONSTANT) return kind->outputs[j].value == 0.0 ? 0.0f : 1.0f;
-    return b->out[j][(size_t)kind->outputs[j].channels * i + (size_t)(kind->outputs[j].channels == 3 ? c : 0)];
+/* Where channel c of target texture t comes from: the source's alpha, channel `offset` of output slot `output`
+ * (`stride` channels), or one value (0 for an unused channel; a constant slot's texel, 1, or 0 for 0, since its
+ * factor holds the constant: the texture alone still reads right); `colour`: written sRGB-encoded. `value_index`
+ * is its place among the output channels then alpha (what uniformity is tracked over). */
+typedef struct channel_source {
+    int alpha, output, constant, colour, value_index;
+    size_t stride, offset;
+    float value;
+} channel_source;
+
+static channel_source channel_source_of(const mr_transform_kind *kind, const workflow_side *to, int t, int c) {
+    channel_source src = {0, -1, 0, to->encodings[t] == MR_IMG_COLOR && c < 3, 0, 1, 0, 0.0f};
+    const char *slot = to->slots[t][c];
+    for (int k = 0; k < kind->output_count; k++) src.value_index += kind->outputs[k].channels; // alpha's place
+    if (slot != NULL && strcmp(slot, "alpha") == 0) {
+        src.alpha = 1;
+        return src;
+    }
+    const int j = output_of(kind, slot);
+    if (j < 0) return src;
+    src.output = j;
+    src.stride = (size_t)kind->outputs[j].channels;
+    src.offset = src.stride == 3 ? (size_t)c : 0;
+    src.value_index = (int)src.offset;
+    for (int k = 0; k < j; k++) src.value_index += kind->outputs[k].channels;
+    if (kind->outputs[j].flags & MR_SLOT_CONSTANT) {
+        src.constant = 1;
+        src.value = kind->outputs[j].value == 0.0 ? 0.0f : 1.0f;
+    }
+    return src;
+}
+
+/* The value channel source `src` gives texel i, from the outputs `out` and the alpha plane. */
+static inline float channel_value(const channel_source *src, float *const *out, const float *alpha, size_t i) {
+    if (src->alpha) return alpha[i];
+    if (src->output < 0 || src->constant) return src->value;
+    return out[src->output][src->stride * i + src->offset];
 }
 
 static inline uint8_t linear8(float v) { return (uint8_t)floor(mr_clampd(v, 0.0, 1.0) * 255.0 + 0.5); }
+
+/* The 8-bit code a target texture stores for v: sRGB for a colour texture's RGB, linear otherwise. */
+static inline uint8_t code_of(float v, int colour) { return colour ? mr_srgb8_encode(v) : linear8(v); }
+
+/* Which target textures hold computed outputs (need) and their channel counts (RGB, or RGBA where the 4th channel
+ * is used: alpha only when some texel has it). */
+static void plan_textures(const mr_transform_kind *kind, const workflow_side *to, int has_alpha, int need[2],
+                          int channels[2]) {
+    for (int t = 0; t < 2; t++) {
+        need[t] = texture_needed(kind, to, t);
+        channels[t] = to->slots[t][3] == NULL || (strcmp(to->slots[t][3], "alpha") == 0 && !has_alpha) ? 3 : 4;
+    }
+}
 
 static void count_flags(mr_gltf_material_report *r, const uint8_t *flags, size_t n) {
     for (size_t i = 0; i < n; i++) {
@@ -371,30 +416,18 @@ static mr_status convert_band(const band_context *ctx, int y0, band_work *w, mr_
         if (!ctx->need[t]) continue;
         const size_t ch = (size_t)ctx->channels[t], first = (size_t)y0 * (size_t)width * ch;
         for (size_t c = 0; c < ch; c++) {
-            // Where channel c comes from: a plane with a stride, or one value.
-            const char *slot = to->slots[t][c];
-            const int j = output_of(kind, slot), is_alpha = slot && strcmp(slot, "alpha") == 0;
-            const int colour = to->encodings[t] == MR_IMG_COLOR && c < 3;
-            const float *plane = NULL;
-            size_t stride = 1;
-            float value = 0.0f;
-            if (is_alpha) {
-                plane = w->planes;
-            } else if (j >= 0 && (kind->outputs[j].flags & MR_SLOT_CONSTANT)) {
-                value = output_value(kind, &b, j, (int)c, 0);
-            } else if (j >= 0) {
-                stride = (size_t)kind->outputs[j].channels;
-                plane = b.out[j] + (stride == 3 ? c : 0);
-            }
+            // The source as a plane and stride (or one value), resolved once: this loop runs per texel.
+            const channel_source src = channel_source_of(kind, to, t, (int)c);
+            const float *plane = src.alpha ? w->planes
+                                 : src.output >= 0 && !src.constant ? b.out[src.output] + src.offset : NULL;
+            const size_t stride = src.alpha ? 1 : src.stride;
             if (ctx->exr) {
                 float *out = (float *)ctx->texels[t] + first + c;
-                for (size_t i = 0; i < b.n; i++) out[ch * i] = plane ? plane[stride * i] : value;
+                for (size_t i = 0; i < b.n; i++) out[ch * i] = plane ? plane[stride * i] : src.value;
             } else {
                 uint8_t *out = (uint8_t *)ctx->texels[t] + first + c;
-                for (size_t i = 0; i < b.n; i++) {
-                    const float v = plane ? plane[stride * i] : value;
-                    out[ch * i] = colour ? mr_srgb8_encode(v) : linear8(v);
-                }
+                for (size_t i = 0; i < b.n; i++)
+                    out[ch * i] = code_of(plane ? plane[stride * i] : src.value, src.colour);
             }
         }
     }
@@ -405,20 +438,11 @@ static mr_status convert_band(const band_context *ctx, int y0, band_work *w, mr_
  * whose every channel is uniform (or constant, or 0) is not needed: its slots become factors (mk->values). */
 static void drop_uniform_textures(const mr_transform_kind *kind, const workflow_side *to, const int channels[2],
                                   const uint8_t *uniform, int need[2]) {
-    int values = 0;
-    for (int j = 0; j < kind->output_count; j++) values += kind->outputs[j].channels;
     for (int t = 0; t < 2; t++) {
         int all_uniform = need[t];
         for (int c = 0; c < channels[t] && all_uniform; c++) {
-            const char *slot = to->slots[t][c];
-            int j = output_of(kind, slot), v = 0;
-            if (slot != NULL && strcmp(slot, "alpha") == 0) {
-                all_uniform = uniform[values];
-                continue;
-            }
-            if (j < 0 || (kind->outputs[j].flags & MR_SLOT_CONSTANT)) continue;
-            for (int k = 0; k < j; k++) v += kind->outputs[k].channels;
-            all_uniform = uniform[v + (kind->outputs[j].channels == 3 ? c : 0)];
+            const channel_source src = channel_source_of(kind, to, t, c);
+            if (src.alpha || (src.output >= 0 && !src.constant)) all_uniform = uniform[src.value_index];
         }
         if (all_uniform) need[t] = 0; // its mk->textures[t] stays -1: set_outputs writes mk->values
     }
@@ -452,12 +476,10 @@ static mr_status convert_texels(const conversion *cv, const sources *src, mr_ima
     int need[2], channels[2];
     void *texels[2] = {NULL, NULL};
     mr_status status = MR_OK;
-    for (int t = 0; t < 2; t++) {
-        need[t] = texture_needed(kind, to, t);
-        channels[t] = to->slots[t][3] == NULL || (strcmp(to->slots[t][3], "alpha") == 0 && !mk->has_alpha) ? 3 : 4;
+    plan_textures(kind, to, mk->has_alpha, need, channels);
+    for (int t = 0; t < 2; t++)
         if (need[t] && (texels[t] = malloc(n * (size_t)channels[t] * (exr ? sizeof(float) : 1))) == NULL)
             status = MR_ERR_NOMEM;
-    }
     // Bands of rows, side by side: each thread its own planes; the transform runs on one thread per band.
     const int band_rows = width >= BAND_TEXELS ? 1 : BAND_TEXELS / width;
     const int bands = (height + band_rows - 1) / band_rows;
@@ -616,11 +638,7 @@ static int convert_palette(const conversion *cv, const sources *src, made *mk, m
             mk->values[v] = outputs[j][kind->outputs[j].channels * first_used + c];
     mk->alpha = alpha[first_used];
     int need[2], channels[2];
-    for (int tt = 0; tt < 2; tt++) {
-        need[tt] = texture_needed(kind, to, tt);
-        channels[tt] =
-            to->slots[tt][3] == NULL || (strcmp(to->slots[tt][3], "alpha") == 0 && !mk->has_alpha) ? 3 : 4;
-    }
+    plan_textures(kind, to, mk->has_alpha, need, channels);
     drop_uniform_textures(kind, to, channels, uniform, need);
     // The target textures: the index stream under the converted palette.
     mr_srgb8_init();
@@ -630,10 +648,8 @@ static int convert_palette(const conversion *cv, const sources *src, made *mk, m
         for (int e = 0; e < p.entries; e++) {
             trns[e] = 255;
             for (int c = 0; c < channels[tt]; c++) {
-                const char *slot = to->slots[tt][c];
-                const int j = output_of(kind, slot), is_alpha = slot && strcmp(slot, "alpha") == 0;
-                const float v = is_alpha ? alpha[e] : j >= 0 ? output_value(kind, &b, j, c, (size_t)e) : 0.0f;
-                const unsigned char code = to->encodings[tt] == MR_IMG_COLOR && c < 3 ? mr_srgb8_encode(v) : linear8(v);
+                const channel_source src = channel_source_of(kind, to, tt, c);
+                const unsigned char code = code_of(channel_value(&src, b.out, alpha, (size_t)e), src.colour);
                 if (c < 3) rgb[e][c] = code;
                 else trns[e] = code;
             }
@@ -700,7 +716,7 @@ static void set_outputs(const conversion *cv, const sources *src, const made *mk
         const int made_texture = f->texture >= 0 && mk->textures[f->texture] >= 0;
         for (int c = 0; c < slot->channels; c++) {
             if (slot->flags & MR_SLOT_CONSTANT)
-                factor[c] = slot->value; // a made texture holds 1 there (0 for 0: output_value)
+                factor[c] = slot->value; // a made texture holds 1 there (0 for 0: channel_source_of)
             else if (slot->copy_of >= 0)
                 factor[c] = src->factors[slot->copy_of][c];
             else
