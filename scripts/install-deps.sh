@@ -11,6 +11,8 @@ packages=(
     libnlopt-dev
     libpng-dev         # PNG read and write without OpenImageIO (src/io/png_io.c)
     libdeflate-dev     # PNG's zlib streams, compressed and inflated whole (src/io/png_deflate.c, png_palette.c)
+    libsvm-dev         # epsilon-SVR training of learned transforms (src/learn/svr.c)
+    libtinyobjloader-dev  # OBJ meshes, e.g. the paper's material-test sphere (src/io/obj_load.cpp)
     gnuplot-nox
     fonts-dejavu-core  # labels on the demo's contact sheets (oiiotool --text)
     python3            # tests/gltf_validate.sh compares glTF JSON (tests/lib/gltf_json_compare.py)
