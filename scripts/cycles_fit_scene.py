@@ -104,7 +104,10 @@ def parse_args(argv):
     p.add_argument("--size", type=int, default=256, help="image is SIZE x SIZE (default 256)")
     p.add_argument("--samples", type=int, default=16, help="samples per pixel (default 16)")
     p.add_argument("--light", choices=["45", "frontal"], default="45")
-    p.add_argument("--material", choices=["principled", "diffuse"], default="principled")
+    p.add_argument("--material", choices=["principled", "diffuse", "glossy"], default="principled",
+                   help="Principled BSDF, Diffuse BSDF (roughness 0: Lambert), or Glossy BSDF (colour "
+                        "--base-color, --roughness, --distribution; matremap's cycles-ggx at f0 = 1 when the "
+                        "colour is white)")
     p.add_argument("--base-color", type=parse_triple, default=[0.8, 0.8, 0.8],
                    help="linear r,g,b (or one value for grey)")
     p.add_argument("--metallic", type=float, default=0.0)
@@ -142,6 +145,8 @@ def parse_args(argv):
             p.error("--%s must be in [0, 1], got %g" % (name.replace("_", "-"), getattr(a, name)))
     if a.material == "diffuse" and a.component == "specular":
         p.error("--material diffuse has no specular component")
+    if a.material == "glossy" and a.component == "diffuse":
+        p.error("--material glossy has no diffuse component")
     return a
 
 
@@ -211,6 +216,12 @@ def make_material(args):
         bsdf = nt.nodes.new("ShaderNodeBsdfDiffuse")
         bsdf.inputs["Color"].default_value = rgba
         bsdf.inputs["Roughness"].default_value = 0.0  # 0 = Lambert (>0 is Oren-Nayar)
+    elif args.material == "glossy":
+        # The Glossy BSDF has no Fresnel: f = colour D G/(4 cos cos), alpha = Roughness^2 (Cycles squares it).
+        bsdf = nt.nodes.new("ShaderNodeBsdfGlossy")
+        bsdf.distribution = args.distribution
+        bsdf.inputs["Color"].default_value = rgba
+        bsdf.inputs["Roughness"].default_value = args.roughness
     else:
         bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
         bsdf.distribution = args.distribution

@@ -12,7 +12,7 @@ for cmd in models render ssim remap sweep train spec2metal metal2spec report glt
     expect "$cmd --help" 0 "Usage: matremap $cmd" -- "$bin" $cmd --help
 done
 expect "models lists ggx" 0 "^ggx " -- "$bin" models
-expect "models lists every registered model in JSON" 0 '"name": "cycles-principled"' -- "$bin" models --json
+expect "models lists every registered model in JSON" 0 '"name": "cycles-ggx"' -- "$bin" models --json
 expect "models NAME shows ranges" 0 "roughness" -- "$bin" models gltf
 expect "models unknown name lists valid ones" 2 "unknown BRDF model 'ggxx' \(valid: .*ggx" -- "$bin" models ggxx
 

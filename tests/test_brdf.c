@@ -1170,6 +1170,103 @@ MR_TEST(known_cycles_principled) {
         MR_CHECK(close_rel(d[c], b2[c] / PI * (1.0 + (fd90 - 1.0) * FL) * (1.0 + (fd90 - 1.0) * FV), 1e-12));
 }
 
+/* cycles-ggx: with the separable G it is `ggx` at alpha = roughness^2, bit for bit (the same D, G1 and Schlick
+ * code), except where Mitsuba's cut-off D cos_h < 1e-20 zeroes ggx; with correlated = 1, Cycles 3.5's
+ * G2 = 1/(1 + L(wi) + L(wo)) written here from the Lambdas, independently of src/brdf. */
+MR_TEST(known_cycles_ggx) {
+    const mr_brdf_model *m = model_named("cycles-ggx"), *ggx = model_named("ggx");
+    if (!m || !ggx) return;
+    uint64_t rng = 11;
+    int compared = 0, differ = 0, cut = 0;
+    for (int k = 0; k < 2000; k++) {
+        double v[MR_BRDF_MAX_VALUES] = {0}, g[MR_BRDF_MAX_VALUES] = {0}, wi[3], wo[3], d[3], s[3], dg[3], sg[3];
+        random_values(m, &rng, 0.0, v);
+        set_param(m, v, "correlated", 0.0);
+        mr_brdf_default_values(ggx, g);
+        double r = v[mr_brdf_param_offset(m, mr_brdf_param_index(m, "roughness"))];
+        set_param(ggx, g, "alpha", r * r);
+        for (int c = 0; c < 3; c++) {
+            g[mr_brdf_param_offset(ggx, mr_brdf_param_index(ggx, "f0")) + c] =
+                v[mr_brdf_param_offset(m, mr_brdf_param_index(m, "f0")) + c];
+            g[mr_brdf_param_offset(ggx, mr_brdf_param_index(ggx, "diffuse")) + c] =
+                v[mr_brdf_param_offset(m, mr_brdf_param_index(m, "diffuse")) + c];
+        }
+        random_dir(&rng, k < 1000 ? 0.02 : 0.0, wi);
+        random_dir(&rng, k < 1000 ? 0.02 : 0.0, wo);
+        eval_parts(m, v, wi, wo, d, s);
+        eval_parts(ggx, g, wi, wo, dg, sg);
+        for (int c = 0; c < 3; c++) {
+            compared++;
+            if (sg[c] == 0.0 && s[c] > 0.0 && s[c] < 1e-12) {
+                cut++;
+                continue;
+            }
+            if (d[c] != dg[c] || s[c] != sg[c]) differ++;
+        }
+    }
+    MR_CHECK_MSG(differ == 0, "%d of %d values differ from ggx at alpha = roughness^2", differ, compared);
+    printf("      cycles-ggx == ggx(alpha = roughness^2) bit for bit on %d values (%d under Mitsuba's cut-off)\n",
+           compared - cut, cut);
+
+    /* normal incidence, either G: D = 1/(pi alpha^2), G = 1, F = F0: f = F0/(4 pi alpha^2) */
+    double v[MR_BRDF_MAX_VALUES] = {0}, d[3], s[3];
+    mr_brdf_default_values(m, v);
+    set_param(m, v, "roughness", 0.3); /* alpha = 0.09 */
+    set_rgb(m, v, "f0", 0.04, 0.5, 0.9);
+    set_rgb(m, v, "diffuse", 0.2, 0.4, 0.6);
+    const double f0[3] = {0.04, 0.5, 0.9}, rho[3] = {0.2, 0.4, 0.6};
+    for (int corr = 0; corr < 2; corr++) {
+        set_param(m, v, "correlated", corr);
+        eval_parts(m, v, normal, normal, d, s);
+        for (int c = 0; c < 3; c++) {
+            MR_CHECK_MSG(close_rel(s[c], f0[c] / (4.0 * PI * 0.0081), 1e-12), "correlated %d: %.17g", corr, s[c]);
+            MR_CHECK(close_rel(d[c], rho[c] / PI, 1e-15));
+        }
+    }
+
+    /* height-correlated off normal, from Cycles 3.5's Lambda form */
+    set_param(m, v, "correlated", 1.0);
+    const double rough[] = {0.05, 0.3, 0.7, 1.0};
+    for (size_t k = 0; k < sizeof rough / sizeof rough[0]; k++) {
+        double wi[3], wo[3];
+        dir_from_angles(0.4 + 0.3 * k, 0.0, wi);
+        dir_from_angles(1.1 - 0.2 * k, 2.3, wo);
+        double h[3] = {wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]};
+        double hl = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]), ch = h[2] / hl;
+        double c_ih = (wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2]) / hl;
+        double a2 = pow(rough[k], 4.0), dd = 1.0 + (a2 - 1.0) * ch * ch, D = a2 / (PI * dd * dd);
+        double ti2 = (1.0 - wi[2] * wi[2]) / (wi[2] * wi[2]), to2 = (1.0 - wo[2] * wo[2]) / (wo[2] * wo[2]);
+        double Li = 0.5 * (sqrt(1.0 + a2 * ti2) - 1.0), Lo = 0.5 * (sqrt(1.0 + a2 * to2) - 1.0);
+        double G2 = 1.0 / (1.0 + Li + Lo);
+        set_param(m, v, "roughness", rough[k]);
+        eval_parts(m, v, wi, wo, d, s);
+        for (int c = 0; c < 3; c++) {
+            double F = f0[c] + (1.0 - f0[c]) * pow(1.0 - c_ih, 5.0);
+            double expect = F * D * G2 / (4.0 * wi[2] * wo[2]);
+            MR_CHECK_MSG(close_rel(s[c], expect, 1e-10), "roughness %g: %.15g vs %.15g", rough[k], s[c], expect);
+        }
+    }
+
+    /* the height-correlated G keeps more light than the separable one, and stays below 1 (f0 = 1, white furnace) */
+    set_rgb(m, v, "f0", 1.0, 1.0, 1.0);
+    set_rgb(m, v, "diffuse", 0.0, 0.0, 0.0);
+    for (size_t k = 0; k < sizeof rough / sizeof rough[0]; k++) {
+        double sep[3], cor[3], dd[3];
+        set_param(m, v, "roughness", rough[k]);
+        for (int a = 0; a < 3; a++) {
+            double theta = (double)a * 40.0 * PI / 180.0; /* 0, 40, 80 degrees */
+            set_param(m, v, "correlated", 0.0);
+            furnace(m, v, theta, dd, sep);
+            set_param(m, v, "correlated", 1.0);
+            furnace(m, v, theta, dd, cor);
+            MR_CHECK_MSG(cor[0] >= sep[0] - 1e-9 && cor[0] <= 1.0 + 1e-3, "roughness %g, %g deg: %.4f vs %.4f",
+                         rough[k], theta * 180.0 / PI, cor[0], sep[0]);
+            if (k == 3 && a == 2)
+                printf("      roughness 1 at 80 deg: albedo %.4f separable, %.4f correlated\n", sep[0], cor[0]);
+        }
+    }
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(find_unknown_lists_valid_names),
              MR_TEST_ENTRY(default_values_use_per_channel_defaults),
              MR_TEST_ENTRY(parse_assignment_accepts_and_rejects),
@@ -1182,4 +1279,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(find_u
              MR_TEST_ENTRY(known_microfacet_off_normal), MR_TEST_ENTRY(known_conductor_fresnel),
              MR_TEST_ENTRY(known_plastic), MR_TEST_ENTRY(known_ward_variants), MR_TEST_ENTRY(known_trimming),
              MR_TEST_ENTRY(known_phong), MR_TEST_ENTRY(known_blender_ward), MR_TEST_ENTRY(known_gltf),
-             MR_TEST_ENTRY(known_gltf_specgloss), MR_TEST_ENTRY(known_cycles_principled))
+             MR_TEST_ENTRY(known_gltf_specgloss), MR_TEST_ENTRY(known_cycles_principled),
+             MR_TEST_ENTRY(known_cycles_ggx))
