@@ -317,4 +317,14 @@ static inline double mr_gltf_visibility(double alpha, double nl, double nv, doub
     return V;
 }
 
+/* D V of GGX with the height-correlated V above: glTF's specular BRDF without F (brdf-reference 5.1), and Cycles
+ * 3.5+'s GGX G2 D/(4 cos_i cos_o) (4.1), at alpha, with its alpha derivative if d_dalpha. */
+static inline double mr_ggx_dv_correlated(double alpha, const mr_brdf_geom *g, double *d_dalpha) {
+    double dD, dV;
+    double D = mr_mf_D(MR_MF_GGX, alpha, g->cos_h, g->tan2_h, g->sin2_h, d_dalpha ? &dD : NULL);
+    double V = mr_gltf_visibility(alpha, g->cos_i, g->cos_o, d_dalpha ? &dV : NULL);
+    if (d_dalpha) *d_dalpha = dD * V + D * dV;
+    return D * V;
+}
+
 #endif /* MR_BRDF_INTERNAL_H */

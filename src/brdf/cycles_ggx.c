@@ -94,12 +94,7 @@ static void cg_prepare(const mr_brdf_model *model, const double *values, void *s
 
 /* D G/(4 cos_i cos_o) with either G, and its alpha derivative if d_dalpha. */
 static double cg_dg(double alpha, int correlated, const mr_brdf_geom *g, double *d_dalpha) {
-    if (!correlated) return mr_mf_dg(MR_MF_GGX, alpha, g, 0, d_dalpha);
-    double dD, dV;
-    double D = mr_mf_D(MR_MF_GGX, alpha, g->cos_h, g->tan2_h, g->sin2_h, d_dalpha ? &dD : NULL);
-    double V = mr_gltf_visibility(alpha, g->cos_i, g->cos_o, d_dalpha ? &dV : NULL);
-    if (d_dalpha) *d_dalpha = dD * V + D * dV;
-    return D * V;
+    return correlated ? mr_ggx_dv_correlated(alpha, g, d_dalpha) : mr_mf_dg(MR_MF_GGX, alpha, g, 0, d_dalpha);
 }
 
 static void cg_eval(const void *state_bytes, const double wi[3], const double wo[3], double diffuse[3],

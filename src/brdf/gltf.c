@@ -93,15 +93,6 @@ static void gltf_prepare(const mr_brdf_model *model, const double *values, void 
     }
 }
 
-/* D V of glTF (GGX D, height-correlated V) at alpha, with its alpha derivative if d_dalpha. */
-static double gltf_specular_brdf(double alpha, const mr_brdf_geom *g, double *d_dalpha) {
-    double dD, dV;
-    double D = mr_mf_D(MR_MF_GGX, alpha, g->cos_h, g->tan2_h, g->sin2_h, d_dalpha ? &dD : NULL);
-    double V = mr_gltf_visibility(alpha, g->cos_i, g->cos_o, d_dalpha ? &dV : NULL);
-    if (d_dalpha) *d_dalpha = dD * V + D * dV;
-    return D * V;
-}
-
 static void gltf_eval(const void *state_bytes, const double wi[3], const double wo[3], double diffuse[3],
                       double specular[3]) {
     const gltf_state *state = state_bytes;
@@ -120,7 +111,7 @@ static void gltf_eval(const void *state_bytes, const double wi[3], const double 
     if (diffuse)
         for (int c = 0; c < 3; c++) diffuse[c] = (1.0 - m) * (1.0 - Fmax) * state->base[c] * MR_INV_PI;
     if (specular) {
-        double S = gltf_specular_brdf(state->alpha, &g, NULL);
+        double S = mr_ggx_dv_correlated(state->alpha, &g, NULL);
         for (int c = 0; c < 3; c++)
             specular[c] = ((1.0 - m) * F[c] + m * (state->base[c] + (1.0 - state->base[c]) * w)) * S;
     }
@@ -137,7 +128,7 @@ static void gltf_eval_grad(const mr_brdf_model *model, const double *values, con
     double df0_ior = 4.0 * (ior - 1.0) / ((ior + 1.0) * (ior + 1.0) * (ior + 1.0));
     double w = mr_schlick_weight(g.dot_h);
     double dS_dalpha;
-    double S = gltf_specular_brdf(rough * rough, &g, &dS_dalpha);
+    double S = mr_ggx_dv_correlated(rough * rough, &g, &dS_dalpha);
 
     /* q_c = min(f0_ior color_c, 1); F_c = spec (q_c (1 - w) + w); Fmax = F at the channel of the largest q */
     double q[3], F[3];

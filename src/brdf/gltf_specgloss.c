@@ -80,8 +80,7 @@ static void specgloss_eval(const void *state_bytes, const double wi[3], const do
     double w = mr_schlick_weight(g.dot_h);
     double S = 0.0;
     if (specular)
-        S = mr_mf_D(MR_MF_GGX, state->alpha, g.cos_h, g.tan2_h, g.sin2_h, NULL) *
-            mr_gltf_visibility(state->alpha, g.cos_i, g.cos_o, NULL);
+        S = mr_ggx_dv_correlated(state->alpha, &g, NULL);
     for (int c = 0; c < 3; c++) {
         double F = state->f0[c] + (1.0 - state->f0[c]) * w;
         if (diffuse) diffuse[c] = (1.0 - F) * state->c_diff_over_pi[c];
@@ -98,12 +97,10 @@ static void specgloss_eval_grad(const mr_brdf_model *model, const double *values
     double rough = 1.0 - v[SG_GLOSSINESS];
     int floored = rough * rough <= SG_ALPHA_MIN;
     double alpha = floored ? SG_ALPHA_MIN : rough * rough;
-    double dD, dV;
-    double D = mr_mf_D(MR_MF_GGX, alpha, g.cos_h, g.tan2_h, g.sin2_h, &dD);
-    double V = mr_gltf_visibility(alpha, g.cos_i, g.cos_o, &dV);
-    double S = D * V;
+    double dS_dalpha;
+    double S = mr_ggx_dv_correlated(alpha, &g, &dS_dalpha);
     /* dalpha/dglossiness = -2 (1 - glossiness), 0 on the floor */
-    double dS_dgloss = floored ? 0.0 : (dD * V + D * dV) * -2.0 * rough;
+    double dS_dgloss = floored ? 0.0 : dS_dalpha * -2.0 * rough;
     double w = mr_schlick_weight(g.dot_h);
     int cmax = specgloss_argmax(f0);
     double smax = f0[cmax];
