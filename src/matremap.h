@@ -46,6 +46,7 @@
 #include "brdf/brdf.h"
 #include "render/render.h"
 #include "io/image_io.h"
+#include "io/obj_load.h"
 #include "metrics/metrics.h"
 #include "remap/remap.h"
 #include "remap/sweep.h"

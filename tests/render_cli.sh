@@ -93,6 +93,36 @@ expect "an RGB mask is refused, naming the file" 2 "white_env.exr.*1 channel" --
     "$tmp/ggx.exr" --mask "$tmp/white_env.exr"
 expect "a missing mask is named" 2 "nomask.exr" -- "$bin" ssim "$tmp/lam.exr" "$tmp/ggx.exr" --mask "$tmp/nomask.exr"
 
+# OBJ meshes (--mesh): a quad with UVs 0..1 under a red-over-blue map shows red above and blue below (the file's
+# v = 1 is the map's top row), lit by the point light kept beside the camera; the paper's sphere with its camera
+# covers most of the frame; a malformed file is named with its line.
+printf 'v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n' >"$tmp/quad.obj"
+oiiotool --create 16x16 3 --fill:color=1,0,0 16x8+0+0 --fill:color=0,0,1 16x8+0+8 -d float -o "$tmp/red_blue.exr"
+expect "--mesh renders an OBJ quad" 0 "2 triangles, 4 vertices" -- "$bin" render lambert albedo=@"$tmp/red_blue.exr" \
+    --mesh "$tmp/quad.obj" --size 32 -o "$tmp/quad.exr"
+avg() { # the mean R and B of a crop
+    oiiotool "$1" --cut "$2" --printstats 2>/dev/null |
+        sed -nE 's/.*Stats Avg: ([-0-9.e+]+) ([-0-9.e+]+) ([-0-9.e+]+).*/\1 \3/p'
+}
+read -r top_r top_b < <(avg "$tmp/quad.exr" 32x8+0+4)
+read -r bottom_r bottom_b < <(avg "$tmp/quad.exr" 32x8+0+20)
+check "the map's top row lies at the file's v = 1: red above ($top_r, $top_b), blue below ($bottom_r, $bottom_b)" \
+    awk -v a="$top_r" -v b="$top_b" -v c="$bottom_r" -v d="$bottom_b" \
+    'BEGIN { exit !(a > 0.05 && b == 0 && c == 0 && d > 0.05) }'
+matsphere="${MR_SHARED:-$(dirname "$0")/../../shared}/assets/paper/matsphere.obj"
+expect "the paper's sphere with --camera paper" 0 "55742 triangles" -- "$bin" render ggx alpha=0.2 \
+    --mesh "$matsphere" --camera paper --size 32 --mask "$tmp/matsphere_mask.exr" -o "$tmp/matsphere.exr"
+covered=$(oiiotool "$tmp/matsphere_mask.exr" --printstats 2>/dev/null | sed -nE 's/.*Stats Avg: ([-0-9.e+]+).*/\1/p')
+check "it fills 74 % of the frame as a radius 0.5 sphere at 1.5 with a 40-degree view ($covered)" \
+    awk -v v="$covered" 'BEGIN { exit !(v > 0.70 && v < 0.78) }'
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n' >"$tmp/bad.obj"
+expect "a malformed OBJ is named with its line" 2 "bad.obj', line 4: v index '4': out of range" -- "$bin" render ggx \
+    --mesh "$tmp/bad.obj" -o "$tmp/e9.exr"
+expect "a missing OBJ is named" 2 "nomesh.obj': cannot open" -- "$bin" render ggx --mesh "$tmp/nomesh.obj" \
+    -o "$tmp/e10.exr"
+expect "--camera takes auto or paper" 1 "expected auto or paper" -- "$bin" render ggx --camera side -o "$tmp/e11.exr"
+check "no output after these failures" test ! -e "$tmp/e9.exr" -a ! -e "$tmp/e10.exr" -a ! -e "$tmp/e11.exr"
+
 # Errors: the file or value named, nothing written.
 expect "a missing map is named" 2 "nomap.png" -- "$bin" render ggx diffuse=@"$tmp/nomap.png" -o "$tmp/e1.exr"
 expect "a missing environment is named" 2 "noenv.hdr" -- "$bin" render ggx --env "$tmp/noenv.hdr" -o "$tmp/e2.exr"

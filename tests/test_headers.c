@@ -5,6 +5,7 @@
  */
 #include "brdf/brdf.h"
 #include "io/image_io.h"
+#include "io/obj_load.h"
 #include "metrics/metrics.h"
 #include "render/render.h"
 #include "remap/sweep.h"

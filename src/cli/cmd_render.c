@@ -1,14 +1,60 @@
 /*
  * cmd_render.c — `matremap render MODEL [name=value|name=@MAP ...] [--size N] [--light 45|frontal]
  *                [--env FILE [--env-rotation DEG] [--env-samples N] [--env-reflection-samples M] [--env-scale S]]
+ *                [--mesh FILE.obj] [--camera auto|paper]
  *                [--component full|diffuse|specular] [--exposure E] [--mask FILE] -o OUT`
  * Renders a material in the paper's fit scene (render.h), or under an environment map, optionally with
  * parameters from texture maps over the sphere, and writes it in the format of OUT's extension; --mask writes
- * the plan's coverage (mr_render_plan_coverage_mask), the object mask `matremap ssim --mask` takes.
+ * the plan's coverage (mr_render_plan_coverage_mask), the object mask `matremap ssim --mask` takes. --mesh puts
+ * an OBJ mesh (io/obj_load.h) in the sphere's place, its maps read at the mesh's UVs; the point light then keeps
+ * its place relative to the camera and the object's size (mesh_lights below).
  */
+#include <math.h>
 #include <string.h>
 
 #include "cli.h"
+#include "io/obj_load.h"
+
+/* The paper's visualisation camera (brdf-reference 1: Mitsuba perspective, fov 40 on y, at (0,0,-1.5) looking at
+ * the origin), framing its material-test sphere of radius 0.5. */
+static const mr_camera paper_camera = {{0.0, 0.0, -1.5}, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, 40.0};
+
+/* The fit scene's point light (distance 3 from a unit sphere, 10 W/sr, frontal or 45 degrees to the camera's
+ * right) scaled to the object and turned with the camera: at 3 bounding radii from the centre of the object's
+ * bounding sphere (centre of its box, radius to its farthest vertex; the unit sphere for the sphere), in the fit
+ * scene's direction relative to the camera, with intensity 10 radius^2 W/sr, so that an object of any size
+ * receives the fit scene's irradiance where the camera sees it. */
+static void mesh_lights(const mr_mesh *mesh, mr_fit_light which, mr_scene *scene) {
+    double centre[3] = {0.0, 0.0, 0.0}, radius = 1.0;
+    if (mesh != NULL) {
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (int v = 0; v < mesh->vertex_count; v++)
+            for (int i = 0; i < 3; i++) {
+                lo[i] = fmin(lo[i], mesh->positions[3 * v + i]);
+                hi[i] = fmax(hi[i], mesh->positions[3 * v + i]);
+            }
+        radius = 0.0;
+        for (int i = 0; i < 3; i++) centre[i] = 0.5 * (lo[i] + hi[i]);
+        for (int v = 0; v < mesh->vertex_count; v++) {
+            double d2 = 0.0;
+            for (int i = 0; i < 3; i++) d2 += (mesh->positions[3 * v + i] - centre[i]) * (mesh->positions[3 * v + i] -
+                                                                                         centre[i]);
+            radius = fmax(radius, sqrt(d2));
+        }
+    }
+    const mr_camera *cam = &scene->camera;
+    double back[3], right[3], len = 0.0; /* towards the camera; the camera's right = up x back */
+    for (int i = 0; i < 3; i++) back[i] = cam->position[i] - cam->target[i], len += back[i] * back[i];
+    for (int i = 0; i < 3; i++) back[i] /= sqrt(len);
+    right[0] = cam->up[1] * back[2] - cam->up[2] * back[1];
+    right[1] = cam->up[2] * back[0] - cam->up[0] * back[2];
+    right[2] = cam->up[0] * back[1] - cam->up[1] * back[0];
+    len = sqrt(right[0] * right[0] + right[1] * right[1] + right[2] * right[2]);
+    double angle = which == MR_FIT_LIGHT_FRONTAL ? 0.0 : atan(1.0); /* pi/4 */
+    for (int i = 0; i < 3; i++)
+        scene->lights[0].position[i] = centre[i] + 3.0 * radius * (cos(angle) * back[i] + sin(angle) * right[i] / len);
+    for (int c = 0; c < 3; c++) scene->lights[0].intensity[c] *= radius * radius;
+}
 
 static void print_help(void) {
     printf("Usage: matremap render MODEL [name=value|name=@MAP ...] [options] -o OUT.exr|.hdr|.png|.jpg|.tif\n"
@@ -25,14 +71,15 @@ static void print_help(void) {
            "read linearly; EXR/HDR/float files are always linear. A scalar parameter reads a grey image, or one\n"
            "channel of a colour image chosen with name=@MAP:r, :g, :b or :a (glTF packs roughness in g and\n"
            "metallic in b; a glTF roughness must still be squared into an alpha). Maps are sampled bilinearly,\n"
-           "wrapping around the sphere and clamped at the poles, without mipmaps.\n"
+           "wrapping around the sphere and clamped at the poles, without mipmaps (on a --mesh: at its UVs,\n"
+           "repeating in u and clamped in v, the same rule).\n"
            "\n"
            "Environment lighting: --env FILE lights the sphere with an equirectangular HDR map (its centre lies\n"
            "behind the sphere, straight ahead of the camera; the background stays black), sampled with a fixed\n"
            "pattern of N directions importance-sampled by luminance, the same for every pixel: no noise, a\n"
            "bias that shrinks as N grows. --env replaces the point light unless --light is also given.\n"
-           "\n"
-           "Options:\n"
+           "\n");
+    printf("Options:\n"
            "  -o, --output FILE     output image (required)\n"
            "  --size N              image side in pixels (default 512)\n"
            "  --light 45|frontal    point-light position (default 45)\n"
@@ -45,6 +92,15 @@ static void print_help(void) {
            "                        pattern by MIS: smooth materials (GGX alpha < ~0.1) reflect the map instead\n"
            "                        of showing the pattern's directions as sparkles; 0-%d (default 0)\n"
            "  --env-scale S         multiply the map's radiance by S (default 1)\n"
+           "  --mesh FILE.obj       render a Wavefront OBJ mesh instead of the sphere (faces of every object and\n"
+           "                        group, one material; missing normals computed smooth; texture v flipped, so\n"
+           "                        a map's top row lies at the file's v = 1; docs/rendering.md, \"OBJ meshes\").\n"
+           "                        Maps are read at its UVs; the point light keeps its place relative to the\n"
+           "                        camera, 3 bounding radii from the object, scaled to its size\n"
+           "  --camera auto|paper   auto (default): the fit scene's camera for the sphere; for a mesh, looking down\n"
+           "                        -z at its bounding sphere, which fills 90 %% of the 35-degree view. paper: the\n"
+           "                        paper's visualisation camera, at (0,0,-1.5) looking at the origin, 40 degrees\n"
+           "                        (made for its material-test sphere of radius 0.5)\n"
            "  --component C         full, diffuse or specular (default full)\n"
            "  --exposure E          multiply radiance by E before writing (default 1)\n"
            "  --edge-samples N      silhouette pixels are box-filtered with NxN rays (default 4; 1 = pixel\n"
@@ -63,12 +119,15 @@ static void print_help(void) {
            "  matremap render gltf base_color=0.8,0.2,0.1 metallic=0 roughness=0.4 -o sphere.exr\n"
            "  matremap render ggx diffuse=@d.png f0=@s.png alpha=0.2 --env studio.hdr --size 256 -o x.exr\n"
            "  matremap render ggx-metallic albedo=@base.png metallic=@orm.png:b alpha=@alpha.exr --env studio.hdr \\\n"
-           "      --env-rotation 90 -o y.png\n",
+           "      --env-rotation 90 -o y.png\n"
+           "  matremap render ward alpha=@rough.exr specular=@spec.png --mesh matsphere.obj --camera paper \\\n"
+           "      --env tabac_plant_vogl.hdr --env-rotation 45 -o z.exr\n",
            MR_ENV_DEFAULT_SAMPLES, MR_ENV_MAX_REFLECTION_SAMPLES);
 }
 
 int cmd_render(int argc, char **argv) {
-    const char *model_name = NULL, *output = NULL, *env_path = NULL, *mask_path = NULL;
+    const char *model_name = NULL, *output = NULL, *env_path = NULL, *mask_path = NULL, *mesh_path = NULL;
+    int paper = 0;
     mr_fit_scene_options scene_opts = {0};
     int light_given = 0, env_option = 0, env_samples = 0, reflection_samples = 0;
     double env_rotation = 0.0, env_scale = 1.0;
@@ -119,6 +178,14 @@ int cmd_render(int argc, char **argv) {
             if (taken < 0 || !cli_parse_double("render", "--env-scale", value, 0.0, 1e9, &env_scale))
                 return CLI_EXIT_USAGE;
             env_option = 1;
+        } else if ((taken = cli_take_option("render", argc, argv, &i, "--mesh", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            mesh_path = value;
+        } else if ((taken = cli_take_option("render", argc, argv, &i, "--camera", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (strcmp(value, "auto") != 0 && strcmp(value, "paper") != 0)
+                return cli_usage_error("render", "--camera '%s': expected auto or paper", value);
+            paper = strcmp(value, "paper") == 0;
         } else if ((taken = cli_take_option("render", argc, argv, &i, "--component", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             if (mr_component_from_name(value, &component) != MR_OK)
@@ -159,15 +226,36 @@ int cmd_render(int argc, char **argv) {
 
     mr_image *env = NULL, *image = NULL;
     mr_render_plan *plan = NULL;
+    mr_obj_mesh *obj = NULL;
     mr_status status = MR_OK;
     if (code == CLI_EXIT_OK && env_path != NULL) {
         status = mr_img_read(env_path, NULL, &env);
         if (status != MR_OK) code = cli_fail("render", status);
     }
+    double load_seconds = 0.0;
+    if (code == CLI_EXIT_OK && mesh_path != NULL) {
+        double t0 = cli_now();
+        status = mr_obj_load(mesh_path, NULL, &obj);
+        load_seconds = cli_now() - t0;
+        if (status != MR_OK) code = cli_fail("render", status);
+        else if (obj->warnings[0] != '\0')
+            fprintf(stderr, "matremap render: warning: OBJ '%s': %s", mesh_path, obj->warnings);
+    }
     double start = cli_now(), plan_seconds = 0.0;
     mr_scene scene = mr_scene_fit(&scene_opts);
     scene.edge_samples = edge_samples;
     scene.threads = threads;
+    if (obj != NULL) {
+        scene.shape.type = MR_SHAPE_MESH;
+        scene.shape.mesh = &obj->mesh;
+        mr_frame_options frame = {0};
+        frame.width = scene.width;
+        frame.height = scene.height;
+        if (!paper) status = mr_camera_frame_mesh(&obj->mesh, &frame, &scene.camera);
+        if (status != MR_OK) code = cli_fail("render", status);
+    }
+    if (paper) scene.camera = paper_camera;
+    if (obj != NULL || paper) mesh_lights(obj != NULL ? &obj->mesh : NULL, scene_opts.light, &scene);
     if (env != NULL) {
         // --env alone lights with the map only; with an explicit --light the point light stays as well.
         int slot = light_given ? scene.light_count++ : 0;
@@ -194,6 +282,10 @@ int cmd_render(int argc, char **argv) {
             if (status == MR_OK) status = mr_img_write(mask_path, mask, &mask_opts);
             mr_image_free(mask);
         }
+        if (status == MR_OK && obj != NULL)
+            fprintf(stderr, "matremap render: mesh %s: %d triangles, %d vertices, read in %.1f ms; %ld shadow rays\n",
+                    mesh_path, obj->mesh.triangle_count, obj->mesh.vertex_count, 1e3 * load_seconds,
+                    mr_render_plan_shadow_ray_count(plan));
         if (status == MR_OK)
             fprintf(stderr, "matremap render: wrote %s (%s, %dx%d, %d lit pixels, %ld shading samples, plan %.1f ms, "
                     "rendered in %.1f ms)\n", output, mr_component_name(component), scene.width, scene.height,
@@ -205,6 +297,7 @@ int cmd_render(int argc, char **argv) {
     mr_image_free(image);
     mr_render_plan_free(plan);
     mr_image_free(env);
+    mr_obj_mesh_free(obj);
     mr_material_free(material);
     return code;
 }

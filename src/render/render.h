@@ -10,7 +10,8 @@
  * Environment lighting: scene.lights[i] = mr_light_environment(map, 1.0, 0.0, 0) (an equirectangular HDR
  * image, e.g. read with mr_img_read) in place of, or beside, the point light. docs/rendering.md has the details.
  * Triangle meshes: scene.shape.type = MR_SHAPE_MESH, scene.shape.mesh = &mesh (an mr_mesh the caller fills, e.g.
- * from a glTF primitive), and mr_camera_frame_mesh(&mesh, NULL, &scene.camera) to frame it.
+ * from a glTF primitive, or one read from an OBJ file by mr_obj_load, io/obj_load.h), and
+ * mr_camera_frame_mesh(&mesh, NULL, &scene.camera) to frame it.
  *
  * Design (docs/design.md principle 2, "simulate only the effects a scene calls for"):
  *   - A plan is built once per scene. It traces one primary ray through each pixel centre and keeps the hits on
