@@ -99,6 +99,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h 
                   src/io/image_io.h src/io/obj_load.h src/metrics/metrics.h src/remap/remap.h src/remap/sweep.h \
                   src/workflow/workflow.h \
                   src/workflow/dataset.h src/workflow/labels.h src/transform/transform.h src/report/report.h nn/mlp.h \
+                  src/learn/parametric.h src/learn/svr.h src/learn/sweep_table.h src/learn/learned.h \
                   gltf/mr_gltf.h gltf/mr_gltf_convert.h gltf/mr_gltf_scene.h
 
 .PHONY: all check asan demo bench analyses evaluation evaluation-gltf evaluation-hardcases evaluation-viewers dataset \

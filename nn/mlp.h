@@ -253,6 +253,11 @@ mr_status mr_mlp_train(const float *x, const float *y, size_t n, int n_in, int n
  * existing one is left as it was. */
 mr_status mr_mlp_write(const mr_mlp *net, const char *path);
 
+/* The weight file's text in memory (*text malloc'ed, NUL-terminated, the caller frees it; *length may be NULL):
+ * exactly the bytes mr_mlp_write writes, for formats that embed a network (src/learn/learned.h). `name` labels
+ * errors (NULL = "<memory>"). Errors as mr_mlp_write's, without MR_ERR_IO. */
+mr_status mr_mlp_format(const mr_mlp *net, const char *name, char **text, size_t *length);
+
 /* Read a weight file. MR_ERR_IO (cannot open or read, naming the path), MR_ERR_FORMAT (naming the path and
  * line: see the header comment), MR_ERR_NOMEM. On success *out is the caller's (mr_mlp_free); on failure it
  * is untouched. */

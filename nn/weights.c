@@ -121,10 +121,11 @@ static mr_status format_net(const mr_mlp *net, out_text *o) {
     return MR_OK;
 }
 
-mr_status mr_mlp_write(const mr_mlp *net, const char *path) {
-    if (path == NULL || path[0] == '\0') return mr_fail(MR_ERR_INVALID_ARG, "mlp write: empty path");
-    if (net == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mlp write '%s': NULL network", path);
-    mr_status status = check_values(net, path);
+mr_status mr_mlp_format(const mr_mlp *net, const char *name, char **text, size_t *length) {
+    if (name == NULL) name = "<memory>";
+    if (net == NULL || text == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mlp write '%s': NULL argument", name);
+    *text = NULL;
+    mr_status status = check_values(net, name);
     if (status != MR_OK) return status;
     mr_c_numeric locale;
     status = mr_c_numeric_enter(&locale, "mlp write");
@@ -133,8 +134,18 @@ mr_status mr_mlp_write(const mr_mlp *net, const char *path) {
     status = format_net(net, &o);
     mr_c_numeric_leave(&locale);
     if (status != MR_OK) return status;
-    status = mr_atomic_write_bytes(path, o.text, o.length);
-    free(o.text);
+    *text = o.text;
+    if (length != NULL) *length = o.length;
+    return MR_OK;
+}
+
+mr_status mr_mlp_write(const mr_mlp *net, const char *path) {
+    if (path == NULL || path[0] == '\0') return mr_fail(MR_ERR_INVALID_ARG, "mlp write: empty path");
+    char *text = NULL;
+    size_t length = 0;
+    mr_status status = mr_mlp_format(net, path, &text, &length);
+    if (status == MR_OK) status = mr_atomic_write_bytes(path, text, length);
+    free(text);
     return status;
 }
 

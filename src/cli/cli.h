@@ -75,6 +75,8 @@ int cmd_remap(int argc, char **argv);
 int cmd_sweep(int argc, char **argv);
 int cmd_dataset(int argc, char **argv);
 int cmd_train(int argc, char **argv);
+int cmd_learn(int argc, char **argv);
+int cmd_convert(int argc, char **argv);
 int cmd_spec2metal(int argc, char **argv);
 int cmd_report(int argc, char **argv);
 int cmd_gltf(int argc, char **argv);

@@ -22,6 +22,8 @@ static const command commands[] = {
     {"sweep", cmd_sweep, "remap a grid or random sample of source materials into a resumable CSV file"},
     {"dataset", cmd_dataset, "make the specular -> metallic training pairs (image labels); compare objectives"},
     {"train", cmd_train, "train the specular -> metallic network on sweep files (the dataset)"},
+    {"learn", cmd_learn, "learn a transform between two models from sweep files (parametric, svr, mlp)"},
+    {"convert", cmd_convert, "convert texture maps from one model to another (learned, chained or direct)"},
     {"spec2metal", cmd_spec2metal, "convert specular-workflow texture maps to metallic ones (also a command)"},
     {"metal2spec", cmd_metal2spec, "convert metallic-workflow texture maps to specular ones (also a command)"},
     {"gltf", cmd_gltf, "convert a glTF asset's materials: gltf spec2metal|metal2spec IN -o OUT"},

@@ -75,21 +75,30 @@ static mr_status check_finite(const double *v, size_t n, const char *what) {
 }
 
 mr_status mr_fit_polynomial(const double *x, const double *y, size_t n, int degree, double *c, double *rms) {
+    return mr_fit_polynomial_ex(x, y, n, degree, 0, c, rms);
+}
+
+mr_status mr_fit_polynomial_ex(const double *x, const double *y, size_t n, int degree, int through_origin, double *c,
+                               double *rms) {
     if (x == NULL || y == NULL || c == NULL) return mr_fail(MR_ERR_INVALID_ARG, "polynomial fit: NULL argument");
     if (degree < 0 || degree > MR_POLY_MAX_DEGREE)
         return mr_fail(MR_ERR_INVALID_ARG, "polynomial fit: degree %d: expected 0 .. %d", degree, MR_POLY_MAX_DEGREE);
-    if (n < (size_t)degree + 1)
-        return mr_fail(MR_ERR_INVALID_ARG, "polynomial fit: %zu pairs for degree %d (at least %d)", n, degree,
-                       degree + 1);
+    if (through_origin && degree < 1)
+        return mr_fail(MR_ERR_INVALID_ARG, "polynomial fit: degree %d through the origin: expected 1 .. %d", degree,
+                       MR_POLY_MAX_DEGREE);
+    const int m = degree + 1 - (through_origin != 0); // coefficients fitted
+    if (n < (size_t)m)
+        return mr_fail(MR_ERR_INVALID_ARG, "polynomial fit: %zu pairs for degree %d (at least %d)", n, degree, m);
     mr_status status = check_finite(x, n, "x");
     if (status == MR_OK) status = check_finite(y, n, "y");
     if (status != MR_OK) return status;
-    const int m = degree + 1;
     double *a = malloc(n * (size_t)m * sizeof *a), rss = 0.0;
     if (a == NULL) return mr_fail(MR_ERR_NOMEM, "polynomial fit: out of memory for %zu pairs", n);
-    for (size_t i = 0; i < n; i++)
-        for (int k = 0, p = 1; k < m; k++, p = 0) a[i * (size_t)m + (size_t)k] = p ? 1.0 : a[i * m + k - 1] * x[i];
-    const int ok = least_squares(a, y, n, m, c, &rss);
+    for (size_t i = 0; i < n; i++) // column k holds x^(k + through_origin)
+        for (int k = 0; k < m; k++)
+            a[i * (size_t)m + (size_t)k] = k > 0 ? a[i * m + k - 1] * x[i] : through_origin ? x[i] : 1.0;
+    c[0] = 0.0;
+    const int ok = least_squares(a, y, n, m, c + (through_origin != 0), &rss);
     free(a);
     if (!ok)
         return mr_fail(MR_ERR_INVALID_ARG, "polynomial fit: the %zu x values do not determine a degree-%d polynomial "

@@ -3,7 +3,7 @@
  * pairs of remapped uniform materials (sweeps), the target roughness as a polynomial of the source roughness, and
  * the target specular as the source specular times one slope k(alpha) for all three channels (chromaticity kept),
  *     k(alpha) = c0 + c1 e^(-c2 alpha) + c3 e^(-c4 alpha^2) [+ c5 / alpha].
- * Groundwork of issue 15 (`matremap learn --method parametric`); not installed yet.
+ * Used by `matremap learn --method parametric` (learned.h).
  *
  * Conditioning. Fitted freely, that form is ill-conditioned: for a small c2, c1 e^(-c2 alpha) ~ c1 - c1 c2 alpha
  * trades off against c0, and unbounded fits drift to c0 ~ -600, c1 ~ +600 (the paper's appendix prints such
@@ -36,6 +36,11 @@ extern "C" {
  * mean square. MR_ERR_INVALID_ARG for degree outside 0..MR_POLY_MAX_DEGREE, fewer than degree + 1 pairs, or a
  * non-finite value (naming its index). */
 mr_status mr_fit_polynomial(const double *x, const double *y, size_t n, int degree, double *c, double *rms);
+
+/* The same with c[0] = 0 when through_origin (a mirror stays a mirror; the authors' roughness fit has no constant
+ * term): x^1 .. x^degree fitted, degree >= 1. */
+mr_status mr_fit_polynomial_ex(const double *x, const double *y, size_t n, int degree, int through_origin, double *c,
+                               double *rms);
 
 /* c[0] + c[1] x + ... */
 double mr_polynomial_eval(const double *c, int degree, double x);

@@ -1,0 +1,413 @@
+/*
+ * cmd_convert.c — `matremap convert`: texture maps (or constants) of one BRDF model's parameters converted to
+ * another model's, per texel, through learned transforms (one, a chain given or found), through the library's
+ * texture-set conversion (mr_transform_convert_maps); see docs/learn.md.
+ */
+#include <dirent.h>
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "learn/learned.h"
+
+#define COMMAND "convert"
+#define MAX_TRANSFORMS 256
+
+static void print_help(void) {
+    printf("Usage: matremap convert --from MODEL --to MODEL NAME=FILE|VALUE ...\n"
+           "                        (--transform T.mrt [--transform T2.mrt ...] | --transforms DIR [--via MODEL,...])\n"
+           "                        -o PREFIX [options]\n"
+           "\n"
+           "Converts a material of one BRDF model into another, texel by texel: every NAME=FILE gives a parameter of\n"
+           "the source model as a texture map (any format the tool reads; FILE:r|g|b|a picks one channel for a\n"
+           "one-channel parameter; 8/16-bit colour maps are sRGB-decoded, everything else is read as it is),\n"
+           "NAME=VALUE (or NAME=R,G,B) a constant; parameters not given keep the model's defaults ('matremap models\n"
+           "MODEL' lists them). Maps must share one size; constants broadcast. With constants only, the one texel is\n"
+           "converted and printed as 'MODEL name=value ...'.\n"
+           "\n"
+           "How:\n"
+           "  --transform T.mrt   a transform made by 'matremap learn'; repeat it to chain transforms in order\n"
+           "  --transforms DIR    every *.mrt in DIR: the chain from --from to --to with the fewest hops (then the\n"
+           "                      least held-out error) is found; --via MODEL[,MODEL...] makes it pass those models\n"
+           "\n"
+           "Outputs: PREFIX<param>.exr (linear float; --format png: 8-bit, colour parameters sRGB-encoded) for every\n"
+           "parameter of the target model, the first input map's alpha carried into RGB outputs, and\n"
+           "PREFIXflags.png: red where a texel lay outside a learned transform's training domain (extrapolated:\n"
+           "the paper's Fig. 19 failure), green where an output left its parameter's range and was clamped, blue\n"
+           "where an input was clamped or not finite. PREFIX may name a folder ('out/'). No output may be an input.\n"
+           "\n"
+           "Options:\n"
+           "  --format exr|png    output format (default exr)\n"
+           "  --threads T         threads (default: automatic; the result does not depend on it)\n"
+           "  --json              the summary as JSON on stdout\n"
+           "  --help              this text\n"
+           "\n"
+           "Examples:\n"
+           "  matremap convert --from ward --to ggx alpha=@rough.exr specular=@spec.png diffuse=@diff.png \\\n"
+           "                   --transform ward_ggx.mrt -o out/ggx_\n"
+           "  matremap convert --from blender-ward --to ggx specular=0.1 rms=0.2 --transforms transforms/ \\\n"
+           "                   --via ward\n");
+}
+
+static int same_file(const char *a, const char *b) {
+    struct stat sa, sb;
+    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+/* "name=VALUE" keeps its form, "name=FILE" becomes "name=@FILE" (cli_material's map syntax); *owned gets the copy. */
+static const char *as_material_assignment(const char *arg, char **owned) {
+    const char *eq = strchr(arg, '=');
+    *owned = NULL;
+    if (eq == NULL || eq[1] == '@' || eq[1] == '\0') return arg;
+    char *end = NULL;
+    (void)strtod(eq + 1, &end);
+    if (end != eq + 1 && (*end == '\0' || *end == ',')) return arg; // a number or a list of numbers
+    size_t n = strlen(arg);
+    char *copy = malloc(n + 2);
+    if (copy == NULL) return arg;
+    size_t head = (size_t)(eq - arg) + 1;
+    memcpy(copy, arg, head);
+    copy[head] = '@';
+    memcpy(copy + head + 1, eq + 1, n - head + 1);
+    *owned = copy;
+    return copy;
+}
+
+typedef struct loaded {
+    mr_learned *all[MAX_TRANSFORMS];
+    char *paths[MAX_TRANSFORMS];
+    int count;
+} loaded;
+
+static void loaded_free(loaded *l) {
+    for (int i = 0; i < l->count; i++) {
+        mr_learned_free(l->all[i]);
+        free(l->paths[i]);
+    }
+    l->count = 0;
+}
+
+static int load_one(loaded *l, const char *path) {
+    if (l->count == MAX_TRANSFORMS) return cli_usage_error(COMMAND, "more than %d transforms", MAX_TRANSFORMS);
+    mr_status status = mr_learned_read(path, &l->all[l->count]);
+    if (status != MR_OK) return cli_fail(COMMAND, status);
+    l->paths[l->count] = strdup(path);
+    l->count++;
+    return CLI_EXIT_OK;
+}
+
+static int load_dir(loaded *l, const char *dir) {
+    DIR *d = opendir(dir);
+    if (d == NULL) {
+        fprintf(stderr, "matremap convert: error: --transforms '%s': %s\n", dir, strerror(errno));
+        return CLI_EXIT_BAD_INPUT;
+    }
+    // Sorted names, so the chain chosen among equals does not depend on the directory's order.
+    char *names[MAX_TRANSFORMS];
+    int count = 0, code = CLI_EXIT_OK;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) {
+        size_t n = strlen(e->d_name);
+        if (n < 5 || strcmp(e->d_name + n - 4, ".mrt") != 0) continue;
+        if (count == MAX_TRANSFORMS) break;
+        names[count++] = strdup(e->d_name);
+    }
+    closedir(d);
+    for (int i = 1; i < count; i++)
+        for (int j = i; j > 0 && strcmp(names[j - 1], names[j]) > 0; j--) {
+            char *t = names[j];
+            names[j] = names[j - 1];
+            names[j - 1] = t;
+        }
+    for (int i = 0; i < count; i++) {
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s", dir, names[i]);
+        if (code == CLI_EXIT_OK) code = load_one(l, path);
+        free(names[i]);
+    }
+    if (code == CLI_EXIT_OK && count == 0) {
+        fprintf(stderr, "matremap convert: error: --transforms '%s': no *.mrt files there\n", dir);
+        code = CLI_EXIT_BAD_INPUT;
+    }
+    return code;
+}
+
+static int is_colour(const mr_brdf_param *p) { return p->channels == 3 && p->min_value >= 0.0 && p->max_value <= 1.0; }
+
+/* out[j] with the alpha of `alpha_source` appended when it has one (RGB outputs only); else out[j] itself. */
+static mr_status with_alpha(mr_image *rgb, const mr_image *alpha_source, mr_image **out) {
+    *out = rgb;
+    if (alpha_source == NULL || rgb->channels != 3) return MR_OK;
+    mr_image *rgba = NULL;
+    mr_status status = mr_image_create(rgb->width, rgb->height, 4, &rgba);
+    if (status != MR_OK) return status;
+    const size_t n = (size_t)rgb->width * (size_t)rgb->height;
+    for (size_t i = 0; i < n; i++) {
+        memcpy(rgba->pixels + 4 * i, rgb->pixels + 3 * i, 3 * sizeof *rgba->pixels);
+        rgba->pixels[4 * i + 3] = alpha_source->pixels[i * 4 + 3];
+    }
+    *out = rgba;
+    return MR_OK;
+}
+
+int cmd_convert(int argc, char **argv) {
+    const char *from = NULL, *to = NULL, *prefix = NULL, *format = "exr", *dir = NULL, *via_list = NULL;
+    const char *assignments[CLI_MAX_ASSIGNMENTS], *transform_paths[MR_LEARNED_MAX_HOPS];
+    char *owned[CLI_MAX_ASSIGNMENTS];
+    int assignment_count = 0, transform_count = 0, json = 0, threads = 0;
+    for (int i = 1; i < argc; i++) {
+        const char *v = NULL;
+        int r;
+        if (cli_is_help(argv[i])) {
+            print_help();
+            return CLI_EXIT_OK;
+        }
+        if ((r = cli_take_option(COMMAND, argc, argv, &i, "--from", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            from = v;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--to", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            to = v;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--output", &v)) != 0 ||
+                   (r = cli_take_option(COMMAND, argc, argv, &i, "-o", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            prefix = v;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--transform", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            if (transform_count == MR_LEARNED_MAX_HOPS)
+                return cli_usage_error(COMMAND, "more than %d --transform files", MR_LEARNED_MAX_HOPS);
+            transform_paths[transform_count++] = v;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--transforms", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            dir = v;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--via", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            via_list = v;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--format", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            if (strcmp(v, "exr") != 0 && strcmp(v, "png") != 0)
+                return cli_usage_error(COMMAND, "--format '%s': expected exr or png", v);
+            format = v;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--threads", &v)) != 0) {
+            if (r < 0 || !cli_parse_int(COMMAND, "--threads", v, 1, 1024, &threads)) return CLI_EXIT_USAGE;
+        } else if (strcmp(argv[i], "--json") == 0) {
+            json = 1;
+        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
+            return cli_usage_error(COMMAND, "unknown option '%s'", argv[i]);
+        } else if (strchr(argv[i], '=') != NULL) {
+            if (assignment_count == CLI_MAX_ASSIGNMENTS) return cli_usage_error(COMMAND, "too many assignments");
+            assignments[assignment_count] = argv[i];
+            owned[assignment_count++] = NULL;
+        } else {
+            return cli_usage_error(COMMAND, "'%s': expected NAME=FILE or NAME=VALUE", argv[i]);
+        }
+    }
+    if (from == NULL || to == NULL) return cli_usage_error(COMMAND, "give --from MODEL and --to MODEL");
+    if ((transform_count > 0) + (dir != NULL) != 1)
+        return cli_usage_error(COMMAND, "give --transform T.mrt (repeatable) or --transforms DIR");
+    if (via_list != NULL && dir == NULL) return cli_usage_error(COMMAND, "--via needs --transforms DIR");
+    const mr_brdf_model *source = mr_brdf_find(from), *target = source ? mr_brdf_find(to) : NULL;
+    if (source == NULL || target == NULL) return cli_fail(COMMAND, MR_ERR_INVALID_ARG);
+
+    // The chain.
+    loaded l = {{NULL}, {NULL}, 0};
+    int code = CLI_EXIT_OK, path[MR_LEARNED_MAX_HOPS], hops = 0;
+    for (int k = 0; k < transform_count && code == CLI_EXIT_OK; k++) {
+        code = load_one(&l, transform_paths[k]);
+        path[hops++] = k;
+    }
+    if (code == CLI_EXIT_OK && dir != NULL) code = load_dir(&l, dir);
+    if (code != CLI_EXIT_OK) {
+        loaded_free(&l);
+        return code;
+    }
+    if (dir != NULL) {
+        const mr_brdf_model *via[MR_LEARNED_MAX_HOPS];
+        int via_count = 0;
+        char list[1024];
+        snprintf(list, sizeof list, "%s", via_list ? via_list : "");
+        for (char *save = NULL, *w = strtok_r(list, ",", &save); w; w = strtok_r(NULL, ",", &save)) {
+            if (via_count == MR_LEARNED_MAX_HOPS) break;
+            via[via_count] = mr_brdf_find(w);
+            if (via[via_count++] == NULL) {
+                loaded_free(&l);
+                return cli_fail(COMMAND, MR_ERR_INVALID_ARG);
+            }
+        }
+        mr_status status = mr_learned_find_chain((const mr_learned *const *)l.all, l.count, source, target, via,
+                                                 via_count, path, &hops);
+        if (status != MR_OK) {
+            loaded_free(&l);
+            return cli_fail(COMMAND, status);
+        }
+    } else {
+        const mr_learned *first = l.all[path[0]], *last = l.all[path[hops - 1]];
+        const char *bad = first->source != source ? l.paths[path[0]] : last->target != target ? l.paths[path[hops - 1]]
+                                                                                               : NULL;
+        if (bad != NULL) {
+            fprintf(stderr, "matremap convert: error: '%s' converts %s to %s, but the conversion asked is %s to %s\n",
+                    bad, (bad == l.paths[path[0]] ? first : last)->source->name,
+                    (bad == l.paths[path[0]] ? first : last)->target->name, source->name, target->name);
+            loaded_free(&l);
+            return CLI_EXIT_BAD_INPUT;
+        }
+    }
+    const mr_learned *chain[MR_LEARNED_MAX_HOPS];
+    for (int h = 0; h < hops; h++) chain[h] = l.all[path[h]];
+    mr_transform_kind *kind = NULL;
+    mr_status status = mr_learned_kind_create(chain, hops, &kind);
+    if (status != MR_OK) {
+        loaded_free(&l);
+        return cli_fail(COMMAND, status);
+    }
+
+    // The source material: maps and constants.
+    const double started = cli_now();
+    for (int k = 0; k < assignment_count; k++) assignments[k] = as_material_assignment(assignments[k], &owned[k]);
+    mr_material *m = NULL;
+    code = cli_material_load(COMMAND, from, assignments, assignment_count, &m);
+    for (int k = 0; k < assignment_count; k++) free(owned[k]);
+    mr_transform *t = NULL;
+    mr_transform_options topts = {0};
+    topts.threads = threads;
+    if (code == CLI_EXIT_OK) {
+        status = mr_transform_create(kind, &topts, &t);
+        if (status != MR_OK) code = cli_fail(COMMAND, status);
+    }
+    mr_transform_map in[MR_TRANSFORM_MAX_SLOTS];
+    mr_image *out[MR_TRANSFORM_MAX_SLOTS] = {NULL};
+    uint8_t *flags = NULL;
+    const mr_image *alpha_source = NULL;
+    int any_map = 0;
+    for (int p = 0; code == CLI_EXIT_OK && p < source->param_count; p++) {
+        const int at = mr_brdf_param_offset(source, p);
+        in[p] = (mr_transform_map){NULL, 0, 0, {m->values[at], m->values[at], m->values[at]}, {0}};
+        if (source->params[p].channels == 3)
+            for (int c = 0; c < 3; c++) in[p].value[c] = m->values[at + c];
+        for (int k = 0; k < m->map_count; k++) // the last map of a parameter is the one bound
+            if (m->maps[k].param == p) {
+                in[p].image = m->maps[k].image;
+                in[p].channel = m->maps[k].channel;
+            }
+        if (in[p].image != NULL) {
+            any_map = 1;
+            if (alpha_source == NULL && in[p].image->channels == 4) alpha_source = in[p].image;
+        }
+    }
+    // Outputs: named, checked against every input before anything is written.
+    char names[MR_TRANSFORM_MAX_SLOTS + 1][4096];
+    const int out_count = target->param_count;
+    if (code == CLI_EXIT_OK && any_map) {
+        if (prefix == NULL) code = cli_usage_error(COMMAND, "maps given: name the outputs with -o PREFIX");
+        for (int j = 0; code == CLI_EXIT_OK && j <= out_count; j++) {
+            int n = j < out_count ? snprintf(names[j], sizeof names[j], "%s%s.%s", prefix, target->params[j].name,
+                                             format)
+                                  : snprintf(names[j], sizeof names[j], "%sflags.png", prefix);
+            if (n < 0 || (size_t)n >= sizeof names[j]) code = cli_usage_error(COMMAND, "-o '%s': too long", prefix);
+            for (int k = 0; code == CLI_EXIT_OK && k < m->map_count; k++)
+                if (same_file(names[j], m->maps[k].source)) {
+                    fprintf(stderr, "matremap convert: error: output '%s' is the input map '%s': it would be "
+                                    "replaced\n", names[j], m->maps[k].source);
+                    code = CLI_EXIT_BAD_INPUT;
+                }
+        }
+    }
+    double convert_seconds = 0.0;
+    if (code == CLI_EXIT_OK) {
+        const double t0 = cli_now();
+        status = mr_transform_convert_maps(t, in, out, &flags);
+        convert_seconds = cli_now() - t0;
+        if (status != MR_OK) code = cli_fail(COMMAND, status);
+    }
+    size_t n = 0, counts[4] = {0};
+    int width = 0, height = 0;
+    if (code == CLI_EXIT_OK) {
+        width = out[0]->width;
+        height = out[0]->height;
+        n = (size_t)width * (size_t)height;
+        for (size_t i = 0; i < n; i++) {
+            counts[0] += (flags[i] & MR_WF_EXTRAPOLATED) != 0;
+            counts[1] += (flags[i] & MR_WF_CLAMPED_OUTPUT) != 0;
+            counts[2] += (flags[i] & (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT)) != 0;
+            counts[3] += flags[i] != 0;
+        }
+    }
+    // Write: every output, then the flag map.
+    for (int j = 0; code == CLI_EXIT_OK && any_map && j <= out_count; j++) {
+        mr_image *image = NULL;
+        mr_img_write_options wo = {MR_IMG_DATA, 0, 0};
+        if (j < out_count) {
+            status = with_alpha(out[j], alpha_source, &image);
+            wo.encoding = is_colour(&target->params[j]) ? MR_IMG_COLOR : MR_IMG_DATA;
+        } else {
+            status = mr_image_create(width, height, 3, &image);
+            for (size_t i = 0; status == MR_OK && i < n; i++) {
+                image->pixels[3 * i] = (flags[i] & MR_WF_EXTRAPOLATED) ? 1.0f : 0.0f;
+                image->pixels[3 * i + 1] = (flags[i] & MR_WF_CLAMPED_OUTPUT) ? 1.0f : 0.0f;
+                image->pixels[3 * i + 2] = (flags[i] & (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT)) ? 1.0f : 0.0f;
+            }
+        }
+        if (status == MR_OK) status = mr_img_write(names[j], image, &wo);
+        if (image != (j < out_count ? out[j] : NULL)) mr_image_free(image);
+        if (status != MR_OK) code = cli_fail(COMMAND, status);
+    }
+    const double seconds = cli_now() - started;
+    if (code == CLI_EXIT_OK) {
+        if (json) {
+            printf("{\"source\": \"%s\", \"target\": \"%s\", \"chain\": [", source->name, target->name);
+            for (int h = 0; h < hops; h++) {
+                printf("%s", h ? ", " : "");
+                cli_json_string(stdout, l.paths[path[h]]);
+            }
+            printf("], \"width\": %d, \"height\": %d, \"texels\": %zu, \"seconds\": {\"convert\": %.6f, \"total\": "
+                   "%.6f}, \"flags\": {\"extrapolated\": %zu, \"clamped_output\": %zu, \"clamped_input\": %zu, "
+                   "\"any\": %zu}, \"outputs\": [",
+                   width, height, n, convert_seconds, seconds, counts[0], counts[1], counts[2], counts[3]);
+            for (int j = 0; any_map && j <= out_count; j++) {
+                printf("%s", j ? ", " : "");
+                cli_json_string(stdout, names[j]);
+            }
+            printf("], \"values\": {");
+            for (int j = 0; !any_map && j < out_count; j++)
+                if (target->params[j].channels == 3)
+                    printf("%s\"%s\": [%.9g, %.9g, %.9g]", j ? ", " : "", target->params[j].name,
+                           out[j]->pixels[0], out[j]->pixels[1], out[j]->pixels[2]);
+                else
+                    printf("%s\"%s\": %.9g", j ? ", " : "", target->params[j].name, out[j]->pixels[0]);
+            printf("}}\n");
+        } else if (!any_map) {
+            printf("%s", target->name);
+            for (int j = 0; j < out_count; j++)
+                if (target->params[j].channels == 3)
+                    printf(" %s=%.6g,%.6g,%.6g", target->params[j].name, out[j]->pixels[0], out[j]->pixels[1],
+                           out[j]->pixels[2]);
+                else
+                    printf(" %s=%.6g", target->params[j].name, out[j]->pixels[0]);
+            printf("\n");
+            if (counts[3])
+                fprintf(stderr, "matremap convert: note: %s%s%s\n",
+                        counts[0] ? "outside the transform's training domain (extrapolated) " : "",
+                        counts[1] ? "an output was clamped into its range " : "",
+                        counts[2] ? "an input was clamped or not finite" : "");
+        } else {
+            printf("matremap convert: %s -> %s through %d transform%s, %dx%d = %zu texels in %.2f s (convert %.3f "
+                   "s): %zu extrapolated (outside the training domain), %zu clamped outputs, %zu clamped inputs\n",
+                   source->name, target->name, hops, hops == 1 ? "" : "s", width, height, n, seconds, convert_seconds,
+                   counts[0], counts[1], counts[2]);
+            fprintf(stderr, "matremap convert: wrote");
+            for (int j = 0; j <= out_count; j++) fprintf(stderr, " %s", names[j]);
+            fprintf(stderr, "\n");
+        }
+    }
+    for (int j = 0; j < MR_TRANSFORM_MAX_SLOTS; j++) mr_image_free(out[j]);
+    free(flags);
+    mr_transform_free(t);
+    mr_material_free(m);
+    mr_learned_kind_free(kind);
+    loaded_free(&l);
+    return code;
+}

@@ -1,0 +1,375 @@
+/*
+ * cmd_learn.c — `matremap learn`: a transform between two BRDF models learned from sweep files (src/learn/learned.h),
+ * written as a .mrt file, with the paper's cross-section plots on request.
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "learn/learned.h"
+#include "learn/svr.h"
+
+#define MAX_FILES 64
+#define COMMAND "learn"
+
+static void print_help(void) {
+    printf("Usage: matremap learn SWEEP.csv [SWEEP.csv ...] --method parametric|svr|mlp -o T.mrt [options]\n"
+           "\n"
+           "Learns a transform from one BRDF model's parameters to another's (paper sections 5-7) from the rows of\n"
+           "'matremap sweep' files (uniform remaps of the same model pair, target values and fit scene), and writes it\n"
+           "as a transform file that 'matremap convert --transform' applies to texture maps. The rows decide what is\n"
+           "learned: source parameters that vary are the inputs, fitted target parameters that vary the outputs; an\n"
+           "RGB parameter swept grey (a grid axis) is learned as one number and applied per channel; a diffuse albedo\n"
+           "held in the sweeps is carried by the ratio of the two models' Lambertian lobes; the rest keep the values\n"
+           "of the rows. Rows whose outcome is local-minimum are left out.\n"
+           "\n"
+           "Methods:\n"
+           "  parametric  (default) section 7: target roughness a polynomial of the source roughness (degree <= 4,\n"
+           "              through the origin), each specular channel the source's times one slope\n"
+           "              k(a) = c0 + c1 e^(-c2 a) + c3 e^(-c4 a^2) [+ c5/a]: chromaticity kept, linear extrapolation.\n"
+           "              The exponents are searched on a bounded log grid, the rest by least squares (the free fit is\n"
+           "              ill-conditioned: the paper's printed fits drift to c0 ~ -900). Needs sweeps of a roughness\n"
+           "              and a specular reflectance only.\n"
+           "  svr         epsilon-SVR with RBF kernels (libsvm), one per output, C, gamma and epsilon searched on a grid\n"
+           "              then locally on a seeded validation split; accurate inside the sweep, not beyond it.\n"
+           "  mlp         one hidden ReLU layer (nn/), Adam with early stopping.\n"
+           "\n"
+           "Options:\n"
+           "  -o, --output FILE   the transform file (required; written atomically; never one of the inputs)\n"
+           "  --method M          parametric, svr or mlp (default parametric)\n"
+           "  --validation F      share of rows held out to measure the error (default 0.2); parametric and svr\n"
+           "                      are then refitted on every row\n"
+           "  --seed S            the split (and the MLP's initialisation) (default 1)\n"
+           "  --degree N          parametric: roughness polynomial degree 1..4 (default 4)\n"
+           "  --intercept         parametric: give the roughness polynomial a constant term (default: none)\n"
+           "  --inverse auto|yes|no  parametric: the c5/a term of the authors' code (default auto: kept when it\n"
+           "                      lowers the held-out error by 1 %% or more)\n"
+           "  --hidden N          mlp: hidden units (default 64)\n"
+           "  --epochs N          mlp: most epochs (default 2000)\n"
+           "  --threads T         svr search / mlp training threads (default: all cores; results do not depend on it)\n"
+           "  --all-outcomes      keep local-minimum rows too\n"
+           "  --plots DIR         the paper's cross sections as SVG (gnuplot): target roughness against source\n"
+           "                      roughness, target specular against source specular coloured by roughness, with\n"
+           "                      the rows and the learned curves (DIR/roughness.svg, DIR/specular.svg, data as CSV)\n"
+           "  --json              the summary as JSON on stdout\n"
+           "  --help              this text\n"
+           "\n"
+           "Examples:\n"
+           "  matremap sweep --from ward diffuse=0 --to ggx diffuse=0 --grid alpha=0.02:0.5:15:log \\\n"
+           "                 specular=0.02:0.3:5 -o ward_ggx.csv\n"
+           "  matremap learn ward_ggx.csv -o ward_ggx.mrt --plots ward_ggx_plots\n"
+           "  matremap learn ward_ggx.csv --method svr -o ward_ggx_svr.mrt\n"
+           "  matremap convert --from ward --to ggx specular=@spec.exr alpha=@rough.exr diffuse=@diff.png \\\n"
+           "                   --transform ward_ggx.mrt -o out/ggx_\n");
+}
+
+static int same_file(const char *a, const char *b) {
+    struct stat sa, sb;
+    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+typedef struct progress_state {
+    int draw;
+    double started;
+} progress_state;
+
+static void draw_progress(const char *stage, double fraction, void *user) {
+    progress_state *p = user;
+    if (p->draw) fprintf(stderr, "\rlearn: %s %3.0f %%  %.1f s ", stage, 100.0 * fraction, cli_now() - p->started);
+}
+
+/* ---- plots ------------------------------------------------------------------------------------------------- */
+
+/* The roughness and specular features/outputs of a transform, if it has them (the paper's cross sections). */
+typedef struct plot_axes {
+    int rough_feature, spec_feature, rough_output, spec_output;
+} plot_axes;
+
+static int find_axes(const mr_learned *t, plot_axes *a) {
+    *a = (plot_axes){-1, -1, -1, -1};
+    for (int i = 0; i < t->feature_count; i++) {
+        const mr_brdf_param *p = &t->source->params[t->features[i].param];
+        if (p->channels == 1 && p->role == MR_PARAM_NONLINEAR && a->rough_feature < 0) a->rough_feature = i;
+        else if ((p->lobe & MR_LOBE_SPECULAR) && p->role != MR_PARAM_NONLINEAR && a->spec_feature < 0 &&
+                 t->features[i].kind != MR_LEARNED_CHANNEL)
+            a->spec_feature = i;
+    }
+    for (int j = 0; j < t->output_count; j++) {
+        const mr_brdf_param *p = &t->target->params[t->outputs[j].param];
+        if (p->channels == 1 && p->role == MR_PARAM_NONLINEAR && a->rough_output < 0) a->rough_output = j;
+        else if ((p->lobe & MR_LOBE_SPECULAR) && p->role != MR_PARAM_NONLINEAR && a->spec_output < 0 &&
+                 t->outputs[j].kind != MR_LEARNED_CHANNEL)
+            a->spec_output = j;
+    }
+    return a->rough_feature >= 0 && a->spec_feature >= 0 && a->rough_output >= 0 && a->spec_output >= 0;
+}
+
+static double slot_of(const mr_brdf_model *m, const mr_learned_slot *s, const double *row) {
+    const int at = mr_brdf_param_offset(m, s->param) + (s->kind == MR_LEARNED_CHANNEL ? s->channel : 0);
+    return s->kind == MR_LEARNED_GREY ? (row[at] + row[at + 1] + row[at + 2]) / 3.0 : row[at];
+}
+
+/* The learned target at source roughness r and specular s (every other source value from `base_row`). */
+static void learned_at(const mr_learned *t, const plot_axes *a, const double *base_row, double r, double s,
+                       double *rough, double *spec) {
+    double v[MR_BRDF_MAX_VALUES], w[MR_BRDF_MAX_VALUES];
+    memcpy(v, base_row, (size_t)mr_brdf_value_count(t->source) * sizeof *v);
+    const mr_learned_slot *fr = &t->features[a->rough_feature], *fs = &t->features[a->spec_feature];
+    v[mr_brdf_param_offset(t->source, fr->param)] = r;
+    const int sat = mr_brdf_param_offset(t->source, fs->param);
+    for (int c = 0; c < (fs->kind == MR_LEARNED_GREY ? 3 : 1); c++) v[sat + c] = s;
+    mr_learned_apply(t, v, w, NULL);
+    *rough = slot_of(t->target, &t->outputs[a->rough_output], w);
+    *spec = slot_of(t->target, &t->outputs[a->spec_output], w);
+}
+
+static int write_plots(const mr_learned *t, const mr_sweep_table *tab, const char *dir, const char *title) {
+    plot_axes a;
+    if (!find_axes(t, &a)) {
+        fprintf(stderr, "matremap learn: note: no plots: the transform has no roughness and specular pair to cut "
+                        "through\n");
+        return 1;
+    }
+    if (mkdir(dir, 0777) != 0 && errno != EEXIST) {
+        fprintf(stderr, "matremap learn: error: --plots '%s': cannot create the folder: %s\n", dir, strerror(errno));
+        return 0;
+    }
+    char path[4096];
+    snprintf(path, sizeof path, "%s/rows.csv", dir);
+    FILE *f = fopen(path, "w");
+    if (f == NULL) {
+        fprintf(stderr, "matremap learn: error: cannot write '%s': %s\n", path, strerror(errno));
+        return 0;
+    }
+    const mr_learned_slot *fr = &t->features[a.rough_feature], *fs = &t->features[a.spec_feature];
+    const mr_learned_slot *or_ = &t->outputs[a.rough_output], *os = &t->outputs[a.spec_output];
+    fprintf(f, "source_roughness,source_specular,target_roughness,target_specular\n");
+    double smax = 0.0;
+    for (size_t r = 0; r < tab->n; r++) {
+        const double *sv = tab->source_values + r * (size_t)tab->source_count;
+        const double *tv = tab->target_values + r * (size_t)tab->target_count;
+        const double s = slot_of(t->source, fs, sv);
+        smax = fmax(smax, s);
+        fprintf(f, "%.9g,%.9g,%.9g,%.9g\n", slot_of(t->source, fr, sv), s, slot_of(t->target, or_, tv),
+                slot_of(t->target, os, tv));
+    }
+    fclose(f);
+    // Learned curves: roughness over the domain (specular at the domain's middle); specular lines at 6 roughnesses
+    // across the domain, drawn to 1.5 x the largest specular of the rows (what lies beyond is extrapolation).
+    snprintf(path, sizeof path, "%s/curves.csv", dir);
+    f = fopen(path, "w");
+    if (f == NULL) {
+        fprintf(stderr, "matremap learn: error: cannot write '%s': %s\n", path, strerror(errno));
+        return 0;
+    }
+    const double *base_row = tab->source_values;
+    const double rlo = fr->min, rhi = fr->max, smid = 0.5 * (fs->min + fs->max);
+    fprintf(f, "# roughness curve\nsource_roughness,target_roughness\n");
+    for (int k = 0; k <= 200; k++) {
+        const double r = rlo + (rhi - rlo) * k / 200.0;
+        double tr, ts;
+        learned_at(t, &a, base_row, r, smid, &tr, &ts);
+        fprintf(f, "%.9g,%.9g\n", r, tr);
+    }
+    for (int line = 0; line < 6; line++) {
+        const double r = rlo * pow(rhi / rlo, line / 5.0);
+        fprintf(f, "\n\n# specular line at roughness %.4g\nsource_specular,target_specular,roughness\n", r);
+        for (int k = 0; k <= 50; k++) {
+            const double s = 1.5 * fmax(smax, 1e-6) * k / 50.0;
+            double tr, ts;
+            learned_at(t, &a, base_row, r, s, &tr, &ts);
+            fprintf(f, "%.9g,%.9g,%.9g\n", s, ts, r);
+        }
+    }
+    fclose(f);
+    FILE *plot = popen("gnuplot 2>/dev/null", "w");
+    if (plot == NULL) return 1;
+    const char *sr = t->source->params[fr->param].name, *ss = t->source->params[fs->param].name;
+    const char *tr = t->target->params[or_->param].name, *ts = t->target->params[os->param].name;
+    fprintf(plot,
+            "set terminal svg size 720,520 dynamic font 'Helvetica,12' background rgb 'white'\n"
+            "set datafile separator ','\nset grid\nset key top left\n"
+            "set output '%s/roughness.svg'\nset title '%s: roughness' noenhanced\n"
+            "set xlabel '%s %s' noenhanced\nset ylabel '%s %s' noenhanced\n"
+            "plot '%s/rows.csv' using 1:3 skip 1 with points pt 7 ps 0.5 lc rgb '#4477aa' title 'sweep rows', "
+            "'%s/curves.csv' index 0 using 1:2 skip 1 with lines lw 2 lc rgb '#cc3311' title '%s'\n"
+            "set output '%s/specular.svg'\nset title '%s: specular, coloured by source roughness' noenhanced\n"
+            "set xlabel '%s %s' noenhanced\nset ylabel '%s %s' noenhanced\n"
+            "set palette rgbformulae 33,13,10\nset cbrange [%.9g:%.9g]\nset logscale cb\nset cblabel '%s %s' "
+            "noenhanced\n"
+            "plot '%s/rows.csv' using 2:4:1 skip 1 with points pt 7 ps 0.5 lc palette title 'sweep rows', "
+            "for [i=1:6] '%s/curves.csv' index i using 1:2:3 skip 1 with lines lw 1.5 lc palette notitle\n",
+            dir, title, t->source->name, sr, t->target->name, tr, dir, dir, mr_learn_method_name(t->method), dir,
+            title, t->source->name, ss, t->target->name, ts, rlo, rhi, t->source->name, sr, dir, dir);
+    if (pclose(plot) != 0)
+        fprintf(stderr, "matremap learn: note: no SVG plots (gnuplot missing or failed); the data is in %s\n", dir);
+    return 1;
+}
+
+/* ---- the command ------------------------------------------------------------------------------------------ */
+
+static void print_summary(const mr_learned *t, const char *output, double seconds, int json) {
+    if (json) {
+        printf("{\"output\": ");
+        cli_json_string(stdout, output);
+        printf(", \"method\": \"%s\", \"source\": \"%s\", \"target\": \"%s\", \"train_rows\": %ld, "
+               "\"validation_rows\": %ld, \"seconds\": %.3f, \"features\": [",
+               mr_learn_method_name(t->method), t->source->name, t->target->name, t->train_rows, t->validation_rows,
+               seconds);
+        for (int i = 0; i < t->feature_count; i++)
+            printf("%s{\"name\": \"%s\", \"min\": %.9g, \"max\": %.9g}", i ? ", " : "",
+                   t->source->params[t->features[i].param].name, t->features[i].min, t->features[i].max);
+        printf("], \"validation_rmse\": {");
+        for (int j = 0; j < t->output_count; j++) {
+            const mr_learned_slot *s = &t->outputs[j];
+            printf("%s\"%s%s%c\": %.9g", j ? ", " : "", t->target->params[s->param].name,
+                   s->kind == MR_LEARNED_CHANNEL ? "_" : "", s->kind == MR_LEARNED_CHANNEL ? "rgb"[s->channel] : '\0',
+                   t->rmse[j]);
+        }
+        printf("}");
+        if (t->method == MR_LEARN_PARAMETRIC) {
+            printf(", \"roughness\": [");
+            for (int k = 0; k <= t->roughness_degree; k++) printf("%s%.9g", k ? ", " : "", t->roughness[k]);
+            printf("], \"slope\": [");
+            for (int k = 0; k < (t->slope.with_inverse ? 6 : 5); k++) printf("%s%.9g", k ? ", " : "", t->slope.c[k]);
+            printf("]");
+        }
+        printf("}\n");
+        return;
+    }
+    printf("matremap learn: %s -> %s by %s, %ld rows (+%ld held out) in %.2f s -> %s\n", t->source->name,
+           t->target->name, mr_learn_method_name(t->method), t->train_rows, t->validation_rows, seconds, output);
+    for (int i = 0; i < t->feature_count; i++) {
+        const mr_learned_slot *s = &t->features[i];
+        printf("  input  %-12s %s, trained over [%.4g, %.4g]\n", t->source->params[s->param].name,
+               s->kind == MR_LEARNED_GREY ? "grey (per channel)" : s->kind == MR_LEARNED_CHANNEL ? "channel" : "scalar",
+               s->min, s->max);
+    }
+    for (int j = 0; j < t->output_count; j++) {
+        const mr_learned_slot *s = &t->outputs[j];
+        printf("  output %-12s held-out RMSE %.4g\n", t->target->params[s->param].name, t->rmse[j]);
+    }
+    for (int i = 0; i < t->carry_count; i++) {
+        const mr_learned_carry *c = &t->carries[i];
+        printf("  carry  %-12s = %.6g x source %s (%s)\n", t->target->params[c->target_param].name, c->factor[0],
+               t->source->params[c->source_param].name, c->learned ? "fitted on the rows" : "ratio of the lobes");
+    }
+    if (t->method == MR_LEARN_PARAMETRIC) {
+        const char *a = t->source->params[t->features[0].param].name;
+        printf("  %s' =", t->target->params[t->outputs[0].param].name);
+        for (int k = t->roughness_origin ? 1 : 0; k <= t->roughness_degree; k++)
+            printf(" %+.4g %s^%d", t->roughness[k], a, k);
+        const double *c = t->slope.c;
+        printf("\n  k(%s) = %.4g %+.4g e^(-%.4g %s) %+.4g e^(-%.4g %s^2)", a, c[0], c[1], c[2], a, c[3], c[4], a);
+        if (t->slope.with_inverse) printf(" %+.4g / %s", c[5], a);
+        printf("\n");
+    } else if (t->method == MR_LEARN_SVR) {
+        for (int j = 0; j < t->svr->n_out; j++)
+            printf("  svr %d: %d support vectors, C %.4g, gamma %.4g, epsilon %.4g\n", j, t->svr->outputs[j].sv_count,
+                   t->svr->outputs[j].C, t->svr->outputs[j].gamma, t->svr->outputs[j].epsilon);
+    }
+    for (const char *p = t->provenance; p && *p;) {
+        const char *e = strchr(p, '\n');
+        if (strncmp(p, "note: ", 6) == 0) printf("  %.*s\n", (int)(e - p), p);
+        p = e + 1;
+    }
+}
+
+int cmd_learn(int argc, char **argv) {
+    const char *files[MAX_FILES], *output = NULL, *plots = NULL;
+    int file_count = 0, json = 0;
+    mr_learn_options o = {0};
+    mr_sweep_table_options to = {0};
+    for (int i = 1; i < argc; i++) {
+        const char *v = NULL;
+        int r;
+        if (cli_is_help(argv[i])) {
+            print_help();
+            return CLI_EXIT_OK;
+        }
+        if ((r = cli_take_option(COMMAND, argc, argv, &i, "--output", &v)) != 0 ||
+            (r = cli_take_option(COMMAND, argc, argv, &i, "-o", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            output = v;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--method", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            if (mr_learn_method_from_name(v, &o.method) != MR_OK)
+                return cli_usage_error(COMMAND, "--method: %s", mr_last_error());
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--validation", &v)) != 0) {
+            if (r < 0 || !cli_parse_double(COMMAND, "--validation", v, 0.01, 0.5, &o.validation_fraction))
+                return CLI_EXIT_USAGE;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--seed", &v)) != 0) {
+            int seed = 0;
+            if (r < 0 || !cli_parse_int(COMMAND, "--seed", v, 1, 2147483647, &seed)) return CLI_EXIT_USAGE;
+            o.seed = (unsigned long long)seed;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--degree", &v)) != 0) {
+            if (r < 0 || !cli_parse_int(COMMAND, "--degree", v, 1, MR_POLY_MAX_DEGREE, &o.roughness_degree))
+                return CLI_EXIT_USAGE;
+        } else if (strcmp(argv[i], "--intercept") == 0) {
+            o.roughness_intercept = 1;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--inverse", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            if (strcmp(v, "auto") == 0) o.slope_inverse = 0;
+            else if (strcmp(v, "yes") == 0) o.slope_inverse = 1;
+            else if (strcmp(v, "no") == 0) o.slope_inverse = -1;
+            else return cli_usage_error(COMMAND, "--inverse '%s': expected auto, yes or no", v);
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--hidden", &v)) != 0) {
+            if (r < 0 || !cli_parse_int(COMMAND, "--hidden", v, 1, 4096, &o.mlp_hidden)) return CLI_EXIT_USAGE;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--epochs", &v)) != 0) {
+            if (r < 0 || !cli_parse_int(COMMAND, "--epochs", v, 1, 1000000, &o.mlp_max_epochs)) return CLI_EXIT_USAGE;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--threads", &v)) != 0) {
+            if (r < 0 || !cli_parse_int(COMMAND, "--threads", v, 1, 1024, &o.threads)) return CLI_EXIT_USAGE;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--plots", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            plots = v;
+        } else if (strcmp(argv[i], "--all-outcomes") == 0) {
+            to.keep_all_outcomes = 1;
+        } else if (strcmp(argv[i], "--json") == 0) {
+            json = 1;
+        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
+            return cli_usage_error(COMMAND, "unknown option '%s'", argv[i]);
+        } else {
+            if (file_count == MAX_FILES) return cli_usage_error(COMMAND, "more than %d sweep files", MAX_FILES);
+            files[file_count++] = argv[i];
+        }
+    }
+    if (file_count == 0) return cli_usage_error(COMMAND, "no sweep file given");
+    if (output == NULL) return cli_usage_error(COMMAND, "no output file: give -o T.mrt");
+    for (int i = 0; i < file_count; i++)
+        if (same_file(files[i], output)) {
+            fprintf(stderr, "matremap learn: error: -o '%s' is the input sweep '%s': it would be replaced\n", output,
+                    files[i]);
+            return CLI_EXIT_BAD_INPUT;
+        }
+    const double started = cli_now();
+    mr_sweep_table tab;
+    mr_status status = mr_sweep_table_load(files, file_count, &to, &tab);
+    if (status != MR_OK) return cli_fail(COMMAND, status);
+    progress_state ps = {isatty(STDERR_FILENO), started};
+    o.progress = draw_progress;
+    o.progress_user = &ps;
+    mr_learned *t = NULL;
+    status = mr_learn(&tab, &o, &t);
+    if (ps.draw) fprintf(stderr, "\r\033[K");
+    if (status == MR_OK) status = mr_learned_write(t, output);
+    if (status != MR_OK) {
+        mr_sweep_table_free(&tab);
+        mr_learned_free(t);
+        return cli_fail(COMMAND, status);
+    }
+    int ok = 1;
+    if (plots != NULL) {
+        char title[256];
+        snprintf(title, sizeof title, "%s -> %s (%s)", t->source->name, t->target->name,
+                 mr_learn_method_name(t->method));
+        ok = write_plots(t, &tab, plots, title);
+    }
+    print_summary(t, output, cli_now() - started, json);
+    mr_sweep_table_free(&tab);
+    mr_learned_free(t);
+    return ok ? CLI_EXIT_OK : CLI_EXIT_BAD_INPUT;
+}

@@ -1,0 +1,485 @@
+/*
+ * learn.c — training learned transforms from sweep rows (contract in learned.h): which parameters are features,
+ * outputs, carries and base values; the held-out split; the three methods.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "learn/learned.h"
+#include "learn/svr.h"
+#include "mr_internal.h"
+#include "nn/mlp.h"
+
+#define DEFAULT_VALIDATION 0.2
+#define DEFAULT_DEGREE 4
+#define DEFAULT_HIDDEN 64
+#define DEFAULT_EPOCHS 2000
+#define MIN_ROWS 10
+
+/* How a parameter behaves over the rows. */
+typedef struct param_use {
+    int varies; /* some slot differs between rows */
+    int grey;   /* RGB and r = g = b in every row (up to a relative 1e-9) */
+} param_use;
+
+static param_use use_of(const double *values, size_t n, int count, int offset, int channels) {
+    param_use u = {0, channels == 3};
+    for (size_t i = 0; i < n; i++) {
+        const double *row = values + i * (size_t)count + offset;
+        for (int c = 0; c < channels; c++)
+            if (row[c] != values[offset + c]) u.varies = 1;
+        if (channels == 3) {
+            const double tol = 1e-9 * fmax(1.0, fabs(row[0]));
+            if (fabs(row[1] - row[0]) > tol || fabs(row[2] - row[0]) > tol) u.grey = 0;
+        }
+    }
+    return u;
+}
+
+static uint64_t splitmix64(uint64_t *state) {
+    uint64_t z = (*state += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+
+/* A seeded permutation of 0 .. n-1 (Fisher-Yates). */
+static size_t *shuffled(size_t n, unsigned long long seed) {
+    size_t *order = malloc(n * sizeof *order);
+    if (order == NULL) return NULL;
+    for (size_t i = 0; i < n; i++) order[i] = i;
+    uint64_t state = seed;
+    for (size_t i = n; i > 1; i--) {
+        size_t j = (size_t)(splitmix64(&state) % i);
+        size_t tmp = order[i - 1];
+        order[i - 1] = order[j];
+        order[j] = tmp;
+    }
+    return order;
+}
+
+/* The value a slot takes in one row (GREY: the channel mean). */
+static double slot_value(const mr_brdf_model *model, const mr_learned_slot *s, const double *row) {
+    const int at = mr_brdf_param_offset(model, s->param) + (s->kind == MR_LEARNED_CHANNEL ? s->channel : 0);
+    return s->kind == MR_LEARNED_GREY ? (row[at] + row[at + 1] + row[at + 2]) / 3.0 : row[at];
+}
+
+static void add_slot(mr_learned_slot *slots, int *count, int param, int channels, int grey) {
+    if (channels == 3 && !grey) {
+        for (int c = 0; c < 3; c++) slots[(*count)++] = (mr_learned_slot){param, MR_LEARNED_CHANNEL, c, 0.0, 0.0};
+    } else {
+        slots[(*count)++] = (mr_learned_slot){param, channels == 3 ? MR_LEARNED_GREY : MR_LEARNED_SCALAR, 0, 0.0, 0.0};
+    }
+}
+
+static mr_status note(mr_learned *t, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static mr_status note(mr_learned *t, const char *fmt, ...) {
+    char line[512];
+    va_list args;
+    va_start(args, fmt);
+    vsnprintf(line, sizeof line, fmt, args);
+    va_end(args);
+    size_t have = t->provenance ? strlen(t->provenance) : 0, more = strlen(line);
+    char *grown = realloc(t->provenance, have + more + 8);
+    if (grown == NULL) return mr_fail(MR_ERR_NOMEM, "learn: out of memory");
+    memcpy(grown + have, "note: ", 6);
+    memcpy(grown + have + 6, line, more);
+    memcpy(grown + have + 6 + more, "\n", 2);
+    t->provenance = grown;
+    return MR_OK;
+}
+
+/* f_r's diffuse part of `model` at normal incidence and at a grazing pair, with parameter p at `value` and the rest
+ * at `values`. */
+static void diffuse_at(const mr_brdf_model *model, const double *values, int p, double value, double out[2][3]) {
+    double v[MR_BRDF_MAX_VALUES];
+    memcpy(v, values, sizeof v);
+    const int at = mr_brdf_param_offset(model, p);
+    for (int c = 0; c < model->params[p].channels; c++) v[at + c] = value;
+    static const double n[3] = {0.0, 0.0, 1.0}, g1[3] = {0.8, 0.0, 0.6}, g2[3] = {-0.28, 0.96, 0.0};
+    double g2n[3] = {g2[0], g2[1], 0.0}; // below: lifted to z = 0.3 and normalised
+    const double len = sqrt(g2[0] * g2[0] + g2[1] * g2[1] + 0.09);
+    for (int k = 0; k < 2; k++) g2n[k] = g2[k] / len;
+    g2n[2] = 0.3 / len;
+    mr_brdf_state st;
+    model->prepare(model, v, st.bytes);
+    model->eval(st.bytes, n, n, out[0], NULL);
+    model->eval(st.bytes, g1, g2n, out[1], NULL);
+}
+
+/* The factor carrying a Lambertian parameter of the source into one of the target: f_src(1) / f_tgt(1) when both
+ * are linear in f_r and direction-independent (Lambert), else 0 (no carry). */
+static double lobe_ratio(const mr_brdf_model *src, const double *src_values, int sp, const mr_brdf_model *tgt,
+                         const double *tgt_values, int tp) {
+    double s1[2][3], s2[2][3], t1[2][3], t2[2][3];
+    diffuse_at(src, src_values, sp, 0.25, s1);
+    diffuse_at(src, src_values, sp, 0.5, s2);
+    diffuse_at(tgt, tgt_values, tp, 0.25, t1);
+    diffuse_at(tgt, tgt_values, tp, 0.5, t2);
+    const double rel = 1e-9;
+    for (int k = 0; k < 2; k++) // linear, and the same at both direction pairs
+        if (fabs(s2[k][0] - 2.0 * s1[k][0]) > rel * s2[k][0] || fabs(t2[k][0] - 2.0 * t1[k][0]) > rel * t2[k][0])
+            return 0.0;
+    if (!(s1[0][0] > 0.0 && t1[0][0] > 0.0)) return 0.0;
+    if (fabs(s1[1][0] - s1[0][0]) > rel * s1[0][0] || fabs(t1[1][0] - t1[0][0]) > rel * t1[0][0]) return 0.0;
+    return s1[0][0] / t1[0][0];
+}
+
+/* ---- methods ---------------------------------------------------------------------------------------------- */
+
+/* Rows `idx[0..m)` as feature and output matrices (outputs GREY: channel mean). */
+static void gather(const mr_sweep_table *tab, const mr_learned *t, const size_t *idx, size_t m, double *x, double *y) {
+    for (size_t r = 0; r < m; r++) {
+        const double *sv = tab->source_values + idx[r] * (size_t)tab->source_count;
+        const double *tv = tab->target_values + idx[r] * (size_t)tab->target_count;
+        for (int i = 0; i < t->feature_count; i++) x[r * t->feature_count + i] = slot_value(t->source, &t->features[i], sv);
+        for (int j = 0; j < t->output_count; j++) y[r * t->output_count + j] = slot_value(t->target, &t->outputs[j], tv);
+    }
+}
+
+static mr_status fit_parametric(const mr_sweep_table *tab, mr_learned *t, const size_t *idx, size_t m,
+                                const mr_learn_options *o, int with_inverse) {
+    double *alpha = malloc(m * sizeof *alpha), *alpha2 = malloc(m * sizeof *alpha2);
+    double *ss = malloc(3 * m * sizeof *ss), *st = malloc(3 * m * sizeof *st);
+    mr_status status = alpha && alpha2 && ss && st ? MR_OK : mr_fail(MR_ERR_NOMEM, "learn: out of memory");
+    const int s_at = mr_brdf_param_offset(t->source, t->features[1].param);
+    const int t_at = mr_brdf_param_offset(t->target, t->outputs[1].param);
+    const int s_ch = t->source->params[t->features[1].param].channels;
+    const int t_ch = t->target->params[t->outputs[1].param].channels;
+    for (size_t r = 0; status == MR_OK && r < m; r++) {
+        const double *sv = tab->source_values + idx[r] * (size_t)tab->source_count;
+        const double *tv = tab->target_values + idx[r] * (size_t)tab->target_count;
+        alpha[r] = slot_value(t->source, &t->features[0], sv);
+        alpha2[r] = slot_value(t->target, &t->outputs[0], tv);
+        for (int c = 0; c < 3; c++) {
+            ss[3 * r + c] = sv[s_at + (s_ch == 3 ? c : 0)];
+            // a one-channel target specular learns from the mean of a coloured source (what apply feeds it)
+            st[3 * r + c] = tv[t_at + (t_ch == 3 ? c : 0)];
+            if (t_ch == 1 && s_ch == 3) ss[3 * r + c] = (sv[s_at] + sv[s_at + 1] + sv[s_at + 2]) / 3.0;
+        }
+    }
+    if (status == MR_OK)
+        status = mr_fit_polynomial_ex(alpha, alpha2, m, t->roughness_degree, t->roughness_origin, t->roughness, NULL);
+    if (status == MR_OK) status = mr_fit_specular_slope(alpha, ss, st, m, with_inverse, &t->slope);
+    (void)o;
+    free(alpha);
+    free(alpha2);
+    free(ss);
+    free(st);
+    return status == MR_OK ? MR_OK : mr_fail_context(status, "learn parametric");
+}
+
+static mr_status fit_svr(const mr_sweep_table *tab, mr_learned *t, const size_t *idx, size_t m,
+                         const mr_learn_options *o) {
+    double *x = malloc(m * (size_t)t->feature_count * sizeof *x), *y = malloc(m * (size_t)t->output_count * sizeof *y);
+    if (x == NULL || y == NULL) {
+        free(x);
+        free(y);
+        return mr_fail(MR_ERR_NOMEM, "learn: out of memory");
+    }
+    gather(tab, t, idx, m, x, y);
+    mr_svr_train_options so = {0};
+    so.seed = t->seed;
+    so.threads = o->threads;
+    mr_svr_free(t->svr);
+    t->svr = NULL;
+    mr_status status = mr_svr_train(x, y, m, t->feature_count, t->output_count, &so, &t->svr, NULL);
+    free(x);
+    free(y);
+    return status == MR_OK ? MR_OK : mr_fail_context(status, "learn svr");
+}
+
+static mr_status fit_mlp(const mr_sweep_table *tab, mr_learned *t, const size_t *idx, size_t m,
+                         const mr_learn_options *o) {
+    double *x = malloc(m * (size_t)t->feature_count * sizeof *x), *y = malloc(m * (size_t)t->output_count * sizeof *y);
+    float *xf = malloc(m * (size_t)t->feature_count * sizeof *xf), *yf = malloc(m * (size_t)t->output_count * sizeof *yf);
+    mr_status status = x && y && xf && yf ? MR_OK : mr_fail(MR_ERR_NOMEM, "learn: out of memory");
+    if (status == MR_OK) {
+        gather(tab, t, idx, m, x, y);
+        for (size_t k = 0; k < m * (size_t)t->feature_count; k++) xf[k] = (float)x[k];
+        for (size_t k = 0; k < m * (size_t)t->output_count; k++) yf[k] = (float)y[k];
+        mr_mlp_train_options mo = {0};
+        mo.n_hidden = o->mlp_hidden > 0 ? o->mlp_hidden : DEFAULT_HIDDEN;
+        mo.max_epochs = o->mlp_max_epochs > 0 ? o->mlp_max_epochs : DEFAULT_EPOCHS;
+        mo.patience = 100;
+        mo.batch_size = 32;
+        mo.validation_fraction = 0.15;
+        mo.seed = t->seed;
+        mo.threads = o->threads;
+        mr_mlp_free(t->mlp);
+        t->mlp = NULL;
+        status = mr_mlp_train(xf, yf, m, t->feature_count, t->output_count, &mo, &t->mlp, NULL);
+        if (status != MR_OK) status = mr_fail_context(status, "learn mlp");
+    }
+    free(x);
+    free(y);
+    free(xf);
+    free(yf);
+    return status;
+}
+
+static mr_status fit(const mr_sweep_table *tab, mr_learned *t, const size_t *idx, size_t m, const mr_learn_options *o,
+                     int with_inverse) {
+    switch (t->method) {
+    case MR_LEARN_PARAMETRIC: return fit_parametric(tab, t, idx, m, o, with_inverse);
+    case MR_LEARN_SVR: return fit_svr(tab, t, idx, m, o);
+    default: return fit_mlp(tab, t, idx, m, o);
+    }
+}
+
+/* Each output's RMSE over rows idx[0..m) through the whole transform (carries, clamps and all); GREY outputs over
+ * their three channels. Learned carries are refitted by the caller before this. */
+static void measure(const mr_sweep_table *tab, const mr_learned *t, const size_t *idx, size_t m, double *rmse) {
+    double sum[MR_LEARNED_MAX_SLOTS] = {0};
+    long count[MR_LEARNED_MAX_SLOTS] = {0};
+    for (size_t r = 0; r < m; r++) {
+        const double *sv = tab->source_values + idx[r] * (size_t)tab->source_count;
+        const double *tv = tab->target_values + idx[r] * (size_t)tab->target_count;
+        double w[MR_BRDF_MAX_VALUES];
+        mr_learned_apply(t, sv, w, NULL);
+        for (int j = 0; j < t->output_count; j++) {
+            const mr_learned_slot *s = &t->outputs[j];
+            const int at = mr_brdf_param_offset(t->target, s->param) + (s->kind == MR_LEARNED_CHANNEL ? s->channel : 0);
+            for (int c = 0; c < (s->kind == MR_LEARNED_GREY ? 3 : 1); c++) {
+                const double d = w[at + c] - tv[at + c];
+                sum[j] += d * d;
+                count[j]++;
+            }
+        }
+    }
+    for (int j = 0; j < t->output_count; j++) rmse[j] = count[j] ? sqrt(sum[j] / (double)count[j]) : 0.0;
+}
+
+/* Learned carries: per-channel slopes through the origin over rows idx[0..m). */
+static void fit_carries(const mr_sweep_table *tab, mr_learned *t, const size_t *idx, size_t m) {
+    for (int i = 0; i < t->carry_count; i++) {
+        mr_learned_carry *c = &t->carries[i];
+        if (!c->learned) continue;
+        const int to = mr_brdf_param_offset(t->target, c->target_param);
+        const int from = mr_brdf_param_offset(t->source, c->source_param);
+        for (int ch = 0; ch < t->target->params[c->target_param].channels; ch++) {
+            double sxy = 0.0, sxx = 0.0;
+            for (size_t r = 0; r < m; r++) {
+                const double xv = tab->source_values[idx[r] * (size_t)tab->source_count + (size_t)(from + ch)];
+                const double yv = tab->target_values[idx[r] * (size_t)tab->target_count + (size_t)(to + ch)];
+                sxy += xv * yv;
+                sxx += xv * xv;
+            }
+            c->factor[ch] = sxx > 0.0 ? sxy / sxx : 1.0;
+        }
+    }
+}
+
+/* ---- roles ------------------------------------------------------------------------------------------------ */
+
+static int is_roughness(const mr_brdf_param *p) {
+    return p->channels == 1 && p->role == MR_PARAM_NONLINEAR && (p->lobe & MR_LOBE_SPECULAR);
+}
+static int is_linear(const mr_brdf_param *p) { return p->role == MR_PARAM_LINEAR || p->role == MR_PARAM_AFFINE; }
+
+/* Decide features, outputs, carries and base values from how the rows use each parameter. */
+static mr_status plan(const mr_sweep_table *tab, mr_learned *t) {
+    const mr_brdf_model *src = tab->source, *tgt = tab->target;
+    param_use su[MR_BRDF_MAX_VALUES], tu[MR_BRDF_MAX_VALUES];
+    for (int p = 0; p < src->param_count; p++)
+        su[p] = use_of(tab->source_values, tab->n, tab->source_count, mr_brdf_param_offset(src, p),
+                       src->params[p].channels);
+    for (int p = 0; p < tgt->param_count; p++)
+        tu[p] = use_of(tab->target_values, tab->n, tab->target_count, mr_brdf_param_offset(tgt, p),
+                       tgt->params[p].channels);
+    memcpy(t->base, tab->target_values, (size_t)tab->target_count * sizeof *t->base);
+    int carried[MR_BRDF_MAX_VALUES] = {0}, used_source[MR_BRDF_MAX_VALUES] = {0};
+    // Carries: a Lambertian target parameter from a Lambertian source parameter (learned when the rows vary both
+    // and the method is parametric; by the lobes' ratio when neither varies).
+    for (int tp = 0; tp < tgt->param_count; tp++) {
+        const mr_brdf_param *q = &tgt->params[tp];
+        if (q->lobe != MR_LOBE_DIFFUSE || q->role != MR_PARAM_LINEAR) continue;
+        for (int sp = 0; sp < src->param_count; sp++) {
+            const mr_brdf_param *p = &src->params[sp];
+            if (p->lobe != MR_LOBE_DIFFUSE || p->role != MR_PARAM_LINEAR || p->channels != q->channels) continue;
+            if (used_source[sp]) continue;
+            mr_learned_carry c = {tp, sp, 0, {1.0, 1.0, 1.0}};
+            if (su[sp].varies && tu[tp].varies && t->method == MR_LEARN_PARAMETRIC) {
+                c.learned = 1;
+            } else if (!su[sp].varies && !tu[tp].varies) {
+                const double *sv = tab->source_values, *tv = tab->target_values;
+                const double ratio = lobe_ratio(src, sv, sp, tgt, tv, tp);
+                if (ratio <= 0.0) continue;
+                for (int ch = 0; ch < 3; ch++) c.factor[ch] = ratio;
+            } else {
+                continue;
+            }
+            t->carries[t->carry_count++] = c;
+            carried[tp] = used_source[sp] = 1;
+            break;
+        }
+    }
+    for (int tp = 0; tp < tgt->param_count; tp++) {
+        const mr_brdf_param *q = &tgt->params[tp];
+        if (!tu[tp].varies && !carried[tp] && q->role != MR_PARAM_SWITCH && !(q->flags & MR_PARAM_FIT_FIXED)) {
+            char value[64];
+            snprintf(value, sizeof value, "%g", t->base[mr_brdf_param_offset(tgt, tp)]);
+            mr_status status = note(t, "target %s is %s in every row: written as that constant (vary it in the sweep "
+                                    "to learn it)", q->name, value);
+            if (status != MR_OK) return status;
+        }
+    }
+    if (t->method == MR_LEARN_PARAMETRIC) {
+        int rough = -1, spec = -1;
+        for (int p = 0; p < src->param_count; p++) {
+            if (!su[p].varies || used_source[p]) continue;
+            const mr_brdf_param *q = &src->params[p];
+            if (is_roughness(q) && rough < 0) {
+                rough = p;
+            } else if ((q->lobe & MR_LOBE_SPECULAR) && q->role == MR_PARAM_NONLINEAR && spec < 0 && q->channels == 1 &&
+                       rough >= 0) {
+                return mr_fail(MR_ERR_INVALID_ARG, "parametric: the source's specular parameter %s %s is not linear "
+                               "in f_r (an index of refraction?): the paper changes variable first (its Eq. 1, "
+                               "F0 = ((ior - 1) / (ior + 1))^2); use svr or mlp, or sweep an F0-parameterised model",
+                               src->name, q->name);
+            } else if ((q->lobe & MR_LOBE_SPECULAR) && is_linear(q) && spec < 0) {
+                spec = p;
+            } else {
+                return mr_fail(MR_ERR_INVALID_ARG, "parametric: the rows vary the source's %s %s, which is neither "
+                               "its roughness nor its specular reflectance: the paper's parametric form does not "
+                               "cover it (use svr or mlp, or hold it in the sweep)", src->name, q->name);
+            }
+        }
+        int trough = -1, tspec = -1;
+        for (int p = 0; p < tgt->param_count; p++) {
+            if (!tu[p].varies || carried[p]) continue;
+            const mr_brdf_param *q = &tgt->params[p];
+            if (is_roughness(q) && trough < 0) trough = p;
+            else if ((q->lobe & MR_LOBE_SPECULAR) && is_linear(q) && tspec < 0) tspec = p;
+            else
+                return mr_fail(MR_ERR_INVALID_ARG, "parametric: the fitted target %s %s varies over the rows, but the "
+                               "parametric form writes only a roughness and a specular reflectance (use svr or mlp)",
+                               tgt->name, q->name);
+        }
+        if (rough < 0 || spec < 0 || trough < 0 || tspec < 0)
+            return mr_fail(MR_ERR_INVALID_ARG, "parametric: needs rows that vary the source's roughness and specular "
+                           "reflectance (%s%s) and a target roughness and specular that follow (%s%s)",
+                           rough < 0 ? "no roughness varies" : "roughness ok",
+                           spec < 0 ? ", no specular varies" : ", specular ok",
+                           trough < 0 ? "no target roughness varies" : "target roughness ok",
+                           tspec < 0 ? ", no target specular varies" : ", target specular ok");
+        t->features[0] = (mr_learned_slot){rough, MR_LEARNED_SCALAR, 0, 0.0, 0.0};
+        t->features[1] = (mr_learned_slot){spec, src->params[spec].channels == 3 ? MR_LEARNED_GREY : MR_LEARNED_SCALAR,
+                                           0, 0.0, 0.0};
+        t->outputs[0] = (mr_learned_slot){trough, MR_LEARNED_SCALAR, 0, 0.0, 0.0};
+        t->outputs[1] = (mr_learned_slot){tspec, tgt->params[tspec].channels == 3 ? MR_LEARNED_GREY : MR_LEARNED_SCALAR,
+                                          0, 0.0, 0.0};
+        t->feature_count = t->output_count = 2;
+    } else {
+        for (int p = 0; p < src->param_count; p++)
+            if (su[p].varies && !used_source[p]) add_slot(t->features, &t->feature_count, p, src->params[p].channels,
+                                                          su[p].grey);
+        for (int p = 0; p < tgt->param_count; p++)
+            if (tu[p].varies && !carried[p]) add_slot(t->outputs, &t->output_count, p, tgt->params[p].channels,
+                                                      tu[p].grey);
+        if (t->feature_count == 0 || t->output_count == 0)
+            return mr_fail(MR_ERR_INVALID_ARG, "learn: the rows vary %s: nothing to learn",
+                           t->feature_count == 0 ? "no source parameter" : "no fitted target parameter");
+    }
+    // Training domains: over every row (GREY: every channel).
+    for (int i = 0; i < t->feature_count; i++) {
+        mr_learned_slot *s = &t->features[i];
+        const int at = mr_brdf_param_offset(src, s->param) + (s->kind == MR_LEARNED_CHANNEL ? s->channel : 0);
+        const int channels = s->kind == MR_LEARNED_GREY ? 3 : 1;
+        s->min = INFINITY;
+        s->max = -INFINITY;
+        for (size_t r = 0; r < tab->n; r++)
+            for (int c = 0; c < channels; c++) {
+                const double v = tab->source_values[r * (size_t)tab->source_count + (size_t)(at + c)];
+                s->min = fmin(s->min, v);
+                s->max = fmax(s->max, v);
+            }
+    }
+    return MR_OK;
+}
+
+mr_status mr_learn(const mr_sweep_table *tab, const mr_learn_options *opts, mr_learned **out) {
+    if (tab == NULL || out == NULL || tab->source == NULL) return mr_fail(MR_ERR_INVALID_ARG, "learn: NULL argument");
+    mr_learn_options o = opts ? *opts : (mr_learn_options){0};
+    if (o.validation_fraction == 0.0) o.validation_fraction = DEFAULT_VALIDATION;
+    if (o.seed == 0) o.seed = 1;
+    if (o.roughness_degree == 0) o.roughness_degree = DEFAULT_DEGREE;
+    if ((unsigned)o.method >= MR_LEARN_METHOD_COUNT)
+        return mr_fail(MR_ERR_INVALID_ARG, "learn: method %d: unknown", (int)o.method);
+    if (!(o.validation_fraction > 0.0 && o.validation_fraction <= 0.5))
+        return mr_fail(MR_ERR_INVALID_ARG, "learn: validation fraction %g: expected (0, 0.5]", o.validation_fraction);
+    if (o.roughness_degree < 1 || o.roughness_degree > MR_POLY_MAX_DEGREE)
+        return mr_fail(MR_ERR_INVALID_ARG, "learn: roughness degree %d: expected 1 .. %d", o.roughness_degree,
+                       MR_POLY_MAX_DEGREE);
+    if (o.slope_inverse < -1 || o.slope_inverse > 1)
+        return mr_fail(MR_ERR_INVALID_ARG, "learn: slope_inverse %d: expected -1, 0 or 1", o.slope_inverse);
+    if (o.threads < 0 || o.mlp_hidden < 0 || o.mlp_max_epochs < 0)
+        return mr_fail(MR_ERR_INVALID_ARG, "learn: negative threads, hidden units or epochs");
+    if (tab->n < MIN_ROWS)
+        return mr_fail(MR_ERR_INVALID_ARG, "learn: %zu rows; at least %d are needed (a validation split is held out)",
+                       tab->n, MIN_ROWS);
+    mr_learned *t = calloc(1, sizeof *t);
+    if (t == NULL) return mr_fail(MR_ERR_NOMEM, "learn: out of memory");
+    t->source = tab->source;
+    t->target = tab->target;
+    t->method = o.method;
+    t->validation_fraction = o.validation_fraction;
+    t->seed = o.seed;
+    t->roughness_degree = o.roughness_degree;
+    t->roughness_origin = !o.roughness_intercept;
+    if (tab->provenance != NULL) {
+        t->provenance = strdup(tab->provenance);
+        if (t->provenance == NULL) {
+            free(t);
+            return mr_fail(MR_ERR_NOMEM, "learn: out of memory");
+        }
+    }
+    mr_status status = plan(tab, t);
+    size_t *order = status == MR_OK ? shuffled(tab->n, o.seed) : NULL;
+    if (status == MR_OK && order == NULL) status = mr_fail(MR_ERR_NOMEM, "learn: out of memory");
+    size_t n_val = (size_t)llround(o.validation_fraction * (double)tab->n);
+    if (n_val < 1) n_val = 1;
+    const size_t n_train = tab->n - n_val;
+    t->train_rows = (long)n_train;
+    t->validation_rows = (long)n_val;
+    if (o.progress) o.progress("fit", 0.0, o.progress_user);
+    // Fit on the training rows; measure on the held-out ones. PARAMETRIC with slope_inverse 0 tries both forms.
+    int inverse = o.slope_inverse > 0;
+    if (status == MR_OK) {
+        fit_carries(tab, t, order + n_val, n_train);
+        status = fit(tab, t, order + n_val, n_train, &o, inverse);
+        if (status == MR_OK) measure(tab, t, order, n_val, t->rmse);
+    }
+    if (status == MR_OK && t->method == MR_LEARN_PARAMETRIC && o.slope_inverse == 0) {
+        mr_learned trial = *t;
+        trial.svr = NULL;
+        trial.mlp = NULL;
+        double rmse[MR_LEARNED_MAX_SLOTS];
+        if (fit(tab, &trial, order + n_val, n_train, &o, 1) == MR_OK) {
+            measure(tab, &trial, order, n_val, rmse);
+            if (rmse[1] < 0.99 * t->rmse[1]) { // clearly better held-out specular: keep the c5 / alpha term
+                inverse = 1;
+                memcpy(t->rmse, rmse, sizeof rmse);
+            }
+        }
+        status = MR_OK;
+    }
+    if (o.progress) o.progress("fit", 0.5, o.progress_user);
+    // The transform returned: refitted on every row (the MLP keeps its early-stopped network).
+    if (status == MR_OK && t->method != MR_LEARN_MLP) {
+        fit_carries(tab, t, order, tab->n);
+        status = fit(tab, t, order, tab->n, &o, inverse);
+    }
+    if (o.progress) o.progress("fit", 1.0, o.progress_user);
+    free(order);
+    if (status != MR_OK) {
+        mr_learned_free(t);
+        return status;
+    }
+    *out = t;
+    return MR_OK;
+}

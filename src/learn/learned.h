@@ -1,0 +1,221 @@
+/*
+ * learned.h — transforms learned from sweeps (paper sections 5-7): a regression from a source BRDF model's
+ * parameters to a target model's, trained on uniform remaps (sweep_table.h), written to and read from versioned
+ * text files (.mrt) that round-trip exactly, applied per texel to whole texture sets, and composed into chains.
+ *
+ * Main calls:
+ *   mr_sweep_table rows;  mr_sweep_table_load(files, 2, NULL, &rows);
+ *   mr_learn_options o = {0};  o.method = MR_LEARN_PARAMETRIC;           // zero = defaults
+ *   mr_learned *t;  mr_learn(&rows, &o, &t);
+ *   mr_learned_write(t, "ward-ggx.mrt");                                    // atomic, exact
+ *   mr_learned_read("ward-ggx.mrt", &t2);                                   // errors name file and line
+ *   mr_learned_apply(t, source_values, target_values, &flags);             // one texel, packed vectors
+ *   mr_learned_free(t);
+ *
+ * What a transform does with one texel (source packed values v -> target packed values w):
+ *   1. w = base: the target values every transform writes where it learned nothing (the sweeps' fixed target
+ *      values: switches, fixed extension factors, parameters held constant in every row).
+ *   2. carries: w[target parameter] = factor * v[source parameter], per channel: a lobe the sweeps did not vary
+ *      (a diffuse albedo held at 0 while the specular was swept) is carried by the ratio of the two models'
+ *      Lambertian lobes (both parameters linear in f_r; factor = f_src(1) / f_tgt(1) at normal incidence), or, when
+ *      the rows vary it and the method is parametric, by a per-channel slope fitted on the rows.
+ *   3. the regression: features (source parameters the sweeps varied) -> outputs (target parameters that varied):
+ *      - a SCALAR feature is a one-channel parameter; a GREY feature an RGB parameter every row held grey (r = g = b,
+ *        as a grid axis sweeps it): it enters the regression as one number, and the regression is evaluated once
+ *        per channel, channel c of every GREY feature in, channel c of every GREY output out (the paper's per-channel
+ *        use of its sweeps); SCALAR and CHANNEL outputs come from one evaluation at the mean of each GREY feature's
+ *        channels. A CHANNEL feature is one channel of an RGB parameter the rows varied per channel.
+ *      - PARAMETRIC (section 7): exactly two features, the source roughness (SCALAR) and specular (GREY or SCALAR),
+ *        and two outputs, the target roughness and specular: roughness' = polynomial(roughness) (degree <= 4, through
+ *        the origin by default, as the authors' fit), specular'_c = k(roughness) specular_c with
+ *        k(a) = c0 + c1 e^(-c2 a) + c3 e^(-c4 a^2) [+ c5 / a] (parametric.h says how it is fitted well-conditioned):
+ *        one slope for the three channels, so chromaticity is kept, and linear extrapolation beyond the rows.
+ *      - SVR: one epsilon-SVR with an RBF kernel per output (svr.h), inputs and outputs normalised.
+ *      - MLP: one hidden ReLU layer (nn/mlp.h), every output at once.
+ *   4. outputs are clamped into the target parameters' ranges; a clamp sets MR_WF_CLAMPED_OUTPUT; a feature
+ *      outside its training domain [min, max] (every channel of a GREY feature) sets MR_WF_EXTRAPOLATED (the paper's
+ *      Fig. 19 failure is extrapolation); a non-finite input is read as the parameter's minimum and sets
+ *      MR_WF_NONFINITE_INPUT, one outside its range is clamped and sets MR_WF_CLAMPED_INPUT.
+ * A chain (mr_learned_chain_apply) runs transforms one after the other, each hop's target the next one's source,
+ * flags or'ed.
+ *
+ * Validation. mr_learn splits the rows by a seeded shuffle (validation_fraction held out, default 0.2), fits on the
+ * rest, measures each output's RMSE on the held-out rows (raw units; a GREY output over its three channel
+ * evaluations), then (parametric, svr) refits on every row for the transform it returns; the MLP keeps the network
+ * early stopping chose on the held-out rows. The figures are stored in the file.
+ *
+ * The file (mr_learned_write / mr_learned_read), version 1. Text, '\n' line ends, one key per line followed by
+ * values separated by single spaces; numbers C99 hexadecimal floats ("%a": exact), counts decimal. Lines starting
+ * with '#' are comments the writer adds for people (coefficients in decimal) and the reader skips. Keys in order:
+ *   matremap-transform 1
+ *   source MODEL                         target MODEL                 method parametric|svr|mlp
+ *   features N   then N lines: feature PARAM scalar|grey|channel C MIN MAX
+ *   outputs N    then N lines: output PARAM scalar|grey|channel C
+ *   base V1 ... Vk                       (k = the target's packed value count)
+ *   carries N    then N lines: carry TARGET_PARAM SOURCE_PARAM learned|lobes F_R [F_G F_B]
+ *   validation FRACTION SEED TRAIN_ROWS VALIDATION_ROWS
+ *   rmse R1 ... RN                       (one per output, raw units)
+ *   provenance N then N lines: | TEXT    (the sweeps' files, row counts and header lines)
+ *   the method's block: parametric: "roughness DEGREE ORIGIN C0 .. C4" and "slope INVERSE C0 .. C5";
+ *     svr: "svr N_IN N_OUT", "in_mean", "in_std", "out_mean", "out_std" lines, then per output
+ *     "model SV_COUNT GAMMA C EPSILON RHO VALIDATION_RMSE" and SV_COUNT lines "sv COEF X1 .. XN_IN";
+ *     mlp: "mlp LINES" then LINES lines holding a matremap-mlp weight file (nn/mlp.h)
+ *   checksum XXXXXXXX                    (FNV-1a 32 of every byte before this line, hex)
+ *   end
+ * The reader checks everything: magic and version, registered models, parameter names and channel counts against
+ * the models, domains (min <= max, finite), counts against limits, every number finite, the method block's sizes,
+ * the checksum (a file edited or damaged after it was written is refused: "checksum mismatch"), and nothing after
+ * "end"; any fault is MR_ERR_FORMAT naming the file, the line and what was expected. Writing then reading gives a
+ * transform whose every number has the same bits, and writing that again gives the same bytes.
+ *
+ * Threads: a transform is immutable once made; apply may run on several threads at once. Ownership: one owner,
+ * one free (mr_learned_free, NULL-safe). Nothing is printed.
+ */
+#ifndef MR_LEARN_LEARNED_H
+#define MR_LEARN_LEARNED_H
+
+#include <stddef.h>
+
+#include "../brdf/brdf.h"
+#include "../mr_status.h"
+#include "../transform/transform.h"
+#include "parametric.h"
+#include "sweep_table.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MR_LEARNED_FILE_MAGIC "matremap-transform"
+#define MR_LEARNED_FILE_VERSION 1
+#define MR_LEARNED_MAX_SLOTS MR_BRDF_MAX_VALUES /* features, outputs */
+#define MR_LEARNED_MAX_PROVENANCE 4096          /* provenance lines kept */
+#define MR_LEARNED_MAX_HOPS 8                    /* transforms in one chain */
+
+/* Flags a texel may get from a learned transform, beyond workflow.h's mr_wf_flag bits (which share the byte). */
+enum {
+    MR_WF_EXTRAPOLATED = 1u << 4,   /* a feature lay outside the transform's training domain */
+    MR_WF_CLAMPED_OUTPUT = 1u << 5  /* an output left the target parameter's range and was clamped */
+};
+
+typedef enum mr_learn_method {
+    MR_LEARN_PARAMETRIC = 0,
+    MR_LEARN_SVR,
+    MR_LEARN_MLP,
+    MR_LEARN_METHOD_COUNT
+} mr_learn_method;
+
+/* "parametric", "svr", "mlp"; NULL outside the enum. */
+const char *mr_learn_method_name(mr_learn_method method);
+/* MR_ERR_INVALID_ARG naming the valid names for an unknown one. */
+mr_status mr_learn_method_from_name(const char *name, mr_learn_method *out);
+
+typedef enum mr_learned_slot_kind {
+    MR_LEARNED_SCALAR = 0, /* a one-channel parameter */
+    MR_LEARNED_GREY,       /* an RGB parameter as one number, evaluated per channel */
+    MR_LEARNED_CHANNEL     /* one channel of an RGB parameter */
+} mr_learned_slot_kind;
+
+typedef struct mr_learned_slot {
+    int param;                 /* the parameter's index in its model */
+    mr_learned_slot_kind kind;
+    int channel;               /* CHANNEL: 0, 1 or 2; else 0 */
+    double min, max;           /* features: the training domain; outputs: 0 */
+} mr_learned_slot;
+
+typedef struct mr_learned_carry {
+    int target_param, source_param; /* the same channel count */
+    int learned;                    /* 1: the factors were fitted on rows; 0: the ratio of the models' lobes */
+    double factor[3];               /* per channel (one for scalars) */
+} mr_learned_carry;
+
+struct mr_svr;
+struct mr_mlp;
+
+typedef struct mr_learned {
+    const mr_brdf_model *source, *target;
+    mr_learn_method method;
+    int feature_count, output_count, carry_count;
+    mr_learned_slot features[MR_LEARNED_MAX_SLOTS];
+    mr_learned_slot outputs[MR_LEARNED_MAX_SLOTS];
+    mr_learned_carry carries[MR_LEARNED_MAX_SLOTS];
+    double base[MR_BRDF_MAX_VALUES];               /* target packed values */
+    double validation_fraction;
+    unsigned long long seed;
+    long train_rows, validation_rows;
+    double rmse[MR_LEARNED_MAX_SLOTS];             /* per output, on the held-out rows, raw units */
+    char *provenance;                              /* '\n'-terminated lines */
+    /* PARAMETRIC */
+    int roughness_degree, roughness_origin;
+    double roughness[MR_POLY_MAX_DEGREE + 1];
+    mr_specular_slope slope;
+    /* SVR, MLP (owned) */
+    struct mr_svr *svr;
+    struct mr_mlp *mlp;
+} mr_learned;
+
+/* Options of mr_learn; zero = the defaults given. */
+typedef struct mr_learn_options {
+    mr_learn_method method;        /* PARAMETRIC */
+    double validation_fraction;    /* 0 = 0.2; in (0, 0.5] */
+    unsigned long long seed;       /* 0 = 1 */
+    int roughness_degree;          /* PARAMETRIC: 0 = 4; 1 .. 4 */
+    int roughness_intercept;       /* PARAMETRIC: 1 fits a constant term too; default 0 (through the origin) */
+    int slope_inverse;             /* PARAMETRIC: 0 = automatic (the c5 / alpha term kept when it lowers the
+                                      held-out error), 1 = always, -1 = never */
+    int threads;                   /* SVR's search, MLP's training: 0 = all cores */
+    int mlp_hidden;                /* MLP: 0 = 64 */
+    int mlp_max_epochs;            /* MLP: 0 = 2000 */
+    void (*progress)(const char *stage, double fraction, void *user); /* optional, from the calling thread */
+    void *progress_user;
+} mr_learn_options;
+
+/* Learn a transform from the rows of t. MR_ERR_INVALID_ARG naming what is wrong: too few rows, nothing varied, a
+ * pair whose data does not have the parametric shape (a source specular parameter that is not linear in f_r, such
+ * as an IOR: the paper changes variable with its Eq. 1 first; more varied parameters than roughness and specular),
+ * options out of range. *out is set only on success. */
+mr_status mr_learn(const mr_sweep_table *t, const mr_learn_options *opts, mr_learned **out);
+
+/* One texel: source packed values in (mr_brdf_value_count(t->source)), target packed values out; *flags (may be
+ * NULL) gets the MR_WF_* bits. Never fails for non-NULL arguments; reentrant. */
+void mr_learned_apply(const mr_learned *t, const double *source_values, double *target_values, unsigned *flags);
+
+/* Hops t[0], t[1], ... (t[i]->target == t[i+1]->source); flags or'ed over the hops. MR_ERR_INVALID_ARG when the
+ * models do not connect. */
+mr_status mr_learned_chain_apply(const mr_learned *const *t, int hops, const double *source_values,
+                                 double *target_values, unsigned *flags);
+
+/* The held-out RMSE summed over outputs in units of each target parameter's range (for choosing among chains). */
+double mr_learned_error(const mr_learned *t);
+
+/* The chain from `source` to `target` through `via[0..via_count)` (models to pass, in order; may be 0) among
+ * `all[0..n)`: fewest hops, then the least summed mr_learned_error (ties: the lower indices). path[] receives the
+ * indices into all[] of the hops, *hops their count (<= MR_LEARNED_MAX_HOPS). MR_ERR_INVALID_ARG naming the pair
+ * and listing the transforms' pairs when no chain exists. */
+mr_status mr_learned_find_chain(const mr_learned *const *all, int n, const mr_brdf_model *source,
+                                const mr_brdf_model *target, const mr_brdf_model *const *via, int via_count,
+                                int *path, int *hops);
+
+/* A transform kind (transform.h) applying the chain hops[0..count) per texel: its inputs are every parameter of the
+ * first hop's source (optional: a missing map is the model's default), its outputs every parameter of the last hop's
+ * target, flags MR_TRANSFORM_PER_TEXEL (repeated texels converted once). Use it with mr_transform_create and
+ * mr_transform_convert_maps. The kind borrows the hops (they must outlive it and every transform made from it) and
+ * is freed by mr_learned_kind_free. MR_ERR_INVALID_ARG for hops that do not connect or a model with more than
+ * MR_TRANSFORM_MAX_SLOTS parameters. */
+mr_status mr_learned_kind_create(const mr_learned *const *hops, int count, mr_transform_kind **out);
+void mr_learned_kind_free(mr_transform_kind *kind);
+
+mr_status mr_learned_write(const mr_learned *t, const char *path);
+/* The file's text into *text (malloc'ed, NUL-terminated; the caller frees it), exactly what write writes. */
+mr_status mr_learned_format(const mr_learned *t, char **text, size_t *length);
+mr_status mr_learned_read(const char *path, mr_learned **out);
+/* Parse `size` bytes of file text; `name` labels errors. */
+mr_status mr_learned_parse(const char *text, size_t size, const char *name, mr_learned **out);
+
+void mr_learned_free(mr_learned *t);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MR_LEARN_LEARNED_H */

@@ -1,0 +1,104 @@
+/*
+ * learned_kind.c — a chain of learned transforms as a transform kind of src/transform (contract in learned.h), so
+ * that texture sets go through the library's one texture-set conversion (mr_transform_convert_maps).
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "learn/learned.h"
+#include "mr_internal.h"
+#include "transform/transform.h"
+
+/* The kind and everything it points to, in one block. */
+typedef struct learned_kind {
+    mr_transform_kind kind;
+    mr_transform_slot inputs[MR_TRANSFORM_MAX_SLOTS], outputs[MR_TRANSFORM_MAX_SLOTS];
+    const mr_learned *hops[MR_LEARNED_MAX_HOPS];
+    int hop_count;
+    char name[32], summary[512];
+} learned_kind;
+
+static mr_status learned_create(const mr_transform_kind *kind, const mr_transform_options *opts, void **state) {
+    (void)opts;
+    *state = (void *)kind->config;
+    return MR_OK;
+}
+
+static mr_status learned_apply(const mr_transform *t, const mr_transform_batch *b) {
+    const learned_kind *lk = mr_transform_state(t);
+    const mr_transform_kind *kind = &lk->kind;
+    for (size_t i = 0; i < b->n; i++) {
+        double v[MR_BRDF_MAX_VALUES], w[MR_BRDF_MAX_VALUES];
+        int k = 0;
+        for (int s = 0; s < kind->input_count; s++)
+            for (int c = 0; c < kind->inputs[s].channels; c++)
+                v[k++] = b->in[s][i * (size_t)kind->inputs[s].channels + (size_t)c];
+        unsigned flags = 0;
+        mr_learned_chain_apply(lk->hops, lk->hop_count, v, w, &flags);
+        k = 0;
+        for (int s = 0; s < kind->output_count; s++)
+            for (int c = 0; c < kind->outputs[s].channels; c++)
+                b->out[s][i * (size_t)kind->outputs[s].channels + (size_t)c] = (float)w[k++];
+        b->flags[i] = (uint8_t)flags;
+    }
+    return MR_OK;
+}
+
+/* One slot per parameter of `model`, its range the domain (what apply clamps). */
+static int model_slots(const mr_brdf_model *model, mr_transform_slot *slots) {
+    if (model->param_count > MR_TRANSFORM_MAX_SLOTS) return 0;
+    for (int p = 0; p < model->param_count; p++) {
+        const mr_brdf_param *q = &model->params[p];
+        slots[p] = (mr_transform_slot){q->name, q->channels, q->min_value, q->max_value, q->min_value,
+                                       MR_SLOT_OPTIONAL, 0.0, -1};
+    }
+    return 1;
+}
+
+mr_status mr_learned_kind_create(const mr_learned *const *hops, int count, mr_transform_kind **out) {
+    if (hops == NULL || out == NULL || count < 1 || count > MR_LEARNED_MAX_HOPS)
+        return mr_fail(MR_ERR_INVALID_ARG, "learned kind: NULL argument or %d hops (1 .. %d)", count,
+                       MR_LEARNED_MAX_HOPS);
+    for (int h = 0; h < count; h++) {
+        if (hops[h] == NULL) return mr_fail(MR_ERR_INVALID_ARG, "learned kind: hop %d is NULL", h + 1);
+        if (h > 0 && hops[h - 1]->target != hops[h]->source)
+            return mr_fail(MR_ERR_INVALID_ARG, "transform chain: hop %d ends in %s but hop %d starts from %s", h,
+                           hops[h - 1]->target->name, h + 1, hops[h]->source->name);
+    }
+    learned_kind *lk = calloc(1, sizeof *lk);
+    if (lk == NULL) return mr_fail(MR_ERR_NOMEM, "learned kind: out of memory");
+    const mr_brdf_model *source = hops[0]->source, *target = hops[count - 1]->target;
+    if (!model_slots(source, lk->inputs) || !model_slots(target, lk->outputs)) {
+        free(lk);
+        return mr_fail(MR_ERR_INVALID_ARG, "learned kind: %s or %s has more than %d parameters", source->name,
+                       target->name, MR_TRANSFORM_MAX_SLOTS);
+    }
+    memcpy(lk->hops, hops, (size_t)count * sizeof *hops);
+    lk->hop_count = count;
+    snprintf(lk->name, sizeof lk->name, "%s", count == 1 ? mr_learn_method_name(hops[0]->method) : "chain");
+    int at = snprintf(lk->summary, sizeof lk->summary, "learned from sweeps: %s", source->name);
+    for (int h = 0; h < count && at > 0 && (size_t)at < sizeof lk->summary; h++)
+        at += snprintf(lk->summary + at, sizeof lk->summary - (size_t)at, " -(%s)-> %s",
+                       mr_learn_method_name(hops[h]->method), hops[h]->target->name);
+    mr_transform_kind *k = &lk->kind;
+    k->name = lk->name;
+    k->summary = lk->summary;
+    k->source = source->name;
+    k->target = target->name;
+    k->input_count = source->param_count;
+    k->inputs = lk->inputs;
+    k->output_count = target->param_count;
+    k->outputs = lk->outputs;
+    k->flags = MR_TRANSFORM_PER_TEXEL;
+    k->config = lk;
+    k->create = learned_create;
+    k->destroy = NULL;
+    k->apply = learned_apply;
+    *out = k;
+    return MR_OK;
+}
+
+void mr_learned_kind_free(mr_transform_kind *kind) {
+    free(kind); // the kind is the first member of its learned_kind block
+}

@@ -1,0 +1,416 @@
+/*
+ * test_learned.c — transforms learned from sweeps (src/learn/learned.h, sweep_table.h): known mappings recovered by
+ * the parametric method, transform files that round-trip bit for bit (every method) and refuse damage with a clear
+ * message, training-domain flags, chromaticity kept by the parametric method where the SVR shifts it, chains equal to
+ * their steps (in doubles and through the texture-set conversion), the chain search, carries by the lobes' ratio,
+ * and data the parametric form cannot take refused with the reason.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "harness.h"
+#include "learn/learned.h"
+#include "learn/svr.h"
+#include "transform/transform.h"
+
+/* A known mapping for synthetic sweeps: roughness and slope of the paper's form. */
+static const double TRUE_POLY[5] = {0.0, 0.95, 0.3, -0.4, 0.1};
+static const mr_specular_slope TRUE_SLOPE = {{0.9, -0.25, 12.0, 0.15, 4.0, 0.0}, 0, 0.0};
+
+/* Write a sweep file of `source` -> `target` (both with a scalar roughness `rough` and an RGB specular `spec`):
+ * na roughness values x ns grey speculars, the target following TRUE_POLY and TRUE_SLOPE, other values fixed as
+ * `from` / `to` assignments say. Returns the path. */
+static const char *write_sweep(const char *name, const char *source, const char *from, const char *rough,
+                               const char *spec, const char *target, const char *to, const char *trough,
+                               const char *tspec, int na, int ns, double amin, double amax, double smin, double smax) {
+    const mr_brdf_model *s = mr_brdf_find(source), *t = mr_brdf_find(target);
+    double sv[MR_BRDF_MAX_VALUES], tv[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(s, sv);
+    mr_brdf_default_values(t, tv);
+    char buf[256];
+    snprintf(buf, sizeof buf, "%s", from);
+    for (char *save = NULL, *w = strtok_r(buf, " ", &save); w; w = strtok_r(NULL, " ", &save))
+        mr_brdf_parse_assignment(s, w, sv);
+    snprintf(buf, sizeof buf, "%s", to);
+    for (char *save = NULL, *w = strtok_r(buf, " ", &save); w; w = strtok_r(NULL, " ", &save))
+        mr_brdf_parse_assignment(t, w, tv);
+    const char *path = mr_test_tmp_path(name);
+    FILE *f = fopen(path, "w");
+    fprintf(f, "# matremap test sweep\n# from: %s %s\n# to: %s %s\n# scene: fit size=64 light=45\nindex", source, from,
+            target, to);
+    static const char rgb[3] = {'r', 'g', 'b'};
+    for (int pass = 0; pass < 2; pass++) {
+        const mr_brdf_model *m = pass ? t : s;
+        for (int p = 0; p < m->param_count; p++)
+            for (int c = 0; c < m->params[p].channels; c++) {
+                if (m->params[p].channels == 3)
+                    fprintf(f, ",%s%s_%c", pass ? "to_" : "", m->params[p].name, rgb[c]);
+                else
+                    fprintf(f, ",%s%s", pass ? "to_" : "", m->params[p].name);
+            }
+    }
+    fprintf(f, ",rmse,relative_rmse,ssim,outcome,renders,seconds\n");
+    const int ra = mr_brdf_param_offset(s, mr_brdf_param_index(s, rough));
+    const int sa = mr_brdf_param_offset(s, mr_brdf_param_index(s, spec));
+    const int ta = mr_brdf_param_offset(t, mr_brdf_param_index(t, trough));
+    const int tsa = mr_brdf_param_offset(t, mr_brdf_param_index(t, tspec));
+    long index = 0;
+    for (int i = 0; i < na; i++)
+        for (int j = 0; j < ns; j++) {
+            const double a = amin * pow(amax / amin, na > 1 ? i / (double)(na - 1) : 0.0);
+            const double sp = smin + (smax - smin) * (ns > 1 ? j / (double)(ns - 1) : 0.0);
+            sv[ra] = a;
+            for (int c = 0; c < 3; c++) sv[sa + c] = sp;
+            tv[ta] = mr_polynomial_eval(TRUE_POLY, 4, a);
+            for (int c = 0; c < 3; c++) tv[tsa + c] = mr_specular_slope_eval(&TRUE_SLOPE, a) * sp;
+            fprintf(f, "%ld", index++);
+            for (int k = 0; k < mr_brdf_value_count(s); k++) fprintf(f, ",%.17g", sv[k]);
+            for (int k = 0; k < mr_brdf_value_count(t); k++) fprintf(f, ",%.17g", tv[k]);
+            fprintf(f, ",0.001,0.01,0.99,converged,50,0.01\n");
+        }
+    fclose(f);
+    return path;
+}
+
+static const char *ward_ggx_sweep(void) {
+    return write_sweep("ward_ggx.csv", "ward", "diffuse=0", "alpha", "specular", "ggx", "diffuse=0", "alpha", "f0", 20,
+                       6, 0.02, 0.6, 0.02, 0.3);
+}
+
+static mr_learned *learn_from(const char *path, mr_learn_method method) {
+    mr_sweep_table tab;
+    if (mr_sweep_table_load(&path, 1, NULL, &tab) != MR_OK) return NULL;
+    mr_learn_options o = {0};
+    o.method = method;
+    o.threads = 1;
+    mr_learned *t = NULL;
+    mr_status status = mr_learn(&tab, &o, &t);
+    mr_sweep_table_free(&tab);
+    return status == MR_OK ? t : NULL;
+}
+
+/* The parametric method recovers a mapping of its own form from exact rows. */
+MR_TEST(parametric_recovers_known_mapping) {
+    mr_learned *t = learn_from(ward_ggx_sweep(), MR_LEARN_PARAMETRIC);
+    MR_CHECK_MSG(t != NULL, "%s", mr_last_error());
+    if (t == NULL) return;
+    MR_CHECK(t->feature_count == 2 && t->output_count == 2 && t->features[1].kind == MR_LEARNED_GREY);
+    MR_CHECK(t->roughness_origin == 1 && t->roughness[0] == 0.0);
+    for (int k = 1; k < 5; k++) MR_CHECK_NEAR(t->roughness[k], TRUE_POLY[k], 1e-6);
+    for (double a = 0.02; a <= 0.6; a += 0.01)
+        MR_CHECK_NEAR(mr_specular_slope_eval(&t->slope, a), mr_specular_slope_eval(&TRUE_SLOPE, a), 2e-4);
+    MR_CHECK(t->rmse[0] < 1e-8 && t->rmse[1] < 1e-4);
+    // The diffuse, held at 0 in the rows, is carried by the lobes' ratio: Ward's and GGX's Lambert are the same.
+    MR_CHECK(t->carry_count == 1 && t->carries[0].learned == 0);
+    MR_CHECK_NEAR(t->carries[0].factor[0], 1.0, 1e-12);
+    MR_CHECK(strstr(t->provenance, "# from: ward diffuse=0") != NULL);
+    mr_learned_free(t);
+}
+
+/* Blender Internal's diffuse has no 1/pi: a Ward albedo rho is carried as rho / pi. */
+MR_TEST(carry_by_lobe_ratio) {
+    const char *path = write_sweep("ward_bward.csv", "ward", "diffuse=0", "alpha", "specular", "blender-ward",
+                                   "diffuse=0", "rms", "specular", 12, 4, 0.02, 0.35, 0.02, 0.3);
+    mr_learned *t = learn_from(path, MR_LEARN_PARAMETRIC);
+    MR_CHECK_MSG(t != NULL, "%s", mr_last_error());
+    if (t == NULL) return;
+    MR_CHECK(t->carry_count == 1);
+    MR_CHECK_NEAR(t->carries[0].factor[1], 1.0 / 3.14159265358979323846, 1e-12);
+    mr_learned_free(t);
+}
+
+/* Write, read, write: the same bytes, and every number of the transform the same bits. */
+static void check_round_trip(const mr_learned *t) {
+    char *a = NULL, *b = NULL;
+    size_t la = 0, lb = 0;
+    MR_CHECK_OK(mr_learned_format(t, &a, &la));
+    mr_learned *back = NULL;
+    MR_CHECK_OK(mr_learned_parse(a, la, "memory", &back));
+    if (back == NULL) {
+        free(a);
+        return;
+    }
+    MR_CHECK_OK(mr_learned_format(back, &b, &lb));
+    MR_CHECK(la == lb && memcmp(a, b, la) == 0);
+    MR_CHECK(back->source == t->source && back->target == t->target && back->method == t->method);
+    MR_CHECK(memcmp(back->base, t->base, sizeof t->base) == 0 && memcmp(back->rmse, t->rmse, sizeof t->rmse) == 0);
+    MR_CHECK(memcmp(back->features, t->features, sizeof t->features) == 0);
+    MR_CHECK(strcmp(back->provenance, t->provenance) == 0);
+    // Applied to the same texels, the same bits (inside the domain, beyond it, coloured).
+    const double probes[3][4] = {{0.1, 0.2, 0.2, 0.2}, {0.9, 0.5, 0.2, 0.1}, {0.03, 0.01, 0.02, 0.03}};
+    for (int p = 0; p < 3; p++) {
+        double v[MR_BRDF_MAX_VALUES] = {0}, w1[MR_BRDF_MAX_VALUES], w2[MR_BRDF_MAX_VALUES];
+        v[mr_brdf_param_offset(t->source, mr_brdf_param_index(t->source, "alpha"))] = probes[p][0];
+        for (int c = 0; c < 3; c++)
+            v[mr_brdf_param_offset(t->source, mr_brdf_param_index(t->source, "specular")) + c] = probes[p][1 + c];
+        mr_learned_apply(t, v, w1, NULL);
+        mr_learned_apply(back, v, w2, NULL);
+        MR_CHECK(memcmp(w1, w2, (size_t)mr_brdf_value_count(t->target) * sizeof *w1) == 0);
+    }
+    mr_learned_free(back);
+    free(a);
+    free(b);
+}
+
+MR_TEST(round_trip_every_method) {
+    for (int m = 0; m < MR_LEARN_METHOD_COUNT; m++) {
+        mr_learned *t = learn_from(ward_ggx_sweep(), (mr_learn_method)m);
+        MR_CHECK_MSG(t != NULL, "%s: %s", mr_learn_method_name((mr_learn_method)m), mr_last_error());
+        if (t == NULL) continue;
+        check_round_trip(t);
+        // and through a file
+        const char *path = mr_test_tmp_path("t.mrt");
+        MR_CHECK_OK(mr_learned_write(t, path));
+        mr_learned *back = NULL;
+        MR_CHECK_OK(mr_learned_read(path, &back));
+        MR_CHECK(back != NULL && back->method == t->method);
+        mr_learned_free(back);
+        mr_learned_free(t);
+    }
+}
+
+/* Damaged files: each refused as MR_ERR_FORMAT naming the file, the line and what was expected. */
+MR_TEST(corrupted_files_refused) {
+    mr_learned *t = learn_from(ward_ggx_sweep(), MR_LEARN_PARAMETRIC);
+    if (t == NULL) return;
+    char *text = NULL;
+    size_t n = 0;
+    MR_CHECK_OK(mr_learned_format(t, &text, &n));
+    mr_learned_free(t);
+    struct {
+        const char *what, *find, *replace, *message;
+    } cases[] = {
+        {"magic", "matremap-transform 1", "matremap-transfrom 1", "not a matremap transform file"},
+        {"version", "matremap-transform 1", "matremap-transform 7", "version 7"},
+        {"model", "target ggx", "target gxx", "gxx"},
+        {"parameter", "feature alpha scalar", "feature alfa scalar", "no parameter 'alfa'"},
+        {"slot kind", "output f0 grey", "output f0 scalar", "3 channels"},
+        {"a digit", "validation 0x1.999999999999ap-3", "validation 0x1.999999999999bp-3", "checksum mismatch"},
+        {"a count", "features 2", "features 3", "line"},
+        {"a number", "rmse 0x", "rmse zz", "not a finite number"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        char *hit = strstr(text, cases[k].find);
+        MR_CHECK_MSG(hit != NULL, "%s: '%s' not in the file", cases[k].what, cases[k].find);
+        if (hit == NULL) continue;
+        size_t head = (size_t)(hit - text), fl = strlen(cases[k].find), rl = strlen(cases[k].replace);
+        char *bad = malloc(n - fl + rl + 1);
+        memcpy(bad, text, head);
+        memcpy(bad + head, cases[k].replace, rl);
+        memcpy(bad + head + rl, hit + fl, n - head - fl + 1);
+        mr_learned *back = NULL;
+        mr_status status = mr_learned_parse(bad, n - fl + rl, "bad.mrt", &back);
+        MR_CHECK_MSG(status == MR_ERR_FORMAT && back == NULL, "%s: status %d", cases[k].what, (int)status);
+        MR_CHECK_MSG(strstr(mr_last_error(), "bad.mrt") && strstr(mr_last_error(), "line") &&
+                         strstr(mr_last_error(), cases[k].message),
+                     "%s: %s", cases[k].what, mr_last_error());
+        free(bad);
+    }
+    // Truncated anywhere: refused (never a partial transform).
+    for (size_t cut = 0; cut < n; cut += n / 97 + 1) {
+        mr_learned *back = NULL;
+        MR_CHECK_MSG(mr_learned_parse(text, cut, "cut.mrt", &back) == MR_ERR_FORMAT && back == NULL, "cut at %zu",
+                     cut);
+    }
+    // Text after "end".
+    char *longer = malloc(n + 8);
+    memcpy(longer, text, n);
+    memcpy(longer + n, "extra\n", 7);
+    mr_learned *back = NULL;
+    MR_CHECK(mr_learned_parse(longer, n + 6, "long.mrt", &back) == MR_ERR_FORMAT);
+    MR_CHECK_MSG(strstr(mr_last_error(), "after 'end'") != NULL, "%s", mr_last_error());
+    MR_CHECK(mr_learned_read(mr_test_tmp_path("missing.mrt"), &back) == MR_ERR_IO);
+    free(longer);
+    free(text);
+}
+
+static void ward_values(double alpha, double r, double g, double b, double diffuse, double *v) {
+    const mr_brdf_model *ward = mr_brdf_find("ward");
+    mr_brdf_default_values(ward, v);
+    v[mr_brdf_param_offset(ward, mr_brdf_param_index(ward, "alpha"))] = alpha;
+    const int s = mr_brdf_param_offset(ward, mr_brdf_param_index(ward, "specular"));
+    const int d = mr_brdf_param_offset(ward, mr_brdf_param_index(ward, "diffuse"));
+    v[s] = r;
+    v[s + 1] = g;
+    v[s + 2] = b;
+    v[d] = v[d + 1] = v[d + 2] = diffuse;
+}
+
+/* Texels outside the rows' domain are flagged; inside, not. Coloured specular beyond the domain keeps its
+ * chromaticity under the parametric method (one slope for the three channels); the SVR's is measured to shift. */
+MR_TEST(domain_flags_and_chromaticity) {
+    mr_learned *p = learn_from(ward_ggx_sweep(), MR_LEARN_PARAMETRIC);
+    mr_learned *s = learn_from(ward_ggx_sweep(), MR_LEARN_SVR);
+    if (p == NULL || s == NULL) {
+        MR_CHECK_MSG(0, "%s", mr_last_error());
+        return;
+    }
+    const mr_brdf_model *ggx = mr_brdf_find("ggx");
+    const int f0 = mr_brdf_param_offset(ggx, mr_brdf_param_index(ggx, "f0"));
+    double v[MR_BRDF_MAX_VALUES], w[MR_BRDF_MAX_VALUES];
+    unsigned flags = 0;
+    ward_values(0.1, 0.2, 0.2, 0.2, 0.3, v);
+    mr_learned_apply(p, v, w, &flags);
+    MR_CHECK(flags == 0);
+    ward_values(0.1, 0.6, 0.24, 0.12, 0.3, v); // red beyond the rows' 0.3
+    mr_learned_apply(p, v, w, &flags);
+    MR_CHECK(flags & MR_WF_EXTRAPOLATED);
+    MR_CHECK_NEAR(w[f0] / w[f0 + 1], 0.6 / 0.24, 1e-12);
+    MR_CHECK_NEAR(w[f0] / w[f0 + 2], 0.6 / 0.12, 1e-12);
+    MR_CHECK_NEAR(w[f0], mr_specular_slope_eval(&TRUE_SLOPE, 0.1) * 0.6, 1e-3); // linear extrapolation
+    ward_values(0.8, 0.2, 0.2, 0.2, 0.3, v); // roughness beyond 0.6
+    mr_learned_apply(p, v, w, &flags);
+    MR_CHECK(flags & MR_WF_EXTRAPOLATED);
+    // SVR: inside the domain it follows the mapping; beyond it, the channels' ratio is not kept.
+    ward_values(0.1, 0.2, 0.2, 0.2, 0.3, v);
+    mr_learned_apply(s, v, w, &flags);
+    MR_CHECK(flags == 0);
+    MR_CHECK_NEAR(w[f0], mr_specular_slope_eval(&TRUE_SLOPE, 0.1) * 0.2, 5e-3);
+    ward_values(0.1, 0.6, 0.24, 0.12, 0.3, v);
+    mr_learned_apply(s, v, w, &flags);
+    const double shift = fabs(w[f0] / w[f0 + 2] - 5.0);
+    MR_CHECK_MSG(shift > 0.1, "svr red/blue ratio %g (5 kept: expected the Fig. 19 shift)", w[f0] / w[f0 + 2]);
+    mr_learned_free(p);
+    mr_learned_free(s);
+}
+
+/* A chain is its steps: in doubles, and through the texture-set conversion (float planes) texel by texel. */
+MR_TEST(chain_equals_steps) {
+    const char *ab = write_sweep("ward_ggx2.csv", "ward", "diffuse=0", "alpha", "specular", "ggx", "diffuse=0",
+                                 "alpha", "f0", 16, 5, 0.02, 0.6, 0.02, 0.3);
+    const char *bc = write_sweep("ggx_as.csv", "ggx", "diffuse=0", "alpha", "f0", "as", "diffuse=0", "alpha", "f0", 16,
+                                 5, 0.01, 0.7, 0.01, 0.4);
+    mr_learned *t1 = learn_from(ab, MR_LEARN_PARAMETRIC), *t2 = learn_from(bc, MR_LEARN_SVR);
+    if (t1 == NULL || t2 == NULL) {
+        MR_CHECK_MSG(0, "%s", mr_last_error());
+        return;
+    }
+    const mr_learned *chain[2] = {t1, t2};
+    mr_transform_kind *kind = NULL;
+    MR_CHECK_OK(mr_learned_kind_create(chain, 2, &kind));
+    mr_transform *t = NULL;
+    MR_CHECK_OK(mr_transform_create(kind, NULL, &t));
+    enum { W = 37, H = 11 };
+    mr_image *alpha = NULL, *spec = NULL, *diff = NULL;
+    mr_image_create(W, H, 1, &alpha);
+    mr_image_create(W, H, 3, &spec);
+    mr_image_create(W, H, 3, &diff);
+    for (int i = 0; i < W * H; i++) {
+        alpha->pixels[i] = (float)(0.02 + 0.7 * (i % W) / W);
+        for (int c = 0; c < 3; c++) {
+            spec->pixels[3 * i + c] = (float)(0.02 + 0.3 * ((i / W + c) % H) / H);
+            diff->pixels[3 * i + c] = (float)(0.1 * c + 0.01 * (i % 7));
+        }
+    }
+    const mr_brdf_model *ward = mr_brdf_find("ward");
+    mr_transform_map in[MR_TRANSFORM_MAX_SLOTS];
+    double defaults[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(ward, defaults);
+    for (int p = 0; p < ward->param_count; p++) {
+        const double d = defaults[mr_brdf_param_offset(ward, p)];
+        in[p] = (mr_transform_map){NULL, 0, 0, {d, d, d}, {0}};
+    }
+    in[mr_brdf_param_index(ward, "alpha")].image = alpha;
+    in[mr_brdf_param_index(ward, "specular")].image = spec;
+    in[mr_brdf_param_index(ward, "diffuse")].image = diff;
+    mr_image *out[MR_TRANSFORM_MAX_SLOTS] = {NULL};
+    uint8_t *flags = NULL;
+    MR_CHECK_OK(mr_transform_convert_maps(t, in, out, &flags));
+    const mr_brdf_model *as = mr_brdf_find("as");
+    long mismatches = 0, extrapolated = 0;
+    for (int i = 0; out[0] != NULL && i < W * H; i++) {
+        double v[MR_BRDF_MAX_VALUES], mid[MR_BRDF_MAX_VALUES], w[MR_BRDF_MAX_VALUES], wc[MR_BRDF_MAX_VALUES];
+        ward_values(alpha->pixels[i], spec->pixels[3 * i], spec->pixels[3 * i + 1], spec->pixels[3 * i + 2], 0.0, v);
+        for (int c = 0; c < 3; c++) v[mr_brdf_param_offset(ward, 0) + c] = diff->pixels[3 * i + c];
+        unsigned f1 = 0, f2 = 0, fc = 0;
+        mr_learned_apply(t1, v, mid, &f1);
+        mr_learned_apply(t2, mid, w, &f2);
+        MR_CHECK_OK(mr_learned_chain_apply(chain, 2, v, wc, &fc));
+        MR_CHECK(memcmp(w, wc, (size_t)mr_brdf_value_count(as) * sizeof *w) == 0 && fc == (f1 | f2));
+        for (int p = 0, k = 0; p < as->param_count; p++)
+            for (int c = 0; c < as->params[p].channels; c++, k++)
+                mismatches += out[p]->pixels[i * as->params[p].channels + c] != (float)w[k];
+        mismatches += flags[i] != fc;
+        extrapolated += (fc & MR_WF_EXTRAPOLATED) != 0;
+    }
+    MR_CHECK_MSG(mismatches == 0, "%ld values differ between the chain's conversion and its steps", mismatches);
+    MR_CHECK(extrapolated > 0 && extrapolated < W * H); // the maps reach beyond the rows in places
+    // A chain that does not connect is refused.
+    const mr_learned *wrong[2] = {t2, t1};
+    mr_transform_kind *none = NULL;
+    MR_CHECK(mr_learned_kind_create(wrong, 2, &none) == MR_ERR_INVALID_ARG && none == NULL);
+    for (int j = 0; j < MR_TRANSFORM_MAX_SLOTS; j++) mr_image_free(out[j]);
+    free(flags);
+    mr_image_free(alpha);
+    mr_image_free(spec);
+    mr_image_free(diff);
+    mr_transform_free(t);
+    mr_learned_kind_free(kind);
+    mr_learned_free(t1);
+    mr_learned_free(t2);
+}
+
+/* Fewest hops first, then least error; --via forces a model; no chain names the pairs there are. */
+MR_TEST(chain_search) {
+    mr_learned *a = calloc(1, sizeof *a), *b = calloc(1, sizeof *b), *c = calloc(1, sizeof *c);
+    mr_learned *d = calloc(1, sizeof *d);
+    const mr_brdf_model *ward = mr_brdf_find("ward"), *ggx = mr_brdf_find("ggx"), *as = mr_brdf_find("as"),
+                        *beck = mr_brdf_find("beckmann");
+    *a = (mr_learned){.source = ward, .target = ggx, .output_count = 1, .rmse = {0.01}};
+    *b = (mr_learned){.source = ggx, .target = as, .output_count = 1, .rmse = {0.01}};
+    *c = (mr_learned){.source = ward, .target = as, .output_count = 1, .rmse = {0.5}};
+    *d = (mr_learned){.source = ward, .target = beck, .output_count = 1, .rmse = {0.001}};
+    const mr_learned *all[4] = {a, b, c, d};
+    int path[MR_LEARNED_MAX_HOPS], hops = 0;
+    MR_CHECK_OK(mr_learned_find_chain(all, 4, ward, as, NULL, 0, path, &hops));
+    MR_CHECK(hops == 1 && path[0] == 2); // one hop beats two, whatever the error
+    const mr_brdf_model *via[1] = {ggx};
+    MR_CHECK_OK(mr_learned_find_chain(all, 4, ward, as, via, 1, path, &hops));
+    MR_CHECK(hops == 2 && path[0] == 0 && path[1] == 1);
+    MR_CHECK(mr_learned_find_chain(all, 4, as, ward, NULL, 0, path, &hops) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strstr(mr_last_error(), "ward -> ggx") != NULL, "%s", mr_last_error());
+    free(a);
+    free(b);
+    free(c);
+    free(d);
+}
+
+/* The parametric form needs a linear specular: an IOR source is refused with the paper's Eq. 1 named; a file pair
+ * that mixes scenes is refused naming both files. */
+MR_TEST(parametric_refuses_wrong_shape) {
+    const char *path = write_sweep("plastic.csv", "ggx-plastic", "diffuse=0", "alpha", "specular", "ggx", "diffuse=0",
+                                   "alpha", "f0", 6, 4, 0.02, 0.5, 0.1, 0.9);
+    // make the ior vary too: rewrite the ior column in the synthetic rows
+    mr_sweep_table tab;
+    MR_CHECK_OK(mr_sweep_table_load(&path, 1, NULL, &tab));
+    const mr_brdf_model *pl = mr_brdf_find("ggx-plastic");
+    const int ior = mr_brdf_param_offset(pl, mr_brdf_param_index(pl, "ior"));
+    const int spec = mr_brdf_param_offset(pl, mr_brdf_param_index(pl, "specular"));
+    for (size_t r = 0; r < tab.n; r++) {
+        tab.source_values[r * (size_t)tab.source_count + (size_t)ior] = 1.2 + 0.1 * (double)(r % 5);
+        for (int c = 0; c < 3; c++) tab.source_values[r * (size_t)tab.source_count + (size_t)(spec + c)] = 1.0;
+    }
+    mr_learned *t = NULL;
+    mr_learn_options o = {0};
+    MR_CHECK(mr_learn(&tab, &o, &t) == MR_ERR_INVALID_ARG && t == NULL);
+    MR_CHECK_MSG(strstr(mr_last_error(), "Eq. 1") != NULL, "%s", mr_last_error());
+    mr_sweep_table_free(&tab);
+    // Two files of different fit scenes.
+    const char *other = mr_test_tmp_path("other_scene.csv");
+    size_t n = 0;
+    char *text = mr_test_read_file(ward_ggx_sweep(), &n);
+    char *at = strstr(text, "light=45");
+    memcpy(at, "light=00", 8);
+    mr_test_write_file(other, text, n);
+    free(text);
+    const char *both[2] = {ward_ggx_sweep(), other};
+    MR_CHECK(mr_sweep_table_load(both, 2, NULL, &tab) == MR_ERR_FORMAT);
+    MR_CHECK_MSG(strstr(mr_last_error(), "scene") && strstr(mr_last_error(), "other_scene.csv"), "%s",
+                 mr_last_error());
+}
+
+MR_TEST_MAIN(MR_TEST_ENTRY(parametric_recovers_known_mapping), MR_TEST_ENTRY(carry_by_lobe_ratio),
+             MR_TEST_ENTRY(round_trip_every_method), MR_TEST_ENTRY(corrupted_files_refused),
+             MR_TEST_ENTRY(domain_flags_and_chromaticity), MR_TEST_ENTRY(chain_equals_steps),
+             MR_TEST_ENTRY(chain_search), MR_TEST_ENTRY(parametric_refuses_wrong_shape))
