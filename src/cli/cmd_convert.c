@@ -35,7 +35,8 @@ static void print_help(void) {
            "                      least held-out error) is found; --via MODEL[,MODEL...] makes it pass those models\n"
            "\n"
            "Outputs: PREFIX<param>.exr (linear float; --format png: 8-bit, colour parameters sRGB-encoded) for every\n"
-           "parameter of the target model, the first input map's alpha carried into RGB outputs, and\n"
+           "parameter of the target model (the folder of PREFIX is made if missing), the first input map's alpha\n"
+           "carried into RGB outputs, and\n"
            "PREFIXflags.png: red where a texel lay outside a learned transform's training domain (extrapolated:\n"
            "the paper's Fig. 19 failure), green where an output left its parameter's range and was clamped, blue\n"
            "where an input was clamped or not finite. PREFIX may name a folder ('out/'). No output may be an input.\n"
@@ -314,6 +315,15 @@ int cmd_convert(int argc, char **argv) {
                                     "replaced\n", names[j], m->maps[k].source);
                     code = CLI_EXIT_BAD_INPUT;
                 }
+        }
+    }
+    if (code == CLI_EXIT_OK && any_map && strrchr(prefix, '/') != NULL) { // "out/ggx_": make the folder "out"
+        char folder[4096];
+        snprintf(folder, sizeof folder, "%.*s", (int)(strrchr(prefix, '/') - prefix), prefix);
+        if (folder[0] != '\0' && mkdir(folder, 0777) != 0 && errno != EEXIST) {
+            fprintf(stderr, "matremap convert: error: -o '%s': cannot create the folder '%s': %s\n", prefix, folder,
+                    strerror(errno));
+            code = CLI_EXIT_BAD_INPUT;
         }
     }
     double convert_seconds = 0.0;

@@ -17,54 +17,55 @@
 #define COMMAND "learn"
 
 static void print_help(void) {
-    printf("Usage: matremap learn SWEEP.csv [SWEEP.csv ...] --method parametric|svr|mlp -o T.mrt [options]\n"
-           "\n"
-           "Learns a transform from one BRDF model's parameters to another's (paper sections 5-7) from the rows of\n"
-           "'matremap sweep' files (uniform remaps of the same model pair, target values and fit scene), and writes it\n"
-           "as a transform file that 'matremap convert --transform' applies to texture maps. The rows decide what is\n"
-           "learned: source parameters that vary are the inputs, fitted target parameters that vary the outputs; an\n"
-           "RGB parameter swept grey (a grid axis) is learned as one number and applied per channel; a diffuse albedo\n"
-           "held in the sweeps is carried by the ratio of the two models' Lambertian lobes; the rest keep the values\n"
-           "of the rows. Rows whose outcome is local-minimum are left out.\n"
-           "\n"
-           "Methods:\n"
-           "  parametric  (default) section 7: target roughness a polynomial of the source roughness (degree <= 4,\n"
-           "              through the origin), each specular channel the source's times one slope\n"
-           "              k(a) = c0 + c1 e^(-c2 a) + c3 e^(-c4 a^2) [+ c5/a]: chromaticity kept, linear extrapolation.\n"
-           "              The exponents are searched on a bounded log grid, the rest by least squares (the free fit is\n"
-           "              ill-conditioned: the paper's printed fits drift to c0 ~ -900). Needs sweeps of a roughness\n"
-           "              and a specular reflectance only.\n"
-           "  svr         epsilon-SVR with RBF kernels (libsvm), one per output, C, gamma and epsilon searched on a grid\n"
-           "              then locally on a seeded validation split; accurate inside the sweep, not beyond it.\n"
-           "  mlp         one hidden ReLU layer (nn/), Adam with early stopping.\n"
-           "\n"
-           "Options:\n"
-           "  -o, --output FILE   the transform file (required; written atomically; never one of the inputs)\n"
-           "  --method M          parametric, svr or mlp (default parametric)\n"
-           "  --validation F      share of rows held out to measure the error (default 0.2); parametric and svr\n"
-           "                      are then refitted on every row\n"
-           "  --seed S            the split (and the MLP's initialisation) (default 1)\n"
-           "  --degree N          parametric: roughness polynomial degree 1..4 (default 4)\n"
-           "  --intercept         parametric: give the roughness polynomial a constant term (default: none)\n"
-           "  --inverse auto|yes|no  parametric: the c5/a term of the authors' code (default auto: kept when it\n"
-           "                      lowers the held-out error by 1 %% or more)\n"
-           "  --hidden N          mlp: hidden units (default 64)\n"
-           "  --epochs N          mlp: most epochs (default 2000)\n"
-           "  --threads T         svr search / mlp training threads (default: all cores; results do not depend on it)\n"
-           "  --all-outcomes      keep local-minimum rows too\n"
-           "  --plots DIR         the paper's cross sections as SVG (gnuplot): target roughness against source\n"
-           "                      roughness, target specular against source specular coloured by roughness, with\n"
-           "                      the rows and the learned curves (DIR/roughness.svg, DIR/specular.svg, data as CSV)\n"
-           "  --json              the summary as JSON on stdout\n"
-           "  --help              this text\n"
-           "\n"
-           "Examples:\n"
-           "  matremap sweep --from ward diffuse=0 --to ggx diffuse=0 --grid alpha=0.02:0.5:15:log \\\n"
-           "                 specular=0.02:0.3:5 -o ward_ggx.csv\n"
-           "  matremap learn ward_ggx.csv -o ward_ggx.mrt --plots ward_ggx_plots\n"
-           "  matremap learn ward_ggx.csv --method svr -o ward_ggx_svr.mrt\n"
-           "  matremap convert --from ward --to ggx specular=@spec.exr alpha=@rough.exr diffuse=@diff.png \\\n"
-           "                   --transform ward_ggx.mrt -o out/ggx_\n");
+    printf(
+        "Usage: matremap learn SWEEP.csv [SWEEP.csv ...] --method parametric|svr|mlp -o T.mrt [options]\n"
+        "\n"
+        "Learns a transform from one BRDF model's parameters to another's (paper sections 5-7) from the rows of\n"
+        "'matremap sweep' files (uniform remaps of the same model pair, target values and fit scene), and writes it\n"
+        "as a transform file that 'matremap convert --transform' applies to texture maps. The rows decide what is\n"
+        "learned: source parameters that vary are the inputs, fitted target parameters that vary the outputs; an\n"
+        "RGB parameter swept grey (a grid axis) is learned as one number and applied per channel; a diffuse albedo\n"
+        "held in the sweeps is carried by the ratio of the two models' Lambertian lobes; the rest keep the values\n"
+        "of the rows. Rows whose outcome is local-minimum are left out.\n"
+        "\n"
+        "Methods:\n"
+        "  parametric  (default) section 7: target roughness a polynomial of the source roughness (degree <= 4,\n"
+        "              through the origin), each specular channel the source's times one slope\n"
+        "              k(a) = c0 + c1 e^(-c2 a) + c3 e^(-c4 a^2) [+ c5/a]: chromaticity kept, linear extrapolation.\n"
+        "              The exponents are searched on a bounded log grid, the rest by least squares (the free fit is\n"
+        "              ill-conditioned: the paper's printed fits drift to c0 ~ -900). Needs sweeps of a roughness\n"
+        "              and a specular reflectance only.\n"
+        "  svr         epsilon-SVR with RBF kernels (libsvm), one per output, C, gamma and epsilon searched on a grid\n"
+        "              then locally on a seeded validation split; accurate inside the sweep, not beyond it.\n"
+        "  mlp         one hidden ReLU layer (nn/), Adam with early stopping.\n"
+        "\n"
+        "Options:\n"
+        "  -o, --output FILE   the transform file (required; written atomically; never one of the inputs)\n"
+        "  --method M          parametric, svr or mlp (default parametric)\n"
+        "  --validation F      share of rows held out to measure the error (default 0.2); parametric and svr\n"
+        "                      are then refitted on every row\n"
+        "  --seed S            the split (and the MLP's initialisation) (default 1)\n"
+        "  --degree N          parametric: roughness polynomial degree 1..4 (default 4)\n"
+        "  --intercept         parametric: give the roughness polynomial a constant term (default: none)\n"
+        "  --inverse auto|yes|no  parametric: the c5/a term of the authors' code (default auto: kept when it\n"
+        "                      lowers the held-out error by 1 %% or more)\n"
+        "  --hidden N          mlp: hidden units (default 64)\n"
+        "  --epochs N          mlp: most epochs (default 2000)\n"
+        "  --threads T         svr search / mlp training threads (default: all cores; results do not depend on it)\n"
+        "  --all-outcomes      keep local-minimum rows too\n"
+        "  --plots DIR         the paper's cross sections as SVG (gnuplot): target roughness against source\n"
+        "                      roughness, target specular against source specular coloured by roughness, with\n"
+        "                      the rows and the learned curves (DIR/roughness.svg, DIR/specular.svg, data as CSV)\n"
+        "  --json              the summary as JSON on stdout\n"
+        "  --help              this text\n"
+        "\n"
+        "Examples:\n"
+        "  matremap sweep --from ward diffuse=0 --to ggx diffuse=0 --grid alpha=0.02:0.5:15:log \\\n"
+        "                 specular=0.02:0.3:5 -o ward_ggx.csv\n"
+        "  matremap learn ward_ggx.csv -o ward_ggx.mrt --plots ward_ggx_plots\n"
+        "  matremap learn ward_ggx.csv --method svr -o ward_ggx_svr.mrt\n"
+        "  matremap convert --from ward --to ggx specular=@spec.exr alpha=@rough.exr diffuse=@diff.png \\\n"
+        "                   --transform ward_ggx.mrt -o out/ggx_\n");
 }
 
 static int same_file(const char *a, const char *b) {
@@ -226,9 +227,9 @@ static void print_summary(const mr_learned *t, const char *output, double second
         printf("], \"validation_rmse\": {");
         for (int j = 0; j < t->output_count; j++) {
             const mr_learned_slot *s = &t->outputs[j];
-            printf("%s\"%s%s%c\": %.9g", j ? ", " : "", t->target->params[s->param].name,
-                   s->kind == MR_LEARNED_CHANNEL ? "_" : "", s->kind == MR_LEARNED_CHANNEL ? "rgb"[s->channel] : '\0',
-                   t->rmse[j]);
+            const char *suffix[3] = {"_r", "_g", "_b"};
+            printf("%s\"%s%s\": %.9g", j ? ", " : "", t->target->params[s->param].name,
+                   s->kind == MR_LEARNED_CHANNEL ? suffix[s->channel] : "", t->rmse[j]);
         }
         printf("}");
         if (t->method == MR_LEARN_PARAMETRIC) {
@@ -267,6 +268,14 @@ static void print_summary(const mr_learned *t, const char *output, double second
         printf("\n  k(%s) = %.4g %+.4g e^(-%.4g %s) %+.4g e^(-%.4g %s^2)", a, c[0], c[1], c[2], a, c[3], c[4], a);
         if (t->slope.with_inverse) printf(" %+.4g / %s", c[5], a);
         printf("\n");
+        if (t->output_count == 3) {
+            const double *d = t->diffuse_slope.c;
+            printf("  %s' = carry + %s k_d(%s), k_d = %.4g %+.4g e^(-%.4g %s) %+.4g e^(-%.4g %s^2)",
+                   t->target->params[t->outputs[2].param].name, t->source->params[t->features[1].param].name, a, d[0],
+                   d[1], d[2], a, d[3], d[4], a);
+            if (t->diffuse_slope.with_inverse) printf(" %+.4g / %s", d[5], a);
+            printf("\n");
+        }
     } else if (t->method == MR_LEARN_SVR) {
         for (int j = 0; j < t->svr->n_out; j++)
             printf("  svr %d: %d support vectors, C %.4g, gamma %.4g, epsilon %.4g\n", j, t->svr->outputs[j].sv_count,

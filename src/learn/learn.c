@@ -131,13 +131,31 @@ static double lobe_ratio(const mr_brdf_model *src, const double *src_values, int
 
 /* ---- methods ---------------------------------------------------------------------------------------------- */
 
+/* What an output learns in one row: the target's value less what a carry into the same parameter gives (GREY: the
+ * channel means). */
+static double output_value(const mr_learned *t, const mr_learned_slot *s, const double *sv, const double *tv) {
+    double v = slot_value(t->target, s, tv);
+    for (int i = 0; i < t->carry_count; i++) {
+        const mr_learned_carry *c = &t->carries[i];
+        if (c->target_param != s->param) continue;
+        const int from = mr_brdf_param_offset(t->source, c->source_param);
+        if (s->kind == MR_LEARNED_GREY)
+            v -= (c->factor[0] * sv[from] + c->factor[1] * sv[from + 1] + c->factor[2] * sv[from + 2]) / 3.0;
+        else
+            v -= c->factor[s->kind == MR_LEARNED_CHANNEL ? s->channel : 0] *
+                 sv[from + (s->kind == MR_LEARNED_CHANNEL ? s->channel : 0)];
+    }
+    return v;
+}
+
 /* Rows `idx[0..m)` as feature and output matrices (outputs GREY: channel mean). */
 static void gather(const mr_sweep_table *tab, const mr_learned *t, const size_t *idx, size_t m, double *x, double *y) {
     for (size_t r = 0; r < m; r++) {
         const double *sv = tab->source_values + idx[r] * (size_t)tab->source_count;
         const double *tv = tab->target_values + idx[r] * (size_t)tab->target_count;
-        for (int i = 0; i < t->feature_count; i++) x[r * t->feature_count + i] = slot_value(t->source, &t->features[i], sv);
-        for (int j = 0; j < t->output_count; j++) y[r * t->output_count + j] = slot_value(t->target, &t->outputs[j], tv);
+        for (int i = 0; i < t->feature_count; i++)
+            x[r * t->feature_count + i] = slot_value(t->source, &t->features[i], sv);
+        for (int j = 0; j < t->output_count; j++) y[r * t->output_count + j] = output_value(t, &t->outputs[j], sv, tv);
     }
 }
 
@@ -165,6 +183,17 @@ static mr_status fit_parametric(const mr_sweep_table *tab, mr_learned *t, const 
     if (status == MR_OK)
         status = mr_fit_polynomial_ex(alpha, alpha2, m, t->roughness_degree, t->roughness_origin, t->roughness, NULL);
     if (status == MR_OK) status = mr_fit_specular_slope(alpha, ss, st, m, with_inverse, &t->slope);
+    if (status == MR_OK && t->output_count == 3) { // the diffuse the fits add: k_d(alpha) s, the carry removed
+        for (size_t r = 0; r < m; r++) {
+            const double *sv = tab->source_values + idx[r] * (size_t)tab->source_count;
+            const double *tv = tab->target_values + idx[r] * (size_t)tab->target_count;
+            const double d = output_value(t, &t->outputs[2], sv, tv);
+            for (int c = 0; c < 3; c++) st[3 * r + c] = d;
+            if (s_ch == 3) // per channel: the grey rows make d the same in each, against each channel's specular
+                for (int c = 0; c < 3; c++) ss[3 * r + c] = sv[s_at + c];
+        }
+        status = mr_fit_specular_slope(alpha, ss, st, m, with_inverse, &t->diffuse_slope);
+    }
     (void)o;
     free(alpha);
     free(alpha2);
@@ -196,7 +225,8 @@ static mr_status fit_svr(const mr_sweep_table *tab, mr_learned *t, const size_t 
 static mr_status fit_mlp(const mr_sweep_table *tab, mr_learned *t, const size_t *idx, size_t m,
                          const mr_learn_options *o) {
     double *x = malloc(m * (size_t)t->feature_count * sizeof *x), *y = malloc(m * (size_t)t->output_count * sizeof *y);
-    float *xf = malloc(m * (size_t)t->feature_count * sizeof *xf), *yf = malloc(m * (size_t)t->output_count * sizeof *yf);
+    float *xf = malloc(m * (size_t)t->feature_count * sizeof *xf),
+          *yf = malloc(m * (size_t)t->output_count * sizeof *yf);
     mr_status status = x && y && xf && yf ? MR_OK : mr_fail(MR_ERR_NOMEM, "learn: out of memory");
     if (status == MR_OK) {
         gather(tab, t, idx, m, x, y);
@@ -292,9 +322,12 @@ static mr_status plan(const mr_sweep_table *tab, mr_learned *t) {
         tu[p] = use_of(tab->target_values, tab->n, tab->target_count, mr_brdf_param_offset(tgt, p),
                        tgt->params[p].channels);
     memcpy(t->base, tab->target_values, (size_t)tab->target_count * sizeof *t->base);
+    // carried[tp]: 1 the target parameter is a carry alone; 2 a carry plus a learned residual (an output).
     int carried[MR_BRDF_MAX_VALUES] = {0}, used_source[MR_BRDF_MAX_VALUES] = {0};
-    // Carries: a Lambertian target parameter from a Lambertian source parameter (learned when the rows vary both
-    // and the method is parametric; by the lobes' ratio when neither varies).
+    // Carries: a Lambertian target parameter from a Lambertian source parameter. A source held in the rows is carried
+    // by the lobes' ratio, and what the fits still put into the target (a diffuse that stands in for a lobe's tail)
+    // is learned on top as an output; a source the rows vary is carried by a fitted slope under the parametric
+    // method (the other methods take it as a feature).
     for (int tp = 0; tp < tgt->param_count; tp++) {
         const mr_brdf_param *q = &tgt->params[tp];
         if (q->lobe != MR_LOBE_DIFFUSE || q->role != MR_PARAM_LINEAR) continue;
@@ -305,16 +338,16 @@ static mr_status plan(const mr_sweep_table *tab, mr_learned *t) {
             mr_learned_carry c = {tp, sp, 0, {1.0, 1.0, 1.0}};
             if (su[sp].varies && tu[tp].varies && t->method == MR_LEARN_PARAMETRIC) {
                 c.learned = 1;
-            } else if (!su[sp].varies && !tu[tp].varies) {
-                const double *sv = tab->source_values, *tv = tab->target_values;
-                const double ratio = lobe_ratio(src, sv, sp, tgt, tv, tp);
+            } else if (!su[sp].varies) {
+                const double ratio = lobe_ratio(src, tab->source_values, sp, tgt, tab->target_values, tp);
                 if (ratio <= 0.0) continue;
                 for (int ch = 0; ch < 3; ch++) c.factor[ch] = ratio;
             } else {
                 continue;
             }
             t->carries[t->carry_count++] = c;
-            carried[tp] = used_source[sp] = 1;
+            carried[tp] = !c.learned && tu[tp].varies ? 2 : 1;
+            used_source[sp] = 1;
             break;
         }
     }
@@ -349,11 +382,12 @@ static mr_status plan(const mr_sweep_table *tab, mr_learned *t) {
                                "cover it (use svr or mlp, or hold it in the sweep)", src->name, q->name);
             }
         }
-        int trough = -1, tspec = -1;
+        int trough = -1, tspec = -1, tdiff = -1;
         for (int p = 0; p < tgt->param_count; p++) {
-            if (!tu[p].varies || carried[p]) continue;
+            if (!tu[p].varies || carried[p] == 1) continue;
             const mr_brdf_param *q = &tgt->params[p];
-            if (is_roughness(q) && trough < 0) trough = p;
+            if (carried[p] == 2 && tdiff < 0) tdiff = p;
+            else if (is_roughness(q) && trough < 0) trough = p;
             else if ((q->lobe & MR_LOBE_SPECULAR) && is_linear(q) && tspec < 0) tspec = p;
             else
                 return mr_fail(MR_ERR_INVALID_ARG, "parametric: the fitted target %s %s varies over the rows, but the "
@@ -374,12 +408,16 @@ static mr_status plan(const mr_sweep_table *tab, mr_learned *t) {
         t->outputs[1] = (mr_learned_slot){tspec, tgt->params[tspec].channels == 3 ? MR_LEARNED_GREY : MR_LEARNED_SCALAR,
                                           0, 0.0, 0.0};
         t->feature_count = t->output_count = 2;
+        if (tdiff >= 0) // the diffuse the fits add, linear in the specular: k_d(alpha) s (a second slope)
+            t->outputs[t->output_count++] =
+                (mr_learned_slot){tdiff, tgt->params[tdiff].channels == 3 ? MR_LEARNED_GREY : MR_LEARNED_SCALAR, 0,
+                                  0.0, 0.0};
     } else {
         for (int p = 0; p < src->param_count; p++)
             if (su[p].varies && !used_source[p]) add_slot(t->features, &t->feature_count, p, src->params[p].channels,
                                                           su[p].grey);
         for (int p = 0; p < tgt->param_count; p++)
-            if (tu[p].varies && !carried[p]) add_slot(t->outputs, &t->output_count, p, tgt->params[p].channels,
+            if (tu[p].varies && carried[p] != 1) add_slot(t->outputs, &t->output_count, p, tgt->params[p].channels,
                                                       tu[p].grey);
         if (t->feature_count == 0 || t->output_count == 0)
             return mr_fail(MR_ERR_INVALID_ARG, "learn: the rows vary %s: nothing to learn",

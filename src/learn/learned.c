@@ -40,6 +40,7 @@ static void regress(const mr_learned *t, const double *x, double *y) {
     case MR_LEARN_PARAMETRIC:
         y[0] = mr_polynomial_eval(t->roughness, t->roughness_degree, x[0]);
         y[1] = mr_specular_slope_eval(&t->slope, x[0]) * x[1];
+        if (t->output_count == 3) y[2] = mr_specular_slope_eval(&t->diffuse_slope, x[0]) * x[1];
         break;
     case MR_LEARN_SVR:
         mr_svr_predict(t->svr, x, 1, y);
@@ -98,13 +99,17 @@ void mr_learned_apply(const mr_learned *t, const double *source_values, double *
         }
     }
     regress(t, x, y);
+    // Outputs replace the base; on a carried parameter they add to the carry (the part the carry does not explain).
+    double carry[MR_BRDF_MAX_VALUES];
+    memcpy(carry, w, sizeof carry);
+    int carried[MR_BRDF_MAX_VALUES] = {0};
+    for (int i = 0; i < t->carry_count; i++) carried[t->carries[i].target_param] = 1;
     for (int j = 0; j < t->output_count; j++) {
         const mr_learned_slot *s = &t->outputs[j];
         const int at = slot_offset(tgt, s);
-        if (s->kind == MR_LEARNED_GREY)
-            w[at] = w[at + 1] = w[at + 2] = y[j];
-        else
-            w[at] = y[j];
+        const int add = carried[s->param];
+        for (int ch = 0; ch < (s->kind == MR_LEARNED_GREY ? 3 : 1); ch++)
+            w[at + ch] = (add ? carry[at + ch] : 0.0) + y[j];
     }
     if (grey && coloured) { // per channel: channel c of the GREY features in, channel c of the GREY outputs out
         for (int ch = 0; ch < 3; ch++) {
@@ -113,7 +118,10 @@ void mr_learned_apply(const mr_learned *t, const double *source_values, double *
                 xc[i] = t->features[i].kind == MR_LEARNED_GREY ? v[slot_offset(src, &t->features[i]) + ch] : x[i];
             regress(t, xc, yc);
             for (int j = 0; j < t->output_count; j++)
-                if (t->outputs[j].kind == MR_LEARNED_GREY) w[slot_offset(tgt, &t->outputs[j]) + ch] = yc[j];
+                if (t->outputs[j].kind == MR_LEARNED_GREY) {
+                    const int at = slot_offset(tgt, &t->outputs[j]) + ch;
+                    w[at] = (carried[t->outputs[j].param] ? carry[at] : 0.0) + yc[j];
+                }
         }
     }
     for (int p = 0, k = 0; p < tgt->param_count; p++)

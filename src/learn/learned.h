@@ -17,8 +17,10 @@
  *      values: switches, fixed extension factors, parameters held constant in every row).
  *   2. carries: w[target parameter] = factor * v[source parameter], per channel: a lobe the sweeps did not vary
  *      (a diffuse albedo held at 0 while the specular was swept) is carried by the ratio of the two models'
- *      Lambertian lobes (both parameters linear in f_r; factor = f_src(1) / f_tgt(1) at normal incidence), or, when
- *      the rows vary it and the method is parametric, by a per-channel slope fitted on the rows.
+ *      Lambertian lobes (both parameters linear in f_r and direction-independent; factor = f_src(1) / f_tgt(1)), or,
+ *      when the rows vary it and the method is parametric, by a per-channel slope fitted on the rows. When the rows
+ *      hold the source parameter but the fits still vary the target one (a diffuse standing in for a lobe's tail),
+ *      the carried parameter is also an output, learned on what the carry leaves, and added to it.
  *   3. the regression: features (source parameters the sweeps varied) -> outputs (target parameters that varied):
  *      - a SCALAR feature is a one-channel parameter; a GREY feature an RGB parameter every row held grey (r = g = b,
  *        as a grid axis sweeps it): it enters the regression as one number, and the regression is evaluated once
@@ -29,7 +31,8 @@
  *        and two outputs, the target roughness and specular: roughness' = polynomial(roughness) (degree <= 4, through
  *        the origin by default, as the authors' fit), specular'_c = k(roughness) specular_c with
  *        k(a) = c0 + c1 e^(-c2 a) + c3 e^(-c4 a^2) [+ c5 / a] (parametric.h says how it is fitted well-conditioned):
- *        one slope for the three channels, so chromaticity is kept, and linear extrapolation beyond the rows.
+ *        one slope for the three channels, so chromaticity is kept, and linear extrapolation beyond the rows. A third
+ *        output, a carried diffuse the fits add to, is diffuse'_c = carry + k_d(roughness) specular_c (same form).
  *      - SVR: one epsilon-SVR with an RBF kernel per output (svr.h), inputs and outputs normalised.
  *      - MLP: one hidden ReLU layer (nn/mlp.h), every output at once.
  *   4. outputs are clamped into the target parameters' ranges; a clamp sets MR_WF_CLAMPED_OUTPUT; a feature
@@ -56,9 +59,10 @@
  *   validation FRACTION SEED TRAIN_ROWS VALIDATION_ROWS
  *   rmse R1 ... RN                       (one per output, raw units)
  *   provenance N then N lines: | TEXT    (the sweeps' files, row counts and header lines)
- *   the method's block: parametric: "roughness DEGREE ORIGIN C0 .. C4" and "slope INVERSE C0 .. C5";
+ *   the method's block: parametric: "roughness DEGREE ORIGIN C0 .. C4", "slope INVERSE C0 .. C5" and, with a
+ *     third output, "diffuse_slope INVERSE C0 .. C5";
  *     svr: "svr N_IN N_OUT", "in_mean", "in_std", "out_mean", "out_std" lines, then per output
- *     "model SV_COUNT GAMMA C EPSILON RHO VALIDATION_RMSE" and SV_COUNT lines "sv COEF X1 .. XN_IN";
+ *     "model SV_COUNT GAMMA C EPSILON RHO VALIDATION_RMSE GRID_RMSE" and SV_COUNT lines "sv COEF X1 .. XN_IN";
  *     mlp: "mlp LINES" then LINES lines holding a matremap-mlp weight file (nn/mlp.h)
  *   checksum XXXXXXXX                    (FNV-1a 32 of every byte before this line, hex)
  *   end
@@ -149,6 +153,7 @@ typedef struct mr_learned {
     int roughness_degree, roughness_origin;
     double roughness[MR_POLY_MAX_DEGREE + 1];
     mr_specular_slope slope;
+    mr_specular_slope diffuse_slope;               /* a third output (a carried diffuse the fits add to): k_d */
     /* SVR, MLP (owned) */
     struct mr_svr *svr;
     struct mr_mlp *mlp;

@@ -88,10 +88,19 @@ static void put_parametric_comment(text_out *o, const mr_learned *t) {
         if (k > 0 || !t->roughness_origin) put(o, "%s%.6g %s^%d", k > (t->roughness_origin ? 1 : 0) ? " + " : "",
                                                t->roughness[k], a, k);
     const double *c = t->slope.c;
-    put(o, "\n# %s' = %s * [%.6g + %.6g e^(-%.6g %s) + %.6g e^(-%.6g %s^2)", t->target->params[t->outputs[1].param].name,
-        t->source->params[t->features[1].param].name, c[0], c[1], c[2], a, c[3], c[4], a);
+    put(o, "\n# %s' = %s * [%.6g + %.6g e^(-%.6g %s) + %.6g e^(-%.6g %s^2)",
+        t->target->params[t->outputs[1].param].name, t->source->params[t->features[1].param].name, c[0], c[1], c[2], a,
+        c[3], c[4], a);
     if (t->slope.with_inverse) put(o, " + %.6g / %s", c[5], a);
     put(o, "]\n");
+    if (t->output_count == 3) {
+        const double *d = t->diffuse_slope.c;
+        put(o, "# %s' = carried + %s * [%.6g + %.6g e^(-%.6g %s) + %.6g e^(-%.6g %s^2)",
+            t->target->params[t->outputs[2].param].name, t->source->params[t->features[1].param].name, d[0], d[1],
+            d[2], a, d[3], d[4], a);
+        if (t->diffuse_slope.with_inverse) put(o, " + %.6g / %s", d[5], a);
+        put(o, "]\n");
+    }
 }
 
 static mr_status format_svr(text_out *o, const mr_svr *m) {
@@ -147,6 +156,10 @@ static mr_status format_all(const mr_learned *t, text_out *o) {
         put_values(o, "", t->roughness, MR_POLY_MAX_DEGREE + 1);
         put(o, "slope %d", t->slope.with_inverse);
         put_values(o, "", t->slope.c, 6);
+        if (t->output_count == 3) {
+            put(o, "diffuse_slope %d", t->diffuse_slope.with_inverse);
+            put_values(o, "", t->diffuse_slope.c, 6);
+        }
         break;
     case MR_LEARN_SVR: format_svr(o, t->svr); break;
     default: {
@@ -462,9 +475,10 @@ static mr_status parse_all(parser *ps, mr_learned *t) {
         if ((status = slot_line(ps, "output", t->target, 0, &t->outputs[j])) != MR_OK) return status;
     if (t->feature_count < 1 || t->output_count < 1) return bad(ps, "a transform needs a feature and an output");
     if (t->method == MR_LEARN_PARAMETRIC &&
-        (t->feature_count != 2 || t->output_count != 2 || t->features[0].kind != MR_LEARNED_SCALAR ||
-         t->outputs[0].kind != MR_LEARNED_SCALAR))
-        return bad(ps, "a parametric transform has 2 features and 2 outputs, the first of each a scalar roughness");
+        (t->feature_count != 2 || t->output_count < 2 || t->output_count > 3 ||
+         t->features[0].kind != MR_LEARNED_SCALAR || t->outputs[0].kind != MR_LEARNED_SCALAR))
+        return bad(ps, "a parametric transform has 2 features and 2 or 3 outputs, the first of each a scalar "
+                   "roughness");
     if ((status = expect_key(ps, "base")) != MR_OK) return status;
     const int target_count = mr_brdf_value_count(t->target);
     if ((status = numbers(ps, "base value", t->base, target_count)) != MR_OK) return status;
@@ -513,7 +527,8 @@ static mr_status parse_all(parser *ps, mr_learned *t) {
     size_t length = 0;
     for (long k = 0; k < count; k++) {
         if ((status = next_line(ps, "a provenance line", 1)) != MR_OK) return status;
-        if (ps->e - ps->s < 2 || ps->s[0] != '|' || ps->s[1] != ' ') return bad(ps, "expected a provenance line '| ...'");
+        if (ps->e - ps->s < 2 || ps->s[0] != '|' || ps->s[1] != ' ')
+            return bad(ps, "expected a provenance line '| ...'");
         const size_t add = (size_t)(ps->e - ps->s - 2);
         char *grown = realloc(t->provenance, length + add + 2);
         if (grown == NULL) return mr_fail(MR_ERR_NOMEM, "transform '%s': out of memory", ps->name);
@@ -537,6 +552,12 @@ static mr_status parse_all(parser *ps, mr_learned *t) {
         if ((status = integer(ps, "inverse-term flag", 0, 1, &inverse)) != MR_OK) return status;
         if ((status = numbers(ps, "slope coefficient", t->slope.c, 6)) != MR_OK) return status;
         t->slope.with_inverse = (int)inverse;
+        if (t->output_count == 3) {
+            if ((status = expect_key(ps, "diffuse_slope")) != MR_OK) return status;
+            if ((status = integer(ps, "inverse-term flag", 0, 1, &inverse)) != MR_OK) return status;
+            if ((status = numbers(ps, "diffuse slope coefficient", t->diffuse_slope.c, 6)) != MR_OK) return status;
+            t->diffuse_slope.with_inverse = (int)inverse;
+        }
         break;
     }
     case MR_LEARN_SVR:
@@ -611,7 +632,8 @@ mr_status mr_learned_read(const char *path, mr_learned **out) {
         if (grown == NULL) free(text);
         text = grown;
     }
-    if (status == MR_OK && ferror(f)) status = mr_fail(MR_ERR_IO, "transform '%s': read error: %s", path, strerror(errno));
+    if (status == MR_OK && ferror(f))
+        status = mr_fail(MR_ERR_IO, "transform '%s': read error: %s", path, strerror(errno));
     fclose(f);
     if (status == MR_OK) status = mr_learned_parse(text, length, path, out);
     free(text);

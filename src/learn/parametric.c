@@ -10,12 +10,18 @@
 #include "mr_internal.h"
 
 #define MAX_COLUMNS 6
+/* How independent a design column must be of the earlier ones (its norm after their reflections, relative to its
+ * own): a polynomial's powers are legitimately close on a short interval; the slope's exponential columns are not
+ * allowed to nearly repeat the constant (e^(-0.01 a^2) ~ 1 - 0.01 a^2 makes -36 + 36 e^(...) cancellations). */
+#define POLY_INDEPENDENCE 1e-9
+#define SLOPE_INDEPENDENCE 1e-2
 #define GRID 25 /* exponent values per axis, log-spaced over [MR_SLOPE_RATE_MIN, MR_SLOPE_RATE_MAX] */
 
 /* min |A x - b| for A (n x m, row-major, n >= m, m <= MAX_COLUMNS) by Householder QR on copies. Returns 0 when
- * a column is (nearly) a combination of the earlier ones: its norm after their reflections is below 1e-9 of its
- * own, and the solution would rest on a cancellation. *rss gets the residual sum of squares. */
-static int least_squares(const double *a_in, const double *b_in, size_t n, int m, double *x, double *rss) {
+ * a column is (nearly) a combination of the earlier ones: its norm after their reflections is below `independence`
+ * of its own, and the solution would rest on a cancellation. *rss gets the residual sum of squares. */
+static int least_squares(const double *a_in, const double *b_in, size_t n, int m, double independence, double *x,
+                         double *rss) {
     double *a = malloc(n * (size_t)m * sizeof *a), *b = malloc(n * sizeof *b);
     if (a == NULL || b == NULL) {
         free(a);
@@ -30,7 +36,7 @@ static int least_squares(const double *a_in, const double *b_in, size_t n, int m
         for (size_t i = 0; i < n; i++) full += a[i * m + k] * a[i * m + k];
         for (size_t i = (size_t)k; i < n; i++) norm += a[i * m + k] * a[i * m + k];
         norm = sqrt(norm);
-        if (!(norm > 1e-9 * sqrt(full)) || norm == 0.0) {
+        if (!(norm > independence * sqrt(full)) || norm == 0.0) {
             ok = 0;
             break;
         }
@@ -98,7 +104,7 @@ mr_status mr_fit_polynomial_ex(const double *x, const double *y, size_t n, int d
         for (int k = 0; k < m; k++)
             a[i * (size_t)m + (size_t)k] = k > 0 ? a[i * m + k - 1] * x[i] : through_origin ? x[i] : 1.0;
     c[0] = 0.0;
-    const int ok = least_squares(a, y, n, m, c + (through_origin != 0), &rss);
+    const int ok = least_squares(a, y, n, m, POLY_INDEPENDENCE, c + (through_origin != 0), &rss);
     free(a);
     if (!ok)
         return mr_fail(MR_ERR_INVALID_ARG, "polynomial fit: the %zu x values do not determine a degree-%d polynomial "
@@ -143,7 +149,7 @@ static double solve_linear(const slope_data *d, double c2, double c4, mr_specula
         }
     }
     double x[4] = {0, 0, 0, 0}, rss = 0.0;
-    if (!least_squares(d->design, d->s_tgt, 3 * d->n, m, x, &rss)) return INFINITY;
+    if (!least_squares(d->design, d->s_tgt, 3 * d->n, m, SLOPE_INDEPENDENCE, x, &rss)) return INFINITY;
     k->c[0] = x[0];
     k->c[1] = x[1];
     k->c[2] = c2;

@@ -10,7 +10,7 @@
  * pairs: -944 + 944.82 e^(-0.00046 alpha)). Here the two exponents are searched on a bounded log-spaced grid
  * (c2 in [MR_SLOPE_RATE_MIN, MR_SLOPE_RATE_MAX], c4 likewise) and, for each pair, the linear coefficients (c0, c1,
  * c3 [, c5]) are the least-squares solution (Householder QR, no normal equations); a pair whose design columns are
- * nearly dependent (a column's residual norm below 1e-9 of its norm after the earlier ones are removed) is skipped
+ * nearly dependent (a column's residual norm below 1 % of its norm after the earlier ones are removed) is skipped
  * rather than solved, so the answer never rests on a cancellation. The four best grid pairs are each refined by
  * golden-section searches in each exponent in turn (log scale, two grid steps about the current value, 24 rounds),
  * and the best result kept.

@@ -1,0 +1,92 @@
+#!/usr/bin/env bash
+# `matremap learn` and `matremap convert` on a real (small) sweep: a parametric transform learned, written and
+# refused when damaged; texture maps converted with outputs, alpha, sizes and the flag map; constants printed;
+# chains given and found; the errors a user can make. Ends with "N passed, N failed".
+set -u
+bin="${MR_BUILD:-build}/bin/matremap"
+root=$(cd "$(dirname "$0")/.." && pwd)
+source "$(dirname "$0")/lib/cli_harness.sh"
+
+"$bin" sweep --from ward diffuse=0 --to ggx diffuse=0 --grid alpha=0.03:0.4:8:log specular=0.03:0.25:3 --size 32 \
+    --threads 2 -o "$tmp/wg.csv" 2>/dev/null
+"$bin" sweep --from ggx diffuse=0 --to as diffuse=0 --grid alpha=0.02:0.5:8:log f0=0.02:0.3:3 --size 32 \
+    --threads 2 -o "$tmp/ga.csv" 2>/dev/null
+check "the sweeps are made" test -s "$tmp/wg.csv" -a -s "$tmp/ga.csv"
+
+expect "learn --help" 0 "Usage: matremap learn" -- "$bin" learn --help
+expect "learn: no sweep" 1 "no sweep file" -- "$bin" learn -o "$tmp/x.mrt"
+expect "learn: no output" 1 "no output file" -- "$bin" learn "$tmp/wg.csv"
+expect "learn: -o over the sweep" 2 "would be replaced" -- "$bin" learn "$tmp/wg.csv" -o "$tmp/./wg.csv"
+expect "learn: unknown method" 1 "valid: parametric, svr, mlp" -- "$bin" learn "$tmp/wg.csv" --method gp -o "$tmp/x.mrt"
+expect "learn: a missing file" 2 "nope.csv" -- "$bin" learn "$tmp/nope.csv" -o "$tmp/x.mrt"
+expect "learn: two sweeps of different pairs" 2 "differ" -- "$bin" learn "$tmp/wg.csv" "$tmp/ga.csv" -o "$tmp/x.mrt"
+
+expect "learn parametric with plots" 0 "ward -> ggx by parametric" -- \
+    "$bin" learn "$tmp/wg.csv" -o "$tmp/wg.mrt" --plots "$tmp/plots"
+check "the summary gives the held-out error" grep -q "held-out RMSE" "$tmp/out"
+check "the transform file starts with its magic" grep -q "^matremap-transform 1$" "$tmp/wg.mrt"
+check "it records where its data came from" grep -q "^| # from: ward diffuse=0" "$tmp/wg.mrt"
+check "the cross-section data is written" test -s "$tmp/plots/rows.csv" -a -s "$tmp/plots/curves.csv"
+if command -v gnuplot >/dev/null; then
+    check "the cross sections are plotted" grep -q "<svg" "$tmp/plots/specular.svg"
+fi
+"$bin" learn "$tmp/wg.csv" -o "$tmp/wg2.mrt" >/dev/null
+check "learning is reproducible byte for byte" cmp -s "$tmp/wg.mrt" "$tmp/wg2.mrt"
+expect "learn --json" 0 '"validation_rmse": \{"alpha": [0-9]' -- "$bin" learn "$tmp/ga.csv" -o "$tmp/ga.mrt" --json
+
+sed 's/^validation 0x1.999999999999ap-3/validation 0x1.999999999999bp-3/' "$tmp/wg.mrt" > "$tmp/edited.mrt"
+expect "convert: an edited transform is refused" 2 "edited.mrt.*checksum mismatch" -- \
+    "$bin" convert --from ward --to ggx alpha=0.1 --transform "$tmp/edited.mrt"
+head -c 300 "$tmp/wg.mrt" > "$tmp/cut.mrt"
+expect "convert: a truncated transform is refused" 2 "cut.mrt.*line" -- \
+    "$bin" convert --from ward --to ggx alpha=0.1 --transform "$tmp/cut.mrt"
+
+expect "convert --help" 0 "Usage: matremap convert" -- "$bin" convert --help
+expect "convert: constants print the texel" 0 "^ggx alpha=0\.[0-9]+ f0=(0\.1[0-9]*),\1,\1 diffuse=0.3,0.3,0.3$" -- \
+    "$bin" convert --from ward --to ggx alpha=0.1 specular=0.15 diffuse=0.3 --transform "$tmp/wg.mrt"
+expect "convert: beyond the training domain is noted" 0 "extrapolated" -- \
+    "$bin" convert --from ward --to ggx alpha=0.9 specular=0.15 --transform "$tmp/wg.mrt"
+expect "convert: the transform must fit the pair" 2 "converts ward to ggx" -- \
+    "$bin" convert --from ggx --to as alpha=0.1 --transform "$tmp/wg.mrt"
+expect "convert: no transform" 1 "--transform" -- "$bin" convert --from ward --to ggx alpha=0.1
+expect "convert: an unknown parameter" 2 "alfa" -- \
+    "$bin" convert --from ward --to ggx alfa=0.1 --transform "$tmp/wg.mrt"
+
+# Texture maps: a roughness map with alpha reaching beyond the rows, a coloured specular map with an alpha channel.
+oiiotool --pattern fill:top=0.02:bottom=0.6 64x32 1 -d float -o "$tmp/rough.exr" >/dev/null 2>&1
+oiiotool --pattern fill:left=0.05,0.1,0.02,1:right=0.3,0.2,0.1,0.5 64x32 4 -d uint8 -o "$tmp/spec.png" >/dev/null 2>&1
+expect "convert maps" 0 "64x32 = 2048 texels" -- "$bin" convert --from ward --to ggx alpha="$tmp/rough.exr" \
+    specular=@"$tmp/spec.png" diffuse=0.2 --transform "$tmp/wg.mrt" -o "$tmp/o/ggx_"
+check "every target parameter is written" test -s "$tmp/o/ggx_alpha.exr" -a -s "$tmp/o/ggx_f0.exr" \
+    -a -s "$tmp/o/ggx_diffuse.exr" -a -s "$tmp/o/ggx_flags.png"
+check "outputs keep the size" bash -c "oiiotool --info '$tmp/o/ggx_alpha.exr' | grep -q '64 x  *32'"
+check "RGB outputs carry the input's alpha" bash -c "oiiotool --info -v '$tmp/o/ggx_f0.exr' | grep -q '4 channel'"
+check "texels beyond the rows are flagged red" bash -c \
+    "oiiotool --stats '$tmp/o/ggx_flags.png' | grep -q 'Max: 255 0 0 '"
+check "and the summary counts them" grep -qE "[1-9][0-9]* extrapolated" "$tmp/out"
+expect "convert --format png" 0 "texels" -- "$bin" convert --from ward --to ggx alpha=@"$tmp/rough.exr" \
+    specular=@"$tmp/spec.png" --transform "$tmp/wg.mrt" -o "$tmp/png_" --format png
+check "png outputs" test -s "$tmp/png_f0.png"
+cp "$tmp/spec.png" "$tmp/x_f0.png"
+expect "convert: an output that is an input is refused" 2 "would be replaced" -- "$bin" convert --from ward --to ggx \
+    specular=@"$tmp/x_f0.png" --transform "$tmp/wg.mrt" -o "$tmp/x_" --format png
+
+# Chains: given in order, and found in a folder (fewest hops), with --via.
+mkdir -p "$tmp/mrt" && cp "$tmp/wg.mrt" "$tmp/ga.mrt" "$tmp/mrt/"
+expect "convert through a given chain" 0 "^as alpha=" -- "$bin" convert --from ward --to as alpha=0.1 specular=0.1 \
+    --transform "$tmp/wg.mrt" --transform "$tmp/ga.mrt"
+chained=$(sed -n 1p "$tmp/out")
+expect "convert through a found chain" 0 "^as alpha=" -- "$bin" convert --from ward --to as alpha=0.1 specular=0.1 \
+    --transforms "$tmp/mrt" --via ggx
+check "the found chain is the given one" test "$(sed -n 1p "$tmp/out")" = "$chained"
+step=$("$bin" convert --from ward --to ggx alpha=0.1 specular=0.1 --transform "$tmp/wg.mrt" | sed 's/^ggx //')
+# shellcheck disable=SC2086 # the step's name=value words
+stepwise=$("$bin" convert --from ggx --to as $step --transform "$tmp/ga.mrt" | sed -n 1p)
+# the steps pass through 6-digit text, so they agree with the chain to about 1e-5
+check "the chain equals its steps" awk -v a="$chained" -v b="$stepwise" 'BEGIN {
+    n = split(a, x, /[ =,]/); split(b, y, /[ =,]/)
+    for (i = 1; i <= n; i++) if (x[i] + 0 != 0 && (x[i] - y[i]) ^ 2 > (1e-5 * x[i]) ^ 2) exit 1 }'
+expect "convert: no chain" 2 "no chain of transforms from as to ward" -- \
+    "$bin" convert --from as --to ward alpha=0.1 --transforms "$tmp/mrt"
+
+finish
