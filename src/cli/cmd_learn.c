@@ -246,17 +246,22 @@ static void print_summary(const mr_learned *t, const char *output, double second
            t->target->name, mr_learn_method_name(t->method), t->train_rows, t->validation_rows, seconds, output);
     for (int i = 0; i < t->feature_count; i++) {
         const mr_learned_slot *s = &t->features[i];
-        printf("  input  %-12s %s, trained over [%.4g, %.4g]\n", t->source->params[s->param].name,
-               s->kind == MR_LEARNED_GREY ? "grey (per channel)" : s->kind == MR_LEARNED_CHANNEL ? "channel" : "scalar",
-               s->min, s->max);
+        char name[80];
+        snprintf(name, sizeof name, "%s%s", t->source->params[s->param].name,
+                 s->kind == MR_LEARNED_CHANNEL ? (const char *[]){"_r", "_g", "_b"}[s->channel] : "");
+        printf("  input  %-14s %s, trained over [%.4g, %.4g]\n", name,
+               s->kind == MR_LEARNED_GREY ? "RGB, applied per channel" : "scalar", s->min, s->max);
     }
     for (int j = 0; j < t->output_count; j++) {
         const mr_learned_slot *s = &t->outputs[j];
-        printf("  output %-12s held-out RMSE %.4g\n", t->target->params[s->param].name, t->rmse[j]);
+        char name[80];
+        snprintf(name, sizeof name, "%s%s", t->target->params[s->param].name,
+                 s->kind == MR_LEARNED_CHANNEL ? (const char *[]){"_r", "_g", "_b"}[s->channel] : "");
+        printf("  output %-14s held-out RMSE %.4g\n", name, t->rmse[j]);
     }
     for (int i = 0; i < t->carry_count; i++) {
         const mr_learned_carry *c = &t->carries[i];
-        printf("  carry  %-12s = %.6g x source %s (%s)\n", t->target->params[c->target_param].name, c->factor[0],
+        printf("  carry  %-14s = %.6g x source %s (%s)\n", t->target->params[c->target_param].name, c->factor[0],
                t->source->params[c->source_param].name, c->learned ? "fitted on the rows" : "ratio of the lobes");
     }
     if (t->method == MR_LEARN_PARAMETRIC) {
