@@ -236,8 +236,8 @@ static mr_status fit_mlp(const mr_sweep_table *tab, mr_learned *t, const size_t 
         mo.n_hidden = o->mlp_hidden > 0 ? o->mlp_hidden : DEFAULT_HIDDEN;
         mo.max_epochs = o->mlp_max_epochs > 0 ? o->mlp_max_epochs : DEFAULT_EPOCHS;
         // Sweeps are small (tens to thousands of rows): small batches, a larger step and a long patience let the
-        // network settle (measured on ward -> ggx, 60 rows: held-out f0 RMSE 0.0036, against 0.0059 with nn/'s
-        // defaults of batch 64, rate 1e-3 and patience 20).
+        // network settle (measured on ward -> ggx, 60 rows: held-out f0 RMSE 0.0036, against 0.0059 with
+        // batch 32, rate 1e-3 and patience 100).
         mo.patience = 500;
         mo.batch_size = 16;
         mo.validation_fraction = 0.2;
