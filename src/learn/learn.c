@@ -267,14 +267,17 @@ static mr_status fit(const mr_sweep_table *tab, mr_learned *t, const size_t *idx
 
 /* Each output's RMSE over rows idx[0..m) through the whole transform (carries, clamps and all); GREY outputs over
  * their three channels. Learned carries are refitted by the caller before this. */
-static void measure(const mr_sweep_table *tab, const mr_learned *t, const size_t *idx, size_t m, double *rmse) {
+static mr_status measure(const mr_sweep_table *tab, const mr_learned *t, const size_t *idx, size_t m, double *rmse) {
+    const size_t sc = (size_t)tab->source_count, tc = (size_t)tab->target_count;
+    double *in = malloc(m * sc * sizeof *in), *out = malloc(m * tc * sizeof *out);
+    mr_status status = in && out ? MR_OK : mr_fail(MR_ERR_NOMEM, "learn: out of memory");
+    for (size_t r = 0; status == MR_OK && r < m; r++)
+        memcpy(in + r * sc, tab->source_values + idx[r] * sc, sc * sizeof *in);
+    if (status == MR_OK) status = mr_learned_apply_batch(t, m, in, out, NULL);
     double sum[MR_LEARNED_MAX_SLOTS] = {0};
     long count[MR_LEARNED_MAX_SLOTS] = {0};
-    for (size_t r = 0; r < m; r++) {
-        const double *sv = tab->source_values + idx[r] * (size_t)tab->source_count;
-        const double *tv = tab->target_values + idx[r] * (size_t)tab->target_count;
-        double w[MR_BRDF_MAX_VALUES];
-        mr_learned_apply(t, sv, w, NULL);
+    for (size_t r = 0; status == MR_OK && r < m; r++) {
+        const double *tv = tab->target_values + idx[r] * tc, *w = out + r * tc;
         for (int j = 0; j < t->output_count; j++) {
             const mr_learned_slot *s = &t->outputs[j];
             const int at = mr_brdf_param_offset(t->target, s->param) + (s->kind == MR_LEARNED_CHANNEL ? s->channel : 0);
@@ -286,6 +289,9 @@ static void measure(const mr_sweep_table *tab, const mr_learned *t, const size_t
         }
     }
     for (int j = 0; j < t->output_count; j++) rmse[j] = count[j] ? sqrt(sum[j] / (double)count[j]) : 0.0;
+    free(in);
+    free(out);
+    return status;
 }
 
 /* Learned carries: per-channel slopes through the origin over rows idx[0..m). */
@@ -494,15 +500,15 @@ mr_status mr_learn(const mr_sweep_table *tab, const mr_learn_options *opts, mr_l
     if (status == MR_OK) {
         fit_carries(tab, t, order + n_val, n_train);
         status = fit(tab, t, order + n_val, n_train, &o, inverse);
-        if (status == MR_OK) measure(tab, t, order, n_val, t->rmse);
+        if (status == MR_OK) status = measure(tab, t, order, n_val, t->rmse);
     }
     if (status == MR_OK && t->method == MR_LEARN_PARAMETRIC && o.slope_inverse == 0) {
         mr_learned trial = *t;
         trial.svr = NULL;
         trial.mlp = NULL;
         double rmse[MR_LEARNED_MAX_SLOTS];
-        if (fit(tab, &trial, order + n_val, n_train, &o, 1) == MR_OK) {
-            measure(tab, &trial, order, n_val, rmse);
+        if (fit(tab, &trial, order + n_val, n_train, &o, 1) == MR_OK &&
+            measure(tab, &trial, order, n_val, rmse) == MR_OK) {
             if (rmse[1] < 0.99 * t->rmse[1]) { // clearly better held-out specular: keep the c5 / alpha term
                 inverse = 1;
                 memcpy(t->rmse, rmse, sizeof rmse);

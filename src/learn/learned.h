@@ -182,13 +182,22 @@ typedef struct mr_learn_options {
 mr_status mr_learn(const mr_sweep_table *t, const mr_learn_options *opts, mr_learned **out);
 
 /* One texel: source packed values in (mr_brdf_value_count(t->source)), target packed values out; *flags (may be
- * NULL) gets the MR_WF_* bits. Never fails for non-NULL arguments; reentrant. */
+ * NULL) gets the MR_WF_* bits. Reentrant; it allocates scratch, and should that fail, writes the target's defaults
+ * and sets MR_WF_METHOD_FAILED. */
 void mr_learned_apply(const mr_learned *t, const double *source_values, double *target_values, unsigned *flags);
+
+/* n texels at once (rows of packed values; flags may be NULL): the same values as n calls of mr_learned_apply, faster
+ * (the regression runs on many rows per call). Runs on the calling thread. MR_ERR_NOMEM, MR_ERR_INVALID_ARG. */
+mr_status mr_learned_apply_batch(const mr_learned *t, size_t n, const double *source_values, double *target_values,
+                                 unsigned *flags);
 
 /* Hops t[0], t[1], ... (t[i]->target == t[i+1]->source); flags or'ed over the hops. MR_ERR_INVALID_ARG when the
  * models do not connect. */
 mr_status mr_learned_chain_apply(const mr_learned *const *t, int hops, const double *source_values,
                                  double *target_values, unsigned *flags);
+/* The chain on n texels at once (as mr_learned_apply_batch). */
+mr_status mr_learned_chain_apply_batch(const mr_learned *const *t, int hops, size_t n, const double *source_values,
+                                       double *target_values, unsigned *flags);
 
 /* The held-out RMSE summed over outputs in units of each target parameter's range (for choosing among chains). */
 double mr_learned_error(const mr_learned *t);

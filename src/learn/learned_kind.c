@@ -25,24 +25,39 @@ static mr_status learned_create(const mr_transform_kind *kind, const mr_transfor
     return MR_OK;
 }
 
+/* Texels go through the chain in blocks of this many packed rows (the regression runs on a block at a time). */
+#define BLOCK 1024
+
 static mr_status learned_apply(const mr_transform *t, const mr_transform_batch *b) {
     const learned_kind *lk = mr_transform_state(t);
     const mr_transform_kind *kind = &lk->kind;
-    for (size_t i = 0; i < b->n; i++) {
-        double v[MR_BRDF_MAX_VALUES], w[MR_BRDF_MAX_VALUES];
-        int k = 0;
-        for (int s = 0; s < kind->input_count; s++)
-            for (int c = 0; c < kind->inputs[s].channels; c++)
-                v[k++] = b->in[s][i * (size_t)kind->inputs[s].channels + (size_t)c];
-        unsigned flags = 0;
-        mr_learned_chain_apply(lk->hops, lk->hop_count, v, w, &flags);
-        k = 0;
-        for (int s = 0; s < kind->output_count; s++)
-            for (int c = 0; c < kind->outputs[s].channels; c++)
-                b->out[s][i * (size_t)kind->outputs[s].channels + (size_t)c] = (float)w[k++];
-        b->flags[i] = (uint8_t)flags;
+    const size_t sc = (size_t)mr_brdf_value_count(lk->hops[0]->source);
+    const size_t tc = (size_t)mr_brdf_value_count(lk->hops[lk->hop_count - 1]->target);
+    const size_t m = MR_MIN(b->n, BLOCK);
+    double *v = malloc(m * sc * sizeof *v), *w = malloc(m * tc * sizeof *w);
+    unsigned *flags = malloc(m * sizeof *flags);
+    mr_status status = v && w && flags ? MR_OK : mr_fail(MR_ERR_NOMEM, "transform %s: out of memory", kind->name);
+    for (size_t start = 0; start < b->n && status == MR_OK; start += BLOCK) {
+        const size_t count = MR_MIN(BLOCK, b->n - start);
+        for (size_t i = 0; i < count; i++) {
+            size_t k = 0;
+            for (int s = 0; s < kind->input_count; s++)
+                for (int c = 0; c < kind->inputs[s].channels; c++)
+                    v[i * sc + k++] = b->in[s][(start + i) * (size_t)kind->inputs[s].channels + (size_t)c];
+        }
+        status = mr_learned_chain_apply_batch(lk->hops, lk->hop_count, count, v, w, flags);
+        for (size_t i = 0; status == MR_OK && i < count; i++) {
+            size_t k = 0;
+            for (int s = 0; s < kind->output_count; s++)
+                for (int c = 0; c < kind->outputs[s].channels; c++)
+                    b->out[s][(start + i) * (size_t)kind->outputs[s].channels + (size_t)c] = (float)w[i * tc + k++];
+            b->flags[start + i] = (uint8_t)flags[i];
+        }
     }
-    return MR_OK;
+    free(v);
+    free(w);
+    free(flags);
+    return status;
 }
 
 /* One slot per parameter of `model`, its range the domain (what apply clamps). */
