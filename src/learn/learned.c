@@ -122,7 +122,8 @@ static mr_status apply_chunk(const mr_learned *t, size_t n, const double *in, do
             const mr_learned_carry *c = &t->carries[j];
             const int to = mr_brdf_param_offset(tgt, c->target_param);
             const int from = mr_brdf_param_offset(src, c->source_param);
-            for (int ch = 0; ch < tgt->params[c->target_param].channels; ch++) w[to + ch] = c->factor[ch] * v[from + ch];
+            for (int ch = 0; ch < tgt->params[c->target_param].channels; ch++)
+                w[to + ch] = c->factor[ch] * v[from + ch];
         }
         memcpy(wk->carry + i * MAXV, w, (size_t)tc * sizeof *w);
         // Features: GREY ones at their channel mean (and, per channel, below), each channel checked against the domain.
@@ -148,9 +149,10 @@ static mr_status apply_chunk(const mr_learned *t, size_t n, const double *in, do
         if (!wk->coloured[i]) continue;
         for (int ch = 0; ch < 3; ch++, rows++)
             for (int k = 0; k < t->feature_count; k++)
-                wk->x[rows * F + (size_t)k] = t->features[k].kind == MR_LEARNED_GREY
-                                                  ? wk->v[i * MAXV + (size_t)slot_offset(src, &t->features[k]) + (size_t)ch]
-                                                  : wk->x[i * F + (size_t)k];
+                wk->x[rows * F + (size_t)k] =
+                    t->features[k].kind == MR_LEARNED_GREY
+                        ? wk->v[i * MAXV + (size_t)slot_offset(src, &t->features[k]) + (size_t)ch]
+                        : wk->x[i * F + (size_t)k];
     }
     mr_status status = regress(t, wk->x, rows, wk->y, wk->xf, wk->yf);
     if (status != MR_OK) return status;
