@@ -96,9 +96,9 @@ TESTS     := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
 
 PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h src/render/render.h \
-                  src/io/image_io.h src/metrics/metrics.h src/remap/remap.h src/remap/sweep.h src/workflow/workflow.h \
-                  src/workflow/dataset.h src/workflow/labels.h src/transform/transform.h src/report/report.h nn/mlp.h \
-                  gltf/mr_gltf.h gltf/mr_gltf_convert.h gltf/mr_gltf_scene.h
+                  src/io/image_io.h src/metrics/metrics.h src/remap/remap.h src/remap/direct.h src/remap/sweep.h \
+                  src/workflow/workflow.h src/workflow/dataset.h src/workflow/labels.h src/transform/transform.h \
+                  src/report/report.h nn/mlp.h gltf/mr_gltf.h gltf/mr_gltf_convert.h gltf/mr_gltf_scene.h
 
 .PHONY: all check asan demo bench analyses evaluation evaluation-gltf evaluation-hardcases evaluation-viewers dataset \
         train objectives deps install clean

@@ -48,6 +48,7 @@
 #include "io/image_io.h"
 #include "metrics/metrics.h"
 #include "remap/remap.h"
+#include "remap/direct.h"
 #include "remap/sweep.h"
 #include "report/report.h"
 #include "workflow/workflow.h"

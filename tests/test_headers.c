@@ -7,6 +7,7 @@
 #include "io/image_io.h"
 #include "metrics/metrics.h"
 #include "render/render.h"
+#include "remap/direct.h"
 #include "remap/sweep.h"
 #include "workflow/workflow.h"
 #include "workflow/dataset.h"
