@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # make bench: prints benchmark figures and writes them into docs/performance.md (between the bench:render,
-# bench:metrics, bench:remap, bench:workflow, bench:gltf and bench:report-accuracy markers) and docs/rendering.md
-# (bench:envlight, bench:mesh, bench:reflection). Asserts nothing. Peers are measured in the same run: Blender Cycles
+# bench:metrics, bench:remap, bench:direct, bench:workflow, bench:gltf and bench:report-accuracy markers) and
+# docs/rendering.md (bench:envlight, bench:mesh, bench:reflection). Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
-# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|png|gltf|remap|remap-processes]
+# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|png|gltf|remap|remap-processes|direct]
 #   --only NAME runs one section and rewrites only its markers (the full run takes long; sections written as
 #   functions below can be run alone). From make: make bench BENCH_ARGS="--only report-accuracy".
 set -euo pipefail
@@ -384,6 +384,25 @@ bench_remap_table() {
     } > "$work/remap.md"
 }
 
+# The direct remap of real texture sets (docs/performance.md, bench:direct): distinct values against the
+# quantisation step, a whole 1024^2 set on 2 threads, and its answers against single remaps (tests/bench_direct.c).
+bench_direct() {
+    echo
+    echo "== direct remaps of texture sets: unique values, time on 2 threads, error against single remaps (tests/bench_direct.c)"
+    local sets="$shared/assets/specgloss"
+    if [ ! -d "$sets" ]; then
+        echo "(no assets at $sets: the direct remap section was skipped)"
+        echo "Direct remaps skipped: ../shared/assets was not found in this run." > "$work/direct.md"
+        return 0
+    fi
+    "$root/$build/tests/bench_direct" "$sets" $quick | tee "$work/direct_table.md"
+    {
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'))."
+        echo
+        cat "$work/direct_table.md"
+    } > "$work/direct.md"
+}
+
 # Remaps as users run them (docs/performance.md, bench:remap-processes): whole `matremap remap` processes at the
 # default size, alone and two started together, with the default (automatic) threads, with --threads 2 (a team for
 # every render, as before issue 13), and with OMP_NUM_THREADS=1 (the old workaround). Median of 21 runs each; the
@@ -611,6 +630,10 @@ if [ -n "$only" ]; then
             replace_section remap "$work/remap.md"
             replace_section remap-processes "$work/remap_processes.md"
             ;;
+        direct)
+            bench_direct
+            replace_section direct "$work/direct.md"
+            ;;
         remap-processes)
             bench_remap_processes
             replace_section remap-processes "$work/remap_processes.md"
@@ -625,7 +648,7 @@ if [ -n "$only" ]; then
             replace_section workflow "$work/workflow.md"
             replace_section workflow-e2e "$work/e2e.md"
             ;;
-        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, png, gltf, remap, remap-processes)" >&2; exit 1 ;;
+        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, png, gltf, remap, remap-processes, direct)" >&2; exit 1 ;;
     esac
     exit 0
 fi
@@ -641,6 +664,7 @@ echo "== image metrics (tests/bench_metrics.c)"
 echo
 bench_remap_table
 bench_remap_processes
+bench_direct
 
 bench_workflow
 
@@ -759,6 +783,7 @@ if [ -f "$perf" ]; then
     replace_section metrics "$work/metrics_table.md"
     replace_section remap "$work/remap.md"
     replace_section remap-processes "$work/remap_processes.md"
+    replace_section direct "$work/direct.md"
     replace_section workflow "$work/workflow.md"
     replace_section workflow-e2e "$work/e2e.md"
     replace_section gltf "$work/gltf.md"

@@ -49,6 +49,7 @@
 #include "io/obj_load.h"
 #include "metrics/metrics.h"
 #include "remap/remap.h"
+#include "remap/direct.h"
 #include "remap/sweep.h"
 #include "report/report.h"
 #include "workflow/workflow.h"

@@ -109,22 +109,6 @@ static mr_render_plan *plan_of(int size, double *ms) {
     return plan;
 }
 
-/* The relative RMSE over the pixels the object covers, as mr_remap_result.relative_rmse defines it. */
-static double relative_rmse(const mr_render_plan *plan, const mr_image *fit, const mr_image *source) {
-    const mr_scene *scene = mr_render_plan_scene(plan);
-    const float *coverage = mr_render_plan_coverage(plan);
-    double diff = 0.0, energy = 0.0;
-    for (int p = 0; p < scene->width * scene->height; p++) {
-        if (!(coverage[p] > 0.0f)) continue;
-        for (int c = 0; c < 3; c++) {
-            double a = fit->pixels[(size_t)p * 3 + c], b = source->pixels[(size_t)p * 3 + c];
-            diff += (a - b) * (a - b);
-            energy += b * b;
-        }
-    }
-    return energy > 0.0 ? sqrt(diff / energy) : 0.0;
-}
-
 /* One remap's figures. */
 typedef struct sample {
     double ms, renders, rel_fit, rel_512, ssim_512;
@@ -151,7 +135,7 @@ static sample measure(const mr_render_plan *plan, const mr_render_plan *plan512,
         fprintf(stderr, "bench_remap: %s\n", mr_last_error());
         exit(3);
     }
-    s.rel_512 = relative_rmse(plan512, scratch512, source512);
+    s.rel_512 = bench_relative_rmse(plan512, scratch512, source512);
     return s;
 }
 

@@ -9,6 +9,7 @@
 #include "io/obj_load.h"
 #include "metrics/metrics.h"
 #include "remap/remap.h"
+#include "remap/direct.h"
 #include "remap/sweep.h"
 #include "workflow/workflow.h"
 #include "workflow/dataset.h"

@@ -176,6 +176,11 @@ MR_TEST(grid_errors_name_the_bad_value) {
     spec.axes[1] = spec.axes[0];
     spec.axis_count = 2;
     MR_CHECK(mr_sweep_check(&spec) == MR_ERR_INVALID_ARG && strstr(mr_last_error(), "two grid axes") != NULL);
+    // A warm start for every sample would be hidden from the file's header: refused.
+    spec.axis_count = 1;
+    MR_CHECK_OK(mr_sweep_check(&spec));
+    spec.remap.initial_values = spec.target_values;
+    MR_CHECK(mr_sweep_check(&spec) == MR_ERR_INVALID_ARG && strstr(mr_last_error(), "initial_values") != NULL);
 }
 
 MR_TEST(random_samples_depend_only_on_seed_and_index_and_stay_in_bounds) {

@@ -73,6 +73,8 @@ static inline const char *mr_io_file_label(char *label, const char *path) {
 
 /* mr_srgb_to_linear in double, not rounded to float (mr_img_half_step's differences of decodes need it). */
 double mr_srgb_decode_double(double encoded);
+/* mr_linear_to_srgb in double (the direct remap quantises colours in sRGB-encoded units, src/remap/direct.h). */
+double mr_srgb_encode_double(double linear);
 
 /* The 8-bit sRGB code the image writer stores for a linear value (clamped to [0, 1], NaN -> 0): exactly
  * floor(clamp(mr_linear_to_srgb(v)) * 255 + 0.5), by table (srgb.c). Call mr_srgb8_init() once before (thread-safe,

@@ -25,11 +25,13 @@ double mr_srgb_decode_double(double v) {
 
 float mr_srgb_to_linear(float encoded) { return (float)mr_srgb_decode_double(encoded); }
 
-float mr_linear_to_srgb(float linear) {
-    double l = linear, a = fabs(l);
+double mr_srgb_encode_double(double l) {
+    double a = fabs(l);
     double v = a <= 0.0031308 ? 12.92 * a : 1.055 * pow(a, 1.0 / 2.4) - 0.055;
-    return (float)(l < 0.0 ? -v : (l >= 0.0 ? v : l));
+    return l < 0.0 ? -v : (l >= 0.0 ? v : l);
 }
+
+float mr_linear_to_srgb(float linear) { return (float)mr_srgb_encode_double(linear); }
 
 /* ---- 8-bit sRGB codes by table ----
  * code(v) = floor(clamp(enc(clamp(v)), 0, 1) * 255 + 0.5) with enc = mr_linear_to_srgb, the writer's rule

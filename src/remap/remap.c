@@ -149,6 +149,7 @@ typedef struct fit_context {
     long renders;
     mr_status failure;               /* set when a render fails inside an nlopt callback */
     nlopt_opt running;
+    int warm;                        /* AUTO/JOINT from opts.initial_values: one local refinement, no grid */
 } fit_context;
 
 static double to_value(const fitted_slot *s, double u) {
@@ -516,7 +517,12 @@ static void auto_fit(fit_context *ctx, candidate *best, int *ambiguous) {
         memcpy(best->values, ctx->base, sizeof best->values);
         return;
     }
-    if (d <= 3) {
+    if (ctx->warm) { // a warm start (remap.h, initial_values): the start's basin only
+        for (int i = 0; i < d; i++) starts[0].u[i] = to_unit(&ctx->nonlinear[i], ctx->base[ctx->nonlinear[i].slot]);
+        starts[0].sse = HUGE_VAL;
+        start_count = 1;
+        step = MR_REMAP_WARM_STEP;
+    } else if (d <= 3) {
         static const int default_points[4] = {0, DEFAULT_GRID_1D, DEFAULT_GRID_2D, DEFAULT_GRID_3D};
         int points = ctx->opts.grid_points > 1 ? ctx->opts.grid_points : default_points[d];
         start_count = grid_minima(ctx, points, starts, MAX_REFINED_STARTS);
@@ -1139,6 +1145,15 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     status = mr_image_create(scene->width, scene->height, 3, &ctx.scratch);
     for (int i = 0; status == MR_OK && i <= ctx.linear_param_count; i++)
         status = mr_image_create(scene->width, scene->height, 3, &ctx.basis[i]);
+    // A warm start: the fitted parameters start from opts.initial_values (remap.h).
+    for (int i = 0; opts.initial_values != NULL && i < target->param_count; i++) {
+        if (held_fixed(target, opts.held, i)) continue;
+        const int offset = mr_brdf_param_offset(target, i);
+        for (int c = 0; c < target->params[i].channels; c++)
+            ctx.base[offset + c] = mr_clampd(opts.initial_values[offset + c], target->params[i].min_value,
+                                             target->params[i].max_value);
+    }
+    ctx.warm = opts.initial_values != NULL && (opts.strategy == MR_REMAP_AUTO || opts.strategy == MR_REMAP_JOINT);
     ctx.split_lobes = lobes_split(target, ctx.linear_params, ctx.linear_param_count);
     ctx.homogeneous = ctx.split_lobes && black_without_linear(target, opts.held, ctx.base, is_linear);
     for (int i = 0; status == MR_OK && ctx.split_lobes && i < 4; i++)
@@ -1224,6 +1239,7 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
         ctx.goal = source->full;
         candidate global;
         int ignored;
+        ctx.warm = 0; // the global search itself, whatever the start
         auto_fit(&ctx, &global, &ignored);
         memcpy(ctx.base, saved, sizeof saved);
         if (ctx.failure != MR_OK) {

@@ -2,12 +2,9 @@
  * sweep.c — parameter sweeps through mr_remap, streamed to a crash-safe, resumable CSV file (contract in
  * sweep.h).
  *
- * Why the file protocol is what it is:
- *   - O_APPEND + one write() per complete line: the kernel places each write at the end of the file as a unit,
- *     so rows of different threads never interleave, and a process killed at any instant has written each row
- *     or not, except that a write can end early: on a full disk (we cut the partial line back ourselves) or,
- *     in principle, on SIGKILL between two pages of the page cache. Resume removes such a torn tail. stdio
- *     buffering would split rows across write()s, so it is not used for rows.
+ * Why the file protocol is what it is (the line-by-line part, shared with direct.c's caches, is remap_file.c's):
+ *   - O_APPEND + one write() per complete line (remap_file.h): rows of different threads never interleave, and a
+ *     process killed at any instant leaves whole rows plus at most one torn last line, which resume removes.
  *   - Rows are written in completion order (threads finish out of order) and sorted once, at the end, by
  *     writing a temporary file and renaming it over the original (src/io/atomic_file.c), so a crash during the
  *     rewrite leaves the complete unsorted file, and the next resume sorts it.
@@ -20,7 +17,6 @@
 #include <fcntl.h>
 #include <limits.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -36,47 +32,11 @@
 #include "../io/io_internal.h"
 #include "../matremap.h"
 #include "../mr_internal.h"
+#include "remap_file.h"
 
 #define COMMAND_PREFIX "# command: "
+#define WHAT "sweep file" /* what messages call the file */
 #define ROW_TAIL_COLUMNS 6 /* rmse, relative_rmse, ssim, outcome, renders, seconds */
-
-/* ---- a growing string ------------------------------------------------------------------------------------ */
-
-typedef struct strbuf {
-    char *text;
-    size_t length, capacity;
-    int failed; /* an allocation failed: the content is incomplete */
-} strbuf;
-
-#if defined(__GNUC__)
-__attribute__((format(printf, 2, 3)))
-#endif
-static void sb_printf(strbuf *sb, const char *fmt, ...) {
-    if (sb->failed) return;
-    for (;;) {
-        va_list args;
-        va_start(args, fmt);
-        size_t room = sb->capacity - sb->length;
-        int n = vsnprintf(sb->text ? sb->text + sb->length : NULL, sb->text ? room : 0, fmt, args);
-        va_end(args);
-        if (n < 0) {
-            sb->failed = 1;
-            return;
-        }
-        if (sb->text != NULL && (size_t)n < room) {
-            sb->length += (size_t)n;
-            return;
-        }
-        size_t capacity = MR_MAX(2 * sb->capacity, sb->length + (size_t)n + 256);
-        char *grown = realloc(sb->text, capacity);
-        if (grown == NULL) {
-            sb->failed = 1;
-            return;
-        }
-        sb->text = grown;
-        sb->capacity = capacity;
-    }
-}
 
 /* ---- samples --------------------------------------------------------------------------------------------- */
 
@@ -263,23 +223,6 @@ mr_status mr_sweep_parse_axis(const mr_brdf_model *source, const char *text, mr_
     return MR_OK;
 }
 
-static mr_status check_values(const mr_brdf_model *m, const double *values, const char *which) {
-    int slot = 0;
-    for (int i = 0; i < m->param_count; i++) {
-        const mr_brdf_param *p = &m->params[i];
-        for (int c = 0; c < p->channels; c++, slot++) {
-            double v = values[slot];
-            if (!(v >= p->min_value && v <= p->max_value))
-                return mr_fail(MR_ERR_INVALID_ARG, "%s value %s = %g of model '%s' is outside [%g, %g]", which,
-                               p->name, v, m->name, p->min_value, p->max_value);
-            if (p->role == MR_PARAM_SWITCH && v != floor(v))
-                return mr_fail(MR_ERR_INVALID_ARG, "%s value %s = %g of model '%s' is a switch: not an integer",
-                               which, p->name, v, m->name);
-        }
-    }
-    return MR_OK;
-}
-
 mr_status mr_sweep_check(const mr_sweep_spec *spec) {
     if (spec == NULL || spec->source == NULL || spec->target == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "sweep: NULL spec, source model or target model");
@@ -287,28 +230,15 @@ mr_status mr_sweep_check(const mr_sweep_spec *spec) {
     if (mr_brdf_value_count(m) > MR_BRDF_MAX_VALUES || mr_brdf_value_count(spec->target) > MR_BRDF_MAX_VALUES ||
         m->param_count > (int)(sizeof spec->held * CHAR_BIT))
         return mr_fail(MR_ERR_INVALID_ARG, "sweep: a model has more values than a sweep can hold");
-    mr_status status = check_values(m, spec->source_values, "source");
-    if (status == MR_OK) status = check_values(spec->target, spec->target_values, "target");
+    mr_status status = mr_remap_file_check_values(m, spec->source_values, "source");
+    if (status == MR_OK) status = mr_remap_file_check_values(spec->target, spec->target_values, "target");
     if (status != MR_OK) return status;
     if (m->param_count < (int)(sizeof spec->held * CHAR_BIT) && (spec->held >> m->param_count) != 0)
         return mr_fail(MR_ERR_INVALID_ARG, "sweep: held marks parameters that model '%s' does not have", m->name);
-    const mr_remap_options *r = &spec->remap;
-    if (mr_remap_strategy_name(r->strategy) == NULL)
-        return mr_fail(MR_ERR_INVALID_ARG, "sweep: remap strategy %d is not one of auto, single, two, three",
-                       (int)r->strategy);
-    if (r->max_evaluations < 1 || !(r->xtol >= 0.0 && isfinite(r->xtol)) || r->grid_points < 0 || r->starts < 0)
-        return mr_fail(MR_ERR_INVALID_ARG,
-                       "sweep: remap options out of range (max_evaluations %d >= 1, xtol %g >= 0, grid_points %d "
-                       ">= 0, starts %d >= 0)",
-                       r->max_evaluations, r->xtol, r->grid_points, r->starts);
-    if (spec->scene.size < 0 || spec->scene.size > MR_RENDER_MAX_SIZE)
-        return mr_fail(MR_ERR_INVALID_ARG, "sweep: scene size %d: expected 0 (default %d) to %d", spec->scene.size,
-                       MR_REMAP_DEFAULT_SIZE, MR_RENDER_MAX_SIZE);
-    if (mr_fit_light_name(spec->scene.light) == NULL)
-        return mr_fail(MR_ERR_INVALID_ARG, "sweep: fit light %d is not one of 45, frontal", (int)spec->scene.light);
-    if (!(spec->scene.intensity >= 0.0 && isfinite(spec->scene.intensity)))
-        return mr_fail(MR_ERR_INVALID_ARG, "sweep: light intensity %g: expected >= 0 (0: default)",
-                       spec->scene.intensity);
+    status = mr_remap_file_check_options("sweep", &spec->remap, &spec->scene);
+    if (status != MR_OK) return status;
+    if (spec->remap.initial_values != NULL) // every sample would start there, and the header would not say so
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: remap.initial_values must be NULL (a sweep starts no fit warm)");
 
     if (spec->sampling == MR_SWEEP_GRID) {
         if (spec->axis_count < 1 || spec->axis_count > MR_SWEEP_MAX_AXES)
@@ -360,84 +290,39 @@ mr_status mr_sweep_sample(const mr_sweep_spec *spec, long index, double *values)
 
 /* ---- header, columns, rows ---------------------------------------------------------------------------------- */
 
-/* "name=v" per parameter, one value for an RGB parameter whose channels agree (so the line can be pasted back
- * as arguments). */
-static void append_values(strbuf *sb, const mr_brdf_model *m, const double *values) {
-    int slot = 0;
-    for (int i = 0; i < m->param_count; i++) {
-        const mr_brdf_param *p = &m->params[i];
-        const double *v = values + slot;
-        slot += p->channels;
-        sb_printf(sb, " %s=%.17g", p->name, v[0]);
-        if (p->channels == 3 && !(v[1] == v[0] && v[2] == v[0])) sb_printf(sb, ",%.17g,%.17g", v[1], v[2]);
-    }
-}
-
-static void append_columns(strbuf *sb, const mr_brdf_model *m, const char *prefix) {
-    static const char *const suffix[3] = {"_r", "_g", "_b"};
-    for (int i = 0; i < m->param_count; i++) {
-        const mr_brdf_param *p = &m->params[i];
-        if (p->channels == 1)
-            sb_printf(sb, ",%s%s", prefix, p->name);
-        else
-            for (int c = 0; c < p->channels; c++) sb_printf(sb, ",%s%s%s", prefix, p->name, suffix[c]);
-    }
-}
-
-static mr_scene fit_scene(const mr_sweep_spec *spec) {
-    mr_fit_scene_options o = spec->scene;
-    if (o.size == 0) o.size = MR_REMAP_DEFAULT_SIZE;
-    return mr_scene_fit(&o);
-}
-
 /* The header for this run (every line '\n'-terminated, the column line last), in the C numeric locale. */
-static mr_status build_header(const mr_sweep_spec *spec, const char *command_line, strbuf *sb) {
-    const mr_scene scene = fit_scene(spec);
-    const mr_remap_options *r = &spec->remap;
-    sb_printf(sb, "# matremap %s sweep\n", mr_version());
-    sb_printf(sb, "# from: %s", spec->source->name);
-    append_values(sb, spec->source, spec->source_values);
-    sb_printf(sb, "\n# to: %s", spec->target->name);
-    append_values(sb, spec->target, spec->target_values);
-    sb_printf(sb, "\n# remap: strategy=%s max_evaluations=%d xtol=%.17g grid_points=%d starts=%d seed=%lu",
-              mr_remap_strategy_name(r->strategy), r->max_evaluations, r->xtol, r->grid_points, r->starts, r->seed);
-    // Held target parameters are named only when there are some, so files written before --hold still resume.
-    for (int p = 0, first = 1; p < spec->target->param_count && p < 32; p++)
-        if ((r->held >> p) & 1u) {
-            sb_printf(sb, "%s%s", first ? " held=" : ",", spec->target->params[p].name);
-            first = 0;
-        }
-    sb_printf(sb, "\n");
-    // highlight_samples: rows fitted before the pixels about the highlight were integrated (issue 13) are not
-    // comparable with today's, so a sweep written then does not resume now (its header differs)
-    sb_printf(sb, "# scene: fit size=%d light=%s intensity=%.17g edge_samples=%d highlight_samples=%s\n",
-              scene.width, mr_fit_light_name(spec->scene.light), scene.lights[0].intensity[0],
-              scene.edge_samples > 0 ? scene.edge_samples : MR_SCENE_DEFAULT_EDGE_SAMPLES,
-              scene.highlight_samples == 0 ? "integrated" : "centres");
+static mr_status build_header(const mr_sweep_spec *spec, const char *command_line, mr_strbuf *sb) {
+    mr_strbuf_printf(sb, "# matremap %s sweep\n", mr_version());
+    mr_strbuf_printf(sb, "# from: %s", spec->source->name);
+    mr_strbuf_values(sb, spec->source, spec->source_values);
+    mr_strbuf_printf(sb, "\n# to: %s", spec->target->name);
+    mr_strbuf_values(sb, spec->target, spec->target_values);
+    mr_strbuf_printf(sb, "\n");
+    mr_strbuf_remap_lines(sb, spec->target, &spec->remap, &spec->scene);
     if (spec->sampling == MR_SWEEP_GRID) {
-        sb_printf(sb, "# sampling: grid");
+        mr_strbuf_printf(sb, "# sampling: grid");
         for (int a = 0; a < spec->axis_count; a++) {
             const mr_sweep_axis *axis = &spec->axes[a];
-            sb_printf(sb, " %s=%.17g:%.17g:%ld%s", spec->source->params[axis->param].name, axis->lo, axis->hi,
+            mr_strbuf_printf(sb, " %s=%.17g:%.17g:%ld%s", spec->source->params[axis->param].name, axis->lo, axis->hi,
                       axis->count, axis->log_scale ? ":log" : "");
         }
     } else {
-        sb_printf(sb, "# sampling: random=%ld seed=%llu over", spec->random_count, spec->seed);
+        mr_strbuf_printf(sb, "# sampling: random=%ld seed=%llu over", spec->random_count, spec->seed);
         int first = 1;
         for (int p = 0; p < spec->source->param_count; p++)
             if (random_eligible(spec, p)) {
-                sb_printf(sb, "%s%s", first ? " " : ",", spec->source->params[p].name);
+                mr_strbuf_printf(sb, "%s%s", first ? " " : ",", spec->source->params[p].name);
                 first = 0;
             }
     }
-    sb_printf(sb, "\n# samples: %ld\n" COMMAND_PREFIX, sample_count_unchecked(spec));
+    mr_strbuf_printf(sb, "\n# samples: %ld\n" COMMAND_PREFIX, sample_count_unchecked(spec));
     // The command line is informational; a line break in an argument must not start a line of its own.
     for (const char *c = command_line ? command_line : ""; *c; c++)
-        sb_printf(sb, "%c", *c == '\n' || *c == '\r' ? ' ' : *c);
-    sb_printf(sb, "\nindex");
-    append_columns(sb, spec->source, "");
-    append_columns(sb, spec->target, "to_");
-    sb_printf(sb, ",rmse,relative_rmse,ssim,outcome,renders,seconds\n");
+        mr_strbuf_printf(sb, "%c", *c == '\n' || *c == '\r' ? ' ' : *c);
+    mr_strbuf_printf(sb, "\nindex");
+    mr_strbuf_columns(sb, spec->source, "");
+    mr_strbuf_columns(sb, spec->target, "to_");
+    mr_strbuf_printf(sb, ",rmse,relative_rmse,ssim,outcome,renders,seconds\n");
     return sb->failed ? mr_fail(MR_ERR_NOMEM, "sweep: out of memory building the header") : MR_OK;
 }
 
@@ -478,43 +363,6 @@ mr_status mr_sweep_format_row(const mr_sweep_spec *spec, const mr_sweep_row *row
     return status;
 }
 
-/* Parse one field [*cursor, end) up to the next ',' (or the end); number fields must be consumed entirely. */
-/* The next ','-separated field of line[0, length) from *at; *at becomes SIZE_MAX after the last field. */
-static int next_field(const char *line, size_t length, size_t *at, const char **field, size_t *field_len) {
-    if (*at > length) return 0;
-    const char *start = line + *at;
-    const char *comma = memchr(start, ',', length - *at);
-    *field = start;
-    *field_len = comma ? (size_t)(comma - start) : length - *at;
-    *at = comma ? (size_t)(comma - line) + 1 : SIZE_MAX;
-    return 1;
-}
-
-static int parse_double_field(const char *field, size_t len, double *out) {
-    char tmp[64];
-    if (len == 0 || len >= sizeof tmp) return 0;
-    memcpy(tmp, field, len);
-    tmp[len] = '\0';
-    char *stop = NULL;
-    double v = strtod(tmp, &stop);
-    if (stop != tmp + len) return 0;
-    *out = v;
-    return 1;
-}
-
-static int parse_long_field(const char *field, size_t len, long *out) {
-    char tmp[32];
-    if (len == 0 || len >= sizeof tmp || field[0] == '-' || field[0] == '+' || field[0] == ' ') return 0;
-    memcpy(tmp, field, len);
-    tmp[len] = '\0';
-    char *stop = NULL;
-    errno = 0;
-    long v = strtol(tmp, &stop, 10);
-    if (stop != tmp + len || errno == ERANGE) return 0;
-    *out = v;
-    return 1;
-}
-
 /* Row parsing in the current (C) numeric locale; `total` bounds the index. */
 static mr_status parse_row(const mr_sweep_spec *spec, long total, const char *line, size_t length,
                            mr_sweep_row *out) {
@@ -527,11 +375,11 @@ static mr_status parse_row(const mr_sweep_spec *spec, long total, const char *li
     const char *field = NULL;
     size_t len = 0;
     for (int k = 0; k < columns; k++) {
-        if (!next_field(line, length, &at, &field, &len))
+        if (!mr_csv_next_field(line, length, &at, &field, &len))
             return mr_fail(MR_ERR_FORMAT, "row has %d columns, expected %d", k, columns);
         int ok;
         if (k == 0) {
-            ok = parse_long_field(field, len, &row.index) && row.index < total;
+            ok = mr_csv_parse_long(field, len, &row.index) && row.index < total;
             if (!ok)
                 return mr_fail(MR_ERR_FORMAT, "index '%.*s' is not a sample number in [0, %ld]",
                                (int)MR_MIN(len, 40), field, total - 1);
@@ -539,14 +387,14 @@ static mr_status parse_row(const mr_sweep_spec *spec, long total, const char *li
         }
         int c = k - 1;
         if (c < ns) {
-            ok = parse_double_field(field, len, &row.source[c]);
+            ok = mr_csv_parse_double(field, len, &row.source[c]);
         } else if (c < ns + nt) {
-            ok = parse_double_field(field, len, &row.target[c - ns]);
+            ok = mr_csv_parse_double(field, len, &row.target[c - ns]);
         } else {
             switch (c - ns - nt) {
-            case 0: ok = parse_double_field(field, len, &row.rmse); break;
-            case 1: ok = parse_double_field(field, len, &row.relative_rmse); break;
-            case 2: ok = parse_double_field(field, len, &row.ssim); break;
+            case 0: ok = mr_csv_parse_double(field, len, &row.rmse); break;
+            case 1: ok = mr_csv_parse_double(field, len, &row.relative_rmse); break;
+            case 2: ok = mr_csv_parse_double(field, len, &row.ssim); break;
             case 3:
                 ok = 0;
                 for (int o = 0; o < MR_FIT_OUTCOME_COUNT; o++) {
@@ -557,8 +405,8 @@ static mr_status parse_row(const mr_sweep_spec *spec, long total, const char *li
                     }
                 }
                 break;
-            case 4: ok = parse_long_field(field, len, &row.renders); break;
-            default: ok = parse_double_field(field, len, &row.seconds); break;
+            case 4: ok = mr_csv_parse_long(field, len, &row.renders); break;
+            default: ok = mr_csv_parse_double(field, len, &row.seconds); break;
             }
         }
         if (!ok)
@@ -584,92 +432,6 @@ mr_status mr_sweep_parse_row(const mr_sweep_spec *spec, const char *line, size_t
 
 /* ---- the file ------------------------------------------------------------------------------------------------ */
 
-static double now_seconds(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* The whole file into a malloc'ed buffer (NUL-terminated for convenience). */
-static mr_status read_all(int fd, const char *path, char **out, size_t *out_size) {
-    struct stat st;
-    if (fstat(fd, &st) != 0) {
-        int err = errno;
-        return mr_fail(MR_ERR_IO, "sweep file '%s': cannot stat: %s", path, strerror(err));
-    }
-    size_t size = (size_t)st.st_size, got = 0;
-    char *data = malloc(size + 1);
-    if (data == NULL) return mr_fail(MR_ERR_NOMEM, "sweep file '%s': out of memory reading %zu bytes", path, size);
-    while (got < size) {
-        ssize_t n = pread(fd, data + got, size - got, (off_t)got);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) {
-            int err = n < 0 ? errno : 0;
-            free(data);
-            return mr_fail(MR_ERR_IO, "sweep file '%s': read failed: %s", path, err ? strerror(err) : "file shrank");
-        }
-        got += (size_t)n;
-    }
-    data[size] = '\0';
-    *out = data;
-    *out_size = size;
-    return MR_OK;
-}
-
-/* One write() of the whole buffer at the end of the file (O_APPEND). If the kernel takes only part of it (a
- * full disk, a file-size limit), the rest is tried once more, which either completes the line or yields the
- * real errno; in the latter case the partial line is cut back off, so the file keeps only whole lines.
- * *file_size tracks the size (only this process writes: the lock). */
-static mr_status append_line(int fd, const char *path, const char *line, size_t length, off_t *file_size) {
-    size_t done = 0;
-    int err = 0;
-    for (int attempt = 0; attempt < 2 && done < length; attempt++) {
-        ssize_t n;
-        do {
-            n = write(fd, line + done, length - done);
-        } while (n < 0 && errno == EINTR);
-        if (n < 0) {
-            err = errno;
-            break;
-        }
-        if (n == 0) err = ENOSPC; /* no progress and no errno: call it what it nearly always is */
-        done += (size_t)n;
-    }
-    if (done == length) {
-        *file_size += (off_t)length;
-        return MR_OK;
-    }
-    if (done > 0 && ftruncate(fd, *file_size) != 0) {
-        int cut = errno;
-        return mr_fail(MR_ERR_IO, "sweep file '%s': short write (%zu of %zu bytes: %s) and cannot cut it back: %s",
-                       path, done, length, strerror(err), strerror(cut));
-    }
-    return mr_fail(MR_ERR_IO, "sweep file '%s': cannot append to it: %s", path, strerror(err));
-}
-
-static mr_status lock_file(int fd, const char *path) {
-    struct flock fl;
-    memset(&fl, 0, sizeof fl);
-    fl.l_type = F_WRLCK;
-    fl.l_whence = SEEK_SET;
-    if (fcntl(fd, F_SETLK, &fl) == 0) return MR_OK;
-    int err = errno;
-    if (err == EACCES || err == EAGAIN) {
-        memset(&fl, 0, sizeof fl);
-        fl.l_type = F_WRLCK;
-        fl.l_whence = SEEK_SET;
-        long pid = fcntl(fd, F_GETLK, &fl) == 0 && fl.l_type != F_UNLCK ? (long)fl.l_pid : 0;
-        return mr_fail(MR_ERR_IO, "sweep file '%s' is being written by another process (pid %ld)", path, pid);
-    }
-    return mr_fail(MR_ERR_IO, "sweep file '%s': cannot lock: %s", path, strerror(err));
-}
-
-/* Quote at most 160 characters of a line for a message. */
-static void quote_line(const char *line, size_t len, char *buf, size_t size) {
-    if (len > 0 && line[len - 1] == '\n') len--;
-    snprintf(buf, size, "'%.*s%s'", (int)MR_MIN(len, 160), line, len > 160 ? "..." : "");
-}
-
 typedef struct sweep_file {
     const char *path;
     int fd;
@@ -682,49 +444,25 @@ typedef struct sweep_file {
 
 /* Check an existing file against this run's header, collect the samples it holds, and cut off a torn last line
  * (only after everything else checked out, so a refused file is left exactly as it was). */
-static mr_status adopt_file(const mr_sweep_spec *spec, const strbuf *header, sweep_file *f) {
+static mr_status adopt_file(const mr_sweep_spec *spec, const mr_strbuf *header, sweep_file *f) {
     char *data = NULL;
     size_t size = 0;
-    mr_status status = read_all(f->fd, f->path, &data, &size);
+    mr_status status = mr_text_file_read_all(f->fd, f->path, WHAT, &data, &size);
     if (status != MR_OK) return status;
     if (size == 0) { /* created but killed before its header went out: start it */
         free(data);
-        return append_line(f->fd, f->path, header->text, header->length, &f->size);
+        return mr_text_file_append(f->fd, f->path, WHAT, header->text, header->length, &f->size);
     }
-    const char *pos = data, *end = data + size;
-    const char *expected = header->text, *expected_end = header->text + header->length;
+    size_t rows_at = 0;
     long line_number = 0;
-    while (expected < expected_end) { /* header, line by line */
-        const char *want_nl = memchr(expected, '\n', (size_t)(expected_end - expected));
-        size_t want_len = (size_t)(want_nl - expected) + 1;
-        const char *nl = memchr(pos, '\n', (size_t)(end - pos));
-        line_number++;
-        if (nl == NULL) {
-            free(data);
-            return mr_fail(MR_ERR_FORMAT,
-                           "sweep file '%s': the header ends early, at line %ld (a torn file?); not touching it "
-                           "(remove it to start afresh)",
-                           f->path, line_number);
-        }
-        size_t have_len = (size_t)(nl - pos) + 1;
-        const size_t prefix = strlen(COMMAND_PREFIX);
-        int is_command = want_len >= prefix && memcmp(expected, COMMAND_PREFIX, prefix) == 0;
-        int same = is_command ? have_len >= prefix && memcmp(pos, COMMAND_PREFIX, prefix) == 0
-                              : have_len == want_len && memcmp(pos, expected, want_len) == 0;
-        if (!same) {
-            char have_q[200], want_q[200];
-            quote_line(pos, have_len, have_q, sizeof have_q);
-            quote_line(expected, want_len, want_q, sizeof want_q);
-            free(data);
-            return mr_fail(MR_ERR_INVALID_ARG,
-                           "sweep file '%s' was made by another sweep: line %ld is %s, this run's is %s; not touching "
-                           "it (use another output file, or remove it)",
-                           f->path, line_number, have_q, want_q);
-        }
-        pos = nl + 1;
-        expected += want_len;
+    status = mr_text_file_match_header(f->path, WHAT, "was made by another sweep",
+                                       "use another output file, or remove it", data, size, header->text,
+                                       header->length, COMMAND_PREFIX, &rows_at, &line_number);
+    if (status != MR_OK) {
+        free(data);
+        return status;
     }
-
+    const char *pos = data + rows_at, *end = data + size;
     double source[MR_BRDF_MAX_VALUES];
     const int ns = mr_brdf_value_count(spec->source);
     while (pos < end) { /* rows */
@@ -770,7 +508,7 @@ static mr_status adopt_file(const mr_sweep_spec *spec, const strbuf *header, swe
 }
 
 /* Open (and lock) the file, fresh or resumed. */
-static mr_status open_file(const mr_sweep_spec *spec, const strbuf *header, int resume, sweep_file *f) {
+static mr_status open_file(const mr_sweep_spec *spec, const mr_strbuf *header, int resume, sweep_file *f) {
     int flags = O_RDWR | O_APPEND | O_CREAT | O_CLOEXEC | (resume ? 0 : O_EXCL);
     f->fd = open(f->path, flags, 0666);
     if (f->fd < 0) {
@@ -783,10 +521,10 @@ static mr_status open_file(const mr_sweep_spec *spec, const strbuf *header, int 
     struct stat st;
     if (fstat(f->fd, &st) != 0 || !S_ISREG(st.st_mode))
         return mr_fail(MR_ERR_INVALID_ARG, "sweep file '%s' is not a regular file", f->path);
-    mr_status status = lock_file(f->fd, f->path);
+    mr_status status = mr_text_file_lock(f->fd, f->path, WHAT);
     if (status != MR_OK) return status;
     f->size = st.st_size;
-    if (!resume) return append_line(f->fd, f->path, header->text, header->length, &f->size);
+    if (!resume) return mr_text_file_append(f->fd, f->path, WHAT, header->text, header->length, &f->size);
     return adopt_file(spec, header, f);
 }
 
@@ -795,7 +533,7 @@ static mr_status sort_file(sweep_file *f, long header_lines, int *sorted) {
     *sorted = 0;
     char *data = NULL;
     size_t size = 0;
-    mr_status status = read_all(f->fd, f->path, &data, &size);
+    mr_status status = mr_text_file_read_all(f->fd, f->path, WHAT, &data, &size);
     if (status != MR_OK) return status;
     const char **lines = calloc((size_t)f->total, sizeof *lines);
     if (lines == NULL) {
@@ -812,7 +550,7 @@ static mr_status sort_file(sweep_file *f, long header_lines, int *sorted) {
     int in_order = 1;
     long k = 0;
     // Rows were all validated (or written by us); the index is the text before the first comma. The strtol
-    // cannot run past the buffer: read_all NUL-terminates it.
+    // cannot run past the buffer: mr_text_file_read_all NUL-terminates it.
     for (const char *pos = rows; pos < data + size && k < f->total; k++) {
         long index = strtol(pos, NULL, 10);
         if (index < 0 || index >= f->total) index = 0; /* cannot happen; keeps the array in bounds */
@@ -876,6 +614,7 @@ typedef struct run_state {
     const mr_render_plan *plan;
     long run_total, run_done;
     long outcomes[MR_FIT_OUTCOME_COUNT];
+    const long *pending;       /* the samples this run computes */
     int stop;                  /* set (under the file lock) when the file fails: no new samples start */
     long failed;               /* samples whose remap failed (the others go on: their rows are worth having) */
     mr_status failure;         /* the failure to report: a file error, else the lowest failed sample's */
@@ -929,7 +668,7 @@ static void run_sample(run_state *st, long index) {
         if (status != MR_OK) {
             record_failure(st, status, index, 0);
         } else if (!st->stop) {
-            status = append_line(st->file->fd, st->file->path, line, length, &st->file->size);
+            status = mr_text_file_append(st->file->fd, st->file->path, WHAT, line, length, &st->file->size);
             if (status != MR_OK) {
                 record_failure(st, status, index, 1);
             } else {
@@ -945,37 +684,15 @@ static void run_sample(run_state *st, long index) {
     }
 }
 
+static void run_item(void *ctx, long k) {
+    run_state *st = ctx;
+    run_sample(st, st->pending[k]);
+}
+
 static mr_status run_pending(run_state *st, const long *pending, long count, int threads) {
-    mr_status locale_status = MR_OK;
-#pragma omp parallel num_threads(threads)
-    {
-#ifdef _OPENMP
-        // Samples are the unit of parallelism: renders and metrics inside a sample must not spawn teams of
-        // their own (2 x 2 threads on 2 cores only thrash). nthreads-var is per task, so this affects only
-        // the regions this thread opens from here, not the caller's settings; it also covers --threads 1,
-        // whose one-thread team is not an active level that max-active-levels would count.
-        omp_set_num_threads(1);
-#endif
-        mr_c_numeric cn;
-        mr_status entered = mr_c_numeric_enter(&cn, "sweep");
-        if (entered != MR_OK) {
-#pragma omp critical(mr_sweep_file)
-            {
-                locale_status = entered;
-#pragma omp atomic write
-                st->stop = 1;
-            }
-        }
-#pragma omp for schedule(dynamic)
-        for (long k = 0; k < count; k++) {
-            int stopping;
-#pragma omp atomic read
-            stopping = st->stop;
-            if (!stopping) run_sample(st, pending[k]);
-        }
-        if (entered == MR_OK) mr_c_numeric_leave(&cn);
-    }
-    if (locale_status != MR_OK) return mr_fail(locale_status, "sweep: cannot switch a thread to the C locale");
+    st->pending = pending;
+    mr_status status = mr_remap_run_parallel(threads, count, &st->stop, run_item, st, "sweep");
+    if (status != MR_OK) return status;
     if (st->file_failed) return mr_fail(st->failure, "%s", st->failure_message);
     if (st->failed > 0)
         return mr_fail(st->failure,
@@ -987,7 +704,7 @@ static mr_status run_pending(run_state *st, const long *pending, long count, int
 
 mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_sweep_options *opts,
                        mr_sweep_summary *out) {
-    double start = now_seconds();
+    double start = mr_now_seconds();
     mr_sweep_options defaults;
     memset(&defaults, 0, sizeof defaults);
     if (opts == NULL) opts = &defaults;
@@ -1002,7 +719,7 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
     threads = 1;
 #endif
 
-    strbuf header = {0};
+    mr_strbuf header = {0};
     mr_c_numeric cn;
     status = mr_c_numeric_enter(&cn, "sweep");
     if (status != MR_OK) return status;
@@ -1029,7 +746,7 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
         for (long i = 0; status == MR_OK && i < f.total; i++)
             if (!f.done[i]) pending[pending_count++] = i;
         if (status == MR_OK) {
-            mr_scene scene = fit_scene(spec);
+            mr_scene scene = mr_remap_file_scene(&spec->scene);
             status = mr_render_plan_create(&scene, &plan);
         }
         if (status == MR_OK) {
@@ -1061,7 +778,7 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
         out->truncated_bytes = f.truncated;
         out->sorted = sorted;
         out->threads = threads;
-        out->seconds = now_seconds() - start;
+        out->seconds = mr_now_seconds() - start;
     }
     return MR_OK;
 }

@@ -1,0 +1,182 @@
+/*
+ * direct.h — the direct remap of a spatially varying material: every texel's source parameters remapped into the
+ * target model by the image-based optimiser itself (mr_remap, remap.h), with no regression in between. It is the
+ * reference that learned transforms are judged against (`matremap convert --direct`).
+ *
+ * Main calls:
+ *   mr_direct_options o = {0};                       // zero = defaults
+ *   o.cache_path = "ggx_to_ward.cache";              // optional: answers kept across runs
+ *   mr_direct_summary s;
+ *   mr_direct_remap(mr_brdf_find("ggx"), mr_brdf_find("ward-balanced"), in, n, &o, out, outcomes, &s);
+ * `in` holds n texels, each a packed source value vector (mr_brdf_value_count(source) doubles, brdf.h); `out`
+ * receives n packed target vectors (mr_brdf_value_count(target) doubles, fixed parameters and switches included).
+ *
+ * What a texel gets:
+ *   1. Its values are clamped into each parameter's [min, max] (counted in summary->clamped; the renderer clamps
+ *      them the same way, so this is the material it shows). A value that is NaN or infinite is refused.
+ *   2. They are quantised (mr_direct_quantise) with step t = opts->tolerance (default MR_DIRECT_DEFAULT_TOLERANCE):
+ *        - a colour (an RGB parameter: diffuse, specular, F0, base colour), channel by channel in sRGB-encoded
+ *          units (IEC 61966-2-1, its curve continued above 1 for reflectances allowed beyond it):
+ *          q = decode(t * round(encode(v) / t)). So t = 1/255 keeps an 8-bit sRGB texture's texels exactly, and a
+ *          coarser step errs alike to the eye in dark and bright texels (in linear units a step of 6/255 would
+ *          be more than a dark reflectance of 0.02 and 3 % of 0.8);
+ *        - a scalar flagged MR_PARAM_LOG_SCALE with min > 0 (roughness, Phong's exponent): in log space,
+ *          q = exp(t * round(ln v / t)), a relative step of e^t - 1 (~ t), as fine as the colours' at mid grey;
+ *        - a switch (Ward's trim): kept exactly;
+ *        - any other scalar (metallic, glossiness, IOR, a scalar specular): q = t * round(v / t), an absolute
+ *          step of t in the parameter's own units;
+ *      and then clamped into [min, max] again. The quantised vector is a fixed point: quantising it gives it back.
+ *   3. Texels whose quantised vectors are equal (bit for bit) share one answer: the remap of that quantised vector,
+ *      the "unique value". So a texel's answer depends on its own value and the tolerance only, never on the
+ *      other texels it was remapped with, except through the warm start (below).
+ * The answer of a unique value is mr_remap(plan, source, q, target, &remap) in the fit scene of opts->scene, with
+ * opts->remap as options (target_values and held there say which target values are fixed), run one of two ways:
+ *   - full: exactly that call (bit-identical to calling it yourself with the same plan size, light and options);
+ *   - warm-started: the same call with remap.initial_values set to an already solved, nearby unique value's
+ *     answer (remap.h: for AUTO and JOINT one local refinement from there instead of the global grid search)
+ *     and remap.xtol raised to MR_DIRECT_WARM_XTOL.
+ *     The unique values are sorted along a Morton (Z-order) curve through their quantised coordinates and cut
+ *     into chains of opts->chain_length (default MR_DIRECT_DEFAULT_CHAIN); in each chain, in order, a value
+ *     starts from the answer of the nearest value of its chain already answered with outcome CONVERGED
+ *     (Euclidean distance in quantisation steps; the earliest in the chain on a tie; a cache hit counts as
+ *     answered); a value with no such neighbour (the first of a chain) gets a full remap. The guard: a
+ *     warm-started answer is kept only if its outcome is MR_FIT_CONVERGED and its relative RMSE is at most
+ *     MR_DIRECT_GUARD_GAIN times its seed's plus MR_DIRECT_GUARD_FLOOR (neighbours fit about equally well; a
+ *     warm start that fell into another basin does not). Otherwise the value gets a full remap, whose outcome
+ *     stands (a fallback). A warm-started answer is the full remap's minimum when both find the same basin, up
+ *     to the local fit's tolerance: on the shared texture sets within 1e-4 (largest parameter difference, alpha
+ *     relative, reflectances absolute; tests/bench_direct.c), checked within 2e-3 by tests/test_direct.c.
+ *     What a warm start cannot report: an AUTO fit's ambiguity (two minima within 1 %: LOCAL_MINIMUM) needs the
+ *     global grid, so a kept warm answer is CONVERGED where a full remap might have said LOCAL_MINIMUM.
+ *     opts->cold = 1 gives every unique value a full remap (slower; no warm start at all).
+ *
+ * Cache (opts->cache_path, optional): a text file of answers that later runs reuse. Its header says everything an
+ * answer depends on; a file whose header differs is refused, untouched (MR_ERR_INVALID_ARG naming the first
+ * differing line: use another cache file per configuration):
+ *   # matremap VERSION direct-cache
+ *   # from: SOURCE_MODEL
+ *   # to: TARGET_MODEL name=v ...                 (the target values: fixed values, switches, starts)
+ *   # remap: strategy=auto max_evaluations=400 ... [held=...]   (defaults written out: {0} = the defaults)
+ *   # scene: fit size=64 light=45 intensity=10 edge_samples=4 highlight_samples=integrated
+ *   # direct: tolerance=0.023529411764705882 start=warm|cold
+ *   <source columns>,<to_ target columns>,relative_rmse,outcome,how
+ * then one line per unique value: its quantised source vector, its target vector, the relative RMSE and outcome
+ * of its remap, and how it was found ("full" or "warm"), numbers with %.17g in the C numeric locale (they read
+ * back bit for bit). A value found in the cache is not remapped: its answer is the cached one, bit for bit (the
+ * first line for it, should a file hold two). New answers are appended as they are found, each line in one
+ * write() of O_APPEND (remap_file.h): a run killed at any moment keeps every answer written; the next run cuts
+ * a torn last line off and goes on from them. An advisory lock refuses a second process using the same file at
+ * once (MR_ERR_IO). A line that does not parse, or whose source vector is not a quantised value of this
+ * tolerance, is MR_ERR_FORMAT naming the line (the file is not touched). A missing file is created; an empty
+ * one (killed before its header) is started afresh.
+ * With a cache, a value's answer is the one of the run that first computed it: a warm start from another chain
+ * can differ from this run's own at the level of the fit's tolerance, so output can differ in the last digits
+ * between a run that found some values cached and one that did not.
+ *
+ * Determinism: without cache hits, out, outcomes and every count of the summary (but seconds) are the same, bit
+ * for bit, for any opts->threads: the chains are fixed by the input alone, each chain runs on one thread, and
+ * mr_remap is deterministic. A run whose values are all in the cache reproduces the run that wrote it exactly.
+ * Threads: chains are spread over opts->threads threads (OpenMP, dynamic); every remap runs single-threaded
+ * inside (as sweeps do, sweep.h), and no more threads are opened than there are chains with work. The progress
+ * callback is called serialised, after each unique value is answered (cache hits are reported once, at the
+ * start).
+ * Errors (nothing is printed; mr_last_error() has the message): MR_ERR_INVALID_ARG for a NULL model, a NULL
+ * in/out with n > 0, a non-finite value (naming the texel and the parameter), bad options (naming them), a
+ * foreign cache; MR_ERR_FORMAT for a corrupt cache; MR_ERR_IO for a cache that cannot be read, locked or
+ * appended to; a remap's own failure (MR_ERR_EXTERNAL, MR_ERR_NOMEM) stops the run. On any failure out and
+ * outcomes are not written (the cache keeps the answers already appended). n = 0 is MR_OK and does nothing (no
+ * cache is opened).
+ * Ownership: the caller owns every array; nothing returned needs freeing.
+ */
+#ifndef MR_DIRECT_H
+#define MR_DIRECT_H
+
+#include <stddef.h>
+
+#include "../brdf/brdf.h"
+#include "../mr_status.h"
+#include "../render/render.h"
+#include "remap.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The default quantisation step t (see the header comment for what it means per parameter), chosen from the
+ * figures of tests/bench_direct.c (docs/performance.md, "Direct remaps"): the finest step with which both 1024^2
+ * texture sets of the shared assets (Avocado, FloppyDisk, read as Ward and remapped into GGX) remap in at most
+ * 60 s on 2 cores: FloppyDisk has 21,000 distinct values at 6/255 (33,000 at 4/255, 56,000 at 2/255) and a value
+ * costs 5.5-6 ms of CPU (125 s of CPU for the set, measured on a shared machine). What the step costs in accuracy:
+ * the answers' renders differ from those of the exact texels' remaps by ~3 % relative RMSE (median; at most 9 %),
+ * a third of what a Ward -> GGX fit leaves itself (~9 %). */
+#define MR_DIRECT_DEFAULT_TOLERANCE (6.0 / 255.0)
+/* Unique values per chain (the header comment): the first of each gets a full remap, the others warm starts. */
+#define MR_DIRECT_DEFAULT_CHAIN 64
+/* A warm start's local refinement stops at steps of max(remap.xtol, MR_DIRECT_WARM_XTOL) in normalised
+ * coordinates (remap.h): a factor 1.001 in a GGX alpha, a quarter of a step of 1/255 in ln alpha; it takes a fifth
+ * fewer renders than the default 1e-6, and its answers stay as close to full remaps (tests/bench_direct.c). */
+#define MR_DIRECT_WARM_XTOL 1e-4
+/* The warm start's guard: kept while relative RMSE <= GAIN x the seed's + FLOOR. */
+#define MR_DIRECT_GUARD_GAIN 1.25
+#define MR_DIRECT_GUARD_FLOOR 0.005
+
+/* What the progress callback sees. */
+typedef struct mr_direct_progress {
+    size_t done;       /* unique values answered so far, cache hits included */
+    size_t total;      /* unique values */
+    size_t cache_hits; /* of them, found in the cache */
+} mr_direct_progress;
+
+/* Called serialised (never twice at once), on the thread that answered the value; keep it short. */
+typedef void (*mr_direct_progress_fn)(const mr_direct_progress *progress, void *user);
+
+/* Zero-initialised = defaults. */
+typedef struct mr_direct_options {
+    double tolerance;            /* quantisation step t in [1e-9, 1]; 0 = MR_DIRECT_DEFAULT_TOLERANCE */
+    mr_remap_options remap;      /* every remap's options ({0} = mr_remap_options_default()): strategy, tolerances,
+                                    target_values (fixed target values; NULL = the target's defaults) and held.
+                                    Its initial_values and threads are the direct remap's to set: must be NULL / 0 */
+    mr_fit_scene_options scene;  /* the fit scene: size 0 = MR_REMAP_DEFAULT_SIZE, light, intensity 0 = 10 */
+    int threads;                 /* threads at most; 0 = omp_get_max_threads() */
+    int chain_length;            /* unique values per chain, >= 1; 0 = MR_DIRECT_DEFAULT_CHAIN */
+    int cold;                    /* 1: no warm starts, a full remap for every unique value */
+    const char *cache_path;      /* optional cache file (header comment); NULL = none */
+    mr_direct_progress_fn progress; /* optional */
+    void *progress_user;
+} mr_direct_options;
+
+typedef struct mr_direct_summary {
+    size_t texels;                           /* n */
+    size_t clamped;                          /* texels with a value outside its parameter's range */
+    size_t unique;                           /* distinct quantised values */
+    size_t cache_hits;                       /* unique values answered by the cache */
+    size_t full;                             /* unique values answered by a full remap (chain starts, fallbacks,
+                                                every one with cold) */
+    size_t warm;                             /* unique values answered by a warm start the guard kept */
+    size_t fallbacks;                        /* warm starts the guard refused (their value then had a full
+                                                remap: counted in `full` too) */
+    size_t remaps;                           /* remaps run: full + warm + fallbacks */
+    size_t outcomes[MR_FIT_OUTCOME_COUNT];   /* unique values by the outcome of their answer (hits included) */
+    long renders;                            /* target renders of the remaps run (mr_remap_result.renders) */
+    int threads;                             /* threads used (0: nothing was remapped) */
+    double seconds;                          /* wall time of the call */
+} mr_direct_summary;
+
+/* Quantise one packed source vector (mr_brdf_value_count(source) doubles) with step `tolerance` (0 = default)
+ * into q[] as the header comment says (clamped into range, then quantised): the value whose remap a texel of
+ * these values gets. in and q may be the same array. MR_ERR_INVALID_ARG for a NULL argument, a tolerance outside
+ * [1e-9, 1], or a value that is NaN or infinite (naming the parameter). */
+mr_status mr_direct_quantise(const mr_brdf_model *source, double tolerance, const double *in, double *q);
+
+/* Remap n texels from `source` to `target` as the header comment says. in: n * mr_brdf_value_count(source)
+ * doubles; out: n * mr_brdf_value_count(target) doubles; outcomes (optional): n outcomes, each texel's answer's;
+ * summary (optional). opts may be NULL (defaults). */
+mr_status mr_direct_remap(const mr_brdf_model *source, const mr_brdf_model *target, const double *in, size_t n,
+                          const mr_direct_options *opts, double *out, mr_fit_outcome *outcomes,
+                          mr_direct_summary *summary);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MR_DIRECT_H */
