@@ -89,4 +89,25 @@ check "the chain equals its steps" awk -v a="$chained" -v b="$stepwise" 'BEGIN {
 expect "convert: no chain" 2 "no chain of transforms from as to ward" -- \
     "$bin" convert --from as --to ward alpha=0.1 --transforms "$tmp/mrt"
 
+# --direct: the image-based optimiser on every distinct texel; a cache answers a second run with the same bits.
+oiiotool --pattern fill:top=0.03:bottom=0.3 16x8 1 -d float -o "$tmp/r16.exr" >/dev/null 2>&1
+oiiotool --pattern fill:left=0.05,0.1,0.02:right=0.2,0.15,0.1 16x8 3 -d uint8 -o "$tmp/s16.png" >/dev/null 2>&1
+expect "convert --direct" 0 "by direct remaps, 16x8 = 128 texels" -- "$bin" convert --from ward --to ggx \
+    alpha="$tmp/r16.exr" specular="$tmp/s16.png" diffuse=0 --direct --size 32 --cache "$tmp/d.cache" -o "$tmp/d1_"
+check "the direct summary counts distinct values and remaps" grep -qE "[0-9]+ distinct values .* 0 from the cache" \
+    "$tmp/err"
+expect "convert --direct again, from the cache" 0 "from the cache" -- "$bin" convert --from ward --to ggx \
+    alpha="$tmp/r16.exr" specular="$tmp/s16.png" diffuse=0 --direct --size 32 --cache "$tmp/d.cache" -o "$tmp/d2_"
+check "every value came from the cache" grep -qE "([0-9]+) distinct values \(tolerance [0-9.]+\): \1 from the cache" \
+    "$tmp/err"
+check "cached answers are the same bits" cmp -s "$tmp/d1_f0.exr" "$tmp/d2_f0.exr"
+expect "convert --direct: a cache of another scene is refused" 2 "d.cache" -- "$bin" convert --from ward --to ggx \
+    alpha="$tmp/r16.exr" --direct --size 48 --cache "$tmp/d.cache" -o "$tmp/d3_"
+expect "convert: --tolerance without --direct" 1 "go with --direct" -- "$bin" convert --from ward --to ggx \
+    alpha=0.1 --transform "$tmp/wg.mrt" --tolerance 0.01
+# The learned transform against the direct reference on the same texels: close inside the training domain.
+"$bin" convert --from ward --to ggx alpha="$tmp/r16.exr" specular="$tmp/s16.png" diffuse=0 --transform "$tmp/wg.mrt" \
+    -o "$tmp/l_" >/dev/null 2>&1
+check "learned alpha within 0.02 of direct alpha" bash -c \
+    "oiiotool --diff --fail 0.02 --failpercent 0 '$tmp/l_alpha.exr' '$tmp/d1_alpha.exr' >/dev/null"
 finish

@@ -19,7 +19,8 @@
 
 static void print_help(void) {
     printf("Usage: matremap convert --from MODEL --to MODEL NAME=FILE|VALUE ...\n"
-           "                        (--transform T.mrt [--transform T2.mrt ...] | --transforms DIR [--via MODEL,...])\n"
+           "                        (--transform T.mrt [--transform T2.mrt ...] | --transforms DIR [--via MODEL,...] |\n"
+           "                         --direct [--tolerance T] [--cache FILE] [--size N] [--light 45|frontal])\n"
            "                        -o PREFIX [options]\n"
            "\n"
            "Converts a material of one BRDF model into another, texel by texel: every NAME=FILE gives a parameter of\n"
@@ -33,12 +34,22 @@ static void print_help(void) {
            "  --transform T.mrt   a transform made by 'matremap learn'; repeat it to chain transforms in order\n"
            "  --transforms DIR    every *.mrt in DIR: the chain from --from to --to with the fewest hops (then the\n"
            "                      least held-out error) is found; --via MODEL[,MODEL...] makes it pass those models\n"
+           "  --direct            no regression: every distinct texel value, quantised to --tolerance, remapped by the\n"
+           "                      image-based optimiser itself (as 'matremap remap'), each warm-started from a solved\n"
+           "                      neighbour; the reference the learned transforms are judged against. Slow: seconds\n"
+           "                      to minutes per texture set (progress on stderr)\n"
+           "  --tolerance T       --direct: quantisation step, colours in sRGB-encoded units, roughness in ln units\n"
+           "                      (default 6/255 = 0.0235; 1/255 keeps 8-bit maps exact and costs more)\n"
+           "  --cache FILE        --direct: answers kept across runs (created if missing; refused if it was made\n"
+           "                      for other models, options or scene)\n"
+           "  --size N, --light L --direct: the fit scene (default 64, 45; as 'matremap remap')\n"
            "\n"
            "Outputs: PREFIX<param>.exr (linear float; --format png: 8-bit, colour parameters sRGB-encoded) for every\n"
            "parameter of the target model (the folder of PREFIX is made if missing), the first input map's alpha\n"
            "carried into RGB outputs, and\n"
            "PREFIXflags.png: red where a texel lay outside a learned transform's training domain (extrapolated:\n"
-           "the paper's Fig. 19 failure), green where an output left its parameter's range and was clamped, blue\n"
+           "the paper's Fig. 19 failure) or, with --direct, where its fit did not converge (under-resolved,\n"
+           "at-bound, unreachable), green where an output left its parameter's range and was clamped, blue\n"
            "where an input was clamped or not finite. PREFIX may name a folder ('out/'). No output may be an input.\n"
            "\n"
            "Options:\n"
@@ -76,6 +87,20 @@ static const char *as_material_assignment(const char *arg, char **owned) {
     memcpy(copy + head + 1, eq + 1, n - head + 1);
     *owned = copy;
     return copy;
+}
+
+typedef struct progress_state {
+    int draw;
+    double started;
+} progress_state;
+
+static void draw_progress(const mr_direct_progress *p, void *user) {
+    progress_state *s = user;
+    if (!s->draw || p->total == 0) return;
+    const double elapsed = cli_now() - s->started, fraction = (double)p->done / (double)p->total;
+    fprintf(stderr, "\rconvert --direct: %zu/%zu distinct values (%zu from the cache)  %.0f s", p->done, p->total,
+            p->cache_hits, elapsed);
+    if (fraction > 0.02) fprintf(stderr, ", ETA %.0f s ", elapsed * (1.0 - fraction) / fraction);
 }
 
 typedef struct loaded {
@@ -159,7 +184,8 @@ int cmd_convert(int argc, char **argv) {
     const char *from = NULL, *to = NULL, *prefix = NULL, *format = "exr", *dir = NULL, *via_list = NULL;
     const char *assignments[CLI_MAX_ASSIGNMENTS], *transform_paths[MR_LEARNED_MAX_HOPS];
     char *owned[CLI_MAX_ASSIGNMENTS];
-    int assignment_count = 0, transform_count = 0, json = 0, threads = 0;
+    int assignment_count = 0, transform_count = 0, json = 0, threads = 0, direct = 0;
+    mr_direct_options dopts = {0};
     for (int i = 1; i < argc; i++) {
         const char *v = NULL;
         int r;
@@ -195,6 +221,20 @@ int cmd_convert(int argc, char **argv) {
             format = v;
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--threads", &v)) != 0) {
             if (r < 0 || !cli_parse_int(COMMAND, "--threads", v, 1, 1024, &threads)) return CLI_EXIT_USAGE;
+        } else if (strcmp(argv[i], "--direct") == 0) {
+            direct = 1;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--tolerance", &v)) != 0) {
+            if (r < 0 || !cli_parse_double(COMMAND, "--tolerance", v, 1e-9, 1.0, &dopts.tolerance))
+                return CLI_EXIT_USAGE;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--cache", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            dopts.cache_path = v;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--size", &v)) != 0) {
+            if (r < 0 || !cli_parse_int(COMMAND, "--size", v, 8, 4096, &dopts.scene.size)) return CLI_EXIT_USAGE;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--light", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            if (mr_fit_light_from_name(v, &dopts.scene.light) != MR_OK)
+                return cli_usage_error(COMMAND, "--light '%s': expected 45 or frontal", v);
         } else if (strcmp(argv[i], "--json") == 0) {
             json = 1;
         } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
@@ -208,8 +248,10 @@ int cmd_convert(int argc, char **argv) {
         }
     }
     if (from == NULL || to == NULL) return cli_usage_error(COMMAND, "give --from MODEL and --to MODEL");
-    if ((transform_count > 0) + (dir != NULL) != 1)
-        return cli_usage_error(COMMAND, "give --transform T.mrt (repeatable) or --transforms DIR");
+    if ((transform_count > 0) + (dir != NULL) + direct != 1)
+        return cli_usage_error(COMMAND, "give one of --transform T.mrt (repeatable), --transforms DIR or --direct");
+    if (!direct && (dopts.tolerance != 0.0 || dopts.cache_path || dopts.scene.size || dopts.scene.light))
+        return cli_usage_error(COMMAND, "--tolerance, --cache, --size and --light go with --direct");
     if (via_list != NULL && dir == NULL) return cli_usage_error(COMMAND, "--via needs --transforms DIR");
     const mr_brdf_model *source = mr_brdf_find(from), *target = source ? mr_brdf_find(to) : NULL;
     if (source == NULL || target == NULL) return cli_fail(COMMAND, MR_ERR_INVALID_ARG);
@@ -226,7 +268,9 @@ int cmd_convert(int argc, char **argv) {
         loaded_free(&l);
         return code;
     }
-    if (dir != NULL) {
+    if (direct) {
+        // no transforms to find
+    } else if (dir != NULL) {
         const mr_brdf_model *via[MR_LEARNED_MAX_HOPS];
         int via_count = 0;
         char list[1024];
@@ -260,7 +304,12 @@ int cmd_convert(int argc, char **argv) {
     const mr_learned *chain[MR_LEARNED_MAX_HOPS];
     for (int h = 0; h < hops; h++) chain[h] = l.all[path[h]];
     mr_transform_kind *kind = NULL;
-    mr_status status = mr_learned_kind_create(chain, hops, &kind);
+    progress_state progress = {isatty(STDERR_FILENO) && !json, cli_now()};
+    dopts.threads = threads;
+    dopts.progress = draw_progress;
+    dopts.progress_user = &progress;
+    mr_status status = direct ? mr_direct_kind_create(source, target, &dopts, &kind)
+                              : mr_learned_kind_create(chain, hops, &kind);
     if (status != MR_OK) {
         loaded_free(&l);
         return cli_fail(COMMAND, status);
@@ -331,6 +380,7 @@ int cmd_convert(int argc, char **argv) {
         const double t0 = cli_now();
         status = mr_transform_convert_maps(t, in, out, &flags);
         convert_seconds = cli_now() - t0;
+        if (progress.draw && direct) fprintf(stderr, "\r\033[K");
         if (status != MR_OK) code = cli_fail(COMMAND, status);
     }
     size_t n = 0, counts[4] = {0};
@@ -340,7 +390,7 @@ int cmd_convert(int argc, char **argv) {
         height = out[0]->height;
         n = (size_t)width * (size_t)height;
         for (size_t i = 0; i < n; i++) {
-            counts[0] += (flags[i] & MR_WF_EXTRAPOLATED) != 0;
+            counts[0] += (flags[i] & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED)) != 0;
             counts[1] += (flags[i] & MR_WF_CLAMPED_OUTPUT) != 0;
             counts[2] += (flags[i] & (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT)) != 0;
             counts[3] += flags[i] != 0;
@@ -356,7 +406,7 @@ int cmd_convert(int argc, char **argv) {
         } else {
             status = mr_image_create(width, height, 3, &image);
             for (size_t i = 0; status == MR_OK && i < n; i++) {
-                image->pixels[3 * i] = (flags[i] & MR_WF_EXTRAPOLATED) ? 1.0f : 0.0f;
+                image->pixels[3 * i] = (flags[i] & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED)) ? 1.0f : 0.0f;
                 image->pixels[3 * i + 1] = (flags[i] & MR_WF_CLAMPED_OUTPUT) ? 1.0f : 0.0f;
                 image->pixels[3 * i + 2] = (flags[i] & (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT)) ? 1.0f : 0.0f;
             }
@@ -366,15 +416,31 @@ int cmd_convert(int argc, char **argv) {
         if (status != MR_OK) code = cli_fail(COMMAND, status);
     }
     const double seconds = cli_now() - started;
+    const mr_direct_summary *ds = direct && code == CLI_EXIT_OK ? mr_direct_kind_summary(kind) : NULL;
+    if (ds != NULL && !json)
+        fprintf(stderr, "matremap convert: --direct: %zu distinct values (tolerance %.4g): %zu from the cache, %zu full "
+                        "remaps, %zu warm-started (%zu fell back to full), %ld renders; outcomes: %zu converged, %zu "
+                        "under-resolved, %zu at-bound, %zu unreachable, %zu local-minimum\n",
+                ds->unique, dopts.tolerance > 0.0 ? dopts.tolerance : MR_DIRECT_DEFAULT_TOLERANCE, ds->cache_hits,
+                ds->full, ds->warm, ds->fallbacks, ds->renders, ds->outcomes[MR_FIT_CONVERGED],
+                ds->outcomes[MR_FIT_UNDER_RESOLVED], ds->outcomes[MR_FIT_AT_BOUND], ds->outcomes[MR_FIT_UNREACHABLE],
+                ds->outcomes[MR_FIT_LOCAL_MINIMUM]);
     if (code == CLI_EXIT_OK) {
         if (json) {
-            printf("{\"source\": \"%s\", \"target\": \"%s\", \"chain\": [", source->name, target->name);
+            printf("{\"source\": \"%s\", \"target\": \"%s\", \"method\": \"%s\", ", source->name, target->name,
+                   direct ? "direct" : "learned");
+            if (ds != NULL)
+                printf("\"direct\": {\"unique\": %zu, \"cache_hits\": %zu, \"full\": %zu, \"warm\": %zu, "
+                       "\"fallbacks\": %zu, \"renders\": %ld, \"converged\": %zu}, ",
+                       ds->unique, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->renders,
+                       ds->outcomes[MR_FIT_CONVERGED]);
+            printf("\"chain\": [");
             for (int h = 0; h < hops; h++) {
                 printf("%s", h ? ", " : "");
                 cli_json_string(stdout, l.paths[path[h]]);
             }
             printf("], \"width\": %d, \"height\": %d, \"texels\": %zu, \"seconds\": {\"convert\": %.6f, \"total\": "
-                   "%.6f}, \"flags\": {\"extrapolated\": %zu, \"clamped_output\": %zu, \"clamped_input\": %zu, "
+                   "%.6f}, \"flags\": {\"extrapolated_or_unconverged\": %zu, \"clamped_output\": %zu, \"clamped_input\": %zu, "
                    "\"any\": %zu}, \"outputs\": [",
                    width, height, n, convert_seconds, seconds, counts[0], counts[1], counts[2], counts[3]);
             for (int j = 0; any_map && j <= out_count; j++) {
@@ -404,10 +470,16 @@ int cmd_convert(int argc, char **argv) {
                         counts[1] ? "an output was clamped into its range " : "",
                         counts[2] ? "an input was clamped or not finite" : "");
         } else {
-            printf("matremap convert: %s -> %s through %d transform%s, %dx%d = %zu texels in %.2f s (convert %.3f "
-                   "s): %zu extrapolated (outside the training domain), %zu clamped outputs, %zu clamped inputs\n",
-                   source->name, target->name, hops, hops == 1 ? "" : "s", width, height, n, seconds, convert_seconds,
-                   counts[0], counts[1], counts[2]);
+            if (direct)
+                printf("matremap convert: %s -> %s by direct remaps, %dx%d = %zu texels in %.2f s (convert %.3f s): "
+                       "%zu not converged, %zu clamped outputs, %zu clamped inputs\n",
+                       source->name, target->name, width, height, n, seconds, convert_seconds, counts[0], counts[1],
+                       counts[2]);
+            else
+                printf("matremap convert: %s -> %s through %d transform%s, %dx%d = %zu texels in %.2f s (convert %.3f "
+                       "s): %zu extrapolated (outside the training domain), %zu clamped outputs, %zu clamped inputs\n",
+                       source->name, target->name, hops, hops == 1 ? "" : "s", width, height, n, seconds,
+                       convert_seconds, counts[0], counts[1], counts[2]);
             fprintf(stderr, "matremap convert: wrote");
             for (int j = 0; j <= out_count; j++) fprintf(stderr, " %s", names[j]);
             fprintf(stderr, "\n");
@@ -417,7 +489,10 @@ int cmd_convert(int argc, char **argv) {
     free(flags);
     mr_transform_free(t);
     mr_material_free(m);
-    mr_learned_kind_free(kind);
+    if (direct)
+        mr_direct_kind_free(kind);
+    else
+        mr_learned_kind_free(kind);
     loaded_free(&l);
     return code;
 }

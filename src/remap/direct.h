@@ -96,6 +96,7 @@
 #include "../brdf/brdf.h"
 #include "../mr_status.h"
 #include "../render/render.h"
+#include "../transform/transform.h"
 #include "remap.h"
 
 #ifdef __cplusplus
@@ -174,6 +175,23 @@ mr_status mr_direct_quantise(const mr_brdf_model *source, double tolerance, cons
 mr_status mr_direct_remap(const mr_brdf_model *source, const mr_brdf_model *target, const double *in, size_t n,
                           const mr_direct_options *opts, double *out, mr_fit_outcome *outcomes,
                           mr_direct_summary *summary);
+
+/* Flag of a texel whose direct answer is not a converged fit (under-resolved, at-bound, unreachable or a local
+ * minimum), beside workflow.h's mr_wf_flag bits and learned.h's. */
+enum { MR_WF_UNCONVERGED = 1u << 6 };
+
+/* A transform kind (transform.h) that converts texture sets by mr_direct_remap with `opts` (copied; its cache path
+ * and progress callback are borrowed and must outlive the kind): inputs every parameter of `source` (optional: a
+ * missing map is the default), outputs every parameter of `target`. Not PER_TEXEL: the direct remap deduplicates
+ * (quantised) values itself, over the whole set. A non-finite input texel is read as its parameter's minimum and
+ * flagged MR_WF_NONFINITE_INPUT (mr_direct_remap itself refuses them), one outside its range MR_WF_CLAMPED_INPUT, a
+ * texel whose answer did not converge MR_WF_UNCONVERGED. One conversion at a time per kind (it keeps the last
+ * summary: mr_direct_kind_summary). Freed by mr_direct_kind_free. */
+mr_status mr_direct_kind_create(const mr_brdf_model *source, const mr_brdf_model *target, const mr_direct_options *opts,
+                                mr_transform_kind **out);
+/* The summary of the kind's last conversion (zeroed before the first). */
+const mr_direct_summary *mr_direct_kind_summary(const mr_transform_kind *kind);
+void mr_direct_kind_free(mr_transform_kind *kind);
 
 #ifdef __cplusplus
 }
