@@ -18,51 +18,52 @@
 #define MAX_TRANSFORMS 256
 
 static void print_help(void) {
-    printf("Usage: matremap convert --from MODEL --to MODEL NAME=FILE|VALUE ...\n"
-           "                        (--transform T.mrt [--transform T2.mrt ...] | --transforms DIR [--via MODEL,...] |\n"
-           "                         --direct [--tolerance T] [--cache FILE] [--size N] [--light 45|frontal])\n"
-           "                        -o PREFIX [options]\n"
-           "\n"
-           "Converts a material of one BRDF model into another, texel by texel: every NAME=FILE gives a parameter of\n"
-           "the source model as a texture map (any format the tool reads; FILE:r|g|b|a picks one channel for a\n"
-           "one-channel parameter; 8/16-bit colour maps are sRGB-decoded, everything else is read as it is),\n"
-           "NAME=VALUE (or NAME=R,G,B) a constant; parameters not given keep the model's defaults ('matremap models\n"
-           "MODEL' lists them). Maps must share one size; constants broadcast. With constants only, the one texel is\n"
-           "converted and printed as 'MODEL name=value ...'.\n"
-           "\n"
-           "How:\n"
-           "  --transform T.mrt   a transform made by 'matremap learn'; repeat it to chain transforms in order\n"
-           "  --transforms DIR    every *.mrt in DIR: the chain from --from to --to with the fewest hops (then the\n"
-           "                      least held-out error) is found; --via MODEL[,MODEL...] makes it pass those models\n"
-           "  --direct            no regression: every distinct texel value, quantised to --tolerance, remapped by the\n"
-           "                      image-based optimiser itself (as 'matremap remap'), each warm-started from a solved\n"
-           "                      neighbour; the reference the learned transforms are judged against. Slow: seconds\n"
-           "                      to minutes per texture set (progress on stderr)\n"
-           "  --tolerance T       --direct: quantisation step, colours in sRGB-encoded units, roughness in ln units\n"
-           "                      (default 6/255 = 0.0235; 1/255 keeps 8-bit maps exact and costs more)\n"
-           "  --cache FILE        --direct: answers kept across runs (created if missing; refused if it was made\n"
-           "                      for other models, options or scene)\n"
-           "  --size N, --light L --direct: the fit scene (default 64, 45; as 'matremap remap')\n"
-           "\n"
-           "Outputs: PREFIX<param>.exr (linear float; --format png: 8-bit, colour parameters sRGB-encoded) for every\n"
-           "parameter of the target model (the folder of PREFIX is made if missing), the first input map's alpha\n"
-           "carried into RGB outputs, and\n"
-           "PREFIXflags.png: red where a texel lay outside a learned transform's training domain (extrapolated:\n"
-           "the paper's Fig. 19 failure) or, with --direct, where its fit did not converge (under-resolved,\n"
-           "at-bound, unreachable), green where an output left its parameter's range and was clamped, blue\n"
-           "where an input was clamped or not finite. PREFIX may name a folder ('out/'). No output may be an input.\n"
-           "\n"
-           "Options:\n"
-           "  --format exr|png    output format (default exr)\n"
-           "  --threads T         threads (default: automatic; the result does not depend on it)\n"
-           "  --json              the summary as JSON on stdout\n"
-           "  --help              this text\n"
-           "\n"
-           "Examples:\n"
-           "  matremap convert --from ward --to ggx alpha=@rough.exr specular=@spec.png diffuse=@diff.png \\\n"
-           "                   --transform ward_ggx.mrt -o out/ggx_\n"
-           "  matremap convert --from blender-ward --to ggx specular=0.1 rms=0.2 --transforms transforms/ \\\n"
-           "                   --via ward\n");
+    printf(
+        "Usage: matremap convert --from MODEL --to MODEL NAME=FILE|VALUE ...\n"
+        "                        (--transform T.mrt [--transform T2.mrt ...] | --transforms DIR [--via MODEL,...] |\n"
+        "                         --direct [--tolerance T] [--cache FILE] [--size N] [--light 45|frontal])\n"
+        "                        -o PREFIX [options]\n"
+        "\n"
+        "Converts a material of one BRDF model into another, texel by texel: every NAME=FILE gives a parameter of\n"
+        "the source model as a texture map (any format the tool reads; FILE:r|g|b|a picks one channel for a\n"
+        "one-channel parameter; 8/16-bit colour maps are sRGB-decoded, everything else is read as it is),\n"
+        "NAME=VALUE (or NAME=R,G,B) a constant; parameters not given keep the model's defaults ('matremap models\n"
+        "MODEL' lists them). Maps must share one size; constants broadcast. With constants only, the one texel is\n"
+        "converted and printed as 'MODEL name=value ...'.\n"
+        "\n"
+        "How:\n"
+        "  --transform T.mrt   a transform made by 'matremap learn'; repeat it to chain transforms in order\n"
+        "  --transforms DIR    every *.mrt in DIR: the chain from --from to --to with the fewest hops (then the\n"
+        "                      least held-out error) is found; --via MODEL[,MODEL...] makes it pass those models\n"
+        "  --direct            no regression: every distinct texel value, quantised to --tolerance, remapped by the\n"
+        "                      image-based optimiser itself (as 'matremap remap'), each warm-started from a solved\n"
+        "                      neighbour; the reference the learned transforms are judged against. Slow: seconds\n"
+        "                      to minutes per texture set (progress on stderr)\n"
+        "  --tolerance T       --direct: quantisation step, colours in sRGB-encoded units, roughness in ln units\n"
+        "                      (default 6/255 = 0.0235; 1/255 keeps 8-bit maps exact and costs more)\n"
+        "  --cache FILE        --direct: answers kept across runs (created if missing; refused if it was made\n"
+        "                      for other models, options or scene)\n"
+        "  --size N, --light L --direct: the fit scene (default 64, 45; as 'matremap remap')\n"
+        "\n"
+        "Outputs: PREFIX<param>.exr (linear float; --format png: 8-bit, colour parameters sRGB-encoded) for every\n"
+        "parameter of the target model (the folder of PREFIX is made if missing), the first input map's alpha\n"
+        "carried into RGB outputs, and\n"
+        "PREFIXflags.png: red where a texel lay outside a learned transform's training domain (extrapolated:\n"
+        "the paper's Fig. 19 failure) or, with --direct, where its fit did not converge (under-resolved,\n"
+        "at-bound, unreachable), green where an output left its parameter's range and was clamped, blue\n"
+        "where an input was clamped or not finite. PREFIX may name a folder ('out/'). No output may be an input.\n"
+        "\n"
+        "Options:\n"
+        "  --format exr|png    output format (default exr)\n"
+        "  --threads T         threads (default: automatic; the result does not depend on it)\n"
+        "  --json              the summary as JSON on stdout\n"
+        "  --help              this text\n"
+        "\n"
+        "Examples:\n"
+        "  matremap convert --from ward --to ggx alpha=@rough.exr specular=@spec.png diffuse=@diff.png \\\n"
+        "                   --transform ward_ggx.mrt -o out/ggx_\n"
+        "  matremap convert --from blender-ward --to ggx specular=0.1 rms=0.2 --transforms transforms/ \\\n"
+        "                   --via ward\n");
 }
 
 static int same_file(const char *a, const char *b) {
@@ -418,9 +419,10 @@ int cmd_convert(int argc, char **argv) {
     const double seconds = cli_now() - started;
     const mr_direct_summary *ds = direct && code == CLI_EXIT_OK ? mr_direct_kind_summary(kind) : NULL;
     if (ds != NULL && !json)
-        fprintf(stderr, "matremap convert: --direct: %zu distinct values (tolerance %.4g): %zu from the cache, %zu full "
-                        "remaps, %zu warm-started (%zu fell back to full), %ld renders; outcomes: %zu converged, %zu "
-                        "under-resolved, %zu at-bound, %zu unreachable, %zu local-minimum\n",
+        fprintf(stderr,
+                "matremap convert: --direct: %zu distinct values (tolerance %.4g): %zu from the cache, %zu full "
+                "remaps, %zu warm-started (%zu fell back to full), %ld renders; outcomes: %zu converged, %zu "
+                "under-resolved, %zu at-bound, %zu unreachable, %zu local-minimum\n",
                 ds->unique, dopts.tolerance > 0.0 ? dopts.tolerance : MR_DIRECT_DEFAULT_TOLERANCE, ds->cache_hits,
                 ds->full, ds->warm, ds->fallbacks, ds->renders, ds->outcomes[MR_FIT_CONVERGED],
                 ds->outcomes[MR_FIT_UNDER_RESOLVED], ds->outcomes[MR_FIT_AT_BOUND], ds->outcomes[MR_FIT_UNREACHABLE],
@@ -440,7 +442,8 @@ int cmd_convert(int argc, char **argv) {
                 cli_json_string(stdout, l.paths[path[h]]);
             }
             printf("], \"width\": %d, \"height\": %d, \"texels\": %zu, \"seconds\": {\"convert\": %.6f, \"total\": "
-                   "%.6f}, \"flags\": {\"extrapolated_or_unconverged\": %zu, \"clamped_output\": %zu, \"clamped_input\": %zu, "
+                   "%.6f}, \"flags\": {\"extrapolated_or_unconverged\": %zu, \"clamped_output\": %zu, "
+                   "\"clamped_input\": %zu, "
                    "\"any\": %zu}, \"outputs\": [",
                    width, height, n, convert_seconds, seconds, counts[0], counts[1], counts[2], counts[3]);
             for (int j = 0; any_map && j <= out_count; j++) {
