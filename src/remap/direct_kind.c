@@ -46,7 +46,8 @@ static mr_status direct_apply(const mr_transform *t, const mr_transform_batch *b
             }
         b->flags[i] = f;
     }
-    if (status == MR_OK) status = mr_direct_remap(dk->source, dk->target, in, n, &dk->opts, out, outcomes, &dk->summary);
+    if (status == MR_OK)
+        status = mr_direct_remap(dk->source, dk->target, in, n, &dk->opts, out, outcomes, &dk->summary);
     for (size_t i = 0; status == MR_OK && i < n; i++) {
         size_t k = 0;
         for (int s = 0; s < kind->output_count; s++)
