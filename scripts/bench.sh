@@ -4,7 +4,7 @@
 # docs/rendering.md (bench:envlight, bench:mesh, bench:reflection). Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
-# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|png|gltf|remap|remap-processes|direct]
+# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|png|gltf|remap|remap-processes|direct|learn]
 #   --only NAME runs one section and rewrites only its markers (the full run takes long; sections written as
 #   functions below can be run alone). From make: make bench BENCH_ARGS="--only report-accuracy".
 set -euo pipefail
@@ -403,6 +403,82 @@ bench_direct() {
     } > "$work/direct.md"
 }
 
+# What accuracy costs for learned transforms (docs/performance.md, bench:learn): the paper's Mitsuba Ward -> GGX on
+# the Avocado spec-gloss set read as a Ward SVBRDF (tests/bench_direct.c's mapping: diffuse and specular as stored,
+# alpha = (1 - glossiness)^2), 1024^2. Sweeps of growing size (alpha x grey specular grids, diffuse held at 0),
+# each learned by every method; per method and sweep: the sweep's time, training time, conversion throughput of the
+# whole set on 2 threads (M texels/s: the convert step alone, from --json), the share of texels outside the training
+# domain, and the mean absolute difference of alpha and F0 from `convert --direct` (the reference) on the same set.
+bench_learn() {
+    echo
+    echo "== learned transforms: sweep size, training time, throughput, error against --direct (ward -> ggx)"
+    local dir="$shared/assets/specgloss/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness"
+    local out="$work/learn" table="$work/learn.md"
+    if [ ! -d "$dir" ]; then
+        echo "(no assets at $dir: the learned-transform section was skipped)"
+        echo "Learned transforms skipped: ../shared/assets was not found in this run." > "$table"
+        return 0
+    fi
+    rm -rf "$out" && mkdir -p "$out"
+    oiiotool "$dir/Avocado_diffuse.png" --ch R,G,B --resize 1024x1024 -d uint8 -o "$out/diffuse.png"
+    oiiotool "$dir/Avocado_specularGlossiness.png" --ch R,G,B --resize 1024x1024 -d uint8 -o "$out/specular.png"
+    oiiotool "$dir/Avocado_specularGlossiness.png" --ch A --resize 1024x1024 --mulc -1 --addc 1 --powc 2 \
+        --maxc 0.0001 -d float -o "$out/alpha.exr"
+    local maps=(alpha="$out/alpha.exr" specular="$out/specular.png" diffuse="$out/diffuse.png")
+    local s e
+    s=$(date +%s%N)
+    "$bin" convert --from ward --to ggx "${maps[@]}" --direct -o "$out/direct_" 2>"$out/direct.log" >/dev/null
+    e=$(date +%s%N)
+    local direct_s
+    direct_s=$(awk -v a="$s" -v b="$e" 'BEGIN {printf "%.1f", (b - a) / 1e9}')
+    echo "convert --direct: $direct_s s ($(grep -o '[0-9]* distinct values' "$out/direct.log"))"
+    local grids=("5 2" "10 3" "20 5" "30 8")
+    [ "$quick" = --quick ] && grids=("5 2" "10 3")
+    {
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'))."
+        echo "The Avocado spec-gloss set at 1024² read as a Mitsuba Ward SVBRDF (alpha = (1 - glossiness)², diffuse and"
+        echo "specular as stored), converted to GGX; the reference is \`convert --direct\` (default tolerance 6/255,"
+        echo "$(grep -o '[0-9]* distinct values' "$out/direct.log"), $direct_s s on 2 cores). Sweeps: ward alpha 0.005–0.8 (log)"
+        echo "× grey specular 0.02–0.5, diffuse 0, the default fit scene (64², 45°). Throughput: the conversion alone"
+        echo "(repeated texels converted once), 2 threads. Errors: mean |learned − direct| over the set's texels."
+        echo
+        echo "| sweep (alpha × specular) | sweep s | method | train s | held-out RMSE alpha / F0 | M texels/s | extrapolated | mean abs. error vs direct: alpha / F0 |"
+        echo "|---|---:|---|---:|---|---:|---:|---|"
+    } > "$table"
+    for g in "${grids[@]}"; do
+        read -r na ns <<<"$g"
+        local csv="$out/sweep_${na}x${ns}.csv"
+        s=$(date +%s%N)
+        "$bin" sweep --from ward diffuse=0 --to ggx diffuse=0 --grid alpha=0.005:0.8:"$na":log specular=0.02:0.5:"$ns" \
+            -o "$csv" >/dev/null 2>&1
+        e=$(date +%s%N)
+        local sweep_s
+        sweep_s=$(awk -v a="$s" -v b="$e" 'BEGIN {printf "%.1f", (b - a) / 1e9}')
+        for method in parametric svr mlp; do
+            local mrt="$out/${method}_${na}x${ns}.mrt" json="$out/${method}_${na}x${ns}.json"
+            "$bin" learn "$csv" --method "$method" -o "$mrt" --json > "$json.learn" 2>/dev/null || continue
+            "$bin" convert --from ward --to ggx "${maps[@]}" --transform "$mrt" -o "$out/${method}_${na}x${ns}_" \
+                --json > "$json" 2>/dev/null || continue
+            local ea ef
+            ea=$(oiiotool --diff "$out/${method}_${na}x${ns}_alpha.exr" "$out/direct_alpha.exr" 2>/dev/null \
+                | awk '/Mean error/ {print $4}')
+            ef=$(oiiotool --diff "$out/${method}_${na}x${ns}_f0.exr" "$out/direct_f0.exr" 2>/dev/null \
+                | awk '/Mean error/ {print $4}')
+            python3 - "$json.learn" "$json" "$na" "$ns" "$sweep_s" "$method" "$ea" "$ef" <<'PY' | tee -a "$table"
+import json, sys
+learn, conv = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
+na, ns, sweep_s, method, ea, ef = sys.argv[3:9]
+r = learn["validation_rmse"]
+rate = conv["texels"] / conv["seconds"]["convert"] / 1e6
+ext = 100.0 * conv["flags"]["extrapolated_or_unconverged"] / conv["texels"]
+print(f"| {na} × {ns} = {int(na) * int(ns)} | {sweep_s} | {method} | {learn['seconds']:.2f} | "
+      f"{r.get('alpha', float('nan')):.4f} / {r.get('f0', float('nan')):.4f} | {rate:.1f} | {ext:.1f} % | "
+      f"{float(ea):.4f} / {float(ef):.4f} |")
+PY
+        done
+    done
+}
+
 # Remaps as users run them (docs/performance.md, bench:remap-processes): whole `matremap remap` processes at the
 # default size, alone and two started together, with the default (automatic) threads, with --threads 2 (a team for
 # every render, as before issue 13), and with OMP_NUM_THREADS=1 (the old workaround). Median of 21 runs each; the
@@ -634,6 +710,10 @@ if [ -n "$only" ]; then
             bench_direct
             replace_section direct "$work/direct.md"
             ;;
+        learn)
+            bench_learn
+            replace_section learn "$work/learn.md"
+            ;;
         remap-processes)
             bench_remap_processes
             replace_section remap-processes "$work/remap_processes.md"
@@ -648,7 +728,7 @@ if [ -n "$only" ]; then
             replace_section workflow "$work/workflow.md"
             replace_section workflow-e2e "$work/e2e.md"
             ;;
-        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, png, gltf, remap, remap-processes, direct)" >&2; exit 1 ;;
+        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, png, gltf, remap, remap-processes, direct, learn)" >&2; exit 1 ;;
     esac
     exit 0
 fi
@@ -665,6 +745,7 @@ echo
 bench_remap_table
 bench_remap_processes
 bench_direct
+bench_learn
 
 bench_workflow
 
@@ -784,6 +865,7 @@ if [ -f "$perf" ]; then
     replace_section remap "$work/remap.md"
     replace_section remap-processes "$work/remap_processes.md"
     replace_section direct "$work/direct.md"
+    replace_section learn "$work/learn.md"
     replace_section workflow "$work/workflow.md"
     replace_section workflow-e2e "$work/e2e.md"
     replace_section gltf "$work/gltf.md"
