@@ -535,9 +535,9 @@ static void score_line(const trainer *t, job *line, long len) {
 }
 
 /* Score `units` lines of `len` consecutive jobs on the trainer's threads, in batches between calls of the progress
- * callback (one batch without one). *done counts the phase's candidates, *fits the libsvm fits made, *costly the
- * ones refused as too costly. MR_ERR_CANCELLED if the callback asks; MR_ERR_INVALID_ARG if libsvm refused a
- * job's hyper-parameters. */
+ * callback (one batch without one). *done counts the phase's candidates; rep the fits made, their iterations and
+ * those above the cap. MR_ERR_CANCELLED if the callback asks; MR_ERR_INVALID_ARG if libsvm refused a job's
+ * hyper-parameters (a line stops at such a job, so the refusal is met before its unscored successors). */
 static mr_status run_lines(const trainer *t, job *jobs, long units, long len, mr_svr_phase phase, long *done,
                            long planned, mr_svr_train_report *rep) {
     const long batch = t->opt->progress == NULL ? units : MR_MAX(8L, 4L * t->threads);

@@ -103,7 +103,8 @@
  * omp_get_max_threads() threads, one per MR_SVR_PREDICT_ROWS rows at most (a team costs more than fewer rows save).
  * All functions are reentrant and a model may be shared by threads for reading. libsvm prints through one
  * process-wide function pointer: the first mr_svr_train points it, once, at a function that prints nothing (it
- * reads the iteration counts) and leaves it so; other libsvm users in the process are silenced too.
+ * reads the iteration counts the cost cap needs) and leaves it so; other libsvm users in the process are silenced
+ * too, and must not replace it (the cap would go blind: report->iterations would stay 0).
  *
  * Ownership. A model returned through `mr_svr **out` belongs to the caller and is released, with everything it
  * points to, by mr_svr_free() (NULL-safe). The library keeps no pointer to caller arrays after a call returns, and
