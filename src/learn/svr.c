@@ -5,7 +5,9 @@
 #include "learn/svr.h"
 
 #include <libsvm/svm.h>
+#include <limits.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -124,29 +126,106 @@ double mr_svr_far_field(const mr_svr *m, int k) { return m->out_mean[k] - m->out
 
 /* ---- prediction --------------------------------------------------------------------------------------------- */
 
-/* One row: x raw in, y raw out, u scratch of n_in doubles. The order of operations is libsvm's (svr.h). */
-static void predict_row(const mr_svr *m, const double *restrict x, double *restrict u, double *restrict y) {
-    const int n_in = m->n_in;
-    int nan = 0;
-    for (int i = 0; i < n_in; i++) {
-        u[i] = (x[i] - m->in_mean[i]) / m->in_std[i];
-        nan |= isnan(u[i]);
+/* Rows go in vector lanes, as in nn/mlp.c: a block of LANES rows is normalised and transposed into u[n_in][LANES],
+ * then for each support vector the squared distances of the block's rows are summed over the inputs (the support
+ * vector's value broadcast) and each kernel term is added into the rows' sums. Every inner loop runs over the
+ * block's rows, a compile-time constant, so GCC vectorises it, and each row's arithmetic is the order of svr.h, the
+ * same bits in any lane, block or thread. glibc's exp() is a scalar call that would take most of the time (about
+ * 25 ns a term where the whole vectorised term costs a few), so the kernel uses exp_nonpositive below: plain
+ * arithmetic that vectorises, within 1 ulp of exp. On x86-64 Linux with GCC the block loop is also compiled for
+ * x86-64-v3 (AVX2) and chosen at run time (target_clones); no variant fuses a multiply and an add (ISO C mode:
+ * -ffp-contract=off), so all give the same bits. */
+#define LANES 8
+
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 12 && defined(__x86_64__) && defined(__linux__)
+#define SVR_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define SVR_CLONES
+#endif
+
+/* e^x[l] for each lane, x[l] <= 0, into e[l]: 0 from -708 down (where e^x < 2^-1021 and every kernel term is
+ * negligible) and for NaN (a NaN row is flagged apart). Cody and Waite's reduction x = n ln2 + r, |r| <= ln2 / 2,
+ * with ln2 split in a high part exact in n ln2 (fdlibm's) and a low part; e^r by its Taylor series to degree 13
+ * (the next term is below 5e-18 of it); 2^n built in the exponent bits. Measured against glibc over (-708, 0]:
+ * within 1 ulp. Three loops without branches, as GCC vectorises them at -O2 (one loop with the selects is not). */
+static MR_ALWAYS_INLINE void exp_lanes(const double *restrict x, double *restrict e) {
+    const double lo = -708.0, shifter = 0x1.8p52; /* t = x log2(e) + 1.5 2^52 holds round(x log2 e) in its bits */
+    double xc[LANES];
+    for (int l = 0; l < LANES; l++) xc[l] = x[l] > lo ? x[l] : lo;
+    for (int l = 0; l < LANES; l++) {
+        const double t = xc[l] * 0x1.71547652b82fep0 + shifter;
+        const double n = t - shifter;
+        const double r = (xc[l] - n * 0x1.62e42feep-1) - n * 0x1.a39ef35793c76p-33;
+        double p = 1.0 / 6227020800.0; // 1/13!
+        p = p * r + 1.0 / 479001600.0;
+        p = p * r + 1.0 / 39916800.0;
+        p = p * r + 1.0 / 3628800.0;
+        p = p * r + 1.0 / 362880.0;
+        p = p * r + 1.0 / 40320.0;
+        p = p * r + 1.0 / 5040.0;
+        p = p * r + 1.0 / 720.0;
+        p = p * r + 1.0 / 120.0;
+        p = p * r + 1.0 / 24.0;
+        p = p * r + 1.0 / 6.0;
+        p = p * r + 0.5;
+        p = p * r + 1.0;
+        p = p * r + 1.0;
+        uint64_t bits;
+        memcpy(&bits, &t, sizeof bits);
+        bits = (bits + 1023) << 52; // n + 1023 in the exponent field (n >= -1022 here)
+        double scale;
+        memcpy(&scale, &bits, sizeof scale);
+        e[l] = p * scale;
     }
+    for (int l = 0; l < LANES; l++) e[l] = xc[l] > lo ? e[l] : 0.0;
+}
+
+/* One block: u[n_in][LANES] normalised inputs in, acc[n_out][LANES] normalised outputs out. */
+SVR_CLONES
+static void predict_block(const mr_svr *m, const double *restrict u, double *restrict acc) {
+    const int n_in = m->n_in;
     for (int k = 0; k < m->n_out; k++) {
         const mr_svr_output *o = &m->outputs[k];
-        const double *restrict sv = o->sv;
         const double neg_gamma = -o->gamma;
-        double sum = 0.0;
+        const double *restrict sv = o->sv;
+        double sum[LANES] = {0.0};
         for (int s = 0; s < o->sv_count; s++, sv += n_in) {
-            double d2 = 0.0;
+            double d2[LANES] = {0.0}, x[LANES], e[LANES];
             for (int i = 0; i < n_in; i++) {
-                const double t = u[i] - sv[i];
-                d2 += t * t;
+                const double c = sv[i];
+                for (int l = 0; l < LANES; l++) {
+                    const double d = u[i * LANES + l] - c;
+                    d2[l] += d * d;
+                }
             }
-            sum += o->coef[s] * exp(neg_gamma * d2);
+            for (int l = 0; l < LANES; l++) x[l] = neg_gamma * d2[l];
+            exp_lanes(x, e);
+            const double coef = o->coef[s];
+            for (int l = 0; l < LANES; l++) sum[l] += coef * e[l];
         }
-        y[k] = nan ? NAN : m->out_mean[k] + m->out_std[k] * (sum - o->rho);
+        for (int l = 0; l < LANES; l++) acc[k * LANES + l] = sum[l] - o->rho;
     }
+}
+
+/* Rows [first, first + count) of `in` (count <= LANES) to `out`; ws holds (n_in + n_out) LANES doubles. A partial
+ * block repeats its last row in the spare lanes. */
+static void predict_rows(const mr_svr *m, const double *in, size_t first, int count, double *out, double *ws) {
+    const size_t n_in = (size_t)m->n_in, n_out = (size_t)m->n_out;
+    double *u = ws, *acc = ws + n_in * LANES;
+    int nan[LANES];
+    for (int l = 0; l < LANES; l++) {
+        const double *x = in + (first + (size_t)(l < count ? l : count - 1)) * n_in;
+        nan[l] = 0;
+        for (size_t i = 0; i < n_in; i++) {
+            u[i * LANES + (size_t)l] = (x[i] - m->in_mean[i]) / m->in_std[i];
+            nan[l] |= isnan(u[i * LANES + (size_t)l]);
+        }
+    }
+    predict_block(m, u, acc);
+    for (int l = 0; l < count; l++)
+        for (size_t k = 0; k < n_out; k++)
+            out[(first + (size_t)l) * n_out + k] =
+                nan[l] ? NAN : m->out_mean[k] + m->out_std[k] * acc[k * LANES + (size_t)l];
 }
 
 mr_status mr_svr_predict(const mr_svr *m, const double *in, size_t count, double *out) {
@@ -169,19 +248,22 @@ mr_status mr_svr_predict_threads(const mr_svr *m, const double *in, size_t count
     // A thread per MR_SVR_PREDICT_ROWS rows at most: for fewer, starting a team costs more than it saves.
     if ((size_t)threads > count / MR_SVR_PREDICT_ROWS) threads = (int)(count / MR_SVR_PREDICT_ROWS);
     if (threads < 1) threads = 1;
-    double *ws = malloc((size_t)threads * (size_t)m->n_in * sizeof(double));
+    const size_t per_thread = ((size_t)m->n_in + (size_t)m->n_out) * LANES;
+    double *ws = malloc((size_t)threads * per_thread * sizeof(double));
     if (ws == NULL) return mr_fail(MR_ERR_NOMEM, "svr predict: out of memory for the workspace");
-    const size_t n_in = (size_t)m->n_in, n_out = (size_t)m->n_out;
-    const long rows = (long)count;
+    const long blocks = (long)((count + LANES - 1) / LANES);
 #pragma omp parallel num_threads(threads) if (threads > 1)
     {
 #ifdef _OPENMP
-        double *u = ws + (size_t)omp_get_thread_num() * n_in;
+        double *mine = ws + (size_t)omp_get_thread_num() * per_thread;
 #else
-        double *u = ws;
+        double *mine = ws;
 #endif
 #pragma omp for schedule(static)
-        for (long r = 0; r < rows; r++) predict_row(m, in + (size_t)r * n_in, u, out + (size_t)r * n_out);
+        for (long b = 0; b < blocks; b++) {
+            const size_t first = (size_t)b * LANES;
+            predict_rows(m, in, first, (int)MR_MIN((size_t)LANES, count - first), out, mine);
+        }
     }
     free(ws);
     return MR_OK;
@@ -192,25 +274,32 @@ mr_status mr_svr_predict_threads(const mr_svr *m, const double *in, size_t count
 enum { AXIS_C, AXIS_GAMMA, AXIS_EPSILON, AXES };
 
 /* The search space per axis, in log units of `base` (svr.h): the grid lo, lo + spacing, ..., hi; the local
- * search's first step (half the spacing) and its box (the grid widened by one spacing). */
+ * search's first step is half the spacing and its box the grid widened by one spacing. */
 static const struct axis {
     const char *name;
     double base, lo, hi, spacing;
 } axes[AXES] = {
     {"C", 2.0, -2.0, 12.0, 2.0},
-    {"gamma", 2.0, -6.0, 4.0, 2.0},
+    {"gamma", 2.0, -8.0, 4.0, 2.0},
     {"epsilon", 10.0, -4.0, -1.0, 1.0},
 };
 
+/* Grid cells are numbered with C varying fastest, then epsilon, then gamma: a run of C values is a line. */
+static const int cell_axes[AXES] = {AXIS_GAMMA, AXIS_EPSILON, AXIS_C}; /* slowest first */
+
 #define LIBSVM_TOLERANCE 1e-3 /* libsvm's stopping tolerance (its -e), its default */
-#define FINAL_SCALE 0.125     /* the local search stops when its step falls below this share of the first */
+#define FINAL_SCALE 0.25      /* the local search stops when its step falls below this share of the first */
+#define LINE_GROWTH 4         /* iterations grow about as C when coefficients sit at the bound: 4x a grid step */
+
+enum { ROWS_SEARCH, ROWS_TRAIN, ROWS_ALL }; /* which rows a fit uses */
 
 typedef struct trainer {
     int n_in, n_out, threads;
-    size_t n, n_val, n_train;
+    size_t n, n_val, n_train, n_search;
+    long cap;                  /* iterations above which a search fit is too costly (svr.h) */
     size_t *order;             /* [n]: the validation rows, then the training rows */
     struct svm_node *nodes;    /* [n][n_in + 1]: row r's normalised inputs, indices 1..n_in, then index -1 */
-    struct svm_node **x_train; /* [n_train] rows of the training split */
+    struct svm_node **x_train; /* [n_train] rows of the training split (the search's are the first n_search) */
     struct svm_node **x_all;   /* [n] every row in its order */
     double *v;                 /* [n][n_out] normalised outputs */
     double *y_train;           /* [n_out][n_train] */
@@ -222,15 +311,32 @@ typedef struct trainer {
     double start;              /* mr_now_seconds() at the call */
 } trainer;
 
+enum { JOB_FITTED, JOB_COPIED, JOB_SKIPPED }; /* how a job got its score */
+
 /* One candidate of one output: log coordinates t (unused on fixed axes) and its validation score. */
 typedef struct job {
     int output;
     double t[AXES];
-    double rmse;         /* normalised units; +inf for a failed fit */
+    double rmse;         /* normalised units; +inf for a failed or too costly fit */
+    long iterations;     /* libsvm's iterations for the fit */
+    int at_bound;        /* some coefficient reached C */
+    int how;             /* JOB_* */
     const char *refused; /* svm_check_parameter's message, or NULL */
 } job;
 
-static void print_nothing(const char *s) { (void)s; }
+/* libsvm reports through its print function only; the iteration count comes at the end of each fit as
+ * "optimization finished, #iter = N". Fits run whole on one thread, so a thread-local count is the fit's. */
+static _Thread_local long fit_iterations;
+
+static void libsvm_print(const char *s) {
+    const char *p = strstr(s, "#iter = ");
+    if (p != NULL) fit_iterations = strtol(p + 8, NULL, 10);
+}
+
+/* libsvm's print function is one process-wide pointer: set once, before any of our fits. */
+static pthread_once_t libsvm_print_once = PTHREAD_ONCE_INIT;
+
+static void set_libsvm_print(void) { svm_set_print_string_function(libsvm_print); }
 
 /* Mean and population deviation of column `col` of the `stride`-wide rows rows[0 .. count - 1], in row order;
  * deviation 1 for a (near) constant column (svr.h). */
@@ -254,6 +360,9 @@ static mr_status check_options(const mr_svr_train_options *o) {
         return mr_fail(MR_ERR_INVALID_ARG, "svr train: validation_fraction %g (expected 0 <= f < 1; 0 = %g)",
                        o->validation_fraction, MR_SVR_DEFAULT_VALIDATION);
     if (o->threads < 0) return mr_fail(MR_ERR_INVALID_ARG, "svr train: %d threads (expected >= 0)", o->threads);
+    if (o->search_rows < 0)
+        return mr_fail(MR_ERR_INVALID_ARG, "svr train: search_rows %d (expected >= 0; 0 = %d)", o->search_rows,
+                       MR_SVR_SEARCH_ROWS);
     const double fixed[AXES] = {o->C, o->gamma, o->epsilon};
     for (int a = 0; a < AXES; a++)
         if (!(fixed[a] >= 0.0 && isfinite(fixed[a])))
@@ -317,6 +426,10 @@ static mr_status trainer_init(trainer *t, const double *x, const double *y) {
     const double wanted = floor(fraction * (double)n + 0.5);
     t->n_val = wanted < 1.0 ? 1 : wanted > (double)(n - 1) ? n - 1 : (size_t)wanted;
     t->n_train = n - t->n_val;
+    const size_t search_rows = t->opt->search_rows > 0 ? (size_t)t->opt->search_rows : MR_SVR_SEARCH_ROWS;
+    t->n_search = MR_MIN(t->n_train, search_rows);
+    t->cap = MR_SVR_ITERATIONS_PER_ROW * (long)t->n_search + MR_SVR_ITERATIONS_MIN;
+    if (t->fixed[AXIS_C] && t->fixed[AXIS_GAMMA] && t->fixed[AXIS_EPSILON]) t->cap = LONG_MAX; // nothing to choose
 
     // Normalisation from the training split, then the normalised rows.
     const size_t *train = t->order + t->n_val;
@@ -349,13 +462,13 @@ static void hyper_parameters(const trainer *t, const double lt[AXES], double hp[
     for (int a = 0; a < AXES; a++) hp[a] = t->fixed[a] ? t->fixed_value[a] : pow(axes[a].base, lt[a]);
 }
 
-/* libsvm's fit of output k with hyper-parameters hp (C, gamma, epsilon) on the training split or all rows; NULL
- * with *refused set if svm_check_parameter refuses them. */
-static struct svm_model *fit(const trainer *t, int k, const double hp[AXES], int all_rows, const char **refused) {
+/* libsvm's fit of output k with hyper-parameters hp (C, gamma, epsilon) on the rows `rows` (ROWS_*); NULL with
+ * *refused set if svm_check_parameter refuses them. fit_iterations gets libsvm's iteration count. */
+static struct svm_model *fit(const trainer *t, int k, const double hp[AXES], int rows, const char **refused) {
     struct svm_problem prob;
-    prob.l = (int)(all_rows ? t->n : t->n_train);
-    prob.y = all_rows ? t->y_all + (size_t)k * t->n : t->y_train + (size_t)k * t->n_train;
-    prob.x = all_rows ? t->x_all : t->x_train;
+    prob.l = (int)(rows == ROWS_ALL ? t->n : rows == ROWS_TRAIN ? t->n_train : t->n_search);
+    prob.y = rows == ROWS_ALL ? t->y_all + (size_t)k * t->n : t->y_train + (size_t)k * t->n_train;
+    prob.x = rows == ROWS_ALL ? t->x_all : t->x_train;
     struct svm_parameter p;
     memset(&p, 0, sizeof p);
     p.svm_type = EPSILON_SVR;
@@ -369,17 +482,22 @@ static struct svm_model *fit(const trainer *t, int k, const double hp[AXES], int
     p.cache_size = mb < MR_SVR_CACHE_MB ? mb : MR_SVR_CACHE_MB;
     p.shrinking = 1;
     p.probability = 0;
+    fit_iterations = 0;
     *refused = svm_check_parameter(&prob, &p);
     return *refused != NULL ? NULL : svm_train(&prob, &p);
 }
 
-/* Score a job: fit on the training split, root mean square error on the validation split. */
-static void score(const trainer *t, job *j) {
+/* Score a job: fit on `rows`, root mean square error on the validation split (+inf if not finite). */
+static void score(const trainer *t, job *j, int rows) {
     double hp[AXES];
     hyper_parameters(t, j->t, hp);
-    struct svm_model *model = fit(t, j->output, hp, 0, &j->refused);
+    struct svm_model *model = fit(t, j->output, hp, rows, &j->refused);
+    j->how = JOB_FITTED;
     j->rmse = INFINITY;
+    j->iterations = fit_iterations;
+    j->at_bound = 0;
     if (model == NULL) return;
+    for (int s = 0; s < model->l; s++) j->at_bound |= fabs(model->sv_coef[0][s]) >= hp[AXIS_C] * (1.0 - 1e-12);
     double sse = 0.0;
     for (size_t i = 0; i < t->n_val; i++) {
         const size_t r = t->order[i];
@@ -391,23 +509,57 @@ static void score(const trainer *t, job *j) {
     if (rmse < INFINITY) j->rmse = rmse; // NaN stays +inf: the worst score
 }
 
-/* Score jobs[0 .. count - 1] on the trainer's threads, in batches between calls of the progress callback (one
- * batch without one). *done counts the phase's fits. MR_ERR_CANCELLED if the callback asks; MR_ERR_INVALID_ARG if
- * libsvm refused a job's hyper-parameters. */
-static mr_status run_jobs(const trainer *t, job *jobs, long count, mr_svr_phase phase, long *done, long planned) {
-    const long batch = t->opt->progress == NULL ? count : MR_MAX(32L, 16L * t->threads);
-    for (long first = 0; first < count; first += batch) {
-        const long last = MR_MIN(count, first + batch);
+/* Score one line of `len` search jobs, in order (the grid's C values, or one local-search poll): a fit above the
+ * iteration cap scores +inf; after a fit with no coefficient at the bound C, every larger C has the same solution
+ * and takes its score; after one above cap / LINE_GROWTH iterations the larger C values would cost more than the
+ * cap and score +inf unfitted. */
+static void score_line(const trainer *t, job *line, long len) {
+    for (long i = 0; i < len; i++) {
+        job *j = &line[i], *prev = i > 0 ? &line[i - 1] : NULL;
+        j->refused = NULL;
+        j->iterations = 0;
+        j->at_bound = 0;
+        if (prev != NULL && prev->how != JOB_SKIPPED && prev->rmse < INFINITY && !prev->at_bound) {
+            j->how = JOB_COPIED;
+            j->rmse = prev->rmse;
+            j->iterations = prev->iterations; // the same solution, about the same cost
+        } else if (prev != NULL && (prev->how == JOB_SKIPPED || prev->iterations > t->cap / LINE_GROWTH)) {
+            j->how = JOB_SKIPPED;
+            j->rmse = INFINITY;
+        } else {
+            score(t, j, ROWS_SEARCH);
+            if (j->iterations > t->cap) j->rmse = INFINITY;
+            if (j->refused != NULL) return;
+        }
+    }
+}
+
+/* Score `units` lines of `len` consecutive jobs on the trainer's threads, in batches between calls of the progress
+ * callback (one batch without one). *done counts the phase's candidates; rep the fits made, their iterations and
+ * those above the cap. MR_ERR_CANCELLED if the callback asks; MR_ERR_INVALID_ARG if libsvm refused a job's
+ * hyper-parameters (a line stops at such a job, so the refusal is met before its unscored successors). */
+static mr_status run_lines(const trainer *t, job *jobs, long units, long len, mr_svr_phase phase, long *done,
+                           long planned, mr_svr_train_report *rep) {
+    const long batch = t->opt->progress == NULL ? units : MR_MAX(8L, 4L * t->threads);
+    for (long first = 0; first < units; first += batch) {
+        const long last = MR_MIN(units, first + batch);
 #pragma omp parallel for num_threads(t->threads) schedule(dynamic, 1) if (t->threads > 1)
-        for (long i = first; i < last; i++) score(t, &jobs[i]);
-        for (long i = first; i < last; i++)
+        for (long u = first; u < last; u++) score_line(t, jobs + u * len, len);
+        for (long i = first * len; i < last * len; i++) {
             if (jobs[i].refused != NULL) {
                 double hp[AXES];
                 hyper_parameters(t, jobs[i].t, hp);
                 return mr_fail(MR_ERR_INVALID_ARG, "svr train: libsvm refuses C %g, gamma %g, epsilon %g: %s", hp[0],
                                hp[1], hp[2], jobs[i].refused);
             }
-        *done += last - first;
+            if (jobs[i].how == JOB_FITTED) {
+                long *fits = phase == MR_SVR_PHASE_GRID ? &rep->grid_fits : &rep->local_fits;
+                (*fits)++;
+                rep->iterations += jobs[i].iterations;
+                rep->costly_fits += jobs[i].iterations > t->cap;
+            }
+        }
+        *done += (last - first) * len;
         if (t->opt->progress != NULL) {
             const mr_svr_progress p = {phase, *done, planned, mr_now_seconds() - t->start};
             if (t->opt->progress(&p, t->opt->progress_user) != 0)
@@ -423,10 +575,11 @@ static mr_status run_jobs(const trainer *t, job *jobs, long count, mr_svr_phase 
 typedef struct scored {
     double (*t)[AXES];
     double *rmse;
+    long *iterations;
     long count, capacity;
 } scored;
 
-static int scored_add(scored *s, const double lt[AXES], double rmse) {
+static int scored_add(scored *s, const job *j) {
     if (s->count == s->capacity) {
         const long cap = s->capacity > 0 ? 2 * s->capacity : 256;
         double(*nt)[AXES] = realloc(s->t, (size_t)cap * sizeof *nt);
@@ -435,10 +588,14 @@ static int scored_add(scored *s, const double lt[AXES], double rmse) {
         double *nr = realloc(s->rmse, (size_t)cap * sizeof *nr);
         if (nr == NULL) return 0;
         s->rmse = nr;
+        long *ni = realloc(s->iterations, (size_t)cap * sizeof *ni);
+        if (ni == NULL) return 0;
+        s->iterations = ni;
         s->capacity = cap;
     }
-    memcpy(s->t[s->count], lt, sizeof s->t[0]);
-    s->rmse[s->count++] = rmse;
+    memcpy(s->t[s->count], j->t, sizeof s->t[0]);
+    s->rmse[s->count] = j->rmse;
+    s->iterations[s->count++] = j->iterations;
     return 1;
 }
 
@@ -457,20 +614,23 @@ static long scored_find(const scored *s, const double lt[AXES]) {
 typedef struct search {
     int output, active;
     double center[AXES], rmse, scale;
+    long iterations; /* the centre's fit's */
     int polls;
     double poll_t[2 * AXES][AXES];
     double poll_rmse[2 * AXES]; /* known already, or NAN until its job has run */
+    long poll_iterations[2 * AXES];
     long poll_job[2 * AXES];    /* the job scoring it this round, or -1 */
 } search;
 
-/* Grid sizes per axis (1 on a fixed axis) and the cell's log coordinates. */
+/* Grid values on axis a (1 on a fixed axis). */
 static int grid_size(const trainer *t, int a) {
     return t->fixed[a] ? 1 : (int)((axes[a].hi - axes[a].lo) / axes[a].spacing) + 1;
 }
 
+/* A grid cell's log coordinates. */
 static void cell_point(const trainer *t, long cell, double lt[AXES]) {
-    for (int a = AXES - 1; a >= 0; a--) {
-        const int size = grid_size(t, a);
+    for (int c = AXES - 1; c >= 0; c--) {
+        const int a = cell_axes[c], size = grid_size(t, a);
         lt[a] = t->fixed[a] ? 0.0 : axes[a].lo + axes[a].spacing * (double)(cell % size);
         cell /= size;
     }
@@ -480,8 +640,8 @@ static void cell_point(const trainer *t, long cell, double lt[AXES]) {
  * by the cell's index. */
 static int grid_local_min(const trainer *t, const double *rmse, long cell) {
     long stride = 1;
-    for (int a = AXES - 1; a >= 0; a--) {
-        const int size = grid_size(t, a);
+    for (int c = AXES - 1; c >= 0; c--) {
+        const int size = grid_size(t, cell_axes[c]);
         const long pos = cell / stride % size;
         for (int dir = -1; dir <= 1; dir += 2) {
             if (pos + dir < 0 || pos + dir >= size) continue;
@@ -493,7 +653,37 @@ static int grid_local_min(const trainer *t, const double *rmse, long cell) {
     return 1;
 }
 
-/* Poll every active search's neighbours; new points become jobs (one per distinct point and output). */
+/* Up to MR_SVR_STARTS searches from the grid cells of output k (scores rmse[0 .. cells - 1]) that are below their
+ * neighbours, best first (the grid's best is one of them). Returns how many were added at searches[0 ..]. */
+static int plan_starts(const trainer *t, int k, const double *rmse, const job *cells_jobs, long cells,
+                       search *searches) {
+    long chosen[MR_SVR_STARTS];
+    int starts = 0;
+    while (starts < MR_SVR_STARTS && cells > 1) {
+        long pick = -1;
+        for (long c = 0; c < cells; c++) {
+            int taken = 0;
+            for (int s = 0; s < starts; s++) taken |= chosen[s] == c;
+            if (!taken && rmse[c] < INFINITY && (pick < 0 || rmse[c] < rmse[pick]) && grid_local_min(t, rmse, c))
+                pick = c;
+        }
+        if (pick < 0) break;
+        search *se = &searches[starts];
+        memset(se, 0, sizeof *se);
+        se->output = k;
+        se->active = 1;
+        memcpy(se->center, cells_jobs[pick].t, sizeof se->center);
+        se->rmse = rmse[pick];
+        se->iterations = cells_jobs[pick].iterations;
+        se->scale = 1.0;
+        chosen[starts++] = pick;
+    }
+    return starts;
+}
+
+/* Poll every active search's neighbours; new points become jobs (one per distinct point and output). A neighbour
+ * in a costlier direction (a larger C or gamma, a smaller epsilon: libsvm needs more iterations there) of a centre
+ * whose fit took over half the cap is not polled: it would most likely cost more than the cap and score +inf. */
 static long plan_round(const trainer *t, search *searches, int count, const scored *done, job *jobs) {
     long n_jobs = 0;
     for (int si = 0; si < count; si++) {
@@ -507,6 +697,8 @@ static long plan_round(const trainer *t, search *searches, int count, const scor
                 memcpy(p, s->center, sizeof p);
                 p[a] += dir * 0.5 * axes[a].spacing * s->scale;
                 if (p[a] < axes[a].lo - axes[a].spacing || p[a] > axes[a].hi + axes[a].spacing) continue;
+                const int costlier = a == AXIS_EPSILON ? dir < 0 : dir > 0;
+                if (costlier && s->iterations > t->cap / 2) continue;
                 const int q = s->polls++;
                 memcpy(s->poll_t[q], p, sizeof p);
                 s->poll_job[q] = -1;
@@ -514,12 +706,15 @@ static long plan_round(const trainer *t, search *searches, int count, const scor
                 const long known = scored_find(&done[s->output], p);
                 if (known >= 0) {
                     s->poll_rmse[q] = done[s->output].rmse[known];
+                    s->poll_iterations[q] = done[s->output].iterations[known];
                     continue;
                 }
                 for (long j = 0; j < n_jobs && s->poll_job[q] < 0; j++)
                     if (jobs[j].output == s->output && same_point(jobs[j].t, p)) s->poll_job[q] = j;
                 if (s->poll_job[q] >= 0) continue;
-                jobs[n_jobs] = (job){s->output, {p[0], p[1], p[2]}, INFINITY, NULL};
+                memset(&jobs[n_jobs], 0, sizeof jobs[n_jobs]);
+                jobs[n_jobs].output = s->output;
+                memcpy(jobs[n_jobs].t, p, sizeof p);
                 s->poll_job[q] = n_jobs++;
             }
         }
@@ -535,12 +730,16 @@ static void finish_round(search *searches, int count, const job *jobs) {
         if (!s->active) continue;
         int best = -1;
         for (int q = 0; q < s->polls; q++) {
-            if (s->poll_job[q] >= 0) s->poll_rmse[q] = jobs[s->poll_job[q]].rmse;
+            if (s->poll_job[q] >= 0) {
+                s->poll_rmse[q] = jobs[s->poll_job[q]].rmse;
+                s->poll_iterations[q] = jobs[s->poll_job[q]].iterations;
+            }
             if (best < 0 || s->poll_rmse[q] < s->poll_rmse[best]) best = q;
         }
         if (best >= 0 && s->poll_rmse[best] < s->rmse) {
             memcpy(s->center, s->poll_t[best], sizeof s->center);
             s->rmse = s->poll_rmse[best];
+            s->iterations = s->poll_iterations[best];
         } else {
             s->scale *= 0.5;
             if (s->scale < FINAL_SCALE) s->active = 0;
@@ -553,98 +752,116 @@ static void finish_round(search *searches, int count, const job *jobs) {
     }
 }
 
-/* The grid, then the local search, for every output; best[k] gets the chosen point's index in done[k]. */
+/* The grid, then the local search, for every output; best[k] gets the chosen point's index in done[k], grid_best[k]
+ * the grid's best cell's. */
 static mr_status run_search(const trainer *t, scored *done, long *best, long *grid_best, mr_svr_train_report *rep) {
     const int O = t->n_out;
     long cells = 1;
     for (int a = 0; a < AXES; a++) cells *= grid_size(t, a);
-    const long grid_jobs = cells * O;
-    long capacity = MR_MAX(grid_jobs, (long)O * MR_SVR_STARTS * 2 * AXES);
-    job *jobs = malloc((size_t)capacity * sizeof *jobs);
+    const long line = grid_size(t, AXIS_C), grid_jobs = cells * O;
+    const long capacity = MR_MAX(grid_jobs, (long)O * MR_SVR_STARTS * 2 * AXES);
+    job *jobs = calloc((size_t)capacity, sizeof *jobs);
     search *searches = malloc((size_t)O * MR_SVR_STARTS * sizeof *searches);
-    if (jobs == NULL || searches == NULL) {
-        free(jobs);
-        free(searches);
-        return mr_fail(MR_ERR_NOMEM, "svr train: out of memory for the search");
-    }
+    double *rmse = malloc((size_t)cells * sizeof *rmse);
     mr_status status = MR_OK;
-    for (long j = 0; j < grid_jobs; j++) {
+    if (jobs == NULL || searches == NULL || rmse == NULL)
+        status = mr_fail(MR_ERR_NOMEM, "svr train: out of memory for the search");
+    for (long j = 0; j < grid_jobs && status == MR_OK; j++) {
         jobs[j].output = (int)(j / cells);
         cell_point(t, j % cells, jobs[j].t);
-        jobs[j].rmse = INFINITY;
-        jobs[j].refused = NULL;
     }
-    long fits = 0;
-    status = run_jobs(t, jobs, grid_jobs, MR_SVR_PHASE_GRID, &fits, grid_jobs);
-    rep->grid_fits = fits;
+    long candidates = 0;
+    if (status == MR_OK)
+        status = run_lines(t, jobs, grid_jobs / line, line, MR_SVR_PHASE_GRID, &candidates, grid_jobs, rep);
     int n_search = 0;
     for (int k = 0; k < O && status == MR_OK; k++) {
         const job *g = jobs + (long)k * cells;
-        double *rmse = malloc((size_t)cells * sizeof *rmse);
-        if (rmse == NULL) {
-            status = mr_fail(MR_ERR_NOMEM, "svr train: out of memory for the search");
-            break;
-        }
+        grid_best[k] = 0;
         for (long c = 0; c < cells; c++) {
             rmse[c] = g[c].rmse;
-            if (!scored_add(&done[k], g[c].t, g[c].rmse)) status = mr_fail(MR_ERR_NOMEM, "svr train: out of memory");
-        }
-        // Starts: the cells below their neighbours, best first (the grid's best is one of them).
-        grid_best[k] = 0;
-        for (long c = 1; c < cells; c++)
             if (rmse[c] < rmse[grid_best[k]]) grid_best[k] = c;
-        int starts = 0;
-        long chosen[MR_SVR_STARTS];
-        while (starts < MR_SVR_STARTS) {
-            long pick = -1;
-            for (long c = 0; c < cells; c++) {
-                int taken = 0;
-                for (int s = 0; s < starts; s++) taken |= chosen[s] == c;
-                if (!taken && (pick < 0 || rmse[c] < rmse[pick]) && rmse[c] < INFINITY && grid_local_min(t, rmse, c))
-                    pick = c;
-            }
-            if (pick < 0) break;
-            chosen[starts++] = pick;
+            if (!scored_add(&done[k], &g[c])) status = mr_fail(MR_ERR_NOMEM, "svr train: out of memory");
         }
-        for (int s = 0; s < starts && cells > 1; s++) {
-            search *se = &searches[n_search++];
-            memset(se, 0, sizeof *se);
-            se->output = k;
-            se->active = 1;
-            memcpy(se->center, g[chosen[s]].t, sizeof se->center);
-            se->rmse = g[chosen[s]].rmse;
-            se->scale = 1.0;
-        }
-        free(rmse);
+        n_search += plan_starts(t, k, rmse, g, cells, searches + n_search);
     }
 
-    // The local search, in rounds: every active search's polls are scored together.
-    fits = 0;
-    rep->local_rounds = 0;
+    // The local search, in rounds: the polls of every active search are scored together.
+    candidates = 0;
     for (int round = 0; round < MR_SVR_MAX_ROUNDS && status == MR_OK; round++) {
         int active = 0;
         for (int s = 0; s < n_search; s++) active |= searches[s].active;
         if (!active) break;
         const long n_jobs = plan_round(t, searches, n_search, done, jobs);
-        status = run_jobs(t, jobs, n_jobs, MR_SVR_PHASE_LOCAL, &fits, fits + n_jobs);
+        status = run_lines(t, jobs, n_jobs, 1, MR_SVR_PHASE_LOCAL, &candidates, candidates + n_jobs, rep);
         for (long j = 0; j < n_jobs && status == MR_OK; j++)
-            if (!scored_add(&done[jobs[j].output], jobs[j].t, jobs[j].rmse))
+            if (!scored_add(&done[jobs[j].output], &jobs[j]))
                 status = mr_fail(MR_ERR_NOMEM, "svr train: out of memory");
         finish_round(searches, n_search, jobs);
         rep->local_rounds = round + 1;
     }
-    rep->local_fits = fits;
     for (int k = 0; k < O && status == MR_OK; k++) {
         best[k] = 0;
         for (long i = 1; i < done[k].count; i++)
             if (done[k].rmse[i] < done[k].rmse[best[k]]) best[k] = i;
+        if (!(done[k].rmse[best[k]] < INFINITY))
+            status = mr_fail(MR_ERR_NUMERIC, "svr train: output %d: no candidate gives a finite validation error", k);
     }
     free(jobs);
     free(searches);
+    free(rmse);
     return status;
 }
 
 /* ---- training: the entry point --------------------------------------------------------------------------------- */
+
+/* After the search: output k's validation score on the whole training split (when the search used part of it),
+ * then its fit on all rows. */
+static void final_fit(const trainer *t, job *j, struct svm_model **model) {
+    if (t->n_search < t->n_train) {
+        score(t, j, ROWS_TRAIN);
+        if (j->refused != NULL) return;
+    }
+    double hp[AXES];
+    hyper_parameters(t, j->t, hp);
+    *model = fit(t, j->output, hp, ROWS_ALL, &j->refused);
+}
+
+/* Copy libsvm's fits (models[k] for output k) into a new plain model. */
+static mr_status copy_models(const trainer *t, const job *chosen, const double *grid_rmse,
+                             struct svm_model *const *models, mr_svr **out) {
+    const int n_in = t->n_in, n_out = t->n_out;
+    int *sv_counts = malloc((size_t)n_out * sizeof *sv_counts);
+    if (sv_counts == NULL) return mr_fail(MR_ERR_NOMEM, "svr train: out of memory");
+    for (int k = 0; k < n_out; k++) sv_counts[k] = models[k]->l;
+    mr_svr *m = NULL;
+    mr_status status = mr_svr_alloc(n_in, n_out, sv_counts, &m);
+    free(sv_counts);
+    if (status != MR_OK) return status;
+    memcpy(m->in_mean, t->in_mean, (size_t)n_in * sizeof(double));
+    memcpy(m->in_std, t->in_std, (size_t)n_in * sizeof(double));
+    memcpy(m->out_mean, t->out_mean, (size_t)n_out * sizeof(double));
+    memcpy(m->out_std, t->out_std, (size_t)n_out * sizeof(double));
+    for (int k = 0; k < n_out; k++) {
+        mr_svr_output *mo = &m->outputs[k];
+        const struct svm_model *sm = models[k];
+        for (int s = 0; s < sm->l; s++) {
+            for (const struct svm_node *node = sm->SV[s]; node->index != -1; node++)
+                if (node->index >= 1 && node->index <= n_in)
+                    mo->sv[(size_t)s * (size_t)n_in + (size_t)(node->index - 1)] = node->value;
+            mo->coef[s] = sm->sv_coef[0][s];
+        }
+        double hp[AXES];
+        hyper_parameters(t, chosen[k].t, hp);
+        mo->rho = sm->rho[0];
+        mo->gamma = hp[AXIS_GAMMA];
+        mo->C = hp[AXIS_C];
+        mo->epsilon = hp[AXIS_EPSILON];
+        mo->validation_rmse = t->out_std[k] * chosen[k].rmse;
+        mo->grid_rmse = t->out_std[k] * grid_rmse[k];
+    }
+    *out = m;
+    return MR_OK;
+}
 
 mr_status mr_svr_train(const double *x, const double *y, size_t n, int n_in, int n_out,
                        const mr_svr_train_options *opts, mr_svr **out, mr_svr_train_report *report) {
@@ -677,27 +894,25 @@ mr_status mr_svr_train(const double *x, const double *y, size_t n, int n_in, int
         t.fixed[a] = fixed[a] > 0.0;
         t.fixed_value[a] = fixed[a];
     }
-    svm_set_print_string_function(print_nothing); // libsvm's solver reports on stdout otherwise
+    pthread_once(&libsvm_print_once, set_libsvm_print); // libsvm's solver reports on stdout otherwise
 
     mr_svr_train_report rep;
     memset(&rep, 0, sizeof rep);
     scored *done = calloc((size_t)n_out, sizeof *done);
     long *best = malloc(2 * (size_t)n_out * sizeof *best);
+    double *grid_rmse = malloc((size_t)n_out * sizeof *grid_rmse);
     struct svm_model **models = calloc((size_t)n_out, sizeof *models);
-    job *refits = malloc((size_t)n_out * sizeof *refits);
-    int *sv_counts = malloc((size_t)n_out * sizeof *sv_counts);
-    if (done == NULL || best == NULL || models == NULL || refits == NULL || sv_counts == NULL)
+    job *chosen = calloc((size_t)n_out, sizeof *chosen);
+    if (done == NULL || best == NULL || grid_rmse == NULL || models == NULL || chosen == NULL)
         status = mr_fail(MR_ERR_NOMEM, "svr train: out of memory");
     if (status == MR_OK) status = trainer_init(&t, x, y);
-    long *grid_best = best + n_out;
-    if (status == MR_OK) status = run_search(&t, done, best, grid_best, &rep);
-
-    // Refit every output with its choice on all rows.
+    if (status == MR_OK) status = run_search(&t, done, best, best + n_out, &rep);
     if (status == MR_OK) {
         for (int k = 0; k < n_out; k++) {
-            refits[k].output = k;
-            memcpy(refits[k].t, done[k].t[best[k]], sizeof refits[k].t);
-            refits[k].refused = NULL;
+            chosen[k].output = k;
+            memcpy(chosen[k].t, done[k].t[best[k]], sizeof chosen[k].t);
+            chosen[k].rmse = done[k].rmse[best[k]];
+            grid_rmse[k] = done[k].rmse[best[n_out + k]];
         }
         if (o->progress != NULL) {
             const mr_svr_progress p = {MR_SVR_PHASE_REFIT, 0, n_out, mr_now_seconds() - t.start};
@@ -707,45 +922,14 @@ mr_status mr_svr_train(const double *x, const double *y, size_t n, int n_in, int
     }
     if (status == MR_OK) {
 #pragma omp parallel for num_threads(t.threads) schedule(dynamic, 1) if (t.threads > 1)
-        for (int k = 0; k < n_out; k++) {
-            double hp[AXES];
-            hyper_parameters(&t, refits[k].t, hp);
-            models[k] = fit(&t, k, hp, 1, &refits[k].refused);
-        }
-        for (int k = 0; k < n_out && status == MR_OK; k++) {
+        for (int k = 0; k < n_out; k++) final_fit(&t, &chosen[k], &models[k]);
+        for (int k = 0; k < n_out && status == MR_OK; k++)
             if (models[k] == NULL)
-                status = mr_fail(MR_ERR_INVALID_ARG, "svr train: libsvm refuses output %d's refit: %s", k,
-                                 refits[k].refused != NULL ? refits[k].refused : "no model");
-            else
-                sv_counts[k] = models[k]->l;
-        }
+                status = mr_fail(MR_ERR_INVALID_ARG, "svr train: libsvm refuses output %d's final fit: %s", k,
+                                 chosen[k].refused != NULL ? chosen[k].refused : "no model");
     }
     mr_svr *m = NULL;
-    if (status == MR_OK) status = mr_svr_alloc(n_in, n_out, sv_counts, &m);
-    if (status == MR_OK) {
-        memcpy(m->in_mean, t.in_mean, (size_t)n_in * sizeof(double));
-        memcpy(m->in_std, t.in_std, (size_t)n_in * sizeof(double));
-        memcpy(m->out_mean, t.out_mean, (size_t)n_out * sizeof(double));
-        memcpy(m->out_std, t.out_std, (size_t)n_out * sizeof(double));
-        for (int k = 0; k < n_out; k++) {
-            mr_svr_output *mo = &m->outputs[k];
-            const struct svm_model *sm = models[k];
-            double hp[AXES];
-            hyper_parameters(&t, refits[k].t, hp);
-            for (int s = 0; s < sm->l; s++) {
-                for (const struct svm_node *node = sm->SV[s]; node->index != -1; node++)
-                    if (node->index >= 1 && node->index <= n_in)
-                        mo->sv[(size_t)s * (size_t)n_in + (size_t)(node->index - 1)] = node->value;
-                mo->coef[s] = sm->sv_coef[0][s];
-            }
-            mo->rho = sm->rho[0];
-            mo->gamma = hp[AXIS_GAMMA];
-            mo->C = hp[AXIS_C];
-            mo->epsilon = hp[AXIS_EPSILON];
-            mo->validation_rmse = t.out_std[k] * done[k].rmse[best[k]];
-            mo->grid_rmse = t.out_std[k] * done[k].rmse[grid_best[k]];
-        }
-    }
+    if (status == MR_OK) status = copy_models(&t, chosen, grid_rmse, models, &m);
     if (models != NULL)
         for (int k = 0; k < n_out; k++)
             if (models[k] != NULL) svm_free_and_destroy_model(&models[k]);
@@ -753,19 +937,18 @@ mr_status mr_svr_train(const double *x, const double *y, size_t n, int n_in, int
         for (int k = 0; k < n_out; k++) {
             free(done[k].t);
             free(done[k].rmse);
+            free(done[k].iterations);
         }
     free(done);
     free(best);
+    free(grid_rmse);
     free(models);
-    free(refits);
-    free(sv_counts);
+    free(chosen);
     trainer_free(&t);
-    if (status != MR_OK) {
-        mr_svr_free(m);
-        return status;
-    }
+    if (status != MR_OK) return status;
     rep.n_train = t.n_train;
     rep.n_validation = t.n_val;
+    rep.n_search = t.n_search;
     rep.seconds = mr_now_seconds() - t.start;
     *out = m;
     if (report != NULL) *report = rep;

@@ -16,22 +16,24 @@
  *   v_k = sum over s < sv_count of coef[s] exp(-gamma |sv_s - u|^2) - rho   output k's SVR (fields of outputs[k])
  *   y_k = out_mean[k] + out_std[k] v_k                                      raw output
  * with |sv_s - u|^2 = sum over i in index order of (u_i - sv[s * n_in + i])^2, the kernel terms added in SV order,
- * one rounding per operation (ISO C mode, no fused multiply-add): the evaluation order of libsvm's svm_predict on the
- * same model (tests/test_svr.c checks the two agree to 1e-12 relative; on x86-64 they agree bit for bit). Every
- * output has its own support vectors, coefficients and hyper-parameters. Outputs are not clamped.
+ * one rounding per operation (ISO C mode, no fused multiply-add): the order of libsvm's svm_predict on the same
+ * model. The exponential is our own, within 1 ulp of glibc's exp (it vectorises; exp() calls took most of the
+ * time), so a prediction equals svm_predict's to about 1e-16 of out_std sum |coef| (tests/test_svr.c: 1e-12 is
+ * asserted; most predictions are the same bits). Every output has its own support vectors, coefficients and
+ * hyper-parameters. Outputs are not clamped.
  *
  * Plain data. mr_svr and everything it points to is one allocation (the struct, the outputs array, then the
  * doubles: in_mean, in_std, out_mean, out_std, then each output's sv and coef in output order), so a reader builds
- * one with mr_svr_alloc, fills the fields, checks it with mr_svr_check, and a writer walks the fields. Values may be
- * changed in place; pointers and sizes may not. Nothing refers to libsvm: a file of these fields (hexadecimal
+ * one with mr_svr_alloc, fills the fields and checks it with mr_svr_check, and a writer walks the fields. Values may
+ * be changed in place; pointers and sizes may not. Nothing refers to libsvm: a file of these fields (hexadecimal
  * floats) reproduces the model's predictions bit for bit.
  *
- * Extrapolation. Every kernel term vanishes far from the support vectors (|sv - u|^2 large), so far outside the
- * training data v_k -> -rho and y_k -> out_mean[k] - out_std[k] rho (mr_svr_far_field): the SVR falls back to a
- * constant near the mean of the training outputs instead of continuing the trend. This is the paper's Fig. 19
- * failure (a specular colour beyond the training range loses its chromaticity), kept on purpose and tested: the
- * transform layer flags texels outside the training domain. An infinite input gives exactly the far field; a NaN
- * input gives NaN in every output of its row.
+ * Extrapolation. Every kernel term vanishes far from the support vectors, so far outside the training data
+ * v_k -> -rho and y_k -> out_mean[k] - out_std[k] rho (mr_svr_far_field): the SVR falls back to a constant near
+ * the mean of the training outputs instead of continuing the trend. This is the paper's Fig. 19 failure (a specular
+ * colour beyond the training range loses its chromaticity), kept on purpose and tested: the transform layer flags
+ * texels outside the training domain. An infinite input gives exactly the far field (so does any input whose terms
+ * all fall below e^-708); a NaN input gives NaN in every output of its row.
  *
  * Normalisation. mr_svr_train computes each input and output column's mean and population standard deviation over
  * the training split (below), in double in row order. A column whose deviation is not above 1e-12 max(1, |mean|)
@@ -42,54 +44,77 @@
  * Training (mr_svr_train).
  *   - Split: a seeded shuffle of the rows (splitmix64); the first round(validation_fraction n) (at least 1, at most
  *     n - 1) are the validation split, the rest the training split. The split also fixes the normalisation.
- *   - Every candidate (C, gamma, epsilon) of every output is one libsvm EPSILON_SVR fit on the normalised training
- *     split (RBF kernel, shrinking on, stopping tolerance 1e-3, a kernel cache of the training split's size up to
- *     MR_SVR_CACHE_MB), scored by the root mean square of its error on the validation split (normalised units).
- *   - Grid: log2 C in -2, 0, ..., 12; log2 gamma in -6, -4, ..., 4; log10 epsilon in -4, -3, -2, -1 (192 cells per
+ *   - A candidate (C, gamma, epsilon) of an output is scored by one libsvm EPSILON_SVR fit (RBF kernel, shrinking,
+ *     stopping tolerance 1e-3, libsvm's default; a kernel cache of the whole l x l matrix up to MR_SVR_CACHE_MB) on
+ *     the search rows: the first search_rows (default MR_SVR_SEARCH_ROWS) of the shuffled training split; the score
+ *     is the root mean square error on the validation split, in normalised units.
+ *   - Cost. libsvm's SMO solver slows down sharply where the fit nears an interpolation (large C, small epsilon,
+ *     wide kernels: noise-free sweeps invite it). For 720 rows of a smooth 4 x 4 remap (gamma 1/4, epsilon 1e-3)
+ *     a fit took 44 thousand iterations (0.5 s) at C = 4, 0.7 million (10 s) at C = 64 and 7.9 million (57 s, and a
+ *     worse validation error) at C = 1024; at 10^7 libsvm stops and prints a warning to stderr that no callback
+ *     silences. The search bounds this by libsvm's own iteration count (from its report of each fit, so
+ *     deterministic): a fit of more than MR_SVR_ITERATIONS_PER_ROW iterations per search row plus
+ *     MR_SVR_ITERATIONS_MIN is too costly and scores +inf (report->costly_fits), and the search avoids the fits that
+ *     would be, as below. Where the validation error still falls beyond that boundary, the choice is the best
+ *     affordable one.
+ *   - Grid: log2 C in -2, 0, ..., 12; log2 gamma in -8, -6, ..., 4; log10 epsilon in -4, -3, -2, -1 (224 cells per
  *     output). Why these ranges: outputs have unit deviation, so C = 2^-2 already lets a coefficient reach a quarter
  *     of it (heavily regularised) and 2^12 makes the fit an interpolation of noise-free sweeps; inputs have unit
- *     deviation, so with n_in = 1..6 a squared distance across the data is ~2 n_in and gamma = 2^-6 is a kernel
- *     wider than the data (nearly polynomial), 2^4 one a quarter of a deviation wide (finer than the spacing of a few
- *     thousand rows in four dimensions); epsilon = 1e-4 of a deviation is below the noise of optimiser-made sweeps,
- *     1e-1 a coarse tube for noisy ones.
+ *     deviation, so with n_in = 1..6 a squared distance across the data is ~2 n_in and gamma = 2^-8 is a kernel much
+ *     wider than the data (nearly polynomial: best where an output depends on one input of several, as the target
+ *     roughness on the source roughness alone), 2^4 one a quarter of a deviation wide (finer than the spacing of a
+ *     few thousand rows in four dimensions); epsilon = 1e-4 of a deviation is below the noise of optimiser-made
+ *     sweeps, 1e-1 a coarse tube for noisy ones. For each (gamma, epsilon) the C values are fitted in increasing
+ *     order: after a fit with no coefficient at the bound C, larger C values have the same solution and take its
+ *     score unfitted; after a fit of more than a quarter of the cap (iterations grow about as C there, and the grid
+ *     steps C by 4), the larger ones would exceed the cap and score +inf unfitted.
  *   - Local search: from the best grid cell and up to MR_SVR_STARTS - 1 further cells that are better than their
  *     grid neighbours (in order of validation error), a compass search in (log2 C, log2 gamma, log10 epsilon):
  *     poll the two neighbours at +-step on each axis, move to the best poll if it lowers the validation error,
- *     else halve the step; steps start at half the grid spacing (1, 1, 0.5) and stop below an eighth of it (three
- *     halvings) or after MR_SVR_MAX_ROUNDS rounds. The search may leave the grid by one spacing on every side
- *     (C 2^-4..2^14, gamma 2^-8..2^6, epsilon 1e-5..1). Candidates already scored are not fitted again. The chosen
- *     point is the lowest validation error of all candidates of the output (the first scored among ties), so it is
- *     never worse than the grid's best: outputs[k].grid_rmse against outputs[k].validation_rmse says how much the
- *     local search gained. (The paper tuned the three by "simple gradient descent"; the validation error of an SVR
- *     is piecewise smooth and full of plateaus in these parameters, where a grid then a derivative-free local search
- *     is the usual remedy: Hsu, Chang, Lin, "A practical guide to support vector classification", 2003.)
+ *     else halve the step; steps start at half the grid spacing (1, 1, 0.5) and the search ends after failing at a
+ *     quarter of that, or after MR_SVR_MAX_ROUNDS rounds. It may leave the grid by one spacing on every side (C
+ *     2^-4..2^14, gamma 2^-10..2^6, epsilon 1e-5..1). Neighbours in a costlier direction (larger C or gamma, smaller
+ *     epsilon) of a centre whose fit took over half the cap are not polled. Candidates already scored are not
+ *     fitted again. The chosen point is the lowest score of all candidates of the output (the first scored among
+ *     ties, so the smaller C on a grid line), never worse than the grid's best: outputs[k].grid_rmse against
+ *     outputs[k].validation_rmse says what the local search gained. (The paper tuned the three by "simple gradient
+ *     descent"; the validation error of an SVR is piecewise smooth and full of plateaus in these parameters, where
+ *     a grid then a derivative-free local search is the usual remedy: Hsu, Chang, Lin, "A practical guide to
+ *     support vector classification", 2003.)
  *   - Fixed hyper-parameters: a C, gamma or epsilon set in the options is used for every output and not searched
- *     (the grid and the search run over the others; with all three fixed, one fit per output is scored).
- *   - Refit: each output is then fitted once more with its chosen hyper-parameters on all n rows (training and
- *     validation splits, still normalised with the training split's statistics): the validation rows are sweep
- *     data too, and a transform wants every sample; the reported validation error is the split fit's (honest), the
- *     returned model the refit's.
+ *     (the grid and the search run over the others; with all three fixed, one fit per output is scored, uncapped).
+ *   - Validation error reported: when the search rows are the whole training split, the chosen candidate's score;
+ *     otherwise the chosen hyper-parameters are fitted once more on the whole training split and scored (honest for
+ *     the final model's size; grid_rmse is then from the search rows and may exceed or undercut it).
+ *   - Refit: each output is finally fitted with its chosen hyper-parameters on all n rows (training and validation
+ *     splits, still normalised with the training split's statistics): the validation rows are sweep data too, and a
+ *     transform wants every sample. These fits are not capped; their hyper-parameters cost at most the cap on the
+ *     search rows, far below libsvm's own limit of 10^7 iterations, so its warning is not reached in practice.
  *
  * Determinism. The split is the only random draw (from opts->seed). Every fit is a libsvm call on the same data in
- * the same order, which is deterministic; scores are stored by candidate and compared in a fixed order, so the same
- * seed gives the same model bits whatever the thread count (tests/test_svr.c checks 1, 2 and 3 threads).
+ * the same order, which is deterministic, and so are its iteration counts; scores are stored by candidate and
+ * compared in a fixed order, so the same seed gives the same model bits whatever the thread count (tests/test_svr.c
+ * checks 1, 2 and 3 threads). Prediction: each row's outputs are the same bits whatever the other rows, the thread
+ * count and the CPU (on x86-64 Linux an AVX2 variant is chosen at run time; it rounds exactly as the SSE2 one).
  *
- * Threads. Candidates are independent: the grid cells of all outputs, each round of the local search (the polls of
- * every start of every output) and the refits run on opts->threads OpenMP threads (0 = omp_get_max_threads()), one
- * libsvm fit per thread at a time, each with its own kernel cache. mr_svr_predict splits rows over
+ * Threads. Candidates are independent: the grid lines of all outputs, each round of the local search (the polls of
+ * every start of every output) and the final fits run on opts->threads OpenMP threads (0 = omp_get_max_threads()),
+ * one libsvm fit per thread at a time, each with its own kernel cache. mr_svr_predict splits blocks of rows over
  * omp_get_max_threads() threads, one per MR_SVR_PREDICT_ROWS rows at most (a team costs more than fewer rows save).
- * All functions are reentrant and a model may be shared by threads for reading. libsvm prints through a process-wide
- * function pointer: mr_svr_train points it at a function that prints nothing (svm_set_print_string_function) and
- * leaves it so.
+ * All functions are reentrant and a model may be shared by threads for reading. libsvm prints through one
+ * process-wide function pointer: the first mr_svr_train points it, once, at a function that prints nothing (it
+ * reads the iteration counts the cost cap needs) and leaves it so; other libsvm users in the process are silenced
+ * too, and must not replace it (the cap would go blind: report->iterations would stay 0).
  *
  * Ownership. A model returned through `mr_svr **out` belongs to the caller and is released, with everything it
  * points to, by mr_svr_free() (NULL-safe). The library keeps no pointer to caller arrays after a call returns, and
- * no libsvm model outlives the call that trained it.
+ * no libsvm model outlives the call that trained it (support vectors and coefficients are copied out).
  *
  * Errors. MR_ERR_INVALID_ARG with the value named (NULL arrays, sizes out of range, options out of range, a
  * non-finite training value by row and column, a hyper-parameter libsvm's svm_check_parameter refuses, a model that
- * fails mr_svr_check); MR_ERR_NOMEM; MR_ERR_CANCELLED when the progress callback asks to stop. Nothing is printed.
- * Out-pointers are untouched on failure.
+ * fails mr_svr_check); MR_ERR_NUMERIC (no candidate of an output gives a finite validation error); MR_ERR_NOMEM;
+ * MR_ERR_CANCELLED when the progress callback asks to stop. Nothing is printed. Out-pointers are untouched on
+ * failure.
  */
 #ifndef MR_LEARN_SVR_H
 #define MR_LEARN_SVR_H
@@ -105,10 +130,13 @@ extern "C" {
 #define MR_SVR_MAX_IO 1024          /* largest n_in or n_out */
 #define MR_SVR_MAX_ROWS 1000000     /* most training rows (libsvm counts in int; the fit is O(rows^2) anyway) */
 #define MR_SVR_DEFAULT_VALIDATION 0.2
-#define MR_SVR_STARTS 3             /* local searches per output */
+#define MR_SVR_STARTS 2             /* local searches per output */
 #define MR_SVR_MAX_ROUNDS 40        /* rounds of the local search */
 #define MR_SVR_CACHE_MB 128         /* largest libsvm kernel cache per fit */
 #define MR_SVR_PREDICT_ROWS 256     /* rows a prediction thread must have */
+#define MR_SVR_SEARCH_ROWS 1000     /* training rows the search fits on, by default */
+#define MR_SVR_ITERATIONS_PER_ROW 50 /* the cap: a search fit of more libsvm iterations than this per search */
+#define MR_SVR_ITERATIONS_MIN 10000  /* row plus this is too costly and scores +inf (header comment) */
 
 /* One output's epsilon-SVR (header comment). */
 typedef struct mr_svr_output {
@@ -170,8 +198,8 @@ typedef enum mr_svr_phase {
 /* What the progress callback sees. */
 typedef struct mr_svr_progress {
     mr_svr_phase phase;
-    long fits_done;    /* libsvm fits finished in this phase */
-    long fits_planned; /* the phase's fits as known now (the local search learns its own as it goes) */
+    long done;         /* candidates of this phase scored so far (fitted, or scored without a fit) */
+    long planned;      /* the phase's candidates as known now (the local search learns its own as it goes) */
     double seconds;    /* since mr_svr_train began */
 } mr_svr_progress;
 
@@ -187,6 +215,7 @@ typedef struct mr_svr_train_options {
     double C;                   /* > 0: this penalty for every output, not searched; 0 = search */
     double gamma;               /* > 0: this kernel width (normalised units), not searched; 0 = search */
     double epsilon;             /* > 0: this tube half-width (normalised units), not searched; 0 = search */
+    int search_rows;            /* training rows the search fits on; 0 = MR_SVR_SEARCH_ROWS */
     mr_svr_progress_fn progress;
     void *progress_user;
 } mr_svr_train_options;
@@ -194,8 +223,11 @@ typedef struct mr_svr_train_options {
 /* How a training run went (per output, the model's training record). */
 typedef struct mr_svr_train_report {
     size_t n_train, n_validation; /* rows in each split */
-    long grid_fits;               /* libsvm fits scored on the grid (all outputs) */
-    long local_fits;              /* and in the local search */
+    size_t n_search;              /* training rows the search fitted on */
+    long grid_fits;               /* libsvm fits made for the grid (all outputs) */
+    long local_fits;              /* and for the local search */
+    long costly_fits;             /* of those, fits above the iteration cap (scored +inf) */
+    long long iterations;         /* libsvm's iterations over the search's fits */
     int local_rounds;             /* rounds of the local search */
     double seconds;               /* wall time of the whole call */
 } mr_svr_train_report;
