@@ -30,6 +30,10 @@ __attribute__((format(printf, 2, 3)))
 #endif
 int cli_usage_error(const char *command, const char *fmt, ...);
 
+/* 1 if a and b name the same existing file (st_dev and st_ino: links, "./x" and other spellings included): an output
+ * that would replace an input. */
+int cli_same_file(const char *a, const char *b);
+
 /* True if argv[i] is "--help" or "-h". */
 int cli_is_help(const char *arg);
 

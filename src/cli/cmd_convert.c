@@ -66,11 +66,6 @@ static void print_help(void) {
         "                   --via ward\n");
 }
 
-static int same_file(const char *a, const char *b) {
-    struct stat sa, sb;
-    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
-}
-
 /* "name=VALUE" keeps its form, "name=FILE" becomes "name=@FILE" (cli_material's map syntax); *owned gets the copy. */
 static const char *as_material_assignment(const char *arg, char **owned) {
     const char *eq = strchr(arg, '=');
@@ -360,7 +355,7 @@ int cmd_convert(int argc, char **argv) {
                                   : snprintf(names[j], sizeof names[j], "%sflags.png", prefix);
             if (n < 0 || (size_t)n >= sizeof names[j]) code = cli_usage_error(COMMAND, "-o '%s': too long", prefix);
             for (int k = 0; code == CLI_EXIT_OK && k < m->map_count; k++)
-                if (same_file(names[j], m->maps[k].source)) {
+                if (cli_same_file(names[j], m->maps[k].source)) {
                     fprintf(stderr, "matremap convert: error: output '%s' is the input map '%s': it would be "
                                     "replaced\n", names[j], m->maps[k].source);
                     code = CLI_EXIT_BAD_INPUT;

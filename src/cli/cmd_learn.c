@@ -68,11 +68,6 @@ static void print_help(void) {
         "                   --transform ward_ggx.mrt -o out/ggx_\n");
 }
 
-static int same_file(const char *a, const char *b) {
-    struct stat sa, sb;
-    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
-}
-
 typedef struct progress_state {
     int draw;
     double started;
@@ -354,7 +349,7 @@ int cmd_learn(int argc, char **argv) {
     if (file_count == 0) return cli_usage_error(COMMAND, "no sweep file given");
     if (output == NULL) return cli_usage_error(COMMAND, "no output file: give -o T.mrt");
     for (int i = 0; i < file_count; i++)
-        if (same_file(files[i], output)) {
+        if (cli_same_file(files[i], output)) {
             fprintf(stderr, "matremap learn: error: -o '%s' is the input sweep '%s': it would be replaced\n", output,
                     files[i]);
             return CLI_EXIT_BAD_INPUT;

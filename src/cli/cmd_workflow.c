@@ -223,16 +223,10 @@ static const char *default_format(map_arg *const *maps, int count) {
     return "png";
 }
 
-/* 1 if a and b name the same existing file (st_dev and st_ino: links and other spellings included). */
-static int same_file(const char *a, const char *b) {
-    struct stat sa, sb;
-    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
-}
-
 /* 1 if a and b name one file, existing or still to be written: the same text, the same existing file, or the same
  * name in the same existing directory ("./x_diffuse.png" and "x_diffuse.png" before either is written). */
 static int same_path(const char *a, const char *b) {
-    if (strcmp(a, b) == 0 || same_file(a, b)) return 1;
+    if (strcmp(a, b) == 0 || cli_same_file(a, b)) return 1;
     const char *name_a = strrchr(a, '/'), *name_b = strrchr(b, '/');
     name_a = name_a ? name_a + 1 : a;
     name_b = name_b ? name_b + 1 : b;
@@ -240,7 +234,7 @@ static int same_path(const char *a, const char *b) {
     char dir_a[PATH_SIZE], dir_b[PATH_SIZE]; // "dir/" or "." for a bare name
     snprintf(dir_a, sizeof dir_a, "%.*s", name_a > a ? (int)(name_a - a) : 1, name_a > a ? a : ".");
     snprintf(dir_b, sizeof dir_b, "%.*s", name_b > b ? (int)(name_b - b) : 1, name_b > b ? b : ".");
-    return same_file(dir_a, dir_b);
+    return cli_same_file(dir_a, dir_b);
 }
 
 /* Name the outputs PREFIX_<name>.EXT and check the options; refuse (usage error) an output that is an input, or

@@ -2,12 +2,15 @@
  * learned_file.c — the transform file (.mrt) of learned.h: writing, reading, and their strict checks.
  */
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "c_locale.h"
 #include "io/io_internal.h"
@@ -15,6 +18,7 @@
 #include "learn/svr.h"
 #include "mr_internal.h"
 #include "nn/mlp.h"
+#include "remap/remap_file.h"
 
 #define MAX_TOKEN 63
 #define MAX_FILE_BYTES ((size_t)1 << 30)
@@ -611,30 +615,21 @@ mr_status mr_learned_parse(const char *text, size_t size, const char *name, mr_l
 mr_status mr_learned_read(const char *path, mr_learned **out) {
     if (path == NULL || path[0] == '\0') return mr_fail(MR_ERR_INVALID_ARG, "transform read: empty path");
     if (out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "transform read '%s': NULL output", path);
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) return mr_fail(MR_ERR_IO, "transform '%s': cannot open: %s", path, strerror(errno));
-    size_t length = 0, capacity = 1 << 16;
-    char *text = malloc(capacity);
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0) return mr_fail(MR_ERR_IO, "transform '%s': cannot open: %s", path, strerror(errno));
+    struct stat st;
     mr_status status = MR_OK;
-    for (;;) {
-        if (text == NULL) {
-            status = mr_fail(MR_ERR_NOMEM, "transform '%s': out of memory", path);
-            break;
-        }
-        length += fread(text + length, 1, capacity - length, f);
-        if (length < capacity) break;
-        if (capacity >= MAX_FILE_BYTES) {
-            status = mr_fail(MR_ERR_FORMAT, "transform '%s': larger than %zu bytes", path, MAX_FILE_BYTES);
-            break;
-        }
-        capacity *= 2;
-        char *grown = realloc(text, capacity);
-        if (grown == NULL) free(text);
-        text = grown;
-    }
-    if (status == MR_OK && ferror(f))
-        status = mr_fail(MR_ERR_IO, "transform '%s': read error: %s", path, strerror(errno));
-    fclose(f);
+    if (fstat(fd, &st) != 0)
+        status = mr_fail(MR_ERR_IO, "transform '%s': cannot stat: %s", path, strerror(errno));
+    else if (!S_ISREG(st.st_mode))
+        status = mr_fail(MR_ERR_IO, "transform '%s': not a regular file", path);
+    else if ((size_t)st.st_size > MAX_FILE_BYTES)
+        status = mr_fail(MR_ERR_FORMAT, "transform '%s': %lld bytes, more than the %zu a transform may take", path,
+                         (long long)st.st_size, MAX_FILE_BYTES);
+    char *text = NULL;
+    size_t length = 0;
+    if (status == MR_OK) status = mr_text_file_read_all(fd, path, "transform", &text, &length);
+    close(fd);
     if (status == MR_OK) status = mr_learned_parse(text, length, path, out);
     free(text);
     return status;

@@ -60,17 +60,6 @@ static mr_status learned_apply(const mr_transform *t, const mr_transform_batch *
     return status;
 }
 
-/* One slot per parameter of `model`, its range the domain (what apply clamps). */
-static int model_slots(const mr_brdf_model *model, mr_transform_slot *slots) {
-    if (model->param_count > MR_TRANSFORM_MAX_SLOTS) return 0;
-    for (int p = 0; p < model->param_count; p++) {
-        const mr_brdf_param *q = &model->params[p];
-        slots[p] = (mr_transform_slot){q->name, q->channels, q->min_value, q->max_value, q->min_value,
-                                       MR_SLOT_OPTIONAL, 0.0, -1};
-    }
-    return 1;
-}
-
 mr_status mr_learned_kind_create(const mr_learned *const *hops, int count, mr_transform_kind **out) {
     if (hops == NULL || out == NULL || count < 1 || count > MR_LEARNED_MAX_HOPS)
         return mr_fail(MR_ERR_INVALID_ARG, "learned kind: NULL argument or %d hops (1 .. %d)", count,
@@ -84,7 +73,7 @@ mr_status mr_learned_kind_create(const mr_learned *const *hops, int count, mr_tr
     learned_kind *lk = calloc(1, sizeof *lk);
     if (lk == NULL) return mr_fail(MR_ERR_NOMEM, "learned kind: out of memory");
     const mr_brdf_model *source = hops[0]->source, *target = hops[count - 1]->target;
-    if (!model_slots(source, lk->inputs) || !model_slots(target, lk->outputs)) {
+    if (!mr_transform_model_slots(source, lk->inputs) || !mr_transform_model_slots(target, lk->outputs)) {
         free(lk);
         return mr_fail(MR_ERR_INVALID_ARG, "learned kind: %s or %s has more than %d parameters", source->name,
                        target->name, MR_TRANSFORM_MAX_SLOTS);

@@ -11,6 +11,7 @@
 
 #include "c_locale.h"
 #include "mr_internal.h"
+#include "remap/remap_file.h"
 
 #define MAX_COLUMNS 128
 #define MAX_LINE 8192
@@ -25,20 +26,6 @@ typedef struct file_columns {
 typedef struct file_header {
     char from_model[64], to_line[1024], scene[256];
 } file_header;
-
-static int split_fields(char *line, char **fields, int max) {
-    line[strcspn(line, "\r\n")] = '\0';
-    int count = 0;
-    char *at = line;
-    while (count < max) {
-        fields[count++] = at;
-        char *comma = strchr(at, ',');
-        if (comma == NULL) break;
-        *comma = '\0';
-        at = comma + 1;
-    }
-    return count;
-}
 
 static int parse_number(const char *text, double *out) {
     char *end = NULL;
@@ -205,7 +192,7 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
                 }
             }
             char *names[MAX_COLUMNS];
-            int count = split_fields(line, names, MAX_COLUMNS);
+            int count = mr_csv_split(line, names, MAX_COLUMNS);
             status = map_model_columns(path, names, count, source, "", cols.source);
             if (status == MR_OK) status = map_model_columns(path, names, count, target, "to_", cols.target);
             cols.ssim = cols.outcome = -1;
@@ -220,7 +207,7 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
             continue;
         }
         char *fields[MAX_COLUMNS];
-        int count = split_fields(line, fields, MAX_COLUMNS);
+        int count = mr_csv_split(line, fields, MAX_COLUMNS);
         if (count != cols.count) {
             status = mr_fail(MR_ERR_FORMAT, "%s:%ld: %d fields, the column line has %d (a torn or edited row)", path,
                              line_number, count, cols.count);

@@ -61,22 +61,12 @@ static mr_status direct_apply(const mr_transform *t, const mr_transform_batch *b
     return status;
 }
 
-static int model_slots(const mr_brdf_model *model, mr_transform_slot *slots) {
-    if (model->param_count > MR_TRANSFORM_MAX_SLOTS) return 0;
-    for (int p = 0; p < model->param_count; p++) {
-        const mr_brdf_param *q = &model->params[p];
-        slots[p] = (mr_transform_slot){q->name, q->channels, q->min_value, q->max_value, q->min_value,
-                                       MR_SLOT_OPTIONAL, 0.0, -1};
-    }
-    return 1;
-}
-
 mr_status mr_direct_kind_create(const mr_brdf_model *source, const mr_brdf_model *target, const mr_direct_options *opts,
                                 mr_transform_kind **out) {
     if (source == NULL || target == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "direct: NULL argument");
     direct_kind *dk = calloc(1, sizeof *dk);
     if (dk == NULL) return mr_fail(MR_ERR_NOMEM, "direct: out of memory");
-    if (!model_slots(source, dk->inputs) || !model_slots(target, dk->outputs)) {
+    if (!mr_transform_model_slots(source, dk->inputs) || !mr_transform_model_slots(target, dk->outputs)) {
         free(dk);
         return mr_fail(MR_ERR_INVALID_ARG, "direct: %s or %s has more than %d parameters", source->name, target->name,
                        MR_TRANSFORM_MAX_SLOTS);

@@ -330,3 +330,17 @@ int mr_csv_parse_long(const char *field, size_t len, long *out) {
     *out = v;
     return 1;
 }
+
+int mr_csv_split(char *line, char **fields, int max) {
+    line[strcspn(line, "\r\n")] = '\0';
+    int count = 0;
+    char *at = line;
+    while (count < max) {
+        fields[count++] = at;
+        char *comma = strchr(at, ',');
+        if (comma == NULL) break;
+        *comma = '\0';
+        at = comma + 1;
+    }
+    return count;
+}

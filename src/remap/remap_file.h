@@ -103,6 +103,9 @@ mr_status mr_remap_run_parallel(int threads, long count, int *stop, void (*work)
  * the last field. Returns 0 when there is no field left (*at was SIZE_MAX). */
 int mr_csv_next_field(const char *line, size_t length, size_t *at, const char **field, size_t *field_len);
 
+/* Split `line` in place at commas (a trailing '\r' or '\n' cut off) into fields[0 .. result), at most max. */
+int mr_csv_split(char *line, char **fields, int max);
+
 /* The whole field as a number (strtod in the current numeric locale) / a non-negative decimal integer; 0 if the
  * field is empty, too long or not entirely the number. */
 int mr_csv_parse_double(const char *field, size_t len, double *out);

@@ -75,6 +75,16 @@ int mr_transform_output_index(const mr_transform_kind *kind, const char *name) {
     return kind ? slot_index(kind->outputs, kind->output_count, name) : -1;
 }
 
+int mr_transform_model_slots(const mr_brdf_model *model, mr_transform_slot *slots) {
+    if (model == NULL || slots == NULL || model->param_count > MR_TRANSFORM_MAX_SLOTS) return 0;
+    for (int p = 0; p < model->param_count; p++) {
+        const mr_brdf_param *q = &model->params[p];
+        slots[p] = (mr_transform_slot){q->name, q->channels, q->min_value, q->max_value, q->min_value,
+                                       MR_SLOT_OPTIONAL, 0.0, -1};
+    }
+    return 1;
+}
+
 /* ---- instances ---------------------------------------------------------------------------------------------- */
 
 #define NETWORK_FILE "spec2metal.mlp"

@@ -37,6 +37,7 @@
 #include <stdint.h>
 
 #include "../mr_image.h"
+#include "../brdf/brdf.h"
 #include "../mr_status.h"
 #include "../workflow/workflow.h"
 
@@ -134,6 +135,11 @@ const mr_transform_kind *mr_transform_find(const char *source, const char *targe
 /* Index of slot `name` in the kind's inputs (outputs), or -1. */
 int mr_transform_input_index(const mr_transform_kind *kind, const char *name);
 int mr_transform_output_index(const mr_transform_kind *kind, const char *name);
+
+/* One slot per parameter of `model`, in table order, into slots[] (MR_TRANSFORM_MAX_SLOTS): the parameter's name,
+ * channels, range as domain, its minimum for non-finite inputs, optional; for kinds that read or write a whole model
+ * (learned.h, direct.h). Returns 0 if the model has more parameters than a kind may have slots. */
+int mr_transform_model_slots(const mr_brdf_model *model, mr_transform_slot *slots);
 
 /* ---- instances ---- */
 

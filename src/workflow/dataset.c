@@ -11,6 +11,7 @@
 
 #include "../c_locale.h"
 #include "../mr_internal.h"
+#include "../remap/remap_file.h"
 #include "workflow.h"
 
 #define MAX_COLUMNS 256
@@ -26,21 +27,6 @@ static int find_column(char **names, int count, const char *name) {
     for (int i = 0; i < count; i++)
         if (strcmp(names[i], name) == 0) return i;
     return -1;
-}
-
-/* Split `line` in place at commas (the trailing newline removed); returns the field count (at most max). */
-static int split_fields(char *line, char **fields, int max) {
-    line[strcspn(line, "\r\n")] = '\0';
-    int count = 0;
-    char *at = line;
-    while (count < max) {
-        fields[count++] = at;
-        char *comma = strchr(at, ',');
-        if (comma == NULL) break;
-        *comma = '\0';
-        at = comma + 1;
-    }
-    return count;
 }
 
 static mr_status map_columns(const char *path, char **names, int count, columns *c, int *metallic_source) {
@@ -159,11 +145,11 @@ static mr_status load_file(const char *path, const mr_wf_dataset_options *opts, 
                 status = mr_fail(MR_ERR_NOMEM, "dataset: out of memory");
                 break;
             }
-            name_count = split_fields(header, names, MAX_COLUMNS);
+            name_count = mr_csv_split(header, names, MAX_COLUMNS);
             status = map_columns(path, names, name_count, &c, &metallic_source);
             continue;
         }
-        int field_count = split_fields(line, fields, MAX_COLUMNS);
+        int field_count = mr_csv_split(line, fields, MAX_COLUMNS);
         if (field_count != name_count) {
             status = mr_fail(MR_ERR_FORMAT, "%s:%ld: %d fields, the header names %d (a torn last line? resume the "
                              "sweep to finish it)", path, line_number, field_count, name_count);
