@@ -385,7 +385,10 @@ sheet="$work/index.html"
 
 if [ -z "$smoke" ]; then
     mkdir -p "$docs"
-    for f in "$work"/plots/*.svg; do [ -f "$f" ] && cp "$f" "$docs/"; done
+    # Small SVGs in docs/: gnuplot's output shrunk by make analyses' minifier (what it draws unchanged).
+    for f in "$work"/plots/*.svg; do
+        [ -f "$f" ] && awk -f "$root/scripts/analyses/svgmin.awk" "$f" >"$docs/${f##*/}"
+    done
     replace_doc_section "$root/docs/evaluation-svbrdf.md" eval-svbrdf "$table" ||
         echo "evaluation-svbrdf: docs/evaluation-svbrdf.md has no eval-svbrdf markers: table left in $table" >&2
 fi
