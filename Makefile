@@ -12,7 +12,7 @@
 #   make evaluation-hardcases   every spec2metal method on single hard texels, on spheres (docs/evaluation.md)
 #   make evaluation-svbrdf   real texture sets as Ward SVBRDFs remapped by every learned method into ggx, beckmann,
 #                   as and cycles-principled, on the paper's sphere under the turning Tabac Plant probe
-#                   (docs/evaluation-svbrdf.md; ~15 min on 2 cores)
+#                   (docs/evaluation-svbrdf.md; 11 min on 2 cores after make)
 #   make evaluation-viewers   the same conversions in the viewers people use: Blender Cycles and three.js in
 #                   headless Chromium (docs/evaluation.md, "What viewers show"; installs Blender, Chromium, npm pins)
 #   make dataset    the specular -> metallic training set (build/dataset); make train: data/spec2metal.mlp;
