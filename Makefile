@@ -10,6 +10,9 @@
 #   make evaluation the workflow converters on the real texture sets of ../shared/assets (docs/evaluation.md)
 #   make evaluation-gltf   the glTF conversions and gltf-transform's, rendered as meshes (docs/evaluation.md)
 #   make evaluation-hardcases   every spec2metal method on single hard texels, on spheres (docs/evaluation.md)
+#   make evaluation-svbrdf   real texture sets as Ward SVBRDFs remapped by every learned method into ggx, beckmann,
+#                   as and cycles-principled, on the paper's sphere under the turning Tabac Plant probe
+#                   (docs/evaluation-svbrdf.md; 11 min on 2 cores after make)
 #   make evaluation-viewers   the same conversions in the viewers people use: Blender Cycles and three.js in
 #                   headless Chromium (docs/evaluation.md, "What viewers show"; installs Blender, Chromium, npm pins)
 #   make dataset    the specular -> metallic training set (build/dataset); make train: data/spec2metal.mlp;
@@ -102,7 +105,8 @@ PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h 
                   src/learn/parametric.h src/learn/svr.h src/learn/sweep_table.h src/learn/learned.h \
                   gltf/mr_gltf.h gltf/mr_gltf_convert.h gltf/mr_gltf_scene.h
 
-.PHONY: all check asan demo bench analyses evaluation evaluation-gltf evaluation-hardcases evaluation-viewers dataset \
+.PHONY: all check asan demo bench analyses evaluation evaluation-gltf evaluation-hardcases evaluation-svbrdf \
+        evaluation-viewers dataset \
         train objectives deps install clean
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
@@ -187,6 +191,9 @@ evaluation-gltf: all
 
 evaluation-hardcases: all
 	scripts/evaluate-hardcases.sh $(BUILD)
+
+evaluation-svbrdf: all
+	scripts/evaluate-svbrdf.sh $(BUILD)
 
 # object_metrics: SSIM and luminance over a render's object pixels (its alpha), from mr_ssim's map.
 OBJECT_METRICS := $(BUILD)/tools/object_metrics

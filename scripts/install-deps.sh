@@ -14,6 +14,7 @@ packages=(
     libsvm-dev         # epsilon-SVR training of learned transforms (src/learn/svr.c)
     libtinyobjloader-dev  # OBJ meshes, e.g. the paper's material-test sphere (src/io/obj_load.cpp)
     gnuplot-nox
+    jq                 # scripts/evaluate-svbrdf.sh reads the reports' summary.json
     fonts-dejavu-core  # labels on the demo's contact sheets (oiiotool --text)
     python3            # tests/gltf_validate.sh compares glTF JSON (tests/lib/gltf_json_compare.py)
     locales            # tests/test_locale.c builds a decimal-comma locale (de_DE) with localedef from its data

@@ -410,7 +410,33 @@ MR_TEST(parametric_refuses_wrong_shape) {
                  mr_last_error());
 }
 
+/* SVR hyper-parameters held through the options are used for every output, not searched; invalid ones are named. */
+MR_TEST(svr_hyper_parameters_held) {
+    const char *path = ward_ggx_sweep();
+    mr_sweep_table tab;
+    MR_CHECK_OK(mr_sweep_table_load(&path, 1, NULL, &tab));
+    mr_learn_options o = {0};
+    o.method = MR_LEARN_SVR;
+    o.threads = 1;
+    o.svr_C = 1000.0;
+    o.svr_gamma = 0.5;
+    o.svr_epsilon = 0.001;
+    mr_learned *t = NULL;
+    MR_CHECK_OK(mr_learn(&tab, &o, &t));
+    for (int k = 0; t != NULL && t->svr != NULL && k < t->svr->n_out; k++) {
+        const mr_svr_output *out = &t->svr->outputs[k];
+        MR_CHECK(out->C == 1000.0 && out->gamma == 0.5 && out->epsilon == 0.001);
+    }
+    mr_learned_free(t);
+    t = NULL;
+    o.svr_C = -1.0;
+    MR_CHECK(mr_learn(&tab, &o, &t) == MR_ERR_INVALID_ARG && t == NULL);
+    MR_CHECK(strstr(mr_last_error(), "svr C -1") != NULL);
+    mr_sweep_table_free(&tab);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(parametric_recovers_known_mapping), MR_TEST_ENTRY(carry_by_lobe_ratio),
              MR_TEST_ENTRY(round_trip_every_method), MR_TEST_ENTRY(corrupted_files_refused),
              MR_TEST_ENTRY(domain_flags_and_chromaticity), MR_TEST_ENTRY(chain_equals_steps),
-             MR_TEST_ENTRY(chain_search), MR_TEST_ENTRY(parametric_refuses_wrong_shape))
+             MR_TEST_ENTRY(chain_search), MR_TEST_ENTRY(parametric_refuses_wrong_shape),
+             MR_TEST_ENTRY(svr_hyper_parameters_held))

@@ -51,7 +51,9 @@ static void print_help(void) {
         "                      lowers the held-out error by 1 %% or more)\n"
         "  --hidden N          mlp: hidden units (default 64)\n"
         "  --epochs N          mlp: most epochs (default 2000)\n"
-        "  --threads T         svr search / mlp training threads (default: all cores; results do not depend on it)\n"
+        "  --svr-c C, --svr-gamma G, --svr-epsilon E\n"
+        "                      svr: fix that hyper-parameter for every output (normalised units) instead\n"
+        "                      of searching it (the search fits up to ~200 candidates per output)\n"        "  --threads T         svr search / mlp training threads (default: all cores; results do not depend on it)\n"
         "  --all-outcomes      keep local-minimum rows too\n"
         "  --plots DIR         the paper's cross sections as SVG (gnuplot): target roughness against source\n"
         "                      roughness, target specular against source specular coloured by roughness, with\n"
@@ -328,6 +330,13 @@ int cmd_learn(int argc, char **argv) {
             else return cli_usage_error(COMMAND, "--inverse '%s': expected auto, yes or no", v);
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--hidden", &v)) != 0) {
             if (r < 0 || !cli_parse_int(COMMAND, "--hidden", v, 1, 4096, &o.mlp_hidden)) return CLI_EXIT_USAGE;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--svr-c", &v)) != 0) {
+            if (r < 0 || !cli_parse_double(COMMAND, "--svr-c", v, 1e-12, 1e12, &o.svr_C)) return CLI_EXIT_USAGE;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--svr-gamma", &v)) != 0) {
+            if (r < 0 || !cli_parse_double(COMMAND, "--svr-gamma", v, 1e-12, 1e12, &o.svr_gamma)) return CLI_EXIT_USAGE;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--svr-epsilon", &v)) != 0) {
+            if (r < 0 || !cli_parse_double(COMMAND, "--svr-epsilon", v, 1e-12, 1e12, &o.svr_epsilon))
+                return CLI_EXIT_USAGE;
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--epochs", &v)) != 0) {
             if (r < 0 || !cli_parse_int(COMMAND, "--epochs", v, 1, 1000000, &o.mlp_max_epochs)) return CLI_EXIT_USAGE;
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--threads", &v)) != 0) {

@@ -15,10 +15,6 @@
 #include "cli.h"
 #include "io/obj_load.h"
 
-/* The paper's visualisation camera (brdf-reference 1: Mitsuba perspective, fov 40 on y, at (0,0,-1.5) looking at
- * the origin), framing its material-test sphere of radius 0.5. */
-static const mr_camera paper_camera = {{0.0, 0.0, -1.5}, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, 40.0};
-
 /* The fit scene's point light (distance 3 from a unit sphere, 10 W/sr, frontal or 45 degrees to the camera's
  * right) scaled to the object and turned with the camera: at 3 bounding radii from the centre of the object's
  * bounding sphere (centre of its box, radius to its farthest vertex; the unit sphere for the sphere), in the fit
@@ -254,7 +250,7 @@ int cmd_render(int argc, char **argv) {
         if (!paper) status = mr_camera_frame_mesh(&obj->mesh, &frame, &scene.camera);
         if (status != MR_OK) code = cli_fail("render", status);
     }
-    if (paper) scene.camera = paper_camera;
+    if (paper) scene.camera = mr_camera_paper();
     if (obj != NULL || paper) mesh_lights(obj != NULL ? &obj->mesh : NULL, scene_opts.light, &scene);
     if (env != NULL) {
         // --env alone lights with the map only; with an explicit --light the point light stays as well.

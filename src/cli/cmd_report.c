@@ -1,7 +1,8 @@
 /*
  * cmd_report.c — `matremap report -o DIR [options] REFERENCE [-- MATERIAL ...]`: parses the command line into
  * report inputs (materials given as for `matremap render`, cli_material.c, or glTF assets loaded as scenes,
- * mr_gltf_scene_load) and options, calls mr_report_make (src/report/report.h), which renders, compares and
+ * mr_gltf_scene_load), an optional OBJ mesh to render the materials on (--mesh, mr_obj_load) and options,
+ * calls mr_report_make (src/report/report.h), which renders, compares and
  * writes the report folder, and prints each input's mean figures and the page's path. Progress goes to stderr
  * on a terminal.
  */
@@ -12,8 +13,9 @@
 
 #include "cli.h"
 #include "gltf/mr_gltf_scene.h"
+#include "io/obj_load.h"
 
-#define MAX_MATERIALS 16
+#define MAX_MATERIALS 64
 #define MAX_ARGS 64
 
 static void print_help(void) {
@@ -32,6 +34,9 @@ static void print_help(void) {
            "KHR_materials_specular and _ior), factors times textures through their samplers (wrap modes,\n"
            "TEXCOORD_0/1, KHR_texture_transform), with normal, occlusion and emissive maps, single-sided backs\n"
            "culled, seen from a three-quarter view onto the reference's broadest side (docs/report.md).\n"
+           "With --mesh FILE.obj the materials are rendered on that mesh instead of the sphere (e.g. the paper's\n"
+           "material-test sphere, ../shared/assets/paper/matsphere.obj), their maps at its UVs, one render plan per\n"
+           "view (its shadows traced once) shared by every material.\n"
            "\n"
            "Options:\n"
            "  -o, --output DIR     the report folder (created if missing; its files are replaced)\n"
@@ -48,6 +53,10 @@ static void print_help(void) {
            "  --camera-direction X,Y,Z  glTF assets: the direction from the reference's centre to the camera\n"
            "                       (default: a three-quarter view onto its broadest side); the camera frames its\n"
            "                       bounds\n"
+"  --mesh FILE.obj      materials: render them on this Wavefront OBJ mesh (docs/rendering.md, \"OBJ\n"
+           "                       meshes\"); needs --env\n"
+           "  --camera auto|paper  with --mesh: auto (default) frames the mesh from +z; paper is the paper's\n"
+           "                       visualisation camera, at (0,0,-1.5) looking at the origin, 40 degrees on y\n"
            "  --exposure E         display exposure of the pictures and of SSIM (default: the reference's\n"
            "                       object pixels in the first view to a mean luminance of 0.18)\n"
            "  --title TEXT         the page's title\n"
@@ -74,6 +83,8 @@ typedef struct group {
 
 typedef struct options {
     const char *dir;
+    const char *mesh_path; /* --mesh */
+    int paper_camera;      /* --camera paper */
     mr_report_options report; /* zero: the library's defaults */
 } options;
 
@@ -150,6 +161,14 @@ static int parse(int argc, char **argv, options *o, group *groups, int *group_co
             if (taken < 0 || !cli_parse_int("report", "--size", value, MR_REPORT_MIN_SIZE, MR_RENDER_MAX_SIZE,
                                             &o->report.size))
                 return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("report", argc, argv, &i, "--mesh", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            o->mesh_path = value;
+        } else if ((taken = cli_take_option("report", argc, argv, &i, "--camera", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (strcmp(value, "auto") != 0 && strcmp(value, "paper") != 0)
+                return cli_usage_error("report", "--camera '%s': expected auto or paper", value);
+            o->paper_camera = strcmp(value, "paper") == 0;
         } else if ((taken = cli_take_option("report", argc, argv, &i, "--camera-direction", &value))) {
             if (taken < 0 || !parse_direction("--camera-direction", value, o->report.camera_direction))
                 return CLI_EXIT_USAGE;
@@ -180,6 +199,11 @@ static int parse(int argc, char **argv, options *o, group *groups, int *group_co
     const mr_report_options *r = &o->report;
     if (r->env_path == NULL && r->rotations > 1)
         return cli_usage_error("report", "--rotations %d needs --env FILE (the fit scene has one view)", r->rotations);
+    if (o->mesh_path != NULL && r->env_path == NULL)
+        return cli_usage_error("report", "--mesh needs --env FILE (the fit scene's point light is placed for the unit "
+                               "sphere)");
+    if (o->paper_camera && o->mesh_path == NULL)
+        return cli_usage_error("report", "--camera paper places the camera for --mesh");
     if (r->env_path == NULL && (r->env_scale > 0.0 || r->env_samples > 0 || r->reflection_samples != 0))
         return cli_usage_error("report", "--env-scale, --env-samples and --env-reflection-samples need --env FILE");
     *group_count = n;
@@ -242,10 +266,24 @@ int cmd_report(int argc, char **argv) {
         if (groups[k].count > 0)
             return cli_usage_error("report", "'%s': a glTF asset takes no name=value parameters",
                                    groups[k].assignments[0]);
+    if (o.mesh_path != NULL && gltf_entries > 0)
+        return cli_usage_error("report", "--mesh renders materials (MODEL name=value ...); glTF assets bring their "
+                               "own triangles");
     if (o.report.has_camera_direction && gltf_entries == 0)
         return cli_usage_error("report", "--camera-direction places the camera for glTF assets; spheres use the fit "
                                "camera");
 
+    mr_obj_mesh *obj = NULL;
+    const mr_camera paper = mr_camera_paper();
+    if (o.mesh_path != NULL) {
+        mr_status status = mr_obj_load(o.mesh_path, NULL, &obj);
+        if (status != MR_OK) return cli_fail("report", status);
+        if (obj->warnings[0] != '\0')
+            fprintf(stderr, "matremap report: warning: OBJ '%s': %s", o.mesh_path, obj->warnings);
+        o.report.mesh = &obj->mesh;
+        o.report.mesh_name = o.mesh_path;
+        if (o.paper_camera) o.report.camera = &paper;
+    }
     mr_material *materials[MAX_MATERIALS] = {NULL};
     mr_gltf_scene *scenes[MAX_MATERIALS] = {NULL};
     static char descriptions[MAX_MATERIALS][2048];
@@ -281,5 +319,6 @@ int cmd_report(int argc, char **argv) {
         mr_material_free(materials[k]);
         mr_gltf_scene_free(scenes[k]);
     }
+    mr_obj_mesh_free(obj);
     return code;
 }

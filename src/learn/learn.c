@@ -214,6 +214,9 @@ static mr_status fit_svr(const mr_sweep_table *tab, mr_learned *t, const size_t 
     mr_svr_train_options so = {0};
     so.seed = t->seed;
     so.threads = o->threads;
+    so.C = o->svr_C;
+    so.gamma = o->svr_gamma;
+    so.epsilon = o->svr_epsilon;
     mr_svr_free(t->svr);
     t->svr = NULL;
     mr_status status = mr_svr_train(x, y, m, t->feature_count, t->output_count, &so, &t->svr, NULL);
@@ -467,6 +470,10 @@ mr_status mr_learn(const mr_sweep_table *tab, const mr_learn_options *opts, mr_l
         return mr_fail(MR_ERR_INVALID_ARG, "learn: slope_inverse %d: expected -1, 0 or 1", o.slope_inverse);
     if (o.threads < 0 || o.mlp_hidden < 0 || o.mlp_max_epochs < 0)
         return mr_fail(MR_ERR_INVALID_ARG, "learn: negative threads, hidden units or epochs");
+    if (!(o.svr_C >= 0.0 && o.svr_gamma >= 0.0 && o.svr_epsilon >= 0.0 && isfinite(o.svr_C) &&
+          isfinite(o.svr_gamma) && isfinite(o.svr_epsilon)))
+        return mr_fail(MR_ERR_INVALID_ARG, "learn: svr C %g, gamma %g, epsilon %g: expected 0 (searched) or > 0",
+                       o.svr_C, o.svr_gamma, o.svr_epsilon);
     if (tab->n < MIN_ROWS)
         return mr_fail(MR_ERR_INVALID_ARG, "learn: %zu rows; at least %d are needed (a validation split is held out)",
                        tab->n, MIN_ROWS);

@@ -171,6 +171,8 @@ typedef struct mr_learn_options {
     int threads;                   /* SVR's search, MLP's training: 0 = all cores */
     int mlp_hidden;                /* MLP: 0 = 64 */
     int mlp_max_epochs;            /* MLP: 0 = 2000 */
+    double svr_C, svr_gamma, svr_epsilon; /* SVR: > 0 fixes that hyper-parameter for every output (normalised
+                                      units, svr.h) and leaves it out of the search; 0 = searched */
     void (*progress)(const char *stage, double fraction, void *user); /* optional, from the calling thread */
     void *progress_user;
 } mr_learn_options;

@@ -327,6 +327,11 @@ typedef struct mr_fit_scene_options {
  * opts may be NULL for all defaults. */
 mr_scene mr_scene_fit(const mr_fit_scene_options *opts);
 
+/* The paper's visualisation camera (brdf-reference 1: Mitsuba perspective, 40 degrees on y, at (0, 0, -1.5)
+ * looking at the origin, +y up; its right is -x), which frames its material-test sphere of radius 0.5
+ * (../shared/assets/paper/matsphere.obj, io/obj_load.h) over 74 % of the frame. */
+mr_camera mr_camera_paper(void);
+
 /* Check a scene's values (sizes, finite vectors, radius > 0, camera not inside the sphere, non-degenerate
  * camera frame, light count). MR_ERR_INVALID_ARG with the offending field otherwise. */
 mr_status mr_scene_validate(const mr_scene *scene);

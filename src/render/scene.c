@@ -49,6 +49,11 @@ mr_status mr_fit_light_from_name(const char *name, mr_fit_light *out) {
 #define FIT_DEFAULT_SIZE 512
 #define FIT_DEFAULT_INTENSITY 10.0
 
+mr_camera mr_camera_paper(void) {
+    const mr_camera camera = {{0.0, 0.0, -1.5}, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, 40.0};
+    return camera;
+}
+
 mr_scene mr_scene_fit(const mr_fit_scene_options *opts) {
     mr_fit_scene_options o = {0};
     if (opts != NULL) o = *opts;

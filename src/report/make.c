@@ -41,6 +41,9 @@ typedef struct settings {
     double env_scale, exposure; /* exposure 0: pick it from the first render */
     int has_camera_direction;
     double camera_direction[3];
+    const mr_mesh *mesh;  /* materials on a mesh; NULL: the unit sphere */
+    const char *mesh_name;
+    mr_camera camera;     /* with mesh: the camera every view uses */
     const char *title;
     int (*progress)(void *user, int done, int total, const char *what);
     void *progress_user;
@@ -204,7 +207,22 @@ static mr_status resolve_options(const mr_report_options *opts, int scenes, sett
             return mr_fail(MR_ERR_INVALID_ARG, "report option camera_direction (%g, %g, %g): expected a finite, "
                            "non-zero direction", d[0], d[1], d[2]);
     }
+    if (opts->mesh != NULL && scenes)
+        return mr_fail(MR_ERR_INVALID_ARG, "report option mesh renders materials; glTF scenes bring their own");
+    if (opts->mesh != NULL && !has_env)
+        return mr_fail(MR_ERR_INVALID_ARG, "report option mesh needs an environment map (the fit scene's point "
+                       "light is placed for the unit sphere)");
+    if (opts->camera != NULL && opts->mesh == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "report option camera places the camera for a mesh; %s",
+                       scenes ? "glTF scenes take camera_direction" : "the sphere uses the fit camera");
+    if (opts->mesh != NULL) {
+        mr_status mesh_status = mr_mesh_validate(opts->mesh);
+        if (mesh_status != MR_OK)
+            return mr_fail_context(mesh_status, "report mesh '%s'", opts->mesh_name ? opts->mesh_name : "(unnamed)");
+    }
     memset(st, 0, sizeof *st);
+    st->mesh = opts->mesh;
+    st->mesh_name = opts->mesh_name ? opts->mesh_name : "a mesh";
     st->size = opts->size ? opts->size : MR_REPORT_DEFAULT_SIZE;
     st->views = opts->rotations ? opts->rotations : (has_env ? 4 : 1);
     st->env_samples = opts->env_samples ? opts->env_samples : MR_REPORT_DEFAULT_ENV_SAMPLES;
@@ -366,6 +384,10 @@ static mr_status render_view(const settings *st, const char *dir, const mr_repor
         scene.shape.type = MR_SHAPE_MESH;
         scene.shape.mesh = &inputs[0].scene->mesh;
         status = frame_reference(st, inputs[0].scene, &scene.camera);
+    } else if (st->mesh != NULL) { // every material on the one mesh, one plan for all
+        scene.shape.type = MR_SHAPE_MESH;
+        scene.shape.mesh = st->mesh;
+        scene.camera = st->camera;
     }
     mr_render_plan *plan = NULL;
     mr_image *reference = NULL, *reference_mask = NULL; // the reference's render and coverage
@@ -489,8 +511,9 @@ static mr_status write_page(const settings *st, const char *dir, int scenes, con
                                             e->thumb_label_ptrs, k ? e->object_ssim : NULL,
                                             k ? e->object_relative_rmse : NULL};
     }
-    char scene[1024];
-    const char *object = scenes ? "Each asset's triangles, framed as the reference's" : "Unit sphere";
+    char scene[1024], mesh[512];
+    snprintf(mesh, sizeof mesh, "Mesh %s (%d triangles)", st->mesh_name, st->mesh ? st->mesh->triangle_count : 0);
+    const char *object = scenes ? "Each asset's triangles, framed as the reference's" : st->mesh ? mesh : "Unit sphere";
     if (st->env != NULL)
         snprintf(scene, sizeof scene, "%s, %d² pixels, lit by %s (radiance x %.4g, %d fixed directions and %d "
                  "about each pixel's mirror direction), turned in %d steps of %g°; pictures at exposure %.4g.",
@@ -590,6 +613,13 @@ mr_status mr_report_make(const mr_report_input *inputs, int count, const char *d
         st.env = env;
     }
     if (status == MR_OK && st.env != NULL && st.env_scale <= 0.0) st.env_scale = auto_env_scale(st.env);
+    if (status == MR_OK && st.mesh != NULL) { // the camera: given, or the mesh framed from +z
+        mr_frame_options frame = {0};
+        if (opts->camera != NULL)
+            st.camera = *opts->camera;
+        else
+            status = mr_camera_frame_mesh(st.mesh, &frame, &st.camera);
+    }
     entry *entries = NULL;
     if (status == MR_OK && (entries = calloc((size_t)count, sizeof *entries)) == NULL)
         status = mr_fail(MR_ERR_NOMEM, "report: out of memory for %d inputs", count);

@@ -81,7 +81,8 @@ mr_status mr_report_write(const mr_report *report, const char *dir);
 
 /* ---- Making a report (make.c) ----------------------------------------------------------------------------------
  * mr_report_make renders every input for every view and compares it with the first (the reference):
- *   - Inputs are all materials, each rendered on the unit sphere of the fit scene (render.h, mr_scene_fit), or all
+ *   - Inputs are all materials, each rendered on the unit sphere of the fit scene (render.h, mr_scene_fit) or on
+ *     options.mesh (the paper's material-test sphere, say) seen by options.camera, or all
  *     glTF scenes, each rendered as its mesh with its materials, seen by the camera that frames the reference
  *     (mr_camera_frame_mesh) from camera_direction, by default a three-quarter view onto the reference's broadest
  *     side (along the axis of its smallest extent, raised and turned a little).
@@ -100,7 +101,8 @@ mr_status mr_report_write(const mr_report *report, const char *dir);
  *     MR_REPORT_THUMBNAIL_SIDE pixels, at most MR_REPORT_MAX_THUMBNAILS per input), then index.html and
  *     summary.json (mr_report_write). Every file is written atomically.
  * Failure: MR_ERR_INVALID_ARG naming the input or option (count < 1, an input with neither or both of material
- * and scene, materials mixed with scenes, an option out of range, environment options without a map), the
+ * and scene, materials mixed with scenes, an option out of range, environment options without a map, a mesh
+ * with scenes or without a map, a camera without a mesh, an invalid mesh: mr_mesh_validate's message), the
  * environment map's read error (naming the file), MR_ERR_IO naming the folder when it cannot be created or is
  * not a folder, a render's or a write's error, MR_ERR_CANCELLED when the progress callback asks to stop. Nothing
  * is written before the inputs, the options and the map have been checked; a later failure leaves the files
@@ -123,6 +125,8 @@ mr_status mr_report_write(const mr_report *report, const char *dir);
 #define MR_REPORT_MAX_THUMBNAILS 64
 
 struct mr_material;    /* render/render.h */
+struct mr_mesh;        /* render/render.h */
+struct mr_camera;      /* render/render.h */
 struct mr_gltf_scene;  /* gltf/mr_gltf_scene.h */
 
 /* One thing to compare: exactly one of material and scene (both borrowed for the call). */
@@ -153,6 +157,13 @@ typedef struct mr_report_options {
     int has_camera_direction;  /* scenes only: camera_direction is the direction from the reference's centre to
                                   the camera (non-zero); 0 = the three-quarter view */
     double camera_direction[3];
+    const struct mr_mesh *mesh; /* materials only: render them on this mesh (borrowed for the call, e.g. an OBJ
+                                  file's: io/obj_load.h) instead of the unit sphere, their maps read at its UVs;
+                                  needs an environment map (the fit scene's point light is placed for the unit
+                                  sphere). NULL = the sphere */
+    const char *mesh_name;     /* names the mesh on the page ("matsphere.obj"); NULL = "a mesh" */
+    const struct mr_camera *camera; /* with mesh: the camera (e.g. mr_camera_paper(), render.h); NULL = the mesh
+                                  framed from +z (mr_camera_frame_mesh's defaults) */
     int threads;               /* mr_scene.threads of plans and renders: 0 = automatic, else 1 .. 1024 */
     const char *title;         /* the page's title; NULL = "matremap report" */
     /* Called before each view is rendered (done = views finished, total = views, what = "view") and once when
