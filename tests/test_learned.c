@@ -146,6 +146,28 @@ MR_TEST(solver_residue_not_learned) {
     mr_sweep_table_free(&tab);
 }
 
+/* A float map at a parameter's bound is no clamped input ((double)0.4f lies above blender-ward's rms maximum 0.4:
+ * a FloppyDisk set clamped into Blender's range had 46 % of its texels flagged); beyond the float's rounding it is. */
+MR_TEST(float_map_at_bound_not_clamped) {
+    const char *path = write_sweep("bward_ward.csv", "blender-ward", "diffuse=0", "rms", "specular", "ward",
+                                   "diffuse=0", "alpha", "specular", 12, 4, 0.02, 0.4, 0.02, 0.3);
+    mr_learned *t = learn_from(path, MR_LEARN_PARAMETRIC);
+    MR_CHECK_MSG(t != NULL, "%s", mr_last_error());
+    if (t == NULL) return;
+    const mr_brdf_model *bw = mr_brdf_find("blender-ward");
+    double v[MR_BRDF_MAX_VALUES], w[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(bw, v);
+    const int rms = mr_brdf_param_offset(bw, mr_brdf_param_index(bw, "rms"));
+    unsigned flags = 0;
+    v[rms] = (double)0.4f;
+    mr_learned_apply(t, v, w, &flags);
+    MR_CHECK_MSG(!(flags & MR_WF_CLAMPED_INPUT), "flags %#x", flags);
+    v[rms] = 0.41;
+    mr_learned_apply(t, v, w, &flags);
+    MR_CHECK(flags & MR_WF_CLAMPED_INPUT);
+    mr_learned_free(t);
+}
+
 /* Write, read, write: the same bytes, and every number of the transform the same bits. */
 static void check_round_trip(const mr_learned *t) {
     char *a = NULL, *b = NULL;
@@ -437,7 +459,7 @@ MR_TEST(parametric_refuses_wrong_shape) {
 }
 
 MR_TEST_MAIN(MR_TEST_ENTRY(parametric_recovers_known_mapping), MR_TEST_ENTRY(carry_by_lobe_ratio),
-             MR_TEST_ENTRY(solver_residue_not_learned),
+             MR_TEST_ENTRY(solver_residue_not_learned), MR_TEST_ENTRY(float_map_at_bound_not_clamped),
              MR_TEST_ENTRY(round_trip_every_method), MR_TEST_ENTRY(corrupted_files_refused),
              MR_TEST_ENTRY(domain_flags_and_chromaticity), MR_TEST_ENTRY(chain_equals_steps),
              MR_TEST_ENTRY(chain_search), MR_TEST_ENTRY(parametric_refuses_wrong_shape))

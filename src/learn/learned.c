@@ -4,6 +4,7 @@
  */
 #include "learn/learned.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -62,6 +63,12 @@ static int inside(double v, double min, double max) {
     return v >= min - slack && v <= max + slack;
 }
 
+/* Is x outside [lo, hi] by more than a float's rounding? Texture maps hold floats, and a map at a parameter's
+ * bound is no clamped input: (double)0.4f = 0.40000000596 lies above Blender's rms maximum 0.4. */
+static int outside_range(double x, double lo, double hi) {
+    return x < lo - FLT_EPSILON * fabs(lo) || x > hi + FLT_EPSILON * fabs(hi);
+}
+
 void mr_learned_apply(const mr_learned *t, const double *source_values, double *target_values, unsigned *flags) {
     unsigned f = 0;
     const mr_brdf_model *src = t->source, *tgt = t->target;
@@ -70,7 +77,7 @@ void mr_learned_apply(const mr_learned *t, const double *source_values, double *
         for (int c = 0; c < src->params[p].channels; c++, k++) {
             const double lo = src->params[p].min_value, hi = src->params[p].max_value, x = source_values[k];
             if (!isfinite(x)) f |= MR_WF_NONFINITE_INPUT;
-            else if (x < lo || x > hi) f |= MR_WF_CLAMPED_INPUT;
+            else if (outside_range(x, lo, hi)) f |= MR_WF_CLAMPED_INPUT;
             v[k] = mr_clampd(x, lo, hi);
         }
     const int target_count = mr_brdf_value_count(tgt);
