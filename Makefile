@@ -7,6 +7,8 @@
 #   make bench      benchmarks (prints figures, asserts nothing; see docs/performance.md); one section:
 #                   make bench BENCH_ARGS="--only report-accuracy"
 #   make analyses   the paper's stability analyses (docs/analyses.md)
+#   make paper      the paper's Appendix fits, Fig. 18 (a chain) and Fig. 19 (extrapolation) reproduced in
+#                   build/paper (docs/paper-reproduction.md; 4-5 min on 2 cores)
 #   make evaluation the workflow converters on the real texture sets of ../shared/assets (docs/evaluation.md)
 #   make evaluation-gltf   the glTF conversions and gltf-transform's, rendered as meshes (docs/evaluation.md)
 #   make evaluation-hardcases   every spec2metal method on single hard texels, on spheres (docs/evaluation.md)
@@ -105,9 +107,8 @@ PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h 
                   src/learn/parametric.h src/learn/svr.h src/learn/sweep_table.h src/learn/learned.h \
                   gltf/mr_gltf.h gltf/mr_gltf_convert.h gltf/mr_gltf_scene.h
 
-.PHONY: all check asan demo bench analyses evaluation evaluation-gltf evaluation-hardcases evaluation-svbrdf \
-        evaluation-viewers dataset \
-        train objectives deps install clean
+.PHONY: all check asan demo bench analyses paper evaluation evaluation-gltf evaluation-hardcases evaluation-svbrdf \
+        evaluation-viewers dataset train objectives deps install clean
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
 all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE)
@@ -182,6 +183,9 @@ bench: all $(BENCHES)
 
 analyses: all
 	scripts/analyses.sh $(BUILD)
+
+paper: all
+	scripts/paper-appendix.sh $(BUILD)
 
 evaluation: all
 	scripts/evaluate-workflow.sh $(BUILD)

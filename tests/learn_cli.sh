@@ -33,6 +33,12 @@ fi
 "$bin" learn "$tmp/wg.csv" -o "$tmp/wg2.mrt" >/dev/null
 check "learning is reproducible byte for byte" cmp -s "$tmp/wg.mrt" "$tmp/wg2.mrt"
 expect "learn --json" 0 '"validation_rmse": \{"alpha": [0-9]' -- "$bin" learn "$tmp/ga.csv" -o "$tmp/ga.mrt" --json
+check "learn --json writes no NUL byte" test "$(tr -cd '\000' < "$tmp/out" | wc -c)" -eq 0
+check "learn --json is valid JSON naming the outputs" python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert set(d["validation_rmse"]) == {"alpha", "f0", "diffuse"}, d["validation_rmse"]
+assert len(d["roughness"]) == 5 and len(d["slope"]) in (5, 6)' "$tmp/out"
 
 sed 's/^validation 0x1.999999999999ap-3/validation 0x1.999999999999bp-3/' "$tmp/wg.mrt" > "$tmp/edited.mrt"
 expect "convert: an edited transform is refused" 2 "edited.mrt.*checksum mismatch" -- \

@@ -120,6 +120,55 @@ MR_TEST(carry_by_lobe_ratio) {
     mr_learned_free(t);
 }
 
+/* A lobe the source lacks is fitted to 0 with a solver's residue in a few rows (a real ward -> as sweep: 6e-12 and
+ * 1e-7 in 2 of 120 rows); that is not a varying output: parametric still learns, the diffuse is carried. */
+MR_TEST(solver_residue_not_learned) {
+    const char *path = write_sweep("ward_as_residue.csv", "ward", "diffuse=0", "alpha", "specular", "as", "diffuse=0",
+                                   "alpha", "f0", 12, 4, 0.02, 0.6, 0.02, 0.3);
+    mr_sweep_table tab;
+    MR_CHECK_OK(mr_sweep_table_load(&path, 1, NULL, &tab));
+    const mr_brdf_model *as = mr_brdf_find("as");
+    const int d = mr_brdf_param_offset(as, mr_brdf_param_index(as, "diffuse"));
+    for (int c = 0; c < 3; c++) {
+        tab.target_values[3 * (size_t)tab.target_count + (size_t)(d + c)] = 1.0029739407702908e-07;
+        tab.target_values[7 * (size_t)tab.target_count + (size_t)(d + c)] = 6.0892878777457576e-12;
+    }
+    mr_learned *t = NULL;
+    mr_learn_options o = {0};
+    MR_CHECK_MSG(mr_learn(&tab, &o, &t) == MR_OK, "%s", mr_last_error());
+    MR_CHECK(t != NULL && t->output_count == 2 && t->carry_count == 1 && t->carries[0].learned == 0);
+    mr_learned_free(t);
+    // A diffuse that really varies (1e-3 of its range) is an output too: learned on top of the carry (k_d).
+    for (int c = 0; c < 3; c++) tab.target_values[3 * (size_t)tab.target_count + (size_t)(d + c)] = 1e-3;
+    t = NULL;
+    MR_CHECK_MSG(mr_learn(&tab, &o, &t) == MR_OK, "%s", mr_last_error());
+    MR_CHECK(t != NULL && t->output_count == 3 && t->outputs[2].param == mr_brdf_param_index(as, "diffuse"));
+    mr_learned_free(t);
+    mr_sweep_table_free(&tab);
+}
+
+/* A float map at a parameter's bound is no clamped input ((double)0.4f lies above blender-ward's rms maximum 0.4:
+ * a FloppyDisk set clamped into Blender's range had 46 % of its texels flagged); beyond the float's rounding it is. */
+MR_TEST(float_map_at_bound_not_clamped) {
+    const char *path = write_sweep("bward_ward.csv", "blender-ward", "diffuse=0", "rms", "specular", "ward",
+                                   "diffuse=0", "alpha", "specular", 12, 4, 0.02, 0.4, 0.02, 0.3);
+    mr_learned *t = learn_from(path, MR_LEARN_PARAMETRIC);
+    MR_CHECK_MSG(t != NULL, "%s", mr_last_error());
+    if (t == NULL) return;
+    const mr_brdf_model *bw = mr_brdf_find("blender-ward");
+    double v[MR_BRDF_MAX_VALUES], w[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(bw, v);
+    const int rms = mr_brdf_param_offset(bw, mr_brdf_param_index(bw, "rms"));
+    unsigned flags = 0;
+    v[rms] = (double)0.4f;
+    mr_learned_apply(t, v, w, &flags);
+    MR_CHECK_MSG(!(flags & MR_WF_CLAMPED_INPUT), "flags %#x", flags);
+    v[rms] = 0.41;
+    mr_learned_apply(t, v, w, &flags);
+    MR_CHECK(flags & MR_WF_CLAMPED_INPUT);
+    mr_learned_free(t);
+}
+
 /* Write, read, write: the same bytes, and every number of the transform the same bits. */
 static void check_round_trip(const mr_learned *t) {
     char *a = NULL, *b = NULL;
@@ -436,6 +485,7 @@ MR_TEST(svr_hyper_parameters_held) {
 }
 
 MR_TEST_MAIN(MR_TEST_ENTRY(parametric_recovers_known_mapping), MR_TEST_ENTRY(carry_by_lobe_ratio),
+             MR_TEST_ENTRY(solver_residue_not_learned), MR_TEST_ENTRY(float_map_at_bound_not_clamped),
              MR_TEST_ENTRY(round_trip_every_method), MR_TEST_ENTRY(corrupted_files_refused),
              MR_TEST_ENTRY(domain_flags_and_chromaticity), MR_TEST_ENTRY(chain_equals_steps),
              MR_TEST_ENTRY(chain_search), MR_TEST_ENTRY(parametric_refuses_wrong_shape),

@@ -225,7 +225,7 @@ static void print_summary(const mr_learned *t, const char *output, double second
         printf("], \"validation_rmse\": {");
         for (int j = 0; j < t->output_count; j++) {
             const mr_learned_slot *s = &t->outputs[j];
-            const char *suffix[3] = {"_r", "_g", "_b"};
+            static const char *const suffix[3] = {"_r", "_g", "_b"}; // a CHANNEL output's key: f0_r; else the name
             printf("%s\"%s%s\": %.9g", j ? ", " : "", t->target->params[s->param].name,
                    s->kind == MR_LEARNED_CHANNEL ? suffix[s->channel] : "", t->rmse[j]);
         }

@@ -20,18 +20,23 @@
 #define DEFAULT_EPOCHS 2000
 #define MIN_ROWS 10
 
+/* A fitted target value varies over the rows only when it moves by more than this share of its parameter's range:
+ * a lobe the source does not have (a diffuse held at 0 on both sides) is fitted to 0 in most rows and to a residue
+ * of the solver (1e-12 .. 1e-7) in a few, which is not something to learn. Source values are compared exactly. */
+#define TARGET_NOISE 1e-5
+
 /* How a parameter behaves over the rows. */
 typedef struct param_use {
-    int varies; /* some slot differs between rows */
+    int varies; /* some slot differs between rows by more than the tolerance */
     int grey;   /* RGB and r = g = b in every row (up to a relative 1e-9) */
 } param_use;
 
-static param_use use_of(const double *values, size_t n, int count, int offset, int channels) {
+static param_use use_of(const double *values, size_t n, int count, int offset, int channels, double tolerance) {
     param_use u = {0, channels == 3};
     for (size_t i = 0; i < n; i++) {
         const double *row = values + i * (size_t)count + offset;
         for (int c = 0; c < channels; c++)
-            if (row[c] != values[offset + c]) u.varies = 1;
+            if (fabs(row[c] - values[offset + c]) > tolerance) u.varies = 1;
         if (channels == 3) {
             const double tol = 1e-9 * fmax(1.0, fabs(row[0]));
             if (fabs(row[1] - row[0]) > tol || fabs(row[2] - row[0]) > tol) u.grey = 0;
@@ -330,10 +335,10 @@ static mr_status plan(const mr_sweep_table *tab, mr_learned *t) {
     param_use su[MR_BRDF_MAX_VALUES], tu[MR_BRDF_MAX_VALUES];
     for (int p = 0; p < src->param_count; p++)
         su[p] = use_of(tab->source_values, tab->n, tab->source_count, mr_brdf_param_offset(src, p),
-                       src->params[p].channels);
+                       src->params[p].channels, 0.0);
     for (int p = 0; p < tgt->param_count; p++)
         tu[p] = use_of(tab->target_values, tab->n, tab->target_count, mr_brdf_param_offset(tgt, p),
-                       tgt->params[p].channels);
+                       tgt->params[p].channels, TARGET_NOISE * (tgt->params[p].max_value - tgt->params[p].min_value));
     memcpy(t->base, tab->target_values, (size_t)tab->target_count * sizeof *t->base);
     // carried[tp]: 1 the target parameter is a carry alone; 2 a carry plus a learned residual (an output).
     int carried[MR_BRDF_MAX_VALUES] = {0}, used_source[MR_BRDF_MAX_VALUES] = {0};

@@ -4,6 +4,7 @@
  */
 #include "learn/learned.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -68,6 +69,12 @@ static int inside(double v, double min, double max) {
     return v >= min - slack && v <= max + slack;
 }
 
+/* Is x outside [lo, hi] by more than a float's rounding? Texture maps hold floats, and a map at a parameter's
+ * bound is no clamped input: (double)0.4f = 0.40000000596 lies above Blender's rms maximum 0.4. */
+static int outside_range(double x, double lo, double hi) {
+    return x < lo - FLT_EPSILON * fabs(lo) || x > hi + FLT_EPSILON * fabs(hi);
+}
+
 /* Texels a batch handles at once, and the scratch they need: per texel its sanitised values and carries, and up to
  * 4 regression rows (the channel means, then each channel of a coloured texel whose features include GREY ones). */
 #define CHUNK 256
@@ -114,7 +121,7 @@ static mr_status apply_chunk(const mr_learned *t, size_t n, const double *in, do
             for (int c = 0; c < src->params[p].channels; c++, k++) {
                 const double lo = src->params[p].min_value, hi = src->params[p].max_value, x = in[i * (size_t)sc + k];
                 if (!isfinite(x)) f |= MR_WF_NONFINITE_INPUT;
-                else if (x < lo || x > hi) f |= MR_WF_CLAMPED_INPUT;
+                else if (outside_range(x, lo, hi)) f |= MR_WF_CLAMPED_INPUT;
                 v[k] = mr_clampd(x, lo, hi);
             }
         memcpy(w, t->base, (size_t)tc * sizeof *w);

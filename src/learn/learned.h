@@ -21,7 +21,8 @@
  *      when the rows vary it and the method is parametric, by a per-channel slope fitted on the rows. When the rows
  *      hold the source parameter but the fits still vary the target one (a diffuse standing in for a lobe's tail),
  *      the carried parameter is also an output, learned on what the carry leaves, and added to it.
- *   3. the regression: features (source parameters the sweeps varied) -> outputs (target parameters that varied):
+ *   3. the regression: features (source parameters the sweeps varied) -> outputs (target parameters that varied
+ *      by more than 1e-5 of their range: the solver's residue on a lobe the source lacks, 1e-12 .. 1e-7, is not):
  *      - a SCALAR feature is a one-channel parameter; a GREY feature an RGB parameter every row held grey (r = g = b,
  *        as a grid axis sweeps it): it enters the regression as one number, and the regression is evaluated once
  *        per channel, channel c of every GREY feature in, channel c of every GREY output out (the paper's per-channel
