@@ -267,7 +267,7 @@ ssim_of() {
 }
 display() { oiiotool "$1" --mulc "$2" --colorconvert linear sRGB --ch R,G,B -d uint8 -o "$3"; }
 # flag_counts CONVERT.json: "TEXELS EXTRAPOLATED" from `matremap convert --json`
-flag_counts() { sed -n 's/.*"texels": \([0-9]*\).*"extrapolated": \([0-9]*\).*/\1 \2/p' "$1"; }
+flag_counts() { sed -n 's/.*"texels": \([0-9]*\).*"extrapolated_or_unconverged": \([0-9]*\).*/\1 \2/p' "$1"; }
 
 progress "figure 19: renders (source Ward; AS by parametric, SVR and the full-range parametric)"
 render "$f19/ward.exr" ward diffuse=0 "specular=@$f19/ward_specular.exr" "alpha=@$f19/ward_alpha.exr"
