@@ -19,6 +19,14 @@ expect "learn: no output" 1 "no output file" -- "$bin" learn "$tmp/wg.csv"
 expect "learn: -o over the sweep" 2 "would be replaced" -- "$bin" learn "$tmp/wg.csv" -o "$tmp/./wg.csv"
 expect "learn: unknown method" 1 "valid: parametric, svr, mlp" -- "$bin" learn "$tmp/wg.csv" --method gp -o "$tmp/x.mrt"
 expect "learn: a missing file" 2 "nope.csv" -- "$bin" learn "$tmp/nope.csv" -o "$tmp/x.mrt"
+sed '12s/,0.0[0-9]*,converged/,nan,converged/' "$tmp/wg.csv" > "$tmp/nan.csv"
+sed -i '12s/^\([0-9]*\),\([^,]*\),/\1,nan,/' "$tmp/nan.csv"
+expect "learn: a NaN in a row names file and line" 2 "nan.csv:12: .*not a finite number" -- \
+    "$bin" learn "$tmp/nan.csv" -o "$tmp/x.mrt"
+check "... and writes nothing" test ! -e "$tmp/x.mrt"
+head -c "$(($(wc -c < "$tmp/wg.csv") - 30))" "$tmp/wg.csv" > "$tmp/torn.csv"
+expect "learn: a torn last row names file and line" 2 "torn.csv:[0-9]+: .*fields" -- \
+    "$bin" learn "$tmp/torn.csv" -o "$tmp/x.mrt"
 expect "learn: two sweeps of different pairs" 2 "differ" -- "$bin" learn "$tmp/wg.csv" "$tmp/ga.csv" -o "$tmp/x.mrt"
 
 expect "learn parametric with plots" 0 "ward -> ggx by parametric" -- \
@@ -73,6 +81,10 @@ check "and the summary counts them" grep -qE "[1-9][0-9]* extrapolated" "$tmp/ou
 expect "convert --format png" 0 "texels" -- "$bin" convert --from ward --to ggx alpha=@"$tmp/rough.exr" \
     specular=@"$tmp/spec.png" --transform "$tmp/wg.mrt" -o "$tmp/png_" --format png
 check "png outputs" test -s "$tmp/png_f0.png"
+oiiotool --pattern constant:color=0.1 32x32 1 -d float -o "$tmp/rough32.exr" >/dev/null 2>&1
+expect "convert: maps of different sizes are refused" 2 "64x32" -- "$bin" convert --from ward --to ggx \
+    alpha="$tmp/rough32.exr" specular=@"$tmp/spec.png" --transform "$tmp/wg.mrt" -o "$tmp/sz_"
+check "... and nothing is written" bash -c "! ls '$tmp'/sz_* >/dev/null 2>&1"
 cp "$tmp/spec.png" "$tmp/x_f0.png"
 expect "convert: an output that is an input is refused" 2 "would be replaced" -- "$bin" convert --from ward --to ggx \
     specular=@"$tmp/x_f0.png" --transform "$tmp/wg.mrt" -o "$tmp/x_" --format png
@@ -102,6 +114,12 @@ expect "convert --direct" 0 "by direct remaps, 16x8 = 128 texels" -- "$bin" conv
     alpha="$tmp/r16.exr" specular="$tmp/s16.png" diffuse=0 --direct --size 32 --cache "$tmp/d.cache" -o "$tmp/d1_"
 check "the direct summary counts distinct values and remaps" grep -qE "[0-9]+ distinct values .* 0 from the cache" \
     "$tmp/err"
+# The verdicts: the glossy top row (alpha 0.03) is under-resolved at 32² (remap says so), the rough bottom row is not.
+check "unconverged direct texels are counted" grep -qE "[1-9][0-9]* not converged" "$tmp/out"
+check "... and red in the flag map where remap says under-resolved (the top row)" bash -c \
+    "oiiotool --dumpdata '$tmp/d1_flags.png' | grep -q 'Pixel (0, 0): 255 0 0' && \
+     oiiotool --dumpdata '$tmp/d1_flags.png' | grep -q 'Pixel (0, 7): 0 0 0' && \
+     '$bin' remap --from ward alpha=0.03 specular=0.05,0.1,0.02 diffuse=0 --to ggx --size 32 | grep -q 'outcome: under-resolved'"
 expect "convert --direct again, from the cache" 0 "from the cache" -- "$bin" convert --from ward --to ggx \
     alpha="$tmp/r16.exr" specular="$tmp/s16.png" diffuse=0 --direct --size 32 --cache "$tmp/d.cache" -o "$tmp/d2_"
 check "every value came from the cache" grep -qE "([0-9]+) distinct values \(tolerance [0-9.]+\): \1 from the cache" \

@@ -12,25 +12,18 @@
 
 /* The kind and everything it points to, in one block. */
 typedef struct learned_kind {
-    mr_transform_kind kind;
-    mr_transform_slot inputs[MR_TRANSFORM_MAX_SLOTS], outputs[MR_TRANSFORM_MAX_SLOTS];
+    mr_transform_model_kind model; /* first: the kind's address is the block's */
     const mr_learned *hops[MR_LEARNED_MAX_HOPS];
     int hop_count;
     char name[32], summary[512];
 } learned_kind;
-
-static mr_status learned_create(const mr_transform_kind *kind, const mr_transform_options *opts, void **state) {
-    (void)opts;
-    *state = (void *)kind->config;
-    return MR_OK;
-}
 
 /* Texels go through the chain in blocks of this many packed rows (the regression runs on a block at a time). */
 #define BLOCK 1024
 
 static mr_status learned_apply(const mr_transform *t, const mr_transform_batch *b) {
     const learned_kind *lk = mr_transform_state(t);
-    const mr_transform_kind *kind = &lk->kind;
+    const mr_transform_kind *kind = &lk->model.kind;
     const size_t sc = (size_t)mr_brdf_value_count(lk->hops[0]->source);
     const size_t tc = (size_t)mr_brdf_value_count(lk->hops[lk->hop_count - 1]->target);
     const size_t m = MR_MIN(b->n, BLOCK);
@@ -73,11 +66,6 @@ mr_status mr_learned_kind_create(const mr_learned *const *hops, int count, mr_tr
     learned_kind *lk = calloc(1, sizeof *lk);
     if (lk == NULL) return mr_fail(MR_ERR_NOMEM, "learned kind: out of memory");
     const mr_brdf_model *source = hops[0]->source, *target = hops[count - 1]->target;
-    if (!mr_transform_model_slots(source, lk->inputs) || !mr_transform_model_slots(target, lk->outputs)) {
-        free(lk);
-        return mr_fail(MR_ERR_INVALID_ARG, "learned kind: %s or %s has more than %d parameters", source->name,
-                       target->name, MR_TRANSFORM_MAX_SLOTS);
-    }
     memcpy(lk->hops, hops, (size_t)count * sizeof *hops);
     lk->hop_count = count;
     snprintf(lk->name, sizeof lk->name, "%s", count == 1 ? mr_learn_method_name(hops[0]->method) : "chain");
@@ -85,21 +73,13 @@ mr_status mr_learned_kind_create(const mr_learned *const *hops, int count, mr_tr
     for (int h = 0; h < count && at > 0 && (size_t)at < sizeof lk->summary; h++)
         at += snprintf(lk->summary + at, sizeof lk->summary - (size_t)at, " -(%s)-> %s",
                        mr_learn_method_name(hops[h]->method), hops[h]->target->name);
-    mr_transform_kind *k = &lk->kind;
-    k->name = lk->name;
-    k->summary = lk->summary;
-    k->source = source->name;
-    k->target = target->name;
-    k->input_count = source->param_count;
-    k->inputs = lk->inputs;
-    k->output_count = target->param_count;
-    k->outputs = lk->outputs;
-    k->flags = MR_TRANSFORM_PER_TEXEL;
-    k->config = lk;
-    k->create = learned_create;
-    k->destroy = NULL;
-    k->apply = learned_apply;
-    *out = k;
+    mr_status status = mr_transform_model_kind_init(&lk->model, source, target, lk->name, lk->summary,
+                                                    MR_TRANSFORM_PER_TEXEL, lk, learned_apply);
+    if (status != MR_OK) {
+        free(lk);
+        return status;
+    }
+    *out = &lk->model.kind;
     return MR_OK;
 }
 

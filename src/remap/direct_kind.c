@@ -10,22 +10,15 @@
 #include "remap/direct.h"
 
 typedef struct direct_kind {
-    mr_transform_kind kind; /* first: the kind's address is the block's */
-    mr_transform_slot inputs[MR_TRANSFORM_MAX_SLOTS], outputs[MR_TRANSFORM_MAX_SLOTS];
+    mr_transform_model_kind model; /* first: the kind's address is the block's */
     const mr_brdf_model *source, *target;
     mr_direct_options opts;
     mr_direct_summary summary;
 } direct_kind;
 
-static mr_status direct_create(const mr_transform_kind *kind, const mr_transform_options *opts, void **state) {
-    (void)opts;
-    *state = (void *)kind->config;
-    return MR_OK;
-}
-
 static mr_status direct_apply(const mr_transform *t, const mr_transform_batch *b) {
     direct_kind *dk = mr_transform_state(t);
-    const mr_transform_kind *kind = &dk->kind;
+    const mr_transform_kind *kind = &dk->model.kind;
     const size_t n = b->n, sc = (size_t)mr_brdf_value_count(dk->source), tc = (size_t)mr_brdf_value_count(dk->target);
     double *in = malloc(n * sc * sizeof *in), *out = malloc(n * tc * sizeof *out);
     mr_fit_outcome *outcomes = malloc(n * sizeof *outcomes);
@@ -66,28 +59,17 @@ mr_status mr_direct_kind_create(const mr_brdf_model *source, const mr_brdf_model
     if (source == NULL || target == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "direct: NULL argument");
     direct_kind *dk = calloc(1, sizeof *dk);
     if (dk == NULL) return mr_fail(MR_ERR_NOMEM, "direct: out of memory");
-    if (!mr_transform_model_slots(source, dk->inputs) || !mr_transform_model_slots(target, dk->outputs)) {
+    mr_status status = mr_transform_model_kind_init(
+        &dk->model, source, target, "direct",
+        "every distinct (quantised) texel remapped by the image-based optimiser (direct.h)", 0, dk, direct_apply);
+    if (status != MR_OK) {
         free(dk);
-        return mr_fail(MR_ERR_INVALID_ARG, "direct: %s or %s has more than %d parameters", source->name, target->name,
-                       MR_TRANSFORM_MAX_SLOTS);
+        return status;
     }
     dk->source = source;
     dk->target = target;
     if (opts != NULL) dk->opts = *opts;
-    mr_transform_kind *k = &dk->kind;
-    k->name = "direct";
-    k->summary = "every distinct (quantised) texel remapped by the image-based optimiser (direct.h)";
-    k->source = source->name;
-    k->target = target->name;
-    k->input_count = source->param_count;
-    k->inputs = dk->inputs;
-    k->output_count = target->param_count;
-    k->outputs = dk->outputs;
-    k->flags = 0;
-    k->config = dk;
-    k->create = direct_create;
-    k->apply = direct_apply;
-    *out = k;
+    *out = &dk->model.kind;
     return MR_OK;
 }
 

@@ -75,14 +75,47 @@ int mr_transform_output_index(const mr_transform_kind *kind, const char *name) {
     return kind ? slot_index(kind->outputs, kind->output_count, name) : -1;
 }
 
-int mr_transform_model_slots(const mr_brdf_model *model, mr_transform_slot *slots) {
-    if (model == NULL || slots == NULL || model->param_count > MR_TRANSFORM_MAX_SLOTS) return 0;
+/* One slot per parameter of `model`, in table order; 0 if it has more than a kind may have. */
+static int model_slots(const mr_brdf_model *model, mr_transform_slot *slots) {
+    if (model->param_count > MR_TRANSFORM_MAX_SLOTS) return 0;
     for (int p = 0; p < model->param_count; p++) {
         const mr_brdf_param *q = &model->params[p];
         slots[p] = (mr_transform_slot){q->name, q->channels, q->min_value, q->max_value, q->min_value,
                                        MR_SLOT_OPTIONAL, 0.0, -1};
     }
     return 1;
+}
+
+static mr_status config_is_state(const mr_transform_kind *kind, const mr_transform_options *opts, void **state) {
+    (void)opts;
+    *state = (void *)kind->config;
+    return MR_OK;
+}
+
+mr_status mr_transform_model_kind_init(mr_transform_model_kind *mk, const mr_brdf_model *source,
+                                       const mr_brdf_model *target, const char *name, const char *summary,
+                                       unsigned flags, const void *config,
+                                       mr_status (*apply)(const mr_transform *t, const mr_transform_batch *b)) {
+    if (mk == NULL || source == NULL || target == NULL || apply == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "transform kind: NULL argument");
+    if (!model_slots(source, mk->inputs) || !model_slots(target, mk->outputs))
+        return mr_fail(MR_ERR_INVALID_ARG, "transform %s: %s or %s has more than %d parameters", name, source->name,
+                       target->name, MR_TRANSFORM_MAX_SLOTS);
+    mr_transform_kind *k = &mk->kind;
+    *k = (mr_transform_kind){0};
+    k->name = name;
+    k->summary = summary;
+    k->source = source->name;
+    k->target = target->name;
+    k->input_count = source->param_count;
+    k->inputs = mk->inputs;
+    k->output_count = target->param_count;
+    k->outputs = mk->outputs;
+    k->flags = flags;
+    k->config = config;
+    k->create = config_is_state;
+    k->apply = apply;
+    return MR_OK;
 }
 
 /* ---- instances ---------------------------------------------------------------------------------------------- */

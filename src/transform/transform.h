@@ -136,10 +136,21 @@ const mr_transform_kind *mr_transform_find(const char *source, const char *targe
 int mr_transform_input_index(const mr_transform_kind *kind, const char *name);
 int mr_transform_output_index(const mr_transform_kind *kind, const char *name);
 
-/* One slot per parameter of `model`, in table order, into slots[] (MR_TRANSFORM_MAX_SLOTS): the parameter's name,
- * channels, range as domain, its minimum for non-finite inputs, optional; for kinds that read or write a whole model
- * (learned.h, direct.h). Returns 0 if the model has more parameters than a kind may have slots. */
-int mr_transform_model_slots(const mr_brdf_model *model, mr_transform_slot *slots);
+/* A kind that reads every parameter of `source` and writes every parameter of `target` (learned.h, direct.h): its
+ * slot tables (one slot per parameter in table order: name, channels, range as domain, the minimum for non-finite
+ * inputs, optional) and the kind pointing at them. Embed it first in the block that owns the kind. */
+typedef struct mr_transform_model_kind {
+    mr_transform_kind kind; /* first: a pointer to the kind is one to the block */
+    mr_transform_slot inputs[MR_TRANSFORM_MAX_SLOTS], outputs[MR_TRANSFORM_MAX_SLOTS];
+} mr_transform_model_kind;
+
+/* Fill *mk: the slot tables, and the kind with `name`, `summary` (both borrowed), `flags`, `config` and `apply`; its
+ * create hands `config` to apply as the state (mr_transform_state), its destroy is NULL. MR_ERR_INVALID_ARG naming
+ * the models when one has more parameters than MR_TRANSFORM_MAX_SLOTS. */
+mr_status mr_transform_model_kind_init(mr_transform_model_kind *mk, const mr_brdf_model *source,
+                                       const mr_brdf_model *target, const char *name, const char *summary,
+                                       unsigned flags, const void *config,
+                                       mr_status (*apply)(const mr_transform *t, const mr_transform_batch *b));
 
 /* ---- instances ---- */
 
