@@ -581,7 +581,7 @@ static int convert_palette(const conversion *cv, const sources *src, made *mk, m
     const mr_transform_kind *kind = cv->kind;
     const workflow_side *from = cv->from, *to = cv->to;
     char label[600];
-    snprintf(label, sizeof label, "glTF '%s' image %d", mr_gltf_path(cv->asset), src->images[t]);
+    snprintf(label, sizeof label, "glTF '%s': image %d", mr_gltf_path(cv->asset), src->images[t]);
     mr_io_png_palette p;
     if ((*status = mr_io_png_palette_read(im.bytes, im.size, label, &p)) != MR_OK) return 1;
     // The entries as the reader decodes texels (colour channels sRGB-decoded for a colour texture, alpha linear).
@@ -812,9 +812,9 @@ static int read_codes(const conversion *cv, const sources *src, mr_io_codes code
     for (int t = 0; t < 2; t++) {
         if (src->refs[t].index < 0) continue;
         char label[600];
-        snprintf(label, sizeof label, "glTF '%s' image %d", mr_gltf_path(cv->asset), src->images[t]);
+        snprintf(label, sizeof label, "glTF '%s': image %d", mr_gltf_path(cv->asset), src->images[t]);
         FILE *f = fmemopen((void *)im[t].bytes, im[t].size, "rb");
-        statuses[t] = f ? mr_io_png_deflate_read_codes(f, label, 16384, &codes[t], &handled[t])
+        statuses[t] = f ? mr_io_png_deflate_read_codes(f, label, MR_IO_MAX_DIMENSION_DEFAULT, &codes[t], &handled[t])
                         : mr_fail(MR_ERR_NOMEM, "%s: cannot open the bytes as a stream", label);
         if (f != NULL) fclose(f);
         if (statuses[t] != MR_OK) snprintf(messages[t], sizeof messages[t], "%s", mr_last_error());

@@ -102,12 +102,15 @@ double read_component(const unsigned char *p, int type, bool normalized) {
     }
 }
 
-// Reads `count` elements of n components from buffer view `view` at `offset` into dst; packed ignores the
-// view's byteStride (sparse arrays are tightly packed). "" on success, else the reason.
-std::string read_view(const tinygltf::Model &m, int view, size_t offset, size_t count, int n, int type,
-                      bool normalized, bool packed, double *dst) {
+// Where `count` elements of n components of `type` lie in buffer view `view` at `offset`: checked against the
+// view and the view against its buffer (stride * (count - 1) + element size within the view, the view within the
+// buffer, every step overflow-safe) before anything is allocated for them. packed ignores the view's byteStride
+// (sparse arrays are tightly packed). "" on success (*base and *stride set), else the reason, naming the field.
+std::string locate(const tinygltf::Model &m, int view, size_t offset, size_t count, int n, int type, bool packed,
+                   const unsigned char **base, size_t *stride) {
     if (view < 0 || view >= (int)m.bufferViews.size())
-        return "buffer view " + std::to_string(view) + " does not exist";
+        return "bufferView " + std::to_string(view) + " does not exist (the asset has " +
+               std::to_string(m.bufferViews.size()) + ")";
     const tinygltf::BufferView &v = m.bufferViews[view];
     if (v.extensions.count("EXT_meshopt_compression"))
         return "buffer view " + std::to_string(view) + " is EXT_meshopt_compression-compressed (not decoded)";
@@ -115,23 +118,33 @@ std::string read_view(const tinygltf::Model &m, int view, size_t offset, size_t 
         return "buffer view " + std::to_string(view) + ": buffer " + std::to_string(v.buffer) + " does not exist";
     const std::vector<unsigned char> &buf = m.buffers[v.buffer].data;
     if (v.byteOffset > buf.size() || v.byteLength > buf.size() - v.byteOffset)
-        return "buffer view " + std::to_string(view) + " (offset " + std::to_string(v.byteOffset) + ", length " +
-               std::to_string(v.byteLength) + ") exceeds buffer " + std::to_string(v.buffer) + " (" +
+        return "buffer view " + std::to_string(view) + " (byteOffset " + std::to_string(v.byteOffset) +
+               ", byteLength " + std::to_string(v.byteLength) + ") exceeds buffer " + std::to_string(v.buffer) + " (" +
                std::to_string(buf.size()) + " bytes)";
     size_t cs = (size_t)component_bytes(type), elem = cs * (size_t)n;
-    size_t stride = (!packed && v.byteStride != 0) ? v.byteStride : elem;
-    if (stride < elem)
-        return "buffer view " + std::to_string(view) + ": byteStride " + std::to_string(stride) +
+    *stride = (!packed && v.byteStride != 0) ? v.byteStride : elem;
+    if (*stride < elem)
+        return "buffer view " + std::to_string(view) + ": byteStride " + std::to_string(*stride) +
                " is smaller than an element (" + std::to_string(elem) + " bytes)";
+    *base = buf.data() + v.byteOffset;
     if (count == 0) return "";
+    // stride * (count - 1) + elem <= byteLength - offset, without computing the product.
     size_t avail = offset <= v.byteLength ? v.byteLength - offset : 0;
-    if (offset > v.byteLength || elem > avail || (count - 1) > (avail - elem) / stride)
-        return std::to_string(count) + " elements at offset " + std::to_string(offset) + " run past the end of "
-               "buffer view " + std::to_string(view) + " (" + std::to_string(v.byteLength) + " bytes)";
-    const unsigned char *base = buf.data() + v.byteOffset + offset;
+    if (offset > v.byteLength || elem > avail || (count - 1) > (avail - elem) / *stride)
+        return "count " + std::to_string(count) + " (" + std::to_string(elem) + "-byte elements, byteStride " +
+               std::to_string(*stride) + ") at byteOffset " + std::to_string(offset) +
+               " runs past the end of buffer view " + std::to_string(view) + " (byteLength " +
+               std::to_string(v.byteLength) + ")";
+    *base += offset;
+    return "";
+}
+
+// Reads `count` elements of n components located by locate() into dst (count * n values).
+void read_elements(const unsigned char *base, size_t stride, size_t count, int n, int type, bool normalized,
+                   double *dst) {
+    const size_t cs = (size_t)component_bytes(type);
     for (size_t i = 0; i < count; i++)
         for (int c = 0; c < n; c++) dst[i * n + c] = read_component(base + i * stride + c * cs, type, normalized);
-    return "";
 }
 
 std::string type_name(int type) {
@@ -147,47 +160,89 @@ std::string type_name(int type) {
     }
 }
 
-const size_t MAX_ZERO_ELEMENTS = (size_t)1 << 24; // an accessor without a buffer view: zeros, capped
+// An accessor without a buffer view is zeros (sparse values on top): nothing in the file holds them, so their
+// count has a limit of its own (mr_gltf.h, "Limits").
+const size_t MAX_ZERO_ELEMENTS = (size_t)1 << 20;
 
-// Accessor `index` of glTF type want_type (TINYGLTF_TYPE_*) as doubles, count * components; sparse applied.
-std::string read_accessor(const tinygltf::Model &m, int index, int want_type, std::vector<double> *out) {
-    if (index < 0 || index >= (int)m.accessors.size()) return "accessor " + std::to_string(index) + " does not exist";
+// Where an accessor's values lie (check_accessor): its elements, and a sparse accessor's indices and values.
+struct accessor_layout {
+    int n = 0;                        // components per element
+    const unsigned char *base = NULL; // the elements (NULL: zeros, no buffer view)
+    size_t stride = 0;
+    size_t sparse = 0;  // sparse.count, 0 if not sparse
+    int index_type = 0; // sparse.indices.componentType
+    const unsigned char *indices = NULL, *values = NULL;
+    size_t index_stride = 0, value_stride = 0;
+};
+
+// Accessor `index` of glTF type want_type (TINYGLTF_TYPE_*) checked without reading it: every count, offset and
+// stride against the bytes that hold it (locate()), a count without a buffer view against MAX_ZERO_ELEMENTS. ""
+// on success (*layout set), else the reason, naming the accessor and the field.
+std::string check_accessor(const tinygltf::Model &m, int index, int want_type, accessor_layout *layout) {
+    if (index < 0 || index >= (int)m.accessors.size())
+        return "accessor " + std::to_string(index) + " does not exist (the asset has " +
+               std::to_string(m.accessors.size()) + ")";
     const tinygltf::Accessor &a = m.accessors[index];
     std::string name = "accessor " + std::to_string(index);
     if (a.type != want_type) return name + " is a " + type_name(a.type) + ", not a " + type_name(want_type);
-    int n = tinygltf::GetNumComponentsInType((uint32_t)a.type);
-    if (n <= 0 || component_bytes(a.componentType) == 0)
+    layout->n = tinygltf::GetNumComponentsInType((uint32_t)a.type);
+    if (layout->n <= 0 || component_bytes(a.componentType) == 0)
         return name + " has an unknown componentType " + std::to_string(a.componentType);
     if (a.bufferView < 0 && a.count > MAX_ZERO_ELEMENTS)
-        return name + " has no buffer view and " + std::to_string(a.count) + " elements";
-    if (a.count > (size_t)INT_MAX) return name + " has too many elements";
-    out->assign(a.count * (size_t)n, 0.0);
+        return name + ": count " + std::to_string(a.count) + " without a bufferView (at most " +
+               std::to_string(MAX_ZERO_ELEMENTS) + ")";
     if (a.bufferView >= 0) {
-        std::string why = read_view(m, a.bufferView, a.byteOffset, a.count, n, a.componentType, a.normalized,
-                                    false, out->data());
+        std::string why = locate(m, a.bufferView, a.byteOffset, a.count, layout->n, a.componentType, false,
+                                 &layout->base, &layout->stride);
         if (!why.empty()) return name + ": " + why;
+    } else if (a.byteOffset != 0) {
+        return name + ": byteOffset " + std::to_string(a.byteOffset) + " without a bufferView";
     }
-    if (a.sparse.isSparse) {
-        if (a.sparse.count < 0 || (size_t)a.sparse.count > a.count)
-            return name + ": sparse count " + std::to_string(a.sparse.count) + " out of range";
-        size_t sc = (size_t)a.sparse.count;
-        int it = a.sparse.indices.componentType;
-        if (it != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && it != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
-            it != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
-            return name + ": sparse indices have componentType " + std::to_string(it);
-        if (a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0)
-            return name + ": negative sparse byteOffset";
+    if (!a.sparse.isSparse)
+        return "";
+    if (a.sparse.count < 1 || (size_t)a.sparse.count > a.count)
+        return name + ": sparse.count " + std::to_string(a.sparse.count) + " out of range (1 to count " +
+               std::to_string(a.count) + ")";
+    layout->sparse = (size_t)a.sparse.count;
+    const int it = layout->index_type = a.sparse.indices.componentType;
+    if (it != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && it != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+        it != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+        return name + ": sparse.indices.componentType " + std::to_string(it) + " is not an unsigned integer";
+    if (a.sparse.indices.byteOffset < 0 || a.sparse.values.byteOffset < 0)
+        return name + ": negative sparse byteOffset";
+    std::string why = locate(m, a.sparse.indices.bufferView, (size_t)a.sparse.indices.byteOffset, layout->sparse, 1, it,
+                             true, &layout->indices, &layout->index_stride);
+    if (!why.empty())
+        return name + ": sparse.indices: " + why;
+    why = locate(m, a.sparse.values.bufferView, (size_t)a.sparse.values.byteOffset, layout->sparse, layout->n,
+                 a.componentType, true, &layout->values, &layout->value_stride);
+    if (!why.empty())
+        return name + ": sparse.values: " + why;
+    return "";
+}
+
+// Accessor `index` of glTF type want_type as doubles, count * components; sparse applied. Nothing is allocated
+// before check_accessor has held every size against the bytes that hold it: count * n doubles are then at most 8
+// times those bytes (or MAX_ZERO_ELEMENTS elements).
+std::string read_accessor(const tinygltf::Model &m, int index, int want_type, std::vector<double> *out) {
+    accessor_layout L;
+    std::string why = check_accessor(m, index, want_type, &L);
+    if (!why.empty())
+        return why;
+    const tinygltf::Accessor &a = m.accessors[index];
+    const int n = L.n;
+    out->assign(a.count * (size_t)n, 0.0);
+    if (L.base != NULL)
+        read_elements(L.base, L.stride, a.count, n, a.componentType, a.normalized, out->data());
+    if (L.sparse > 0) {
+        const size_t sc = L.sparse;
         std::vector<double> idx(sc), val(sc * (size_t)n);
-        std::string why = read_view(m, a.sparse.indices.bufferView, (size_t)a.sparse.indices.byteOffset, sc, 1, it,
-                                    false, true, idx.data());
-        if (why.empty())
-            why = read_view(m, a.sparse.values.bufferView, (size_t)a.sparse.values.byteOffset, sc, n,
-                            a.componentType, a.normalized, true, val.data());
-        if (!why.empty()) return name + ": sparse " + why;
+        read_elements(L.indices, L.index_stride, sc, 1, L.index_type, false, idx.data());
+        read_elements(L.values, L.value_stride, sc, n, a.componentType, a.normalized, val.data());
         for (size_t i = 0; i < sc; i++) {
             if (idx[i] >= (double)a.count)
-                return name + ": sparse index " + std::to_string((long long)idx[i]) + " past its " +
-                       std::to_string(a.count) + " elements";
+                return "accessor " + std::to_string(index) + ": sparse index " + std::to_string((long long)idx[i]) +
+                       " past its " + std::to_string(a.count) + " elements";
             size_t k = (size_t)idx[i];
             for (int c = 0; c < n; c++) (*out)[k * n + c] = val[i * n + c];
         }
@@ -208,7 +263,12 @@ struct group_build {
 struct geometry_build {
     std::vector<group_build> groups;
     int primitives = 0, skipped = 0, flipped = 0;
+    size_t vertices = 0, triangles = 0; // so far, over all groups
 };
+
+// The most vertices and triangles a scene may flatten to (mr_gltf.h, "Limits"): instancing repeats a mesh once per
+// node, so a small file can name more geometry than its bytes hold; about 1 GB of arrays at the limit.
+const size_t MAX_SCENE_VERTICES = (size_t)1 << 24, MAX_SCENE_TRIANGLES = (size_t)1 << 24;
 
 bool all_finite(const std::vector<double> &v) {
     for (double x : v)
@@ -250,8 +310,19 @@ mr_status add_primitive(const mr_gltf *g, int mesh, int prim, const mat4 &w, geo
         b->skipped++;
         return MR_OK;
     }
+    // POSITION checked against its bytes, then its count against the scene's limit, before anything is read for
+    // this instance (instancing repeats a mesh once per node).
+    accessor_layout layout;
+    std::string why = check_accessor(m, a_pos, TINYGLTF_TYPE_VEC3, &layout);
+    if (!why.empty())
+        return mr_fail(MR_ERR_FORMAT, "%s: POSITION: %s", where.c_str(), why.c_str());
+    if (m.accessors[a_pos].count > MAX_SCENE_VERTICES - b->vertices)
+        return mr_fail(MR_ERR_FORMAT,
+                       "%s: POSITION: accessor %d: count %zu takes the scene past the limit of %zu "
+                       "vertices (%zu so far)",
+                       where.c_str(), a_pos, m.accessors[a_pos].count, MAX_SCENE_VERTICES, b->vertices);
     std::vector<double> pos, nrm, tan, uv0, uv1, ind;
-    std::string why = read_accessor(m, a_pos, TINYGLTF_TYPE_VEC3, &pos);
+    why = read_accessor(m, a_pos, TINYGLTF_TYPE_VEC3, &pos);
     if (!why.empty()) return mr_fail(MR_ERR_FORMAT, "%s: POSITION: %s", where.c_str(), why.c_str());
     size_t nv = pos.size() / 3;
     for (size_t i = 0; i < pos.size(); i++)
@@ -341,6 +412,10 @@ mr_status add_primitive(const mr_gltf *g, int mesh, int prim, const mat4 &w, geo
     }
     std::vector<uint32_t> tri;
     size_t ni = ind.size();
+    const size_t triangles = mode == TINYGLTF_MODE_TRIANGLES ? ni / 3 : (ni >= 3 ? ni - 2 : 0);
+    if (triangles > MAX_SCENE_TRIANGLES - b->triangles)
+        return mr_fail(MR_ERR_FORMAT, "%s: its %zu triangles take the scene past the limit of %zu triangles",
+                       where.c_str(), triangles, MAX_SCENE_TRIANGLES);
     if (mode == TINYGLTF_MODE_TRIANGLES) {
         for (size_t i = 0; i + 2 < ni; i += 3)
             for (int k = 0; k < 3; k++) tri.push_back((uint32_t)ind[i + k]);
@@ -380,6 +455,8 @@ mr_status add_primitive(const mr_gltf *g, int mesh, int prim, const mat4 &w, geo
     for (uint32_t t : tri) grp->idx.push_back(t + (uint32_t)base);
     grp->primitives++;
     b->primitives++;
+    b->vertices += nv;
+    b->triangles += triangles;
     return MR_OK;
 }
 

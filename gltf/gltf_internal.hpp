@@ -4,6 +4,8 @@
 #ifndef MR_GLTF_INTERNAL_HPP
 #define MR_GLTF_INTERNAL_HPP
 
+#include <limits.h>
+
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -50,8 +52,34 @@ std::string uri_encode_spaces(const std::string &rel);
 // The mime type of encoded image bytes by their signature ("" if unknown).
 std::string sniff_mime(const std::vector<unsigned char> &b);
 
-// The whole file; errors (MR_ERR_IO) name it as "<what> '<path>'".
+// ---- limits on what a file may make the loader do (documented in mr_gltf.h, "Limits") ----------------------
+
+// The most bytes the shim reads from one file: the asset, an external buffer, an external image. tinygltf 2.7
+// passes image sizes as int and the asset's size as unsigned, so anything larger would be cut short.
+const size_t MAX_INPUT_BYTES = (size_t)INT_MAX;
+
+// The deepest nesting of arrays and objects in an asset's JSON. tinygltf and nlohmann/json recurse once per level
+// (converting to tinygltf::Value, destroying the tree), so tens of thousands of levels overflow the stack; a
+// real asset nests about 10 deep, extras included.
+const int MAX_JSON_DEPTH = 128;
+
+// The whole file, if it is a regular file of at most MAX_INPUT_BYTES (mr_io_open_input: a folder, a FIFO or a
+// device is refused by name); errors name it as "<what> '<path>'" (MR_ERR_IO, MR_ERR_FORMAT for the size), or are
+// the reason alone ("is a directory") when what is NULL.
 mr_status read_file(const std::string &path, std::vector<unsigned char> *out, const char *what);
+
+// Where the top-level "materials" value lies in an asset's JSON text (byte offsets into it).
+struct json_span {
+    bool found = false;
+    size_t begin = 0, end = 0;
+};
+
+// One pass over JSON text of n bytes, outside strings, before any parser sees it: nesting deeper than
+// MAX_JSON_DEPTH is MR_ERR_FORMAT naming `file`, the limit and the byte offset (`base` + the offset in text: the
+// JSON chunk of a .glb starts at byte 20). *materials receives the span of the root object's "materials" value, so
+// that it alone can be parsed again for what tinygltf does not check (validate_materials). Malformed JSON is left
+// to the parser.
+mr_status scan_json(const char *text, size_t n, size_t base, const std::string &file, json_span *materials);
 
 bool list_has(const std::vector<std::string> &list, const char *name);
 
@@ -59,6 +87,17 @@ nlohmann::json to_json(const Value &v);
 
 // The keys of the material schema (the model holds them; the file's own are stale once a material is set).
 bool is_material_key(const std::string &key);
+
+// The file's materials (the JSON text of the top-level "materials" value, parsed alone) against the parts of the
+// glTF schema the shim and its users read, which tinygltf 2.7 does not check or silently drops: every material an
+// object; a material's extensions an object of objects (tinygltf drops an extension that is not one, and the
+// material then reads as if it had none); the factors of the core material, KHR_materials_pbrSpecularGlossiness,
+// KHR_materials_specular and KHR_materials_ior numbers of the right count, finite and within the schema's range;
+// every textureInfo (core and in those extensions) an object whose index names a texture of the asset, with a
+// non-negative integer texCoord and a well-formed KHR_texture_transform; alphaMode one of glTF's three. Also each
+// texture's source and sampler in range. MR_ERR_FORMAT naming the file, the material (index and name) and the
+// field, with its value. (material.cpp)
+mr_status validate_materials(const mr_gltf *g, const char *text, const json_span &span);
 
 // The asset's original JSON (struct mr_gltf), parsed from original_text on the first call; null if the text is
 // not a JSON object. Buffers' and images' "uri" are dropped: their payloads are written from the model.

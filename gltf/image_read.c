@@ -22,7 +22,7 @@ mr_status mr_gltf_image_read(const mr_gltf *asset, int image, const mr_img_read_
     if (im.bytes == NULL || im.size == 0)
         return mr_fail(MR_ERR_FORMAT, "glTF '%s': image %d has no bytes", mr_gltf_path(asset), image);
     char name[1024];
-    snprintf(name, sizeof name, "glTF '%s' image %d", mr_gltf_path(asset), image);
+    snprintf(name, sizeof name, "glTF '%s': image %d", mr_gltf_path(asset), image);
     return mr_img_read_memory(im.bytes, im.size, name, opts, out, stored);
 }
 

@@ -24,15 +24,6 @@ namespace {
 
 // ---- small helpers ------------------------------------------------------------------------------------
 
-std::string first_line(const std::string &s) {
-    std::string t = s;
-    while (!t.empty() && (t.back() == '\n' || t.back() == '\r')) t.pop_back();
-    for (char &c : t) {
-        if (c == '\n') c = ';';
-    }
-    return t;
-}
-
 std::string dir_of(const std::string &path) {
     size_t slash = path.find_last_of('/');
     if (slash == std::string::npos) return ".";
@@ -76,14 +67,88 @@ std::string base64_encode(const unsigned char *p, size_t n) {
     return out;
 }
 
-// tinygltf's image callback: keep the encoded bytes, decode nothing.
-bool keep_image_bytes(tinygltf::Image *image, const int, std::string *, std::string *, int, int,
-                      const unsigned char *bytes, int size, void *) {
+// tinygltf's image callback: keep the encoded bytes, decode nothing. `user` is the model being loaded: tinygltf 2.7
+// hands an image in a buffer view over as &buffer.data[byteOffset] with the view's byteLength, unchecked, so a view
+// that runs past its buffer would be read past the buffer's end; it is checked here first.
+bool keep_image_bytes(tinygltf::Image *image, const int index, std::string *err, std::string *, int, int,
+                      const unsigned char *bytes, int size, void *user) {
+    const tinygltf::Model *m = static_cast<const tinygltf::Model *>(user);
+    if (image->bufferView >= 0) { // tinygltf has checked the view's and its buffer's index
+        const tinygltf::BufferView &v = m->bufferViews[(size_t)image->bufferView];
+        const tinygltf::Buffer &b = m->buffers[(size_t)v.buffer];
+        if (v.byteOffset > b.data.size() || v.byteLength > b.data.size() - v.byteOffset ||
+            v.byteLength > (size_t)INT_MAX) {
+            if (err != NULL)
+                *err += "image " + std::to_string(index) + ": buffer view " + std::to_string(image->bufferView) +
+                        " (byteOffset " + std::to_string(v.byteOffset) + ", byteLength " +
+                        std::to_string(v.byteLength) + ") runs past the end of buffer " + std::to_string(v.buffer) +
+                        " (" + std::to_string(b.data.size()) + " bytes)\n";
+            return false;
+        }
+        bytes = b.data.data() + v.byteOffset;
+        size = (int)v.byteLength;
+    }
+    if (size < 0 || (size > 0 && bytes == NULL)) {
+        if (err != NULL)
+            *err += "image " + std::to_string(index) + ": no bytes\n";
+        return false;
+    }
     image->image.assign(bytes, bytes + size);
     image->as_is = true;
     image->width = image->height = image->component = image->bits = -1;
     if (image->mimeType.empty()) image->mimeType = sniff_mime(image->image);
     return true;
+}
+
+// tinygltf's file callbacks (tinygltf::FsCallbacks), replacing its own: its FileExists fopen()s the file, which
+// blocks on a FIFO; its ReadWholeFile takes the size of a folder (2^63 - 1 on ext4) and allocates it; and a file it
+// does not find beside the asset it looks for in the working directory. These look beside the asset only, and
+// read regular files only (read_file), recording why the last read failed so that the message can name the buffer.
+struct fs_context {
+    std::string prefix; // what every path tinygltf asks for starts with: the asset's directory and '/'
+    std::string failed; // the last file that could not be read, and why (mr_last_error() then)
+    std::string why;
+    mr_status status = MR_OK;
+};
+
+bool fs_exists(const std::string &path, void *user) {
+    const fs_context *ctx = static_cast<const fs_context *>(user);
+    struct stat st;
+    return path.compare(0, ctx->prefix.size(), ctx->prefix) == 0 && stat(path.c_str(), &st) == 0;
+}
+
+std::string fs_expand(const std::string &path, void *) { return path; }
+
+bool fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *user) {
+    fs_context *ctx = static_cast<fs_context *>(user);
+    std::vector<unsigned char> bytes;
+    mr_status s = read_file(path, &bytes, NULL);
+    if (s != MR_OK) {
+        ctx->failed = path;
+        ctx->status = s;
+        ctx->why = mr_last_error();
+        if (err != NULL)
+            *err += ctx->why;
+        return false;
+    }
+    out->swap(bytes);
+    return true;
+}
+
+bool fs_write(std::string *err, const std::string &, const std::vector<unsigned char> &, void *) {
+    if (err != NULL)
+        *err += "the glTF shim writes files itself";
+    return false;
+}
+
+// The last non-empty line of tinygltf's error text: it appends its fatal error last, after any complaints it
+// recorded and went on from.
+std::string last_line(const std::string &s) {
+    std::string t = s;
+    while (!t.empty() && (t.back() == '\n' || t.back() == '\r'))
+        t.pop_back();
+    size_t nl = t.find_last_of('\n');
+    return nl == std::string::npos ? t : t.substr(nl + 1);
 }
 
 // tinygltf's image writer callback: write nothing (the shim writes images itself).
@@ -468,44 +533,83 @@ mr_status save_impl(mr_gltf *g, const char *path_c) {
 
 mr_status load_impl(const char *path_c, mr_gltf **out) {
     const std::string path = path_c;
-    struct stat st;
-    if (stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
-        return mr_fail(MR_ERR_IO, "glTF '%s': is a directory", path.c_str());
     std::vector<unsigned char> bytes;
     mr_status s = read_file(path, &bytes, "glTF");
     if (s != MR_OK) return s;
+
+    // The JSON: the whole file, or a .glb's JSON chunk (when its header says where that is; tinygltf refuses it
+    // otherwise). Its nesting is bounded before tinygltf parses it (scan_json).
+    const bool is_glb = bytes.size() >= 4 && memcmp(bytes.data(), "glTF", 4) == 0;
+    const char *text = (const char *)bytes.data();
+    size_t text_size = bytes.size(), text_base = 0;
+    if (is_glb) {
+        text_size = 0;
+        if (bytes.size() >= 20 && memcmp(bytes.data() + 16, "JSON", 4) == 0) {
+            uint32_t len =
+                (uint32_t)bytes[12] | (uint32_t)bytes[13] << 8 | (uint32_t)bytes[14] << 16 | (uint32_t)bytes[15] << 24;
+            if (len <= bytes.size() - 20)
+                text_size = len;
+            text += 20;
+            text_base = 20;
+        }
+    }
+    json_span materials;
+    if (text_size > 0) {
+        s = scan_json(text, text_size, text_base, path, &materials);
+        if (s != MR_OK)
+            return s;
+    }
 
     std::unique_ptr<mr_gltf> g(new mr_gltf()); // released to the caller on success, freed on any other way out
     g->path = path;
     g->base_dir = dir_of(path);
     tinygltf::TinyGLTF loader;
-    loader.SetImageLoader(keep_image_bytes, NULL);
+    loader.SetImageLoader(keep_image_bytes, &g->model);
+    fs_context fs;
+    fs.prefix = g->base_dir.back() == '/' ? g->base_dir : g->base_dir + "/";
+    loader.SetFsCallbacks(tinygltf::FsCallbacks{fs_exists, fs_expand, fs_read, fs_write, &fs});
     std::string err, warn;
     bool ok;
-    bool is_glb = bytes.size() >= 4 && memcmp(bytes.data(), "glTF", 4) == 0;
-    if (is_glb) {
-        ok = loader.LoadBinaryFromMemory(&g->model, &err, &warn, bytes.data(), (unsigned)bytes.size(),
-                                         g->base_dir);
-    } else {
-        ok = loader.LoadASCIIFromString(&g->model, &err, &warn, (const char *)bytes.data(),
-                                        (unsigned)bytes.size(), g->base_dir);
+    try {
+        if (is_glb) {
+            ok = loader.LoadBinaryFromMemory(&g->model, &err, &warn, bytes.data(), (unsigned)bytes.size(), g->base_dir);
+        } else {
+            ok = loader.LoadASCIIFromString(&g->model, &err, &warn, (const char *)bytes.data(), (unsigned)bytes.size(),
+                                            g->base_dir);
+        }
+    } catch (const std::bad_alloc &) {
+        throw;
+    } catch (const std::exception &e) {
+        // tinygltf 2.7 throws on some malformed files (a GLB buffer of byteLength 0: std::vector::at).
+        return mr_fail(MR_ERR_FORMAT, "glTF '%s': malformed (tinygltf threw: %s)", path.c_str(), e.what());
     }
     if (!ok) {
-        mr_status code = err.find("not found") != std::string::npos || err.find("Failed to load") != std::string::npos
-                             ? MR_ERR_IO : MR_ERR_FORMAT;
-        std::string why = first_line(err.empty() ? warn : err);
+        // A buffer that could not be read: buffers are parsed first, and appended one by one, so the one that
+        // failed is the next one.
+        const size_t buffer = g->model.buffers.size();
+        auto relative = [&](const std::string &p) {
+            return p.compare(0, fs.prefix.size(), fs.prefix) == 0 ? p.substr(fs.prefix.size()) : p;
+        };
+        if (fs.status != MR_OK && err.find(fs.failed) != std::string::npos)
+            return mr_fail(fs.status, "glTF '%s': buffer %zu ('%s'): %s", path.c_str(), buffer,
+                           relative(fs.failed).c_str(), fs.why.c_str());
+        const std::string not_found = "File not found : ";
+        size_t at = err.find(not_found);
+        if (at != std::string::npos) {
+            std::string name = err.substr(at + not_found.size());
+            name = name.substr(0, name.find('\n'));
+            return mr_fail(MR_ERR_IO, "glTF '%s': buffer %zu ('%s'): not found (looked up relative to '%s')",
+                           path.c_str(), buffer, name.c_str(), g->base_dir.c_str());
+        }
+        mr_status code = err.find("Failed to load") != std::string::npos ? MR_ERR_IO : MR_ERR_FORMAT;
+        std::string why = last_line(err.empty() ? warn : err);
         if (why.empty()) why = is_glb ? "not a valid binary glTF" : "not a valid glTF";
+        if (why.compare(0, 15, "[json.exception") == 0)
+            why = "invalid JSON: " + why;
         if (code == MR_ERR_IO) why += " (resources are looked up relative to '" + g->base_dir + "')";
-        else if (is_glb) why += " (" + std::to_string(bytes.size()) + " bytes read; truncated?)";
+        else if (is_glb && (why.find("binary") != std::string::npos || why.find("Chunk") != std::string::npos))
+            why += " (" + std::to_string(bytes.size()) + " bytes read; truncated?)";
         return mr_fail(code, "glTF '%s': %s", path.c_str(), why.c_str());
-    }
-    // The JSON text is kept for what tinygltf drops, and parsed only if it is needed (original_json).
-    if (is_glb && bytes.size() >= 20) {
-        uint32_t len = (uint32_t)bytes[12] | (uint32_t)bytes[13] << 8 | (uint32_t)bytes[14] << 16 |
-                       (uint32_t)bytes[15] << 24;
-        if (len <= bytes.size() - 20) g->original_text.assign((const char *)bytes.data() + 20, len);
-    } else if (!is_glb) {
-        g->original_text.assign((const char *)bytes.data(), bytes.size());
     }
     for (size_t i = 0; i < g->model.buffers.size(); i++) {
         const std::string &uri = g->model.buffers[i].uri;
@@ -516,13 +620,21 @@ mr_status load_impl(const char *path_c, mr_gltf **out) {
         bool external = im.bufferView < 0 && !im.uri.empty();
         std::string p = external ? join_path(g->base_dir, url_decode(im.uri)) : "";
         if (external && im.image.empty()) {
+            // tinygltf goes on without an image it cannot read: say why, naming the asset, the image and its URI.
             std::vector<unsigned char> probe;
-            mr_status rs = read_file(p, &probe, "glTF image");
-            if (rs != MR_OK) return mr_fail_context(rs, "glTF '%s': image %zu", path.c_str(), i);
-            return mr_fail(MR_ERR_FORMAT, "glTF '%s': image %zu ('%s') is empty", path.c_str(), i, p.c_str());
+            mr_status rs = read_file(p, &probe, NULL);
+            std::string why = rs != MR_OK ? mr_last_error() : "is empty";
+            if (rs == MR_OK)
+                rs = MR_ERR_FORMAT;
+            return mr_fail(rs, "glTF '%s': image %zu ('%s'): %s", path.c_str(), i, im.uri.c_str(), why.c_str());
         }
         g->image_paths.push_back(p);
     }
+    s = validate_materials(g.get(), text, materials);
+    if (s != MR_OK)
+        return s;
+    // The JSON text is kept for what tinygltf drops, and parsed only if it is needed (original_json).
+    g->original_text.assign(text, text_size);
     *out = g.release();
     return MR_OK;
 }

@@ -2,6 +2,9 @@
 // gltf/mr_gltf.h): mr_gltf_material to and from tinygltf's Material, its extensions kept as JSON Values.
 #include "gltf/gltf_internal.hpp"
 
+#include <limits.h>
+#include <stdint.h>
+#include <stdio.h>
 #include <string.h>
 
 #include <algorithm>
@@ -332,7 +335,261 @@ mr_wrap wrap_of_gl(int gl) { return gl == 33071 ? MR_WRAP_CLAMP : gl == 33648 ? 
 
 int gl_of_wrap(mr_wrap w) { return w == MR_WRAP_CLAMP ? 33071 : w == MR_WRAP_MIRROR ? 33648 : 10497; }
 
+// ---- validating the file's materials (validate_materials) ------------------------------------------------------
+
+// "a number", "an object", ... for messages.
+std::string kind(const nlohmann::json &v) {
+    switch (v.type()) {
+    case nlohmann::json::value_t::object:
+        return "an object";
+    case nlohmann::json::value_t::array:
+        return "an array";
+    case nlohmann::json::value_t::string:
+        return "a string";
+    case nlohmann::json::value_t::boolean:
+        return "a boolean";
+    case nlohmann::json::value_t::null:
+        return "null";
+    default:
+        return "a number";
+    }
+}
+
+// One material's checks; every failure names the material and the field (a path such as
+// "extensions.KHR_materials_pbrSpecularGlossiness.diffuseTexture.index").
+struct material_check {
+    const mr_gltf *g;
+    std::string where; // "glTF 'x.gltf': material 2 ('Glass')"
+
+    mr_status fail(const std::string &field, const std::string &why) const {
+        if (field.empty())
+            return mr_fail(MR_ERR_FORMAT, "%s: %s", where.c_str(), why.c_str());
+        return mr_fail(MR_ERR_FORMAT, "%s: %s %s", where.c_str(), field.c_str(), why.c_str());
+    }
+
+    // A number within [lo, hi] (finite: JSON has no NaN, but 1e999 parses as infinity).
+    mr_status number(const nlohmann::json &v, const std::string &field, double lo, double hi) const {
+        if (!v.is_number())
+            return fail(field, "is " + kind(v) + ", not a number");
+        const double x = v.get<double>();
+        char text[64];
+        snprintf(text, sizeof text, "%.17g", x);
+        if (!std::isfinite(x))
+            return fail(field, std::string("is ") + text + ", not a finite number");
+        if (x < lo || x > hi) {
+            char range[96];
+            if (std::isinf(hi))
+                snprintf(range, sizeof range, "at least %g", lo);
+            else
+                snprintf(range, sizeof range, "within [%g, %g]", lo, hi);
+            return fail(field, std::string("is ") + text + ", expected " + range);
+        }
+        return MR_OK;
+    }
+
+    // An array of exactly n numbers, each within [lo, hi].
+    mr_status numbers(const nlohmann::json &v, const std::string &field, size_t n, double lo, double hi) const {
+        if (!v.is_array())
+            return fail(field, "is " + kind(v) + ", not an array of " + std::to_string(n) + " numbers");
+        if (v.size() != n)
+            return fail(field, "has " + std::to_string(v.size()) + " values, expected " + std::to_string(n));
+        for (size_t i = 0; i < n; i++) {
+            mr_status s = number(v[i], field + "[" + std::to_string(i) + "]", lo, hi);
+            if (s != MR_OK)
+                return s;
+        }
+        return MR_OK;
+    }
+
+    // A non-negative integer below `limit`, which names one of `limit` elements of `what` (NULL: a plain number,
+    // limit INT_MAX as tinygltf keeps it in an int).
+    mr_status index(const nlohmann::json &v, const std::string &field, size_t limit, const char *what) const {
+        if (!v.is_number_integer())
+            return fail(field, "is " + (v.is_number() ? std::string("not an integer") : kind(v)) +
+                                   ", expected a non-negative integer");
+        if (!v.is_number_unsigned())
+            return fail(field, "is " + std::to_string(v.get<int64_t>()) + ", expected a non-negative integer");
+        const uint64_t x = v.get<uint64_t>();
+        if (x >= limit)
+            return fail(field, "is " + std::to_string(x) +
+                                   (what != NULL ? ": no such " + std::string(what) + " (the asset has " +
+                                                       std::to_string(limit) + ")"
+                                                 : ", more than " + std::to_string(limit - 1)));
+        return MR_OK;
+    }
+
+    // An "extensions" value: an object whose every value is an object (glTF's schema for extensions; tinygltf
+    // drops those that are not, which would make the material read as if it had none).
+    mr_status extensions(const nlohmann::json &v, const std::string &field) const {
+        if (!v.is_object())
+            return fail(field, "is " + kind(v) + ", not a JSON object");
+        for (auto it = v.begin(); it != v.end(); ++it)
+            if (!it.value().is_object())
+                return fail(field + "." + it.key(), "is " + kind(it.value()) + ", not a JSON object");
+        return MR_OK;
+    }
+
+    // A textureInfo (normalTextureInfo, occlusionTextureInfo: `extra` is their scale or strength, with its range).
+    mr_status texture_info(const nlohmann::json &v, const std::string &field, const char *extra = NULL, double lo = 0,
+                           double hi = 0) const {
+        if (!v.is_object())
+            return fail(field, "is " + kind(v) + ", not a JSON object");
+        if (!v.contains("index"))
+            return fail(field, "has no index");
+        mr_status s = index(v["index"], field + ".index", g->model.textures.size(), "texture");
+        if (s == MR_OK && v.contains("texCoord"))
+            s = index(v["texCoord"], field + ".texCoord", INT_MAX, NULL);
+        if (s == MR_OK && extra != NULL && v.contains(extra))
+            s = number(v[extra], field + "." + extra, lo, hi);
+        if (s == MR_OK && v.contains("extensions"))
+            s = extensions(v["extensions"], field + ".extensions");
+        if (s != MR_OK || !v.contains("extensions") || !v["extensions"].contains(EXT_TRANSFORM))
+            return s;
+        const nlohmann::json &t = v["extensions"][EXT_TRANSFORM];
+        const std::string at = field + ".extensions." + EXT_TRANSFORM;
+        const double inf = INFINITY;
+        if (t.contains("offset"))
+            s = numbers(t["offset"], at + ".offset", 2, -inf, inf);
+        if (s == MR_OK && t.contains("rotation"))
+            s = number(t["rotation"], at + ".rotation", -inf, inf);
+        if (s == MR_OK && t.contains("scale"))
+            s = numbers(t["scale"], at + ".scale", 2, -inf, inf);
+        if (s == MR_OK && t.contains("texCoord"))
+            s = index(t["texCoord"], at + ".texCoord", INT_MAX, NULL);
+        return s;
+    }
+
+    // Optional members of object o: each present one checked by `check`.
+    template <typename F>
+    mr_status each(const nlohmann::json &o, std::initializer_list<const char *> keys, F check) const {
+        for (const char *key : keys) {
+            if (!o.contains(key))
+                continue;
+            mr_status s = check(o[key], std::string(key));
+            if (s != MR_OK)
+                return s;
+        }
+        return MR_OK;
+    }
+
+    mr_status material(const nlohmann::json &m) const {
+        const double inf = INFINITY;
+        mr_status s = MR_OK;
+        if (m.contains("pbrMetallicRoughness")) {
+            const nlohmann::json &pbr = m["pbrMetallicRoughness"];
+            const std::string at = "pbrMetallicRoughness";
+            if (!pbr.is_object())
+                return fail(at, "is " + kind(pbr) + ", not a JSON object");
+            if (pbr.contains("baseColorFactor"))
+                s = numbers(pbr["baseColorFactor"], at + ".baseColorFactor", 4, 0, 1);
+            if (s == MR_OK)
+                s = each(pbr, {"metallicFactor", "roughnessFactor"},
+                         [&](const nlohmann::json &v, const std::string &k) { return number(v, at + "." + k, 0, 1); });
+            if (s == MR_OK)
+                s = each(pbr, {"baseColorTexture", "metallicRoughnessTexture"},
+                         [&](const nlohmann::json &v, const std::string &k) { return texture_info(v, at + "." + k); });
+            if (s == MR_OK && pbr.contains("extensions"))
+                s = extensions(pbr["extensions"], at + ".extensions");
+            if (s != MR_OK)
+                return s;
+        }
+        if (m.contains("normalTexture"))
+            s = texture_info(m["normalTexture"], "normalTexture", "scale", -inf, inf);
+        if (s == MR_OK && m.contains("occlusionTexture"))
+            s = texture_info(m["occlusionTexture"], "occlusionTexture", "strength", 0, 1);
+        if (s == MR_OK && m.contains("emissiveTexture"))
+            s = texture_info(m["emissiveTexture"], "emissiveTexture");
+        if (s == MR_OK && m.contains("emissiveFactor"))
+            s = numbers(m["emissiveFactor"], "emissiveFactor", 3, 0, 1);
+        if (s == MR_OK && m.contains("alphaMode")) {
+            const nlohmann::json &mode = m["alphaMode"];
+            if (!mode.is_string())
+                return fail("alphaMode", "is " + kind(mode) + ", not a string");
+            const std::string v = mode.get<std::string>();
+            if (v != "OPAQUE" && v != "MASK" && v != "BLEND")
+                return fail("alphaMode", "is '" + v + "', expected OPAQUE, MASK or BLEND");
+        }
+        if (s == MR_OK && m.contains("alphaCutoff"))
+            s = number(m["alphaCutoff"], "alphaCutoff", 0, inf);
+        if (s == MR_OK && m.contains("doubleSided") && !m["doubleSided"].is_boolean())
+            return fail("doubleSided", "is " + kind(m["doubleSided"]) + ", not a boolean");
+        if (s == MR_OK && m.contains("name") && !m["name"].is_string())
+            return fail("name", "is " + kind(m["name"]) + ", not a string");
+        if (s != MR_OK || !m.contains("extensions"))
+            return s;
+        const nlohmann::json &exts = m["extensions"];
+        s = extensions(exts, "extensions");
+        if (s == MR_OK && exts.contains(EXT_SPEC_GLOSS)) {
+            const nlohmann::json &e = exts[EXT_SPEC_GLOSS];
+            const std::string at = std::string("extensions.") + EXT_SPEC_GLOSS;
+            if (e.contains("diffuseFactor"))
+                s = numbers(e["diffuseFactor"], at + ".diffuseFactor", 4, 0, 1);
+            if (s == MR_OK && e.contains("specularFactor"))
+                s = numbers(e["specularFactor"], at + ".specularFactor", 3, 0, 1);
+            if (s == MR_OK && e.contains("glossinessFactor"))
+                s = number(e["glossinessFactor"], at + ".glossinessFactor", 0, 1);
+            if (s == MR_OK)
+                s = each(e, {"diffuseTexture", "specularGlossinessTexture"},
+                         [&](const nlohmann::json &v, const std::string &k) { return texture_info(v, at + "." + k); });
+        }
+        if (s == MR_OK && exts.contains(EXT_SPECULAR)) {
+            const nlohmann::json &e = exts[EXT_SPECULAR];
+            const std::string at = std::string("extensions.") + EXT_SPECULAR;
+            if (e.contains("specularFactor"))
+                s = number(e["specularFactor"], at + ".specularFactor", 0, 1);
+            if (s == MR_OK && e.contains("specularColorFactor"))
+                s = numbers(e["specularColorFactor"], at + ".specularColorFactor", 3, 0, inf);
+            if (s == MR_OK)
+                s = each(e, {"specularTexture", "specularColorTexture"},
+                         [&](const nlohmann::json &v, const std::string &k) { return texture_info(v, at + "." + k); });
+        }
+        if (s == MR_OK && exts.contains(EXT_IOR) && exts[EXT_IOR].contains("ior")) {
+            const nlohmann::json &ior = exts[EXT_IOR]["ior"];
+            const std::string at = std::string("extensions.") + EXT_IOR + ".ior";
+            // KHR_materials_ior: at least 1, or 0 (a thin-walled limit the extension allows).
+            if (!(ior.is_number() && ior.get<double>() == 0.0))
+                s = number(ior, at, 1, inf);
+        }
+        return s;
+    }
+};
+
 } // namespace
+
+namespace mr_gltf_internal {
+
+mr_status validate_materials(const mr_gltf *g, const char *text, const json_span &span) {
+    const tinygltf::Model &model = g->model;
+    for (size_t t = 0; t < model.textures.size(); t++) {
+        const tinygltf::Texture &tex = model.textures[t];
+        if (tex.source < -1 || tex.source >= (int)model.images.size())
+            return mr_fail(MR_ERR_FORMAT, "glTF '%s': texture %zu: source %d: no such image (the asset has %zu)",
+                           g->path.c_str(), t, tex.source, model.images.size());
+        if (tex.sampler < -1 || tex.sampler >= (int)model.samplers.size())
+            return mr_fail(MR_ERR_FORMAT, "glTF '%s': texture %zu: sampler %d: no such sampler (the asset has %zu)",
+                           g->path.c_str(), t, tex.sampler, model.samplers.size());
+    }
+    if (!span.found)
+        return MR_OK;
+    nlohmann::json materials = nlohmann::json::parse(text + span.begin, text + span.end, nullptr, false);
+    if (materials.is_discarded() || !materials.is_array())
+        return mr_fail(MR_ERR_FORMAT, "glTF '%s': materials is %s, not an array", g->path.c_str(),
+                       materials.is_discarded() ? "not valid JSON" : kind(materials).c_str());
+    for (size_t k = 0; k < materials.size(); k++) {
+        const nlohmann::json &m = materials[k];
+        material_check check{g, "glTF '" + g->path + "': material " + std::to_string(k)};
+        if (!m.is_object())
+            return check.fail("", "is " + kind(m) + ", not a JSON object");
+        if (m.contains("name") && m["name"].is_string())
+            check.where += " ('" + m["name"].get<std::string>() + "')";
+        mr_status s = check.material(m);
+        if (s != MR_OK)
+            return s;
+    }
+    return MR_OK;
+}
+
+} // namespace mr_gltf_internal
 
 // ---- the C API -------------------------------------------------------------------------------------------
 

@@ -211,7 +211,7 @@ mr_status mr_gltf_add_image_bytes(mr_gltf *asset, const void *bytes, size_t size
 
 /* Decodes image `image` (mr_img_read_stored's conventions: opts may be NULL, *stored may be NULL): an external image
  * from its file, an embedded one (data URI, buffer view) from the asset's bytes in memory (mr_img_read_memory;
- * nothing is written to disk). Errors name the asset and the image index ("glTF 'a.gltf' image 3: truncated PNG:
+ * nothing is written to disk). Errors name the asset and the image index ("glTF 'a.gltf': image 3: truncated PNG:
  * ..."; an external image's also name its file). */
 mr_status mr_gltf_image_read(const mr_gltf *asset, int image, const mr_img_read_options *opts, mr_image **out,
                              mr_img_stored *stored);

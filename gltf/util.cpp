@@ -1,12 +1,15 @@
 // util.cpp — helpers more than one file of the glTF shim uses (declared in gltf_internal.hpp).
 #include "gltf/gltf_internal.hpp"
 
+#include "io/io_internal.h"
+
 #include <errno.h>
 #include <limits.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include <algorithm>
+#include <memory>
 #include <set>
 #include <sstream>
 
@@ -51,16 +54,120 @@ std::string sniff_mime(const std::vector<unsigned char> &b) {
 }
 
 mr_status read_file(const std::string &path, std::vector<unsigned char> *out, const char *what) {
-    FILE *f = fopen(path.c_str(), "rb");
-    if (f == NULL) return mr_fail(MR_ERR_IO, "%s '%s': cannot open: %s", what, path.c_str(), strerror(errno));
-    std::vector<unsigned char> bytes;
-    unsigned char chunk[65536];
-    size_t n;
-    while ((n = fread(chunk, 1, sizeof chunk, f)) > 0) bytes.insert(bytes.end(), chunk, chunk + n);
-    int failed = ferror(f);
-    fclose(f);
-    if (failed) return mr_fail(MR_ERR_IO, "%s '%s': read error", what, path.c_str());
+    const std::string label = what != NULL ? std::string(what) + " '" + path + "'" : "";
+    FILE *file = NULL;
+    uint64_t size = 0;
+    mr_status s = mr_io_open_input(path.c_str(), what != NULL ? label.c_str() : NULL, MAX_INPUT_BYTES, &file, &size);
+    if (s != MR_OK)
+        return s;
+    std::unique_ptr<FILE, int (*)(FILE *)> f(file, fclose); // closed however this returns (resize may throw)
+    // The size fstat gave when the file was opened (a file that shrinks meanwhile is read as far as it goes).
+    std::vector<unsigned char> bytes((size_t)size);
+    size_t got = 0, n;
+    while (got < bytes.size() && (n = fread(bytes.data() + got, 1, bytes.size() - got, f.get())) > 0)
+        got += n;
+    if (ferror(f.get())) {
+        if (what == NULL)
+            return mr_fail(MR_ERR_IO, "read error");
+        return mr_fail(MR_ERR_IO, "%s: read error", label.c_str());
+    }
+    bytes.resize(got);
     out->swap(bytes);
+    return MR_OK;
+}
+
+// ---- the JSON text, before any parser sees it ----------------------------------------------------------------
+
+mr_status scan_json(const char *text, size_t n, size_t base, const std::string &file, json_span *materials) {
+    *materials = json_span();
+    // Where the root object stands: expecting a key, inside one, expecting its ':', inside its value.
+    enum { KEY, IN_KEY, COLON, VALUE } top = KEY;
+    bool in_string = false, escaped = false, key_escaped = false, root_object = false;
+    size_t depth = 0, key_begin = 0, key_end = 0, value_begin = std::string::npos;
+    auto end_value = [&](size_t at) {
+        if (value_begin == std::string::npos)
+            return;
+        std::string key(text + key_begin + 1, key_end - key_begin - 1);
+        if (key_escaped) { // a key written with escapes ("materi\u0061ls") means what it decodes to
+            nlohmann::json k = nlohmann::json::parse(text + key_begin, text + key_end + 1, nullptr, false);
+            key = k.is_string() ? k.get<std::string>() : "";
+        }
+        if (key == "materials") { // JSON's last duplicate wins, in nlohmann and tinygltf alike
+            materials->found = true;
+            materials->begin = value_begin;
+            materials->end = at;
+        }
+    };
+    for (size_t i = 0; i < n; i++) {
+        const char c = text[i];
+        if (in_string) {
+            if (escaped) {
+                escaped = false;
+            } else if (c == '\\') {
+                escaped = true;
+                if (depth == 1 && top == IN_KEY)
+                    key_escaped = true;
+            } else if (c == '"') {
+                in_string = false;
+                if (depth == 1 && top == IN_KEY) {
+                    key_end = i;
+                    top = COLON;
+                }
+            }
+            continue;
+        }
+        const bool top_value = depth == 1 && root_object && top == VALUE && value_begin == std::string::npos;
+        switch (c) {
+        case ' ':
+        case '\t':
+        case '\n':
+        case '\r':
+            break;
+        case '"':
+            in_string = true;
+            if (depth == 1 && root_object && top == KEY) {
+                top = IN_KEY;
+                key_begin = i;
+                key_escaped = false;
+            } else if (top_value) {
+                value_begin = i;
+            }
+            break;
+        case '{':
+        case '[':
+            if (depth == 0)
+                root_object = c == '{';
+            if (top_value)
+                value_begin = i;
+            if (++depth > MAX_JSON_DEPTH)
+                return mr_fail(MR_ERR_FORMAT, "glTF '%s': the JSON nests deeper than %d levels (at byte %zu)",
+                               file.c_str(), MAX_JSON_DEPTH, base + i);
+            break;
+        case '}':
+        case ']':
+            if (depth == 1 && root_object && top == VALUE)
+                end_value(i);
+            if (depth > 0)
+                depth--;
+            break;
+        case ':':
+            if (depth == 1 && root_object && top == COLON) {
+                top = VALUE;
+                value_begin = std::string::npos;
+            }
+            break;
+        case ',':
+            if (depth == 1 && root_object && top == VALUE) {
+                end_value(i);
+                top = KEY;
+            }
+            break;
+        default:
+            if (top_value)
+                value_begin = i;
+            break;
+        }
+    }
     return MR_OK;
 }
 

@@ -556,13 +556,13 @@ MR_TEST(embedded_images_decode_from_memory) {
         const int corrupt[2] = {5, 6};
         for (int k = 0; k < 2; k++) {
             MR_CHECK(mr_gltf_image_read(g, corrupt[k], NULL, &img, NULL) == MR_ERR_FORMAT && img == NULL);
-            snprintf(want, sizeof want, "glTF '%s' image %d", in, corrupt[k]);
+            snprintf(want, sizeof want, "glTF '%s': image %d", in, corrupt[k]);
             MR_CHECK_MSG(strstr(mr_last_error(), want) != NULL && strstr(mr_last_error(), "matremap-") == NULL &&
                              strstr(mr_last_error(), k == 0 ? "truncated PNG" : "not an image") != NULL,
                          "%s", mr_last_error());
         }
         MR_CHECK(mr_gltf_texture_read(g, 1, NULL, &img, NULL) == MR_ERR_FORMAT && img == NULL);
-        snprintf(want, sizeof want, "glTF '%s' image 5", in);
+        snprintf(want, sizeof want, "glTF '%s': image 5", in);
         MR_CHECK_MSG(strstr(mr_last_error(), want) != NULL, "%s", mr_last_error());
         /* An external image's errors name the asset and the image too. */
         MR_CHECK(mr_test_write_file(mr_test_tmp_path("ref.png"), png, png_n / 2));
@@ -763,6 +763,137 @@ MR_TEST(bad_inputs) {
     MR_CHECK(strstr(mr_last_error(), "read from") != NULL);
     MR_CHECK(mr_gltf_save(g, mr_test_tmp_path("no/such/dir/x.gltf")) == MR_ERR_IO);
     MR_CHECK(!file_exists(mr_test_tmp_path("no")));
+    mr_gltf_free(g);
+}
+
+/* Writes `json` to scratch file `name` and expects mr_gltf_load to fail with `expected`, naming the file, `needle`. */
+static void expect_json_error(const char *name, const char *json, mr_status expected, const char *needle) {
+    const char *path = mr_test_tmp_path(name);
+    MR_CHECK(mr_test_write_file(path, json, strlen(json)));
+    expect_load_error(path, expected, needle);
+}
+
+/* Files that lie (issue 16): JSON nested past the limit (tens of thousands of levels overflowed the stack), URIs
+ * naming a folder, a FIFO or a device (a 2^63-byte allocation, a hang), an image in a buffer view past its buffer
+ * (read past the end), material extensions that are not objects (tinygltf dropped them: the material read as if
+ * it had none) and fields of the wrong type, count or range. Each fails to load with MR_ERR_IO or MR_ERR_FORMAT
+ * naming the file, the object and the field. */
+MR_TEST(hostile_inputs) {
+    // Nesting: the root object and 127 arrays are 128 levels, the limit; one more is refused, naming the byte.
+    char *json = malloc(2000);
+    for (int extra = 0; extra < 2 && json != NULL; extra++) {
+        const int arrays = 127 + extra;
+        int n = sprintf(json, "{\"asset\":{\"version\":\"2.0\"},\"extras\":");
+        for (int i = 0; i < arrays; i++)
+            json[n++] = '[';
+        for (int i = 0; i < arrays; i++)
+            json[n++] = ']';
+        strcpy(json + n, "}");
+        const char *path = mr_test_tmp_path(extra ? "deep129.gltf" : "deep128.gltf");
+        MR_CHECK(mr_test_write_file(path, json, strlen(json)));
+        if (extra) {
+            expect_load_error(path, MR_ERR_FORMAT, "the JSON nests deeper than 128 levels (at byte 163)");
+        } else {
+            mr_gltf *g = NULL;
+            MR_CHECK_OK(mr_gltf_load(path, &g));
+            mr_gltf_free(g);
+        }
+    }
+    free(json);
+    // 50000 levels, as the crash had it, in a string too: brackets inside strings do not count.
+    const int deep = 50000;
+    json = malloc(2 * deep + 200);
+    if (json != NULL) {
+        int n = sprintf(json, "{\"asset\":{\"version\":\"2.0\"},\"extras\":\"[[[[\",\"x\":");
+        for (int i = 0; i < deep; i++)
+            json[n++] = '[';
+        for (int i = 0; i < deep; i++)
+            json[n++] = ']';
+        strcpy(json + n, "}");
+        expect_json_error("deep50000.gltf", json, MR_ERR_FORMAT, "nests deeper than 128 levels (at byte 174)");
+        free(json);
+    }
+
+    // URIs naming what is not a regular file: refused by name, before a byte is read.
+    MR_CHECK(mkdir(mr_test_tmp_path("folder"), 0777) == 0);
+    MR_CHECK(mkfifo(mr_test_tmp_path("pipe.png"), 0666) == 0);
+    expect_json_error("img_dir.gltf", "{\"asset\":{\"version\":\"2.0\"},\"images\":[{\"uri\":\"folder/\"}]}", MR_ERR_IO,
+                      "image 0 ('folder/'): is a directory");
+    expect_json_error("buf_dir.gltf",
+                      "{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"byteLength\":4,\"uri\":\"folder\"}]}",
+                      MR_ERR_IO, "buffer 0 ('folder'): is a directory");
+    expect_json_error("img_fifo.gltf", "{\"asset\":{\"version\":\"2.0\"},\"images\":[{\"uri\":\"pipe.png\"}]}",
+                      MR_ERR_IO, "image 0 ('pipe.png'): is not a regular file (a FIFO)");
+    expect_json_error("buf_fifo.gltf",
+                      "{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"byteLength\":4,\"uri\":\"pipe.png\"}]}",
+                      MR_ERR_IO, "buffer 0 ('pipe.png'): is not a regular file (a FIFO)");
+    expect_json_error("img_dev.gltf",
+                      "{\"asset\":{\"version\":\"2.0\"},\"images\":[{\"uri\":\"../../../../../../../../dev/zero\"}]}",
+                      MR_ERR_IO, "is not a regular file (a character device)");
+    expect_load_error(mr_test_tmp_path("pipe.png"), MR_ERR_IO, "is not a regular file (a FIFO)");
+
+    // An image in a buffer view that runs past its 4-byte buffer.
+    expect_json_error(
+        "img_view.gltf",
+        "{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"byteLength\":4,\"uri\":"
+        "\"data:application/octet-stream;base64,AAAAAA==\"}],\"bufferViews\":[{\"buffer\":0,"
+        "\"byteOffset\":2,\"byteLength\":1000}],\"images\":[{\"bufferView\":0,\"mimeType\":\"image/png\"}]}",
+        MR_ERR_FORMAT,
+        "image 0: buffer view 0 (byteOffset 2, byteLength 1000) runs past the end of "
+        "buffer 0 (4 bytes)");
+
+    // Materials: each field this API reads, as the schema has it.
+    static const struct {
+        const char *material, *needle;
+    } bad[] = {
+        {"{\"name\":\"M\",\"extensions\":{\"KHR_materials_pbrSpecularGlossiness\":5}}",
+         "material 0 ('M'): extensions.KHR_materials_pbrSpecularGlossiness is a number, not a JSON object"},
+        {"{\"extensions\":{\"KHR_materials_specular\":[]}}",
+         "material 0: extensions.KHR_materials_specular is an array, not a JSON object"},
+        {"{\"extensions\":{\"KHR_materials_pbrSpecularGlossiness\":{\"glossinessFactor\":\"1\"}}}",
+         "extensions.KHR_materials_pbrSpecularGlossiness.glossinessFactor is a string, not a number"},
+        {"{\"extensions\":{\"KHR_materials_pbrSpecularGlossiness\":{\"diffuseFactor\":[1,1,1]}}}",
+         "diffuseFactor has 3 values, expected 4"},
+        {"{\"extensions\":{\"KHR_materials_pbrSpecularGlossiness\":{\"specularFactor\":[1,1e999,1]}}}", "invalid JSON"},
+        {"{\"extensions\":{\"KHR_materials_pbrSpecularGlossiness\":{\"diffuseTexture\":{\"index\":1}}}}",
+         "diffuseTexture.index is 1: no such texture (the asset has 1)"},
+        {"{\"extensions\":{\"KHR_materials_specular\":{\"specularColorTexture\":{\"index\":0,\"texCoord\":1.5}}}}",
+         "specularColorTexture.texCoord is not an integer"},
+        {"{\"normalTexture\":{\"index\":0,\"extensions\":{\"KHR_texture_transform\":{\"scale\":[1]}}}}",
+         "normalTexture.extensions.KHR_texture_transform.scale has 1 values, expected 2"},
+        {"{\"pbrMetallicRoughness\":{\"roughnessFactor\":-0.5}}",
+         "pbrMetallicRoughness.roughnessFactor is -0.5, expected within [0, 1]"},
+        {"{\"pbrMetallicRoughness\":{\"baseColorFactor\":\"red\"}}",
+         "pbrMetallicRoughness.baseColorFactor is a string, not an array of 4 numbers"},
+        {"{\"occlusionTexture\":{\"index\":0,\"strength\":2}}", "occlusionTexture.strength is 2, expected within"},
+        {"{\"doubleSided\":1}", "doubleSided is a number, not a boolean"},
+        {"{\"extensions\":{\"KHR_materials_ior\":{\"ior\":-1}}}", "extensions.KHR_materials_ior.ior is -1"},
+        {"7", "materials' does not contain an JSON object"}, // tinygltf's own check and message
+    };
+    char text[1024];
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+        snprintf(text, sizeof text,
+                 "{\"asset\":{\"version\":\"2.0\"},\"images\":[{\"uri\":\"data:image/png;base64,iVBORw0KGgo=\"}],"
+                 "\"textures\":[{\"source\":0}],\"materials\":[%s]}",
+                 bad[k].material);
+        expect_json_error("material.gltf", text, MR_ERR_FORMAT, bad[k].needle);
+    }
+    // ... and what is right loads: every field present, at the ends of its range.
+    expect_json_error("texture.gltf", "{\"asset\":{\"version\":\"2.0\"},\"textures\":[{\"source\":0,\"sampler\":3}]}",
+                      MR_ERR_FORMAT, "texture 0: source 0: no such image (the asset has 0)");
+    const char *good = mr_test_tmp_path("good.gltf");
+    snprintf(text, sizeof text,
+             "{\"asset\":{\"version\":\"2.0\"},\"images\":[{\"uri\":\"data:image/png;base64,iVBORw0KGgo=\"}],"
+             "\"textures\":[{\"source\":0}],\"materials\":[{\"name\":\"ok\",\"pbrMetallicRoughness\":{"
+             "\"baseColorFactor\":[0,1,0.5,1],\"metallicFactor\":0,\"roughnessFactor\":1,\"baseColorTexture\":"
+             "{\"index\":0,\"texCoord\":1,\"extensions\":{\"KHR_texture_transform\":{\"offset\":[-3,2],"
+             "\"rotation\":7,\"scale\":[-1,40],\"texCoord\":0}}}},\"normalTexture\":{\"index\":0,\"scale\":-2},"
+             "\"emissiveFactor\":[1,1,1],\"alphaMode\":\"MASK\",\"alphaCutoff\":0,\"doubleSided\":true,"
+             "\"extensions\":{\"KHR_materials_ior\":{\"ior\":0},\"KHR_materials_specular\":{"
+             "\"specularColorFactor\":[2,0,1]},\"VENDOR_other\":{}}}]}");
+    MR_CHECK(mr_test_write_file(good, text, strlen(text)));
+    mr_gltf *g = NULL;
+    MR_CHECK_OK(mr_gltf_load(good, &g));
     mr_gltf_free(g);
 }
 
@@ -1068,10 +1199,9 @@ MR_TEST_MAIN(MR_TEST_ENTRY(every_asset_loads), MR_TEST_ENTRY(floppy_disk_spec_gl
              MR_TEST_ENTRY(avocado_carries_both_workflows), MR_TEST_ENTRY(water_bottle_packed_orm),
              MR_TEST_ENTRY(texture_settings_samplers), MR_TEST_ENTRY(duck_and_truck),
              MR_TEST_ENTRY(round_trip_every_asset), MR_TEST_ENTRY(round_trip_file_from_env),
-             MR_TEST_ENTRY(glb_embedded_resources),
-             MR_TEST_ENTRY(data_uri_resources), MR_TEST_ENTRY(embedded_images_decode_from_memory),
-             MR_TEST_ENTRY(drop_spec_gloss_set_metal_rough_add_texture),
-             MR_TEST_ENTRY(bad_inputs), MR_TEST_ENTRY(mutated_inputs_fail_cleanly),
-             MR_TEST_ENTRY(no_partial_output_no_input_overwrite),
-             MR_TEST_ENTRY(prune_unused_hand_made), MR_TEST_ENTRY(prune_unused_uncertain_images),
-             MR_TEST_ENTRY(prune_unused_avocado))
+             MR_TEST_ENTRY(glb_embedded_resources), MR_TEST_ENTRY(data_uri_resources),
+             MR_TEST_ENTRY(embedded_images_decode_from_memory),
+             MR_TEST_ENTRY(drop_spec_gloss_set_metal_rough_add_texture), MR_TEST_ENTRY(bad_inputs),
+             MR_TEST_ENTRY(hostile_inputs), MR_TEST_ENTRY(mutated_inputs_fail_cleanly),
+             MR_TEST_ENTRY(no_partial_output_no_input_overwrite), MR_TEST_ENTRY(prune_unused_hand_made),
+             MR_TEST_ENTRY(prune_unused_uncertain_images), MR_TEST_ENTRY(prune_unused_avocado))

@@ -422,6 +422,15 @@ MR_TEST(geometry_bad_inputs) {
                           "mesh 2 ('') primitive 0: indices: accessor 99 does not exist");
     expect_geometry_error("g_view.gltf", "\"count\": 4, \"type\": \"VEC3\", \"name\": \"quadpos\"",
                           "\"count\": 400, \"type\": \"VEC3\"", "mesh 0 ('') primitive 0: POSITION: accessor 0");
+    /* a count of 2^30 (and 2^62, whose byte size overflows) is held against the view's bytes before anything is
+     * allocated for it: 24 GiB of doubles were asked for before it was */
+    expect_geometry_error("g_huge.gltf", "\"count\": 4, \"type\": \"VEC3\", \"name\": \"quadpos\"",
+                          "\"count\": 1073741824, \"type\": \"VEC3\"",
+                          "POSITION: accessor 0: count 1073741824 (12-byte elements, byteStride 12) at byteOffset 0 "
+                          "runs past the end of buffer view");
+    expect_geometry_error("g_overflow.gltf", "\"count\": 4, \"type\": \"VEC3\", \"name\": \"quadpos\"",
+                          "\"count\": 4611686018427387904, \"type\": \"VEC3\"",
+                          "POSITION: accessor 0: count 4611686018427387904");
     expect_geometry_error("g_nan.gltf", "\"POSITION\": 5,", "\"POSITION\": 8,",
                           "mesh 2 ('') primitive 0: POSITION 0 is not finite");
     /* POSITION of type VEC2; NORMAL with fewer elements; sparse index past the count; mode 7 */
@@ -430,7 +439,7 @@ MR_TEST(geometry_bad_inputs) {
     expect_geometry_error("g_count.gltf", "\"NORMAL\": 1, \"TANGENT\"", "\"NORMAL\": 8, \"TANGENT\"",
                           "mesh 2 ('') primitive 0: NORMAL has 1 elements, POSITION 4");
     expect_geometry_error("g_sparse.gltf", "\"sparse\": {\"count\": 1,", "\"sparse\": {\"count\": 5,",
-                          "mesh 2 ('') primitive 0: POSITION: accessor 5: sparse count 5");
+                          "mesh 2 ('') primitive 0: POSITION: accessor 5: sparse.count 5 out of range");
     expect_geometry_error("g_mode.gltf", "\"mode\": 6", "\"mode\": 7", "mesh 1 ('') primitive 1: unknown mode 7");
     /* a node cycle; a node naming a missing mesh */
     expect_geometry_error("g_cycle.gltf", "\"mesh\": 1}", "\"mesh\": 1, \"children\": [0]}", "node 0 is reached twice");

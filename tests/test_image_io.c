@@ -9,18 +9,19 @@
  * Reading from memory (mr_img_read_memory) gives what reading the same bytes from a file gives, bit for bit.
  */
 #include <dirent.h>
-#include <png.h>
-#include <setjmp.h>
 #include <errno.h>
 #include <float.h>
 #include <math.h>
+#include <png.h>
+#include <setjmp.h>
+#include <signal.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <signal.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "../src/io/image_io.h"
@@ -665,7 +666,7 @@ MR_TEST(read_memory_bad_bytes_fail_clearly) {
     static unsigned char bytes[1 << 16];
     /* garbage: text, random bytes, an empty buffer */
     const char text[] = "this is not an image at all\n";
-    memory_fails(text, sizeof text - 1, "glTF 'x.gltf' image 3", NULL, MR_ERR_FORMAT, "not an image");
+    memory_fails(text, sizeof text - 1, "glTF 'x.gltf': image 3", NULL, MR_ERR_FORMAT, "not an image");
     unsigned s = 4711;
     for (size_t i = 0; i < 3000; i++) {
         s = s * 1103515245u + 12345u;
@@ -1043,6 +1044,108 @@ MR_TEST(bad_inputs_give_clear_errors) {
     mr_image_free(noise);
 }
 
+/* The seconds since `start`. */
+static double seconds_since(const struct timespec *start) {
+    struct timespec now;
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    return (double)(now.tv_sec - start->tv_sec) + 1e-9 * (double)(now.tv_nsec - start->tv_nsec);
+}
+
+/* Files that lie (issue 16). What is not a regular file is refused by name before a byte is read (a FIFO would
+ * block, /dev/zero never end, a folder's size is 2^63 - 1). A JPEG or HDR header claiming 16000 x 16000 over a few
+ * bytes fails at the first band of rows it cannot decode (it took 10-16 s and 3 GB, decoding grey rows, before).
+ * A multi-part EXR is refused, and tiled files, read by rows of tiles, read as their scanline twins do. */
+MR_TEST(untrusted_files_are_checked_before_they_are_read) {
+    mr_image *img = NULL;
+    const char *fifo = mr_test_tmp_path("pipe.exr");
+    MR_CHECK(mkfifo(fifo, 0666) == 0);
+    const struct {
+        const char *path, *needle;
+    } special[] = {{fifo, "is not a regular file (a FIFO)"},
+                   {"/dev/zero", "is not a regular file (a character device)"},
+                   {mr_test_scratch_dir(), "is a directory"}};
+    for (size_t k = 0; k < sizeof special / sizeof special[0]; k++) {
+        MR_CHECK(mr_img_read(special[k].path, NULL, &img) == MR_ERR_IO && img == NULL);
+        char want[700];
+        snprintf(want, sizeof want, "image '%s': %s", special[k].path, special[k].needle);
+        MR_CHECK_MSG(strcmp(mr_last_error(), want) == 0, "'%s', expected '%s'", mr_last_error(), want);
+    }
+    // The opening itself: a size limit, and the reason alone without a label.
+    FILE *f = NULL;
+    uint64_t size = 0;
+    const char *ten = mr_test_tmp_path("ten.bin");
+    MR_CHECK(mr_test_write_file(ten, "0123456789", 10));
+    MR_CHECK(mr_io_open_input(ten, "file 'ten.bin'", 9, &f, &size) == MR_ERR_FORMAT && f == NULL);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "file 'ten.bin': 10 bytes, more than the limit of 9") == 0, "%s",
+                 mr_last_error());
+    MR_CHECK(mr_io_open_input(fifo, NULL, 0, &f, NULL) == MR_ERR_IO && f == NULL);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "is not a regular file (a FIFO)") == 0, "%s", mr_last_error());
+    MR_CHECK_OK(mr_io_open_input(ten, "ten", 10, &f, &size));
+    MR_CHECK(f != NULL && size == 10 && fgetc(f) == '0');
+    if (f != NULL)
+        fclose(f);
+
+    // Headers claiming 16000 x 16000: refused within seconds, naming the file, from a file and from memory.
+    mr_image *noise = make_noise(64, 64, 777);
+    static unsigned char bytes[1 << 16];
+    const char *jpeg = mr_test_tmp_path("claims.jpg"), *hdr = mr_test_tmp_path("claims.hdr");
+    MR_CHECK_OK(mr_img_write(jpeg, noise, NULL));
+    long n = read_file(jpeg, bytes, sizeof bytes);
+    long sof = -1;
+    for (long i = 2; i + 9 < n && sof < 0; i++)
+        if (bytes[i] == 0xff && bytes[i + 1] == 0xc0)
+            sof = i;
+    MR_CHECK(sof > 0);
+    if (sof > 0) {
+        bytes[sof + 5] = bytes[sof + 7] = 16000 >> 8; // height, width (big-endian)
+        bytes[sof + 6] = bytes[sof + 8] = 16000 & 255;
+        MR_CHECK(mr_test_write_file(jpeg, bytes, (size_t)n / 2)); // and most of the scan gone
+        struct timespec start;
+        clock_gettime(CLOCK_MONOTONIC, &start);
+        MR_CHECK(mr_img_read(jpeg, NULL, &img) == MR_ERR_FORMAT && img == NULL);
+        MR_CHECK_MSG(strstr(mr_last_error(), jpeg) != NULL && strstr(mr_last_error(), "corrupt or truncated") != NULL,
+                     "%s", mr_last_error());
+        MR_CHECK(mr_img_read_memory(bytes, (size_t)n / 2, "claims in memory", NULL, &img, NULL) == MR_ERR_FORMAT);
+        MR_CHECK_MSG(strstr(mr_last_error(), "claims in memory") != NULL, "%s", mr_last_error());
+        const double took = seconds_since(&start);
+        MR_CHECK_MSG(took < 5.0, "%.1f s for two reads", took);
+    }
+    const char head[] = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 16000 +X 16000\n";
+    unsigned char lie[sizeof head - 1 + 64]; // the header, then 16 flat pixels
+    memcpy(lie, head, sizeof head - 1);
+    memset(lie + sizeof head - 1, 0x80, 64);
+    MR_CHECK(mr_test_write_file(hdr, lie, sizeof lie));
+    MR_CHECK(mr_img_read(hdr, NULL, &img) == MR_ERR_FORMAT && img == NULL);
+    MR_CHECK_MSG(strstr(mr_last_error(), hdr) != NULL && strstr(mr_last_error(), "scanline 0") != NULL, "%s",
+                 mr_last_error());
+
+    // oiiotool's multi-part EXR is refused; its tiled files (odd sizes, mipmapped) read as the scanline one does.
+    char cmd[2048];
+    const char *scan = mr_test_tmp_path("scan.exr"), *tiled = mr_test_tmp_path("tiled.exr");
+    const char *mip = mr_test_tmp_path("mip.exr"), *parts = mr_test_tmp_path("parts.exr");
+    snprintf(cmd, sizeof cmd,
+             "oiiotool --pattern checker:width=3:height=5 37x23 3 -d half -o '%s' --tile 8 8 -o '%s' "
+             "--tile 16 16 -otex '%s' --dup --siappend --scanline -o '%s'",
+             scan, tiled, mip, parts);
+    MR_CHECK_MSG(run_quiet(cmd) == 0, "%s", cmd);
+    mr_image *want = NULL;
+    MR_CHECK_OK(mr_img_read(scan, NULL, &want));
+    const char *twins[2] = {tiled, mip};
+    for (int k = 0; k < 2 && want != NULL; k++) {
+        MR_CHECK_OK(mr_img_read(twins[k], NULL, &img));
+        MR_CHECK_MSG(img != NULL && img->width == 37 && img->height == 23 &&
+                         memcmp(img->pixels, want->pixels, mr_image_value_count(want) * sizeof(float)) == 0,
+                     "%s differs from %s", twins[k], scan);
+        mr_image_free(img);
+        img = NULL;
+    }
+    mr_image_free(want);
+    MR_CHECK(mr_img_read(parts, NULL, &img) == MR_ERR_UNSUPPORTED && img == NULL);
+    MR_CHECK_MSG(strstr(mr_last_error(), parts) != NULL && strstr(mr_last_error(), "multi-part EXR (2 parts)") != NULL,
+                 "%s", mr_last_error());
+    mr_image_free(noise);
+}
+
 MR_TEST(library_prints_nothing) {
     /* Library code never prints (mr_status.h): run the failure paths with stderr and stdout captured. */
     fflush(stdout);
@@ -1057,7 +1160,7 @@ MR_TEST(library_prints_nothing) {
     dup2(fileno(sink), 2);
 
     mr_image *img = NULL, *noise = NULL;
-    mr_status statuses[16];
+    mr_status statuses[24];
     int k = 0;
     mr_image_create(40, 30, 3, &noise);
     for (size_t i = 0; i < mr_image_value_count(noise); i++) noise->pixels[i] = (float)((i * 7919) % 1000) / 1000.0f;
@@ -1074,6 +1177,20 @@ MR_TEST(library_prints_nothing) {
         statuses[k++] = mr_img_read_memory(bytes, n > 0 ? (size_t)n / 2 : 0, cut, NULL, &img, NULL);
     }
     statuses[k++] = mr_img_read_memory("not an image", 12, "quiet text", NULL, &img, NULL);
+    // Deflate data libdeflate refuses and libpng then fails on (its default handler printed "libpng error: ...").
+    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    static const unsigned char ihdr[13] = {0, 0, 0, 4, 0, 0, 0, 4, 8, 2, 0, 0, 0};
+    static const unsigned char idat[16] = {0x78, 0x9c, 0xff, 0xff, 0xff, 0xff, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9};
+    unsigned char png[8 + 25 + 28 + 12], *at = png + 8;
+    memcpy(png, signature, 8);
+    at = mr_io_png_put_chunk(at, "IHDR", ihdr, sizeof ihdr);
+    at = mr_io_png_put_chunk(at, "IDAT", idat, sizeof idat);
+    at = mr_io_png_put_chunk(at, "IEND", NULL, 0);
+    statuses[k++] = mr_img_read_memory(png, (size_t)(at - png), "quiet libpng", NULL, &img, NULL);
+    mr_test_write_file(mr_test_tmp_path("quiet_libpng.png"), png, (size_t)(at - png));
+    statuses[k++] = mr_img_read(mr_test_tmp_path("quiet_libpng.png"), NULL, &img);
+    mkfifo(mr_test_tmp_path("quiet_fifo.exr"), 0666);
+    statuses[k++] = mr_img_read(mr_test_tmp_path("quiet_fifo.exr"), NULL, &img);
     mr_test_write_file(mr_test_tmp_path("quiet_text.png"), "not a png", 9);
     statuses[k++] = mr_img_read(mr_test_tmp_path("quiet_text.png"), NULL, &img);
     statuses[k++] = mr_img_read(mr_test_tmp_path("quiet_missing.exr"), NULL, &img);
@@ -1183,16 +1300,15 @@ MR_TEST(half_step_is_half_a_code_value) {
 }
 
 MR_TEST_MAIN(MR_TEST_ENTRY(openimageio_module_loads_first), MR_TEST_ENTRY(srgb_transfer_functions),
-             MR_TEST_ENTRY(png8_rgb_round_trip),
-             MR_TEST_ENTRY(png16_rgb_round_trip), MR_TEST_ENTRY(large_integer_round_trips),
-             MR_TEST_ENTRY(png_data_encoding_is_linear),
+             MR_TEST_ENTRY(png8_rgb_round_trip), MR_TEST_ENTRY(png16_rgb_round_trip),
+             MR_TEST_ENTRY(large_integer_round_trips), MR_TEST_ENTRY(png_data_encoding_is_linear),
              MR_TEST_ENTRY(tiff_round_trips), MR_TEST_ENTRY(jpeg_round_trip),
              MR_TEST_ENTRY(exr_float_round_trip_is_exact), MR_TEST_ENTRY(exr_half_round_trip),
              MR_TEST_ENTRY(hdr_round_trip), MR_TEST_ENTRY(one_channel_round_trips),
              MR_TEST_ENTRY(rgba_alpha_is_not_premultiplied), MR_TEST_ENTRY(read_channel_conversions),
              MR_TEST_ENTRY(reads_files_written_by_oiiotool), MR_TEST_ENTRY(png_reader_matches_openimageio),
              MR_TEST_ENTRY(read_memory_matches_the_file), MR_TEST_ENTRY(read_memory_bad_bytes_fail_clearly),
-             MR_TEST_ENTRY(oiiotool_reads_our_exr),
+             MR_TEST_ENTRY(oiiotool_reads_our_exr), MR_TEST_ENTRY(untrusted_files_are_checked_before_they_are_read),
              MR_TEST_ENTRY(write_into_missing_directory_fails_cleanly),
              MR_TEST_ENTRY(failed_write_leaves_target_untouched), MR_TEST_ENTRY(full_disk_fails_cleanly),
              MR_TEST_ENTRY(written_files_have_ordinary_permissions), MR_TEST_ENTRY(concurrent_writes_and_reads),

@@ -415,6 +415,61 @@ MR_TEST(png_deflate_corrupt_streams_fail_cleanly) {
     libdeflate_free_compressor(c);
 }
 
-MR_TEST_MAIN(MR_TEST_ENTRY(png_deflate_reader_matches_libpng),
-             MR_TEST_ENTRY(png_deflate_writer_round_trips),
-             MR_TEST_ENTRY(png_deflate_corrupt_streams_fail_cleanly))
+/* The sizes IHDR claims, held against what the file holds before any decoder allocates (issue 16): a file of a
+ * few bytes claiming 16000 x 16000 pixels made libpng allocate 768 MB of rows it never filled. Its IDAT chunks must
+ * hold at least 1/1032 of the image's samples (deflate's largest expansion); the most compressible image there is,
+ * all zeros at libdeflate's and zlib's best, still passes, and decodes. */
+MR_TEST(png_sizes_are_held_against_the_file) {
+    static unsigned char zeros[2048 * 2049], z[1 << 16], file[1 << 17];
+    struct libdeflate_compressor *c = libdeflate_alloc_compressor(12);
+    MR_CHECK(c != NULL);
+    if (c == NULL)
+        return;
+    // 16000 x 16000 RGB over 64 bytes of zeros, non-interlaced and interlaced, from a file and from memory.
+    const size_t zn = libdeflate_zlib_compress(c, zeros, 64, z, sizeof z);
+    size_t n = build_png(file, 16000, 16000, 2, z, zn, 0, 0);
+    const char *path = mr_test_tmp_path("claims.png");
+    for (int interlaced = 0; interlaced < 2; interlaced++) {
+        file[28] = (unsigned char)interlaced; // IHDR's interlace byte, and its CRC again
+        const uint32_t crc = libdeflate_crc32(0, file + 12, 17);
+        for (int b = 0; b < 4; b++)
+            file[29 + b] = (unsigned char)(crc >> (24 - 8 * b));
+        MR_CHECK(mr_test_write_file(path, file, n));
+        mr_image *img = NULL;
+        MR_CHECK(mr_img_read(path, NULL, &img) == MR_ERR_FORMAT && img == NULL);
+        MR_CHECK_MSG(strstr(mr_last_error(), path) != NULL &&
+                         strstr(mr_last_error(), "truncated PNG: IHDR claims 16000x16000 pixels") != NULL,
+                     "%s", mr_last_error());
+        MR_CHECK(mr_img_read_memory(file, n, "claims", NULL, &img, NULL) == MR_ERR_FORMAT && img == NULL);
+        MR_CHECK_MSG(strstr(mr_last_error(), "claims: truncated PNG: IHDR claims 16000x16000") != NULL, "%s",
+                     mr_last_error());
+    }
+    // Past the maximum dimension: said so, whatever IDAT holds.
+    mr_img_read_options small = {MR_IMG_COLOR, 0, 15999};
+    mr_image *img = NULL;
+    MR_CHECK(mr_img_read(path, &small, &img) == MR_ERR_FORMAT);
+    MR_CHECK_MSG(strstr(mr_last_error(), "16000x16000 pixels exceeds the maximum dimension 15999") != NULL, "%s",
+                 mr_last_error());
+    // The most compressible image: 2048 x 2048 grey zeros (filter bytes included) at libdeflate's level 12.
+    const size_t best = libdeflate_zlib_compress(c, zeros, 2048 * 2049, z, sizeof z);
+    n = build_png(file, 2048, 2048, 0, z, best, 0, 0);
+    MR_CHECK(best > 0 && mr_test_write_file(path, file, n));
+    MR_CHECK_MSG((best - 6) * 1032 >= 2048 * 2048, "%zu bytes", best);
+    MR_CHECK_OK(mr_img_read(path, NULL, &img));
+    MR_CHECK(img != NULL && img->width == 2048 && img->pixels[2048 * 2048 - 1] == 0.0f);
+    mr_image_free(img);
+    // The same claim with one compressed byte fewer than deflate needs for it is refused.
+    const size_t need = 2048 * 2048 / 1032 + 6;
+    if (best > need) {
+        n = build_png(file, 2048, 2048, 0, z, need - 1, 0, 0);
+        MR_CHECK(mr_test_write_file(path, file, n));
+        img = NULL;
+        MR_CHECK(mr_img_read(path, NULL, &img) == MR_ERR_FORMAT && img == NULL);
+        MR_CHECK_MSG(strstr(mr_last_error(), "truncated PNG: IHDR claims 2048x2048") != NULL, "%s", mr_last_error());
+    }
+    libdeflate_free_compressor(c);
+}
+
+MR_TEST_MAIN(MR_TEST_ENTRY(png_deflate_reader_matches_libpng), MR_TEST_ENTRY(png_deflate_writer_round_trips),
+             MR_TEST_ENTRY(png_deflate_corrupt_streams_fail_cleanly),
+             MR_TEST_ENTRY(png_sizes_are_held_against_the_file))

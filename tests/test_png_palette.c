@@ -3,6 +3,7 @@
  * paletted PNG taken apart and put together again decodes as before, broken ones are refused, a code decodes as the
  * image reader decodes it, and the 8-bit sRGB table gives the writer's codes.
  */
+#include <libdeflate.h>
 #include <stdint.h>
 
 #include "harness.h"
@@ -67,6 +68,27 @@ MR_TEST(broken_palettes_are_refused) {
     bytes[40] ^= 0x5a;
     MR_CHECK(mr_io_png_palette_read(bytes, size - 20, "short duck", &p) == MR_ERR_FORMAT);
     MR_CHECK(strstr(mr_last_error(), "truncated") != NULL);
+    // IHDR claiming more than the readers take, or more than the IDAT chunks can inflate to: refused before the
+    // index stream is allocated (a few bytes once asked for 256 MB here, or 2^62 bytes past 2^31 pixels a side).
+    unsigned char ihdr[17];
+    memcpy(ihdr, bytes + 12, 17);
+    const uint32_t sides[2] = {20000, 16000};
+    const char *needles[2] = {"20000x20000 pixels exceeds the maximum dimension 16384",
+                              "truncated PNG: IHDR claims 16000x16000 pixels"};
+    for (int k = 0; k < 2; k++) {
+        for (int b = 0; b < 4; b++)
+            bytes[16 + b] = bytes[20 + b] = (unsigned char)(sides[k] >> (24 - 8 * b));
+        const uint32_t crc = libdeflate_crc32(0, bytes + 12, 17);
+        unsigned char saved[4];
+        memcpy(saved, bytes + 29, 4);
+        for (int b = 0; b < 4; b++)
+            bytes[29 + b] = (unsigned char)(crc >> (24 - 8 * b));
+        MR_CHECK(mr_io_png_palette_read(bytes, size, "big duck", &p) == MR_ERR_FORMAT && p.idat == NULL);
+        MR_CHECK_MSG(strstr(mr_last_error(), "big duck") != NULL && strstr(mr_last_error(), needles[k]) != NULL, "%s",
+                     mr_last_error());
+        memcpy(bytes + 29, saved, 4);
+    }
+    memcpy(bytes + 12, ihdr, 17);
     // The same indices under a palette of 2 entries: indices past it.
     MR_CHECK(mr_io_png_palette_read(bytes, size, "duck", &p) == MR_OK);
     mr_io_png_palette two = p;

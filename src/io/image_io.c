@@ -20,13 +20,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
 #include "../mr_internal.h"
 #include "image_io.h"
 #include "io_internal.h"
 
-#define DEFAULT_MAX_DIMENSION 16384
+#define DEFAULT_MAX_DIMENSION MR_IO_MAX_DIMENSION_DEFAULT
 #define DEFAULT_JPEG_QUALITY 95
 
 typedef enum file_format { FORMAT_EXR, FORMAT_HDR, FORMAT_PNG, FORMAT_JPEG, FORMAT_TIFF, FORMAT_UNKNOWN } file_format;
@@ -56,20 +55,28 @@ static uint32_t be32(const unsigned char *p) {
     return ((uint32_t)p[0] << 24) | ((uint32_t)p[1] << 16) | ((uint32_t)p[2] << 8) | (uint32_t)p[3];
 }
 
+/* The most deflate expands: 258 bytes from one 2-bit code (1032 times), as png_deflate.c counts it. */
+#define DEFLATE_MAX_RATIO 1032
+
 /* If the open stream `f` is a PNG (by its signature, whatever the extension: *is_png says), walk its chunk
  * structure (ISO/IEC 15948 section 5: length, type, data, CRC) up to IEND: IHDR first, every length inside the
  * file, every CRC right. Why here and not in the decoder: libpng's messages (png_io.c decodes with it what
  * png_deflate.c does not take, and png_deflate.c leaves it every malformed file) do not say where a file went wrong
  * (and OpenImageIO's PNG reader, which a PNG no longer reaches, printed them on stderr). This catches truncation
  * and any corruption that a CRC detects (all but deliberately crafted files) with a message saying where, before
- * any decoder sees the file. */
-static mr_status check_png_structure(const char *label, FILE *f, int *is_png) {
+ * any decoder sees the file. It also holds the sizes IHDR claims against what the file can hold, before a decoder
+ * allocates for them: each side at most max_dimension, and the IDAT chunks together at least 1/1032 of the image's
+ * samples (deflate's largest expansion), so a file of a few bytes claiming 16384 x 16384 is refused as truncated
+ * instead of making libpng allocate a gigabyte of rows it will never fill. */
+static mr_status check_png_structure(const char *label, FILE *f, int max_dimension, int *is_png) {
     static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    static const int samples_of[7] = {1, 0, 3, 1, 2, 0, 4}; // per colour type (IHDR, §11.2.2); 0: invalid
     unsigned char head[8];
     *is_png = fread(head, 1, 8, f) == 8 && memcmp(head, signature, 8) == 0;
     if (!*is_png) return MR_OK;
     unsigned char buf[16384];
     long offset = 8;
+    uint64_t width = 0, height = 0, sample_bits = 0, idat_bytes = 0;
     for (int chunk = 0;; chunk++) {
         size_t got = fread(head, 1, 8, f);
         if (got != 8)
@@ -85,6 +92,9 @@ static mr_status check_png_structure(const char *label, FILE *f, int *is_png) {
                            type, offset, (unsigned long)length);
         if (chunk == 0 && strcmp(type, "IHDR") != 0)
             return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: the first chunk is '%s', not IHDR", label, type);
+        if (chunk == 0 && length != 13)
+            return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: IHDR holds %lu bytes, not 13", label,
+                           (unsigned long)length);
         uint32_t crc = libdeflate_crc32(0, head + 4, 4); // CRC-32 of ISO/IEC 15948:2003, Annex D
         for (uint32_t left = length; left > 0;) {
             size_t want = left < sizeof buf ? left : sizeof buf;
@@ -108,9 +118,37 @@ static mr_status check_png_structure(const char *label, FILE *f, int *is_png) {
         if (crc != be32(stored))
             return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: CRC mismatch in chunk '%s' at byte %ld", label, type,
                            offset);
+        if (chunk == 0) { // buf holds the 13 bytes of IHDR: width, height, bit depth, colour type, ...
+            width = be32(buf);
+            height = be32(buf + 4);
+            const unsigned depth = buf[8], colour = buf[9];
+            if (width == 0 || height == 0 || width > 0x7fffffffu || height > 0x7fffffffu)
+                return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: IHDR gives %llux%llu pixels", label,
+                               (unsigned long long)width, (unsigned long long)height);
+            if (width > (uint64_t)max_dimension || height > (uint64_t)max_dimension)
+                return mr_fail(MR_ERR_FORMAT, "%s: %llux%llu pixels exceeds the maximum dimension %d", label,
+                               (unsigned long long)width, (unsigned long long)height, max_dimension);
+            if (colour > 6 || samples_of[colour] == 0 || depth == 0 || depth > 16)
+                return mr_fail(MR_ERR_FORMAT, "%s: corrupt PNG: IHDR gives colour type %u at %u bits", label, colour,
+                               depth);
+            sample_bits = width * height * (uint64_t)samples_of[colour] * depth; // < 2^62: both sides <= 2^31
+        }
+        if (strcmp(type, "IDAT") == 0)
+            idat_bytes += length;
         offset += 12 + (long)length;
-        if (strcmp(type, "IEND") == 0) return MR_OK;
+        if (strcmp(type, "IEND") == 0)
+            break;
     }
+    // The image data is at least sample_bits / 8 bytes (more with filter bytes and Adam7 passes), of which deflate
+    // makes at most DEFLATE_MAX_RATIO from each compressed byte (plus the zlib header and checksum, 6 bytes).
+    if (idat_bytes < 6 || (idat_bytes - 6) * DEFLATE_MAX_RATIO < sample_bits / 8)
+        return mr_fail(MR_ERR_FORMAT,
+                       "%s: truncated PNG: IHDR claims %llux%llu pixels (at least %llu bytes of image data), but its "
+                       "IDAT chunks hold %llu compressed bytes, which inflate to at most %llu",
+                       label, (unsigned long long)width, (unsigned long long)height,
+                       (unsigned long long)(sample_bits / 8), (unsigned long long)idat_bytes,
+                       (unsigned long long)(idat_bytes < 6 ? 0 : (idat_bytes - 6) * DEFLATE_MAX_RATIO));
+    return MR_OK;
 }
 
 /* sRGB-decode one stored value. For 8/16-bit storage (max_code 255 or 65535) the integer code is recovered
@@ -214,7 +252,7 @@ static mr_status read_stream(const char *path, const unsigned char *bytes, size_
                              const char *label, const mr_img_read_options *o, mr_image **out, mr_img_stored *stored) {
     int is_png = 0;
     mr_io_raw raw = {0, 0, 0, 0, 0, NULL};
-    mr_status status = check_png_structure(label, stream, &is_png);
+    mr_status status = check_png_structure(label, stream, o->max_dimension, &is_png);
     // PNG (by its signature: nearly every glTF texture) through png_io.c; the rest through the OpenImageIO module,
     // loaded on first use.
     if (status == MR_OK && is_png) {
@@ -283,18 +321,12 @@ mr_status mr_img_read_stored(const char *path, const mr_img_read_options *opts, 
     mr_status status = read_options(label, opts, &o);
     if (status != MR_OK) return status;
 
-    /* File-system problems are MR_ERR_IO with the system's reason; OIIO would call them "not an image". */
-    struct stat st;
-    if (stat(path, &st) != 0) {
-        int err = errno;
-        return mr_fail(MR_ERR_IO, "%s: cannot open: %s", label, strerror(err));
-    }
-    if (S_ISDIR(st.st_mode)) return mr_fail(MR_ERR_IO, "%s: cannot open: is a directory", label);
-    FILE *file = fopen(path, "rb");
-    if (file == NULL) {
-        int err = errno;
-        return mr_fail(MR_ERR_IO, "%s: cannot open: %s", label, strerror(err));
-    }
+    /* File-system problems are MR_ERR_IO with the system's reason (OIIO would call them "not an image"); only a
+     * regular file is read: a folder, a FIFO or a device is refused by name (mr_io_open_input). */
+    FILE *file = NULL;
+    status = mr_io_open_input(path, label, 0, &file, NULL);
+    if (status != MR_OK)
+        return status;
     return read_stream(path, NULL, 0, file, label, &o, out, stored);
 }
 

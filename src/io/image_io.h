@@ -85,7 +85,7 @@ mr_status mr_img_read_stored(const char *path, const mr_img_read_options *opts, 
  * asset, as a data URI or in a buffer view), with the same options, conventions, checks and results as reading
  * the same bytes from a file, bit for bit; nothing touches the disk. The format is recognised by the first bytes:
  * PNG (as for a file), JPEG, EXR, Radiance HDR, TIFF, WebP, GIF and BMP (OpenImageIO). Messages call the
- * data `name` (e.g. "glTF 'x.gltf' image 3"; NULL or "" = "image in memory"). *out is owned by the caller and
+ * data `name` (e.g. "glTF 'x.gltf': image 3"; NULL or "" = "image in memory"). *out is owned by the caller and
  * untouched on failure; *stored (may be NULL) as for mr_img_read_stored. Errors: MR_ERR_FORMAT (no bytes, another
  * format, truncated or corrupt, larger than max_dimension, RGB data when 1 channel was requested),
  * MR_ERR_INVALID_ARG (out NULL, bytes NULL with a size, bad options), MR_ERR_NOMEM, MR_ERR_EXTERNAL (the

@@ -36,6 +36,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <memory>
 #include <new>
 #include <string>
 #include <vector>
@@ -102,9 +103,17 @@ OIIO::TypeDesc sample_type(mr_io_sample sample) {
     }
 }
 
-/* The first subimage of the opened `in` into *raw; messages call the image `label`. */
-mr_status decode(OIIO::ImageInput *in, const char *label, int max_dimension, mr_io_raw *raw) {
-    const OIIO::ImageSpec spec = in->spec();
+/* The most channels a file may declare (an EXR with render passes as layers has a few dozen). */
+const int MAX_CHANNELS = 1024;
+
+/* How far a data window's origin may lie from (0, 0): OpenImageIO computes x + width, y + height in int. */
+const int64_t MAX_ORIGIN = (int64_t)1 << 30;
+
+/* The spec's claims, checked before a byte of pixels is allocated or decoded: sizes within max_dimension, a data
+ * window whose ends fit in int, a sane channel count and tile size; volume and deep images refused, and an EXR of
+ * several parts (OpenImageIO would read its first part only, which may not be the one meant). */
+mr_status check_spec(OIIO::ImageInput *in, const char *label, int max_dimension, bool is_exr) {
+    const OIIO::ImageSpec &spec = in->spec();
     if (spec.width < 1 || spec.height < 1 || spec.nchannels < 1)
         return mr_fail(MR_ERR_FORMAT, "%s: empty image (%dx%d, %d channels)", label, spec.width, spec.height,
                        spec.nchannels);
@@ -114,6 +123,43 @@ mr_status decode(OIIO::ImageInput *in, const char *label, int max_dimension, mr_
     if (spec.depth > 1)
         return mr_fail(MR_ERR_FORMAT, "%s: volume images (depth %d) are not supported", label, spec.depth);
     if (spec.deep) return mr_fail(MR_ERR_FORMAT, "%s: deep images are not supported", label);
+    if (spec.nchannels > MAX_CHANNELS)
+        return mr_fail(MR_ERR_FORMAT, "%s: %d channels, more than the limit of %d", label, spec.nchannels,
+                       MAX_CHANNELS);
+    const int64_t x = spec.x, y = spec.y;
+    if (x < -MAX_ORIGIN || y < -MAX_ORIGIN || x + spec.width > MAX_ORIGIN || y + spec.height > MAX_ORIGIN ||
+        spec.z != 0)
+        return mr_fail(MR_ERR_FORMAT, "%s: data window at (%d, %d, %d), size %dx%d, lies beyond +-2^30 pixels", label,
+                       spec.x, spec.y, spec.z, spec.width, spec.height);
+    if (spec.tile_width != 0 && (spec.tile_width < 0 || spec.tile_height < 1 || spec.tile_width > max_dimension ||
+                                 spec.tile_height > max_dimension || spec.tile_depth > 1))
+        return mr_fail(MR_ERR_FORMAT, "%s: tiles of %dx%dx%d pixels (each side at most %d)", label, spec.tile_width,
+                       spec.tile_height, spec.tile_depth, max_dimension);
+    if (is_exr) {
+        int parts = 1;
+        while (parts < 1000 && in->seek_subimage(parts, 0))
+            parts++;
+        (void)in->geterror(); // seeking past the last part records an error
+        if (parts > 1)
+            return mr_fail(MR_ERR_UNSUPPORTED,
+                           "%s: a multi-part EXR (%s%d parts); extract the one to read, e.g. "
+                           "oiiotool FILE --subimage 0 -o part.exr",
+                           label, parts == 1000 ? "at least " : "", parts);
+        if (!in->seek_subimage(0, 0)) {
+            std::string why = one_line(in->geterror());
+            return mr_fail(MR_ERR_FORMAT, "%s: cannot read its first part: %s", label, why.c_str());
+        }
+    }
+    return MR_OK;
+}
+
+/* The first subimage of the opened `in` into *raw; messages call the image `label`. */
+mr_status decode(OIIO::ImageInput *in, const char *label, int max_dimension, mr_io_raw *raw) {
+    const bool is_exr = std::strcmp(in->format_name(), "openexr") == 0;
+    mr_status status = check_spec(in, label, max_dimension, is_exr);
+    if (status != MR_OK)
+        return status;
+    const OIIO::ImageSpec spec = in->spec();
 
     int index[4] = {0, 0, 0, 0};
     const int channels = choose_channels(spec, index);
@@ -126,19 +172,38 @@ mr_status decode(OIIO::ImageInput *in, const char *label, int max_dimension, mr_
     const size_t count = (size_t)spec.width * (size_t)spec.height;
     if (count > SIZE_MAX / sizeof(float) / span)
         return mr_fail(MR_ERR_NOMEM, "%s: %dx%d pixels do not fit in memory", label, spec.width, spec.height);
-    /* A vector, so an exception thrown by OIIO cannot leak it; `pixels` is malloc'ed only once nothing below
-     * can throw (the caller releases it with free()). */
-    std::vector<float> stored(count * span);
-    if (!in->read_image(0, 0, lo, hi + 1, OIIO::TypeFloat, stored.data())) {
-        std::string why = one_line(in->geterror());
-        return mr_fail(MR_ERR_FORMAT, "%s: cannot decode pixels (corrupt or truncated?): %s", label,
-                       why.c_str());
+    /* The stored channels, read a band of rows at a time into a buffer that is not cleared first: memory is only
+     * touched as rows decode, and a file that claims more rows than it holds (a JPEG or HDR header saying 16000 x
+     * 16000 over a few bytes of data) fails at its first band with the decoder's error, instead of having 3 GB
+     * allocated and filled with grey first. Held by a unique_ptr, so an exception thrown by OIIO cannot leak it;
+     * `pixels` is malloc'ed only once nothing below can throw (the caller releases it with free()). */
+    std::unique_ptr<float, void (*)(void *)> stored(static_cast<float *>(std::malloc(count * span * sizeof(float))),
+                                                    std::free);
+    if (!stored)
+        return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %dx%d pixels", label, spec.width, spec.height);
+    const int tile = spec.tile_width > 0 ? spec.tile_height : 1;
+    const int band = tile >= 64 ? tile : (64 + tile - 1) / tile * tile; // whole tiles, at least 64 rows
+    for (int y = 0; y < spec.height; y += band) {
+        const int rows = spec.height - y < band ? spec.height - y : band;
+        float *at = stored.get() + (size_t)y * (size_t)spec.width * span;
+        // A tiled file by whole rows of tiles (OpenImageIO 2.4.7's read_scanlines divides by zero on one).
+        const bool ok =
+            spec.tile_width > 0
+                ? in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + y, spec.y + y + rows, spec.z, spec.z + 1,
+                                 lo, hi + 1, OIIO::TypeFloat, at)
+                : in->read_scanlines(0, 0, spec.y + y, spec.y + y + rows, spec.z, lo, hi + 1, OIIO::TypeFloat, at);
+        if (!ok) {
+            std::string why = one_line(in->geterror());
+            return mr_fail(MR_ERR_FORMAT, "%s: cannot decode pixels (corrupt or truncated?): %s", label, why.c_str());
+        }
+        /* A decoder may record a failure and still return true: libjpeg's "Premature end of JPEG file" on a
+         * truncated JPEG is only a warning, and the missing rows come back grey. Any pending message fails the
+         * read (this also leaves nothing pending when the ImageInput is destroyed). */
+        if (in->has_error())
+            return mr_fail(MR_ERR_FORMAT, "%s: decoded with errors (corrupt or truncated?): %s", label,
+                           one_line(in->geterror()).c_str());
     }
-    const bool is_exr = std::strcmp(in->format_name(), "openexr") == 0;
     in->close();
-    /* A decoder may record a failure and still return true: libjpeg's "Premature end of JPEG file" on a
-     * truncated JPEG is only a warning, and the missing rows come back grey. Any pending message fails the
-     * read (this also leaves nothing pending when the ImageInput is destroyed). */
     std::string pending = in->geterror();
     if (!pending.empty())
         return mr_fail(MR_ERR_FORMAT, "%s: decoded with errors (corrupt or truncated?): %s", label,
@@ -146,9 +211,10 @@ mr_status decode(OIIO::ImageInput *in, const char *label, int max_dimension, mr_
     float *pixels = static_cast<float *>(std::malloc(count * (size_t)channels * sizeof(float)));
     if (pixels == nullptr)
         return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %dx%d pixels", label, spec.width, spec.height);
+    const float *from = stored.get();
     for (size_t p = 0; p < count; p++)
         for (int k = 0; k < channels; k++)
-            pixels[p * (size_t)channels + (size_t)k] = stored[p * span + (size_t)(index[k] - lo)];
+            pixels[p * (size_t)channels + (size_t)k] = from[p * span + (size_t)(index[k] - lo)];
 
     /* Integer storage holds display-encoded values, except in EXR, which is linear whatever the type. */
     raw->width = spec.width;

@@ -57,6 +57,23 @@ mr_status mr_atomic_write_bytes(const char *target, const void *bytes, size_t si
  * Preserves errno and the recorded last-error message. */
 void mr_atomic_abort(mr_atomic_file *file);
 
+/* ---- input files (input_file.c) ---------------------------------------------------------------------------
+ * Every file a reader of src/io or gltf/ opens because a user (or a file the user gave) named it goes through
+ * mr_io_open_input: only a regular file is read. A folder, a FIFO, a device (/dev/zero) or a socket is refused
+ * by name before a byte is read, where fopen would open a folder (whose size, asked by seeking, is 2^63 - 1),
+ * block on a FIFO or read a device without end. */
+
+/* Open `path` for reading as a stdio stream (*out; the caller fcloses it) if it is a regular file of at most
+ * max_bytes bytes (0: any size); *size (may be NULL) receives its size. Failures, with messages "<label>: <why>"
+ * (just "<why>" when label is NULL): MR_ERR_IO "cannot open: <system reason>", "is a directory", "is not a
+ * regular file (a FIFO)" (or a character device, a block device, a socket); MR_ERR_FORMAT "<n> bytes, more than
+ * the limit of <max_bytes>". Never blocks: the file is opened with O_NONBLOCK and checked on its descriptor. */
+mr_status mr_io_open_input(const char *path, const char *label, uint64_t max_bytes, FILE **out, uint64_t *size);
+
+/* The largest width or height an image read accepts unless told otherwise (mr_img_read_options.max_dimension 0;
+ * the PNG readers of glTF conversions): 16384, a 4 GiB RGBA float image. */
+#define MR_IO_MAX_DIMENSION_DEFAULT 16384
+
 /* ---- what messages call an image ---------------------------------------------------------------------- */
 
 /* A read's messages name what it reads: "image '<path>'" for a file, the caller's name for bytes in memory

@@ -29,11 +29,13 @@
 #include "../mr_internal.h"
 #include "io_internal.h"
 
-/* One read or write: the first error the callbacks record (warnings are dropped: a PNG that decodes is taken, as
- * OpenImageIO takes it) and, when writing, the encoded file grown in memory (written at the end in one checked
- * atomic write, so that a full disk fails cleanly). */
+/* One read or write: the first error and the first warning the callbacks record (a PNG that decodes despite a
+ * warning is taken, as OpenImageIO takes it; when the decode then fails, the warning goes into the message, as it
+ * may say more than the error) and, when writing, the encoded file grown in memory (written at the end in one
+ * checked atomic write, so that a full disk fails cleanly). */
 typedef struct png_session {
     char error[256];
+    char warning[256];
     unsigned char *data;
     size_t size, capacity;
     int out_of_memory;
@@ -46,8 +48,9 @@ static void on_error(png_structp png, png_const_charp message) {
 }
 
 static void on_warning(png_structp png, png_const_charp message) {
-    (void)png;
-    (void)message;
+    png_session *m = png_get_error_ptr(png);
+    if (m != NULL && m->warning[0] == '\0')
+        snprintf(m->warning, sizeof m->warning, "%s", message ? message : "");
 }
 
 /* PNG stores 16-bit samples big-endian; png_set_swap makes them little-endian: host order on such hosts only. */
@@ -59,9 +62,11 @@ static int host_is_little_endian(void) {
 mr_status mr_io_png_read(const char *path, int max_dimension, mr_io_raw *raw) {
     char label[MR_IO_LABEL_SIZE];
     mr_io_file_label(label, path);
-    FILE *file = fopen(path, "rb");
-    if (file == NULL) return mr_fail(MR_ERR_IO, "%s: cannot open", label);
-    mr_status status = mr_io_png_read_stream(file, label, max_dimension, raw);
+    FILE *file = NULL;
+    mr_status status = mr_io_open_input(path, label, 0, &file, NULL);
+    if (status != MR_OK)
+        return status;
+    status = mr_io_png_read_stream(file, label, max_dimension, raw);
     fclose(file);
     return status;
 }
@@ -96,10 +101,14 @@ mr_status mr_io_png_read_stream_libpng(FILE *file, const char *label, int max_di
         png_destroy_read_struct(&png, &info, NULL);
         free(bytes);
         free(rows);
-        char why[sizeof session->error];
+        char why[sizeof session->error], warned[sizeof session->warning];
         memcpy(why, session->error, sizeof why);
+        memcpy(warned, session->warning, sizeof warned);
         free(session);
         if (own_message) return mr_fail(failure, "%s: %s", label, why);
+        if (warned[0] != '\0' && strcmp(warned, why) != 0)
+            return mr_fail(MR_ERR_FORMAT, "%s: cannot decode PNG (corrupt or truncated?): %s (libpng warned: %s)",
+                           label, why, warned);
         return mr_fail(MR_ERR_FORMAT, "%s: cannot decode PNG (corrupt or truncated?): %s", label, why);
     }
     png_init_io(png, file);

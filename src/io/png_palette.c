@@ -80,9 +80,24 @@ mr_status mr_io_png_palette_read(const unsigned char *bytes, size_t size, const 
         mr_io_png_palette_free(out);
         return mr_fail(MR_ERR_FORMAT, "%s: paletted PNG without PLTE", label);
     }
-    // The index histogram: inflate, unfilter, count (an index past the palette is an error, as in libpng).
+    // The index histogram: inflate, unfilter, count (an index past the palette is an error, as in libpng). The
+    // sizes IHDR claims are held against the readers' limit and against what the IDAT chunks can inflate to (deflate
+    // makes at most 1032 bytes of each, after the zlib stream's 6 bytes of header and checksum) before the index
+    // stream is allocated.
+    if (out->width > MR_IO_MAX_DIMENSION_DEFAULT || out->height > MR_IO_MAX_DIMENSION_DEFAULT) {
+        mr_io_png_palette_free(out);
+        return mr_fail(MR_ERR_FORMAT, "%s: %dx%d pixels exceeds the maximum dimension %d", label, out->width,
+                       out->height, MR_IO_MAX_DIMENSION_DEFAULT);
+    }
     const size_t row_bytes = ((size_t)out->width * (size_t)depth + 7) / 8;
     const size_t raw_size = (size_t)out->height * (row_bytes + 1);
+    if (idat_size < 6 || (idat_size - 6) * 1032 < raw_size) {
+        mr_io_png_palette_free(out);
+        return mr_fail(MR_ERR_FORMAT,
+                       "%s: truncated PNG: IHDR claims %dx%d pixels (%zu bytes of image data), but its "
+                       "IDAT chunks hold %zu compressed bytes",
+                       label, out->width, out->height, raw_size, idat_size);
+    }
     unsigned char *raw = calloc(raw_size + row_bytes, 1);
     struct libdeflate_decompressor *inflater = raw ? libdeflate_alloc_decompressor() : NULL;
     if (inflater == NULL) {
