@@ -162,8 +162,30 @@ typedef struct mr_gltf_counts {
 } mr_gltf_counts;
 
 /* Reads a .gltf or .glb (by content: a binary glTF starts with "glTF") with its buffers and images: external
- * files relative to the asset, data URIs and GLB chunks. Missing or unreadable buffers and images, malformed
- * JSON and truncated containers fail with MR_ERR_IO / MR_ERR_FORMAT and a message naming the file. */
+ * files relative to the asset (beside it only: not looked for in the working directory), data URIs and GLB chunks.
+ * Missing or unreadable buffers and images, malformed JSON and truncated containers fail with MR_ERR_IO /
+ * MR_ERR_FORMAT and a message naming the file (and the buffer or image by index and URI).
+ *
+ * Nothing in the file is trusted (see "Limits" below for the numbers): the JSON's nesting is bounded before any
+ * parser sees it; the asset and every file a URI names must be a regular file (a folder, a FIFO, a device such as
+ * /dev/zero is refused by name: "glTF 'a.gltf': image 3 ('textures/'): is a directory"); an image in a buffer view
+ * must lie within its buffer; and the materials are held against the parts of the glTF schema this API reads,
+ * which tinygltf 2.7 does not check (it drops an extension that is not a JSON object, and defaults a factor of the
+ * wrong type): every material and extension an object; the factors of the core material and of
+ * KHR_materials_pbrSpecularGlossiness, _specular and _ior numbers of the right count, finite and within the
+ * schema's ranges; every textureInfo's index a texture of the asset, its texCoord a non-negative integer, its
+ * KHR_texture_transform well formed; alphaMode OPAQUE, MASK or BLEND; every texture's source and sampler in range.
+ * A failure there is MR_ERR_FORMAT naming the material (index and name), the field and the value ("material 2
+ * ('Glass'): extensions.KHR_materials_pbrSpecularGlossiness is a number, not a JSON object"). Accessors are
+ * checked when geometry is read (mr_gltf_get_triangles).
+ *
+ * Limits (MR_ERR_FORMAT past them, each far above what real assets use):
+ *   - JSON nesting: 128 levels of arrays and objects (a real asset nests about 10; tinygltf and nlohmann/json
+ *     recurse per level, and tens of thousands of levels overflowed the stack);
+ *   - the asset and each external buffer or image: 2^31 - 1 bytes (tinygltf 2.7 passes sizes as int);
+ *   - geometry (mr_gltf_get_triangles): a scene of at most 2^24 vertices and 2^24 triangles after instancing,
+ *     and an accessor without a buffer view (zeros) of at most 2^20 elements; every other count is bounded by
+ *     the bytes that hold it. */
 mr_status mr_gltf_load(const char *path, mr_gltf **out);
 
 void mr_gltf_free(mr_gltf *asset);
@@ -307,7 +329,11 @@ mr_status mr_gltf_prune_unused(mr_gltf *asset, mr_gltf_prune_stats *stats);
  * MR_ERR_FORMAT naming the file, mesh and primitive: accessors or buffer views out of range or of the wrong
  * type, indices past the vertex count, non-finite positions, attributes of different counts; a scene or node
  * naming a node or mesh that does not exist, and a node cycle, name the scene or node. A bad scene index is
- * MR_ERR_INVALID_ARG. */
+ * MR_ERR_INVALID_ARG. Every count, byteOffset, byteStride and byteLength is held against the bytes that hold it
+ * before anything is allocated for it (a view within its buffer; an accessor's stride * (count - 1) + element size
+ * within its view, without overflow; sparse indices and values likewise), and the scene against the limits of
+ * mr_gltf_load's "Limits": "accessor 0: count 1073741824 (12-byte elements, byteStride 12) at byteOffset 0 runs
+ * past the end of buffer view 0 (byteLength 36)". */
 typedef struct mr_gltf_triangle_group {
     int material;       /* materials[] index, -1 = glTF's default material */
     int vertex_count;

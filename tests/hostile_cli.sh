@@ -155,6 +155,14 @@ refuse "ssim of a FIFO (no hang)" "$tmp/fifo.exr" "image '[^']*fifo.exr': is not
     "$bin" ssim "$tmp/fifo.exr" "$tmp/ref.png"
 expect "ssim of /dev/zero" 2 "image '/dev/zero': is not a regular file \(a character device\)" -- \
     timeout 60 "$bin" ssim /dev/zero "$tmp/ref.png"
+mkfifo "$tmp/fifo.hdr" "$tmp/fifo.obj"
+refuse "report --env FIFO (no hang)" "$tmp/fifo.hdr" "image '[^']*fifo.hdr': is not a regular file \(a FIFO\)" -- \
+    "$bin" report --env "$tmp/fifo.hdr" -o "$tmp/o/report" ggx alpha=0.3
+env_map="${MR_SHARED:-$root/../shared}/assets/hdri/studio_small_03_1k.hdr"
+if [ -f "$env_map" ]; then
+    refuse "report --mesh FIFO (no hang)" "$tmp/fifo.obj" "OBJ '[^']*fifo.obj': cannot read: is not a regular file" \
+        -- "$bin" report --mesh "$tmp/fifo.obj" --env "$env_map" -o "$tmp/o/report" ggx alpha=0.3
+fi
 mkfifo "$tmp/fifo.gltf"
 refuse "a glTF that is a FIFO" "$tmp/fifo.gltf" "glTF '[^']*fifo.gltf': is not a regular file \(a FIFO\)" -- \
     "$bin" gltf spec2metal "$tmp/fifo.gltf" -o "$tmp/o/o.gltf"

@@ -1108,7 +1108,8 @@ MR_TEST(untrusted_files_are_checked_before_they_are_read) {
         MR_CHECK(mr_img_read_memory(bytes, (size_t)n / 2, "claims in memory", NULL, &img, NULL) == MR_ERR_FORMAT);
         MR_CHECK_MSG(strstr(mr_last_error(), "claims in memory") != NULL, "%s", mr_last_error());
         const double took = seconds_since(&start);
-        MR_CHECK_MSG(took < 5.0, "%.1f s for two reads", took);
+        // Over 30 s before; well under 1 s now (10 s under ASan, which maps the 3 GB buffer's shadow).
+        MR_CHECK_MSG(took < 20.0, "%.1f s for two reads", took);
     }
     const char head[] = "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 16000 +X 16000\n";
     unsigned char lie[sizeof head - 1 + 64]; // the header, then 16 flat pixels

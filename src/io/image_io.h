@@ -22,9 +22,16 @@
  * Format limits: JPEG and Radiance HDR cannot store alpha (4-channel images are MR_ERR_UNSUPPORTED, not
  * silently flattened); JPEG sides are at most 65500 pixels; HDR stores RGB (a 1-channel image is written as
  * grey RGB) and has no sign, so negative and NaN values are written as 0.
- * Robustness: reads reject images larger than opts.max_dimension on either side before decoding pixels, check
- * a PNG's chunk structure (truncation, CRC) before decoding it, and fail on any error a decoder reports, even
- * one it treats as a warning (a truncated JPEG). Only the first subimage's data window is read.
+ * Robustness: only a regular file is read (a folder, a FIFO, a device such as /dev/zero is MR_ERR_IO naming it,
+ * before a byte is read). Reads reject images larger than opts.max_dimension on either side before decoding pixels,
+ * check a PNG's chunk structure (truncation, CRC) and hold the size its IHDR claims against what its IDAT chunks
+ * can inflate to (at most 1032 bytes per compressed byte) before any decoder allocates for it, and fail on any
+ * error a decoder reports, even one it treats as a warning (a truncated JPEG). Through OpenImageIO, the spec is
+ * checked before pixels (size, at most 1024 channels, a data window within +-2^30, tiles no larger than
+ * max_dimension; deep, volume and multi-part EXR images refused) and the pixels are read a band of rows at a time,
+ * so that a header claiming more rows than the file holds fails at its first missing band instead of costing the
+ * whole image's memory and time. Only the first subimage's data window is read (and only the first mipmap level).
+ * What libpng, libjpeg, OpenEXR and OpenImageIO say is folded into the one message; none of it is printed.
  * Writes go to a temporary file "<path>.tmp.<pid>.<n>" beside the target and are renamed over it only when
  * every write, flush and fsync succeeded; on failure no partial output is left behind and an existing target
  * is untouched. New files get mode 0666 minus the umask, like any other output.
@@ -62,9 +69,10 @@ typedef struct mr_img_write_options {
 } mr_img_write_options;
 
 /* Read `path` into a new image (*out, owned by the caller; untouched on failure). opts may be NULL for the
- * defaults. Errors name the file: MR_ERR_IO (missing, a directory, unreadable), MR_ERR_FORMAT (not an image,
- * truncated or corrupt, larger than max_dimension, RGB data when 1 channel was requested, volume or deep
- * images), MR_ERR_INVALID_ARG (bad options), MR_ERR_NOMEM. */
+ * defaults. Errors name the file: MR_ERR_IO (missing, a directory or another non-regular file, unreadable),
+ * MR_ERR_FORMAT (not an image, truncated or corrupt, a header claiming more than the file holds, larger than
+ * max_dimension, RGB data when 1 channel was requested, volume or deep images), MR_ERR_UNSUPPORTED (a multi-part
+ * EXR), MR_ERR_INVALID_ARG (bad options), MR_ERR_NOMEM. */
 mr_status mr_img_read(const char *path, const mr_img_read_options *opts, mr_image **out);
 
 /* How a file stored the samples mr_img_read_stored decoded: what limits the precision of its values. */

@@ -172,20 +172,20 @@ mr_status decode(OIIO::ImageInput *in, const char *label, int max_dimension, mr_
     const size_t count = (size_t)spec.width * (size_t)spec.height;
     if (count > SIZE_MAX / sizeof(float) / span)
         return mr_fail(MR_ERR_NOMEM, "%s: %dx%d pixels do not fit in memory", label, spec.width, spec.height);
-    /* The stored channels, read a band of rows at a time into a buffer that is not cleared first: memory is only
-     * touched as rows decode, and a file that claims more rows than it holds (a JPEG or HDR header saying 16000 x
-     * 16000 over a few bytes of data) fails at its first band with the decoder's error, instead of having 3 GB
-     * allocated and filled with grey first. Held by a unique_ptr, so an exception thrown by OIIO cannot leak it;
-     * `pixels` is malloc'ed only once nothing below can throw (the caller releases it with free()). */
-    std::unique_ptr<float, void (*)(void *)> stored(static_cast<float *>(std::malloc(count * span * sizeof(float))),
-                                                    std::free);
-    if (!stored)
-        return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %dx%d pixels", label, spec.width, spec.height);
+    /* The stored channels, read a band of rows at a time, each band into memory of its own allocated as it is
+     * reached: a file that claims more rows than it holds (a JPEG or HDR header saying 16000 x 16000 over a few
+     * bytes of data) fails at its first missing band with the decoder's error, having cost one band, instead of
+     * 3 GB allocated and filled with grey first. The bands are held by unique_ptrs, so an exception thrown by OIIO
+     * cannot leak them; `pixels` is malloc'ed only once nothing below can throw (the caller releases it with
+     * free()). */
     const int tile = spec.tile_width > 0 ? spec.tile_height : 1;
-    const int band = tile >= 64 ? tile : (64 + tile - 1) / tile * tile; // whole tiles, at least 64 rows
+    const int band = tile >= 256 ? tile : (256 + tile - 1) / tile * tile; // whole tiles, at least 256 rows
+    const size_t row_values = (size_t)spec.width * span;
+    std::vector<std::unique_ptr<float[]>> bands;
     for (int y = 0; y < spec.height; y += band) {
         const int rows = spec.height - y < band ? spec.height - y : band;
-        float *at = stored.get() + (size_t)y * (size_t)spec.width * span;
+        bands.emplace_back(new float[(size_t)rows * row_values]); // not cleared: the decoder fills it
+        float *at = bands.back().get();
         // A tiled file by whole rows of tiles (OpenImageIO 2.4.7's read_scanlines divides by zero on one).
         const bool ok =
             spec.tile_width > 0
@@ -211,10 +211,12 @@ mr_status decode(OIIO::ImageInput *in, const char *label, int max_dimension, mr_
     float *pixels = static_cast<float *>(std::malloc(count * (size_t)channels * sizeof(float)));
     if (pixels == nullptr)
         return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %dx%d pixels", label, spec.width, spec.height);
-    const float *from = stored.get();
-    for (size_t p = 0; p < count; p++)
+    const size_t band_pixels = (size_t)band * (size_t)spec.width;
+    for (size_t p = 0; p < count; p++) {
+        const float *from = bands[p / band_pixels].get() + (p % band_pixels) * span;
         for (int k = 0; k < channels; k++)
-            pixels[p * (size_t)channels + (size_t)k] = from[p * span + (size_t)(index[k] - lo)];
+            pixels[p * (size_t)channels + (size_t)k] = from[index[k] - lo];
+    }
 
     /* Integer storage holds display-encoded values, except in EXR, which is linear whatever the type. */
     raw->width = spec.width;
