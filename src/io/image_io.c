@@ -208,22 +208,60 @@ static const char *oiio_format_of(const unsigned char *bytes, size_t size) {
     return "";
 }
 
+/* A JPEG's bytes (in memory already, or the whole of `stream`) with its header cleaned (mr_io_jpeg_clean) into
+ * *out (malloc'ed, the caller's). */
+static mr_status read_jpeg_clean(FILE *stream, const unsigned char *bytes, size_t size, const char *label,
+                                 unsigned char **out, size_t *out_size) {
+    unsigned char *whole = NULL;
+    if (bytes == NULL) {
+        long length;
+        if (fseek(stream, 0, SEEK_END) != 0 || (length = ftell(stream)) < 0 || fseek(stream, 0, SEEK_SET) != 0)
+            return mr_fail(MR_ERR_IO, "%s: cannot seek in the file", label);
+        size = (size_t)length;
+        whole = malloc(size ? size : 1);
+        if (whole == NULL) return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %zu bytes", label, size);
+        if (fread(whole, 1, size, stream) != size) {
+            free(whole);
+            return mr_fail(MR_ERR_IO, "%s: read error", label);
+        }
+        bytes = whole;
+    }
+    mr_status status = mr_io_jpeg_clean(bytes, size, label, out, out_size);
+    free(whole);
+    return status;
+}
+
 /* The read itself, shared by a file (path) and bytes in memory (path NULL, bytes and size): `stream` is open at
  * the start of either and is closed here; `label` is what messages call the image; *o has its defaults. */
 static mr_status read_stream(const char *path, const unsigned char *bytes, size_t size, FILE *stream,
                              const char *label, const mr_img_read_options *o, mr_image **out, mr_img_stored *stored) {
     int is_png = 0;
     mr_io_raw raw = {0, 0, 0, 0, 0, NULL};
+    unsigned char *jpeg = NULL;
+    size_t jpeg_size = 0;
     mr_status status = check_png_structure(label, stream, &is_png);
     // PNG (by its signature: nearly every glTF texture) through png_io.c; the rest through the OpenImageIO module,
     // loaded on first use.
     if (status == MR_OK && is_png) {
         rewind(stream);
         status = mr_io_png_read_stream(stream, label, o->max_dimension, &raw);
+    } else if (status == MR_OK) {
+        // EXR: the header's sizes checked before OpenEXR trusts them (exr_check.c says why). JPEG: the whole file
+        // taken into memory and its header rewritten without the metadata OpenImageIO would parse (jpeg_check.c).
+        unsigned char magic[4];
+        rewind(stream);
+        size_t got = fread(magic, 1, 4, stream);
+        if (got == 4 && memcmp(magic, "\x76\x2f\x31\x01", 4) == 0)
+            status = mr_io_exr_check(stream, label, o->max_dimension);
+        else if (got >= 3 && memcmp(magic, "\xff\xd8\xff", 3) == 0)
+            status = read_jpeg_clean(stream, bytes, size, label, &jpeg, &jpeg_size);
     }
     fclose(stream);
     if (status != MR_OK) return status;
-    if (!is_png && path != NULL) {
+    if (jpeg != NULL) {
+        status = mr_io_oiio_read_memory(jpeg, jpeg_size, "jpeg", label, o->max_dimension, &raw);
+        free(jpeg);
+    } else if (!is_png && path != NULL) {
         status = mr_io_oiio_read(path, o->max_dimension, &raw);
     } else if (!is_png) {
         const char *format = oiio_format_of(bytes, size);

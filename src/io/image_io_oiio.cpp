@@ -34,6 +34,7 @@
 
 #include <cstdint>
 #include <cstdlib>
+#include <climits>
 #include <cstring>
 #include <exception>
 #include <new>
@@ -117,19 +118,43 @@ mr_status decode(OIIO::ImageInput *in, const char *label, int max_dimension, mr_
 
     int index[4] = {0, 0, 0, 0};
     const int channels = choose_channels(spec, index);
-    int lo = index[0], hi = index[0];
-    for (int k = 1; k < channels; k++) {
-        lo = index[k] < lo ? index[k] : lo;
-        hi = index[k] > hi ? index[k] : hi;
+    const size_t count = (size_t)spec.width * (size_t)spec.height;
+    /* Samples are read as the file stores them, all channels, and converted here: asked for another type or a
+     * channel range, OpenImageIO 2.4's read_image and read_scanlines allocate a 64 MB buffer per call whatever the
+     * image's size (almost all the time a fuzzer spent on a 24x24 JPEG), which read_scanline (one row) and
+     * read_tiles (whole tiles) do not; they are also faster on large files. Files whose channels differ in type
+     * (some EXRs) take read_image. */
+    const bool one_type = spec.channelformats.empty();
+    int lo = 0, hi = spec.nchannels - 1;
+    if (!one_type) {
+        lo = hi = index[0];
+        for (int k = 1; k < channels; k++) {
+            lo = index[k] < lo ? index[k] : lo;
+            hi = index[k] > hi ? index[k] : hi;
+        }
     }
     const size_t span = (size_t)(hi - lo + 1);
-    const size_t count = (size_t)spec.width * (size_t)spec.height;
-    if (count > SIZE_MAX / sizeof(float) / span)
+    const size_t sample_size = one_type ? spec.format.size() : sizeof(float);
+    if (count > SIZE_MAX / sizeof(float) / span || count * span > (size_t)INT_MAX)
         return mr_fail(MR_ERR_NOMEM, "%s: %dx%d pixels do not fit in memory", label, spec.width, spec.height);
-    /* A vector, so an exception thrown by OIIO cannot leak it; `pixels` is malloc'ed only once nothing below
+    /* Vectors, so an exception thrown by OIIO cannot leak them; `pixels` is malloc'ed only once nothing below
      * can throw (the caller releases it with free()). */
     std::vector<float> stored(count * span);
-    if (!in->read_image(0, 0, lo, hi + 1, OIIO::TypeFloat, stored.data())) {
+    bool read = true;
+    if (one_type) {
+        std::vector<unsigned char> native(count * span * sample_size);
+        const size_t row = (size_t)spec.width * span * sample_size;
+        if (spec.tile_width > 0)
+            read = in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y, spec.y + spec.height, spec.z, spec.z + 1,
+                                  0, spec.nchannels, spec.format, native.data());
+        for (int y = 0; read && spec.tile_width <= 0 && y < spec.height; y++)
+            read = in->read_scanline(spec.y + y, spec.z, spec.format, native.data() + (size_t)y * row);
+        read = read && OIIO::convert_pixel_values(spec.format, native.data(), OIIO::TypeFloat, stored.data(),
+                                                  (int)(count * span));
+    } else {
+        read = in->read_image(0, 0, lo, hi + 1, OIIO::TypeFloat, stored.data());
+    }
+    if (!read) {
         std::string why = one_line(in->geterror());
         return mr_fail(MR_ERR_FORMAT, "%s: cannot decode pixels (corrupt or truncated?): %s", label,
                        why.c_str());

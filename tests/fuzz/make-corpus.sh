@@ -72,6 +72,10 @@ if need exr; then
     oiiotool "$f" --resize 32x32 -d half --tile 16 16 -o "$out/exr/tiled.exr"
     oiiotool "$f" --resize 16x16 --ch R -d float -o "$out/exr/grey.exr"
     oiiotool "$f" --resize 16x16 --ch R,G,B,A=1 -d half -o "$out/exr/rgba.exr"
+    oiiotool "$f" --resize 37x23 --tile 8 8 -d half -o "$out/exr/tiled_odd.exr"
+    oiiotool "$f" --resize 37x23 -d half -otex:resize=0 "$out/exr/mipmap.exr"
+    oiiotool "$f" --resize 16x16 --attrib oiio:subimagename a "$f" --resize 16x16 --ch R,G \
+        --attrib oiio:subimagename b --siappend -o "$out/exr/multipart.exr"
     made exr
 fi
 
