@@ -39,9 +39,12 @@ for t in "${targets[@]}"; do
     start=$(date +%s)
     dict=()
     [ -f "$root/tests/fuzz/$t.dict" ] && dict=(-dict="$root/tests/fuzz/$t.dict")
+    # Inputs grow up to max_len: 64 kB for text and glTF (a seed is at most 32 kB), 256 kB for images.
+    max_len=262144
+    case $t in gltf|mlp|mrt|sweep|cli_value|obj) max_len=65536 ;; esac
     "$binary" -max_total_time="$seconds" -runs="$([ "$runs" -gt 0 ] && echo "$runs" || echo -1)" \
         -print_final_stats=1 -close_fd_mask=3 -timeout=20 -rss_limit_mb=3072 -malloc_limit_mb=3072 \
-        -max_len=262144 -artifact_prefix="$fuzz_build/findings/$t-" "${dict[@]}" \
+        -max_len=$max_len -artifact_prefix="$fuzz_build/findings/$t-" "${dict[@]}" \
         "$fuzz_build/work/$t" "$fuzz_build/corpus/$t" > "$log" 2>&1
     rc=$?
     elapsed=$(( $(date +%s) - start ))

@@ -119,41 +119,30 @@ mr_status decode(OIIO::ImageInput *in, const char *label, int max_dimension, mr_
     int index[4] = {0, 0, 0, 0};
     const int channels = choose_channels(spec, index);
     const size_t count = (size_t)spec.width * (size_t)spec.height;
-    /* Samples are read as the file stores them, all channels, and converted here: asked for another type or a
-     * channel range, OpenImageIO 2.4's read_image and read_scanlines allocate a 64 MB buffer per call whatever the
-     * image's size (almost all the time a fuzzer spent on a 24x24 JPEG), which read_scanline (one row) and
-     * read_tiles (whole tiles) do not; they are also faster on large files. Files whose channels differ in type
-     * (some EXRs) take read_image. */
+    /* All channels are read, row by row (read_scanline) or tile by tile (read_tiles), in the stored type when every
+     * channel has the same one (converted here), else as floats: OpenImageIO 2.4's read_image and read_scanlines
+     * allocate a 64 MB buffer per call whatever the image's size (almost all the time a fuzzer spent on a 24x24
+     * JPEG), which these do not; they are also faster on large files. */
     const bool one_type = spec.channelformats.empty();
-    int lo = 0, hi = spec.nchannels - 1;
-    if (!one_type) {
-        lo = hi = index[0];
-        for (int k = 1; k < channels; k++) {
-            lo = index[k] < lo ? index[k] : lo;
-            hi = index[k] > hi ? index[k] : hi;
-        }
-    }
-    const size_t span = (size_t)(hi - lo + 1);
-    const size_t sample_size = one_type ? spec.format.size() : sizeof(float);
+    const OIIO::TypeDesc type = one_type ? spec.format : OIIO::TypeFloat;
+    const size_t span = (size_t)spec.nchannels, sample_size = type.size();
+    const int lo = 0;
     if (count > SIZE_MAX / sizeof(float) / span || count * span > (size_t)INT_MAX)
         return mr_fail(MR_ERR_NOMEM, "%s: %dx%d pixels do not fit in memory", label, spec.width, spec.height);
     /* Vectors, so an exception thrown by OIIO cannot leak them; `pixels` is malloc'ed only once nothing below
      * can throw (the caller releases it with free()). */
     std::vector<float> stored(count * span);
+    std::vector<unsigned char> native(one_type ? count * span * sample_size : 0);
+    unsigned char *target = one_type ? native.data() : reinterpret_cast<unsigned char *>(stored.data());
+    const size_t row = (size_t)spec.width * span * sample_size;
     bool read = true;
-    if (one_type) {
-        std::vector<unsigned char> native(count * span * sample_size);
-        const size_t row = (size_t)spec.width * span * sample_size;
-        if (spec.tile_width > 0)
-            read = in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y, spec.y + spec.height, spec.z, spec.z + 1,
-                                  0, spec.nchannels, spec.format, native.data());
-        for (int y = 0; read && spec.tile_width <= 0 && y < spec.height; y++)
-            read = in->read_scanline(spec.y + y, spec.z, spec.format, native.data() + (size_t)y * row);
-        read = read && OIIO::convert_pixel_values(spec.format, native.data(), OIIO::TypeFloat, stored.data(),
-                                                  (int)(count * span));
-    } else {
-        read = in->read_image(0, 0, lo, hi + 1, OIIO::TypeFloat, stored.data());
-    }
+    if (spec.tile_width > 0)
+        read = in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y, spec.y + spec.height, spec.z, spec.z + 1, 0,
+                              spec.nchannels, type, target);
+    for (int y = 0; read && spec.tile_width <= 0 && y < spec.height; y++)
+        read = in->read_scanline(spec.y + y, spec.z, type, target + (size_t)y * row);
+    if (read && one_type)
+        read = OIIO::convert_pixel_values(type, native.data(), OIIO::TypeFloat, stored.data(), (int)(count * span));
     if (!read) {
         std::string why = one_line(in->geterror());
         return mr_fail(MR_ERR_FORMAT, "%s: cannot decode pixels (corrupt or truncated?): %s", label,

@@ -114,7 +114,7 @@ for b in doc.get("buffers", []):
         data = base64.b64decode(uri.split(",", 1)[1])
     else:
         data = open(os.path.join(base, uri), "rb").read()
-    if len(data) > 200000: sys.exit(0)   # a large mesh makes a slow seed
+    if len(data) > 32768: sys.exit(0)   # a large mesh makes a slow seed (libFuzzer mutates whole inputs)
     offsets.append(add(data))
 for v in views:
     v["byteOffset"] = v.get("byteOffset", 0) + offsets[v.get("buffer", 0)]
@@ -138,6 +138,47 @@ doc["buffers"] = [{"byteLength": len(blob), "uri": data_uri}]
 open(os.path.join(out, name + ".gltf"), "w").write(json.dumps(doc))
 PY
     done
+    # Small hand-made assets: materials only (every spec-gloss and metal-rough field, texture transforms), and
+    # one triangle whose buffer and image are data URIs.
+    python3 - "$tmp/tiny.png" "$out/gltf" <<'PY'
+import base64, json, struct, sys
+tiny = base64.b64encode(open(sys.argv[1], "rb").read()).decode()
+out = sys.argv[2]
+tex = {"index": 0, "texCoord": 0, "extensions": {"KHR_texture_transform": {"offset": [0.5, 0], "scale": [2, 2],
+       "rotation": 0.3}}}
+materials = [
+    {"name": "sg", "extensions": {"KHR_materials_pbrSpecularGlossiness": {"diffuseFactor": [0.8, 0.2, 0.1, 1],
+     "specularFactor": [0.04, 0.04, 0.04], "glossinessFactor": 0.6, "diffuseTexture": tex,
+     "specularGlossinessTexture": {"index": 0}}}, "alphaMode": "MASK", "alphaCutoff": 0.3, "doubleSided": True},
+    {"name": "mr", "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.5], "metallicFactor": 0.2,
+     "roughnessFactor": 0.7, "baseColorTexture": {"index": 0}, "metallicRoughnessTexture": {"index": 0}},
+     "normalTexture": {"index": 0, "scale": 0.5}, "occlusionTexture": {"index": 0, "strength": 0.3},
+     "emissiveTexture": {"index": 0}, "emissiveFactor": [0.1, 0, 0], "alphaMode": "BLEND"},
+]
+doc = {"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_materials_pbrSpecularGlossiness",
+       "KHR_texture_transform"], "materials": materials, "textures": [{"source": 0, "sampler": 0}],
+       "samplers": [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33648, "wrapT": 33071}],
+       "images": [{"uri": "data:image/png;base64," + tiny}]}
+open(out + "/materials.gltf", "w").write(json.dumps(doc))
+positions = struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0)
+uvs = struct.pack("<6f", 0, 0, 1, 0, 0, 1)
+indices = struct.pack("<3H", 0, 1, 2) + b"\0\0"
+blob = positions + uvs + indices
+doc.update({"buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64," +
+            base64.b64encode(blob).decode()}],
+            "bufferViews": [{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 24},
+                            {"buffer": 0, "byteOffset": 60, "byteLength": 6}],
+            "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                           "min": [0, 0, 0], "max": [1, 1, 0]},
+                          {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"},
+                          {"bufferView": 2, "componentType": 5123, "count": 3, "type": "SCALAR"}],
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2,
+                                        "material": 0}]}],
+            "nodes": [{"mesh": 0, "translation": [1, 2, 3], "children": [1]},
+                      {"mesh": 0, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]}],
+            "scenes": [{"nodes": [0]}], "scene": 0})
+open(out + "/triangle.gltf", "w").write(json.dumps(doc))
+PY
     made gltf
 fi
 
