@@ -2,9 +2,10 @@
  * fuzz_gltf.c — the glTF loader and everything `report`, `gltf spec2metal` and `render gltf` do with what it
  * read: materials, textures and images (decoded), the scene's triangles and bounds, and the spec-gloss
  * conversion. The writer is left out (it serialises what the loader accepted, and took half of each execution;
- * the tests and the fault-injection runs cover it). The bytes are an asset as a file holds it (.glb when they start with "glTF", .gltf JSON
- * otherwise); resources it names are looked up beside it in the scratch folder, where there are none, so only
- * data URIs and a .glb's own chunk reach the decoders (tests/fuzz/make-corpus.py makes seeds of that kind).
+ * the tests and the fault-injection runs cover it). The bytes are an asset as a file holds it (.glb when they
+ * start with "glTF", .gltf JSON otherwise); resources it names are looked up beside it in the scratch folder,
+ * where there are none, so only data URIs and a .glb's own chunk reach the decoders (tests/fuzz/make-corpus.sh
+ * makes seeds of that kind).
  */
 #include <string.h>
 
