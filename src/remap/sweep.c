@@ -1169,9 +1169,9 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
         free(st);
         return status;
     }
-    f.state = calloc((size_t)total, 1);
+    f.state = rank == 0 ? calloc((size_t)total, 1) : NULL; /* only rank 0 keeps the file's books */
     todo = calloc(todo_bytes, 1);
-    if (f.state == NULL || todo == NULL)
+    if ((rank == 0 && f.state == NULL) || todo == NULL)
         status = mr_fail(MR_ERR_NOMEM, "sweep: out of memory for %ld samples", total);
     if (status == MR_OK)
         status = build_header(spec, opts->command_line, opts->shard_index, opts->shard_count, &header);
