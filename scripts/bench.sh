@@ -723,12 +723,13 @@ bench_mpi() {
         labels+=("$label") walls+=("$(printf '%s\n' "${ws[@]}" | median)") cpus+=("$(printf '%s\n' "${cs[@]}" | median)")
         echo "   $label: wall ${walls[-1]} s, CPU ${cpus[-1]} s ($(tail -n 1 "$dir/$label.log"))"
     }
-    local load
+    local load load_end
     load=$(cut -d' ' -f1 /proc/loadavg)
     mpi_case one "$bin" "${sweep[@]}" --threads 1
     mpi_case np1 "${mpi[@]}" -np 1 "$bin" "${sweep[@]}" --threads 1
     mpi_case np2 "${mpi[@]}" -np 2 "$bin" "${sweep[@]}"
     mpi_case threads2 "$bin" "${sweep[@]}" --threads 2
+    load_end=$(cut -d' ' -f1 /proc/loadavg)
     local same=yes
     for l in np1 np2 threads2; do
         diff <(grep -v '^# command:' "$dir/one.csv" | sed '/^#/!s/,[^,]*$//') \
@@ -737,7 +738,7 @@ bench_mpi() {
     local speedup
     speedup=$(awk -v a="${walls[0]}" -v b="${walls[2]}" 'BEGIN {printf "%.2f", a / b}')
     {
-        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), load $load at the start, $(mpirun --version | head -n 1):"
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), load average $load before and $load_end after, $(mpirun --version | head -n 1):"
         echo "\`matremap ${sweep[*]}\` (default fit scene, 64²), whole commands (MPI's start included), medians of $runs runs."
         echo "The four files hold the same rows in the same order (seconds and command line aside): $same."
         echo
@@ -752,10 +753,13 @@ bench_mpi() {
                 "$(awk -v a="${walls[0]}" -v b="${walls[$i]}" 'BEGIN {print a / b}')"
         done
         echo
-        echo "Speed-up of 2 ranks over 1 (whole commands): **${speedup}×** (target ≥ 1.8×)."
+        echo "Speed-up of 2 ranks over 1 (whole commands): **${speedup}×** (target ≥ 1.8×); the work MPI adds: CPU"
+        echo "$(awk -v a="${cpus[2]}" -v b="${cpus[0]}" 'BEGIN {printf "%.2f", a / b}')× that of one process. On a machine that other jobs share, the wall clock measures them too"
+        echo "(a load average above the core count means this process did not have its cores)."
     } >"$out"
 
-    # The cost model: one core's rate per model pair (1 thread, the default scene), from M random samples.
+    # The cost model: one core's rate per model pair (1 thread, the default scene), from M random samples: remaps
+    # per CPU second, which other jobs on a shared machine inflate much less than the wall clock.
     local pairs=("ward diffuse=0|ggx diffuse=0|the learned transforms' pair (docs/learn.md)"
         "ggx|ward-balanced|this section's sweep" "as diffuse=0|ward trim=1|the paper's Appendix pair"
         "ggx-metallic|ggx|the workflow pair (docs/workflow.md)" "gltf|blender-ward|glTF into Blender's Ward")
@@ -763,9 +767,9 @@ bench_mpi() {
     efficiency=$(awk -v s="$speedup" 'BEGIN {e = s / 2; if (e > 1) e = 1; printf "%.2f", e}')
     {
         echo
-        echo "Remaps per second on one core (\`--threads 1\`, $m random samples, seed 3, default fit scene), and what"
-        echo "sweeps cost on C cores at the efficiency measured above (${efficiency} = speed-up / ranks):"
-        echo "T = N / (rate × C × ${efficiency})."
+        echo "Remaps per second on one core (\`--threads 1\`, $m random samples, seed 3, default fit scene: samples per"
+        echo "CPU second), and what sweeps cost on C cores at the efficiency measured above (${efficiency} = speed-up /"
+        echo "ranks): T = N / (rate × C × ${efficiency})."
         echo
         echo "| from → to | pair | remaps/s per core | renders per remap | 1,000 rows on 2 cores | 10,000 rows on 64 cores | 100,000 rows on 1,024 cores |"
         echo "|---|---|---:|---:|---:|---:|---:|"
@@ -778,7 +782,7 @@ bench_mpi() {
         # shellcheck disable=SC2086 # the model's values are separate words
         read -r w c < <(times_of "$dir/pair.log" "$bin" sweep --from $from --to $to --random "$m" --seed 3 --threads 1 \
             -o "$dir/pair.csv")
-        rate=$(awk -v n="$m" -v w="$w" 'BEGIN {printf "%.2f", n / w}')
+        rate=$(awk -v n="$m" -v c="$c" 'BEGIN {printf "%.1f", n / c}')
         renders=$(grep -v '^#' "$dir/pair.csv" | tail -n +2 | awk -F, '{ s += $(NF - 1) } END { printf "%.0f", s / NR }')
         printf '| %s → %s | %s | %s | %s | %s | %s | %s |\n' "$from" "$to" "$what" "$rate" "$renders" \
             "$(human "$(awk -v r="$rate" -v e="$efficiency" 'BEGIN {print 1000 / (r * 2 * e)}')")" \

@@ -187,8 +187,7 @@ typedef struct mr_sweep_progress {
  * thread that wrote it, while that thread uses the C numeric locale. Keep it short: other rows wait. */
 typedef void (*mr_sweep_progress_fn)(const mr_sweep_progress *progress, void *user);
 
-/* Tags of the messages a sweep's processes exchange (mr_sweep_comm); the largest message is
- * MR_SWEEP_MESSAGE_MAX bytes. */
+/* The largest message a sweep's processes exchange (mr_sweep_comm): a row line, or a failure with its text. */
 #define MR_SWEEP_MESSAGE_MAX (MR_SWEEP_MAX_LINE + 1024)
 
 /* How the processes of one sweep talk (one rank per process; see the header comment). The library calls these
