@@ -772,7 +772,7 @@ MR_TEST(two_and_three_ranks_write_the_single_process_file_and_resume_it) {
     MR_CHECK(run_ranks(2, specs, ones, two, 0, ranks) == 0);
     for (int k = 0; k < 2; k++)
         MR_CHECK_MSG(ranks[k].status == MR_OK, "rank %d: %s", k, ranks[k].message);
-    MR_CHECK(ranks[0].summary.computed == 11 && ranks[0].summary.processes == 2); /* sorted: unless they came in order */
+    MR_CHECK(ranks[0].summary.computed == 11 && ranks[0].summary.processes == 2); /* sorted unless in order */
     MR_CHECK(ranks[0].summary.threads_total == 2 && ranks[1].summary.computed == 5); /* rank 1: samples 1, 3, .. 9 */
     MR_CHECK(same_rows(reference, two));
 
