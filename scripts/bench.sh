@@ -738,7 +738,7 @@ bench_mpi() {
     local speedup
     speedup=$(awk -v a="${walls[0]}" -v b="${walls[2]}" 'BEGIN {printf "%.2f", a / b}')
     {
-        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), load average $load before and $load_end after, $(mpirun --version | head -n 1):"
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), load average $load before and $load_end after, niceness $(nice) (scheduler autogroup: $(cut -d' ' -f2- /proc/self/autogroup 2>/dev/null || echo none)), $(mpirun --version | head -n 1):"
         echo "\`matremap ${sweep[*]}\` (default fit scene, 64²), whole commands (MPI's start included), medians of $runs runs."
         echo "The four files hold the same rows in the same order (seconds and command line aside): $same."
         echo
@@ -758,36 +758,41 @@ bench_mpi() {
         echo "(a load average above the core count means this process did not have its cores)."
     } >"$out"
 
-    # The cost model: one core's rate per model pair (1 thread, the default scene), from M random samples: remaps
-    # per CPU second, which other jobs on a shared machine inflate much less than the wall clock.
+    # The cost model: one core's rate per model pair (1 thread), from M random samples in the default fit scene and
+    # M/6 in the paper's (512², 64 times the pixels): remaps per CPU second, which other jobs on a shared machine
+    # inflate much less than the wall clock.
     local pairs=("ward diffuse=0|ggx diffuse=0|the learned transforms' pair (docs/learn.md)"
         "ggx|ward-balanced|this section's sweep" "as diffuse=0|ward trim=1|the paper's Appendix pair"
         "ggx-metallic|ggx|the workflow pair (docs/workflow.md)" "gltf|blender-ward|glTF into Blender's Ward")
-    local efficiency
+    local efficiency big=$((m / 6))
     efficiency=$(awk -v s="$speedup" 'BEGIN {e = s / 2; if (e > 1) e = 1; printf "%.2f", e}')
     {
         echo
-        echo "Remaps per second on one core (\`--threads 1\`, $m random samples, seed 3, default fit scene: samples per"
-        echo "CPU second), and what sweeps cost on C cores at the efficiency measured above (${efficiency} = speed-up /"
-        echo "ranks): T = N / (rate × C × ${efficiency})."
+        echo "Remaps per second on one core (\`--threads 1\`, random samples, seed 3: $m in the default fit scene, 64², and"
+        echo "$big in the paper's, \`--size 512\`; samples per CPU second), and what sweeps cost on C cores at the efficiency"
+        echo "measured above (${efficiency} = speed-up / ranks): T = N / (rate × C × ${efficiency}), plus MPI's start."
         echo
-        echo "| from → to | pair | remaps/s per core | renders per remap | 1,000 rows on 2 cores | 10,000 rows on 64 cores | 100,000 rows on 1,024 cores |"
-        echo "|---|---|---:|---:|---:|---:|---:|"
+        echo "| from → to | pair | remaps/s per core, 64² | renders per remap | remaps/s per core, 512² | 10,000 rows, 64², 2 cores | 10,000 rows, 512², 2 cores | 10,000 rows, 512², 64 cores | 100,000 rows, 512², 1,024 cores |"
+        echo "|---|---|---:|---:|---:|---:|---:|---:|---:|"
     } >>"$out"
-    human() { awk -v t="$1" 'BEGIN { if (t < 120) printf "%.0f s", t; else if (t < 7200) printf "%.1f min", t / 60; else printf "%.1f h", t / 3600 }'; }
-    local entry from to what w c rate renders
+    human() { awk -v t="$1" 'BEGIN { if (t < 120) printf "%.0f s", t; else if (t < 7200) printf "%.0f min", t / 60; else printf "%.1f h", t / 3600 }'; }
+    cost() { awk -v n="$1" -v r="$2" -v c="$3" -v e="$efficiency" 'BEGIN {print n / (r * c * e)}'; }
+    local entry from to what w c rate rate512 renders
     for entry in "${pairs[@]}"; do
         IFS='|' read -r from to what <<<"$entry"
-        rm -f "$dir/pair.csv"
+        rm -f "$dir/pair.csv" "$dir/pair512.csv"
         # shellcheck disable=SC2086 # the model's values are separate words
         read -r w c < <(times_of "$dir/pair.log" "$bin" sweep --from $from --to $to --random "$m" --seed 3 --threads 1 \
             -o "$dir/pair.csv")
         rate=$(awk -v n="$m" -v c="$c" 'BEGIN {printf "%.1f", n / c}')
         renders=$(grep -v '^#' "$dir/pair.csv" | tail -n +2 | awk -F, '{ s += $(NF - 1) } END { printf "%.0f", s / NR }')
-        printf '| %s → %s | %s | %s | %s | %s | %s | %s |\n' "$from" "$to" "$what" "$rate" "$renders" \
-            "$(human "$(awk -v r="$rate" -v e="$efficiency" 'BEGIN {print 1000 / (r * 2 * e)}')")" \
-            "$(human "$(awk -v r="$rate" -v e="$efficiency" 'BEGIN {print 10000 / (r * 64 * e)}')")" \
-            "$(human "$(awk -v r="$rate" -v e="$efficiency" 'BEGIN {print 100000 / (r * 1024 * e)}')")" | tee -a "$out"
+        # shellcheck disable=SC2086
+        read -r w c < <(times_of "$dir/pair512.log" "$bin" sweep --from $from --to $to --random "$big" --seed 3 \
+            --threads 1 --size 512 -o "$dir/pair512.csv")
+        rate512=$(awk -v n="$big" -v c="$c" 'BEGIN {printf "%.2f", n / c}')
+        printf '| %s → %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' "$from" "$to" "$what" "$rate" "$renders" "$rate512" \
+            "$(human "$(cost 10000 "$rate" 2)")" "$(human "$(cost 10000 "$rate512" 2)")" \
+            "$(human "$(cost 10000 "$rate512" 64)")" "$(human "$(cost 100000 "$rate512" 1024)")" | tee -a "$out"
     done
     cat "$out"
 }
