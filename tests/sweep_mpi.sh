@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # `mpirun -np 2 matremap sweep` against a single process (docs/sweep.md, "Several processes"): the same rows in
-# the same order (the seconds column and the command line aside); a rank killed with SIGKILL at random moments
+# the same order (the seconds column and the command line aside; typed alike, the same bytes but the seconds), on 3
+# ranks too; a rank killed with SIGKILL at random moments
 # (mpirun then ends the other) and the run resumed, on 2 ranks or on one process, ends as the same file; a single
 # process's interrupted file resumed on 2 ranks too; --help and usage errors printed once, not once per rank; an
 # existing file refused (exit 2, untouched); a missing MPI module refused (exit 2, naming it, no file).
@@ -17,7 +18,7 @@ if ! command -v mpirun >/dev/null 2>&1; then
     finish
 fi
 # As root Open MPI wants to be told; --oversubscribe lets 2 ranks run on a 1-core machine.
-mpi=(mpirun -np 2 --oversubscribe)
+launcher=(mpirun --oversubscribe)
 # Under AddressSanitizer (make asan), Open MPI's own allocations outlive MPI_Finalize (thousands of them, from
 # MPI_Init): LeakSanitizer is told to leave what Open MPI's libraries and components allocated, and unwinds fully
 # so that it can tell (its fast unwinder stops inside those libraries, which keep no frame pointers). Our own
@@ -25,7 +26,8 @@ mpi=(mpirun -np 2 --oversubscribe)
 printf 'leak:%s\n' libopen-pal.so libopen-rte.so libmpi.so libpmix.so libhwloc.so libevent mca_ ld-linux >"$tmp/lsan.supp"
 export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}fast_unwind_on_malloc=0"
 export LSAN_OPTIONS="${LSAN_OPTIONS:+$LSAN_OPTIONS:}suppressions=$tmp/lsan.supp:print_suppressions=0"
-[ "$(id -u)" -eq 0 ] && mpi+=(--allow-run-as-root)
+[ "$(id -u)" -eq 0 ] && launcher+=(--allow-run-as-root)
+mpi=("${launcher[@]}" -np 2)
 echo "   $(mpirun --version 2>/dev/null | head -n 1)"
 
 args=(--from ggx --to ward-balanced --random 40 --seed 7 --size 96)
@@ -78,6 +80,21 @@ else
 fi
 check "... the single process's file: same header, rows, order (seconds, command line aside)" [ "$ok_rows" -eq 1 ]
 check "... the summary printed once (rank 0 speaks)" [ "$(grep -c 'is complete' "$tmp/err")" -eq 1 ]
+
+# Typed the same way (the same arguments, -o included, in another folder), the two files are the same bytes but
+# for the seconds column: the command line recorded is the same too.
+mkdir -p "$tmp/a" "$tmp/b"
+abs_bin="$(cd "$(dirname "$bin")" && pwd)/$(basename "$bin")"
+(cd "$tmp/a" && "$abs_bin" sweep "${args[@]}" -o same.csv 2>/dev/null)
+(cd "$tmp/b" && "${mpi[@]}" "$abs_bin" sweep "${args[@]}" -o same.csv >/dev/null 2>&1)
+strip_seconds() { sed '/^#/!s/,[^,]*$//' "$1"; }
+check "the same command with and without mpirun: the same bytes but the seconds" \
+    cmp -s <(strip_seconds "$tmp/a/same.csv") <(strip_seconds "$tmp/b/same.csv")
+# Three ranks (more than the cores here: --oversubscribe): the same rows.
+expect "mpirun -np 3 matremap sweep succeeds" 0 "3 ranks" -- \
+    "${launcher[@]}" -np 3 "$bin" sweep "${args[@]}" -o "$tmp/np3.csv"
+if same_as_ref "$tmp/np3.csv"; then ok_rows=1; else ok_rows=0; head -5 "$tmp/diff" | sed 's/^/      /'; fi
+check "... the single process's rows" [ "$ok_rows" -eq 1 ]
 
 # --help and usage errors: once, not once per rank.
 expect "--help under mpirun" 0 "Several processes" -- "${mpi[@]}" "$bin" sweep --help
