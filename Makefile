@@ -82,7 +82,15 @@ MODULE      := $(BUILD)/lib/matremap/libmatremap-oiio.so
 MODULE_SRC  := src/io/image_io_oiio.cpp src/status.c src/io/atomic_file.c
 MODULE_OBJ  := $(patsubst %,$(BUILD)/pic/%.o,$(basename $(MODULE_SRC)))
 
-LIB_C_SRC   := $(filter-out src/cli/%,$(wildcard src/*.c src/*/*.c)) $(wildcard nn/*.c gltf/*.c)
+# MPI is optional: `matremap sweep` under mpirun loads a module holding every MPI call (src/remap/sweep_mpi.c says
+# why), built only where pkg-config knows Open MPI's mpi-c (libopenmpi-dev); MPI=0 leaves it out. Nothing else
+# links MPI, so the library, the tool and the tests build and run without it.
+MPI         ?= 1
+MPI_PC      := $(if $(filter 1,$(MPI)),$(shell $(PKG_CONFIG) --exists mpi-c 2>/dev/null && echo mpi-c))
+MPI_MODULE  := $(if $(MPI_PC),$(BUILD)/lib/matremap/libmatremap-mpi.so)
+MPI_SRC     := src/remap/sweep_mpi_module.c
+
+LIB_C_SRC   := $(filter-out src/cli/% $(MPI_SRC),$(wildcard src/*.c src/*/*.c)) $(wildcard nn/*.c gltf/*.c)
 LIB_CXX_SRC := $(filter-out src/io/image_io_oiio.cpp,$(wildcard src/*/*.cpp)) $(wildcard gltf/*.cpp)
 CLI_SRC     := $(wildcard src/cli/*.c)
 TEST_SRC    := $(wildcard tests/test_*.c)
@@ -117,7 +125,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h 
         evaluation-viewers dataset train objectives deps install clean
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
-all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE)
+all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE) $(MPI_MODULE)
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
@@ -142,12 +150,21 @@ $(MODULE): $(MODULE_OBJ)
 	@mkdir -p $(dir $@)
 	$(CXX) -shared $(ALL_LDFLAGS) -Wl,-Bsymbolic $(MODULE_DEFS) $^ $(shell $(PKG_CONFIG) --libs OpenImageIO 2>/dev/null) -o $@
 
+# The MPI module: plain C against Open MPI's headers and library (what mpicc adds, taken from pkg-config, so that
+# CC and the sanitizers stay the project's).
+$(BUILD)/lib/matremap/libmatremap-mpi.so: $(MPI_SRC)
+	@mkdir -p $(dir $@)
+	$(CC) -D_POSIX_C_SOURCE=200809L -std=c11 $(WARN) $(SAN) $(CFLAGS) -fPIC -fvisibility=hidden -shared \
+	    $(shell $(PKG_CONFIG) --cflags mpi-c 2>/dev/null) $(LDFLAGS) -Wl,-z,defs $< \
+	    $(shell $(PKG_CONFIG) --libs mpi-c 2>/dev/null) -o $@
+
 # The module and data directories are compiled into oiio_module.o and cmd_workflow.o (the network); this stamp
 # changes (and so rebuilds them) when PREFIX does, e.g. for `make install PREFIX=...` after a plain `make`.
 $(BUILD)/module_dir.stamp: FORCE
 	@mkdir -p $(dir $@)
 	@echo '$(MODULE_DIR) $(DATA_DIR)' | cmp -s - $@ || echo '$(MODULE_DIR) $(DATA_DIR)' > $@
-$(BUILD)/obj/src/io/oiio_module.o $(BUILD)/obj/src/cli/cmd_workflow.o: $(BUILD)/module_dir.stamp
+$(BUILD)/obj/src/io/oiio_module.o $(BUILD)/obj/src/cli/cmd_workflow.o $(BUILD)/obj/src/remap/sweep_mpi.o: \
+    $(BUILD)/module_dir.stamp
 .PHONY: FORCE
 FORCE:
 
@@ -271,7 +288,7 @@ install: all
 	install -m 644 data/spec2metal.mlp $(DESTDIR)$(PREFIX)/share/matremap/
 	install -m 644 $(LIB) $(DESTDIR)$(PREFIX)/lib/
 	install -d $(DESTDIR)$(MODULE_DIR)
-	install -m 755 $(MODULE) $(DESTDIR)$(MODULE_DIR)/
+	install -m 755 $(MODULE) $(MPI_MODULE) $(DESTDIR)$(MODULE_DIR)/
 	for h in $(PUBLIC_HEADERS); do \
 	    d=$(DESTDIR)$(PREFIX)/include/matremap/$$(dirname $${h#src/}); install -d $$d; install -m 644 $$h $$d/; done
 	sed -e 's|@PREFIX@|$(PREFIX)|' -e "s|@VERSION@|$$(sed -n 's/^#define MR_VERSION_STRING \"\(.*\)\"/\1/p' src/matremap.h)|" \
