@@ -197,6 +197,8 @@ if need sweep || need mrt || need mlp; then
         --size 16 -o "$tmp/wg.csv" >/dev/null 2>&1
     "$bin" sweep --from gltf-specgloss --to gltf --random 12 --size 16 -o "$tmp/sm.csv" >/dev/null 2>&1
     cp "$tmp/wg.csv" "$out/sweep/ward_ggx.csv"
+    "$bin" sweep --from ward --to ggx --random 4 --size 16 --shard 0/1 -o "$tmp/shard.csv" >/dev/null 2>&1
+    cp "$tmp/shard.csv" "$out/sweep/shard_0_of_1.csv"
     cp "$tmp/sm.csv" "$out/sweep/specgloss_gltf.csv"
     for m in parametric svr mlp; do
         "$bin" learn "$tmp/wg.csv" --method "$m" -o "$out/mrt/ward_ggx_$m.mrt" >/dev/null 2>&1
