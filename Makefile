@@ -82,7 +82,15 @@ MODULE      := $(BUILD)/lib/matremap/libmatremap-oiio.so
 MODULE_SRC  := src/io/image_io_oiio.cpp src/status.c src/io/atomic_file.c
 MODULE_OBJ  := $(patsubst %,$(BUILD)/pic/%.o,$(basename $(MODULE_SRC)))
 
-LIB_C_SRC   := $(filter-out src/cli/%,$(wildcard src/*.c src/*/*.c)) $(wildcard nn/*.c gltf/*.c)
+# MPI is optional: `matremap sweep` under mpirun loads a module holding every MPI call (src/remap/sweep_mpi.c says
+# why), built only where pkg-config knows Open MPI's mpi-c (libopenmpi-dev); MPI=0 leaves it out. Nothing else
+# links MPI, so the library, the tool and the tests build and run without it.
+MPI         ?= 1
+MPI_PC      := $(if $(filter 1,$(MPI)),$(shell $(PKG_CONFIG) --exists mpi-c 2>/dev/null && echo mpi-c))
+MPI_MODULE  := $(if $(MPI_PC),$(BUILD)/lib/matremap/libmatremap-mpi.so)
+MPI_SRC     := src/remap/sweep_mpi_module.c
+
+LIB_C_SRC   := $(filter-out src/cli/% $(MPI_SRC),$(wildcard src/*.c src/*/*.c)) $(wildcard nn/*.c gltf/*.c)
 LIB_CXX_SRC := $(filter-out src/io/image_io_oiio.cpp,$(wildcard src/*/*.cpp)) $(wildcard gltf/*.cpp)
 CLI_SRC     := $(wildcard src/cli/*.c)
 TEST_SRC    := $(wildcard tests/test_*.c)
@@ -98,6 +106,11 @@ TOOL_LINKS := $(BUILD)/bin/spec2metal $(BUILD)/bin/metal2spec
 # (PREFIX/bin -> PREFIX/share/matremap); the build tree gets a copy in the same place, so every BUILD finds it.
 NETWORK   := $(BUILD)/share/matremap/spec2metal.mlp
 TESTS     := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
+# Fuzz targets (tests/fuzz/): linked into tests/test_fuzz_inputs for make check, and one libFuzzer binary each
+# for make fuzz. They reach the CLI's value parsers too, so they link the CLI's objects except main().
+FUZZ_NAMES  := gltf png jpeg exr hdr mlp mrt sweep cli_value obj
+FUZZ_OBJ    := $(patsubst %,$(BUILD)/obj/tests/fuzz/fuzz_%.o,$(FUZZ_NAMES) support)
+CLI_LIB_OBJ := $(filter-out $(BUILD)/obj/src/cli/main.o,$(CLI_OBJ))
 BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
 
 PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h src/render/render.h \
@@ -107,11 +120,12 @@ PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h 
                   src/learn/parametric.h src/learn/svr.h src/learn/sweep_table.h src/learn/learned.h \
                   gltf/mr_gltf.h gltf/mr_gltf_convert.h gltf/mr_gltf_scene.h
 
-.PHONY: all check asan demo bench analyses paper evaluation evaluation-gltf evaluation-hardcases evaluation-svbrdf \
+.PHONY: all check asan fuzz fuzz-targets demo bench \
+        analyses paper evaluation evaluation-gltf evaluation-hardcases evaluation-svbrdf \
         evaluation-viewers dataset train objectives deps install clean
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
-all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE)
+all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE) $(MPI_MODULE)
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
@@ -129,16 +143,28 @@ $(BUILD)/pic/%.o: %.cpp
 	@mkdir -p $(dir $@)
 	$(CXX) $(ALL_CXXFLAGS) -fPIC -fvisibility=hidden -MMD -MP -c $< -o $@
 
+# -z defs: every symbol the module needs is resolved at link time. Not in the fuzz build, where clang's sanitizer and
+# libFuzzer runtimes live in the executable that loads the module.
+MODULE_DEFS ?= -Wl,-z,defs
 $(MODULE): $(MODULE_OBJ)
 	@mkdir -p $(dir $@)
-	$(CXX) -shared $(ALL_LDFLAGS) -Wl,-Bsymbolic -Wl,-z,defs $^ $(shell $(PKG_CONFIG) --libs OpenImageIO 2>/dev/null) -o $@
+	$(CXX) -shared $(ALL_LDFLAGS) -Wl,-Bsymbolic $(MODULE_DEFS) $^ $(shell $(PKG_CONFIG) --libs OpenImageIO 2>/dev/null) -o $@
+
+# The MPI module: plain C against Open MPI's headers and library (what mpicc adds, taken from pkg-config, so that
+# CC and the sanitizers stay the project's).
+$(BUILD)/lib/matremap/libmatremap-mpi.so: $(MPI_SRC)
+	@mkdir -p $(dir $@)
+	$(CC) -D_POSIX_C_SOURCE=200809L -std=c11 $(WARN) $(SAN) $(CFLAGS) -fPIC -fvisibility=hidden -shared \
+	    $(shell $(PKG_CONFIG) --cflags mpi-c 2>/dev/null) $(LDFLAGS) -Wl,-z,defs $< \
+	    $(shell $(PKG_CONFIG) --libs mpi-c 2>/dev/null) -o $@
 
 # The module and data directories are compiled into oiio_module.o and cmd_workflow.o (the network); this stamp
 # changes (and so rebuilds them) when PREFIX does, e.g. for `make install PREFIX=...` after a plain `make`.
 $(BUILD)/module_dir.stamp: FORCE
 	@mkdir -p $(dir $@)
 	@echo '$(MODULE_DIR) $(DATA_DIR)' | cmp -s - $@ || echo '$(MODULE_DIR) $(DATA_DIR)' > $@
-$(BUILD)/obj/src/io/oiio_module.o $(BUILD)/obj/src/cli/cmd_workflow.o: $(BUILD)/module_dir.stamp
+$(BUILD)/obj/src/io/oiio_module.o $(BUILD)/obj/src/cli/cmd_workflow.o $(BUILD)/obj/src/remap/sweep_mpi.o: \
+    $(BUILD)/module_dir.stamp
 .PHONY: FORCE
 FORCE:
 
@@ -165,6 +191,10 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(LIB)
 	@mkdir -p $(dir $@)
 	$(LINK) $(ALL_LDFLAGS) $< $(LIB) $(ALL_LDLIBS) -o $@
 
+$(BUILD)/tests/test_fuzz_inputs: $(BUILD)/obj/tests/test_fuzz_inputs.o $(FUZZ_OBJ) $(CLI_LIB_OBJ) $(LIB)
+	@mkdir -p $(dir $@)
+	$(LINK) $(ALL_LDFLAGS) $^ $(ALL_LDLIBS) -o $@
+
 # headers_cpp.o only has to compile: every public header must be valid C++ as well as C.
 check: all $(TESTS) $(BUILD)/obj/tests/headers_cpp.o
 	scripts/run-tests.sh $(BUILD)
@@ -172,6 +202,29 @@ check: all $(TESTS) $(BUILD)/obj/tests/headers_cpp.o
 asan:
 	$(MAKE) BUILD=build/asan CFLAGS="-O1 -g -fno-omit-frame-pointer" CXXFLAGS="-O1 -g -fno-omit-frame-pointer" \
 	    SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" check
+
+# make fuzz: every libFuzzer target (tests/fuzz/, docs/reliability.md) built with clang, AddressSanitizer and
+# UndefinedBehaviorSanitizer into build/fuzz, then run one after another for FUZZ_SECONDS each (and at most
+# FUZZ_RUNS executions each, when given); FUZZ_TARGETS picks some (default all). Findings go to
+# build/fuzz/findings, every run's figures to build/fuzz/runs.tsv.
+FUZZ_SECONDS ?= 60
+FUZZ_RUNS    ?= 0
+FUZZ_TARGETS ?=
+FUZZ_FLAGS   := -O1 -g -fno-omit-frame-pointer
+fuzz: all
+	$(MAKE) BUILD=build/fuzz CC=clang CXX=clang++ CFLAGS="$(FUZZ_FLAGS)" CXXFLAGS="$(FUZZ_FLAGS)" MODULE_DEFS= \
+	    SAN="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined" fuzz-targets
+	scripts/fuzz.sh $(BUILD) build/fuzz $(FUZZ_SECONDS) $(FUZZ_RUNS) $(FUZZ_TARGETS)
+
+fuzz-targets: $(FUZZ_NAMES:%=$(BUILD)/bin/fuzz_%) $(MODULE)
+
+$(BUILD)/obj/tests/fuzz/libfuzzer_%.o: tests/fuzz/fuzz_%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -DMR_FUZZ_LIBFUZZER -MMD -MP -c $< -o $@
+
+$(BUILD)/bin/fuzz_%: $(BUILD)/obj/tests/fuzz/libfuzzer_%.o $(BUILD)/obj/tests/fuzz/fuzz_support.o $(CLI_LIB_OBJ) $(LIB)
+	@mkdir -p $(dir $@)
+	$(LINK) $(ALL_LDFLAGS) -fsanitize=fuzzer $^ $(ALL_LDLIBS) -o $@
 
 demo: all
 	scripts/demo.sh $(BUILD)
@@ -235,7 +288,7 @@ install: all
 	install -m 644 data/spec2metal.mlp $(DESTDIR)$(PREFIX)/share/matremap/
 	install -m 644 $(LIB) $(DESTDIR)$(PREFIX)/lib/
 	install -d $(DESTDIR)$(MODULE_DIR)
-	install -m 755 $(MODULE) $(DESTDIR)$(MODULE_DIR)/
+	install -m 755 $(MODULE) $(MPI_MODULE) $(DESTDIR)$(MODULE_DIR)/
 	for h in $(PUBLIC_HEADERS); do \
 	    d=$(DESTDIR)$(PREFIX)/include/matremap/$$(dirname $${h#src/}); install -d $$d; install -m 644 $$h $$d/; done
 	sed -e 's|@PREFIX@|$(PREFIX)|' -e "s|@VERSION@|$$(sed -n 's/^#define MR_VERSION_STRING \"\(.*\)\"/\1/p' src/matremap.h)|" \

@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # make bench: prints benchmark figures and writes them into docs/performance.md (between the bench:render,
-# bench:metrics, bench:remap, bench:direct, bench:workflow, bench:gltf and bench:report-accuracy markers) and
+# bench:metrics, bench:remap, bench:direct, bench:mpi, bench:workflow, bench:gltf and bench:report-accuracy markers) and
 # docs/rendering.md (bench:envlight, bench:mesh, bench:reflection). Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
-# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|png|gltf|remap|remap-processes|direct|learn]
+# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|png|gltf|remap|remap-processes|direct|learn|mpi]
 #   --only NAME runs one section and rewrites only its markers (the full run takes long; sections written as
 #   functions below can be run alone). From make: make bench BENCH_ARGS="--only report-accuracy".
 set -euo pipefail
@@ -693,6 +693,110 @@ PY
     fi
 }
 
+# Sweeps across processes (docs/performance.md, bench:mpi): one random sweep (ggx -> ward-balanced, default fit
+# scene) as one process with 1 thread, mpirun -np 1 and -np 2 with 1 thread per rank, and one process with 2
+# threads; whole commands (MPI's start included), wall and CPU seconds, medians of RUNS; the files checked to hold the
+# same rows. Then the cost model for a cluster: remaps per second on one core for the model pairs the project sweeps,
+# and what the sweep sizes the regressions need cost on C cores at the measured efficiency.
+bench_mpi() {
+    echo
+    echo "== sweeps across processes: mpirun -np 2 against one process, and the cost model for a cluster"
+    local out="$work/mpi.md" dir="$work/mpi" runs=3 n=400 m=60
+    [ "$quick" = --quick ] && runs=1 n=120 m=20
+    rm -rf "$dir" && mkdir -p "$dir"
+    if ! command -v mpirun >/dev/null 2>&1 || [ ! -f "$root/$build/lib/matremap/libmatremap-mpi.so" ]; then
+        echo "MPI section skipped: mpirun or the MPI module (libmatremap-mpi.so) was missing in this run." | tee "$out"
+        return 0
+    fi
+    local mpi=(mpirun --oversubscribe)
+    [ "$(id -u)" -eq 0 ] && mpi+=(--allow-run-as-root)
+    local sweep=(sweep --from ggx --to ward-balanced --random "$n" --seed 7)
+    local labels=() walls=() cpus=()
+    mpi_case() { # LABEL COMMAND...: median wall and CPU seconds of RUNS runs into a fresh file
+        local label=$1 w c ws=() cs=()
+        shift
+        for _ in $(seq "$runs"); do
+            rm -f "$dir/$label.csv"
+            read -r w c < <(times_of "$dir/$label.log" "$@" -o "$dir/$label.csv")
+            ws+=("$w") cs+=("$c")
+        done
+        labels+=("$label") walls+=("$(printf '%s\n' "${ws[@]}" | median)") cpus+=("$(printf '%s\n' "${cs[@]}" | median)")
+        echo "   $label: wall ${walls[-1]} s, CPU ${cpus[-1]} s ($(tail -n 1 "$dir/$label.log"))"
+    }
+    local load load_end
+    load=$(cut -d' ' -f1 /proc/loadavg)
+    mpi_case one "$bin" "${sweep[@]}" --threads 1
+    mpi_case np1 "${mpi[@]}" -np 1 "$bin" "${sweep[@]}" --threads 1
+    mpi_case np2 "${mpi[@]}" -np 2 "$bin" "${sweep[@]}"
+    mpi_case threads2 "$bin" "${sweep[@]}" --threads 2
+    load_end=$(cut -d' ' -f1 /proc/loadavg)
+    local same=yes
+    for l in np1 np2 threads2; do
+        diff <(grep -v '^# command:' "$dir/one.csv" | sed '/^#/!s/,[^,]*$//') \
+            <(grep -v '^# command:' "$dir/$l.csv" | sed '/^#/!s/,[^,]*$//') >/dev/null || same="no ($l differs)"
+    done
+    local speedup
+    speedup=$(awk -v a="${walls[0]}" -v b="${walls[2]}" 'BEGIN {printf "%.2f", a / b}')
+    {
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), load average $load before and $load_end after, niceness $(nice) (scheduler autogroup: $(cut -d' ' -f2- /proc/self/autogroup 2>/dev/null || echo none)), $(mpirun --version | head -n 1):"
+        echo "\`matremap ${sweep[*]}\` (default fit scene, 64²), whole commands (MPI's start included), medians of $runs runs."
+        echo "The four files hold the same rows in the same order (seconds and command line aside): $same."
+        echo
+        echo "| run | ranks × threads | wall s | CPU s | rows/s | speed-up over 1 × 1 |"
+        echo "|---|---|---:|---:|---:|---:|"
+        local names=("\`matremap sweep ... --threads 1\`" "\`mpirun -np 1 matremap sweep ... --threads 1\`"
+            "\`mpirun -np 2 matremap sweep ...\` (1 thread per rank: the default)" "\`matremap sweep ... --threads 2\`")
+        local shapes=("1 × 1" "1 × 1" "2 × 1" "1 × 2")
+        for i in 0 1 2 3; do
+            printf '| %s | %s | %.2f | %.2f | %.1f | %.2f× |\n' "${names[$i]}" "${shapes[$i]}" "${walls[$i]}" "${cpus[$i]}" \
+                "$(awk -v w="${walls[$i]}" -v n="$n" 'BEGIN {print n / w}')" \
+                "$(awk -v a="${walls[0]}" -v b="${walls[$i]}" 'BEGIN {print a / b}')"
+        done
+        echo
+        echo "Speed-up of 2 ranks over 1 (whole commands): **${speedup}×** (target ≥ 1.8×); the work MPI adds: CPU"
+        echo "$(awk -v a="${cpus[2]}" -v b="${cpus[0]}" 'BEGIN {printf "%.2f", a / b}')× that of one process. On a machine that other jobs share, the wall clock measures them too"
+        echo "(a load average above the core count means this process did not have its cores)."
+    } >"$out"
+
+    # The cost model: one core's rate per model pair (1 thread), from M random samples in the default fit scene and
+    # M/6 in the paper's (512², 64 times the pixels): remaps per CPU second, which other jobs on a shared machine
+    # inflate much less than the wall clock.
+    local pairs=("ward diffuse=0|ggx diffuse=0|the learned transforms' pair (docs/learn.md)"
+        "ggx|ward-balanced|this section's sweep" "as diffuse=0|ward trim=1|the paper's Appendix pair"
+        "ggx-metallic|ggx|the workflow pair (docs/workflow.md)" "gltf|blender-ward|glTF into Blender's Ward")
+    local efficiency big=$((m / 6))
+    efficiency=$(awk -v s="$speedup" 'BEGIN {e = s / 2; if (e > 1) e = 1; printf "%.2f", e}')
+    {
+        echo
+        echo "Remaps per second on one core (\`--threads 1\`, random samples, seed 3: $m in the default fit scene, 64², and"
+        echo "$big in the paper's, \`--size 512\`; samples per CPU second), and what sweeps cost on C cores at the efficiency"
+        echo "measured above (${efficiency} = speed-up / ranks): T = N / (rate × C × ${efficiency}), plus MPI's start."
+        echo
+        echo "| from → to | pair | remaps/s per core, 64² | renders per remap | remaps/s per core, 512² | 10,000 rows, 64², 2 cores | 10,000 rows, 512², 2 cores | 10,000 rows, 512², 64 cores | 100,000 rows, 512², 1,024 cores |"
+        echo "|---|---|---:|---:|---:|---:|---:|---:|---:|"
+    } >>"$out"
+    human() { awk -v t="$1" 'BEGIN { if (t < 120) printf "%.0f s", t; else if (t < 7200) printf "%.0f min", t / 60; else printf "%.1f h", t / 3600 }'; }
+    cost() { awk -v n="$1" -v r="$2" -v c="$3" -v e="$efficiency" 'BEGIN {print n / (r * c * e)}'; }
+    local entry from to what w c rate rate512 renders
+    for entry in "${pairs[@]}"; do
+        IFS='|' read -r from to what <<<"$entry"
+        rm -f "$dir/pair.csv" "$dir/pair512.csv"
+        # shellcheck disable=SC2086 # the model's values are separate words
+        read -r w c < <(times_of "$dir/pair.log" "$bin" sweep --from $from --to $to --random "$m" --seed 3 --threads 1 \
+            -o "$dir/pair.csv")
+        rate=$(awk -v n="$m" -v c="$c" 'BEGIN {printf "%.1f", n / c}')
+        renders=$(grep -v '^#' "$dir/pair.csv" | tail -n +2 | awk -F, '{ s += $(NF - 1) } END { printf "%.0f", s / NR }')
+        # shellcheck disable=SC2086
+        read -r w c < <(times_of "$dir/pair512.log" "$bin" sweep --from $from --to $to --random "$big" --seed 3 \
+            --threads 1 --size 512 -o "$dir/pair512.csv")
+        rate512=$(awk -v n="$big" -v c="$c" 'BEGIN {printf "%.2f", n / c}')
+        printf '| %s → %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' "$from" "$to" "$what" "$rate" "$renders" "$rate512" \
+            "$(human "$(cost 10000 "$rate" 2)")" "$(human "$(cost 10000 "$rate512" 2)")" \
+            "$(human "$(cost 10000 "$rate512" 64)")" "$(human "$(cost 100000 "$rate512" 1024)")" | tee -a "$out"
+    done
+    cat "$out"
+}
+
 if [ -n "$only" ]; then
     case $only in
         report-accuracy) bench_report_accuracy ;;
@@ -715,6 +819,10 @@ if [ -n "$only" ]; then
             bench_learn
             replace_section learn "$work/learn.md"
             ;;
+        mpi)
+            bench_mpi
+            replace_section mpi "$work/mpi.md"
+            ;;
         remap-processes)
             bench_remap_processes
             replace_section remap-processes "$work/remap_processes.md"
@@ -729,7 +837,7 @@ if [ -n "$only" ]; then
             replace_section workflow "$work/workflow.md"
             replace_section workflow-e2e "$work/e2e.md"
             ;;
-        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, png, gltf, remap, remap-processes, direct, learn)" >&2; exit 1 ;;
+        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, png, gltf, remap, remap-processes, direct, learn, mpi)" >&2; exit 1 ;;
     esac
     exit 0
 fi
@@ -747,6 +855,7 @@ bench_remap_table
 bench_remap_processes
 bench_direct
 bench_learn
+bench_mpi
 
 bench_workflow
 
@@ -867,6 +976,7 @@ if [ -f "$perf" ]; then
     replace_section remap-processes "$work/remap_processes.md"
     replace_section direct "$work/direct.md"
     replace_section learn "$work/learn.md"
+    replace_section mpi "$work/mpi.md"
     replace_section workflow "$work/workflow.md"
     replace_section workflow-e2e "$work/e2e.md"
     replace_section gltf "$work/gltf.md"

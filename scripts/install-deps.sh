@@ -19,6 +19,8 @@ packages=(
     python3            # tests/gltf_validate.sh compares glTF JSON (tests/lib/gltf_json_compare.py)
     locales            # tests/test_locale.c builds a decimal-comma locale (de_DE) with localedef from its data
     chromium           # tests/report_cli.sh opens a report page headless and checks its screenshot
+    clang libclang-rt-14-dev libomp-14-dev  # make fuzz: libFuzzer targets with ASan+UBSan (clang's OpenMP runtime)
+    openmpi-bin libopenmpi-dev  # optional: `mpirun -np N matremap sweep` (the MPI module; tests/sweep_mpi.sh)
 )
 # node + npm run the independent SSIM implementation (ssim.js) and the Khronos glTF validator in the tests;
 # the machine may already have a node of its own outside Debian's packages, which is fine.

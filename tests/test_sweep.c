@@ -6,9 +6,10 @@
  */
 #include <locale.h>
 #include <omp.h>
+#include <pthread.h>
 #include <signal.h>
-#include <sys/resource.h>
 #include <stdint.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include "harness.h"
@@ -18,8 +19,11 @@
 static char tmpdir[64];
 
 static void cleanup(void) {
-    const char *names[] = {"threads1.csv", "threads2.csv", "mismatch.csv", "reference.csv", "torn.csv",
-                           "progress.csv", "limit_ref.csv", "limit.csv"};
+    const char *names[] = {"threads1.csv", "threads2.csv",    "mismatch.csv",    "reference.csv",  "torn.csv",
+                           "progress.csv", "limit_ref.csv",   "limit.csv",       "ranks_ref.csv",  "ranks2.csv",
+                           "ranks3.csv",   "refused.csv",     "shard_ref.csv",   "shard0.csv",     "shard1.csv",
+                           "shard2.csv",   "shard1_copy.csv", "other_seed1.csv", "half1.csv",      "other_to1.csv",
+                           "merged.csv",   "bad_shard.csv",   "insane.csv",      "insane_ref.csv", "unfinished.csv"};
     char path[256];
     for (size_t k = 0; k < sizeof names / sizeof names[0]; k++) {
         snprintf(path, sizeof path, "%s/%s", tmpdir, names[k]);
@@ -29,9 +33,9 @@ static void cleanup(void) {
 }
 
 static const char *tmp_path(const char *name) {
-    static char path[4][256];
+    static char path[32][256]; /* a ring: a test holds up to 32 at once */
     static int next;
-    char *p = path[next++ % 4];
+    char *p = path[next++ % 32];
     if (tmpdir[0] == '\0') {
         strcpy(tmpdir, "/tmp/mr_test_sweep.XXXXXX");
         if (mkdtemp(tmpdir) == NULL)
@@ -48,6 +52,13 @@ static void write_text(const char *path, const char *text, size_t length) {
     if (f == NULL) return;
     fwrite(text, 1, length, f);
     fclose(f);
+}
+
+static int same_bytes(const char *path, const char *text) {
+    char *now = mr_test_read_file(path, NULL);
+    int same = now != NULL && text != NULL && strcmp(now, text) == 0;
+    free(now);
+    return same;
 }
 
 /* The file without its "# command:" line and without each row's last column (seconds, the only value that
@@ -558,6 +569,526 @@ MR_TEST(progress_is_reported_once_per_row_in_order) {
     unlink(path);
 }
 
+/* ---- several ranks in one process ---------------------------------------------------------------------------
+ * A transport over threads with what MPI gives the sweep (mr_sweep_comm: a broadcast from rank 0, buffered
+ * messages that arrive in order per pair of ranks), so that the protocol between ranks is tested where Open MPI
+ * is not installed; tests/sweep_mpi.sh runs the real thing under mpirun. */
+
+#define FAKE_MAX_RANKS 4
+
+typedef struct fake_message {
+    struct fake_message *next;
+    int from, tag;
+    size_t bytes;
+    unsigned char data[MR_SWEEP_MESSAGE_MAX];
+} fake_message;
+
+typedef struct fake_net {
+    pthread_mutex_t lock;
+    pthread_cond_t changed;
+    int size;
+    fake_message *head[FAKE_MAX_RANKS], *tail[FAKE_MAX_RANKS];
+    const void *broadcast;
+    size_t broadcast_bytes;
+    long broadcast_round;
+    int broadcast_unread;
+    long messages; /* sent, all ranks */
+} fake_net;
+
+typedef struct fake_rank {
+    fake_net *net;
+    int rank;
+    long round; /* the last broadcast this rank read */
+    mr_sweep_comm comm;
+    mr_sweep_spec spec;
+    const char *path;
+    mr_sweep_options opts;
+    mr_sweep_summary summary;
+    mr_status status;
+    char message[1024];
+} fake_rank;
+
+static mr_status fake_broadcast(void *user, void *buf, size_t bytes) {
+    fake_rank *r = user;
+    fake_net *n = r->net;
+    mr_status status = MR_OK;
+    pthread_mutex_lock(&n->lock);
+    if (r->rank == 0) {
+        n->broadcast = buf;
+        n->broadcast_bytes = bytes;
+        n->broadcast_round++;
+        n->broadcast_unread = n->size - 1;
+        pthread_cond_broadcast(&n->changed);
+        while (n->broadcast_unread > 0)
+            pthread_cond_wait(&n->changed, &n->lock); /* buf stays valid till then */
+    } else {
+        while (n->broadcast_round <= r->round)
+            pthread_cond_wait(&n->changed, &n->lock);
+        if (bytes != n->broadcast_bytes)
+            status = MR_ERR_EXTERNAL; /* a collective with mismatched sizes */
+        memcpy(buf, n->broadcast, bytes < n->broadcast_bytes ? bytes : n->broadcast_bytes);
+        r->round = n->broadcast_round;
+        n->broadcast_unread--;
+        pthread_cond_broadcast(&n->changed);
+    }
+    pthread_mutex_unlock(&n->lock);
+    return status;
+}
+
+static mr_status fake_send(void *user, int to, int tag, const void *buf, size_t bytes) {
+    fake_rank *r = user;
+    fake_net *n = r->net;
+    if (to < 0 || to >= n->size || bytes > MR_SWEEP_MESSAGE_MAX)
+        return MR_ERR_INVALID_ARG;
+    fake_message *m = calloc(1, sizeof *m);
+    if (m == NULL)
+        return MR_ERR_NOMEM;
+    m->from = r->rank;
+    m->tag = tag;
+    m->bytes = bytes;
+    memcpy(m->data, buf, bytes);
+    pthread_mutex_lock(&n->lock);
+    if (n->tail[to] != NULL)
+        n->tail[to]->next = m;
+    else
+        n->head[to] = m;
+    n->tail[to] = m;
+    n->messages++;
+    pthread_cond_broadcast(&n->changed);
+    pthread_mutex_unlock(&n->lock);
+    return MR_OK;
+}
+
+static mr_status fake_receive(void *user, int wait, int *from, int *tag, void *buf, size_t *bytes, int *got) {
+    fake_rank *r = user;
+    fake_net *n = r->net;
+    pthread_mutex_lock(&n->lock);
+    while (wait && n->head[r->rank] == NULL)
+        pthread_cond_wait(&n->changed, &n->lock);
+    fake_message *m = n->head[r->rank];
+    if (m != NULL) {
+        n->head[r->rank] = m->next;
+        if (m->next == NULL)
+            n->tail[r->rank] = NULL;
+    }
+    pthread_mutex_unlock(&n->lock);
+    *got = m != NULL;
+    if (m != NULL) {
+        *from = m->from;
+        *tag = m->tag;
+        *bytes = m->bytes;
+        memcpy(buf, m->data, m->bytes);
+        free(m);
+    }
+    return MR_OK;
+}
+
+static mr_status fake_flush(void *user) {
+    (void)user;
+    return MR_OK;
+}
+
+static void *fake_rank_main(void *arg) {
+    fake_rank *r = arg;
+    r->status = mr_sweep_run(&r->spec, r->path, &r->opts, &r->summary);
+    snprintf(r->message, sizeof r->message, "%s", r->status == MR_OK ? "" : mr_last_error());
+    return NULL;
+}
+
+/* Run the sweep `specs[k]` on `size` ranks, rank k with threads[k] threads, each in a thread of its own. Every
+ * rank's outcome is in ranks[k]. Returns the number of messages left undelivered (0 when the protocol drained). */
+static long run_ranks(int size, const mr_sweep_spec *specs, const int *threads, const char *path, int resume,
+                      fake_rank *ranks) {
+    fake_net net;
+    memset(&net, 0, sizeof net);
+    pthread_mutex_init(&net.lock, NULL);
+    pthread_cond_init(&net.changed, NULL);
+    net.size = size;
+    pthread_t tids[FAKE_MAX_RANKS];
+    for (int k = 0; k < size; k++) {
+        fake_rank *r = &ranks[k];
+        memset(r, 0, sizeof *r);
+        r->net = &net;
+        r->rank = k;
+        r->comm.rank = k;
+        r->comm.size = size;
+        r->comm.user = r;
+        r->comm.broadcast = fake_broadcast;
+        r->comm.send = fake_send;
+        r->comm.receive = fake_receive;
+        r->comm.flush = fake_flush;
+        r->spec = specs[k];
+        r->path = path;
+        r->opts.resume = resume;
+        r->opts.threads = threads[k];
+        r->opts.command_line = "test_sweep ranks";
+        r->opts.comm = &r->comm;
+    }
+    for (int k = 0; k < size; k++)
+        pthread_create(&tids[k], NULL, fake_rank_main, &ranks[k]);
+    for (int k = 0; k < size; k++)
+        pthread_join(tids[k], NULL);
+    long left = 0;
+    for (int k = 0; k < size; k++)
+        while (net.head[k] != NULL) {
+            fake_message *m = net.head[k];
+            net.head[k] = m->next;
+            free(m);
+            left++;
+        }
+    pthread_mutex_destroy(&net.lock);
+    pthread_cond_destroy(&net.changed);
+    return left;
+}
+
+static int same_rows(const char *path_a, const char *path_b) {
+    char *a = mr_test_read_file(path_a, NULL), *b = mr_test_read_file(path_b, NULL);
+    int same = 0;
+    if (a != NULL && b != NULL) {
+        char *ca = comparable(a), *cb = comparable(b);
+        same = strcmp(ca, cb) == 0;
+        if (!same)
+            fprintf(stderr, "      '%s' and '%s' differ:\n%s\n---\n%s\n", path_a, path_b, ca, cb);
+        free(ca);
+        free(cb);
+    }
+    free(a);
+    free(b);
+    return same;
+}
+
+MR_TEST(two_and_three_ranks_write_the_single_process_file_and_resume_it) {
+    mr_sweep_spec spec = random_spec(11, 13, 16);
+    const char *reference = tmp_path("ranks_ref.csv"), *two = tmp_path("ranks2.csv"), *three = tmp_path("ranks3.csv");
+    unlink(reference);
+    unlink(two);
+    unlink(three);
+    MR_CHECK_OK(run(&spec, reference, 0, 1, NULL));
+
+    // Two ranks, one thread each, from nothing.
+    mr_sweep_spec specs[FAKE_MAX_RANKS] = {spec, spec, spec};
+    fake_rank ranks[FAKE_MAX_RANKS];
+    int ones[FAKE_MAX_RANKS] = {1, 1, 1};
+    MR_CHECK(run_ranks(2, specs, ones, two, 0, ranks) == 0);
+    for (int k = 0; k < 2; k++)
+        MR_CHECK_MSG(ranks[k].status == MR_OK, "rank %d: %s", k, ranks[k].message);
+    MR_CHECK(ranks[0].summary.computed == 11 && ranks[0].summary.processes == 2); /* sorted unless in order */
+    MR_CHECK(ranks[0].summary.threads_total == 2 && ranks[1].summary.computed == 5); /* rank 1: samples 1, 3, .. 9 */
+    MR_CHECK(same_rows(reference, two));
+
+    // Three ranks (1, 2 and 1 threads) resume a file a killed run left: rows 7 and 2, and a torn row 4.
+    char *full = mr_test_read_file(reference, NULL);
+    MR_CHECK(full != NULL);
+    if (full == NULL)
+        return;
+    const char *rows = strstr(full, "\n0,") + 1, *r7 = strstr(full, "\n7,") + 1, *r2 = strstr(full, "\n2,") + 1;
+    const char *r4 = strstr(full, "\n4,") + 1;
+    char *partial = malloc(strlen(full) + 1);
+    size_t n = (size_t)(rows - full), l7 = (size_t)(strchr(r7, '\n') + 1 - r7),
+           l2 = (size_t)(strchr(r2, '\n') + 1 - r2);
+    memcpy(partial, full, n);
+    memcpy(partial + n, r7, l7);
+    memcpy(partial + n + l7, r2, l2);
+    memcpy(partial + n + l7 + l2, r4, 20);
+    write_text(three, partial, n + l7 + l2 + 20);
+    int mixed[FAKE_MAX_RANKS] = {1, 2, 1};
+    MR_CHECK(run_ranks(3, specs, mixed, three, 1, ranks) == 0);
+    for (int k = 0; k < 3; k++)
+        MR_CHECK_MSG(ranks[k].status == MR_OK, "rank %d: %s", k, ranks[k].message);
+    MR_CHECK(ranks[0].summary.already_done == 2 && ranks[0].summary.computed == 9 &&
+             ranks[0].summary.truncated_bytes == 20 && ranks[0].summary.threads_total == 4);
+    MR_CHECK(ranks[0].summary.computed == ranks[0].summary.outcomes[0] + ranks[0].summary.outcomes[1] +
+                                              ranks[0].summary.outcomes[2] + ranks[0].summary.outcomes[3]);
+    MR_CHECK(same_rows(reference, three));
+    // The resumed file kept its own header (the first run's command line) and is sorted.
+    char *resumed = mr_test_read_file(three, NULL);
+    MR_CHECK(resumed != NULL && strncmp(resumed, full, (size_t)(rows - full)) == 0);
+    free(resumed);
+
+    // A finished file resumed by two ranks: nothing to do, not a byte changed.
+    char *before = mr_test_read_file(three, NULL);
+    MR_CHECK(run_ranks(2, specs, ones, three, 1, ranks) == 0);
+    MR_CHECK(ranks[0].status == MR_OK && ranks[1].status == MR_OK && ranks[0].summary.computed == 0);
+    MR_CHECK(same_bytes(three, before));
+    free(before);
+    free(partial);
+    free(full);
+}
+
+MR_TEST(a_rank_running_another_sweep_is_refused_before_the_file_is_made) {
+    mr_sweep_spec spec = random_spec(4, 5, 16), other = spec;
+    other.seed = 6;
+    const char *path = tmp_path("refused.csv");
+    unlink(path);
+    mr_sweep_spec specs[FAKE_MAX_RANKS] = {spec, other};
+    fake_rank ranks[FAKE_MAX_RANKS];
+    int ones[FAKE_MAX_RANKS] = {1, 1};
+    MR_CHECK(run_ranks(2, specs, ones, path, 0, ranks) == 0);
+    MR_CHECK_MSG(ranks[0].status == MR_ERR_INVALID_ARG && strstr(ranks[0].message, "rank 1 runs another sweep"), "%s",
+                 ranks[0].message);
+    MR_CHECK(ranks[1].status == MR_ERR_INVALID_ARG && strstr(ranks[1].message, "rank 0 did not start"));
+    MR_CHECK(access(path, F_OK) != 0); /* nothing written */
+
+    // Rank 0's own refusal (the file exists, no resume) reaches every rank with its status.
+    MR_CHECK_OK(run(&spec, path, 0, 1, NULL));
+    char *before = mr_test_read_file(path, NULL);
+    specs[1] = spec;
+    MR_CHECK(run_ranks(2, specs, ones, path, 0, ranks) == 0);
+    MR_CHECK(ranks[0].status == MR_ERR_INVALID_ARG && strstr(ranks[0].message, "already exists"));
+    MR_CHECK(ranks[1].status == MR_ERR_INVALID_ARG);
+    MR_CHECK(same_bytes(path, before));
+    free(before);
+}
+
+static mr_status run_shard(const mr_sweep_spec *spec, const char *path, long k, long n, int resume) {
+    mr_sweep_options o = {0};
+    o.resume = resume;
+    o.threads = 2;
+    o.shard_index = k;
+    o.shard_count = n;
+    o.command_line = "test_sweep shard";
+    return mr_sweep_run(spec, path, &o, NULL);
+}
+
+MR_TEST(shards_merge_into_the_single_process_file) {
+    mr_sweep_spec spec = random_spec(10, 21, 16);
+    const char *reference = tmp_path("shard_ref.csv"), *merged = tmp_path("merged.csv");
+    const char *shard[3] = {tmp_path("shard0.csv"), tmp_path("shard1.csv"), tmp_path("shard2.csv")};
+    unlink(reference);
+    unlink(merged);
+    MR_CHECK_OK(run(&spec, reference, 0, 1, NULL));
+    for (int k = 0; k < 3; k++) {
+        unlink(shard[k]);
+        mr_sweep_options o = {0};
+        o.threads = 2;
+        o.shard_index = k;
+        o.shard_count = 3;
+        o.command_line = "test_sweep shard";
+        mr_sweep_summary s;
+        MR_CHECK_OK(mr_sweep_run(&spec, shard[k], &o, &s));
+        MR_CHECK(s.total == 10 && s.file_total == (k == 0 ? 4 : 3) && s.computed == s.file_total);
+    }
+    char *text = mr_test_read_file(shard[1], NULL);
+    MR_CHECK(text != NULL && strstr(text, "# samples: 10\n# shard: 1/3\n# command: test_sweep shard\n") != NULL);
+    MR_CHECK(text != NULL && strstr(text, "\n1,") != NULL && strstr(text, "\n4,") != NULL && !strstr(text, "\n2,"));
+    free(text);
+    // A shard resumes as a shard: finished, nothing to do; as another shard, refused naming the line.
+    MR_CHECK_OK(run_shard(&spec, shard[1], 1, 3, 1));
+    MR_CHECK(run_shard(&spec, shard[1], 2, 3, 1) == MR_ERR_INVALID_ARG && strstr(mr_last_error(), "line 8 is '# "
+                                                                                                  "shard: 1/3'"));
+    MR_CHECK(run_shard(&spec, shard[1], 0, 0, 1) == MR_ERR_INVALID_ARG);
+    MR_CHECK(run_shard(&spec, shard[1], 3, 3, 1) == MR_ERR_INVALID_ARG && strstr(mr_last_error(), "0 <= K < N"));
+    MR_CHECK(run_shard(&spec, shard[1], 0, 11, 1) == MR_ERR_INVALID_ARG && strstr(mr_last_error(), "empty"));
+
+    const char *order[3] = {shard[2], shard[0], shard[1]}; /* any order */
+    mr_sweep_merge_summary ms;
+    MR_CHECK_OK(mr_sweep_merge(order, 3, merged, "test_sweep merge", &ms));
+    MR_CHECK(ms.total == 10 && ms.shards == 3);
+    MR_CHECK(same_rows(reference, merged));
+    text = mr_test_read_file(merged, NULL);
+    MR_CHECK(text != NULL && strstr(text, "# shard:") == NULL && strstr(text, "# command: test_sweep merge\n"));
+    free(text);
+    // The merged file is a finished sweep: resuming it does nothing.
+    mr_sweep_summary s;
+    MR_CHECK_OK(run(&spec, merged, 1, 1, &s));
+    MR_CHECK(s.computed == 0 && s.already_done == 10);
+    // A merged file is never overwritten.
+    MR_CHECK(mr_sweep_merge(order, 3, merged, NULL, NULL) == MR_ERR_INVALID_ARG &&
+             strstr(mr_last_error(), "already exists"));
+    // One shard of one is the whole sweep.
+    mr_sweep_spec small = random_spec(2, 3, 16);
+    unlink(shard[0]);
+    unlink(merged);
+    MR_CHECK_OK(run_shard(&small, shard[0], 0, 1, 0));
+    MR_CHECK_OK(mr_sweep_merge(shard, 1, merged, "one", &ms));
+    MR_CHECK(ms.total == 2 && ms.shards == 1);
+    unlink(merged);
+}
+
+/* mr_sweep_merge must fail with `status` and a message holding both fragments, and write nothing. */
+static int merge_fails(const char *const *paths, int count, mr_status status, const char *a, const char *b) {
+    const char *merged = tmp_path("merged.csv");
+    unlink(merged);
+    mr_status got = mr_sweep_merge(paths, count, merged, NULL, NULL);
+    int ok = got == status && strstr(mr_last_error(), a) != NULL && (b == NULL || strstr(mr_last_error(), b));
+    if (!ok)
+        fprintf(stderr, "      %s: %s\n", mr_status_str(got), mr_last_error());
+    return ok && access(merged, F_OK) != 0;
+}
+
+MR_TEST(merge_refuses_shards_that_do_not_belong_together) {
+    mr_sweep_spec spec = random_spec(6, 31, 16);
+    const char *s0 = tmp_path("shard0.csv"), *s1 = tmp_path("shard1.csv"), *s2 = tmp_path("shard2.csv");
+    const char *copy = tmp_path("shard1_copy.csv"), *seed1 = tmp_path("other_seed1.csv");
+    const char *half1 = tmp_path("half1.csv"), *to1 = tmp_path("other_to1.csv"), *bad = tmp_path("bad_shard.csv");
+    const char *whole = tmp_path("shard_ref.csv");
+    const char *all[] = {s0, s1, s2, copy, seed1, half1, to1, bad, whole};
+    for (size_t k = 0; k < sizeof all / sizeof all[0]; k++)
+        unlink(all[k]);
+    MR_CHECK_OK(run_shard(&spec, s0, 0, 3, 0));
+    MR_CHECK_OK(run_shard(&spec, s1, 1, 3, 0));
+    MR_CHECK_OK(run_shard(&spec, s2, 2, 3, 0));
+    char *text1 = mr_test_read_file(s1, NULL);
+    write_text(copy, text1, strlen(text1));
+    mr_sweep_spec other = spec;
+    other.seed = 32;
+    MR_CHECK_OK(run_shard(&other, seed1, 1, 3, 0));
+    MR_CHECK_OK(run_shard(&spec, half1, 1, 2, 0));
+    other = spec;
+    other.target = mr_brdf_find("ward");
+    mr_brdf_default_values(other.target, other.target_values);
+    MR_CHECK_OK(run_shard(&other, to1, 1, 3, 0));
+    MR_CHECK_OK(run(&spec, whole, 0, 1, NULL));
+
+    const char *missing[] = {s2, s0};
+    MR_CHECK(merge_fails(missing, 2, MR_ERR_INVALID_ARG, "missing: 1/3", NULL));
+    const char *twice[] = {s0, s1, copy, s2};
+    MR_CHECK(merge_fails(twice, 4, MR_ERR_INVALID_ARG, "both shard 1/3", copy));
+    const char *same[] = {s0, s1, s1};
+    MR_CHECK(merge_fails(same, 3, MR_ERR_INVALID_ARG, "are the same file", NULL));
+    const char *seeds[] = {s0, seed1, s2};
+    MR_CHECK(merge_fails(seeds, 3, MR_ERR_INVALID_ARG, "from different sweeps", "# sampling: random=6 seed=32"));
+    const char *models[] = {s0, to1, s2};
+    MR_CHECK(merge_fails(models, 3, MR_ERR_INVALID_ARG, "from different sweeps", "'# to: ward "));
+    const char *halves[] = {s0, half1, s2};
+    MR_CHECK(merge_fails(halves, 3, MR_ERR_INVALID_ARG, "split the sweep differently", "1/2"));
+    const char *whole_file[] = {whole};
+    MR_CHECK(merge_fails(whole_file, 1, MR_ERR_FORMAT, "is a whole sweep, not a shard", NULL));
+    const char *absent[] = {s0, tmp_path("no_such_shard.csv"), s2};
+    MR_CHECK(merge_fails(absent, 3, MR_ERR_INVALID_ARG, "no_such_shard.csv", "cannot open"));
+
+    // Shards that are unfinished or corrupt: a missing last row, a torn one, an edited value, another version.
+    const char *with_bad[] = {s0, bad, s2};
+    size_t len1 = strlen(text1);
+    const char *last = text1 + len1 - 1;
+    while (last > text1 && last[-1] != '\n')
+        last--;
+    write_text(bad, text1, (size_t)(last - text1));
+    MR_CHECK(merge_fails(with_bad, 3, MR_ERR_INVALID_ARG, "ends after 1 of its 2 rows", "--resume"));
+    write_text(bad, text1, len1 - 1);
+    MR_CHECK(merge_fails(with_bad, 3, MR_ERR_INVALID_ARG, "line 12 is torn", NULL));
+    char *edited = strdup(text1);
+    char *row = strstr(edited, "\n1,") + 1;
+    char *col = row;
+    for (int c = 0; c < 8; c++)
+        col = strchr(col, ',') + 1; /* column 9: to_diffuse_r */
+    char *end = strchr(col, ',');
+    char rebuilt[8192];
+    snprintf(rebuilt, sizeof rebuilt, "%.*s-0.5%s", (int)(col - edited), edited, end);
+    write_text(bad, rebuilt, strlen(rebuilt));
+    MR_CHECK(merge_fails(with_bad, 3, MR_ERR_FORMAT, "bad_shard.csv': line 11: column 9 (to_diffuse_r)",
+                         "outside diffuse's range"));
+    snprintf(rebuilt, sizeof rebuilt, "# matremap 0.0.1 sweep\n%s", strchr(text1, '\n') + 1);
+    write_text(bad, rebuilt, strlen(rebuilt));
+    MR_CHECK(merge_fails(with_bad, 3, MR_ERR_FORMAT, "line 1 is '# matremap 0.0.1 sweep'", "another matremap"));
+    free(edited);
+    free(text1);
+
+    // A merge never replaces the output, and an output that is a shard is refused the same way.
+    const char *good[] = {s0, s1, s2};
+    char *before = mr_test_read_file(s1, NULL);
+    MR_CHECK(mr_sweep_merge(good, 3, s1, NULL, NULL) == MR_ERR_INVALID_ARG && same_bytes(s1, before));
+    free(before);
+}
+
+/* A copy of `text` with field `column` (0-based) of the row of sample `index` replaced by `value`. */
+static char *replace_field(const char *text, long index, int column, const char *value) {
+    char want[32];
+    snprintf(want, sizeof want, "\n%ld,", index);
+    const char *row = strstr(text, want) + 1, *at = row;
+    for (int c = 0; c < column; c++)
+        at = strchr(at, ',') + 1;
+    const char *end = at + strcspn(at, ",\n");
+    char *out = malloc(strlen(text) + strlen(value) + 1);
+    sprintf(out, "%.*s%s%s", (int)(at - text), text, value, end);
+    return out;
+}
+
+MR_TEST(resume_refuses_rows_that_are_not_sane_naming_line_and_column) {
+    mr_sweep_spec spec = random_spec(4, 5, 16);
+    const char *reference = tmp_path("insane_ref.csv"), *path = tmp_path("insane.csv");
+    unlink(reference);
+    MR_CHECK_OK(run(&spec, reference, 0, 1, NULL));
+    char *full = mr_test_read_file(reference, NULL);
+    if (full == NULL) {
+        MR_CHECK(full != NULL);
+        return;
+    }
+    // Columns: 1 index, 2 alpha, 3-5 f0, 6-8 diffuse, 9-11 to_diffuse, 12-14 to_specular, 15 to_alpha,
+    // 16 to_trim, 17 rmse, 18 relative_rmse, 19 ssim, 20 outcome, 21 renders, 22 seconds. Sample 1 is line 11.
+    struct {
+        int column; /* 0-based field */
+        const char *value, *message;
+    } cases[] = {
+        {8, "-0.5", "line 11: column 9 (to_diffuse_r): -0.5 is outside diffuse's range [0, 1]"},
+        {11, "1e300", "line 11: column 12 (to_specular_r): 1.0000000000000001e+300 is outside"},
+        {14, "inf", "line 11: column 15 (to_alpha): inf is not a finite number"},
+        {1, "nan", "line 11: column 2 (alpha): nan is not a finite number"},
+        {3, "-inf", "line 11: column 4 (f0_g): -inf is not a finite number"},
+        {15, "0.5", "line 11: column 16 (to_trim): 0.5 is not an integer (trim is a switch"},
+        {16, "nan", "line 11: column 17 (rmse): nan is not a finite number >= 0"},
+        {16, "-1", "line 11: column 17 (rmse): -1 is not"},
+        {17, "nan", "line 11: column 18 (relative_rmse): nan is not a number >= 0 (or inf)"},
+        {18, "1.5", "line 11: column 19 (ssim): 1.5 is not a number in [-1, 1]"},
+        {21, "inf", "line 11: column 22 (seconds): inf is not a finite number >= 0"},
+        {20, "-3", "line 11: column 21: '-3' is not a valid value"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        char *edited = replace_field(full, 1, cases[k].column, cases[k].value);
+        write_text(path, edited, strlen(edited));
+        mr_sweep_summary s;
+        mr_status status = run(&spec, path, 1, 1, &s);
+        MR_CHECK_MSG(status == MR_ERR_FORMAT && strstr(mr_last_error(), "sweep file '") != NULL &&
+                         strstr(mr_last_error(), "insane.csv': ") != NULL &&
+                         strstr(mr_last_error(), cases[k].message) != NULL,
+                     "%s=%s: %s: %s", cases[k].message, cases[k].value, mr_status_str(status), mr_last_error());
+        MR_CHECK_MSG(same_bytes(path, edited), "the refused file was changed (%s)", cases[k].value);
+        free(edited);
+    }
+    // relative_rmse = inf is what a black source gives: a sane row.
+    char *black = replace_field(full, 1, 17, "inf");
+    write_text(path, black, strlen(black));
+    MR_CHECK_OK(run(&spec, path, 1, 1, NULL));
+    free(black);
+    // The same check as a library call.
+    mr_sweep_row row;
+    const char *line = strstr(full, "\n2,") + 1;
+    MR_CHECK_OK(mr_sweep_parse_row(&spec, line, (size_t)(strchr(line, '\n') + 1 - line), &row));
+    MR_CHECK_OK(mr_sweep_check_row(&spec, &row));
+    row.target[0] = -1e-3;
+    MR_CHECK(mr_sweep_check_row(&spec, &row) == MR_ERR_FORMAT && strstr(mr_last_error(), "column 9 (to_diffuse_r)"));
+    free(full);
+}
+
+MR_TEST(a_torn_last_row_is_never_counted_even_when_only_its_line_end_is_missing) {
+    mr_sweep_spec spec = random_spec(4, 5, 16);
+    const char *reference = tmp_path("insane_ref.csv"), *path = tmp_path("unfinished.csv");
+    char *full = mr_test_read_file(reference, NULL);
+    if (full == NULL) { /* the test above made it; run alone, make it */
+        MR_CHECK_OK(run(&spec, reference, 0, 1, NULL));
+        full = mr_test_read_file(reference, NULL);
+    }
+    MR_CHECK(full != NULL);
+    if (full == NULL)
+        return;
+    size_t len = strlen(full);
+    write_text(path, full, len - 1); /* row 3 complete but for its '\n' */
+    mr_sweep_summary s;
+    MR_CHECK_OK(run(&spec, path, 1, 1, &s));
+    const char *row3 = strstr(full, "\n3,") + 1;
+    MR_CHECK(s.already_done == 3 && s.computed == 1 && s.truncated_bytes == (long)(full + len - 1 - row3));
+    MR_CHECK(same_rows(reference, path));
+    // A torn line that holds garbage (half a number, a NaN) is cut the same way: it was never a row.
+    char torn[8192];
+    snprintf(torn, sizeof torn, "%.*s3,nan,1e30", (int)(row3 - full), full);
+    write_text(path, torn, strlen(torn));
+    MR_CHECK_OK(run(&spec, path, 1, 1, &s));
+    MR_CHECK_MSG(s.already_done == 3 && s.computed == 1 && s.truncated_bytes == 10, "%ld %ld %ld", s.already_done,
+                 s.computed, s.truncated_bytes);
+    MR_CHECK(same_rows(reference, path));
+    free(full);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(grid_is_cartesian_first_axis_slowest_with_exact_endpoints),
              MR_TEST_ENTRY(grid_log_spacing_is_geometric), MR_TEST_ENTRY(grid_errors_name_the_bad_value),
              MR_TEST_ENTRY(random_samples_depend_only_on_seed_and_index_and_stay_in_bounds),
@@ -565,4 +1096,10 @@ MR_TEST_MAIN(MR_TEST_ENTRY(grid_is_cartesian_first_axis_slowest_with_exact_endpo
              MR_TEST_ENTRY(an_existing_file_is_never_overwritten_and_a_mismatching_one_never_touched),
              MR_TEST_ENTRY(resume_cuts_a_torn_line_and_ends_with_the_uninterrupted_file),
              MR_TEST_ENTRY(a_full_disk_leaves_whole_rows_and_the_sweep_resumes),
-             MR_TEST_ENTRY(progress_is_reported_once_per_row_in_order))
+             MR_TEST_ENTRY(progress_is_reported_once_per_row_in_order),
+             MR_TEST_ENTRY(two_and_three_ranks_write_the_single_process_file_and_resume_it),
+             MR_TEST_ENTRY(a_rank_running_another_sweep_is_refused_before_the_file_is_made),
+             MR_TEST_ENTRY(shards_merge_into_the_single_process_file),
+             MR_TEST_ENTRY(merge_refuses_shards_that_do_not_belong_together),
+             MR_TEST_ENTRY(resume_refuses_rows_that_are_not_sane_naming_line_and_column),
+             MR_TEST_ENTRY(a_torn_last_row_is_never_counted_even_when_only_its_line_end_is_missing))

@@ -23,6 +23,20 @@ expect "train: missing file" 2 "nope.csv" -- "$bin" train "$tmp/nope.csv" -o "$t
 expect "train: a sweep into another workflow" 2 "to_albedo" -- "$bin" train "$tmp/ward.csv" -o "$tmp/x.mlp"
 head -c 2000 "$tmp/on.csv" > "$tmp/torn.csv"
 expect "train: a torn file names its line" 2 "torn.csv:[0-9]+" -- "$bin" train "$tmp/torn.csv" -o "$tmp/x.mlp"
+# Every outcome a sweep writes is known to the reader: an under-resolved row is a pair like the others (it was once
+# "unknown outcome", which stopped train on any real sweep holding one).
+python3 - "$tmp/on.csv" "$tmp/under.csv" <<'PY'
+import sys
+lines = open(sys.argv[1]).read().split("\n")
+header = next(i for i, l in enumerate(lines) if l and not l.startswith("#"))
+column = lines[header].split(",").index("outcome")
+row = lines[header + 1].split(",")
+row[column] = "under-resolved"
+lines[header + 1] = ",".join(row)
+open(sys.argv[2], "w").write("\n".join(lines))
+PY
+expect "train: an under-resolved row is read" 0 "validation loss" -- \
+    "$bin" train "$tmp/under.csv" -o "$tmp/under.mlp" --hidden 4 --epochs 2
 expect "train: --hidden 0" 1 "--hidden" -- "$bin" train "$tmp/on.csv" -o "$tmp/x.mlp" --hidden 0
 
 expect "train a small network" 0 "validation loss" -- \

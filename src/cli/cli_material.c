@@ -93,7 +93,9 @@ static int load_map(const char *command, mr_material *m, const map_assignment *m
 
 /* One name=value or name=@MAP[:c] assignment into m; returns a CLI exit code. */
 static int assign(const char *command, mr_material *m, const char *assignment) {
-    if (strchr(assignment, '=')[1] != '@') {
+    const char *eq = strchr(assignment, '=');
+    if (eq == NULL) return cli_usage_error(command, "'%s' is not a NAME=VALUE or NAME=@FILE assignment", assignment);
+    if (eq[1] != '@') {
         mr_status status = mr_brdf_parse_assignment(m->model, assignment, m->values);
         return status == MR_OK ? CLI_EXIT_OK : cli_fail(command, status);
     }

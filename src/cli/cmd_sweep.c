@@ -4,6 +4,8 @@
  * the guarantees; docs/sweep.md the walk-through).
  */
 #include <errno.h>
+#include <fcntl.h>
+#include <omp.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
@@ -46,7 +48,13 @@ static void print_help(void) {
            "  --strategy S          auto (default), joint, single, two or three (see 'matremap remap --help')\n"
            "  --size N              fit-scene side in pixels (default %d)\n"
            "  --light L             45 (default) or frontal\n"
-           "  --threads T           samples at once (default: all cores); each sample runs single-threaded\n"
+           "  --threads T           samples at once in this process (default: all cores; under mpirun, the\n"
+           "                        cores this rank may use divided by the ranks on its machine, at least 1, so\n"
+           "                        that N ranks on one machine share its cores; OMP_NUM_THREADS=T sets T for\n"
+           "                        every rank); each sample runs single-threaded\n"
+           "  --shard K/N           compute only shard K of N (0 <= K < N): the samples whose index %% N == K,\n"
+           "                        into a file of its own (one per job of a job array; it resumes like any\n"
+           "                        sweep); 'matremap sweep merge' joins the N files into the sweep's file\n"
            "  --help                this text\n"
            "\n"
            "The file starts with '# ' lines describing the run (tool version, models and values, remap options,\n"
@@ -55,25 +63,110 @@ static void print_help(void) {
            "--resume picks up from there. When the last sample is in, the file is rewritten sorted by index, so a\n"
            "finished file is the same whether or not it was interrupted, and for any --threads (the seconds\n"
            "column aside). A progress bar is drawn when stderr is a terminal; a summary line ends every run.\n"
+           "\n",
+           MR_REMAP_DEFAULT_SIZE);
+    printf("Several processes: 'mpirun -np N matremap sweep ...' (Open MPI; as root add --allow-run-as-root, and\n"
+           "--oversubscribe for more ranks than cores) splits the missing samples round-robin between the ranks;\n"
+           "rank 0 writes every row into FILE as above, so the file is the one a single process writes (the\n"
+           "seconds column aside), a run killed at any moment resumes with --resume on any number of ranks, and\n"
+           "only rank 0 needs FILE's folder. Needs the MPI module libmatremap-mpi.so (built where Open MPI's\n"
+           "development files are installed); without it the run stops with exit 2.\n"
+           "\n"
+           "Merging shards: matremap sweep merge SHARD... -o FILE   (see 'matremap sweep merge --help')\n"
            "\n"
            "Exit codes: 0 done, 1 usage error, 2 bad input (unknown model or parameter, bad grid, a FILE that\n"
-           "exists without --resume or belongs to another sweep), 3 internal failure.\n"
+           "exists without --resume, belongs to another sweep or holds a row that is not a sane row of it: a\n"
+           "value outside its parameter's range or not finite), 3 internal failure.\n"
            "\n"
            "Examples:\n"
            "  matremap sweep --from ggx diffuse=0 --to ward-balanced --grid alpha=0.01:1:25:log -o alpha.csv\n"
            "  matremap sweep --from ggx --to ward-balanced --grid alpha=0.02:0.5:8:log f0=0.02:1:5 -o ggx_ward.csv\n"
            "  matremap sweep --from gltf --to blender-ward --random 1000 --seed 7 --threads 2 -o gltf.csv\n"
-           "  matremap sweep --from gltf --to blender-ward --random 1000 --seed 7 --threads 2 -o gltf.csv --resume\n",
-           MR_REMAP_DEFAULT_SIZE);
+           "  matremap sweep --from gltf --to blender-ward --random 1000 --seed 7 --threads 2 -o gltf.csv --resume\n"
+           "  mpirun -np 8 matremap sweep --from gltf --to blender-ward --random 100000 --seed 7 -o big.csv --resume\n"
+           "  matremap sweep --from ggx --to ward --random 4000 --shard $K/16 -o s$K.csv   # K=$SLURM_ARRAY_TASK_ID\n"
+           "  matremap sweep merge s*.csv -o ggx_ward.csv\n");
 }
 
-/* "matremap sweep ARGS..." with shell quoting where needed, for the file's "# command:" line. */
-static char *command_line(int argc, char **argv) {
-    size_t size = strlen("matremap") + 1;
+static char *command_line(int argc, char **argv, const char *prefix);
+
+static void print_merge_help(void) {
+    printf("Usage: matremap sweep merge SHARD.csv... -o DATA.csv\n"
+           "\n"
+           "Joins the N files of a sweep run in shards ('matremap sweep ... --shard K/N', e.g. the jobs of a job\n"
+           "array) into DATA.csv: the file a single 'matremap sweep' with the same arguments writes (its header with\n"
+           "this command line and no shard line, then every row in index order, each as in its shard). The shards\n"
+           "are given in any order and must belong together: every header line the same but '# shard:' and\n"
+           "'# command:' (models, values, remap options, scene, sampling, seed, sample count), the same N, each K\n"
+           "from 0 to N-1 exactly once, each shard finished (all its rows, in order, no torn last line: run an\n"
+           "interrupted shard again with --resume first) and not being written, every row a sane row of the sweep\n"
+           "(values finite and inside their parameters' ranges, the sample's source values). DATA.csv must not\n"
+           "exist; it is written to a temporary file and renamed into place, so it appears complete or not at all.\n"
+           "\n"
+           "Exit codes: 0 merged, 1 usage error, 2 shards that do not belong together or are unfinished or\n"
+           "corrupt (the message names the file, the line and what disagrees), or an existing DATA.csv,\n"
+           "3 internal failure.\n");
+}
+
+/* `matremap sweep merge SHARD... -o OUT`. */
+static int cmd_sweep_merge(int argc, char **argv) {
+    const char *output = NULL;
+    const char **shards = calloc((size_t)argc + 1, sizeof *shards);
+    int count = 0;
+    if (shards == NULL)
+        return cli_usage_error("sweep merge", "out of memory");
+    for (int i = 1; i < argc; i++) {
+        const char *value = NULL;
+        int taken;
+        if (cli_is_help(argv[i])) {
+            print_merge_help();
+            free(shards);
+            return CLI_EXIT_OK;
+        }
+        if ((taken = cli_take_option("sweep merge", argc, argv, &i, "--output", &value)) ||
+            (taken = cli_take_option("sweep merge", argc, argv, &i, "-o", &value))) {
+            if (taken < 0) {
+                free(shards);
+                return CLI_EXIT_USAGE;
+            }
+            output = value;
+        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
+            free(shards);
+            return cli_usage_error("sweep merge", "unknown option '%s'", argv[i]);
+        } else {
+            shards[count++] = argv[i];
+        }
+    }
+    int rc;
+    if (count == 0) {
+        rc = cli_usage_error("sweep merge", "no shard files given");
+    } else if (output == NULL) {
+        rc = cli_usage_error("sweep merge", "missing -o DATA.csv");
+    } else {
+        char *command = command_line(argc, argv, "matremap sweep");
+        mr_sweep_merge_summary summary;
+        mr_status status = mr_sweep_merge(shards, count, output, command, &summary);
+        free(command);
+        if (status != MR_OK) {
+            rc = cli_fail("sweep merge", status);
+        } else {
+            fprintf(stderr, "matremap sweep merge: '%s' written: %ld samples from %ld shards\n", output, summary.total,
+                    summary.shards);
+            rc = CLI_EXIT_OK;
+        }
+    }
+    free(shards);
+    return rc;
+}
+
+/* "PREFIX ARGS..." (argv[0] is the command's name) with shell quoting where needed, for the file's "# command:"
+ * line. */
+static char *command_line(int argc, char **argv, const char *prefix) {
+    size_t size = strlen(prefix) + 1;
     for (int i = 0; i < argc; i++) size += 4 * strlen(argv[i]) + 3;
     char *text = malloc(size), *out = text;
     if (text == NULL) return NULL;
-    out += sprintf(out, "matremap");
+    out += sprintf(out, "%s", prefix);
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i];
         *out++ = ' ';
@@ -153,21 +246,54 @@ static int parse_seed(const char *text, unsigned long long *out) {
     return 1;
 }
 
-int cmd_sweep(int argc, char **argv) {
-    const char *from_name = NULL, *to_name = NULL, *output = NULL, *hold_list = NULL;
+/* --shard K/N: 0 <= K < N. */
+static int parse_shard(const char *text, long *k, long *n) {
+    char *end = NULL;
+    errno = 0;
+    long a = strtol(text, &end, 10), b = -1;
+    int ok = text[0] >= '0' && text[0] <= '9' && *end == '/' && errno != ERANGE;
+    if (ok) {
+        const char *rest = end + 1;
+        b = strtol(rest, &end, 10);
+        ok = rest[0] >= '0' && rest[0] <= '9' && *end == '\0' && errno != ERANGE && b >= 1 && a < b &&
+             b <= MR_SWEEP_MAX_SAMPLES;
+    }
+    if (!ok) {
+        cli_usage_error("sweep", "--shard '%s': expected K/N with integers 0 <= K < N (shard K of N)", text);
+        return 0;
+    }
+    *k = a;
+    *n = b;
+    return 1;
+}
+
+/* What the command line asks for. */
+typedef struct sweep_args {
+    mr_sweep_spec spec;
+    const char *output;
+    int resume, threads;
+    long shard_index, shard_count;
+} sweep_args;
+
+/* Parse the arguments into *a: CLI_EXIT_OK to run, else the exit code (messages printed). */
+static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
+    const char *from_name = NULL, *to_name = NULL, *hold_list = NULL;
     const char *from_assignments[MAX_ASSIGNMENTS], *to_assignments[MAX_ASSIGNMENTS];
     const char *grid_axes[MR_SWEEP_MAX_AXES];
-    int from_count = 0, to_count = 0, axis_count = 0, random_count = 0, seed_given = 0, resume = 0, threads = 0;
+    int from_count = 0, to_count = 0, axis_count = 0, random_count = 0, seed_given = 0;
     unsigned long long seed = 1;
     mr_fit_scene_options scene = {0};
     mr_remap_strategy strategy = MR_REMAP_AUTO;
     enum { NONE, FROM, TO } collecting = NONE;
+    memset(a, 0, sizeof *a);
+    *help = 0;
 
     for (int i = 1; i < argc; i++) {
         const char *value = NULL;
         int taken;
         if (cli_is_help(argv[i])) {
             print_help();
+            *help = 1;
             return CLI_EXIT_OK;
         }
         if ((taken = cli_take_option("sweep", argc, argv, &i, "--from", &value))) {
@@ -195,9 +321,9 @@ int cmd_sweep(int argc, char **argv) {
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--output", &value)) ||
                    (taken = cli_take_option("sweep", argc, argv, &i, "-o", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
-            output = value;
+            a->output = value;
         } else if (strcmp(argv[i], "--resume") == 0) {
-            resume = 1;
+            a->resume = 1;
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--strategy", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             if (mr_remap_strategy_from_name(value, &strategy) != MR_OK)
@@ -209,7 +335,11 @@ int cmd_sweep(int argc, char **argv) {
             if (mr_fit_light_from_name(value, &scene.light) != MR_OK)
                 return cli_usage_error("sweep", "%s", mr_last_error());
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--threads", &value))) {
-            if (taken < 0 || !cli_parse_int("sweep", "--threads", value, 1, 1024, &threads)) return CLI_EXIT_USAGE;
+            if (taken < 0 || !cli_parse_int("sweep", "--threads", value, 1, 1024, &a->threads))
+                return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--shard", &value))) {
+            if (taken < 0 || !parse_shard(value, &a->shard_index, &a->shard_count))
+                return CLI_EXIT_USAGE;
         } else if (argv[i][0] == '-') {
             return cli_usage_error("sweep", "unknown option '%s'", argv[i]);
         } else if (strchr(argv[i], '=') != NULL && strchr(argv[i], ':') != NULL && axis_count > 0) {
@@ -233,82 +363,171 @@ int cmd_sweep(int argc, char **argv) {
     if (axis_count == 0 && random_count == 0)
         return cli_usage_error("sweep", "missing the samples: --grid name=lo:hi:n[:log] or --random N");
     if (seed_given && random_count == 0) return cli_usage_error("sweep", "--seed goes with --random");
-    if (output == NULL) return cli_usage_error("sweep", "missing -o DATA.csv");
+    if (a->output == NULL)
+        return cli_usage_error("sweep", "missing -o DATA.csv");
 
     const mr_brdf_model *from = mr_brdf_find(from_name), *to = NULL;
     if (from == NULL) return cli_fail("sweep", MR_ERR_INVALID_ARG);
     to = mr_brdf_find(to_name);
     if (to == NULL) return cli_fail("sweep", MR_ERR_INVALID_ARG);
-    mr_sweep_spec spec;
-    mr_sweep_spec_init(&spec, from, to);
+    mr_sweep_spec *spec = &a->spec;
+    mr_sweep_spec_init(spec, from, to);
     for (int k = 0; k < from_count; k++) {
-        mr_status status = mr_brdf_parse_assignment(from, from_assignments[k], spec.source_values);
+        mr_status status = mr_brdf_parse_assignment(from, from_assignments[k], spec->source_values);
         if (status != MR_OK) return cli_fail("sweep", status);
         const char *equals = strchr(from_assignments[k], '=');
         for (int p = 0; p < from->param_count; p++)
             if (strlen(from->params[p].name) == (size_t)(equals - from_assignments[k]) &&
                 strncmp(from->params[p].name, from_assignments[k], (size_t)(equals - from_assignments[k])) == 0)
-                spec.held |= 1u << p;
+                spec->held |= 1u << p;
     }
     for (int k = 0; k < to_count; k++) {
-        mr_status status = mr_brdf_parse_assignment(to, to_assignments[k], spec.target_values);
+        mr_status status = mr_brdf_parse_assignment(to, to_assignments[k], spec->target_values);
         if (status != MR_OK) return cli_fail("sweep", status);
     }
-    spec.remap.strategy = strategy;
-    if (hold_list != NULL && !cli_parse_held("sweep", to, hold_list, &spec.remap.held)) return CLI_EXIT_USAGE;
-    spec.scene = scene;
+    spec->remap.strategy = strategy;
+    if (hold_list != NULL && !cli_parse_held("sweep", to, hold_list, &spec->remap.held))
+        return CLI_EXIT_USAGE;
+    spec->scene = scene;
     if (random_count > 0) {
-        spec.sampling = MR_SWEEP_RANDOM;
-        spec.random_count = random_count;
-        spec.seed = seed;
+        spec->sampling = MR_SWEEP_RANDOM;
+        spec->random_count = random_count;
+        spec->seed = seed;
     } else {
-        spec.sampling = MR_SWEEP_GRID;
+        spec->sampling = MR_SWEEP_GRID;
         for (int k = 0; k < axis_count; k++) {
-            mr_status status = mr_sweep_parse_axis(from, grid_axes[k], &spec.axes[k]);
+            mr_status status = mr_sweep_parse_axis(from, grid_axes[k], &spec->axes[k]);
             if (status != MR_OK) return cli_fail("sweep", status);
         }
-        spec.axis_count = axis_count;
+        spec->axis_count = axis_count;
     }
-    mr_status status = mr_sweep_check(&spec);
+    mr_status status = mr_sweep_check(spec);
     if (status != MR_OK) return cli_fail("sweep", status);
+    long total = mr_sweep_sample_count(spec);
+    if (a->shard_count > total)
+        return cli_usage_error("sweep", "--shard %ld/%ld: %ld shards for a sweep of %ld samples (some would be empty)",
+                               a->shard_index, a->shard_count, a->shard_count, total);
+    return CLI_EXIT_OK;
+}
 
-    // The library refuses an existing file too (race-free, O_EXCL); this check only words it for the CLI.
+/* Point descriptor fd at /dev/null; returns a copy of the old one for unmute (-1 if it could not). */
+static int mute(int fd) {
+    fflush(fd == STDOUT_FILENO ? stdout : stderr);
+    int saved = dup(fd), null = open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (saved >= 0 && null >= 0)
+        dup2(null, fd);
+    if (null >= 0)
+        close(null);
+    return saved;
+}
+
+static void unmute(int fd, int saved) {
+    if (saved < 0)
+        return;
+    fflush(fd == STDOUT_FILENO ? stdout : stderr);
+    dup2(saved, fd);
+    close(saved);
+}
+
+int cmd_sweep(int argc, char **argv) {
+    if (argc > 1 && strcmp(argv[1], "merge") == 0)
+        return cmd_sweep_merge(argc - 1, argv + 1);
+
+    // Under mpirun every rank parses the same arguments: only rank 0 speaks about them.
+    int mpi_size = 1, mpi_rank = 0;
+    const char *mpi_variable = NULL;
+    const int under_mpi = mr_sweep_mpi_launched(&mpi_size, &mpi_rank, &mpi_variable);
+    int saved_out = -1, saved_err = -1;
+    if (under_mpi && mpi_rank != 0) {
+        saved_out = mute(STDOUT_FILENO);
+        saved_err = mute(STDERR_FILENO);
+    }
+    sweep_args a;
+    int help = 0;
+    int rc = parse_args(argc, argv, &a, &help);
+    if (under_mpi && mpi_rank != 0) {
+        unmute(STDOUT_FILENO, saved_out);
+        unmute(STDERR_FILENO, saved_err);
+    }
+    if (rc != CLI_EXIT_OK || help)
+        return rc;
+    const char *output = a.output;
+
+    // The library refuses an existing file too (race-free, O_EXCL); this check only words it for the CLI. Under
+    // MPI only rank 0 sees the file (the other ranks may run elsewhere): rank 0's library says it to all.
     struct stat st;
-    if (!resume && stat(output, &st) == 0) {
+    if (!under_mpi && !a.resume && stat(output, &st) == 0) {
         fprintf(stderr, "matremap sweep: error: '%s' already exists: use --resume to continue it, or remove it\n",
                 output);
         return CLI_EXIT_BAD_INPUT;
     }
 
-    char *command = command_line(argc, argv);
+    mr_sweep_comm comm;
+    int local_size = 1;
+    if (under_mpi) {
+        mr_status status = mr_sweep_mpi_start(&comm, &local_size);
+        if (status != MR_OK) {
+            // Every rank meets the same missing module; a rank elsewhere may meet its own: each says so once.
+            fprintf(stderr, "matremap sweep: error: rank %d of %d (%s): %s\n", mpi_rank, mpi_size, mpi_variable,
+                    mr_last_error());
+            return cli_exit_code(status);
+        }
+        mpi_rank = comm.rank;
+        // N ranks on a machine share its cores; a launcher that bound this rank to fewer cores shrinks them too.
+        if (a.threads == 0 && getenv("OMP_NUM_THREADS") == NULL)
+            a.threads = omp_get_num_procs() / (local_size > 1 ? local_size : 1) > 1
+                            ? omp_get_num_procs() / (local_size > 1 ? local_size : 1)
+                            : 1;
+    }
+
+    char *command = command_line(argc, argv, "matremap");
     progress_bar bar = {cli_now(), 0.0, 0};
     mr_sweep_options opts = {0};
-    opts.resume = resume;
-    opts.threads = threads;
+    opts.resume = a.resume;
+    opts.threads = a.threads;
     opts.command_line = command;
-    if (isatty(STDERR_FILENO)) {
+    opts.shard_index = a.shard_index;
+    opts.shard_count = a.shard_count;
+    opts.comm = under_mpi ? &comm : NULL;
+    if (isatty(STDERR_FILENO) && mpi_rank == 0) {
         opts.progress = draw_progress;
         opts.progress_user = &bar;
         signal(SIGINT, on_interrupt);
         signal(SIGTERM, on_interrupt);
     }
     mr_sweep_summary summary;
-    status = mr_sweep_run(&spec, output, &opts, &summary);
+    mr_status status = mr_sweep_run(&a.spec, output, &opts, &summary);
     free(command);
+    char message[1024];
+    snprintf(message, sizeof message, "%s", mr_last_error());
+    if (under_mpi)
+        mr_sweep_mpi_finish(&comm);
     if (bar.drawn && status != MR_OK) fprintf(stderr, "\n");
-    if (status != MR_OK) return cli_fail("sweep", status);
+    // Rank 0 reports for the run (the other ranks' failures reach it as messages).
+    if (mpi_rank != 0)
+        return cli_exit_code(status);
+    if (status != MR_OK) {
+        fprintf(stderr, "matremap sweep: error: %s\n", message[0] ? message : mr_status_str(status));
+        return cli_exit_code(status);
+    }
 
+    char what[64] = "";
+    if (a.shard_count > 0)
+        snprintf(what, sizeof what, " (shard %ld/%ld of %ld samples)", a.shard_index, a.shard_count, summary.total);
     if (summary.truncated_bytes > 0)
         fprintf(stderr, "matremap sweep: removed a torn last line (%ld bytes) from '%s'\n", summary.truncated_bytes,
                 output);
     if (summary.computed == 0) {
-        fprintf(stderr, "matremap sweep: '%s' is complete: all %ld samples were already there; nothing to do\n",
-                output, summary.total);
+        fprintf(stderr, "matremap sweep: '%s'%s is complete: all %ld samples were already there; nothing to do\n",
+                output, what, summary.file_total);
         return CLI_EXIT_OK;
     }
-    fprintf(stderr, "matremap sweep: '%s' is complete: %ld samples; %ld computed in %.1f s (%.2f rows/s, %d threads)",
-            output, summary.total, summary.computed, summary.seconds, (double)summary.computed / summary.seconds,
-            summary.threads);
+    fprintf(stderr, "matremap sweep: '%s'%s is complete: %ld samples; %ld computed in %.1f s (%.2f rows/s, ", output,
+            what, summary.file_total, summary.computed, summary.seconds, (double)summary.computed / summary.seconds);
+    if (summary.processes > 1)
+        fprintf(stderr, "%d ranks, %ld threads in all)", summary.processes, summary.threads_total);
+    else
+        fprintf(stderr, "%d threads)", summary.threads);
     if (summary.already_done > 0) fprintf(stderr, ", %ld were already there", summary.already_done);
     fprintf(stderr, "; outcomes:");
     int first = 1;

@@ -246,30 +246,69 @@ static const char *oiio_format_of(const unsigned char *bytes, size_t size) {
     return "";
 }
 
+/* The whole of `stream` (a file's) into *out (malloc'ed, the caller's) and *out_size. */
+static mr_status read_whole_stream(FILE *stream, const char *label, unsigned char **out, size_t *out_size) {
+    long length;
+    if (fseek(stream, 0, SEEK_END) != 0 || (length = ftell(stream)) < 0 || fseek(stream, 0, SEEK_SET) != 0)
+        return mr_fail(MR_ERR_IO, "%s: cannot seek in the file", label);
+    unsigned char *whole = malloc(length ? (size_t)length : 1);
+    if (whole == NULL) return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %ld bytes", label, length);
+    if (fread(whole, 1, (size_t)length, stream) != (size_t)length) {
+        free(whole);
+        return mr_fail(MR_ERR_IO, "%s: read error", label);
+    }
+    *out = whole;
+    *out_size = (size_t)length;
+    return MR_OK;
+}
+
 /* The read itself, shared by a file (path) and bytes in memory (path NULL, bytes and size): `stream` is open at
  * the start of either and is closed here; `label` is what messages call the image; *o has its defaults. */
 static mr_status read_stream(const char *path, const unsigned char *bytes, size_t size, FILE *stream,
                              const char *label, const mr_img_read_options *o, mr_image **out, mr_img_stored *stored) {
     int is_png = 0;
     mr_io_raw raw = {0, 0, 0, 0, 0, NULL};
+    unsigned char *whole = NULL, *clean = NULL; /* a file's bytes; a JPEG's with its header cleaned */
+    size_t whole_size = 0, clean_size = 0;
+    const char *format = "";
     mr_status status = check_png_structure(label, stream, o->max_dimension, &is_png);
     // PNG (by its signature: nearly every glTF texture) through png_io.c; the rest through the OpenImageIO module,
-    // loaded on first use.
+    // loaded on first use, by the reader their signature names, from memory: a file is read whole first. So
+    // OpenImageIO never tries its other readers on a file the named one refuses (on a corrupt .hdr it tried them
+    // all, camera raw included: 3 ms each), and a file named for another format is still read.
     if (status == MR_OK && is_png) {
         rewind(stream);
         status = mr_io_png_read_stream(stream, label, o->max_dimension, &raw);
+    } else if (status == MR_OK) {
+        unsigned char magic[12];
+        rewind(stream);
+        format = oiio_format_of(magic, fread(magic, 1, sizeof magic, stream));
+        // EXR: the header's sizes checked before OpenEXR trusts them (exr_check.c says why).
+        if (strcmp(format, "openexr") == 0) status = mr_io_exr_check(stream, label, o->max_dimension);
+        if (status == MR_OK && path != NULL && format[0] != '\0')
+            status = read_whole_stream(stream, label, &whole, &whole_size);
+        if (whole != NULL) bytes = whole, size = whole_size;
+        // JPEG: its header rewritten without the metadata OpenImageIO would parse (jpeg_check.c says why).
+        if (status == MR_OK && strcmp(format, "jpeg") == 0) {
+            status = mr_io_jpeg_clean(bytes, size, label, &clean, &clean_size);
+            if (status == MR_OK) bytes = clean, size = clean_size;
+        }
     }
     fclose(stream);
-    if (status != MR_OK) return status;
-    if (!is_png && path != NULL) {
-        status = mr_io_oiio_read(path, o->max_dimension, &raw);
-    } else if (!is_png) {
-        const char *format = oiio_format_of(bytes, size);
-        if (format[0] == '\0')
-            return mr_fail(MR_ERR_FORMAT, "%s: not an image this reader knows from memory (by its first bytes: PNG, "
-                           "JPEG, EXR, Radiance HDR, TIFF, WebP, GIF or BMP)", label);
-        status = mr_io_oiio_read_memory(bytes, size, format, label, o->max_dimension, &raw);
+    if (status == MR_OK && !is_png) {
+        if (format[0] == '\0' && path != NULL) {
+            status = mr_io_oiio_read(path, o->max_dimension, &raw);
+        } else if (format[0] == '\0') {
+            status = mr_fail(MR_ERR_FORMAT, "%s: not an image this reader knows from memory (by its first bytes: PNG, "
+                             "JPEG, EXR, Radiance HDR, TIFF, WebP, GIF or BMP)", label);
+        } else {
+            status = mr_io_oiio_read_memory(bytes, size, format, label, o->max_dimension, &raw);
+            // A reader that cannot read from memory reads the file.
+            if (status == MR_ERR_UNSUPPORTED && path != NULL) status = mr_io_oiio_read(path, o->max_dimension, &raw);
+        }
     }
+    free(whole);
+    free(clean);
     if (status != MR_OK) return status;
 
     int out_ch = o->channels;

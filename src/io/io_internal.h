@@ -129,6 +129,20 @@ mr_status mr_io_oiio_read(const char *path, int max_dimension, mr_io_raw *raw);
 mr_status mr_io_oiio_read_memory(const void *bytes, size_t size, const char *format, const char *label,
                                  int max_dimension, mr_io_raw *raw);
 
+/* An EXR file's structure checked before OpenImageIO opens it (exr_check.c): version 2, not deep; every header
+ * attribute's size within the file; channel list, compression and data window present and valid; width and height
+ * at most max_dimension; the offset table inside the file and every chunk offset after it. `stream` is the whole
+ * file (or the bytes, through fmemopen), at any position; it is left at an unspecified one. MR_ERR_FORMAT naming
+ * `label`, the field and the value; MR_ERR_UNSUPPORTED for deep data; MR_ERR_IO if it cannot seek. */
+mr_status mr_io_exr_check(FILE *stream, const char *label, int max_dimension);
+
+/* A JPEG's bytes with their header's marker segments checked (each length within the bytes) and its metadata
+ * segments (APP1-APP13, APP15, comments: Exif, ICC, XMP, IPTC) left out, into *out (malloc'ed, the caller's; at
+ * most `size` bytes) and *out_size; the scans are copied as they are (jpeg_check.c says why). MR_ERR_FORMAT naming
+ * `label` and the byte; MR_ERR_NOMEM. */
+mr_status mr_io_jpeg_clean(const unsigned char *bytes, size_t size, const char *label, unsigned char **out,
+                           size_t *out_size);
+
 /* Sample types for mr_io_oiio_write. */
 typedef enum mr_io_sample {
     MR_IO_U8 = 0,

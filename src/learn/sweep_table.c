@@ -78,15 +78,6 @@ static mr_status map_model_columns(const char *path, char **names, int count, co
     return MR_OK;
 }
 
-static int outcome_from_name(const char *name, mr_fit_outcome *out) {
-    for (int o = 0; o < MR_FIT_OUTCOME_COUNT; o++)
-        if (strcmp(name, mr_fit_outcome_name((mr_fit_outcome)o)) == 0) {
-            *out = (mr_fit_outcome)o;
-            return 1;
-        }
-    return 0;
-}
-
 static mr_status grow(mr_sweep_table *t, size_t *capacity) {
     if (t->n < *capacity) return MR_OK;
     size_t grown = *capacity ? 2 * *capacity : 256;
@@ -215,7 +206,7 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
         }
         rows++;
         mr_fit_outcome outcome;
-        if (!outcome_from_name(fields[cols.outcome], &outcome)) {
+        if (!mr_fit_outcome_from_name(fields[cols.outcome], &outcome)) {
             status = mr_fail(MR_ERR_FORMAT, "%s:%ld: unknown outcome '%s'", path, line_number, fields[cols.outcome]);
             break;
         }

@@ -90,6 +90,15 @@ const char *mr_fit_outcome_name(mr_fit_outcome outcome) {
     return (unsigned)outcome < MR_FIT_OUTCOME_COUNT ? outcome_names[outcome] : NULL;
 }
 
+int mr_fit_outcome_from_name(const char *name, mr_fit_outcome *out) {
+    for (int o = 0; name != NULL && o < MR_FIT_OUTCOME_COUNT; o++)
+        if (strcmp(name, outcome_names[o]) == 0) {
+            *out = (mr_fit_outcome)o;
+            return 1;
+        }
+    return 0;
+}
+
 mr_remap_options mr_remap_options_default(void) {
     mr_remap_options o;
     memset(&o, 0, sizeof o);

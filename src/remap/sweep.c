@@ -35,6 +35,7 @@
 #include "remap_file.h"
 
 #define COMMAND_PREFIX "# command: "
+#define SHARD_PREFIX "# shard: "
 #define WHAT "sweep file" /* what messages call the file */
 #define ROW_TAIL_COLUMNS 6 /* rmse, relative_rmse, ssim, outcome, renders, seconds */
 
@@ -290,8 +291,10 @@ mr_status mr_sweep_sample(const mr_sweep_spec *spec, long index, double *values)
 
 /* ---- header, columns, rows ---------------------------------------------------------------------------------- */
 
-/* The header for this run (every line '\n'-terminated, the column line last), in the C numeric locale. */
-static mr_status build_header(const mr_sweep_spec *spec, const char *command_line, mr_strbuf *sb) {
+/* The header for this run (every line '\n'-terminated, the column line last), in the C numeric locale; a shard
+ * (shard_count > 0) adds "# shard: K/N" before the command line. */
+static mr_status build_header(const mr_sweep_spec *spec, const char *command_line, long shard_index, long shard_count,
+                              mr_strbuf *sb) {
     mr_strbuf_printf(sb, "# matremap %s sweep\n", mr_version());
     mr_strbuf_printf(sb, "# from: %s", spec->source->name);
     mr_strbuf_values(sb, spec->source, spec->source_values);
@@ -315,7 +318,10 @@ static mr_status build_header(const mr_sweep_spec *spec, const char *command_lin
                 first = 0;
             }
     }
-    mr_strbuf_printf(sb, "\n# samples: %ld\n" COMMAND_PREFIX, sample_count_unchecked(spec));
+    mr_strbuf_printf(sb, "\n# samples: %ld\n", sample_count_unchecked(spec));
+    if (shard_count > 0)
+        mr_strbuf_printf(sb, SHARD_PREFIX "%ld/%ld\n", shard_index, shard_count);
+    mr_strbuf_printf(sb, COMMAND_PREFIX);
     // The command line is informational; a line break in an argument must not start a line of its own.
     for (const char *c = command_line ? command_line : ""; *c; c++)
         mr_strbuf_printf(sb, "%c", *c == '\n' || *c == '\r' ? ' ' : *c);
@@ -430,20 +436,139 @@ mr_status mr_sweep_parse_row(const mr_sweep_spec *spec, const char *line, size_t
     return status;
 }
 
+/* The name of field k of a row (0: "index"), as in the column line. */
+static void column_name(const mr_sweep_spec *spec, int k, char *buf, size_t size) {
+    static const char *const tail[ROW_TAIL_COLUMNS] = {"rmse",    "relative_rmse", "ssim",
+                                                       "outcome", "renders",       "seconds"};
+    static const char *const suffix[3] = {"_r", "_g", "_b"};
+    if (k == 0) {
+        snprintf(buf, size, "index");
+        return;
+    }
+    int c = k - 1;
+    for (int side = 0; side < 2; side++) {
+        const mr_brdf_model *m = side ? spec->target : spec->source;
+        for (int p = 0; p < m->param_count; p++) {
+            int offset = mr_brdf_param_offset(m, p), channels = m->params[p].channels;
+            if (c >= offset && c < offset + channels) {
+                snprintf(buf, size, "%s%s%s", side ? "to_" : "", m->params[p].name,
+                         channels == 3 ? suffix[c - offset] : "");
+                return;
+            }
+        }
+        c -= mr_brdf_value_count(m);
+    }
+    snprintf(buf, size, "%s", c >= 0 && c < ROW_TAIL_COLUMNS ? tail[c] : "?");
+}
+
+/* Range checks of a row's values (contract in sweep.h). The fitted values may lie outside a parameter's range by
+ * rounding (mr_remap maps a log-scaled range's endpoints through exp(log(x)): Phong's exponent can come back as
+ * 10000.000000000009), hence the band of 1e-9 of the range's width; 1e300 or a negative reflectance never fit. */
+static mr_status check_row(const mr_sweep_spec *spec, const mr_sweep_row *row) {
+    char name[64];
+    int column = 1;
+    for (int side = 0; side < 2; side++) {
+        const mr_brdf_model *m = side ? spec->target : spec->source;
+        const double *v = side ? row->target : row->source;
+        for (int p = 0; p < m->param_count; p++) {
+            const mr_brdf_param *param = &m->params[p];
+            const double band = 1e-9 * (param->max_value - param->min_value);
+            for (int c = 0; c < param->channels; c++, column++) {
+                const double x = v[mr_brdf_param_offset(m, p) + c];
+                if (isfinite(x) && x >= param->min_value - band && x <= param->max_value + band &&
+                    (param->role != MR_PARAM_SWITCH || x == floor(x)))
+                    continue;
+                column_name(spec, column, name, sizeof name);
+                if (!isfinite(x))
+                    return mr_fail(MR_ERR_FORMAT, "column %d (%s): %g is not a finite number", column + 1, name, x);
+                if (x < param->min_value - band || x > param->max_value + band)
+                    return mr_fail(MR_ERR_FORMAT, "column %d (%s): %.17g is outside %s's range [%g, %g] (model '%s')",
+                                   column + 1, name, x, param->name, param->min_value, param->max_value, m->name);
+                return mr_fail(MR_ERR_FORMAT, "column %d (%s): %.17g is not an integer (%s is a switch of model '%s')",
+                               column + 1, name, x, param->name, m->name);
+            }
+        }
+    }
+    // column is now the first tail column's field index (rmse).
+    const struct {
+        double value;
+        int ok;
+        const char *expected;
+    } tail[] = {
+        {row->rmse, isfinite(row->rmse) && row->rmse >= 0.0, "a finite number >= 0"},
+        {row->relative_rmse, row->relative_rmse >= 0.0, "a number >= 0 (or inf)"},
+        {row->ssim, isfinite(row->ssim) && fabs(row->ssim) <= 1.0 + 1e-9, "a number in [-1, 1]"},
+    };
+    for (int t = 0; t < 3; t++)
+        if (!tail[t].ok) {
+            column_name(spec, column + t, name, sizeof name);
+            return mr_fail(MR_ERR_FORMAT, "column %d (%s): %g is not %s", column + t + 1, name, tail[t].value,
+                           tail[t].expected);
+        }
+    if ((int)row->outcome < 0 || row->outcome >= MR_FIT_OUTCOME_COUNT)
+        return mr_fail(MR_ERR_FORMAT, "column %d (outcome): %d is not an outcome", column + 4, (int)row->outcome);
+    if (row->renders < 0)
+        return mr_fail(MR_ERR_FORMAT, "column %d (renders): %ld is negative", column + 5, row->renders);
+    if (!(isfinite(row->seconds) && row->seconds >= 0.0))
+        return mr_fail(MR_ERR_FORMAT, "column %d (seconds): %g is not a finite number >= 0", column + 6, row->seconds);
+    return MR_OK;
+}
+
+mr_status mr_sweep_check_row(const mr_sweep_spec *spec, const mr_sweep_row *row) {
+    mr_status status = mr_sweep_check(spec);
+    if (status != MR_OK)
+        return status;
+    if (row == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: NULL row");
+    return check_row(spec, row);
+}
+
 /* ---- the file ------------------------------------------------------------------------------------------------ */
+
+/* What a sample is to a file (sweep_file.state). */
+enum { SAMPLE_TODO = 0, SAMPLE_IN_FILE = 1, SAMPLE_NOT_OURS = 2 };
 
 typedef struct sweep_file {
     const char *path;
     int fd;
     off_t size;
-    long total;
-    unsigned char *done; /* per sample: already in the file */
-    long done_count;
+    long total;           /* samples in the sweep */
+    long shard, shards;   /* the file holds the samples with index % shards == shard (shards 1: all of them) */
+    long expected;        /* how many samples that is */
+    unsigned char *state; /* per sample: SAMPLE_TODO, _IN_FILE or _NOT_OURS */
+    long done_count;      /* samples in the file */
     long truncated;
 } sweep_file;
 
+/* Samples with index % shards == shard among [0, total). */
+static long shard_size(long total, long shard, long shards) {
+    return total > shard ? (total - shard - 1) / shards + 1 : 0;
+}
+
+/* Parse and check one complete row line (`length` bytes, its '\n' included) of a file that holds shard
+ * `shard` of `shards` of the sweep `spec`: the syntax, the values (check_row), a sample of this file, and that
+ * sample's source values. The message says what is wrong, not where: callers add the file and line. */
+static mr_status check_line(const mr_sweep_spec *spec, long total, long shard, long shards, const char *line,
+                            size_t length, mr_sweep_row *row) {
+    mr_status status = parse_row(spec, total, line, length, row);
+    if (status == MR_OK)
+        status = check_row(spec, row);
+    if (status != MR_OK)
+        return status;
+    if (row->index % shards != shard)
+        return mr_fail(MR_ERR_FORMAT, "sample %ld belongs to shard %ld/%ld, not to this file's %ld/%ld", row->index,
+                       row->index % shards, shards, shard, shards);
+    double source[MR_BRDF_MAX_VALUES];
+    sample_unchecked(spec, row->index, source);
+    if (memcmp(source, row->source, (size_t)mr_brdf_value_count(spec->source) * sizeof(double)) != 0)
+        return mr_fail(MR_ERR_FORMAT, "the source values of sample %ld are not this sweep's (was the file edited?)",
+                       row->index);
+    return MR_OK;
+}
+
 /* Check an existing file against this run's header, collect the samples it holds, and cut off a torn last line
- * (only after everything else checked out, so a refused file is left exactly as it was). */
+ * (only after everything else checked out, so a refused file is left exactly as it was). A torn line is never
+ * counted, even when only its '\n' is missing: its write did not complete. */
 static mr_status adopt_file(const mr_sweep_spec *spec, const mr_strbuf *header, sweep_file *f) {
     char *data = NULL;
     size_t size = 0;
@@ -463,8 +588,6 @@ static mr_status adopt_file(const mr_sweep_spec *spec, const mr_strbuf *header, 
         return status;
     }
     const char *pos = data + rows_at, *end = data + size;
-    double source[MR_BRDF_MAX_VALUES];
-    const int ns = mr_brdf_value_count(spec->source);
     while (pos < end) { /* rows */
         const char *nl = memchr(pos, '\n', (size_t)(end - pos));
         line_number++;
@@ -473,25 +596,14 @@ static mr_status adopt_file(const mr_sweep_spec *spec, const mr_strbuf *header, 
             break;
         }
         mr_sweep_row row;
-        status = parse_row(spec, f->total, pos, (size_t)(nl - pos) + 1, &row);
+        status = check_line(spec, f->total, f->shard, f->shards, pos, (size_t)(nl - pos) + 1, &row);
+        if (status == MR_OK && f->state[row.index] == SAMPLE_IN_FILE)
+            status = mr_fail(MR_ERR_FORMAT, "sample %ld appears a second time", row.index);
         if (status != MR_OK) {
             free(data);
             return mr_fail_context(status, "sweep file '%s': line %ld", f->path, line_number);
         }
-        if (f->done[row.index]) {
-            free(data);
-            return mr_fail(MR_ERR_FORMAT, "sweep file '%s': line %ld: sample %ld appears a second time", f->path,
-                           line_number, row.index);
-        }
-        sample_unchecked(spec, row.index, source);
-        if (memcmp(source, row.source, (size_t)ns * sizeof(double)) != 0) {
-            free(data);
-            return mr_fail(MR_ERR_FORMAT,
-                           "sweep file '%s': line %ld: the source values of sample %ld are not this sweep's (was the "
-                           "file edited?)",
-                           f->path, line_number, row.index);
-        }
-        f->done[row.index] = 1;
+        f->state[row.index] = SAMPLE_IN_FILE;
         f->done_count++;
         pos = nl + 1;
     }
@@ -528,17 +640,18 @@ static mr_status open_file(const mr_sweep_spec *spec, const mr_strbuf *header, i
     return adopt_file(spec, header, f);
 }
 
-/* Every sample is in the file: rewrite it in index order unless it already is (atomic: temporary + rename). */
+/* Every sample of the file is in it: rewrite it in index order unless it already is (atomic: temporary +
+ * rename). */
 static mr_status sort_file(sweep_file *f, long header_lines, int *sorted) {
     *sorted = 0;
     char *data = NULL;
     size_t size = 0;
     mr_status status = mr_text_file_read_all(f->fd, f->path, WHAT, &data, &size);
     if (status != MR_OK) return status;
-    const char **lines = calloc((size_t)f->total, sizeof *lines);
+    const char **lines = calloc((size_t)MR_MAX(f->expected, 1), sizeof *lines);
     if (lines == NULL) {
         free(data);
-        return mr_fail(MR_ERR_NOMEM, "sweep file '%s': out of memory sorting %ld rows", f->path, f->total);
+        return mr_fail(MR_ERR_NOMEM, "sweep file '%s': out of memory sorting %ld rows", f->path, f->expected);
     }
     // The file's own header (its command line may differ from this run's) is kept byte for byte.
     const char *rows = data;
@@ -549,22 +662,25 @@ static mr_status sort_file(sweep_file *f, long header_lines, int *sorted) {
     const size_t header_length = (size_t)(rows - data);
     int in_order = 1;
     long k = 0;
-    // Rows were all validated (or written by us); the index is the text before the first comma. The strtol
-    // cannot run past the buffer: mr_text_file_read_all NUL-terminates it.
-    for (const char *pos = rows; pos < data + size && k < f->total; k++) {
+    // Rows were all validated (or written by us); the index is the text before the first comma, and row k of
+    // the sorted file is sample shard + k * shards. The strtol cannot run past the buffer: mr_text_file_read_all
+    // NUL-terminates it.
+    for (const char *pos = rows; pos < data + size && k < f->expected; k++) {
         long index = strtol(pos, NULL, 10);
-        if (index < 0 || index >= f->total) index = 0; /* cannot happen; keeps the array in bounds */
-        lines[index] = pos;
-        in_order &= index == k;
+        if (index < 0 || index >= f->total || index % f->shards != f->shard)
+            index = f->shard; /* cannot happen */
+        lines[index / f->shards] = pos;
+        in_order &= index == f->shard + k * f->shards;
         const char *nl = memchr(pos, '\n', (size_t)(data + size - pos));
         pos = nl ? nl + 1 : data + size;
     }
-    in_order &= k == f->total;
-    for (long i = 0; i < f->total; i++)
+    in_order &= k == f->expected;
+    for (long i = 0; i < f->expected; i++)
         if (lines[i] == NULL) { /* cannot happen: every sample was checked in; refuse rather than drop rows */
             free(lines);
             free(data);
-            return mr_fail(MR_ERR_FORMAT, "sweep file '%s': sample %ld is missing at the end of the run", f->path, i);
+            return mr_fail(MR_ERR_FORMAT, "sweep file '%s': sample %ld is missing at the end of the run", f->path,
+                           f->shard + i * f->shards);
         }
     if (in_order) {
         free(lines);
@@ -585,7 +701,7 @@ static mr_status sort_file(sweep_file *f, long header_lines, int *sorted) {
     }
     if (status == MR_OK) {
         int ok = fwrite(data, 1, header_length, out) == header_length;
-        for (long i = 0; ok && i < f->total; i++) {
+        for (long i = 0; ok && i < f->expected; i++) {
             const char *nl = strchr(lines[i], '\n');
             size_t len = (size_t)(nl - lines[i]) + 1;
             ok = fwrite(lines[i], 1, len, out) == len;
@@ -607,40 +723,237 @@ static mr_status sort_file(sweep_file *f, long header_lines, int *sorted) {
 
 /* ---- the run ------------------------------------------------------------------------------------------------- */
 
+/* The messages between ranks (mr_sweep_comm). Per pair of ranks they arrive in order, so a worker's HELLO comes
+ * before its rows, its rows before its DONE, and rank 0's STOP before its FINAL. Numbers travel in the machine's
+ * byte order: the ranks of one run are copies of one build on machines of one architecture (the HELLO's header
+ * hash would differ between builds that write other files).
+ *   worker -> 0: HELLO   u64 header hash, i64 samples, i32 threads, i32 status, message (a setup failure)
+ *   0 -> all:    (broadcast) GO i32 status, i32 0, i64 samples to run; then, if the status is MR_OK, the
+ *                (samples + 7) / 8 bytes of the to-do bitmap (bit i % 8 of byte i / 8: sample i runs)
+ *   worker -> 0: ROW     one row line, '\n' included
+ *   worker -> 0: FAIL    i64 sample, i32 status, message: the sample's remap failed
+ *   worker -> 0: DONE    i64 rows sent, i32 status, message (a failure of the rank that ended its share early)
+ *   0 -> worker: STOP    (no content) the run failed: start no more samples
+ *   0 -> worker: FINAL   i32 status: the run's end, after the file was finished */
+enum { TAG_HELLO = 1, TAG_ROW, TAG_FAIL, TAG_DONE, TAG_STOP, TAG_FINAL };
+
+static void put_u64(unsigned char *at, uint64_t v) { memcpy(at, &v, sizeof v); }
+static void put_i32(unsigned char *at, int32_t v) { memcpy(at, &v, sizeof v); }
+static uint64_t get_u64(const unsigned char *at) {
+    uint64_t v;
+    memcpy(&v, at, sizeof v);
+    return v;
+}
+static int32_t get_i32(const unsigned char *at) {
+    int32_t v;
+    memcpy(&v, at, sizeof v);
+    return v;
+}
+
+/* A fixed part of `fixed` bytes, then a NUL-terminated message: the message of a received buffer (terminated
+ * here whatever the sender did; buf has MR_SWEEP_MESSAGE_MAX + 1 bytes). */
+static const char *message_text(unsigned char *buf, size_t bytes, size_t fixed) {
+    if (bytes < fixed)
+        return "";
+    buf[MR_MIN(bytes, (size_t)MR_SWEEP_MESSAGE_MAX)] = '\0';
+    return (const char *)buf + fixed;
+}
+
+/* A status and message into buf (fixed part already there); the message is cut to fit. Returns the size. */
+static size_t put_message(unsigned char *buf, size_t fixed, const char *message) {
+    size_t len = strnlen(message, MR_SWEEP_MESSAGE_MAX - fixed - 1);
+    memcpy(buf + fixed, message, len);
+    buf[fixed + len] = '\0';
+    return fixed + len + 1;
+}
+
+/* FNV-1a: equal headers give equal hashes; a header that differs (another version, other arguments) almost
+ * surely does not. */
+static uint64_t hash_text(const char *text, size_t length) {
+    uint64_t h = 0xcbf29ce484222325ULL;
+    for (size_t i = 0; i < length; i++)
+        h = (h ^ (unsigned char)text[i]) * 0x100000001b3ULL;
+    return h;
+}
+
 typedef struct run_state {
     const mr_sweep_spec *spec;
     const mr_sweep_options *opts;
-    sweep_file *file;
+    const mr_sweep_comm *comm; /* NULL: alone */
+    int rank, size;
+    sweep_file *file; /* rank 0 */
     const mr_render_plan *plan;
-    long run_total, run_done;
+    long run_total, run_done; /* rank 0: the whole run's rows (every rank's); other ranks: their own */
     long outcomes[MR_FIT_OUTCOME_COUNT];
-    const long *pending;       /* the samples this run computes */
-    int stop;                  /* set (under the file lock) when the file fails: no new samples start */
+    const long *pending;       /* the samples this rank computes */
+    int stop;                  /* set (under the file lock) when the run fails: no new samples start */
     long failed;               /* samples whose remap failed (the others go on: their rows are worth having) */
-    mr_status failure;         /* the failure to report: a file error, else the lowest failed sample's */
+    mr_status failure;         /* the failure to report: a run failure, else the lowest failed sample's */
     long failure_index;
-    int file_failed;
+    int run_failed; /* the failure is the run's (file, communication, a rank), not a sample's */
     char failure_message[1024];
+    int comm_failed;    /* a comm call failed: this rank stops talking */
+    int workers_done;   /* rank 0: DONE messages received */
+    int stop_sent;      /* rank 0: STOP sent to the other ranks */
+    long threads_total; /* rank 0: threads of every rank */
+    unsigned char message[MR_SWEEP_MESSAGE_MAX + 1];
 } run_state;
 
-/* Called under the file lock, on the thread that failed (mr_last_error() is per thread). A file error stops the
+/* Called under the file lock (or with no worker thread running), on the thread that failed (mr_last_error() is
+ * per thread; `message` NULL means mr_last_error()). A run failure (the file, communication, a rank) stops the
  * run; a failed remap is counted and the sweep goes on. The reported failure does not depend on thread timing
- * unless the file fails: it is the lowest failed index. */
-static void record_failure(run_state *st, mr_status status, long index, int file_error) {
-    if (file_error) {
+ * unless the run fails: it is the lowest failed index. */
+static void record_failure(run_state *st, mr_status status, long index, int run_failure, const char *message) {
+    if (run_failure) {
 #pragma omp atomic write
         st->stop = 1;
     } else {
         st->failed++;
     }
-    if (st->file_failed || (!file_error && st->failure != MR_OK && st->failure_index < index)) return;
+    if (st->run_failed || (!run_failure && st->failure != MR_OK && st->failure_index < index))
+        return;
     st->failure = status;
     st->failure_index = index;
-    st->file_failed = file_error;
-    snprintf(st->failure_message, sizeof st->failure_message, "%s", mr_last_error());
+    st->run_failed = run_failure;
+    snprintf(st->failure_message, sizeof st->failure_message, "%s", message ? message : mr_last_error());
 }
 
-/* Remap sample `index` and append its row. Runs on a worker thread, in the C numeric locale. */
+/* A comm call, its failure recorded as the run's (and this rank stops talking: the peers learn of it from MPI,
+ * which ends the job, or from the missing messages). */
+static int comm_ok(run_state *st, mr_status status, const char *what) {
+    if (status == MR_OK)
+        return 1;
+    mr_fail_context(status, "sweep: rank %d of %d: %s", st->rank, st->size, what);
+    st->comm_failed = 1;
+    record_failure(st, status, -1, 1, NULL);
+    return 0;
+}
+
+static void send_to(run_state *st, int to, int tag, const void *buf, size_t bytes, const char *what) {
+    if (!st->comm_failed)
+        comm_ok(st, st->comm->send(st->comm->user, to, tag, buf, bytes), what);
+}
+
+/* Rank 0, after a run failure: tell the others to start no more samples (once). */
+static void stop_others(run_state *st) {
+    if (st->rank != 0 || st->size < 2 || st->stop_sent || !st->stop)
+        return;
+    st->stop_sent = 1;
+    unsigned char none = 0;
+    for (int r = 1; r < st->size; r++)
+        send_to(st, r, TAG_STOP, &none, 1, "telling the ranks to stop");
+}
+
+/* Rank 0: append a line, count it and report progress (under the file lock). */
+static void append_row(run_state *st, const mr_sweep_row *row, const char *line, size_t length) {
+    sweep_file *f = st->file;
+    mr_status status = mr_text_file_append(f->fd, f->path, WHAT, line, length, &f->size);
+    if (status != MR_OK) {
+        record_failure(st, status, row->index, 1, NULL);
+        return;
+    }
+    f->state[row->index] = SAMPLE_IN_FILE;
+    f->done_count++;
+    st->run_done++;
+    st->outcomes[row->outcome]++;
+    if (st->opts->progress != NULL) {
+        mr_sweep_progress p = {f->done_count, f->total, st->run_done, st->run_total, row};
+        st->opts->progress(&p, st->opts->progress_user);
+    }
+}
+
+/* Rank 0: a row from another rank. It must be one whole line of a sample this run is waiting for; a rank that
+ * sends anything else is broken (another build?), and the run stops rather than write a doubtful row. After a
+ * run failure rows are dropped (a resume computes them again). */
+static void accept_remote_row(run_state *st, int from, const char *line, size_t length) {
+    if (st->stop)
+        return;
+    sweep_file *f = st->file;
+    mr_sweep_row row;
+    mr_status status = MR_OK;
+    if (length == 0 || line[length - 1] != '\n' || memchr(line, '\n', length - 1) != NULL ||
+        memchr(line, '\0', length) != NULL)
+        status = mr_fail(MR_ERR_FORMAT, "not one line");
+    if (status == MR_OK)
+        status = check_line(st->spec, f->total, f->shard, f->shards, line, length, &row);
+    if (status == MR_OK && f->state[row.index] != SAMPLE_TODO)
+        status = mr_fail(MR_ERR_FORMAT, "sample %ld is not one this run is waiting for", row.index);
+    if (status != MR_OK) {
+        mr_fail_context(status, "sweep: rank %d sent a row that rank 0 cannot accept", from);
+        record_failure(st, status, -1, 1, NULL);
+        return;
+    }
+    append_row(st, &row, line, length);
+}
+
+/* Rank 0: one message from another rank (under the file lock, or with no worker thread running). */
+static void handle_message(run_state *st, int from, int tag, size_t bytes) {
+    unsigned char *buf = st->message;
+    if (tag == TAG_ROW) {
+        accept_remote_row(st, from, (const char *)buf, bytes);
+    } else if (tag == TAG_FAIL && bytes >= 12) {
+        long index = (long)get_u64(buf);
+        mr_status status = (mr_status)get_i32(buf + 8);
+        char message[1024];
+        snprintf(message, sizeof message, "(on rank %d) %s", from, message_text(buf, bytes, 12));
+        record_failure(st, status == MR_OK ? MR_ERR_EXTERNAL : status, index, 0, message);
+    } else if (tag == TAG_DONE && bytes >= 12) {
+        st->workers_done++;
+        mr_status status = (mr_status)get_i32(buf + 8);
+        if (status != MR_OK) {
+            char message[1024];
+            snprintf(message, sizeof message, "sweep: rank %d stopped: %s", from, message_text(buf, bytes, 12));
+            record_failure(st, status, -1, 1, message);
+        }
+    } else {
+        mr_fail(MR_ERR_EXTERNAL, "sweep: rank %d sent an unexpected message (tag %d, %zu bytes)", from, tag, bytes);
+        record_failure(st, MR_ERR_EXTERNAL, -1, 1, NULL);
+    }
+    stop_others(st);
+}
+
+/* Rank 0: handle the messages that have arrived (wait 0), or wait for one (wait 1). */
+static void receive_messages(run_state *st, int wait) {
+    for (;;) {
+        if (st->comm_failed)
+            return;
+        int from = -1, tag = 0, got = 0;
+        size_t bytes = 0;
+        if (!comm_ok(st, st->comm->receive(st->comm->user, wait, &from, &tag, st->message, &bytes, &got), "receiving"))
+            return;
+        if (!got)
+            return;
+        handle_message(st, from, tag, MR_MIN(bytes, (size_t)MR_SWEEP_MESSAGE_MAX));
+        if (wait)
+            return;
+    }
+}
+
+/* Another rank: any STOP from rank 0 that has arrived (under the file lock). */
+static void poll_stop(run_state *st) {
+    for (;;) {
+        if (st->comm_failed)
+            return;
+        int from = -1, tag = 0, got = 0;
+        size_t bytes = 0;
+        if (!comm_ok(st, st->comm->receive(st->comm->user, 0, &from, &tag, st->message, &bytes, &got), "receiving"))
+            return;
+        if (!got)
+            return;
+        if (tag != TAG_STOP) {
+            mr_fail(MR_ERR_EXTERNAL, "sweep: rank %d: unexpected message (tag %d) from rank %d during the run",
+                    st->rank, tag, from);
+            st->comm_failed = 1;
+            record_failure(st, MR_ERR_EXTERNAL, -1, 1, NULL);
+            return;
+        }
+#pragma omp atomic write
+        st->stop = 1;
+    }
+}
+
+/* Remap sample `index` and hand its row on: rank 0 appends it, the others send it to rank 0. Runs on a worker
+ * thread, in the C numeric locale. */
 static void run_sample(run_state *st, long index) {
     const mr_sweep_spec *spec = st->spec;
     mr_sweep_row row;
@@ -665,21 +978,28 @@ static void run_sample(run_state *st, long index) {
     }
 #pragma omp critical(mr_sweep_file)
     {
-        if (status != MR_OK) {
-            record_failure(st, status, index, 0);
-        } else if (!st->stop) {
-            status = mr_text_file_append(st->file->fd, st->file->path, WHAT, line, length, &st->file->size);
+        if (st->rank == 0) {
+            if (status != MR_OK)
+                record_failure(st, status, index, 0, NULL);
+            else if (!st->stop)
+                append_row(st, &row, line, length);
+            if (st->size > 1) {
+                receive_messages(st, 0);
+                stop_others(st);
+            }
+        } else if (!st->comm_failed) {
             if (status != MR_OK) {
-                record_failure(st, status, index, 1);
+                st->failed++;
+                put_u64(st->message, (uint64_t)index);
+                put_i32(st->message + 8, (int32_t)status);
+                size_t bytes = put_message(st->message, 12, mr_last_error());
+                send_to(st, 0, TAG_FAIL, st->message, bytes, "sending a failure to rank 0");
             } else {
-                st->file->done_count++;
+                send_to(st, 0, TAG_ROW, line, length, "sending a row to rank 0");
                 st->run_done++;
                 st->outcomes[row.outcome]++;
-                if (st->opts->progress != NULL) {
-                    mr_sweep_progress p = {st->file->done_count, st->file->total, st->run_done, st->run_total, &row};
-                    st->opts->progress(&p, st->opts->progress_user);
-                }
             }
+            poll_stop(st);
         }
     }
 }
@@ -689,17 +1009,101 @@ static void run_item(void *ctx, long k) {
     run_sample(st, st->pending[k]);
 }
 
-static mr_status run_pending(run_state *st, const long *pending, long count, int threads) {
-    st->pending = pending;
-    mr_status status = mr_remap_run_parallel(threads, count, &st->stop, run_item, st, "sweep");
-    if (status != MR_OK) return status;
-    if (st->file_failed) return mr_fail(st->failure, "%s", st->failure_message);
+/* The status a finished run reports (rank 0, or this rank alone). */
+static mr_status run_status(run_state *st) {
+    if (st->run_failed)
+        return mr_fail(st->failure, "%s", st->failure_message);
     if (st->failed > 0)
         return mr_fail(st->failure,
                        "sweep: %ld of %ld samples failed (the other rows are in '%s'; a resume retries the failed "
                        "ones); sample %ld: %s",
-                       st->failed, count, st->file->path, st->failure_index, st->failure_message);
+                       st->failed, st->run_total, st->file->path, st->failure_index, st->failure_message);
     return MR_OK;
+}
+
+/* Rank 0 with other ranks: wait for every rank's DONE, handling their rows meanwhile, in the C numeric locale. */
+static void gather_others(run_state *st) {
+    mr_c_numeric cn;
+    mr_status status = mr_c_numeric_enter(&cn, "sweep");
+    if (status != MR_OK) {
+        record_failure(st, status, -1, 1, NULL);
+        stop_others(st);
+    }
+    while (st->workers_done < st->size - 1 && !st->comm_failed)
+        receive_messages(st, 1);
+    if (status == MR_OK)
+        mr_c_numeric_leave(&cn);
+}
+
+/* Another rank, after its share: DONE (with a failure of its own, if any), then wait for rank 0's FINAL. */
+static mr_status finish_other(run_state *st, mr_status own) {
+    if (st->comm_failed)
+        return mr_fail(st->failure, "%s", st->failure_message);
+    put_u64(st->message, (uint64_t)st->run_done);
+    put_i32(st->message + 8, (int32_t)own);
+    size_t bytes = put_message(st->message, 12, own == MR_OK ? "" : mr_last_error());
+    send_to(st, 0, TAG_DONE, st->message, bytes, "reporting to rank 0");
+    while (!st->comm_failed) {
+        int from = -1, tag = 0, got = 0;
+        size_t n = 0;
+        if (!comm_ok(st, st->comm->receive(st->comm->user, 1, &from, &tag, st->message, &n, &got), "receiving"))
+            break;
+        if (got && tag == TAG_FINAL && n >= 4) {
+            mr_status final = (mr_status)get_i32(st->message);
+            if (!comm_ok(st, st->comm->flush(st->comm->user), "flushing its messages"))
+                break;
+            if (final == MR_OK)
+                return MR_OK;
+            return mr_fail(final, "sweep: the run failed (rank 0 reports why; this is rank %d)", st->rank);
+        }
+        // STOP after this rank's last sample: nothing to stop any more.
+    }
+    return mr_fail(st->failure, "%s", st->failure_message);
+}
+
+/* Rank 0 with other ranks, at the end: everyone gets the run's status, and rank 0's messages are delivered. */
+static void send_final(run_state *st, mr_status status) {
+    unsigned char buf[4];
+    put_i32(buf, (int32_t)status);
+    for (int r = 1; r < st->size; r++)
+        send_to(st, r, TAG_FINAL, buf, sizeof buf, "sending the end to the ranks");
+    if (!st->comm_failed)
+        comm_ok(st, st->comm->flush(st->comm->user), "flushing its messages");
+}
+
+/* Rank 0 with other ranks, before the file is opened: every rank's HELLO; a rank whose header differs from rank
+ * 0's runs another sweep (another version, other arguments) and the run is refused. */
+static mr_status gather_hellos(run_state *st, uint64_t hash, long total) {
+    mr_status result = MR_OK;
+    for (int hellos = 0; hellos < st->size - 1;) {
+        int from = -1, tag = 0, got = 0;
+        size_t bytes = 0;
+        mr_status status = st->comm->receive(st->comm->user, 1, &from, &tag, st->message, &bytes, &got);
+        if (status != MR_OK)
+            return mr_fail_context(status, "sweep: rank 0: waiting for the other ranks");
+        if (!got)
+            continue;
+        if (tag != TAG_HELLO || bytes < 24) {
+            if (result == MR_OK)
+                result =
+                    mr_fail(MR_ERR_EXTERNAL, "sweep: rank %d sent an unexpected first message (tag %d)", from, tag);
+            hellos++;
+            continue;
+        }
+        hellos++;
+        st->threads_total += get_i32(st->message + 16);
+        mr_status theirs = (mr_status)get_i32(st->message + 20);
+        if (result != MR_OK)
+            continue;
+        if (theirs != MR_OK)
+            result = mr_fail(theirs, "sweep: rank %d could not start: %s", from, message_text(st->message, bytes, 24));
+        else if (get_u64(st->message) != hash || (long)get_u64(st->message + 8) != total)
+            result = mr_fail(MR_ERR_INVALID_ARG,
+                             "sweep: rank %d runs another sweep than rank 0 (its file header would differ: another "
+                             "matremap version, or other arguments?); nothing was written",
+                             from);
+    }
+    return result;
 }
 
 mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_sweep_options *opts,
@@ -712,6 +1116,21 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
     if (status != MR_OK) return status;
     if (path == NULL || path[0] == '\0') return mr_fail(MR_ERR_INVALID_ARG, "sweep: empty output path");
     if (opts->threads < 0) return mr_fail(MR_ERR_INVALID_ARG, "sweep: threads %d: expected >= 0", opts->threads);
+    const long total = sample_count_unchecked(spec);
+    if (opts->shard_count < 0 ||
+        (opts->shard_count > 0 && (opts->shard_index < 0 || opts->shard_index >= opts->shard_count)))
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: shard %ld/%ld: expected K/N with 0 <= K < N", opts->shard_index,
+                       opts->shard_count);
+    if (opts->shard_count > total)
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: %ld shards for %ld samples: some shards would be empty",
+                       opts->shard_count, total);
+    const mr_sweep_comm *comm = opts->comm;
+    if (comm != NULL && (comm->size < 1 || comm->rank < 0 || comm->rank >= comm->size || comm->broadcast == NULL ||
+                         comm->send == NULL || comm->receive == NULL || comm->flush == NULL))
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep: comm: rank %d of %d, or a missing function", comm->rank, comm->size);
+    const int size = comm ? comm->size : 1, rank = comm ? comm->rank : 0;
+    if (size == 1)
+        comm = NULL;
     int threads = opts->threads;
 #ifdef _OPENMP
     if (threads == 0) threads = omp_get_max_threads();
@@ -719,66 +1138,755 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
     threads = 1;
 #endif
 
-    mr_strbuf header = {0};
-    mr_c_numeric cn;
-    status = mr_c_numeric_enter(&cn, "sweep");
-    if (status != MR_OK) return status;
+    run_state *st = calloc(1, sizeof *st);
+    if (st == NULL)
+        return mr_fail(MR_ERR_NOMEM, "sweep: out of memory");
+    st->spec = spec;
+    st->opts = opts;
+    st->comm = comm;
+    st->rank = rank;
+    st->size = size;
+    st->failure = MR_OK;
+    st->threads_total = threads;
+    mr_strbuf header = {0}, bare = {0};
     sweep_file f;
     memset(&f, 0, sizeof f);
     f.path = path;
     f.fd = -1;
-    f.total = sample_count_unchecked(spec);
-    f.done = calloc((size_t)f.total, 1);
+    f.total = total;
+    f.shard = opts->shard_count > 0 ? opts->shard_index : 0;
+    f.shards = opts->shard_count > 0 ? opts->shard_count : 1;
+    f.expected = shard_size(total, f.shard, f.shards);
+    st->file = &f;
+    unsigned char *todo = NULL; /* the to-do bitmap, as broadcast */
+    const size_t todo_bytes = ((size_t)total + 7) / 8;
     mr_render_plan *plan = NULL;
     long *pending = NULL;
-    run_state st;
-    memset(&st, 0, sizeof st);
-    if (f.done == NULL) status = mr_fail(MR_ERR_NOMEM, "sweep: out of memory for %ld samples", f.total);
-    if (status == MR_OK) status = build_header(spec, opts->command_line, &header);
-    if (status == MR_OK) status = open_file(spec, &header, opts->resume, &f);
-    mr_c_numeric_leave(&cn);
-    long already = f.done_count;
 
-    long pending_count = 0;
-    if (status == MR_OK && f.done_count < f.total) {
-        pending = malloc((size_t)(f.total - f.done_count) * sizeof *pending);
-        if (pending == NULL) status = mr_fail(MR_ERR_NOMEM, "sweep: out of memory for %ld samples", f.total);
-        for (long i = 0; status == MR_OK && i < f.total; i++)
-            if (!f.done[i]) pending[pending_count++] = i;
+    mr_c_numeric cn;
+    status = mr_c_numeric_enter(&cn, "sweep");
+    if (status != MR_OK) {
+        free(st);
+        return status;
+    }
+    f.state = rank == 0 ? calloc((size_t)total, 1) : NULL; /* only rank 0 keeps the file's books */
+    todo = calloc(todo_bytes, 1);
+    if ((rank == 0 && f.state == NULL) || todo == NULL)
+        status = mr_fail(MR_ERR_NOMEM, "sweep: out of memory for %ld samples", total);
+    if (status == MR_OK)
+        status = build_header(spec, opts->command_line, opts->shard_index, opts->shard_count, &header);
+    if (status == MR_OK)
+        status = build_header(spec, NULL, opts->shard_index, opts->shard_count, &bare);
+    const uint64_t hash = status == MR_OK ? hash_text(bare.text, bare.length) : 0;
+
+    // Setup: rank 0 hears from every rank, opens the file and tells everyone what to run.
+    long todo_count = 0;
+    if (rank == 0) {
+        if (comm != NULL) {
+            mr_status others = gather_hellos(st, hash, total);
+            if (status == MR_OK)
+                status = others;
+        }
         if (status == MR_OK) {
+            for (long i = 0; i < total; i++)
+                if (i % f.shards != f.shard)
+                    f.state[i] = SAMPLE_NOT_OURS;
+            status = open_file(spec, &header, opts->resume, &f);
+        }
+        for (long i = 0; status == MR_OK && i < total; i++)
+            if (f.state[i] == SAMPLE_TODO) {
+                todo[i / 8] |= (unsigned char)(1u << (i % 8));
+                todo_count++;
+            }
+        if (comm != NULL) {
+            unsigned char go[16] = {0};
+            put_i32(go, (int32_t)status);
+            put_u64(go + 8, (uint64_t)todo_count);
+            mr_status sent = comm->broadcast(comm->user, go, sizeof go);
+            if (sent == MR_OK && status == MR_OK)
+                sent = comm->broadcast(comm->user, todo, todo_bytes);
+            if (sent != MR_OK && status == MR_OK) {
+                status = mr_fail_context(sent, "sweep: rank 0: telling the ranks what to run");
+                st->comm_failed = 1;
+            }
+        }
+    } else {
+        put_u64(st->message, hash);
+        put_u64(st->message + 8, (uint64_t)total);
+        put_i32(st->message + 16, threads);
+        put_i32(st->message + 20, (int32_t)status);
+        size_t bytes = put_message(st->message, 24, status == MR_OK ? "" : mr_last_error());
+        mr_status sent = comm->send(comm->user, 0, TAG_HELLO, st->message, bytes);
+        unsigned char go[16] = {0};
+        if (sent == MR_OK)
+            sent = comm->broadcast(comm->user, go, sizeof go);
+        mr_status theirs = (mr_status)get_i32(go);
+        if (sent == MR_OK && theirs == MR_OK)
+            sent = comm->broadcast(comm->user, todo, todo_bytes);
+        if (sent != MR_OK)
+            status = mr_fail_context(sent, "sweep: rank %d: hearing from rank 0", rank);
+        else if (theirs != MR_OK)
+            status = mr_fail(theirs, "sweep: rank 0 did not start the run (it reports why; this is rank %d)", rank);
+        for (long i = 0; status == MR_OK && i < total; i++)
+            todo_count += (todo[i / 8] >> (i % 8)) & 1;
+    }
+    mr_c_numeric_leave(&cn);
+    const long already = f.done_count;
+    // From here on, once the setup succeeded, every rank goes through to the end of the protocol.
+    const int started = status == MR_OK;
+
+    // This rank's share: the k-th sample to run goes to rank k % size.
+    long share = 0;
+    if (status == MR_OK && todo_count > 0) {
+        pending = malloc((size_t)(todo_count / size + 1) * sizeof *pending);
+        if (pending == NULL)
+            status = mr_fail(MR_ERR_NOMEM, "sweep: out of memory for %ld samples", todo_count);
+        for (long i = 0, k = 0; status == MR_OK && i < total; i++)
+            if ((todo[i / 8] >> (i % 8)) & 1) {
+                if (k % size == rank)
+                    pending[share++] = i;
+                k++;
+            }
+        if (status == MR_OK && share > 0) {
             mr_scene scene = mr_remap_file_scene(&spec->scene);
             status = mr_render_plan_create(&scene, &plan);
         }
-        if (status == MR_OK) {
-            st.spec = spec;
-            st.opts = opts;
-            st.file = &f;
-            st.plan = plan;
-            st.run_total = pending_count;
-            st.failure = MR_OK;
-            status = run_pending(&st, pending, pending_count, threads);
-        }
     }
+    st->plan = plan;
+    st->run_total = rank == 0 ? todo_count : share;
+    if (status == MR_OK && share > 0) {
+        st->pending = pending;
+        mr_status ran = mr_remap_run_parallel(threads, share, &st->stop, run_item, st, "sweep");
+        if (ran != MR_OK) {
+            if (rank == 0) {
+#pragma omp critical(mr_sweep_file)
+                record_failure(st, ran, -1, 1, NULL);
+            } else {
+                status = ran;
+            }
+        }
+    } else if (status != MR_OK && started && rank == 0) {
+        record_failure(st, status, -1, 1, NULL); /* rank 0 could not compute its share: the run failed */
+        status = MR_OK;
+    }
+
     int sorted = 0;
-    long header_lines = 0;
-    for (size_t i = 0; i < header.length; i++) header_lines += header.text[i] == '\n';
-    if (status == MR_OK) status = sort_file(&f, header_lines, &sorted);
+    if (started && rank == 0) {
+        if (comm != NULL) {
+            stop_others(st);
+            gather_others(st);
+        }
+        status = run_status(st);
+        long header_lines = 0;
+        for (size_t i = 0; i < header.length; i++)
+            header_lines += header.text[i] == '\n';
+        if (status == MR_OK)
+            status = sort_file(&f, header_lines, &sorted);
+        if (comm != NULL) {
+            char message[1024]; /* mr_last_error()'s capacity (status.c) */
+            snprintf(message, sizeof message, "%s", mr_last_error());
+            send_final(st, status);
+            if (status != MR_OK)
+                mr_fail(status, "%s", message); /* the run's message, not a later one */
+        }
+    } else if (started) {
+        status = finish_other(st, status);
+    }
     if (f.fd >= 0) close(f.fd); /* releases the lock, after the rename */
     mr_render_plan_free(plan);
     free(pending);
-    free(f.done);
+    free(todo);
+    free(f.state);
     free(header.text);
-    if (status != MR_OK) return status;
-    if (out != NULL) {
+    free(bare.text);
+    if (status == MR_OK && out != NULL) {
         memset(out, 0, sizeof *out);
-        out->total = f.total;
+        out->total = total;
+        out->file_total = f.expected;
         out->already_done = already;
-        out->computed = st.run_done;
-        memcpy(out->outcomes, st.outcomes, sizeof out->outcomes);
+        out->computed = st->run_done;
+        memcpy(out->outcomes, st->outcomes, sizeof out->outcomes);
         out->truncated_bytes = f.truncated;
         out->sorted = sorted;
         out->threads = threads;
+        out->processes = size;
+        out->threads_total = rank == 0 ? st->threads_total : threads;
         out->seconds = mr_now_seconds() - start;
     }
+    free(st);
+    return status;
+}
+
+/* ---- merging shards ------------------------------------------------------------------------------------------ */
+
+/* Longest line merge reads (a header's command line can be long; a row is at most MR_SWEEP_MAX_LINE): a file
+ * that is one endless line is refused, not swallowed. */
+#define MERGE_MAX_LINE (1L << 20)
+
+/* The next line of fp into *buf (grown as needed, NUL-terminated, '\n' kept) and *len; 0 at the end of the file,
+ * -1 for a line longer than MERGE_MAX_LINE (MR_ERR_FORMAT) or out of memory (MR_ERR_NOMEM) in *failure, the
+ * message naming `path` and the line. */
+static int read_line(FILE *fp, const char *path, long line_number, char **buf, size_t *cap, size_t *len,
+                     mr_status *failure) {
+    *len = 0;
+    for (;;) {
+        if (*cap - *len < 2) {
+            size_t grown = *cap ? 2 * *cap : 4096;
+            char *p = realloc(*buf, grown);
+            if (p == NULL) {
+                *failure = mr_fail(MR_ERR_NOMEM, "shard file '%s': out of memory reading line %ld", path, line_number);
+                return -1;
+            }
+            *buf = p;
+            *cap = grown;
+        }
+        if (fgets(*buf + *len, (int)MR_MIN(*cap - *len, (size_t)INT_MAX), fp) == NULL)
+            return *len > 0;
+        *len += strlen(*buf + *len);
+        if (*len > 0 && (*buf)[*len - 1] == '\n')
+            return 1;
+        if (*len > (size_t)MERGE_MAX_LINE) {
+            *failure = mr_fail(MR_ERR_FORMAT, "shard file '%s': line %ld is longer than %ld bytes", path, line_number,
+                               MERGE_MAX_LINE);
+            return -1;
+        }
+    }
+}
+
+/* The text after `prefix` of the header line that starts with it, or NULL. */
+static const char *header_field(char *const *lines, int count, const char *prefix) {
+    size_t n = strlen(prefix);
+    for (int i = 0; i < count; i++)
+        if (strncmp(lines[i], prefix, n) == 0)
+            return lines[i] + n;
+    return NULL;
+}
+
+/* Split text (a copy) at spaces into at most `max` tokens; returns the count, -1 if there are more. */
+static int split_words(char *text, char **words, int max) {
+    int n = 0;
+    char *save = NULL;
+    for (char *w = strtok_r(text, " ", &save); w != NULL; w = strtok_r(NULL, " ", &save)) {
+        if (n == max)
+            return -1;
+        words[n++] = w;
+    }
+    return n;
+}
+
+static int parse_whole_long(const char *text, long *out) { return mr_csv_parse_long(text, strlen(text), out); }
+
+/* "MODEL name=v ..." (the "# from:" / "# to:" lines) into a model and its packed values. */
+static mr_status parse_model_values(const char *text, const mr_brdf_model **model, double *values) {
+    char copy[MR_SWEEP_MAX_LINE];
+    if (strlen(text) >= sizeof copy)
+        return mr_fail(MR_ERR_FORMAT, "the line is too long");
+    strcpy(copy, text);
+    char *words[2 * MR_BRDF_MAX_VALUES + 2];
+    int n = split_words(copy, words, (int)(sizeof words / sizeof words[0]));
+    if (n < 1)
+        return mr_fail(MR_ERR_FORMAT, "no model named");
+    *model = mr_brdf_find(words[0]);
+    if (*model == NULL)
+        return MR_ERR_FORMAT; /* mr_brdf_find's message lists the models */
+    mr_brdf_default_values(*model, values);
+    for (int k = 1; k < n; k++) {
+        mr_status status = mr_brdf_parse_assignment(*model, words[k], values);
+        if (status != MR_OK)
+            return MR_ERR_FORMAT;
+    }
     return MR_OK;
+}
+
+/* "strategy=S max_evaluations=N xtol=X grid_points=G starts=S seed=S[ held=a,b]" into spec->remap. */
+static mr_status parse_remap_line(const char *text, mr_sweep_spec *spec) {
+    char copy[MR_SWEEP_MAX_LINE];
+    if (strlen(text) >= sizeof copy)
+        return mr_fail(MR_ERR_FORMAT, "the line is too long");
+    strcpy(copy, text);
+    char *words[16];
+    int n = split_words(copy, words, 16);
+    for (int k = 0; k < n; k++) {
+        char *eq = strchr(words[k], '=');
+        if (eq == NULL)
+            return mr_fail(MR_ERR_FORMAT, "'%s' is not name=value", words[k]);
+        *eq = '\0';
+        const char *key = words[k], *value = eq + 1;
+        long v = 0;
+        int ok = 1;
+        if (strcmp(key, "strategy") == 0) {
+            ok = mr_remap_strategy_from_name(value, &spec->remap.strategy) == MR_OK;
+        } else if (strcmp(key, "xtol") == 0) {
+            ok = mr_csv_parse_double(value, strlen(value), &spec->remap.xtol);
+        } else if (strcmp(key, "held") == 0) {
+            char *save = NULL;
+            for (char *name = strtok_r(eq + 1, ",", &save); ok && name != NULL; name = strtok_r(NULL, ",", &save)) {
+                int p = mr_brdf_param_index(spec->target, name);
+                ok = p >= 0 && p < 32;
+                if (ok)
+                    spec->remap.held |= 1u << p;
+            }
+        } else if ((ok = parse_whole_long(value, &v) && v <= INT_MAX)) {
+            if (strcmp(key, "max_evaluations") == 0)
+                spec->remap.max_evaluations = (int)v;
+            else if (strcmp(key, "grid_points") == 0)
+                spec->remap.grid_points = (int)v;
+            else if (strcmp(key, "starts") == 0)
+                spec->remap.starts = (int)v;
+            else if (strcmp(key, "seed") == 0)
+                spec->remap.seed = (unsigned long)v;
+            else
+                ok = 0;
+        }
+        if (!ok)
+            return mr_fail(MR_ERR_FORMAT, "'%s=%s' is not a remap option this version knows", key, value);
+    }
+    return MR_OK;
+}
+
+/* "fit size=N light=L intensity=I ..." into spec->scene (the other fields are fixed by the version: the rebuilt
+ * header shows whether they match). */
+static mr_status parse_scene_line(const char *text, mr_sweep_spec *spec) {
+    char copy[MR_SWEEP_MAX_LINE];
+    if (strlen(text) >= sizeof copy)
+        return mr_fail(MR_ERR_FORMAT, "the line is too long");
+    strcpy(copy, text);
+    char *words[16];
+    int n = split_words(copy, words, 16);
+    if (n < 1 || strcmp(words[0], "fit") != 0)
+        return mr_fail(MR_ERR_FORMAT, "not a fit scene");
+    for (int k = 1; k < n; k++) {
+        char *eq = strchr(words[k], '=');
+        if (eq == NULL)
+            return mr_fail(MR_ERR_FORMAT, "'%s' is not name=value", words[k]);
+        *eq = '\0';
+        long v = 0;
+        int ok = 1;
+        if (strcmp(words[k], "size") == 0)
+            ok = parse_whole_long(eq + 1, &v) && v <= MR_RENDER_MAX_SIZE && (spec->scene.size = (int)v, 1);
+        else if (strcmp(words[k], "light") == 0)
+            ok = mr_fit_light_from_name(eq + 1, &spec->scene.light) == MR_OK;
+        else if (strcmp(words[k], "intensity") == 0)
+            ok = mr_csv_parse_double(eq + 1, strlen(eq + 1), &spec->scene.intensity);
+        if (!ok)
+            return mr_fail(MR_ERR_FORMAT, "'%s=%s' is not a scene setting this version knows", words[k], eq + 1);
+    }
+    return MR_OK;
+}
+
+/* "grid AXIS ..." or "random=N seed=S over p,q,..." into the spec's sampling. */
+static mr_status parse_sampling_line(const char *text, mr_sweep_spec *spec) {
+    char copy[MR_SWEEP_MAX_LINE];
+    if (strlen(text) >= sizeof copy)
+        return mr_fail(MR_ERR_FORMAT, "the line is too long");
+    strcpy(copy, text);
+    char *words[MR_SWEEP_MAX_AXES + 1];
+    int n = split_words(copy, words, MR_SWEEP_MAX_AXES + 1);
+    if (n >= 2 && strcmp(words[0], "grid") == 0) {
+        spec->sampling = MR_SWEEP_GRID;
+        for (int k = 1; k < n; k++) {
+            mr_status status = mr_sweep_parse_axis(spec->source, words[k], &spec->axes[k - 1]);
+            if (status != MR_OK)
+                return MR_ERR_FORMAT;
+        }
+        spec->axis_count = n - 1;
+        return MR_OK;
+    }
+    if (n == 4 && strncmp(words[0], "random=", 7) == 0 && strncmp(words[1], "seed=", 5) == 0 &&
+        strcmp(words[2], "over") == 0) {
+        spec->sampling = MR_SWEEP_RANDOM;
+        char *end = NULL;
+        errno = 0;
+        unsigned long long seed = strtoull(words[1] + 5, &end, 10);
+        if (!parse_whole_long(words[0] + 7, &spec->random_count) || words[1][5] < '0' || words[1][5] > '9' ||
+            *end != '\0' || errno == ERANGE)
+            return mr_fail(MR_ERR_FORMAT, "'%s %s': expected random=N seed=S", words[0], words[1]);
+        spec->seed = seed;
+        // Every parameter not drawn is held (switches and fixed factors are never drawn anyway).
+        spec->held = spec->source->param_count >= 32 ? ~0u : (1u << spec->source->param_count) - 1;
+        char *save = NULL;
+        for (char *name = strtok_r(words[3], ",", &save); name != NULL; name = strtok_r(NULL, ",", &save)) {
+            int p = mr_brdf_param_index(spec->source, name);
+            if (p < 0 || p >= 32)
+                return mr_fail(MR_ERR_FORMAT, "model '%s' has no parameter '%s'", spec->source->name, name);
+            spec->held &= ~(1u << p);
+        }
+        return MR_OK;
+    }
+    return mr_fail(MR_ERR_FORMAT, "expected 'grid AXIS ...' or 'random=N seed=S over PARAMETERS'");
+}
+
+/* One shard file being merged. */
+typedef struct merge_shard {
+    const char *path;
+    FILE *fp;
+    mr_sweep_spec spec;
+    long k, n;
+    char *bare;       /* the header without its "# shard:" and "# command:" lines: equal for shards of one sweep */
+    long line_number; /* of the last line read */
+    dev_t dev;
+    ino_t ino;
+} merge_shard;
+
+/* Read and check a shard's header: parsed back into a sweep, which must rebuild the header byte for byte. */
+static mr_status read_shard_header(merge_shard *s) {
+    enum { MAX_HEADER_LINES = 32 };
+    char *lines[MAX_HEADER_LINES] = {0};
+    int count = 0;
+    char *buf = NULL;
+    size_t cap = 0, len = 0;
+    mr_status status = MR_OK;
+    mr_strbuf file_header = {0}, rebuilt = {0}, bare = {0};
+    for (;;) { /* the '#' lines and the column line */
+        int got = read_line(s->fp, s->path, s->line_number + 1, &buf, &cap, &len, &status);
+        if (got < 0)
+            break;
+        if (got == 0 || buf[len - 1] != '\n') {
+            status = mr_fail(MR_ERR_FORMAT, "shard file '%s': the header ends early, at line %ld (%s)", s->path,
+                             s->line_number + 1, got ? "a torn line" : "the end of the file");
+            break;
+        }
+        s->line_number++;
+        if (count == MAX_HEADER_LINES) {
+            status = mr_fail(MR_ERR_FORMAT, "shard file '%s': no column line after %d header lines", s->path, count);
+            break;
+        }
+        mr_strbuf_printf(&file_header, "%s", buf);
+        buf[len - 1] = '\0';
+        lines[count] = strdup(buf);
+        if (lines[count++] == NULL) {
+            status = mr_fail(MR_ERR_NOMEM, "shard file '%s': out of memory", s->path);
+            break;
+        }
+        if (buf[0] != '#')
+            break; /* the column line ends the header */
+    }
+    free(buf);
+    const char *from = NULL, *to = NULL, *remap = NULL, *scene = NULL, *sampling = NULL, *shard = NULL;
+    const char *command = NULL;
+    if (status == MR_OK) {
+        from = header_field(lines, count, "# from: ");
+        to = header_field(lines, count, "# to: ");
+        remap = header_field(lines, count, "# remap: ");
+        scene = header_field(lines, count, "# scene: ");
+        sampling = header_field(lines, count, "# sampling: ");
+        shard = header_field(lines, count, SHARD_PREFIX);
+        command = header_field(lines, count, COMMAND_PREFIX);
+        if (strncmp(lines[0], "# matremap ", 11) != 0 || from == NULL || to == NULL || remap == NULL || scene == NULL ||
+            sampling == NULL || command == NULL)
+            status = mr_fail(MR_ERR_FORMAT,
+                             "shard file '%s' is not a sweep file (its header lacks a '# from:', "
+                             "'# to:', '# remap:', '# scene:', '# sampling:' or '# command:' line)",
+                             s->path);
+        else if (shard == NULL)
+            status = mr_fail(MR_ERR_FORMAT,
+                             "'%s' is a whole sweep, not a shard (its header has no '# shard: K/N' "
+                             "line): merge takes the files of 'matremap sweep ... --shard K/N' runs",
+                             s->path);
+    }
+    if (status == MR_OK) {
+        const char *slash = strchr(shard, '/');
+        char kbuf[32];
+        size_t klen = slash ? (size_t)(slash - shard) : 0;
+        if (klen > 0 && klen < sizeof kbuf) {
+            memcpy(kbuf, shard, klen);
+            kbuf[klen] = '\0';
+        }
+        if (slash == NULL || klen == 0 || klen >= sizeof kbuf || !parse_whole_long(kbuf, &s->k) ||
+            !parse_whole_long(slash + 1, &s->n) || s->n < 1 || s->k >= s->n)
+            status =
+                mr_fail(MR_ERR_FORMAT, "shard file '%s': '# shard: %s' is not K/N with 0 <= K < N", s->path, shard);
+    }
+    // The sweep, read back. A line this version would write otherwise shows in the comparison below.
+    const char *step = "# from:";
+    if (status == MR_OK) {
+        const mr_brdf_model *source = NULL, *target = NULL;
+        double sv[MR_BRDF_MAX_VALUES], tv[MR_BRDF_MAX_VALUES];
+        status = parse_model_values(from, &source, sv);
+        if (status == MR_OK) {
+            step = "# to:";
+            status = parse_model_values(to, &target, tv);
+        }
+        if (status == MR_OK) {
+            mr_sweep_spec_init(&s->spec, source, target);
+            memcpy(s->spec.source_values, sv, sizeof sv);
+            memcpy(s->spec.target_values, tv, sizeof tv);
+            step = "# remap:";
+            status = parse_remap_line(remap, &s->spec);
+        }
+        if (status == MR_OK) {
+            step = "# scene:";
+            status = parse_scene_line(scene, &s->spec);
+        }
+        if (status == MR_OK) {
+            step = "# sampling:";
+            status = parse_sampling_line(sampling, &s->spec);
+        }
+        if (status == MR_OK) {
+            step = "the header";
+            status = mr_sweep_check(&s->spec);
+        }
+        if (status != MR_OK)
+            mr_fail_context(MR_ERR_FORMAT, "shard file '%s': %s line", s->path, step);
+        if (status != MR_OK)
+            status = MR_ERR_FORMAT;
+    }
+    if (status == MR_OK) {
+        status = build_header(&s->spec, command, s->k, s->n, &rebuilt);
+        if (status == MR_OK && (file_header.failed || rebuilt.length != file_header.length ||
+                                memcmp(rebuilt.text, file_header.text, rebuilt.length) != 0)) {
+            // Name the first line that differs.
+            const char *a = file_header.text ? file_header.text : "", *b = rebuilt.text;
+            long line = 1;
+            while (*a && *a == *b) {
+                if (*a == '\n')
+                    line++;
+                a++;
+                b++;
+            }
+            while (a > file_header.text && a[-1] != '\n')
+                a--, b--;
+            status =
+                mr_fail(MR_ERR_FORMAT,
+                        "shard file '%s': line %ld is '%.*s', but the sweep its header describes would have "
+                        "'%.*s' (written by another matremap version, or edited?)",
+                        s->path, line, (int)MR_MIN(strcspn(a, "\n"), 200), a, (int)MR_MIN(strcspn(b, "\n"), 200), b);
+        }
+    }
+    if (status == MR_OK) {
+        for (int i = 0; i < count; i++)
+            if (strncmp(lines[i], SHARD_PREFIX, strlen(SHARD_PREFIX)) != 0 &&
+                strncmp(lines[i], COMMAND_PREFIX, strlen(COMMAND_PREFIX)) != 0)
+                mr_strbuf_printf(&bare, "%s\n", lines[i]);
+        if (bare.failed)
+            status = mr_fail(MR_ERR_NOMEM, "shard file '%s': out of memory", s->path);
+        s->bare = bare.text;
+        bare.text = NULL;
+    }
+    for (int i = 0; i < count; i++)
+        free(lines[i]);
+    free(file_header.text);
+    free(rebuilt.text);
+    free(bare.text);
+    return status;
+}
+
+/* The first line where two shards' headers (shard and command lines left out) differ, for the message. */
+static mr_status shards_differ(const merge_shard *a, const merge_shard *b) {
+    const char *x = a->bare, *y = b->bare;
+    long line = 1;
+    while (*x && *x == *y) {
+        if (*x == '\n')
+            line++;
+        x++;
+        y++;
+    }
+    while (x > a->bare && x[-1] != '\n')
+        x--, y--;
+    return mr_fail(MR_ERR_INVALID_ARG,
+                   "shard files '%s' and '%s' are from different sweeps: '%.*s' in the first, '%.*s' in the second",
+                   a->path, b->path, (int)MR_MIN(strcspn(x, "\n"), 200), x, (int)MR_MIN(strcspn(y, "\n"), 200), y);
+}
+
+/* Open a shard and read its header. */
+static mr_status open_shard(merge_shard *s) {
+    s->fp = fopen(s->path, "r");
+    if (s->fp == NULL) {
+        int err = errno;
+        return mr_fail(err == ENOENT ? MR_ERR_INVALID_ARG : MR_ERR_IO, "shard file '%s': cannot open: %s", s->path,
+                       strerror(err));
+    }
+    struct stat st;
+    if (fstat(fileno(s->fp), &st) != 0 || !S_ISREG(st.st_mode))
+        return mr_fail(MR_ERR_INVALID_ARG, "shard file '%s' is not a regular file", s->path);
+    s->dev = st.st_dev;
+    s->ino = st.st_ino;
+    // A sweep still writing the shard holds its write lock (mr_text_file_lock): its rows are not all there yet.
+    struct flock lock;
+    memset(&lock, 0, sizeof lock);
+    lock.l_type = F_WRLCK;
+    lock.l_whence = SEEK_SET;
+    if (fcntl(fileno(s->fp), F_GETLK, &lock) == 0 && lock.l_type != F_UNLCK)
+        return mr_fail(MR_ERR_INVALID_ARG,
+                       "shard file '%s' is being written by another process (pid %ld): merge it when its sweep has "
+                       "finished",
+                       s->path, (long)lock.l_pid);
+    return read_shard_header(s);
+}
+
+/* Copy the rows of the shards, in index order (sample i is row i / N of shard i % N), into out, checking each. */
+static mr_status merge_rows(merge_shard *const *by_k, long n, const mr_sweep_spec *spec, long total, FILE *out) {
+    char *buf = NULL;
+    size_t cap = 0, len = 0;
+    mr_status status = MR_OK;
+    for (long i = 0; status == MR_OK && i < total; i++) {
+        merge_shard *s = by_k[i % n];
+        const long want = shard_size(total, s->k, s->n);
+        int got = read_line(s->fp, s->path, s->line_number + 1, &buf, &cap, &len, &status);
+        if (got < 0)
+            break;
+        if (got == 0) {
+            status = mr_fail(MR_ERR_INVALID_ARG,
+                             "shard file '%s' (shard %ld/%ld) ends after %ld of its %ld rows, at sample %ld: finish "
+                             "it first (run its sweep again with --resume)",
+                             s->path, s->k, s->n, i / n, want, i);
+            break;
+        }
+        s->line_number++;
+        if (buf[len - 1] != '\n') {
+            status = mr_fail(MR_ERR_INVALID_ARG,
+                             "shard file '%s': line %ld is torn (no line end): the shard was interrupted; finish it "
+                             "first (run its sweep again with --resume)",
+                             s->path, s->line_number);
+            break;
+        }
+        mr_sweep_row row;
+        status = check_line(spec, total, s->k, s->n, buf, len, &row);
+        if (status == MR_OK && row.index != i)
+            status = mr_fail(row.index < i ? MR_ERR_FORMAT : MR_ERR_INVALID_ARG,
+                             "sample %ld where sample %ld belongs (%s)", row.index, i,
+                             row.index < i ? "a sample twice, or rows out of order: an unfinished shard? run its "
+                                             "sweep again with --resume"
+                                           : "samples are missing: finish the shard first (run its sweep again "
+                                             "with --resume)");
+        if (status != MR_OK) {
+            mr_fail_context(status, "shard file '%s': line %ld", s->path, s->line_number);
+            break;
+        }
+        if (fwrite(buf, 1, len, out) != len) {
+            int err = errno;
+            status = mr_fail(MR_ERR_IO, "sweep merge: cannot write: %s", strerror(err));
+        }
+    }
+    for (long k = 0; status == MR_OK && k < n; k++) { /* nothing may follow a shard's last sample */
+        merge_shard *s = by_k[k];
+        int got = read_line(s->fp, s->path, s->line_number + 1, &buf, &cap, &len, &status);
+        if (got > 0)
+            status = mr_fail(MR_ERR_FORMAT,
+                             "shard file '%s': line %ld follows the shard's last sample (%ld rows): an "
+                             "edited file?",
+                             s->path, s->line_number + 1, shard_size(total, s->k, s->n));
+    }
+    free(buf);
+    return status;
+}
+
+mr_status mr_sweep_merge(const char *const *paths, int count, const char *output, const char *command_line,
+                         mr_sweep_merge_summary *out) {
+    if (paths == NULL || count < 1)
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep merge: no shard files given");
+    if (output == NULL || output[0] == '\0')
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep merge: empty output path");
+    struct stat ost;
+    if (lstat(output, &ost) == 0)
+        return mr_fail(MR_ERR_INVALID_ARG,
+                       "sweep merge: '%s' already exists; not overwriting it (remove it, or "
+                       "choose another -o)",
+                       output);
+    merge_shard *shards = calloc((size_t)count, sizeof *shards);
+    merge_shard **by_k = calloc((size_t)count, sizeof *by_k);
+    mr_c_numeric cn;
+    mr_status status = mr_c_numeric_enter(&cn, "sweep merge");
+    if (status != MR_OK) {
+        free(shards);
+        free(by_k);
+        return status;
+    }
+    if (shards == NULL || by_k == NULL)
+        status = mr_fail(MR_ERR_NOMEM, "sweep merge: out of memory");
+    for (int i = 0; status == MR_OK && i < count; i++) {
+        shards[i].path = paths[i];
+        status = open_shard(&shards[i]);
+        for (int j = 0; status == MR_OK && j < i; j++)
+            if (shards[j].dev == shards[i].dev && shards[j].ino == shards[i].ino)
+                status = mr_fail(MR_ERR_INVALID_ARG, "sweep merge: '%s' and '%s' are the same file", shards[j].path,
+                                 shards[i].path);
+    }
+    // They must be the N shards of one sweep, each once.
+    const long n = status == MR_OK ? shards[0].n : 0;
+    for (int i = 0; status == MR_OK && i < count; i++) {
+        merge_shard *s = &shards[i];
+        if (s->n != n)
+            status = mr_fail(MR_ERR_INVALID_ARG,
+                             "shard files '%s' and '%s' split the sweep differently: shard %ld/%ld and %ld/%ld (all "
+                             "shards must come from runs with the same N)",
+                             shards[0].path, s->path, shards[0].k, shards[0].n, s->k, s->n);
+        else if (strcmp(s->bare, shards[0].bare) != 0)
+            status = shards_differ(&shards[0], s);
+        for (int j = 0; status == MR_OK && j < i; j++)
+            if (shards[j].k == s->k)
+                status = mr_fail(MR_ERR_INVALID_ARG, "shard files '%s' and '%s' are both shard %ld/%ld", shards[j].path,
+                                 s->path, s->k, n);
+    }
+    if (status == MR_OK && count != n) {
+        char missing[512] = "";
+        size_t used = 0;
+        for (long k = 0, listed = 0; k < n && used + 32 < sizeof missing; k++) {
+            int given = 0;
+            for (int i = 0; i < count; i++)
+                given |= shards[i].k == k;
+            if (given)
+                continue;
+            used += (size_t)snprintf(missing + used, sizeof missing - used, "%s%ld/%ld", listed++ ? ", " : "", k, n);
+        }
+        status = mr_fail(MR_ERR_INVALID_ARG,
+                         "sweep merge: %d shard files given, the sweep has %ld shards; missing: "
+                         "%s",
+                         count, n, missing);
+    }
+    for (int i = 0; status == MR_OK && i < count; i++)
+        by_k[shards[i].k] = &shards[i]; /* K < N = count */
+    mr_atomic_file tmp;
+    memset(&tmp, 0, sizeof tmp);
+    FILE *fp = NULL;
+    long total = 0;
+    if (status == MR_OK) {
+        total = sample_count_unchecked(&shards[0].spec);
+        status = mr_atomic_begin(output, &tmp);
+    }
+    if (status == MR_OK && (fp = fopen(tmp.tmp_path, "w")) == NULL) {
+        int err = errno;
+        status =
+            mr_fail(MR_ERR_IO, "sweep merge: cannot open the temporary file '%s': %s", tmp.tmp_path, strerror(err));
+    }
+    if (status == MR_OK) {
+        mr_strbuf header = {0};
+        status = build_header(&shards[0].spec, command_line, 0, 0, &header);
+        if (status == MR_OK && fwrite(header.text, 1, header.length, fp) != header.length) {
+            int err = errno;
+            status = mr_fail(MR_ERR_IO, "sweep merge: cannot write '%s': %s", tmp.tmp_path, strerror(err));
+        }
+        free(header.text);
+    }
+    if (status == MR_OK)
+        status = merge_rows(by_k, n, &shards[0].spec, total, fp);
+    if (fp != NULL) {
+        int err = 0;
+        if (fflush(fp) != 0)
+            err = errno;
+        if (fclose(fp) != 0 && err == 0)
+            err = errno;
+        if (err != 0 && status == MR_OK)
+            status = mr_fail(MR_ERR_IO, "sweep merge: cannot write '%s': %s", tmp.tmp_path, strerror(err));
+    }
+    // Checked again just before the rename: the output may have appeared meanwhile (it is never replaced).
+    if (status == MR_OK && lstat(output, &ost) == 0)
+        status = mr_fail(MR_ERR_INVALID_ARG, "sweep merge: '%s' appeared while merging; not overwriting it", output);
+    if (status == MR_OK)
+        status = mr_atomic_commit(&tmp);
+    if (status != MR_OK && tmp.active)
+        mr_atomic_abort(&tmp);
+    mr_c_numeric_leave(&cn);
+    for (int i = 0; shards != NULL && i < count; i++) {
+        if (shards[i].fp != NULL)
+            fclose(shards[i].fp);
+        free(shards[i].bare);
+    }
+    free(shards);
+    free(by_k);
+    if (status == MR_OK && out != NULL) {
+        out->total = total;
+        out->shards = n;
+    }
+    return status;
 }

@@ -60,6 +60,19 @@
  *     finished sweep is the same file, byte for byte except the `seconds` column (and the "# command:" line),
  *     whether or not it was interrupted and resumed, with any thread counts.
  *
+ * Shards (mr_sweep_options.shard_index/shard_count, the CLI's --shard K/N for job arrays): shard K of N holds
+ * exactly the samples whose index % N == K, in a file of its own whose header carries "# shard: K/N" after
+ * "# samples:"; it is resumed and finished (sorted) like a whole sweep. mr_sweep_merge() checks that a set of
+ * shard files is one complete sweep and writes the file a single run would have written.
+ *
+ * Several processes (mr_sweep_options.comm; the CLI's `mpirun -np N matremap sweep`, through mr_sweep_mpi_start):
+ * rank 0 alone opens, locks, checks, appends to and sorts the file, exactly as above; the samples still missing
+ * (in index order) are dealt out round-robin, the k-th to rank k % N; every rank computes its share with its own
+ * threads and sends each row to rank 0 as its text line, which rank 0 checks (a row of this sweep, not yet in the
+ * file) and appends in one write() like its own. So the file is the same, byte for byte apart from the seconds
+ * column and the command line, for any number of ranks and threads, and a run killed at any moment (any rank:
+ * mpirun then ends them all) resumes like a single process, with any number of ranks.
+ *
  * Determinism: a row's values depend only on the spec and its index (seconds aside): mr_remap is deterministic
  * and each sample is computed on one thread.
  * Threads: mr_sweep_run runs samples in parallel (OpenMP, schedule(dynamic)) sharing one render plan; every
@@ -174,34 +187,119 @@ typedef struct mr_sweep_progress {
  * thread that wrote it, while that thread uses the C numeric locale. Keep it short: other rows wait. */
 typedef void (*mr_sweep_progress_fn)(const mr_sweep_progress *progress, void *user);
 
+/* The largest message a sweep's processes exchange (mr_sweep_comm): a row line, or a failure with its text. */
+#define MR_SWEEP_MESSAGE_MAX (MR_SWEEP_MAX_LINE + 1024)
+
+/* How the processes of one sweep talk (one rank per process; see the header comment). The library calls these
+ * from one thread at a time (the calling thread, or a worker thread under the sweep's lock), so an MPI
+ * implementation needs MPI_THREAD_SERIALIZED. Each call returns MR_OK or a failure status (after mr_fail()ing a
+ * message where the implementation can); a failure ends the run on that rank with the status. */
+typedef struct mr_sweep_comm {
+    int rank; /* this process, 0 .. size - 1; rank 0 owns the file */
+    int size; /* processes in the run, >= 1 (1: the same as no comm) */
+    void *user;
+    /* Collective: every rank calls it at the same point of the run with the same `bytes`; on return every
+     * rank's buf[0, bytes) holds rank 0's. */
+    mr_status (*broadcast)(void *user, void *buf, size_t bytes);
+    /* Queue `bytes` (<= MR_SWEEP_MESSAGE_MAX) bytes with `tag` for rank `to`; returns without waiting for the
+     * receiver (the bytes are copied). Messages from one rank to another arrive in the order they were sent. */
+    mr_status (*send)(void *user, int to, int tag, const void *buf, size_t bytes);
+    /* The next message for this rank, from any rank, into buf[MR_SWEEP_MESSAGE_MAX]: *from, *tag, *bytes.
+     * `wait` 0: *got = 0 at once when none has arrived; `wait` 1: returns with *got = 1 (without burning a core
+     * while it waits, ideally). */
+    mr_status (*receive)(void *user, int wait, int *from, int *tag, void *buf, size_t *bytes, int *got);
+    /* Wait until every message this rank sent has been delivered. */
+    mr_status (*flush)(void *user);
+} mr_sweep_comm;
+
 /* Zero-initialised = defaults. */
 typedef struct mr_sweep_options {
     int resume;                   /* 0: the file must not exist; 1: continue it (see the header comment) */
-    int threads;                  /* samples at once; 0 = omp_get_max_threads() */
+    int threads;                  /* samples at once (in this process); 0 = omp_get_max_threads() */
     const char *command_line;     /* recorded as "# command: ..." (line breaks become spaces); NULL = empty */
-    mr_sweep_progress_fn progress; /* optional; called after each row, serialised */
+    mr_sweep_progress_fn progress; /* optional; called after each row, serialised (rank 0: every rank's rows) */
     void *progress_user;
+    long shard_index, shard_count; /* this file is shard K = shard_index of N = shard_count (0 <= K < N); N = 0:
+                                      the whole sweep (see the header comment) */
+    const mr_sweep_comm *comm;     /* NULL: this process alone; else the ranks of the run (every rank calls
+                                      mr_sweep_run with the same spec, path, resume and shard) */
 } mr_sweep_options;
 
 typedef struct mr_sweep_summary {
     long total;                              /* samples in the sweep */
+    long file_total;                         /* samples this file holds: total, or the shard's share */
     long already_done;                       /* rows found in the file on resume */
     long computed;                           /* rows this run wrote */
     long outcomes[MR_FIT_OUTCOME_COUNT];     /* this run's rows by outcome */
     long truncated_bytes;                    /* size of the torn last line removed on resume (0: none) */
     int sorted;                              /* 1: the finished file was rewritten in index order */
-    int threads;                             /* threads used */
+    int threads;                             /* threads used (by this process) */
+    int processes;                           /* ranks that computed (1 without a comm) */
+    long threads_total;                      /* threads used by all ranks together */
     double seconds;                          /* wall time of this call */
 } mr_sweep_summary;
 
+/* Check a parsed row against `spec`: every value finite (relative_rmse may be +inf: a black source), source
+ * and target values inside their parameters' [min, max] (switches integers), rmse >= 0, ssim in [-1, 1],
+ * seconds >= 0. MR_ERR_FORMAT naming the column by number and name and the value otherwise ("column 9
+ * (to_diffuse_r): -0.5 is outside diffuse's range [0, 1] of model 'ward-balanced'"). Resume and merge check
+ * every row of a file this way (mr_sweep_parse_row alone checks only the syntax). */
+mr_status mr_sweep_check_row(const mr_sweep_spec *spec, const mr_sweep_row *row);
+
 /* Run (or continue, opts->resume) the sweep `spec` into the CSV file `path`, as described in the header
- * comment. opts may be NULL. On MR_OK every sample has its row and the file is sorted; *out (may be NULL)
- * gets the summary. On failure the rows written so far stay and a resume continues: a bad spec or file
- * (MR_ERR_INVALID_ARG / MR_ERR_FORMAT / MR_ERR_IO) stops the run at once; a remap that fails does not stop the
- * other samples: the run finishes them, leaves the failed ones out of the file (unsorted, as it is incomplete)
- * and returns the status of the lowest failed sample, the message giving the count and that sample. */
+ * comment. opts may be NULL. On MR_OK every sample (of the shard) has its row and the file is sorted; *out (may
+ * be NULL) gets the summary (on every rank; rank 0's counts cover all ranks). On failure the rows written so far
+ * stay and a resume continues: a bad spec or file (MR_ERR_INVALID_ARG / MR_ERR_FORMAT / MR_ERR_IO) stops the
+ * run at once; a remap that fails does not stop the other samples: the run finishes them, leaves the failed
+ * ones out of the file (unsorted, as it is incomplete) and returns the status of the lowest failed sample, the
+ * message giving the count and that sample. With a comm, every rank returns rank 0's status; the message is
+ * rank 0's (the others say that rank 0 reports it), and a rank whose spec or version differs from rank 0's
+ * makes rank 0 refuse the run (MR_ERR_INVALID_ARG naming the rank) before the file is opened. */
 mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_sweep_options *opts,
                        mr_sweep_summary *out);
+
+/* What mr_sweep_merge found. */
+typedef struct mr_sweep_merge_summary {
+    long total;  /* samples in the sweep (rows written) */
+    long shards; /* shard files merged (N) */
+} mr_sweep_merge_summary;
+
+/* Merge the shard files paths[0 .. count) (in any order) into `output`, the file a single run of the sweep
+ * would have written: its header (with "# command: " + command_line, NULL = empty, and no shard line), then
+ * every row in index order, byte for byte as in the shards. Written atomically (a temporary file renamed into
+ * place); `output` must not exist yet, nor be one of the shards. Each shard's header must be one this version
+ * writes (it is parsed back into the sweep and rebuilt, byte for byte), and the shards must belong together:
+ * the same sweep (models, values, remap options, scene, sampling, seed, sample count: every header line but
+ * "# shard:" and "# command:"), the same N, each K in 0 .. N-1 exactly once, each shard complete (every one of
+ * its samples once, in order: a finished shard is sorted), every row checked as on resume (mr_sweep_parse_row,
+ * mr_sweep_check_row, the sample's source values), no torn last line, and no shard still being written (its
+ * lock is held). MR_ERR_INVALID_ARG (shards that do not fit together, an existing output) or MR_ERR_FORMAT (a
+ * bad file, naming it and the line) with a message naming the file(s) and what disagrees; MR_ERR_IO for
+ * unreadable files or a failed write. Nothing is written on failure. */
+mr_status mr_sweep_merge(const char *const *paths, int count, const char *output, const char *command_line,
+                         mr_sweep_merge_summary *out);
+
+/* ---- running under MPI (sweep_mpi.c) ----
+ * The library itself never links MPI: a small module, libmatremap-mpi.so (src/remap/sweep_mpi_module.c, built
+ * only where Open MPI's development files are installed), holds every MPI call, and is loaded on demand, like
+ * the OpenImageIO module: from the file named by $MR_MPI_MODULE, else <executable's directory>/../lib/matremap/,
+ * else the install directory MR_MODULE_DIR. */
+
+/* 1 if the environment says this process was started by an MPI launcher as one of several processes, with
+ * *size and *rank (either may be NULL) from the launcher's variables and *variable (may be NULL) naming the
+ * one read: OMPI_COMM_WORLD_SIZE/_RANK (Open MPI's mpirun), PMI_SIZE/PMI_RANK (MPICH's Hydra, Slurm's
+ * srun --mpi=pmi2). 0 otherwise, and for a launch of a single process (size 1). */
+int mr_sweep_mpi_launched(int *size, int *rank, const char **variable);
+
+/* Load the module, start MPI (MPI_Init_thread, MPI_THREAD_SERIALIZED) and fill *comm with MPI_COMM_WORLD's
+ * rank and size; *local_size (may be NULL) gets the number of ranks on this machine (MPI_COMM_TYPE_SHARED).
+ * MR_ERR_UNSUPPORTED if the module cannot be loaded (the message says where it looked and why), MR_ERR_EXTERNAL
+ * if MPI does not start. Call once per process; end with mr_sweep_mpi_finish. A communication failure later
+ * ends the whole job (MPI's default error handler), as the death of a rank does. */
+mr_status mr_sweep_mpi_start(mr_sweep_comm *comm, int *local_size);
+
+/* Wait for this rank's messages to be delivered and end MPI (MPI_Finalize). */
+mr_status mr_sweep_mpi_finish(mr_sweep_comm *comm);
 
 #ifdef __cplusplus
 }

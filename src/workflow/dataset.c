@@ -155,15 +155,14 @@ static mr_status load_file(const char *path, const mr_wf_dataset_options *opts, 
                              "sweep to finish it)", path, line_number, field_count, name_count);
             break;
         }
-        const char *outcome = fields[c.outcome];
-        int good = strcmp(outcome, "converged") == 0 || strcmp(outcome, "at-bound") == 0 ||
-                   strcmp(outcome, "unreachable") == 0;
-        int bad = strcmp(outcome, "local-minimum") == 0;
-        if (!good && !bad) {
-            status = mr_fail(MR_ERR_FORMAT, "%s:%ld: unknown outcome '%s'", path, line_number, outcome);
+        // Every outcome a sweep writes is known here (an under-resolved fit is kept, as learn's reader keeps it:
+        // its label is the fit's best answer); only a local minimum, a fit known to be wrong, is left out.
+        mr_fit_outcome outcome;
+        if (!mr_fit_outcome_from_name(fields[c.outcome], &outcome)) {
+            status = mr_fail(MR_ERR_FORMAT, "%s:%ld: unknown outcome '%s'", path, line_number, fields[c.outcome]);
             break;
         }
-        if (bad && !(opts && opts->keep_all_outcomes)) {
+        if (outcome == MR_FIT_LOCAL_MINIMUM && !(opts && opts->keep_all_outcomes)) {
             d->skipped++;
             continue;
         }
