@@ -543,6 +543,17 @@ void mr_gltf_free(mr_gltf *asset) { delete asset; }
 
 const char *mr_gltf_path(const mr_gltf *asset) { return asset ? asset->path.c_str() : ""; }
 
+const char *mr_gltf_source_file(const mr_gltf *asset, int k) {
+    if (asset == NULL || k < 0) return NULL;
+    if (k-- == 0) return asset->path.c_str();
+    for (const std::vector<std::string> *list : {&asset->buffer_paths, &asset->image_paths})
+        for (const std::string &p : *list) {
+            if (p.empty()) continue; // embedded
+            if (k-- == 0) return p.c_str();
+        }
+    return NULL;
+}
+
 void mr_gltf_get_counts(const mr_gltf *g, mr_gltf_counts *out) {
     memset(out, 0, sizeof *out);
     if (g == NULL) return;

@@ -171,6 +171,12 @@ void mr_gltf_free(mr_gltf *asset);
 /* The file the asset was read from. */
 const char *mr_gltf_path(const mr_gltf *asset);
 
+/* The k-th file the asset was read from: k = 0 the .gltf or .glb itself (mr_gltf_path), then each external buffer
+ * and image file as opened (relative to the asset's folder; a file two of them share comes once per reference);
+ * NULL for k past the last (or a NULL asset). What a writer must never replace (matremap's commands check their
+ * outputs against these). */
+const char *mr_gltf_source_file(const mr_gltf *asset, int k);
+
 void mr_gltf_get_counts(const mr_gltf *asset, mr_gltf_counts *out);
 
 /* glTF's default material (no name, no textures, no extensions). */
