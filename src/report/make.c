@@ -329,6 +329,20 @@ static mr_status make_hidden_folder(const char *dir, const char *what, char *out
                    strerror(errno));
 }
 
+/* The failure's message with the scratch folder's name replaced by the target's (a picture is named as the user
+ * knows it: "out/view0_material1.png"), and what became of the target said first. Returns status. */
+static mr_status name_target(mr_status status, const char *dir, const char *scratch) {
+    char message[2048], *at;
+    snprintf(message, sizeof message, "%s", mr_last_error());
+    size_t from = strlen(scratch), to = strlen(dir);
+    while (to > 1 && dir[to - 1] == '/') to--; // "out/" is "out"
+    while ((at = strstr(message, scratch)) != NULL && strlen(message) - from + to < sizeof message) {
+        memmove(at + to, at + from, strlen(at + from) + 1);
+        memcpy(at, dir, to);
+    }
+    return mr_fail(status, "report '%s' not written (a previous report there is left as it was): %s", dir, message);
+}
+
 /* Put the finished scratch folder in the place of `dir`: renamed there when nothing is; else the old report is
  * renamed aside, the new one in, and the old one removed (if the second rename fails, the old one goes back). */
 static mr_status commit_folder(const char *dir, const char *scratch) {
@@ -754,7 +768,10 @@ mr_status mr_report_make(const mr_report_input *inputs, int count, const char *d
     if (status == MR_OK) status = write_page(&st, scratch, scenes, entries, count, exposure);
     if (status == MR_OK && out != NULL) status = make_result(&st, entries, count, exposure, out);
     if (status == MR_OK) status = commit_folder(dir, scratch);
-    if (made && status != MR_OK) remove_tree(scratch); // the previous report, if any, is as it was
+    if (made && status != MR_OK) {
+        remove_tree(scratch); // the previous report, if any, is as it was
+        status = name_target(status, dir, scratch);
+    }
     if (status != MR_OK && out != NULL) {
         mr_report_result_free(*out);
         *out = NULL;
