@@ -155,6 +155,9 @@ refuses "--flags over an input: refused" "output '$tmp/in_diffuse.png' \(--flags
 cp "$root/data/spec2metal.mlp" "$tmp/w_metallic.png"
 refuses "-o over the --weights file" "output '$tmp/w_metallic.png' \(-o $tmp/w\) is the input --weights" "$tmp" -- \
     "$bin" spec2metal --diffuse 0.5 --specular 0.04 --glossiness 0.5 --weights "$tmp/w_metallic.png" -o "$tmp/w"
+refuses "-o over the network MATREMAP_WEIGHTS names" "output '$tmp/w_metallic.png' \(-o $tmp/w\) is the input the network" \
+    "$tmp" -- env MATREMAP_WEIGHTS="$tmp/w_metallic.png" "$bin" spec2metal --diffuse 0.5 --specular 0.04 \
+    --glossiness 0.5 -o "$tmp/w"
 check "the inputs are unchanged" bash -c "cmp -s '$tmp/in_diffuse.png' '$tmp/keep.png' &&
     cmp -s '$tmp/in_basecolor.png' '$tmp/keep.png'"
 check "and nothing was written" bash -c "! ls '$tmp'/in_[mrsg]* '$tmp'/o_* >/dev/null 2>&1"

@@ -224,9 +224,10 @@ static const char *default_format(map_arg *const *maps, int count) {
 }
 
 /* Name the outputs PREFIX_<name>.EXT and check the options; refuse (exit 2, cli_io_check) an output that is an input
- * (a map, --weights) or another output (--flags named like one). */
+ * (a map, --weights, or the installed network the transform loaded, `network`, "" for none) or another output
+ * (--flags named like one). */
 static int plan_outputs(const char *command, out_options *o, map_arg *const *maps, int map_count, const char *weights,
-                        const char *const *names, output *outputs, int count) {
+                        const char *network, const char *const *names, output *outputs, int count) {
     if (o->format == NULL) o->format = default_format(maps, map_count);
     if (o->bits != 0) {
         int exr = strcmp(o->format, "exr") == 0;
@@ -245,6 +246,7 @@ static int plan_outputs(const char *command, out_options *o, map_arg *const *map
     for (int m = 0; m < map_count; m++)
         if (is_file(maps[m])) cli_io_input(&io, maps[m]->text, "%s %s", maps[m]->option, maps[m]->text);
     if (weights != NULL) cli_io_input(&io, weights, "--weights %s", weights);
+    if (network != NULL && network[0] != '\0') cli_io_input(&io, network, "the network %s", network);
     for (int k = 0; k < count; k++) cli_io_output(&io, outputs[k].path, "-o %s", o->prefix);
     if (o->flags_path != NULL) cli_io_output(&io, o->flags_path, "--flags");
     int code = cli_io_check(&io);
@@ -733,7 +735,8 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
     memset(outputs, 0, sizeof outputs);
     int code = check_prefix(command, o, cv->maps, cv->map_count);
     if (code == CLI_EXIT_OK)
-        code = plan_outputs(command, o, cv->maps, cv->map_count, weights, names, outputs, output_count);
+        code = plan_outputs(command, o, cv->maps, cv->map_count, weights, mr_transform_network_path(t), names, outputs,
+                            output_count);
 
     // Read: the maps into the transform's input planes.
     double started = cli_now(), seconds[3] = {0.0, 0.0, 0.0};
