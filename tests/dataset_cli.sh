@@ -64,6 +64,11 @@ refuses "dataset --compare: -o over --weights" "is the input --weights $tmp/io/w
     "$bin" dataset --compare --samples 2 --env "$tmp/io/env.exr" --weights "$tmp/io/w.mlp" -o "$tmp/io/w.mlp"
 refuses "dataset --compare: -o over --env" "is the input --env $tmp/io/env.exr" "$tmp/io" -- \
     "$bin" dataset --compare --samples 2 --env "$tmp/io/env.exr" -o "$tmp/io/env.exr"
+oiiotool --pattern constant:color=0.1,0.1,-0.25 1x1 3 -d float --pattern constant:color=0.5,0.5,0.5 16x8 3 -d float \
+    --paste +2+1 -o "$tmp/io/negative.exr" >/dev/null 2>&1
+expect "dataset: a negative --label-env value is named" 2 "negative.exr': pixel \(2, 1\), channel 2 holds -0.25" -- \
+    "$bin" dataset -o "$tmp/io/never.csv" --samples 3 --label-env "$tmp/io/negative.exr"
+check "... and nothing is written" test ! -e "$tmp/io/never.csv"
 ls "$tmp" | grep -q '\.tmp\.' && leftover=yes || leftover=no
 check "no temporary file is left behind" test "$leftover" = no
 

@@ -140,8 +140,10 @@ expect "--env-reflection-samples without --env" 1 "need --env" -- "$bin" render 
 expect "--env-reflection-samples over the maximum" 1 "env-reflection-samples" -- "$bin" render ggx \
     --env "$tmp/white_env.exr" --env-reflection-samples 1025 -o "$tmp/e7.exr"
 oiiotool --pattern constant:color=1,-1,1 8x4 3 -d float -o "$tmp/negative_env.exr"
-expect "a negative environment value is named" 2 "environment map value -1 at pixel" -- "$bin" render ggx \
+expect "a negative environment value is named with its file" 2 \
+    "image '$tmp/negative_env.exr': pixel \(0, 0\), channel 1 holds -1: expected finite radiance" -- "$bin" render ggx \
     --env "$tmp/negative_env.exr" -o "$tmp/e8.exr"
+check "... and nothing is written" test ! -e "$tmp/e8.exr"
 
 # ---- no output replaces an input (by device and inode: another spelling, a hard link, a symbolic link) -----------
 mkdir -p "$tmp/io/sub"

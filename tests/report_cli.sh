@@ -88,7 +88,12 @@ expect "--from is renamed" 1 "is now --camera-direction" -- "$bin" report -o "$t
 expect "an unknown model" 2 "frobnicate" -- "$bin" report -o "$tmp/e4" frobnicate
 expect "a missing map is named" 2 "nomap.png" -- "$bin" report -o "$tmp/e5" ggx diffuse=@"$tmp/nomap.png"
 expect "a missing environment is named" 2 "nosky.hdr" -- "$bin" report -o "$tmp/e6" --env "$tmp/nosky.hdr" ggx
-check "no folder after a failure" test ! -e "$tmp/e4" -a ! -e "$tmp/e5" -a ! -e "$tmp/e6"
+oiiotool --pattern constant:color=nan,nan,nan 1x1 3 -d float --pattern constant:color=0.2,0.2,0.2 16x8 3 -d float \
+    --paste +3+5 -o "$tmp/nan_env.exr"
+expect "an environment with a NaN is named, with the pixel" 2 \
+    "environment map '$tmp/nan_env.exr': pixel \(3, 5\), channel 0 holds nan" -- "$bin" report -o "$tmp/e10" --size 32 \
+    --env "$tmp/nan_env.exr" ggx
+check "no folder after a failure" test ! -e "$tmp/e4" -a ! -e "$tmp/e5" -a ! -e "$tmp/e6" -a ! -e "$tmp/e10"
 touch "$tmp/afile"
 expect "-o naming a file" 2 "not a folder" -- "$bin" report -o "$tmp/afile" ggx
 

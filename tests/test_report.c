@@ -446,6 +446,12 @@ MR_TEST(a_report_replaces_its_folder_as_a_whole_or_not_at_all) {
     MR_CHECK(mkdir(mr_test_tmp_path("empty/view9_material9.png"), 0777) == 0);
     MR_CHECK(mr_report_make(three, 1, empty, &o, NULL) == MR_ERR_INVALID_ARG);
     MR_CHECK_MSG(contains(mr_last_error(), "holds 'view9_material9.png'"), "%s", mr_last_error());
+    // A folder is replaced by its name: ".", ".." and "/" have none to rename.
+    const char *unnamed[4] = {".", "..", "/", "a/.."};
+    for (int k = 0; k < 4; k++) {
+        MR_CHECK(mr_report_make(three, 1, unnamed[k], &o, NULL) == MR_ERR_INVALID_ARG);
+        MR_CHECK_MSG(contains(mr_last_error(), "name the folder itself"), "%s", mr_last_error());
+    }
     MR_CHECK(scratch_entries() == 0);
 done:
     mr_material_free(a);

@@ -254,6 +254,12 @@ void cli_io_free(cli_io *io) {
     cli_io_init(io, io->command);
 }
 
+mr_status cli_check_radiance(const mr_image *image, const char *path) {
+    char label[4096 + 16];
+    snprintf(label, sizeof label, "image '%s'", path);
+    return mr_image_check_radiance(image, label);
+}
+
 int cli_is_help(const char *arg) { return strcmp(arg, "--help") == 0 || strcmp(arg, "-h") == 0; }
 
 int cli_take_option(const char *command, int argc, char **argv, int *i, const char *name, const char **value) {

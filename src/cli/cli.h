@@ -88,6 +88,10 @@ void cli_io_gltf(cli_io *io, const mr_gltf *asset, const char *label);
 int cli_io_check(const cli_io *io);
 void cli_io_free(cli_io *io);
 
+/* mr_image_check_radiance labelled "image 'PATH'": finite radiance >= 0 in the image read from `path`, or
+ * MR_ERR_INVALID_ARG naming the file, the pixel, the channel and the value (measurements, environment maps). */
+mr_status cli_check_radiance(const mr_image *image, const char *path);
+
 /* True if argv[i] is "--help" or "-h". */
 int cli_is_help(const char *arg);
 

@@ -646,6 +646,7 @@ int cmd_dataset(int argc, char **argv) {
     for (int e = 0; code == CLI_EXIT_OK && e < label_env_count; e++) {
         mr_img_read_options ro = {MR_IMG_DATA, 3, 0};
         mr_status status = mr_img_read(label_env_paths[e], &ro, &label_envs[e]);
+        if (status == MR_OK) status = cli_check_radiance(label_envs[e], label_env_paths[e]);
         if (status != MR_OK) code = cli_fail("dataset", status);
         lo.envs[e] = label_envs[e];
         lo.env_count = e + 1;
@@ -655,6 +656,7 @@ int cmd_dataset(int argc, char **argv) {
         for (int e = 0; code == CLI_EXIT_OK && e < env_count; e++) {
             mr_img_read_options ro = {MR_IMG_DATA, 3, 0};
             mr_status status = mr_img_read(env_paths[e], &ro, &envs[e]);
+            if (status == MR_OK) status = cli_check_radiance(envs[e], env_paths[e]);
             if (status != MR_OK) code = cli_fail("dataset", status);
         }
         if (code == CLI_EXIT_OK)

@@ -87,11 +87,7 @@ static int read_source_image(const char *path, mr_image **out) {
     mr_img_read_options ro = {0};
     ro.channels = 3;
     mr_status status = mr_img_read(path, &ro, out);
-    if (status == MR_OK) {
-        char label[4096 + 16];
-        snprintf(label, sizeof label, "image '%s'", path);
-        status = mr_image_check_radiance(*out, label);
-    }
+    if (status == MR_OK) status = cli_check_radiance(*out, path);
     return status == MR_OK ? CLI_EXIT_OK : cli_fail("remap", status);
 }
 

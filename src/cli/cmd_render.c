@@ -238,6 +238,7 @@ int cmd_render(int argc, char **argv) {
     mr_status status = MR_OK;
     if (code == CLI_EXIT_OK && env_path != NULL) {
         status = mr_img_read(env_path, NULL, &env);
+        if (status == MR_OK) status = cli_check_radiance(env, env_path); // named by its file
         if (status != MR_OK) code = cli_fail("render", status);
     }
     double load_seconds = 0.0;

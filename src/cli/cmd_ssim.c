@@ -102,11 +102,7 @@ int cmd_ssim(int argc, char **argv) {
         status = mr_img_read(paths[k], &ro, &images[k]);
     }
     // Measurements: finite radiance >= 0, or exit 2 naming the file, the pixel and the value.
-    for (int k = 0; k < 2 && status == MR_OK; k++) {
-        char label[4096 + 16];
-        snprintf(label, sizeof label, "image '%s'", paths[k]);
-        status = mr_image_check_radiance(images[k], label);
-    }
+    for (int k = 0; k < 2 && status == MR_OK; k++) status = cli_check_radiance(images[k], paths[k]);
     if (status == MR_OK) status = mr_ssim(images[0], images[1], &opts, &ssim, map_path ? &map : NULL);
     if (status == MR_OK) status = mr_rmse(images[0], images[1], &rmse);
     if (status == MR_OK && mask_path != NULL) {

@@ -308,15 +308,26 @@ static void remove_tree(const char *path) {
     errno = saved;
 }
 
+/* Where the last component of `dir` starts (*name) and ends (*length: trailing slashes left out, "out/" is "out").
+ * MR_ERR_INVALID_ARG for a folder that cannot be renamed by its name: "/", ".", "..". */
+static mr_status split_folder_name(const char *dir, size_t *name, size_t *length) {
+    *length = strlen(dir);
+    while (*length > 1 && dir[*length - 1] == '/') --*length;
+    *name = *length;
+    while (*name > 0 && dir[*name - 1] != '/') --*name;
+    const size_t n = *length - *name;
+    if (n == 0 || (dir[*name] == '.' && (n == 1 || (n == 2 && dir[*name + 1] == '.'))))
+        return mr_fail(MR_ERR_INVALID_ARG, "report folder '%s': name the folder itself (not '/', '.' or '..')", dir);
+    return MR_OK;
+}
+
 /* A new empty folder beside `dir`, hidden: "PARENT/.NAME.matremap-<what>-<pid>-<n>" in *out, the first n free
  * (mkdir is atomic, so reports made at once, by threads or processes, each get their own; the umask applies, as to
  * a folder made in place). */
 static mr_status make_hidden_folder(const char *dir, const char *what, char *out, size_t size) {
-    size_t length = strlen(dir);
-    while (length > 1 && dir[length - 1] == '/') length--; // "out/" is "out"
-    size_t name = length;
-    while (name > 0 && dir[name - 1] != '/') name--;
-    if (length == name) return mr_fail(MR_ERR_INVALID_ARG, "report folder '%s': not a folder's name", dir);
+    size_t name, length;
+    mr_status status = split_folder_name(dir, &name, &length);
+    if (status != MR_OK) return status;
     for (int k = 0; k < 10000; k++) {
         int n = snprintf(out, size, "%.*s.%.*s.matremap-%s-%ld-%d", (int)name, dir, (int)(length - name), dir + name,
                          what, (long)getpid(), k);
@@ -334,7 +345,8 @@ static mr_status make_hidden_folder(const char *dir, const char *what, char *out
 static mr_status name_target(mr_status status, const char *dir, const char *scratch) {
     char message[2048], *at;
     snprintf(message, sizeof message, "%s", mr_last_error());
-    size_t from = strlen(scratch), to = strlen(dir);
+    const size_t from = strlen(scratch);
+    size_t to = strlen(dir);
     while (to > 1 && dir[to - 1] == '/') to--; // "out/" is "out"
     while ((at = strstr(message, scratch)) != NULL && strlen(message) - from + to < sizeof message) {
         memmove(at + to, at + from, strlen(at + from) + 1);
@@ -728,6 +740,9 @@ mr_status mr_report_make(const mr_report_input *inputs, int count, const char *d
     mr_image *env = NULL; // read here when only its path is given
     if (st.env == NULL && opts->env_path != NULL) {
         status = mr_img_read(opts->env_path, NULL, &env);
+        char label[4096 + 32];
+        snprintf(label, sizeof label, "environment map '%s'", opts->env_path);
+        if (status == MR_OK) status = mr_image_check_radiance(env, label); // named here, before any render
         st.env = env;
     }
     if (status == MR_OK && st.env != NULL && st.env_scale <= 0.0) st.env_scale = auto_env_scale(st.env);
@@ -755,6 +770,8 @@ mr_status mr_report_make(const mr_report_input *inputs, int count, const char *d
     // Everything is written into a scratch folder beside `dir`, put in its place once complete.
     char scratch[4096] = "";
     int exists = 0;
+    size_t name_at, name_end;
+    if (status == MR_OK) status = split_folder_name(dir, &name_at, &name_end);
     if (status == MR_OK) status = check_target(dir, &exists);
     if (status == MR_OK) status = make_hidden_folder(dir, "new", scratch, sizeof scratch);
     const int made = status == MR_OK;
