@@ -204,22 +204,22 @@ static int stage_outputs(const char *prefix, const char (*names)[4096], mr_image
     int made_folder = 0;
     if (strrchr(prefix, '/') != NULL) {
         snprintf(folder, sizeof folder, "%.*s", (int)(strrchr(prefix, '/') - prefix), prefix);
-        if (folder[0] != '\0' && mkdir(folder, 0777) != 0 && errno != EEXIST) {
-            fprintf(stderr, "matremap convert: error: -o '%s': cannot create the folder '%s': %s\n", prefix, folder,
-                    strerror(errno));
-            free(temps);
-            return CLI_EXIT_BAD_INPUT;
+        if (folder[0] != '\0') {
+            made_folder = mkdir(folder, 0777) == 0;
+            if (!made_folder && errno != EEXIST) {
+                fprintf(stderr, "matremap convert: error: -o '%s': cannot create the folder '%s': %s\n", prefix,
+                        folder, strerror(errno));
+                free(temps);
+                return CLI_EXIT_BAD_INPUT;
+            }
         }
-        made_folder = folder[0] != '\0' && errno != EEXIST;
     }
-    int code = CLI_EXIT_OK, written = 0;
-    for (; written < count && code == CLI_EXIT_OK; written++) {
-        mr_status status = mr_img_write(temps[written], images[written], &options[written]);
-        if (status != MR_OK) {
-            // The message names the temporary file; say which output it was.
-            fprintf(stderr, "matremap convert: error: writing '%s': %s\n", names[written], mr_last_error());
+    int code = CLI_EXIT_OK;
+    for (int k = 0; k < count && code == CLI_EXIT_OK; k++) {
+        mr_status status = mr_img_write(temps[k], images[k], &options[k]);
+        if (status != MR_OK) { // the message names the temporary file: say which output it was
+            fprintf(stderr, "matremap convert: error: writing '%s': %s\n", names[k], mr_last_error());
             code = cli_exit_code(status);
-            break;
         }
     }
     for (int k = 0; code == CLI_EXIT_OK && k < count; k++)
