@@ -23,6 +23,10 @@ struct mr_gltf {
     std::string base_dir;                 // its directory ("." if none)
     std::vector<std::string> image_paths; // per image: resolved source file ("" for embedded images)
     std::vector<std::string> buffer_paths; // per buffer: resolved source file ("" for embedded buffers)
+    // Every file the asset was read from, as loaded: the asset, then its external buffers and images. Kept when
+    // edits remove images or buffers (mr_gltf_prune_unused), so that a save never writes over a file that was read,
+    // even one nothing refers to any more.
+    std::vector<std::string> source_files;
     // The file's JSON, for what tinygltf does not keep: merge_original restores it on save, and
     // mr_gltf_prune_unused renumbers references in it. Loading keeps only its text; original_json parses it on
     // first use, so that a read-only use (loading an asset to render it) parses the JSON once, in tinygltf.

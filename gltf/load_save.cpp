@@ -347,6 +347,7 @@ mr_status save_impl(mr_gltf *g, const char *path_c) {
 
     // Input files the output must never replace.
     std::set<std::string> inputs;
+    for (const auto &p : g->source_files) inputs.insert(real_path(p)); // pruned images' files included
     inputs.insert(real_path(g->path));
     for (const auto &p : g->buffer_paths) {
         if (!p.empty()) inputs.insert(real_path(p));
@@ -635,6 +636,10 @@ mr_status load_impl(const char *path_c, mr_gltf **out) {
         return s;
     // The JSON text is kept for what tinygltf drops, and parsed only if it is needed (original_json).
     g->original_text.assign(text, text_size);
+    g->source_files.push_back(g->path);
+    for (const std::vector<std::string> *list : {&g->buffer_paths, &g->image_paths})
+        for (const std::string &p : *list)
+            if (!p.empty()) g->source_files.push_back(p);
     *out = g.release();
     return MR_OK;
 }
@@ -654,6 +659,11 @@ mr_status mr_gltf_load(const char *path, mr_gltf **out) {
 void mr_gltf_free(mr_gltf *asset) { delete asset; }
 
 const char *mr_gltf_path(const mr_gltf *asset) { return asset ? asset->path.c_str() : ""; }
+
+const char *mr_gltf_source_file(const mr_gltf *asset, int k) {
+    if (asset == NULL || k < 0 || (size_t)k >= asset->source_files.size()) return NULL;
+    return asset->source_files[(size_t)k].c_str();
+}
 
 void mr_gltf_get_counts(const mr_gltf *g, mr_gltf_counts *out) {
     memset(out, 0, sizeof *out);

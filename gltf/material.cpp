@@ -698,6 +698,9 @@ mr_status mr_gltf_image_write_file(const mr_gltf *g, int image, const char *path
         std::string real = real_path(path);
         if (!real.empty()) {
             if (real == real_path(g->path)) goto is_input;
+            for (const auto &p : g->source_files) {
+                if (real == real_path(p)) goto is_input;
+            }
             for (const auto &p : g->image_paths) {
                 if (!p.empty() && real == real_path(p)) goto is_input;
             }

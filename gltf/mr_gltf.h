@@ -31,7 +31,8 @@
  * unchanged (an asset using EXT_meshopt_compression, which points into buffers by index, is not packed and
  * keeps external files like a .gltf). Every file is written to a temporary name and renamed when
  * complete; on failure the files this call created are removed. The output and its resources are never
- * written over a file the asset was read from (an unchanged resource that would land on its own source is
+ * written over a file the asset was read from, even one an edit has since removed from the asset (a new image
+ * named like a pruned image's file gets a fresh name; an unchanged resource that would land on its own source is
  * left in place). extensionsUsed/extensionsRequired are brought up to date first (mr_gltf_sync_extensions).
  *
  * Everything this API does not touch (meshes, nodes, animations, skins, cameras, scenes, extras, other
@@ -192,6 +193,13 @@ void mr_gltf_free(mr_gltf *asset);
 
 /* The file the asset was read from. */
 const char *mr_gltf_path(const mr_gltf *asset);
+
+/* The k-th file the asset was read from: k = 0 the .gltf or .glb itself (mr_gltf_path), then each external buffer
+ * and image file as opened (relative to the asset's folder; a file two of them share comes once per reference), as
+ * loaded: edits that remove images (mr_gltf_prune_unused) do not remove them here. NULL for k past the last (or a
+ * NULL asset). What a writer must never replace: mr_gltf_save and mr_gltf_image_write_file refuse or avoid them,
+ * and matremap's commands check their outputs against them. */
+const char *mr_gltf_source_file(const mr_gltf *asset, int k);
 
 void mr_gltf_get_counts(const mr_gltf *asset, mr_gltf_counts *out);
 

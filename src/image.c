@@ -1,6 +1,7 @@
 /* image.c — mr_image allocation (contract in mr_image.h). */
 #include "mr_image.h"
 
+#include <float.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -37,6 +38,27 @@ mr_status mr_image_clone(const mr_image *src, mr_image **out) {
     memcpy(copy->pixels, src->pixels, mr_image_value_count(src) * sizeof(float));
     *out = copy;
     return MR_OK;
+}
+
+mr_status mr_image_check_values(const mr_image *image, const char *label, int allow_negative) {
+    if (label == NULL) label = "image";
+    if (image == NULL || image->pixels == NULL) return mr_fail(MR_ERR_INVALID_ARG, "%s: NULL image", label);
+    const int channels = image->channels, used = MR_MIN(3, channels);
+    const size_t n = (size_t)image->width * (size_t)image->height;
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < used; c++) {
+            const float v = image->pixels[i * (size_t)channels + (size_t)c];
+            // NaN fails both comparisons; -0 passes (it is >= 0).
+            if (allow_negative ? (v >= -FLT_MAX && v <= FLT_MAX) : (v >= 0.0f && v <= FLT_MAX)) continue;
+            return mr_fail(MR_ERR_INVALID_ARG, "%s: pixel (%d, %d), channel %d holds %g: expected %s", label,
+                           (int)(i % (size_t)image->width), (int)(i / (size_t)image->width), c, (double)v,
+                           allow_negative ? "finite values" : "finite radiance >= 0");
+        }
+    return MR_OK;
+}
+
+mr_status mr_image_check_radiance(const mr_image *image, const char *label) {
+    return mr_image_check_values(image, label, 0);
 }
 
 void mr_image_free(mr_image *image) {

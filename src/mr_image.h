@@ -34,6 +34,13 @@ mr_status mr_image_clone(const mr_image *src, mr_image **out);
 /* Release the image and its pixels. NULL is allowed. */
 void mr_image_free(mr_image *image);
 
+/* Radiance a measurement can hold (an image to fit or to compare: remap's source renders, the images `matremap ssim`
+ * compares): every value of the colour channels, the first min(3, channels) (alpha is not radiance), finite and
+ * >= 0 (-0 included). MR_OK, or MR_ERR_INVALID_ARG naming the first other value in row order: "<label>: pixel
+ * (x, y), channel c holds nan: expected finite radiance >= 0" (label NULL = "image"; a reader's label,
+ * "image 'x.exr'", names the file). */
+mr_status mr_image_check_radiance(const mr_image *image, const char *label);
+
 /* Number of floats in the pixel buffer. */
 static inline size_t mr_image_value_count(const mr_image *image) {
     return (size_t)image->width * (size_t)image->height * (size_t)image->channels;

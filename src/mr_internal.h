@@ -8,6 +8,7 @@
 
 #include <stdint.h>
 
+#include "mr_image.h"
 #include "mr_status.h"
 
 #ifdef __cplusplus
@@ -30,6 +31,10 @@ mr_status mr_fail(mr_status status, const char *fmt, ...);
 __attribute__((format(printf, 2, 3)))
 #endif
 mr_status mr_fail_context(mr_status status, const char *fmt, ...);
+
+/* mr_image_check_radiance (mr_image.h), or with allow_negative only finiteness ("expected finite values"): what
+ * the metrics ask of the images they compare. */
+mr_status mr_image_check_values(const mr_image *image, const char *label, int allow_negative);
 
 #define MR_MIN(a, b) ((a) < (b) ? (a) : (b))
 #define MR_MAX(a, b) ((a) > (b) ? (a) : (b))

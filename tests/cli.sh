@@ -46,6 +46,33 @@ expect "ssim size mismatch names both files" 2 "small.exr' is 32x32 but .*x.exr'
     "$bin" ssim "$tmp/small.exr" "$tmp/x.exr"
 expect "ssim needs two images" 1 "two images" -- "$bin" ssim "$tmp/x.exr"
 
+# ssim: --map never replaces an image it compares or the mask (by inode: spellings and links count).
+mkdir -p "$tmp/io"
+cp "$tmp/x.exr" "$tmp/io/a.exr"
+"$bin" render lambert --size 64 -o "$tmp/io/b.exr" --mask "$tmp/io/mask.png" 2>/dev/null
+ln "$tmp/io/b.exr" "$tmp/io/b_link.exr"
+refuses "ssim --map over image A" "output '$tmp/io/./a.exr' \(--map\) is the input image A $tmp/io/a.exr; refusing" \
+    "$tmp/io" -- "$bin" ssim "$tmp/io/a.exr" "$tmp/io/b.exr" --map "$tmp/io/./a.exr"
+refuses "ssim --map over a hard link of image B" "is the input image B $tmp/io/b.exr" "$tmp/io" -- \
+    "$bin" ssim "$tmp/io/a.exr" "$tmp/io/b.exr" --map "$tmp/io/b_link.exr"
+refuses "ssim --map over the mask" "is the input --mask" "$tmp/io" -- \
+    "$bin" ssim "$tmp/io/a.exr" "$tmp/io/b.exr" --mask "$tmp/io/mask.png" --map "$tmp/io/mask.png"
+
+# ssim: images are measurements, finite radiance >= 0; anything else is bad input (2) naming file, pixel, value.
+oiiotool --pattern constant:color=nan,nan,nan 1x1 3 -d float --pattern constant:color=0.2,0.2,0.2 64x64 3 \
+    -d float --paste +3+5 -o "$tmp/io/nan.exr"
+oiiotool --pattern constant:color=0.1,inf,0.1 1x1 3 -d float --pattern constant:color=0.2,0.2,0.2 64x64 3 \
+    -d float --paste +60+2 -o "$tmp/io/inf.exr"
+oiiotool --pattern constant:color=0.1,0.1,-0.25 1x1 3 -d float --pattern constant:color=0.2,0.2,0.2 64x64 3 \
+    -d float --paste +0+63 -o "$tmp/io/negative.exr"
+expect "ssim of a NaN pixel: bad input, named" 2 "image '$tmp/io/nan.exr': pixel \(3, 5\), channel 0 holds nan" -- \
+    "$bin" ssim "$tmp/io/a.exr" "$tmp/io/nan.exr"
+expect "ssim of an infinite pixel: bad input, named" 2 "inf.exr': pixel \(60, 2\), channel 1 holds inf" -- \
+    "$bin" ssim "$tmp/io/inf.exr" "$tmp/io/a.exr" --json
+expect "ssim of negative radiance: bad input, named" 2 "negative.exr': pixel \(0, 63\), channel 2 holds -0.25" -- \
+    "$bin" ssim "$tmp/io/a.exr" "$tmp/io/negative.exr" --map "$tmp/io/never.png"
+check "... and no --map written" test ! -e "$tmp/io/never.png"
+
 # OpenImageIO is a module loaded on first use: commands that need no image decoding never load it, and a
 # missing module is a clear external failure (exit 3), not a crash.
 expect "EXR output does not need the OpenImageIO module" 0 "wrote" -- env MR_OIIO_MODULE=/nonexistent/mod.so \

@@ -48,6 +48,27 @@ head -c $(($(wc -c <"$tmp/a.mlp") / 2)) "$tmp/a.mlp" >"$tmp/torn.mlp"
 expect "dataset --compare: a torn network names the file" 2 "torn.mlp" -- "$bin" dataset --compare --samples 2 \
     --env "$shared/assets/hdri/studio_small_03_1k.hdr" --weights "$tmp/torn.mlp" -o "$tmp/t.md"
 check "... and writes no table" test ! -e "$tmp/t.md"
+# No output replaces an input: -o against --asset (and every file it refers to), --env, --label-env, --weights.
+mkdir -p "$tmp/io"
+cp "$(dirname "$duck")"/* "$tmp/io/"
+cp "$tmp/a.mlp" "$tmp/io/w.mlp"
+oiiotool --pattern constant:color=0.5,0.5,0.5 16x8 3 -d float -o "$tmp/io/env.exr" >/dev/null 2>&1
+refuses "dataset: -o over the asset's buffer" \
+    "output '$tmp/io/Duck0.bin' is the input a file of --asset $tmp/io/Duck.gltf; refusing" "$tmp/io" -- \
+    "$bin" dataset -o "$tmp/io/Duck0.bin" --samples 3 --asset "$tmp/io/Duck.gltf"
+refuses "dataset: -o over the asset itself" "output '$tmp/io/./Duck.gltf' is the input --asset" "$tmp/io" -- \
+    "$bin" dataset -o "$tmp/io/./Duck.gltf" --samples 3 --asset "$tmp/io/Duck.gltf"
+refuses "dataset: -o over --label-env" "is the input --label-env $tmp/io/env.exr" "$tmp/io" -- \
+    "$bin" dataset -o "$tmp/io/env.exr" --samples 3 --label-env "$tmp/io/env.exr"
+refuses "dataset --compare: -o over --weights" "is the input --weights $tmp/io/w.mlp" "$tmp/io" -- \
+    "$bin" dataset --compare --samples 2 --env "$tmp/io/env.exr" --weights "$tmp/io/w.mlp" -o "$tmp/io/w.mlp"
+refuses "dataset --compare: -o over --env" "is the input --env $tmp/io/env.exr" "$tmp/io" -- \
+    "$bin" dataset --compare --samples 2 --env "$tmp/io/env.exr" -o "$tmp/io/env.exr"
+oiiotool --pattern constant:color=0.1,0.1,-0.25 1x1 3 -d float --pattern constant:color=0.5,0.5,0.5 16x8 3 -d float \
+    --paste +2+1 -o "$tmp/io/negative.exr" >/dev/null 2>&1
+expect "dataset: a negative --label-env value is named" 2 "negative.exr': pixel \(2, 1\), channel 2 holds -0.25" -- \
+    "$bin" dataset -o "$tmp/io/never.csv" --samples 3 --label-env "$tmp/io/negative.exr"
+check "... and nothing is written" test ! -e "$tmp/io/never.csv"
 ls "$tmp" | grep -q '\.tmp\.' && leftover=yes || leftover=no
 check "no temporary file is left behind" test "$leftover" = no
 

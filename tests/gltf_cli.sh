@@ -70,6 +70,30 @@ sum_before=$(cat "$tmp/Duck.gltf" "$tmp/DuckCM.png" | md5sum)
 expect "the output may not be the input" 2 "" -- "$bin" gltf spec2metal "$tmp/Duck.gltf" -o "$tmp/Duck.gltf" \
     --method weighted
 check "... and the input is unchanged" test "$(cat "$tmp/Duck.gltf" "$tmp/DuckCM.png" | md5sum)" = "$sum_before"
+# By device and inode: a hard link or a symbolic link to the asset, and --weights, are inputs too (exit 2, named).
+mkdir -p "$tmp/io"
+cp "$shared/specgloss/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/"* "$tmp/io/"
+ln "$tmp/io/Duck.gltf" "$tmp/io/hard.gltf"
+ln -s Duck.gltf "$tmp/io/soft.gltf"
+cp "$root/data/spec2metal.mlp" "$tmp/io/net.gltf"
+refuses "gltf: -o a hard link to the asset" "output '$tmp/io/hard.gltf' is the input asset $tmp/io/Duck.gltf; refusing" \
+    "$tmp/io" -- "$bin" gltf spec2metal "$tmp/io/Duck.gltf" -o "$tmp/io/hard.gltf" --method weighted
+refuses "gltf: -o a symbolic link to the asset" "output '$tmp/io/soft.gltf' is the input asset" "$tmp/io" -- \
+    "$bin" gltf metal2spec "$tmp/io/Duck.gltf" -o "$tmp/io/soft.gltf"
+refuses "gltf: -o the --weights file" "output '$tmp/io/./net.gltf' is the input --weights $tmp/io/net.gltf" "$tmp/io" -- \
+    "$bin" gltf spec2metal "$tmp/io/Duck.gltf" -o "$tmp/io/./net.gltf" --weights "$tmp/io/net.gltf"
+# A new texture named like an input texture (the converted base colour of out.gltf is out_m0_basecolor.png) gets
+# a fresh name, even though the old texture is pruned from the output: the input file stays as it was.
+mkdir -p "$tmp/clash"
+cp "$shared/specgloss/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/"* "$tmp/clash/"
+mv "$tmp/clash/DuckCM.png" "$tmp/clash/out_m0_basecolor.png"
+sed -i 's/DuckCM\.png/out_m0_basecolor.png/' "$tmp/clash/Duck.gltf"
+sum_before=$(cat "$tmp/clash/Duck.gltf" "$tmp/clash/Duck0.bin" "$tmp/clash/out_m0_basecolor.png" | md5sum)
+expect "gltf: a texture named like an input texture" 0 "1 of 1 materials converted" -- "$bin" gltf spec2metal \
+    "$tmp/clash/Duck.gltf" -o "$tmp/clash/out.gltf" --method weighted --overwrite-metal-rough
+check "... leaves every input file as it was" test \
+    "$(cat "$tmp/clash/Duck.gltf" "$tmp/clash/Duck0.bin" "$tmp/clash/out_m0_basecolor.png" | md5sum)" = "$sum_before"
+check "... and the output refers to a fresh name" grep -q '"uri": "out_m0_basecolor_1.png"' "$tmp/clash/out.gltf"
 
 # ---- spec2metal -------------------------------------------------------------------------------------------------
 mkdir -p "$tmp/floppy" "$tmp/avocado" "$tmp/keep" "$tmp/sg" "$tmp/truck" "$tmp/duck" "$tmp/bottle" "$tmp/back" \

@@ -16,7 +16,13 @@ check "the sweeps are made" test -s "$tmp/wg.csv" -a -s "$tmp/ga.csv"
 expect "learn --help" 0 "Usage: matremap learn" -- "$bin" learn --help
 expect "learn: no sweep" 1 "no sweep file" -- "$bin" learn -o "$tmp/x.mrt"
 expect "learn: no output" 1 "no output file" -- "$bin" learn "$tmp/wg.csv"
-expect "learn: -o over the sweep" 2 "would be replaced" -- "$bin" learn "$tmp/wg.csv" -o "$tmp/./wg.csv"
+mkdir -p "$tmp/io/plots"
+cp "$tmp/wg.csv" "$tmp/io/plots/rows.csv"
+refuses "learn: -o over the sweep" "output '$tmp/./wg.csv' is the input sweep $tmp/wg.csv; refusing" "$tmp" -- \
+    "$bin" learn "$tmp/wg.csv" -o "$tmp/./wg.csv"
+refuses "learn: --plots DIR whose rows.csv is the sweep" \
+    "output '$tmp/io/plots/rows.csv' \(--plots $tmp/io/plots\) is the input sweep" "$tmp/io" -- \
+    "$bin" learn "$tmp/io/plots/rows.csv" -o "$tmp/io/x.mrt" --plots "$tmp/io/plots"
 expect "learn: unknown method" 1 "valid: parametric, svr, mlp" -- "$bin" learn "$tmp/wg.csv" --method gp -o "$tmp/x.mrt"
 expect "learn: a missing file" 2 "nope.csv" -- "$bin" learn "$tmp/nope.csv" -o "$tmp/x.mrt"
 sed '12s/,0.0[0-9]*,converged/,nan,converged/' "$tmp/wg.csv" > "$tmp/nan.csv"
@@ -85,9 +91,37 @@ oiiotool --pattern constant:color=0.1 32x32 1 -d float -o "$tmp/rough32.exr" >/d
 expect "convert: maps of different sizes are refused" 2 "64x32" -- "$bin" convert --from ward --to ggx \
     alpha="$tmp/rough32.exr" specular=@"$tmp/spec.png" --transform "$tmp/wg.mrt" -o "$tmp/sz_"
 check "... and nothing is written" bash -c "! ls '$tmp'/sz_* >/dev/null 2>&1"
-cp "$tmp/spec.png" "$tmp/x_f0.png"
-expect "convert: an output that is an input is refused" 2 "would be replaced" -- "$bin" convert --from ward --to ggx \
-    specular=@"$tmp/x_f0.png" --transform "$tmp/wg.mrt" -o "$tmp/x_" --format png
+# No output replaces an input: maps (as given, NAME=FILE or NAME=@FILE), transforms, and --cache against both.
+cp "$tmp/spec.png" "$tmp/io/x_f0.png"
+cp "$tmp/rough.exr" "$tmp/io/r.exr"
+cp "$tmp/wg.mrt" "$tmp/io/t.mrt"
+ln "$tmp/io/t.mrt" "$tmp/io/y_alpha.exr"
+refuses "convert: an output that is an input map is refused" \
+    "output '$tmp/io/x_f0.png' \(-o $tmp/io/x_\) is the input specular=@$tmp/io/x_f0.png; refusing" "$tmp/io" -- \
+    "$bin" convert --from ward --to ggx specular=@"$tmp/io/x_f0.png" --transform "$tmp/wg.mrt" -o "$tmp/io/x_" \
+    --format png
+refuses "convert: ... named as given (NAME=FILE)" "is the input specular=$tmp/io/x_f0.png;" "$tmp/io" -- \
+    "$bin" convert --from ward --to ggx specular="$tmp/io/x_f0.png" --transform "$tmp/wg.mrt" -o "$tmp/io/./x_" \
+    --format png
+refuses "convert: an output that is a hard link of the transform" \
+    "output '$tmp/io/y_alpha.exr' \(-o $tmp/io/y_\) is the input transform $tmp/io/t.mrt" "$tmp/io" -- \
+    "$bin" convert --from ward --to ggx alpha=@"$tmp/io/r.exr" --transform "$tmp/io/t.mrt" -o "$tmp/io/y_"
+refuses "convert: --cache over an input map" "output '$tmp/io/r.exr' \(--cache\) is the input alpha=$tmp/io/r.exr" \
+    "$tmp/io" -- "$bin" convert --from ward --to ggx alpha="$tmp/io/r.exr" --direct --cache "$tmp/io/r.exr" \
+    -o "$tmp/io/z_"
+# A failed write (a file-size limit, as a full disk) leaves the previous outputs as they were and nothing else:
+# every output is written to a hidden temporary file beside it, all renamed into place only once all are written.
+refuses "convert: a write failing midway leaves the outputs as they were" "error: writing '$tmp/o/ggx_" "$tmp/o" -- \
+    bash -c 'trap "" XFSZ; ulimit -f 4; exec "$@"' _ "$bin" convert --from ward --to ggx alpha="$tmp/rough.exr" \
+    specular=@"$tmp/spec.png" diffuse=0.3 --transform "$tmp/wg.mrt" -o "$tmp/o/ggx_"
+expect "convert: ... and into a new folder, no folder is left" 2 "error: writing '$tmp/new/ggx_" -- \
+    bash -c 'trap "" XFSZ; ulimit -f 4; exec "$@"' _ "$bin" convert --from ward --to ggx alpha="$tmp/rough.exr" \
+    specular=@"$tmp/spec.png" diffuse=0.3 --transform "$tmp/wg.mrt" -o "$tmp/new/ggx_"
+check "... no folder left" test ! -e "$tmp/new"
+mkdir -p "$tmp/io/w_flags.png"
+refuses "convert: a folder in an output's way is refused before anything is written" \
+    "output '$tmp/io/w_flags.png' \(-o $tmp/io/w_\) is a folder" "$tmp/io" -- "$bin" convert --from ward --to ggx \
+    alpha=@"$tmp/rough.exr" --transform "$tmp/wg.mrt" -o "$tmp/io/w_"
 
 # Chains: given in order, and found in a folder (fewest hops), with --via.
 mkdir -p "$tmp/mrt" && cp "$tmp/wg.mrt" "$tmp/ga.mrt" "$tmp/mrt/"

@@ -72,4 +72,17 @@ check "source, target and SSIM pictures exist" test -s "$tmp/pic_source.png" -a 
 expect "Ward cannot follow a bright conductor" 0 "outcome: unreachable .*trimming" -- \
     "$bin" remap --from as f0=0.9 alpha=0.05 --to ward --size 64
 
+# --images PREFIX writes PREFIX_source.png, _target.png and _ssim.png: none of them may be an input.
+mkdir -p "$tmp/io"
+"$bin" render lambert albedo=0.5 --size 32 -o "$tmp/io/r_source.png" 2>/dev/null
+"$bin" render lambert albedo=0.5 --size 32 --component diffuse -o "$tmp/io/d.exr" 2>/dev/null
+"$bin" render lambert albedo=0.5 --size 32 --component specular -o "$tmp/io/s.exr" 2>/dev/null
+ln -s d.exr "$tmp/io/x_ssim.png"
+refuses "remap --images over the --from-images render" \
+    "output '$tmp/io/r_source.png' \(--images $tmp/io/r\) is the input --from-images $tmp/io/r_source.png" \
+    "$tmp/io" -- "$bin" remap --from-images "$tmp/io/r_source.png" --images "$tmp/io/r" --to lambert
+refuses "remap --images: a picture that links to --diffuse" "x_ssim.png' \(--images .*/x\) is the input --diffuse" \
+    "$tmp/io" -- "$bin" remap --from-images "$tmp/io/r_source.png" --diffuse "$tmp/io/d.exr" \
+    --specular "$tmp/io/s.exr" --images "$tmp/io/./x" --to lambert
+
 finish

@@ -140,7 +140,36 @@ expect "--env-reflection-samples without --env" 1 "need --env" -- "$bin" render 
 expect "--env-reflection-samples over the maximum" 1 "env-reflection-samples" -- "$bin" render ggx \
     --env "$tmp/white_env.exr" --env-reflection-samples 1025 -o "$tmp/e7.exr"
 oiiotool --pattern constant:color=1,-1,1 8x4 3 -d float -o "$tmp/negative_env.exr"
-expect "a negative environment value is named" 2 "environment map value -1 at pixel" -- "$bin" render ggx \
+expect "a negative environment value is named with its file" 2 \
+    "image '$tmp/negative_env.exr': pixel \(0, 0\), channel 1 holds -1: expected finite radiance" -- "$bin" render ggx \
     --env "$tmp/negative_env.exr" -o "$tmp/e8.exr"
+check "... and nothing is written" test ! -e "$tmp/e8.exr"
+
+# ---- no output replaces an input (by device and inode: another spelling, a hard link, a symbolic link) -----------
+mkdir -p "$tmp/io/sub"
+oiiotool --pattern checker:width=4:height=4:color1=0.8,0.2,0.1:color2=0.1,0.3,0.8 16x16 3 -o "$tmp/io/t.png"
+cp "$tmp/white_env.exr" "$tmp/io/env.exr"
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' >"$tmp/io/tri.obj"
+ln "$tmp/io/t.png" "$tmp/io/hard.png"
+ln -s t.png "$tmp/io/soft.png"
+abs_bin=$(realpath "$bin")
+cd "$tmp/io"
+refuses "render: -o ./t.png is the map base_color=@t.png" "output './t.png' is the input base_color=@t.png; refusing" \
+    "$tmp/io" -- "$abs_bin" render gltf base_color=@t.png --size 16 -o ./t.png
+cd "$OLDPWD"
+refuses "render: -o through dir/.. is the map" "is the input base_color=@$tmp/io/t.png" "$tmp/io" -- \
+    "$bin" render gltf base_color=@"$tmp/io/t.png" --size 16 -o "$tmp/io/sub/../t.png"
+refuses "render: -o a hard link to the map" "output '$tmp/io/hard.png' is the input base_color=@" "$tmp/io" -- \
+    "$bin" render gltf base_color=@"$tmp/io/t.png" --size 16 -o "$tmp/io/hard.png"
+refuses "render: -o a symbolic link to a channel's map" "output '$tmp/io/soft.png' is the input roughness=@.*t.png:g" \
+    "$tmp/io" -- "$bin" render gltf roughness=@"$tmp/io/t.png":g --size 16 -o "$tmp/io/soft.png"
+refuses "render: -o the --env map" "output '$tmp/io/env.exr' is the input --env $tmp/io/env.exr" "$tmp/io" -- \
+    "$bin" render gltf --env "$tmp/io/env.exr" --size 16 -o "$tmp/io/env.exr"
+refuses "render: --mask over the --mesh" "output '$tmp/io/tri.obj' \(--mask\) is the input --mesh" "$tmp/io" -- \
+    "$bin" render gltf --mesh "$tmp/io/tri.obj" --size 16 -o "$tmp/io/new.exr" --mask "$tmp/io/tri.obj"
+refuses "render: --mask and -o are one file" "\(--mask\) is also the output '$tmp/io/sub/../m.png'" "$tmp/io" -- \
+    "$bin" render gltf --size 16 -o "$tmp/io/sub/../m.png" --mask "$tmp/io/m.png"
+expect "render: an output beside its input is fine" 0 "wrote" -- "$bin" render gltf base_color=@"$tmp/io/t.png" \
+    --size 16 -o "$tmp/io/t2.png"
 
 finish

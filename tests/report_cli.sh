@@ -88,9 +88,56 @@ expect "--from is renamed" 1 "is now --camera-direction" -- "$bin" report -o "$t
 expect "an unknown model" 2 "frobnicate" -- "$bin" report -o "$tmp/e4" frobnicate
 expect "a missing map is named" 2 "nomap.png" -- "$bin" report -o "$tmp/e5" ggx diffuse=@"$tmp/nomap.png"
 expect "a missing environment is named" 2 "nosky.hdr" -- "$bin" report -o "$tmp/e6" --env "$tmp/nosky.hdr" ggx
-check "no folder after a failure" test ! -e "$tmp/e4" -a ! -e "$tmp/e5" -a ! -e "$tmp/e6"
+oiiotool --pattern constant:color=nan,nan,nan 1x1 3 -d float --pattern constant:color=0.2,0.2,0.2 16x8 3 -d float \
+    --paste +3+5 -o "$tmp/nan_env.exr"
+expect "an environment with a NaN is named, with the pixel" 2 \
+    "environment map '$tmp/nan_env.exr': pixel \(3, 5\), channel 0 holds nan" -- "$bin" report -o "$tmp/e10" --size 32 \
+    --env "$tmp/nan_env.exr" ggx
+check "no folder after a failure" test ! -e "$tmp/e4" -a ! -e "$tmp/e5" -a ! -e "$tmp/e6" -a ! -e "$tmp/e10"
 touch "$tmp/afile"
 expect "-o naming a file" 2 "not a folder" -- "$bin" report -o "$tmp/afile" ggx
+
+# ---- the folder is an output as a whole: written beside it, renamed in, or nothing ---------------------------------
+mkdir -p "$tmp/rep"
+expect "a report to replace" 0 "report: $tmp/rep/r/index.html" -- "$bin" report -o "$tmp/rep/r" --size 32 ggx \
+    alpha=0.2 -- ggx alpha=0.4 -- ggx alpha=0.6
+expect "... replaced by one with fewer materials" 0 "report:" -- "$bin" report -o "$tmp/rep/r/" --size 32 ggx \
+    alpha=0.2 -- ggx alpha=0.3
+check "... which leaves none of the old pictures" test ! -e "$tmp/rep/r/view0_material2.png" -a \
+    -s "$tmp/rep/r/view0_material1.png"
+check "... and no scratch folder beside it" test "$(ls -A "$tmp/rep")" = r
+ln -s r/view0_material1.png "$tmp/rep/link.png"
+refuses "an input inside the folder is refused (replacing the folder would delete it)" \
+    "output folder '$tmp/rep/r' holds the input base_color=@$tmp/rep/r/view0_material0.png; refusing to replace it" \
+    "$tmp/rep" -- "$bin" report -o "$tmp/rep/r" --size 32 gltf base_color=@"$tmp/rep/r/view0_material0.png"
+refuses "... also through a symbolic link" "holds the input roughness=@$tmp/rep/link.png:g" "$tmp/rep" -- \
+    "$bin" report -o "$tmp/rep/r" --size 32 gltf roughness=@"$tmp/rep/link.png":g
+echo mine >"$tmp/rep/r/notes.txt"
+refuses "a folder holding what no report writes is refused, untouched" \
+    "report folder '$tmp/rep/r' holds 'notes.txt', which no report writes" "$tmp/rep" -- \
+    "$bin" report -o "$tmp/rep/r" --size 32 ggx alpha=0.2
+rm "$tmp/rep/r/notes.txt" "$tmp/rep/link.png"
+# A write failing midway (a file-size limit, as a full disk would) leaves the previous report as it was, every file.
+refuses "a write failing midway leaves the previous report" \
+    "report '$tmp/rep/r' not written \(a previous report there is left as it was\): .*'$tmp/rep/r/view" "$tmp/rep" -- \
+    bash -c 'trap "" XFSZ; ulimit -f 8; exec "$@"' _ "$bin" report -o "$tmp/rep/r" --size 512 ggx alpha=0.2 -- \
+    ggx alpha=0.5
+expect "... and a new folder is not made at all" 2 "not written" -- bash -c 'trap "" XFSZ; ulimit -f 8; exec "$@"' _ \
+    "$bin" report -o "$tmp/rep/new" --size 512 ggx alpha=0.2 -- ggx alpha=0.5
+check "... nothing left of it" test "$(ls -A "$tmp/rep")" = r
+# A real full disk: a 200 KiB tmpfs (needs root to mount; skipped otherwise). The first report fits, the second
+# runs out of space midway (after several pictures): the first stays, byte for byte.
+mkdir -p "$tmp/disk"
+if [ "$(id -u)" = 0 ] && mount -t tmpfs -o size=200k tmpfs "$tmp/disk" 2>/dev/null; then
+    trap 'umount "$tmp/disk" 2>/dev/null; rm -rf "$tmp"' EXIT
+    expect "a report on a small disk" 0 "report:" -- "$bin" report -o "$tmp/disk/r" --size 32 ggx alpha=0.2 -- \
+        ggx alpha=0.4
+    refuses "a full disk midway leaves the previous report" "not written .*No space left on device" "$tmp/disk" -- \
+        "$bin" report -o "$tmp/disk/r" --size 512 ggx alpha=0.2 -- ggx alpha=0.4 -- ggx alpha=0.6 -- ggx alpha=0.8
+    umount "$tmp/disk"
+else
+    echo "skip  a full disk midway (mounting a tmpfs needs root)"
+fi
 
 # ---- glTF assets rendered as their meshes ------------------------------------------------------------------------
 shared="${MR_SHARED:-$(cd "$(dirname "$0")/.." && pwd)/../shared}/assets"

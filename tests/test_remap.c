@@ -961,6 +961,11 @@ MR_TEST(bad_source_images_are_rejected_with_their_sizes_and_pixels) {
                      mr_last_error());
         MR_CHECK(mr_remap_images(plan, &(mr_remap_source){good, bad, good}, ward, &o, &r) == MR_ERR_INVALID_ARG);
         MR_CHECK_MSG(strstr(mr_last_error(), "(5, 7)") && strstr(mr_last_error(), "diffuse"), "%s", mr_last_error());
+        // The irradiance reference is a measurement too.
+        double scale = 42.0;
+        MR_CHECK(mr_irradiance_scale(plan, bad, 0.5, &scale) == MR_ERR_INVALID_ARG && scale == 42.0);
+        MR_CHECK_MSG(strstr(mr_last_error(), "irradiance reference image: pixel (5, 7), channel 1 holds"), "%s",
+                     mr_last_error());
         mr_image_free(bad);
         bad = NULL;
     }

@@ -13,6 +13,7 @@
  */
 #include "report/report.h"
 
+#include <dirent.h>
 #include <sys/stat.h>
 
 #include "gltf/mr_gltf_scene.h"
@@ -250,6 +251,15 @@ static mr_material *ggx(double alpha) {
     return m;
 }
 
+/* Entries of the tests' scratch folder whose name holds ".matremap-": a report's scratch folders left behind. */
+static int scratch_entries(void) {
+    DIR *d = opendir(mr_test_scratch_dir());
+    int count = 0;
+    for (struct dirent *e; d != NULL && (e = readdir(d)) != NULL;) count += strstr(e->d_name, ".matremap-") != NULL;
+    if (d != NULL) closedir(d);
+    return count;
+}
+
 /* A file of report folder `dir`, read whole (NULL if missing). */
 static char *report_file(const char *dir, const char *name) {
     char path[600];
@@ -341,12 +351,25 @@ MR_TEST(environment_views_maps_and_progress) {
     free(summary);
     MR_CHECK(file_exists(mr_test_tmp_path("env/map_material1_0.png")));
     mr_report_result_free(r);
-    // Stopped by the callback after one view: MR_ERR_CANCELLED, no page, no figures.
+    // Stopped by the callback after one view (its pictures written): MR_ERR_CANCELLED, no figures, and no folder:
+    // the pictures went to a scratch folder beside it, removed again.
     log = (progress_log){0, -1, -1, 1};
     r = (mr_report_result *)&r;
     MR_CHECK(mr_report_make(in, 2, mr_test_tmp_path("stopped"), &o, &r) == MR_ERR_CANCELLED);
-    MR_CHECK(r == NULL && log.calls == 2 && !file_exists(mr_test_tmp_path("stopped/index.html")));
-    MR_CHECK(file_exists(mr_test_tmp_path("stopped/view0_material1.png")));
+    MR_CHECK(r == NULL && log.calls == 2 && !file_exists(mr_test_tmp_path("stopped")));
+    MR_CHECK(scratch_entries() == 0);
+    // Stopped while replacing the report made above: that report stays as it was, every file of it.
+    char *before = report_file(dir, "index.html");
+    log = (progress_log){0, -1, -1, 1};
+    o.rotations = 3;
+    MR_CHECK(mr_report_make(in, 2, dir, &o, NULL) == MR_ERR_CANCELLED);
+    char *after = report_file(dir, "index.html");
+    MR_CHECK(before != NULL && after != NULL && strcmp(before, after) == 0);
+    MR_CHECK(file_exists(mr_test_tmp_path("env/view1_material1.png")) &&
+             !file_exists(mr_test_tmp_path("env/view2_material1.png")));
+    MR_CHECK(scratch_entries() == 0);
+    free(before);
+    free(after);
 done:
     mr_image_free(env);
     mr_image_free(albedo);
@@ -378,6 +401,62 @@ MR_TEST(gltf_scene_against_itself_is_ssim_one) {
 done:
     mr_gltf_scene_free(a);
     mr_gltf_scene_free(b);
+}
+
+MR_TEST(a_report_replaces_its_folder_as_a_whole_or_not_at_all) {
+    mr_material *a = ggx(0.2), *b = ggx(0.4), *c = ggx(0.6);
+    if (a == NULL || b == NULL || c == NULL) goto done;
+    mr_report_input three[3] = {{NULL, NULL, a, NULL}, {NULL, NULL, b, NULL}, {NULL, NULL, c, NULL}};
+    mr_report_options o = {0};
+    o.size = 32;
+    const char *dir = mr_test_tmp_path("replaced");
+    MR_CHECK_OK(mr_report_make(three, 3, dir, &o, NULL));
+    MR_CHECK(file_exists(mr_test_tmp_path("replaced/view0_material2.png")));
+    // Two materials over three: the old third render goes with the old report (the folder is replaced, not
+    // written into); a trailing slash names the same folder.
+    char slash[600];
+    snprintf(slash, sizeof slash, "%s/", dir);
+    MR_CHECK_OK(mr_report_make(three, 2, slash, &o, NULL));
+    MR_CHECK(file_exists(mr_test_tmp_path("replaced/view0_material1.png")) &&
+             !file_exists(mr_test_tmp_path("replaced/view0_material2.png")));
+    char *summary = report_file(dir, "summary.json");
+    MR_CHECK(contains(summary, "alpha=0.4") && !contains(summary, "alpha=0.6"));
+    free(summary);
+    // A folder holding anything a report does not write is not replaced: refused, naming the entry, untouched.
+    const char *foreign = mr_test_tmp_path("replaced/notes.txt");
+    FILE *f = fopen(foreign, "w");
+    if (f != NULL) {
+        fputs("mine\n", f);
+        fclose(f);
+    }
+    char *page = report_file(dir, "index.html");
+    MR_CHECK(mr_report_make(three, 3, dir, &o, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(contains(mr_last_error(), "holds 'notes.txt'"), "%s", mr_last_error());
+    char *still = report_file(dir, "index.html"), *notes = mr_test_read_file(foreign, NULL);
+    MR_CHECK(page != NULL && still != NULL && strcmp(page, still) == 0);
+    MR_CHECK(notes != NULL && strcmp(notes, "mine\n") == 0);
+    MR_CHECK(!file_exists(mr_test_tmp_path("replaced/view0_material2.png")));
+    free(page);
+    free(still);
+    free(notes);
+    // So is a sub-folder, even one named like a picture.
+    const char *empty = mr_test_tmp_path("empty");
+    MR_CHECK(mkdir(empty, 0777) == 0);
+    MR_CHECK_OK(mr_report_make(three, 1, empty, &o, NULL)); // an empty folder is taken
+    MR_CHECK(mkdir(mr_test_tmp_path("empty/view9_material9.png"), 0777) == 0);
+    MR_CHECK(mr_report_make(three, 1, empty, &o, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(contains(mr_last_error(), "holds 'view9_material9.png'"), "%s", mr_last_error());
+    // A folder is replaced by its name: ".", ".." and "/" have none to rename.
+    const char *unnamed[4] = {".", "..", "/", "a/.."};
+    for (int k = 0; k < 4; k++) {
+        MR_CHECK(mr_report_make(three, 1, unnamed[k], &o, NULL) == MR_ERR_INVALID_ARG);
+        MR_CHECK_MSG(contains(mr_last_error(), "name the folder itself"), "%s", mr_last_error());
+    }
+    MR_CHECK(scratch_entries() == 0);
+done:
+    mr_material_free(a);
+    mr_material_free(b);
+    mr_material_free(c);
 }
 
 MR_TEST(bad_inputs_and_options_are_named_and_write_nothing) {
@@ -559,6 +638,7 @@ MR_TEST_MAIN(MR_TEST_ENTRY(avocado_scene_has_the_assets_triangles_and_its_specgl
              MR_TEST_ENTRY(material_against_itself_is_ssim_one_and_another_is_below),
              MR_TEST_ENTRY(environment_views_maps_and_progress),
              MR_TEST_ENTRY(gltf_scene_against_itself_is_ssim_one),
+             MR_TEST_ENTRY(a_report_replaces_its_folder_as_a_whole_or_not_at_all),
              MR_TEST_ENTRY(bad_inputs_and_options_are_named_and_write_nothing),
              MR_TEST_ENTRY(materials_on_an_obj_mesh_under_a_turning_map),
              MR_TEST_ENTRY(mesh_options_are_refused_by_name))

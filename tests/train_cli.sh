@@ -17,7 +17,26 @@ check "the tiny dataset is made" test -s "$tmp/on.csv" -a -s "$tmp/off.csv" -a -
 expect "train --help" 0 "Usage: matremap train" -- "$bin" train --help
 expect "train: no dataset" 1 "no dataset" -- "$bin" train -o "$tmp/x.mlp"
 expect "train: no output" 1 "missing -o" -- "$bin" train "$tmp/on.csv"
-expect "train: -o over a dataset file" 1 "overwrite a dataset" -- "$bin" train "$tmp/on.csv" -o "$tmp/on.csv"
+# No output (the weights, the loss curve's PREFIX.csv and PREFIX.svg) replaces an input: exit 2, both named.
+mkdir -p "$tmp/io"
+cp "$tmp/on.csv" "$tmp/io/ds.csv"
+cp "$tmp/test.csv" "$tmp/io/t.csv"
+cp "$tmp/test.csv" "$tmp/io/t_loss.csv"
+ln "$tmp/io/ds.csv" "$tmp/io/ds_link.mlp"
+abs_bin=$(realpath "$bin")
+cd "$tmp/io"
+refuses "train: -o ./ds.csv is the dataset ds.csv" "output './ds.csv' is the input dataset ds.csv; refusing" \
+    "$tmp/io" -- "$abs_bin" train ds.csv -o ./ds.csv
+refuses "train: -o is the --test file" "output 't.csv' is the input --test t.csv" "$tmp/io" -- \
+    "$abs_bin" train ds.csv --test t.csv -o t.csv
+refuses "train: --loss-curve ds writes ds.csv, the dataset" \
+    "output 'ds.csv' \(--loss-curve ds\) is the input dataset ds.csv" "$tmp/io" -- \
+    "$abs_bin" train ds.csv -o w.mlp --loss-curve ds
+refuses "train: the default loss curve over the --test file" "output 't_loss.csv' \(the loss curve of -o t.mlp\)" \
+    "$tmp/io" -- "$abs_bin" train ds.csv --test t_loss.csv -o t.mlp
+cd "$OLDPWD"
+refuses "train: -o a hard link to the dataset" "output '$tmp/io/ds_link.mlp' is the input dataset" "$tmp/io" -- \
+    "$bin" train "$tmp/io/ds.csv" -o "$tmp/io/ds_link.mlp"
 expect "train: missing file" 2 "nope.csv" -- "$bin" train "$tmp/nope.csv" -o "$tmp/x.mlp"
 "$bin" sweep --from ggx --to ward --random 3 --size 16 -o "$tmp/ward.csv" 2>/dev/null
 expect "train: a sweep into another workflow" 2 "to_albedo" -- "$bin" train "$tmp/ward.csv" -o "$tmp/x.mlp"

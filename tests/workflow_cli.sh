@@ -139,23 +139,31 @@ check "bad inputs write nothing" bash -c "! ls '$tmp'/x_* >/dev/null 2>&1"
 cp "$tmp/c8.png" "$tmp/in_diffuse.png"
 cp "$tmp/c8.png" "$tmp/in_basecolor.png"
 cp "$tmp/c8.png" "$tmp/keep.png"
-expect "-o whose output is the input: refused" 1 "the output '$tmp/in_basecolor.png' is the input --diffuse" -- \
+refuses "-o whose output is the input: refused" \
+    "output '$tmp/in_basecolor.png' \(-o $tmp/in\) is the input --diffuse $tmp/in_basecolor.png; refusing" "$tmp" -- \
     "$bin" spec2metal --diffuse "$tmp/in_basecolor.png" --specular 0.04 --glossiness 0.5 --method weighted -o "$tmp/in"
-expect "...also for metal2spec's diffuse output" 1 "is the input --basecolor" -- \
+refuses "...also for metal2spec's diffuse output" "is the input --basecolor" "$tmp" -- \
     "$bin" metal2spec --basecolor "$tmp/in_diffuse.png" --metallic 0 --roughness 0.5 -o "$tmp/in"
 ln -s in_diffuse.png "$tmp/alias_diffuse.png"
-expect "...also through a link" 1 "inputs are never overwritten" -- \
+refuses "...also through a link" "alias_diffuse.png' \(-o $tmp/alias\) is the input --basecolor" "$tmp" -- \
     "$bin" metal2spec --basecolor "$tmp/in_diffuse.png" --metallic 0 --roughness 0.5 -o "$tmp/alias"
-expect "...and another spelling" 1 "inputs are never overwritten" -- \
+refuses "...and another spelling" "refusing to overwrite it" "$tmp" -- \
     "$bin" metal2spec --basecolor "$tmp/./in_diffuse.png" --metallic 0 --roughness 0.5 -o "$tmp/../${tmp##*/}/in"
-expect "--flags over an input: refused" 1 "choose another --flags FILE" -- \
+refuses "--flags over an input: refused" "output '$tmp/in_diffuse.png' \(--flags\) is the input --basecolor" "$tmp" -- \
     "$bin" metal2spec --basecolor "$tmp/in_diffuse.png" --metallic 0 --roughness 0.5 -o "$tmp/o" \
     --flags "$tmp/in_diffuse.png"
+cp "$root/data/spec2metal.mlp" "$tmp/w_metallic.png"
+refuses "-o over the --weights file" "output '$tmp/w_metallic.png' \(-o $tmp/w\) is the input --weights" "$tmp" -- \
+    "$bin" spec2metal --diffuse 0.5 --specular 0.04 --glossiness 0.5 --weights "$tmp/w_metallic.png" -o "$tmp/w"
+refuses "-o over the network MATREMAP_WEIGHTS names" "output '$tmp/w_metallic.png' \(-o $tmp/w\) is the input the network" \
+    "$tmp" -- env MATREMAP_WEIGHTS="$tmp/w_metallic.png" "$bin" spec2metal --diffuse 0.5 --specular 0.04 \
+    --glossiness 0.5 -o "$tmp/w"
 check "the inputs are unchanged" bash -c "cmp -s '$tmp/in_diffuse.png' '$tmp/keep.png' &&
     cmp -s '$tmp/in_basecolor.png' '$tmp/keep.png'"
 check "and nothing was written" bash -c "! ls '$tmp'/in_[mrsg]* '$tmp'/o_* >/dev/null 2>&1"
 # --flags spelled differently from an output that does not exist yet (it would overwrite the output).
-expect "--flags is an output by another spelling: refused" 1 "--flags '$tmp/./o_specular.png' is also the output" -- \
+refuses "--flags is an output by another spelling: refused" \
+    "output '$tmp/./o_specular.png' \(--flags\) is also the output '$tmp/o_specular.png'" "$tmp" -- \
     "$bin" metal2spec --basecolor "$tmp/c8.png" --metallic 0 --roughness 0.5 -o "$tmp/o" \
     --flags "$tmp/./o_specular.png"
 expect "second input missing" 2 "nope.png" -- \

@@ -1,4 +1,5 @@
 /* cli.c — shared command-line plumbing (contracts in cli.h). */
+#define _XOPEN_SOURCE 700 /* realpath (X/Open): where an input lies, for folder outputs */
 #include "cli.h"
 
 #include <errno.h>
@@ -60,6 +61,203 @@ int cli_parse_held(const char *command, const mr_brdf_model *model, const char *
 int cli_same_file(const char *a, const char *b) {
     struct stat sa, sb;
     return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+/* ---- inputs and outputs (cli.h) ---------------------------------------------------------------------------- */
+
+void cli_io_init(cli_io *io, const char *command) {
+    memset(io, 0, sizeof *io);
+    io->command = command;
+}
+
+static char *format_label(const char *fmt, va_list args) {
+    va_list copy;
+    va_copy(copy, args);
+    int n = vsnprintf(NULL, 0, fmt, copy);
+    va_end(copy);
+    char *label = n >= 0 ? malloc((size_t)n + 1) : NULL;
+    if (label != NULL) vsnprintf(label, (size_t)n + 1, fmt, args);
+    return label;
+}
+
+/* Append (path, label) to *list; the label is taken over. On failure the label is freed and io remembers it. */
+static void io_add(cli_io *io, cli_io_entry **list, int *count, int *capacity, const char *path, char *label,
+                   int folder) {
+    char *copy = path != NULL ? strdup(path) : NULL;
+    if (copy != NULL && *count == *capacity) {
+        int grown = *capacity ? 2 * *capacity : 16;
+        cli_io_entry *more = realloc(*list, (size_t)grown * sizeof *more);
+        if (more != NULL) {
+            *list = more;
+            *capacity = grown;
+        }
+    }
+    if (copy == NULL || *count == *capacity) {
+        io->out_of_memory |= path != NULL;
+        free(copy);
+        free(label);
+        return;
+    }
+    (*list)[(*count)++] = (cli_io_entry){copy, label, folder};
+}
+
+void cli_io_input(cli_io *io, const char *path, const char *label_fmt, ...) {
+    va_list args;
+    va_start(args, label_fmt);
+    char *label = format_label(label_fmt, args);
+    va_end(args);
+    if (label == NULL) io->out_of_memory = 1;
+    io_add(io, &io->inputs, &io->input_count, &io->input_capacity, path, label, 0);
+}
+
+void cli_io_output(cli_io *io, const char *path, const char *label_fmt, ...) {
+    char *label = NULL;
+    if (label_fmt != NULL) {
+        va_list args;
+        va_start(args, label_fmt);
+        label = format_label(label_fmt, args);
+        va_end(args);
+        if (label == NULL) io->out_of_memory = 1;
+    }
+    io_add(io, &io->outputs, &io->output_count, &io->output_capacity, path, label, 0);
+}
+
+void cli_io_output_folder(cli_io *io, const char *path, const char *label_fmt, ...) {
+    char *label = NULL;
+    if (label_fmt != NULL) {
+        va_list args;
+        va_start(args, label_fmt);
+        label = format_label(label_fmt, args);
+        va_end(args);
+        if (label == NULL) io->out_of_memory = 1;
+    }
+    io_add(io, &io->outputs, &io->output_count, &io->output_capacity, path, label, 1);
+}
+
+void cli_io_material(cli_io *io, const char *const *assignments, const char *const *labels, int count) {
+    for (int k = 0; k < count; k++) {
+        const char *eq = strchr(assignments[k], '=');
+        if (eq == NULL || eq[1] != '@') continue;
+        // The file as cli_material_load reads it: "name=@FILE[:r|g|b|a]".
+        const char *file = eq + 2;
+        size_t length = strlen(file);
+        if (length >= 3 && file[length - 2] == ':' && strchr("rgba", file[length - 1]) != NULL) length -= 2;
+        char *path = malloc(length + 1);
+        if (path == NULL) {
+            io->out_of_memory = 1;
+            continue;
+        }
+        memcpy(path, file, length);
+        path[length] = '\0';
+        cli_io_input(io, path, "%s", labels != NULL ? labels[k] : assignments[k]);
+        free(path);
+    }
+}
+
+void cli_io_gltf(cli_io *io, const mr_gltf *asset, const char *label) {
+    const char *file;
+    for (int k = 0; (file = mr_gltf_source_file(asset, k)) != NULL; k++)
+        if (k == 0)
+            cli_io_input(io, file, "%s", label);
+        else
+            cli_io_input(io, file, "a file of %s", label);
+}
+
+/* 1 if `inner` (an existing file or folder) lies inside the existing folder `folder`, or is it: some folder on
+ * the way from inner's real path up to the root is the folder (device and inode). */
+static int io_inside(const char *inner, const struct stat *folder) {
+    char *real = realpath(inner, NULL);
+    if (real == NULL) return 0;
+    int inside = 0;
+    for (;;) { // "/a/b/c", "/a/b", "/a", "/"
+        struct stat st;
+        if (stat(real, &st) == 0 && st.st_dev == folder->st_dev && st.st_ino == folder->st_ino) {
+            inside = 1;
+            break;
+        }
+        char *slash = strrchr(real, '/');
+        if (slash == NULL || strcmp(real, "/") == 0) break;
+        slash[slash == real] = '\0';
+    }
+    free(real);
+    return inside;
+}
+
+/* 1 if outputs a and b are one file, existing or still to be written: the same text, the same existing file, or
+ * the same name in the same existing folder ("./x.png" and "x.png" before either is written). */
+static int io_same_output(const char *a, const char *b) {
+    if (strcmp(a, b) == 0 || cli_same_file(a, b)) return 1;
+    const char *name_a = strrchr(a, '/'), *name_b = strrchr(b, '/');
+    name_a = name_a ? name_a + 1 : a;
+    name_b = name_b ? name_b + 1 : b;
+    if (name_a[0] == '\0' || strcmp(name_a, name_b) != 0) return 0;
+    char *dir_a = strndup(name_a > a ? a : ".", name_a > a ? (size_t)(name_a - a) : 1);
+    char *dir_b = strndup(name_b > b ? b : ".", name_b > b ? (size_t)(name_b - b) : 1);
+    int same = dir_a != NULL && dir_b != NULL && cli_same_file(dir_a, dir_b);
+    free(dir_a);
+    free(dir_b);
+    return same;
+}
+
+/* "output 'PATH'" or "output 'PATH' (LABEL)", as messages name an output. */
+static void io_print_output(const char *command, const cli_io_entry *out) {
+    fprintf(stderr, "matremap %s: error: output %s'%s'", command, out->folder ? "folder " : "", out->path);
+    if (out->label != NULL) fprintf(stderr, " (%s)", out->label);
+}
+
+int cli_io_check(const cli_io *io) {
+    if (io->out_of_memory) {
+        fprintf(stderr, "matremap %s: error: out of memory listing the inputs and outputs\n", io->command);
+        return CLI_EXIT_INTERNAL;
+    }
+    for (int o = 0; o < io->output_count; o++) {
+        const cli_io_entry *out = &io->outputs[o];
+        struct stat st;
+        if (stat(out->path, &st) != 0) continue; // not there yet: no input can be it
+        for (int i = 0; i < io->input_count; i++) {
+            const cli_io_entry *in = &io->inputs[i];
+            const int hit =
+                out->folder && S_ISDIR(st.st_mode) ? io_inside(in->path, &st) : cli_same_file(out->path, in->path);
+            if (!hit) continue;
+            io_print_output(io->command, out);
+            if (out->folder && !cli_same_file(out->path, in->path))
+                fprintf(stderr, " holds the input %s; refusing to replace it\n", in->label);
+            else
+                fprintf(stderr, " is the input %s; refusing to overwrite it\n", in->label);
+            return CLI_EXIT_BAD_INPUT;
+        }
+    }
+    for (int o = 0; o < io->output_count; o++)
+        for (int p = 0; p < o; p++) {
+            const cli_io_entry *a = &io->outputs[p], *b = &io->outputs[o];
+            if (!io_same_output(a->path, b->path)) continue;
+            io_print_output(io->command, b);
+            fprintf(stderr, " is also the output '%s'", a->path);
+            if (a->label != NULL) fprintf(stderr, " (%s)", a->label);
+            fprintf(stderr, "; refusing to write one over the other\n");
+            return CLI_EXIT_BAD_INPUT;
+        }
+    return CLI_EXIT_OK;
+}
+
+void cli_io_free(cli_io *io) {
+    for (int k = 0; k < io->input_count; k++) {
+        free(io->inputs[k].path);
+        free(io->inputs[k].label);
+    }
+    for (int k = 0; k < io->output_count; k++) {
+        free(io->outputs[k].path);
+        free(io->outputs[k].label);
+    }
+    free(io->inputs);
+    free(io->outputs);
+    cli_io_init(io, io->command);
+}
+
+mr_status cli_check_radiance(const mr_image *image, const char *path) {
+    char label[4096 + 16];
+    snprintf(label, sizeof label, "image '%s'", path);
+    return mr_image_check_radiance(image, label);
 }
 
 int cli_is_help(const char *arg) { return strcmp(arg, "--help") == 0 || strcmp(arg, "-h") == 0; }

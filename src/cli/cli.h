@@ -34,6 +34,64 @@ int cli_usage_error(const char *command, const char *fmt, ...);
  * that would replace an input. */
 int cli_same_file(const char *a, const char *b);
 
+/* ---- what a command reads and writes: no output ever replaces an input (cli.c) ------------------------------
+ * Every command that writes files lists its inputs (every file it reads: maps of name=@MAP, --env, datasets, the
+ * files a glTF asset refers to, ...) and its outputs (every file it writes, derived names included: --loss-curve
+ * PREFIX's PREFIX.csv and PREFIX.svg, --images PREFIX's pictures, a report's folder) and calls cli_io_check before
+ * it writes anything; cli_io_check may be called again once more inputs are known (a glTF asset's files, after it
+ * is read). An output is refused when it is the same file as an input: the same device and inode (stat), so "./x",
+ * "dir/../x", hard links and symbolic links count; an output that does not exist yet, or lies in a folder that does
+ * not, cannot be one. A folder output (cli_io_output_folder: report's folder, replaced as a whole) is refused when an
+ * input lies inside it. Two outputs that name one file (the same existing file, or the same name in the same
+ * existing folder) are refused too: the second would replace the first. The message names both arguments:
+ *   matremap render: error: output 't.png' is the input base_color=@t.png; refusing to overwrite it
+ *   matremap train: error: output 'ds.csv' (--loss-curve ds) is the input dataset ds.csv; refusing to overwrite it
+ * and the exit code is 2 (bad input). Labels say how the user gave the file, as a noun phrase ("--env env.hdr",
+ * "base_color=@t.png", "dataset ds.csv"); an output's label (may be NULL) says where a derived name comes from. */
+typedef struct cli_io_entry {
+    char *path;  /* owned copy */
+    char *label; /* owned; NULL for an output named by itself */
+    int folder;  /* output: a folder replaced as a whole */
+} cli_io_entry;
+
+typedef struct cli_io {
+    const char *command;
+    cli_io_entry *inputs, *outputs;
+    int input_count, output_count, input_capacity, output_capacity;
+    int out_of_memory; /* a registration failed: cli_io_check reports it (exit 3) */
+} cli_io;
+
+void cli_io_init(cli_io *io, const char *command);
+/* Register an input file; the label is printf-formatted. */
+#if defined(__GNUC__)
+__attribute__((format(printf, 3, 4)))
+#endif
+void cli_io_input(cli_io *io, const char *path, const char *label_fmt, ...);
+/* Register an output file; label_fmt may be NULL (the path says it all: -o FILE). */
+#if defined(__GNUC__)
+__attribute__((format(printf, 3, 4)))
+#endif
+void cli_io_output(cli_io *io, const char *path, const char *label_fmt, ...);
+/* Register an output folder, whose contents the command replaces as a whole. */
+#if defined(__GNUC__)
+__attribute__((format(printf, 3, 4)))
+#endif
+void cli_io_output_folder(cli_io *io, const char *path, const char *label_fmt, ...);
+/* Register the files of every name=@MAP[:c] among a material's assignments (cli_material_load's syntax) as inputs,
+ * labelled with the assignment as given (labels[k], or assignments[k] when labels is NULL). */
+void cli_io_material(cli_io *io, const char *const *assignments, const char *const *labels, int count);
+/* Register every file a glTF asset was read from (mr_gltf_source_file) as inputs: "<label>" for the asset's own file,
+ * "a file of <label>" for its buffers and images. */
+void cli_io_gltf(cli_io *io, const mr_gltf *asset, const char *label);
+/* CLI_EXIT_OK, or print why (naming both files) and return CLI_EXIT_BAD_INPUT (CLI_EXIT_INTERNAL when a
+ * registration ran out of memory). Checks every pair each time it is called. */
+int cli_io_check(const cli_io *io);
+void cli_io_free(cli_io *io);
+
+/* mr_image_check_radiance labelled "image 'PATH'": finite radiance >= 0 in the image read from `path`, or
+ * MR_ERR_INVALID_ARG naming the file, the pixel, the channel and the value (measurements, environment maps). */
+mr_status cli_check_radiance(const mr_image *image, const char *path);
+
 /* True if argv[i] is "--help" or "-h". */
 int cli_is_help(const char *arg);
 

@@ -51,7 +51,9 @@ static void print_help(void) {
         "PREFIXflags.png: red where a texel lay outside a learned transform's training domain (extrapolated:\n"
         "the paper's Fig. 19 failure) or, with --direct, where its fit did not converge (under-resolved,\n"
         "at-bound, unreachable), green where an output left its parameter's range and was clamped, blue\n"
-        "where an input was clamped or not finite. PREFIX may name a folder ('out/'). No output may be an input.\n"
+        "where an input was clamped or not finite. PREFIX may name a folder ('out/'). No output may be an input\n"
+        "(exit 2). The outputs are written all or none: to hidden files beside them, renamed into place when every\n"
+        "one is written, so a failure leaves the files of an earlier run as they were.\n"
         "\n"
         "Options:\n"
         "  --format exr|png    output format (default exr)\n"
@@ -176,6 +178,66 @@ static mr_status with_alpha(mr_image *rgb, const mr_image *alpha_source, mr_imag
     return MR_OK;
 }
 
+/* Write images[k] to names[k] (k < count), all or none: each into a hidden temporary file beside its target
+ * ("DIR/.matremap-PID-NAME", the extension kept for the writer), then all renamed into place once every one is
+ * written. A failure before the renames removes the temporary files and leaves the targets as they were (and the
+ * folder of PREFIX, if this call made it, is removed again); a target that is a folder is refused before anything is
+ * written, so the renames (within one folder) do not fail in practice. Returns an exit code (messages printed). */
+static int stage_outputs(const char *prefix, const char (*names)[4096], mr_image *const *images,
+                         const mr_img_write_options *options, int count) {
+    char (*temps)[4096 + 64] = calloc((size_t)count, sizeof *temps);
+    if (temps == NULL) {
+        fprintf(stderr, "matremap convert: error: out of memory\n");
+        return CLI_EXIT_INTERNAL;
+    }
+    for (int k = 0; k < count; k++) {
+        struct stat st;
+        if (stat(names[k], &st) == 0 && S_ISDIR(st.st_mode)) {
+            fprintf(stderr, "matremap convert: error: output '%s' (-o %s) is a folder\n", names[k], prefix);
+            free(temps);
+            return CLI_EXIT_BAD_INPUT;
+        }
+        const char *slash = strrchr(names[k], '/');
+        const int head = slash ? (int)(slash - names[k]) + 1 : 0;
+        snprintf(temps[k], sizeof temps[k], "%.*s.matremap-%ld-%s", head, names[k], (long)getpid(), names[k] + head);
+    }
+    // "out/ggx_": make the folder "out" (one level, as documented), removed again if nothing lands in it.
+    char folder[4096] = "";
+    int made_folder = 0;
+    if (strrchr(prefix, '/') != NULL) {
+        snprintf(folder, sizeof folder, "%.*s", (int)(strrchr(prefix, '/') - prefix), prefix);
+        if (folder[0] != '\0') {
+            made_folder = mkdir(folder, 0777) == 0;
+            if (!made_folder && errno != EEXIST) {
+                fprintf(stderr, "matremap convert: error: -o '%s': cannot create the folder '%s': %s\n", prefix,
+                        folder, strerror(errno));
+                free(temps);
+                return CLI_EXIT_BAD_INPUT;
+            }
+        }
+    }
+    int code = CLI_EXIT_OK;
+    for (int k = 0; k < count && code == CLI_EXIT_OK; k++) {
+        mr_status status = mr_img_write(temps[k], images[k], &options[k]);
+        if (status != MR_OK) { // the message names the temporary file: say which output it was
+            fprintf(stderr, "matremap convert: error: writing '%s': %s\n", names[k], mr_last_error());
+            code = cli_exit_code(status);
+        }
+    }
+    for (int k = 0; code == CLI_EXIT_OK && k < count; k++)
+        if (rename(temps[k], names[k]) != 0) {
+            fprintf(stderr, "matremap convert: error: cannot rename '%s' to '%s': %s\n", temps[k], names[k],
+                    strerror(errno));
+            code = CLI_EXIT_BAD_INPUT;
+        }
+    if (code != CLI_EXIT_OK) {
+        for (int k = 0; k < count; k++) unlink(temps[k]); // the renamed ones are gone already
+        if (made_folder) rmdir(folder);
+    }
+    free(temps);
+    return code;
+}
+
 int cmd_convert(int argc, char **argv) {
     const char *from = NULL, *to = NULL, *prefix = NULL, *format = "exr", *dir = NULL, *via_list = NULL;
     const char *assignments[CLI_MAX_ASSIGNMENTS], *transform_paths[MR_LEARNED_MAX_HOPS];
@@ -297,6 +359,42 @@ int cmd_convert(int argc, char **argv) {
             return CLI_EXIT_BAD_INPUT;
         }
     }
+    // Maps and constants as cli_material_load takes them (NAME=FILE is NAME=@FILE there).
+    const char *labels[CLI_MAX_ASSIGNMENTS]; // as given, for messages
+    int maps_given = 0;
+    for (int k = 0; k < assignment_count; k++) {
+        labels[k] = assignments[k];
+        assignments[k] = as_material_assignment(assignments[k], &owned[k]);
+        maps_given |= strchr(assignments[k], '=')[1] == '@';
+    }
+    // Outputs: named, checked against every input before anything is written.
+    char names[MR_TRANSFORM_MAX_SLOTS + 1][4096];
+    const int out_count = target->param_count;
+    if (code == CLI_EXIT_OK && maps_given) {
+        if (prefix == NULL) code = cli_usage_error(COMMAND, "maps given: name the outputs with -o PREFIX");
+        for (int j = 0; code == CLI_EXIT_OK && j <= out_count; j++) {
+            int n = j < out_count ? snprintf(names[j], sizeof names[j], "%s%s.%s", prefix, target->params[j].name,
+                                             format)
+                                  : snprintf(names[j], sizeof names[j], "%sflags.png", prefix);
+            if (n < 0 || (size_t)n >= sizeof names[j]) code = cli_usage_error(COMMAND, "-o '%s': too long", prefix);
+        }
+    }
+    if (code == CLI_EXIT_OK) {
+        cli_io io;
+        cli_io_init(&io, COMMAND);
+        cli_io_material(&io, assignments, labels, assignment_count);
+        for (int k = 0; k < l.count; k++) cli_io_input(&io, l.paths[k], "transform %s", l.paths[k]);
+        for (int j = 0; maps_given && j <= out_count; j++) cli_io_output(&io, names[j], "-o %s", prefix);
+        // The cache is read and rewritten: an output, never over another input or output.
+        if (dopts.cache_path != NULL) cli_io_output(&io, dopts.cache_path, "--cache");
+        code = cli_io_check(&io);
+        cli_io_free(&io);
+    }
+    if (code != CLI_EXIT_OK) {
+        for (int k = 0; k < assignment_count; k++) free(owned[k]);
+        loaded_free(&l);
+        return code;
+    }
     const mr_learned *chain[MR_LEARNED_MAX_HOPS];
     for (int h = 0; h < hops; h++) chain[h] = l.all[path[h]];
     mr_transform_kind *kind = NULL;
@@ -307,16 +405,15 @@ int cmd_convert(int argc, char **argv) {
     mr_status status = direct ? mr_direct_kind_create(source, target, &dopts, &kind)
                               : mr_learned_kind_create(chain, hops, &kind);
     if (status != MR_OK) {
+        for (int k = 0; k < assignment_count; k++) free(owned[k]);
         loaded_free(&l);
         return cli_fail(COMMAND, status);
     }
 
     // The source material: maps and constants.
     const double started = cli_now();
-    for (int k = 0; k < assignment_count; k++) assignments[k] = as_material_assignment(assignments[k], &owned[k]);
     mr_material *m = NULL;
     code = cli_material_load(COMMAND, from, assignments, assignment_count, &m);
-    for (int k = 0; k < assignment_count; k++) free(owned[k]);
     mr_transform *t = NULL;
     mr_transform_options topts = {0};
     topts.threads = threads;
@@ -344,33 +441,6 @@ int cmd_convert(int argc, char **argv) {
             if (alpha_source == NULL && in[p].image->channels == 4) alpha_source = in[p].image;
         }
     }
-    // Outputs: named, checked against every input before anything is written.
-    char names[MR_TRANSFORM_MAX_SLOTS + 1][4096];
-    const int out_count = target->param_count;
-    if (code == CLI_EXIT_OK && any_map) {
-        if (prefix == NULL) code = cli_usage_error(COMMAND, "maps given: name the outputs with -o PREFIX");
-        for (int j = 0; code == CLI_EXIT_OK && j <= out_count; j++) {
-            int n = j < out_count ? snprintf(names[j], sizeof names[j], "%s%s.%s", prefix, target->params[j].name,
-                                             format)
-                                  : snprintf(names[j], sizeof names[j], "%sflags.png", prefix);
-            if (n < 0 || (size_t)n >= sizeof names[j]) code = cli_usage_error(COMMAND, "-o '%s': too long", prefix);
-            for (int k = 0; code == CLI_EXIT_OK && k < m->map_count; k++)
-                if (cli_same_file(names[j], m->maps[k].source)) {
-                    fprintf(stderr, "matremap convert: error: output '%s' is the input map '%s': it would be "
-                                    "replaced\n", names[j], m->maps[k].source);
-                    code = CLI_EXIT_BAD_INPUT;
-                }
-        }
-    }
-    if (code == CLI_EXIT_OK && any_map && strrchr(prefix, '/') != NULL) { // "out/ggx_": make the folder "out"
-        char folder[4096];
-        snprintf(folder, sizeof folder, "%.*s", (int)(strrchr(prefix, '/') - prefix), prefix);
-        if (folder[0] != '\0' && mkdir(folder, 0777) != 0 && errno != EEXIST) {
-            fprintf(stderr, "matremap convert: error: -o '%s': cannot create the folder '%s': %s\n", prefix, folder,
-                    strerror(errno));
-            code = CLI_EXIT_BAD_INPUT;
-        }
-    }
     double convert_seconds = 0.0;
     if (code == CLI_EXIT_OK) {
         const double t0 = cli_now();
@@ -392,24 +462,29 @@ int cmd_convert(int argc, char **argv) {
             counts[3] += flags[i] != 0;
         }
     }
-    // Write: every output, then the flag map.
-    for (int j = 0; code == CLI_EXIT_OK && any_map && j <= out_count; j++) {
-        mr_image *image = NULL;
-        mr_img_write_options wo = {MR_IMG_DATA, 0, 0};
-        if (j < out_count) {
-            status = with_alpha(out[j], alpha_source, &image);
-            wo.encoding = is_colour(&target->params[j]) ? MR_IMG_COLOR : MR_IMG_DATA;
-        } else {
-            status = mr_image_create(width, height, 3, &image);
+    // Write: every output, then the flag map, all or none (stage_outputs).
+    if (code == CLI_EXIT_OK && any_map) {
+        mr_image *images[MR_TRANSFORM_MAX_SLOTS + 1] = {NULL};
+        mr_img_write_options options[MR_TRANSFORM_MAX_SLOTS + 1];
+        for (int j = 0; status == MR_OK && j <= out_count; j++) {
+            options[j] = (mr_img_write_options){MR_IMG_DATA, 0, 0};
+            if (j < out_count) {
+                status = with_alpha(out[j], alpha_source, &images[j]);
+                options[j].encoding = is_colour(&target->params[j]) ? MR_IMG_COLOR : MR_IMG_DATA;
+                continue;
+            }
+            status = mr_image_create(width, height, 3, &images[j]);
             for (size_t i = 0; status == MR_OK && i < n; i++) {
-                image->pixels[3 * i] = (flags[i] & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED)) ? 1.0f : 0.0f;
-                image->pixels[3 * i + 1] = (flags[i] & MR_WF_CLAMPED_OUTPUT) ? 1.0f : 0.0f;
-                image->pixels[3 * i + 2] = (flags[i] & (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT)) ? 1.0f : 0.0f;
+                float *px = images[j]->pixels + 3 * i;
+                px[0] = (flags[i] & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED)) ? 1.0f : 0.0f;
+                px[1] = (flags[i] & MR_WF_CLAMPED_OUTPUT) ? 1.0f : 0.0f;
+                px[2] = (flags[i] & (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT)) ? 1.0f : 0.0f;
             }
         }
-        if (status == MR_OK) status = mr_img_write(names[j], image, &wo);
-        if (image != (j < out_count ? out[j] : NULL)) mr_image_free(image);
-        if (status != MR_OK) code = cli_fail(COMMAND, status);
+        code = status == MR_OK ? stage_outputs(prefix, (const char(*)[4096])names, images, options, out_count + 1)
+                               : cli_fail(COMMAND, status);
+        for (int j = 0; j <= out_count; j++)
+            if (images[j] != (j < out_count ? out[j] : NULL)) mr_image_free(images[j]);
     }
     const double seconds = cli_now() - started;
     const mr_direct_summary *ds = direct && code == CLI_EXIT_OK ? mr_direct_kind_summary(kind) : NULL;
@@ -491,6 +566,7 @@ int cmd_convert(int argc, char **argv) {
         mr_direct_kind_free(kind);
     else
         mr_learned_kind_free(kind);
+    for (int k = 0; k < assignment_count; k++) free(owned[k]);
     loaded_free(&l);
     return code;
 }

@@ -222,11 +222,15 @@ static double texel_at(const mr_image *image, double u, double v, int c) {
 }
 
 /* ASSET_TEXELS texels of every spec-gloss material of `path`, shared equally among its materials: diffuse and
- * specular maps (sRGB-decoded) times their factors, at the same relative position in both. Returns an exit code. */
-static int add_asset_texels(const char *path, uint64_t seed, texel_pool *pool) {
+ * specular maps (sRGB-decoded) times their factors, at the same relative position in both; the files the asset was
+ * read from are added to io's inputs. Returns an exit code. */
+static int add_asset_texels(const char *path, uint64_t seed, texel_pool *pool, cli_io *io) {
     mr_gltf *asset = NULL;
     mr_status status = mr_gltf_load(path, &asset);
     if (status != MR_OK) return cli_fail("dataset", status);
+    char label[4096 + 16];
+    snprintf(label, sizeof label, "--asset %s", path);
+    cli_io_gltf(io, asset, label); // its buffers and images are inputs too
     mr_gltf_counts counts;
     mr_gltf_get_counts(asset, &counts);
     int sg_materials = 0;
@@ -602,10 +606,21 @@ int cmd_dataset(int argc, char **argv) {
     if (samples < 0) samples = do_compare ? 400 : 16000;
     if (threads > 0) omp_set_num_threads(threads);
 
+    // Nothing written over a file read: -o against the maps, the networks and the assets with their files.
+    cli_io io;
+    cli_io_init(&io, "dataset");
+    for (int e = 0; e < env_count; e++) cli_io_input(&io, env_paths[e], "--env %s", env_paths[e]);
+    for (int e = 0; e < label_env_count; e++)
+        cli_io_input(&io, label_env_paths[e], "--label-env %s", label_env_paths[e]);
+    for (int w = 0; w < weight_count; w++) cli_io_input(&io, weights[w], "--weights %s", weights[w]);
+    for (int a = 0; a < asset_count; a++) cli_io_input(&io, assets[a], "--asset %s", assets[a]);
+    if (output != NULL) cli_io_output(&io, output, NULL);
     texel_pool pool = {NULL, 0, 0};
-    int code = CLI_EXIT_OK;
+    int code = cli_io_check(&io);
     for (int a = 0; code == CLI_EXIT_OK && a < asset_count; a++)
-        code = add_asset_texels(assets[a], (uint64_t)seed, &pool);
+        code = add_asset_texels(assets[a], (uint64_t)seed, &pool, &io);
+    if (code == CLI_EXIT_OK) code = cli_io_check(&io); // with the assets' files
+    cli_io_free(&io);
     size_t extra = do_compare ? (size_t)HARD_CASES : 0, n = extra + (size_t)samples;
     pair *pairs = code == CLI_EXIT_OK ? calloc(n, sizeof *pairs) : NULL;
     const char **names = code == CLI_EXIT_OK ? calloc(n, sizeof *names) : NULL;
@@ -631,6 +646,7 @@ int cmd_dataset(int argc, char **argv) {
     for (int e = 0; code == CLI_EXIT_OK && e < label_env_count; e++) {
         mr_img_read_options ro = {MR_IMG_DATA, 3, 0};
         mr_status status = mr_img_read(label_env_paths[e], &ro, &label_envs[e]);
+        if (status == MR_OK) status = cli_check_radiance(label_envs[e], label_env_paths[e]);
         if (status != MR_OK) code = cli_fail("dataset", status);
         lo.envs[e] = label_envs[e];
         lo.env_count = e + 1;
@@ -640,6 +656,7 @@ int cmd_dataset(int argc, char **argv) {
         for (int e = 0; code == CLI_EXIT_OK && e < env_count; e++) {
             mr_img_read_options ro = {MR_IMG_DATA, 3, 0};
             mr_status status = mr_img_read(env_paths[e], &ro, &envs[e]);
+            if (status == MR_OK) status = cli_check_radiance(envs[e], env_paths[e]);
             if (status != MR_OK) code = cli_fail("dataset", status);
         }
         if (code == CLI_EXIT_OK)

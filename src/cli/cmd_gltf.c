@@ -162,6 +162,16 @@ int cmd_gltf(int argc, char **argv) {
     int code = parse(argc, argv, &o);
     if (code != CLI_EXIT_OK) return code;
     int to_metal = strcmp(o.direction, "spec2metal") == 0;
+    // Nothing written over a file read: OUT against IN and --weights here; the asset's buffers and images, and the
+    // files written beside OUT, the library keeps apart (mr_gltf_save: never over a file the asset was read from).
+    cli_io io;
+    cli_io_init(&io, "gltf");
+    cli_io_input(&io, o.input, "asset %s", o.input);
+    if (o.weights != NULL) cli_io_input(&io, o.weights, "--weights %s", o.weights);
+    cli_io_output(&io, o.output, NULL);
+    code = cli_io_check(&io);
+    cli_io_free(&io);
+    if (code != CLI_EXIT_OK) return code;
 
     // The transform: the method's descriptor for this pair of glTF models.
     const mr_transform_kind *kind = to_metal ? mr_transform_find("gltf-specgloss", "gltf", o.method)

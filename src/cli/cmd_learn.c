@@ -358,12 +358,20 @@ int cmd_learn(int argc, char **argv) {
     }
     if (file_count == 0) return cli_usage_error(COMMAND, "no sweep file given");
     if (output == NULL) return cli_usage_error(COMMAND, "no output file: give -o T.mrt");
-    for (int i = 0; i < file_count; i++)
-        if (cli_same_file(files[i], output)) {
-            fprintf(stderr, "matremap learn: error: -o '%s' is the input sweep '%s': it would be replaced\n", output,
-                    files[i]);
-            return CLI_EXIT_BAD_INPUT;
-        }
+    // Nothing written over a file read: the transform and --plots DIR's files against the sweeps.
+    cli_io io;
+    cli_io_init(&io, COMMAND);
+    for (int i = 0; i < file_count; i++) cli_io_input(&io, files[i], "sweep %s", files[i]);
+    cli_io_output(&io, output, NULL);
+    static const char *const plot_files[4] = {"rows.csv", "curves.csv", "roughness.svg", "specular.svg"};
+    for (int k = 0; plots != NULL && k < 4; k++) {
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s", plots, plot_files[k]);
+        cli_io_output(&io, path, "--plots %s", plots);
+    }
+    int code = cli_io_check(&io);
+    cli_io_free(&io);
+    if (code != CLI_EXIT_OK) return code;
     const double started = cli_now();
     mr_sweep_table tab;
     mr_status status = mr_sweep_table_load(files, file_count, &to, &tab);

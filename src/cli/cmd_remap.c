@@ -2,7 +2,6 @@
  * cmd_remap.c — `matremap remap`: fit a target model to a built-in source material, or to renders of the fit
  * scene made by any renderer (remap.h has the method and the outcome definitions).
  */
-#include <math.h>
 #include <string.h>
 
 #include "cli.h"
@@ -82,23 +81,18 @@ static void print_values(FILE *out, const mr_brdf_model *model, const double *va
     }
 }
 
-/* A render to fit: read as RGB, every value finite and >= 0 (radiance), or exit 2 naming the file and pixel. */
+/* A render to fit: read as RGB, every value finite and >= 0 (radiance, mr_image_check_radiance), or exit 2 naming
+ * the file and the pixel. */
 static int read_source_image(const char *path, mr_image **out) {
     mr_img_read_options ro = {0};
     ro.channels = 3;
     mr_status status = mr_img_read(path, &ro, out);
-    if (status != MR_OK) return cli_fail("remap", status);
-    const mr_image *image = *out;
-    for (size_t i = 0; i < mr_image_value_count(image); i++) {
-        const float v = image->pixels[i];
-        if (isfinite(v) && v >= 0.0f) continue;
-        fprintf(stderr, "matremap remap: error: '%s': pixel (%d, %d), channel %d holds %g: a render to fit must hold "
-                "finite radiance >= 0\n", path, (int)(i / 3 % (size_t)image->width),
-                (int)(i / 3 / (size_t)image->width), (int)(i % 3), (double)v);
-        return CLI_EXIT_BAD_INPUT;
-    }
-    return CLI_EXIT_OK;
+    if (status == MR_OK) status = cli_check_radiance(*out, path);
+    return status == MR_OK ? CLI_EXIT_OK : cli_fail("remap", status);
 }
+
+/* The pictures of --images PREFIX: PREFIX + these. */
+static const char *const picture_suffixes[3] = {"_source.png", "_target.png", "_ssim.png"};
 
 /* Render the source's and target's full images and the SSIM map as pictures (--images). */
 static mr_status write_pictures(const char *prefix, const mr_render_plan *plan, const mr_image *source,
@@ -110,15 +104,15 @@ static mr_status write_pictures(const char *prefix, const mr_render_plan *plan, 
     if (status == MR_OK) status = mr_ssim(source, target_image, NULL, &ssim, &map);
     if (status == MR_OK) status = mr_ssim_map_visualise(map, 0.0, &picture);
     if (status == MR_OK) {
-        snprintf(path, sizeof path, "%s_source.png", prefix);
+        snprintf(path, sizeof path, "%s%s", prefix, picture_suffixes[0]);
         status = mr_img_write(path, source, NULL);
     }
     if (status == MR_OK) {
-        snprintf(path, sizeof path, "%s_target.png", prefix);
+        snprintf(path, sizeof path, "%s%s", prefix, picture_suffixes[1]);
         status = mr_img_write(path, target_image, NULL);
     }
     if (status == MR_OK) {
-        snprintf(path, sizeof path, "%s_ssim.png", prefix);
+        snprintf(path, sizeof path, "%s%s", prefix, picture_suffixes[2]);
         status = mr_img_write(path, picture, NULL);
     }
     mr_image_free(target_image);
@@ -234,9 +228,24 @@ int cmd_remap(int argc, char **argv) {
         }
     }
 
+    // Nothing written over a file read: --images PREFIX's pictures against the renders.
+    static const char *const image_options[3] = {"--from-images", "--diffuse", "--specular"};
+    cli_io io;
+    cli_io_init(&io, "remap");
+    for (int k = 0; k < 3; k++)
+        if (image_paths[k]) cli_io_input(&io, image_paths[k], "%s %s", image_options[k], image_paths[k]);
+    if (reference_path) cli_io_input(&io, reference_path, "--match-irradiance %s", reference_path);
+    for (int k = 0; images_prefix != NULL && k < 3; k++) {
+        char path[4096];
+        snprintf(path, sizeof path, "%s%s", images_prefix, picture_suffixes[k]);
+        cli_io_output(&io, path, "--images %s", images_prefix);
+    }
+    int exit_code = cli_io_check(&io);
+    cli_io_free(&io);
+    if (exit_code != CLI_EXIT_OK) return exit_code;
+
     // Source images (black-box renders) decide the scene size; they must all agree and be square.
     mr_image *images[3] = {NULL, NULL, NULL}, *reference = NULL;
-    int exit_code = CLI_EXIT_OK;
     for (int k = 0; k < 3 && exit_code == CLI_EXIT_OK; k++)
         if (image_paths[k]) exit_code = read_source_image(image_paths[k], &images[k]);
     if (exit_code == CLI_EXIT_OK && reference_path) exit_code = read_source_image(reference_path, &reference);

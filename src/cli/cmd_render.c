@@ -217,8 +217,20 @@ int cmd_render(int argc, char **argv) {
         return cli_usage_error("render", "--env-rotation, --env-samples, --env-reflection-samples and --env-scale need "
                                "--env FILE");
 
+    // Nothing written over a file read (maps, the map, the mesh).
+    cli_io io;
+    cli_io_init(&io, "render");
+    cli_io_material(&io, assignments, NULL, assignment_count);
+    if (env_path != NULL) cli_io_input(&io, env_path, "--env %s", env_path);
+    if (mesh_path != NULL) cli_io_input(&io, mesh_path, "--mesh %s", mesh_path);
+    cli_io_output(&io, output, NULL);
+    if (mask_path != NULL) cli_io_output(&io, mask_path, "--mask");
+    int code = cli_io_check(&io);
+    cli_io_free(&io);
+    if (code != CLI_EXIT_OK) return code;
+
     mr_material *material = NULL;
-    int code = cli_material_load("render", model_name, assignments, assignment_count, &material);
+    code = cli_material_load("render", model_name, assignments, assignment_count, &material);
 
     mr_image *env = NULL, *image = NULL;
     mr_render_plan *plan = NULL;
@@ -226,6 +238,7 @@ int cmd_render(int argc, char **argv) {
     mr_status status = MR_OK;
     if (code == CLI_EXIT_OK && env_path != NULL) {
         status = mr_img_read(env_path, NULL, &env);
+        if (status == MR_OK) status = cli_check_radiance(env, env_path); // named by its file
         if (status != MR_OK) code = cli_fail("render", status);
     }
     double load_seconds = 0.0;

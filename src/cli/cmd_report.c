@@ -39,7 +39,9 @@ static void print_help(void) {
            "view (its shadows traced once) shared by every material.\n"
            "\n"
            "Options:\n"
-           "  -o, --output DIR     the report folder (created if missing; its files are replaced)\n"
+           "  -o, --output DIR     the report folder, written whole or not at all: made beside DIR and renamed\n"
+           "                       into place when complete, replacing a previous report there (a folder that\n"
+           "                       holds anything a report does not write is refused, as is an input inside DIR)\n"
            "  --env FILE           equirectangular HDR map (.hdr, .exr); without it, the fit scene's point light\n"
            "  --rotations N        views: the map turned by 360/N degrees each (default 4; 1 without --env)\n"
            "  --env-scale S        radiance scale (default: the map's mean luminance brought to 0.5)\n"
@@ -273,11 +275,30 @@ int cmd_report(int argc, char **argv) {
         return cli_usage_error("report", "--camera-direction places the camera for glTF assets; spheres use the fit "
                                "camera");
 
+    // Nothing read may lie in the folder: the report replaces it as a whole (report.h, "The folder").
+    cli_io io;
+    cli_io_init(&io, "report");
+    for (int k = 0; k < count; k++) {
+        if (gltf_entries > 0) cli_io_input(&io, groups[k].model_name, "asset %s", groups[k].model_name);
+        cli_io_material(&io, groups[k].assignments, NULL, groups[k].count);
+    }
+    if (o.report.env_path != NULL) cli_io_input(&io, o.report.env_path, "--env %s", o.report.env_path);
+    if (o.mesh_path != NULL) cli_io_input(&io, o.mesh_path, "--mesh %s", o.mesh_path);
+    cli_io_output_folder(&io, o.dir, NULL);
+    code = cli_io_check(&io);
+    if (code != CLI_EXIT_OK) {
+        cli_io_free(&io);
+        return code;
+    }
+
     mr_obj_mesh *obj = NULL;
     const mr_camera paper = mr_camera_paper();
     if (o.mesh_path != NULL) {
         mr_status status = mr_obj_load(o.mesh_path, NULL, &obj);
-        if (status != MR_OK) return cli_fail("report", status);
+        if (status != MR_OK) {
+            cli_io_free(&io);
+            return cli_fail("report", status);
+        }
         if (obj->warnings[0] != '\0')
             fprintf(stderr, "matremap report: warning: OBJ '%s': %s", o.mesh_path, obj->warnings);
         o.report.mesh = &obj->mesh;
@@ -290,8 +311,16 @@ int cmd_report(int argc, char **argv) {
     mr_report_input inputs[MAX_MATERIALS];
     for (int k = 0; k < count && code == CLI_EXIT_OK; k++) {
         const group *g = &groups[k];
-        if (gltf_entries > 0) {
-            mr_status status = mr_gltf_scene_load(g->model_name, NULL, &scenes[k]);
+        if (gltf_entries > 0) { // mr_gltf_scene_load, with the asset's files noted as inputs on the way
+            mr_gltf *asset = NULL;
+            mr_status status = mr_gltf_load(g->model_name, &asset);
+            if (status == MR_OK) {
+                char label[4096 + 8];
+                snprintf(label, sizeof label, "asset %s", g->model_name);
+                cli_io_gltf(&io, asset, label);
+                status = mr_gltf_scene_from_asset(asset, NULL, &scenes[k]);
+            }
+            mr_gltf_free(asset);
             if (status != MR_OK) code = cli_fail("report", status);
         } else {
             code = cli_material_load("report", g->model_name, g->assignments, g->count, &materials[k]);
@@ -300,6 +329,8 @@ int cmd_report(int argc, char **argv) {
         // A scene's description (its triangles and materials) is made by the library.
         inputs[k] = (mr_report_input){g->label, gltf_entries > 0 ? NULL : descriptions[k], materials[k], scenes[k]};
     }
+    if (code == CLI_EXIT_OK) code = cli_io_check(&io); // with the assets' buffers and images
+    cli_io_free(&io);
     if (code == CLI_EXIT_OK) {
         int progress_shown = 0;
         if (isatty(STDERR_FILENO)) {

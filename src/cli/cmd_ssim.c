@@ -70,6 +70,16 @@ int cmd_ssim(int argc, char **argv) {
     if (mask_path != NULL && opts.downsample)
         return cli_usage_error("ssim", "--mask and --downsample cannot be combined (the mask is at full resolution)");
 
+    cli_io io;
+    cli_io_init(&io, "ssim");
+    cli_io_input(&io, paths[0], "image A %s", paths[0]);
+    cli_io_input(&io, paths[1], "image B %s", paths[1]);
+    if (mask_path != NULL) cli_io_input(&io, mask_path, "--mask %s", mask_path);
+    if (map_path != NULL) cli_io_output(&io, map_path, "--map");
+    int code = cli_io_check(&io);
+    cli_io_free(&io);
+    if (code != CLI_EXIT_OK) return code;
+
     mr_image *images[2] = {NULL, NULL};
     mr_image *map = NULL, *picture = NULL, *mask = NULL;
     double ssim = 0.0, rmse = 0.0, object_ssim = 0.0, object_rmse = 0.0, object_mean = 0.0;
@@ -91,6 +101,8 @@ int cmd_ssim(int argc, char **argv) {
         images[k] = NULL;
         status = mr_img_read(paths[k], &ro, &images[k]);
     }
+    // Measurements: finite radiance >= 0, or exit 2 naming the file, the pixel and the value.
+    for (int k = 0; k < 2 && status == MR_OK; k++) status = cli_check_radiance(images[k], paths[k]);
     if (status == MR_OK) status = mr_ssim(images[0], images[1], &opts, &ssim, map_path ? &map : NULL);
     if (status == MR_OK) status = mr_rmse(images[0], images[1], &rmse);
     if (status == MR_OK && mask_path != NULL) {

@@ -223,9 +223,6 @@ int cmd_train(int argc, char **argv) {
     }
     if (file_count == 0) return cli_usage_error("train", "no dataset file (sweep CSV) given");
     if (output == NULL) return cli_usage_error("train", "missing -o WEIGHTS");
-    for (int i = 0; i < file_count; i++)
-        if (strcmp(files[i], output) == 0)
-            return cli_usage_error("train", "-o %s would overwrite a dataset file", output);
     char default_prefix[4096];
     if (curve_prefix == NULL) {
         snprintf(default_prefix, sizeof default_prefix, "%s", output);
@@ -234,6 +231,23 @@ int cmd_train(int argc, char **argv) {
         strncat(default_prefix, "_loss", sizeof default_prefix - strlen(default_prefix) - 1);
         curve_prefix = default_prefix;
     }
+    // Nothing written over a file read: the weights and the loss curve's two files against the datasets.
+    cli_io io;
+    cli_io_init(&io, "train");
+    for (int i = 0; i < file_count; i++) cli_io_input(&io, files[i], "dataset %s", files[i]);
+    for (int t = 0; t < test_count; t++) cli_io_input(&io, tests[t], "--test %s", tests[t]);
+    cli_io_output(&io, output, NULL);
+    for (int k = 0; k < 2; k++) {
+        char path[4096 + 8];
+        snprintf(path, sizeof path, "%s.%s", curve_prefix, k == 0 ? "csv" : "svg");
+        if (curve_prefix == default_prefix)
+            cli_io_output(&io, path, "the loss curve of -o %s", output);
+        else
+            cli_io_output(&io, path, "--loss-curve %s", curve_prefix);
+    }
+    int code = cli_io_check(&io);
+    cli_io_free(&io);
+    if (code != CLI_EXIT_OK) return code;
     opts.threads = threads;
 
     double started = cli_now();

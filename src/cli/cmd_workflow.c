@@ -223,24 +223,11 @@ static const char *default_format(map_arg *const *maps, int count) {
     return "png";
 }
 
-/* 1 if a and b name one file, existing or still to be written: the same text, the same existing file, or the same
- * name in the same existing directory ("./x_diffuse.png" and "x_diffuse.png" before either is written). */
-static int same_path(const char *a, const char *b) {
-    if (strcmp(a, b) == 0 || cli_same_file(a, b)) return 1;
-    const char *name_a = strrchr(a, '/'), *name_b = strrchr(b, '/');
-    name_a = name_a ? name_a + 1 : a;
-    name_b = name_b ? name_b + 1 : b;
-    if (strcmp(name_a, name_b) != 0) return 0;
-    char dir_a[PATH_SIZE], dir_b[PATH_SIZE]; // "dir/" or "." for a bare name
-    snprintf(dir_a, sizeof dir_a, "%.*s", name_a > a ? (int)(name_a - a) : 1, name_a > a ? a : ".");
-    snprintf(dir_b, sizeof dir_b, "%.*s", name_b > b ? (int)(name_b - b) : 1, name_b > b ? b : ".");
-    return cli_same_file(dir_a, dir_b);
-}
-
-/* Name the outputs PREFIX_<name>.EXT and check the options; refuse (usage error) an output that is an input, or
- * the flag map named like an output. */
-static int plan_outputs(const char *command, out_options *o, map_arg *const *maps, int map_count,
-                        const char *const *names, output *outputs, int count) {
+/* Name the outputs PREFIX_<name>.EXT and check the options; refuse (exit 2, cli_io_check) an output that is an input
+ * (a map, --weights, or the installed network the transform loaded, `network`, "" for none) or another output
+ * (--flags named like one). */
+static int plan_outputs(const char *command, out_options *o, map_arg *const *maps, int map_count, const char *weights,
+                        const char *network, const char *const *names, output *outputs, int count) {
     if (o->format == NULL) o->format = default_format(maps, map_count);
     if (o->bits != 0) {
         int exr = strcmp(o->format, "exr") == 0;
@@ -254,19 +241,17 @@ static int plan_outputs(const char *command, out_options *o, map_arg *const *map
         if (length < 0 || (size_t)length >= sizeof outputs[k].path)
             return cli_usage_error(command, "-o '%s': the prefix is too long", o->prefix);
     }
-    for (int k = 0; k <= count; k++) {
-        const char *path = k < count ? outputs[k].path : o->flags_path;
-        if (path == NULL) continue;
-        for (int m = 0; m < map_count; m++)
-            if (is_file(maps[m]) && same_path(path, maps[m]->text))
-                return cli_usage_error(command, "the output '%s' is the input %s '%s': inputs are never "
-                                       "overwritten (choose another %s)", path, maps[m]->option, maps[m]->text,
-                                       k < count ? "-o PREFIX" : "--flags FILE");
-        for (int j = 0; k == count && j < count; j++)
-            if (same_path(path, outputs[j].path))
-                return cli_usage_error(command, "--flags '%s' is also the output '%s'", path, outputs[j].path);
-    }
-    return CLI_EXIT_OK;
+    cli_io io;
+    cli_io_init(&io, command);
+    for (int m = 0; m < map_count; m++)
+        if (is_file(maps[m])) cli_io_input(&io, maps[m]->text, "%s %s", maps[m]->option, maps[m]->text);
+    if (weights != NULL) cli_io_input(&io, weights, "--weights %s", weights);
+    if (network != NULL && network[0] != '\0') cli_io_input(&io, network, "the network %s", network);
+    for (int k = 0; k < count; k++) cli_io_output(&io, outputs[k].path, "-o %s", o->prefix);
+    if (o->flags_path != NULL) cli_io_output(&io, o->flags_path, "--flags");
+    int code = cli_io_check(&io);
+    cli_io_free(&io);
+    return code;
 }
 
 static void free_outputs(output *outputs, int count) {
@@ -749,7 +734,9 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
     output outputs[MAX_OUTPUTS];
     memset(outputs, 0, sizeof outputs);
     int code = check_prefix(command, o, cv->maps, cv->map_count);
-    if (code == CLI_EXIT_OK) code = plan_outputs(command, o, cv->maps, cv->map_count, names, outputs, output_count);
+    if (code == CLI_EXIT_OK)
+        code = plan_outputs(command, o, cv->maps, cv->map_count, weights, mr_transform_network_path(t), names, outputs,
+                            output_count);
 
     // Read: the maps into the transform's input planes.
     double started = cli_now(), seconds[3] = {0.0, 0.0, 0.0};

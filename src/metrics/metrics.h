@@ -3,9 +3,9 @@
  * display-referred images (what reports show).
  *
  * SSIM convention (fixed, documented once here and in docs/metrics.md):
- *   1. display mapping: each linear channel is multiplied by `exposure` (default 1), clamped to [0,1] (NaN
- *      counts as 0, +inf as 1) and sRGB-encoded (no other tone curve: the fit scene is lit so that diffuse
- *      albedos stay below 1);
+ *   1. display mapping: each linear channel is multiplied by `exposure` (default 1), clamped to [0,1] (a
+ *      negative value counts as 0, a product beyond a float's range as 1) and sRGB-encoded (no other tone
+ *      curve: the fit scene is lit so that diffuse albedos stay below 1);
  *   2. luma: Y' = 0.299 R' + 0.587 G' + 0.114 B' (ITU-R BT.601 on the encoded values, as MATLAB's rgb2gray,
  *      kept in double, not rounded to 8-bit levels); single-channel images are used as they are (mapped as
  *      in step 1); alpha is ignored;
@@ -14,6 +14,13 @@
  *      MSSIM = mean of the map. No automatic downsampling unless opts.downsample asks for MATLAB's rule.
  * Sums are accumulated in double, in a fixed order, so results do not depend on the thread count.
  * Cross-checked against ssim.js 3.5.0 ('original' mode) to a few 1e-9 (tests/ssim_crosscheck.sh).
+ *
+ * Values: every function here refuses a NaN or an infinity in the compared channels of either image
+ * (MR_ERR_INVALID_ARG naming "image a" or "image b", the pixel and the channel): they have no difference and no
+ * display value, so a figure computed over them would hide bad data. Negative values are compared as they are
+ * (RMSE) or clamped (SSIM's display mapping). Images that are measurements (renders to fit or to judge) should
+ * also hold no negative radiance: mr_image_check_radiance (mr_image.h) checks that, naming the file; `matremap
+ * ssim` and `matremap remap` call it on every image they read.
  *
  * Object masks (what a viewer looks at: a rendered object, not the background around it). A mask is a
  * 1-channel image of the images' size holding, per pixel, the fraction the object covers, in [0, 1] (a render
@@ -52,8 +59,8 @@ typedef struct mr_ssim_options {
 
 /* Root-mean-square difference over all pixels and the first min(3, channels) channels of two linear images
  * (alpha is not compared; no clamping). Sizes and channel counts must match (MR_ERR_INVALID_ARG, naming both
- * sizes). A NaN or infinite pixel is MR_ERR_NUMERIC naming the first such pixel. *out_rmse is untouched on
- * failure. */
+ * sizes). A NaN or infinite value is MR_ERR_INVALID_ARG naming the image and the first such pixel (header
+ * comment, "Values"). *out_rmse is untouched on failure. */
 mr_status mr_rmse(const mr_image *a, const mr_image *b, double *out_rmse);
 
 /* Like mr_rmse, over the pixels where mask > 0 only (mask NULL: every pixel, exactly mr_rmse), each counted
@@ -69,8 +76,9 @@ mr_status mr_rmse_masked(const mr_image *a, const mr_image *b, const mr_image *m
  * With opts->mask, the mean over the map pixels whose window touches the object (header comment).
  * If map_out is not NULL, *map_out receives the 1-channel SSIM map ((w-10)x(h-10) of the possibly downsampled
  * images, values in [-1,1]; the whole map, with or without a mask), owned by the caller. Errors:
- * MR_ERR_INVALID_ARG (sizes, options; a mask of the wrong size or channels, with a value outside [0, 1], with
- * downsampling, or whose dilation reaches no map pixel), MR_ERR_NOMEM; the outputs are untouched on failure.
+ * MR_ERR_INVALID_ARG (sizes, options; a NaN or infinite value, header comment "Values"; a mask of the wrong size
+ * or channels, with a value outside [0, 1], with downsampling, or whose dilation reaches no map pixel),
+ * MR_ERR_NOMEM; the outputs are untouched on failure.
  * A 512x512 RGB pair takes a few milliseconds. */
 mr_status mr_ssim(const mr_image *a, const mr_image *b, const mr_ssim_options *opts, double *out_ssim,
                   mr_image **map_out);

@@ -886,13 +886,9 @@ static mr_status check_source_image(const mr_render_plan *plan, const mr_image *
     if (image->width != scene->width || image->height != scene->height || image->channels != 3)
         return mr_fail(MR_ERR_INVALID_ARG, "remap: the source %s image is %dx%dx%d, the fit scene is %dx%dx3", what,
                        image->width, image->height, image->channels, scene->width, scene->height);
-    size_t n = mr_image_value_count(image);
-    for (size_t i = 0; i < n; i++)
-        if (!isfinite(image->pixels[i]) || image->pixels[i] < 0.0f)
-            return mr_fail(MR_ERR_INVALID_ARG, "remap: the source %s image holds %g at pixel (%d, %d), channel %d: "
-                           "expected finite radiance >= 0", what, (double)image->pixels[i],
-                           (int)(i / 3 % (size_t)image->width), (int)(i / 3 / (size_t)image->width), (int)(i % 3));
-    return MR_OK;
+    char label[96];
+    snprintf(label, sizeof label, "remap: the source %s image", what);
+    return mr_image_check_radiance(image, label);
 }
 
 static void free_context(fit_context *ctx) {

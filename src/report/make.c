@@ -3,6 +3,7 @@
  * environment map, the folder; for each view one render plan shared by all inputs, renders, pictures and
  * comparisons; thumbnails of every map; then the page and summary (mr_report_write, report.c).
  */
+#include <dirent.h>
 #include <errno.h>
 #include <math.h>
 #include <stdint.h>
@@ -10,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "../matremap.h"
 #include "../mr_internal.h"
@@ -241,15 +243,143 @@ static mr_status resolve_options(const mr_report_options *opts, int scenes, sett
     return MR_OK;
 }
 
-/* The folder: created if missing; an existing non-folder is an error. */
-static mr_status make_folder(const char *dir) {
-    struct stat st;
-    if (stat(dir, &st) == 0) {
-        if (S_ISDIR(st.st_mode)) return MR_OK;
-        return mr_fail(MR_ERR_IO, "report folder '%s' exists and is not a folder", dir);
+/* ---- the folder (report.h, "The folder") ----------------------------------------------------------------- */
+
+/* 1 if `name` is a file mr_report_make writes: index.html, summary.json, view<V>_material<K>.png,
+ * ssim_view<V>_material<K>.png, map_material<K>_<N>.png. */
+static int is_report_file(const char *name) {
+    if (strcmp(name, "index.html") == 0 || strcmp(name, "summary.json") == 0) return 1;
+    static const char *const patterns[3] = {"view%d_material%d.png%n", "ssim_view%d_material%d.png%n",
+                                            "map_material%d_%d.png%n"};
+    for (int k = 0; k < 3; k++) {
+        int a, b, end = -1;
+        if (sscanf(name, patterns[k], &a, &b, &end) == 2 && end == (int)strlen(name)) return 1;
     }
-    if (mkdir(dir, 0777) != 0)
-        return mr_fail(MR_ERR_IO, "cannot create the report folder '%s': %s", dir, strerror(errno));
+    return 0;
+}
+
+/* What is at `dir`: *exists 0 (nothing) or 1 (a folder the report may replace: empty, or holding only files a
+ * report writes). MR_ERR_IO when it is not a folder or cannot be listed; MR_ERR_INVALID_ARG naming the first entry
+ * no report writes (a file of someone else's, a sub-folder): the report refuses to replace that folder. */
+static mr_status check_target(const char *dir, int *exists) {
+    struct stat st;
+    *exists = 0;
+    if (stat(dir, &st) != 0) {
+        if (errno == ENOENT) return MR_OK;
+        return mr_fail(MR_ERR_IO, "report folder '%s': %s", dir, strerror(errno));
+    }
+    if (!S_ISDIR(st.st_mode)) return mr_fail(MR_ERR_IO, "report folder '%s' exists and is not a folder", dir);
+    DIR *d = opendir(dir);
+    if (d == NULL) return mr_fail(MR_ERR_IO, "report folder '%s': cannot list it: %s", dir, strerror(errno));
+    mr_status status = MR_OK;
+    for (struct dirent *e; status == MR_OK && (e = readdir(d)) != NULL;) {
+        if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        if (!is_report_file(e->d_name) || lstat(path, &st) != 0 || !S_ISREG(st.st_mode))
+            status = mr_fail(MR_ERR_INVALID_ARG,
+                             "report folder '%s' holds '%s', which no report writes: refusing to "
+                             "replace the folder (a report replaces its folder as a whole); choose another",
+                             dir, e->d_name);
+    }
+    closedir(d);
+    if (status == MR_OK) *exists = 1;
+    return status;
+}
+
+/* Remove `path` and, if it is a folder, everything in it (symbolic links are removed, never followed). Best effort:
+ * what cannot be removed stays. errno is kept. */
+static void remove_tree(const char *path) {
+    const int saved = errno;
+    struct stat st;
+    DIR *d = lstat(path, &st) == 0 && S_ISDIR(st.st_mode) ? opendir(path) : NULL;
+    if (d != NULL) {
+        for (struct dirent *e; (e = readdir(d)) != NULL;) {
+            if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
+            char inner[4096];
+            int n = snprintf(inner, sizeof inner, "%s/%s", path, e->d_name);
+            if (n > 0 && (size_t)n < sizeof inner) remove_tree(inner);
+        }
+        closedir(d);
+        rmdir(path);
+    } else {
+        unlink(path);
+    }
+    errno = saved;
+}
+
+/* Where the last component of `dir` starts (*name) and ends (*length: trailing slashes left out, "out/" is "out").
+ * MR_ERR_INVALID_ARG for a folder that cannot be renamed by its name: "/", ".", "..". */
+static mr_status split_folder_name(const char *dir, size_t *name, size_t *length) {
+    *length = strlen(dir);
+    while (*length > 1 && dir[*length - 1] == '/') --*length;
+    *name = *length;
+    while (*name > 0 && dir[*name - 1] != '/') --*name;
+    const size_t n = *length - *name;
+    if (n == 0 || (dir[*name] == '.' && (n == 1 || (n == 2 && dir[*name + 1] == '.'))))
+        return mr_fail(MR_ERR_INVALID_ARG, "report folder '%s': name the folder itself (not '/', '.' or '..')", dir);
+    return MR_OK;
+}
+
+/* A new empty folder beside `dir`, hidden: "PARENT/.NAME.matremap-<what>-<pid>-<n>" in *out, the first n free
+ * (mkdir is atomic, so reports made at once, by threads or processes, each get their own; the umask applies, as to
+ * a folder made in place). */
+static mr_status make_hidden_folder(const char *dir, const char *what, char *out, size_t size) {
+    size_t name, length;
+    mr_status status = split_folder_name(dir, &name, &length);
+    if (status != MR_OK) return status;
+    for (int k = 0; k < 10000; k++) {
+        int n = snprintf(out, size, "%.*s.%.*s.matremap-%s-%ld-%d", (int)name, dir, (int)(length - name), dir + name,
+                         what, (long)getpid(), k);
+        if (n < 0 || (size_t)n >= size)
+            return mr_fail(MR_ERR_INVALID_ARG, "report folder '%s': the name is too long", dir);
+        if (mkdir(out, 0777) == 0) return MR_OK;
+        if (errno != EEXIST) break;
+    }
+    return mr_fail(MR_ERR_IO, "cannot create the report folder '%s' (a scratch folder beside it, '%s': %s)", dir, out,
+                   strerror(errno));
+}
+
+/* The failure's message with the scratch folder's name replaced by the target's (a picture is named as the user
+ * knows it: "out/view0_material1.png"), and what became of the target said first. Returns status. */
+static mr_status name_target(mr_status status, const char *dir, const char *scratch) {
+    char message[2048], *at;
+    snprintf(message, sizeof message, "%s", mr_last_error());
+    const size_t from = strlen(scratch);
+    size_t to = strlen(dir);
+    while (to > 1 && dir[to - 1] == '/') to--; // "out/" is "out"
+    while ((at = strstr(message, scratch)) != NULL && strlen(message) - from + to < sizeof message) {
+        memmove(at + to, at + from, strlen(at + from) + 1);
+        memcpy(at, dir, to);
+    }
+    return mr_fail(status, "report '%s' not written (a previous report there is left as it was): %s", dir, message);
+}
+
+/* Put the finished scratch folder in the place of `dir`: renamed there when nothing is; else the old report is
+ * renamed aside, the new one in, and the old one removed (if the second rename fails, the old one goes back). */
+static mr_status commit_folder(const char *dir, const char *scratch) {
+    int exists = 0;
+    mr_status status = check_target(dir, &exists); // again: it may have changed while the report was made
+    if (status != MR_OK) return status;
+    if (!exists) {
+        if (rename(scratch, dir) != 0)
+            return mr_fail(MR_ERR_IO, "cannot move the report into '%s': %s", dir, strerror(errno));
+        return MR_OK;
+    }
+    char aside[4096];
+    status = make_hidden_folder(dir, "old", aside, sizeof aside);
+    if (status != MR_OK) return status;
+    if (rename(dir, aside) != 0) { // over the empty folder just made
+        status = mr_fail(MR_ERR_IO, "cannot move the previous report '%s' aside: %s", dir, strerror(errno));
+        rmdir(aside);
+        return status;
+    }
+    if (rename(scratch, dir) != 0) {
+        status = mr_fail(MR_ERR_IO, "cannot move the report into '%s': %s", dir, strerror(errno));
+        rename(aside, dir);
+        return status;
+    }
+    remove_tree(aside);
     return MR_OK;
 }
 
@@ -610,6 +740,9 @@ mr_status mr_report_make(const mr_report_input *inputs, int count, const char *d
     mr_image *env = NULL; // read here when only its path is given
     if (st.env == NULL && opts->env_path != NULL) {
         status = mr_img_read(opts->env_path, NULL, &env);
+        char label[4096 + 32];
+        snprintf(label, sizeof label, "environment map '%s'", opts->env_path);
+        if (status == MR_OK) status = mr_image_check_radiance(env, label); // named here, before any render
         st.env = env;
     }
     if (status == MR_OK && st.env != NULL && st.env_scale <= 0.0) st.env_scale = auto_env_scale(st.env);
@@ -634,16 +767,32 @@ mr_status mr_report_make(const mr_report_input *inputs, int count, const char *d
         else
             describe_material(in->material, e->description, sizeof e->description);
     }
-    if (status == MR_OK) status = make_folder(dir);
+    // Everything is written into a scratch folder beside `dir`, put in its place once complete.
+    char scratch[4096] = "";
+    int exists = 0;
+    size_t name_at, name_end;
+    if (status == MR_OK) status = split_folder_name(dir, &name_at, &name_end);
+    if (status == MR_OK) status = check_target(dir, &exists);
+    if (status == MR_OK) status = make_hidden_folder(dir, "new", scratch, sizeof scratch);
+    const int made = status == MR_OK;
     double exposure = st.exposure;
     for (int v = 0; v < st.views && status == MR_OK; v++) {
         status = progress(&st, v);
-        if (status == MR_OK) status = render_view(&st, dir, inputs, count, v, entries, &exposure);
+        if (status == MR_OK) status = render_view(&st, scratch, inputs, count, v, entries, &exposure);
     }
     if (status == MR_OK) status = progress(&st, st.views);
-    for (int k = 0; k < count && status == MR_OK; k++) status = write_thumbnails(dir, &inputs[k], k, &entries[k]);
-    if (status == MR_OK) status = write_page(&st, dir, scenes, entries, count, exposure);
+    for (int k = 0; k < count && status == MR_OK; k++) status = write_thumbnails(scratch, &inputs[k], k, &entries[k]);
+    if (status == MR_OK) status = write_page(&st, scratch, scenes, entries, count, exposure);
     if (status == MR_OK && out != NULL) status = make_result(&st, entries, count, exposure, out);
+    if (status == MR_OK) status = commit_folder(dir, scratch);
+    if (made && status != MR_OK) {
+        remove_tree(scratch); // the previous report, if any, is as it was
+        status = name_target(status, dir, scratch);
+    }
+    if (status != MR_OK && out != NULL) {
+        mr_report_result_free(*out);
+        *out = NULL;
+    }
     free(entries);
     mr_image_free(env);
     return status;

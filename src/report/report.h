@@ -33,8 +33,9 @@
  *
  * Contract: every string is UTF-8 and is escaped for HTML and JSON here; numbers must be finite (NaN and infinity
  * are MR_ERR_INVALID_ARG naming the material and view). Both files are written atomically (the folder must
- * exist for mr_report_write; mr_report_make creates it). The library never prints: mr_report_make tells its
- * progress to a callback. Thread-safe (no global state besides the thread-local last error).
+ * exist for mr_report_write; mr_report_make writes a whole folder atomically, see "The folder" below). The
+ * library never prints: mr_report_make tells its progress to a callback. Thread-safe (no global state besides the
+ * thread-local last error).
  */
 #ifndef MR_REPORT_H
 #define MR_REPORT_H
@@ -95,7 +96,7 @@ mr_status mr_report_write(const mr_report *report, const char *dir);
  *     view to a mean luminance of 0.18; pictures and SSIM use it.
  *   - Figures per candidate and view: SSIM and relative RMSE (RMSE / RMS of the reference) over the whole frame,
  *     and over the object (metrics.h masks; object RMSE / the reference's mean radiance there).
- *   - Files in `dir` (created if missing): view<V>_material<K>.png (renders, sRGB at the exposure),
+ *   - Files in `dir` (see "The folder" below): view<V>_material<K>.png (renders, sRGB at the exposure),
  *     ssim_view<V>_material<K>.png (SSIM maps, candidates only), map_material<K>_<N>.png (thumbnails of every
  *     map: each material's BRDF maps, then a scene's normal, occlusion and emissive maps; box-filtered to at most
  *     MR_REPORT_THUMBNAIL_SIDE pixels, at most MR_REPORT_MAX_THUMBNAILS per input), then index.html and
@@ -104,9 +105,22 @@ mr_status mr_report_write(const mr_report *report, const char *dir);
  * and scene, materials mixed with scenes, an option out of range, environment options without a map, a mesh
  * with scenes or without a map, a camera without a mesh, an invalid mesh: mr_mesh_validate's message), the
  * environment map's read error (naming the file), MR_ERR_IO naming the folder when it cannot be created or is
- * not a folder, a render's or a write's error, MR_ERR_CANCELLED when the progress callback asks to stop. Nothing
- * is written before the inputs, the options and the map have been checked; a later failure leaves the files
- * written so far. */
+ * not a folder, MR_ERR_INVALID_ARG naming the entry when the folder holds something no report writes, a render's
+ * or a write's error, MR_ERR_CANCELLED when the progress callback asks to stop. Nothing is written before the
+ * inputs, the options and the map have been checked.
+ *
+ * The folder is an output as a whole: everything is written into a scratch folder beside `dir` (the same parent,
+ * a hidden name: ".NAME.matremap-new-<pid>-<n>") and renamed to `dir` once complete. When `dir` exists, it is
+ * replaced only then: the previous report is renamed aside (".NAME.matremap-old-<pid>-<n>"), the new one in, and
+ * the old one removed (if the second rename fails, the old one is renamed back). So a failure at any point (a full
+ * disk, a render error, a cancel) leaves the previous report, or nothing, never a part of a report, and a report
+ * made with fewer views or inputs leaves no picture of the one before it. Which folders may be replaced: a missing
+ * one, an empty one, or one that holds only files a report writes (index.html, summary.json and pictures named as
+ * above); a folder holding anything else (a file of someone else's, a sub-folder) is refused, naming the entry, and
+ * left untouched: a report never deletes what it did not write. The caller keeps its inputs out of `dir` (it is
+ * replaced; `matremap report` refuses an input inside it). A process killed midway leaves its scratch folder
+ * beside `dir` (hidden; remove it by hand); the folder itself is as it was. Between the two renames, for an
+ * instant, `dir` does not exist. */
 
 #define MR_REPORT_DEFAULT_SIZE 384
 /* Defaults chosen with `make bench BENCH_ARGS="--only report-accuracy"` (docs/performance.md, "Defaults for
