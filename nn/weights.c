@@ -371,11 +371,11 @@ mr_status mr_mlp_parse(const char *text, size_t size, const char *name, mr_mlp *
 mr_status mr_mlp_read(const char *path, mr_mlp **out) {
     if (path == NULL || path[0] == '\0') return mr_fail(MR_ERR_INVALID_ARG, "mlp read: empty path");
     if (out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mlp read '%s': NULL output pointer", path);
-    FILE *in = fopen(path, "rb");
-    if (in == NULL) {
-        int err = errno;
-        return mr_fail(MR_ERR_IO, "mlp weights '%s': cannot open: %s", path, strerror(err));
-    }
+    FILE *in = NULL;
+    char label[MR_IO_LABEL_SIZE + 16];
+    snprintf(label, sizeof label, "mlp weights '%s'", path);
+    mr_status opened = mr_io_open_input(path, label, 0, &in, NULL); /* regular files only: a FIFO would block */
+    if (opened != MR_OK) return opened;
     size_t length = 0, capacity = 1 << 16;
     char *text = malloc(capacity);
     mr_status status = MR_OK;

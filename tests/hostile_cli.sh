@@ -168,4 +168,19 @@ mkfifo "$tmp/fifo.gltf"
 refuse "a glTF that is a FIFO" "$tmp/fifo.gltf" "glTF '[^']*fifo.gltf': is not a regular file \(a FIFO\)" -- \
     "$bin" gltf spec2metal "$tmp/fifo.gltf" -o "$tmp/o/o.gltf"
 
+# The text readers too: sweep files (learn, train, sweep merge), transforms (convert), networks (spec2metal).
+mkfifo "$tmp/fifo.csv" "$tmp/fifo.mrt" "$tmp/fifo.mlp"
+refuse "train of a FIFO (no hang)" "$tmp/fifo.csv" "fifo.csv: is not a regular file \(a FIFO\)" -- \
+    "$bin" train "$tmp/fifo.csv" -o "$tmp/o/x.mlp"
+refuse "learn of a FIFO (no hang)" "$tmp/fifo.csv" "fifo.csv: is not a regular file \(a FIFO\)" -- \
+    "$bin" learn "$tmp/fifo.csv" -o "$tmp/o/x.mrt"
+refuse "sweep merge of a FIFO (no hang)" "$tmp/fifo.csv" "shard file '[^']*fifo.csv': is not a regular file \(a FIFO\)" -- \
+    "$bin" sweep merge "$tmp/fifo.csv" -o "$tmp/o/m.csv"
+refuse "convert --transform of a FIFO (no hang)" "$tmp/fifo.mrt" \
+    "transform '[^']*fifo.mrt': is not a regular file \(a FIFO\)" -- \
+    "$bin" convert --from ward --to ggx alpha=0.1 --transform "$tmp/fifo.mrt" -o "$tmp/o/cv"
+refuse "spec2metal --weights of a FIFO (no hang)" "$tmp/fifo.mlp" "weights '[^']*fifo.mlp': is not a regular file" -- \
+    "$bin" spec2metal --diffuse "$tmp/ref.png" --specular "$tmp/ref.png" --glossiness 0.5 --method mlp \
+    --weights "$tmp/fifo.mlp" -o "$tmp/o/s2m"
+
 finish

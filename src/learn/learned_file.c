@@ -615,21 +615,16 @@ mr_status mr_learned_parse(const char *text, size_t size, const char *name, mr_l
 mr_status mr_learned_read(const char *path, mr_learned **out) {
     if (path == NULL || path[0] == '\0') return mr_fail(MR_ERR_INVALID_ARG, "transform read: empty path");
     if (out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "transform read '%s': NULL output", path);
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
-    if (fd < 0) return mr_fail(MR_ERR_IO, "transform '%s': cannot open: %s", path, strerror(errno));
-    struct stat st;
-    mr_status status = MR_OK;
-    if (fstat(fd, &st) != 0)
-        status = mr_fail(MR_ERR_IO, "transform '%s': cannot stat: %s", path, strerror(errno));
-    else if (!S_ISREG(st.st_mode))
-        status = mr_fail(MR_ERR_IO, "transform '%s': not a regular file", path);
-    else if ((size_t)st.st_size > MAX_FILE_BYTES)
-        status = mr_fail(MR_ERR_FORMAT, "transform '%s': %lld bytes, more than the %zu a transform may take", path,
-                         (long long)st.st_size, MAX_FILE_BYTES);
+    // Only a regular file, of at most MAX_FILE_BYTES, is opened (a FIFO named as a transform blocked open()).
+    char label[MR_IO_LABEL_SIZE + 16];
+    snprintf(label, sizeof label, "transform '%s'", path);
+    FILE *file = NULL;
+    mr_status status = mr_io_open_input(path, label, MAX_FILE_BYTES, &file, NULL);
+    if (status != MR_OK) return status;
     char *text = NULL;
     size_t length = 0;
-    if (status == MR_OK) status = mr_text_file_read_all(fd, path, "transform", &text, &length);
-    close(fd);
+    status = mr_text_file_read_all(fileno(file), path, "transform", &text, &length);
+    fclose(file);
     if (status == MR_OK) status = mr_learned_parse(text, length, path, out);
     free(text);
     return status;

@@ -11,6 +11,7 @@
 
 #include "c_locale.h"
 #include "mr_internal.h"
+#include "io/io_internal.h"
 #include "remap/remap_file.h"
 
 #define MAX_COLUMNS 128
@@ -118,8 +119,9 @@ static mr_status check_range(const char *path, long line_number, const mr_brdf_m
 
 static mr_status load_file(const char *path, const mr_sweep_table_options *opts, int first, file_header *reference,
                            const char *reference_path, mr_sweep_table *t, size_t *capacity, size_t *prov_length) {
-    FILE *f = fopen(path, "r");
-    if (f == NULL) return mr_fail(MR_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    FILE *f = NULL;
+    mr_status opened = mr_io_open_input(path, path, 0, &f, NULL); /* regular files only: a FIFO would block */
+    if (opened != MR_OK) return opened;
     char *line = malloc(MAX_LINE);
     char *header_text = NULL;
     size_t header_length = 0;

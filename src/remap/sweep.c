@@ -1690,12 +1690,11 @@ static mr_status shards_differ(const merge_shard *a, const merge_shard *b) {
 
 /* Open a shard and read its header. */
 static mr_status open_shard(merge_shard *s) {
-    s->fp = fopen(s->path, "r");
-    if (s->fp == NULL) {
-        int err = errno;
-        return mr_fail(err == ENOENT ? MR_ERR_INVALID_ARG : MR_ERR_IO, "shard file '%s': cannot open: %s", s->path,
-                       strerror(err));
-    }
+    // Regular files only, opened without blocking (fopen blocked on a FIFO named as a shard).
+    char label[MR_IO_LABEL_SIZE + 16];
+    snprintf(label, sizeof label, "shard file '%s'", s->path);
+    mr_status opened = mr_io_open_input(s->path, label, 0, &s->fp, NULL);
+    if (opened != MR_OK) return opened == MR_ERR_IO && errno == ENOENT ? MR_ERR_INVALID_ARG : opened;
     struct stat st;
     if (fstat(fileno(s->fp), &st) != 0 || !S_ISREG(st.st_mode))
         return mr_fail(MR_ERR_INVALID_ARG, "shard file '%s' is not a regular file", s->path);

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "../c_locale.h"
+#include "../io/io_internal.h"
 #include "../mr_internal.h"
 #include "../remap/remap_file.h"
 #include "workflow.h"
@@ -126,8 +127,9 @@ static mr_status take_row(const char *path, long line_number, char **fields, int
 
 static mr_status load_file(const char *path, const mr_wf_dataset_options *opts, mr_wf_dataset *d,
                            size_t *capacity) {
-    FILE *f = fopen(path, "r");
-    if (f == NULL) return mr_fail(MR_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    FILE *f = NULL;
+    mr_status opened = mr_io_open_input(path, path, 0, &f, NULL); /* regular files only: a FIFO would block */
+    if (opened != MR_OK) return opened;
     char *line = NULL, *header = NULL;
     size_t line_size = 0;
     long line_number = 0;
