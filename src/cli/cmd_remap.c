@@ -109,18 +109,19 @@ static mr_status write_pictures(const char *prefix, const mr_render_plan *plan, 
     mr_status status = mr_render(plan, target, values, MR_COMPONENT_FULL, &target_image);
     if (status == MR_OK) status = mr_ssim(source, target_image, NULL, &ssim, &map);
     if (status == MR_OK) status = mr_ssim_map_visualise(map, 0.0, &picture);
-    if (status == MR_OK) {
-        snprintf(path, sizeof path, "%s_source.png", prefix);
-        status = mr_img_write(path, source, NULL);
+    // The three belong together: when one cannot be written, those written before it are removed.
+    static const char *const suffixes[3] = {"_source.png", "_target.png", "_ssim.png"};
+    const mr_image *pictures[3] = {source, target_image, picture};
+    int written = 0;
+    for (; status == MR_OK && written < 3; written++) {
+        snprintf(path, sizeof path, "%s%s", prefix, suffixes[written]);
+        status = mr_img_write(path, pictures[written], NULL);
     }
-    if (status == MR_OK) {
-        snprintf(path, sizeof path, "%s_target.png", prefix);
-        status = mr_img_write(path, target_image, NULL);
-    }
-    if (status == MR_OK) {
-        snprintf(path, sizeof path, "%s_ssim.png", prefix);
-        status = mr_img_write(path, picture, NULL);
-    }
+    if (status != MR_OK)
+        for (int k = 0; k < written - 1; k++) {
+            snprintf(path, sizeof path, "%s%s", prefix, suffixes[k]);
+            remove(path);
+        }
     mr_image_free(target_image);
     mr_image_free(map);
     mr_image_free(picture);
