@@ -515,6 +515,9 @@ mr_status load_impl(const char *path_c, mr_gltf **out) {
                                         (unsigned)bytes.size(), g->base_dir);
     }
     if (!ok) {
+        // tinygltf turns exceptions into its error text, std::bad_alloc included: out of memory is not bad input.
+        if (err.find("bad_alloc") != std::string::npos)
+            return mr_fail(MR_ERR_NOMEM, "glTF '%s': out of memory", path.c_str());
         mr_status code = err.find("not found") != std::string::npos || err.find("Failed to load") != std::string::npos
                              ? MR_ERR_IO : MR_ERR_FORMAT;
         std::string why = first_line(err.empty() ? warn : err);

@@ -11,17 +11,18 @@
 # number of allocations A and I/O calls W the command makes (fault_inject.c: MR_FAULT_COUNT_FILE). Then for every
 # N in 1..A the N-th allocation fails, once (one-shot) and from there on (persistent, MR_FAULT_PERSIST=1), and the
 # same for N in 1..W and the I/O calls. Each run passes when:
-#   - it ends by itself (no hang: 120 s), with exit 2 or 3 and exactly one line on stderr, "matremap ...: error:"
-#     naming the injected cause ("out of memory" / the system's "No space left on device" or "Input/output
-#     error"), or with exit 0 and outputs equal to the reference (the failure was legitimately recovered from);
+#   - it ends by itself (no hang: 120 s), with exactly one line on stderr, "matremap ...: error:" naming the
+#     injected cause, and the exit code of that cause (cli.h): 3 and "out of memory" for an allocation, 2 and the
+#     system's "No space left on device" or "Input/output error" for an I/O call (a file that cannot be written);
+#     or with exit 0 and outputs equal to the reference (the failure was legitimately recovered from);
 #   - ASan, LSan and UBSan report nothing (their logs go to files, so stderr is the command's own);
 #   - it leaves no partial output: after a failure the output folder is as empty as before (no output file, no
 #     temporary file, no scratch folder); the exceptions are the scenario kinds below;
 #   - the inputs are unchanged (sha256 of every input before and after).
-# Scenario kinds: "atomic" (all of the above); "sweep" (the sweep file is crash-safe by design: rows kept so far
-# may stay, but nothing else, and a fault-free --resume must then give the reference rows); "report" (the report
-# folder is another helper's subject: only no temporary file may be left, besides exit code, message and
-# sanitizers).
+# Scenario kinds: "atomic" (all of the above); "sweep" and "cache" (a sweep file and convert --direct's cache are
+# crash-safe by design: the rows kept so far may stay, but nothing else, and a fault-free rerun, with --resume for
+# the sweep, must then give the reference outputs); "report" (the report folder is another helper's subject: only no
+# temporary file may be left, besides exit code, message and sanitizers).
 # Prints one line per scenario and mode, the problems found, and a table for docs/reliability.md; exit status 1 if
 # any run failed. Runs with OMP_NUM_THREADS=1, so that the N-th call is the same call in every run.
 set -u
@@ -114,6 +115,8 @@ add spec2metal atomic spec2metal --diffuse "$in/diff.png" --specular "$in/spec.p
 add metal2spec atomic metal2spec --basecolor "$in/diff.png" --metallic "$in/gloss.png" --roughness "$in/gloss.png" \
     -o s
 add gltf-spec2metal atomic gltf spec2metal "$in/sg.gltf" -o o.gltf --method weighted
+add convert-direct cache convert --from ward --to ggx alpha=0.2 specular=@"$in/spec.png" diffuse=0.3 --direct \
+    --cache cache.csv --size 16 --format png -o d_
 add report report report -o rep --size 16 ggx alpha=0.3 -- ward
 
 # ---- one run ---------------------------------------------------------------------------------------------------
@@ -135,7 +138,9 @@ run_cmd() {
 snapshot() { # DIR -> listing on stdout
     (cd "$1" && find . -type f | LC_ALL=C sort | while read -r f; do
         case $f in
-            *.csv) printf '%s ' "$f"; sed -E '/^[0-9]/s/,[^,]*$//' "$f" | sha256sum | cut -d' ' -f1 ;;
+            *.csv) if grep -q ',seconds$' "$f"; then # a sweep's: the time each row took
+                       printf '%s ' "$f"; sed -E '/^[0-9]/s/,[^,]*$//' "$f" | sha256sum | cut -d' ' -f1
+                   else sha256sum "$f" | awk '{print $2, $1}'; fi ;;
             *.json) printf '%s ' "$f"; sed -E 's/"seconds": [^,}]*//g' "$f" | sha256sum | cut -d' ' -f1 ;;
             *.html) printf '%s ' "$f"; sed -E 's/[0-9.]+ s\b//g' "$f" | sha256sum | cut -d' ' -f1 ;;
             *) sha256sum "$f" | awk '{print $2, $1}' ;;
@@ -143,11 +148,16 @@ snapshot() { # DIR -> listing on stdout
     done)
 }
 
-count_of() { sed -n "s/^$1 //p" "$work/count" 2>/dev/null; }
+# A figure of the last run's count file (fault_inject.c); 0 when there is none (a run that crashed writes none).
+count_of() {
+    local v
+    v=$(sed -n "s/^$1 //p" "$work/count" 2>/dev/null)
+    echo "${v:-0}"
+}
 
-# judge SCENARIO KIND MODE N CAUSE-PATTERN: checks the run just made; prints the outcome class on stdout.
+# judge SCENARIO KIND MODE N CAUSE-PATTERN EXIT: checks the run just made; prints the outcome class on stdout.
 judge() {
-    local name=$1 kind=$2 mode=$3 n=$4 cause=$5 bad=""
+    local name=$1 kind=$2 mode=$3 n=$4 cause=$5 code=$6 bad=""
     if ls "$san"/* >/dev/null 2>&1; then
         bad="sanitizer: $(grep -m1 -hE 'ERROR|SUMMARY|runtime error' "$san"/* | cut -c1-160)"
     elif [ "$rc" -eq 124 ]; then
@@ -167,7 +177,7 @@ judge() {
         fi
         [ -z "$bad" ] && { echo recovered; return; }
     fi
-    if [ -z "$bad" ] && [ "$rc" -ne 2 ] && [ "$rc" -ne 3 ]; then bad="exit $rc"; fi
+    if [ -z "$bad" ] && [ "$rc" -ne "$code" ]; then bad="exit $rc, not $code: $(cut -c1-200 "$work/stderr")"; fi
     if [ -z "$bad" ]; then
         local lines
         lines=$(wc -l < "$work/stderr")
@@ -179,22 +189,25 @@ judge() {
             bad="message does not name the cause: $(cut -c1-240 "$work/stderr")"
         fi
     fi
+    local kept="" again=""
+    case $kind in
+        sweep) kept=s.csv again=--resume ;;
+        cache) kept=cache.csv ;;
+    esac
     if [ -z "$bad" ]; then
         local left
         case $kind in
-            atomic) left=$(cd "$out" && find . -mindepth 1 | head -3 | tr '\n' ' ') ;;
-            sweep) left=$(cd "$out" && find . -mindepth 1 ! -name s.csv | head -3 | tr '\n' ' ') ;;
             report) left=$(cd "$out" && find . -name '*.tmp.*' | head -3 | tr '\n' ' ') ;;
+            *) left=$(cd "$out" && find . -mindepth 1 ! -name "${kept:-.}" | head -3 | tr '\n' ' ') ;;
         esac
         [ -n "$left" ] && bad="partial output left after exit $rc: $left"
     fi
-    if [ -z "$bad" ] && [ "$kind" = sweep ] && [ -e "$out/s.csv" ]; then
-        # The rows kept must resume into the reference.
-        local kept=$work/kept.csv
-        cp "$out/s.csv" "$kept"
-        (cd "$out" && eval "timeout 120 \"\$bin\" ${args_of[$index]} --resume" >/dev/null 2>"$work/resume.err")
+    if [ -z "$bad" ] && [ -n "$kept" ] && [ -e "$out/$kept" ]; then
+        # The rows kept must lead a fault-free rerun to the reference.
+        (cd "$out" && eval "timeout 120 \"\$bin\" ${args_of[$index]} $again" >/dev/null 2>"$work/rerun.err")
         if [ $? -ne 0 ] || ! snapshot "$out" | cmp -s - "$ref/$name.snapshot"; then
-            bad="the sweep file left after exit $rc does not resume into the reference: $(head -c 200 "$work/resume.err")"
+            bad="the $kept left after exit $rc does not lead a rerun to the reference: $(head -c 200 "$work/rerun.err")"
+            bad+="$(snapshot "$out" | diff - "$ref/$name.snapshot" | grep '^[<>]' | head -2 | tr '\n' ' ')"
         fi
     fi
     if [ -n "$bad" ]; then
@@ -223,10 +236,11 @@ for index in "${!scenarios[@]}"; do
     allocs=$(count_of alloc)
     ios=$(count_of io)
     row="$name $allocs $ios"
+    injected=0 spared=0
     for mode in alloc alloc-persistent io io-persistent; do
         case $mode in
-            alloc*) total=$allocs var=MR_FAULT_ALLOC cause='out of memory|cannot allocate memory' ;;
-            io*) total=$ios var=MR_FAULT_IO cause='no space left on device|input/output error' ;;
+            alloc*) total=$allocs var=MR_FAULT_ALLOC cause='out of memory|no memory|cannot allocate memory' code=3 ;;
+            io*) total=$ios var=MR_FAULT_IO cause='no space left on device|input/output error' code=2 ;;
         esac
         persist=0
         [[ $mode == *persistent ]] && persist=1
@@ -236,7 +250,9 @@ for index in "${!scenarios[@]}"; do
             export "$var=$n" MR_FAULT_PERSIST=$persist
             run_cmd "${args_of[$index]}"
             unset MR_FAULT_ALLOC MR_FAULT_IO MR_FAULT_PERSIST
-            o=$(judge "$name" "$kind" "$mode" "$n" "$cause")
+            injected=$((injected + $(count_of injected_alloc) + $(count_of injected_io)))
+            spared=$((spared + $(count_of spared)))
+            o=$(judge "$name" "$kind" "$mode" "$n" "$cause" "$code")
             outcome[$o]=$((${outcome[$o]:-0} + 1))
             runs=$((runs + 1))
         done
@@ -246,20 +262,26 @@ for index in "${!scenarios[@]}"; do
         row+=" $runs ${outcome[exit2]:-0} ${outcome[exit3]:-0} ${outcome[recovered]:-0} ${outcome[problem]:-0}"
         unset outcome
     done
-    echo "$row" >> "$table"
+    echo "$row $injected $spared" >> "$table"
 done
 elapsed=$(($(date +%s) - start))
 
 echo
 echo "Per scenario: calls counted in the fault-free run, then per mode (alloc, alloc persistent, io, io persistent):"
-echo "runs / exit 2 / exit 3 / recovered (exit 0, outputs as without the fault) / problems (step $step, ${elapsed} s)"
-printf '| %s | %s | %s | %s | %s | %s | %s |\n' scenario allocs "I/O calls" "alloc one-shot" "alloc persistent" \
-    "I/O one-shot" "I/O persistent"
-printf '|---|---:|---:|---|---|---|---|\n'
-while read -r name a w r1 a2 a3 a0 ap r2 b2 b3 b0 bp r3 c2 c3 c0 cp r4 d2 d3 d0 dp; do
-    printf '| %s | %s | %s | %s | %s | %s | %s |\n' "$name" "$a" "$w" "$r1: $a2/$a3/$a0/$ap" "$r2: $b2/$b3/$b0/$bp" \
-        "$r3: $c2/$c3/$c0/$cp" "$r4: $d2/$d3/$d0/$dp"
+echo "runs: exit 2 / exit 3 / recovered (exit 0, outputs as without the fault) / problems; then the failures injected"
+echo "over all runs (persistent runs inject many) and the allocations of nlohmann/json's destructor let through"
+echo "(fault_inject_new.cpp). Step $step, ${elapsed} s."
+printf '| %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' scenario allocs "I/O calls" "alloc one-shot" \
+    "alloc persistent" "I/O one-shot" "I/O persistent" "failures injected" spared
+printf '|---|---:|---:|---|---|---|---|---:|---:|\n'
+total_runs=0 total_injected=0
+while read -r name a w r1 a2 a3 a0 ap r2 b2 b3 b0 bp r3 c2 c3 c0 cp r4 d2 d3 d0 dp inj sp; do
+    printf '| %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' "$name" "$a" "$w" "$r1: $a2/$a3/$a0/$ap" \
+        "$r2: $b2/$b3/$b0/$bp" "$r3: $c2/$c3/$c0/$cp" "$r4: $d2/$d3/$d0/$dp" "$inj" "$sp"
+    total_runs=$((total_runs + r1 + r2 + r3 + r4))
+    total_injected=$((total_injected + inj))
 done < "$table"
+echo "In all: $total_runs runs, $total_injected failures injected."
 echo
 problems=$(wc -l < "$log")
 if [ "$problems" -gt 0 ]; then

@@ -362,10 +362,13 @@ int cmd_convert(int argc, char **argv) {
                 }
         }
     }
+    char folder[4096] = "";
+    int made_folder = 0; // removed again (if still empty) when the command fails
     if (code == CLI_EXIT_OK && any_map && strrchr(prefix, '/') != NULL) { // "out/ggx_": make the folder "out"
-        char folder[4096];
         snprintf(folder, sizeof folder, "%.*s", (int)(strrchr(prefix, '/') - prefix), prefix);
-        if (folder[0] != '\0' && mkdir(folder, 0777) != 0 && errno != EEXIST) {
+        if (folder[0] != '\0' && mkdir(folder, 0777) == 0) {
+            made_folder = 1;
+        } else if (folder[0] != '\0' && errno != EEXIST) {
             fprintf(stderr, "matremap convert: error: -o '%s': cannot create the folder '%s': %s\n", prefix, folder,
                     strerror(errno));
             code = CLI_EXIT_BAD_INPUT;
@@ -409,8 +412,14 @@ int cmd_convert(int argc, char **argv) {
         }
         if (status == MR_OK) status = mr_img_write(names[j], image, &wo);
         if (image != (j < out_count ? out[j] : NULL)) mr_image_free(image);
-        if (status != MR_OK) code = cli_fail(COMMAND, status);
+        if (status != MR_OK) {
+            code = cli_fail(COMMAND, status);
+            for (int k = 0; k < j; k++)
+                remove(names[k]); // the maps belong together: none is left without the rest
+        }
     }
+    if (code != CLI_EXIT_OK && made_folder)
+        rmdir(folder);
     const double seconds = cli_now() - started;
     const mr_direct_summary *ds = direct && code == CLI_EXIT_OK ? mr_direct_kind_summary(kind) : NULL;
     if (ds != NULL && !json)

@@ -133,34 +133,34 @@ static mr_status learned_at(const mr_learned *t, const plot_axes *a, const doubl
  * rows.csv, curves.csv, roughness.svg, specular.svg (the SVGs inactive when gnuplot is missing or fails). */
 enum { PLOT_ROWS, PLOT_CURVES, PLOT_ROUGHNESS, PLOT_SPECULAR, PLOT_FILES };
 
-/* Write the plots into files[] (zero-initialised by the caller); *created is 1 when DIR was made here (the caller
- * removes it again if the run fails). Returns 1, or 0 after printing the error with every temporary file removed. */
+/* Write the plots into files[] (zero-initialised by the caller; their targets are paths[], which must outlive them);
+ * *created is 1 when DIR was made here (the caller removes it again if the run fails). Returns a CLI exit code: after
+ * a failure the error is printed and every temporary file removed. */
 static int prepare_plots(const mr_learned *t, const mr_sweep_table *tab, const char *dir, const char *title,
-                         mr_atomic_file files[PLOT_FILES], int *created) {
+                         mr_atomic_file files[PLOT_FILES], char paths[PLOT_FILES][4096], int *created) {
     plot_axes a;
     if (!find_axes(t, &a)) {
         fprintf(stderr, "matremap learn: note: no plots: the transform has no roughness and specular pair to cut "
                         "through\n");
-        return 1;
+        return CLI_EXIT_OK;
     }
     if (mkdir(dir, 0777) == 0) {
         *created = 1;
     } else if (errno != EEXIST) {
         fprintf(stderr, "matremap learn: error: --plots '%s': cannot create the folder: %s\n", dir, strerror(errno));
-        return 0;
+        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
     }
-    char paths[PLOT_FILES][4096];
     static const char *const names[PLOT_FILES] = {"rows.csv", "curves.csv", "roughness.svg", "specular.svg"};
     for (int k = 0; k < PLOT_FILES; k++) {
         int length = snprintf(paths[k], sizeof paths[k], "%s/%s", dir, names[k]);
         if (length < 0 || (size_t)length >= sizeof paths[k]) {
             fprintf(stderr, "matremap learn: error: --plots '%s': the name is too long\n", dir);
-            return 0;
+            return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
         }
     }
     FILE *f = cli_output_open(COMMAND, paths[PLOT_ROWS], &files[PLOT_ROWS]);
     if (f == NULL)
-        return 0;
+        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
     const mr_learned_slot *fr = &t->features[a.rough_feature], *fs = &t->features[a.spec_feature];
     const mr_learned_slot *or_ = &t->outputs[a.rough_output], *os = &t->outputs[a.spec_output];
     fprintf(f, "source_roughness,source_specular,target_roughness,target_specular\n");
@@ -174,13 +174,13 @@ static int prepare_plots(const mr_learned *t, const mr_sweep_table *tab, const c
                 slot_of(t->target, os, tv));
     }
     if (!cli_output_close(COMMAND, f, &files[PLOT_ROWS]))
-        return 0;
+        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
     // Learned curves: roughness over the domain (specular at the domain's middle); specular lines at 6 roughnesses
     // across the domain, drawn to 1.5 x the largest specular of the rows (what lies beyond is extrapolation).
     f = cli_output_open(COMMAND, paths[PLOT_CURVES], &files[PLOT_CURVES]);
     if (f == NULL) {
         cli_outputs_abort(files, PLOT_FILES);
-        return 0;
+        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
     }
     const double *base_row = tab->source_values;
     const double rlo = fr->min, rhi = fr->max, smid = 0.5 * (fs->min + fs->max);
@@ -205,20 +205,18 @@ static int prepare_plots(const mr_learned *t, const mr_sweep_table *tab, const c
     if (status != MR_OK) {
         fclose(f);
         cli_outputs_abort(files, PLOT_FILES);
-        cli_fail(COMMAND, status);
-        return 0;
+        return cli_fail(COMMAND, status);
     }
     if (!cli_output_close(COMMAND, f, &files[PLOT_CURVES])) {
         cli_outputs_abort(files, PLOT_FILES);
-        return 0;
+        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
     }
     // gnuplot draws into the SVGs' temporary files from the CSVs' temporary files.
     for (int k = PLOT_ROUGHNESS; k <= PLOT_SPECULAR; k++) {
         status = mr_atomic_begin(paths[k], &files[k]);
         if (status != MR_OK) {
             cli_outputs_abort(files, PLOT_FILES);
-            cli_fail(COMMAND, status);
-            return 0;
+            return cli_fail(COMMAND, status);
         }
     }
     FILE *plot = popen("gnuplot 2>/dev/null", "w");
@@ -245,14 +243,14 @@ static int prepare_plots(const mr_learned *t, const mr_sweep_table *tab, const c
     int drawn = 0;
     if (!cli_gnuplot_close(COMMAND, plot, &drawn)) {
         cli_outputs_abort(files, PLOT_FILES);
-        return 0;
+        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
     }
     if (!drawn) {
         mr_atomic_abort(&files[PLOT_ROUGHNESS]);
         mr_atomic_abort(&files[PLOT_SPECULAR]);
         fprintf(stderr, "matremap learn: note: no SVG plots (gnuplot missing or failed); the data is in %s\n", dir);
     }
-    return 1;
+    return CLI_EXIT_OK;
 }
 
 /* ---- the command ------------------------------------------------------------------------------------------ */
@@ -422,26 +420,27 @@ int cmd_learn(int argc, char **argv) {
     if (ps.draw) fprintf(stderr, "\r\033[K");
     // The plots are prepared first and committed after the transform, so a failure leaves neither.
     mr_atomic_file plot_files[PLOT_FILES] = {{{0}, NULL, 0}};
-    int ok = 1, created_dir = 0;
+    char plot_paths[PLOT_FILES][4096];
+    int code = CLI_EXIT_OK, created_dir = 0;
     if (status == MR_OK && plots != NULL) {
         char title[256];
         snprintf(title, sizeof title, "%s -> %s (%s)", t->source->name, t->target->name,
                  mr_learn_method_name(t->method));
-        ok = prepare_plots(t, &tab, plots, title, plot_files, &created_dir);
+        code = prepare_plots(t, &tab, plots, title, plot_files, plot_paths, &created_dir);
     }
-    if (status == MR_OK && ok) {
+    if (status == MR_OK && code == CLI_EXIT_OK) {
         status = mr_learned_write(t, output);
         if (status != MR_OK)
             cli_outputs_abort(plot_files, PLOT_FILES);
     }
-    if (status == MR_OK && ok)
-        ok = cli_outputs_commit(COMMAND, plot_files, PLOT_FILES, &output, 1);
-    if (status != MR_OK || !ok) {
+    if (status == MR_OK && code == CLI_EXIT_OK && !cli_outputs_commit(COMMAND, plot_files, PLOT_FILES, &output, 1))
+        code = CLI_EXIT_BAD_INPUT;
+    if (status != MR_OK || code != CLI_EXIT_OK) {
         if (created_dir)
             rmdir(plots); // only if empty: nothing of this run is left in it
         mr_sweep_table_free(&tab);
         mr_learned_free(t);
-        return status != MR_OK ? cli_fail(COMMAND, status) : CLI_EXIT_BAD_INPUT;
+        return status != MR_OK ? cli_fail(COMMAND, status) : code;
     }
     print_summary(t, output, cli_now() - started, json);
     mr_sweep_table_free(&tab);

@@ -78,13 +78,14 @@ static int record_epoch(const mr_mlp_epoch *epoch, void *user) {
 }
 
 /* PREFIX.csv and, if gnuplot runs, PREFIX.svg, prepared as the temporary files files[0] and files[1] (zero-initialised
- * by the caller), which the caller commits with the network (cli.h). Returns 0 after printing why, every temporary
- * file removed. */
-static int prepare_curve(const curve *c, const char *prefix, const char *title, mr_atomic_file files[2]) {
-    char path[4096], svg[4096];
-    int length = snprintf(path, sizeof path, "%s.csv", prefix);
-    int svg_length = snprintf(svg, sizeof svg, "%s.svg", prefix);
-    if (length < 0 || (size_t)length >= sizeof path || svg_length < 0 || (size_t)svg_length >= sizeof svg) {
+ * by the caller; their targets are paths[0] and paths[1], which must outlive them), which the caller commits with the
+ * network (cli.h). Returns 0 after printing why, every temporary file removed. */
+static int prepare_curve(const curve *c, const char *prefix, const char *title, mr_atomic_file files[2],
+                         char paths[2][4096]) {
+    char *path = paths[0], *svg = paths[1];
+    int length = snprintf(path, sizeof paths[0], "%s.csv", prefix);
+    int svg_length = snprintf(svg, sizeof paths[1], "%s.svg", prefix);
+    if (length < 0 || (size_t)length >= sizeof paths[0] || svg_length < 0 || (size_t)svg_length >= sizeof paths[1]) {
         fprintf(stderr, "matremap train: error: --loss-curve '%s': the name is too long\n", prefix);
         return 0;
     }
@@ -294,7 +295,8 @@ int cmd_train(int argc, char **argv) {
     snprintf(title, sizeof title, "matremap train: %zu pairs, %d hidden units, seed %llu", data.n,
              net ? net->n_hidden : 0, opts.seed);
     mr_atomic_file curve_files[2] = {{{0}, NULL, 0}, {{0}, NULL, 0}};
-    int curve_ok = status == MR_OK && prepare_curve(&c, curve_prefix, title, curve_files);
+    char curve_paths[2][4096];
+    int curve_ok = status == MR_OK && prepare_curve(&c, curve_prefix, title, curve_files, curve_paths);
     if (curve_ok) {
         status = mr_mlp_write(net, output);
         if (status != MR_OK)
@@ -307,7 +309,8 @@ int cmd_train(int argc, char **argv) {
     if (status != MR_OK || !curve_ok) {
         mr_wf_dataset_free(&data);
         for (int t = 0; t < test_count; t++) mr_wf_dataset_free(&test[t]);
-        return status != MR_OK ? cli_fail("train", status) : CLI_EXIT_INTERNAL;
+        // (a curve that cannot be written: prepare_curve or the commit named the file)
+        return status != MR_OK ? cli_fail("train", status) : CLI_EXIT_BAD_INPUT;
     }
     double seconds = cli_now() - started;
     if (json) {
