@@ -19,6 +19,9 @@
 #                   headless Chromium (docs/evaluation.md, "What viewers show"; installs Blender, Chromium, npm pins)
 #   make dataset    the specular -> metallic training set (build/dataset); make train: data/spec2metal.mlp;
 #                   make objectives: which label objective agrees with object SSIM (docs/training.md)
+#   make faults     allocation and I/O fault injection (build/faults, ASan + UBSan + LSan): the N-th allocation,
+#                   write or rename fails, for every N, over the main commands (scripts/faults.sh; docs/reliability.md);
+#                   FAULT_STEP=k tries every k-th N only
 #   make deps       installs the Debian packages the project needs (scripts/install-deps.sh)
 #   make install PREFIX=/usr/local   tools, static library, public headers, matremap.pc and the network
 
@@ -120,7 +123,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h 
                   src/learn/parametric.h src/learn/svr.h src/learn/sweep_table.h src/learn/learned.h \
                   gltf/mr_gltf.h gltf/mr_gltf_convert.h gltf/mr_gltf_scene.h
 
-.PHONY: all check asan fuzz fuzz-targets demo bench \
+.PHONY: all check asan fuzz fuzz-targets faults demo bench \
         analyses paper evaluation evaluation-gltf evaluation-hardcases evaluation-svbrdf \
         evaluation-viewers dataset train objectives deps install clean
 # Keep test objects between runs (they are intermediate files of the test binaries).
@@ -176,9 +179,19 @@ $(LIB): $(LIB_OBJ)
 # Programs link with the C++ driver only when the library holds C++ objects (the glTF shim).
 LINK := $(if $(strip $(LIB_CXX_SRC)),$(CXX),$(CC))
 
-$(BUILD)/bin/matremap: $(CLI_OBJ) $(LIB)
+# FAULTS=1 (make faults): the tool is linked with the fault injector, whose wrappers GNU ld's --wrap puts between
+# the project's own objects and these functions (tests/fault_inject.c says why and how); the one symbol exported
+# lets fault_inject_new.cpp recognise its caller (nlohmann/json's destructor) with dladdr.
+FAULT_OBJ  := $(if $(FAULTS),$(BUILD)/obj/tests/fault_inject.o $(BUILD)/obj/tests/fault_inject_new.o)
+FAULT_WRAP := main malloc calloc realloc strdup _Znwm _Znam _ZnwmRKSt9nothrow_t _ZnamRKSt9nothrow_t \
+              fopen open write fwrite fputs fputc putc fprintf vfprintf fflush fclose fsync ftruncate rename mkdir
+ifneq ($(FAULTS),)
+FAULT_LDFLAGS := -Wl,--export-dynamic-symbol='*json_value7destroy*' $(foreach f,$(FAULT_WRAP),-Wl,--wrap=$(f))
+endif
+
+$(BUILD)/bin/matremap: $(CLI_OBJ) $(LIB) $(FAULT_OBJ)
 	@mkdir -p $(dir $@)
-	$(LINK) $(ALL_LDFLAGS) $(CLI_OBJ) $(LIB) $(ALL_LDLIBS) -o $@
+	$(LINK) $(ALL_LDFLAGS) $(FAULT_LDFLAGS) $(CLI_OBJ) $(FAULT_OBJ) $(LIB) $(ALL_LDLIBS) -o $@
 
 $(TOOL_LINKS): $(BUILD)/bin/matremap
 	ln -sfn matremap $@
@@ -225,6 +238,15 @@ $(BUILD)/obj/tests/fuzz/libfuzzer_%.o: tests/fuzz/fuzz_%.c
 $(BUILD)/bin/fuzz_%: $(BUILD)/obj/tests/fuzz/libfuzzer_%.o $(BUILD)/obj/tests/fuzz/fuzz_support.o $(CLI_LIB_OBJ) $(LIB)
 	@mkdir -p $(dir $@)
 	$(LINK) $(ALL_LDFLAGS) -fsanitize=fuzzer $^ $(ALL_LDLIBS) -o $@
+
+# The fault build is the ASan + UBSan build of make asan with the injector linked in; LeakSanitizer is on (ASan's
+# default on Linux). FAULT_STEP=k: every k-th N only (a quick pass), FAULT_ONLY=NAME: one command of the driver.
+FAULT_STEP ?= 1
+FAULT_ONLY ?=
+faults:
+	$(MAKE) BUILD=build/faults FAULTS=1 CFLAGS="-O1 -g -fno-omit-frame-pointer" \
+	    CXXFLAGS="-O1 -g -fno-omit-frame-pointer" SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" all
+	scripts/faults.sh build/faults $(FAULT_STEP) $(FAULT_ONLY)
 
 demo: all
 	scripts/demo.sh $(BUILD)

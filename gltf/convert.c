@@ -497,6 +497,7 @@ static mr_status convert_texels(const conversion *cv, const sources *src, mr_ima
 #pragma omp parallel num_threads(team) if (team > 1)
     {
         band_work w;
+        memset(&w, 0, sizeof w); // freed below even when an earlier failure kept it from being allocated
         mr_status mine = status == MR_OK ? band_work_alloc(cv->kind, (size_t)band_rows * (size_t)width, &w)
                                          : MR_ERR_NOMEM;
         mr_gltf_material_report counts;

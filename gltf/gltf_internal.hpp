@@ -33,6 +33,7 @@ struct mr_gltf {
     std::string original_text;
     nlohmann::json original;
     bool original_parsed = false;
+    ~mr_gltf(); // util.cpp: takes `original` apart without allocating (mr_gltf_internal::release_json)
 };
 
 namespace mr_gltf_internal {
@@ -106,6 +107,11 @@ mr_status validate_materials(const mr_gltf *g, const char *text, const json_span
 // The asset's original JSON (struct mr_gltf), parsed from original_text on the first call; null if the text is
 // not a JSON object. Buffers' and images' "uri" are dropped: their payloads are written from the model.
 nlohmann::json &original_json(mr_gltf *g);
+
+// Empty a JSON value without allocating, leaving null. nlohmann/json's destructor moves the children of an array
+// or object onto a std::vector first (so that deep documents are not destroyed recursively), and a std::bad_alloc
+// from a destructor terminates the program: an asset freed after running out of memory must not need memory.
+void release_json(nlohmann::json &j) noexcept;
 
 } // namespace mr_gltf_internal
 

@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -276,6 +277,7 @@ struct pending_file {
     std::string source;              // real path of the file these bytes came from, "" if none
     std::string target;              // full path
     bool skip = false;               // the target is this resource's own unchanged source
+    bool created = false;            // written by this save where no file was: removed if the save fails
 };
 
 std::string with_suffix(const std::string &rel, int n) {
@@ -294,9 +296,10 @@ mr_status make_dirs(const std::string &dir, std::vector<std::string> *created) {
     }
     mr_status s = make_dirs(dir_of(dir), created);
     if (s != MR_OK) return s;
+    std::string made = dir; // copied before mkdir: recording it after cannot fail (the caller reserved the room)
     if (mkdir(dir.c_str(), 0777) != 0 && errno != EEXIST)
         return mr_fail(MR_ERR_IO, "output directory '%s': cannot create: %s", dir.c_str(), strerror(errno));
-    created->push_back(dir);
+    created->push_back(std::move(made));
     return MR_OK;
 }
 
@@ -507,23 +510,44 @@ mr_status save_impl(mr_gltf *g, const char *path_c) {
     if (binary) main_bytes = make_glb(json_text, glb_bin);
     else main_bytes.assign(json_text.begin(), json_text.end());
 
-    // Write the resources, then the main file; on failure remove what this call created.
-    std::vector<std::string> created_files, created_dirs;
+    // Write the resources, then the main file; on failure, a status or an exception (out of memory), remove what
+    // this call created. The record of it allocates nothing once writing has begun (flags in `files`, the folders'
+    // room reserved: at most one per '/' of the targets), so the clean-up knows everything it must remove.
+    std::vector<std::string> created_dirs;
+    size_t depth = 0;
+    for (const pending_file &f : files)
+        depth += (size_t)std::count(f.target.begin(), f.target.end(), '/');
+    created_dirs.reserve(depth);
+    auto clean_up = [&files, &created_dirs]() {
+        for (const pending_file &f : files)
+            if (f.created)
+                unlink(f.target.c_str());
+        for (auto it = created_dirs.rbegin(); it != created_dirs.rend(); ++it)
+            rmdir(it->c_str());
+    };
     mr_status status = MR_OK;
-    for (const pending_file &f : files) {
-        if (f.skip) continue;
-        status = make_dirs(dir_of(f.target), &created_dirs);
-        if (status != MR_OK) break;
-        struct stat st;
-        bool existed = stat(f.target.c_str(), &st) == 0;
-        status = mr_atomic_write_bytes(f.target.c_str(), f.bytes->data(), f.bytes->size());
-        if (status != MR_OK) break;
-        if (!existed) created_files.push_back(f.target);
+    try {
+        for (pending_file &f : files) {
+            if (f.skip)
+                continue;
+            status = make_dirs(dir_of(f.target), &created_dirs);
+            if (status != MR_OK)
+                break;
+            struct stat st;
+            bool existed = stat(f.target.c_str(), &st) == 0;
+            status = mr_atomic_write_bytes(f.target.c_str(), f.bytes->data(), f.bytes->size());
+            if (status != MR_OK)
+                break;
+            f.created = !existed;
+        }
+        if (status == MR_OK)
+            status = mr_atomic_write_bytes(out_path.c_str(), main_bytes.data(), main_bytes.size());
+    } catch (...) {
+        clean_up();
+        throw;
     }
-    if (status == MR_OK) status = mr_atomic_write_bytes(out_path.c_str(), main_bytes.data(), main_bytes.size());
     if (status != MR_OK) {
-        for (const auto &f : created_files) unlink(f.c_str());
-        for (auto it = created_dirs.rbegin(); it != created_dirs.rend(); ++it) rmdir(it->c_str());
+        clean_up();
         return mr_fail_context(status, "glTF output '%s'", out_path.c_str());
     }
     return MR_OK;
@@ -585,6 +609,9 @@ mr_status load_impl(const char *path_c, mr_gltf **out) {
         return mr_fail(MR_ERR_FORMAT, "glTF '%s': malformed (tinygltf threw: %s)", path.c_str(), e.what());
     }
     if (!ok) {
+        // tinygltf turns exceptions into its error text, std::bad_alloc included: out of memory is not bad input.
+        if (err.find("bad_alloc") != std::string::npos)
+            return mr_fail(MR_ERR_NOMEM, "glTF '%s': out of memory", path.c_str());
         // A buffer that could not be read: buffers are parsed first, and appended one by one, so the one that
         // failed is the next one.
         const size_t buffer = g->model.buffers.size();

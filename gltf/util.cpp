@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <iterator>
 #include <set>
 #include <sstream>
 
@@ -220,4 +221,20 @@ nlohmann::json &original_json(mr_gltf *g) {
     return g->original;
 }
 
+// Leaf first: the last element of the deepest non-empty container on the path of last elements is a scalar or an
+// empty container, whose destruction allocates nothing; erase it and start again from the top. O(size x depth),
+// no recursion, no allocation.
+void release_json(nlohmann::json &j) noexcept {
+    auto nonempty = [](const nlohmann::json &v) { return (v.is_array() || v.is_object()) && !v.empty(); };
+    while (nonempty(j)) {
+        nlohmann::json *p = &j;
+        while (nonempty(p->back()))
+            p = &p->back();
+        p->erase(std::prev(p->end()));
+    }
+    j = nullptr;
+}
+
 } // namespace mr_gltf_internal
+
+mr_gltf::~mr_gltf() { mr_gltf_internal::release_json(original); }

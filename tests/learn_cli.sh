@@ -44,6 +44,16 @@ check "the cross-section data is written" test -s "$tmp/plots/rows.csv" -a -s "$
 if command -v gnuplot >/dev/null; then
     check "the cross sections are plotted" grep -q "<svg" "$tmp/plots/specular.svg"
 fi
+# The plots are committed with the transform: when they cannot be written, no transform is left either.
+touch "$tmp/plainfile"
+expect "learn: --plots under a file" 2 "plainfile/sub" -- \
+    "$bin" learn "$tmp/wg.csv" -o "$tmp/np.mrt" --plots "$tmp/plainfile/sub"
+check "... and writes no transform" test ! -e "$tmp/np.mrt"
+mkdir -p "$tmp/p2/rows.csv"
+expect "learn: a plot file that is a folder" 2 "rows.csv" -- \
+    "$bin" learn "$tmp/wg.csv" -o "$tmp/np.mrt" --plots "$tmp/p2"
+check "... removes the transform it had written and leaves no temporary file" \
+    test ! -e "$tmp/np.mrt" -a -z "$(ls -A "$tmp/p2" | grep -v '^rows.csv$')"
 "$bin" learn "$tmp/wg.csv" -o "$tmp/wg2.mrt" >/dev/null
 check "learning is reproducible byte for byte" cmp -s "$tmp/wg.mrt" "$tmp/wg2.mrt"
 expect "learn --json" 0 '"validation_rmse": \{"alpha": [0-9]' -- "$bin" learn "$tmp/ga.csv" -o "$tmp/ga.mrt" --json

@@ -79,6 +79,10 @@ expect "train: --form other" 1 "--form 'other'" -- "$bin" train "$tmp/on.csv" -o
 expect "train --json" 0 '"best_validation_loss": [0-9]' -- \
     "$bin" train "$tmp/on.csv" -o "$tmp/d.mlp" --hidden 4 --epochs 3 --json --loss-curve "$tmp/curve"
 check "--loss-curve PREFIX" test -s "$tmp/curve.csv"
+# The loss curve is committed with the network: when it cannot be written, no network is left either.
+expect "train: a loss curve in a missing folder" 2 "nodir/curve.csv" -- \
+    "$bin" train "$tmp/on.csv" -o "$tmp/e.mlp" --hidden 4 --epochs 3 --loss-curve "$tmp/nodir/curve"
+check "... and writes no network" test ! -e "$tmp/e.mlp"
 
 check "the shipped network is 6 x 300 x 4" bash -c \
     "grep -q '^n_in 6$' $root/data/spec2metal.mlp && grep -q '^n_hidden 300$' $root/data/spec2metal.mlp && grep -q '^n_out 4$' $root/data/spec2metal.mlp"

@@ -23,7 +23,11 @@ int cli_exit_code(mr_status status) {
 
 int cli_fail(const char *command, mr_status status) {
     const char *message = mr_last_error();
-    fprintf(stderr, "matremap %s: error: %s\n", command, message[0] ? message : mr_status_str(status));
+    // A status the front end made itself (after mr_clear_error) has no message: out of memory is said in words.
+    fprintf(stderr, "matremap %s: error: %s\n", command,
+            message[0]               ? message
+            : status == MR_ERR_NOMEM ? "out of memory"
+                                     : mr_status_str(status));
     return cli_exit_code(status);
 }
 

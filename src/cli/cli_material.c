@@ -16,7 +16,8 @@ typedef struct map_assignment {
     int channel;       /* -1: none given */
 } map_assignment;
 
-/* Split "name=@FILE[:c]" into map's name, path and channel; returns 0 (after a usage error) if malformed. */
+/* Split "name=@FILE[:c]" into map's name, path and channel; returns a CLI exit code (CLI_EXIT_USAGE after a usage
+ * error if malformed, CLI_EXIT_INTERNAL when out of memory). */
 static int parse_map_assignment(const char *command, const char *assignment, map_assignment *map) {
     const char *eq = strchr(assignment, '=');
     size_t name_length = (size_t)(eq - assignment);
@@ -32,21 +33,19 @@ static int parse_map_assignment(const char *command, const char *assignment, map
             file_length -= 2;
         }
     }
-    if (name_length == 0 || file_length == 0) {
-        cli_usage_error(command, "'%s': expected name=@FILE or name=@FILE:r|g|b|a", assignment);
-        return 0;
-    }
+    if (name_length == 0 || file_length == 0)
+        return cli_usage_error(command, "'%s': expected name=@FILE or name=@FILE:r|g|b|a", assignment);
     map->name = malloc(name_length + 1);
     map->path = malloc(file_length + 1);
-    if (map->name == NULL || map->path == NULL) {
-        cli_usage_error(command, "out of memory");
-        return 0;
+    if (map->name == NULL || map->path == NULL) { // not a usage error: the caller frees what was allocated
+        fprintf(stderr, "matremap %s: error: out of memory for '%s'\n", command, assignment);
+        return CLI_EXIT_INTERNAL;
     }
     memcpy(map->name, assignment, name_length);
     map->name[name_length] = '\0';
     memcpy(map->path, file, file_length);
     map->path[file_length] = '\0';
-    return 1;
+    return CLI_EXIT_OK;
 }
 
 /* Read one map the way its parameter needs it and bind it to m (which then owns the image); returns a CLI exit
@@ -100,7 +99,9 @@ static int assign(const char *command, mr_material *m, const char *assignment) {
         return status == MR_OK ? CLI_EXIT_OK : cli_fail(command, status);
     }
     map_assignment map = {0};
-    int code = parse_map_assignment(command, assignment, &map) ? load_map(command, m, &map) : CLI_EXIT_USAGE;
+    int code = parse_map_assignment(command, assignment, &map);
+    if (code == CLI_EXIT_OK)
+        code = load_map(command, m, &map);
     free(map.name);
     free(map.path);
     return code;

@@ -426,7 +426,10 @@ static int compare(pair *texels, size_t n, const char **names, const mr_image *c
     mr_wf_metal *answers = malloc(n * sizeof *answers);
     float *dif = malloc(n * 3 * sizeof *dif), *spe = malloc(n * 3 * sizeof *spe);
     float *alb = malloc(n * 3 * sizeof *alb), *met = malloc(n * sizeof *met);
-    if (answers == NULL || dif == NULL || spe == NULL || alb == NULL || met == NULL) status = MR_ERR_NOMEM;
+    if (answers == NULL || dif == NULL || spe == NULL || alb == NULL || met == NULL) {
+        mr_clear_error(); // cli_fail then says "out of memory"
+        status = MR_ERR_NOMEM;
+    }
     for (size_t i = 0; status == MR_OK && i < n; i++)
         for (int c = 0; c < 3; c++) {
             dif[3 * i + c] = (float)texels[i].in.diffuse[c];
@@ -437,6 +440,7 @@ static int compare(pair *texels, size_t n, const char **names, const mr_image *c
         column *col = &cols[ncol];
         col->ssim = malloc(n * sizeof *col->ssim);
         if (col->ssim == NULL) {
+            mr_clear_error();
             status = MR_ERR_NOMEM;
             break;
         }

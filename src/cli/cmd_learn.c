@@ -113,37 +113,54 @@ static double slot_of(const mr_brdf_model *m, const mr_learned_slot *s, const do
 }
 
 /* The learned target at source roughness r and specular s (every other source value from `base_row`). */
-static void learned_at(const mr_learned *t, const plot_axes *a, const double *base_row, double r, double s,
-                       double *rough, double *spec) {
+static mr_status learned_at(const mr_learned *t, const plot_axes *a, const double *base_row, double r, double s,
+                            double *rough, double *spec) {
     double v[MR_BRDF_MAX_VALUES], w[MR_BRDF_MAX_VALUES];
     memcpy(v, base_row, (size_t)mr_brdf_value_count(t->source) * sizeof *v);
     const mr_learned_slot *fr = &t->features[a->rough_feature], *fs = &t->features[a->spec_feature];
     v[mr_brdf_param_offset(t->source, fr->param)] = r;
     const int sat = mr_brdf_param_offset(t->source, fs->param);
     for (int c = 0; c < (fs->kind == MR_LEARNED_GREY ? 3 : 1); c++) v[sat + c] = s;
-    mr_learned_apply(t, v, w, NULL);
+    mr_status status = mr_learned_apply_batch(t, 1, v, w, NULL); // (mr_learned_apply would hide a failure)
+    if (status != MR_OK)
+        return status;
     *rough = slot_of(t->target, &t->outputs[a->rough_output], w);
     *spec = slot_of(t->target, &t->outputs[a->spec_output], w);
+    return MR_OK;
 }
 
-static int write_plots(const mr_learned *t, const mr_sweep_table *tab, const char *dir, const char *title) {
+/* The plots' files, prepared as temporary files (cli.h's protocol) for the caller to commit with the transform:
+ * rows.csv, curves.csv, roughness.svg, specular.svg (the SVGs inactive when gnuplot is missing or fails). */
+enum { PLOT_ROWS, PLOT_CURVES, PLOT_ROUGHNESS, PLOT_SPECULAR, PLOT_FILES };
+
+/* Write the plots into files[] (zero-initialised by the caller; their targets are paths[], which must outlive them);
+ * *created is 1 when DIR was made here (the caller removes it again if the run fails). Returns a CLI exit code: after
+ * a failure the error is printed and every temporary file removed. */
+static int prepare_plots(const mr_learned *t, const mr_sweep_table *tab, const char *dir, const char *title,
+                         mr_atomic_file files[PLOT_FILES], char paths[PLOT_FILES][4096], int *created) {
     plot_axes a;
     if (!find_axes(t, &a)) {
         fprintf(stderr, "matremap learn: note: no plots: the transform has no roughness and specular pair to cut "
                         "through\n");
-        return 1;
+        return CLI_EXIT_OK;
     }
-    if (mkdir(dir, 0777) != 0 && errno != EEXIST) {
+    if (mkdir(dir, 0777) == 0) {
+        *created = 1;
+    } else if (errno != EEXIST) {
         fprintf(stderr, "matremap learn: error: --plots '%s': cannot create the folder: %s\n", dir, strerror(errno));
-        return 0;
+        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
     }
-    char path[4096];
-    snprintf(path, sizeof path, "%s/rows.csv", dir);
-    FILE *f = fopen(path, "w");
-    if (f == NULL) {
-        fprintf(stderr, "matremap learn: error: cannot write '%s': %s\n", path, strerror(errno));
-        return 0;
+    static const char *const names[PLOT_FILES] = {"rows.csv", "curves.csv", "roughness.svg", "specular.svg"};
+    for (int k = 0; k < PLOT_FILES; k++) {
+        int length = snprintf(paths[k], sizeof paths[k], "%s/%s", dir, names[k]);
+        if (length < 0 || (size_t)length >= sizeof paths[k]) {
+            fprintf(stderr, "matremap learn: error: --plots '%s': the name is too long\n", dir);
+            return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
+        }
     }
+    FILE *f = cli_output_open(COMMAND, paths[PLOT_ROWS], &files[PLOT_ROWS]);
+    if (f == NULL)
+        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
     const mr_learned_slot *fr = &t->features[a.rough_feature], *fs = &t->features[a.spec_feature];
     const mr_learned_slot *or_ = &t->outputs[a.rough_output], *os = &t->outputs[a.spec_output];
     fprintf(f, "source_roughness,source_specular,target_roughness,target_specular\n");
@@ -156,57 +173,84 @@ static int write_plots(const mr_learned *t, const mr_sweep_table *tab, const cha
         fprintf(f, "%.9g,%.9g,%.9g,%.9g\n", slot_of(t->source, fr, sv), s, slot_of(t->target, or_, tv),
                 slot_of(t->target, os, tv));
     }
-    fclose(f);
+    if (!cli_output_close(COMMAND, f, &files[PLOT_ROWS]))
+        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
     // Learned curves: roughness over the domain (specular at the domain's middle); specular lines at 6 roughnesses
     // across the domain, drawn to 1.5 x the largest specular of the rows (what lies beyond is extrapolation).
-    snprintf(path, sizeof path, "%s/curves.csv", dir);
-    f = fopen(path, "w");
+    f = cli_output_open(COMMAND, paths[PLOT_CURVES], &files[PLOT_CURVES]);
     if (f == NULL) {
-        fprintf(stderr, "matremap learn: error: cannot write '%s': %s\n", path, strerror(errno));
-        return 0;
+        cli_outputs_abort(files, PLOT_FILES);
+        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
     }
     const double *base_row = tab->source_values;
     const double rlo = fr->min, rhi = fr->max, smid = 0.5 * (fs->min + fs->max);
+    mr_status status = MR_OK;
     fprintf(f, "# roughness curve\nsource_roughness,target_roughness\n");
-    for (int k = 0; k <= 200; k++) {
+    for (int k = 0; k <= 200 && status == MR_OK; k++) {
         const double r = rlo + (rhi - rlo) * k / 200.0;
         double tr, ts;
-        learned_at(t, &a, base_row, r, smid, &tr, &ts);
+        status = learned_at(t, &a, base_row, r, smid, &tr, &ts);
         fprintf(f, "%.9g,%.9g\n", r, tr);
     }
-    for (int line = 0; line < 6; line++) {
+    for (int line = 0; line < 6 && status == MR_OK; line++) {
         const double r = rlo * pow(rhi / rlo, line / 5.0);
         fprintf(f, "\n\n# specular line at roughness %.4g\nsource_specular,target_specular,roughness\n", r);
-        for (int k = 0; k <= 50; k++) {
+        for (int k = 0; k <= 50 && status == MR_OK; k++) {
             const double s = 1.5 * fmax(smax, 1e-6) * k / 50.0;
             double tr, ts;
-            learned_at(t, &a, base_row, r, s, &tr, &ts);
+            status = learned_at(t, &a, base_row, r, s, &tr, &ts);
             fprintf(f, "%.9g,%.9g,%.9g\n", s, ts, r);
         }
     }
-    fclose(f);
+    if (status != MR_OK) {
+        fclose(f);
+        cli_outputs_abort(files, PLOT_FILES);
+        return cli_fail(COMMAND, status);
+    }
+    if (!cli_output_close(COMMAND, f, &files[PLOT_CURVES])) {
+        cli_outputs_abort(files, PLOT_FILES);
+        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
+    }
+    // gnuplot draws into the SVGs' temporary files from the CSVs' temporary files.
+    for (int k = PLOT_ROUGHNESS; k <= PLOT_SPECULAR; k++) {
+        status = mr_atomic_begin(paths[k], &files[k]);
+        if (status != MR_OK) {
+            cli_outputs_abort(files, PLOT_FILES);
+            return cli_fail(COMMAND, status);
+        }
+    }
     FILE *plot = popen("gnuplot 2>/dev/null", "w");
-    if (plot == NULL) return 1;
     const char *sr = t->source->params[fr->param].name, *ss = t->source->params[fs->param].name;
     const char *tr = t->target->params[or_->param].name, *ts = t->target->params[os->param].name;
-    fprintf(plot,
-            "set terminal svg size 720,520 dynamic font 'Helvetica,12' background rgb 'white'\n"
-            "set datafile separator ','\nset grid\nset key top left\n"
-            "set output '%s/roughness.svg'\nset title '%s: roughness' noenhanced\n"
-            "set xlabel '%s %s' noenhanced\nset ylabel '%s %s' noenhanced\n"
-            "plot '%s/rows.csv' using 1:3 skip 1 with points pt 7 ps 0.5 lc rgb '#4477aa' title 'sweep rows', "
-            "'%s/curves.csv' index 0 using 1:2 skip 1 with lines lw 2 lc rgb '#cc3311' title '%s'\n"
-            "set output '%s/specular.svg'\nset title '%s: specular, coloured by source roughness' noenhanced\n"
-            "set xlabel '%s %s' noenhanced\nset ylabel '%s %s' noenhanced\n"
-            "set palette rgbformulae 33,13,10\nset cbrange [%.9g:%.9g]\nset logscale cb\nset cblabel '%s %s' "
-            "noenhanced\n"
-            "plot '%s/rows.csv' using 2:4:1 skip 1 with points pt 7 ps 0.5 lc palette title 'sweep rows', "
-            "for [i=1:6] '%s/curves.csv' index i using 1:2:3 skip 1 with lines lw 1.5 lc palette notitle\n",
-            dir, title, t->source->name, sr, t->target->name, tr, dir, dir, mr_learn_method_name(t->method), dir,
-            title, t->source->name, ss, t->target->name, ts, rlo, rhi, t->source->name, sr, dir, dir);
-    if (pclose(plot) != 0)
+    const char *rows = files[PLOT_ROWS].tmp_path, *curves = files[PLOT_CURVES].tmp_path;
+    if (plot != NULL)
+        fprintf(plot,
+                "set terminal svg size 720,520 dynamic font 'Helvetica,12' background rgb 'white'\n"
+                "set datafile separator ','\nset grid\nset key top left\n"
+                "set output '%s'\nset title '%s: roughness' noenhanced\n"
+                "set xlabel '%s %s' noenhanced\nset ylabel '%s %s' noenhanced\n"
+                "plot '%s' using 1:3 skip 1 with points pt 7 ps 0.5 lc rgb '#4477aa' title 'sweep rows', "
+                "'%s' index 0 using 1:2 skip 1 with lines lw 2 lc rgb '#cc3311' title '%s'\n"
+                "set output '%s'\nset title '%s: specular, coloured by source roughness' noenhanced\n"
+                "set xlabel '%s %s' noenhanced\nset ylabel '%s %s' noenhanced\n"
+                "set palette rgbformulae 33,13,10\nset cbrange [%.9g:%.9g]\nset logscale cb\nset cblabel '%s %s' "
+                "noenhanced\n"
+                "plot '%s' using 2:4:1 skip 1 with points pt 7 ps 0.5 lc palette title 'sweep rows', "
+                "for [i=1:6] '%s' index i using 1:2:3 skip 1 with lines lw 1.5 lc palette notitle\n",
+                files[PLOT_ROUGHNESS].tmp_path, title, t->source->name, sr, t->target->name, tr, rows, curves,
+                mr_learn_method_name(t->method), files[PLOT_SPECULAR].tmp_path, title, t->source->name, ss,
+                t->target->name, ts, rlo, rhi, t->source->name, sr, rows, curves);
+    int drawn = 0;
+    if (!cli_gnuplot_close(COMMAND, plot, &drawn)) {
+        cli_outputs_abort(files, PLOT_FILES);
+        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
+    }
+    if (!drawn) {
+        mr_atomic_abort(&files[PLOT_ROUGHNESS]);
+        mr_atomic_abort(&files[PLOT_SPECULAR]);
         fprintf(stderr, "matremap learn: note: no SVG plots (gnuplot missing or failed); the data is in %s\n", dir);
-    return 1;
+    }
+    return CLI_EXIT_OK;
 }
 
 /* ---- the command ------------------------------------------------------------------------------------------ */
@@ -382,21 +426,32 @@ int cmd_learn(int argc, char **argv) {
     mr_learned *t = NULL;
     status = mr_learn(&tab, &o, &t);
     if (ps.draw) fprintf(stderr, "\r\033[K");
-    if (status == MR_OK) status = mr_learned_write(t, output);
-    if (status != MR_OK) {
-        mr_sweep_table_free(&tab);
-        mr_learned_free(t);
-        return cli_fail(COMMAND, status);
-    }
-    int ok = 1;
-    if (plots != NULL) {
+    // The plots are prepared first and committed after the transform, so a failure leaves neither.
+    mr_atomic_file plot_files[PLOT_FILES] = {{{0}, NULL, 0}};
+    char plot_paths[PLOT_FILES][4096];
+    int code = CLI_EXIT_OK, created_dir = 0;
+    if (status == MR_OK && plots != NULL) {
         char title[256];
         snprintf(title, sizeof title, "%s -> %s (%s)", t->source->name, t->target->name,
                  mr_learn_method_name(t->method));
-        ok = write_plots(t, &tab, plots, title);
+        code = prepare_plots(t, &tab, plots, title, plot_files, plot_paths, &created_dir);
+    }
+    if (status == MR_OK && code == CLI_EXIT_OK) {
+        status = mr_learned_write(t, output);
+        if (status != MR_OK)
+            cli_outputs_abort(plot_files, PLOT_FILES);
+    }
+    if (status == MR_OK && code == CLI_EXIT_OK && !cli_outputs_commit(COMMAND, plot_files, PLOT_FILES, &output, 1))
+        code = CLI_EXIT_BAD_INPUT;
+    if (status != MR_OK || code != CLI_EXIT_OK) {
+        if (created_dir)
+            rmdir(plots); // only if empty: nothing of this run is left in it
+        mr_sweep_table_free(&tab);
+        mr_learned_free(t);
+        return status != MR_OK ? cli_fail(COMMAND, status) : code;
     }
     print_summary(t, output, cli_now() - started, json);
     mr_sweep_table_free(&tab);
     mr_learned_free(t);
-    return ok ? CLI_EXIT_OK : CLI_EXIT_BAD_INPUT;
+    return CLI_EXIT_OK;
 }

@@ -103,18 +103,18 @@ static mr_status write_pictures(const char *prefix, const mr_render_plan *plan, 
     mr_status status = mr_render(plan, target, values, MR_COMPONENT_FULL, &target_image);
     if (status == MR_OK) status = mr_ssim(source, target_image, NULL, &ssim, &map);
     if (status == MR_OK) status = mr_ssim_map_visualise(map, 0.0, &picture);
-    if (status == MR_OK) {
-        snprintf(path, sizeof path, "%s%s", prefix, picture_suffixes[0]);
-        status = mr_img_write(path, source, NULL);
+    // The three belong together: when one cannot be written, those written before it are removed.
+    const mr_image *pictures[3] = {source, target_image, picture};
+    int written = 0;
+    for (; status == MR_OK && written < 3; written++) {
+        snprintf(path, sizeof path, "%s%s", prefix, picture_suffixes[written]);
+        status = mr_img_write(path, pictures[written], NULL);
     }
-    if (status == MR_OK) {
-        snprintf(path, sizeof path, "%s%s", prefix, picture_suffixes[1]);
-        status = mr_img_write(path, target_image, NULL);
-    }
-    if (status == MR_OK) {
-        snprintf(path, sizeof path, "%s%s", prefix, picture_suffixes[2]);
-        status = mr_img_write(path, picture, NULL);
-    }
+    if (status != MR_OK)
+        for (int k = 0; k < written - 1; k++) {
+            snprintf(path, sizeof path, "%s%s", prefix, picture_suffixes[k]);
+            remove(path);
+        }
     mr_image_free(target_image);
     mr_image_free(map);
     mr_image_free(picture);

@@ -481,6 +481,10 @@ int cmd_sweep(int argc, char **argv) {
     }
 
     char *command = command_line(argc, argv, "matremap");
+    if (command == NULL) { // the file's header records it: no sweep without it
+        fprintf(stderr, "matremap sweep: error: out of memory for the command line\n");
+        return CLI_EXIT_INTERNAL;
+    }
     progress_bar bar = {cli_now(), 0.0, 0};
     mr_sweep_options opts = {0};
     opts.resume = a.resume;

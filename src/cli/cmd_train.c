@@ -77,38 +77,52 @@ static int record_epoch(const mr_mlp_epoch *epoch, void *user) {
     return 0;
 }
 
-/* PREFIX.csv and, if gnuplot runs, PREFIX.svg. Returns 0 and prints why on failure of the CSV. */
-static int write_curve(const curve *c, const char *prefix, const char *title) {
-    char path[4096];
-    int length = snprintf(path, sizeof path, "%s.csv", prefix);
-    if (length < 0 || (size_t)length >= sizeof path) {
+/* PREFIX.csv and, if gnuplot runs, PREFIX.svg, prepared as the temporary files files[0] and files[1] (zero-initialised
+ * by the caller; their targets are paths[0] and paths[1], which must outlive them), which the caller commits with the
+ * network (cli.h). Returns 0 after printing why, every temporary file removed. */
+static int prepare_curve(const curve *c, const char *prefix, const char *title, mr_atomic_file files[2],
+                         char paths[2][4096]) {
+    char *path = paths[0], *svg = paths[1];
+    int length = snprintf(path, sizeof paths[0], "%s.csv", prefix);
+    int svg_length = snprintf(svg, sizeof paths[1], "%s.svg", prefix);
+    if (length < 0 || (size_t)length >= sizeof paths[0] || svg_length < 0 || (size_t)svg_length >= sizeof paths[1]) {
         fprintf(stderr, "matremap train: error: --loss-curve '%s': the name is too long\n", prefix);
         return 0;
     }
-    FILE *f = fopen(path, "w");
-    if (f == NULL) {
-        fprintf(stderr, "matremap train: error: cannot write '%s': %s\n", path, strerror(errno));
+    FILE *f = cli_output_open("train", path, &files[0]);
+    if (f == NULL)
         return 0;
-    }
     fprintf(f, "epoch,train_loss,validation_loss,best_epoch\n");
     for (int i = 0; i < c->count; i++)
         fprintf(f, "%d,%.9g,%.9g,%d\n", c->epochs[i].epoch, c->epochs[i].train_loss, c->epochs[i].validation_loss,
                 c->epochs[i].best_epoch);
-    if (fclose(f) != 0) {
-        fprintf(stderr, "matremap train: error: cannot write '%s': %s\n", path, strerror(errno));
+    if (!cli_output_close("train", f, &files[0]))
+        return 0;
+    // The plot is a convenience: without gnuplot the CSV is the curve. gnuplot draws into the SVG's temporary file.
+    mr_status status = mr_atomic_begin(svg, &files[1]);
+    if (status != MR_OK) {
+        cli_outputs_abort(files, 2);
+        cli_fail("train", status);
         return 0;
     }
-    // The plot is a convenience: without gnuplot the CSV is the curve.
     FILE *plot = popen("gnuplot 2>/dev/null", "w");
-    if (plot == NULL) return 1;
-    fprintf(plot, "set terminal svg size 800,480 dynamic font 'Helvetica,12' background rgb 'white'\n"
-                  "set output '%s.svg'\nset datafile separator ','\nset logscale y\nset grid\n"
-                  "set xlabel 'epoch'\nset ylabel 'loss (MSE of normalised outputs)'\nset title '%s' noenhanced\n"
-                  "plot '%s' using 1:2 skip 1 with lines lw 2 title 'train', "
-                  "'' using 1:3 skip 1 with lines lw 2 title 'validation'\n",
-            prefix, title, path);
-    if (pclose(plot) != 0)
+    if (plot != NULL)
+        fprintf(plot,
+                "set terminal svg size 800,480 dynamic font 'Helvetica,12' background rgb 'white'\n"
+                "set output '%s'\nset datafile separator ','\nset logscale y\nset grid\n"
+                "set xlabel 'epoch'\nset ylabel 'loss (MSE of normalised outputs)'\nset title '%s' noenhanced\n"
+                "plot '%s' using 1:2 skip 1 with lines lw 2 title 'train', "
+                "'' using 1:3 skip 1 with lines lw 2 title 'validation'\n",
+                files[1].tmp_path, title, files[0].tmp_path);
+    int drawn = 0;
+    if (!cli_gnuplot_close("train", plot, &drawn)) {
+        cli_outputs_abort(files, 2);
+        return 0;
+    }
+    if (!drawn) {
+        mr_atomic_abort(&files[1]);
         fprintf(stderr, "matremap train: note: no plot (gnuplot missing or failed); the curve is in %s\n", path);
+    }
     return 1;
 }
 
@@ -122,7 +136,11 @@ static mr_status test_methods(const mr_mlp *net, const mr_wf_dataset *test, meth
     size_t n = test->n;
     float *diffuse = malloc(n * 3 * sizeof *diffuse), *specular = malloc(n * 3 * sizeof *specular);
     float *albedo = malloc(n * 3 * sizeof *albedo), *metallic = malloc(n * sizeof *metallic);
-    mr_status status = (diffuse && specular && albedo && metallic) ? MR_OK : MR_ERR_NOMEM;
+    mr_status status = MR_OK;
+    if (!(diffuse && specular && albedo && metallic)) {
+        mr_clear_error(); // cli_fail then says "out of memory"
+        status = MR_ERR_NOMEM;
+    }
     for (size_t i = 0; status == MR_OK && i < n; i++)
         for (int c = 0; c < 3; c++) {
             diffuse[3 * i + c] = test->x[6 * i + c];
@@ -279,20 +297,34 @@ int cmd_train(int argc, char **argv) {
     if (c.draw) fputc('\n', stderr);
     double train_seconds = cli_now() - c.started;
     method_error errors[MAX_FILES][4];
-    if (status == MR_OK && report.stop == MR_MLP_STOP_CALLBACK) status = MR_ERR_NOMEM; // the curve's realloc
+    if (status == MR_OK && report.stop == MR_MLP_STOP_CALLBACK) { // the curve's realloc
+        mr_clear_error();
+        status = MR_ERR_NOMEM;
+    }
     if (status == MR_OK && residual) snprintf(net->kind, sizeof net->kind, "%s", MR_WF_MLP_RESIDUAL_KIND);
-    if (status == MR_OK) status = mr_mlp_write(net, output);
+    // Nothing is written before every result is in; the loss curve is prepared first and committed after the
+    // network, so a failure leaves none of the outputs.
     for (int t = 0; t < test_count && status == MR_OK; t++) status = test_methods(net, &test[t], errors[t]);
     char title[256];
     snprintf(title, sizeof title, "matremap train: %zu pairs, %d hidden units, seed %llu", data.n,
              net ? net->n_hidden : 0, opts.seed);
-    int curve_ok = status == MR_OK && write_curve(&c, curve_prefix, title);
+    mr_atomic_file curve_files[2] = {{{0}, NULL, 0}, {{0}, NULL, 0}};
+    char curve_paths[2][4096];
+    int curve_ok = status == MR_OK && prepare_curve(&c, curve_prefix, title, curve_files, curve_paths);
+    if (curve_ok) {
+        status = mr_mlp_write(net, output);
+        if (status != MR_OK)
+            cli_outputs_abort(curve_files, 2);
+    }
+    if (status == MR_OK && curve_ok)
+        curve_ok = cli_outputs_commit("train", curve_files, 2, &output, 1);
     free(c.epochs);
     mr_mlp_free(net);
     if (status != MR_OK || !curve_ok) {
         mr_wf_dataset_free(&data);
         for (int t = 0; t < test_count; t++) mr_wf_dataset_free(&test[t]);
-        return status != MR_OK ? cli_fail("train", status) : CLI_EXIT_INTERNAL;
+        // (a curve that cannot be written: prepare_curve or the commit named the file)
+        return status != MR_OK ? cli_fail("train", status) : CLI_EXIT_BAD_INPUT;
     }
     double seconds = cli_now() - started;
     if (json) {

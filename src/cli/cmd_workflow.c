@@ -348,13 +348,14 @@ static int write_outputs(const char *command, const out_options *o, output *outp
     }
     if (first_failed < 0) return CLI_EXIT_OK;
     const struct write_job *failure = &jobs[first_failed];
-    fprintf(stderr, "matremap %s: error: %s\n", command,
-            failure->message[0] ? failure->message : mr_status_str(failure->status));
     for (int k = 0; k < job_count; k++)
         if (jobs[k].status == MR_OK) remove(jobs[k].path);
+    // One line: the failure, and what became of the outputs that were written.
+    fprintf(stderr, "matremap %s: error: %s", command,
+            failure->message[0] ? failure->message : mr_status_str(failure->status));
     if (written > 0)
-        fprintf(stderr, "matremap %s: removed the %d output%s written beside the failure\n", command, written,
-                written == 1 ? "" : "s");
+        fprintf(stderr, " (the %d output%s written beside it removed)", written, written == 1 ? "" : "s");
+    fputc('\n', stderr);
     return cli_exit_code(failure->status);
 }
 

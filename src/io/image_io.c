@@ -324,7 +324,7 @@ static mr_status read_stream(const char *path, const unsigned char *bytes, size_
         // two, at the peak; convert_channels reads each pixel before writing it).
         image = malloc(sizeof *image);
         if (image != NULL) *image = (mr_image){raw.width, raw.height, out_ch, raw.pixels};
-        status = image != NULL ? MR_OK : MR_ERR_NOMEM;
+        status = image != NULL ? MR_OK : mr_fail(MR_ERR_NOMEM, "out of memory");
     } else {
         status = mr_image_create(raw.width, raw.height, out_ch, &image);
     }

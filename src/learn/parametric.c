@@ -17,19 +17,11 @@
 #define SLOPE_INDEPENDENCE 1e-2
 #define GRID 25 /* exponent values per axis, log-spaced over [MR_SLOPE_RATE_MIN, MR_SLOPE_RATE_MAX] */
 
-/* min |A x - b| for A (n x m, row-major, n >= m, m <= MAX_COLUMNS) by Householder QR on copies. Returns 0 when
+/* min |A x - b| for A (n x m, row-major, n >= m, m <= MAX_COLUMNS) by Householder QR in place: a and b are
+ * overwritten (callers pass copies; no allocation here, so a failure can only mean dependence). Returns 0 when
  * a column is (nearly) a combination of the earlier ones: its norm after their reflections is below `independence`
  * of its own, and the solution would rest on a cancellation. *rss gets the residual sum of squares. */
-static int least_squares(const double *a_in, const double *b_in, size_t n, int m, double independence, double *x,
-                         double *rss) {
-    double *a = malloc(n * (size_t)m * sizeof *a), *b = malloc(n * sizeof *b);
-    if (a == NULL || b == NULL) {
-        free(a);
-        free(b);
-        return 0;
-    }
-    memcpy(a, a_in, n * (size_t)m * sizeof *a);
-    memcpy(b, b_in, n * sizeof *b);
+static int least_squares(double *a, double *b, size_t n, int m, double independence, double *x, double *rss) {
     int ok = 1;
     for (int k = 0; k < m && ok; k++) {
         double full = 0.0, norm = 0.0;
@@ -68,8 +60,6 @@ static int least_squares(const double *a_in, const double *b_in, size_t n, int m
         for (size_t i = (size_t)m; i < n; i++) r += b[i] * b[i];
         *rss = r;
     }
-    free(a);
-    free(b);
     return ok;
 }
 
@@ -98,13 +88,15 @@ mr_status mr_fit_polynomial_ex(const double *x, const double *y, size_t n, int d
     mr_status status = check_finite(x, n, "x");
     if (status == MR_OK) status = check_finite(y, n, "y");
     if (status != MR_OK) return status;
-    double *a = malloc(n * (size_t)m * sizeof *a), rss = 0.0;
+    double *a = malloc((n * (size_t)m + n) * sizeof *a), rss = 0.0; // the design, then a copy of y
     if (a == NULL) return mr_fail(MR_ERR_NOMEM, "polynomial fit: out of memory for %zu pairs", n);
+    double *b = a + n * (size_t)m;
+    memcpy(b, y, n * sizeof *b);
     for (size_t i = 0; i < n; i++) // column k holds x^(k + through_origin)
         for (int k = 0; k < m; k++)
             a[i * (size_t)m + (size_t)k] = k > 0 ? a[i * m + k - 1] * x[i] : through_origin ? x[i] : 1.0;
     c[0] = 0.0;
-    const int ok = least_squares(a, y, n, m, POLY_INDEPENDENCE, c + (through_origin != 0), &rss);
+    const int ok = least_squares(a, b, n, m, POLY_INDEPENDENCE, c + (through_origin != 0), &rss);
     free(a);
     if (!ok)
         return mr_fail(MR_ERR_INVALID_ARG, "polynomial fit: the %zu x values do not determine a degree-%d polynomial "
@@ -130,7 +122,8 @@ typedef struct slope_data {
     const double *alpha, *s_src, *s_tgt;
     size_t n;
     int with_inverse;
-    double *design; /* 3n x columns */
+    double *design; /* 3n x columns; least_squares overwrites it, solve_linear refills it */
+    double *rhs;    /* 3n: s_tgt copied for least_squares to overwrite (in the design's allocation) */
 } slope_data;
 
 /* For exponents (c2, c4): the linear coefficients (written into k->c) and the residual sum of squares; +inf when
@@ -149,7 +142,9 @@ static double solve_linear(const slope_data *d, double c2, double c4, mr_specula
         }
     }
     double x[4] = {0, 0, 0, 0}, rss = 0.0;
-    if (!least_squares(d->design, d->s_tgt, 3 * d->n, m, SLOPE_INDEPENDENCE, x, &rss)) return INFINITY;
+    memcpy(d->rhs, d->s_tgt, 3 * d->n * sizeof *d->rhs);
+    if (!least_squares(d->design, d->rhs, 3 * d->n, m, SLOPE_INDEPENDENCE, x, &rss))
+        return INFINITY;
     k->c[0] = x[0];
     k->c[1] = x[1];
     k->c[2] = c2;
@@ -198,8 +193,9 @@ mr_status mr_fit_specular_slope(const double *alpha, const double *s_src, const 
         if (!(alpha[i] > 0.0)) status = mr_fail(MR_ERR_INVALID_ARG, "specular slope fit: alpha[%zu] = %g <= 0", i,
                                                 alpha[i]);
     if (status != MR_OK) return status;
-    slope_data d = {alpha, s_src, s_tgt, n, with_inverse, malloc(3 * n * (size_t)m * sizeof(double))};
+    slope_data d = {alpha, s_src, s_tgt, n, with_inverse, malloc(3 * n * ((size_t)m + 1) * sizeof(double)), NULL};
     if (d.design == NULL) return mr_fail(MR_ERR_NOMEM, "specular slope fit: out of memory for %zu pairs", n);
+    d.rhs = d.design + 3 * n * (size_t)m;
     // The grid, then the best cell refined in each exponent within its grid neighbours.
     double rates[GRID];
     for (int g = 0; g < GRID; g++)

@@ -146,6 +146,8 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
                 break;
             }
             if (strncmp(line, "# command:", 10) != 0) status = append_text(&header_text, &header_length, line);
+            if (status != MR_OK)
+                break; // (the header line's own parse below would overwrite the status)
             if (strncmp(line, "# from: ", 8) == 0) {
                 status = parse_model_line(path, line_number, line + 8, &source, source_fixed);
                 if (source) snprintf(h.from_model, sizeof h.from_model, "%s", source->name);

@@ -413,7 +413,7 @@ static double direct_objective(unsigned n, const double *u, double *grad, void *
 static double local_fit(fit_context *ctx, unsigned n, nlopt_func objective, double *u, const double *steps) {
     nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, n);
     if (opt == NULL) {
-        ctx->failure = MR_ERR_NOMEM;
+        ctx->failure = mr_fail(MR_ERR_NOMEM, "out of memory for the local optimiser");
         return NAN;
     }
     double lower[2 * MAX_SLOTS], upper[2 * MAX_SLOTS];
@@ -478,7 +478,7 @@ static int grid_minima(fit_context *ctx, int points, candidate *starts, int max_
     if (sse == NULL || all == NULL) {
         free(sse);
         free(all);
-        ctx->failure = MR_ERR_NOMEM;
+        ctx->failure = mr_fail(MR_ERR_NOMEM, "out of memory for a grid of %d points", total);
         return 0;
     }
     for (int g = 0; g < total && ctx->failure == MR_OK; g++) {

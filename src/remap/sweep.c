@@ -634,10 +634,16 @@ static mr_status open_file(const mr_sweep_spec *spec, const mr_strbuf *header, i
     if (fstat(f->fd, &st) != 0 || !S_ISREG(st.st_mode))
         return mr_fail(MR_ERR_INVALID_ARG, "sweep file '%s' is not a regular file", f->path);
     mr_status status = mr_text_file_lock(f->fd, f->path, WHAT);
-    if (status != MR_OK) return status;
+    if (status == MR_OK && resume) {
+        f->size = st.st_size;
+        return adopt_file(spec, header, f);
+    }
     f->size = st.st_size;
-    if (!resume) return mr_text_file_append(f->fd, f->path, WHAT, header->text, header->length, &f->size);
-    return adopt_file(spec, header, f);
+    if (status == MR_OK)
+        status = mr_text_file_append(f->fd, f->path, WHAT, header->text, header->length, &f->size);
+    if (status != MR_OK)
+        unlink(f->path); // made here (O_EXCL) and holding no row: an empty file would block a rerun
+    return status;
 }
 
 /* Every sample of the file is in it: rewrite it in index order unless it already is (atomic: temporary +
