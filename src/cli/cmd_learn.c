@@ -132,6 +132,7 @@ static mr_status learned_at(const mr_learned *t, const plot_axes *a, const doubl
 /* The plots' files, prepared as temporary files (cli.h's protocol) for the caller to commit with the transform:
  * rows.csv, curves.csv, roughness.svg, specular.svg (the SVGs inactive when gnuplot is missing or fails). */
 enum { PLOT_ROWS, PLOT_CURVES, PLOT_ROUGHNESS, PLOT_SPECULAR, PLOT_FILES };
+static const char *const plot_names[PLOT_FILES] = {"rows.csv", "curves.csv", "roughness.svg", "specular.svg"};
 
 /* Write the plots into files[] (zero-initialised by the caller; their targets are paths[], which must outlive them);
  * *created is 1 when DIR was made here (the caller removes it again if the run fails). Returns a CLI exit code: after
@@ -150,9 +151,8 @@ static int prepare_plots(const mr_learned *t, const mr_sweep_table *tab, const c
         fprintf(stderr, "matremap learn: error: --plots '%s': cannot create the folder: %s\n", dir, strerror(errno));
         return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
     }
-    static const char *const names[PLOT_FILES] = {"rows.csv", "curves.csv", "roughness.svg", "specular.svg"};
     for (int k = 0; k < PLOT_FILES; k++) {
-        int length = snprintf(paths[k], sizeof paths[k], "%s/%s", dir, names[k]);
+        int length = snprintf(paths[k], sizeof paths[k], "%s/%s", dir, plot_names[k]);
         if (length < 0 || (size_t)length >= sizeof paths[k]) {
             fprintf(stderr, "matremap learn: error: --plots '%s': the name is too long\n", dir);
             return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
@@ -407,10 +407,9 @@ int cmd_learn(int argc, char **argv) {
     cli_io_init(&io, COMMAND);
     for (int i = 0; i < file_count; i++) cli_io_input(&io, files[i], "sweep %s", files[i]);
     cli_io_output(&io, output, NULL);
-    static const char *const plot_files[4] = {"rows.csv", "curves.csv", "roughness.svg", "specular.svg"};
-    for (int k = 0; plots != NULL && k < 4; k++) {
+    for (int k = 0; plots != NULL && k < PLOT_FILES; k++) {
         char path[4096];
-        snprintf(path, sizeof path, "%s/%s", plots, plot_files[k]);
+        snprintf(path, sizeof path, "%s/%s", plots, plot_names[k]);
         cli_io_output(&io, path, "--plots %s", plots);
     }
     int code = cli_io_check(&io);
@@ -429,7 +428,7 @@ int cmd_learn(int argc, char **argv) {
     // The plots are prepared first and committed after the transform, so a failure leaves neither.
     mr_atomic_file plot_files[PLOT_FILES] = {{{0}, NULL, 0}};
     char plot_paths[PLOT_FILES][4096];
-    int code = CLI_EXIT_OK, created_dir = 0;
+    int created_dir = 0;
     if (status == MR_OK && plots != NULL) {
         char title[256];
         snprintf(title, sizeof title, "%s -> %s (%s)", t->source->name, t->target->name,
