@@ -11,10 +11,11 @@
 # number of allocations A and I/O calls W the command makes (fault_inject.c: MR_FAULT_COUNT_FILE). Then for every
 # N in 1..A the N-th allocation fails, once (one-shot) and from there on (persistent, MR_FAULT_PERSIST=1), and the
 # same for N in 1..W and the I/O calls. Each run passes when:
-#   - it ends by itself (no hang: 120 s), with exactly one line on stderr, "matremap ...: error:" naming the
-#     injected cause, and the exit code of that cause (cli.h): 3 and "out of memory" for an allocation, 2 and the
-#     system's "No space left on device" or "Input/output error" for an I/O call (a file that cannot be written);
-#     or with exit 0 and outputs equal to the reference (the failure was legitimately recovered from);
+#   - it ends by itself (no hang: 120 s), with one line "matremap ...: error:" naming the injected cause, last on
+#     stderr (before it only progress lines the fault-free run printed too, figures aside), and the exit code of
+#     that cause (cli.h): 3 and "out of memory" for an allocation, 2 and the system's "No space left on device"
+#     or "Input/output error" for an I/O call (a file that cannot be written); or with exit 0 and outputs equal
+#     to the reference (the failure was legitimately recovered from);
 #   - ASan, LSan and UBSan report nothing (their logs go to files, so stderr is the command's own);
 #   - it leaves no partial output: after a failure the output folder is as empty as before (no output file, no
 #     temporary file, no scratch folder); the exceptions are the scenario kinds below;
@@ -59,6 +60,8 @@ oiiotool --pattern checker:width=4:height=4:color1=0.04,0.04,0.04:color2=0.9,0.8
 oiiotool --pattern fill:top=0.2:bottom=0.9 8x8 1 -d uint8 -o gloss.png
 oiiotool diff.png --ch R,G,B,A=1.0 -o diffa.png
 oiiotool spec.png gloss.png --chappend -o specgloss.png
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 3/3 2/2\nf 1/1 2/2 4/3\nf 1/1 4/3 3/2\nf 2/1 3/2 4/3\n' \
+    > tet.obj # a tetrahedron for render --mesh
 "$bin" render ggx diffuse=0.5 f0=0.04 alpha=0.3 --size 16 -o a.png 2>/dev/null &&
     "$bin" render ggx diffuse=0.5 f0=0.04 alpha=0.35 --size 16 -o b.png 2>/dev/null &&
     "$bin" sweep --from ward diffuse=0 --to ggx diffuse=0 --grid alpha=0.03:0.4:4:log specular=0.03:0.25:3 --size 16 \
@@ -99,6 +102,7 @@ args_of=()
 kinds=()
 add() { scenarios+=("$1"); kinds+=("$2"); shift 2; args_of+=("$(printf '%q ' "$@")"); }
 add render-png atomic render ggx diffuse=@"$in/diff.png" f0=0.04 alpha=0.3 --size 16 -o r.png
+add render-mesh atomic render ggx diffuse=@"$in/diff.png" alpha=0.3 --mesh "$in/tet.obj" --size 16 -o m.png
 add render-exr atomic render gltf base_color=0.8,0.2,0.1 metallic=0.4 roughness=@"$in/gloss.png" --size 16 -o r.exr
 add ssim atomic ssim "$in/a.png" "$in/b.png" --map map.png
 add remap atomic remap --from ggx alpha=0.2 --to ward --size 16 --images rm
@@ -180,13 +184,21 @@ judge() {
     if [ -z "$bad" ] && [ "$rc" -ne "$code" ]; then bad="exit $rc, not $code: $(cut -c1-200 "$work/stderr")"; fi
     if [ -z "$bad" ]; then
         local lines
+        # The last line is the one message; lines before it may only be progress the fault-free run printed too.
         lines=$(wc -l < "$work/stderr")
-        if [ "$lines" -ne 1 ]; then
-            bad="$lines lines on stderr: $(head -3 "$work/stderr" | cut -c1-200 | tr '\n' '|')"
-        elif ! grep -qE '^matremap [a-z0-9]+: error: ' "$work/stderr"; then
-            bad="message not 'matremap CMD: error: ...': $(cut -c1-200 "$work/stderr")"
-        elif ! grep -qiE "$cause" "$work/stderr"; then
-            bad="message does not name the cause: $(cut -c1-240 "$work/stderr")"
+        local last extra
+        last=$(tail -n 1 "$work/stderr")
+        extra=$(head -n -1 "$work/stderr" | tr '0-9' '#' | grep -vxF -f "$ref/$name.stderr" | head -2 | tr '\n' '|')
+        if [ "$lines" -lt 1 ]; then
+            bad="nothing on stderr"
+        elif [ -n "$extra" ]; then
+            bad="$lines lines on stderr, not only the message and the usual progress: ${extra:0:200}"
+        elif [[ ! $last =~ ^matremap\ [a-z0-9]+:\ error:\  ]]; then
+            bad="the last line is not 'matremap CMD: error: ...': ${last:0:200}"
+        elif [ "$(grep -c ': error: ' "$work/stderr")" -ne 1 ]; then
+            bad="more than one error line: $(grep ': error: ' "$work/stderr" | head -2 | cut -c1-150 | tr '\n' '|')"
+        elif ! grep -qiE "$cause" <<< "$last"; then
+            bad="message does not name the cause: ${last:0:240}"
         fi
     fi
     local kept="" again=""
@@ -233,6 +245,7 @@ for index in "${!scenarios[@]}"; do
         continue
     fi
     snapshot "$out" > "$ref/$name.snapshot"
+    tr '0-9' '#' < "$work/stderr" > "$ref/$name.stderr" # its progress lines, figures blanked
     allocs=$(count_of alloc)
     ios=$(count_of io)
     row="$name $allocs $ios"

@@ -106,12 +106,13 @@ static mr_status write_pictures(const char *prefix, const mr_render_plan *plan, 
     // The three belong together: when one cannot be written, those written before it are removed.
     const mr_image *pictures[3] = {source, target_image, picture};
     int written = 0;
-    for (; status == MR_OK && written < 3; written++) {
-        snprintf(path, sizeof path, "%s%s", prefix, picture_suffixes[written]);
-        status = mr_img_write(path, pictures[written], NULL);
+    for (int k = 0; status == MR_OK && k < 3; k++) {
+        snprintf(path, sizeof path, "%s%s", prefix, picture_suffixes[k]);
+        status = mr_img_write(path, pictures[k], NULL);
+        written += status == MR_OK;
     }
     if (status != MR_OK)
-        for (int k = 0; k < written - 1; k++) {
+        for (int k = 0; k < written; k++) {
             snprintf(path, sizeof path, "%s%s", prefix, picture_suffixes[k]);
             remove(path);
         }

@@ -634,15 +634,13 @@ static mr_status open_file(const mr_sweep_spec *spec, const mr_strbuf *header, i
     if (fstat(f->fd, &st) != 0 || !S_ISREG(st.st_mode))
         return mr_fail(MR_ERR_INVALID_ARG, "sweep file '%s' is not a regular file", f->path);
     mr_status status = mr_text_file_lock(f->fd, f->path, WHAT);
-    if (status == MR_OK && resume) {
-        f->size = st.st_size;
-        return adopt_file(spec, header, f);
-    }
+    if (status != MR_OK) return status;
     f->size = st.st_size;
-    if (status == MR_OK)
-        status = mr_text_file_append(f->fd, f->path, WHAT, header->text, header->length, &f->size);
+    if (resume)
+        return adopt_file(spec, header, f);
+    status = mr_text_file_append(f->fd, f->path, WHAT, header->text, header->length, &f->size);
     if (status != MR_OK)
-        unlink(f->path); // made here (O_EXCL) and holding no row: an empty file would block a rerun
+        unlink(f->path); // made here (O_EXCL), locked, holding no row: an empty file would refuse a rerun
     return status;
 }
 
