@@ -229,6 +229,14 @@ typedef struct encoded_texture {
 } encoded_texture;
 
 /* New images are named PREFIX_mK_NAME.EXT (K the material, NAME the target texture's). */
+/* Threads for a material's two textures handled side by side (read, decoded, encoded): two when there are two and
+ * the caller's thread count allows it (the transform's threads option; 0 = OpenMP's default, which
+ * OMP_NUM_THREADS sets), else one: a pair must never open a thread the caller did not grant. */
+static int pair_team(const conversion *cv, int both) {
+    if (!both) return 1;
+    return MR_MIN(2, mr_auto_threads(mr_transform_options_of(cv->opts->transform)->threads, 1, 1));
+}
+
 static void texture_uri(const conversion *cv, int t, const char *extension, encoded_texture *e) {
     const char *prefix = cv->opts->image_prefix ? cv->opts->image_prefix : "converted";
     snprintf(e->uri, sizeof e->uri, "%s_m%d_%s.%s", prefix, cv->material, cv->to->texture_names[t], extension);
@@ -546,7 +554,8 @@ static mr_status convert_texels(const conversion *cv, const sources *src, mr_ima
     encoded_texture encoded[2];
     memset(encoded, 0, sizeof encoded);
     if (status == MR_OK) {
-#pragma omp parallel for schedule(static, 1) num_threads(2) if (need[0] && need[1])
+    const int pair = pair_team(cv, need[0] && need[1]);
+#pragma omp parallel for schedule(static, 1) num_threads(pair) if (pair > 1)
         for (int t = 0; t < 2; t++) {
             if (!need[t]) continue;
             statuses[t] = encode_texture(cv, t, width, height, channels[t], exr ? NULL : texels[t],
@@ -772,7 +781,8 @@ static mr_status read_sources(const conversion *cv, const sources *src, mr_image
     mr_status statuses[2] = {MR_OK, MR_OK};
     char messages[2][1024] = {"", ""};
     const int both = src->refs[0].index >= 0 && src->refs[1].index >= 0;
-#pragma omp parallel for schedule(static, 1) num_threads(2) if (both)
+    const int pair = pair_team(cv, both);
+#pragma omp parallel for schedule(static, 1) num_threads(pair) if (pair > 1)
     for (int t = 0; t < 2; t++) {
         if (src->refs[t].index < 0) continue;
         mr_img_read_options ro = {0};
@@ -809,7 +819,8 @@ static int read_codes(const conversion *cv, const sources *src, mr_io_codes code
     int handled[2] = {1, 1};
     char messages[2][1024] = {"", ""};
     const int both = src->refs[0].index >= 0 && src->refs[1].index >= 0;
-#pragma omp parallel for schedule(static, 1) num_threads(2) if (both)
+    const int pair = pair_team(cv, both);
+#pragma omp parallel for schedule(static, 1) num_threads(pair) if (pair > 1)
     for (int t = 0; t < 2; t++) {
         if (src->refs[t].index < 0) continue;
         char label[600];

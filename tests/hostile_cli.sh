@@ -133,6 +133,10 @@ image hdr/header-16000x16000-4-pixels.hdr "cannot decode pixels .*scanline 0"
 image hdr/header-negative-height.hdr "empty image \(4x-5"
 image hdr/header-no-size.hdr "missing image size"
 image hdr/truncated-rows.hdr "cannot decode pixels .*scanline 2"
+# GIF, BMP and WebP: the declared picture refused before OpenImageIO's reader allocates it at open.
+image other/screen-28941x16316.gif "its GIF header declares 28941 x 16316 pixels \(each side 1 to 16384\)"
+image other/dib-100000x100000-rle8.bmp "its BMP header declares 100000 x 100000 pixels"
+image other/canvas-1048577x1048577.webp "its WebP header declares 1048577 x 1048577 pixels"
 
 # A JPEG that lies about its size costs what it holds, not what it claims: time and memory measured.
 start=$(date +%s%N)

@@ -1,6 +1,6 @@
 /*
  * test_image_headers.c — the structure checks that run before OpenImageIO sees a file (src/io/exr_check.c,
- * src/io/jpeg_check.c): valid files of every layout still read (scan lines in every compression, tiles, mipmaps;
+ * src/io/jpeg_check.c, src/io/canvas_check.c): valid files of every layout still read (scan lines in every compression, tiles, mipmaps;
  * JPEGs carrying metadata; several parts pass the check, and the reader refuses them), and files whose headers lie
  * about their sizes are refused with a message naming the file and the field, before anything large is allocated.
  * Files are made by the library's own writers and by oiiotool, then edited byte by byte.
@@ -260,6 +260,58 @@ MR_TEST(jpeg_metadata_is_dropped_and_the_pixels_kept) {
     mr_image_free(reference);
 }
 
+/* ---- GIF, BMP, WebP (canvas_check.c) -------------------------------------------------------------------- */
+
+/* Each format as oiiotool writes it (a 40 x 30 checker; WebP lossy and lossless) reads at its size; the same
+ * file with its header's width raised past max_dimension (given as 64 here) is refused naming the file and the
+ * size, from memory and as a file. The width's place in each header is what canvas_check.c reads. */
+MR_TEST(gif_bmp_webp_declared_sizes_are_checked) {
+    if (!have_oiiotool()) {
+        printf("    (oiiotool missing: GIF, BMP and WebP not checked)\n");
+        return;
+    }
+    static const struct {
+        const char *name, *extra;
+        size_t width_at; /* byte of the width field */
+        int bytes;       /* its width in bytes, little-endian */
+        unsigned minus;  /* the field holds width - minus */
+    } cases[] = {
+        {"checker.gif", "", 6, 2, 0},
+        {"checker.bmp", "", 18, 4, 0},
+        {"checker.webp", "", 26, 2, 0},
+        {"checker-lossless.webp", "--attrib compression lossless", 21, 1, 1},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        const char *path = mr_test_tmp_path(cases[i].name);
+        char command[1200];
+        snprintf(command, sizeof command, "oiiotool --pattern checker:width=8:height=8 40x30 3 -d uint8 %s -o '%s'",
+                 cases[i].extra, path);
+        MR_CHECK_MSG(system(command) == 0, "%s", command);
+        size_t size = 0;
+        unsigned char *bytes = slurp(path, &size);
+        MR_CHECK(bytes != NULL && size > 30);
+        if (bytes == NULL || size <= 30) continue;
+        mr_img_read_options small = {MR_IMG_COLOR, 0, 64};
+        mr_image *image = NULL;
+        mr_status status = mr_img_read_memory(bytes, size, cases[i].name, &small, &image, NULL);
+        MR_CHECK_MSG(status == MR_OK && image->width == 40 && image->height == 30, "%s: %s", cases[i].name,
+                     mr_last_error());
+        mr_image_free(image);
+        // 65 wide: one past the limit (a lossless WebP packs width - 1 in 14 bits from byte 21: its low 8 here).
+        unsigned value = 65 - cases[i].minus;
+        for (int b = 0; b < cases[i].bytes; b++)
+            bytes[cases[i].width_at + (size_t)b] = (unsigned char)(value >> (8 * b));
+        image = NULL;
+        status = mr_img_read_memory(bytes, size, cases[i].name, &small, &image, NULL);
+        MR_CHECK_MSG(status == MR_ERR_FORMAT && strstr(mr_last_error(), "declares 65 x 30 pixels (each side 1 to 64)") &&
+                         strstr(mr_last_error(), cases[i].name),
+                     "%s: %s: %s", cases[i].name, mr_status_str(status), mr_last_error());
+        mr_image_free(image);
+        free(bytes);
+    }
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(exr_layouts_all_pass_the_check), MR_TEST_ENTRY(exr_headers_that_lie_are_refused),
              MR_TEST_ENTRY(exr_tiles_larger_than_the_image_are_refused),
-             MR_TEST_ENTRY(jpeg_metadata_is_dropped_and_the_pixels_kept))
+             MR_TEST_ENTRY(jpeg_metadata_is_dropped_and_the_pixels_kept),
+             MR_TEST_ENTRY(gif_bmp_webp_declared_sizes_are_checked))

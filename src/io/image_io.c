@@ -280,11 +280,16 @@ static mr_status read_stream(const char *path, const unsigned char *bytes, size_
         rewind(stream);
         status = mr_io_png_read_stream(stream, label, o->max_dimension, &raw);
     } else if (status == MR_OK) {
-        unsigned char magic[12];
+        unsigned char head[32];
         rewind(stream);
-        format = oiio_format_of(magic, fread(magic, 1, sizeof magic, stream));
-        // EXR: the header's sizes checked before OpenEXR trusts them (exr_check.c says why).
-        if (strcmp(format, "openexr") == 0) status = mr_io_exr_check(stream, label, o->max_dimension);
+        const size_t head_size = fread(head, 1, sizeof head, stream);
+        format = oiio_format_of(head, head_size);
+        // EXR: the header's sizes checked before OpenEXR trusts them (exr_check.c says why); GIF, BMP and WebP:
+        // the picture's declared size, which their readers allocate when they open it (canvas_check.c).
+        if (strcmp(format, "openexr") == 0)
+            status = mr_io_exr_check(stream, label, o->max_dimension);
+        else
+            status = mr_io_canvas_check(head, head_size, format, label, o->max_dimension);
         if (status == MR_OK && path != NULL && format[0] != '\0')
             status = read_whole_stream(stream, label, &whole, &whole_size);
         if (whole != NULL) bytes = whole, size = whole_size;

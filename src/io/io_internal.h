@@ -136,6 +136,13 @@ mr_status mr_io_oiio_read_memory(const void *bytes, size_t size, const char *for
  * `label`, the field and the value; MR_ERR_UNSUPPORTED for deep data; MR_ERR_IO if it cannot seek. */
 mr_status mr_io_exr_check(FILE *stream, const char *label, int max_dimension);
 
+/* The picture size a GIF, BMP or WebP header declares (`format` as oiio_format_of names it: "gif", "bmp",
+ * "webp"; any other passes), from the first `size` bytes at `head` (30 are enough), held against max_dimension
+ * before OpenImageIO's reader allocates it at open (canvas_check.c says why). MR_ERR_FORMAT naming `label`, the
+ * size and the limit. */
+mr_status mr_io_canvas_check(const unsigned char *head, size_t size, const char *format, const char *label,
+                             int max_dimension);
+
 /* A JPEG's bytes with their header's marker segments checked (each length within the bytes) and its metadata
  * segments (APP1-APP13, APP15, comments: Exif, ICC, XMP, IPTC) left out, into *out (malloc'ed, the caller's; at
  * most `size` bytes) and *out_size; the scans are copied as they are (jpeg_check.c says why). MR_ERR_FORMAT naming

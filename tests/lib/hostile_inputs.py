@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """hostile_inputs.py OUT_DIR [BASE.jpg] — writes the malformed and lying files the readers must refuse by name
 (tests/hostile_cli.sh runs them through the CLI; copies live in tests/fuzz/regressions/<target>/, which
-test_fuzz_inputs replays through the fuzz targets). One folder per reader: OUT_DIR/gltf, png, jpeg, exr, hdr.
+test_fuzz_inputs replays through the fuzz targets). One folder per reader: OUT_DIR/gltf, png, jpeg, exr, hdr, other (GIF, BMP, WebP).
 Each file is small and says in its name what it claims; the comment beside each says what it once did.
 
 Every file is made here from scratch (a PNG, an uncompressed EXR and a flat Radiance HDR are simple enough to write
@@ -123,6 +123,19 @@ def hdr_inputs():
         "header-no-size.hdr": hdr(4, 4, b"-Y +X"),
         "truncated-rows.hdr": hdr(4, 4, rows=2),
     }
+
+
+# ---- GIF, BMP, WebP: the sizes their headers declare ---------------------------------------------------------------
+
+def other_inputs():
+    # OpenImageIO's readers allocate the declared picture when they open the file: the GIF below (its screen is what
+    # fuzz_gltf found inside a .glb) took 2 GB and 3 s before it failed.
+    gif = b"GIF89a" + struct.pack("<HHBBB", 28941, 16316, 0, 0, 0) + b";"
+    dib = struct.pack("<IiiHHIIiiII", 40, 100000, -100000, 1, 8, 1, 0, 2835, 2835, 0, 0)  # RLE8, top-down
+    bmp = b"BM" + struct.pack("<IHHI", 14 + len(dib) + 6, 0, 0, 14 + len(dib)) + dib + b"\x00\x01\x00\x00\x00\x01"
+    vp8x = b"VP8X" + struct.pack("<I", 10) + b"\x00\x00\x00\x00" + (1 << 20).to_bytes(3, "little") * 2
+    webp = b"RIFF" + struct.pack("<I", 4 + len(vp8x)) + b"WEBP" + vp8x
+    return {"screen-28941x16316.gif": gif, "dib-100000x100000-rle8.bmp": bmp, "canvas-1048577x1048577.webp": webp}
 
 
 # ---- JPEG (patched from a base file) ------------------------------------------------------------------------------
@@ -281,7 +294,8 @@ def main():
     if len(sys.argv) not in (2, 3):
         raise SystemExit(__doc__)
     root = sys.argv[1]
-    sets = {"png": png_inputs(), "exr": exr_inputs(), "hdr": hdr_inputs(), "gltf": gltf_inputs()}
+    sets = {"png": png_inputs(), "exr": exr_inputs(), "hdr": hdr_inputs(), "gltf": gltf_inputs(),
+            "other": other_inputs()}
     if len(sys.argv) == 3:
         with open(sys.argv[2], "rb") as f:
             sets["jpeg"] = jpeg_inputs(f.read())
