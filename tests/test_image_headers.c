@@ -1,7 +1,7 @@
 /*
  * test_image_headers.c — the structure checks that run before OpenImageIO sees a file (src/io/exr_check.c,
- * src/io/jpeg_check.c, src/io/canvas_check.c): valid files of every layout still read (scan lines in every compression, tiles, mipmaps;
- * JPEGs carrying metadata; several parts pass the check, and the reader refuses them), and files whose headers lie
+ * src/io/jpeg_check.c, src/io/canvas_check.c): valid files of every layout still read (scan lines in every
+ * compression, tiles, mipmaps; JPEGs carrying metadata; GIF, BMP and WebP; several parts pass the check, and the reader refuses them), and files whose headers lie
  * about their sizes are refused with a message naming the file and the field, before anything large is allocated.
  * Files are made by the library's own writers and by oiiotool, then edited byte by byte.
  */
@@ -303,8 +303,9 @@ MR_TEST(gif_bmp_webp_declared_sizes_are_checked) {
             bytes[cases[i].width_at + (size_t)b] = (unsigned char)(value >> (8 * b));
         image = NULL;
         status = mr_img_read_memory(bytes, size, cases[i].name, &small, &image, NULL);
-        MR_CHECK_MSG(status == MR_ERR_FORMAT && strstr(mr_last_error(), "declares 65 x 30 pixels (each side 1 to 64)") &&
-                         strstr(mr_last_error(), cases[i].name),
+        const char *message = mr_last_error();
+        MR_CHECK_MSG(status == MR_ERR_FORMAT && strstr(message, "declares 65 x 30 pixels (each side 1 to 64)") &&
+                         strstr(message, cases[i].name),
                      "%s: %s: %s", cases[i].name, mr_status_str(status), mr_last_error());
         mr_image_free(image);
         free(bytes);
