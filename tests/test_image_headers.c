@@ -2,7 +2,8 @@
  * test_image_headers.c — the structure checks that run before OpenImageIO sees a file (src/io/exr_check.c,
  * src/io/jpeg_check.c, src/io/canvas_check.c): valid files of every layout still read (scan lines in every
  * compression, tiles, mipmaps; JPEGs carrying metadata; GIF, BMP and WebP; several parts pass the check, and the
- * reader refuses them), and files whose headers lie about their sizes are refused with a message naming the file and the field, before anything large is allocated.
+ * reader refuses them), and files whose headers lie about their sizes are refused with a message naming the file and
+ * the field, before anything large is allocated.
  * Files are made by the library's own writers and by oiiotool, then edited byte by byte.
  */
 #include <stdint.h>
