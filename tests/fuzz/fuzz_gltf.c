@@ -34,7 +34,9 @@ int mr_fuzz_gltf(const uint8_t *data, size_t size) {
         mr_gltf_texture texture;
         if (mr_gltf_get_texture(asset, i, &texture) != MR_OK) continue;
         mr_image *image = NULL;
-        if (mr_gltf_texture_read(asset, i, &small, &image, NULL) == MR_OK) mr_image_free(image);
+        const mr_status status = mr_gltf_texture_read(asset, i, &small, &image, NULL);
+        fuzz_require_setup(status);
+        if (status == MR_OK) mr_image_free(image);
     }
     double lo[3], hi[3];
     int count = 0;

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "fuzz.h"
+#include "matremap.h"
 
 static char scratch_dir[512];
 static char scratch_path[1024];
@@ -53,4 +54,10 @@ const char *fuzz_write_scratch(const char *name, const uint8_t *data, size_t siz
     }
     close(fd);
     return path;
+}
+
+void fuzz_require_setup(int status) {
+    if (status == MR_OK || strstr(mr_last_error(), "cannot load the OpenImageIO module") == NULL) return;
+    fprintf(stderr, "fuzz: the build is incomplete: %s\n", mr_last_error());
+    abort();
 }
