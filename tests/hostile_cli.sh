@@ -133,6 +133,10 @@ image hdr/header-16000x16000-4-pixels.hdr "cannot decode pixels .*scanline 0"
 image hdr/header-negative-height.hdr "empty image \(4x-5"
 image hdr/header-no-size.hdr "missing image size"
 image hdr/truncated-rows.hdr "cannot decode pixels .*scanline 2"
+# A JPEG is read whole (its header is rewritten in memory): one larger than 1 GiB is refused before (a sparse file).
+printf '\377\330\377\340' >"$in/jpeg/sparse-1100M.jpg"
+truncate -s 1100M "$in/jpeg/sparse-1100M.jpg"
+image jpeg/sparse-1100M.jpg "1153433600 bytes, more than the 1073741824 a JPEG file may have"
 # GIF, BMP and WebP: the declared picture refused before OpenImageIO's reader allocates it at open.
 image other/screen-28941x16316.gif "its GIF header declares 28941 x 16316 pixels \(each side 1 to 16384\)"
 image other/dib-100000x100000-rle8.bmp "its BMP header declares 100000 x 100000 pixels"

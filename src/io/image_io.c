@@ -246,11 +246,19 @@ static const char *oiio_format_of(const unsigned char *bytes, size_t size) {
     return "";
 }
 
-/* The whole of `stream` (a file's) into *out (malloc'ed, the caller's) and *out_size. */
-static mr_status read_whole_stream(FILE *stream, const char *label, unsigned char **out, size_t *out_size) {
+/* The most bytes a JPEG file may have: it is read whole to have its header cleaned (jpeg_check.c). A JPEG of
+ * 16384 x 16384 pixels (the default max_dimension) at quality 100 is about 200 MB. */
+#define MAX_JPEG_FILE_BYTES (1L << 30)
+
+/* The whole of `stream` (a file's, at most `limit` bytes) into *out (malloc'ed, the caller's) and *out_size. */
+static mr_status read_whole_stream(FILE *stream, const char *label, long limit, unsigned char **out,
+                                   size_t *out_size) {
     long length;
     if (fseek(stream, 0, SEEK_END) != 0 || (length = ftell(stream)) < 0 || fseek(stream, 0, SEEK_SET) != 0)
         return mr_fail(MR_ERR_IO, "%s: cannot seek in the file", label);
+    if (length > limit)
+        return mr_fail(MR_ERR_FORMAT, "%s: %ld bytes, more than the %ld a JPEG file may have (it is read whole)", label,
+                       length, limit);
     unsigned char *whole = malloc(length ? (size_t)length : 1);
     if (whole == NULL) return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %ld bytes", label, length);
     if (fread(whole, 1, (size_t)length, stream) != (size_t)length) {
@@ -273,9 +281,10 @@ static mr_status read_stream(const char *path, const unsigned char *bytes, size_
     const char *format = "";
     mr_status status = check_png_structure(label, stream, o->max_dimension, &is_png);
     // PNG (by its signature: nearly every glTF texture) through png_io.c; the rest through the OpenImageIO module,
-    // loaded on first use, by the reader their signature names, from memory: a file is read whole first. So
-    // OpenImageIO never tries its other readers on a file the named one refuses (on a corrupt .hdr it tried them
-    // all, camera raw included: 3 ms each), and a file named for another format is still read.
+    // loaded on first use, by the reader their signature names (a file named for another format is still read),
+    // and by that reader alone: OpenImageIO never tries its other readers on a file the named one refuses (on a
+    // corrupt .hdr it tried them all, camera raw included: 3 ms each). A file is read as the reader goes, except a
+    // JPEG, whose header is rewritten in memory first.
     if (status == MR_OK && is_png) {
         rewind(stream);
         status = mr_io_png_read_stream(stream, label, o->max_dimension, &raw);
@@ -290,12 +299,11 @@ static mr_status read_stream(const char *path, const unsigned char *bytes, size_
             status = mr_io_exr_check(stream, label, o->max_dimension);
         else
             status = mr_io_canvas_check(head, head_size, format, label, o->max_dimension);
-        if (status == MR_OK && path != NULL && format[0] != '\0')
-            status = read_whole_stream(stream, label, &whole, &whole_size);
-        if (whole != NULL) bytes = whole, size = whole_size;
         // JPEG: its header rewritten without the metadata OpenImageIO would parse (jpeg_check.c says why).
         if (status == MR_OK && strcmp(format, "jpeg") == 0) {
-            status = mr_io_jpeg_clean(bytes, size, label, &clean, &clean_size);
+            if (path != NULL) status = read_whole_stream(stream, label, MAX_JPEG_FILE_BYTES, &whole, &whole_size);
+            if (whole != NULL) bytes = whole, size = whole_size;
+            if (status == MR_OK) status = mr_io_jpeg_clean(bytes, size, label, &clean, &clean_size);
             if (status == MR_OK) bytes = clean, size = clean_size;
         }
     }
@@ -306,10 +314,13 @@ static mr_status read_stream(const char *path, const unsigned char *bytes, size_
         } else if (format[0] == '\0') {
             status = mr_fail(MR_ERR_FORMAT, "%s: not an image this reader knows from memory (by its first bytes: PNG, "
                              "JPEG, EXR, Radiance HDR, TIFF, WebP, GIF or BMP)", label);
+        } else if (path != NULL && bytes == NULL) {
+            status = mr_io_oiio_read_as(path, format, o->max_dimension, &raw);
         } else {
             status = mr_io_oiio_read_memory(bytes, size, format, label, o->max_dimension, &raw);
             // A reader that cannot read from memory reads the file.
-            if (status == MR_ERR_UNSUPPORTED && path != NULL) status = mr_io_oiio_read(path, o->max_dimension, &raw);
+            if (status == MR_ERR_UNSUPPORTED && path != NULL)
+                status = mr_io_oiio_read_as(path, format, o->max_dimension, &raw);
         }
     }
     free(whole);

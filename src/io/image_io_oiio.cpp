@@ -4,9 +4,10 @@
  * It is built as a module of its own (libmatremap-oiio.so) that oiio_module.c loads with dlopen the first time
  * an image is read or a non-EXR image written: Debian's OpenImageIO pulls in some 250 shared libraries whose
  * start-up (OpenCV's above all) costs about 0.4 s, which every `matremap` run would otherwise pay, even
- * `matremap models`. The module exports four extern "C" entry points (contracts of mr_io_oiio_read,
- * mr_io_oiio_read_memory and mr_io_oiio_write in io_internal.h): mr_oiio_module_read decodes a file of any format
- * OpenImageIO 2.4 knows into floats, mr_oiio_module_read_memory does the same for encoded bytes in memory (an
+ * `matremap models`. The module exports five extern "C" entry points (contracts of mr_io_oiio_read,
+ * mr_io_oiio_read_as, mr_io_oiio_read_memory and mr_io_oiio_write in io_internal.h): mr_oiio_module_read decodes a
+ * file of any format OpenImageIO 2.4 knows into floats, mr_oiio_module_read_as a file by the one reader its caller
+ * names, mr_oiio_module_read_memory does the same for encoded bytes in memory (an
  * IOMemReader), mr_oiio_module_write encodes an already-quantised buffer and writes it through the atomic protocol of
  * atomic_file.c (compiled into the module too), and mr_oiio_module_last_error returns the module's own
  * thread-local message (status.c is compiled into the module with hidden visibility, so the module's
@@ -255,6 +256,24 @@ mr_status read_impl(const char *path, const char *label, int max_dimension, mr_i
     return decode(in.get(), label, max_dimension, raw);
 }
 
+/* A file read by the reader named `format` (its signature's: image_io.c), never by the others OpenImageIO would try
+ * on a file its named reader refuses; the file is read from the disk as the reader goes, not held whole. */
+mr_status read_as_impl(const char *path, const char *format, const char *label, int max_dimension, mr_io_raw *raw) {
+    const OIIO::ImageSpec config = read_config();
+    auto in = OIIO::ImageInput::create(format, false, &config);
+    if (!in) {
+        std::string why = one_line(OIIO::geterror());
+        return mr_fail(MR_ERR_EXTERNAL, "%s: OpenImageIO has no %s reader: %s", label, format, why.c_str());
+    }
+    OIIO::ImageSpec opened;
+    if (!in->open(path, opened, config)) {
+        std::string why = one_line(in->geterror());
+        (void)OIIO::geterror();
+        return mr_fail(MR_ERR_FORMAT, "%s: not a readable %s image: %s", label, in->format_name(), why.c_str());
+    }
+    return decode(in.get(), label, max_dimension, raw);
+}
+
 /* Bytes in memory through an IOMemReader, which must outlive the reader (declared first). The proxy goes in the
  * configuration ("oiio:ioproxy"): open() takes it from there, and without it OIIO 2.4.7 looks for a file named
  * `label`. The reader is chosen by name, as bytes have no extension for OpenImageIO to go by. */
@@ -370,6 +389,13 @@ extern "C" MR_MODULE_EXPORT mr_status mr_oiio_module_read(const char *path, int 
     char label[MR_IO_LABEL_SIZE];
     mr_io_file_label(label, path);
     return guarded(label, "decoding", [&] { return read_impl(path, label, max_dimension, raw); });
+}
+
+extern "C" MR_MODULE_EXPORT mr_status mr_oiio_module_read_as(const char *path, const char *format, int max_dimension,
+                                                             mr_io_raw *raw) {
+    char label[MR_IO_LABEL_SIZE];
+    mr_io_file_label(label, path);
+    return guarded(label, "decoding", [&] { return read_as_impl(path, format, label, max_dimension, raw); });
 }
 
 extern "C" MR_MODULE_EXPORT mr_status mr_oiio_module_read_memory(const void *bytes, size_t size, const char *format,

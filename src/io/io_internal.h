@@ -122,6 +122,11 @@ typedef struct mr_io_raw {
  * the C++ runtime threw). Messages name the file. */
 mr_status mr_io_oiio_read(const char *path, int max_dimension, mr_io_raw *raw);
 
+/* mr_io_oiio_read by OpenImageIO's reader `format` alone ("openexr", "hdr", "tiff", ...: the caller recognised
+ * the file by its signature), which reads the file as it goes: whatever its name, and without trying the other
+ * readers when this one refuses it. Same errors. */
+mr_status mr_io_oiio_read_as(const char *path, const char *format, int max_dimension, mr_io_raw *raw);
+
 /* mr_io_oiio_read for `size` encoded bytes at `bytes` (an OpenImageIO IOMemReader: nothing touches the disk),
  * decoded by OpenImageIO's reader `format` ("jpeg", "openexr", "hdr", "tiff", ...: the caller recognised it by
  * the bytes' signature; OpenImageIO recognises a file by its extension, which bytes lack). Messages call the

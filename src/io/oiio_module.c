@@ -33,12 +33,14 @@
 #define MODULE_FILE "libmatremap-oiio.so"
 
 typedef mr_status (*module_read_fn)(const char *, int, mr_io_raw *);
+typedef mr_status (*module_read_as_fn)(const char *, const char *, int, mr_io_raw *);
 typedef mr_status (*module_read_memory_fn)(const void *, size_t, const char *, const char *, int, mr_io_raw *);
 typedef mr_status (*module_write_fn)(const char *, int, int, int, mr_io_sample, const void *, int, int);
 typedef const char *(*module_error_fn)(void);
 
 static pthread_once_t load_once = PTHREAD_ONCE_INIT;
 static module_read_fn module_read;
+static module_read_as_fn module_read_as;
 static module_read_memory_fn module_read_memory;
 static module_write_fn module_write;
 static module_error_fn module_error;
@@ -54,10 +56,11 @@ static int try_load(const char *path) {
     }
     // POSIX allows converting dlsym's void * to a function pointer; ISO C does not, hence the memcpy.
     void *read_sym = dlsym(handle, "mr_oiio_module_read");
+    void *read_as_sym = dlsym(handle, "mr_oiio_module_read_as");
     void *read_memory_sym = dlsym(handle, "mr_oiio_module_read_memory");
     void *write_sym = dlsym(handle, "mr_oiio_module_write");
     void *error_sym = dlsym(handle, "mr_oiio_module_last_error");
-    if (read_sym == NULL || read_memory_sym == NULL || write_sym == NULL || error_sym == NULL) {
+    if (read_sym == NULL || read_as_sym == NULL || read_memory_sym == NULL || write_sym == NULL || error_sym == NULL) {
         size_t used = strlen(load_failure);
         snprintf(load_failure + used, sizeof load_failure - used, "%s%s: not a matremap image module",
                  used ? "; " : "", path);
@@ -65,6 +68,7 @@ static int try_load(const char *path) {
         return 0;
     }
     memcpy(&module_read, &read_sym, sizeof read_sym);
+    memcpy(&module_read_as, &read_as_sym, sizeof read_as_sym);
     memcpy(&module_read_memory, &read_memory_sym, sizeof read_memory_sym);
     memcpy(&module_write, &write_sym, sizeof write_sym);
     memcpy(&module_error, &error_sym, sizeof error_sym);
@@ -114,6 +118,13 @@ mr_status mr_io_oiio_read(const char *path, int max_dimension, mr_io_raw *raw) {
     mr_status status = ensure_loaded(mr_io_file_label(label, path));
     if (status != MR_OK) return status;
     return forward_status(module_read(path, max_dimension, raw));
+}
+
+mr_status mr_io_oiio_read_as(const char *path, const char *format, int max_dimension, mr_io_raw *raw) {
+    char label[MR_IO_LABEL_SIZE];
+    mr_status status = ensure_loaded(mr_io_file_label(label, path));
+    if (status != MR_OK) return status;
+    return forward_status(module_read_as(path, format, max_dimension, raw));
 }
 
 mr_status mr_io_oiio_read_memory(const void *bytes, size_t size, const char *format, const char *label,
