@@ -256,22 +256,30 @@ mr_status read_impl(const char *path, const char *label, int max_dimension, mr_i
     return decode(in.get(), label, max_dimension, raw);
 }
 
-/* A file read by the reader named `format` (its signature's: image_io.c), never by the others OpenImageIO would try
- * on a file its named reader refuses; the file is read from the disk as the reader goes, not held whole. */
-mr_status read_as_impl(const char *path, const char *format, const char *label, int max_dimension, mr_io_raw *raw) {
-    const OIIO::ImageSpec config = read_config();
-    auto in = OIIO::ImageInput::create(format, false, &config);
+/* The reader named `format` (a signature's: image_io.c) made, opened on `name` with `config` and decoded:
+ * `memory`, if not NULL, is where it reads from (the proxy is in `config` too). Never the other readers
+ * OpenImageIO would try on a file its named reader refuses. */
+mr_status read_named(const char *format, const char *name, const OIIO::ImageSpec &config,
+                     OIIO::Filesystem::IOProxy *memory, const char *label, int max_dimension, mr_io_raw *raw) {
+    auto in = OIIO::ImageInput::create(format, false, &config, memory);
     if (!in) {
         std::string why = one_line(OIIO::geterror());
         return mr_fail(MR_ERR_EXTERNAL, "%s: OpenImageIO has no %s reader: %s", label, format, why.c_str());
     }
+    if (memory != nullptr && !in->supports("ioproxy"))
+        return mr_fail(MR_ERR_UNSUPPORTED, "%s: the OpenImageIO %s reader cannot read from memory", label, format);
     OIIO::ImageSpec opened;
-    if (!in->open(path, opened, config)) {
+    if (!in->open(name, opened, config)) {
         std::string why = one_line(in->geterror());
         (void)OIIO::geterror();
         return mr_fail(MR_ERR_FORMAT, "%s: not a readable %s image: %s", label, in->format_name(), why.c_str());
     }
     return decode(in.get(), label, max_dimension, raw);
+}
+
+/* A file by the reader named `format`, read from the disk as the reader goes (not held whole). */
+mr_status read_as_impl(const char *path, const char *format, const char *label, int max_dimension, mr_io_raw *raw) {
+    return read_named(format, path, read_config(), nullptr, label, max_dimension, raw);
 }
 
 /* Bytes in memory through an IOMemReader, which must outlive the reader (declared first). The proxy goes in the
@@ -283,20 +291,7 @@ mr_status read_memory_impl(const void *bytes, size_t size, const char *format, c
     OIIO::ImageSpec config = read_config();
     void *proxy = &memory;
     config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
-    auto in = OIIO::ImageInput::create(format, false, &config, &memory);
-    if (!in) {
-        std::string why = one_line(OIIO::geterror());
-        return mr_fail(MR_ERR_EXTERNAL, "%s: OpenImageIO has no %s reader: %s", label, format, why.c_str());
-    }
-    if (!in->supports("ioproxy"))
-        return mr_fail(MR_ERR_UNSUPPORTED, "%s: the OpenImageIO %s reader cannot read from memory", label, format);
-    OIIO::ImageSpec opened;
-    if (!in->open(label, opened, config)) {
-        std::string why = one_line(in->geterror());
-        (void)OIIO::geterror();
-        return mr_fail(MR_ERR_FORMAT, "%s: not a readable %s image: %s", label, in->format_name(), why.c_str());
-    }
-    return decode(in.get(), label, max_dimension, raw);
+    return read_named(format, label, config, &memory, label, max_dimension, raw);
 }
 
 /* Removes the temporary file if the write does not reach commit, even when an exception unwinds. */
