@@ -631,6 +631,13 @@ MR_TEST(read_memory_matches_the_file) {
         same_as_file(path, NULL);
         same_as_file(path, &as_data);
         same_as_file(path, &as_rgb);
+        // The same bytes under another format's extension: read by their signature's reader all the same.
+        size_t size = 0;
+        char *bytes = mr_test_read_file(path, &size);
+        const char *misnamed = mr_test_tmp_path(strstr(files[k].name, ".png") ? "misnamed.exr" : "misnamed.png");
+        MR_CHECK(bytes != NULL && mr_test_write_file(misnamed, bytes, size));
+        same_as_file(misnamed, NULL);
+        free(bytes);
     }
     /* Real textures: palette and RGB PNGs of ../shared/assets (the Duck's is 512^2, CheckAndX has an sRGB chunk). */
     const char *shared = getenv("MR_SHARED");
