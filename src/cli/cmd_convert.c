@@ -182,7 +182,9 @@ static mr_status with_alpha(mr_image *rgb, const mr_image *alpha_source, mr_imag
  * ("DIR/.matremap-PID-NAME", the extension kept for the writer), then all renamed into place once every one is
  * written. A failure before the renames removes the temporary files and leaves the targets as they were (and the
  * folder of PREFIX, if this call made it, is removed again); a target that is a folder is refused before anything is
- * written, so the renames (within one folder) do not fail in practice. Returns an exit code (messages printed). */
+ * written, so the renames (within one folder) fail only on an I/O error, and then the outputs already renamed are
+ * removed too (as cli_outputs_commit does): none of the set, rather than a mixed one. Returns an exit code (messages
+ * printed). */
 static int stage_outputs(const char *prefix, const char (*names)[4096], mr_image *const *images,
                          const mr_img_write_options *options, int count) {
     char (*temps)[4096 + 64] = calloc((size_t)count, sizeof *temps);
@@ -226,8 +228,12 @@ static int stage_outputs(const char *prefix, const char (*names)[4096], mr_image
     }
     for (int k = 0; code == CLI_EXIT_OK && k < count; k++)
         if (rename(temps[k], names[k]) != 0) {
-            fprintf(stderr, "matremap convert: error: cannot rename '%s' to '%s': %s\n", temps[k], names[k],
-                    strerror(errno));
+            // Leave none of this run's outputs: a set half replaced would not belong together (faults.sh found
+            // the first maps left when a later rename failed).
+            const int renamed = k;
+            fprintf(stderr, "matremap convert: error: cannot rename '%s' to '%s': %s%s\n", temps[k], names[k],
+                    strerror(errno), renamed ? " (the outputs renamed before it removed)" : "");
+            for (int j = 0; j < renamed; j++) remove(names[j]);
             code = CLI_EXIT_BAD_INPUT;
         }
     if (code != CLI_EXIT_OK) {
