@@ -228,7 +228,6 @@ typedef struct encoded_texture {
     char path[1024]; /* "" for PNG */
 } encoded_texture;
 
-/* New images are named PREFIX_mK_NAME.EXT (K the material, NAME the target texture's). */
 /* Threads for a material's two textures handled side by side (read, decoded, encoded): two when there are two and
  * the caller's thread count allows it (the transform's threads option; 0 = OpenMP's default, which
  * OMP_NUM_THREADS sets), else one: a pair must never open a thread the caller did not grant. */
@@ -237,6 +236,7 @@ static int pair_team(const conversion *cv, int both) {
     return MR_MIN(2, mr_auto_threads(mr_transform_options_of(cv->opts->transform)->threads, 1, 1));
 }
 
+/* New images are named PREFIX_mK_NAME.EXT (K the material, NAME the target texture's). */
 static void texture_uri(const conversion *cv, int t, const char *extension, encoded_texture *e) {
     const char *prefix = cv->opts->image_prefix ? cv->opts->image_prefix : "converted";
     snprintf(e->uri, sizeof e->uri, "%s_m%d_%s.%s", prefix, cv->material, cv->to->texture_names[t], extension);
@@ -554,7 +554,7 @@ static mr_status convert_texels(const conversion *cv, const sources *src, mr_ima
     encoded_texture encoded[2];
     memset(encoded, 0, sizeof encoded);
     if (status == MR_OK) {
-    const int pair = pair_team(cv, need[0] && need[1]);
+        const int pair = pair_team(cv, need[0] && need[1]);
 #pragma omp parallel for schedule(static, 1) num_threads(pair) if (pair > 1)
         for (int t = 0; t < 2; t++) {
             if (!need[t]) continue;
