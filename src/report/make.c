@@ -139,7 +139,11 @@ static mr_status write_thumbnail(const char *dir, const char *name, const mr_ima
                 mr_image_at(thumb, x, y)[c] = (float)(sum / count);
             }
     char path[4096];
-    snprintf(path, sizeof path, "%s/%s", dir, name);
+    if (snprintf(path, sizeof path, "%s/%s", dir, name) >= (int)sizeof path) {
+        mr_image_free(thumb);
+        return mr_fail(MR_ERR_INVALID_ARG, "report folder '%s': the path of '%s' is longer than %zu bytes", dir, name,
+                       sizeof path - 1);
+    }
     mr_img_write_options wo = {0};
     wo.encoding = colour ? MR_IMG_COLOR : MR_IMG_DATA;
     status = mr_img_write(path, thumb, &wo);
