@@ -86,6 +86,12 @@ static mr_status read_channels(exr_reader *r, const unsigned char *value, int64_
         at = (int64_t)(fields - value) + 16;
     }
     if (at >= size) return mr_fail(MR_ERR_FORMAT, "%s: not a valid EXR file: unterminated channel list", r->label);
+    // OpenEXR reads a channel list up to its terminator, whatever the attribute's size says, and reads the next
+    // attribute from there: a list shorter than its size makes it read the next one from inside this one (fuzzing:
+    // a 230-byte file whose list ended 18 bytes early; the bytes after it gave a string of 1.6 GB).
+    if (at != size - 1)
+        return mr_fail(MR_ERR_FORMAT, "%s: not a valid EXR file: the channel list ends at byte %lld of the %lld "
+                       "its attribute claims", r->label, (long long)at + 1, (long long)size);
     h->has_channels = 1;
     return MR_OK;
 }
@@ -122,6 +128,57 @@ static mr_status take_attribute(exr_reader *r, const char *name, const char *typ
     return MR_OK;
 }
 
+/* The bytes OpenEXR 3.1 reads for a value of `type` whatever the attribute's size says (each type's
+ * readValueFrom), or -1 for the types it reads by their size (string, floatvector, opaque ones) or by their content
+ * (chlist, preview, stringvector: checked on their own). A size that differs would make the library read the next
+ * attribute from the wrong place. */
+static int64_t fixed_size_of(const char *type) {
+    static const struct {
+        const char *type;
+        int64_t size;
+    } fixed[] = {
+        {"int", 4},          {"float", 4},       {"double", 8},     {"compression", 1}, {"lineOrder", 1},
+        {"envmap", 1},       {"deepImageState", 1}, {"tiledesc", 9}, {"box2i", 16},      {"box2f", 16},
+        {"v2i", 8},          {"v2f", 8},         {"v2d", 16},       {"v3i", 12},        {"v3f", 12},
+        {"v3d", 24},         {"m33f", 36},       {"m33d", 72},      {"m44f", 64},       {"m44d", 128},
+        {"rational", 8},     {"timecode", 8},    {"keycode", 28},   {"chromaticities", 32},
+    };
+    for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
+        if (strcmp(type, fixed[i].type) == 0) return fixed[i].size;
+    return -1;
+}
+
+/* A preview (width, height, then 4 bytes a pixel) or a string vector (int32 length, then the bytes, repeated) whose
+ * content is exactly `size` bytes: OpenEXR allocates what the content says (a preview's width x height x 4, each
+ * string's length) before it reads it. `stream` is at the value and is left after it. */
+static mr_status check_sized_content(exr_reader *r, const char *name, const char *type, int64_t size) {
+    if (strcmp(type, "preview") == 0) {
+        unsigned char wh[8];
+        if (size < 8 || fread(wh, 1, 8, r->stream) != 8)
+            return mr_fail(MR_ERR_FORMAT, "%s: not a valid EXR file: preview '%s' of %lld bytes", r->label, name,
+                           (long long)size);
+        const int64_t width = (uint32_t)le32(wh), height = (uint32_t)le32(wh + 4);
+        if (width * height * 4 != size - 8) // each at most 2^32 - 1: the product fits in 64 bits times 4
+            return mr_fail(MR_ERR_FORMAT, "%s: not a valid EXR file: preview '%s' of %lld x %lld pixels in %lld "
+                           "bytes", r->label, name, (long long)width, (long long)height, (long long)size);
+        return fseek(r->stream, (long)(size - 8), SEEK_CUR) == 0 ? MR_OK : truncated(r, "a preview");
+    }
+    for (int64_t at = 0; at < size;) { // stringvector
+        unsigned char length_bytes[4];
+        if (size - at < 4 || fread(length_bytes, 1, 4, r->stream) != 4)
+            return mr_fail(MR_ERR_FORMAT, "%s: not a valid EXR file: string vector '%s' malformed at byte %lld",
+                           r->label, name, (long long)at);
+        const int64_t length = le32(length_bytes);
+        at += 4;
+        if (length < 0 || length > size - at)
+            return mr_fail(MR_ERR_FORMAT, "%s: not a valid EXR file: string vector '%s' holds a string of %lld "
+                           "bytes with %lld left", r->label, name, (long long)length, (long long)(size - at));
+        if (fseek(r->stream, (long)length, SEEK_CUR) != 0) return truncated(r, "a string vector");
+        at += length;
+    }
+    return MR_OK;
+}
+
 /* One header, up to and including its terminating empty name. *empty: the header had no attribute at all (the
  * end of a multi-part file's list). */
 static mr_status read_header(exr_reader *r, int long_names, exr_header *h, int *empty) {
@@ -144,11 +201,20 @@ static mr_status read_header(exr_reader *r, int long_names, exr_header *h, int *
         if (size < 0 || at < 0 || size > r->size - at)
             return mr_fail(MR_ERR_FORMAT, "%s: not a valid EXR file: attribute '%s' claims %lld bytes, the file "
                            "has %lld after it", r->label, name, (long long)size, (long long)(r->size - at));
-        if (strcmp(type, "chlist") == 0 && strcmp(name, "channels") == 0) {
+        const int64_t fixed = fixed_size_of(type);
+        if (fixed >= 0 && size != fixed)
+            return mr_fail(MR_ERR_FORMAT, "%s: not a valid EXR file: attribute '%s' of type %s claims %lld bytes "
+                           "(the type has %lld)", r->label, name, type, (long long)size, (long long)fixed);
+        if (strcmp(type, "preview") == 0 || strcmp(type, "stringvector") == 0) {
+            mr_status status = check_sized_content(r, name, type, size);
+            if (status != MR_OK) return status;
+        } else if (strcmp(type, "chlist") == 0) {
             unsigned char *list = malloc((size_t)size + 1);
             if (list == NULL) return mr_fail(MR_ERR_NOMEM, "%s: out of memory", r->label);
+            exr_header other; // a channel list by another name is checked the same way, and counts for nothing
+            memset(&other, 0, sizeof other);
             mr_status status = fread(list, 1, (size_t)size, r->stream) == (size_t)size
-                                   ? read_channels(r, list, size, h)
+                                   ? read_channels(r, list, size, strcmp(name, "channels") == 0 ? h : &other)
                                    : truncated(r, "the channel list");
             free(list);
             if (status != MR_OK) return status;
