@@ -172,6 +172,21 @@ MR_TEST(exr_headers_that_lie_are_refused) {
     put32(bad + table, 0x00ffffffu);
     check_refused(bad, size, "offset.exr", MR_ERR_FORMAT, "chunk 0 is at byte 16777215");
 
+    // A channel list whose attribute claims 4 bytes more than the list (OpenEXR reads the list to its terminator
+    // and the next attribute from there: found by fuzzing), and a float attribute claiming 8 bytes.
+    memcpy(bad, good, size);
+    value = exr_attribute(bad, size, "channels");
+    MR_CHECK(value > 0);
+    uint32_t list_size;
+    memcpy(&list_size, bad + value - 4, 4);
+    put32(bad + value - 4, list_size + 4);
+    check_refused(bad, size, "long_chlist.exr", MR_ERR_FORMAT, "the channel list ends at byte");
+    memcpy(bad, good, size);
+    value = exr_attribute(bad, size, "pixelAspectRatio");
+    MR_CHECK(value > 0);
+    put32(bad + value - 4, 8);
+    check_refused(bad, size, "long_float.exr", MR_ERR_FORMAT, "of type float claims 8 bytes (the type has 4)");
+
     // Cut inside the header, and a deep-data flag.
     check_refused(good, 40, "cut.exr", MR_ERR_FORMAT, "truncated");
     memcpy(bad, good, size);
