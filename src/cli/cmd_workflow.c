@@ -18,6 +18,9 @@
 #include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "cli.h"
 
@@ -120,13 +123,26 @@ static int check_map(const char *command, const map_arg *m) {
     return CLI_EXIT_OK;
 }
 
+/* Threads for `jobs` files read or written side by side: no more than the files, nor than --threads (0: OpenMP's
+ * default, which OMP_NUM_THREADS sets) allows. */
+static int file_team(int threads, int jobs) {
+#ifdef _OPENMP
+    const int allowed = threads > 0 ? threads : omp_get_max_threads();
+#else
+    const int allowed = 1;
+    (void)threads;
+#endif
+    return jobs < allowed ? jobs : allowed;
+}
+
 /* Read every map and check the files have one size; *width x *height is it (1 x 1 if all are constants). The
  * files are decoded in parallel (PNG decoding is a third of a 2048² conversion); the first failure in option order
  * is the one reported. */
-static int read_maps(const char *command, map_arg *const *maps, int count, int *width, int *height) {
+static int read_maps(const char *command, map_arg *const *maps, int count, int threads, int *width, int *height) {
     mr_status statuses[MAX_MAPS];
     char messages[MAX_MAPS][1024]; // mr_last_error() is per thread
-#pragma omp parallel for schedule(dynamic, 1)
+    const int team = file_team(threads, count);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(team) if (team > 1)
     for (int k = 0; k < count; k++) {
         statuses[k] = MR_OK;
         messages[k][0] = '\0';
@@ -330,7 +346,8 @@ static int write_outputs(const char *command, const out_options *o, output *outp
         // MR_IMG_DATA: the exact colours of flag_colours.
         jobs[job_count++] = (struct write_job){o->flags_path, picture, MR_IMG_DATA, MR_OK, ""};
     }
-#pragma omp parallel for schedule(dynamic, 1)
+    const int team = file_team(o->threads, job_count);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(team) if (team > 1)
     for (int k = 0; k < job_count; k++) {
         mr_img_write_options wo = {0};
         wo.encoding = jobs[k].encoding;
@@ -742,7 +759,7 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
     // Read: the maps into the transform's input planes.
     double started = cli_now(), seconds[3] = {0.0, 0.0, 0.0};
     int width = 1, height = 1;
-    if (code == CLI_EXIT_OK) code = read_maps(command, cv->maps, cv->map_count, &width, &height);
+    if (code == CLI_EXIT_OK) code = read_maps(command, cv->maps, cv->map_count, o->threads, &width, &height);
     const size_t n = (size_t)width * (size_t)height;
     mr_transform_map in[MR_TRANSFORM_MAX_SLOTS];
     mr_image *converted[MR_TRANSFORM_MAX_SLOTS] = {NULL};
