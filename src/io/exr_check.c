@@ -158,7 +158,10 @@ static mr_status check_sized_content(exr_reader *r, const char *name, const char
             return mr_fail(MR_ERR_FORMAT, "%s: not a valid EXR file: preview '%s' of %lld bytes", r->label, name,
                            (long long)size);
         const int64_t width = (uint32_t)le32(wh), height = (uint32_t)le32(wh + 4);
-        if (width * height * 4 != size - 8) // each at most 2^32 - 1: the product fits in 64 bits times 4
+        const int64_t pixels = (size - 8) / 4; // size < 2^31: width is held to it before the product is formed
+        if (width == 0 || height == 0 ? size != 8
+                                      : (size - 8) % 4 != 0 || width > pixels || height != pixels / width ||
+                                            width * height != pixels)
             return mr_fail(MR_ERR_FORMAT, "%s: not a valid EXR file: preview '%s' of %lld x %lld pixels in %lld "
                            "bytes", r->label, name, (long long)width, (long long)height, (long long)size);
         return fseek(r->stream, (long)(size - 8), SEEK_CUR) == 0 ? MR_OK : truncated(r, "a preview");
