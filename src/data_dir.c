@@ -1,4 +1,5 @@
-/* data_dir.c — where the library finds its installed data files (matremap.h, mr_data_path). */
+/* data_dir.c — where the library finds its installed data files (matremap.h, mr_data_path) and its modules
+ * (mr_internal.h, mr_module_beside_executable). */
 #include <limits.h>
 #include <stdio.h>
 #include <string.h>
@@ -46,4 +47,14 @@ mr_status mr_data_path(const char *file, char *out, size_t size) {
     for (int k = 0; k < count; k++) snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", k ? ", " : "",
                                              tried[k]);
     return mr_fail(MR_ERR_IO, "data file '%s' not found (tried %s)", file, list);
+}
+
+int mr_module_beside_executable(const char *file, char *out, size_t size) {
+    char exe[PATH_MAX];
+    ssize_t length = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    if (length <= 0) return 0;
+    exe[length] = '\0';
+    if (!cut_last(exe)) return 0;
+    int n = snprintf(out, size, "%s/../lib/matremap/%s", exe, file);
+    return n > 0 && (size_t)n < size && access(out, F_OK) == 0;
 }

@@ -53,6 +53,11 @@ mr_status mr_image_check_values(const mr_image *image, const char *label, int al
  * workflow.h, metrics.c). */
 int mr_auto_threads(int requested, long work, long threshold);
 
+/* A module `file` (libmatremap-oiio.so, libmatremap-mpi.so) beside the running executable, in
+ * <its directory>/../lib/matremap/ (the build tree's build/bin -> build/lib/matremap, an install's PREFIX/bin ->
+ * PREFIX/lib/matremap): its path into out[size] and 1 when that file exists, else 0 (data_dir.c). */
+int mr_module_beside_executable(const char *file, char *out, size_t size);
+
 /* Seconds on the monotonic clock (an arbitrary origin): for durations the library reports. */
 double mr_now_seconds(void);
 

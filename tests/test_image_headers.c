@@ -16,21 +16,8 @@
 
 /* ---- helpers ---------------------------------------------------------------------------------------------- */
 
-static unsigned char *slurp(const char *path, size_t *size) {
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    unsigned char *bytes = malloc(n > 0 ? (size_t)n : 1);
-    if (bytes != NULL && fread(bytes, 1, (size_t)n, f) != (size_t)n) {
-        free(bytes);
-        bytes = NULL;
-    }
-    fclose(f);
-    *size = (size_t)n;
-    return bytes;
-}
+/* The whole file (harness.h's reader), as bytes. */
+static unsigned char *slurp(const char *path, size_t *size) { return (unsigned char *)mr_test_read_file(path, size); }
 
 /* A small test picture (8 x 6, a gradient) written as `name` in the scratch folder; its path. */
 static const char *write_picture(const char *name, int channels) {

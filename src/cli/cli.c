@@ -114,28 +114,25 @@ void cli_io_input(cli_io *io, const char *path, const char *label_fmt, ...) {
     io_add(io, &io->inputs, &io->input_count, &io->input_capacity, path, label, 0);
 }
 
-void cli_io_output(cli_io *io, const char *path, const char *label_fmt, ...) {
+/* An output (a file, or a folder when `folder`), labelled by label_fmt and its arguments (NULL: by its path). */
+static void io_add_output(cli_io *io, const char *path, int folder, const char *label_fmt, va_list args) {
     char *label = NULL;
-    if (label_fmt != NULL) {
-        va_list args;
-        va_start(args, label_fmt);
-        label = format_label(label_fmt, args);
-        va_end(args);
-        if (label == NULL) io->out_of_memory = 1;
-    }
-    io_add(io, &io->outputs, &io->output_count, &io->output_capacity, path, label, 0);
+    if (label_fmt != NULL && (label = format_label(label_fmt, args)) == NULL) io->out_of_memory = 1;
+    io_add(io, &io->outputs, &io->output_count, &io->output_capacity, path, label, folder);
+}
+
+void cli_io_output(cli_io *io, const char *path, const char *label_fmt, ...) {
+    va_list args;
+    va_start(args, label_fmt);
+    io_add_output(io, path, 0, label_fmt, args);
+    va_end(args);
 }
 
 void cli_io_output_folder(cli_io *io, const char *path, const char *label_fmt, ...) {
-    char *label = NULL;
-    if (label_fmt != NULL) {
-        va_list args;
-        va_start(args, label_fmt);
-        label = format_label(label_fmt, args);
-        va_end(args);
-        if (label == NULL) io->out_of_memory = 1;
-    }
-    io_add(io, &io->outputs, &io->output_count, &io->output_capacity, path, label, 1);
+    va_list args;
+    va_start(args, label_fmt);
+    io_add_output(io, path, 1, label_fmt, args);
+    va_end(args);
 }
 
 void cli_io_material(cli_io *io, const char *const *assignments, const char *const *labels, int count) {

@@ -81,18 +81,8 @@ static void load_module(void) {
         try_load(override); // an explicit choice is not second-guessed by the fallbacks
         return;
     }
-    char exe[PATH_MAX];
-    ssize_t len = readlink("/proc/self/exe", exe, sizeof exe - 1);
-    if (len > 0) {
-        exe[len] = '\0';
-        char *slash = strrchr(exe, '/');
-        if (slash != NULL) {
-            *slash = '\0';
-            char candidate[PATH_MAX + 64];
-            snprintf(candidate, sizeof candidate, "%s/../lib/matremap/" MODULE_FILE, exe);
-            if (access(candidate, F_OK) == 0 && try_load(candidate)) return;
-        }
-    }
+    char candidate[PATH_MAX + 64];
+    if (mr_module_beside_executable(MODULE_FILE, candidate, sizeof candidate) && try_load(candidate)) return;
     try_load(MR_MODULE_DIR "/" MODULE_FILE);
 }
 

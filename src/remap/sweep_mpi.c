@@ -112,19 +112,9 @@ static int load_module(char *why, size_t size) {
     const char *override = getenv("MR_MPI_MODULE");
     if (override != NULL && override[0] != '\0')
         return try_load(override, why, size);
-    char exe[PATH_MAX];
-    ssize_t len = readlink("/proc/self/exe", exe, sizeof exe - 1);
-    if (len > 0) {
-        exe[len] = '\0';
-        char *slash = strrchr(exe, '/');
-        if (slash != NULL) {
-            *slash = '\0';
-            char candidate[PATH_MAX + 64];
-            snprintf(candidate, sizeof candidate, "%s/../lib/matremap/" MODULE_FILE, exe);
-            if (access(candidate, F_OK) == 0 && try_load(candidate, why, size))
-                return 1;
-        }
-    }
+    char candidate[PATH_MAX + 64];
+    if (mr_module_beside_executable(MODULE_FILE, candidate, sizeof candidate) && try_load(candidate, why, size))
+        return 1;
     return try_load(MR_MODULE_DIR "/" MODULE_FILE, why, size);
 }
 
