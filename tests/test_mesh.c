@@ -574,7 +574,7 @@ MR_TEST(mesh_generated_normals_and_tangents_follow_the_surface) {
     test_mesh welded = uv_sphere(32, 64, 1), sphere = uv_sphere(32, 64, 0);
     mesh_world w;
     memset(&w, 0, sizeof w);
-    MR_CHECK_OK(mr_mesh_world_build(&welded.mesh, &w));
+    MR_CHECK_OK(mr_mesh_world_build(&welded.mesh, 0, &w));
     double worst_normal = 0.0;
     for (int v = 0; v < w.vertex_count && w.normal != NULL; v++)
         for (int k = 0; k < 3; k++) worst_normal = fmax(worst_normal, fabs(w.normal[v][k] - w.position[v][k]));
@@ -585,7 +585,7 @@ MR_TEST(mesh_generated_normals_and_tangents_follow_the_surface) {
         if (mirrored)
             for (int v = 0; v < sphere.mesh.vertex_count; v++) sphere.uvs[2 * v] = 1.0f - sphere.uvs[2 * v];
         memset(&w, 0, sizeof w);
-        MR_CHECK_OK(mr_mesh_world_build(&sphere.mesh, &w));
+        MR_CHECK_OK(mr_mesh_world_build(&sphere.mesh, 0, &w));
         double worst = 0.0;
         int wrong_sign = 0;
         for (int v = 0; v < w.vertex_count && w.tangent != NULL; v++) {
@@ -973,17 +973,17 @@ MR_TEST(mesh_zero_normals_and_tangents_are_generated_per_vertex) {
     memset(&zeros, 0, sizeof zeros);
     memset(&half, 0, sizeof half);
     m.mesh.normals = NULL;
-    MR_CHECK_OK(mr_mesh_world_build(&m.mesh, &generated));
+    MR_CHECK_OK(mr_mesh_world_build(&m.mesh, 0, &generated));
     float *given = m.normals;
     float *none = calloc((size_t)m.mesh.vertex_count * 3, sizeof(float));
     float *no_tangents = calloc((size_t)m.mesh.vertex_count * 4, sizeof(float));
     m.mesh.normals = none;
     m.mesh.tangents = no_tangents;
-    MR_CHECK_OK(mr_mesh_world_build(&m.mesh, &zeros));
+    MR_CHECK_OK(mr_mesh_world_build(&m.mesh, 0, &zeros));
     const int nv = m.mesh.vertex_count;
     for (int v = nv / 2; v < nv; v++) given[3 * v] = given[3 * v + 1] = given[3 * v + 2] = 0.0f;
     m.mesh.normals = given;
-    MR_CHECK_OK(mr_mesh_world_build(&m.mesh, &half));
+    MR_CHECK_OK(mr_mesh_world_build(&m.mesh, 0, &half));
     int same = 1, kept = 1;
     for (int v = 0; v < nv && generated.normal && zeros.normal && half.normal; v++)
         for (int k = 0; k < 3; k++) {

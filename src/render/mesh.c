@@ -588,10 +588,10 @@ static int any_vertex_in_front(const mesh_world *mesh, const double n[3], double
  * inner side (against the winding's normal), and the winding agrees with the face's vertex normals. A
  * double-sided mesh shows its backs too, which face the rest of a convex mesh: it must then be flat (every
  * vertex on both sides, i.e. on every face's plane) to need no shadow rays. */
-static int mesh_is_convex(const mesh_world *mesh) {
+static int mesh_is_convex(const mesh_world *mesh, int threads) {
     const double tol = CONVEX_TOLERANCE * mesh->scale;
     int convex = 1;
-#pragma omp parallel for schedule(dynamic, 256) reduction(&& : convex)
+#pragma omp parallel for schedule(dynamic, 256) reduction(&& : convex) num_threads(threads) if (threads > 1)
     for (int f = 0; f < mesh->triangle_count; f++) {
         if (!convex) continue;
         const uint32_t *tri = mesh->triangle[f];
@@ -638,7 +638,7 @@ size_t mr_mesh_world_bytes(const mesh_world *mesh) {
            (size_t)mesh->material_count;
 }
 
-mr_status mr_mesh_world_build(const mr_mesh *src, mesh_world *mesh) {
+mr_status mr_mesh_world_build(const mr_mesh *src, int threads, mesh_world *mesh) {
     mr_status status = mr_mesh_validate(src);
     if (status != MR_OK) return status;
     const int nv = src->vertex_count, nt = src->triangle_count;
@@ -729,7 +729,7 @@ mr_status mr_mesh_world_build(const mr_mesh *src, mesh_world *mesh) {
     scratch = NULL;
     missing_normal = missing_tangent = NULL;
     if (!bvh_build(mesh)) goto oom;
-    mesh->convex = mesh_is_convex(mesh);
+    mesh->convex = mesh_is_convex(mesh, mr_auto_threads(threads, nt, MR_MESH_PARALLEL_FACES));
     return MR_OK;
 no_extent:
     free(scratch);

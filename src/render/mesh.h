@@ -50,8 +50,14 @@ typedef struct mesh_hit {
 } mesh_hit;
 
 /* Build *mesh (zeroed by the caller) from a validated mr_mesh: world-space attributes, generated normals and
- * tangents, the BVH, the convexity test. MR_ERR_NOMEM (mr_mesh_world_free cleans up) or MR_ERR_INVALID_ARG. */
-mr_status mr_mesh_world_build(const mr_mesh *src, mesh_world *mesh);
+ * tangents, the BVH, the convexity test. threads: mr_scene.threads (0 = automatic: a team only for a mesh of at
+ * least MR_MESH_PARALLEL_FACES triangles; n >= 1: n threads), used by the convexity test. MR_ERR_NOMEM
+ * (mr_mesh_world_free cleans up) or MR_ERR_INVALID_ARG. */
+mr_status mr_mesh_world_build(const mr_mesh *src, int threads, mesh_world *mesh);
+
+/* The convexity test's automatic thread rule: a face costs about one root-to-leaf BVH walk (~1 us), so below
+ * this a team costs more to start than it saves, and copies running side by side would share cores for nothing. */
+#define MR_MESH_PARALLEL_FACES 4096
 void mr_mesh_world_free(mesh_world *mesh);
 size_t mr_mesh_world_bytes(const mesh_world *mesh);
 

@@ -978,7 +978,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     if (status != MR_OK) goto fail;
     tr.mesh = &plan->mesh;
     if (scene->shape.type == MR_SHAPE_MESH) {
-        status = mr_mesh_world_build(scene->shape.mesh, &plan->mesh);
+        status = mr_mesh_world_build(scene->shape.mesh, scene->threads, &plan->mesh);
         if (status != MR_OK) goto fail;
         const mr_mesh *src = scene->shape.mesh;
         if (src->surfaces != NULL) {
