@@ -208,8 +208,15 @@ $(BUILD)/tests/test_fuzz_inputs: $(BUILD)/obj/tests/test_fuzz_inputs.o $(FUZZ_OB
 	@mkdir -p $(dir $@)
 	$(LINK) $(ALL_LDFLAGS) $^ $(ALL_LDLIBS) -o $@
 
+# The thread counter tests/threads_cli.sh preloads (tests/thread_count.c): a test instrument, so built without
+# the sanitizers, in every BUILD.
+THREAD_COUNTER := $(BUILD)/tests/libthread_count.so
+$(THREAD_COUNTER): tests/thread_count.c
+	@mkdir -p $(dir $@)
+	$(CC) -std=c11 -pedantic $(WARN) -O1 -fPIC -shared $< -ldl -o $@
+
 # headers_cpp.o only has to compile: every public header must be valid C++ as well as C.
-check: all $(TESTS) $(BUILD)/obj/tests/headers_cpp.o
+check: all $(TESTS) $(THREAD_COUNTER) $(BUILD)/obj/tests/headers_cpp.o
 	scripts/run-tests.sh $(BUILD)
 
 asan:

@@ -246,7 +246,7 @@ MR_TEST(ssim_matches_brute_force_reference) {
     for (int k = 0; k < 4; k++) {
         mr_image *a = make_scene(cases[k].w, cases[k].h, cases[k].channels, 0.3, 10 + (uint64_t)k);
         mr_image *b = with_noise(a, 0.4, 20 + (uint64_t)k);
-        mr_ssim_options o = {cases[k].exposure, 0, NULL};
+        mr_ssim_options o = {cases[k].exposure, 0, NULL, 0};
         double s = 0.0;
         mr_image *map = NULL;
         MR_CHECK_OK(mr_ssim(a, b, &o, &s, &map));
@@ -306,7 +306,7 @@ MR_TEST(exposure_and_alpha) {
         b2->pixels[i] *= 2.0f;
     }
     double s_exp = 0.0, s_pre = 0.0, s_default = 0.0, s_one = 0.0;
-    mr_ssim_options two = {2.0, 0, NULL}, one = {1.0, 0, NULL}, zero = {0.0, 0, NULL};
+    mr_ssim_options two = {2.0, 0, NULL, 0}, one = {1.0, 0, NULL, 0}, zero = {0.0, 0, NULL, 0};
     MR_CHECK_OK(mr_ssim(a, b, &two, &s_exp, NULL));
     MR_CHECK_OK(mr_ssim(a2, b2, NULL, &s_pre, NULL));
     MR_CHECK(s_exp == s_pre);
@@ -319,7 +319,7 @@ MR_TEST(exposure_and_alpha) {
     MR_CHECK_OK(mr_ssim(a, b, &one, &s_alpha, NULL));
     MR_CHECK(s_alpha == s_one);
     /* invalid options */
-    mr_ssim_options bad = {-1.0, 0, NULL};
+    mr_ssim_options bad = {-1.0, 0, NULL, 0};
     double untouched = 42.0;
     MR_CHECK(mr_ssim(a, b, &bad, &untouched, NULL) == MR_ERR_INVALID_ARG);
     bad.exposure = NAN;
@@ -327,6 +327,13 @@ MR_TEST(exposure_and_alpha) {
     bad.exposure = 1.0;
     bad.downsample = 2;
     MR_CHECK(mr_ssim(a, b, &bad, &untouched, NULL) == MR_ERR_INVALID_ARG);
+    bad.downsample = 0;
+    bad.threads = -1;
+    MR_CHECK(mr_ssim(a, b, &bad, &untouched, NULL) == MR_ERR_INVALID_ARG);
+    bad.threads = MR_METRICS_MAX_THREADS + 1;
+    MR_CHECK(mr_ssim(a, b, &bad, &untouched, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_rmse_masked(a, b, NULL, -1, &untouched, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_rmse_masked(a, b, NULL, MR_METRICS_MAX_THREADS + 1, &untouched, NULL) == MR_ERR_INVALID_ARG);
     MR_CHECK(untouched == 42.0);
     mr_image_free(a);
     mr_image_free(b);
@@ -358,7 +365,7 @@ MR_TEST(non_finite_pixels) {
         MR_CHECK(s == 42.0 && map == (mr_image *)&s);
         MR_CHECK(mr_rmse(bad, a, &r) == MR_ERR_INVALID_ARG);
         MR_CHECK_MSG(strstr(mr_last_error(), "rmse: image a: pixel (7, 5), channel 1") != NULL, "%s", mr_last_error());
-        MR_CHECK(mr_rmse_masked(a, bad, NULL, &r, NULL) == MR_ERR_INVALID_ARG && r == 42.0);
+        MR_CHECK(mr_rmse_masked(a, bad, NULL, 0, &r, NULL) == MR_ERR_INVALID_ARG && r == 42.0);
         mr_image_free(bad);
     }
     /* Alpha is not compared, so a NaN there is no error. */
@@ -449,15 +456,21 @@ MR_TEST(deterministic_across_thread_counts) {
 #ifdef _OPENMP
     mr_image *a = make_scene(517, 389, 3, 0.05, 13), *b = with_noise(a, 0.1, 14);
     int saved = omp_get_max_threads();
-    double s[3], r[3];
+    double s[3], r[3], s_given[3], r_given[3];
     mr_image *maps[3] = {NULL, NULL, NULL};
     const int counts[3] = {1, 2, 3};
     for (int k = 0; k < 3; k++) {
-        omp_set_num_threads(counts[k]);
+        omp_set_num_threads(counts[k]); // the automatic team's size
         MR_CHECK_OK(mr_ssim(a, b, NULL, &s[k], &maps[k]));
         MR_CHECK_OK(mr_rmse(a, b, &r[k]));
     }
     omp_set_num_threads(saved);
+    for (int k = 0; k < 3; k++) { // the caller's count (mr_ssim_options.threads)
+        mr_ssim_options given = {1.0, 0, NULL, counts[k]};
+        MR_CHECK_OK(mr_ssim(a, b, &given, &s_given[k], NULL));
+        MR_CHECK_OK(mr_rmse_masked(a, b, NULL, counts[k], &r_given[k], NULL));
+        MR_CHECK(s_given[k] == s[0] && r_given[k] == r[0]);
+    }
     for (int k = 1; k < 3; k++) {
         MR_CHECK_MSG(s[k] == s[0], "%d threads: %.17g vs %.17g", counts[k], s[k], s[0]);
         MR_CHECK(r[k] == r[0]);
@@ -479,7 +492,7 @@ MR_TEST(matlab_downsampling) {
     for (int k = 0; k < 4; k++) {
         mr_image *a = make_scene(sizes[k][0], sizes[k][1], 3, 0.2, 30 + (uint64_t)k);
         mr_image *b = with_noise(a, 0.3, 40 + (uint64_t)k);
-        mr_ssim_options o = {1.0, 1, NULL}, plain = {1.0, 0, NULL};
+        mr_ssim_options o = {1.0, 1, NULL, 0}, plain = {1.0, 0, NULL, 0};
         double s = 0.0, s_plain = 0.0;
         mr_image *map = NULL;
         MR_CHECK_OK(mr_ssim(a, b, &o, &s, &map));
@@ -502,7 +515,7 @@ MR_TEST(matlab_downsampling) {
     const int thin_sizes[2][2] = {{1000, 20}, {5000, 520}};
     for (int k = 0; k < 2; k++) {
         mr_image *thin = make_scene(thin_sizes[k][0], thin_sizes[k][1], 1, 0.1, 50);
-        mr_ssim_options o = {1.0, 1, NULL};
+        mr_ssim_options o = {1.0, 1, NULL, 0};
         double s = 0.0;
         mr_image *map = NULL;
         MR_CHECK_OK(mr_ssim(thin, thin, &o, &s, &map));
@@ -593,7 +606,7 @@ MR_TEST(masked_ssim_matches_definition) {
         mr_image *mask = disc_mask(64, 52, discs[k][0], discs[k][1], discs[k][2]);
         long counted = 0;
         double expected = ref_masked_mean(map, mask, &counted);
-        mr_ssim_options o = {1.0, 0, mask};
+        mr_ssim_options o = {1.0, 0, mask, 0};
         double s = 0.0;
         MR_CHECK_OK(mr_ssim(a, b, &o, &s, NULL));
         MR_CHECK_NEAR(s, expected, 1e-12);
@@ -610,14 +623,14 @@ MR_TEST(mask_of_ones_is_the_whole_frame) {
     mr_image *a = make_scene(71, 53, 3, 0.1, 62), *b = with_noise(a, 0.3, 63), *ones = NULL;
     MR_CHECK_OK(mr_image_create(71, 53, 1, &ones));
     for (size_t i = 0; i < mr_image_value_count(ones); i++) ones->pixels[i] = 1.0f;
-    mr_ssim_options whole = {1.5, 0, NULL}, masked = {1.5, 0, ones};
+    mr_ssim_options whole = {1.5, 0, NULL, 0}, masked = {1.5, 0, ones, 0};
     double s_whole = 0.0, s_masked = 0.0, r_whole = 0.0, r_masked = 0.0, r_null = 0.0, mean = 0.0;
     MR_CHECK_OK(mr_ssim(a, b, &whole, &s_whole, NULL));
     MR_CHECK_OK(mr_ssim(a, b, &masked, &s_masked, NULL));
     MR_CHECK_MSG(s_whole == s_masked, "%.17g vs %.17g", s_whole, s_masked);
     MR_CHECK_OK(mr_rmse(a, b, &r_whole));
-    MR_CHECK_OK(mr_rmse_masked(a, b, ones, &r_masked, &mean));
-    MR_CHECK_OK(mr_rmse_masked(a, b, NULL, &r_null, NULL));
+    MR_CHECK_OK(mr_rmse_masked(a, b, ones, 0, &r_masked, &mean));
+    MR_CHECK_OK(mr_rmse_masked(a, b, NULL, 0, &r_null, NULL));
     MR_CHECK(r_whole == r_masked && r_whole == r_null);
     double sum = 0.0;
     for (size_t i = 0; i < mr_image_value_count(a); i++) sum += a->pixels[i];
@@ -653,12 +666,12 @@ MR_TEST(background_difference_leaves_object_figures) {
     const int w = 80, h = 60;
     mr_image *a = make_scene(w, h, 3, 0.05, 64), *mask = disc_mask(w, h, 40.0, 30.0, 12.0);
     mr_image *b = with_noise_where(a, mask, 11, 0.6, 65);
-    mr_ssim_options whole = {1.0, 0, NULL}, object = {1.0, 0, mask};
+    mr_ssim_options whole = {1.0, 0, NULL, 0}, object = {1.0, 0, mask, 0};
     double s_whole = 0.0, s_object = 0.0, r_whole = 0.0, r_object = -1.0;
     MR_CHECK_OK(mr_ssim(a, b, &whole, &s_whole, NULL));
     MR_CHECK_OK(mr_ssim(a, b, &object, &s_object, NULL));
     MR_CHECK_OK(mr_rmse(a, b, &r_whole));
-    MR_CHECK_OK(mr_rmse_masked(a, b, mask, &r_object, NULL));
+    MR_CHECK_OK(mr_rmse_masked(a, b, mask, 0, &r_object, NULL));
     MR_CHECK_MSG(s_whole < 0.99 && s_object == 1.0, "whole frame %.6f, object %.17g", s_whole, s_object);
     MR_CHECK_MSG(r_whole > 0.01 && r_object == 0.0, "whole frame %g, object %g", r_whole, r_object);
     /* one pixel nearer (10 from the object) is inside a counted window: the object's SSIM sees it */
@@ -682,7 +695,7 @@ MR_TEST(object_difference_weighs_more_on_the_object) {
     long counted = 0;
     ref_masked_mean(map, mask, &counted);
     free(map);
-    mr_ssim_options whole = {1.0, 0, NULL}, object = {1.0, 0, mask};
+    mr_ssim_options whole = {1.0, 0, NULL, 0}, object = {1.0, 0, mask, 0};
     double s_whole = 0.0, s_object = 0.0;
     MR_CHECK_OK(mr_ssim(a, b, &whole, &s_whole, NULL));
     MR_CHECK_OK(mr_ssim(a, b, &object, &s_object, NULL));
@@ -702,7 +715,7 @@ MR_TEST(object_difference_weighs_more_on_the_object) {
             }
         }
     MR_CHECK_OK(mr_rmse(a, b, &r_whole));
-    MR_CHECK_OK(mr_rmse_masked(a, b, mask, &r_object, &mean));
+    MR_CHECK_OK(mr_rmse_masked(a, b, mask, 0, &r_object, &mean));
     MR_CHECK_NEAR(r_object, sqrt(sum / (3.0 * pixels)), 1e-12);
     MR_CHECK_NEAR(mean, sum_a / (3.0 * pixels), 1e-12);
     MR_CHECK_NEAR(r_whole * r_whole * w * h, r_object * r_object * pixels, 1e-9);
@@ -713,7 +726,7 @@ MR_TEST(object_difference_weighs_more_on_the_object) {
         omp_set_num_threads(threads);
         double s = 0.0, r = 0.0;
         MR_CHECK_OK(mr_ssim(a, b, &object, &s, NULL));
-        MR_CHECK_OK(mr_rmse_masked(a, b, mask, &r, NULL));
+        MR_CHECK_OK(mr_rmse_masked(a, b, mask, 0, &r, NULL));
         MR_CHECK_MSG(s == s_object && r == r_object, "%d threads", threads);
     }
     omp_set_num_threads(saved);
@@ -734,23 +747,23 @@ MR_TEST(mask_errors) {
     static mr_image sentinel_image;
     mr_image *const sentinel = &sentinel_image;
     mr_image *map = sentinel;
-    mr_ssim_options o = {1.0, 0, small};
+    mr_ssim_options o = {1.0, 0, small, 0};
     MR_CHECK(mr_ssim(a, b, &o, &s, &map) == MR_ERR_INVALID_ARG);
     MR_CHECK_MSG(strstr(mr_last_error(), "30x19x1") != NULL, "%s", mr_last_error());
-    MR_CHECK(mr_rmse_masked(a, b, small, &r, &mean) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_rmse_masked(a, b, small, 0, &r, &mean) == MR_ERR_INVALID_ARG);
     o.mask = rgb;
     MR_CHECK(mr_ssim(a, b, &o, &s, &map) == MR_ERR_INVALID_ARG);
-    MR_CHECK(mr_rmse_masked(a, b, rgb, &r, &mean) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_rmse_masked(a, b, rgb, 0, &r, &mean) == MR_ERR_INVALID_ARG);
     o.mask = empty; /* no object pixel: no figure to give */
     MR_CHECK(mr_ssim(a, b, &o, &s, &map) == MR_ERR_INVALID_ARG);
-    MR_CHECK(mr_rmse_masked(a, b, empty, &r, &mean) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_rmse_masked(a, b, empty, 0, &r, &mean) == MR_ERR_INVALID_ARG);
     MR_CHECK_MSG(strstr(mr_last_error(), "covers no pixel") != NULL, "%s", mr_last_error());
     mask->pixels[3 * 30 + 7] = 1.5f;
     o.mask = mask;
     MR_CHECK(mr_ssim(a, b, &o, &s, &map) == MR_ERR_INVALID_ARG);
     MR_CHECK_MSG(strstr(mr_last_error(), "(7, 3)") != NULL, "%s", mr_last_error());
     mask->pixels[3 * 30 + 7] = NAN;
-    MR_CHECK(mr_rmse_masked(a, b, mask, &r, &mean) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_rmse_masked(a, b, mask, 0, &r, &mean) == MR_ERR_INVALID_ARG);
     mask->pixels[3 * 30 + 7] = 0.0f;
     o.downsample = 1; /* a mask is at full resolution */
     MR_CHECK(mr_ssim(a, b, &o, &s, &map) == MR_ERR_INVALID_ARG);

@@ -1,11 +1,12 @@
-/* cmd_ssim.c — `matremap ssim A B [--map OUT.png] [--exposure E] [--mask M] [--json]`: SSIM and RMSE of two
- * images, over the whole frame or over an object mask (metrics.h). */
+/* cmd_ssim.c — `matremap ssim A B [--map OUT.png] [--exposure E] [--mask M] [--threads T] [--json]`: SSIM and
+ * RMSE of two images, over the whole frame or over an object mask (metrics.h). */
 #include <string.h>
 
 #include "cli.h"
 
 static void print_help(void) {
-    printf("Usage: matremap ssim A B [--map OUT.png] [--exposure E] [--downsample] [--mask M] [--json]\n"
+    printf("Usage: matremap ssim A B [--map OUT.png] [--exposure E] [--downsample] [--mask M] [--threads T]\n"
+           "                         [--json]\n"
            "\n"
            "Prints the mean SSIM of images A and B (Wang et al. 2004: 11x11 Gaussian window, sigma 1.5,\n"
            "K1 = 0.01, K2 = 0.03, L = 1) computed on display-referred luma: linear radiance times the\n"
@@ -26,6 +27,8 @@ static void print_help(void) {
            "  --downsample    apply Wang's MATLAB rule (box filter and decimate by round(min side/256));\n"
            "                  not with --mask\n"
            "  --mask M        also compare over the object whose coverage M holds (above)\n"
+           "  --threads T     threads for the measures (default 0 = automatic: all cores for images of at\n"
+           "                  least 65536 pixels, one below); the figures do not depend on it\n"
            "  --json          machine-readable output\n"
            "  --help          this text\n");
 }
@@ -52,6 +55,9 @@ int cmd_ssim(int argc, char **argv) {
         } else if ((taken = cli_take_option("ssim", argc, argv, &i, "--mask", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             mask_path = value;
+        } else if ((taken = cli_take_option("ssim", argc, argv, &i, "--threads", &value))) {
+            if (taken < 0 || !cli_parse_int("ssim", "--threads", value, 0, MR_METRICS_MAX_THREADS, &opts.threads))
+                return CLI_EXIT_USAGE;
         } else if (strcmp(argv[i], "--downsample") == 0) {
             opts.downsample = 1;
         } else if (strcmp(argv[i], "--json") == 0) {
@@ -104,7 +110,7 @@ int cmd_ssim(int argc, char **argv) {
     // Measurements: finite radiance >= 0, or exit 2 naming the file, the pixel and the value.
     for (int k = 0; k < 2 && status == MR_OK; k++) status = cli_check_radiance(images[k], paths[k]);
     if (status == MR_OK) status = mr_ssim(images[0], images[1], &opts, &ssim, map_path ? &map : NULL);
-    if (status == MR_OK) status = mr_rmse(images[0], images[1], &rmse);
+    if (status == MR_OK) status = mr_rmse_masked(images[0], images[1], NULL, opts.threads, &rmse, NULL);
     if (status == MR_OK && mask_path != NULL) {
         mr_img_read_options ro = {0};
         ro.encoding = MR_IMG_DATA; // coverage fractions, not colours
@@ -113,7 +119,8 @@ int cmd_ssim(int argc, char **argv) {
         mr_ssim_options object = opts;
         object.mask = mask;
         if (status == MR_OK) status = mr_ssim(images[0], images[1], &object, &object_ssim, NULL);
-        if (status == MR_OK) status = mr_rmse_masked(images[0], images[1], mask, &object_rmse, &object_mean);
+        if (status == MR_OK) status = mr_rmse_masked(images[0], images[1], mask, opts.threads, &object_rmse,
+                                                                   &object_mean);
     }
     if (status == MR_OK && map_path != NULL) {
         status = mr_ssim_map_visualise(map, 0.0, &picture);

@@ -48,6 +48,14 @@
 
 namespace {
 
+/* The module decodes and encodes on the calling thread. matremap's own loops decide how many images are read or
+ * written at once (--threads, OMP_NUM_THREADS), and many copies of the tool run side by side; OpenEXR's pool,
+ * which OpenImageIO sizes to one thread per core by default, would add threads nobody asked for (its reader
+ * started them whatever --threads said: tests/threads_cli.sh). "exr_threads" -1 is OpenEXR on the caller's
+ * thread (0 would be one per core); set when the module is loaded, before any file is opened. OpenImageIO's own
+ * pool ("threads") is left alone: reading and writing whole images does not use it, and setting it starts it. */
+const bool exr_on_the_calling_thread = [] { return OIIO::attribute("exr_threads", -1); }();
+
 /* OIIO messages may span lines; mr_last_error is one line. */
 std::string one_line(std::string text) {
     for (char &ch : text)

@@ -48,7 +48,10 @@
  * 64^2 fit once per run; many run side by side). Results do not depend on the thread count. */
 #define METRICS_PARALLEL_PIXELS 65536
 
-static int metrics_threads(long pixels) { return mr_auto_threads(0, pixels, METRICS_PARALLEL_PIXELS); }
+/* requested: the caller's thread count (mr_ssim_options.threads; 0 = automatic). */
+static int metrics_threads(int requested, long pixels) {
+    return mr_auto_threads(requested, pixels, METRICS_PARALLEL_PIXELS);
+}
 
 #define SSIM_WIN 11
 #define SSIM_RADIUS 5
@@ -166,8 +169,9 @@ static void luma_row(const float *src, int w, int ch, double exposure, const dou
 }
 
 /* The display-referred luma plane of `image` (w*h doubles, row-major). */
-static void luma_plane(const mr_image *image, double exposure, const srgb_encoder *enc, double *out) {
-    const int w = image->width, h = image->height, ch = image->channels, threads = metrics_threads((long)w * h);
+static void luma_plane(const mr_image *image, double exposure, const srgb_encoder *enc, int requested, double *out) {
+    const int w = image->width, h = image->height, ch = image->channels;
+    const int threads = metrics_threads(requested, (long)w * h);
 #pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
     for (int y = 0; y < h; y++)
         luma_row(image->pixels + (size_t)y * (size_t)w * (size_t)ch, w, ch, exposure, enc->base, enc->inv,
@@ -183,10 +187,10 @@ static int mirror_index(int i, int n) {
 }
 
 /* ssim.m's imfilter(ones(f)/f^2, 'symmetric', 'same') + (1:f:end, 1:f:end): src w x h -> dst dw x dh. */
-static void downsample_plane(const double *src, int w, int h, int f, double *dst, int dw, int dh) {
+static void downsample_plane(const double *src, int w, int h, int f, int requested, double *dst, int dw, int dh) {
     const int before = (f + 1) / 2 - 1; /* MATLAB's kernel origin is floor((f+1)/2) (1-based) */
     const double area = (double)f * (double)f;
-    const int threads = metrics_threads((long)w * h);
+    const int threads = metrics_threads(requested, (long)w * h);
 #pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
     for (int i = 0; i < dh; i++) {
         for (int j = 0; j < dw; j++) {
@@ -316,7 +320,7 @@ static void horizontal_row(const luma_source *src, int r, int ow, const double g
  * (no page faults for megabytes of temporaries, and the working set stays in cache). A band recomputes the 10
  * horizontal rows it shares with its neighbour, by the same code on the same inputs, so every value, and the
  * result, is the same for any number of threads or bands. */
-static int ssim_stream(const luma_source *src, int w, int h, const unsigned char *counted, float *map,
+static int ssim_stream(const luma_source *src, int w, int h, const unsigned char *counted, int requested, float *map,
                        double *out) {
     const int ow = w - (SSIM_WIN - 1), oh = h - (SSIM_WIN - 1);
     double g[SSIM_WIN];
@@ -324,7 +328,7 @@ static int ssim_stream(const luma_source *src, int w, int h, const unsigned char
     const double c1 = (SSIM_K1 * SSIM_L) * (SSIM_K1 * SSIM_L);
     const double c2 = (SSIM_K2 * SSIM_L) * (SSIM_K2 * SSIM_L);
 
-    const int threads = metrics_threads((long)w * h);
+    const int threads = metrics_threads(requested, (long)w * h);
     const int bands = MR_MIN(threads, oh);
     const size_t slot_size = 5 * (size_t)ow;
     const size_t per_thread = 2 * (size_t)w + SSIM_WIN * slot_size + (size_t)ow;
@@ -477,13 +481,16 @@ mr_status mr_ssim(const mr_image *a, const mr_image *b, const mr_ssim_options *o
     mr_status status = check_pair("ssim", a, b);
     if (status != MR_OK) return status;
     if (out_ssim == NULL) return mr_fail(MR_ERR_INVALID_ARG, "ssim: out_ssim must not be NULL");
-    mr_ssim_options o = {0.0, 0, NULL};
+    mr_ssim_options o = {0.0, 0, NULL, 0};
     if (opts != NULL) o = *opts;
     const double exposure = o.exposure == 0.0 ? 1.0 : o.exposure;
     if (!(exposure > 0.0) || !isfinite(exposure))
         return mr_fail(MR_ERR_INVALID_ARG, "ssim: exposure %g must be positive and finite (0 = 1)", o.exposure);
     if (o.downsample != 0 && o.downsample != 1)
         return mr_fail(MR_ERR_INVALID_ARG, "ssim: downsample %d (valid: 0 = none, 1 = MATLAB rule)", o.downsample);
+    if (o.threads < 0 || o.threads > MR_METRICS_MAX_THREADS)
+        return mr_fail(MR_ERR_INVALID_ARG, "ssim: threads %d (valid: 0 = automatic, 1 .. %d)", o.threads,
+                       MR_METRICS_MAX_THREADS);
 
     const int w = a->width, h = a->height;
     if (o.mask != NULL) {
@@ -538,17 +545,17 @@ mr_status mr_ssim(const mr_image *a, const mr_image *b, const mr_ssim_options *o
             return mr_fail(MR_ERR_NOMEM, "ssim: out of memory for %dx%d images", w, h);
         }
         double *x = planes, *y = planes + full, *xs = y + full, *ys = xs + small;
-        luma_plane(a, exposure, &enc, x);
-        luma_plane(b, exposure, &enc, y);
-        downsample_plane(x, w, h, f, xs, dw, dh);
-        downsample_plane(y, w, h, f, ys, dw, dh);
+        luma_plane(a, exposure, &enc, o.threads, x);
+        luma_plane(b, exposure, &enc, o.threads, y);
+        downsample_plane(x, w, h, f, o.threads, xs, dw, dh);
+        downsample_plane(y, w, h, f, o.threads, ys, dw, dh);
         src.a = src.b = NULL;
         src.x = xs;
         src.y = ys;
         src.w = dw;
     }
     double value = 0.0;
-    int ok = ssim_stream(&src, dw, dh, counted, map != NULL ? map->pixels : NULL, &value);
+    int ok = ssim_stream(&src, dw, dh, counted, o.threads, map != NULL ? map->pixels : NULL, &value);
     free(counted);
     free(planes);
     encoder_free(&enc);
@@ -564,20 +571,23 @@ mr_status mr_ssim(const mr_image *a, const mr_image *b, const mr_ssim_options *o
 /* ---- RMSE ------------------------------------------------------------------------------------------- */
 
 mr_status mr_rmse(const mr_image *a, const mr_image *b, double *out_rmse) {
-    return mr_rmse_masked(a, b, NULL, out_rmse, NULL);
+    return mr_rmse_masked(a, b, NULL, 0, out_rmse, NULL);
 }
 
-mr_status mr_rmse_masked(const mr_image *a, const mr_image *b, const mr_image *mask, double *out_rmse,
-                         double *out_mean_a) {
+mr_status mr_rmse_masked(const mr_image *a, const mr_image *b, const mr_image *mask, int threads_requested,
+                         double *out_rmse, double *out_mean_a) {
     mr_status status = check_pair("rmse", a, b);
     if (status != MR_OK) return status;
     if (out_rmse == NULL) return mr_fail(MR_ERR_INVALID_ARG, "rmse: out_rmse must not be NULL");
     const int w = a->width, h = a->height, ch = a->channels, used = MR_MIN(3, ch);
     if (mask != NULL && (status = check_mask("rmse", mask, w, h)) != MR_OK) return status;
+    if (threads_requested < 0 || threads_requested > MR_METRICS_MAX_THREADS)
+        return mr_fail(MR_ERR_INVALID_ARG, "rmse: threads %d (valid: 0 = automatic, 1 .. %d)", threads_requested,
+                       MR_METRICS_MAX_THREADS);
     double *row_sums = malloc(3 * (size_t)h * sizeof(double)); /* squared differences, a's values, pixels */
     if (row_sums == NULL) return mr_fail(MR_ERR_NOMEM, "rmse: out of memory");
     double *row_a = row_sums + h, *row_pixels = row_a + h;
-    const int threads = metrics_threads((long)w * h);
+    const int threads = metrics_threads(threads_requested, (long)w * h);
 #pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
     for (int y = 0; y < h; y++) {
         const float *pa = a->pixels + (size_t)y * (size_t)w * (size_t)ch;

@@ -55,7 +55,12 @@ typedef struct mr_ssim_options {
     const mr_image *mask; /* NULL = the whole frame (every map pixel); otherwise the object's coverage (see the
                              header comment): 1 channel, the images' size, values in [0, 1]; the mean is taken
                              over the map pixels whose window holds an object pixel (> 0). Borrowed. */
+    int threads;          /* OpenMP threads: 0 (default) = automatic, a team of omp_get_max_threads() only for
+                             images of at least 65536 pixels, one thread below; n in 1 .. MR_METRICS_MAX_THREADS:
+                             n threads. The figures do not depend on it */
 } mr_ssim_options;
+
+#define MR_METRICS_MAX_THREADS 1024
 
 /* Root-mean-square difference over all pixels and the first min(3, channels) channels of two linear images
  * (alpha is not compared; no clamping). Sizes and channel counts must match (MR_ERR_INVALID_ARG, naming both
@@ -64,13 +69,14 @@ typedef struct mr_ssim_options {
 mr_status mr_rmse(const mr_image *a, const mr_image *b, double *out_rmse);
 
 /* Like mr_rmse, over the pixels where mask > 0 only (mask NULL: every pixel, exactly mr_rmse), each counted
- * once, and, if out_mean_a is not NULL, the mean of a's values over the same pixels and channels: with the
- * reference as a, rmse / mean is the RMSE relative to the reference's mean radiance on the object. The mask is
- * as for SSIM (header comment). Errors as mr_rmse, and MR_ERR_INVALID_ARG for a mask of the wrong size or
- * channels, a value outside [0, 1] (naming the pixel), or a mask that covers no pixel. The outputs are
- * untouched on failure. */
-mr_status mr_rmse_masked(const mr_image *a, const mr_image *b, const mr_image *mask, double *out_rmse,
-                         double *out_mean_a);
+ * once, on `threads` threads (as mr_ssim_options.threads: 0 = automatic, mr_rmse's choice), and, if out_mean_a
+ * is not NULL, the mean of a's values over the same pixels and channels: with the reference as a, rmse / mean
+ * is the RMSE relative to the reference's mean radiance on the object. The mask is as for SSIM (header
+ * comment). Errors as mr_rmse, and MR_ERR_INVALID_ARG for a mask of the wrong size or
+ * channels, a value outside [0, 1] (naming the pixel), a mask that covers no pixel, or threads outside
+ * 0 .. MR_METRICS_MAX_THREADS. The outputs are untouched on failure. */
+mr_status mr_rmse_masked(const mr_image *a, const mr_image *b, const mr_image *mask, int threads,
+                         double *out_rmse, double *out_mean_a);
 
 /* Mean SSIM of a and b (same size and channels; at least 11x11 after downsampling). opts may be NULL.
  * With opts->mask, the mean over the map pixels whose window touches the object (header comment).

@@ -476,20 +476,20 @@ static mr_status frame_reference(const settings *st, const mr_gltf_scene *refere
     return mr_camera_frame_mesh(&reference->mesh, &frame, camera);
 }
 
-/* Compare candidate e's render `image` of view v with the reference's (whole frame, and over `mask`); write its
- * SSIM map picture. */
+/* Compare candidate e's render `image` of view v with the reference's (whole frame, and over `mask`) on the
+ * report's threads; write its SSIM map picture. */
 static mr_status compare(const char *dir, int v, int k, const mr_image *reference, const mr_image *image,
-                         const mr_image *mask, double exposure, entry *e) {
-    mr_ssim_options so = {exposure, 0, NULL};
+                         const mr_image *mask, double exposure, int threads, entry *e) {
+    mr_ssim_options so = {exposure, 0, NULL, threads};
     mr_image *map = NULL, *picture = NULL;
     double rmse = 0.0, reference_rms = rms(reference), object_rmse = 0.0, object_mean = 0.0;
     mr_status status = mr_ssim(reference, image, &so, &e->ssim[v], &map);
-    if (status == MR_OK) status = mr_rmse(reference, image, &rmse);
+    if (status == MR_OK) status = mr_rmse_masked(reference, image, NULL, threads, &rmse, NULL);
     e->relative_rmse[v] = reference_rms > 0.0 ? rmse / reference_rms : rmse;
     // The same over the object: what a viewer looks at (metrics.h, masks).
     so.mask = mask;
     if (status == MR_OK) status = mr_ssim(reference, image, &so, &e->object_ssim[v], NULL);
-    if (status == MR_OK) status = mr_rmse_masked(reference, image, mask, &object_rmse, &object_mean);
+    if (status == MR_OK) status = mr_rmse_masked(reference, image, mask, threads, &object_rmse, &object_mean);
     e->object_relative_rmse[v] = object_mean > 0.0 ? object_rmse / object_mean : object_rmse;
     if (status == MR_OK) status = mr_ssim_map_visualise(map, 0.0, &picture);
     snprintf(e->map_names[v], sizeof e->map_names[v], "ssim_view%d_material%d.png", v, k);
@@ -558,7 +558,7 @@ static mr_status render_view(const settings *st, const char *dir, const mr_repor
         if (status == MR_OK && k > 0) {
             mr_image *mask = NULL;
             status = comparison_mask(reference_mask, plan, plan_entry != 0, &mask);
-            if (status == MR_OK) status = compare(dir, v, k, reference, image, mask, *exposure, e);
+            if (status == MR_OK) status = compare(dir, v, k, reference, image, mask, *exposure, st->threads, e);
             mr_image_free(mask);
         }
         if (k == 0)

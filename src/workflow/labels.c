@@ -737,7 +737,7 @@ mr_status mr_wf_label_ssim(const mr_wf_label_scene *scene, const mr_wf_spec *spe
         double lum = 0.0;
         for (size_t i = 0; i < (size_t)side * side; i++)
             for (int c = 0; c < 3; c++) lum += REC709[c] * a->pixels[3 * i + c];
-        mr_ssim_options o = {lum > 0.0 ? 0.18 * side * side / lum : 1.0, 0, NULL};
+        mr_ssim_options o = {lum > 0.0 ? 0.18 * side * side / lum : 1.0, 0, NULL, 0};
         double s = 0.0;
         status = mr_ssim(a, b, &o, &s, NULL);
         sum += s;
