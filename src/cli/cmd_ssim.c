@@ -119,8 +119,8 @@ int cmd_ssim(int argc, char **argv) {
         mr_ssim_options object = opts;
         object.mask = mask;
         if (status == MR_OK) status = mr_ssim(images[0], images[1], &object, &object_ssim, NULL);
-        if (status == MR_OK) status = mr_rmse_masked(images[0], images[1], mask, opts.threads, &object_rmse,
-                                                                   &object_mean);
+        if (status == MR_OK)
+            status = mr_rmse_masked(images[0], images[1], mask, opts.threads, &object_rmse, &object_mean);
     }
     if (status == MR_OK && map_path != NULL) {
         status = mr_ssim_map_visualise(map, 0.0, &picture);

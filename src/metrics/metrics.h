@@ -72,9 +72,9 @@ mr_status mr_rmse(const mr_image *a, const mr_image *b, double *out_rmse);
  * once, on `threads` threads (as mr_ssim_options.threads: 0 = automatic, mr_rmse's choice), and, if out_mean_a
  * is not NULL, the mean of a's values over the same pixels and channels: with the reference as a, rmse / mean
  * is the RMSE relative to the reference's mean radiance on the object. The mask is as for SSIM (header
- * comment). Errors as mr_rmse, and MR_ERR_INVALID_ARG for a mask of the wrong size or
- * channels, a value outside [0, 1] (naming the pixel), a mask that covers no pixel, or threads outside
- * 0 .. MR_METRICS_MAX_THREADS. The outputs are untouched on failure. */
+ * comment). Errors as mr_rmse, and MR_ERR_INVALID_ARG for a mask of the wrong size or channels, a value outside
+ * [0, 1] (naming the pixel), a mask that covers no pixel, or threads outside 0 .. MR_METRICS_MAX_THREADS. The
+ * outputs are untouched on failure. */
 mr_status mr_rmse_masked(const mr_image *a, const mr_image *b, const mr_image *mask, int threads,
                          double *out_rmse, double *out_mean_a);
 

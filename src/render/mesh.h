@@ -58,6 +58,7 @@ mr_status mr_mesh_world_build(const mr_mesh *src, int threads, mesh_world *mesh)
 /* The convexity test's automatic thread rule: a face costs about one root-to-leaf BVH walk (~1 us), so below
  * this a team costs more to start than it saves, and copies running side by side would share cores for nothing. */
 #define MR_MESH_PARALLEL_FACES 4096
+
 void mr_mesh_world_free(mesh_world *mesh);
 size_t mr_mesh_world_bytes(const mesh_world *mesh);
 
