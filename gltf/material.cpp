@@ -65,7 +65,6 @@ Object *as_object(Value &v) {
 }
 
 const double ZERO2[2] = {0, 0}, ONE2[2] = {1, 1}, ONE3[3] = {1, 1, 1}, ONE4[4] = {1, 1, 1, 1};
-const double ZERO3[3] = {0, 0, 0};
 
 void read_transform(const tinygltf::ExtensionMap &exts, mr_gltf_texture_ref *r) {
     auto it = exts.find(EXT_TRANSFORM);
