@@ -67,6 +67,8 @@ none "render, a sphere at 256^2" -- "$bin" render ggx diffuse=0.2 f0=0.04 alpha=
 none "render, the paper's material sphere mesh ($(grep -c '^f ' "$sphere_obj") faces)" -- \
     "$bin" render ggx diffuse=0.2 f0=0.04 alpha=0.3 --mesh "$sphere_obj" --size 96 THREADS -o mesh.exr
 none "ssim, 256^2" -- "$bin" ssim "$tmp/one/sphere.exr" "$tmp/two/sphere.exr" THREADS
+expect "ssim --threads out of range: a usage error naming it" 1 "--threads '-1': expected an integer in \\[0, 1024\\]" \
+    -- "$bin" ssim "$tmp/one/sphere.exr" "$tmp/two/sphere.exr" --threads -1
 none "remap" -- "$bin" remap --from ggx alpha=0.2 f0=0.3 --to ward THREADS
 none "metal2spec, WaterBottle's 2048^2 maps" -- "$bin" metal2spec --basecolor "$bottle/WaterBottle_baseColor.png" \
     --metallic-roughness "$bottle/WaterBottle_occlusionRoughnessMetallic.png" THREADS -o bottle_
