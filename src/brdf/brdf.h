@@ -119,6 +119,12 @@ struct mr_brdf_model {
      * [j*3 + channel]. Switch parameters have derivative 0. */
     void (*eval_grad)(const mr_brdf_model *model, const double *values, const double wi[3],
                       const double wo[3], double *d_diffuse, double *d_specular);
+
+    /* Optional (NULL: never): nonzero when the model rescales its LINEAR parameters at these packed values, so
+     * that f_r is not linear in them there (Mitsuba's energy trimming, brdf_internal.h: diffuse + specular > 1
+     * in some channel with trim on). Texture maps hold values where it does not: random sweeps draw there
+     * (remap/sweep.h, the TEXTURE region) and learned transforms leave such rows out (learn/sweep_table.h). */
+    int (*rescales)(const mr_brdf_model *model, const double *values);
 };
 
 /* A prepared state on the stack: `mr_brdf_state st; model->prepare(model, values, st.bytes);` */

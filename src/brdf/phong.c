@@ -104,6 +104,13 @@ static void phong_eval_grad(const mr_brdf_model *model, const double *values, co
     for (int c = 0; c < 3; c++) d_specular[PHONG_EXPONENT * 3 + c] = trim.scale * rho_s[c] * dS;
 }
 
+/* Mitsuba trims at these values (brdf.h, rescales). */
+static int phong_rescales(const mr_brdf_model *model, const double *values) {
+    double v[MR_BRDF_MAX_VALUES];
+    mr_brdf_clamp_values(model, values, v);
+    return mr_brdf_trim_compute(v + PHONG_DIFFUSE, v + PHONG_SPECULAR, v[PHONG_TRIM] >= 0.5).active;
+}
+
 const mr_brdf_model mr_brdf_phong = {
     .name = "phong",
     .summary = "modified Phong (Lafortune) + Lambert, Mitsuba's energy trimming",
@@ -115,4 +122,5 @@ const mr_brdf_model mr_brdf_phong = {
     .prepare = phong_prepare,
     .eval = phong_eval,
     .eval_grad = phong_eval_grad,
+    .rescales = phong_rescales,
 };

@@ -147,6 +147,13 @@ static void ward_eval_grad(const mr_brdf_model *model, const double *values, con
     for (int c = 0; c < 3; c++) d_specular[WARD_ALPHA * 3 + c] = trim.scale * rho_s[c] * dS;
 }
 
+/* Mitsuba trims at these values (brdf.h, rescales). */
+static int ward_rescales(const mr_brdf_model *model, const double *values) {
+    double v[MR_BRDF_MAX_VALUES];
+    mr_brdf_clamp_values(model, values, v);
+    return mr_brdf_trim_compute(v + WARD_DIFFUSE, v + WARD_SPECULAR, v[WARD_TRIM] >= 0.5).active;
+}
+
 #define WARD_DESCRIPTOR(cname, mname, msummary, mflags, index)                                           \
     const mr_brdf_model cname = {                                                                        \
         .name = mname,                                                                                   \
@@ -159,6 +166,7 @@ static void ward_eval_grad(const mr_brdf_model *model, const double *values, con
         .prepare = ward_prepare,                                                                         \
         .eval = ward_eval,                                                                               \
         .eval_grad = ward_eval_grad,                                                                     \
+        .rescales = ward_rescales,                                                                       \
     }
 
 WARD_DESCRIPTOR(mr_brdf_ward, "ward", "Ward 1992 (Mitsuba variant 'ward'), 1/sqrt(cos_i cos_o) normalisation",

@@ -40,7 +40,8 @@ static void print_help(void) {
         "                      neighbour; the reference the learned transforms are judged against. Slow: seconds\n"
         "                      to minutes per texture set (progress on stderr)\n"
         "  --tolerance T       --direct: quantisation step, colours in sRGB-encoded units, roughness in ln units\n"
-        "                      (default 6/255 = 0.0235; 1/255 keeps 8-bit maps exact and costs more)\n"
+        "                      (default 6/255 = 0.0235 with maps; 1/255 keeps 8-bit maps exact and costs more;\n"
+        "                      constants alone are remapped at their exact values: 1e-9)\n"
         "  --cache FILE        --direct: answers kept across runs (created if missing; refused if it was made\n"
         "                      for other models, options or scene)\n"
         "  --size N, --light L --direct: the fit scene (default 64, 45; as 'matremap remap')\n"
@@ -49,7 +50,9 @@ static void print_help(void) {
         "parameter of the target model (the folder of PREFIX is made if missing), the first input map's alpha\n"
         "carried into RGB outputs, and\n"
         "PREFIXflags.png: red where a texel lay outside a learned transform's training domain (extrapolated:\n"
-        "the paper's Fig. 19 failure) or, with --direct, where its fit did not converge (under-resolved,\n"
+        "the paper's Fig. 19 failure) or was converted by a transform that failed its check against the remaps\n"
+        "('matremap learn' warns; every texel is then red), or, with --direct, where its fit did not converge\n"
+        "(under-resolved,\n"
         "at-bound, unreachable), green where an output left its parameter's range and was clamped, blue\n"
         "where an input was clamped or not finite. PREFIX may name a folder ('out/'). No output may be an input\n"
         "(exit 2). The outputs are written all or none: to hidden files beside them, renamed into place when every\n"
@@ -288,7 +291,7 @@ int cmd_convert(int argc, char **argv) {
         } else if (strcmp(argv[i], "--direct") == 0) {
             direct = 1;
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--tolerance", &v)) != 0) {
-            if (r < 0 || !cli_parse_double(COMMAND, "--tolerance", v, 1e-9, 1.0, &dopts.tolerance))
+            if (r < 0 || !cli_parse_double(COMMAND, "--tolerance", v, MR_DIRECT_MIN_TOLERANCE, 1.0, &dopts.tolerance))
                 return CLI_EXIT_USAGE;
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--cache", &v)) != 0) {
             if (r < 0) return CLI_EXIT_USAGE;
@@ -403,6 +406,15 @@ int cmd_convert(int argc, char **argv) {
     }
     const mr_learned *chain[MR_LEARNED_MAX_HOPS];
     for (int h = 0; h < hops; h++) chain[h] = l.all[path[h]];
+    for (int h = 0; h < hops && !direct; h++) // a transform that failed its check: said before the work
+        if (chain[h]->check.done && !chain[h]->check.passed)
+            fprintf(stderr, "matremap convert: warning: transform %s (%s -> %s by %s) failed its check against the "
+                    "remaps when it was learned (docs/learn.md, \"The check\"); every texel it converts is flagged "
+                    "(red)\n", l.paths[path[h]], chain[h]->source->name, chain[h]->target->name,
+                    mr_learn_method_name(chain[h]->method));
+    // Constants alone are one texel: remapped at their exact values, not at a quantised neighbour (which the
+    // default step puts up to 12 % away for a dark colour), unless --tolerance says otherwise.
+    if (direct && !maps_given && dopts.tolerance == 0.0) dopts.tolerance = MR_DIRECT_MIN_TOLERANCE;
     mr_transform_kind *kind = NULL;
     progress_state progress = {isatty(STDERR_FILENO) && !json, cli_now()};
     dopts.threads = threads;
@@ -455,17 +467,18 @@ int cmd_convert(int argc, char **argv) {
         if (progress.draw && direct) fprintf(stderr, "\r\033[K");
         if (status != MR_OK) code = cli_fail(COMMAND, status);
     }
-    size_t n = 0, counts[4] = {0};
+    size_t n = 0, counts[5] = {0}; // red, green, blue, any, failed transform
     int width = 0, height = 0;
     if (code == CLI_EXIT_OK) {
         width = out[0]->width;
         height = out[0]->height;
         n = (size_t)width * (size_t)height;
         for (size_t i = 0; i < n; i++) {
-            counts[0] += (flags[i] & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED)) != 0;
+            counts[0] += (flags[i] & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED | MR_WF_UNCHECKED)) != 0;
             counts[1] += (flags[i] & MR_WF_CLAMPED_OUTPUT) != 0;
             counts[2] += (flags[i] & (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT)) != 0;
             counts[3] += flags[i] != 0;
+            counts[4] += (flags[i] & MR_WF_UNCHECKED) != 0;
         }
     }
     // Write: every output, then the flag map, all or none (stage_outputs).
@@ -482,7 +495,7 @@ int cmd_convert(int argc, char **argv) {
             status = mr_image_create(width, height, 3, &images[j]);
             for (size_t i = 0; status == MR_OK && i < n; i++) {
                 float *px = images[j]->pixels + 3 * i;
-                px[0] = (flags[i] & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED)) ? 1.0f : 0.0f;
+                px[0] = (flags[i] & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED | MR_WF_UNCHECKED)) ? 1.0f : 0.0f;
                 px[1] = (flags[i] & MR_WF_CLAMPED_OUTPUT) ? 1.0f : 0.0f;
                 px[2] = (flags[i] & (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT)) ? 1.0f : 0.0f;
             }
@@ -519,9 +532,9 @@ int cmd_convert(int argc, char **argv) {
             }
             printf("], \"width\": %d, \"height\": %d, \"texels\": %zu, \"seconds\": {\"convert\": %.6f, \"total\": "
                    "%.6f}, \"flags\": {\"extrapolated_or_unconverged\": %zu, \"clamped_output\": %zu, "
-                   "\"clamped_input\": %zu, "
+                   "\"clamped_input\": %zu, \"failed_check\": %zu, "
                    "\"any\": %zu}, \"outputs\": [",
-                   width, height, n, convert_seconds, seconds, counts[0], counts[1], counts[2], counts[3]);
+                   width, height, n, convert_seconds, seconds, counts[0], counts[1], counts[2], counts[4], counts[3]);
             for (int j = 0; any_map && j <= out_count; j++) {
                 printf("%s", j ? ", " : "");
                 cli_json_string(stdout, names[j]);
@@ -544,8 +557,9 @@ int cmd_convert(int argc, char **argv) {
                     printf(" %s=%.6g", target->params[j].name, out[j]->pixels[0]);
             printf("\n");
             if (counts[3])
-                fprintf(stderr, "matremap convert: note: %s%s%s\n",
-                        counts[0] ? "outside the transform's training domain (extrapolated) " : "",
+                fprintf(stderr, "matremap convert: note: %s%s%s%s\n",
+                        counts[4] ? "converted by a transform that failed its check against the remaps; " : "",
+                        counts[0] > counts[4] ? "outside the transform's training domain (extrapolated) " : "",
                         counts[1] ? "an output was clamped into its range " : "",
                         counts[2] ? "an input was clamped or not finite" : "");
         } else {
@@ -556,9 +570,10 @@ int cmd_convert(int argc, char **argv) {
                        counts[2]);
             else
                 printf("matremap convert: %s -> %s through %d transform%s, %dx%d = %zu texels in %.2f s (convert %.3f "
-                       "s): %zu extrapolated (outside the training domain), %zu clamped outputs, %zu clamped inputs\n",
+                       "s): %zu extrapolated (outside the training domain) or by a transform that failed its check "
+                       "(%zu), %zu clamped outputs, %zu clamped inputs\n",
                        source->name, target->name, hops, hops == 1 ? "" : "s", width, height, n, seconds,
-                       convert_seconds, counts[0], counts[1], counts[2]);
+                       convert_seconds, counts[0], counts[4], counts[1], counts[2]);
             fprintf(stderr, "matremap convert: wrote");
             for (int j = 0; j <= out_count; j++) fprintf(stderr, " %s", names[j]);
             fprintf(stderr, "\n");

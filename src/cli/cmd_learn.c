@@ -56,6 +56,8 @@ static void print_help(void) {
         "                      of searching it (the search fits up to ~200 candidates per output)\n"
         "  --threads T         svr search / mlp training threads (default: all cores; results do not depend on it)\n"
         "  --all-outcomes      keep local-minimum rows too\n"
+        "  --keep-trimmed      keep the rows where the source rescales its reflectances (Ward's and Phong's energy\n"
+        "                      trimming, diffuse + specular > 1), left out by default: no texel lies there\n"
         "  --plots DIR         the paper's cross sections as SVG (gnuplot): target roughness against source\n"
         "                      roughness, target specular against source specular coloured by roughness, with\n"
         "                      the rows and the learned curves (DIR/roughness.svg, DIR/specular.svg, data as CSV)\n"
@@ -274,6 +276,22 @@ static void print_summary(const mr_learned *t, const char *output, double second
                    s->kind == MR_LEARNED_CHANNEL ? suffix[s->channel] : "", t->rmse[j]);
         }
         printf("}");
+        const mr_learned_check *k = &t->check;
+        printf(", \"check\": {\"done\": %s, \"passed\": %s, \"rows\": %ld, \"max_relative_error\": %g, "
+               "\"max_dssim\": %g, ", k->done ? "true" : "false", k->passed ? "true" : "false", k->rows,
+               MR_LEARNED_MAX_RELATIVE_ERROR, MR_LEARNED_MAX_DSSIM);
+        if (k->done && !isnan(k->dssim_mean))
+            printf("\"dssim_mean\": %.6g, \"dssim_p90\": %.6g, ", k->dssim_mean, k->dssim_p90);
+        else
+            printf("\"dssim_mean\": null, \"dssim_p90\": null, ");
+        printf("\"relative_error\": {");
+        for (int j = 0; j < t->output_count; j++) {
+            const mr_learned_slot *s = &t->outputs[j];
+            static const char *const suffix[3] = {"_r", "_g", "_b"};
+            printf("%s\"%s%s\": {\"median\": %.6g, \"p90\": %.6g}", j ? ", " : "", t->target->params[s->param].name,
+                   s->kind == MR_LEARNED_CHANNEL ? suffix[s->channel] : "", k->relative_median[j], k->relative_p90[j]);
+        }
+        printf("}}");
         if (t->method == MR_LEARN_PARAMETRIC) {
             printf(", \"roughness\": [");
             for (int k = 0; k <= t->roughness_degree; k++) printf("%s%.9g", k ? ", " : "", t->roughness[k]);
@@ -299,7 +317,20 @@ static void print_summary(const mr_learned *t, const char *output, double second
         char name[80];
         snprintf(name, sizeof name, "%s%s", t->target->params[s->param].name,
                  s->kind == MR_LEARNED_CHANNEL ? (const char *[]){"_r", "_g", "_b"}[s->channel] : "");
-        printf("  output %-14s held-out RMSE %.4g\n", name, t->rmse[j]);
+        if (t->check.done)
+            printf("  output %-14s held-out RMSE %.4g; against the remaps: median %.2g %%, 9 in 10 within %.2g %%\n",
+                   name, t->rmse[j], 100.0 * t->check.relative_median[j], 100.0 * t->check.relative_p90[j]);
+        else
+            printf("  output %-14s held-out RMSE %.4g\n", name, t->rmse[j]);
+    }
+    if (t->check.done) {
+        if (isnan(t->check.dssim_mean))
+            printf("  check  %s: no renders (the sweep's fit scene is not one this version renders)\n",
+                   t->check.passed ? "passed" : "FAILED");
+        else
+            printf("  check  %s: SSIM below the remaps' by %.2g on average, 9 in 10 within %.2g (%ld held-out rows; "
+                   "bounds %g %%, %g)\n", t->check.passed ? "passed" : "FAILED", t->check.dssim_mean,
+                   t->check.dssim_p90, t->check.rows, 100.0 * MR_LEARNED_MAX_RELATIVE_ERROR, MR_LEARNED_MAX_DSSIM);
     }
     for (int i = 0; i < t->carry_count; i++) {
         const mr_learned_carry *c = &t->carries[i];
@@ -333,6 +364,23 @@ static void print_summary(const mr_learned *t, const char *output, double second
         if (strncmp(p, "note: ", 6) == 0) printf("  %.*s\n", (int)(e - p), p);
         p = e + 1;
     }
+}
+
+/* The warning of a transform that failed its check: which bound, by how much, and what to do. */
+static void warn_check(const mr_learned *t) {
+    const mr_learned_check *k = &t->check;
+    fprintf(stderr, "matremap learn: warning: the transform fails its check against the remaps on %ld held-out rows:",
+            k->rows);
+    for (int j = 0; j < t->output_count; j++)
+        if (k->relative_p90[j] > MR_LEARNED_MAX_RELATIVE_ERROR)
+            fprintf(stderr, " %s is more than %g %% off in more than 1 row in 10 (9 in 10 within %.3g %%);",
+                    t->target->params[t->outputs[j].param].name, 100.0 * MR_LEARNED_MAX_RELATIVE_ERROR,
+                    100.0 * k->relative_p90[j]);
+    if (!isnan(k->dssim_p90) && k->dssim_p90 > MR_LEARNED_MAX_DSSIM)
+        fprintf(stderr, " its renders lose more than %g SSIM to the remaps' in more than 1 row in 10 (%.3g);",
+                MR_LEARNED_MAX_DSSIM, k->dssim_p90);
+    fprintf(stderr, " convert flags every texel it converts with it. Sweep more samples of the values your textures "
+            "hold (sweep --random N, --region texture), try another --method, or convert with --direct.\n");
 }
 
 int cmd_learn(int argc, char **argv) {
@@ -391,6 +439,8 @@ int cmd_learn(int argc, char **argv) {
             plots = v;
         } else if (strcmp(argv[i], "--all-outcomes") == 0) {
             to.keep_all_outcomes = 1;
+        } else if (strcmp(argv[i], "--keep-trimmed") == 0) {
+            to.keep_rescaled = 1;
         } else if (strcmp(argv[i], "--json") == 0) {
             json = 1;
         } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
@@ -419,6 +469,10 @@ int cmd_learn(int argc, char **argv) {
     mr_sweep_table tab;
     mr_status status = mr_sweep_table_load(files, file_count, &to, &tab);
     if (status != MR_OK) return cli_fail(COMMAND, status);
+    if (tab.rescaled > 0)
+        fprintf(stderr, "matremap learn: note: %zu of %zu rows left out: %s rescales their source values (energy "
+                "trimming, diffuse + specular > 1), where no texel of a texture lies (--keep-trimmed keeps them)\n",
+                tab.rescaled, tab.rescaled + tab.n + tab.skipped, tab.source->name);
     progress_state ps = {isatty(STDERR_FILENO), started};
     o.progress = draw_progress;
     o.progress_user = &ps;
@@ -450,6 +504,8 @@ int cmd_learn(int argc, char **argv) {
         return status != MR_OK ? cli_fail(COMMAND, status) : code;
     }
     print_summary(t, output, cli_now() - started, json);
+    fflush(stdout); // the summary before the warning, also when both go to one pipe
+    if (!t->check.passed) warn_check(t);
     mr_sweep_table_free(&tab);
     mr_learned_free(t);
     return CLI_EXIT_OK;

@@ -32,9 +32,14 @@ static void print_help(void) {
            "                              axes after it) for a Cartesian product, first axis slowest: sample\n"
            "                              index = ((i1 * n2) + i2) * n3 + i3 ...\n"
            "  --random N                  N samples, each continuous source parameter drawn uniformly from its\n"
-           "                              range (log-uniformly for roughness-like parameters flagged log-scale),\n"
-           "                              RGB channels independently; parameters given after --from, switches and\n"
-           "                              fixed extension factors are held\n"
+           "                              range (log-uniformly for roughness-like parameters flagged log-scale);\n"
+           "                              parameters given after --from, switches and fixed extension factors are\n"
+           "                              held\n"
+           "  --region R                  where --random draws: texture (default): the values texture maps hold,\n"
+           "                              RGB parameters grey (learn applies them per channel) and only where the\n"
+           "                              source is linear in its reflectances (Ward, Phong: diffuse + specular\n"
+           "                              <= 1, no energy trimming); range: every parameter over its whole range,\n"
+           "                              RGB channels independently\n"
            "  --seed S                    seed of --random (default 1); sample i depends only on (S, i)\n"
            "Values given after --from hold for every sample; a grid axis overrides them. Values given after --to\n"
            "hold the target's fixed parameters and switches (e.g. Ward's trim), as in 'matremap remap';\n"
@@ -280,7 +285,8 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
     const char *from_name = NULL, *to_name = NULL, *hold_list = NULL;
     const char *from_assignments[MAX_ASSIGNMENTS], *to_assignments[MAX_ASSIGNMENTS];
     const char *grid_axes[MR_SWEEP_MAX_AXES];
-    int from_count = 0, to_count = 0, axis_count = 0, random_count = 0, seed_given = 0;
+    int from_count = 0, to_count = 0, axis_count = 0, random_count = 0, seed_given = 0, region_given = 0;
+    mr_sweep_region region = MR_SWEEP_REGION_TEXTURE;
     unsigned long long seed = 1;
     mr_fit_scene_options scene = {0};
     mr_remap_strategy strategy = MR_REMAP_AUTO;
@@ -318,6 +324,11 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--seed", &value))) {
             if (taken < 0 || !parse_seed(value, &seed)) return CLI_EXIT_USAGE;
             seed_given = 1;
+        } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--region", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (mr_sweep_region_from_name(value, &region) != MR_OK)
+                return cli_usage_error("sweep", "--region %s", mr_last_error());
+            region_given = 1;
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--output", &value)) ||
                    (taken = cli_take_option("sweep", argc, argv, &i, "-o", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
@@ -363,6 +374,7 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
     if (axis_count == 0 && random_count == 0)
         return cli_usage_error("sweep", "missing the samples: --grid name=lo:hi:n[:log] or --random N");
     if (seed_given && random_count == 0) return cli_usage_error("sweep", "--seed goes with --random");
+    if (region_given && random_count == 0) return cli_usage_error("sweep", "--region goes with --random");
     if (a->output == NULL)
         return cli_usage_error("sweep", "missing -o DATA.csv");
 
@@ -393,6 +405,7 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
         spec->sampling = MR_SWEEP_RANDOM;
         spec->random_count = random_count;
         spec->seed = seed;
+        spec->region = region;
     } else {
         spec->sampling = MR_SWEEP_GRID;
         for (int k = 0; k < axis_count; k++) {

@@ -12,6 +12,9 @@
 #include "learn/learned.h"
 #include "learn/svr.h"
 #include "mr_internal.h"
+#include "metrics/metrics.h"
+#include "remap/remap_file.h"
+#include "remap/sweep.h"
 #include "nn/mlp.h"
 
 #define DEFAULT_VALIDATION 0.2
@@ -104,6 +107,11 @@ static void diffuse_at(const mr_brdf_model *model, const double *values, int p, 
     double v[MR_BRDF_MAX_VALUES];
     memcpy(v, values, sizeof v);
     const int at = mr_brdf_param_offset(model, p);
+    if (model->rescales != NULL) // the lobe alone: the others' reflectances must not trim it (brdf.h, rescales)
+        for (int q = 0; q < model->param_count; q++)
+            if (q != p && model->params[q].role == MR_PARAM_LINEAR)
+                for (int c = 0; c < model->params[q].channels; c++)
+                    v[mr_brdf_param_offset(model, q) + c] = model->params[q].min_value;
     for (int c = 0; c < model->params[p].channels; c++) v[at + c] = value;
     static const double n[3] = {0.0, 0.0, 1.0}, g1[3] = {0.8, 0.0, 0.6}, g2[3] = {-0.28, 0.96, 0.0};
     double g2n[3] = {g2[0], g2[1], 0.0}; // below: lifted to z = 0.3 and normalised
@@ -189,15 +197,26 @@ static mr_status fit_parametric(const mr_sweep_table *tab, mr_learned *t, const 
         status = mr_fit_polynomial_ex(alpha, alpha2, m, t->roughness_degree, t->roughness_origin, t->roughness, NULL);
     if (status == MR_OK) status = mr_fit_specular_slope(alpha, ss, st, m, with_inverse, &t->slope);
     if (status == MR_OK && t->output_count == 3) { // the diffuse the fits add: k_d(alpha) s, the carry removed
+        // Rows whose fitted diffuse sits on its lower bound are left out: there the fit wanted less than the range
+        // allows (a diffuse taking back what a wider target lobe adds, from a source diffuse smaller than that),
+        // so the row shows a bound, not the slope (keeping them bends k_d toward 0 everywhere).
+        const mr_brdf_param *q = &t->target->params[t->outputs[2].param];
+        const double floor_value = q->min_value + 1e-9 * (q->max_value - q->min_value);
+        size_t kept = 0;
         for (size_t r = 0; r < m; r++) {
             const double *sv = tab->source_values + idx[r] * (size_t)tab->source_count;
             const double *tv = tab->target_values + idx[r] * (size_t)tab->target_count;
+            if (slot_value(t->target, &t->outputs[2], tv) <= floor_value) continue;
             const double d = output_value(t, &t->outputs[2], sv, tv);
-            for (int c = 0; c < 3; c++) st[3 * r + c] = d;
-            if (s_ch == 3) // per channel: the grey rows make d the same in each, against each channel's specular
-                for (int c = 0; c < 3; c++) ss[3 * r + c] = sv[s_at + c];
+            alpha[kept] = alpha[r];
+            for (int c = 0; c < 3; c++) {
+                st[3 * kept + c] = d;
+                // per channel: the grey rows make d the same in each, against each channel's specular
+                ss[3 * kept + c] = s_ch == 3 ? sv[s_at + c] : ss[3 * r + c];
+            }
+            kept++;
         }
-        status = mr_fit_specular_slope(alpha, ss, st, m, with_inverse, &t->diffuse_slope);
+        status = mr_fit_specular_slope(alpha, ss, st, kept, with_inverse, &t->diffuse_slope);
     }
     (void)o;
     free(alpha);
@@ -302,6 +321,102 @@ static mr_status measure(const mr_sweep_table *tab, const mr_learned *t, const s
     return status;
 }
 
+static int is_roughness(const mr_brdf_param *p);
+
+/* ---- the check against the remaps (learned.h, mr_learned_check) ---------------------------------------------- */
+
+static int compare_doubles(const void *a, const void *b) {
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The q-quantile of v[0..n) (sorted in place; nearest rank), 0 for n = 0. */
+static double quantile(double *v, size_t n, double q) {
+    if (n == 0) return 0.0;
+    qsort(v, n, sizeof *v, compare_doubles);
+    size_t k = (size_t)ceil(q * (double)n);
+    return v[k > 0 ? k - 1 : 0];
+}
+
+/* dSSIM of rows idx[0..m) (at most MR_LEARNED_CHECK_MAX_RENDERS of them) into d[], their count into *n: the row's
+ * own SSIM less the SSIM of the learned answer w (rows of the target's packed values) to the source's render, in
+ * the rows' fit scene. MR_ERR_FORMAT when the scene line is not one this version renders (the caller reports NaN). */
+static mr_status check_renders(const mr_sweep_table *tab, const mr_learned *t, const size_t *idx, size_t m,
+                               const double *w, double *d, size_t *n) {
+    mr_fit_scene_options fit;
+    *n = 0;
+    mr_status status = mr_sweep_scene_parse(tab->scene, &fit);
+    if (status != MR_OK) return status;
+    mr_scene scene = mr_remap_file_scene(&fit);
+    mr_render_plan *plan = NULL;
+    status = mr_render_plan_create(&scene, &plan);
+    const size_t count = m < MR_LEARNED_CHECK_MAX_RENDERS ? m : MR_LEARNED_CHECK_MAX_RENDERS;
+    for (size_t r = 0; status == MR_OK && r < count; r++) {
+        mr_image *source = NULL, *learned = NULL;
+        double ssim = 0.0;
+        status = mr_render(plan, t->source, tab->source_values + idx[r] * (size_t)tab->source_count,
+                           MR_COMPONENT_FULL, &source);
+        if (status == MR_OK)
+            status = mr_render(plan, t->target, w + r * (size_t)tab->target_count, MR_COMPONENT_FULL, &learned);
+        if (status == MR_OK) status = mr_ssim(learned, source, NULL, &ssim, NULL);
+        if (status == MR_OK) d[(*n)++] = tab->ssim[idx[r]] - ssim;
+        mr_image_free(source);
+        mr_image_free(learned);
+    }
+    mr_render_plan_free(plan);
+    return status;
+}
+
+/* t's check on the held-out rows idx[0..m): see learned.h. */
+static mr_status check(const mr_sweep_table *tab, const mr_learned *t, const size_t *idx, size_t m,
+                       mr_learned_check *out) {
+    const size_t sc = (size_t)tab->source_count, tc = (size_t)tab->target_count;
+    double *in = malloc(m * sc * sizeof *in), *w = malloc(m * tc * sizeof *w);
+    double *rel = malloc(3 * m * sizeof *rel), *d = malloc(m * sizeof *d);
+    mr_status status = in && w && rel && d ? MR_OK : mr_fail(MR_ERR_NOMEM, "learn: out of memory");
+    for (size_t r = 0; status == MR_OK && r < m; r++) memcpy(in + r * sc, tab->source_values + idx[r] * sc, sc * sizeof *in);
+    if (status == MR_OK) status = mr_learned_apply_batch(t, m, in, w, NULL);
+    memset(out, 0, sizeof *out);
+    out->passed = 1;
+    for (int j = 0; status == MR_OK && j < t->output_count; j++) {
+        const mr_learned_slot *s = &t->outputs[j];
+        const mr_brdf_param *q = &t->target->params[s->param];
+        const int at = mr_brdf_param_offset(t->target, s->param) + (s->kind == MR_LEARNED_CHANNEL ? s->channel : 0);
+        const double floor_value = MR_LEARNED_CHECK_FLOOR * fmin(1.0, q->max_value - q->min_value);
+        size_t n = 0;
+        for (size_t r = 0; r < m; r++) {
+            if (is_roughness(q) && tab->outcome[idx[r]] == MR_FIT_UNDER_RESOLVED) continue; // only bounded
+            const double *tv = tab->target_values + idx[r] * tc;
+            for (int c = 0; c < (s->kind == MR_LEARNED_GREY ? 3 : 1); c++)
+                rel[n++] = fabs(w[r * tc + (size_t)(at + c)] - tv[at + c]) / fmax(fabs(tv[at + c]), floor_value);
+        }
+        out->relative_p90[j] = quantile(rel, n, 0.9);
+        out->relative_median[j] = quantile(rel, n, 0.5);
+        if (out->relative_p90[j] > MR_LEARNED_MAX_RELATIVE_ERROR) out->passed = 0;
+    }
+    size_t n = 0;
+    if (status == MR_OK) {
+        mr_status rendered = check_renders(tab, t, idx, m, w, d, &n);
+        if (rendered == MR_ERR_NOMEM) status = rendered;
+        if (rendered != MR_OK) n = 0;
+    }
+    if (status == MR_OK) {
+        double sum = 0.0;
+        for (size_t r = 0; r < n; r++) sum += d[r];
+        out->dssim_mean = n ? sum / (double)n : NAN;
+        out->dssim_p90 = n ? quantile(d, n, 0.9) : NAN;
+        if (n && out->dssim_p90 > MR_LEARNED_MAX_DSSIM) out->passed = 0;
+        out->rows = (long)m;
+        out->done = m > 0;
+        if (!out->done) out->passed = 0;
+    }
+    free(in);
+    free(w);
+    free(rel);
+    free(d);
+    return status;
+}
+
 /* Learned carries: per-channel slopes through the origin over rows idx[0..m). */
 static void fit_carries(const mr_sweep_table *tab, mr_learned *t, const size_t *idx, size_t m) {
     for (int i = 0; i < t->carry_count; i++) {
@@ -354,12 +469,12 @@ static mr_status plan(const mr_sweep_table *tab, mr_learned *t) {
             if (p->lobe != MR_LOBE_DIFFUSE || p->role != MR_PARAM_LINEAR || p->channels != q->channels) continue;
             if (used_source[sp]) continue;
             mr_learned_carry c = {tp, sp, 0, {1.0, 1.0, 1.0}};
-            if (su[sp].varies && tu[tp].varies && t->method == MR_LEARN_PARAMETRIC) {
-                c.learned = 1;
-            } else if (!su[sp].varies) {
-                const double ratio = lobe_ratio(src, tab->source_values, sp, tgt, tab->target_values, tp);
-                if (ratio <= 0.0) continue;
+            const double ratio = lobe_ratio(src, tab->source_values, sp, tgt, tab->target_values, tp);
+            if (su[sp].varies && t->method != MR_LEARN_PARAMETRIC) continue; // a feature of the regression
+            if (ratio > 0.0) {
                 for (int ch = 0; ch < 3; ch++) c.factor[ch] = ratio;
+            } else if (su[sp].varies && tu[tp].varies) {
+                c.learned = 1;
             } else {
                 continue;
             }
@@ -514,6 +629,7 @@ mr_status mr_learn(const mr_sweep_table *tab, const mr_learn_options *opts, mr_l
         status = fit(tab, t, order + n_val, n_train, &o, inverse);
         if (status == MR_OK) status = measure(tab, t, order, n_val, t->rmse);
     }
+    int checked = 0;
     if (status == MR_OK && t->method == MR_LEARN_PARAMETRIC && o.slope_inverse == 0) {
         mr_learned trial = *t;
         trial.svr = NULL;
@@ -524,10 +640,15 @@ mr_status mr_learn(const mr_sweep_table *tab, const mr_learn_options *opts, mr_l
             if (rmse[1] < 0.99 * t->rmse[1]) { // clearly better held-out specular: keep the c5 / alpha term
                 inverse = 1;
                 memcpy(t->rmse, rmse, sizeof rmse);
+                status = check(tab, &trial, order, n_val, &t->check);
+                checked = 1;
             }
         }
-        status = MR_OK;
+        if (status != MR_ERR_NOMEM) status = MR_OK;
     }
+    // The check, on the transform fitted without the held-out rows (the one refitted on every row below is
+    // checked by them only through this one).
+    if (status == MR_OK && !checked) status = check(tab, t, order, n_val, &t->check);
     if (o.progress) o.progress("fit", 0.5, o.progress_user);
     // The transform returned: refitted on every row (the MLP keeps its early-stopped network).
     if (status == MR_OK && t->method != MR_LEARN_MLP) {

@@ -150,6 +150,7 @@ static mr_status apply_chunk(const mr_learned *t, size_t n, const double *in, do
             }
         }
         wk->coloured[i] = grey && coloured;
+        if (t->check.done && !t->check.passed) f |= MR_WF_UNCHECKED;
         if (flags != NULL) flags[i] = f;
     }
     for (size_t i = 0; i < n; i++) { // per channel: channel c of the GREY features in, channel c of GREY outputs out

@@ -59,6 +59,8 @@
  *   carries N    then N lines: carry TARGET_PARAM SOURCE_PARAM learned|lobes F_R [F_G F_B]
  *   validation FRACTION SEED TRAIN_ROWS VALIDATION_ROWS
  *   rmse R1 ... RN                       (one per output, raw units)
+ *   check ROWS PASSED DSSIM_MEAN DSSIM_P90 MEDIAN1 P90_1 ... MEDIANN P90_N   (version 2; mr_learned_check;
+ *                                        ROWS 0: not checked, PASSED 0 or 1, a NaN dSSIM written as "nan")
  *   provenance N then N lines: | TEXT    (the sweeps' files, row counts and header lines)
  *   the method's block: parametric: "roughness DEGREE ORIGIN C0 .. C4", "slope INVERSE C0 .. C5" and, with a
  *     third output, "diffuse_slope INVERSE C0 .. C5";
@@ -92,7 +94,7 @@ extern "C" {
 #endif
 
 #define MR_LEARNED_FILE_MAGIC "matremap-transform"
-#define MR_LEARNED_FILE_VERSION 1
+#define MR_LEARNED_FILE_VERSION 2 /* 2 adds the check line; version 1 files are read as unchecked */
 #define MR_LEARNED_MAX_SLOTS MR_BRDF_MAX_VALUES /* features, outputs */
 #define MR_LEARNED_MAX_PROVENANCE 4096          /* provenance lines kept */
 #define MR_LEARNED_MAX_HOPS 8                    /* transforms in one chain */
@@ -100,7 +102,8 @@ extern "C" {
 /* Flags a texel may get from a learned transform, beyond workflow.h's mr_wf_flag bits (which share the byte). */
 enum {
     MR_WF_EXTRAPOLATED = 1u << 4,   /* a feature lay outside the transform's training domain */
-    MR_WF_CLAMPED_OUTPUT = 1u << 5  /* an output left the target parameter's range and was clamped */
+    MR_WF_CLAMPED_OUTPUT = 1u << 5, /* an output left the target parameter's range and was clamped */
+    MR_WF_UNCHECKED = 1u << 7       /* the transform failed its check against the remaps (mr_learned_check) */
 };
 
 typedef enum mr_learn_method {
@@ -137,6 +140,32 @@ typedef struct mr_learned_carry {
 struct mr_svr;
 struct mr_mlp;
 
+/* The check of a transform against the remaps themselves (the answers of `convert --direct`, without its
+ * quantisation) on the held-out rows, in the units a user reads (docs/learn.md, "The check"):
+ *   - per output, the relative error |learned - remap| / max(|remap|, MR_LEARNED_CHECK_FLOOR min(1, range)) per
+ *     row and channel (the floor: near black, a small absolute error is no error a user sees)
+ *     (a roughness output skips the rows whose roughness the fit scene only bounds: outcome under-resolved), its
+ *     median and 90th percentile;
+ *   - dSSIM: the remap's own SSIM to the source's render (the row's ssim) less the learned answer's, both in the
+ *     rows' fit scene, over at most MR_LEARNED_CHECK_MAX_RENDERS held-out rows: its mean and 90th percentile.
+ * A transform passes when every output's 90th percentile is at most MR_LEARNED_MAX_RELATIVE_ERROR and the dSSIM's
+ * at most MR_LEARNED_MAX_DSSIM: then 9 texels in 10 of a texture set inside its domain come within those bounds of
+ * what --direct gives. `learn` warns about a transform that fails; `convert` warns too and flags every texel it
+ * converts with it (MR_WF_UNCHECKED). */
+#define MR_LEARNED_MAX_RELATIVE_ERROR 0.10
+#define MR_LEARNED_CHECK_FLOOR 0.05
+#define MR_LEARNED_MAX_DSSIM 0.02
+#define MR_LEARNED_CHECK_MAX_RENDERS 256
+
+typedef struct mr_learned_check {
+    int done;                                    /* 0: not checked (a version 1 file); the rest is then 0 */
+    int passed;                                  /* 1: within both bounds */
+    long rows;                                   /* held-out rows checked */
+    double relative_median[MR_LEARNED_MAX_SLOTS]; /* per output */
+    double relative_p90[MR_LEARNED_MAX_SLOTS];
+    double dssim_mean, dssim_p90;                /* NaN when the rows' fit scene could not be rendered */
+} mr_learned_check;
+
 typedef struct mr_learned {
     const mr_brdf_model *source, *target;
     mr_learn_method method;
@@ -149,6 +178,7 @@ typedef struct mr_learned {
     unsigned long long seed;
     long train_rows, validation_rows;
     double rmse[MR_LEARNED_MAX_SLOTS];             /* per output, on the held-out rows, raw units */
+    mr_learned_check check;                        /* against the remaps on the held-out rows */
     char *provenance;                              /* '\n'-terminated lines */
     /* PARAMETRIC */
     int roughness_degree, roughness_origin;

@@ -145,6 +145,12 @@ static mr_status format_all(const mr_learned *t, text_out *o) {
     }
     put(o, "validation %a %llu %ld %ld\n", t->validation_fraction, t->seed, t->train_rows, t->validation_rows);
     put_values(o, "rmse", t->rmse, t->output_count);
+    const mr_learned_check *k = &t->check;
+    put(o, "check %ld %d %a %a", k->done ? k->rows : 0L, k->done && k->passed, k->done ? k->dssim_mean : 0.0,
+        k->done ? k->dssim_p90 : 0.0);
+    for (int j = 0; j < t->output_count; j++)
+        put(o, " %a %a", k->done ? k->relative_median[j] : 0.0, k->done ? k->relative_p90[j] : 0.0);
+    put(o, "\n");
     long lines = 0;
     for (const char *p = t->provenance; p && *p; p++) lines += *p == '\n';
     put(o, "provenance %ld\n", lines);
@@ -448,6 +454,38 @@ static mr_status parse_mlp(parser *ps, mr_learned *t) {
     return MR_OK;
 }
 
+/* "check ROWS PASSED DSSIM_MEAN DSSIM_P90 (MEDIAN P90) per output" (learned.h). */
+static mr_status check_line(parser *ps, mr_learned *t) {
+    mr_learned_check *k = &t->check;
+    long rows = 0, passed = 0;
+    mr_status status = expect_key(ps, "check");
+    if (status == MR_OK) status = integer(ps, "checked rows", 0, 1000000000L, &rows);
+    if (status == MR_OK) status = integer(ps, "check verdict", 0, 1, &passed);
+    for (int i = 0; i < 2 && status == MR_OK; i++) { // the dSSIM: a number >= -2 or nan (no render)
+        char buf[MAX_TOKEN + 1];
+        double *v = i == 0 ? &k->dssim_mean : &k->dssim_p90;
+        status = word(ps, "dSSIM", buf, sizeof buf);
+        if (status != MR_OK) break;
+        char *end = NULL;
+        *v = strtod(buf, &end);
+        if (end == buf || *end != '\0' || !(isnan(*v) || (*v >= -2.0 && *v <= 2.0)))
+            status = bad(ps, "dSSIM '%s': expected a number in [-2, 2] or nan", buf);
+    }
+    for (int j = 0; j < t->output_count && status == MR_OK; j++) {
+        status = number(ps, "relative error", &k->relative_median[j]);
+        if (status == MR_OK) status = number(ps, "relative error", &k->relative_p90[j]);
+        if (status == MR_OK && (k->relative_median[j] < 0.0 || k->relative_p90[j] < 0.0))
+            status = bad(ps, "a relative error is negative");
+    }
+    if (status == MR_OK) status = line_end(ps);
+    if (status != MR_OK) return status;
+    k->done = rows > 0;
+    k->rows = rows;
+    k->passed = (int)passed;
+    if (!k->done && passed) return bad(ps, "a check of 0 rows cannot pass");
+    return MR_OK;
+}
+
 static mr_status parse_all(parser *ps, mr_learned *t) {
     mr_status status = next_line(ps, "the magic line", 0);
     if (status != MR_OK) return status;
@@ -457,8 +495,8 @@ static mr_status parse_all(parser *ps, mr_learned *t) {
         return bad(ps, "not a matremap transform file (expected '%s %d' first)", MR_LEARNED_FILE_MAGIC,
                    MR_LEARNED_FILE_VERSION);
     if ((status = integer(ps, "version", 1, 1000000, &version)) != MR_OK) return status;
-    if (version != MR_LEARNED_FILE_VERSION)
-        return bad(ps, "version %ld; this matremap reads version %d (a newer matremap wrote it?)", version,
+    if (version < 1 || version > MR_LEARNED_FILE_VERSION)
+        return bad(ps, "version %ld; this matremap reads versions 1 to %d (a newer matremap wrote it?)", version,
                    MR_LEARNED_FILE_VERSION);
     if ((status = line_end(ps)) != MR_OK) return status;
     if ((status = model_line(ps, "source", &t->source)) != MR_OK) return status;
@@ -527,6 +565,7 @@ static mr_status parse_all(parser *ps, mr_learned *t) {
     if ((status = numbers(ps, "rmse", t->rmse, t->output_count)) != MR_OK) return status;
     for (int j = 0; j < t->output_count; j++)
         if (t->rmse[j] < 0.0) return bad(ps, "rmse %g is negative", t->rmse[j]);
+    if (version >= 2 && (status = check_line(ps, t)) != MR_OK) return status;
     if ((status = count_line(ps, "provenance", MR_LEARNED_MAX_PROVENANCE, &count)) != MR_OK) return status;
     size_t length = 0;
     for (long k = 0; k < count; k++) {

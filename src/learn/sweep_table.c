@@ -236,6 +236,10 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
         if (status == MR_OK) status = check_range(path, line_number, source, "", sv);
         if (status == MR_OK) status = check_range(path, line_number, target, "to_", tv);
         if (status != MR_OK) break;
+        if (source->rescales != NULL && source->rescales(source, sv) && !(opts && opts->keep_rescaled)) {
+            t->rescaled++;
+            continue;
+        }
         t->outcome[t->n++] = outcome;
         kept++;
     }
@@ -271,8 +275,11 @@ mr_status mr_sweep_table_load(const char *const *paths, int count, const mr_swee
     }
     mr_c_numeric_leave(&locale);
     if (status == MR_OK && out->n == 0)
-        status = mr_fail(MR_ERR_FORMAT, "%s%s: no usable rows (%zu left out for their outcome)", paths[0],
-                         count > 1 ? " ..." : "", out->skipped);
+        status = mr_fail(MR_ERR_FORMAT, "%s%s: no usable rows (%zu left out for their outcome, %zu because model '%s' "
+                         "rescales their source values%s)", paths[0], count > 1 ? " ..." : "", out->skipped,
+                         out->rescaled, out->source ? out->source->name : "?",
+                         out->rescaled ? ": a sweep of the values textures hold is 'sweep --random N' with the "
+                                         "default --region texture" : "");
     if (status != MR_OK) mr_sweep_table_free(out);
     return status;
 }

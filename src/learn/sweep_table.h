@@ -19,6 +19,10 @@
  * so the row is not the mapping) and counted in `skipped`; every other outcome is kept (under-resolved and at-bound
  * rows are still the best fit the scene resolves). A row with a missing or non-finite field, an unknown outcome or
  * a value outside its parameter's [min, max] is MR_ERR_FORMAT naming file, line and column.
+ * By default rows whose source the model rescales (mr_brdf_model.rescales: Ward's energy trimming with diffuse +
+ * specular > 1) are left out too and counted in `rescaled`: there the source is not linear in its reflectances, no
+ * texel of a texture map lies there, and a transform fitted over them (a random sweep over Ward's whole specular
+ * range [0, 10] is 95 % trimmed) is wrong for every texel that does.
  * Provenance: `provenance` holds, for each file, a line "sweep FILE rows N kept K" followed by its header lines
  * (without "# command:"), each '\n'-terminated: what a transform file records of its data.
  * Ownership: the table owns its arrays (one free: mr_sweep_table_free, which zeroes it). Nothing is printed.
@@ -38,6 +42,7 @@ extern "C" {
 
 typedef struct mr_sweep_table_options {
     int keep_all_outcomes; /* 1: keep local-minimum rows too; default 0 */
+    int keep_rescaled;     /* 1: keep the rows whose source the model rescales too; default 0 */
 } mr_sweep_table_options;
 
 typedef struct mr_sweep_table {
@@ -47,6 +52,7 @@ typedef struct mr_sweep_table {
     char scene[256];                          /* the "# scene:" line's text after "# scene: " */
     size_t n;                                 /* rows kept */
     size_t skipped;                           /* rows left out for their outcome */
+    size_t rescaled;                          /* rows left out because the source model rescales their values */
     double *source_values;                    /* n x source_count */
     double *target_values;                    /* n x target_count */
     double *ssim;                             /* n: the fit's SSIM */

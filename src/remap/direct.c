@@ -36,7 +36,7 @@
 
 #define WHAT "direct cache" /* what messages call the cache file */
 #define MAX_TOLERANCE 1.0
-#define MIN_TOLERANCE 1e-9  /* keeps the quantised coordinates far inside int64 */
+#define MIN_TOLERANCE MR_DIRECT_MIN_TOLERANCE /* direct.h; keeps the quantised coordinates far inside int64 */
 
 /* ---- quantisation ---------------------------------------------------------------------------------------- */
 

@@ -111,6 +111,7 @@ extern "C" {
  * the answers' renders differ from those of the exact texels' remaps by ~3 % relative RMSE (median; at most 9 %),
  * a third of what a Ward -> GGX fit leaves itself (~9 %). */
 #define MR_DIRECT_DEFAULT_TOLERANCE (6.0 / 255.0)
+#define MR_DIRECT_MIN_TOLERANCE 1e-9 /* the smallest quantisation step: exact values for any input */
 /* Unique values per chain (the header comment): the first of each gets a full remap, the others warm starts. */
 #define MR_DIRECT_DEFAULT_CHAIN 64
 /* A warm start's local refinement stops at steps of max(remap.xtol, MR_DIRECT_WARM_XTOL) in normalised
@@ -133,7 +134,7 @@ typedef void (*mr_direct_progress_fn)(const mr_direct_progress *progress, void *
 
 /* Zero-initialised = defaults. */
 typedef struct mr_direct_options {
-    double tolerance;            /* quantisation step t in [1e-9, 1]; 0 = MR_DIRECT_DEFAULT_TOLERANCE */
+    double tolerance;            /* quantisation step t in [MR_DIRECT_MIN_TOLERANCE, 1]; 0 = the default */
     mr_remap_options remap;      /* every remap's options ({0} = mr_remap_options_default()): strategy, tolerances,
                                     target_values (fixed target values; NULL = the target's defaults) and held.
                                     Its initial_values and threads are the direct remap's to set: must be NULL / 0 */

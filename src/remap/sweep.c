@@ -84,6 +84,38 @@ static long sample_count_unchecked(const mr_sweep_spec *spec) {
     return total;
 }
 
+/* One draw of every eligible parameter into values, from the stream at *state; grey: one number for an RGB
+ * parameter's three channels (the TEXTURE region). */
+static void draw_once(const mr_sweep_spec *spec, uint64_t *state, int grey, double *values) {
+    const mr_brdf_model *m = spec->source;
+    for (int p = 0; p < m->param_count; p++) {
+        if (!random_eligible(spec, p)) continue;
+        const mr_brdf_param *param = &m->params[p];
+        int offset = mr_brdf_param_offset(m, p);
+        int log_scale = (param->flags & MR_PARAM_LOG_SCALE) && param->min_value > 0.0;
+        for (int c = 0; c < param->channels; c++) {
+            if (grey && c > 0) {
+                values[offset + c] = values[offset];
+                continue;
+            }
+            double u = next_unit(state);
+            double v = log_scale ? exp(log(param->min_value) + u * (log(param->max_value) - log(param->min_value)))
+                                 : param->min_value + u * (param->max_value - param->min_value);
+            values[offset + c] = mr_clampd(v, param->min_value, param->max_value);
+        }
+    }
+}
+
+/* The drawn LINEAR parameters at their range's minimum (the TEXTURE region's last resort). */
+static void linear_at_minimum(const mr_sweep_spec *spec, double *values) {
+    const mr_brdf_model *m = spec->source;
+    for (int p = 0; p < m->param_count; p++) {
+        if (!random_eligible(spec, p) || m->params[p].role != MR_PARAM_LINEAR) continue;
+        int offset = mr_brdf_param_offset(m, p);
+        for (int c = 0; c < m->params[p].channels; c++) values[offset + c] = m->params[p].min_value;
+    }
+}
+
 static void sample_unchecked(const mr_sweep_spec *spec, long index, double *values) {
     const mr_brdf_model *m = spec->source;
     memcpy(values, spec->source_values, (size_t)mr_brdf_value_count(m) * sizeof(double));
@@ -99,18 +131,31 @@ static void sample_unchecked(const mr_sweep_spec *spec, long index, double *valu
         return;
     }
     uint64_t state = mix64(mix64((uint64_t)spec->seed) + (uint64_t)index);
-    for (int p = 0; p < m->param_count; p++) {
-        if (!random_eligible(spec, p)) continue;
-        const mr_brdf_param *param = &m->params[p];
-        int offset = mr_brdf_param_offset(m, p);
-        int log_scale = (param->flags & MR_PARAM_LOG_SCALE) && param->min_value > 0.0;
-        for (int c = 0; c < param->channels; c++) {
-            double u = next_unit(&state);
-            double v = log_scale ? exp(log(param->min_value) + u * (log(param->max_value) - log(param->min_value)))
-                                 : param->min_value + u * (param->max_value - param->min_value);
-            values[offset + c] = mr_clampd(v, param->min_value, param->max_value);
-        }
+    const int texture = spec->region == MR_SWEEP_REGION_TEXTURE;
+    for (long draw = 0;; draw++) {
+        draw_once(spec, &state, texture, values);
+        if (!texture || m->rescales == NULL || !m->rescales(m, values)) return;
+        if (draw + 1 >= MR_SWEEP_MAX_DRAWS) break;
     }
+    // Nothing linear in MR_SWEEP_MAX_DRAWS draws: the drawn reflectances at their minimum, which
+    // mr_sweep_check has made sure the source does not rescale.
+    linear_at_minimum(spec, values);
+}
+
+static const char *const region_names[MR_SWEEP_REGION_COUNT] = {"texture", "range"};
+
+const char *mr_sweep_region_name(mr_sweep_region region) {
+    return (unsigned)region < MR_SWEEP_REGION_COUNT ? region_names[region] : NULL;
+}
+
+mr_status mr_sweep_region_from_name(const char *name, mr_sweep_region *out) {
+    for (int r = 0; r < MR_SWEEP_REGION_COUNT; r++)
+        if (name != NULL && strcmp(name, region_names[r]) == 0) {
+            *out = (mr_sweep_region)r;
+            return MR_OK;
+        }
+    return mr_fail(MR_ERR_INVALID_ARG, "region '%s': expected texture (the values texture maps hold) or range "
+                   "(every parameter over its whole range)", name ? name : "(null)");
 }
 
 /* ---- spec ------------------------------------------------------------------------------------------------ */
@@ -266,6 +311,19 @@ mr_status mr_sweep_check(const mr_sweep_spec *spec) {
                            "sweep: model '%s' has no parameter left to randomise (switches, fixed extension factors "
                            "and the values given are held)",
                            m->name);
+        if ((unsigned)spec->region >= MR_SWEEP_REGION_COUNT)
+            return mr_fail(MR_ERR_INVALID_ARG, "sweep: region %d is neither texture nor range", (int)spec->region);
+        if (spec->region == MR_SWEEP_REGION_TEXTURE && m->rescales != NULL) {
+            double lowest[MR_BRDF_MAX_VALUES];
+            memcpy(lowest, spec->source_values, (size_t)mr_brdf_value_count(m) * sizeof(double));
+            linear_at_minimum(spec, lowest);
+            if (m->rescales(m, lowest))
+                return mr_fail(MR_ERR_INVALID_ARG,
+                               "sweep: the values held put model '%s' where it rescales its reflectances (energy "
+                               "trimming) whatever is drawn, so no sample lies where texture maps do: hold smaller "
+                               "reflectances, or sample --region range",
+                               m->name);
+        }
     } else {
         return mr_fail(MR_ERR_INVALID_ARG, "sweep: sampling %d is neither grid nor random", (int)spec->sampling);
     }
@@ -310,7 +368,11 @@ static mr_status build_header(const mr_sweep_spec *spec, const char *command_lin
                       axis->count, axis->log_scale ? ":log" : "");
         }
     } else {
-        mr_strbuf_printf(sb, "# sampling: random=%ld seed=%llu over", spec->random_count, spec->seed);
+        mr_strbuf_printf(sb, "# sampling: random=%ld seed=%llu", spec->random_count, spec->seed);
+        // Files from before regions have no region word, and are RANGE (parse_sampling_line).
+        if (spec->region != MR_SWEEP_REGION_RANGE)
+            mr_strbuf_printf(sb, " region=%s", mr_sweep_region_name(spec->region));
+        mr_strbuf_printf(sb, " over");
         int first = 1;
         for (int p = 0; p < spec->source->param_count; p++)
             if (random_eligible(spec, p)) {
@@ -1478,6 +1540,15 @@ static mr_status parse_scene_line(const char *text, mr_sweep_spec *spec) {
     return MR_OK;
 }
 
+mr_status mr_sweep_scene_parse(const char *text, mr_fit_scene_options *out) {
+    mr_sweep_spec spec;
+    memset(&spec, 0, sizeof spec);
+    mr_status status = text != NULL && out != NULL ? parse_scene_line(text, &spec)
+                                                    : mr_fail(MR_ERR_INVALID_ARG, "sweep scene: NULL argument");
+    if (status == MR_OK) *out = spec.scene;
+    return status;
+}
+
 /* "grid AXIS ..." or "random=N seed=S over p,q,..." into the spec's sampling. */
 static mr_status parse_sampling_line(const char *text, mr_sweep_spec *spec) {
     char copy[MR_SWEEP_MAX_LINE];
@@ -1495,6 +1566,14 @@ static mr_status parse_sampling_line(const char *text, mr_sweep_spec *spec) {
         }
         spec->axis_count = n - 1;
         return MR_OK;
+    }
+    spec->region = MR_SWEEP_REGION_RANGE; // a header without a region word
+    if (n == 5 && strncmp(words[2], "region=", 7) == 0) {
+        if (mr_sweep_region_from_name(words[2] + 7, &spec->region) != MR_OK)
+            return mr_fail(MR_ERR_FORMAT, "'%s': expected region=texture or region=range", words[2]);
+        words[2] = words[3];
+        words[3] = words[4];
+        n = 4;
     }
     if (n == 4 && strncmp(words[0], "random=", 7) == 0 && strncmp(words[1], "seed=", 5) == 0 &&
         strcmp(words[2], "over") == 0) {
@@ -1517,7 +1596,7 @@ static mr_status parse_sampling_line(const char *text, mr_sweep_spec *spec) {
         }
         return MR_OK;
     }
-    return mr_fail(MR_ERR_FORMAT, "expected 'grid AXIS ...' or 'random=N seed=S over PARAMETERS'");
+    return mr_fail(MR_ERR_FORMAT, "expected 'grid AXIS ...' or 'random=N seed=S [region=R] over PARAMETERS'");
 }
 
 /* One shard file being merged. */

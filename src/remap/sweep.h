@@ -19,7 +19,13 @@
  *     geometrically; an RGB parameter gets the value in all three channels. Axes override source_values.
  *   - RANDOM: every source parameter that is not a switch, not MR_PARAM_FIT_FIXED, not held (bit p of `held`)
  *     and has a non-empty range is drawn uniformly from [min, max], log-uniformly if the descriptor flags
- *     MR_PARAM_LOG_SCALE (and min > 0), each channel of an RGB parameter independently. The draws come from a
+ *     MR_PARAM_LOG_SCALE (and min > 0). In the TEXTURE region (the default) an RGB parameter is drawn grey, one
+ *     number for its three channels, and a draw where the source rescales its reflectances (Ward's or Phong's
+ *     energy trimming: mr_brdf_model.rescales) is drawn again from the same stream, so the samples are uniform
+ *     over the part of the ranges where the source is linear: where texture maps' texels lie, and what a learned
+ *     transform's per-channel form assumes. (At most MR_SWEEP_MAX_DRAWS draws; should every one rescale, the
+ *     drawn reflectances are set to their minimum, which mr_sweep_spec_check has made sure does not.) In the
+ *     RANGE region each channel is drawn independently and every draw is kept. The draws come from a
  *     splitmix64 stream started from (seed, i) alone, so sample i is the same whatever else runs, in any order,
  *     on any number of threads. The rest keep source_values.
  * Each sample is remapped with mr_remap() (remap.h) in the fit scene of `scene`, with `remap` as options and
@@ -32,7 +38,7 @@
  *   # to: MODEL name=v ...             |  the header: these lines describe the run completely; resuming
  *   # remap: strategy=auto ...         |  requires them to be identical, except "# command:", which only
  *   # scene: fit size=128 light=45 ... |  records the command line of the run that created the file
- *   # sampling: grid alpha=... | random=N seed=S over p,q,...
+ *   # sampling: grid alpha=... | random=N seed=S region=R over p,q,...
  *   # samples: N                       |
  *   # command: ...                    /
  *   index,<source slots>,<to_ target slots>,rmse,relative_rmse,ssim,outcome,renders,seconds
@@ -100,12 +106,31 @@ extern "C" {
 #define MR_SWEEP_MAX_SAMPLES 100000000L
 /* Enough for any row or header line the library writes (39 numbers at most, each < 26 characters). */
 #define MR_SWEEP_MAX_LINE 4096
+/* RANDOM in the TEXTURE region: draws per sample before giving up on a linear one (Ward's grey diffuse in [0, 1]
+ * and specular in [0, 10] are linear in 1 draw of 20). */
+#define MR_SWEEP_MAX_DRAWS 100000
 
 typedef enum mr_sweep_sampling {
     MR_SWEEP_GRID = 0,
     MR_SWEEP_RANDOM,
     MR_SWEEP_SAMPLING_COUNT
 } mr_sweep_sampling;
+
+/* Where RANDOM draws (the header's "region=" word; a header without one is RANGE, the only region of files
+ * written before regions existed). */
+typedef enum mr_sweep_region {
+    MR_SWEEP_REGION_TEXTURE = 0, /* the values texture maps hold: an RGB parameter grey (one draw for its three
+                                    channels, which learn then applies per channel), and only values where the
+                                    source is linear in its reflectances (mr_brdf_model.rescales false: Ward with
+                                    diffuse + specular <= 1), drawn again until they are */
+    MR_SWEEP_REGION_RANGE,       /* every parameter over its whole range, each channel independently */
+    MR_SWEEP_REGION_COUNT
+} mr_sweep_region;
+
+/* "texture", "range"; NULL outside the enum. */
+const char *mr_sweep_region_name(mr_sweep_region region);
+/* MR_ERR_INVALID_ARG naming the valid names for an unknown one. */
+mr_status mr_sweep_region_from_name(const char *name, mr_sweep_region *out);
 
 /* One grid axis: `count` values of source parameter `param` from lo to hi inclusive. */
 typedef struct mr_sweep_axis {
@@ -128,7 +153,13 @@ typedef struct mr_sweep_spec {
     int axis_count;
     long random_count;                        /* RANDOM: number of samples */
     unsigned long long seed;                  /* RANDOM */
+    mr_sweep_region region;                   /* RANDOM: default TEXTURE */
 } mr_sweep_spec;
+
+/* The fit scene of a sweep file's "# scene:" line (its text after "# scene: ", e.g. "fit size=64 light=45
+ * intensity=10 ..."): size, light and intensity into *out (zeroed first). MR_ERR_FORMAT naming what is not a scene
+ * setting this version knows. */
+mr_status mr_sweep_scene_parse(const char *text, mr_fit_scene_options *out);
 
 /* Fill *spec for a sweep from `source` to `target`: both models' default values, nothing held,
  * mr_remap_options_default(), the default fit scene, GRID with no axes yet, seed 1. */
