@@ -741,7 +741,10 @@ static void set_outputs(const conversion *cv, const sources *src, const made *mk
         } else {
             mr_gltf_texture_ref_none(ref);
         }
-        if (strcmp(slot->name, "specular") == 0 || strcmp(slot->name, "specular_color") == 0) m->has_specular = 1;
+        // KHR_materials_specular is metal-rough's: the spec-gloss side's "specular" is the extension's own factor.
+        if (cv->to == &metalrough_side &&
+            (strcmp(slot->name, "specular") == 0 || strcmp(slot->name, "specular_color") == 0))
+            m->has_specular = 1;
     }
     if (mr_transform_output_index(kind, "ior") >= 0 && cv->to == &metalrough_side) m->has_ior = 1;
     if (cv->to == &metalrough_side && mr_transform_output_index(kind, "specular_color") >= 0 &&
@@ -933,6 +936,12 @@ static mr_status convert_material(conversion *cv, made *cache, int *cached, mr_g
         *r = mk->report;
     }
     set_outputs(cv, &src, mk, textured, &m);
+    // A KHR_materials_specular at its defaults (factor 1, colour 1, no textures) means what the core material means
+    // alone: written out, it is an empty object (beside spec-gloss, the validator's MULTIPLE_EXTENSIONS); dropped.
+    if (m.has_specular && m.specular_strength == 1.0 && m.specular_color_factor[0] == 1.0 &&
+        m.specular_color_factor[1] == 1.0 && m.specular_color_factor[2] == 1.0 && m.specular_texture.index < 0 &&
+        m.specular_color_texture.index < 0)
+        m.has_specular = 0;
     if (to_metal) m.has_spec_gloss = cv->opts->keep_source;
     else m.has_spec_gloss = 1; // the core material stays as the fallback
     status = mr_gltf_set_material(cv->asset, cv->material, &m);
@@ -1012,7 +1021,10 @@ mr_status mr_gltf_convert_file(const char *input, const char *output, const mr_g
         status = mr_gltf_set_extension_required(asset, "KHR_materials_pbrSpecularGlossiness", 0);
     if (status == MR_OK) {
         mr_gltf_sync_extensions(asset);
-        status = mr_gltf_save(asset, output);
+        // Side files named after the output, so that two outputs in one folder never share one (every Sketchfab
+        // export's buffer is scene.bin), and no file another asset uses replaced unless asked.
+        mr_gltf_save_options so = {1, opts->replace_files, opts->replace_hint};
+        status = mr_gltf_save_with(asset, output, &so);
     }
     mr_gltf_free(asset);
     if (status != MR_OK || result == NULL) {

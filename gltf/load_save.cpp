@@ -272,6 +272,7 @@ void pack_glb(const tinygltf::Model &m, nlohmann::json &doc, std::vector<unsigne
 // ---- saving --------------------------------------------------------------------------------------------
 
 struct pending_file {
+    std::string what;                // "buffer 0", "image 3": how messages name it
     std::string rel;                 // relative path under the output directory (decoded)
     const std::vector<unsigned char> *bytes;
     std::string source;              // real path of the file these bytes came from, "" if none
@@ -328,13 +329,62 @@ std::vector<unsigned char> make_glb(const std::string &json, const std::vector<u
     return out;
 }
 
+// The side file name `rel` (relative, decoded) of a resource under the naming after the output (stem STEM): the same
+// folder, its file name prefixed "STEM_" unless it already starts so (a converted texture, or the file of an
+// earlier output of the same name).
+std::string named_after(const std::string &stem, const std::string &rel) {
+    size_t slash = rel.find_last_of('/');
+    std::string dir = slash == std::string::npos ? "" : rel.substr(0, slash + 1);
+    std::string name = slash == std::string::npos ? rel : rel.substr(slash + 1);
+    if (name.compare(0, stem.size() + 1, stem + "_") == 0) return rel;
+    return dir + stem + "_" + name;
+}
+
+// The files an existing glTF at `out_path` refers to by URI (buffers and images; data URIs and URIs that leave its
+// folder aside), as canonical paths of existing files: the side files of the output a save replaces, which it may
+// replace too. Empty when there is no such file or it is not a glTF (unreadable, not JSON, nested too deep).
+std::set<std::string> files_of_existing_output(const std::string &out_path, const std::string &out_dir) {
+    std::set<std::string> owned;
+    struct stat st;
+    if (stat(out_path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return owned;
+    std::vector<unsigned char> bytes;
+    if (read_file(out_path, &bytes, NULL) != MR_OK) return owned;
+    const char *text = (const char *)bytes.data();
+    size_t n = bytes.size(), base = 0;
+    if (n >= 4 && memcmp(text, "glTF", 4) == 0) { // a .glb: its JSON chunk
+        if (n < 20 || memcmp(text + 16, "JSON", 4) != 0) return owned;
+        uint32_t len = (uint32_t)bytes[12] | (uint32_t)bytes[13] << 8 | (uint32_t)bytes[14] << 16 |
+                       (uint32_t)bytes[15] << 24;
+        if (len > n - 20) return owned;
+        text += 20;
+        n = len;
+        base = 20;
+    }
+    json_span materials;
+    if (n == 0 || scan_json(text, n, base, out_path, &materials) != MR_OK) return owned; // bounded nesting first
+    nlohmann::json doc = nlohmann::json::parse(text, text + n, nullptr, false);
+    if (!doc.is_object()) return owned;
+    for (const char *key : {"buffers", "images"}) {
+        if (!doc.contains(key) || !doc[key].is_array()) continue;
+        for (const nlohmann::json &o : doc[key]) {
+            if (!o.is_object() || !o.contains("uri") || !o["uri"].is_string()) continue;
+            const std::string uri = o["uri"].get<std::string>();
+            const std::string decoded = url_decode(uri);
+            if (is_data_uri(uri) || !is_safe_relative(decoded)) continue;
+            std::string real = real_path(join_path(out_dir, decoded));
+            if (!real.empty()) owned.insert(real);
+        }
+    }
+    return owned;
+}
+
 bool ends_with(const std::string &s, const char *suffix) {
     size_t n = strlen(suffix);
     if (s.size() < n) return false;
     return strcasecmp(s.c_str() + s.size() - n, suffix) == 0;
 }
 
-mr_status save_impl(mr_gltf *g, const char *path_c) {
+mr_status save_impl(mr_gltf *g, const char *path_c, const mr_gltf_save_options &opts) {
     const std::string out_path = path_c;
     bool binary;
     if (ends_with(out_path, ".glb")) binary = true;
@@ -418,13 +468,19 @@ mr_status save_impl(mr_gltf *g, const char *path_c) {
         }
         if (is_data_uri(buf.uri)) continue; // tinygltf wrote it as a data URI again
         pending_file f;
+        f.what = "buffer " + std::to_string(i);
         f.bytes = &buf.data;
         std::string decoded = url_decode(buf.uri);
+        const std::string own_name = stem + (i == 0 ? "" : "_" + std::to_string(i)) + ".bin";
         if (!buf.uri.empty() && is_safe_relative(decoded)) {
             f.rel = decoded;
+            if (opts.name_after_output) {
+                size_t slash = decoded.find_last_of('/');
+                f.rel = (slash == std::string::npos ? "" : decoded.substr(0, slash + 1)) + own_name;
+            }
             f.source = real_path(g->buffer_paths[i]);
         } else {
-            f.rel = stem + (i == 0 ? "" : "_" + std::to_string(i)) + ".bin";
+            f.rel = own_name;
             f.source = buf.uri.empty() ? "" : real_path(g->buffer_paths[i]);
         }
         uri_slots.push_back({&b, files.size()});
@@ -450,17 +506,24 @@ mr_status save_impl(mr_gltf *g, const char *path_c) {
             return mr_fail(MR_ERR_IO, "glTF output '%s': image %zu ('%s') has no data to write", out_path.c_str(),
                            i, im.uri.c_str());
         pending_file f;
+        f.what = "image " + std::to_string(i);
         f.bytes = &im.image;
         std::string decoded = url_decode(im.uri);
         f.rel = is_safe_relative(decoded) ? decoded : "image_" + std::to_string(i) + "." +
                                                           (im.mimeType == "image/jpeg" ? "jpg" : "png");
+        if (opts.name_after_output) f.rel = named_after(stem, f.rel);
         f.source = real_path(g->image_paths[i]);
         uri_slots.push_back({&o, files.size()});
         files.push_back(f);
     }
 
     // Targets: an unchanged resource landing on its own source stays; one landing on another input file, on
-    // the output itself or on another resource's target gets a fresh name.
+    // the output itself or on another resource's target gets a fresh name. One landing on any other existing file
+    // is refused (nothing written) unless that file belongs to the output being replaced (the existing file at
+    // `path` refers to it) or opts.replace_files.
+    const std::set<std::string> owned = opts.replace_files ? std::set<std::string>()
+                                                           : files_of_existing_output(out_path, out_dir);
+    const pending_file *refused = NULL;
     std::set<std::string> taken;
     taken.insert(out_real.empty() ? out_path : out_real);
     for (pending_file &f : files) {
@@ -500,8 +563,15 @@ mr_status save_impl(mr_gltf *g, const char *path_c) {
             taken.insert(key);
             f.rel = rel;
             f.target = target;
+            if (!real.empty() && !opts.replace_files && !owned.count(real) && refused == NULL) refused = &f;
             break;
         }
+    }
+    if (refused != NULL) {
+        const char *hint = opts.replace_hint != NULL && opts.replace_hint[0] ? opts.replace_hint : "replace_files";
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF output '%s': its %s would be written to '%s', which exists and is "
+                       "not a file of an earlier '%s' (another asset's, perhaps); refusing to replace it (%s allows "
+                       "it)", out_path.c_str(), refused->what.c_str(), refused->target.c_str(), out_path.c_str(), hint);
     }
     for (auto &slot : uri_slots) (*slot.first)["uri"] = uri_encode_spaces(files[slot.second].rel);
 
@@ -714,7 +784,16 @@ void mr_gltf_get_counts(const mr_gltf *g, mr_gltf_counts *out) {
 mr_status mr_gltf_save(mr_gltf *g, const char *path) {
     if (g == NULL || path == NULL || path[0] == '\0')
         return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL asset or empty output path");
-    MR_GLTF_GUARD(path, return save_impl(g, path);)
+    mr_gltf_save_options opts = {0, 1, NULL}; // names as read; existing files replaced (as before the options)
+    MR_GLTF_GUARD(path, return save_impl(g, path, opts);)
+}
+
+mr_status mr_gltf_save_with(mr_gltf *g, const char *path, const mr_gltf_save_options *opts) {
+    if (g == NULL || path == NULL || path[0] == '\0')
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL asset or empty output path");
+    mr_gltf_save_options o = {0, 0, NULL};
+    if (opts != NULL) o = *opts;
+    MR_GLTF_GUARD(path, return save_impl(g, path, o);)
 }
 
 } // extern "C"

@@ -34,6 +34,8 @@
  * written over a file the asset was read from, even one an edit has since removed from the asset (a new image
  * named like a pruned image's file gets a fresh name; an unchanged resource that would land on its own source is
  * left in place). extensionsUsed/extensionsRequired are brought up to date first (mr_gltf_sync_extensions).
+ * mr_gltf_save_with can name the side files after the output (out/floppy.gltf: floppy.bin, floppy_NAME.png) and
+ * refuses to replace an existing file that is not a side file of the output it replaces (mr_gltf_save_options).
  *
  * Everything this API does not touch (meshes, nodes, animations, skins, cameras, scenes, extras, other
  * extensions, properties outside the schema) is written back: what tinygltf 2.7 parses but does not write
@@ -379,8 +381,31 @@ void mr_gltf_triangles_free(mr_gltf_triangles *triangles);
  * returns), e.g. to frame a camera. *count receives the vertex count (0: empty scene, box 0); count may be NULL. */
 mr_status mr_gltf_get_bounds(const mr_gltf *asset, int scene, double lo[3], double hi[3], int *count);
 
-/* Writes the asset to `path` (.gltf or .glb, see the top of this header). */
+/* Writes the asset to `path` (.gltf or .glb, see the top of this header): side files under their own URIs, and an
+ * existing file in their way replaced (unless it is an input). mr_gltf_save_with(asset, path, &{0, 1, NULL}). */
 mr_status mr_gltf_save(mr_gltf *asset, const char *path);
+
+/* How mr_gltf_save_with names the side files of a .gltf output (external buffers and images; a .glb has none) and
+ * which existing files it may replace. A zeroed struct (or NULL): names as read, no existing file replaced but
+ * the output's own. */
+typedef struct mr_gltf_save_options {
+    int name_after_output; /* 1: side files named after the output's stem STEM (its file name without the
+                              extension), in the folder their URI has: buffer 0 STEM.bin, buffer k STEM_k.bin, an
+                              image STEM_NAME (NAME its file name; kept as it is when it starts with "STEM_"
+                              already, as new images named PREFIX_mK_... by mr_gltf_convert_file do), so outputs of
+                              different names in one folder do not share side files; 0: the URIs as read */
+    int replace_files;     /* 1: an existing file where a side file goes is replaced (inputs never are); 0: refused
+                              (MR_ERR_INVALID_ARG, nothing written) unless the existing file at `path` is a glTF
+                              (or .glb) that refers to it by URI, i.e. it is a side file of the output being
+                              replaced (the same save run again) */
+    const char *replace_hint; /* how the caller's user allows replacing, named in the refusal ("--replace-files");
+                                 NULL: "replace_files" */
+} mr_gltf_save_options;
+
+/* mr_gltf_save with options (NULL: a zeroed struct). Besides mr_gltf_save's errors: MR_ERR_INVALID_ARG naming the
+ * side file (buffer or image index and path) that would replace an existing file it may not; nothing is written
+ * then. The output file itself, named by the caller, is replaced as by mr_gltf_save. */
+mr_status mr_gltf_save_with(mr_gltf *asset, const char *path, const mr_gltf_save_options *opts);
 
 #ifdef __cplusplus
 }

@@ -56,6 +56,9 @@ typedef struct mr_gltf_convert_options {
                                       any more; 0 (default) prunes them (mr_gltf_prune_unused) */
     void (*progress)(void *user, int material, int material_count); /* after each material; may be NULL */
     void *progress_user;
+    int replace_files;             /* mr_gltf_convert_file: 1 lets a side file of the output replace an existing
+                                      file that is not the earlier output's own (mr_gltf_save_options) */
+    const char *replace_hint;      /* mr_gltf_convert_file: what allows it, named in the refusal (NULL: the field) */
 } mr_gltf_convert_options;
 
 typedef enum mr_gltf_convert_outcome {
@@ -90,7 +93,10 @@ typedef struct mr_gltf_convert_result {
 } mr_gltf_convert_result;
 
 /* The whole job in one call: load `input`, convert (mr_gltf_convert), prune what nothing refers to any more (unless
- * keep_unused), and save `output` (.gltf with its files beside it, or .glb; never over an input file). A spec-gloss
+ * keep_unused), and save `output` (.gltf with its files beside it, or .glb; never over an input file) through
+ * mr_gltf_save_with, its side files named after the output (out/floppy.gltf: floppy.bin, floppy_m0_basecolor.png,
+ * floppy_NAME for a copied image) and never replacing an existing file that is not a side file of the earlier output
+ * at `output` (unless replace_files: MR_ERR_INVALID_ARG, nothing written). A spec-gloss
  * extension kept beside the new core material (keep_source, or gltf -> gltf-specgloss) is made optional, so engines
  * without it read the core material. *result (may be NULL) is filled on success and zeroed on failure. Errors are
  * mr_gltf_load's, mr_gltf_convert's and mr_gltf_save's. */

@@ -106,8 +106,8 @@ check "FloppyDisk: its material converted, its texels flagged by kind" grep -q \
     "$tmp/out"
 check "FloppyDisk: its diffuse and specular-glossiness textures pruned" \
     grep -q "^pruned 2 textures, 2 images and 0 samplers that nothing refers to$" "$tmp/out"
-check "... their files not written, the normal map's is" test \
-    "$(cd "$tmp/floppy/textures" && echo *)" = "material_0_normal.png"
+check "... their files not written, the normal map's is (named after the output)" test \
+    "$(cd "$tmp/floppy/textures" && echo *)" = "floppy_material_0_normal.png"
 check "the spec-gloss extension is gone from the material" test \
     "$(gltf "$out" '"KHR_materials_pbrSpecularGlossiness" in d["materials"][0].get("extensions", {})')" = False
 check "... and from extensionsUsed and extensionsRequired" test \
@@ -118,7 +118,8 @@ check "core base colour and metallic-roughness textures" test \
 check "the normal map (renumbered: the textures before it were pruned), meshes and nodes are kept" test \
     "$(gltf "$out" '(m(0)["normalTexture"]["index"], uri(m(0)["normalTexture"]["index"]), len(d["meshes"]),
                      len(d["nodes"]))')" = \
-    "$(gltf "$floppy" '(0, uri(m(0)["normalTexture"]["index"]), len(d["meshes"]), len(d["nodes"]))')"
+    "$(gltf "$floppy" '(0, uri(m(0)["normalTexture"]["index"]).replace("/", "/floppy_"), len(d["meshes"]),
+                       len(d["nodes"]))')"
 
 # The Avocado carries both workflows: its own metal-rough textures are kept by default, and the output says so
 # per material (human and JSON); the spec-gloss extension goes like a converted material's.
@@ -130,10 +131,10 @@ check "... and the total counts it" \
     grep -q "^gltf spec2metal: 0 of 1 materials converted, 1 kept with metal-rough values of its own" "$tmp/out"
 check "kept: the asset's own base colour texture" test \
     "$(gltf "$tmp/keep/a.gltf" 'uri(pbr(0)["baseColorTexture"]["index"])')" = \
-    "Avocado_baseColor.png"
+    "a_Avocado_baseColor.png"
 check "kept: only the spec-gloss textures pruned" test \
     "$(gltf "$tmp/keep/a.gltf" '[d["images"][t["source"]]["uri"] for t in d["textures"]]')" = \
-    "['Avocado_baseColor.png', 'Avocado_roughnessMetallic.png', 'Avocado_normal.png']"
+    "['a_Avocado_baseColor.png', 'a_Avocado_roughnessMetallic.png', 'a_Avocado_normal.png']"
 check "kept: the spec-gloss extension is gone" test \
     "$(gltf "$tmp/keep/a.gltf" '(SG in m(0).get("extensions", {}), SG in d.get("extensionsUsed", []))')" = \
     "(False, False)"
@@ -149,7 +150,7 @@ expect "Avocado kept, --keep-specgloss" 0 "its spec-gloss extension kept \\(--ke
 check "... both workflows stay, untouched" test \
     "$(gltf "$tmp/keepsg/a.gltf" '(uri(pbr(0)["baseColorTexture"]["index"]),
                                   uri(ext(0)["diffuseTexture"]["index"]))')" = \
-    "('Avocado_baseColor.png', 'Avocado_diffuse.png')"
+    "('a_Avocado_baseColor.png', 'a_Avocado_diffuse.png')"
 mkdir -p "$tmp/floppyj"
 expect "FloppyDisk --json: converted" 0 '"converted": \[0\], "kept": \[\]' -- "$bin" gltf spec2metal "$floppy" \
     -o "$tmp/floppyj/f.gltf" --method weighted --json
@@ -165,15 +166,15 @@ check "Avocado: the spec-gloss and the replaced core textures pruned" \
     grep -q "^pruned 4 textures, 4 images and 0 samplers" "$tmp/out"
 check "... the remaining textures are the normal map and the new ones" test \
     "$(gltf "$tmp/avocado/avocado.gltf" '[d["images"][t["source"]]["uri"] for t in d["textures"]]')" = \
-    "['Avocado_normal.png', 'avocado_m0_basecolor.png', 'avocado_m0_metallicRoughness.png']"
+    "['avocado_Avocado_normal.png', 'avocado_m0_basecolor.png', 'avocado_m0_metallicRoughness.png']"
 check "... and the output folder has no dead images" test \
     "$(cd "$tmp/avocado" && echo *.png)" = \
-    "Avocado_normal.png avocado_m0_basecolor.png avocado_m0_metallicRoughness.png"
+    "avocado_Avocado_normal.png avocado_m0_basecolor.png avocado_m0_metallicRoughness.png"
 mkdir -p "$tmp/unused"
 expect "Avocado, --keep-unused --json" 0 '"keep_unused": true, "pruned": \{"textures": 0, "images": 0' -- \
     "$bin" gltf spec2metal "$avocado" -o "$tmp/unused/a.gltf" --method mean --keep-unused --json \
     --overwrite-metal-rough
-old_files=$(ls "$tmp/unused" | grep -c '^Avocado_.*png')
+old_files=$(ls "$tmp/unused" | grep -c '^a_Avocado_.*png')
 check "--keep-unused: the old textures and their 5 files stay" test \
     "$(gltf "$tmp/unused/a.gltf" 'len(d["textures"]), len(d["images"])') $old_files" = "(7, 7) 5"
 expect "the maps through spec2metal" 0 "" -- "$bin" spec2metal --diffuse "$avocado_dir/Avocado_diffuse.png" \
@@ -190,7 +191,7 @@ check "--keep-specgloss: the extension stays, used but not required" test \
 check "--keep-specgloss: its textures stay referenced (only the replaced core ones pruned)" test \
     "$(gltf "$tmp/sg/a.gltf" '(uri(ext(0)["diffuseTexture"]["index"]),
         uri(ext(0)["specularGlossinessTexture"]["index"]), len(d["textures"]), len(d["images"]))')" = \
-    "('Avocado_diffuse.png', 'Avocado_specularGlossiness.png', 5, 5)"
+    "('a_Avocado_diffuse.png', 'a_Avocado_specularGlossiness.png', 5, 5)"
 
 # Factor-only materials: the factors spec2metal computes for the same constants. (The truck's materials carry
 # metal-rough values of their own too: kept unless --overwrite-metal-rough.)
@@ -226,7 +227,7 @@ check "specular colour 0.89, ior 1000, metallic 0, the diffuse as base colour" t
     "$(gltf "$tmp/ext/ext.gltf" '(m(0)["extensions"]["KHR_materials_specular"]["specularColorFactor"],
         m(0)["extensions"]["KHR_materials_ior"]["ior"], pbr(0)["metallicFactor"], pbr(0)["baseColorFactor"][:3],
         uri(pbr(0)["baseColorTexture"]["index"]))')" = \
-    "([0.89, 0.89, 0.89], 1000.0, 0.0, [0.93, 0.93, 0.93], 'textures/material_0_diffuse.png')"
+    "([0.89, 0.89, 0.89], 1000.0, 0.0, [0.93, 0.93, 0.93], 'textures/ext_material_0_diffuse.png')"
 oiiotool --iconfig oiio:UnassociatedAlpha 1 "$(dirname "$floppy")/textures/material_0_specularGlossiness.png" \
     --ch A -d float --mulc 0.91 --mulc -1 --addc 1 -o "$tmp/rough_expected.exr"
 oiiotool "$tmp/ext/$(gltf "$tmp/ext/ext.gltf" 'uri(pbr(0)["metallicRoughnessTexture"]["index"])')" --ch G -d float \

@@ -4,6 +4,8 @@
  * route reuses textures and turns a uniform result into factors, and bad options are refused.
  */
 #include <stdint.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "harness.h"
 #include "io/io_internal.h"
@@ -175,8 +177,78 @@ MR_TEST(bad_options_are_refused) {
     mr_gltf_free(asset);
 }
 
+/* metal2spec adds the spec-gloss extension and nothing else: no KHR_materials_specular (whose "specular" slot name
+ * the spec-gloss side shares), which the file would hold as an empty object beside spec-gloss. */
+MR_TEST(metal2spec_adds_no_specular_extension) {
+    mr_gltf *asset = NULL;
+    mr_transform *t = make_transform("gltf", "gltf-specgloss", "eq2");
+    MR_CHECK(mr_gltf_load(mr_test_asset_path("metalrough/WaterBottle/glTF/WaterBottle.gltf"), &asset) == MR_OK);
+    if (asset == NULL || t == NULL) return;
+    mr_gltf_convert_options o = {0};
+    o.transform = t;
+    mr_gltf_material_report report;
+    MR_CHECK(mr_gltf_convert(asset, &o, &report) == MR_OK);
+    MR_CHECK(report.outcome == MR_GLTF_CONVERTED);
+    mr_gltf_material m;
+    MR_CHECK(mr_gltf_get_material(asset, 0, &m) == MR_OK);
+    MR_CHECK(m.has_spec_gloss && !m.has_specular);
+    MR_CHECK(!mr_gltf_material_has_extension(asset, 0, "KHR_materials_specular"));
+    mr_gltf_free(asset);
+    mr_transform_free(t);
+}
+
+static int file_is(const char *path, const char *text) {
+    char buf[64] = "";
+    FILE *f = fopen(path, "rb");
+    if (f == NULL) return 0;
+    size_t n = fread(buf, 1, sizeof buf - 1, f);
+    fclose(f);
+    buf[n] = '\0';
+    return strcmp(buf, text) == 0;
+}
+
+/* mr_gltf_convert_file names the side files after the output (a.gltf: a.bin, a_m0_...), so a second output in the
+ * same folder shares none; an existing file that is no side file of the earlier output is refused, nothing
+ * written, the hint named; replace_files replaces it; the same conversion again replaces its own files. */
+MR_TEST(convert_file_side_files_after_the_output) {
+    mr_transform *t = make_transform("gltf-specgloss", "gltf", "weighted");
+    if (t == NULL) return;
+    mr_gltf_convert_options o = {0};
+    o.transform = t;
+    o.overwrite = 1;
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s", mr_test_tmp_path("sides"));
+    MR_CHECK(mkdir(dir, 0777) == 0);
+    char a[600], b[600], path[600];
+    snprintf(a, sizeof a, "%s/a.gltf", dir);
+    snprintf(b, sizeof b, "%s/b.gltf", dir);
+    MR_CHECK_OK(mr_gltf_convert_file(mr_test_asset_path(DUCK), a, &o, NULL));
+    const char *made[] = {"a.bin", "a_m0_basecolor.png", "a_m0_metallicRoughness.png"};
+    for (int k = 0; k < 3; k++) {
+        snprintf(path, sizeof path, "%s/%s", dir, made[k]);
+        MR_CHECK_MSG(access(path, F_OK) == 0, "%s", path);
+    }
+    snprintf(path, sizeof path, "%s/b.bin", dir);
+    MR_CHECK(mr_test_write_file(path, "someone's", 9));
+    o.replace_hint = "--replace-files";
+    MR_CHECK(mr_gltf_convert_file(mr_test_asset_path(DUCK), b, &o, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strstr(mr_last_error(), "buffer 0") && strstr(mr_last_error(), "b.bin") &&
+                 strstr(mr_last_error(), "--replace-files"), "%s", mr_last_error());
+    MR_CHECK(file_is(path, "someone's") && access(b, F_OK) != 0);
+    snprintf(path, sizeof path, "%s/b_m0_basecolor.png", dir);
+    MR_CHECK(access(path, F_OK) != 0); // nothing written
+    MR_CHECK_OK(mr_gltf_convert_file(mr_test_asset_path(DUCK), a, &o, NULL)); // its own files, again
+    o.replace_files = 1;
+    MR_CHECK_OK(mr_gltf_convert_file(mr_test_asset_path(DUCK), b, &o, NULL));
+    snprintf(path, sizeof path, "%s/b.bin", dir);
+    MR_CHECK(!file_is(path, "someone's"));
+    mr_transform_free(t);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(duck_palette_route_gives_the_converters_codes),
              MR_TEST_ENTRY(floppy_code_route_gives_the_converters_codes),
              MR_TEST_ENTRY(truck_materials_share_a_conversion),
              MR_TEST_ENTRY(extension_route_reuses_textures_and_makes_factors),
-             MR_TEST_ENTRY(bad_options_are_refused))
+             MR_TEST_ENTRY(bad_options_are_refused),
+             MR_TEST_ENTRY(metal2spec_adds_no_specular_extension),
+             MR_TEST_ENTRY(convert_file_side_files_after_the_output))

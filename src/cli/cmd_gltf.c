@@ -48,7 +48,14 @@ static void print_help(void) {
            "unused), and its image file is not written beside OUT; references are renumbered. What an unknown\n"
            "extension might refer to is kept (gltf/mr_gltf.h, mr_gltf_prune_unused).\n"
            "\n"
-           "Options:\n"
+           "Side files of a .gltf OUT are named after it, so that outputs in one folder never share one: for\n"
+           "out/floppy.gltf, buffers floppy.bin, floppy_1.bin, ...; new textures floppy_mK_NAME.png (K the material);\n"
+           "copied images floppy_FILE in the folder of their URI (textures/floppy_material_0_normal.png). A .glb\n"
+           "holds everything. An existing file is replaced only when it is an earlier OUT's own (OUT exists and\n"
+           "refers to it: the same command run again) or with --replace-files; otherwise nothing is written and the\n"
+           "command fails (exit 2) naming the file. Inputs are never replaced.\n"
+           "\n");
+    printf("Options:\n"
            "  -o, --output OUT      the converted asset (.gltf with its files beside it, or .glb); never an input\n"
            "  --method M            spec2metal: mlp (default), weighted, mean, khronos, or extension: the lossless\n"
            "                        route of KHR_materials_specular + KHR_materials_ior (ior 1000, textures reused,\n"
@@ -67,12 +74,17 @@ static void print_help(void) {
            "  --format F            png (default) or exr for the new textures (EXR is not a core glTF image\n"
            "                        type: the validator reports it and many viewers cannot read it)\n"
            "  --keep-unused         keep unreferenced textures, images and samplers (default: remove them)\n"
+           "  --replace-files       let OUT's side files replace existing files that are not an earlier OUT's own\n"
+           "                        (another asset's, say; inputs never)\n"
            "  --json                a JSON summary on stdout\n"
            "  --help                this text\n"
            "\n"
-           "Prints one line per material (converted: texture size, flagged texels by flag, time; kept or left as it\n"
-           "is: why), a total and what was removed; --json gives the same, with the lists of converted and kept\n"
-           "materials.\n"
+           "Prints one line per material (converted: texture size, flagged texels by reason, time; kept or left as it\n"
+           "is: why), a total, the flagged texels of all conversions by reason and what was removed; --json gives\n"
+           "the same, with the lists of converted and kept materials. The reasons are those of 'matremap spec2metal'\n"
+           "and 'metal2spec' (a texel may have several): off-manifold (spec2metal weighted, mean, khronos: no\n"
+           "metal-rough material gives these maps; metal2spec, glTF convention: a diffuse above 1, clamped),\n"
+           "non-finite input, clamped input, method failed.\n"
            "\n"
            "Example:\n"
            "  matremap gltf spec2metal FloppyDisk/scene.gltf -o out/floppy.gltf --method weighted\n");
@@ -85,9 +97,29 @@ typedef struct options {
     int eps_given; /* else each input's tolerance follows its texture's encoding */
     int threads;   /* --threads: mr_wf_options.threads (0 automatic) */
     int overwrite, keep_specgloss, keep_unused, json;
+    int replace_files; /* --replace-files: side files may replace existing files that are not the output's own */
 } options;
 
 /* ---- the command -------------------------------------------------------------------------------------------- */
+
+/* The flagged texels by reason, every reason 'matremap spec2metal|metal2spec' names (a texel with several flags
+ * counts under each): "N off-manifold[ (meaning)], N non-finite input, N clamped input, N method failed";
+ * off-manifold only where it is computed. */
+static void print_reasons(const mr_gltf_material_report *r, int off_computed, const char *off_meaning) {
+    if (off_computed) printf("%zu off-manifold%s, ", r->off_manifold, off_meaning);
+    printf("%zu non-finite input, %zu clamped input, %zu method failed", r->nonfinite, r->clamped, r->failed);
+}
+
+/* The same as a JSON object; off_manifold null where it is not computed. */
+static void print_json_reasons(const mr_gltf_material_report *r, int off_computed) {
+    printf("{\"off_manifold\": ");
+    if (off_computed)
+        printf("%zu", r->off_manifold);
+    else
+        printf("null");
+    printf(", \"nonfinite_input\": %zu, \"clamped_input\": %zu, \"method_failed\": %zu}", r->nonfinite, r->clamped,
+           r->failed);
+}
 
 static int parse(int argc, char **argv, options *o) {
     for (int i = 1; i < argc; i++) {
@@ -124,6 +156,8 @@ static int parse(int argc, char **argv, options *o) {
             o->keep_specgloss = 1;
         } else if (strcmp(argv[i], "--keep-unused") == 0) {
             o->keep_unused = 1;
+        } else if (strcmp(argv[i], "--replace-files") == 0) {
+            o->replace_files = 1;
         } else if (strcmp(argv[i], "--json") == 0) {
             o->json = 1;
         } else if (argv[i][0] == '-') {
@@ -208,6 +242,8 @@ int cmd_gltf(int argc, char **argv) {
         co.keep_source = o.keep_specgloss;
         co.exact_inputs = o.eps_given;
         co.keep_unused = o.keep_unused;
+        co.replace_files = o.replace_files;
+        co.replace_hint = "--replace-files";
         mr_status status = mr_gltf_convert_file(o.input, o.output, &co, &result);
         if (status != MR_OK) code = cli_fail("gltf", status);
     }
@@ -220,6 +256,26 @@ int cmd_gltf(int argc, char **argv) {
     }
     // The off-manifold tolerance, where one is computed (analytic spec2metal methods).
     const char *tolerance = !(kind->flags & MR_TRANSFORM_TOLERANCES) ? NULL : o.eps_given ? "eps" : "encoding";
+    // Where the off-manifold flag is computed, as 'matremap spec2metal|metal2spec' say it: spec2metal's analytic
+    // methods (the result misses the input), metal2spec with the glTF convention (a diffuse spec-gloss cannot store,
+    // clamped to 1).
+    const int off_computed = tolerance != NULL || (!to_metal && (kind->flags & MR_TRANSFORM_CONVENTION) &&
+                                                   o.convention == MR_WF_DIFFUSE_SPECGLOSS);
+    const char *off_meaning = to_metal ? "" : " (spec-gloss diffuse above 1, clamped)";
+    // The totals: each conversion once (materials sharing one count it once: its textures are written once).
+    mr_gltf_material_report total;
+    memset(&total, 0, sizeof total);
+    size_t texels = 0;
+    for (int k = 0; k < result.material_count; k++) {
+        const mr_gltf_material_report *r = &outcomes[k];
+        if (r->outcome != MR_GLTF_CONVERTED) continue;
+        texels += r->width > 0 ? (size_t)r->width * (size_t)r->height : 1;
+        total.flagged += r->flagged;
+        total.off_manifold += r->off_manifold;
+        total.nonfinite += r->nonfinite;
+        total.clamped += r->clamped;
+        total.failed += r->failed;
+    }
     const int use_mlp = (kind->flags & MR_TRANSFORM_NEEDS_NETWORK) != 0;
     double seconds = cli_now() - started;
     if (code == CLI_EXIT_OK && !o.json) {
@@ -243,9 +299,7 @@ int cmd_gltf(int argc, char **argv) {
             printf(", %zu texel%s flagged", r->flagged, r->flagged == 1 ? "" : "s");
             if (r->flagged > 0) {
                 printf(" (");
-                if (tolerance) printf("%zu off-manifold, ", r->off_manifold);
-                printf("%zu non-finite input, %zu clamped input", r->nonfinite, r->clamped);
-                if (r->failed) printf(", %zu method failed", r->failed);
+                print_reasons(r, off_computed, off_meaning);
                 printf(")");
             }
             printf(", %.3f s%s\n", r->seconds,
@@ -260,6 +314,14 @@ int cmd_gltf(int argc, char **argv) {
         else if (tolerance)
             printf(" (off-manifold tolerance: half a code value of each texture, times its factor)");
         printf(" in %.2f s; wrote %s\n", seconds, o.output);
+        if (converted > 0) {
+            printf("gltf %s: %zu of %zu texel%s flagged", o.direction, total.flagged, texels, texels == 1 ? "" : "s");
+            if (total.flagged > 0) {
+                printf(": ");
+                print_reasons(&total, off_computed, off_meaning);
+            }
+            printf("\n");
+        }
         if (o.keep_unused) {
             printf("unreferenced textures, images and samplers kept (--keep-unused)\n");
         } else {
@@ -302,16 +364,14 @@ int cmd_gltf(int argc, char **argv) {
                 printf("null");
             else
                 cli_json_string(stdout, r->reason);
-            printf(", \"width\": %d, \"height\": %d, \"flagged\": %zu, \"flags\": {\"off_manifold\": ", r->width,
-                   r->height, r->flagged);
-            if (tolerance && (r->outcome == MR_GLTF_CONVERTED || r->outcome == MR_GLTF_SHARED))
-                printf("%zu", r->off_manifold);
-            else
-                printf("null");
-            printf(", \"nonfinite_input\": %zu, \"clamped_input\": %zu, \"method_failed\": %zu}, \"seconds\": %.6f}",
-                   r->nonfinite, r->clamped, r->failed, r->seconds);
+            printf(", \"width\": %d, \"height\": %d, \"flagged\": %zu, \"flags\": ", r->width, r->height,
+                   r->flagged);
+            print_json_reasons(r, off_computed && (r->outcome == MR_GLTF_CONVERTED || r->outcome == MR_GLTF_SHARED));
+            printf(", \"seconds\": %.6f}", r->seconds);
         }
-        printf("], \"keep_unused\": %s, \"pruned\": {\"textures\": %d, \"images\": %d, \"samplers\": %d, "
+        printf("], \"texels\": %zu, \"flagged\": %zu, \"flags\": ", texels, total.flagged);
+        print_json_reasons(&total, off_computed && converted > 0);
+        printf(", \"keep_unused\": %s, \"pruned\": {\"textures\": %d, \"images\": %d, \"samplers\": %d, "
                "\"uncertain\": %d}}\n", o.keep_unused ? "true" : "false", pruned.textures, pruned.images,
                pruned.samplers, pruned.uncertain);
     }
