@@ -38,7 +38,7 @@ expect "learn: two sweeps of different pairs" 2 "differ" -- "$bin" learn "$tmp/w
 expect "learn parametric with plots" 0 "ward -> ggx by parametric" -- \
     "$bin" learn "$tmp/wg.csv" -o "$tmp/wg.mrt" --plots "$tmp/plots"
 check "the summary gives the held-out error" grep -q "held-out RMSE" "$tmp/out"
-check "the transform file starts with its magic" grep -q "^matremap-transform 1$" "$tmp/wg.mrt"
+check "the transform file starts with its magic" grep -q "^matremap-transform 2$" "$tmp/wg.mrt"
 check "it records where its data came from" grep -q "^| # from: ward diffuse=0" "$tmp/wg.mrt"
 check "the cross-section data is written" test -s "$tmp/plots/rows.csv" -a -s "$tmp/plots/curves.csv"
 if command -v gnuplot >/dev/null; then
@@ -178,4 +178,59 @@ expect "convert: --tolerance without --direct" 1 "go with --direct" -- "$bin" co
     -o "$tmp/l_" >/dev/null 2>&1
 check "learned alpha within 0.02 of direct alpha" bash -c \
     "oiiotool --diff --fail 0.02 --failpercent 0 '$tmp/l_alpha.exr' '$tmp/d1_alpha.exr' >/dev/null"
+# The README's sweep (issue 26): 'sweep --random N' draws where texture maps lie (grey, untrimmed), so every method's
+# transform gives an ordinary texel within 5 % of the remap itself ('--direct' on constants remaps the exact values),
+# SVR keeps a grey texel grey, and learn checks each transform against the held-out remaps and says so.
+"$bin" sweep --from ward --to ggx --random 300 --threads 2 -o "$tmp/rw.csv" 2>/dev/null
+check "the random sweep says its region" grep -q "^# sampling: random=300 seed=1 region=texture over" "$tmp/rw.csv"
+texel="diffuse=0.5 specular=0.2 alpha=0.1"
+# shellcheck disable=SC2086
+"$bin" convert --from ward --to ggx $texel --direct --json > "$tmp/direct.json" 2>/dev/null
+# shellcheck disable=SC2086
+"$bin" remap --from ward $texel --to ggx > "$tmp/remap.txt" 2>/dev/null
+check "--direct on constants is the remap of the exact values" python3 -c "
+import json, re, sys
+d = json.load(open('$tmp/direct.json'))['values']
+r = dict(re.findall(r'(\w+)=([0-9.e+-]+)', open('$tmp/remap.txt').readline()))
+sys.exit(0 if abs(d['f0'][0] - float(r['f0'])) < 1e-3 * float(r['f0']) and abs(d['alpha'] - float(r['alpha'])) < 1e-3 * float(r['alpha']) else 1)"
+for method in parametric svr mlp; do
+    expect "learn the README's sweep by $method" 0 "check  passed|check  FAILED" -- \
+        "$bin" learn "$tmp/rw.csv" --method $method --threads 2 -o "$tmp/rw_$method.mrt"
+    check "... prints each output's error against the remaps" grep -q "against the remaps: median .*, 9 in 10 within" \
+        "$tmp/out"
+    # shellcheck disable=SC2086
+    "$bin" convert --from ward --to ggx $texel --transform "$tmp/rw_$method.mrt" --json > "$tmp/l.json" 2>/dev/null
+    check "... its texel is within 5 % of --direct, and grey stays grey ($method)" python3 -c "
+import json, sys
+d = json.load(open('$tmp/direct.json'))['values']; l = json.load(open('$tmp/l.json'))['values']
+ok = all(abs(l[k] - d[k]) <= 0.05 * d[k] for k in ['alpha'])
+ok = ok and all(abs(l[k][c] - d[k][c]) <= 0.05 * d[k][c] for k in ['f0', 'diffuse'] for c in range(3))
+ok = ok and all(l[k][0] == l[k][1] == l[k][2] for k in ['f0', 'diffuse'])
+print(d, l); sys.exit(0 if ok else 1)"
+done
+"$bin" learn "$tmp/rw.csv" -o "$tmp/rw_p.mrt" --json > "$tmp/learn.json" 2>/dev/null
+check "learn --json gives the check" python3 -c "
+import json, sys
+c = json.load(open('$tmp/learn.json'))['check']
+sys.exit(0 if c['done'] and c['passed'] and c['rows'] == 60 and c['relative_error']['f0']['p90'] <= 0.1 else 1)"
+# The sweep as it was drawn before regions (Ward's whole specular range, channels apart: 95 % trimmed): learn
+# leaves the trimmed rows out and says why, instead of a transform ten times off.
+"$bin" sweep --from ward --to ggx --random 300 --region range --threads 2 -o "$tmp/range.csv" 2>/dev/null
+expect "learn refuses a sweep whose every row is trimmed, saying why" 2 \
+    "300 because model 'ward' rescales .*--region texture" -- "$bin" learn "$tmp/range.csv" -o "$tmp/range.mrt"
+check "... and writes nothing" test ! -e "$tmp/range.mrt"
+expect "learn --keep-trimmed learns them anyway, and the check fails it" 0 "check  FAILED" -- \
+    "$bin" learn "$tmp/range.csv" --keep-trimmed -o "$tmp/range.mrt"
+check "... with a warning naming what is off" grep -q "warning: the transform fails its check.* is more than 10 % off" \
+    "$tmp/err"
+# shellcheck disable=SC2086
+expect "convert with a transform that failed its check warns and flags the texel" 0 "ggx alpha=" -- \
+    "$bin" convert --from ward --to ggx $texel --transform "$tmp/range.mrt"
+check "... the warning names the transform" grep -q "warning: transform $tmp/range.mrt .* failed its check" "$tmp/err"
+check "... and the note says the texel is flagged for it" grep -q "failed its check against the remaps" "$tmp/err"
+oiiotool --pattern constant:color=0.2 4x4 1 -d float -o "$tmp/a4.exr" >/dev/null 2>&1
+expect "convert maps with it: every texel red in the flag map" 0 "failed its check \(16\)" -- \
+    "$bin" convert --from ward --to ggx alpha="$tmp/a4.exr" specular=0.2 diffuse=0.5 --transform "$tmp/range.mrt" \
+    -o "$tmp/failed_"
+check "... red" bash -c "oiiotool --dumpdata '$tmp/failed_flags.png' | grep -q 'Pixel (3, 3): 255 0 0'"
 finish

@@ -8,10 +8,12 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <unistd.h>
 
 #include "harness.h"
 #include "learn/learned.h"
 #include "learn/svr.h"
+#include "remap/sweep.h"
 #include "transform/transform.h"
 
 /* A known mapping for synthetic sweeps: roughness and slope of the paper's form. */
@@ -230,8 +232,9 @@ MR_TEST(corrupted_files_refused) {
     struct {
         const char *what, *find, *replace, *message;
     } cases[] = {
-        {"magic", "matremap-transform 1", "matremap-transfrom 1", "not a matremap transform file"},
-        {"version", "matremap-transform 1", "matremap-transform 7", "version 7"},
+        {"magic", "matremap-transform 2", "matremap-transfrom 2", "not a matremap transform file"},
+        {"version", "matremap-transform 2", "matremap-transform 7", "version 7"},
+        {"a verdict", "\ncheck ", "\ncheck 0x1 ", "not an integer"},
         {"model", "target ggx", "target gxx", "gxx"},
         {"parameter", "feature alpha scalar", "feature alfa scalar", "no parameter 'alfa'"},
         {"slot kind", "output f0 grey", "output f0 scalar", "3 channels"},
@@ -301,7 +304,8 @@ MR_TEST(domain_flags_and_chromaticity) {
     unsigned flags = 0;
     ward_values(0.1, 0.2, 0.2, 0.2, 0.3, v);
     mr_learned_apply(p, v, w, &flags);
-    MR_CHECK(flags == 0);
+    // (The test rows are a made-up mapping no render matches: the check fails them, and flags every texel.)
+    MR_CHECK(flags == MR_WF_UNCHECKED);
     ward_values(0.1, 0.6, 0.24, 0.12, 0.3, v); // red beyond the rows' 0.3
     mr_learned_apply(p, v, w, &flags);
     MR_CHECK(flags & MR_WF_EXTRAPOLATED);
@@ -314,7 +318,7 @@ MR_TEST(domain_flags_and_chromaticity) {
     // SVR: inside the domain it follows the mapping; beyond it, the channels' ratio is not kept.
     ward_values(0.1, 0.2, 0.2, 0.2, 0.3, v);
     mr_learned_apply(s, v, w, &flags);
-    MR_CHECK(flags == 0);
+    MR_CHECK((flags & ~MR_WF_UNCHECKED) == 0);
     MR_CHECK_NEAR(w[f0], mr_specular_slope_eval(&TRUE_SLOPE, 0.1) * 0.2, 5e-3);
     ward_values(0.1, 0.6, 0.24, 0.12, 0.3, v);
     mr_learned_apply(s, v, w, &flags);
@@ -484,9 +488,108 @@ MR_TEST(svr_hyper_parameters_held) {
     mr_sweep_table_free(&tab);
 }
 
+static uint32_t fnv1a(const char *text, size_t length) {
+    uint32_t h = 2166136261u;
+    for (size_t i = 0; i < length; i++) h = (h ^ (unsigned char)text[i]) * 16777619u;
+    return h;
+}
+
+/* The check (learned.h): a transform learned from real remaps of the values textures hold passes, and its texels
+ * are not flagged; one learned from rows whose f0 is 30 % off fails by name, flags every texel, and keeps its
+ * verdict through its file; a version 1 file (no check line) reads as unchecked and flags nothing. */
+MR_TEST(check_against_the_remaps) {
+    const mr_brdf_model *ward = mr_brdf_find("ward"), *ggx = mr_brdf_find("ggx");
+    mr_sweep_spec spec;
+    mr_sweep_spec_init(&spec, ward, ggx);
+    spec.sampling = MR_SWEEP_RANDOM;
+    spec.random_count = 150;
+    spec.scene.size = 32;
+    const char *path = mr_test_tmp_path("check.csv");
+    unlink(path);
+    mr_sweep_options so = {0};
+    so.threads = 2;
+    mr_sweep_summary summary;
+    MR_CHECK_OK(mr_sweep_run(&spec, path, &so, &summary));
+    mr_sweep_table tab;
+    MR_CHECK_OK(mr_sweep_table_load(&path, 1, NULL, &tab));
+    MR_CHECK(tab.rescaled == 0 && tab.n + tab.skipped == 150);
+    mr_learn_options o = {0};
+    o.threads = 1;
+    mr_learned *t = NULL;
+    MR_CHECK_OK(mr_learn(&tab, &o, &t));
+    if (t == NULL) return;
+    MR_CHECK(t->check.done && t->check.rows == 30 && isfinite(t->check.dssim_mean));
+    MR_CHECK_MSG(t->check.passed, "p90 %g %g %g, dssim %g", t->check.relative_p90[0], t->check.relative_p90[1],
+                 t->check.relative_p90[2], t->check.dssim_p90);
+    double v[MR_BRDF_MAX_VALUES], w[MR_BRDF_MAX_VALUES];
+    unsigned flags = 1;
+    ward_values(0.1, 0.2, 0.2, 0.2, 0.5, v);
+    mr_learned_apply(t, v, w, &flags);
+    MR_CHECK(flags == 0);
+    mr_learned_free(t);
+
+    // Every row's f0 30 % high: the rows agree with one another (relative errors stay small), but not with the
+    // renders (the rows' SSIM): the dSSIM fails it.
+    const int f0 = mr_brdf_param_offset(ggx, mr_brdf_param_index(ggx, "f0"));
+    for (size_t r = 0; r < tab.n; r++)
+        for (int c = 0; c < 3; c++) tab.target_values[r * (size_t)tab.target_count + (size_t)(f0 + c)] *= 1.3;
+    t = NULL;
+    MR_CHECK_OK(mr_learn(&tab, &o, &t));
+    if (t == NULL) return;
+    MR_CHECK(t->check.done && !t->check.passed);
+    MR_CHECK_MSG(t->check.relative_p90[1] <= MR_LEARNED_MAX_RELATIVE_ERROR && t->check.dssim_p90 > MR_LEARNED_MAX_DSSIM,
+                 "%g %g", t->check.relative_p90[1], t->check.dssim_p90);
+    mr_learned_free(t);
+    // Every other row's f0 30 % higher again: no curve follows both halves: the relative error fails it.
+    for (size_t r = 0; r < tab.n; r += 2)
+        for (int c = 0; c < 3; c++) tab.target_values[r * (size_t)tab.target_count + (size_t)(f0 + c)] *= 1.3;
+    t = NULL;
+    MR_CHECK_OK(mr_learn(&tab, &o, &t));
+    mr_sweep_table_free(&tab);
+    if (t == NULL) return;
+    MR_CHECK(t->check.done && !t->check.passed && t->outputs[1].param == mr_brdf_param_index(ggx, "f0"));
+    MR_CHECK_MSG(t->check.relative_p90[1] > MR_LEARNED_MAX_RELATIVE_ERROR, "%g", t->check.relative_p90[1]);
+    mr_learned_apply(t, v, w, &flags);
+    MR_CHECK(flags == MR_WF_UNCHECKED);
+    char *text = NULL;
+    size_t n = 0;
+    MR_CHECK_OK(mr_learned_format(t, &text, &n));
+    mr_learned_free(t);
+    mr_learned *back = NULL;
+    MR_CHECK_OK(mr_learned_parse(text, n, "failed.mrt", &back));
+    if (back != NULL) {
+        MR_CHECK(back->check.done && !back->check.passed && back->check.rows == 30);
+        mr_learned_apply(back, v, w, &flags);
+        MR_CHECK(flags == MR_WF_UNCHECKED);
+        mr_learned_free(back);
+    }
+    // Version 1: no check line.
+    char *check = strstr(text, "\ncheck "), *sum = strstr(text, "\nchecksum ");
+    MR_CHECK(check != NULL && sum != NULL && strncmp(text, "matremap-transform 2\n", 21) == 0);
+    if (check != NULL && sum != NULL) {
+        char *eol = strchr(check + 1, '\n');
+        memmove(check + 1, eol + 1, strlen(eol + 1) + 1);
+        text[19] = '1';
+        sum = strstr(text, "\nchecksum ");
+        char line[32];
+        snprintf(line, sizeof line, "%08x", (unsigned)fnv1a(text, (size_t)(sum + 1 - text)));
+        memcpy(sum + 10, line, 8);
+        back = NULL;
+        MR_CHECK_MSG(mr_learned_parse(text, strlen(text), "v1.mrt", &back) == MR_OK, "%s", mr_last_error());
+        if (back != NULL) {
+            MR_CHECK(!back->check.done && !back->check.passed);
+            mr_learned_apply(back, v, w, &flags);
+            MR_CHECK(flags == 0);
+            mr_learned_free(back);
+        }
+    }
+    free(text);
+    unlink(path);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(parametric_recovers_known_mapping), MR_TEST_ENTRY(carry_by_lobe_ratio),
              MR_TEST_ENTRY(solver_residue_not_learned), MR_TEST_ENTRY(float_map_at_bound_not_clamped),
              MR_TEST_ENTRY(round_trip_every_method), MR_TEST_ENTRY(corrupted_files_refused),
              MR_TEST_ENTRY(domain_flags_and_chromaticity), MR_TEST_ENTRY(chain_equals_steps),
              MR_TEST_ENTRY(chain_search), MR_TEST_ENTRY(parametric_refuses_wrong_shape),
-             MR_TEST_ENTRY(svr_hyper_parameters_held))
+             MR_TEST_ENTRY(svr_hyper_parameters_held), MR_TEST_ENTRY(check_against_the_remaps))

@@ -196,6 +196,7 @@ MR_TEST(grid_errors_name_the_bad_value) {
 
 MR_TEST(random_samples_depend_only_on_seed_and_index_and_stay_in_bounds) {
     mr_sweep_spec spec = random_spec(1000, 7, 0);
+    spec.region = MR_SWEEP_REGION_RANGE; /* each channel its own draw */
     const mr_brdf_model *m = spec.source;
     int d = mr_brdf_param_index(m, "diffuse");
     spec.held = 1u << d; /* diffuse given by the user: held */
@@ -236,6 +237,70 @@ MR_TEST(random_samples_depend_only_on_seed_and_index_and_stay_in_bounds) {
     // Nothing left to randomise is an error.
     spec.held = (1u << m->param_count) - 1;
     MR_CHECK(mr_sweep_check(&spec) == MR_ERR_INVALID_ARG && strstr(mr_last_error(), "randomise") != NULL);
+}
+
+/* The TEXTURE region (the default): RGB parameters grey, and only values where Ward does not trim (diffuse +
+ * specular <= 1), spread over that whole region; the RANGE region over Ward's whole ranges is nearly all trimmed
+ * (the README's sweep before regions: 95 % of its rows were). Headers say which; a file of one is not resumed as
+ * the other, and a header without a region word (files from before regions) reads as RANGE. */
+MR_TEST(the_texture_region_draws_grey_linear_values) {
+    const mr_brdf_model *ward = mr_brdf_find("ward");
+    mr_sweep_spec spec;
+    mr_sweep_spec_init(&spec, ward, mr_brdf_find("ggx"));
+    spec.sampling = MR_SWEEP_RANDOM;
+    spec.random_count = 2000;
+    MR_CHECK(spec.region == MR_SWEEP_REGION_TEXTURE);
+    const int d = mr_brdf_param_offset(ward, mr_brdf_param_index(ward, "diffuse"));
+    const int s = mr_brdf_param_offset(ward, mr_brdf_param_index(ward, "specular"));
+    int grey = 0, trimmed = 0, high_specular = 0, high_diffuse = 0;
+    for (long i = 0; i < spec.random_count; i++) {
+        double v[MR_BRDF_MAX_VALUES];
+        MR_CHECK_OK(mr_sweep_sample(&spec, i, v));
+        grey += v[d] == v[d + 1] && v[d] == v[d + 2] && v[s] == v[s + 1] && v[s] == v[s + 2];
+        trimmed += ward->rescales(ward, v) != 0;
+        high_specular += v[s] > 0.75;
+        high_diffuse += v[d] > 0.75;
+    }
+    MR_CHECK_MSG(grey == 2000 && trimmed == 0, "grey %d, trimmed %d", grey, trimmed);
+    // Uniform over the triangle d + s <= 1: 1/16 of it has s > 0.75 (and as much d > 0.75): 125 of 2000.
+    MR_CHECK_MSG(high_specular > 90 && high_specular < 160 && high_diffuse > 90 && high_diffuse < 160, "%d, %d",
+                 high_specular, high_diffuse);
+    spec.region = MR_SWEEP_REGION_RANGE;
+    trimmed = 0;
+    for (long i = 0; i < 200; i++) {
+        double v[MR_BRDF_MAX_VALUES];
+        MR_CHECK_OK(mr_sweep_sample(&spec, i, v));
+        trimmed += ward->rescales(ward, v) != 0;
+    }
+    MR_CHECK_MSG(trimmed > 190, "%d of 200 trimmed", trimmed);
+    // Held values that leave nothing linear to draw are refused by name.
+    spec.region = MR_SWEEP_REGION_TEXTURE;
+    MR_CHECK_OK(mr_brdf_parse_assignment(ward, "diffuse=1", spec.source_values));
+    spec.held = 1u << mr_brdf_param_index(ward, "diffuse");
+    MR_CHECK_OK(mr_sweep_check(&spec));
+    MR_CHECK_OK(mr_brdf_parse_assignment(ward, "specular=0.5", spec.source_values));
+    spec.held |= 1u << mr_brdf_param_index(ward, "specular");
+    MR_CHECK(mr_sweep_check(&spec) == MR_ERR_INVALID_ARG && strstr(mr_last_error(), "rescales") != NULL);
+
+    // The header names the region; RANGE writes none (as files from before regions, which read as RANGE).
+    mr_sweep_spec texture = random_spec(3, 5, 16), range = texture;
+    range.region = MR_SWEEP_REGION_RANGE;
+    const char *path = tmp_path("region.csv");
+    mr_sweep_summary sum;
+    unlink(path);
+    MR_CHECK_OK(run(&texture, path, 0, 1, &sum));
+    char *text = mr_test_read_file(path, NULL);
+    MR_CHECK(text && strstr(text, "# sampling: random=3 seed=5 region=texture over alpha,f0,diffuse\n") != NULL);
+    free(text);
+    MR_CHECK(run(&range, path, 1, 1, &sum) == MR_ERR_INVALID_ARG); /* another sweep: not resumed */
+    unlink(path);
+    MR_CHECK_OK(run(&range, path, 0, 1, &sum));
+    text = mr_test_read_file(path, NULL);
+    MR_CHECK(text && strstr(text, "# sampling: random=3 seed=5 over alpha,f0,diffuse\n") != NULL);
+    free(text);
+    MR_CHECK_OK(run(&range, path, 1, 1, &sum));
+    MR_CHECK(sum.already_done == 3 && sum.computed == 0);
+    unlink(path);
 }
 
 MR_TEST(rows_round_trip_exactly) {
@@ -325,7 +390,7 @@ MR_TEST(one_and_two_threads_write_the_same_file) {
     if (a && b) {
         char *ca = comparable(a), *cb = comparable(b);
         MR_CHECK_MSG(strcmp(ca, cb) == 0, "files differ:\n%s\n---\n%s", ca, cb);
-        MR_CHECK(strstr(a, "# sampling: random=6 seed=11 over alpha,f0,diffuse\n") != NULL);
+        MR_CHECK(strstr(a, "# sampling: random=6 seed=11 region=texture over alpha,f0,diffuse\n") != NULL);
         MR_CHECK(strstr(a, "\nindex,alpha,f0_r,f0_g,f0_b,diffuse_r,diffuse_g,diffuse_b,to_diffuse_r,") != NULL);
         // Rows are in index order at the end.
         const char *row = strstr(a, "\n0,");
@@ -564,7 +629,7 @@ MR_TEST(progress_is_reported_once_per_row_in_order) {
     MR_CHECK_OK(mr_sweep_run(&spec, path, &o, &s));
     MR_CHECK(omp_get_max_threads() == threads_before); /* the single-threaded samples leave the caller's ICV */
     MR_CHECK(log.calls == 8 && log.monotonic && log.run_total == 8 && log.last_done == 8);
-    MR_CHECK(s.outcomes[0] + s.outcomes[1] + s.outcomes[2] + s.outcomes[3] == 8);
+    MR_CHECK(s.outcomes[0] + s.outcomes[1] + s.outcomes[2] + s.outcomes[3] + s.outcomes[4] == 8);
     MR_CHECK(s.seconds > 0.0);
     unlink(path);
 }
@@ -798,7 +863,8 @@ MR_TEST(two_and_three_ranks_write_the_single_process_file_and_resume_it) {
     MR_CHECK(ranks[0].summary.already_done == 2 && ranks[0].summary.computed == 9 &&
              ranks[0].summary.truncated_bytes == 20 && ranks[0].summary.threads_total == 4);
     MR_CHECK(ranks[0].summary.computed == ranks[0].summary.outcomes[0] + ranks[0].summary.outcomes[1] +
-                                              ranks[0].summary.outcomes[2] + ranks[0].summary.outcomes[3]);
+                                              ranks[0].summary.outcomes[2] + ranks[0].summary.outcomes[3] +
+                                              ranks[0].summary.outcomes[4]);
     MR_CHECK(same_rows(reference, three));
     // The resumed file kept its own header (the first run's command line) and is sorted.
     char *resumed = mr_test_read_file(three, NULL);
@@ -1092,6 +1158,7 @@ MR_TEST(a_torn_last_row_is_never_counted_even_when_only_its_line_end_is_missing)
 MR_TEST_MAIN(MR_TEST_ENTRY(grid_is_cartesian_first_axis_slowest_with_exact_endpoints),
              MR_TEST_ENTRY(grid_log_spacing_is_geometric), MR_TEST_ENTRY(grid_errors_name_the_bad_value),
              MR_TEST_ENTRY(random_samples_depend_only_on_seed_and_index_and_stay_in_bounds),
+             MR_TEST_ENTRY(the_texture_region_draws_grey_linear_values),
              MR_TEST_ENTRY(rows_round_trip_exactly), MR_TEST_ENTRY(one_and_two_threads_write_the_same_file),
              MR_TEST_ENTRY(an_existing_file_is_never_overwritten_and_a_mismatching_one_never_touched),
              MR_TEST_ENTRY(resume_cuts_a_torn_line_and_ends_with_the_uninterrupted_file),

@@ -200,8 +200,14 @@ static mr_status fit_parametric(const mr_sweep_table *tab, mr_learned *t, const 
         // Rows whose fitted diffuse sits on its lower bound are left out: there the fit wanted less than the range
         // allows (a diffuse taking back what a wider target lobe adds, from a source diffuse smaller than that),
         // so the row shows a bound, not the slope (keeping them bends k_d toward 0 everywhere).
+        // (Unless too few are off it to fit the slope's five coefficients well: then every row.)
         const mr_brdf_param *q = &t->target->params[t->outputs[2].param];
-        const double floor_value = q->min_value + 1e-9 * (q->max_value - q->min_value);
+        double floor_value = q->min_value + 1e-9 * (q->max_value - q->min_value);
+        size_t off_bound = 0;
+        for (size_t r = 0; r < m; r++)
+            off_bound += slot_value(t->target, &t->outputs[2], tab->target_values + idx[r] * (size_t)tab->target_count) >
+                         floor_value;
+        if (off_bound < MIN_ROWS) floor_value = -INFINITY;
         size_t kept = 0;
         for (size_t r = 0; r < m; r++) {
             const double *sv = tab->source_values + idx[r] * (size_t)tab->source_count;
