@@ -57,7 +57,11 @@ static int load_map(const char *command, mr_material *m, const char *assignment)
         }
     }
     if (code == CLI_EXIT_OK) {
-        mr_status status = mr_material_add_map(m, name, image, channel, path, NULL);
+        // The source as people read it (report's thumbnails): the file, and an override if the map gives one.
+        char source[4200];
+        snprintf(source, sizeof source, "%s%s", path,
+                 encoding == MR_MAP_LINEAR ? ":linear" : encoding == MR_MAP_SRGB ? ":srgb" : "");
+        mr_status status = mr_material_add_map(m, name, image, channel, source, NULL);
         if (status == MR_OK) image = NULL; // m owns it
         else code = cli_fail(command, status);
     }
