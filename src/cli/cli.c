@@ -305,7 +305,7 @@ int cli_check_map(const char *command, const char *label, const char *text, int 
 }
 
 int cli_read_map(const char *command, const char *label, const char *text, int channels, const mr_brdf_param *param,
-                 const mr_img_read_options *opts, mr_image **out, mr_img_stored *stored, int *channel) {
+                 const mr_img_read_options *opts, mr_image **out, mr_img_stored *stored) {
     int code = cli_check_map(command, label, text, channels);
     if (code != CLI_EXIT_OK) return code;
     size_t length;
@@ -319,11 +319,9 @@ int cli_read_map(const char *command, const char *label, const char *text, int c
     }
     mr_status status = mr_img_read_param_map(path, param, encoding, opts, out, stored);
     free(path);
-    if (status == MR_ERR_INVALID_ARG && encoding == MR_MAP_SRGB) // a float file: what the user asked cannot be
+    if (status == MR_ERR_INVALID_ARG && encoding == MR_MAP_SRGB) // :srgb on a float file: the request is the error
         return cli_usage_error(command, "'%s': %s", label, mr_last_error());
-    if (status != MR_OK) return cli_fail(command, status);
-    if (channel != NULL) *channel = selected;
-    return CLI_EXIT_OK;
+    return status == MR_OK ? CLI_EXIT_OK : cli_fail(command, status);
 }
 
 int cli_is_help(const char *arg) { return strcmp(arg, "--help") == 0 || strcmp(arg, "-h") == 0; }

@@ -165,12 +165,12 @@ void cli_split_map(const char *text, int channels, size_t *path_length, int *cha
  * in the wrong order ("x.png:linear:g", when no file "x.png:linear" exists). */
 int cli_check_map(const char *command, const char *label, const char *text, int channels);
 
-/* Read the map in `text` (FILE[:c][:e], as cli_split_map takes it) for parameter `param` (may be NULL: a map feeding
- * no one parameter, linear unless overridden) with mr_img_read_param_map; *channel (may be NULL) gets the channel
- * selector. Returns a CLI exit code after printing any error naming `label`: a usage error for a malformed map or
- * :srgb on a float file, else cli_fail's. */
+/* Read the map in `text` (FILE[:c][:e], as cli_split_map takes it; the channel selector is the caller's to apply)
+ * for parameter `param` (may be NULL: a map feeding no one parameter, linear unless overridden) with
+ * mr_img_read_param_map (opts and stored as there). Returns a CLI exit code after printing any error naming `label`:
+ * a usage error for a malformed map or :srgb on a float file, else cli_fail's. */
 int cli_read_map(const char *command, const char *label, const char *text, int channels, const mr_brdf_param *param,
-                 const mr_img_read_options *opts, mr_image **out, mr_img_stored *stored, int *channel);
+                 const mr_img_read_options *opts, mr_image **out, mr_img_stored *stored);
 
 /* ---- materials on the command line: MODEL name=value ... name=@MAP[:r|g|b|a][:linear|srgb] ... (cli_material.c) */
 

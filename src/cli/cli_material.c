@@ -41,7 +41,7 @@ static int load_map(const char *command, mr_material *m, const char *assignment)
         code = cli_usage_error(command, "'%s': %s is an RGB parameter and takes the whole image (no :%c)", assignment,
                                param->name, "rgba"[channel]);
     } else {
-        code = cli_read_map(command, assignment, file, 1, param, NULL, &image, NULL, NULL);
+        code = cli_read_map(command, assignment, file, 1, param, NULL, &image, NULL);
     }
     if (param != NULL && param->channels == 3) channel = 0; // an RGB parameter reads channels 0-2
     if (code == CLI_EXIT_OK && channel < 0) {
