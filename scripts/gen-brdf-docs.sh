@@ -18,6 +18,24 @@ generate() {
     echo "blocks, not this file. Conventions shared by all models (frame, f_r without the cosine, diffuse/specular"
     echo "split, clamping, parameter roles and lobes) are in src/brdf/brdf.h. \`matremap models\` lists each"
     echo "model's parameter table."
+    echo
+    echo "## Texture maps: one rule for encodings"
+    echo
+    echo "Every parameter states in its descriptor how an 8/16-bit texture map of it is encoded (\`MR_PARAM_SRGB_MAP\`"
+    echo "in src/brdf/brdf.h; the ENCODING column of \`matremap models NAME\`, \`map_encoding\` in \`models --json\`):"
+    echo
+    echo "- colour parameters, reflectances and albedos given as RGB colours (diffuse, specular, f0, albedo,"
+    echo "  base_color, specular_color), are held **sRGB-encoded** in 8/16-bit maps, whatever their range (Ward's and"
+    echo "  Phong's specular reach 10; their maps are still colours);"
+    echo "- everything else (roughness, alpha, rms, exponent, metallic, ior, eta, k, scalar factors such as the"
+    echo "  one-channel specular of gltf and cycles-principled, switches) is **linear**;"
+    echo "- float files (EXR, HDR, float TIFF) are always linear."
+    echo
+    echo "Every command that reads maps (render, report, convert, spec2metal, metal2spec) applies this rule through one"
+    echo "library function, \`mr_img_read_param_map\` (src/io/image_io.h). A map may override it: \`FILE:linear\` or"
+    echo "\`FILE:srgb\`, after any channel selector (\`roughness=@orm.png:g:linear\`); \`:srgb\` on a float file is an"
+    echo "error. glTF textures follow the glTF specification (baseColor, specularColor, diffuse and specularGlossiness"
+    echo "RGB sRGB; metallicRoughness, specular and glossiness linear), which the gltf and gltf-specgloss flags match."
     local files
     files=$(cd "$root/src/brdf" && { ls lambert.c; ls ./*.c | sed 's|^\./||' | grep -v -x -e lambert.c -e registry.c; })
     for f in $files; do

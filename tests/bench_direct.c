@@ -5,8 +5,9 @@
  * The sets: the shared spec-gloss texture sets (Avocado, FloppyDisk; 2048^2 PNGs) box-filtered to 1024^2 in their
  * stored 8-bit values and rounded to 8 bits again, as a 1024^2 PNG of the set would store them (the glTF files'
  * factors are not applied), then read as Ward SVBRDFs through a documented mapping, not a conversion: Ward's
- * diffuse = the diffuse texel, Ward's specular = the specular texel (both sRGB-decoded), Ward's alpha =
- * (1 - glossiness)^2 (glossiness linear; floored at 1e-4 as the models floor it), Mitsuba's energy trimming on.
+ * diffuse = the diffuse texel, Ward's specular = the specular texel (both sRGB-decoded, by the library's rule for maps
+ * of colour parameters), Ward's alpha = (1 - glossiness)^2 (glossiness linear, as the rule reads gltf-specgloss's;
+ * floored at 1e-4 as the models floor it), Mitsuba's energy trimming on.
  * They are remapped into GGX (the paper's Mitsuba Ward -> Mitsuba GGX), AUTO, the default fit scene (64^2, light
  * at 45 degrees).
  *
@@ -97,34 +98,46 @@ static unsigned char *load_codes(const char *dir, const texture_set *set, int si
     return codes;
 }
 
-/* The Ward reading of the codes (the header comment), packed for model "ward". */
-static double *ward_texels(const mr_brdf_model *ward, const unsigned char *codes, size_t n) {
+/* The value an 8-bit map of parameter `index` of `model` holds at `code`, by the library's one rule for maps
+ * (mr_brdf_param_map_encoding: sRGB-decoded for colour parameters, linear for the rest), as mr_img_read_param_map
+ * would read it. */
+static double map_value(const mr_brdf_model *model, int index, unsigned char code) {
+    const double stored = code / 255.0;
+    return mr_brdf_param_map_encoding(&model->params[index], MR_MAP_AS_PARAMETER) == MR_IMG_COLOR
+               ? mr_srgb_decode_double(stored)
+               : stored;
+}
+
+/* The Ward reading of the codes (the header comment), packed for model "ward": diffuse and specular as maps of
+ * Ward's parameters, glossiness as a map of glTF spec-gloss's. */
+static double *ward_texels(const mr_brdf_model *ward, const mr_brdf_model *sg, const unsigned char *codes, size_t n) {
     const int nv = mr_brdf_value_count(ward);
-    const int d = mr_brdf_param_offset(ward, mr_brdf_param_index(ward, "diffuse"));
-    const int s = mr_brdf_param_offset(ward, mr_brdf_param_index(ward, "specular"));
+    const int di = mr_brdf_param_index(ward, "diffuse"), si = mr_brdf_param_index(ward, "specular");
+    const int d = mr_brdf_param_offset(ward, di), s = mr_brdf_param_offset(ward, si);
     const int a = mr_brdf_param_offset(ward, mr_brdf_param_index(ward, "alpha"));
+    const int gi = mr_brdf_param_index(sg, "glossiness");
     double *v = malloc(n * (size_t)nv * sizeof *v);
     for (size_t i = 0; i < n; i++) {
         double *t = v + i * (size_t)nv;
         mr_brdf_default_values(ward, t); // trim = 1
         for (int c = 0; c < 3; c++) {
-            t[d + c] = mr_srgb_decode_double(codes[i * 7 + (size_t)c] / 255.0);
-            t[s + c] = mr_srgb_decode_double(codes[i * 7 + 3 + (size_t)c] / 255.0);
+            t[d + c] = map_value(ward, di, codes[i * 7 + (size_t)c]);
+            t[s + c] = map_value(ward, si, codes[i * 7 + 3 + (size_t)c]);
         }
-        const double r = 1.0 - codes[i * 7 + 6] / 255.0;
+        const double r = 1.0 - map_value(sg, gi, codes[i * 7 + 6]);
         t[a] = fmax(r * r, 1e-4);
     }
     return v;
 }
 
-/* The same texels as glTF spec-gloss values (glossiness as stored). */
+/* The same texels as glTF spec-gloss values (diffuse, specular, glossiness: the model's parameters in table order,
+ * each read as a map of it). */
 static double *specgloss_texels(const mr_brdf_model *sg, const unsigned char *codes, size_t n) {
     const int nv = mr_brdf_value_count(sg);
     double *v = malloc(n * (size_t)nv * sizeof *v);
     for (size_t i = 0; i < n; i++)
         for (int c = 0; c < 7; c++)
-            v[i * (size_t)nv + (size_t)c] = c < 6 ? mr_srgb_decode_double(codes[i * 7 + (size_t)c] / 255.0)
-                                                  : codes[i * 7 + 6] / 255.0;
+            v[i * (size_t)nv + (size_t)c] = map_value(sg, c < 3 ? 0 : c < 6 ? 1 : 2, codes[i * 7 + (size_t)c]);
     return v;
 }
 
@@ -232,7 +245,7 @@ int main(int argc, char **argv) {
         unsigned char *codes = load_codes(argv[1], &sets[s], side);
         const size_t n = (size_t)side * side;
         r->texels = n;
-        double *texels = ward_texels(ward, codes, n), *as_sg = specgloss_texels(sg, codes, n);
+        double *texels = ward_texels(ward, sg, codes, n), *as_sg = specgloss_texels(sg, codes, n);
         for (int k = 0; k < STEP_COUNT; k++) {
             r->unique[k] = count_unique(ward, texels, n, steps[k] / 255.0);
             r->unique_specgloss[k] = count_unique(sg, as_sg, n, steps[k] / 255.0);

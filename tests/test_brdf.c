@@ -15,6 +15,7 @@
 
 #include "brdf/brdf.h"
 #include "harness.h"
+#include "io/image_io.h"
 
 #define PI 3.14159265358979323846
 
@@ -160,6 +161,44 @@ MR_TEST(registry_tables_are_consistent) {
         }
         MR_CHECK(mr_brdf_param_offset(m, -1) == -1 && mr_brdf_param_offset(m, m->param_count) == -1);
         MR_CHECK(mr_brdf_param_index(m, "no-such-parameter") == -1);
+    }
+}
+
+MR_TEST(map_encodings_follow_one_rule) {
+    /* Colour parameters (reflectances and albedos given as RGB colours) are flagged MR_PARAM_SRGB_MAP in every
+     * model, whatever their range (Ward's and Phong's specular go to 10); nothing else is. */
+    static const char *const colours[] = {"diffuse", "specular", "albedo", "f0", "base_color", "specular_color"};
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        for (int i = 0; i < m->param_count; i++) {
+            const mr_brdf_param *p = &m->params[i];
+            MR_CHECK_MSG((p->flags & ~(unsigned)(MR_PARAM_LOG_SCALE | MR_PARAM_FIT_FIXED | MR_PARAM_SRGB_MAP)) == 0,
+                         "%s.%s", m->name, p->name);
+            int colour = 0;
+            for (size_t k = 0; k < sizeof colours / sizeof colours[0]; k++)
+                colour |= p->channels == 3 && strcmp(p->name, colours[k]) == 0;
+            MR_CHECK_MSG(((p->flags & MR_PARAM_SRGB_MAP) != 0) == colour, "%s.%s: %s", m->name, p->name,
+                         colour ? "a colour without MR_PARAM_SRGB_MAP" : "MR_PARAM_SRGB_MAP on a non-colour");
+            MR_CHECK_MSG(mr_brdf_param_map_encoding(p, MR_MAP_AS_PARAMETER) == (colour ? MR_IMG_COLOR : MR_IMG_DATA),
+                         "%s.%s", m->name, p->name);
+        }
+    }
+    /* glTF fixes its textures' encodings (baseColor, specularColor, diffuse and specularGlossiness RGB sRGB;
+     * metallicRoughness, specular and glossiness linear): the gltf and gltf-specgloss models agree. */
+    static const struct {
+        const char *model, *param;
+        mr_img_encoding encoding;
+    } gltf[] = {
+        {"gltf", "base_color", MR_IMG_COLOR},          {"gltf", "metallic", MR_IMG_DATA},
+        {"gltf", "roughness", MR_IMG_DATA},            {"gltf", "specular", MR_IMG_DATA},
+        {"gltf", "specular_color", MR_IMG_COLOR},      {"gltf-specgloss", "diffuse", MR_IMG_COLOR},
+        {"gltf-specgloss", "specular", MR_IMG_COLOR},  {"gltf-specgloss", "glossiness", MR_IMG_DATA},
+    };
+    for (size_t k = 0; k < sizeof gltf / sizeof gltf[0]; k++) {
+        const mr_brdf_model *m = mr_brdf_find(gltf[k].model);
+        const int i = m ? mr_brdf_param_index(m, gltf[k].param) : -1;
+        MR_CHECK_MSG(i >= 0 && mr_brdf_param_map_encoding(&m->params[i], MR_MAP_AS_PARAMETER) == gltf[k].encoding,
+                     "%s.%s", gltf[k].model, gltf[k].param);
     }
 }
 
@@ -1267,7 +1306,8 @@ MR_TEST(known_cycles_ggx) {
     }
 }
 
-MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(find_unknown_lists_valid_names),
+MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(map_encodings_follow_one_rule),
+             MR_TEST_ENTRY(find_unknown_lists_valid_names),
              MR_TEST_ENTRY(default_values_use_per_channel_defaults),
              MR_TEST_ENTRY(parse_assignment_accepts_and_rejects),
              MR_TEST_ENTRY(random_values_are_finite_and_nonnegative), MR_TEST_ENTRY(reciprocity),

@@ -1307,6 +1307,62 @@ MR_TEST(half_step_is_half_a_code_value) {
     MR_CHECK(mr_img_half_step(-0.5, 8, MR_IMG_COLOR) == mr_img_half_step(0.0, 8, MR_IMG_COLOR));
 }
 
+MR_TEST(parameter_maps_follow_one_rule) {
+    /* An 8-bit grey PNG of code 64 (0.25 stored linearly): a map of Ward's specular (a colour, range up to 10) is
+     * sRGB-decoded to 0.0513, of its alpha taken as stored; :linear and :srgb override; a float file is linear,
+     * and :srgb on it is an error naming the file. */
+    const mr_brdf_model *ward = mr_brdf_find("ward");
+    MR_CHECK(ward != NULL);
+    if (ward == NULL) return;
+    const mr_brdf_param *specular = &ward->params[mr_brdf_param_index(ward, "specular")];
+    const mr_brdf_param *alpha = &ward->params[mr_brdf_param_index(ward, "alpha")];
+    MR_CHECK(mr_brdf_param_map_encoding(specular, MR_MAP_AS_PARAMETER) == MR_IMG_COLOR);
+    MR_CHECK(mr_brdf_param_map_encoding(alpha, MR_MAP_AS_PARAMETER) == MR_IMG_DATA);
+    MR_CHECK(mr_brdf_param_map_encoding(specular, MR_MAP_LINEAR) == MR_IMG_DATA);
+    MR_CHECK(mr_brdf_param_map_encoding(alpha, MR_MAP_SRGB) == MR_IMG_COLOR);
+    MR_CHECK(mr_brdf_param_map_encoding(NULL, MR_MAP_AS_PARAMETER) == MR_IMG_DATA);
+    MR_CHECK(strcmp(mr_img_encoding_name(MR_IMG_COLOR), "sRGB") == 0);
+    MR_CHECK(strcmp(mr_img_encoding_name(MR_IMG_DATA), "linear") == 0);
+    mr_image *grey = NULL;
+    MR_CHECK_OK(mr_image_create(4, 2, 3, &grey));
+    if (grey == NULL) return;
+    for (size_t i = 0; i < mr_image_value_count(grey); i++) grey->pixels[i] = 0.25f;
+    const mr_img_write_options as_stored = {MR_IMG_DATA, 8, 0};
+    const char *png = mr_test_tmp_path("code64.png"), *exr = mr_test_tmp_path("quarter.exr");
+    MR_CHECK_OK(mr_img_write(png, grey, &as_stored));
+    MR_CHECK_OK(mr_img_write(exr, grey, NULL));
+    const double decoded = mr_srgb_decode_double(64.0 / 255.0); /* 0.05127 */
+    const struct {
+        const char *path;
+        const mr_brdf_param *param;
+        mr_map_encoding how;
+        double expected;
+        mr_img_encoding stored;
+    } cases[] = {
+        {png, specular, MR_MAP_AS_PARAMETER, decoded, MR_IMG_COLOR},
+        {png, specular, MR_MAP_LINEAR, 64.0 / 255.0, MR_IMG_DATA},
+        {png, alpha, MR_MAP_AS_PARAMETER, 64.0 / 255.0, MR_IMG_DATA},
+        {png, alpha, MR_MAP_SRGB, decoded, MR_IMG_COLOR},
+        {exr, specular, MR_MAP_AS_PARAMETER, 0.25, MR_IMG_DATA},
+        {exr, specular, MR_MAP_LINEAR, 0.25, MR_IMG_DATA},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        mr_image *map = NULL;
+        mr_img_stored stored = {-1, MR_IMG_COLOR};
+        MR_CHECK_OK(mr_img_read_param_map(cases[k].path, cases[k].param, cases[k].how, NULL, &map, &stored));
+        if (map == NULL) continue;
+        MR_CHECK_NEAR(map->pixels[0], cases[k].expected, 1e-6);
+        MR_CHECK_MSG(stored.encoding == cases[k].stored, "case %zu", k);
+        mr_image_free(map);
+    }
+    mr_image *untouched = NULL;
+    MR_CHECK(mr_img_read_param_map(exr, specular, MR_MAP_SRGB, NULL, &untouched, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(untouched == NULL);
+    MR_CHECK(strstr(mr_last_error(), "quarter.exr") != NULL && strstr(mr_last_error(), "floating-point") != NULL);
+    MR_CHECK(mr_img_read_param_map(png, specular, (mr_map_encoding)7, NULL, &untouched, NULL) == MR_ERR_INVALID_ARG);
+    mr_image_free(grey);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(openimageio_module_loads_first), MR_TEST_ENTRY(srgb_transfer_functions),
              MR_TEST_ENTRY(png8_rgb_round_trip), MR_TEST_ENTRY(png16_rgb_round_trip),
              MR_TEST_ENTRY(large_integer_round_trips), MR_TEST_ENTRY(png_data_encoding_is_linear),
@@ -1322,4 +1378,4 @@ MR_TEST_MAIN(MR_TEST_ENTRY(openimageio_module_loads_first), MR_TEST_ENTRY(srgb_t
              MR_TEST_ENTRY(written_files_have_ordinary_permissions), MR_TEST_ENTRY(concurrent_writes_and_reads),
              MR_TEST_ENTRY(bad_inputs_give_clear_errors), MR_TEST_ENTRY(library_prints_nothing),
              MR_TEST_ENTRY(read_stored_says_how_the_file_stored_its_samples),
-             MR_TEST_ENTRY(half_step_is_half_a_code_value))
+             MR_TEST_ENTRY(half_step_is_half_a_code_value), MR_TEST_ENTRY(parameter_maps_follow_one_rule))

@@ -41,9 +41,9 @@ enum { BW_DIFFUSE = 0, BW_SPECULAR = 3, BW_RMS = 6 };
 #define BW_ALPHA_MIN 0.001
 
 static const mr_brdf_param blender_ward_params[] = {
-    {"diffuse", 3, 0.64, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, 0,
+    {"diffuse", 3, 0.64, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, MR_PARAM_SRGB_MAP,
      "BI material colour x diffuse intensity, linear RGB; f_d = diffuse (BI has no 1/pi)", NULL},
-    {"specular", 3, 0.5, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_SPECULAR, 0,
+    {"specular", 3, 0.5, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_SPECULAR, MR_PARAM_SRGB_MAP,
      "BI specular colour x specular intensity, linear RGB", NULL},
     {"rms", 1, 0.1, BW_ALPHA_MIN, 0.4, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, MR_PARAM_LOG_SCALE,
      "BI WardIso slope (RNA specular_slope), the Ward alpha", NULL},

@@ -60,9 +60,15 @@ typedef enum mr_param_lobe {
 /* Bit flags of mr_brdf_param.flags. */
 enum {
     MR_PARAM_LOG_SCALE = 1, /* the optimiser should search this parameter on a log scale (roughness) */
-    MR_PARAM_FIT_FIXED = 2  /* fits hold it at its given value (default: the table's) instead of fitting it:
+    MR_PARAM_FIT_FIXED = 2, /* fits hold it at its given value (default: the table's) instead of fitting it:
                                extension factors such as glTF's KHR_materials_specular, which a remap into the
                                core material should not invent */
+    MR_PARAM_SRGB_MAP = 4   /* a colour (a reflectance or albedo given as an RGB colour: diffuse, specular, f0,
+                               base colour, specular colour): 8/16-bit texture maps of it hold sRGB-encoded
+                               values. Without the flag (roughness, alpha, metallic, ior, eta, scalars, switches)
+                               they hold linear values. Float files (EXR, HDR, float TIFF) are linear either way.
+                               The one rule every reader of maps applies: mr_brdf_param_map_encoding and
+                               mr_img_read_param_map (io/image_io.h) */
 };
 
 typedef struct mr_brdf_param {

@@ -63,9 +63,9 @@ enum { CG_ROUGHNESS = 0, CG_F0 = 1, CG_DIFFUSE = 4, CG_CORRELATED = 7 };
 static const mr_brdf_param cg_params[] = {
     {"roughness", 1, 0.5, 0.01, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, MR_PARAM_LOG_SCALE,
      "Glossy BSDF Roughness (Cycles' slider); GGX alpha = roughness^2", NULL},
-    {"f0", 3, 0.04, 0.0, 1.0, MR_PARAM_AFFINE, MR_LOBE_SPECULAR, 0,
+    {"f0", 3, 0.04, 0.0, 1.0, MR_PARAM_AFFINE, MR_LOBE_SPECULAR, MR_PARAM_SRGB_MAP,
      "Schlick reflectance at normal incidence F0 of wi.h, linear RGB (as the authors' pbr plugin)", NULL},
-    {"diffuse", 3, 0.0, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, 0,
+    {"diffuse", 3, 0.0, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, MR_PARAM_SRGB_MAP,
      "Lambert reflectance rho_d, linear RGB, added to the glossy lobe (a Diffuse BSDF, roughness 0)", NULL},
     {"correlated", 1, 0.0, 0.0, 1.0, MR_PARAM_SWITCH, MR_LOBE_SPECULAR, 0,
      "Smith G: 0 separable G1(wi) G1(wo) (Cycles <= 3.4), 1 height-correlated (Cycles 3.5+)", NULL},

@@ -63,7 +63,7 @@ enum { CP_BASE = 0, CP_METALLIC = 3, CP_SPECULAR = 4, CP_SPECULAR_TINT = 5, CP_R
 static const double cp_lum_weight[3] = {0.3, 0.6, 0.1};
 
 static const mr_brdf_param cp_params[] = {
-    {"base_color", 3, 0.8, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, 0,
+    {"base_color", 3, 0.8, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_SRGB_MAP,
      "Base Color, linear RGB: diffuse albedo, metal F0 and specular tint", NULL},
     {"metallic", 1, 0.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, 0, "Metallic", NULL},
     {"specular", 1, 0.5, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, 0,

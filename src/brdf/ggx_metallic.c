@@ -30,7 +30,7 @@
 enum { GM_ALBEDO = 0, GM_METALLIC = 3, GM_ALPHA = 4, GM_F0D = 5 };
 
 static const mr_brdf_param ggx_metallic_params[] = {
-    {"albedo", 3, 0.8, 0.0, 1.0, MR_PARAM_AFFINE, MR_LOBE_BOTH, 0,
+    {"albedo", 3, 0.8, 0.0, 1.0, MR_PARAM_AFFINE, MR_LOBE_BOTH, MR_PARAM_SRGB_MAP,
      "base colour, linear RGB: diffuse = albedo (1 - metallic), F0 = f0d (1 - metallic) + metallic albedo", NULL},
     {"metallic", 1, 0.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, 0, "metalness (paper Eq. 2)", NULL},
     {"alpha", 1, 0.1, 1e-4, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, MR_PARAM_LOG_SCALE,

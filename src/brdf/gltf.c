@@ -56,14 +56,15 @@ enum { GLTF_BASE = 0, GLTF_METALLIC = 3, GLTF_ROUGHNESS = 4, GLTF_SPECULAR = 5, 
 #define GLTF_ROUGHNESS_MIN 0.01
 
 static const mr_brdf_param gltf_params[] = {
-    {"base_color", 3, 1.0, 0.0, 1.0, MR_PARAM_AFFINE, MR_LOBE_BOTH, 0, "baseColorFactor, linear RGB", NULL},
+    {"base_color", 3, 1.0, 0.0, 1.0, MR_PARAM_AFFINE, MR_LOBE_BOTH, MR_PARAM_SRGB_MAP,
+     "baseColorFactor, linear RGB", NULL},
     {"metallic", 1, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, 0,
      "metallicFactor (f is affine in it alone, bilinear with base_color)", NULL},
     {"roughness", 1, 1.0, GLTF_ROUGHNESS_MIN, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, MR_PARAM_LOG_SCALE,
      "roughnessFactor; GGX alpha = roughness^2", NULL},
     {"specular", 1, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_FIT_FIXED,
      "KHR_materials_specular specularFactor (dielectric f0 and f90 scale)", NULL},
-    {"specular_color", 3, 1.0, 0.0, 25.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_FIT_FIXED,
+    {"specular_color", 3, 1.0, 0.0, 25.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_FIT_FIXED | MR_PARAM_SRGB_MAP,
      "KHR_materials_specular specularColorFactor, linear RGB (dielectric f0 tint)", NULL},
     {"ior", 1, 1.5, 1.0, 5.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_FIT_FIXED,
      "KHR_materials_ior index of refraction (dielectric f0 = ((ior-1)/(ior+1))^2); 0 is not supported", NULL},

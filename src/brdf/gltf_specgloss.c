@@ -34,8 +34,9 @@ enum { SG_DIFFUSE = 0, SG_SPECULAR = 3, SG_GLOSSINESS = 6 };
 #define SG_ALPHA_MIN 1e-4
 
 static const mr_brdf_param specgloss_params[] = {
-    {"diffuse", 3, 1.0, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, 0, "diffuseFactor, linear RGB", NULL},
-    {"specular", 3, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, 0,
+    {"diffuse", 3, 1.0, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, MR_PARAM_SRGB_MAP,
+     "diffuseFactor, linear RGB", NULL},
+    {"specular", 3, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_SRGB_MAP,
      "specularFactor = Schlick F0, linear RGB; also dims diffuse by (1 - max specular)", NULL},
     {"glossiness", 1, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, 0,
      "glossinessFactor; GGX alpha = (1 - glossiness)^2, floored at 1e-4", NULL},

@@ -15,7 +15,8 @@ typedef struct lambert_state {
 } lambert_state;
 
 static const mr_brdf_param lambert_params[] = {
-    {"albedo", 3, 0.5, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, 0, "diffuse reflectance (linear RGB)", NULL},
+    {"albedo", 3, 0.5, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, MR_PARAM_SRGB_MAP,
+     "diffuse reflectance (linear RGB)", NULL},
 };
 
 static void lambert_prepare(const mr_brdf_model *model, const double *values, void *state_bytes) {

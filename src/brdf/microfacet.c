@@ -95,15 +95,15 @@ enum { MF_PLASTIC_IOR = 1, MF_PLASTIC_SPECULAR = 2, MF_PLASTIC_DIFFUSE = 5 };
     {"alpha", 1, 0.1, 1e-4, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, MR_PARAM_LOG_SCALE,            \
      "microfacet roughness alpha (Mitsuba alpha, isotropic); floored at 1e-4 as Mitsuba", NULL}
 #define MF_DIFFUSE_PARAM(def)                                                                          \
-    {"diffuse", 3, def, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, 0,                                 \
+    {"diffuse", 3, def, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, MR_PARAM_SRGB_MAP,                 \
      "Lambert reflectance rho_d, linear RGB, added to the specular lobe", NULL}
 #define MF_SPECULAR_PARAM                                                                              \
-    {"specular", 3, 1.0, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_SPECULAR, 0,                               \
+    {"specular", 3, 1.0, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_SPECULAR, MR_PARAM_SRGB_MAP,               \
      "specular scale rho_s, linear RGB (Mitsuba specularReflectance)", NULL}
 
 static const mr_brdf_param mf_schlick_params[] = {
     MF_ALPHA_PARAM,
-    {"f0", 3, 0.04, 0.0, 1.0, MR_PARAM_AFFINE, MR_LOBE_SPECULAR, 0,
+    {"f0", 3, 0.04, 0.0, 1.0, MR_PARAM_AFFINE, MR_LOBE_SPECULAR, MR_PARAM_SRGB_MAP,
      "Schlick reflectance at normal incidence F0, linear RGB (the authors' pbr plugin)", NULL},
     MF_DIFFUSE_PARAM(0.0),
 };

@@ -32,9 +32,9 @@
 enum { PHONG_DIFFUSE = 0, PHONG_SPECULAR = 3, PHONG_EXPONENT = 6, PHONG_TRIM = 7 };
 
 static const mr_brdf_param phong_params[] = {
-    {"diffuse", 3, 0.5, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, 0,
+    {"diffuse", 3, 0.5, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, MR_PARAM_SRGB_MAP,
      "diffuse reflectance rho_d, linear RGB (Mitsuba diffuseReflectance); linear only while not trimmed", NULL},
-    {"specular", 3, 0.2, 0.0, 10.0, MR_PARAM_LINEAR, MR_LOBE_SPECULAR, 0,
+    {"specular", 3, 0.2, 0.0, 10.0, MR_PARAM_LINEAR, MR_LOBE_SPECULAR, MR_PARAM_SRGB_MAP,
      "specular reflectance rho_s, linear RGB (Mitsuba specularReflectance); linear only while not trimmed", NULL},
     {"exponent", 1, 30.0, 1.0, 10000.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, MR_PARAM_LOG_SCALE,
      "Phong exponent n of max(0, wo.r)^n, with (n+2)/(2 pi) normalisation", NULL},

@@ -60,9 +60,9 @@ static const ward_config ward_configs[] = {{WARD_ORIGINAL}, {WARD_DUER}, {WARD_B
 enum { WARD_DIFFUSE = 0, WARD_SPECULAR = 3, WARD_ALPHA = 6, WARD_TRIM = 7 };
 
 static const mr_brdf_param ward_params[] = {
-    {"diffuse", 3, 0.5, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, 0,
+    {"diffuse", 3, 0.5, 0.0, 1.0, MR_PARAM_LINEAR, MR_LOBE_DIFFUSE, MR_PARAM_SRGB_MAP,
      "diffuse reflectance rho_d, linear RGB (Mitsuba diffuseReflectance); linear only while not trimmed", NULL},
-    {"specular", 3, 0.2, 0.0, 10.0, MR_PARAM_LINEAR, MR_LOBE_SPECULAR, 0,
+    {"specular", 3, 0.2, 0.0, 10.0, MR_PARAM_LINEAR, MR_LOBE_SPECULAR, MR_PARAM_SRGB_MAP,
      "specular reflectance rho_s, linear RGB (Mitsuba specularReflectance); linear only while not trimmed", NULL},
     {"alpha", 1, 0.1, 1e-4, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_SPECULAR, MR_PARAM_LOG_SCALE,
      "Ward roughness (RMS slope) alpha, isotropic", NULL},

@@ -78,7 +78,7 @@ void cli_io_output(cli_io *io, const char *path, const char *label_fmt, ...);
 __attribute__((format(printf, 3, 4)))
 #endif
 void cli_io_output_folder(cli_io *io, const char *path, const char *label_fmt, ...);
-/* Register the files of every name=@MAP[:c] among a material's assignments (cli_material_load's syntax) as inputs,
+/* Register the files of every name=@MAP[:c][:e] among a material's assignments (cli_material_load's syntax) as inputs,
  * labelled with the assignment as given (labels[k], or assignments[k] when labels is NULL). */
 void cli_io_material(cli_io *io, const char *const *assignments, const char *const *labels, int count);
 /* Register every file a glTF asset was read from (mr_gltf_source_file) as inputs: "<label>" for the asset's own file,
@@ -147,7 +147,32 @@ int cli_outputs_commit(const char *command, mr_atomic_file *files, int n, const 
 /* Remove the temporary files of files[0..n) that were not committed. */
 void cli_outputs_abort(mr_atomic_file *files, int n);
 
-/* ---- materials given on the command line: MODEL name=value ... name=@MAP[:r|g|b|a] ... (cli_material.c) ---- */
+/* ---- maps given on the command line: FILE[:r|g|b|a][:linear|srgb] (cli.c) ------------------------------------
+ * Every command that reads a map of a parameter takes the file with optional selectors at its end, in this order:
+ * a channel (:r, :g, :b or :a, where the command picks channels: a one-channel parameter of render, report and
+ * convert), then an encoding (:linear or :srgb) that overrides the parameter's own (mr_img_read_param_map: 8/16-bit
+ * colour maps sRGB, everything else linear; float files always linear, and :srgb on one is a usage error). E.g.
+ * roughness=@orm.png:g:linear. Selectors are always taken from the end: a file whose own name ends in one is given
+ * with an explicit encoding after it ("odd:linear:srgb" reads the file "odd:linear" as sRGB). */
+
+/* Split `text` into its file and selectors: *path_length is the length of FILE at the start of text, *channel the
+ * channel (0-3 for r, g, b, a; -1 when none is given or `channels` is 0: the command picks none, and ":g" stays part
+ * of the file name), *encoding the override (MR_MAP_AS_PARAMETER when none is given). Never fails. */
+void cli_split_map(const char *text, int channels, size_t *path_length, int *channel, mr_map_encoding *encoding);
+
+/* A map's text split by cli_split_map, checked: CLI_EXIT_OK, or a usage error (CLI_EXIT_USAGE, printed with `label`,
+ * how the user gave the map: "specular=@s.png:linear", "--specular s.png") for an empty file name, or for selectors
+ * in the wrong order ("x.png:linear:g", when no file "x.png:linear" exists). */
+int cli_check_map(const char *command, const char *label, const char *text, int channels);
+
+/* Read the map in `text` (FILE[:c][:e], as cli_split_map takes it; the channel selector is the caller's to apply)
+ * for parameter `param` (may be NULL: a map feeding no one parameter, linear unless overridden) with
+ * mr_img_read_param_map (opts and stored as there). Returns a CLI exit code after printing any error naming `label`:
+ * a usage error for a malformed map or :srgb on a float file, else cli_fail's. */
+int cli_read_map(const char *command, const char *label, const char *text, int channels, const mr_brdf_param *param,
+                 const mr_img_read_options *opts, mr_image **out, mr_img_stored *stored);
+
+/* ---- materials on the command line: MODEL name=value ... name=@MAP[:r|g|b|a][:linear|srgb] ... (cli_material.c) */
 
 #define CLI_MAX_ASSIGNMENTS 64
 

@@ -1,96 +1,77 @@
 /*
  * cli_material.c — a material given on the command line, as `render` and `report` take it: MODEL followed by
- * name=value and name=@MAP[:r|g|b|a] assignments (cli.h). Maps are read the way their parameter needs them:
- * colour parameters (RGB, range within [0,1]) sRGB-decoded from 8/16-bit files, everything else linear. The
- * result is the library's mr_material (render/render.h), which owns the maps; this file only parses and reads.
+ * name=value and name=@MAP[:r|g|b|a][:linear|srgb] assignments (cli.h). Maps are read by the library's one rule
+ * (mr_img_read_param_map, io/image_io.h): colour parameters (flagged MR_PARAM_SRGB_MAP) sRGB-decoded from 8/16-bit
+ * files, everything else linear, float files linear, unless the map says :linear or :srgb. The result is the
+ * library's mr_material (render/render.h), which owns the maps; this file only parses and reads.
  */
 #include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
 
-/* A map assignment split up: "name=@FILE[:c]". */
-typedef struct map_assignment {
-    const char *text; /* as given: "roughness=@orm.png:g" */
-    char *name, *path; /* owned copies */
-    int channel;       /* -1: none given */
-} map_assignment;
-
-/* Split "name=@FILE[:c]" into map's name, path and channel; returns a CLI exit code (CLI_EXIT_USAGE after a usage
- * error if malformed, CLI_EXIT_INTERNAL when out of memory). */
-static int parse_map_assignment(const char *command, const char *assignment, map_assignment *map) {
-    const char *eq = strchr(assignment, '=');
-    size_t name_length = (size_t)(eq - assignment);
-    const char *file = eq + 2;
-    size_t file_length = strlen(file);
-    map->text = assignment;
-    map->channel = -1;
-    if (file_length >= 3 && file[file_length - 2] == ':') {
-        const char *letters = "rgba";
-        const char *hit = strchr(letters, file[file_length - 1]);
-        if (hit != NULL && *hit != '\0') {
-            map->channel = (int)(hit - letters);
-            file_length -= 2;
-        }
-    }
-    if (name_length == 0 || file_length == 0)
-        return cli_usage_error(command, "'%s': expected name=@FILE or name=@FILE:r|g|b|a", assignment);
-    map->name = malloc(name_length + 1);
-    map->path = malloc(file_length + 1);
-    if (map->name == NULL || map->path == NULL) { // not a usage error: the caller frees what was allocated
+/* Read one map, "name=@FILE[:c][:e]", the way its parameter needs it (cli_read_map: the library's one rule, or the
+ * map's :linear or :srgb) and bind it to m (which then owns the image); returns a CLI exit code (CLI_EXIT_OK on
+ * success). */
+static int load_map(const char *command, mr_material *m, const char *assignment) {
+    const mr_brdf_model *model = m->model;
+    const char *eq = strchr(assignment, '='), *file = eq + 2;
+    if (eq == assignment)
+        return cli_usage_error(command, "'%s': expected name=@FILE[:r|g|b|a][:linear|srgb]", assignment);
+    int code = cli_check_map(command, assignment, file, 1);
+    if (code != CLI_EXIT_OK) return code;
+    size_t path_length;
+    int channel;
+    mr_map_encoding encoding;
+    cli_split_map(file, 1, &path_length, &channel, &encoding);
+    char *name = strndup(assignment, (size_t)(eq - assignment)), *path = strndup(file, path_length);
+    if (name == NULL || path == NULL) {
+        free(name);
+        free(path);
         fprintf(stderr, "matremap %s: error: out of memory for '%s'\n", command, assignment);
         return CLI_EXIT_INTERNAL;
     }
-    memcpy(map->name, assignment, name_length);
-    map->name[name_length] = '\0';
-    memcpy(map->path, file, file_length);
-    map->path[file_length] = '\0';
-    return CLI_EXIT_OK;
-}
-
-/* Read one map the way its parameter needs it and bind it to m (which then owns the image); returns a CLI exit
- * code (CLI_EXIT_OK on success). */
-static int load_map(const char *command, mr_material *m, const map_assignment *map) {
-    const mr_brdf_model *model = m->model;
-    int index = mr_brdf_param_index(model, map->name);
-    if (index < 0) {
-        mr_param_textures unused = {0};
-        return cli_fail(command, mr_param_textures_set(&unused, model, map->name, NULL, 0));
-    }
-    const mr_brdf_param *param = &model->params[index];
-    int colour = param->channels == 3 && param->min_value >= 0.0 && param->max_value <= 1.0;
-    if (param->channels == 3 && map->channel >= 0)
-        return cli_usage_error(command, "'%s': %s is an RGB parameter and takes the whole image (no :%c)",
-                               map->text, param->name, "rgba"[map->channel]);
-    mr_img_read_options read = {colour ? MR_IMG_COLOR : MR_IMG_DATA, 0, 0};
+    int index = mr_brdf_param_index(model, name);
+    const mr_brdf_param *param = index >= 0 ? &model->params[index] : NULL;
     mr_image *image = NULL;
-    mr_status status = mr_img_read(map->path, &read, &image);
-    if (status != MR_OK) return cli_fail(command, status);
-    int channel = param->channels == 3 ? 0 : map->channel; // an RGB parameter reads channels 0-2
-    if (param->channels == 1 && channel < 0) {
+    if (param == NULL) {
+        mr_param_textures unused = {0};
+        code = cli_fail(command, mr_param_textures_set(&unused, model, name, NULL, 0));
+    } else if (param->channels == 3 && channel >= 0) {
+        code = cli_usage_error(command, "'%s': %s is an RGB parameter and takes the whole image (no :%c)", assignment,
+                               param->name, "rgba"[channel]);
+    } else {
+        code = cli_read_map(command, assignment, file, 1, param, NULL, &image, NULL);
+    }
+    if (param != NULL && param->channels == 3) channel = 0; // an RGB parameter reads channels 0-2
+    if (code == CLI_EXIT_OK && channel < 0) {
         channel = 0;
         if (image->channels >= 3) {
             // A grey picture saved as RGB is fine; real colour needs the user to say which channel to use.
             size_t pixels = (size_t)image->width * (size_t)image->height;
             const float *px = image->pixels;
-            for (size_t p = 0; p < pixels; p++, px += image->channels)
-                if (px[0] != px[1] || px[0] != px[2]) {
-                    mr_image_free(image);
-                    return cli_usage_error(command, "'%s': %s holds colour, but %s takes one value: pick a "
-                                           "channel with @%s:r, :g, :b or :a", map->text, map->path, param->name,
-                                           map->path);
-                }
+            for (size_t p = 0; p < pixels && code == CLI_EXIT_OK; p++, px += image->channels)
+                if (px[0] != px[1] || px[0] != px[2])
+                    code = cli_usage_error(command, "'%s': %s holds colour, but %s takes one value: pick a channel "
+                                           "with @%s:r, :g, :b or :a", assignment, path, param->name, path);
         }
     }
-    status = mr_material_add_map(m, map->name, image, channel, map->path, NULL);
-    if (status != MR_OK) {
-        mr_image_free(image);
-        return cli_fail(command, status);
+    if (code == CLI_EXIT_OK) {
+        // The source as people read it (report's thumbnails): the file, and an override if the map gives one.
+        char source[4200];
+        snprintf(source, sizeof source, "%s%s", path,
+                 encoding == MR_MAP_LINEAR ? ":linear" : encoding == MR_MAP_SRGB ? ":srgb" : "");
+        mr_status status = mr_material_add_map(m, name, image, channel, source, NULL);
+        if (status == MR_OK) image = NULL; // m owns it
+        else code = cli_fail(command, status);
     }
-    return CLI_EXIT_OK;
+    mr_image_free(image);
+    free(name);
+    free(path);
+    return code;
 }
 
-/* One name=value or name=@MAP[:c] assignment into m; returns a CLI exit code. */
+/* One name=value or name=@MAP[:c][:e] assignment into m; returns a CLI exit code. */
 static int assign(const char *command, mr_material *m, const char *assignment) {
     const char *eq = strchr(assignment, '=');
     if (eq == NULL) return cli_usage_error(command, "'%s' is not a NAME=VALUE or NAME=@FILE assignment", assignment);
@@ -98,13 +79,7 @@ static int assign(const char *command, mr_material *m, const char *assignment) {
         mr_status status = mr_brdf_parse_assignment(m->model, assignment, m->values);
         return status == MR_OK ? CLI_EXIT_OK : cli_fail(command, status);
     }
-    map_assignment map = {0};
-    int code = parse_map_assignment(command, assignment, &map);
-    if (code == CLI_EXIT_OK)
-        code = load_map(command, m, &map);
-    free(map.name);
-    free(map.path);
-    return code;
+    return load_map(command, m, assignment);
 }
 
 int cli_material_load(const char *command, const char *model_name, const char *const *assignments, int count,

@@ -24,12 +24,17 @@ static void print_help(void) {
         "                         --direct [--tolerance T] [--cache FILE] [--size N] [--light 45|frontal])\n"
         "                        -o PREFIX [options]\n"
         "\n"
-        "Converts a material of one BRDF model into another, texel by texel: every NAME=FILE gives a parameter of\n"
-        "the source model as a texture map (any format the tool reads; FILE:r|g|b|a picks one channel for a\n"
-        "one-channel parameter; 8/16-bit colour maps are sRGB-decoded, everything else is read as it is),\n"
-        "NAME=VALUE (or NAME=R,G,B) a constant; parameters not given keep the model's defaults ('matremap models\n"
-        "MODEL' lists them). Maps must share one size; constants broadcast. With constants only, the one texel is\n"
-        "converted and printed as 'MODEL name=value ...'.\n"
+        "Converts a material of one BRDF model into another, texel by texel: every NAME=FILE (or NAME=@FILE) gives\n"
+        "a parameter of the source model as a texture map (any format the tool reads), NAME=VALUE (or NAME=R,G,B)\n"
+        "a constant; parameters not given keep the model's defaults ('matremap models MODEL' lists them). Maps\n"
+        "must share one size; constants broadcast. With constants only, the one texel is converted and printed as\n"
+        "'MODEL name=value ...'.\n"
+        "\n"
+        "Maps hold the parameter's own values, by one rule for every command: 8/16-bit maps of colour parameters\n"
+        "(the ENCODING column of 'matremap models MODEL': diffuse, specular, f0, base colour ...) are sRGB-decoded\n"
+        "whatever the parameter's range, every other parameter is read linearly, and float files (EXR, HDR, float\n"
+        "TIFF) are always linear. FILE:linear or FILE:srgb overrides it for one map (:srgb on a float file is an\n"
+        "error); FILE:r|g|b|a picks one channel for a one-channel parameter, before the encoding: orm.png:g:linear.\n"
         "\n"
         "How:\n"
         "  --transform T.mrt   a transform made by 'matremap learn'; repeat it to chain transforms in order\n"
@@ -46,9 +51,9 @@ static void print_help(void) {
         "                      for other models, options or scene)\n"
         "  --size N, --light L --direct: the fit scene (default 64, 45; as 'matremap remap')\n"
         "\n"
-        "Outputs: PREFIX<param>.exr (linear float; --format png: 8-bit, colour parameters sRGB-encoded) for every\n"
-        "parameter of the target model (the folder of PREFIX is made if missing), the first input map's alpha\n"
-        "carried into RGB outputs, and\n"
+        "Outputs: PREFIX<param>.exr (linear float; --format png: 8-bit by the same rule, colour parameters\n"
+        "sRGB-encoded, so they read back as written) for every parameter of the target model (the folder of\n"
+        "PREFIX is made if missing), the first input map's alpha carried into RGB outputs, and\n"
         "PREFIXflags.png: red where a texel lay outside a learned transform's training domain (extrapolated:\n"
         "the paper's Fig. 19 failure) or was converted by a transform that failed its check against the remaps\n"
         "('matremap learn' warns; every texel is then red), or, with --direct, where its fit did not converge\n"
@@ -162,8 +167,6 @@ static int load_dir(loaded *l, const char *dir) {
     }
     return code;
 }
-
-static int is_colour(const mr_brdf_param *p) { return p->channels == 3 && p->min_value >= 0.0 && p->max_value <= 1.0; }
 
 /* out[j] with the alpha of `alpha_source` appended when it has one (RGB outputs only); else out[j] itself. */
 static mr_status with_alpha(mr_image *rgb, const mr_image *alpha_source, mr_image **out) {
@@ -489,7 +492,8 @@ int cmd_convert(int argc, char **argv) {
             options[j] = (mr_img_write_options){MR_IMG_DATA, 0, 0};
             if (j < out_count) {
                 status = with_alpha(out[j], alpha_source, &images[j]);
-                options[j].encoding = is_colour(&target->params[j]) ? MR_IMG_COLOR : MR_IMG_DATA;
+                // The rule maps are read by, so a PNG output reads back as written.
+                options[j].encoding = mr_brdf_param_map_encoding(&target->params[j], MR_MAP_AS_PARAMETER);
                 continue;
             }
             status = mr_image_create(width, height, 3, &images[j]);

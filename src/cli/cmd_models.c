@@ -25,6 +25,11 @@ static const char *default_text(const mr_brdf_param *p, char *buf, size_t size) 
     return buf;
 }
 
+/* How an 8/16-bit map of the parameter is read: "sRGB" or "linear" (the one rule, io/image_io.h). */
+static const char *map_encoding(const mr_brdf_param *p) {
+    return mr_img_encoding_name(mr_brdf_param_map_encoding(p, MR_MAP_AS_PARAMETER));
+}
+
 /* "name name[rgb] ..." for the model list. */
 static const char *format_params(const mr_brdf_model *m, char *buf, size_t size) {
     size_t used = 0;
@@ -39,8 +44,14 @@ static void print_help(void) {
     printf("Usage: matremap models [NAME] [--json]\n"
            "\n"
            "Lists every registered BRDF model with its parameters. With NAME, describes that model in detail:\n"
-           "each parameter's channels, default, range, role and meaning. Parameters are given to other\n"
-           "commands as name=value, or name=r,g,b for RGB ones (a single value sets all three channels).\n"
+           "each parameter's channels, default, range, role, lobe, map encoding and meaning. Parameters are given\n"
+           "to other commands as name=value, or name=r,g,b for RGB ones (a single value sets all three channels),\n"
+           "or as texture maps (name=@FILE).\n"
+           "\n"
+           "ENCODING is how every command reads an 8/16-bit map of the parameter: sRGB for colours (reflectances\n"
+           "and albedos given as RGB colours: diffuse, specular, f0, base colour), linear for everything else\n"
+           "(roughness, alpha, metallic, ior, scalars, switches), whatever the parameter's range. Float files (EXR,\n"
+           "HDR, float TIFF) are always linear. FILE:linear or FILE:srgb overrides the rule for one map.\n"
            "\n"
            "Options:\n"
            "  --json    machine-readable output on stdout\n"
@@ -66,9 +77,9 @@ static void print_json_model(const mr_brdf_model *m) {
         else
             printf("%.17g", p->default_value);
         printf(", \"min\": %.17g, \"max\": %.17g, \"role\": \"%s\", \"lobe\": \"%s\", \"log_scale\": %s, "
-               "\"meaning\": ",
+               "\"map_encoding\": \"%s\", \"meaning\": ",
                p->min_value, p->max_value, role_names[p->role], lobe_name(p->lobe),
-               (p->flags & MR_PARAM_LOG_SCALE) ? "true" : "false");
+               (p->flags & MR_PARAM_LOG_SCALE) ? "true" : "false", map_encoding(p));
         cli_json_string(stdout, p->meaning);
         printf("}");
     }
@@ -81,14 +92,17 @@ static void print_model_detail(const mr_brdf_model *m) {
     if (m->flags & MR_BRDF_NOT_ENERGY_CONSERVING)
         printf("note: may reflect more energy than it receives (not bounded by the white-furnace test)\n");
     printf("analytic parameter derivatives: %s\n\n", m->eval_grad ? "yes" : "no");
-    printf("  %-15s %-3s %-17s %7s %7s  %-9s %-8s %s\n", "PARAMETER", "CH", "DEFAULT", "MIN", "MAX", "ROLE",
-           "LOBE", "MEANING");
+    printf("  %-15s %-3s %-17s %7s %7s  %-9s %-8s %-8s %s\n", "PARAMETER", "CH", "DEFAULT", "MIN", "MAX", "ROLE",
+           "LOBE", "ENCODING", "MEANING");
     for (int i = 0; i < m->param_count; i++) {
         const mr_brdf_param *p = &m->params[i];
         char def[64];
-        printf("  %-15s %-3d %-17s %7.4g %7.4g  %-9s %-8s %s\n", p->name, p->channels, default_text(p, def, sizeof def),
-               p->min_value, p->max_value, role_names[p->role], lobe_name(p->lobe), p->meaning);
+        printf("  %-15s %-3d %-17s %7.4g %7.4g  %-9s %-8s %-8s %s\n", p->name, p->channels,
+               default_text(p, def, sizeof def), p->min_value, p->max_value, role_names[p->role], lobe_name(p->lobe),
+               map_encoding(p), p->meaning);
     }
+    printf("\nENCODING: how an 8/16-bit map of the parameter is read (float files are always linear; FILE:linear or\n"
+           "FILE:srgb overrides it).\n");
 }
 
 int cmd_models(int argc, char **argv) {

@@ -40,34 +40,57 @@ typedef enum map_kind {
 typedef struct map_arg {
     const char *option;       /* "--diffuse": names the map in messages */
     map_kind kind;
-    mr_img_encoding encoding; /* how 8/16-bit files are decoded */
+    const char *model, *param; /* the BRDF parameter the map holds: how 8/16-bit files are decoded follows the one
+                                  rule (mr_img_read_param_map: a packed map, by its RGB's parameter) */
     int min_channels;         /* MAP_PACKED: the channels it must have (3 or 4) */
     const char *layout;       /* MAP_PACKED: what those channels hold, for messages */
     const char *text;         /* as given; NULL when absent */
+    char path[PATH_SIZE];     /* a file: the file, the text without its :linear or :srgb */
+    mr_map_encoding how;      /* a file: the encoding it gives (MR_MAP_AS_PARAMETER when none) */
     int is_constant;
     double constant[3];       /* grey broadcast */
     mr_image *image;          /* the file, once read */
     mr_img_stored stored;     /* how the file stored its samples (spec2metal's tolerances) */
 } map_arg;
 
-static map_arg map_colour(const char *option) {
-    return (map_arg){.option = option, .kind = MAP_COLOR, .encoding = MR_IMG_COLOR};
+static map_arg map_colour(const char *option, const char *model, const char *param) {
+    return (map_arg){.option = option, .kind = MAP_COLOR, .model = model, .param = param};
 }
-static map_arg map_data(const char *option) {
-    return (map_arg){.option = option, .kind = MAP_DATA, .encoding = MR_IMG_DATA};
+static map_arg map_data(const char *option, const char *model, const char *param) {
+    return (map_arg){.option = option, .kind = MAP_DATA, .model = model, .param = param};
 }
-static map_arg map_packed(const char *option, mr_img_encoding encoding, int channels, const char *layout) {
-    return (map_arg){.option = option, .kind = MAP_PACKED, .encoding = encoding, .min_channels = channels,
+static map_arg map_packed(const char *option, const char *model, const char *param, int channels,
+                          const char *layout) {
+    return (map_arg){.option = option, .kind = MAP_PACKED, .model = model, .param = param, .min_channels = channels,
                      .layout = layout};
 }
 
+/* The descriptor entry of the parameter a map holds (the models and names are this file's own: never NULL). */
+static const mr_brdf_param *map_param(const map_arg *m) {
+    const mr_brdf_model *model = mr_brdf_find(m->model);
+    const int index = model != NULL ? mr_brdf_param_index(model, m->param) : -1;
+    return index >= 0 ? &model->params[index] : NULL;
+}
+
 /* Take the text of a map option: a constant (text made only of number characters: one number, or R,G,B for a
- * colour map, in [0, 1]) or a file name ("./0.5" names a file). Returns 0 and prints a usage error for a
- * malformed constant, a second use of the option, or a constant where only files will do. */
+ * colour map, in [0, 1]) or a file name ("./0.5" names a file), FILE[:linear|srgb] (cli.h). Returns 0 and prints a
+ * usage error for a malformed constant or file, a second use of the option, or a constant where only files will
+ * do. */
 static int set_map(const char *command, map_arg *m, const char *text) {
     if (m->text != NULL) return cli_usage_error(command, "%s given twice", m->option) == 0;
     m->text = text;
-    if (text[0] == '\0' || strspn(text, "0123456789.,+-eE") != strlen(text)) return 1;
+    if (text[0] == '\0' || strspn(text, "0123456789.,+-eE") != strlen(text)) {
+        char label[PATH_SIZE + 64];
+        snprintf(label, sizeof label, "%s %s", m->option, text);
+        if (cli_check_map(command, label, text, 0) != CLI_EXIT_OK) return 0;
+        size_t length;
+        int channel;
+        cli_split_map(text, 0, &length, &channel, &m->how);
+        if (length >= sizeof m->path) return cli_usage_error(command, "%s: the file name is too long", m->option) == 0;
+        memcpy(m->path, text, length);
+        m->path[length] = '\0';
+        return 1;
+    }
     if (m->kind == MAP_PACKED)
         return cli_usage_error(command, "%s '%s': expected an image file (%s)", m->option, text, m->layout) == 0;
     int count = 0;
@@ -147,13 +170,18 @@ static int read_maps(const char *command, map_arg *const *maps, int count, int t
         statuses[k] = MR_OK;
         messages[k][0] = '\0';
         if (!is_file(maps[k])) continue;
-        mr_img_read_options ro = {0};
-        ro.encoding = maps[k]->encoding;
-        statuses[k] = mr_img_read_stored(maps[k]->text, &ro, &maps[k]->image, &maps[k]->stored);
+        // The one rule for maps (the parameter's encoding, or the map's :linear or :srgb).
+        statuses[k] = mr_img_read_param_map(maps[k]->path, map_param(maps[k]), maps[k]->how, NULL, &maps[k]->image,
+                                            &maps[k]->stored);
         if (statuses[k] != MR_OK) snprintf(messages[k], sizeof messages[k], "%s", mr_last_error());
     }
     const map_arg *first = NULL;
     for (int k = 0; k < count; k++) {
+        if (statuses[k] == MR_ERR_INVALID_ARG && maps[k]->how == MR_MAP_SRGB) { // :srgb on a float file
+            char label[PATH_SIZE + 64];
+            snprintf(label, sizeof label, "%s %s", maps[k]->option, maps[k]->text);
+            return cli_usage_error(command, "'%s': %s", label, messages[k]);
+        }
         if (statuses[k] != MR_OK) {
             fprintf(stderr, "matremap %s: error: %s\n", command,
                     messages[k][0] ? messages[k] : mr_status_str(statuses[k]));
@@ -232,7 +260,7 @@ static const char *format_from_name(const char *text) {
 static const char *default_format(map_arg *const *maps, int count) {
     for (int k = 0; k < count; k++) {
         if (!is_file(maps[k])) continue;
-        const char *dot = strrchr(maps[k]->text, '.');
+        const char *dot = strrchr(maps[k]->path, '.');
         const char *format = dot != NULL && strchr(dot, '/') == NULL ? format_from_name(dot + 1) : NULL;
         return format ? format : "png";
     }
@@ -260,7 +288,7 @@ static int plan_outputs(const char *command, out_options *o, map_arg *const *map
     cli_io io;
     cli_io_init(&io, command);
     for (int m = 0; m < map_count; m++)
-        if (is_file(maps[m])) cli_io_input(&io, maps[m]->text, "%s %s", maps[m]->option, maps[m]->text);
+        if (is_file(maps[m])) cli_io_input(&io, maps[m]->path, "%s %s", maps[m]->option, maps[m]->text);
     if (weights != NULL) cli_io_input(&io, weights, "--weights %s", weights);
     if (network != NULL && network[0] != '\0') cli_io_input(&io, network, "the network %s", network);
     for (int k = 0; k < count; k++) cli_io_output(&io, outputs[k].path, "-o %s", o->prefix);
@@ -602,11 +630,14 @@ static void print_spec2metal_help(void) {
            "into metallic-workflow ones (base colour, metallic, roughness), texel by texel (docs/workflow.md).\n"
            "\n"
            "A MAP is an image file or a constant: one number, or R,G,B for a colour, linear in [0, 1] (a file named\n"
-           "like a number is written ./0.5). Colour maps (diffuse, specular, base colour) are sRGB-encoded in\n"
-           "8/16-bit files and linear in EXR; data maps (glossiness, roughness, metallic) are linear in every\n"
-           "format, and a grey RGB file serves as one. Files must have the same size and constants broadcast to it;\n"
-           "with constants only, the one texel is converted and printed. roughness = 1 - glossiness (the\n"
-           "spec-gloss convention). The diffuse map's alpha, if it has one, becomes the base colour's alpha.\n"
+           "like a number is written ./0.5). Files are read by the one rule of every command ('matremap models\n"
+           "gltf-specgloss' and 'models gltf' show it per parameter): colour maps (diffuse, specular, base colour)\n"
+           "are sRGB-encoded in 8/16-bit files; data maps (glossiness, roughness, metallic) are linear, and a grey\n"
+           "RGB file serves as one; float files (EXR, float TIFF) are always linear. FILE:linear or FILE:srgb\n"
+           "overrides it for one map (:srgb on a float file is an error). Files must have the same size and\n"
+           "constants broadcast to it; with constants only, the one texel is converted and printed. roughness =\n"
+           "1 - glossiness (the spec-gloss convention). The diffuse map's alpha, if it has one, becomes the base\n"
+           "colour's alpha.\n"
            "\n"
            "Inputs:\n"
            "  --diffuse MAP              diffuse colour, RGB or RGBA\n"
@@ -854,9 +885,13 @@ static const output_layout metal_packed[] = {
 
 int cmd_spec2metal(int argc, char **argv) {
     const char *command = "spec2metal";
-    map_arg diffuse = map_colour("--diffuse"), specular = map_colour("--specular");
-    map_arg glossiness = map_data("--glossiness"), roughness = map_data("--roughness");
-    map_arg packed = map_packed("--specular-glossiness", MR_IMG_COLOR, 4, "RGBA: specular RGB, glossiness A");
+    map_arg diffuse = map_colour("--diffuse", "gltf-specgloss", "diffuse");
+    map_arg specular = map_colour("--specular", "gltf-specgloss", "specular");
+    map_arg glossiness = map_data("--glossiness", "gltf-specgloss", "glossiness");
+    map_arg roughness = map_data("--roughness", "gltf", "roughness");
+    // RGB specular (sRGB in 8/16-bit files, as the specular parameter), A glossiness (alpha: always linear).
+    map_arg packed = map_packed("--specular-glossiness", "gltf-specgloss", "specular", 4,
+                                "RGBA: specular RGB, glossiness A");
     map_arg *all[] = {&diffuse, &specular, &glossiness, &roughness, &packed};
     const char *weights = NULL;
     double eps = MR_WF_DEFAULT_EPS;
@@ -910,11 +945,13 @@ static void print_metal2spec_help(void) {
            "  glossiness = 1 - roughness.\n"
            "\n"
            "A MAP is an image file or a constant: one number, or R,G,B for a colour, linear in [0, 1] (a file named\n"
-           "like a number is written ./0.5). Colour maps (base colour, diffuse, specular) are sRGB-encoded in\n"
-           "8/16-bit files and linear in EXR; data maps (metallic, roughness, glossiness) are linear in every\n"
-           "format, and a grey RGB file serves as one. Files must have the same size and constants broadcast to it;\n"
-           "with constants only, the one texel is converted and printed. The base colour's alpha, if it has one,\n"
-           "becomes the diffuse map's alpha.\n"
+           "like a number is written ./0.5). Files are read by the one rule of every command ('matremap models\n"
+           "gltf' shows it per parameter): colour maps (base colour) are sRGB-encoded in 8/16-bit files; data maps\n"
+           "(metallic, roughness) are linear, and a grey RGB file serves as one; float files (EXR, float TIFF) are\n"
+           "always linear. FILE:linear or FILE:srgb overrides it for one map (:srgb on a float file is an error).\n"
+           "The outputs follow the same rule (diffuse and specular sRGB in png/tif). Files must have the same size\n"
+           "and constants broadcast to it; with constants only, the one texel is converted and printed. The base\n"
+           "colour's alpha, if it has one, becomes the diffuse map's alpha.\n"
            "\n"
            "Inputs:\n"
            "  --basecolor MAP            base colour, RGB or RGBA\n"
@@ -974,9 +1011,10 @@ static const output_layout spec_packed[] = {
 
 int cmd_metal2spec(int argc, char **argv) {
     const char *command = "metal2spec";
-    map_arg basecolor = map_colour("--basecolor");
-    map_arg metallic = map_data("--metallic"), roughness = map_data("--roughness");
-    map_arg packed = map_packed("--metallic-roughness", MR_IMG_DATA, 3, "RGB: G roughness, B metallic");
+    map_arg basecolor = map_colour("--basecolor", "gltf", "base_color");
+    map_arg metallic = map_data("--metallic", "gltf", "metallic");
+    map_arg roughness = map_data("--roughness", "gltf", "roughness");
+    map_arg packed = map_packed("--metallic-roughness", "gltf", "roughness", 3, "RGB: G roughness, B metallic");
     map_arg *all[] = {&basecolor, &metallic, &roughness, &packed};
     method_options m = {"eq2", MR_WF_F0_GLTF, 0, MR_WF_DIFFUSE_SPECGLOSS};
     out_options o = {0};

@@ -12,6 +12,8 @@
  *     linear and never premultiplied (PNG/TIFF store unassociated alpha; EXR alpha is kept as stored).
  *     On read, the rule follows the stored sample type: integer samples are display-encoded, floating-point
  *     samples (EXR, HDR, float TIFF) are linear.
+ *   - A map of a BRDF parameter is read by the one rule of mr_img_read_param_map (below): sRGB for colour
+ *     parameters (MR_PARAM_SRGB_MAP), linear for the rest, unless the map overrides it.
  * Backends: PNG is read and written without OpenImageIO (png_deflate.c: libdeflate inflates and deflates its
  * image data; png_io.c: libpng decodes what png_deflate.c leaves, e.g. Adam7); anything else goes through
  * OpenImageIO (C++ shim, image_io_oiio.cpp, built as the module libmatremap-oiio.so and loaded on first use, see
@@ -41,6 +43,7 @@
 #ifndef MR_IMAGE_IO_H
 #define MR_IMAGE_IO_H
 
+#include "../brdf/brdf.h"
 #include "../mr_image.h"
 #include "../mr_status.h"
 
@@ -118,6 +121,39 @@ double mr_img_half_step(double value, int bits, mr_img_encoding encoding);
  * or unwritable, a write or the rename failed: the system's reason is given), MR_ERR_EXTERNAL (an encoder
  * failed), MR_ERR_NOMEM. */
 mr_status mr_img_write(const char *path, const mr_image *image, const mr_img_write_options *opts);
+
+/* ---- maps of BRDF parameters: the one rule (param_map.c) ----------------------------------------------------
+ * A texture map of a BRDF parameter holds the parameter's own values. 8/16-bit files hold a colour parameter
+ * (flagged MR_PARAM_SRGB_MAP in its descriptor, brdf.h: diffuse, specular, f0, base colour, ...) sRGB-encoded and
+ * every other parameter (roughness, alpha, metallic, ior, scalars, switches) linear, whatever its range; float
+ * files (EXR, HDR, float TIFF) are linear. A map may override the rule (the command line's FILE:linear and
+ * FILE:srgb): MR_MAP_LINEAR takes the stored values of an 8/16-bit file as they are, MR_MAP_SRGB decodes them;
+ * sRGB decoding applies to integer files only, so MR_MAP_SRGB on a float file is an error. Alpha is always
+ * linear. Every command that reads parameter maps (render, report, convert, spec2metal, metal2spec) reads them
+ * through mr_img_read_param_map; glTF's textures follow the glTF specification, which agrees with the flags of
+ * the gltf and gltf-specgloss models (tests/test_brdf.c checks it). */
+typedef enum mr_map_encoding {
+    MR_MAP_AS_PARAMETER = 0, /* the rule: sRGB for a parameter flagged MR_PARAM_SRGB_MAP, else linear */
+    MR_MAP_SRGB,             /* override: sRGB-decode 8/16-bit files (":srgb") */
+    MR_MAP_LINEAR,           /* override: linear in every format (":linear") */
+    MR_MAP_ENCODING_COUNT
+} mr_map_encoding;
+
+/* How 8/16-bit maps of `param` are decoded: MR_IMG_COLOR (sRGB) or MR_IMG_DATA (linear). `how` is the map's
+ * override, MR_MAP_AS_PARAMETER for none: then MR_IMG_COLOR exactly when param->flags has MR_PARAM_SRGB_MAP.
+ * A NULL param (a map that feeds no parameter) reads as MR_IMG_DATA unless overridden. */
+mr_img_encoding mr_brdf_param_map_encoding(const mr_brdf_param *param, mr_map_encoding how);
+
+/* The name of an encoding for displays and command lines: "sRGB" for MR_IMG_COLOR, "linear" for MR_IMG_DATA. */
+const char *mr_img_encoding_name(mr_img_encoding encoding);
+
+/* Read a map of `param` (may be NULL, as above) from `path` by the rule: mr_img_read_stored with the encoding
+ * mr_brdf_param_map_encoding(param, how); opts (may be NULL) gives channels and max_dimension, its encoding is
+ * ignored. *out and *stored (may be NULL) as for mr_img_read_stored. Errors: those of mr_img_read_stored, and
+ * MR_ERR_INVALID_ARG naming the file when `how` is MR_MAP_SRGB and the file stores floating-point samples (they are
+ * linear; sRGB decoding applies to 8/16-bit files), or when `how` is out of range. */
+mr_status mr_img_read_param_map(const char *path, const mr_brdf_param *param, mr_map_encoding how,
+                                const mr_img_read_options *opts, mr_image **out, mr_img_stored *stored);
 
 /* sRGB transfer functions (IEC 61966-2-1), exact piecewise form evaluated in double. Values outside [0,1]
  * are mirrored through 0 (odd extension, no clamping); NaN stays NaN. */

@@ -593,7 +593,7 @@ static mr_status write_thumbnails(const char *dir, const mr_report_input *in, in
                 im = m->maps[t].image;
                 channel = m->maps[t].channel;
                 rgb = param->channels == 3;
-                colour = rgb && param->min_value >= 0.0 && param->max_value <= 1.0;
+                colour = rgb && mr_brdf_param_map_encoding(param, MR_MAP_AS_PARAMETER) == MR_IMG_COLOR;
                 if (rgb || im->channels == 1) // a one-channel map (a folded glTF map) says its source itself
                     snprintf(what, sizeof what, "%s (%s)", param->name, m->maps[t].source);
                 else

@@ -1,0 +1,42 @@
+/*
+ * param_map.c — the one rule for texture maps of BRDF parameters (image_io.h, "maps of BRDF parameters"): how an
+ * 8/16-bit map of a parameter is decoded follows the parameter's MR_PARAM_SRGB_MAP flag, unless the map says
+ * otherwise; float files are linear.
+ */
+#include "image_io.h"
+#include "io_internal.h"
+#include "mr_internal.h"
+
+mr_img_encoding mr_brdf_param_map_encoding(const mr_brdf_param *param, mr_map_encoding how) {
+    if (how == MR_MAP_SRGB) return MR_IMG_COLOR;
+    if (how == MR_MAP_LINEAR) return MR_IMG_DATA;
+    return param != NULL && (param->flags & MR_PARAM_SRGB_MAP) ? MR_IMG_COLOR : MR_IMG_DATA;
+}
+
+const char *mr_img_encoding_name(mr_img_encoding encoding) {
+    return encoding == MR_IMG_COLOR ? "sRGB" : "linear";
+}
+
+mr_status mr_img_read_param_map(const char *path, const mr_brdf_param *param, mr_map_encoding how,
+                                const mr_img_read_options *opts, mr_image **out, mr_img_stored *stored) {
+    if ((int)how < 0 || how >= MR_MAP_ENCODING_COUNT)
+        return mr_fail(MR_ERR_INVALID_ARG, "mr_img_read_param_map: unknown map encoding %d (valid: "
+                       "MR_MAP_AS_PARAMETER, MR_MAP_SRGB, MR_MAP_LINEAR)", (int)how);
+    mr_img_read_options o = {MR_IMG_COLOR, 0, 0};
+    if (opts != NULL) o = *opts;
+    o.encoding = mr_brdf_param_map_encoding(param, how);
+    mr_image *image = NULL;
+    mr_img_stored s;
+    mr_status status = mr_img_read_stored(path, &o, &image, &s);
+    if (status != MR_OK) return status;
+    if (how == MR_MAP_SRGB && s.encoding != MR_IMG_COLOR) { // read as colour, yet not decoded: float samples
+        mr_image_free(image);
+        char label[MR_IO_LABEL_SIZE];
+        mr_io_file_label(label, path);
+        return mr_fail(MR_ERR_INVALID_ARG, "%s stores floating-point samples, which are linear: sRGB decoding "
+                       "(:srgb) applies to 8/16-bit files", label);
+    }
+    *out = image;
+    if (stored != NULL) *stored = s;
+    return MR_OK;
+}
