@@ -45,13 +45,14 @@ static void print_help(void) {
         "                      for other models, options or scene)\n"
         "  --size N, --light L --direct: the fit scene (default 64, 45; as 'matremap remap')\n"
         "\n"
-        "Outputs: PREFIX<param>.exr (linear float; --format png: 8-bit, colour parameters sRGB-encoded) for every\n"
-        "parameter of the target model (the folder of PREFIX is made if missing), the first input map's alpha\n"
-        "carried into RGB outputs, and\n"
-        "PREFIXflags.png: red where a texel lay outside a learned transform's training domain (extrapolated:\n"
+        "Outputs: PREFIX_<param>.exr (linear float; --format png: 8-bit, colour parameters sRGB-encoded) for every\n"
+        "parameter of the target model, the first input map's alpha carried into RGB outputs, and\n"
+        "PREFIX_flags.png: red where a texel lay outside a learned transform's training domain (extrapolated:\n"
         "the paper's Fig. 19 failure) or, with --direct, where its fit did not converge (under-resolved,\n"
         "at-bound, unreachable), green where an output left its parameter's range and was clamped, blue\n"
-        "where an input was clamped or not finite. PREFIX may name a folder ('out/'). No output may be an input\n"
+        "where an input was clamped or not finite. The '_' is left out after a PREFIX ending in '/', '_', '-' or\n"
+        "'.' (-o out/ writes out/alpha.exr; -o out/ggx and -o out/ggx_ both write out/ggx_alpha.exr); missing\n"
+        "folders are made. No output may be an input\n"
         "(exit 2). The outputs are written all or none: to hidden files beside them, renamed into place when every\n"
         "one is written, so a failure leaves the files of an earlier run as they were.\n"
         "\n"
@@ -180,8 +181,8 @@ static mr_status with_alpha(mr_image *rgb, const mr_image *alpha_source, mr_imag
 
 /* Write images[k] to names[k] (k < count), all or none: each into a hidden temporary file beside its target
  * ("DIR/.matremap-PID-NAME", the extension kept for the writer), then all renamed into place once every one is
- * written. A failure before the renames removes the temporary files and leaves the targets as they were (and the
- * folder of PREFIX, if this call made it, is removed again); a target that is a folder is refused before anything is
+ * written. A failure before the renames removes the temporary files and leaves the targets as they were (the
+ * folders of PREFIX were made by cli_io_check); a target that is a folder is refused before anything is
  * written, so the renames (within one folder) fail only on an I/O error, and then the outputs already renamed are
  * removed too (as cli_outputs_commit does): none of the set, rather than a mixed one. Returns an exit code (messages
  * printed). */
@@ -203,21 +204,6 @@ static int stage_outputs(const char *prefix, const char (*names)[4096], mr_image
         const int head = slash ? (int)(slash - names[k]) + 1 : 0;
         snprintf(temps[k], sizeof temps[k], "%.*s.matremap-%ld-%s", head, names[k], (long)getpid(), names[k] + head);
     }
-    // "out/ggx_": make the folder "out" (one level, as documented), removed again if nothing lands in it.
-    char folder[4096] = "";
-    int made_folder = 0;
-    if (strrchr(prefix, '/') != NULL) {
-        snprintf(folder, sizeof folder, "%.*s", (int)(strrchr(prefix, '/') - prefix), prefix);
-        if (folder[0] != '\0') {
-            made_folder = mkdir(folder, 0777) == 0;
-            if (!made_folder && errno != EEXIST) {
-                fprintf(stderr, "matremap convert: error: -o '%s': cannot create the folder '%s': %s\n", prefix,
-                        folder, strerror(errno));
-                free(temps);
-                return CLI_EXIT_BAD_INPUT;
-            }
-        }
-    }
     int code = CLI_EXIT_OK;
     for (int k = 0; k < count && code == CLI_EXIT_OK; k++) {
         mr_status status = mr_img_write(temps[k], images[k], &options[k]);
@@ -236,10 +222,8 @@ static int stage_outputs(const char *prefix, const char (*names)[4096], mr_image
             for (int j = 0; j < renamed; j++) remove(names[j]);
             code = CLI_EXIT_BAD_INPUT;
         }
-    if (code != CLI_EXIT_OK) {
+    if (code != CLI_EXIT_OK)
         for (int k = 0; k < count; k++) unlink(temps[k]); // the renamed ones are gone already
-        if (made_folder) rmdir(folder);
-    }
     free(temps);
     return code;
 }
@@ -379,10 +363,13 @@ int cmd_convert(int argc, char **argv) {
     if (code == CLI_EXIT_OK && maps_given) {
         if (prefix == NULL) code = cli_usage_error(COMMAND, "maps given: name the outputs with -o PREFIX");
         for (int j = 0; code == CLI_EXIT_OK && j <= out_count; j++) {
-            int n = j < out_count ? snprintf(names[j], sizeof names[j], "%s%s.%s", prefix, target->params[j].name,
-                                             format)
-                                  : snprintf(names[j], sizeof names[j], "%sflags.png", prefix);
-            if (n < 0 || (size_t)n >= sizeof names[j]) code = cli_usage_error(COMMAND, "-o '%s': too long", prefix);
+            char name[256];
+            if (j < out_count)
+                snprintf(name, sizeof name, "%s.%s", target->params[j].name, format);
+            else
+                snprintf(name, sizeof name, "flags.png");
+            if (!cli_output_name(names[j], sizeof names[j], prefix, name))
+                code = cli_usage_error(COMMAND, "-o '%s': too long", prefix);
         }
     }
     if (code == CLI_EXIT_OK) {
