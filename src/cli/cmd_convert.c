@@ -228,6 +228,91 @@ static int stage_outputs(const char *prefix, const char (*names)[4096], mr_image
     return code;
 }
 
+/* "name v", "name r,g,b": parameter p of `model` in packed `values`, appended to text. */
+static void append_param(char *text, size_t size, const mr_brdf_model *model, const double *values, int p) {
+    const int at = mr_brdf_param_offset(model, p);
+    size_t used = strlen(text);
+    if (model->params[p].channels == 3)
+        snprintf(text + used, size - used, "%s %.4g,%.4g,%.4g", model->params[p].name, values[at], values[at + 1],
+                 values[at + 2]);
+    else
+        snprintf(text + used, size - used, "%s %.4g", model->params[p].name, values[at]);
+}
+
+/* What the flags of a converted constant texel came from, one note per hop that raised one: the transform (its
+ * file, its models), the source parameters outside its training domain, the target parameters it clamped into their
+ * ranges (those left on a bound of their range), inputs clamped or not finite. The chain is run again hop by hop on
+ * the texel (mr_learned_apply: the values of the chain, each hop's own flags). With --direct (no hops), the
+ * parameters on a bound are named. */
+static void explain_texel(const mr_learned *const *chain, const char *const *paths, int hops,
+                          const mr_brdf_model *source, const double *source_values, const mr_brdf_model *target,
+                          const double *target_values, unsigned flags) {
+    double values[2][MR_BRDF_MAX_VALUES];
+    memcpy(values[0], source_values, (size_t)mr_brdf_value_count(source) * sizeof values[0][0]);
+    for (int h = 0; h <= hops; h++) {
+        const mr_learned *t = h < hops ? chain[h] : NULL;
+        const mr_brdf_model *in_model = t ? t->source : source, *out_model = t ? t->target : target;
+        const double *in = values[h % 2];
+        double *out = values[(h + 1) % 2];
+        unsigned f = flags;
+        if (t != NULL)
+            mr_learned_apply(t, in, out, &f);
+        else if (hops == 0) // --direct: the converted values as they are
+            memcpy(out, target_values, (size_t)mr_brdf_value_count(target) * sizeof out[0]);
+        else
+            break;
+        if ((f & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED | MR_WF_CLAMPED_OUTPUT | MR_WF_CLAMPED_INPUT |
+                  MR_WF_NONFINITE_INPUT)) == 0)
+            continue;
+        char note[2048] = "";
+        if (t != NULL && (f & MR_WF_EXTRAPOLATED)) {
+            snprintf(note + strlen(note), sizeof note - strlen(note), "outside its training domain:");
+            for (int k = 0; k < t->feature_count; k++) {
+                const mr_learned_slot *slot = &t->features[k];
+                const int at = mr_brdf_param_offset(in_model, slot->param);
+                const int channels = slot->kind == MR_LEARNED_GREY ? 3 : 1;
+                const int first = slot->kind == MR_LEARNED_CHANNEL ? slot->channel : 0;
+                int outside = 0;
+                for (int c = first; c < first + channels; c++)
+                    outside |= in[at + c] < slot->min || in[at + c] > slot->max;
+                if (!outside) continue;
+                snprintf(note + strlen(note), sizeof note - strlen(note), " ");
+                append_param(note, sizeof note, in_model, in, slot->param);
+                snprintf(note + strlen(note), sizeof note - strlen(note), " (trained on [%.4g, %.4g])", slot->min,
+                         slot->max);
+            }
+            snprintf(note + strlen(note), sizeof note - strlen(note), "; ");
+        }
+        if (t == NULL && (f & MR_WF_UNCONVERGED))
+            snprintf(note + strlen(note), sizeof note - strlen(note), "the fit did not converge; ");
+        if (f & MR_WF_CLAMPED_OUTPUT) {
+            snprintf(note + strlen(note), sizeof note - strlen(note), "clamped into its range:");
+            for (int p = 0; p < out_model->param_count; p++) {
+                const mr_brdf_param *param = &out_model->params[p];
+                const int at = mr_brdf_param_offset(out_model, p);
+                int bound = 0;
+                for (int c = 0; c < param->channels; c++)
+                    bound |= out[at + c] <= param->min_value || out[at + c] >= param->max_value;
+                if (!bound || param->role == MR_PARAM_SWITCH || param->min_value == param->max_value) continue;
+                snprintf(note + strlen(note), sizeof note - strlen(note), " ");
+                append_param(note, sizeof note, out_model, out, p);
+                snprintf(note + strlen(note), sizeof note - strlen(note), " (range [%g, %g])", param->min_value,
+                         param->max_value);
+            }
+            snprintf(note + strlen(note), sizeof note - strlen(note), "; ");
+        }
+        if (f & (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT))
+            snprintf(note + strlen(note), sizeof note - strlen(note), "an input was clamped or not finite; ");
+        note[strlen(note) - 2] = '\0'; // the last "; "
+        if (t != NULL)
+            fprintf(stderr, "matremap convert: note: hop %d of %d (%s, %s -> %s): %s\n", h + 1, hops, paths[h],
+                    t->source->name, t->target->name, note);
+        else
+            fprintf(stderr, "matremap convert: note: --direct %s -> %s: %s\n", source->name, target->name, note);
+        flags = 0; // a chain's hops raise their own
+    }
+}
+
 int cmd_convert(int argc, char **argv) {
     const char *from = NULL, *to = NULL, *prefix = NULL, *format = "exr", *dir = NULL, *via_list = NULL;
     const char *assignments[CLI_MAX_ASSIGNMENTS], *transform_paths[MR_LEARNED_MAX_HOPS];
@@ -530,11 +615,15 @@ int cmd_convert(int argc, char **argv) {
                 else
                     printf(" %s=%.6g", target->params[j].name, out[j]->pixels[0]);
             printf("\n");
-            if (counts[3])
-                fprintf(stderr, "matremap convert: note: %s%s%s\n",
-                        counts[0] ? "outside the transform's training domain (extrapolated) " : "",
-                        counts[1] ? "an output was clamped into its range " : "",
-                        counts[2] ? "an input was clamped or not finite" : "");
+            if (counts[3]) {
+                const char *hop_paths[MR_LEARNED_MAX_HOPS];
+                double converted[MR_BRDF_MAX_VALUES];
+                for (int h = 0; h < hops; h++) hop_paths[h] = l.paths[path[h]];
+                for (int j = 0; j < out_count; j++)
+                    for (int c = 0; c < target->params[j].channels; c++)
+                        converted[mr_brdf_param_offset(target, j) + c] = out[j]->pixels[c];
+                explain_texel(chain, hop_paths, direct ? 0 : hops, source, m->values, target, converted, flags[0]);
+            }
         } else {
             if (direct)
                 printf("matremap convert: %s -> %s by direct remaps, %dx%d = %zu texels in %.2f s (convert %.3f s): "

@@ -42,7 +42,7 @@ static void print_usage(FILE *out) {
         fprintf(out, "  %-10s %s\n", commands[i].name, commands[i].summary);
     fprintf(out,
             "\n"
-            "'matremap COMMAND --help' describes a command.\n"
+            "'matremap COMMAND --help' (or 'matremap help COMMAND') describes a command.\n"
             "Exit codes: 0 ok, 1 usage error, 2 bad input, 3 internal or external failure.\n");
 }
 
@@ -54,9 +54,33 @@ int main(int argc, char **argv) {
         print_usage(stderr);
         return CLI_EXIT_USAGE;
     }
-    if (cli_is_help(argv[1]) || strcmp(argv[1], "help") == 0) {
+    if (cli_is_help(argv[1]) || (strcmp(argv[1], "help") == 0 && argc == 2)) {
         print_usage(stdout);
         return CLI_EXIT_OK;
+    }
+    if (strcmp(argv[1], "help") == 0) { // `matremap help CMD` is `matremap CMD --help`
+        const int sweep_merge = argc == 4 && strcmp(argv[2], "sweep") == 0 && strcmp(argv[3], "merge") == 0;
+        if (argc > 3 && !sweep_merge) {
+            fprintf(stderr, "matremap help: expected one command, got '%s' and more\nTry 'matremap --help'.\n", argv[2]);
+            return CLI_EXIT_USAGE;
+        }
+        const char *name = argv[2];
+        char help_flag[] = "--help";
+        for (size_t i = 0; !sweep_merge && i < sizeof commands / sizeof commands[0]; i++)
+            if (strcmp(name, commands[i].name) == 0) {
+                char *help_argv[] = {argv[2], help_flag, NULL};
+                return commands[i].run(2, help_argv);
+            }
+        if (sweep_merge) { // sweep's sub-command: `matremap help sweep merge`
+            char sweep[] = "sweep", merge[] = "merge";
+            char *help_argv[] = {sweep, merge, help_flag, NULL};
+            return cmd_sweep(3, help_argv);
+        }
+        fprintf(stderr, "matremap help: unknown command '%s' (valid:", name);
+        for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+            fprintf(stderr, "%s %s", i ? "," : "", commands[i].name);
+        fprintf(stderr, ")\nTry 'matremap --help'.\n");
+        return CLI_EXIT_USAGE;
     }
     if (strcmp(argv[1], "--version") == 0) {
         printf("matremap %s\n", mr_version());
