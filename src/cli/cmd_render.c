@@ -300,11 +300,11 @@ int cmd_render(int argc, char **argv) {
                                "--env FILE");
     const int gltf = is_gltf_path(model_name);
     if (gltf && assignment_count > 0)
-        return cli_usage_error("render", "'%s': a glTF asset takes no name=value parameters (its materials are its own)",
-                               assignments[0]);
+        return cli_usage_error("render", "'%s': a glTF asset takes no name=value parameters (its materials are its "
+                               "own)", assignments[0]);
     if (gltf && mesh_path != NULL)
-        return cli_usage_error("render", "--mesh renders a material (MODEL name=value ...); a glTF asset brings its own "
-                               "triangles");
+        return cli_usage_error("render", "--mesh renders a material (MODEL name=value ...); a glTF asset brings its "
+                               "own triangles");
     if (gltf && paper)
         return cli_usage_error("render", "--camera paper is placed for the paper's sphere; a glTF asset is framed by "
                                "--camera-direction");

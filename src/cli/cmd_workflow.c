@@ -240,8 +240,8 @@ static const char *default_format(map_arg *const *maps, int count) {
 }
 
 /* Name the outputs PREFIX_<name>.EXT (cli_output_name's rule) and check the options; refuse (exit 2, cli_io_check)
- * an output that is an input (a map, --weights, or the installed network the transform loaded, `network`, "" for none) or another output
- * (--flags named like one). */
+ * an output that is an input (a map, --weights, or the installed network the transform loaded, `network`, "" for
+ * none) or another output (--flags named like one). */
 static int plan_outputs(const char *command, out_options *o, map_arg *const *maps, int map_count, const char *weights,
                         const char *network, const char *const *names, output *outputs, int count) {
     if (o->format == NULL) o->format = default_format(maps, map_count);
@@ -411,7 +411,7 @@ static void print_summary(const summary *s, const out_options *o, const output *
     size_t off = count_flag(s->flags, n, MR_WF_OFF_MANIFOLD);
     size_t failed = count_flag(s->flags, n, MR_WF_METHOD_FAILED);
     if (!o->json) {
-        printf("%s: %dx%d = %zu texel%s, method %s", s->command, s->width, s->height, n, n == 1 ? "" : "s",
+        printf("matremap %s: %dx%d = %zu texel%s, method %s", s->command, s->width, s->height, n, n == 1 ? "" : "s",
                s->method);
         if (s->weights) printf(" (%s)", s->weights);
         if (s->f0 >= 0.0) printf(" (F0 %g)", s->f0);

@@ -61,7 +61,8 @@ int main(int argc, char **argv) {
     if (strcmp(argv[1], "help") == 0) { // `matremap help CMD` is `matremap CMD --help`
         const int sweep_merge = argc == 4 && strcmp(argv[2], "sweep") == 0 && strcmp(argv[3], "merge") == 0;
         if (argc > 3 && !sweep_merge) {
-            fprintf(stderr, "matremap help: expected one command, got '%s' and more\nTry 'matremap --help'.\n", argv[2]);
+            fprintf(stderr, "matremap help: expected one command, got '%s' and more\nTry 'matremap --help'.\n",
+                    argv[2]);
             return CLI_EXIT_USAGE;
         }
         const char *name = argv[2];
