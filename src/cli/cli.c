@@ -9,6 +9,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 int cli_exit_code(mr_status status) {
     switch (status) {
@@ -206,6 +207,19 @@ static void io_print_output(const char *command, const cli_io_entry *out) {
     if (out->label != NULL) fprintf(stderr, " (%s)", out->label);
 }
 
+/* The folders cli_io_check made in this process, in the order made (cli_io_unmake_folders). */
+#define MAX_MADE_FOLDERS 64
+static char *made_folders[MAX_MADE_FOLDERS];
+static int made_folder_count;
+
+void cli_io_unmake_folders(void) {
+    while (made_folder_count > 0) {
+        char *folder = made_folders[--made_folder_count];
+        rmdir(folder); // fails, as it should, on a folder that holds anything
+        free(folder);
+    }
+}
+
 /* Make the folder `folder` and every missing folder above it (mkdir -p; the umask applies). 0, or -1 with errno set
  * and `failed` (size bytes) naming the folder that could not be made: a missing one that mkdir refused, or a
  * component that is there but is not a folder (ENOTDIR). */
@@ -231,7 +245,10 @@ static int make_folders(const char *folder, char *failed, size_t size) {
                 errno = ENOTDIR;
                 return -1;
             }
-        } else if (mkdir(path, 0777) != 0 && errno != EEXIST) { // EEXIST: made meanwhile by another process
+        } else if (mkdir(path, 0777) == 0) {
+            if (made_folder_count < MAX_MADE_FOLDERS && (made_folders[made_folder_count] = strdup(path)) != NULL)
+                made_folder_count++;
+        } else if (errno != EEXIST) { // EEXIST: made meanwhile by another process
             snprintf(failed, size, "%s", path);
             return -1;
         }

@@ -53,7 +53,8 @@ int cli_same_file(const char *a, const char *b);
  * mkdir -p does ("-o a/b/c/x.png" makes a, a/b and a/b/c; a folder output's parent, not the folder itself), so that
  * every command takes an output in a folder that does not exist yet, and says so before any work when it cannot:
  *   matremap render: error: output 'f/x/y.png': cannot create the folder 'f': Not a directory
- * (exit 2). Folders made stay when the command fails later. */
+ * (exit 2). A command that fails afterwards leaves none of the folders it made that are still empty (main.c calls
+ * cli_io_unmake_folders on a non-zero exit code). */
 typedef struct cli_io_entry {
     char *path;  /* owned copy */
     char *label; /* owned; NULL for an output named by itself */
@@ -94,6 +95,8 @@ void cli_io_gltf(cli_io *io, const mr_gltf *asset, const char *label);
  * is called. */
 int cli_io_check(const cli_io *io);
 void cli_io_free(cli_io *io);
+/* Remove the folders cli_io_check made in this process that are still empty, deepest first. */
+void cli_io_unmake_folders(void);
 
 /* mr_image_check_radiance labelled "image 'PATH'": finite radiance >= 0 in the image read from `path`, or
  * MR_ERR_INVALID_ARG naming the file, the pixel, the channel and the value (measurements, environment maps). */

@@ -46,10 +46,16 @@ static void print_usage(FILE *out) {
             "Exit codes: 0 ok, 1 usage error, 2 bad input, 3 internal or external failure.\n");
 }
 
+/* A command's exit code; a failed run leaves none of the empty folders it made for its outputs (cli.h). */
+static int finished(int code) {
+    if (code != CLI_EXIT_OK) cli_io_unmake_folders();
+    return code;
+}
+
 int main(int argc, char **argv) {
     const char *self = argc > 0 && argv[0] ? (strrchr(argv[0], '/') ? strrchr(argv[0], '/') + 1 : argv[0]) : "";
-    if (strcmp(self, "spec2metal") == 0) return cmd_spec2metal(argc, argv); // `ln -s matremap spec2metal`
-    if (strcmp(self, "metal2spec") == 0) return cmd_metal2spec(argc, argv);
+    if (strcmp(self, "spec2metal") == 0) return finished(cmd_spec2metal(argc, argv)); // `ln -s matremap spec2metal`
+    if (strcmp(self, "metal2spec") == 0) return finished(cmd_metal2spec(argc, argv));
     if (argc < 2) {
         print_usage(stderr);
         return CLI_EXIT_USAGE;
@@ -88,7 +94,7 @@ int main(int argc, char **argv) {
         return CLI_EXIT_OK;
     }
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        if (strcmp(argv[1], commands[i].name) == 0) return commands[i].run(argc - 1, argv + 1);
+        if (strcmp(argv[1], commands[i].name) == 0) return finished(commands[i].run(argc - 1, argv + 1));
     fprintf(stderr, "matremap: unknown command '%s' (valid:", argv[1]);
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         fprintf(stderr, "%s %s", i ? "," : "", commands[i].name);
