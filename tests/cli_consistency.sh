@@ -219,7 +219,8 @@ expect "convert: the clamp note names the hop and the parameter" 0 \
     "$bin" convert --from blender-ward --to ggx specular=0.1 rms=0.2 --transforms "$tmp/chain/" --via ward
 check "... once" test "$(grep -c "clamped" "$tmp/err")" -eq 1
 expect "convert: extrapolation names the parameter and the domain" 0 \
-    "hop 2 of 2 \(.*ward_ggx.mrt, ward -> ggx\): outside its training domain: specular 0.9,0.9,0.9 \(trained on" -- \
+    "hop 2 of 2 \(.*ward_ggx.mrt, ward -> ggx\): extrapolated, outside its training domain: specular 0.9,0.9,0.9 \(tr" \
+    -- \
     "$bin" convert --from blender-ward --to ggx specular=0.9 rms=0.2 diffuse=0.1 --transforms "$tmp/chain" --via ward
 
 finish

@@ -266,7 +266,7 @@ static void explain_texel(const mr_learned *const *chain, const char *const *pat
             continue;
         char note[2048] = "";
         if (t != NULL && (f & MR_WF_EXTRAPOLATED)) {
-            snprintf(note + strlen(note), sizeof note - strlen(note), "outside its training domain:");
+            snprintf(note + strlen(note), sizeof note - strlen(note), "extrapolated, outside its training domain:");
             for (int k = 0; k < t->feature_count; k++) {
                 const mr_learned_slot *slot = &t->features[k];
                 const int at = mr_brdf_param_offset(in_model, slot->param);
