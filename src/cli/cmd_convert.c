@@ -97,8 +97,8 @@ static void draw_progress(const mr_direct_progress *p, void *user) {
     progress_state *s = user;
     if (!s->draw || p->total == 0) return;
     const double elapsed = cli_now() - s->started, fraction = (double)p->done / (double)p->total;
-    fprintf(stderr, "\rconvert --direct: %zu/%zu distinct values (%zu from the cache)  %.0f s", p->done, p->total,
-            p->cache_hits, elapsed);
+    fprintf(stderr, "\rmatremap convert: --direct: %zu/%zu distinct values (%zu from the cache)  %.0f s", p->done,
+            p->total, p->cache_hits, elapsed);
     if (fraction > 0.02) fprintf(stderr, ", ETA %.0f s ", elapsed * (1.0 - fraction) / fraction);
 }
 

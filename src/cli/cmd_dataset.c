@@ -294,7 +294,7 @@ typedef struct pair {
 } pair;
 
 static void progress(const char *what, size_t done, size_t total, double started) {
-    fprintf(stderr, "\rdataset: %s %zu/%zu  %.0f s ", what, done, total, cli_now() - started);
+    fprintf(stderr, "\rmatremap dataset: %s %zu/%zu  %.0f s ", what, done, total, cli_now() - started);
 }
 
 /* Label every pair (OpenMP over pairs, dynamic: texels differ in cost). */
