@@ -39,7 +39,9 @@ expect "unknown option" 1 "unknown option '--frob'" -- "$bin" render gltf --frob
 expect "unknown extension" 2 "y.xyz" -- "$bin" render gltf --size 32 -o "$tmp/y.xyz"
 if ls "$tmp" | grep -q 'y\.'; then echo "FAIL  a failed render left a file behind"; failed=$((failed + 1));
 else echo "ok    failed renders leave no file"; passed=$((passed + 1)); fi
-expect "unwritable directory" 2 "nodir" -- "$bin" render gltf --size 32 -o "$tmp/nodir/y.exr"
+touch "$tmp/plain"
+expect "a folder that cannot be made (under a file)" 2 "cannot create the folder '$tmp/plain'" -- \
+    "$bin" render gltf --size 32 -o "$tmp/plain/nodir/y.exr"
 expect "ssim missing file names it" 2 "missing.exr" -- "$bin" ssim "$tmp/missing.exr" "$tmp/x.exr"
 "$bin" render lambert --size 32 -o "$tmp/small.exr" 2>/dev/null
 expect "ssim size mismatch names both files" 2 "small.exr' is 32x32 but .*x.exr' is 64x64" -- \

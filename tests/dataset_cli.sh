@@ -19,8 +19,9 @@ expect "dataset: an asset without spec-gloss names the file" 2 "WaterBottle.gltf
 expect "dataset: a missing asset names the file" 2 "nope.gltf" -- \
     "$bin" dataset -o "$tmp/x.csv" --samples 3 --asset "$tmp/nope.gltf"
 check "nothing is left behind on failure" test ! -e "$tmp/x.csv"
-expect "dataset: an output folder that does not exist is named" 2 "nowhere" -- \
-    "$bin" dataset -o "$tmp/nowhere/x.csv" --samples 3
+touch "$tmp/plain"
+expect "dataset: an output folder that cannot be made is named" 2 "cannot create the folder '$tmp/plain'" -- \
+    "$bin" dataset -o "$tmp/plain/nowhere/x.csv" --samples 3
 expect "dataset --compare: a missing map names the file" 2 "nope.hdr" -- \
     "$bin" dataset --compare --samples 2 --env "$tmp/nope.hdr" -o "$tmp/t.md"
 check "... and writes no table" test ! -e "$tmp/t.md"

@@ -128,7 +128,7 @@ kept_line+="baseColorTexture, metallicRoughnessTexture; its spec-gloss extension
 expect "Avocado: kept by default" 0 "$kept_line" -- "$bin" gltf spec2metal "$avocado" -o "$tmp/keep/a.gltf" \
     --method weighted
 check "... and the total counts it" \
-    grep -q "^gltf spec2metal: 0 of 1 materials converted, 1 kept with metal-rough values of its own" "$tmp/out"
+    grep -q "^matremap gltf spec2metal: 0 of 1 materials converted, 1 kept with metal-rough values of its own" "$tmp/out"
 check "kept: the asset's own base colour texture" test \
     "$(gltf "$tmp/keep/a.gltf" 'uri(pbr(0)["baseColorTexture"]["index"])')" = \
     "a_Avocado_baseColor.png"

@@ -80,8 +80,9 @@ expect "train --json" 0 '"best_validation_loss": [0-9]' -- \
     "$bin" train "$tmp/on.csv" -o "$tmp/d.mlp" --hidden 4 --epochs 3 --json --loss-curve "$tmp/curve"
 check "--loss-curve PREFIX" test -s "$tmp/curve.csv"
 # The loss curve is committed with the network: when it cannot be written, no network is left either.
-expect "train: a loss curve in a missing folder" 2 "nodir/curve.csv" -- \
-    "$bin" train "$tmp/on.csv" -o "$tmp/e.mlp" --hidden 4 --epochs 3 --loss-curve "$tmp/nodir/curve"
+touch "$tmp/plain"
+expect "train: a loss curve in a folder that cannot be made" 2 "plain/nodir/curve.csv" -- \
+    "$bin" train "$tmp/on.csv" -o "$tmp/e.mlp" --hidden 4 --epochs 3 --loss-curve "$tmp/plain/nodir/curve"
 check "... and writes no network" test ! -e "$tmp/e.mlp"
 
 check "the shipped network is 6 x 300 x 4" bash -c \

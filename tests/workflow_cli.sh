@@ -169,8 +169,9 @@ refuses "--flags is an output by another spelling: refused" \
 expect "second input missing" 2 "nope.png" -- \
     "$bin" metal2spec --basecolor "$tmp/c8.png" --metallic "$tmp/nope.png" --roughness 0.5 -o "$tmp/part"
 check "no partial outputs after a missing input" bash -c "! ls '$tmp'/part_* >/dev/null 2>&1"
-expect "--flags in a missing directory" 2 "nodir/f.png" -- \
-    "$bin" metal2spec --basecolor "$tmp/c8.png" --metallic 0 --roughness 0.5 -o "$tmp/part" --flags "$tmp/nodir/f.png"
+touch "$tmp/plain"
+expect "--flags in a folder that cannot be made" 2 "plain/nodir/f.png" -- "$bin" metal2spec --basecolor "$tmp/c8.png" \
+    --metallic 0 --roughness 0.5 -o "$tmp/part" --flags "$tmp/plain/nodir/f.png"
 check "no partial outputs after a failed --flags write" bash -c "! ls '$tmp'/part_* >/dev/null 2>&1"
 mkdir "$tmp/dir_metallic.png"
 expect "a directory in an output's way" 2 "dir_metallic.png" -- \

@@ -9,6 +9,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 int cli_exit_code(mr_status status) {
     switch (status) {
@@ -208,6 +209,88 @@ static void io_print_output(const char *command, const cli_io_entry *out) {
     if (out->label != NULL) fprintf(stderr, " (%s)", out->label);
 }
 
+/* The folders cli_io_check made in this process, in the order made (cli_io_unmake_folders). */
+#define MAX_MADE_FOLDERS 64
+static char *made_folders[MAX_MADE_FOLDERS];
+static int made_folder_count;
+
+void cli_io_unmake_folders(void) {
+    while (made_folder_count > 0) {
+        char *folder = made_folders[--made_folder_count];
+        rmdir(folder); // fails, as it should, on a folder that holds anything
+        free(folder);
+    }
+}
+
+/* Make the folder `folder` and every missing folder above it (mkdir -p; the umask applies). 0, or -1 with errno set
+ * and `failed` (size bytes) naming the folder that could not be made: a missing one that mkdir refused, or a
+ * component that is there but is not a folder (ENOTDIR). */
+static int make_folders(const char *folder, char *failed, size_t size) {
+    char path[4096];
+    const size_t length = strlen(folder);
+    if (length == 0 || length >= sizeof path) {
+        snprintf(failed, size, "%s", folder);
+        errno = length ? ENAMETOOLONG : ENOENT;
+        return -1;
+    }
+    memcpy(path, folder, length + 1);
+    // From the top down: "a", "a/b", "a/b/c" (a leading '/' and repeated slashes are skipped).
+    for (size_t end = 1; end <= length; end++) {
+        if (path[end] != '/' && path[end] != '\0') continue;
+        if (path[end - 1] == '/') continue;
+        const char kept = path[end];
+        path[end] = '\0';
+        struct stat st;
+        if (stat(path, &st) == 0) {
+            if (!S_ISDIR(st.st_mode)) {
+                snprintf(failed, size, "%s", path);
+                errno = ENOTDIR;
+                return -1;
+            }
+        } else if (mkdir(path, 0777) == 0) {
+            if (made_folder_count < MAX_MADE_FOLDERS && (made_folders[made_folder_count] = strdup(path)) != NULL)
+                made_folder_count++;
+        } else if (errno != EEXIST) { // EEXIST: made meanwhile by another process
+            snprintf(failed, size, "%s", path);
+            return -1;
+        }
+        path[end] = kept;
+    }
+    return 0;
+}
+
+/* The folder an output is written in (for a folder output, the one it is made beside), when the path names one:
+ * "a/b/c/out.png" -> "a/b/c", "out.png" -> "" (the working folder, which exists). */
+static void output_parent(const char *path, char *parent, size_t size) {
+    size_t length = strlen(path);
+    while (length > 1 && path[length - 1] == '/') length--; // "report/" is the folder "report"
+    size_t slash = length;
+    while (slash > 0 && path[slash - 1] != '/') slash--;
+    if (slash == 0) {
+        parent[0] = '\0';
+        return;
+    }
+    size_t keep = slash - 1;
+    while (keep > 0 && path[keep - 1] == '/') keep--; // "a//b" -> "a"
+    if (keep == 0) keep = 1;                          // "/out.png" -> "/"
+    snprintf(parent, size, "%.*s", (int)keep, path);
+}
+
+/* Make the missing folders every output is to be written in (cli.h). */
+static int io_make_folders(const cli_io *io) {
+    for (int o = 0; o < io->output_count; o++) {
+        const cli_io_entry *out = &io->outputs[o];
+        char parent[4096], failed[4096];
+        output_parent(out->path, parent, sizeof parent);
+        if (parent[0] == '\0' || make_folders(parent, failed, sizeof failed) == 0) continue;
+        const int err = errno;
+        io_print_output(io->command, out);
+        fprintf(stderr, ": cannot create the folder '%s': %s\n", failed, strerror(err));
+        return CLI_EXIT_BAD_INPUT;
+    }
+    return CLI_EXIT_OK;
+}
+
 int cli_io_check(const cli_io *io) {
     if (io->out_of_memory) {
         fprintf(stderr, "matremap %s: error: out of memory listing the inputs and outputs\n", io->command);
@@ -240,7 +323,7 @@ int cli_io_check(const cli_io *io) {
             fprintf(stderr, "; refusing to write one over the other\n");
             return CLI_EXIT_BAD_INPUT;
         }
-    return CLI_EXIT_OK;
+    return io_make_folders(io);
 }
 
 void cli_io_free(cli_io *io) {

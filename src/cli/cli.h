@@ -48,7 +48,13 @@ int cli_same_file(const char *a, const char *b);
  *   matremap render: error: output 't.png' is the input base_color=@t.png; refusing to overwrite it
  *   matremap train: error: output 'ds.csv' (--loss-curve ds) is the input dataset ds.csv; refusing to overwrite it
  * and the exit code is 2 (bad input). Labels say how the user gave the file, as a noun phrase ("--env env.hdr",
- * "base_color=@t.png", "dataset ds.csv"); an output's label (may be NULL) says where a derived name comes from. */
+ * "base_color=@t.png", "dataset ds.csv"); an output's label (may be NULL) says where a derived name comes from.
+ * When every check passes, cli_io_check makes the missing folders the outputs are to be written in, nested as
+ * mkdir -p does ("-o a/b/c/x.png" makes a, a/b and a/b/c; a folder output's parent, not the folder itself), so that
+ * every command takes an output in a folder that does not exist yet, and says so before any work when it cannot:
+ *   matremap render: error: output 'f/x/y.png': cannot create the folder 'f': Not a directory
+ * (exit 2). A command that fails afterwards leaves none of the folders it made that are still empty (main.c calls
+ * cli_io_unmake_folders on a non-zero exit code). */
 typedef struct cli_io_entry {
     char *path;  /* owned copy */
     char *label; /* owned; NULL for an output named by itself */
@@ -84,10 +90,13 @@ void cli_io_material(cli_io *io, const char *const *assignments, const char *con
 /* Register every file a glTF asset was read from (mr_gltf_source_file) as inputs: "<label>" for the asset's own file,
  * "a file of <label>" for its buffers and images. */
 void cli_io_gltf(cli_io *io, const mr_gltf *asset, const char *label);
-/* CLI_EXIT_OK, or print why (naming both files) and return CLI_EXIT_BAD_INPUT (CLI_EXIT_INTERNAL when a
- * registration ran out of memory). Checks every pair each time it is called. */
+/* CLI_EXIT_OK (the outputs' folders made), or print why (naming both files, or the folder that cannot be made) and
+ * return CLI_EXIT_BAD_INPUT (CLI_EXIT_INTERNAL when a registration ran out of memory). Checks every pair each time it
+ * is called. */
 int cli_io_check(const cli_io *io);
 void cli_io_free(cli_io *io);
+/* Remove the folders cli_io_check made in this process that are still empty, deepest first. */
+void cli_io_unmake_folders(void);
 
 /* mr_image_check_radiance labelled "image 'PATH'": finite radiance >= 0 in the image read from `path`, or
  * MR_ERR_INVALID_ARG naming the file, the pixel, the channel and the value (measurements, environment maps). */
@@ -126,6 +135,13 @@ double cli_now(void);
  * rename it into place only when every write succeeded. A command writing several files prepares them all before
  * committing any, so a failure while writing leaves none of them. Each function prints its error as one line
  * "matremap CMD: error: ..." naming the file and the system's reason. */
+
+/* The one rule for output names made from -o PREFIX (convert, spec2metal, metal2spec, remap --images): PREFIX
+ * ending in '/', '_', '-' or '.' (or empty) is followed by the name directly, any other gets '_' in between:
+ *   "out/ggx_" + "alpha.exr" -> "out/ggx_alpha.exr"    "pfx/ggx" + "alpha.exr" -> "pfx/ggx_alpha.exr"
+ *   "out/"     + "alpha.exr" -> "out/alpha.exr"        "avocado" + "basecolor.png" -> "avocado_basecolor.png"
+ * Writes the name into out (size bytes); returns 0 when it does not fit. */
+int cli_output_name(char *out, size_t size, const char *prefix, const char *name);
 
 /* Create the temporary file for `path` and open it for writing. NULL after printing the error. */
 FILE *cli_output_open(const char *command, const char *path, mr_atomic_file *file);

@@ -7,6 +7,8 @@
  */
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
 
 #include "cli.h"
 
@@ -71,13 +73,31 @@ static int load_map(const char *command, mr_material *m, const char *assignment)
     return code;
 }
 
+/* 1 if a value that is not a number looks like a file meant as a map: an image's extension (before optional
+ * ":r|g|b|a" and ":linear|srgb"), or the name of an existing file. */
+static int looks_like_file(const char *value) {
+    static const char *const extensions[] = {"png", "jpg", "jpeg", "exr", "hdr", "tif", "tiff", "bmp", "tga", "pfm"};
+    const char *dot = strrchr(value, '.');
+    size_t length = dot != NULL ? strcspn(dot + 1, ":") : 0;
+    for (size_t k = 0; dot != NULL && strchr(dot, '/') == NULL && k < sizeof extensions / sizeof *extensions; k++)
+        if (strlen(extensions[k]) == length && strncasecmp(dot + 1, extensions[k], length) == 0) return 1;
+    struct stat st;
+    return stat(value, &st) == 0 && S_ISREG(st.st_mode);
+}
+
 /* One name=value or name=@MAP[:c][:e] assignment into m; returns a CLI exit code. */
 static int assign(const char *command, mr_material *m, const char *assignment) {
     const char *eq = strchr(assignment, '=');
     if (eq == NULL) return cli_usage_error(command, "'%s' is not a NAME=VALUE or NAME=@FILE assignment", assignment);
     if (eq[1] != '@') {
         mr_status status = mr_brdf_parse_assignment(m->model, assignment, m->values);
-        return status == MR_OK ? CLI_EXIT_OK : cli_fail(command, status);
+        if (status == MR_OK) return CLI_EXIT_OK;
+        if (status == MR_ERR_INVALID_ARG && looks_like_file(eq + 1)) { // "base_color=a.png": maps take '@'
+            fprintf(stderr, "matremap %s: error: %s; did you mean %.*s=@%s? (a map is given as name=@FILE)\n",
+                    command, mr_last_error(), (int)(eq - assignment), assignment, eq + 1);
+            return cli_exit_code(status);
+        }
+        return cli_fail(command, status);
     }
     return load_map(command, m, assignment);
 }

@@ -51,15 +51,17 @@ static void print_help(void) {
         "                      for other models, options or scene)\n"
         "  --size N, --light L --direct: the fit scene (default 64, 45; as 'matremap remap')\n"
         "\n"
-        "Outputs: PREFIX<param>.exr (linear float; --format png: 8-bit by the same rule, colour parameters\n"
-        "sRGB-encoded, so they read back as written) for every parameter of the target model (the folder of\n"
-        "PREFIX is made if missing), the first input map's alpha carried into RGB outputs, and\n"
-        "PREFIXflags.png: red where a texel lay outside a learned transform's training domain (extrapolated:\n"
+        "Outputs: PREFIX_<param>.exr (linear float; --format png: 8-bit by the same rule, colour parameters\n"
+        "sRGB-encoded, so they read back as written) for every parameter of the target model, the first input\n"
+        "map's alpha carried into RGB outputs, and\n"
+        "PREFIX_flags.png: red where a texel lay outside a learned transform's training domain (extrapolated:\n"
         "the paper's Fig. 19 failure) or was converted by a transform that failed its check against the remaps\n"
         "('matremap learn' warns; every texel is then red), or, with --direct, where its fit did not converge\n"
         "(under-resolved,\n"
         "at-bound, unreachable), green where an output left its parameter's range and was clamped, blue\n"
-        "where an input was clamped or not finite. PREFIX may name a folder ('out/'). No output may be an input\n"
+        "where an input was clamped or not finite. The '_' is left out after a PREFIX ending in '/', '_', '-' or\n"
+        "'.' (-o out/ writes out/alpha.exr; -o out/ggx and -o out/ggx_ both write out/ggx_alpha.exr); missing\n"
+        "folders are made. No output may be an input\n"
         "(exit 2). The outputs are written all or none: to hidden files beside them, renamed into place when every\n"
         "one is written, so a failure leaves the files of an earlier run as they were.\n"
         "\n"
@@ -104,8 +106,8 @@ static void draw_progress(const mr_direct_progress *p, void *user) {
     progress_state *s = user;
     if (!s->draw || p->total == 0) return;
     const double elapsed = cli_now() - s->started, fraction = (double)p->done / (double)p->total;
-    fprintf(stderr, "\rconvert --direct: %zu/%zu distinct values (%zu from the cache)  %.0f s", p->done, p->total,
-            p->cache_hits, elapsed);
+    fprintf(stderr, "\rmatremap convert: --direct: %zu/%zu distinct values (%zu from the cache)  %.0f s", p->done,
+            p->total, p->cache_hits, elapsed);
     if (fraction > 0.02) fprintf(stderr, ", ETA %.0f s ", elapsed * (1.0 - fraction) / fraction);
 }
 
@@ -186,8 +188,8 @@ static mr_status with_alpha(mr_image *rgb, const mr_image *alpha_source, mr_imag
 
 /* Write images[k] to names[k] (k < count), all or none: each into a hidden temporary file beside its target
  * ("DIR/.matremap-PID-NAME", the extension kept for the writer), then all renamed into place once every one is
- * written. A failure before the renames removes the temporary files and leaves the targets as they were (and the
- * folder of PREFIX, if this call made it, is removed again); a target that is a folder is refused before anything is
+ * written. A failure before the renames removes the temporary files and leaves the targets as they were (the
+ * folders of PREFIX were made by cli_io_check); a target that is a folder is refused before anything is
  * written, so the renames (within one folder) fail only on an I/O error, and then the outputs already renamed are
  * removed too (as cli_outputs_commit does): none of the set, rather than a mixed one. Returns an exit code (messages
  * printed). */
@@ -209,21 +211,6 @@ static int stage_outputs(const char *prefix, const char (*names)[4096], mr_image
         const int head = slash ? (int)(slash - names[k]) + 1 : 0;
         snprintf(temps[k], sizeof temps[k], "%.*s.matremap-%ld-%s", head, names[k], (long)getpid(), names[k] + head);
     }
-    // "out/ggx_": make the folder "out" (one level, as documented), removed again if nothing lands in it.
-    char folder[4096] = "";
-    int made_folder = 0;
-    if (strrchr(prefix, '/') != NULL) {
-        snprintf(folder, sizeof folder, "%.*s", (int)(strrchr(prefix, '/') - prefix), prefix);
-        if (folder[0] != '\0') {
-            made_folder = mkdir(folder, 0777) == 0;
-            if (!made_folder && errno != EEXIST) {
-                fprintf(stderr, "matremap convert: error: -o '%s': cannot create the folder '%s': %s\n", prefix,
-                        folder, strerror(errno));
-                free(temps);
-                return CLI_EXIT_BAD_INPUT;
-            }
-        }
-    }
     int code = CLI_EXIT_OK;
     for (int k = 0; k < count && code == CLI_EXIT_OK; k++) {
         mr_status status = mr_img_write(temps[k], images[k], &options[k]);
@@ -242,12 +229,98 @@ static int stage_outputs(const char *prefix, const char (*names)[4096], mr_image
             for (int j = 0; j < renamed; j++) remove(names[j]);
             code = CLI_EXIT_BAD_INPUT;
         }
-    if (code != CLI_EXIT_OK) {
+    if (code != CLI_EXIT_OK)
         for (int k = 0; k < count; k++) unlink(temps[k]); // the renamed ones are gone already
-        if (made_folder) rmdir(folder);
-    }
     free(temps);
     return code;
+}
+
+/* "name v", "name r,g,b": parameter p of `model` in packed `values`, appended to text. */
+static void append_param(char *text, size_t size, const mr_brdf_model *model, const double *values, int p) {
+    const int at = mr_brdf_param_offset(model, p);
+    size_t used = strlen(text);
+    if (model->params[p].channels == 3)
+        snprintf(text + used, size - used, "%s %.4g,%.4g,%.4g", model->params[p].name, values[at], values[at + 1],
+                 values[at + 2]);
+    else
+        snprintf(text + used, size - used, "%s %.4g", model->params[p].name, values[at]);
+}
+
+/* What the flags of a converted constant texel came from, one note per hop that raised one: the transform (its
+ * file, its models), the source parameters outside its training domain, the target parameters it clamped into their
+ * ranges (those left on a bound of their range), inputs clamped or not finite. The chain is run again hop by hop on
+ * the texel (mr_learned_apply: the values of the chain, each hop's own flags). With --direct (no hops), the
+ * parameters on a bound are named. */
+static void explain_texel(const mr_learned *const *chain, const char *const *paths, int hops,
+                          const mr_brdf_model *source, const double *source_values, const mr_brdf_model *target,
+                          const double *target_values, unsigned flags) {
+    double values[2][MR_BRDF_MAX_VALUES];
+    memcpy(values[0], source_values, (size_t)mr_brdf_value_count(source) * sizeof values[0][0]);
+    for (int h = 0; h <= hops; h++) {
+        const mr_learned *t = h < hops ? chain[h] : NULL;
+        const mr_brdf_model *in_model = t ? t->source : source, *out_model = t ? t->target : target;
+        const double *in = values[h % 2];
+        double *out = values[(h + 1) % 2];
+        unsigned f = flags;
+        if (t != NULL)
+            mr_learned_apply(t, in, out, &f);
+        else if (hops == 0) // --direct: the converted values as they are
+            memcpy(out, target_values, (size_t)mr_brdf_value_count(target) * sizeof out[0]);
+        else
+            break;
+        if ((f & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED | MR_WF_CLAMPED_OUTPUT | MR_WF_CLAMPED_INPUT |
+                  MR_WF_NONFINITE_INPUT | MR_WF_UNCHECKED)) == 0)
+            continue;
+        char note[2048] = "";
+        if (t != NULL && (f & MR_WF_UNCHECKED))
+            snprintf(note + strlen(note), sizeof note - strlen(note),
+                     "the transform failed its check against the remaps when it was learned; ");
+        if (t != NULL && (f & MR_WF_EXTRAPOLATED)) {
+            snprintf(note + strlen(note), sizeof note - strlen(note), "extrapolated, outside its training domain:");
+            for (int k = 0; k < t->feature_count; k++) {
+                const mr_learned_slot *slot = &t->features[k];
+                const int at = mr_brdf_param_offset(in_model, slot->param);
+                const int channels = slot->kind == MR_LEARNED_GREY ? 3 : 1;
+                const int first = slot->kind == MR_LEARNED_CHANNEL ? slot->channel : 0;
+                int outside = 0;
+                for (int c = first; c < first + channels; c++)
+                    outside |= in[at + c] < slot->min || in[at + c] > slot->max;
+                if (!outside) continue;
+                snprintf(note + strlen(note), sizeof note - strlen(note), " ");
+                append_param(note, sizeof note, in_model, in, slot->param);
+                snprintf(note + strlen(note), sizeof note - strlen(note), " (trained on [%.4g, %.4g])", slot->min,
+                         slot->max);
+            }
+            snprintf(note + strlen(note), sizeof note - strlen(note), "; ");
+        }
+        if (t == NULL && (f & MR_WF_UNCONVERGED))
+            snprintf(note + strlen(note), sizeof note - strlen(note), "the fit did not converge; ");
+        if (f & MR_WF_CLAMPED_OUTPUT) {
+            snprintf(note + strlen(note), sizeof note - strlen(note), "clamped into its range:");
+            for (int p = 0; p < out_model->param_count; p++) {
+                const mr_brdf_param *param = &out_model->params[p];
+                const int at = mr_brdf_param_offset(out_model, p);
+                int bound = 0;
+                for (int c = 0; c < param->channels; c++)
+                    bound |= out[at + c] <= param->min_value || out[at + c] >= param->max_value;
+                if (!bound || param->role == MR_PARAM_SWITCH || param->min_value == param->max_value) continue;
+                snprintf(note + strlen(note), sizeof note - strlen(note), " ");
+                append_param(note, sizeof note, out_model, out, p);
+                snprintf(note + strlen(note), sizeof note - strlen(note), " (range [%g, %g])", param->min_value,
+                         param->max_value);
+            }
+            snprintf(note + strlen(note), sizeof note - strlen(note), "; ");
+        }
+        if (f & (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT))
+            snprintf(note + strlen(note), sizeof note - strlen(note), "an input was clamped or not finite; ");
+        note[strlen(note) - 2] = '\0'; // the last "; "
+        if (t != NULL)
+            fprintf(stderr, "matremap convert: note: hop %d of %d (%s, %s -> %s): %s\n", h + 1, hops, paths[h],
+                    t->source->name, t->target->name, note);
+        else
+            fprintf(stderr, "matremap convert: note: --direct %s -> %s: %s\n", source->name, target->name, note);
+        flags = 0; // a chain's hops raise their own
+    }
 }
 
 int cmd_convert(int argc, char **argv) {
@@ -385,10 +458,13 @@ int cmd_convert(int argc, char **argv) {
     if (code == CLI_EXIT_OK && maps_given) {
         if (prefix == NULL) code = cli_usage_error(COMMAND, "maps given: name the outputs with -o PREFIX");
         for (int j = 0; code == CLI_EXIT_OK && j <= out_count; j++) {
-            int n = j < out_count ? snprintf(names[j], sizeof names[j], "%s%s.%s", prefix, target->params[j].name,
-                                             format)
-                                  : snprintf(names[j], sizeof names[j], "%sflags.png", prefix);
-            if (n < 0 || (size_t)n >= sizeof names[j]) code = cli_usage_error(COMMAND, "-o '%s': too long", prefix);
+            char name[256];
+            if (j < out_count)
+                snprintf(name, sizeof name, "%s.%s", target->params[j].name, format);
+            else
+                snprintf(name, sizeof name, "flags.png");
+            if (!cli_output_name(names[j], sizeof names[j], prefix, name))
+                code = cli_usage_error(COMMAND, "-o '%s': too long", prefix);
         }
     }
     if (code == CLI_EXIT_OK) {
@@ -560,12 +636,15 @@ int cmd_convert(int argc, char **argv) {
                 else
                     printf(" %s=%.6g", target->params[j].name, out[j]->pixels[0]);
             printf("\n");
-            if (counts[3])
-                fprintf(stderr, "matremap convert: note: %s%s%s%s\n",
-                        counts[4] ? "converted by a transform that failed its check against the remaps; " : "",
-                        counts[0] > counts[4] ? "outside the transform's training domain (extrapolated) " : "",
-                        counts[1] ? "an output was clamped into its range " : "",
-                        counts[2] ? "an input was clamped or not finite" : "");
+            if (counts[3]) {
+                const char *hop_paths[MR_LEARNED_MAX_HOPS];
+                double converted[MR_BRDF_MAX_VALUES];
+                for (int h = 0; h < hops; h++) hop_paths[h] = l.paths[path[h]];
+                for (int j = 0; j < out_count; j++)
+                    for (int c = 0; c < target->params[j].channels; c++)
+                        converted[mr_brdf_param_offset(target, j) + c] = out[j]->pixels[c];
+                explain_texel(chain, hop_paths, direct ? 0 : hops, source, m->values, target, converted, flags[0]);
+            }
         } else {
             if (direct)
                 printf("matremap convert: %s -> %s by direct remaps, %dx%d = %zu texels in %.2f s (convert %.3f s): "

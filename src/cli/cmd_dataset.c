@@ -60,6 +60,9 @@ static void print_help(void) {
            "  --compare             the objective comparison (needs --env)\n"
            "  --env FILE            an environment map for --compare (repeatable, at most %d)\n"
            "  --weights FILE        a network to compare too (repeatable, at most %d)\n"
+           "  --json                a summary as one JSON object on stdout: the output, pair count, outcomes\n"
+           "                        (converged, unreachable), categories, seconds; with --compare (which then\n"
+           "                        needs -o for the table) each column's mean and worst SSIM\n"
            "  --help                this text\n"
            "\n"
            "Exit codes: 0 done, 1 usage error, 2 bad input (an asset or map that cannot be read, an asset without\n"
@@ -291,7 +294,7 @@ typedef struct pair {
 } pair;
 
 static void progress(const char *what, size_t done, size_t total, double started) {
-    fprintf(stderr, "\rdataset: %s %zu/%zu  %.0f s ", what, done, total, cli_now() - started);
+    fprintf(stderr, "\rmatremap dataset: %s %zu/%zu  %.0f s ", what, done, total, cli_now() - started);
 }
 
 /* Label every pair (OpenMP over pairs, dynamic: texels differ in cost). */
@@ -409,7 +412,7 @@ typedef struct column {
  * reading of the diffuse), networks. */
 static int compare(pair *texels, size_t n, const char **names, const mr_image *const *envs, int env_count,
                    const char *const *weights, int weight_count, const mr_wf_label_options *label_opts,
-                   const char *output) {
+                   const char *output, int json) {
     mr_wf_label_options eo = mr_wf_label_options_default();
     eo.size = 96;
     eo.env_count = env_count;
@@ -533,6 +536,22 @@ static int compare(pair *texels, size_t n, const char **names, const mr_image *c
         }
         if (output) code = finish_output(f, &file);
     }
+    if (code == CLI_EXIT_OK && json) { // the columns' means and worsts over every texel, as the table's last rows
+        printf("{\"command\": \"dataset --compare\", \"output\": ");
+        cli_json_string(stdout, output);
+        printf(", \"texels\": %zu, \"hard_cases\": %d, \"envs\": %d, \"columns\": [", n, HARD_CASES, env_count);
+        for (int k = 0; k < ncol; k++) {
+            double sum = 0.0, worst = 1.0;
+            for (size_t i = 0; i < n; i++) {
+                sum += cols[k].ssim[i];
+                worst = fmin(worst, cols[k].ssim[i]);
+            }
+            printf("%s{\"name\": ", k ? ", " : "");
+            cli_json_string(stdout, cols[k].name);
+            printf(", \"mean_ssim\": %.6f, \"worst_ssim\": %.6f}", sum / (double)n, worst);
+        }
+        printf("]}\n");
+    }
     for (int k = 0; k < ncol; k++) free(cols[k].ssim);
     free(answers);
     free(dif);
@@ -547,7 +566,8 @@ int cmd_dataset(int argc, char **argv) {
     const char *output = NULL, *assets[MAX_ASSETS], *env_paths[MAX_ENVS], *weights[MAX_WEIGHTS];
     const char *label_env_paths[MAX_ENVS];
     int asset_count = 0, env_count = 0, label_env_count = 0, weight_count = 0;
-    int samples = -1, seed = 1, threads = 0, do_compare = 0;
+    int samples = -1, seed = 1, threads = 0, do_compare = 0, json = 0;
+    const double started = cli_now();
     mr_wf_label_options lo = mr_wf_label_options_default();
     for (int i = 1; i < argc; i++) {
         const char *value = NULL;
@@ -599,14 +619,19 @@ int cmd_dataset(int argc, char **argv) {
             if (taken < 0 || !cli_parse_int("dataset", "--threads", value, 1, 1024, &threads)) return CLI_EXIT_USAGE;
         } else if (strcmp(argv[i], "--compare") == 0) {
             do_compare = 1;
+        } else if (strcmp(argv[i], "--json") == 0) {
+            json = 1;
         } else {
-            return cli_usage_error("dataset", "unexpected argument '%s'", argv[i]);
+            return cli_usage_error("dataset", "%s '%s'", argv[i][0] == '-' ? "unknown option" : "unexpected argument",
+                                   argv[i]);
         }
     }
     if (!do_compare && output == NULL) return cli_usage_error("dataset", "missing -o PAIRS.csv");
     if (do_compare && env_count == 0) return cli_usage_error("dataset", "--compare needs at least one --env map");
     if (!do_compare && (env_count || weight_count))
         return cli_usage_error("dataset", "--env and --weights go with --compare");
+    if (do_compare && json && output == NULL)
+        return cli_usage_error("dataset", "--compare --json needs -o TABLE.md (the table; the JSON has its summary)");
     if (samples < 0) samples = do_compare ? 400 : 16000;
     if (threads > 0) omp_set_num_threads(threads);
 
@@ -665,7 +690,7 @@ int cmd_dataset(int argc, char **argv) {
         }
         if (code == CLI_EXIT_OK)
             code = compare(pairs, n, names, (const mr_image *const *)envs, env_count, weights, weight_count, &lo,
-                           output);
+                           output, json);
         for (int e = 0; e < env_count; e++) mr_image_free(envs[e]);
     } else if (code == CLI_EXIT_OK) {
         mr_wf_label_scene *scene = NULL;
@@ -674,6 +699,21 @@ int cmd_dataset(int argc, char **argv) {
         mr_wf_label_scene_free(scene);
         code = status == MR_OK ? write_pairs(output, pairs, n, mr_wf_objective_name(lo.objective), (uint64_t)seed)
                                : cli_fail("dataset", status);
+        if (code == CLI_EXIT_OK && json) {
+            size_t converged = 0, per_category[CAT_COUNT] = {0};
+            for (size_t i = 0; i < n; i++) {
+                converged += pairs[i].result.loss <= CONVERGED_LOSS;
+                per_category[pairs[i].cat]++;
+            }
+            printf("{\"command\": \"dataset\", \"output\": ");
+            cli_json_string(stdout, output);
+            printf(", \"pairs\": %zu, \"objective\": \"%s\", \"seed\": %d, \"assets\": %d, \"outcomes\": "
+                   "{\"converged\": %zu, \"unreachable\": %zu}, \"categories\": {", n,
+                   mr_wf_objective_name(lo.objective), seed, asset_count, converged, n - converged);
+            for (int c = 0; c < CAT_COUNT; c++)
+                printf("%s\"%s\": %zu", c ? ", " : "", category_names[c], per_category[c]);
+            printf("}, \"seconds\": %.6f}\n", cli_now() - started);
+        }
     }
     for (int e = 0; e < label_env_count; e++) mr_image_free(label_envs[e]);
     free(pairs);

@@ -306,7 +306,7 @@ int cmd_gltf(int argc, char **argv) {
                    r->outcome == MR_GLTF_SHARED ? " (the same sources as an earlier material: its textures reused)"
                                                 : "");
         }
-        printf("gltf %s: %d of %d materials converted", o.direction, converted, result.material_count);
+        printf("matremap gltf %s: %d of %d materials converted", o.direction, converted, result.material_count);
         if (kept > 0) printf(", %d kept with metal-rough values of %s own", kept, kept == 1 ? "its" : "their");
         printf(" with %s%s%s", o.method, use_mlp ? " " : "", use_mlp ? net_path : "");
         if (tolerance && o.eps_given)

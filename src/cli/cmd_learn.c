@@ -80,7 +80,8 @@ typedef struct progress_state {
 
 static void draw_progress(const char *stage, double fraction, void *user) {
     progress_state *p = user;
-    if (p->draw) fprintf(stderr, "\rlearn: %s %3.0f %%  %.1f s ", stage, 100.0 * fraction, cli_now() - p->started);
+    if (p->draw)
+        fprintf(stderr, "\rmatremap learn: %s %3.0f %%  %.1f s ", stage, 100.0 * fraction, cli_now() - p->started);
 }
 
 /* ---- plots ------------------------------------------------------------------------------------------------- */

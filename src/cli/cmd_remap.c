@@ -50,7 +50,8 @@ static void print_help(void) {
            "  --light L          45 (default) or frontal\n"
            "  --threads N        OpenMP threads of the fit's renders (default 0: automatic, one thread at the\n"
            "                     default size, where a team costs more than it saves; copies run side by side)\n"
-           "  --images PREFIX    also write PREFIX_source.png, PREFIX_target.png and PREFIX_ssim.png\n"
+           "  --images PREFIX    also write PREFIX_source.png, PREFIX_target.png and PREFIX_ssim.png (no '_'\n"
+           "                     after a PREFIX ending in '/', '_', '-' or '.': --images out/ writes out/source.png)\n"
            "  --json             machine-readable result on stdout\n"
            "  --help             this text\n"
            "\n"
@@ -91,8 +92,8 @@ static int read_source_image(const char *path, mr_image **out) {
     return status == MR_OK ? CLI_EXIT_OK : cli_fail("remap", status);
 }
 
-/* The pictures of --images PREFIX: PREFIX + these. */
-static const char *const picture_suffixes[3] = {"_source.png", "_target.png", "_ssim.png"};
+/* The pictures of --images PREFIX: these after PREFIX (cli_output_name's rule: PREFIX_source.png, out/source.png). */
+static const char *const picture_suffixes[3] = {"source.png", "target.png", "ssim.png"};
 
 /* Render the source's and target's full images and the SSIM map as pictures (--images). */
 static mr_status write_pictures(const char *prefix, const mr_render_plan *plan, const mr_image *source,
@@ -107,13 +108,13 @@ static mr_status write_pictures(const char *prefix, const mr_render_plan *plan, 
     const mr_image *pictures[3] = {source, target_image, picture};
     int written = 0;
     for (int k = 0; status == MR_OK && k < 3; k++) {
-        snprintf(path, sizeof path, "%s%s", prefix, picture_suffixes[k]);
+        cli_output_name(path, sizeof path, prefix, picture_suffixes[k]);
         status = mr_img_write(path, pictures[k], NULL);
         written += status == MR_OK;
     }
     if (status != MR_OK)
         for (int k = 0; k < written; k++) {
-            snprintf(path, sizeof path, "%s%s", prefix, picture_suffixes[k]);
+            cli_output_name(path, sizeof path, prefix, picture_suffixes[k]);
             remove(path);
         }
     mr_image_free(target_image);
@@ -238,7 +239,7 @@ int cmd_remap(int argc, char **argv) {
     if (reference_path) cli_io_input(&io, reference_path, "--match-irradiance %s", reference_path);
     for (int k = 0; images_prefix != NULL && k < 3; k++) {
         char path[4096];
-        snprintf(path, sizeof path, "%s%s", images_prefix, picture_suffixes[k]);
+        cli_output_name(path, sizeof path, images_prefix, picture_suffixes[k]);
         cli_io_output(&io, path, "--images %s", images_prefix);
     }
     int exit_code = cli_io_check(&io);

@@ -2,17 +2,22 @@
  * cmd_render.c — `matremap render MODEL [name=value|name=@MAP ...] [--size N] [--light 45|frontal]
  *                [--env FILE [--env-rotation DEG] [--env-samples N] [--env-reflection-samples M] [--env-scale S]]
  *                [--mesh FILE.obj] [--camera auto|paper]
- *                [--component full|diffuse|specular] [--exposure E] [--mask FILE] -o OUT`
+ *                [--component full|diffuse|specular] [--exposure E] [--mask FILE] [--json] -o OUT`
+ *                and `matremap render ASSET.gltf|.glb [--camera-direction X,Y,Z] [the same options] -o OUT`
  * Renders a material in the paper's fit scene (render.h), or under an environment map, optionally with
  * parameters from texture maps over the sphere, and writes it in the format of OUT's extension; --mask writes
  * the plan's coverage (mr_render_plan_coverage_mask), the object mask `matremap ssim --mask` takes. --mesh puts
  * an OBJ mesh (io/obj_load.h) in the sphere's place, its maps read at the mesh's UVs; the point light then keeps
- * its place relative to the camera and the object's size (mesh_lights below).
+ * its place relative to the camera and the object's size (mesh_lights below). A glTF asset in MODEL's place is
+ * rendered as `matremap report` renders one (mr_gltf_scene_from_asset: its triangles, each with its material), seen
+ * from report's three-quarter view (or --camera-direction), lit by the scaled point light or --env.
  */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
+#include "gltf/mr_gltf_scene.h"
 #include "io/obj_load.h"
 
 /* The fit scene's point light (distance 3 from a unit sphere, 10 W/sr, frontal or 45 degrees to the camera's
@@ -54,6 +59,7 @@ static void mesh_lights(const mr_mesh *mesh, mr_fit_light which, mr_scene *scene
 
 static void print_help(void) {
     printf("Usage: matremap render MODEL [name=value|name=@MAP ...] [options] -o OUT.exr|.hdr|.png|.jpg|.tif\n"
+           "       matremap render ASSET.gltf|ASSET.glb [options] -o OUT.exr|.hdr|.png|.jpg|.tif\n"
            "\n"
            "Renders MODEL with the given parameters in the fit scene of Sztrajman et al. (section 4.1): a unit\n"
            "sphere at the origin, a point light (10 W/sr) at distance 3, 45 degrees from the view direction,\n"
@@ -76,6 +82,15 @@ static void print_help(void) {
            "behind the sphere, straight ahead of the camera; the background stays black), sampled with a fixed\n"
            "pattern of N directions importance-sampled by luminance, the same for every pixel: no noise, a\n"
            "bias that shrinks as N grows. --env replaces the point light unless --light is also given.\n"
+           "\n"
+           "glTF assets: ASSET.gltf or ASSET.glb in MODEL's place renders the asset's scene as 'matremap report'\n"
+           "does (docs/report.md): its triangles, each with its material (spec-gloss when the material carries it,\n"
+           "else metal-rough with KHR_materials_specular and _ior), factors times textures through their samplers,\n"
+           "normal, occlusion and emissive maps, single-sided backs culled; no name=value parameters. The camera\n"
+           "frames the asset from a three-quarter view onto its broadest side (report's), or from --camera-direction;\n"
+           "the point light keeps its place relative to the camera, scaled to the asset as for --mesh; --env,\n"
+           "--env-*, --light, --size, --component, --exposure, --edge-samples, --bits and --mask work as for a\n"
+           "material.\n"
            "\n");
     printf("Options:\n"
            "  -o, --output FILE     output image (required)\n"
@@ -98,7 +113,9 @@ static void print_help(void) {
            "  --camera auto|paper   auto (default): the fit scene's camera for the sphere; for a mesh, looking down\n"
            "                        -z at its bounding sphere, which fills 90 %% of the 35-degree view. paper: the\n"
            "                        paper's visualisation camera, at (0,0,-1.5) looking at the origin, 40 degrees\n"
-           "                        (made for its material-test sphere of radius 0.5)\n"
+           "                        (made for its material-test sphere of radius 0.5; not for glTF assets)\n"
+           "  --camera-direction X,Y,Z  glTF assets: the direction from the asset's centre to the camera (default:\n"
+           "                        the three-quarter view of 'matremap report'); the camera frames its bounds\n"
            "  --component C         full, diffuse or specular (default full)\n"
            "  --exposure E          multiply radiance by E before writing (default 1)\n"
            "  --edge-samples N      silhouette pixels are box-filtered with NxN rays (default 4; 1 = pixel\n"
@@ -111,6 +128,8 @@ static void print_help(void) {
            "                        --edge-samples N), lit or not, the same for every material; linear in every\n"
            "                        format (EXR keeps it exact). 'matremap ssim A B --mask FILE' compares renders\n"
            "                        over it (docs/metrics.md)\n"
+           "  --json                what was done as one JSON object on stdout (outputs, size, pixels, samples,\n"
+           "                        timings) instead of the 'wrote' line on stderr\n"
            "  --help                this text\n"
            "\n"
            "Examples:\n"
@@ -119,8 +138,65 @@ static void print_help(void) {
            "  matremap render ggx-metallic albedo=@base.png metallic=@orm.png:b alpha=@alpha.exr --env studio.hdr \\\n"
            "      --env-rotation 90 -o y.png\n"
            "  matremap render ward alpha=@rough.exr specular=@spec.png --mesh matsphere.obj --camera paper \\\n"
-           "      --env tabac_plant_vogl.hdr --env-rotation 45 -o z.exr\n",
+           "      --env tabac_plant_vogl.hdr --env-rotation 45 -o z.exr\n"
+           "  matremap render WaterBottle.gltf --env studio.hdr --size 256 -o bottle.png\n",
            MR_ENV_DEFAULT_SAMPLES, MR_ENV_MAX_REFLECTION_SAMPLES);
+}
+
+static int is_gltf_path(const char *text) {
+    size_t n = strlen(text);
+    return (n > 5 && strcmp(text + n - 5, ".gltf") == 0) || (n > 4 && strcmp(text + n - 4, ".glb") == 0);
+}
+
+/* Parse "X,Y,Z" (a finite, non-zero direction) for --camera-direction. 1, or 0 after a usage error. */
+static int parse_direction(const char *text, double out[3]) {
+    const char *p = text;
+    for (int k = 0; k < 3; k++) {
+        char *end = NULL;
+        out[k] = strtod(p, &end);
+        if (end == p || !isfinite(out[k]) || *end != (k < 2 ? ',' : '\0'))
+            return cli_usage_error("render", "--camera-direction '%s': expected three numbers X,Y,Z", text) == 0;
+        p = end + 1;
+    }
+    if (out[0] == 0.0 && out[1] == 0.0 && out[2] == 0.0)
+        return cli_usage_error("render", "--camera-direction '%s': the direction must not be zero", text) == 0;
+    return 1;
+}
+
+/* The camera on a glTF asset, as `matremap report` places it (src/report/make.c, frame_reference): from
+ * `direction` when given, else a three-quarter view onto the asset's broadest side, along the axis of its smallest
+ * extent, raised and turned a little. */
+static mr_status frame_asset(const mr_gltf_scene *asset, const double *direction, int width, int height,
+                             mr_camera *camera) {
+    const double *lo = asset->bbox_min, *hi = asset->bbox_max;
+    int thin = 0;
+    for (int c = 1; c < 3; c++)
+        if (hi[c] - lo[c] < hi[thin] - lo[thin]) thin = c;
+    mr_frame_options frame = {0};
+    frame.width = width;
+    frame.height = height;
+    for (int c = 0; c < 3; c++) frame.from[c] = direction != NULL ? direction[c] : (c == thin ? 1.0 : 0.35);
+    return mr_camera_frame_mesh(&asset->mesh, &frame, camera);
+}
+
+/* Read the asset (its files noted in io as inputs, then checked again: an output over a buffer or an image is
+ * refused) and build its scene. Returns an exit code. */
+static int load_asset(const char *path, cli_io *io, mr_gltf_scene **out) {
+    mr_gltf *asset = NULL;
+    mr_status status = mr_gltf_load(path, &asset);
+    if (status == MR_OK) {
+        char label[4096 + 8];
+        snprintf(label, sizeof label, "asset %s", path);
+        cli_io_gltf(io, asset, label);
+        int code = cli_io_check(io);
+        if (code != CLI_EXIT_OK) {
+            mr_gltf_free(asset);
+            return code;
+        }
+        status = mr_gltf_scene_from_asset(asset, NULL, out);
+    }
+    mr_gltf_free(asset);
+    return status == MR_OK ? CLI_EXIT_OK : cli_fail("render", status);
 }
 
 int cmd_render(int argc, char **argv) {
@@ -131,7 +207,8 @@ int cmd_render(int argc, char **argv) {
     double env_rotation = 0.0, env_scale = 1.0;
     mr_component component = MR_COMPONENT_FULL;
     double exposure = 1.0;
-    int edge_samples = 0, threads = 0;
+    int edge_samples = 0, threads = 0, json = 0, has_direction = 0;
+    double direction[3] = {0.0, 0.0, 0.0};
     mr_img_write_options write_opts = {0};
     const char *assignments[CLI_MAX_ASSIGNMENTS];
     int assignment_count = 0;
@@ -179,6 +256,11 @@ int cmd_render(int argc, char **argv) {
         } else if ((taken = cli_take_option("render", argc, argv, &i, "--mesh", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             mesh_path = value;
+        } else if ((taken = cli_take_option("render", argc, argv, &i, "--camera-direction", &value))) {
+            if (taken < 0 || !parse_direction(value, direction)) return CLI_EXIT_USAGE;
+            has_direction = 1;
+        } else if (strcmp(argv[i], "--json") == 0) {
+            json = 1;
         } else if ((taken = cli_take_option("render", argc, argv, &i, "--camera", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             if (strcmp(value, "auto") != 0 && strcmp(value, "paper") != 0)
@@ -218,6 +300,18 @@ int cmd_render(int argc, char **argv) {
     if (env_option && env_path == NULL)
         return cli_usage_error("render", "--env-rotation, --env-samples, --env-reflection-samples and --env-scale need "
                                "--env FILE");
+    const int gltf = is_gltf_path(model_name);
+    if (gltf && assignment_count > 0)
+        return cli_usage_error("render", "'%s': a glTF asset takes no name=value parameters (its materials are its "
+                               "own)", assignments[0]);
+    if (gltf && mesh_path != NULL)
+        return cli_usage_error("render", "--mesh renders a material (MODEL name=value ...); a glTF asset brings its "
+                               "own triangles");
+    if (gltf && paper)
+        return cli_usage_error("render", "--camera paper is placed for the paper's sphere; a glTF asset is framed by "
+                               "--camera-direction");
+    if (!gltf && has_direction)
+        return cli_usage_error("render", "--camera-direction places the camera for glTF assets");
 
     // Nothing written over a file read (maps, the map, the mesh).
     cli_io io;
@@ -225,14 +319,22 @@ int cmd_render(int argc, char **argv) {
     cli_io_material(&io, assignments, NULL, assignment_count);
     if (env_path != NULL) cli_io_input(&io, env_path, "--env %s", env_path);
     if (mesh_path != NULL) cli_io_input(&io, mesh_path, "--mesh %s", mesh_path);
+    if (gltf) cli_io_input(&io, model_name, "asset %s", model_name);
     cli_io_output(&io, output, NULL);
     if (mask_path != NULL) cli_io_output(&io, mask_path, "--mask");
     int code = cli_io_check(&io);
-    cli_io_free(&io);
-    if (code != CLI_EXIT_OK) return code;
 
     mr_material *material = NULL;
-    code = cli_material_load("render", model_name, assignments, assignment_count, &material);
+    mr_gltf_scene *asset = NULL;
+    double asset_seconds = 0.0;
+    if (code == CLI_EXIT_OK && gltf) {
+        double t0 = cli_now();
+        code = load_asset(model_name, &io, &asset);
+        asset_seconds = cli_now() - t0;
+    } else if (code == CLI_EXIT_OK) {
+        code = cli_material_load("render", model_name, assignments, assignment_count, &material);
+    }
+    cli_io_free(&io);
 
     mr_image *env = NULL, *image = NULL;
     mr_render_plan *plan = NULL;
@@ -265,8 +367,15 @@ int cmd_render(int argc, char **argv) {
         if (!paper) status = mr_camera_frame_mesh(&obj->mesh, &frame, &scene.camera);
         if (status != MR_OK) code = cli_fail("render", status);
     }
+    if (asset != NULL) {
+        scene.shape.type = MR_SHAPE_MESH;
+        scene.shape.mesh = &asset->mesh;
+        status = frame_asset(asset, has_direction ? direction : NULL, scene.width, scene.height, &scene.camera);
+        if (status != MR_OK) code = cli_fail("render", status);
+    }
     if (paper) scene.camera = mr_camera_paper();
-    if (obj != NULL || paper) mesh_lights(obj != NULL ? &obj->mesh : NULL, scene_opts.light, &scene);
+    if (obj != NULL || asset != NULL || paper)
+        mesh_lights(obj != NULL ? &obj->mesh : asset != NULL ? &asset->mesh : NULL, scene_opts.light, &scene);
     if (env != NULL) {
         // --env alone lights with the map only; with an explicit --light the point light stays as well.
         int slot = light_given ? scene.light_count++ : 0;
@@ -276,7 +385,9 @@ int cmd_render(int argc, char **argv) {
     if (code == CLI_EXIT_OK) {
         status = mr_render_plan_create(&scene, &plan);
         plan_seconds = cli_now() - start;
-        if (status == MR_OK)
+        if (status == MR_OK && asset != NULL)
+            status = mr_render_materials(plan, asset->bindings, asset->material_count, component, &image);
+        else if (status == MR_OK)
             status = mr_render_textured(plan, material->model, material->values, &material->textures, component,
                                         &image);
         if (status == MR_OK && exposure != 1.0) {
@@ -293,22 +404,52 @@ int cmd_render(int argc, char **argv) {
             if (status == MR_OK) status = mr_img_write(mask_path, mask, &mask_opts);
             mr_image_free(mask);
         }
-        if (status == MR_OK && obj != NULL)
-            fprintf(stderr, "matremap render: mesh %s: %d triangles, %d vertices, read in %.1f ms; %ld shadow rays\n",
-                    mesh_path, obj->mesh.triangle_count, obj->mesh.vertex_count, 1e3 * load_seconds,
-                    mr_render_plan_shadow_ray_count(plan));
-        if (status == MR_OK)
+        const mr_mesh *mesh = obj != NULL ? &obj->mesh : asset != NULL ? &asset->mesh : NULL;
+        if (status != MR_OK) {
+            code = cli_fail("render", status);
+        } else if (json) {
+            printf("{\"command\": \"render\", \"model\": ");
+            cli_json_string(stdout, asset != NULL ? "gltf asset" : material->model->name);
+            printf(", \"asset\": ");
+            if (asset != NULL)
+                cli_json_string(stdout, model_name);
+            else
+                printf("null");
+            printf(", \"mesh\": ");
+            if (obj != NULL)
+                cli_json_string(stdout, mesh_path);
+            else
+                printf("null");
+            printf(", \"outputs\": [");
+            cli_json_string(stdout, output);
+            if (mask_path != NULL) {
+                printf(", ");
+                cli_json_string(stdout, mask_path);
+            }
+            printf("], \"component\": \"%s\", \"width\": %d, \"height\": %d, \"lit_pixels\": %d, "
+                   "\"shading_samples\": %ld, \"shadow_rays\": %ld, \"triangles\": %d, \"materials\": %d, ",
+                   mr_component_name(component), scene.width, scene.height, mr_render_plan_lit_pixel_count(plan),
+                   mr_render_plan_sample_count(plan), mr_render_plan_shadow_ray_count(plan),
+                   mesh != NULL ? mesh->triangle_count : 0, asset != NULL ? asset->material_count : 1);
+            printf("\"seconds\": {\"load\": %.6f, \"plan\": %.6f, \"render\": %.6f}}\n",
+                   obj != NULL ? load_seconds : asset_seconds, plan_seconds, render_seconds);
+        } else {
+            if (mesh != NULL)
+                fprintf(stderr, "matremap render: %s %s: %d triangles, %d vertices, read in %.1f ms; %ld shadow rays\n",
+                        obj != NULL ? "mesh" : "asset", obj != NULL ? mesh_path : model_name, mesh->triangle_count,
+                        mesh->vertex_count, 1e3 * (obj != NULL ? load_seconds : asset_seconds),
+                        mr_render_plan_shadow_ray_count(plan));
             fprintf(stderr, "matremap render: wrote %s (%s, %dx%d, %d lit pixels, %ld shading samples, plan %.1f ms, "
                     "rendered in %.1f ms)\n", output, mr_component_name(component), scene.width, scene.height,
                     mr_render_plan_lit_pixel_count(plan), mr_render_plan_sample_count(plan), 1e3 * plan_seconds,
                     1e3 * render_seconds);
-        else
-            code = cli_fail("render", status);
+        }
     }
     mr_image_free(image);
     mr_render_plan_free(plan);
     mr_image_free(env);
     mr_obj_mesh_free(obj);
+    mr_gltf_scene_free(asset);
     mr_material_free(material);
     return code;
 }

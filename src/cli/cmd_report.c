@@ -39,8 +39,8 @@ static void print_help(void) {
            "With --mesh FILE.obj the materials are rendered on that mesh instead of the sphere (e.g. the paper's\n"
            "material-test sphere, ../shared/assets/paper/matsphere.obj), their maps at its UVs, one render plan per\n"
            "view (its shadows traced once) shared by every material.\n"
-           "\n"
-           "Options:\n"
+           "\n");
+    printf("Options:\n"
            "  -o, --output DIR     the report folder, written whole or not at all: made beside DIR and renamed\n"
            "                       into place when complete, replacing a previous report there (a folder that\n"
            "                       holds anything a report does not write is refused, as is an input inside DIR)\n"
@@ -65,9 +65,12 @@ static void print_help(void) {
            "                       object pixels in the first view to a mean luminance of 0.18)\n"
            "  --title TEXT         the page's title\n"
            "  --label TEXT         (inside a material's group) its name in the report (default: the model)\n"
+           "  --json               the figures as one JSON object on stdout instead of the table: the folder, its\n"
+           "                       page and summary.json, views, exposure, each material's mean figures and seconds\n"
            "  --help               this text\n"
            "\n"
-           "Prints each material's mean SSIM and relative RMSE and the page's path.\n"
+           "Prints each material's mean SSIM and relative RMSE and the page's path. Missing folders above DIR are\n"
+           "made.\n"
            "\n"
            "Example:\n"
            "  matremap report -o out/avocado --env studio.hdr \\\n"
@@ -89,6 +92,7 @@ typedef struct options {
     const char *dir;
     const char *mesh_path; /* --mesh */
     int paper_camera;      /* --camera paper */
+    int json;              /* --json */
     mr_report_options report; /* zero: the library's defaults */
 } options;
 
@@ -185,6 +189,8 @@ static int parse(int argc, char **argv, options *o, group *groups, int *group_co
             if (taken < 0 ||
                 !cli_parse_double("report", "--exposure", value, 1e-12, 1e12, &o->report.exposure))
                 return CLI_EXIT_USAGE;
+        } else if (strcmp(argv[i], "--json") == 0) {
+            o->json = 1;
         } else if (argv[i][0] == '-') {
             return cli_usage_error("report", "unknown option '%s'", argv[i]);
         } else if (g->model_name == NULL) {
@@ -249,7 +255,32 @@ static void print_result(const mr_report_result *r, const char *dir) {
     printf("report: %s/index.html\n", dir);
 }
 
+/* The same as one JSON object (--json). */
+static void print_json(const mr_report_result *r, const char *dir, double seconds) {
+    char path[4096 + 16];
+    printf("{\"command\": \"report\", \"output\": ");
+    cli_json_string(stdout, dir);
+    snprintf(path, sizeof path, "%s/index.html", dir);
+    printf(", \"page\": ");
+    cli_json_string(stdout, path);
+    snprintf(path, sizeof path, "%s/summary.json", dir);
+    printf(", \"summary\": ");
+    cli_json_string(stdout, path);
+    printf(", \"views\": %d, \"exposure\": %.9g, \"env_scale\": %.9g, \"materials\": [", r->view_count,
+           r->exposure, r->env_scale);
+    for (int k = 0; k < r->material_count; k++) {
+        const mr_report_figures *f = &r->materials[k];
+        printf("%s{\"label\": ", k ? ", " : "");
+        cli_json_string(stdout, f->label);
+        printf(", \"reference\": %s, \"object_ssim\": %.6f, \"object_relative_rmse\": %.6f, \"ssim\": %.6f, "
+               "\"relative_rmse\": %.6f, \"seconds\": %.6f}", k == 0 ? "true" : "false", f->mean_object_ssim,
+               f->mean_object_relative_rmse, f->mean_ssim, f->mean_relative_rmse, f->seconds);
+    }
+    printf("], \"seconds\": %.6f}\n", seconds);
+}
+
 int cmd_report(int argc, char **argv) {
+    const double started = cli_now();
     for (int i = 1; i < argc; i++)
         if (cli_is_help(argv[i])) {
             print_help();
@@ -342,7 +373,9 @@ int cmd_report(int argc, char **argv) {
         mr_report_result *result = NULL;
         mr_status status = mr_report_make(inputs, count, o.dir, &o.report, &result);
         if (progress_shown) fputc('\n', stderr);
-        if (status == MR_OK)
+        if (status == MR_OK && o.json)
+            print_json(result, o.dir, cli_now() - started);
+        else if (status == MR_OK)
             print_result(result, o.dir);
         else
             code = cli_fail("report", status);

@@ -60,6 +60,8 @@ static void print_help(void) {
            "  --shard K/N           compute only shard K of N (0 <= K < N): the samples whose index %% N == K,\n"
            "                        into a file of its own (one per job of a job array; it resumes like any\n"
            "                        sweep); 'matremap sweep merge' joins the N files into the sweep's file\n"
+           "  --json                the run's summary as one JSON object on stdout (instead of the summary line):\n"
+           "                        output, samples, computed, already_done, seconds, threads, outcomes\n"
            "  --help                this text\n"
            "\n"
            "The file starts with '# ' lines describing the run (tool version, models and values, remap options,\n"
@@ -96,7 +98,7 @@ static void print_help(void) {
 static char *command_line(int argc, char **argv, const char *prefix);
 
 static void print_merge_help(void) {
-    printf("Usage: matremap sweep merge SHARD.csv... -o DATA.csv\n"
+    printf("Usage: matremap sweep merge SHARD.csv... -o DATA.csv [--json]\n"
            "\n"
            "Joins the N files of a sweep run in shards ('matremap sweep ... --shard K/N', e.g. the jobs of a job\n"
            "array) into DATA.csv: the file a single 'matremap sweep' with the same arguments writes (its header with\n"
@@ -107,6 +109,8 @@ static void print_merge_help(void) {
            "interrupted shard again with --resume first) and not being written, every row a sane row of the sweep\n"
            "(values finite and inside their parameters' ranges, the sample's source values). DATA.csv must not\n"
            "exist; it is written to a temporary file and renamed into place, so it appears complete or not at all.\n"
+           "Missing folders of DATA.csv are made. --json prints the summary as one JSON object on stdout (output,\n"
+           "samples, shards, seconds) instead of the summary line.\n"
            "\n"
            "Exit codes: 0 merged, 1 usage error, 2 shards that do not belong together or are unfinished or\n"
            "corrupt (the message names the file, the line and what disagrees), or an existing DATA.csv,\n"
@@ -117,7 +121,7 @@ static void print_merge_help(void) {
 static int cmd_sweep_merge(int argc, char **argv) {
     const char *output = NULL;
     const char **shards = calloc((size_t)argc + 1, sizeof *shards);
-    int count = 0;
+    int count = 0, json = 0;
     if (shards == NULL)
         return cli_usage_error("sweep merge", "out of memory");
     for (int i = 1; i < argc; i++) {
@@ -135,6 +139,8 @@ static int cmd_sweep_merge(int argc, char **argv) {
                 return CLI_EXIT_USAGE;
             }
             output = value;
+        } else if (strcmp(argv[i], "--json") == 0) {
+            json = 1;
         } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
             free(shards);
             return cli_usage_error("sweep merge", "unknown option '%s'", argv[i]);
@@ -148,16 +154,34 @@ static int cmd_sweep_merge(int argc, char **argv) {
     } else if (output == NULL) {
         rc = cli_usage_error("sweep merge", "missing -o DATA.csv");
     } else {
-        char *command = command_line(argc, argv, "matremap sweep");
+        // The shards against the output (the library refuses it too), and the output's folders made.
+        cli_io io;
+        cli_io_init(&io, "sweep merge");
+        for (int k = 0; k < count; k++) cli_io_input(&io, shards[k], "shard %s", shards[k]);
+        cli_io_output(&io, output, NULL);
+        rc = cli_io_check(&io);
+        cli_io_free(&io);
+        char *command = rc == CLI_EXIT_OK ? command_line(argc, argv, "matremap sweep") : NULL;
         mr_sweep_merge_summary summary;
-        mr_status status = mr_sweep_merge(shards, count, output, command, &summary);
+        const double started = cli_now();
+        mr_status status = rc == CLI_EXIT_OK ? mr_sweep_merge(shards, count, output, command, &summary) : MR_OK;
         free(command);
-        if (status != MR_OK) {
+        if (rc != CLI_EXIT_OK) {
+            // said by cli_io_check
+        } else if (status != MR_OK) {
             rc = cli_fail("sweep merge", status);
+        } else if (json) {
+            printf("{\"command\": \"sweep merge\", \"output\": ");
+            cli_json_string(stdout, output);
+            printf(", \"samples\": %ld, \"shards\": %ld, \"inputs\": [", summary.total, summary.shards);
+            for (int k = 0; k < count; k++) {
+                printf("%s", k ? ", " : "");
+                cli_json_string(stdout, shards[k]);
+            }
+            printf("], \"seconds\": %.6f}\n", cli_now() - started);
         } else {
             fprintf(stderr, "matremap sweep merge: '%s' written: %ld samples from %ld shards\n", output, summary.total,
                     summary.shards);
-            rc = CLI_EXIT_OK;
         }
     }
     free(shards);
@@ -276,7 +300,7 @@ static int parse_shard(const char *text, long *k, long *n) {
 typedef struct sweep_args {
     mr_sweep_spec spec;
     const char *output;
-    int resume, threads;
+    int resume, threads, json;
     long shard_index, shard_count;
 } sweep_args;
 
@@ -335,6 +359,8 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
             a->output = value;
         } else if (strcmp(argv[i], "--resume") == 0) {
             a->resume = 1;
+        } else if (strcmp(argv[i], "--json") == 0) {
+            a->json = 1;
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--strategy", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             if (mr_remap_strategy_from_name(value, &strategy) != MR_OK)
@@ -475,6 +501,16 @@ int cmd_sweep(int argc, char **argv) {
         return CLI_EXIT_BAD_INPUT;
     }
 
+    // The output's folders, made by rank 0 (the one that writes the file) before any work.
+    if (mpi_rank == 0) {
+        cli_io io;
+        cli_io_init(&io, "sweep");
+        cli_io_output(&io, output, NULL);
+        rc = cli_io_check(&io);
+        cli_io_free(&io);
+        if (rc != CLI_EXIT_OK) return rc;
+    }
+
     mr_sweep_comm comm;
     int local_size = 1;
     if (under_mpi) {
@@ -528,6 +564,23 @@ int cmd_sweep(int argc, char **argv) {
         return cli_exit_code(status);
     }
 
+    if (a.json) {
+        printf("{\"command\": \"sweep\", \"output\": ");
+        cli_json_string(stdout, output);
+        printf(", \"samples\": %ld, \"sweep_samples\": %ld, \"computed\": %ld, \"already_done\": %ld, "
+               "\"truncated_bytes\": %ld, \"shard\": ", summary.file_total, summary.total, summary.computed,
+               summary.already_done, summary.truncated_bytes);
+        if (a.shard_count > 0)
+            printf("{\"index\": %ld, \"count\": %ld}", a.shard_index, a.shard_count);
+        else
+            printf("null");
+        printf(", \"seconds\": %.6f, \"threads\": %d, \"processes\": %d, \"threads_total\": %ld, \"outcomes\": {",
+               summary.seconds, summary.threads, summary.processes, summary.threads_total);
+        for (int o = 0; o < MR_FIT_OUTCOME_COUNT; o++)
+            printf("%s\"%s\": %ld", o ? ", " : "", mr_fit_outcome_name((mr_fit_outcome)o), summary.outcomes[o]);
+        printf("}}\n");
+        return CLI_EXIT_OK;
+    }
     char what[64] = "";
     if (a.shard_count > 0)
         snprintf(what, sizeof what, " (shard %ld/%ld of %ld samples)", a.shard_index, a.shard_count, summary.total);

@@ -71,7 +71,7 @@ static int record_epoch(const mr_mlp_epoch *epoch, void *user) {
     }
     c->epochs[c->count++] = *epoch;
     if (c->draw)
-        fprintf(stderr, "\rtrain: epoch %d/%d  train %.5f  validation %.5f  best %.5f (epoch %d)  %.0f s ",
+        fprintf(stderr, "\rmatremap train: epoch %d/%d  train %.5f  validation %.5f  best %.5f (epoch %d)  %.0f s ",
                 epoch->epoch, epoch->max_epochs, epoch->train_loss, epoch->validation_loss,
                 epoch->best_validation_loss, epoch->best_epoch, cli_now() - c->started);
     return 0;

@@ -267,9 +267,9 @@ static const char *default_format(map_arg *const *maps, int count) {
     return "png";
 }
 
-/* Name the outputs PREFIX_<name>.EXT and check the options; refuse (exit 2, cli_io_check) an output that is an input
- * (a map, --weights, or the installed network the transform loaded, `network`, "" for none) or another output
- * (--flags named like one). */
+/* Name the outputs PREFIX_<name>.EXT (cli_output_name's rule) and check the options; refuse (exit 2, cli_io_check)
+ * an output that is an input (a map, --weights, or the installed network the transform loaded, `network`, "" for
+ * none) or another output (--flags named like one). */
 static int plan_outputs(const char *command, out_options *o, map_arg *const *maps, int map_count, const char *weights,
                         const char *network, const char *const *names, output *outputs, int count) {
     if (o->format == NULL) o->format = default_format(maps, map_count);
@@ -281,8 +281,9 @@ static int plan_outputs(const char *command, out_options *o, map_arg *const *map
     }
     if (o->prefix == NULL) return CLI_EXIT_OK; // nothing is written
     for (int k = 0; k < count; k++) {
-        int length = snprintf(outputs[k].path, sizeof outputs[k].path, "%s_%s.%s", o->prefix, names[k], o->format);
-        if (length < 0 || (size_t)length >= sizeof outputs[k].path)
+        char name[256];
+        snprintf(name, sizeof name, "%s.%s", names[k], o->format);
+        if (!cli_output_name(outputs[k].path, sizeof outputs[k].path, o->prefix, name))
             return cli_usage_error(command, "-o '%s': the prefix is too long", o->prefix);
     }
     cli_io io;
@@ -438,7 +439,7 @@ static void print_summary(const summary *s, const out_options *o, const output *
     size_t off = count_flag(s->flags, n, MR_WF_OFF_MANIFOLD);
     size_t failed = count_flag(s->flags, n, MR_WF_METHOD_FAILED);
     if (!o->json) {
-        printf("%s: %dx%d = %zu texel%s, method %s", s->command, s->width, s->height, n, n == 1 ? "" : "s",
+        printf("matremap %s: %dx%d = %zu texel%s, method %s", s->command, s->width, s->height, n, n == 1 ? "" : "s",
                s->method);
         if (s->weights) printf(" (%s)", s->weights);
         if (s->f0 >= 0.0) printf(" (F0 %g)", s->f0);
@@ -671,7 +672,9 @@ static void print_spec2metal_help(void) {
            "\n");
     printf("Output:\n"
            "  -o, --output PREFIX   PREFIX_basecolor.EXT (RGB, or RGBA with the diffuse's alpha), PREFIX_metallic.EXT\n"
-           "                        and PREFIX_roughness.EXT; required unless every MAP is a constant\n"
+           "                        and PREFIX_roughness.EXT; required unless every MAP is a constant. No '_'\n"
+           "                        after a PREFIX ending in '/', '_', '-' or '.' (-o out/ writes out/basecolor.png);\n"
+           "                        missing folders are made\n"
            "  --pack                glTF packing: PREFIX_basecolor.EXT and PREFIX_metallicRoughness.EXT\n"
            "                        (R 0, G roughness, B metallic)\n"
            "  --format F            png, exr or tif (default: the first input file's, if one of these; else png)\n"
@@ -973,7 +976,8 @@ static void print_metal2spec_help(void) {
     printf("Output:\n"
            "  -o, --output PREFIX   PREFIX_diffuse.EXT (RGB, or RGBA with the base colour's alpha),\n"
            "                        PREFIX_specular.EXT and PREFIX_glossiness.EXT; required unless every MAP is a\n"
-           "                        constant\n"
+           "                        constant. No '_' after a PREFIX ending in '/', '_', '-' or '.' (-o out/ writes\n"
+           "                        out/diffuse.png); missing folders are made\n"
            "  --pack                KHR_materials_pbrSpecularGlossiness packing: PREFIX_diffuse.EXT and\n"
            "                        PREFIX_specularGlossiness.EXT (RGB specular, sRGB in png/tif; A glossiness,\n"
            "                        linear)\n"

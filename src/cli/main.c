@@ -42,28 +42,59 @@ static void print_usage(FILE *out) {
         fprintf(out, "  %-10s %s\n", commands[i].name, commands[i].summary);
     fprintf(out,
             "\n"
-            "'matremap COMMAND --help' describes a command.\n"
+            "'matremap COMMAND --help' (or 'matremap help COMMAND') describes a command.\n"
             "Exit codes: 0 ok, 1 usage error, 2 bad input, 3 internal or external failure.\n");
+}
+
+/* A command's exit code; a failed run leaves none of the empty folders it made for its outputs (cli.h). */
+static int finished(int code) {
+    if (code != CLI_EXIT_OK) cli_io_unmake_folders();
+    return code;
 }
 
 int main(int argc, char **argv) {
     const char *self = argc > 0 && argv[0] ? (strrchr(argv[0], '/') ? strrchr(argv[0], '/') + 1 : argv[0]) : "";
-    if (strcmp(self, "spec2metal") == 0) return cmd_spec2metal(argc, argv); // `ln -s matremap spec2metal`
-    if (strcmp(self, "metal2spec") == 0) return cmd_metal2spec(argc, argv);
+    if (strcmp(self, "spec2metal") == 0) return finished(cmd_spec2metal(argc, argv)); // `ln -s matremap spec2metal`
+    if (strcmp(self, "metal2spec") == 0) return finished(cmd_metal2spec(argc, argv));
     if (argc < 2) {
         print_usage(stderr);
         return CLI_EXIT_USAGE;
     }
-    if (cli_is_help(argv[1]) || strcmp(argv[1], "help") == 0) {
+    if (cli_is_help(argv[1]) || (strcmp(argv[1], "help") == 0 && argc == 2)) {
         print_usage(stdout);
         return CLI_EXIT_OK;
+    }
+    if (strcmp(argv[1], "help") == 0) { // `matremap help CMD` is `matremap CMD --help`
+        const int sweep_merge = argc == 4 && strcmp(argv[2], "sweep") == 0 && strcmp(argv[3], "merge") == 0;
+        if (argc > 3 && !sweep_merge) {
+            fprintf(stderr, "matremap help: expected one command, got '%s' and more\nTry 'matremap --help'.\n",
+                    argv[2]);
+            return CLI_EXIT_USAGE;
+        }
+        const char *name = argv[2];
+        char help_flag[] = "--help";
+        for (size_t i = 0; !sweep_merge && i < sizeof commands / sizeof commands[0]; i++)
+            if (strcmp(name, commands[i].name) == 0) {
+                char *help_argv[] = {argv[2], help_flag, NULL};
+                return commands[i].run(2, help_argv);
+            }
+        if (sweep_merge) { // sweep's sub-command: `matremap help sweep merge`
+            char sweep[] = "sweep", merge[] = "merge";
+            char *help_argv[] = {sweep, merge, help_flag, NULL};
+            return cmd_sweep(3, help_argv);
+        }
+        fprintf(stderr, "matremap help: unknown command '%s' (valid:", name);
+        for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+            fprintf(stderr, "%s %s", i ? "," : "", commands[i].name);
+        fprintf(stderr, ")\nTry 'matremap --help'.\n");
+        return CLI_EXIT_USAGE;
     }
     if (strcmp(argv[1], "--version") == 0) {
         printf("matremap %s\n", mr_version());
         return CLI_EXIT_OK;
     }
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-        if (strcmp(argv[1], commands[i].name) == 0) return commands[i].run(argc - 1, argv + 1);
+        if (strcmp(argv[1], commands[i].name) == 0) return finished(commands[i].run(argc - 1, argv + 1));
     fprintf(stderr, "matremap: unknown command '%s' (valid:", argv[1]);
     for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
         fprintf(stderr, "%s %s", i ? "," : "", commands[i].name);
