@@ -44,8 +44,8 @@ static void print_help(void) {
            "Values given after --from hold for every sample; a grid axis overrides them. Values given after --to\n"
            "hold the target's fixed parameters and switches (e.g. Ward's trim), as in 'matremap remap';\n"
            "--hold NAME[,NAME] holds target parameters at those values instead of fitting them.\n"
-           "\n"
-           "Options:\n"
+           "\n");
+    printf("Options:\n"
            "  -o, --output FILE     the CSV file (required); it must not exist unless --resume is given\n"
            "  --resume              continue FILE: its header must match this run exactly (models, values,\n"
            "                        sampling, strategy, scene), a torn last line is removed, and only the\n"
