@@ -166,7 +166,7 @@ expect "gltf metal2spec, text: the material's line names the reason" 0 \
     "converted, 512x512 textures, $flagged texels flagged \\($off off-manifold \\(spec-gloss diffuse above 1, clamped\\), 0 non-finite input, 0 clamped input, 0 method failed\\)" \
     -- "$bin" gltf metal2spec "$tmp/mr/duck.gltf" -o "$tmp/sgt/duck.gltf"
 check "... and the total line too" grep -qE \
-    "^gltf metal2spec: $flagged of 262144 texels flagged: $off off-manifold \\(spec-gloss diffuse above 1, clamped\\)" \
+    "^matremap gltf metal2spec: $flagged of 262144 texels flagged: $off off-manifold \\(spec-gloss diffuse above 1, clamped\\)" \
     "$tmp/out"
 
 finish

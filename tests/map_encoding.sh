@@ -47,7 +47,7 @@ check "... every parameter has it" bash -c \
     "[ \$(grep -o '\"channels\"' '$tmp/out' | wc -l) -eq \$(grep -o '\"map_encoding\"' '$tmp/out' | wc -l) ]"
 
 # ---- convert (--direct: one distinct value, one remap), NAME=FILE and NAME=@FILE ----
-direct=(--direct --size 32)
+direct=(--direct --size 32 --tolerance 1e-6) # maps and constants alike remapped at their exact values
 expect "convert: the constant 0.0513" 0 "^ggx " -- "$bin" convert --from ward --to ggx specular="$srgb" "${direct[@]}"
 f0_srgb=$(sed -n 's/.* f0=\([^ ]*\).*/\1/p' "$tmp/out")
 expect "convert: the constant 0.251" 0 "^ggx " -- "$bin" convert --from ward --to ggx specular="$linear" "${direct[@]}"

@@ -8,7 +8,8 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 source "$(dirname "$0")/lib/cli_harness.sh"
 
 sweep() { # SOURCE COUNT SEED FILE
-    "$bin" sweep --from "$1" alpha=0.2 --to ggx-metallic alpha=0.2 --hold alpha --random "$2" --seed "$3" --size 16 \
+    "$bin" sweep --from "$1" alpha=0.2 --to ggx-metallic alpha=0.2 --hold alpha --random "$2" --region range \
+        --seed "$3" --size 16 \
         --threads 2 -o "$tmp/$4" 2>/dev/null
 }
 sweep ggx-metallic 60 1 on.csv && sweep ggx 60 2 off.csv && sweep ggx-metallic 30 3 test.csv

@@ -315,7 +315,8 @@ int cmd_gltf(int argc, char **argv) {
             printf(" (off-manifold tolerance: half a code value of each texture, times its factor)");
         printf(" in %.2f s; wrote %s\n", seconds, o.output);
         if (converted > 0) {
-            printf("gltf %s: %zu of %zu texel%s flagged", o.direction, total.flagged, texels, texels == 1 ? "" : "s");
+            printf("matremap gltf %s: %zu of %zu texel%s flagged", o.direction, total.flagged, texels,
+                   texels == 1 ? "" : "s");
             if (total.flagged > 0) {
                 printf(": ");
                 print_reasons(&total, off_computed, off_meaning);

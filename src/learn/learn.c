@@ -204,9 +204,10 @@ static mr_status fit_parametric(const mr_sweep_table *tab, mr_learned *t, const 
         const mr_brdf_param *q = &t->target->params[t->outputs[2].param];
         double floor_value = q->min_value + 1e-9 * (q->max_value - q->min_value);
         size_t off_bound = 0;
-        for (size_t r = 0; r < m; r++)
-            off_bound += slot_value(t->target, &t->outputs[2], tab->target_values + idx[r] * (size_t)tab->target_count) >
-                         floor_value;
+        for (size_t r = 0; r < m; r++) {
+            const double *tv = tab->target_values + idx[r] * (size_t)tab->target_count;
+            off_bound += slot_value(t->target, &t->outputs[2], tv) > floor_value;
+        }
         if (off_bound < MIN_ROWS) floor_value = -INFINITY;
         size_t kept = 0;
         for (size_t r = 0; r < m; r++) {
@@ -380,7 +381,8 @@ static mr_status check(const mr_sweep_table *tab, const mr_learned *t, const siz
     double *in = malloc(m * sc * sizeof *in), *w = malloc(m * tc * sizeof *w);
     double *rel = malloc(3 * m * sizeof *rel), *d = malloc(m * sizeof *d);
     mr_status status = in && w && rel && d ? MR_OK : mr_fail(MR_ERR_NOMEM, "learn: out of memory");
-    for (size_t r = 0; status == MR_OK && r < m; r++) memcpy(in + r * sc, tab->source_values + idx[r] * sc, sc * sizeof *in);
+    for (size_t r = 0; status == MR_OK && r < m; r++)
+        memcpy(in + r * sc, tab->source_values + idx[r] * sc, sc * sizeof *in);
     if (status == MR_OK) status = mr_learned_apply_batch(t, m, in, w, NULL);
     memset(out, 0, sizeof *out);
     out->passed = 1;
