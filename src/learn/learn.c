@@ -654,8 +654,8 @@ mr_status mr_learn(const mr_sweep_table *tab, const mr_learn_options *opts, mr_l
         }
         if (status != MR_ERR_NOMEM) status = MR_OK;
     }
-    // The check, on the transform fitted without the held-out rows (the one refitted on every row below is
-    // checked by them only through this one).
+    // The check runs on the transform fitted without the held-out rows, which thus test it fairly; the one
+    // returned is refitted on every row below.
     if (status == MR_OK && !checked) status = check(tab, t, order, n_val, &t->check);
     if (o.progress) o.progress("fit", 0.5, o.progress_user);
     // The transform returned: refitted on every row (the MLP keeps its early-stopped network).
