@@ -546,14 +546,16 @@ int cmd_convert(int argc, char **argv) {
         if (progress.draw && direct) fprintf(stderr, "\r\033[K");
         if (status != MR_OK) code = cli_fail(COMMAND, status);
     }
-    size_t n = 0, counts[5] = {0}; // red, green, blue, any, failed transform
+    // extrapolated or unconverged, clamped output, clamped input, any flag, by a transform that failed its check
+    // (the flag map's red is the first or the last)
+    size_t n = 0, counts[5] = {0};
     int width = 0, height = 0;
     if (code == CLI_EXIT_OK) {
         width = out[0]->width;
         height = out[0]->height;
         n = (size_t)width * (size_t)height;
         for (size_t i = 0; i < n; i++) {
-            counts[0] += (flags[i] & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED | MR_WF_UNCHECKED)) != 0;
+            counts[0] += (flags[i] & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED)) != 0;
             counts[1] += (flags[i] & MR_WF_CLAMPED_OUTPUT) != 0;
             counts[2] += (flags[i] & (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT)) != 0;
             counts[3] += flags[i] != 0;
@@ -653,8 +655,8 @@ int cmd_convert(int argc, char **argv) {
                        counts[2]);
             else
                 printf("matremap convert: %s -> %s through %d transform%s, %dx%d = %zu texels in %.2f s (convert %.3f "
-                       "s): %zu extrapolated (outside the training domain) or by a transform that failed its check "
-                       "(%zu), %zu clamped outputs, %zu clamped inputs\n",
+                       "s): %zu extrapolated (outside the training domain), %zu by a transform that failed its check, "
+                       "%zu clamped outputs, %zu clamped inputs\n",
                        source->name, target->name, hops, hops == 1 ? "" : "s", width, height, n, seconds,
                        convert_seconds, counts[0], counts[4], counts[1], counts[2]);
             fprintf(stderr, "matremap convert: wrote");
