@@ -95,6 +95,13 @@ mr_status mr_gltf_scene_from_asset(const mr_gltf *asset, const mr_gltf_scene_opt
 /* NULL-safe. */
 void mr_gltf_scene_free(mr_gltf_scene *scene);
 
+/* The camera `matremap report` and `matremap render ASSET` place on a scene: looking at it from `direction` (need not
+ * be normalised), or, when direction is NULL, the three-quarter view onto its broadest side: along the axis of its
+ * smallest extent, raised and turned a little (0.35 on the two other axes); framed by mr_camera_frame_mesh for a
+ * width x height image (0 x 0: square). MR_ERR_INVALID_ARG for a zero direction, and as mr_camera_frame_mesh. */
+mr_status mr_gltf_scene_frame(const mr_gltf_scene *scene, const double *direction, int width, int height,
+                              mr_camera *out);
+
 #ifdef __cplusplus
 }
 #endif

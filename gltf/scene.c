@@ -350,6 +350,23 @@ mr_status mr_gltf_scene_load(const char *path, const mr_gltf_scene_options *opts
     return status;
 }
 
+mr_status mr_gltf_scene_frame(const mr_gltf_scene *scene, const double *direction, int width, int height,
+                              mr_camera *out) {
+    if (scene == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF scene frame: NULL argument");
+    const double *lo = scene->bbox_min, *hi = scene->bbox_max;
+    int thin = 0;
+    for (int c = 1; c < 3; c++)
+        if (hi[c] - lo[c] < hi[thin] - lo[thin]) thin = c;
+    mr_frame_options frame = {0};
+    frame.width = width;
+    frame.height = height;
+    for (int c = 0; c < 3; c++) frame.from[c] = direction != NULL ? direction[c] : (c == thin ? 1.0 : 0.35);
+    if (direction != NULL && frame.from[0] == 0.0 && frame.from[1] == 0.0 && frame.from[2] == 0.0)
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF scene '%s': a camera direction of (0, 0, 0) points nowhere",
+                       scene->path ? scene->path : "?");
+    return mr_camera_frame_mesh(&scene->mesh, &frame, out);
+}
+
 void mr_gltf_scene_free(mr_gltf_scene *s) {
     if (s == NULL) return;
     for (int k = 0; s->materials != NULL && k < s->material_count; k++) {

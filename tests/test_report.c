@@ -629,7 +629,36 @@ done:
     mr_gltf_scene_free(s);
 }
 
+/* The camera report and render ASSET place on a scene (mr_gltf_scene_frame): the three-quarter view along the axis of
+ * the smallest extent by default, the same as that direction given, looking at the box's centre; a zero direction
+ * refused. */
+MR_TEST(scene_frame_looks_from_the_broad_side) {
+    mr_gltf_scene *s = NULL;
+    MR_CHECK_OK(mr_gltf_scene_load(asset_path(BOTTLE), NULL, &s));
+    if (s == NULL) return;
+    int thin = 0;
+    for (int c = 1; c < 3; c++)
+        if (s->bbox_max[c] - s->bbox_min[c] < s->bbox_max[thin] - s->bbox_min[thin]) thin = c;
+    double three_quarter[3] = {0.35, 0.35, 0.35};
+    three_quarter[thin] = 1.0;
+    mr_camera by_default, given;
+    MR_CHECK_OK(mr_gltf_scene_frame(s, NULL, 320, 200, &by_default));
+    MR_CHECK_OK(mr_gltf_scene_frame(s, three_quarter, 320, 200, &given));
+    MR_CHECK(memcmp(&by_default, &given, sizeof given) == 0);
+    // Seen from the broad side: the camera is offset from the target mostly along the thin axis.
+    double offset[3];
+    for (int c = 0; c < 3; c++) offset[c] = by_default.position[c] - by_default.target[c];
+    for (int c = 0; c < 3; c++)
+        if (c != thin) MR_CHECK_NEAR(offset[c] / offset[thin], 0.35, 1e-9);
+    const double zero[3] = {0.0, 0.0, 0.0};
+    mr_camera unused;
+    MR_CHECK(mr_gltf_scene_frame(s, zero, 0, 0, &unused) == MR_ERR_INVALID_ARG &&
+             strstr(mr_last_error(), "direction") != NULL);
+    mr_gltf_scene_free(s);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(avocado_scene_has_the_assets_triangles_and_its_specgloss_material),
+             MR_TEST_ENTRY(scene_frame_looks_from_the_broad_side),
              MR_TEST_ENTRY(truck_scene_has_a_slot_per_material),
              MR_TEST_ENTRY(water_bottle_scene_is_metal_rough_with_surface_maps),
              MR_TEST_ENTRY(factors_are_folded_into_the_maps),

@@ -1,6 +1,7 @@
 /* cli.c — shared command-line plumbing (contracts in cli.h). */
 #define _XOPEN_SOURCE 700 /* realpath (X/Open): where an input lies, for folder outputs */
 #include "cli.h"
+#include "gltf/mr_gltf_scene.h"
 
 #include <errno.h>
 #include <math.h>
@@ -165,6 +166,24 @@ void cli_io_gltf(cli_io *io, const mr_gltf *asset, const char *label) {
             cli_io_input(io, file, "%s", label);
         else
             cli_io_input(io, file, "a file of %s", label);
+}
+
+int cli_gltf_scene_load(const char *command, const char *path, cli_io *io, mr_gltf_scene **out) {
+    mr_gltf *asset = NULL;
+    mr_status status = mr_gltf_load(path, &asset);
+    if (status == MR_OK) {
+        char label[4096 + 8];
+        snprintf(label, sizeof label, "asset %s", path);
+        cli_io_gltf(io, asset, label);
+        int code = cli_io_check(io);
+        if (code != CLI_EXIT_OK) {
+            mr_gltf_free(asset);
+            return code;
+        }
+        status = mr_gltf_scene_from_asset(asset, NULL, out);
+    }
+    mr_gltf_free(asset);
+    return status == MR_OK ? CLI_EXIT_OK : cli_fail(command, status);
 }
 
 /* 1 if `inner` (an existing file or folder) lies inside the existing folder `folder`, or is it: some folder on

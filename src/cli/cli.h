@@ -90,6 +90,11 @@ void cli_io_material(cli_io *io, const char *const *assignments, const char *con
 /* Register every file a glTF asset was read from (mr_gltf_source_file) as inputs: "<label>" for the asset's own file,
  * "a file of <label>" for its buffers and images. */
 void cli_io_gltf(cli_io *io, const mr_gltf *asset, const char *label);
+/* Read the glTF asset at `path`, note its files in io as inputs ("asset PATH"), check io again (an output over a
+ * buffer or an image is refused, cli_io_check) and build its scene for the renderer (mr_gltf_scene_from_asset) into
+ * *out (caller-owned). Returns a CLI exit code, after printing why when it is not CLI_EXIT_OK. */
+struct mr_gltf_scene;
+int cli_gltf_scene_load(const char *command, const char *path, cli_io *io, struct mr_gltf_scene **out);
 /* CLI_EXIT_OK (the outputs' folders made), or print why (naming both files, or the folder that cannot be made) and
  * return CLI_EXIT_BAD_INPUT (CLI_EXIT_INTERNAL when a registration ran out of memory). Checks every pair each time it
  * is called. */

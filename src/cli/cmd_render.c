@@ -163,41 +163,6 @@ static int parse_direction(const char *text, double out[3]) {
     return 1;
 }
 
-/* The camera on a glTF asset, as `matremap report` places it (src/report/make.c, frame_reference): from
- * `direction` when given, else a three-quarter view onto the asset's broadest side, along the axis of its smallest
- * extent, raised and turned a little. */
-static mr_status frame_asset(const mr_gltf_scene *asset, const double *direction, int width, int height,
-                             mr_camera *camera) {
-    const double *lo = asset->bbox_min, *hi = asset->bbox_max;
-    int thin = 0;
-    for (int c = 1; c < 3; c++)
-        if (hi[c] - lo[c] < hi[thin] - lo[thin]) thin = c;
-    mr_frame_options frame = {0};
-    frame.width = width;
-    frame.height = height;
-    for (int c = 0; c < 3; c++) frame.from[c] = direction != NULL ? direction[c] : (c == thin ? 1.0 : 0.35);
-    return mr_camera_frame_mesh(&asset->mesh, &frame, camera);
-}
-
-/* Read the asset (its files noted in io as inputs, then checked again: an output over a buffer or an image is
- * refused) and build its scene. Returns an exit code. */
-static int load_asset(const char *path, cli_io *io, mr_gltf_scene **out) {
-    mr_gltf *asset = NULL;
-    mr_status status = mr_gltf_load(path, &asset);
-    if (status == MR_OK) {
-        char label[4096 + 8];
-        snprintf(label, sizeof label, "asset %s", path);
-        cli_io_gltf(io, asset, label);
-        int code = cli_io_check(io);
-        if (code != CLI_EXIT_OK) {
-            mr_gltf_free(asset);
-            return code;
-        }
-        status = mr_gltf_scene_from_asset(asset, NULL, out);
-    }
-    mr_gltf_free(asset);
-    return status == MR_OK ? CLI_EXIT_OK : cli_fail("render", status);
-}
 
 int cmd_render(int argc, char **argv) {
     const char *model_name = NULL, *output = NULL, *env_path = NULL, *mask_path = NULL, *mesh_path = NULL;
@@ -329,7 +294,7 @@ int cmd_render(int argc, char **argv) {
     double asset_seconds = 0.0;
     if (code == CLI_EXIT_OK && gltf) {
         double t0 = cli_now();
-        code = load_asset(model_name, &io, &asset);
+        code = cli_gltf_scene_load("render", model_name, &io, &asset);
         asset_seconds = cli_now() - t0;
     } else if (code == CLI_EXIT_OK) {
         code = cli_material_load("render", model_name, assignments, assignment_count, &material);
@@ -370,7 +335,8 @@ int cmd_render(int argc, char **argv) {
     if (asset != NULL) {
         scene.shape.type = MR_SHAPE_MESH;
         scene.shape.mesh = &asset->mesh;
-        status = frame_asset(asset, has_direction ? direction : NULL, scene.width, scene.height, &scene.camera);
+        status = mr_gltf_scene_frame(asset, has_direction ? direction : NULL, scene.width, scene.height,
+                                     &scene.camera);
         if (status != MR_OK) code = cli_fail("render", status);
     }
     if (paper) scene.camera = mr_camera_paper();

@@ -344,17 +344,8 @@ int cmd_report(int argc, char **argv) {
     mr_report_input inputs[MAX_MATERIALS];
     for (int k = 0; k < count && code == CLI_EXIT_OK; k++) {
         const group *g = &groups[k];
-        if (gltf_entries > 0) { // mr_gltf_scene_load, with the asset's files noted as inputs on the way
-            mr_gltf *asset = NULL;
-            mr_status status = mr_gltf_load(g->model_name, &asset);
-            if (status == MR_OK) {
-                char label[4096 + 8];
-                snprintf(label, sizeof label, "asset %s", g->model_name);
-                cli_io_gltf(&io, asset, label);
-                status = mr_gltf_scene_from_asset(asset, NULL, &scenes[k]);
-            }
-            mr_gltf_free(asset);
-            if (status != MR_OK) code = cli_fail("report", status);
+        if (gltf_entries > 0) { // the asset's files noted as inputs on the way
+            code = cli_gltf_scene_load("report", g->model_name, &io, &scenes[k]);
         } else {
             code = cli_material_load("report", g->model_name, g->assignments, g->count, &materials[k]);
             describe(g, descriptions[k], sizeof descriptions[k]);

@@ -462,20 +462,6 @@ static int same_mesh(const mr_mesh *a, const mr_mesh *b) {
     return 1;
 }
 
-/* The camera that frames the reference scene: from camera_direction, or a three-quarter view onto its broadest
- * side, along the axis of its smallest extent, raised and turned a little (a flat asset seen edge-on shows
- * nothing of its material). */
-static mr_status frame_reference(const settings *st, const mr_gltf_scene *reference, mr_camera *camera) {
-    const double *lo = reference->bbox_min, *hi = reference->bbox_max;
-    int thin = 0;
-    for (int c = 1; c < 3; c++)
-        if (hi[c] - lo[c] < hi[thin] - lo[thin]) thin = c;
-    mr_frame_options frame = {0};
-    for (int c = 0; c < 3; c++)
-        frame.from[c] = st->has_camera_direction ? st->camera_direction[c] : (c == thin ? 1.0 : 0.35);
-    return mr_camera_frame_mesh(&reference->mesh, &frame, camera);
-}
-
 /* Compare candidate e's render `image` of view v with the reference's (whole frame, and over `mask`) on the
  * report's threads; write its SSIM map picture. */
 static mr_status compare(const char *dir, int v, int k, const mr_image *reference, const mr_image *image,
@@ -517,7 +503,10 @@ static mr_status render_view(const settings *st, const char *dir, const mr_repor
     if (scenes) { // every scene's mesh seen by the camera that frames the reference's
         scene.shape.type = MR_SHAPE_MESH;
         scene.shape.mesh = &inputs[0].scene->mesh;
-        status = frame_reference(st, inputs[0].scene, &scene.camera);
+        // From camera_direction, or a three-quarter view onto its broadest side (a flat asset seen edge-on shows
+        // nothing of its material).
+        status = mr_gltf_scene_frame(inputs[0].scene, st->has_camera_direction ? st->camera_direction : NULL, 0, 0,
+                                     &scene.camera);
     } else if (st->mesh != NULL) { // every material on the one mesh, one plan for all
         scene.shape.type = MR_SHAPE_MESH;
         scene.shape.mesh = st->mesh;
