@@ -9,7 +9,6 @@
 
 #include <stdio.h>
 
-#include "io/io_internal.h"
 #include "matremap.h"
 
 enum {

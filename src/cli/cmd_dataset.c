@@ -17,7 +17,6 @@
 
 #include "cli.h"
 #include "gltf/mr_gltf.h"
-#include "io/io_internal.h"
 #include "workflow/labels.h"
 
 #define MAX_ASSETS 16

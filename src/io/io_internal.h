@@ -12,7 +12,8 @@
  *                       first use and forwards these calls to (OpenImageIO's dependencies cost ~0.4 s of
  *                       start-up, see oiio_module.c);
  *   exr_write.c         EXR encoding through the OpenEXR Core C API (mr_io_exr_write);
- *   atomic_file.c       the temp-file + rename protocol that every write goes through;
+ *   atomic_file.c       the temp-file + rename protocol that every write goes through (mr_core.h);
+ *   input_file.c        opening a file a user names as an input (mr_core.h);
  *   srgb.c              the IEC 61966-2-1 transfer functions.
  * C and C++ both include this header, so it uses no C-only syntax.
  */
@@ -23,52 +24,14 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "../mr_core.h"
 #include "../mr_status.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* ---- atomic output files (atomic_file.c) -------------------------------------------------------------
- * Protocol (after redis' rdbSave): mr_atomic_begin() creates an empty, exclusive temporary file beside the
- * target, named "<target>.tmp.<pid>.<n>" (same directory, so rename(2) cannot cross file systems); the writer
- * fills tmp_path; mr_atomic_commit() fsyncs it and renames it over the target; on any failure the caller
- * calls mr_atomic_abort(), which unlinks the temporary file. A target that existed before is never opened
- * for writing, so a failed write leaves it untouched. */
-typedef struct mr_atomic_file {
-    char tmp_path[4096]; /* the temporary file to write */
-    const char *target;  /* borrowed: the final path */
-    int active;          /* 1 between a successful begin and commit/abort */
-} mr_atomic_file;
-
-/* Create the temporary file for `target`. MR_ERR_IO (naming the target and the reason, e.g. a missing or
- * unwritable directory) or MR_ERR_INVALID_ARG (path too long). On failure nothing is left on disk. */
-mr_status mr_atomic_begin(const char *target, mr_atomic_file *file);
-
-/* fsync the finished temporary file and rename it to the target. On failure the temporary file is removed
- * (the caller need not call mr_atomic_abort, though doing so is harmless). */
-mr_status mr_atomic_commit(mr_atomic_file *file);
-
-/* The whole protocol for a file already encoded in memory: begin, fwrite + fflush + fclose (every result
- * checked), commit; abort on any failure. Errors (MR_ERR_IO) name the target and the system's reason. */
-mr_status mr_atomic_write_bytes(const char *target, const void *bytes, size_t size);
-
-/* Remove the temporary file (if still there). Safe to call twice, and after a successful commit (no-op).
- * Preserves errno and the recorded last-error message. */
-void mr_atomic_abort(mr_atomic_file *file);
-
-/* ---- input files (input_file.c) ---------------------------------------------------------------------------
- * Every file a reader of src/io or gltf/ opens because a user (or a file the user gave) named it goes through
- * mr_io_open_input: only a regular file is read. A folder, a FIFO, a device (/dev/zero) or a socket is refused
- * by name before a byte is read, where fopen would open a folder (whose size, asked by seeking, is 2^63 - 1),
- * block on a FIFO or read a device without end. */
-
-/* Open `path` for reading as a stdio stream (*out; the caller fcloses it) if it is a regular file of at most
- * max_bytes bytes (0: any size); *size (may be NULL) receives its size. Failures, with messages "<label>: <why>"
- * (just "<why>" when label is NULL): MR_ERR_IO "cannot open: <system reason>", "is a directory", "is not a
- * regular file (a FIFO)" (or a character device, a block device, a socket); MR_ERR_FORMAT "<n> bytes, more than
- * the limit of <max_bytes>". Never blocks: the file is opened with O_NONBLOCK and checked on its descriptor. */
-mr_status mr_io_open_input(const char *path, const char *label, uint64_t max_bytes, FILE **out, uint64_t *size);
+/* Atomic output files (atomic_file.c) and input files (input_file.c) are core: mr_core.h declares them. */
 
 /* The largest width or height an image read accepts unless told otherwise (mr_img_read_options.max_dimension 0;
  * the PNG readers of glTF conversions): 16384, a 4 GiB RGBA float image. */
@@ -77,10 +40,8 @@ mr_status mr_io_open_input(const char *path, const char *label, uint64_t max_byt
 /* ---- what messages call an image ---------------------------------------------------------------------- */
 
 /* A read's messages name what it reads: "image '<path>'" for a file, the caller's name for bytes in memory
- * (mr_img_read_memory). Longer labels are cut to the size of mr_last_error's buffer, which would cut them anyway. */
-#define MR_IO_LABEL_SIZE 1024
-
-/* "image '<path>'" into label[MR_IO_LABEL_SIZE]; returns label. Inline: the OpenImageIO module needs it too. */
+ * (mr_img_read_memory). mr_io_file_label: "image '<path>'" into label[MR_IO_LABEL_SIZE] (mr_core.h); returns
+ * label. Inline: the OpenImageIO module needs it too. */
 static inline const char *mr_io_file_label(char *label, const char *path) {
     snprintf(label, MR_IO_LABEL_SIZE, "image '%s'", path);
     return label;
@@ -88,10 +49,7 @@ static inline const char *mr_io_file_label(char *label, const char *path) {
 
 /* ---- sRGB (srgb.c) ------------------------------------------------------------------------------------ */
 
-/* mr_srgb_to_linear in double, not rounded to float (mr_img_half_step's differences of decodes need it). */
-double mr_srgb_decode_double(double encoded);
-/* mr_linear_to_srgb in double (the direct remap quantises colours in sRGB-encoded units, src/remap/direct.h). */
-double mr_srgb_encode_double(double linear);
+/* mr_srgb_decode_double and mr_srgb_encode_double are public (image_io.h). */
 
 /* The 8-bit sRGB code the image writer stores for a linear value (clamped to [0, 1], NaN -> 0): exactly
  * floor(clamp(mr_linear_to_srgb(v)) * 255 + 0.5), by table (srgb.c). Call mr_srgb8_init() once before (thread-safe,

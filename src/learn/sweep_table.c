@@ -11,7 +11,6 @@
 
 #include "c_locale.h"
 #include "mr_internal.h"
-#include "io/io_internal.h"
 #include "remap/remap_file.h"
 
 #define MAX_COLUMNS 128

@@ -10,7 +10,6 @@
 #include <string.h>
 
 #include "../c_locale.h"
-#include "../io/io_internal.h"
 #include "../mr_internal.h"
 #include "../remap/remap_file.h"
 #include "workflow.h"
