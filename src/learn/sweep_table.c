@@ -209,7 +209,7 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
         }
         rows++;
         mr_fit_outcome outcome;
-        if (!mr_fit_outcome_from_name(fields[cols.outcome], &outcome)) {
+        if (mr_fit_outcome_from_name(fields[cols.outcome], &outcome) != MR_OK) {
             status = mr_fail(MR_ERR_FORMAT, "%s:%ld: unknown outcome '%s'", path, line_number, fields[cols.outcome]);
             break;
         }

@@ -21,7 +21,7 @@
 
 #include "../metrics/metrics.h"
 #include "../mr_internal.h"
-#include "../render/render_internal.h"
+#include "../render/render.h"
 
 #define MAX_SLOTS MR_BRDF_MAX_VALUES
 #define DEFAULT_MAX_EVALUATIONS 400
@@ -90,13 +90,15 @@ const char *mr_fit_outcome_name(mr_fit_outcome outcome) {
     return (unsigned)outcome < MR_FIT_OUTCOME_COUNT ? outcome_names[outcome] : NULL;
 }
 
-int mr_fit_outcome_from_name(const char *name, mr_fit_outcome *out) {
+mr_status mr_fit_outcome_from_name(const char *name, mr_fit_outcome *out) {
     for (int o = 0; name != NULL && o < MR_FIT_OUTCOME_COUNT; o++)
         if (strcmp(name, outcome_names[o]) == 0) {
             *out = (mr_fit_outcome)o;
-            return 1;
+            return MR_OK;
         }
-    return 0;
+    return mr_fail(MR_ERR_INVALID_ARG,
+                   "unknown fit outcome '%s' (valid: converged, at-bound, unreachable, local-minimum, under-resolved)",
+                   name ? name : "(null)");
 }
 
 mr_remap_options mr_remap_options_default(void) {
