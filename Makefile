@@ -116,7 +116,7 @@ FUZZ_OBJ    := $(patsubst %,$(BUILD)/obj/tests/fuzz/fuzz_%.o,$(FUZZ_NAMES) suppo
 CLI_LIB_OBJ := $(filter-out $(BUILD)/obj/src/cli/main.o,$(CLI_OBJ))
 BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
 
-PUBLIC_HEADERS := src/matremap.h src/mr_status.h src/mr_image.h src/brdf/brdf.h src/render/render.h \
+PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h src/brdf/brdf.h src/render/render.h \
                   src/io/image_io.h src/io/obj_load.h src/metrics/metrics.h src/remap/remap.h src/remap/direct.h \
                   src/remap/sweep.h src/workflow/workflow.h src/workflow/dataset.h src/workflow/labels.h \
                   src/transform/transform.h src/report/report.h nn/mlp.h \
@@ -320,7 +320,7 @@ install: all
 	install -m 755 $(MODULE) $(MPI_MODULE) $(DESTDIR)$(MODULE_DIR)/
 	for h in $(PUBLIC_HEADERS); do \
 	    d=$(DESTDIR)$(PREFIX)/include/matremap/$$(dirname $${h#src/}); install -d $$d; install -m 644 $$h $$d/; done
-	sed -e 's|@PREFIX@|$(PREFIX)|' -e "s|@VERSION@|$$(sed -n 's/^#define MR_VERSION_STRING \"\(.*\)\"/\1/p' src/matremap.h)|" \
+	sed -e 's|@PREFIX@|$(PREFIX)|' -e "s|@VERSION@|$$(sed -n 's/^#define MR_VERSION_STRING \"\(.*\)\"/\1/p' src/mr_core.h)|" \
 	    scripts/matremap.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/matremap.pc
 
 clean:

@@ -14,7 +14,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "io/io_internal.h"
+#include "io/png_texture.h"
 #include "mr_internal.h"
 
 /* Texels per band: the band's planes (about 20 floats a texel) stay within a few MB. */
@@ -576,7 +576,7 @@ static mr_status convert_texels(const conversion *cv, const sources *src, mr_ima
     return status;
 }
 
-/* A paletted PNG source converts by converting its palette (io_internal.h, "Paletted PNG"): when it is the material's
+/* A paletted PNG source converts by converting its palette (png_texture.h, "Paletted PNG"): when it is the material's
  * only texture (the other inputs factors), every texel of one index gets one answer, so each target texture is the
  * same index stream under a converted palette; no texel is decoded, filtered or deflated, and the answers are those
  * of the texel-by-texel path (the same decoded values through the same transform, the same 8-bit codes). Returns

@@ -17,7 +17,6 @@
 #include <set>
 #include <sstream>
 
-#include "io/io_internal.h"
 
 using namespace mr_gltf_internal;
 

@@ -10,7 +10,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "io/io_internal.h"
 
 using namespace mr_gltf_internal;
 

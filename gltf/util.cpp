@@ -1,7 +1,6 @@
 // util.cpp — helpers more than one file of the glTF shim uses (declared in gltf_internal.hpp).
 #include "gltf/gltf_internal.hpp"
 
-#include "io/io_internal.h"
 
 #include <errno.h>
 #include <limits.h>

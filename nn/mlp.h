@@ -61,11 +61,12 @@
  *     loss is the mean of the minibatch losses of that epoch weighted by their rows, measured before each
  *     step (as Keras reports it); epoch 0's is a full pass over the training split.
  *
- * Determinism. Everything random comes from splitmix64 streams derived from opts->seed (split, initial
- * weights, epoch shuffles). A minibatch's gradient is summed over fixed chunks of rows (the chunking depends
- * only on batch_size) and the chunk sums are added in chunk order, so training gives bit-identical weights
- * for a seed whatever the thread count and whichever of the per-CPU variants of the gradient pass runs (they
- * differ only in vector width); across machines only libm can differ (the initialisation uses log and cos).
+ * Determinism. Everything random comes from splitmix64 streams derived from opts->seed (mr_rng_stream of
+ * mr_core.h: split, initial weights, epoch shuffles). A minibatch's gradient is summed over fixed chunks of rows
+ * (the chunking depends only on batch_size) and the chunk sums are added in chunk order, so training gives
+ * bit-identical weights for a seed whatever the thread count and whichever of the per-CPU variants of the gradient
+ * pass runs (they differ only in vector width); across machines only libm can differ (the initialisation uses log
+ * and cos).
  *
  * Threads. mr_mlp_train runs the chunks of a minibatch and of the loss passes on opts->threads OpenMP
  * threads; mr_mlp_predict splits rows in blocks over omp_get_max_threads() threads, one per 256 rows at most (a

@@ -49,27 +49,6 @@ static inline size_t mr_mlp_work_doubles(const mr_mlp_dims *d) { return 3 * (siz
 double mr_mlp_sse_grad(const mr_mlp_dims *d, const double *params, const double *x, const double *t, size_t n,
                        double *grad, double *work);
 
-/* ---- splitmix64 (Steele, Lea, Flood, "Fast splittable pseudorandom number generators", OOPSLA 2014) ----- */
-
-static inline uint64_t mr_mlp_mix64(uint64_t z) {
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-}
-
-/* The start state of stream `stream` of `seed` (streams of one seed do not overlap in practice). */
-static inline uint64_t mr_mlp_rng_stream(uint64_t seed, uint64_t stream) {
-    return mr_mlp_mix64(seed ^ mr_mlp_mix64(stream + 0x6a09e667f3bcc909ULL));
-}
-
-static inline uint64_t mr_mlp_rng_next(uint64_t *state) {
-    *state += 0x9e3779b97f4a7c15ULL;
-    return mr_mlp_mix64(*state);
-}
-
-/* Uniform in [0, 1): the top 53 bits. */
-static inline double mr_mlp_rng_unit(uint64_t *state) { return (double)(mr_mlp_rng_next(state) >> 11) * 0x1p-53; }
-
 #ifdef __cplusplus
 }
 #endif

@@ -195,7 +195,7 @@ static double adam_step(trainer *t, const size_t *order, size_t count, double be
 /* Fisher-Yates shuffle of a[0 .. n-1] (the modulo's bias, below n / 2^64, is immaterial). */
 static void shuffle(size_t *a, size_t n, uint64_t *rng) {
     for (size_t i = n; i > 1; i--) {
-        size_t j = (size_t)(mr_mlp_rng_next(rng) % (uint64_t)i);
+        size_t j = (size_t)(mr_rng_next(rng) % (uint64_t)i);
         size_t tmp = a[i - 1];
         a[i - 1] = a[j];
         a[j] = tmp;
@@ -204,8 +204,8 @@ static void shuffle(size_t *a, size_t n, uint64_t *rng) {
 
 /* Standard normal by Box-Muller (one of the pair). */
 static double normal(uint64_t *rng) {
-    double u1 = 1.0 - mr_mlp_rng_unit(rng); // (0, 1]
-    double u2 = mr_mlp_rng_unit(rng);
+    double u1 = 1.0 - mr_rng_unit(rng); // (0, 1]
+    double u2 = mr_rng_unit(rng);
     return sqrt(-2.0 * log(u1)) * cos(2.0 * MR_PI * u2);
 }
 
@@ -263,7 +263,7 @@ static mr_status setup(trainer *t, size_t n) {
 
     // Split.
     for (size_t r = 0; r < n; r++) t->order[r] = r;
-    uint64_t rng = mr_mlp_rng_stream(t->opt.seed, 1);
+    uint64_t rng = mr_rng_stream(t->opt.seed, 1);
     shuffle(t->order, n, &rng);
     double wanted = floor(t->opt.val_fraction * (double)n + 0.5);
     t->n_val = wanted < 1.0 ? 1 : wanted > (double)(n - 1) ? n - 1 : (size_t)wanted;
@@ -275,7 +275,7 @@ static mr_status setup(trainer *t, size_t n) {
     for (size_t k = 0; k < O; k++) column_stats(t->y, O, k, train, t->n_train, &t->out_mean[k], &t->out_std[k]);
 
     // Initialisation: He for the ReLU layer, LeCun for the linear one, zero biases.
-    rng = mr_mlp_rng_stream(t->opt.seed, 2);
+    rng = mr_rng_stream(t->opt.seed, 2);
     memset(t->params, 0, P * sizeof(double));
     const double s1 = sqrt(2.0 / (double)I), s2 = sqrt(1.0 / (double)t->d.n_hidden);
     for (size_t q = 0; q < mr_mlp_off_b1(&t->d); q++) t->params[q] = s1 * normal(&rng);
@@ -357,7 +357,7 @@ mr_status mr_mlp_train(const float *x, const float *y, size_t n, int n_in, int n
     }
 
     size_t *train_order = t.order + t.n_val; // reshuffled in place every epoch
-    uint64_t rng = mr_mlp_rng_stream(t.opt.seed, 3);
+    uint64_t rng = mr_rng_stream(t.opt.seed, 3);
     double beta1_t = 1.0, beta2_t = 1.0;
     for (int epoch = 1; !stop && epoch <= t.opt.max_epochs; epoch++) {
         shuffle(train_order, t.n_train, &rng);

@@ -20,7 +20,6 @@
 #include <string.h>
 
 #include "../src/c_locale.h"
-#include "../src/io/io_internal.h"
 #include "../src/mr_internal.h"
 
 /* Hidden and output activations: the only pair version 1 knows. */

@@ -1,11 +1,10 @@
-/* data_dir.c — where the library finds its installed data files (matremap.h, mr_data_path) and its modules
+/* data_dir.c — where the library finds its installed data files (mr_core.h, mr_data_path) and its modules
  * (mr_internal.h, mr_module_beside_executable). */
 #include <limits.h>
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
 
-#include "matremap.h"
 #include "mr_internal.h"
 
 #ifndef MR_DATA_DIR

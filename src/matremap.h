@@ -34,13 +34,7 @@
 #ifndef MATREMAP_H
 #define MATREMAP_H
 
-#define MR_VERSION_MAJOR 0
-#define MR_VERSION_MINOR 1
-#define MR_VERSION_PATCH 0
-#define MR_VERSION_STRING "0.1.0"
-
-#include <stddef.h>
-
+#include "mr_core.h" /* the version (MR_VERSION_*, mr_version), mr_data_path, the RNG, atomic files, threads */
 #include "mr_status.h"
 #include "mr_image.h"
 #include "brdf/brdf.h"
@@ -64,21 +58,5 @@
 #include "gltf/mr_gltf.h"
 #include "gltf/mr_gltf_convert.h"
 #include "gltf/mr_gltf_scene.h"
-
-#ifdef __cplusplus
-extern "C" {
-#endif
-
-/* The library's version string, MR_VERSION_STRING of the build it was compiled from. */
-const char *mr_version(void);
-
-/* The path of the installed data file `file` (e.g. "spec2metal.mlp") in out[size]: beside the running executable
- * (PREFIX/bin -> PREFIX/share/matremap/, or a build tree's build/bin -> data/), else the install directory fixed at
- * build time (MR_DATA_DIR). MR_ERR_IO listing the places tried when none has it. */
-mr_status mr_data_path(const char *file, char *out, size_t size);
-
-#ifdef __cplusplus
-}
-#endif
 
 #endif /* MATREMAP_H */

@@ -1,6 +1,9 @@
 /*
  * mr_internal.h — helpers shared by the library's translation units; not installed, not public.
  *
+ * Every library file includes this header (and never the umbrella matremap.h): it brings the core every layer
+ * needs, mr_core.h (the version, the data path, the one RNG, atomic output files, input files, the automatic
+ * thread rule), and adds what only the library's own code uses (mr_fail, the clamps, the hash).
  * C and C++ (the image-I/O and glTF shims) both include it, so it uses no C-only syntax.
  */
 #ifndef MR_INTERNAL_H
@@ -8,6 +11,7 @@
 
 #include <stdint.h>
 
+#include "mr_core.h"
 #include "mr_image.h"
 #include "mr_status.h"
 
@@ -46,12 +50,6 @@ mr_status mr_image_check_values(const mr_image *image, const char *label, int al
 #else
 #define MR_ALWAYS_INLINE inline
 #endif
-
-/* OpenMP threads for a piece of work: `requested` when it is > 0 (an option the caller set), else the automatic
- * rule: a team of omp_get_max_threads() when `work` reaches `threshold` (work too small to gain from a second
- * thread stays on one: copies run side by side), 1 otherwise. The thresholds are the callers' (render.h,
- * workflow.h, metrics.c). */
-int mr_auto_threads(int requested, long work, long threshold);
 
 /* A module `file` (libmatremap-oiio.so, libmatremap-mpi.so) beside the running executable, in
  * <its directory>/../lib/matremap/ (the build tree's build/bin -> build/lib/matremap, an install's PREFIX/bin ->

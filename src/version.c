@@ -1,4 +1,4 @@
 /* version.c — mr_version(). */
-#include "matremap.h"
+#include "mr_core.h"
 
 const char *mr_version(void) { return MR_VERSION_STRING; }

@@ -1,6 +1,7 @@
 // Every public header must compile as C++ too (the glTF and image-I/O shims include them); see also
 // tests/test_headers.c. Built by `make check`; a compile error is the failure.
 #include "matremap.h"
+#include "mr_core.h"
 #include "mr_image.h"
 #include "mr_status.h"
 #include "brdf/brdf.h"

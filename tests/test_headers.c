@@ -1,7 +1,8 @@
 /*
  * test_headers.c — the public headers are self-contained in C (each included first in its own unit would be
  * stricter; here every header is included alone before matremap.h pulls the rest), the version macros agree
- * with mr_version(), and status names round-trip. tests/headers_cpp.cpp compiles them as C++.
+ * with mr_version(), status names round-trip, and the core RNG gives splitmix64's stream. tests/headers_cpp.cpp
+ * compiles them as C++.
  */
 #include "brdf/brdf.h"
 #include "io/image_io.h"
@@ -16,6 +17,7 @@
 #include "nn/mlp.h"
 #include "gltf/mr_gltf.h"
 #include "gltf/mr_gltf_scene.h"
+#include "mr_core.h"
 #include "matremap.h"
 
 #include <omp.h>
@@ -59,5 +61,20 @@ MR_TEST(last_error_is_per_thread_and_clearable) {
     MR_CHECK(mr_last_error()[0] == '\0');
 }
 
+/* The core RNG's stream is part of the outputs' contract (a sweep's samples, a dataset's texels, a network's and an
+ * SVR's split follow from their seed): its first values for seed 1, as splitmix64's reference gives them, so a
+ * change of the stream fails here before it changes a file. */
+MR_TEST(rng_stream_is_splitmix64) {
+    uint64_t state = 1;
+    MR_CHECK(mr_rng_next(&state) == 0x910a2dec89025cc1ULL);
+    MR_CHECK(mr_rng_next(&state) == 0xbeeb8da1658eec67ULL);
+    MR_CHECK(mr_rng_next(&state) == 0xf893a2eefb32555eULL);
+    state = 1;
+    MR_CHECK(mr_rng_unit(&state) == 5103132997656651.0 * 0x1p-53); // the top 53 bits of the first value
+    MR_CHECK(mr_rng_unit(&state) == 6717404888216029.0 * 0x1p-53);
+    MR_CHECK(mr_rng_mix(1) == 0x5692161d100b05e5ULL);
+    MR_CHECK(mr_rng_stream(1, 1) == 0xc8a9e97d2c18711aULL);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(version_string_matches_macros), MR_TEST_ENTRY(status_names_are_complete),
-             MR_TEST_ENTRY(last_error_is_per_thread_and_clearable))
+             MR_TEST_ENTRY(last_error_is_per_thread_and_clearable), MR_TEST_ENTRY(rng_stream_is_splitmix64))

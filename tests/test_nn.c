@@ -17,18 +17,19 @@
 #include <unistd.h>
 
 #include "../nn/mlp_internal.h"
+#include "mr_core.h" /* mr_rng_*: the seeded inputs */
 #include "harness.h"
 
 /* ---- helpers ---------------------------------------------------------------------------------------------- */
 
-static double uniform(uint64_t *rng, double lo, double hi) { return lo + (hi - lo) * mr_mlp_rng_unit(rng); }
+static double uniform(uint64_t *rng, double lo, double hi) { return lo + (hi - lo) * mr_rng_unit(rng); }
 
 /* A network with random weights and normalisation (the values need not make sense, only be varied). */
 static mr_mlp *random_net(int n_in, int n_hidden, int n_out, uint64_t seed) {
     mr_mlp *net = NULL;
     MR_CHECK_OK(mr_mlp_create(n_in, n_hidden, n_out, &net));
     if (net == NULL) return NULL;
-    uint64_t rng = mr_mlp_rng_stream(seed, 99);
+    uint64_t rng = mr_rng_stream(seed, 99);
     size_t params = mr_mlp_param_count(net);
     for (size_t q = 0; q < params; q++) net->data[q] = (float)uniform(&rng, -1.0, 1.0);
     for (int i = 0; i < n_in; i++) {
@@ -44,7 +45,7 @@ static mr_mlp *random_net(int n_in, int n_hidden, int n_out, uint64_t seed) {
 
 static float *random_rows(size_t n, int cols, uint64_t seed) {
     float *a = malloc(n * (size_t)cols * sizeof(float));
-    uint64_t rng = mr_mlp_rng_stream(seed, 7);
+    uint64_t rng = mr_rng_stream(seed, 7);
     for (size_t q = 0; q < n * (size_t)cols; q++) a[q] = (float)uniform(&rng, 0.0, 1.0);
     return a;
 }
@@ -106,7 +107,7 @@ MR_TEST(gradient_matches_central_differences) {
     const size_t P = mr_mlp_dims_params(&d);
     double params[64], grad[64], x[N * 3], t[N * 2], work[32];
     MR_CHECK(P == 32 && mr_mlp_work_doubles(&d) <= 32);
-    uint64_t rng = mr_mlp_rng_stream(5, 0);
+    uint64_t rng = mr_rng_stream(5, 0);
     for (size_t q = 0; q < P; q++) params[q] = uniform(&rng, -1.0, 1.0);
     for (int q = 0; q < N * 3; q++) x[q] = uniform(&rng, -1.5, 1.5);
     for (int q = 0; q < N * 2; q++) t[q] = uniform(&rng, -1.0, 1.0);

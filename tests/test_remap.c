@@ -152,6 +152,16 @@ MR_TEST(names_round_trip) {
         MR_CHECK(strcmp(mr_fit_outcome_name((mr_fit_outcome)i), outcomes[i]) == 0);
     MR_CHECK(mr_fit_outcome_name(MR_FIT_OUTCOME_COUNT) == NULL);
     MR_CHECK(mr_fit_outcome_name((mr_fit_outcome)-1) == NULL);
+    for (int i = 0; i < MR_FIT_OUTCOME_COUNT; i++) {
+        mr_fit_outcome parsed = MR_FIT_OUTCOME_COUNT;
+        MR_CHECK_OK(mr_fit_outcome_from_name(outcomes[i], &parsed));
+        MR_CHECK(parsed == (mr_fit_outcome)i);
+    }
+    mr_fit_outcome kept = MR_FIT_AT_BOUND;
+    MR_CHECK(mr_fit_outcome_from_name("Converged", &kept) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "converged, at-bound, unreachable, local-minimum, under-resolved") != NULL);
+    MR_CHECK(kept == MR_FIT_AT_BOUND);
+    MR_CHECK(mr_fit_outcome_from_name(NULL, &kept) == MR_ERR_INVALID_ARG);
 }
 
 MR_TEST(default_options_are_the_documented_ones) {

@@ -1425,8 +1425,8 @@ MR_TEST(narrow_highlights_keep_their_energy) {
     mr_render_plan_free(centres);
 }
 
-/* The closer look of remaps (render_internal.h): one plan, built by whichever thread asks first, the same for
- * every later caller, with the zoomed camera, and freed with its plan (ASan's leak check in make asan). */
+/* The closer look of remaps (render.h, mr_render_plan_zoomed): one plan, built by whichever thread asks first, the
+ * same for every later caller, with the zoomed camera, and freed with its plan (ASan's leak check in make asan). */
 MR_TEST(closer_look_plan_is_built_once_and_shared) {
     mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){64, MR_FIT_LIGHT_45, 0});
     mr_render_plan *plan = NULL;

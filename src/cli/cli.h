@@ -9,7 +9,6 @@
 
 #include <stdio.h>
 
-#include "io/io_internal.h"
 #include "matremap.h"
 
 enum {
@@ -136,7 +135,7 @@ void cli_json_string(FILE *out, const char *s);
 double cli_now(void);
 
 /* ---- text files the commands write themselves (cli_output.c) --------------------------------------------------
- * The library's atomic-file protocol (io/io_internal.h) with stdio: write into a temporary file beside the target,
+ * The library's atomic-file protocol (mr_core.h) with stdio: write into a temporary file beside the target,
  * rename it into place only when every write succeeded. A command writing several files prepares them all before
  * committing any, so a failure while writing leaves none of them. Each function prints its error as one line
  * "matremap CMD: error: ..." naming the file and the system's reason. */

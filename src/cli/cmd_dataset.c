@@ -17,7 +17,6 @@
 
 #include "cli.h"
 #include "gltf/mr_gltf.h"
-#include "io/io_internal.h"
 #include "workflow/labels.h"
 
 #define MAX_ASSETS 16
@@ -76,20 +75,12 @@ static void print_help(void) {
 
 /* ---- drawing texels ------------------------------------------------------------------------------------------ */
 
-static uint64_t mix64(uint64_t z) {
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-}
-
+/* A stream of the core RNG (mr_core.h: splitmix64). */
 typedef struct rng {
     uint64_t state;
 } rng;
 
-static double uniform(rng *r) {
-    r->state += 0x9e3779b97f4a7c15ULL;
-    return (double)(mix64(r->state) >> 11) * 0x1.0p-53;
-}
+static double uniform(rng *r) { return mr_rng_unit(&r->state); }
 
 static int code_between(rng *r, int lo, int hi) {
     int v = lo + (int)(uniform(r) * (hi - lo + 1));
@@ -142,7 +133,7 @@ typedef struct texel_pool {
 
 /* Sample i: its category by a fixed mixture (asset texels 30 % when there are any), then its values. */
 static category draw_texel(uint64_t seed, size_t i, const texel_pool *pool, mr_wf_spec *t) {
-    rng r = {mix64(seed * 0x9e3779b97f4a7c15ULL + 0x632be59bd9b4e019ULL) ^ mix64((uint64_t)i + 1)};
+    rng r = {mr_rng_mix(seed * 0x9e3779b97f4a7c15ULL + 0x632be59bd9b4e019ULL) ^ mr_rng_mix((uint64_t)i + 1)};
     double u = uniform(&r);
     category cat;
     if (pool->count > 0 && u < 0.3)
@@ -257,7 +248,7 @@ static int add_asset_texels(const char *path, uint64_t seed, texel_pool *pool, c
     }
     pool->texels = grown;
     int code = CLI_EXIT_OK;
-    rng r = {mix64(seed ^ 0xa5a5a5a5ULL) ^ mix64((uint64_t)pool->assets + 77)};
+    rng r = {mr_rng_mix(seed ^ 0xa5a5a5a5ULL) ^ mr_rng_mix((uint64_t)pool->assets + 77)};
     for (int k = 0; code == CLI_EXIT_OK && k < counts.materials; k++) {
         mr_gltf_material m;
         if (mr_gltf_get_material(asset, k, &m) != MR_OK || !m.has_spec_gloss) continue;

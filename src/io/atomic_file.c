@@ -1,5 +1,5 @@
 /*
- * atomic_file.c — write-to-temporary-then-rename for every output file (protocol in io_internal.h).
+ * atomic_file.c — write-to-temporary-then-rename for every output file (protocol in mr_core.h).
  *
  * After redis' rdbSave(): the data goes to a temporary file in the target's directory; only when every write,
  * flush and close has succeeded is it fsync'ed and rename(2)d over the target, which POSIX makes atomic, so

@@ -159,6 +159,10 @@ mr_status mr_img_read_param_map(const char *path, const mr_brdf_param *param, mr
  * are mirrored through 0 (odd extension, no clamping); NaN stays NaN. */
 float mr_srgb_to_linear(float encoded);
 float mr_linear_to_srgb(float linear);
+/* The same in double, not rounded to float: mr_img_half_step's differences of decodes, and the direct remap, which
+ * quantises colours in sRGB-encoded units (remap/direct.h), need it. */
+double mr_srgb_decode_double(double encoded);
+double mr_srgb_encode_double(double linear);
 
 #ifdef __cplusplus
 }

@@ -1,5 +1,5 @@
 /*
- * input_file.c — opening a file the user names as an input (io_internal.h, "Input files").
+ * input_file.c — opening a file the user names as an input (mr_core.h, "input files").
  *
  * Why not fopen: a path from the command line or from inside a downloaded file (a glTF URI) may name a folder, a
  * FIFO, a terminal or a device such as /dev/zero. fopen opens a folder happily (and a reader that asks its size by

@@ -12,7 +12,8 @@
  *                       first use and forwards these calls to (OpenImageIO's dependencies cost ~0.4 s of
  *                       start-up, see oiio_module.c);
  *   exr_write.c         EXR encoding through the OpenEXR Core C API (mr_io_exr_write);
- *   atomic_file.c       the temp-file + rename protocol that every write goes through;
+ *   atomic_file.c       the temp-file + rename protocol that every write goes through (mr_core.h);
+ *   input_file.c        opening a file a user names as an input (mr_core.h);
  *   srgb.c              the IEC 61966-2-1 transfer functions.
  * C and C++ both include this header, so it uses no C-only syntax.
  */
@@ -23,64 +24,21 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "../mr_core.h"
 #include "../mr_status.h"
+#include "png_texture.h" /* the part of src/io that gltf/convert.c uses */
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* ---- atomic output files (atomic_file.c) -------------------------------------------------------------
- * Protocol (after redis' rdbSave): mr_atomic_begin() creates an empty, exclusive temporary file beside the
- * target, named "<target>.tmp.<pid>.<n>" (same directory, so rename(2) cannot cross file systems); the writer
- * fills tmp_path; mr_atomic_commit() fsyncs it and renames it over the target; on any failure the caller
- * calls mr_atomic_abort(), which unlinks the temporary file. A target that existed before is never opened
- * for writing, so a failed write leaves it untouched. */
-typedef struct mr_atomic_file {
-    char tmp_path[4096]; /* the temporary file to write */
-    const char *target;  /* borrowed: the final path */
-    int active;          /* 1 between a successful begin and commit/abort */
-} mr_atomic_file;
-
-/* Create the temporary file for `target`. MR_ERR_IO (naming the target and the reason, e.g. a missing or
- * unwritable directory) or MR_ERR_INVALID_ARG (path too long). On failure nothing is left on disk. */
-mr_status mr_atomic_begin(const char *target, mr_atomic_file *file);
-
-/* fsync the finished temporary file and rename it to the target. On failure the temporary file is removed
- * (the caller need not call mr_atomic_abort, though doing so is harmless). */
-mr_status mr_atomic_commit(mr_atomic_file *file);
-
-/* The whole protocol for a file already encoded in memory: begin, fwrite + fflush + fclose (every result
- * checked), commit; abort on any failure. Errors (MR_ERR_IO) name the target and the system's reason. */
-mr_status mr_atomic_write_bytes(const char *target, const void *bytes, size_t size);
-
-/* Remove the temporary file (if still there). Safe to call twice, and after a successful commit (no-op).
- * Preserves errno and the recorded last-error message. */
-void mr_atomic_abort(mr_atomic_file *file);
-
-/* ---- input files (input_file.c) ---------------------------------------------------------------------------
- * Every file a reader of src/io or gltf/ opens because a user (or a file the user gave) named it goes through
- * mr_io_open_input: only a regular file is read. A folder, a FIFO, a device (/dev/zero) or a socket is refused
- * by name before a byte is read, where fopen would open a folder (whose size, asked by seeking, is 2^63 - 1),
- * block on a FIFO or read a device without end. */
-
-/* Open `path` for reading as a stdio stream (*out; the caller fcloses it) if it is a regular file of at most
- * max_bytes bytes (0: any size); *size (may be NULL) receives its size. Failures, with messages "<label>: <why>"
- * (just "<why>" when label is NULL): MR_ERR_IO "cannot open: <system reason>", "is a directory", "is not a
- * regular file (a FIFO)" (or a character device, a block device, a socket); MR_ERR_FORMAT "<n> bytes, more than
- * the limit of <max_bytes>". Never blocks: the file is opened with O_NONBLOCK and checked on its descriptor. */
-mr_status mr_io_open_input(const char *path, const char *label, uint64_t max_bytes, FILE **out, uint64_t *size);
-
-/* The largest width or height an image read accepts unless told otherwise (mr_img_read_options.max_dimension 0;
- * the PNG readers of glTF conversions): 16384, a 4 GiB RGBA float image. */
-#define MR_IO_MAX_DIMENSION_DEFAULT 16384
+/* Atomic output files (atomic_file.c) and input files (input_file.c) are core: mr_core.h declares them. */
 
 /* ---- what messages call an image ---------------------------------------------------------------------- */
 
 /* A read's messages name what it reads: "image '<path>'" for a file, the caller's name for bytes in memory
- * (mr_img_read_memory). Longer labels are cut to the size of mr_last_error's buffer, which would cut them anyway. */
-#define MR_IO_LABEL_SIZE 1024
-
-/* "image '<path>'" into label[MR_IO_LABEL_SIZE]; returns label. Inline: the OpenImageIO module needs it too. */
+ * (mr_img_read_memory). mr_io_file_label: "image '<path>'" into label[MR_IO_LABEL_SIZE] (mr_core.h); returns
+ * label. Inline: the OpenImageIO module needs it too. */
 static inline const char *mr_io_file_label(char *label, const char *path) {
     snprintf(label, MR_IO_LABEL_SIZE, "image '%s'", path);
     return label;
@@ -88,16 +46,8 @@ static inline const char *mr_io_file_label(char *label, const char *path) {
 
 /* ---- sRGB (srgb.c) ------------------------------------------------------------------------------------ */
 
-/* mr_srgb_to_linear in double, not rounded to float (mr_img_half_step's differences of decodes need it). */
-double mr_srgb_decode_double(double encoded);
-/* mr_linear_to_srgb in double (the direct remap quantises colours in sRGB-encoded units, src/remap/direct.h). */
-double mr_srgb_encode_double(double linear);
+/* mr_srgb_decode_double and mr_srgb_encode_double are public (image_io.h); mr_srgb8_encode is in png_texture.h. */
 
-/* The 8-bit sRGB code the image writer stores for a linear value (clamped to [0, 1], NaN -> 0): exactly
- * floor(clamp(mr_linear_to_srgb(v)) * 255 + 0.5), by table (srgb.c). Call mr_srgb8_init() once before (thread-safe,
- * idempotent). */
-void mr_srgb8_init(void);
-unsigned char mr_srgb8_encode(float linear);
 
 /* ---- decoding through OpenImageIO (image_io_oiio.cpp) ----------------------------------------------- */
 
@@ -193,49 +143,9 @@ mr_status mr_io_png_read_stream_libpng(FILE *file, const char *label, int max_di
  * the stream then somewhere after its start. */
 mr_status mr_io_png_deflate_read(FILE *file, const char *label, int max_dimension, mr_io_raw *raw, int *handled);
 
-/* An 8-bit image's stored samples, undecoded: what a texture conversion reads (a quarter of the floats' memory). */
-typedef struct mr_io_codes {
-    int width, height;
-    int channels;   /* the stored layout: 1 grey, 2 grey + alpha, 3 RGB, 4 RGBA */
-    uint8_t *codes; /* width * height * channels, top-left first; malloc'ed, the caller frees it */
-} mr_io_codes;
-
-/* The same decoder, giving the codes of an 8-bit non-palette PNG without a tRNS key (*handled = 1, or a status of
- * its own); *handled = 0 for any other PNG (then decode it to floats). mr_io_decode_code gives a code's value as
- * the readers decode it. */
-mr_status mr_io_png_deflate_read_codes(FILE *file, const char *label, int max_dimension, mr_io_codes *codes,
-                                       int *handled);
-
-/* How the PNG writer compresses. `filters` is a set of PNG filter types (§9 of the PNG spec; the bits of libpng's
- * PNG_FILTER_*): one type filters every row; several choose per row the one whose bytes, read as signed, have
- * the smallest sum of absolute values (libpng's heuristic; MR_IO_PNG_ALL_FILTERS: all five). With libpng = 0
- * the writer is png_deflate.c's, `level` libdeflate's 0-12 (1 fastest, 6 its default, 12 smallest); with
- * libpng = 1 it is libpng + zlib (png_io.c, the writer before libdeflate, kept for comparisons), level zlib's 0-9.
- * MR_IO_PNG_DEFAULT is the default of mr_img_write and of glTF conversions (docs/performance.md, "PNG read and
- * write": the fastest setting whose files are at most 15 % larger than OpenImageIO's, zlib level 6). */
-typedef struct mr_io_png_settings {
-    int level;
-    int filters;
-    int libpng;
-} mr_io_png_settings;
-#define MR_IO_PNG_FILTER_NONE 0x08  /* PNG_FILTER_NONE of png.h (this header does not include it) */
-#define MR_IO_PNG_FILTER_SUB 0x10
-#define MR_IO_PNG_FILTER_UP 0x20
-#define MR_IO_PNG_FILTER_AVG 0x40
-#define MR_IO_PNG_FILTER_PAETH 0x80
-#define MR_IO_PNG_ALL_FILTERS 0xf8
-#define MR_IO_PNG_DEFAULT {1, MR_IO_PNG_ALL_FILTERS, 0}
-
-/* Encode `data` (width*height*channels unsigned samples of `bits` 8 or 16, host order, top-left first; channels
- * 1 grey, 2 grey + alpha, 3 RGB, 4 RGBA) as a PNG in memory and write it to `path` atomically; srgb_tag adds the
- * sRGB, gAMA and cHRM chunks. Errors name `path`. */
+/* mr_io_png_encode (png_texture.h) written to `path` atomically. Errors name `path`. */
 mr_status mr_io_png_write(const char *path, int width, int height, int channels, int bits, const void *data,
                           int srgb_tag, const mr_io_png_settings *settings);
-
-/* The same encoding into memory: *bytes (malloc'ed, the caller frees it) and *size; `name` names the image in
- * errors. */
-mr_status mr_io_png_encode(const char *name, int width, int height, int channels, int bits, const void *data,
-                           int srgb_tag, const mr_io_png_settings *settings, unsigned char **bytes, size_t *size);
 
 /* png_deflate.c's encoder behind mr_io_png_encode (which checks the arguments first). */
 mr_status mr_io_png_deflate_encode(const char *name, int width, int height, int channels, int bits, const void *data,
@@ -253,38 +163,7 @@ int mr_io_png_unfilter_row(int type, uint8_t *x, const uint8_t *prev, size_t n, 
  * the byte after it (png_deflate.c). */
 unsigned char *mr_io_png_put_chunk(unsigned char *at, const char *type, const void *data, size_t length);
 
-/* ---- Paletted PNG (png_palette.c) --------------------------------------------------------------------- */
-
-/* A non-interlaced paletted PNG taken apart: its header, palette, index stream and index histogram. */
-typedef struct mr_io_png_palette {
-    int width, height, bit_depth;  /* bit depth 1, 2, 4 or 8 */
-    unsigned char ihdr[13];        /* the IHDR data, copied into the rewritten file */
-    int entries;                   /* PLTE entries, 1 .. 2^bit_depth */
-    unsigned char rgb[256][3];     /* PLTE */
-    unsigned char alpha[256];      /* tRNS, 255 past it or without one */
-    int has_alpha;                 /* a tRNS chunk was present */
-    size_t counts[256];            /* texels per entry */
-    unsigned char *idat;           /* the IDAT data, concatenated (owned: mr_io_png_palette_free) */
-    size_t idat_size;
-} mr_io_png_palette;
-
-/* 1 when `bytes` start as a non-interlaced paletted PNG (signature and IHDR only: a sniff, not a check). */
-int mr_io_png_is_paletted(const unsigned char *bytes, size_t size);
-
-/* Take the PNG in bytes[size] apart: every chunk's length and CRC checked, the index stream inflated once for the
- * histogram. MR_ERR_FORMAT naming `label` for anything else or anything broken; MR_ERR_NOMEM. */
-mr_status mr_io_png_palette_read(const unsigned char *bytes, size_t size, const char *label, mr_io_png_palette *out);
-void mr_io_png_palette_free(mr_io_png_palette *p);
-
-/* The PNG of p's header and index stream under the palette rgb[p->entries] and alpha (NULL: opaque; tRNS written up
- * to the last entry that is not 255), with the sRGB chunks the writer adds when srgb_tag is set; *bytes is malloc'ed
- * (the caller frees it). */
-mr_status mr_io_png_palette_write(const mr_io_png_palette *p, const unsigned char rgb[][3],
-                                  const unsigned char *alpha, int srgb_tag, unsigned char **bytes, size_t *size);
-
-/* The value the image reader gives a stored integer code of `bits` (8 or 16) bits: sRGB-decoded for colour (srgb 1)
- * or code / (2^bits - 1) as data, exactly as mr_img_read_stored computes it. */
-float mr_io_decode_code(unsigned code, int bits, int srgb);
+/* Paletted PNGs (png_palette.c) and mr_io_decode_code: png_texture.h. */
 
 /* ---- EXR through OpenEXR Core (exr_write.c) ---------------------------------------------------------- */
 

@@ -226,7 +226,7 @@ struct loader {
         if (stat(path.c_str(), &st) != 0)
             return mr_fail(MR_ERR_IO, "OBJ '%s': cannot open: %s", path.c_str(), strerror(errno));
         if (S_ISDIR(st.st_mode)) return mr_fail(MR_ERR_IO, "OBJ '%s': cannot read: is a directory", path.c_str());
-        // A FIFO would block the read, a device (/dev/zero) never end it: regular files only (io_internal.h).
+        // A FIFO would block the read, a device (/dev/zero) never end it: regular files only (mr_core.h).
         if (!S_ISREG(st.st_mode))
             return mr_fail(MR_ERR_IO, "OBJ '%s': cannot read: is not a regular file", path.c_str());
         std::ifstream in(path.c_str(), std::ios::in | std::ios::binary);

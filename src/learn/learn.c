@@ -48,13 +48,6 @@ static param_use use_of(const double *values, size_t n, int count, int offset, i
     return u;
 }
 
-static uint64_t splitmix64(uint64_t *state) {
-    uint64_t z = (*state += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-}
-
 /* A seeded permutation of 0 .. n-1 (Fisher-Yates). */
 static size_t *shuffled(size_t n, unsigned long long seed) {
     size_t *order = malloc(n * sizeof *order);
@@ -62,7 +55,7 @@ static size_t *shuffled(size_t n, unsigned long long seed) {
     for (size_t i = 0; i < n; i++) order[i] = i;
     uint64_t state = seed;
     for (size_t i = n; i > 1; i--) {
-        size_t j = (size_t)(splitmix64(&state) % i);
+        size_t j = (size_t)(mr_rng_next(&state) % i);
         size_t tmp = order[i - 1];
         order[i - 1] = order[j];
         order[j] = tmp;

@@ -13,7 +13,6 @@
 #include <unistd.h>
 
 #include "c_locale.h"
-#include "io/io_internal.h"
 #include "learn/learned.h"
 #include "learn/svr.h"
 #include "mr_internal.h"

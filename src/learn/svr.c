@@ -13,7 +13,6 @@
 #include <string.h>
 
 #include "mr_internal.h"
-#include "nn/mlp_internal.h" /* the splitmix64 streams of the split (mr_mlp_rng_*) */
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -416,9 +415,9 @@ static mr_status trainer_init(trainer *t, const double *x, const double *y) {
 
     // Split: a Fisher-Yates shuffle (the modulo's bias, below n / 2^64, is immaterial).
     for (size_t r = 0; r < n; r++) t->order[r] = r;
-    uint64_t rng = mr_mlp_rng_stream(t->opt->seed, 1);
+    uint64_t rng = mr_rng_stream(t->opt->seed, 1);
     for (size_t i = n; i > 1; i--) {
-        const size_t j = (size_t)(mr_mlp_rng_next(&rng) % (uint64_t)i), tmp = t->order[i - 1];
+        const size_t j = (size_t)(mr_rng_next(&rng) % (uint64_t)i), tmp = t->order[i - 1];
         t->order[i - 1] = t->order[j];
         t->order[j] = tmp;
     }

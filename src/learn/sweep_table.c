@@ -11,7 +11,6 @@
 
 #include "c_locale.h"
 #include "mr_internal.h"
-#include "io/io_internal.h"
 #include "remap/remap_file.h"
 
 #define MAX_COLUMNS 128
@@ -210,7 +209,7 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
         }
         rows++;
         mr_fit_outcome outcome;
-        if (!mr_fit_outcome_from_name(fields[cols.outcome], &outcome)) {
+        if (mr_fit_outcome_from_name(fields[cols.outcome], &outcome) != MR_OK) {
             status = mr_fail(MR_ERR_FORMAT, "%s:%ld: unknown outcome '%s'", path, line_number, fields[cols.outcome]);
             break;
         }

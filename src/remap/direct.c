@@ -29,8 +29,7 @@
 #endif
 
 #include "../c_locale.h"
-#include "../io/io_internal.h"
-#include "../matremap.h"
+#include "../io/image_io.h"
 #include "../mr_internal.h"
 #include "remap_file.h"
 

@@ -21,7 +21,7 @@
 
 #include "../metrics/metrics.h"
 #include "../mr_internal.h"
-#include "../render/render_internal.h"
+#include "../render/render.h"
 
 #define MAX_SLOTS MR_BRDF_MAX_VALUES
 #define DEFAULT_MAX_EVALUATIONS 400
@@ -90,13 +90,15 @@ const char *mr_fit_outcome_name(mr_fit_outcome outcome) {
     return (unsigned)outcome < MR_FIT_OUTCOME_COUNT ? outcome_names[outcome] : NULL;
 }
 
-int mr_fit_outcome_from_name(const char *name, mr_fit_outcome *out) {
+mr_status mr_fit_outcome_from_name(const char *name, mr_fit_outcome *out) {
     for (int o = 0; name != NULL && o < MR_FIT_OUTCOME_COUNT; o++)
         if (strcmp(name, outcome_names[o]) == 0) {
             *out = (mr_fit_outcome)o;
-            return 1;
+            return MR_OK;
         }
-    return 0;
+    return mr_fail(MR_ERR_INVALID_ARG,
+                   "unknown fit outcome '%s' (valid: converged, at-bound, unreachable, local-minimum, under-resolved)",
+                   name ? name : "(null)");
 }
 
 mr_remap_options mr_remap_options_default(void) {
@@ -458,15 +460,6 @@ static int compare_candidates(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
-/* splitmix64: the multi-start points, seeded (remap.h: deterministic). */
-static double next_uniform(unsigned long long *state) {
-    unsigned long long z = (*state += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    z ^= z >> 31;
-    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
-}
-
 /* Evaluate a grid of `points` values per nonlinear dimension (d <= 3, points^d projections), keep its local
  * minima (no lower neighbour among the 3^d - 1 around), best first, in starts[]; returns the count. */
 static int grid_minima(fit_context *ctx, int points, candidate *starts, int max_starts) {
@@ -537,12 +530,12 @@ static void auto_fit(fit_context *ctx, candidate *best, int *ambiguous) {
         start_count = grid_minima(ctx, points, starts, MAX_REFINED_STARTS);
         step = 1.0 / (points - 1);
     } else {
-        unsigned long long state = ctx->opts.seed;
+        uint64_t state = ctx->opts.seed; // the multi-start points, seeded (remap.h: deterministic)
         int wanted = MR_MIN(MR_MAX(ctx->opts.starts, 1), 64);
         for (int s = 0; s < wanted; s++) {
             for (int i = 0; i < d; i++)
                 starts[s].u[i] = s == 0 ? to_unit(&ctx->nonlinear[i], ctx->base[ctx->nonlinear[i].slot])
-                                        : next_uniform(&state);
+                                        : mr_rng_unit(&state);
             starts[s].sse = HUGE_VAL;
         }
         start_count = wanted;
@@ -724,9 +717,9 @@ static double direct_stage(fit_context *ctx, unsigned lobes, int exact_lobe, con
 
 /* ---- which parameters the projection may solve for ----------------------------------------------------- */
 
-static void random_direction(unsigned long long *state, double d[3]) {
+static void random_direction(uint64_t *state, double d[3]) {
     // Cosine-distributed above 0.05 of the horizon: the region a fit scene actually samples.
-    double u = next_uniform(state), v = next_uniform(state);
+    double u = mr_rng_unit(state), v = mr_rng_unit(state);
     double z = sqrt(0.0025 + (1.0 - 0.0025) * u), r = sqrt(fmax(0.0, 1.0 - z * z)), phi = 2.0 * MR_PI * v;
     d[0] = r * cos(phi);
     d[1] = r * sin(phi);
@@ -755,7 +748,7 @@ static int held_fixed(const mr_brdf_model *m, unsigned held, int i) {
 
 static int jointly_affine(const mr_brdf_model *m, unsigned held, const double *base, const unsigned char *is_linear,
                           int candidate) {
-    unsigned long long state = 0x5eedULL;
+    uint64_t state = 0x5eedULL;
     int count = mr_brdf_value_count(m);
     for (int trial = 0; trial < 48; trial++) {
         double u[MAX_SLOTS], w[MAX_SLOTS], mid[MAX_SLOTS], wi[3], wo[3], fu[3], fw[3], fm[3];
@@ -766,7 +759,7 @@ static int jointly_affine(const mr_brdf_model *m, unsigned held, const double *b
             int offset = mr_brdf_param_offset(m, i);
             double span = (is_linear[i] && i != candidate) ? 0.05 : 1.0;
             for (int c = 0; c < p->channels; c++)
-                u[offset + c] = p->min_value + span * next_uniform(&state) * (p->max_value - p->min_value);
+                u[offset + c] = p->min_value + span * mr_rng_unit(&state) * (p->max_value - p->min_value);
         }
         memcpy(w, u, sizeof w);
         for (int i = 0; i < m->param_count; i++) {
@@ -775,15 +768,15 @@ static int jointly_affine(const mr_brdf_model *m, unsigned held, const double *b
             int offset = mr_brdf_param_offset(m, i);
             double span = i == candidate ? 1.0 : 0.05;
             for (int c = 0; c < p->channels; c++)
-                w[offset + c] = p->min_value + span * next_uniform(&state) * (p->max_value - p->min_value);
+                w[offset + c] = p->min_value + span * mr_rng_unit(&state) * (p->max_value - p->min_value);
         }
         for (int j = 0; j < count; j++) mid[j] = 0.5 * (u[j] + w[j]);
         random_direction(&state, wi);
         random_direction(&state, wo);
         if (trial % 2 == 0) {
             // Near the mirror direction of wi: tilt the mirror by up to ~0.05 rad.
-            wo[0] = -wi[0] + 0.05 * (next_uniform(&state) - 0.5);
-            wo[1] = -wi[1] + 0.05 * (next_uniform(&state) - 0.5);
+            wo[0] = -wi[0] + 0.05 * (mr_rng_unit(&state) - 0.5);
+            wo[1] = -wi[1] + 0.05 * (mr_rng_unit(&state) - 0.5);
             wo[2] = wi[2];
             double len = sqrt(wo[0] * wo[0] + wo[1] * wo[1] + wo[2] * wo[2]);
             for (int k = 0; k < 3; k++) wo[k] /= len;
@@ -832,7 +825,7 @@ static int lobes_split(const mr_brdf_model *m, const int *linear_params, int cou
  * others (Ward: no diffuse, no specular, no light; GGX with Schlick F0 = 0 still reflects at grazing angles). */
 static int black_without_linear(const mr_brdf_model *m, unsigned held, const double *base,
                                 const unsigned char *is_linear) {
-    unsigned long long state = 0xb1ac0ULL;
+    uint64_t state = 0xb1ac0ULL;
     for (int trial = 0; trial < 32; trial++) {
         double v[MAX_SLOTS], wi[3], wo[3], f[3];
         memcpy(v, base, sizeof v);
@@ -842,7 +835,7 @@ static int black_without_linear(const mr_brdf_model *m, unsigned held, const dou
             int offset = mr_brdf_param_offset(m, i);
             for (int c = 0; c < p->channels; c++)
                 v[offset + c] = is_linear[i] ? 0.0
-                                             : p->min_value + next_uniform(&state) * (p->max_value - p->min_value);
+                                             : p->min_value + mr_rng_unit(&state) * (p->max_value - p->min_value);
         }
         random_direction(&state, wi);
         random_direction(&state, wo);

@@ -118,9 +118,9 @@ typedef enum mr_fit_outcome {
 
 /* "converged", "at-bound", "unreachable", "local-minimum", "under-resolved"; NULL outside the enum. */
 const char *mr_fit_outcome_name(mr_fit_outcome outcome);
-/* The outcome called `name` (one of the above) into *out: 1, or 0 (nothing written) for any other text. Readers of
+/* Parse one of the names above into *out; MR_ERR_INVALID_ARG listing them otherwise (nothing written). Readers of
  * sweep files take outcomes through this, so that every reader knows every outcome the writer may use. */
-int mr_fit_outcome_from_name(const char *name, mr_fit_outcome *out);
+mr_status mr_fit_outcome_from_name(const char *name, mr_fit_outcome *out);
 
 typedef struct mr_remap_options {
     mr_remap_strategy strategy;  /* MR_REMAP_AUTO */

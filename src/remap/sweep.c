@@ -29,8 +29,6 @@
 #endif
 
 #include "../c_locale.h"
-#include "../io/io_internal.h"
-#include "../matremap.h"
 #include "../mr_internal.h"
 #include "remap_file.h"
 
@@ -40,22 +38,6 @@
 #define ROW_TAIL_COLUMNS 6 /* rmse, relative_rmse, ssim, outcome, renders, seconds */
 
 /* ---- samples --------------------------------------------------------------------------------------------- */
-
-/* splitmix64 (Steele, Lea, Flood, "Fast splittable pseudorandom number generators", OOPSLA 2014): a bijective
- * mixer, so distinct (seed, index) start states never coincide for one seed. */
-static uint64_t mix64(uint64_t z) {
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-}
-
-static uint64_t next64(uint64_t *state) {
-    *state += 0x9e3779b97f4a7c15ULL;
-    return mix64(*state);
-}
-
-/* Uniform in [0, 1): the top 53 bits. */
-static double next_unit(uint64_t *state) { return (double)(next64(state) >> 11) * 0x1p-53; }
 
 static int random_eligible(const mr_sweep_spec *spec, int p) {
     const mr_brdf_param *param = &spec->source->params[p];
@@ -98,7 +80,7 @@ static void draw_once(const mr_sweep_spec *spec, uint64_t *state, int grey, doub
                 values[offset + c] = values[offset];
                 continue;
             }
-            double u = next_unit(state);
+            double u = mr_rng_unit(state);
             double v = log_scale ? exp(log(param->min_value) + u * (log(param->max_value) - log(param->min_value)))
                                  : param->min_value + u * (param->max_value - param->min_value);
             values[offset + c] = mr_clampd(v, param->min_value, param->max_value);
@@ -130,7 +112,8 @@ static void sample_unchecked(const mr_sweep_spec *spec, long index, double *valu
         }
         return;
     }
-    uint64_t state = mix64(mix64((uint64_t)spec->seed) + (uint64_t)index);
+    // mr_rng_mix is a bijection (mr_core.h), so distinct (seed, index) start states never coincide for one seed.
+    uint64_t state = mr_rng_mix(mr_rng_mix((uint64_t)spec->seed) + (uint64_t)index);
     const int texture = spec->region == MR_SWEEP_REGION_TEXTURE;
     for (long draw = 0;; draw++) {
         draw_once(spec, &state, texture, values);

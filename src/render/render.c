@@ -138,7 +138,7 @@ struct mr_render_plan {
     long shadow_rays;      /* traced while building the plan */
     int render_threads;    /* OpenMP threads a render uses (render.h, mr_scene.threads) */
     int emits;             /* some hit has emission (else renders skip adding it) */
-    /* The closer look (render_internal.h, mr_render_plan_zoomed): built on first use by whichever thread asks
+    /* The closer look (render.h, mr_render_plan_zoomed): built on first use by whichever thread asks
      * first, installed with a compare-and-swap (a thread that loses frees its copy), freed with this plan. */
     _Atomic(struct mr_render_plan *) zoomed;
     double zoom;           /* of a plan made by mr_render_plan_zoomed: its zoom factor */

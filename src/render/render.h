@@ -420,6 +420,21 @@ mr_status mr_render_into(const mr_render_plan *plan, const mr_brdf_model *model,
 mr_status mr_render_components_into(const mr_render_plan *plan, const mr_brdf_model *model,
                                     const double *values, mr_image *diffuse, mr_image *specular);
 
+/* mr_render_into and mr_render_components_into with `threads` OpenMP threads (0 = the plan's, as those calls): for
+ * a caller with a thread count of its own, e.g. a remap passing mr_remap_options.threads through. */
+mr_status mr_render_into_threads(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
+                                 const double *values, mr_component component, mr_image *image);
+mr_status mr_render_components_into_threads(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
+                                            const double *values, mr_image *diffuse, mr_image *specular);
+
+/* The plan of `plan`'s scene looking at the first point light's highlight on the sphere `zoom` times closer (the
+ * same camera position, turned towards the highlight, its field of view `zoom` times narrower, the same image
+ * size), built on the first call and kept by `plan` (freed with it; safe to call from several threads at once), so
+ * that repeated remaps with one plan (sweeps) build it once. *out (borrowed from `plan`) = NULL with MR_OK when
+ * the scene is not a sphere or no point light's highlight is seen. A plan keeps one zoom factor: a later call with
+ * another fails (MR_ERR_INVALID_ARG). */
+mr_status mr_render_plan_zoomed(const mr_render_plan *plan, double zoom, const mr_render_plan **out);
+
 /* ---- textured spheres: parameters from maps over the sphere's (u, v) (conventions in the header comment) ---- */
 
 /* Which parameters come from maps. Zero-initialise it ({0}: no maps, every parameter from values[]) and set

@@ -13,9 +13,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "../matremap.h"
 #include "../mr_internal.h"
 #include "gltf/mr_gltf_scene.h"
+#include "metrics/metrics.h"
 #include "report.h"
 
 /* A generated description is cut here: the page shows it in one table cell. */

@@ -9,7 +9,6 @@
 #include <string.h>
 
 #include "brdf/brdf.h"
-#include "matremap.h"
 #include "mr_internal.h"
 #include "nn/mlp.h"
 

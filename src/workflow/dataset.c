@@ -10,7 +10,6 @@
 #include <string.h>
 
 #include "../c_locale.h"
-#include "../io/io_internal.h"
 #include "../mr_internal.h"
 #include "../remap/remap_file.h"
 #include "workflow.h"
@@ -160,7 +159,7 @@ static mr_status load_file(const char *path, const mr_wf_dataset_options *opts, 
         // Every outcome a sweep writes is known here (an under-resolved fit is kept, as learn's reader keeps it:
         // its label is the fit's best answer); only a local minimum, a fit known to be wrong, is left out.
         mr_fit_outcome outcome;
-        if (!mr_fit_outcome_from_name(fields[c.outcome], &outcome)) {
+        if (mr_fit_outcome_from_name(fields[c.outcome], &outcome) != MR_OK) {
             status = mr_fail(MR_ERR_FORMAT, "%s:%ld: unknown outcome '%s'", path, line_number, fields[c.outcome]);
             break;
         }
