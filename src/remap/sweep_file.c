@@ -463,28 +463,7 @@ mr_status mr_sweep_file_spec_from_header(const char *from, const char *to, const
     return status == MR_OK ? MR_OK : MR_ERR_FORMAT;
 }
 
-/* ---- reading lines ----------------------------------------------------------------------------------------- */
-
-mr_sweep_line_result mr_sweep_file_read_line(FILE *fp, size_t max_line, char **buf, size_t *cap, size_t *len) {
-    *len = 0;
-    for (;;) {
-        if (*cap - *len < 2) {
-            size_t grown = *cap ? 2 * *cap : 4096;
-            char *p = realloc(*buf, grown);
-            if (p == NULL)
-                return MR_SWEEP_LINE_NO_MEMORY;
-            *buf = p;
-            *cap = grown;
-        }
-        if (fgets(*buf + *len, (int)MR_MIN(*cap - *len, (size_t)INT_MAX), fp) == NULL)
-            return *len > 0 ? MR_SWEEP_LINE_READ : MR_SWEEP_LINE_END;
-        *len += strlen(*buf + *len);
-        if (*len > 0 && (*buf)[*len - 1] == '\n')
-            return max_line > 0 && *len - 1 > max_line ? MR_SWEEP_LINE_TOO_LONG : MR_SWEEP_LINE_READ;
-        if (max_line > 0 && *len > max_line)
-            return MR_SWEEP_LINE_TOO_LONG;
-    }
-}
+/* ---- reading by column name ----------------------------------------------------------------------------------------- */
 
 mr_status mr_sweep_reader_open(mr_sweep_reader *r, const char *path, size_t max_line) {
     r->path = path;
@@ -493,24 +472,26 @@ mr_status mr_sweep_reader_open(mr_sweep_reader *r, const char *path, size_t max_
 }
 
 int mr_sweep_reader_next(mr_sweep_reader *r, mr_status *failure) {
-    switch (mr_sweep_file_read_line(r->fp, r->max_line, &r->line, &r->capacity, &r->length)) {
-    case MR_SWEEP_LINE_READ:
-        r->line_number++;
-        return 1;
-    case MR_SWEEP_LINE_END:
+    errno = 0;
+    ssize_t length = getline(&r->line, &r->capacity, r->fp);
+    if (length < 0) {
+        if (errno == ENOMEM) {
+            *failure = mr_fail(MR_ERR_NOMEM, "%s: out of memory reading line %ld", r->path, r->line_number + 1);
+            return -1;
+        }
         if (!ferror(r->fp))
             return 0;
         *failure = mr_fail(MR_ERR_IO, "%s: read error: %s", r->path, strerror(errno));
         return -1;
-    case MR_SWEEP_LINE_TOO_LONG:
-        r->line_number++;
+    }
+    r->length = (size_t)length;
+    r->line_number++;
+    if (r->max_line > 0 && r->length - (r->line[r->length - 1] == '\n') > r->max_line) {
         *failure = mr_fail(MR_ERR_FORMAT, "%s:%ld: line longer than %zu bytes", r->path, r->line_number,
                            r->max_line);
         return -1;
-    default:
-        *failure = mr_fail(MR_ERR_NOMEM, "%s: out of memory reading line %ld", r->path, r->line_number + 1);
-        return -1;
     }
+    return 1;
 }
 
 void mr_sweep_reader_close(mr_sweep_reader *r) {

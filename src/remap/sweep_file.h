@@ -1,6 +1,6 @@
 /*
  * sweep_file.h — the sweep file's format, in one place: its header written and read back into a sweep, its rows
- * formatted, parsed and checked, its lines read; used by the sweep (sweep.c: writing, resume), the shard merge
+ * formatted, parsed and checked, its lines read by column name; used by the sweep (sweep.c: writing, resume), the shard merge
  * (sweep_merge.c), learn's sweep table (src/learn/sweep_table.c) and train's dataset (src/workflow/dataset.c).
  * Not installed, not public: sweep.h describes the file, and its public calls (mr_sweep_format_row,
  * mr_sweep_parse_row, mr_sweep_check_row, mr_sweep_scene_parse) are defined in sweep_file.c on top of these.
@@ -78,20 +78,7 @@ mr_status mr_sweep_file_parse_model(const char *text, size_t length, const mr_br
 mr_status mr_sweep_file_spec_from_header(const char *from, const char *to, const char *remap, const char *scene,
                                          const char *sampling, mr_sweep_spec *spec, const char **step);
 
-/* ---- reading lines ---- */
-
-/* What mr_sweep_file_read_line found. */
-typedef enum mr_sweep_line_result {
-    MR_SWEEP_LINE_END = 0,   /* the end of the file: nothing read */
-    MR_SWEEP_LINE_READ = 1,  /* a line, '\n' kept (the last line of a file may lack it) */
-    MR_SWEEP_LINE_TOO_LONG,  /* longer than max_line */
-    MR_SWEEP_LINE_NO_MEMORY  /* *buf could not grow */
-} mr_sweep_line_result;
-
-/* The next line of fp into *buf (grown as needed, NUL-terminated; *cap its size) and *len. A line whose length
- * without its '\n' exceeds max_line (0: no limit) is MR_SWEEP_LINE_TOO_LONG, so a file that is one endless line is
- * refused, not swallowed. Sets no message: the caller names the file its way. */
-mr_sweep_line_result mr_sweep_file_read_line(FILE *fp, size_t max_line, char **buf, size_t *cap, size_t *len);
+/* ---- reading by column name ---- */
 
 /* A sweep file read line by line, for the readers that find their columns by name. Zero it, then
  * mr_sweep_reader_open; mr_sweep_reader_close releases it (also after a failed open). */
@@ -99,7 +86,8 @@ typedef struct mr_sweep_reader {
     const char *path;  /* borrowed */
     FILE *fp;
     size_t max_line;   /* longest line accepted, without its '\n'; 0: any */
-    char *line;        /* the current line, NUL-terminated, '\n' kept */
+    char *line;        /* the current line (getline: NUL-terminated, '\n' kept; a NUL byte in it ends it as a
+                          C string, as the readers take it) */
     size_t length, capacity;
     long line_number;  /* of the current line, from 1 */
 } mr_sweep_reader;

@@ -8,6 +8,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,25 +24,35 @@
 
 /* Longest line merge reads (a header's command line can be long; a row is at most MR_SWEEP_MAX_LINE): a file
  * that is one endless line is refused, not swallowed. */
-#define MERGE_MAX_LINE ((size_t)1 << 20)
+#define MERGE_MAX_LINE (1L << 20)
 
 /* The next line of fp into *buf (grown as needed, NUL-terminated, '\n' kept) and *len; 0 at the end of the file,
  * -1 for a line longer than MERGE_MAX_LINE (MR_ERR_FORMAT) or out of memory (MR_ERR_NOMEM) in *failure, the
  * message naming `path` and the line. */
 static int read_line(FILE *fp, const char *path, long line_number, char **buf, size_t *cap, size_t *len,
                      mr_status *failure) {
-    switch (mr_sweep_file_read_line(fp, MERGE_MAX_LINE, buf, cap, len)) {
-    case MR_SWEEP_LINE_READ:
-        return 1;
-    case MR_SWEEP_LINE_END:
-        return 0;
-    case MR_SWEEP_LINE_TOO_LONG:
-        *failure = mr_fail(MR_ERR_FORMAT, "shard file '%s': line %ld is longer than %ld bytes", path, line_number,
-                           (long)MERGE_MAX_LINE);
-        return -1;
-    default:
-        *failure = mr_fail(MR_ERR_NOMEM, "shard file '%s': out of memory reading line %ld", path, line_number);
-        return -1;
+    *len = 0;
+    for (;;) {
+        if (*cap - *len < 2) {
+            size_t grown = *cap ? 2 * *cap : 4096;
+            char *p = realloc(*buf, grown);
+            if (p == NULL) {
+                *failure = mr_fail(MR_ERR_NOMEM, "shard file '%s': out of memory reading line %ld", path, line_number);
+                return -1;
+            }
+            *buf = p;
+            *cap = grown;
+        }
+        if (fgets(*buf + *len, (int)MR_MIN(*cap - *len, (size_t)INT_MAX), fp) == NULL)
+            return *len > 0;
+        *len += strlen(*buf + *len);
+        if (*len > 0 && (*buf)[*len - 1] == '\n')
+            return 1;
+        if (*len > (size_t)MERGE_MAX_LINE) {
+            *failure = mr_fail(MR_ERR_FORMAT, "shard file '%s': line %ld is longer than %ld bytes", path, line_number,
+                               MERGE_MAX_LINE);
+            return -1;
+        }
     }
 }
 
