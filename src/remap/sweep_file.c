@@ -261,33 +261,39 @@ mr_status mr_sweep_check_row(const mr_sweep_spec *spec, const mr_sweep_row *row)
 
 /* ---- the header read back ---------------------------------------------------------------------------------- */
 
-/* Split text (a copy) at spaces into at most `max` tokens; returns the count, -1 if there are more. */
-static int split_words(char *text, char **words, int max) {
-    int n = 0;
-    char *save = NULL;
-    for (char *w = strtok_r(text, " ", &save); w != NULL; w = strtok_r(NULL, " ", &save)) {
-        if (n == max)
-            return -1;
-        words[n++] = w;
-    }
-    return n;
-}
-
-mr_status mr_sweep_file_parse_model(const char *text, size_t length, const mr_brdf_model **model, double *values) {
-    char copy[MR_SWEEP_MAX_LINE];
-    if (length >= sizeof copy)
+/* text[0, length) copied into copy[MR_SWEEP_MAX_LINE] and split there at spaces into words[0 .. *n), at most `max`
+ * (*n = -1 if there are more). MR_ERR_FORMAT if the text does not fit the copy. */
+static mr_status split_line(const char *text, size_t length, char *copy, char **words, int max, int *n) {
+    if (length >= MR_SWEEP_MAX_LINE)
         return mr_fail(MR_ERR_FORMAT, "the line is too long");
     memcpy(copy, text, length);
     copy[length] = '\0';
-    char *save = NULL, *word = strtok_r(copy, " ", &save);
-    if (word == NULL)
+    *n = 0;
+    char *save = NULL;
+    for (char *w = strtok_r(copy, " ", &save); w != NULL; w = strtok_r(NULL, " ", &save)) {
+        if (*n == max) {
+            *n = -1;
+            break;
+        }
+        words[(*n)++] = w;
+    }
+    return MR_OK;
+}
+
+mr_status mr_sweep_file_parse_model(const char *text, size_t length, const mr_brdf_model **model, double *values) {
+    char copy[MR_SWEEP_MAX_LINE], *words[MR_SWEEP_MAX_LINE / 2 + 1]; /* as many words as the line can hold */
+    int n = 0;
+    mr_status status = split_line(text, length, copy, words, MR_SWEEP_MAX_LINE / 2 + 1, &n);
+    if (status != MR_OK)
+        return status;
+    if (n < 1)
         return mr_fail(MR_ERR_FORMAT, "no model named");
-    *model = mr_brdf_find(word);
+    *model = mr_brdf_find(words[0]);
     if (*model == NULL)
         return MR_ERR_FORMAT; /* mr_brdf_find's message lists the models */
     mr_brdf_default_values(*model, values);
-    while ((word = strtok_r(NULL, " ", &save)) != NULL)
-        if (mr_brdf_parse_assignment(*model, word, values) != MR_OK)
+    for (int k = 1; k < n; k++)
+        if (mr_brdf_parse_assignment(*model, words[k], values) != MR_OK)
             return MR_ERR_FORMAT; /* its message names the assignment */
     return MR_OK;
 }
@@ -296,12 +302,11 @@ static int parse_whole_long(const char *text, long *out) { return mr_csv_parse_l
 
 /* "strategy=S max_evaluations=N xtol=X grid_points=G starts=S seed=S[ held=a,b]" into spec->remap. */
 static mr_status parse_remap_line(const char *text, mr_sweep_spec *spec) {
-    char copy[MR_SWEEP_MAX_LINE];
-    if (strlen(text) >= sizeof copy)
-        return mr_fail(MR_ERR_FORMAT, "the line is too long");
-    strcpy(copy, text);
-    char *words[16];
-    int n = split_words(copy, words, 16);
+    char copy[MR_SWEEP_MAX_LINE], *words[16];
+    int n = 0;
+    mr_status status = split_line(text, strlen(text), copy, words, 16, &n);
+    if (status != MR_OK)
+        return status;
     for (int k = 0; k < n; k++) {
         char *eq = strchr(words[k], '=');
         if (eq == NULL)
@@ -343,12 +348,11 @@ static mr_status parse_remap_line(const char *text, mr_sweep_spec *spec) {
 /* "fit size=N light=L intensity=I ..." into spec->scene (the other fields are fixed by the version: the rebuilt
  * header shows whether they match). */
 static mr_status parse_scene_line(const char *text, mr_sweep_spec *spec) {
-    char copy[MR_SWEEP_MAX_LINE];
-    if (strlen(text) >= sizeof copy)
-        return mr_fail(MR_ERR_FORMAT, "the line is too long");
-    strcpy(copy, text);
-    char *words[16];
-    int n = split_words(copy, words, 16);
+    char copy[MR_SWEEP_MAX_LINE], *words[16];
+    int n = 0;
+    mr_status status = split_line(text, strlen(text), copy, words, 16, &n);
+    if (status != MR_OK)
+        return status;
     if (n < 1 || strcmp(words[0], "fit") != 0)
         return mr_fail(MR_ERR_FORMAT, "not a fit scene");
     for (int k = 1; k < n; k++) {
@@ -381,12 +385,11 @@ mr_status mr_sweep_scene_parse(const char *text, mr_fit_scene_options *out) {
 
 /* "grid AXIS ..." or "random=N seed=S over p,q,..." into the spec's sampling. */
 static mr_status parse_sampling_line(const char *text, mr_sweep_spec *spec) {
-    char copy[MR_SWEEP_MAX_LINE];
-    if (strlen(text) >= sizeof copy)
-        return mr_fail(MR_ERR_FORMAT, "the line is too long");
-    strcpy(copy, text);
-    char *words[MR_SWEEP_MAX_AXES + 1];
-    int n = split_words(copy, words, MR_SWEEP_MAX_AXES + 1);
+    char copy[MR_SWEEP_MAX_LINE], *words[MR_SWEEP_MAX_AXES + 1];
+    int n = 0;
+    mr_status status = split_line(text, strlen(text), copy, words, MR_SWEEP_MAX_AXES + 1, &n);
+    if (status != MR_OK)
+        return status;
     if (n >= 2 && strcmp(words[0], "grid") == 0) {
         spec->sampling = MR_SWEEP_GRID;
         for (int k = 1; k < n; k++) {

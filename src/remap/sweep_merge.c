@@ -79,6 +79,24 @@ typedef struct merge_shard {
     ino_t ino;
 } merge_shard;
 
+/* The first line where the texts *x and *y differ: its number (from 1), with *x and *y moved to its start in
+ * each, for a message that shows both. */
+static long first_differing_line(const char **x, const char **y) {
+    const char *a = *x, *b = *y, *start = *x;
+    long line = 1;
+    while (*a && *a == *b) {
+        if (*a == '\n')
+            line++;
+        a++;
+        b++;
+    }
+    while (a > start && a[-1] != '\n')
+        a--, b--;
+    *x = a;
+    *y = b;
+    return line;
+}
+
 /* Read and check a shard's header: parsed back into a sweep, which must rebuild the header byte for byte. */
 static mr_status read_shard_header(merge_shard *s) {
     enum { MAX_HEADER_LINES = 32 };
@@ -159,17 +177,8 @@ static mr_status read_shard_header(merge_shard *s) {
         status = mr_sweep_file_header(&s->spec, command, s->k, s->n, &rebuilt);
         if (status == MR_OK && (file_header.failed || rebuilt.length != file_header.length ||
                                 memcmp(rebuilt.text, file_header.text, rebuilt.length) != 0)) {
-            // Name the first line that differs.
             const char *a = file_header.text ? file_header.text : "", *b = rebuilt.text;
-            long line = 1;
-            while (*a && *a == *b) {
-                if (*a == '\n')
-                    line++;
-                a++;
-                b++;
-            }
-            while (a > file_header.text && a[-1] != '\n')
-                a--, b--;
+            const long line = first_differing_line(&a, &b);
             status =
                 mr_fail(MR_ERR_FORMAT,
                         "shard file '%s': line %ld is '%.*s', but the sweep its header describes would have "
@@ -198,15 +207,7 @@ static mr_status read_shard_header(merge_shard *s) {
 /* The first line where two shards' headers (shard and command lines left out) differ, for the message. */
 static mr_status shards_differ(const merge_shard *a, const merge_shard *b) {
     const char *x = a->bare, *y = b->bare;
-    long line = 1;
-    while (*x && *x == *y) {
-        if (*x == '\n')
-            line++;
-        x++;
-        y++;
-    }
-    while (x > a->bare && x[-1] != '\n')
-        x--, y--;
+    first_differing_line(&x, &y);
     return mr_fail(MR_ERR_INVALID_ARG,
                    "shard files '%s' and '%s' are from different sweeps: '%.*s' in the first, '%.*s' in the second",
                    a->path, b->path, (int)MR_MIN(strcspn(x, "\n"), 200), x, (int)MR_MIN(strcspn(y, "\n"), 200), y);
