@@ -466,7 +466,7 @@ mr_status mr_sweep_file_spec_from_header(const char *from, const char *to, const
     return status == MR_OK ? MR_OK : MR_ERR_FORMAT;
 }
 
-/* ---- reading by column name ----------------------------------------------------------------------------------------- */
+/* ---- reading by column name ------------------------------------------------------------------------------- */
 
 mr_status mr_sweep_reader_open(mr_sweep_reader *r, const char *path, size_t max_line) {
     r->path = path;

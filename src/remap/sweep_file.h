@@ -1,7 +1,8 @@
 /*
  * sweep_file.h — the sweep file's format, in one place: its header written and read back into a sweep, its rows
- * formatted, parsed and checked, its lines read by column name; used by the sweep (sweep.c: writing, resume), the shard merge
- * (sweep_merge.c), learn's sweep table (src/learn/sweep_table.c) and train's dataset (src/workflow/dataset.c).
+ * formatted, parsed and checked, its lines read by column name; used by the sweep (sweep.c: writing, resume),
+ * the shard merge (sweep_merge.c), learn's sweep table (src/learn/sweep_table.c) and train's dataset
+ * (src/workflow/dataset.c).
  * Not installed, not public: sweep.h describes the file, and its public calls (mr_sweep_format_row,
  * mr_sweep_parse_row, mr_sweep_check_row, mr_sweep_scene_parse) are defined in sweep_file.c on top of these.
  *
