@@ -1,5 +1,6 @@
 /*
- * sweep_table.c — sweep files read as packed parameter vectors (contract in sweep_table.h).
+ * sweep_table.c — sweep files read as packed parameter vectors (contract in sweep_table.h), through the sweep
+ * file's reader by column name (src/remap/sweep_file.h).
  */
 #include "learn/sweep_table.h"
 

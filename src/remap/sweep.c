@@ -1,6 +1,7 @@
 /*
  * sweep.c — parameter sweeps through mr_remap, streamed to a crash-safe, resumable CSV file (contract in
- * sweep.h).
+ * sweep.h): the samples, the spec's checks, the file opened, resumed and sorted, and the run (threads, and ranks
+ * under MPI). The file's format (header, rows, their checks) is sweep_file.c's; merging shards, sweep_merge.c's.
  *
  * Why the file protocol is what it is (the line-by-line part, shared with direct.c's caches, is remap_file.c's):
  *   - O_APPEND + one write() per complete line (remap_file.h): rows of different threads never interleave, and a

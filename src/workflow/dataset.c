@@ -1,5 +1,6 @@
 /*
- * dataset.c — sweep files -> (specular, metallic) training pairs. Contract in dataset.h.
+ * dataset.c — sweep files -> (specular, metallic) training pairs. Contract in dataset.h. The files are read
+ * through the sweep file's reader by column name (src/remap/sweep_file.h).
  */
 #include "dataset.h"
 
