@@ -21,6 +21,7 @@
 
 #include "../src/c_locale.h"
 #include "../src/mr_internal.h"
+#include "../src/text_lines.h"
 
 /* Hidden and output activations: the only pair version 1 knows. */
 #define ACTIVATIONS "relu linear"
@@ -152,9 +153,7 @@ mr_status mr_mlp_write(const mr_mlp *net, const char *path) {
 
 typedef struct parser {
     const char *name;
-    const char *p, *end; /* the unread bytes */
-    long line;           /* number of the current line (1-based) */
-    const char *s, *e;   /* the current line's unread part, without its '\n' */
+    mr_text_lines text; /* the lines and their tokens (src/text_lines.h) */
 } parser;
 
 #if defined(__GNUC__)
@@ -166,35 +165,19 @@ static mr_status bad(const parser *ps, const char *fmt, ...) {
     va_start(args, fmt);
     vsnprintf(why, sizeof why, fmt, args);
     va_end(args);
-    return mr_fail(MR_ERR_FORMAT, "mlp weights '%s': line %ld: %s", ps->name, ps->line, why);
+    return mr_fail(MR_ERR_FORMAT, "mlp weights '%s': line %ld: %s", ps->name, ps->text.line, why);
 }
 
 /* Step to the next line; `expected` names what should be there (for the end-of-file message). */
 static mr_status next_line(parser *ps, const char *expected) {
-    ps->line++;
-    if (ps->p >= ps->end) return bad(ps, "unexpected end of file (expected %s; truncated file?)", expected);
-    const char *nl = memchr(ps->p, '\n', (size_t)(ps->end - ps->p));
-    if (nl == NULL) return bad(ps, "last line has no end of line (truncated file?)");
-    ps->s = ps->p;
-    ps->e = nl;
-    ps->p = nl + 1;
-    return MR_OK;
+    mr_text_line_result got = mr_text_lines_next(&ps->text);
+    if (got == MR_TEXT_LINE) return MR_OK;
+    ps->text.line++; /* the messages name the line that is missing or torn */
+    if (got == MR_TEXT_END) return bad(ps, "unexpected end of file (expected %s; truncated file?)", expected);
+    return bad(ps, "last line has no end of line (truncated file?)");
 }
 
-/* The next space-separated token of the line into *tok / *len; 0 at the end of the line. */
-static int token(parser *ps, const char **tok, size_t *len) {
-    while (ps->s < ps->e && *ps->s == ' ') ps->s++;
-    if (ps->s >= ps->e) return 0;
-    const char *start = ps->s;
-    while (ps->s < ps->e && *ps->s != ' ') ps->s++;
-    *tok = start;
-    *len = (size_t)(ps->s - start);
-    return 1;
-}
-
-static int token_is(const char *tok, size_t len, const char *word) {
-    return len == strlen(word) && memcmp(tok, word, len) == 0;
-}
+static int token(parser *ps, const char **tok, size_t *len) { return mr_text_lines_token(&ps->text, tok, len); }
 
 /* Printable excerpt of a token for messages. */
 static const char *excerpt(const char *tok, size_t len, char *buf, size_t size) {
@@ -212,10 +195,10 @@ static const char *excerpt(const char *tok, size_t len, char *buf, size_t size) 
 static mr_status read_values(parser *ps, const char *key, float *v, size_t count, int positive) {
     mr_status status = next_line(ps, key);
     if (status != MR_OK) return status;
-    const char *tok = ps->s;
+    const char *tok = ps->text.s;
     size_t len = 0;
     char shown[40];
-    if (!token(ps, &tok, &len) || !token_is(tok, len, key))
+    if (!token(ps, &tok, &len) || !mr_text_token_is(tok, len, key))
         return bad(ps, "expected '%s', found '%s'", key, excerpt(tok, len, shown, sizeof shown));
     size_t q = 0;
     for (; token(ps, &tok, &len); q++) {
@@ -243,10 +226,10 @@ static mr_status read_values(parser *ps, const char *key, float *v, size_t count
 static mr_status read_size(parser *ps, const char *key, int limit, int *out) {
     mr_status status = next_line(ps, key);
     if (status != MR_OK) return status;
-    const char *tok = ps->s;
+    const char *tok = ps->text.s;
     size_t len = 0;
     char shown[40];
-    if (!token(ps, &tok, &len) || !token_is(tok, len, key))
+    if (!token(ps, &tok, &len) || !mr_text_token_is(tok, len, key))
         return bad(ps, "expected '%s N', found '%s'", key, excerpt(tok, len, shown, sizeof shown));
     if (!token(ps, &tok, &len)) return bad(ps, "'%s' without a value", key);
     long value = 0;
@@ -266,16 +249,16 @@ static mr_status read_size(parser *ps, const char *key, int limit, int *out) {
 static mr_status read_magic(parser *ps, int *version_out) {
     mr_status status = next_line(ps, "'" MR_MLP_FILE_MAGIC " 1'");
     if (status != MR_OK) return status;
-    const char *tok = ps->s;
+    const char *tok = ps->text.s;
     size_t len = 0;
     char shown[40];
-    if (!token(ps, &tok, &len) || !token_is(tok, len, MR_MLP_FILE_MAGIC))
+    if (!token(ps, &tok, &len) || !mr_text_token_is(tok, len, MR_MLP_FILE_MAGIC))
         return bad(ps, "not an MLP weight file (expected '%s %d', found '%s')", MR_MLP_FILE_MAGIC, MR_MLP_FILE_VERSION,
                    excerpt(tok, len, shown, sizeof shown));
     if (!token(ps, &tok, &len)) return bad(ps, "no version after '%s'", MR_MLP_FILE_MAGIC);
-    if (token_is(tok, len, "1"))
+    if (mr_text_token_is(tok, len, "1"))
         *version_out = 1;
-    else if (token_is(tok, len, "2"))
+    else if (mr_text_token_is(tok, len, "2"))
         *version_out = 2;
     else
         return bad(ps, "unsupported version '%s' (this build reads versions 1 to %d)",
@@ -299,11 +282,11 @@ static mr_status parse_net(parser *ps, mr_mlp **out) {
     if (status != MR_OK) return status;
     static const char *const activation_words[] = {"activation", "relu", "linear"};
     for (int w = 0; w < 4; w++) {
-        const char *tok = ps->s;
+        const char *tok = ps->text.s;
         size_t len = 0;
         char shown[40];
         int got = token(ps, &tok, &len);
-        if (w == 3 ? got : !got || !token_is(tok, len, activation_words[w]))
+        if (w == 3 ? got : !got || !mr_text_token_is(tok, len, activation_words[w]))
             return bad(ps, "unsupported activations (expected 'activation " ACTIVATIONS "', found '%s')",
                        excerpt(tok, len, shown, sizeof shown));
     }
@@ -311,15 +294,15 @@ static mr_status parse_net(parser *ps, mr_mlp **out) {
     if (version == 2) {
         status = next_line(ps, "'kind WORD'");
         if (status != MR_OK) return status;
-        const char *tok = ps->s, *word = NULL;
+        const char *tok = ps->text.s, *word = NULL;
         size_t len = 0, word_len = 0;
         char shown[40];
-        int ok = token(ps, &tok, &len) && token_is(tok, len, "kind") && token(ps, &word, &word_len) &&
+        int ok = token(ps, &tok, &len) && mr_text_token_is(tok, len, "kind") && token(ps, &word, &word_len) &&
                  word_len < MR_MLP_KIND_MAX && !token(ps, &tok, &len);
         for (size_t q = 0; ok && q < word_len; q++) ok = kind_char(word[q]);
         if (!ok)
             return bad(ps, "expected 'kind WORD' (a word of at most %d letters, digits, '.', '_' or '-'), found '%s'",
-                       MR_MLP_KIND_MAX - 1, excerpt(ps->s - len, len, shown, sizeof shown));
+                       MR_MLP_KIND_MAX - 1, excerpt(ps->text.s - len, len, shown, sizeof shown));
         memcpy(kind, word, word_len);
         kind[word_len] = '\0';
     }
@@ -337,12 +320,13 @@ static mr_status parse_net(parser *ps, mr_mlp **out) {
     for (size_t k = 0; k < O && status == MR_OK; k++) status = read_values(ps, "w2", net->w2 + k * H, H, 0);
     if (status == MR_OK) status = read_values(ps, "b2", net->b2, O, 0);
     if (status == MR_OK) status = next_line(ps, "'end'");
-    if (status == MR_OK && !token_is(ps->s, (size_t)(ps->e - ps->s), "end")) {
+    if (status == MR_OK && !mr_text_token_is(ps->text.s, (size_t)(ps->text.e - ps->text.s), "end")) {
         char shown[40];
-        status = bad(ps, "expected 'end', found '%s'", excerpt(ps->s, (size_t)(ps->e - ps->s), shown, sizeof shown));
+        status = bad(ps, "expected 'end', found '%s'",
+                     excerpt(ps->text.s, (size_t)(ps->text.e - ps->text.s), shown, sizeof shown));
     }
-    if (status == MR_OK && ps->p < ps->end) {
-        ps->line++;
+    if (status == MR_OK && ps->text.p < ps->text.end) {
+        ps->text.line++;
         status = bad(ps, "unexpected content after 'end'");
     }
     if (status != MR_OK) {
@@ -358,7 +342,8 @@ mr_status mr_mlp_parse(const char *text, size_t size, const char *name, mr_mlp *
     if (out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mlp weights '%s': NULL output pointer", name);
     if (text == NULL && size > 0) return mr_fail(MR_ERR_INVALID_ARG, "mlp weights '%s': NULL text", name);
     if (text == NULL) text = "";
-    parser ps = {name, text, text + size, 0, NULL, NULL};
+    parser ps = {name, {0}};
+    mr_text_lines_init(&ps.text, text, size);
     mr_c_numeric locale;
     mr_status status = mr_c_numeric_enter(&locale, "mlp read");
     if (status != MR_OK) return status;

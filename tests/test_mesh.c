@@ -1033,7 +1033,18 @@ MR_TEST(mesh_single_sided_backs_let_light_through) {
     test_mesh_free(&flipped);
 }
 
-MR_TEST_MAIN(MR_TEST_ENTRY(mesh_sphere_matches_the_analytic_sphere),
+/* mr_mesh_corner_angle, the weight of a triangle's normal at a corner (the renderer's and the OBJ reader's). */
+MR_TEST(mesh_corner_angle_known_answers) {
+    const double o[3] = {0, 0, 0}, x[3] = {2, 0, 0}, y[3] = {0, 3, 0}, xy[3] = {1, 1, 0}, pi = acos(-1.0);
+    MR_CHECK_NEAR(mr_mesh_corner_angle(o, x, y), pi / 2, 1e-15);
+    MR_CHECK_NEAR(mr_mesh_corner_angle(o, x, xy), pi / 4, 1e-15);
+    MR_CHECK(mr_mesh_corner_angle(o, x, x) == 0.0); /* degenerate: no area, no weight */
+    MR_CHECK(mr_mesh_corner_angle(o, o, y) == 0.0);
+    const double angles = mr_mesh_corner_angle(o, x, y) + mr_mesh_corner_angle(x, y, o) + mr_mesh_corner_angle(y, o, x);
+    MR_CHECK_NEAR(angles, pi, 1e-14);
+}
+
+MR_TEST_MAIN(MR_TEST_ENTRY(mesh_sphere_matches_the_analytic_sphere), MR_TEST_ENTRY(mesh_corner_angle_known_answers),
              MR_TEST_ENTRY(mesh_bvh_agrees_with_brute_force),
              MR_TEST_ENTRY(mesh_convex_needs_no_shadow_rays_concave_gets_them),
              MR_TEST_ENTRY(mesh_shadow_of_a_plate_under_a_point_light),

@@ -19,6 +19,7 @@
 #include "../nn/mlp_internal.h"
 #include "mr_core.h" /* mr_rng_*: the seeded inputs */
 #include "harness.h"
+#include "text_lines.h"
 
 /* ---- helpers ---------------------------------------------------------------------------------------------- */
 
@@ -662,6 +663,28 @@ MR_TEST(inference_throughput) {
     mr_mlp_free(net);
 }
 
+/* The line tokenizer the .mlp and .mrt readers share (src/text_lines.h): lines counted from 1, tokens split at
+ * runs of spaces, a last line without its '\n' told apart from the end of the text. */
+MR_TEST(text_lines_count_lines_and_split_tokens) {
+    const char text[] = "w1  1 -2\n\nend";
+    mr_text_lines t;
+    mr_text_lines_init(&t, text, sizeof text - 1);
+    const char *tok = NULL;
+    size_t len = 0;
+    MR_CHECK(mr_text_lines_next(&t) == MR_TEXT_LINE && t.line == 1 && t.line_start == text);
+    MR_CHECK(mr_text_lines_token(&t, &tok, &len) && mr_text_token_is(tok, len, "w1"));
+    MR_CHECK(mr_text_lines_token(&t, &tok, &len) && mr_text_token_is(tok, len, "1"));
+    MR_CHECK(mr_text_lines_token(&t, &tok, &len) && mr_text_token_is(tok, len, "-2"));
+    MR_CHECK(!mr_text_lines_token(&t, &tok, &len));
+    MR_CHECK(mr_text_lines_next(&t) == MR_TEXT_LINE && t.line == 2 && !mr_text_lines_token(&t, &tok, &len));
+    MR_CHECK(mr_text_lines_next(&t) == MR_TEXT_NO_LINE_END && t.line == 2); /* "end" has no '\n' */
+    mr_text_lines_init(&t, "x\n", 2);
+    MR_CHECK(mr_text_lines_next(&t) == MR_TEXT_LINE && mr_text_lines_next(&t) == MR_TEXT_END && t.line == 1);
+    mr_text_lines_init(&t, NULL, 0);
+    MR_CHECK(mr_text_lines_next(&t) == MR_TEXT_END);
+    MR_CHECK(!mr_text_token_is("end", 3, "en") && !mr_text_token_is("en", 2, "end"));
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(gradient_matches_central_differences), MR_TEST_ENTRY(predict_matches_scalar_reference),
              MR_TEST_ENTRY(predict_is_identical_for_1_and_2_threads),
              MR_TEST_ENTRY(nan_input_propagates_to_its_row_only),
@@ -671,4 +694,4 @@ MR_TEST_MAIN(MR_TEST_ENTRY(gradient_matches_central_differences), MR_TEST_ENTRY(
              MR_TEST_ENTRY(constant_features_normalise_without_nan),
              MR_TEST_ENTRY(early_stopping_restores_the_best_weights),
              MR_TEST_ENTRY(callback_stops_training_and_defaults_apply), MR_TEST_ENTRY(bad_arguments_are_refused),
-             MR_TEST_ENTRY(inference_throughput))
+             MR_TEST_ENTRY(inference_throughput), MR_TEST_ENTRY(text_lines_count_lines_and_split_tokens))

@@ -15,6 +15,7 @@
 #include "harness.h"
 #include "matremap.h"
 #include "remap/sweep.h"
+#include "remap/sweep_file.h"
 
 static char tmpdir[64];
 
@@ -1155,6 +1156,78 @@ MR_TEST(a_torn_last_row_is_never_counted_even_when_only_its_line_end_is_missing)
     free(full);
 }
 
+/* The sweep file's module (sweep_file.h): a header read back into its sweep rebuilds byte for byte (what merge
+ * relies on), and the column-name reader that learn and train use finds the columns, counts lines and refuses an
+ * over-long one naming file and line. */
+MR_TEST(sweep_file_header_reads_back_and_the_column_reader_counts_lines) {
+    mr_sweep_spec spec;
+    mr_sweep_spec_init(&spec, mr_brdf_find("ward"), mr_brdf_find("ggx"));
+    spec.sampling = MR_SWEEP_RANDOM;
+    spec.random_count = 5;
+    spec.seed = 7;
+    spec.scene.size = 16;
+    mr_strbuf header = {0};
+    MR_CHECK_OK(mr_sweep_file_header(&spec, "cmd", 1, 3, &header));
+    // The texts after each prefix, as merge finds them.
+    const char *prefixes[5] = {MR_SWEEP_FROM_PREFIX, MR_SWEEP_TO_PREFIX, MR_SWEEP_REMAP_PREFIX, MR_SWEEP_SCENE_PREFIX,
+                               MR_SWEEP_SAMPLING_PREFIX};
+    char texts[5][MR_SWEEP_MAX_LINE];
+    for (int i = 0; i < 5; i++) {
+        const char *at = strstr(header.text, prefixes[i]);
+        MR_CHECK(at != NULL);
+        if (at == NULL) return;
+        at += strlen(prefixes[i]);
+        snprintf(texts[i], sizeof texts[i], "%.*s", (int)strcspn(at, "\n"), at);
+    }
+    mr_sweep_spec back;
+    const char *step = NULL;
+    MR_CHECK_OK(mr_sweep_file_spec_from_header(texts[0], texts[1], texts[2], texts[3], texts[4], &back, &step));
+    mr_strbuf rebuilt = {0};
+    MR_CHECK_OK(mr_sweep_file_header(&back, "cmd", 1, 3, &rebuilt));
+    MR_CHECK(rebuilt.length == header.length && memcmp(rebuilt.text, header.text, header.length) == 0);
+    // A "# from:" line naming no model fails at that step.
+    MR_CHECK(mr_sweep_file_spec_from_header("", texts[1], texts[2], texts[3], texts[4], &back, &step) ==
+             MR_ERR_FORMAT);
+    MR_CHECK(strcmp(step, "# from:") == 0 && strstr(mr_last_error(), "no model named") != NULL);
+
+    // The column-name reader over the header, two rows and a line longer than its limit.
+    const char *path = tmp_path("column_reader.csv");
+    FILE *f = fopen(path, "w");
+    fprintf(f, "%sa,b\n", header.text);
+    for (int i = 0; i < 300; i++) fputc('9', f);
+    fputc('\n', f);
+    fclose(f);
+    mr_sweep_reader reader = {0};
+    MR_CHECK_OK(mr_sweep_reader_open(&reader, path, 200));
+    mr_status status = MR_OK;
+    long lines = 0;
+    char *names[64];
+    int column_of_seconds = -1;
+    while (mr_sweep_reader_next(&reader, &status) > 0) {
+        lines++;
+        MR_CHECK(reader.line_number == lines);
+        if (strncmp(reader.line, "index,", 6) == 0) {
+            int count = mr_csv_split(reader.line, names, 64);
+            column_of_seconds = mr_sweep_file_find_column(names, count, "seconds");
+            MR_CHECK(mr_sweep_file_find_column(names, count, "no such column") == -1);
+        }
+    }
+    long before_long = 1; /* the header's lines (the column line last), then "a,b" */
+    for (const char *c = header.text; *c; c++) before_long += *c == '\n';
+    MR_CHECK_MSG(lines == before_long, "%ld lines before the long one, expected %ld", lines, before_long);
+    MR_CHECK(column_of_seconds ==
+             mr_brdf_value_count(spec.source) + mr_brdf_value_count(spec.target) + MR_SWEEP_ROW_TAIL_COLUMNS);
+    char where[64];
+    snprintf(where, sizeof where, ":%ld: line longer than 200 bytes", before_long + 1);
+    MR_CHECK_MSG(status == MR_ERR_FORMAT && strstr(mr_last_error(), where) != NULL, "%s", mr_last_error());
+    mr_sweep_reader_close(&reader);
+    double x = 0.0;
+    MR_CHECK(mr_sweep_file_parse_number("0.25", &x) && x == 0.25);
+    MR_CHECK(!mr_sweep_file_parse_number("inf", &x) && !mr_sweep_file_parse_number("1x", &x));
+    free(header.text);
+    free(rebuilt.text);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(grid_is_cartesian_first_axis_slowest_with_exact_endpoints),
              MR_TEST_ENTRY(grid_log_spacing_is_geometric), MR_TEST_ENTRY(grid_errors_name_the_bad_value),
              MR_TEST_ENTRY(random_samples_depend_only_on_seed_and_index_and_stay_in_bounds),
@@ -1169,4 +1242,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(grid_is_cartesian_first_axis_slowest_with_exact_endpo
              MR_TEST_ENTRY(shards_merge_into_the_single_process_file),
              MR_TEST_ENTRY(merge_refuses_shards_that_do_not_belong_together),
              MR_TEST_ENTRY(resume_refuses_rows_that_are_not_sane_naming_line_and_column),
-             MR_TEST_ENTRY(a_torn_last_row_is_never_counted_even_when_only_its_line_end_is_missing))
+             MR_TEST_ENTRY(a_torn_last_row_is_never_counted_even_when_only_its_line_end_is_missing),
+             MR_TEST_ENTRY(sweep_file_header_reads_back_and_the_column_reader_counts_lines))

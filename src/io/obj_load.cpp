@@ -22,6 +22,7 @@
 #include <tiny_obj_loader.h>
 
 #include "mr_internal.h"
+#include "render/mesh.h" /* mr_mesh_corner_angle: the renderer's weighting of smooth normals */
 
 namespace {
 
@@ -187,16 +188,6 @@ void cross3(const double *a, const double *b, double *out) {
 }
 
 double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-
-// The corner angle at a between the edges to b and c; 0 for a degenerate corner (render/mesh.c's rule).
-double corner_angle(const double *a, const double *b, const double *c) {
-    double u[3], v[3], x[3];
-    sub3(b, a, u);
-    sub3(c, a, v);
-    cross3(u, v, x);
-    double s = sqrt(dot3(x, x));
-    return s > 0.0 ? atan2(s, dot3(u, v)) : 0.0;
-}
 
 // A file normal made unit; false when it is zero or not finite (then a computed one is used).
 bool unit_normal(const std::vector<tinyobj::real_t> &normals, int vn, double out[3]) {
@@ -369,7 +360,8 @@ struct loader {
                 cross3(e1, e2, n);
                 double len = sqrt(dot3(n, n));
                 if (!(len > 0.0)) continue;
-                double angle[3] = {corner_angle(p0, p1, p2), corner_angle(p1, p2, p0), corner_angle(p2, p0, p1)};
+                double angle[3] = {mr_mesh_corner_angle(p0, p1, p2), mr_mesh_corner_angle(p1, p2, p0),
+                                   mr_mesh_corner_angle(p2, p0, p1)};
                 for (int j = 0; j < 3; j++) {
                     auto it = slot.find(vertices[t[j]].v);
                     if (it == slot.end()) continue;

@@ -18,6 +18,7 @@
 #include "mr_internal.h"
 #include "nn/mlp.h"
 #include "remap/remap_file.h"
+#include "text_lines.h"
 
 #define MAX_TOKEN 63
 #define MAX_FILE_BYTES ((size_t)1 << 30)
@@ -221,10 +222,8 @@ mr_status mr_learned_write(const mr_learned *t, const char *path) {
 
 typedef struct parser {
     const char *name;
-    const char *start, *p, *end; /* the whole text; the unread bytes */
-    long line;
-    const char *s, *e;           /* the current line's unread part */
-    const char *line_start;      /* where the current line began (the checksum covers what precedes it) */
+    mr_text_lines text; /* the lines and their tokens (src/text_lines.h); text.line_start: where the current
+                           line began (the checksum covers what precedes it) */
 } parser;
 
 #if defined(__GNUC__)
@@ -236,32 +235,21 @@ static mr_status bad(const parser *ps, const char *fmt, ...) {
     va_start(args, fmt);
     vsnprintf(why, sizeof why, fmt, args);
     va_end(args);
-    return mr_fail(MR_ERR_FORMAT, "transform '%s': line %ld: %s", ps->name, ps->line, why);
+    return mr_fail(MR_ERR_FORMAT, "transform '%s': line %ld: %s", ps->name, ps->text.line, why);
 }
 
 /* The next line that is not a comment; `raw` also takes comment lines (provenance, mlp blocks keep theirs). */
 static mr_status next_line(parser *ps, const char *expected, int raw) {
     for (;;) {
-        if (ps->p >= ps->end) return bad(ps, "the file ends early: expected %s (a truncated file?)", expected);
-        const char *nl = memchr(ps->p, '\n', (size_t)(ps->end - ps->p));
-        if (nl == NULL) return bad(ps, "the last line has no line end: expected %s (a truncated file?)", expected);
-        ps->line++;
-        ps->line_start = ps->p;
-        ps->s = ps->p;
-        ps->e = nl;
-        ps->p = nl + 1;
-        if (raw || ps->s == ps->e || ps->s[0] != '#') return MR_OK;
+        mr_text_line_result got = mr_text_lines_next(&ps->text);
+        if (got == MR_TEXT_END) return bad(ps, "the file ends early: expected %s (a truncated file?)", expected);
+        if (got == MR_TEXT_NO_LINE_END)
+            return bad(ps, "the last line has no line end: expected %s (a truncated file?)", expected);
+        if (raw || ps->text.s == ps->text.e || ps->text.s[0] != '#') return MR_OK;
     }
 }
 
-static int token(parser *ps, const char **tok, size_t *len) {
-    while (ps->s < ps->e && *ps->s == ' ') ps->s++;
-    if (ps->s >= ps->e) return 0;
-    *tok = ps->s;
-    while (ps->s < ps->e && *ps->s != ' ') ps->s++;
-    *len = (size_t)(ps->s - *tok);
-    return 1;
-}
+static int token(parser *ps, const char **tok, size_t *len) { return mr_text_lines_token(&ps->text, tok, len); }
 
 static mr_status expect_key(parser *ps, const char *key) {
     mr_status status = next_line(ps, key, 0);
@@ -269,7 +257,8 @@ static mr_status expect_key(parser *ps, const char *key) {
     const char *tok;
     size_t len;
     if (!token(ps, &tok, &len) || len != strlen(key) || memcmp(tok, key, len) != 0)
-        return bad(ps, "expected '%s', found '%.*s'", key, (int)MR_MIN(ps->e - ps->line_start, 40), ps->line_start);
+        return bad(ps, "expected '%s', found '%.*s'", key, (int)MR_MIN(ps->text.e - ps->text.line_start, 40),
+                   ps->text.line_start);
     return MR_OK;
 }
 
@@ -440,12 +429,13 @@ static mr_status parse_mlp(parser *ps, mr_learned *t) {
     long lines = 0;
     mr_status status = count_line(ps, "mlp", 100000000L, &lines);
     if (status != MR_OK) return status;
-    const char *from = ps->p;
+    const char *from = ps->text.p;
     for (long k = 0; k < lines && status == MR_OK; k++) status = next_line(ps, "a line of the network", 1);
     if (status != MR_OK) return status;
     char label[600];
-    snprintf(label, sizeof label, "%s, its network (lines %ld-%ld)", ps->name, ps->line - lines + 1, ps->line);
-    status = mr_mlp_parse(from, (size_t)(ps->p - from), label, &t->mlp);
+    snprintf(label, sizeof label, "%s, its network (lines %ld-%ld)", ps->name, ps->text.line - lines + 1,
+             ps->text.line);
+    status = mr_mlp_parse(from, (size_t)(ps->text.p - from), label, &t->mlp);
     if (status != MR_OK) return status;
     if (t->mlp->n_in != t->feature_count || t->mlp->n_out != t->output_count)
         return bad(ps, "the network has %d inputs and %d outputs; the transform %d features and %d outputs",
@@ -569,12 +559,12 @@ static mr_status parse_all(parser *ps, mr_learned *t) {
     size_t length = 0;
     for (long k = 0; k < count; k++) {
         if ((status = next_line(ps, "a provenance line", 1)) != MR_OK) return status;
-        if (ps->e - ps->s < 2 || ps->s[0] != '|' || ps->s[1] != ' ')
+        if (ps->text.e - ps->text.s < 2 || ps->text.s[0] != '|' || ps->text.s[1] != ' ')
             return bad(ps, "expected a provenance line '| ...'");
-        const size_t add = (size_t)(ps->e - ps->s - 2);
+        const size_t add = (size_t)(ps->text.e - ps->text.s - 2);
         char *grown = realloc(t->provenance, length + add + 2);
         if (grown == NULL) return mr_fail(MR_ERR_NOMEM, "transform '%s': out of memory", ps->name);
-        memcpy(grown + length, ps->s + 2, add);
+        memcpy(grown + length, ps->text.s + 2, add);
         length += add;
         grown[length++] = '\n';
         grown[length] = '\0';
@@ -609,7 +599,7 @@ static mr_status parse_all(parser *ps, mr_learned *t) {
         if ((status = parse_mlp(ps, t)) != MR_OK) return status;
     }
     if ((status = expect_key(ps, "checksum")) != MR_OK) return status;
-    const uint32_t computed = fnv1a(ps->start, (size_t)(ps->line_start - ps->start));
+    const uint32_t computed = fnv1a(ps->text.start, (size_t)(ps->text.line_start - ps->text.start));
     char sum[16];
     if ((status = word(ps, "checksum", sum, sizeof sum)) != MR_OK) return status;
     end = NULL;
@@ -622,8 +612,8 @@ static mr_status parse_all(parser *ps, mr_learned *t) {
     if ((status = line_end(ps)) != MR_OK) return status;
     if ((status = expect_key(ps, "end")) != MR_OK) return status;
     if ((status = line_end(ps)) != MR_OK) return status;
-    if (ps->p != ps->end) {
-        ps->line++;
+    if (ps->text.p != ps->text.end) {
+        ps->text.line++;
         return bad(ps, "text after 'end'");
     }
     return MR_OK;
@@ -635,7 +625,8 @@ mr_status mr_learned_parse(const char *text, size_t size, const char *name, mr_l
         return mr_fail(MR_ERR_INVALID_ARG, "transform '%s': NULL argument", name);
     mr_learned *t = calloc(1, sizeof *t);
     if (t == NULL) return mr_fail(MR_ERR_NOMEM, "transform '%s': out of memory", name);
-    parser ps = {name, text ? text : "", text ? text : "", (text ? text : "") + size, 0, NULL, NULL, NULL};
+    parser ps = {name, {0}};
+    mr_text_lines_init(&ps.text, text, size);
     mr_c_numeric locale;
     mr_status status = mr_c_numeric_enter(&locale, "transform read");
     if (status == MR_OK) {

@@ -1,10 +1,9 @@
 /*
- * sweep_table.c — sweep files read as packed parameter vectors (contract in sweep_table.h).
+ * sweep_table.c — sweep files read as packed parameter vectors (contract in sweep_table.h), through the sweep
+ * file's reader by column name (src/remap/sweep_file.h).
  */
 #include "learn/sweep_table.h"
 
-#include <errno.h>
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -12,9 +11,10 @@
 #include "c_locale.h"
 #include "mr_internal.h"
 #include "remap/remap_file.h"
+#include "remap/sweep_file.h"
 
 #define MAX_COLUMNS 128
-#define MAX_LINE 8192
+#define MAX_LINE 8190 /* without the '\n' */
 
 /* Where each packed slot of a model is among a file's columns. */
 typedef struct file_columns {
@@ -27,53 +27,24 @@ typedef struct file_header {
     char from_model[64], to_line[1024], scene[256];
 } file_header;
 
-static int parse_number(const char *text, double *out) {
-    char *end = NULL;
-    errno = 0;
-    double v = strtod(text, &end);
-    if (end == text || *end != '\0' || !isfinite(v)) return 0;
-    *out = v;
-    return 1;
-}
-
 /* "MODEL name=v name=v ..." (the text after "# from: " or "# to: "): the model, and its values into values[]
  * (defaults for parameters not named). */
 static mr_status parse_model_line(const char *path, long line_number, const char *text, const mr_brdf_model **model,
                                   double *values) {
-    char buf[1024];
-    snprintf(buf, sizeof buf, "%s", text);
-    buf[strcspn(buf, "\r\n")] = '\0';
-    char *save = NULL, *word = strtok_r(buf, " ", &save);
-    if (word == NULL) return mr_fail(MR_ERR_FORMAT, "%s:%ld: no model named", path, line_number);
-    *model = mr_brdf_find(word);
-    if (*model == NULL) return mr_fail_context(MR_ERR_FORMAT, "%s:%ld", path, line_number);
-    mr_brdf_default_values(*model, values);
-    while ((word = strtok_r(NULL, " ", &save)) != NULL) {
-        mr_status status = mr_brdf_parse_assignment(*model, word, values);
-        if (status != MR_OK) return mr_fail_context(MR_ERR_FORMAT, "%s:%ld", path, line_number);
-    }
-    return MR_OK;
+    mr_status status = mr_sweep_file_parse_model(text, strcspn(text, "\r\n"), model, values);
+    return status == MR_OK ? MR_OK : mr_fail_context(MR_ERR_FORMAT, "%s:%ld", path, line_number);
 }
 
 /* The column of every packed slot of `model` (prefix "" or "to_"). */
 static mr_status map_model_columns(const char *path, char **names, int count, const mr_brdf_model *model,
                                    const char *prefix, int *slots) {
-    static const char rgb[3] = {'r', 'g', 'b'};
-    for (int p = 0, k = 0; p < model->param_count; p++) {
-        const mr_brdf_param *param = &model->params[p];
-        for (int c = 0; c < param->channels; c++, k++) {
-            char name[96];
-            if (param->channels == 3)
-                snprintf(name, sizeof name, "%s%s_%c", prefix, param->name, rgb[c]);
-            else
-                snprintf(name, sizeof name, "%s%s", prefix, param->name);
-            slots[k] = -1;
-            for (int i = 0; i < count; i++)
-                if (strcmp(names[i], name) == 0) slots[k] = i;
-            if (slots[k] < 0)
-                return mr_fail(MR_ERR_FORMAT, "%s: no column '%s' (model %s): not a sweep file of this model pair",
-                               path, name, model->name);
-        }
+    for (int k = 0; k < mr_brdf_value_count(model); k++) {
+        char name[96];
+        mr_sweep_file_slot_name(model, k, prefix, name, sizeof name);
+        slots[k] = mr_sweep_file_find_column(names, count, name);
+        if (slots[k] < 0)
+            return mr_fail(MR_ERR_FORMAT, "%s: no column '%s' (model %s): not a sweep file of this model pair", path,
+                           name, model->name);
     }
     return MR_OK;
 }
@@ -118,43 +89,36 @@ static mr_status check_range(const char *path, long line_number, const mr_brdf_m
 
 static mr_status load_file(const char *path, const mr_sweep_table_options *opts, int first, file_header *reference,
                            const char *reference_path, mr_sweep_table *t, size_t *capacity, size_t *prov_length) {
-    FILE *f = NULL;
-    mr_status opened = mr_io_open_input(path, path, 0, &f, NULL); /* regular files only: a FIFO would block */
-    if (opened != MR_OK) return opened;
-    char *line = malloc(MAX_LINE);
+    mr_sweep_reader reader = {0};
+    mr_status status = mr_sweep_reader_open(&reader, path, MAX_LINE);
     char *header_text = NULL;
     size_t header_length = 0;
-    mr_status status = line ? MR_OK : mr_fail(MR_ERR_NOMEM, "sweep table: out of memory");
     file_header h = {{0}, {0}, {0}};
     const mr_brdf_model *source = NULL, *target = NULL;
     double source_fixed[MR_BRDF_MAX_VALUES], target_fixed[MR_BRDF_MAX_VALUES];
     file_columns cols;
     int have_columns = 0;
-    long line_number = 0;
     size_t rows = 0, kept = 0;
-    while (status == MR_OK && fgets(line, MAX_LINE, f) != NULL) {
-        line_number++;
-        size_t length = strlen(line);
-        if (length == MAX_LINE - 1 && line[length - 1] != '\n') {
-            status = mr_fail(MR_ERR_FORMAT, "%s:%ld: line longer than %d bytes", path, line_number, MAX_LINE - 2);
-            break;
-        }
+    while (status == MR_OK && mr_sweep_reader_next(&reader, &status) > 0) {
+        char *line = reader.line;
+        const long line_number = reader.line_number;
         if (line[0] == '#') {
             if (have_columns) {
                 status = mr_fail(MR_ERR_FORMAT, "%s:%ld: a '#' line after the column line", path, line_number);
                 break;
             }
-            if (strncmp(line, "# command:", 10) != 0) status = append_text(&header_text, &header_length, line);
+            if (strncmp(line, MR_SWEEP_COMMAND_PREFIX, 10) != 0)
+                status = append_text(&header_text, &header_length, line);
             if (status != MR_OK)
                 break; // (the header line's own parse below would overwrite the status)
-            if (strncmp(line, "# from: ", 8) == 0) {
+            if (strncmp(line, MR_SWEEP_FROM_PREFIX, 8) == 0) {
                 status = parse_model_line(path, line_number, line + 8, &source, source_fixed);
                 if (source) snprintf(h.from_model, sizeof h.from_model, "%s", source->name);
-            } else if (strncmp(line, "# to: ", 6) == 0) {
+            } else if (strncmp(line, MR_SWEEP_TO_PREFIX, 6) == 0) {
                 snprintf(h.to_line, sizeof h.to_line, "%s", line + 6);
                 h.to_line[strcspn(h.to_line, "\r\n")] = '\0';
                 status = parse_model_line(path, line_number, line + 6, &target, target_fixed);
-            } else if (strncmp(line, "# scene: ", 9) == 0) {
+            } else if (strncmp(line, MR_SWEEP_SCENE_PREFIX, 9) == 0) {
                 snprintf(h.scene, sizeof h.scene, "%s", line + 9);
                 h.scene[strcspn(h.scene, "\r\n")] = '\0';
             }
@@ -228,7 +192,7 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
             double *into = k < t->source_count                     ? sv + k
                            : k < t->source_count + t->target_count ? tv + (k - t->source_count)
                                                                    : t->ssim + t->n;
-            if (!parse_number(fields[column], into))
+            if (!mr_sweep_file_parse_number(fields[column], into))
                 status = mr_fail(MR_ERR_FORMAT, "%s:%ld: column %d ('%s') is not a finite number", path, line_number,
                                  column + 1, fields[column]);
         }
@@ -242,7 +206,6 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
         t->outcome[t->n++] = outcome;
         kept++;
     }
-    if (status == MR_OK && ferror(f)) status = mr_fail(MR_ERR_IO, "%s: read error: %s", path, strerror(errno));
     if (status == MR_OK && !have_columns)
         status = mr_fail(MR_ERR_FORMAT, "%s: no column line: not a matremap sweep file (or an empty one)", path);
     if (status == MR_OK) {
@@ -252,8 +215,7 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
         if (status == MR_OK && header_text) status = append_text(&t->provenance, prov_length, header_text);
     }
     free(header_text);
-    free(line);
-    fclose(f);
+    mr_sweep_reader_close(&reader);
     return status;
 }
 

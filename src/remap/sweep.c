@@ -1,6 +1,7 @@
 /*
  * sweep.c — parameter sweeps through mr_remap, streamed to a crash-safe, resumable CSV file (contract in
- * sweep.h).
+ * sweep.h): the samples, the spec's checks, the file opened, resumed and sorted, and the run (threads, and ranks
+ * under MPI). The file's format (header, rows, their checks) is sweep_file.c's; merging shards, sweep_merge.c's.
  *
  * Why the file protocol is what it is (the line-by-line part, shared with direct.c's caches, is remap_file.c's):
  *   - O_APPEND + one write() per complete line (remap_file.h): rows of different threads never interleave, and a
@@ -31,11 +32,10 @@
 #include "../c_locale.h"
 #include "../mr_internal.h"
 #include "remap_file.h"
+#include "sweep_file.h"
+#include "sweep_internal.h"
 
-#define COMMAND_PREFIX "# command: "
-#define SHARD_PREFIX "# shard: "
 #define WHAT "sweep file" /* what messages call the file */
-#define ROW_TAIL_COLUMNS 6 /* rmse, relative_rmse, ssim, outcome, renders, seconds */
 
 /* ---- samples --------------------------------------------------------------------------------------------- */
 
@@ -330,243 +330,10 @@ mr_status mr_sweep_sample(const mr_sweep_spec *spec, long index, double *values)
     return MR_OK;
 }
 
-/* ---- header, columns, rows ---------------------------------------------------------------------------------- */
+long mr_sweep_total_unchecked(const mr_sweep_spec *spec) { return sample_count_unchecked(spec); }
 
-/* The header for this run (every line '\n'-terminated, the column line last), in the C numeric locale; a shard
- * (shard_count > 0) adds "# shard: K/N" before the command line. */
-static mr_status build_header(const mr_sweep_spec *spec, const char *command_line, long shard_index, long shard_count,
-                              mr_strbuf *sb) {
-    mr_strbuf_printf(sb, "# matremap %s sweep\n", mr_version());
-    mr_strbuf_printf(sb, "# from: %s", spec->source->name);
-    mr_strbuf_values(sb, spec->source, spec->source_values);
-    mr_strbuf_printf(sb, "\n# to: %s", spec->target->name);
-    mr_strbuf_values(sb, spec->target, spec->target_values);
-    mr_strbuf_printf(sb, "\n");
-    mr_strbuf_remap_lines(sb, spec->target, &spec->remap, &spec->scene);
-    if (spec->sampling == MR_SWEEP_GRID) {
-        mr_strbuf_printf(sb, "# sampling: grid");
-        for (int a = 0; a < spec->axis_count; a++) {
-            const mr_sweep_axis *axis = &spec->axes[a];
-            mr_strbuf_printf(sb, " %s=%.17g:%.17g:%ld%s", spec->source->params[axis->param].name, axis->lo, axis->hi,
-                      axis->count, axis->log_scale ? ":log" : "");
-        }
-    } else {
-        mr_strbuf_printf(sb, "# sampling: random=%ld seed=%llu", spec->random_count, spec->seed);
-        // Files from before regions have no region word, and are RANGE (parse_sampling_line).
-        if (spec->region != MR_SWEEP_REGION_RANGE)
-            mr_strbuf_printf(sb, " region=%s", mr_sweep_region_name(spec->region));
-        mr_strbuf_printf(sb, " over");
-        int first = 1;
-        for (int p = 0; p < spec->source->param_count; p++)
-            if (random_eligible(spec, p)) {
-                mr_strbuf_printf(sb, "%s%s", first ? " " : ",", spec->source->params[p].name);
-                first = 0;
-            }
-    }
-    mr_strbuf_printf(sb, "\n# samples: %ld\n", sample_count_unchecked(spec));
-    if (shard_count > 0)
-        mr_strbuf_printf(sb, SHARD_PREFIX "%ld/%ld\n", shard_index, shard_count);
-    mr_strbuf_printf(sb, COMMAND_PREFIX);
-    // The command line is informational; a line break in an argument must not start a line of its own.
-    for (const char *c = command_line ? command_line : ""; *c; c++)
-        mr_strbuf_printf(sb, "%c", *c == '\n' || *c == '\r' ? ' ' : *c);
-    mr_strbuf_printf(sb, "\nindex");
-    mr_strbuf_columns(sb, spec->source, "");
-    mr_strbuf_columns(sb, spec->target, "to_");
-    mr_strbuf_printf(sb, ",rmse,relative_rmse,ssim,outcome,renders,seconds\n");
-    return sb->failed ? mr_fail(MR_ERR_NOMEM, "sweep: out of memory building the header") : MR_OK;
-}
+int mr_sweep_draws_param(const mr_sweep_spec *spec, int p) { return random_eligible(spec, p); }
 
-/* Row formatting in the current (C) numeric locale. */
-static mr_status format_row(const mr_sweep_spec *spec, const mr_sweep_row *row, char *buf, size_t size,
-                            size_t *length) {
-    const char *outcome = mr_fit_outcome_name(row->outcome);
-    if (outcome == NULL) return mr_fail(MR_ERR_INVALID_ARG, "sweep row %ld: outcome %d out of range", row->index,
-                                        (int)row->outcome);
-    size_t used = 0;
-    int n = snprintf(buf, size, "%ld", row->index);
-    int ns = mr_brdf_value_count(spec->source), nt = mr_brdf_value_count(spec->target);
-    for (int k = 0; n >= 0 && k < ns + nt; k++) {
-        used += (size_t)n;
-        double v = k < ns ? row->source[k] : row->target[k - ns];
-        n = snprintf(buf + MR_MIN(used, size), used < size ? size - used : 0, ",%.17g", v);
-    }
-    if (n >= 0) {
-        used += (size_t)n;
-        n = snprintf(buf + MR_MIN(used, size), used < size ? size - used : 0, ",%.17g,%.17g,%.17g,%s,%ld,%.17g\n",
-                     row->rmse, row->relative_rmse, row->ssim, outcome, row->renders, row->seconds);
-    }
-    if (n < 0 || used + (size_t)n >= size)
-        return mr_fail(MR_ERR_INVALID_ARG, "sweep row %ld: does not fit in a buffer of %zu bytes", row->index, size);
-    if (length != NULL) *length = used + (size_t)n;
-    return MR_OK;
-}
-
-mr_status mr_sweep_format_row(const mr_sweep_spec *spec, const mr_sweep_row *row, char *buf, size_t size,
-                              size_t *length) {
-    if (spec == NULL || spec->source == NULL || spec->target == NULL || row == NULL || buf == NULL)
-        return mr_fail(MR_ERR_INVALID_ARG, "sweep: NULL spec, row or buffer");
-    mr_c_numeric cn;
-    mr_status status = mr_c_numeric_enter(&cn, "sweep");
-    if (status != MR_OK) return status;
-    status = format_row(spec, row, buf, size, length);
-    mr_c_numeric_leave(&cn);
-    return status;
-}
-
-/* Row parsing in the current (C) numeric locale; `total` bounds the index. */
-static mr_status parse_row(const mr_sweep_spec *spec, long total, const char *line, size_t length,
-                           mr_sweep_row *out) {
-    if (length > 0 && line[length - 1] == '\n') length--;
-    size_t at = 0;
-    const int ns = mr_brdf_value_count(spec->source), nt = mr_brdf_value_count(spec->target);
-    const int columns = 1 + ns + nt + ROW_TAIL_COLUMNS;
-    mr_sweep_row row;
-    memset(&row, 0, sizeof row);
-    const char *field = NULL;
-    size_t len = 0;
-    for (int k = 0; k < columns; k++) {
-        if (!mr_csv_next_field(line, length, &at, &field, &len))
-            return mr_fail(MR_ERR_FORMAT, "row has %d columns, expected %d", k, columns);
-        int ok;
-        if (k == 0) {
-            ok = mr_csv_parse_long(field, len, &row.index) && row.index < total;
-            if (!ok)
-                return mr_fail(MR_ERR_FORMAT, "index '%.*s' is not a sample number in [0, %ld]",
-                               (int)MR_MIN(len, 40), field, total - 1);
-            continue;
-        }
-        int c = k - 1;
-        if (c < ns) {
-            ok = mr_csv_parse_double(field, len, &row.source[c]);
-        } else if (c < ns + nt) {
-            ok = mr_csv_parse_double(field, len, &row.target[c - ns]);
-        } else {
-            switch (c - ns - nt) {
-            case 0: ok = mr_csv_parse_double(field, len, &row.rmse); break;
-            case 1: ok = mr_csv_parse_double(field, len, &row.relative_rmse); break;
-            case 2: ok = mr_csv_parse_double(field, len, &row.ssim); break;
-            case 3:
-                ok = 0;
-                for (int o = 0; o < MR_FIT_OUTCOME_COUNT; o++) {
-                    const char *name = mr_fit_outcome_name((mr_fit_outcome)o);
-                    if (strlen(name) == len && memcmp(name, field, len) == 0) {
-                        row.outcome = (mr_fit_outcome)o;
-                        ok = 1;
-                    }
-                }
-                break;
-            case 4: ok = mr_csv_parse_long(field, len, &row.renders); break;
-            default: ok = mr_csv_parse_double(field, len, &row.seconds); break;
-            }
-        }
-        if (!ok)
-            return mr_fail(MR_ERR_FORMAT, "column %d: '%.*s' is not a valid value", k + 1, (int)MR_MIN(len, 40),
-                           field);
-    }
-    if (at != SIZE_MAX) return mr_fail(MR_ERR_FORMAT, "row has more than %d columns", columns);
-    *out = row;
-    return MR_OK;
-}
-
-mr_status mr_sweep_parse_row(const mr_sweep_spec *spec, const char *line, size_t length, mr_sweep_row *out) {
-    mr_status status = mr_sweep_check(spec);
-    if (status != MR_OK) return status;
-    if (line == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "sweep: NULL line or output");
-    mr_c_numeric cn;
-    status = mr_c_numeric_enter(&cn, "sweep");
-    if (status != MR_OK) return status;
-    status = parse_row(spec, sample_count_unchecked(spec), line, length, out);
-    mr_c_numeric_leave(&cn);
-    return status;
-}
-
-/* The name of field k of a row (0: "index"), as in the column line. */
-static void column_name(const mr_sweep_spec *spec, int k, char *buf, size_t size) {
-    static const char *const tail[ROW_TAIL_COLUMNS] = {"rmse",    "relative_rmse", "ssim",
-                                                       "outcome", "renders",       "seconds"};
-    static const char *const suffix[3] = {"_r", "_g", "_b"};
-    if (k == 0) {
-        snprintf(buf, size, "index");
-        return;
-    }
-    int c = k - 1;
-    for (int side = 0; side < 2; side++) {
-        const mr_brdf_model *m = side ? spec->target : spec->source;
-        for (int p = 0; p < m->param_count; p++) {
-            int offset = mr_brdf_param_offset(m, p), channels = m->params[p].channels;
-            if (c >= offset && c < offset + channels) {
-                snprintf(buf, size, "%s%s%s", side ? "to_" : "", m->params[p].name,
-                         channels == 3 ? suffix[c - offset] : "");
-                return;
-            }
-        }
-        c -= mr_brdf_value_count(m);
-    }
-    snprintf(buf, size, "%s", c >= 0 && c < ROW_TAIL_COLUMNS ? tail[c] : "?");
-}
-
-/* Range checks of a row's values (contract in sweep.h). The fitted values may lie outside a parameter's range by
- * rounding (mr_remap maps a log-scaled range's endpoints through exp(log(x)): Phong's exponent can come back as
- * 10000.000000000009), hence the band of 1e-9 of the range's width; 1e300 or a negative reflectance never fit. */
-static mr_status check_row(const mr_sweep_spec *spec, const mr_sweep_row *row) {
-    char name[64];
-    int column = 1;
-    for (int side = 0; side < 2; side++) {
-        const mr_brdf_model *m = side ? spec->target : spec->source;
-        const double *v = side ? row->target : row->source;
-        for (int p = 0; p < m->param_count; p++) {
-            const mr_brdf_param *param = &m->params[p];
-            const double band = 1e-9 * (param->max_value - param->min_value);
-            for (int c = 0; c < param->channels; c++, column++) {
-                const double x = v[mr_brdf_param_offset(m, p) + c];
-                if (isfinite(x) && x >= param->min_value - band && x <= param->max_value + band &&
-                    (param->role != MR_PARAM_SWITCH || x == floor(x)))
-                    continue;
-                column_name(spec, column, name, sizeof name);
-                if (!isfinite(x))
-                    return mr_fail(MR_ERR_FORMAT, "column %d (%s): %g is not a finite number", column + 1, name, x);
-                if (x < param->min_value - band || x > param->max_value + band)
-                    return mr_fail(MR_ERR_FORMAT, "column %d (%s): %.17g is outside %s's range [%g, %g] (model '%s')",
-                                   column + 1, name, x, param->name, param->min_value, param->max_value, m->name);
-                return mr_fail(MR_ERR_FORMAT, "column %d (%s): %.17g is not an integer (%s is a switch of model '%s')",
-                               column + 1, name, x, param->name, m->name);
-            }
-        }
-    }
-    // column is now the first tail column's field index (rmse).
-    const struct {
-        double value;
-        int ok;
-        const char *expected;
-    } tail[] = {
-        {row->rmse, isfinite(row->rmse) && row->rmse >= 0.0, "a finite number >= 0"},
-        {row->relative_rmse, row->relative_rmse >= 0.0, "a number >= 0 (or inf)"},
-        {row->ssim, isfinite(row->ssim) && fabs(row->ssim) <= 1.0 + 1e-9, "a number in [-1, 1]"},
-    };
-    for (int t = 0; t < 3; t++)
-        if (!tail[t].ok) {
-            column_name(spec, column + t, name, sizeof name);
-            return mr_fail(MR_ERR_FORMAT, "column %d (%s): %g is not %s", column + t + 1, name, tail[t].value,
-                           tail[t].expected);
-        }
-    if ((int)row->outcome < 0 || row->outcome >= MR_FIT_OUTCOME_COUNT)
-        return mr_fail(MR_ERR_FORMAT, "column %d (outcome): %d is not an outcome", column + 4, (int)row->outcome);
-    if (row->renders < 0)
-        return mr_fail(MR_ERR_FORMAT, "column %d (renders): %ld is negative", column + 5, row->renders);
-    if (!(isfinite(row->seconds) && row->seconds >= 0.0))
-        return mr_fail(MR_ERR_FORMAT, "column %d (seconds): %g is not a finite number >= 0", column + 6, row->seconds);
-    return MR_OK;
-}
-
-mr_status mr_sweep_check_row(const mr_sweep_spec *spec, const mr_sweep_row *row) {
-    mr_status status = mr_sweep_check(spec);
-    if (status != MR_OK)
-        return status;
-    if (row == NULL)
-        return mr_fail(MR_ERR_INVALID_ARG, "sweep: NULL row");
-    return check_row(spec, row);
-}
 
 /* ---- the file ------------------------------------------------------------------------------------------------ */
 
@@ -585,19 +352,15 @@ typedef struct sweep_file {
     long truncated;
 } sweep_file;
 
-/* Samples with index % shards == shard among [0, total). */
-static long shard_size(long total, long shard, long shards) {
+long mr_sweep_shard_size(long total, long shard, long shards) {
     return total > shard ? (total - shard - 1) / shards + 1 : 0;
 }
 
-/* Parse and check one complete row line (`length` bytes, its '\n' included) of a file that holds shard
- * `shard` of `shards` of the sweep `spec`: the syntax, the values (check_row), a sample of this file, and that
- * sample's source values. The message says what is wrong, not where: callers add the file and line. */
-static mr_status check_line(const mr_sweep_spec *spec, long total, long shard, long shards, const char *line,
-                            size_t length, mr_sweep_row *row) {
-    mr_status status = parse_row(spec, total, line, length, row);
+mr_status mr_sweep_check_line(const mr_sweep_spec *spec, long total, long shard, long shards, const char *line,
+                              size_t length, mr_sweep_row *row) {
+    mr_status status = mr_sweep_file_parse_row(spec, total, line, length, row);
     if (status == MR_OK)
-        status = check_row(spec, row);
+        status = mr_sweep_file_check_row(spec, row);
     if (status != MR_OK)
         return status;
     if (row->index % shards != shard)
@@ -627,7 +390,7 @@ static mr_status adopt_file(const mr_sweep_spec *spec, const mr_strbuf *header, 
     long line_number = 0;
     status = mr_text_file_match_header(f->path, WHAT, "was made by another sweep",
                                        "use another output file, or remove it", data, size, header->text,
-                                       header->length, COMMAND_PREFIX, &rows_at, &line_number);
+                                       header->length, MR_SWEEP_COMMAND_PREFIX, &rows_at, &line_number);
     if (status != MR_OK) {
         free(data);
         return status;
@@ -641,7 +404,7 @@ static mr_status adopt_file(const mr_sweep_spec *spec, const mr_strbuf *header, 
             break;
         }
         mr_sweep_row row;
-        status = check_line(spec, f->total, f->shard, f->shards, pos, (size_t)(nl - pos) + 1, &row);
+        status = mr_sweep_check_line(spec, f->total, f->shard, f->shards, pos, (size_t)(nl - pos) + 1, &row);
         if (status == MR_OK && f->state[row.index] == SAMPLE_IN_FILE)
             status = mr_fail(MR_ERR_FORMAT, "sample %ld appears a second time", row.index);
         if (status != MR_OK) {
@@ -924,7 +687,7 @@ static void accept_remote_row(run_state *st, int from, const char *line, size_t 
         memchr(line, '\0', length) != NULL)
         status = mr_fail(MR_ERR_FORMAT, "not one line");
     if (status == MR_OK)
-        status = check_line(st->spec, f->total, f->shard, f->shards, line, length, &row);
+        status = mr_sweep_check_line(st->spec, f->total, f->shard, f->shards, line, length, &row);
     if (status == MR_OK && f->state[row.index] != SAMPLE_TODO)
         status = mr_fail(MR_ERR_FORMAT, "sample %ld is not one this run is waiting for", row.index);
     if (status != MR_OK) {
@@ -1023,7 +786,7 @@ static void run_sample(run_state *st, long index) {
         row.outcome = r.outcome;
         row.renders = r.renders;
         row.seconds = r.seconds;
-        status = format_row(spec, &row, line, sizeof line, &length);
+        status = mr_sweep_file_format_row(spec, &row, line, sizeof line, &length);
     }
 #pragma omp critical(mr_sweep_file)
     {
@@ -1205,7 +968,7 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
     f.total = total;
     f.shard = opts->shard_count > 0 ? opts->shard_index : 0;
     f.shards = opts->shard_count > 0 ? opts->shard_count : 1;
-    f.expected = shard_size(total, f.shard, f.shards);
+    f.expected = mr_sweep_shard_size(total, f.shard, f.shards);
     st->file = &f;
     unsigned char *todo = NULL; /* the to-do bitmap, as broadcast */
     const size_t todo_bytes = ((size_t)total + 7) / 8;
@@ -1223,9 +986,9 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
     if ((rank == 0 && f.state == NULL) || todo == NULL)
         status = mr_fail(MR_ERR_NOMEM, "sweep: out of memory for %ld samples", total);
     if (status == MR_OK)
-        status = build_header(spec, opts->command_line, opts->shard_index, opts->shard_count, &header);
+        status = mr_sweep_file_header(spec, opts->command_line, opts->shard_index, opts->shard_count, &header);
     if (status == MR_OK)
-        status = build_header(spec, NULL, opts->shard_index, opts->shard_count, &bare);
+        status = mr_sweep_file_header(spec, NULL, opts->shard_index, opts->shard_count, &bare);
     const uint64_t hash = status == MR_OK ? hash_text(bare.text, bare.length) : 0;
 
     // Setup: rank 0 hears from every rank, opens the file and tells everyone what to run.
@@ -1363,595 +1126,5 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
         out->seconds = mr_now_seconds() - start;
     }
     free(st);
-    return status;
-}
-
-/* ---- merging shards ------------------------------------------------------------------------------------------ */
-
-/* Longest line merge reads (a header's command line can be long; a row is at most MR_SWEEP_MAX_LINE): a file
- * that is one endless line is refused, not swallowed. */
-#define MERGE_MAX_LINE (1L << 20)
-
-/* The next line of fp into *buf (grown as needed, NUL-terminated, '\n' kept) and *len; 0 at the end of the file,
- * -1 for a line longer than MERGE_MAX_LINE (MR_ERR_FORMAT) or out of memory (MR_ERR_NOMEM) in *failure, the
- * message naming `path` and the line. */
-static int read_line(FILE *fp, const char *path, long line_number, char **buf, size_t *cap, size_t *len,
-                     mr_status *failure) {
-    *len = 0;
-    for (;;) {
-        if (*cap - *len < 2) {
-            size_t grown = *cap ? 2 * *cap : 4096;
-            char *p = realloc(*buf, grown);
-            if (p == NULL) {
-                *failure = mr_fail(MR_ERR_NOMEM, "shard file '%s': out of memory reading line %ld", path, line_number);
-                return -1;
-            }
-            *buf = p;
-            *cap = grown;
-        }
-        if (fgets(*buf + *len, (int)MR_MIN(*cap - *len, (size_t)INT_MAX), fp) == NULL)
-            return *len > 0;
-        *len += strlen(*buf + *len);
-        if (*len > 0 && (*buf)[*len - 1] == '\n')
-            return 1;
-        if (*len > (size_t)MERGE_MAX_LINE) {
-            *failure = mr_fail(MR_ERR_FORMAT, "shard file '%s': line %ld is longer than %ld bytes", path, line_number,
-                               MERGE_MAX_LINE);
-            return -1;
-        }
-    }
-}
-
-/* The text after `prefix` of the header line that starts with it, or NULL. */
-static const char *header_field(char *const *lines, int count, const char *prefix) {
-    size_t n = strlen(prefix);
-    for (int i = 0; i < count; i++)
-        if (strncmp(lines[i], prefix, n) == 0)
-            return lines[i] + n;
-    return NULL;
-}
-
-/* Split text (a copy) at spaces into at most `max` tokens; returns the count, -1 if there are more. */
-static int split_words(char *text, char **words, int max) {
-    int n = 0;
-    char *save = NULL;
-    for (char *w = strtok_r(text, " ", &save); w != NULL; w = strtok_r(NULL, " ", &save)) {
-        if (n == max)
-            return -1;
-        words[n++] = w;
-    }
-    return n;
-}
-
-static int parse_whole_long(const char *text, long *out) { return mr_csv_parse_long(text, strlen(text), out); }
-
-/* "MODEL name=v ..." (the "# from:" / "# to:" lines) into a model and its packed values. */
-static mr_status parse_model_values(const char *text, const mr_brdf_model **model, double *values) {
-    char copy[MR_SWEEP_MAX_LINE];
-    if (strlen(text) >= sizeof copy)
-        return mr_fail(MR_ERR_FORMAT, "the line is too long");
-    strcpy(copy, text);
-    char *words[2 * MR_BRDF_MAX_VALUES + 2];
-    int n = split_words(copy, words, (int)(sizeof words / sizeof words[0]));
-    if (n < 1)
-        return mr_fail(MR_ERR_FORMAT, "no model named");
-    *model = mr_brdf_find(words[0]);
-    if (*model == NULL)
-        return MR_ERR_FORMAT; /* mr_brdf_find's message lists the models */
-    mr_brdf_default_values(*model, values);
-    for (int k = 1; k < n; k++) {
-        mr_status status = mr_brdf_parse_assignment(*model, words[k], values);
-        if (status != MR_OK)
-            return MR_ERR_FORMAT;
-    }
-    return MR_OK;
-}
-
-/* "strategy=S max_evaluations=N xtol=X grid_points=G starts=S seed=S[ held=a,b]" into spec->remap. */
-static mr_status parse_remap_line(const char *text, mr_sweep_spec *spec) {
-    char copy[MR_SWEEP_MAX_LINE];
-    if (strlen(text) >= sizeof copy)
-        return mr_fail(MR_ERR_FORMAT, "the line is too long");
-    strcpy(copy, text);
-    char *words[16];
-    int n = split_words(copy, words, 16);
-    for (int k = 0; k < n; k++) {
-        char *eq = strchr(words[k], '=');
-        if (eq == NULL)
-            return mr_fail(MR_ERR_FORMAT, "'%s' is not name=value", words[k]);
-        *eq = '\0';
-        const char *key = words[k], *value = eq + 1;
-        long v = 0;
-        int ok = 1;
-        if (strcmp(key, "strategy") == 0) {
-            ok = mr_remap_strategy_from_name(value, &spec->remap.strategy) == MR_OK;
-        } else if (strcmp(key, "xtol") == 0) {
-            ok = mr_csv_parse_double(value, strlen(value), &spec->remap.xtol);
-        } else if (strcmp(key, "held") == 0) {
-            char *save = NULL;
-            for (char *name = strtok_r(eq + 1, ",", &save); ok && name != NULL; name = strtok_r(NULL, ",", &save)) {
-                int p = mr_brdf_param_index(spec->target, name);
-                ok = p >= 0 && p < 32;
-                if (ok)
-                    spec->remap.held |= 1u << p;
-            }
-        } else if ((ok = parse_whole_long(value, &v) && v <= INT_MAX)) {
-            if (strcmp(key, "max_evaluations") == 0)
-                spec->remap.max_evaluations = (int)v;
-            else if (strcmp(key, "grid_points") == 0)
-                spec->remap.grid_points = (int)v;
-            else if (strcmp(key, "starts") == 0)
-                spec->remap.starts = (int)v;
-            else if (strcmp(key, "seed") == 0)
-                spec->remap.seed = (unsigned long)v;
-            else
-                ok = 0;
-        }
-        if (!ok)
-            return mr_fail(MR_ERR_FORMAT, "'%s=%s' is not a remap option this version knows", key, value);
-    }
-    return MR_OK;
-}
-
-/* "fit size=N light=L intensity=I ..." into spec->scene (the other fields are fixed by the version: the rebuilt
- * header shows whether they match). */
-static mr_status parse_scene_line(const char *text, mr_sweep_spec *spec) {
-    char copy[MR_SWEEP_MAX_LINE];
-    if (strlen(text) >= sizeof copy)
-        return mr_fail(MR_ERR_FORMAT, "the line is too long");
-    strcpy(copy, text);
-    char *words[16];
-    int n = split_words(copy, words, 16);
-    if (n < 1 || strcmp(words[0], "fit") != 0)
-        return mr_fail(MR_ERR_FORMAT, "not a fit scene");
-    for (int k = 1; k < n; k++) {
-        char *eq = strchr(words[k], '=');
-        if (eq == NULL)
-            return mr_fail(MR_ERR_FORMAT, "'%s' is not name=value", words[k]);
-        *eq = '\0';
-        long v = 0;
-        int ok = 1;
-        if (strcmp(words[k], "size") == 0)
-            ok = parse_whole_long(eq + 1, &v) && v <= MR_RENDER_MAX_SIZE && (spec->scene.size = (int)v, 1);
-        else if (strcmp(words[k], "light") == 0)
-            ok = mr_fit_light_from_name(eq + 1, &spec->scene.light) == MR_OK;
-        else if (strcmp(words[k], "intensity") == 0)
-            ok = mr_csv_parse_double(eq + 1, strlen(eq + 1), &spec->scene.intensity);
-        if (!ok)
-            return mr_fail(MR_ERR_FORMAT, "'%s=%s' is not a scene setting this version knows", words[k], eq + 1);
-    }
-    return MR_OK;
-}
-
-mr_status mr_sweep_scene_parse(const char *text, mr_fit_scene_options *out) {
-    mr_sweep_spec spec;
-    memset(&spec, 0, sizeof spec);
-    mr_status status = text != NULL && out != NULL ? parse_scene_line(text, &spec)
-                                                    : mr_fail(MR_ERR_INVALID_ARG, "sweep scene: NULL argument");
-    if (status == MR_OK) *out = spec.scene;
-    return status;
-}
-
-/* "grid AXIS ..." or "random=N seed=S over p,q,..." into the spec's sampling. */
-static mr_status parse_sampling_line(const char *text, mr_sweep_spec *spec) {
-    char copy[MR_SWEEP_MAX_LINE];
-    if (strlen(text) >= sizeof copy)
-        return mr_fail(MR_ERR_FORMAT, "the line is too long");
-    strcpy(copy, text);
-    char *words[MR_SWEEP_MAX_AXES + 1];
-    int n = split_words(copy, words, MR_SWEEP_MAX_AXES + 1);
-    if (n >= 2 && strcmp(words[0], "grid") == 0) {
-        spec->sampling = MR_SWEEP_GRID;
-        for (int k = 1; k < n; k++) {
-            mr_status status = mr_sweep_parse_axis(spec->source, words[k], &spec->axes[k - 1]);
-            if (status != MR_OK)
-                return MR_ERR_FORMAT;
-        }
-        spec->axis_count = n - 1;
-        return MR_OK;
-    }
-    spec->region = MR_SWEEP_REGION_RANGE; // a header without a region word
-    if (n == 5 && strncmp(words[2], "region=", 7) == 0) {
-        if (mr_sweep_region_from_name(words[2] + 7, &spec->region) != MR_OK)
-            return mr_fail(MR_ERR_FORMAT, "'%s': expected region=texture or region=range", words[2]);
-        words[2] = words[3];
-        words[3] = words[4];
-        n = 4;
-    }
-    if (n == 4 && strncmp(words[0], "random=", 7) == 0 && strncmp(words[1], "seed=", 5) == 0 &&
-        strcmp(words[2], "over") == 0) {
-        spec->sampling = MR_SWEEP_RANDOM;
-        char *end = NULL;
-        errno = 0;
-        unsigned long long seed = strtoull(words[1] + 5, &end, 10);
-        if (!parse_whole_long(words[0] + 7, &spec->random_count) || words[1][5] < '0' || words[1][5] > '9' ||
-            *end != '\0' || errno == ERANGE)
-            return mr_fail(MR_ERR_FORMAT, "'%s %s': expected random=N seed=S", words[0], words[1]);
-        spec->seed = seed;
-        // Every parameter not drawn is held (switches and fixed factors are never drawn anyway).
-        spec->held = spec->source->param_count >= 32 ? ~0u : (1u << spec->source->param_count) - 1;
-        char *save = NULL;
-        for (char *name = strtok_r(words[3], ",", &save); name != NULL; name = strtok_r(NULL, ",", &save)) {
-            int p = mr_brdf_param_index(spec->source, name);
-            if (p < 0 || p >= 32)
-                return mr_fail(MR_ERR_FORMAT, "model '%s' has no parameter '%s'", spec->source->name, name);
-            spec->held &= ~(1u << p);
-        }
-        return MR_OK;
-    }
-    return mr_fail(MR_ERR_FORMAT, "expected 'grid AXIS ...' or 'random=N seed=S [region=R] over PARAMETERS'");
-}
-
-/* One shard file being merged. */
-typedef struct merge_shard {
-    const char *path;
-    FILE *fp;
-    mr_sweep_spec spec;
-    long k, n;
-    char *bare;       /* the header without its "# shard:" and "# command:" lines: equal for shards of one sweep */
-    long line_number; /* of the last line read */
-    dev_t dev;
-    ino_t ino;
-} merge_shard;
-
-/* Read and check a shard's header: parsed back into a sweep, which must rebuild the header byte for byte. */
-static mr_status read_shard_header(merge_shard *s) {
-    enum { MAX_HEADER_LINES = 32 };
-    char *lines[MAX_HEADER_LINES] = {0};
-    int count = 0;
-    char *buf = NULL;
-    size_t cap = 0, len = 0;
-    mr_status status = MR_OK;
-    mr_strbuf file_header = {0}, rebuilt = {0}, bare = {0};
-    for (;;) { /* the '#' lines and the column line */
-        int got = read_line(s->fp, s->path, s->line_number + 1, &buf, &cap, &len, &status);
-        if (got < 0)
-            break;
-        if (got == 0 || buf[len - 1] != '\n') {
-            status = mr_fail(MR_ERR_FORMAT, "shard file '%s': the header ends early, at line %ld (%s)", s->path,
-                             s->line_number + 1, got ? "a torn line" : "the end of the file");
-            break;
-        }
-        s->line_number++;
-        if (count == MAX_HEADER_LINES) {
-            status = mr_fail(MR_ERR_FORMAT, "shard file '%s': no column line after %d header lines", s->path, count);
-            break;
-        }
-        mr_strbuf_printf(&file_header, "%s", buf);
-        buf[len - 1] = '\0';
-        lines[count] = strdup(buf);
-        if (lines[count++] == NULL) {
-            status = mr_fail(MR_ERR_NOMEM, "shard file '%s': out of memory", s->path);
-            break;
-        }
-        if (buf[0] != '#')
-            break; /* the column line ends the header */
-    }
-    free(buf);
-    const char *from = NULL, *to = NULL, *remap = NULL, *scene = NULL, *sampling = NULL, *shard = NULL;
-    const char *command = NULL;
-    if (status == MR_OK) {
-        from = header_field(lines, count, "# from: ");
-        to = header_field(lines, count, "# to: ");
-        remap = header_field(lines, count, "# remap: ");
-        scene = header_field(lines, count, "# scene: ");
-        sampling = header_field(lines, count, "# sampling: ");
-        shard = header_field(lines, count, SHARD_PREFIX);
-        command = header_field(lines, count, COMMAND_PREFIX);
-        if (strncmp(lines[0], "# matremap ", 11) != 0 || from == NULL || to == NULL || remap == NULL || scene == NULL ||
-            sampling == NULL || command == NULL)
-            status = mr_fail(MR_ERR_FORMAT,
-                             "shard file '%s' is not a sweep file (its header lacks a '# from:', "
-                             "'# to:', '# remap:', '# scene:', '# sampling:' or '# command:' line)",
-                             s->path);
-        else if (shard == NULL)
-            status = mr_fail(MR_ERR_FORMAT,
-                             "'%s' is a whole sweep, not a shard (its header has no '# shard: K/N' "
-                             "line): merge takes the files of 'matremap sweep ... --shard K/N' runs",
-                             s->path);
-    }
-    if (status == MR_OK) {
-        const char *slash = strchr(shard, '/');
-        char kbuf[32];
-        size_t klen = slash ? (size_t)(slash - shard) : 0;
-        if (klen > 0 && klen < sizeof kbuf) {
-            memcpy(kbuf, shard, klen);
-            kbuf[klen] = '\0';
-        }
-        if (slash == NULL || klen == 0 || klen >= sizeof kbuf || !parse_whole_long(kbuf, &s->k) ||
-            !parse_whole_long(slash + 1, &s->n) || s->n < 1 || s->k >= s->n)
-            status =
-                mr_fail(MR_ERR_FORMAT, "shard file '%s': '# shard: %s' is not K/N with 0 <= K < N", s->path, shard);
-    }
-    // The sweep, read back. A line this version would write otherwise shows in the comparison below.
-    const char *step = "# from:";
-    if (status == MR_OK) {
-        const mr_brdf_model *source = NULL, *target = NULL;
-        double sv[MR_BRDF_MAX_VALUES], tv[MR_BRDF_MAX_VALUES];
-        status = parse_model_values(from, &source, sv);
-        if (status == MR_OK) {
-            step = "# to:";
-            status = parse_model_values(to, &target, tv);
-        }
-        if (status == MR_OK) {
-            mr_sweep_spec_init(&s->spec, source, target);
-            memcpy(s->spec.source_values, sv, sizeof sv);
-            memcpy(s->spec.target_values, tv, sizeof tv);
-            step = "# remap:";
-            status = parse_remap_line(remap, &s->spec);
-        }
-        if (status == MR_OK) {
-            step = "# scene:";
-            status = parse_scene_line(scene, &s->spec);
-        }
-        if (status == MR_OK) {
-            step = "# sampling:";
-            status = parse_sampling_line(sampling, &s->spec);
-        }
-        if (status == MR_OK) {
-            step = "the header";
-            status = mr_sweep_check(&s->spec);
-        }
-        if (status != MR_OK)
-            mr_fail_context(MR_ERR_FORMAT, "shard file '%s': %s line", s->path, step);
-        if (status != MR_OK)
-            status = MR_ERR_FORMAT;
-    }
-    if (status == MR_OK) {
-        status = build_header(&s->spec, command, s->k, s->n, &rebuilt);
-        if (status == MR_OK && (file_header.failed || rebuilt.length != file_header.length ||
-                                memcmp(rebuilt.text, file_header.text, rebuilt.length) != 0)) {
-            // Name the first line that differs.
-            const char *a = file_header.text ? file_header.text : "", *b = rebuilt.text;
-            long line = 1;
-            while (*a && *a == *b) {
-                if (*a == '\n')
-                    line++;
-                a++;
-                b++;
-            }
-            while (a > file_header.text && a[-1] != '\n')
-                a--, b--;
-            status =
-                mr_fail(MR_ERR_FORMAT,
-                        "shard file '%s': line %ld is '%.*s', but the sweep its header describes would have "
-                        "'%.*s' (written by another matremap version, or edited?)",
-                        s->path, line, (int)MR_MIN(strcspn(a, "\n"), 200), a, (int)MR_MIN(strcspn(b, "\n"), 200), b);
-        }
-    }
-    if (status == MR_OK) {
-        for (int i = 0; i < count; i++)
-            if (strncmp(lines[i], SHARD_PREFIX, strlen(SHARD_PREFIX)) != 0 &&
-                strncmp(lines[i], COMMAND_PREFIX, strlen(COMMAND_PREFIX)) != 0)
-                mr_strbuf_printf(&bare, "%s\n", lines[i]);
-        if (bare.failed)
-            status = mr_fail(MR_ERR_NOMEM, "shard file '%s': out of memory", s->path);
-        s->bare = bare.text;
-        bare.text = NULL;
-    }
-    for (int i = 0; i < count; i++)
-        free(lines[i]);
-    free(file_header.text);
-    free(rebuilt.text);
-    free(bare.text);
-    return status;
-}
-
-/* The first line where two shards' headers (shard and command lines left out) differ, for the message. */
-static mr_status shards_differ(const merge_shard *a, const merge_shard *b) {
-    const char *x = a->bare, *y = b->bare;
-    long line = 1;
-    while (*x && *x == *y) {
-        if (*x == '\n')
-            line++;
-        x++;
-        y++;
-    }
-    while (x > a->bare && x[-1] != '\n')
-        x--, y--;
-    return mr_fail(MR_ERR_INVALID_ARG,
-                   "shard files '%s' and '%s' are from different sweeps: '%.*s' in the first, '%.*s' in the second",
-                   a->path, b->path, (int)MR_MIN(strcspn(x, "\n"), 200), x, (int)MR_MIN(strcspn(y, "\n"), 200), y);
-}
-
-/* Open a shard and read its header. */
-static mr_status open_shard(merge_shard *s) {
-    // Regular files only, opened without blocking (fopen blocked on a FIFO named as a shard).
-    char label[MR_IO_LABEL_SIZE + 16];
-    snprintf(label, sizeof label, "shard file '%s'", s->path);
-    mr_status opened = mr_io_open_input(s->path, label, 0, &s->fp, NULL);
-    if (opened != MR_OK) return opened == MR_ERR_IO && errno == ENOENT ? MR_ERR_INVALID_ARG : opened;
-    struct stat st;
-    if (fstat(fileno(s->fp), &st) != 0 || !S_ISREG(st.st_mode))
-        return mr_fail(MR_ERR_INVALID_ARG, "shard file '%s' is not a regular file", s->path);
-    s->dev = st.st_dev;
-    s->ino = st.st_ino;
-    // A sweep still writing the shard holds its write lock (mr_text_file_lock): its rows are not all there yet.
-    struct flock lock;
-    memset(&lock, 0, sizeof lock);
-    lock.l_type = F_WRLCK;
-    lock.l_whence = SEEK_SET;
-    if (fcntl(fileno(s->fp), F_GETLK, &lock) == 0 && lock.l_type != F_UNLCK)
-        return mr_fail(MR_ERR_INVALID_ARG,
-                       "shard file '%s' is being written by another process (pid %ld): merge it when its sweep has "
-                       "finished",
-                       s->path, (long)lock.l_pid);
-    return read_shard_header(s);
-}
-
-/* Copy the rows of the shards, in index order (sample i is row i / N of shard i % N), into out, checking each. */
-static mr_status merge_rows(merge_shard *const *by_k, long n, const mr_sweep_spec *spec, long total, FILE *out) {
-    char *buf = NULL;
-    size_t cap = 0, len = 0;
-    mr_status status = MR_OK;
-    for (long i = 0; status == MR_OK && i < total; i++) {
-        merge_shard *s = by_k[i % n];
-        const long want = shard_size(total, s->k, s->n);
-        int got = read_line(s->fp, s->path, s->line_number + 1, &buf, &cap, &len, &status);
-        if (got < 0)
-            break;
-        if (got == 0) {
-            status = mr_fail(MR_ERR_INVALID_ARG,
-                             "shard file '%s' (shard %ld/%ld) ends after %ld of its %ld rows, at sample %ld: finish "
-                             "it first (run its sweep again with --resume)",
-                             s->path, s->k, s->n, i / n, want, i);
-            break;
-        }
-        s->line_number++;
-        if (buf[len - 1] != '\n') {
-            status = mr_fail(MR_ERR_INVALID_ARG,
-                             "shard file '%s': line %ld is torn (no line end): the shard was interrupted; finish it "
-                             "first (run its sweep again with --resume)",
-                             s->path, s->line_number);
-            break;
-        }
-        mr_sweep_row row;
-        status = check_line(spec, total, s->k, s->n, buf, len, &row);
-        if (status == MR_OK && row.index != i)
-            status = mr_fail(row.index < i ? MR_ERR_FORMAT : MR_ERR_INVALID_ARG,
-                             "sample %ld where sample %ld belongs (%s)", row.index, i,
-                             row.index < i ? "a sample twice, or rows out of order: an unfinished shard? run its "
-                                             "sweep again with --resume"
-                                           : "samples are missing: finish the shard first (run its sweep again "
-                                             "with --resume)");
-        if (status != MR_OK) {
-            mr_fail_context(status, "shard file '%s': line %ld", s->path, s->line_number);
-            break;
-        }
-        if (fwrite(buf, 1, len, out) != len) {
-            int err = errno;
-            status = mr_fail(MR_ERR_IO, "sweep merge: cannot write: %s", strerror(err));
-        }
-    }
-    for (long k = 0; status == MR_OK && k < n; k++) { /* nothing may follow a shard's last sample */
-        merge_shard *s = by_k[k];
-        int got = read_line(s->fp, s->path, s->line_number + 1, &buf, &cap, &len, &status);
-        if (got > 0)
-            status = mr_fail(MR_ERR_FORMAT,
-                             "shard file '%s': line %ld follows the shard's last sample (%ld rows): an "
-                             "edited file?",
-                             s->path, s->line_number + 1, shard_size(total, s->k, s->n));
-    }
-    free(buf);
-    return status;
-}
-
-mr_status mr_sweep_merge(const char *const *paths, int count, const char *output, const char *command_line,
-                         mr_sweep_merge_summary *out) {
-    if (paths == NULL || count < 1)
-        return mr_fail(MR_ERR_INVALID_ARG, "sweep merge: no shard files given");
-    if (output == NULL || output[0] == '\0')
-        return mr_fail(MR_ERR_INVALID_ARG, "sweep merge: empty output path");
-    struct stat ost;
-    if (lstat(output, &ost) == 0)
-        return mr_fail(MR_ERR_INVALID_ARG,
-                       "sweep merge: '%s' already exists; not overwriting it (remove it, or "
-                       "choose another -o)",
-                       output);
-    merge_shard *shards = calloc((size_t)count, sizeof *shards);
-    merge_shard **by_k = calloc((size_t)count, sizeof *by_k);
-    mr_c_numeric cn;
-    mr_status status = mr_c_numeric_enter(&cn, "sweep merge");
-    if (status != MR_OK) {
-        free(shards);
-        free(by_k);
-        return status;
-    }
-    if (shards == NULL || by_k == NULL)
-        status = mr_fail(MR_ERR_NOMEM, "sweep merge: out of memory");
-    for (int i = 0; status == MR_OK && i < count; i++) {
-        shards[i].path = paths[i];
-        status = open_shard(&shards[i]);
-        for (int j = 0; status == MR_OK && j < i; j++)
-            if (shards[j].dev == shards[i].dev && shards[j].ino == shards[i].ino)
-                status = mr_fail(MR_ERR_INVALID_ARG, "sweep merge: '%s' and '%s' are the same file", shards[j].path,
-                                 shards[i].path);
-    }
-    // They must be the N shards of one sweep, each once.
-    const long n = status == MR_OK ? shards[0].n : 0;
-    for (int i = 0; status == MR_OK && i < count; i++) {
-        merge_shard *s = &shards[i];
-        if (s->n != n)
-            status = mr_fail(MR_ERR_INVALID_ARG,
-                             "shard files '%s' and '%s' split the sweep differently: shard %ld/%ld and %ld/%ld (all "
-                             "shards must come from runs with the same N)",
-                             shards[0].path, s->path, shards[0].k, shards[0].n, s->k, s->n);
-        else if (strcmp(s->bare, shards[0].bare) != 0)
-            status = shards_differ(&shards[0], s);
-        for (int j = 0; status == MR_OK && j < i; j++)
-            if (shards[j].k == s->k)
-                status = mr_fail(MR_ERR_INVALID_ARG, "shard files '%s' and '%s' are both shard %ld/%ld", shards[j].path,
-                                 s->path, s->k, n);
-    }
-    if (status == MR_OK && count != n) {
-        char missing[512] = "";
-        size_t used = 0;
-        for (long k = 0, listed = 0; k < n && used + 32 < sizeof missing; k++) {
-            int given = 0;
-            for (int i = 0; i < count; i++)
-                given |= shards[i].k == k;
-            if (given)
-                continue;
-            used += (size_t)snprintf(missing + used, sizeof missing - used, "%s%ld/%ld", listed++ ? ", " : "", k, n);
-        }
-        status = mr_fail(MR_ERR_INVALID_ARG,
-                         "sweep merge: %d shard files given, the sweep has %ld shards; missing: "
-                         "%s",
-                         count, n, missing);
-    }
-    for (int i = 0; status == MR_OK && i < count; i++)
-        by_k[shards[i].k] = &shards[i]; /* K < N = count */
-    mr_atomic_file tmp;
-    memset(&tmp, 0, sizeof tmp);
-    FILE *fp = NULL;
-    long total = 0;
-    if (status == MR_OK) {
-        total = sample_count_unchecked(&shards[0].spec);
-        status = mr_atomic_begin(output, &tmp);
-    }
-    if (status == MR_OK && (fp = fopen(tmp.tmp_path, "w")) == NULL) {
-        int err = errno;
-        status =
-            mr_fail(MR_ERR_IO, "sweep merge: cannot open the temporary file '%s': %s", tmp.tmp_path, strerror(err));
-    }
-    if (status == MR_OK) {
-        mr_strbuf header = {0};
-        status = build_header(&shards[0].spec, command_line, 0, 0, &header);
-        if (status == MR_OK && fwrite(header.text, 1, header.length, fp) != header.length) {
-            int err = errno;
-            status = mr_fail(MR_ERR_IO, "sweep merge: cannot write '%s': %s", tmp.tmp_path, strerror(err));
-        }
-        free(header.text);
-    }
-    if (status == MR_OK)
-        status = merge_rows(by_k, n, &shards[0].spec, total, fp);
-    if (fp != NULL) {
-        int err = 0;
-        if (fflush(fp) != 0)
-            err = errno;
-        if (fclose(fp) != 0 && err == 0)
-            err = errno;
-        if (err != 0 && status == MR_OK)
-            status = mr_fail(MR_ERR_IO, "sweep merge: cannot write '%s': %s", tmp.tmp_path, strerror(err));
-    }
-    // Checked again just before the rename: the output may have appeared meanwhile (it is never replaced).
-    if (status == MR_OK && lstat(output, &ost) == 0)
-        status = mr_fail(MR_ERR_INVALID_ARG, "sweep merge: '%s' appeared while merging; not overwriting it", output);
-    if (status == MR_OK)
-        status = mr_atomic_commit(&tmp);
-    if (status != MR_OK && tmp.active)
-        mr_atomic_abort(&tmp);
-    mr_c_numeric_leave(&cn);
-    for (int i = 0; shards != NULL && i < count; i++) {
-        if (shards[i].fp != NULL)
-            fclose(shards[i].fp);
-        free(shards[i].bare);
-    }
-    free(shards);
-    free(by_k);
-    if (status == MR_OK && out != NULL) {
-        out->total = total;
-        out->shards = n;
-    }
     return status;
 }

@@ -179,8 +179,7 @@ static void normal_matrix(const double m[16], double out[16]) {
     out[15] = 1.0;
 }
 
-/* The angle of the triangle's corner at a, between edges to b and c (0 for a degenerate corner). */
-static double corner_angle(const double a[3], const double b[3], const double c[3]) {
+double mr_mesh_corner_angle(const double a[3], const double b[3], const double c[3]) {
     double u[3], v[3], x[3];
     vec3_sub(b, a, u);
     vec3_sub(c, a, v);
@@ -203,7 +202,8 @@ static void generate_normals(mesh_world *mesh, const unsigned char *missing) {
         vec3_sub(p2, p0, e2);
         vec3_cross(e1, e2, n);
         if (!(vec3_normalize(n) > 0.0)) continue;
-        double angle[3] = {corner_angle(p0, p1, p2), corner_angle(p1, p2, p0), corner_angle(p2, p0, p1)};
+        double angle[3] = {mr_mesh_corner_angle(p0, p1, p2), mr_mesh_corner_angle(p1, p2, p0),
+                           mr_mesh_corner_angle(p2, p0, p1)};
         for (int k = 0; k < 3; k++)
             if (missing == NULL || missing[tri[k]])
                 for (int i = 0; i < 3; i++) mesh->normal[tri[k]][i] += angle[k] * n[i];
@@ -240,7 +240,8 @@ static void generate_tangents(mesh_world *mesh, double (*bitangent)[3], const un
             b[i] = (e2[i] * du1 - e1[i] * du2) / r;
         }
         if (!(vec3_normalize(s) > 0.0) || !(vec3_normalize(b) > 0.0)) continue;
-        double angle[3] = {corner_angle(p0, p1, p2), corner_angle(p1, p2, p0), corner_angle(p2, p0, p1)};
+        double angle[3] = {mr_mesh_corner_angle(p0, p1, p2), mr_mesh_corner_angle(p1, p2, p0),
+                           mr_mesh_corner_angle(p2, p0, p1)};
         for (int k = 0; k < 3; k++)
             for (int i = 0; i < 3; i++) {
                 mesh->tangent[tri[k]][i] += angle[k] * s[i];

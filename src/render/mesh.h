@@ -9,6 +9,10 @@
 
 #include "render.h"
 
+#ifdef __cplusplus
+extern "C" { /* for mr_mesh_corner_angle, which the OBJ reader (src/io/obj_load.cpp) shares */
+#endif
+
 /* A BVH node: an interior node's children are nodes[first] and nodes[first + 1]; a leaf (count > 0) holds
  * triangles order[first .. first + count - 1]. */
 typedef struct bvh_node {
@@ -82,5 +86,13 @@ int mr_mesh_occluded(const mesh_world *mesh, const double origin[3], const doubl
  * (by the winding), texture coordinates of both sets ((0, 0) for a set the mesh lacks). */
 void mr_mesh_shade(const mesh_world *mesh, const mesh_hit *hit, double normal[3], double tangent[3],
                 double bitangent[3], double geometric[3], double uv[2], double uv1[2]);
+
+/* The angle of a triangle's corner at a, between its edges to b and c (0 for a degenerate corner): the weight of
+ * a triangle's normal and tangent at that corner, here and in the OBJ reader's smooth normals. */
+double mr_mesh_corner_angle(const double a[3], const double b[3], const double c[3]);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif /* MR_MESH_H */

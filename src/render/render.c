@@ -10,7 +10,7 @@
  *   2. lighting: each light type turns hit records into shading samples. A point light gives at most one sample
  *      per hit (local light direction and weight) and needs no shadow ray on a convex object. An environment
  *      light gives the indices of its fixed directions above the hit's horizon; the directions and their
- *      L/(pdf N) weights are tabled once per plan (env_setup). With reflection samples, each hit also gets M
+ *      L/(pdf N) weights are tabled once per plan (env_sampling.c). With reflection samples, each hit also gets M
  *      directions drawn around its mirror direction, with their weights; both sets are combined by multiple
  *      importance sampling (the pattern's factor is computed by the render, from the hit's mirror direction).
  * Rows are traced in parallel into per-row buffers and concatenated in image order, so the plan is identical
@@ -24,6 +24,7 @@
 #include <string.h>
 
 #include "../mr_internal.h"
+#include "env_sampling.h"
 #include "highlight.h"
 #include "mesh.h"
 #include "render.h"
@@ -52,15 +53,6 @@ typedef struct point_sample {
     double weight[3]; /* I * cos(theta_l) / d^2 * the hit's share of its pixel, per RGB channel */
 } point_sample;
 
-/* Where a hit's reflection samples go (world space): r, the view reflected about the shading normal; a, the
- * unit direction perpendicular to r in the plane of r and the normal; b = r x a; and squash = n.v (at least
- * 0.02). A GGX lobe about the normal of width alpha reflects to a lobe about r of width 2 alpha along a and
- * 2 alpha n.v along b: tilting the half vector out of the plane of incidence turns the reflection by only
- * 2 (v.h) times the tilt. */
-struct reflection_frame {
-    double r[3], a[3], b[3];
-    double squash;
-};
 
 /* A lit hit: what the render needs of the geometry. Environment samples are direction indices; the frame turns
  * the tabled world directions into local ones. */
@@ -86,40 +78,6 @@ typedef struct reflection_sample {
     float weight[3]; /* sum over the lights that take reflection samples of L(w) / (N pdf(w) + M q(w)) */
 } reflection_sample;
 
-/* What a direction that is not in the pattern needs of an environment light: its radiance and pattern pdf.
- * The map is borrowed while the plan is built and forgotten afterwards. */
-typedef struct env_source {
-    const mr_image *map;
-    double total;               /* sum of luminance * sin(theta_row) over the map: the pattern's normaliser */
-    int n;                      /* the light's pattern size N */
-    double cos_turn, sin_turn;  /* its rotation about +y */
-    double intensity[3];
-    int reflections;            /* 1 if it takes part in the reflection samples' MIS */
-} env_source;
-
-/* The reflection samples' distribution q: an equal mixture of lobes about the mirror direction r, each shaped
- * like an anisotropic GGX distribution of normals about r, of widths beta along the frame's a and
- * beta * squash along b (struct reflection_frame): in slopes (x/z, y/z) of a direction (x, y, z) in the frame
- * (a, b, r), q = P22(slopes) / z^3 with P22 = 1 / (pi bx by (1 + (x/z)^2 / bx^2 + (y/z)^2 / by^2)^2) (the
- * hemisphere about r). Near r a GGX material of roughness alpha reflects a lobe of this shape with beta ~
- * 2 alpha, heavy tails included, so the widths run from 2e-4 (alpha 1e-4, the models' floor) to 0.125
- * (alpha ~ 0.06): a lobe much wider than the pattern's spacing is already well sampled by the pattern, whose
- * MIS weight then dominates. */
-#define REFLECTION_LOBES 5
-static const double reflection_beta[REFLECTION_LOBES] = {0.125, 0.025, 0.005, 0.001, 0.0002};
-
-/* The fixed directions of every environment light of the scene, concatenated in light order. */
-typedef struct env_table {
-    int count;
-    double (*direction)[3]; /* world space, unit */
-    double (*weight)[3];    /* L(w) * scale / (pdf(w) * N) per RGB channel; 0 for directions never used */
-    double *mis_npdf;       /* N pdf(w) of a direction whose light takes reflection samples, 0 otherwise */
-    int reflections;        /* M: reflection samples per hit (0: none, and mis_npdf is NULL) */
-    int per_lobe[REFLECTION_LOBES]; /* how many of the M each lobe of q draws */
-    double (*unit_slopes)[2]; /* [M]: the lobes' directions as slopes of a unit-width lobe, lobe by lobe */
-    int source_count;
-    env_source *sources;    /* [source_count], while the plan is built only */
-} env_table;
 
 struct mr_render_plan {
     mr_scene scene;
@@ -351,241 +309,6 @@ static int shadowed(const mesh_world *mesh, const hit_record *hit, const double 
     return mr_mesh_occluded(mesh, origin, dir, distance, hit->triangle);
 }
 
-/* ---- environment lights: the fixed sample pattern ----------------------------------------------------------- */
-
-/* Number of directions of an environment light's pattern. */
-static int env_light_samples(const mr_light *light) {
-    return light->samples > 0 ? light->samples : MR_ENV_DEFAULT_SAMPLES;
-}
-
-/* Van der Corput radical inverse of i in base 2, in [0, 1): the second coordinate of the Hammersley set. */
-static double radical_inverse2(uint32_t i) {
-    i = (i << 16) | (i >> 16);
-    i = ((i & 0x55555555u) << 1) | ((i & 0xAAAAAAAAu) >> 1);
-    i = ((i & 0x33333333u) << 2) | ((i & 0xCCCCCCCCu) >> 2);
-    i = ((i & 0x0F0F0F0Fu) << 4) | ((i & 0xF0F0F0F0u) >> 4);
-    i = ((i & 0x00FF00FFu) << 8) | ((i & 0xFF00FF00u) >> 8);
-    return (double)i * (1.0 / 4294967296.0);
-}
-
-/* The bin of a piecewise-constant distribution holding xi: cdf[0] = 0 <= xi < cdf[n] = 1, the result b has
- * cdf[b] <= xi < cdf[b+1], so empty bins are never chosen. */
-static int cdf_find(const double *cdf, int n, double xi) {
-    int lo = 0, hi = n;
-    while (hi - lo > 1) {
-        int mid = lo + (hi - lo) / 2;
-        if (cdf[mid] <= xi)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    return lo;
-}
-
-/* Rec. 709 luminance of a map pixel (a grey map is its own luminance): what the pattern importance-samples. */
-static double env_luminance(const float *px, int channels) {
-    if (channels == 1) return px[0];
-    return 0.2126 * px[0] + 0.7152 * px[1] + 0.0722 * px[2];
-}
-
-/* Fill the n directions and weights of one environment light (docs/rendering.md, "The estimator"): the
- * Hammersley point (xi1, xi2) = ((k + 0.5)/n, radical_inverse(k)) picks a map row from the marginal of
- * p(row, column) = luminance * sin(theta_row) and a column from that row's conditional (continuous inversion
- * inside the chosen texel), so pdf_uv = p / mean(p) over the unit square and, in solid angle,
- * pdf(w) = pdf_uv / (2 pi^2 sin theta). The weight is L(w) * scale / (pdf(w) n), with L the chosen texel (the
- * map is piecewise constant, like the pdf). xi1 grows with k, so rows come in order and each row's conditional
- * is built once, in a buffer of one row: O(width * height) time, O(width + height) memory. With npdf, each
- * direction's N pdf(w) (what MIS weighs the pattern by) goes there; *total gets the normaliser (0: a black map).
- * Returns 0 on allocation failure. */
-static int env_fill(const mr_light *light, int n, double (*direction)[3], double (*weight)[3], double *npdf,
-                    double *total_out) {
-    const mr_image *map = light->environment;
-    const int width = map->width, height = map->height, channels = map->channels;
-    double *row_cdf = malloc((size_t)(height + 1) * sizeof *row_cdf);
-    double *col_cdf = malloc((size_t)(width + 1) * sizeof *col_cdf);
-    if (row_cdf == NULL || col_cdf == NULL) {
-        free(row_cdf);
-        free(col_cdf);
-        return 0;
-    }
-    row_cdf[0] = 0.0;
-    for (int j = 0; j < height; j++) {
-        double sum = 0.0;
-        for (int i = 0; i < width; i++) sum += env_luminance(mr_image_at(map, i, j), channels);
-        row_cdf[j + 1] = row_cdf[j] + sum * sin(MR_PI * (j + 0.5) / height);
-    }
-    const double total = row_cdf[height];
-    *total_out = 0.0;
-    if (!(total > 0.0 && isfinite(total))) {
-        // A black map: no direction carries light (weight 0: the plan stores none of them).
-        for (int k = 0; k < n; k++) {
-            for (int c = 0; c < 3; c++) {
-                direction[k][c] = c == 1 ? 1.0 : 0.0;
-                weight[k][c] = 0.0;
-            }
-            if (npdf) npdf[k] = 0.0;
-        }
-        free(row_cdf);
-        free(col_cdf);
-        return 1;
-    }
-    for (int j = 1; j < height; j++) row_cdf[j] /= total;
-    row_cdf[height] = 1.0;
-    *total_out = total;
-
-    // fmod first, so that whole turns (360, -720 ...) are the identity exactly.
-    const double turn = fmod(light->rotation_degrees, 360.0) * MR_PI / 180.0;
-    const double cos_turn = cos(turn), sin_turn = sin(turn);
-    int row = -1;
-    for (int k = 0; k < n; k++) {
-        double xi1 = (k + 0.5) / n, xi2 = radical_inverse2((uint32_t)k);
-        int j = cdf_find(row_cdf, height, xi1);
-        if (j != row) {
-            row = j;
-            col_cdf[0] = 0.0;
-            for (int i = 0; i < width; i++)
-                col_cdf[i + 1] = col_cdf[i] + env_luminance(mr_image_at(map, i, j), channels);
-            double row_total = col_cdf[width];
-            for (int i = 1; i < width; i++) col_cdf[i] /= row_total;
-            col_cdf[width] = 1.0;
-        }
-        int i = cdf_find(col_cdf, width, xi2);
-        double dv = (xi1 - row_cdf[j]) / (row_cdf[j + 1] - row_cdf[j]);
-        double du = (xi2 - col_cdf[i]) / (col_cdf[i + 1] - col_cdf[i]);
-        double u = (i + du) / width, v = (j + dv) / height;
-        double theta = MR_PI * v, phi = 2.0 * MR_PI * (u - 0.5);
-        double sin_theta = sin(theta);
-        double x = sin_theta * sin(phi), y = cos(theta), z = -sin_theta * cos(phi);
-        direction[k][0] = x * cos_turn + z * sin_turn;
-        direction[k][1] = y;
-        direction[k][2] = -x * sin_turn + z * cos_turn;
-
-        const float *px = mr_image_at(map, i, j);
-        double pdf_uv = env_luminance(px, channels) * sin(MR_PI * (j + 0.5) / height) * width * height / total;
-        double factor = pdf_uv > 0.0 && sin_theta > 0.0 ? 2.0 * MR_PI * MR_PI * sin_theta / (pdf_uv * n) : 0.0;
-        for (int c = 0; c < 3; c++)
-            weight[k][c] = (double)px[channels == 1 ? 0 : c] * light->intensity[c] * factor;
-        if (npdf) npdf[k] = factor > 0.0 ? 1.0 / factor : 0.0;
-    }
-    free(row_cdf);
-    free(col_cdf);
-    return 1;
-}
-
-/* ---- reflection samples: directions about the mirror direction, combined with the pattern by MIS ------------- */
-
-/* M q(w): the reflection samples' density at unit direction w, times their number. The slopes come from dot
- * products with a and b, which keep their precision at the narrowest lobe (1 - r.w would cancel). q is taken as
- * 0 more than acos(REFLECTION_CONE_COS) = 53 degrees from r (about 10 widths of the widest lobe): the MIS weights
- * stay a partition of unity as long as the pattern's factor and the reflection samples' weights use the same q
- * (a reflection sample out there would weigh 0; none of the fixed ones is), and the render skips the lobes for
- * most pattern directions with one dot product. */
-#define REFLECTION_CONE_COS 0.6
-static double reflection_density(const env_table *env, const struct reflection_frame *f, const double w[3]) {
-    const double z = vec3_dot(f->r, w);
-    if (!(z > REFLECTION_CONE_COS)) return 0.0;
-    const double sx = vec3_dot(f->a, w) / z, sy = vec3_dot(f->b, w) / z, z3 = z * z * z;
-    double sum = 0.0;
-    for (int j = 0; j < REFLECTION_LOBES; j++) {
-        const double bx = reflection_beta[j], by = reflection_beta[j] * f->squash;
-        const double d = 1.0 + sx * sx / (bx * bx) + sy * sy / (by * by);
-        sum += env->per_lobe[j] / (MR_PI * bx * by * z3 * d * d);
-    }
-    return sum;
-}
-
-/* The radiance of `source` along world direction w (unit), into L (RGB, intensity included), and N pdf(w) of
- * its pattern: the inverse of env_fill's mapping, with the same piecewise-constant texel and pdf. */
-static double env_source_lookup(const env_source *source, const double w[3], double L[3]) {
-    const mr_image *map = source->map;
-    // Undo the rotation about +y, then the map's angles (env_fill: x = sin t sin p, y = cos t, z = -sin t cos p).
-    double x = w[0] * source->cos_turn - w[2] * source->sin_turn;
-    double z = w[0] * source->sin_turn + w[2] * source->cos_turn;
-    double y = w[1] < -1.0 ? -1.0 : w[1] > 1.0 ? 1.0 : w[1];
-    double theta = acos(y), phi = atan2(x, -z), sin_theta = hypot(x, z);
-    double u = phi / (2.0 * MR_PI) + 0.5, v = theta / MR_PI;
-    int i = (int)(u * map->width), j = (int)(v * map->height);
-    i = i < 0 ? 0 : i >= map->width ? map->width - 1 : i;
-    j = j < 0 ? 0 : j >= map->height ? map->height - 1 : j;
-    const float *px = mr_image_at(map, i, j);
-    for (int c = 0; c < 3; c++) L[c] = (double)px[map->channels == 1 ? 0 : c] * source->intensity[c];
-    if (!(sin_theta > 1e-12)) return INFINITY; // the poles: a set of measure zero the pattern never leaves empty
-    double pdf_uv = env_luminance(px, map->channels) * sin(MR_PI * (j + 0.5) / map->height) * map->width *
-                    map->height / source->total;
-    return source->n * pdf_uv / (2.0 * MR_PI * MR_PI * sin_theta);
-}
-
-/* Direction k of the m of lobe j, as slopes of a lobe of unit widths: a Hammersley point mapped through the unit
- * GGX slope distribution's inverse CDF (radius^2 = xi / (1 - xi)), each lobe turned by a golden-ratio fraction of
- * a turn so that no two lobes line up. The same for every hit: tabled once per plan. */
-static void reflection_unit_slopes(int j, int k, int m, double slopes[2]) {
-    const double xi1 = (k + 0.5) / m, xi2 = fmod(radical_inverse2((uint32_t)k) + 0.6180339887498949 * j, 1.0);
-    const double radius = sqrt(xi1 / (1.0 - xi1)), phi = 2.0 * MR_PI * xi2;
-    slopes[0] = radius * cos(phi);
-    slopes[1] = radius * sin(phi);
-}
-
-static void env_table_free(env_table *env) {
-    free(env->direction);
-    free(env->weight);
-    free(env->mis_npdf);
-    free(env->unit_slopes);
-    free(env->sources);
-    memset(env, 0, sizeof *env);
-}
-
-/* The directions of every environment light of the scene, concatenated in light order. */
-static mr_status env_setup(const mr_scene *scene, env_table *env) {
-    int total = 0, lights = 0, reflections = 0;
-    for (int l = 0; l < scene->light_count; l++)
-        if (scene->lights[l].type == MR_LIGHT_ENVIRONMENT) {
-            total += env_light_samples(&scene->lights[l]);
-            lights++;
-            reflections = MR_MAX(reflections, scene->lights[l].reflection_samples);
-        }
-    env->count = total;
-    if (total == 0) return MR_OK;
-    env->direction = malloc((size_t)total * sizeof *env->direction);
-    env->weight = malloc((size_t)total * sizeof *env->weight);
-    env->sources = calloc((size_t)lights, sizeof *env->sources);
-    if (env->direction == NULL || env->weight == NULL || env->sources == NULL) goto oom;
-    if (reflections > 0) {
-        env->mis_npdf = malloc((size_t)total * sizeof *env->mis_npdf);
-        env->unit_slopes = malloc((size_t)reflections * sizeof *env->unit_slopes);
-        if (env->mis_npdf == NULL || env->unit_slopes == NULL) goto oom;
-        env->reflections = reflections;
-        int next = 0;
-        for (int j = 0; j < REFLECTION_LOBES; j++) {
-            env->per_lobe[j] = reflections / REFLECTION_LOBES + (j < reflections % REFLECTION_LOBES);
-            for (int k = 0; k < env->per_lobe[j]; k++)
-                reflection_unit_slopes(j, k, env->per_lobe[j], env->unit_slopes[next++]);
-        }
-    }
-    int offset = 0;
-    for (int l = 0; l < scene->light_count; l++) {
-        const mr_light *light = &scene->lights[l];
-        if (light->type != MR_LIGHT_ENVIRONMENT) continue;
-        int n = env_light_samples(light);
-        env_source *source = &env->sources[env->source_count++];
-        source->map = light->environment;
-        source->n = n;
-        const double turn = fmod(light->rotation_degrees, 360.0) * MR_PI / 180.0;
-        source->cos_turn = cos(turn);
-        source->sin_turn = sin(turn);
-        for (int c = 0; c < 3; c++) source->intensity[c] = light->intensity[c];
-        source->reflections = reflections > 0 && light->reflection_samples > 0;
-        double *npdf = env->mis_npdf ? env->mis_npdf + offset : NULL;
-        if (!env_fill(light, n, env->direction + offset, env->weight + offset, npdf, &source->total)) goto oom;
-        if (npdf && !source->reflections)
-            for (int k = 0; k < n; k++) npdf[k] = 0.0; // this light's pattern keeps its plain weights
-        if (!(source->total > 0.0)) source->reflections = 0;
-        offset += n;
-    }
-    return MR_OK;
-oom:
-    env_table_free(env);
-    return mr_fail(MR_ERR_NOMEM, "render plan: out of memory for %d environment directions", total);
-}
 
 /* ---- stage 2 over a row of hits, and the plan ---------------------------------------------------------------- */
 
@@ -652,7 +375,7 @@ static int add_reflection_samples(const env_table *env, const mesh_world *occlud
                 const env_source *source = &env->sources[l];
                 if (!source->reflections) continue;
                 double L[3];
-                const double npdf = env_source_lookup(source, w, L);
+                const double npdf = mr_env_source_lookup(source, w, L);
                 for (int c = 0; c < 3; c++) weight[c] += L[c] / (npdf + mq);
             }
             if (weight[0] == 0.0 && weight[1] == 0.0 && weight[2] == 0.0) continue;
@@ -701,7 +424,7 @@ static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world
         // An environment light: its directions above the hit's horizon (a convex object cannot occlude
         // itself, so this is the whole visibility test) that carry light; on a self-occluding mesh, those
         // whose shadow ray escapes.
-        int n = env_light_samples(light);
+        int n = mr_env_light_samples(light);
         if (hit->view_local[2] > 0.0) {
             if (!reserve((void **)&row->env, &row->env_capacity, row->env_count + (size_t)n, sizeof *row->env))
                 return 0;
@@ -947,7 +670,7 @@ void mr_render_plan_free(mr_render_plan *plan) {
     free(plan->point_samples);
     free(plan->env_samples);
     free(plan->reflection_samples);
-    env_table_free(&plan->env);
+    mr_env_table_free(&plan->env);
     mr_mesh_world_free(&plan->mesh);
     free(plan);
 }
@@ -974,7 +697,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     plan->scene = *scene;
     plan->coverage = calloc((size_t)width * (size_t)height, sizeof *plan->coverage);
     if (plan->coverage == NULL) goto oom;
-    status = env_setup(scene, &plan->env);
+    status = mr_env_table_setup(scene, &plan->env);
     if (status != MR_OK) goto fail;
     tr.mesh = &plan->mesh;
     if (scene->shape.type == MR_SHAPE_MESH) {
@@ -1192,49 +915,6 @@ int mr_render_plan_trace_mesh(const mr_render_plan *plan, const double origin[3]
     return 1;
 }
 
-/* ---- textures ------------------------------------------------------------------------------------------------ */
-
-/* Can parameter `index` of `model` come from `map`, read at `channel`? */
-static mr_status check_texture(const mr_brdf_model *model, int index, const mr_image *map, int channel) {
-    const mr_brdf_param *param = &model->params[index];
-    if (param->role == MR_PARAM_SWITCH)
-        return mr_fail(MR_ERR_INVALID_ARG, "texture for %s parameter '%s': a switch cannot come from a map",
-                       model->name, param->name);
-    if (map->width < 1 || map->height < 1 || map->pixels == NULL ||
-        (map->channels != 1 && map->channels != 3 && map->channels != 4))
-        return mr_fail(MR_ERR_INVALID_ARG, "texture for %s parameter '%s': not a valid image (%dx%d, %d channels)",
-                       model->name, param->name, map->width, map->height, map->channels);
-    if (param->channels == 3 && channel != 0)
-        return mr_fail(MR_ERR_INVALID_ARG, "texture for %s parameter '%s': an RGB parameter reads channels 0-2 "
-                       "(or a grey map), so its channel must be 0, not %d", model->name, param->name, channel);
-    if (param->channels == 1 && (channel < 0 || channel >= map->channels))
-        return mr_fail(MR_ERR_INVALID_ARG, "texture for %s parameter '%s': channel %d requested of a %d-channel map",
-                       model->name, param->name, channel, map->channels);
-    return MR_OK;
-}
-
-mr_status mr_param_textures_set(mr_param_textures *textures, const mr_brdf_model *model, const char *name,
-                                const mr_image *map, int channel) {
-    if (textures == NULL || model == NULL || name == NULL)
-        return mr_fail(MR_ERR_INVALID_ARG, "textures: NULL textures, model or parameter name");
-    int index = mr_brdf_param_index(model, name);
-    if (index < 0) {
-        char valid[256] = "";
-        size_t used = 0;
-        for (int p = 0; p < model->param_count && used < sizeof valid; p++)
-            used += (size_t)snprintf(valid + used, sizeof valid - used, "%s%s", p ? ", " : "", model->params[p].name);
-        return mr_fail(MR_ERR_INVALID_ARG, "textures: model %s has no parameter '%s' (valid: %s)", model->name, name,
-                       valid);
-    }
-    if (map != NULL) {
-        mr_status status = check_texture(model, index, map, channel);
-        if (status != MR_OK) return status;
-    }
-    textures->maps[index] = map;
-    textures->channel[index] = map != NULL ? channel : 0;
-    return MR_OK;
-}
-
 /* ---- renders ------------------------------------------------------------------------------------------------- */
 
 static mr_status check_target(const mr_render_plan *plan, const mr_image *image, const char *what) {
@@ -1307,7 +987,7 @@ static mr_status material_state_init(const mr_material_binding *material, int in
     ms->binding_count = 0;
     for (int p = 0; textures != NULL && p < model->param_count && p < MR_BRDF_MAX_VALUES; p++) {
         if (textures->maps[p] == NULL) continue;
-        mr_status status = check_texture(model, p, textures->maps[p], textures->channel[p]);
+        mr_status status = mr_texture_check_binding(model, p, textures->maps[p], textures->channel[p]);
         if (status == MR_OK) status = mr_texture_sampling_validate(&textures->sampling[p], "render: texture sampling");
         if (status != MR_OK) return status;
         const int channels = model->params[p].channels;

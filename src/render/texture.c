@@ -1,9 +1,11 @@
 /* texture.c — bilinear texture lookups with wrap modes, coordinate sets and KHR_texture_transform. Contract in
  * render.h ("texture sampling") and texture.h. Wrap modes act on texel indices, as GPUs apply them: a lookup
  * between the last and the first texel blends them under REPEAT, blends the last with itself under CLAMP, and
- * mirrors the neighbourhood under MIRRORED_REPEAT (the glTF 2.0 sampler modes, OpenGL 4.6 section 8.14.2). */
+ * mirrors the neighbourhood under MIRRORED_REPEAT (the glTF 2.0 sampler modes, OpenGL 4.6 section 8.14.2). Also
+ * the binding of maps to a model's parameters (mr_param_textures_set) and its checks. */
 #include <math.h>
 #include <stddef.h>
+#include <stdio.h>
 
 #include "../mr_internal.h"
 #include "texture.h"
@@ -92,4 +94,46 @@ void mr_texture_sampler_read(const texture_sampler *sampler, const double uv0[2]
         double top = a + fx * (b - a), bottom = d + fx * (e - d);
         out[k] = top + fy * (bottom - top);
     }
+}
+
+/* ---- maps bound to parameters (render.h, mr_param_textures) ------------------------------------------------- */
+
+mr_status mr_texture_check_binding(const mr_brdf_model *model, int index, const mr_image *map, int channel) {
+    const mr_brdf_param *param = &model->params[index];
+    if (param->role == MR_PARAM_SWITCH)
+        return mr_fail(MR_ERR_INVALID_ARG, "texture for %s parameter '%s': a switch cannot come from a map",
+                       model->name, param->name);
+    if (map->width < 1 || map->height < 1 || map->pixels == NULL ||
+        (map->channels != 1 && map->channels != 3 && map->channels != 4))
+        return mr_fail(MR_ERR_INVALID_ARG, "texture for %s parameter '%s': not a valid image (%dx%d, %d channels)",
+                       model->name, param->name, map->width, map->height, map->channels);
+    if (param->channels == 3 && channel != 0)
+        return mr_fail(MR_ERR_INVALID_ARG, "texture for %s parameter '%s': an RGB parameter reads channels 0-2 "
+                       "(or a grey map), so its channel must be 0, not %d", model->name, param->name, channel);
+    if (param->channels == 1 && (channel < 0 || channel >= map->channels))
+        return mr_fail(MR_ERR_INVALID_ARG, "texture for %s parameter '%s': channel %d requested of a %d-channel map",
+                       model->name, param->name, channel, map->channels);
+    return MR_OK;
+}
+
+mr_status mr_param_textures_set(mr_param_textures *textures, const mr_brdf_model *model, const char *name,
+                                const mr_image *map, int channel) {
+    if (textures == NULL || model == NULL || name == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "textures: NULL textures, model or parameter name");
+    int index = mr_brdf_param_index(model, name);
+    if (index < 0) {
+        char valid[256] = "";
+        size_t used = 0;
+        for (int p = 0; p < model->param_count && used < sizeof valid; p++)
+            used += (size_t)snprintf(valid + used, sizeof valid - used, "%s%s", p ? ", " : "", model->params[p].name);
+        return mr_fail(MR_ERR_INVALID_ARG, "textures: model %s has no parameter '%s' (valid: %s)", model->name, name,
+                       valid);
+    }
+    if (map != NULL) {
+        mr_status status = mr_texture_check_binding(model, index, map, channel);
+        if (status != MR_OK) return status;
+    }
+    textures->maps[index] = map;
+    textures->channel[index] = map != NULL ? channel : 0;
+    return MR_OK;
 }

@@ -25,4 +25,9 @@ void mr_texture_sampler_init(texture_sampler *sampler, const mr_image *map, cons
  * is a + t (b - a), so a constant map gives its value exactly. */
 void mr_texture_sampler_read(const texture_sampler *sampler, const double uv0[2], const double uv1[2], double *out);
 
+/* Can parameter `index` of `model` come from `map`, read at `channel` (render.h, mr_param_textures)? MR_OK, or
+ * MR_ERR_INVALID_ARG naming the model, the parameter and what is wrong: a switch, not a valid image, an RGB
+ * parameter read from a channel other than 0, a channel the map does not have. */
+mr_status mr_texture_check_binding(const mr_brdf_model *model, int index, const mr_image *map, int channel);
+
 #endif /* MR_TEXTURE_H */

@@ -1,10 +1,9 @@
 /*
- * dataset.c — sweep files -> (specular, metallic) training pairs. Contract in dataset.h.
+ * dataset.c — sweep files -> (specular, metallic) training pairs. Contract in dataset.h. The files are read
+ * through the sweep file's reader by column name (src/remap/sweep_file.h).
  */
 #include "dataset.h"
 
-#include <errno.h>
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -12,6 +11,7 @@
 #include "../c_locale.h"
 #include "../mr_internal.h"
 #include "../remap/remap_file.h"
+#include "../remap/sweep_file.h"
 #include "workflow.h"
 
 #define MAX_COLUMNS 256
@@ -23,33 +23,27 @@ typedef struct columns {
     int to_albedo[3], to_metallic, outcome;
 } columns;
 
-static int find_column(char **names, int count, const char *name) {
-    for (int i = 0; i < count; i++)
-        if (strcmp(names[i], name) == 0) return i;
-    return -1;
-}
-
 static mr_status map_columns(const char *path, char **names, int count, columns *c, int *metallic_source) {
     static const char rgb[3] = {'r', 'g', 'b'};
     char name[64];
     int have_specular = 1, have_metallic = 1, have_output = 1;
     for (int k = 0; k < 3; k++) {
         snprintf(name, sizeof name, "diffuse_%c", rgb[k]);
-        c->diffuse[k] = find_column(names, count, name);
+        c->diffuse[k] = mr_sweep_file_find_column(names, count, name);
         snprintf(name, sizeof name, "f0_%c", rgb[k]);
-        c->f0[k] = find_column(names, count, name);
+        c->f0[k] = mr_sweep_file_find_column(names, count, name);
         snprintf(name, sizeof name, "albedo_%c", rgb[k]);
-        c->albedo[k] = find_column(names, count, name);
+        c->albedo[k] = mr_sweep_file_find_column(names, count, name);
         snprintf(name, sizeof name, "to_albedo_%c", rgb[k]);
-        c->to_albedo[k] = find_column(names, count, name);
+        c->to_albedo[k] = mr_sweep_file_find_column(names, count, name);
         have_specular &= c->diffuse[k] >= 0 && c->f0[k] >= 0;
         have_metallic &= c->albedo[k] >= 0;
         have_output &= c->to_albedo[k] >= 0;
     }
-    c->metallic = find_column(names, count, "metallic");
-    c->dielectric_f0 = find_column(names, count, "dielectric_f0");
-    c->to_metallic = find_column(names, count, "to_metallic");
-    c->outcome = find_column(names, count, "outcome");
+    c->metallic = mr_sweep_file_find_column(names, count, "metallic");
+    c->dielectric_f0 = mr_sweep_file_find_column(names, count, "dielectric_f0");
+    c->to_metallic = mr_sweep_file_find_column(names, count, "to_metallic");
+    c->outcome = mr_sweep_file_find_column(names, count, "outcome");
     have_metallic &= c->metallic >= 0 && c->dielectric_f0 >= 0;
     have_output &= c->to_metallic >= 0;
     if (!have_output || c->outcome < 0)
@@ -60,15 +54,6 @@ static mr_status map_columns(const char *path, char **names, int count, columns 
                        "source, e.g. ggx) nor albedo_r/g/b + metallic + dielectric_f0 (e.g. ggx-metallic)", path);
     *metallic_source = !have_specular;
     return MR_OK;
-}
-
-static int parse_number(const char *text, double *out) {
-    char *end = NULL;
-    errno = 0;
-    double v = strtod(text, &end);
-    if (end == text || *end != '\0' || !isfinite(v)) return 0;
-    *out = v;
-    return 1;
 }
 
 /* Append one row's pair to d (growing the arrays); returns MR_OK, or a failure naming path:line. */
@@ -88,7 +73,7 @@ static mr_status take_row(const char *path, long line_number, char **fields, int
     needed[used++] = c->to_metallic;
     double values[12];
     for (int i = 0; i < used; i++) {
-        if (needed[i] >= field_count || !parse_number(fields[needed[i]], &values[i]))
+        if (needed[i] >= field_count || !mr_sweep_file_parse_number(fields[needed[i]], &values[i]))
             return mr_fail(MR_ERR_FORMAT, "%s:%ld: field %d is missing or not a finite number", path, line_number,
                            needed[i] + 1);
     }
@@ -126,19 +111,16 @@ static mr_status take_row(const char *path, long line_number, char **fields, int
 
 static mr_status load_file(const char *path, const mr_wf_dataset_options *opts, mr_wf_dataset *d,
                            size_t *capacity) {
-    FILE *f = NULL;
-    mr_status opened = mr_io_open_input(path, path, 0, &f, NULL); /* regular files only: a FIFO would block */
-    if (opened != MR_OK) return opened;
-    char *line = NULL, *header = NULL;
-    size_t line_size = 0;
-    long line_number = 0;
+    mr_sweep_reader reader = {0};
+    mr_status status = mr_sweep_reader_open(&reader, path, 0); /* lines of any length */
+    char *header = NULL;
     char *names[MAX_COLUMNS], *fields[MAX_COLUMNS];
     int name_count = 0, metallic_source = 0;
     columns c;
     memset(&c, 0, sizeof c);
-    mr_status status = MR_OK;
-    while (status == MR_OK && getline(&line, &line_size, f) >= 0) {
-        line_number++;
+    while (status == MR_OK && mr_sweep_reader_next(&reader, &status) > 0) {
+        char *line = reader.line;
+        const long line_number = reader.line_number;
         if (line[0] == '#' || line[0] == '\n') continue;
         if (header == NULL) {
             header = strdup(line);
@@ -169,11 +151,9 @@ static mr_status load_file(const char *path, const mr_wf_dataset_options *opts, 
         }
         status = take_row(path, line_number, fields, field_count, &c, metallic_source, d, capacity);
     }
-    if (status == MR_OK && ferror(f)) status = mr_fail(MR_ERR_IO, "%s: read error: %s", path, strerror(errno));
     if (status == MR_OK && header == NULL) status = mr_fail(MR_ERR_FORMAT, "%s: no column header line", path);
-    free(line);
     free(header);
-    fclose(f);
+    mr_sweep_reader_close(&reader);
     return status;
 }
 
