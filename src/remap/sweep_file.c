@@ -13,8 +13,6 @@
 #include <string.h>
 
 #include "../c_locale.h"
-#include "../io/io_internal.h"
-#include "../matremap.h"
 #include "../mr_internal.h"
 #include "sweep_internal.h"
 

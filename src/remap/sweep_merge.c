@@ -16,7 +16,6 @@
 #include <unistd.h>
 
 #include "../c_locale.h"
-#include "../io/io_internal.h"
 #include "../mr_internal.h"
 #include "remap_file.h"
 #include "sweep_file.h"
