@@ -218,7 +218,9 @@ typedef struct mr_mlp_train_options {
     double beta2;                /* second-moment decay, < 1; 0 = 0.999 */
     double epsilon;              /* added to sqrt(v_hat); 0 = 1e-8 */
     unsigned long long seed;     /* split, initialisation and shuffles; every value (0 included) is a seed */
-    int threads;                 /* OpenMP threads; 0 = omp_get_max_threads(); results do not depend on it */
+    int threads;                 /* OpenMP threads; 0 = automatic (mr_auto_threads: a team of omp_get_max_threads()
+                                    for any training set; each loop forks only for two chunks or more); results
+                                    do not depend on it */
     mr_mlp_epoch_fn epoch_fn;    /* optional progress / loss-curve callback */
     void *epoch_user;            /* passed to epoch_fn */
 } mr_mlp_train_options;

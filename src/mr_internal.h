@@ -49,8 +49,8 @@ mr_status mr_image_check_values(const mr_image *image, const char *label, int al
 
 /* OpenMP threads for a piece of work: `requested` when it is > 0 (an option the caller set), else the automatic
  * rule: a team of omp_get_max_threads() when `work` reaches `threshold` (work too small to gain from a second
- * thread stays on one: copies run side by side), 1 otherwise. The thresholds are the callers' (render.h,
- * workflow.h, metrics.c). */
+ * thread stays on one: copies run side by side), 1 otherwise. Every options struct's `threads = 0` means this
+ * rule; the thresholds are the callers' (threads.c lists them). */
 int mr_auto_threads(int requested, long work, long threshold);
 
 /* A module `file` (libmatremap-oiio.so, libmatremap-mpi.so) beside the running executable, in

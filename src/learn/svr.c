@@ -884,8 +884,10 @@ mr_status mr_svr_train(const double *x, const double *y, size_t n, int n_in, int
     t.n = n;
     t.opt = o;
     t.start = mr_now_seconds();
+    // The automatic thread rule (mr_auto_threads) over the rows; any training set reaches the threshold: the
+    // search fits up to ~200 candidates per output, which a team shares.
 #ifdef _OPENMP
-    t.threads = o->threads > 0 ? o->threads : omp_get_max_threads();
+    t.threads = mr_auto_threads(o->threads, (long)n, 2);
 #else
     t.threads = 1;
 #endif
