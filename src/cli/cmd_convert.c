@@ -651,13 +651,13 @@ int cmd_convert(int argc, char **argv) {
         } else {
             if (direct)
                 printf("matremap convert: %s -> %s by direct remaps, %dx%d = %zu texels in %.2f s (convert %.3f s): "
-                       "%zu not converged, %zu clamped outputs, %zu clamped inputs\n",
+                       "%zu not converged, %zu clamped outputs, %zu clamped or non-finite inputs\n",
                        source->name, target->name, width, height, n, seconds, convert_seconds, counts[0], counts[1],
                        counts[2]);
             else
                 printf("matremap convert: %s -> %s through %d transform%s, %dx%d = %zu texels in %.2f s (convert %.3f "
                        "s): %zu extrapolated (outside the training domain), %zu by a transform that failed its check, "
-                       "%zu clamped outputs, %zu clamped inputs\n",
+                       "%zu clamped outputs, %zu clamped or non-finite inputs\n",
                        source->name, target->name, hops, hops == 1 ? "" : "s", width, height, n, seconds,
                        convert_seconds, counts[0], counts[4], counts[1], counts[2]);
             fprintf(stderr, "matremap convert: wrote");

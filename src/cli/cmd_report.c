@@ -357,6 +357,7 @@ int cmd_report(int argc, char **argv) {
             if (status != MR_OK) code = cli_fail("report", status);
         } else {
             code = cli_material_load("report", g->model_name, g->assignments, g->count, &materials[k]);
+            cli_material_note_invalid_texels("report", materials[k]);
             describe(g, descriptions[k], sizeof descriptions[k]);
         }
         // A scene's description (its triangles and materials) is made by the library.
