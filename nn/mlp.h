@@ -169,7 +169,8 @@ size_t mr_mlp_param_count(const mr_mlp *net);
  * (a small per-thread workspace); out is untouched on failure. */
 mr_status mr_mlp_predict(const mr_mlp *net, const float *in, size_t n, float *out);
 
-/* mr_mlp_predict on at most max_team threads (0 = omp_get_max_threads()), still one per 256 rows at most. */
+/* mr_mlp_predict on at most max_team threads (0 = automatic, mr_auto_threads: omp_get_max_threads()), still one
+ * per 256 rows at most. */
 mr_status mr_mlp_predict_threads(const mr_mlp *net, const float *in, size_t n, float *out, int max_team);
 
 /* The loss of `net` on n rows (x: n x n_in raw inputs, y: n x n_out raw targets): the mean over rows and

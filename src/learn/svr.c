@@ -240,7 +240,8 @@ mr_status mr_svr_predict_threads(const mr_svr *m, const double *in, size_t count
     if (count > SIZE_MAX / sizeof(double) / (size_t)MR_MAX(m->n_in, m->n_out))
         return mr_fail(MR_ERR_INVALID_ARG, "svr predict: %zu rows overflow size_t", count);
 #ifdef _OPENMP
-    int threads = max_team > 0 ? max_team : omp_get_max_threads();
+    // The automatic rule (mr_auto_threads): a team from two blocks of rows on, capped below.
+    int threads = mr_auto_threads(max_team, (long)MR_MIN(count, (size_t)LONG_MAX), 2 * MR_SVR_PREDICT_ROWS);
 #else
     int threads = 1;
     (void)max_team;

@@ -179,8 +179,8 @@ mr_status mr_svr_check(const mr_svr *m);
  * MR_ERR_NOMEM; out is untouched on failure. */
 mr_status mr_svr_predict(const mr_svr *m, const double *in, size_t count, double *out);
 
-/* mr_svr_predict on at most max_team threads (0 = omp_get_max_threads()), still one per MR_SVR_PREDICT_ROWS rows
- * at most. */
+/* mr_svr_predict on at most max_team threads (0 = automatic, mr_auto_threads: omp_get_max_threads()), still one
+ * per MR_SVR_PREDICT_ROWS rows at most. */
 mr_status mr_svr_predict_threads(const mr_svr *m, const double *in, size_t count, double *out, int max_team);
 
 /* Output k's value far from every support vector (an infinite input): out_mean[k] - out_std[k] rho. */
