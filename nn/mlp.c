@@ -29,6 +29,7 @@
  */
 #include "mlp_internal.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -69,14 +70,6 @@
 #define MR_MLP_MULTIVERSION 0
 #define MR_MLP_CLONES
 #endif
-
-static int max_threads(void) {
-#ifdef _OPENMP
-    return omp_get_max_threads();
-#else
-    return 1;
-#endif
-}
 
 static int thread_id(void) {
 #ifdef _OPENMP
@@ -285,8 +278,9 @@ mr_status mr_mlp_predict_threads(const mr_mlp *net, const float *in, size_t n, f
     if (in == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mlp predict: NULL input or output array");
     size_t widest = (size_t)MR_MAX(net->n_in, net->n_out);
     if (n > SIZE_MAX / widest) return mr_fail(MR_ERR_INVALID_ARG, "mlp predict: %zu rows overflow size_t", n);
-    // A thread per PREDICT_ROWS_PER_THREAD rows at most: for fewer, starting a team costs more than it saves.
-    int threads = max_team > 0 ? max_team : max_threads();
+    // The automatic rule (mr_auto_threads) with a team from two blocks of rows on, then a thread per
+    // PREDICT_ROWS_PER_THREAD rows at most: for fewer, starting a team costs more than it saves.
+    int threads = mr_auto_threads(max_team, (long)MR_MIN(n, (size_t)LONG_MAX), 2 * PREDICT_ROWS_PER_THREAD);
     if ((size_t)threads > n / PREDICT_ROWS_PER_THREAD) threads = (int)(n / PREDICT_ROWS_PER_THREAD);
     if (threads < 1) threads = 1;
     float *ws = malloc((size_t)threads * (size_t)(net->n_in + net->n_out) * MAX_LANES * sizeof(float));

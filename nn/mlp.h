@@ -170,7 +170,8 @@ size_t mr_mlp_param_count(const mr_mlp *net);
  * (a small per-thread workspace); out is untouched on failure. */
 mr_status mr_mlp_predict(const mr_mlp *net, const float *in, size_t n, float *out);
 
-/* mr_mlp_predict on at most max_team threads (0 = omp_get_max_threads()), still one per 256 rows at most. */
+/* mr_mlp_predict on at most max_team threads (0 = automatic, mr_auto_threads: omp_get_max_threads()), still one
+ * per 256 rows at most. */
 mr_status mr_mlp_predict_threads(const mr_mlp *net, const float *in, size_t n, float *out, int max_team);
 
 /* The loss of `net` on n rows (x: n x n_in raw inputs, y: n x n_out raw targets): the mean over rows and
@@ -219,7 +220,9 @@ typedef struct mr_mlp_train_options {
     double beta2;                /* second-moment decay, < 1; 0 = 0.999 */
     double epsilon;              /* added to sqrt(v_hat); 0 = 1e-8 */
     unsigned long long seed;     /* split, initialisation and shuffles; every value (0 included) is a seed */
-    int threads;                 /* OpenMP threads; 0 = omp_get_max_threads(); results do not depend on it */
+    int threads;                 /* OpenMP threads; 0 = automatic (mr_auto_threads: a team of omp_get_max_threads()
+                                    for any training set; each loop forks only for two chunks or more); results
+                                    do not depend on it */
     mr_mlp_epoch_fn epoch_fn;    /* optional progress / loss-curve callback */
     void *epoch_user;            /* passed to epoch_fn */
 } mr_mlp_train_options;

@@ -15,6 +15,7 @@
 #include "mlp_internal.h"
 
 #include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -54,7 +55,12 @@ typedef struct resolved {
     uint64_t seed;
 } resolved;
 
-static mr_status resolve_options(const mr_mlp_train_options *o, resolved *r) {
+/* The automatic thread rule's threshold (mr_mlp_train_options.threads = 0, mr_auto_threads): any training set. A
+ * team gains as soon as a minibatch or a loss pass has two chunks, and each parallel loop forks only then. */
+#define PARALLEL_ROWS 2
+
+/* The options in force for n rows: zero fields read as their defaults (mlp.h). */
+static mr_status resolve_options(const mr_mlp_train_options *o, size_t n, resolved *r) {
     mr_mlp_train_options zero;
     memset(&zero, 0, sizeof zero);
     if (o == NULL) o = &zero;
@@ -79,11 +85,11 @@ static mr_status resolve_options(const mr_mlp_train_options *o, resolved *r) {
     r->max_epochs = o->max_epochs ? o->max_epochs : MR_MLP_DEFAULT_MAX_EPOCHS;
     r->patience = o->patience ? o->patience : MR_MLP_DEFAULT_PATIENCE;
 #ifdef _OPENMP
-    r->threads = o->threads ? o->threads : omp_get_max_threads();
+    r->threads = mr_auto_threads(o->threads, (long)MR_MIN(n, (size_t)LONG_MAX), PARALLEL_ROWS);
 #else
+    (void)n;
     r->threads = 1;
 #endif
-    if (r->threads < 1) r->threads = 1;
     r->val_fraction = o->validation_fraction > 0.0 ? o->validation_fraction : MR_MLP_DEFAULT_VALIDATION;
     r->lr = o->learning_rate > 0.0 ? o->learning_rate : MR_MLP_DEFAULT_LEARNING_RATE;
     r->beta1 = o->beta1 > 0.0 ? o->beta1 : MR_MLP_DEFAULT_BETA1;
@@ -310,7 +316,7 @@ mr_status mr_mlp_train(const float *x, const float *y, size_t n, int n_in, int n
     if (x == NULL || y == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mlp train: NULL data array");
     if (n < 2) return mr_fail(MR_ERR_INVALID_ARG, "mlp train: %zu rows (need at least 2: one to train, one to "
                               "validate)", n);
-    mr_status status = resolve_options(opts, &t.opt);
+    mr_status status = resolve_options(opts, n, &t.opt);
     if (status != MR_OK) return status;
     status = mr_mlp_check_dims("mlp train", n_in, t.opt.n_hidden, n_out);
     if (status != MR_OK) return status;

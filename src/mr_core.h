@@ -122,8 +122,8 @@ mr_status mr_io_open_input(const char *path, const char *label, uint64_t max_byt
 
 /* OpenMP threads for a piece of work: `requested` when it is > 0 (an option the caller set), else the automatic
  * rule: a team of omp_get_max_threads() when `work` reaches `threshold` (work too small to gain from a second
- * thread stays on one: copies run side by side), 1 otherwise. The thresholds are the callers' (render.h,
- * workflow.h, metrics.c). */
+ * thread stays on one: copies run side by side), 1 otherwise. Every options struct's `threads = 0` means this
+ * rule; the thresholds are the callers' (threads.c lists them). */
 int mr_auto_threads(int requested, long work, long threshold);
 
 #ifdef __cplusplus

@@ -1127,6 +1127,58 @@ MR_TEST(texture_constant_maps_render_like_values) {
     mr_image_free(diffuse_rgb);
 }
 
+MR_TEST(texels_that_are_no_values_are_read_as_documented) {
+    // render.h, mr_param_textures: a NaN or infinite texel reads as 0 and a negative one as 0, before the blend, so
+    // a map holding them renders exactly as the map with those texels replaced by 0; mr_material_map_invalid_texels
+    // counts them per map, over the channels the parameter reads (a texel once, non-finite before negative).
+    const mr_brdf_model *gltf = mr_brdf_find("gltf");
+    mr_image *bad = constant_map(8, 8, 3, 0.5f), *sane = constant_map(8, 8, 3, 0.5f);
+    mr_image_at(bad, 1, 1)[0] = NAN;
+    mr_image_at(bad, 3, 2)[1] = INFINITY;
+    mr_image_at(bad, 4, 2)[2] = -INFINITY;
+    mr_image_at(bad, 4, 2)[0] = -1.0f; // non-finite in another channel: counted once, as not finite
+    mr_image_at(bad, 5, 6)[2] = -0.25f;
+    mr_image_at(bad, 6, 6)[2] = -0.25f;
+    mr_image_at(sane, 1, 1)[0] = 0.0f;
+    mr_image_at(sane, 3, 2)[1] = 0.0f;
+    mr_image_at(sane, 4, 2)[2] = 0.0f;
+    mr_image_at(sane, 4, 2)[0] = 0.0f;
+    mr_image_at(sane, 5, 6)[2] = 0.0f;
+    mr_image_at(sane, 6, 6)[2] = 0.0f;
+    mr_material *m = NULL;
+    MR_CHECK_OK(mr_material_create(gltf, &m));
+    if (m == NULL) return;
+    mr_image *blue = NULL;
+    MR_CHECK_OK(mr_image_clone(bad, &blue));
+    MR_CHECK_OK(mr_material_add_map(m, "base_color", bad, 0, "bad.exr", NULL));
+    MR_CHECK_OK(mr_material_add_map(m, "metallic", blue, 2, "bad.exr", NULL));
+    size_t nonfinite = 99, negative = 99;
+    MR_CHECK_OK(mr_material_map_invalid_texels(m, 0, &nonfinite, &negative));
+    MR_CHECK_MSG(nonfinite == 3 && negative == 2, "base_color: %zu not finite, %zu negative", nonfinite, negative);
+    MR_CHECK_OK(mr_material_map_invalid_texels(m, 1, &nonfinite, &negative));
+    MR_CHECK_MSG(nonfinite == 1 && negative == 2, "metallic (B): %zu not finite, %zu negative", nonfinite, negative);
+    MR_CHECK(mr_material_map_invalid_texels(m, 2, &nonfinite, &negative) == MR_ERR_INVALID_ARG);
+    mr_clear_error();
+
+    mr_render_plan *plan = NULL;
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){48, MR_FIT_LIGHT_45, 0});
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    mr_image *from_bad = NULL, *from_sane = NULL;
+    mr_param_textures textures = {0};
+    MR_CHECK_OK(mr_param_textures_set(&textures, gltf, "base_color", sane, 0));
+    MR_CHECK_OK(mr_param_textures_set(&textures, gltf, "metallic", sane, 2));
+    if (plan != NULL) {
+        MR_CHECK_OK(mr_render_textured(plan, gltf, m->values, &m->textures, MR_COMPONENT_FULL, &from_bad));
+        MR_CHECK_OK(mr_render_textured(plan, gltf, m->values, &textures, MR_COMPONENT_FULL, &from_sane));
+        MR_CHECK(from_bad != NULL && from_sane != NULL && same_pixels(from_bad, from_sane));
+    }
+    mr_image_free(from_bad);
+    mr_image_free(from_sane);
+    mr_render_plan_free(plan);
+    mr_material_free(m);
+    mr_image_free(sane);
+}
+
 MR_TEST(texture_coordinates_follow_the_documented_layout) {
     // Albedo map R = u, G = v at texel centres (ramps, which bilinear filtering reproduces exactly away from the
     // wrap), B = 0.5: every pixel inside the silhouette (box-filtered edge pixels aside) of a frontally lit Lambert
@@ -1261,7 +1313,7 @@ MR_TEST(texture_bad_inputs_are_rejected) {
 }
 
 MR_TEST(texture_non_finite_texels_render_finite) {
-    // Design principle 6: a NaN or infinite texel is clamped by prepare() like any value; no NaN leaves.
+    // Design principle 6: a NaN or infinite texel is read as 0 (render.h, mr_param_textures); no NaN leaves.
     const mr_brdf_model *ggx = mr_brdf_find("ggx");
     mr_image *alpha = constant_map(8, 4, 1, 0.3f), *f0 = constant_map(8, 4, 3, 0.5f);
     for (int j = 0; j < 4; j++)
@@ -1452,6 +1504,7 @@ MR_TEST(closer_look_plan_is_built_once_and_shared) {
 }
 
 MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
+             MR_TEST_ENTRY(texels_that_are_no_values_are_read_as_documented),
              MR_TEST_ENTRY(closer_look_plan_is_built_once_and_shared),
              MR_TEST_ENTRY(highlight_quadrature_shares_each_pixel_exactly),
              MR_TEST_ENTRY(narrow_highlights_keep_their_energy),

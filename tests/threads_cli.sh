@@ -63,6 +63,13 @@ none() {
     check "$name: --threads 2 starts some ($two)" test "$two" -gt 0
 }
 
+# One convention: every command takes --threads 0 (automatic) and says so the same way in its --help.
+for command in render ssim remap metal2spec spec2metal gltf sweep learn convert dataset train report; do
+    expect "$command --threads 0 is accepted" 0 "" -- "$bin" "$command" --threads 0 --help
+    check "$command --help: '--threads ... (default 0: automatic'" \
+        sh -c "'$bin' $command --help | grep -q -- '--threads .*(default 0: automatic'"
+done
+
 none "render, a sphere at 256^2" -- "$bin" render ggx diffuse=0.2 f0=0.04 alpha=0.3 --size 256 THREADS -o sphere.exr
 none "render, the paper's material sphere mesh ($(grep -c '^f ' "$sphere_obj") faces)" -- \
     "$bin" render ggx diffuse=0.2 f0=0.04 alpha=0.3 --mesh "$sphere_obj" --size 96 THREADS -o mesh.exr

@@ -201,6 +201,10 @@ int cli_read_map(const char *command, const char *label, const char *text, int c
  * CLI_EXIT_OK. */
 int cli_material_load(const char *command, const char *model_name, const char *const *assignments, int count,
                       mr_material **out);
+/* The commands that render a material's maps (render, report): one note on stderr per map holding texels that are
+ * not parameter values, how many and how they are read (mr_material_map_invalid_texels, docs/rendering.md):
+ * "matremap render: note: base_color=@nan.exr: 3 texels not finite, read as 0; 2 negative, clamped to 0". */
+void cli_material_note_invalid_texels(const char *command, const mr_material *material);
 
 int cmd_models(int argc, char **argv);
 int cmd_render(int argc, char **argv);

@@ -102,6 +102,21 @@ static int assign(const char *command, mr_material *m, const char *assignment) {
     return load_map(command, m, assignment);
 }
 
+void cli_material_note_invalid_texels(const char *command, const mr_material *m) {
+    for (int k = 0; m != NULL && k < m->map_count; k++) {
+        size_t nonfinite = 0, negative = 0;
+        if (mr_material_map_invalid_texels(m, k, &nonfinite, &negative) != MR_OK || nonfinite + negative == 0)
+            continue;
+        const mr_material_map *map = &m->maps[k];
+        fprintf(stderr, "matremap %s: note: %s=@%s:", command, m->model->params[map->param].name, map->source);
+        if (nonfinite > 0)
+            fprintf(stderr, " %zu texel%s not finite, read as 0%s", nonfinite, nonfinite == 1 ? "" : "s",
+                    negative > 0 ? ";" : "");
+        if (negative > 0) fprintf(stderr, " %zu negative, clamped to 0", negative);
+        fprintf(stderr, "\n");
+    }
+}
+
 int cli_material_load(const char *command, const char *model_name, const char *const *assignments, int count,
                       mr_material **out) {
     *out = NULL;

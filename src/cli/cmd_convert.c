@@ -67,7 +67,8 @@ static void print_help(void) {
         "\n"
         "Options:\n"
         "  --format exr|png    output format (default exr)\n"
-        "  --threads T         threads (default: automatic; the result does not depend on it)\n"
+        "  --threads T         OpenMP threads (default 0: automatic, a team for work large enough to gain\n"
+        "                      from it); the result does not depend on it\n"
         "  --json              the summary as JSON on stdout\n"
         "  --help              this text\n"
         "\n"
@@ -363,7 +364,7 @@ int cmd_convert(int argc, char **argv) {
                 return cli_usage_error(COMMAND, "--format '%s': expected exr or png", v);
             format = v;
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--threads", &v)) != 0) {
-            if (r < 0 || !cli_parse_int(COMMAND, "--threads", v, 1, 1024, &threads)) return CLI_EXIT_USAGE;
+            if (r < 0 || !cli_parse_int(COMMAND, "--threads", v, 0, 1024, &threads)) return CLI_EXIT_USAGE;
         } else if (strcmp(argv[i], "--direct") == 0) {
             direct = 1;
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--tolerance", &v)) != 0) {
@@ -650,13 +651,13 @@ int cmd_convert(int argc, char **argv) {
         } else {
             if (direct)
                 printf("matremap convert: %s -> %s by direct remaps, %dx%d = %zu texels in %.2f s (convert %.3f s): "
-                       "%zu not converged, %zu clamped outputs, %zu clamped inputs\n",
+                       "%zu not converged, %zu clamped outputs, %zu clamped or non-finite inputs\n",
                        source->name, target->name, width, height, n, seconds, convert_seconds, counts[0], counts[1],
                        counts[2]);
             else
                 printf("matremap convert: %s -> %s through %d transform%s, %dx%d = %zu texels in %.2f s (convert %.3f "
                        "s): %zu extrapolated (outside the training domain), %zu by a transform that failed its check, "
-                       "%zu clamped outputs, %zu clamped inputs\n",
+                       "%zu clamped outputs, %zu clamped or non-finite inputs\n",
                        source->name, target->name, hops, hops == 1 ? "" : "s", width, height, n, seconds,
                        convert_seconds, counts[0], counts[4], counts[1], counts[2]);
             fprintf(stderr, "matremap convert: wrote");

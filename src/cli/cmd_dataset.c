@@ -55,7 +55,7 @@ static void print_help(void) {
            "                        studio and sky (repeatable, at most %d)\n"
            "  --chroma-weight W     luma objective: weight of the per-channel colour term (default 0.1)\n"
            "  --regularisation L    pull towards the analytic answer (default 1e-4, labels.h)\n"
-           "  --threads T           OpenMP threads (default: all cores; the result does not depend on it)\n"
+           "  --threads T           OpenMP threads (default 0: automatic, all cores); results do not depend on it\n"
            "  --compare             the objective comparison (needs --env)\n"
            "  --env FILE            an environment map for --compare (repeatable, at most %d)\n"
            "  --weights FILE        a network to compare too (repeatable, at most %d)\n"
@@ -430,7 +430,7 @@ static int compare(pair *texels, size_t n, const char **names, const mr_image *c
             spe[3 * i + c] = (float)texels[i].in.specular[c];
         }
     int total = MR_WF_OBJECTIVE_COUNT + 3 + weight_count;
-    for (int k = 0; status == MR_OK && k < total; k++) {
+    for (int k = MR_WF_OBJECTIVE_LINEAR; status == MR_OK && k < total; k++) { // every objective, then the rest
         column *col = &cols[ncol];
         col->ssim = malloc(n * sizeof *col->ssim);
         if (col->ssim == NULL) {
@@ -603,11 +603,13 @@ int cmd_dataset(int argc, char **argv) {
         } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--regularisation", &value))) {
             if (taken < 0 || !cli_parse_double("dataset", "--regularisation", value, 0.0, 1.0, &lo.regularisation))
                 return CLI_EXIT_USAGE;
+            if (lo.regularisation == 0.0) lo.regularisation = MR_WF_LABEL_OFF; // 0 in the options: the default
         } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--chroma-weight", &value))) {
             if (taken < 0 || !cli_parse_double("dataset", "--chroma-weight", value, 0.0, 100.0, &lo.chroma_weight))
                 return CLI_EXIT_USAGE;
+            if (lo.chroma_weight == 0.0) lo.chroma_weight = MR_WF_LABEL_OFF;
         } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--threads", &value))) {
-            if (taken < 0 || !cli_parse_int("dataset", "--threads", value, 1, 1024, &threads)) return CLI_EXIT_USAGE;
+            if (taken < 0 || !cli_parse_int("dataset", "--threads", value, 0, 1024, &threads)) return CLI_EXIT_USAGE;
         } else if (strcmp(argv[i], "--compare") == 0) {
             do_compare = 1;
         } else if (strcmp(argv[i], "--json") == 0) {

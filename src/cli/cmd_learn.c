@@ -54,7 +54,8 @@ static void print_help(void) {
         "  --svr-c C, --svr-gamma G, --svr-epsilon E\n"
         "                      svr: fix that hyper-parameter for every output (normalised units) instead\n"
         "                      of searching it (the search fits up to ~200 candidates per output)\n"
-        "  --threads T         svr search / mlp training threads (default: all cores; results do not depend on it)\n"
+        "  --threads T         svr search / mlp training threads (default 0: automatic, all cores); results do\n"
+        "                      not depend on it\n"
         "  --all-outcomes      keep local-minimum rows too\n"
         "  --keep-trimmed      keep the rows where the source rescales its reflectances (Ward's and Phong's energy\n"
         "                      trimming, diffuse + specular > 1), left out by default: no texel lies there\n"
@@ -434,7 +435,7 @@ int cmd_learn(int argc, char **argv) {
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--epochs", &v)) != 0) {
             if (r < 0 || !cli_parse_int(COMMAND, "--epochs", v, 1, 1000000, &o.mlp_max_epochs)) return CLI_EXIT_USAGE;
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--threads", &v)) != 0) {
-            if (r < 0 || !cli_parse_int(COMMAND, "--threads", v, 1, 1024, &o.threads)) return CLI_EXIT_USAGE;
+            if (r < 0 || !cli_parse_int(COMMAND, "--threads", v, 0, 1024, &o.threads)) return CLI_EXIT_USAGE;
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--plots", &v)) != 0) {
             if (r < 0) return CLI_EXIT_USAGE;
             plots = v;

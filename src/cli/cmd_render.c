@@ -298,6 +298,7 @@ int cmd_render(int argc, char **argv) {
         asset_seconds = cli_now() - t0;
     } else if (code == CLI_EXIT_OK) {
         code = cli_material_load("render", model_name, assignments, assignment_count, &material);
+        cli_material_note_invalid_texels("render", material);
     }
     cli_io_free(&io);
 

@@ -348,6 +348,7 @@ int cmd_report(int argc, char **argv) {
             code = cli_gltf_scene_load("report", g->model_name, &io, &scenes[k]);
         } else {
             code = cli_material_load("report", g->model_name, g->assignments, g->count, &materials[k]);
+            cli_material_note_invalid_texels("report", materials[k]);
             describe(g, descriptions[k], sizeof descriptions[k]);
         }
         // A scene's description (its triangles and materials) is made by the library.

@@ -27,7 +27,7 @@ static void print_help(void) {
            "  --downsample    apply Wang's MATLAB rule (box filter and decimate by round(min side/256));\n"
            "                  not with --mask\n"
            "  --mask M        also compare over the object whose coverage M holds (above)\n"
-           "  --threads T     threads for the measures (default 0 = automatic: all cores for images of at\n"
+           "  --threads T     threads for the measures (default 0: automatic, all cores for images of at\n"
            "                  least 65536 pixels, one below); the figures do not depend on it\n"
            "  --json          machine-readable output\n"
            "  --help          this text\n");

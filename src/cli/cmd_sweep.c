@@ -53,10 +53,10 @@ static void print_help(void) {
            "  --strategy S          auto (default), joint, single, two or three (see 'matremap remap --help')\n"
            "  --size N              fit-scene side in pixels (default %d)\n"
            "  --light L             45 (default) or frontal\n"
-           "  --threads T           samples at once in this process (default: all cores; under mpirun, the\n"
-           "                        cores this rank may use divided by the ranks on its machine, at least 1, so\n"
-           "                        that N ranks on one machine share its cores; OMP_NUM_THREADS=T sets T for\n"
-           "                        every rank); each sample runs single-threaded\n"
+           "  --threads T           samples at once in this process (default 0: automatic, all cores; under\n"
+           "                        mpirun, the cores this rank may use divided by the ranks on its machine, at\n"
+           "                        least 1, so that N ranks on one machine share its cores; OMP_NUM_THREADS=T\n"
+           "                        sets T for every rank); each sample runs single-threaded\n"
            "  --shard K/N           compute only shard K of N (0 <= K < N): the samples whose index %% N == K,\n"
            "                        into a file of its own (one per job of a job array; it resumes like any\n"
            "                        sweep); 'matremap sweep merge' joins the N files into the sweep's file\n"
@@ -372,7 +372,7 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
             if (mr_fit_light_from_name(value, &scene.light) != MR_OK)
                 return cli_usage_error("sweep", "%s", mr_last_error());
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--threads", &value))) {
-            if (taken < 0 || !cli_parse_int("sweep", "--threads", value, 1, 1024, &a->threads))
+            if (taken < 0 || !cli_parse_int("sweep", "--threads", value, 0, 1024, &a->threads))
                 return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--shard", &value))) {
             if (taken < 0 || !parse_shard(value, &a->shard_index, &a->shard_count))

@@ -37,7 +37,7 @@ static void print_help(void) {
            "  --form F             residual (default): the network learns the correction to the albedo-weighted\n"
            "                       inverse, applied gated (zero where Eq. 2 is exactly invertible) and colour-\n"
            "                       neutral (src/workflow/workflow.h); plain: it learns the labels themselves\n"
-           "  --threads T          OpenMP threads (default: all cores; the result does not depend on it)\n"
+           "  --threads T          OpenMP threads (default 0: automatic, all cores); results do not depend on it\n"
            "  --loss-curve PREFIX  write PREFIX.csv (epoch, train and validation loss) and PREFIX.svg (a plot, when\n"
            "                       gnuplot is installed); default: WEIGHTS without its extension + '_loss'\n"
            "  --test FILE.csv      held-out sweep files (repeatable): print each method's error on them\n"
@@ -223,7 +223,7 @@ int cmd_train(int argc, char **argv) {
                 return cli_usage_error("train", "--form '%s': expected residual or plain", value);
             residual = strcmp(value, "residual") == 0;
         } else if ((taken = cli_take_option("train", argc, argv, &i, "--threads", &value))) {
-            if (taken < 0 || !cli_parse_int("train", "--threads", value, 1, 1024, &threads)) return CLI_EXIT_USAGE;
+            if (taken < 0 || !cli_parse_int("train", "--threads", value, 0, 1024, &threads)) return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("train", argc, argv, &i, "--loss-curve", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             curve_prefix = value;

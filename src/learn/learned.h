@@ -199,7 +199,8 @@ typedef struct mr_learn_options {
     int roughness_intercept;       /* PARAMETRIC: 1 fits a constant term too; default 0 (through the origin) */
     int slope_inverse;             /* PARAMETRIC: 0 = automatic (the c5 / alpha term kept when it lowers the
                                       held-out error), 1 = always, -1 = never */
-    int threads;                   /* SVR's search, MLP's training: 0 = all cores */
+    int threads;                   /* SVR's search, MLP's training: 0 = automatic (mr_svr_train_options.threads,
+                                      mr_mlp_train_options.threads: all cores) */
     int mlp_hidden;                /* MLP: 0 = 64 */
     int mlp_max_epochs;            /* MLP: 0 = 2000 */
     double svr_C, svr_gamma, svr_epsilon; /* SVR: > 0 fixes that hyper-parameter for every output (normalised

@@ -239,7 +239,8 @@ mr_status mr_svr_predict_threads(const mr_svr *m, const double *in, size_t count
     if (count > SIZE_MAX / sizeof(double) / (size_t)MR_MAX(m->n_in, m->n_out))
         return mr_fail(MR_ERR_INVALID_ARG, "svr predict: %zu rows overflow size_t", count);
 #ifdef _OPENMP
-    int threads = max_team > 0 ? max_team : omp_get_max_threads();
+    // The automatic rule (mr_auto_threads): a team from two blocks of rows on, capped below.
+    int threads = mr_auto_threads(max_team, (long)MR_MIN(count, (size_t)LONG_MAX), 2 * MR_SVR_PREDICT_ROWS);
 #else
     int threads = 1;
     (void)max_team;
@@ -883,8 +884,10 @@ mr_status mr_svr_train(const double *x, const double *y, size_t n, int n_in, int
     t.n = n;
     t.opt = o;
     t.start = mr_now_seconds();
+    // The automatic thread rule (mr_auto_threads) over the rows; any training set reaches the threshold: the
+    // search fits up to ~200 candidates per output, which a team shares.
 #ifdef _OPENMP
-    t.threads = o->threads > 0 ? o->threads : omp_get_max_threads();
+    t.threads = mr_auto_threads(o->threads, (long)n, 2);
 #else
     t.threads = 1;
 #endif

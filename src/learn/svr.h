@@ -98,7 +98,7 @@
  * count and the CPU (on x86-64 Linux an AVX2 variant is chosen at run time; it rounds exactly as the SSE2 one).
  *
  * Threads. Candidates are independent: the grid lines of all outputs, each round of the local search (the polls of
- * every start of every output) and the final fits run on opts->threads OpenMP threads (0 = omp_get_max_threads()),
+ * every start of every output) and the final fits run on opts->threads OpenMP threads (0 = automatic, all of them),
  * one libsvm fit per thread at a time, each with its own kernel cache. mr_svr_predict splits blocks of rows over
  * omp_get_max_threads() threads, one per MR_SVR_PREDICT_ROWS rows at most (a team costs more than fewer rows save).
  * All functions are reentrant and a model may be shared by threads for reading. libsvm prints through one
@@ -179,8 +179,8 @@ mr_status mr_svr_check(const mr_svr *m);
  * MR_ERR_NOMEM; out is untouched on failure. */
 mr_status mr_svr_predict(const mr_svr *m, const double *in, size_t count, double *out);
 
-/* mr_svr_predict on at most max_team threads (0 = omp_get_max_threads()), still one per MR_SVR_PREDICT_ROWS rows
- * at most. */
+/* mr_svr_predict on at most max_team threads (0 = automatic, mr_auto_threads: omp_get_max_threads()), still one
+ * per MR_SVR_PREDICT_ROWS rows at most. */
 mr_status mr_svr_predict_threads(const mr_svr *m, const double *in, size_t count, double *out, int max_team);
 
 /* Output k's value far from every support vector (an infinite input): out_mean[k] - out_std[k] rho. */
@@ -211,7 +211,9 @@ typedef int (*mr_svr_progress_fn)(const mr_svr_progress *progress, void *user);
 typedef struct mr_svr_train_options {
     double validation_fraction; /* share of rows held out, < 1; 0 = 0.2 */
     unsigned long long seed;    /* the split; every value (0 included) is a seed */
-    int threads;                /* OpenMP threads; 0 = omp_get_max_threads(); results do not depend on it */
+    int threads;                /* OpenMP threads; 0 = automatic (mr_auto_threads: a team of omp_get_max_threads()
+                                   for any training set, the search's candidates shared); results do not depend
+                                   on it */
     double C;                   /* > 0: this penalty for every output, not searched; 0 = search */
     double gamma;               /* > 0: this kernel width (normalised units), not searched; 0 = search */
     double epsilon;             /* > 0: this tube half-width (normalised units), not searched; 0 = search */

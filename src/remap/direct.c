@@ -726,7 +726,7 @@ mr_status mr_direct_remap(const mr_brdf_model *source, const mr_brdf_model *targ
                     break;
                 }
 #ifdef _OPENMP
-        threads = opts->threads > 0 ? opts->threads : omp_get_max_threads();
+        threads = mr_auto_threads(opts->threads, (long)chain_count, 2); // a team from two chains with work on
 #endif
         threads = (int)MR_MAX(1, MR_MIN((size_t)threads, chain_count));
     }

@@ -139,7 +139,9 @@ typedef struct mr_direct_options {
                                     target_values (fixed target values; NULL = the target's defaults) and held.
                                     Its initial_values and threads are the direct remap's to set: must be NULL / 0 */
     mr_fit_scene_options scene;  /* the fit scene: size 0 = MR_REMAP_DEFAULT_SIZE, light, intensity 0 = 10 */
-    int threads;                 /* threads at most; 0 = omp_get_max_threads() */
+    int threads;                 /* threads at most; 0 = automatic (mr_auto_threads: a team of
+                                    omp_get_max_threads() for two chains with work or more, never more threads
+                                    than such chains) */
     int chain_length;            /* unique values per chain, >= 1; 0 = MR_DIRECT_DEFAULT_CHAIN */
     int cold;                    /* 1: no warm starts, a full remap for every unique value */
     const char *cache_path;      /* optional cache file (header comment); NULL = none */

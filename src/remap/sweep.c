@@ -943,11 +943,10 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
     const int size = comm ? comm->size : 1, rank = comm ? comm->rank : 0;
     if (size == 1)
         comm = NULL;
-    int threads = opts->threads;
 #ifdef _OPENMP
-    if (threads == 0) threads = omp_get_max_threads();
+    int threads = mr_auto_threads(opts->threads, total, MR_SWEEP_PARALLEL_SAMPLES);
 #else
-    threads = 1;
+    int threads = 1;
 #endif
 
     run_state *st = calloc(1, sizeof *st);

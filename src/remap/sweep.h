@@ -243,10 +243,15 @@ typedef struct mr_sweep_comm {
     mr_status (*flush)(void *user);
 } mr_sweep_comm;
 
+/* The automatic thread rule's threshold (mr_sweep_options.threads = 0): each sample runs on one thread, so a
+ * second thread gains from two samples on. */
+#define MR_SWEEP_PARALLEL_SAMPLES 2
+
 /* Zero-initialised = defaults. */
 typedef struct mr_sweep_options {
     int resume;                   /* 0: the file must not exist; 1: continue it (see the header comment) */
-    int threads;                  /* samples at once (in this process); 0 = omp_get_max_threads() */
+    int threads;                  /* samples at once (in this process); 0 = automatic (mr_auto_threads: a team of
+                                     omp_get_max_threads() for MR_SWEEP_PARALLEL_SAMPLES samples or more) */
     const char *command_line;     /* recorded as "# command: ..." (line breaks become spaces); NULL = empty */
     mr_sweep_progress_fn progress; /* optional; called after each row, serialised (rank 0: every rank's rows) */
     void *progress_user;

@@ -1,6 +1,7 @@
 /*
  * material.c — materials that own their maps (contract in render.h, "materials that own their maps").
  */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -37,6 +38,32 @@ mr_status mr_material_add_map(mr_material *m, const char *param, mr_image *image
     }
     maps[m->map_count++] = (mr_material_map){index, channel, image, copy};
     m->textures = textures;
+    return MR_OK;
+}
+
+mr_status mr_material_map_invalid_texels(const mr_material *m, int k, size_t *nonfinite, size_t *negative) {
+    if (m == NULL || nonfinite == NULL || negative == NULL || k < 0 || k >= m->map_count)
+        return mr_fail(MR_ERR_INVALID_ARG, "material map texels: NULL argument or map %d outside 0 .. %d", k,
+                       m != NULL ? m->map_count - 1 : -1);
+    const mr_material_map *map = &m->maps[k];
+    const mr_image *image = map->image;
+    // The channels texture sampling reads (mr_param_textures): a grey map's one, else the parameter's.
+    const int count = m->model->params[map->param].channels, stride = image->channels;
+    const int first = stride == 1 ? 0 : map->channel, read = stride == 1 ? 1 : count;
+    const size_t texels = (size_t)image->width * (size_t)image->height;
+    size_t not_finite = 0, below_zero = 0;
+    for (size_t i = 0; i < texels; i++) {
+        const float *px = image->pixels + i * (size_t)stride + first;
+        int bad = 0, low = 0;
+        for (int c = 0; c < read; c++) {
+            bad |= !isfinite(px[c]);
+            low |= px[c] < 0.0f;
+        }
+        not_finite += bad;
+        below_zero += !bad && low;
+    }
+    *nonfinite = not_finite;
+    *negative = below_zero;
     return MR_OK;
 }
 

@@ -444,7 +444,9 @@ mr_status mr_render_plan_zoomed(const mr_render_plan *plan, double zoom, const m
  * sampled bilinearly at the hit's (u, v) with texel centres at ((i + 0.5)/width, (j + 0.5)/height), wrapping in
  * u and clamping in v unless textures->sampling says otherwise (see mr_texture_sampling), without mipmaps (a map
  * much finer than the sphere's pixels aliases; shrink it first).
- * Sampled values are clamped into the model's bounds by its prepare(), like constant values. */
+ * A texel that holds no parameter value is read as one: NaN and infinities as 0, negative values clamped to 0
+ * (before the bilinear blend; mr_material_map_invalid_texels counts them, docs/rendering.md). Sampled values are
+ * clamped into the model's bounds by its prepare(), like constant values. */
 typedef struct mr_param_textures {
     const mr_image *maps[MR_BRDF_MAX_VALUES]; /* maps[i]: parameter i's map; NULL = values[] constant. An RGB
                                                  parameter reads channels 0-2 of a 3- or 4-channel map, or the
@@ -537,6 +539,13 @@ mr_status mr_material_create(const mr_brdf_model *model, mr_material **out);
  * does and the material is unchanged. */
 mr_status mr_material_add_map(mr_material *material, const char *param, mr_image *image, int channel,
                               const char *source, const mr_texture_sampling *sampling);
+
+/* The texels of material->maps[k] that texture sampling reads as something else than stored (mr_param_textures),
+ * over the channels its parameter reads: *nonfinite those holding a NaN or an infinity in any of them (read as 0),
+ * *negative the others holding a negative value (clamped to 0). What a command names in its output (the render
+ * and report commands: "note: base_color=@nan.exr: 3 texels not finite, read as 0; ..."). MR_ERR_INVALID_ARG for a
+ * NULL argument or k outside 0 .. map_count - 1. */
+mr_status mr_material_map_invalid_texels(const mr_material *material, int k, size_t *nonfinite, size_t *negative);
 
 /* The material as mr_render_materials takes it (pointers into *material). */
 mr_material_binding mr_material_binding_of(const mr_material *material);

@@ -61,6 +61,13 @@ static long wrap_index(long i, long n, mr_wrap mode) {
     return k < 0 ? k + n : k;
 }
 
+/* A stored texel as the renderer reads it: NaN and infinities as 0, negative values clamped to 0 (every parameter's
+ * range starts at 0 or above; docs/rendering.md, "Texels that are not parameter values"). Finite values >= 0 pass
+ * unchanged, so a clean map renders as it always did. mr_material_map_invalid_texels counts the others. */
+static inline double texel_value(float stored) {
+    return stored >= 0.0f && stored < INFINITY ? (double)stored : 0.0;
+}
+
 /* Coordinates beyond this many texels are clamped before the conversion to long (no overflow): a lookup that
  * far out has lost every fractional bit of its coordinate anyway. */
 #define TEXEL_LIMIT 1e15
@@ -89,8 +96,8 @@ void mr_texture_sampler_read(const texture_sampler *sampler, const double uv0[2]
     const float *r1 = map->pixels + (size_t)j1 * (size_t)map->width * stride;
     for (int k = 0; k < sampler->count; k++) {
         size_t c = map->channels == 1 ? 0 : (size_t)(sampler->channel + k);
-        double a = r0[(size_t)i0 * stride + c], b = r0[(size_t)i1 * stride + c];
-        double d = r1[(size_t)i0 * stride + c], e = r1[(size_t)i1 * stride + c];
+        double a = texel_value(r0[(size_t)i0 * stride + c]), b = texel_value(r0[(size_t)i1 * stride + c]);
+        double d = texel_value(r1[(size_t)i0 * stride + c]), e = texel_value(r1[(size_t)i1 * stride + c]);
         double top = a + fx * (b - a), bottom = d + fx * (e - d);
         out[k] = top + fy * (bottom - top);
     }

@@ -20,14 +20,15 @@
 #define GOLDEN_STEPS 10
 #define GAUSS_NEWTON_STEPS 3
 
-static const char *const objective_names[MR_WF_OBJECTIVE_COUNT] = {"linear", "display", "log", "exposed", "luma"};
+static const char *const objective_names[MR_WF_OBJECTIVE_COUNT] = {"luma", /* DEFAULT */
+                                                                     "linear", "display", "log", "exposed", "luma"};
 
 const char *mr_wf_objective_name(mr_wf_objective objective) {
     return (unsigned)objective < MR_WF_OBJECTIVE_COUNT ? objective_names[objective] : NULL;
 }
 
 mr_status mr_wf_objective_from_name(const char *name, mr_wf_objective *out) {
-    for (int i = 0; name != NULL && i < MR_WF_OBJECTIVE_COUNT; i++)
+    for (int i = MR_WF_OBJECTIVE_LINEAR; name != NULL && i < MR_WF_OBJECTIVE_COUNT; i++)
         if (strcmp(name, objective_names[i]) == 0) {
             *out = (mr_wf_objective)i;
             return MR_OK;
@@ -146,9 +147,33 @@ static double map_mean_luminance(const mr_image *map) {
     return sum / (double)n;
 }
 
+/* The options in force: *given with its zero fields read as their defaults and MR_WF_LABEL_OFF as 0 (labels.h), so
+ * that a zeroed struct is mr_wf_label_options_default(). */
+static mr_wf_label_options options_in_force(const mr_wf_label_options *given) {
+    const mr_wf_label_options d = mr_wf_label_options_default();
+    mr_wf_label_options o = *given;
+    if (o.objective == MR_WF_OBJECTIVE_DEFAULT) o.objective = d.objective;
+    if (o.size == 0) o.size = d.size;
+    if (o.glossiness_count == 0) {
+        o.glossiness_count = d.glossiness_count;
+        memcpy(o.glossiness, d.glossiness, sizeof o.glossiness);
+    }
+    if (o.env_samples == 0) o.env_samples = d.env_samples;
+    o.reflection_samples = o.reflection_samples == 0                 ? d.reflection_samples
+                           : o.reflection_samples == MR_WF_LABEL_OFF ? 0
+                                                                      : o.reflection_samples;
+    o.chroma_weight = o.chroma_weight == 0.0                 ? d.chroma_weight
+                      : o.chroma_weight == MR_WF_LABEL_OFF ? 0.0
+                                                            : o.chroma_weight;
+    o.regularisation = o.regularisation == 0.0                 ? d.regularisation
+                       : o.regularisation == MR_WF_LABEL_OFF ? 0.0
+                                                              : o.regularisation;
+    return o;
+}
+
 static mr_status check_options(const mr_wf_label_options *o) {
     const char *what = "label options";
-    if ((unsigned)o->objective >= MR_WF_OBJECTIVE_COUNT)
+    if ((int)o->objective <= MR_WF_OBJECTIVE_DEFAULT || (int)o->objective >= MR_WF_OBJECTIVE_COUNT)
         return mr_fail(MR_ERR_INVALID_ARG, "%s: objective %d unknown", what, (int)o->objective);
     if (o->size < 16 || o->size > 1024)
         return mr_fail(MR_ERR_INVALID_ARG, "%s: size %d outside 16 .. 1024", what, o->size);
@@ -209,6 +234,8 @@ static mr_status render_basis(const mr_render_plan *plan, double g, size_t pixel
 
 mr_status mr_wf_label_scene_create(const mr_wf_label_options *opts, mr_wf_label_scene **out) {
     if (opts == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "label scene: NULL options or output");
+    const mr_wf_label_options in_force = options_in_force(opts);
+    opts = &in_force;
     mr_status status = check_options(opts);
     if (status != MR_OK) return status;
     mr_wf_label_scene *scene = calloc(1, sizeof *scene);

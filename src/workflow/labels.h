@@ -61,8 +61,11 @@
 extern "C" {
 #endif
 
+/* The objectives run from MR_WF_OBJECTIVE_LINEAR to MR_WF_OBJECTIVE_COUNT - 1; 0 is the default, so that a zeroed
+ * mr_wf_label_options is the defaults. */
 typedef enum mr_wf_objective {
-    MR_WF_OBJECTIVE_LINEAR = 0,
+    MR_WF_OBJECTIVE_DEFAULT = 0, /* MR_WF_OBJECTIVE_LUMA */
+    MR_WF_OBJECTIVE_LINEAR,
     MR_WF_OBJECTIVE_DISPLAY,
     MR_WF_OBJECTIVE_LOG,
     MR_WF_OBJECTIVE_EXPOSED,
@@ -70,29 +73,36 @@ typedef enum mr_wf_objective {
     MR_WF_OBJECTIVE_COUNT
 } mr_wf_objective;
 
-/* "linear", "display", "log", "exposed", "luma"; NULL outside the enum. */
+/* "linear", "display", "log", "exposed", "luma" (DEFAULT: "luma"); NULL outside the enum. */
 const char *mr_wf_objective_name(mr_wf_objective objective);
-/* Parse one of the names above; MR_ERR_INVALID_ARG listing them otherwise (*out untouched). */
+/* Parse one of the names above (never into DEFAULT); MR_ERR_INVALID_ARG listing them otherwise (*out untouched). */
 mr_status mr_wf_objective_from_name(const char *name, mr_wf_objective *out);
 
 #define MR_WF_LABEL_MAX_ENVS 8
 #define MR_WF_LABEL_MAX_GLOSS 8
 
+/* For reflection_samples, chroma_weight and regularisation, whose 0 means the default: none at all. */
+#define MR_WF_LABEL_OFF (-1)
+
+/* Zero-initialised = defaults: every 0 below reads as the default it names. */
 typedef struct mr_wf_label_options {
-    mr_wf_objective objective;      /* default MR_WF_OBJECTIVE_LUMA (docs/training.md, "Objectives") */
-    int size;                       /* sphere image side in pixels, 16 .. 1024; default 32 */
-    int glossiness_count;           /* 1 .. MR_WF_LABEL_MAX_GLOSS; default 4 */
-    double glossiness[MR_WF_LABEL_MAX_GLOSS]; /* default 0.3, 0.6, 0.8, 0.95 (GGX alpha 0.49 .. 0.0025) */
+    mr_wf_objective objective;      /* 0 = MR_WF_OBJECTIVE_LUMA (docs/training.md, "Objectives") */
+    int size;                       /* sphere image side in pixels, 16 .. 1024; 0 = 32 */
+    int glossiness_count;           /* 1 .. MR_WF_LABEL_MAX_GLOSS; 0 = 4, at the default glossinesses */
+    double glossiness[MR_WF_LABEL_MAX_GLOSS]; /* default 0.3, 0.6, 0.8, 0.95 (GGX alpha 0.49 .. 0.0025); read
+                                                 only when glossiness_count > 0 */
     int env_count;                  /* 0 = the two built-in synthetic environments; else 1 .. MAX_ENVS */
     const mr_image *envs[MR_WF_LABEL_MAX_ENVS]; /* borrowed by mr_wf_label_scene_create only */
-    int env_samples;                /* pattern directions per environment; default 256 */
-    int reflection_samples;         /* default 40 (as matremap report) */
-    double chroma_weight;           /* LUMA only: weight of the per-channel term, >= 0; default 0.1 */
-    double regularisation;          /* weight of the pull towards the analytic answer, >= 0; default 1e-4:
-                                       a unit change of a parameter must buy a mean squared display difference of
-                                       1e-4 (about 2.5 8-bit codes rms) */
+    int env_samples;                /* pattern directions per environment; 0 = 256 */
+    int reflection_samples;         /* 0 = 40 (as matremap report); MR_WF_LABEL_OFF: none */
+    double chroma_weight;           /* LUMA only: weight of the per-channel term, > 0; 0 = 0.1; MR_WF_LABEL_OFF:
+                                       none */
+    double regularisation;          /* weight of the pull towards the analytic answer, > 0; 0 = 1e-4, MR_WF_LABEL_OFF:
+                                       none. 1e-4: a unit change of a parameter must buy a mean squared display
+                                       difference of 1e-4 (about 2.5 8-bit codes rms) */
 } mr_wf_label_options;
 
+/* The defaults spelt out (the same scene as a zeroed struct), for callers that change a field or two. */
 mr_wf_label_options mr_wf_label_options_default(void);
 
 typedef struct mr_wf_label_scene mr_wf_label_scene;
