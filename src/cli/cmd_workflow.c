@@ -18,9 +18,6 @@
 #include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 #include "cli.h"
 
@@ -146,46 +143,31 @@ static int check_map(const char *command, const map_arg *m) {
     return CLI_EXIT_OK;
 }
 
-/* Threads for `jobs` files read or written side by side: no more than the files, nor than --threads (0: OpenMP's
- * default, which OMP_NUM_THREADS sets) allows. */
-static int file_team(int threads, int jobs) {
-#ifdef _OPENMP
-    const int allowed = threads > 0 ? threads : omp_get_max_threads();
-#else
-    const int allowed = 1;
-    (void)threads;
-#endif
-    return jobs < allowed ? jobs : allowed;
-}
-
 /* Read every map and check the files have one size; *width x *height is it (1 x 1 if all are constants). The
- * files are decoded in parallel (PNG decoding is a third of a 2048² conversion); the first failure in option order
- * is the one reported. */
+ * files are decoded side by side (mr_img_read_param_maps); the first failure in option order is the one reported. */
 static int read_maps(const char *command, map_arg *const *maps, int count, int threads, int *width, int *height) {
-    mr_status statuses[MAX_MAPS];
-    char messages[MAX_MAPS][1024]; // mr_last_error() is per thread
-    const int team = file_team(threads, count);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(team) if (team > 1)
+    mr_img_param_map reads[MAX_MAPS];
+    for (int k = 0; k < count; k++) // the one rule for maps (the parameter's encoding, or the map's :linear or :srgb)
+        reads[k] = (mr_img_param_map){is_file(maps[k]) ? maps[k]->path : NULL, map_param(maps[k]), maps[k]->how,
+                                      NULL, {0}};
+    int failed = -1;
+    const mr_status status = mr_img_read_param_maps(reads, count, NULL, threads, &failed);
     for (int k = 0; k < count; k++) {
-        statuses[k] = MR_OK;
-        messages[k][0] = '\0';
-        if (!is_file(maps[k])) continue;
-        // The one rule for maps (the parameter's encoding, or the map's :linear or :srgb).
-        statuses[k] = mr_img_read_param_map(maps[k]->path, map_param(maps[k]), maps[k]->how, NULL, &maps[k]->image,
-                                            &maps[k]->stored);
-        if (statuses[k] != MR_OK) snprintf(messages[k], sizeof messages[k], "%s", mr_last_error());
+        maps[k]->image = reads[k].image;
+        maps[k]->stored = reads[k].stored;
     }
+    if (status != MR_OK && failed < 0) return cli_fail(command, status); // out of memory before any read
     const map_arg *first = NULL;
     for (int k = 0; k < count; k++) {
-        if (statuses[k] == MR_ERR_INVALID_ARG && maps[k]->how == MR_MAP_SRGB) { // :srgb on a float file
+        if (k == failed && status == MR_ERR_INVALID_ARG && maps[k]->how == MR_MAP_SRGB) { // :srgb on a float file
             char label[PATH_SIZE + 64];
             snprintf(label, sizeof label, "%s %s", maps[k]->option, maps[k]->text);
-            return cli_usage_error(command, "'%s': %s", label, messages[k]);
+            return cli_usage_error(command, "'%s': %s", label, mr_last_error());
         }
-        if (statuses[k] != MR_OK) {
+        if (k == failed) {
             fprintf(stderr, "matremap %s: error: %s\n", command,
-                    messages[k][0] ? messages[k] : mr_status_str(statuses[k]));
-            return cli_exit_code(statuses[k]);
+                    mr_last_error()[0] ? mr_last_error() : mr_status_str(status));
+            return cli_exit_code(status);
         }
         int code = check_map(command, maps[k]);
         if (code != CLI_EXIT_OK) return code;
@@ -327,82 +309,28 @@ static mr_status compose(int width, int height, int channels, const plane *plane
     return MR_OK;
 }
 
-/* The false-colour flag map: black for a clean texel, else the colour of its most severe flag. */
-static const struct flag_colour {
-    unsigned flag;
-    float rgb[3];
-} flag_colours[] = {
-    {MR_WF_METHOD_FAILED, {1.0f, 0.0f, 0.0f}},   /* red */
-    {MR_WF_NONFINITE_INPUT, {1.0f, 0.0f, 1.0f}}, /* magenta */
-    {MR_WF_CLAMPED_INPUT, {0.0f, 0.5f, 1.0f}},   /* blue */
-    {MR_WF_OFF_MANIFOLD, {1.0f, 0.5f, 0.0f}},    /* orange */
-};
-
-static mr_status flag_picture(int width, int height, const uint8_t *flags, mr_image **out) {
-    mr_status status = mr_image_create(width, height, 3, out);
-    if (status != MR_OK) return status;
-    size_t n = (size_t)width * (size_t)height;
-    for (size_t i = 0; i < n; i++)
-        for (size_t k = 0; k < sizeof flag_colours / sizeof flag_colours[0]; k++)
-            if (flags[i] & flag_colours[k].flag) {
-                memcpy((*out)->pixels + 3 * i, flag_colours[k].rgb, sizeof flag_colours[k].rgb);
-                break;
-            }
-    return MR_OK;
-}
-
-/* Write the outputs and the flag map (if asked), all or none: when a write fails (the --flags directory does not
- * exist, a directory is in an output's way), the outputs this call did write are removed again, so a failed run
- * leaves no half set behind (a file one of them had replaced stays lost). The files are encoded in parallel
- * (PNG compression is most of a 2048² conversion's time; image_io is thread-safe); the first failure in output
- * order is the one reported. Returns an exit code (messages printed). */
+/* Write the outputs and the flag map (if asked), all or none (mr_img_write_set: each to a temporary beside it, all
+ * renamed into place once every one is written). Returns an exit code (messages printed). */
 static int write_outputs(const char *command, const out_options *o, output *outputs, int count, int width,
                          int height, const uint8_t *flags) {
-    struct write_job {
-        const char *path;
-        const mr_image *image;
-        mr_img_encoding encoding;
-        mr_status status;
-        char message[1024]; /* mr_last_error() is per thread: kept for the report */
-    } jobs[MAX_OUTPUTS + 1];
-    int job_count = 0;
+    mr_img_set_item items[MAX_OUTPUTS + 1];
+    char label[PATH_SIZE + 8];
+    snprintf(label, sizeof label, "-o %s", o->prefix);
+    int item_count = 0;
     for (int k = 0; k < count; k++)
-        jobs[job_count++] = (struct write_job){outputs[k].path, outputs[k].image, outputs[k].encoding, MR_OK, ""};
+        items[item_count++] = (mr_img_set_item){outputs[k].path, label, outputs[k].image,
+                                                {outputs[k].encoding, o->bits, 0}};
     mr_image *picture = NULL;
     if (o->flags_path != NULL) {
-        mr_status status = flag_picture(width, height, flags, &picture);
+        mr_status status = mr_flag_picture(flags, width, height, &mr_workflow_flag_code, &picture);
         if (status != MR_OK) return cli_fail(command, status);
-        // MR_IMG_DATA: the exact colours of flag_colours.
-        jobs[job_count++] = (struct write_job){o->flags_path, picture, MR_IMG_DATA, MR_OK, ""};
+        // MR_IMG_DATA: the exact colours of the code.
+        items[item_count++] = (mr_img_set_item){o->flags_path, "--flags", picture, {MR_IMG_DATA, 0, 0}};
     }
-    const int team = file_team(o->threads, job_count);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(team) if (team > 1)
-    for (int k = 0; k < job_count; k++) {
-        mr_img_write_options wo = {0};
-        wo.encoding = jobs[k].encoding;
-        wo.bits = jobs[k].image == picture ? 0 : o->bits;
-        jobs[k].status = mr_img_write(jobs[k].path, jobs[k].image, &wo);
-        if (jobs[k].status != MR_OK) snprintf(jobs[k].message, sizeof jobs[k].message, "%s", mr_last_error());
-    }
+    const mr_img_set_options set_options = {o->threads};
+    const mr_status status = mr_img_write_set(items, item_count, &set_options, NULL);
     mr_image_free(picture);
-    int first_failed = -1, written = 0;
-    for (int k = 0; k < job_count; k++) {
-        if (jobs[k].status == MR_OK)
-            written++;
-        else if (first_failed < 0)
-            first_failed = k;
-    }
-    if (first_failed < 0) return CLI_EXIT_OK;
-    const struct write_job *failure = &jobs[first_failed];
-    for (int k = 0; k < job_count; k++)
-        if (jobs[k].status == MR_OK) remove(jobs[k].path);
-    // One line: the failure, and what became of the outputs that were written.
-    fprintf(stderr, "matremap %s: error: %s", command,
-            failure->message[0] ? failure->message : mr_status_str(failure->status));
-    if (written > 0)
-        fprintf(stderr, " (the %d output%s written beside it removed)", written, written == 1 ? "" : "s");
-    fputc('\n', stderr);
-    return cli_exit_code(failure->status);
+    return status == MR_OK ? CLI_EXIT_OK : cli_fail(command, status);
 }
 
 /* ---- the summary ------------------------------------------------------------------------------------------- */
@@ -426,18 +354,13 @@ typedef struct summary {
     double eps;           /* spec2metal: the tolerance given by --eps */
 } summary;
 
-static size_t count_flag(const uint8_t *flags, size_t n, unsigned flag) {
-    size_t count = 0;
-    for (size_t i = 0; i < n; i++) count += (flags[i] & flag) != 0;
-    return count;
-}
-
 static void print_summary(const summary *s, const out_options *o, const output *outputs, int count) {
     size_t n = (size_t)s->width * (size_t)s->height;
-    size_t clamped = count_flag(s->flags, n, MR_WF_CLAMPED_INPUT);
-    size_t nonfinite = count_flag(s->flags, n, MR_WF_NONFINITE_INPUT);
-    size_t off = count_flag(s->flags, n, MR_WF_OFF_MANIFOLD);
-    size_t failed = count_flag(s->flags, n, MR_WF_METHOD_FAILED);
+    static const unsigned reasons[4] = {MR_WF_CLAMPED_INPUT, MR_WF_NONFINITE_INPUT, MR_WF_OFF_MANIFOLD,
+                                        MR_WF_METHOD_FAILED};
+    size_t counts[4];
+    mr_flags_count(s->flags, n, reasons, 4, counts);
+    const size_t clamped = counts[0], nonfinite = counts[1], off = counts[2], failed = counts[3];
     if (!o->json) {
         printf("matremap %s: %dx%d = %zu texel%s, method %s", s->command, s->width, s->height, n, n == 1 ? "" : "s",
                s->method);

@@ -190,6 +190,46 @@ typedef struct mr_transform_map {
 mr_status mr_transform_convert_maps(const mr_transform *t, const mr_transform_map *in, mr_image **out,
                                     uint8_t **flags);
 
+/* ---- flags: counted by reason, drawn as a picture (flags.c) ------------------------------------------------
+ * Every conversion flags its texels with mr_wf_flag bits (workflow.h: CLAMPED_INPUT, NONFINITE_INPUT, OFF_MANIFOLD,
+ * METHOD_FAILED; learned.h: EXTRAPOLATED, CLAMPED_OUTPUT, UNCHECKED; direct.h: UNCONVERGED). A command reports them
+ * counted by reason (mr_flags_count) and draws them as a picture (mr_flag_picture) whose colour code is data, an
+ * mr_flag_code table kept beside the transforms that set its flags:
+ *   mr_workflow_flag_code (here; spec2metal, metal2spec --flags): the colour of a texel's most severe flag, first
+ *     match wins: red method failed, magenta non-finite input, blue (0, 0.5, 1) clamped input, orange (1, 0.5, 0)
+ *     off-manifold;
+ *   mr_learned_flag_code (learned.h; convert's PREFIX_flags.png): one channel per kind of reason, each set when the
+ *     texel has one: red extrapolated, unconverged or by a transform that failed its check, green clamped output,
+ *     blue clamped or non-finite input.
+ * A clean texel is black. The picture is written linear (MR_IMG_DATA), so its files hold the table's values. */
+
+/* One colour of a code: a texel having any bit of `flags` takes (or adds) `rgb`. */
+typedef struct mr_flag_colour {
+    unsigned flags;
+    float rgb[3];
+} mr_flag_colour;
+
+typedef enum mr_flag_paint {
+    MR_FLAG_PAINT_FIRST = 0, /* the first colour (in table order: most severe first) whose flags the texel has */
+    MR_FLAG_PAINT_EACH       /* every colour whose flags the texel has, channel by channel the largest value */
+} mr_flag_paint;
+
+typedef struct mr_flag_code {
+    mr_flag_paint paint;
+    int count;
+    const mr_flag_colour *colours;
+} mr_flag_code;
+
+extern const mr_flag_code mr_workflow_flag_code;
+
+/* counts[r] = how many of the n texels have any bit of reasons[r] (r < reason_count; 0xFF counts every flagged
+ * texel). A NULL flags counts nothing (every count 0). */
+void mr_flags_count(const uint8_t *flags, size_t n, const unsigned *reasons, int reason_count, size_t *counts);
+
+/* The flag picture of width x height flags in `code`'s colours: a new RGB image (*out, the caller frees it; black
+ * where a texel is clean). MR_ERR_INVALID_ARG for a NULL argument or a bad size, MR_ERR_NOMEM. */
+mr_status mr_flag_picture(const uint8_t *flags, int width, int height, const mr_flag_code *code, mr_image **out);
+
 /* One texel through doubles (constants, scripts): in[] / out[] packed in slot order (channels consecutive). */
 mr_status mr_transform_apply_values(const mr_transform *t, const double *in, double *out, unsigned *flags);
 
