@@ -224,9 +224,41 @@ MR_TEST(maps_convert_texel_by_texel) {
     mr_transform_free(t);
 }
 
+/* Flags counted by reason, and drawn in each code: the workflow code paints a texel's most severe flag, the learned
+ * code one channel per kind of reason; clean texels are black. */
+MR_TEST(flags_counted_and_drawn_by_their_code) {
+    const uint8_t flags[6] = {0, MR_WF_CLAMPED_INPUT, MR_WF_NONFINITE_INPUT | MR_WF_METHOD_FAILED, MR_WF_OFF_MANIFOLD,
+                              MR_WF_EXTRAPOLATED | MR_WF_CLAMPED_OUTPUT, MR_WF_UNCONVERGED | MR_WF_CLAMPED_INPUT};
+    const unsigned reasons[4] = {MR_WF_CLAMPED_INPUT, MR_WF_NONFINITE_INPUT | MR_WF_OFF_MANIFOLD, 0xFFu,
+                                 MR_WF_UNCHECKED};
+    size_t counts[4] = {9, 9, 9, 9};
+    mr_flags_count(flags, 6, reasons, 4, counts);
+    MR_CHECK(counts[0] == 2 && counts[1] == 2 && counts[2] == 5 && counts[3] == 0);
+    mr_flags_count(NULL, 6, reasons, 4, counts);
+    MR_CHECK(counts[0] == 0 && counts[2] == 0);
+
+    static const float workflow[6][3] = {{0, 0, 0}, {0, 0.5f, 1}, {1, 0, 0}, {1, 0.5f, 0}, {0, 0, 0}, {0, 0.5f, 1}};
+    static const float learned[6][3] = {{0, 0, 0}, {0, 0, 1}, {0, 0, 1}, {0, 0, 0}, {1, 1, 0}, {1, 0, 1}};
+    const mr_flag_code *codes[2] = {&mr_workflow_flag_code, &mr_learned_flag_code};
+    const float (*expected[2])[3] = {workflow, learned};
+    for (int c = 0; c < 2; c++) {
+        mr_image *picture = NULL;
+        MR_CHECK_OK(mr_flag_picture(flags, 3, 2, codes[c], &picture));
+        MR_CHECK(picture->width == 3 && picture->height == 2 && picture->channels == 3);
+        for (int i = 0; i < 6; i++)
+            MR_CHECK_MSG(memcmp(picture->pixels + 3 * i, expected[c][i], sizeof expected[c][i]) == 0,
+                         "code %d, texel %d: %g %g %g", c, i, picture->pixels[3 * i], picture->pixels[3 * i + 1],
+                         picture->pixels[3 * i + 2]);
+        mr_image_free(picture);
+    }
+    mr_image *none = NULL;
+    MR_CHECK(mr_flag_picture(NULL, 3, 2, &mr_workflow_flag_code, &none) == MR_ERR_INVALID_ARG && none == NULL);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(kinds_name_model_parameters),
              MR_TEST_ENTRY(repeated_values_give_the_per_texel_bits),
              MR_TEST_ENTRY(extension_route_moves_values),
              MR_TEST_ENTRY(eq2_and_eq3_invert_each_other),
              MR_TEST_ENTRY(bad_options_are_refused),
-             MR_TEST_ENTRY(maps_convert_texel_by_texel))
+             MR_TEST_ENTRY(maps_convert_texel_by_texel),
+             MR_TEST_ENTRY(flags_counted_and_drawn_by_their_code))
