@@ -169,22 +169,6 @@ static int load_dir(loaded *l, const char *dir) {
     return code;
 }
 
-/* out[j] with the alpha of `alpha_source` appended when it has one (RGB outputs only); else out[j] itself. */
-static mr_status with_alpha(mr_image *rgb, const mr_image *alpha_source, mr_image **out) {
-    *out = rgb;
-    if (alpha_source == NULL || rgb->channels != 3) return MR_OK;
-    mr_image *rgba = NULL;
-    mr_status status = mr_image_create(rgb->width, rgb->height, 4, &rgba);
-    if (status != MR_OK) return status;
-    const size_t n = (size_t)rgb->width * (size_t)rgb->height;
-    for (size_t i = 0; i < n; i++) {
-        memcpy(rgba->pixels + 4 * i, rgb->pixels + 3 * i, 3 * sizeof *rgba->pixels);
-        rgba->pixels[4 * i + 3] = alpha_source->pixels[i * 4 + 3];
-    }
-    *out = rgba;
-    return MR_OK;
-}
-
 /* "name v", "name r,g,b": parameter p of `model` in packed `values`, appended to text. */
 static void append_param(char *text, size_t size, const mr_brdf_model *model, const double *values, int p) {
     const int at = mr_brdf_param_offset(model, p);
@@ -517,7 +501,7 @@ int cmd_convert(int argc, char **argv) {
         for (int j = 0; status == MR_OK && j <= out_count; j++) {
             items[j] = (mr_img_set_item){names[j], label, NULL, {MR_IMG_DATA, 0, 0}};
             if (j < out_count) {
-                status = with_alpha(out[j], alpha_source, &images[j]);
+                status = mr_image_with_alpha(out[j], alpha_source, &images[j]);
                 // The rule maps are read by, so a PNG output reads back as written.
                 items[j].options.encoding = mr_brdf_param_map_encoding(&target->params[j], MR_MAP_AS_PARAMETER);
             } else {

@@ -187,25 +187,6 @@ static int read_maps(const char *command, map_arg *const *maps, int count, int t
     return CLI_EXIT_OK;
 }
 
-/* n texels of one channel of the map (a data map's first) or its constant. */
-static void fill_channel(const map_arg *m, int channel, size_t n, float *dst) {
-    const mr_image *im = m->image;
-    for (size_t i = 0; i < n; i++)
-        dst[i] = im ? im->pixels[i * (size_t)im->channels + (size_t)channel] : (float)m->constant[0];
-}
-
-/* The colour map's alpha (n values), or NULL when it has none (or on allocation failure: *failed is set). */
-static float *take_alpha(const map_arg *m, size_t n, int *failed) {
-    if (m->image == NULL || m->image->channels != 4) return NULL;
-    float *alpha = malloc(n * sizeof *alpha);
-    if (alpha == NULL) {
-        *failed = 1;
-        return NULL;
-    }
-    fill_channel(m, 3, n, alpha);
-    return alpha;
-}
-
 static void free_maps(map_arg *const *maps, int count) {
     for (int k = 0; k < count; k++) {
         mr_image_free(maps[k]->image);
@@ -286,27 +267,6 @@ static void free_outputs(output *outputs, int count) {
         mr_image_free(outputs[k].image);
         outputs[k].image = NULL;
     }
-}
-
-/* An image of `channels` channels whose channel c is planes[c] (n values each, or, when `stride` is 3, the
- * channel of 3-interleaved values at offsets[c]); a NULL plane is filled with `fill`. */
-typedef struct plane {
-    const float *values;
-    int stride, offset;
-} plane;
-
-static mr_status compose(int width, int height, int channels, const plane *planes, float fill, mr_image **out) {
-    mr_status status = mr_image_create(width, height, channels, out);
-    if (status != MR_OK) return status;
-    size_t n = (size_t)width * (size_t)height;
-    float *dst = (*out)->pixels;
-    for (int c = 0; c < channels; c++) {
-        const plane *p = &planes[c];
-        for (size_t i = 0; i < n; i++)
-            dst[i * (size_t)channels + (size_t)c] =
-                p->values ? p->values[i * (size_t)p->stride + (size_t)p->offset] : fill;
-    }
-    return MR_OK;
 }
 
 /* Write the outputs and the flag map (if asked), all or none (mr_img_write_set: each to a temporary beside it, all
@@ -717,18 +677,11 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
     double started = cli_now(), seconds[3] = {0.0, 0.0, 0.0};
     int width = 1, height = 1;
     if (code == CLI_EXIT_OK) code = read_maps(command, cv->maps, cv->map_count, o->threads, &width, &height);
-    const size_t n = (size_t)width * (size_t)height;
     mr_transform_map in[MR_TRANSFORM_MAX_SLOTS];
     mr_image *converted[MR_TRANSFORM_MAX_SLOTS] = {NULL};
-    float *alpha = NULL;
+    mr_image *alpha = NULL; // the first map when it has an alpha channel, carried into the first output
     uint8_t *flags = NULL;
-    int failed = 0;
     if (code == CLI_EXIT_OK) {
-        alpha = take_alpha(cv->maps[0], n, &failed);
-        if (failed) {
-            fprintf(stderr, "matremap %s: error: out of memory for %dx%d texels\n", command, width, height);
-            code = CLI_EXIT_INTERNAL;
-        }
         for (int i = 0; i < kind->input_count; i++) {
             const slot_source *from = &cv->inputs[i];
             const map_arg *map = cv->maps[from->map];
@@ -746,6 +699,10 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
     started = cli_now();
     if (code == CLI_EXIT_OK && (status = mr_transform_convert_maps(t, in, converted, &flags)) != MR_OK)
         code = cli_fail(command, status);
+    if (cv->maps[0]->image != NULL && cv->maps[0]->image->channels == 4) { // kept for the outputs, the rest freed
+        alpha = cv->maps[0]->image;
+        cv->maps[0]->image = NULL;
+    }
     free_maps(cv->maps, cv->map_count);
     seconds[1] = cli_now() - started;
 
@@ -754,15 +711,15 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
     if (code == CLI_EXIT_OK && o->prefix != NULL) {
         for (int l = 0; l < output_count && status == MR_OK; l++) {
             const output_layout *lay = &layouts[l];
-            plane p[4];
+            mr_image_channel sources[4];
             int channels = lay->channels - (lay->slot[lay->channels - 1] == LAYOUT_ALPHA && alpha == NULL);
             for (int c = 0; c < channels; c++) {
                 int j = lay->slot[c];
-                p[c] = j == LAYOUT_ALPHA ? (plane){alpha, 1, 0}
-                       : j == LAYOUT_ZERO ? (plane){NULL, 1, 0}
-                                          : (plane){converted[j]->pixels, kind->outputs[j].channels, lay->channel[c]};
+                sources[c] = j == LAYOUT_ALPHA ? (mr_image_channel){alpha, 3}
+                             : j == LAYOUT_ZERO ? (mr_image_channel){NULL, 0}
+                                                : (mr_image_channel){converted[j], lay->channel[c]};
             }
-            status = compose(width, height, channels, p, 0.0f, &outputs[l].image);
+            status = mr_image_pack(width, height, channels, sources, 0.0f, &outputs[l].image);
             outputs[l].encoding = lay->encoding;
         }
         code = status != MR_OK ? cli_fail(command, status)
@@ -790,7 +747,7 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
     free_outputs(outputs, MAX_OUTPUTS);
     free_maps(cv->maps, cv->map_count);
     for (int j = 0; j < MR_TRANSFORM_MAX_SLOTS; j++) mr_image_free(converted[j]);
-    free(alpha);
+    mr_image_free(alpha);
     free(flags);
     mr_transform_free(t);
     mr_mlp_free(net);

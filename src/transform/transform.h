@@ -190,6 +190,28 @@ typedef struct mr_transform_map {
 mr_status mr_transform_convert_maps(const mr_transform *t, const mr_transform_map *in, mr_image **out,
                                     uint8_t **flags);
 
+/* ---- output images: channels packed from converted maps (pack.c) ------------------------------------------
+ * The images a texture-set conversion writes are packed from the converted maps channel by channel: glTF's
+ * metallicRoughness (R 0, G roughness, B metallic), KHR_materials_pbrSpecularGlossiness' RGB specular and A
+ * glossiness, and the first input map's alpha carried into an RGB output (spec2metal, metal2spec, convert). */
+
+/* Where one channel of a packed image comes from: channel `channel` of `image`, or the fill value (image NULL). */
+typedef struct mr_image_channel {
+    const mr_image *image;
+    int channel;
+} mr_image_channel;
+
+/* A new width x height image (*out, the caller frees it) of `channels` channels (1, 3 or 4), channel c copied from
+ * sources[c] (values unchanged), `fill` where sources[c].image is NULL. MR_ERR_INVALID_ARG for a source of another
+ * size or lacking the channel; MR_ERR_NOMEM. */
+mr_status mr_image_pack(int width, int height, int channels, const mr_image_channel *sources, float fill,
+                        mr_image **out);
+
+/* `rgb` with the alpha of `alpha_source` appended, when rgb has 3 channels and alpha_source (may be NULL) has 4:
+ * a new image in *out (the caller frees it); otherwise *out is rgb itself (not a copy: free it only once). Errors as
+ * mr_image_pack's. */
+mr_status mr_image_with_alpha(mr_image *rgb, const mr_image *alpha_source, mr_image **out);
+
 /* ---- flags: counted by reason, drawn as a picture (flags.c) ------------------------------------------------
  * Every conversion flags its texels with mr_wf_flag bits (workflow.h: CLAMPED_INPUT, NONFINITE_INPUT, OFF_MANIFOLD,
  * METHOD_FAILED; learned.h: EXTRAPOLATED, CLAMPED_OUTPUT, UNCHECKED; direct.h: UNCONVERGED). A command reports them
