@@ -117,74 +117,32 @@ static int set_map(const char *command, map_arg *m, const char *text) {
 
 static int is_file(const map_arg *m) { return m->text != NULL && !m->is_constant; }
 
-/* Check a map's channels once its file is read. Returns an exit code (messages printed). */
-static int check_map(const char *command, const map_arg *m) {
-    const mr_image *im = m->image;
-    if (im == NULL) return CLI_EXIT_OK;
-    if (m->kind == MAP_PACKED && im->channels < m->min_channels) {
-        fprintf(stderr, "matremap %s: error: %s '%s' has %s; expected %s\n", command, m->option, m->text,
-                im->channels == 1 ? "one channel" : "no alpha channel", m->layout);
-        return CLI_EXIT_BAD_INPUT;
-    }
-    if (m->kind == MAP_DATA && im->channels >= 3) {
-        size_t n = (size_t)im->width * (size_t)im->height;
-        for (size_t i = 0; i < n; i++) {
-            const float *p = im->pixels + i * (size_t)im->channels;
-            if (p[0] != p[1] || p[0] != p[2]) {
-                fprintf(stderr, "matremap %s: error: %s '%s' is a colour image (pixel %zu, %zu is %g, %g, %g); "
-                        "expected one channel, or grey%s\n", command, m->option, m->text, i % (size_t)im->width,
-                        i / (size_t)im->width, p[0], p[1], p[2],
-                        strcmp(m->option, "--glossiness") == 0 ? " (an RGBA spec-gloss texture goes to "
-                                                                 "--specular-glossiness)" : "");
-                return CLI_EXIT_BAD_INPUT;
-            }
-        }
-    }
-    return CLI_EXIT_OK;
-}
-
-/* Read every map and check the files have one size; *width x *height is it (1 x 1 if all are constants). The
- * files are decoded side by side (mr_img_read_param_maps); the first failure in option order is the one reported. */
+/* Read every map and check the files have one size (mr_img_read_texture_set: decoded side by side, a data map's
+ * file grey, a packed map's channels there); *width x *height is it (1 x 1 if all are constants). The first failure
+ * in option order is the one reported. */
 static int read_maps(const char *command, map_arg *const *maps, int count, int threads, int *width, int *height) {
     mr_img_param_map reads[MAX_MAPS];
-    for (int k = 0; k < count; k++) // the one rule for maps (the parameter's encoding, or the map's :linear or :srgb)
-        reads[k] = (mr_img_param_map){is_file(maps[k]) ? maps[k]->path : NULL, map_param(maps[k]), maps[k]->how,
-                                      NULL, {0}};
+    char labels[MAX_MAPS][PATH_SIZE + 64];
+    for (int k = 0; k < count; k++) {
+        const map_arg *m = maps[k];
+        snprintf(labels[k], sizeof labels[k], "%s '%s'", m->option, m->text ? m->text : "");
+        // The one rule for maps (the parameter's encoding, or the map's :linear or :srgb).
+        reads[k] = (mr_img_param_map){is_file(m) ? m->path : NULL, map_param(m), m->how, NULL, {0}, labels[k],
+                                      m->kind == MAP_PACKED ? m->min_channels : 0, m->layout, m->kind == MAP_DATA,
+                                      strcmp(m->option, "--glossiness") == 0
+                                          ? " (an RGBA spec-gloss texture goes to --specular-glossiness)" : NULL};
+    }
     int failed = -1;
-    const mr_status status = mr_img_read_param_maps(reads, count, NULL, threads, &failed);
+    const mr_status status = mr_img_read_texture_set(reads, count, NULL, threads, width, height, &failed);
     for (int k = 0; k < count; k++) {
         maps[k]->image = reads[k].image;
         maps[k]->stored = reads[k].stored;
     }
-    if (status != MR_OK && failed < 0) return cli_fail(command, status); // out of memory before any read
-    const map_arg *first = NULL;
-    for (int k = 0; k < count; k++) {
-        if (k == failed && status == MR_ERR_INVALID_ARG && maps[k]->how == MR_MAP_SRGB) { // :srgb on a float file
-            char label[PATH_SIZE + 64];
-            snprintf(label, sizeof label, "%s %s", maps[k]->option, maps[k]->text);
-            return cli_usage_error(command, "'%s': %s", label, mr_last_error());
-        }
-        if (k == failed) {
-            fprintf(stderr, "matremap %s: error: %s\n", command,
-                    mr_last_error()[0] ? mr_last_error() : mr_status_str(status));
-            return cli_exit_code(status);
-        }
-        int code = check_map(command, maps[k]);
-        if (code != CLI_EXIT_OK) return code;
-        const mr_image *im = maps[k]->image;
-        if (im == NULL) continue;
-        if (first == NULL) {
-            first = maps[k];
-        } else if (im->width != first->image->width || im->height != first->image->height) {
-            fprintf(stderr, "matremap %s: error: %s '%s' is %dx%d but %s '%s' is %dx%d: maps must have the same "
-                    "size (constants broadcast)\n", command, maps[k]->option, maps[k]->text, im->width, im->height,
-                    first->option, first->text, first->image->width, first->image->height);
-            return CLI_EXIT_BAD_INPUT;
-        }
-    }
-    *width = first ? first->image->width : 1;
-    *height = first ? first->image->height : 1;
-    return CLI_EXIT_OK;
+    if (status == MR_OK) return CLI_EXIT_OK;
+    if (failed >= 0 && reads[failed].image == NULL && status == MR_ERR_INVALID_ARG && maps[failed]->how == MR_MAP_SRGB)
+        // :srgb on a float file
+        return cli_usage_error(command, "'%s %s': %s", maps[failed]->option, maps[failed]->text, mr_last_error());
+    return cli_fail(command, status);
 }
 
 static void free_maps(map_arg *const *maps, int count) {

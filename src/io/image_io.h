@@ -191,6 +191,13 @@ typedef struct mr_img_param_map {
     mr_map_encoding how;        /* the map's override, MR_MAP_AS_PARAMETER for none */
     mr_image *image;            /* out: the map, owned by the caller (NULL until read) */
     mr_img_stored stored;       /* out: how the file stored its samples */
+    /* What mr_img_read_texture_set checks (zeroed: nothing): */
+    const char *label;          /* names the map in messages, as the user gave it ("--glossiness 'g.png'"); NULL:
+                                   "map 'PATH'" */
+    int min_channels;           /* the channels the file must have (a packed map: 3 or 4); 0: any */
+    const char *layout;         /* with min_channels: what those channels hold ("RGB: G roughness, B metallic") */
+    int grey;                   /* 1: a one-value map: a file of 3 or more channels must be grey (R = G = B) */
+    const char *hint;           /* appended to the message refusing a colour file for a grey map; may be NULL */
 } mr_img_param_map;
 
 /* Read every map of maps[0..count) with a path by mr_img_read_param_map (opts as there, may be NULL), the files
@@ -201,6 +208,17 @@ typedef struct mr_img_param_map {
  * index, else -1. Errors: those of mr_img_read_param_map; MR_ERR_NOMEM. */
 mr_status mr_img_read_param_maps(mr_img_param_map *maps, int count, const mr_img_read_options *opts, int threads,
                                  int *failed);
+
+/* The maps of one texture set: mr_img_read_param_maps, then, map by map in order (the first problem is the one
+ * reported), its read's failure or the checks its fields ask for, and one size for every file: *width x *height
+ * is it (1 x 1 when every map is a constant; both may be NULL). Ownership as for mr_img_read_param_maps (the caller
+ * frees every maps[k].image in either case). *failed (may be NULL) is the index of the map refused, else -1; its
+ * image is NULL when its read failed, set when a check refused it. Errors: those of the reads; MR_ERR_INVALID_ARG,
+ * naming the map by its label: "LABEL has one channel; expected LAYOUT" (or "no alpha channel"), "LABEL is a colour
+ * image (pixel X, Y is R, G, B); expected one channel, or grey<HINT>", "LABEL is WxH but LABEL0 is WxH: maps must
+ * have the same size (constants broadcast)". */
+mr_status mr_img_read_texture_set(mr_img_param_map *maps, int count, const mr_img_read_options *opts, int threads,
+                                  int *width, int *height, int *failed);
 
 /* sRGB transfer functions (IEC 61966-2-1), exact piecewise form evaluated in double. Values outside [0,1]
  * are mirrored through 0 (odd extension, no clamping); NaN stays NaN. */
