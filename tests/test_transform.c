@@ -255,10 +255,50 @@ MR_TEST(flags_counted_and_drawn_by_their_code) {
     MR_CHECK(mr_flag_picture(NULL, 3, 2, &mr_workflow_flag_code, &none) == MR_ERR_INVALID_ARG && none == NULL);
 }
 
+/* mr_image_pack copies channels as they are (glTF's metallicRoughness: R fill, G roughness, B metallic);
+ * mr_image_with_alpha appends a 4-channel source's alpha to an RGB image, and is the image itself otherwise. */
+MR_TEST(outputs_packed_channel_by_channel) {
+    mr_image *metallic = NULL, *roughness = NULL, *rgb = NULL, *rgba = NULL, *packed = NULL, *with = NULL;
+    MR_CHECK_OK(mr_image_create(2, 1, 1, &metallic));
+    MR_CHECK_OK(mr_image_create(2, 1, 1, &roughness));
+    MR_CHECK_OK(mr_image_create(2, 1, 3, &rgb));
+    MR_CHECK_OK(mr_image_create(2, 1, 4, &rgba));
+    for (int i = 0; i < 2; i++) {
+        metallic->pixels[i] = 0.25f + (float)i;
+        roughness->pixels[i] = -0.5f - (float)i; // values are copied, never clamped
+        for (int c = 0; c < 3; c++) rgb->pixels[3 * i + c] = 0.1f * (float)(c + 3 * i);
+        for (int c = 0; c < 4; c++) rgba->pixels[4 * i + c] = 0.7f + 0.01f * (float)(c + 4 * i);
+    }
+    const mr_image_channel mr[3] = {{NULL, 0}, {roughness, 0}, {metallic, 0}};
+    MR_CHECK_OK(mr_image_pack(2, 1, 3, mr, 0.0f, &packed));
+    for (int i = 0; i < 2; i++)
+        MR_CHECK(packed->pixels[3 * i] == 0.0f && packed->pixels[3 * i + 1] == roughness->pixels[i] &&
+                 packed->pixels[3 * i + 2] == metallic->pixels[i]);
+    MR_CHECK_OK(mr_image_with_alpha(rgb, rgba, &with));
+    MR_CHECK(with != rgb && with->channels == 4);
+    for (int i = 0; i < 2; i++)
+        MR_CHECK(memcmp(with->pixels + 4 * i, rgb->pixels + 3 * i, 3 * sizeof(float)) == 0 &&
+                 with->pixels[4 * i + 3] == rgba->pixels[4 * i + 3]);
+    mr_image_free(with);
+    MR_CHECK_OK(mr_image_with_alpha(rgb, NULL, &with));
+    MR_CHECK(with == rgb);
+    MR_CHECK_OK(mr_image_with_alpha(metallic, rgba, &with));
+    MR_CHECK(with == metallic);
+    const mr_image_channel missing[1] = {{rgb, 3}};
+    mr_image *none = NULL;
+    MR_CHECK(mr_image_pack(2, 1, 1, missing, 0.0f, &none) == MR_ERR_INVALID_ARG && none == NULL);
+    mr_image_free(packed);
+    mr_image_free(metallic);
+    mr_image_free(roughness);
+    mr_image_free(rgb);
+    mr_image_free(rgba);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(kinds_name_model_parameters),
              MR_TEST_ENTRY(repeated_values_give_the_per_texel_bits),
              MR_TEST_ENTRY(extension_route_moves_values),
              MR_TEST_ENTRY(eq2_and_eq3_invert_each_other),
              MR_TEST_ENTRY(bad_options_are_refused),
              MR_TEST_ENTRY(maps_convert_texel_by_texel),
-             MR_TEST_ENTRY(flags_counted_and_drawn_by_their_code))
+             MR_TEST_ENTRY(flags_counted_and_drawn_by_their_code),
+             MR_TEST_ENTRY(outputs_packed_channel_by_channel))
