@@ -46,8 +46,6 @@ typedef struct map_arg {
     mr_map_encoding how;      /* a file: the encoding it gives (MR_MAP_AS_PARAMETER when none) */
     int is_constant;
     double constant[3];       /* grey broadcast */
-    mr_image *image;          /* the file, once read */
-    mr_img_stored stored;     /* how the file stored its samples (spec2metal's tolerances) */
 } map_arg;
 
 static map_arg map_colour(const char *option, const char *model, const char *param) {
@@ -117,38 +115,19 @@ static int set_map(const char *command, map_arg *m, const char *text) {
 
 static int is_file(const map_arg *m) { return m->text != NULL && !m->is_constant; }
 
-/* Read every map and check the files have one size (mr_img_read_texture_set: decoded side by side, a data map's
- * file grey, a packed map's channels there); *width x *height is it (1 x 1 if all are constants). The first failure
- * in option order is the one reported. */
-static int read_maps(const char *command, map_arg *const *maps, int count, int threads, int *width, int *height) {
-    mr_img_param_map reads[MAX_MAPS];
-    char labels[MAX_MAPS][PATH_SIZE + 64];
+/* The maps as the library's texture-set conversion takes them: each file's path, the parameter it holds (the one
+ * rule: the parameter's encoding, or the map's :linear or :srgb), what its file must be (a data map grey, a packed
+ * map's channels), its label for messages (labels[k]: "--glossiness 'g.png'") and its constant. */
+static void texture_maps(map_arg *const *maps, int count, mr_img_param_map *reads, char (*labels)[PATH_SIZE + 64],
+                         double (*constants)[3]) {
     for (int k = 0; k < count; k++) {
         const map_arg *m = maps[k];
         snprintf(labels[k], sizeof labels[k], "%s '%s'", m->option, m->text ? m->text : "");
-        // The one rule for maps (the parameter's encoding, or the map's :linear or :srgb).
         reads[k] = (mr_img_param_map){is_file(m) ? m->path : NULL, map_param(m), m->how, NULL, {0}, labels[k],
                                       m->kind == MAP_PACKED ? m->min_channels : 0, m->layout, m->kind == MAP_DATA,
                                       strcmp(m->option, "--glossiness") == 0
                                           ? " (an RGBA spec-gloss texture goes to --specular-glossiness)" : NULL};
-    }
-    int failed = -1;
-    const mr_status status = mr_img_read_texture_set(reads, count, NULL, threads, width, height, &failed);
-    for (int k = 0; k < count; k++) {
-        maps[k]->image = reads[k].image;
-        maps[k]->stored = reads[k].stored;
-    }
-    if (status == MR_OK) return CLI_EXIT_OK;
-    if (failed >= 0 && reads[failed].image == NULL && status == MR_ERR_INVALID_ARG && maps[failed]->how == MR_MAP_SRGB)
-        // :srgb on a float file
-        return cli_usage_error(command, "'%s %s': %s", maps[failed]->option, maps[failed]->text, mr_last_error());
-    return cli_fail(command, status);
-}
-
-static void free_maps(map_arg *const *maps, int count) {
-    for (int k = 0; k < count; k++) {
-        mr_image_free(maps[k]->image);
-        maps[k]->image = NULL;
+        memcpy(constants[k], m->constant, sizeof constants[k]);
     }
 }
 
@@ -156,8 +135,6 @@ static void free_maps(map_arg *const *maps, int count) {
 
 typedef struct output {
     char path[PATH_SIZE];
-    mr_image *image;
-    mr_img_encoding encoding;
 } output;
 
 /* The shared output options. */
@@ -220,24 +197,17 @@ static int plan_outputs(const char *command, out_options *o, map_arg *const *map
     return code;
 }
 
-static void free_outputs(output *outputs, int count) {
-    for (int k = 0; k < count; k++) {
-        mr_image_free(outputs[k].image);
-        outputs[k].image = NULL;
-    }
-}
-
 /* Write the outputs and the flag map (if asked), all or none (mr_img_write_set: each to a temporary beside it, all
  * renamed into place once every one is written). Returns an exit code (messages printed). */
-static int write_outputs(const char *command, const out_options *o, output *outputs, int count, int width,
-                         int height, const uint8_t *flags) {
+static int write_outputs(const char *command, const out_options *o, const output *outputs,
+                         const mr_texture_layout *layouts, mr_image *const *images, int count, int width, int height,
+                         const uint8_t *flags) {
     mr_img_set_item items[MAX_OUTPUTS + 1];
     char label[PATH_SIZE + 8];
     snprintf(label, sizeof label, "-o %s", o->prefix);
     int item_count = 0;
     for (int k = 0; k < count; k++)
-        items[item_count++] = (mr_img_set_item){outputs[k].path, label, outputs[k].image,
-                                                {outputs[k].encoding, o->bits, 0}};
+        items[item_count++] = (mr_img_set_item){outputs[k].path, label, images[k], {layouts[k].encoding, o->bits, 0}};
     mr_image *picture = NULL;
     if (o->flags_path != NULL) {
         mr_status status = mr_flag_picture(flags, width, height, &mr_workflow_flag_code, &picture);
@@ -542,32 +512,15 @@ static void print_spec2metal_help(void) {
 
 /* ---- one conversion, either direction ---------------------------------------------------------------------- */
 
-/* Where a transform input's values come from: map `map` (of the command's list), its colour channels (channel -1)
- * or one channel; complement: 1 - value (a roughness map for a glossiness slot). */
-typedef struct slot_source {
-    int map, channel, complement;
-} slot_source;
-
-/* One output file: its name, how it is encoded, and per channel the transform output slot (and that slot's
- * channel) written there; LAYOUT_ZERO writes 0, LAYOUT_ALPHA the first map's alpha (the channel exists only when
- * that map has one). */
-enum { LAYOUT_ZERO = -1, LAYOUT_ALPHA = -2 };
-typedef struct output_layout {
-    const char *name;
-    mr_img_encoding encoding;
-    int channels;
-    int slot[4], channel[4];
-} output_layout;
-
 /* What a command converts: the transform's models, its maps and how they feed the slots, its outputs. */
 typedef struct conversion {
     const char *command, *source, *target;
     map_arg *const *maps;
     int map_count;
-    slot_source inputs[3];
-    const output_layout *layouts; /* unpacked: one file per output slot (their names name the printed values) */
+    mr_texture_source inputs[3];      /* feeding the transform's input slots */
+    const mr_texture_layout *layouts; /* unpacked: one file per output slot (their names name the printed values) */
     int layout_count;
-    const output_layout *packed; /* --pack */
+    const mr_texture_layout *packed;  /* --pack */
     int packed_count;
 } conversion;
 
@@ -620,7 +573,7 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
                 kind->flags & MR_TRANSFORM_NEEDS_NETWORK ? hint : "");
         return cli_exit_code(status);
     }
-    const output_layout *layouts = o->pack ? cv->packed : cv->layouts;
+    const mr_texture_layout *layouts = o->pack ? cv->packed : cv->layouts;
     const int output_count = o->pack ? cv->packed_count : cv->layout_count;
     const char *names[MAX_OUTPUTS];
     for (int l = 0; l < output_count; l++) names[l] = layouts[l].name;
@@ -631,59 +584,31 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
         code = plan_outputs(command, o, cv->maps, cv->map_count, weights, mr_transform_network_path(t), names, outputs,
                             output_count);
 
-    // Read: the maps into the transform's input planes.
-    double started = cli_now(), seconds[3] = {0.0, 0.0, 0.0};
-    int width = 1, height = 1;
-    if (code == CLI_EXIT_OK) code = read_maps(command, cv->maps, cv->map_count, o->threads, &width, &height);
-    mr_transform_map in[MR_TRANSFORM_MAX_SLOTS];
-    mr_image *converted[MR_TRANSFORM_MAX_SLOTS] = {NULL};
-    mr_image *alpha = NULL; // the first map when it has an alpha channel, carried into the first output
-    uint8_t *flags = NULL;
-    if (code == CLI_EXIT_OK) {
-        for (int i = 0; i < kind->input_count; i++) {
-            const slot_source *from = &cv->inputs[i];
-            const map_arg *map = cv->maps[from->map];
-            // NaN and infinities stay non-finite through the complement: the transform reads them (flagged).
-            in[i] = (mr_transform_map){map->image, from->channel < 0 ? 0 : from->channel, from->complement,
-                                       {map->constant[0], map->constant[1], map->constant[2]},
-                                       {0, 0, {1.0, 1.0, 1.0}}};
-            if (!eps_given) // each value known to half a code of its file (workflow.h, "Tolerances")
-                in[i].stored = mr_wf_quantisation_of(is_file(map) ? &map->stored : NULL, NULL);
-        }
+    // Read, convert and pack: the library's texture-set conversion.
+    mr_img_param_map reads[MAX_MAPS];
+    char labels[MAX_MAPS][PATH_SIZE + 64];
+    double constants[MAX_MAPS][3];
+    texture_maps(cv->maps, cv->map_count, reads, labels, constants);
+    const mr_texture_set set = {reads, (const double(*)[3])constants, cv->map_count, cv->inputs, eps_given,
+                                layouts, o->prefix != NULL ? output_count : 0, o->threads};
+    mr_texture_result result = {0};
+    double seconds[3] = {0.0, 0.0, 0.0};
+    if (code == CLI_EXIT_OK && (status = mr_transform_convert_texture_set(t, &set, &result)) != MR_OK) {
+        const map_arg *refused = result.failed_map >= 0 ? cv->maps[result.failed_map] : NULL;
+        // :srgb on a float file is a usage error, as the option's text is
+        if (refused != NULL && result.failed_reading && status == MR_ERR_INVALID_ARG && refused->how == MR_MAP_SRGB)
+            code = cli_usage_error(command, "'%s %s': %s", refused->option, refused->text, mr_last_error());
+        else
+            code = cli_fail(command, status);
     }
-    seconds[0] = cli_now() - started;
-
-    // Convert: the library's texture-set conversion.
-    started = cli_now();
-    if (code == CLI_EXIT_OK && (status = mr_transform_convert_maps(t, in, converted, &flags)) != MR_OK)
-        code = cli_fail(command, status);
-    if (cv->maps[0]->image != NULL && cv->maps[0]->image->channels == 4) { // kept for the outputs, the rest freed
-        alpha = cv->maps[0]->image;
-        cv->maps[0]->image = NULL;
-    }
-    free_maps(cv->maps, cv->map_count);
-    seconds[1] = cli_now() - started;
+    if (code == CLI_EXIT_OK) memcpy(seconds, result.seconds, sizeof seconds);
 
     // Write.
-    started = cli_now();
-    if (code == CLI_EXIT_OK && o->prefix != NULL) {
-        for (int l = 0; l < output_count && status == MR_OK; l++) {
-            const output_layout *lay = &layouts[l];
-            mr_image_channel sources[4];
-            int channels = lay->channels - (lay->slot[lay->channels - 1] == LAYOUT_ALPHA && alpha == NULL);
-            for (int c = 0; c < channels; c++) {
-                int j = lay->slot[c];
-                sources[c] = j == LAYOUT_ALPHA ? (mr_image_channel){alpha, 3}
-                             : j == LAYOUT_ZERO ? (mr_image_channel){NULL, 0}
-                                                : (mr_image_channel){converted[j], lay->channel[c]};
-            }
-            status = mr_image_pack(width, height, channels, sources, 0.0f, &outputs[l].image);
-            outputs[l].encoding = lay->encoding;
-        }
-        code = status != MR_OK ? cli_fail(command, status)
-                               : write_outputs(command, o, outputs, output_count, width, height, flags);
-    }
-    seconds[2] = cli_now() - started;
+    const double started = cli_now();
+    if (code == CLI_EXIT_OK && o->prefix != NULL)
+        code = write_outputs(command, o, outputs, layouts, result.outputs, output_count, result.width, result.height,
+                             result.flags);
+    seconds[2] += cli_now() - started; // packing and writing
 
     if (code == CLI_EXIT_OK) {
         const mr_transform_options *used = mr_transform_options_of(t);
@@ -695,18 +620,14 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
                      kind->flags & MR_TRANSFORM_USES_F0 ? used->dielectric_f0 : -1.0,
                      (kind->flags & MR_TRANSFORM_TOLERANCES) ||
                          (convention && m->convention == MR_WF_DIFFUSE_SPECGLOSS && strcmp(command, "metal2spec") == 0),
-                     width, height, {seconds[0], seconds[1], seconds[2]}, flags,
-                     {{cv->layouts[0].name, converted[0]->pixels, 3},
-                      {cv->layouts[1].name, converted[1]->pixels, kind->outputs[1].channels},
-                      {cv->layouts[2].name, converted[2]->pixels, 1}},
+                     result.width, result.height, {seconds[0], seconds[1], seconds[2]}, result.flags,
+                     {{cv->layouts[0].name, result.converted[0]->pixels, 3},
+                      {cv->layouts[1].name, result.converted[1]->pixels, kind->outputs[1].channels},
+                      {cv->layouts[2].name, result.converted[2]->pixels, 1}},
                      !eps_given, eps};
         print_summary(&s, o, outputs, output_count);
     }
-    free_outputs(outputs, MAX_OUTPUTS);
-    free_maps(cv->maps, cv->map_count);
-    for (int j = 0; j < MR_TRANSFORM_MAX_SLOTS; j++) mr_image_free(converted[j]);
-    mr_image_free(alpha);
-    free(flags);
+    mr_texture_result_free(&result);
     mr_transform_free(t);
     mr_mlp_free(net);
     return code;
@@ -714,14 +635,14 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
 
 /* ---- spec2metal --------------------------------------------------------------------------------------------- */
 
-static const output_layout metal_layouts[] = {
-    {"basecolor", MR_IMG_COLOR, 4, {0, 0, 0, LAYOUT_ALPHA}, {0, 1, 2, 0}},
+static const mr_texture_layout metal_layouts[] = {
+    {"basecolor", MR_IMG_COLOR, 4, {0, 0, 0, MR_LAYOUT_ALPHA}, {0, 1, 2, 0}},
     {"metallic", MR_IMG_DATA, 1, {1}, {0}},
     {"roughness", MR_IMG_DATA, 1, {2}, {0}},
 };
-static const output_layout metal_packed[] = {
-    {"basecolor", MR_IMG_COLOR, 4, {0, 0, 0, LAYOUT_ALPHA}, {0, 1, 2, 0}},
-    {"metallicRoughness", MR_IMG_DATA, 3, {LAYOUT_ZERO, 2, 1}, {0, 0, 0}}, // glTF: G roughness, B metallic
+static const mr_texture_layout metal_packed[] = {
+    {"basecolor", MR_IMG_COLOR, 4, {0, 0, 0, MR_LAYOUT_ALPHA}, {0, 1, 2, 0}},
+    {"metallicRoughness", MR_IMG_DATA, 3, {MR_LAYOUT_ZERO, 2, 1}, {0, 0, 0}}, // glTF: G roughness, B metallic
 };
 
 int cmd_spec2metal(int argc, char **argv) {
@@ -767,8 +688,8 @@ int cmd_spec2metal(int argc, char **argv) {
     // The gltf-specgloss -> gltf transforms; --convention paper reads the diffuse as Eq. 2 prints it.
     conversion cv = {command, "gltf-specgloss", "gltf", all, 5,
                      {{0, -1, 0}, {packed.text ? 4 : 1, -1, 0},
-                      packed.text ? (slot_source){4, 3, 0} : glossiness.text ? (slot_source){2, 0, 0}
-                                                                             : (slot_source){3, 0, 1}},
+                      packed.text ? (mr_texture_source){4, 3, 0} : glossiness.text ? (mr_texture_source){2, 0, 0}
+                                                                             : (mr_texture_source){3, 0, 1}},
                      metal_layouts, 3, metal_packed, 2};
     return run_conversion(&cv, &m, &o, weights, eps, eps_given);
 }
@@ -840,13 +761,13 @@ static void print_metal2spec_help(void) {
            "  metal2spec --basecolor 0.9,0.6,0.2 --metallic 1 --roughness 0.3\n");
 }
 
-static const output_layout spec_layouts[] = {
-    {"diffuse", MR_IMG_COLOR, 4, {0, 0, 0, LAYOUT_ALPHA}, {0, 1, 2, 0}},
+static const mr_texture_layout spec_layouts[] = {
+    {"diffuse", MR_IMG_COLOR, 4, {0, 0, 0, MR_LAYOUT_ALPHA}, {0, 1, 2, 0}},
     {"specular", MR_IMG_COLOR, 3, {1, 1, 1}, {0, 1, 2}},
     {"glossiness", MR_IMG_DATA, 1, {2}, {0}},
 };
-static const output_layout spec_packed[] = {
-    {"diffuse", MR_IMG_COLOR, 4, {0, 0, 0, LAYOUT_ALPHA}, {0, 1, 2, 0}},
+static const mr_texture_layout spec_packed[] = {
+    {"diffuse", MR_IMG_COLOR, 4, {0, 0, 0, MR_LAYOUT_ALPHA}, {0, 1, 2, 0}},
     // RGB specular sRGB-encoded, A glossiness linear: what image_io does for a colour image with alpha.
     {"specularGlossiness", MR_IMG_COLOR, 4, {1, 1, 1, 2}, {0, 1, 2, 0}},
 };
@@ -874,8 +795,8 @@ int cmd_metal2spec(int argc, char **argv) {
     if (packed.text != NULL ? (metallic.text || roughness.text) : (!metallic.text || !roughness.text))
         return cli_usage_error(command, "give --metallic MAP and --roughness MAP, or --metallic-roughness MR");
     conversion cv = {command, "gltf", "gltf-specgloss", all, 4,
-                     {{0, -1, 0}, packed.text ? (slot_source){3, 2, 0} : (slot_source){1, 0, 0},
-                      packed.text ? (slot_source){3, 1, 0} : (slot_source){2, 0, 0}},
+                     {{0, -1, 0}, packed.text ? (mr_texture_source){3, 2, 0} : (mr_texture_source){1, 0, 0},
+                      packed.text ? (mr_texture_source){3, 1, 0} : (mr_texture_source){2, 0, 0}},
                      spec_layouts, 3, spec_packed, 2};
     return run_conversion(&cv, &m, &o, NULL, 0.0, 0);
 }

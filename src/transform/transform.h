@@ -38,6 +38,7 @@
 
 #include "../mr_image.h"
 #include "../brdf/brdf.h"
+#include "../io/image_io.h"
 #include "../mr_status.h"
 #include "../workflow/workflow.h"
 
@@ -211,6 +212,71 @@ mr_status mr_image_pack(int width, int height, int channels, const mr_image_chan
  * a new image in *out (the caller frees it); otherwise *out is rgb itself (not a copy: free it only once). Errors as
  * mr_image_pack's. */
 mr_status mr_image_with_alpha(mr_image *rgb, const mr_image *alpha_source, mr_image **out);
+
+/* ---- texture-set conversions: files in, packed images out (texture_set.c) ----------------------------------
+ * The pipeline of spec2metal and metal2spec as one call: read and check the maps (mr_img_read_texture_set), feed
+ * the transform's input slots from them (a map's colour channels or one channel, complemented when asked),
+ * convert (mr_transform_convert_maps), and pack the converted slots into the output images a layout describes
+ * (mr_image_pack; glTF's channel packing), the first map's alpha carried where a layout asks for it. The caller
+ * writes the images (mr_img_write_set) and the flag picture (mr_flag_picture) and reports the flags
+ * (mr_flags_count). */
+
+/* Where a transform input slot's values come from: map `map` of the set, its colour channels (channel -1) or one
+ * channel; complement: 1 - value (a roughness map for a glossiness slot; NaN stays NaN). */
+typedef struct mr_texture_source {
+    int map, channel, complement;
+} mr_texture_source;
+
+/* Channel sources of a layout besides the transform's output slots. */
+enum {
+    MR_LAYOUT_ZERO = -1, /* 0 */
+    MR_LAYOUT_ALPHA = -2 /* the first map's alpha; a last channel that exists only when that map has one */
+};
+
+/* One output image: its name (for the caller's file names), how its file is encoded, and per channel the output
+ * slot (and that slot's channel) written there, or MR_LAYOUT_ZERO / MR_LAYOUT_ALPHA. */
+typedef struct mr_texture_layout {
+    const char *name;
+    mr_img_encoding encoding;
+    int channels;
+    int slot[4], channel[4];
+} mr_texture_layout;
+
+#define MR_TEXTURE_MAX_OUTPUTS 4
+
+/* What to convert. maps[k] as mr_img_read_texture_set takes them (its images are the call's: read and freed by
+ * it), constants[k] the value of a map without a path (R, G, B; a one-value map's in all three). */
+typedef struct mr_texture_set {
+    mr_img_param_map *maps;
+    const double (*constants)[3];
+    int map_count;
+    const mr_texture_source *inputs;    /* one per kind->inputs[] */
+    int exact;                          /* 0: each input known to half a code of its file (workflow.h,
+                                           "Tolerances"); 1: every input exact (the transform's eps alone) */
+    const mr_texture_layout *layouts;   /* the output images; layout_count 0: none (only the converted slots) */
+    int layout_count;                   /* at most MR_TEXTURE_MAX_OUTPUTS */
+    int threads;                        /* file decoding: 0 = automatic (mr_auto_threads), n >= 1: at most n. The
+                                           conversion takes the transform's own option */
+} mr_texture_set;
+
+/* What came out; every pointer owned, released by mr_texture_result_free. */
+typedef struct mr_texture_result {
+    int width, height;                              /* the maps' size; 1 x 1 when every map is a constant */
+    mr_image *converted[MR_TRANSFORM_MAX_SLOTS];    /* one per kind->outputs[] (as mr_transform_convert_maps) */
+    mr_image *outputs[MR_TEXTURE_MAX_OUTPUTS];      /* one per layout */
+    uint8_t *flags;                                 /* width x height mr_wf_flag bytes */
+    double seconds[3];                              /* read, convert, pack */
+    int failed_map;                                 /* on failure: the map refused (else -1), */
+    int failed_reading;                             /* and whether its read failed (1) or a check refused it (0) */
+} mr_texture_result;
+
+/* Convert `set` through t into *out (zeroed first). On failure nothing is returned but out->failed_map and
+ * out->failed_reading, and every image is freed. Errors: those of mr_img_read_texture_set (the map named by its
+ * label), mr_transform_convert_maps and mr_image_pack; MR_ERR_INVALID_ARG for a source or layout naming a map,
+ * slot or channel that is not there. */
+mr_status mr_transform_convert_texture_set(const mr_transform *t, const mr_texture_set *set, mr_texture_result *out);
+/* Free what a result holds and zero it (NULL-safe). */
+void mr_texture_result_free(mr_texture_result *r);
 
 /* ---- flags: counted by reason, drawn as a picture (flags.c) ------------------------------------------------
  * Every conversion flags its texels with mr_wf_flag bits (workflow.h: CLAMPED_INPUT, NONFINITE_INPUT, OFF_MANIFOLD,
