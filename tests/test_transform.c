@@ -294,6 +294,83 @@ MR_TEST(outputs_packed_channel_by_channel) {
     mr_image_free(rgba);
 }
 
+/* mr_transform_convert_texture_set: files read by the one rule, a constant broadcast, the slots fed (a roughness map
+ * complemented into glossiness), packed as glTF does with the diffuse's alpha carried; the same values as the steps
+ * taken one by one. A map refused names itself (failed_map, failed_reading). */
+MR_TEST(texture_sets_convert_in_one_call) {
+    const mr_brdf_model *sg = mr_brdf_find("gltf-specgloss"), *gltf = mr_brdf_find("gltf");
+    const mr_brdf_param *diffuse_param = &sg->params[mr_brdf_param_index(sg, "diffuse")];
+    const mr_brdf_param *rough_param = &gltf->params[mr_brdf_param_index(gltf, "roughness")];
+    mr_image *diffuse = NULL, *rough = NULL;
+    MR_CHECK_OK(mr_image_create(3, 2, 4, &diffuse));
+    MR_CHECK_OK(mr_image_create(3, 2, 1, &rough));
+    for (int k = 0; k < 24; k++) diffuse->pixels[k] = (float)(k % 5) / 5.0f;
+    for (int k = 0; k < 6; k++) rough->pixels[k] = (float)k / 5.0f;
+    char d[600], r[600];
+    snprintf(d, sizeof d, "%s", mr_test_tmp_path("set_diffuse.png"));
+    snprintf(r, sizeof r, "%s", mr_test_tmp_path("set_rough.png"));
+    MR_CHECK_OK(mr_img_write(d, diffuse, NULL));
+    MR_CHECK_OK(mr_img_write(r, rough, &(mr_img_write_options){MR_IMG_DATA, 0, 0}));
+    mr_transform *t = NULL;
+    MR_CHECK_OK(mr_transform_create(mr_transform_find("gltf-specgloss", "gltf", "weighted"), NULL, &t));
+    if (t == NULL) return;
+
+    mr_img_param_map maps[3] = {{.path = d, .param = diffuse_param, .label = "--diffuse d"},
+                                {.path = NULL, .label = "--specular 0.04"},
+                                {.path = r, .param = rough_param, .label = "--roughness r", .grey = 1}};
+    const double constants[3][3] = {{0, 0, 0}, {0.04, 0.04, 0.04}, {0, 0, 0}};
+    const mr_texture_source inputs[3] = {{0, -1, 0}, {1, -1, 0}, {2, 0, 1}};
+    const mr_texture_layout packed[2] = {
+        {"basecolor", MR_IMG_COLOR, 4, {0, 0, 0, MR_LAYOUT_ALPHA}, {0, 1, 2, 0}},
+        {"metallicRoughness", MR_IMG_DATA, 3, {MR_LAYOUT_ZERO, 2, 1}, {0, 0, 0}}};
+    const mr_texture_set set = {maps, constants, 3, inputs, 0, packed, 2, 0};
+    mr_texture_result result;
+    MR_CHECK_OK(mr_transform_convert_texture_set(t, &set, &result));
+    MR_CHECK(result.width == 3 && result.height == 2 && result.flags != NULL && maps[0].image == NULL);
+
+    // The steps one by one.
+    mr_image *d_read = NULL, *r_read = NULL, *out[3] = {NULL, NULL, NULL};
+    mr_img_stored d_stored, r_stored;
+    MR_CHECK_OK(mr_img_read_param_map(d, diffuse_param, MR_MAP_AS_PARAMETER, NULL, &d_read, &d_stored));
+    MR_CHECK_OK(mr_img_read_param_map(r, rough_param, MR_MAP_AS_PARAMETER, NULL, &r_read, &r_stored));
+    mr_transform_map in[3] = {{d_read, 0, 0, {0, 0, 0}, mr_wf_quantisation_of(&d_stored, NULL)},
+                              {NULL, 0, 0, {0.04, 0.04, 0.04}, mr_wf_quantisation_of(NULL, NULL)},
+                              {r_read, 0, 1, {0, 0, 0}, mr_wf_quantisation_of(&r_stored, NULL)}};
+    uint8_t *flags = NULL;
+    MR_CHECK_OK(mr_transform_convert_maps(t, in, out, &flags));
+    if (out[0] != NULL && result.outputs[0] != NULL && result.outputs[1] != NULL) {
+        MR_CHECK(result.outputs[0]->channels == 4 && result.outputs[1]->channels == 3);
+        for (int k = 0; k < 6; k++) {
+            MR_CHECK(memcmp(result.outputs[0]->pixels + 4 * k, out[0]->pixels + 3 * k, 3 * sizeof(float)) == 0);
+            MR_CHECK(result.outputs[0]->pixels[4 * k + 3] == d_read->pixels[4 * k + 3]);
+            MR_CHECK(result.outputs[1]->pixels[3 * k] == 0.0f);
+            MR_CHECK(result.outputs[1]->pixels[3 * k + 1] == out[2]->pixels[k]);
+            MR_CHECK(result.outputs[1]->pixels[3 * k + 2] == out[1]->pixels[k]);
+            MR_CHECK(result.flags[k] == flags[k]);
+            MR_CHECK(memcmp(result.converted[0]->pixels + 3 * k, out[0]->pixels + 3 * k, 3 * sizeof(float)) == 0);
+        }
+    }
+    mr_texture_result_free(&result);
+    MR_CHECK(result.outputs[0] == NULL && result.flags == NULL);
+    for (int j = 0; j < 3; j++) mr_image_free(out[j]);
+    free(flags);
+
+    // A colour file where a grey one is expected: refused by its label, read but checked.
+    maps[2].path = d;
+    MR_CHECK(mr_transform_convert_texture_set(t, &set, &result) == MR_ERR_INVALID_ARG);
+    MR_CHECK(result.failed_map == 2 && !result.failed_reading && maps[2].image == NULL);
+    MR_CHECK_MSG(strstr(mr_last_error(), "--roughness r is a colour image") != NULL, "%s", mr_last_error());
+    // A missing file: its read failed.
+    maps[2].path = mr_test_tmp_path("set_missing.png");
+    MR_CHECK(mr_transform_convert_texture_set(t, &set, &result) == MR_ERR_IO);
+    MR_CHECK(result.failed_map == 2 && result.failed_reading && result.outputs[0] == NULL);
+    mr_image_free(d_read);
+    mr_image_free(r_read);
+    mr_image_free(diffuse);
+    mr_image_free(rough);
+    mr_transform_free(t);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(kinds_name_model_parameters),
              MR_TEST_ENTRY(repeated_values_give_the_per_texel_bits),
              MR_TEST_ENTRY(extension_route_moves_values),
@@ -301,4 +378,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(kinds_name_model_parameters),
              MR_TEST_ENTRY(bad_options_are_refused),
              MR_TEST_ENTRY(maps_convert_texel_by_texel),
              MR_TEST_ENTRY(flags_counted_and_drawn_by_their_code),
-             MR_TEST_ENTRY(outputs_packed_channel_by_channel))
+             MR_TEST_ENTRY(outputs_packed_channel_by_channel),
+             MR_TEST_ENTRY(texture_sets_convert_in_one_call))
