@@ -452,30 +452,13 @@ int cmd_convert(int argc, char **argv) {
         status = mr_transform_create(kind, &topts, &t);
         if (status != MR_OK) code = cli_fail(COMMAND, status);
     }
-    mr_transform_map in[MR_TRANSFORM_MAX_SLOTS];
-    mr_image *out[MR_TRANSFORM_MAX_SLOTS] = {NULL};
+    mr_image *out[MR_TRANSFORM_MAX_SLOTS] = {NULL}; // RGB outputs carry the first map's alpha
     uint8_t *flags = NULL;
-    const mr_image *alpha_source = NULL;
-    int any_map = 0;
-    for (int p = 0; code == CLI_EXIT_OK && p < source->param_count; p++) {
-        const int at = mr_brdf_param_offset(source, p);
-        in[p] = (mr_transform_map){NULL, 0, 0, {m->values[at], m->values[at], m->values[at]}, {0}};
-        if (source->params[p].channels == 3)
-            for (int c = 0; c < 3; c++) in[p].value[c] = m->values[at + c];
-        for (int k = 0; k < m->map_count; k++) // the last map of a parameter is the one bound
-            if (m->maps[k].param == p) {
-                in[p].image = m->maps[k].image;
-                in[p].channel = m->maps[k].channel;
-            }
-        if (in[p].image != NULL) {
-            any_map = 1;
-            if (alpha_source == NULL && in[p].image->channels == 4) alpha_source = in[p].image;
-        }
-    }
+    const int any_map = code == CLI_EXIT_OK && m->map_count > 0;
     double convert_seconds = 0.0;
     if (code == CLI_EXIT_OK) {
         const double t0 = cli_now();
-        status = mr_transform_convert_maps(t, in, out, &flags);
+        status = mr_transform_convert_material(t, m, out, &flags);
         convert_seconds = cli_now() - t0;
         if (progress.draw && direct) fprintf(stderr, "\r\033[K");
         if (status != MR_OK) code = cli_fail(COMMAND, status);
@@ -494,26 +477,20 @@ int cmd_convert(int argc, char **argv) {
     }
     // Write: every output, then the flag map, all or none (mr_img_write_set).
     if (code == CLI_EXIT_OK && any_map) {
-        mr_image *images[MR_TRANSFORM_MAX_SLOTS + 1] = {NULL};
+        mr_image *picture = NULL;
         mr_img_set_item items[MR_TRANSFORM_MAX_SLOTS + 1];
         char label[4096 + 8];
         snprintf(label, sizeof label, "-o %s", prefix);
-        for (int j = 0; status == MR_OK && j <= out_count; j++) {
-            items[j] = (mr_img_set_item){names[j], label, NULL, {MR_IMG_DATA, 0, 0}};
-            if (j < out_count) {
-                status = mr_image_with_alpha(out[j], alpha_source, &images[j]);
-                // The rule maps are read by, so a PNG output reads back as written.
-                items[j].options.encoding = mr_brdf_param_map_encoding(&target->params[j], MR_MAP_AS_PARAMETER);
-            } else {
-                status = mr_flag_picture(flags, width, height, &mr_learned_flag_code, &images[j]);
-            }
-            items[j].image = images[j];
-        }
+        // The rule maps are read by, so a PNG output reads back as written.
+        for (int j = 0; j < out_count; j++)
+            items[j] = (mr_img_set_item){names[j], label, out[j],
+                                         {mr_brdf_param_map_encoding(&target->params[j], MR_MAP_AS_PARAMETER), 0, 0}};
+        status = mr_flag_picture(flags, width, height, &mr_learned_flag_code, &picture);
+        items[out_count] = (mr_img_set_item){names[out_count], label, picture, {MR_IMG_DATA, 0, 0}};
         mr_img_set_options set_options = {threads};
         if (status == MR_OK) status = mr_img_write_set(items, out_count + 1, &set_options, NULL);
         code = status == MR_OK ? CLI_EXIT_OK : cli_fail(COMMAND, status);
-        for (int j = 0; j <= out_count; j++)
-            if (images[j] != (j < out_count ? out[j] : NULL)) mr_image_free(images[j]);
+        mr_image_free(picture);
     }
     const double seconds = cli_now() - started;
     const mr_direct_summary *ds = direct && code == CLI_EXIT_OK ? mr_direct_kind_summary(kind) : NULL;

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "mr_internal.h"
+#include "render/render.h"
 #include "transform.h"
 
 void mr_texture_result_free(mr_texture_result *r) {
@@ -107,4 +108,53 @@ mr_status mr_transform_convert_texture_set(const mr_transform *t, const mr_textu
     out->seconds[2] = mr_now_seconds() - started;
     if (status != MR_OK) mr_texture_result_free(out);
     return status;
+}
+
+mr_status mr_transform_convert_material(const mr_transform *t, const mr_material *material, mr_image **out,
+                                        uint8_t **flags) {
+    const mr_transform_kind *kind = mr_transform_kind_of(t);
+    const mr_brdf_model *model = material->model;
+    if (strcmp(model->name, kind->source) != 0)
+        return mr_fail(MR_ERR_INVALID_ARG, "a material of %s given to a transform of %s", model->name, kind->source);
+    mr_transform_map in[MR_TRANSFORM_MAX_SLOTS];
+    const mr_image *alpha_source = NULL;
+    for (int i = 0; i < kind->input_count; i++) {
+        const int p = mr_brdf_param_index(model, kind->inputs[i].name);
+        if (p < 0)
+            return mr_fail(MR_ERR_INVALID_ARG, "transform input %s is no parameter of %s", kind->inputs[i].name,
+                           model->name);
+        const int at = mr_brdf_param_offset(model, p);
+        const double *v = material->values + at;
+        in[i] = (mr_transform_map){NULL, 0, 0, {v[0], v[0], v[0]}, {0}};
+        if (model->params[p].channels == 3)
+            for (int c = 0; c < 3; c++) in[i].value[c] = v[c];
+        for (int k = 0; k < material->map_count; k++) // the last map of a parameter is the one bound
+            if (material->maps[k].param == p) {
+                in[i].image = material->maps[k].image;
+                in[i].channel = material->maps[k].channel;
+            }
+        if (in[i].image != NULL && alpha_source == NULL && in[i].image->channels == 4) alpha_source = in[i].image;
+    }
+    mr_image *converted[MR_TRANSFORM_MAX_SLOTS] = {NULL};
+    uint8_t *texel_flags = NULL;
+    mr_status status = mr_transform_convert_maps(t, in, converted, &texel_flags);
+    for (int j = 0; j < kind->output_count && status == MR_OK; j++) {
+        mr_image *carried = NULL;
+        status = mr_image_with_alpha(converted[j], alpha_source, &carried);
+        if (status == MR_OK && carried != converted[j]) {
+            mr_image_free(converted[j]);
+            converted[j] = carried;
+        }
+    }
+    if (status != MR_OK) {
+        for (int j = 0; j < MR_TRANSFORM_MAX_SLOTS; j++) mr_image_free(converted[j]);
+        free(texel_flags);
+        return status;
+    }
+    for (int j = 0; j < kind->output_count; j++) out[j] = converted[j];
+    if (flags != NULL)
+        *flags = texel_flags;
+    else
+        free(texel_flags);
+    return MR_OK;
 }

@@ -278,6 +278,16 @@ mr_status mr_transform_convert_texture_set(const mr_transform *t, const mr_textu
 /* Free what a result holds and zero it (NULL-safe). */
 void mr_texture_result_free(mr_texture_result *r);
 
+/* The pipeline of convert as one call: a material of the kind's source model (struct mr_material, render.h: its
+ * values and the maps bound to its parameters) converted texel by texel through t; each input slot reads the
+ * parameter of its name, its map (the one bound) or its value. out[j] is one new image per kind->outputs[j] (the
+ * caller frees them), an RGB one carrying the alpha of the first 4-channel map in parameter order; *flags as
+ * mr_transform_convert_maps. MR_ERR_INVALID_ARG for a material of another model; the errors of
+ * mr_transform_convert_maps and mr_image_with_alpha. On failure nothing is returned. */
+struct mr_material;
+mr_status mr_transform_convert_material(const mr_transform *t, const struct mr_material *material, mr_image **out,
+                                        uint8_t **flags);
+
 /* ---- flags: counted by reason, drawn as a picture (flags.c) ------------------------------------------------
  * Every conversion flags its texels with mr_wf_flag bits (workflow.h: CLAMPED_INPUT, NONFINITE_INPUT, OFF_MANIFOLD,
  * METHOD_FAILED; learned.h: EXTRAPOLATED, CLAMPED_OUTPUT, UNCHECKED; direct.h: UNCONVERGED). A command reports them
