@@ -371,6 +371,55 @@ MR_TEST(texture_sets_convert_in_one_call) {
     mr_transform_free(t);
 }
 
+/* mr_transform_convert_material: each slot reads its parameter's bound map or value, as mr_transform_convert_maps
+ * would be fed by hand; an RGB output carries the first 4-channel map's alpha; a material of another model is
+ * refused. */
+MR_TEST(materials_convert_in_one_call) {
+    const mr_brdf_model *sg = mr_brdf_find("gltf-specgloss");
+    mr_material *m = NULL;
+    MR_CHECK_OK(mr_material_create(sg, &m));
+    mr_image *diffuse = NULL, *gloss = NULL;
+    MR_CHECK_OK(mr_image_create(2, 2, 4, &diffuse));
+    MR_CHECK_OK(mr_image_create(2, 2, 1, &gloss));
+    for (int k = 0; k < 16; k++) diffuse->pixels[k] = 0.05f * (float)(k + 1);
+    for (int k = 0; k < 4; k++) gloss->pixels[k] = 0.2f * (float)(k + 1);
+    const int spec_at = mr_brdf_param_offset(sg, mr_brdf_param_index(sg, "specular"));
+    for (int c = 0; c < 3; c++) m->values[spec_at + c] = 0.04 + 0.01 * c;
+    mr_transform_map in[3] = {{diffuse, 0, 0, {0, 0, 0}, {0}},
+                              {NULL, 0, 0, {0.04, 0.05, 0.06}, {0}},
+                              {gloss, 0, 0, {0, 0, 0}, {0}}};
+    mr_transform *t = NULL;
+    MR_CHECK_OK(mr_transform_create(mr_transform_find("gltf-specgloss", "gltf", "weighted"), NULL, &t));
+    mr_image *by_hand[3] = {NULL, NULL, NULL}, *out[3] = {NULL, NULL, NULL};
+    uint8_t *hand_flags = NULL, *flags = NULL;
+    MR_CHECK_OK(mr_transform_convert_maps(t, in, by_hand, &hand_flags));
+    MR_CHECK_OK(mr_material_add_map(m, "diffuse", diffuse, 0, "diffuse", NULL)); // m owns them now
+    MR_CHECK_OK(mr_material_add_map(m, "glossiness", gloss, 0, "glossiness", NULL));
+    MR_CHECK_OK(mr_transform_convert_material(t, m, out, &flags));
+    if (out[0] != NULL && by_hand[0] != NULL) {
+        MR_CHECK(out[0]->channels == 4 && out[1]->channels == 1 && out[2]->channels == 1);
+        for (int k = 0; k < 4; k++) {
+            MR_CHECK(memcmp(out[0]->pixels + 4 * k, by_hand[0]->pixels + 3 * k, 3 * sizeof(float)) == 0);
+            MR_CHECK(out[0]->pixels[4 * k + 3] == diffuse->pixels[4 * k + 3]);
+            MR_CHECK(out[1]->pixels[k] == by_hand[1]->pixels[k] && out[2]->pixels[k] == by_hand[2]->pixels[k]);
+            MR_CHECK(flags[k] == hand_flags[k]);
+        }
+    }
+    for (int j = 0; j < 3; j++) {
+        mr_image_free(out[j]);
+        mr_image_free(by_hand[j]);
+        out[j] = NULL;
+    }
+    free(flags);
+    free(hand_flags);
+    mr_material *other = NULL;
+    MR_CHECK_OK(mr_material_create(mr_brdf_find("gltf"), &other));
+    MR_CHECK(mr_transform_convert_material(t, other, out, NULL) == MR_ERR_INVALID_ARG && out[0] == NULL);
+    mr_material_free(other);
+    mr_material_free(m);
+    mr_transform_free(t);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(kinds_name_model_parameters),
              MR_TEST_ENTRY(repeated_values_give_the_per_texel_bits),
              MR_TEST_ENTRY(extension_route_moves_values),
@@ -379,4 +428,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(kinds_name_model_parameters),
              MR_TEST_ENTRY(maps_convert_texel_by_texel),
              MR_TEST_ENTRY(flags_counted_and_drawn_by_their_code),
              MR_TEST_ENTRY(outputs_packed_channel_by_channel),
-             MR_TEST_ENTRY(texture_sets_convert_in_one_call))
+             MR_TEST_ENTRY(texture_sets_convert_in_one_call),
+             MR_TEST_ENTRY(materials_convert_in_one_call))
