@@ -1466,9 +1466,9 @@ MR_TEST(parameter_maps_read_side_by_side) {
         MR_CHECK(maps[0].stored.bits == 8 && maps[2].stored.bits == 16);
         for (int k = 0; k < 3; k++) mr_image_free(maps[k].image);
     }
-    // A missing file and a float file read with :srgb: the first in order is reported; the others are read.
+    // A missing file and an unknown encoding: the first in order is reported; the others are read.
     mr_img_param_map bad[3] = {{.path = a, .param = colour, .how = MR_MAP_AS_PARAMETER},
-                               {.path = mr_test_tmp_path("maps_missing.png"), .param = rough, .how = MR_MAP_AS_PARAMETER},
+                               {.path = mr_test_tmp_path("maps_missing.png"), .param = rough},
                                {.path = b, .param = rough, .how = MR_MAP_ENCODING_COUNT}};
     int failed = -1;
     MR_CHECK(mr_img_read_param_maps(bad, 3, NULL, 2, &failed) == MR_ERR_IO && failed == 1);
