@@ -1,7 +1,8 @@
 /*
  * cmd_convert.c — `matremap convert`: texture maps (or constants) of one BRDF model's parameters converted to
  * another model's, per texel, through learned transforms (one, a chain given or found), through the library's
- * texture-set conversion (mr_transform_convert_maps); see docs/learn.md.
+ * conversion of a material (mr_transform_convert_material); the outputs and the flag picture (mr_flag_picture,
+ * mr_learned_flag_code) written all or none (mr_img_write_set); see docs/learn.md.
  */
 #include <dirent.h>
 #include <errno.h>

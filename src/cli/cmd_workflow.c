@@ -5,8 +5,10 @@
  *
  * One driver serves both directions (run_conversion), told by a `conversion` table which maps feed the
  * transform's input slots and how its output slots are packed into files. The steps: parse the maps (an image
- * file or a constant each), name the outputs and refuse any that is an input, read the files (one size; constants
- * broadcast), convert in one mr_transform_apply, write the outputs (all or none), print one summary line or JSON.
+ * file or a constant each), name the outputs and refuse any that is an input, then the library's texture-set
+ * conversion (mr_transform_convert_texture_set: read and check the files, one size, constants broadcast; convert;
+ * pack), write the outputs and the flag picture all or none (mr_img_write_set, mr_flag_picture), print one summary
+ * line or JSON.
  */
 #include <errno.h>
 #include <float.h>

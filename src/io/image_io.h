@@ -3,6 +3,9 @@
  *
  * Main calls: mr_img_read(path, &opts, &image) ... mr_img_write(path, image, &opts). Free with mr_image_free.
  * mr_img_read_memory decodes an encoded image already in memory (e.g. embedded in a glTF asset) the same way.
+ * Sets of files: mr_img_read_param_maps / mr_img_read_texture_set read the maps of a texture set side by side (the
+ * latter checks them: grey data maps, packed channels, one size); mr_img_write_set writes several images all or
+ * none (each to a temporary beside it, all renamed into place once every one is written).
  *
  * Colour convention (the only place it is applied): images in memory are linear (mr_image.h).
  *   - EXR and HDR hold linear floats and are read and written as they are.
