@@ -211,13 +211,15 @@ static void plan_textures(const mr_transform_kind *kind, const workflow_side *to
 }
 
 static void count_flags(mr_gltf_material_report *r, const uint8_t *flags, size_t n) {
-    for (size_t i = 0; i < n; i++) {
-        r->flagged += flags[i] != 0;
-        r->off_manifold += (flags[i] & MR_WF_OFF_MANIFOLD) != 0;
-        r->nonfinite += (flags[i] & MR_WF_NONFINITE_INPUT) != 0;
-        r->clamped += (flags[i] & MR_WF_CLAMPED_INPUT) != 0;
-        r->failed += (flags[i] & MR_WF_METHOD_FAILED) != 0;
-    }
+    static const unsigned reasons[5] = {0xFFu, MR_WF_OFF_MANIFOLD, MR_WF_NONFINITE_INPUT, MR_WF_CLAMPED_INPUT,
+                                        MR_WF_METHOD_FAILED};
+    size_t counts[5];
+    mr_flags_count(flags, n, reasons, 5, counts); // transform.h: the one way flags are counted
+    r->flagged += counts[0];
+    r->off_manifold += counts[1];
+    r->nonfinite += counts[2];
+    r->clamped += counts[3];
+    r->failed += counts[4];
 }
 
 /* A new texture, encoded: PNG bytes in memory, or an EXR in a temporary file. */

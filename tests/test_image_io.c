@@ -1363,6 +1363,174 @@ MR_TEST(parameter_maps_follow_one_rule) {
     mr_image_free(grey);
 }
 
+/* Entries of the test directory whose name starts with ".matremap-" (mr_img_write_set's temporaries). */
+static int count_set_temporaries(void) {
+    DIR *d = opendir(mr_test_scratch_dir());
+    if (d == NULL) return -1;
+    int n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) n += strncmp(e->d_name, ".matremap-", 10) == 0;
+    closedir(d);
+    return n;
+}
+
+/* mr_img_write_set: every image written (bytes as mr_img_write's), whatever the threads; a folder in one target's way
+ * refuses the set before anything is written; a failing write leaves the earlier set whole and no temporary. */
+MR_TEST(image_sets_are_written_all_or_none) {
+    mr_image *colour = make_f(3, 1.0f), *grey = make_f(1, 0.5f);
+    char paths[3][600], single[600];
+    const char *names[3] = {"set_a.png", "set_b.exr", "set_c.png"};
+    for (int k = 0; k < 3; k++) snprintf(paths[k], sizeof paths[k], "%s", mr_test_tmp_path(names[k]));
+    mr_img_set_item items[3] = {{paths[0], "-o set_", colour, {MR_IMG_COLOR, 16, 0}},
+                                {paths[1], "-o set_", grey, {MR_IMG_DATA, 0, 0}},
+                                {paths[2], "--flags", grey, {MR_IMG_DATA, 0, 0}}};
+    unsigned char expected[65536], got[65536];
+    for (int threads = 1; threads <= 3; threads += 2) {
+        mr_img_set_options options = {threads};
+        int failed = 7;
+        MR_CHECK_OK(mr_img_write_set(items, 3, &options, &failed));
+        MR_CHECK(failed == -1);
+        for (int k = 0; k < 3; k++) { // the bytes of a single mr_img_write
+            snprintf(single, sizeof single, "%s", mr_test_tmp_path(k == 1 ? "single.exr" : "single.png"));
+            MR_CHECK_OK(mr_img_write(single, items[k].image, &items[k].options));
+            long a = read_file(single, expected, sizeof expected), b = read_file(paths[k], got, sizeof got);
+            MR_CHECK_MSG(a > 0 && a == b && memcmp(expected, got, (size_t)a) == 0, "%s, %d threads", names[k],
+                         threads);
+        }
+    }
+    MR_CHECK(count_set_temporaries() == 0);
+    long before = read_file(paths[0], expected, sizeof expected);
+
+    // A folder in the last target's way: refused, naming it and its label, before anything is written.
+    char folder[600];
+    snprintf(folder, sizeof folder, "%s", mr_test_tmp_path("set_dir.png"));
+    MR_CHECK(mkdir(folder, 0755) == 0);
+    mr_img_set_item blocked[2] = {{paths[0], "-o set_", grey, {MR_IMG_DATA, 0, 0}},
+                                  {folder, "--flags", grey, {MR_IMG_DATA, 0, 0}}};
+    int failed = -1;
+    MR_CHECK(mr_img_write_set(blocked, 2, NULL, &failed) == MR_ERR_INVALID_ARG && failed == 1);
+    MR_CHECK_MSG(strstr(mr_last_error(), "set_dir.png' (--flags) is a folder") != NULL, "%s", mr_last_error());
+    MR_CHECK(read_file(paths[0], got, sizeof got) == before && memcmp(expected, got, (size_t)before) == 0);
+    // The same target twice: refused.
+    mr_img_set_item twice[2] = {items[0], items[0]};
+    MR_CHECK(mr_img_write_set(twice, 2, NULL, &failed) == MR_ERR_INVALID_ARG && failed == 1);
+
+    // A write that fails (a 4-channel JPEG) after others succeeded: the set is lost, the earlier one stays whole.
+    mr_image *rgba = make_f(4, 1.0f);
+    char jpeg[600];
+    snprintf(jpeg, sizeof jpeg, "%s", mr_test_tmp_path("set_d.jpg"));
+    mr_img_set_item bad[2] = {{paths[0], NULL, grey, {MR_IMG_DATA, 0, 0}}, {jpeg, NULL, rgba, {MR_IMG_COLOR, 0, 0}}};
+    for (int threads = 1; threads <= 2; threads++) {
+        mr_img_set_options options = {threads};
+        MR_CHECK(mr_img_write_set(bad, 2, &options, &failed) == MR_ERR_UNSUPPORTED && failed == 1);
+        MR_CHECK_MSG(strncmp(mr_last_error(), "writing '", 9) == 0 && strstr(mr_last_error(), "set_d.jpg") != NULL,
+                     "%s", mr_last_error());
+        MR_CHECK(read_file(paths[0], got, sizeof got) == before && memcmp(expected, got, (size_t)before) == 0);
+        MR_CHECK(!file_exists(jpeg));
+        MR_CHECK(count_set_temporaries() == 0 && count_temporaries() == 0);
+    }
+    MR_CHECK_OK(mr_img_write_set(NULL, 0, NULL, NULL)); // an empty set: nothing to do
+    mr_image_free(colour);
+    mr_image_free(grey);
+    mr_image_free(rgba);
+}
+
+/* mr_img_read_param_maps: each map as mr_img_read_param_map reads it, constants skipped, whatever the threads; the
+ * first failure in order reported, with the maps read left to the caller. */
+MR_TEST(parameter_maps_read_side_by_side) {
+    const mr_brdf_model *gltf = mr_brdf_find("gltf");
+    const mr_brdf_param *colour = &gltf->params[mr_brdf_param_index(gltf, "base_color")];
+    const mr_brdf_param *rough = &gltf->params[mr_brdf_param_index(gltf, "roughness")];
+    mr_image *f = make_f(3, 1.0f);
+    char a[600], b[600];
+    snprintf(a, sizeof a, "%s", mr_test_tmp_path("maps_a.png"));
+    snprintf(b, sizeof b, "%s", mr_test_tmp_path("maps_b.png"));
+    MR_CHECK_OK(mr_img_write(a, f, NULL));
+    MR_CHECK_OK(mr_img_write(b, f, &(mr_img_write_options){MR_IMG_DATA, 16, 0}));
+    for (int threads = 0; threads <= 2; threads++) {
+        mr_img_param_map maps[3] = {{.path = a, .param = colour, .how = MR_MAP_AS_PARAMETER},
+                                    {.path = NULL, .param = rough, .how = MR_MAP_AS_PARAMETER},
+                                    {.path = b, .param = rough, .how = MR_MAP_AS_PARAMETER}};
+        int failed = 7;
+        MR_CHECK_OK(mr_img_read_param_maps(maps, 3, NULL, threads, &failed));
+        MR_CHECK(failed == -1 && maps[1].image == NULL);
+        for (int k = 0; k < 3; k += 2) {
+            mr_image *one = NULL;
+            mr_img_stored stored;
+            MR_CHECK_OK(mr_img_read_param_map(maps[k].path, maps[k].param, maps[k].how, NULL, &one, &stored));
+            MR_CHECK(maps[k].image != NULL && one != NULL && maps[k].stored.bits == stored.bits &&
+                     memcmp(maps[k].image->pixels, one->pixels,
+                            (size_t)F_W * F_H * (size_t)one->channels * sizeof(float)) == 0);
+            mr_image_free(one);
+        }
+        MR_CHECK(maps[0].stored.bits == 8 && maps[2].stored.bits == 16);
+        for (int k = 0; k < 3; k++) mr_image_free(maps[k].image);
+    }
+    // A missing file and an unknown encoding: the first in order is reported; the others are read.
+    mr_img_param_map bad[3] = {{.path = a, .param = colour, .how = MR_MAP_AS_PARAMETER},
+                               {.path = mr_test_tmp_path("maps_missing.png"), .param = rough},
+                               {.path = b, .param = rough, .how = MR_MAP_ENCODING_COUNT}};
+    int failed = -1;
+    MR_CHECK(mr_img_read_param_maps(bad, 3, NULL, 2, &failed) == MR_ERR_IO && failed == 1);
+    MR_CHECK_MSG(strstr(mr_last_error(), "maps_missing.png") != NULL, "%s", mr_last_error());
+    MR_CHECK(bad[0].image != NULL && bad[1].image == NULL && bad[2].image == NULL);
+    for (int k = 0; k < 3; k++) mr_image_free(bad[k].image);
+    mr_image_free(f);
+}
+
+/* mr_img_read_texture_set: one size (constants broadcast), a grey map's file grey, a packed map's channels; the first
+ * problem in order refused, naming the map by its label. */
+MR_TEST(texture_sets_are_read_and_checked) {
+    const mr_brdf_model *gltf = mr_brdf_find("gltf");
+    const mr_brdf_param *colour = &gltf->params[mr_brdf_param_index(gltf, "base_color")];
+    const mr_brdf_param *rough = &gltf->params[mr_brdf_param_index(gltf, "roughness")];
+    mr_image *rgb = make_f(3, 1.0f), *grey1 = make_f(1, 0.5f), *small = NULL;
+    MR_CHECK_OK(mr_image_create(2, 2, 1, &small));
+    char c[600], g[600], s[600];
+    snprintf(c, sizeof c, "%s", mr_test_tmp_path("set_colour.png"));
+    snprintf(g, sizeof g, "%s", mr_test_tmp_path("set_grey.png"));
+    snprintf(s, sizeof s, "%s", mr_test_tmp_path("set_small.png"));
+    MR_CHECK_OK(mr_img_write(c, rgb, NULL));
+    MR_CHECK_OK(mr_img_write(g, grey1, &(mr_img_write_options){MR_IMG_DATA, 0, 0}));
+    MR_CHECK_OK(mr_img_write(s, small, &(mr_img_write_options){MR_IMG_DATA, 0, 0}));
+    // A colour map, a constant and a grey map: read, the set's size is the files'.
+    mr_img_param_map ok[3] = {{c, colour, MR_MAP_AS_PARAMETER, NULL, {0}, "--basecolor c", 0, NULL, 0, NULL},
+                              {NULL, rough, MR_MAP_AS_PARAMETER, NULL, {0}, "--metallic 0.5", 0, NULL, 1, NULL},
+                              {g, rough, MR_MAP_AS_PARAMETER, NULL, {0}, "--roughness g", 0, NULL, 1, NULL}};
+    int width = 0, height = 0, failed = 7;
+    MR_CHECK_OK(mr_img_read_texture_set(ok, 3, NULL, 0, &width, &height, &failed));
+    MR_CHECK(width == F_W && height == F_H && failed == -1 && ok[0].image && !ok[1].image && ok[2].image);
+    for (int k = 0; k < 3; k++) mr_image_free(ok[k].image);
+    // Constants only: one texel.
+    mr_img_param_map constant = {NULL, rough, MR_MAP_AS_PARAMETER, NULL, {0}, NULL, 0, NULL, 0, NULL};
+    MR_CHECK_OK(mr_img_read_texture_set(&constant, 1, NULL, 0, &width, &height, NULL));
+    MR_CHECK(width == 1 && height == 1);
+    // A colour file where a grey one is expected, the hint appended.
+    mr_img_param_map colour_grey[2] = {{c, colour, MR_MAP_AS_PARAMETER, NULL, {0}, "--diffuse c", 0, NULL, 0, NULL},
+                                       {c, rough, MR_MAP_AS_PARAMETER, NULL, {0}, "--glossiness c", 0, NULL, 1,
+                                        " (a hint)"}};
+    MR_CHECK(mr_img_read_texture_set(colour_grey, 2, NULL, 2, NULL, NULL, &failed) == MR_ERR_INVALID_ARG);
+    MR_CHECK(failed == 1 && colour_grey[1].image != NULL);
+    MR_CHECK_MSG(strstr(mr_last_error(), "--glossiness c is a colour image (pixel 0, 0 is") != NULL &&
+                     strstr(mr_last_error(), "expected one channel, or grey (a hint)") != NULL,
+                 "%s", mr_last_error());
+    for (int k = 0; k < 2; k++) mr_image_free(colour_grey[k].image);
+    // A packed map lacking its channels; two sizes.
+    mr_img_param_map packed = {g, rough, MR_MAP_AS_PARAMETER, NULL, {0}, "--mr g", 3, "RGB: G, B", 0, NULL};
+    MR_CHECK(mr_img_read_texture_set(&packed, 1, NULL, 0, NULL, NULL, &failed) == MR_ERR_INVALID_ARG && failed == 0);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "--mr g has one channel; expected RGB: G, B") == 0, "%s", mr_last_error());
+    mr_image_free(packed.image);
+    mr_img_param_map sizes[2] = {{g, rough, MR_MAP_AS_PARAMETER, NULL, {0}, "--a g", 0, NULL, 1, NULL},
+                                 {s, rough, MR_MAP_AS_PARAMETER, NULL, {0}, NULL, 0, NULL, 1, NULL}};
+    MR_CHECK(mr_img_read_texture_set(sizes, 2, NULL, 0, NULL, NULL, &failed) == MR_ERR_INVALID_ARG && failed == 1);
+    MR_CHECK_MSG(strstr(mr_last_error(), "set_small.png' is 2x2 but --a g is 6x5: maps must have the same size") !=
+                     NULL, "%s", mr_last_error());
+    for (int k = 0; k < 2; k++) mr_image_free(sizes[k].image);
+    mr_image_free(rgb);
+    mr_image_free(grey1);
+    mr_image_free(small);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(openimageio_module_loads_first), MR_TEST_ENTRY(srgb_transfer_functions),
              MR_TEST_ENTRY(png8_rgb_round_trip), MR_TEST_ENTRY(png16_rgb_round_trip),
              MR_TEST_ENTRY(large_integer_round_trips), MR_TEST_ENTRY(png_data_encoding_is_linear),
@@ -1378,4 +1546,6 @@ MR_TEST_MAIN(MR_TEST_ENTRY(openimageio_module_loads_first), MR_TEST_ENTRY(srgb_t
              MR_TEST_ENTRY(written_files_have_ordinary_permissions), MR_TEST_ENTRY(concurrent_writes_and_reads),
              MR_TEST_ENTRY(bad_inputs_give_clear_errors), MR_TEST_ENTRY(library_prints_nothing),
              MR_TEST_ENTRY(read_stored_says_how_the_file_stored_its_samples),
-             MR_TEST_ENTRY(half_step_is_half_a_code_value), MR_TEST_ENTRY(parameter_maps_follow_one_rule))
+             MR_TEST_ENTRY(half_step_is_half_a_code_value), MR_TEST_ENTRY(parameter_maps_follow_one_rule),
+             MR_TEST_ENTRY(image_sets_are_written_all_or_none), MR_TEST_ENTRY(parameter_maps_read_side_by_side),
+             MR_TEST_ENTRY(texture_sets_are_read_and_checked))

@@ -224,9 +224,209 @@ MR_TEST(maps_convert_texel_by_texel) {
     mr_transform_free(t);
 }
 
+/* Flags counted by reason, and drawn in each code: the workflow code paints a texel's most severe flag, the learned
+ * code one channel per kind of reason; clean texels are black. */
+MR_TEST(flags_counted_and_drawn_by_their_code) {
+    const uint8_t flags[6] = {0, MR_WF_CLAMPED_INPUT, MR_WF_NONFINITE_INPUT | MR_WF_METHOD_FAILED, MR_WF_OFF_MANIFOLD,
+                              MR_WF_EXTRAPOLATED | MR_WF_CLAMPED_OUTPUT, MR_WF_UNCONVERGED | MR_WF_CLAMPED_INPUT};
+    const unsigned reasons[4] = {MR_WF_CLAMPED_INPUT, MR_WF_NONFINITE_INPUT | MR_WF_OFF_MANIFOLD, 0xFFu,
+                                 MR_WF_UNCHECKED};
+    size_t counts[4] = {9, 9, 9, 9};
+    mr_flags_count(flags, 6, reasons, 4, counts);
+    MR_CHECK(counts[0] == 2 && counts[1] == 2 && counts[2] == 5 && counts[3] == 0);
+    mr_flags_count(NULL, 6, reasons, 4, counts);
+    MR_CHECK(counts[0] == 0 && counts[2] == 0);
+
+    static const float workflow[6][3] = {{0, 0, 0}, {0, 0.5f, 1}, {1, 0, 0}, {1, 0.5f, 0}, {0, 0, 0}, {0, 0.5f, 1}};
+    static const float learned[6][3] = {{0, 0, 0}, {0, 0, 1}, {0, 0, 1}, {0, 0, 0}, {1, 1, 0}, {1, 0, 1}};
+    const mr_flag_code *codes[2] = {&mr_workflow_flag_code, &mr_learned_flag_code};
+    const float (*expected[2])[3] = {workflow, learned};
+    for (int c = 0; c < 2; c++) {
+        mr_image *picture = NULL;
+        MR_CHECK_OK(mr_flag_picture(flags, 3, 2, codes[c], &picture));
+        MR_CHECK(picture->width == 3 && picture->height == 2 && picture->channels == 3);
+        for (int i = 0; i < 6; i++)
+            MR_CHECK_MSG(memcmp(picture->pixels + 3 * i, expected[c][i], sizeof expected[c][i]) == 0,
+                         "code %d, texel %d: %g %g %g", c, i, picture->pixels[3 * i], picture->pixels[3 * i + 1],
+                         picture->pixels[3 * i + 2]);
+        mr_image_free(picture);
+    }
+    mr_image *none = NULL;
+    MR_CHECK(mr_flag_picture(NULL, 3, 2, &mr_workflow_flag_code, &none) == MR_ERR_INVALID_ARG && none == NULL);
+}
+
+/* mr_image_pack copies channels as they are (glTF's metallicRoughness: R fill, G roughness, B metallic);
+ * mr_image_with_alpha appends a 4-channel source's alpha to an RGB image, and is the image itself otherwise. */
+MR_TEST(outputs_packed_channel_by_channel) {
+    mr_image *metallic = NULL, *roughness = NULL, *rgb = NULL, *rgba = NULL, *packed = NULL, *with = NULL;
+    MR_CHECK_OK(mr_image_create(2, 1, 1, &metallic));
+    MR_CHECK_OK(mr_image_create(2, 1, 1, &roughness));
+    MR_CHECK_OK(mr_image_create(2, 1, 3, &rgb));
+    MR_CHECK_OK(mr_image_create(2, 1, 4, &rgba));
+    for (int i = 0; i < 2; i++) {
+        metallic->pixels[i] = 0.25f + (float)i;
+        roughness->pixels[i] = -0.5f - (float)i; // values are copied, never clamped
+        for (int c = 0; c < 3; c++) rgb->pixels[3 * i + c] = 0.1f * (float)(c + 3 * i);
+        for (int c = 0; c < 4; c++) rgba->pixels[4 * i + c] = 0.7f + 0.01f * (float)(c + 4 * i);
+    }
+    const mr_image_channel mr[3] = {{NULL, 0}, {roughness, 0}, {metallic, 0}};
+    MR_CHECK_OK(mr_image_pack(2, 1, 3, mr, 0.0f, &packed));
+    for (int i = 0; i < 2; i++)
+        MR_CHECK(packed->pixels[3 * i] == 0.0f && packed->pixels[3 * i + 1] == roughness->pixels[i] &&
+                 packed->pixels[3 * i + 2] == metallic->pixels[i]);
+    MR_CHECK_OK(mr_image_with_alpha(rgb, rgba, &with));
+    MR_CHECK(with != rgb && with->channels == 4);
+    for (int i = 0; i < 2; i++)
+        MR_CHECK(memcmp(with->pixels + 4 * i, rgb->pixels + 3 * i, 3 * sizeof(float)) == 0 &&
+                 with->pixels[4 * i + 3] == rgba->pixels[4 * i + 3]);
+    mr_image_free(with);
+    MR_CHECK_OK(mr_image_with_alpha(rgb, NULL, &with));
+    MR_CHECK(with == rgb);
+    MR_CHECK_OK(mr_image_with_alpha(metallic, rgba, &with));
+    MR_CHECK(with == metallic);
+    const mr_image_channel missing[1] = {{rgb, 3}};
+    mr_image *none = NULL;
+    MR_CHECK(mr_image_pack(2, 1, 1, missing, 0.0f, &none) == MR_ERR_INVALID_ARG && none == NULL);
+    mr_image_free(packed);
+    mr_image_free(metallic);
+    mr_image_free(roughness);
+    mr_image_free(rgb);
+    mr_image_free(rgba);
+}
+
+/* mr_transform_convert_texture_set: files read by the one rule, a constant broadcast, the slots fed (a roughness map
+ * complemented into glossiness), packed as glTF does with the diffuse's alpha carried; the same values as the steps
+ * taken one by one. A map refused names itself (failed_map, failed_reading). */
+MR_TEST(texture_sets_convert_in_one_call) {
+    const mr_brdf_model *sg = mr_brdf_find("gltf-specgloss"), *gltf = mr_brdf_find("gltf");
+    const mr_brdf_param *diffuse_param = &sg->params[mr_brdf_param_index(sg, "diffuse")];
+    const mr_brdf_param *rough_param = &gltf->params[mr_brdf_param_index(gltf, "roughness")];
+    mr_image *diffuse = NULL, *rough = NULL;
+    MR_CHECK_OK(mr_image_create(3, 2, 4, &diffuse));
+    MR_CHECK_OK(mr_image_create(3, 2, 1, &rough));
+    for (int k = 0; k < 24; k++) diffuse->pixels[k] = (float)(k % 5) / 5.0f;
+    for (int k = 0; k < 6; k++) rough->pixels[k] = (float)k / 5.0f;
+    char d[600], r[600];
+    snprintf(d, sizeof d, "%s", mr_test_tmp_path("set_diffuse.png"));
+    snprintf(r, sizeof r, "%s", mr_test_tmp_path("set_rough.png"));
+    MR_CHECK_OK(mr_img_write(d, diffuse, NULL));
+    MR_CHECK_OK(mr_img_write(r, rough, &(mr_img_write_options){MR_IMG_DATA, 0, 0}));
+    mr_transform *t = NULL;
+    MR_CHECK_OK(mr_transform_create(mr_transform_find("gltf-specgloss", "gltf", "weighted"), NULL, &t));
+    if (t == NULL) return;
+
+    mr_img_param_map maps[3] = {{.path = d, .param = diffuse_param, .label = "--diffuse d"},
+                                {.path = NULL, .label = "--specular 0.04"},
+                                {.path = r, .param = rough_param, .label = "--roughness r", .grey = 1}};
+    const double constants[3][3] = {{0, 0, 0}, {0.04, 0.04, 0.04}, {0, 0, 0}};
+    const mr_texture_source inputs[3] = {{0, -1, 0}, {1, -1, 0}, {2, 0, 1}};
+    const mr_texture_layout packed[2] = {
+        {"basecolor", MR_IMG_COLOR, 4, {0, 0, 0, MR_LAYOUT_ALPHA}, {0, 1, 2, 0}},
+        {"metallicRoughness", MR_IMG_DATA, 3, {MR_LAYOUT_ZERO, 2, 1}, {0, 0, 0}}};
+    const mr_texture_set set = {maps, constants, 3, inputs, 0, packed, 2, 0};
+    mr_texture_result result;
+    MR_CHECK_OK(mr_transform_convert_texture_set(t, &set, &result));
+    MR_CHECK(result.width == 3 && result.height == 2 && result.flags != NULL && maps[0].image == NULL);
+
+    // The steps one by one.
+    mr_image *d_read = NULL, *r_read = NULL, *out[3] = {NULL, NULL, NULL};
+    mr_img_stored d_stored, r_stored;
+    MR_CHECK_OK(mr_img_read_param_map(d, diffuse_param, MR_MAP_AS_PARAMETER, NULL, &d_read, &d_stored));
+    MR_CHECK_OK(mr_img_read_param_map(r, rough_param, MR_MAP_AS_PARAMETER, NULL, &r_read, &r_stored));
+    mr_transform_map in[3] = {{d_read, 0, 0, {0, 0, 0}, mr_wf_quantisation_of(&d_stored, NULL)},
+                              {NULL, 0, 0, {0.04, 0.04, 0.04}, mr_wf_quantisation_of(NULL, NULL)},
+                              {r_read, 0, 1, {0, 0, 0}, mr_wf_quantisation_of(&r_stored, NULL)}};
+    uint8_t *flags = NULL;
+    MR_CHECK_OK(mr_transform_convert_maps(t, in, out, &flags));
+    if (out[0] != NULL && result.outputs[0] != NULL && result.outputs[1] != NULL) {
+        MR_CHECK(result.outputs[0]->channels == 4 && result.outputs[1]->channels == 3);
+        for (int k = 0; k < 6; k++) {
+            MR_CHECK(memcmp(result.outputs[0]->pixels + 4 * k, out[0]->pixels + 3 * k, 3 * sizeof(float)) == 0);
+            MR_CHECK(result.outputs[0]->pixels[4 * k + 3] == d_read->pixels[4 * k + 3]);
+            MR_CHECK(result.outputs[1]->pixels[3 * k] == 0.0f);
+            MR_CHECK(result.outputs[1]->pixels[3 * k + 1] == out[2]->pixels[k]);
+            MR_CHECK(result.outputs[1]->pixels[3 * k + 2] == out[1]->pixels[k]);
+            MR_CHECK(result.flags[k] == flags[k]);
+            MR_CHECK(memcmp(result.converted[0]->pixels + 3 * k, out[0]->pixels + 3 * k, 3 * sizeof(float)) == 0);
+        }
+    }
+    mr_texture_result_free(&result);
+    MR_CHECK(result.outputs[0] == NULL && result.flags == NULL);
+    for (int j = 0; j < 3; j++) mr_image_free(out[j]);
+    free(flags);
+
+    // A colour file where a grey one is expected: refused by its label, read but checked.
+    maps[2].path = d;
+    MR_CHECK(mr_transform_convert_texture_set(t, &set, &result) == MR_ERR_INVALID_ARG);
+    MR_CHECK(result.failed_map == 2 && !result.failed_reading && maps[2].image == NULL);
+    MR_CHECK_MSG(strstr(mr_last_error(), "--roughness r is a colour image") != NULL, "%s", mr_last_error());
+    // A missing file: its read failed.
+    maps[2].path = mr_test_tmp_path("set_missing.png");
+    MR_CHECK(mr_transform_convert_texture_set(t, &set, &result) == MR_ERR_IO);
+    MR_CHECK(result.failed_map == 2 && result.failed_reading && result.outputs[0] == NULL);
+    mr_image_free(d_read);
+    mr_image_free(r_read);
+    mr_image_free(diffuse);
+    mr_image_free(rough);
+    mr_transform_free(t);
+}
+
+/* mr_transform_convert_material: each slot reads its parameter's bound map or value, as mr_transform_convert_maps
+ * would be fed by hand; an RGB output carries the first 4-channel map's alpha; a material of another model is
+ * refused. */
+MR_TEST(materials_convert_in_one_call) {
+    const mr_brdf_model *sg = mr_brdf_find("gltf-specgloss");
+    mr_material *m = NULL;
+    MR_CHECK_OK(mr_material_create(sg, &m));
+    mr_image *diffuse = NULL, *gloss = NULL;
+    MR_CHECK_OK(mr_image_create(2, 2, 4, &diffuse));
+    MR_CHECK_OK(mr_image_create(2, 2, 1, &gloss));
+    for (int k = 0; k < 16; k++) diffuse->pixels[k] = 0.05f * (float)(k + 1);
+    for (int k = 0; k < 4; k++) gloss->pixels[k] = 0.2f * (float)(k + 1);
+    const int spec_at = mr_brdf_param_offset(sg, mr_brdf_param_index(sg, "specular"));
+    for (int c = 0; c < 3; c++) m->values[spec_at + c] = 0.04 + 0.01 * c;
+    mr_transform_map in[3] = {{diffuse, 0, 0, {0, 0, 0}, {0}},
+                              {NULL, 0, 0, {0.04, 0.05, 0.06}, {0}},
+                              {gloss, 0, 0, {0, 0, 0}, {0}}};
+    mr_transform *t = NULL;
+    MR_CHECK_OK(mr_transform_create(mr_transform_find("gltf-specgloss", "gltf", "weighted"), NULL, &t));
+    mr_image *by_hand[3] = {NULL, NULL, NULL}, *out[3] = {NULL, NULL, NULL};
+    uint8_t *hand_flags = NULL, *flags = NULL;
+    MR_CHECK_OK(mr_transform_convert_maps(t, in, by_hand, &hand_flags));
+    MR_CHECK_OK(mr_material_add_map(m, "diffuse", diffuse, 0, "diffuse", NULL)); // m owns them now
+    MR_CHECK_OK(mr_material_add_map(m, "glossiness", gloss, 0, "glossiness", NULL));
+    MR_CHECK_OK(mr_transform_convert_material(t, m, out, &flags));
+    if (out[0] != NULL && by_hand[0] != NULL) {
+        MR_CHECK(out[0]->channels == 4 && out[1]->channels == 1 && out[2]->channels == 1);
+        for (int k = 0; k < 4; k++) {
+            MR_CHECK(memcmp(out[0]->pixels + 4 * k, by_hand[0]->pixels + 3 * k, 3 * sizeof(float)) == 0);
+            MR_CHECK(out[0]->pixels[4 * k + 3] == diffuse->pixels[4 * k + 3]);
+            MR_CHECK(out[1]->pixels[k] == by_hand[1]->pixels[k] && out[2]->pixels[k] == by_hand[2]->pixels[k]);
+            MR_CHECK(flags[k] == hand_flags[k]);
+        }
+    }
+    for (int j = 0; j < 3; j++) {
+        mr_image_free(out[j]);
+        mr_image_free(by_hand[j]);
+        out[j] = NULL;
+    }
+    free(flags);
+    free(hand_flags);
+    mr_material *other = NULL;
+    MR_CHECK_OK(mr_material_create(mr_brdf_find("gltf"), &other));
+    MR_CHECK(mr_transform_convert_material(t, other, out, NULL) == MR_ERR_INVALID_ARG && out[0] == NULL);
+    mr_material_free(other);
+    mr_material_free(m);
+    mr_transform_free(t);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(kinds_name_model_parameters),
              MR_TEST_ENTRY(repeated_values_give_the_per_texel_bits),
              MR_TEST_ENTRY(extension_route_moves_values),
              MR_TEST_ENTRY(eq2_and_eq3_invert_each_other),
              MR_TEST_ENTRY(bad_options_are_refused),
-             MR_TEST_ENTRY(maps_convert_texel_by_texel))
+             MR_TEST_ENTRY(maps_convert_texel_by_texel),
+             MR_TEST_ENTRY(flags_counted_and_drawn_by_their_code),
+             MR_TEST_ENTRY(outputs_packed_channel_by_channel),
+             MR_TEST_ENTRY(texture_sets_convert_in_one_call),
+             MR_TEST_ENTRY(materials_convert_in_one_call))

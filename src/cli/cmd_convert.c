@@ -1,14 +1,14 @@
 /*
  * cmd_convert.c — `matremap convert`: texture maps (or constants) of one BRDF model's parameters converted to
  * another model's, per texel, through learned transforms (one, a chain given or found), through the library's
- * texture-set conversion (mr_transform_convert_maps); see docs/learn.md.
+ * conversion of a material (mr_transform_convert_material); the outputs and the flag picture (mr_flag_picture,
+ * mr_learned_flag_code) written all or none (mr_img_write_set); see docs/learn.md.
  */
 #include <dirent.h>
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include "cli.h"
@@ -168,71 +168,6 @@ static int load_dir(loaded *l, const char *dir) {
         fprintf(stderr, "matremap convert: error: --transforms '%s': no *.mrt files there\n", dir);
         code = CLI_EXIT_BAD_INPUT;
     }
-    return code;
-}
-
-/* out[j] with the alpha of `alpha_source` appended when it has one (RGB outputs only); else out[j] itself. */
-static mr_status with_alpha(mr_image *rgb, const mr_image *alpha_source, mr_image **out) {
-    *out = rgb;
-    if (alpha_source == NULL || rgb->channels != 3) return MR_OK;
-    mr_image *rgba = NULL;
-    mr_status status = mr_image_create(rgb->width, rgb->height, 4, &rgba);
-    if (status != MR_OK) return status;
-    const size_t n = (size_t)rgb->width * (size_t)rgb->height;
-    for (size_t i = 0; i < n; i++) {
-        memcpy(rgba->pixels + 4 * i, rgb->pixels + 3 * i, 3 * sizeof *rgba->pixels);
-        rgba->pixels[4 * i + 3] = alpha_source->pixels[i * 4 + 3];
-    }
-    *out = rgba;
-    return MR_OK;
-}
-
-/* Write images[k] to names[k] (k < count), all or none: each into a hidden temporary file beside its target
- * ("DIR/.matremap-PID-NAME", the extension kept for the writer), then all renamed into place once every one is
- * written. A failure before the renames removes the temporary files and leaves the targets as they were (the
- * folders of PREFIX were made by cli_io_check); a target that is a folder is refused before anything is
- * written, so the renames (within one folder) fail only on an I/O error, and then the outputs already renamed are
- * removed too (as cli_outputs_commit does): none of the set, rather than a mixed one. Returns an exit code (messages
- * printed). */
-static int stage_outputs(const char *prefix, const char (*names)[4096], mr_image *const *images,
-                         const mr_img_write_options *options, int count) {
-    char (*temps)[4096 + 64] = calloc((size_t)count, sizeof *temps);
-    if (temps == NULL) {
-        fprintf(stderr, "matremap convert: error: out of memory\n");
-        return CLI_EXIT_INTERNAL;
-    }
-    for (int k = 0; k < count; k++) {
-        struct stat st;
-        if (stat(names[k], &st) == 0 && S_ISDIR(st.st_mode)) {
-            fprintf(stderr, "matremap convert: error: output '%s' (-o %s) is a folder\n", names[k], prefix);
-            free(temps);
-            return CLI_EXIT_BAD_INPUT;
-        }
-        const char *slash = strrchr(names[k], '/');
-        const int head = slash ? (int)(slash - names[k]) + 1 : 0;
-        snprintf(temps[k], sizeof temps[k], "%.*s.matremap-%ld-%s", head, names[k], (long)getpid(), names[k] + head);
-    }
-    int code = CLI_EXIT_OK;
-    for (int k = 0; k < count && code == CLI_EXIT_OK; k++) {
-        mr_status status = mr_img_write(temps[k], images[k], &options[k]);
-        if (status != MR_OK) { // the message names the temporary file: say which output it was
-            fprintf(stderr, "matremap convert: error: writing '%s': %s\n", names[k], mr_last_error());
-            code = cli_exit_code(status);
-        }
-    }
-    for (int k = 0; code == CLI_EXIT_OK && k < count; k++)
-        if (rename(temps[k], names[k]) != 0) {
-            // Leave none of this run's outputs: a set half replaced would not belong together (faults.sh found
-            // the first maps left when a later rename failed).
-            const int renamed = k;
-            fprintf(stderr, "matremap convert: error: cannot rename '%s' to '%s': %s%s\n", temps[k], names[k],
-                    strerror(errno), renamed ? " (the outputs renamed before it removed)" : "");
-            for (int j = 0; j < renamed; j++) remove(names[j]);
-            code = CLI_EXIT_BAD_INPUT;
-        }
-    if (code != CLI_EXIT_OK)
-        for (int k = 0; k < count; k++) unlink(temps[k]); // the renamed ones are gone already
-    free(temps);
     return code;
 }
 
@@ -519,74 +454,45 @@ int cmd_convert(int argc, char **argv) {
         status = mr_transform_create(kind, &topts, &t);
         if (status != MR_OK) code = cli_fail(COMMAND, status);
     }
-    mr_transform_map in[MR_TRANSFORM_MAX_SLOTS];
-    mr_image *out[MR_TRANSFORM_MAX_SLOTS] = {NULL};
+    mr_image *out[MR_TRANSFORM_MAX_SLOTS] = {NULL}; // RGB outputs carry the first map's alpha
     uint8_t *flags = NULL;
-    const mr_image *alpha_source = NULL;
-    int any_map = 0;
-    for (int p = 0; code == CLI_EXIT_OK && p < source->param_count; p++) {
-        const int at = mr_brdf_param_offset(source, p);
-        in[p] = (mr_transform_map){NULL, 0, 0, {m->values[at], m->values[at], m->values[at]}, {0}};
-        if (source->params[p].channels == 3)
-            for (int c = 0; c < 3; c++) in[p].value[c] = m->values[at + c];
-        for (int k = 0; k < m->map_count; k++) // the last map of a parameter is the one bound
-            if (m->maps[k].param == p) {
-                in[p].image = m->maps[k].image;
-                in[p].channel = m->maps[k].channel;
-            }
-        if (in[p].image != NULL) {
-            any_map = 1;
-            if (alpha_source == NULL && in[p].image->channels == 4) alpha_source = in[p].image;
-        }
-    }
+    const int any_map = code == CLI_EXIT_OK && m->map_count > 0;
     double convert_seconds = 0.0;
     if (code == CLI_EXIT_OK) {
         const double t0 = cli_now();
-        status = mr_transform_convert_maps(t, in, out, &flags);
+        status = mr_transform_convert_material(t, m, out, &flags);
         convert_seconds = cli_now() - t0;
         if (progress.draw && direct) fprintf(stderr, "\r\033[K");
         if (status != MR_OK) code = cli_fail(COMMAND, status);
     }
     // extrapolated or unconverged, clamped output, clamped input, any flag, by a transform that failed its check
     // (the flag map's red is the first or the last)
+    static const unsigned reasons[5] = {MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED, MR_WF_CLAMPED_OUTPUT,
+                                        MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT, 0xFFu, MR_WF_UNCHECKED};
     size_t n = 0, counts[5] = {0};
     int width = 0, height = 0;
     if (code == CLI_EXIT_OK) {
         width = out[0]->width;
         height = out[0]->height;
         n = (size_t)width * (size_t)height;
-        for (size_t i = 0; i < n; i++) {
-            counts[0] += (flags[i] & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED)) != 0;
-            counts[1] += (flags[i] & MR_WF_CLAMPED_OUTPUT) != 0;
-            counts[2] += (flags[i] & (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT)) != 0;
-            counts[3] += flags[i] != 0;
-            counts[4] += (flags[i] & MR_WF_UNCHECKED) != 0;
-        }
+        mr_flags_count(flags, n, reasons, 5, counts);
     }
-    // Write: every output, then the flag map, all or none (stage_outputs).
+    // Write: every output, then the flag map, all or none (mr_img_write_set).
     if (code == CLI_EXIT_OK && any_map) {
-        mr_image *images[MR_TRANSFORM_MAX_SLOTS + 1] = {NULL};
-        mr_img_write_options options[MR_TRANSFORM_MAX_SLOTS + 1];
-        for (int j = 0; status == MR_OK && j <= out_count; j++) {
-            options[j] = (mr_img_write_options){MR_IMG_DATA, 0, 0};
-            if (j < out_count) {
-                status = with_alpha(out[j], alpha_source, &images[j]);
-                // The rule maps are read by, so a PNG output reads back as written.
-                options[j].encoding = mr_brdf_param_map_encoding(&target->params[j], MR_MAP_AS_PARAMETER);
-                continue;
-            }
-            status = mr_image_create(width, height, 3, &images[j]);
-            for (size_t i = 0; status == MR_OK && i < n; i++) {
-                float *px = images[j]->pixels + 3 * i;
-                px[0] = (flags[i] & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED | MR_WF_UNCHECKED)) ? 1.0f : 0.0f;
-                px[1] = (flags[i] & MR_WF_CLAMPED_OUTPUT) ? 1.0f : 0.0f;
-                px[2] = (flags[i] & (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT)) ? 1.0f : 0.0f;
-            }
-        }
-        code = status == MR_OK ? stage_outputs(prefix, (const char(*)[4096])names, images, options, out_count + 1)
-                               : cli_fail(COMMAND, status);
-        for (int j = 0; j <= out_count; j++)
-            if (images[j] != (j < out_count ? out[j] : NULL)) mr_image_free(images[j]);
+        mr_image *picture = NULL;
+        mr_img_set_item items[MR_TRANSFORM_MAX_SLOTS + 1];
+        char label[4096 + 8];
+        snprintf(label, sizeof label, "-o %s", prefix);
+        // The rule maps are read by, so a PNG output reads back as written.
+        for (int j = 0; j < out_count; j++)
+            items[j] = (mr_img_set_item){names[j], label, out[j],
+                                         {mr_brdf_param_map_encoding(&target->params[j], MR_MAP_AS_PARAMETER), 0, 0}};
+        status = mr_flag_picture(flags, width, height, &mr_learned_flag_code, &picture);
+        items[out_count] = (mr_img_set_item){names[out_count], label, picture, {MR_IMG_DATA, 0, 0}};
+        mr_img_set_options set_options = {threads};
+        if (status == MR_OK) status = mr_img_write_set(items, out_count + 1, &set_options, NULL);
+        code = status == MR_OK ? CLI_EXIT_OK : cli_fail(COMMAND, status);
+        mr_image_free(picture);
     }
     const double seconds = cli_now() - started;
     const mr_direct_summary *ds = direct && code == CLI_EXIT_OK ? mr_direct_kind_summary(kind) : NULL;

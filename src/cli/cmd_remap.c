@@ -98,25 +98,20 @@ static const char *const picture_suffixes[3] = {"source.png", "target.png", "ssi
 /* Render the source's and target's full images and the SSIM map as pictures (--images). */
 static mr_status write_pictures(const char *prefix, const mr_render_plan *plan, const mr_image *source,
                                 const mr_brdf_model *target, const double *values) {
-    char path[4096];
     mr_image *target_image = NULL, *map = NULL, *picture = NULL;
     double ssim;
     mr_status status = mr_render(plan, target, values, MR_COMPONENT_FULL, &target_image);
     if (status == MR_OK) status = mr_ssim(source, target_image, NULL, &ssim, &map);
     if (status == MR_OK) status = mr_ssim_map_visualise(map, 0.0, &picture);
-    // The three belong together: when one cannot be written, those written before it are removed.
+    // The three belong together: written all or none (mr_img_write_set).
     const mr_image *pictures[3] = {source, target_image, picture};
-    int written = 0;
-    for (int k = 0; status == MR_OK && k < 3; k++) {
-        cli_output_name(path, sizeof path, prefix, picture_suffixes[k]);
-        status = mr_img_write(path, pictures[k], NULL);
-        written += status == MR_OK;
+    char paths[3][4096];
+    mr_img_set_item items[3];
+    for (int k = 0; k < 3; k++) {
+        cli_output_name(paths[k], sizeof paths[k], prefix, picture_suffixes[k]);
+        items[k] = (mr_img_set_item){paths[k], NULL, pictures[k], {MR_IMG_COLOR, 0, 0}};
     }
-    if (status != MR_OK)
-        for (int k = 0; k < written; k++) {
-            cli_output_name(path, sizeof path, prefix, picture_suffixes[k]);
-            remove(path);
-        }
+    if (status == MR_OK) status = mr_img_write_set(items, 3, NULL, NULL);
     mr_image_free(target_image);
     mr_image_free(map);
     mr_image_free(picture);

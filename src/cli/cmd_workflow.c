@@ -5,8 +5,10 @@
  *
  * One driver serves both directions (run_conversion), told by a `conversion` table which maps feed the
  * transform's input slots and how its output slots are packed into files. The steps: parse the maps (an image
- * file or a constant each), name the outputs and refuse any that is an input, read the files (one size; constants
- * broadcast), convert in one mr_transform_apply, write the outputs (all or none), print one summary line or JSON.
+ * file or a constant each), name the outputs and refuse any that is an input, then the library's texture-set
+ * conversion (mr_transform_convert_texture_set: read and check the files, one size, constants broadcast; convert;
+ * pack), write the outputs and the flag picture all or none (mr_img_write_set, mr_flag_picture), print one summary
+ * line or JSON.
  */
 #include <errno.h>
 #include <float.h>
@@ -18,9 +20,6 @@
 #include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 #include "cli.h"
 
@@ -49,8 +48,6 @@ typedef struct map_arg {
     mr_map_encoding how;      /* a file: the encoding it gives (MR_MAP_AS_PARAMETER when none) */
     int is_constant;
     double constant[3];       /* grey broadcast */
-    mr_image *image;          /* the file, once read */
-    mr_img_stored stored;     /* how the file stored its samples (spec2metal's tolerances) */
 } map_arg;
 
 static map_arg map_colour(const char *option, const char *model, const char *param) {
@@ -120,114 +117,19 @@ static int set_map(const char *command, map_arg *m, const char *text) {
 
 static int is_file(const map_arg *m) { return m->text != NULL && !m->is_constant; }
 
-/* Check a map's channels once its file is read. Returns an exit code (messages printed). */
-static int check_map(const char *command, const map_arg *m) {
-    const mr_image *im = m->image;
-    if (im == NULL) return CLI_EXIT_OK;
-    if (m->kind == MAP_PACKED && im->channels < m->min_channels) {
-        fprintf(stderr, "matremap %s: error: %s '%s' has %s; expected %s\n", command, m->option, m->text,
-                im->channels == 1 ? "one channel" : "no alpha channel", m->layout);
-        return CLI_EXIT_BAD_INPUT;
-    }
-    if (m->kind == MAP_DATA && im->channels >= 3) {
-        size_t n = (size_t)im->width * (size_t)im->height;
-        for (size_t i = 0; i < n; i++) {
-            const float *p = im->pixels + i * (size_t)im->channels;
-            if (p[0] != p[1] || p[0] != p[2]) {
-                fprintf(stderr, "matremap %s: error: %s '%s' is a colour image (pixel %zu, %zu is %g, %g, %g); "
-                        "expected one channel, or grey%s\n", command, m->option, m->text, i % (size_t)im->width,
-                        i / (size_t)im->width, p[0], p[1], p[2],
-                        strcmp(m->option, "--glossiness") == 0 ? " (an RGBA spec-gloss texture goes to "
-                                                                 "--specular-glossiness)" : "");
-                return CLI_EXIT_BAD_INPUT;
-            }
-        }
-    }
-    return CLI_EXIT_OK;
-}
-
-/* Threads for `jobs` files read or written side by side: no more than the files, nor than --threads (0: OpenMP's
- * default, which OMP_NUM_THREADS sets) allows. */
-static int file_team(int threads, int jobs) {
-#ifdef _OPENMP
-    const int allowed = threads > 0 ? threads : omp_get_max_threads();
-#else
-    const int allowed = 1;
-    (void)threads;
-#endif
-    return jobs < allowed ? jobs : allowed;
-}
-
-/* Read every map and check the files have one size; *width x *height is it (1 x 1 if all are constants). The
- * files are decoded in parallel (PNG decoding is a third of a 2048² conversion); the first failure in option order
- * is the one reported. */
-static int read_maps(const char *command, map_arg *const *maps, int count, int threads, int *width, int *height) {
-    mr_status statuses[MAX_MAPS];
-    char messages[MAX_MAPS][1024]; // mr_last_error() is per thread
-    const int team = file_team(threads, count);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(team) if (team > 1)
+/* The maps as the library's texture-set conversion takes them: each file's path, the parameter it holds (the one
+ * rule: the parameter's encoding, or the map's :linear or :srgb), what its file must be (a data map grey, a packed
+ * map's channels), its label for messages (labels[k]: "--glossiness 'g.png'") and its constant. */
+static void texture_maps(map_arg *const *maps, int count, mr_img_param_map *reads, char (*labels)[PATH_SIZE + 64],
+                         double (*constants)[3]) {
     for (int k = 0; k < count; k++) {
-        statuses[k] = MR_OK;
-        messages[k][0] = '\0';
-        if (!is_file(maps[k])) continue;
-        // The one rule for maps (the parameter's encoding, or the map's :linear or :srgb).
-        statuses[k] = mr_img_read_param_map(maps[k]->path, map_param(maps[k]), maps[k]->how, NULL, &maps[k]->image,
-                                            &maps[k]->stored);
-        if (statuses[k] != MR_OK) snprintf(messages[k], sizeof messages[k], "%s", mr_last_error());
-    }
-    const map_arg *first = NULL;
-    for (int k = 0; k < count; k++) {
-        if (statuses[k] == MR_ERR_INVALID_ARG && maps[k]->how == MR_MAP_SRGB) { // :srgb on a float file
-            char label[PATH_SIZE + 64];
-            snprintf(label, sizeof label, "%s %s", maps[k]->option, maps[k]->text);
-            return cli_usage_error(command, "'%s': %s", label, messages[k]);
-        }
-        if (statuses[k] != MR_OK) {
-            fprintf(stderr, "matremap %s: error: %s\n", command,
-                    messages[k][0] ? messages[k] : mr_status_str(statuses[k]));
-            return cli_exit_code(statuses[k]);
-        }
-        int code = check_map(command, maps[k]);
-        if (code != CLI_EXIT_OK) return code;
-        const mr_image *im = maps[k]->image;
-        if (im == NULL) continue;
-        if (first == NULL) {
-            first = maps[k];
-        } else if (im->width != first->image->width || im->height != first->image->height) {
-            fprintf(stderr, "matremap %s: error: %s '%s' is %dx%d but %s '%s' is %dx%d: maps must have the same "
-                    "size (constants broadcast)\n", command, maps[k]->option, maps[k]->text, im->width, im->height,
-                    first->option, first->text, first->image->width, first->image->height);
-            return CLI_EXIT_BAD_INPUT;
-        }
-    }
-    *width = first ? first->image->width : 1;
-    *height = first ? first->image->height : 1;
-    return CLI_EXIT_OK;
-}
-
-/* n texels of one channel of the map (a data map's first) or its constant. */
-static void fill_channel(const map_arg *m, int channel, size_t n, float *dst) {
-    const mr_image *im = m->image;
-    for (size_t i = 0; i < n; i++)
-        dst[i] = im ? im->pixels[i * (size_t)im->channels + (size_t)channel] : (float)m->constant[0];
-}
-
-/* The colour map's alpha (n values), or NULL when it has none (or on allocation failure: *failed is set). */
-static float *take_alpha(const map_arg *m, size_t n, int *failed) {
-    if (m->image == NULL || m->image->channels != 4) return NULL;
-    float *alpha = malloc(n * sizeof *alpha);
-    if (alpha == NULL) {
-        *failed = 1;
-        return NULL;
-    }
-    fill_channel(m, 3, n, alpha);
-    return alpha;
-}
-
-static void free_maps(map_arg *const *maps, int count) {
-    for (int k = 0; k < count; k++) {
-        mr_image_free(maps[k]->image);
-        maps[k]->image = NULL;
+        const map_arg *m = maps[k];
+        snprintf(labels[k], sizeof labels[k], "%s '%s'", m->option, m->text ? m->text : "");
+        reads[k] = (mr_img_param_map){is_file(m) ? m->path : NULL, map_param(m), m->how, NULL, {0}, labels[k],
+                                      m->kind == MAP_PACKED ? m->min_channels : 0, m->layout, m->kind == MAP_DATA,
+                                      strcmp(m->option, "--glossiness") == 0
+                                          ? " (an RGBA spec-gloss texture goes to --specular-glossiness)" : NULL};
+        memcpy(constants[k], m->constant, sizeof constants[k]);
     }
 }
 
@@ -235,8 +137,6 @@ static void free_maps(map_arg *const *maps, int count) {
 
 typedef struct output {
     char path[PATH_SIZE];
-    mr_image *image;
-    mr_img_encoding encoding;
 } output;
 
 /* The shared output options. */
@@ -299,110 +199,28 @@ static int plan_outputs(const char *command, out_options *o, map_arg *const *map
     return code;
 }
 
-static void free_outputs(output *outputs, int count) {
-    for (int k = 0; k < count; k++) {
-        mr_image_free(outputs[k].image);
-        outputs[k].image = NULL;
-    }
-}
-
-/* An image of `channels` channels whose channel c is planes[c] (n values each, or, when `stride` is 3, the
- * channel of 3-interleaved values at offsets[c]); a NULL plane is filled with `fill`. */
-typedef struct plane {
-    const float *values;
-    int stride, offset;
-} plane;
-
-static mr_status compose(int width, int height, int channels, const plane *planes, float fill, mr_image **out) {
-    mr_status status = mr_image_create(width, height, channels, out);
-    if (status != MR_OK) return status;
-    size_t n = (size_t)width * (size_t)height;
-    float *dst = (*out)->pixels;
-    for (int c = 0; c < channels; c++) {
-        const plane *p = &planes[c];
-        for (size_t i = 0; i < n; i++)
-            dst[i * (size_t)channels + (size_t)c] =
-                p->values ? p->values[i * (size_t)p->stride + (size_t)p->offset] : fill;
-    }
-    return MR_OK;
-}
-
-/* The false-colour flag map: black for a clean texel, else the colour of its most severe flag. */
-static const struct flag_colour {
-    unsigned flag;
-    float rgb[3];
-} flag_colours[] = {
-    {MR_WF_METHOD_FAILED, {1.0f, 0.0f, 0.0f}},   /* red */
-    {MR_WF_NONFINITE_INPUT, {1.0f, 0.0f, 1.0f}}, /* magenta */
-    {MR_WF_CLAMPED_INPUT, {0.0f, 0.5f, 1.0f}},   /* blue */
-    {MR_WF_OFF_MANIFOLD, {1.0f, 0.5f, 0.0f}},    /* orange */
-};
-
-static mr_status flag_picture(int width, int height, const uint8_t *flags, mr_image **out) {
-    mr_status status = mr_image_create(width, height, 3, out);
-    if (status != MR_OK) return status;
-    size_t n = (size_t)width * (size_t)height;
-    for (size_t i = 0; i < n; i++)
-        for (size_t k = 0; k < sizeof flag_colours / sizeof flag_colours[0]; k++)
-            if (flags[i] & flag_colours[k].flag) {
-                memcpy((*out)->pixels + 3 * i, flag_colours[k].rgb, sizeof flag_colours[k].rgb);
-                break;
-            }
-    return MR_OK;
-}
-
-/* Write the outputs and the flag map (if asked), all or none: when a write fails (the --flags directory does not
- * exist, a directory is in an output's way), the outputs this call did write are removed again, so a failed run
- * leaves no half set behind (a file one of them had replaced stays lost). The files are encoded in parallel
- * (PNG compression is most of a 2048² conversion's time; image_io is thread-safe); the first failure in output
- * order is the one reported. Returns an exit code (messages printed). */
-static int write_outputs(const char *command, const out_options *o, output *outputs, int count, int width,
-                         int height, const uint8_t *flags) {
-    struct write_job {
-        const char *path;
-        const mr_image *image;
-        mr_img_encoding encoding;
-        mr_status status;
-        char message[1024]; /* mr_last_error() is per thread: kept for the report */
-    } jobs[MAX_OUTPUTS + 1];
-    int job_count = 0;
+/* Write the outputs and the flag map (if asked), all or none (mr_img_write_set: each to a temporary beside it, all
+ * renamed into place once every one is written). Returns an exit code (messages printed). */
+static int write_outputs(const char *command, const out_options *o, const output *outputs,
+                         const mr_texture_layout *layouts, mr_image *const *images, int count, int width, int height,
+                         const uint8_t *flags) {
+    mr_img_set_item items[MAX_OUTPUTS + 1];
+    char label[PATH_SIZE + 8];
+    snprintf(label, sizeof label, "-o %s", o->prefix);
+    int item_count = 0;
     for (int k = 0; k < count; k++)
-        jobs[job_count++] = (struct write_job){outputs[k].path, outputs[k].image, outputs[k].encoding, MR_OK, ""};
+        items[item_count++] = (mr_img_set_item){outputs[k].path, label, images[k], {layouts[k].encoding, o->bits, 0}};
     mr_image *picture = NULL;
     if (o->flags_path != NULL) {
-        mr_status status = flag_picture(width, height, flags, &picture);
+        mr_status status = mr_flag_picture(flags, width, height, &mr_workflow_flag_code, &picture);
         if (status != MR_OK) return cli_fail(command, status);
-        // MR_IMG_DATA: the exact colours of flag_colours.
-        jobs[job_count++] = (struct write_job){o->flags_path, picture, MR_IMG_DATA, MR_OK, ""};
+        // MR_IMG_DATA: the exact colours of the code.
+        items[item_count++] = (mr_img_set_item){o->flags_path, "--flags", picture, {MR_IMG_DATA, 0, 0}};
     }
-    const int team = file_team(o->threads, job_count);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(team) if (team > 1)
-    for (int k = 0; k < job_count; k++) {
-        mr_img_write_options wo = {0};
-        wo.encoding = jobs[k].encoding;
-        wo.bits = jobs[k].image == picture ? 0 : o->bits;
-        jobs[k].status = mr_img_write(jobs[k].path, jobs[k].image, &wo);
-        if (jobs[k].status != MR_OK) snprintf(jobs[k].message, sizeof jobs[k].message, "%s", mr_last_error());
-    }
+    const mr_img_set_options set_options = {o->threads};
+    const mr_status status = mr_img_write_set(items, item_count, &set_options, NULL);
     mr_image_free(picture);
-    int first_failed = -1, written = 0;
-    for (int k = 0; k < job_count; k++) {
-        if (jobs[k].status == MR_OK)
-            written++;
-        else if (first_failed < 0)
-            first_failed = k;
-    }
-    if (first_failed < 0) return CLI_EXIT_OK;
-    const struct write_job *failure = &jobs[first_failed];
-    for (int k = 0; k < job_count; k++)
-        if (jobs[k].status == MR_OK) remove(jobs[k].path);
-    // One line: the failure, and what became of the outputs that were written.
-    fprintf(stderr, "matremap %s: error: %s", command,
-            failure->message[0] ? failure->message : mr_status_str(failure->status));
-    if (written > 0)
-        fprintf(stderr, " (the %d output%s written beside it removed)", written, written == 1 ? "" : "s");
-    fputc('\n', stderr);
-    return cli_exit_code(failure->status);
+    return status == MR_OK ? CLI_EXIT_OK : cli_fail(command, status);
 }
 
 /* ---- the summary ------------------------------------------------------------------------------------------- */
@@ -426,18 +244,13 @@ typedef struct summary {
     double eps;           /* spec2metal: the tolerance given by --eps */
 } summary;
 
-static size_t count_flag(const uint8_t *flags, size_t n, unsigned flag) {
-    size_t count = 0;
-    for (size_t i = 0; i < n; i++) count += (flags[i] & flag) != 0;
-    return count;
-}
-
 static void print_summary(const summary *s, const out_options *o, const output *outputs, int count) {
     size_t n = (size_t)s->width * (size_t)s->height;
-    size_t clamped = count_flag(s->flags, n, MR_WF_CLAMPED_INPUT);
-    size_t nonfinite = count_flag(s->flags, n, MR_WF_NONFINITE_INPUT);
-    size_t off = count_flag(s->flags, n, MR_WF_OFF_MANIFOLD);
-    size_t failed = count_flag(s->flags, n, MR_WF_METHOD_FAILED);
+    static const unsigned reasons[4] = {MR_WF_CLAMPED_INPUT, MR_WF_NONFINITE_INPUT, MR_WF_OFF_MANIFOLD,
+                                        MR_WF_METHOD_FAILED};
+    size_t counts[4];
+    mr_flags_count(s->flags, n, reasons, 4, counts);
+    const size_t clamped = counts[0], nonfinite = counts[1], off = counts[2], failed = counts[3];
     if (!o->json) {
         printf("matremap %s: %dx%d = %zu texel%s, method %s", s->command, s->width, s->height, n, n == 1 ? "" : "s",
                s->method);
@@ -701,32 +514,15 @@ static void print_spec2metal_help(void) {
 
 /* ---- one conversion, either direction ---------------------------------------------------------------------- */
 
-/* Where a transform input's values come from: map `map` (of the command's list), its colour channels (channel -1)
- * or one channel; complement: 1 - value (a roughness map for a glossiness slot). */
-typedef struct slot_source {
-    int map, channel, complement;
-} slot_source;
-
-/* One output file: its name, how it is encoded, and per channel the transform output slot (and that slot's
- * channel) written there; LAYOUT_ZERO writes 0, LAYOUT_ALPHA the first map's alpha (the channel exists only when
- * that map has one). */
-enum { LAYOUT_ZERO = -1, LAYOUT_ALPHA = -2 };
-typedef struct output_layout {
-    const char *name;
-    mr_img_encoding encoding;
-    int channels;
-    int slot[4], channel[4];
-} output_layout;
-
 /* What a command converts: the transform's models, its maps and how they feed the slots, its outputs. */
 typedef struct conversion {
     const char *command, *source, *target;
     map_arg *const *maps;
     int map_count;
-    slot_source inputs[3];
-    const output_layout *layouts; /* unpacked: one file per output slot (their names name the printed values) */
+    mr_texture_source inputs[3];      /* feeding the transform's input slots */
+    const mr_texture_layout *layouts; /* unpacked: one file per output slot (their names name the printed values) */
     int layout_count;
-    const output_layout *packed; /* --pack */
+    const mr_texture_layout *packed;  /* --pack */
     int packed_count;
 } conversion;
 
@@ -779,7 +575,7 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
                 kind->flags & MR_TRANSFORM_NEEDS_NETWORK ? hint : "");
         return cli_exit_code(status);
     }
-    const output_layout *layouts = o->pack ? cv->packed : cv->layouts;
+    const mr_texture_layout *layouts = o->pack ? cv->packed : cv->layouts;
     const int output_count = o->pack ? cv->packed_count : cv->layout_count;
     const char *names[MAX_OUTPUTS];
     for (int l = 0; l < output_count; l++) names[l] = layouts[l].name;
@@ -790,62 +586,31 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
         code = plan_outputs(command, o, cv->maps, cv->map_count, weights, mr_transform_network_path(t), names, outputs,
                             output_count);
 
-    // Read: the maps into the transform's input planes.
-    double started = cli_now(), seconds[3] = {0.0, 0.0, 0.0};
-    int width = 1, height = 1;
-    if (code == CLI_EXIT_OK) code = read_maps(command, cv->maps, cv->map_count, o->threads, &width, &height);
-    const size_t n = (size_t)width * (size_t)height;
-    mr_transform_map in[MR_TRANSFORM_MAX_SLOTS];
-    mr_image *converted[MR_TRANSFORM_MAX_SLOTS] = {NULL};
-    float *alpha = NULL;
-    uint8_t *flags = NULL;
-    int failed = 0;
-    if (code == CLI_EXIT_OK) {
-        alpha = take_alpha(cv->maps[0], n, &failed);
-        if (failed) {
-            fprintf(stderr, "matremap %s: error: out of memory for %dx%d texels\n", command, width, height);
-            code = CLI_EXIT_INTERNAL;
-        }
-        for (int i = 0; i < kind->input_count; i++) {
-            const slot_source *from = &cv->inputs[i];
-            const map_arg *map = cv->maps[from->map];
-            // NaN and infinities stay non-finite through the complement: the transform reads them (flagged).
-            in[i] = (mr_transform_map){map->image, from->channel < 0 ? 0 : from->channel, from->complement,
-                                       {map->constant[0], map->constant[1], map->constant[2]},
-                                       {0, 0, {1.0, 1.0, 1.0}}};
-            if (!eps_given) // each value known to half a code of its file (workflow.h, "Tolerances")
-                in[i].stored = mr_wf_quantisation_of(is_file(map) ? &map->stored : NULL, NULL);
-        }
+    // Read, convert and pack: the library's texture-set conversion.
+    mr_img_param_map reads[MAX_MAPS];
+    char labels[MAX_MAPS][PATH_SIZE + 64];
+    double constants[MAX_MAPS][3];
+    texture_maps(cv->maps, cv->map_count, reads, labels, constants);
+    const mr_texture_set set = {reads, (const double(*)[3])constants, cv->map_count, cv->inputs, eps_given,
+                                layouts, o->prefix != NULL ? output_count : 0, o->threads};
+    mr_texture_result result = {0};
+    double seconds[3] = {0.0, 0.0, 0.0};
+    if (code == CLI_EXIT_OK && (status = mr_transform_convert_texture_set(t, &set, &result)) != MR_OK) {
+        const map_arg *refused = result.failed_map >= 0 ? cv->maps[result.failed_map] : NULL;
+        // :srgb on a float file is a usage error, as the option's text is
+        if (refused != NULL && result.failed_reading && status == MR_ERR_INVALID_ARG && refused->how == MR_MAP_SRGB)
+            code = cli_usage_error(command, "'%s %s': %s", refused->option, refused->text, mr_last_error());
+        else
+            code = cli_fail(command, status);
     }
-    seconds[0] = cli_now() - started;
-
-    // Convert: the library's texture-set conversion.
-    started = cli_now();
-    if (code == CLI_EXIT_OK && (status = mr_transform_convert_maps(t, in, converted, &flags)) != MR_OK)
-        code = cli_fail(command, status);
-    free_maps(cv->maps, cv->map_count);
-    seconds[1] = cli_now() - started;
+    if (code == CLI_EXIT_OK) memcpy(seconds, result.seconds, sizeof seconds);
 
     // Write.
-    started = cli_now();
-    if (code == CLI_EXIT_OK && o->prefix != NULL) {
-        for (int l = 0; l < output_count && status == MR_OK; l++) {
-            const output_layout *lay = &layouts[l];
-            plane p[4];
-            int channels = lay->channels - (lay->slot[lay->channels - 1] == LAYOUT_ALPHA && alpha == NULL);
-            for (int c = 0; c < channels; c++) {
-                int j = lay->slot[c];
-                p[c] = j == LAYOUT_ALPHA ? (plane){alpha, 1, 0}
-                       : j == LAYOUT_ZERO ? (plane){NULL, 1, 0}
-                                          : (plane){converted[j]->pixels, kind->outputs[j].channels, lay->channel[c]};
-            }
-            status = compose(width, height, channels, p, 0.0f, &outputs[l].image);
-            outputs[l].encoding = lay->encoding;
-        }
-        code = status != MR_OK ? cli_fail(command, status)
-                               : write_outputs(command, o, outputs, output_count, width, height, flags);
-    }
-    seconds[2] = cli_now() - started;
+    const double started = cli_now();
+    if (code == CLI_EXIT_OK && o->prefix != NULL)
+        code = write_outputs(command, o, outputs, layouts, result.outputs, output_count, result.width, result.height,
+                             result.flags);
+    seconds[2] += cli_now() - started; // packing and writing
 
     if (code == CLI_EXIT_OK) {
         const mr_transform_options *used = mr_transform_options_of(t);
@@ -857,18 +622,14 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
                      kind->flags & MR_TRANSFORM_USES_F0 ? used->dielectric_f0 : -1.0,
                      (kind->flags & MR_TRANSFORM_TOLERANCES) ||
                          (convention && m->convention == MR_WF_DIFFUSE_SPECGLOSS && strcmp(command, "metal2spec") == 0),
-                     width, height, {seconds[0], seconds[1], seconds[2]}, flags,
-                     {{cv->layouts[0].name, converted[0]->pixels, 3},
-                      {cv->layouts[1].name, converted[1]->pixels, kind->outputs[1].channels},
-                      {cv->layouts[2].name, converted[2]->pixels, 1}},
+                     result.width, result.height, {seconds[0], seconds[1], seconds[2]}, result.flags,
+                     {{cv->layouts[0].name, result.converted[0]->pixels, 3},
+                      {cv->layouts[1].name, result.converted[1]->pixels, kind->outputs[1].channels},
+                      {cv->layouts[2].name, result.converted[2]->pixels, 1}},
                      !eps_given, eps};
         print_summary(&s, o, outputs, output_count);
     }
-    free_outputs(outputs, MAX_OUTPUTS);
-    free_maps(cv->maps, cv->map_count);
-    for (int j = 0; j < MR_TRANSFORM_MAX_SLOTS; j++) mr_image_free(converted[j]);
-    free(alpha);
-    free(flags);
+    mr_texture_result_free(&result);
     mr_transform_free(t);
     mr_mlp_free(net);
     return code;
@@ -876,14 +637,14 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
 
 /* ---- spec2metal --------------------------------------------------------------------------------------------- */
 
-static const output_layout metal_layouts[] = {
-    {"basecolor", MR_IMG_COLOR, 4, {0, 0, 0, LAYOUT_ALPHA}, {0, 1, 2, 0}},
+static const mr_texture_layout metal_layouts[] = {
+    {"basecolor", MR_IMG_COLOR, 4, {0, 0, 0, MR_LAYOUT_ALPHA}, {0, 1, 2, 0}},
     {"metallic", MR_IMG_DATA, 1, {1}, {0}},
     {"roughness", MR_IMG_DATA, 1, {2}, {0}},
 };
-static const output_layout metal_packed[] = {
-    {"basecolor", MR_IMG_COLOR, 4, {0, 0, 0, LAYOUT_ALPHA}, {0, 1, 2, 0}},
-    {"metallicRoughness", MR_IMG_DATA, 3, {LAYOUT_ZERO, 2, 1}, {0, 0, 0}}, // glTF: G roughness, B metallic
+static const mr_texture_layout metal_packed[] = {
+    {"basecolor", MR_IMG_COLOR, 4, {0, 0, 0, MR_LAYOUT_ALPHA}, {0, 1, 2, 0}},
+    {"metallicRoughness", MR_IMG_DATA, 3, {MR_LAYOUT_ZERO, 2, 1}, {0, 0, 0}}, // glTF: G roughness, B metallic
 };
 
 int cmd_spec2metal(int argc, char **argv) {
@@ -929,8 +690,8 @@ int cmd_spec2metal(int argc, char **argv) {
     // The gltf-specgloss -> gltf transforms; --convention paper reads the diffuse as Eq. 2 prints it.
     conversion cv = {command, "gltf-specgloss", "gltf", all, 5,
                      {{0, -1, 0}, {packed.text ? 4 : 1, -1, 0},
-                      packed.text ? (slot_source){4, 3, 0} : glossiness.text ? (slot_source){2, 0, 0}
-                                                                             : (slot_source){3, 0, 1}},
+                      packed.text ? (mr_texture_source){4, 3, 0} : glossiness.text ? (mr_texture_source){2, 0, 0}
+                                                                             : (mr_texture_source){3, 0, 1}},
                      metal_layouts, 3, metal_packed, 2};
     return run_conversion(&cv, &m, &o, weights, eps, eps_given);
 }
@@ -1002,13 +763,13 @@ static void print_metal2spec_help(void) {
            "  metal2spec --basecolor 0.9,0.6,0.2 --metallic 1 --roughness 0.3\n");
 }
 
-static const output_layout spec_layouts[] = {
-    {"diffuse", MR_IMG_COLOR, 4, {0, 0, 0, LAYOUT_ALPHA}, {0, 1, 2, 0}},
+static const mr_texture_layout spec_layouts[] = {
+    {"diffuse", MR_IMG_COLOR, 4, {0, 0, 0, MR_LAYOUT_ALPHA}, {0, 1, 2, 0}},
     {"specular", MR_IMG_COLOR, 3, {1, 1, 1}, {0, 1, 2}},
     {"glossiness", MR_IMG_DATA, 1, {2}, {0}},
 };
-static const output_layout spec_packed[] = {
-    {"diffuse", MR_IMG_COLOR, 4, {0, 0, 0, LAYOUT_ALPHA}, {0, 1, 2, 0}},
+static const mr_texture_layout spec_packed[] = {
+    {"diffuse", MR_IMG_COLOR, 4, {0, 0, 0, MR_LAYOUT_ALPHA}, {0, 1, 2, 0}},
     // RGB specular sRGB-encoded, A glossiness linear: what image_io does for a colour image with alpha.
     {"specularGlossiness", MR_IMG_COLOR, 4, {1, 1, 1, 2}, {0, 1, 2, 0}},
 };
@@ -1036,8 +797,8 @@ int cmd_metal2spec(int argc, char **argv) {
     if (packed.text != NULL ? (metallic.text || roughness.text) : (!metallic.text || !roughness.text))
         return cli_usage_error(command, "give --metallic MAP and --roughness MAP, or --metallic-roughness MR");
     conversion cv = {command, "gltf", "gltf-specgloss", all, 4,
-                     {{0, -1, 0}, packed.text ? (slot_source){3, 2, 0} : (slot_source){1, 0, 0},
-                      packed.text ? (slot_source){3, 1, 0} : (slot_source){2, 0, 0}},
+                     {{0, -1, 0}, packed.text ? (mr_texture_source){3, 2, 0} : (mr_texture_source){1, 0, 0},
+                      packed.text ? (mr_texture_source){3, 1, 0} : (mr_texture_source){2, 0, 0}},
                      spec_layouts, 3, spec_packed, 2};
     return run_conversion(&cv, &m, &o, NULL, 0.0, 0);
 }

@@ -3,6 +3,9 @@
  *
  * Main calls: mr_img_read(path, &opts, &image) ... mr_img_write(path, image, &opts). Free with mr_image_free.
  * mr_img_read_memory decodes an encoded image already in memory (e.g. embedded in a glTF asset) the same way.
+ * Sets of files: mr_img_read_param_maps / mr_img_read_texture_set read the maps of a texture set side by side (the
+ * latter checks them: grey data maps, packed channels, one size); mr_img_write_set writes several images all or
+ * none (each to a temporary beside it, all renamed into place once every one is written).
  *
  * Colour convention (the only place it is applied): images in memory are linear (mr_image.h).
  *   - EXR and HDR hold linear floats and are read and written as they are.
@@ -122,6 +125,34 @@ double mr_img_half_step(double value, int bits, mr_img_encoding encoding);
  * failed), MR_ERR_NOMEM. */
 mr_status mr_img_write(const char *path, const mr_image *image, const mr_img_write_options *opts);
 
+/* ---- output sets: several images written all or none (image_set.c) ----------------------------------------
+ * A command that writes a set of images which belong together (the maps of one converted texture set and its flag
+ * picture) writes them with mr_img_write_set: each image goes to a hidden temporary file beside its target,
+ * "DIR/.matremap-<pid>-NAME" (the extension kept, so the format is the target's), and only when every one is
+ * written are they renamed into place, in order. A failure before the renames removes the temporaries and leaves
+ * every target as it was (an earlier run's set stays whole); a target that is a folder, or named twice, is refused
+ * before anything is written, so the renames (each within its folder) fail only on an I/O error, and then the
+ * targets already renamed are removed too: none of the set rather than a mixed one. The folders must exist. */
+
+typedef struct mr_img_set_item {
+    const char *path;             /* the target */
+    const char *label;            /* how the user named it, for messages ("-o out/ggx_"); NULL: none */
+    const mr_image *image;        /* borrowed */
+    mr_img_write_options options; /* as for mr_img_write */
+} mr_img_set_item;
+
+typedef struct mr_img_set_options {
+    int threads; /* images encoded side by side: 0 = automatic (mr_auto_threads: a team, no larger than the set,
+                    for two images or more), n >= 1: at most n. The files do not depend on it */
+} mr_img_set_options;
+
+/* Write items[0..count) all or none, as above; opts may be NULL (zeroed: the defaults). On failure *failed (may be
+ * NULL) is the index of the item that failed (the first in order, when several did), else -1. Errors, each naming the
+ * target: MR_ERR_INVALID_ARG "output 'P' (LABEL) is a folder" or "named twice" (nothing written); a write's own
+ * status as "writing 'P': <its message>"; MR_ERR_IO "cannot rename 'TMP' to 'P': <reason>[ (the outputs renamed
+ * before it removed)]"; MR_ERR_NOMEM. count 0 is a no-op. */
+mr_status mr_img_write_set(const mr_img_set_item *items, int count, const mr_img_set_options *opts, int *failed);
+
 /* ---- maps of BRDF parameters: the one rule (param_map.c) ----------------------------------------------------
  * A texture map of a BRDF parameter holds the parameter's own values. 8/16-bit files hold a colour parameter
  * (flagged MR_PARAM_SRGB_MAP in its descriptor, brdf.h: diffuse, specular, f0, base colour, ...) sRGB-encoded and
@@ -154,6 +185,43 @@ const char *mr_img_encoding_name(mr_img_encoding encoding);
  * linear; sRGB decoding applies to 8/16-bit files), or when `how` is out of range. */
 mr_status mr_img_read_param_map(const char *path, const mr_brdf_param *param, mr_map_encoding how,
                                 const mr_img_read_options *opts, mr_image **out, mr_img_stored *stored);
+
+/* One map of a texture set for mr_img_read_param_maps: what to read (path, param, how as for mr_img_read_param_map)
+ * and, once read, the image and how its file stored it. */
+typedef struct mr_img_param_map {
+    const char *path;           /* NULL: nothing to read (a constant: image stays NULL) */
+    const mr_brdf_param *param; /* may be NULL (linear unless overridden) */
+    mr_map_encoding how;        /* the map's override, MR_MAP_AS_PARAMETER for none */
+    mr_image *image;            /* out: the map, owned by the caller (NULL until read) */
+    mr_img_stored stored;       /* out: how the file stored its samples */
+    /* What mr_img_read_texture_set checks (zeroed: nothing): */
+    const char *label;          /* names the map in messages, as the user gave it ("--glossiness 'g.png'"); NULL:
+                                   "map 'PATH'" */
+    int min_channels;           /* the channels the file must have (a packed map: 3 or 4); 0: any */
+    const char *layout;         /* with min_channels: what those channels hold ("RGB: G roughness, B metallic") */
+    int grey;                   /* 1: a one-value map: a file of 3 or more channels must be grey (R = G = B) */
+    const char *hint;           /* appended to the message refusing a colour file for a grey map; may be NULL */
+} mr_img_param_map;
+
+/* Read every map of maps[0..count) with a path by mr_img_read_param_map (opts as there, may be NULL), the files
+ * decoded side by side: `threads` 0 = automatic (mr_auto_threads: a team, no larger than the maps, for two maps or
+ * more), n >= 1: at most n; the images do not depend on it. Each map's image is set once it is read, also when
+ * another map failed: the caller frees every maps[k].image (NULL-safe) in either case. On failure the first map in
+ * order that failed is the one reported (its status, its message in mr_last_error()) and *failed (may be NULL) is its
+ * index, else -1. Errors: those of mr_img_read_param_map; MR_ERR_NOMEM. */
+mr_status mr_img_read_param_maps(mr_img_param_map *maps, int count, const mr_img_read_options *opts, int threads,
+                                 int *failed);
+
+/* The maps of one texture set: mr_img_read_param_maps, then, map by map in order (the first problem is the one
+ * reported), its read's failure or the checks its fields ask for, and one size for every file: *width x *height
+ * is it (1 x 1 when every map is a constant; both may be NULL). Ownership as for mr_img_read_param_maps (the caller
+ * frees every maps[k].image in either case). *failed (may be NULL) is the index of the map refused, else -1; its
+ * image is NULL when its read failed, set when a check refused it. Errors: those of the reads; MR_ERR_INVALID_ARG,
+ * naming the map by its label: "LABEL has one channel; expected LAYOUT" (or "no alpha channel"), "LABEL is a colour
+ * image (pixel X, Y is R, G, B); expected one channel, or grey<HINT>", "LABEL is WxH but LABEL0 is WxH: maps must
+ * have the same size (constants broadcast)". */
+mr_status mr_img_read_texture_set(mr_img_param_map *maps, int count, const mr_img_read_options *opts, int threads,
+                                  int *width, int *height, int *failed);
 
 /* sRGB transfer functions (IEC 61966-2-1), exact piecewise form evaluated in double. Values outside [0,1]
  * are mirrored through 0 (odd extension, no clamping); NaN stays NaN. */

@@ -13,9 +13,19 @@
 #include "learn/svr.h"
 #include "mr_internal.h"
 #include "nn/mlp.h"
+#include "remap/direct.h"
 #include "workflow/workflow.h"
 
 static const char *const method_names[MR_LEARN_METHOD_COUNT] = {"parametric", "svr", "mlp"};
+
+static const mr_flag_colour learned_colours[] = {
+    {MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED | MR_WF_UNCHECKED, {1.0f, 0.0f, 0.0f}}, /* red */
+    {MR_WF_CLAMPED_OUTPUT, {0.0f, 1.0f, 0.0f}},                                     /* green */
+    {MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT, {0.0f, 0.0f, 1.0f}},              /* blue */
+};
+const mr_flag_code mr_learned_flag_code = {MR_FLAG_PAINT_EACH,
+                                           (int)(sizeof learned_colours / sizeof learned_colours[0]),
+                                           learned_colours};
 
 const char *mr_learn_method_name(mr_learn_method method) {
     return (unsigned)method < MR_LEARN_METHOD_COUNT ? method_names[method] : NULL;

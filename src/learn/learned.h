@@ -106,6 +106,12 @@ enum {
     MR_WF_UNCHECKED = 1u << 7       /* the transform failed its check against the remaps (mr_learned_check) */
 };
 
+/* The colour code of a model-to-model conversion's flag picture (convert's PREFIX_flags.png; transform.h, "flags"):
+ * one channel per kind of reason, each 1 where the texel has one: red extrapolated (MR_WF_EXTRAPOLATED), not
+ * converged (--direct's MR_WF_UNCONVERGED, remap/direct.h) or converted by a transform that failed its check
+ * (MR_WF_UNCHECKED); green clamped output; blue clamped or non-finite input. */
+extern const mr_flag_code mr_learned_flag_code;
+
 typedef enum mr_learn_method {
     MR_LEARN_PARAMETRIC = 0,
     MR_LEARN_SVR,

@@ -12,6 +12,11 @@
  *   b.out[0] = base_color;  b.out[1] = metallic;  b.out[2] = roughness;               // kind->outputs[] order
  *   mr_transform_apply(t, &b);
  *   mr_transform_free(t);
+ * Texture sets: mr_transform_convert_maps (images and constants in, one image per output slot and per-texel flags
+ * out); mr_transform_convert_texture_set (spec2metal's and metal2spec's pipeline: files read and checked, converted,
+ * packed into output layouts with mr_image_pack / mr_image_with_alpha); mr_transform_convert_material (convert's:
+ * a material's maps and values). Flags: mr_flags_count (by reason) and mr_flag_picture (a colour code as data:
+ * mr_workflow_flag_code here, mr_learned_flag_code in learned.h).
  *
  * Planes. A transform reads and writes planes of floats, one per slot: a slot is one parameter of the source
  * (inputs) or target (outputs) model of src/brdf, named as the model names it, with its channel count; a 3-channel
@@ -38,6 +43,7 @@
 
 #include "../mr_image.h"
 #include "../brdf/brdf.h"
+#include "../io/image_io.h"
 #include "../mr_status.h"
 #include "../workflow/workflow.h"
 
@@ -189,6 +195,143 @@ typedef struct mr_transform_map {
  * MR_ERR_NOMEM. On failure nothing is returned. */
 mr_status mr_transform_convert_maps(const mr_transform *t, const mr_transform_map *in, mr_image **out,
                                     uint8_t **flags);
+
+/* ---- output images: channels packed from converted maps (pack.c) ------------------------------------------
+ * The images a texture-set conversion writes are packed from the converted maps channel by channel: glTF's
+ * metallicRoughness (R 0, G roughness, B metallic), KHR_materials_pbrSpecularGlossiness' RGB specular and A
+ * glossiness, and the first input map's alpha carried into an RGB output (spec2metal, metal2spec, convert). */
+
+/* Where one channel of a packed image comes from: channel `channel` of `image`, or the fill value (image NULL). */
+typedef struct mr_image_channel {
+    const mr_image *image;
+    int channel;
+} mr_image_channel;
+
+/* A new width x height image (*out, the caller frees it) of `channels` channels (1, 3 or 4), channel c copied from
+ * sources[c] (values unchanged), `fill` where sources[c].image is NULL. MR_ERR_INVALID_ARG for a source of another
+ * size or lacking the channel; MR_ERR_NOMEM. */
+mr_status mr_image_pack(int width, int height, int channels, const mr_image_channel *sources, float fill,
+                        mr_image **out);
+
+/* `rgb` with the alpha of `alpha_source` appended, when rgb has 3 channels and alpha_source (may be NULL) has 4:
+ * a new image in *out (the caller frees it); otherwise *out is rgb itself (not a copy: free it only once). Errors as
+ * mr_image_pack's. */
+mr_status mr_image_with_alpha(mr_image *rgb, const mr_image *alpha_source, mr_image **out);
+
+/* ---- texture-set conversions: files in, packed images out (texture_set.c) ----------------------------------
+ * The pipeline of spec2metal and metal2spec as one call: read and check the maps (mr_img_read_texture_set), feed
+ * the transform's input slots from them (a map's colour channels or one channel, complemented when asked),
+ * convert (mr_transform_convert_maps), and pack the converted slots into the output images a layout describes
+ * (mr_image_pack; glTF's channel packing), the first map's alpha carried where a layout asks for it. The caller
+ * writes the images (mr_img_write_set) and the flag picture (mr_flag_picture) and reports the flags
+ * (mr_flags_count). */
+
+/* Where a transform input slot's values come from: map `map` of the set, its colour channels (channel -1) or one
+ * channel; complement: 1 - value (a roughness map for a glossiness slot; NaN stays NaN). */
+typedef struct mr_texture_source {
+    int map, channel, complement;
+} mr_texture_source;
+
+/* Channel sources of a layout besides the transform's output slots. */
+enum {
+    MR_LAYOUT_ZERO = -1, /* 0 */
+    MR_LAYOUT_ALPHA = -2 /* the first map's alpha; a last channel that exists only when that map has one */
+};
+
+/* One output image: its name (for the caller's file names), how its file is encoded, and per channel the output
+ * slot (and that slot's channel) written there, or MR_LAYOUT_ZERO / MR_LAYOUT_ALPHA. */
+typedef struct mr_texture_layout {
+    const char *name;
+    mr_img_encoding encoding;
+    int channels;
+    int slot[4], channel[4];
+} mr_texture_layout;
+
+#define MR_TEXTURE_MAX_OUTPUTS 4
+
+/* What to convert. maps[k] as mr_img_read_texture_set takes them (its images are the call's: read and freed by
+ * it), constants[k] the value of a map without a path (R, G, B; a one-value map's in all three). */
+typedef struct mr_texture_set {
+    mr_img_param_map *maps;
+    const double (*constants)[3];
+    int map_count;
+    const mr_texture_source *inputs;    /* one per kind->inputs[] */
+    int exact;                          /* 0: each input known to half a code of its file (workflow.h,
+                                           "Tolerances"); 1: every input exact (the transform's eps alone) */
+    const mr_texture_layout *layouts;   /* the output images; layout_count 0: none (only the converted slots) */
+    int layout_count;                   /* at most MR_TEXTURE_MAX_OUTPUTS */
+    int threads;                        /* file decoding: 0 = automatic (mr_auto_threads), n >= 1: at most n. The
+                                           conversion takes the transform's own option */
+} mr_texture_set;
+
+/* What came out; every pointer owned, released by mr_texture_result_free. */
+typedef struct mr_texture_result {
+    int width, height;                              /* the maps' size; 1 x 1 when every map is a constant */
+    mr_image *converted[MR_TRANSFORM_MAX_SLOTS];    /* one per kind->outputs[] (as mr_transform_convert_maps) */
+    mr_image *outputs[MR_TEXTURE_MAX_OUTPUTS];      /* one per layout */
+    uint8_t *flags;                                 /* width x height mr_wf_flag bytes */
+    double seconds[3];                              /* read, convert, pack */
+    int failed_map;                                 /* on failure: the map refused (else -1), */
+    int failed_reading;                             /* and whether its read failed (1) or a check refused it (0) */
+} mr_texture_result;
+
+/* Convert `set` through t into *out (zeroed first). On failure nothing is returned but out->failed_map and
+ * out->failed_reading, and every image is freed. Errors: those of mr_img_read_texture_set (the map named by its
+ * label), mr_transform_convert_maps and mr_image_pack; MR_ERR_INVALID_ARG for a source or layout naming a map,
+ * slot or channel that is not there. */
+mr_status mr_transform_convert_texture_set(const mr_transform *t, const mr_texture_set *set, mr_texture_result *out);
+/* Free what a result holds and zero it (NULL-safe). */
+void mr_texture_result_free(mr_texture_result *r);
+
+/* The pipeline of convert as one call: a material of the kind's source model (struct mr_material, render.h: its
+ * values and the maps bound to its parameters) converted texel by texel through t; each input slot reads the
+ * parameter of its name, its map (the one bound) or its value. out[j] is one new image per kind->outputs[j] (the
+ * caller frees them), an RGB one carrying the alpha of the first 4-channel map in parameter order; *flags as
+ * mr_transform_convert_maps. MR_ERR_INVALID_ARG for a material of another model; the errors of
+ * mr_transform_convert_maps and mr_image_with_alpha. On failure nothing is returned. */
+struct mr_material;
+mr_status mr_transform_convert_material(const mr_transform *t, const struct mr_material *material, mr_image **out,
+                                        uint8_t **flags);
+
+/* ---- flags: counted by reason, drawn as a picture (flags.c) ------------------------------------------------
+ * Every conversion flags its texels with mr_wf_flag bits (workflow.h: CLAMPED_INPUT, NONFINITE_INPUT, OFF_MANIFOLD,
+ * METHOD_FAILED; learned.h: EXTRAPOLATED, CLAMPED_OUTPUT, UNCHECKED; direct.h: UNCONVERGED). A command reports them
+ * counted by reason (mr_flags_count) and draws them as a picture (mr_flag_picture) whose colour code is data, an
+ * mr_flag_code table kept beside the transforms that set its flags:
+ *   mr_workflow_flag_code (here; spec2metal, metal2spec --flags): the colour of a texel's most severe flag, first
+ *     match wins: red method failed, magenta non-finite input, blue (0, 0.5, 1) clamped input, orange (1, 0.5, 0)
+ *     off-manifold;
+ *   mr_learned_flag_code (learned.h; convert's PREFIX_flags.png): one channel per kind of reason, each set when the
+ *     texel has one: red extrapolated, unconverged or by a transform that failed its check, green clamped output,
+ *     blue clamped or non-finite input.
+ * A clean texel is black. The picture is written linear (MR_IMG_DATA), so its files hold the table's values. */
+
+/* One colour of a code: a texel having any bit of `flags` takes (or adds) `rgb`. */
+typedef struct mr_flag_colour {
+    unsigned flags;
+    float rgb[3];
+} mr_flag_colour;
+
+typedef enum mr_flag_paint {
+    MR_FLAG_PAINT_FIRST = 0, /* the first colour (in table order: most severe first) whose flags the texel has */
+    MR_FLAG_PAINT_EACH       /* every colour whose flags the texel has, channel by channel the largest value */
+} mr_flag_paint;
+
+typedef struct mr_flag_code {
+    mr_flag_paint paint;
+    int count;
+    const mr_flag_colour *colours;
+} mr_flag_code;
+
+extern const mr_flag_code mr_workflow_flag_code;
+
+/* counts[r] = how many of the n texels have any bit of reasons[r] (r < reason_count; 0xFF counts every flagged
+ * texel). A NULL flags counts nothing (every count 0). */
+void mr_flags_count(const uint8_t *flags, size_t n, const unsigned *reasons, int reason_count, size_t *counts);
+
+/* The flag picture of width x height flags in `code`'s colours: a new RGB image (*out, the caller frees it; black
+ * where a texel is clean). MR_ERR_INVALID_ARG for a NULL argument or a bad size, MR_ERR_NOMEM. */
+mr_status mr_flag_picture(const uint8_t *flags, int width, int height, const mr_flag_code *code, mr_image **out);
 
 /* One texel through doubles (constants, scripts): in[] / out[] packed in slot order (channels consecutive). */
 mr_status mr_transform_apply_values(const mr_transform *t, const double *in, double *out, unsigned *flags);
