@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "workflow/pairs.h"
 
 #define MAX_FILES 64
 
@@ -125,57 +126,6 @@ static int prepare_curve(const curve *c, const char *prefix, const char *title, 
         fprintf(stderr, "matremap train: note: no plot (gnuplot missing or failed); the curve is in %s\n", path);
     }
     return 1;
-}
-
-typedef struct method_error {
-    const char *name;
-    double albedo_rmse, metallic_rmse, metallic_max;
-} method_error;
-
-/* Each method's error on the test pairs against their labels. */
-static mr_status test_methods(const mr_mlp *net, const mr_wf_dataset *test, method_error errors[4]) {
-    size_t n = test->n;
-    float *diffuse = malloc(n * 3 * sizeof *diffuse), *specular = malloc(n * 3 * sizeof *specular);
-    float *albedo = malloc(n * 3 * sizeof *albedo), *metallic = malloc(n * sizeof *metallic);
-    mr_status status = MR_OK;
-    if (!(diffuse && specular && albedo && metallic)) {
-        mr_clear_error(); // cli_fail then says "out of memory"
-        status = MR_ERR_NOMEM;
-    }
-    for (size_t i = 0; status == MR_OK && i < n; i++)
-        for (int c = 0; c < 3; c++) {
-            diffuse[3 * i + c] = test->x[6 * i + c];
-            specular[3 * i + c] = test->x[6 * i + 3 + c];
-        }
-    static const char *const names[4] = {"mlp", "weighted", "mean", "khronos"};
-    static const mr_wf_method methods[4] = {MR_WF_CUSTOM, MR_WF_WEIGHTED, MR_WF_MEAN, MR_WF_KHRONOS};
-    for (int m = 0; status == MR_OK && m < 4; m++) {
-        mr_wf_spec_input in = {diffuse, specular, NULL};
-        mr_wf_metal_maps out = {albedo, metallic, NULL};
-        mr_wf_options o = mr_wf_options_default();
-        o.method = methods[m];
-        status = m == 0 ? mr_wf_spec_to_metal_mlp_batch(net, &in, n, &o, &out, NULL)
-                        : mr_wf_spec_to_metal_batch(&in, n, &o, &out, NULL);
-        double sa = 0.0, sm = 0.0, worst = 0.0;
-        for (size_t i = 0; status == MR_OK && i < n; i++) {
-            for (int c = 0; c < 3; c++) {
-                double d = albedo[3 * i + c] - test->y[4 * i + c];
-                sa += d * d;
-            }
-            double d = metallic[i] - test->y[4 * i + 3];
-            sm += d * d;
-            worst = fmax(worst, fabs(d));
-        }
-        errors[m].name = names[m];
-        errors[m].albedo_rmse = n ? sqrt(sa / (3.0 * (double)n)) : 0.0;
-        errors[m].metallic_rmse = n ? sqrt(sm / (double)n) : 0.0;
-        errors[m].metallic_max = worst;
-    }
-    free(diffuse);
-    free(specular);
-    free(albedo);
-    free(metallic);
-    return status;
 }
 
 int cmd_train(int argc, char **argv) {
@@ -297,7 +247,7 @@ int cmd_train(int argc, char **argv) {
                           &report);
     if (c.draw) fputc('\n', stderr);
     double train_seconds = cli_now() - c.started;
-    method_error errors[MAX_FILES][4];
+    mr_wf_method_error errors[MAX_FILES][MR_WF_EVALUATED_METHODS];
     if (status == MR_OK && report.stop == MR_MLP_STOP_CALLBACK) { // the curve's realloc
         mr_clear_error();
         status = MR_ERR_NOMEM;
@@ -305,7 +255,8 @@ int cmd_train(int argc, char **argv) {
     if (status == MR_OK && residual) snprintf(net->kind, sizeof net->kind, "%s", MR_WF_MLP_RESIDUAL_KIND);
     // Nothing is written before every result is in; the loss curve is prepared first and committed after the
     // network, so a failure leaves none of the outputs.
-    for (int t = 0; t < test_count && status == MR_OK; t++) status = test_methods(net, &test[t], errors[t]);
+    for (int t = 0; t < test_count && status == MR_OK; t++)
+        status = mr_wf_pairs_evaluate(net, &test[t], threads, errors[t]);
     char title[256];
     snprintf(title, sizeof title, "matremap train: %zu pairs, %d hidden units, seed %llu", data.n,
              net ? net->n_hidden : 0, opts.seed);
@@ -343,7 +294,7 @@ int cmd_train(int argc, char **argv) {
             printf("%s{\"file\": ", t ? ", " : "");
             cli_json_string(stdout, tests[t]);
             printf(", \"pairs\": %zu", test[t].n);
-            for (int m = 0; m < 4; m++)
+            for (int m = 0; m < MR_WF_EVALUATED_METHODS; m++)
                 printf(", \"%s\": {\"albedo_rmse\": %.6g, \"metallic_rmse\": %.6g, \"metallic_max_error\": %.6g}",
                        errors[t][m].name, errors[t][m].albedo_rmse, errors[t][m].metallic_rmse,
                        errors[t][m].metallic_max);
@@ -361,7 +312,7 @@ int cmd_train(int argc, char **argv) {
         for (int t = 0; t < test_count; t++) {
             printf("test %s (%zu pairs): error against the labels\n", tests[t], test[t].n);
             printf("  %-9s %12s %14s %14s\n", "method", "albedo RMSE", "metallic RMSE", "metallic max");
-            for (int m = 0; m < 4; m++)
+            for (int m = 0; m < MR_WF_EVALUATED_METHODS; m++)
                 printf("  %-9s %12.5f %14.5f %14.5f\n", errors[t][m].name, errors[t][m].albedo_rmse,
                        errors[t][m].metallic_rmse, errors[t][m].metallic_max);
         }

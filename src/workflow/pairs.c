@@ -509,3 +509,53 @@ mr_status mr_wf_pairs_compare(const mr_wf_compare_options *opts, mr_wf_compare_t
     *out = table;
     return MR_OK;
 }
+
+/* ---- converters against labels ------------------------------------------------------------------------------- */
+
+mr_status mr_wf_pairs_evaluate(const struct mr_mlp *net, const mr_wf_dataset *pairs, int threads,
+                               mr_wf_method_error errors[MR_WF_EVALUATED_METHODS]) {
+    if (net == NULL || pairs == NULL || errors == NULL || (pairs->n > 0 && (pairs->x == NULL || pairs->y == NULL)))
+        return mr_fail(MR_ERR_INVALID_ARG, "evaluate: NULL network, pairs or errors");
+    const size_t n = pairs->n;
+    float *diffuse = malloc(n * 3 * sizeof *diffuse), *specular = malloc(n * 3 * sizeof *specular);
+    float *albedo = malloc(n * 3 * sizeof *albedo), *metallic = malloc(n * sizeof *metallic);
+    mr_status status = MR_OK;
+    if (!(diffuse && specular && albedo && metallic))
+        status = mr_fail(MR_ERR_NOMEM, "evaluate: out of memory for %zu pairs", n);
+    for (size_t i = 0; status == MR_OK && i < n; i++)
+        for (int c = 0; c < 3; c++) {
+            diffuse[3 * i + c] = pairs->x[MR_WF_DATASET_INPUTS * i + c];
+            specular[3 * i + c] = pairs->x[MR_WF_DATASET_INPUTS * i + 3 + c];
+        }
+    static const char *const names[MR_WF_EVALUATED_METHODS] = {"mlp", "weighted", "mean", "khronos"};
+    static const mr_wf_method methods[MR_WF_EVALUATED_METHODS] = {MR_WF_CUSTOM, MR_WF_WEIGHTED, MR_WF_MEAN,
+                                                                  MR_WF_KHRONOS};
+    for (int m = 0; status == MR_OK && m < MR_WF_EVALUATED_METHODS; m++) {
+        mr_wf_spec_input in = {diffuse, specular, NULL};
+        mr_wf_metal_maps out = {albedo, metallic, NULL};
+        mr_wf_options o = mr_wf_options_default();
+        o.method = methods[m];
+        o.threads = threads;
+        status = m == 0 ? mr_wf_spec_to_metal_mlp_batch(net, &in, n, &o, &out, NULL)
+                        : mr_wf_spec_to_metal_batch(&in, n, &o, &out, NULL);
+        double sa = 0.0, sm = 0.0, worst = 0.0;
+        for (size_t i = 0; status == MR_OK && i < n; i++) {
+            for (int c = 0; c < 3; c++) {
+                double d = albedo[3 * i + c] - pairs->y[MR_WF_DATASET_OUTPUTS * i + c];
+                sa += d * d;
+            }
+            double d = metallic[i] - pairs->y[MR_WF_DATASET_OUTPUTS * i + 3];
+            sm += d * d;
+            worst = fmax(worst, fabs(d));
+        }
+        errors[m].name = names[m];
+        errors[m].albedo_rmse = n ? sqrt(sa / (3.0 * (double)n)) : 0.0;
+        errors[m].metallic_rmse = n ? sqrt(sm / (double)n) : 0.0;
+        errors[m].metallic_max = worst;
+    }
+    free(diffuse);
+    free(specular);
+    free(albedo);
+    free(metallic);
+    return status;
+}

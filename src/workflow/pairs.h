@@ -14,6 +14,9 @@
  *   mr_wf_compare_table *t;
  *   mr_wf_pairs_compare(&c, &t);  ...  mr_wf_compare_table_free(t);
  *
+ *   mr_wf_method_error e[MR_WF_EVALUATED_METHODS];
+ *   mr_wf_pairs_evaluate(net, &held_out, 0, e);       // each converter's error against held-out labels
+ *
  * Texels. Sample i is a pure function of (seed, i), so files do not depend on the thread count. Its category comes
  * from a fixed mixture (30 % asset texels when the pool holds any, the rest shared as listed below); its values are
  * 8-bit sRGB codes decoded to linear (mr_wf_pair_category says which codes). A pool holds texels of textured
@@ -41,6 +44,7 @@
 
 #include "../mr_image.h"
 #include "../mr_status.h"
+#include "dataset.h"
 #include "labels.h"
 
 #ifdef __cplusplus
@@ -159,6 +163,28 @@ typedef struct mr_wf_compare_table {
  * arguments or counts out of range, the networks' read failures (nn/mlp.h), the scenes' (labels.h), MR_ERR_NOMEM. */
 mr_status mr_wf_pairs_compare(const mr_wf_compare_options *opts, mr_wf_compare_table **out);
 void mr_wf_compare_table_free(mr_wf_compare_table *table);
+
+/* ---- converters against labels (`matremap train --test`) ---- */
+
+/* The converters evaluated, in this order: the network, then the analytic WEIGHTED, MEAN and KHRONOS. */
+#define MR_WF_EVALUATED_METHODS 4
+
+typedef struct mr_wf_method_error {
+    const char *name;     /* "mlp", "weighted", "mean", "khronos" (static) */
+    double albedo_rmse;   /* over every pair and channel */
+    double metallic_rmse;
+    double metallic_max;  /* the largest |metallic - label| */
+} mr_wf_method_error;
+
+struct mr_mlp;
+/* Each converter's error on labelled pairs (a dataset of mr_wf_dataset_load: x the spec-gloss inputs as the file
+ * stores them, y the labels): `net` (a spec -> metal network, nn/mlp.h, applied by mr_wf_spec_to_metal_mlp_batch),
+ * then the analytic inverses with the default options (plain reading of the diffuse, F0d 0.04), into
+ * errors[MR_WF_EVALUATED_METHODS]. No pairs: every error 0. `threads` is the batches' (workflow.h; 0 = automatic);
+ * the errors do not depend on it. MR_ERR_INVALID_ARG for NULL arguments or a network of another shape,
+ * MR_ERR_NOMEM. */
+mr_status mr_wf_pairs_evaluate(const struct mr_mlp *net, const mr_wf_dataset *pairs, int threads,
+                               mr_wf_method_error errors[MR_WF_EVALUATED_METHODS]);
 
 #ifdef __cplusplus
 }
