@@ -115,3 +115,28 @@ void mr_atomic_abort(mr_atomic_file *file) {
     errno = saved;
     file->active = 0;
 }
+
+mr_status mr_atomic_open_text(const char *target, mr_atomic_file *file, FILE **out) {
+    *out = NULL;
+    mr_status status = mr_atomic_begin(target, file);
+    if (status != MR_OK) return status;
+    *out = fopen(file->tmp_path, "w");
+    if (*out != NULL) return MR_OK;
+    int err = errno;
+    mr_atomic_abort(file);
+    return mr_fail(MR_ERR_IO, "cannot write '%s': %s", target, strerror(err));
+}
+
+mr_status mr_atomic_close_text(FILE *f, mr_atomic_file *file) {
+    // A failed write leaves the stream's error indicator and its errno; fclose may fail by itself (the last flush).
+    const int bad = ferror(f);
+    const int write_errno = errno;
+    errno = 0;
+    const int closed = fclose(f) == 0;
+    int err = !closed ? errno : bad ? write_errno : 0;
+    if (closed && !bad) return MR_OK;
+    if (err == 0) err = EIO;
+    mr_status status = mr_fail(MR_ERR_IO, "cannot write '%s': %s", file->target, strerror(err));
+    mr_atomic_abort(file);
+    return status;
+}

@@ -57,6 +57,14 @@ mr_status mr_atomic_write_bytes(const char *target, const void *bytes, size_t si
  * Preserves errno and the recorded last-error message. */
 void mr_atomic_abort(mr_atomic_file *file);
 
+/* A text file written through stdio under the protocol: mr_atomic_open_text begins and opens the temporary file
+ * for writing (*out; on failure NULL and nothing left: mr_atomic_begin's errors, or MR_ERR_IO "cannot write
+ * 'TARGET': REASON"); mr_atomic_close_text closes it and checks every write (the stream's error indicator, the
+ * last flush): MR_OK with the file still to commit (or abort), or MR_ERR_IO "cannot write 'TARGET': REASON" with
+ * the temporary file removed. Messages as the command line's outputs have always said them. */
+mr_status mr_atomic_open_text(const char *target, mr_atomic_file *file, FILE **out);
+mr_status mr_atomic_close_text(FILE *f, mr_atomic_file *file);
+
 /* ---- input files (input_file.c) ---------------------------------------------------------------------------
  * Every file a reader of src/io or gltf/ opens because a user (or a file the user gave) named it goes through
  * mr_io_open_input: only a regular file is read. A folder, a FIFO, a device (/dev/zero) or a socket is refused

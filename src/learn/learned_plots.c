@@ -73,38 +73,12 @@ static void abort_all(mr_atomic_file files[MR_LEARNED_PLOT_FILES]) {
     for (int k = 0; k < MR_LEARNED_PLOT_FILES; k++) mr_atomic_abort(&files[k]);
 }
 
-/* The temporary file of `file` (target `path`) opened for writing; NULL after recording why (nothing left). */
-static FILE *open_output(const char *path, mr_atomic_file *file) {
-    if (mr_atomic_begin(path, file) != MR_OK) return NULL;
-    FILE *f = fopen(file->tmp_path, "w");
-    if (f == NULL) {
-        int err = errno;
-        mr_atomic_abort(file);
-        mr_fail(MR_ERR_IO, "cannot write '%s': %s", path, strerror(err));
-    }
-    return f;
-}
-
-/* Close what open_output opened: MR_OK, or MR_ERR_IO naming the target (the temporary file removed). */
-static mr_status close_output(FILE *f, mr_atomic_file *file) {
-    // A failed write leaves the stream's error indicator and its errno; fclose may fail by itself (the last flush).
-    const int bad = ferror(f);
-    const int write_errno = errno;
-    errno = 0;
-    const int closed = fclose(f) == 0;
-    int err = !closed ? errno : bad ? write_errno : 0;
-    if (closed && !bad) return MR_OK;
-    if (err == 0) err = EIO;
-    mr_status status = mr_fail(MR_ERR_IO, "cannot write '%s': %s", file->target, strerror(err));
-    mr_atomic_abort(file);
-    return status;
-}
-
 /* rows.csv: every row of the sweeps at the cut; *smax gets the largest source specular. */
 static mr_status write_rows(const mr_learned *t, const plot_axes *a, const mr_sweep_table *tab, const char *path,
                             mr_atomic_file *file, double *smax) {
-    FILE *f = open_output(path, file);
-    if (f == NULL) return MR_ERR_IO;
+    FILE *f = NULL;
+    mr_status status = mr_atomic_open_text(path, file, &f);
+    if (status != MR_OK) return status;
     const mr_learned_slot *fr = &t->features[a->rough_feature], *fs = &t->features[a->spec_feature];
     const mr_learned_slot *or_ = &t->outputs[a->rough_output], *os = &t->outputs[a->spec_output];
     fprintf(f, "source_roughness,source_specular,target_roughness,target_specular\n");
@@ -117,19 +91,19 @@ static mr_status write_rows(const mr_learned *t, const plot_axes *a, const mr_sw
         fprintf(f, "%.9g,%.9g,%.9g,%.9g\n", slot_of(t->source, fr, sv), s, slot_of(t->target, or_, tv),
                 slot_of(t->target, os, tv));
     }
-    return close_output(f, file);
+    return mr_atomic_close_text(f, file);
 }
 
 /* curves.csv: roughness over the domain (specular at the domain's middle); specular lines at 6 roughnesses across
  * the domain, drawn to 1.5 x the largest specular of the rows (what lies beyond is extrapolation). */
 static mr_status write_curves(const mr_learned *t, const plot_axes *a, const mr_sweep_table *tab, double smax,
                               const char *path, mr_atomic_file *file) {
-    FILE *f = open_output(path, file);
-    if (f == NULL) return MR_ERR_IO;
+    FILE *f = NULL;
+    mr_status status = mr_atomic_open_text(path, file, &f);
+    if (status != MR_OK) return status;
     const mr_learned_slot *fr = &t->features[a->rough_feature], *fs = &t->features[a->spec_feature];
     const double *base_row = tab->source_values;
     const double rlo = fr->min, rhi = fr->max, smid = 0.5 * (fs->min + fs->max);
-    mr_status status = MR_OK;
     fprintf(f, "# roughness curve\nsource_roughness,target_roughness\n");
     for (int k = 0; k <= 200 && status == MR_OK; k++) {
         const double r = rlo + (rhi - rlo) * k / 200.0;
@@ -152,7 +126,7 @@ static mr_status write_curves(const mr_learned *t, const plot_axes *a, const mr_
         mr_atomic_abort(file);
         return status;
     }
-    return close_output(f, file);
+    return mr_atomic_close_text(f, file);
 }
 
 /* gnuplot draws both SVGs into their temporary files from the CSVs' temporary files; *drawn = 1 when it ran and

@@ -3,7 +3,6 @@
  */
 #include "pairs.h"
 
-#include <errno.h>
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -260,14 +259,9 @@ static void lobe(const mr_wf_spec *in, double d[3]) {
 
 static mr_status write_pairs(const char *path, const pair *pairs, size_t n, const char *objective, uint64_t seed) {
     mr_atomic_file file;
-    mr_status status = mr_atomic_begin(path, &file);
+    FILE *f = NULL;
+    mr_status status = mr_atomic_open_text(path, &file, &f);
     if (status != MR_OK) return status;
-    FILE *f = fopen(file.tmp_path, "w");
-    if (f == NULL) {
-        status = mr_fail(MR_ERR_IO, "cannot write '%s': %s", path, strerror(errno));
-        mr_atomic_abort(&file);
-        return status;
-    }
     fprintf(f, "# matremap dataset: objective %s, seed %llu, %zu pairs (docs/training.md)\n", objective,
             (unsigned long long)seed, n);
     fprintf(f, "index,category,sg_diffuse_r,sg_diffuse_g,sg_diffuse_b,diffuse_r,diffuse_g,diffuse_b,f0_r,f0_g,f0_b,"
@@ -282,12 +276,8 @@ static mr_status write_pairs(const char *path, const pair *pairs, size_t n, cons
                 p->label.albedo[2], p->label.metallic, p->result.loss, p->result.analytic_loss,
                 p->result.kept_analytic, p->result.loss <= MR_WF_PAIRS_CONVERGED_LOSS ? "converged" : "unreachable");
     }
-    int bad = ferror(f);
-    if (fclose(f) != 0 || bad) {
-        status = mr_fail(MR_ERR_IO, "cannot write '%s': %s", path, strerror(errno));
-        mr_atomic_abort(&file);
-        return status;
-    }
+    status = mr_atomic_close_text(f, &file);
+    if (status != MR_OK) return status;
     return mr_atomic_commit(&file);
 }
 
