@@ -13,34 +13,16 @@ int cli_output_name(char *out, size_t size, const char *prefix, const char *name
 }
 
 FILE *cli_output_open(const char *command, const char *path, mr_atomic_file *file) {
-    mr_status status = mr_atomic_begin(path, file);
-    if (status != MR_OK) {
-        cli_fail(command, status);
-        return NULL;
-    }
-    FILE *f = fopen(file->tmp_path, "w");
-    if (f == NULL) {
-        int err = errno;
-        mr_atomic_abort(file);
-        fprintf(stderr, "matremap %s: error: cannot write '%s': %s\n", command, path, strerror(err));
-    }
+    FILE *f = NULL;
+    mr_status status = mr_atomic_open_text(path, file, &f);
+    if (status != MR_OK) cli_fail(command, status);
     return f;
 }
 
 int cli_output_close(const char *command, FILE *f, mr_atomic_file *file) {
-    // A failed write leaves the stream's error indicator and its errno; fclose may fail by itself (the last flush).
-    const int bad = ferror(f);
-    const int write_errno = errno;
-    errno = 0;
-    const int closed = fclose(f) == 0;
-    int err = !closed ? errno : bad ? write_errno : 0;
-    if (closed && !bad)
-        return 1;
-    if (err == 0)
-        err = EIO;
-    fprintf(stderr, "matremap %s: error: cannot write '%s': %s\n", command, file->target, strerror(err));
-    mr_atomic_abort(file);
-    return 0;
+    mr_status status = mr_atomic_close_text(f, file);
+    if (status != MR_OK) cli_fail(command, status);
+    return status == MR_OK;
 }
 
 int cli_gnuplot_close(const char *command, FILE *plot, int *drawn) {
