@@ -47,23 +47,7 @@ void cli_outputs_abort(mr_atomic_file *files, int n) {
 }
 
 int cli_outputs_commit(const char *command, mr_atomic_file *files, int n, const char *const *written, int n_written) {
-    for (int i = 0; i < n; i++) {
-        if (!files[i].active)
-            continue;
-        mr_status status = mr_atomic_commit(&files[i]);
-        if (status == MR_OK) {
-            files[i].tmp_path[0] = '\0'; // marks it committed for the clean-up below
-            continue;
-        }
-        // Leave none of this run's outputs: a set of files half replaced would not belong together.
-        for (int k = 0; k < i; k++)
-            if (files[k].target != NULL && files[k].tmp_path[0] == '\0')
-                remove(files[k].target);
-        for (int k = 0; k < n_written; k++)
-            remove(written[k]);
-        cli_outputs_abort(files, n);
-        fprintf(stderr, "matremap %s: error: %s (the outputs written before it removed)\n", command, mr_last_error());
-        return 0;
-    }
-    return 1;
+    mr_status status = mr_atomic_commit_set(files, n, written, n_written);
+    if (status != MR_OK) cli_fail(command, status);
+    return status == MR_OK;
 }

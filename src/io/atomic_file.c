@@ -140,3 +140,22 @@ mr_status mr_atomic_close_text(FILE *f, mr_atomic_file *file) {
     mr_atomic_abort(file);
     return status;
 }
+
+mr_status mr_atomic_commit_set(mr_atomic_file *files, int n, const char *const *written, int n_written) {
+    for (int i = 0; i < n; i++) {
+        if (!files[i].active) continue;
+        if (mr_atomic_commit(&files[i]) == MR_OK) {
+            files[i].tmp_path[0] = '\0'; // marks it committed for the clean-up below
+            continue;
+        }
+        // Leave none of this set: files half replaced would not belong together.
+        char why[1024];
+        snprintf(why, sizeof why, "%s", mr_last_error());
+        for (int k = 0; k < i; k++)
+            if (files[k].target != NULL && files[k].tmp_path[0] == '\0') remove(files[k].target);
+        for (int k = 0; k < n_written; k++) remove(written[k]);
+        for (int k = 0; k < n; k++) mr_atomic_abort(&files[k]);
+        return mr_fail(MR_ERR_IO, "%s (the outputs written before it removed)", why);
+    }
+    return MR_OK;
+}

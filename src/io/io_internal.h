@@ -65,6 +65,12 @@ void mr_atomic_abort(mr_atomic_file *file);
 mr_status mr_atomic_open_text(const char *target, mr_atomic_file *file, FILE **out);
 mr_status mr_atomic_close_text(FILE *f, mr_atomic_file *file);
 
+/* Commit a set of prepared files all or none: every active file of files[0..n) in order; when one fails, the files
+ * of the set committed before it are removed, and so are written[0..n_written) (outputs the caller committed just
+ * before, e.g. the file the set goes with), the rest aborted, and MR_ERR_IO is returned with the commit's message
+ * followed by " (the outputs written before it removed)". Inactive files (aborted, or never begun) are skipped. */
+mr_status mr_atomic_commit_set(mr_atomic_file *files, int n, const char *const *written, int n_written);
+
 /* ---- input files (input_file.c) ---------------------------------------------------------------------------
  * Every file a reader of src/io or gltf/ opens because a user (or a file the user gave) named it goes through
  * mr_io_open_input: only a regular file is read. A folder, a FIFO, a device (/dev/zero) or a socket is refused

@@ -205,26 +205,6 @@ static mr_status prepare(const mr_learned *t, const mr_sweep_table *tab, const c
     return MR_OK;
 }
 
-/* Rename every prepared file over its target; on a failure, remove the ones renamed before it and the transform
- * at `written`, and the rest's temporary files: a set of files half replaced would not belong together. */
-static mr_status commit_all(mr_atomic_file files[MR_LEARNED_PLOT_FILES], const char *written) {
-    for (int i = 0; i < MR_LEARNED_PLOT_FILES; i++) {
-        if (!files[i].active) continue;
-        if (mr_atomic_commit(&files[i]) == MR_OK) {
-            files[i].tmp_path[0] = '\0'; // marks it committed for the clean-up below
-            continue;
-        }
-        char why[1024];
-        snprintf(why, sizeof why, "%s", mr_last_error());
-        for (int k = 0; k < i; k++)
-            if (files[k].target != NULL && files[k].tmp_path[0] == '\0') remove(files[k].target);
-        remove(written);
-        abort_all(files);
-        return mr_fail(MR_ERR_IO, "%s (the outputs written before it removed)", why);
-    }
-    return MR_OK;
-}
-
 static mr_status write_with_plots(const mr_learned *t, const mr_sweep_table *rows, const char *path,
                                   const char *dir, const char *hint, mr_learned_plots_result *result) {
     // The plots are prepared first and committed after the transform, so a failure leaves neither.
@@ -237,7 +217,7 @@ static mr_status write_with_plots(const mr_learned *t, const mr_sweep_table *row
         status = mr_learned_write(t, path);
         if (status != MR_OK) abort_all(files);
     }
-    if (status == MR_OK) status = commit_all(files, path);
+    if (status == MR_OK) status = mr_atomic_commit_set(files, MR_LEARNED_PLOT_FILES, &path, 1);
     if (status != MR_OK && created) rmdir(dir); // only if empty: nothing of this call is left in it
     return status;
 }
