@@ -51,7 +51,7 @@ static void print_help(void) {
            "                        studio and sky (repeatable, at most %d)\n"
            "  --chroma-weight W     luma objective: weight of the per-channel colour term (default 0.1)\n"
            "  --regularisation L    pull towards the analytic answer (default 1e-4, labels.h)\n"
-           "  --threads T           OpenMP threads (default: all cores; the result does not depend on it)\n"
+           "  --threads T           OpenMP threads (default 0: automatic, all cores); results do not depend on it\n"
            "  --compare             the objective comparison (needs --env)\n"
            "  --env FILE            an environment map for --compare (repeatable, at most %d)\n"
            "  --weights FILE        a network to compare too (repeatable, at most %d)\n"
@@ -257,7 +257,7 @@ int cmd_dataset(int argc, char **argv) {
             if (taken < 0 || !cli_parse_double("dataset", "--chroma-weight", value, 0.0, 100.0, &lo.chroma_weight))
                 return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("dataset", argc, argv, &i, "--threads", &value))) {
-            if (taken < 0 || !cli_parse_int("dataset", "--threads", value, 1, 1024, &threads)) return CLI_EXIT_USAGE;
+            if (taken < 0 || !cli_parse_int("dataset", "--threads", value, 0, 1024, &threads)) return CLI_EXIT_USAGE;
         } else if (strcmp(argv[i], "--compare") == 0) {
             do_compare = 1;
         } else if (strcmp(argv[i], "--json") == 0) {
