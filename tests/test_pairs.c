@@ -175,12 +175,12 @@ MR_TEST(objectives_compared) {
     MR_CHECK_OK(mr_wf_pairs_compare(&o, &t));
     if (t != NULL) {
         MR_CHECK(t->texel_count == (size_t)t->hard_case_count + 3 && t->hard_case_count >= 10);
-        MR_CHECK(t->column_count == MR_WF_OBJECTIVE_COUNT + 3 + 1);
+        MR_CHECK(t->column_count == MR_WF_COMPARE_OBJECTIVES + 3 + 1);
         MR_CHECK(strcmp(t->columns[0].name, "labels: linear") == 0);
-        MR_CHECK(strcmp(t->columns[MR_WF_OBJECTIVE_COUNT].name, "weighted") == 0);
+        MR_CHECK(strcmp(t->columns[MR_WF_COMPARE_OBJECTIVES].name, "weighted") == 0);
         MR_CHECK(strncmp(t->columns[t->column_count - 1].name, "mlp zero.mlp", 12) == 0);
         MR_CHECK(strcmp(t->hard_cases[0].name, "black plastic") == 0);
-        MR_CHECK_NEAR(t->columns[MR_WF_OBJECTIVE_COUNT].ssim[0], 1.0, 1e-3);
+        MR_CHECK_NEAR(t->columns[MR_WF_COMPARE_OBJECTIVES].ssim[0], 1.0, 1e-3);
         for (int k = 0; k < t->column_count; k++)
             for (size_t i = 0; i < t->texel_count; i++)
                 MR_CHECK(t->columns[k].ssim[i] >= -1.0 && t->columns[k].ssim[i] <= 1.0 + 1e-9);

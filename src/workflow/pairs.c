@@ -238,9 +238,12 @@ static mr_status label_pairs(const mr_wf_label_scene *scene, pair *pairs, size_t
     return status;
 }
 
-/* The label options in force: the caller's, or the defaults. */
+/* The label options in force: the caller's, or the defaults; their scenes render with the pairs' threads unless
+ * they name their own. */
 static mr_wf_label_options label_options_of(const mr_wf_pairs_options *opts) {
-    return opts->labels ? *opts->labels : mr_wf_label_options_default();
+    mr_wf_label_options o = opts->labels ? *opts->labels : mr_wf_label_options_default();
+    if (o.threads == 0) o.threads = opts->threads;
+    return o;
 }
 
 /* Drawn texels first come after `first` fixed ones; sample i of the draw is pairs[first + i]. */
@@ -353,16 +356,16 @@ void mr_wf_compare_table_free(mr_wf_compare_table *table) {
     free(table);
 }
 
-/* Column k's answers for every texel: an objective's labels (k < MR_WF_OBJECTIVE_COUNT), an analytic inverse
+/* Column k's answers for every texel: an objective's labels (k < MR_WF_COMPARE_OBJECTIVES), an analytic inverse
  * (glTF reading of the diffuse), or a network; the column's name is set first. dif/spe hold the texels as planes,
  * alb/met are scratch planes of the batches. */
 static mr_status column_answers(const mr_wf_compare_options *opts, int k, pair *texels, size_t n, const float *dif,
                                 const float *spe, float *alb, float *met, mr_wf_metal *answers,
                                 mr_wf_compare_column *col) {
     mr_status status;
-    if (k < MR_WF_OBJECTIVE_COUNT) {
+    if (k < MR_WF_COMPARE_OBJECTIVES) {
         mr_wf_label_options lo = label_options_of(&opts->pairs);
-        lo.objective = (mr_wf_objective)k;
+        lo.objective = (mr_wf_objective)(MR_WF_OBJECTIVE_LINEAR + k);
         mr_wf_label_scene *scene = NULL;
         snprintf(col->name, sizeof col->name, "labels: %s", mr_wf_objective_name(lo.objective));
         status = mr_wf_label_scene_create(&lo, &scene);
@@ -376,7 +379,7 @@ static mr_status column_answers(const mr_wf_compare_options *opts, int k, pair *
     mr_wf_options o = mr_wf_options_default();
     o.spec_diffuse = MR_WF_DIFFUSE_SPECGLOSS;
     o.threads = opts->pairs.threads;
-    int a = k - MR_WF_OBJECTIVE_COUNT;
+    int a = k - MR_WF_COMPARE_OBJECTIVES;
     if (a < 3) {
         static const mr_wf_method methods[3] = {MR_WF_WEIGHTED, MR_WF_MEAN, MR_WF_KHRONOS};
         o.method = methods[a];
@@ -422,6 +425,7 @@ static mr_status compare(const mr_wf_compare_options *opts, pair *texels, size_t
     eo.glossiness[0] = 0.3;
     eo.glossiness[1] = 0.6;
     eo.glossiness[2] = 0.9;
+    eo.threads = opts->pairs.threads;
     mr_wf_label_scene *eval = NULL;
     mr_status status = mr_wf_label_scene_create(&eo, &eval);
     if (status != MR_OK) return status;
@@ -435,7 +439,7 @@ static mr_status compare(const mr_wf_compare_options *opts, pair *texels, size_t
             dif[3 * i + c] = (float)texels[i].in.diffuse[c];
             spe[3 * i + c] = (float)texels[i].in.specular[c];
         }
-    const int total = MR_WF_OBJECTIVE_COUNT + 3 + opts->weight_count;
+    const int total = MR_WF_COMPARE_OBJECTIVES + 3 + opts->weight_count;
     for (int k = 0; status == MR_OK && k < total; k++) {
         mr_wf_compare_column *col = &table->columns[table->column_count];
         col->ssim = malloc(n * sizeof *col->ssim);

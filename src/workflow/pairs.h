@@ -105,7 +105,9 @@ typedef struct mr_wf_pairs_options {
                                            default is 1) */
     const mr_wf_label_options *labels;  /* how labels are made; NULL = mr_wf_label_options_default() */
     const mr_wf_texel_pool *pool;       /* asset texels (borrowed); NULL or empty: none, no ASSET category */
-    int threads;                        /* 0 = automatic (mr_auto_threads); n >= 1: n OpenMP threads */
+    int threads;                        /* 0 = automatic (mr_auto_threads); n >= 1: n OpenMP threads, for the fits
+                                           and for the label scenes' renders (unless labels->threads names
+                                           theirs) */
     mr_wf_pairs_progress_fn progress;   /* NULL: none */
     void *progress_user;
 } mr_wf_pairs_options;
@@ -129,7 +131,9 @@ typedef struct mr_wf_named_texel {
 } mr_wf_named_texel;
 
 #define MR_WF_COMPARE_MAX_WEIGHTS 4
-#define MR_WF_COMPARE_MAX_COLUMNS (MR_WF_OBJECTIVE_COUNT + 3 + MR_WF_COMPARE_MAX_WEIGHTS)
+/* The objectives compared: every one from MR_WF_OBJECTIVE_LINEAR on (labels.h), in the enum's order. */
+#define MR_WF_COMPARE_OBJECTIVES ((int)MR_WF_OBJECTIVE_COUNT - (int)MR_WF_OBJECTIVE_LINEAR)
+#define MR_WF_COMPARE_MAX_COLUMNS (MR_WF_COMPARE_OBJECTIVES + 3 + MR_WF_COMPARE_MAX_WEIGHTS)
 
 typedef struct mr_wf_compare_options {
     mr_wf_pairs_options pairs;  /* the drawn texels (samples 0 = 400) and how the objectives' labels are made
@@ -152,7 +156,8 @@ typedef struct mr_wf_compare_table {
     int hard_case_count;                  /* texels 0 .. hard_case_count - 1 are hard_cases[] */
     const mr_wf_named_texel *hard_cases;  /* a static table (not freed) */
     mr_wf_pair_category *categories;      /* per texel (hard cases: MR_WF_PAIR_UNIFORM) */
-    int column_count;                     /* objectives, then weighted, mean, khronos, then the networks */
+    int column_count;                     /* MR_WF_COMPARE_OBJECTIVES objectives' labels, then weighted, mean,
+                                             khronos, then the networks */
     mr_wf_compare_column columns[MR_WF_COMPARE_MAX_COLUMNS];
 } mr_wf_compare_table;
 
