@@ -178,7 +178,8 @@ mr_status mr_wf_texel_pool_add_maps(mr_wf_texel_pool *pool, const mr_image *diff
         return mr_fail(MR_ERR_INVALID_ARG, "texel pool: NULL pool or factors");
     if (pool->count + count > pool->capacity) {
         float *grown = realloc(pool->texels, (pool->count + count) * 6 * sizeof *grown);
-        if (grown == NULL) return mr_fail(MR_ERR_NOMEM, "texel pool: out of memory for %zu texels", pool->count + count);
+        if (grown == NULL)
+            return mr_fail(MR_ERR_NOMEM, "texel pool: out of memory for %zu texels", pool->count + count);
         pool->texels = grown;
         pool->capacity = pool->count + count;
     }
