@@ -29,10 +29,12 @@
  * within one 8-bit code rms (loss <= MR_WF_PAIRS_CONVERGED_LOSS), else unreachable (the closest metal-rough
  * answer). Numbers in the C locale (%.9g, losses %.6g). mr_wf_dataset_load reads it.
  *
- * Threads: the labels are fitted by an OpenMP team of `threads` (0: the automatic rule, every core for any pairs),
- * with a dynamic schedule (texels differ in cost); no process-wide setting is changed. Results do not depend on it.
- * Progress: opts->progress (NULL: none) is called from the team, one call at a time, every 256 pairs of a stage and
- * once more after the stage's last pair (done == total), from the calling thread.
+ * Threads: the labels are fitted (and --compare's answers judged) by an OpenMP team of `threads` (0: the automatic
+ * rule, every core for two pairs or more) with a dynamic schedule (texels differ in cost), and the label scenes
+ * render with it; no process-wide setting is changed. Results do not depend on it.
+ * Progress: opts->progress (NULL: none) is called from the team, one call at a time, after every 256th pair of a
+ * stage (a stage: the labels of one objective), and once when the stage is done (done == total) from the calling
+ * thread; it must not call back into this module.
  * Ownership: a table has one owner and one free (mr_wf_compare_table_free, NULL-safe); a pool likewise
  * (mr_wf_texel_pool_free). Nothing is printed.
  */
