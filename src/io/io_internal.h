@@ -71,6 +71,17 @@ mr_status mr_atomic_close_text(FILE *f, mr_atomic_file *file);
  * followed by " (the outputs written before it removed)". Inactive files (aborted, or never begun) are skipped. */
 mr_status mr_atomic_commit_set(mr_atomic_file *files, int n, const char *const *written, int n_written);
 
+/* ---- plots drawn by gnuplot (gnuplot.c) -------------------------------------------------------------------
+ * A plot is a convenience beside the data it draws: the script (printf-style) is piped to "gnuplot" (popen, its
+ * stderr discarded), which draws into the files the script names (the callers' temporary files). *drawn is 1 when
+ * gnuplot ran and succeeded, 0 when it is missing or failed (the caller then aborts the pictures and keeps the
+ * data). MR_ERR_IO "cannot write the plot script to gnuplot: REASON" only when writing to a gnuplot that started
+ * failed. */
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+mr_status mr_gnuplot_draw(int *drawn, const char *script, ...);
+
 /* ---- input files (input_file.c) ---------------------------------------------------------------------------
  * Every file a reader of src/io or gltf/ opens because a user (or a file the user gave) named it goes through
  * mr_io_open_input: only a regular file is read. A folder, a FIFO, a device (/dev/zero) or a socket is refused

@@ -129,21 +129,19 @@ static mr_status write_curves(const mr_learned *t, const plot_axes *a, const mr_
     return mr_atomic_close_text(f, file);
 }
 
-/* gnuplot draws both SVGs into their temporary files from the CSVs' temporary files; *drawn = 1 when it ran and
- * succeeded. MR_ERR_IO when the script cannot be written to a gnuplot that runs. */
+/* gnuplot draws both SVGs into their temporary files from the CSVs' temporary files (mr_gnuplot_draw: *drawn = 1
+ * when it ran and succeeded). */
 static mr_status draw_svgs(const mr_learned *t, const plot_axes *a, mr_atomic_file files[MR_LEARNED_PLOT_FILES],
                            int *drawn) {
-    *drawn = 0;
     const mr_learned_slot *fr = &t->features[a->rough_feature], *fs = &t->features[a->spec_feature];
     const mr_learned_slot *or_ = &t->outputs[a->rough_output], *os = &t->outputs[a->spec_output];
     char title[256];
     snprintf(title, sizeof title, "%s -> %s (%s)", t->source->name, t->target->name, mr_learn_method_name(t->method));
-    FILE *plot = popen("gnuplot 2>/dev/null", "w");
-    if (plot == NULL) return MR_OK; // the plot is a convenience: without gnuplot the CSVs are the cross sections
     const char *sr = t->source->params[fr->param].name, *ss = t->source->params[fs->param].name;
     const char *tr = t->target->params[or_->param].name, *ts = t->target->params[os->param].name;
     const char *rows = files[PLOT_ROWS].tmp_path, *curves = files[PLOT_CURVES].tmp_path;
-    fprintf(plot,
+    return mr_gnuplot_draw(
+        drawn,
             "set terminal svg size 720,520 dynamic font 'Helvetica,12' background rgb 'white'\n"
             "set datafile separator ','\nset grid\nset key top left\n"
             "set output '%s'\nset title '%s: roughness' noenhanced\n"
@@ -159,13 +157,6 @@ static mr_status draw_svgs(const mr_learned *t, const plot_axes *a, mr_atomic_fi
             files[PLOT_ROUGHNESS].tmp_path, title, t->source->name, sr, t->target->name, tr, rows, curves,
             mr_learn_method_name(t->method), files[PLOT_SPECULAR].tmp_path, title, t->source->name, ss,
             t->target->name, ts, fr->min, fr->max, t->source->name, sr, rows, curves);
-    const int bad = ferror(plot);
-    const int err = errno;
-    const int rc = pclose(plot);
-    if (bad)
-        return mr_fail(MR_ERR_IO, "cannot write the plot script to gnuplot: %s", strerror(err ? err : EIO));
-    *drawn = rc == 0;
-    return MR_OK;
 }
 
 /* The plots as temporary files (files[] zero-initialised by the caller, their targets paths[]), or nothing when
