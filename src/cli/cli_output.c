@@ -1,5 +1,4 @@
 /* cli_output.c — text files the commands write themselves, atomically (contract in cli.h). */
-#include <errno.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -21,33 +20,6 @@ FILE *cli_output_open(const char *command, const char *path, mr_atomic_file *fil
 
 int cli_output_close(const char *command, FILE *f, mr_atomic_file *file) {
     mr_status status = mr_atomic_close_text(f, file);
-    if (status != MR_OK) cli_fail(command, status);
-    return status == MR_OK;
-}
-
-int cli_gnuplot_close(const char *command, FILE *plot, int *drawn) {
-    *drawn = 0;
-    if (plot == NULL)
-        return 1;
-    const int bad = ferror(plot);
-    const int err = errno;
-    const int rc = pclose(plot);
-    if (bad) {
-        fprintf(stderr, "matremap %s: error: cannot write the plot script to gnuplot: %s\n", command,
-                strerror(err ? err : EIO));
-        return 0;
-    }
-    *drawn = rc == 0;
-    return 1;
-}
-
-void cli_outputs_abort(mr_atomic_file *files, int n) {
-    for (int i = 0; i < n; i++)
-        mr_atomic_abort(&files[i]);
-}
-
-int cli_outputs_commit(const char *command, mr_atomic_file *files, int n, const char *const *written, int n_written) {
-    mr_status status = mr_atomic_commit_set(files, n, written, n_written);
     if (status != MR_OK) cli_fail(command, status);
     return status == MR_OK;
 }
