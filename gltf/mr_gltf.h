@@ -252,6 +252,16 @@ mr_status mr_gltf_image_read(const mr_gltf *asset, int image, const mr_img_read_
 mr_status mr_gltf_texture_read(const mr_gltf *asset, int texture, const mr_img_read_options *opts, mr_image **out,
                                mr_img_stored *stored);
 
+struct mr_wf_texel_pool;
+/* Texels of the asset's spec-gloss materials (KHR_materials_pbrSpecularGlossiness) for `matremap dataset`'s draws
+ * (src/workflow/pairs.h): one source of the pool, MR_WF_POOL_SOURCE_TEXELS texels shared equally among those
+ * materials, each the diffuse and specular-glossiness textures (decoded as colour textures: sRGB to linear) times
+ * their factors at one random position, from the stream of (seed, the pool's source count). *materials gets how
+ * many materials were sampled: 0 (an asset without spec-gloss materials) adds nothing and is left to the caller to
+ * judge. A texture that cannot be decoded fails with its error (the texels added before it stay). */
+mr_status mr_gltf_add_specgloss_texels(const mr_gltf *asset, uint64_t seed, struct mr_wf_texel_pool *pool,
+                                       int *materials);
+
 /* Adds a texture of `image` with `sampler` (NULL = no sampler, i.e. glTF's defaults); an identical sampler
  * already in the asset is reused. *out_texture receives its index. */
 mr_status mr_gltf_add_texture(mr_gltf *asset, int image, const mr_gltf_sampler *sampler, int *out_texture);

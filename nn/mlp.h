@@ -257,6 +257,17 @@ mr_status mr_mlp_train(const float *x, const float *y, size_t n, int n_in, int n
  * existing one is left as it was. */
 mr_status mr_mlp_write(const mr_mlp *net, const char *path);
 
+/* The network at `path` (mr_mlp_write) with its training's loss curve, all or none: PREFIX.csv (a header
+ * "epoch,train_loss,validation_loss,best_epoch", then one line per epochs[0..count), %.9g in the C locale) and
+ * PREFIX.svg (train and validation loss against the epoch, log scale, titled `title`, drawn by gnuplot when it runs:
+ * *drawn = 1; else 0 and only the CSV). The curve is prepared as temporary files, the network written, then the
+ * curve renamed into place; a failure at any step leaves none of the three (a network already renamed is removed).
+ * prefix_hint names the prefix in messages ("HINT 'PREFIX': the name is too long"; NULL: "loss curve"). drawn may be
+ * NULL. MR_ERR_INVALID_ARG for NULL net, path, prefix or epochs (with count > 0); MR_ERR_IO naming a file that
+ * cannot be written; mr_mlp_write's errors. */
+mr_status mr_mlp_write_with_curve(const mr_mlp *net, const char *path, const mr_mlp_epoch *epochs, int count,
+                                  const char *prefix, const char *prefix_hint, const char *title, int *drawn);
+
 /* The weight file's text in memory (*text malloc'ed, NUL-terminated, the caller frees it; *length may be NULL):
  * exactly the bytes mr_mlp_write writes, for formats that embed a network (src/learn/learned.h). `name` labels
  * errors (NULL = "<memory>"). Errors as mr_mlp_write's, without MR_ERR_IO. */

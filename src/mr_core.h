@@ -101,6 +101,20 @@ mr_status mr_atomic_write_bytes(const char *target, const void *bytes, size_t si
  * Preserves errno and the recorded last-error message. */
 void mr_atomic_abort(mr_atomic_file *file);
 
+/* A text file written through stdio under the protocol: mr_atomic_open_text begins and opens the temporary file
+ * for writing (*out; on failure NULL and nothing left: mr_atomic_begin's errors, or MR_ERR_IO "cannot write
+ * 'TARGET': REASON"); mr_atomic_close_text closes it and checks every write (the stream's error indicator, the
+ * last flush): MR_OK with the file still to commit (or abort), or MR_ERR_IO "cannot write 'TARGET': REASON" with
+ * the temporary file removed. Messages as the command line's outputs have always said them. */
+mr_status mr_atomic_open_text(const char *target, mr_atomic_file *file, FILE **out);
+mr_status mr_atomic_close_text(FILE *f, mr_atomic_file *file);
+
+/* Commit a set of prepared files all or none: every active file of files[0..n) in order; when one fails, the files
+ * of the set committed before it are removed, and so are written[0..n_written) (outputs the caller committed just
+ * before, e.g. the file the set goes with), the rest aborted, and MR_ERR_IO is returned with the commit's message
+ * followed by " (the outputs written before it removed)". Inactive files (aborted, or never begun) are skipped. */
+mr_status mr_atomic_commit_set(mr_atomic_file *files, int n, const char *const *written, int n_written);
+
 /* ---- input files (io/input_file.c) --------------------------------------------------------------------------
  * Every file the library opens because a user (or a file the user gave) named it goes through mr_io_open_input:
  * only a regular file is read. A folder, a FIFO, a device (/dev/zero) or a socket is refused by name before a byte

@@ -14,6 +14,8 @@
 #include "remap/sweep.h"
 #include "workflow/workflow.h"
 #include "workflow/dataset.h"
+#include "workflow/pairs.h"
+#include "learn/learned_plots.h"
 #include "report/report.h"
 #include "nn/mlp.h"
 #include "gltf/mr_gltf.h"

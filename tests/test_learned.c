@@ -12,6 +12,7 @@
 
 #include "harness.h"
 #include "learn/learned.h"
+#include "learn/learned_plots.h"
 #include "learn/svr.h"
 #include "remap/sweep.h"
 #include "transform/transform.h"
@@ -587,9 +588,68 @@ MR_TEST(check_against_the_remaps) {
     unlink(path);
 }
 
+/* mr_learned_write_with_plots: the transform and its cross sections as one set. The rows file holds every row at the
+ * cut, the curves follow the transform (the parametric fit recovers TRUE_POLY), and a set that cannot be completed
+ * leaves nothing, not even the transform; a transform without a roughness and specular pair writes no plots. */
+MR_TEST(plots_written_with_the_transform) {
+    const char *sweep = ward_ggx_sweep();
+    mr_sweep_table tab;
+    MR_CHECK_OK(mr_sweep_table_load(&sweep, 1, NULL, &tab));
+    mr_learned *t = learn_from(sweep, MR_LEARN_PARAMETRIC);
+    MR_CHECK(t != NULL);
+    if (t == NULL) {
+        mr_sweep_table_free(&tab);
+        return;
+    }
+    const char *out = mr_test_tmp_path("plotted.mrt"), *dir = mr_test_tmp_path("plots");
+    mr_learned_plots_result r = {-1, -1};
+    MR_CHECK_OK(mr_learned_write_with_plots(t, &tab, out, dir, NULL, &r));
+    MR_CHECK(r.cut == 1 && (r.drawn == 0 || r.drawn == 1));
+    mr_learned *back = NULL;
+    MR_CHECK_OK(mr_learned_read(out, &back));
+    mr_learned_free(back);
+    char path[1024];
+    for (int k = 0; k < MR_LEARNED_PLOT_FILES; k++) {
+        snprintf(path, sizeof path, "%s/%s", dir, mr_learned_plot_file_name(k));
+        MR_CHECK_MSG(access(path, F_OK) == 0 || (k >= 2 && !r.drawn), "%s missing", path);
+    }
+    MR_CHECK(mr_learned_plot_file_name(MR_LEARNED_PLOT_FILES) == NULL);
+    snprintf(path, sizeof path, "%s/rows.csv", dir);
+    char *rows = mr_test_read_file(path, NULL);
+    MR_CHECK(rows != NULL && strncmp(rows, "source_roughness,source_specular,target_roughness,target_specular\n",
+                                     66) == 0);
+    size_t lines = 0;
+    for (const char *c = rows; c && *c; c++) lines += *c == '\n';
+    MR_CHECK(lines == 1 + tab.n);
+    free(rows);
+    snprintf(path, sizeof path, "%s/curves.csv", dir);
+    FILE *f = fopen(path, "r");
+    char line[256];
+    double a = 0.0, rough = 0.0;
+    MR_CHECK(f != NULL && fgets(line, sizeof line, f) && fgets(line, sizeof line, f) && fgets(line, sizeof line, f));
+    MR_CHECK(f != NULL && sscanf(line, "%lf,%lf", &a, &rough) == 2);
+    MR_CHECK_NEAR(rough, mr_polynomial_eval(TRUE_POLY, 4, a), 1e-6); // the first point of the roughness curve
+    if (f) fclose(f);
+    // A folder that cannot be made (under a file): nothing is written, the transform neither.
+    const char *plain = mr_test_tmp_path("plain_file"), *none = mr_test_tmp_path("not_written.mrt");
+    MR_CHECK(mr_test_write_file(plain, "x", 1));
+    snprintf(path, sizeof path, "%s/sub", plain);
+    mr_learned_plots_options po = {"--plots"};
+    MR_CHECK(mr_learned_write_with_plots(t, &tab, none, path, &po, &r) == MR_ERR_IO);
+    MR_CHECK(strstr(mr_last_error(), "--plots '") != NULL && strstr(mr_last_error(), "cannot create the folder"));
+    MR_CHECK(access(none, F_OK) != 0 && r.cut == 0);
+    MR_CHECK(mr_learned_write_with_plots(NULL, &tab, none, NULL, NULL, NULL) == MR_ERR_INVALID_ARG);
+    // Without a directory it is mr_learned_write.
+    MR_CHECK_OK(mr_learned_write_with_plots(t, &tab, none, NULL, NULL, &r));
+    MR_CHECK(access(none, F_OK) == 0 && r.cut == 0);
+    mr_learned_free(t);
+    mr_sweep_table_free(&tab);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(parametric_recovers_known_mapping), MR_TEST_ENTRY(carry_by_lobe_ratio),
              MR_TEST_ENTRY(solver_residue_not_learned), MR_TEST_ENTRY(float_map_at_bound_not_clamped),
              MR_TEST_ENTRY(round_trip_every_method), MR_TEST_ENTRY(corrupted_files_refused),
              MR_TEST_ENTRY(domain_flags_and_chromaticity), MR_TEST_ENTRY(chain_equals_steps),
              MR_TEST_ENTRY(chain_search), MR_TEST_ENTRY(parametric_refuses_wrong_shape),
-             MR_TEST_ENTRY(svr_hyper_parameters_held), MR_TEST_ENTRY(check_against_the_remaps))
+             MR_TEST_ENTRY(svr_hyper_parameters_held), MR_TEST_ENTRY(check_against_the_remaps),
+             MR_TEST_ENTRY(plots_written_with_the_transform))

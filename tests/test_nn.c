@@ -685,6 +685,38 @@ MR_TEST(text_lines_count_lines_and_split_tokens) {
     MR_CHECK(!mr_text_token_is("end", 3, "en") && !mr_text_token_is("en", 2, "end"));
 }
 
+/* mr_mlp_write_with_curve: the network and its loss curve as one set; a curve that cannot be written leaves no
+ * network either. */
+MR_TEST(network_written_with_its_loss_curve) {
+    mr_mlp *net = random_net(3, 4, 2, 11);
+    if (net == NULL) return;
+    const mr_mlp_epoch epochs[3] = {{0, 2, 1.0, 0.9, 0, 0.9}, {1, 2, 0.5, 0.6, 1, 0.6}, {2, 2, 0.25, 0.7, 1, 0.6}};
+    const char *path = mr_test_tmp_path("curved.mlp"), *prefix = mr_test_tmp_path("curved_loss");
+    int drawn = -1;
+    MR_CHECK_OK(mr_mlp_write_with_curve(net, path, epochs, 3, prefix, "--loss-curve", "a title", &drawn));
+    MR_CHECK(drawn == 0 || drawn == 1);
+    mr_mlp *back = NULL;
+    MR_CHECK_OK(mr_mlp_read(path, &back));
+    mr_mlp_free(back);
+    char csv[1024], svg[1024];
+    snprintf(csv, sizeof csv, "%s.csv", prefix);
+    snprintf(svg, sizeof svg, "%s.svg", prefix);
+    char *text = mr_test_read_file(csv, NULL);
+    MR_CHECK(text != NULL && strcmp(text, "epoch,train_loss,validation_loss,best_epoch\n0,1,0.9,0\n1,0.5,0.6,1\n"
+                                          "2,0.25,0.7,1\n") == 0);
+    free(text);
+    MR_CHECK((access(svg, F_OK) == 0) == (drawn == 1));
+    // A prefix under a plain file: nothing is written, not even the network.
+    const char *plain = mr_test_tmp_path("curve_plain"), *none = mr_test_tmp_path("not_written.mlp");
+    MR_CHECK(mr_test_write_file(plain, "x", 1));
+    char bad[1024];
+    snprintf(bad, sizeof bad, "%s/sub/loss", plain);
+    MR_CHECK(mr_mlp_write_with_curve(net, none, epochs, 3, bad, NULL, NULL, &drawn) != MR_OK);
+    MR_CHECK(access(none, F_OK) != 0 && drawn == 0);
+    MR_CHECK(mr_mlp_write_with_curve(NULL, none, epochs, 3, prefix, NULL, NULL, NULL) == MR_ERR_INVALID_ARG);
+    mr_mlp_free(net);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(gradient_matches_central_differences), MR_TEST_ENTRY(predict_matches_scalar_reference),
              MR_TEST_ENTRY(predict_is_identical_for_1_and_2_threads),
              MR_TEST_ENTRY(nan_input_propagates_to_its_row_only),
@@ -694,4 +726,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(gradient_matches_central_differences), MR_TEST_ENTRY(
              MR_TEST_ENTRY(constant_features_normalise_without_nan),
              MR_TEST_ENTRY(early_stopping_restores_the_best_weights),
              MR_TEST_ENTRY(callback_stops_training_and_defaults_apply), MR_TEST_ENTRY(bad_arguments_are_refused),
-             MR_TEST_ENTRY(inference_throughput), MR_TEST_ENTRY(text_lines_count_lines_and_split_tokens))
+             MR_TEST_ENTRY(inference_throughput), MR_TEST_ENTRY(text_lines_count_lines_and_split_tokens),
+             MR_TEST_ENTRY(network_written_with_its_loss_curve))

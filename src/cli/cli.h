@@ -150,22 +150,9 @@ int cli_output_name(char *out, size_t size, const char *prefix, const char *name
 /* Create the temporary file for `path` and open it for writing. NULL after printing the error. */
 FILE *cli_output_open(const char *command, const char *path, mr_atomic_file *file);
 
-/* Close f. 1 if every write to it succeeded (the temporary file then waits for cli_outputs_commit); else 0, after
- * printing the error and removing the temporary file. */
+/* Close f. 1 if every write to it succeeded (the temporary file then waits for mr_atomic_commit or
+ * mr_atomic_commit_set); else 0, after printing the error and removing the temporary file. */
 int cli_output_close(const char *command, FILE *f, mr_atomic_file *file);
-
-/* Close a gnuplot pipe (popen; NULL: gnuplot could not be started) and say whether it drew: *drawn is 1 when
- * gnuplot ran and succeeded, 0 when it is missing or failed (a plot is a convenience: the caller notes it and goes
- * on). Returns 0, after printing the error, only when writing the script to the pipe failed. */
-int cli_gnuplot_close(const char *command, FILE *plot, int *drawn);
-
-/* Rename the prepared temporary files files[0..n) into place, in order (inactive ones, zero-initialised or aborted,
- * are skipped). If one fails, the files already renamed and the `written` paths (outputs of the same run committed
- * before) are removed, the other temporary files too, and 0 is returned after printing the error. */
-int cli_outputs_commit(const char *command, mr_atomic_file *files, int n, const char *const *written, int n_written);
-
-/* Remove the temporary files of files[0..n) that were not committed. */
-void cli_outputs_abort(mr_atomic_file *files, int n);
 
 /* ---- maps given on the command line: FILE[:r|g|b|a][:linear|srgb] (cli.c) ------------------------------------
  * Every command that reads a map of a parameter takes the file with optional selectors at its end, in this order:

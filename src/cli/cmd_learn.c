@@ -2,15 +2,14 @@
  * cmd_learn.c — `matremap learn`: a transform between two BRDF models learned from sweep files (src/learn/learned.h),
  * written as a .mrt file, with the paper's cross-section plots on request.
  */
-#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include "cli.h"
 #include "learn/learned.h"
+#include "learn/learned_plots.h"
 #include "learn/svr.h"
 
 #define MAX_FILES 64
@@ -83,178 +82,6 @@ static void draw_progress(const char *stage, double fraction, void *user) {
     progress_state *p = user;
     if (p->draw)
         fprintf(stderr, "\rmatremap learn: %s %3.0f %%  %.1f s ", stage, 100.0 * fraction, cli_now() - p->started);
-}
-
-/* ---- plots ------------------------------------------------------------------------------------------------- */
-
-/* The roughness and specular features/outputs of a transform, if it has them (the paper's cross sections). */
-typedef struct plot_axes {
-    int rough_feature, spec_feature, rough_output, spec_output;
-} plot_axes;
-
-static int find_axes(const mr_learned *t, plot_axes *a) {
-    *a = (plot_axes){-1, -1, -1, -1};
-    for (int i = 0; i < t->feature_count; i++) {
-        const mr_brdf_param *p = &t->source->params[t->features[i].param];
-        if (p->channels == 1 && p->role == MR_PARAM_NONLINEAR && a->rough_feature < 0) a->rough_feature = i;
-        else if ((p->lobe & MR_LOBE_SPECULAR) && p->role != MR_PARAM_NONLINEAR && a->spec_feature < 0 &&
-                 t->features[i].kind != MR_LEARNED_CHANNEL)
-            a->spec_feature = i;
-    }
-    for (int j = 0; j < t->output_count; j++) {
-        const mr_brdf_param *p = &t->target->params[t->outputs[j].param];
-        if (p->channels == 1 && p->role == MR_PARAM_NONLINEAR && a->rough_output < 0) a->rough_output = j;
-        else if ((p->lobe & MR_LOBE_SPECULAR) && p->role != MR_PARAM_NONLINEAR && a->spec_output < 0 &&
-                 t->outputs[j].kind != MR_LEARNED_CHANNEL)
-            a->spec_output = j;
-    }
-    return a->rough_feature >= 0 && a->spec_feature >= 0 && a->rough_output >= 0 && a->spec_output >= 0;
-}
-
-static double slot_of(const mr_brdf_model *m, const mr_learned_slot *s, const double *row) {
-    const int at = mr_brdf_param_offset(m, s->param) + (s->kind == MR_LEARNED_CHANNEL ? s->channel : 0);
-    return s->kind == MR_LEARNED_GREY ? (row[at] + row[at + 1] + row[at + 2]) / 3.0 : row[at];
-}
-
-/* The learned target at source roughness r and specular s (every other source value from `base_row`). */
-static mr_status learned_at(const mr_learned *t, const plot_axes *a, const double *base_row, double r, double s,
-                            double *rough, double *spec) {
-    double v[MR_BRDF_MAX_VALUES], w[MR_BRDF_MAX_VALUES];
-    memcpy(v, base_row, (size_t)mr_brdf_value_count(t->source) * sizeof *v);
-    const mr_learned_slot *fr = &t->features[a->rough_feature], *fs = &t->features[a->spec_feature];
-    v[mr_brdf_param_offset(t->source, fr->param)] = r;
-    const int sat = mr_brdf_param_offset(t->source, fs->param);
-    for (int c = 0; c < (fs->kind == MR_LEARNED_GREY ? 3 : 1); c++) v[sat + c] = s;
-    mr_status status = mr_learned_apply_batch(t, 1, v, w, NULL); // (mr_learned_apply would hide a failure)
-    if (status != MR_OK)
-        return status;
-    *rough = slot_of(t->target, &t->outputs[a->rough_output], w);
-    *spec = slot_of(t->target, &t->outputs[a->spec_output], w);
-    return MR_OK;
-}
-
-/* The plots' files, prepared as temporary files (cli.h's protocol) for the caller to commit with the transform:
- * rows.csv, curves.csv, roughness.svg, specular.svg (the SVGs inactive when gnuplot is missing or fails). */
-enum { PLOT_ROWS, PLOT_CURVES, PLOT_ROUGHNESS, PLOT_SPECULAR, PLOT_FILES };
-static const char *const plot_names[PLOT_FILES] = {"rows.csv", "curves.csv", "roughness.svg", "specular.svg"};
-
-/* Write the plots into files[] (zero-initialised by the caller; their targets are paths[], which must outlive them);
- * *created is 1 when DIR was made here (the caller removes it again if the run fails). Returns a CLI exit code: after
- * a failure the error is printed and every temporary file removed. */
-static int prepare_plots(const mr_learned *t, const mr_sweep_table *tab, const char *dir, const char *title,
-                         mr_atomic_file files[PLOT_FILES], char paths[PLOT_FILES][4096], int *created) {
-    plot_axes a;
-    if (!find_axes(t, &a)) {
-        fprintf(stderr, "matremap learn: note: no plots: the transform has no roughness and specular pair to cut "
-                        "through\n");
-        return CLI_EXIT_OK;
-    }
-    if (mkdir(dir, 0777) == 0) {
-        *created = 1;
-    } else if (errno != EEXIST) {
-        fprintf(stderr, "matremap learn: error: --plots '%s': cannot create the folder: %s\n", dir, strerror(errno));
-        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
-    }
-    for (int k = 0; k < PLOT_FILES; k++) {
-        int length = snprintf(paths[k], sizeof paths[k], "%s/%s", dir, plot_names[k]);
-        if (length < 0 || (size_t)length >= sizeof paths[k]) {
-            fprintf(stderr, "matremap learn: error: --plots '%s': the name is too long\n", dir);
-            return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
-        }
-    }
-    FILE *f = cli_output_open(COMMAND, paths[PLOT_ROWS], &files[PLOT_ROWS]);
-    if (f == NULL)
-        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
-    const mr_learned_slot *fr = &t->features[a.rough_feature], *fs = &t->features[a.spec_feature];
-    const mr_learned_slot *or_ = &t->outputs[a.rough_output], *os = &t->outputs[a.spec_output];
-    fprintf(f, "source_roughness,source_specular,target_roughness,target_specular\n");
-    double smax = 0.0;
-    for (size_t r = 0; r < tab->n; r++) {
-        const double *sv = tab->source_values + r * (size_t)tab->source_count;
-        const double *tv = tab->target_values + r * (size_t)tab->target_count;
-        const double s = slot_of(t->source, fs, sv);
-        smax = fmax(smax, s);
-        fprintf(f, "%.9g,%.9g,%.9g,%.9g\n", slot_of(t->source, fr, sv), s, slot_of(t->target, or_, tv),
-                slot_of(t->target, os, tv));
-    }
-    if (!cli_output_close(COMMAND, f, &files[PLOT_ROWS]))
-        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
-    // Learned curves: roughness over the domain (specular at the domain's middle); specular lines at 6 roughnesses
-    // across the domain, drawn to 1.5 x the largest specular of the rows (what lies beyond is extrapolation).
-    f = cli_output_open(COMMAND, paths[PLOT_CURVES], &files[PLOT_CURVES]);
-    if (f == NULL) {
-        cli_outputs_abort(files, PLOT_FILES);
-        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
-    }
-    const double *base_row = tab->source_values;
-    const double rlo = fr->min, rhi = fr->max, smid = 0.5 * (fs->min + fs->max);
-    mr_status status = MR_OK;
-    fprintf(f, "# roughness curve\nsource_roughness,target_roughness\n");
-    for (int k = 0; k <= 200 && status == MR_OK; k++) {
-        const double r = rlo + (rhi - rlo) * k / 200.0;
-        double tr, ts;
-        status = learned_at(t, &a, base_row, r, smid, &tr, &ts);
-        fprintf(f, "%.9g,%.9g\n", r, tr);
-    }
-    for (int line = 0; line < 6 && status == MR_OK; line++) {
-        const double r = rlo * pow(rhi / rlo, line / 5.0);
-        fprintf(f, "\n\n# specular line at roughness %.4g\nsource_specular,target_specular,roughness\n", r);
-        for (int k = 0; k <= 50 && status == MR_OK; k++) {
-            const double s = 1.5 * fmax(smax, 1e-6) * k / 50.0;
-            double tr, ts;
-            status = learned_at(t, &a, base_row, r, s, &tr, &ts);
-            fprintf(f, "%.9g,%.9g,%.9g\n", s, ts, r);
-        }
-    }
-    if (status != MR_OK) {
-        fclose(f);
-        cli_outputs_abort(files, PLOT_FILES);
-        return cli_fail(COMMAND, status);
-    }
-    if (!cli_output_close(COMMAND, f, &files[PLOT_CURVES])) {
-        cli_outputs_abort(files, PLOT_FILES);
-        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
-    }
-    // gnuplot draws into the SVGs' temporary files from the CSVs' temporary files.
-    for (int k = PLOT_ROUGHNESS; k <= PLOT_SPECULAR; k++) {
-        status = mr_atomic_begin(paths[k], &files[k]);
-        if (status != MR_OK) {
-            cli_outputs_abort(files, PLOT_FILES);
-            return cli_fail(COMMAND, status);
-        }
-    }
-    FILE *plot = popen("gnuplot 2>/dev/null", "w");
-    const char *sr = t->source->params[fr->param].name, *ss = t->source->params[fs->param].name;
-    const char *tr = t->target->params[or_->param].name, *ts = t->target->params[os->param].name;
-    const char *rows = files[PLOT_ROWS].tmp_path, *curves = files[PLOT_CURVES].tmp_path;
-    if (plot != NULL)
-        fprintf(plot,
-                "set terminal svg size 720,520 dynamic font 'Helvetica,12' background rgb 'white'\n"
-                "set datafile separator ','\nset grid\nset key top left\n"
-                "set output '%s'\nset title '%s: roughness' noenhanced\n"
-                "set xlabel '%s %s' noenhanced\nset ylabel '%s %s' noenhanced\n"
-                "plot '%s' using 1:3 skip 1 with points pt 7 ps 0.5 lc rgb '#4477aa' title 'sweep rows', "
-                "'%s' index 0 using 1:2 skip 1 with lines lw 2 lc rgb '#cc3311' title '%s'\n"
-                "set output '%s'\nset title '%s: specular, coloured by source roughness' noenhanced\n"
-                "set xlabel '%s %s' noenhanced\nset ylabel '%s %s' noenhanced\n"
-                "set palette rgbformulae 33,13,10\nset cbrange [%.9g:%.9g]\nset logscale cb\nset cblabel '%s %s' "
-                "noenhanced\n"
-                "plot '%s' using 2:4:1 skip 1 with points pt 7 ps 0.5 lc palette title 'sweep rows', "
-                "for [i=1:6] '%s' index i using 1:2:3 skip 1 with lines lw 1.5 lc palette notitle\n",
-                files[PLOT_ROUGHNESS].tmp_path, title, t->source->name, sr, t->target->name, tr, rows, curves,
-                mr_learn_method_name(t->method), files[PLOT_SPECULAR].tmp_path, title, t->source->name, ss,
-                t->target->name, ts, rlo, rhi, t->source->name, sr, rows, curves);
-    int drawn = 0;
-    if (!cli_gnuplot_close(COMMAND, plot, &drawn)) {
-        cli_outputs_abort(files, PLOT_FILES);
-        return CLI_EXIT_BAD_INPUT; // a file or folder that cannot be written, named
-    }
-    if (!drawn) {
-        mr_atomic_abort(&files[PLOT_ROUGHNESS]);
-        mr_atomic_abort(&files[PLOT_SPECULAR]);
-        fprintf(stderr, "matremap learn: note: no SVG plots (gnuplot missing or failed); the data is in %s\n", dir);
-    }
-    return CLI_EXIT_OK;
 }
 
 /* ---- the command ------------------------------------------------------------------------------------------ */
@@ -459,9 +286,9 @@ int cmd_learn(int argc, char **argv) {
     cli_io_init(&io, COMMAND);
     for (int i = 0; i < file_count; i++) cli_io_input(&io, files[i], "sweep %s", files[i]);
     cli_io_output(&io, output, NULL);
-    for (int k = 0; plots != NULL && k < PLOT_FILES; k++) {
+    for (int k = 0; plots != NULL && k < MR_LEARNED_PLOT_FILES; k++) {
         char path[4096];
-        snprintf(path, sizeof path, "%s/%s", plots, plot_names[k]);
+        snprintf(path, sizeof path, "%s/%s", plots, mr_learned_plot_file_name(k));
         cli_io_output(&io, path, "--plots %s", plots);
     }
     int code = cli_io_check(&io);
@@ -481,30 +308,20 @@ int cmd_learn(int argc, char **argv) {
     mr_learned *t = NULL;
     status = mr_learn(&tab, &o, &t);
     if (ps.draw) fprintf(stderr, "\r\033[K");
-    // The plots are prepared first and committed after the transform, so a failure leaves neither.
-    mr_atomic_file plot_files[PLOT_FILES] = {{{0}, NULL, 0}};
-    char plot_paths[PLOT_FILES][4096];
-    int created_dir = 0;
-    if (status == MR_OK && plots != NULL) {
-        char title[256];
-        snprintf(title, sizeof title, "%s -> %s (%s)", t->source->name, t->target->name,
-                 mr_learn_method_name(t->method));
-        code = prepare_plots(t, &tab, plots, title, plot_files, plot_paths, &created_dir);
-    }
-    if (status == MR_OK && code == CLI_EXIT_OK) {
-        status = mr_learned_write(t, output);
-        if (status != MR_OK)
-            cli_outputs_abort(plot_files, PLOT_FILES);
-    }
-    if (status == MR_OK && code == CLI_EXIT_OK && !cli_outputs_commit(COMMAND, plot_files, PLOT_FILES, &output, 1))
-        code = CLI_EXIT_BAD_INPUT;
-    if (status != MR_OK || code != CLI_EXIT_OK) {
-        if (created_dir)
-            rmdir(plots); // only if empty: nothing of this run is left in it
+    // The transform and its plots as one set (learned_plots.h): a failure leaves none of them.
+    mr_learned_plots_options po = {"--plots"};
+    mr_learned_plots_result plotted = {0, 0};
+    if (status == MR_OK) status = mr_learned_write_with_plots(t, &tab, output, plots, &po, &plotted);
+    if (status != MR_OK) {
         mr_sweep_table_free(&tab);
         mr_learned_free(t);
-        return status != MR_OK ? cli_fail(COMMAND, status) : code;
+        return cli_fail(COMMAND, status);
     }
+    if (plots != NULL && !plotted.cut)
+        fprintf(stderr, "matremap learn: note: no plots: the transform has no roughness and specular pair to cut "
+                        "through\n");
+    else if (plots != NULL && !plotted.drawn)
+        fprintf(stderr, "matremap learn: note: no SVG plots (gnuplot missing or failed); the data is in %s\n", plots);
     print_summary(t, output, cli_now() - started, json);
     fflush(stdout); // the summary before the warning, also when both go to one pipe
     if (!t->check.passed) warn_check(t);

@@ -3,13 +3,12 @@
  * materials remapped to metallic ones (src/workflow/dataset.h; scripts/dataset.sh makes them), write the weight
  * file, the loss curve (CSV + SVG plot) and, with --test, the errors of every method on held-out sweep files.
  */
-#include <errno.h>
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
 #include "cli.h"
+#include "workflow/pairs.h"
 
 #define MAX_FILES 64
 
@@ -76,106 +75,6 @@ static int record_epoch(const mr_mlp_epoch *epoch, void *user) {
                 epoch->epoch, epoch->max_epochs, epoch->train_loss, epoch->validation_loss,
                 epoch->best_validation_loss, epoch->best_epoch, cli_now() - c->started);
     return 0;
-}
-
-/* PREFIX.csv and, if gnuplot runs, PREFIX.svg, prepared as the temporary files files[0] and files[1] (zero-initialised
- * by the caller; their targets are paths[0] and paths[1], which must outlive them), which the caller commits with the
- * network (cli.h). Returns 0 after printing why, every temporary file removed. */
-static int prepare_curve(const curve *c, const char *prefix, const char *title, mr_atomic_file files[2],
-                         char paths[2][4096]) {
-    char *path = paths[0], *svg = paths[1];
-    int length = snprintf(path, sizeof paths[0], "%s.csv", prefix);
-    int svg_length = snprintf(svg, sizeof paths[1], "%s.svg", prefix);
-    if (length < 0 || (size_t)length >= sizeof paths[0] || svg_length < 0 || (size_t)svg_length >= sizeof paths[1]) {
-        fprintf(stderr, "matremap train: error: --loss-curve '%s': the name is too long\n", prefix);
-        return 0;
-    }
-    FILE *f = cli_output_open("train", path, &files[0]);
-    if (f == NULL)
-        return 0;
-    fprintf(f, "epoch,train_loss,validation_loss,best_epoch\n");
-    for (int i = 0; i < c->count; i++)
-        fprintf(f, "%d,%.9g,%.9g,%d\n", c->epochs[i].epoch, c->epochs[i].train_loss, c->epochs[i].validation_loss,
-                c->epochs[i].best_epoch);
-    if (!cli_output_close("train", f, &files[0]))
-        return 0;
-    // The plot is a convenience: without gnuplot the CSV is the curve. gnuplot draws into the SVG's temporary file.
-    mr_status status = mr_atomic_begin(svg, &files[1]);
-    if (status != MR_OK) {
-        cli_outputs_abort(files, 2);
-        cli_fail("train", status);
-        return 0;
-    }
-    FILE *plot = popen("gnuplot 2>/dev/null", "w");
-    if (plot != NULL)
-        fprintf(plot,
-                "set terminal svg size 800,480 dynamic font 'Helvetica,12' background rgb 'white'\n"
-                "set output '%s'\nset datafile separator ','\nset logscale y\nset grid\n"
-                "set xlabel 'epoch'\nset ylabel 'loss (MSE of normalised outputs)'\nset title '%s' noenhanced\n"
-                "plot '%s' using 1:2 skip 1 with lines lw 2 title 'train', "
-                "'' using 1:3 skip 1 with lines lw 2 title 'validation'\n",
-                files[1].tmp_path, title, files[0].tmp_path);
-    int drawn = 0;
-    if (!cli_gnuplot_close("train", plot, &drawn)) {
-        cli_outputs_abort(files, 2);
-        return 0;
-    }
-    if (!drawn) {
-        mr_atomic_abort(&files[1]);
-        fprintf(stderr, "matremap train: note: no plot (gnuplot missing or failed); the curve is in %s\n", path);
-    }
-    return 1;
-}
-
-typedef struct method_error {
-    const char *name;
-    double albedo_rmse, metallic_rmse, metallic_max;
-} method_error;
-
-/* Each method's error on the test pairs against their labels. */
-static mr_status test_methods(const mr_mlp *net, const mr_wf_dataset *test, method_error errors[4]) {
-    size_t n = test->n;
-    float *diffuse = malloc(n * 3 * sizeof *diffuse), *specular = malloc(n * 3 * sizeof *specular);
-    float *albedo = malloc(n * 3 * sizeof *albedo), *metallic = malloc(n * sizeof *metallic);
-    mr_status status = MR_OK;
-    if (!(diffuse && specular && albedo && metallic)) {
-        mr_clear_error(); // cli_fail then says "out of memory"
-        status = MR_ERR_NOMEM;
-    }
-    for (size_t i = 0; status == MR_OK && i < n; i++)
-        for (int c = 0; c < 3; c++) {
-            diffuse[3 * i + c] = test->x[6 * i + c];
-            specular[3 * i + c] = test->x[6 * i + 3 + c];
-        }
-    static const char *const names[4] = {"mlp", "weighted", "mean", "khronos"};
-    static const mr_wf_method methods[4] = {MR_WF_CUSTOM, MR_WF_WEIGHTED, MR_WF_MEAN, MR_WF_KHRONOS};
-    for (int m = 0; status == MR_OK && m < 4; m++) {
-        mr_wf_spec_input in = {diffuse, specular, NULL};
-        mr_wf_metal_maps out = {albedo, metallic, NULL};
-        mr_wf_options o = mr_wf_options_default();
-        o.method = methods[m];
-        status = m == 0 ? mr_wf_spec_to_metal_mlp_batch(net, &in, n, &o, &out, NULL)
-                        : mr_wf_spec_to_metal_batch(&in, n, &o, &out, NULL);
-        double sa = 0.0, sm = 0.0, worst = 0.0;
-        for (size_t i = 0; status == MR_OK && i < n; i++) {
-            for (int c = 0; c < 3; c++) {
-                double d = albedo[3 * i + c] - test->y[4 * i + c];
-                sa += d * d;
-            }
-            double d = metallic[i] - test->y[4 * i + 3];
-            sm += d * d;
-            worst = fmax(worst, fabs(d));
-        }
-        errors[m].name = names[m];
-        errors[m].albedo_rmse = n ? sqrt(sa / (3.0 * (double)n)) : 0.0;
-        errors[m].metallic_rmse = n ? sqrt(sm / (double)n) : 0.0;
-        errors[m].metallic_max = worst;
-    }
-    free(diffuse);
-    free(specular);
-    free(albedo);
-    free(metallic);
-    return status;
 }
 
 int cmd_train(int argc, char **argv) {
@@ -297,36 +196,31 @@ int cmd_train(int argc, char **argv) {
                           &report);
     if (c.draw) fputc('\n', stderr);
     double train_seconds = cli_now() - c.started;
-    method_error errors[MAX_FILES][4];
+    mr_wf_method_error errors[MAX_FILES][MR_WF_EVALUATED_METHODS];
     if (status == MR_OK && report.stop == MR_MLP_STOP_CALLBACK) { // the curve's realloc
         mr_clear_error();
         status = MR_ERR_NOMEM;
     }
     if (status == MR_OK && residual) snprintf(net->kind, sizeof net->kind, "%s", MR_WF_MLP_RESIDUAL_KIND);
-    // Nothing is written before every result is in; the loss curve is prepared first and committed after the
-    // network, so a failure leaves none of the outputs.
-    for (int t = 0; t < test_count && status == MR_OK; t++) status = test_methods(net, &test[t], errors[t]);
+    // Nothing is written before every result is in; then the network and its loss curve as one set (mlp.h).
+    for (int t = 0; t < test_count && status == MR_OK; t++)
+        status = mr_wf_pairs_evaluate(net, &test[t], threads, errors[t]);
     char title[256];
     snprintf(title, sizeof title, "matremap train: %zu pairs, %d hidden units, seed %llu", data.n,
              net ? net->n_hidden : 0, opts.seed);
-    mr_atomic_file curve_files[2] = {{{0}, NULL, 0}, {{0}, NULL, 0}};
-    char curve_paths[2][4096];
-    int curve_ok = status == MR_OK && prepare_curve(&c, curve_prefix, title, curve_files, curve_paths);
-    if (curve_ok) {
-        status = mr_mlp_write(net, output);
-        if (status != MR_OK)
-            cli_outputs_abort(curve_files, 2);
-    }
-    if (status == MR_OK && curve_ok)
-        curve_ok = cli_outputs_commit("train", curve_files, 2, &output, 1);
+    int drawn = 0;
+    if (status == MR_OK)
+        status = mr_mlp_write_with_curve(net, output, c.epochs, c.count, curve_prefix, "--loss-curve", title, &drawn);
     free(c.epochs);
     mr_mlp_free(net);
-    if (status != MR_OK || !curve_ok) {
+    if (status != MR_OK) {
         mr_wf_dataset_free(&data);
         for (int t = 0; t < test_count; t++) mr_wf_dataset_free(&test[t]);
-        // (a curve that cannot be written: prepare_curve or the commit named the file)
-        return status != MR_OK ? cli_fail("train", status) : CLI_EXIT_BAD_INPUT;
+        return cli_fail("train", status);
     }
+    if (!drawn)
+        fprintf(stderr, "matremap train: note: no plot (gnuplot missing or failed); the curve is in %s.csv\n",
+                curve_prefix);
     double seconds = cli_now() - started;
     if (json) {
         printf("{\"weights\": ");
@@ -343,7 +237,7 @@ int cmd_train(int argc, char **argv) {
             printf("%s{\"file\": ", t ? ", " : "");
             cli_json_string(stdout, tests[t]);
             printf(", \"pairs\": %zu", test[t].n);
-            for (int m = 0; m < 4; m++)
+            for (int m = 0; m < MR_WF_EVALUATED_METHODS; m++)
                 printf(", \"%s\": {\"albedo_rmse\": %.6g, \"metallic_rmse\": %.6g, \"metallic_max_error\": %.6g}",
                        errors[t][m].name, errors[t][m].albedo_rmse, errors[t][m].metallic_rmse,
                        errors[t][m].metallic_max);
@@ -361,7 +255,7 @@ int cmd_train(int argc, char **argv) {
         for (int t = 0; t < test_count; t++) {
             printf("test %s (%zu pairs): error against the labels\n", tests[t], test[t].n);
             printf("  %-9s %12s %14s %14s\n", "method", "albedo RMSE", "metallic RMSE", "metallic max");
-            for (int m = 0; m < 4; m++)
+            for (int m = 0; m < MR_WF_EVALUATED_METHODS; m++)
                 printf("  %-9s %12.5f %14.5f %14.5f\n", errors[t][m].name, errors[t][m].albedo_rmse,
                        errors[t][m].metallic_rmse, errors[t][m].metallic_max);
         }

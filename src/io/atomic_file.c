@@ -115,3 +115,47 @@ void mr_atomic_abort(mr_atomic_file *file) {
     errno = saved;
     file->active = 0;
 }
+
+mr_status mr_atomic_open_text(const char *target, mr_atomic_file *file, FILE **out) {
+    *out = NULL;
+    mr_status status = mr_atomic_begin(target, file);
+    if (status != MR_OK) return status;
+    *out = fopen(file->tmp_path, "w");
+    if (*out != NULL) return MR_OK;
+    int err = errno;
+    mr_atomic_abort(file);
+    return mr_fail(MR_ERR_IO, "cannot write '%s': %s", target, strerror(err));
+}
+
+mr_status mr_atomic_close_text(FILE *f, mr_atomic_file *file) {
+    // A failed write leaves the stream's error indicator and its errno; fclose may fail by itself (the last flush).
+    const int bad = ferror(f);
+    const int write_errno = errno;
+    errno = 0;
+    const int closed = fclose(f) == 0;
+    int err = !closed ? errno : bad ? write_errno : 0;
+    if (closed && !bad) return MR_OK;
+    if (err == 0) err = EIO;
+    mr_status status = mr_fail(MR_ERR_IO, "cannot write '%s': %s", file->target, strerror(err));
+    mr_atomic_abort(file);
+    return status;
+}
+
+mr_status mr_atomic_commit_set(mr_atomic_file *files, int n, const char *const *written, int n_written) {
+    for (int i = 0; i < n; i++) {
+        if (!files[i].active) continue;
+        if (mr_atomic_commit(&files[i]) == MR_OK) {
+            files[i].tmp_path[0] = '\0'; // marks it committed for the clean-up below
+            continue;
+        }
+        // Leave none of this set: files half replaced would not belong together.
+        char why[1024];
+        snprintf(why, sizeof why, "%s", mr_last_error());
+        for (int k = 0; k < i; k++)
+            if (files[k].target != NULL && files[k].tmp_path[0] == '\0') remove(files[k].target);
+        for (int k = 0; k < n_written; k++) remove(written[k]);
+        for (int k = 0; k < n; k++) mr_atomic_abort(&files[k]);
+        return mr_fail(MR_ERR_IO, "%s (the outputs written before it removed)", why);
+    }
+    return MR_OK;
+}

@@ -33,6 +33,7 @@ extern "C" {
 #endif
 
 /* Atomic output files (atomic_file.c) and input files (input_file.c) are core: mr_core.h declares them. */
+/* Plots drawn by gnuplot (gnuplot.c): io/gnuplot.h. */
 
 /* ---- what messages call an image ---------------------------------------------------------------------- */
 

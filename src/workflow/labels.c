@@ -198,6 +198,8 @@ static mr_status check_options(const mr_wf_label_options *o) {
         return mr_fail(MR_ERR_INVALID_ARG, "%s: chroma_weight %g must be finite and >= 0", what, o->chroma_weight);
     if (!(o->regularisation >= 0.0) || !isfinite(o->regularisation))
         return mr_fail(MR_ERR_INVALID_ARG, "%s: regularisation %g must be finite and >= 0", what, o->regularisation);
+    if (o->threads < 0 || o->threads > 1024)
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: threads %d outside 0 (automatic) .. 1024", what, o->threads);
     return MR_OK;
 }
 
@@ -266,6 +268,7 @@ mr_status mr_wf_label_scene_create(const mr_wf_label_options *opts, mr_wf_label_
             mr_scene s = mr_scene_fit(&fit);
             s.lights[0] = mr_light_environment(map, mean > 0.0 ? 0.5 / mean : 1.0, 0.0, opts->env_samples);
             s.lights[0].reflection_samples = opts->reflection_samples;
+            s.threads = opts->threads;
             status = mr_render_plan_create(&s, &plan);
         }
         if (status == MR_OK && e == 0) {

@@ -100,6 +100,9 @@ typedef struct mr_wf_label_options {
     double regularisation;          /* weight of the pull towards the analytic answer, > 0; 0 = 1e-4, MR_WF_LABEL_OFF:
                                        none. 1e-4: a unit change of a parameter must buy a mean squared display
                                        difference of 1e-4 (about 2.5 8-bit codes rms) */
+    int threads;                    /* OpenMP threads of the scene's renders (mr_render_plan_create, the scene's
+                                       `threads`): 0 (default) = automatic, n = 1 .. 1024: n. Fits are one thread
+                                       each (the caller runs them side by side); nothing depends on it */
 } mr_wf_label_options;
 
 /* The defaults spelt out (the same scene as a zeroed struct), for callers that change a field or two. */
