@@ -267,8 +267,17 @@ static int make_folders(const char *folder, char *failed, size_t size) {
                 return -1;
             }
         } else if (mkdir(path, 0777) == 0) {
-            if (made_folder_count < MAX_MADE_FOLDERS && (made_folders[made_folder_count] = strdup(path)) != NULL)
-                made_folder_count++;
+            // Recorded so that a failed run removes it; one that cannot be recorded (out of memory) is not kept.
+            if (made_folder_count < MAX_MADE_FOLDERS) {
+                char *kept_path = strdup(path);
+                if (kept_path == NULL) {
+                    rmdir(path);
+                    snprintf(failed, size, "%s", path);
+                    errno = ENOMEM;
+                    return -1;
+                }
+                made_folders[made_folder_count++] = kept_path;
+            }
         } else if (errno != EEXIST) { // EEXIST: made meanwhile by another process
             snprintf(failed, size, "%s", path);
             return -1;

@@ -5,7 +5,6 @@
  */
 #include <errno.h>
 #include <fcntl.h>
-#include <omp.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
@@ -523,10 +522,7 @@ int cmd_sweep(int argc, char **argv) {
         }
         mpi_rank = comm.rank;
         // N ranks on a machine share its cores; a launcher that bound this rank to fewer cores shrinks them too.
-        if (a.threads == 0 && getenv("OMP_NUM_THREADS") == NULL)
-            a.threads = omp_get_num_procs() / (local_size > 1 ? local_size : 1) > 1
-                            ? omp_get_num_procs() / (local_size > 1 ? local_size : 1)
-                            : 1;
+        if (a.threads == 0) a.threads = mr_sweep_rank_threads(local_size);
     }
 
     char *command = command_line(argc, argv, "matremap");

@@ -334,6 +334,12 @@ int mr_sweep_mpi_launched(int *size, int *rank, const char **variable);
  * ends the whole job (MPI's default error handler), as the death of a rank does. */
 mr_status mr_sweep_mpi_start(mr_sweep_comm *comm, int *local_size);
 
+/* The threads each rank of a run uses unless told (mr_sweep_options.threads for a rank), when `local_size` ranks
+ * (mr_sweep_mpi_start) share this machine: the cores this process may use divided among them, at least 1, so
+ * that N ranks on one machine do not each start a team of every core; 0 (the automatic rule, which reads it) when
+ * OMP_NUM_THREADS is set, which says the count for every rank. */
+int mr_sweep_rank_threads(int local_size);
+
 /* Wait for this rank's messages to be delivered and end MPI (MPI_Finalize). */
 mr_status mr_sweep_mpi_finish(mr_sweep_comm *comm);
 

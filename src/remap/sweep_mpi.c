@@ -12,6 +12,7 @@
  *   3. MR_MODULE_DIR/libmatremap-mpi.so.
  */
 #include <dlfcn.h>
+#include <omp.h>
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -182,4 +183,10 @@ mr_status mr_sweep_mpi_finish(mr_sweep_comm *comm) {
     if (comm != NULL)
         memset(comm, 0, sizeof *comm);
     return module_status(module.finalize(), "finalize");
+}
+
+int mr_sweep_rank_threads(int local_size) {
+    if (getenv("OMP_NUM_THREADS") != NULL) return 0;
+    const int share = omp_get_num_procs() / (local_size > 1 ? local_size : 1);
+    return share > 1 ? share : 1;
 }
