@@ -112,6 +112,15 @@ static inline mr_brdf_trim mr_brdf_trim_compute(const double diffuse[3], const d
     return t;
 }
 
+/* Whether Mitsuba trims at these packed values (the `rescales` hook of brdf.h): the model's values clamped, its
+ * diffuse and specular RGB at slots `diffuse` and `specular`, its trim switch at slot `trim`. */
+static inline int mr_brdf_trim_engaged(const mr_brdf_model *model, const double *values, int diffuse, int specular,
+                                       int trim) {
+    double v[MR_BRDF_MAX_VALUES];
+    mr_brdf_clamp_values(model, values, v);
+    return mr_brdf_trim_compute(v + diffuse, v + specular, v[trim] >= 0.5).active;
+}
+
 /* Gradient of f = trim(rho_d)/pi (diffuse part) + trim(rho_s) * lobe (specular part) with respect to the raw
  * rho_d (slots slot_d..+2) and rho_s (slots slot_s..+2), written into the [slot*3 + channel] arrays.
  * With trimming active, x' = 0.99 x/m and dm/dx_c' = [c' == argmax] for both x = rho_d and x = rho_s, so

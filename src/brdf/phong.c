@@ -106,9 +106,7 @@ static void phong_eval_grad(const mr_brdf_model *model, const double *values, co
 
 /* Mitsuba trims at these values (brdf.h, rescales). */
 static int phong_rescales(const mr_brdf_model *model, const double *values) {
-    double v[MR_BRDF_MAX_VALUES];
-    mr_brdf_clamp_values(model, values, v);
-    return mr_brdf_trim_compute(v + PHONG_DIFFUSE, v + PHONG_SPECULAR, v[PHONG_TRIM] >= 0.5).active;
+    return mr_brdf_trim_engaged(model, values, PHONG_DIFFUSE, PHONG_SPECULAR, PHONG_TRIM);
 }
 
 const mr_brdf_model mr_brdf_phong = {

@@ -149,9 +149,7 @@ static void ward_eval_grad(const mr_brdf_model *model, const double *values, con
 
 /* Mitsuba trims at these values (brdf.h, rescales). */
 static int ward_rescales(const mr_brdf_model *model, const double *values) {
-    double v[MR_BRDF_MAX_VALUES];
-    mr_brdf_clamp_values(model, values, v);
-    return mr_brdf_trim_compute(v + WARD_DIFFUSE, v + WARD_SPECULAR, v[WARD_TRIM] >= 0.5).active;
+    return mr_brdf_trim_engaged(model, values, WARD_DIFFUSE, WARD_SPECULAR, WARD_TRIM);
 }
 
 #define WARD_DESCRIPTOR(cname, mname, msummary, mflags, index)                                           \

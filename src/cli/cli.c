@@ -168,6 +168,25 @@ void cli_io_gltf(cli_io *io, const mr_gltf *asset, const char *label) {
             cli_io_input(io, file, "a file of %s", label);
 }
 
+int cli_parse_direction(const char *command, const char *option, const char *text, double out[3]) {
+    const char *p = text;
+    for (int k = 0; k < 3; k++) {
+        char *end = NULL;
+        out[k] = strtod(p, &end);
+        if (end == p || !isfinite(out[k]) || *end != (k < 2 ? ',' : '\0'))
+            return cli_usage_error(command, "%s '%s': expected three numbers X,Y,Z", option, text) == 0;
+        p = end + 1;
+    }
+    if (out[0] == 0.0 && out[1] == 0.0 && out[2] == 0.0)
+        return cli_usage_error(command, "%s '%s': the direction must not be zero", option, text) == 0;
+    return 1;
+}
+
+int cli_is_gltf_path(const char *text) {
+    size_t n = strlen(text);
+    return (n > 5 && strcmp(text + n - 5, ".gltf") == 0) || (n > 4 && strcmp(text + n - 4, ".glb") == 0);
+}
+
 int cli_gltf_scene_load(const char *command, const char *path, cli_io *io, mr_gltf_scene **out) {
     mr_gltf *asset = NULL;
     mr_status status = mr_gltf_load(path, &asset);

@@ -89,6 +89,11 @@ void cli_io_material(cli_io *io, const char *const *assignments, const char *con
 /* Register every file a glTF asset was read from (mr_gltf_source_file) as inputs: "<label>" for the asset's own file,
  * "a file of <label>" for its buffers and images. */
 void cli_io_gltf(cli_io *io, const mr_gltf *asset, const char *label);
+/* Parse "X,Y,Z" (three finite numbers, not all zero: a direction) given to `option`. 1, or 0 after a usage error
+ * naming the option and the text. */
+int cli_parse_direction(const char *command, const char *option, const char *text, double out[3]);
+/* 1 if `text` names a glTF asset (ends in ".gltf" or ".glb"): what render and report take in a model's place. */
+int cli_is_gltf_path(const char *text);
 /* Read the glTF asset at `path`, note its files in io as inputs ("asset PATH"), check io again (an output over a
  * buffer or an image is refused, cli_io_check) and build its scene for the renderer (mr_gltf_scene_from_asset) into
  * *out (caller-owned). Returns a CLI exit code, after printing why when it is not CLI_EXIT_OK. */

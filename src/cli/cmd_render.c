@@ -143,26 +143,6 @@ static void print_help(void) {
            MR_ENV_DEFAULT_SAMPLES, MR_ENV_MAX_REFLECTION_SAMPLES);
 }
 
-static int is_gltf_path(const char *text) {
-    size_t n = strlen(text);
-    return (n > 5 && strcmp(text + n - 5, ".gltf") == 0) || (n > 4 && strcmp(text + n - 4, ".glb") == 0);
-}
-
-/* Parse "X,Y,Z" (a finite, non-zero direction) for --camera-direction. 1, or 0 after a usage error. */
-static int parse_direction(const char *text, double out[3]) {
-    const char *p = text;
-    for (int k = 0; k < 3; k++) {
-        char *end = NULL;
-        out[k] = strtod(p, &end);
-        if (end == p || !isfinite(out[k]) || *end != (k < 2 ? ',' : '\0'))
-            return cli_usage_error("render", "--camera-direction '%s': expected three numbers X,Y,Z", text) == 0;
-        p = end + 1;
-    }
-    if (out[0] == 0.0 && out[1] == 0.0 && out[2] == 0.0)
-        return cli_usage_error("render", "--camera-direction '%s': the direction must not be zero", text) == 0;
-    return 1;
-}
-
 
 int cmd_render(int argc, char **argv) {
     const char *model_name = NULL, *output = NULL, *env_path = NULL, *mask_path = NULL, *mesh_path = NULL;
@@ -222,7 +202,8 @@ int cmd_render(int argc, char **argv) {
             if (taken < 0) return CLI_EXIT_USAGE;
             mesh_path = value;
         } else if ((taken = cli_take_option("render", argc, argv, &i, "--camera-direction", &value))) {
-            if (taken < 0 || !parse_direction(value, direction)) return CLI_EXIT_USAGE;
+            if (taken < 0 || !cli_parse_direction("render", "--camera-direction", value, direction))
+                return CLI_EXIT_USAGE;
             has_direction = 1;
         } else if (strcmp(argv[i], "--json") == 0) {
             json = 1;
@@ -265,7 +246,7 @@ int cmd_render(int argc, char **argv) {
     if (env_option && env_path == NULL)
         return cli_usage_error("render", "--env-rotation, --env-samples, --env-reflection-samples and --env-scale need "
                                "--env FILE");
-    const int gltf = is_gltf_path(model_name);
+    const int gltf = cli_is_gltf_path(model_name);
     if (gltf && assignment_count > 0)
         return cli_usage_error("render", "'%s': a glTF asset takes no name=value parameters (its materials are its "
                                "own)", assignments[0]);

@@ -96,25 +96,6 @@ typedef struct options {
     mr_report_options report; /* zero: the library's defaults */
 } options;
 
-/* Parse "X,Y,Z" (a non-zero direction) for `option`. Returns 1, or 0 after printing a usage error. */
-static int parse_direction(const char *option, const char *text, double out[3]) {
-    const char *p = text;
-    for (int k = 0; k < 3; k++) {
-        char *end = NULL;
-        out[k] = strtod(p, &end);
-        if (end == p || !isfinite(out[k]) || *end != (k < 2 ? ',' : '\0')) {
-            cli_usage_error("report", "%s '%s': expected three numbers X,Y,Z", option, text);
-            return 0;
-        }
-        p = end + 1;
-    }
-    if (out[0] == 0.0 && out[1] == 0.0 && out[2] == 0.0) {
-        cli_usage_error("report", "%s '%s': the direction must not be zero", option, text);
-        return 0;
-    }
-    return 1;
-}
-
 /* Parse argv into options and groups. Returns an exit code. */
 static int parse(int argc, char **argv, options *o, group *groups, int *group_count) {
     int n = 1;
@@ -178,7 +159,7 @@ static int parse(int argc, char **argv, options *o, group *groups, int *group_co
                 return cli_usage_error("report", "--camera '%s': expected auto or paper", value);
             o->paper_camera = strcmp(value, "paper") == 0;
         } else if ((taken = cli_take_option("report", argc, argv, &i, "--camera-direction", &value))) {
-            if (taken < 0 || !parse_direction("--camera-direction", value, o->report.camera_direction))
+            if (taken < 0 || !cli_parse_direction("report", "--camera-direction", value, o->report.camera_direction))
                 return CLI_EXIT_USAGE;
             o->report.has_camera_direction = 1;
         } else if ((taken = cli_take_option("report", argc, argv, &i, "--env-scale", &value))) {
@@ -225,11 +206,6 @@ static void describe(const group *g, char *out, size_t size) {
     size_t used = (size_t)snprintf(out, size, "%s", g->model_name);
     for (int k = 0; k < g->count && used < size; k++)
         used += (size_t)snprintf(out + used, size - used, " %s", g->assignments[k]);
-}
-
-static int is_gltf_path(const char *text) {
-    size_t n = strlen(text);
-    return (n > 5 && strcmp(text + n - 5, ".gltf") == 0) || (n > 4 && strcmp(text + n - 4, ".glb") == 0);
 }
 
 /* mr_report_options.progress on a terminal: "view 2/4" rewritten in place; *user (int) notes that a line was
@@ -294,7 +270,7 @@ int cmd_report(int argc, char **argv) {
     if (code != CLI_EXIT_OK) return code;
     // Inputs are all materials on the sphere, or all glTF assets (rendered as their meshes).
     int gltf_entries = 0;
-    for (int k = 0; k < count; k++) gltf_entries += is_gltf_path(groups[k].model_name);
+    for (int k = 0; k < count; k++) gltf_entries += cli_is_gltf_path(groups[k].model_name);
     if (gltf_entries > 0 && gltf_entries < count)
         return cli_usage_error("report", "give either materials (MODEL name=value ...) or glTF assets, not both");
     for (int k = 0; gltf_entries > 0 && k < count; k++)

@@ -28,22 +28,22 @@ typedef struct plot_axes {
     int rough_feature, spec_feature, rough_output, spec_output;
 } plot_axes;
 
+/* The first roughness slot (a one-channel nonlinear parameter) and the first specular slot (a linear specular one,
+ * not a single channel) among slots[0..count) of `model`, or -1. */
+static void find_pair(const mr_brdf_model *model, const mr_learned_slot *slots, int count, int *rough, int *spec) {
+    *rough = *spec = -1;
+    for (int i = 0; i < count; i++) {
+        const mr_brdf_param *p = &model->params[slots[i].param];
+        if (p->channels == 1 && p->role == MR_PARAM_NONLINEAR && *rough < 0) *rough = i;
+        else if ((p->lobe & MR_LOBE_SPECULAR) && p->role != MR_PARAM_NONLINEAR && *spec < 0 &&
+                 slots[i].kind != MR_LEARNED_CHANNEL)
+            *spec = i;
+    }
+}
+
 static int find_axes(const mr_learned *t, plot_axes *a) {
-    *a = (plot_axes){-1, -1, -1, -1};
-    for (int i = 0; i < t->feature_count; i++) {
-        const mr_brdf_param *p = &t->source->params[t->features[i].param];
-        if (p->channels == 1 && p->role == MR_PARAM_NONLINEAR && a->rough_feature < 0) a->rough_feature = i;
-        else if ((p->lobe & MR_LOBE_SPECULAR) && p->role != MR_PARAM_NONLINEAR && a->spec_feature < 0 &&
-                 t->features[i].kind != MR_LEARNED_CHANNEL)
-            a->spec_feature = i;
-    }
-    for (int j = 0; j < t->output_count; j++) {
-        const mr_brdf_param *p = &t->target->params[t->outputs[j].param];
-        if (p->channels == 1 && p->role == MR_PARAM_NONLINEAR && a->rough_output < 0) a->rough_output = j;
-        else if ((p->lobe & MR_LOBE_SPECULAR) && p->role != MR_PARAM_NONLINEAR && a->spec_output < 0 &&
-                 t->outputs[j].kind != MR_LEARNED_CHANNEL)
-            a->spec_output = j;
-    }
+    find_pair(t->source, t->features, t->feature_count, &a->rough_feature, &a->spec_feature);
+    find_pair(t->target, t->outputs, t->output_count, &a->rough_output, &a->spec_output);
     return a->rough_feature >= 0 && a->spec_feature >= 0 && a->rough_output >= 0 && a->spec_output >= 0;
 }
 
