@@ -2,14 +2,16 @@
 # gltf_outputs.sh — what `matremap gltf` writes beside its output, and what it says (issue 26):
 #   1. side files (buffers, copied and converted images) are named after the output, so two assets whose files
 #      share names (every Sketchfab export's buffer is scene.bin) converted into one folder both stay valid (the
-#      Khronos validator, 0 errors, on both; the first one's files unchanged); an existing file in a side file's
+#      Khronos validator, 0 errors, on both; the first one's files unchanged; three.js in headless Chromium loads
+#      both with their textures); an existing file in a side file's
 #      way that the earlier output does not refer to is refused (exit 2, named, nothing written) unless
 #      --replace-files; the same command run again replaces its own files;
 #   2. metal2spec writes no empty KHR_materials_specular beside the spec-gloss extension (no MULTIPLE_EXTENSIONS
 #      warning), and spec2metal does not carry one (an input holding `{}`, as earlier versions wrote) back;
 #   3. the flagged texels are counted by reason, per material and in total, in text and in --json, as the
 #      standalone `matremap metal2spec` counts them on the same textures.
-# Needs node/npm (the validator, tests/node) and python3. Ends with "N passed, N failed".
+# Needs node/npm (the validator, tests/node; three.js, scripts/viewers), Chromium and python3. Ends with
+# "N passed, N failed".
 set -u
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="${MR_BUILD:-$root/build}"
@@ -73,6 +75,34 @@ done
 # The normal map of the FloppyDisk is still its own (the Duck's texture went to another file).
 check "coll/floppy.gltf's normal map is the FloppyDisk's" cmp -s "$floppy_dir/textures/material_0_normal.png" \
     "$tmp/coll/textures/floppy_material_0_normal.png"
+# The client that opens them: three.js in headless Chromium (scripts/viewers/three_render.mjs) loads both assets of
+# the one folder with every file found: the Duck shows its texture (yellow: red far above blue over the frame; a
+# missing texture renders the factor's white), the FloppyDisk covers pixels.
+viewers="$root/scripts/viewers"
+if [ -x /usr/lib/chromium/chromium ]; then
+    if [ ! -f "$viewers/node_modules/three/package.json" ]; then
+        (cd "$viewers" && npm ci --no-audit --no-fund --loglevel=error) >"$tmp/npm_viewers.log" 2>&1 ||
+            echo "      npm ci failed: $(tail -n 3 "$tmp/npm_viewers.log" | tr '\n' ' ')"
+    fi
+    python3 - "$tmp" "$shared/hdri/studio_small_03_1k.hdr" >"$tmp/three_jobs.json" <<'PY'
+import json, sys
+tmp, env = sys.argv[1], sys.argv[2]
+view = {"azimuth": 30, "elevation": 20, "fov": 35, "margin": 1.05}
+print(json.dumps({"chromium": "/usr/lib/chromium/chromium", "jobs": [
+    {"three": "three", "gltf": f"{tmp}/coll/{name}.gltf", "env": env, "out": f"{tmp}/three_{name}.exr", "size": 96,
+     "supersample": 1, "envMean": 0.5, "view": view} for name in ("floppy", "duck")]}))
+PY
+    check "three.js (headless Chromium) renders coll/floppy.gltf and coll/duck.gltf" \
+        bash -c "node '$viewers/three_render.mjs' '$tmp/three_jobs.json' >'$tmp/three.log' 2>&1"
+    mean() { oiiotool --stats "$1" 2>/dev/null | sed -nE 's/.*Stats Avg: ([^(]*).*/\1/p'; }
+    check "... the Duck with its texture (red $(mean "$tmp/three_duck.exr" | cut -d' ' -f1) over blue $(mean \
+        "$tmp/three_duck.exr" | cut -d' ' -f3), at least 5 times)" \
+        awk -v m="$(mean "$tmp/three_duck.exr")" 'BEGIN { split(m, c, " "); exit !(c[1] > 5 * c[3] && c[1] > 0.01) }'
+    check "... the FloppyDisk on the frame (coverage $(mean "$tmp/three_floppy.exr" | cut -d' ' -f4))" \
+        awk -v m="$(mean "$tmp/three_floppy.exr")" 'BEGIN { split(m, c, " "); exit !(c[4] > 0.05) }'
+else
+    echo "   skipped the three.js check: /usr/lib/chromium/chromium is missing (scripts/install-deps.sh installs it)"
+fi
 
 # The same command again: it replaces its own side files (the existing output refers to them).
 expect "the same conversion again into coll/floppy.gltf" 0 "1 of 1 materials converted" -- "$bin" gltf spec2metal \
