@@ -119,7 +119,7 @@ BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
 PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h src/brdf/brdf.h src/render/render.h \
                   src/io/image_io.h src/io/obj_load.h src/metrics/metrics.h src/remap/remap.h src/remap/direct.h \
                   src/remap/sweep.h src/workflow/workflow.h src/workflow/dataset.h src/workflow/labels.h \
-                  src/workflow/pairs.h src/learn/learned_plots.h \
+                  src/workflow/pairs.h src/learn/learned_plots.h src/io/output_plan.h \
                   src/transform/transform.h src/report/report.h nn/mlp.h \
                   src/learn/parametric.h src/learn/svr.h src/learn/sweep_table.h src/learn/learned.h \
                   gltf/mr_gltf.h gltf/mr_gltf_convert.h gltf/mr_gltf_scene.h

@@ -40,6 +40,7 @@
 #include "brdf/brdf.h"
 #include "render/render.h"
 #include "io/image_io.h"
+#include "io/output_plan.h"
 #include "io/obj_load.h"
 #include "metrics/metrics.h"
 #include "remap/remap.h"

@@ -30,82 +30,41 @@ __attribute__((format(printf, 2, 3)))
 #endif
 int cli_usage_error(const char *command, const char *fmt, ...);
 
-/* 1 if a and b name the same existing file (st_dev and st_ino: links, "./x" and other spellings included): an output
- * that would replace an input. */
-int cli_same_file(const char *a, const char *b);
-
-/* ---- what a command reads and writes: no output ever replaces an input (cli.c) ------------------------------
+/* ---- what a command reads and writes: no output ever replaces an input (io/output_plan.h) --------------------
  * Every command that writes files lists its inputs (every file it reads: maps of name=@MAP, --env, datasets, the
  * files a glTF asset refers to, ...) and its outputs (every file it writes, derived names included: --loss-curve
- * PREFIX's PREFIX.csv and PREFIX.svg, --images PREFIX's pictures, a report's folder) and calls cli_io_check before
- * it writes anything; cli_io_check may be called again once more inputs are known (a glTF asset's files, after it
- * is read). An output is refused when it is the same file as an input: the same device and inode (stat), so "./x",
- * "dir/../x", hard links and symbolic links count; an output that does not exist yet, or lies in a folder that does
- * not, cannot be one. A folder output (cli_io_output_folder: report's folder, replaced as a whole) is refused when an
- * input lies inside it. Two outputs that name one file (the same existing file, or the same name in the same
- * existing folder) are refused too: the second would replace the first. The message names both arguments:
+ * PREFIX's PREFIX.csv and PREFIX.svg, --images PREFIX's pictures, a report's folder) in an mr_output_plan, labelled
+ * as the user gave them ("--env env.hdr", "base_color=@t.png"; an output's label says where a derived name comes
+ * from), and calls cli_plan_check before it writes anything, again once more inputs are known (a glTF asset's
+ * files, after it is read). The library's header holds the contract: which outputs are refused, the messages, the
+ * folders made (mkdir -p). Here a refused output or a folder that cannot be made exits 2, out of memory 3:
  *   matremap render: error: output 't.png' is the input base_color=@t.png; refusing to overwrite it
- *   matremap train: error: output 'ds.csv' (--loss-curve ds) is the input dataset ds.csv; refusing to overwrite it
- * and the exit code is 2 (bad input). Labels say how the user gave the file, as a noun phrase ("--env env.hdr",
- * "base_color=@t.png", "dataset ds.csv"); an output's label (may be NULL) says where a derived name comes from.
- * When every check passes, cli_io_check makes the missing folders the outputs are to be written in, nested as
- * mkdir -p does ("-o a/b/c/x.png" makes a, a/b and a/b/c; a folder output's parent, not the folder itself), so that
- * every command takes an output in a folder that does not exist yet, and says so before any work when it cannot:
  *   matremap render: error: output 'f/x/y.png': cannot create the folder 'f': Not a directory
- * (exit 2). A command that fails afterwards leaves none of the folders it made that are still empty (main.c calls
- * cli_io_unmake_folders on a non-zero exit code). */
-typedef struct cli_io_entry {
-    char *path;  /* owned copy */
-    char *label; /* owned; NULL for an output named by itself */
-    int folder;  /* output: a folder replaced as a whole */
-} cli_io_entry;
+ * A command that fails afterwards leaves none of the folders it made that are still empty (main.c calls
+ * cli_unmake_folders on a non-zero exit code). */
 
-typedef struct cli_io {
-    const char *command;
-    cli_io_entry *inputs, *outputs;
-    int input_count, output_count, input_capacity, output_capacity;
-    int out_of_memory; /* a registration failed: cli_io_check reports it (exit 3) */
-} cli_io;
-
-void cli_io_init(cli_io *io, const char *command);
-/* Register an input file; the label is printf-formatted. */
-#if defined(__GNUC__)
-__attribute__((format(printf, 3, 4)))
-#endif
-void cli_io_input(cli_io *io, const char *path, const char *label_fmt, ...);
-/* Register an output file; label_fmt may be NULL (the path says it all: -o FILE). */
-#if defined(__GNUC__)
-__attribute__((format(printf, 3, 4)))
-#endif
-void cli_io_output(cli_io *io, const char *path, const char *label_fmt, ...);
-/* Register an output folder, whose contents the command replaces as a whole. */
-#if defined(__GNUC__)
-__attribute__((format(printf, 3, 4)))
-#endif
-void cli_io_output_folder(cli_io *io, const char *path, const char *label_fmt, ...);
-/* Register the files of every name=@MAP[:c][:e] among a material's assignments (cli_material_load's syntax) as inputs,
+/* mr_output_plan_check, and the folders it made taken into the process's list (cli_unmake_folders): CLI_EXIT_OK, or
+ * print "matremap CMD: error: <mr_last_error()>" and return cli_fail's exit code (CLI_EXIT_BAD_INPUT for a refused
+ * output or a folder that cannot be made, CLI_EXIT_INTERNAL out of memory). */
+int cli_plan_check(const char *command, mr_output_plan *plan);
+/* Remove the folders cli_plan_check's plans made in this process that are still empty, deepest first. */
+void cli_unmake_folders(void);
+/* List the files of every name=@MAP[:c][:e] among a material's assignments (cli_material_load's syntax) as inputs,
  * labelled with the assignment as given (labels[k], or assignments[k] when labels is NULL). */
-void cli_io_material(cli_io *io, const char *const *assignments, const char *const *labels, int count);
-/* Register every file a glTF asset was read from (mr_gltf_source_file) as inputs: "<label>" for the asset's own file,
+void cli_plan_material(mr_output_plan *plan, const char *const *assignments, const char *const *labels, int count);
+/* List every file a glTF asset was read from (mr_gltf_source_file) as inputs: "<label>" for the asset's own file,
  * "a file of <label>" for its buffers and images. */
-void cli_io_gltf(cli_io *io, const mr_gltf *asset, const char *label);
+void cli_plan_gltf(mr_output_plan *plan, const mr_gltf *asset, const char *label);
 /* Parse "X,Y,Z" (three finite numbers, not all zero: a direction) given to `option`. 1, or 0 after a usage error
  * naming the option and the text. */
 int cli_parse_direction(const char *command, const char *option, const char *text, double out[3]);
 /* 1 if `text` names a glTF asset (ends in ".gltf" or ".glb"): what render and report take in a model's place. */
 int cli_is_gltf_path(const char *text);
 /* Read the glTF asset at `path`, note its files in io as inputs ("asset PATH"), check io again (an output over a
- * buffer or an image is refused, cli_io_check) and build its scene for the renderer (mr_gltf_scene_from_asset) into
- * *out (caller-owned). Returns a CLI exit code, after printing why when it is not CLI_EXIT_OK. */
+ * buffer or an image is refused, cli_plan_check) and build its scene for the renderer (mr_gltf_scene_from_asset)
+ * into *out (caller-owned). Returns a CLI exit code, after printing why when it is not CLI_EXIT_OK. */
 struct mr_gltf_scene;
-int cli_gltf_scene_load(const char *command, const char *path, cli_io *io, struct mr_gltf_scene **out);
-/* CLI_EXIT_OK (the outputs' folders made), or print why (naming both files, or the folder that cannot be made) and
- * return CLI_EXIT_BAD_INPUT (CLI_EXIT_INTERNAL when a registration ran out of memory). Checks every pair each time it
- * is called. */
-int cli_io_check(const cli_io *io);
-void cli_io_free(cli_io *io);
-/* Remove the folders cli_io_check made in this process that are still empty, deepest first. */
-void cli_io_unmake_folders(void);
+int cli_gltf_scene_load(const char *command, const char *path, mr_output_plan *io, struct mr_gltf_scene **out);
 
 /* mr_image_check_radiance labelled "image 'PATH'": finite radiance >= 0 in the image read from `path`, or
  * MR_ERR_INVALID_ARG naming the file, the pixel, the channel and the value (measurements, environment maps). */

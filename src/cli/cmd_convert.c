@@ -404,15 +404,14 @@ int cmd_convert(int argc, char **argv) {
         }
     }
     if (code == CLI_EXIT_OK) {
-        cli_io io;
-        cli_io_init(&io, COMMAND);
-        cli_io_material(&io, assignments, labels, assignment_count);
-        for (int k = 0; k < l.count; k++) cli_io_input(&io, l.paths[k], "transform %s", l.paths[k]);
-        for (int j = 0; maps_given && j <= out_count; j++) cli_io_output(&io, names[j], "-o %s", prefix);
+        mr_output_plan io = {0};
+        cli_plan_material(&io, assignments, labels, assignment_count);
+        for (int k = 0; k < l.count; k++) mr_output_plan_inputf(&io, l.paths[k], "transform %s", l.paths[k]);
+        for (int j = 0; maps_given && j <= out_count; j++) mr_output_plan_outputf(&io, names[j], "-o %s", prefix);
         // The cache is read and rewritten: an output, never over another input or output.
-        if (dopts.cache_path != NULL) cli_io_output(&io, dopts.cache_path, "--cache");
-        code = cli_io_check(&io);
-        cli_io_free(&io);
+        if (dopts.cache_path != NULL) mr_output_plan_output(&io, dopts.cache_path, "--cache");
+        code = cli_plan_check(COMMAND, &io);
+        mr_output_plan_free(&io);
     }
     if (code != CLI_EXIT_OK) {
         for (int k = 0; k < assignment_count; k++) free(owned[k]);

@@ -96,13 +96,13 @@ static void draw_progress(const char *stage, size_t done, size_t total, void *us
 
 /* The spec-gloss texels of the asset at `path` into the pool; the files the asset was read from are added to io's
  * inputs. Returns an exit code. */
-static int add_asset_texels(const char *path, uint64_t seed, mr_wf_texel_pool *pool, cli_io *io) {
+static int add_asset_texels(const char *path, uint64_t seed, mr_wf_texel_pool *pool, mr_output_plan *io) {
     mr_gltf *asset = NULL;
     mr_status status = mr_gltf_load(path, &asset);
     if (status != MR_OK) return cli_fail("dataset", status);
     char label[4096 + 16];
     snprintf(label, sizeof label, "--asset %s", path);
-    cli_io_gltf(io, asset, label); // its buffers and images are inputs too
+    cli_plan_gltf(io, asset, label); // its buffers and images are inputs too
     int materials = 0;
     status = mr_gltf_add_specgloss_texels(asset, seed, pool, &materials);
     mr_gltf_free(asset);
@@ -278,20 +278,19 @@ int cmd_dataset(int argc, char **argv) {
     if (samples < 0) samples = do_compare ? 400 : 16000;
 
     // Nothing written over a file read: -o against the maps, the networks and the assets with their files.
-    cli_io io;
-    cli_io_init(&io, "dataset");
-    for (int e = 0; e < env_count; e++) cli_io_input(&io, env_paths[e], "--env %s", env_paths[e]);
+    mr_output_plan io = {0};
+    for (int e = 0; e < env_count; e++) mr_output_plan_inputf(&io, env_paths[e], "--env %s", env_paths[e]);
     for (int e = 0; e < label_env_count; e++)
-        cli_io_input(&io, label_env_paths[e], "--label-env %s", label_env_paths[e]);
-    for (int w = 0; w < weight_count; w++) cli_io_input(&io, weights[w], "--weights %s", weights[w]);
-    for (int a = 0; a < asset_count; a++) cli_io_input(&io, assets[a], "--asset %s", assets[a]);
-    if (output != NULL) cli_io_output(&io, output, NULL);
+        mr_output_plan_inputf(&io, label_env_paths[e], "--label-env %s", label_env_paths[e]);
+    for (int w = 0; w < weight_count; w++) mr_output_plan_inputf(&io, weights[w], "--weights %s", weights[w]);
+    for (int a = 0; a < asset_count; a++) mr_output_plan_inputf(&io, assets[a], "--asset %s", assets[a]);
+    if (output != NULL) mr_output_plan_output(&io, output, NULL);
     mr_wf_texel_pool pool = {0};
-    int code = cli_io_check(&io);
+    int code = cli_plan_check("dataset", &io);
     for (int a = 0; code == CLI_EXIT_OK && a < asset_count; a++)
         code = add_asset_texels(assets[a], (uint64_t)seed, &pool, &io);
-    if (code == CLI_EXIT_OK) code = cli_io_check(&io); // with the assets' files
-    cli_io_free(&io);
+    if (code == CLI_EXIT_OK) code = cli_plan_check("dataset", &io); // with the assets' files
+    mr_output_plan_free(&io);
     mr_image *label_envs[MAX_ENVS] = {NULL}, *envs[MAX_ENVS] = {NULL};
     for (int e = 0; code == CLI_EXIT_OK && e < label_env_count; e++) {
         mr_img_read_options ro = {MR_IMG_DATA, 3, 0};

@@ -198,13 +198,12 @@ int cmd_gltf(int argc, char **argv) {
     int to_metal = strcmp(o.direction, "spec2metal") == 0;
     // Nothing written over a file read: OUT against IN and --weights here; the asset's buffers and images, and the
     // files written beside OUT, the library keeps apart (mr_gltf_save: never over a file the asset was read from).
-    cli_io io;
-    cli_io_init(&io, "gltf");
-    cli_io_input(&io, o.input, "asset %s", o.input);
-    if (o.weights != NULL) cli_io_input(&io, o.weights, "--weights %s", o.weights);
-    cli_io_output(&io, o.output, NULL);
-    code = cli_io_check(&io);
-    cli_io_free(&io);
+    mr_output_plan io = {0};
+    mr_output_plan_inputf(&io, o.input, "asset %s", o.input);
+    if (o.weights != NULL) mr_output_plan_inputf(&io, o.weights, "--weights %s", o.weights);
+    mr_output_plan_output(&io, o.output, NULL);
+    code = cli_plan_check("gltf", &io);
+    mr_output_plan_free(&io);
     if (code != CLI_EXIT_OK) return code;
 
     // The transform: the method's descriptor for this pair of glTF models.

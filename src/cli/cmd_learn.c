@@ -282,17 +282,16 @@ int cmd_learn(int argc, char **argv) {
     if (file_count == 0) return cli_usage_error(COMMAND, "no sweep file given");
     if (output == NULL) return cli_usage_error(COMMAND, "no output file: give -o T.mrt");
     // Nothing written over a file read: the transform and --plots DIR's files against the sweeps.
-    cli_io io;
-    cli_io_init(&io, COMMAND);
-    for (int i = 0; i < file_count; i++) cli_io_input(&io, files[i], "sweep %s", files[i]);
-    cli_io_output(&io, output, NULL);
+    mr_output_plan io = {0};
+    for (int i = 0; i < file_count; i++) mr_output_plan_inputf(&io, files[i], "sweep %s", files[i]);
+    mr_output_plan_output(&io, output, NULL);
     for (int k = 0; plots != NULL && k < MR_LEARNED_PLOT_FILES; k++) {
         char path[4096];
         snprintf(path, sizeof path, "%s/%s", plots, mr_learned_plot_file_name(k));
-        cli_io_output(&io, path, "--plots %s", plots);
+        mr_output_plan_outputf(&io, path, "--plots %s", plots);
     }
-    int code = cli_io_check(&io);
-    cli_io_free(&io);
+    int code = cli_plan_check(COMMAND, &io);
+    mr_output_plan_free(&io);
     if (code != CLI_EXIT_OK) return code;
     const double started = cli_now();
     mr_sweep_table tab;

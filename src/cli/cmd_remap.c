@@ -227,18 +227,17 @@ int cmd_remap(int argc, char **argv) {
 
     // Nothing written over a file read: --images PREFIX's pictures against the renders.
     static const char *const image_options[3] = {"--from-images", "--diffuse", "--specular"};
-    cli_io io;
-    cli_io_init(&io, "remap");
+    mr_output_plan io = {0};
     for (int k = 0; k < 3; k++)
-        if (image_paths[k]) cli_io_input(&io, image_paths[k], "%s %s", image_options[k], image_paths[k]);
-    if (reference_path) cli_io_input(&io, reference_path, "--match-irradiance %s", reference_path);
+        if (image_paths[k]) mr_output_plan_inputf(&io, image_paths[k], "%s %s", image_options[k], image_paths[k]);
+    if (reference_path) mr_output_plan_inputf(&io, reference_path, "--match-irradiance %s", reference_path);
     for (int k = 0; images_prefix != NULL && k < 3; k++) {
         char path[4096];
         cli_output_name(path, sizeof path, images_prefix, picture_suffixes[k]);
-        cli_io_output(&io, path, "--images %s", images_prefix);
+        mr_output_plan_outputf(&io, path, "--images %s", images_prefix);
     }
-    int exit_code = cli_io_check(&io);
-    cli_io_free(&io);
+    int exit_code = cli_plan_check("remap", &io);
+    mr_output_plan_free(&io);
     if (exit_code != CLI_EXIT_OK) return exit_code;
 
     // Source images (black-box renders) decide the scene size; they must all agree and be square.

@@ -260,15 +260,14 @@ int cmd_render(int argc, char **argv) {
         return cli_usage_error("render", "--camera-direction places the camera for glTF assets");
 
     // Nothing written over a file read (maps, the map, the mesh).
-    cli_io io;
-    cli_io_init(&io, "render");
-    cli_io_material(&io, assignments, NULL, assignment_count);
-    if (env_path != NULL) cli_io_input(&io, env_path, "--env %s", env_path);
-    if (mesh_path != NULL) cli_io_input(&io, mesh_path, "--mesh %s", mesh_path);
-    if (gltf) cli_io_input(&io, model_name, "asset %s", model_name);
-    cli_io_output(&io, output, NULL);
-    if (mask_path != NULL) cli_io_output(&io, mask_path, "--mask");
-    int code = cli_io_check(&io);
+    mr_output_plan io = {0};
+    cli_plan_material(&io, assignments, NULL, assignment_count);
+    if (env_path != NULL) mr_output_plan_inputf(&io, env_path, "--env %s", env_path);
+    if (mesh_path != NULL) mr_output_plan_inputf(&io, mesh_path, "--mesh %s", mesh_path);
+    if (gltf) mr_output_plan_inputf(&io, model_name, "asset %s", model_name);
+    mr_output_plan_output(&io, output, NULL);
+    if (mask_path != NULL) mr_output_plan_output(&io, mask_path, "--mask");
+    int code = cli_plan_check("render", &io);
 
     mr_material *material = NULL;
     mr_gltf_scene *asset = NULL;
@@ -281,7 +280,7 @@ int cmd_render(int argc, char **argv) {
         code = cli_material_load("render", model_name, assignments, assignment_count, &material);
         cli_material_note_invalid_texels("render", material);
     }
-    cli_io_free(&io);
+    mr_output_plan_free(&io);
 
     mr_image *env = NULL, *image = NULL;
     mr_render_plan *plan = NULL;

@@ -285,18 +285,17 @@ int cmd_report(int argc, char **argv) {
                                "camera");
 
     // Nothing read may lie in the folder: the report replaces it as a whole (report.h, "The folder").
-    cli_io io;
-    cli_io_init(&io, "report");
+    mr_output_plan io = {0};
     for (int k = 0; k < count; k++) {
-        if (gltf_entries > 0) cli_io_input(&io, groups[k].model_name, "asset %s", groups[k].model_name);
-        cli_io_material(&io, groups[k].assignments, NULL, groups[k].count);
+        if (gltf_entries > 0) mr_output_plan_inputf(&io, groups[k].model_name, "asset %s", groups[k].model_name);
+        cli_plan_material(&io, groups[k].assignments, NULL, groups[k].count);
     }
-    if (o.report.env_path != NULL) cli_io_input(&io, o.report.env_path, "--env %s", o.report.env_path);
-    if (o.mesh_path != NULL) cli_io_input(&io, o.mesh_path, "--mesh %s", o.mesh_path);
-    cli_io_output_folder(&io, o.dir, NULL);
-    code = cli_io_check(&io);
+    if (o.report.env_path != NULL) mr_output_plan_inputf(&io, o.report.env_path, "--env %s", o.report.env_path);
+    if (o.mesh_path != NULL) mr_output_plan_inputf(&io, o.mesh_path, "--mesh %s", o.mesh_path);
+    mr_output_plan_output_folder(&io, o.dir, NULL);
+    code = cli_plan_check("report", &io);
     if (code != CLI_EXIT_OK) {
-        cli_io_free(&io);
+        mr_output_plan_free(&io);
         return code;
     }
 
@@ -305,7 +304,7 @@ int cmd_report(int argc, char **argv) {
     if (o.mesh_path != NULL) {
         mr_status status = mr_obj_load(o.mesh_path, NULL, &obj);
         if (status != MR_OK) {
-            cli_io_free(&io);
+            mr_output_plan_free(&io);
             return cli_fail("report", status);
         }
         if (obj->warnings[0] != '\0')
@@ -330,8 +329,8 @@ int cmd_report(int argc, char **argv) {
         // A scene's description (its triangles and materials) is made by the library.
         inputs[k] = (mr_report_input){g->label, gltf_entries > 0 ? NULL : descriptions[k], materials[k], scenes[k]};
     }
-    if (code == CLI_EXIT_OK) code = cli_io_check(&io); // with the assets' buffers and images
-    cli_io_free(&io);
+    if (code == CLI_EXIT_OK) code = cli_plan_check("report", &io); // with the assets' buffers and images
+    mr_output_plan_free(&io);
     if (code == CLI_EXIT_OK) {
         int progress_shown = 0;
         if (isatty(STDERR_FILENO)) {

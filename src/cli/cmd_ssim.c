@@ -76,14 +76,13 @@ int cmd_ssim(int argc, char **argv) {
     if (mask_path != NULL && opts.downsample)
         return cli_usage_error("ssim", "--mask and --downsample cannot be combined (the mask is at full resolution)");
 
-    cli_io io;
-    cli_io_init(&io, "ssim");
-    cli_io_input(&io, paths[0], "image A %s", paths[0]);
-    cli_io_input(&io, paths[1], "image B %s", paths[1]);
-    if (mask_path != NULL) cli_io_input(&io, mask_path, "--mask %s", mask_path);
-    if (map_path != NULL) cli_io_output(&io, map_path, "--map");
-    int code = cli_io_check(&io);
-    cli_io_free(&io);
+    mr_output_plan io = {0};
+    mr_output_plan_inputf(&io, paths[0], "image A %s", paths[0]);
+    mr_output_plan_inputf(&io, paths[1], "image B %s", paths[1]);
+    if (mask_path != NULL) mr_output_plan_inputf(&io, mask_path, "--mask %s", mask_path);
+    if (map_path != NULL) mr_output_plan_output(&io, map_path, "--map");
+    int code = cli_plan_check("ssim", &io);
+    mr_output_plan_free(&io);
     if (code != CLI_EXIT_OK) return code;
 
     mr_image *images[2] = {NULL, NULL};

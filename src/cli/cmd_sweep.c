@@ -154,19 +154,18 @@ static int cmd_sweep_merge(int argc, char **argv) {
         rc = cli_usage_error("sweep merge", "missing -o DATA.csv");
     } else {
         // The shards against the output (the library refuses it too), and the output's folders made.
-        cli_io io;
-        cli_io_init(&io, "sweep merge");
-        for (int k = 0; k < count; k++) cli_io_input(&io, shards[k], "shard %s", shards[k]);
-        cli_io_output(&io, output, NULL);
-        rc = cli_io_check(&io);
-        cli_io_free(&io);
+        mr_output_plan io = {0};
+        for (int k = 0; k < count; k++) mr_output_plan_inputf(&io, shards[k], "shard %s", shards[k]);
+        mr_output_plan_output(&io, output, NULL);
+        rc = cli_plan_check("sweep merge", &io);
+        mr_output_plan_free(&io);
         char *command = rc == CLI_EXIT_OK ? command_line(argc, argv, "matremap sweep") : NULL;
         mr_sweep_merge_summary summary;
         const double started = cli_now();
         mr_status status = rc == CLI_EXIT_OK ? mr_sweep_merge(shards, count, output, command, &summary) : MR_OK;
         free(command);
         if (rc != CLI_EXIT_OK) {
-            // said by cli_io_check
+            // said by cli_plan_check
         } else if (status != MR_OK) {
             rc = cli_fail("sweep merge", status);
         } else if (json) {
@@ -502,11 +501,10 @@ int cmd_sweep(int argc, char **argv) {
 
     // The output's folders, made by rank 0 (the one that writes the file) before any work.
     if (mpi_rank == 0) {
-        cli_io io;
-        cli_io_init(&io, "sweep");
-        cli_io_output(&io, output, NULL);
-        rc = cli_io_check(&io);
-        cli_io_free(&io);
+        mr_output_plan io = {0};
+        mr_output_plan_output(&io, output, NULL);
+        rc = cli_plan_check("sweep", &io);
+        mr_output_plan_free(&io);
         if (rc != CLI_EXIT_OK) return rc;
     }
 

@@ -150,21 +150,20 @@ int cmd_train(int argc, char **argv) {
         curve_prefix = default_prefix;
     }
     // Nothing written over a file read: the weights and the loss curve's two files against the datasets.
-    cli_io io;
-    cli_io_init(&io, "train");
-    for (int i = 0; i < file_count; i++) cli_io_input(&io, files[i], "dataset %s", files[i]);
-    for (int t = 0; t < test_count; t++) cli_io_input(&io, tests[t], "--test %s", tests[t]);
-    cli_io_output(&io, output, NULL);
+    mr_output_plan io = {0};
+    for (int i = 0; i < file_count; i++) mr_output_plan_inputf(&io, files[i], "dataset %s", files[i]);
+    for (int t = 0; t < test_count; t++) mr_output_plan_inputf(&io, tests[t], "--test %s", tests[t]);
+    mr_output_plan_output(&io, output, NULL);
     for (int k = 0; k < 2; k++) {
         char path[4096 + 8];
         snprintf(path, sizeof path, "%s.%s", curve_prefix, k == 0 ? "csv" : "svg");
         if (curve_prefix == default_prefix)
-            cli_io_output(&io, path, "the loss curve of -o %s", output);
+            mr_output_plan_outputf(&io, path, "the loss curve of -o %s", output);
         else
-            cli_io_output(&io, path, "--loss-curve %s", curve_prefix);
+            mr_output_plan_outputf(&io, path, "--loss-curve %s", curve_prefix);
     }
-    int code = cli_io_check(&io);
-    cli_io_free(&io);
+    int code = cli_plan_check("train", &io);
+    mr_output_plan_free(&io);
     if (code != CLI_EXIT_OK) return code;
     opts.threads = threads;
 

@@ -167,7 +167,7 @@ static const char *default_format(map_arg *const *maps, int count) {
     return "png";
 }
 
-/* Name the outputs PREFIX_<name>.EXT (cli_output_name's rule) and check the options; refuse (exit 2, cli_io_check)
+/* Name the outputs PREFIX_<name>.EXT (cli_output_name's rule) and check the options; refuse (exit 2, cli_plan_check)
  * an output that is an input (a map, --weights, or the installed network the transform loaded, `network`, "" for
  * none) or another output (--flags named like one). */
 static int plan_outputs(const char *command, out_options *o, map_arg *const *maps, int map_count, const char *weights,
@@ -186,16 +186,15 @@ static int plan_outputs(const char *command, out_options *o, map_arg *const *map
         if (!cli_output_name(outputs[k].path, sizeof outputs[k].path, o->prefix, name))
             return cli_usage_error(command, "-o '%s': the prefix is too long", o->prefix);
     }
-    cli_io io;
-    cli_io_init(&io, command);
+    mr_output_plan io = {0};
     for (int m = 0; m < map_count; m++)
-        if (is_file(maps[m])) cli_io_input(&io, maps[m]->path, "%s %s", maps[m]->option, maps[m]->text);
-    if (weights != NULL) cli_io_input(&io, weights, "--weights %s", weights);
-    if (network != NULL && network[0] != '\0') cli_io_input(&io, network, "the network %s", network);
-    for (int k = 0; k < count; k++) cli_io_output(&io, outputs[k].path, "-o %s", o->prefix);
-    if (o->flags_path != NULL) cli_io_output(&io, o->flags_path, "--flags");
-    int code = cli_io_check(&io);
-    cli_io_free(&io);
+        if (is_file(maps[m])) mr_output_plan_inputf(&io, maps[m]->path, "%s %s", maps[m]->option, maps[m]->text);
+    if (weights != NULL) mr_output_plan_inputf(&io, weights, "--weights %s", weights);
+    if (network != NULL && network[0] != '\0') mr_output_plan_inputf(&io, network, "the network %s", network);
+    for (int k = 0; k < count; k++) mr_output_plan_outputf(&io, outputs[k].path, "-o %s", o->prefix);
+    if (o->flags_path != NULL) mr_output_plan_output(&io, o->flags_path, "--flags");
+    int code = cli_plan_check(command, &io);
+    mr_output_plan_free(&io);
     return code;
 }
 

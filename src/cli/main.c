@@ -48,7 +48,7 @@ static void print_usage(FILE *out) {
 
 /* A command's exit code; a failed run leaves none of the empty folders it made for its outputs (cli.h). */
 static int finished(int code) {
-    if (code != CLI_EXIT_OK) cli_io_unmake_folders();
+    if (code != CLI_EXIT_OK) cli_unmake_folders();
     return code;
 }
 
