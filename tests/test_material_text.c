@@ -98,7 +98,8 @@ MR_TEST(faults_told_apart) {
     snprintf(bad, sizeof bad, "roughness=@%s", orm);
     expect_fault("gltf", bad, MR_ERR_INVALID_ARG, 1, "holds colour, but roughness takes one value: pick a channel");
     snprintf(bad, sizeof bad, "base_color=@%s:r", orm);
-    expect_fault("gltf", bad, MR_ERR_INVALID_ARG, 1, "base_color is an RGB parameter and takes the whole image (no :r)");
+    expect_fault("gltf", bad, MR_ERR_INVALID_ARG, 1,
+                 "base_color is an RGB parameter and takes the whole image (no :r)");
     snprintf(bad, sizeof bad, "roughness=@%s:linear:g", grey);
     expect_fault("gltf", bad, MR_ERR_INVALID_ARG, 1, "the channel comes before the encoding");
     snprintf(bad, sizeof bad, "roughness=@%s:srgb", exr);

@@ -176,13 +176,14 @@ int cli_check_map(const char *command, const char *label, const char *text, int 
 
 #define CLI_MAX_ASSIGNMENTS 64
 
-/* Build *out (an mr_material, render/render.h: mr_material_free) from MODEL and its assignments: values parsed,
- * maps read and bound. Returns a CLI exit code (messages printed, naming `command`); *out is NULL unless it is
+/* Build *out (an mr_material, render/render.h: mr_material_free) from MODEL and its assignments
+ * (mr_material_from_assignments: values parsed, maps read and bound). Returns a CLI exit code (messages printed,
+ * naming `command`: a usage error when the text is at fault, else cli_fail's); *out is NULL unless it is
  * CLI_EXIT_OK. */
 int cli_material_load(const char *command, const char *model_name, const char *const *assignments, int count,
                       mr_material **out);
 /* The commands that render a material's maps (render, report): one note on stderr per map holding texels that are
- * not parameter values, how many and how they are read (mr_material_map_invalid_texels, docs/rendering.md):
+ * not parameter values, how many and how they are read (mr_material_describe_invalid_texels, docs/rendering.md):
  * "matremap render: note: base_color=@nan.exr: 3 texels not finite, read as 0; 2 negative, clamped to 0". */
 void cli_material_note_invalid_texels(const char *command, const mr_material *material);
 

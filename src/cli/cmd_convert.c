@@ -1,8 +1,9 @@
 /*
  * cmd_convert.c — `matremap convert`: texture maps (or constants) of one BRDF model's parameters converted to
- * another model's, per texel, through learned transforms (one, a chain given or found), through the library's
- * conversion of a material (mr_transform_convert_material); the outputs and the flag picture (mr_flag_picture,
- * mr_learned_flag_code) written all or none (mr_img_write_set); see docs/learn.md.
+ * another model's, per texel, through learned transforms (one, a chain given or found) or the direct remap. The job
+ * is the library's (learn/learned.h: mr_learned_set_add_file / _folder, mr_learned_find_chain or
+ * mr_learned_check_ends, mr_learned_convert_material, mr_learned_explain_texel); this file parses, checks that no
+ * output replaces an input, and prints; see docs/learn.md.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -297,9 +298,11 @@ int cmd_convert(int argc, char **argv) {
     for (int j = 0; j <= out_count; j++) outputs[j] = names[j];
     char label[4096 + 8];
     snprintf(label, sizeof label, "-o %s", prefix ? prefix : "");
-    const mr_learned_conversion_spec spec = {source, target, chain, direct ? 0 : hops, &dopts,
-                                             assignments, assignment_count, maps_given ? outputs : NULL, label,
-                                             threads};
+    const mr_learned_conversion_spec spec = {.source = source, .target = target, .chain = chain,
+                                             .hops = direct ? 0 : hops, .direct = &dopts,
+                                             .assignments = assignments, .assignment_count = assignment_count,
+                                             .outputs = maps_given ? outputs : NULL, .output_label = label,
+                                             .threads = threads};
     mr_learned_conversion r;
     status = mr_learned_convert_material(&spec, &r);
     if (progress.draw && direct && r.converting) fprintf(stderr, "\r\033[K");

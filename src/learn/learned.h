@@ -271,7 +271,8 @@ void mr_learned_kind_free(mr_transform_kind *kind);
  *   const mr_learned *chain[MR_LEARNED_MAX_HOPS];  for (h ...) chain[h] = set.all[path[h]];
  *   const char *a[] = {"alpha=@rough.exr", "specular=@spec.png"};
  *   const char *outputs[] = {"out/ggx_alpha.exr", ..., "out/ggx_flags.png"};  // one per target parameter + flags
- *   mr_learned_conversion_spec spec = {ward, ggx, chain, hops, NULL, a, 2, outputs, "-o out/ggx_", 0};
+ *   mr_learned_conversion_spec spec = {.source = ward, .target = ggx, .chain = chain, .hops = hops,
+ *                                      .assignments = a, .assignment_count = 2, .outputs = outputs};
  *   mr_learned_conversion r;  mr_learned_convert_material(&spec, &r);   ... r.extrapolated ...
  *   mr_learned_conversion_free(&r);  mr_learned_set_free(&set);
  */
