@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "harness.h"
@@ -646,10 +647,121 @@ MR_TEST(plots_written_with_the_transform) {
     mr_sweep_table_free(&tab);
 }
 
+/* convert's transforms from a folder: every *.mrt in the order of their names (not the folder's), nothing else; an
+ * empty or missing folder named by its label; a chain given hop by hop whose ends are not the conversion asked. */
+MR_TEST(folder_read_sorted_and_ends_checked) {
+    mr_learned *p = learn_from(ward_ggx_sweep(), MR_LEARN_PARAMETRIC);
+    if (p == NULL) {
+        MR_CHECK_MSG(0, "%s", mr_last_error());
+        return;
+    }
+    char dir[512], empty[512];
+    snprintf(dir, sizeof dir, "%s", mr_test_tmp_path("transforms"));
+    snprintf(empty, sizeof empty, "%s", mr_test_tmp_path("no_transforms"));
+    MR_CHECK(mkdir(dir, 0777) == 0 && mkdir(empty, 0777) == 0);
+    static const char *const names[3] = {"zeta.mrt", "alpha.mrt", "mid.mrt"}; // written out of order
+    for (int k = 0; k < 3; k++) {
+        char path[600];
+        snprintf(path, sizeof path, "%s/%s", dir, names[k]);
+        MR_CHECK_OK(mr_learned_write(p, path));
+    }
+    char other[600];
+    snprintf(other, sizeof other, "%s/readme.txt", dir);
+    MR_CHECK(mr_test_write_file(other, "not a transform\n", 16));
+    mr_learned_set set = {0};
+    MR_CHECK_OK(mr_learned_set_add_folder(&set, dir, NULL));
+    MR_CHECK(set.count == 3);
+    static const char *const sorted[3] = {"/alpha.mrt", "/mid.mrt", "/zeta.mrt"};
+    for (int k = 0; k < set.count && k < 3; k++) {
+        const size_t n = strlen(set.paths[k]), m = strlen(sorted[k]);
+        MR_CHECK_MSG(n > m && strcmp(set.paths[k] + n - m, sorted[k]) == 0 && strncmp(set.paths[k], dir, strlen(dir))
+                     == 0, "paths[%d] = %s", k, set.paths[k]);
+        MR_CHECK(set.all[k]->source == p->source && set.all[k]->target == p->target);
+    }
+    // The empty folder, by its label and by default.
+    MR_CHECK(mr_learned_set_add_folder(&set, empty, "--transforms 'x'") == MR_ERR_IO);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "--transforms 'x': no *.mrt files there") == 0, "%s", mr_last_error());
+    MR_CHECK(mr_learned_set_add_folder(&set, empty, NULL) == MR_ERR_IO);
+    MR_CHECK_MSG(strstr(mr_last_error(), "folder '") == mr_last_error() && strstr(mr_last_error(), "no *.mrt"),
+                 "%s", mr_last_error());
+    char missing[600];
+    snprintf(missing, sizeof missing, "%s/missing", dir);
+    MR_CHECK(mr_learned_set_add_folder(&set, missing, NULL) == MR_ERR_IO);
+    MR_CHECK_MSG(strstr(mr_last_error(), "No such file") != NULL, "%s", mr_last_error());
+    MR_CHECK(set.count == 3);
+    // A chain given hop by hop: its first hop must start at the source, its last end at the target.
+    const mr_brdf_model *ward = mr_brdf_find("ward"), *ggx = mr_brdf_find("ggx"), *as = mr_brdf_find("as");
+    const mr_learned *chain[1] = {set.all[0]};
+    const char *chain_names[1] = {"w.mrt"};
+    MR_CHECK_OK(mr_learned_check_ends(chain, chain_names, 1, ward, ggx));
+    MR_CHECK(mr_learned_check_ends(chain, chain_names, 1, ward, as) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "'w.mrt' converts ward to ggx, but the conversion asked is ward to as") == 0,
+                 "%s", mr_last_error());
+    MR_CHECK(mr_learned_check_ends(chain, chain_names, 1, as, ggx) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strstr(mr_last_error(), "asked is as to ggx") != NULL, "%s", mr_last_error());
+    mr_learned_set_free(&set);
+    MR_CHECK(set.count == 0);
+    mr_learned_free(p);
+}
+
+typedef struct collected_notes {
+    int count, hop[4];
+    char text[4][2048];
+} collected_notes;
+
+static void collect_note(int hop, const char *note, void *user) {
+    collected_notes *c = user;
+    if (c->count == 4) return;
+    c->hop[c->count] = hop;
+    snprintf(c->text[c->count++], sizeof c->text[0], "%s", note);
+}
+
+/* Why a converted texel was flagged: an extrapolated one names the parameter, its value and the training domain; a
+ * clamped one (the direct remap's answer on a bound) the parameter and its range; a clean texel gets no note. */
+MR_TEST(explain_flagged_texel) {
+    mr_learned *p = learn_from(ward_ggx_sweep(), MR_LEARN_PARAMETRIC);
+    if (p == NULL) {
+        MR_CHECK_MSG(0, "%s", mr_last_error());
+        return;
+    }
+    const mr_brdf_model *ward = mr_brdf_find("ward"), *ggx = mr_brdf_find("ggx");
+    double v[MR_BRDF_MAX_VALUES], w[MR_BRDF_MAX_VALUES];
+    unsigned flags = 0;
+    ward_values(0.8, 0.2, 0.2, 0.2, 0.3, v); // roughness beyond the rows' 0.6
+    mr_learned_apply(p, v, w, &flags);
+    MR_CHECK(flags & MR_WF_EXTRAPOLATED);
+    const mr_learned *chain[1] = {p};
+    collected_notes notes = {0};
+    mr_learned_explain_texel(chain, 1, ward, v, ggx, w, flags, collect_note, &notes);
+    MR_CHECK(notes.count == 1 && notes.hop[0] == 0);
+    MR_CHECK_MSG(strstr(notes.text[0], "extrapolated, outside its training domain: alpha 0.8 (trained on [0.02, 0.6])")
+                 != NULL, "%s", notes.text[0]);
+    // (The test rows are a made-up mapping no render matches: the check fails them.)
+    MR_CHECK_MSG(strstr(notes.text[0], "the transform failed its check") == notes.text[0], "%s", notes.text[0]);
+    MR_CHECK(notes.text[0][strlen(notes.text[0]) - 1] != ' ' && notes.text[0][strlen(notes.text[0]) - 1] != ';');
+    // The direct remap (no hops): a target parameter on a bound of its range, clamped.
+    const int alpha = mr_brdf_param_index(ggx, "alpha");
+    mr_brdf_default_values(ggx, w);
+    w[mr_brdf_param_offset(ggx, alpha)] = ggx->params[alpha].max_value;
+    MR_CHECK_OK(mr_brdf_parse_assignment(ggx, "diffuse=0.3", w)); // inside its range (its default 0 is a bound)
+    notes.count = 0;
+    mr_learned_explain_texel(NULL, 0, ward, v, ggx, w, MR_WF_CLAMPED_OUTPUT, collect_note, &notes);
+    char expected[256];
+    snprintf(expected, sizeof expected, "clamped into its range: alpha %.4g (range [%g, %g])",
+             ggx->params[alpha].max_value, ggx->params[alpha].min_value, ggx->params[alpha].max_value);
+    MR_CHECK(notes.count == 1 && notes.hop[0] == 0);
+    MR_CHECK_MSG(strcmp(notes.text[0], expected) == 0, "'%s', expected '%s'", notes.text[0], expected);
+    notes.count = 0;
+    mr_learned_explain_texel(NULL, 0, ward, v, ggx, w, 0, collect_note, &notes);
+    MR_CHECK(notes.count == 0);
+    mr_learned_free(p);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(parametric_recovers_known_mapping), MR_TEST_ENTRY(carry_by_lobe_ratio),
              MR_TEST_ENTRY(solver_residue_not_learned), MR_TEST_ENTRY(float_map_at_bound_not_clamped),
              MR_TEST_ENTRY(round_trip_every_method), MR_TEST_ENTRY(corrupted_files_refused),
              MR_TEST_ENTRY(domain_flags_and_chromaticity), MR_TEST_ENTRY(chain_equals_steps),
              MR_TEST_ENTRY(chain_search), MR_TEST_ENTRY(parametric_refuses_wrong_shape),
              MR_TEST_ENTRY(svr_hyper_parameters_held), MR_TEST_ENTRY(check_against_the_remaps),
-             MR_TEST_ENTRY(plots_written_with_the_transform))
+             MR_TEST_ENTRY(plots_written_with_the_transform), MR_TEST_ENTRY(folder_read_sorted_and_ends_checked),
+             MR_TEST_ENTRY(explain_flagged_texel))

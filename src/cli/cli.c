@@ -179,64 +179,13 @@ mr_status cli_check_radiance(const mr_image *image, const char *path) {
     return mr_image_check_radiance(image, label);
 }
 
-/* 1 if text[0..*length) ends in ":suffix" (and holds something before it); then *length drops it. */
-static int strip_suffix(const char *text, size_t *length, const char *suffix) {
-    const size_t n = strlen(suffix);
-    if (*length < n + 2 || text[*length - n - 1] != ':' || strncmp(text + *length - n, suffix, n) != 0) return 0;
-    *length -= n + 1;
-    return 1;
-}
-
 void cli_split_map(const char *text, int channels, size_t *path_length, int *channel, mr_map_encoding *encoding) {
-    size_t length = strlen(text);
-    *encoding = strip_suffix(text, &length, "linear") ? MR_MAP_LINEAR
-                : strip_suffix(text, &length, "srgb")  ? MR_MAP_SRGB
-                                                       : MR_MAP_AS_PARAMETER;
-    static const char *const letters[4] = {"r", "g", "b", "a"};
-    *channel = -1;
-    for (int c = 0; channels && c < 4 && *channel < 0; c++)
-        if (strip_suffix(text, &length, letters[c])) *channel = c;
-    *path_length = length;
+    mr_map_ref_split(text, channels, path_length, channel, encoding);
 }
 
 int cli_check_map(const char *command, const char *label, const char *text, int channels) {
-    size_t length;
-    int channel;
-    mr_map_encoding encoding;
-    cli_split_map(text, channels, &length, &channel, &encoding);
-    const char *syntax = channels ? "FILE[:r|g|b|a][:linear|srgb]" : "FILE[:linear|srgb]";
-    if (length == 0) return cli_usage_error(command, "'%s': no file name (expected %s)", label, syntax);
-    size_t rest = length;
-    int misplaced = channel >= 0 && (strip_suffix(text, &rest, "linear") || strip_suffix(text, &rest, "srgb"));
-    if (misplaced) {
-        struct stat st;
-        char *path = strndup(text, length);
-        misplaced = path != NULL && stat(path, &st) != 0; // a file really named "x.png:linear" is read as it is
-        free(path);
-    }
-    if (misplaced)
-        return cli_usage_error(command, "'%s': the channel comes before the encoding: %.*s:%c%.*s", label, (int)rest,
-                               text, "rgba"[channel], (int)(length - rest), text + rest);
-    return CLI_EXIT_OK;
-}
-
-int cli_read_map(const char *command, const char *label, const char *text, int channels, const mr_brdf_param *param,
-                 const mr_img_read_options *opts, mr_image **out, mr_img_stored *stored) {
-    int code = cli_check_map(command, label, text, channels);
-    if (code != CLI_EXIT_OK) return code;
-    size_t length;
-    int selected;
-    mr_map_encoding encoding;
-    cli_split_map(text, channels, &length, &selected, &encoding);
-    char *path = strndup(text, length);
-    if (path == NULL) {
-        fprintf(stderr, "matremap %s: error: out of memory for '%s'\n", command, label);
-        return CLI_EXIT_INTERNAL;
-    }
-    mr_status status = mr_img_read_param_map(path, param, encoding, opts, out, stored);
-    free(path);
-    if (status == MR_ERR_INVALID_ARG && encoding == MR_MAP_SRGB) // :srgb on a float file: the request is the error
-        return cli_usage_error(command, "'%s': %s", label, mr_last_error());
+    mr_status status = mr_map_ref_check(label, text, channels);
+    if (status == MR_ERR_INVALID_ARG) return cli_usage_error(command, "%s", mr_last_error());
     return status == MR_OK ? CLI_EXIT_OK : cli_fail(command, status);
 }
 

@@ -119,41 +119,30 @@ FILE *cli_output_open(const char *command, const char *path, mr_atomic_file *fil
 int cli_output_close(const char *command, FILE *f, mr_atomic_file *file);
 
 /* ---- maps given on the command line: FILE[:r|g|b|a][:linear|srgb] (cli.c) ------------------------------------
- * Every command that reads a map of a parameter takes the file with optional selectors at its end, in this order:
- * a channel (:r, :g, :b or :a, where the command picks channels: a one-channel parameter of render, report and
- * convert), then an encoding (:linear or :srgb) that overrides the parameter's own (mr_img_read_param_map: 8/16-bit
- * colour maps sRGB, everything else linear; float files always linear, and :srgb on one is a usage error). E.g.
- * roughness=@orm.png:g:linear. Selectors are always taken from the end: a file whose own name ends in one is given
- * with an explicit encoding after it ("odd:linear:srgb" reads the file "odd:linear" as sRGB). */
+ * The syntax is the library's (io/image_io.h, "maps named in text"): a channel selector where the command picks
+ * channels (a one-channel parameter of render, report and convert), then an encoding overriding the parameter's own
+ * rule (mr_img_read_param_map), e.g. roughness=@orm.png:g:linear. */
 
-/* Split `text` into its file and selectors: *path_length is the length of FILE at the start of text, *channel the
- * channel (0-3 for r, g, b, a; -1 when none is given or `channels` is 0: the command picks none, and ":g" stays part
- * of the file name), *encoding the override (MR_MAP_AS_PARAMETER when none is given). Never fails. */
+/* mr_map_ref_split. */
 void cli_split_map(const char *text, int channels, size_t *path_length, int *channel, mr_map_encoding *encoding);
 
-/* A map's text split by cli_split_map, checked: CLI_EXIT_OK, or a usage error (CLI_EXIT_USAGE, printed with `label`,
- * how the user gave the map: "specular=@s.png:linear", "--specular s.png") for an empty file name, or for selectors
- * in the wrong order ("x.png:linear:g", when no file "x.png:linear" exists). */
+/* mr_map_ref_check labelled `label` (how the user gave the map: "specular=@s.png:linear", "--specular s.png"):
+ * CLI_EXIT_OK, or its message as a usage error (CLI_EXIT_USAGE) for an empty file name or selectors in the wrong
+ * order. */
 int cli_check_map(const char *command, const char *label, const char *text, int channels);
-
-/* Read the map in `text` (FILE[:c][:e], as cli_split_map takes it; the channel selector is the caller's to apply)
- * for parameter `param` (may be NULL: a map feeding no one parameter, linear unless overridden) with
- * mr_img_read_param_map (opts and stored as there). Returns a CLI exit code after printing any error naming `label`:
- * a usage error for a malformed map or :srgb on a float file, else cli_fail's. */
-int cli_read_map(const char *command, const char *label, const char *text, int channels, const mr_brdf_param *param,
-                 const mr_img_read_options *opts, mr_image **out, mr_img_stored *stored);
 
 /* ---- materials on the command line: MODEL name=value ... name=@MAP[:r|g|b|a][:linear|srgb] ... (cli_material.c) */
 
 #define CLI_MAX_ASSIGNMENTS 64
 
-/* Build *out (an mr_material, render/render.h: mr_material_free) from MODEL and its assignments: values parsed,
- * maps read and bound. Returns a CLI exit code (messages printed, naming `command`); *out is NULL unless it is
+/* Build *out (an mr_material, render/render.h: mr_material_free) from MODEL and its assignments
+ * (mr_material_from_assignments: values parsed, maps read and bound). Returns a CLI exit code (messages printed,
+ * naming `command`: a usage error when the text is at fault, else cli_fail's); *out is NULL unless it is
  * CLI_EXIT_OK. */
 int cli_material_load(const char *command, const char *model_name, const char *const *assignments, int count,
                       mr_material **out);
 /* The commands that render a material's maps (render, report): one note on stderr per map holding texels that are
- * not parameter values, how many and how they are read (mr_material_map_invalid_texels, docs/rendering.md):
+ * not parameter values, how many and how they are read (mr_material_describe_invalid_texels, docs/rendering.md):
  * "matremap render: note: base_color=@nan.exr: 3 texels not finite, read as 0; 2 negative, clamped to 0". */
 void cli_material_note_invalid_texels(const char *command, const mr_material *material);
 

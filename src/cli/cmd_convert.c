@@ -1,12 +1,10 @@
 /*
  * cmd_convert.c — `matremap convert`: texture maps (or constants) of one BRDF model's parameters converted to
- * another model's, per texel, through learned transforms (one, a chain given or found), through the library's
- * conversion of a material (mr_transform_convert_material); the outputs and the flag picture (mr_flag_picture,
- * mr_learned_flag_code) written all or none (mr_img_write_set); see docs/learn.md.
+ * another model's, per texel, through learned transforms (one, a chain given or found) or the direct remap. The job
+ * is the library's (learn/learned.h: mr_learned_set_add_file / _folder, mr_learned_find_chain or
+ * mr_learned_check_ends, mr_learned_convert_material, mr_learned_explain_texel); this file parses, checks that no
+ * output replaces an input, and prints; see docs/learn.md.
  */
-#include <dirent.h>
-#include <errno.h>
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -15,7 +13,6 @@
 #include "learn/learned.h"
 
 #define COMMAND "convert"
-#define MAX_TRANSFORMS 256
 
 static void print_help(void) {
     printf(
@@ -112,151 +109,21 @@ static void draw_progress(const mr_direct_progress *p, void *user) {
     if (fraction > 0.02) fprintf(stderr, ", ETA %.0f s ", elapsed * (1.0 - fraction) / fraction);
 }
 
-typedef struct loaded {
-    mr_learned *all[MAX_TRANSFORMS];
-    char *paths[MAX_TRANSFORMS];
-    int count;
-} loaded;
+/* One note of mr_learned_explain_texel, printed with the hop's file and models (or as --direct's). */
+typedef struct explain_state {
+    const mr_learned *const *chain;
+    const char *const *paths;
+    int hops;
+    const mr_brdf_model *source, *target;
+} explain_state;
 
-static void loaded_free(loaded *l) {
-    for (int i = 0; i < l->count; i++) {
-        mr_learned_free(l->all[i]);
-        free(l->paths[i]);
-    }
-    l->count = 0;
-}
-
-static int load_one(loaded *l, const char *path) {
-    if (l->count == MAX_TRANSFORMS) return cli_usage_error(COMMAND, "more than %d transforms", MAX_TRANSFORMS);
-    mr_status status = mr_learned_read(path, &l->all[l->count]);
-    if (status != MR_OK) return cli_fail(COMMAND, status);
-    l->paths[l->count] = strdup(path);
-    l->count++;
-    return CLI_EXIT_OK;
-}
-
-static int load_dir(loaded *l, const char *dir) {
-    DIR *d = opendir(dir);
-    if (d == NULL) {
-        fprintf(stderr, "matremap convert: error: --transforms '%s': %s\n", dir, strerror(errno));
-        return CLI_EXIT_BAD_INPUT;
-    }
-    // Sorted names, so the chain chosen among equals does not depend on the directory's order.
-    char *names[MAX_TRANSFORMS];
-    int count = 0, code = CLI_EXIT_OK;
-    struct dirent *e;
-    while ((e = readdir(d)) != NULL) {
-        size_t n = strlen(e->d_name);
-        if (n < 5 || strcmp(e->d_name + n - 4, ".mrt") != 0) continue;
-        if (count == MAX_TRANSFORMS) break;
-        names[count++] = strdup(e->d_name);
-    }
-    closedir(d);
-    for (int i = 1; i < count; i++)
-        for (int j = i; j > 0 && strcmp(names[j - 1], names[j]) > 0; j--) {
-            char *t = names[j];
-            names[j] = names[j - 1];
-            names[j - 1] = t;
-        }
-    for (int i = 0; i < count; i++) {
-        char path[4096];
-        snprintf(path, sizeof path, "%s/%s", dir, names[i]);
-        if (code == CLI_EXIT_OK) code = load_one(l, path);
-        free(names[i]);
-    }
-    if (code == CLI_EXIT_OK && count == 0) {
-        fprintf(stderr, "matremap convert: error: --transforms '%s': no *.mrt files there\n", dir);
-        code = CLI_EXIT_BAD_INPUT;
-    }
-    return code;
-}
-
-/* "name v", "name r,g,b": parameter p of `model` in packed `values`, appended to text. */
-static void append_param(char *text, size_t size, const mr_brdf_model *model, const double *values, int p) {
-    const int at = mr_brdf_param_offset(model, p);
-    size_t used = strlen(text);
-    if (model->params[p].channels == 3)
-        snprintf(text + used, size - used, "%s %.4g,%.4g,%.4g", model->params[p].name, values[at], values[at + 1],
-                 values[at + 2]);
+static void print_note(int hop, const char *note, void *user) {
+    const explain_state *e = user;
+    if (e->hops > 0)
+        fprintf(stderr, "matremap convert: note: hop %d of %d (%s, %s -> %s): %s\n", hop + 1, e->hops,
+                e->paths[hop], e->chain[hop]->source->name, e->chain[hop]->target->name, note);
     else
-        snprintf(text + used, size - used, "%s %.4g", model->params[p].name, values[at]);
-}
-
-/* What the flags of a converted constant texel came from, one note per hop that raised one: the transform (its
- * file, its models), the source parameters outside its training domain, the target parameters it clamped into their
- * ranges (those left on a bound of their range), inputs clamped or not finite. The chain is run again hop by hop on
- * the texel (mr_learned_apply: the values of the chain, each hop's own flags). With --direct (no hops), the
- * parameters on a bound are named. */
-static void explain_texel(const mr_learned *const *chain, const char *const *paths, int hops,
-                          const mr_brdf_model *source, const double *source_values, const mr_brdf_model *target,
-                          const double *target_values, unsigned flags) {
-    double values[2][MR_BRDF_MAX_VALUES];
-    memcpy(values[0], source_values, (size_t)mr_brdf_value_count(source) * sizeof values[0][0]);
-    for (int h = 0; h <= hops; h++) {
-        const mr_learned *t = h < hops ? chain[h] : NULL;
-        const mr_brdf_model *in_model = t ? t->source : source, *out_model = t ? t->target : target;
-        const double *in = values[h % 2];
-        double *out = values[(h + 1) % 2];
-        unsigned f = flags;
-        if (t != NULL)
-            mr_learned_apply(t, in, out, &f);
-        else if (hops == 0) // --direct: the converted values as they are
-            memcpy(out, target_values, (size_t)mr_brdf_value_count(target) * sizeof out[0]);
-        else
-            break;
-        if ((f & (MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED | MR_WF_CLAMPED_OUTPUT | MR_WF_CLAMPED_INPUT |
-                  MR_WF_NONFINITE_INPUT | MR_WF_UNCHECKED)) == 0)
-            continue;
-        char note[2048] = "";
-        if (t != NULL && (f & MR_WF_UNCHECKED))
-            snprintf(note + strlen(note), sizeof note - strlen(note),
-                     "the transform failed its check against the remaps when it was learned; ");
-        if (t != NULL && (f & MR_WF_EXTRAPOLATED)) {
-            snprintf(note + strlen(note), sizeof note - strlen(note), "extrapolated, outside its training domain:");
-            for (int k = 0; k < t->feature_count; k++) {
-                const mr_learned_slot *slot = &t->features[k];
-                const int at = mr_brdf_param_offset(in_model, slot->param);
-                const int channels = slot->kind == MR_LEARNED_GREY ? 3 : 1;
-                const int first = slot->kind == MR_LEARNED_CHANNEL ? slot->channel : 0;
-                int outside = 0;
-                for (int c = first; c < first + channels; c++)
-                    outside |= in[at + c] < slot->min || in[at + c] > slot->max;
-                if (!outside) continue;
-                snprintf(note + strlen(note), sizeof note - strlen(note), " ");
-                append_param(note, sizeof note, in_model, in, slot->param);
-                snprintf(note + strlen(note), sizeof note - strlen(note), " (trained on [%.4g, %.4g])", slot->min,
-                         slot->max);
-            }
-            snprintf(note + strlen(note), sizeof note - strlen(note), "; ");
-        }
-        if (t == NULL && (f & MR_WF_UNCONVERGED))
-            snprintf(note + strlen(note), sizeof note - strlen(note), "the fit did not converge; ");
-        if (f & MR_WF_CLAMPED_OUTPUT) {
-            snprintf(note + strlen(note), sizeof note - strlen(note), "clamped into its range:");
-            for (int p = 0; p < out_model->param_count; p++) {
-                const mr_brdf_param *param = &out_model->params[p];
-                const int at = mr_brdf_param_offset(out_model, p);
-                int bound = 0;
-                for (int c = 0; c < param->channels; c++)
-                    bound |= out[at + c] <= param->min_value || out[at + c] >= param->max_value;
-                if (!bound || param->role == MR_PARAM_SWITCH || param->min_value == param->max_value) continue;
-                snprintf(note + strlen(note), sizeof note - strlen(note), " ");
-                append_param(note, sizeof note, out_model, out, p);
-                snprintf(note + strlen(note), sizeof note - strlen(note), " (range [%g, %g])", param->min_value,
-                         param->max_value);
-            }
-            snprintf(note + strlen(note), sizeof note - strlen(note), "; ");
-        }
-        if (f & (MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT))
-            snprintf(note + strlen(note), sizeof note - strlen(note), "an input was clamped or not finite; ");
-        note[strlen(note) - 2] = '\0'; // the last "; "
-        if (t != NULL)
-            fprintf(stderr, "matremap convert: note: hop %d of %d (%s, %s -> %s): %s\n", h + 1, hops, paths[h],
-                    t->source->name, t->target->name, note);
-        else
-            fprintf(stderr, "matremap convert: note: --direct %s -> %s: %s\n", source->name, target->name, note);
-        flags = 0; // a chain's hops raise their own
-    }
+        fprintf(stderr, "matremap convert: note: --direct %s -> %s: %s\n", e->source->name, e->target->name, note);
 }
 
 int cmd_convert(int argc, char **argv) {
@@ -336,49 +203,40 @@ int cmd_convert(int argc, char **argv) {
     if (source == NULL || target == NULL) return cli_fail(COMMAND, MR_ERR_INVALID_ARG);
 
     // The chain.
-    loaded l = {{NULL}, {NULL}, 0};
+    mr_learned_set l = {0};
     int code = CLI_EXIT_OK, path[MR_LEARNED_MAX_HOPS], hops = 0;
-    for (int k = 0; k < transform_count && code == CLI_EXIT_OK; k++) {
-        code = load_one(&l, transform_paths[k]);
+    mr_status status = MR_OK;
+    for (int k = 0; k < transform_count && status == MR_OK; k++) {
+        status = mr_learned_set_add_file(&l, transform_paths[k]);
         path[hops++] = k;
     }
-    if (code == CLI_EXIT_OK && dir != NULL) code = load_dir(&l, dir);
-    if (code != CLI_EXIT_OK) {
-        loaded_free(&l);
-        return code;
+    if (status == MR_OK && dir != NULL) {
+        char label[4096 + 20];
+        snprintf(label, sizeof label, "--transforms '%s'", dir);
+        status = mr_learned_set_add_folder(&l, dir, label);
     }
-    if (direct) {
+    if (direct || status != MR_OK) {
         // no transforms to find
     } else if (dir != NULL) {
         const mr_brdf_model *via[MR_LEARNED_MAX_HOPS];
         int via_count = 0;
         char list[1024];
         snprintf(list, sizeof list, "%s", via_list ? via_list : "");
-        for (char *save = NULL, *w = strtok_r(list, ",", &save); w; w = strtok_r(NULL, ",", &save)) {
+        for (char *save = NULL, *w = strtok_r(list, ",", &save); w && status == MR_OK; w = strtok_r(NULL, ",", &save)) {
             if (via_count == MR_LEARNED_MAX_HOPS) break;
             via[via_count] = mr_brdf_find(w);
-            if (via[via_count++] == NULL) {
-                loaded_free(&l);
-                return cli_fail(COMMAND, MR_ERR_INVALID_ARG);
-            }
+            if (via[via_count++] == NULL) status = MR_ERR_INVALID_ARG;
         }
-        mr_status status = mr_learned_find_chain((const mr_learned *const *)l.all, l.count, source, target, via,
-                                                 via_count, path, &hops);
-        if (status != MR_OK) {
-            loaded_free(&l);
-            return cli_fail(COMMAND, status);
-        }
+        if (status == MR_OK)
+            status = mr_learned_find_chain((const mr_learned *const *)l.all, l.count, source, target, via, via_count,
+                                           path, &hops);
     } else {
-        const mr_learned *first = l.all[path[0]], *last = l.all[path[hops - 1]];
-        const char *bad = first->source != source ? l.paths[path[0]] : last->target != target ? l.paths[path[hops - 1]]
-                                                                                               : NULL;
-        if (bad != NULL) {
-            fprintf(stderr, "matremap convert: error: '%s' converts %s to %s, but the conversion asked is %s to %s\n",
-                    bad, (bad == l.paths[path[0]] ? first : last)->source->name,
-                    (bad == l.paths[path[0]] ? first : last)->target->name, source->name, target->name);
-            loaded_free(&l);
-            return CLI_EXIT_BAD_INPUT;
-        }
+        status = mr_learned_check_ends((const mr_learned *const *)l.all, (const char *const *)l.paths, hops, source,
+                                       target);
+    }
+    if (status != MR_OK) {
+        mr_learned_set_free(&l);
+        return cli_fail(COMMAND, status);
     }
     // Maps and constants as cli_material_load takes them (NAME=FILE is NAME=@FILE there).
     const char *labels[CLI_MAX_ASSIGNMENTS]; // as given, for messages
@@ -415,170 +273,122 @@ int cmd_convert(int argc, char **argv) {
     }
     if (code != CLI_EXIT_OK) {
         for (int k = 0; k < assignment_count; k++) free(owned[k]);
-        loaded_free(&l);
+        mr_learned_set_free(&l);
         return code;
     }
     const mr_learned *chain[MR_LEARNED_MAX_HOPS];
-    for (int h = 0; h < hops; h++) chain[h] = l.all[path[h]];
+    const char *hop_paths[MR_LEARNED_MAX_HOPS];
+    for (int h = 0; h < hops; h++) {
+        chain[h] = l.all[path[h]];
+        hop_paths[h] = l.paths[path[h]];
+    }
     for (int h = 0; h < hops && !direct; h++) // a transform that failed its check: said before the work
         if (chain[h]->check.done && !chain[h]->check.passed)
             fprintf(stderr, "matremap convert: warning: transform %s (%s -> %s by %s) failed its check against the "
                     "remaps when it was learned (docs/learn.md, \"The check\"); every texel it converts is flagged "
-                    "(red)\n", l.paths[path[h]], chain[h]->source->name, chain[h]->target->name,
+                    "(red)\n", hop_paths[h], chain[h]->source->name, chain[h]->target->name,
                     mr_learn_method_name(chain[h]->method));
-    // Constants alone are one texel: remapped at their exact values, not at a quantised neighbour (which the
-    // default step puts up to 12 % away for a dark colour), unless --tolerance says otherwise.
-    if (direct && !maps_given && dopts.tolerance == 0.0) dopts.tolerance = MR_DIRECT_MIN_TOLERANCE;
-    mr_transform_kind *kind = NULL;
+
+    // The job: the kind, the material, the conversion, the outputs written all or none.
     progress_state progress = {isatty(STDERR_FILENO) && !json, cli_now()};
-    dopts.threads = threads;
     dopts.progress = draw_progress;
     dopts.progress_user = &progress;
-    mr_status status = direct ? mr_direct_kind_create(source, target, &dopts, &kind)
-                              : mr_learned_kind_create(chain, hops, &kind);
+    const char *outputs[MR_TRANSFORM_MAX_SLOTS + 1];
+    for (int j = 0; j <= out_count; j++) outputs[j] = names[j];
+    char label[4096 + 8];
+    snprintf(label, sizeof label, "-o %s", prefix ? prefix : "");
+    const mr_learned_conversion_spec spec = {.source = source, .target = target, .chain = chain,
+                                             .hops = direct ? 0 : hops, .direct = &dopts,
+                                             .assignments = assignments, .assignment_count = assignment_count,
+                                             .outputs = maps_given ? outputs : NULL, .output_label = label,
+                                             .threads = threads};
+    mr_learned_conversion r;
+    status = mr_learned_convert_material(&spec, &r);
+    if (progress.draw && direct && r.converting) fprintf(stderr, "\r\033[K");
     if (status != MR_OK) {
+        code = r.material_report.usage ? cli_usage_error(COMMAND, "%s", mr_last_error()) : cli_fail(COMMAND, status);
         for (int k = 0; k < assignment_count; k++) free(owned[k]);
-        loaded_free(&l);
-        return cli_fail(COMMAND, status);
+        mr_learned_set_free(&l);
+        return code;
     }
-
-    // The source material: maps and constants.
-    const double started = cli_now();
-    mr_material *m = NULL;
-    code = cli_material_load(COMMAND, from, assignments, assignment_count, &m);
-    mr_transform *t = NULL;
-    mr_transform_options topts = {0};
-    topts.threads = threads;
-    if (code == CLI_EXIT_OK) {
-        status = mr_transform_create(kind, &topts, &t);
-        if (status != MR_OK) code = cli_fail(COMMAND, status);
-    }
-    mr_image *out[MR_TRANSFORM_MAX_SLOTS] = {NULL}; // RGB outputs carry the first map's alpha
-    uint8_t *flags = NULL;
-    const int any_map = code == CLI_EXIT_OK && m->map_count > 0;
-    double convert_seconds = 0.0;
-    if (code == CLI_EXIT_OK) {
-        const double t0 = cli_now();
-        status = mr_transform_convert_material(t, m, out, &flags);
-        convert_seconds = cli_now() - t0;
-        if (progress.draw && direct) fprintf(stderr, "\r\033[K");
-        if (status != MR_OK) code = cli_fail(COMMAND, status);
-    }
-    // extrapolated or unconverged, clamped output, clamped input, any flag, by a transform that failed its check
-    // (the flag map's red is the first or the last)
-    static const unsigned reasons[5] = {MR_WF_EXTRAPOLATED | MR_WF_UNCONVERGED, MR_WF_CLAMPED_OUTPUT,
-                                        MR_WF_CLAMPED_INPUT | MR_WF_NONFINITE_INPUT, 0xFFu, MR_WF_UNCHECKED};
-    size_t n = 0, counts[5] = {0};
-    int width = 0, height = 0;
-    if (code == CLI_EXIT_OK) {
-        width = out[0]->width;
-        height = out[0]->height;
-        n = (size_t)width * (size_t)height;
-        mr_flags_count(flags, n, reasons, 5, counts);
-    }
-    // Write: every output, then the flag map, all or none (mr_img_write_set).
-    if (code == CLI_EXIT_OK && any_map) {
-        mr_image *picture = NULL;
-        mr_img_set_item items[MR_TRANSFORM_MAX_SLOTS + 1];
-        char label[4096 + 8];
-        snprintf(label, sizeof label, "-o %s", prefix);
-        // The rule maps are read by, so a PNG output reads back as written.
-        for (int j = 0; j < out_count; j++)
-            items[j] = (mr_img_set_item){names[j], label, out[j],
-                                         {mr_brdf_param_map_encoding(&target->params[j], MR_MAP_AS_PARAMETER), 0, 0}};
-        status = mr_flag_picture(flags, width, height, &mr_learned_flag_code, &picture);
-        items[out_count] = (mr_img_set_item){names[out_count], label, picture, {MR_IMG_DATA, 0, 0}};
-        mr_img_set_options set_options = {threads};
-        if (status == MR_OK) status = mr_img_write_set(items, out_count + 1, &set_options, NULL);
-        code = status == MR_OK ? CLI_EXIT_OK : cli_fail(COMMAND, status);
-        mr_image_free(picture);
-    }
-    const double seconds = cli_now() - started;
-    const mr_direct_summary *ds = direct && code == CLI_EXIT_OK ? mr_direct_kind_summary(kind) : NULL;
+    const mr_direct_summary *ds = r.has_direct ? &r.direct : NULL;
     if (ds != NULL && !json)
         fprintf(stderr,
                 "matremap convert: --direct: %zu distinct values (tolerance %.4g): %zu from the cache, %zu full "
                 "remaps, %zu warm-started (%zu fell back to full), %ld renders; outcomes: %zu converged, %zu "
                 "under-resolved, %zu at-bound, %zu unreachable, %zu local-minimum\n",
-                ds->unique, dopts.tolerance > 0.0 ? dopts.tolerance : MR_DIRECT_DEFAULT_TOLERANCE, ds->cache_hits,
-                ds->full, ds->warm, ds->fallbacks, ds->renders, ds->outcomes[MR_FIT_CONVERGED],
-                ds->outcomes[MR_FIT_UNDER_RESOLVED], ds->outcomes[MR_FIT_AT_BOUND], ds->outcomes[MR_FIT_UNREACHABLE],
-                ds->outcomes[MR_FIT_LOCAL_MINIMUM]);
-    if (code == CLI_EXIT_OK) {
-        if (json) {
-            printf("{\"source\": \"%s\", \"target\": \"%s\", \"method\": \"%s\", ", source->name, target->name,
-                   direct ? "direct" : "learned");
-            if (ds != NULL)
-                printf("\"direct\": {\"unique\": %zu, \"cache_hits\": %zu, \"full\": %zu, \"warm\": %zu, "
-                       "\"fallbacks\": %zu, \"renders\": %ld, \"converged\": %zu}, ",
-                       ds->unique, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->renders,
-                       ds->outcomes[MR_FIT_CONVERGED]);
-            printf("\"chain\": [");
-            for (int h = 0; h < hops; h++) {
-                printf("%s", h ? ", " : "");
-                cli_json_string(stdout, l.paths[path[h]]);
-            }
-            printf("], \"width\": %d, \"height\": %d, \"texels\": %zu, \"seconds\": {\"convert\": %.6f, \"total\": "
-                   "%.6f}, \"flags\": {\"extrapolated_or_unconverged\": %zu, \"clamped_output\": %zu, "
-                   "\"clamped_input\": %zu, \"failed_check\": %zu, "
-                   "\"any\": %zu}, \"outputs\": [",
-                   width, height, n, convert_seconds, seconds, counts[0], counts[1], counts[2], counts[4], counts[3]);
-            for (int j = 0; any_map && j <= out_count; j++) {
-                printf("%s", j ? ", " : "");
-                cli_json_string(stdout, names[j]);
-            }
-            printf("], \"values\": {");
-            for (int j = 0; !any_map && j < out_count; j++)
-                if (target->params[j].channels == 3)
-                    printf("%s\"%s\": [%.9g, %.9g, %.9g]", j ? ", " : "", target->params[j].name,
-                           out[j]->pixels[0], out[j]->pixels[1], out[j]->pixels[2]);
-                else
-                    printf("%s\"%s\": %.9g", j ? ", " : "", target->params[j].name, out[j]->pixels[0]);
-            printf("}}\n");
-        } else if (!any_map) {
-            printf("%s", target->name);
-            for (int j = 0; j < out_count; j++)
-                if (target->params[j].channels == 3)
-                    printf(" %s=%.6g,%.6g,%.6g", target->params[j].name, out[j]->pixels[0], out[j]->pixels[1],
-                           out[j]->pixels[2]);
-                else
-                    printf(" %s=%.6g", target->params[j].name, out[j]->pixels[0]);
-            printf("\n");
-            if (counts[3]) {
-                const char *hop_paths[MR_LEARNED_MAX_HOPS];
-                double converted[MR_BRDF_MAX_VALUES];
-                for (int h = 0; h < hops; h++) hop_paths[h] = l.paths[path[h]];
-                for (int j = 0; j < out_count; j++)
-                    for (int c = 0; c < target->params[j].channels; c++)
-                        converted[mr_brdf_param_offset(target, j) + c] = out[j]->pixels[c];
-                explain_texel(chain, hop_paths, direct ? 0 : hops, source, m->values, target, converted, flags[0]);
-            }
-        } else {
-            if (direct)
-                printf("matremap convert: %s -> %s by direct remaps, %dx%d = %zu texels in %.2f s (convert %.3f s): "
-                       "%zu not converged, %zu clamped outputs, %zu clamped or non-finite inputs\n",
-                       source->name, target->name, width, height, n, seconds, convert_seconds, counts[0], counts[1],
-                       counts[2]);
-            else
-                printf("matremap convert: %s -> %s through %d transform%s, %dx%d = %zu texels in %.2f s (convert %.3f "
-                       "s): %zu extrapolated (outside the training domain), %zu by a transform that failed its check, "
-                       "%zu clamped outputs, %zu clamped or non-finite inputs\n",
-                       source->name, target->name, hops, hops == 1 ? "" : "s", width, height, n, seconds,
-                       convert_seconds, counts[0], counts[4], counts[1], counts[2]);
-            fprintf(stderr, "matremap convert: wrote");
-            for (int j = 0; j <= out_count; j++) fprintf(stderr, " %s", names[j]);
-            fprintf(stderr, "\n");
+                ds->unique, r.direct_tolerance, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->renders,
+                ds->outcomes[MR_FIT_CONVERGED], ds->outcomes[MR_FIT_UNDER_RESOLVED], ds->outcomes[MR_FIT_AT_BOUND],
+                ds->outcomes[MR_FIT_UNREACHABLE], ds->outcomes[MR_FIT_LOCAL_MINIMUM]);
+    mr_image *const *out = r.converted;
+    const int any_map = r.material->map_count > 0;
+    if (json) {
+        printf("{\"source\": \"%s\", \"target\": \"%s\", \"method\": \"%s\", ", source->name, target->name,
+               direct ? "direct" : "learned");
+        if (ds != NULL)
+            printf("\"direct\": {\"unique\": %zu, \"cache_hits\": %zu, \"full\": %zu, \"warm\": %zu, "
+                   "\"fallbacks\": %zu, \"renders\": %ld, \"converged\": %zu}, ",
+                   ds->unique, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->renders,
+                   ds->outcomes[MR_FIT_CONVERGED]);
+        printf("\"chain\": [");
+        for (int h = 0; h < hops; h++) {
+            printf("%s", h ? ", " : "");
+            cli_json_string(stdout, hop_paths[h]);
         }
+        printf("], \"width\": %d, \"height\": %d, \"texels\": %zu, \"seconds\": {\"convert\": %.6f, \"total\": "
+               "%.6f}, \"flags\": {\"extrapolated_or_unconverged\": %zu, \"clamped_output\": %zu, "
+               "\"clamped_input\": %zu, \"failed_check\": %zu, "
+               "\"any\": %zu}, \"outputs\": [",
+               r.width, r.height, r.texels, r.convert_seconds, r.seconds, r.extrapolated, r.clamped_output,
+               r.clamped_input, r.failed_check, r.flagged);
+        for (int j = 0; any_map && j <= out_count; j++) {
+            printf("%s", j ? ", " : "");
+            cli_json_string(stdout, names[j]);
+        }
+        printf("], \"values\": {");
+        for (int j = 0; !any_map && j < out_count; j++)
+            if (target->params[j].channels == 3)
+                printf("%s\"%s\": [%.9g, %.9g, %.9g]", j ? ", " : "", target->params[j].name, out[j]->pixels[0],
+                       out[j]->pixels[1], out[j]->pixels[2]);
+            else
+                printf("%s\"%s\": %.9g", j ? ", " : "", target->params[j].name, out[j]->pixels[0]);
+        printf("}}\n");
+    } else if (!any_map) {
+        printf("%s", target->name);
+        for (int j = 0; j < out_count; j++)
+            if (target->params[j].channels == 3)
+                printf(" %s=%.6g,%.6g,%.6g", target->params[j].name, out[j]->pixels[0], out[j]->pixels[1],
+                       out[j]->pixels[2]);
+            else
+                printf(" %s=%.6g", target->params[j].name, out[j]->pixels[0]);
+        printf("\n");
+        if (r.flagged) {
+            double converted[MR_BRDF_MAX_VALUES];
+            for (int j = 0; j < out_count; j++)
+                for (int c = 0; c < target->params[j].channels; c++)
+                    converted[mr_brdf_param_offset(target, j) + c] = out[j]->pixels[c];
+            explain_state e = {chain, hop_paths, direct ? 0 : hops, source, target};
+            mr_learned_explain_texel(chain, e.hops, source, r.material->values, target, converted, r.flags[0],
+                                     print_note, &e);
+        }
+    } else {
+        if (direct)
+            printf("matremap convert: %s -> %s by direct remaps, %dx%d = %zu texels in %.2f s (convert %.3f s): "
+                   "%zu not converged, %zu clamped outputs, %zu clamped or non-finite inputs\n",
+                   source->name, target->name, r.width, r.height, r.texels, r.seconds, r.convert_seconds,
+                   r.extrapolated, r.clamped_output, r.clamped_input);
+        else
+            printf("matremap convert: %s -> %s through %d transform%s, %dx%d = %zu texels in %.2f s (convert %.3f "
+                   "s): %zu extrapolated (outside the training domain), %zu by a transform that failed its check, "
+                   "%zu clamped outputs, %zu clamped or non-finite inputs\n",
+                   source->name, target->name, hops, hops == 1 ? "" : "s", r.width, r.height, r.texels, r.seconds,
+                   r.convert_seconds, r.extrapolated, r.failed_check, r.clamped_output, r.clamped_input);
+        fprintf(stderr, "matremap convert: wrote");
+        for (int j = 0; j <= out_count; j++) fprintf(stderr, " %s", names[j]);
+        fprintf(stderr, "\n");
     }
-    for (int j = 0; j < MR_TRANSFORM_MAX_SLOTS; j++) mr_image_free(out[j]);
-    free(flags);
-    mr_transform_free(t);
-    mr_material_free(m);
-    if (direct)
-        mr_direct_kind_free(kind);
-    else
-        mr_learned_kind_free(kind);
+    mr_learned_conversion_free(&r);
     for (int k = 0; k < assignment_count; k++) free(owned[k]);
-    loaded_free(&l);
+    mr_learned_set_free(&l);
     return code;
 }

@@ -3,6 +3,7 @@
  *
  * Main calls: mr_img_read(path, &opts, &image) ... mr_img_write(path, image, &opts). Free with mr_image_free.
  * mr_img_read_memory decodes an encoded image already in memory (e.g. embedded in a glTF asset) the same way.
+ * Maps named in text ("orm.png:g:linear"): mr_map_ref_split, mr_map_ref_check, mr_map_ref_read.
  * Sets of files: mr_img_read_param_maps / mr_img_read_texture_set read the maps of a texture set side by side (the
  * latter checks them: grey data maps, packed channels, one size); mr_img_write_set writes several images all or
  * none (each to a temporary beside it, all renamed into place once every one is written).
@@ -185,6 +186,33 @@ const char *mr_img_encoding_name(mr_img_encoding encoding);
  * linear; sRGB decoding applies to 8/16-bit files), or when `how` is out of range. */
 mr_status mr_img_read_param_map(const char *path, const mr_brdf_param *param, mr_map_encoding how,
                                 const mr_img_read_options *opts, mr_image **out, mr_img_stored *stored);
+
+/* ---- maps named in text: FILE[:r|g|b|a][:linear|srgb] (param_map.c) --------------------------------------------
+ * How the command line (and any caller taking maps as text) names a map: the file, then optional selectors at its
+ * end, in this order: a channel (:r, :g, :b or :a, where the caller picks channels: a one-channel parameter), then an
+ * encoding (:linear or :srgb) overriding the parameter's own rule above (:srgb on a float file is an error). E.g.
+ * "orm.png:g:linear". Selectors are always taken from the end: a file whose own name ends in one is given with an
+ * explicit encoding after it ("odd:linear:srgb" reads the file "odd:linear" as sRGB). */
+
+/* Split `text` into its file and selectors: *path_length is the length of FILE at the start of text, *channel the
+ * channel (0-3 for r, g, b, a; -1 when none is given or `channels` is 0: the caller picks none, and ":g" stays part
+ * of the file name), *encoding the override (MR_MAP_AS_PARAMETER when none is given). Never fails. */
+void mr_map_ref_split(const char *text, int channels, size_t *path_length, int *channel, mr_map_encoding *encoding);
+
+/* Check the text as mr_map_ref_split splits it: MR_OK, or MR_ERR_INVALID_ARG (a fault of the text itself, which a
+ * command line reports as a usage error) naming `label` (how the user gave the map: "specular=@s.png:linear",
+ * "--specular s.png"; NULL: the text): "'LABEL': no file name (expected FILE[:r|g|b|a][:linear|srgb])" (or
+ * "FILE[:linear|srgb]" when channels is 0), "'LABEL': the channel comes before the encoding: x.png:g:linear" (for
+ * "x.png:linear:g", unless a file "x.png:linear" exists). MR_ERR_NOMEM. */
+mr_status mr_map_ref_check(const char *label, const char *text, int channels);
+
+/* Read the map named by `text` (checked by mr_map_ref_check first; the channel selector is the caller's to apply) for
+ * `param` (may be NULL: linear unless overridden) with mr_img_read_param_map (opts, *out and *stored as there).
+ * *usage (may be NULL) is 1 when the request is at fault rather than the file: the text is malformed, or :srgb was
+ * asked of a float file ("'LABEL': <mr_img_read_param_map's message>"); else 0. Errors: mr_map_ref_check's, those
+ * of mr_img_read_param_map, MR_ERR_NOMEM ("out of memory for 'LABEL'"). */
+mr_status mr_map_ref_read(const char *label, const char *text, int channels, const mr_brdf_param *param,
+                          const mr_img_read_options *opts, mr_image **out, mr_img_stored *stored, int *usage);
 
 /* One map of a texture set for mr_img_read_param_maps: what to read (path, param, how as for mr_img_read_param_map)
  * and, once read, the image and how its file stored it. */

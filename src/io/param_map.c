@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <stdlib.h>
+#include <sys/stat.h>
 
 #include "image_io.h"
 #include "io_internal.h"
@@ -140,4 +141,76 @@ mr_status mr_img_read_texture_set(mr_img_param_map *maps, int count, const mr_im
     if (width != NULL) *width = first ? first->image->width : 1;
     if (height != NULL) *height = first ? first->image->height : 1;
     return MR_OK;
+}
+
+/* ---- maps named in text: FILE[:r|g|b|a][:linear|srgb] ---------------------------------------------------------- */
+
+/* 1 if text[0..*length) ends in ":suffix" (and holds something before it); then *length drops it. */
+static int strip_suffix(const char *text, size_t *length, const char *suffix) {
+    const size_t n = strlen(suffix);
+    if (*length < n + 2 || text[*length - n - 1] != ':' || strncmp(text + *length - n, suffix, n) != 0) return 0;
+    *length -= n + 1;
+    return 1;
+}
+
+void mr_map_ref_split(const char *text, int channels, size_t *path_length, int *channel, mr_map_encoding *encoding) {
+    size_t length = strlen(text);
+    *encoding = strip_suffix(text, &length, "linear") ? MR_MAP_LINEAR
+                : strip_suffix(text, &length, "srgb")  ? MR_MAP_SRGB
+                                                       : MR_MAP_AS_PARAMETER;
+    static const char *const letters[4] = {"r", "g", "b", "a"};
+    *channel = -1;
+    for (int c = 0; channels && c < 4 && *channel < 0; c++)
+        if (strip_suffix(text, &length, letters[c])) *channel = c;
+    *path_length = length;
+}
+
+mr_status mr_map_ref_check(const char *label, const char *text, int channels) {
+    if (label == NULL) label = text;
+    size_t length;
+    int channel;
+    mr_map_encoding encoding;
+    mr_map_ref_split(text, channels, &length, &channel, &encoding);
+    const char *syntax = channels ? "FILE[:r|g|b|a][:linear|srgb]" : "FILE[:linear|srgb]";
+    if (length == 0) return mr_fail(MR_ERR_INVALID_ARG, "'%s': no file name (expected %s)", label, syntax);
+    size_t rest = length;
+    int misplaced = channel >= 0 && (strip_suffix(text, &rest, "linear") || strip_suffix(text, &rest, "srgb"));
+    if (misplaced) {
+        struct stat st;
+        char *path = strndup(text, length);
+        misplaced = path != NULL && stat(path, &st) != 0; // a file really named "x.png:linear" is read as it is
+        free(path);
+    }
+    if (misplaced)
+        return mr_fail(MR_ERR_INVALID_ARG, "'%s': the channel comes before the encoding: %.*s:%c%.*s", label,
+                       (int)rest, text, "rgba"[channel], (int)(length - rest), text + rest);
+    return MR_OK;
+}
+
+mr_status mr_map_ref_read(const char *label, const char *text, int channels, const mr_brdf_param *param,
+                          const mr_img_read_options *opts, mr_image **out, mr_img_stored *stored, int *usage) {
+    int ignored;
+    if (usage == NULL) usage = &ignored;
+    *usage = 0;
+    if (label == NULL) label = text;
+    mr_status status = mr_map_ref_check(label, text, channels);
+    if (status != MR_OK) {
+        *usage = status == MR_ERR_INVALID_ARG;
+        return status;
+    }
+    size_t length;
+    int selected;
+    mr_map_encoding encoding;
+    mr_map_ref_split(text, channels, &length, &selected, &encoding);
+    char *path = strndup(text, length);
+    if (path == NULL) return mr_fail(MR_ERR_NOMEM, "out of memory for '%s'", label);
+    status = mr_img_read_param_map(path, param, encoding, opts, out, stored);
+    free(path);
+    if (status == MR_ERR_INVALID_ARG && encoding == MR_MAP_SRGB) { // :srgb on a float file: the request is the error
+        char message[1024];
+        snprintf(message, sizeof message, "%s", mr_last_error());
+        *usage = 1;
+        return mr_fail(status, "'%s': %s", label, message);
+    }
+    return status;
 }

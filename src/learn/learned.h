@@ -11,6 +11,8 @@
  *   mr_learned_read("ward-ggx.mrt", &t2);                                   // errors name file and line
  *   mr_learned_apply(t, source_values, target_values, &flags);             // one texel, packed vectors
  *   mr_learned_free(t);
+ * Converting a material (convert's job): mr_learned_set_add_file / mr_learned_set_add_folder, mr_learned_find_chain
+ * or mr_learned_check_ends, mr_learned_convert_material, mr_learned_explain_texel (below).
  *
  * What a transform does with one texel (source packed values v -> target packed values w):
  *   1. w = base: the target values every transform writes where it learned nothing (the sweeps' fixed target
@@ -85,6 +87,8 @@
 
 #include "../brdf/brdf.h"
 #include "../mr_status.h"
+#include "../remap/direct.h"
+#include "../render/render.h"
 #include "../transform/transform.h"
 #include "parametric.h"
 #include "sweep_table.h"
@@ -258,6 +262,117 @@ mr_status mr_learned_find_chain(const mr_learned *const *all, int n, const mr_br
  * MR_TRANSFORM_MAX_SLOTS parameters. */
 mr_status mr_learned_kind_create(const mr_learned *const *hops, int count, mr_transform_kind **out);
 void mr_learned_kind_free(mr_transform_kind *kind);
+
+/* ---- converting a material: `matremap convert` as library calls (learned_convert.c) ---------------------------
+ *   mr_learned_set set = {0};
+ *   mr_learned_set_add_folder(&set, "transforms", NULL);                  // every *.mrt, sorted by name
+ *   int path[MR_LEARNED_MAX_HOPS], hops;
+ *   mr_learned_find_chain((const mr_learned *const *)set.all, set.count, ward, ggx, NULL, 0, path, &hops);
+ *   const mr_learned *chain[MR_LEARNED_MAX_HOPS];  for (h ...) chain[h] = set.all[path[h]];
+ *   const char *a[] = {"alpha=@rough.exr", "specular=@spec.png"};
+ *   const char *outputs[] = {"out/ggx_alpha.exr", ..., "out/ggx_flags.png"};  // one per target parameter + flags
+ *   mr_learned_conversion_spec spec = {.source = ward, .target = ggx, .chain = chain, .hops = hops,
+ *                                      .assignments = a, .assignment_count = 2, .outputs = outputs};
+ *   mr_learned_conversion r;  mr_learned_convert_material(&spec, &r);   ... r.extrapolated ...
+ *   mr_learned_conversion_free(&r);  mr_learned_set_free(&set);
+ */
+
+/* Transforms read from files, with the names they were read by (messages, summaries). Zeroed = empty; one owner,
+ * freed by mr_learned_set_free (the set's transforms with it). */
+#define MR_LEARNED_SET_MAX 256
+typedef struct mr_learned_set {
+    int count;
+    mr_learned *all[MR_LEARNED_SET_MAX];
+    char *paths[MR_LEARNED_SET_MAX]; /* as read: the path given, or FOLDER/NAME */
+} mr_learned_set;
+
+/* Read the transform at `path` (mr_learned_read) and add it to the set. Errors: mr_learned_read's;
+ * MR_ERR_INVALID_ARG "more than 256 transforms"; MR_ERR_NOMEM. The set is unchanged on failure. */
+mr_status mr_learned_set_add_file(mr_learned_set *set, const char *path);
+
+/* Add every file of the folder `dir` whose name ends in ".mrt", in the order of their names (strcmp), so that the
+ * chain chosen among equals (mr_learned_find_chain) does not depend on the folder's order; at most
+ * MR_LEARNED_SET_MAX names are taken, in the order the folder lists them. `label` names the folder in messages (NULL:
+ * "folder 'DIR'"). Errors: MR_ERR_IO "LABEL: <the system's reason>" when the folder cannot be opened, "LABEL: no
+ * *.mrt files there"; the first file that cannot be read (mr_learned_read's error; the files before it stay added). */
+mr_status mr_learned_set_add_folder(mr_learned_set *set, const char *dir, const char *label);
+
+/* Frees every transform and name of the set and empties it (NULL-safe). */
+void mr_learned_set_free(mr_learned_set *set);
+
+/* A chain given hop by hop (names[h] names chain[h] in messages) must start at `source` and end at `target`: MR_OK,
+ * or MR_ERR_INVALID_ARG "'NAME' converts A to B, but the conversion asked is C to D" naming the first hop when it
+ * starts elsewhere, else the last. (Whether the hops connect is mr_learned_kind_create's check.) */
+mr_status mr_learned_check_ends(const mr_learned *const *chain, const char *const *names, int hops,
+                                const mr_brdf_model *source, const mr_brdf_model *target);
+
+/* Called once per hop that raised a flag: hop (0-based; with no hops, 0: the direct remap) and its note. */
+typedef void (*mr_learned_note_fn)(int hop, const char *note, void *user);
+
+/* Why one converted texel was flagged: the chain chain[0..hops) is run again hop by hop on the texel
+ * (mr_learned_apply: each hop's values and own flags; `flags`, the texel's flags from the conversion, count for the
+ * first hop), and each hop that raised a flag gets one note: "the transform failed its check against the remaps
+ * when it was learned", "extrapolated, outside its training domain: alpha 0.9 (trained on [0.01, 0.5])" (each
+ * source parameter outside the domain, with its value and the domain), "clamped into its range: roughness 1 (range
+ * [0, 1])" (each target parameter left on a bound of its range), "an input was clamped or not finite", joined by
+ * "; ". With hops 0 (the direct remap, target_values the converted texel), one note for the conversion: "the fit did
+ * not converge" and the clamped parameters. Values are packed (source_values mr_brdf_value_count(source) doubles,
+ * target_values the target's); note_fn may be NULL. Nothing is printed. */
+void mr_learned_explain_texel(const mr_learned *const *chain, int hops, const mr_brdf_model *source,
+                              const double *source_values, const mr_brdf_model *target, const double *target_values,
+                              unsigned flags, mr_learned_note_fn note_fn, void *user);
+
+/* A material converted from one model to another: through a learned chain (hops >= 1) or, with hops 0, the direct
+ * remap (mr_direct_kind_create: no regression, every distinct texel remapped). */
+typedef struct mr_learned_conversion_spec {
+    const mr_brdf_model *source, *target;
+    const mr_learned *const *chain;      /* [hops], chain[0]->source == source ... (mr_learned_kind_create) */
+    int hops;                            /* 0: the direct remap */
+    const mr_direct_options *direct;     /* hops 0: its options (NULL = defaults; copied, its threads replaced by
+                                            `threads`; with no map among the assignments and tolerance 0, the values
+                                            are remapped exactly: MR_DIRECT_MIN_TOLERANCE) */
+    const char *const *assignments;      /* the source material as mr_material_from_assignments takes it */
+    int assignment_count;
+    const char *const *outputs;          /* NULL: nothing written; else target->param_count + 1 file names: one per
+                                            target parameter, then the flag picture. Written only when the material
+                                            has maps */
+    const char *output_label;            /* names the outputs in messages ("-o PREFIX"); may be NULL */
+    int threads;                         /* 0 = automatic; the result does not depend on it */
+} mr_learned_conversion_spec;
+
+typedef struct mr_learned_conversion {
+    mr_material *material;                        /* the source material read (its values: the constants) */
+    mr_image *converted[MR_TRANSFORM_MAX_SLOTS];  /* one per target parameter; RGB ones carry the first map's alpha */
+    uint8_t *flags;                               /* width x height MR_WF_* bytes */
+    int width, height;                            /* 1 x 1 for constants alone */
+    size_t texels;
+    size_t extrapolated;    /* texels extrapolated (outside a transform's domain) or not converged (direct) */
+    size_t clamped_output;  /* an output clamped into its range */
+    size_t clamped_input;   /* an input clamped or not finite */
+    size_t failed_check;    /* converted by a transform that failed its check (MR_WF_UNCHECKED) */
+    size_t flagged;         /* any flag */
+    int written;            /* the outputs and the flag picture were written */
+    int converting;         /* the conversion ran (also set on failure: it may have reported progress) */
+    double convert_seconds; /* the conversion itself */
+    double seconds;         /* reading the material, converting, writing */
+    int has_direct;         /* the direct remap's summary: */
+    mr_direct_summary direct;
+    double direct_tolerance;                      /* the quantisation step it used */
+    mr_material_text_report material_report;     /* which assignment failed, and whether its text was at fault */
+} mr_learned_conversion;
+
+/* The job of `matremap convert`: the kind made (the chain's, or the direct remap's), the material read from its
+ * assignments (mr_material_from_assignments), converted texel by texel (mr_transform_convert_material: repeated
+ * texels once, the first map's alpha carried), the flags counted, and, when outputs are named and the material has
+ * maps, every target parameter written by the rule maps are read by (mr_brdf_param_map_encoding: PNG outputs read
+ * back as written) with the flag picture (mr_flag_picture, mr_learned_flag_code), all or none (mr_img_write_set).
+ * *out is zeroed first; on failure it holds only material_report and converting (nothing to free). Errors: those of
+ * the kind, of the material (out->material_report.usage says whether its text was at fault), of the conversion and
+ * of the writes. */
+mr_status mr_learned_convert_material(const mr_learned_conversion_spec *spec, mr_learned_conversion *out);
+
+/* Frees what a conversion holds and zeroes it (NULL-safe). */
+void mr_learned_conversion_free(mr_learned_conversion *conversion);
 
 mr_status mr_learned_write(const mr_learned *t, const char *path);
 /* The file's text into *text (malloc'ed, NUL-terminated; the caller frees it), exactly what write writes. */

@@ -553,6 +553,46 @@ mr_material_binding mr_material_binding_of(const mr_material *material);
 /* Releases the material and its maps; NULL-safe. */
 void mr_material_free(mr_material *material);
 
+/* ---- materials given as text (material_text.c) ----------------------------------------------------------------
+ * MODEL followed by assignments, as the command line takes a material (render, report, convert):
+ *   name=VALUE, name=R,G,B     a value (mr_brdf_parse_assignment)
+ *   name=@FILE[:r|g|b|a][:linear|srgb]   a map (io/image_io.h, "maps named in text"): read by the one rule of
+ *                              mr_img_read_param_map, bound with mr_material_add_map (its source "FILE[:e]"). A
+ *                              one-value parameter takes a channel selector, or a one-channel or grey file (a colour
+ *                              file without a selector is refused); an RGB parameter takes the whole image.
+ *   mr_material *m;  mr_material_text_report why;
+ *   const char *a[] = {"roughness=@orm.png:g:linear", "base_color=@albedo.png", "metallic=0"};
+ *   if (mr_material_from_assignments("gltf", a, 3, NULL, &m, &why) != MR_OK) ... mr_last_error(), why.failed
+ */
+typedef struct mr_material_text_options {
+    int max_dimension; /* largest side of a map; 0 = the reader's default (mr_img_read_options) */
+} mr_material_text_options;
+
+typedef struct mr_material_text_report {
+    int failed; /* the assignment refused (an index into assignments), or -1 (none, or the model itself) */
+    int usage;  /* 1: the text is at fault, not a file or a value (a command line's usage error): an assignment
+                   without '=', a map without a name, malformed selectors ("'x.png:linear:g': the channel comes before
+                   the encoding ..."), a channel selector on an RGB parameter, :srgb on a float file, a colour file
+                   for a one-value parameter without a channel selector */
+} mr_material_text_report;
+
+/* A material of the model named `model_name` (mr_brdf_find) with assignments[0..count) applied in order into *out
+ * (caller-owned: mr_material_free; NULL on failure). options may be NULL (zero = defaults); report (may be NULL)
+ * says which assignment failed and whether the text was at fault. Errors, one line in mr_last_error() naming the
+ * assignment as given: MR_ERR_INVALID_ARG for an unknown model (listing the models), an unknown parameter ("textures:
+ * model M has no parameter 'x' (valid: ...)"), a value out of range (mr_brdf_parse_assignment's message; a value
+ * that looks like a file adds "; did you mean name=@FILE? (a map is given as name=@FILE)"), the usage-level faults
+ * above ("'roughness=@c.png': c.png holds colour, but roughness takes one value: pick a channel with @c.png:r, :g,
+ * :b or :a"); the errors of reading a map (mr_map_ref_read); MR_ERR_NOMEM. */
+mr_status mr_material_from_assignments(const char *model_name, const char *const *assignments, int count,
+                                       const mr_material_text_options *options, mr_material **out,
+                                       mr_material_text_report *report);
+
+/* What material->maps[k] holds that is not parameter values (mr_material_map_invalid_texels) as one line into
+ * text[size] (truncated to fit), e.g. "base_color=@nan.exr: 3 texels not finite, read as 0; 2 negative, clamped to
+ * 0": 1 when there is something to say, else 0 (text then ""; also for k out of range). */
+int mr_material_describe_invalid_texels(const mr_material *material, int k, char *text, size_t size);
+
 #ifdef __cplusplus
 }
 #endif
