@@ -145,11 +145,9 @@ double cli_now(void);
  * committing any, so a failure while writing leaves none of them. Each function prints its error as one line
  * "matremap CMD: error: ..." naming the file and the system's reason. */
 
-/* The one rule for output names made from -o PREFIX (convert, spec2metal, metal2spec, remap --images): PREFIX
- * ending in '/', '_', '-' or '.' (or empty) is followed by the name directly, any other gets '_' in between:
- *   "out/ggx_" + "alpha.exr" -> "out/ggx_alpha.exr"    "pfx/ggx" + "alpha.exr" -> "pfx/ggx_alpha.exr"
- *   "out/"     + "alpha.exr" -> "out/alpha.exr"        "avocado" + "basecolor.png" -> "avocado_basecolor.png"
- * Writes the name into out (size bytes); returns 0 when it does not fit. */
+/* The one rule for output names made from -o PREFIX (convert, spec2metal, metal2spec, remap --images): the library's
+ * mr_img_prefixed_name (io/image_io.h), e.g. "avocado" + "basecolor.png" -> "avocado_basecolor.png", "out/" +
+ * "alpha.exr" -> "out/alpha.exr". Writes the name into out (size bytes); returns 0 when it does not fit. */
 int cli_output_name(char *out, size_t size, const char *prefix, const char *name);
 
 /* Create the temporary file for `path` and open it for writing. NULL after printing the error. */
