@@ -9,8 +9,9 @@
  * the plan's coverage (mr_render_plan_coverage_mask), the object mask `matremap ssim --mask` takes. --mesh puts
  * an OBJ mesh (io/obj_load.h) in the sphere's place, its maps read at the mesh's UVs; the point light then keeps
  * its place relative to the camera and the object's size (mr_scene_fit_light_to_mesh, render.h). A glTF asset in
- * MODEL's place is rendered as `matremap report` renders one (mr_gltf_scene_from_asset: its triangles, each with its material), seen
- * from report's three-quarter view (or --camera-direction), lit by the scaled point light or --env.
+ * MODEL's place is rendered as `matremap report` renders one (mr_gltf_scene_from_asset: its triangles, each with
+ * its material), seen from report's three-quarter view (or --camera-direction), lit by the scaled point light or
+ * --env.
  */
 #include <stdlib.h>
 #include <string.h>
