@@ -1156,6 +1156,21 @@ MR_TEST(a_torn_last_row_is_never_counted_even_when_only_its_line_end_is_missing)
     free(full);
 }
 
+/* The texts after the "# from:", "# to:", "# remap:", "# scene:" and "# sampling:" prefixes of a header (each
+ * without its line end), as merge finds them. 0 after a failed check when one is missing. */
+static int header_texts(const char *header, char texts[5][MR_SWEEP_MAX_LINE]) {
+    const char *prefixes[5] = {MR_SWEEP_FROM_PREFIX, MR_SWEEP_TO_PREFIX, MR_SWEEP_REMAP_PREFIX, MR_SWEEP_SCENE_PREFIX,
+                               MR_SWEEP_SAMPLING_PREFIX};
+    for (int i = 0; i < 5; i++) {
+        const char *at = header != NULL ? strstr(header, prefixes[i]) : NULL;
+        MR_CHECK(at != NULL);
+        if (at == NULL) return 0;
+        at += strlen(prefixes[i]);
+        snprintf(texts[i], MR_SWEEP_MAX_LINE, "%.*s", (int)strcspn(at, "\n"), at);
+    }
+    return 1;
+}
+
 /* The sweep file's module (sweep_file.h): a header read back into its sweep rebuilds byte for byte (what merge
  * relies on), and the column-name reader that learn and train use finds the columns, counts lines and refuses an
  * over-long one naming file and line. */
@@ -1169,16 +1184,8 @@ MR_TEST(sweep_file_header_reads_back_and_the_column_reader_counts_lines) {
     mr_strbuf header = {0};
     MR_CHECK_OK(mr_sweep_file_header(&spec, "cmd", 1, 3, &header));
     // The texts after each prefix, as merge finds them.
-    const char *prefixes[5] = {MR_SWEEP_FROM_PREFIX, MR_SWEEP_TO_PREFIX, MR_SWEEP_REMAP_PREFIX, MR_SWEEP_SCENE_PREFIX,
-                               MR_SWEEP_SAMPLING_PREFIX};
     char texts[5][MR_SWEEP_MAX_LINE];
-    for (int i = 0; i < 5; i++) {
-        const char *at = strstr(header.text, prefixes[i]);
-        MR_CHECK(at != NULL);
-        if (at == NULL) return;
-        at += strlen(prefixes[i]);
-        snprintf(texts[i], sizeof texts[i], "%.*s", (int)strcspn(at, "\n"), at);
-    }
+    if (!header_texts(header.text, texts)) return;
     mr_sweep_spec back;
     const char *step = NULL;
     MR_CHECK_OK(mr_sweep_file_spec_from_header(texts[0], texts[1], texts[2], texts[3], texts[4], &back, &step));
@@ -1306,17 +1313,10 @@ MR_TEST(header_settings_refuse_what_they_do_not_know) {
     mr_sweep_spec spec = random_spec(5, 7, 16);
     mr_strbuf header = {0};
     MR_CHECK_OK(mr_sweep_file_header(&spec, "cmd", 0, 0, &header));
-    const char *prefixes[5] = {MR_SWEEP_FROM_PREFIX, MR_SWEEP_TO_PREFIX, MR_SWEEP_REMAP_PREFIX, MR_SWEEP_SCENE_PREFIX,
-                               MR_SWEEP_SAMPLING_PREFIX};
     char texts[5][MR_SWEEP_MAX_LINE];
-    for (int i = 0; i < 5; i++) {
-        const char *at = header.text != NULL ? strstr(header.text, prefixes[i]) : NULL;
-        MR_CHECK(at != NULL);
-        if (at == NULL) return;
-        at += strlen(prefixes[i]);
-        snprintf(texts[i], sizeof texts[i], "%.*s", (int)strcspn(at, "\n"), at);
-    }
+    const int found = header_texts(header.text, texts);
     free(header.text);
+    if (!found) return;
     mr_sweep_spec back;
     const char *step = NULL;
     MR_CHECK_OK(mr_sweep_file_spec_from_header(texts[0], texts[1], texts[2], texts[3], texts[4], &back, &step));

@@ -337,10 +337,19 @@ static int parse_whole_long(const char *text, long *out) { return mr_csv_parse_l
  * know. The value may be changed (held's list is cut at its commas). */
 typedef int (*setting_fn)(const char *name, char *value, mr_sweep_spec *spec);
 
-/* words[first .. n), each "name=value", given to take in order. MR_ERR_FORMAT "'WORD' is not name=value", or
- * "'NAME=VALUE' is not a WHAT this version knows" for the first one take refuses. */
-static mr_status parse_settings(char **words, int first, int n, const char *what, setting_fn take,
-                                mr_sweep_spec *spec) {
+/* A header line's text: its words (after `head`, a first word the line must have, e.g. "fit"; NULL: none, else
+ * MR_ERR_FORMAT `not_head`), each "name=value", given to take in order. MR_ERR_FORMAT "'WORD' is not name=value",
+ * or "'NAME=VALUE' is not a WHAT this version knows" for the first one take refuses; split_line's errors. */
+static mr_status parse_settings(const char *text, const char *head, const char *not_head, const char *what,
+                                setting_fn take, mr_sweep_spec *spec) {
+    char copy[MR_SWEEP_MAX_LINE], *words[16];
+    int n = 0;
+    mr_status status = split_line(text, strlen(text), copy, words, 16, &n);
+    if (status != MR_OK)
+        return status;
+    const int first = head != NULL;
+    if (head != NULL && (n < 1 || strcmp(words[0], head) != 0))
+        return mr_fail(MR_ERR_FORMAT, "%s", not_head);
     for (int k = first; k < n; k++) {
         char *eq = strchr(words[k], '=');
         if (eq == NULL)
@@ -387,12 +396,7 @@ static int take_remap_setting(const char *key, char *value, mr_sweep_spec *spec)
 
 /* "strategy=S max_evaluations=N xtol=X grid_points=G starts=S seed=S[ held=a,b]" into spec->remap. */
 static mr_status parse_remap_line(const char *text, mr_sweep_spec *spec) {
-    char copy[MR_SWEEP_MAX_LINE], *words[16];
-    int n = 0;
-    mr_status status = split_line(text, strlen(text), copy, words, 16, &n);
-    if (status != MR_OK)
-        return status;
-    return parse_settings(words, 0, n, "remap option", take_remap_setting, spec);
+    return parse_settings(text, NULL, NULL, "remap option", take_remap_setting, spec);
 }
 
 /* A setting of the scene line into spec->scene; names this version does not write are let through (the rebuilt
@@ -411,14 +415,7 @@ static int take_scene_setting(const char *key, char *value, mr_sweep_spec *spec)
 /* "fit size=N light=L intensity=I ..." into spec->scene (the other fields are fixed by the version: the rebuilt
  * header shows whether they match). */
 static mr_status parse_scene_line(const char *text, mr_sweep_spec *spec) {
-    char copy[MR_SWEEP_MAX_LINE], *words[16];
-    int n = 0;
-    mr_status status = split_line(text, strlen(text), copy, words, 16, &n);
-    if (status != MR_OK)
-        return status;
-    if (n < 1 || strcmp(words[0], "fit") != 0)
-        return mr_fail(MR_ERR_FORMAT, "not a fit scene");
-    return parse_settings(words, 1, n, "scene setting", take_scene_setting, spec);
+    return parse_settings(text, "fit", "not a fit scene", "scene setting", take_scene_setting, spec);
 }
 
 mr_status mr_sweep_scene_parse(const char *text, mr_fit_scene_options *out) {
