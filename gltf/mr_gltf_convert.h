@@ -9,7 +9,7 @@
  *   mr_gltf_convert(asset, &o, NULL);
  *   mr_gltf_prune_unused(asset, NULL);  mr_gltf_save(asset, "out/out.gltf");
  * or all of it, load to save, in one call: mr_gltf_convert_file("in.gltf", "out/out.gltf", &o, &result)
- * (docs/examples/convert_asset.c).
+ * (docs/examples/convert_asset.c), summed up by mr_gltf_convert_totals_of(&result, &totals).
  *
  * Per material: the source workflow's factors times its textures, in linear values (colour textures sRGB-decoded,
  * glossiness and alpha linear), on the grid of the larger source texture (the smaller resampled bilinearly, texel

@@ -8,6 +8,7 @@
  *   mr_remap_result r;
  *   mr_remap(plan, source_model, source_values, target_model, &o, &r);     // built-in source
  *   mr_remap_images(plan, &(mr_remap_source){full, diffuse, specular}, target_model, &o, &r);  // any renderer
+ *   mr_remap_read_render(path, &full);  mr_remap_write_pictures(prefix, plan, full, target_model, r.values);
  *
  * Objective: the L2 difference of linear HDR RGB images over the plan's pixels (the paper's metric).
  *

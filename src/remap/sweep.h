@@ -10,6 +10,7 @@
  *   spec.sampling = MR_SWEEP_GRID;
  *   mr_sweep_parse_axis(spec.source, "alpha=0.01:1:9:log", &spec.axes[spec.axis_count++]);
  *   mr_sweep_options o = {0};  o.resume = 1;  o.threads = 2;                          // zero = defaults
+ *   mr_sweep_command_line("matremap", argc, argv, &line);  o.command_line = line;     // the header's record
  *   mr_sweep_summary s;
  *   mr_sweep_run(&spec, "alpha.csv", &o, &s);
  *

@@ -14,9 +14,11 @@
  *   mr_transform_free(t);
  * Texture sets: mr_transform_convert_maps (images and constants in, one image per output slot and per-texel flags
  * out); mr_transform_convert_texture_set (spec2metal's and metal2spec's pipeline: files read and checked, converted,
- * packed into output layouts with mr_image_pack / mr_image_with_alpha); mr_transform_convert_material (convert's:
- * a material's maps and values). Flags: mr_flags_count (by reason) and mr_flag_picture (a colour code as data:
- * mr_workflow_flag_code here, mr_learned_flag_code in learned.h).
+ * packed into output layouts with mr_image_pack / mr_image_with_alpha), written all or none with its flag picture
+ * (mr_texture_set_write: files named by mr_texture_output_path) and summed up (mr_texture_set_stats); the rules
+ * around it (mr_texture_constant_parse, mr_texture_default_format, mr_texture_check_bits);
+ * mr_transform_convert_material (convert's: a material's maps and values). Flags: mr_flags_count (by reason) and
+ * mr_flag_picture (a colour code as data: mr_workflow_flag_code here, mr_learned_flag_code in learned.h).
  *
  * Planes. A transform reads and writes planes of floats, one per slot: a slot is one parameter of the source
  * (inputs) or target (outputs) model of src/brdf, named as the model names it, with its channel count; a 3-channel
