@@ -196,7 +196,7 @@ int cmd_remap(int argc, char **argv) {
     for (int k = 0; k < 3; k++)
         if (image_paths[k]) cli_io_input(&io, image_paths[k], "%s %s", image_options[k], image_paths[k]);
     if (reference_path) cli_io_input(&io, reference_path, "--match-irradiance %s", reference_path);
-    for (int k = 0; images_prefix != NULL && k < MR_REMAP_PICTURE_COUNT; k++) {
+    for (int k = 0; images_prefix != NULL && k < 3; k++) {
         char path[4096];
         mr_remap_picture_path(images_prefix, k, path, sizeof path); // an overlong prefix: refused by the write
         cli_io_output(&io, path, "--images %s", images_prefix);
