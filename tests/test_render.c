@@ -1503,6 +1503,20 @@ MR_TEST(closer_look_plan_is_built_once_and_shared) {
     mr_render_plan_free(plan);
 }
 
+/* mr_image_scale (render's --exposure, remap's irradiance scale): every value, alpha included, times the factor
+ * and rounded to float once; NULL does nothing. */
+MR_TEST(image_scale_multiplies_every_value_once) {
+    mr_image *image = NULL;
+    MR_CHECK_OK(mr_image_create(2, 1, 4, &image));
+    if (image == NULL) return;
+    const float values[8] = {0.1f, 0.2f, 0.3f, 1.0f, 3.0f, -1.0f, 0.0f, 0.5f};
+    memcpy(image->pixels, values, sizeof values);
+    mr_image_scale(image, 1.0 / 3.0);
+    for (int k = 0; k < 8; k++) MR_CHECK(image->pixels[k] == (float)(values[k] * (1.0 / 3.0)));
+    mr_image_scale(NULL, 2.0);
+    mr_image_free(image);
+}
+
 /* mr_scene_fit_light_to_mesh: with no mesh (the unit sphere) the fit scene's light stays where mr_scene_fit put it;
  * a box of corners (1,1,1) and (3,3,3) (centre (2,2,2), bounding radius sqrt 3) gets it at 3 sqrt 3 from its centre
  * towards the camera (frontal), 3 times stronger; turned with the camera (45 degrees: to the camera's right). */
@@ -1543,6 +1557,7 @@ MR_TEST(fit_light_follows_the_mesh_and_the_camera) {
 
 MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
              MR_TEST_ENTRY(fit_light_follows_the_mesh_and_the_camera),
+             MR_TEST_ENTRY(image_scale_multiplies_every_value_once),
              MR_TEST_ENTRY(texels_that_are_no_values_are_read_as_documented),
              MR_TEST_ENTRY(closer_look_plan_is_built_once_and_shared),
              MR_TEST_ENTRY(highlight_quadrature_shares_each_pixel_exactly),

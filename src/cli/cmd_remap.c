@@ -240,10 +240,7 @@ int cmd_remap(int argc, char **argv) {
         status = mr_render_plan_create(&scene, &plan);
         if (status == MR_OK && reference != NULL) {
             status = mr_irradiance_scale(plan, reference, reference_albedo, &irradiance_scale);
-            for (int k = 0; k < 3 && status == MR_OK; k++)
-                if (images[k])
-                    for (size_t v = 0; v < mr_image_value_count(images[k]); v++)
-                        images[k]->pixels[v] = (float)(images[k]->pixels[v] * irradiance_scale);
+            for (int k = 0; k < 3 && status == MR_OK; k++) mr_image_scale(images[k], irradiance_scale);
         }
         if (status == MR_OK) {
             if (from != NULL) {

@@ -302,10 +302,7 @@ int cmd_render(int argc, char **argv) {
         else if (status == MR_OK)
             status = mr_render_textured(plan, material->model, material->values, &material->textures, component,
                                         &image);
-        if (status == MR_OK && exposure != 1.0) {
-            size_t n = mr_image_value_count(image);
-            for (size_t p = 0; p < n; p++) image->pixels[p] = (float)(image->pixels[p] * exposure);
-        }
+        if (status == MR_OK && exposure != 1.0) mr_image_scale(image, exposure);
         double render_seconds = cli_now() - start - plan_seconds;
         if (status == MR_OK) status = mr_img_write(output, image, &write_opts);
         if (status == MR_OK && mask_path != NULL) {
