@@ -1044,3 +1044,19 @@ void mr_gltf_convert_result_free(mr_gltf_convert_result *result) {
     free(result->materials);
     memset(result, 0, sizeof *result);
 }
+
+void mr_gltf_convert_totals_of(const mr_gltf_convert_result *result, mr_gltf_convert_totals *out) {
+    memset(out, 0, sizeof *out);
+    for (int k = 0; result != NULL && k < result->material_count; k++) {
+        const mr_gltf_material_report *r = &result->materials[k];
+        out->converted += r->outcome == MR_GLTF_CONVERTED || r->outcome == MR_GLTF_SHARED;
+        out->kept += r->outcome == MR_GLTF_KEPT;
+        if (r->outcome != MR_GLTF_CONVERTED) continue; // each conversion once: its textures are written once
+        out->texels += r->width > 0 ? (size_t)r->width * (size_t)r->height : 1;
+        out->total.flagged += r->flagged;
+        out->total.off_manifold += r->off_manifold;
+        out->total.nonfinite += r->nonfinite;
+        out->total.clamped += r->clamped;
+        out->total.failed += r->failed;
+    }
+}

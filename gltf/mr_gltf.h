@@ -262,6 +262,15 @@ struct mr_wf_texel_pool;
 mr_status mr_gltf_add_specgloss_texels(const mr_gltf *asset, uint64_t seed, struct mr_wf_texel_pool *pool,
                                        int *materials);
 
+/* The asset at `path` read (mr_gltf_load) and its spec-gloss texels added to the pool (mr_gltf_add_specgloss_texels)
+ * in one call, for `matremap dataset --asset PATH`. An asset without spec-gloss materials is MR_ERR_INVALID_ARG
+ * "LABEL: no material carries KHR_materials_pbrSpecularGlossiness" (label: how the caller names the asset, "--asset
+ * x.gltf"; NULL: "'PATH'"). On success *asset (may be NULL: the asset is freed) gets the asset, the caller's to free
+ * (mr_gltf_free), e.g. to list the files it was read from (mr_gltf_source_file); on failure it is NULL. Errors:
+ * mr_gltf_load's and mr_gltf_add_specgloss_texels'. */
+mr_status mr_gltf_add_specgloss_texels_from_file(const char *path, const char *label, uint64_t seed,
+                                                 struct mr_wf_texel_pool *pool, mr_gltf **asset);
+
 /* Adds a texture of `image` with `sampler` (NULL = no sampler, i.e. glTF's defaults); an identical sampler
  * already in the asset is reused. *out_texture receives its index. */
 mr_status mr_gltf_add_texture(mr_gltf *asset, int image, const mr_gltf_sampler *sampler, int *out_texture);

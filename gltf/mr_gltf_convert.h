@@ -9,7 +9,7 @@
  *   mr_gltf_convert(asset, &o, NULL);
  *   mr_gltf_prune_unused(asset, NULL);  mr_gltf_save(asset, "out/out.gltf");
  * or all of it, load to save, in one call: mr_gltf_convert_file("in.gltf", "out/out.gltf", &o, &result)
- * (docs/examples/convert_asset.c).
+ * (docs/examples/convert_asset.c), summed up by mr_gltf_convert_totals_of(&result, &totals).
  *
  * Per material: the source workflow's factors times its textures, in linear values (colour textures sRGB-decoded,
  * glossiness and alpha linear), on the grid of the larger source texture (the smaller resampled bilinearly, texel
@@ -105,6 +105,19 @@ mr_status mr_gltf_convert_file(const char *input, const char *output, const mr_g
 
 /* Releases result->materials and zeroes *result; NULL-safe. */
 void mr_gltf_convert_result_free(mr_gltf_convert_result *result);
+
+/* A conversion's totals over its materials. */
+typedef struct mr_gltf_convert_totals {
+    int converted;                 /* materials converted (MR_GLTF_CONVERTED, and MR_GLTF_SHARED reusing one) */
+    int kept;                      /* materials kept with metal-rough values of their own (MR_GLTF_KEPT) */
+    size_t texels;                 /* texels converted: each conversion once (MR_GLTF_CONVERTED only: materials
+                                      sharing its sources wrote no textures of their own), 1 for factors only */
+    mr_gltf_material_report total; /* flagged, off_manifold, nonfinite, clamped, failed summed over the same
+                                      conversions; the other fields zero */
+} mr_gltf_convert_totals;
+
+/* The totals of `result` (NULL: all zero) into *out. */
+void mr_gltf_convert_totals_of(const mr_gltf_convert_result *result, mr_gltf_convert_totals *out);
 
 #ifdef __cplusplus
 }

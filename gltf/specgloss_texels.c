@@ -2,6 +2,8 @@
  * specgloss_texels.c — an asset's spec-gloss texels for the training pairs' draws (mr_gltf.h,
  * mr_gltf_add_specgloss_texels; the pool and its draws: src/workflow/pairs.h).
  */
+#include <stdio.h>
+
 #include "gltf/mr_gltf.h"
 #include "mr_internal.h"
 #include "workflow/pairs.h"
@@ -36,5 +38,27 @@ mr_status mr_gltf_add_specgloss_texels(const mr_gltf *asset, uint64_t seed, stru
         mr_image_free(sg);
     }
     mr_wf_texel_pool_end_source(pool);
+    return status;
+}
+
+mr_status mr_gltf_add_specgloss_texels_from_file(const char *path, const char *label, uint64_t seed,
+                                                 struct mr_wf_texel_pool *pool, mr_gltf **asset) {
+    if (asset != NULL) *asset = NULL;
+    if (path == NULL || pool == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF spec-gloss texels: NULL argument");
+    mr_gltf *loaded = NULL;
+    mr_status status = mr_gltf_load(path, &loaded);
+    if (status != MR_OK) return status;
+    int materials = 0;
+    status = mr_gltf_add_specgloss_texels(loaded, seed, pool, &materials);
+    if (status == MR_OK && materials == 0) {
+        char quoted[4096 + 3];
+        if (label == NULL) snprintf(quoted, sizeof quoted, "'%s'", path);
+        status = mr_fail(MR_ERR_INVALID_ARG, "%s: no material carries KHR_materials_pbrSpecularGlossiness",
+                         label != NULL ? label : quoted);
+    }
+    if (status == MR_OK && asset != NULL)
+        *asset = loaded;
+    else
+        mr_gltf_free(loaded);
     return status;
 }

@@ -66,3 +66,9 @@ void mr_image_free(mr_image *image) {
     free(image->pixels);
     free(image);
 }
+
+void mr_image_scale(mr_image *image, double factor) {
+    if (image == NULL) return;
+    const size_t n = mr_image_value_count(image);
+    for (size_t p = 0; p < n; p++) image->pixels[p] = (float)(image->pixels[p] * factor);
+}

@@ -41,6 +41,10 @@ void mr_image_free(mr_image *image);
  * "image 'x.exr'", names the file). */
 mr_status mr_image_check_radiance(const mr_image *image, const char *label);
 
+/* Every value of the image (alpha included) times `factor`, in place, each rounded to float once: (float)(v *
+ * factor) (an exposure, an irradiance scale). NULL is allowed (nothing done). */
+void mr_image_scale(mr_image *image, double factor);
+
 /* Number of floats in the pixel buffer. */
 static inline size_t mr_image_value_count(const mr_image *image) {
     return (size_t)image->width * (size_t)image->height * (size_t)image->channels;

@@ -222,6 +222,20 @@ MR_TEST(default_values_use_per_channel_defaults) {
     param_named(m, "k", &k);
     MR_CHECK(v[eta] == 0.200438 && v[eta + 1] == 0.924033 && v[eta + 2] == 1.10221);
     MR_CHECK(v[k] == 3.91295 && v[k + 1] == 2.45285 && v[k + 2] == 2.14219);
+    // One parameter's default by channel, as mr_brdf_default_values writes it (coloured or not).
+    const int eta_index = mr_brdf_param_index(m, "eta"), rough_index = mr_brdf_param_index(m, "alpha");
+    for (int c = 0; c < 3; c++) MR_CHECK(mr_brdf_param_default(&m->params[eta_index], c) == v[eta + c]);
+    if (rough_index >= 0)
+        MR_CHECK(mr_brdf_param_default(&m->params[rough_index], 0) == m->params[rough_index].default_value);
+    // The names `matremap models` prints for roles and lobes.
+    MR_CHECK(strcmp(mr_param_role_name(MR_PARAM_LINEAR), "linear") == 0 &&
+             strcmp(mr_param_role_name(MR_PARAM_AFFINE), "affine") == 0 &&
+             strcmp(mr_param_role_name(MR_PARAM_NONLINEAR), "nonlinear") == 0 &&
+             strcmp(mr_param_role_name(MR_PARAM_SWITCH), "switch") == 0);
+    MR_CHECK(mr_param_role_name(MR_PARAM_ROLE_COUNT) == NULL);
+    MR_CHECK(strcmp(mr_param_lobe_name(MR_LOBE_DIFFUSE), "diffuse") == 0 &&
+             strcmp(mr_param_lobe_name(MR_LOBE_SPECULAR), "specular") == 0 &&
+             strcmp(mr_param_lobe_name(MR_LOBE_BOTH), "both") == 0);
 }
 
 MR_TEST(parse_assignment_accepts_and_rejects) {

@@ -245,7 +245,35 @@ MR_TEST(convert_file_side_files_after_the_output) {
     mr_transform_free(t);
 }
 
-MR_TEST_MAIN(MR_TEST_ENTRY(duck_palette_route_gives_the_converters_codes),
+/* A conversion's totals: converted counts shared materials too, texels and flags each conversion once (a shared
+ * material's textures are the earlier one's), factors-only a texel; kept and skipped materials add nothing else. */
+MR_TEST(totals_count_each_conversion_once) {
+    mr_gltf_material_report m[4];
+    memset(m, 0, sizeof m);
+    m[0].outcome = MR_GLTF_CONVERTED;
+    m[0].width = 4;
+    m[0].height = 2;
+    m[0].flagged = 3;
+    m[0].clamped = 2;
+    m[0].off_manifold = 1;
+    m[1] = m[0];
+    m[1].outcome = MR_GLTF_SHARED;
+    m[2].outcome = MR_GLTF_CONVERTED; // factors only
+    m[2].flagged = m[2].failed = 1;
+    m[3].outcome = MR_GLTF_KEPT;
+    m[3].flagged = 7;
+    const mr_gltf_convert_result result = {4, m, {0}};
+    mr_gltf_convert_totals t;
+    mr_gltf_convert_totals_of(&result, &t);
+    MR_CHECK(t.converted == 3 && t.kept == 1 && t.texels == 9);
+    MR_CHECK(t.total.flagged == 4 && t.total.clamped == 2 && t.total.off_manifold == 1 && t.total.failed == 1 &&
+             t.total.nonfinite == 0);
+    mr_gltf_convert_totals_of(NULL, &t);
+    MR_CHECK(t.converted == 0 && t.texels == 0 && t.total.flagged == 0);
+}
+
+MR_TEST_MAIN(MR_TEST_ENTRY(totals_count_each_conversion_once),
+             MR_TEST_ENTRY(duck_palette_route_gives_the_converters_codes),
              MR_TEST_ENTRY(floppy_code_route_gives_the_converters_codes),
              MR_TEST_ENTRY(truck_materials_share_a_conversion),
              MR_TEST_ENTRY(extension_route_reuses_textures_and_makes_factors),

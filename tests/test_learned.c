@@ -757,7 +757,21 @@ MR_TEST(explain_flagged_texel) {
     mr_learned_free(p);
 }
 
-MR_TEST_MAIN(MR_TEST_ENTRY(parametric_recovers_known_mapping), MR_TEST_ENTRY(carry_by_lobe_ratio),
+/* A slot's name: the parameter's, with _r/_g/_b for one channel of an RGB parameter (learn's summary keys). */
+MR_TEST(slot_names_carry_the_channel) {
+    const mr_brdf_model *ggx = mr_brdf_find("ggx-conductor");
+    const int eta = mr_brdf_param_index(ggx, "eta"), alpha = mr_brdf_param_index(ggx, "alpha");
+    char name[16];
+    const mr_learned_slot scalar = {alpha, MR_LEARNED_SCALAR, 0, 0.0, 0.0}, grey = {eta, MR_LEARNED_GREY, 0, 0.0, 0.0},
+                          green = {eta, MR_LEARNED_CHANNEL, 1, 0.0, 0.0};
+    MR_CHECK(strcmp(mr_learned_slot_name(ggx, &scalar, name, sizeof name), "alpha") == 0);
+    MR_CHECK(strcmp(mr_learned_slot_name(ggx, &grey, name, sizeof name), "eta") == 0);
+    MR_CHECK(strcmp(mr_learned_slot_name(ggx, &green, name, sizeof name), "eta_g") == 0);
+    MR_CHECK(strcmp(mr_learned_slot_name(ggx, &green, name, 4), "eta") == 0); // truncated to fit
+}
+
+MR_TEST_MAIN(MR_TEST_ENTRY(slot_names_carry_the_channel),
+             MR_TEST_ENTRY(parametric_recovers_known_mapping), MR_TEST_ENTRY(carry_by_lobe_ratio),
              MR_TEST_ENTRY(solver_residue_not_learned), MR_TEST_ENTRY(float_map_at_bound_not_clamped),
              MR_TEST_ENTRY(round_trip_every_method), MR_TEST_ENTRY(corrupted_files_refused),
              MR_TEST_ENTRY(domain_flags_and_chromaticity), MR_TEST_ENTRY(chain_equals_steps),

@@ -143,6 +143,20 @@ MR_TEST(texel_pool_and_asset_draws) {
     MR_CHECK_OK(mr_gltf_add_specgloss_texels(asset, 1, &p1, &materials));
     MR_CHECK(materials == 0 && p1.count == before);
     mr_gltf_free(asset);
+    // The same from the files in one call: the Duck's texels as above, its asset handed back (to list its files);
+    // the metal-rough asset refused by the caller's label, nothing added and nothing handed back.
+    mr_wf_texel_pool p3 = {0};
+    asset = NULL;
+    MR_CHECK_OK(mr_gltf_add_specgloss_texels_from_file(duck, "--asset duck", 1, &p3, &asset));
+    MR_CHECK(asset != NULL && p3.count == p2.count &&
+             memcmp(p3.texels, p2.texels, p2.count * 6 * sizeof *p2.texels) == 0);
+    mr_gltf_free(asset);
+    MR_CHECK(mr_gltf_add_specgloss_texels_from_file(bottle, "--asset wb", 1, &p3, &asset) == MR_ERR_INVALID_ARG);
+    MR_CHECK(asset == NULL && p3.count == p2.count);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "--asset wb: no material carries KHR_materials_pbrSpecularGlossiness") == 0,
+                 "%s", mr_last_error());
+    MR_CHECK(mr_gltf_add_specgloss_texels_from_file(mr_test_tmp_path("none.gltf"), NULL, 1, &p3, NULL) == MR_ERR_IO);
+    mr_wf_texel_pool_free(&p3);
     mr_wf_texel_pool_free(&p1);
     mr_wf_texel_pool_free(&p2);
 }

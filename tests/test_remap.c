@@ -9,6 +9,7 @@
 #include <math.h>
 #include <omp.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "harness.h"
 #include "matremap.h"
@@ -1125,7 +1126,54 @@ MR_TEST(zeroed_options_are_the_defaults) {
     mr_render_plan_free(plan);
 }
 
-MR_TEST_MAIN(MR_TEST_ENTRY(names_round_trip), MR_TEST_ENTRY(zeroed_options_are_the_defaults),
+/* A remap's files: renders read as RGB radiance (a negative value refused, naming the file), and the pictures of
+ * --images (source, target, SSIM map) written as a set under the prefix and readable, the source's as it was. */
+MR_TEST(pictures_written_and_readable) {
+    mr_render_plan *plan = fit_plan(16);
+    const mr_brdf_model *ggx = mr_brdf_find("ggx");
+    if (plan == NULL || ggx == NULL) return;
+    double source_values[MR_BRDF_MAX_VALUES], target_values[MR_BRDF_MAX_VALUES];
+    material(ggx, "alpha=0.2", source_values);
+    material(ggx, "alpha=0.3", target_values);
+    mr_image *source = NULL;
+    MR_CHECK_OK(mr_render(plan, ggx, source_values, MR_COMPONENT_FULL, &source));
+    char render[600], prefix[600], path[700];
+    snprintf(render, sizeof render, "%s", mr_test_tmp_path("remap_source.exr"));
+    snprintf(prefix, sizeof prefix, "%s", mr_test_tmp_path("pics/"));
+    MR_CHECK(mkdir(prefix, 0755) == 0);
+    MR_CHECK_OK(mr_img_write(render, source, NULL));
+    mr_image *read = NULL;
+    MR_CHECK_OK(mr_remap_read_render(render, &read));
+    if (read != NULL && source != NULL)
+        MR_CHECK(read->channels == 3 && memcmp(read->pixels, source->pixels, mr_image_value_count(source) * 4) == 0);
+    MR_CHECK_OK(mr_remap_write_pictures(prefix, plan, read, ggx, target_values));
+    const char *names[MR_REMAP_PICTURE_COUNT] = {"source.png", "target.png", "ssim.png"};
+    for (int k = 0; k < MR_REMAP_PICTURE_COUNT; k++) {
+        MR_CHECK_OK(mr_remap_picture_path(prefix, k, path, sizeof path));
+        MR_CHECK(strncmp(path, prefix, strlen(prefix)) == 0 && strcmp(path + strlen(prefix), names[k]) == 0);
+        mr_image *picture = NULL;
+        MR_CHECK_OK(mr_img_read(path, NULL, &picture));
+        if (picture != NULL && k < 2) MR_CHECK(picture->width == 16 && picture->height == 16); // the renders
+        if (picture != NULL) MR_CHECK(picture->width > 0 && picture->channels >= 3);
+        mr_image_free(picture);
+    }
+    MR_CHECK(mr_remap_picture_path(prefix, MR_REMAP_PICTURE_COUNT, path, sizeof path) == MR_ERR_INVALID_ARG);
+    if (source != NULL) {
+        source->pixels[5] = -1.0f;
+        MR_CHECK_OK(mr_img_write(render, source, NULL));
+        mr_image_free(read);
+        read = NULL;
+        MR_CHECK(mr_remap_read_render(render, &read) == MR_ERR_INVALID_ARG && read == NULL);
+        MR_CHECK_MSG(strstr(mr_last_error(), "image '") != NULL && strstr(mr_last_error(), "remap_source.exr'"),
+                     "%s", mr_last_error());
+    }
+    mr_image_free(read);
+    mr_image_free(source);
+    mr_render_plan_free(plan);
+}
+
+MR_TEST_MAIN(MR_TEST_ENTRY(names_round_trip),
+             MR_TEST_ENTRY(pictures_written_and_readable), MR_TEST_ENTRY(zeroed_options_are_the_defaults),
              MR_TEST_ENTRY(glossy_sources_keep_their_reflectance_at_the_default_size),
              MR_TEST_ENTRY(outcomes_say_what_the_scene_shows),
              MR_TEST_ENTRY(default_options_are_the_documented_ones),

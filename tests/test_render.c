@@ -1503,7 +1503,61 @@ MR_TEST(closer_look_plan_is_built_once_and_shared) {
     mr_render_plan_free(plan);
 }
 
+/* mr_image_scale (render's --exposure, remap's irradiance scale): every value, alpha included, times the factor
+ * and rounded to float once; NULL does nothing. */
+MR_TEST(image_scale_multiplies_every_value_once) {
+    mr_image *image = NULL;
+    MR_CHECK_OK(mr_image_create(2, 1, 4, &image));
+    if (image == NULL) return;
+    const float values[8] = {0.1f, 0.2f, 0.3f, 1.0f, 3.0f, -1.0f, 0.0f, 0.5f};
+    memcpy(image->pixels, values, sizeof values);
+    mr_image_scale(image, 1.0 / 3.0);
+    for (int k = 0; k < 8; k++) MR_CHECK(image->pixels[k] == (float)(values[k] * (1.0 / 3.0)));
+    mr_image_scale(NULL, 2.0);
+    mr_image_free(image);
+}
+
+/* mr_scene_fit_light_to_mesh: with no mesh (the unit sphere) the fit scene's light stays where mr_scene_fit put it;
+ * a box of corners (1,1,1) and (3,3,3) (centre (2,2,2), bounding radius sqrt 3) gets it at 3 sqrt 3 from its centre
+ * towards the camera (frontal), 3 times stronger; turned with the camera (45 degrees: to the camera's right). */
+MR_TEST(fit_light_follows_the_mesh_and_the_camera) {
+    for (int which = 0; which < MR_FIT_LIGHT_COUNT; which++) {
+        mr_fit_scene_options o = {64, (mr_fit_light)which, 0.0};
+        const mr_scene fit = mr_scene_fit(&o);
+        mr_scene scene = fit;
+        MR_CHECK_OK(mr_scene_fit_light_to_mesh(&scene, NULL, (mr_fit_light)which));
+        for (int i = 0; i < 3; i++) {
+            MR_CHECK_NEAR(scene.lights[0].position[i], fit.lights[0].position[i], 1e-12);
+            MR_CHECK(scene.lights[0].intensity[i] == fit.lights[0].intensity[i]);
+        }
+    }
+    float corners[8 * 3];
+    for (int v = 0; v < 8; v++)
+        for (int i = 0; i < 3; i++) corners[3 * v + i] = (v >> i) & 1 ? 3.0f : 1.0f;
+    const mr_mesh box = {.vertex_count = 8, .positions = corners};
+    mr_fit_scene_options o = {64, MR_FIT_LIGHT_FRONTAL, 0.0};
+    mr_scene scene = mr_scene_fit(&o);
+    const double intensity = scene.lights[0].intensity[0], r = sqrt(3.0);
+    MR_CHECK_OK(mr_scene_fit_light_to_mesh(&scene, &box, MR_FIT_LIGHT_FRONTAL));
+    MR_CHECK_NEAR(scene.lights[0].position[0], 2.0, 1e-12);
+    MR_CHECK_NEAR(scene.lights[0].position[1], 2.0, 1e-12);
+    MR_CHECK_NEAR(scene.lights[0].position[2], 2.0 + 3.0 * r, 1e-12);
+    MR_CHECK_NEAR(scene.lights[0].intensity[0], intensity * 3.0, 1e-12);
+    // The camera looking down -x from +x: the light at 45 degrees lies between +x (back) and the camera's right.
+    scene = mr_scene_fit(&(mr_fit_scene_options){64, MR_FIT_LIGHT_45, 0.0});
+    scene.camera.position[0] = 4.0;
+    scene.camera.position[2] = 0.0;
+    MR_CHECK_OK(mr_scene_fit_light_to_mesh(&scene, NULL, MR_FIT_LIGHT_45));
+    const double h = 3.0 * sqrt(0.5); // up (0,1,0) x back (1,0,0) = (0,0,-1): the right
+    MR_CHECK_NEAR(scene.lights[0].position[0], h, 1e-12);
+    MR_CHECK_NEAR(scene.lights[0].position[1], 0.0, 1e-12);
+    MR_CHECK_NEAR(scene.lights[0].position[2], -h, 1e-12);
+    MR_CHECK(mr_scene_fit_light_to_mesh(NULL, NULL, MR_FIT_LIGHT_45) == MR_ERR_INVALID_ARG);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
+             MR_TEST_ENTRY(fit_light_follows_the_mesh_and_the_camera),
+             MR_TEST_ENTRY(image_scale_multiplies_every_value_once),
              MR_TEST_ENTRY(texels_that_are_no_values_are_read_as_documented),
              MR_TEST_ENTRY(closer_look_plan_is_built_once_and_shared),
              MR_TEST_ENTRY(highlight_quadrature_shares_each_pixel_exactly),

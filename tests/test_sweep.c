@@ -1156,6 +1156,21 @@ MR_TEST(a_torn_last_row_is_never_counted_even_when_only_its_line_end_is_missing)
     free(full);
 }
 
+/* The texts after the "# from:", "# to:", "# remap:", "# scene:" and "# sampling:" prefixes of a header (each
+ * without its line end), as merge finds them. 0 after a failed check when one is missing. */
+static int header_texts(const char *header, char texts[5][MR_SWEEP_MAX_LINE]) {
+    const char *prefixes[5] = {MR_SWEEP_FROM_PREFIX, MR_SWEEP_TO_PREFIX, MR_SWEEP_REMAP_PREFIX, MR_SWEEP_SCENE_PREFIX,
+                               MR_SWEEP_SAMPLING_PREFIX};
+    for (int i = 0; i < 5; i++) {
+        const char *at = header != NULL ? strstr(header, prefixes[i]) : NULL;
+        MR_CHECK(at != NULL);
+        if (at == NULL) return 0;
+        at += strlen(prefixes[i]);
+        snprintf(texts[i], MR_SWEEP_MAX_LINE, "%.*s", (int)strcspn(at, "\n"), at);
+    }
+    return 1;
+}
+
 /* The sweep file's module (sweep_file.h): a header read back into its sweep rebuilds byte for byte (what merge
  * relies on), and the column-name reader that learn and train use finds the columns, counts lines and refuses an
  * over-long one naming file and line. */
@@ -1169,16 +1184,8 @@ MR_TEST(sweep_file_header_reads_back_and_the_column_reader_counts_lines) {
     mr_strbuf header = {0};
     MR_CHECK_OK(mr_sweep_file_header(&spec, "cmd", 1, 3, &header));
     // The texts after each prefix, as merge finds them.
-    const char *prefixes[5] = {MR_SWEEP_FROM_PREFIX, MR_SWEEP_TO_PREFIX, MR_SWEEP_REMAP_PREFIX, MR_SWEEP_SCENE_PREFIX,
-                               MR_SWEEP_SAMPLING_PREFIX};
     char texts[5][MR_SWEEP_MAX_LINE];
-    for (int i = 0; i < 5; i++) {
-        const char *at = strstr(header.text, prefixes[i]);
-        MR_CHECK(at != NULL);
-        if (at == NULL) return;
-        at += strlen(prefixes[i]);
-        snprintf(texts[i], sizeof texts[i], "%.*s", (int)strcspn(at, "\n"), at);
-    }
+    if (!header_texts(header.text, texts)) return;
     mr_sweep_spec back;
     const char *step = NULL;
     MR_CHECK_OK(mr_sweep_file_spec_from_header(texts[0], texts[1], texts[2], texts[3], texts[4], &back, &step));
@@ -1228,7 +1235,111 @@ MR_TEST(sweep_file_header_reads_back_and_the_column_reader_counts_lines) {
     free(rebuilt.text);
 }
 
+/* Split a "# command:" text as a POSIX shell would: words separated by spaces, '...' quoting anything, \' outside
+ * quotes a quote. Up to max words into words[] (each its own malloc'ed string); returns the count. */
+static int shell_split(const char *text, char **words, int max) {
+    int n = 0;
+    const char *p = text;
+    while (*p && n < max) {
+        while (*p == ' ') p++;
+        if (*p == '\0') break;
+        char *w = malloc(strlen(p) + 1), *o = w;
+        while (*p && *p != ' ') {
+            if (*p == '\'') {
+                for (p++; *p && *p != '\''; p++) *o++ = *p;
+                if (*p) p++;
+            } else if (*p == '\\' && p[1]) {
+                *o++ = p[1];
+                p += 2;
+            } else {
+                *o++ = *p++;
+            }
+        }
+        *o = '\0';
+        words[n++] = w;
+    }
+    return n;
+}
+
+/* mr_sweep_command_line: plain arguments as they are, the others single-quoted ('\'' for a quote, '' for an empty
+ * one); the "# command:" line of a header built with it splits back into the same arguments (a line break in one
+ * becomes a space there, and only there). */
+MR_TEST(command_line_quoting_round_trips_through_the_header) {
+    const char *argv[] = {"sweep", "--from", "ggx", "alpha=0.1:0.5:3", "-o", "out dir/s.csv", "it's", "", "a\"b$c",
+                          "x\ny"};
+    const int argc = (int)(sizeof argv / sizeof argv[0]);
+    char *line = NULL;
+    MR_CHECK_OK(mr_sweep_command_line("matremap", argc, argv, &line));
+    if (line == NULL) return;
+    MR_CHECK_MSG(strcmp(line, "matremap sweep --from ggx alpha=0.1:0.5:3 -o 'out dir/s.csv' 'it'\\''s' '' "
+                              "'a\"b$c' 'x\ny'") == 0, "%s", line);
+    mr_sweep_spec spec = random_spec(5, 7, 16);
+    mr_strbuf header = {0};
+    MR_CHECK_OK(mr_sweep_file_header(&spec, line, 0, 0, &header));
+    const char *at = header.text != NULL ? strstr(header.text, MR_SWEEP_COMMAND_PREFIX) : NULL;
+    MR_CHECK(at != NULL);
+    if (at != NULL) {
+        at += strlen(MR_SWEEP_COMMAND_PREFIX);
+        char text[1024];
+        snprintf(text, sizeof text, "%.*s", (int)strcspn(at, "\n"), at);
+        char *words[32];
+        const int n = shell_split(text, words, 32);
+        MR_CHECK(n == argc + 1 && strcmp(words[0], "matremap") == 0);
+        for (int k = 1; k < n && k <= argc; k++)
+            MR_CHECK_MSG(strcmp(words[k], k == argc ? "x y" : argv[k - 1]) == 0, "word %d '%s'", k, words[k]);
+        for (int k = 0; k < n; k++) free(words[k]);
+    }
+    free(header.text);
+    free(line);
+    MR_CHECK_OK(mr_sweep_command_line("matremap sweep", 0, NULL, &line));
+    MR_CHECK(line != NULL && strcmp(line, "matremap sweep") == 0);
+    free(line);
+    MR_CHECK(mr_sweep_command_line(NULL, 0, NULL, &line) == MR_ERR_INVALID_ARG && line == NULL);
+}
+
+/* The remap and scene lines read by one name=value loop: a word without '=' and a name this version does not know
+ * refused with the line's own noun; a scene name it does not write let through. */
+MR_TEST(header_settings_refuse_what_they_do_not_know) {
+    mr_fit_scene_options scene;
+    MR_CHECK_OK(mr_sweep_scene_parse("fit size=32 light=frontal intensity=5 future=1", &scene));
+    MR_CHECK(scene.size == 32 && scene.light == MR_FIT_LIGHT_FRONTAL && scene.intensity == 5.0);
+    MR_CHECK(mr_sweep_scene_parse("fit size", &scene) == MR_ERR_FORMAT);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "'size' is not name=value") == 0, "%s", mr_last_error());
+    MR_CHECK(mr_sweep_scene_parse("fit light=sideways", &scene) == MR_ERR_FORMAT);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "'light=sideways' is not a scene setting this version knows") == 0, "%s",
+                 mr_last_error());
+    MR_CHECK(mr_sweep_scene_parse("sphere size=32", &scene) == MR_ERR_FORMAT);
+
+    mr_sweep_spec spec = random_spec(5, 7, 16);
+    mr_strbuf header = {0};
+    MR_CHECK_OK(mr_sweep_file_header(&spec, "cmd", 0, 0, &header));
+    char texts[5][MR_SWEEP_MAX_LINE];
+    const int found = header_texts(header.text, texts);
+    free(header.text);
+    if (!found) return;
+    mr_sweep_spec back;
+    const char *step = NULL;
+    MR_CHECK_OK(mr_sweep_file_spec_from_header(texts[0], texts[1], texts[2], texts[3], texts[4], &back, &step));
+    MR_CHECK(back.remap.strategy == spec.remap.strategy && back.remap.grid_points == spec.remap.grid_points);
+    char remap[MR_SWEEP_MAX_LINE + 32];
+    snprintf(remap, sizeof remap, "%s held=alpha", texts[2]);
+    MR_CHECK_OK(mr_sweep_file_spec_from_header(texts[0], texts[1], remap, texts[3], texts[4], &back, &step));
+    MR_CHECK(back.remap.held == 1u << mr_brdf_param_index(back.target, "alpha"));
+    snprintf(remap, sizeof remap, "%s colour=blue", texts[2]);
+    MR_CHECK(mr_sweep_file_spec_from_header(texts[0], texts[1], remap, texts[3], texts[4], &back, &step) ==
+             MR_ERR_FORMAT);
+    MR_CHECK(step != NULL && strcmp(step, "# remap:") == 0);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "'colour=blue' is not a remap option this version knows") == 0, "%s",
+                 mr_last_error());
+    snprintf(remap, sizeof remap, "%s held=alpha,nothing", texts[2]);
+    MR_CHECK(mr_sweep_file_spec_from_header(texts[0], texts[1], remap, texts[3], texts[4], &back, &step) ==
+             MR_ERR_FORMAT);
+    MR_CHECK_MSG(strstr(mr_last_error(), "'held=alpha") != NULL, "%s", mr_last_error());
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(grid_is_cartesian_first_axis_slowest_with_exact_endpoints),
+             MR_TEST_ENTRY(command_line_quoting_round_trips_through_the_header),
+             MR_TEST_ENTRY(header_settings_refuse_what_they_do_not_know),
              MR_TEST_ENTRY(grid_log_spacing_is_geometric), MR_TEST_ENTRY(grid_errors_name_the_bad_value),
              MR_TEST_ENTRY(random_samples_depend_only_on_seed_and_index_and_stay_in_bounds),
              MR_TEST_ENTRY(the_texture_region_draws_grey_linear_values),

@@ -4,6 +4,7 @@
  * Eq. 2 and Eq. 3 invert each other through the descriptors, and bad input is refused with a message.
  */
 #include <stdint.h>
+#include <unistd.h>
 
 #include "harness.h"
 #include "matremap.h"
@@ -371,6 +372,121 @@ MR_TEST(texture_sets_convert_in_one_call) {
     mr_transform_free(t);
 }
 
+/* What spec2metal and metal2spec decide from text, in the library: a constant (grey or R,G,B; the first number
+ * outside [0, 1] named), the output format (named, or the first input file's), the bits a format takes, and the
+ * output names (mr_img_prefixed_name's rule: '_' after a prefix unless it ends in '/', '_', '-' or '.'). */
+MR_TEST(texture_set_text_rules) {
+    MR_CHECK(mr_texture_constant_like("0.5") && mr_texture_constant_like("0.9,0.6,0.2") &&
+             mr_texture_constant_like("1e-3"));
+    MR_CHECK(!mr_texture_constant_like("") && !mr_texture_constant_like("./0.5") && !mr_texture_constant_like("a.png"));
+    double v[3] = {-1, -1, -1};
+    MR_CHECK_OK(mr_texture_constant_parse("0.25", 0, v));
+    MR_CHECK(v[0] == 0.25 && v[1] == 0.25 && v[2] == 0.25);
+    MR_CHECK_OK(mr_texture_constant_parse("0.9,0.6,0.2", 1, v));
+    MR_CHECK(v[0] == 0.9 && v[1] == 0.6 && v[2] == 0.2);
+    MR_CHECK(mr_texture_constant_parse("0.9,0.6,0.2", 0, v) == MR_ERR_FORMAT); // three numbers: colour maps only
+    MR_CHECK(v[0] == 0.9); // untouched on failure
+    MR_CHECK(mr_texture_constant_parse("0.5,0.5", 1, v) == MR_ERR_FORMAT);
+    MR_CHECK(mr_texture_constant_parse("0.1,0.2,0.3,0.4", 1, v) == MR_ERR_FORMAT);
+    MR_CHECK(mr_texture_constant_parse("1e999", 0, v) == MR_ERR_FORMAT);
+    MR_CHECK(mr_texture_constant_parse("0.5,2,-1", 1, v) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "2 is outside [0, 1]") == 0, "%s", mr_last_error());
+
+    MR_CHECK(strcmp(mr_texture_format_from_name("PNG"), "png") == 0);
+    MR_CHECK(strcmp(mr_texture_format_from_name("tiff"), "tif") == 0);
+    MR_CHECK(strcmp(mr_texture_format_from_name("Exr"), "exr") == 0);
+    MR_CHECK(mr_texture_format_from_name("jpg") == NULL);
+    const char *first_exr[3] = {NULL, "maps/d.EXR", "s.tif"}, *first_jpg[2] = {"d.jpg", "s.exr"};
+    const char *no_extension[1] = {"maps.v2/diffuse"}, *none[2] = {NULL, NULL};
+    MR_CHECK(strcmp(mr_texture_default_format(first_exr, 3), "exr") == 0);
+    MR_CHECK(strcmp(mr_texture_default_format(first_jpg, 2), "png") == 0); // the first file decides
+    MR_CHECK(strcmp(mr_texture_default_format(no_extension, 1), "png") == 0);
+    MR_CHECK(strcmp(mr_texture_default_format(none, 2), "png") == 0);
+
+    MR_CHECK_OK(mr_texture_check_bits("png", 0));
+    MR_CHECK_OK(mr_texture_check_bits("tif", 16));
+    MR_CHECK_OK(mr_texture_check_bits("exr", 32));
+    MR_CHECK(mr_texture_check_bits("exr", 8) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "exr files take 16 (half) or 32 (float)") == 0, "%s", mr_last_error());
+    MR_CHECK(mr_texture_check_bits("png", 32) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "png files take 8 or 16") == 0, "%s", mr_last_error());
+
+    const mr_texture_layout base = {"basecolor", MR_IMG_COLOR, 3, {0, 0, 0}, {0, 1, 2}};
+    char path[64];
+    MR_CHECK_OK(mr_texture_output_path("avocado", &base, "png", path, sizeof path));
+    MR_CHECK(strcmp(path, "avocado_basecolor.png") == 0);
+    MR_CHECK_OK(mr_texture_output_path("out/", &base, "exr", path, sizeof path));
+    MR_CHECK(strcmp(path, "out/basecolor.exr") == 0);
+    MR_CHECK_OK(mr_texture_output_path("gold-", &base, "tif", path, sizeof path));
+    MR_CHECK(strcmp(path, "gold-basecolor.tif") == 0);
+    MR_CHECK(mr_texture_output_path("a_very_long_prefix_that_does_not_fit", &base, "png", path, 24) ==
+             MR_ERR_INVALID_ARG);
+    MR_CHECK_OK(mr_img_prefixed_name(path, sizeof path, "", "alpha.exr"));
+    MR_CHECK(strcmp(path, "alpha.exr") == 0);
+    MR_CHECK_OK(mr_img_prefixed_name(path, sizeof path, "pfx/ggx.", "alpha.exr"));
+    MR_CHECK(strcmp(path, "pfx/ggx.alpha.exr") == 0);
+}
+
+/* mr_texture_set_write: a result's images under the prefix and the flag picture, all or none (bits a format does
+ * not take: nothing written), read back as written; mr_texture_set_stats: each converted slot's figures. */
+MR_TEST(texture_set_written_and_figured) {
+    mr_texture_result r = {0};
+    MR_CHECK_OK(mr_image_create(2, 1, 3, &r.converted[0]));
+    MR_CHECK_OK(mr_image_create(2, 1, 1, &r.converted[1]));
+    MR_CHECK_OK(mr_image_create(2, 1, 3, &r.outputs[0]));
+    MR_CHECK_OK(mr_image_create(2, 1, 1, &r.outputs[1]));
+    r.flags = calloc(2, 1);
+    if (r.converted[0] == NULL || r.converted[1] == NULL || r.outputs[0] == NULL || r.outputs[1] == NULL ||
+        r.flags == NULL)
+        return;
+    r.width = 2;
+    r.height = 1;
+    const float rgb[6] = {0.1f, 0.2f, 0.3f, 0.3f, 0.6f, 0.5f}, grey[2] = {0.25f, 0.75f};
+    memcpy(r.converted[0]->pixels, rgb, sizeof rgb);
+    memcpy(r.converted[1]->pixels, grey, sizeof grey);
+    memcpy(r.outputs[0]->pixels, rgb, sizeof rgb);
+    memcpy(r.outputs[1]->pixels, grey, sizeof grey);
+    r.flags[1] = MR_WF_CLAMPED_INPUT;
+
+    mr_texture_stats st;
+    MR_CHECK_OK(mr_texture_set_stats(&r, 0, &st));
+    MR_CHECK(st.channels == 3);
+    MR_CHECK(st.min[0] == (double)0.1f && st.max[1] == (double)0.6f);
+    MR_CHECK(st.mean[2] == ((double)0.3f + (double)0.5f) / 2.0);
+    MR_CHECK_OK(mr_texture_set_stats(&r, 1, &st));
+    MR_CHECK(st.channels == 1 && st.min[0] == 0.25 && st.mean[0] == 0.5 && st.max[0] == 0.75);
+    MR_CHECK(mr_texture_set_stats(&r, 2, &st) == MR_ERR_INVALID_ARG); // no such slot
+
+    const mr_texture_layout layouts[2] = {{"basecolor", MR_IMG_COLOR, 3, {0, 0, 0}, {0, 1, 2}},
+                                          {"metallic", MR_IMG_DATA, 1, {1}, {0}}};
+    char prefix[600], flags_path[600], base[640], metal[640];
+    snprintf(prefix, sizeof prefix, "%s", mr_test_tmp_path("ws"));
+    snprintf(flags_path, sizeof flags_path, "%s", mr_test_tmp_path("ws_flags.png"));
+    snprintf(base, sizeof base, "%s_basecolor.png", prefix);
+    snprintf(metal, sizeof metal, "%s_metallic.png", prefix);
+    mr_texture_write_options wo = {prefix, "-o ws", "png", 8, flags_path, "--flags", NULL, 0};
+    wo.bits = 32; // png takes 8 or 16: refused before anything is written
+    MR_CHECK(mr_texture_set_write(&r, layouts, 2, &wo) == MR_ERR_INVALID_ARG);
+    MR_CHECK(access(base, F_OK) != 0 && access(flags_path, F_OK) != 0);
+    wo.bits = 16;
+    MR_CHECK_OK(mr_texture_set_write(&r, layouts, 2, &wo));
+    mr_image *back = NULL, *picture = NULL, *expected = NULL;
+    MR_CHECK_OK(mr_img_read(metal, &(mr_img_read_options){MR_IMG_DATA, 1, 0}, &back));
+    if (back != NULL) MR_CHECK_NEAR(back->pixels[1], 0.75, 1.0 / 65535.0);
+    mr_image_free(back);
+    back = NULL;
+    MR_CHECK_OK(mr_img_read(base, NULL, &back)); // colour: sRGB in the file, linear again once read
+    if (back != NULL) MR_CHECK(back->channels == 3 && fabs(back->pixels[4] - 0.6) < 1e-3);
+    MR_CHECK_OK(mr_img_read(flags_path, &(mr_img_read_options){MR_IMG_DATA, 3, 0}, &picture));
+    MR_CHECK_OK(mr_flag_picture(r.flags, 2, 1, &mr_workflow_flag_code, &expected));
+    if (picture != NULL && expected != NULL)
+        for (int k = 0; k < 6; k++) MR_CHECK_NEAR(picture->pixels[k], expected->pixels[k], 1.0 / 255.0);
+    mr_image_free(back);
+    mr_image_free(picture);
+    mr_image_free(expected);
+    mr_texture_result_free(&r);
+}
+
 /* mr_transform_convert_material: each slot reads its parameter's bound map or value, as mr_transform_convert_maps
  * would be fed by hand; an RGB output carries the first 4-channel map's alpha; a material of another model is
  * refused. */
@@ -429,4 +545,6 @@ MR_TEST_MAIN(MR_TEST_ENTRY(kinds_name_model_parameters),
              MR_TEST_ENTRY(flags_counted_and_drawn_by_their_code),
              MR_TEST_ENTRY(outputs_packed_channel_by_channel),
              MR_TEST_ENTRY(texture_sets_convert_in_one_call),
+             MR_TEST_ENTRY(texture_set_text_rules),
+             MR_TEST_ENTRY(texture_set_written_and_figured),
              MR_TEST_ENTRY(materials_convert_in_one_call))

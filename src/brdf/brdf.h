@@ -164,6 +164,15 @@ int mr_brdf_param_index(const mr_brdf_model *model, const char *name);
 /* Fill values[] with the table defaults. */
 void mr_brdf_default_values(const mr_brdf_model *model, double *values);
 
+/* Channel `channel` of a parameter's default: default_rgb[channel] when the parameter has coloured defaults, else
+ * default_value (what mr_brdf_default_values writes). */
+double mr_brdf_param_default(const mr_brdf_param *param, int channel);
+
+/* "linear", "affine", "nonlinear", "switch"; NULL outside the enum (`matremap models` prints them). */
+const char *mr_param_role_name(mr_param_role role);
+/* "diffuse", "specular", "both" (MR_LOBE_BOTH and any other value). */
+const char *mr_param_lobe_name(mr_param_lobe lobe);
+
 /* Parse one "name=value" or "name=r,g,b" assignment into values[]. A single number given to an RGB parameter
  * sets all three channels. Unknown names (the message lists the valid ones), malformed numbers, wrong channel
  * counts and values outside [min, max] are MR_ERR_INVALID_ARG. */

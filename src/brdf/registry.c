@@ -64,8 +64,20 @@ void mr_brdf_default_values(const mr_brdf_model *model, double *values) {
     int slot = 0;
     for (int i = 0; i < model->param_count; i++)
         for (int c = 0; c < model->params[i].channels; c++)
-            values[slot++] = model->params[i].default_rgb ? model->params[i].default_rgb[c]
-                                                          : model->params[i].default_value;
+            values[slot++] = mr_brdf_param_default(&model->params[i], c);
+}
+
+double mr_brdf_param_default(const mr_brdf_param *param, int channel) {
+    return param->default_rgb ? param->default_rgb[channel] : param->default_value;
+}
+
+const char *mr_param_role_name(mr_param_role role) {
+    static const char *const names[MR_PARAM_ROLE_COUNT] = {"linear", "affine", "nonlinear", "switch"};
+    return (unsigned)role < MR_PARAM_ROLE_COUNT ? names[role] : NULL;
+}
+
+const char *mr_param_lobe_name(mr_param_lobe lobe) {
+    return lobe == MR_LOBE_DIFFUSE ? "diffuse" : lobe == MR_LOBE_SPECULAR ? "specular" : "both";
 }
 
 static mr_status unknown_param(const mr_brdf_model *model, const char *name, size_t name_len) {

@@ -114,7 +114,7 @@ void cli_plan_material(mr_output_plan *plan, const char *const *assignments, con
         size_t length = 0;
         int channel;
         mr_map_encoding encoding;
-        cli_split_map(file, 1, &length, &channel, &encoding);
+        mr_map_ref_split(file, 1, &length, &channel, &encoding);
         char *path = malloc(length + 1);
         if (path == NULL) {
             plan->out_of_memory = 1; // the check says so
@@ -177,16 +177,6 @@ mr_status cli_check_radiance(const mr_image *image, const char *path) {
     char label[4096 + 16];
     snprintf(label, sizeof label, "image '%s'", path);
     return mr_image_check_radiance(image, label);
-}
-
-void cli_split_map(const char *text, int channels, size_t *path_length, int *channel, mr_map_encoding *encoding) {
-    mr_map_ref_split(text, channels, path_length, channel, encoding);
-}
-
-int cli_check_map(const char *command, const char *label, const char *text, int channels) {
-    mr_status status = mr_map_ref_check(label, text, channels);
-    if (status == MR_ERR_INVALID_ARG) return cli_usage_error(command, "%s", mr_last_error());
-    return status == MR_OK ? CLI_EXIT_OK : cli_fail(command, status);
 }
 
 int cli_is_help(const char *arg) { return strcmp(arg, "--help") == 0 || strcmp(arg, "-h") == 0; }

@@ -104,32 +104,12 @@ double cli_now(void);
  * committing any, so a failure while writing leaves none of them. Each function prints its error as one line
  * "matremap CMD: error: ..." naming the file and the system's reason. */
 
-/* The one rule for output names made from -o PREFIX (convert, spec2metal, metal2spec, remap --images): PREFIX
- * ending in '/', '_', '-' or '.' (or empty) is followed by the name directly, any other gets '_' in between:
- *   "out/ggx_" + "alpha.exr" -> "out/ggx_alpha.exr"    "pfx/ggx" + "alpha.exr" -> "pfx/ggx_alpha.exr"
- *   "out/"     + "alpha.exr" -> "out/alpha.exr"        "avocado" + "basecolor.png" -> "avocado_basecolor.png"
- * Writes the name into out (size bytes); returns 0 when it does not fit. */
-int cli_output_name(char *out, size_t size, const char *prefix, const char *name);
-
 /* Create the temporary file for `path` and open it for writing. NULL after printing the error. */
 FILE *cli_output_open(const char *command, const char *path, mr_atomic_file *file);
 
 /* Close f. 1 if every write to it succeeded (the temporary file then waits for mr_atomic_commit or
  * mr_atomic_commit_set); else 0, after printing the error and removing the temporary file. */
 int cli_output_close(const char *command, FILE *f, mr_atomic_file *file);
-
-/* ---- maps given on the command line: FILE[:r|g|b|a][:linear|srgb] (cli.c) ------------------------------------
- * The syntax is the library's (io/image_io.h, "maps named in text"): a channel selector where the command picks
- * channels (a one-channel parameter of render, report and convert), then an encoding overriding the parameter's own
- * rule (mr_img_read_param_map), e.g. roughness=@orm.png:g:linear. */
-
-/* mr_map_ref_split. */
-void cli_split_map(const char *text, int channels, size_t *path_length, int *channel, mr_map_encoding *encoding);
-
-/* mr_map_ref_check labelled `label` (how the user gave the map: "specular=@s.png:linear", "--specular s.png"):
- * CLI_EXIT_OK, or its message as a usage error (CLI_EXIT_USAGE) for an empty file name or selectors in the wrong
- * order. */
-int cli_check_map(const char *command, const char *label, const char *text, int channels);
 
 /* ---- materials on the command line: MODEL name=value ... name=@MAP[:r|g|b|a][:linear|srgb] ... (cli_material.c) */
 

@@ -1,15 +1,7 @@
 /* cli_output.c — text files the commands write themselves, atomically (contract in cli.h). */
 #include <stdio.h>
-#include <string.h>
 
 #include "cli.h"
-
-int cli_output_name(char *out, size_t size, const char *prefix, const char *name) {
-    const size_t length = strlen(prefix);
-    const int direct = length == 0 || strchr("/_-.", prefix[length - 1]) != NULL;
-    const int n = snprintf(out, size, "%s%s%s", prefix, direct ? "" : "_", name);
-    return n >= 0 && (size_t)n < size;
-}
 
 FILE *cli_output_open(const char *command, const char *path, mr_atomic_file *file) {
     FILE *f = NULL;

@@ -257,7 +257,7 @@ int cmd_convert(int argc, char **argv) {
                 snprintf(name, sizeof name, "%s.%s", target->params[j].name, format);
             else
                 snprintf(name, sizeof name, "flags.png");
-            if (!cli_output_name(names[j], sizeof names[j], prefix, name))
+            if (mr_img_prefixed_name(names[j], sizeof names[j], prefix, name) != MR_OK)
                 code = cli_usage_error(COMMAND, "-o '%s': too long", prefix);
         }
     }

@@ -97,22 +97,13 @@ static void draw_progress(const char *stage, size_t done, size_t total, void *us
 /* The spec-gloss texels of the asset at `path` into the pool; the files the asset was read from are added to io's
  * inputs. Returns an exit code. */
 static int add_asset_texels(const char *path, uint64_t seed, mr_wf_texel_pool *pool, mr_output_plan *io) {
-    mr_gltf *asset = NULL;
-    mr_status status = mr_gltf_load(path, &asset);
-    if (status != MR_OK) return cli_fail("dataset", status);
     char label[4096 + 16];
     snprintf(label, sizeof label, "--asset %s", path);
-    cli_plan_gltf(io, asset, label); // its buffers and images are inputs too
-    int materials = 0;
-    status = mr_gltf_add_specgloss_texels(asset, seed, pool, &materials);
-    mr_gltf_free(asset);
+    mr_gltf *asset = NULL;
+    const mr_status status = mr_gltf_add_specgloss_texels_from_file(path, label, seed, pool, &asset);
     if (status != MR_OK) return cli_fail("dataset", status);
-    if (materials == 0) {
-        fprintf(stderr,
-                "matremap dataset: error: --asset %s: no material carries KHR_materials_pbrSpecularGlossiness\n",
-                path);
-        return CLI_EXIT_BAD_INPUT;
-    }
+    cli_plan_gltf(io, asset, label); // its buffers and images are inputs too
+    mr_gltf_free(asset);
     return CLI_EXIT_OK;
 }
 

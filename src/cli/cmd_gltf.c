@@ -248,11 +248,11 @@ int cmd_gltf(int argc, char **argv) {
     }
     const mr_gltf_material_report *outcomes = result.materials;
     const mr_gltf_prune_stats pruned = result.pruned;
-    int converted = 0, kept = 0;
-    for (int k = 0; k < result.material_count; k++) {
-        converted += outcomes[k].outcome == MR_GLTF_CONVERTED || outcomes[k].outcome == MR_GLTF_SHARED;
-        kept += outcomes[k].outcome == MR_GLTF_KEPT;
-    }
+    mr_gltf_convert_totals totals; // each conversion once (materials sharing one count it once)
+    mr_gltf_convert_totals_of(&result, &totals);
+    const int converted = totals.converted, kept = totals.kept;
+    const size_t texels = totals.texels;
+    const mr_gltf_material_report total = totals.total;
     // The off-manifold tolerance, where one is computed (analytic spec2metal methods).
     const char *tolerance = !(kind->flags & MR_TRANSFORM_TOLERANCES) ? NULL : o.eps_given ? "eps" : "encoding";
     // Where the off-manifold flag is computed, as 'matremap spec2metal|metal2spec' say it: spec2metal's analytic
@@ -261,20 +261,6 @@ int cmd_gltf(int argc, char **argv) {
     const int off_computed = tolerance != NULL || (!to_metal && (kind->flags & MR_TRANSFORM_CONVENTION) &&
                                                    o.convention == MR_WF_DIFFUSE_SPECGLOSS);
     const char *off_meaning = to_metal ? "" : " (spec-gloss diffuse above 1, clamped)";
-    // The totals: each conversion once (materials sharing one count it once: its textures are written once).
-    mr_gltf_material_report total;
-    memset(&total, 0, sizeof total);
-    size_t texels = 0;
-    for (int k = 0; k < result.material_count; k++) {
-        const mr_gltf_material_report *r = &outcomes[k];
-        if (r->outcome != MR_GLTF_CONVERTED) continue;
-        texels += r->width > 0 ? (size_t)r->width * (size_t)r->height : 1;
-        total.flagged += r->flagged;
-        total.off_manifold += r->off_manifold;
-        total.nonfinite += r->nonfinite;
-        total.clamped += r->clamped;
-        total.failed += r->failed;
-    }
     const int use_mlp = (kind->flags & MR_TRANSFORM_NEEDS_NETWORK) != 0;
     double seconds = cli_now() - started;
     if (code == CLI_EXIT_OK && !o.json) {

@@ -98,12 +98,10 @@ static void print_summary(const mr_learned *t, const char *output, double second
             printf("%s{\"name\": \"%s\", \"min\": %.9g, \"max\": %.9g}", i ? ", " : "",
                    t->source->params[t->features[i].param].name, t->features[i].min, t->features[i].max);
         printf("], \"validation_rmse\": {");
-        for (int j = 0; j < t->output_count; j++) {
-            const mr_learned_slot *s = &t->outputs[j];
-            static const char *const suffix[3] = {"_r", "_g", "_b"}; // a CHANNEL output's key: f0_r; else the name
-            printf("%s\"%s%s\": %.9g", j ? ", " : "", t->target->params[s->param].name,
-                   s->kind == MR_LEARNED_CHANNEL ? suffix[s->channel] : "", t->rmse[j]);
-        }
+        char name[80];
+        for (int j = 0; j < t->output_count; j++) // a CHANNEL output's key: f0_r; else the name
+            printf("%s\"%s\": %.9g", j ? ", " : "", mr_learned_slot_name(t->target, &t->outputs[j], name, sizeof name),
+                   t->rmse[j]);
         printf("}");
         const mr_learned_check *k = &t->check;
         printf(", \"check\": {\"done\": %s, \"passed\": %s, \"rows\": %ld, \"max_relative_error\": %g, "
@@ -114,12 +112,10 @@ static void print_summary(const mr_learned *t, const char *output, double second
         else
             printf("\"dssim_mean\": null, \"dssim_p90\": null, ");
         printf("\"relative_error\": {");
-        for (int j = 0; j < t->output_count; j++) {
-            const mr_learned_slot *s = &t->outputs[j];
-            static const char *const suffix[3] = {"_r", "_g", "_b"};
-            printf("%s\"%s%s\": {\"median\": %.6g, \"p90\": %.6g}", j ? ", " : "", t->target->params[s->param].name,
-                   s->kind == MR_LEARNED_CHANNEL ? suffix[s->channel] : "", k->relative_median[j], k->relative_p90[j]);
-        }
+        for (int j = 0; j < t->output_count; j++)
+            printf("%s\"%s\": {\"median\": %.6g, \"p90\": %.6g}", j ? ", " : "",
+                   mr_learned_slot_name(t->target, &t->outputs[j], name, sizeof name), k->relative_median[j],
+                   k->relative_p90[j]);
         printf("}}");
         if (t->method == MR_LEARN_PARAMETRIC) {
             printf(", \"roughness\": [");
@@ -136,16 +132,14 @@ static void print_summary(const mr_learned *t, const char *output, double second
     for (int i = 0; i < t->feature_count; i++) {
         const mr_learned_slot *s = &t->features[i];
         char name[80];
-        snprintf(name, sizeof name, "%s%s", t->source->params[s->param].name,
-                 s->kind == MR_LEARNED_CHANNEL ? (const char *[]){"_r", "_g", "_b"}[s->channel] : "");
+        mr_learned_slot_name(t->source, s, name, sizeof name);
         printf("  input  %-14s %s, trained over [%.4g, %.4g]\n", name,
                s->kind == MR_LEARNED_GREY ? "RGB, applied per channel" : "scalar", s->min, s->max);
     }
     for (int j = 0; j < t->output_count; j++) {
         const mr_learned_slot *s = &t->outputs[j];
         char name[80];
-        snprintf(name, sizeof name, "%s%s", t->target->params[s->param].name,
-                 s->kind == MR_LEARNED_CHANNEL ? (const char *[]){"_r", "_g", "_b"}[s->channel] : "");
+        mr_learned_slot_name(t->target, s, name, sizeof name);
         if (t->check.done)
             printf("  output %-14s held-out RMSE %.4g; against the remaps: median %.2g %%, 9 in 10 within %.2g %%\n",
                    name, t->rmse[j], 100.0 * t->check.relative_median[j], 100.0 * t->check.relative_p90[j]);

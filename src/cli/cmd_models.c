@@ -5,17 +5,6 @@
 
 #define MAX_INT(a, b) ((a) > (b) ? (a) : (b))
 
-static const char *const role_names[MR_PARAM_ROLE_COUNT] = {"linear", "affine", "nonlinear", "switch"};
-
-static const char *lobe_name(mr_param_lobe lobe) {
-    return lobe == MR_LOBE_DIFFUSE ? "diffuse" : lobe == MR_LOBE_SPECULAR ? "specular" : "both";
-}
-
-/* Channel c of a parameter's default (RGB parameters may have a coloured default, brdf.h). */
-static double param_default(const mr_brdf_param *p, int c) {
-    return p->default_rgb ? p->default_rgb[c] : p->default_value;
-}
-
 /* The default as text: one number, or r,g,b when the channels differ. */
 static const char *default_text(const mr_brdf_param *p, char *buf, size_t size) {
     if (p->channels == 3 && p->default_rgb)
@@ -73,12 +62,13 @@ static void print_json_model(const mr_brdf_model *m) {
         cli_json_string(stdout, p->name);
         printf(", \"channels\": %d, \"default\": ", p->channels);
         if (p->channels == 3)
-            printf("[%.17g, %.17g, %.17g]", param_default(p, 0), param_default(p, 1), param_default(p, 2));
+            printf("[%.17g, %.17g, %.17g]", mr_brdf_param_default(p, 0), mr_brdf_param_default(p, 1),
+                   mr_brdf_param_default(p, 2));
         else
             printf("%.17g", p->default_value);
         printf(", \"min\": %.17g, \"max\": %.17g, \"role\": \"%s\", \"lobe\": \"%s\", \"log_scale\": %s, "
                "\"map_encoding\": \"%s\", \"meaning\": ",
-               p->min_value, p->max_value, role_names[p->role], lobe_name(p->lobe),
+               p->min_value, p->max_value, mr_param_role_name(p->role), mr_param_lobe_name(p->lobe),
                (p->flags & MR_PARAM_LOG_SCALE) ? "true" : "false", map_encoding(p));
         cli_json_string(stdout, p->meaning);
         printf("}");
@@ -98,8 +88,8 @@ static void print_model_detail(const mr_brdf_model *m) {
         const mr_brdf_param *p = &m->params[i];
         char def[64];
         printf("  %-15s %-3d %-17s %7.4g %7.4g  %-9s %-8s %-8s %s\n", p->name, p->channels,
-               default_text(p, def, sizeof def), p->min_value, p->max_value, role_names[p->role], lobe_name(p->lobe),
-               map_encoding(p), p->meaning);
+               default_text(p, def, sizeof def), p->min_value, p->max_value, mr_param_role_name(p->role),
+               mr_param_lobe_name(p->lobe), map_encoding(p), p->meaning);
     }
     printf("\nENCODING: how an 8/16-bit map of the parameter is read (float files are always linear; FILE:linear or\n"
            "FILE:srgb overrides it).\n");

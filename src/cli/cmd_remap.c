@@ -82,42 +82,6 @@ static void print_values(FILE *out, const mr_brdf_model *model, const double *va
     }
 }
 
-/* A render to fit: read as RGB, every value finite and >= 0 (radiance, mr_image_check_radiance), or exit 2 naming
- * the file and the pixel. */
-static int read_source_image(const char *path, mr_image **out) {
-    mr_img_read_options ro = {0};
-    ro.channels = 3;
-    mr_status status = mr_img_read(path, &ro, out);
-    if (status == MR_OK) status = cli_check_radiance(*out, path);
-    return status == MR_OK ? CLI_EXIT_OK : cli_fail("remap", status);
-}
-
-/* The pictures of --images PREFIX: these after PREFIX (cli_output_name's rule: PREFIX_source.png, out/source.png). */
-static const char *const picture_suffixes[3] = {"source.png", "target.png", "ssim.png"};
-
-/* Render the source's and target's full images and the SSIM map as pictures (--images). */
-static mr_status write_pictures(const char *prefix, const mr_render_plan *plan, const mr_image *source,
-                                const mr_brdf_model *target, const double *values) {
-    mr_image *target_image = NULL, *map = NULL, *picture = NULL;
-    double ssim;
-    mr_status status = mr_render(plan, target, values, MR_COMPONENT_FULL, &target_image);
-    if (status == MR_OK) status = mr_ssim(source, target_image, NULL, &ssim, &map);
-    if (status == MR_OK) status = mr_ssim_map_visualise(map, 0.0, &picture);
-    // The three belong together: written all or none (mr_img_write_set).
-    const mr_image *pictures[3] = {source, target_image, picture};
-    char paths[3][4096];
-    mr_img_set_item items[3];
-    for (int k = 0; k < 3; k++) {
-        cli_output_name(paths[k], sizeof paths[k], prefix, picture_suffixes[k]);
-        items[k] = (mr_img_set_item){paths[k], NULL, pictures[k], {MR_IMG_COLOR, 0, 0}};
-    }
-    if (status == MR_OK) status = mr_img_write_set(items, 3, NULL, NULL);
-    mr_image_free(target_image);
-    mr_image_free(map);
-    mr_image_free(picture);
-    return status;
-}
-
 int cmd_remap(int argc, char **argv) {
     const char *from_name = NULL, *to_name = NULL, *images_prefix = NULL;
     const char *image_paths[3] = {NULL, NULL, NULL}; /* full, diffuse, specular */
@@ -233,7 +197,7 @@ int cmd_remap(int argc, char **argv) {
     if (reference_path) mr_output_plan_inputf(&io, reference_path, "--match-irradiance %s", reference_path);
     for (int k = 0; images_prefix != NULL && k < 3; k++) {
         char path[4096];
-        cli_output_name(path, sizeof path, images_prefix, picture_suffixes[k]);
+        mr_remap_picture_path(images_prefix, k, path, sizeof path); // an overlong prefix: refused by the write
         mr_output_plan_outputf(&io, path, "--images %s", images_prefix);
     }
     int exit_code = cli_plan_check("remap", &io);
@@ -242,9 +206,13 @@ int cmd_remap(int argc, char **argv) {
 
     // Source images (black-box renders) decide the scene size; they must all agree and be square.
     mr_image *images[3] = {NULL, NULL, NULL}, *reference = NULL;
+    mr_status status = MR_OK;
     for (int k = 0; k < 3 && exit_code == CLI_EXIT_OK; k++)
-        if (image_paths[k]) exit_code = read_source_image(image_paths[k], &images[k]);
-    if (exit_code == CLI_EXIT_OK && reference_path) exit_code = read_source_image(reference_path, &reference);
+        if (image_paths[k] && (status = mr_remap_read_render(image_paths[k], &images[k])) != MR_OK)
+            exit_code = cli_fail("remap", status);
+    if (exit_code == CLI_EXIT_OK && reference_path &&
+        (status = mr_remap_read_render(reference_path, &reference)) != MR_OK)
+        exit_code = cli_fail("remap", status);
     if (exit_code == CLI_EXIT_OK && images[0] != NULL) {
         if (images[0]->width != images[0]->height) {
             fprintf(stderr, "matremap remap: error: '%s' is %dx%d: fit-scene renders are square\n", image_paths[0],
@@ -265,17 +233,13 @@ int cmd_remap(int argc, char **argv) {
     mr_render_plan *plan = NULL;
     mr_remap_result result;
     double irradiance_scale = 1.0;
-    mr_status status = MR_OK;
     if (exit_code == CLI_EXIT_OK) {
         scene_opts.size = size > 0 ? size : MR_REMAP_DEFAULT_SIZE;
         mr_scene scene = mr_scene_fit(&scene_opts);
         status = mr_render_plan_create(&scene, &plan);
         if (status == MR_OK && reference != NULL) {
             status = mr_irradiance_scale(plan, reference, reference_albedo, &irradiance_scale);
-            for (int k = 0; k < 3 && status == MR_OK; k++)
-                if (images[k])
-                    for (size_t v = 0; v < mr_image_value_count(images[k]); v++)
-                        images[k]->pixels[v] = (float)(images[k]->pixels[v] * irradiance_scale);
+            for (int k = 0; k < 3 && status == MR_OK; k++) mr_image_scale(images[k], irradiance_scale);
         }
         if (status == MR_OK) {
             if (from != NULL) {
@@ -288,7 +252,7 @@ int cmd_remap(int argc, char **argv) {
         if (status == MR_OK && images_prefix != NULL) {
             mr_image *source_image = images[0];
             if (source_image == NULL) status = mr_render(plan, from, source_values, MR_COMPONENT_FULL, &images[0]);
-            if (status == MR_OK) status = write_pictures(images_prefix, plan, images[0], to, result.values);
+            if (status == MR_OK) status = mr_remap_write_pictures(images_prefix, plan, images[0], to, result.values);
         }
         if (status != MR_OK) exit_code = cli_fail("remap", status);
     }

@@ -8,54 +8,17 @@
  * parameters from texture maps over the sphere, and writes it in the format of OUT's extension; --mask writes
  * the plan's coverage (mr_render_plan_coverage_mask), the object mask `matremap ssim --mask` takes. --mesh puts
  * an OBJ mesh (io/obj_load.h) in the sphere's place, its maps read at the mesh's UVs; the point light then keeps
- * its place relative to the camera and the object's size (mesh_lights below). A glTF asset in MODEL's place is
- * rendered as `matremap report` renders one (mr_gltf_scene_from_asset: its triangles, each with its material), seen
- * from report's three-quarter view (or --camera-direction), lit by the scaled point light or --env.
+ * its place relative to the camera and the object's size (mr_scene_fit_light_to_mesh, render.h). A glTF asset in
+ * MODEL's place is rendered as `matremap report` renders one (mr_gltf_scene_from_asset: its triangles, each with
+ * its material), seen from report's three-quarter view (or --camera-direction), lit by the scaled point light or
+ * --env.
  */
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
 #include "gltf/mr_gltf_scene.h"
 #include "io/obj_load.h"
-
-/* The fit scene's point light (distance 3 from a unit sphere, 10 W/sr, frontal or 45 degrees to the camera's
- * right) scaled to the object and turned with the camera: at 3 bounding radii from the centre of the object's
- * bounding sphere (centre of its box, radius to its farthest vertex; the unit sphere for the sphere), in the fit
- * scene's direction relative to the camera, with intensity 10 radius^2 W/sr, so that an object of any size
- * receives the fit scene's irradiance where the camera sees it. */
-static void mesh_lights(const mr_mesh *mesh, mr_fit_light which, mr_scene *scene) {
-    double centre[3] = {0.0, 0.0, 0.0}, radius = 1.0;
-    if (mesh != NULL) {
-        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        for (int v = 0; v < mesh->vertex_count; v++)
-            for (int i = 0; i < 3; i++) {
-                lo[i] = fmin(lo[i], mesh->positions[3 * v + i]);
-                hi[i] = fmax(hi[i], mesh->positions[3 * v + i]);
-            }
-        radius = 0.0;
-        for (int i = 0; i < 3; i++) centre[i] = 0.5 * (lo[i] + hi[i]);
-        for (int v = 0; v < mesh->vertex_count; v++) {
-            double d2 = 0.0;
-            for (int i = 0; i < 3; i++) d2 += (mesh->positions[3 * v + i] - centre[i]) * (mesh->positions[3 * v + i] -
-                                                                                         centre[i]);
-            radius = fmax(radius, sqrt(d2));
-        }
-    }
-    const mr_camera *cam = &scene->camera;
-    double back[3], right[3], len = 0.0; /* towards the camera; the camera's right = up x back */
-    for (int i = 0; i < 3; i++) back[i] = cam->position[i] - cam->target[i], len += back[i] * back[i];
-    for (int i = 0; i < 3; i++) back[i] /= sqrt(len);
-    right[0] = cam->up[1] * back[2] - cam->up[2] * back[1];
-    right[1] = cam->up[2] * back[0] - cam->up[0] * back[2];
-    right[2] = cam->up[0] * back[1] - cam->up[1] * back[0];
-    len = sqrt(right[0] * right[0] + right[1] * right[1] + right[2] * right[2]);
-    double angle = which == MR_FIT_LIGHT_FRONTAL ? 0.0 : atan(1.0); /* pi/4 */
-    for (int i = 0; i < 3; i++)
-        scene->lights[0].position[i] = centre[i] + 3.0 * radius * (cos(angle) * back[i] + sin(angle) * right[i] / len);
-    for (int c = 0; c < 3; c++) scene->lights[0].intensity[c] *= radius * radius;
-}
 
 static void print_help(void) {
     printf("Usage: matremap render MODEL [name=value|name=@MAP ...] [options] -o OUT.exr|.hdr|.png|.jpg|.tif\n"
@@ -322,7 +285,8 @@ int cmd_render(int argc, char **argv) {
     }
     if (paper) scene.camera = mr_camera_paper();
     if (obj != NULL || asset != NULL || paper)
-        mesh_lights(obj != NULL ? &obj->mesh : asset != NULL ? &asset->mesh : NULL, scene_opts.light, &scene);
+        mr_scene_fit_light_to_mesh(&scene, obj != NULL ? &obj->mesh : asset != NULL ? &asset->mesh : NULL,
+                                   scene_opts.light); // never fails: the fit scene has its light
     if (env != NULL) {
         // --env alone lights with the map only; with an explicit --light the point light stays as well.
         int slot = light_given ? scene.light_count++ : 0;
@@ -337,10 +301,7 @@ int cmd_render(int argc, char **argv) {
         else if (status == MR_OK)
             status = mr_render_textured(plan, material->model, material->values, &material->textures, component,
                                         &image);
-        if (status == MR_OK && exposure != 1.0) {
-            size_t n = mr_image_value_count(image);
-            for (size_t p = 0; p < n; p++) image->pixels[p] = (float)(image->pixels[p] * exposure);
-        }
+        if (status == MR_OK && exposure != 1.0) mr_image_scale(image, exposure);
         double render_seconds = cli_now() - start - plan_seconds;
         if (status == MR_OK) status = mr_img_write(output, image, &write_opts);
         if (status == MR_OK && mask_path != NULL) {

@@ -94,8 +94,6 @@ static void print_help(void) {
            "  matremap sweep merge s*.csv -o ggx_ward.csv\n");
 }
 
-static char *command_line(int argc, char **argv, const char *prefix);
-
 static void print_merge_help(void) {
     printf("Usage: matremap sweep merge SHARD.csv... -o DATA.csv [--json]\n"
            "\n"
@@ -159,7 +157,8 @@ static int cmd_sweep_merge(int argc, char **argv) {
         mr_output_plan_output(&io, output, NULL);
         rc = cli_plan_check("sweep merge", &io);
         mr_output_plan_free(&io);
-        char *command = rc == CLI_EXIT_OK ? command_line(argc, argv, "matremap sweep") : NULL;
+        char *command = NULL; // out of memory: no "# command:" text (the merge records an empty one)
+        if (rc == CLI_EXIT_OK) mr_sweep_command_line("matremap sweep", argc, (const char *const *)argv, &command);
         mr_sweep_merge_summary summary;
         const double started = cli_now();
         mr_status status = rc == CLI_EXIT_OK ? mr_sweep_merge(shards, count, output, command, &summary) : MR_OK;
@@ -184,39 +183,6 @@ static int cmd_sweep_merge(int argc, char **argv) {
     }
     free(shards);
     return rc;
-}
-
-/* "PREFIX ARGS..." (argv[0] is the command's name) with shell quoting where needed, for the file's "# command:"
- * line. */
-static char *command_line(int argc, char **argv, const char *prefix) {
-    size_t size = strlen(prefix) + 1;
-    for (int i = 0; i < argc; i++) size += 4 * strlen(argv[i]) + 3;
-    char *text = malloc(size), *out = text;
-    if (text == NULL) return NULL;
-    out += sprintf(out, "%s", prefix);
-    for (int i = 0; i < argc; i++) {
-        const char *a = argv[i];
-        *out++ = ' ';
-        int plain = a[0] != '\0';
-        for (const char *c = a; *c && plain; c++)
-            plain = strchr("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_./:=,+-@%", *c) != NULL;
-        if (plain) {
-            out += sprintf(out, "%s", a);
-            continue;
-        }
-        *out++ = '\'';
-        for (const char *c = a; *c; c++) {
-            if (*c == '\'') {
-                memcpy(out, "'\\''", 4);
-                out += 4;
-            } else {
-                *out++ = *c;
-            }
-        }
-        *out++ = '\'';
-    }
-    *out = '\0';
-    return text;
 }
 
 /* The progress bar: only when stderr is a terminal, at most ten redraws a second. */
@@ -523,8 +489,9 @@ int cmd_sweep(int argc, char **argv) {
         if (a.threads == 0) a.threads = mr_sweep_rank_threads(local_size);
     }
 
-    char *command = command_line(argc, argv, "matremap");
-    if (command == NULL) { // the file's header records it: no sweep without it
+    char *command = NULL;
+    if (mr_sweep_command_line("matremap", argc, (const char *const *)argv, &command) != MR_OK) {
+        // the file's header records it: no sweep without it
         fprintf(stderr, "matremap sweep: error: out of memory for the command line\n");
         return CLI_EXIT_INTERNAL;
     }

@@ -7,19 +7,12 @@
  * transform's input slots and how its output slots are packed into files. The steps: parse the maps (an image
  * file or a constant each), name the outputs and refuse any that is an input, then the library's texture-set
  * conversion (mr_transform_convert_texture_set: read and check the files, one size, constants broadcast; convert;
- * pack), write the outputs and the flag picture all or none (mr_img_write_set, mr_flag_picture), print one summary
- * line or JSON.
+ * pack), write the outputs and the flag picture all or none (mr_texture_set_write), print one summary line or JSON
+ * (its figures: mr_texture_set_stats). Constants, formats and output names follow transform.h's rules.
  */
-#include <errno.h>
 #include <float.h>
-#include <limits.h>
-#include <math.h>
 #include <stdint.h>
-#include <stdlib.h>
 #include <string.h>
-#include <strings.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include "cli.h"
 
@@ -76,13 +69,13 @@ static const mr_brdf_param *map_param(const map_arg *m) {
 static int set_map(const char *command, map_arg *m, const char *text) {
     if (m->text != NULL) return cli_usage_error(command, "%s given twice", m->option) == 0;
     m->text = text;
-    if (text[0] == '\0' || strspn(text, "0123456789.,+-eE") != strlen(text)) {
+    if (!mr_texture_constant_like(text)) {
         char label[PATH_SIZE + 64];
         snprintf(label, sizeof label, "%s %s", m->option, text);
-        if (cli_check_map(command, label, text, 0) != CLI_EXIT_OK) return 0;
+        if (mr_map_ref_check(label, text, 0) != MR_OK) return cli_usage_error(command, "%s", mr_last_error()) == 0;
         size_t length;
         int channel;
-        cli_split_map(text, 0, &length, &channel, &m->how);
+        mr_map_ref_split(text, 0, &length, &channel, &m->how);
         if (length >= sizeof m->path) return cli_usage_error(command, "%s: the file name is too long", m->option) == 0;
         memcpy(m->path, text, length);
         m->path[length] = '\0';
@@ -90,26 +83,13 @@ static int set_map(const char *command, map_arg *m, const char *text) {
     }
     if (m->kind == MAP_PACKED)
         return cli_usage_error(command, "%s '%s': expected an image file (%s)", m->option, text, m->layout) == 0;
-    int count = 0;
-    for (const char *p = text;;) {
-        char *end = NULL;
-        errno = 0;
-        double v = strtod(p, &end);
-        if (end == p || errno == ERANGE || !isfinite(v) || count == 3 || (*end != ',' && *end != '\0')) {
-            count = -1;
-            break;
-        }
-        if (v < 0.0 || v > 1.0)
-            return cli_usage_error(command, "%s '%s': %g is outside [0, 1]", m->option, text, v) == 0;
-        m->constant[count++] = v;
-        if (*end == '\0') break;
-        p = end + 1;
-    }
-    if (count == 1) m->constant[1] = m->constant[2] = m->constant[0];
-    if (count == 1 || (count == 3 && m->kind == MAP_COLOR)) {
+    mr_status status = mr_texture_constant_parse(text, m->kind == MAP_COLOR, m->constant);
+    if (status == MR_OK) {
         m->is_constant = 1;
         return 1;
     }
+    if (status == MR_ERR_INVALID_ARG) // a number outside [0, 1], named by the library
+        return cli_usage_error(command, "%s '%s': %s", m->option, text, mr_last_error()) == 0;
     return cli_usage_error(command, "%s '%s': expected an image file or %s", m->option, text,
                            m->kind == MAP_COLOR ? "a constant (one number or R,G,B in [0, 1])"
                                                 : "a constant (one number in [0, 1])") == 0;
@@ -148,44 +128,22 @@ typedef struct out_options {
     int threads;            /* --threads: mr_wf_options.threads (0 automatic) */
 } out_options;
 
-/* "png", "exr" or "tif" for a format name or extension (case-insensitive; "tiff" too), NULL for others. */
-static const char *format_from_name(const char *text) {
-    static const char *const formats[] = {"png", "exr", "tif", "tiff"};
-    for (int k = 0; k < 4; k++)
-        if (strcasecmp(text, formats[k]) == 0) return formats[k < 3 ? k : 2];
-    return NULL;
-}
-
-/* The format of the first input file if it is png, exr or tif; png otherwise. */
-static const char *default_format(map_arg *const *maps, int count) {
-    for (int k = 0; k < count; k++) {
-        if (!is_file(maps[k])) continue;
-        const char *dot = strrchr(maps[k]->path, '.');
-        const char *format = dot != NULL && strchr(dot, '/') == NULL ? format_from_name(dot + 1) : NULL;
-        return format ? format : "png";
-    }
-    return "png";
-}
-
-/* Name the outputs PREFIX_<name>.EXT (cli_output_name's rule) and check the options; refuse (exit 2, cli_plan_check)
+/* Name the outputs PREFIX_<name>.EXT (mr_texture_output_path) and check the options; refuse (exit 2, cli_plan_check)
  * an output that is an input (a map, --weights, or the installed network the transform loaded, `network`, "" for
  * none) or another output (--flags named like one). */
 static int plan_outputs(const char *command, out_options *o, map_arg *const *maps, int map_count, const char *weights,
-                        const char *network, const char *const *names, output *outputs, int count) {
-    if (o->format == NULL) o->format = default_format(maps, map_count);
-    if (o->bits != 0) {
-        int exr = strcmp(o->format, "exr") == 0;
-        if (exr ? (o->bits != 16 && o->bits != 32) : (o->bits != 8 && o->bits != 16))
-            return cli_usage_error(command, "--bits %d: %s files take %s", o->bits, o->format,
-                                   exr ? "16 (half) or 32 (float)" : "8 or 16");
+                        const char *network, const mr_texture_layout *layouts, output *outputs, int count) {
+    if (o->format == NULL) {
+        const char *paths[MAX_MAPS];
+        for (int k = 0; k < map_count; k++) paths[k] = is_file(maps[k]) ? maps[k]->path : NULL;
+        o->format = mr_texture_default_format(paths, map_count);
     }
+    if (mr_texture_check_bits(o->format, o->bits) != MR_OK)
+        return cli_usage_error(command, "--bits %d: %s", o->bits, mr_last_error());
     if (o->prefix == NULL) return CLI_EXIT_OK; // nothing is written
-    for (int k = 0; k < count; k++) {
-        char name[256];
-        snprintf(name, sizeof name, "%s.%s", names[k], o->format);
-        if (!cli_output_name(outputs[k].path, sizeof outputs[k].path, o->prefix, name))
+    for (int k = 0; k < count; k++)
+        if (mr_texture_output_path(o->prefix, &layouts[k], o->format, outputs[k].path, sizeof outputs[k].path) != MR_OK)
             return cli_usage_error(command, "-o '%s': the prefix is too long", o->prefix);
-    }
     mr_output_plan io = {0};
     for (int m = 0; m < map_count; m++)
         if (is_file(maps[m])) mr_output_plan_inputf(&io, maps[m]->path, "%s %s", maps[m]->option, maps[m]->text);
@@ -198,27 +156,15 @@ static int plan_outputs(const char *command, out_options *o, map_arg *const *map
     return code;
 }
 
-/* Write the outputs and the flag map (if asked), all or none (mr_img_write_set: each to a temporary beside it, all
- * renamed into place once every one is written). Returns an exit code (messages printed). */
-static int write_outputs(const char *command, const out_options *o, const output *outputs,
-                         const mr_texture_layout *layouts, mr_image *const *images, int count, int width, int height,
-                         const uint8_t *flags) {
-    mr_img_set_item items[MAX_OUTPUTS + 1];
+/* Write the outputs and the flag map (if asked), all or none (mr_texture_set_write). Returns an exit code (messages
+ * printed). */
+static int write_outputs(const char *command, const out_options *o, const mr_texture_layout *layouts,
+                         const mr_texture_result *result, int count) {
     char label[PATH_SIZE + 8];
     snprintf(label, sizeof label, "-o %s", o->prefix);
-    int item_count = 0;
-    for (int k = 0; k < count; k++)
-        items[item_count++] = (mr_img_set_item){outputs[k].path, label, images[k], {layouts[k].encoding, o->bits, 0}};
-    mr_image *picture = NULL;
-    if (o->flags_path != NULL) {
-        mr_status status = mr_flag_picture(flags, width, height, &mr_workflow_flag_code, &picture);
-        if (status != MR_OK) return cli_fail(command, status);
-        // MR_IMG_DATA: the exact colours of the code.
-        items[item_count++] = (mr_img_set_item){o->flags_path, "--flags", picture, {MR_IMG_DATA, 0, 0}};
-    }
-    const mr_img_set_options set_options = {o->threads};
-    const mr_status status = mr_img_write_set(items, item_count, &set_options, NULL);
-    mr_image_free(picture);
+    const mr_texture_write_options wo = {o->prefix, label, o->format, o->bits, o->flags_path, "--flags", NULL,
+                                         o->threads};
+    const mr_status status = mr_texture_set_write(result, layouts, count, &wo);
     return status == MR_OK ? CLI_EXIT_OK : cli_fail(command, status);
 }
 
@@ -239,6 +185,7 @@ typedef struct summary {
     double seconds[3];   /* read, convert, write */
     const uint8_t *flags;
     quantity values[3];
+    const mr_texture_result *result; /* the conversion: its figures (mr_texture_set_stats) */
     int input_tolerances; /* spec2metal: off-manifold tolerances from the inputs' encodings (else eps) */
     double eps;           /* spec2metal: the tolerance given by --eps */
 } summary;
@@ -328,25 +275,14 @@ static void print_summary(const summary *s, const out_options *o, const output *
     // Each quantity's minimum, mean and maximum as converted (before the files' quantisation).
     for (int q = 0; q < 3; q++) {
         const quantity *v = &s->values[q];
-        double lo[3], hi[3], sum[3];
-        for (int c = 0; c < v->channels; c++) {
-            lo[c] = INFINITY;
-            hi[c] = -INFINITY;
-            sum[c] = 0.0;
-        }
-        for (size_t i = 0; i < n; i++)
-            for (int c = 0; c < v->channels; c++) {
-                double x = v->values[i * (size_t)v->channels + (size_t)c];
-                lo[c] = x < lo[c] ? x : lo[c];
-                hi[c] = x > hi[c] ? x : hi[c];
-                sum[c] += x;
-            }
+        mr_texture_stats st = {0};
+        mr_texture_set_stats(s->result, q, &st); // never fails: the result holds every slot
         printf("%s\"%s\": {", q ? ", " : "", v->name);
         const char *keys[3] = {"min", "mean", "max"};
         for (int k = 0; k < 3; k++) {
             printf("%s\"%s\": %s", k ? ", " : "", keys[k], v->channels == 3 ? "[" : "");
             for (int c = 0; c < v->channels; c++)
-                printf("%s%.9g", c ? ", " : "", k == 0 ? lo[c] : (k == 1 ? sum[c] / (double)n : hi[c]));
+                printf("%s%.9g", c ? ", " : "", k == 0 ? st.min[c] : (k == 1 ? st.mean[c] : st.max[c]));
             printf("%s", v->channels == 3 ? "]" : "");
         }
         printf("}");
@@ -365,7 +301,7 @@ static int take_output_option(const char *command, int argc, char **argv, int *i
         (taken = cli_take_option(command, argc, argv, i, "-o", &value))) {
         if (taken > 0) o->prefix = value;
     } else if ((taken = cli_take_option(command, argc, argv, i, "--format", &value))) {
-        if (taken > 0 && (o->format = format_from_name(value)) == NULL) {
+        if (taken > 0 && (o->format = mr_texture_format_from_name(value)) == NULL) {
             cli_usage_error(command, "--format '%s': unknown format (valid: png, exr, tif)", value);
             taken = -1;
         }
@@ -576,14 +512,12 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
     }
     const mr_texture_layout *layouts = o->pack ? cv->packed : cv->layouts;
     const int output_count = o->pack ? cv->packed_count : cv->layout_count;
-    const char *names[MAX_OUTPUTS];
-    for (int l = 0; l < output_count; l++) names[l] = layouts[l].name;
     output outputs[MAX_OUTPUTS];
     memset(outputs, 0, sizeof outputs);
     int code = check_prefix(command, o, cv->maps, cv->map_count);
     if (code == CLI_EXIT_OK)
-        code = plan_outputs(command, o, cv->maps, cv->map_count, weights, mr_transform_network_path(t), names, outputs,
-                            output_count);
+        code = plan_outputs(command, o, cv->maps, cv->map_count, weights, mr_transform_network_path(t), layouts,
+                            outputs, output_count);
 
     // Read, convert and pack: the library's texture-set conversion.
     mr_img_param_map reads[MAX_MAPS];
@@ -607,8 +541,7 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
     // Write.
     const double started = cli_now();
     if (code == CLI_EXIT_OK && o->prefix != NULL)
-        code = write_outputs(command, o, outputs, layouts, result.outputs, output_count, result.width, result.height,
-                             result.flags);
+        code = write_outputs(command, o, layouts, &result, output_count);
     seconds[2] += cli_now() - started; // packing and writing
 
     if (code == CLI_EXIT_OK) {
@@ -625,7 +558,7 @@ static int run_conversion(const conversion *cv, const method_options *m, out_opt
                      {{cv->layouts[0].name, result.converted[0]->pixels, 3},
                       {cv->layouts[1].name, result.converted[1]->pixels, kind->outputs[1].channels},
                       {cv->layouts[2].name, result.converted[2]->pixels, 1}},
-                     !eps_given, eps};
+                     &result, !eps_given, eps};
         print_summary(&s, o, outputs, output_count);
     }
     mr_texture_result_free(&result);

@@ -154,6 +154,15 @@ typedef struct mr_img_set_options {
  * before it removed)]"; MR_ERR_NOMEM. count 0 is a no-op. */
 mr_status mr_img_write_set(const mr_img_set_item *items, int count, const mr_img_set_options *opts, int *failed);
 
+/* The one rule for the names of a set's files made from a prefix (-o PREFIX of convert, spec2metal, metal2spec;
+ * remap --images): a PREFIX ending in '/', '_', '-' or '.' (or empty) is followed by the name directly, any other
+ * gets '_' in between:
+ *   "out/ggx_" + "alpha.exr" -> "out/ggx_alpha.exr"    "pfx/ggx" + "alpha.exr" -> "pfx/ggx_alpha.exr"
+ *   "out/"     + "alpha.exr" -> "out/alpha.exr"        "avocado" + "basecolor.png" -> "avocado_basecolor.png"
+ * Writes the name into out (size bytes). MR_ERR_INVALID_ARG naming the prefix when it does not fit (out then holds
+ * a truncated name, never used). */
+mr_status mr_img_prefixed_name(char *out, size_t size, const char *prefix, const char *name);
+
 /* ---- maps of BRDF parameters: the one rule (param_map.c) ----------------------------------------------------
  * A texture map of a BRDF parameter holds the parameter's own values. 8/16-bit files hold a colour parameter
  * (flagged MR_PARAM_SRGB_MAP in its descriptor, brdf.h: diffuse, specular, f0, base colour, ...) sRGB-encoded and

@@ -106,3 +106,12 @@ mr_status mr_img_write_set(const mr_img_set_item *items, int count, const mr_img
     free(jobs);
     return status;
 }
+
+mr_status mr_img_prefixed_name(char *out, size_t size, const char *prefix, const char *name) {
+    const size_t length = strlen(prefix);
+    const int direct = length == 0 || strchr("/_-.", prefix[length - 1]) != NULL;
+    const int n = snprintf(out, size, "%s%s%s", prefix, direct ? "" : "_", name);
+    if (n < 0 || (size_t)n >= size) return mr_fail(MR_ERR_INVALID_ARG, "prefix '%s': the name of '%s' is too long",
+                                                   prefix, name);
+    return MR_OK;
+}

@@ -31,6 +31,15 @@ const char *mr_learn_method_name(mr_learn_method method) {
     return (unsigned)method < MR_LEARN_METHOD_COUNT ? method_names[method] : NULL;
 }
 
+const char *mr_learned_slot_name(const mr_brdf_model *model, const mr_learned_slot *slot, char *buf, size_t size) {
+    static const char *const suffix[3] = {"_r", "_g", "_b"};
+    if (buf == NULL || size == 0) return buf;
+    const int channel = slot->kind == MR_LEARNED_CHANNEL && slot->channel >= 0 && slot->channel < 3 ? slot->channel
+                                                                                                      : -1;
+    snprintf(buf, size, "%s%s", model->params[slot->param].name, channel >= 0 ? suffix[channel] : "");
+    return buf;
+}
+
 mr_status mr_learn_method_from_name(const char *name, mr_learn_method *out) {
     for (int m = 0; name != NULL && m < MR_LEARN_METHOD_COUNT; m++)
         if (strcmp(name, method_names[m]) == 0) {

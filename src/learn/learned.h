@@ -141,6 +141,11 @@ typedef struct mr_learned_slot {
     double min, max;           /* features: the training domain; outputs: 0 */
 } mr_learned_slot;
 
+/* A slot's name, as learn's summary and its JSON keys give it: the parameter's name in `model` (the transform's
+ * source for a feature, its target for an output), with "_r", "_g" or "_b" for one channel of an RGB parameter
+ * (MR_LEARNED_CHANNEL: f0_g); into buf (size bytes, truncated if need be). Returns buf. */
+const char *mr_learned_slot_name(const mr_brdf_model *model, const mr_learned_slot *slot, char *buf, size_t size);
+
 typedef struct mr_learned_carry {
     int target_param, source_param; /* the same channel count */
     int learned;                    /* 1: the factors were fitted on rows; 0: the ratio of the models' lobes */

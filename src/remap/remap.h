@@ -8,6 +8,7 @@
  *   mr_remap_result r;
  *   mr_remap(plan, source_model, source_values, target_model, &o, &r);     // built-in source
  *   mr_remap_images(plan, &(mr_remap_source){full, diffuse, specular}, target_model, &o, &r);  // any renderer
+ *   mr_remap_read_render(path, &full);  mr_remap_write_pictures(prefix, plan, full, target_model, r.values);
  *
  * Objective: the L2 difference of linear HDR RGB images over the plan's pixels (the paper's metric).
  *
@@ -196,6 +197,28 @@ mr_status mr_remap(const mr_render_plan *plan, const mr_brdf_model *source_model
  * MR_ERR_INVALID_ARG if the reference has the wrong size or is black where matremap's render is lit. */
 mr_status mr_irradiance_scale(const mr_render_plan *plan, const mr_image *reference, double albedo,
                               double *scale);
+
+/* ---- a remap's files: the renders read, the pictures written (pictures.c) ---------------------------------- */
+
+/* Read a render to fit (a source image or an irradiance reference) from `path` as RGB (*out, the caller frees it),
+ * every value finite radiance >= 0 (mr_image_check_radiance labelled "image 'PATH'"). mr_img_read's errors, or
+ * MR_ERR_INVALID_ARG naming the file, the pixel, the channel and the value; on failure *out is NULL. */
+mr_status mr_remap_read_render(const char *path, mr_image **out);
+
+#define MR_REMAP_PICTURE_COUNT 3
+
+/* The file of picture k (0 the source's render, 1 the target's, 2 the SSIM map) under `prefix`: PREFIX_source.png,
+ * PREFIX_target.png, PREFIX_ssim.png by mr_img_prefixed_name's rule (io/image_io.h: "out/" + "source.png" ->
+ * "out/source.png"), into out (size bytes). MR_ERR_INVALID_ARG for k outside [0, MR_REMAP_PICTURE_COUNT) or a
+ * name that does not fit. */
+mr_status mr_remap_picture_path(const char *prefix, int k, char *out, size_t size);
+
+/* The pictures of a remap (`matremap remap --images PREFIX`), all or none (mr_img_write_set): the source's full
+ * render `source` (the plan's size), the target's render with `values` on `plan`, and the SSIM map between them
+ * (mr_ssim_map_visualise), each sRGB PNG at mr_remap_picture_path(prefix, k). Errors: mr_render's, mr_ssim's and
+ * mr_img_write_set's (naming the file); nothing is written on failure. */
+mr_status mr_remap_write_pictures(const char *prefix, const mr_render_plan *plan, const mr_image *source,
+                                  const mr_brdf_model *target, const double *values);
 
 #ifdef __cplusplus
 }

@@ -10,6 +10,7 @@
  *   spec.sampling = MR_SWEEP_GRID;
  *   mr_sweep_parse_axis(spec.source, "alpha=0.01:1:9:log", &spec.axes[spec.axis_count++]);
  *   mr_sweep_options o = {0};  o.resume = 1;  o.threads = 2;                          // zero = defaults
+ *   mr_sweep_command_line("matremap", argc, argv, &line);  o.command_line = line;     // the header's record
  *   mr_sweep_summary s;
  *   mr_sweep_run(&spec, "alpha.csv", &o, &s);
  *
@@ -314,6 +315,14 @@ typedef struct mr_sweep_merge_summary {
  * unreadable files or a failed write. Nothing is written on failure. */
 mr_status mr_sweep_merge(const char *const *paths, int count, const char *output, const char *command_line,
                          mr_sweep_merge_summary *out);
+
+/* The command line a sweep file records (mr_sweep_options.command_line, mr_sweep_merge's): `prefix` ("matremap",
+ * "matremap sweep") then each of argv[0 .. argc), a space before each, quoted for a POSIX shell where needed: an
+ * argument made only of letters, digits and _./:=,+-@% is written as it is, any other (the empty one too) inside
+ * single quotes, a quote in it as '\'' ("a b" -> 'a b', "it's" -> 'it'\''s'), so that pasting the line into a shell
+ * runs the same command. *out is malloc'ed (the caller frees it). MR_ERR_INVALID_ARG for a NULL argument or a
+ * negative argc; MR_ERR_NOMEM. */
+mr_status mr_sweep_command_line(const char *prefix, int argc, const char *const *argv, char **out);
 
 /* ---- running under MPI (sweep_mpi.c) ----
  * The library itself never links MPI: a small module, libmatremap-mpi.so (src/remap/sweep_mpi_module.c, built

@@ -20,6 +20,41 @@
 
 /* The header for this run (every line '\n'-terminated, the column line last), in the C numeric locale; a shard
  * (shard_count > 0) adds "# shard: K/N" before the command line. */
+mr_status mr_sweep_command_line(const char *prefix, int argc, const char *const *argv, char **out) {
+    if (out != NULL) *out = NULL;
+    if (prefix == NULL || out == NULL || argc < 0 || (argc > 0 && argv == NULL))
+        return mr_fail(MR_ERR_INVALID_ARG, "sweep command line: NULL argument");
+    size_t size = strlen(prefix) + 1;
+    for (int i = 0; i < argc; i++) size += 4 * strlen(argv[i]) + 3; // every character a quote ('\''), two quotes
+    char *text = malloc(size), *o = text;
+    if (text == NULL) return mr_fail(MR_ERR_NOMEM, "sweep command line: out of memory");
+    o += sprintf(o, "%s", prefix);
+    for (int i = 0; i < argc; i++) {
+        const char *a = argv[i];
+        *o++ = ' ';
+        int plain = a[0] != '\0';
+        for (const char *c = a; *c && plain; c++)
+            plain = strchr("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_./:=,+-@%", *c) != NULL;
+        if (plain) {
+            o += sprintf(o, "%s", a);
+            continue;
+        }
+        *o++ = '\'';
+        for (const char *c = a; *c; c++) {
+            if (*c == '\'') {
+                memcpy(o, "'\\''", 4);
+                o += 4;
+            } else {
+                *o++ = *c;
+            }
+        }
+        *o++ = '\'';
+    }
+    *o = '\0';
+    *out = text;
+    return MR_OK;
+}
+
 mr_status mr_sweep_file_header(const mr_sweep_spec *spec, const char *command_line, long shard_index,
                                long shard_count, mr_strbuf *sb) {
     mr_strbuf_printf(sb, "# matremap %s sweep\n", mr_version());
@@ -298,78 +333,89 @@ mr_status mr_sweep_file_parse_model(const char *text, size_t length, const mr_br
 
 static int parse_whole_long(const char *text, long *out) { return mr_csv_parse_long(text, strlen(text), out); }
 
-/* "strategy=S max_evaluations=N xtol=X grid_points=G starts=S seed=S[ held=a,b]" into spec->remap. */
-static mr_status parse_remap_line(const char *text, mr_sweep_spec *spec) {
+/* One "name=value" setting of a header line taken into *spec: 1, or 0 for a name or value this version does not
+ * know. The value may be changed (held's list is cut at its commas). */
+typedef int (*setting_fn)(const char *name, char *value, mr_sweep_spec *spec);
+
+/* A header line's text: its words (after `head`, a first word the line must have, e.g. "fit"; NULL: none, else
+ * MR_ERR_FORMAT `not_head`), each "name=value", given to take in order. MR_ERR_FORMAT "'WORD' is not name=value",
+ * or "'NAME=VALUE' is not a WHAT this version knows" for the first one take refuses; split_line's errors. */
+static mr_status parse_settings(const char *text, const char *head, const char *not_head, const char *what,
+                                setting_fn take, mr_sweep_spec *spec) {
     char copy[MR_SWEEP_MAX_LINE], *words[16];
     int n = 0;
     mr_status status = split_line(text, strlen(text), copy, words, 16, &n);
     if (status != MR_OK)
         return status;
-    for (int k = 0; k < n; k++) {
+    const int first = head != NULL;
+    if (head != NULL && (n < 1 || strcmp(words[0], head) != 0))
+        return mr_fail(MR_ERR_FORMAT, "%s", not_head);
+    for (int k = first; k < n; k++) {
         char *eq = strchr(words[k], '=');
         if (eq == NULL)
             return mr_fail(MR_ERR_FORMAT, "'%s' is not name=value", words[k]);
         *eq = '\0';
-        const char *key = words[k], *value = eq + 1;
-        long v = 0;
-        int ok = 1;
-        if (strcmp(key, "strategy") == 0) {
-            ok = mr_remap_strategy_from_name(value, &spec->remap.strategy) == MR_OK;
-        } else if (strcmp(key, "xtol") == 0) {
-            ok = mr_csv_parse_double(value, strlen(value), &spec->remap.xtol);
-        } else if (strcmp(key, "held") == 0) {
-            char *save = NULL;
-            for (char *name = strtok_r(eq + 1, ",", &save); ok && name != NULL; name = strtok_r(NULL, ",", &save)) {
-                int p = mr_brdf_param_index(spec->target, name);
-                ok = p >= 0 && p < 32;
-                if (ok)
-                    spec->remap.held |= 1u << p;
-            }
-        } else if ((ok = parse_whole_long(value, &v) && v <= INT_MAX)) {
-            if (strcmp(key, "max_evaluations") == 0)
-                spec->remap.max_evaluations = (int)v;
-            else if (strcmp(key, "grid_points") == 0)
-                spec->remap.grid_points = (int)v;
-            else if (strcmp(key, "starts") == 0)
-                spec->remap.starts = (int)v;
-            else if (strcmp(key, "seed") == 0)
-                spec->remap.seed = (unsigned long)v;
-            else
-                ok = 0;
-        }
-        if (!ok)
-            return mr_fail(MR_ERR_FORMAT, "'%s=%s' is not a remap option this version knows", key, value);
+        if (!take(words[k], eq + 1, spec))
+            return mr_fail(MR_ERR_FORMAT, "'%s=%s' is not a %s this version knows", words[k], eq + 1, what);
     }
     return MR_OK;
+}
+
+/* A setting of the remap line into spec->remap. */
+static int take_remap_setting(const char *key, char *value, mr_sweep_spec *spec) {
+    long v = 0;
+    if (strcmp(key, "strategy") == 0)
+        return mr_remap_strategy_from_name(value, &spec->remap.strategy) == MR_OK;
+    if (strcmp(key, "xtol") == 0)
+        return mr_csv_parse_double(value, strlen(value), &spec->remap.xtol);
+    if (strcmp(key, "held") == 0) {
+        int ok = 1;
+        char *save = NULL;
+        for (char *name = strtok_r(value, ",", &save); ok && name != NULL; name = strtok_r(NULL, ",", &save)) {
+            int p = mr_brdf_param_index(spec->target, name);
+            ok = p >= 0 && p < 32;
+            if (ok)
+                spec->remap.held |= 1u << p;
+        }
+        return ok;
+    }
+    if (!parse_whole_long(value, &v) || v > INT_MAX)
+        return 0;
+    if (strcmp(key, "max_evaluations") == 0)
+        spec->remap.max_evaluations = (int)v;
+    else if (strcmp(key, "grid_points") == 0)
+        spec->remap.grid_points = (int)v;
+    else if (strcmp(key, "starts") == 0)
+        spec->remap.starts = (int)v;
+    else if (strcmp(key, "seed") == 0)
+        spec->remap.seed = (unsigned long)v;
+    else
+        return 0;
+    return 1;
+}
+
+/* "strategy=S max_evaluations=N xtol=X grid_points=G starts=S seed=S[ held=a,b]" into spec->remap. */
+static mr_status parse_remap_line(const char *text, mr_sweep_spec *spec) {
+    return parse_settings(text, NULL, NULL, "remap option", take_remap_setting, spec);
+}
+
+/* A setting of the scene line into spec->scene; names this version does not write are let through (the rebuilt
+ * header shows whether they match). */
+static int take_scene_setting(const char *key, char *value, mr_sweep_spec *spec) {
+    long v = 0;
+    if (strcmp(key, "size") == 0)
+        return parse_whole_long(value, &v) && v <= MR_RENDER_MAX_SIZE && (spec->scene.size = (int)v, 1);
+    if (strcmp(key, "light") == 0)
+        return mr_fit_light_from_name(value, &spec->scene.light) == MR_OK;
+    if (strcmp(key, "intensity") == 0)
+        return mr_csv_parse_double(value, strlen(value), &spec->scene.intensity);
+    return 1;
 }
 
 /* "fit size=N light=L intensity=I ..." into spec->scene (the other fields are fixed by the version: the rebuilt
  * header shows whether they match). */
 static mr_status parse_scene_line(const char *text, mr_sweep_spec *spec) {
-    char copy[MR_SWEEP_MAX_LINE], *words[16];
-    int n = 0;
-    mr_status status = split_line(text, strlen(text), copy, words, 16, &n);
-    if (status != MR_OK)
-        return status;
-    if (n < 1 || strcmp(words[0], "fit") != 0)
-        return mr_fail(MR_ERR_FORMAT, "not a fit scene");
-    for (int k = 1; k < n; k++) {
-        char *eq = strchr(words[k], '=');
-        if (eq == NULL)
-            return mr_fail(MR_ERR_FORMAT, "'%s' is not name=value", words[k]);
-        *eq = '\0';
-        long v = 0;
-        int ok = 1;
-        if (strcmp(words[k], "size") == 0)
-            ok = parse_whole_long(eq + 1, &v) && v <= MR_RENDER_MAX_SIZE && (spec->scene.size = (int)v, 1);
-        else if (strcmp(words[k], "light") == 0)
-            ok = mr_fit_light_from_name(eq + 1, &spec->scene.light) == MR_OK;
-        else if (strcmp(words[k], "intensity") == 0)
-            ok = mr_csv_parse_double(eq + 1, strlen(eq + 1), &spec->scene.intensity);
-        if (!ok)
-            return mr_fail(MR_ERR_FORMAT, "'%s=%s' is not a scene setting this version knows", words[k], eq + 1);
-    }
-    return MR_OK;
+    return parse_settings(text, "fit", "not a fit scene", "scene setting", take_scene_setting, spec);
 }
 
 mr_status mr_sweep_scene_parse(const char *text, mr_fit_scene_options *out) {

@@ -327,6 +327,15 @@ typedef struct mr_fit_scene_options {
  * opts may be NULL for all defaults. */
 mr_scene mr_scene_fit(const mr_fit_scene_options *opts);
 
+/* The fit scene's point light (scene->lights[0], as mr_scene_fit placed it: distance 3 from a unit sphere, frontal
+ * or 45 degrees to the camera's right, `light`) scaled to an object and turned with scene->camera, for a mesh in
+ * the sphere's place (`matremap render` of an OBJ or a glTF asset): at 3 bounding radii from the centre of the
+ * mesh's bounding sphere (centre of its box, radius to its farthest vertex; mesh NULL: the unit sphere at the
+ * origin), in the fit scene's direction relative to the camera, its intensity multiplied by radius^2, so that an
+ * object of any size receives the fit scene's irradiance where the camera sees it. MR_ERR_INVALID_ARG for a NULL
+ * scene or one without a light (nothing changed). */
+mr_status mr_scene_fit_light_to_mesh(mr_scene *scene, const mr_mesh *mesh, mr_fit_light light);
+
 /* The paper's visualisation camera (brdf-reference 1: Mitsuba perspective, 40 degrees on y, at (0, 0, -1.5)
  * looking at the origin, +y up; its right is -x), which frames its material-test sphere of radius 0.5
  * (../shared/assets/paper/matsphere.obj, io/obj_load.h) over 74 % of the frame. */

@@ -77,6 +77,41 @@ mr_scene mr_scene_fit(const mr_fit_scene_options *opts) {
     return scene;
 }
 
+mr_status mr_scene_fit_light_to_mesh(mr_scene *scene, const mr_mesh *mesh, mr_fit_light light) {
+    if (scene == NULL || scene->light_count < 1)
+        return mr_fail(MR_ERR_INVALID_ARG, "fit light for a mesh: %s", scene == NULL ? "NULL scene" : "no light");
+    double centre[3] = {0.0, 0.0, 0.0}, radius = 1.0;
+    if (mesh != NULL) {
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (int v = 0; v < mesh->vertex_count; v++)
+            for (int i = 0; i < 3; i++) {
+                lo[i] = fmin(lo[i], mesh->positions[3 * v + i]);
+                hi[i] = fmax(hi[i], mesh->positions[3 * v + i]);
+            }
+        radius = 0.0;
+        for (int i = 0; i < 3; i++) centre[i] = 0.5 * (lo[i] + hi[i]);
+        for (int v = 0; v < mesh->vertex_count; v++) {
+            double d2 = 0.0;
+            for (int i = 0; i < 3; i++) d2 += (mesh->positions[3 * v + i] - centre[i]) * (mesh->positions[3 * v + i] -
+                                                                                         centre[i]);
+            radius = fmax(radius, sqrt(d2));
+        }
+    }
+    const mr_camera *cam = &scene->camera;
+    double back[3], right[3], len = 0.0; /* towards the camera; the camera's right = up x back */
+    for (int i = 0; i < 3; i++) back[i] = cam->position[i] - cam->target[i], len += back[i] * back[i];
+    for (int i = 0; i < 3; i++) back[i] /= sqrt(len);
+    right[0] = cam->up[1] * back[2] - cam->up[2] * back[1];
+    right[1] = cam->up[2] * back[0] - cam->up[0] * back[2];
+    right[2] = cam->up[0] * back[1] - cam->up[1] * back[0];
+    len = sqrt(right[0] * right[0] + right[1] * right[1] + right[2] * right[2]);
+    double angle = light == MR_FIT_LIGHT_FRONTAL ? 0.0 : atan(1.0); /* pi/4 */
+    for (int i = 0; i < 3; i++)
+        scene->lights[0].position[i] = centre[i] + 3.0 * radius * (cos(angle) * back[i] + sin(angle) * right[i] / len);
+    for (int c = 0; c < 3; c++) scene->lights[0].intensity[c] *= radius * radius;
+    return MR_OK;
+}
+
 mr_light mr_light_environment(const mr_image *map, double scale, double rotation_degrees, int samples) {
     mr_light light;
     memset(&light, 0, sizeof light);

@@ -2,8 +2,12 @@
  * texture_set.c — a texture set converted: maps read and checked, converted, packed into output images (contract in
  * transform.h, "texture-set conversions").
  */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "mr_internal.h"
 #include "render/render.h"
@@ -156,5 +160,138 @@ mr_status mr_transform_convert_material(const mr_transform *t, const mr_material
         *flags = texel_flags;
     else
         free(texel_flags);
+    return MR_OK;
+}
+
+/* ---- a texture set's maps as text, its files and its figures ------------------------------------------------ */
+
+int mr_texture_constant_like(const char *text) {
+    return text != NULL && text[0] != '\0' && strspn(text, "0123456789.,+-eE") == strlen(text);
+}
+
+mr_status mr_texture_constant_parse(const char *text, int colour, double out[3]) {
+    if (text == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "texture constant: NULL argument");
+    double values[3];
+    int count = 0;
+    for (const char *p = text;;) { // left to right: the first number outside [0, 1] is the one named
+        char *end = NULL;
+        errno = 0;
+        double v = strtod(p, &end);
+        if (end == p || errno == ERANGE || !isfinite(v) || count == 3 || (*end != ',' && *end != '\0')) {
+            count = -1;
+            break;
+        }
+        if (v < 0.0 || v > 1.0) return mr_fail(MR_ERR_INVALID_ARG, "%g is outside [0, 1]", v);
+        values[count++] = v;
+        if (*end == '\0') break;
+        p = end + 1;
+    }
+    if (count == 1) values[1] = values[2] = values[0];
+    if (count == 1 || (count == 3 && colour)) {
+        memcpy(out, values, sizeof values);
+        return MR_OK;
+    }
+    return mr_fail(MR_ERR_FORMAT, "'%s': expected one number%s in [0, 1]", text, colour ? " or R,G,B" : "");
+}
+
+const char *mr_texture_format_from_name(const char *text) {
+    static const char *const formats[] = {"png", "exr", "tif", "tiff"};
+    for (int k = 0; text != NULL && k < 4; k++)
+        if (strcasecmp(text, formats[k]) == 0) return formats[k < 3 ? k : 2];
+    return NULL;
+}
+
+const char *mr_texture_default_format(const char *const *paths, int count) {
+    for (int k = 0; paths != NULL && k < count; k++) {
+        if (paths[k] == NULL) continue;
+        const char *dot = strrchr(paths[k], '.');
+        const char *format = dot != NULL && strchr(dot, '/') == NULL ? mr_texture_format_from_name(dot + 1) : NULL;
+        return format ? format : "png";
+    }
+    return "png";
+}
+
+mr_status mr_texture_check_bits(const char *format, int bits) {
+    if (format == NULL) return mr_fail(MR_ERR_INVALID_ARG, "texture bits: NULL format");
+    const int exr = strcmp(format, "exr") == 0;
+    if (bits == 0 || (exr ? (bits == 16 || bits == 32) : (bits == 8 || bits == 16))) return MR_OK;
+    return mr_fail(MR_ERR_INVALID_ARG, "%s files take %s", format, exr ? "16 (half) or 32 (float)" : "8 or 16");
+}
+
+mr_status mr_texture_output_path(const char *prefix, const mr_texture_layout *layout, const char *format, char *out,
+                                 size_t size) {
+    if (prefix == NULL || layout == NULL || layout->name == NULL || format == NULL || out == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "texture output path: NULL argument");
+    char name[256];
+    const int n = snprintf(name, sizeof name, "%s.%s", layout->name, format);
+    if (n < 0 || (size_t)n >= sizeof name)
+        return mr_fail(MR_ERR_INVALID_ARG, "output name '%s': too long", layout->name);
+    return mr_img_prefixed_name(out, size, prefix, name);
+}
+
+#define WRITE_PATH_SIZE 4096
+
+mr_status mr_texture_set_write(const mr_texture_result *result, const mr_texture_layout *layouts, int count,
+                               const mr_texture_write_options *opts) {
+    if (result == NULL || layouts == NULL || opts == NULL || opts->prefix == NULL || count < 0 ||
+        count > MR_TEXTURE_MAX_OUTPUTS)
+        return mr_fail(MR_ERR_INVALID_ARG, "texture set write: NULL argument or %d outputs", count);
+    const char *format = opts->format != NULL ? opts->format : "png";
+    mr_status status = mr_texture_check_bits(format, opts->bits);
+    if (status != MR_OK) return status;
+    mr_img_set_item items[MR_TEXTURE_MAX_OUTPUTS + 1];
+    char paths[MR_TEXTURE_MAX_OUTPUTS][WRITE_PATH_SIZE];
+    int item_count = 0;
+    for (int k = 0; k < count; k++) {
+        if (result->outputs[k] == NULL)
+            return mr_fail(MR_ERR_INVALID_ARG, "texture set write: output %d (%s) not in the result", k,
+                           layouts[k].name);
+        if ((status = mr_texture_output_path(opts->prefix, &layouts[k], format, paths[k], sizeof paths[k])) != MR_OK)
+            return status;
+        items[item_count++] = (mr_img_set_item){paths[k], opts->prefix_label, result->outputs[k],
+                                                {layouts[k].encoding, opts->bits, 0}};
+    }
+    mr_image *picture = NULL;
+    if (opts->flags_path != NULL) {
+        status = mr_flag_picture(result->flags, result->width, result->height,
+                                 opts->flag_code != NULL ? opts->flag_code : &mr_workflow_flag_code, &picture);
+        if (status != MR_OK) return status;
+        // MR_IMG_DATA: the exact colours of the code.
+        items[item_count++] = (mr_img_set_item){opts->flags_path, opts->flags_label, picture, {MR_IMG_DATA, 0, 0}};
+    }
+    const mr_img_set_options set_options = {opts->threads};
+    status = mr_img_write_set(items, item_count, &set_options, NULL);
+    mr_image_free(picture);
+    return status;
+}
+
+mr_status mr_texture_set_stats(const mr_texture_result *result, int slot, mr_texture_stats *out) {
+    if (result == NULL || out == NULL || slot < 0 || slot >= MR_TRANSFORM_MAX_SLOTS || result->converted[slot] == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "texture set stats: no converted slot %d", slot);
+    const mr_image *image = result->converted[slot];
+    const int channels = image->channels;
+    if (channels != 1 && channels != 3)
+        return mr_fail(MR_ERR_INVALID_ARG, "texture set stats: slot %d has %d channels", slot, channels);
+    const size_t n = (size_t)result->width * (size_t)result->height;
+    double lo[3], hi[3], sum[3];
+    for (int c = 0; c < channels; c++) {
+        lo[c] = INFINITY;
+        hi[c] = -INFINITY;
+        sum[c] = 0.0;
+    }
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < channels; c++) {
+            double x = image->pixels[i * (size_t)channels + (size_t)c];
+            lo[c] = x < lo[c] ? x : lo[c];
+            hi[c] = x > hi[c] ? x : hi[c];
+            sum[c] += x;
+        }
+    memset(out, 0, sizeof *out);
+    out->channels = channels;
+    for (int c = 0; c < channels; c++) {
+        out->min[c] = lo[c];
+        out->mean[c] = sum[c] / (double)n;
+        out->max[c] = hi[c];
+    }
     return MR_OK;
 }

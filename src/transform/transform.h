@@ -14,9 +14,11 @@
  *   mr_transform_free(t);
  * Texture sets: mr_transform_convert_maps (images and constants in, one image per output slot and per-texel flags
  * out); mr_transform_convert_texture_set (spec2metal's and metal2spec's pipeline: files read and checked, converted,
- * packed into output layouts with mr_image_pack / mr_image_with_alpha); mr_transform_convert_material (convert's:
- * a material's maps and values). Flags: mr_flags_count (by reason) and mr_flag_picture (a colour code as data:
- * mr_workflow_flag_code here, mr_learned_flag_code in learned.h).
+ * packed into output layouts with mr_image_pack / mr_image_with_alpha), written all or none with its flag picture
+ * (mr_texture_set_write: files named by mr_texture_output_path) and summed up (mr_texture_set_stats); the rules
+ * around it (mr_texture_constant_parse, mr_texture_default_format, mr_texture_check_bits);
+ * mr_transform_convert_material (convert's: a material's maps and values). Flags: mr_flags_count (by reason) and
+ * mr_flag_picture (a colour code as data: mr_workflow_flag_code here, mr_learned_flag_code in learned.h).
  *
  * Planes. A transform reads and writes planes of floats, one per slot: a slot is one parameter of the source
  * (inputs) or target (outputs) model of src/brdf, named as the model names it, with its channel count; a 3-channel
@@ -282,6 +284,69 @@ typedef struct mr_texture_result {
 mr_status mr_transform_convert_texture_set(const mr_transform *t, const mr_texture_set *set, mr_texture_result *out);
 /* Free what a result holds and zero it (NULL-safe). */
 void mr_texture_result_free(mr_texture_result *r);
+
+/* ---- a texture set's maps as text, its files and its figures (texture_set.c) --------------------------------
+ * What spec2metal and metal2spec decide from their options, and what they do with a result: a map given as a
+ * constant, the output format, the output files' names, the files written all or none with the flag picture, and
+ * each converted quantity's minimum, mean and maximum (the JSON summary's). */
+
+/* 1 if `text` is written as a constant: not empty and made only of number characters ("0123456789.,+-eE"); any
+ * other text names a file (a file named like a number is written "./0.5"). */
+int mr_texture_constant_like(const char *text);
+
+/* Parse a map's constant: one number (out[0..2] all of it: grey) or, when `colour`, R,G,B; every number finite and
+ * in [0, 1]. MR_ERR_INVALID_ARG "V is outside [0, 1]" (V as %g) for the first number outside it, met left to
+ * right; MR_ERR_FORMAT for text that is not such a constant (three numbers for a map that is not a colour, a
+ * malformed or extra number). out is written only on success. */
+mr_status mr_texture_constant_parse(const char *text, int colour, double out[3]);
+
+/* "png", "exr" or "tif" for a format name or a file extension (case-insensitive; "tiff" too), NULL for others. */
+const char *mr_texture_format_from_name(const char *text);
+
+/* The output format a texture set takes by default: that of the first of paths[0..count) not NULL (a NULL path is a
+ * constant map) when its extension is png, exr or tif (or tiff); "png" otherwise and when every path is NULL. */
+const char *mr_texture_default_format(const char *const *paths, int count);
+
+/* MR_OK when files of `format` ("png", "exr", "tif") take `bits` per sample: 0 (the format's default), 8 or 16 for
+ * png and tif, 16 (half) or 32 (float) for exr; else MR_ERR_INVALID_ARG "FORMAT files take 8 or 16" (or "16 (half)
+ * or 32 (float)"). */
+mr_status mr_texture_check_bits(const char *format, int bits);
+
+/* The file of `layout` under `prefix`: PREFIX_<layout name>.<format>, by mr_img_prefixed_name's rule (io/image_io.h;
+ * "out/" + basecolor -> "out/basecolor.png"), into out (size bytes). MR_ERR_INVALID_ARG when it does not fit. */
+mr_status mr_texture_output_path(const char *prefix, const mr_texture_layout *layout, const char *format, char *out,
+                                 size_t size);
+
+/* Where and how mr_texture_set_write writes a result. Zeroed: the defaults noted. */
+struct mr_flag_code;
+typedef struct mr_texture_write_options {
+    const char *prefix;       /* required: the outputs are mr_texture_output_path(prefix, layouts[k], format) */
+    const char *prefix_label; /* how messages name the outputs ("-o out"); NULL: by their paths alone */
+    const char *format;       /* "png", "exr" or "tif"; NULL: "png" */
+    int bits;                 /* per sample, as mr_texture_check_bits takes; 0: the format's default */
+    const char *flags_path;   /* the flag picture's file; NULL: none */
+    const char *flags_label;  /* how messages name it ("--flags"); NULL: by its path */
+    const struct mr_flag_code *flag_code; /* the picture's colours (below); NULL: mr_workflow_flag_code */
+    int threads;              /* files encoded side by side (mr_img_set_options.threads): 0 automatic */
+} mr_texture_write_options;
+
+/* Write result->outputs[0..count) (packed by layouts[0..count), each file encoded as its layout's encoding says)
+ * and, when opts->flags_path is set, the picture of result->flags (mr_flag_picture, written linear: the code's
+ * exact colours), all or none (mr_img_write_set). Errors: MR_ERR_INVALID_ARG for a NULL argument, an output missing
+ * from the result, bits the format does not take or a name that does not fit; mr_flag_picture's and
+ * mr_img_write_set's (naming the file). */
+mr_status mr_texture_set_write(const mr_texture_result *result, const mr_texture_layout *layouts, int count,
+                               const mr_texture_write_options *opts);
+
+/* One converted quantity's figures per channel, as converted (before the files' quantisation). */
+typedef struct mr_texture_stats {
+    int channels;                /* 1 or 3 (the slot's) */
+    double min[3], mean[3], max[3];
+} mr_texture_stats;
+
+/* The figures of result->converted[slot] over its width x height texels (the mean is the sum in texel order, in
+ * double, over the texel count). MR_ERR_INVALID_ARG for a NULL argument or a slot the result does not hold. */
+mr_status mr_texture_set_stats(const mr_texture_result *result, int slot, mr_texture_stats *out);
 
 /* The pipeline of convert as one call: a material of the kind's source model (struct mr_material, render.h: its
  * values and the maps bound to its parameters) converted texel by texel through t; each input slot reads the
