@@ -1172,8 +1172,47 @@ MR_TEST(pictures_written_and_readable) {
     mr_render_plan_free(plan);
 }
 
+/* The renders of a remap from images: read side by side, the full one square, every other its size; on a refusal
+ * nothing is handed back. */
+MR_TEST(sources_read_and_sized) {
+    mr_image *square = NULL, *wide = NULL, *small = NULL;
+    MR_CHECK_OK(mr_image_create(8, 8, 3, &square));
+    MR_CHECK_OK(mr_image_create(8, 4, 3, &wide));
+    MR_CHECK_OK(mr_image_create(4, 4, 3, &small));
+    if (square == NULL || wide == NULL || small == NULL) return;
+    for (size_t i = 0; i < mr_image_value_count(square); i++) square->pixels[i] = 0.25f;
+    char full[600], diffuse[600], odd[600], tiny[600];
+    snprintf(full, sizeof full, "%s", mr_test_tmp_path("src_full.exr"));
+    snprintf(diffuse, sizeof diffuse, "%s", mr_test_tmp_path("src_diffuse.exr"));
+    snprintf(odd, sizeof odd, "%s", mr_test_tmp_path("src_wide.exr"));
+    snprintf(tiny, sizeof tiny, "%s", mr_test_tmp_path("src_tiny.exr"));
+    MR_CHECK_OK(mr_img_write(full, square, NULL));
+    MR_CHECK_OK(mr_img_write(diffuse, square, NULL));
+    MR_CHECK_OK(mr_img_write(odd, wide, NULL));
+    MR_CHECK_OK(mr_img_write(tiny, small, NULL));
+    mr_image *images[3] = {NULL, NULL, NULL}, *reference = NULL;
+    const char *both[3] = {full, diffuse, NULL};
+    MR_CHECK_OK(mr_remap_read_sources(both, full, images, &reference));
+    MR_CHECK(images[0] != NULL && images[1] != NULL && images[2] == NULL && reference != NULL);
+    if (images[1] != NULL) MR_CHECK(images[1]->width == 8 && images[1]->pixels[0] == 0.25f);
+    for (int k = 0; k < 3; k++) mr_image_free(images[k]);
+    mr_image_free(reference);
+    const char *not_square[3] = {odd, NULL, NULL};
+    MR_CHECK(mr_remap_read_sources(not_square, NULL, images, &reference) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strstr(mr_last_error(), "is 8x4: fit-scene renders are square") != NULL, "%s", mr_last_error());
+    MR_CHECK(images[0] == NULL && reference == NULL);
+    MR_CHECK(mr_remap_read_sources(both, tiny, images, &reference) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strstr(mr_last_error(), "src_tiny.exr' is 4x4 but '") != NULL &&
+                     strstr(mr_last_error(), "all renders must have the same size") != NULL, "%s", mr_last_error());
+    MR_CHECK(images[0] == NULL && images[1] == NULL && reference == NULL);
+    mr_image_free(square);
+    mr_image_free(wide);
+    mr_image_free(small);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(names_round_trip),
-             MR_TEST_ENTRY(pictures_written_and_readable), MR_TEST_ENTRY(zeroed_options_are_the_defaults),
+             MR_TEST_ENTRY(pictures_written_and_readable), MR_TEST_ENTRY(sources_read_and_sized),
+             MR_TEST_ENTRY(zeroed_options_are_the_defaults),
              MR_TEST_ENTRY(glossy_sources_keep_their_reflectance_at_the_default_size),
              MR_TEST_ENTRY(outcomes_say_what_the_scene_shows),
              MR_TEST_ENTRY(default_options_are_the_documented_ones),

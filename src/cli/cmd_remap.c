@@ -206,30 +206,9 @@ int cmd_remap(int argc, char **argv) {
 
     // Source images (black-box renders) decide the scene size; they must all agree and be square.
     mr_image *images[3] = {NULL, NULL, NULL}, *reference = NULL;
-    mr_status status = MR_OK;
-    for (int k = 0; k < 3 && exit_code == CLI_EXIT_OK; k++)
-        if (image_paths[k] && (status = mr_remap_read_render(image_paths[k], &images[k])) != MR_OK)
-            exit_code = cli_fail("remap", status);
-    if (exit_code == CLI_EXIT_OK && reference_path &&
-        (status = mr_remap_read_render(reference_path, &reference)) != MR_OK)
-        exit_code = cli_fail("remap", status);
-    if (exit_code == CLI_EXIT_OK && images[0] != NULL) {
-        if (images[0]->width != images[0]->height) {
-            fprintf(stderr, "matremap remap: error: '%s' is %dx%d: fit-scene renders are square\n", image_paths[0],
-                    images[0]->width, images[0]->height);
-            exit_code = CLI_EXIT_BAD_INPUT;
-        }
-        const mr_image *others[3] = {images[1], images[2], reference};
-        const char *other_paths[3] = {image_paths[1], image_paths[2], reference_path};
-        for (int k = 0; k < 3 && exit_code == CLI_EXIT_OK; k++)
-            if (others[k] && (others[k]->width != images[0]->width || others[k]->height != images[0]->height)) {
-                fprintf(stderr, "matremap remap: error: '%s' is %dx%d but '%s' is %dx%d: all renders must have "
-                        "the same size\n", other_paths[k], others[k]->width, others[k]->height, image_paths[0],
-                        images[0]->width, images[0]->height);
-                exit_code = CLI_EXIT_BAD_INPUT;
-            }
-        size = images[0]->width;
-    }
+    mr_status status = mr_remap_read_sources(image_paths, reference_path, images, &reference);
+    if (status != MR_OK) exit_code = cli_fail("remap", status);
+    if (images[0] != NULL) size = images[0]->width;
     mr_render_plan *plan = NULL;
     mr_remap_result result;
     double irradiance_scale = 1.0;

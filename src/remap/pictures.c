@@ -35,6 +35,32 @@ mr_status mr_remap_read_render(const char *path, mr_image **out) {
     return MR_OK;
 }
 
+mr_status mr_remap_read_sources(const char *const paths[3], const char *reference_path, mr_image *images[3],
+                                mr_image **reference) {
+    if (paths == NULL || images == NULL || reference == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "remap renders: NULL argument");
+    mr_image *read[4] = {NULL, NULL, NULL, NULL};
+    const char *all[4] = {paths[0], paths[1], paths[2], reference_path};
+    mr_status status = MR_OK;
+    for (int k = 0; k < 4 && status == MR_OK; k++)
+        if (all[k] != NULL) status = mr_remap_read_render(all[k], &read[k]);
+    const mr_image *full = read[0];
+    if (status == MR_OK && full != NULL && full->width != full->height)
+        status = mr_fail(MR_ERR_INVALID_ARG, "'%s' is %dx%d: fit-scene renders are square", all[0], full->width,
+                         full->height);
+    for (int k = 1; k < 4 && status == MR_OK && full != NULL; k++)
+        if (read[k] != NULL && (read[k]->width != full->width || read[k]->height != full->height))
+            status = mr_fail(MR_ERR_INVALID_ARG, "'%s' is %dx%d but '%s' is %dx%d: all renders must have the same size",
+                             all[k], read[k]->width, read[k]->height, all[0], full->width, full->height);
+    for (int k = 0; k < 4 && status != MR_OK; k++) {
+        mr_image_free(read[k]);
+        read[k] = NULL;
+    }
+    for (int k = 0; k < 3; k++) images[k] = read[k];
+    *reference = read[3];
+    return status;
+}
+
 mr_status mr_remap_picture_path(const char *prefix, int k, char *out, size_t size) {
     if (prefix == NULL || out == NULL || k < 0 || k >= MR_REMAP_PICTURE_COUNT)
         return mr_fail(MR_ERR_INVALID_ARG, "remap picture %d: no such picture", k);

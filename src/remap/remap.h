@@ -205,6 +205,16 @@ mr_status mr_irradiance_scale(const mr_render_plan *plan, const mr_image *refere
  * MR_ERR_INVALID_ARG naming the file, the pixel, the channel and the value; on failure *out is NULL. */
 mr_status mr_remap_read_render(const char *path, mr_image **out);
 
+/* The renders of a remap from images (`matremap remap --from-images`): paths[0] the full render, paths[1] and
+ * paths[2] its diffuse and specular parts (NULL when absent), `reference_path` a Lambert render for
+ * mr_irradiance_scale (NULL when absent), each read by mr_remap_read_render into images[k] and *reference (NULL for
+ * an absent one; the caller frees them). The full render decides the scene's size: it must be square and every
+ * other render its size. Errors: mr_remap_read_render's; MR_ERR_INVALID_ARG "'PATH' is WxH: fit-scene renders are
+ * square", "'PATH' is WxH but 'FULL' is WxH: all renders must have the same size". On failure nothing is left
+ * allocated (every output NULL). */
+mr_status mr_remap_read_sources(const char *const paths[3], const char *reference_path, mr_image *images[3],
+                                mr_image **reference);
+
 #define MR_REMAP_PICTURE_COUNT 3
 
 /* The file of picture k (0 the source's render, 1 the target's, 2 the SSIM map) under `prefix`: PREFIX_source.png,
