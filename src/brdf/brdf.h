@@ -36,7 +36,7 @@ extern "C" {
 #endif
 
 /* Upper bound on a model's packed value count and on its prepared-state size; descriptors must fit. */
-#define MR_BRDF_MAX_VALUES 16
+#define MR_BRDF_MAX_VALUES 24
 #define MR_BRDF_STATE_BYTES 512
 
 /* How f_r depends on a parameter, with all other parameters fixed. The optimiser uses this structure:
