@@ -12,6 +12,7 @@
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "brdf/brdf.h"
 #include "harness.h"
@@ -167,7 +168,8 @@ MR_TEST(registry_tables_are_consistent) {
 MR_TEST(map_encodings_follow_one_rule) {
     /* Colour parameters (reflectances and albedos given as RGB colours) are flagged MR_PARAM_SRGB_MAP in every
      * model, whatever their range (Ward's and Phong's specular go to 10); nothing else is. */
-    static const char *const colours[] = {"diffuse", "specular", "albedo", "f0", "base_color", "specular_color"};
+    static const char *const colours[] = {"diffuse", "specular", "albedo", "f0", "base_color", "specular_color",
+                                         "diffuse_color"};
     for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
         const mr_brdf_model *m = *mp;
         for (int i = 0; i < m->param_count; i++) {
@@ -1320,6 +1322,284 @@ MR_TEST(known_cycles_ggx) {
     }
 }
 
+/* UsdPreviewSurface 2.5 (src/brdf/usd_preview.c), written out here from the specification's words: returns the
+ * diffuse and specular parts. p holds the packed values (diffuse_color RGB, use_specular_workflow, specular_color
+ * RGB, metallic, roughness, clearcoat, clearcoat_roughness, ior). */
+static void usd_preview_reference(const double *p, const double wi[3], const double wo[3], double d[3], double s[3]) {
+    double h[3] = {wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]};
+    double hl = sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+    double nh = h[2] / hl, ih = (wi[0] * h[0] + wi[1] * h[1] + wi[2] * h[2]) / hl;
+    double w = pow(1.0 - ih, 5.0), r2 = pow((1.0 - p[11]) / (1.0 + p[11]), 2.0), m = p[7];
+    double S[2];
+    for (int k = 0; k < 2; k++) { /* GGX D G2/(4 n.l n.v), height-correlated, alpha = roughness^2 */
+        double a = pow(p[k ? 10 : 8], 2.0), a2 = a * a, dd = nh * nh * (a2 - 1.0) + 1.0, D = a2 / (PI * dd * dd);
+        double V = 0.5 / (wo[2] * sqrt(a2 + (1 - a2) * wi[2] * wi[2]) + wi[2] * sqrt(a2 + (1 - a2) * wo[2] * wo[2]));
+        S[k] = D * V;
+    }
+    for (int c = 0; c < 3; c++) {
+        double f0, f90, weight;
+        if (p[3] >= 0.5) {
+            f0 = p[4 + c], f90 = 1.0, weight = 1.0;
+        } else {
+            double k = (1.0 - m) + m * p[c];
+            f0 = (1.0 - m) * r2 * k + m * k, f90 = k, weight = 1.0 - m;
+        }
+        double F = f0 + (f90 - f0) * w;
+        d[c] = weight * (1.0 - F) * p[c] / PI;
+        s[c] = F * S[0] + p[9] * (r2 + (1.0 - r2) * w) * S[1];
+    }
+}
+
+MR_TEST(known_usd_preview) {
+    const mr_brdf_model *m = model_named("usd-preview"), *gltf = model_named("gltf");
+    if (!m || !gltf) return;
+    double v[MR_BRDF_MAX_VALUES] = {0}, d[3], s[3], rd[3], rs[3];
+    const double base[3] = {0.9, 0.5, 0.1};
+    MR_CHECK(mr_brdf_value_count(m) == 12);
+    mr_brdf_default_values(m, v);
+    set_rgb(m, v, "diffuse_color", 0.9, 0.5, 0.1);
+    set_param(m, v, "roughness", 0.4); /* alpha = 0.16: at normal incidence D V = 1/(4 pi alpha^2) */
+    const double dv0 = 1.0 / (4.0 * PI * 0.0256);
+
+    /* metallic workflow at normal incidence (w = 0): F0 = k ((1 - m) R2 + m), k = mix(1, diffuse, m) */
+    set_param(m, v, "metallic", 0.3);
+    eval_parts(m, v, normal, normal, d, s);
+    for (int c = 0; c < 3; c++) {
+        double k = 0.7 + 0.3 * base[c], f0 = k * (0.7 * 0.04 + 0.3);
+        MR_CHECK_MSG(close_rel(s[c], f0 * dv0, 1e-12), "F0 %d: %.17g vs %.17g", c, s[c] / dv0, f0);
+        MR_CHECK(close_rel(d[c], 0.7 * (1.0 - f0) * base[c] / PI, 1e-12));
+    }
+    /* ... metallic 1: F0 = F90 = diffuse_color at every angle, no diffuse part */
+    set_param(m, v, "metallic", 1.0);
+    double wi[3], wo[3];
+    dir_from_angles(1.2, 0.0, wi);
+    dir_from_angles(1.3, 2.0, wo);
+    eval_parts(m, v, normal, normal, d, s);
+    for (int c = 0; c < 3; c++) MR_CHECK(close_rel(s[c], base[c] * dv0, 1e-12) && d[c] == 0.0);
+    eval_parts(m, v, wi, wo, d, s);
+    usd_preview_reference(v, wi, wo, rd, rs);
+    for (int c = 0; c < 3; c++) MR_CHECK(close_rel(s[c], rs[c], 1e-11) && d[c] == 0.0);
+
+    /* specular workflow: F0 = specular_color at normal incidence, F90 = 1; metallic and ior ignored */
+    set_param(m, v, "use_specular_workflow", 1.0);
+    set_rgb(m, v, "specular_color", 0.05, 0.3, 0.8);
+    const double sc[3] = {0.05, 0.3, 0.8};
+    eval_parts(m, v, normal, normal, d, s);
+    for (int c = 0; c < 3; c++) {
+        MR_CHECK_MSG(close_rel(s[c], sc[c] * dv0, 1e-12), "specular F0 %d: %.17g", c, s[c] / dv0);
+        MR_CHECK(close_rel(d[c], (1.0 - sc[c]) * base[c] / PI, 1e-12));
+    }
+    double d2[3], s2[3];
+    set_param(m, v, "ior", 2.5);
+    eval_parts(m, v, wi, wo, d2, s2);
+    eval_parts(m, v, wi, wo, d, s);
+    for (int c = 0; c < 3; c++) MR_CHECK(d[c] == d2[c] && s[c] == s2[c]);
+    /* ... off normal, against the transcription above */
+    usd_preview_reference(v, wi, wo, rd, rs);
+    for (int c = 0; c < 3; c++)
+        MR_CHECK_MSG(close_rel(d[c], rd[c], 1e-11) && close_rel(s[c], rs[c], 1e-11), "specular wf %d", c);
+
+    /* no Lambert case: with F0 = 0 (ior 1, or specular_color 0) Schlick still gives F = w, so the diffuse is
+     * (1 - w) diffuse/pi: exactly diffuse/pi on retro-reflection (wi = wo, w = 0), dimmer elsewhere */
+    mr_brdf_default_values(m, v);
+    set_rgb(m, v, "diffuse_color", 0.9, 0.5, 0.1);
+    set_param(m, v, "ior", 1.0);
+    for (int k = 0; k < 5; k++) {
+        double dir[3];
+        dir_from_angles(0.3 * k, 0.7 * k, dir);
+        eval_parts(m, v, dir, dir, d, s);
+        /* |wi + wo|/2 may round below 1: w ~ 1e-80 */
+        for (int c = 0; c < 3; c++) MR_CHECK(close_rel(d[c], base[c] / PI, 1e-15) && s[c] < 1e-60);
+    }
+    dir_from_angles(1.4, 0.0, wi); /* mirror pair at 80 degrees: wi.h = cos 80 deg, w = 0.39 */
+    dir_from_angles(1.4, PI, wo);
+    eval_parts(m, v, wi, wo, d, s);
+    usd_preview_reference(v, wi, wo, rd, rs);
+    for (int c = 0; c < 3; c++) MR_CHECK(close_rel(d[c], rd[c], 1e-12) && d[c] < 0.7 * base[c] / PI);
+
+    /* metallic workflow, metallic 0, no clearcoat = gltf with metallic 0 at the same ior, any colour and roughness */
+    uint64_t rng = 12;
+    int compared = 0, differ = 0;
+    double worst = 0.0;
+    for (int k = 0; k < 400; k++) {
+        double g[MR_BRDF_MAX_VALUES] = {0}, dg[3], sg[3];
+        mr_brdf_default_values(m, v);
+        mr_brdf_default_values(gltf, g);
+        double col[3] = {rnd(&rng), rnd(&rng), rnd(&rng)}, rough = 0.01 + 0.99 * rnd(&rng), ior = 1.0 + 2.0 * rnd(&rng);
+        set_rgb(m, v, "diffuse_color", col[0], col[1], col[2]);
+        set_rgb(gltf, g, "base_color", col[0], col[1], col[2]);
+        set_param(m, v, "roughness", rough);
+        set_param(gltf, g, "roughness", rough);
+        set_param(m, v, "ior", ior);
+        set_param(gltf, g, "ior", ior);
+        set_param(gltf, g, "metallic", 0.0);
+        random_dir(&rng, k < 200 ? 0.02 : 0.0, wi);
+        random_dir(&rng, k < 200 ? 0.02 : 0.0, wo);
+        eval_parts(m, v, wi, wo, d, s);
+        eval_parts(gltf, g, wi, wo, dg, sg);
+        for (int c = 0; c < 3; c++) {
+            compared += 2;
+            worst = fmax(worst, fabs(d[c] - dg[c]) / fmax(dg[c], 1e-300));
+            worst = fmax(worst, fabs(s[c] - sg[c]) / fmax(sg[c], 1e-300));
+            if (!close_rel(d[c], dg[c], 1e-12) || !close_rel(s[c], sg[c], 1e-12)) differ++;
+        }
+    }
+    MR_CHECK_MSG(differ == 0, "%d of %d values differ from gltf (metallic 0)", differ, compared);
+    printf("      usd-preview (metallic 0, clearcoat 0) == gltf (metallic 0, same ior): %d values, worst rel %.2g\n",
+           compared, worst);
+    /* the core glTF material (no extensions) at any metallic m is the specular workflow exactly: glTF's
+     * (1 - m) F_dielectric + m F_metal is Schlick with F0 = mix(0.04, base, m) and F90 = 1, and its diffuse
+     * (1 - m) 0.96 (1 - w) base/pi is (1 - F0_c)(1 - w) diffuse_c/pi with diffuse_c = (1 - m) 0.96 base_c/(1 - F0_c),
+     * which stays <= 1 */
+    differ = 0, compared = 0;
+    for (int k = 0; k < 400; k++) {
+        double g[MR_BRDF_MAX_VALUES] = {0}, dg[3], sg[3], f0[3], dc[3];
+        mr_brdf_default_values(m, v);
+        mr_brdf_default_values(gltf, g);
+        double col[3] = {rnd(&rng), rnd(&rng), rnd(&rng)}, rough = 0.01 + 0.99 * rnd(&rng), mt = rnd(&rng);
+        for (int c = 0; c < 3; c++) {
+            f0[c] = (1.0 - mt) * 0.04 + mt * col[c];
+            dc[c] = (1.0 - mt) * 0.96 * col[c] / (1.0 - f0[c]);
+        }
+        set_param(m, v, "use_specular_workflow", 1.0);
+        set_rgb(m, v, "specular_color", f0[0], f0[1], f0[2]);
+        set_rgb(m, v, "diffuse_color", dc[0], dc[1], dc[2]);
+        set_param(m, v, "roughness", rough);
+        set_rgb(gltf, g, "base_color", col[0], col[1], col[2]);
+        set_param(gltf, g, "metallic", mt);
+        set_param(gltf, g, "roughness", rough);
+        random_dir(&rng, 0.02, wi);
+        random_dir(&rng, 0.02, wo);
+        eval_parts(m, v, wi, wo, d, s);
+        eval_parts(gltf, g, wi, wo, dg, sg);
+        for (int c = 0; c < 3; c++) {
+            compared++;
+            if (!close_rel(d[c] + s[c], dg[c] + sg[c], 1e-12)) differ++;
+        }
+    }
+    MR_CHECK_MSG(differ == 0, "%d of %d values differ from core gltf (specular workflow)", differ, compared);
+    /* ... but not the metallic workflow at metallic 1: gltf's metal has F90 = 1, this one F90 = the albedo */
+    {
+        double g[MR_BRDF_MAX_VALUES] = {0}, dg[3], sg[3];
+        mr_brdf_default_values(m, v);
+        mr_brdf_default_values(gltf, g);
+        set_rgb(m, v, "diffuse_color", 0.9, 0.5, 0.1);
+        set_rgb(gltf, g, "base_color", 0.9, 0.5, 0.1);
+        set_param(m, v, "metallic", 1.0);
+        set_param(m, v, "roughness", 1.0);
+        dir_from_angles(1.4, 0.0, wi);
+        dir_from_angles(1.4, PI, wo);
+        eval_parts(m, v, wi, wo, d, s);
+        eval_parts(gltf, g, wi, wo, dg, sg);
+        MR_CHECK(s[2] < 0.5 * sg[2]);
+    }
+
+    /* roles in the workflow the generic test (switches at 0) does not visit: specular_color and clearcoat are
+     * affine in the specular workflow, diffuse_color is linear there, and quadratic in the metallic one */
+    rng = 13;
+    int bad = 0, quadratic = 0;
+    for (int k = 0; k < 40; k++) {
+        double u[MR_BRDF_MAX_VALUES] = {0}, a[6], b[6], mid[6];
+        random_values(m, &rng, 0.0, u);
+        random_dir(&rng, 0.02, wi);
+        random_dir(&rng, 0.02, wo);
+        set_param(m, u, "use_specular_workflow", 1.0);
+        const char *affine[] = {"specular_color", "clearcoat"};
+        for (int i = 0; i < 2; i++) {
+            double x[MR_BRDF_MAX_VALUES], y[MR_BRDF_MAX_VALUES], z[MR_BRDF_MAX_VALUES];
+            memcpy(x, u, sizeof x), memcpy(y, u, sizeof y), memcpy(z, u, sizeof z);
+            set_param(m, x, affine[i], 0.0), set_param(m, y, affine[i], 1.0), set_param(m, z, affine[i], 0.5);
+            eval_parts(m, x, wi, wo, a, a + 3);
+            eval_parts(m, y, wi, wo, b, b + 3);
+            eval_parts(m, z, wi, wo, mid, mid + 3);
+            for (int o = 0; o < 6; o++)
+                if (!close_rel(mid[o], 0.5 * (a[o] + b[o]), 1e-11)) bad++;
+        }
+        for (int wf = 0; wf < 2; wf++) {
+            double x[MR_BRDF_MAX_VALUES], y[MR_BRDF_MAX_VALUES];
+            memcpy(x, u, sizeof x);
+            set_param(m, x, "use_specular_workflow", wf);
+            memcpy(y, x, sizeof y);
+            for (int c = 0; c < 3; c++) y[c] = 0.37 * x[c];
+            eval_parts(m, x, wi, wo, a, a + 3), eval_parts(m, y, wi, wo, b, b + 3);
+            for (int c = 0; c < 3; c++) {
+                int linear = close_rel(b[c], 0.37 * a[c], 1e-12);
+                if (wf == 1 && (!linear || b[c + 3] != a[c + 3])) bad++;
+                if (wf == 0 && !linear) quadratic++;
+            }
+        }
+    }
+    MR_CHECK_MSG(bad == 0, "%d role violations in the specular workflow", bad);
+    MR_CHECK_MSG(quadratic > 60, "diffuse_color looked linear in the metallic workflow (%d of 120 not)", quadratic);
+
+    /* white furnace, by the brute-force quadrature above: bounded where the specification conserves energy */
+    double fd[3], fs[3];
+    mr_brdf_default_values(m, v);
+    set_param(m, v, "use_specular_workflow", 1.0);
+    set_rgb(m, v, "specular_color", 1.0, 1.0, 1.0); /* F = 1: the GGX lobe's own albedo, no diffuse */
+    set_rgb(m, v, "diffuse_color", 1.0, 1.0, 1.0);
+    const double angles[] = {0.0, 40.0, 80.0};
+    for (int a = 0; a < 3; a++) {
+        furnace(m, v, angles[a] * PI / 180.0, fd, fs);
+        MR_CHECK_MSG(fd[0] == 0.0 && fs[0] <= 1.0 + 1e-3 && fs[0] > 0.8, "F = 1 at %g deg: %.4f", angles[a], fs[0]);
+    }
+    mr_brdf_default_values(m, v);
+    set_rgb(m, v, "diffuse_color", 1.0, 1.0, 1.0);
+    furnace(m, v, 0.0, fd, fs);
+    double at0 = fd[0] + fs[0];
+    MR_CHECK_MSG(at0 <= 1.0 + 2e-3 && at0 > 0.95, "white, defaults, normal incidence: %.4f", at0);
+    set_param(m, v, "roughness", 0.01);
+    furnace(m, v, 80.0 * PI / 180.0, fd, fs);
+    double smooth80 = fd[0] + fs[0];
+    set_param(m, v, "roughness", 0.5);
+    set_param(m, v, "clearcoat", 1.0);
+    furnace(m, v, 0.0, fd, fs);
+    double coat0 = fd[0] + fs[0];
+    MR_CHECK(smooth80 > 1.01 && coat0 > at0);
+    printf("      usd-preview white furnace: %.4f at 0 deg (defaults, white); %.4f at 80 deg (roughness 0.01); "
+           "%.4f at 0 deg with clearcoat 1\n", at0, smooth80, coat0);
+}
+
+/* The model against tests/usd_preview_reference.py, an independent numpy transcription of the specification: every
+ * value to 1e-6 relative. Runs Debian's python3 (python3-numpy, scripts/install-deps.sh). */
+MR_TEST(known_usd_preview_matches_python) {
+    const mr_brdf_model *m = model_named("usd-preview");
+    if (!m) return;
+    const char *root = getenv("MR_ROOT");
+    char cmd[4096];
+    const char *python = access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
+    snprintf(cmd, sizeof cmd, "%s '%s/tests/usd_preview_reference.py'", python, root ? root : ".");
+    FILE *pipe = popen(cmd, "r");
+    MR_CHECK_MSG(pipe != NULL, "cannot run %s", cmd);
+    if (!pipe) return;
+    int lines = 0, bad = 0;
+    double worst = 0.0, x[24];
+    for (;;) {
+        int n = 0;
+        while (n < 24 && fscanf(pipe, "%lf", &x[n]) == 1) n++;
+        if (n < 24) break;
+        double d[3], s[3];
+        eval_parts(m, x, x + 12, x + 15, d, s);
+        for (int c = 0; c < 3; c++) {
+            double pd = x[18 + c], ps = x[21 + c];
+            worst = fmax(worst, fabs(d[c] - pd) / fmax(fabs(pd), 1e-300));
+            worst = fmax(worst, fabs(s[c] - ps) / fmax(fabs(ps), 1e-300));
+            if (!close_rel(d[c], pd, 1e-6) || !close_rel(s[c], ps, 1e-6)) {
+                if (bad++ < 3)
+                    fprintf(stderr, "    line %d channel %d: diffuse %.12g vs %.12g, specular %.12g vs %.12g\n",
+                            lines + 1, c, d[c], pd, s[c], ps);
+            }
+        }
+        lines++;
+    }
+    int status = pclose(pipe);
+    MR_CHECK_MSG(status == 0, "%s exited with %d (needs python3-numpy)", cmd, status);
+    MR_CHECK_MSG(lines >= 40, "%d lines read from the Python reference", lines);
+    MR_CHECK_MSG(bad == 0, "%d of %d values differ from the Python reference", bad, 6 * lines);
+    printf("      usd-preview vs tests/usd_preview_reference.py: %d direction pairs x 6 values, worst rel %.2g\n",
+           lines, worst);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(map_encodings_follow_one_rule),
              MR_TEST_ENTRY(find_unknown_lists_valid_names),
              MR_TEST_ENTRY(default_values_use_per_channel_defaults),
@@ -1334,4 +1614,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(map_en
              MR_TEST_ENTRY(known_plastic), MR_TEST_ENTRY(known_ward_variants), MR_TEST_ENTRY(known_trimming),
              MR_TEST_ENTRY(known_phong), MR_TEST_ENTRY(known_blender_ward), MR_TEST_ENTRY(known_gltf),
              MR_TEST_ENTRY(known_gltf_specgloss), MR_TEST_ENTRY(known_cycles_principled),
-             MR_TEST_ENTRY(known_cycles_ggx))
+             MR_TEST_ENTRY(known_cycles_ggx),
+             MR_TEST_ENTRY(known_usd_preview), MR_TEST_ENTRY(known_usd_preview_matches_python))
