@@ -35,7 +35,8 @@
  *     artistic_ior(diffuseColor, diffuseColor) (exact Fresnel, F(0) = diffuseColor, tending to 1 at grazing) with
  *     the Schlick lobe; the two agree at normal incidence and differ towards grazing.
  *   - The clearcoat is added on top of the base (Storm); MaterialX layers it (the base times 1 - clearcoat E_coat).
- *   - No multiple-scattering compensation (MaterialX's generalized_schlick_bsdf multiplies by one); Storm has none.
+ *   - No multiple-scattering compensation: MaterialX's generalized_schlick_bsdf (pbrlib/genglsl) multiplies its
+ *     lobe by mx_ggx_energy_compensation(n.v, alpha); Storm has none.
  *   - G: height-correlated Smith (MaterialX's mx_ggx_smith_G2); Storm uses the separable Schlick-GGX k = alpha/2
  *     and adds 0.001 to D's numerator and to 4 n.l n.v, shading hacks left out here.
  *
