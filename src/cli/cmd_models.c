@@ -81,13 +81,18 @@ static void print_model_detail(const mr_brdf_model *m) {
     printf("source: %s\n", m->source);
     if (m->flags & MR_BRDF_NOT_ENERGY_CONSERVING)
         printf("note: may reflect more energy than it receives (not bounded by the white-furnace test)\n");
+    if (m->flags & MR_BRDF_NON_RECIPROCAL)
+        printf("note: not reciprocal (layers are albedo-scaled at the view direction, the first of eval's two)\n");
     printf("analytic parameter derivatives: %s\n\n", m->eval_grad ? "yes" : "no");
-    printf("  %-15s %-3s %-17s %7s %7s  %-9s %-8s %-8s %s\n", "PARAMETER", "CH", "DEFAULT", "MIN", "MAX", "ROLE",
+    int width = 15; /* the name column: 15, or wider for a model with longer names */
+    for (int i = 0; i < m->param_count; i++)
+        if ((int)strlen(m->params[i].name) > width) width = (int)strlen(m->params[i].name);
+    printf("  %-*s %-3s %-17s %7s %7s  %-9s %-8s %-8s %s\n", width, "PARAMETER", "CH", "DEFAULT", "MIN", "MAX", "ROLE",
            "LOBE", "ENCODING", "MEANING");
     for (int i = 0; i < m->param_count; i++) {
         const mr_brdf_param *p = &m->params[i];
         char def[64];
-        printf("  %-15s %-3d %-17s %7.4g %7.4g  %-9s %-8s %-8s %s\n", p->name, p->channels,
+        printf("  %-*s %-3d %-17s %7.4g %7.4g  %-9s %-8s %-8s %s\n", width, p->name, p->channels,
                default_text(p, def, sizeof def), p->min_value, p->max_value, mr_param_role_name(p->role),
                mr_param_lobe_name(p->lobe), map_encoding(p), p->meaning);
     }
