@@ -170,7 +170,7 @@ MR_TEST(map_encodings_follow_one_rule) {
     /* Colour parameters (reflectances and albedos given as RGB colours) are flagged MR_PARAM_SRGB_MAP in every
      * model, whatever their range (Ward's and Phong's specular go to 10); nothing else is. */
     static const char *const colours[] = {"diffuse", "specular", "albedo", "f0", "base_color", "specular_color",
-                                          "coat_color"};
+                                          "coat_color", "specular_tint", "coat_tint"};
     for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
         const mr_brdf_model *m = *mp;
         for (int i = 0; i < m->param_count; i++) {
@@ -1480,6 +1480,107 @@ MR_TEST(known_openpbr_reference) {
     printf("      openpbr vs the numpy reference: %d direction pairs, largest relative difference %.3g\n", rows, worst);
 }
 
+/* blender-principled (blender_principled.c): F0, the level, F82, Lambert and glTF's metal as special cases, and the
+ * white furnace with Multiscatter GGX. */
+MR_TEST(known_blender_principled) {
+    const mr_brdf_model *m = model_named("blender-principled");
+    const mr_brdf_model *gltf = model_named("gltf");
+    if (!m || !gltf) return;
+    double v[MR_BRDF_MAX_VALUES], d[3], s[3];
+    const double n[3] = {0.0, 0.0, 1.0};
+
+    /* single-scatter GGX: dielectric F0 = ((ior - 1)/(ior + 1))^2 2 specular_ior_level, tinted */
+    mr_brdf_default_values(m, v);
+    set_param(m, v, "multiscatter", 0.0);
+    set_rgb(m, v, "base_color", 0.0, 0.0, 0.0);
+    set_param(m, v, "roughness", 0.5);
+    const double iors[] = {1.3, 1.5, 2.2}, levels[] = {0.5, 0.25, 0.8};
+    for (int k = 0; k < 3; k++) {
+        set_param(m, v, "ior", iors[k]);
+        set_param(m, v, "specular_ior_level", levels[k]);
+        set_rgb(m, v, "specular_tint", 1.0, 0.5, 0.25);
+        eval_parts(m, v, n, n, d, s);
+        double f0 = pow((iors[k] - 1.0) / (iors[k] + 1.0), 2.0) * 2.0 * levels[k], dv = op_test_dv(0.25, n, n);
+        const double tint[3] = {1.0, 0.5, 0.25};
+        for (int c = 0; c < 3; c++)
+            MR_CHECK_MSG(close_rel(s[c], f0 * tint[c] * dv, 1e-12) && d[c] == 0.0, "ior %g level %g: %.15g vs %.15g",
+                         iors[k], levels[k], s[c], f0 * tint[c] * dv);
+    }
+
+    /* metal: F0 = base_color at normal incidence, specular_tint times Schlick at 1/7 */
+    mr_brdf_default_values(m, v);
+    set_param(m, v, "multiscatter", 0.0);
+    set_param(m, v, "metallic", 1.0);
+    set_param(m, v, "roughness", 0.5);
+    set_rgb(m, v, "base_color", 0.9, 0.6, 0.3);
+    set_rgb(m, v, "specular_tint", 0.5, 0.8, 1.0);
+    const double base[3] = {0.9, 0.6, 0.3}, tint[3] = {0.5, 0.8, 1.0};
+    eval_parts(m, v, n, n, d, s);
+    for (int c = 0; c < 3; c++)
+        MR_CHECK_MSG(close_rel(s[c], base[c] * op_test_dv(0.25, n, n), 1e-12), "metal F0 %d: %.15g", c, s[c]);
+    double mu = 1.0 / 7.0, sn = sqrt(1.0 - mu * mu);
+    const double wi82[3] = {sn, 0.0, mu}, wo82[3] = {-sn, 0.0, mu};
+    eval_parts(m, v, wi82, wo82, d, s);
+    for (int c = 0; c < 3; c++) {
+        double expect = tint[c] * (base[c] + (1.0 - base[c]) * pow(1.0 - mu, 5.0)) * op_test_dv(0.25, wi82, wo82);
+        MR_CHECK_MSG(close_rel(s[c], expect, 1e-12), "F82 %d: %.15g vs %.15g", c, s[c], expect);
+    }
+
+    /* special cases: no specular layer -> Lambert; a white-tinted single-scatter metal -> gltf's metal */
+    double g[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(gltf, g);
+    set_rgb(gltf, g, "base_color", 0.9, 0.6, 0.3);
+    set_param(gltf, g, "metallic", 1.0);
+    set_param(gltf, g, "roughness", 0.5);
+    set_rgb(m, v, "specular_tint", 1.0, 1.0, 1.0);
+    double lam[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(m, lam);
+    set_param(m, lam, "specular_ior_level", 0.0);
+    set_rgb(m, lam, "base_color", 0.7, 0.5, 0.2);
+    uint64_t rng = 91;
+    int bad_metal = 0, bad_lambert = 0;
+    for (int k = 0; k < 500; k++) {
+        double wi[3], wo[3], d2[3], s2[3];
+        random_dir(&rng, 0.0, wi);
+        random_dir(&rng, 0.0, wo);
+        eval_parts(m, v, wi, wo, d, s);
+        eval_parts(gltf, g, wi, wo, d2, s2);
+        for (int c = 0; c < 3; c++)
+            if (!close_rel(s[c], s2[c], 1e-12) || d[c] != 0.0 || d2[c] != 0.0) bad_metal++;
+        eval_parts(m, lam, wi, wo, d, s);
+        const double rho[3] = {0.7, 0.5, 0.2};
+        for (int c = 0; c < 3; c++)
+            if (!close_rel(d[c], rho[c] / PI, 1e-14) || s[c] != 0.0) bad_lambert++;
+    }
+    MR_CHECK_MSG(bad_metal == 0, "%d values differ from gltf's metal", bad_metal);
+    MR_CHECK_MSG(bad_lambert == 0, "%d values differ from Lambert", bad_lambert);
+
+    /* white furnace with Multiscatter GGX (the quadrature of this file) */
+    const double rough[] = {0.1, 0.3, 0.6, 1.0}, angles[] = {0.0, 40.0, 65.0, 80.0};
+    double lo[2] = {1e9, 1e9}, hi[2] = {0.0, 0.0};
+    for (int metal = 0; metal < 2; metal++)
+        for (int coat = 0; coat < 2; coat++)
+            for (size_t r = 0; r < sizeof rough / sizeof rough[0]; r++) {
+                mr_brdf_default_values(m, v);
+                set_rgb(m, v, "base_color", 1.0, 1.0, 1.0);
+                set_param(m, v, "metallic", metal);
+                set_param(m, v, "roughness", rough[r]);
+                set_param(m, v, "coat_weight", coat);
+                set_param(m, v, "coat_roughness", 0.2);
+                for (size_t a = 0; a < sizeof angles / sizeof angles[0]; a++) {
+                    furnace(m, v, angles[a] * PI / 180.0, d, s);
+                    double total = d[0] + s[0];
+                    lo[metal] = fmin(lo[metal], total);
+                    hi[metal] = fmax(hi[metal], total);
+                    MR_CHECK_MSG(total <= 1.005, "metal %d coat %d roughness %g, %g deg: albedo %.4f", metal, coat,
+                                 rough[r], angles[a], total);
+                }
+            }
+    printf("      blender-principled white furnace (0-80 deg, roughness 0.1-1, coat on/off): dielectric %.4f .. %.4f, "
+           "metal %.4f .. %.4f\n", lo[0], hi[0], lo[1], hi[1]);
+    MR_CHECK(lo[1] > 0.99);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(map_encodings_follow_one_rule),
              MR_TEST_ENTRY(find_unknown_lists_valid_names),
              MR_TEST_ENTRY(default_values_use_per_channel_defaults),
@@ -1495,4 +1596,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(map_en
              MR_TEST_ENTRY(known_phong), MR_TEST_ENTRY(known_blender_ward), MR_TEST_ENTRY(known_gltf),
              MR_TEST_ENTRY(known_gltf_specgloss), MR_TEST_ENTRY(known_cycles_principled),
              MR_TEST_ENTRY(known_cycles_ggx), MR_TEST_ENTRY(known_openpbr),
-             MR_TEST_ENTRY(known_openpbr_reference))
+             MR_TEST_ENTRY(known_openpbr_reference),
+             MR_TEST_ENTRY(known_blender_principled))

@@ -236,11 +236,11 @@ MR_TEST(self_remap_recovers_the_source_parameters) {
     mr_render_plan_free(plan);
 }
 
-/* openpbr to and from gltf and cycles-principled, SSIM > 0.99. gltf's dielectric (F0 0.04, Lambert) and metal
- * (Schlick F) are near openpbr's defaults (ior 1.5, EON at sigma 0, F82 with a white tint = Schlick); the
- * differences are the layering (albedo scaling against glTF's 1 - F(v.h)) and, for cycles-principled, Burley's
- * diffuse and the separable G. Measured: 0.9986 (openpbr -> cycles-principled) to 0.99996. */
-MR_TEST(openpbr_remaps_to_and_from_gltf_and_cycles_principled) {
+/* openpbr and blender-principled to and from gltf and cycles-principled (and blender-principled -> openpbr), SSIM
+ * > 0.99. gltf's dielectric (F0 0.04, Lambert) and metal (Schlick F) are near the layered models' defaults (ior 1.5,
+ * Lambert, F82 with a white tint = Schlick); the differences are the layering (albedo scaling against glTF's
+ * 1 - F(v.h)), multiple scattering and, for cycles-principled, Burley's diffuse and the separable G. */
+MR_TEST(layered_models_remap_to_and_from_gltf_and_cycles_principled) {
     static const struct {
         const char *source, *assignments, *target;
         double min_ssim;
@@ -251,6 +251,12 @@ MR_TEST(openpbr_remaps_to_and_from_gltf_and_cycles_principled) {
         {"openpbr", "base_color=0.9,0.6,0.3 base_metalness=1 specular_roughness=0.5", "gltf", 0.99},
         {"cycles-principled", "base_color=0.6,0.4,0.2 roughness=0.4", "openpbr", 0.99},
         {"openpbr", "base_color=0.6,0.4,0.2 specular_roughness=0.4", "cycles-principled", 0.99},
+        {"gltf", "base_color=0.6,0.4,0.2 metallic=0 roughness=0.4", "blender-principled", 0.99},
+        {"gltf", "base_color=0.9,0.6,0.3 metallic=1 roughness=0.3", "blender-principled", 0.99},
+        {"blender-principled", "base_color=0.6,0.4,0.2 roughness=0.4", "gltf", 0.99},
+        {"cycles-principled", "base_color=0.6,0.4,0.2 roughness=0.4", "blender-principled", 0.99},
+        {"blender-principled", "base_color=0.6,0.4,0.2 roughness=0.4", "cycles-principled", 0.99},
+        {"blender-principled", "base_color=0.9,0.6,0.3 metallic=1 roughness=0.5", "openpbr", 0.99},
     };
     mr_render_plan *plan = fit_plan(32);
     mr_remap_options o = options(MR_REMAP_AUTO);
@@ -1248,7 +1254,7 @@ MR_TEST_MAIN(MR_TEST_ENTRY(names_round_trip),
              MR_TEST_ENTRY(outcomes_say_what_the_scene_shows),
              MR_TEST_ENTRY(default_options_are_the_documented_ones),
              MR_TEST_ENTRY(self_remap_recovers_the_source_parameters),
-             MR_TEST_ENTRY(openpbr_remaps_to_and_from_gltf_and_cycles_principled),
+             MR_TEST_ENTRY(layered_models_remap_to_and_from_gltf_and_cycles_principled),
              MR_TEST_ENTRY(metallic_to_specular_matches_the_analytic_conversion),
              MR_TEST_ENTRY(metallic_workflow_round_trip_follows_equation_2),
              MR_TEST_ENTRY(every_strategy_returns_a_finite_result),

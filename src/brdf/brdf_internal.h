@@ -428,5 +428,19 @@ static inline double mr_eon_albedo_on(const mr_eon *e, double mu, double sin2) {
 double mr_ggx_albedo_dielectric(double mu, double r, double eps);
 /* The same with F = 1: the lobe's own single-scattering albedo (bilinear in (sqrt(mu), r)). */
 double mr_ggx_albedo_one(double mu, double r);
+/* Its cosine-weighted hemispherical average E_avg(r) = 2 integral_0^1 E(mu) mu dmu (Simpson's rule, 64 intervals, on
+ * the interpolated table): per parameter set, not per eval. */
+double mr_ggx_albedo_one_avg(double r);
+
+/* The hemispherical average of the exact dielectric Fresnel, F_avg(eta) = 2 integral_0^1 F(mu, eta) mu dmu, eta >= 1
+ * (Simpson's rule, 64 intervals; F is smooth on [0, 1] for eta >= 1, the error is below 1e-7). Per parameter set. */
+static inline double mr_fresnel_dielectric_avg(double eta) {
+    double sum = 0.0;
+    for (int i = 0; i <= 64; i++) {
+        double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0);
+        sum += w * 2.0 * mu * mr_fresnel_dielectric(MR_MAX(mu, 1e-9), eta, NULL);
+    }
+    return sum / (3.0 * 64.0);
+}
 
 #endif /* MR_BRDF_INTERNAL_H */

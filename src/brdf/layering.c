@@ -40,3 +40,12 @@ double mr_ggx_albedo_one(double mu, double r) {
     const double(*t)[MR_GGX_ALB_NT] = mr_ggx_alb_one;
     return alb_lerp(alb_lerp(t[ir][it], t[ir][it + 1], a), alb_lerp(t[ir + 1][it], t[ir + 1][it + 1], a), b);
 }
+
+double mr_ggx_albedo_one_avg(double r) {
+    double sum = 0.0;
+    for (int i = 0; i <= 64; i++) {
+        double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0);
+        sum += w * 2.0 * mu * mr_ggx_albedo_one(mu, r);
+    }
+    return sum / (3.0 * 64.0);
+}
