@@ -97,7 +97,11 @@ enum {
      * their sum only while the lobe albedos sum to at most 1, which is the caller's choice of parameters.
      * The white-furnace test checks these models lobe by lobe (unless they are also flagged
      * MR_BRDF_NOT_ENERGY_CONSERVING); a fit may want to constrain the sum. */
-    MR_BRDF_INDEPENDENT_LOBES = 2
+    MR_BRDF_INDEPENDENT_LOBES = 2,
+    /* f_r(wi, wo) != f_r(wo, wi): the model scales lower layers by 1 - E(wi), the directional albedo of the layer
+     * above at the FIRST direction (OpenPBR's non-reciprocal albedo scaling, with the renderer's view direction
+     * first: render.c calls eval(view, light)). The reciprocity test skips these models and `models` says so. */
+    MR_BRDF_NON_RECIPROCAL = 4
 };
 
 typedef struct mr_brdf_model mr_brdf_model;

@@ -336,4 +336,111 @@ static inline double mr_ggx_dv_correlated(double alpha, const mr_brdf_geom *g, d
     return D * V;
 }
 
+/* ---- F82-tint metal Fresnel (Kutz et al. 2021, as OpenPBR 1.1 "Metal" writes it) ---- */
+
+/* mu_bar = 1/7, the cosine of about 82 degrees where the tint is pinned. */
+#define MR_F82_MU_BAR (1.0 / 7.0)
+
+/* Schlick's curve F0 + (1 - F0)(1 - mu)^5, mu in [0, 1]. */
+static inline double mr_schlick(double mu, double f0) { return f0 + (1.0 - f0) * mr_schlick_weight(mu); }
+
+/* The F82-tint correction's coefficient b for one channel, so that mr_f82_tint(mu, f0, b) hits
+ * tint * F_Schlick(mu_bar) at mu = mu_bar:  b = (1 - tint) F_Schlick(mu_bar) / (mu_bar (1 - mu_bar)^6). Computed
+ * once per parameter set (prepare). */
+static inline double mr_f82_coeff(double f0, double tint) {
+    double m = 1.0 - MR_F82_MU_BAR, m2 = m * m, m6 = m2 * m2 * m2;
+    return (1.0 - tint) * mr_schlick(MR_F82_MU_BAR, f0) / (MR_F82_MU_BAR * m6);
+}
+
+/* F82(mu) = F_Schlick(mu) - b mu (1 - mu)^6, clamped into [0, 1] (for black f0 and tint the curve dips a little
+ * below 0 beside mu_bar; a reflectance cannot). */
+static inline double mr_f82_tint(double mu, double f0, double b) {
+    double m = 1.0 - mu, m2 = m * m;
+    return mr_clampd(mr_schlick(mu, f0) - b * mu * m2 * m2 * m2, 0.0, 1.0);
+}
+
+/* ---- EON: energy-preserving Oren-Nayar (Portsmouth et al. 2024; OpenPBR 1.1 "Glossy-diffuse") ---- */
+
+/* Fujii's Oren-Nayar f_ON = rho/pi (A + B s/t) with A = 1/(1 + c1 sigma), B = sigma A, c1 = 1/2 - 2/(3 pi),
+ * s = wi.wo - cos_i cos_o, 1/t = 1 for s <= 0 and 1/max(cos_i, cos_o) for s > 0. Its rho-free directional
+ * albedo is E(mu) = A + B g(mu) with (integrating s/t over the hemisphere in closed form)
+ *   pi g = sin(th)(th - sin(th) cos(th)) + 2/3 tan(th)(1 - sin^3(th)) - 2/3 sin(th),  mu = cos(th),
+ * and its cosine-weighted average is <E> = A + B <g>, <g> = 2/3 - 28/(15 pi). So that nothing cancels as
+ * sigma -> 0, the code keeps 1 - E(mu) = sigma A (c1 - g(mu)) and 1 - <E> = sigma A (c1 - <g>). */
+#define MR_EON_C1 (0.5 - 2.0 / (3.0 * MR_PI))
+#define MR_EON_G_AVG (2.0 / 3.0 - 28.0 / (15.0 * MR_PI))
+
+/* g(mu) above for mu in (0, 1]; 1 - sin^3 = (1 - sin)(1 + sin + sin^2) and 1 - sin = cos^2/(1 + sin) keep the
+ * tan(th) term finite at grazing angles. */
+static inline double mr_eon_g(double mu, double sin2) {
+    double s = sqrt(sin2), th = atan2(s, mu);
+    double t = s * (th - s * mu) + (2.0 / 3.0) * s * mu * (1.0 + s + sin2) / (1.0 + s) - (2.0 / 3.0) * s;
+    return t * MR_INV_PI;
+}
+
+/* The per-parameter-set part of EON for one colour channel rho in [0, 1] and sigma in [0, 1]. */
+typedef struct mr_eon {
+    double A, B;          /* Fujii's coefficients */
+    double sigma_A;       /* sigma A: 1 - E(mu) = sigma_A (c1 - g(mu)) */
+    double comp[3];       /* rho_ms / (pi (c1 - <g>)) per channel: the multiple-scattering lobe's scale */
+} mr_eon;
+
+/* rho_ms = rho^2 <E> / (1 - rho (1 - <E>)) (the multiple-scattering albedo of the Oren-Nayar microfacets), and
+ * f_comp = rho_ms / pi (1 - E(mu_i))(1 - E(mu_o)) / (1 - <E>), so that rho = 1 gives a total albedo of exactly 1
+ * at every angle. comp[] folds 1/pi, rho_ms and 1/(1 - <E>) (its sigma A factor cancels one of the two in the
+ * numerator, which the eval supplies). sigma = 0 leaves comp at 0 (Lambert). */
+static inline void mr_eon_prepare(double sigma, const double rho[3], mr_eon *e) {
+    e->A = 1.0 / (1.0 + MR_EON_C1 * sigma);
+    e->B = sigma * e->A;
+    e->sigma_A = sigma * e->A;
+    double e_avg = e->A + e->B * MR_EON_G_AVG;
+    for (int c = 0; c < 3; c++) {
+        double one_minus_avg = e->sigma_A * (MR_EON_C1 - MR_EON_G_AVG);
+        double rho_ms = rho[c] * rho[c] * e_avg / (1.0 - rho[c] * one_minus_avg);
+        e->comp[c] = sigma > 0.0 ? MR_INV_PI * rho_ms / (MR_EON_C1 - MR_EON_G_AVG) : 0.0;
+    }
+}
+
+/* EON's f_r: out[c] = rho_c/pi (A + B s/t) + f_comp_c, for the geometry g and the dot product
+ * wi.wo (= cos_i cos_o + s). Symmetric in (wi, wo). */
+static inline void mr_eon_eval(const mr_eon *e, const double rho[3], const mr_brdf_geom *g, double wi_dot_wo,
+                               double out[3]) {
+    double s = wi_dot_wo - g->cos_i * g->cos_o;
+    double s_over_t = s > 0.0 ? s / MR_MAX(g->cos_i, g->cos_o) : s;
+    double on = MR_INV_PI * (e->A + e->B * s_over_t);
+    double ms = 0.0;
+    if (e->sigma_A > 0.0)
+        ms = e->sigma_A * (MR_EON_C1 - mr_eon_g(g->cos_i, g->sin2_i)) * (MR_EON_C1 - mr_eon_g(g->cos_o, g->sin2_o));
+    for (int c = 0; c < 3; c++) out[c] = rho[c] * on + e->comp[c] * ms;
+}
+
+/* The rho-free Oren-Nayar albedo E(mu) = A + B g(mu) (the furnace tests' reference). */
+static inline double mr_eon_albedo_on(const mr_eon *e, double mu, double sin2) {
+    return e->A + e->B * mr_eon_g(mu, sin2);
+}
+
+/* ---- tabulated directional albedos of single-scattering GGX (layering.c; tables by scripts/gen-ggx-albedo.c) ---- */
+
+/* E(mu) = integral over the hemisphere of D V F cos(theta_o) d omega_o for GGX with alpha = r^2, the
+ * height-correlated V of mr_ggx_dv_correlated and F = mr_fresnel_dielectric(wo.h, eta), eta = (1 + eps)/(1 - eps),
+ * eps = sqrt(F0) in [0, 0.5] (eta in [1, 3]); mu = cos(theta_i) in [0, 1], r in [0.01, 1] (clamped). Trilinear in
+ * (sqrt(mu), r, sqrt(eps)) on the generated table. */
+double mr_ggx_albedo_dielectric(double mu, double r, double eps);
+/* The same with F = 1: the lobe's own single-scattering albedo (bilinear in (sqrt(mu), r)). */
+double mr_ggx_albedo_one(double mu, double r);
+/* Its cosine-weighted hemispherical average E_avg(r) = 2 integral_0^1 E(mu) mu dmu (Simpson's rule, 64 intervals, on
+ * the interpolated table): per parameter set, not per eval. */
+double mr_ggx_albedo_one_avg(double r);
+
+/* The hemispherical average of the exact dielectric Fresnel, F_avg(eta) = 2 integral_0^1 F(mu, eta) mu dmu, eta >= 1
+ * (Simpson's rule, 64 intervals; F is smooth on [0, 1] for eta >= 1, the error is below 1e-7). Per parameter set. */
+static inline double mr_fresnel_dielectric_avg(double eta) {
+    double sum = 0.0;
+    for (int i = 0; i <= 64; i++) {
+        double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0);
+        sum += w * 2.0 * mu * mr_fresnel_dielectric(MR_MAX(mu, 1e-9), eta, NULL);
+    }
+    return sum / (3.0 * 64.0);
+}
+
 #endif /* MR_BRDF_INTERNAL_H */

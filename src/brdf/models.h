@@ -39,6 +39,9 @@ extern const mr_brdf_model mr_brdf_cycles_principled;
 extern const mr_brdf_model mr_brdf_cycles_ggx;
 /* usd_preview.c */
 extern const mr_brdf_model mr_brdf_usd_preview;
+/* openpbr.c, blender_principled.c */
+extern const mr_brdf_model mr_brdf_openpbr;
+extern const mr_brdf_model mr_brdf_blender_principled;
 
 /* Display order of `matremap models`; registry.c expands it into its table. */
 #define MR_BRDF_REGISTERED_MODELS                                                                           \
@@ -48,6 +51,6 @@ extern const mr_brdf_model mr_brdf_usd_preview;
         &mr_brdf_beckmann_plastic, &mr_brdf_ggx_plastic, &mr_brdf_as_plastic, &mr_brdf_ggx_metallic,         \
         &mr_brdf_blender_ward,                                                                               \
         &mr_brdf_gltf, &mr_brdf_gltf_specgloss, &mr_brdf_cycles_principled, &mr_brdf_cycles_ggx,             \
-        &mr_brdf_usd_preview,
+        &mr_brdf_openpbr, &mr_brdf_blender_principled, &mr_brdf_usd_preview,
 
 #endif /* MR_BRDF_MODELS_H */

@@ -81,6 +81,8 @@ static void print_model_detail(const mr_brdf_model *m) {
     printf("source: %s\n", m->source);
     if (m->flags & MR_BRDF_NOT_ENERGY_CONSERVING)
         printf("note: may reflect more energy than it receives (not bounded by the white-furnace test)\n");
+    if (m->flags & MR_BRDF_NON_RECIPROCAL)
+        printf("note: not reciprocal (layers are albedo-scaled at the view direction, the first of eval's two)\n");
     printf("analytic parameter derivatives: %s\n\n", m->eval_grad ? "yes" : "no");
     int width = 15; // the names' column: as wide as the longest name (use_specular_workflow)
     for (int i = 0; i < m->param_count; i++)

@@ -1,0 +1,239 @@
+/*
+ * blender_principled.c — `blender-principled`: Blender 4.x Cycles' Principled BSDF (the 4.0 rewrite), its opaque,
+ * isotropic reflection: a coat over a metal / dielectric-specular / Lambert stack, layered by albedo.
+ *
+ * Read in the Cycles sources of Blender 4.2 (intern/cycles/kernel/svm/closure.h CLOSURE_BSDF_PRINCIPLED_ID, as
+ * stored at commit 02e6985c: thin film present, the diffuse a plain Lambert closure, no Diffuse Roughness input;
+ * kernel/closure/bsdf_microfacet.h microfacet_fresnel, microfacet_ggx_preserve_energy,
+ * bsdf_microfacet_estimate_albedo, bsdf_microfacet_setup_fresnel_*; bsdf_util.h closure_layering_weight,
+ * fresnel_f82tint_B, fresnel_f82, fresnel_f82_Fss, F0_from_ior, ior_from_F0). Cycles' eval returns f cos(wo); ours
+ * does not (brdf.h). The first argument of eval is the view direction (Cycles' sd->wi; render.c calls
+ * eval(view, light)), at which every albedo estimate below is taken: the model is not reciprocal
+ * (MR_BRDF_NON_RECIPROCAL), as Cycles' layering is not.
+ *
+ *   Lobes: GGX, alpha = roughness^2, Smith G2 = 1/(1 + Lambda_i + Lambda_o), DV = D G2/(4 cos_i cos_o)
+ *     (mr_ggx_dv_correlated). With multiscatter on (the node's default "Multiscatter GGX"), each lobe is scaled by
+ *     1 + F_ms (1 - E)/E, F_ms = F_ss E_avg/(1 - F_ss (1 - E_avg)) (microfacet_ggx_preserve_energy: the energy
+ *     scale 1/E times its Fresnel darkening), E = E(mu_v, r) the lobe's F = 1 albedo, E_avg its average, F_ss the
+ *     lobe's average Fresnel.
+ *   w = 1 (the weight left for lower layers, RGB).
+ *   Layering (closure_layering_weight, bsdf_albedo): a layer's albedo estimate is its closure weight times
+ *     mix(F0, F90, s(mu_v, r, eta)); with multiscatter the weight carries the darkening E + F_ms (1 - E), so the
+ *     estimate does too (dk below; 1 without multiscatter). Lower layers keep w (1 - max_c estimate_c).
+ *   Coat (coat_weight C > 0): f += C F(v.h, coat_ior) DV_c ms_c, F the exact dielectric Fresnel,
+ *     alpha_c = coat_roughness^2, F_ss = F_avg(coat_ior). Then w *= 1 - C dk_c mix(F0_c, 1, s(mu_v, r_c, coat_ior))
+ *     and w *= mix(1, coat_tint^(1/cos_t), C),
+ *     cos_t = sqrt(1 - (1 - mu_v^2)/coat_ior^2) (the view ray refracted into the coat, one pass).
+ *   Metal: f += metallic w F82(v.h) DV ms, F82 = saturate(F_Schlick(base_color) - b mu (1 - mu)^6),
+ *     b = (1 - specular_tint) F_Schlick(1/7)/((1/7)(6/7)^6) (brdf_internal.h mr_f82_*), F_ss = mix(F0, 1, 1/21)
+ *     - b/126 (the exact average of that curve). Then w *= 1 - metallic.
+ *   Dielectric specular: f0 = F0(ior) 2 specular_ior_level, eta = (1 + sqrt(f0))/(1 - sqrt(f0)) (f0 <= 0.99);
+ *     F = mix(f0 specular_tint, 1, saturate((F(v.h, eta) - f0)/(1 - f0))) per channel (the generalized Schlick
+ *     with a negative exponent: the real Fresnel curve remapped), f += w F DV ms, F_ss = mix(f0 tint, 1,
+ *     (F_avg(eta) - f0)/(1 - f0)). Then w *= 1 - max_c dk_c mix(f0 tint_c, 1, s(mu_v, r, eta)).
+ *   Diffuse: f += w base_color/pi (Lambert).
+ *   Albedo estimate s(mu, r, eta) (Cycles' ggx_gen_schlick_ior_s): the lobe-weighted mean of the remap weight,
+ *     (E_F(mu) - F0 E(mu))/((1 - F0) E(mu)), E_F the albedo with the real Fresnel (layering.c tables).
+ *
+ * Substitutions, with their size: Cycles' lookup tables (ggx_E, ggx_Eavg, ggx_gen_schlick_ior_s) are replaced by
+ * this library's own GGX albedo tables (ggx_albedo_tables.h; the same integrals, computed here, differently
+ * gridded), and the fitted fresnel_dielectric_Fss by the exact average F_avg. Cycles works in float and drops
+ * closures below CLOSURE_WEIGHT_CUTOFF (1e-5); this model is double and continuous.
+ *
+ * Parameters (the node's inputs, lowercase; defaults the node's):
+ *   base_color         RGB [0, 1]      default 0.8
+ *   metallic               [0, 1]      default 0
+ *   roughness              [0.01, 1]   default 0.5   log scale; alpha = roughness^2, floor 0.01 (alpha 1e-4)
+ *   ior                    [1, 3]      default 1.5   (the node allows below 1: not supported here). Fits hold it.
+ *   specular_ior_level     [0, 1]      default 0.5   0.5 leaves F0(ior); 0 removes the specular layer
+ *   specular_tint      RGB [0, 1]      default 1     dielectric F0 tint (F90 stays 1); the metal's F82 tint. Fixed.
+ *   coat_weight            [0, 1]      default 0     fits hold the coat parameters
+ *   coat_roughness         [0, 1]      default 0.03  computed with a floor of 0.01
+ *   coat_ior               [1, 3]      default 1.5
+ *   coat_tint          RGB [0, 1]      default 1
+ *   multiscatter           {0, 1}      default 1     the distribution: 1 "Multiscatter GGX", 0 "GGX"
+ * All NONLINEAR (albedo-scaled layers), multiscatter a SWITCH.
+ * Split: diffuse part = the Lambert lobe with its weight w; specular part = coat, metal and dielectric lobes.
+ * Out of scope: Diffuse Roughness (4.3+ sources, not the ones read), subsurface, transmission, sheen, emission, thin
+ * film, anisotropy, alpha, normals.
+ * Energy: the albedo-scaled stack conserves energy up to the estimate's approximations; the white furnace of
+ * tests/test_brdf.c bounds it (known_blender_principled reports the figures).
+ */
+#include "brdf_internal.h"
+
+/* Slots of the packed value vector. */
+enum {
+    BP_BASE = 0, BP_METALLIC = 3, BP_ROUGHNESS = 4, BP_IOR = 5, BP_LEVEL = 6, BP_TINT = 7, BP_COAT_WEIGHT = 10,
+    BP_COAT_ROUGHNESS = 11, BP_COAT_IOR = 12, BP_COAT_TINT = 13, BP_MULTISCATTER = 16
+};
+
+#define BP_ROUGHNESS_MIN 0.01
+
+static const mr_brdf_param bp_params[] = {
+    {"base_color", 3, 0.8, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_SRGB_MAP,
+     "Base Color, linear RGB: Lambert albedo and metal F0", NULL},
+    {"metallic", 1, 0.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, 0, "Metallic", NULL},
+    {"roughness", 1, 0.5, BP_ROUGHNESS_MIN, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_LOG_SCALE,
+     "Roughness; GGX alpha = roughness^2 (metal and specular)", NULL},
+    {"ior", 1, 1.5, 1.0, 3.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_FIT_FIXED, "IOR of the dielectric", NULL},
+    {"specular_ior_level", 1, 0.5, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, 0,
+     "Specular IOR Level: F0 = F0(ior) 2 level (0.5 keeps the ior)", NULL},
+    {"specular_tint", 3, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_FIT_FIXED | MR_PARAM_SRGB_MAP,
+     "Specular Tint: dielectric F0 tint (F90 = 1); the metal's F82 tint", NULL},
+    {"coat_weight", 1, 0.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_FIT_FIXED, "Coat Weight", NULL},
+    {"coat_roughness", 1, 0.03, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_FIT_FIXED,
+     "Coat Roughness; alpha = max(r, 0.01)^2", NULL},
+    {"coat_ior", 1, 1.5, 1.0, 3.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_FIT_FIXED, "Coat IOR", NULL},
+    {"coat_tint", 3, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_FIT_FIXED | MR_PARAM_SRGB_MAP,
+     "Coat Tint: transmittance at normal incidence, one pass along the view ray", NULL},
+    {"multiscatter", 1, 1.0, 0.0, 1.0, MR_PARAM_SWITCH, MR_LOBE_BOTH, MR_PARAM_FIT_FIXED,
+     "1: Multiscatter GGX (the node's default), 0: GGX", NULL},
+};
+
+typedef struct bp_state {
+    double r, alpha;            /* base lobes */
+    double rho[3];              /* base_color */
+    double metallic;
+    double f0m[3], b[3];        /* metal F0 and F82 coefficient */
+    double fss_m[3];            /* metal average Fresnel */
+    double eta, f0;             /* dielectric specular: eta from ior and level, its F0 */
+    double f0s[3];              /* saturate(f0 specular_tint) */
+    double fss_s[3];            /* specular average Fresnel (tinted) */
+    int spec;                   /* eta != 1 */
+    double E_avg;               /* base lobes' E_avg(r) */
+    int coat;
+    double C, r_c, alpha_c, eta_c, f0_c, fss_c, E_avg_c, inv_eta_c2;
+    double log_tint[3];
+    int tint_black[3];
+    int multiscatter;
+} bp_state;
+
+_Static_assert(sizeof(bp_state) <= MR_BRDF_STATE_BYTES, "bp_state must fit in MR_BRDF_STATE_BYTES");
+
+static double bp_lerp(double a, double b, double t) { return a + (b - a) * t; }
+
+/* microfacet_ggx_preserve_energy's darkening E + F_ms (1 - E), F_ms = F_ss E_avg/(1 - F_ss (1 - E_avg)): the
+ * closure weight's factor. The lobe's scale is this times the energy scale 1/E: 1 + F_ms (1 - E)/E. */
+static double bp_darkening(double E, double E_avg, double fss) {
+    double fms = fss * E_avg / (1.0 - fss * (1.0 - E_avg));
+    return E + fms * (1.0 - E);
+}
+
+/* Cycles' estimate s of the remap weight: (E_F - F0 E)/((1 - F0) E), clamped into [0, 1]. */
+static double bp_estimate_s(double mu, double r, double eps, double f0) {
+    double E = MR_MAX(mr_ggx_albedo_one(mu, r), 1e-6);
+    return mr_clampd((mr_ggx_albedo_dielectric(mu, r, eps) - f0 * E) / ((1.0 - f0) * E), 0.0, 1.0);
+}
+
+static void bp_prepare(const mr_brdf_model *model, const double *values, void *state_bytes) {
+    bp_state *st = state_bytes;
+    double v[MR_BRDF_MAX_VALUES];
+    mr_brdf_clamp_values(model, values, v);
+    st->r = MR_MAX(v[BP_ROUGHNESS], BP_ROUGHNESS_MIN);
+    st->alpha = st->r * st->r;
+    st->metallic = v[BP_METALLIC];
+    st->multiscatter = v[BP_MULTISCATTER] >= 0.5;
+    st->E_avg = mr_ggx_albedo_one_avg(st->r);
+
+    double ior = v[BP_IOR], f0_ior = (ior - 1.0) / (ior + 1.0);
+    double f0 = MR_MIN(f0_ior * f0_ior * 2.0 * v[BP_LEVEL], 0.99); /* ior_from_F0 clamps F0 to 0.99 */
+    st->f0 = f0;
+    st->eta = (1.0 + sqrt(f0)) / (1.0 - sqrt(f0));
+    st->spec = f0 > 0.0;
+    double s_avg = st->spec ? mr_clampd((mr_fresnel_dielectric_avg(st->eta) - f0) / (1.0 - f0), 0.0, 1.0) : 0.0;
+    for (int c = 0; c < 3; c++) {
+        st->rho[c] = v[BP_BASE + c];
+        st->f0m[c] = v[BP_BASE + c];
+        st->b[c] = mr_f82_coeff(st->f0m[c], v[BP_TINT + c]);
+        st->fss_m[c] = bp_lerp(st->f0m[c], 1.0, 1.0 / 21.0) - st->b[c] / 126.0;
+        st->f0s[c] = mr_clampd(f0 * v[BP_TINT + c], 0.0, 1.0);
+        st->fss_s[c] = bp_lerp(st->f0s[c], 1.0, s_avg);
+    }
+
+    st->C = v[BP_COAT_WEIGHT];
+    st->coat = st->C > 0.0;
+    st->r_c = MR_MAX(v[BP_COAT_ROUGHNESS], BP_ROUGHNESS_MIN);
+    st->alpha_c = st->r_c * st->r_c;
+    st->eta_c = v[BP_COAT_IOR];
+    double q = (st->eta_c - 1.0) / (st->eta_c + 1.0);
+    st->f0_c = q * q;
+    st->fss_c = st->eta_c > 1.0 ? mr_fresnel_dielectric_avg(st->eta_c) : 0.0;
+    st->E_avg_c = mr_ggx_albedo_one_avg(st->r_c);
+    st->inv_eta_c2 = 1.0 / (st->eta_c * st->eta_c);
+    for (int c = 0; c < 3; c++) {
+        double t = v[BP_COAT_TINT + c];
+        st->tint_black[c] = !(t > 0.0);
+        st->log_tint[c] = t > 0.0 ? log(t) : 0.0;
+    }
+}
+
+static void bp_eval(const void *state_bytes, const double wi[3], const double wo[3], double diffuse[3],
+                    double specular[3]) {
+    const bp_state *st = state_bytes;
+    mr_brdf_geom g;
+    if (!mr_brdf_geom_init(wi, wo, &g)) {
+        mr_brdf_zero(diffuse, specular);
+        return;
+    }
+    double mu_v = MR_MIN(g.cos_i, 1.0);
+    double w[3] = {1.0, 1.0, 1.0}, spec[3] = {0.0, 0.0, 0.0};
+
+    if (st->coat) {
+        double E_c = MR_MAX(mr_ggx_albedo_one(mu_v, st->r_c), 1e-6);
+        double dark = st->multiscatter ? bp_darkening(E_c, st->E_avg_c, st->fss_c) : 1.0;
+        double scale = st->multiscatter ? dark / E_c : 1.0;
+        double F = st->eta_c > 1.0 ? mr_fresnel_dielectric(g.dot_h, st->eta_c, NULL) : 0.0;
+        double lobe = st->C * F * mr_ggx_dv_correlated(st->alpha_c, &g, NULL) * scale;
+        double est = st->eta_c > 1.0 ? bp_lerp(st->f0_c, 1.0, bp_estimate_s(mu_v, st->r_c, sqrt(st->f0_c), st->f0_c))
+                                     : 0.0;
+        /* bsdf_albedo is the closure weight (darkened) times the estimate */
+        double keep = mr_clampd(1.0 - st->C * dark * est, 0.0, 1.0);
+        /* the view ray refracted into the coat; coat_ior >= 1, so cos_t >= mu_v > 0 */
+        double cos_t = sqrt(MR_MAX(1.0 - g.sin2_i * st->inv_eta_c2, 0.0));
+        double depth = 1.0 / MR_MAX(cos_t, MR_BRDF_COS_MIN);
+        for (int c = 0; c < 3; c++) {
+            spec[c] = lobe;
+            double T = st->tint_black[c] ? 0.0 : exp(st->log_tint[c] * depth);
+            w[c] = keep * bp_lerp(1.0, T, st->C);
+        }
+    }
+
+    double DV = mr_ggx_dv_correlated(st->alpha, &g, NULL);
+    double E = MR_MAX(mr_ggx_albedo_one(mu_v, st->r), 1e-6);
+    if (st->metallic > 0.0) {
+        for (int c = 0; c < 3; c++) {
+            double scale = st->multiscatter ? bp_darkening(E, st->E_avg, st->fss_m[c]) / E : 1.0;
+            spec[c] += st->metallic * w[c] * mr_f82_tint(g.dot_h, st->f0m[c], st->b[c]) * DV * scale;
+            w[c] *= 1.0 - st->metallic;
+        }
+    }
+    if (st->spec) {
+        double sF = mr_clampd((mr_fresnel_dielectric(g.dot_h, st->eta, NULL) - st->f0) / (1.0 - st->f0), 0.0, 1.0);
+        double s_est = bp_estimate_s(mu_v, st->r, sqrt(st->f0), st->f0), est_max = 0.0;
+        for (int c = 0; c < 3; c++) {
+            double dark = st->multiscatter ? bp_darkening(E, st->E_avg, st->fss_s[c]) : 1.0;
+            double scale = st->multiscatter ? dark / E : 1.0;
+            spec[c] += w[c] * bp_lerp(st->f0s[c], 1.0, sF) * DV * scale;
+            est_max = MR_MAX(est_max, dark * bp_lerp(st->f0s[c], 1.0, s_est));
+        }
+        double keep = mr_clampd(1.0 - est_max, 0.0, 1.0);
+        for (int c = 0; c < 3; c++) w[c] *= keep;
+    }
+    for (int c = 0; c < 3; c++) {
+        if (diffuse) diffuse[c] = w[c] * st->rho[c] * MR_INV_PI;
+        if (specular) specular[c] = spec[c];
+    }
+}
+
+const mr_brdf_model mr_brdf_blender_principled = {
+    .name = "blender-principled",
+    .summary = "Blender 4.2 Cycles Principled BSDF: coat, F82-tint metal, GGX specular over Lambert, albedo-layered",
+    .source = "Blender 4.2 intern/cycles/kernel/svm/closure.h, closure/bsdf_microfacet.h, closure/bsdf_util.h",
+    .param_count = (int)(sizeof bp_params / sizeof bp_params[0]),
+    .params = bp_params,
+    .flags = MR_BRDF_NON_RECIPROCAL,
+    .config = NULL,
+    .prepare = bp_prepare,
+    .eval = bp_eval,
+    .eval_grad = NULL,
+};
