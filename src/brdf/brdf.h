@@ -97,7 +97,11 @@ enum {
      * their sum only while the lobe albedos sum to at most 1, which is the caller's choice of parameters.
      * The white-furnace test checks these models lobe by lobe (unless they are also flagged
      * MR_BRDF_NOT_ENERGY_CONSERVING); a fit may want to constrain the sum. */
-    MR_BRDF_INDEPENDENT_LOBES = 2
+    MR_BRDF_INDEPENDENT_LOBES = 2,
+    /* f(wi, wo) != f(wo, wi) for some valid parameters, by the model's own definition: e.g. a layering whose weights
+     * are directional albedos at the view direction wi (Autodesk Standard Surface, which says so). The reciprocity
+     * test skips these models; the white-furnace test integrates over wo at a fixed wi, as the renderer uses wi. */
+    MR_BRDF_NOT_RECIPROCAL = 4
 };
 
 typedef struct mr_brdf_model mr_brdf_model;

@@ -37,6 +37,8 @@ extern const mr_brdf_model mr_brdf_gltf_specgloss;
 /* cycles_principled.c, cycles_ggx.c */
 extern const mr_brdf_model mr_brdf_cycles_principled;
 extern const mr_brdf_model mr_brdf_cycles_ggx;
+/* standard_surface.c */
+extern const mr_brdf_model mr_brdf_standard_surface;
 
 /* Display order of `matremap models`; registry.c expands it into its table. */
 #define MR_BRDF_REGISTERED_MODELS                                                                           \
@@ -45,6 +47,7 @@ extern const mr_brdf_model mr_brdf_cycles_ggx;
         &mr_brdf_as_nofresnel, &mr_brdf_beckmann_conductor, &mr_brdf_ggx_conductor, &mr_brdf_as_conductor,   \
         &mr_brdf_beckmann_plastic, &mr_brdf_ggx_plastic, &mr_brdf_as_plastic, &mr_brdf_ggx_metallic,         \
         &mr_brdf_blender_ward,                                                                               \
-        &mr_brdf_gltf, &mr_brdf_gltf_specgloss, &mr_brdf_cycles_principled, &mr_brdf_cycles_ggx,
+        &mr_brdf_gltf, &mr_brdf_gltf_specgloss, &mr_brdf_cycles_principled, &mr_brdf_cycles_ggx,             \
+        &mr_brdf_standard_surface,
 
 #endif /* MR_BRDF_MODELS_H */
