@@ -25,8 +25,8 @@ generate() {
     echo "in src/brdf/brdf.h; the ENCODING column of \`matremap models NAME\`, \`map_encoding\` in \`models --json\`):"
     echo
     echo "- colour parameters, reflectances and albedos given as RGB colours (diffuse, specular, f0, albedo,"
-    echo "  base_color, specular_color), are held **sRGB-encoded** in 8/16-bit maps, whatever their range (Ward's and"
-    echo "  Phong's specular reach 10; their maps are still colours);"
+    echo "  base_color, specular_color, coat_color), are held **sRGB-encoded** in 8/16-bit maps, whatever their range"
+    echo "  (Ward's and Phong's specular reach 10; their maps are still colours);"
     echo "- everything else (roughness, alpha, rms, exponent, metallic, ior, eta, k, scalar factors such as the"
     echo "  one-channel specular of gltf and cycles-principled, switches) is **linear**;"
     echo "- float files (EXR, HDR, float TIFF) are always linear."

@@ -10,9 +10,9 @@
 This is the spec's reflectance(brdf) (Standard Surface 1.0.1, "Closure mixture representation"), which weighs
 the layers below a dielectric lobe by 1 - reflectance. It has no closed form; this script integrates it.
 
-Grid (node j of n, t = j/(n-1)):   mu  = t^2            33 nodes (denser towards grazing; node 0 at mu = 1e-4)
+Grid (node j of n, t = j/(n-1)):   mu  = t^2            41 nodes (denser towards grazing; node 0 at mu = 1e-4)
                                    r   = 0.01 + 0.99 t^2 17 nodes (denser towards smooth)
-                                   eta = 1 + 2 t^2       17 nodes (denser towards 1, where F has a sharp knee
+                                   eta = 1 + 2 t^2       25 nodes (denser towards 1, where F has a sharp knee
                                                                   near grazing, cos ~ sqrt(eta^2 - 1))
 The model interpolates linearly in (sqrt(mu), sqrt((r - 0.01)/0.99), sqrt((eta - 1)/2)).
 
@@ -28,7 +28,7 @@ import sys
 
 import numpy as np
 
-N_MU, N_R, N_ETA = 33, 17, 17
+N_MU, N_R, N_ETA = 41, 17, 25
 ROUGH_MIN = 0.01
 MU_NODE0 = 1e-4
 

@@ -312,7 +312,9 @@ static inline double mr_fresnel_conductor(double c, double eta, double k, double
 
 /* The largest reflectivity r the mapping below accepts: at r = 1 its n_max = (1 + sqrt r)/(1 - sqrt r) is
  * infinite. Clamping r to 1 - 1e-9 moves the normal-incidence reflectance by at most 1e-9, and keeps n and k below
- * about 4e9, where mr_fresnel_conductor's squares (1.6e19) are still far inside double range. */
+ * about 4e9, where mr_fresnel_conductor's squares (1.6e19) are still far inside double range. Through
+ * mr_fresnel_conductor the round trip r -> (n, k) -> F(1) holds to 1e-9 up to r = 1 - 1e-6; beyond, with g near 1
+ * (n ~ (1 - r)/2 next to k ~ 1), its a = sqrt((A + t)/2) cancels and F(1) is off by up to 1e-8. */
 #define MR_ARTISTIC_R_MAX (1.0 - 1e-9)
 
 /* Gulbrandsen's map from artist colours (per channel) to a conductor's complex index n + ik:
