@@ -1038,8 +1038,8 @@ MR_TEST(work_is_bounded_by_the_options) {
     // A tiny budget still ends with a usable, well-defined fit, within the bound, for every strategy; and the
     // grid and start count are honoured (fewer grid points, fewer renders).
     mr_render_plan *plan = fit_plan(32);
-    const char *targets[] = {"ward", "gltf", "gltf-specgloss", "cycles-principled"};
-    for (int t = 0; t < 4; t++)
+    const char *targets[] = {"ward", "gltf", "gltf-specgloss", "cycles-principled", "standard-surface"};
+    for (int t = 0; t < (int)(sizeof targets / sizeof targets[0]); t++)
         for (int s = 0; s < MR_REMAP_STRATEGY_COUNT; s++) {
             mr_remap_options o = options((mr_remap_strategy)s);
             o.max_evaluations = 12;
