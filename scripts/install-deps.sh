@@ -17,7 +17,7 @@ packages=(
     jq                 # scripts/evaluate-svbrdf.sh reads the reports' summary.json
     fonts-dejavu-core  # labels on the demo's contact sheets (oiiotool --text)
     python3            # tests/gltf_validate.sh compares glTF JSON (tests/lib/gltf_json_compare.py)
-    python3-numpy      # tests/usd_preview_reference.py, the independent transcription test_brdf compares with
+    python3-numpy      # the independent transcriptions tests compare with (tests/*_reference.py); albedo tables
     locales            # tests/test_locale.c builds a decimal-comma locale (de_DE) with localedef from its data
     chromium           # tests/report_cli.sh opens a report page headless and checks its screenshot
     clang libclang-rt-14-dev libomp-14-dev  # make fuzz: libFuzzer targets with ASan+UBSan (clang's OpenMP runtime)

@@ -1860,6 +1860,153 @@ MR_TEST(known_usd_preview_matches_python) {
            lines, worst);
 }
 
+/* standard-surface (Autodesk Standard Surface 1.0.1): the spec's special cases, Gulbrandsen's round trip, the
+ * Lambert reduction, the white furnace with base_color 1 (its albedo table's accuracy shows as |albedo - 1|), and
+ * the non-reciprocity the spec accepts. The Python cross-check is tests/standard_surface_reference.sh. */
+MR_TEST(known_standard_surface) {
+    const mr_brdf_model *m = model_named("standard-surface"), *lambert = model_named("lambert");
+    if (!m || !lambert) return;
+    double v[MR_BRDF_MAX_VALUES], d[3], s[3];
+    const double alpha = 0.09; /* specular_roughness 0.3 */
+    const double lobe0 = 1.0 / (4.0 * PI * alpha * alpha); /* D V at normal incidence: 1/(pi a^2) x 1/4 */
+
+    /* dielectric F0 = ((ior - 1)/(ior + 1))^2 specular specular_color ("Specular reflection"); base 0: no diffuse */
+    const double sc[3] = {0.9, 0.5, 0.2}, iors[] = {1.3, 1.5, 2.4};
+    for (size_t k = 0; k < sizeof iors / sizeof iors[0]; k++) {
+        mr_brdf_default_values(m, v);
+        set_param(m, v, "base", 0.0);
+        set_param(m, v, "specular", 0.7);
+        set_rgb(m, v, "specular_color", sc[0], sc[1], sc[2]);
+        set_param(m, v, "specular_roughness", 0.3);
+        set_param(m, v, "specular_ior", iors[k]);
+        eval_parts(m, v, normal, normal, d, s);
+        double f0 = (iors[k] - 1.0) * (iors[k] - 1.0) / ((iors[k] + 1.0) * (iors[k] + 1.0));
+        for (int c = 0; c < 3; c++) {
+            MR_CHECK_MSG(close_rel(s[c], f0 * 0.7 * sc[c] * lobe0, 1e-12), "ior %g: %.17g", iors[k], s[c]);
+            MR_CHECK(d[c] == 0.0);
+        }
+    }
+
+    /* metal at normal incidence reflects base base_color, whatever the edge tint ("Metal", Gulbrandsen) */
+    const double bc[3] = {0.9, 0.6, 0.3};
+    mr_brdf_default_values(m, v);
+    set_param(m, v, "metalness", 1.0);
+    set_param(m, v, "base", 0.9);
+    set_rgb(m, v, "base_color", bc[0], bc[1], bc[2]);
+    set_param(m, v, "specular", 0.8);
+    set_rgb(m, v, "specular_color", 0.5, 1.0, 0.2);
+    set_param(m, v, "specular_roughness", 0.3);
+    eval_parts(m, v, normal, normal, d, s);
+    for (int c = 0; c < 3; c++) {
+        MR_CHECK_MSG(close_rel(s[c], 0.9 * bc[c] * lobe0, 1e-9), "channel %d: %.17g", c, s[c] / lobe0);
+        MR_CHECK(d[c] == 0.0);
+    }
+
+    /* Gulbrandsen's (r, g) -> (n, k) -> normal-incidence reflectance, both by the closed form and by the exact
+     * conductor Fresnel; r = 1 is clamped to 1 - 1e-9. Above r = 1 - 1e-6 with g near 1 (n ~ (1 - r)/2, k ~ 1)
+     * mr_fresnel_conductor's a = sqrt((A + t)/2) cancels (A + t ~ 2 n^2 k^2 next to 1): 1e-8 at r = 1 - 1e-8. */
+    const double rs[] = {0.0, 1e-6, 0.01, 0.04, 0.3, 0.5, 0.9, 0.99, 0.999999, 0.99999999, 1.0};
+    const double gs[] = {0.0, 0.3, 0.7, 1.0};
+    double worst = 0.0;
+    for (size_t i = 0; i < sizeof rs / sizeof rs[0]; i++)
+        for (size_t j = 0; j < sizeof gs / sizeof gs[0]; j++) {
+            double n, k;
+            mr_artistic_ior(rs[i], gs[j], &n, &k);
+            double closed = ((n - 1.0) * (n - 1.0) + k * k) / ((n + 1.0) * (n + 1.0) + k * k);
+            double exact = mr_fresnel_conductor(1.0, n, k, NULL, NULL), want = fmin(rs[i], MR_ARTISTIC_R_MAX);
+            if (rs[i] <= 0.999999) worst = fmax(worst, fmax(fabs(closed - want), fabs(exact - want)));
+            MR_CHECK_MSG(fabs(closed - want) <= 1e-12 && fabs(exact - want) <= (rs[i] <= 0.999999 ? 1e-9 : 2e-8),
+                         "r %g g %g: n %g k %g -> %.12g, %.12g", rs[i], gs[j], n, k, closed, exact);
+        }
+    /* the edge tint raises the grazing reflectance (g = 1: towards white at grazing) */
+    double n0, k0, n1, k1;
+    mr_artistic_ior(0.5, 0.0, &n0, &k0);
+    mr_artistic_ior(0.5, 1.0, &n1, &k1);
+    double graze = cos(80.0 * PI / 180.0);
+    MR_CHECK(mr_fresnel_conductor(graze, n1, k1, NULL, NULL) > mr_fresnel_conductor(graze, n0, k0, NULL, NULL));
+    printf("      artistic IOR round trip: worst |R(n, k) - r| = %.2g for r <= 1 - 1e-6 (%zu (r, g) pairs in all)\n",
+           worst, sizeof rs / sizeof rs[0] * (sizeof gs / sizeof gs[0]));
+
+    /* diffuse_roughness 0, specular 0, coat 0, metalness 0: Lambert with albedo base base_color, exactly */
+    uint64_t rng = 29;
+    double lv[MR_BRDF_MAX_VALUES] = {0};
+    mr_brdf_default_values(m, v);
+    set_param(m, v, "base", 0.8);
+    set_rgb(m, v, "base_color", 0.3, 0.6, 0.9);
+    set_param(m, v, "specular", 0.0);
+    set_rgb(lambert, lv, "albedo", 0.8 * 0.3, 0.8 * 0.6, 0.8 * 0.9);
+    int differ = 0;
+    for (int k = 0; k < 500; k++) {
+        double wi[3], wo[3], dl[3], sl[3];
+        random_dir(&rng, k < 400 ? 0.01 : 0.0, wi);
+        random_dir(&rng, k < 400 ? 0.01 : 0.0, wo);
+        eval_parts(m, v, wi, wo, d, s);
+        eval_parts(lambert, lv, wi, wo, dl, sl);
+        for (int c = 0; c < 3; c++) differ += d[c] != dl[c] || s[c] != 0.0;
+    }
+    MR_CHECK_MSG(differ == 0, "%d values differ from lambert", differ);
+
+    /* reciprocal without the albedo weights (specular 0, coat 0), not with them (the spec's "Reciprocity") */
+    double wi[3], wo[3], d2[3], s2[3];
+    dir_from_angles(1.2, 0.0, wi);
+    dir_from_angles(0.3, 2.0, wo);
+    set_param(m, v, "metalness", 0.5);
+    set_param(m, v, "diffuse_roughness", 0.6);
+    eval_parts(m, v, wi, wo, d, s);
+    eval_parts(m, v, wo, wi, d2, s2);
+    for (int c = 0; c < 3; c++) MR_CHECK(close_rel(d[c], d2[c], 1e-12) && close_rel(s[c], s2[c], 1e-12));
+    mr_brdf_default_values(m, v);
+    eval_parts(m, v, wi, wo, d, s);
+    eval_parts(m, v, wo, wi, d2, s2);
+    MR_CHECK_MSG(!close_rel(d[0], d2[0], 1e-3), "defaults: diffuse %.9g vs %.9g", d[0], d2[0]);
+
+    /* White furnace, base_color 1 (base 1): a dielectric over Lambert reflects E_s + (1 - E_s) = 1 exactly, so
+     * |albedo - 1| is the albedo table's error (plus the quadrature's, ~1e-3 towards grazing). Over ior x
+     * roughness x angle. */
+    const double t_ior[] = {1.05, 1.3, 1.5, 2.2, 3.0}, t_rough[] = {0.01, 0.1, 0.3, 0.6, 1.0};
+    const double t_angle[] = {0.0, 40.0, 65.0, 80.0, 88.0};
+    double worst_all = 0.0, worst_80 = 0.0;
+    for (size_t a = 0; a < sizeof t_ior / sizeof t_ior[0]; a++)
+        for (size_t b = 0; b < sizeof t_rough / sizeof t_rough[0]; b++)
+            for (size_t c = 0; c < sizeof t_angle / sizeof t_angle[0]; c++) {
+                mr_brdf_default_values(m, v);
+                set_rgb(m, v, "base_color", 1.0, 1.0, 1.0);
+                set_param(m, v, "specular_ior", t_ior[a]);
+                set_param(m, v, "specular_roughness", t_rough[b]);
+                furnace(m, v, t_angle[c] * PI / 180.0, d, s);
+                double err = fabs(d[0] + s[0] - 1.0);
+                worst_all = fmax(worst_all, err);
+                if (t_angle[c] <= 80.0) worst_80 = fmax(worst_80, err);
+            }
+    MR_CHECK_MSG(worst_all <= 0.01, "dielectric over Lambert: |albedo - 1| up to %.4f", worst_all);
+    printf("      white furnace, dielectric over white Lambert: |albedo - 1| <= %.4f (<= %.4f up to 80 deg) over "
+           "ior 1.05-3, roughness 0.01-1\n", worst_all, worst_80);
+
+    /* other white configurations: coat over it, a white metal, rough Oren-Nayar; all at most 1 (+1e-2) */
+    static const struct {
+        const char *label, *assignments[6];
+    } white[] = {
+        {"coat 1 over defaults", {"base_color=1", "coat=1", "coat_roughness=0.1", NULL}},
+        {"coat 1, rough, coat_ior 2.5", {"base_color=1", "coat=1", "coat_roughness=0.7", "coat_ior=2.5", NULL}},
+        {"white metal, roughness 0.2", {"base_color=1", "metalness=1", NULL}},
+        {"white metal, roughness 1", {"base_color=1", "metalness=1", "specular_roughness=1", NULL}},
+        {"Oren-Nayar sigma 1", {"base_color=1", "diffuse_roughness=1", "specular=0", NULL}},
+    };
+    for (size_t k = 0; k < sizeof white / sizeof white[0]; k++) {
+        mr_brdf_default_values(m, v);
+        for (int j = 0; white[k].assignments[j]; j++)
+            MR_CHECK_OK(mr_brdf_parse_assignment(m, white[k].assignments[j], v));
+        double lo = 2.0, hi = 0.0;
+        for (size_t c = 0; c < sizeof t_angle / sizeof t_angle[0]; c++) {
+            furnace(m, v, t_angle[c] * PI / 180.0, d, s);
+            lo = fmin(lo, d[0] + s[0]);
+            hi = fmax(hi, d[0] + s[0]);
+        }
+        MR_CHECK_MSG(hi <= 1.01, "%s: albedo up to %.4f", white[k].label, hi);
+        printf("      white furnace, %-28s albedo %.4f .. %.4f (0-88 deg)\n", white[k].label, lo, hi);
+    }
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(map_encodings_follow_one_rule),
              MR_TEST_ENTRY(find_unknown_lists_valid_names),
              MR_TEST_ENTRY(default_values_use_per_channel_defaults),
@@ -1877,4 +2024,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(map_en
              MR_TEST_ENTRY(known_cycles_ggx), MR_TEST_ENTRY(known_openpbr),
              MR_TEST_ENTRY(known_openpbr_reference),
              MR_TEST_ENTRY(known_blender_principled),
-             MR_TEST_ENTRY(known_usd_preview), MR_TEST_ENTRY(known_usd_preview_matches_python))
+             MR_TEST_ENTRY(known_usd_preview), MR_TEST_ENTRY(known_usd_preview_matches_python),
+             MR_TEST_ENTRY(known_standard_surface))

@@ -378,6 +378,7 @@ MR_TEST(every_strategy_returns_a_finite_result) {
         {"gltf", "base_color=0.6,0.4,0.2 metallic=0.3 roughness=0.4", "gltf-specgloss"},
         {"gltf", "base_color=0.6,0.4,0.2 metallic=0.3 roughness=0.4", "cycles-principled"},
         {"gltf", "base_color=0.6,0.4,0.2 metallic=0.3 roughness=0.4", "usd-preview"},
+        {"gltf", "base_color=0.6,0.4,0.2 metallic=0.3 roughness=0.4", "standard-surface"},
     };
     mr_render_plan *plan = fit_plan(32);
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++)
@@ -1075,8 +1076,8 @@ MR_TEST(work_is_bounded_by_the_options) {
     // A tiny budget still ends with a usable, well-defined fit, within the bound, for every strategy; and the
     // grid and start count are honoured (fewer grid points, fewer renders).
     mr_render_plan *plan = fit_plan(32);
-    const char *targets[] = {"ward", "gltf", "gltf-specgloss", "cycles-principled"};
-    for (int t = 0; t < 4; t++)
+    const char *targets[] = {"ward", "gltf", "gltf-specgloss", "cycles-principled", "standard-surface"};
+    for (int t = 0; t < (int)(sizeof targets / sizeof targets[0]); t++)
         for (int s = 0; s < MR_REMAP_STRATEGY_COUNT; s++) {
             mr_remap_options o = options((mr_remap_strategy)s);
             o.max_evaluations = 12;
@@ -1310,6 +1311,51 @@ MR_TEST(usd_preview_round_trips) {
     mr_render_plan_free(plan);
 }
 
+/* standard-surface to and from gltf and cycles-principled: the fits converge and match (SSIM > 0.99), and a gltf
+ * material taken to standard-surface and back comes home. Standard Surface's dielectric (exact Fresnel, ior 1.5,
+ * its diffuse weighted by 1 - E_s) and metal (Gulbrandsen) differ from glTF's Schlick mix in their details only. */
+MR_TEST(standard_surface_remaps_to_and_from_gltf_and_cycles) {
+    static const struct {
+        const char *source, *assignments, *target;
+    } cases[] = {
+        {"gltf", "base_color=0.6,0.4,0.2 metallic=0 roughness=0.4", "standard-surface"},
+        {"gltf", "base_color=0.9,0.6,0.3 metallic=1 roughness=0.3", "standard-surface"},
+        {"cycles-principled", "base_color=0.3,0.5,0.7 roughness=0.5", "standard-surface"},
+        {"standard-surface", "base_color=0.6,0.4,0.2 specular_roughness=0.4", "gltf"},
+        {"standard-surface", "base_color=0.9,0.6,0.3 metalness=1 specular_roughness=0.3", "gltf"},
+        {"standard-surface", "base_color=0.3,0.5,0.7 specular_roughness=0.5 metalness=0.3", "cycles-principled"},
+    };
+    mr_render_plan *plan = fit_plan(32);
+    mr_remap_options o = options(MR_REMAP_AUTO);
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        mr_remap_result r;
+        char label[200];
+        snprintf(label, sizeof label, "%s %s -> %s", cases[k].source, cases[k].assignments, cases[k].target);
+        MR_CHECK_OK(remap(plan, cases[k].source, cases[k].assignments, cases[k].target, &o, &r));
+        check_well_defined(label, mr_brdf_find(cases[k].target), &o, &r);
+        MR_CHECK_MSG(r.ssim > 0.99, "%s: SSIM %.6f (%s)", label, r.ssim, r.detail);
+        printf("      %-80s SSIM %.5f, relative RMSE %.4f\n", label, r.ssim, r.relative_rmse);
+        if (k >= 2) continue;
+        /* and back to gltf */
+        const mr_brdf_model *ss = mr_brdf_find("standard-surface"), *gltf = mr_brdf_find("gltf");
+        mr_remap_result back;
+        MR_CHECK_OK(mr_remap(plan, ss, r.values, gltf, &o, &back));
+        check_well_defined(label, gltf, &o, &back);
+        MR_CHECK_MSG(back.ssim > 0.99, "%s and back: SSIM %.6f (%s)", label, back.ssim, back.detail);
+        double src[MR_BRDF_MAX_VALUES], ssim = 0.0;
+        material(gltf, cases[k].assignments, src);
+        mr_image *a = NULL, *b = NULL;
+        MR_CHECK_OK(mr_render(plan, gltf, src, MR_COMPONENT_FULL, &a));
+        MR_CHECK_OK(mr_render(plan, gltf, back.values, MR_COMPONENT_FULL, &b));
+        MR_CHECK_OK(mr_ssim(a, b, NULL, &ssim, NULL));
+        MR_CHECK_MSG(ssim > 0.99, "%s and back: SSIM against the source %.6f", label, ssim);
+        printf("      ... and back to gltf: SSIM %.5f against the source\n", ssim);
+        mr_image_free(a);
+        mr_image_free(b);
+    }
+    mr_render_plan_free(plan);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(names_round_trip),
              MR_TEST_ENTRY(pictures_written_and_readable), MR_TEST_ENTRY(sources_read_and_sized),
              MR_TEST_ENTRY(zeroed_options_are_the_defaults),
@@ -1338,4 +1384,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(names_round_trip),
              MR_TEST_ENTRY(work_is_bounded_by_the_options),
              MR_TEST_ENTRY(results_are_identical_for_one_and_two_threads),
              MR_TEST_ENTRY(fixed_parameters_and_switches_keep_their_given_values),
-             MR_TEST_ENTRY(usd_preview_round_trips))
+             MR_TEST_ENTRY(usd_preview_round_trips),
+             MR_TEST_ENTRY(standard_surface_remaps_to_and_from_gltf_and_cycles))

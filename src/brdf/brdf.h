@@ -98,9 +98,10 @@ enum {
      * The white-furnace test checks these models lobe by lobe (unless they are also flagged
      * MR_BRDF_NOT_ENERGY_CONSERVING); a fit may want to constrain the sum. */
     MR_BRDF_INDEPENDENT_LOBES = 2,
-    /* f_r(wi, wo) != f_r(wo, wi): the model scales lower layers by 1 - E(wi), the directional albedo of the layer
-     * above at the FIRST direction (OpenPBR's non-reciprocal albedo scaling, with the renderer's view direction
-     * first: render.c calls eval(view, light)). The reciprocity test skips these models and `models` says so. */
+    /* f_r(wi, wo) != f_r(wo, wi) for some valid parameters, by the model's own definition: it scales lower layers by
+     * 1 - E(wi), the directional albedo of the layer above at the FIRST direction (OpenPBR's and Standard Surface's
+     * albedo scaling, with the renderer's view direction first: render.c calls eval(view, light)). The reciprocity
+     * test skips these models, the white-furnace test integrates over wo at a fixed wi, and `models` says so. */
     MR_BRDF_NON_RECIPROCAL = 4
 };
 

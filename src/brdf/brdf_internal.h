@@ -308,6 +308,34 @@ static inline double mr_fresnel_conductor(double c, double eta, double k, double
     return mr_clampd(0.5 * (rs + rp), 0.0, 1.0);
 }
 
+/* ---- artistic complex IOR (Gulbrandsen 2014, "Artist Friendly Metallic Fresnel", JCGT 3(4)) ---- */
+
+/* The largest reflectivity r the mapping below accepts: at r = 1 its n_max = (1 + sqrt r)/(1 - sqrt r) is
+ * infinite. Clamping r to 1 - 1e-9 moves the normal-incidence reflectance by at most 1e-9, and keeps n and k below
+ * about 4e9, where mr_fresnel_conductor's squares (1.6e19) are still far inside double range. Through
+ * mr_fresnel_conductor the round trip r -> (n, k) -> F(1) holds to 1e-9 up to r = 1 - 1e-6; beyond, with g near 1
+ * (n ~ (1 - r)/2 next to k ~ 1), its a = sqrt((A + t)/2) cancels and F(1) is off by up to 1e-8. */
+#define MR_ARTISTIC_R_MAX (1.0 - 1e-9)
+
+/* Gulbrandsen's map from artist colours (per channel) to a conductor's complex index n + ik:
+ *   r = reflectivity (normal-incidence reflectance) in [0, 1], clamped to [0, MR_ARTISTIC_R_MAX]
+ *   g = edge tint in [0, 1] (clamped)
+ *   n_min = (1 - r)/(1 + r),  n_max = (1 + sqrt r)/(1 - sqrt r),  n = g n_min + (1 - g) n_max
+ *   k^2 = ((n + 1)^2 r - (n - 1)^2)/(1 - r)     (clamped at 0 against rounding)
+ * so that the exact conductor Fresnel at normal incidence, ((n - 1)^2 + k^2)/((n + 1)^2 + k^2), is r again: the
+ * numerator is 4 n r/(1 - r) and the denominator 4 n/(1 - r). Use it with mr_fresnel_conductor. r = 0 gives
+ * n = 1, k = 0 (no reflection); g moves the reflectance towards grazing incidence. */
+static inline void mr_artistic_ior(double r, double g, double *n, double *k) {
+    r = mr_clampd(r, 0.0, MR_ARTISTIC_R_MAX);
+    g = mr_clampd(g, 0.0, 1.0);
+    double sr = sqrt(r);
+    double n_min = (1.0 - r) / (1.0 + r), n_max = (1.0 + sr) / (1.0 - sr);
+    double eta = g * n_min + (1.0 - g) * n_max;
+    double k2 = ((eta + 1.0) * (eta + 1.0) * r - (eta - 1.0) * (eta - 1.0)) / (1.0 - r);
+    *n = eta;
+    *k = sqrt(MR_MAX(k2, 0.0));
+}
+
 /* ---- glTF 2.0 height-correlated Smith visibility (Specification.adoc Appendix B; brdf-reference 5.1) ---- */
 
 /* V = G/(4 |n.l| |n.v|) = 1 / (2 (nv sqrt(a^2 + (1-a^2) nl^2) + nl sqrt(a^2 + (1-a^2) nv^2))), with the chi+

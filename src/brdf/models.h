@@ -42,6 +42,8 @@ extern const mr_brdf_model mr_brdf_usd_preview;
 /* openpbr.c, blender_principled.c */
 extern const mr_brdf_model mr_brdf_openpbr;
 extern const mr_brdf_model mr_brdf_blender_principled;
+/* standard_surface.c */
+extern const mr_brdf_model mr_brdf_standard_surface;
 
 /* Display order of `matremap models`; registry.c expands it into its table. */
 #define MR_BRDF_REGISTERED_MODELS                                                                           \
@@ -51,6 +53,6 @@ extern const mr_brdf_model mr_brdf_blender_principled;
         &mr_brdf_beckmann_plastic, &mr_brdf_ggx_plastic, &mr_brdf_as_plastic, &mr_brdf_ggx_metallic,         \
         &mr_brdf_blender_ward,                                                                               \
         &mr_brdf_gltf, &mr_brdf_gltf_specgloss, &mr_brdf_cycles_principled, &mr_brdf_cycles_ggx,             \
-        &mr_brdf_openpbr, &mr_brdf_blender_principled, &mr_brdf_usd_preview,
+        &mr_brdf_openpbr, &mr_brdf_blender_principled, &mr_brdf_usd_preview, &mr_brdf_standard_surface,
 
 #endif /* MR_BRDF_MODELS_H */

@@ -1,0 +1,238 @@
+/*
+ * standard_surface.c — `standard-surface`: Autodesk Standard Surface 1.0.1, its opaque reflection layers (coat over
+ * metal/specular over diffuse); isotropic. Section names below are those of the specification (Autodesk/
+ * standard-surface, index.html); the reference graph is reference/standard_surface.mtlx (MaterialX nodegraph
+ * NG_standard_surface_surfaceshader_100, which 1.0.1 reuses with new defaults).
+ *
+ *   Closures ("Closures"; each a GGX lobe with alpha = roughness^2 and the height-correlated Smith V):
+ *     coat_brdf     = F_d(wi.h; coat_ior) D V(alpha_c),     alpha_c = coat_roughness^2            ("Coating")
+ *     specular_brdf = F_d(wi.h; specular_ior) D V(alpha_s)                                ("Specular reflection")
+ *     metal_brdf    = F_c(wi.h; n, k) D V(alpha_s)                                              ("Metal")
+ *     diffuse_brdf  = (A + B max(0, cos(phi_i - phi_o)) sin(a) tan(b))/pi      ("Diffuse reflection": Oren-Nayar)
+ *   F_d is the exact dielectric Fresnel, F_c the exact conductor Fresnel (brdf_internal.h), D the GGX distribution,
+ *   V = G2/(4 cos_i cos_o) Smith's height-correlated masking-shadowing, as the reference graph's dielectric_bsdf and
+ *   conductor_bsdf (MaterialX pbrlib) use.
+ *   Metal ("Metal"): n + ik from Gulbrandsen's artistic IOR (mr_artistic_ior, brdf_internal.h), reflectivity
+ *     r = base base_color, edge tint g = specular specular_color; so F_c at normal incidence is base base_color.
+ *   Oren-Nayar: the qualitative model of Oren & Nayar 1994 (their eq. 30), sigma = diffuse_roughness in radians as
+ *     the reference graph passes it: A = 1 - 0.5 s/(s + 0.33), B = 0.45 s/(s + 0.09), s = sigma^2, a = max(theta_i,
+ *     theta_o), b = min; written as B (wi.wo - cos_i cos_o)/max(cos_i, cos_o) where that is positive. sigma = 0
+ *     gives Lambert exactly (A = 1, B = 0).
+ *   Layering, the spec's closure weights with E(x) = reflectance(x), the directional albedo at the VIEW direction
+ *   (wi; render.c evaluates f(view, light)):
+ *     specular_reflection_layer = s sc specular_brdf + (1 - s sc E_s(wi)) base bc' diffuse_brdf
+ *                                                    ("Specular reflection"; transmission, sheen, subsurface = 0)
+ *     specular_mixture = metalness metal_brdf + (1 - metalness) specular_reflection_layer               ("Metal")
+ *     coat_layer = coat coat_brdf + ((1 - coat) + coat coat_color (1 - E_c(wi))) specular_mixture       ("Coating")
+ *   with s = specular, sc = specular_color, bc' = base_color^(1 + coat coat_affect_color) (coat_affect_color) and
+ *   alpha_s = lerp(specular_roughness, 1, coat coat_affect_roughness coat_roughness)^2 (coat_affect_roughness),
+ *   both from "Coating". The reference graph writes the coat tint as mix(1, coat_color, coat) (1 - coat E_c): the
+ *   same at coat_color = 1 or coat in {0, 1}; this model follows the specification's formula.
+ *   Split: diffuse part = the diffuse_brdf term with all its weights; specular part = the rest.
+ *
+ * Directional albedos E_s, E_c: the specification assumes a reflectance() function and leaves its computation
+ *   open. Here E(mu; r, eta) of the F_d D V lobe is a table (standard_surface_albedo.h, written by
+ *   scripts/gen-standard-surface-albedo.py with a half-vector quadrature), interpolated linearly in sqrt(mu),
+ *   sqrt((r - 0.01)/0.99) and sqrt((eta - 1)/2) (41 nodes in mu, 17 in r, 25 in eta: the square roots put nodes
+ *   where E bends, at grazing incidence, smooth lobes and ior near 1). prepare() folds the (r, eta) interpolation
+ *   into one 41-node curve per lobe (floats in the state); eval() interpolates it at sqrt(cos_i). Accuracy, seen
+ *   as |albedo - 1| of a dielectric over a white Lambert base (which is exactly 1 with exact albedos; white
+ *   furnace of tests/test_brdf.c, whose own quadrature error is ~1e-3 towards grazing): <= 0.0082 over ior 1.05-3,
+ *   roughness 0.01-1 and 0-88 degrees, the worst at ior 1.05 and 88 degrees (Fresnel's sharp knee near grazing
+ *   for ior near 1); <= 0.0015 up to 80 degrees. The table is const data: thread-safe, nothing computed at run
+ *   time.
+ *
+ * Parameters (the specification's names, lowercased: the command line's identifiers are lowercase (brdf.h), so
+ * specular_IOR is `specular_ior` and coat_IOR is `coat_ior`; defaults of version 1.0.1; ranges the soft ranges):
+ *   base                 [0, 1]     default 1    weight of the diffuse lobe and factor of the metal's reflectivity.
+ *                                                Fits hold it (only base base_color is visible).
+ *   base_color      RGB  [0, 1]     default 0.8  diffuse colour and metal reflectivity (sRGB maps). NONLINEAR: the
+ *                                                metal's Fresnel depends on it through n, k.
+ *   diffuse_roughness    [0, 1]     default 0    Oren-Nayar sigma (radians); 0 = Lambert.
+ *   metalness            [0, 1]     default 0    AFFINE: the specification's statistical mix.
+ *   specular             [0, 1]     default 1    dielectric specular weight and metal edge-tint factor. Fits hold it.
+ *   specular_color  RGB  [0, 1]     default 1    dielectric tint and metal edge tint (sRGB maps). Fits hold it.
+ *   specular_roughness   [0.01, 1]  default 0.2  alpha = r^2; 0.01 (alpha = 1e-4) is the floor, as other models here.
+ *   specular_ior         [1, 3]     default 1.5  dielectric F0 = ((ior - 1)/(ior + 1))^2 s sc. Fits hold it.
+ *   coat                 [0, 1]     default 0    coat weight. Fits hold it (a remap should not invent a coat).
+ *   coat_color      RGB  [0, 1]     default 1    tint of everything below the coat (sRGB maps). Fits hold it.
+ *   coat_roughness       [0.01, 1]  default 0.1  alpha_c = r^2. Fits hold it.
+ *   coat_ior             [1, 3]     default 1.5  the coat's index. Fits hold it.
+ *   coat_affect_color    [0, 1]     default 0    in the model because f_r changes with it where coat > 0; fits hold
+ *   coat_affect_roughness[0, 1]     default 0    both, since a fit cannot tell them from base_color and
+ *                                                specular_roughness.
+ *   Every colour enters nonlinearly somewhere (the metal's n, k; the albedo-weighted layering), so only metalness
+ *   is AFFINE; coat_color would be affine as well, but not jointly with metalness (their product appears).
+ *
+ * Out of scope (not parameters; documents carry them): opacity/transparency, emission, transmission (and its
+ * colour, depth, scatter, dispersion, extra roughness), subsurface (all its parameters), sheen, thin film,
+ * anisotropy and rotation (specular and coat), normal and coat_normal, tangent, thin_walled.
+ * Reciprocity: flagged MR_BRDF_NON_RECIPROCAL. The specification's weights 1 - E(wi) depend on the incoming (view)
+ * direction only; its section "Reciprocity" says so and accepts it. f(wi, wo) = f(wo, wi) holds when specular = 0
+ * and coat = 0.
+ * Energy: conserving by the specification's construction (white furnace at the view direction: coat E_c +
+ * (1 - coat E_c) (...) <= 1 for any lower layer of albedo <= 1), up to the table's error above. Single-scattering
+ * GGX loses energy at high roughness, as in the reference graph without its energy compensation.
+ * Gradient: none (eval_grad NULL).
+ */
+#include "brdf_internal.h"
+#include "standard_surface_albedo.h"
+
+/* Slots of the packed value vector. */
+enum {
+    SS_BASE = 0, SS_BASE_COLOR = 1, SS_DIFFUSE_ROUGHNESS = 4, SS_METALNESS = 5, SS_SPECULAR = 6,
+    SS_SPECULAR_COLOR = 7, SS_SPECULAR_ROUGHNESS = 10, SS_SPECULAR_IOR = 11, SS_COAT = 12, SS_COAT_COLOR = 13,
+    SS_COAT_ROUGHNESS = 16, SS_COAT_IOR = 17, SS_COAT_AFFECT_COLOR = 18, SS_COAT_AFFECT_ROUGHNESS = 19
+};
+
+#define SS_HELD MR_PARAM_FIT_FIXED
+
+static const mr_brdf_param ss_params[] = {
+    {"base", 1, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, SS_HELD,
+     "base: weight of the diffuse lobe, factor of the metal reflectivity", NULL},
+    {"base_color", 3, 0.8, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_SRGB_MAP,
+     "base_color, linear RGB: diffuse colour; metal reflectivity = base base_color (Gulbrandsen)", NULL},
+    {"diffuse_roughness", 1, 0.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_DIFFUSE, 0,
+     "diffuse_roughness: Oren-Nayar sigma in radians; 0 = Lambert", NULL},
+    {"metalness", 1, 0.0, 0.0, 1.0, MR_PARAM_AFFINE, MR_LOBE_BOTH, 0,
+     "metalness: mix of metal_brdf and the dielectric specular/diffuse layers", NULL},
+    {"specular", 1, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, SS_HELD,
+     "specular: dielectric specular weight; metal edge tint = specular specular_color", NULL},
+    {"specular_color", 3, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, SS_HELD | MR_PARAM_SRGB_MAP,
+     "specular_color, linear RGB: dielectric specular tint and metal edge tint", NULL},
+    {"specular_roughness", 1, 0.2, SS_ALBEDO_ROUGH_MIN, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_LOG_SCALE,
+     "specular_roughness: GGX alpha = roughness^2 (metal and dielectric specular)", NULL},
+    {"specular_ior", 1, 1.5, 1.0, 3.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, SS_HELD,
+     "specular_IOR: dielectric specular index (F0 = ((ior-1)/(ior+1))^2)", NULL},
+    {"coat", 1, 0.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, SS_HELD, "coat: weight of the clear coat", NULL},
+    {"coat_color", 3, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, SS_HELD | MR_PARAM_SRGB_MAP,
+     "coat_color, linear RGB: tint of the layers below the coat", NULL},
+    {"coat_roughness", 1, 0.1, SS_ALBEDO_ROUGH_MIN, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH,
+     SS_HELD | MR_PARAM_LOG_SCALE, "coat_roughness: coat GGX alpha = roughness^2", NULL},
+    {"coat_ior", 1, 1.5, 1.0, 3.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, SS_HELD, "coat_IOR: the coat's index", NULL},
+    {"coat_affect_color", 1, 0.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_DIFFUSE, SS_HELD,
+     "coat_affect_color: diffuse colour = base_color^(1 + coat coat_affect_color)", NULL},
+    {"coat_affect_roughness", 1, 0.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, SS_HELD,
+     "coat_affect_roughness: specular roughness -> lerp(r, 1, coat coat_affect_roughness coat_roughness)", NULL},
+};
+
+typedef struct ss_state {
+    double alpha_s, alpha_c;   /* specular/metal and coat GGX alpha */
+    double eta_s, eta_c;       /* specular_ior, coat_ior */
+    double metalness, coat;
+    double spec_w[3];          /* specular specular_color */
+    double coat_tint[3];       /* coat coat_color */
+    double diffuse_over_pi[3]; /* base bc' / pi */
+    double on_a, on_b;         /* Oren-Nayar A, B */
+    double metal_n[3], metal_k[3];
+    float e_s[SS_ALBEDO_N_MU]; /* E_s and E_c at the sqrt(mu) nodes, for this (roughness, ior) */
+    float e_c[SS_ALBEDO_N_MU];
+} ss_state;
+
+_Static_assert(sizeof(ss_state) <= MR_BRDF_STATE_BYTES, "ss_state must fit in MR_BRDF_STATE_BYTES");
+
+/* Node index and weight of x in [0, 1] on n nodes spaced uniformly in x. */
+static int ss_cell(double x, int n, double *frac) {
+    double t = mr_clampd(x, 0.0, 1.0) * (n - 1);
+    int i = (int)t;
+    if (i > n - 2) i = n - 2;
+    *frac = t - i;
+    return i;
+}
+
+/* The albedo curve over the mu nodes at roughness r and index eta: bilinear in the table's (r, eta) coordinates. */
+static void ss_albedo_curve(double r, double eta, float out[SS_ALBEDO_N_MU]) {
+    double fr, fe;
+    int jr = ss_cell(sqrt(MR_MAX(r - SS_ALBEDO_ROUGH_MIN, 0.0) / (1.0 - SS_ALBEDO_ROUGH_MIN)), SS_ALBEDO_N_R, &fr);
+    int je = ss_cell(sqrt(MR_MAX(eta - 1.0, 0.0) / 2.0), SS_ALBEDO_N_ETA, &fe);
+    for (int i = 0; i < SS_ALBEDO_N_MU; i++)
+        out[i] = (float)((1.0 - fe) * ((1.0 - fr) * ss_albedo[je][jr][i] + fr * ss_albedo[je][jr + 1][i]) +
+                         fe * ((1.0 - fr) * ss_albedo[je + 1][jr][i] + fr * ss_albedo[je + 1][jr + 1][i]));
+}
+
+static double ss_albedo_at(const float curve[SS_ALBEDO_N_MU], double cos_i) {
+    double u;
+    int i = ss_cell(sqrt(MR_MIN(cos_i, 1.0)), SS_ALBEDO_N_MU, &u);
+    return (1.0 - u) * curve[i] + u * curve[i + 1];
+}
+
+static void ss_prepare(const mr_brdf_model *model, const double *values, void *state_bytes) {
+    ss_state *st = state_bytes;
+    double v[MR_BRDF_MAX_VALUES];
+    mr_brdf_clamp_values(model, values, v);
+    double coat = v[SS_COAT];
+    double rough_s = v[SS_SPECULAR_ROUGHNESS], rough_c = v[SS_COAT_ROUGHNESS];
+    double affect = coat * v[SS_COAT_AFFECT_ROUGHNESS] * rough_c;
+    rough_s = rough_s + (1.0 - rough_s) * affect; /* lerp(roughness, 1, ...), "Coating" */
+    st->alpha_s = rough_s * rough_s;
+    st->alpha_c = rough_c * rough_c;
+    st->eta_s = v[SS_SPECULAR_IOR];
+    st->eta_c = v[SS_COAT_IOR];
+    st->metalness = v[SS_METALNESS];
+    st->coat = coat;
+    double gamma = 1.0 + coat * v[SS_COAT_AFFECT_COLOR];
+    double sigma2 = v[SS_DIFFUSE_ROUGHNESS] * v[SS_DIFFUSE_ROUGHNESS];
+    st->on_a = 1.0 - 0.5 * sigma2 / (sigma2 + 0.33);
+    st->on_b = 0.45 * sigma2 / (sigma2 + 0.09);
+    for (int c = 0; c < 3; c++) {
+        double bc = v[SS_BASE_COLOR + c];
+        double bc_diffuse = gamma == 1.0 ? bc : pow(bc, gamma);
+        st->diffuse_over_pi[c] = v[SS_BASE] * bc_diffuse * MR_INV_PI;
+        st->spec_w[c] = v[SS_SPECULAR] * v[SS_SPECULAR_COLOR + c];
+        st->coat_tint[c] = coat * v[SS_COAT_COLOR + c];
+        mr_artistic_ior(v[SS_BASE] * bc, st->spec_w[c], &st->metal_n[c], &st->metal_k[c]);
+    }
+    ss_albedo_curve(rough_s, st->eta_s, st->e_s);
+    ss_albedo_curve(rough_c, st->eta_c, st->e_c);
+}
+
+static void ss_eval(const void *state_bytes, const double wi[3], const double wo[3], double diffuse[3],
+                    double specular[3]) {
+    const ss_state *st = state_bytes;
+    mr_brdf_geom g;
+    if (!mr_brdf_geom_init(wi, wo, &g)) {
+        mr_brdf_zero(diffuse, specular);
+        return;
+    }
+    double e_c = st->coat > 0.0 ? ss_albedo_at(st->e_c, g.cos_i) : 0.0;
+    double below[3]; /* the coat layer's weight of everything under it, at the view direction */
+    for (int c = 0; c < 3; c++) below[c] = (1.0 - st->coat) + st->coat_tint[c] * (1.0 - e_c);
+    if (diffuse) {
+        double e_s = ss_albedo_at(st->e_s, g.cos_i);
+        double on = st->on_a;
+        if (st->on_b > 0.0) {
+            double s = wi[0] * wo[0] + wi[1] * wo[1] + wi[2] * wo[2] - g.cos_i * g.cos_o;
+            if (s > 0.0) on += st->on_b * s / MR_MAX(g.cos_i, g.cos_o);
+        }
+        for (int c = 0; c < 3; c++)
+            diffuse[c] = below[c] * (1.0 - st->metalness) * (1.0 - st->spec_w[c] * e_s) * st->diffuse_over_pi[c] * on;
+    }
+    if (specular) {
+        double dv = mr_ggx_dv_correlated(st->alpha_s, &g, NULL);
+        double f_d = mr_fresnel_dielectric(g.dot_h, st->eta_s, NULL);
+        double coat = st->coat > 0.0
+                          ? st->coat * mr_fresnel_dielectric(g.dot_h, st->eta_c, NULL) *
+                                mr_ggx_dv_correlated(st->alpha_c, &g, NULL)
+                          : 0.0;
+        for (int c = 0; c < 3; c++) {
+            double metal = st->metalness > 0.0
+                               ? st->metalness * mr_fresnel_conductor(g.dot_h, st->metal_n[c], st->metal_k[c], NULL,
+                                                                      NULL)
+                               : 0.0;
+            specular[c] = coat + below[c] * (metal + (1.0 - st->metalness) * st->spec_w[c] * f_d) * dv;
+        }
+    }
+}
+
+const mr_brdf_model mr_brdf_standard_surface = {
+    .name = "standard-surface",
+    .summary = "Autodesk Standard Surface 1.0.1: coat over metal/dielectric GGX over Oren-Nayar, albedo-weighted",
+    .source = "Autodesk/standard-surface index.html (1.0.1) + reference/standard_surface.mtlx; Gulbrandsen 2014",
+    .param_count = (int)(sizeof ss_params / sizeof ss_params[0]),
+    .params = ss_params,
+    .flags = MR_BRDF_NON_RECIPROCAL,
+    .config = NULL,
+    .prepare = ss_prepare,
+    .eval = ss_eval,
+    .eval_grad = NULL,
+};
