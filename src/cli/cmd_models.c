@@ -20,15 +20,6 @@ static const char *map_encoding(const mr_brdf_param *p) {
 }
 
 /* "name name[rgb] ..." for the model list. */
-static const char *format_params(const mr_brdf_model *m, char *buf, size_t size) {
-    size_t used = 0;
-    buf[0] = '\0';
-    for (int k = 0; k < m->param_count && used < size; k++)
-        used += (size_t)snprintf(buf + used, size - used, "%s%s%s", k ? " " : "", m->params[k].name,
-                                 m->params[k].channels == 3 ? "[rgb]" : "");
-    return buf;
-}
-
 static void print_help(void) {
     printf("Usage: matremap models [NAME] [--json]\n"
            "\n"
@@ -138,18 +129,26 @@ int cmd_models(int argc, char **argv) {
         printf("\n]\n");
         return CLI_EXIT_OK;
     }
-    // Columns as wide as their longest entry, so every summary starts in the same column.
-    char params[256];
-    int name_width = 5, params_width = 10;
-    for (int i = 0; models[i] != NULL; i++) {
-        name_width = MAX_INT(name_width, (int)strlen(models[i]->name));
-        params_width = MAX_INT(params_width, (int)strlen(format_params(models[i], params, sizeof params)));
-    }
-    printf("%-*s  %-*s  %s\n", name_width, "MODEL", params_width, "PARAMETERS", "SUMMARY");
+    // One line per model (its name, then its summary, in one column), its parameters on the lines below it,
+    // wrapped: today's layered models have twenty parameters, too many for a column.
+    int name_width = 5;
+    for (int i = 0; models[i] != NULL; i++) name_width = MAX_INT(name_width, (int)strlen(models[i]->name));
+    printf("%-*s  %s\n", name_width, "MODEL", "SUMMARY (PARAMETERS below)");
     for (int i = 0; models[i] != NULL; i++) {
         const mr_brdf_model *m = models[i];
-        printf("%-*s  %-*s  %s%s\n", name_width, m->name, params_width, format_params(m, params, sizeof params),
-               m->summary, (m->flags & MR_BRDF_NOT_ENERGY_CONSERVING) ? " [albedo can exceed 1]" : "");
+        printf("%-*s  %s%s\n", name_width, m->name, m->summary,
+               (m->flags & MR_BRDF_NOT_ENERGY_CONSERVING) ? " [albedo can exceed 1]" : "");
+        int column = 0;
+        for (int k = 0; k < m->param_count; k++) {
+            char word[96];
+            snprintf(word, sizeof word, "%s%s", m->params[k].name, m->params[k].channels == 3 ? "[rgb]" : "");
+            if (column > 0 && column + 1 + (int)strlen(word) > 116) {
+                printf("\n");
+                column = 0;
+            }
+            column += printf("%*s%s", column == 0 ? name_width + 2 : 1, "", word);
+        }
+        printf("\n");
     }
     printf("\n'matremap models NAME' shows a model's parameters with ranges and meanings.\n");
     return CLI_EXIT_OK;
