@@ -183,6 +183,30 @@ const char *mr_param_lobe_name(mr_param_lobe lobe);
  * counts and values outside [min, max] are MR_ERR_INVALID_ARG. */
 mr_status mr_brdf_parse_assignment(const mr_brdf_model *model, const char *assignment, double *values);
 
+/* Parse a hold list, "NAME[=VALUE][,NAME[=VALUE]...]" (the --hold of remap, sweep and convert --direct): each NAME is
+ * a parameter of `model` to hold instead of fit (bit p of *held is set; *held keeps the bits it had); NAME=VALUE also
+ * sets it in values[] by mr_brdf_parse_assignment's rules (an RGB parameter takes one value or r,g,b: the commas
+ * after the first number continue that value while they are followed by a number), a bare NAME keeps the value
+ * values[] already holds (given or default). MR_ERR_INVALID_ARG, naming the parameter and the text, for an unknown
+ * name (the message lists the valid ones), an empty item, a malformed or out-of-range value, or a parameter beyond
+ * the 32 a mask holds; values[] and *held are written only on success. */
+mr_status mr_brdf_parse_holds(const mr_brdf_model *model, const char *text, double *values, unsigned *held);
+
+/* Why a fit of `model` does not fit parameter p when the caller holds the mask `held` (bit p: the caller's hold):
+ * MR_HOLD_FITTED (it is fitted), MR_HOLD_SWITCH (a switch: an option, never fitted), MR_HOLD_CALLER (bit p of
+ * `held` is set, whatever the descriptor says) or MR_HOLD_MODEL (the descriptor's default hold, MR_PARAM_FIT_FIXED:
+ * the model's documented choice of what a fit scene cannot separate). The one rule the remap applies (remap.h). */
+typedef enum mr_hold_reason { MR_HOLD_FITTED = 0, MR_HOLD_MODEL, MR_HOLD_CALLER, MR_HOLD_SWITCH } mr_hold_reason;
+mr_hold_reason mr_brdf_hold_reason(const mr_brdf_model *model, unsigned held, int p);
+
+/* The holds of a fit as one line into buf (capacity size, always terminated; cut short, never overrun): the
+ * caller's holds, then the model's default ones, each group in table order and labelled once,
+ * "a=1, b=0.9,1,1 (held_label); c=1.5, d=0 (default for MODEL)", values from values[] (%g; an RGB parameter "r,g,b"
+ * unless its channels agree); switches are left out. held_label names the caller's holds ("--hold"; NULL: "held").
+ * "" when nothing is held. Returns the length the whole line needs (as snprintf). */
+size_t mr_brdf_format_holds(const mr_brdf_model *model, const double *values, unsigned held, const char *held_label,
+                            char *buf, size_t size);
+
 /* Convenience: prepare + eval of the full f_r (diffuse + specular) into rgb[3]. */
 void mr_brdf_eval_full(const mr_brdf_model *model, const double *values, const double wi[3],
                        const double wo[3], double rgb[3]);

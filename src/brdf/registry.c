@@ -146,6 +146,137 @@ mr_status mr_brdf_parse_assignment(const mr_brdf_model *model, const char *assig
     return status;
 }
 
+/* The end of a number at `text` if the whole of it up to the next ',' (or the end) is one: the commas of an RGB
+ * value are told from those between items this way (a parameter name is never a number). NULL otherwise. */
+static const char *number_item_end(const char *text) {
+    char *end = NULL;
+    errno = 0;
+    (void)strtod(text, &end);
+    if (end == text || (*end != ',' && *end != '\0')) return NULL;
+    return end;
+}
+
+static mr_status parse_holds(const mr_brdf_model *model, const char *text, double *values, unsigned *held) {
+    const char *item = text;
+    if (*item == '\0') return mr_fail(MR_ERR_INVALID_ARG, "hold list of model '%s' is empty", model->name);
+    for (;;) {
+        size_t name_len = strcspn(item, ",=");
+        if (name_len == 0)
+            return mr_fail(MR_ERR_INVALID_ARG, "hold list '%s': an empty parameter name (expected NAME or "
+                           "NAME=VALUE, ','-separated)", text);
+        int index = -1;
+        for (int i = 0; i < model->param_count; i++)
+            if (strlen(model->params[i].name) == name_len && strncmp(model->params[i].name, item, name_len) == 0)
+                index = i;
+        if (index < 0) {
+            char list[512] = "";
+            for (int i = 0; i < model->param_count; i++) append_name(list, sizeof list, model->params[i].name);
+            return mr_fail(MR_ERR_INVALID_ARG, "'%.*s' is not a parameter of '%s' (valid: %s)", (int)name_len, item,
+                           model->name, list);
+        }
+        if (index >= 32)
+            return mr_fail(MR_ERR_INVALID_ARG, "parameter '%s' of model '%s' is beyond the 32 a hold mask holds",
+                           model->params[index].name, model->name);
+        const char *next = item + name_len;
+        if (*next == '=') {
+            // The value: its first number, then every ",number" that follows (an RGB parameter's r,g,b).
+            const char *end = next + 1;
+            const char *number = number_item_end(end);
+            if (number != NULL) {
+                end = number;
+                while (*end == ',' && (number = number_item_end(end + 1)) != NULL) end = number;
+            } else {
+                end += strcspn(end, ",");
+            }
+            char assignment[256];
+            if ((size_t)(end - item) >= sizeof assignment)
+                return mr_fail(MR_ERR_INVALID_ARG, "hold '%.*s...': too long", 40, item);
+            memcpy(assignment, item, (size_t)(end - item));
+            assignment[end - item] = '\0';
+            if (end == next + 1)
+                return mr_fail(MR_ERR_INVALID_ARG, "parameter '%s' of model '%s': '%s' holds no value (expected "
+                               "NAME=VALUE or NAME)", model->params[index].name, model->name, assignment);
+            mr_status status = parse_assignment(model, assignment, values);
+            if (status != MR_OK) return status;
+            next = end;
+        }
+        *held |= 1u << index;
+        if (*next == '\0') return MR_OK;
+        item = next + 1; // *next == ','
+        if (*item == '\0')
+            return mr_fail(MR_ERR_INVALID_ARG, "hold list '%s': an empty parameter name after the last ','", text);
+    }
+}
+
+mr_status mr_brdf_parse_holds(const mr_brdf_model *model, const char *text, double *values, unsigned *held) {
+    if (model == NULL || text == NULL || values == NULL || held == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "hold list: NULL model, text, values or mask");
+    double work[MR_BRDF_MAX_VALUES];
+    const int count = mr_brdf_value_count(model);
+    memcpy(work, values, (size_t)count * sizeof *work);
+    unsigned mask = *held;
+    mr_c_numeric locale;
+    mr_status status = mr_c_numeric_enter(&locale, "hold list");
+    if (status != MR_OK) return status;
+    status = parse_holds(model, text, work, &mask);
+    mr_c_numeric_leave(&locale);
+    if (status != MR_OK) return status;
+    memcpy(values, work, (size_t)count * sizeof *work);
+    *held = mask;
+    return MR_OK;
+}
+
+mr_hold_reason mr_brdf_hold_reason(const mr_brdf_model *model, unsigned held, int p) {
+    if (model == NULL || p < 0 || p >= model->param_count) return MR_HOLD_FITTED;
+    const mr_brdf_param *param = &model->params[p];
+    if (param->role == MR_PARAM_SWITCH) return MR_HOLD_SWITCH;
+    if (p < 32 && ((held >> p) & 1u)) return MR_HOLD_CALLER;
+    if (param->flags & MR_PARAM_FIT_FIXED) return MR_HOLD_MODEL;
+    return MR_HOLD_FITTED;
+}
+
+size_t mr_brdf_format_holds(const mr_brdf_model *model, const double *values, unsigned held, const char *held_label,
+                            char *buf, size_t size) {
+    size_t need = 0;
+    if (buf != NULL && size > 0) buf[0] = '\0';
+    if (model == NULL || values == NULL) return 0;
+    // "1.5" in any host locale; should the bracket fail (it cannot but by running out of memory), the line is written
+    // in the host's, which only a person reads.
+    mr_c_numeric locale;
+    const int entered = mr_c_numeric_enter(&locale, "hold list") == MR_OK;
+    int cut = 0;
+    // Two groups, the caller's holds first: "a=1, b=2 (--hold); c=3 (default for MODEL)".
+    for (int group = 0; group < 2; group++) {
+        const mr_hold_reason want = group == 0 ? MR_HOLD_CALLER : MR_HOLD_MODEL;
+        int items = 0;
+        for (int p = 0; p <= model->param_count; p++) {
+            char item[192];
+            if (p == model->param_count) { // the group's label
+                if (items == 0) break;
+                if (want == MR_HOLD_CALLER) snprintf(item, sizeof item, " (%s)", held_label ? held_label : "held");
+                else snprintf(item, sizeof item, " (default for %s)", model->name);
+            } else {
+                if (mr_brdf_hold_reason(model, held, p) != want) continue;
+                const mr_brdf_param *param = &model->params[p];
+                const double *v = values + mr_brdf_param_offset(model, p);
+                char value[96];
+                if (param->channels == 3 && !(v[1] == v[0] && v[2] == v[0]))
+                    snprintf(value, sizeof value, "%g,%g,%g", v[0], v[1], v[2]);
+                else
+                    snprintf(value, sizeof value, "%g", v[0]);
+                snprintf(item, sizeof item, "%s%s=%s", items ? ", " : need ? "; " : "", param->name, value);
+                items++;
+            }
+            const size_t len = strlen(item);
+            if (buf != NULL && !cut && need + len < size) memcpy(buf + need, item, len + 1);
+            else cut = 1; // no later, shorter item after a gap: the line is cut where it stopped fitting
+            need += len;
+        }
+    }
+    if (entered) mr_c_numeric_leave(&locale);
+    return need;
+}
+
 void mr_brdf_eval_full(const mr_brdf_model *model, const double *values, const double wi[3], const double wo[3],
                        double rgb[3]) {
     mr_brdf_state state;

@@ -42,25 +42,33 @@ int cli_usage_error(const char *command, const char *fmt, ...) {
     return CLI_EXIT_USAGE;
 }
 
-int cli_parse_held(const char *command, const mr_brdf_model *model, const char *list, unsigned *held) {
-    const char *name = list;
-    while (*name) {
-        size_t length = strcspn(name, ",");
-        int found = -1;
-        for (int p = 0; p < model->param_count && p < 32; p++)
-            if (strlen(model->params[p].name) == length && strncmp(model->params[p].name, name, length) == 0) found = p;
-        if (found < 0) {
-            char valid[512] = "";
-            for (int p = 0; p < model->param_count; p++)
-                snprintf(valid + strlen(valid), sizeof valid - strlen(valid), "%s%s", p ? ", " : "",
-                         model->params[p].name);
-            return cli_usage_error(command, "--hold: '%.*s' is not a parameter of '%s' (valid: %s)", (int)length, name,
-                                   model->name, valid) == 0;
-        }
-        *held |= 1u << found;
-        name += length + (name[length] == ',');
+int cli_parse_held(const char *command, const mr_brdf_model *model, const char *list, double *values, unsigned *held) {
+    if (mr_brdf_parse_holds(model, list, values, held) == MR_OK) return 1;
+    return cli_usage_error(command, "--hold: %s", mr_last_error()) == 0;
+}
+
+void cli_print_holds(FILE *out, const char *prefix, const mr_brdf_model *model, const double *values, unsigned held) {
+    char line[2048];
+    if (mr_brdf_format_holds(model, values, held, "--hold", line, sizeof line) == 0) return;
+    fprintf(out, "%sheld: %s\n", prefix ? prefix : "", line);
+}
+
+void cli_print_holds_json(FILE *out, const mr_brdf_model *model, const double *values, unsigned held) {
+    fprintf(out, "[");
+    for (int p = 0, first = 1; p < model->param_count; p++) {
+        const mr_hold_reason why = mr_brdf_hold_reason(model, held, p);
+        if (why != MR_HOLD_MODEL && why != MR_HOLD_CALLER) continue;
+        const double *v = values + mr_brdf_param_offset(model, p);
+        fprintf(out, "%s{\"name\": ", first ? "" : ", ");
+        cli_json_string(out, model->params[p].name);
+        if (model->params[p].channels == 3)
+            fprintf(out, ", \"value\": [%.17g, %.17g, %.17g]", v[0], v[1], v[2]);
+        else
+            fprintf(out, ", \"value\": %.17g", v[0]);
+        fprintf(out, ", \"by\": \"%s\"}", why == MR_HOLD_MODEL ? "default" : "--hold");
+        first = 0;
     }
-    return 1;
+    fprintf(out, "]");
 }
 
 /* ---- inputs and outputs (cli.h; the plan is the library's, io/output_plan.h) --------------------------------- */

@@ -88,9 +88,17 @@ int cli_parse_double(const char *command, const char *option, const char *text, 
 /* --convention gltf|paper (mr_wf_diffuse_from_name) into *out; 0 after a usage error naming `command`. */
 int cli_parse_convention(const char *command, const char *value, mr_wf_diffuse *out);
 
-/* Parse "--hold NAME[,NAME...]": parameters of `model` to hold instead of fit (mr_remap_options.held); on an
- * unknown name print a usage error listing the model's parameters and return 0. */
-int cli_parse_held(const char *command, const mr_brdf_model *model, const char *list, unsigned *held);
+/* Parse "--hold NAME[=VALUE][,NAME[=VALUE]...]" (mr_brdf_parse_holds): parameters of `model` to hold instead of fit
+ * (mr_remap_options.held), a VALUE set in values[] (the target values the --to assignments filled); on an unknown
+ * name or a bad value print a usage error naming it ("--hold: ...") and return 0. */
+int cli_parse_held(const char *command, const mr_brdf_model *model, const char *list, double *values, unsigned *held);
+
+/* The holds a fit of `model` used (mr_brdf_format_holds: the model's default holds and --hold's, with their values):
+ * "held: LIST\n" on `out` (prefixed by `prefix`, e.g. "matremap convert: "; NULL: none), nothing when none. */
+void cli_print_holds(FILE *out, const char *prefix, const mr_brdf_model *model, const double *values, unsigned held);
+
+/* The same as a JSON array (no key): [{"name": N, "value": V or [R, G, B], "by": "default" or "--hold"}, ...]. */
+void cli_print_holds_json(FILE *out, const mr_brdf_model *model, const double *values, unsigned held);
 
 /* Write s as a JSON string literal (quotes and escapes included). */
 void cli_json_string(FILE *out, const char *s);

@@ -18,7 +18,8 @@ static void print_help(void) {
     printf(
         "Usage: matremap convert --from MODEL --to MODEL NAME=FILE|VALUE ...\n"
         "                        (--transform T.mrt [--transform T2.mrt ...] | --transforms DIR [--via MODEL,...] |\n"
-        "                         --direct [--tolerance T] [--cache FILE] [--size N] [--light 45|frontal])\n"
+        "                         --direct [--tolerance T] [--cache FILE] [--size N] [--light 45|frontal]\n"
+        "                                  [--hold NAME[=VALUE],...])\n"
         "                        -o PREFIX [options]\n"
         "\n"
         "Converts a material of one BRDF model into another, texel by texel: every NAME=FILE (or NAME=@FILE) gives\n"
@@ -47,6 +48,9 @@ static void print_help(void) {
         "  --cache FILE        --direct: answers kept across runs (created if missing; refused if it was made\n"
         "                      for other models, options or scene)\n"
         "  --size N, --light L --direct: the fit scene (default 64, 45; as 'matremap remap')\n"
+        "  --hold NAME[=VALUE][,...]  --direct: hold these target parameters at VALUE (or their defaults)\n"
+        "                      instead of fitting them, as 'matremap remap --hold'; the target model's default\n"
+        "                      holds are held too, and a 'held:' line lists every hold used\n"
         "\n");
     printf(
         "Outputs: PREFIX_<param>.exr (linear float; --format png: 8-bit by the same rule, colour parameters\n"
@@ -128,6 +132,7 @@ static void print_note(int hop, const char *note, void *user) {
 
 int cmd_convert(int argc, char **argv) {
     const char *from = NULL, *to = NULL, *prefix = NULL, *format = "exr", *dir = NULL, *via_list = NULL;
+    const char *hold_list = NULL;
     const char *assignments[CLI_MAX_ASSIGNMENTS], *transform_paths[MR_LEARNED_MAX_HOPS];
     char *owned[CLI_MAX_ASSIGNMENTS];
     int assignment_count = 0, transform_count = 0, json = 0, threads = 0, direct = 0;
@@ -172,6 +177,9 @@ int cmd_convert(int argc, char **argv) {
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--tolerance", &v)) != 0) {
             if (r < 0 || !cli_parse_double(COMMAND, "--tolerance", v, MR_DIRECT_MIN_TOLERANCE, 1.0, &dopts.tolerance))
                 return CLI_EXIT_USAGE;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--hold", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            hold_list = v;
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--cache", &v)) != 0) {
             if (r < 0) return CLI_EXIT_USAGE;
             dopts.cache_path = v;
@@ -198,9 +206,17 @@ int cmd_convert(int argc, char **argv) {
         return cli_usage_error(COMMAND, "give one of --transform T.mrt (repeatable), --transforms DIR or --direct");
     if (!direct && (dopts.tolerance != 0.0 || dopts.cache_path || dopts.scene.size || dopts.scene.light))
         return cli_usage_error(COMMAND, "--tolerance, --cache, --size and --light go with --direct");
+    if (!direct && hold_list != NULL)
+        return cli_usage_error(COMMAND, "--hold goes with --direct (a learned transform holds what its sweep held)");
     if (via_list != NULL && dir == NULL) return cli_usage_error(COMMAND, "--via needs --transforms DIR");
     const mr_brdf_model *source = mr_brdf_find(from), *target = source ? mr_brdf_find(to) : NULL;
     if (source == NULL || target == NULL) return cli_fail(COMMAND, MR_ERR_INVALID_ARG);
+    // --direct's target values: the defaults, with --hold's values; the model's default holds and --hold's are held.
+    double target_values[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(target, target_values);
+    if (hold_list != NULL && !cli_parse_held(COMMAND, target, hold_list, target_values, &dopts.remap.held))
+        return CLI_EXIT_USAGE;
+    if (direct) dopts.remap.target_values = target_values;
 
     // The chain.
     mr_learned_set l = {0};
@@ -249,6 +265,11 @@ int cmd_convert(int argc, char **argv) {
     // Outputs: named, checked against every input before anything is written.
     char names[MR_TRANSFORM_MAX_SLOTS + 1][4096];
     const int out_count = target->param_count;
+    if (out_count > MR_TRANSFORM_MAX_SLOTS) { // the names and outputs below have room for that many (and the flags)
+        fprintf(stderr, "matremap convert: error: model '%s' has %d parameters, more than the %d a conversion writes\n",
+                target->name, out_count, MR_TRANSFORM_MAX_SLOTS);
+        code = CLI_EXIT_BAD_INPUT;
+    }
     if (code == CLI_EXIT_OK && maps_given) {
         if (prefix == NULL) code = cli_usage_error(COMMAND, "maps given: name the outputs with -o PREFIX");
         for (int j = 0; code == CLI_EXIT_OK && j <= out_count; j++) {
@@ -320,6 +341,8 @@ int cmd_convert(int argc, char **argv) {
                 ds->unique, r.direct_tolerance, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->renders,
                 ds->outcomes[MR_FIT_CONVERGED], ds->outcomes[MR_FIT_UNDER_RESOLVED], ds->outcomes[MR_FIT_AT_BOUND],
                 ds->outcomes[MR_FIT_UNREACHABLE], ds->outcomes[MR_FIT_LOCAL_MINIMUM]);
+    if (ds != NULL && !json)
+        cli_print_holds(stderr, "matremap convert: --direct: ", target, target_values, dopts.remap.held);
     mr_image *const *out = r.converted;
     const int any_map = r.material->map_count > 0;
     if (json) {
@@ -327,9 +350,16 @@ int cmd_convert(int argc, char **argv) {
                direct ? "direct" : "learned");
         if (ds != NULL)
             printf("\"direct\": {\"unique\": %zu, \"cache_hits\": %zu, \"full\": %zu, \"warm\": %zu, "
-                   "\"fallbacks\": %zu, \"renders\": %ld, \"converged\": %zu}, ",
+                   "\"fallbacks\": %zu, \"renders\": %ld, \"converged\": %zu, \"outcomes\": {",
                    ds->unique, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->renders,
                    ds->outcomes[MR_FIT_CONVERGED]);
+        for (int o = 0; ds != NULL && o < MR_FIT_OUTCOME_COUNT; o++)
+            printf("%s\"%s\": %zu", o ? ", " : "", mr_fit_outcome_name((mr_fit_outcome)o), ds->outcomes[o]);
+        if (ds != NULL) {
+            printf("}, \"held\": ");
+            cli_print_holds_json(stdout, target, target_values, dopts.remap.held);
+            printf("}, ");
+        }
         printf("\"chain\": [");
         for (int h = 0; h < hops; h++) {
             printf("%s", h ? ", " : "");

@@ -86,7 +86,8 @@ static void draw_progress(const char *stage, double fraction, void *user) {
 
 /* ---- the command ------------------------------------------------------------------------------------------ */
 
-static void print_summary(const mr_learned *t, const char *output, double seconds, int json) {
+static void print_summary(const mr_learned *t, const mr_sweep_table *tab, const char *output, double seconds,
+                          int json) {
     if (json) {
         printf("{\"output\": ");
         cli_json_string(stdout, output);
@@ -124,6 +125,8 @@ static void print_summary(const mr_learned *t, const char *output, double second
             for (int k = 0; k < (t->slope.with_inverse ? 6 : 5); k++) printf("%s%.9g", k ? ", " : "", t->slope.c[k]);
             printf("]");
         }
+        printf(", \"held\": "); // the sweep's holds: its header's '# to:' values, held= and the model's defaults
+        cli_print_holds_json(stdout, tab->target, tab->target_fixed, tab->target_held);
         printf("}\n");
         return;
     }
@@ -187,6 +190,7 @@ static void print_summary(const mr_learned *t, const char *output, double second
         if (strncmp(p, "note: ", 6) == 0) printf("  %.*s\n", (int)(e - p), p);
         p = e + 1;
     }
+    cli_print_holds(stdout, "  ", tab->target, tab->target_fixed, tab->target_held);
 }
 
 /* The warning of a transform that failed its check: which bound, by how much, and what to do. */
@@ -315,7 +319,7 @@ int cmd_learn(int argc, char **argv) {
                         "through\n");
     else if (plots != NULL && !plotted.drawn)
         fprintf(stderr, "matremap learn: note: no SVG plots (gnuplot missing or failed); the data is in %s\n", plots);
-    print_summary(t, output, cli_now() - started, json);
+    print_summary(t, &tab, output, cli_now() - started, json);
     fflush(stdout); // the summary before the warning, also when both go to one pipe
     if (!t->check.passed) warn_check(t);
     mr_sweep_table_free(&tab);

@@ -36,8 +36,11 @@ static void print_help(void) {
            "Target:\n"
            "  --to MODEL [name=value ...]     values given here hold fixed parameters (e.g. glTF's ior) and\n"
            "                                  switches (Ward's trim) at those values, and start the others\n"
-           "  --hold NAME[,NAME]              hold these target parameters at their given (or default) values\n"
-           "                                  instead of fitting them, e.g. a roughness both models share\n"
+           "  --hold NAME[=VALUE][,...]       hold these target parameters at VALUE (or their given or default\n"
+           "                                  values) instead of fitting them, e.g. a roughness both models\n"
+           "                                  share; the model's own default holds (extension factors, coats,\n"
+           "                                  what a fit scene cannot separate: 'matremap models MODEL') are\n"
+           "                                  held too, and the result's 'held:' line lists every hold used\n"
            "\n"
            "Options:\n"
            "  --strategy S       auto (default): affine parameters solved exactly, each lobe's roughness\n"
@@ -175,7 +178,8 @@ int cmd_remap(int argc, char **argv) {
         if (status != MR_OK) return cli_fail("remap", status);
     }
     opts.target_values = target_values;
-    if (hold_list != NULL && !cli_parse_held("remap", to, hold_list, &opts.held)) return CLI_EXIT_USAGE;
+    if (hold_list != NULL && !cli_parse_held("remap", to, hold_list, target_values, &opts.held))
+        return CLI_EXIT_USAGE;
 
     const mr_brdf_model *from = NULL;
     double source_values[MR_BRDF_MAX_VALUES];
@@ -261,6 +265,8 @@ int cmd_remap(int argc, char **argv) {
                    result.rmse, result.relative_rmse, result.ssim, result.renders, result.seconds,
                    mr_fit_outcome_name(result.outcome));
             cli_json_string(stdout, result.detail);
+            printf(", \"held\": ");
+            cli_print_holds_json(stdout, to, target_values, opts.held);
             printf("}\n");
         } else {
             printf("%s", to->name);
@@ -272,6 +278,7 @@ int cmd_remap(int argc, char **argv) {
                    result.rmse, 100.0 * result.relative_rmse, result.ssim, result.renders, 1e3 * result.seconds,
                    strategy, scene_opts.size, mr_fit_light_name(scene_opts.light));
             if (reference != NULL) printf("irradiance scale applied to the source images: %.6g\n", irradiance_scale);
+            cli_print_holds(stdout, NULL, to, target_values, opts.held);
         }
     }
     for (int k = 0; k < 3; k++) mr_image_free(images[k]);

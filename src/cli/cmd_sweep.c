@@ -42,7 +42,9 @@ static void print_help(void) {
            "  --seed S                    seed of --random (default 1); sample i depends only on (S, i)\n"
            "Values given after --from hold for every sample; a grid axis overrides them. Values given after --to\n"
            "hold the target's fixed parameters and switches (e.g. Ward's trim), as in 'matremap remap';\n"
-           "--hold NAME[,NAME] holds target parameters at those values instead of fitting them.\n"
+           "--hold NAME[=VALUE][,...] holds target parameters at VALUE (or those values) instead of fitting them; the\n"
+           "target model's default holds are held too, and the summary's 'held:' line lists them all (the header's\n"
+           "'# to:' and 'held=' record them, which learn reads).\n"
            "\n");
     printf("Options:\n"
            "  -o, --output FILE     the CSV file (required); it must not exist unless --resume is given\n"
@@ -388,7 +390,7 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
         if (status != MR_OK) return cli_fail("sweep", status);
     }
     spec->remap.strategy = strategy;
-    if (hold_list != NULL && !cli_parse_held("sweep", to, hold_list, &spec->remap.held))
+    if (hold_list != NULL && !cli_parse_held("sweep", to, hold_list, spec->target_values, &spec->remap.held))
         return CLI_EXIT_USAGE;
     spec->scene = scene;
     if (random_count > 0) {
@@ -539,7 +541,9 @@ int cmd_sweep(int argc, char **argv) {
                summary.seconds, summary.threads, summary.processes, summary.threads_total);
         for (int o = 0; o < MR_FIT_OUTCOME_COUNT; o++)
             printf("%s\"%s\": %ld", o ? ", " : "", mr_fit_outcome_name((mr_fit_outcome)o), summary.outcomes[o]);
-        printf("}}\n");
+        printf("}, \"held\": ");
+        cli_print_holds_json(stdout, a.spec.target, a.spec.target_values, a.spec.remap.held);
+        printf("}\n");
         return CLI_EXIT_OK;
     }
     char what[64] = "";
@@ -568,5 +572,6 @@ int cmd_sweep(int argc, char **argv) {
             first = 0;
         }
     fprintf(stderr, "\n");
+    cli_print_holds(stderr, "matremap sweep: ", a.spec.target, a.spec.target_values, a.spec.remap.held);
     return CLI_EXIT_OK;
 }

@@ -487,7 +487,9 @@ static mr_status plan(const mr_sweep_table *tab, mr_learned *t) {
     }
     for (int tp = 0; tp < tgt->param_count; tp++) {
         const mr_brdf_param *q = &tgt->params[tp];
-        if (!tu[tp].varies && !carried[tp] && q->role != MR_PARAM_SWITCH && !(q->flags & MR_PARAM_FIT_FIXED)) {
+        // A parameter the sweep held (its --hold, in the header) is constant by choice: written as the held value
+        // without a note, as the model's default holds are.
+        if (!tu[tp].varies && !carried[tp] && mr_brdf_hold_reason(tgt, tab->target_held, tp) == MR_HOLD_FITTED) {
             char value[64];
             snprintf(value, sizeof value, "%g", t->base[mr_brdf_param_offset(tgt, tp)]);
             mr_status status = note(t, "target %s is %s in every row: written as that constant (vary it in the sweep "

@@ -87,6 +87,27 @@ static mr_status check_range(const char *path, long line_number, const mr_brdf_m
     return MR_OK;
 }
 
+/* The target parameters the "# remap:" line's " held=a,b" names (the sweep's --hold; none without the word) into
+ * *held. MR_ERR_FORMAT naming the file for a name the target does not have. */
+static mr_status parse_held(const char *path, const char *remap_line, const mr_brdf_model *target, unsigned *held) {
+    *held = 0;
+    const char *at = strstr(remap_line, " held=");
+    if (at == NULL) return MR_OK;
+    at += 6;
+    for (;;) {
+        size_t length = strcspn(at, ", \r\n");
+        int found = -1;
+        for (int p = 0; p < target->param_count && p < 32; p++)
+            if (strlen(target->params[p].name) == length && strncmp(target->params[p].name, at, length) == 0) found = p;
+        if (found < 0)
+            return mr_fail(MR_ERR_FORMAT, "%s: the '# remap:' line holds '%.*s', which is not a parameter of '%s'",
+                           path, (int)length, at, target->name);
+        *held |= 1u << found;
+        if (at[length] != ',') return MR_OK;
+        at += length + 1;
+    }
+}
+
 static mr_status load_file(const char *path, const mr_sweep_table_options *opts, int first, file_header *reference,
                            const char *reference_path, mr_sweep_table *t, size_t *capacity, size_t *prov_length) {
     mr_sweep_reader reader = {0};
@@ -97,6 +118,7 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
     const mr_brdf_model *source = NULL, *target = NULL;
     double source_fixed[MR_BRDF_MAX_VALUES], target_fixed[MR_BRDF_MAX_VALUES];
     file_columns cols;
+    char remap_line[1024] = "";
     int have_columns = 0;
     size_t rows = 0, kept = 0;
     while (status == MR_OK && mr_sweep_reader_next(&reader, &status) > 0) {
@@ -118,6 +140,8 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
                 snprintf(h.to_line, sizeof h.to_line, "%s", line + 6);
                 h.to_line[strcspn(h.to_line, "\r\n")] = '\0';
                 status = parse_model_line(path, line_number, line + 6, &target, target_fixed);
+            } else if (strncmp(line, MR_SWEEP_REMAP_PREFIX, 9) == 0) {
+                snprintf(remap_line, sizeof remap_line, "%s", line + 9);
             } else if (strncmp(line, MR_SWEEP_SCENE_PREFIX, 9) == 0) {
                 snprintf(h.scene, sizeof h.scene, "%s", line + 9);
                 h.scene[strcspn(h.scene, "\r\n")] = '\0';
@@ -130,7 +154,11 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
                                  "a matremap sweep file", path, line_number);
                 break;
             }
+            unsigned held = 0;
+            status = parse_held(path, remap_line, target, &held);
+            if (status != MR_OK) break;
             if (first) {
+                t->target_held = held;
                 *reference = h;
                 t->source = source;
                 t->target = target;
@@ -148,6 +176,8 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
                                      "(same models, target values and fit scene)", reference_path, path, what);
                     break;
                 }
+                t->target_held &= held; // held only where every file held it
+
             }
             char *names[MAX_COLUMNS];
             int count = mr_csv_split(line, names, MAX_COLUMNS);

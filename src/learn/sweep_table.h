@@ -49,6 +49,9 @@ typedef struct mr_sweep_table {
     const mr_brdf_model *source, *target;
     int source_count, target_count;           /* packed value counts of the two models */
     double target_fixed[MR_BRDF_MAX_VALUES];  /* the "# to:" values (fixed parameters and switches) */
+    unsigned target_held;                     /* bit p: every file's sweep held target parameter p (its "# remap:"
+                                                 line's held=, the sweep's --hold) at its "# to:" value; the
+                                                 model's default holds (MR_PARAM_FIT_FIXED) are not in it */
     char scene[256];                          /* the "# scene:" line's text after "# scene: " */
     size_t n;                                 /* rows kept */
     size_t skipped;                           /* rows left out for their outcome */

@@ -53,7 +53,9 @@
 extern "C" {
 #endif
 
-#define MR_TRANSFORM_MAX_SLOTS 8
+/* Parameters a kind reads or writes at most: 16 holds the layered models (standard-surface has 14, openpbr 13,
+ * blender-principled 11), so texture sets convert into them, by --direct or a learned transform. */
+#define MR_TRANSFORM_MAX_SLOTS 16
 
 /* Bit flags of mr_transform_slot.flags. */
 enum {
