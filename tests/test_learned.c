@@ -589,6 +589,63 @@ MR_TEST(check_against_the_remaps) {
     unlink(path);
 }
 
+/* A Ward -> openpbr transform (issue 28): with openpbr's default holds (specular_weight, specular_ior, the coat, the
+ * EON roughness ...) the sweep's fits are well-posed (56 of 60 grid remaps converge, none is a local minimum; before
+ * the holds 7 of 40 random ones converged and 11 were local minima, and learn's check failed on every output), and
+ * learn writes exactly base_color, base_metalness and specular_roughness. Its check (SVR, 12 held-out rows): the
+ * renders stay within MR_LEARNED_MAX_DSSIM of the remaps' (measured p90 0.0046), base_color and specular_roughness
+ * within 10 % (p90 5.6 % and 4.2 %); base_metalness is the one output that may miss 10 % (measured p90 17 %): where
+ * the Ward specular is near a dielectric's 0.04, a little metal with a slightly darker base colour renders the same,
+ * so the remaps themselves scatter there. The verdict asserted is that one: nothing else fails. */
+MR_TEST(ward_to_openpbr_learns_with_the_default_holds) {
+    const mr_brdf_model *ward = mr_brdf_find("ward"), *op = mr_brdf_find("openpbr");
+    mr_sweep_spec spec;
+    mr_sweep_spec_init(&spec, ward, op);
+    spec.sampling = MR_SWEEP_GRID;
+    static const char *const axes[] = {"alpha=0.08:0.5:5:log", "specular=0.02:0.3:4", "diffuse=0.1:0.7:3"};
+    for (int k = 0; k < 3; k++) MR_CHECK_OK(mr_sweep_parse_axis(ward, axes[k], &spec.axes[k]));
+    spec.axis_count = 3;
+    spec.scene.size = 32;
+    const char *path = mr_test_tmp_path("ward_openpbr.csv");
+    unlink(path);
+    mr_sweep_options so = {0};
+    so.threads = 2;
+    mr_sweep_summary summary;
+    MR_CHECK_OK(mr_sweep_run(&spec, path, &so, &summary));
+    MR_CHECK_MSG(summary.outcomes[MR_FIT_LOCAL_MINIMUM] == 0 && summary.outcomes[MR_FIT_CONVERGED] >= 50,
+                 "converged %ld, local minima %ld", summary.outcomes[MR_FIT_CONVERGED],
+                 summary.outcomes[MR_FIT_LOCAL_MINIMUM]);
+    mr_sweep_table tab;
+    MR_CHECK_OK(mr_sweep_table_load(&path, 1, NULL, &tab));
+    mr_learn_options o = {0};
+    o.method = MR_LEARN_SVR;
+    o.threads = 1;
+    mr_learned *t = NULL;
+    MR_CHECK_OK(mr_learn(&tab, &o, &t));
+    mr_sweep_table_free(&tab);
+    unlink(path);
+    if (t == NULL) return;
+    char outputs[256] = "", name[80];
+    for (int j = 0; j < t->output_count; j++)
+        snprintf(outputs + strlen(outputs), sizeof outputs - strlen(outputs), "%s%s", j ? " " : "",
+                 mr_learned_slot_name(op, &t->outputs[j], name, sizeof name));
+    MR_CHECK_MSG(strstr(outputs, "base_metalness specular_roughness") != NULL && strstr(outputs, "base_color") &&
+                 !strstr(outputs, "specular_weight") && !strstr(outputs, "diffuse_roughness"), "outputs: %s", outputs);
+    MR_CHECK(t->check.done && t->check.rows == 12);
+    MR_CHECK_MSG(t->check.dssim_p90 <= MR_LEARNED_MAX_DSSIM, "dSSIM p90 %g", t->check.dssim_p90);
+    for (int j = 0; j < t->output_count; j++) {
+        const int metalness = t->outputs[j].param == mr_brdf_param_index(op, "base_metalness");
+        printf("      %-20s relative error p90 %.3g%s\n", mr_learned_slot_name(op, &t->outputs[j], name, sizeof name),
+               t->check.relative_p90[j], metalness ? " (may exceed the bound: see above)" : "");
+        if (!metalness)
+            MR_CHECK_MSG(t->check.relative_p90[j] <= MR_LEARNED_MAX_RELATIVE_ERROR, "%s: p90 %g", name,
+                         t->check.relative_p90[j]);
+    }
+    printf("      check %s, dSSIM p90 %.3g\n", t->check.passed ? "passed" : "failed (base_metalness only)",
+           t->check.dssim_p90);
+    mr_learned_free(t);
+}
+
 /* mr_learned_write_with_plots: the transform and its cross sections as one set. The rows file holds every row at the
  * cut, the curves follow the transform (the parametric fit recovers TRUE_POLY), and a set that cannot be completed
  * leaves nothing, not even the transform; a transform without a roughness and specular pair writes no plots. */
@@ -770,7 +827,7 @@ MR_TEST(slot_names_carry_the_channel) {
     MR_CHECK(strcmp(mr_learned_slot_name(ggx, &green, name, 4), "eta") == 0); // truncated to fit
 }
 
-MR_TEST_MAIN(MR_TEST_ENTRY(slot_names_carry_the_channel),
+MR_TEST_MAIN(MR_TEST_ENTRY(slot_names_carry_the_channel), MR_TEST_ENTRY(ward_to_openpbr_learns_with_the_default_holds),
              MR_TEST_ENTRY(parametric_recovers_known_mapping), MR_TEST_ENTRY(carry_by_lobe_ratio),
              MR_TEST_ENTRY(solver_residue_not_learned), MR_TEST_ENTRY(float_map_at_bound_not_clamped),
              MR_TEST_ENTRY(round_trip_every_method), MR_TEST_ENTRY(corrupted_files_refused),

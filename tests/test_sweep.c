@@ -429,6 +429,44 @@ MR_TEST(one_and_two_threads_write_the_same_file) {
     free(b);
 }
 
+/* Holds (issue 28): a target parameter held at a value (mr_brdf_parse_holds into the spec's target values and held
+ * mask) is in every row at that value, the header records both ("# to:" and held= of "# remap:"), and the sweep table
+ * learn reads gives them back (target_fixed, target_held: what learn prints and leaves out of its notes). A second
+ * file that fits the parameter makes it fitted for the table (held only where every file held it). */
+MR_TEST(held_targets_are_recorded_in_the_header_and_read_back) {
+    const mr_brdf_model *ward = mr_brdf_find("ward"), *op = mr_brdf_find("openpbr");
+    mr_sweep_spec spec;
+    mr_sweep_spec_init(&spec, ward, op);
+    spec.sampling = MR_SWEEP_RANDOM;
+    spec.random_count = 3;
+    spec.seed = 5;
+    spec.scene.size = 16;
+    MR_CHECK_OK(mr_brdf_parse_holds(op, "base_metalness=0.25", spec.target_values, &spec.remap.held));
+    const int metal = mr_brdf_param_index(op, "base_metalness"), at = mr_brdf_param_offset(op, metal);
+    const char *held = tmp_path("held.csv"), *fitted = tmp_path("fitted.csv");
+    unlink(held);
+    unlink(fitted);
+    MR_CHECK_OK(run(&spec, held, 0, 2, NULL));
+    char *text = mr_test_read_file(held, NULL);
+    MR_CHECK(text != NULL && strstr(text, " base_metalness=0.25 ") != NULL);
+    MR_CHECK(text != NULL && strstr(text, " held=base_metalness\n") != NULL);
+    free(text);
+    mr_sweep_table tab;
+    MR_CHECK_OK(mr_sweep_table_load(&held, 1, NULL, &tab));
+    MR_CHECK(tab.n == 3 && tab.target_held == 1u << metal && tab.target_fixed[at] == 0.25);
+    for (size_t r = 0; r < tab.n; r++) MR_CHECK(tab.target_values[r * (size_t)tab.target_count + (size_t)at] == 0.25);
+    mr_sweep_table_free(&tab);
+    // The same target values, the parameter fitted: the two files' table holds nothing the caller held.
+    spec.remap.held = 0;
+    MR_CHECK_OK(run(&spec, fitted, 0, 2, NULL));
+    const char *both[2] = {held, fitted};
+    MR_CHECK_OK(mr_sweep_table_load(both, 2, NULL, &tab));
+    MR_CHECK(tab.n + tab.skipped == 6 && tab.target_held == 0);
+    mr_sweep_table_free(&tab);
+    unlink(held);
+    unlink(fitted);
+}
+
 MR_TEST(an_existing_file_is_never_overwritten_and_a_mismatching_one_never_touched) {
     mr_sweep_spec spec = random_spec(3, 5, 16);
     const char *path = tmp_path("mismatch.csv");
@@ -1338,6 +1376,7 @@ MR_TEST(header_settings_refuse_what_they_do_not_know) {
 }
 
 MR_TEST_MAIN(MR_TEST_ENTRY(grid_is_cartesian_first_axis_slowest_with_exact_endpoints),
+             MR_TEST_ENTRY(held_targets_are_recorded_in_the_header_and_read_back),
              MR_TEST_ENTRY(command_line_quoting_round_trips_through_the_header),
              MR_TEST_ENTRY(header_settings_refuse_what_they_do_not_know),
              MR_TEST_ENTRY(grid_log_spacing_is_geometric), MR_TEST_ENTRY(grid_errors_name_the_bad_value),

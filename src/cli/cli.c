@@ -62,9 +62,9 @@ void cli_print_holds_json(FILE *out, const mr_brdf_model *model, const double *v
         fprintf(out, "%s{\"name\": ", first ? "" : ", ");
         cli_json_string(out, model->params[p].name);
         if (model->params[p].channels == 3)
-            fprintf(out, ", \"value\": [%.17g, %.17g, %.17g]", v[0], v[1], v[2]);
+            fprintf(out, ", \"value\": [%.9g, %.9g, %.9g]", v[0], v[1], v[2]);
         else
-            fprintf(out, ", \"value\": %.17g", v[0]);
+            fprintf(out, ", \"value\": %.9g", v[0]);
         fprintf(out, ", \"by\": \"%s\"}", why == MR_HOLD_MODEL ? "default" : "--hold");
         first = 0;
     }
