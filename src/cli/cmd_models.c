@@ -58,9 +58,12 @@ static void print_json_model(const mr_brdf_model *m) {
         else
             printf("%.17g", p->default_value);
         printf(", \"min\": %.17g, \"max\": %.17g, \"role\": \"%s\", \"lobe\": \"%s\", \"log_scale\": %s, "
-               "\"map_encoding\": \"%s\", \"meaning\": ",
+               "\"map_encoding\": \"%s\", ",
                p->min_value, p->max_value, mr_param_role_name(p->role), mr_param_lobe_name(p->lobe),
                (p->flags & MR_PARAM_LOG_SCALE) ? "true" : "false", map_encoding(p));
+        printf("\"fit\": \"%s\", \"meaning\": ", // fitted, or held by default (mr_brdf_hold_reason)
+               mr_brdf_hold_reason(m, 0, i) == MR_HOLD_FITTED ? "fitted"
+               : mr_brdf_hold_reason(m, 0, i) == MR_HOLD_SWITCH ? "switch" : "held");
         cli_json_string(stdout, p->meaning);
         printf("}");
     }
@@ -74,7 +77,18 @@ static void print_model_detail(const mr_brdf_model *m) {
         printf("note: may reflect more energy than it receives (not bounded by the white-furnace test)\n");
     if (m->flags & MR_BRDF_NON_RECIPROCAL)
         printf("note: not reciprocal (layers are albedo-scaled at the view direction, the first of eval's two)\n");
-    printf("analytic parameter derivatives: %s\n\n", m->eval_grad ? "yes" : "no");
+    printf("analytic parameter derivatives: %s\n", m->eval_grad ? "yes" : "no");
+    // The default holds (brdf.h, mr_brdf_hold_reason): what a remap into this model fits and what it holds.
+    double defaults[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(m, defaults);
+    char held[1024];
+    if (mr_brdf_format_holds(m, defaults, 0, NULL, held, sizeof held) > 0) {
+        printf("fits hold: %s; --hold NAME=VALUE holds others or another value\nfits solve:", held);
+        for (int i = 0; i < m->param_count; i++)
+            if (mr_brdf_hold_reason(m, 0, i) == MR_HOLD_FITTED) printf(" %s", m->params[i].name);
+        printf("\n");
+    }
+    printf("\n");
     int width = 15; // the names' column: as wide as the longest name (use_specular_workflow)
     for (int i = 0; i < m->param_count; i++)
         if ((int)strlen(m->params[i].name) > width) width = (int)strlen(m->params[i].name);

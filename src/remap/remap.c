@@ -740,10 +740,9 @@ static int close_enough(double a, double b, double scale) { return fabs(a - b) <
  * linear ones are drawn from the lowest 5 % of theirs, where no clamp or energy trimming engages: what is
  * checked is the formula, not its safety nets. */
 /* True if parameter i is not fitted: a switch, a parameter the descriptor holds (MR_PARAM_FIT_FIXED), or one the
- * caller holds (bit i of mr_remap_options.held). */
+ * caller holds (bit i of mr_remap_options.held): brdf.h's one rule, which the commands print. */
 static int held_fixed(const mr_brdf_model *m, unsigned held, int i) {
-    const mr_brdf_param *p = &m->params[i];
-    return p->role == MR_PARAM_SWITCH || (p->flags & MR_PARAM_FIT_FIXED) || (i < 32 && ((held >> i) & 1u));
+    return mr_brdf_hold_reason(m, held, i) != MR_HOLD_FITTED;
 }
 
 static int jointly_affine(const mr_brdf_model *m, unsigned held, const double *base, const unsigned char *is_linear,

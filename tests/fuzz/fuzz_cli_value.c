@@ -39,7 +39,7 @@ int mr_fuzz_cli_value(const uint8_t *data, size_t size) {
         mr_sweep_axis axis;
         (void)mr_sweep_parse_axis(model, args[i], &axis);
         unsigned held = 0;
-        (void)cli_parse_held("fuzz", model, args[i], &held);
+        (void)cli_parse_held("fuzz", model, args[i], values, &held);
         mr_wf_diffuse convention;
         (void)cli_parse_convention("fuzz", args[i], &convention);
         double d;
