@@ -355,6 +355,19 @@ mr_status mr_doc_set_texture(mr_doc_material *m, const char *param, const char *
     return MR_OK;
 }
 
+mr_status mr_doc_set_texture_wrap(mr_doc_material *m, const char *param, mr_doc_wrap wrap_s, mr_doc_wrap wrap_t) {
+    int p = find_param(m, param);
+    if (p < 0 || m->values[p].kind != MR_DOC_TEXTURE)
+        return mr_fail(MR_ERR_INVALID_ARG, "material document: '%s' is no textured parameter of material '%s'",
+                       param ? param : "(null)", m ? m->name : "(null)");
+    if ((unsigned)wrap_s > MR_DOC_WRAP_MIRROR || (unsigned)wrap_t > MR_DOC_WRAP_MIRROR)
+        return mr_fail(MR_ERR_INVALID_ARG, "material document: %s of material '%s': wrap %d/%d", param, m->name,
+                       (int)wrap_s, (int)wrap_t);
+    m->values[p].wrap_s = wrap_s;
+    m->values[p].wrap_t = wrap_t;
+    return MR_OK;
+}
+
 /* ---- writers ----------------------------------------------------------------------------------------------- */
 
 /* Unique identifiers of the materials, in order: their names made identifiers, "material_K" for an empty one, and
@@ -413,6 +426,9 @@ static void mtlx_texture(FILE *f, const mr_brdf_param *d, const mr_doc_value *v,
         fprintf(f, "\" colorspace=\"srgb_texture\" />\n");
     else
         fprintf(f, "\" />\n");
+    static const char *const mtlx_wrap[] = {NULL, "periodic", "clamp", "mirror"};
+    if (v->wrap_s) fprintf(f, "      <input name=\"uaddressmode\" type=\"string\" value=\"%s\" />\n", mtlx_wrap[v->wrap_s]);
+    if (v->wrap_t) fprintf(f, "      <input name=\"vaddressmode\" type=\"string\" value=\"%s\" />\n", mtlx_wrap[v->wrap_t]);
     if (v->uv_set != 0) fprintf(f, "      <input name=\"texcoord\" type=\"vector2\" nodename=\"%s_texcoord\" />\n", input);
     fprintf(f, "    </image>\n");
     const char *last = "image";
@@ -543,6 +559,9 @@ static void write_usda(FILE *f, const mr_doc *doc, char (*names)[128]) {
                     mr_doc_texture_is_srgb(d, v->file) ? "sRGB" : "raw");
             fprintf(f, "            float2 inputs:st.connect = </Materials/%s/uv%d_reader.outputs:result>\n", id,
                     v->uv_set);
+            static const char *const usd_wrap[] = {NULL, "repeat", "clamp", "mirror"};
+            if (v->wrap_s) fprintf(f, "            token inputs:wrapS = \"%s\"\n", usd_wrap[v->wrap_s]);
+            if (v->wrap_t) fprintf(f, "            token inputs:wrapT = \"%s\"\n", usd_wrap[v->wrap_t]);
             if (!all_one(v->scale, d->channels)) {
                 if (d->channels == 3)
                     fprintf(f, "            float4 inputs:scale = (%.9g, %.9g, %.9g, 1)\n", v->scale[0], v->scale[1],

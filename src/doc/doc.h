@@ -52,6 +52,14 @@ typedef enum mr_doc_value_kind {
     MR_DOC_TEXTURE
 } mr_doc_value_kind;
 
+/* How a map repeats outside [0, 1] along u (s) or v (t). */
+typedef enum mr_doc_wrap {
+    MR_DOC_WRAP_UNSET = 0, /* not written: the node's default (MaterialX: periodic; USD: useMetadata) */
+    MR_DOC_WRAP_REPEAT,    /* MaterialX "periodic", USD "repeat" */
+    MR_DOC_WRAP_CLAMP,     /* "clamp" in both */
+    MR_DOC_WRAP_MIRROR     /* "mirror" in both */
+} mr_doc_wrap;
+
 typedef struct mr_doc_value {
     mr_doc_value_kind kind;
     double constant[3]; /* MR_DOC_CONSTANT: linear values, channels of the parameter */
@@ -59,6 +67,7 @@ typedef struct mr_doc_value {
     int channel;        /* -1: RGB (colour parameter) or first channel (scalar); 0..3: R, G, B, A */
     int uv_set;         /* 0: the first UV set ("st" in USD, texcoord 0 in MaterialX) */
     double scale[3];    /* multiply the texel's channels (after decoding to linear): 1 = none; a scalar's in [0] */
+    mr_doc_wrap wrap_s, wrap_t; /* UNSET unless mr_doc_set_texture_wrap */
 } mr_doc_value;
 
 typedef struct mr_doc_material {
@@ -88,6 +97,10 @@ mr_status mr_doc_set_constant(mr_doc_material *m, const char *param, const doubl
  * scale. */
 mr_status mr_doc_set_texture(mr_doc_material *m, const char *param, const char *file, int channel, int uv_set,
                              const double *scale);
+
+/* The wraps of a parameter set to a texture. MR_ERR_INVALID_ARG: unknown parameter, no texture, a wrap outside the
+ * enum. */
+mr_status mr_doc_set_texture_wrap(mr_doc_material *m, const char *param, mr_doc_wrap wrap_s, mr_doc_wrap wrap_t);
 
 /* The format of a path by its extension (".mtlx", ".usda", case-insensitive); UNKNOWN otherwise. */
 mr_doc_format mr_doc_format_from_path(const char *path);

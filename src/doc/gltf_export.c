@@ -45,7 +45,8 @@ static const char *image_extension(const mr_gltf_image *image) {
 /* The file the document names for texture `ref` of material `k`: the texture's image, added to the result's images
  * once (written as PREFIX_image<K>.<ext>). */
 static mr_status texture_file(const mr_gltf *asset, const mr_doc_gltf_options *o, mr_doc_gltf_result *r, int k,
-                              const char *label, const mr_gltf_texture_ref *ref, const char **file) {
+                              const char *label, const mr_gltf_texture_ref *ref, const char **file,
+                              mr_doc_wrap wrap[2]) {
     const char *path = mr_gltf_path(asset);
     mr_gltf_material gm;
     mr_gltf_get_material(asset, k, &gm);
@@ -55,6 +56,11 @@ static mr_status texture_file(const mr_gltf *asset, const mr_doc_gltf_options *o
     mr_gltf_texture texture;
     mr_status st = mr_gltf_get_texture(asset, ref->index, &texture);
     if (st != MR_OK) return st;
+    // glTF's wraps; a sampler without them (MR_WRAP_DEFAULT) is glTF's default, REPEAT.
+    wrap[0] = texture.params.wrap_s == MR_WRAP_CLAMP ? MR_DOC_WRAP_CLAMP
+              : texture.params.wrap_s == MR_WRAP_MIRROR ? MR_DOC_WRAP_MIRROR : MR_DOC_WRAP_REPEAT;
+    wrap[1] = texture.params.wrap_t == MR_WRAP_CLAMP ? MR_DOC_WRAP_CLAMP
+              : texture.params.wrap_t == MR_WRAP_MIRROR ? MR_DOC_WRAP_MIRROR : MR_DOC_WRAP_REPEAT;
     if (texture.image < 0)
         return mr_fail(MR_ERR_UNSUPPORTED, "glTF '%s': material %d ('%s'): %s (texture %d) has no image", path, k,
                        gm.name, label, ref->index);
@@ -126,6 +132,7 @@ static mr_status carry_maps(const mr_gltf *asset, const mr_doc_gltf_options *o, 
     int usd = strcmp(m->model->name, "usd-preview") == 0;
     const char *colour = usd ? "diffuse_color" : "base_color";
     const char *file = NULL;
+    mr_doc_wrap w[2];
     mr_status st;
     // Constants first (every parameter the target has from the factors), textures over them.
     if (usd) {
@@ -146,28 +153,33 @@ static mr_status carry_maps(const mr_gltf *asset, const mr_doc_gltf_options *o, 
     }
     (void)gltf;
     if (gm->base_color_texture.index >= 0) {
-        if ((st = texture_file(asset, o, r, k, "baseColorTexture", &gm->base_color_texture, &file)) != MR_OK ||
+        if ((st = texture_file(asset, o, r, k, "baseColorTexture", &gm->base_color_texture, &file, w)) != MR_OK ||
             (st = mr_doc_set_texture(m, colour, file, -1, gm->base_color_texture.tex_coord, gm->base_color_factor)) !=
-                MR_OK)
+                MR_OK ||
+            (st = mr_doc_set_texture_wrap(m, colour, w[0], w[1])) != MR_OK)
             return st;
     }
     if (gm->metallic_roughness_texture.index >= 0) {
         const mr_gltf_texture_ref *t = &gm->metallic_roughness_texture;
-        if ((st = texture_file(asset, o, r, k, "metallicRoughnessTexture", t, &file)) != MR_OK ||
+        if ((st = texture_file(asset, o, r, k, "metallicRoughnessTexture", t, &file, w)) != MR_OK ||
             (st = mr_doc_set_texture(m, "metallic", file, 2, t->tex_coord, &gm->metallic_factor)) != MR_OK ||
-            (st = mr_doc_set_texture(m, "roughness", file, 1, t->tex_coord, &gm->roughness_factor)) != MR_OK)
+            (st = mr_doc_set_texture(m, "roughness", file, 1, t->tex_coord, &gm->roughness_factor)) != MR_OK ||
+            (st = mr_doc_set_texture_wrap(m, "metallic", w[0], w[1])) != MR_OK ||
+            (st = mr_doc_set_texture_wrap(m, "roughness", w[0], w[1])) != MR_OK)
             return st;
     }
     if (!usd && gm->has_specular && gm->specular_texture.index >= 0) {
-        if ((st = texture_file(asset, o, r, k, "specularTexture", &gm->specular_texture, &file)) != MR_OK ||
+        if ((st = texture_file(asset, o, r, k, "specularTexture", &gm->specular_texture, &file, w)) != MR_OK ||
             (st = mr_doc_set_texture(m, "specular", file, 3, gm->specular_texture.tex_coord,
-                                     &gm->specular_strength)) != MR_OK)
+                                     &gm->specular_strength)) != MR_OK ||
+            (st = mr_doc_set_texture_wrap(m, "specular", w[0], w[1])) != MR_OK)
             return st;
     }
     if (!usd && gm->has_specular && gm->specular_color_texture.index >= 0) {
-        if ((st = texture_file(asset, o, r, k, "specularColorTexture", &gm->specular_color_texture, &file)) != MR_OK ||
+        if ((st = texture_file(asset, o, r, k, "specularColorTexture", &gm->specular_color_texture, &file, w)) != MR_OK ||
             (st = mr_doc_set_texture(m, "specular_color", file, -1, gm->specular_color_texture.tex_coord,
-                                     gm->specular_color_factor)) != MR_OK)
+                                     gm->specular_color_factor)) != MR_OK ||
+            (st = mr_doc_set_texture_wrap(m, "specular_color", w[0], w[1])) != MR_OK)
             return st;
     }
     return MR_OK;
