@@ -100,6 +100,17 @@ int cmd_export(int argc, char **argv) {
     mr_gltf *asset = NULL;
     mr_status st = mr_gltf_load(o.input, &asset);
     if (st != MR_OK) return cli_fail("export", st);
+    // Nothing written over a file read, checked before any work (the remaps): OUT against the asset and its files;
+    // the images beside OUT once the conversion has named them.
+    mr_output_plan io = {0};
+    cli_plan_gltf(&io, asset, "asset");
+    mr_output_plan_output(&io, o.output, NULL);
+    code = cli_plan_check("export", &io);
+    mr_output_plan_free(&io);
+    if (code != CLI_EXIT_OK) {
+        mr_gltf_free(asset);
+        return code;
+    }
 
     // OUT without its extension: the prefix the images beside it are named after.
     char prefix[4096];
@@ -117,8 +128,7 @@ int cmd_export(int argc, char **argv) {
         return cli_fail("export", st);
     }
 
-    // Nothing written over a file read: OUT and the images against the asset and its files.
-    mr_output_plan io = {0};
+    io = (mr_output_plan){0};
     cli_plan_gltf(&io, asset, "asset");
     mr_output_plan_output(&io, o.output, NULL);
     for (int i = 0; i < result->image_count; i++) mr_output_plan_output(&io, result->images[i].path, NULL);

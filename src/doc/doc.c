@@ -161,7 +161,8 @@ const mr_doc_node_input *mr_doc_node_outputs(mr_doc_format format, const char *n
 typedef struct input_rename {
     const char *param, *input;
 } input_rename;
-static const input_rename standard_surface_names[] = {{"specular_ior", "specular_IOR"}, {"coat_ior", "coat_IOR"}, {0, 0}};
+static const input_rename standard_surface_names[] = {
+    {"specular_ior", "specular_IOR"}, {"coat_ior", "coat_IOR"}, {0, 0}};
 static const input_rename usd_preview_names[] = {
     {"diffuse_color", "diffuseColor"}, {"use_specular_workflow", "useSpecularWorkflow"},
     {"specular_color", "specularColor"}, {"clearcoat_roughness", "clearcoatRoughness"}, {0, 0}};
@@ -427,9 +428,12 @@ static void mtlx_texture(FILE *f, const mr_brdf_param *d, const mr_doc_value *v,
     else
         fprintf(f, "\" />\n");
     static const char *const mtlx_wrap[] = {NULL, "periodic", "clamp", "mirror"};
-    if (v->wrap_s) fprintf(f, "      <input name=\"uaddressmode\" type=\"string\" value=\"%s\" />\n", mtlx_wrap[v->wrap_s]);
-    if (v->wrap_t) fprintf(f, "      <input name=\"vaddressmode\" type=\"string\" value=\"%s\" />\n", mtlx_wrap[v->wrap_t]);
-    if (v->uv_set != 0) fprintf(f, "      <input name=\"texcoord\" type=\"vector2\" nodename=\"%s_texcoord\" />\n", input);
+    if (v->wrap_s)
+        fprintf(f, "      <input name=\"uaddressmode\" type=\"string\" value=\"%s\" />\n", mtlx_wrap[v->wrap_s]);
+    if (v->wrap_t)
+        fprintf(f, "      <input name=\"vaddressmode\" type=\"string\" value=\"%s\" />\n", mtlx_wrap[v->wrap_t]);
+    if (v->uv_set != 0)
+        fprintf(f, "      <input name=\"texcoord\" type=\"vector2\" nodename=\"%s_texcoord\" />\n", input);
     fprintf(f, "    </image>\n");
     const char *last = "image";
     if (!colour && v->channel >= 0) {
@@ -498,7 +502,8 @@ static void write_mtlx(FILE *f, const mr_doc *doc, char (*names)[128]) {
 static const char *usd_channel[] = {"r", "g", "b", "a"};
 
 static void write_usda(FILE *f, const mr_doc *doc, char (*names)[128]) {
-    fprintf(f, "#usda 1.0\n(\n    defaultPrim = \"Materials\"\n    doc = \"written by matremap: UsdPreviewSurface\"\n)\n\n");
+    fprintf(f, "#usda 1.0\n(\n    defaultPrim = \"Materials\"\n");
+    fprintf(f, "    doc = \"written by matremap: UsdPreviewSurface\"\n)\n\n");
     fprintf(f, "def Scope \"Materials\"\n{\n");
     for (int k = 0; k < doc->count; k++) {
         const mr_doc_material *m = &doc->materials[k];

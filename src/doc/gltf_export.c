@@ -176,7 +176,8 @@ static mr_status carry_maps(const mr_gltf *asset, const mr_doc_gltf_options *o, 
             return st;
     }
     if (!usd && gm->has_specular && gm->specular_color_texture.index >= 0) {
-        if ((st = texture_file(asset, o, r, k, "specularColorTexture", &gm->specular_color_texture, &file, w)) != MR_OK ||
+        const mr_gltf_texture_ref *t = &gm->specular_color_texture;
+        if ((st = texture_file(asset, o, r, k, "specularColorTexture", t, &file, w)) != MR_OK ||
             (st = mr_doc_set_texture(m, "specular_color", file, -1, gm->specular_color_texture.tex_coord,
                                      gm->specular_color_factor)) != MR_OK ||
             (st = mr_doc_set_texture_wrap(m, "specular_color", w[0], w[1])) != MR_OK)
