@@ -130,6 +130,15 @@ refuses "a textured material to openpbr: no texture route yet" \
     "$bin" export "$bottle" -o "$tmp/refused/b.mtlx"
 refuses "... nor to standard-surface" "no texture route to standard-surface yet" "$tmp/refused" -- \
     "$bin" export "$bottle" -o "$tmp/refused/b.mtlx" --to standard-surface
+# An image named after OUT that is the asset's own file: refused before anything is written.
+mkdir -p "$tmp/own"
+cp "$bottle_dir/WaterBottle_baseColor.png" "$tmp/own/doc_image0.png"
+cat >"$tmp/own/own.gltf" <<'EOF'
+{"asset": {"version": "2.0"}, "images": [{"uri": "doc_image0.png"}], "textures": [{"source": 0}],
+ "materials": [{"name": "Own", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]}
+EOF
+refuses "an image output that is a file of the asset" "doc_image0.png" "$tmp/own" -- \
+    "$bin" export "$tmp/own/own.gltf" -o "$tmp/own/doc.usda"
 expect "usd-preview is not written to .mtlx" 1 "--to usd-preview: .mtlx does not write it" -- \
     "$bin" export "$bottle" -o "$tmp/refused/b.mtlx" --to usd-preview
 expect "openpbr is not written to .usda" 1 "--to openpbr: .usda does not write it" -- \

@@ -102,8 +102,10 @@ int cmd_export(int argc, char **argv) {
     if (st != MR_OK) return cli_fail("export", st);
     // Nothing written over a file read, checked before any work (the remaps): OUT against the asset and its files;
     // the images beside OUT once the conversion has named them.
+    char label[4096 + 8];
+    snprintf(label, sizeof label, "asset %s", o.input);
     mr_output_plan io = {0};
-    cli_plan_gltf(&io, asset, "asset");
+    cli_plan_gltf(&io, asset, label);
     mr_output_plan_output(&io, o.output, NULL);
     code = cli_plan_check("export", &io);
     mr_output_plan_free(&io);
@@ -129,7 +131,7 @@ int cmd_export(int argc, char **argv) {
     }
 
     io = (mr_output_plan){0};
-    cli_plan_gltf(&io, asset, "asset");
+    cli_plan_gltf(&io, asset, label);
     mr_output_plan_output(&io, o.output, NULL);
     for (int i = 0; i < result->image_count; i++) mr_output_plan_output(&io, result->images[i].path, NULL);
     code = cli_plan_check("export", &io);

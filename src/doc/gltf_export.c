@@ -127,8 +127,7 @@ static mr_status set_all(mr_doc_material *m, const double *values) {
 
 /* Textured material k carried over to gltf_pbr or usd-preview's metallic workflow (doc.h: MR_DOC_ROUTE_MAPS). */
 static mr_status carry_maps(const mr_gltf *asset, const mr_doc_gltf_options *o, mr_doc_gltf_result *r, int k,
-                            const mr_gltf_material *gm, mr_doc_material *m, const double *gltf_v,
-                            const mr_brdf_model *gltf) {
+                            const mr_gltf_material *gm, mr_doc_material *m, const double *gltf_v) {
     int usd = strcmp(m->model->name, "usd-preview") == 0;
     const char *colour = usd ? "diffuse_color" : "base_color";
     const char *file = NULL;
@@ -151,7 +150,6 @@ static mr_status carry_maps(const mr_gltf *asset, const mr_doc_gltf_options *o, 
     } else if ((st = set_all(m, gltf_v)) != MR_OK) {
         return st;
     }
-    (void)gltf;
     if (gm->base_color_texture.index >= 0) {
         if ((st = texture_file(asset, o, r, k, "baseColorTexture", &gm->base_color_texture, &file, w)) != MR_OK ||
             (st = mr_doc_set_texture(m, colour, file, -1, gm->base_color_texture.tex_coord, gm->base_color_factor)) !=
@@ -238,7 +236,7 @@ mr_status mr_doc_from_gltf(const mr_gltf *asset, const mr_doc_gltf_options *opts
                 break;
             }
             rm->route = MR_DOC_ROUTE_MAPS;
-            st = carry_maps(asset, &o, r, k, &gm, m, gltf_v, gltf);
+            st = carry_maps(asset, &o, r, k, &gm, m, gltf_v);
         } else if (to_gltf) {
             rm->route = MR_DOC_ROUTE_COPY;
             st = set_all(m, gltf_v);
