@@ -61,5 +61,6 @@
 #include "gltf/mr_gltf.h"
 #include "gltf/mr_gltf_convert.h"
 #include "gltf/mr_gltf_scene.h"
+#include "doc/doc.h"
 
 #endif /* MATREMAP_H */

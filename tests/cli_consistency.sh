@@ -54,6 +54,7 @@ run_cmd() { # NAME OUT: the command NAME writing under folder OUT (the file(s) i
     dataset) "$bin" dataset -o "$o/a/b/c/pairs.csv" --samples 4 --size 16 --threads 1 ;;
     report) "$bin" report -o "$o/a/b/c/report" --size 32 gltf -- ggx ;;
     gltf) "$bin" gltf spec2metal "$duck" -o "$o/a/b/c/duck.gltf" --method weighted ;;
+    export) "$bin" export "$bottle" -o "$o/a/b/c/b.mtlx" --to gltf ;;
     esac
 }
 outputs() { # NAME: the files it wrote, under its folder
@@ -71,13 +72,15 @@ outputs() { # NAME: the files it wrote, under its folder
     dataset) echo a/b/c/pairs.csv ;;
     report) echo a/b/c/report/index.html ;;
     gltf) echo a/b/c/duck.gltf ;;
+    export) echo a/b/c/b.mtlx a/b/c/b_image0.png a/b/c/b_image1.png ;;
     esac
 }
 all_written() { # FOLDER NAME
     local f
     for f in $(outputs "$2"); do [ -s "$1/$f" ] || { echo "      missing $1/$f"; return 1; }; done
 }
-for name in render ssim remap spec2metal metal2spec convert sweep sweep_merge learn train dataset report gltf; do
+for name in render ssim remap spec2metal metal2spec convert sweep sweep_merge learn train dataset report gltf \
+    export; do
     d="$tmp/A/$name"
     mkdir -p "$d"
     expect "$name: outputs in missing nested folders" 0 "" -- run_cmd "$name" "$d"
@@ -139,7 +142,7 @@ expect "report: the same hint" 2 "did you mean diffuse=@d.png\?" -- "$bin" repor
 expect "a plain bad number gets no hint" 2 "'abc' is not a number$" -- "$bin" render gltf metallic=abc -o "$tmp/h.png"
 expect "help alone is the general help" 0 "^Commands:" -- "$bin" help
 check "... the same as --help" cmp -s <("$bin" help) <("$bin" --help)
-for cmd in models render ssim remap sweep dataset train learn convert spec2metal metal2spec gltf report; do
+for cmd in models render ssim remap sweep dataset train learn convert spec2metal metal2spec gltf report export; do
     check "help $cmd prints exactly '$cmd --help'" cmp -s <("$bin" help $cmd) <("$bin" $cmd --help)
 done
 check "help sweep merge prints exactly 'sweep merge --help'" cmp -s <("$bin" help sweep merge) \
@@ -183,13 +186,16 @@ expect "report --json" 0 "" -- "$bin" report -o "$J/rep" --size 32 gltf -- --lab
 check "... materials and figures" test "$(json '(d["command"], d["views"], [m["label"] for m in d["materials"]], \
 d["materials"][0]["object_ssim"], 0 < d["materials"][1]["object_ssim"] < 1, d["page"])')" = \
     "('report', 1, ['gltf', 'other'], 1.0, True, '$J/rep/index.html')"
+expect "export --json" 0 "" -- "$bin" export "$bottle" -o "$J/b.usda" --json
+check "... command, format, routes and images" test "$(json '(d["command"], d["format"], \
+[m["route"] for m in d["materials"]], len(d["images"]))')" = "('export', 'usda', ['maps'], 2)"
 expect "dataset --json" 0 "" -- "$bin" dataset -o "$J/pairs.csv" --samples 6 --size 16 --threads 1 --json
 check "... pairs and outcomes" test "$(json '(d["command"], d["pairs"], \
 d["outcomes"]["converged"] + d["outcomes"]["unreachable"], sum(d["categories"].values()))')" = "('dataset', 6, 6, 6)"
 
 # ---- E. one wording, one prefix --------------------------------------------------------------------------------
 for cmd in models render ssim remap sweep "sweep merge" dataset train learn convert spec2metal metal2spec gltf \
-    report; do
+    report export; do
     # shellcheck disable=SC2086 # "sweep merge" is two words
     expect "$cmd --bogus" 1 "^matremap $cmd: unknown option '--bogus'$" -- "$bin" $cmd --bogus
 done

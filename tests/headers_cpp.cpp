@@ -20,6 +20,7 @@
 #include "nn/mlp.h"
 #include "gltf/mr_gltf.h"
 #include "gltf/mr_gltf_scene.h"
+#include "doc/doc.h"
 
 extern "C" int mr_headers_cpp_probe(void);
 int mr_headers_cpp_probe(void) { return MR_STATUS_COUNT + MR_COMPONENT_COUNT; }

@@ -147,5 +147,6 @@ int cmd_spec2metal(int argc, char **argv);
 int cmd_report(int argc, char **argv);
 int cmd_gltf(int argc, char **argv);
 int cmd_metal2spec(int argc, char **argv);
+int cmd_export(int argc, char **argv);
 
 #endif /* MR_CLI_H */

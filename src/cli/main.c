@@ -27,6 +27,7 @@ static const command commands[] = {
     {"spec2metal", cmd_spec2metal, "convert specular-workflow texture maps to metallic ones (also a command)"},
     {"metal2spec", cmd_metal2spec, "convert metallic-workflow texture maps to specular ones (also a command)"},
     {"gltf", cmd_gltf, "convert a glTF asset's materials: gltf spec2metal|metal2spec IN -o OUT"},
+    {"export", cmd_export, "write a glTF asset's materials as MaterialX (.mtlx) or USD (.usda)"},
     {"report", cmd_report, "render materials under an HDR map and compare them in an HTML report (SSIM)"},
 };
 

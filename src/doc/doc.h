@@ -1,0 +1,207 @@
+/*
+ * doc.h — material documents: MaterialX 1.39 (.mtlx) and USD (.usda, UsdPreviewSurface) written from a small model.
+ *
+ *   mr_doc *doc = mr_doc_create();
+ *   mr_doc_material *m = NULL;
+ *   mr_doc_add_material(doc, "Metal", mr_brdf_find("openpbr"), &m);       // every parameter unset: node defaults
+ *   mr_doc_set_constant(m, "base_color", (double[3]){0.9, 0.6, 0.2});
+ *   mr_doc_set_texture(m, "specular_roughness", "metal_mr.png", 1, 0, NULL);  // G channel of a map, UV set 0
+ *   mr_doc_write(doc, "out.mtlx");                                        // the format by the extension
+ *   mr_doc_free(doc);
+ *
+ *   mr_gltf *asset; mr_gltf_load("a.gltf", &asset);                        // a glTF asset converted (gltf/)
+ *   mr_doc_gltf_options o = {0};  o.target = mr_brdf_find("usd-preview"); o.image_prefix = "out";
+ *   mr_doc_gltf_result *r;  mr_doc_from_gltf(asset, &o, &r);               // remaps, maps carried over
+ *   ... check r->images[i].path against the inputs ... mr_doc_gltf_write(asset, r, "out.usda");
+ *   mr_doc_gltf_result_free(r);
+ *
+ * A material is a name, a target BRDF model from the registry (openpbr, standard-surface, gltf: MaterialX;
+ * usd-preview: USD) and, per parameter of the model, nothing (the node's own default), a constant (linear values) or
+ * a texture: a file (as written into the document, relative to it), a channel (-1: the map's RGB for a colour
+ * parameter, or its first channel for a scalar; 0..3 = R, G, B, A), a UV set and a scale (glTF's factor times the
+ * texel; 1: none).
+ *
+ * What is written (docs/documents.md): only inputs that the node definitions declare (mr_doc_node_inputs, a table of
+ * facts read from MaterialX's libraries and the UsdPreviewSurface specification; tests/test_doc.c checks every
+ * written input against it). A texture's colour space follows the one rule of parameter maps (io/image_io.h,
+ * mr_brdf_param_map_encoding): a parameter flagged MR_PARAM_SRGB_MAP in an 8/16-bit file is sRGB ("srgb_texture" in
+ * MaterialX, sourceColorSpace "sRGB" in USD), anything else is data (no colorspace in MaterialX: the document's
+ * lin_rec709 working space, no conversion; "raw" in USD); float files (.exr, .hdr) are linear either way.
+ *
+ * Errors follow mr_status.h. The document owns its strings (copied on set). Not thread-safe per document.
+ */
+#ifndef MR_DOC_H
+#define MR_DOC_H
+
+#include "../brdf/brdf.h"
+#include "../mr_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum mr_doc_format {
+    MR_DOC_FORMAT_UNKNOWN = 0,
+    MR_DOC_FORMAT_MTLX, /* MaterialX 1.39 */
+    MR_DOC_FORMAT_USDA  /* USD ASCII, UsdPreviewSurface */
+} mr_doc_format;
+
+typedef enum mr_doc_value_kind {
+    MR_DOC_UNSET = 0, /* not written: the node's default */
+    MR_DOC_CONSTANT,
+    MR_DOC_TEXTURE
+} mr_doc_value_kind;
+
+/* How a map repeats outside [0, 1] along u (s) or v (t). */
+typedef enum mr_doc_wrap {
+    MR_DOC_WRAP_UNSET = 0, /* not written: the node's default (MaterialX: periodic; USD: useMetadata) */
+    MR_DOC_WRAP_REPEAT,    /* MaterialX "periodic", USD "repeat" */
+    MR_DOC_WRAP_CLAMP,     /* "clamp" in both */
+    MR_DOC_WRAP_MIRROR     /* "mirror" in both */
+} mr_doc_wrap;
+
+typedef struct mr_doc_value {
+    mr_doc_value_kind kind;
+    double constant[3]; /* MR_DOC_CONSTANT: linear values, channels of the parameter */
+    char *file;         /* MR_DOC_TEXTURE: as written into the document (owned) */
+    int channel;        /* -1: RGB (colour parameter) or first channel (scalar); 0..3: R, G, B, A */
+    int uv_set;         /* 0: the first UV set ("st" in USD, texcoord 0 in MaterialX) */
+    double scale[3];    /* multiply the texel's channels (after decoding to linear): 1 = none; a scalar's in [0] */
+    mr_doc_wrap wrap_s, wrap_t; /* UNSET unless mr_doc_set_texture_wrap */
+} mr_doc_value;
+
+typedef struct mr_doc_material {
+    char *name;                 /* as given (owned); written as an identifier (mr_doc_identifier) */
+    const mr_brdf_model *model; /* openpbr, standard-surface, gltf, usd-preview */
+    mr_doc_value values[MR_BRDF_MAX_VALUES]; /* by parameter index of the model */
+} mr_doc_material;
+
+typedef struct mr_doc mr_doc;
+
+/* An empty document; NULL when out of memory. */
+mr_doc *mr_doc_create(void);
+void mr_doc_free(mr_doc *doc);
+int mr_doc_material_count(const mr_doc *doc);
+/* The k-th material (NULL outside [0, count)); the pointer stays valid until the next add or the free. */
+mr_doc_material *mr_doc_material_at(mr_doc *doc, int k);
+const mr_doc_material *mr_doc_material_get(const mr_doc *doc, int k);
+/* Appends a material of `model` (every parameter unset). MR_ERR_INVALID_ARG when no format can write the model
+ * (the message lists those that can), MR_ERR_NOMEM. *out (may be NULL) receives it. */
+mr_status mr_doc_add_material(mr_doc *doc, const char *name, const mr_brdf_model *model, mr_doc_material **out);
+/* The parameter called `param` of the material's model set to constant values (the parameter's channel count
+ * read from `values`). MR_ERR_INVALID_ARG naming an unknown parameter or a non-finite value. */
+mr_status mr_doc_set_constant(mr_doc_material *m, const char *param, const double *values);
+/* The parameter set to a texture (see the header comment); scale: the parameter's channel count of factors, NULL =
+ * 1. MR_ERR_INVALID_ARG: unknown parameter, a switch parameter, an empty file or one holding '@', '"' or a control
+ * character, a channel outside -1..3, a single channel for a colour parameter, a negative UV set, a non-finite
+ * scale. */
+mr_status mr_doc_set_texture(mr_doc_material *m, const char *param, const char *file, int channel, int uv_set,
+                             const double *scale);
+
+/* The wraps of a parameter set to a texture. MR_ERR_INVALID_ARG: unknown parameter, no texture, a wrap outside the
+ * enum. */
+mr_status mr_doc_set_texture_wrap(mr_doc_material *m, const char *param, mr_doc_wrap wrap_s, mr_doc_wrap wrap_t);
+
+/* The format of a path by its extension (".mtlx", ".usda", case-insensitive); UNKNOWN otherwise. */
+mr_doc_format mr_doc_format_from_path(const char *path);
+/* "mtlx", "usda"; NULL for UNKNOWN. */
+const char *mr_doc_format_name(mr_doc_format format);
+/* The surface shader node that writes `model` in `format` ("open_pbr_surface", "standard_surface", "gltf_pbr",
+ * "UsdPreviewSurface"), or NULL when the format cannot write it. */
+const char *mr_doc_surface_node(const mr_brdf_model *model, mr_doc_format format);
+/* The node input that carries parameter `param` of `model` in `format` ("base_color" -> "base_color",
+ * usd-preview's "diffuse_color" -> "diffuseColor", standard-surface's "specular_ior" -> "specular_IOR"); NULL when
+ * the format cannot write the model or the index is out of range. */
+const char *mr_doc_input_name(const mr_brdf_model *model, int param, mr_doc_format format);
+/* Whether texels of parameter `param` in `file` are sRGB-encoded (the one rule, header comment): 1 or 0. */
+int mr_doc_texture_is_srgb(const mr_brdf_param *param, const char *file);
+/* `name` made an identifier both formats accept (letters, digits, '_'; not starting with a digit: "M_" prefixed),
+ * into out (size bytes, truncated to fit). */
+void mr_doc_identifier(const char *name, char *out, size_t size);
+
+/* A node input as its definition declares it. */
+typedef struct mr_doc_node_input {
+    const char *name;
+    const char *type; /* MaterialX: "float", "color3", "vector2", "integer", "boolean", "filename", "string", ...;
+                         USD: "color3f", "float", "int", "normal3f", "token", "asset", "float2", "float4" */
+} mr_doc_node_input;
+/* The declared inputs (and outputs: mr_doc_node_outputs) of a node this module writes, facts read from
+ * MaterialX 1.39's libraries (bxdf/open_pbr_surface.mtlx, standard_surface.mtlx, gltf_pbr.mtlx; stdlib's image,
+ * extract, multiply, texcoord; pbrlib's surfacematerial) and the UsdPreviewSurface specification (UsdPreviewSurface,
+ * UsdUVTexture, UsdPrimvarReader_float2). `node` is the node's name with its output type for the MaterialX nodes
+ * that have several ("image_color3", "extract_color4", "multiply_float"), its name otherwise. NULL (and *count 0)
+ * for a node not in the table. */
+const mr_doc_node_input *mr_doc_node_inputs(mr_doc_format format, const char *node, int *count);
+const mr_doc_node_input *mr_doc_node_outputs(mr_doc_format format, const char *node, int *count);
+
+/* The document's text in `format` into *out (NUL-terminated, caller frees with free()). MR_ERR_INVALID_ARG when a
+ * material's model is not written by the format (naming the material and the format's models); MR_ERR_NOMEM. */
+mr_status mr_doc_to_text(const mr_doc *doc, mr_doc_format format, char **out);
+/* mr_doc_to_text in the format of the path's extension, written atomically (mr_core.h). MR_ERR_INVALID_ARG for
+ * another extension; MR_ERR_IO. */
+mr_status mr_doc_write(const mr_doc *doc, const char *path);
+
+/* ---- from a glTF asset (gltf_export.c) ---------------------------------------------------------------------- */
+
+struct mr_gltf;
+
+typedef struct mr_doc_gltf_options {
+    const mr_brdf_model *target; /* NULL: openpbr */
+    const char *image_prefix;    /* the images the document refers to are written as mr_img_prefixed_name(prefix,
+                                    "image<K>.<ext>") (io/image_io.h), referred to by their names relative to
+                                    the prefix's folder: give the output's path without its extension. Required
+                                    when a material is textured */
+    int threads;                 /* of the remaps: 0 = automatic (render.h) */
+} mr_doc_gltf_options;
+
+/* How a material was converted. */
+typedef enum mr_doc_route {
+    MR_DOC_ROUTE_COPY = 0, /* glTF to gltf_pbr: the same parameters, exact */
+    MR_DOC_ROUTE_REMAP,    /* uniform factors fitted by mr_remap in the fit scene (remap/remap.h) */
+    MR_DOC_ROUTE_MAPS      /* textures carried over unchanged (gltf -> usd-preview's metallic workflow, gltf) */
+} mr_doc_route;
+
+typedef struct mr_doc_gltf_material {
+    char name[128];      /* the glTF material's name ("" if none) */
+    mr_doc_route route;
+    int outcome;         /* ROUTE_REMAP: the mr_fit_outcome; -1 otherwise */
+    double ssim;         /* ROUTE_REMAP: the fit's SSIM; 1 otherwise */
+    double relative_rmse;
+    char detail[192];    /* ROUTE_REMAP: the fit's detail line */
+} mr_doc_gltf_material;
+
+typedef struct mr_doc_gltf_image {
+    int image;       /* the asset's image index */
+    char path[1024]; /* where it is written */
+    char file[1024]; /* as the document refers to it */
+} mr_doc_gltf_image;
+
+typedef struct mr_doc_gltf_result {
+    mr_doc *doc;
+    int material_count;
+    mr_doc_gltf_material *materials;
+    int image_count;
+    mr_doc_gltf_image *images;
+} mr_doc_gltf_result;
+
+/* Every material of `asset` converted to the target model into a document (nothing is written yet). Uniform
+ * materials (no base colour nor metallic-roughness texture): gltf -> COPY, any other target -> REMAP from the gltf
+ * model's values (base colour, metallic, roughness; KHR_materials_specular and _ior when present). Textured
+ * materials: gltf and usd-preview (metallic workflow) -> MAPS (base colour map -> base_color / diffuse_color, sRGB;
+ * metallic-roughness B -> metallic, G -> roughness; factors as scales); openpbr and standard-surface have no
+ * texture route yet: MR_ERR_UNSUPPORTED naming the material and the missing route. Also refused
+ * (MR_ERR_UNSUPPORTED): KHR_materials_pbrSpecularGlossiness-only materials' textures, KHR_texture_transform, a
+ * texture whose image is missing. An asset without materials: MR_ERR_INVALID_ARG. */
+mr_status mr_doc_from_gltf(const struct mr_gltf *asset, const mr_doc_gltf_options *opts, mr_doc_gltf_result **out);
+/* The result's images written (mr_gltf_image_write_file: atomic, never over an input), then the document
+ * (mr_doc_write). On failure the images already written are removed. */
+mr_status mr_doc_gltf_write(const struct mr_gltf *asset, const mr_doc_gltf_result *result, const char *path);
+void mr_doc_gltf_result_free(mr_doc_gltf_result *result);
+/* "copy", "remap", "maps". */
+const char *mr_doc_route_name(mr_doc_route route);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* MR_DOC_H */

@@ -1,0 +1,154 @@
+#!/usr/bin/env bash
+# export_cli.sh — `matremap export ASSET -o OUT.mtlx|OUT.usda [--to MODEL]` on the shared glTF assets
+# (../shared/assets/MANIFEST.md): a textured metal-rough asset (WaterBottle: base colour, packed ORM) to .usda and to
+# .mtlx --to gltf, the outputs re-read (the MaterialX one by python3's XML parser) and checked: the images written
+# beside OUT are the asset's bytes, colour maps sRGB and data maps raw/linear, metallic from B and roughness from G;
+# the wraps of TextureSettingsTest's samplers; a uniform asset copied to gltf_pbr exactly; --json; output folders
+# made; refusals (exit 2, the material named, nothing written): a textured material to openpbr or
+# standard-surface (no texture route yet); usage errors (exit 1). The remap route of uniform materials takes about
+# 45 s per material on 2 cores: run with MR_EXPORT_REMAP=1 to include it. Ends with "N passed, N failed".
+set -u
+root=$(cd "$(dirname "$0")/.." && pwd)
+build="${MR_BUILD:-$root/build}"
+bin="$build/bin/matremap"
+shared="${MR_SHARED:-$root/../shared}/assets"
+source "$(dirname "$0")/lib/cli_harness.sh"
+
+bottle_dir="$shared/metalrough/WaterBottle/glTF"
+bottle="$bottle_dir/WaterBottle.gltf"
+settings="$shared/metalrough/TextureSettingsTest/glTF/TextureSettingsTest.gltf"
+cat >"$tmp/uniform.gltf" <<'EOF'
+{"asset": {"version": "2.0"},
+ "materials": [
+  {"name": "Gold", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.77, 0.34, 1], "metallicFactor": 1.0,
+   "roughnessFactor": 0.3}},
+  {"name": "Red plastic", "pbrMetallicRoughness": {"baseColorFactor": [0.6, 0.05, 0.04, 1], "metallicFactor": 0.0,
+   "roughnessFactor": 0.5}}]}
+EOF
+
+# ---- a textured asset to USD -------------------------------------------------------------------------------------
+expect "WaterBottle to .usda (usd-preview by default)" 0 "material 0 'BottleMat': maps" -- \
+    "$bin" export "$bottle" -o "$tmp/u/bottle.usda"
+usd="$tmp/u/bottle.usda"
+check "... the folder made, the document and two images written" test -s "$usd" -a -s "$tmp/u/bottle_image0.png" \
+    -a -s "$tmp/u/bottle_image1.png"
+check "... the images are the asset's own bytes" cmp -s "$tmp/u/bottle_image0.png" \
+    "$bottle_dir/WaterBottle_baseColor.png"
+check "... the metallic-roughness image too" cmp -s "$tmp/u/bottle_image1.png" \
+    "$bottle_dir/WaterBottle_occlusionRoughnessMetallic.png"
+usd_check() { # python over the .usda text: every asset file exists beside it; the wiring
+    python3 - "$usd" <<'EOF'
+import os, re, sys
+text = open(sys.argv[1]).read()
+folder = os.path.dirname(sys.argv[1])
+assert text.startswith("#usda 1.0")
+for f in re.findall(r"asset inputs:file = @([^@]+)@", text):
+    assert os.path.isfile(os.path.join(folder, f)), f
+shaders = dict(re.findall(r'def Shader "(\w+)"\s*\{(.*?)\n        \}', text, re.S))
+surface = shaders["Surface"]
+assert 'info:id = "UsdPreviewSurface"' in surface
+assert "int inputs:useSpecularWorkflow = 0" in surface
+assert "inputs:diffuseColor.connect = </Materials/BottleMat/diffuseColor_texture.outputs:rgb>" in surface
+assert "inputs:metallic.connect = </Materials/BottleMat/metallic_texture.outputs:b>" in surface
+assert "inputs:roughness.connect = </Materials/BottleMat/roughness_texture.outputs:g>" in surface
+assert 'sourceColorSpace = "sRGB"' in shaders["diffuseColor_texture"]
+assert 'sourceColorSpace = "raw"' in shaders["metallic_texture"]
+assert 'sourceColorSpace = "raw"' in shaders["roughness_texture"]
+assert 'token inputs:varname = "st"' in shaders["uv0_reader"]
+assert 'info:id = "UsdPrimvarReader_float2"' in shaders["uv0_reader"]
+assert text.count("{") == text.count("}")
+EOF
+}
+check "... re-read: UsdPreviewSurface wired to UsdUVTexture rgb/b/g, sRGB and raw, st" usd_check
+
+# ---- the same asset to MaterialX gltf_pbr --------------------------------------------------------------------------
+expect "WaterBottle to .mtlx --to gltf" 0 "wrote .*bottle.mtlx \(gltf, 1 material\)" -- \
+    "$bin" export "$bottle" -o "$tmp/m/bottle.mtlx" --to gltf
+mtlx_check() { # python's XML parser over the document
+    python3 - "$tmp/m/bottle.mtlx" <<'EOF'
+import os, sys, xml.etree.ElementTree as ET
+root = ET.parse(sys.argv[1]).getroot()
+folder = os.path.dirname(sys.argv[1])
+assert root.tag == "materialx" and root.get("version") == "1.39" and root.get("colorspace") == "lin_rec709"
+graph = root.find("nodegraph")
+images = {n.get("name"): n for n in graph.findall("image")}
+for n in images.values():
+    f = n.find("input[@name='file']")
+    assert os.path.isfile(os.path.join(folder, f.get("value")))
+assert images["base_color_image"].find("input[@name='file']").get("colorspace") == "srgb_texture"
+assert images["metallic_image"].find("input[@name='file']").get("colorspace") is None
+assert images["roughness_image"].find("input[@name='file']").get("colorspace") is None
+idx = {n.get("name"): n.find("input[@name='index']").get("value") for n in graph.findall("extract")}
+assert idx == {"metallic_extract": "2", "roughness_extract": "1"}, idx
+shader = root.find("gltf_pbr")
+inputs = {i.get("name"): i for i in shader.findall("input")}
+assert inputs["base_color"].get("output") == "base_color_out" and inputs["base_color"].get("nodegraph") == graph.get("name")
+assert set(inputs) <= {"base_color", "metallic", "roughness", "specular", "specular_color", "ior"}
+mat = root.find("surfacematerial")
+assert mat.get("name") == "BottleMat" and mat.find("input").get("nodename") == shader.get("name")
+EOF
+}
+check "... re-read by an XML parser: image nodes, colorspaces, extract B and G, gltf_pbr, surfacematerial" mtlx_check
+
+# ---- samplers' wraps ---------------------------------------------------------------------------------------------
+# (Its BackgroundMaterial is uniform: to usd-preview it would be remapped, 45 s; gltf_pbr copies it. The USD wraps are
+# checked by tests/test_doc.c.)
+expect "TextureSettingsTest to .mtlx --to gltf: ten materials" 0 "wrote .*ts.mtlx \(gltf, 10 materials\)" -- "$bin" export "$settings" -o "$tmp/ts/ts.mtlx" --to gltf
+check "... well-formed; MIRRORED_REPEAT, CLAMP_TO_EDGE, REPEAT as mirror, clamp, periodic" python3 -c "
+import sys, xml.etree.ElementTree as ET
+r = ET.parse(sys.argv[1]).getroot()
+modes = {i.get('value') for i in r.iter('input') if i.get('name') in ('uaddressmode', 'vaddressmode')}
+assert modes == {'periodic', 'clamp', 'mirror'}, modes
+assert len(r.findall('surfacematerial')) == 10" "$tmp/ts/ts.mtlx"
+
+# ---- a uniform asset: copy to gltf_pbr -----------------------------------------------------------------------------
+expect "uniform asset to .mtlx --to gltf: copied" 0 "material 1 'Red plastic': copy" -- \
+    "$bin" export "$tmp/uniform.gltf" -o "$tmp/c/uniform.mtlx" --to gltf
+check "... the factors exactly, names made identifiers" python3 -c "
+import sys, xml.etree.ElementTree as ET
+r = ET.parse(sys.argv[1]).getroot()
+s = {n.get('name'): {i.get('name'): i.get('value') for i in n} for n in r.findall('gltf_pbr')}
+assert s['SR_Gold']['base_color'] == '1, 0.77, 0.34' and s['SR_Gold']['roughness'] == '0.3', s
+assert s['SR_Red_plastic']['metallic'] == '0'
+assert [m.get('name') for m in r.findall('surfacematerial')] == ['Gold', 'Red_plastic']" "$tmp/c/uniform.mtlx"
+expect "--json" 0 "" -- "$bin" export "$tmp/uniform.gltf" -o "$tmp/c/j.mtlx" --to gltf --json
+check "... the summary" python3 -c "
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d['command'] == 'export' and d['format'] == 'mtlx' and d['target'] == 'gltf' and d['images'] == []
+assert [(m['name'], m['route']) for m in d['materials']] == [('Gold', 'copy'), ('Red plastic', 'copy')]" "$tmp/out"
+
+if [ "${MR_EXPORT_REMAP:-0}" = 1 ]; then
+    expect "uniform asset to .usda: remapped, the outcome printed" 0 "'Gold': remap \((converged|at-bound)" -- \
+        "$bin" export "$tmp/uniform.gltf" -o "$tmp/r/uniform.usda"
+fi
+
+# ---- refusals ----------------------------------------------------------------------------------------------------
+mkdir -p "$tmp/refused"
+refuses "a textured material to openpbr: no texture route yet" \
+    "error: .*material 0 \('BottleMat'\) is textured: no texture route to openpbr yet" "$tmp/refused" -- \
+    "$bin" export "$bottle" -o "$tmp/refused/b.mtlx"
+refuses "... nor to standard-surface" "no texture route to standard-surface yet" "$tmp/refused" -- \
+    "$bin" export "$bottle" -o "$tmp/refused/b.mtlx" --to standard-surface
+# An image named after OUT that is the asset's own file: refused before anything is written.
+mkdir -p "$tmp/own"
+cp "$bottle_dir/WaterBottle_baseColor.png" "$tmp/own/doc_image0.png"
+cat >"$tmp/own/own.gltf" <<'EOF'
+{"asset": {"version": "2.0"}, "images": [{"uri": "doc_image0.png"}], "textures": [{"source": 0}],
+ "materials": [{"name": "Own", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]}
+EOF
+refuses "an image output that is a file of the asset" "doc_image0.png" "$tmp/own" -- \
+    "$bin" export "$tmp/own/own.gltf" -o "$tmp/own/doc.usda"
+expect "usd-preview is not written to .mtlx" 1 "--to usd-preview: .mtlx does not write it" -- \
+    "$bin" export "$bottle" -o "$tmp/refused/b.mtlx" --to usd-preview
+expect "openpbr is not written to .usda" 1 "--to openpbr: .usda does not write it" -- \
+    "$bin" export "$bottle" -o "$tmp/refused/b.usda" --to openpbr
+expect "an unknown model" 1 "--to 'nope'" -- "$bin" export "$bottle" -o "$tmp/refused/b.usda" --to nope
+expect "another extension" 1 "the extension chooses the format: .mtlx or .usda" -- \
+    "$bin" export "$bottle" -o "$tmp/refused/b.usd"
+expect "a .mtlx input is not read yet" 1 "reading .mtlx is not done yet" -- \
+    "$bin" export "$tmp/m/bottle.mtlx" -o "$tmp/refused/b.usda"
+expect "no -o" 1 "missing -o OUT" -- "$bin" export "$bottle"
+check "... nothing written by the refusals" test -z "$(ls -A "$tmp/refused")"
+expect "help export" 0 "usage: matremap export" -- "$bin" help export
+finish

@@ -1,0 +1,223 @@
+/*
+ * test_doc.c — material documents (src/doc/doc.h) without the command line: every parameter of the four written
+ * models maps to an input its node declares, with the right type; the writers write only declared inputs (every
+ * `<input name=` of a node in the MaterialX text and every `inputs:NAME` of a Shader in the USD text is looked up in
+ * the node tables); colour spaces follow the one rule (sRGB for MR_PARAM_SRGB_MAP parameters in 8/16-bit files,
+ * data otherwise, float files linear); bad values are refused; the write is atomic (a failed write leaves the old
+ * file). tests/export_cli.sh parses the files back with python3's XML parser.
+ */
+#include "doc/doc.h" /* first: the header is self-contained */
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "matremap.h"
+
+#include "harness.h"
+
+static const char *const models[] = {"openpbr", "standard-surface", "gltf", "usd-preview"};
+
+static int declared(mr_doc_format format, const char *node, const char *input, const char **type) {
+    int n = 0;
+    const mr_doc_node_input *in = mr_doc_node_inputs(format, node, &n);
+    for (int i = 0; i < n; i++)
+        if (strcmp(in[i].name, input) == 0) {
+            if (type) *type = in[i].type;
+            return 1;
+        }
+    return 0;
+}
+
+MR_TEST(every_parameter_maps_to_a_declared_input) {
+    for (size_t k = 0; k < sizeof(models) / sizeof(models[0]); k++) {
+        const mr_brdf_model *model = mr_brdf_find(models[k]);
+        MR_CHECK(model != NULL);
+        mr_doc_format format = strcmp(models[k], "usd-preview") == 0 ? MR_DOC_FORMAT_USDA : MR_DOC_FORMAT_MTLX;
+        const char *node = mr_doc_surface_node(model, format);
+        MR_CHECK(node != NULL);
+        for (int p = 0; p < model->param_count; p++) {
+            const char *input = mr_doc_input_name(model, p, format), *type = NULL;
+            MR_CHECK_MSG(input && declared(format, node, input, &type), "%s.%s -> %s", models[k],
+                         model->params[p].name, input ? input : "(none)");
+            if (type == NULL) continue;
+            const char *want = model->params[p].role == MR_PARAM_SWITCH ? "int"
+                               : model->params[p].channels == 3 ? (format == MR_DOC_FORMAT_USDA ? "color3f" : "color3")
+                                                                : "float";
+            MR_CHECK_MSG(strcmp(type, want) == 0, "%s.%s: %s, not %s", models[k], input, type, want);
+        }
+    }
+    MR_CHECK(strcmp(mr_doc_input_name(mr_brdf_find("usd-preview"), 0, MR_DOC_FORMAT_USDA), "diffuseColor") == 0);
+    MR_CHECK(mr_doc_surface_node(mr_brdf_find("usd-preview"), MR_DOC_FORMAT_MTLX) == NULL);
+    MR_CHECK(mr_doc_surface_node(mr_brdf_find("openpbr"), MR_DOC_FORMAT_USDA) == NULL);
+    MR_CHECK(mr_doc_surface_node(mr_brdf_find("ggx"), MR_DOC_FORMAT_MTLX) == NULL);
+}
+
+/* A document with constants and maps of every kind (colour, scalar by channel incl. alpha, scaled, UV set 1). */
+static mr_doc *sample(const char *model_name) {
+    const mr_brdf_model *model = mr_brdf_find(model_name);
+    mr_doc *doc = mr_doc_create();
+    mr_doc_material *m = NULL;
+    MR_CHECK_OK(mr_doc_add_material(doc, "Brushed metal #1", model, &m));
+    int colour = -1, scalar = -1, scalar2 = -1;
+    for (int p = 0; p < model->param_count; p++) {
+        const mr_brdf_param *d = &model->params[p];
+        if (d->channels == 3 && colour < 0)
+            colour = p;
+        else if (d->channels == 1 && d->role != MR_PARAM_SWITCH && scalar < 0)
+            scalar = p;
+        else if (d->channels == 1 && d->role != MR_PARAM_SWITCH && scalar2 < 0)
+            scalar2 = p;
+        else
+            MR_CHECK_OK(mr_doc_set_constant(m, d->name, (double[3]){0.25, 0.5, 0.75}));
+    }
+    MR_CHECK_OK(mr_doc_set_texture(m, model->params[colour].name, "base.png", -1, 0, (double[3]){0.5, 1, 1}));
+    MR_CHECK_OK(mr_doc_set_texture_wrap(m, model->params[colour].name, MR_DOC_WRAP_CLAMP, MR_DOC_WRAP_MIRROR));
+    MR_CHECK_OK(mr_doc_set_texture(m, model->params[scalar].name, "mr.png", 2, 1, NULL));
+    MR_CHECK_OK(mr_doc_set_texture(m, model->params[scalar2].name, "mr.png", 3, 0, (double[1]){0.5}));
+    mr_doc_material *m2 = NULL;
+    MR_CHECK_OK(mr_doc_add_material(doc, "Brushed metal #1", model, &m2)); // the same name: made unique
+    MR_CHECK_OK(mr_doc_set_texture(m2, model->params[colour].name, "base.exr", -1, 0, NULL));
+    return doc;
+}
+
+static int count(const char *text, const char *what) {
+    int n = 0;
+    for (const char *p = strstr(text, what); p; p = strstr(p + 1, what)) n++;
+    return n;
+}
+
+MR_TEST(mtlx_writes_declared_inputs_only) {
+    for (int k = 0; k < 3; k++) {
+        mr_doc *doc = sample(models[k]);
+        char *text = NULL;
+        MR_CHECK_OK(mr_doc_to_text(doc, MR_DOC_FORMAT_MTLX, &text));
+        // Each element <NODE name=".." type="T"> opens a node; each <input name="X" inside it is declared by it.
+        char node[96] = "";
+        for (char *line = strtok(text, "\n"); line; line = strtok(NULL, "\n")) {
+            while (*line == ' ') line++;
+            char name[64], type[64];
+            if (sscanf(line, "<input name=\"%63[^\"]\"", name) == 1) {
+                MR_CHECK_MSG(node[0] && declared(MR_DOC_FORMAT_MTLX, node, name, NULL), "%s: input %s", node, name);
+            } else if (sscanf(line, "<%63[a-z_] name=\"%*[^\"]\" type=\"%63[^\"]\"", node, type) == 2) {
+                // The stdlib nodes are named in the table by their output type; extract by its input's (float out;
+                // extract_color3 and _color4 declare the same input names).
+                if (strcmp(node, "extract") == 0) {
+                    snprintf(node, sizeof node, "extract_color3");
+                } else if (strcmp(node, "image") == 0 || strcmp(node, "multiply") == 0 ||
+                           strcmp(node, "texcoord") == 0) {
+                    char full[96];
+                    snprintf(full, sizeof full, "%.40s_%.40s", node, type);
+                    snprintf(node, sizeof node, "%s", full);
+                }
+                if (strcmp(node, "output") == 0) node[0] = '\0';
+            }
+        }
+        free(text);
+        MR_CHECK_OK(mr_doc_to_text(doc, MR_DOC_FORMAT_MTLX, &text));
+        MR_CHECK(strstr(text, "<materialx version=\"1.39\" colorspace=\"lin_rec709\">") != NULL);
+        MR_CHECK_MSG(count(text, "colorspace=\"srgb_texture\"") == 1, "%s", text); // base.png; not base.exr nor mr.png
+        MR_CHECK(strstr(text, "value=\"base.exr\" />") != NULL);
+        MR_CHECK(count(text, "<surfacematerial ") == 2 && strstr(text, "name=\"Brushed_metal__1_2\"") != NULL);
+        MR_CHECK(strstr(text, "<input name=\"index\" type=\"integer\" value=\"3\" />") != NULL); // alpha
+        MR_CHECK(strstr(text, "<image name=") != NULL && strstr(text, "type=\"color4\"") != NULL);
+        MR_CHECK(strstr(text, "<input name=\"in2\" type=\"color3\" value=\"0.5, 1, 1\" />") != NULL);
+        MR_CHECK(strstr(text, "<texcoord ") != NULL);
+        MR_CHECK(strstr(text, "<input name=\"uaddressmode\" type=\"string\" value=\"clamp\" />") != NULL);
+        MR_CHECK(strstr(text, "<input name=\"vaddressmode\" type=\"string\" value=\"mirror\" />") != NULL);
+        free(text);
+        MR_CHECK(mr_doc_to_text(doc, MR_DOC_FORMAT_USDA, &text) == MR_ERR_INVALID_ARG);
+        MR_CHECK(strstr(mr_last_error(), "does not write") != NULL);
+        mr_doc_free(doc);
+    }
+}
+
+MR_TEST(usda_writes_declared_inputs_only) {
+    mr_doc *doc = sample("usd-preview");
+    char *text = NULL;
+    MR_CHECK_OK(mr_doc_to_text(doc, MR_DOC_FORMAT_USDA, &text));
+    char *copy = strdup(text);
+    const char *node = NULL;
+    for (char *line = strtok(copy, "\n"); line; line = strtok(NULL, "\n")) {
+        char id[64], name[64];
+        if (sscanf(line, " uniform token info:id = \"%63[^\"]\"", id) == 1) {
+            node = strcmp(id, "UsdPreviewSurface") == 0    ? "UsdPreviewSurface"
+                   : strcmp(id, "UsdUVTexture") == 0       ? "UsdUVTexture"
+                   : strcmp(id, "UsdPrimvarReader_float2") == 0 ? "UsdPrimvarReader_float2"
+                                                                 : NULL;
+            MR_CHECK_MSG(node != NULL, "unknown shader %s", id);
+        }
+        const char *in = strstr(line, " inputs:");
+        if (in && strstr(line, "def ") == NULL && sscanf(in, " inputs:%63[A-Za-z0-9_]", name) == 1)
+            MR_CHECK_MSG(node && declared(MR_DOC_FORMAT_USDA, node, name, NULL), "%s: inputs:%s", node, name);
+        const char *outp = strstr(line, "outputs:");
+        if (outp && node && strstr(line, ".connect") == NULL && sscanf(outp, "outputs:%63[A-Za-z0-9_]", name) == 1) {
+            int n = 0, found = 0;
+            const mr_doc_node_input *o = mr_doc_node_outputs(MR_DOC_FORMAT_USDA, node, &n);
+            for (int i = 0; i < n; i++) found |= strcmp(o[i].name, name) == 0;
+            MR_CHECK_MSG(found, "%s: outputs:%s", node, name);
+        }
+        if (strstr(line, "def Material") != NULL) node = NULL;
+    }
+    free(copy);
+    MR_CHECK(strstr(text, "#usda 1.0") == text);
+    MR_CHECK(count(text, "sourceColorSpace = \"sRGB\"") == 1 && count(text, "sourceColorSpace = \"raw\"") == 3);
+    MR_CHECK(strstr(text, "token inputs:varname = \"st\"") && strstr(text, "token inputs:varname = \"st1\""));
+    MR_CHECK(strstr(text, "outputs:rgb>") && strstr(text, "outputs:b>") && strstr(text, "outputs:a>"));
+    MR_CHECK(strstr(text, "float4 inputs:scale = (0.5, 1, 1, 1)") != NULL);
+    MR_CHECK(strstr(text, "token inputs:wrapS = \"clamp\"") && strstr(text, "token inputs:wrapT = \"mirror\""));
+    MR_CHECK(strstr(text, "int inputs:useSpecularWorkflow = 0") != NULL); // 0.25 rounds to 0
+    free(text);
+    mr_doc_free(doc);
+}
+
+MR_TEST(the_colour_space_rule) {
+    const mr_brdf_model *op = mr_brdf_find("openpbr");
+    const mr_brdf_param *colour = &op->params[mr_brdf_param_index(op, "base_color")];
+    const mr_brdf_param *rough = &op->params[mr_brdf_param_index(op, "specular_roughness")];
+    MR_CHECK(mr_doc_texture_is_srgb(colour, "a.png") == 1 && mr_doc_texture_is_srgb(colour, "a.JPG") == 1);
+    MR_CHECK(mr_doc_texture_is_srgb(colour, "a.exr") == 0 && mr_doc_texture_is_srgb(colour, "a.HDR") == 0);
+    MR_CHECK(mr_doc_texture_is_srgb(rough, "a.png") == 0);
+}
+
+MR_TEST(bad_values_are_refused) {
+    const mr_brdf_model *usd = mr_brdf_find("usd-preview");
+    mr_doc *doc = mr_doc_create();
+    mr_doc_material *m = NULL;
+    MR_CHECK(mr_doc_add_material(doc, "x", mr_brdf_find("ggx"), &m) == MR_ERR_INVALID_ARG);
+    MR_CHECK_OK(mr_doc_add_material(doc, "x", usd, &m));
+    MR_CHECK(mr_doc_set_constant(m, "nope", (double[3]){0, 0, 0}) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_doc_set_texture(m, "diffuse_color", "a.png", 1, 0, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_doc_set_texture(m, "use_specular_workflow", "a.png", 0, 0, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_doc_set_texture(m, "metallic", "a@b.png", 0, 0, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_doc_set_texture(m, "metallic", "a.png", 4, 0, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_doc_set_texture(m, "metallic", "a.png", 0, -1, NULL) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_doc_set_texture_wrap(m, "metallic", MR_DOC_WRAP_CLAMP, MR_DOC_WRAP_CLAMP) == MR_ERR_INVALID_ARG);
+    MR_CHECK(mr_doc_format_from_path("a.MTLX") == MR_DOC_FORMAT_MTLX && mr_doc_format_from_path("a.usd") == 0);
+    MR_CHECK(mr_doc_write(doc, mr_test_tmp_path("x.txt")) == MR_ERR_INVALID_ARG);
+    mr_doc_free(doc);
+}
+
+MR_TEST(the_write_is_atomic) {
+    const char *path = mr_test_tmp_path("doc.mtlx");
+    MR_CHECK(mr_test_write_file(path, "old", 3) == 1);
+    mr_doc *doc = mr_doc_create();
+    MR_CHECK_OK(mr_doc_add_material(doc, "u", mr_brdf_find("usd-preview"), NULL));
+    MR_CHECK(mr_doc_write(doc, path) == MR_ERR_INVALID_ARG); // usd-preview in .mtlx: refused, nothing written
+    size_t size = 0;
+    char *text = mr_test_read_file(path, &size);
+    MR_CHECK(text && size == 3 && memcmp(text, "old", 3) == 0);
+    free(text);
+    mr_doc_free(doc);
+    doc = mr_doc_create();
+    MR_CHECK_OK(mr_doc_add_material(doc, "g", mr_brdf_find("gltf"), NULL));
+    MR_CHECK_OK(mr_doc_write(doc, path));
+    text = mr_test_read_file(path, &size);
+    MR_CHECK(text && strstr(text, "<gltf_pbr name=\"SR_g\"") != NULL);
+    free(text);
+    mr_doc_free(doc);
+}
+
+MR_TEST_MAIN(MR_TEST_ENTRY(every_parameter_maps_to_a_declared_input), MR_TEST_ENTRY(mtlx_writes_declared_inputs_only),
+             MR_TEST_ENTRY(usda_writes_declared_inputs_only), MR_TEST_ENTRY(the_colour_space_rule),
+             MR_TEST_ENTRY(bad_values_are_refused), MR_TEST_ENTRY(the_write_is_atomic))
