@@ -126,7 +126,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h sr
 
 .PHONY: all check asan fuzz fuzz-targets faults demo bench \
         analyses paper evaluation evaluation-gltf evaluation-hardcases evaluation-svbrdf \
-        evaluation-viewers dataset train objectives deps install clean
+        evaluation-viewers dataset train objectives deps install clean tables
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
 all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE) $(MPI_MODULE)
@@ -326,5 +326,14 @@ install: all
 
 clean:
 	rm -rf build
+
+# The GGX directional-albedo tables the layered BRDF models interpolate (src/brdf/layering.c), computed from the
+# library's own lobe by scripts/gen-ggx-albedo.c (a minute or two). The header is committed, so `all` does not run
+# this; tests/ggx_albedo_table.sh checks a sample of its entries against the same program.
+tables:
+	@mkdir -p $(BUILD)
+	$(CC) -std=c11 -O2 $(WARN) -Isrc scripts/gen-ggx-albedo.c -lm -o $(BUILD)/gen-ggx-albedo
+	$(BUILD)/gen-ggx-albedo > src/brdf/ggx_albedo_tables.h.tmp
+	mv src/brdf/ggx_albedo_tables.h.tmp src/brdf/ggx_albedo_tables.h
 
 -include $(shell find $(BUILD)/obj $(BUILD)/pic -name '*.d' 2>/dev/null)

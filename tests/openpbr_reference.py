@@ -24,14 +24,16 @@ ROOT = os.environ.get("MR_ROOT", os.path.join(os.path.dirname(os.path.abspath(__
 
 def load_tables():
     text = open(os.path.join(ROOT, "src", "brdf", "ggx_albedo_tables.h")).read()
-    dims = {k: int(v) for k, v in re.findall(r"#define MR_GGX_ALB_(N[TRE]) (\d+)", text)}
+    dims = {k: int(v) for k, v in re.findall(r"#define MR_GGX_ALB_(N_MU|N_R|N_ETA|ONE_N_R) (\d+)", text)}
 
     def array(name):
-        body = text.split(name, 1)[1].split("= {", 1)[1].split("};", 1)[0]
-        return np.array([float(x) for x in re.findall(r"[-+0-9.eE]+", body.replace("{", " ").replace("}", " "))])
+        body = text.split("static const float " + name + "[", 1)[1].split("= {", 1)[1].split("};", 1)[0]
+        body = re.sub(r"/\*.*?\*/", "", body, flags=re.S)
+        values = [float(x) for x in re.findall(r"[-+]?[0-9.]+(?:[eE][-+]?[0-9]+)?", body)]
+        return np.array(values, dtype=np.float32).astype(np.float64)  # the C table is float
 
-    diel = array("mr_ggx_alb_dielectric").reshape(dims["NE"], dims["NR"], dims["NT"])
-    one = array("mr_ggx_alb_one").reshape(dims["NR"], dims["NT"])
+    diel = array("mr_ggx_alb_dielectric").reshape(dims["N_ETA"], dims["N_R"], dims["N_MU"])
+    one = array("mr_ggx_alb_one").reshape(dims["ONE_N_R"], dims["N_MU"])
     return diel, one
 
 
@@ -40,15 +42,19 @@ NE, NR, NT = DIEL.shape
 
 
 def cell(x, n):
-    x = min(max(x, 0.0), n - 1.0)
+    """Node and fraction of the table coordinate x in [0, 1] (clamped) on n nodes."""
+    x = min(max(x, 0.0), 1.0) * (n - 1)
     i = min(int(math.floor(x)), n - 2)
     return i, x - i
 
 
+# Every axis of the tables is quadratic in its node index: mu = t^2, r = 0.01 + 0.99 t^2, eta = 1 + 2 t^2 (the
+# white table ONE has more r nodes than the dielectric one).
 def table_dielectric(mu, r, eps):
-    it, a = cell(math.sqrt(min(max(mu, 0.0), 1.0)) * (NT - 1), NT)
-    ir, b = cell((r - 0.01) / 0.99 * (NR - 1), NR)
-    ie, c = cell(math.sqrt(min(max(eps, 0.0), 0.5) / 0.5) * (NE - 1), NE)
+    it, a = cell(math.sqrt(min(max(mu, 0.0), 1.0)), NT)
+    ir, b = cell(math.sqrt(max(r - 0.01, 0.0) / 0.99), NR)
+    e = min(max(eps, 0.0), 0.5)
+    ie, c = cell(math.sqrt(((1 + e) / (1 - e) - 1.0) / 2.0), NE)
     cube = DIEL[ie:ie + 2, ir:ir + 2, it:it + 2]
     w_t = np.array([1 - a, a])
     w_r = np.array([1 - b, b])
@@ -57,8 +63,8 @@ def table_dielectric(mu, r, eps):
 
 
 def table_one(mu, r):
-    it, a = cell(math.sqrt(min(max(mu, 0.0), 1.0)) * (NT - 1), NT)
-    ir, b = cell((r - 0.01) / 0.99 * (NR - 1), NR)
+    it, a = cell(math.sqrt(min(max(mu, 0.0), 1.0)), NT)
+    ir, b = cell(math.sqrt(max(r - 0.01, 0.0) / 0.99), ONE.shape[0])
     sq = ONE[ir:ir + 2, it:it + 2]
     return float(np.array([1 - b, b]) @ sq @ np.array([1 - a, a]))
 

@@ -5,9 +5,10 @@ Surface 1.0.1, src/brdf/standard_surface.c) from the specification's formulas, c
 Written apart from the C code and in other algebra where there is a choice: the dielectric Fresnel in the
 Cook-Torrance g-form, the conductor Fresnel with complex arithmetic (cos_t = sqrt(1 - sin^2/(n + ik)^2)), Smith's
 height-correlated G2 from the Lambdas, GGX D in its (alpha^2 - 1) cos^2 + 1 form, Oren-Nayar from the angles.
-Shared by definition: Gulbrandsen's (r, g) -> (n, k) map (one formula) and the directional albedo table
-src/brdf/standard_surface_albedo.h with the interpolation its model file documents (linear in sqrt(mu),
-sqrt((r - 0.01)/0.99), sqrt((eta - 1)/2); the (r, eta) blend rounded to float as the model stores it).
+Shared by definition: Gulbrandsen's (r, g) -> (n, k) map (one formula) and the directional albedo table of all
+layered models, src/brdf/ggx_albedo_tables.h (mr_ggx_alb_dielectric), with the interpolation the model file and
+brdf_internal.h document (linear in sqrt(mu), sqrt((r - 0.01)/0.99), sqrt((eta - 1)/2); the (r, eta) blend
+rounded to float as the model stores it).
 
 Usage: standard_surface_reference.py ROOT DRIVER   (DRIVER: tests/lib/brdf_eval.c built against the library)
 Prints ok/FAIL lines and "N passed, N failed"; exit status 1 on any failure. Tolerance: 1e-6 relative.
@@ -56,12 +57,12 @@ PAIRS = [
 
 
 def load_table(root):
-    text = open(root + "/src/brdf/standard_surface_albedo.h").read()
-    dims = [int(re.search(r"#define SS_ALBEDO_N_%s (\d+)" % k, text).group(1)) for k in ("ETA", "R", "MU")]
-    body = text[text.index("ss_albedo["):]
-    body = body[body.index("=") + 1:]
+    text = open(root + "/src/brdf/ggx_albedo_tables.h").read()
+    dims = [int(re.search(r"#define MR_GGX_ALB_N_%s (\d+)" % k, text).group(1)) for k in ("ETA", "R", "MU")]
+    body = text[text.index("static const float mr_ggx_alb_dielectric["):]
+    body = body[body.index("=") + 1:body.index("};")]
     body = re.sub(r"/\*.*?\*/", "", body, flags=re.S)
-    values = [float(x) for x in re.findall(r"-?\d+\.\d+(?:e-?\d+)?", body)]
+    values = [float(x) for x in re.findall(r"[-+]?[0-9.]+(?:[eE][-+]?[0-9]+)?", body)]
     return np.array(values, dtype=np.float32).astype(np.float64).reshape(dims)
 
 

@@ -15,7 +15,7 @@
 #include <unistd.h>
 
 #include "brdf/brdf.h"
-#include "brdf/brdf_internal.h" /* mr_ggx_albedo_one: the table known_openpbr divides out */
+#include "brdf/brdf_internal.h" /* the GGX albedo table lookups of known_openpbr and known_standard_surface */
 #include "harness.h"
 #include "io/image_io.h"
 
@@ -1959,6 +1959,19 @@ MR_TEST(known_standard_surface) {
     eval_parts(m, v, wi, wo, d, s);
     eval_parts(m, v, wo, wi, d2, s2);
     MR_CHECK_MSG(!close_rel(d[0], d2[0], 1e-3), "defaults: diffuse %.9g vs %.9g", d[0], d2[0]);
+
+    /* the precomputed curve (mr_ggx_albedo_curve, what prepare stores) is the shared table's trilinear lookup
+     * (mr_ggx_albedo_dielectric, what openpbr and blender-principled call), up to the curve's float rounding */
+    uint64_t arng = 5;
+    double curve_worst = 0.0;
+    for (int k = 0; k < 300; k++) {
+        double r = 0.01 + 0.99 * rnd(&arng), eta = 1.0 + 2.0 * rnd(&arng), mu = rnd(&arng);
+        float curve[MR_GGX_ALBEDO_CURVE_N];
+        mr_ggx_albedo_curve(r, (eta - 1.0) / (eta + 1.0), curve);
+        curve_worst = fmax(curve_worst, fabs(mr_ggx_albedo_curve_at(curve, mu) -
+                                             mr_ggx_albedo_dielectric(mu, r, (eta - 1.0) / (eta + 1.0))));
+    }
+    MR_CHECK_MSG(curve_worst <= 1e-6, "albedo curve vs trilinear lookup: %.3g", curve_worst);
 
     /* White furnace, base_color 1 (base 1): a dielectric over Lambert reflects E_s + (1 - E_s) = 1 exactly, so
      * |albedo - 1| is the albedo table's error (plus the quadrature's, ~1e-3 towards grazing). Over ior x

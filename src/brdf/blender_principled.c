@@ -36,9 +36,11 @@
  *     (E_F(mu) - F0 E(mu))/((1 - F0) E(mu)), E_F the albedo with the real Fresnel (layering.c tables).
  *
  * Substitutions, with their size: Cycles' lookup tables (ggx_E, ggx_Eavg, ggx_gen_schlick_ior_s) are replaced by
- * this library's own GGX albedo tables (ggx_albedo_tables.h; the same integrals, computed here, differently
- * gridded), and the fitted fresnel_dielectric_Fss by the exact average F_avg. Cycles works in float and drops
- * closures below CLOSURE_WEIGHT_CUTOFF (1e-5); this model is double and continuous.
+ * this library's one GGX albedo table (layering.c, ggx_albedo_tables.h, shared with openpbr and standard-surface;
+ * the same integrals, computed here, differently gridded; its interpolation error, stated in layering.c, is at
+ * most 0.00095 up to 80 degrees for ior 1.05-3, 0.00034 for the F = 1 table), and the fitted fresnel_dielectric_Fss by
+ * the exact average F_avg. Cycles works in float and drops closures below CLOSURE_WEIGHT_CUTOFF (1e-5); this model
+ * is double and continuous.
  *
  * Parameters (the node's inputs, lowercase; defaults the node's):
  *   base_color         RGB [0, 1]      default 0.8

@@ -31,16 +31,15 @@
  *   Split: diffuse part = the diffuse_brdf term with all its weights; specular part = the rest.
  *
  * Directional albedos E_s, E_c: the specification assumes a reflectance() function and leaves its computation
- *   open. Here E(mu; r, eta) of the F_d D V lobe is a table (standard_surface_albedo.h, written by
- *   scripts/gen-standard-surface-albedo.py with a half-vector quadrature), interpolated linearly in sqrt(mu),
- *   sqrt((r - 0.01)/0.99) and sqrt((eta - 1)/2) (41 nodes in mu, 17 in r, 25 in eta: the square roots put nodes
- *   where E bends, at grazing incidence, smooth lobes and ior near 1). prepare() folds the (r, eta) interpolation
- *   into one 41-node curve per lobe (floats in the state); eval() interpolates it at sqrt(cos_i). Accuracy, seen
- *   as |albedo - 1| of a dielectric over a white Lambert base (which is exactly 1 with exact albedos; white
- *   furnace of tests/test_brdf.c, whose own quadrature error is ~1e-3 towards grazing): <= 0.0082 over ior 1.05-3,
- *   roughness 0.01-1 and 0-88 degrees, the worst at ior 1.05 and 88 degrees (Fresnel's sharp knee near grazing
- *   for ior near 1); <= 0.0015 up to 80 degrees. The table is const data: thread-safe, nothing computed at run
- *   time.
+ *   open. Here E(mu; r, eta) of the F_d D V lobe is the library's one GGX albedo table, shared with openpbr and
+ *   blender-principled (layering.c, ggx_albedo_tables.h, written by scripts/gen-ggx-albedo.c with a half-vector
+ *   quadrature of this lobe), interpolated linearly in sqrt(mu), sqrt((r - 0.01)/0.99) and sqrt((eta - 1)/2).
+ *   prepare() folds the (r, eta) interpolation into one 41-node curve per lobe (mr_ggx_albedo_curve; floats in
+ *   the state); eval() interpolates it at sqrt(cos_i). Accuracy, seen as |albedo - 1| of a dielectric over a
+ *   white Lambert base (which is exactly 1 with exact albedos; white furnace of tests/test_brdf.c, whose own
+ *   quadrature error is ~1e-3 towards grazing): <= 0.0057 over ior 1.05-3, roughness 0.01-1 and 0-88 degrees;
+ *   <= 0.0008 up to 80 degrees (E changes fastest near grazing, most for ior near 1, where Fresnel has its sharp
+ *   knee). The table is const data: thread-safe, nothing computed at run time.
  *
  * Parameters (the specification's names, lowercased: the command line's identifiers are lowercase (brdf.h), so
  * specular_IOR is `specular_ior` and coat_IOR is `coat_ior`; defaults of version 1.0.1; ranges the soft ranges):
@@ -85,7 +84,6 @@
  * Gradient: none (eval_grad NULL).
  */
 #include "brdf_internal.h"
-#include "standard_surface_albedo.h"
 
 /* Slots of the packed value vector. */
 enum {
@@ -109,14 +107,14 @@ static const mr_brdf_param ss_params[] = {
      "specular: dielectric specular weight; metal edge tint = specular specular_color", NULL},
     {"specular_color", 3, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, SS_HELD | MR_PARAM_SRGB_MAP,
      "specular_color, linear RGB: dielectric specular tint and metal edge tint", NULL},
-    {"specular_roughness", 1, 0.2, SS_ALBEDO_ROUGH_MIN, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_LOG_SCALE,
+    {"specular_roughness", 1, 0.2, 0.01, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, MR_PARAM_LOG_SCALE,
      "specular_roughness: GGX alpha = roughness^2 (metal and dielectric specular)", NULL},
     {"specular_ior", 1, 1.5, 1.0, 3.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, SS_HELD,
      "specular_IOR: dielectric specular index (F0 = ((ior-1)/(ior+1))^2)", NULL},
     {"coat", 1, 0.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, SS_HELD, "coat: weight of the clear coat", NULL},
     {"coat_color", 3, 1.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, SS_HELD | MR_PARAM_SRGB_MAP,
      "coat_color, linear RGB: tint of the layers below the coat", NULL},
-    {"coat_roughness", 1, 0.1, SS_ALBEDO_ROUGH_MIN, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH,
+    {"coat_roughness", 1, 0.1, 0.01, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH,
      SS_HELD | MR_PARAM_LOG_SCALE, "coat_roughness: coat GGX alpha = roughness^2", NULL},
     {"coat_ior", 1, 1.5, 1.0, 3.0, MR_PARAM_NONLINEAR, MR_LOBE_BOTH, SS_HELD, "coat_IOR: the coat's index", NULL},
     {"coat_affect_color", 1, 0.0, 0.0, 1.0, MR_PARAM_NONLINEAR, MR_LOBE_DIFFUSE, SS_HELD,
@@ -134,36 +132,11 @@ typedef struct ss_state {
     double diffuse_over_pi[3]; /* base bc' / pi */
     double on_a, on_b;         /* Oren-Nayar A, B */
     double metal_n[3], metal_k[3];
-    float e_s[SS_ALBEDO_N_MU]; /* E_s and E_c at the sqrt(mu) nodes, for this (roughness, ior) */
-    float e_c[SS_ALBEDO_N_MU];
+    float e_s[MR_GGX_ALBEDO_CURVE_N]; /* E_s and E_c at the table's mu nodes, for this (roughness, ior) */
+    float e_c[MR_GGX_ALBEDO_CURVE_N];
 } ss_state;
 
 _Static_assert(sizeof(ss_state) <= MR_BRDF_STATE_BYTES, "ss_state must fit in MR_BRDF_STATE_BYTES");
-
-/* Node index and weight of x in [0, 1] on n nodes spaced uniformly in x. */
-static int ss_cell(double x, int n, double *frac) {
-    double t = mr_clampd(x, 0.0, 1.0) * (n - 1);
-    int i = (int)t;
-    if (i > n - 2) i = n - 2;
-    *frac = t - i;
-    return i;
-}
-
-/* The albedo curve over the mu nodes at roughness r and index eta: bilinear in the table's (r, eta) coordinates. */
-static void ss_albedo_curve(double r, double eta, float out[SS_ALBEDO_N_MU]) {
-    double fr, fe;
-    int jr = ss_cell(sqrt(MR_MAX(r - SS_ALBEDO_ROUGH_MIN, 0.0) / (1.0 - SS_ALBEDO_ROUGH_MIN)), SS_ALBEDO_N_R, &fr);
-    int je = ss_cell(sqrt(MR_MAX(eta - 1.0, 0.0) / 2.0), SS_ALBEDO_N_ETA, &fe);
-    for (int i = 0; i < SS_ALBEDO_N_MU; i++)
-        out[i] = (float)((1.0 - fe) * ((1.0 - fr) * ss_albedo[je][jr][i] + fr * ss_albedo[je][jr + 1][i]) +
-                         fe * ((1.0 - fr) * ss_albedo[je + 1][jr][i] + fr * ss_albedo[je + 1][jr + 1][i]));
-}
-
-static double ss_albedo_at(const float curve[SS_ALBEDO_N_MU], double cos_i) {
-    double u;
-    int i = ss_cell(sqrt(MR_MIN(cos_i, 1.0)), SS_ALBEDO_N_MU, &u);
-    return (1.0 - u) * curve[i] + u * curve[i + 1];
-}
 
 static void ss_prepare(const mr_brdf_model *model, const double *values, void *state_bytes) {
     ss_state *st = state_bytes;
@@ -191,8 +164,8 @@ static void ss_prepare(const mr_brdf_model *model, const double *values, void *s
         st->coat_tint[c] = coat * v[SS_COAT_COLOR + c];
         mr_artistic_ior(v[SS_BASE] * bc, st->spec_w[c], &st->metal_n[c], &st->metal_k[c]);
     }
-    ss_albedo_curve(rough_s, st->eta_s, st->e_s);
-    ss_albedo_curve(rough_c, st->eta_c, st->e_c);
+    mr_ggx_albedo_curve(rough_s, (st->eta_s - 1.0) / (st->eta_s + 1.0), st->e_s);
+    mr_ggx_albedo_curve(rough_c, (st->eta_c - 1.0) / (st->eta_c + 1.0), st->e_c);
 }
 
 static void ss_eval(const void *state_bytes, const double wi[3], const double wo[3], double diffuse[3],
@@ -203,11 +176,11 @@ static void ss_eval(const void *state_bytes, const double wi[3], const double wo
         mr_brdf_zero(diffuse, specular);
         return;
     }
-    double e_c = st->coat > 0.0 ? ss_albedo_at(st->e_c, g.cos_i) : 0.0;
+    double e_c = st->coat > 0.0 ? mr_ggx_albedo_curve_at(st->e_c, g.cos_i) : 0.0;
     double below[3]; /* the coat layer's weight of everything under it, at the view direction */
     for (int c = 0; c < 3; c++) below[c] = (1.0 - st->coat) + st->coat_tint[c] * (1.0 - e_c);
     if (diffuse) {
-        double e_s = ss_albedo_at(st->e_s, g.cos_i);
+        double e_s = mr_ggx_albedo_curve_at(st->e_s, g.cos_i);
         double on = st->on_a;
         if (st->on_b > 0.0) {
             double s = wi[0] * wo[0] + wi[1] * wo[1] + wi[2] * wo[2] - g.cos_i * g.cos_o;
