@@ -18,7 +18,10 @@ fail() {
     exit 1
 }
 [ -f "$build/libmatremap.a" ] || fail "no $build/libmatremap.a: run make first"
-${CC:-cc} -std=c11 -D_POSIX_C_SOURCE=200809L -I"$root/src" -O2 "$root/tests/lib/brdf_eval.c" \
+# Under `make asan` the library's objects carry the sanitizers (the parent make's SAN reaches us in MAKEFLAGS).
+san=""
+case "${MAKEFLAGS:-}" in *fsanitize=*) san="-fsanitize=address,undefined" ;; esac
+${CC:-cc} -std=c11 -D_POSIX_C_SOURCE=200809L -I"$root/src" -O2 $san "$root/tests/lib/brdf_eval.c" \
     "$build/libmatremap.a" -lm -o "$tmp/brdf_eval" || fail "tests/lib/brdf_eval.c does not build"
 # Debian's python3 carries python3-numpy; a python3 earlier on PATH (a virtualenv, pyenv) may not.
 python=""
