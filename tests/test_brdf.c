@@ -1438,14 +1438,15 @@ MR_TEST(known_openpbr) {
            lo, hi);
 }
 
-/* openpbr against tests/openpbr_reference.txt: values an independent numpy implementation of the specification's
- * equations wrote (tests/openpbr_reference.py; tests/openpbr_reference.sh checks the file is what it writes). */
-MR_TEST(known_openpbr_reference) {
-    const mr_brdf_model *m = model_named("openpbr");
+/* A model against a reference file: rows of packed values, wi, wo, expected diffuse and specular parts, written by
+ * an independent numpy implementation (tests/NAME_reference.py; tests/NAME_reference.sh checks the file is what
+ * the script writes). Every value must agree to 1e-6 relative. */
+static void check_reference_file(const char *model, const char *file, const char *what) {
+    const mr_brdf_model *m = model_named(model);
     if (!m) return;
     const char *root = getenv("MR_ROOT");
     char path[1024];
-    snprintf(path, sizeof path, "%s/tests/openpbr_reference.txt", root ? root : ".");
+    snprintf(path, sizeof path, "%s/tests/%s", root ? root : ".", file);
     FILE *f = fopen(path, "r");
     MR_CHECK_MSG(f != NULL, "cannot open %s", path);
     if (!f) return;
@@ -1478,7 +1479,19 @@ MR_TEST(known_openpbr_reference) {
     fclose(f);
     MR_CHECK(rows >= 40);
     MR_CHECK_MSG(bad == 0, "%d of %d values differ by more than 1e-6 relative", bad, rows * 6);
-    printf("      openpbr vs the numpy reference: %d direction pairs, largest relative difference %.3g\n", rows, worst);
+    printf("      %s vs the numpy reference: %d direction pairs, largest relative difference %.3g\n", what, rows,
+           worst);
+}
+
+/* openpbr against tests/openpbr_reference.txt: values an independent numpy implementation of the specification's
+ * equations wrote (tests/openpbr_reference.py; tests/openpbr_reference.sh checks the file is what it writes). */
+MR_TEST(known_openpbr_reference) { check_reference_file("openpbr", "openpbr_reference.txt", "openpbr"); }
+
+/* blender-principled against tests/blender_principled_reference.txt: values a numpy implementation written from
+ * the Cycles sources (closure.h, bsdf_microfacet.h, bsdf_util.h) and the model's documented substitutions wrote
+ * (tests/blender_principled_reference.py; tests/blender_principled_reference.sh checks the file). */
+MR_TEST(known_blender_principled_reference) {
+    check_reference_file("blender-principled", "blender_principled_reference.txt", "blender-principled");
 }
 
 /* blender-principled (blender_principled.c): F0, the level, F82, Lambert and glTF's metal as special cases, and the
@@ -2037,5 +2050,6 @@ MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(map_en
              MR_TEST_ENTRY(known_cycles_ggx), MR_TEST_ENTRY(known_openpbr),
              MR_TEST_ENTRY(known_openpbr_reference),
              MR_TEST_ENTRY(known_blender_principled),
+             MR_TEST_ENTRY(known_blender_principled_reference),
              MR_TEST_ENTRY(known_usd_preview), MR_TEST_ENTRY(known_usd_preview_matches_python),
              MR_TEST_ENTRY(known_standard_surface))

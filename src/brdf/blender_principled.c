@@ -12,17 +12,18 @@
  * (MR_BRDF_NON_RECIPROCAL), as Cycles' layering is not.
  *
  *   Lobes: GGX, alpha = roughness^2, Smith G2 = 1/(1 + Lambda_i + Lambda_o), DV = D G2/(4 cos_i cos_o)
- *     (mr_ggx_dv_correlated). With multiscatter on (the node's default "Multiscatter GGX"), each lobe is scaled by
- *     1 + F_ms (1 - E)/E, F_ms = F_ss E_avg/(1 - F_ss (1 - E_avg)) (microfacet_ggx_preserve_energy: the energy
- *     scale 1/E times its Fresnel darkening), E = E(mu_v, r) the lobe's F = 1 albedo, E_avg its average, F_ss the
- *     lobe's average Fresnel.
+ *     (mr_ggx_dv_correlated). With multiscatter on (the node's default "Multiscatter GGX"; the coat always), a
+ *     lobe is scaled by 1 + F_ms (1 - E)/E, F_ms = F_ss E_avg/(1 - F_ss (1 - E_avg)) (microfacet_ggx_preserve_energy:
+ *     the energy scale 1/E times its Fresnel darkening), E = E(mu_v, r) the lobe's F = 1 albedo, E_avg its average,
+ *     F_ss the lobe's average Fresnel.
  *   w = 1 (the weight left for lower layers, RGB).
  *   Layering (closure_layering_weight, bsdf_albedo): a layer's albedo estimate is its closure weight times
  *     mix(F0, F90, s(mu_v, r, eta)); with multiscatter the weight carries the darkening E + F_ms (1 - E), so the
  *     estimate does too (dk below; 1 without multiscatter). Lower layers keep w (1 - max_c estimate_c).
  *   Coat (coat_weight C > 0): f += C F(v.h, coat_ior) DV_c ms_c, F the exact dielectric Fresnel,
- *     alpha_c = coat_roughness^2, F_ss = F_avg(coat_ior). Then w *= 1 - C dk_c mix(F0_c, 1, s(mu_v, r_c, coat_ior))
- *     and w *= mix(1, coat_tint^(1/cos_t), C),
+ *     alpha_c = coat_roughness^2, F_ss = F_avg(coat_ior); ms_c and dk_c whatever multiscatter says (Cycles'
+ *     bsdf_microfacet_setup_fresnel_dielectric always preserves energy). Then
+ *     w *= 1 - C dk_c mix(F0_c, 1, s(mu_v, r_c, coat_ior)) and w *= mix(1, coat_tint^(1/cos_t), C),
  *     cos_t = sqrt(1 - (1 - mu_v^2)/coat_ior^2) (the view ray refracted into the coat, one pass).
  *   Metal: f += metallic w F82(v.h) DV ms, F82 = saturate(F_Schlick(base_color) - b mu (1 - mu)^6),
  *     b = (1 - specular_tint) F_Schlick(1/7)/((1/7)(6/7)^6) (brdf_internal.h mr_f82_*), F_ss = mix(F0, 1, 1/21)
@@ -53,7 +54,7 @@
  *   coat_roughness         [0, 1]      default 0.03  computed with a floor of 0.01
  *   coat_ior               [1, 3]      default 1.5
  *   coat_tint          RGB [0, 1]      default 1
- *   multiscatter           {0, 1}      default 1     the distribution: 1 "Multiscatter GGX", 0 "GGX"
+ *   multiscatter           {0, 1}      default 1     1 "Multiscatter GGX", 0 "GGX" (metal, specular; not coat)
  * Default holds (what a fit holds unless given other values with --to or --hold NAME=VALUE; every fit prints them):
  *   ior=1.5, specular_ior_level=0.5, specular_tint=1 and the coat (coat_weight=0 ...); a fit solves base_color,
  *   metallic and roughness. The fit scene cannot tell metallic from specular_ior_level (both raise F0 while they
@@ -188,8 +189,8 @@ static void bp_eval(const void *state_bytes, const double wi[3], const double wo
 
     if (st->coat) {
         double E_c = MR_MAX(mr_ggx_albedo_one(mu_v, st->r_c), 1e-6);
-        double dark = st->multiscatter ? bp_darkening(E_c, st->E_avg_c, st->fss_c) : 1.0;
-        double scale = st->multiscatter ? dark / E_c : 1.0;
+        /* bsdf_microfacet_setup_fresnel_dielectric preserves the coat's energy whatever the node's distribution */
+        double dark = bp_darkening(E_c, st->E_avg_c, st->fss_c), scale = dark / E_c;
         double F = st->eta_c > 1.0 ? mr_fresnel_dielectric(g.dot_h, st->eta_c, NULL) : 0.0;
         double lobe = st->C * F * mr_ggx_dv_correlated(st->alpha_c, &g, NULL) * scale;
         double est = st->eta_c > 1.0 ? bp_lerp(st->f0_c, 1.0, bp_estimate_s(mu_v, st->r_c, sqrt(st->f0_c), st->f0_c))
