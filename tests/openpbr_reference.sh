@@ -1,37 +1,5 @@
 #!/usr/bin/env bash
 # tests/openpbr_reference.txt holds what tests/openpbr_reference.py (an independent numpy implementation of the
 # OpenPBR equations openpbr.c follows) writes; test_brdf's known_openpbr_reference compares the model with it to
-# 1e-6. This checks the file is still what the script writes (identical to 1e-12 relative), so neither drifts.
-# Without Debian's python3-numpy it says so and counts nothing. Ends with "N passed, N failed".
-set -u
-root=$(cd "$(dirname "$0")/.." && pwd)
-python=/usr/bin/python3
-[ -x "$python" ] || python=python3
-if ! "$python" -c 'import numpy' 2>/dev/null; then
-    echo "skip  openpbr_reference: no numpy for $python"
-    echo "0 passed, 0 failed"
-    exit 0
-fi
-out=$(mktemp)
-trap 'rm -f "$out"' EXIT
-if ! MR_ROOT="$root" "$python" "$root/tests/openpbr_reference.py" >"$out"; then
-    echo "FAIL  tests/openpbr_reference.py failed"
-    echo "0 passed, 1 failed"
-    exit 1
-fi
-if "$python" - "$out" "$root/tests/openpbr_reference.txt" <<'PY'
-import sys
-a = [[float(x) for x in l.split()] for l in open(sys.argv[1])]
-b = [[float(x) for x in l.split()] for l in open(sys.argv[2])]
-ok = len(a) == len(b) and all(len(r) == len(s) and all(abs(x - y) <= 1e-12 * max(abs(x), abs(y), 1e-300)
-                                                     for x, y in zip(r, s)) for r, s in zip(a, b))
-sys.exit(0 if ok else 1)
-PY
-then
-    echo "ok    tests/openpbr_reference.txt is what tests/openpbr_reference.py writes"
-    echo "1 passed, 0 failed"
-else
-    echo "FAIL  tests/openpbr_reference.txt differs from tests/openpbr_reference.py's output: regenerate it"
-    echo "0 passed, 1 failed"
-    exit 1
-fi
+# 1e-6. The check that the file is still what the script writes: tests/lib/reference_file.sh.
+exec "$(dirname "$0")/lib/reference_file.sh" openpbr_reference
