@@ -218,6 +218,40 @@ MR_TEST(the_write_is_atomic) {
     mr_doc_free(doc);
 }
 
+/* A uniform glTF material to usd-preview and openpbr: fitted by a remap in remap's default fit scene (size 0), whose
+ * verdict and SSIM the result carries; a plastic and a gold metal both converge and match. */
+MR_TEST(uniform_materials_are_remapped_and_converge) {
+    static const char asset_text[] =
+        "{\"asset\": {\"version\": \"2.0\"}, \"materials\": ["
+        "{\"name\": \"Gold\", \"pbrMetallicRoughness\": {\"baseColorFactor\": [1.0, 0.77, 0.34, 1], "
+        "\"metallicFactor\": 1.0, \"roughnessFactor\": 0.3}}, "
+        "{\"name\": \"Red plastic\", \"pbrMetallicRoughness\": {\"baseColorFactor\": [0.6, 0.05, 0.04, 1], "
+        "\"metallicFactor\": 0.0, \"roughnessFactor\": 0.5}}]}";
+    const char *path = mr_test_tmp_path("uniform.gltf");
+    MR_CHECK(mr_test_write_file(path, asset_text, sizeof asset_text - 1) == 1);
+    mr_gltf *asset = NULL;
+    MR_CHECK_OK(mr_gltf_load(path, &asset));
+    if (asset == NULL) return;
+    const char *targets[] = {"usd-preview", "openpbr"};
+    for (int t = 0; t < 2; t++) {
+        mr_doc_gltf_options o = {0};
+        o.target = mr_brdf_find(targets[t]);
+        mr_doc_gltf_result *r = NULL;
+        MR_CHECK_OK(mr_doc_from_gltf(asset, &o, &r));
+        if (r == NULL) continue;
+        MR_CHECK(r->material_count == 2 && r->image_count == 0);
+        for (int k = 0; k < r->material_count; k++) {
+            const mr_doc_gltf_material *m = &r->materials[k];
+            MR_CHECK_MSG(m->route == MR_DOC_ROUTE_REMAP && m->outcome == MR_FIT_CONVERGED && m->ssim > 0.999,
+                         "%s %s: route %d, outcome %d, SSIM %.5f (%s)", targets[t], m->name, (int)m->route,
+                         m->outcome, m->ssim, m->detail);
+        }
+        mr_doc_gltf_result_free(r);
+    }
+    mr_gltf_free(asset);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(every_parameter_maps_to_a_declared_input), MR_TEST_ENTRY(mtlx_writes_declared_inputs_only),
              MR_TEST_ENTRY(usda_writes_declared_inputs_only), MR_TEST_ENTRY(the_colour_space_rule),
-             MR_TEST_ENTRY(bad_values_are_refused), MR_TEST_ENTRY(the_write_is_atomic))
+             MR_TEST_ENTRY(bad_values_are_refused), MR_TEST_ENTRY(the_write_is_atomic),
+             MR_TEST_ENTRY(uniform_materials_are_remapped_and_converge))

@@ -152,6 +152,8 @@ typedef struct mr_doc_gltf_options {
                                     the prefix's folder: give the output's path without its extension. Required
                                     when a material is textured */
     int threads;                 /* of the remaps: 0 = automatic (render.h) */
+    int size;                    /* the remaps' fit scene side: 0 = MR_REMAP_DEFAULT_SIZE, as remap, sweep and
+                                    convert --direct fit (remap/remap.h) */
 } mr_doc_gltf_options;
 
 /* How a material was converted. */

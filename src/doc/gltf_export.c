@@ -243,7 +243,11 @@ mr_status mr_doc_from_gltf(const mr_gltf *asset, const mr_doc_gltf_options *opts
         } else {
             rm->route = MR_DOC_ROUTE_REMAP;
             if (plan == NULL) {
-                mr_scene scene = mr_scene_fit(NULL);
+                // The fit scene every other fit of the tool uses (remap, sweep, convert --direct), not the paper's
+                // 512 x 512 frame: 64 times the pixels for the same verdict.
+                mr_fit_scene_options so = {0};
+                so.size = o.size > 0 ? o.size : MR_REMAP_DEFAULT_SIZE;
+                mr_scene scene = mr_scene_fit(&so);
                 scene.threads = o.threads;
                 if ((st = mr_render_plan_create(&scene, &plan)) != MR_OK) break;
             }
