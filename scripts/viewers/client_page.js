@@ -7,16 +7,19 @@
 //   - a USD layer (.usda) through USDLoader: the layer's text is parsed with one extra prim appended, a one-triangle
 //     Mesh bound to the material (`rel material:binding`), so that USDComposer builds the material exactly as it
 //     does for a mesh of a scene (the layer has materials only); the material is taken from that mesh.
+//   - format gltf: the export's source as GLTFLoader reads it (a material of a mesh-less glTF by name, or, with a
+//     mesh, the asset's own materials): the same BRDF as matremap's gltf model, the renderer floor.
 // The material is put on a UV sphere (radius 1, 256 x 128 segments; matremap's fit scene: camera at (0, 0, 4)
 // looking down -z, 35 degrees vertical field of view) or on the meshes of a glTF asset (geometry only, through
 // GLTFLoader; its texture coordinates flipped to v' = 1 - v, from glTF's top-left origin to the bottom-left origin
-// of USD and MaterialX documents), framed as matremap frames an asset (mr_camera_frame_mesh: the bounding box's
-// centre, the farthest vertex's distance as radius, at radius / sin(0.9 * fov / 2) along the given direction).
+// of USD and MaterialX documents, unless job.noUvFlip), framed as matremap frames an asset (mr_camera_frame_mesh:
+// the bounding box's centre, the farthest vertex's distance as radius, at radius / sin(0.9 * fov / 2) along
+// job.cameraDirection). job.uvSpace, when given, is passed to MaterialXLoader (its default: 'bottom-left').
 // It is lit only by an equirectangular HDR map (scene.environment through PMREMGenerator), scaled to a mean
 // luminance of envMean (solid-angle weighted, as three_page.js does) and turned by scene.environmentRotation so that
 // its directions are matremap's (docs/rendering.md: the map's centre at -z, u = 0.75 at +x): three.js reads
 // direction d at u = atan2(d.z, d.x) / 2 pi + 0.5, which puts u = 0.5 at +x and u = 0.75 at +z, a quarter turn
-// away; the rotation is the job's envRotation (radians about +y), checked by the chrome-sphere row of the table.
+// away; the rotation is the job's envRotation (radians about +y; docs/evaluation-clients.md, how it was measured).
 // Rendered into a float render target (linear radiance, no tone mapping, no output colour space, transparent
 // background: alpha = coverage), box-filtered from supersample^2 samples per pixel (each 4x MSAA). Returns the
 // pixels (base64 of a Float32Array, RGBA, top row first) and what the loader reported.

@@ -1,9 +1,10 @@
 // Renders the documents of make evaluation-clients (scripts/evaluate-clients.sh, docs/evaluation-clients.md) with
 // three.js's MaterialXLoader and USDLoader in headless Chromium (client_page.js).
 // Usage: node client_render.mjs JOBS.json
-// JOBS.json: {"chromium": "/usr/lib/chromium/chromium", "jobs": [{"format": "mtlx" | "usda", "doc": ABS, "material":
-//   NAME, "mesh": null | ABS.gltf, "cameraDirection": [x, y, z], "fov": 35, "env": ABS.hdr, "envMean": 0.5,
-//   "envRotation": radians, "flipRows": true, "out": ABS.exr, "size": 256, "supersample": 2}, ...]}
+// JOBS.json: {"chromium": "/usr/lib/chromium/chromium", "jobs": [{"format": "mtlx" | "usda" | "gltf", "doc": ABS,
+//   "material": NAME, "mesh": null | ABS.gltf, "cameraDirection": [x, y, z], "fov": 35, "env": ABS.hdr,
+//   "envMean": 0.5, "envRotation": radians, "flipRows": true, "noUvFlip": false, "out": ABS.exr, "size": 256,
+//   "supersample": 2}, ...]} (client_page.js says what each field does).
 // Each job's render (linear RGBA) is written as an uncompressed float EXR; one JSON line per job on stdout ({"out",
 // "revision", "backend", "report": {"material", "warnings", "errors", "console"}, "env_scale", "seconds"}), the
 // loaders' console warnings and errors during the job included. One page for all jobs (it keeps its PMREM
