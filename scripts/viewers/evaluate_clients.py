@@ -380,6 +380,39 @@ def fmt(row, key, digits=4):
     return "%.*f" % (digits, row[key])
 
 
+METALS = ("Gold", "GlossyAluminium", "RoughCopper")
+
+
+def explanation(case):
+    """The approximation that explains a row's residual (docs/evaluation-clients.md says why, with the numbers)."""
+    m, kind = case["material"], case["kind"]
+    if case.get("variant"):
+        return "check"
+    if kind == "gltf-source":
+        return "floor: PMREM, multiple scattering on rough metals"
+    if m == "WaterBottle":
+        return "images read with v = 0 at the top" if kind == "gltf" else "floor"
+    if kind == "gltf":
+        return "floor (the same BRDF)"
+    if kind == "usd-preview":
+        return "floor (USD metal drawn as glTF's)" if m in METALS else "specularColor (0, 0, 0) applied"
+    by = {
+        ("RoughCopper", "openpbr"): "remap's lower base colour in three.js's metal",
+        ("CoatedRed", "openpbr"): "coat_color unused, no darkening, coat F0 0.04",
+        ("CoatedRed", "standard-surface"): "coat tint on the base colour; near floor",
+        ("CoatedGold", "openpbr"): "coat F0 0.04; floor",
+        ("EdgeTintedCopper", "openpbr"): "no F82 tint",
+        ("EdgeTintedCopper", "standard-surface"): "no edge tint; Gulbrandsen's curve vs Schlick",
+        ("RoughDiffuse", "openpbr"): "base_diffuse_roughness ignored (Lambert)",
+        ("RoughDiffuse", "standard-surface"): "diffuse_roughness ignored (Lambert)",
+    }
+    if (m, kind) in by:
+        return by[(m, kind)]
+    if kind == "standard-surface" and m in METALS + ("CoatedGold",):
+        return "Gulbrandsen's metal Fresnel vs Schlick"
+    return "floor"
+
+
 def cmd_table(work, date, version, three_s, total_s):
     rows = load_rows(work)
     cases = json.load(open(cases_path(work)))
@@ -407,8 +440,8 @@ def cmd_table(work, date, version, three_s, total_s):
            ENV_MEAN, ENV_SAMPLES, REFLECTION_SAMPLES))
     p(textwrap.fill(header, 115, break_on_hyphens=False))
     p()
-    p("| material | document | SSIM studio | lum. studio | SSIM tabac | lum. tabac | loader warnings |")
-    p("|---|---|---:|---:|---:|---:|---|")
+    p("| material | document | SSIM studio | lum. studio | SSIM tabac | lum. tabac | residual | loader warnings |")
+    p("|---|---|---:|---:|---:|---:|---|---|")
     for material in materials_in_order(cases):
         for case in [c for c in cases if c["material"] == material]:
             st, tb = (rows.get((material, case["kind"], case.get("variant"), env)) for env in ENVS)
@@ -416,14 +449,14 @@ def cmd_table(work, date, version, three_s, total_s):
             report = d.get("report", {})
             warns = sorted(set(report.get("warnings", []) + report.get("errors", []) +
                                [c for c in report.get("console", []) if "404" not in c]))
-            short = []
-            for w in warns:
-                m = re.search(r'input "(\w+)" is currently ignored', w)
-                short.append("ignored: `%s`" % m.group(1) if m else w.replace("|", "/")[:80])
-            p("| %s | %s | %s | %s | %s | %s | %s |" % (
+            ignored = [re.search(r'input "(\w+)" is currently ignored', w) for w in warns]
+            short = ["ignored: " + ", ".join("`%s`" % g.group(1) for g in ignored if g)] if any(ignored) else []
+            short += [w.replace("|", "/")[:80] for w, g in zip(warns, ignored) if not g]
+            p("| %s | %s | %s | %s | %s | %s | %s | %s |" % (
                 material, KINDS[case["kind"]][0] + (" — check: %s" % case["variant"] if case.get("variant") else ""),
                 fmt(st, "ssim_object"), fmt(st, "luminance_ratio"),
-                fmt(tb, "ssim_object"), fmt(tb, "luminance_ratio"), ", ".join(short) if short else "none"))
+                fmt(tb, "ssim_object"), fmt(tb, "luminance_ratio"), explanation(case),
+                ", ".join(short) if short else "none"))
 
 
 def main():
