@@ -113,7 +113,7 @@ NETWORK   := $(BUILD)/share/matremap/spec2metal.mlp
 TESTS     := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 # Fuzz targets (tests/fuzz/): linked into tests/test_fuzz_inputs for make check, and one libFuzzer binary each
 # for make fuzz. They reach the CLI's value parsers too, so they link the CLI's objects except main().
-FUZZ_NAMES  := gltf png jpeg exr hdr mlp mrt sweep cli_value obj
+FUZZ_NAMES  := gltf png jpeg exr hdr mlp mrt sweep cli_value obj mtlx
 FUZZ_OBJ    := $(patsubst %,$(BUILD)/obj/tests/fuzz/fuzz_%.o,$(FUZZ_NAMES) support)
 CLI_LIB_OBJ := $(filter-out $(BUILD)/obj/src/cli/main.o,$(CLI_OBJ))
 BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)

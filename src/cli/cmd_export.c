@@ -21,8 +21,9 @@ static void print_help(void) {
            "          nodegraph, colour maps with colorspace srgb_texture, data maps in the document's lin_rec709\n"
            "  .usda   USD: a Material per material with a UsdPreviewSurface (metallic workflow), a UsdUVTexture per\n"
            "          map (sourceColorSpace sRGB or raw) reading the \"st\" primvar; --to usd-preview (the default)\n"
-           "  .gltf, .glb  glTF 2.0 (--to gltf, the only model): from a glTF asset, the asset itself; from a .mtlx,\n"
-           "          an asset holding the materials and their images, no meshes (not done yet: refused)\n"
+           "  .gltf, .glb  glTF 2.0 (--to gltf, the only model): from a glTF asset, the asset itself (its materials\n"
+           "          copied: the same parameters); from a .mtlx, an asset holding the materials as\n"
+           "          pbrMetallicRoughness (+ KHR_materials_specular, _ior when set) and their images, no meshes\n"
            "\n"
            "A MaterialX input is read by its surfacematerials: surface nodes open_pbr_surface, standard_surface,\n"
            "gltf_pbr and UsdPreviewSurface with constant inputs, and maps through image/tiledimage nodes (with\n"
@@ -100,9 +101,6 @@ static int parse(int argc, char **argv, options *o) {
         return cli_usage_error("export", "--to %s: a glTF output (-o '%s') holds gltf materials only (--to gltf); "
                                ".mtlx takes openpbr, standard-surface, gltf; .usda takes usd-preview", o->to,
                                o->output);
-    if (gltf_out && mr_doc_format_from_path(o->input) == MR_DOC_FORMAT_MTLX)
-        return cli_usage_error("export", "-o '%s': a glTF output from a MaterialX input is not done yet (.mtlx or "
-                               ".usda)", o->output);
     return CLI_EXIT_OK;
 }
 
@@ -194,10 +192,21 @@ static int export_mtlx(const options *o, const mr_brdf_model *target, mr_doc_for
     mr_doc_gltf_result *result = NULL;
     st = mr_doc_convert(in, label, &opts, &result);
     mr_doc_free(in);
-    if (st == MR_OK) st = mr_doc_rebase(result->doc, o->input, o->output);
-    if (st == MR_OK) st = mr_doc_write(result->doc, o->output);
+    const char *format_name = mr_doc_format_name(format);
+    if (st == MR_OK && cli_is_gltf_path(o->output)) {
+        // A glTF asset of the materials (no meshes), its images the maps' files copied beside OUT, named after it.
+        mr_gltf *asset = NULL;
+        st = mr_doc_to_gltf(result->doc, o->input, label, &asset);
+        mr_gltf_save_options so = {1, 0, NULL};
+        if (st == MR_OK) st = mr_gltf_save_with(asset, o->output, &so);
+        mr_gltf_free(asset);
+        format_name = strcasecmp(strrchr(o->output, '.'), ".glb") == 0 ? "glb" : "gltf";
+    } else if (st == MR_OK) {
+        st = mr_doc_rebase(result->doc, o->input, o->output);
+        if (st == MR_OK) st = mr_doc_write(result->doc, o->output);
+    }
     if (st != MR_OK) code = cli_fail("export", st);
-    if (code == CLI_EXIT_OK) print_result(o, mr_doc_format_name(format), target, result);
+    if (code == CLI_EXIT_OK) print_result(o, format_name, target, result);
     mr_doc_gltf_result_free(result);
     return code;
 }
