@@ -42,7 +42,7 @@ static void print_help(void) {
            "  textured, any other pair (e.g. to openpbr or standard-surface): refused (exit 2, naming the material):\n"
            "          no texture route to those models yet; use --to usd-preview, --to gltf, or `convert --direct`\n"
            "The images a glTF asset's maps use are written beside OUT, named after it: OUT_image<K>.png|jpg. Normal,\n"
-           "occlusion, emission and alpha maps are not written yet. docs/documents.md says what is exact and what not.\n"
+           "occlusion, emission and alpha maps are not written yet. docs/documents.md says what is exact, what not.\n"
            "\n"
            "options:\n"
            "  -o OUT                the output (.mtlx, .usda, .gltf or .glb); never one of the input's files\n"
@@ -269,7 +269,8 @@ int cmd_export(int argc, char **argv) {
         result->image_count = 0; // the asset's own images go with it
         st = mr_gltf_save_with(asset, o.output, &so);
         if (st != MR_OK) code = cli_fail("export", st);
-        if (code == CLI_EXIT_OK) print_result(&o, strcasecmp(strrchr(o.output, '.'), ".glb") == 0 ? "glb" : "gltf", target, result);
+        const char *name = strcasecmp(strrchr(o.output, '.'), ".glb") == 0 ? "glb" : "gltf";
+        if (code == CLI_EXIT_OK) print_result(&o, name, target, result);
         mr_doc_gltf_result_free(result);
         mr_gltf_free(asset);
         return code;

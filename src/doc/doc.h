@@ -254,8 +254,8 @@ mr_status mr_doc_convert(const mr_doc *in, const char *label, const mr_doc_gltf_
 /* A document whose materials are all of the gltf model (e.g. mr_doc_convert's result with target gltf) as a new
  * glTF asset (gltf/mr_gltf.h: mr_gltf_create; no scene or mesh), for mr_gltf_save_with: pbrMetallicRoughness's
  * factors from the constants (KHR_materials_specular when specular or specular_color is a map or differs from the
- * extension's default 1, KHR_materials_ior when ior differs from 1.5), and maps as textures whose images are the document's files (relative to document `doc_path`'s
- * folder), read with mr_gltf_add_image_file under their file names (name_after_output prefixes them on save), with
+ * extension's default 1, KHR_materials_ior when ior differs from 1.5), and maps as textures whose images are the
+ * document's files (relative to document `doc_path`'s folder), read with mr_gltf_add_image_file under their file names (name_after_output prefixes them on save), with
  * a sampler of their wraps; a map's scale is the factor. MR_ERR_UNSUPPORTED naming `label`, the material and the
  * map where glTF cannot hold it: base_color or specular_color from one channel, metallic not from B or roughness not
  * from G (metallicRoughnessTexture) or the two from different files, UV sets or wraps, specular not from A, an ior
