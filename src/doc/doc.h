@@ -255,11 +255,11 @@ mr_status mr_doc_convert(const mr_doc *in, const char *label, const mr_doc_gltf_
  * glTF asset (gltf/mr_gltf.h: mr_gltf_create; no scene or mesh), for mr_gltf_save_with: pbrMetallicRoughness's
  * factors from the constants (KHR_materials_specular when specular or specular_color is a map or differs from the
  * extension's default 1, KHR_materials_ior when ior differs from 1.5), and maps as textures whose images are the
- * document's files (relative to document `doc_path`'s folder), read with mr_gltf_add_image_file under their file names (name_after_output prefixes them on save), with
- * a sampler of their wraps; a map's scale is the factor. MR_ERR_UNSUPPORTED naming `label`, the material and the
- * map where glTF cannot hold it: base_color or specular_color from one channel, metallic not from B or roughness not
- * from G (metallicRoughnessTexture) or the two from different files, UV sets or wraps, specular not from A, an ior
- * map, a file that is not PNG or JPEG. The caller frees the asset (mr_gltf_free). */
+ * document's files (relative to document `doc_path`'s folder), read with mr_gltf_add_image_file under their file
+ * names (name_after_output prefixes them on save), with a sampler of their wraps; a map's scale is the factor.
+ * MR_ERR_UNSUPPORTED naming `label`, the material and the map where glTF cannot hold it: metallic not from B or
+ * roughness not from G (metallicRoughnessTexture) or the two from different files, UV sets or wraps, specular not
+ * from A, an ior map, a file that is not PNG or JPEG. The caller frees the asset (mr_gltf_free). */
 mr_status mr_doc_to_gltf(const mr_doc *doc, const char *doc_path, const char *label, struct mr_gltf **out);
 
 #ifdef __cplusplus
