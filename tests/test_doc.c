@@ -535,6 +535,19 @@ MR_TEST(mtlx_convert_routes) {
                         "remapped; textured standard-surface materials export to standard-surface only)") == 0,
                  "%s", mr_last_error());
     mr_doc_free(doc);
+    // A value outside the model's range is refused by name, not clamped and remapped; roughness 0 passes.
+    const char *odd = write_text("odd.mtlx", "<materialx version=\"1.39\">\n"
+        "  <standard_surface name=\"SR\" type=\"surfaceshader\">\n"
+        "    <input name=\"specular_roughness\" type=\"float\" value=\"0\" />\n"
+        "    <input name=\"metalness\" type=\"float\" value=\"5\" />\n  </standard_surface>\n"
+        "  <surfacematerial name=\"M\" type=\"material\">\n"
+        "    <input name=\"surfaceshader\" type=\"surfaceshader\" nodename=\"SR\" />\n"
+        "  </surfacematerial>\n</materialx>\n");
+    MR_CHECK_OK(mr_doc_read_mtlx(odd, &doc));
+    MR_CHECK(mr_doc_convert(doc, "odd", &o, &r) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "odd: material 'M': metalness 5 is outside standard-surface's range [0, 1]: "
+                        "not remapped") == 0, "%s", mr_last_error());
+    mr_doc_free(doc);
     doc = sample("gltf");
     o.target = mr_brdf_find("usd-preview");
     MR_CHECK(mr_doc_convert(doc, "s", &o, &r) == MR_ERR_UNSUPPORTED); // sample's specular 0.25: no place in USD

@@ -275,6 +275,20 @@ mr_status mr_doc_convert(const mr_doc *in, const char *label, const mr_doc_gltf_
         }
         double values[MR_BRDF_MAX_VALUES], fitted[MR_BRDF_MAX_VALUES];
         packed_values(src, values);
+        // A value outside the model's range would be clamped by the model (prepare()) and the clamped material
+        // remapped: refused instead, by name. Below a positive lower bound (roughness 0) the clamp is what
+        // renderers do, and passes.
+        for (int p = 0; p < src->model->param_count && st == MR_OK; p++) {
+            const mr_brdf_param *d = &src->model->params[p];
+            for (int c = 0; c < d->channels && st == MR_OK; c++) {
+                double v = values[mr_brdf_param_offset(src->model, p) + c];
+                if ((v < d->min_value && !(v >= 0 && d->min_value > 0)) || v > d->max_value)
+                    st = mr_fail(MR_ERR_INVALID_ARG, "%s: material '%s': %s %.9g is outside %s's range [%g, %g]: "
+                                 "not remapped", label, src->name, d->name, v, src->model->name, d->min_value,
+                                 d->max_value);
+            }
+        }
+        if (st != MR_OK) break;
         if ((st = mr_doc_remap_values(&remapper, src->model, values, o.target, info, fitted)) != MR_OK) break;
         st = mr_doc_set_all(m, fitted);
     }
