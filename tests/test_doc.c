@@ -90,6 +90,13 @@ static int count(const char *text, const char *what) {
 MR_TEST(mtlx_writes_declared_inputs_only) {
     for (int k = 0; k < 3; k++) {
         mr_doc *doc = sample(models[k]);
+        // Extras too (inputs of lobes the models do not have), written after the parameters.
+        static const char *const extra[3][2] = {{"emission_color", "color3"}, {"thin_walled", "boolean"},
+                                                {"alpha_mode", "integer"}};
+        MR_CHECK_OK(mr_doc_add_extra(mr_doc_material_at(doc, 0), extra[k][0], extra[k][1], (double[3]){1, 1, 1}));
+        MR_CHECK(mr_doc_add_extra(mr_doc_material_at(doc, 0), "nope", "float", (double[1]){1}) == MR_ERR_INVALID_ARG);
+        MR_CHECK(mr_doc_add_extra(mr_doc_material_at(doc, 0), extra[k][0], "float", (double[1]){1}) ==
+                 MR_ERR_INVALID_ARG); // the declared type only
         char *text = NULL;
         MR_CHECK_OK(mr_doc_to_text(doc, MR_DOC_FORMAT_MTLX, &text));
         // Each element <NODE name=".." type="T"> opens a node; each <input name="X" inside it is declared by it.
@@ -134,6 +141,10 @@ MR_TEST(mtlx_writes_declared_inputs_only) {
 
 MR_TEST(usda_writes_declared_inputs_only) {
     mr_doc *doc = sample("usd-preview");
+    MR_CHECK_OK(mr_doc_add_extra(mr_doc_material_at(doc, 0), "emissiveColor", "color3", (double[3]){1, 0.5, 0}));
+    MR_CHECK_OK(mr_doc_add_extra(mr_doc_material_at(doc, 0), "opacityMode", "integer", (double[1]){0}));
+    MR_CHECK(mr_doc_add_extra(mr_doc_material_at(doc, 0), "metallic", "float", (double[1]){0}) ==
+             MR_ERR_INVALID_ARG); // a parameter of the model, not an extra
     char *text = NULL;
     MR_CHECK_OK(mr_doc_to_text(doc, MR_DOC_FORMAT_USDA, &text));
     char *copy = strdup(text);
@@ -167,6 +178,8 @@ MR_TEST(usda_writes_declared_inputs_only) {
     MR_CHECK(strstr(text, "float4 inputs:scale = (0.5, 1, 1, 1)") != NULL);
     MR_CHECK(strstr(text, "token inputs:wrapS = \"clamp\"") && strstr(text, "token inputs:wrapT = \"mirror\""));
     MR_CHECK(strstr(text, "int inputs:useSpecularWorkflow = 0") != NULL); // 0.25 rounds to 0
+    MR_CHECK(strstr(text, "color3f inputs:emissiveColor = (1, 0.5, 0)") != NULL);
+    MR_CHECK(strstr(text, "token inputs:opacityMode = \"transparent\"") != NULL);
     free(text);
     mr_doc_free(doc);
 }
