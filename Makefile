@@ -53,7 +53,8 @@ NEEDS_DEPS := $(if $(MAKECMDGOALS),$(filter-out deps clean,$(MAKECMDGOALS)),all)
 ifneq ($(NEEDS_DEPS),)
 missing = $(foreach p,$(1),$(if $(shell $(PKG_CONFIG) --exists $(word 1,$(subst :, ,$(p))) && echo y),,$(p)))
 MISSING := $(call missing,nlopt:libnlopt-dev OpenEXR:libopenexr-dev tinygltf:libtinygltf-dev libpng:libpng-dev \
-                          libdeflate:libdeflate-dev OpenImageIO:libopenimageio-dev tinyobjloader:libtinyobjloader-dev)
+                          libdeflate:libdeflate-dev OpenImageIO:libopenimageio-dev tinyobjloader:libtinyobjloader-dev \
+                          expat:libexpat1-dev)
 # libsvm ships no pkg-config file: its header stands for the package.
 ifeq ($(wildcard /usr/include/libsvm/svm.h),)
 MISSING += libsvm:libsvm-dev
@@ -63,11 +64,12 @@ $(error pkg-config cannot find $(foreach p,$(MISSING),$(word 1,$(subst :, ,$(p))
         $(word 2,$(subst :, ,$(p))))); run scripts/install-deps.sh (or make deps))
 endif
 endif
-DEP_CFLAGS := $(shell $(PKG_CONFIG) --cflags nlopt OpenEXR tinygltf libpng libdeflate tinyobjloader 2>/dev/null)
+DEP_CFLAGS := $(shell $(PKG_CONFIG) --cflags nlopt OpenEXR tinygltf libpng libdeflate tinyobjloader expat \
+                2>/dev/null)
 # --as-needed keeps only the libraries the objects use: OpenEXR's .pc lists its C++ libraries as well, of which
 # the library reads and writes through OpenEXRCore alone (each shared library costs start-up time).
 DEP_LIBS   := -Wl,--as-needed $(shell $(PKG_CONFIG) --libs nlopt OpenEXR tinygltf libpng libdeflate tinyobjloader \
-                                    2>/dev/null) -lsvm -lm
+                                    expat 2>/dev/null) -lsvm -lm
 
 MODULE_DIR := $(PREFIX)/lib/matremap
 DATA_DIR   := $(PREFIX)/share/matremap
@@ -113,7 +115,7 @@ NETWORK   := $(BUILD)/share/matremap/spec2metal.mlp
 TESTS     := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 # Fuzz targets (tests/fuzz/): linked into tests/test_fuzz_inputs for make check, and one libFuzzer binary each
 # for make fuzz. They reach the CLI's value parsers too, so they link the CLI's objects except main().
-FUZZ_NAMES  := gltf png jpeg exr hdr mlp mrt sweep cli_value obj
+FUZZ_NAMES  := gltf png jpeg exr hdr mlp mrt sweep cli_value obj mtlx
 FUZZ_OBJ    := $(patsubst %,$(BUILD)/obj/tests/fuzz/fuzz_%.o,$(FUZZ_NAMES) support)
 CLI_LIB_OBJ := $(filter-out $(BUILD)/obj/src/cli/main.o,$(CLI_OBJ))
 BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)

@@ -11,6 +11,7 @@
 
 #include "gltf/mr_gltf.h"
 #include "io/image_io.h"
+#include "doc/doc_internal.h"
 #include "mr_internal.h"
 #include "remap/remap.h"
 #include "render/render.h"
@@ -117,12 +118,43 @@ static void gltf_values(const mr_brdf_model *gltf, const mr_gltf_material *gm, d
 }
 
 /* Every parameter of the material set to the packed values. */
-static mr_status set_all(mr_doc_material *m, const double *values) {
+mr_status mr_doc_set_all(mr_doc_material *m, const double *values) {
     for (int p = 0; p < m->model->param_count; p++) {
         mr_status st = mr_doc_set_constant(m, m->model->params[p].name, values + mr_brdf_param_offset(m->model, p));
         if (st != MR_OK) return st;
     }
     return MR_OK;
+}
+
+mr_status mr_doc_remap_values(mr_doc_remapper *rm, const mr_brdf_model *from, const double *values,
+                              const mr_brdf_model *to, mr_doc_gltf_material *info, double *out) {
+    mr_status st;
+    if (rm->plan == NULL) {
+        // The fit scene every other fit of the tool uses (remap, sweep, convert --direct), not the paper's
+        // 512 x 512 frame: 64 times the pixels for the same verdict.
+        mr_fit_scene_options so = {0};
+        so.size = rm->size > 0 ? rm->size : MR_REMAP_DEFAULT_SIZE;
+        mr_scene scene = mr_scene_fit(&so);
+        scene.threads = rm->threads;
+        if ((st = mr_render_plan_create(&scene, &rm->plan)) != MR_OK) return st;
+    }
+    mr_remap_options ro = mr_remap_options_default();
+    ro.threads = rm->threads;
+    mr_remap_result fit;
+    if ((st = mr_remap(rm->plan, from, values, to, &ro, &fit)) != MR_OK) return st;
+    info->route = MR_DOC_ROUTE_REMAP;
+    info->outcome = (int)fit.outcome;
+    info->ssim = fit.ssim;
+    info->relative_rmse = fit.relative_rmse;
+    snprintf(info->detail, sizeof(info->detail), "%s", fit.detail);
+    memcpy(out, fit.values, sizeof(fit.values));
+    return MR_OK;
+}
+
+void mr_doc_remapper_free(mr_doc_remapper *rm) {
+    if (rm == NULL) return;
+    mr_render_plan_free(rm->plan);
+    rm->plan = NULL;
 }
 
 /* Textured material k carried over to gltf_pbr or usd-preview's metallic workflow (doc.h: MR_DOC_ROUTE_MAPS). */
@@ -147,7 +179,7 @@ static mr_status carry_maps(const mr_gltf *asset, const mr_doc_gltf_options *o, 
             return mr_fail(MR_ERR_UNSUPPORTED, "glTF '%s': material %d ('%s'): KHR_materials_specular textures have "
                            "no place in usd-preview's metallic workflow (--to gltf keeps them)", mr_gltf_path(asset),
                            k, gm->name);
-    } else if ((st = set_all(m, gltf_v)) != MR_OK) {
+    } else if ((st = mr_doc_set_all(m, gltf_v)) != MR_OK) {
         return st;
     }
     if (gm->base_color_texture.index >= 0) {
@@ -209,7 +241,7 @@ mr_status mr_doc_from_gltf(const mr_gltf *asset, const mr_doc_gltf_options *opts
         return mr_fail(MR_ERR_NOMEM, "glTF export: out of memory");
     }
     r->material_count = counts.materials;
-    mr_render_plan *plan = NULL;
+    mr_doc_remapper remapper = {NULL, o.threads, o.size};
     mr_status st = MR_OK;
     for (int k = 0; k < counts.materials && st == MR_OK; k++) {
         mr_gltf_material gm;
@@ -239,30 +271,14 @@ mr_status mr_doc_from_gltf(const mr_gltf *asset, const mr_doc_gltf_options *opts
             st = carry_maps(asset, &o, r, k, &gm, m, gltf_v);
         } else if (to_gltf) {
             rm->route = MR_DOC_ROUTE_COPY;
-            st = set_all(m, gltf_v);
+            st = mr_doc_set_all(m, gltf_v);
         } else {
-            rm->route = MR_DOC_ROUTE_REMAP;
-            if (plan == NULL) {
-                // The fit scene every other fit of the tool uses (remap, sweep, convert --direct), not the paper's
-                // 512 x 512 frame: 64 times the pixels for the same verdict.
-                mr_fit_scene_options so = {0};
-                so.size = o.size > 0 ? o.size : MR_REMAP_DEFAULT_SIZE;
-                mr_scene scene = mr_scene_fit(&so);
-                scene.threads = o.threads;
-                if ((st = mr_render_plan_create(&scene, &plan)) != MR_OK) break;
-            }
-            mr_remap_options ro = mr_remap_options_default();
-            ro.threads = o.threads;
-            mr_remap_result fit;
-            if ((st = mr_remap(plan, gltf, gltf_v, o.target, &ro, &fit)) != MR_OK) break;
-            rm->outcome = (int)fit.outcome;
-            rm->ssim = fit.ssim;
-            rm->relative_rmse = fit.relative_rmse;
-            snprintf(rm->detail, sizeof(rm->detail), "%s", fit.detail);
-            st = set_all(m, fit.values);
+            double fitted[MR_BRDF_MAX_VALUES];
+            if ((st = mr_doc_remap_values(&remapper, gltf, gltf_v, o.target, rm, fitted)) != MR_OK) break;
+            st = mr_doc_set_all(m, fitted);
         }
     }
-    mr_render_plan_free(plan);
+    mr_doc_remapper_free(&remapper);
     if (st != MR_OK) {
         mr_doc_gltf_result_free(r);
         return st;
