@@ -2,7 +2,7 @@
 # client_docs.sh — the documents `matremap export` writes, opened by three.js's own loaders (the smoke test of make
 # evaluation-clients, docs/evaluation-clients.md): USDLoader in node (scripts/viewers/usd_materials.mjs) reads each
 # material of a .usda with the values the layer holds (colour, metallic, roughness, ior) and the WaterBottle's three
-# maps, and still applies the metallic workflow's specularColor (the three.js approximation the page documents);
+# maps, and keeps its white specularColor (the metallic workflow's layer writes none: three.js would apply it);
 # MaterialXLoader and USDLoader in headless Chromium (scripts/viewers/client_render.mjs, 32 x 32) render an
 # open_pbr_surface and a UsdPreviewSurface material, the MaterialX log holding no error and only the two documented
 # ignored inputs. Needs the npm packages of scripts/viewers (npm ci, as make evaluation-clients runs it) and
@@ -48,12 +48,13 @@ for line in open(sys.argv[2]):
     for key, name in (("metalness", "metallic"), ("roughness", "roughness"), ("ior", "ior"),
                       ("clearcoat", "clearcoat"), ("clearcoatRoughness", "clearcoatRoughness")):
         assert abs(got[key] - value(name)[0]) < 1e-6, (key, got)
-    # three.js does not read useSpecularWorkflow: the metallic workflow's specularColor (0, 0, 0) is its
-    # dielectric F0 tint (docs/evaluation-clients.md). When a three.js update reads it, this and the page change.
-    assert value("useSpecularWorkflow") == [0] and got["specularColor"] == [0, 0, 0], got
+    # three.js does not read useSpecularWorkflow and would take a specularColor as its dielectric F0 tint
+    # (docs/evaluation-clients.md): the metallic workflow's layer has none, so three.js keeps its white default.
+    assert value("useSpecularWorkflow") == [0] and "inputs:specularColor" not in block.split("def Shader")[1], got
+    assert got["specularColor"] == [1, 1, 1], got
 EOF
 }
-check "... with the layer's values; specularColor (0, 0, 0) applied as documented" usd_values
+check "... with the layer's values; no specularColor in the metallic workflow, three.js's white kept" usd_values
 expect "USDLoader (node) reads the WaterBottle's base colour, metallic and roughness maps" 0 \
     '"maps":\["map","metalnessMap","roughnessMap"\]' -- node "$viewers/usd_materials.mjs" "$tmp/b/bottle.usda" \
     BottleMat

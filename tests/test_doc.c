@@ -193,6 +193,27 @@ MR_TEST(the_colour_space_rule) {
     MR_CHECK(mr_doc_texture_is_srgb(rough, "a.png") == 0);
 }
 
+/* The metallic workflow's layer leaves out a constant specularColor (no effect by the specification; three.js's
+ * USDLoader would take it as the dielectric's F0 tint); the specular workflow's keeps it. */
+MR_TEST(usda_specular_color_only_in_the_specular_workflow) {
+    const mr_brdf_model *usd = mr_brdf_find("usd-preview");
+    for (int workflow = -1; workflow <= 1; workflow++) { // -1: useSpecularWorkflow unset, the node's default 0
+        mr_doc *doc = mr_doc_create();
+        mr_doc_material *m = NULL;
+        MR_CHECK_OK(mr_doc_add_material(doc, "x", usd, &m));
+        MR_CHECK_OK(mr_doc_set_constant(m, "specular_color", (double[3]){0.25, 0.5, 0.75}));
+        MR_CHECK_OK(mr_doc_set_constant(m, "metallic", (double[1]){0}));
+        if (workflow >= 0) MR_CHECK_OK(mr_doc_set_constant(m, "use_specular_workflow", (double[1]){workflow}));
+        char *text = NULL;
+        MR_CHECK_OK(mr_doc_to_text(doc, MR_DOC_FORMAT_USDA, &text));
+        int written = text && strstr(text, "color3f inputs:specularColor = (0.25, 0.5, 0.75)") != NULL;
+        MR_CHECK_MSG(written == (workflow == 1), "workflow %d:\n%s", workflow, text ? text : "");
+        MR_CHECK(text && strstr(text, "float inputs:metallic = 0") != NULL);
+        free(text);
+        mr_doc_free(doc);
+    }
+}
+
 MR_TEST(bad_values_are_refused) {
     const mr_brdf_model *usd = mr_brdf_find("usd-preview");
     mr_doc *doc = mr_doc_create();
@@ -586,6 +607,7 @@ MR_TEST(mtlx_convert_routes) {
 
 MR_TEST_MAIN(MR_TEST_ENTRY(every_parameter_maps_to_a_declared_input), MR_TEST_ENTRY(mtlx_writes_declared_inputs_only),
              MR_TEST_ENTRY(usda_writes_declared_inputs_only), MR_TEST_ENTRY(the_colour_space_rule),
+             MR_TEST_ENTRY(usda_specular_color_only_in_the_specular_workflow),
              MR_TEST_ENTRY(bad_values_are_refused), MR_TEST_ENTRY(the_write_is_atomic),
              MR_TEST_ENTRY(uniform_materials_are_remapped_and_converge), MR_TEST_ENTRY(mtlx_round_trip),
              MR_TEST_ENTRY(mtlx_reads_usd_preview_and_top_level_images), MR_TEST_ENTRY(mtlx_reads_materialx_examples),

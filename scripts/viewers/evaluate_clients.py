@@ -136,9 +136,6 @@ EXPLAIN = {
                                "matremap: coat_color 1, coat_darkening 0"),
     ("CoatedRed", "standard-surface"): ("matremap", {"coat_color": "1,1,1", "base_color": "0.54,0.0375,0.018"},
                                         "matremap: coat_color on base_color"),
-    ("RedPlastic", "usd-preview"): ("three", "specularColor", "three.js: document without specularColor"),
-    ("GlossyBlue", "usd-preview"): ("three", "specularColor", "three.js: document without specularColor"),
-    ("CoatedRed", "usd-preview"): ("three", "specularColor", "three.js: document without specularColor"),
 }
 
 
@@ -395,7 +392,7 @@ def explanation(case):
     if kind == "gltf":
         return "floor (the same BRDF)"
     if kind == "usd-preview":
-        return "floor (USD metal drawn as glTF's)" if m in METALS else "specularColor (0, 0, 0) applied"
+        return "floor (USD metal drawn as glTF's)" if m in METALS else "floor (no specularColor written)"
     by = {
         ("RoughCopper", "openpbr"): "remap's lower base colour in three.js's metal",
         ("CoatedRed", "openpbr"): "coat_color unused, no darkening, coat F0 0.04",

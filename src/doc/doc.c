@@ -583,6 +583,21 @@ static void write_mtlx(FILE *f, const mr_doc *doc, char (*names)[128]) {
 
 static const char *usd_channel[] = {"r", "g", "b", "a"};
 
+/* The index of a constant specularColor that the metallic workflow ignores (useSpecularWorkflow 0, written or the
+ * default), or -1. It is left out: a conforming reader gives it no effect either way (the UsdPreviewSurface
+ * specification's specularColor is the specular workflow's F0 only; src/brdf/usd_preview.c), but three.js's
+ * USDLoader (r187) does not read the
+ * workflow and takes it as the dielectric's F0 tint, so a (0, 0, 0) written there turns off every highlight
+ * (docs/evaluation-clients.md). */
+static int usd_unused_specular_color(const mr_doc_material *m) {
+    int workflow = mr_brdf_param_index(m->model, "use_specular_workflow");
+    int color = mr_brdf_param_index(m->model, "specular_color");
+    if (workflow < 0 || color < 0 || m->values[color].kind != MR_DOC_CONSTANT) return -1;
+    const mr_doc_value *w = &m->values[workflow];
+    if (w->kind == MR_DOC_TEXTURE || (w->kind == MR_DOC_CONSTANT && lround(w->constant[0]) != 0)) return -1;
+    return color;
+}
+
 static void write_usda(FILE *f, const mr_doc *doc, char (*names)[128]) {
     fprintf(f, "#usda 1.0\n(\n    defaultPrim = \"Materials\"\n");
     fprintf(f, "    doc = \"written by matremap: UsdPreviewSurface\"\n)\n\n");
@@ -596,10 +611,12 @@ static void write_usda(FILE *f, const mr_doc *doc, char (*names)[128]) {
         fprintf(f, "        token outputs:surface.connect = </Materials/%s/Surface.outputs:surface>\n\n", id);
         fprintf(f, "        def Shader \"Surface\"\n        {\n");
         fprintf(f, "            uniform token info:id = \"UsdPreviewSurface\"\n");
+        int skipped = usd_unused_specular_color(m);
         for (int p = 0; p < model->param_count; p++) {
             const mr_doc_value *v = &m->values[p];
             const mr_brdf_param *d = &model->params[p];
             const char *input = mr_doc_input_name(model, p, MR_DOC_FORMAT_USDA);
+            if (p == skipped) continue;
             if (v->kind == MR_DOC_CONSTANT && d->role == MR_PARAM_SWITCH)
                 fprintf(f, "            int inputs:%s = %d\n", input, (int)lround(v->constant[0]));
             else if (v->kind == MR_DOC_CONSTANT && d->channels == 3)
