@@ -17,6 +17,8 @@
 #                   (docs/evaluation-svbrdf.md; 11 min on 2 cores after make)
 #   make evaluation-viewers   the same conversions in the viewers people use: Blender Cycles and three.js in
 #                   headless Chromium (docs/evaluation.md, "What viewers show"; installs Blender, Chromium, npm pins)
+#   make evaluation-translations   MaterialX's translation graphs beside the image-fitted remap, rendered under
+#                   both HDR maps (docs/evaluation-translations.md)
 #   make dataset    the specular -> metallic training set (build/dataset); make train: data/spec2metal.mlp;
 #                   make objectives: which label objective agrees with object SSIM (docs/training.md)
 #   make faults     allocation and I/O fault injection (build/faults, ASan + UBSan + LSan): the N-th allocation,
@@ -127,7 +129,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h sr
 
 .PHONY: all check asan fuzz fuzz-targets faults demo bench \
         analyses paper evaluation evaluation-gltf evaluation-hardcases evaluation-svbrdf \
-        evaluation-viewers dataset train objectives deps install clean tables
+        evaluation-viewers evaluation-translations dataset train objectives deps install clean tables
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
 all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE) $(MPI_MODULE)
@@ -291,6 +293,10 @@ $(OBJECT_METRICS): $(BUILD)/obj/scripts/viewers/object_metrics.o $(LIB)
 
 evaluation-viewers: all $(OBJECT_METRICS)
 	scripts/evaluate-viewers.sh $(BUILD)
+
+# MaterialX's translation graphs beside the image-fitted remap (docs/evaluation-translations.md; ~5 min on 2 cores).
+evaluation-translations: all
+	scripts/evaluate-translations.sh $(BUILD)
 
 # The specular -> metallic dataset (image-objective labels, a few minutes on 2 cores) and the network trained on
 # it (docs/training.md). `make train` reproduces data/spec2metal.mlp bit for bit.
