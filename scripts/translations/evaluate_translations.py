@@ -87,6 +87,17 @@ MATERIALS = [
 ]
 
 
+METHODS = ("materialx", "fit", "fit-ior")
+
+
+def source_ior(vals):
+    """The source's specular IOR (its specular_ior=, else the models' default 1.5)."""
+    for v in vals:
+        if v.startswith("specular_ior="):
+            return float(v.split("=")[1])
+    return 1.5
+
+
 def run(cmd):
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     if p.returncode != 0:
@@ -141,7 +152,15 @@ def main():
                 base = [bin_, "remap", "--from", src] + vals + ["--to", dst, "--json"]
                 jobs[(name, src, dst, "materialx")] = pool.submit(run, base + ["--method", "materialx"])
                 jobs[(name, src, dst, "fit")] = pool.submit(run, base)
+                ior = source_ior(vals)
+                if ior != 1.5:  # the fit told the source's IOR (a default hold of 1.5 otherwise)
+                    given = ["--hold", "specular_ior=%.9g" % ior] if dst == "standard-surface" else ["ior=%.9g" % ior]
+                    cmd = [bin_, "remap", "--from", src] + vals + ["--to", dst] + given + ["--json"]
+                    jobs[(name, src, dst, "fit-ior")] = pool.submit(run, cmd)
         results = {k: json.loads(f.result()) for k, f in jobs.items()}
+    for name, _, _, _ in mats:
+        for src, dst in PAIRS:
+            results.setdefault((name, src, dst, "fit-ior"), results[(name, src, dst, "fit")])
     print("evaluation-translations: %d translations and fits, %.0f s" % (len(jobs), time.time() - t0), file=sys.stderr)
 
     # Renders: source (per source model), graph and fit (per pair), under each map; PNGs for the montages.
@@ -164,17 +183,22 @@ def main():
                                                                       "%s_ss_source" % name)
             tasks[(name, "openpbr", "source")] = pool.submit(render, "openpbr", op.split(), "%s_openpbr_source" % name)
             for src, dst in PAIRS:
-                for method in ("materialx", "fit"):
+                for method in METHODS:
                     r = results[(name, src, dst, method)]
+                    if method == "fit-ior" and r is results[(name, src, dst, "fit")]:
+                        continue
                     tasks[(name, src, dst, method)] = pool.submit(render, dst, words(r["values"]),
                                                                   "%s_%s_%s_%s" % (name, src, dst, method))
         renders = {k: f.result() for k, f in tasks.items()}
+    for name, _, _, _ in mats:
+        for src, dst in PAIRS:
+            renders.setdefault((name, src, dst, "fit-ior"), renders[(name, src, dst, "fit")])
     print("evaluation-translations: %d renders under each map, %.0f s" % (len(tasks), time.time() - t0),
           file=sys.stderr)
 
     def ssim(a, b, key):
         out = json.loads(run([bin_, "ssim", a, b, "--mask", mask, "--exposure", "%.9g" % exposure[key], "--json"]))
-        return out["object_ssim"]
+        return out["object_ssim"], out["object_relative_rmse"]
 
     rows = []
     with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
@@ -182,7 +206,7 @@ def main():
             for src, dst in PAIRS:
                 row = {"material": name, "from": src, "to": dst}
                 source = renders[(name, src, "source")]
-                for method in ("materialx", "fit"):
+                for method in METHODS:
                     r = results[(name, src, dst, method)]
                     row[method] = {"values": r["values"], "fit_scene_ssim": r["ssim"],
                                    "relative_rmse": r["relative_rmse"], "outcome": r.get("outcome", "")}
@@ -191,9 +215,9 @@ def main():
                                                        renders[(name, src, dst, method)][key][0], key)
                 rows.append(row)
         for row in rows:
-            for method in ("materialx", "fit"):
+            for method in METHODS:
                 for key, _ in MAPS:
-                    row[method][key] = row[method][key].result()
+                    row[method][key], row[method][key + "_rmse"] = row[method][key].result()
     seconds = time.time() - t0
     cpu = os.times().children_user + os.times().children_system
     with open(os.path.join(work, "results.json"), "w") as f:
@@ -222,6 +246,11 @@ def main():
     print("evaluation-translations: %d materials x %d pairs in %.0f s" % (len(mats), len(PAIRS), seconds))
 
 
+def rgb(m):
+    """Object RMSE of linear RGB relative to the source's mean radiance on the object, mean over both maps."""
+    return sum(m[key + "_rmse"] for key, _ in MAPS) / len(MAPS)
+
+
 def write_doc(root, build, mats, rows, exposure, seconds, cpu, only):
     lines = []
     date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
@@ -230,31 +259,42 @@ def write_doc(root, build, mats, rows, exposure, seconds, cpu, only):
                      build, " " + " ".join(sorted(only)) if only else "", date, seconds, cpu,
                      ", ".join("%s %.4g" % (k, v) for k, v in exposure.items())))
     lines.append("")
-    lines.append("Object SSIM against the source's render (1 = identical), per map; `fit scene` is the SSIM the "
-                 "command itself prints (whole 64² frame, point light); the fit's outcome last.")
+    lines.append("Object SSIM against the source's render (1 = identical), per map: the MaterialX graph, the fit "
+                 "(`matremap remap` with the target's default holds), and the fit told the source's IOR (`fit+ior`: "
+                 "`--to gltf ior=N`, `--to usd-preview ior=N`, `--hold specular_ior=N`; `=` where the source's IOR "
+                 "is the default 1.5 and this is the fit). `RGB error`: the object's RMSE of linear RGB relative to the "
+                 "source's mean radiance there (`object_relative_rmse` of `matremap ssim --mask`), mean over both "
+                 "maps: SSIM is computed on luma and does not see a change of hue. `fit scene` is the SSIM the command itself prints "
+                 "(whole 64² frame, point light); the fit's outcome last.")
     for src, dst in PAIRS:
         lines.append("")
         lines.append("### %s → %s" % (src, dst))
         lines.append("")
-        lines.append("| material | graph studio | graph tabac | fit studio | fit tabac | graph fit scene | "
-                     "fit fit scene | fit outcome |")
-        lines.append("|---|---|---|---|---|---|---|---|")
+        lines.append("| material | graph studio | graph tabac | fit studio | fit tabac | fit+ior studio | "
+                     "fit+ior tabac | RGB error graph / fit / fit+ior | graph fit scene | fit fit scene | fit outcome |")
+        lines.append("|---|---|---|---|---|---|---|---|---|---|---|")
         sel = [r for r in rows if r["from"] == src and r["to"] == dst]
         for r in sel:
-            g, f = r["materialx"], r["fit"]
+            g, f, fi = r["materialx"], r["fit"], r["fit-ior"]
+            same = fi is f or fi["values"] == f["values"]
 
             def cell(a, b):
                 return ("**%.4f**" % a) if a > b + 5e-5 else "%.4f" % a
-            lines.append("| %s | %s | %s | %s | %s | %.4f | %.4f | %s |" % (
+            lines.append("| %s | %s | %s | %s | %s | %s | %s | %.3f / %.3f / %s | %.4f | %.4f | %s |" % (
                 r["material"], cell(g["studio"], f["studio"]), cell(g["tabac"], f["tabac"]),
-                cell(f["studio"], g["studio"]), cell(f["tabac"], g["tabac"]), g["fit_scene_ssim"],
-                f["fit_scene_ssim"], f["outcome"]))
+                cell(f["studio"], g["studio"]), cell(f["tabac"], g["tabac"]),
+                "=" if same else "%.4f" % fi["studio"], "=" if same else "%.4f" % fi["tabac"],
+                rgb(g), rgb(f), "=" if same else "%.3f" % rgb(fi), g["fit_scene_ssim"], f["fit_scene_ssim"],
+                f["outcome"] + ("" if same else " (+ior: %s)" % fi["outcome"])))
         n = len(sel)
 
         def mean(method, key):
             return sum(r[method][key] for r in sel) / n
-        lines.append("| **mean** | %.4f | %.4f | %.4f | %.4f | %.4f | %.4f | |" % (
+        lines.append("| **mean** | %.4f | %.4f | %.4f | %.4f | %.4f | %.4f | %.3f / %.3f / %.3f | %.4f | %.4f | |" % (
             mean("materialx", "studio"), mean("materialx", "tabac"), mean("fit", "studio"), mean("fit", "tabac"),
+            mean("fit-ior", "studio"), mean("fit-ior", "tabac"),
+            sum(rgb(r["materialx"]) for r in sel) / n, sum(rgb(r["fit"]) for r in sel) / n,
+            sum(rgb(r["fit-ior"]) for r in sel) / n,
             mean("materialx", "fit_scene_ssim"), mean("fit", "fit_scene_ssim")))
         wins = sum(1 for r in sel for k, _ in MAPS if r["fit"][k] > r["materialx"][k] + 5e-5)
         losses = sum(1 for r in sel for k, _ in MAPS if r["materialx"][k] > r["fit"][k] + 5e-5)
