@@ -19,6 +19,8 @@
 #                   headless Chromium (docs/evaluation.md, "What viewers show"; installs Blender, Chromium, npm pins)
 #   make evaluation-clients   matremap export's .mtlx and .usda opened by three.js's MaterialXLoader and USDLoader
 #                   in headless Chromium beside matremap's own renders (docs/evaluation-clients.md)
+#   make evaluation-translations   MaterialX's translation graphs beside the image-fitted remap, rendered under
+#                   both HDR maps (docs/evaluation-translations.md)
 #   make dataset    the specular -> metallic training set (build/dataset); make train: data/spec2metal.mlp;
 #                   make objectives: which label objective agrees with object SSIM (docs/training.md)
 #   make faults     allocation and I/O fault injection (build/faults, ASan + UBSan + LSan): the N-th allocation,
@@ -126,11 +128,12 @@ PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h sr
                   src/workflow/pairs.h src/learn/learned_plots.h src/io/output_plan.h \
                   src/transform/transform.h src/report/report.h nn/mlp.h \
                   src/learn/parametric.h src/learn/svr.h src/learn/sweep_table.h src/learn/learned.h \
-                  gltf/mr_gltf.h gltf/mr_gltf_convert.h gltf/mr_gltf_scene.h src/doc/doc.h
+                  gltf/mr_gltf.h gltf/mr_gltf_convert.h gltf/mr_gltf_scene.h src/doc/doc.h \
+                  src/remap/translate.h
 
 .PHONY: all check asan fuzz fuzz-targets faults demo bench \
         analyses paper evaluation evaluation-gltf evaluation-hardcases evaluation-svbrdf \
-        evaluation-viewers evaluation-clients dataset train objectives deps install clean tables
+        evaluation-viewers evaluation-clients evaluation-translations dataset train objectives deps install clean tables
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
 all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE) $(MPI_MODULE)
@@ -303,6 +306,10 @@ $(DOC_WRITE): $(BUILD)/obj/scripts/viewers/doc_write.o $(LIB)
 
 evaluation-clients: all $(OBJECT_METRICS) $(DOC_WRITE)
 	scripts/evaluate-clients.sh $(BUILD)
+
+# MaterialX's translation graphs beside the image-fitted remap (docs/evaluation-translations.md; ~5 min on 2 cores).
+evaluation-translations: all
+	scripts/evaluate-translations.sh $(BUILD)
 
 # The specular -> metallic dataset (image-objective labels, a few minutes on 2 cores) and the network trained on
 # it (docs/training.md). `make train` reproduces data/spec2metal.mlp bit for bit.

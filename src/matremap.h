@@ -62,5 +62,6 @@
 #include "gltf/mr_gltf_convert.h"
 #include "gltf/mr_gltf_scene.h"
 #include "doc/doc.h"
+#include "remap/translate.h"
 
 #endif /* MATREMAP_H */

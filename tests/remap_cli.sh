@@ -85,4 +85,25 @@ refuses "remap --images: a picture that links to --diffuse" "x_ssim.png' \(--ima
     "$tmp/io" -- "$bin" remap --from-images "$tmp/io/r_source.png" --diffuse "$tmp/io/d.exr" \
     --specular "$tmp/io/s.exr" --images "$tmp/io/./x" --to lambert
 
+# --method materialx: MaterialX's translation graph instead of a fit (src/remap/translate.h; known answers in
+# tests/test_translate.c). Coated copper into glTF: the base colour becomes the coat colour; the fit-scene SSIM is
+# printed as a fit's is.
+expect "materialx: copper into gltf (json)" 0 '"graph": "NG_standard_surface_to_gltf_pbr"' -- \
+    "$bin" remap --from standard-surface base_color=1 metalness=1 specular=0 coat=1 coat_color=0.9,0.4,0.25 \
+    --to gltf --method materialx --json
+check "materialx: base colour = coat colour" near "$(sed -E 's/.*"values": \{"base_color": \[([-0-9.e+]+), ([-0-9.e+]+).*/\2/' \
+    "$tmp/out")" 0.4 1e-12
+check "materialx: prints the fit scene's SSIM" near "$(field ssim)" 0.5 0.5
+expect "materialx: plain output names the graph and what it drops" 0 "not carried: specular, specular_color" -- \
+    "$bin" remap --from standard-surface --to usd-preview --method materialx
+expect "materialx: no graph for the pair" 1 "--method materialx: no MaterialX translation graph from 'gltf' to \
+'openpbr' \(graphs: standard-surface -> gltf, standard-surface -> usd-preview, openpbr -> standard-surface\)" -- \
+    "$bin" remap --from gltf --to openpbr --method materialx
+expect "materialx: no fit options" 1 "--hold, --strategy, --grid-points and name=value after --to go with --method fit" \
+    -- "$bin" remap --from openpbr --to standard-surface --method materialx --hold coat
+expect "materialx: needs a model source" 1 "give --from MODEL" -- \
+    "$bin" remap --from-images "$tmp/nope.exr" --to gltf --method materialx
+expect "unknown method" 1 "--method 'graph': expected fit or materialx" -- \
+    "$bin" remap --from standard-surface --to gltf --method graph
+
 finish

@@ -6,11 +6,13 @@
 
 #include "cli.h"
 #include "remap/remap.h"
+#include "remap/translate.h"
 
 #define MAX_ASSIGNMENTS 64
 
 static void print_help(void) {
     printf("Usage: matremap remap --from MODEL [name=value ...] --to MODEL [name=value ...] [options]\n"
+           "       matremap remap --from MODEL [name=value ...] --to MODEL --method materialx [options]\n"
            "       matremap remap --from-images FULL.exr [--diffuse D.exr --specular S.exr]\n"
            "                      [--match-irradiance REF.exr] --to MODEL [options]\n"
            "\n"
@@ -41,6 +43,16 @@ static void print_help(void) {
            "                                  share; the model's own default holds (extension factors, coats,\n"
            "                                  what a fit scene cannot separate: 'matremap models MODEL') are\n"
            "                                  held too, and the result's 'held:' line lists every hold used\n"
+           "\n");
+    printf("Method:\n"
+           "  --method fit        (default) fit the target by images, as above\n"
+           "  --method materialx  no fit: MaterialX 1.39.5's closed-form translation graph for the pair\n"
+           "                      (libraries/bxdf/translation): standard-surface -> gltf, standard-surface ->\n"
+           "                      usd-preview, openpbr -> standard-surface; other pairs are refused. Prints the\n"
+           "                      translated values, what the graph does not carry, and the RMSE and SSIM of\n"
+           "                      its render against the source's in the fit scene (--size, --light, --images\n"
+           "                      as for a fit; no name=value after --to, --hold, --strategy, --grid-points);\n"
+           "                      a baseline beside the fit (docs/remap.md, docs/evaluation-translations.md)\n"
            "\n"
            "Options:\n"
            "  --strategy S       auto (default): affine parameters solved exactly, each lobe's roughness\n"
@@ -61,7 +73,9 @@ static void print_help(void) {
            "Examples:\n"
            "  matremap remap --from as f0=0.9 alpha=0.05 --to ward\n"
            "  matremap remap --from ggx-plastic ior=1.3 diffuse=0.5 alpha=0.1 --to ward --strategy single --json\n"
-           "  matremap remap --from-images cycles.exr --match-irradiance cycles_lambert.exr --to ggx\n",
+           "  matremap remap --from-images cycles.exr --match-irradiance cycles_lambert.exr --to ggx\n"
+           "  matremap remap --from standard-surface metalness=1 base_color=0.944,0.776,0.373 --to gltf \\\n"
+           "      --method materialx\n",
            MR_REMAP_DEFAULT_SIZE);
 }
 
@@ -85,13 +99,74 @@ static void print_values(FILE *out, const mr_brdf_model *model, const double *va
     }
 }
 
+/* --method materialx: MaterialX's translation graph (translate.h) instead of a fit, measured in the fit scene. */
+static int run_materialx(const mr_brdf_model *from, const double *source_values, const mr_brdf_model *to, int size,
+                         mr_fit_scene_options *scene_opts, const char *images_prefix, int json) {
+    const mr_translation *t = NULL;
+    if (mr_translate_find(from, to, &t) != MR_OK)
+        return cli_usage_error("remap", "--method materialx: %s", mr_last_error());
+    mr_output_plan io = {0};
+    for (int k = 0; images_prefix != NULL && k < 3; k++) {
+        char path[4096];
+        mr_remap_picture_path(images_prefix, k, path, sizeof path); // an overlong prefix: refused by the write
+        mr_output_plan_outputf(&io, path, "--images %s", images_prefix);
+    }
+    int exit_code = cli_plan_check("remap", &io);
+    mr_output_plan_free(&io);
+    if (exit_code != CLI_EXIT_OK) return exit_code;
+
+    scene_opts->size = size > 0 ? size : MR_REMAP_DEFAULT_SIZE;
+    mr_scene scene = mr_scene_fit(scene_opts);
+    mr_render_plan *plan = NULL;
+    mr_image *source = NULL;
+    mr_translate_result r;
+    mr_status status = mr_render_plan_create(&scene, &plan);
+    if (status == MR_OK) status = mr_translate_compare(plan, from, source_values, to, &r);
+    if (status == MR_OK && images_prefix != NULL) {
+        status = mr_render(plan, from, source_values, MR_COMPONENT_FULL, &source);
+        if (status == MR_OK) status = mr_remap_write_pictures(images_prefix, plan, source, to, r.values);
+    }
+    mr_image_free(source);
+    mr_render_plan_free(plan);
+    if (status != MR_OK) return cli_fail("remap", status);
+
+    const char *light = mr_fit_light_name(scene_opts->light);
+    if (json) {
+        printf("{\"to\": ");
+        cli_json_string(stdout, to->name);
+        printf(", \"from\": {\"model\": ");
+        cli_json_string(stdout, from->name);
+        printf(", \"values\": {");
+        print_values(stdout, from, source_values, 1);
+        printf("}}, \"method\": \"materialx\", \"graph\": ");
+        cli_json_string(stdout, t->graph);
+        printf(", \"file\": ");
+        cli_json_string(stdout, t->file);
+        printf(", \"materialx\": \"%s\", \"not_carried\": ", MR_TRANSLATE_MATERIALX_VERSION);
+        cli_json_string(stdout, t->dropped);
+        printf(", \"size\": %d, \"light\": \"%s\", \"values\": {", scene_opts->size, light);
+        print_values(stdout, to, r.values, 1);
+        printf("}, \"rmse\": %.17g, \"relative_rmse\": %.17g, \"ssim\": %.17g, \"seconds\": %.6f}\n", r.rmse,
+               r.relative_rmse, r.ssim, r.seconds);
+    } else {
+        printf("%s", to->name);
+        print_values(stdout, to, r.values, 0);
+        printf("\n");
+        printf("method: materialx (%s, MaterialX %s %s)\n", t->graph, MR_TRANSLATE_MATERIALX_VERSION, t->file);
+        printf("not carried: %s\n", t->dropped);
+        printf("RMSE %.6g (%.3g %% of the source's RMS radiance), SSIM %.6f, %.1f ms, fit scene %d², light %s\n",
+               r.rmse, 100.0 * r.relative_rmse, r.ssim, 1e3 * r.seconds, scene_opts->size, light);
+    }
+    return CLI_EXIT_OK;
+}
+
 int cmd_remap(int argc, char **argv) {
     const char *from_name = NULL, *to_name = NULL, *images_prefix = NULL;
     const char *image_paths[3] = {NULL, NULL, NULL}; /* full, diffuse, specular */
     const char *reference_path = NULL, *hold_list = NULL;
     double reference_albedo = 0.5;
     const char *from_assignments[MAX_ASSIGNMENTS], *to_assignments[MAX_ASSIGNMENTS];
-    int from_count = 0, to_count = 0, json = 0, size = 0;
+    int from_count = 0, to_count = 0, json = 0, size = 0, materialx = 0, fit_option = 0;
     mr_fit_scene_options scene_opts = {0};
     mr_remap_options opts = mr_remap_options_default();
     enum { NONE, FROM, TO } collecting = NONE;
@@ -131,6 +206,12 @@ int cmd_remap(int argc, char **argv) {
             if (taken < 0) return CLI_EXIT_USAGE;
             if (mr_remap_strategy_from_name(value, &opts.strategy) != MR_OK)
                 return cli_usage_error("remap", "%s", mr_last_error());
+            fit_option = 1;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--method", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (strcmp(value, "fit") != 0 && strcmp(value, "materialx") != 0)
+                return cli_usage_error("remap", "--method '%s': expected fit or materialx", value);
+            materialx = strcmp(value, "materialx") == 0;
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--threads", &value))) {
             if (taken < 0 || !cli_parse_int("remap", "--threads", value, 0, 1024, &opts.threads)) return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--size", &value))) {
@@ -138,9 +219,11 @@ int cmd_remap(int argc, char **argv) {
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--hold", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             hold_list = value;
+            fit_option = 1;
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--grid-points", &value))) {
             if (taken < 0 || !cli_parse_int("remap", "--grid-points", value, 2, 64, &opts.grid_points))
                 return CLI_EXIT_USAGE;
+            fit_option = 1;
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--light", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             if (mr_fit_light_from_name(value, &scene_opts.light) != MR_OK)
@@ -168,6 +251,11 @@ int cmd_remap(int argc, char **argv) {
         return cli_usage_error("remap", "--diffuse, --specular and --match-irradiance go with --from-images");
     if ((image_paths[1] == NULL) != (image_paths[2] == NULL))
         return cli_usage_error("remap", "give both --diffuse and --specular, or neither");
+    if (materialx && from_name == NULL)
+        return cli_usage_error("remap", "--method materialx translates a model's values: give --from MODEL");
+    if (materialx && (fit_option || to_count > 0))
+        return cli_usage_error("remap", "--method materialx sets every target parameter from its graph: --hold, "
+                               "--strategy, --grid-points and name=value after --to go with --method fit");
 
     const mr_brdf_model *to = mr_brdf_find(to_name);
     if (to == NULL) return cli_fail("remap", MR_ERR_INVALID_ARG);
@@ -192,6 +280,7 @@ int cmd_remap(int argc, char **argv) {
             if (status != MR_OK) return cli_fail("remap", status);
         }
     }
+    if (materialx) return run_materialx(from, source_values, to, size, &scene_opts, images_prefix, json);
 
     // Nothing written over a file read: --images PREFIX's pictures against the renders.
     static const char *const image_options[3] = {"--from-images", "--diffuse", "--specular"};
