@@ -34,7 +34,9 @@
 #define MR_DOC_H
 
 #include "../brdf/brdf.h"
+#include "../mr_image.h"
 #include "../mr_status.h"
+#include "../remap/direct.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -144,6 +146,29 @@ mr_status mr_doc_write(const mr_doc *doc, const char *path);
 /* ---- from a glTF asset (gltf_export.c) ---------------------------------------------------------------------- */
 
 struct mr_gltf;
+struct mr_learned_set;
+
+/* How a material was converted. */
+typedef enum mr_doc_route {
+    MR_DOC_ROUTE_COPY = 0, /* glTF to gltf_pbr: the same parameters, exact */
+    MR_DOC_ROUTE_REMAP,    /* uniform factors fitted by mr_remap in the fit scene (remap/remap.h) */
+    MR_DOC_ROUTE_MAPS,     /* textures carried over unchanged (gltf -> usd-preview's metallic workflow, gltf) */
+    MR_DOC_ROUTE_DIRECT,   /* textures converted by the direct remap of every distinct texel (`convert --direct`:
+                              mr_learned_convert_material with hops 0), written as new maps */
+    MR_DOC_ROUTE_LEARNED   /* textures converted through a chain of learned transforms (`convert --transforms`) */
+} mr_doc_route;
+
+/* THE route decision of the document exports (from a glTF asset here, from a MaterialX document too): a material of
+ * model `source` into `target`, `textured` when maps feed it, `have_transforms` when learned transforms were given:
+ *   uniform:  source == target -> COPY, else REMAP;
+ *   textured: source == target, or gltf -> usd-preview (the same quantities: docs/documents.md) -> MAPS;
+ *             any other pair -> LEARNED with transforms, else DIRECT.
+ * MR_ERR_INVALID_ARG for a NULL model or out. */
+mr_status mr_doc_choose_route(const mr_brdf_model *source, const mr_brdf_model *target, int textured,
+                              int have_transforms, mr_doc_route *out);
+
+/* Progress of a material's DIRECT conversion: the material's index and the direct remap's progress. */
+typedef void (*mr_doc_progress_fn)(int material, const mr_direct_progress *progress, void *user);
 
 typedef struct mr_doc_gltf_options {
     const mr_brdf_model *target; /* NULL: openpbr */
@@ -154,14 +179,23 @@ typedef struct mr_doc_gltf_options {
     int threads;                 /* of the remaps: 0 = automatic (render.h) */
     int size;                    /* the remaps' fit scene side: 0 = MR_REMAP_DEFAULT_SIZE, as remap, sweep and
                                     convert --direct fit (remap/remap.h) */
+    const double *target_values; /* REMAP and DIRECT: the target's values held parameters keep (NULL: the
+                                    target's defaults), as mr_remap_options.target_values */
+    unsigned held;               /* REMAP and DIRECT: parameters held beside the target's default holds (bit p:
+                                    parameter p; mr_brdf_parse_holds), as mr_remap_options.held */
+    double tolerance;            /* DIRECT: the quantisation step (remap/direct.h); 0 = MR_DOC_DEFAULT_TOLERANCE */
+    const char *cache_path;      /* DIRECT: the direct remap's cache file (direct.h); NULL = none */
+    const struct mr_learned_set *transforms; /* textured materials go LEARNED through the chain from the source
+                                    model to the target found among them (mr_learned_find_chain); NULL: DIRECT */
+    mr_doc_progress_fn progress; /* DIRECT: optional, as mr_direct_options.progress */
+    void *progress_user;
 } mr_doc_gltf_options;
 
-/* How a material was converted. */
-typedef enum mr_doc_route {
-    MR_DOC_ROUTE_COPY = 0, /* glTF to gltf_pbr: the same parameters, exact */
-    MR_DOC_ROUTE_REMAP,    /* uniform factors fitted by mr_remap in the fit scene (remap/remap.h) */
-    MR_DOC_ROUTE_MAPS      /* textures carried over unchanged (gltf -> usd-preview's metallic workflow, gltf) */
-} mr_doc_route;
+/* The direct route's default quantisation step in export: 12/255 (colours in sRGB-encoded units, so 21 levels of
+ * 255 per channel; roughness in ln units, a relative step of 4.8 %; metallic and other scalars 0.047 absolute).
+ * Twice convert's MR_DIRECT_DEFAULT_TOLERANCE: a remap into the layered models costs 5-10 times one into GGX, and
+ * this keeps a 2048^2 metal-rough texture set within a few minutes on 2 cores (docs/documents.md, measured). */
+#define MR_DOC_DEFAULT_TOLERANCE (12.0 / 255.0)
 
 typedef struct mr_doc_gltf_material {
     char name[128];      /* the glTF material's name ("" if none) */
@@ -170,7 +204,29 @@ typedef struct mr_doc_gltf_material {
     double ssim;         /* ROUTE_REMAP: the fit's SSIM; 1 otherwise */
     double relative_rmse;
     char detail[192];    /* ROUTE_REMAP: the fit's detail line */
+    /* ROUTE_DIRECT and ROUTE_LEARNED: the conversion's figures (mr_learned_conversion) */
+    int width, height;
+    size_t texels;
+    size_t unique;          /* DIRECT: distinct quantised values remapped */
+    size_t unconverged;     /* DIRECT: texels whose fit did not converge; LEARNED: extrapolated texels */
+    size_t failed_check;    /* LEARNED: texels converted by a transform that failed its check */
+    size_t clamped;         /* clamped outputs or inputs */
+    size_t flagged;         /* any flag (red, green or blue in the flag picture) */
+    size_t outcomes[MR_FIT_OUTCOME_COUNT]; /* DIRECT: distinct values by fit outcome (mr_fit_outcome order) */
+    int hops;               /* LEARNED: transforms in the chain */
+    double tolerance;       /* DIRECT: the quantisation step used */
+    double seconds;         /* the conversion's wall time */
 } mr_doc_gltf_material;
+
+/* A converted map the document refers to (DIRECT, LEARNED): written by mr_doc_gltf_write by the one rule of
+ * parameter maps (8-bit PNG; sRGB for MR_PARAM_SRGB_MAP parameters, linear otherwise), or the flag picture. */
+typedef struct mr_doc_gltf_map {
+    int material;       /* its material's index */
+    int param;          /* the target parameter's index; -1: the flag picture (mr_learned_flag_code, linear) */
+    char path[1024];    /* where it is written: mr_img_prefixed_name(prefix, "<material>_<param>.png") */
+    char file[1024];    /* as the document refers to it */
+    mr_image *image;    /* owned */
+} mr_doc_gltf_map;
 
 typedef struct mr_doc_gltf_image {
     int image;       /* the asset's image index */
@@ -184,6 +240,8 @@ typedef struct mr_doc_gltf_result {
     mr_doc_gltf_material *materials;
     int image_count;
     mr_doc_gltf_image *images;
+    int map_count;
+    mr_doc_gltf_map *maps; /* converted maps, written beside the images */
 } mr_doc_gltf_result;
 
 /* Every material of `asset` converted to the target model into a document (nothing is written yet). Uniform
@@ -199,7 +257,7 @@ mr_status mr_doc_from_gltf(const struct mr_gltf *asset, const mr_doc_gltf_option
  * (mr_doc_write). On failure the images already written are removed. */
 mr_status mr_doc_gltf_write(const struct mr_gltf *asset, const mr_doc_gltf_result *result, const char *path);
 void mr_doc_gltf_result_free(mr_doc_gltf_result *result);
-/* "copy", "remap", "maps". */
+/* "copy", "remap", "maps", "direct", "learned". */
 const char *mr_doc_route_name(mr_doc_route route);
 
 #ifdef __cplusplus
