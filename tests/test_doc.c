@@ -251,7 +251,111 @@ MR_TEST(uniform_materials_are_remapped_and_converge) {
     mr_gltf_free(asset);
 }
 
+/* The one route decision (doc.h, mr_doc_choose_route) that every document export calls. */
+MR_TEST(the_route_decision) {
+    const mr_brdf_model *gltf = mr_brdf_find("gltf"), *op = mr_brdf_find("openpbr"),
+                        *ss = mr_brdf_find("standard-surface"), *usd = mr_brdf_find("usd-preview");
+    static const struct {
+        int source, target, textured, transforms;
+        mr_doc_route want;
+    } cases[] = {
+        {0, 0, 0, 0, MR_DOC_ROUTE_COPY},   {0, 1, 0, 0, MR_DOC_ROUTE_REMAP},  {0, 1, 0, 1, MR_DOC_ROUTE_REMAP},
+        {0, 3, 0, 0, MR_DOC_ROUTE_REMAP},  {0, 0, 1, 0, MR_DOC_ROUTE_MAPS},   {0, 3, 1, 0, MR_DOC_ROUTE_MAPS},
+        {0, 3, 1, 1, MR_DOC_ROUTE_MAPS},   {0, 1, 1, 0, MR_DOC_ROUTE_DIRECT}, {0, 2, 1, 0, MR_DOC_ROUTE_DIRECT},
+        {0, 1, 1, 1, MR_DOC_ROUTE_LEARNED}, {0, 2, 1, 1, MR_DOC_ROUTE_LEARNED}, {1, 1, 1, 0, MR_DOC_ROUTE_MAPS},
+        {1, 2, 0, 0, MR_DOC_ROUTE_REMAP},  {1, 2, 1, 0, MR_DOC_ROUTE_DIRECT},
+    };
+    const mr_brdf_model *m[4] = {gltf, op, ss, usd};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        mr_doc_route r = (mr_doc_route)-1;
+        MR_CHECK_OK(mr_doc_choose_route(m[cases[i].source], m[cases[i].target], cases[i].textured,
+                                        cases[i].transforms, &r));
+        MR_CHECK_MSG(r == cases[i].want, "%s -> %s textured %d transforms %d: %s, expected %s",
+                     m[cases[i].source]->name, m[cases[i].target]->name, cases[i].textured, cases[i].transforms,
+                     mr_doc_route_name(r) ? mr_doc_route_name(r) : "?", mr_doc_route_name(cases[i].want));
+    }
+    mr_doc_route r;
+    MR_CHECK(mr_doc_choose_route(NULL, op, 1, 0, &r) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strcmp(mr_doc_route_name(MR_DOC_ROUTE_DIRECT), "direct") == 0 &&
+             strcmp(mr_doc_route_name(MR_DOC_ROUTE_LEARNED), "learned") == 0);
+}
+
+/* A textured glTF material to openpbr by the direct route, without the command line: 4 x 4 maps (two base colours,
+ * two roughnesses, metallic 0) converted, the target's default holds written as constants (specular_ior 1.5), a
+ * caller's hold (base_metalness=0.25) too, the parameters that vary as maps of the map's size the result owns; the
+ * counts of the conversion carried; a material whose maps lie on two UV sets refused, naming both textures. */
+MR_TEST(a_textured_material_converts_by_the_direct_route) {
+    mr_image *base = NULL, *mr = NULL;
+    MR_CHECK_OK(mr_image_create(4, 4, 3, &base));
+    MR_CHECK_OK(mr_image_create(4, 4, 3, &mr));
+    if (base == NULL || mr == NULL) return;
+    for (int i = 0; i < 16; i++)
+        for (int c = 0; c < 3; c++) {
+            base->pixels[i * 3 + c] = i < 8 ? 0.5f : (c == 0 ? 0.8f : 0.2f);
+            mr->pixels[i * 3 + c] = c == 1 ? (i % 2 ? 0.3f : 0.7f) : 0.0f;
+        }
+    mr_img_write_options colour = {MR_IMG_COLOR, 8, 0}, data = {MR_IMG_DATA, 8, 0};
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("route_base.png"), base, &colour));
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("route_mr.png"), mr, &data));
+    mr_image_free(base);
+    mr_image_free(mr);
+    char text[1024];
+    for (int uv1 = 0; uv1 < 2; uv1++) {
+        snprintf(text, sizeof text,
+                 "{\"asset\": {\"version\": \"2.0\"}, \"images\": [{\"uri\": \"route_base.png\"}, {\"uri\": "
+                 "\"route_mr.png\"}], \"textures\": [{\"source\": 0}, {\"source\": 1}], \"materials\": [{\"name\": "
+                 "\"T\", \"pbrMetallicRoughness\": {\"baseColorTexture\": {\"index\": 0}, "
+                 "\"metallicRoughnessTexture\": {\"index\": 1, \"texCoord\": %d}}}]}", uv1);
+        const char *path = mr_test_tmp_path("route.gltf");
+        MR_CHECK(mr_test_write_file(path, text, strlen(text)) == 1);
+        mr_gltf *asset = NULL;
+        MR_CHECK_OK(mr_gltf_load(path, &asset));
+        if (asset == NULL) return;
+        const mr_brdf_model *op = mr_brdf_find("openpbr");
+        double values[MR_BRDF_MAX_VALUES];
+        unsigned held = 0;
+        mr_brdf_default_values(op, values);
+        MR_CHECK_OK(mr_brdf_parse_holds(op, "base_metalness=0.25", values, &held));
+        mr_doc_gltf_options o = {0};
+        o.target = op;
+        o.image_prefix = mr_test_tmp_path("route_out");
+        o.size = 16;
+        o.threads = 1;
+        o.target_values = values;
+        o.held = held;
+        mr_doc_gltf_result *r = NULL;
+        mr_status st = mr_doc_from_gltf(asset, &o, &r);
+        mr_gltf_free(asset);
+        if (uv1) {
+            MR_CHECK(st == MR_ERR_UNSUPPORTED && r == NULL);
+            MR_CHECK_MSG(strstr(mr_last_error(), "baseColorTexture and metallicRoughnessTexture differ in UV set"),
+                         "%s", mr_last_error());
+            continue;
+        }
+        MR_CHECK_OK(st);
+        if (r == NULL) return;
+        const mr_doc_gltf_material *m = &r->materials[0];
+        MR_CHECK_MSG(m->route == MR_DOC_ROUTE_DIRECT && m->texels == 16 && m->width == 4 && m->unique == 4,
+                     "route %s, %zu texels, %zu distinct", mr_doc_route_name(m->route), m->texels, m->unique);
+        const mr_doc_material *dm = mr_doc_material_get(r->doc, 0);
+        const int ior = mr_brdf_param_index(op, "specular_ior"), metal = mr_brdf_param_index(op, "base_metalness");
+        const int colour_p = mr_brdf_param_index(op, "base_color");
+        const int rough = mr_brdf_param_index(op, "specular_roughness");
+        MR_CHECK(dm->values[ior].kind == MR_DOC_CONSTANT && dm->values[ior].constant[0] == 1.5);
+        MR_CHECK(dm->values[metal].kind == MR_DOC_CONSTANT && dm->values[metal].constant[0] == 0.25);
+        MR_CHECK(dm->values[colour_p].kind == MR_DOC_TEXTURE && dm->values[rough].kind == MR_DOC_TEXTURE);
+        int maps = 0;
+        for (int i = 0; i < r->map_count; i++) {
+            MR_CHECK(r->maps[i].image->width == 4 && r->maps[i].image->height == 4);
+            maps += r->maps[i].param == colour_p || r->maps[i].param == rough || r->maps[i].param == -1;
+        }
+        MR_CHECK_MSG(r->map_count == 3 && maps == 3, "%d maps", r->map_count);
+        mr_doc_gltf_result_free(r);
+    }
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(every_parameter_maps_to_a_declared_input), MR_TEST_ENTRY(mtlx_writes_declared_inputs_only),
              MR_TEST_ENTRY(usda_writes_declared_inputs_only), MR_TEST_ENTRY(the_colour_space_rule),
              MR_TEST_ENTRY(bad_values_are_refused), MR_TEST_ENTRY(the_write_is_atomic),
-             MR_TEST_ENTRY(uniform_materials_are_remapped_and_converge))
+             MR_TEST_ENTRY(uniform_materials_are_remapped_and_converge), MR_TEST_ENTRY(the_route_decision),
+             MR_TEST_ENTRY(a_textured_material_converts_by_the_direct_route))

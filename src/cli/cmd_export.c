@@ -119,7 +119,8 @@ static int parse(int argc, char **argv, options *o) {
     if (format == MR_DOC_FORMAT_UNKNOWN)
         return cli_usage_error("export", "-o '%s': the extension chooses the format: .mtlx or .usda", o->output);
     if (o->to == NULL) o->to = format == MR_DOC_FORMAT_MTLX ? "openpbr" : "usd-preview";
-    if (o->direct && o->transform_count > 0) return cli_usage_error("export", "give --direct or --transforms, not both");
+    if (o->direct && o->transform_count > 0)
+        return cli_usage_error("export", "give --direct or --transforms, not both");
     if (o->transform_count > 0 && (o->tolerance != 0.0 || o->cache != NULL))
         return cli_usage_error("export", "--tolerance and --cache go with the direct route, not --transforms");
     return CLI_EXIT_OK;

@@ -11,8 +11,8 @@
  *
  *   mr_gltf *asset; mr_gltf_load("a.gltf", &asset);                        // a glTF asset converted (gltf/)
  *   mr_doc_gltf_options o = {0};  o.target = mr_brdf_find("usd-preview"); o.image_prefix = "out";
- *   mr_doc_gltf_result *r;  mr_doc_from_gltf(asset, &o, &r);               // remaps, maps carried over
- *   ... check r->images[i].path against the inputs ... mr_doc_gltf_write(asset, r, "out.usda");
+ *   mr_doc_gltf_result *r;  mr_doc_from_gltf(asset, &o, &r);               // remaps, maps carried or converted
+ *   ... check r->images[i].path, r->maps[i].path against the inputs ... mr_doc_gltf_write(asset, r, "out.usda");
  *   mr_doc_gltf_result_free(r);
  *
  * A material is a name, a target BRDF model from the registry (openpbr, standard-surface, gltf: MaterialX;
@@ -244,17 +244,25 @@ typedef struct mr_doc_gltf_result {
     mr_doc_gltf_map *maps; /* converted maps, written beside the images */
 } mr_doc_gltf_result;
 
-/* Every material of `asset` converted to the target model into a document (nothing is written yet). Uniform
- * materials (no base colour nor metallic-roughness texture): gltf -> COPY, any other target -> REMAP from the gltf
- * model's values (base colour, metallic, roughness; KHR_materials_specular and _ior when present). Textured
- * materials: gltf and usd-preview (metallic workflow) -> MAPS (base colour map -> base_color / diffuse_color, sRGB;
- * metallic-roughness B -> metallic, G -> roughness; factors as scales); openpbr and standard-surface have no
- * texture route yet: MR_ERR_UNSUPPORTED naming the material and the missing route. Also refused
- * (MR_ERR_UNSUPPORTED): KHR_materials_pbrSpecularGlossiness-only materials' textures, KHR_texture_transform, a
- * texture whose image is missing. An asset without materials: MR_ERR_INVALID_ARG. */
+/* Every material of `asset` converted to the target model into a document (nothing is written yet), by the route
+ * mr_doc_choose_route gives. Uniform materials (no base colour nor metallic-roughness texture): gltf -> COPY, any
+ * other target -> REMAP from the gltf model's values (base colour, metallic, roughness; KHR_materials_specular and
+ * _ior when present). Textured materials: gltf and usd-preview (metallic workflow) -> MAPS (base colour map ->
+ * base_color / diffuse_color, sRGB; metallic-roughness B -> metallic, G -> roughness; factors as scales); openpbr
+ * and standard-surface -> DIRECT (or LEARNED with opts->transforms): the material as mr_gltf_material_brdf reads it
+ * (factors folded into the decoded maps) converted by mr_learned_convert_material (hops 0: the direct remap with
+ * opts' tolerance, holds, scene size and cache; or the chain gltf -> target found among opts->transforms), every
+ * target parameter whose converted map holds one value set as that constant, every other as a new map
+ * (result->maps, written by mr_doc_gltf_write) read through the textures' UV set and wraps, with the flag picture.
+ * Refused (MR_ERR_UNSUPPORTED, naming the material): KHR_materials_pbrSpecularGlossiness-only materials,
+ * KHR_texture_transform, a texture whose image is missing, and for DIRECT/LEARNED maps on different UV sets or wrap
+ * modes (a converted map holds every parameter of a texel); maps of different sizes are the conversion's
+ * MR_ERR_INVALID_ARG; no chain: mr_learned_find_chain's MR_ERR_INVALID_ARG. An asset without materials:
+ * MR_ERR_INVALID_ARG. */
 mr_status mr_doc_from_gltf(const struct mr_gltf *asset, const mr_doc_gltf_options *opts, mr_doc_gltf_result **out);
-/* The result's images written (mr_gltf_image_write_file: atomic, never over an input), then the document
- * (mr_doc_write). On failure the images already written are removed. */
+/* The result's images written (mr_gltf_image_write_file: atomic, never over an input), then its converted maps
+ * (mr_img_write_set, all or none: 8-bit PNG, sRGB for MR_PARAM_SRGB_MAP parameters, linear otherwise, the flag
+ * picture linear), then the document (mr_doc_write). On failure the images and maps already written are removed. */
 mr_status mr_doc_gltf_write(const struct mr_gltf *asset, const mr_doc_gltf_result *result, const char *path);
 void mr_doc_gltf_result_free(mr_doc_gltf_result *result);
 /* "copy", "remap", "maps", "direct", "learned". */
