@@ -48,6 +48,9 @@ static void print_help(void) {
            "  --hold NAME[=VALUE][,...]  remap and direct: hold these target parameters at VALUE (or their\n"
            "                        defaults), as 'matremap remap --hold'; the target's default holds are held too,\n"
            "                        and a 'held:' line lists them\n"
+           "  --tie TARGET=SOURCE[,...]|none  remap and direct: hold target parameters at the glTF material's\n"
+           "                        (or texel's) value; default: the metalness (openpbr: base_metalness=metallic),\n"
+           "                        which the fit scene cannot tell from the base colour at high roughness\n"
            "  --cache FILE          direct: answers kept across runs (as convert --cache)\n"
            "  --size N              the fit scene's side of remaps and direct remaps (default 64)\n"
            "  --threads N           threads (0 = automatic, the default)\n"
@@ -63,7 +66,7 @@ static void print_help(void) {
 #define MAX_TRANSFORM_PATHS 64
 
 typedef struct options {
-    const char *input, *output, *to, *hold, *cache;
+    const char *input, *output, *to, *hold, *cache, *tie;
     const char *transforms[MAX_TRANSFORM_PATHS];
     int transform_count, direct, size, threads, json;
     double tolerance;
@@ -93,6 +96,9 @@ static int parse(int argc, char **argv, options *o) {
         } else if ((taken = cli_take_option("export", argc, argv, &i, "--hold", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             o->hold = value;
+        } else if ((taken = cli_take_option("export", argc, argv, &i, "--tie", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            o->tie = value;
         } else if ((taken = cli_take_option("export", argc, argv, &i, "--cache", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             o->cache = value;
@@ -163,6 +169,9 @@ int cmd_export(int argc, char **argv) {
     unsigned held = 0;
     mr_brdf_default_values(target, target_values);
     if (o.hold != NULL && !cli_parse_held("export", target, o.hold, target_values, &held)) return CLI_EXIT_USAGE;
+    const mr_brdf_model *gltf = mr_brdf_find("gltf");
+    mr_brdf_ties ties;
+    if (!cli_parse_ties("export", gltf, target, o.tie, &ties)) return CLI_EXIT_USAGE;
     mr_learned_set transforms = {0};
     for (int k = 0; k < o.transform_count; k++) {
         struct stat info;
@@ -221,6 +230,7 @@ int cmd_export(int argc, char **argv) {
     opts.size = o.size;
     opts.target_values = target_values;
     opts.held = held;
+    opts.ties = &ties;
     opts.tolerance = o.tolerance;
     opts.cache_path = o.cache;
     opts.transforms = transforms.count > 0 ? &transforms : NULL;
@@ -271,6 +281,7 @@ int cmd_export(int argc, char **argv) {
             printf("\n");
         }
         if (fitted) cli_print_holds(stdout, "", target, target_values, held);
+        if (fitted) cli_print_ties(stdout, "", gltf, target, &ties, o.tie != NULL);
         for (int i = 0; i < result->image_count; i++) printf("wrote %s\n", result->images[i].path);
         for (int i = 0; i < result->map_count; i++) printf("wrote %s\n", result->maps[i].path);
         printf("wrote %s (%s, %d material%s)\n", o.output, target->name, result->material_count,
@@ -316,6 +327,8 @@ int cmd_export(int argc, char **argv) {
         if (fitted) {
             printf(", \"held\": ");
             cli_print_holds_json(stdout, target, target_values, held);
+            printf(", \"tied\": ");
+            cli_print_ties_json(stdout, gltf, target, &ties, o.tie != NULL);
         }
         printf("}\n");
     }

@@ -40,7 +40,11 @@ static void print_help(void) {
            "                                  values) instead of fitting them, e.g. a roughness both models\n"
            "                                  share; the model's own default holds (extension factors, coats,\n"
            "                                  what a fit scene cannot separate: 'matremap models MODEL') are\n"
-           "                                  held too, and the result's 'held:' line lists every hold used\n"
+           "                                  held too, and the result's 'held:' line lists every hold used\n");
+    printf("  --tie TARGET=SOURCE[,...]|none  hold target parameters at the source's value instead of fitting them;\n"
+           "                                  default: a metalness the source states (gltf -> openpbr:\n"
+           "                                  base_metalness=metallic), which the fit scene cannot tell from the base\n"
+           "                                  colour at high roughness; a 'tied:' line says which (docs/remap.md)\n"
            "\n"
            "Options:\n"
            "  --strategy S       auto (default): affine parameters solved exactly, each lobe's roughness\n"
@@ -88,7 +92,7 @@ static void print_values(FILE *out, const mr_brdf_model *model, const double *va
 int cmd_remap(int argc, char **argv) {
     const char *from_name = NULL, *to_name = NULL, *images_prefix = NULL;
     const char *image_paths[3] = {NULL, NULL, NULL}; /* full, diffuse, specular */
-    const char *reference_path = NULL, *hold_list = NULL;
+    const char *reference_path = NULL, *hold_list = NULL, *tie_list = NULL;
     double reference_albedo = 0.5;
     const char *from_assignments[MAX_ASSIGNMENTS], *to_assignments[MAX_ASSIGNMENTS];
     int from_count = 0, to_count = 0, json = 0, size = 0;
@@ -135,6 +139,9 @@ int cmd_remap(int argc, char **argv) {
             if (taken < 0 || !cli_parse_int("remap", "--threads", value, 0, 1024, &opts.threads)) return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--size", &value))) {
             if (taken < 0 || !cli_parse_int("remap", "--size", value, 16, 4096, &size)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--tie", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            tie_list = value;
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--hold", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             hold_list = value;
@@ -191,6 +198,9 @@ int cmd_remap(int argc, char **argv) {
             mr_status status = mr_brdf_parse_assignment(from, from_assignments[k], source_values);
             if (status != MR_OK) return cli_fail("remap", status);
         }
+        if (!cli_parse_ties("remap", from, to, tie_list, &opts.ties)) return CLI_EXIT_USAGE;
+    } else if (tie_list != NULL) {
+        return cli_usage_error("remap", "--tie needs --from MODEL (a tie takes the source's value)");
     }
 
     // Nothing written over a file read: --images PREFIX's pictures against the renders.
@@ -267,6 +277,10 @@ int cmd_remap(int argc, char **argv) {
             cli_json_string(stdout, result.detail);
             printf(", \"held\": ");
             cli_print_holds_json(stdout, to, target_values, opts.held);
+            if (from != NULL) {
+                printf(", \"tied\": ");
+                cli_print_ties_json(stdout, from, to, &opts.ties, tie_list != NULL);
+            }
             printf("}\n");
         } else {
             printf("%s", to->name);
@@ -279,6 +293,7 @@ int cmd_remap(int argc, char **argv) {
                    strategy, scene_opts.size, mr_fit_light_name(scene_opts.light));
             if (reference != NULL) printf("irradiance scale applied to the source images: %.6g\n", irradiance_scale);
             cli_print_holds(stdout, NULL, to, target_values, opts.held);
+            if (from != NULL) cli_print_ties(stdout, NULL, from, to, &opts.ties, tie_list != NULL);
         }
     }
     for (int k = 0; k < 3; k++) mr_image_free(images[k]);

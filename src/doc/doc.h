@@ -183,6 +183,8 @@ typedef struct mr_doc_gltf_options {
                                     target's defaults), as mr_remap_options.target_values */
     unsigned held;               /* REMAP and DIRECT: parameters held beside the target's default holds (bit p:
                                     parameter p; mr_brdf_parse_holds), as mr_remap_options.held */
+    const mr_brdf_ties *ties;    /* REMAP and DIRECT: target parameters held at the source's values (brdf.h); NULL:
+                                    the pair's defaults, mr_brdf_default_ties (openpbr: base_metalness=metallic) */
     double tolerance;            /* DIRECT: the quantisation step (remap/direct.h); 0 = MR_DOC_DEFAULT_TOLERANCE */
     const char *cache_path;      /* DIRECT: the direct remap's cache file (direct.h); NULL = none */
     const struct mr_learned_set *transforms; /* textured materials go LEARNED through the chain from the source

@@ -323,6 +323,7 @@ static mr_status convert_maps(const mr_gltf *asset, const mr_doc_gltf_options *o
     d.tolerance = o->tolerance > 0 ? o->tolerance : MR_DOC_DEFAULT_TOLERANCE;
     d.remap.target_values = o->target_values;
     d.remap.held = o->held;
+    d.remap.ties = o->ties ? *o->ties : mr_brdf_default_ties(gltf, target);
     d.scene.size = o->size > 0 ? o->size : MR_REMAP_DEFAULT_SIZE;
     d.cache_path = o->cache_path;
     progress_relay relay = {o, k};
@@ -448,6 +449,7 @@ mr_status mr_doc_from_gltf(const mr_gltf *asset, const mr_doc_gltf_options *opts
             ro.threads = o.threads;
             ro.target_values = o.target_values;
             ro.held = o.held;
+            ro.ties = o.ties ? *o.ties : mr_brdf_default_ties(gltf, o.target);
             mr_remap_result fit;
             if ((st = mr_remap(plan, gltf, gltf_v, o.target, &ro, &fit)) != MR_OK) break;
             rm->outcome = (int)fit.outcome;
