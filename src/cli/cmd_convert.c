@@ -367,10 +367,10 @@ int cmd_convert(int argc, char **argv) {
         for (int o = 0; ds != NULL && o < MR_FIT_OUTCOME_COUNT; o++)
             printf("%s\"%s\": %zu", o ? ", " : "", mr_fit_outcome_name((mr_fit_outcome)o), ds->outcomes[o]);
         if (ds != NULL) {
-            printf("}, \"held\": ");
-            cli_print_holds_json(stdout, target, target_values, dopts.remap.held);
-            printf(", \"tied\": ");
+            printf("}, \"tied\": ");
             cli_print_ties_json(stdout, source, target, &dopts.remap.ties, tie_list != NULL);
+            printf(", \"held\": ");
+            cli_print_holds_json(stdout, target, target_values, dopts.remap.held);
             printf("}, ");
         }
         printf("\"chain\": [");

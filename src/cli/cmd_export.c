@@ -325,10 +325,10 @@ int cmd_export(int argc, char **argv) {
         }
         printf("]");
         if (fitted) {
-            printf(", \"held\": ");
-            cli_print_holds_json(stdout, target, target_values, held);
             printf(", \"tied\": ");
             cli_print_ties_json(stdout, gltf, target, &ties, o.tie != NULL);
+            printf(", \"held\": ");
+            cli_print_holds_json(stdout, target, target_values, held);
         }
         printf("}\n");
     }

@@ -275,12 +275,12 @@ int cmd_remap(int argc, char **argv) {
                    result.rmse, result.relative_rmse, result.ssim, result.renders, result.seconds,
                    mr_fit_outcome_name(result.outcome));
             cli_json_string(stdout, result.detail);
-            printf(", \"held\": ");
-            cli_print_holds_json(stdout, to, target_values, opts.held);
             if (from != NULL) {
                 printf(", \"tied\": ");
                 cli_print_ties_json(stdout, from, to, &opts.ties, tie_list != NULL);
             }
+            printf(", \"held\": ");
+            cli_print_holds_json(stdout, to, target_values, opts.held);
             printf("}\n");
         } else {
             printf("%s", to->name);

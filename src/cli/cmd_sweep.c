@@ -549,10 +549,10 @@ int cmd_sweep(int argc, char **argv) {
                summary.seconds, summary.threads, summary.processes, summary.threads_total);
         for (int o = 0; o < MR_FIT_OUTCOME_COUNT; o++)
             printf("%s\"%s\": %ld", o ? ", " : "", mr_fit_outcome_name((mr_fit_outcome)o), summary.outcomes[o]);
-        printf("}, \"held\": ");
-        cli_print_holds_json(stdout, a.spec.target, a.spec.target_values, a.spec.remap.held);
-        printf(", \"tied\": ");
+        printf("}, \"tied\": ");
         cli_print_ties_json(stdout, a.spec.source, a.spec.target, &a.spec.remap.ties, a.ties_given);
+        printf(", \"held\": ");
+        cli_print_holds_json(stdout, a.spec.target, a.spec.target_values, a.spec.remap.held);
         printf("}\n");
         return CLI_EXIT_OK;
     }
