@@ -202,6 +202,23 @@ sed 's/"metallicRoughnessTexture": {"index": 1}/"metallicRoughnessTexture": {"in
 refuses "maps on different UV sets: refused, naming the material" \
     "material 0 \('Tex'\): baseColorTexture and metallicRoughnessTexture differ in UV set or wrap mode" \
     "$tmp/tex/refused" -- "$bin" export "$tmp/tex/uv1.gltf" -o "$tmp/tex/refused/doc.mtlx" --size 32
+# The learned route: a small gltf -> openpbr transform (the default tie: base_metalness carried from metallic).
+expect "a small gltf -> openpbr sweep and transform" 0 "" -- bash -c "'$bin' sweep --from gltf --to openpbr \
+    --grid roughness=0.2:0.8:3 metallic=0:1:2 base_color=0.1:0.8:3 --size 16 -o '$tmp/tex/small.csv' && \
+    '$bin' learn '$tmp/tex/small.csv' --method svr -o '$tmp/tex/mrt/small.mrt'"
+expect "--transforms FILE: the learned route, counted" 0 \
+    "material 0 'Tex': learned \(1 transform, 6x6 = 36 texels: [0-9]+ extrapolated, 0 by a transform that failed" \
+    -- "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/l/doc.mtlx" --transforms "$tmp/tex/mrt/small.mrt" --size 16
+expect "convert --transform on the same maps" 0 "" -- "$bin" convert --from gltf --to openpbr \
+    base_color="$tmp/tex/base.png" metallic="$tmp/tex/mr.png:b" roughness="$tmp/tex/mr.png:g" \
+    --transform "$tmp/tex/mrt/small.mrt" --format png -o "$tmp/tex/lconvert/"
+for p in base_color base_metalness specular_roughness; do
+    check "... $p: export's learned map equals convert's" cmp -s "$tmp/tex/l/doc_Tex_$p.png" "$tmp/tex/lconvert/$p.png"
+done
+expect "--transforms DIR: the chain found there" 0 "'Tex': learned \(1 transform" -- \
+    "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/l2/doc.mtlx" --transforms "$tmp/tex/mrt" --size 16
+refuses "--transforms DIR without a transform: refused, nothing written" "no \*.mrt files there" "$tmp/tex/refused" -- \
+    "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/refused/doc.mtlx" --transforms "$tmp/tex/refused"
 expect "--direct and --transforms together" 1 "give --direct or --transforms, not both" -- \
     "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/refused/doc.mtlx" --direct --transforms x.mrt
 
