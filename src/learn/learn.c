@@ -465,8 +465,8 @@ static mr_status plan(const mr_sweep_table *tab, mr_learned *t) {
         const int sp = tab->target_ties.source[tp];
         t->carries[t->carry_count++] = (mr_learned_carry){tp, sp, 0, {1.0, 1.0, 1.0}};
         carried[tp] = 1;
-        mr_status status = note(t, "target %s is tied to source %s (the sweep's tie): carried as it is", tgt->params[tp].name,
-                                src->params[sp].name);
+        mr_status status = note(t, "target %s is tied to source %s (the sweep's tie): carried as it is",
+                                tgt->params[tp].name, src->params[sp].name);
         if (status != MR_OK) return status;
     }
     // Carries: a Lambertian target parameter from a Lambertian source parameter. A source held in the rows is carried
