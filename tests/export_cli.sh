@@ -127,7 +127,7 @@ expect "uniform asset to .mtlx (openpbr): the plastic remapped and converged" 0 
 
 # ---- textured materials to openpbr and standard-surface: the direct route --------------------------------------
 # A small textured asset (6 x 6 maps, clamped sampler) with a uniform material beside it; the maps are converted as
-# `convert --direct` converts them (at export's tolerance, 12/255), in a 32 x 32 fit scene to stay quick.
+# `convert --direct` converts them (export's default tolerance is convert's, 6/255), in a 32 x 32 fit scene.
 mkdir -p "$tmp/tex"
 oiiotool --pattern fill:topleft=0.6,0.3,0.1:topright=0.1,0.4,0.6:bottomleft=0.3,0.3,0.3:bottomright=0.7,0.7,0.2 \
     6x6 3 -d uint8 -o "$tmp/tex/base.png" >/dev/null 2>&1
@@ -144,7 +144,7 @@ cat >"$tmp/tex/tex.gltf" <<'EOF'
 EOF
 check "the small textured asset is made" test -s "$tmp/tex/base.png" -a -s "$tmp/tex/mr.png"
 expect "a textured material to openpbr: converted by the direct route, counted" 0 \
-    "material 0 'Tex': direct \(6x6 = 36 texels, 36 distinct values at tolerance 0\.04706: 36 converged; 0 texels" \
+    "material 0 'Tex': direct \(6x6 = 36 texels, 36 distinct values at tolerance 0\.02353: 36 converged; 0 texels" \
     -- "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/out/doc.mtlx" --size 32
 check "... the uniform one still remapped" grep -q "material 1 'Red plastic': remap (converged" "$tmp/out"
 check "... the holds said" grep -q "^held: base_weight=1, .* (default for openpbr)" "$tmp/out"
@@ -177,9 +177,9 @@ EOF
 }
 check "... re-read: the surface's inputs come from the converted maps (sRGB colour, linear data)" \
     mtlx_converted_check "$tmp/tex/out/doc.mtlx" doc_Tex_
-expect "convert --direct on the same maps, at the same tolerance and scene" 0 "" -- "$bin" convert --from gltf \
+expect "convert --direct on the same maps, with its defaults, in the same scene" 0 "" -- "$bin" convert --from gltf \
     --to openpbr base_color="$tmp/tex/base.png" metallic="$tmp/tex/mr.png:b" roughness="$tmp/tex/mr.png:g" --direct \
-    --tolerance 0.047058823529411764 --size 32 --format png -o "$tmp/tex/convert/"
+    --size 32 --format png -o "$tmp/tex/convert/"
 for p in base_color base_metalness specular_roughness; do
     check "... $p: export's map equals convert --direct's, every code value" \
         cmp -s "$tmp/tex/out/doc_Tex_$p.png" "$tmp/tex/convert/$p.png"

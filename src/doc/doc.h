@@ -193,11 +193,12 @@ typedef struct mr_doc_gltf_options {
     void *progress_user;
 } mr_doc_gltf_options;
 
-/* The direct route's default quantisation step in export: 12/255 (colours in sRGB-encoded units, so 21 levels of
- * 255 per channel; roughness in ln units, a relative step of 4.8 %; metallic and other scalars 0.047 absolute).
- * Twice convert's MR_DIRECT_DEFAULT_TOLERANCE: a remap into the layered models costs 5-10 times one into GGX, and
- * this keeps a 2048^2 metal-rough texture set within a few minutes on 2 cores (docs/documents.md, measured). */
-#define MR_DOC_DEFAULT_TOLERANCE (12.0 / 255.0)
+/* The direct route's default quantisation step in export: convert's, MR_DIRECT_DEFAULT_TOLERANCE = 6/255 (colours in
+ * sRGB-encoded units, 43 levels per channel; roughness in ln units, a relative step of 2.4 %; metallic and other
+ * scalars 0.024 absolute). Measured on the shared WaterBottle (2048^2, 4,712 distinct values into openpbr, metalness
+ * tied): 47 s of CPU, 93 s wall on a loaded 2-core machine; sphere SSIM 0.996 to the source (12/255: 1,421 values,
+ * 19 s of CPU, SSIM 0.990-0.992; docs/documents.md). */
+#define MR_DOC_DEFAULT_TOLERANCE MR_DIRECT_DEFAULT_TOLERANCE
 
 typedef struct mr_doc_gltf_material {
     char name[128];      /* the glTF material's name ("" if none) */
