@@ -219,6 +219,16 @@ expect "--transforms DIR: the chain found there" 0 "'Tex': learned \(1 transform
     "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/l2/doc.mtlx" --transforms "$tmp/tex/mrt" --size 16
 refuses "--transforms DIR without a transform: refused, nothing written" "no \*.mrt files there" "$tmp/tex/refused" -- \
     "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/refused/doc.mtlx" --transforms "$tmp/tex/refused"
+sed 's/"name": "Red plastic"/"name": "Tex"/; s/"roughnessFactor": 0.5}}]}/"roughnessFactor": 0.5}}, {"name": "Tex", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicRoughnessTexture": {"index": 1}}}]}/' \
+    "$tmp/tex/tex.gltf" >"$tmp/tex/dup.gltf"
+expect "two textured materials of one name: their maps named apart" 0 "wrote .*dup_Tex_2_base_color.png" -- \
+    "$bin" export "$tmp/tex/dup.gltf" -o "$tmp/tex/d/dup.mtlx" --size 16
+check "... the first keeps its name" test -s "$tmp/tex/d/dup_Tex_base_color.png"
+oiiotool --pattern constant:color=0,0.5,0.5 4x4 3 -d uint8 -o "$tmp/tex/mr4.png" >/dev/null 2>&1
+sed 's/"uri": "mr.png"/"uri": "mr4.png"/' "$tmp/tex/tex.gltf" >"$tmp/tex/size.gltf"
+refuses "maps of different sizes: refused, naming the material and the sizes" \
+    "material 0 \('Tex'\): .*map 'metallic' is 4x4 but map 'base_color' is 6x6" "$tmp/tex/refused" -- \
+    "$bin" export "$tmp/tex/size.gltf" -o "$tmp/tex/refused/doc.mtlx" --size 16
 expect "--direct and --transforms together" 1 "give --direct or --transforms, not both" -- \
     "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/refused/doc.mtlx" --direct --transforms x.mrt
 

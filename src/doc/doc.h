@@ -226,7 +226,8 @@ typedef struct mr_doc_gltf_material {
 typedef struct mr_doc_gltf_map {
     int material;       /* its material's index */
     int param;          /* the target parameter's index; -1: the flag picture (mr_learned_flag_code, linear) */
-    char path[1024];    /* where it is written: mr_img_prefixed_name(prefix, "<material>_<param>.png") */
+    char stem[160];     /* the material's part of the name: its identifier, "_<index>" added when taken */
+    char path[1024];    /* where it is written: mr_img_prefixed_name(prefix, "<stem>_<param>.png") */
     char file[1024];    /* as the document refers to it */
     mr_image *image;    /* owned */
 } mr_doc_gltf_map;

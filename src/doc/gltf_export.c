@@ -269,6 +269,7 @@ static mr_status add_map(const mr_doc_gltf_options *o, mr_doc_gltf_result *r, in
     out->material = k;
     out->param = param;
     out->image = image;
+    snprintf(out->stem, sizeof(out->stem), "%s", stem);
     char name[512];
     snprintf(name, sizeof(name), "%s_%s.png", stem, what);
     mr_status st = mr_img_prefixed_name(out->path, sizeof(out->path), o->image_prefix, name);
@@ -357,8 +358,7 @@ static mr_status convert_maps(const mr_gltf *asset, const mr_doc_gltf_options *o
     else
         snprintf(stem, sizeof(stem), "material%d", k);
     for (int j = 0; j < r->map_count; j++)
-        if (r->maps[j].material != k && strncmp(r->maps[j].file, stem, strlen(stem)) == 0 &&
-            r->maps[j].file[strlen(stem)] == '_') {
+        if (r->maps[j].material != k && strcmp(r->maps[j].stem, stem) == 0) {
             snprintf(stem + strlen(stem), sizeof(stem) - strlen(stem), "_%d", k);
             break;
         }
