@@ -103,6 +103,10 @@ check "... the fit keeps the source's metalness" grep -q "^openpbr .* base_metal
 expect "remap --tie none: fitted, no tied line" 0 "" -- "$bin" remap --from gltf base_color=0.9 metallic=1 \
     roughness=0.9 --to openpbr --size 16 --tie none
 check "... no tied line" bash -c "! grep -q '^tied:' '$tmp/out'"
+expect "remap --hold on the tied parameter: the hold wins, nothing tied" 0 "held: base_metalness=0.25 \(--hold\)" -- \
+    "$bin" remap --from gltf metallic=1 roughness=0.5 --to openpbr --size 16 --hold base_metalness=0.25
+check "... no tied line, the held value kept" bash -c \
+    "! grep -q '^tied:' '$tmp/out' && grep -q '^openpbr .* base_metalness=0.25 ' '$tmp/out'"
 expect "remap --tie given, in --json" 0 '"tied": \[\{"name": "metalness", "source": "metallic", "by": "--tie"\}\]' -- \
     "$bin" remap --from gltf metallic=0.5 --to standard-surface --size 16 --tie metalness=metallic --json
 expect "remap ward -> openpbr: Ward has no metalness, nothing tied" 0 '"tied": \[\]' -- \

@@ -234,7 +234,8 @@ size_t mr_brdf_format_ties(const mr_brdf_model *source, const mr_brdf_model *tar
                            char *buf, size_t size);
 
 /* Apply ties: target_values[tied parameter] = source_values[its source parameter] (clamped into the target
- * parameter's range), and the tied bits or'ed into *held (may be NULL). */
+ * parameter's range), and the tied bits or'ed into *held (may be NULL). A parameter *held already holds (the
+ * caller's hold) keeps its value: a hold wins over a tie. */
 void mr_brdf_apply_ties(const mr_brdf_model *source, const double *source_values, const mr_brdf_model *target,
                         const mr_brdf_ties *ties, double *target_values, unsigned *held);
 

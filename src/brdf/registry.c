@@ -372,8 +372,9 @@ size_t mr_brdf_format_ties(const mr_brdf_model *source, const mr_brdf_model *tar
 void mr_brdf_apply_ties(const mr_brdf_model *source, const double *source_values, const mr_brdf_model *target,
                         const mr_brdf_ties *ties, double *target_values, unsigned *held) {
     if (source == NULL || source_values == NULL || target == NULL || ties == NULL || target_values == NULL) return;
+    const unsigned caller = held ? *held : 0u;
     for (int p = 0; p < target->param_count && p < 32; p++) {
-        if (!((ties->tied >> p) & 1u)) continue;
+        if (!((ties->tied >> p) & 1u) || ((caller >> p) & 1u)) continue; // a caller's hold wins over a tie
         const mr_brdf_param *q = &target->params[p];
         const double *from = source_values + mr_brdf_param_offset(source, ties->source[p]);
         double *to = target_values + mr_brdf_param_offset(target, p);

@@ -48,13 +48,13 @@ int cli_parse_held(const char *command, const mr_brdf_model *model, const char *
 }
 
 int cli_parse_ties(const char *command, const mr_brdf_model *source, const mr_brdf_model *target, const char *list,
-                   mr_brdf_ties *ties) {
-    if (list == NULL) {
+                   unsigned held, mr_brdf_ties *ties) {
+    if (list == NULL)
         *ties = mr_brdf_default_ties(source, target);
-        return 1;
-    }
-    if (mr_brdf_parse_ties(source, target, list, ties) == MR_OK) return 1;
-    return cli_usage_error(command, "--tie: %s", mr_last_error()) == 0;
+    else if (mr_brdf_parse_ties(source, target, list, ties) != MR_OK)
+        return cli_usage_error(command, "--tie: %s", mr_last_error()) == 0;
+    ties->tied &= ~held;
+    return 1;
 }
 
 void cli_print_ties(FILE *out, const char *prefix, const mr_brdf_model *source, const mr_brdf_model *target,

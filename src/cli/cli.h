@@ -101,9 +101,10 @@ void cli_print_holds(FILE *out, const char *prefix, const mr_brdf_model *model, 
 void cli_print_holds_json(FILE *out, const mr_brdf_model *model, const double *values, unsigned held);
 
 /* The ties of a fit (brdf.h): `list` (--tie TARGET=SOURCE,... or "none") parsed into *ties, or, when list is NULL,
- * the pair's defaults (mr_brdf_default_ties). Returns 1, or prints a usage error naming the item and returns 0. */
+ * the pair's defaults (mr_brdf_default_ties); parameters the caller holds (`held`, --hold) are not tied (a hold
+ * wins). Returns 1, or prints a usage error naming the item and returns 0. */
 int cli_parse_ties(const char *command, const mr_brdf_model *source, const mr_brdf_model *target, const char *list,
-                   mr_brdf_ties *ties);
+                   unsigned held, mr_brdf_ties *ties);
 /* "PREFIXtied: base_metalness=metallic (default for gltf -> openpbr)" ("(--tie)" when given); nothing for none. */
 void cli_print_ties(FILE *out, const char *prefix, const mr_brdf_model *source, const mr_brdf_model *target,
                     const mr_brdf_ties *ties, int given);

@@ -224,7 +224,8 @@ int cmd_convert(int argc, char **argv) {
         return CLI_EXIT_USAGE;
     if (!direct && tie_list != NULL)
         return cli_usage_error(COMMAND, "--tie goes with --direct (a learned transform ties what its sweep tied)");
-    if (direct && !cli_parse_ties(COMMAND, source, target, tie_list, &dopts.remap.ties)) return CLI_EXIT_USAGE;
+    if (direct && !cli_parse_ties(COMMAND, source, target, tie_list, dopts.remap.held, &dopts.remap.ties))
+        return CLI_EXIT_USAGE;
     if (direct) dopts.remap.target_values = target_values;
 
     // The chain.

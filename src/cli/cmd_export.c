@@ -172,7 +172,7 @@ int cmd_export(int argc, char **argv) {
     if (o.hold != NULL && !cli_parse_held("export", target, o.hold, target_values, &held)) return CLI_EXIT_USAGE;
     const mr_brdf_model *gltf = mr_brdf_find("gltf");
     mr_brdf_ties ties;
-    if (!cli_parse_ties("export", gltf, target, o.tie, &ties)) return CLI_EXIT_USAGE;
+    if (!cli_parse_ties("export", gltf, target, o.tie, held, &ties)) return CLI_EXIT_USAGE;
     mr_learned_set transforms = {0};
     for (int k = 0; k < o.transform_count; k++) {
         struct stat info;

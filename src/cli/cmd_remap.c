@@ -198,7 +198,7 @@ int cmd_remap(int argc, char **argv) {
             mr_status status = mr_brdf_parse_assignment(from, from_assignments[k], source_values);
             if (status != MR_OK) return cli_fail("remap", status);
         }
-        if (!cli_parse_ties("remap", from, to, tie_list, &opts.ties)) return CLI_EXIT_USAGE;
+        if (!cli_parse_ties("remap", from, to, tie_list, opts.held, &opts.ties)) return CLI_EXIT_USAGE;
     } else if (tie_list != NULL) {
         return cli_usage_error("remap", "--tie needs --from MODEL (a tie takes the source's value)");
     }

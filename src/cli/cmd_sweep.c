@@ -399,7 +399,7 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
     spec->remap.strategy = strategy;
     if (hold_list != NULL && !cli_parse_held("sweep", to, hold_list, spec->target_values, &spec->remap.held))
         return CLI_EXIT_USAGE;
-    if (!cli_parse_ties("sweep", from, to, tie_list, &spec->remap.ties)) return CLI_EXIT_USAGE;
+    if (!cli_parse_ties("sweep", from, to, tie_list, spec->remap.held, &spec->remap.ties)) return CLI_EXIT_USAGE;
     a->ties_given = tie_list != NULL;
     spec->scene = scene;
     if (random_count > 0) {

@@ -325,6 +325,7 @@ static mr_status convert_maps(const mr_gltf *asset, const mr_doc_gltf_options *o
     d.remap.target_values = o->target_values;
     d.remap.held = o->held;
     d.remap.ties = o->ties ? *o->ties : mr_brdf_default_ties(gltf, target);
+    d.remap.ties.tied &= ~o->held; // a hold wins over a tie (and the cache header says so)
     d.scene.size = o->size > 0 ? o->size : MR_REMAP_DEFAULT_SIZE;
     d.cache_path = o->cache_path;
     progress_relay relay = {o, k};
@@ -450,6 +451,7 @@ mr_status mr_doc_from_gltf(const mr_gltf *asset, const mr_doc_gltf_options *opts
             ro.target_values = o.target_values;
             ro.held = o.held;
             ro.ties = o.ties ? *o.ties : mr_brdf_default_ties(gltf, o.target);
+            ro.ties.tied &= ~o.held;
             mr_remap_result fit;
             if ((st = mr_remap(plan, gltf, gltf_v, o.target, &ro, &fit)) != MR_OK) break;
             rm->outcome = (int)fit.outcome;

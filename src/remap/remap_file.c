@@ -101,7 +101,7 @@ void mr_strbuf_remap_lines(mr_strbuf *sb, const mr_brdf_model *source, const mr_
         }
     // Ties likewise: " tied=base_metalness:metallic" (target:source).
     for (int p = 0, first = 1; source != NULL && p < target->param_count && p < 32; p++)
-        if ((r->ties.tied >> p) & 1u) {
+        if (((r->ties.tied & ~r->held) >> p) & 1u) { // a hold wins over a tie
             mr_strbuf_printf(sb, "%s%s:%s", first ? " tied=" : ",", target->params[p].name,
                              source->params[r->ties.source[p]].name);
             first = 0;
