@@ -17,6 +17,8 @@
 #                   (docs/evaluation-svbrdf.md; 11 min on 2 cores after make)
 #   make evaluation-viewers   the same conversions in the viewers people use: Blender Cycles and three.js in
 #                   headless Chromium (docs/evaluation.md, "What viewers show"; installs Blender, Chromium, npm pins)
+#   make evaluation-clients   matremap export's .mtlx and .usda opened by three.js's MaterialXLoader and USDLoader
+#                   in headless Chromium beside matremap's own renders (docs/evaluation-clients.md)
 #   make dataset    the specular -> metallic training set (build/dataset); make train: data/spec2metal.mlp;
 #                   make objectives: which label objective agrees with object SSIM (docs/training.md)
 #   make faults     allocation and I/O fault injection (build/faults, ASan + UBSan + LSan): the N-th allocation,
@@ -51,7 +53,8 @@ NEEDS_DEPS := $(if $(MAKECMDGOALS),$(filter-out deps clean,$(MAKECMDGOALS)),all)
 ifneq ($(NEEDS_DEPS),)
 missing = $(foreach p,$(1),$(if $(shell $(PKG_CONFIG) --exists $(word 1,$(subst :, ,$(p))) && echo y),,$(p)))
 MISSING := $(call missing,nlopt:libnlopt-dev OpenEXR:libopenexr-dev tinygltf:libtinygltf-dev libpng:libpng-dev \
-                          libdeflate:libdeflate-dev OpenImageIO:libopenimageio-dev tinyobjloader:libtinyobjloader-dev)
+                          libdeflate:libdeflate-dev OpenImageIO:libopenimageio-dev tinyobjloader:libtinyobjloader-dev \
+                          expat:libexpat1-dev)
 # libsvm ships no pkg-config file: its header stands for the package.
 ifeq ($(wildcard /usr/include/libsvm/svm.h),)
 MISSING += libsvm:libsvm-dev
@@ -61,11 +64,12 @@ $(error pkg-config cannot find $(foreach p,$(MISSING),$(word 1,$(subst :, ,$(p))
         $(word 2,$(subst :, ,$(p))))); run scripts/install-deps.sh (or make deps))
 endif
 endif
-DEP_CFLAGS := $(shell $(PKG_CONFIG) --cflags nlopt OpenEXR tinygltf libpng libdeflate tinyobjloader 2>/dev/null)
+DEP_CFLAGS := $(shell $(PKG_CONFIG) --cflags nlopt OpenEXR tinygltf libpng libdeflate tinyobjloader expat \
+                2>/dev/null)
 # --as-needed keeps only the libraries the objects use: OpenEXR's .pc lists its C++ libraries as well, of which
 # the library reads and writes through OpenEXRCore alone (each shared library costs start-up time).
 DEP_LIBS   := -Wl,--as-needed $(shell $(PKG_CONFIG) --libs nlopt OpenEXR tinygltf libpng libdeflate tinyobjloader \
-                                    2>/dev/null) -lsvm -lm
+                                    expat 2>/dev/null) -lsvm -lm
 
 MODULE_DIR := $(PREFIX)/lib/matremap
 DATA_DIR   := $(PREFIX)/share/matremap
@@ -111,7 +115,7 @@ NETWORK   := $(BUILD)/share/matremap/spec2metal.mlp
 TESTS     := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 # Fuzz targets (tests/fuzz/): linked into tests/test_fuzz_inputs for make check, and one libFuzzer binary each
 # for make fuzz. They reach the CLI's value parsers too, so they link the CLI's objects except main().
-FUZZ_NAMES  := gltf png jpeg exr hdr mlp mrt sweep cli_value obj
+FUZZ_NAMES  := gltf png jpeg exr hdr mlp mrt sweep cli_value obj mtlx
 FUZZ_OBJ    := $(patsubst %,$(BUILD)/obj/tests/fuzz/fuzz_%.o,$(FUZZ_NAMES) support)
 CLI_LIB_OBJ := $(filter-out $(BUILD)/obj/src/cli/main.o,$(CLI_OBJ))
 BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
@@ -126,7 +130,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h sr
 
 .PHONY: all check asan fuzz fuzz-targets faults demo bench \
         analyses paper evaluation evaluation-gltf evaluation-hardcases evaluation-svbrdf \
-        evaluation-viewers dataset train objectives deps install clean tables
+        evaluation-viewers evaluation-clients dataset train objectives deps install clean tables
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
 all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE) $(MPI_MODULE)
@@ -290,6 +294,15 @@ $(OBJECT_METRICS): $(BUILD)/obj/scripts/viewers/object_metrics.o $(LIB)
 
 evaluation-viewers: all $(OBJECT_METRICS)
 	scripts/evaluate-viewers.sh $(BUILD)
+
+# doc_write: one uniform material written by the library's document writer (a coat, a metal's specular_color).
+DOC_WRITE := $(BUILD)/tools/doc_write
+$(DOC_WRITE): $(BUILD)/obj/scripts/viewers/doc_write.o $(LIB)
+	@mkdir -p $(dir $@)
+	$(LINK) $(ALL_LDFLAGS) $< $(LIB) $(ALL_LDLIBS) -o $@
+
+evaluation-clients: all $(OBJECT_METRICS) $(DOC_WRITE)
+	scripts/evaluate-clients.sh $(BUILD)
 
 # The specular -> metallic dataset (image-objective labels, a few minutes on 2 cores) and the network trained on
 # it (docs/training.md). `make train` reproduces data/spec2metal.mlp bit for bit.

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 
 using namespace mr_gltf_internal;
@@ -634,6 +635,36 @@ mr_status mr_gltf_set_material(mr_gltf *g, int material, const mr_gltf_material 
     if (s != MR_OK) return s;
     if (in == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL material");
     MR_GLTF_GUARD(g->path.c_str(), return set_material_impl(g, material, in);)
+}
+
+mr_status mr_gltf_create(const char *label, mr_gltf **out) {
+    if (out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL output");
+    *out = NULL;
+    MR_GLTF_GUARD(label ? label : "glTF", {
+        std::unique_ptr<mr_gltf> g(new mr_gltf());
+        g->path = label ? label : "";
+        g->base_dir = ".";
+        g->model.asset.version = "2.0";
+        g->model.asset.generator = "matremap";
+        g->original_parsed = true; // no JSON was read: nothing to merge on save
+        *out = g.release();
+        return MR_OK;
+    })
+}
+
+mr_status mr_gltf_add_material(mr_gltf *g, const mr_gltf_material *in, int *out_material) {
+    if (g == NULL || in == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF: NULL asset or material");
+    MR_GLTF_GUARD(g->path.c_str(), {
+        g->model.materials.emplace_back();
+        int index = (int)g->model.materials.size() - 1;
+        mr_status s = set_material_impl(g, index, in);
+        if (s != MR_OK) {
+            g->model.materials.pop_back();
+            return s;
+        }
+        if (out_material) *out_material = index;
+        return MR_OK;
+    })
 }
 
 mr_status mr_gltf_remove_material_extension(mr_gltf *g, int material, const char *name, int *removed) {

@@ -223,6 +223,15 @@ mr_status mr_gltf_set_material(mr_gltf *asset, int material, const mr_gltf_mater
  * removed may be NULL. */
 mr_status mr_gltf_remove_material_extension(mr_gltf *asset, int material, const char *name, int *removed);
 
+/* An empty asset: asset.version "2.0", generator "matremap", nothing else (no scene, mesh, material or buffer), for
+ * materials added with mr_gltf_add_material and images with mr_gltf_add_image_file (matremap export of a MaterialX
+ * document to .gltf/.glb); `label` names it in messages (mr_gltf_path) and is never read. MR_ERR_NOMEM. */
+mr_status mr_gltf_create(const char *label, mr_gltf **out);
+
+/* Appends a material with mr_gltf_set_material's fields; *out_material (may be NULL) receives its index. On failure
+ * the asset is as it was. */
+mr_status mr_gltf_add_material(mr_gltf *asset, const mr_gltf_material *in, int *out_material);
+
 /* Whether a material carries extension `name` (0 or 1; 0 for a bad index). */
 int mr_gltf_material_has_extension(const mr_gltf *asset, int material, const char *name);
 

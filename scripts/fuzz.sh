@@ -16,7 +16,7 @@ runs=${4:-0}
 shift 4 2>/dev/null || shift $#
 root=$(cd "$(dirname "$0")/.." && pwd)
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(gltf png jpeg exr hdr mlp mrt sweep cli_value obj)
+[ ${#targets[@]} -gt 0 ] || targets=(gltf png jpeg exr hdr mlp mrt sweep cli_value obj mtlx)
 
 "$root/tests/fuzz/make-corpus.sh" "$build" "$fuzz_build/corpus" || { echo "fuzz: cannot make the corpus" >&2; exit 2; }
 mkdir -p "$fuzz_build/findings" "$fuzz_build/logs"
@@ -41,7 +41,7 @@ for t in "${targets[@]}"; do
     [ -f "$root/tests/fuzz/$t.dict" ] && dict=(-dict="$root/tests/fuzz/$t.dict")
     # Inputs grow up to max_len: 64 kB for text and glTF (a seed is at most 32 kB), 256 kB for images.
     max_len=262144
-    case $t in gltf|mlp|mrt|sweep|cli_value|obj) max_len=65536 ;; esac
+    case $t in gltf|mlp|mrt|sweep|cli_value|obj|mtlx) max_len=65536 ;; esac
     run_target() {
         "$binary" -max_total_time="$seconds" -runs="$([ "$runs" -gt 0 ] && echo "$runs" || echo -1)" \
             -print_final_stats=1 -close_fd_mask=3 -timeout=20 -rss_limit_mb=3072 -malloc_limit_mb=3072 \

@@ -13,6 +13,7 @@ packages=(
     libdeflate-dev     # PNG's zlib streams, compressed and inflated whole (src/io/png_deflate.c, png_palette.c)
     libsvm-dev         # epsilon-SVR training of learned transforms (src/learn/svr.c)
     libtinyobjloader-dev  # OBJ meshes, e.g. the paper's material-test sphere (src/io/obj_load.cpp)
+    libexpat1-dev      # MaterialX documents read as export's input (src/doc/mtlx_read.c)
     gnuplot-nox
     jq                 # scripts/evaluate-svbrdf.sh reads the reports' summary.json
     fonts-dejavu-core  # labels on the demo's contact sheets (oiiotool --text)

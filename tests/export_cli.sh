@@ -8,7 +8,11 @@
 # maps written beside OUT, referred to by the document, equal to `convert --direct`'s to the last code value; holds;
 # a refusal writing nothing); refusals (exit 2, the material named, nothing written); usage errors (exit 1); the
 # remap route of uniform materials (the fit scene of remap's default, 64 x 64: about a second per material), its
-# outcomes converged. Ends with "N passed, N failed".
+# outcomes converged. MaterialX input: our own documents back to .usda (maps rebased) and .mtlx (copied: the same
+# text), MaterialX's examples (tests/data/materialx) remapped with the lobes not carried named, refusals (an
+# unsupported node, a textured standard_surface to openpbr, whose direct route runs from glTF only: exit 2, nothing
+# written); .gltf/.glb outputs from a glTF and from a .mtlx, checked by the Khronos glTF validator (tests/node, npm
+# ci). Ends with "N passed, N failed".
 set -u
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="${MR_BUILD:-$root/build}"
@@ -248,11 +252,108 @@ expect "usd-preview is not written to .mtlx" 1 "--to usd-preview: .mtlx does not
 expect "openpbr is not written to .usda" 1 "--to openpbr: .usda does not write it" -- \
     "$bin" export "$bottle" -o "$tmp/refused/b.usda" --to openpbr
 expect "an unknown model" 1 "--to 'nope'" -- "$bin" export "$bottle" -o "$tmp/refused/b.usda" --to nope
-expect "another extension" 1 "the extension chooses the format: .mtlx or .usda" -- \
+expect "another extension" 1 "the extension chooses the format: .mtlx, .usda, .gltf or .glb" -- \
     "$bin" export "$bottle" -o "$tmp/refused/b.usd"
-expect "a .mtlx input is not read yet" 1 "reading .mtlx is not done yet" -- \
-    "$bin" export "$tmp/m/bottle.mtlx" -o "$tmp/refused/b.usda"
+expect "another input" 1 "the input is a glTF asset \\(.gltf or .glb\\) or a MaterialX document \\(.mtlx\\)" -- \
+    "$bin" export "$tmp/u/bottle.usda" -o "$tmp/refused/b.mtlx"
+expect "a glTF output takes --to gltf only" 1 "--to openpbr: a glTF output .* holds gltf materials only" -- \
+    "$bin" export "$bottle" -o "$tmp/refused/b.glb" --to openpbr
 expect "no -o" 1 "missing -o OUT" -- "$bin" export "$bottle"
 check "... nothing written by the refusals" test -z "$(ls -A "$tmp/refused")"
+# ---- MaterialX input ---------------------------------------------------------------------------------------------
+# Our own gltf_pbr document of WaterBottle (maps through extract, the images beside it) read back: to .usda the maps
+# are carried (gltf -> usd-preview), relative to the new folder; to .mtlx --to gltf copied, the same text.
+expect "bottle.mtlx to .usda: maps carried" 0 "material 0 'BottleMat': maps" -- \
+    "$bin" export "$tmp/m/bottle.mtlx" -o "$tmp/x/sub/bottle.usda"
+usd_from_mtlx() {
+    python3 - "$tmp/x/sub/bottle.usda" <<'PY'
+import os, re, sys
+text = open(sys.argv[1]).read()
+folder = os.path.dirname(sys.argv[1])
+files = re.findall(r"asset inputs:file = @([^@]+)@", text)
+assert files and all(f.startswith("../../m/") for f in files), files
+assert all(os.path.isfile(os.path.join(folder, f)) for f in files)
+assert "inputs:metallic.connect = </Materials/BottleMat/metallic_texture.outputs:b>" in text
+assert "inputs:roughness.connect = </Materials/BottleMat/roughness_texture.outputs:g>" in text
+assert text.count('sourceColorSpace = "sRGB"') == 1 and text.count('sourceColorSpace = "raw"') == 2
+PY
+}
+check "... the maps named from the new folder, wired as from the glTF" usd_from_mtlx
+expect "bottle.mtlx to .mtlx --to gltf: copied" 0 "material 0 'BottleMat': copy" -- \
+    "$bin" export "$tmp/m/bottle.mtlx" -o "$tmp/m/again.mtlx" --to gltf
+check "... the same document" cmp -s "$tmp/m/bottle.mtlx" "$tmp/m/again.mtlx"
+# MaterialX's own examples (tests/data/materialx): standard_surface gold to open_pbr_surface by a remap; the
+# OpenPBR pearl to gltf_pbr, its subsurface and thin film reported as not carried (text and --json).
+examples="$root/tests/data/materialx"
+expect "standard_surface gold to .mtlx (openpbr): remapped" 0 "material 0 'Gold': remap \(" -- \
+    "$bin" export "$examples/standard_surface_gold.mtlx" -o "$tmp/x/gold.mtlx"
+check "... an open_pbr_surface, metallic" python3 -c "
+import sys, xml.etree.ElementTree as ET
+r = ET.parse(sys.argv[1]).getroot()
+s = {i.get('name'): i.get('value') for i in r.find('open_pbr_surface')}
+assert float(s['base_metalness']) > 0.9, s
+assert r.find('surfacematerial').get('name') == 'Gold'" "$tmp/x/gold.mtlx"
+expect "open_pbr pearl to .mtlx --to gltf: the lobes not carried are named" 0 \
+    "'Pearl': remap \(.*\); not carried: subsurface_weight, subsurface_color, subsurface_radius_scale, thin_film_weight, thin_film_thickness, thin_film_ior" -- \
+    "$bin" export "$examples/open_pbr_pearl.mtlx" -o "$tmp/x/pearl.mtlx" --to gltf
+expect "... and with --json" 0 "" -- \
+    "$bin" export "$examples/open_pbr_pearl.mtlx" -o "$tmp/x/pearl2.mtlx" --to gltf --json
+check "... the list in the summary" python3 -c "
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d['materials'][0]['not_carried'] == ['subsurface_weight', 'subsurface_color', 'subsurface_radius_scale',
+    'thin_film_weight', 'thin_film_thickness', 'thin_film_ior'], d" "$tmp/out"
+expect "open_pbr pearl to .mtlx (openpbr): copied, its extras kept" 0 "'Pearl': copy$" -- \
+    "$bin" export "$examples/open_pbr_pearl.mtlx" -o "$tmp/x/pearl_op.mtlx"
+check "... subsurface and thin film written unchanged" python3 -c "
+import sys, xml.etree.ElementTree as ET
+s = {i.get('name'): i.get('value') for i in ET.parse(sys.argv[1]).getroot().find('open_pbr_surface')}
+assert s['subsurface_weight'] == '1' and s['thin_film_thickness'] == '0.42' and s['coat_ior'] == '1.68', s" \
+    "$tmp/x/pearl_op.mtlx"
+mkdir -p "$tmp/mrefused"
+cp "$examples/gltf_pbr_boombox.mtlx" "$tmp/mrefused/"
+refuses "an unsupported node: exit 2, file, line, material and node named" \
+    "error: MaterialX '.*gltf_pbr_boombox.mtlx' line 3: material 'Material_boombox': node 'image_basecolor' is a gltf_colorimage, which export cannot follow" \
+    "$tmp/mrefused" -- "$bin" export "$tmp/mrefused/gltf_pbr_boombox.mtlx" -o "$tmp/mrefused/out.usda"
+refuses "a textured standard_surface to openpbr: its direct route runs from glTF only" \
+    "material 'Tiled_Brass' \(standard-surface\) is textured: its maps convert to openpbr by the direct route, which export runs from a glTF asset only so far: export from the glTF asset instead" \
+    "$tmp/mrefused" -- "$bin" export "$examples/standard_surface_brass_tiled.mtlx" -o "$tmp/mrefused/brass.mtlx"
+
+# ---- glTF outputs ------------------------------------------------------------------------------------------------
+validate() { # the Khronos validator (tests/node, pinned; installed with npm ci when missing): 0 errors
+    [ -d "$root/tests/node/node_modules/gltf-validator" ] ||
+        (cd "$root/tests/node" && npm ci --no-audit --no-fund >/dev/null 2>&1) || return 1
+    node "$root/tests/node/gltf_validate.js" "$@"
+}
+expect "WaterBottle to .gltf: the asset itself" 0 "wrote .*g/bottle.gltf \(gltf, 1 material\)" -- \
+    "$bin" export "$bottle" -o "$tmp/g/bottle.gltf"
+check "... its mesh and textures kept" python3 -c "
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d['meshes'] and len(d['textures']) == 4 and d['materials'][0]['name'] == 'BottleMat'" "$tmp/g/bottle.gltf"
+check "... valid (Khronos validator)" validate "$tmp/g/bottle.gltf"
+expect "WaterBottle to .glb" 0 "wrote .*g/bottle.glb \(gltf, 1 material\)" -- \
+    "$bin" export "$bottle" -o "$tmp/g/bottle.glb"
+check "... valid" validate "$tmp/g/bottle.glb"
+expect "bottle.mtlx to .gltf: a glTF of the materials and their images" 0 \
+    "wrote .*g/mtlx.gltf \(gltf, 1 material\)" -- "$bin" export "$tmp/m/bottle.mtlx" -o "$tmp/g/mtlx.gltf"
+gltf_from_mtlx() {
+    python3 - "$tmp/g/mtlx.gltf" <<'PY'
+import json, os, sys
+d = json.load(open(sys.argv[1]))
+m = d['materials'][0]['pbrMetallicRoughness']
+assert 'baseColorTexture' in m and 'metallicRoughnessTexture' in m and 'meshes' not in d, d
+assert 'extensionsUsed' not in d, d   # specular 1, ior 1.5: the extensions' defaults, not written
+for im in d['images']:
+    assert os.path.isfile(os.path.join(os.path.dirname(sys.argv[1]), im['uri'])), im
+PY
+}
+check "... base colour and metallic-roughness textures, the images beside it, no meshes" gltf_from_mtlx
+check "... the base colour image is the asset's bytes" cmp -s "$tmp/g/mtlx_bottle_image0.png" \
+    "$bottle_dir/WaterBottle_baseColor.png"
+check "... valid (Khronos validator)" validate "$tmp/g/mtlx.gltf"
+expect "standard_surface copper to .glb: remapped to gltf" 0 "'Copper': remap" -- \
+    "$bin" export "$examples/standard_surface_copper.mtlx" -o "$tmp/g/copper.glb"
+check "... valid" validate "$tmp/g/copper.glb"
 expect "help export" 0 "usage: matremap export" -- "$bin" help export
 finish

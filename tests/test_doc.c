@@ -90,6 +90,13 @@ static int count(const char *text, const char *what) {
 MR_TEST(mtlx_writes_declared_inputs_only) {
     for (int k = 0; k < 3; k++) {
         mr_doc *doc = sample(models[k]);
+        // Extras too (inputs of lobes the models do not have), written after the parameters.
+        static const char *const extra[3][2] = {{"emission_color", "color3"}, {"thin_walled", "boolean"},
+                                                {"alpha_mode", "integer"}};
+        MR_CHECK_OK(mr_doc_add_extra(mr_doc_material_at(doc, 0), extra[k][0], extra[k][1], (double[3]){1, 1, 1}));
+        MR_CHECK(mr_doc_add_extra(mr_doc_material_at(doc, 0), "nope", "float", (double[1]){1}) == MR_ERR_INVALID_ARG);
+        MR_CHECK(mr_doc_add_extra(mr_doc_material_at(doc, 0), extra[k][0], "float", (double[1]){1}) ==
+                 MR_ERR_INVALID_ARG); // the declared type only
         char *text = NULL;
         MR_CHECK_OK(mr_doc_to_text(doc, MR_DOC_FORMAT_MTLX, &text));
         // Each element <NODE name=".." type="T"> opens a node; each <input name="X" inside it is declared by it.
@@ -134,6 +141,10 @@ MR_TEST(mtlx_writes_declared_inputs_only) {
 
 MR_TEST(usda_writes_declared_inputs_only) {
     mr_doc *doc = sample("usd-preview");
+    MR_CHECK_OK(mr_doc_add_extra(mr_doc_material_at(doc, 0), "emissiveColor", "color3", (double[3]){1, 0.5, 0}));
+    MR_CHECK_OK(mr_doc_add_extra(mr_doc_material_at(doc, 0), "opacityMode", "integer", (double[1]){0}));
+    MR_CHECK(mr_doc_add_extra(mr_doc_material_at(doc, 0), "metallic", "float", (double[1]){0}) ==
+             MR_ERR_INVALID_ARG); // a parameter of the model, not an extra
     char *text = NULL;
     MR_CHECK_OK(mr_doc_to_text(doc, MR_DOC_FORMAT_USDA, &text));
     char *copy = strdup(text);
@@ -167,6 +178,8 @@ MR_TEST(usda_writes_declared_inputs_only) {
     MR_CHECK(strstr(text, "float4 inputs:scale = (0.5, 1, 1, 1)") != NULL);
     MR_CHECK(strstr(text, "token inputs:wrapS = \"clamp\"") && strstr(text, "token inputs:wrapT = \"mirror\""));
     MR_CHECK(strstr(text, "int inputs:useSpecularWorkflow = 0") != NULL); // 0.25 rounds to 0
+    MR_CHECK(strstr(text, "color3f inputs:emissiveColor = (1, 0.5, 0)") != NULL);
+    MR_CHECK(strstr(text, "token inputs:opacityMode = \"transparent\"") != NULL);
     free(text);
     mr_doc_free(doc);
 }
@@ -178,6 +191,27 @@ MR_TEST(the_colour_space_rule) {
     MR_CHECK(mr_doc_texture_is_srgb(colour, "a.png") == 1 && mr_doc_texture_is_srgb(colour, "a.JPG") == 1);
     MR_CHECK(mr_doc_texture_is_srgb(colour, "a.exr") == 0 && mr_doc_texture_is_srgb(colour, "a.HDR") == 0);
     MR_CHECK(mr_doc_texture_is_srgb(rough, "a.png") == 0);
+}
+
+/* The metallic workflow's layer leaves out a constant specularColor (no effect by the specification; three.js's
+ * USDLoader would take it as the dielectric's F0 tint); the specular workflow's keeps it. */
+MR_TEST(usda_specular_color_only_in_the_specular_workflow) {
+    const mr_brdf_model *usd = mr_brdf_find("usd-preview");
+    for (int workflow = -1; workflow <= 1; workflow++) { // -1: useSpecularWorkflow unset, the node's default 0
+        mr_doc *doc = mr_doc_create();
+        mr_doc_material *m = NULL;
+        MR_CHECK_OK(mr_doc_add_material(doc, "x", usd, &m));
+        MR_CHECK_OK(mr_doc_set_constant(m, "specular_color", (double[3]){0.25, 0.5, 0.75}));
+        MR_CHECK_OK(mr_doc_set_constant(m, "metallic", (double[1]){0}));
+        if (workflow >= 0) MR_CHECK_OK(mr_doc_set_constant(m, "use_specular_workflow", (double[1]){workflow}));
+        char *text = NULL;
+        MR_CHECK_OK(mr_doc_to_text(doc, MR_DOC_FORMAT_USDA, &text));
+        int written = text && strstr(text, "color3f inputs:specularColor = (0.25, 0.5, 0.75)") != NULL;
+        MR_CHECK_MSG(written == (workflow == 1), "workflow %d:\n%s", workflow, text ? text : "");
+        MR_CHECK(text && strstr(text, "float inputs:metallic = 0") != NULL);
+        free(text);
+        mr_doc_free(doc);
+    }
 }
 
 MR_TEST(bad_values_are_refused) {
@@ -264,6 +298,9 @@ MR_TEST(the_route_decision) {
         {0, 3, 1, 1, MR_DOC_ROUTE_MAPS},   {0, 1, 1, 0, MR_DOC_ROUTE_DIRECT}, {0, 2, 1, 0, MR_DOC_ROUTE_DIRECT},
         {0, 1, 1, 1, MR_DOC_ROUTE_LEARNED}, {0, 2, 1, 1, MR_DOC_ROUTE_LEARNED}, {1, 1, 1, 0, MR_DOC_ROUTE_MAPS},
         {1, 2, 0, 0, MR_DOC_ROUTE_REMAP},  {1, 2, 1, 0, MR_DOC_ROUTE_DIRECT},
+        // a MaterialX document's materials (mr_doc_convert): usd-preview's maps back to gltf, the rest direct
+        {3, 0, 1, 0, MR_DOC_ROUTE_MAPS},   {3, 0, 0, 0, MR_DOC_ROUTE_REMAP},  {2, 1, 1, 0, MR_DOC_ROUTE_DIRECT},
+        {3, 1, 1, 0, MR_DOC_ROUTE_DIRECT}, {2, 0, 1, 1, MR_DOC_ROUTE_LEARNED},
     };
     const mr_brdf_model *m[4] = {gltf, op, ss, usd};
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -354,8 +391,331 @@ MR_TEST(a_textured_material_converts_by_the_direct_route) {
     }
 }
 
+/* ---- reading MaterialX (mtlx_read.c) ------------------------------------------------------------------------- */
+
+static void same_values(const mr_doc_material *a, const mr_doc_material *b) {
+    MR_CHECK(a->model == b->model);
+    for (int p = 0; p < a->model->param_count; p++) {
+        const mr_doc_value *x = &a->values[p], *y = &b->values[p];
+        const char *name = a->model->params[p].name;
+        MR_CHECK_MSG(x->kind == y->kind, "%s.%s: kind %d, read %d", a->name, name, (int)x->kind, (int)y->kind);
+        if (x->kind == MR_DOC_CONSTANT)
+            for (int c = 0; c < a->model->params[p].channels; c++)
+                MR_CHECK_MSG(x->constant[c] == y->constant[c], "%s.%s[%d]: %.17g, read %.17g", a->name, name, c,
+                             x->constant[c], y->constant[c]);
+        if (x->kind != MR_DOC_TEXTURE || y->kind != MR_DOC_TEXTURE) continue;
+        MR_CHECK_MSG(strcmp(x->file, y->file) == 0, "%s.%s: %s, read %s", a->name, name, x->file, y->file);
+        MR_CHECK_MSG(x->channel == y->channel && x->uv_set == y->uv_set, "%s.%s: channel %d/%d, uv %d/%d", a->name,
+                     name, x->channel, y->channel, x->uv_set, y->uv_set);
+        MR_CHECK_MSG(x->wrap_s == y->wrap_s && x->wrap_t == y->wrap_t, "%s.%s: wraps", a->name, name);
+        for (int c = 0; c < a->model->params[p].channels; c++)
+            MR_CHECK_MSG(x->scale[c] == y->scale[c], "%s.%s: scale[%d] %g, read %g", a->name, name, c, x->scale[c],
+                         y->scale[c]);
+    }
+}
+
+/* What the writer writes, the reader reads back exactly: constants, maps (colour, channels R..A, scales, UV set 1,
+ * wraps, an .exr), for the three models .mtlx writes; names as written (identifiers); extras. */
+MR_TEST(mtlx_round_trip) {
+    for (int k = 0; k < 3; k++) {
+        mr_doc *doc = sample(models[k]);
+        mr_doc_material *m0 = mr_doc_material_at(doc, 0);
+        const char *extra = k == 0 ? "transmission_weight" : k == 1 ? "sheen" : "transmission";
+        MR_CHECK_OK(mr_doc_add_extra(m0, extra, "float", (double[1]){0.375}));
+        if (k == 0) MR_CHECK_OK(mr_doc_add_extra(m0, "geometry_thin_walled", "boolean", (double[1]){1}));
+        const char *path = mr_test_tmp_path("round.mtlx");
+        MR_CHECK_OK(mr_doc_write(doc, path));
+        mr_doc *back = NULL;
+        MR_CHECK_OK(mr_doc_read_mtlx(path, &back));
+        if (back == NULL) {
+            mr_doc_free(doc);
+            continue;
+        }
+        MR_CHECK(mr_doc_material_count(back) == 2);
+        MR_CHECK(strcmp(mr_doc_material_get(back, 0)->name, "Brushed_metal__1") == 0);
+        MR_CHECK(strcmp(mr_doc_material_get(back, 1)->name, "Brushed_metal__1_2") == 0);
+        for (int i = 0; i < 2; i++) same_values(mr_doc_material_get(doc, i), mr_doc_material_get(back, i));
+        const mr_doc_material *b0 = mr_doc_material_get(back, 0);
+        MR_CHECK(b0->extra_count == (k == 0 ? 2 : 1) && strcmp(b0->extras[0].name, extra) == 0 &&
+                 b0->extras[0].value[0] == 0.375);
+        // Written again, the same text.
+        char *t1 = NULL, *t2 = NULL;
+        MR_CHECK_OK(mr_doc_to_text(doc, MR_DOC_FORMAT_MTLX, &t1));
+        MR_CHECK_OK(mr_doc_to_text(back, MR_DOC_FORMAT_MTLX, &t2));
+        MR_CHECK_MSG(t1 && t2 && strcmp(t1, t2) == 0, "%s: the text differs after a round trip", models[k]);
+        free(t1);
+        free(t2);
+        mr_doc_free(back);
+        mr_doc_free(doc);
+    }
+}
+
+static const char *write_text(const char *name, const char *text) {
+    const char *path = mr_test_tmp_path(name);
+    MR_CHECK(mr_test_write_file(path, text, strlen(text)) == 1);
+    return path;
+}
+
+/* MaterialX's UsdPreviewSurface (ND_UsdPreviewSurface_surfaceshader), top-level image nodes (nodename=),
+ * tiledimage with identity tiling, fileprefix on the document, colour spaces, extras written to USD. */
+MR_TEST(mtlx_reads_usd_preview_and_top_level_images) {
+    const char *path = write_text("usdps.mtlx",
+        "<?xml version=\"1.0\"?>\n<materialx version=\"1.39\" colorspace=\"lin_rec709\" fileprefix=\"tex/\">\n"
+        "  <image name=\"albedo\" type=\"color3\">\n"
+        "    <input name=\"file\" type=\"filename\" value=\"albedo.png\" colorspace=\"srgb_texture\" />\n"
+        "    <input name=\"uaddressmode\" type=\"string\" value=\"clamp\" />\n  </image>\n"
+        "  <tiledimage name=\"rough\" type=\"float\">\n"
+        "    <input name=\"file\" type=\"filename\" value=\"rough.png\" />\n"
+        "    <input name=\"uvtiling\" type=\"vector2\" value=\"1, 1\" />\n  </tiledimage>\n"
+        "  <UsdPreviewSurface name=\"SR\" type=\"surfaceshader\" xpos=\"1\">\n"
+        "    <input name=\"diffuseColor\" type=\"color3\" nodename=\"albedo\" />\n"
+        "    <input name=\"roughness\" type=\"float\" nodename=\"rough\" />\n"
+        "    <input name=\"metallic\" type=\"float\" value=\"0.25\" />\n"
+        "    <input name=\"useSpecularWorkflow\" type=\"integer\" value=\"0\" />\n"
+        "    <input name=\"emissiveColor\" type=\"color3\" value=\"0.5, 0.25, 0\" />\n"
+        "    <input name=\"opacityMode\" type=\"integer\" value=\"1\" />\n"
+        "  </UsdPreviewSurface>\n"
+        "  <surfacematerial name=\"M\" type=\"material\">\n"
+        "    <input name=\"surfaceshader\" type=\"surfaceshader\" nodename=\"SR\" />\n  </surfacematerial>\n"
+        "</materialx>\n");
+    mr_doc *doc = NULL;
+    MR_CHECK_OK(mr_doc_read_mtlx(path, &doc));
+    if (doc == NULL) return;
+    const mr_doc_material *m = mr_doc_material_get(doc, 0);
+    const mr_brdf_model *usd = mr_brdf_find("usd-preview");
+    MR_CHECK(m->model == usd);
+    const mr_doc_value *d = &m->values[mr_brdf_param_index(usd, "diffuse_color")];
+    const mr_doc_value *r = &m->values[mr_brdf_param_index(usd, "roughness")];
+    MR_CHECK(d->kind == MR_DOC_TEXTURE && strcmp(d->file, "tex/albedo.png") == 0 && d->wrap_s == MR_DOC_WRAP_CLAMP &&
+             d->wrap_t == MR_DOC_WRAP_UNSET && d->channel == -1);
+    MR_CHECK(r->kind == MR_DOC_TEXTURE && strcmp(r->file, "tex/rough.png") == 0 && r->channel == -1);
+    MR_CHECK(m->values[mr_brdf_param_index(usd, "metallic")].constant[0] == 0.25);
+    MR_CHECK(m->extra_count == 2 && strcmp(m->extras[0].name, "emissiveColor") == 0 && m->extras[0].value[1] == 0.25);
+    char *text = NULL;
+    MR_CHECK_OK(mr_doc_to_text(doc, MR_DOC_FORMAT_USDA, &text));
+    MR_CHECK(text && strstr(text, "color3f inputs:emissiveColor = (0.5, 0.25, 0)") != NULL);
+    MR_CHECK(text && strstr(text, "token inputs:opacityMode = \"presence\"") != NULL);
+    MR_CHECK(text && strstr(text, "asset inputs:file = @tex/albedo.png@") != NULL);
+    free(text);
+    // Rebased: the maps named from another folder.
+    char from[1200], to[1200];
+    snprintf(from, sizeof from, "%s", mr_test_tmp_path("a/b/doc.mtlx"));
+    snprintf(to, sizeof to, "%s", mr_test_tmp_path("a/c/d/out.usda"));
+    MR_CHECK_OK(mr_doc_rebase(doc, from, to));
+    MR_CHECK_MSG(strcmp(d->file, "../../b/tex/albedo.png") == 0, "%s", d->file);
+    MR_CHECK_OK(mr_doc_rebase(doc, "x/doc.mtlx", "x/doc2.mtlx"));
+    MR_CHECK_MSG(strcmp(d->file, "../../b/tex/albedo.png") == 0, "%s", d->file);
+    mr_doc_free(doc);
+}
+
+static const char *example(const char *name) {
+    static char path[4][1024];
+    static int slot;
+    const char *root = getenv("MR_ROOT");
+    char *p = path[slot++ % 4];
+    snprintf(p, 1024, "%s/tests/data/materialx/%s", root ? root : ".", name);
+    return p;
+}
+
+/* MaterialX's own examples (tests/data/materialx, Apache-2.0): the values they author; extras kept. */
+MR_TEST(mtlx_reads_materialx_examples) {
+    mr_doc *doc = NULL;
+    MR_CHECK_OK(mr_doc_read_mtlx(example("standard_surface_gold.mtlx"), &doc));
+    if (doc == NULL) return;
+    const mr_doc_material *m = mr_doc_material_get(doc, 0);
+    const mr_brdf_model *ss = mr_brdf_find("standard-surface");
+    MR_CHECK(m && strcmp(m->name, "Gold") == 0 && m->model == ss);
+    const mr_doc_value *bc = &m->values[mr_brdf_param_index(ss, "base_color")];
+    MR_CHECK(bc->kind == MR_DOC_CONSTANT && bc->constant[0] == 0.944 && bc->constant[1] == 0.776 &&
+             bc->constant[2] == 0.373);
+    MR_CHECK(m->values[mr_brdf_param_index(ss, "specular_roughness")].constant[0] == 0.02);
+    MR_CHECK(m->values[mr_brdf_param_index(ss, "metalness")].constant[0] == 1);
+    MR_CHECK(m->values[mr_brdf_param_index(ss, "specular_color")].constant[2] == 0.751);
+    MR_CHECK(m->values[mr_brdf_param_index(ss, "coat")].kind == MR_DOC_UNSET && m->extra_count == 0);
+    mr_doc_free(doc);
+    MR_CHECK_OK(mr_doc_read_mtlx(example("standard_surface_copper.mtlx"), &doc));
+    m = mr_doc_material_get(doc, 0);
+    MR_CHECK(m && strcmp(m->name, "Copper") == 0 &&
+             m->values[mr_brdf_param_index(ss, "coat_color")].constant[0] == 0.96467984 &&
+             m->values[mr_brdf_param_index(ss, "coat_roughness")].constant[0] == 0.20000000298023224);
+    mr_doc_free(doc);
+    MR_CHECK_OK(mr_doc_read_mtlx(example("standard_surface_plastic.mtlx"), &doc));
+    m = mr_doc_material_get(doc, 0);
+    MR_CHECK(m && m->values[mr_brdf_param_index(ss, "base_color")].constant[2] == 0.81800002);
+    mr_doc_free(doc);
+    // OpenPBR pearl: subsurface and thin film are extras of open_pbr_surface, kept with their values.
+    const mr_brdf_model *op = mr_brdf_find("openpbr");
+    MR_CHECK_OK(mr_doc_read_mtlx(example("open_pbr_pearl.mtlx"), &doc));
+    m = mr_doc_material_get(doc, 0);
+    MR_CHECK(m && m->model == op && m->values[mr_brdf_param_index(op, "coat_ior")].constant[0] == 1.68);
+    MR_CHECK(m && m->extra_count == 6 && strcmp(m->extras[0].name, "subsurface_weight") == 0 &&
+             strcmp(m->extras[5].name, "thin_film_ior") == 0 && m->extras[5].value[0] == 2);
+    mr_doc_free(doc);
+    // Brass: tiledimage maps through a nodegraph, under the document's fileprefix; one map on two inputs.
+    MR_CHECK_OK(mr_doc_read_mtlx(example("standard_surface_brass_tiled.mtlx"), &doc));
+    m = mr_doc_material_get(doc, 0);
+    const mr_doc_value *cc = m ? &m->values[mr_brdf_param_index(ss, "coat_color")] : NULL;
+    MR_CHECK(cc && cc->kind == MR_DOC_TEXTURE && strcmp(cc->file, "../../../Images/brass_color.jpg") == 0);
+    MR_CHECK(m && m->values[mr_brdf_param_index(ss, "coat_roughness")].kind == MR_DOC_TEXTURE &&
+             strcmp(m->values[mr_brdf_param_index(ss, "specular_roughness")].file,
+                    "../../../Images/brass_roughness.jpg") == 0);
+    mr_doc_free(doc);
+}
+
+/* Every refusal with its exact message. */
+MR_TEST(mtlx_refusals_name_file_line_material_and_node) {
+    mr_doc *doc = NULL;
+    char want[2048];
+    const char *boombox = example("gltf_pbr_boombox.mtlx");
+    MR_CHECK(mr_doc_read_mtlx(boombox, &doc) == MR_ERR_UNSUPPORTED && doc == NULL);
+    snprintf(want, sizeof want, "MaterialX '%s' line 3: material 'Material_boombox': node 'image_basecolor' is a "
+             "gltf_colorimage, which export cannot follow (it follows image, tiledimage, extract, multiply and "
+             "texcoord in a nodegraph or at the top level)", boombox);
+    MR_CHECK_MSG(strcmp(mr_last_error(), want) == 0, "%s", mr_last_error());
+    const char *marble = example("standard_surface_marble_solid.mtlx");
+    MR_CHECK(mr_doc_read_mtlx(marble, &doc) == MR_ERR_UNSUPPORTED);
+    snprintf(want, sizeof want, "MaterialX '%s' line 4: material 'Marble_3D': nodegraph 'NG_marble1' has interface "
+             "inputs, which are not followed", marble);
+    MR_CHECK_MSG(strcmp(mr_last_error(), want) == 0, "%s", mr_last_error());
+
+    static const char head[] = "<?xml version=\"1.0\"?>\n<materialx version=\"1.39\">\n";
+    static const char material[] = "  <surfacematerial name=\"M\" type=\"material\">\n"
+                                   "    <input name=\"surfaceshader\" type=\"surfaceshader\" nodename=\"SR\" />\n"
+                                   "  </surfacematerial>\n</materialx>\n";
+    struct {
+        const char *body;
+        mr_status status;
+        const char *message; /* after "MaterialX 'PATH' " */
+    } cases[] = {
+        {"  <open_pbr_surface name=\"SR\" type=\"surfaceshader\">\n"
+         "    <input name=\"base_colour\" type=\"color3\" value=\"1, 0, 0\" />\n  </open_pbr_surface>\n",
+         MR_ERR_FORMAT, "line 4: material 'M': input 'base_colour' of 'SR' is not in the node definition of "
+                        "open_pbr_surface"},
+        {"  <open_pbr_surface name=\"SR\" type=\"surfaceshader\">\n"
+         "    <input name=\"base_color\" type=\"float\" value=\"1\" />\n  </open_pbr_surface>\n",
+         MR_ERR_FORMAT, "line 4: material 'M': input 'base_color' of 'SR' is a float: open_pbr_surface declares it "
+                        "color3"},
+        {"  <open_pbr_surface name=\"SR\" type=\"surfaceshader\">\n"
+         "    <input name=\"base_color\" type=\"color3\" value=\"1, 0\" />\n  </open_pbr_surface>\n",
+         MR_ERR_FORMAT, "line 4: material 'M': input 'base_color': \"1, 0\" is no color3 value"},
+        {"  <standard_surface name=\"SR\" type=\"surfaceshader\">\n"
+         "    <input name=\"base\" type=\"float\" interfacename=\"b\" />\n  </standard_surface>\n",
+         MR_ERR_UNSUPPORTED, "line 4: material 'M': attribute interfacename=\"b\" of <input name=\"base\"> is not "
+                             "followed"},
+        {"  <noise2d name=\"n\" type=\"float\" />\n  <gltf_pbr name=\"SR\" type=\"surfaceshader\">\n"
+         "    <input name=\"roughness\" type=\"float\" nodename=\"n\" />\n  </gltf_pbr>\n",
+         MR_ERR_UNSUPPORTED, "line 3: material 'M': node 'n' is a noise2d, which export cannot follow (it follows "
+                             "image, tiledimage, extract, multiply and texcoord in a nodegraph or at the top level)"},
+        {"  <image name=\"e\" type=\"color3\">\n    <input name=\"file\" type=\"filename\" value=\"e.png\" />\n"
+         "  </image>\n  <gltf_pbr name=\"SR\" type=\"surfaceshader\">\n"
+         "    <input name=\"emissive\" type=\"color3\" nodename=\"e\" />\n  </gltf_pbr>\n",
+         MR_ERR_UNSUPPORTED, "line 7: material 'M': input 'emissive' of gltf_pbr 'SR' is connected to a node: maps "
+                             "are carried only for the parameters of matremap's gltf model"},
+        {"  <image name=\"c\" type=\"color3\">\n    <input name=\"file\" type=\"filename\" value=\"c.png\" />\n"
+         "  </image>\n  <gltf_pbr name=\"SR\" type=\"surfaceshader\">\n"
+         "    <input name=\"base_color\" type=\"color3\" nodename=\"c\" />\n  </gltf_pbr>\n",
+         MR_ERR_UNSUPPORTED, "line 3: material 'M': input 'base_color' reads 'c.png' as lin_rec709; matremap's "
+                             "documents read it as srgb_texture (the one rule of parameter maps: colour maps of "
+                             "8/16-bit files srgb_texture, everything else lin_rec709), so it cannot be carried "
+                             "unchanged"},
+        {"  <disney_principled name=\"SR\" type=\"surfaceshader\" />\n", MR_ERR_UNSUPPORTED,
+         "line 3: material 'M': its surface shader 'SR' is a disney_principled, which export cannot follow (it "
+         "reads open_pbr_surface, standard_surface, gltf_pbr and UsdPreviewSurface)"},
+        {"  <look name=\"L\" />\n  <gltf_pbr name=\"SR\" type=\"surfaceshader\" />\n", MR_ERR_UNSUPPORTED,
+         "line 3: look 'L': looks and their material assignments are not read"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char text[4096];
+        snprintf(text, sizeof text, "%s%s%s", head, cases[i].body, material);
+        const char *path = write_text("bad.mtlx", text);
+        mr_status st = mr_doc_read_mtlx(path, &doc);
+        snprintf(want, sizeof want, "MaterialX '%s' %s", path, cases[i].message);
+        MR_CHECK_MSG(st == cases[i].status && doc == NULL, "case %zu: status %d", i, (int)st);
+        MR_CHECK_MSG(strcmp(mr_last_error(), want) == 0, "case %zu:\n  %s\nwant\n  %s", i, mr_last_error(), want);
+    }
+    const char *dtd = write_text("dtd.mtlx", "<?xml version=\"1.0\"?>\n<!DOCTYPE m [<!ENTITY a \"aaaa\">]>\n"
+                                             "<materialx version=\"1.39\">&a;</materialx>\n");
+    MR_CHECK(mr_doc_read_mtlx(dtd, &doc) == MR_ERR_UNSUPPORTED);
+    snprintf(want, sizeof want, "MaterialX '%s' line 2: a document type declaration (DOCTYPE) is not read", dtd);
+    MR_CHECK_MSG(strcmp(mr_last_error(), want) == 0, "%s", mr_last_error());
+    const char *broken = write_text("broken.mtlx", "<materialx version=\"1.39\">\n<a></b>\n");
+    MR_CHECK(mr_doc_read_mtlx(broken, &doc) == MR_ERR_FORMAT);
+    snprintf(want, sizeof want, "MaterialX '%s' line 2: not well-formed XML: mismatched tag", broken);
+    MR_CHECK_MSG(strcmp(mr_last_error(), want) == 0, "%s", mr_last_error());
+}
+
+/* A read document converted: the same model copies (extras too), another remaps (the extras listed as not
+ * carried), a textured standard-surface material's direct route to openpbr runs from glTF only (refused by name),
+ * gltf maps reach usd-preview. */
+MR_TEST(mtlx_convert_routes) {
+    mr_doc *doc = NULL;
+    MR_CHECK_OK(mr_doc_read_mtlx(example("open_pbr_pearl.mtlx"), &doc));
+    if (doc == NULL) return;
+    mr_doc_gltf_options o = {0};
+    mr_doc_gltf_result *r = NULL;
+    MR_CHECK_OK(mr_doc_convert(doc, "pearl", &o, &r)); // openpbr: copy
+    MR_CHECK(r && r->materials[0].route == MR_DOC_ROUTE_COPY && r->materials[0].not_carried[0] == '\0' &&
+             mr_doc_material_get(r->doc, 0)->extra_count == 6);
+    if (r) same_values(mr_doc_material_get(doc, 0), mr_doc_material_get(r->doc, 0));
+    mr_doc_gltf_result_free(r);
+    o.target = mr_brdf_find("gltf");
+    MR_CHECK_OK(mr_doc_convert(doc, "pearl", &o, &r));
+    MR_CHECK(r && r->materials[0].route == MR_DOC_ROUTE_REMAP && r->materials[0].ssim > 0.98);
+    MR_CHECK_MSG(r && strcmp(r->materials[0].not_carried, "subsurface_weight, subsurface_color, "
+                             "subsurface_radius_scale, thin_film_weight, thin_film_thickness, thin_film_ior") == 0,
+                 "%s", r ? r->materials[0].not_carried : "");
+    mr_doc_gltf_result_free(r);
+    mr_doc_free(doc);
+    MR_CHECK_OK(mr_doc_read_mtlx(example("standard_surface_brass_tiled.mtlx"), &doc));
+    o.target = NULL;
+    MR_CHECK(mr_doc_convert(doc, "MaterialX 'brass.mtlx'", &o, &r) == MR_ERR_UNSUPPORTED);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "MaterialX 'brass.mtlx': material 'Tiled_Brass' (standard-surface) is "
+                        "textured: its maps convert to openpbr by the direct route, which export runs from a glTF "
+                        "asset only so far: export from the glTF asset instead (uniform materials are remapped; "
+                        "textured standard-surface materials export to standard-surface here)") == 0,
+                 "%s", mr_last_error());
+    mr_doc_free(doc);
+    // A value outside the model's range is refused by name, not clamped and remapped; roughness 0 passes.
+    const char *odd = write_text("odd.mtlx", "<materialx version=\"1.39\">\n"
+        "  <standard_surface name=\"SR\" type=\"surfaceshader\">\n"
+        "    <input name=\"specular_roughness\" type=\"float\" value=\"0\" />\n"
+        "    <input name=\"metalness\" type=\"float\" value=\"5\" />\n  </standard_surface>\n"
+        "  <surfacematerial name=\"M\" type=\"material\">\n"
+        "    <input name=\"surfaceshader\" type=\"surfaceshader\" nodename=\"SR\" />\n"
+        "  </surfacematerial>\n</materialx>\n");
+    MR_CHECK_OK(mr_doc_read_mtlx(odd, &doc));
+    MR_CHECK(mr_doc_convert(doc, "odd", &o, &r) == MR_ERR_INVALID_ARG);
+    MR_CHECK_MSG(strcmp(mr_last_error(), "odd: material 'M': metalness 5 is outside standard-surface's range [0, 1]: "
+                        "not remapped") == 0, "%s", mr_last_error());
+    mr_doc_free(doc);
+    doc = sample("gltf");
+    o.target = mr_brdf_find("usd-preview");
+    MR_CHECK(mr_doc_convert(doc, "s", &o, &r) == MR_ERR_UNSUPPORTED); // sample's specular 0.25: no place in USD
+    MR_CHECK_MSG(strstr(mr_last_error(), "have no place in usd-preview's metallic workflow") != NULL, "%s",
+                 mr_last_error());
+    mr_doc_free(doc);
+    doc = mr_doc_create();
+    mr_doc_material *m = NULL;
+    MR_CHECK_OK(mr_doc_add_material(doc, "tex", mr_brdf_find("gltf"), &m));
+    MR_CHECK_OK(mr_doc_set_texture(m, "base_color", "b.png", -1, 1, (double[3]){0.5, 0.5, 0.5}));
+    MR_CHECK_OK(mr_doc_set_texture(m, "roughness", "mr.png", 1, 0, NULL));
+    MR_CHECK_OK(mr_doc_convert(doc, "s", &o, &r));
+    const mr_doc_material *u = r ? mr_doc_material_get(r->doc, 0) : NULL;
+    const mr_brdf_model *usd = mr_brdf_find("usd-preview");
+    MR_CHECK(u && r->materials[0].route == MR_DOC_ROUTE_MAPS &&
+             u->values[mr_brdf_param_index(usd, "diffuse_color")].kind == MR_DOC_TEXTURE &&
+             u->values[mr_brdf_param_index(usd, "diffuse_color")].uv_set == 1 &&
+             u->values[mr_brdf_param_index(usd, "roughness")].channel == 1 &&
+             u->values[mr_brdf_param_index(usd, "metallic")].kind == MR_DOC_UNSET);
+    mr_doc_gltf_result_free(r);
+    mr_doc_free(doc);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(every_parameter_maps_to_a_declared_input), MR_TEST_ENTRY(mtlx_writes_declared_inputs_only),
              MR_TEST_ENTRY(usda_writes_declared_inputs_only), MR_TEST_ENTRY(the_colour_space_rule),
+             MR_TEST_ENTRY(usda_specular_color_only_in_the_specular_workflow),
              MR_TEST_ENTRY(bad_values_are_refused), MR_TEST_ENTRY(the_write_is_atomic),
              MR_TEST_ENTRY(uniform_materials_are_remapped_and_converge), MR_TEST_ENTRY(the_route_decision),
-             MR_TEST_ENTRY(a_textured_material_converts_by_the_direct_route))
+             MR_TEST_ENTRY(a_textured_material_converts_by_the_direct_route), MR_TEST_ENTRY(mtlx_round_trip),
+             MR_TEST_ENTRY(mtlx_reads_usd_preview_and_top_level_images), MR_TEST_ENTRY(mtlx_reads_materialx_examples),
+             MR_TEST_ENTRY(mtlx_refusals_name_file_line_material_and_node), MR_TEST_ENTRY(mtlx_convert_routes))

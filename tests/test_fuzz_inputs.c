@@ -20,7 +20,7 @@ typedef struct target {
 static const target targets[] = {
     {"gltf", mr_fuzz_gltf},   {"png", mr_fuzz_png}, {"jpeg", mr_fuzz_jpeg},   {"exr", mr_fuzz_exr},
     {"hdr", mr_fuzz_hdr},     {"mlp", mr_fuzz_mlp}, {"mrt", mr_fuzz_mrt},     {"sweep", mr_fuzz_sweep},
-    {"cli_value", mr_fuzz_cli_value}, {"obj", mr_fuzz_obj},
+    {"cli_value", mr_fuzz_cli_value}, {"obj", mr_fuzz_obj}, {"mtlx", mr_fuzz_mtlx},
 };
 
 static unsigned char *read_whole(const char *path, size_t *size) {

@@ -1,9 +1,12 @@
 /*
- * cmd_export.c — `matremap export ASSET.gltf -o OUT.mtlx|OUT.usda [--to MODEL]`: a glTF asset's materials written
- * as a MaterialX or USD document (src/doc/doc.h: mr_doc_from_gltf, then mr_doc_gltf_write).
+ * cmd_export.c — `matremap export INPUT -o OUT.mtlx|OUT.usda|OUT.gltf|OUT.glb [--to MODEL]`: a glTF asset's or a
+ * MaterialX document's materials written as a MaterialX or USD document (src/doc/doc.h: mr_doc_from_gltf, then
+ * mr_doc_gltf_write; mr_doc_read_mtlx, mr_doc_convert, mr_doc_rebase, mr_doc_write), or a glTF asset saved as
+ * .gltf/.glb (gltf/mr_gltf.h: mr_gltf_save_with).
  */
 #include <stdio.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -11,34 +14,52 @@
 #include "matremap.h"
 
 static void print_help(void) {
-    printf("usage: matremap export ASSET.gltf|ASSET.glb -o OUT.mtlx|OUT.usda [--to MODEL] [options]\n"
+    printf("usage: matremap export INPUT -o OUT.mtlx|OUT.usda|OUT.gltf|OUT.glb [--to MODEL] [options]\n"
            "\n"
-           "Writes the materials of a glTF asset as a material document. OUT's extension chooses the format:\n"
+           "Writes the materials of INPUT, a glTF asset (.gltf, .glb) or a MaterialX document (.mtlx), as a material\n"
+           "document or a glTF asset. OUT's extension chooses the format:\n"
            "  .mtlx   MaterialX 1.39: a surfacematerial per material over an open_pbr_surface node (the default),\n"
            "          standard_surface (--to standard-surface) or gltf_pbr (--to gltf); maps as image nodes in a\n"
            "          nodegraph, colour maps with colorspace srgb_texture, data maps in the document's lin_rec709\n"
            "  .usda   USD: a Material per material with a UsdPreviewSurface (metallic workflow), a UsdUVTexture per\n"
            "          map (sourceColorSpace sRGB or raw) reading the \"st\" primvar; --to usd-preview (the default)\n"
+           "  .gltf, .glb  glTF 2.0 (--to gltf, the only model): from a glTF asset, the asset itself (its materials\n"
+           "          copied: the same parameters); from a .mtlx, an asset holding the materials as\n"
+           "          pbrMetallicRoughness (+ KHR_materials_specular, _ior off their defaults), images, no meshes\n"
+           "\n"
+           "A MaterialX input is read by its surfacematerials: surface nodes open_pbr_surface, standard_surface,\n"
+           "gltf_pbr and UsdPreviewSurface with constant inputs, and maps through image/tiledimage nodes (with\n"
+           "texcoord, extract, multiply) in nodegraphs or at the top level; colorspace and fileprefix are read, map\n"
+           "paths rewritten relative to OUT. Anything else a material uses (other nodes, interfacename, looks, node\n"
+           "definitions) is refused naming the file, line, material and node (exit 2). Constant inputs of lobes\n"
+           "matremap's models do not have (transmission, subsurface, emission, sheen, ...) are carried when the\n"
+           "output node is the same; otherwise each material's line says which were not carried.\n"
            "\n"
            "How each material is converted (one line each is printed, with its route):\n"
-           "  uniform (no base colour or metallic-roughness texture): remap  the glTF factors fitted by a remap\n"
-           "          in the fit scene (as `matremap remap --from gltf ... --to MODEL`), the outcome and SSIM\n"
-           "          printed; --to gltf copies them (copy: exact)\n"
-           "  textured, --to usd-preview or gltf: maps  base colour -> diffuseColor/base_color (sRGB), the\n"
-           "          metallic-roughness texture's B -> metallic and G -> roughness (linear), factors as scales\n"
-           "  textured, --to openpbr or standard-surface: direct  the maps converted as `matremap convert --direct`\n"
-           "          does (every distinct texel, quantised to --tolerance, remapped; the target's default holds and\n"
-           "          --hold held), or learned  through the transforms of --transforms (as `convert --transforms`);\n"
-           "          the texels, distinct values, texels not converged (or extrapolated) and the time printed.\n"
-           "          A parameter whose converted map holds one value is written as a constant, every other as\n"
+           "  the same model: copy  every value, map and extra input unchanged (exact)\n"
+           "  uniform (no maps), another model: remap  the values fitted by a remap in the fit scene (as\n"
+           "          `matremap remap --from MODEL ... --to MODEL`, with --hold and the ties), the outcome and SSIM\n"
+           "          printed\n"
+           "  textured, gltf <-> usd-preview: maps  base colour -> diffuseColor/base_color (sRGB), metallic and\n"
+           "          roughness (linear; a glTF metallic-roughness texture's B and G), factors as scales\n"
+           "  textured, any other pair (e.g. to openpbr or standard-surface), from a glTF asset: direct  the maps\n"
+           "          converted as `matremap convert --direct` does (every distinct texel, quantised to\n"
+           "          --tolerance, remapped; the target's default holds and --hold held, --tie tied), or learned\n"
+           "          through the transforms of --transforms (as `convert --transforms`); the texels, distinct\n"
+           "          values, texels not converged (or extrapolated) and the time printed. A parameter whose\n"
+           "          converted map holds one value is written as a constant, every other as\n"
            "          OUT_<material>_<parameter>.png (8-bit: sRGB for colours, linear otherwise), with the flag\n"
-           "          picture OUT_<material>_flags.png (red: not converged or extrapolated; green: clamped output)\n"
-           "The images the carried maps use are written beside OUT, named after it: OUT_image<K>.png|jpg. Normal,\n"
-           "occlusion, emission and alpha are not written yet. docs/documents.md says what is exact and what not.\n"
+           "          picture OUT_<material>_flags.png (red: not converged or extrapolated; green: clamped output).\n"
+           "          From a .mtlx not yet: refused (exit 2, naming the material); export from the glTF asset\n"
+           "The images a glTF asset's maps use are written beside OUT, named after it: OUT_image<K>.png|jpg; a\n"
+           ".mtlx's maps stay where they are (named relative to OUT), or are copied beside a glTF OUT as\n"
+           "OUT_<name>. Normal, occlusion, emission and alpha maps are not written yet. docs/documents.md says\n"
+           "what is exact and what not.\n"
            "\n");
     printf("options:\n"
-           "  -o OUT                the document (.mtlx or .usda); never one of the asset's files\n"
-           "  --to MODEL            openpbr (.mtlx default), standard-surface, gltf, usd-preview (.usda default)\n"
+           "  -o OUT                the output (.mtlx, .usda, .gltf or .glb); never one of the input's files\n"
+           "  --to MODEL            openpbr (.mtlx default), standard-surface, gltf (.gltf/.glb: the only one),\n"
+           "                        usd-preview (.usda default)\n"
            "  --direct              textured materials by the direct remap (the default without --transforms)\n"
            "  --transforms PATH     textured materials through learned transforms: PATH a .mrt file or a folder of\n"
            "                        them (repeatable); the chain from gltf to MODEL is found as convert finds it\n"
@@ -49,9 +70,11 @@ static void print_help(void) {
            "  --hold NAME[=VALUE][,...]  remap and direct: hold these target parameters at VALUE (or their\n"
            "                        defaults), as 'matremap remap --hold'; the target's default holds are held too,\n"
            "                        and a 'held:' line lists them\n"
-           "  --tie TARGET=SOURCE[,...]|none  remap and direct: hold target parameters at the glTF material's\n"
-           "                        (or texel's) value; default: the metalness (openpbr: base_metalness=metallic),\n"
-           "                        which the fit scene cannot tell from the base colour at high roughness\n"
+           "  --tie TARGET=SOURCE[,...]|none  remap and direct from a glTF asset: hold target parameters at the\n"
+           "                        glTF material's (or texel's) value; default (a .mtlx's materials too, which take\n"
+           "                        only --tie none): the metalness the source states (openpbr:\n"
+           "                        base_metalness=metallic), which the fit scene cannot tell from the base colour\n"
+           "                        at high roughness; a 'tied:' line\n"
            "  --cache FILE          direct: answers kept across runs (as convert --cache)\n"
            "  --size N              the fit scene's side of remaps and direct remaps (default 64)\n"
            "  --threads N           threads (0 = automatic, the default)\n"
@@ -60,7 +83,9 @@ static void print_help(void) {
            "examples:\n"
            "  matremap export WaterBottle.gltf -o bottle.usda\n"
            "  matremap export Duck.gltf -o duck.mtlx --to standard-surface\n"
-           "  matremap export WaterBottle.gltf -o bottle.mtlx            # openpbr, maps by direct remaps\n"
+           "  matremap export WaterBottle.gltf -o bottle.mtlx              # openpbr, maps by direct remaps\n"
+           "  matremap export standard_surface_gold.mtlx -o gold.mtlx      # to open_pbr_surface by a remap\n"
+           "  matremap export bottle.mtlx -o bottle.usda                   # gltf_pbr maps to UsdPreviewSurface\n"
            "Exit status: 0 written; 1 usage; 2 bad input or a refused material (nothing written); 3 internal error.\n");
 }
 
@@ -117,19 +142,34 @@ static int parse(int argc, char **argv, options *o) {
             return cli_usage_error("export", "unexpected argument '%s' (one input asset)", argv[i]);
         }
     }
-    if (o->input == NULL) return cli_usage_error("export", "missing the input asset (.gltf or .glb)");
-    if (!cli_is_gltf_path(o->input))
-        return cli_usage_error("export", "'%s': the input is a glTF asset (.gltf or .glb); reading .mtlx is not "
-                               "done yet", o->input);
-    if (o->output == NULL) return cli_usage_error("export", "missing -o OUT (.mtlx or .usda)");
+    if (o->input == NULL) return cli_usage_error("export", "missing the input (.gltf, .glb or .mtlx)");
+    if (!cli_is_gltf_path(o->input) && mr_doc_format_from_path(o->input) != MR_DOC_FORMAT_MTLX)
+        return cli_usage_error("export", "'%s': the input is a glTF asset (.gltf or .glb) or a MaterialX document "
+                               "(.mtlx)", o->input);
+    if (o->output == NULL) return cli_usage_error("export", "missing -o OUT (.mtlx, .usda, .gltf or .glb)");
     mr_doc_format format = mr_doc_format_from_path(o->output);
-    if (format == MR_DOC_FORMAT_UNKNOWN)
-        return cli_usage_error("export", "-o '%s': the extension chooses the format: .mtlx or .usda", o->output);
-    if (o->to == NULL) o->to = format == MR_DOC_FORMAT_MTLX ? "openpbr" : "usd-preview";
+    int gltf_out = cli_is_gltf_path(o->output);
+    if (format == MR_DOC_FORMAT_UNKNOWN && !gltf_out)
+        return cli_usage_error("export", "-o '%s': the extension chooses the format: .mtlx, .usda, .gltf or .glb",
+                               o->output);
+    if (o->to == NULL) o->to = gltf_out ? "gltf" : format == MR_DOC_FORMAT_MTLX ? "openpbr" : "usd-preview";
+    if (gltf_out && strcmp(o->to, "gltf") != 0)
+        return cli_usage_error("export", "--to %s: a glTF output (-o '%s') holds gltf materials only (--to gltf); "
+                               ".mtlx takes openpbr, standard-surface, gltf; .usda takes usd-preview", o->to,
+                               o->output);
     if (o->direct && o->transform_count > 0)
         return cli_usage_error("export", "give --direct or --transforms, not both");
     if (o->transform_count > 0 && (o->tolerance != 0.0 || o->cache != NULL))
         return cli_usage_error("export", "--tolerance and --cache go with the direct route, not --transforms");
+    if (mr_doc_format_from_path(o->input) == MR_DOC_FORMAT_MTLX) {
+        if (o->tie != NULL && strcmp(o->tie, "none") != 0)
+            return cli_usage_error("export", "--tie %s: a .mtlx input takes --tie none or the default ties of each "
+                                   "material's model (a 'tied:' line says them), not a list", o->tie);
+        if (o->direct || o->transform_count > 0 || o->tolerance != 0.0 || o->cache != NULL)
+            return cli_usage_error("export", "--direct, --transforms, --tolerance and --cache convert a glTF asset's "
+                                   "textures: the texture routes of a .mtlx input into openpbr or standard-surface "
+                                   "are not done yet (export from the glTF asset)");
+    }
     return CLI_EXIT_OK;
 }
 
@@ -149,6 +189,195 @@ static void draw_progress(int material, const mr_direct_progress *p, void *user)
     s->drawn = 1;
 }
 
+#define MAX_TIE_SOURCES 16
+
+/* The holds and ties of the fits (remap, direct), said when a material was fitted: the ties per source model (a
+ * glTF asset: gltf, as --tie gave them; a .mtlx: each remapped material's model, its default ties). */
+typedef struct fits_said {
+    const double *target_values;
+    unsigned held;
+    int source_count;
+    const mr_brdf_model *sources[MAX_TIE_SOURCES];
+    mr_brdf_ties ties[MAX_TIE_SOURCES];
+    int tie_given;
+} fits_said;
+
+/* One line per material (or the --json summary), the holds and ties, the images, maps and OUT. */
+static void print_result(const options *o, const char *format, const mr_brdf_model *target,
+                         const mr_doc_gltf_result *result, const fits_said *f) {
+    int fitted = 0; // a material remapped or converted: the holds are said
+    for (int k = 0; k < result->material_count; k++)
+        fitted |= result->materials[k].route == MR_DOC_ROUTE_REMAP || result->materials[k].route == MR_DOC_ROUTE_DIRECT;
+    if (!o->json) {
+        for (int k = 0; k < result->material_count; k++) {
+            const mr_doc_gltf_material *m = &result->materials[k];
+            printf("material %d '%s': %s", k, m->name, mr_doc_route_name(m->route));
+            if (m->route == MR_DOC_ROUTE_REMAP)
+                printf(" (%s, SSIM %.4f, relative RMSE %.4f)", mr_fit_outcome_name((mr_fit_outcome)m->outcome),
+                       m->ssim, m->relative_rmse);
+            if (m->route == MR_DOC_ROUTE_DIRECT)
+                printf(" (%dx%d = %zu texels, %zu distinct values at tolerance %.4g: %zu converged; %zu texels not "
+                       "converged, %zu clamped, %zu flagged; %.1f s)", m->width, m->height, m->texels, m->unique,
+                       m->tolerance, m->outcomes[MR_FIT_CONVERGED], m->unconverged, m->clamped, m->flagged,
+                       m->seconds);
+            if (m->route == MR_DOC_ROUTE_LEARNED)
+                printf(" (%d transform%s, %dx%d = %zu texels: %zu extrapolated, %zu by a transform that failed its "
+                       "check, %zu clamped, %zu flagged; %.1f s)", m->hops, m->hops == 1 ? "" : "s", m->width,
+                       m->height, m->texels, m->unconverged, m->failed_check, m->clamped, m->flagged, m->seconds);
+            if (m->not_carried[0]) printf("; not carried: %s", m->not_carried);
+            printf("\n");
+        }
+        if (fitted) cli_print_holds(stdout, "", target, f->target_values, f->held);
+        for (int i = 0; fitted && i < f->source_count; i++)
+            cli_print_ties(stdout, "", f->sources[i], target, &f->ties[i], f->tie_given);
+        for (int i = 0; i < result->image_count; i++) printf("wrote %s\n", result->images[i].path);
+        for (int i = 0; i < result->map_count; i++) printf("wrote %s\n", result->maps[i].path);
+        printf("wrote %s (%s, %d material%s)\n", o->output, target->name, result->material_count,
+               result->material_count == 1 ? "" : "s");
+        return;
+    }
+    printf("{\"command\": \"export\", \"input\": ");
+    cli_json_string(stdout, o->input);
+    printf(", \"output\": ");
+    cli_json_string(stdout, o->output);
+    printf(", \"format\": \"%s\", \"target\": \"%s\", \"materials\": [", format, target->name);
+    for (int k = 0; k < result->material_count; k++) {
+        const mr_doc_gltf_material *m = &result->materials[k];
+        printf("%s{\"name\": ", k ? ", " : "");
+        cli_json_string(stdout, m->name);
+        printf(", \"route\": \"%s\"", mr_doc_route_name(m->route));
+        if (m->route == MR_DOC_ROUTE_REMAP)
+            printf(", \"outcome\": \"%s\", \"ssim\": %.6f, \"relative_rmse\": %.6f",
+                   mr_fit_outcome_name((mr_fit_outcome)m->outcome), m->ssim, m->relative_rmse);
+        if (m->route == MR_DOC_ROUTE_DIRECT || m->route == MR_DOC_ROUTE_LEARNED)
+            printf(", \"width\": %d, \"height\": %d, \"texels\": %zu, \"unconverged_or_extrapolated\": %zu, "
+                   "\"failed_check\": %zu, \"clamped\": %zu, \"flagged\": %zu, \"seconds\": %.3f", m->width,
+                   m->height, m->texels, m->unconverged, m->failed_check, m->clamped, m->flagged, m->seconds);
+        if (m->route == MR_DOC_ROUTE_LEARNED) printf(", \"hops\": %d", m->hops);
+        if (m->route == MR_DOC_ROUTE_DIRECT) {
+            printf(", \"unique\": %zu, \"tolerance\": %.9g, \"outcomes\": {", m->unique, m->tolerance);
+            for (int i = 0; i < MR_FIT_OUTCOME_COUNT; i++)
+                printf("%s\"%s\": %zu", i ? ", " : "", mr_fit_outcome_name((mr_fit_outcome)i), m->outcomes[i]);
+            printf("}");
+        }
+        printf(", \"not_carried\": [");
+        // not_carried is "a, b, c": printed as a JSON list of names
+        const char *s = m->not_carried;
+        for (int first = 1; *s;) {
+            const char *comma = strstr(s, ", ");
+            size_t n = comma ? (size_t)(comma - s) : strlen(s);
+            char name[1024];
+            snprintf(name, sizeof name, "%.*s", (int)n, s);
+            printf("%s", first ? "" : ", ");
+            cli_json_string(stdout, name);
+            first = 0;
+            s += n + (comma ? 2 : 0);
+        }
+        printf("]}");
+    }
+    printf("], \"images\": [");
+    for (int i = 0; i < result->image_count; i++) {
+        printf("%s", i ? ", " : "");
+        cli_json_string(stdout, result->images[i].path);
+    }
+    printf("], \"maps\": [");
+    for (int i = 0; i < result->map_count; i++) {
+        printf("%s", i ? ", " : "");
+        cli_json_string(stdout, result->maps[i].path);
+    }
+    printf("]");
+    if (fitted) {
+        // One source model (a glTF asset, or a .mtlx of one model): its ties as a list; several: a list per model.
+        printf(", \"tied\": ");
+        if (f->source_count == 1) {
+            cli_print_ties_json(stdout, f->sources[0], target, &f->ties[0], f->tie_given);
+        } else {
+            printf("{");
+            for (int i = 0; i < f->source_count; i++) {
+                printf("%s\"%s\": ", i ? ", " : "", f->sources[i]->name);
+                cli_print_ties_json(stdout, f->sources[i], target, &f->ties[i], f->tie_given);
+            }
+            printf("}");
+        }
+        printf(", \"held\": ");
+        cli_print_holds_json(stdout, target, f->target_values, f->held);
+    }
+    printf("}\n");
+}
+
+/* A MaterialX document's materials converted and written (OUT: .mtlx, .usda, .gltf or .glb). */
+static int export_mtlx(const options *o, const mr_brdf_model *target, mr_doc_format format) {
+    double target_values[MR_BRDF_MAX_VALUES];
+    unsigned held = 0;
+    mr_brdf_default_values(target, target_values);
+    if (o->hold != NULL && !cli_parse_held("export", target, o->hold, target_values, &held)) return CLI_EXIT_USAGE;
+    mr_doc *in = NULL;
+    mr_status st = mr_doc_read_mtlx(o->input, &in);
+    if (st != MR_OK) return cli_fail("export", st);
+    char label[4096 + 16];
+    snprintf(label, sizeof label, "MaterialX '%s'", o->input);
+    // Nothing written over a file read: OUT against the document and the maps it names.
+    mr_output_plan io = {0};
+    mr_output_plan_input(&io, o->input, label);
+    for (int k = 0; k < mr_doc_material_count(in); k++) {
+        const mr_doc_material *m = mr_doc_material_get(in, k);
+        for (int p = 0; p < m->model->param_count; p++)
+            if (m->values[p].kind == MR_DOC_TEXTURE && m->values[p].file[0] != '/') {
+                char path[8192];
+                const char *slash = strrchr(o->input, '/');
+                snprintf(path, sizeof path, "%.*s%s", slash ? (int)(slash - o->input + 1) : 0, o->input,
+                         m->values[p].file);
+                mr_output_plan_input(&io, path, "a map of the document");
+            }
+    }
+    mr_output_plan_output(&io, o->output, NULL);
+    int code = cli_plan_check("export", &io);
+    mr_output_plan_free(&io);
+    if (code != CLI_EXIT_OK) {
+        mr_doc_free(in);
+        return code;
+    }
+    mr_doc_gltf_options opts = {0};
+    opts.target = target;
+    opts.threads = o->threads;
+    opts.size = o->size;
+    opts.target_values = target_values;
+    opts.held = held;
+    const mr_brdf_ties no_ties = {0};
+    if (o->tie != NULL) opts.ties = &no_ties; // --tie none
+    mr_doc_gltf_result *result = NULL;
+    st = mr_doc_convert(in, label, &opts, &result);
+    // The ties the remaps took: the defaults of each remapped material's model (a hold wins).
+    fits_said said = {target_values, held, 0, {NULL}, {{0}}, o->tie != NULL};
+    for (int k = 0; st == MR_OK && k < result->material_count; k++) {
+        const mr_brdf_model *source = mr_doc_material_get(in, k)->model;
+        int known = result->materials[k].route != MR_DOC_ROUTE_REMAP;
+        for (int i = 0; i < said.source_count && !known; i++) known = said.sources[i] == source;
+        if (known || said.source_count == MAX_TIE_SOURCES) continue;
+        said.sources[said.source_count] = source;
+        said.ties[said.source_count] = o->tie != NULL ? no_ties : mr_brdf_default_ties(source, target);
+        said.ties[said.source_count++].tied &= ~held;
+    }
+    mr_doc_free(in);
+    const char *format_name = mr_doc_format_name(format);
+    if (st == MR_OK && cli_is_gltf_path(o->output)) {
+        // A glTF asset of the materials (no meshes), its images the maps' files copied beside OUT, named after it.
+        mr_gltf *asset = NULL;
+        st = mr_doc_to_gltf(result->doc, o->input, label, &asset);
+        mr_gltf_save_options so = {1, 0, NULL};
+        if (st == MR_OK) st = mr_gltf_save_with(asset, o->output, &so);
+        mr_gltf_free(asset);
+        format_name = strcasecmp(strrchr(o->output, '.'), ".glb") == 0 ? "glb" : "gltf";
+    } else if (st == MR_OK) {
+        st = mr_doc_rebase(result->doc, o->input, o->output);
+        if (st == MR_OK) st = mr_doc_write(result->doc, o->output);
+    }
+    if (st != MR_OK) code = cli_fail("export", st);
+    if (code == CLI_EXIT_OK) print_result(o, format_name, target, result, &said);
+    mr_doc_gltf_result_free(result);
+    return code;
+}
+
 int cmd_export(int argc, char **argv) {
     for (int i = 1; i < argc; i++)
         if (cli_is_help(argv[i])) {
@@ -160,11 +389,13 @@ int cmd_export(int argc, char **argv) {
     int code = parse(argc, argv, &o);
     if (code != CLI_EXIT_OK) return code;
     mr_doc_format format = mr_doc_format_from_path(o.output);
+    int gltf_out = cli_is_gltf_path(o.output);
     const mr_brdf_model *target = mr_brdf_find(o.to);
     if (target == NULL) return cli_usage_error("export", "--to '%s': %s", o.to, mr_last_error());
-    if (mr_doc_surface_node(target, format) == NULL)
+    if (!gltf_out && mr_doc_surface_node(target, format) == NULL)
         return cli_usage_error("export", "--to %s: .%s does not write it (.mtlx: openpbr, standard-surface, gltf; "
-                               ".usda: usd-preview)", o.to, mr_doc_format_name(format));
+                               ".usda: usd-preview; .gltf, .glb: gltf)", o.to, mr_doc_format_name(format));
+    if (mr_doc_format_from_path(o.input) == MR_DOC_FORMAT_MTLX) return export_mtlx(&o, target, format);
 
     double target_values[MR_BRDF_MAX_VALUES];
     unsigned held = 0;
@@ -246,9 +477,21 @@ int cmd_export(int argc, char **argv) {
         mr_learned_set_free(&transforms);
         return cli_fail("export", st);
     }
-    int fitted = 0; // a material remapped or converted: the holds are said
-    for (int k = 0; k < result->material_count; k++)
-        fitted |= result->materials[k].route == MR_DOC_ROUTE_REMAP || result->materials[k].route == MR_DOC_ROUTE_DIRECT;
+    fits_said said = {target_values, held, 1, {gltf}, {ties}, o.tie != NULL};
+    if (gltf_out) {
+        // glTF to glTF: every material copies (or carries its maps) exactly, so the asset itself is the output,
+        // saved with its side files named after OUT (mr_gltf_save_with), never over an input.
+        mr_gltf_save_options so = {1, 0, NULL};
+        result->image_count = 0; // the asset's own images go with it
+        st = mr_gltf_save_with(asset, o.output, &so);
+        if (st != MR_OK) code = cli_fail("export", st);
+        const char *name = strcasecmp(strrchr(o.output, '.'), ".glb") == 0 ? "glb" : "gltf";
+        if (code == CLI_EXIT_OK) print_result(&o, name, target, result, &said);
+        mr_doc_gltf_result_free(result);
+        mr_gltf_free(asset);
+        mr_learned_set_free(&transforms);
+        return code;
+    }
 
     io = (mr_output_plan){0};
     cli_plan_gltf(&io, asset, label);
@@ -263,76 +506,7 @@ int cmd_export(int argc, char **argv) {
         st = mr_doc_gltf_write(asset, result, o.output);
         if (st != MR_OK) code = cli_fail("export", st);
     }
-    if (code == CLI_EXIT_OK && !o.json) {
-        for (int k = 0; k < result->material_count; k++) {
-            const mr_doc_gltf_material *m = &result->materials[k];
-            printf("material %d '%s': %s", k, m->name, mr_doc_route_name(m->route));
-            if (m->route == MR_DOC_ROUTE_REMAP)
-                printf(" (%s, SSIM %.4f, relative RMSE %.4f)", mr_fit_outcome_name((mr_fit_outcome)m->outcome),
-                       m->ssim, m->relative_rmse);
-            if (m->route == MR_DOC_ROUTE_DIRECT)
-                printf(" (%dx%d = %zu texels, %zu distinct values at tolerance %.4g: %zu converged; %zu texels not "
-                       "converged, %zu clamped, %zu flagged; %.1f s)", m->width, m->height, m->texels, m->unique,
-                       m->tolerance, m->outcomes[MR_FIT_CONVERGED], m->unconverged, m->clamped, m->flagged,
-                       m->seconds);
-            if (m->route == MR_DOC_ROUTE_LEARNED)
-                printf(" (%d transform%s, %dx%d = %zu texels: %zu extrapolated, %zu by a transform that failed its "
-                       "check, %zu clamped, %zu flagged; %.1f s)", m->hops, m->hops == 1 ? "" : "s", m->width,
-                       m->height, m->texels, m->unconverged, m->failed_check, m->clamped, m->flagged, m->seconds);
-            printf("\n");
-        }
-        if (fitted) cli_print_holds(stdout, "", target, target_values, held);
-        if (fitted) cli_print_ties(stdout, "", gltf, target, &ties, o.tie != NULL);
-        for (int i = 0; i < result->image_count; i++) printf("wrote %s\n", result->images[i].path);
-        for (int i = 0; i < result->map_count; i++) printf("wrote %s\n", result->maps[i].path);
-        printf("wrote %s (%s, %d material%s)\n", o.output, target->name, result->material_count,
-               result->material_count == 1 ? "" : "s");
-    } else if (code == CLI_EXIT_OK) {
-        printf("{\"command\": \"export\", \"input\": ");
-        cli_json_string(stdout, o.input);
-        printf(", \"output\": ");
-        cli_json_string(stdout, o.output);
-        printf(", \"format\": \"%s\", \"target\": \"%s\", \"materials\": [", mr_doc_format_name(format), target->name);
-        for (int k = 0; k < result->material_count; k++) {
-            const mr_doc_gltf_material *m = &result->materials[k];
-            printf("%s{\"name\": ", k ? ", " : "");
-            cli_json_string(stdout, m->name);
-            printf(", \"route\": \"%s\"", mr_doc_route_name(m->route));
-            if (m->route == MR_DOC_ROUTE_REMAP)
-                printf(", \"outcome\": \"%s\", \"ssim\": %.6f, \"relative_rmse\": %.6f",
-                       mr_fit_outcome_name((mr_fit_outcome)m->outcome), m->ssim, m->relative_rmse);
-            if (m->route == MR_DOC_ROUTE_DIRECT || m->route == MR_DOC_ROUTE_LEARNED)
-                printf(", \"width\": %d, \"height\": %d, \"texels\": %zu, \"unconverged_or_extrapolated\": %zu, "
-                       "\"failed_check\": %zu, \"clamped\": %zu, \"flagged\": %zu, \"seconds\": %.3f", m->width,
-                       m->height, m->texels, m->unconverged, m->failed_check, m->clamped, m->flagged, m->seconds);
-            if (m->route == MR_DOC_ROUTE_LEARNED) printf(", \"hops\": %d", m->hops);
-            if (m->route == MR_DOC_ROUTE_DIRECT) {
-                printf(", \"unique\": %zu, \"tolerance\": %.9g, \"outcomes\": {", m->unique, m->tolerance);
-                for (int i = 0; i < MR_FIT_OUTCOME_COUNT; i++)
-                    printf("%s\"%s\": %zu", i ? ", " : "", mr_fit_outcome_name((mr_fit_outcome)i), m->outcomes[i]);
-                printf("}");
-            }
-            printf("}");
-        }
-        printf("], \"images\": [");
-        for (int i = 0; i < result->image_count; i++) {
-            printf("%s", i ? ", " : "");
-            cli_json_string(stdout, result->images[i].path);
-        }
-        printf("], \"maps\": [");
-        for (int i = 0; i < result->map_count; i++) {
-            printf("%s", i ? ", " : "");
-            cli_json_string(stdout, result->maps[i].path);
-        }
-        printf("]");
-        if (fitted) {
-            printf(", \"tied\": ");
-            cli_print_ties_json(stdout, gltf, target, &ties, o.tie != NULL);
-            printf(", \"held\": ");
-            cli_print_holds_json(stdout, target, target_values, held);
-        }
-        printf("}\n");
-    }
+    if (code == CLI_EXIT_OK) print_result(&o, mr_doc_format_name(format), target, result, &said);
     mr_doc_gltf_result_free(result);
     mr_gltf_free(asset);
     mr_learned_set_free(&transforms);

@@ -86,6 +86,16 @@ static const mr_doc_node_input surfaceshader_out[] = {{"out", "surfaceshader"}};
 static const mr_doc_node_input image_float_in[] = {IMAGE_INPUTS("float")};
 static const mr_doc_node_input image_color3_in[] = {IMAGE_INPUTS("color3")};
 static const mr_doc_node_input image_color4_in[] = {IMAGE_INPUTS("color4")};
+#define TILEDIMAGE_INPUTS(T)                                                                                 \
+    {"file", "filename"}, {"default", T}, {"texcoord", "vector2"}, {"uvtiling", "vector2"},                   \
+        {"uvoffset", "vector2"}, {"realworldimagesize", "vector2"}, {"realworldtilesize", "vector2"},        \
+        {"filtertype", "string"}, {"framerange", "string"}, {"frameoffset", "integer"},                     \
+    {                                                                                                        \
+        "frameendaction", "string"                                                                           \
+    }
+static const mr_doc_node_input tiledimage_float_in[] = {TILEDIMAGE_INPUTS("float")};
+static const mr_doc_node_input tiledimage_color3_in[] = {TILEDIMAGE_INPUTS("color3")};
+static const mr_doc_node_input tiledimage_color4_in[] = {TILEDIMAGE_INPUTS("color4")};
 static const mr_doc_node_input out_float[] = {{"out", "float"}};
 static const mr_doc_node_input out_color3[] = {{"out", "color3"}};
 static const mr_doc_node_input out_color4[] = {{"out", "color4"}};
@@ -106,6 +116,14 @@ static const mr_doc_node_input usd_preview_in[] = {
     {"clearcoatRoughness", "float"}, {"opacity", "float"}, {"opacityMode", "token"}, {"opacityThreshold", "float"},
     {"ior", "float"}, {"normal", "normal3f"}, {"displacement", "float"}, {"occlusion", "float"},
 };
+/* MaterialX's own definition of the node (libraries/bxdf/usd_preview_surface.mtlx,
+ * ND_UsdPreviewSurface_surfaceshader), which the MaterialX reader follows: MaterialX types (opacityMode an integer). */
+static const mr_doc_node_input usd_preview_mtlx_in[] = {
+    {"diffuseColor", "color3"}, {"emissiveColor", "color3"}, {"useSpecularWorkflow", "integer"},
+    {"specularColor", "color3"}, {"metallic", "float"}, {"roughness", "float"}, {"clearcoat", "float"},
+    {"clearcoatRoughness", "float"}, {"opacity", "float"}, {"opacityMode", "integer"}, {"opacityThreshold", "float"},
+    {"ior", "float"}, {"normal", "vector3"}, {"displacement", "float"}, {"occlusion", "float"},
+};
 static const mr_doc_node_input usd_preview_out[] = {{"surface", "token"}, {"displacement", "token"}};
 static const mr_doc_node_input usd_uv_texture_in[] = {
     {"file", "asset"}, {"st", "float2"}, {"wrapS", "token"}, {"wrapT", "token"}, {"fallback", "float4"},
@@ -124,11 +142,15 @@ static const node_table node_tables[] = {
     {MR_DOC_FORMAT_MTLX, "image_float", image_float_in, N(image_float_in), out_float, 1},
     {MR_DOC_FORMAT_MTLX, "image_color3", image_color3_in, N(image_color3_in), out_color3, 1},
     {MR_DOC_FORMAT_MTLX, "image_color4", image_color4_in, N(image_color4_in), out_color4, 1},
+    {MR_DOC_FORMAT_MTLX, "tiledimage_float", tiledimage_float_in, N(tiledimage_float_in), out_float, 1},
+    {MR_DOC_FORMAT_MTLX, "tiledimage_color3", tiledimage_color3_in, N(tiledimage_color3_in), out_color3, 1},
+    {MR_DOC_FORMAT_MTLX, "tiledimage_color4", tiledimage_color4_in, N(tiledimage_color4_in), out_color4, 1},
     {MR_DOC_FORMAT_MTLX, "extract_color3", extract_color3_in, N(extract_color3_in), out_float, 1},
     {MR_DOC_FORMAT_MTLX, "extract_color4", extract_color4_in, N(extract_color4_in), out_float, 1},
     {MR_DOC_FORMAT_MTLX, "multiply_float", multiply_float_in, N(multiply_float_in), out_float, 1},
     {MR_DOC_FORMAT_MTLX, "multiply_color3", multiply_color3_in, N(multiply_color3_in), out_color3, 1},
     {MR_DOC_FORMAT_MTLX, "texcoord_vector2", texcoord_in, N(texcoord_in), out_vector2, 1},
+    {MR_DOC_FORMAT_MTLX, "UsdPreviewSurface", usd_preview_mtlx_in, N(usd_preview_mtlx_in), surfaceshader_out, 1},
     {MR_DOC_FORMAT_MTLX, "surfacematerial", surfacematerial_in, N(surfacematerial_in), surfacematerial_out, 1},
     {MR_DOC_FORMAT_USDA, "UsdPreviewSurface", usd_preview_in, N(usd_preview_in), usd_preview_out,
      N(usd_preview_out)},
@@ -252,6 +274,8 @@ void mr_doc_free(mr_doc *doc) {
     for (int k = 0; k < doc->count; k++) {
         free(doc->materials[k].name);
         for (int p = 0; p < MR_BRDF_MAX_VALUES; p++) clear_value(&doc->materials[k].values[p]);
+        for (int e = 0; e < doc->materials[k].extra_count; e++) free(doc->materials[k].extras[e].name);
+        free(doc->materials[k].extras);
     }
     free(doc->materials);
     free(doc);
@@ -366,6 +390,51 @@ mr_status mr_doc_set_texture_wrap(mr_doc_material *m, const char *param, mr_doc_
                        (int)wrap_s, (int)wrap_t);
     m->values[p].wrap_s = wrap_s;
     m->values[p].wrap_t = wrap_t;
+    return MR_OK;
+}
+
+/* The MaterialX node whose definition lists a model's inputs (usd-preview: MaterialX's UsdPreviewSurface). */
+static const char *mtlx_node_of(const mr_brdf_model *model) {
+    const model_writer *w = find_writer(model, MR_DOC_FORMAT_UNKNOWN);
+    return w == NULL ? NULL : w->format == MR_DOC_FORMAT_USDA ? "UsdPreviewSurface" : w->node;
+}
+
+mr_status mr_doc_add_extra(mr_doc_material *m, const char *input, const char *type, const double *value) {
+    if (m == NULL || input == NULL || type == NULL || value == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "material document: no material, input, type or value");
+    const char *node = mtlx_node_of(m->model);
+    int n = 0;
+    const mr_doc_node_input *in = mr_doc_node_inputs(MR_DOC_FORMAT_MTLX, node, &n);
+    int declared = -1;
+    for (int i = 0; i < n; i++)
+        if (strcmp(in[i].name, input) == 0) declared = i;
+    if (declared < 0 || strcmp(in[declared].type, type) != 0)
+        return mr_fail(MR_ERR_INVALID_ARG, "material document: material '%s': %s declares no %s input '%s'", m->name,
+                       node ? node : "(no node)", type, input);
+    for (int p = 0; p < m->model->param_count; p++)
+        if (strcmp(mr_doc_input_name(m->model, p, find_writer(m->model, MR_DOC_FORMAT_UNKNOWN)->format), input) == 0)
+            return mr_fail(MR_ERR_INVALID_ARG, "material document: material '%s': '%s' is parameter %s of %s, not "
+                           "an extra input", m->name, input, m->model->params[p].name, m->model->name);
+    int channels = strcmp(type, "color3") == 0 || strcmp(type, "vector3") == 0 ? 3 : 1;
+    for (int c = 0; c < channels; c++)
+        if (!isfinite(value[c]))
+            return mr_fail(MR_ERR_INVALID_ARG, "material document: %s of material '%s' is not finite", input, m->name);
+    int e = 0;
+    while (e < m->extra_count && strcmp(m->extras[e].name, input) != 0) e++;
+    if (e == m->extra_count) {
+        char *name = copy_string(input);
+        mr_doc_extra *grown = name ? realloc(m->extras, (size_t)(m->extra_count + 1) * sizeof(*grown)) : NULL;
+        if (grown == NULL) {
+            free(name);
+            return mr_fail(MR_ERR_NOMEM, "material document: out of memory");
+        }
+        m->extras = grown;
+        memset(&m->extras[e], 0, sizeof(m->extras[e]));
+        m->extras[e].name = name;
+        m->extra_count++;
+    }
+    snprintf(m->extras[e].type, sizeof(m->extras[e].type), "%s", type);
+    for (int c = 0; c < 3; c++) m->extras[e].value[c] = c < channels ? value[c] : 0;
     return MR_OK;
 }
 
@@ -491,6 +560,19 @@ static void write_mtlx(FILE *f, const mr_doc *doc, char (*names)[128]) {
                 fprintf(f, "    <input name=\"%s\" type=\"%s\" nodegraph=\"NG_%s\" output=\"%s_out\" />\n", input,
                         type, names[k], input);
         }
+        for (int e = 0; e < m->extra_count; e++) {
+            const mr_doc_extra *x = &m->extras[e];
+            fprintf(f, "    <input name=\"%s\" type=\"%s\" value=\"", x->name, x->type);
+            if (strcmp(x->type, "color3") == 0 || strcmp(x->type, "vector3") == 0)
+                fprintf(f, "%.9g, %.9g, %.9g", x->value[0], x->value[1], x->value[2]);
+            else if (strcmp(x->type, "boolean") == 0)
+                fprintf(f, "%s", x->value[0] != 0 ? "true" : "false");
+            else if (strcmp(x->type, "integer") == 0)
+                fprintf(f, "%d", (int)x->value[0]);
+            else
+                fprintf(f, "%.9g", x->value[0]);
+            fprintf(f, "\" />\n");
+        }
         fprintf(f, "  </%s>\n", node);
         fprintf(f, "  <surfacematerial name=\"%s\" type=\"material\">\n", names[k]);
         fprintf(f, "    <input name=\"surfaceshader\" type=\"surfaceshader\" nodename=\"SR_%s\" />\n", names[k]);
@@ -500,6 +582,21 @@ static void write_mtlx(FILE *f, const mr_doc *doc, char (*names)[128]) {
 }
 
 static const char *usd_channel[] = {"r", "g", "b", "a"};
+
+/* The index of a constant specularColor that the metallic workflow ignores (useSpecularWorkflow 0, written or the
+ * default), or -1. It is left out: a conforming reader gives it no effect either way (the UsdPreviewSurface
+ * specification's specularColor is the specular workflow's F0 only; src/brdf/usd_preview.c), but three.js's
+ * USDLoader (r187) does not read the
+ * workflow and takes it as the dielectric's F0 tint, so a (0, 0, 0) written there turns off every highlight
+ * (docs/evaluation-clients.md). */
+static int usd_unused_specular_color(const mr_doc_material *m) {
+    int workflow = mr_brdf_param_index(m->model, "use_specular_workflow");
+    int color = mr_brdf_param_index(m->model, "specular_color");
+    if (workflow < 0 || color < 0 || m->values[color].kind != MR_DOC_CONSTANT) return -1;
+    const mr_doc_value *w = &m->values[workflow];
+    if (w->kind == MR_DOC_TEXTURE || (w->kind == MR_DOC_CONSTANT && lround(w->constant[0]) != 0)) return -1;
+    return color;
+}
 
 static void write_usda(FILE *f, const mr_doc *doc, char (*names)[128]) {
     fprintf(f, "#usda 1.0\n(\n    defaultPrim = \"Materials\"\n");
@@ -514,10 +611,12 @@ static void write_usda(FILE *f, const mr_doc *doc, char (*names)[128]) {
         fprintf(f, "        token outputs:surface.connect = </Materials/%s/Surface.outputs:surface>\n\n", id);
         fprintf(f, "        def Shader \"Surface\"\n        {\n");
         fprintf(f, "            uniform token info:id = \"UsdPreviewSurface\"\n");
+        int skipped = usd_unused_specular_color(m);
         for (int p = 0; p < model->param_count; p++) {
             const mr_doc_value *v = &m->values[p];
             const mr_brdf_param *d = &model->params[p];
             const char *input = mr_doc_input_name(model, p, MR_DOC_FORMAT_USDA);
+            if (p == skipped) continue;
             if (v->kind == MR_DOC_CONSTANT && d->role == MR_PARAM_SWITCH)
                 fprintf(f, "            int inputs:%s = %d\n", input, (int)lround(v->constant[0]));
             else if (v->kind == MR_DOC_CONSTANT && d->channels == 3)
@@ -531,6 +630,20 @@ static void write_usda(FILE *f, const mr_doc *doc, char (*names)[128]) {
             else if (v->kind == MR_DOC_TEXTURE)
                 fprintf(f, "            float inputs:%s.connect = </Materials/%s/%s_texture.outputs:%s>\n", input, id,
                         input, usd_channel[v->channel < 0 ? 0 : v->channel]);
+        }
+        for (int e = 0; e < m->extra_count; e++) { // MaterialX's types as USD's (the specification's)
+            const mr_doc_extra *x = &m->extras[e];
+            if (strcmp(x->name, "opacityMode") == 0)
+                fprintf(f, "            token inputs:opacityMode = \"%s\"\n",
+                        x->value[0] != 0 ? "presence" : "transparent");
+            else if (strcmp(x->type, "color3") == 0 || strcmp(x->type, "vector3") == 0)
+                fprintf(f, "            %s inputs:%s = (%.9g, %.9g, %.9g)\n",
+                        strcmp(x->type, "color3") == 0 ? "color3f" : "normal3f", x->name, x->value[0], x->value[1],
+                        x->value[2]);
+            else if (strcmp(x->type, "integer") == 0)
+                fprintf(f, "            int inputs:%s = %d\n", x->name, (int)x->value[0]);
+            else
+                fprintf(f, "            float inputs:%s = %.9g\n", x->name, x->value[0]);
         }
         fprintf(f, "            token outputs:surface\n        }\n");
         // One primvar reader per UV set the material's maps use.

@@ -72,10 +72,21 @@ typedef struct mr_doc_value {
     mr_doc_wrap wrap_s, wrap_t; /* UNSET unless mr_doc_set_texture_wrap */
 } mr_doc_value;
 
+/* A constant input of the material's surface node that is no parameter of its model (a lobe matremap's models do
+ * not have: transmission, subsurface, emission, sheen, thin film, opacity, ...), as read from a MaterialX document:
+ * written back unchanged by the writers when the node is the same, reported as not carried otherwise. */
+typedef struct mr_doc_extra {
+    char *name;       /* the node's input name (owned) */
+    char type[16];    /* its MaterialX type: "float", "color3", "vector3", "integer", "boolean" */
+    double value[3];  /* the channels of the type (boolean, integer: value[0] = 0/1, the integer) */
+} mr_doc_extra;
+
 typedef struct mr_doc_material {
     char *name;                 /* as given (owned); written as an identifier (mr_doc_identifier) */
     const mr_brdf_model *model; /* openpbr, standard-surface, gltf, usd-preview */
     mr_doc_value values[MR_BRDF_MAX_VALUES]; /* by parameter index of the model */
+    int extra_count;
+    mr_doc_extra *extras;       /* (owned) mr_doc_add_extra */
 } mr_doc_material;
 
 typedef struct mr_doc mr_doc;
@@ -103,6 +114,12 @@ mr_status mr_doc_set_texture(mr_doc_material *m, const char *param, const char *
 /* The wraps of a parameter set to a texture. MR_ERR_INVALID_ARG: unknown parameter, no texture, a wrap outside the
  * enum. */
 mr_status mr_doc_set_texture_wrap(mr_doc_material *m, const char *param, mr_doc_wrap wrap_s, mr_doc_wrap wrap_t);
+
+/* An extra constant input (mr_doc_extra) of the material's surface node: `input` must be declared by the node that
+ * writes the model (mr_doc_node_inputs, in MaterialX for openpbr, standard-surface, gltf and usd-preview's
+ * UsdPreviewSurface) with type `type`, and not carry a parameter of the model. MR_ERR_INVALID_ARG naming the input
+ * otherwise, or a non-finite value; a repeated input replaces the earlier one. */
+mr_status mr_doc_add_extra(mr_doc_material *m, const char *input, const char *type, const double *value);
 
 /* The format of a path by its extension (".mtlx", ".usda", case-insensitive); UNKNOWN otherwise. */
 mr_doc_format mr_doc_format_from_path(const char *path);
@@ -161,8 +178,10 @@ typedef enum mr_doc_route {
 /* THE route decision of the document exports (from a glTF asset here, from a MaterialX document too): a material of
  * model `source` into `target`, `textured` when maps feed it, `have_transforms` when learned transforms were given:
  *   uniform:  source == target -> COPY, else REMAP;
- *   textured: source == target, or gltf -> usd-preview (the same quantities: docs/documents.md) -> MAPS;
- *             any other pair -> LEARNED with transforms, else DIRECT.
+ *   textured: source == target, or gltf <-> usd-preview (the same quantities: docs/documents.md) -> MAPS (from
+ *             usd-preview: its metallic workflow without clearcoat, which mr_doc_convert checks);
+ *             any other pair -> LEARNED with transforms, else DIRECT (from a glTF asset; from a MaterialX
+ *             document not yet: mr_doc_convert refuses it).
  * MR_ERR_INVALID_ARG for a NULL model or out. */
 mr_status mr_doc_choose_route(const mr_brdf_model *source, const mr_brdf_model *target, int textured,
                               int have_transforms, mr_doc_route *out);
@@ -219,6 +238,8 @@ typedef struct mr_doc_gltf_material {
     int hops;               /* LEARNED: transforms in the chain */
     double tolerance;       /* DIRECT: the quantisation step used */
     double seconds;         /* the conversion's wall time */
+    char not_carried[1024]; /* mr_doc_convert: the source's authored extra inputs (mr_doc_extra) the output does
+                               not carry, comma-separated ("" none; cut with "..." when longer) */
 } mr_doc_gltf_material;
 
 /* A converted map the document refers to (DIRECT, LEARNED): written by mr_doc_gltf_write by the one rule of
@@ -271,6 +292,49 @@ mr_status mr_doc_gltf_write(const struct mr_gltf *asset, const mr_doc_gltf_resul
 void mr_doc_gltf_result_free(mr_doc_gltf_result *result);
 /* "copy", "remap", "maps", "direct", "learned". */
 const char *mr_doc_route_name(mr_doc_route route);
+
+/* ---- from a MaterialX document (mtlx_read.c, doc_convert.c) --------------------------------------------------- */
+
+/* The materials of a MaterialX 1.38/1.39 document (docs/documents.md, "Reading MaterialX"): each top-level
+ * surfacematerial's surfaceshader, a node of open_pbr_surface (model openpbr), standard_surface
+ * (standard-surface), gltf_pbr (gltf) or UsdPreviewSurface (usd-preview); its inputs constants, or maps through
+ * image|tiledimage (+ texcoord) (+ extract) (+ multiply) in a nodegraph (nodegraph=, output=) or at the top level
+ * (nodename=), with their wraps, UV sets, scales and colour spaces; a map's file as it is relative to the document
+ * (fileprefix applied; mr_doc_rebase for another folder). Constant inputs the node declares that are no parameter
+ * of the model become extras (mr_doc_extra). MR_ERR_UNSUPPORTED, naming the file, the line, the material and what
+ * it cannot follow: any other node, interfacename, nodegraphs with interfaces or node definitions, other node
+ * definition versions, a connected input that is no model parameter, a map whose colour space differs from the
+ * one rule (doc.h header), tiling or offsets, another working colour space, looks, xi:include, a DOCTYPE.
+ * MR_ERR_FORMAT: not well-formed XML, an input not in the node's definition or of another type (naming both), a
+ * missing node, a malformed value, no surfacematerial. MR_ERR_IO: the file cannot be read. */
+mr_status mr_doc_read_mtlx(const char *path, mr_doc **out);
+
+/* The relative map files of `doc` (relative to the folder of document `from`) rewritten relative to the folder of
+ * document `to` (absolute ones stay). MR_ERR_INVALID_ARG for a file that cannot be named (too long). */
+mr_status mr_doc_rebase(mr_doc *doc, const char *from, const char *to);
+
+/* Every material of `in` converted to opts->target (NULL: openpbr; image_prefix unused) into a new document:
+ * the same model -> MR_DOC_ROUTE_COPY (every value, map and extra); a uniform material of another model ->
+ * MR_DOC_ROUTE_REMAP (its values, unset ones the model's defaults, fitted by mr_remap as mr_doc_from_gltf does);
+ * a textured one by mr_doc_choose_route: MR_DOC_ROUTE_MAPS where the parameters are the same quantities (gltf <->
+ * usd-preview's metallic workflow: base colour, metallic, roughness, constant ior); DIRECT and LEARNED (every other
+ * pair, e.g. into openpbr or standard-surface) run from a glTF asset only so far: MR_ERR_UNSUPPORTED naming `label`
+ * (how the caller names the input, e.g. "MaterialX 'in.mtlx'"), the material and the route, saying to export from
+ * the glTF asset instead. Holds and ties (opts) apply to the remaps as in mr_doc_from_gltf. Extras the target does
+ * not carry are listed per material (not_carried). The result has no images (the maps keep their files). */
+mr_status mr_doc_convert(const mr_doc *in, const char *label, const mr_doc_gltf_options *opts,
+                         mr_doc_gltf_result **out);
+
+/* A document whose materials are all of the gltf model (e.g. mr_doc_convert's result with target gltf) as a new
+ * glTF asset (gltf/mr_gltf.h: mr_gltf_create; no scene or mesh), for mr_gltf_save_with: pbrMetallicRoughness's
+ * factors from the constants (KHR_materials_specular when specular or specular_color is a map or differs from the
+ * extension's default 1, KHR_materials_ior when ior differs from 1.5), and maps as textures whose images are the
+ * document's files (relative to document `doc_path`'s folder), read with mr_gltf_add_image_file under their file
+ * names (name_after_output prefixes them on save), with a sampler of their wraps; a map's scale is the factor.
+ * MR_ERR_UNSUPPORTED naming `label`, the material and the map where glTF cannot hold it: metallic not from B or
+ * roughness not from G (metallicRoughnessTexture) or the two from different files, UV sets or wraps, specular not
+ * from A, an ior map, a file that is not PNG or JPEG. The caller frees the asset (mr_gltf_free). */
+mr_status mr_doc_to_gltf(const mr_doc *doc, const char *doc_path, const char *label, struct mr_gltf **out);
 
 #ifdef __cplusplus
 }

@@ -12,6 +12,7 @@
 #include "gltf/mr_gltf.h"
 #include "gltf/mr_gltf_scene.h"
 #include "io/image_io.h"
+#include "doc/doc_internal.h"
 #include "learn/learned.h"
 #include "mr_internal.h"
 #include "remap/direct.h"
@@ -37,7 +38,8 @@ mr_status mr_doc_choose_route(const mr_brdf_model *source, const mr_brdf_model *
     if (!textured)
         *out = source == target ? MR_DOC_ROUTE_COPY : MR_DOC_ROUTE_REMAP;
     else if (source == target ||
-             (strcmp(source->name, "gltf") == 0 && strcmp(target->name, "usd-preview") == 0))
+             (strcmp(source->name, "gltf") == 0 && strcmp(target->name, "usd-preview") == 0) ||
+             (strcmp(source->name, "usd-preview") == 0 && strcmp(target->name, "gltf") == 0))
         *out = MR_DOC_ROUTE_MAPS;
     else
         *out = have_transforms ? MR_DOC_ROUTE_LEARNED : MR_DOC_ROUTE_DIRECT;
@@ -139,12 +141,52 @@ static void gltf_values(const mr_brdf_model *gltf, const mr_gltf_material *gm, d
 }
 
 /* Every parameter of the material set to the packed values. */
-static mr_status set_all(mr_doc_material *m, const double *values) {
+mr_status mr_doc_set_all(mr_doc_material *m, const double *values) {
     for (int p = 0; p < m->model->param_count; p++) {
         mr_status st = mr_doc_set_constant(m, m->model->params[p].name, values + mr_brdf_param_offset(m->model, p));
         if (st != MR_OK) return st;
     }
     return MR_OK;
+}
+
+mr_status mr_doc_remap_values(mr_doc_remapper *rm, const mr_brdf_model *from, const double *values,
+                              const mr_brdf_model *to, mr_doc_gltf_material *info, double *out) {
+    mr_status st;
+    if (rm->plan == NULL) {
+        // The fit scene every other fit of the tool uses (remap, sweep, convert --direct), not the paper's
+        // 512 x 512 frame: 64 times the pixels for the same verdict.
+        mr_fit_scene_options so = {0};
+        so.size = rm->size > 0 ? rm->size : MR_REMAP_DEFAULT_SIZE;
+        mr_scene scene = mr_scene_fit(&so);
+        scene.threads = rm->threads;
+        if ((st = mr_render_plan_create(&scene, &rm->plan)) != MR_OK) return st;
+    }
+    mr_remap_options ro = mr_remap_options_default();
+    ro.threads = rm->threads;
+    ro.target_values = rm->target_values;
+    ro.held = rm->held;
+    ro.ties = rm->ties ? *rm->ties : mr_brdf_default_ties(from, to);
+    ro.ties.tied &= ~rm->held; // a hold wins over a tie
+    mr_remap_result fit;
+    if ((st = mr_remap(rm->plan, from, values, to, &ro, &fit)) != MR_OK) return st;
+    info->route = MR_DOC_ROUTE_REMAP;
+    info->outcome = (int)fit.outcome;
+    info->ssim = fit.ssim;
+    info->relative_rmse = fit.relative_rmse;
+    snprintf(info->detail, sizeof(info->detail), "%s", fit.detail);
+    memcpy(out, fit.values, sizeof(fit.values));
+    return MR_OK;
+}
+
+mr_doc_remapper mr_doc_remapper_of(const mr_doc_gltf_options *o) {
+    mr_doc_remapper rm = {NULL, o->threads, o->size, o->target_values, o->held, o->ties};
+    return rm;
+}
+
+void mr_doc_remapper_free(mr_doc_remapper *rm) {
+    if (rm == NULL) return;
+    mr_render_plan_free(rm->plan);
+    rm->plan = NULL;
 }
 
 /* Textured material k carried over to gltf_pbr or usd-preview's metallic workflow (doc.h: MR_DOC_ROUTE_MAPS). */
@@ -169,7 +211,7 @@ static mr_status carry_maps(const mr_gltf *asset, const mr_doc_gltf_options *o, 
             return mr_fail(MR_ERR_UNSUPPORTED, "glTF '%s': material %d ('%s'): KHR_materials_specular textures have "
                            "no place in usd-preview's metallic workflow (--to gltf keeps them)", mr_gltf_path(asset),
                            k, gm->name);
-    } else if ((st = set_all(m, gltf_v)) != MR_OK) {
+    } else if ((st = mr_doc_set_all(m, gltf_v)) != MR_OK) {
         return st;
     }
     if (gm->base_color_texture.index >= 0) {
@@ -409,7 +451,7 @@ mr_status mr_doc_from_gltf(const mr_gltf *asset, const mr_doc_gltf_options *opts
         return mr_fail(MR_ERR_NOMEM, "glTF export: out of memory");
     }
     r->material_count = counts.materials;
-    mr_render_plan *plan = NULL;
+    mr_doc_remapper remapper = mr_doc_remapper_of(&o);
     mr_status st = MR_OK;
     for (int k = 0; k < counts.materials && st == MR_OK; k++) {
         mr_gltf_material gm;
@@ -435,33 +477,14 @@ mr_status mr_doc_from_gltf(const mr_gltf *asset, const mr_doc_gltf_options *opts
         } else if (rm->route == MR_DOC_ROUTE_DIRECT || rm->route == MR_DOC_ROUTE_LEARNED) {
             st = convert_maps(asset, &o, r, k, &gm, m);
         } else if (rm->route == MR_DOC_ROUTE_COPY) {
-            st = set_all(m, gltf_v);
+            st = mr_doc_set_all(m, gltf_v);
         } else {
-            if (plan == NULL) {
-                // The fit scene every other fit of the tool uses (remap, sweep, convert --direct), not the paper's
-                // 512 x 512 frame: 64 times the pixels for the same verdict.
-                mr_fit_scene_options so = {0};
-                so.size = o.size > 0 ? o.size : MR_REMAP_DEFAULT_SIZE;
-                mr_scene scene = mr_scene_fit(&so);
-                scene.threads = o.threads;
-                if ((st = mr_render_plan_create(&scene, &plan)) != MR_OK) break;
-            }
-            mr_remap_options ro = mr_remap_options_default();
-            ro.threads = o.threads;
-            ro.target_values = o.target_values;
-            ro.held = o.held;
-            ro.ties = o.ties ? *o.ties : mr_brdf_default_ties(gltf, o.target);
-            ro.ties.tied &= ~o.held;
-            mr_remap_result fit;
-            if ((st = mr_remap(plan, gltf, gltf_v, o.target, &ro, &fit)) != MR_OK) break;
-            rm->outcome = (int)fit.outcome;
-            rm->ssim = fit.ssim;
-            rm->relative_rmse = fit.relative_rmse;
-            snprintf(rm->detail, sizeof(rm->detail), "%s", fit.detail);
-            st = set_all(m, fit.values);
+            double fitted[MR_BRDF_MAX_VALUES];
+            if ((st = mr_doc_remap_values(&remapper, gltf, gltf_v, o.target, rm, fitted)) != MR_OK) break;
+            st = mr_doc_set_all(m, fitted);
         }
     }
-    mr_render_plan_free(plan);
+    mr_doc_remapper_free(&remapper);
     if (st != MR_OK) {
         mr_doc_gltf_result_free(r);
         return st;

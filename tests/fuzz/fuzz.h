@@ -29,6 +29,7 @@ int mr_fuzz_mrt(const uint8_t *data, size_t size);
 int mr_fuzz_sweep(const uint8_t *data, size_t size);
 int mr_fuzz_cli_value(const uint8_t *data, size_t size);
 int mr_fuzz_obj(const uint8_t *data, size_t size);
+int mr_fuzz_mtlx(const uint8_t *data, size_t size);
 
 /* A file path private to this process (a folder made once under $TMPDIR or /tmp, removed at exit) whose name
  * ends in `name`, e.g. fuzz_scratch_path("in.glb"); the same name gives the same path. NULL if the folder cannot

@@ -227,3 +227,20 @@ if need cli_value; then
     done
     made cli_value
 fi
+
+if need mtlx; then
+    # MaterialX's own examples (tests/data/materialx, Apache-2.0: kept with their notice there), and documents of
+    # our own writer: maps with extract, multiply, texcoord and wraps (WaterBottle, TextureSettingsTest to gltf_pbr,
+    # copied: no remap), and a uniform one.
+    cp "$root"/tests/data/materialx/*.mtlx "$out/mtlx/"
+    printf '{"asset": {"version": "2.0"}, "materials": [{"name": "Gold", "pbrMetallicRoughness": {"baseColorFactor":
+        [1.0, 0.77, 0.34, 1], "metallicFactor": 1.0, "roughnessFactor": 0.3}}]}' > "$tmp/uniform.gltf"
+    "$bin" export "$tmp/uniform.gltf" -o "$out/mtlx/uniform_gltf_pbr.mtlx" --to gltf >/dev/null 2>&1 || true
+    for g in "$assets/metalrough/WaterBottle/glTF/WaterBottle.gltf" \
+             "$assets/metalrough/TextureSettingsTest/glTF/TextureSettingsTest.gltf"; do
+        [ -f "$g" ] || continue
+        n=$(basename "$g" .gltf)
+        "$bin" export "$g" -o "$tmp/mtlx_$n/$n.mtlx" --to gltf >/dev/null 2>&1 && cp "$tmp/mtlx_$n/$n.mtlx" "$out/mtlx/"
+    done
+    made mtlx
+fi
