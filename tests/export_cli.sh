@@ -10,9 +10,10 @@
 # remap route of uniform materials (the fit scene of remap's default, 64 x 64: about a second per material), its
 # outcomes converged. MaterialX input: our own documents back to .usda (maps rebased) and .mtlx (copied: the same
 # text), MaterialX's examples (tests/data/materialx) remapped with the lobes not carried named, refusals (an
-# unsupported node, a textured standard_surface to openpbr, whose direct route runs from glTF only: exit 2, nothing
-# written); .gltf/.glb outputs from a glTF and from a .mtlx, checked by the Khronos glTF validator (tests/node, npm
-# ci). Ends with "N passed, N failed".
+# unsupported node, a textured standard_surface whose maps are missing: exit 2, nothing written), a textured .mtlx
+# to openpbr by the direct route (maps equal to the glTF asset's own export, byte for byte); .gltf/.glb outputs
+# from a glTF and from a .mtlx, checked by the Khronos glTF validator (tests/node, npm ci). Ends with "N passed, N
+# failed".
 set -u
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="${MR_BUILD:-$root/build}"
@@ -315,9 +316,33 @@ cp "$examples/gltf_pbr_boombox.mtlx" "$tmp/mrefused/"
 refuses "an unsupported node: exit 2, file, line, material and node named" \
     "error: MaterialX '.*gltf_pbr_boombox.mtlx' line 3: material 'Material_boombox': node 'image_basecolor' is a gltf_colorimage, which export cannot follow" \
     "$tmp/mrefused" -- "$bin" export "$tmp/mrefused/gltf_pbr_boombox.mtlx" -o "$tmp/mrefused/out.usda"
-refuses "a textured standard_surface to openpbr: its direct route runs from glTF only" \
-    "material 'Tiled_Brass' \(standard-surface\) is textured: its maps convert to openpbr by the direct route, which export runs from a glTF asset only so far: export from the glTF asset instead" \
+refuses "a textured standard_surface to openpbr whose maps are missing: the map named, nothing written" \
+    "material 'Tiled_Brass' \(standard-surface\) to openpbr by the direct route: map of specular_roughness: image '.*/Images/brass_roughness.jpg': cannot open" \
     "$tmp/mrefused" -- "$bin" export "$examples/standard_surface_brass_tiled.mtlx" -o "$tmp/mrefused/brass.mtlx"
+
+# A textured .mtlx to openpbr by the direct route: the small asset (factors as scales) written as a gltf_pbr
+# document, that document exported to openpbr from another folder; its converted maps equal the asset's own export's
+# (tex/out/doc_*, the same tolerance and scene) byte for byte, named relative to OUT.
+expect "the small asset as a gltf_pbr document (maps carried)" 0 "material 0 'Tex': maps" -- \
+    "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/gl/gl.mtlx" --to gltf
+expect "that document's textured material to openpbr: the direct route" 0 \
+    "material 0 'Tex': direct \(6x6 = 36 texels, 36 distinct values at tolerance 0\.02353: 36 converged; 0 texels" \
+    -- "$bin" export "$tmp/tex/gl/gl.mtlx" -o "$tmp/tex/glop/doc.mtlx" --size 32
+for p in base_color base_metalness specular_roughness flags; do
+    check "... $p: the .mtlx's converted map equals the glTF asset's" cmp -s "$tmp/tex/glop/doc_Tex_$p.png" \
+        "$tmp/tex/out/doc_Tex_$p.png"
+done
+check "... the document refers to the maps beside it" grep -q 'value="doc_Tex_base_color.png"' "$tmp/tex/glop/doc.mtlx"
+expect "that document through --transforms: the learned route" 0 "material 0 'Tex': learned \(1 transform" -- \
+    "$bin" export "$tmp/tex/gl/gl.mtlx" -o "$tmp/tex/gll/doc.mtlx" --transforms "$tmp/tex/mrt/small.mrt" --size 16
+for p in base_color base_metalness specular_roughness; do
+    check "... $p: the .mtlx's learned map equals the glTF asset's" cmp -s "$tmp/tex/gll/doc_Tex_$p.png" \
+        "$tmp/tex/l/doc_Tex_$p.png"
+done
+mkdir -p "$tmp/tex/glb"
+refuses "a .mtlx's converted maps into a glTF output: refused before the work, nothing written" \
+    "material 'Tex' \(openpbr\) converts its maps to gltf by the direct route, whose maps a glTF output cannot hold yet" \
+    "$tmp/tex/glb" -- "$bin" export "$tmp/tex/glop/doc.mtlx" -o "$tmp/tex/glb/doc.glb"
 
 # ---- glTF outputs ------------------------------------------------------------------------------------------------
 validate() { # the Khronos validator (tests/node, pinned; installed with npm ci when missing): 0 errors

@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "matremap.h"
 
@@ -668,12 +669,13 @@ MR_TEST(mtlx_convert_routes) {
     mr_doc_free(doc);
     MR_CHECK_OK(mr_doc_read_mtlx(example("standard_surface_brass_tiled.mtlx"), &doc));
     o.target = NULL;
-    MR_CHECK(mr_doc_convert(doc, "MaterialX 'brass.mtlx'", &o, &r) == MR_ERR_UNSUPPORTED);
-    MR_CHECK_MSG(strcmp(mr_last_error(), "MaterialX 'brass.mtlx': material 'Tiled_Brass' (standard-surface) is "
-                        "textured: its maps convert to openpbr by the direct route, which export runs from a glTF "
-                        "asset only so far: export from the glTF asset instead (uniform materials are remapped; "
-                        "textured standard-surface materials export to standard-surface here)") == 0,
+    o.document_path = example("standard_surface_brass_tiled.mtlx"); // its maps are not in the repository
+    MR_CHECK(mr_doc_convert(doc, "MaterialX 'brass.mtlx'", &o, &r) == MR_ERR_IO);
+    MR_CHECK_MSG(strstr(mr_last_error(), "MaterialX 'brass.mtlx': material 'Tiled_Brass' (standard-surface) to "
+                        "openpbr by the direct route: map of specular_roughness: image '") == mr_last_error() &&
+                 strstr(mr_last_error(), "/Images/brass_roughness.jpg': cannot open") != NULL,
                  "%s", mr_last_error());
+    o.document_path = NULL;
     mr_doc_free(doc);
     // A value outside the model's range is refused by name, not clamped and remapped; roughness 0 passes.
     const char *odd = write_text("odd.mtlx", "<materialx version=\"1.39\">\n"
@@ -711,6 +713,80 @@ MR_TEST(mtlx_convert_routes) {
     mr_doc_free(doc);
 }
 
+/* A textured material read from a document converts by the direct route, as a glTF material does: its maps read
+ * from files relative to the document (a grey roughness map, a base colour map with a scale), the converted maps
+ * named relative to the document; maps on two UV sets refused naming both; no image prefix refused. */
+MR_TEST(mtlx_textured_material_converts_by_the_direct_route) {
+    mr_image *base = NULL, *rough = NULL;
+    MR_CHECK_OK(mr_image_create(2, 2, 3, &base));
+    MR_CHECK_OK(mr_image_create(2, 2, 1, &rough));
+    if (base == NULL || rough == NULL) return;
+    for (int i = 0; i < 4; i++) {
+        for (int c = 0; c < 3; c++) base->pixels[i * 3 + c] = i < 2 ? 0.5f : (c == 0 ? 0.8f : 0.2f);
+        rough->pixels[i] = i % 2 ? 0.3f : 0.7f;
+    }
+    mr_img_write_options colour = {MR_IMG_COLOR, 8, 0}, data = {MR_IMG_DATA, 8, 0};
+    MR_CHECK(mkdir(mr_test_tmp_path("maps"), 0755) == 0 && mkdir(mr_test_tmp_path("out"), 0755) == 0);
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("maps/base.png"), base, &colour));
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("maps/rough.png"), rough, &data));
+    mr_image_free(base);
+    mr_image_free(rough);
+    for (int uv1 = 0; uv1 < 2; uv1++) {
+        mr_doc *doc = mr_doc_create();
+        mr_doc_material *m = NULL;
+        MR_CHECK_OK(mr_doc_add_material(doc, "T", mr_brdf_find("gltf"), &m));
+        if (m == NULL) return;
+        MR_CHECK_OK(mr_doc_set_texture(m, "base_color", "maps/base.png", -1, 0, (double[3]){0.5, 0.9, 1}));
+        MR_CHECK_OK(mr_doc_set_texture(m, "roughness", "maps/rough.png", -1, uv1, NULL));
+        MR_CHECK_OK(mr_doc_set_constant(m, "metallic", (double[1]){0}));
+        mr_doc_gltf_options o = {0};
+        o.size = 16;
+        o.document_path = mr_test_tmp_path("doc.mtlx");
+        mr_doc_gltf_result *r = NULL;
+        mr_status st = mr_doc_convert(doc, "d", &o, &r);
+        MR_CHECK_MSG(uv1 || (st == MR_ERR_INVALID_ARG && strstr(mr_last_error(), "no image prefix given")), "%s",
+                     mr_last_error());
+        o.image_prefix = mr_test_tmp_path("out/doc");
+        st = mr_doc_convert(doc, "d", &o, &r);
+        mr_doc_free(doc);
+        if (uv1) {
+            MR_CHECK(st == MR_ERR_UNSUPPORTED);
+            MR_CHECK_MSG(strcmp(mr_last_error(), "d: material 'T' (gltf) to openpbr by the direct route: the maps of "
+                                "base_color and roughness differ in UV set or wrap mode: a converted map holds every "
+                                "parameter of a texel, so its maps must share both") == 0, "%s", mr_last_error());
+            continue;
+        }
+        MR_CHECK_OK(st);
+        if (r == NULL) return;
+        const mr_doc_gltf_material *info = &r->materials[0];
+        MR_CHECK_MSG(info->route == MR_DOC_ROUTE_DIRECT && info->texels == 4 && info->width == 2 && info->unique == 4,
+                     "route %s, %zu texels, %zu distinct", mr_doc_route_name(info->route), info->texels, info->unique);
+        const mr_doc_material *out = mr_doc_material_get(r->doc, 0);
+        const mr_brdf_model *op = mr_brdf_find("openpbr");
+        const mr_doc_value *bc = &out->values[mr_brdf_param_index(op, "base_color")];
+        const mr_doc_value *sr = &out->values[mr_brdf_param_index(op, "specular_roughness")];
+        const mr_doc_value *bm = &out->values[mr_brdf_param_index(op, "base_metalness")];
+        MR_CHECK_MSG(bc->kind == MR_DOC_TEXTURE && strcmp(bc->file, "out/doc_T_base_color.png") == 0, "%s",
+                     bc->kind == MR_DOC_TEXTURE ? bc->file : "not a map");
+        MR_CHECK(sr->kind == MR_DOC_TEXTURE && strcmp(sr->file, "out/doc_T_specular_roughness.png") == 0);
+        MR_CHECK(bm->kind == MR_DOC_CONSTANT && bm->constant[0] == 0); // tied to metallic 0
+        MR_CHECK(r->map_count == 3 && r->maps[2].param == -1);
+        // The scale is folded in: the converted base colour of the scaled texels is darker in red than green's 0.9
+        // would make it, and the (0.8, 0.2, 0.2) texels' red stays above their green.
+        if (r->map_count == 3) {
+            const mr_image *img = r->maps[0].image;
+            MR_CHECK_MSG(img->pixels[0] < img->pixels[1] && img->pixels[2 * 3] > img->pixels[2 * 3 + 1],
+                         "%g %g %g / %g %g", img->pixels[0], img->pixels[1], img->pixels[2], img->pixels[6],
+                         img->pixels[7]);
+        }
+        MR_CHECK_OK(mr_doc_gltf_write(NULL, r, mr_test_tmp_path("out/doc.mtlx")));
+        FILE *f = fopen(mr_test_tmp_path("out/doc_T_base_color.png"), "rb");
+        MR_CHECK(f != NULL);
+        if (f) fclose(f);
+        mr_doc_gltf_result_free(r);
+    }
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(every_parameter_maps_to_a_declared_input), MR_TEST_ENTRY(mtlx_writes_declared_inputs_only),
              MR_TEST_ENTRY(usda_writes_declared_inputs_only), MR_TEST_ENTRY(the_colour_space_rule),
              MR_TEST_ENTRY(usda_specular_color_only_in_the_specular_workflow),
@@ -718,4 +794,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(every_parameter_maps_to_a_declared_input), MR_TEST_EN
              MR_TEST_ENTRY(uniform_materials_are_remapped_and_converge), MR_TEST_ENTRY(the_route_decision),
              MR_TEST_ENTRY(a_textured_material_converts_by_the_direct_route), MR_TEST_ENTRY(mtlx_round_trip),
              MR_TEST_ENTRY(mtlx_reads_usd_preview_and_top_level_images), MR_TEST_ENTRY(mtlx_reads_materialx_examples),
-             MR_TEST_ENTRY(mtlx_refusals_name_file_line_material_and_node), MR_TEST_ENTRY(mtlx_convert_routes))
+             MR_TEST_ENTRY(mtlx_refusals_name_file_line_material_and_node), MR_TEST_ENTRY(mtlx_convert_routes),
+             MR_TEST_ENTRY(mtlx_textured_material_converts_by_the_direct_route))

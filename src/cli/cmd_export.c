@@ -42,15 +42,16 @@ static void print_help(void) {
            "          printed\n"
            "  textured, gltf <-> usd-preview: maps  base colour -> diffuseColor/base_color (sRGB), metallic and\n"
            "          roughness (linear; a glTF metallic-roughness texture's B and G), factors as scales\n"
-           "  textured, any other pair (e.g. to openpbr or standard-surface), from a glTF asset: direct  the maps\n"
-           "          converted as `matremap convert --direct` does (every distinct texel, quantised to\n"
-           "          --tolerance, remapped; the target's default holds and --hold held, --tie tied), or learned\n"
-           "          through the transforms of --transforms (as `convert --transforms`); the texels, distinct\n"
-           "          values, texels not converged (or extrapolated) and the time printed. A parameter whose\n"
-           "          converted map holds one value is written as a constant, every other as\n"
-           "          OUT_<material>_<parameter>.png (8-bit: sRGB for colours, linear otherwise), with the flag\n"
-           "          picture OUT_<material>_flags.png (red: not converged or extrapolated; green: clamped output).\n"
-           "          From a .mtlx not yet: refused (exit 2, naming the material); export from the glTF asset\n"
+           "  textured, any other pair (e.g. to openpbr or standard-surface): direct  the maps (a .mtlx's read\n"
+           "          from its files, scales folded in) converted as `matremap convert --direct` does (every\n"
+           "          distinct texel, quantised to --tolerance, remapped; the target's default holds and --hold\n"
+           "          held, --tie tied), or learned  through the transforms of --transforms (as `convert\n"
+           "          --transforms`); the texels, distinct values, texels not converged (or extrapolated) and the\n"
+           "          time printed. A parameter whose converted map holds one value is written as a constant,\n"
+           "          every other as OUT_<material>_<parameter>.png (8-bit: sRGB for colours, linear otherwise),\n"
+           "          with the flag picture OUT_<material>_flags.png (red: not converged or extrapolated; green:\n"
+           "          clamped output).\n"
+           "          Not into a .gltf/.glb output (a .mtlx's textured materials of another model: exit 2)\n"
            "The images a glTF asset's maps use are written beside OUT, named after it: OUT_image<K>.png|jpg; a\n"
            ".mtlx's maps stay where they are (named relative to OUT), or are copied beside a glTF OUT as\n"
            "OUT_<name>. Normal, occlusion, emission and alpha maps are not written yet. docs/documents.md says\n"
@@ -62,7 +63,8 @@ static void print_help(void) {
            "                        usd-preview (.usda default)\n"
            "  --direct              textured materials by the direct remap (the default without --transforms)\n"
            "  --transforms PATH     textured materials through learned transforms: PATH a .mrt file or a folder of\n"
-           "                        them (repeatable); the chain from gltf to MODEL is found as convert finds it\n"
+           "                        them (repeatable); the chain from the material's model to MODEL is found as\n"
+           "                        convert finds it\n"
            "  --tolerance T         direct: the quantisation step (default 6/255 = 0.0235, convert's: colours\n"
            "                        in sRGB-encoded units, 43 levels per channel; roughness in ln units, 2.4 %%\n"
            "                        relative; metallic 0.024 absolute); 12/255 takes a third of the time, 1/255\n"
@@ -165,10 +167,6 @@ static int parse(int argc, char **argv, options *o) {
         if (o->tie != NULL && strcmp(o->tie, "none") != 0)
             return cli_usage_error("export", "--tie %s: a .mtlx input takes --tie none or the default ties of each "
                                    "material's model (a 'tied:' line says them), not a list", o->tie);
-        if (o->direct || o->transform_count > 0 || o->tolerance != 0.0 || o->cache != NULL)
-            return cli_usage_error("export", "--direct, --transforms, --tolerance and --cache convert a glTF asset's "
-                                   "textures: the texture routes of a .mtlx input into openpbr or standard-surface "
-                                   "are not done yet (export from the glTF asset)");
     }
     return CLI_EXIT_OK;
 }
@@ -305,12 +303,25 @@ static void print_result(const options *o, const char *format, const mr_brdf_mod
     printf("}\n");
 }
 
-/* A MaterialX document's materials converted and written (OUT: .mtlx, .usda, .gltf or .glb). */
-static int export_mtlx(const options *o, const mr_brdf_model *target, mr_doc_format format) {
-    double target_values[MR_BRDF_MAX_VALUES];
-    unsigned held = 0;
-    mr_brdf_default_values(target, target_values);
-    if (o->hold != NULL && !cli_parse_held("export", target, o->hold, target_values, &held)) return CLI_EXIT_USAGE;
+/* The document and the maps it names as inputs of the plan. */
+static void plan_document(mr_output_plan *io, const char *input, const char *label, const mr_doc *in) {
+    mr_output_plan_input(io, input, label);
+    for (int k = 0; k < mr_doc_material_count(in); k++) {
+        const mr_doc_material *m = mr_doc_material_get(in, k);
+        for (int p = 0; p < m->model->param_count; p++)
+            if (m->values[p].kind == MR_DOC_TEXTURE && m->values[p].file[0] != '/') {
+                char path[8192];
+                const char *slash = strrchr(input, '/');
+                snprintf(path, sizeof path, "%.*s%s", slash ? (int)(slash - input + 1) : 0, input, m->values[p].file);
+                mr_output_plan_input(io, path, "a map of the document");
+            }
+    }
+}
+
+/* A MaterialX document's materials converted and written (OUT: .mtlx, .usda, .gltf or .glb), converted maps
+ * beside OUT. */
+static int export_mtlx(const options *o, const mr_brdf_model *target, mr_doc_format format,
+                       const double *target_values, unsigned held, const mr_learned_set *transforms) {
     mr_doc *in = NULL;
     mr_status st = mr_doc_read_mtlx(o->input, &in);
     if (st != MR_OK) return cli_fail("export", st);
@@ -318,24 +329,31 @@ static int export_mtlx(const options *o, const mr_brdf_model *target, mr_doc_for
     snprintf(label, sizeof label, "MaterialX '%s'", o->input);
     // Nothing written over a file read: OUT against the document and the maps it names.
     mr_output_plan io = {0};
-    mr_output_plan_input(&io, o->input, label);
-    for (int k = 0; k < mr_doc_material_count(in); k++) {
-        const mr_doc_material *m = mr_doc_material_get(in, k);
-        for (int p = 0; p < m->model->param_count; p++)
-            if (m->values[p].kind == MR_DOC_TEXTURE && m->values[p].file[0] != '/') {
-                char path[8192];
-                const char *slash = strrchr(o->input, '/');
-                snprintf(path, sizeof path, "%.*s%s", slash ? (int)(slash - o->input + 1) : 0, o->input,
-                         m->values[p].file);
-                mr_output_plan_input(&io, path, "a map of the document");
-            }
-    }
+    plan_document(&io, o->input, label, in);
     mr_output_plan_output(&io, o->output, NULL);
+    for (int k = 0; transforms != NULL && k < transforms->count; k++)
+        mr_output_plan_inputf(&io, transforms->paths[k], "transform %s", transforms->paths[k]);
+    if (o->cache != NULL) mr_output_plan_output(&io, o->cache, "--cache");
     int code = cli_plan_check("export", &io);
     mr_output_plan_free(&io);
     if (code != CLI_EXIT_OK) {
         mr_doc_free(in);
         return code;
+    }
+    for (int k = 0; cli_is_gltf_path(o->output) && k < mr_doc_material_count(in); k++) {
+        // Converted maps cannot go into a glTF output: said before the work.
+        const mr_doc_material *m = mr_doc_material_get(in, k);
+        int textured = 0;
+        for (int p = 0; p < m->model->param_count; p++) textured |= m->values[p].kind == MR_DOC_TEXTURE;
+        mr_doc_route route = MR_DOC_ROUTE_COPY;
+        if (mr_doc_choose_route(m->model, target, textured, transforms != NULL, &route) == MR_OK &&
+            (route == MR_DOC_ROUTE_DIRECT || route == MR_DOC_ROUTE_LEARNED)) {
+            fprintf(stderr, "matremap export: error: MaterialX '%s': material '%s' (%s) converts its maps to gltf by "
+                    "the %s route, whose maps a glTF output cannot hold yet: write .mtlx or .usda\n", o->input,
+                    m->name, m->model->name, mr_doc_route_name(route));
+            mr_doc_free(in);
+            return CLI_EXIT_BAD_INPUT;
+        }
     }
     mr_doc_gltf_options opts = {0};
     opts.target = target;
@@ -345,8 +363,22 @@ static int export_mtlx(const options *o, const mr_brdf_model *target, mr_doc_for
     opts.held = held;
     const mr_brdf_ties no_ties = {0};
     if (o->tie != NULL) opts.ties = &no_ties; // --tie none
+    // OUT without its extension: the prefix converted maps are named after.
+    char prefix[4096];
+    snprintf(prefix, sizeof prefix, "%s", o->output);
+    char *dot = strrchr(prefix, '.');
+    if (dot) *dot = '\0';
+    opts.image_prefix = prefix;
+    opts.document_path = o->input;
+    opts.tolerance = o->tolerance;
+    opts.cache_path = o->cache;
+    opts.transforms = transforms;
+    progress_state progress = {isatty(STDERR_FILENO) && !o->json, cli_now(), 0};
+    opts.progress = draw_progress;
+    opts.progress_user = &progress;
     mr_doc_gltf_result *result = NULL;
     st = mr_doc_convert(in, label, &opts, &result);
+    if (progress.drawn) fprintf(stderr, "\r\033[K");
     // The ties the remaps took: the defaults of each remapped material's model (a hold wins).
     fits_said said = {target_values, held, 0, {NULL}, {{0}}, o->tie != NULL};
     for (int k = 0; st == MR_OK && k < result->material_count; k++) {
@@ -358,8 +390,23 @@ static int export_mtlx(const options *o, const mr_brdf_model *target, mr_doc_for
         said.ties[said.source_count] = o->tie != NULL ? no_ties : mr_brdf_default_ties(source, target);
         said.ties[said.source_count++].tied &= ~held;
     }
-    mr_doc_free(in);
     const char *format_name = mr_doc_format_name(format);
+    if (st == MR_OK && result->map_count > 0) {
+        // Converted maps (never into a glTF output: refused above), never over an input.
+        io = (mr_output_plan){0};
+        plan_document(&io, o->input, label, in);
+        mr_output_plan_output(&io, o->output, NULL);
+        for (int i = 0; i < result->map_count; i++) mr_output_plan_output(&io, result->maps[i].path, NULL);
+        if (o->cache != NULL) mr_output_plan_output(&io, o->cache, "--cache");
+        code = cli_plan_check("export", &io);
+        mr_output_plan_free(&io);
+        if (code != CLI_EXIT_OK) {
+            mr_doc_gltf_result_free(result);
+            mr_doc_free(in);
+            return code;
+        }
+    }
+    mr_doc_free(in);
     if (st == MR_OK && cli_is_gltf_path(o->output)) {
         // A glTF asset of the materials (no meshes), its images the maps' files copied beside OUT, named after it.
         mr_gltf *asset = NULL;
@@ -370,7 +417,7 @@ static int export_mtlx(const options *o, const mr_brdf_model *target, mr_doc_for
         format_name = strcasecmp(strrchr(o->output, '.'), ".glb") == 0 ? "glb" : "gltf";
     } else if (st == MR_OK) {
         st = mr_doc_rebase(result->doc, o->input, o->output);
-        if (st == MR_OK) st = mr_doc_write(result->doc, o->output);
+        if (st == MR_OK) st = mr_doc_gltf_write(NULL, result, o->output); // the converted maps, then OUT
     }
     if (st != MR_OK) code = cli_fail("export", st);
     if (code == CLI_EXIT_OK) print_result(o, format_name, target, result, &said);
@@ -395,8 +442,6 @@ int cmd_export(int argc, char **argv) {
     if (!gltf_out && mr_doc_surface_node(target, format) == NULL)
         return cli_usage_error("export", "--to %s: .%s does not write it (.mtlx: openpbr, standard-surface, gltf; "
                                ".usda: usd-preview; .gltf, .glb: gltf)", o.to, mr_doc_format_name(format));
-    if (mr_doc_format_from_path(o.input) == MR_DOC_FORMAT_MTLX) return export_mtlx(&o, target, format);
-
     double target_values[MR_BRDF_MAX_VALUES];
     unsigned held = 0;
     mr_brdf_default_values(target, target_values);
@@ -425,6 +470,11 @@ int cmd_export(int argc, char **argv) {
             fprintf(stderr, "matremap export: warning: transform %s (%s -> %s) failed its check against the remaps "
                     "when it was learned (docs/learn.md, \"The check\"); every texel it converts is flagged (red)\n",
                     transforms.paths[k], transforms.all[k]->source->name, transforms.all[k]->target->name);
+    if (mr_doc_format_from_path(o.input) == MR_DOC_FORMAT_MTLX) {
+        code = export_mtlx(&o, target, format, target_values, held, transforms.count > 0 ? &transforms : NULL);
+        mr_learned_set_free(&transforms);
+        return code;
+    }
 
     mr_gltf *asset = NULL;
     mr_status st = mr_gltf_load(o.input, &asset);

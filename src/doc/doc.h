@@ -180,8 +180,7 @@ typedef enum mr_doc_route {
  *   uniform:  source == target -> COPY, else REMAP;
  *   textured: source == target, or gltf <-> usd-preview (the same quantities: docs/documents.md) -> MAPS (from
  *             usd-preview: its metallic workflow without clearcoat, which mr_doc_convert checks);
- *             any other pair -> LEARNED with transforms, else DIRECT (from a glTF asset; from a MaterialX
- *             document not yet: mr_doc_convert refuses it).
+ *             any other pair -> LEARNED with transforms, else DIRECT (mr_doc_from_gltf, mr_doc_convert).
  * MR_ERR_INVALID_ARG for a NULL model or out. */
 mr_status mr_doc_choose_route(const mr_brdf_model *source, const mr_brdf_model *target, int textured,
                               int have_transforms, mr_doc_route *out);
@@ -210,6 +209,9 @@ typedef struct mr_doc_gltf_options {
                                     model to the target found among them (mr_learned_find_chain); NULL: DIRECT */
     mr_doc_progress_fn progress; /* DIRECT: optional, as mr_direct_options.progress */
     void *progress_user;
+    const char *document_path;   /* mr_doc_convert: the document read, against whose folder its relative map files
+                                    are read (DIRECT, LEARNED) and the converted maps named; NULL: the current
+                                    folder */
 } mr_doc_gltf_options;
 
 /* The direct route's default quantisation step in export: convert's, MR_DIRECT_DEFAULT_TOLERANCE = 6/255 (colours in
@@ -285,7 +287,8 @@ typedef struct mr_doc_gltf_result {
  * MR_ERR_INVALID_ARG; no chain: mr_learned_find_chain's MR_ERR_INVALID_ARG. An asset without materials:
  * MR_ERR_INVALID_ARG. */
 mr_status mr_doc_from_gltf(const struct mr_gltf *asset, const mr_doc_gltf_options *opts, mr_doc_gltf_result **out);
-/* The result's images written (mr_gltf_image_write_file: atomic, never over an input), then its converted maps
+/* The result's images written (mr_gltf_image_write_file: atomic, never over an input; `asset` may be NULL when the
+ * result has no images, as mr_doc_convert's), then its converted maps
  * (mr_img_write_set, all or none: 8-bit PNG, sRGB for MR_PARAM_SRGB_MAP parameters, linear otherwise, the flag
  * picture linear), then the document (mr_doc_write). On failure the images and maps already written are removed. */
 mr_status mr_doc_gltf_write(const struct mr_gltf *asset, const mr_doc_gltf_result *result, const char *path);
@@ -313,15 +316,19 @@ mr_status mr_doc_read_mtlx(const char *path, mr_doc **out);
  * document `to` (absolute ones stay). MR_ERR_INVALID_ARG for a file that cannot be named (too long). */
 mr_status mr_doc_rebase(mr_doc *doc, const char *from, const char *to);
 
-/* Every material of `in` converted to opts->target (NULL: openpbr; image_prefix unused) into a new document:
+/* Every material of `in` converted to opts->target (NULL: openpbr) into a new document, by mr_doc_choose_route:
  * the same model -> MR_DOC_ROUTE_COPY (every value, map and extra); a uniform material of another model ->
- * MR_DOC_ROUTE_REMAP (its values, unset ones the model's defaults, fitted by mr_remap as mr_doc_from_gltf does);
- * a textured one by mr_doc_choose_route: MR_DOC_ROUTE_MAPS where the parameters are the same quantities (gltf <->
- * usd-preview's metallic workflow: base colour, metallic, roughness, constant ior); DIRECT and LEARNED (every other
- * pair, e.g. into openpbr or standard-surface) run from a glTF asset only so far: MR_ERR_UNSUPPORTED naming `label`
- * (how the caller names the input, e.g. "MaterialX 'in.mtlx'"), the material and the route, saying to export from
- * the glTF asset instead. Holds and ties (opts) apply to the remaps as in mr_doc_from_gltf. Extras the target does
- * not carry are listed per material (not_carried). The result has no images (the maps keep their files). */
+ * MR_DOC_ROUTE_REMAP (its values, unset ones the model's defaults, fitted by mr_remap as mr_doc_from_gltf does, with
+ * opts' holds and ties); a textured one -> MR_DOC_ROUTE_MAPS where the parameters are the same quantities (gltf <->
+ * usd-preview's metallic workflow: base colour, metallic, roughness, constant ior), otherwise DIRECT (or LEARNED with
+ * opts->transforms) as mr_doc_from_gltf converts a glTF material: the source material built from the document's map
+ * files (relative ones read against opts->document_path's folder, by the one rule of parameter maps, each map's
+ * channel, its scale folded into the texels) and constants, its maps on one UV set with one pair of wraps
+ * (otherwise MR_ERR_UNSUPPORTED) and of one size; the converted maps in result->maps (opts->image_prefix required),
+ * referred to relative to the input document's folder (mr_doc_rebase then names them for the output), written by
+ * mr_doc_gltf_write(NULL, ...). Errors name `label` (how the caller names the input, e.g. "MaterialX 'in.mtlx'"),
+ * the material and the route. Extras the target does not carry are listed per material (not_carried). The result
+ * has no images (the carried maps keep their files). */
 mr_status mr_doc_convert(const mr_doc *in, const char *label, const mr_doc_gltf_options *opts,
                          mr_doc_gltf_result **out);
 

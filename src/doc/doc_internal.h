@@ -32,4 +32,16 @@ void mr_doc_remapper_free(mr_doc_remapper *rm);
 /* Every parameter of the material set to the packed values (constants). */
 mr_status mr_doc_set_all(mr_doc_material *m, const double *values);
 
+struct mr_material;
+
+/* Textured material k (of result r, its document material m, already routed DIRECT or LEARNED in r->materials[k])
+ * converted from `source` (a material of the source model with its maps, factors folded in: TAKEN, freed here) by
+ * mr_learned_convert_material (hops 0 with o's tolerance, holds, ties, scene size and cache; or the chain among
+ * o->transforms): every target parameter whose converted map holds one value set as that constant, every other a
+ * new map of r (PREFIX_<name>_<param>.png, o->image_prefix) read through `uv_set` and `wrap`, plus the flag
+ * picture. `where` names the material in messages ("glTF 'a.gltf': material 0 ('M')"). */
+mr_status mr_doc_convert_textured(const mr_doc_gltf_options *o, mr_doc_gltf_result *r, int k, const char *where,
+                                  const char *name, struct mr_material *source, int uv_set, const mr_doc_wrap wrap[2],
+                                  mr_doc_material *m);
+
 #endif /* MR_DOC_INTERNAL_H */

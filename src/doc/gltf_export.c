@@ -335,38 +335,50 @@ static void relay_progress(const mr_direct_progress *p, void *user) {
 
 /* Textured material k converted into the target by the direct remap or the learned chain (doc.h:
  * MR_DOC_ROUTE_DIRECT, MR_DOC_ROUTE_LEARNED): the source material with its factors folded in
- * (mr_gltf_material_brdf), converted as `convert` does (mr_learned_convert_material), every target parameter set to
- * its constant where the converted map holds one value, else to a new map the result owns; plus the flag picture. */
+ * (mr_gltf_material_brdf), converted by mr_doc_convert_textured. */
 static mr_status convert_maps(const mr_gltf *asset, const mr_doc_gltf_options *o, mr_doc_gltf_result *r, int k,
                               const mr_gltf_material *gm, mr_doc_material *m) {
-    const char *path = mr_gltf_path(asset);
-    mr_doc_gltf_material *rm = &r->materials[k];
-    const mr_brdf_model *gltf = mr_brdf_find("gltf"), *target = m->model;
+    char where[4096 + 200];
+    snprintf(where, sizeof where, "glTF '%s': material %d ('%s')", mr_gltf_path(asset), k, gm->name);
     if (o->image_prefix == NULL || o->image_prefix[0] == '\0')
-        return mr_fail(MR_ERR_INVALID_ARG, "glTF '%s': material %d ('%s') is textured: no image prefix given", path,
-                       k, gm->name);
+        return mr_fail(MR_ERR_INVALID_ARG, "%s is textured: no image prefix given", where);
     int uv_set = 0;
     mr_doc_wrap wrap[2] = {MR_DOC_WRAP_REPEAT, MR_DOC_WRAP_REPEAT};
     mr_status st = converted_sampling(asset, k, gm, &uv_set, wrap);
     if (st != MR_OK) return st;
+    mr_material *source = NULL;
+    if ((st = mr_gltf_material_brdf(asset, k, 0, &source)) != MR_OK) return st;
+    return mr_doc_convert_textured(o, r, k, where, gm->name, source, uv_set, wrap, m);
+}
+
+mr_status mr_doc_convert_textured(const mr_doc_gltf_options *o, mr_doc_gltf_result *r, int k, const char *where,
+                                  const char *name, mr_material *source, int uv_set, const mr_doc_wrap wrap[2],
+                                  mr_doc_material *m) {
+    mr_doc_gltf_material *rm = &r->materials[k];
+    const mr_brdf_model *from = source->model, *target = m->model;
+    if (o->image_prefix == NULL || o->image_prefix[0] == '\0') {
+        mr_material_free(source);
+        return mr_fail(MR_ERR_INVALID_ARG, "%s is textured: no image prefix given", where);
+    }
+    mr_status st = MR_OK;
     // The chain, for the learned route.
     const mr_learned *chain[MR_LEARNED_MAX_HOPS];
     int hops = 0;
     if (rm->route == MR_DOC_ROUTE_LEARNED) {
         int path_index[MR_LEARNED_MAX_HOPS];
-        st = mr_learned_find_chain((const mr_learned *const *)o->transforms->all, o->transforms->count, gltf, target,
+        st = mr_learned_find_chain((const mr_learned *const *)o->transforms->all, o->transforms->count, from, target,
                                    NULL, 0, path_index, &hops);
-        if (st != MR_OK)
-            return mr_fail_context(st, "glTF '%s': material %d ('%s')", path, k, gm->name);
+        if (st != MR_OK) {
+            mr_material_free(source);
+            return mr_fail_context(st, "%s", where);
+        }
         for (int h = 0; h < hops; h++) chain[h] = o->transforms->all[path_index[h]];
     }
-    mr_material *source = NULL;
-    if ((st = mr_gltf_material_brdf(asset, k, 0, &source)) != MR_OK) return st;
     mr_direct_options d = {0};
     d.tolerance = o->tolerance > 0 ? o->tolerance : MR_DOC_DEFAULT_TOLERANCE;
     d.remap.target_values = o->target_values;
     d.remap.held = o->held;
-    d.remap.ties = o->ties ? *o->ties : mr_brdf_default_ties(gltf, target);
+    d.remap.ties = o->ties ? *o->ties : mr_brdf_default_ties(from, target);
     d.remap.ties.tied &= ~o->held; // a hold wins over a tie (and the cache header says so)
     d.scene.size = o->size > 0 ? o->size : MR_REMAP_DEFAULT_SIZE;
     d.cache_path = o->cache_path;
@@ -375,11 +387,11 @@ static mr_status convert_maps(const mr_gltf *asset, const mr_doc_gltf_options *o
         d.progress = relay_progress;
         d.progress_user = &relay;
     }
-    const mr_learned_conversion_spec spec = {.source = gltf, .target = target, .chain = chain, .hops = hops,
+    const mr_learned_conversion_spec spec = {.source = from, .target = target, .chain = chain, .hops = hops,
                                              .direct = &d, .material = source, .threads = o->threads};
     mr_learned_conversion c;
     st = mr_learned_convert_material(&spec, &c); // takes `source`
-    if (st != MR_OK) return mr_fail_context(st, "glTF '%s': material %d ('%s')", path, k, gm->name);
+    if (st != MR_OK) return mr_fail_context(st, "%s", where);
     rm->width = c.width;
     rm->height = c.height;
     rm->texels = c.texels;
@@ -396,8 +408,8 @@ static mr_status convert_maps(const mr_gltf *asset, const mr_doc_gltf_options *o
     }
     // The maps' names: PREFIX_<material>_<parameter>.png, the material's identifier made unique in the document.
     char stem[160];
-    if (gm->name[0] != '\0')
-        mr_doc_identifier(gm->name, stem, sizeof(stem));
+    if (name != NULL && name[0] != '\0')
+        mr_doc_identifier(name, stem, sizeof(stem));
     else
         snprintf(stem, sizeof(stem), "material%d", k);
     for (int j = 0; j < r->map_count; j++)
@@ -494,7 +506,8 @@ mr_status mr_doc_from_gltf(const mr_gltf *asset, const mr_doc_gltf_options *opts
 }
 
 mr_status mr_doc_gltf_write(const mr_gltf *asset, const mr_doc_gltf_result *result, const char *path) {
-    if (asset == NULL || result == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF export: no asset or result");
+    if ((asset == NULL && result != NULL && result->image_count > 0) || result == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF export: no asset or result");
     if (mr_doc_format_from_path(path) == MR_DOC_FORMAT_UNKNOWN)
         return mr_fail(MR_ERR_INVALID_ARG, "material document '%s': the extension chooses the format: .mtlx or .usda",
                        path ? path : "(null)");
