@@ -95,6 +95,14 @@ mr_status mr_gltf_scene_from_asset(const mr_gltf *asset, const mr_gltf_scene_opt
 /* NULL-safe. */
 void mr_gltf_scene_free(mr_gltf_scene *scene);
 
+/* Material `material` of the asset as a BRDF material, as a scene's slot holds it (mr_gltf_scene_material.brdf:
+ * factors folded into the decoded maps) into *out (caller-owned: mr_material_free; NULL on failure): spec_gloss 0
+ * reads its core metal-roughness as `gltf`, 1 its KHR_materials_pbrSpecularGlossiness as `gltf-specgloss`, -1 as a
+ * scene does (spec-gloss when the material has it). Errors: MR_ERR_INVALID_ARG for a NULL argument, an index outside
+ * the asset's materials or spec_gloss 1 on a material without the extension; a texture's decoding errors naming the
+ * asset, the material and the texture. */
+mr_status mr_gltf_material_brdf(const mr_gltf *asset, int material, int spec_gloss, mr_material **out);
+
 /* The camera `matremap report` and `matremap render ASSET` place on a scene: looking at it from `direction` (need not
  * be normalised), or, when direction is NULL, the three-quarter view onto its broadest side: along the axis of its
  * smallest extent, raised and turned a little (0.35 on the two other axes); framed by mr_camera_frame_mesh for a

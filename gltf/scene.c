@@ -160,6 +160,34 @@ static mr_status load_brdf(const load_context *ctx, const mr_gltf_material *mat,
     return mat->has_spec_gloss ? load_specgloss(ctx, mat, *out) : load_metalrough(ctx, mat, *out);
 }
 
+mr_status mr_gltf_material_brdf(const mr_gltf *asset, int material, int spec_gloss, mr_material **out) {
+    if (out != NULL) *out = NULL;
+    if (asset == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "glTF material: NULL asset or result");
+    mr_gltf_material mat;
+    mr_status status = mr_gltf_get_material(asset, material, &mat);
+    if (status != MR_OK) return status;
+    char name[160];
+    if (mat.name[0] != '\0')
+        snprintf(name, sizeof name, "%s", mat.name);
+    else
+        snprintf(name, sizeof name, "material %d", material);
+    const load_context ctx = {asset, mr_gltf_path(asset), name};
+    if (spec_gloss < 0) {
+        status = load_brdf(&ctx, &mat, out);
+    } else if (spec_gloss && !mat.has_spec_gloss) {
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF '%s': material '%s' has no KHR_materials_pbrSpecularGlossiness",
+                       ctx.path, name);
+    } else {
+        status = mr_material_create(mr_brdf_find(spec_gloss ? "gltf-specgloss" : "gltf"), out);
+        if (status == MR_OK) status = spec_gloss ? load_specgloss(&ctx, &mat, *out) : load_metalrough(&ctx, &mat, *out);
+    }
+    if (status != MR_OK) {
+        mr_material_free(*out);
+        *out = NULL;
+    }
+    return status;
+}
+
 /* The material's surface: sidedness, normal map and scale, occlusion map and strength, emission (factor times
  * map). Decoded maps go to the slot (owned by the scene). */
 static mr_status load_surface(const load_context *ctx, const mr_gltf_material *mat, mr_surface *surface,

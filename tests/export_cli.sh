@@ -4,13 +4,16 @@
 # .mtlx --to gltf, the outputs re-read (the MaterialX one by python3's XML parser) and checked: the images written
 # beside OUT are the asset's bytes, colour maps sRGB and data maps raw/linear, metallic from B and roughness from G;
 # the wraps of TextureSettingsTest's samplers; a uniform asset copied to gltf_pbr exactly; --json; output folders
-# made; refusals (exit 2, the material named, nothing written): a textured material to openpbr or
-# standard-surface (no texture route yet); usage errors (exit 1); the remap route of uniform materials (the fit scene
-# of remap's default, 64 x 64: about a second per material), its outcomes converged. MaterialX input: our own
-# documents back to .usda (maps rebased) and .mtlx (copied: the same text), MaterialX's examples (tests/data/
-# materialx) remapped with the lobes not carried named, refusals (an unsupported node, a textured standard_surface to
-# openpbr: exit 2, nothing written); .gltf/.glb outputs from a glTF and from a .mtlx, checked by the Khronos glTF
-# validator (tests/node, npm ci). Ends with "N passed, N failed".
+# made; textured materials to openpbr and standard-surface by the direct route (a small made asset: the converted
+# maps written beside OUT, referred to by the document, equal to `convert --direct`'s to the last code value; holds;
+# a refusal writing nothing); refusals (exit 2, the material named, nothing written); usage errors (exit 1); the
+# remap route of uniform materials (the fit scene of remap's default, 64 x 64: about a second per material), its
+# outcomes converged. MaterialX input: our own documents back to .usda (maps rebased) and .mtlx (copied: the same
+# text), MaterialX's examples (tests/data/materialx) remapped with the lobes not carried named, refusals (an
+# unsupported node, a textured standard_surface whose maps are missing: exit 2, nothing written), a textured .mtlx
+# to openpbr by the direct route (maps equal to the glTF asset's own export, byte for byte); .gltf/.glb outputs
+# from a glTF and from a .mtlx, checked by the Khronos glTF validator (tests/node, npm ci). Ends with "N passed, N
+# failed".
 set -u
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="${MR_BUILD:-$root/build}"
@@ -127,13 +130,115 @@ expect "uniform asset to .usda: remapped, the outcome printed" 0 "'Gold': remap 
 expect "uniform asset to .mtlx (openpbr): the plastic remapped and converged" 0 \
     "'Red plastic': remap \(converged, SSIM 0\.99[0-9]*" -- "$bin" export "$tmp/uniform.gltf" -o "$tmp/r/uniform.mtlx"
 
+# ---- textured materials to openpbr and standard-surface: the direct route --------------------------------------
+# A small textured asset (6 x 6 maps, clamped sampler) with a uniform material beside it; the maps are converted as
+# `convert --direct` converts them (export's default tolerance is convert's, 6/255), in a 32 x 32 fit scene.
+mkdir -p "$tmp/tex"
+oiiotool --pattern fill:topleft=0.6,0.3,0.1:topright=0.1,0.4,0.6:bottomleft=0.3,0.3,0.3:bottomright=0.7,0.7,0.2 \
+    6x6 3 -d uint8 -o "$tmp/tex/base.png" >/dev/null 2>&1
+oiiotool --pattern fill:topleft=0,0.2,0:topright=0,0.8,0:bottomleft=0,0.4,1:bottomright=0,0.6,1 6x6 3 -d uint8 \
+    -o "$tmp/tex/mr.png" >/dev/null 2>&1
+cat >"$tmp/tex/tex.gltf" <<'EOF'
+{"asset": {"version": "2.0"}, "images": [{"uri": "base.png"}, {"uri": "mr.png"}],
+ "samplers": [{"wrapS": 33071, "wrapT": 33071}],
+ "textures": [{"source": 0, "sampler": 0}, {"source": 1, "sampler": 0}],
+ "materials": [{"name": "Tex", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
+   "metallicRoughnessTexture": {"index": 1}}},
+  {"name": "Red plastic", "pbrMetallicRoughness": {"baseColorFactor": [0.6, 0.05, 0.04, 1], "metallicFactor": 0.0,
+   "roughnessFactor": 0.5}}]}
+EOF
+check "the small textured asset is made" test -s "$tmp/tex/base.png" -a -s "$tmp/tex/mr.png"
+expect "a textured material to openpbr: converted by the direct route, counted" 0 \
+    "material 0 'Tex': direct \(6x6 = 36 texels, 36 distinct values at tolerance 0\.02353: 36 converged; 0 texels" \
+    -- "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/out/doc.mtlx" --size 32
+check "... the uniform one still remapped" grep -q "material 1 'Red plastic': remap (converged" "$tmp/out"
+check "... the holds said" grep -q "^held: base_weight=1, .* (default for openpbr)" "$tmp/out"
+check "... the converted maps written beside OUT, named after it, with the flag picture" test -s \
+    "$tmp/tex/out/doc_Tex_base_color.png" -a -s "$tmp/tex/out/doc_Tex_base_metalness.png" -a -s \
+    "$tmp/tex/out/doc_Tex_specular_roughness.png" -a -s "$tmp/tex/out/doc_Tex_flags.png"
+check "... held parameters are constants: no map for them" test ! -e "$tmp/tex/out/doc_Tex_specular_ior.png"
+mtlx_converted_check() { # the document refers to the maps: colour sRGB, data linear, clamped wraps; holds constant
+    python3 - "$1" "$2" <<'EOF'
+import os, sys, xml.etree.ElementTree as ET
+path, prefix = sys.argv[1], sys.argv[2]
+root = ET.parse(path).getroot()
+folder = os.path.dirname(path)
+images = {}
+for image in root.iter("image"):
+    inputs = {i.get("name"): i for i in image.findall("input")}
+    f = inputs["file"]
+    assert os.path.isfile(os.path.join(folder, f.get("value"))), f.get("value")
+    assert inputs["uaddressmode"].get("value") == "clamp" and inputs["vaddressmode"].get("value") == "clamp"
+    images[f.get("value")] = (image.get("type"), f.get("colorspace"))
+assert images[prefix + "base_color.png"] == ("color3", "srgb_texture"), images
+assert images[prefix + "base_metalness.png"] == ("float", None), images
+assert images[prefix + "specular_roughness.png"] == ("float", None), images
+surface = [n for n in root if n.get("name") == "SR_Tex"][0]
+inputs = {i.get("name"): i for i in surface.findall("input")}
+assert inputs["base_color"].get("nodegraph") == "NG_Tex", inputs["base_color"].attrib
+assert inputs["specular_roughness"].get("output") == "specular_roughness_out"
+assert inputs["specular_ior"].get("value") == "1.5", inputs["specular_ior"].attrib
+EOF
+}
+check "... re-read: the surface's inputs come from the converted maps (sRGB colour, linear data)" \
+    mtlx_converted_check "$tmp/tex/out/doc.mtlx" doc_Tex_
+expect "convert --direct on the same maps, with its defaults, in the same scene" 0 "" -- "$bin" convert --from gltf \
+    --to openpbr base_color="$tmp/tex/base.png" metallic="$tmp/tex/mr.png:b" roughness="$tmp/tex/mr.png:g" --direct \
+    --size 32 --format png -o "$tmp/tex/convert/"
+for p in base_color base_metalness specular_roughness; do
+    check "... $p: export's map equals convert --direct's, every code value" \
+        cmp -s "$tmp/tex/out/doc_Tex_$p.png" "$tmp/tex/convert/$p.png"
+done
+expect "--to standard-surface: direct too" 0 "material 0 'Tex': direct \(6x6 = 36 texels" -- \
+    "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/ss/doc.mtlx" --size 32 --to standard-surface
+check "... standard_surface referring to the converted maps" grep -q \
+    'value="doc_Tex_base_color.png" colorspace="srgb_texture"' "$tmp/tex/ss/doc.mtlx"
+expect "--json: the route and the conversion's counts" 0 '"route": "direct", "width": 6, "height": 6, "texels": 36' \
+    -- "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/j/doc.mtlx" --size 32 --json
+check "... the maps listed, the holds too" grep -q '"maps": \[".*doc_Tex_base_color.png".*"held": \[' "$tmp/out"
+expect "--hold: held by the direct route too" 0 "held: specular_roughness=0.4 \(--hold\)" -- \
+    "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/h/doc.mtlx" --size 32 --hold specular_roughness=0.4
+check "... a held parameter is a constant" grep -q '<input name="specular_roughness" type="float" value="0.4" />' \
+    "$tmp/tex/h/doc.mtlx"
+# Refusals: nothing written.
+mkdir -p "$tmp/tex/refused"
+sed 's/"metallicRoughnessTexture": {"index": 1}/"metallicRoughnessTexture": {"index": 1, "texCoord": 1}/' \
+    "$tmp/tex/tex.gltf" >"$tmp/tex/uv1.gltf"
+refuses "maps on different UV sets: refused, naming the material" \
+    "material 0 \('Tex'\): baseColorTexture and metallicRoughnessTexture differ in UV set or wrap mode" \
+    "$tmp/tex/refused" -- "$bin" export "$tmp/tex/uv1.gltf" -o "$tmp/tex/refused/doc.mtlx" --size 32
+# The learned route: a small gltf -> openpbr transform (the default tie: base_metalness carried from metallic).
+expect "a small gltf -> openpbr sweep and transform" 0 "" -- bash -c "'$bin' sweep --from gltf --to openpbr \
+    --grid roughness=0.2:0.8:3 metallic=0:1:2 base_color=0.1:0.8:3 --size 16 -o '$tmp/tex/small.csv' && \
+    '$bin' learn '$tmp/tex/small.csv' --method svr -o '$tmp/tex/mrt/small.mrt'"
+expect "--transforms FILE: the learned route, counted" 0 \
+    "material 0 'Tex': learned \(1 transform, 6x6 = 36 texels: [0-9]+ extrapolated, 0 by a transform that failed" \
+    -- "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/l/doc.mtlx" --transforms "$tmp/tex/mrt/small.mrt" --size 16
+expect "convert --transform on the same maps" 0 "" -- "$bin" convert --from gltf --to openpbr \
+    base_color="$tmp/tex/base.png" metallic="$tmp/tex/mr.png:b" roughness="$tmp/tex/mr.png:g" \
+    --transform "$tmp/tex/mrt/small.mrt" --format png -o "$tmp/tex/lconvert/"
+for p in base_color base_metalness specular_roughness; do
+    check "... $p: export's learned map equals convert's" cmp -s "$tmp/tex/l/doc_Tex_$p.png" "$tmp/tex/lconvert/$p.png"
+done
+expect "--transforms DIR: the chain found there" 0 "'Tex': learned \(1 transform" -- \
+    "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/l2/doc.mtlx" --transforms "$tmp/tex/mrt" --size 16
+refuses "--transforms DIR without a transform: refused, nothing written" "no \*.mrt files there" "$tmp/tex/refused" -- \
+    "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/refused/doc.mtlx" --transforms "$tmp/tex/refused"
+sed 's/"name": "Red plastic"/"name": "Tex"/; s/"roughnessFactor": 0.5}}]}/"roughnessFactor": 0.5}}, {"name": "Tex", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicRoughnessTexture": {"index": 1}}}]}/' \
+    "$tmp/tex/tex.gltf" >"$tmp/tex/dup.gltf"
+expect "two textured materials of one name: their maps named apart" 0 "wrote .*dup_Tex_2_base_color.png" -- \
+    "$bin" export "$tmp/tex/dup.gltf" -o "$tmp/tex/d/dup.mtlx" --size 16
+check "... the first keeps its name" test -s "$tmp/tex/d/dup_Tex_base_color.png"
+oiiotool --pattern constant:color=0,0.5,0.5 4x4 3 -d uint8 -o "$tmp/tex/mr4.png" >/dev/null 2>&1
+sed 's/"uri": "mr.png"/"uri": "mr4.png"/' "$tmp/tex/tex.gltf" >"$tmp/tex/size.gltf"
+refuses "maps of different sizes: refused, naming the material and the sizes" \
+    "material 0 \('Tex'\): .*map 'metallic' is 4x4 but map 'base_color' is 6x6" "$tmp/tex/refused" -- \
+    "$bin" export "$tmp/tex/size.gltf" -o "$tmp/tex/refused/doc.mtlx" --size 16
+expect "--direct and --transforms together" 1 "give --direct or --transforms, not both" -- \
+    "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/refused/doc.mtlx" --direct --transforms x.mrt
+
 # ---- refusals ----------------------------------------------------------------------------------------------------
 mkdir -p "$tmp/refused"
-refuses "a textured material to openpbr: no texture route yet" \
-    "error: .*material 0 \('BottleMat'\) is textured: no texture route to openpbr yet" "$tmp/refused" -- \
-    "$bin" export "$bottle" -o "$tmp/refused/b.mtlx"
-refuses "... nor to standard-surface" "no texture route to standard-surface yet" "$tmp/refused" -- \
-    "$bin" export "$bottle" -o "$tmp/refused/b.mtlx" --to standard-surface
 # An image named after OUT that is the asset's own file: refused before anything is written.
 mkdir -p "$tmp/own"
 cp "$bottle_dir/WaterBottle_baseColor.png" "$tmp/own/doc_image0.png"
@@ -211,9 +316,33 @@ cp "$examples/gltf_pbr_boombox.mtlx" "$tmp/mrefused/"
 refuses "an unsupported node: exit 2, file, line, material and node named" \
     "error: MaterialX '.*gltf_pbr_boombox.mtlx' line 3: material 'Material_boombox': node 'image_basecolor' is a gltf_colorimage, which export cannot follow" \
     "$tmp/mrefused" -- "$bin" export "$tmp/mrefused/gltf_pbr_boombox.mtlx" -o "$tmp/mrefused/out.usda"
-refuses "a textured standard_surface to openpbr: no texture route" \
-    "material 'Tiled_Brass' \(standard-surface\) is textured: no texture route from standard-surface to openpbr yet" \
+refuses "a textured standard_surface to openpbr whose maps are missing: the map named, nothing written" \
+    "material 'Tiled_Brass' \(standard-surface\) to openpbr by the direct route: map of specular_roughness: image '.*/Images/brass_roughness.jpg': cannot open" \
     "$tmp/mrefused" -- "$bin" export "$examples/standard_surface_brass_tiled.mtlx" -o "$tmp/mrefused/brass.mtlx"
+
+# A textured .mtlx to openpbr by the direct route: the small asset (factors as scales) written as a gltf_pbr
+# document, that document exported to openpbr from another folder; its converted maps equal the asset's own export's
+# (tex/out/doc_*, the same tolerance and scene) byte for byte, named relative to OUT.
+expect "the small asset as a gltf_pbr document (maps carried)" 0 "material 0 'Tex': maps" -- \
+    "$bin" export "$tmp/tex/tex.gltf" -o "$tmp/tex/gl/gl.mtlx" --to gltf
+expect "that document's textured material to openpbr: the direct route" 0 \
+    "material 0 'Tex': direct \(6x6 = 36 texels, 36 distinct values at tolerance 0\.02353: 36 converged; 0 texels" \
+    -- "$bin" export "$tmp/tex/gl/gl.mtlx" -o "$tmp/tex/glop/doc.mtlx" --size 32
+for p in base_color base_metalness specular_roughness flags; do
+    check "... $p: the .mtlx's converted map equals the glTF asset's" cmp -s "$tmp/tex/glop/doc_Tex_$p.png" \
+        "$tmp/tex/out/doc_Tex_$p.png"
+done
+check "... the document refers to the maps beside it" grep -q 'value="doc_Tex_base_color.png"' "$tmp/tex/glop/doc.mtlx"
+expect "that document through --transforms: the learned route" 0 "material 0 'Tex': learned \(1 transform" -- \
+    "$bin" export "$tmp/tex/gl/gl.mtlx" -o "$tmp/tex/gll/doc.mtlx" --transforms "$tmp/tex/mrt/small.mrt" --size 16
+for p in base_color base_metalness specular_roughness; do
+    check "... $p: the .mtlx's learned map equals the glTF asset's" cmp -s "$tmp/tex/gll/doc_Tex_$p.png" \
+        "$tmp/tex/l/doc_Tex_$p.png"
+done
+mkdir -p "$tmp/tex/glb"
+refuses "a .mtlx's converted maps into a glTF output: refused before the work, nothing written" \
+    "material 'Tex' \(openpbr\) converts its maps to gltf by the direct route, whose maps a glTF output cannot hold yet" \
+    "$tmp/tex/glb" -- "$bin" export "$tmp/tex/glop/doc.mtlx" -o "$tmp/tex/glb/doc.glb"
 
 # ---- glTF outputs ------------------------------------------------------------------------------------------------
 validate() { # the Khronos validator (tests/node, pinned; installed with npm ci when missing): 0 errors

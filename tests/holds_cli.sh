@@ -2,7 +2,8 @@
 # Holds from the command line (issue 28): --hold NAME=VALUE sets and holds a target parameter in remap, sweep and
 # convert --direct; every fitting command prints the holds it used, the caller's and the target model's default ones
 # (text and --json), the sweep's header records them and learn reads them back; bad hold lists name the parameter and
-# the value. A Ward texture set converts into openpbr and blender-principled by --direct, its outcomes counted.
+# the value. A Ward texture set converts into openpbr and blender-principled by --direct, its outcomes counted. Ties
+# (--tie, the default metalness tie from a glTF source) are said, recorded in the sweep header and kept by the fits.
 # Ends with "N passed, N failed".
 set -u
 bin="${MR_BUILD:-build}/bin/matremap"
@@ -94,4 +95,35 @@ expect "learn --json: the holds" 0 '"held": \[\{"name": "base_weight", "value": 
 expect "sweep --hold: a bad name" 1 "sweep: --hold: 'metal' is not a parameter of 'openpbr'" -- \
     "$bin" sweep --from ward --to openpbr --random 2 --hold metal=0 -o "$tmp/bad.csv"
 
+# ---- ties (docs/remap.md, "Ties"): a metalness the source states is held at its value ------------------------------
+expect "remap gltf -> openpbr: base_metalness tied to metallic by default, said" 0 \
+    "^tied: base_metalness=metallic \(default for gltf -> openpbr\)" -- "$bin" remap --from gltf base_color=0.9 \
+    metallic=1 roughness=0.9 --to openpbr --size 16
+check "... the fit keeps the source's metalness" grep -q "^openpbr .* base_metalness=1 " "$tmp/out"
+expect "remap --tie none: fitted, no tied line" 0 "" -- "$bin" remap --from gltf base_color=0.9 metallic=1 \
+    roughness=0.9 --to openpbr --size 16 --tie none
+check "... no tied line" bash -c "! grep -q '^tied:' '$tmp/out'"
+expect "remap --hold on the tied parameter: the hold wins, nothing tied" 0 "held: base_metalness=0.25 \(--hold\)" -- \
+    "$bin" remap --from gltf metallic=1 roughness=0.5 --to openpbr --size 16 --hold base_metalness=0.25
+check "... no tied line, the held value kept" bash -c \
+    "! grep -q '^tied:' '$tmp/out' && grep -q '^openpbr .* base_metalness=0.25 ' '$tmp/out'"
+expect "remap --tie given, in --json" 0 '"tied": \[\{"name": "metalness", "source": "metallic", "by": "--tie"\}\]' -- \
+    "$bin" remap --from gltf metallic=0.5 --to standard-surface --size 16 --tie metalness=metallic --json
+expect "remap ward -> openpbr: Ward has no metalness, nothing tied" 0 '"tied": \[\]' -- \
+    "$bin" remap --from ward --to openpbr --size 16 --json
+expect "--tie: a channel mismatch named" 1 "--tie: tie list 'base_color=metallic': base_color has 3 channel" -- \
+    "$bin" remap --from gltf --to openpbr --tie base_color=metallic
+expect "--tie: an unknown target parameter" 1 "'metal' is not a parameter of 'openpbr' a fit can tie" -- \
+    "$bin" remap --from gltf --to openpbr --tie metal=metallic
+expect "--tie without --from" 1 "--tie needs --from MODEL" -- \
+    "$bin" remap --from-images "$tmp/none.exr" --to openpbr --tie none
+expect "sweep gltf -> openpbr: the tie said and recorded in the header" 0 \
+    "matremap sweep: tied: base_metalness=metallic \(default for gltf -> openpbr\)" -- "$bin" sweep --from gltf \
+    --to openpbr --grid metallic=0:1:2 --size 16 -o "$tmp/tied.csv"
+check "... the header's remap line: tied=base_metalness:metallic" grep -q "^# remap: .* tied=base_metalness:metallic$" \
+    "$tmp/tied.csv"
+expect "convert --direct gltf -> blender-principled: tied, said" 0 \
+    "tied: metallic=metallic \(default for gltf -> blender-principled\)" -- "$bin" convert --from gltf \
+    --to blender-principled base_color=0.5 metallic=0.3 roughness=0.6 --direct --size 16
+check "... the converted metallic is the source's" grep -q " metallic=0.3 " "$tmp/out"
 finish

@@ -99,7 +99,7 @@ expect "materialx: plain output names the graph and what it drops" 0 "not carrie
 expect "materialx: no graph for the pair" 1 "--method materialx: no MaterialX translation graph from 'gltf' to \
 'openpbr' \(graphs: standard-surface -> gltf, standard-surface -> usd-preview, openpbr -> standard-surface\)" -- \
     "$bin" remap --from gltf --to openpbr --method materialx
-expect "materialx: no fit options" 1 "--hold, --strategy, --grid-points and name=value after --to go with --method fit" \
+expect "materialx: no fit options" 1 "--hold, --tie, --strategy, --grid-points and name=value after --to go with --method fit" \
     -- "$bin" remap --from openpbr --to standard-surface --method materialx --hold coat
 expect "materialx: needs a model source" 1 "give --from MODEL" -- \
     "$bin" remap --from-images "$tmp/nope.exr" --to gltf --method materialx

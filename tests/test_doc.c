@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "matremap.h"
 
@@ -285,6 +286,111 @@ MR_TEST(uniform_materials_are_remapped_and_converge) {
     mr_gltf_free(asset);
 }
 
+/* The one route decision (doc.h, mr_doc_choose_route) that every document export calls. */
+MR_TEST(the_route_decision) {
+    const mr_brdf_model *gltf = mr_brdf_find("gltf"), *op = mr_brdf_find("openpbr"),
+                        *ss = mr_brdf_find("standard-surface"), *usd = mr_brdf_find("usd-preview");
+    static const struct {
+        int source, target, textured, transforms;
+        mr_doc_route want;
+    } cases[] = {
+        {0, 0, 0, 0, MR_DOC_ROUTE_COPY},   {0, 1, 0, 0, MR_DOC_ROUTE_REMAP},  {0, 1, 0, 1, MR_DOC_ROUTE_REMAP},
+        {0, 3, 0, 0, MR_DOC_ROUTE_REMAP},  {0, 0, 1, 0, MR_DOC_ROUTE_MAPS},   {0, 3, 1, 0, MR_DOC_ROUTE_MAPS},
+        {0, 3, 1, 1, MR_DOC_ROUTE_MAPS},   {0, 1, 1, 0, MR_DOC_ROUTE_DIRECT}, {0, 2, 1, 0, MR_DOC_ROUTE_DIRECT},
+        {0, 1, 1, 1, MR_DOC_ROUTE_LEARNED}, {0, 2, 1, 1, MR_DOC_ROUTE_LEARNED}, {1, 1, 1, 0, MR_DOC_ROUTE_MAPS},
+        {1, 2, 0, 0, MR_DOC_ROUTE_REMAP},  {1, 2, 1, 0, MR_DOC_ROUTE_DIRECT},
+        // a MaterialX document's materials (mr_doc_convert): usd-preview's maps back to gltf, the rest direct
+        {3, 0, 1, 0, MR_DOC_ROUTE_MAPS},   {3, 0, 0, 0, MR_DOC_ROUTE_REMAP},  {2, 1, 1, 0, MR_DOC_ROUTE_DIRECT},
+        {3, 1, 1, 0, MR_DOC_ROUTE_DIRECT}, {2, 0, 1, 1, MR_DOC_ROUTE_LEARNED},
+    };
+    const mr_brdf_model *m[4] = {gltf, op, ss, usd};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        mr_doc_route r = (mr_doc_route)-1;
+        MR_CHECK_OK(mr_doc_choose_route(m[cases[i].source], m[cases[i].target], cases[i].textured,
+                                        cases[i].transforms, &r));
+        MR_CHECK_MSG(r == cases[i].want, "%s -> %s textured %d transforms %d: %s, expected %s",
+                     m[cases[i].source]->name, m[cases[i].target]->name, cases[i].textured, cases[i].transforms,
+                     mr_doc_route_name(r) ? mr_doc_route_name(r) : "?", mr_doc_route_name(cases[i].want));
+    }
+    mr_doc_route r;
+    MR_CHECK(mr_doc_choose_route(NULL, op, 1, 0, &r) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strcmp(mr_doc_route_name(MR_DOC_ROUTE_DIRECT), "direct") == 0 &&
+             strcmp(mr_doc_route_name(MR_DOC_ROUTE_LEARNED), "learned") == 0);
+}
+
+/* A textured glTF material to openpbr by the direct route, without the command line: 4 x 4 maps (two base colours,
+ * two roughnesses, metallic 0) converted, the target's default holds written as constants (specular_ior 1.5), a
+ * caller's hold (base_metalness=0.25) too, the parameters that vary as maps of the map's size the result owns; the
+ * counts of the conversion carried; a material whose maps lie on two UV sets refused, naming both textures. */
+MR_TEST(a_textured_material_converts_by_the_direct_route) {
+    mr_image *base = NULL, *mr = NULL;
+    MR_CHECK_OK(mr_image_create(4, 4, 3, &base));
+    MR_CHECK_OK(mr_image_create(4, 4, 3, &mr));
+    if (base == NULL || mr == NULL) return;
+    for (int i = 0; i < 16; i++)
+        for (int c = 0; c < 3; c++) {
+            base->pixels[i * 3 + c] = i < 8 ? 0.5f : (c == 0 ? 0.8f : 0.2f);
+            mr->pixels[i * 3 + c] = c == 1 ? (i % 2 ? 0.3f : 0.7f) : 0.0f;
+        }
+    mr_img_write_options colour = {MR_IMG_COLOR, 8, 0}, data = {MR_IMG_DATA, 8, 0};
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("route_base.png"), base, &colour));
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("route_mr.png"), mr, &data));
+    mr_image_free(base);
+    mr_image_free(mr);
+    char text[1024];
+    for (int uv1 = 0; uv1 < 2; uv1++) {
+        snprintf(text, sizeof text,
+                 "{\"asset\": {\"version\": \"2.0\"}, \"images\": [{\"uri\": \"route_base.png\"}, {\"uri\": "
+                 "\"route_mr.png\"}], \"textures\": [{\"source\": 0}, {\"source\": 1}], \"materials\": [{\"name\": "
+                 "\"T\", \"pbrMetallicRoughness\": {\"baseColorTexture\": {\"index\": 0}, "
+                 "\"metallicRoughnessTexture\": {\"index\": 1, \"texCoord\": %d}}}]}", uv1);
+        const char *path = mr_test_tmp_path("route.gltf");
+        MR_CHECK(mr_test_write_file(path, text, strlen(text)) == 1);
+        mr_gltf *asset = NULL;
+        MR_CHECK_OK(mr_gltf_load(path, &asset));
+        if (asset == NULL) return;
+        const mr_brdf_model *op = mr_brdf_find("openpbr");
+        double values[MR_BRDF_MAX_VALUES];
+        unsigned held = 0;
+        mr_brdf_default_values(op, values);
+        MR_CHECK_OK(mr_brdf_parse_holds(op, "base_metalness=0.25", values, &held));
+        mr_doc_gltf_options o = {0};
+        o.target = op;
+        o.image_prefix = mr_test_tmp_path("route_out");
+        o.size = 16;
+        o.threads = 1;
+        o.target_values = values;
+        o.held = held;
+        mr_doc_gltf_result *r = NULL;
+        mr_status st = mr_doc_from_gltf(asset, &o, &r);
+        mr_gltf_free(asset);
+        if (uv1) {
+            MR_CHECK(st == MR_ERR_UNSUPPORTED && r == NULL);
+            MR_CHECK_MSG(strstr(mr_last_error(), "baseColorTexture and metallicRoughnessTexture differ in UV set"),
+                         "%s", mr_last_error());
+            continue;
+        }
+        MR_CHECK_OK(st);
+        if (r == NULL) return;
+        const mr_doc_gltf_material *m = &r->materials[0];
+        MR_CHECK_MSG(m->route == MR_DOC_ROUTE_DIRECT && m->texels == 16 && m->width == 4 && m->unique == 4,
+                     "route %s, %zu texels, %zu distinct", mr_doc_route_name(m->route), m->texels, m->unique);
+        const mr_doc_material *dm = mr_doc_material_get(r->doc, 0);
+        const int ior = mr_brdf_param_index(op, "specular_ior"), metal = mr_brdf_param_index(op, "base_metalness");
+        const int colour_p = mr_brdf_param_index(op, "base_color");
+        const int rough = mr_brdf_param_index(op, "specular_roughness");
+        MR_CHECK(dm->values[ior].kind == MR_DOC_CONSTANT && dm->values[ior].constant[0] == 1.5);
+        MR_CHECK(dm->values[metal].kind == MR_DOC_CONSTANT && dm->values[metal].constant[0] == 0.25);
+        MR_CHECK(dm->values[colour_p].kind == MR_DOC_TEXTURE && dm->values[rough].kind == MR_DOC_TEXTURE);
+        int maps = 0;
+        for (int i = 0; i < r->map_count; i++) {
+            MR_CHECK(r->maps[i].image->width == 4 && r->maps[i].image->height == 4);
+            maps += r->maps[i].param == colour_p || r->maps[i].param == rough || r->maps[i].param == -1;
+        }
+        MR_CHECK_MSG(r->map_count == 3 && maps == 3, "%d maps", r->map_count);
+        mr_doc_gltf_result_free(r);
+    }
+}
 
 /* ---- reading MaterialX (mtlx_read.c) ------------------------------------------------------------------------- */
 
@@ -540,8 +646,8 @@ MR_TEST(mtlx_refusals_name_file_line_material_and_node) {
 }
 
 /* A read document converted: the same model copies (extras too), another remaps (the extras listed as not
- * carried), a textured standard-surface material has no route to openpbr (refused by name), gltf maps reach
- * usd-preview. */
+ * carried), a textured standard-surface material's direct route to openpbr runs from glTF only (refused by name),
+ * gltf maps reach usd-preview. */
 MR_TEST(mtlx_convert_routes) {
     mr_doc *doc = NULL;
     MR_CHECK_OK(mr_doc_read_mtlx(example("open_pbr_pearl.mtlx"), &doc));
@@ -563,11 +669,13 @@ MR_TEST(mtlx_convert_routes) {
     mr_doc_free(doc);
     MR_CHECK_OK(mr_doc_read_mtlx(example("standard_surface_brass_tiled.mtlx"), &doc));
     o.target = NULL;
-    MR_CHECK(mr_doc_convert(doc, "MaterialX 'brass.mtlx'", &o, &r) == MR_ERR_UNSUPPORTED);
-    MR_CHECK_MSG(strcmp(mr_last_error(), "MaterialX 'brass.mtlx': material 'Tiled_Brass' (standard-surface) is "
-                        "textured: no texture route from standard-surface to openpbr yet (uniform materials are "
-                        "remapped; textured standard-surface materials export to standard-surface only)") == 0,
+    o.document_path = example("standard_surface_brass_tiled.mtlx"); // its maps are not in the repository
+    MR_CHECK(mr_doc_convert(doc, "MaterialX 'brass.mtlx'", &o, &r) == MR_ERR_IO);
+    MR_CHECK_MSG(strstr(mr_last_error(), "MaterialX 'brass.mtlx': material 'Tiled_Brass' (standard-surface) to "
+                        "openpbr by the direct route: map of specular_roughness: image '") == mr_last_error() &&
+                 strstr(mr_last_error(), "/Images/brass_roughness.jpg': cannot open") != NULL,
                  "%s", mr_last_error());
+    o.document_path = NULL;
     mr_doc_free(doc);
     // A value outside the model's range is refused by name, not clamped and remapped; roughness 0 passes.
     const char *odd = write_text("odd.mtlx", "<materialx version=\"1.39\">\n"
@@ -605,10 +713,86 @@ MR_TEST(mtlx_convert_routes) {
     mr_doc_free(doc);
 }
 
+/* A textured material read from a document converts by the direct route, as a glTF material does: its maps read
+ * from files relative to the document (a grey roughness map, a base colour map with a scale), the converted maps
+ * named relative to the document; maps on two UV sets refused naming both; no image prefix refused. */
+MR_TEST(mtlx_textured_material_converts_by_the_direct_route) {
+    mr_image *base = NULL, *rough = NULL;
+    MR_CHECK_OK(mr_image_create(2, 2, 3, &base));
+    MR_CHECK_OK(mr_image_create(2, 2, 1, &rough));
+    if (base == NULL || rough == NULL) return;
+    for (int i = 0; i < 4; i++) {
+        for (int c = 0; c < 3; c++) base->pixels[i * 3 + c] = i < 2 ? 0.5f : (c == 0 ? 0.8f : 0.2f);
+        rough->pixels[i] = i % 2 ? 0.3f : 0.7f;
+    }
+    mr_img_write_options colour = {MR_IMG_COLOR, 8, 0}, data = {MR_IMG_DATA, 8, 0};
+    MR_CHECK(mkdir(mr_test_tmp_path("maps"), 0755) == 0 && mkdir(mr_test_tmp_path("out"), 0755) == 0);
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("maps/base.png"), base, &colour));
+    MR_CHECK_OK(mr_img_write(mr_test_tmp_path("maps/rough.png"), rough, &data));
+    mr_image_free(base);
+    mr_image_free(rough);
+    for (int uv1 = 0; uv1 < 2; uv1++) {
+        mr_doc *doc = mr_doc_create();
+        mr_doc_material *m = NULL;
+        MR_CHECK_OK(mr_doc_add_material(doc, "T", mr_brdf_find("gltf"), &m));
+        if (m == NULL) return;
+        MR_CHECK_OK(mr_doc_set_texture(m, "base_color", "maps/base.png", -1, 0, (double[3]){0.5, 0.9, 1}));
+        MR_CHECK_OK(mr_doc_set_texture(m, "roughness", "maps/rough.png", -1, uv1, NULL));
+        MR_CHECK_OK(mr_doc_set_constant(m, "metallic", (double[1]){0}));
+        mr_doc_gltf_options o = {0};
+        o.size = 16;
+        o.document_path = mr_test_tmp_path("doc.mtlx");
+        mr_doc_gltf_result *r = NULL;
+        mr_status st = mr_doc_convert(doc, "d", &o, &r);
+        MR_CHECK_MSG(uv1 || (st == MR_ERR_INVALID_ARG && strstr(mr_last_error(), "no image prefix given")), "%s",
+                     mr_last_error());
+        o.image_prefix = mr_test_tmp_path("out/doc");
+        st = mr_doc_convert(doc, "d", &o, &r);
+        mr_doc_free(doc);
+        if (uv1) {
+            MR_CHECK(st == MR_ERR_UNSUPPORTED);
+            MR_CHECK_MSG(strcmp(mr_last_error(), "d: material 'T' (gltf) to openpbr by the direct route: the maps of "
+                                "base_color and roughness differ in UV set or wrap mode: a converted map holds every "
+                                "parameter of a texel, so its maps must share both") == 0, "%s", mr_last_error());
+            continue;
+        }
+        MR_CHECK_OK(st);
+        if (r == NULL) return;
+        const mr_doc_gltf_material *info = &r->materials[0];
+        MR_CHECK_MSG(info->route == MR_DOC_ROUTE_DIRECT && info->texels == 4 && info->width == 2 && info->unique == 4,
+                     "route %s, %zu texels, %zu distinct", mr_doc_route_name(info->route), info->texels, info->unique);
+        const mr_doc_material *out = mr_doc_material_get(r->doc, 0);
+        const mr_brdf_model *op = mr_brdf_find("openpbr");
+        const mr_doc_value *bc = &out->values[mr_brdf_param_index(op, "base_color")];
+        const mr_doc_value *sr = &out->values[mr_brdf_param_index(op, "specular_roughness")];
+        const mr_doc_value *bm = &out->values[mr_brdf_param_index(op, "base_metalness")];
+        MR_CHECK_MSG(bc->kind == MR_DOC_TEXTURE && strcmp(bc->file, "out/doc_T_base_color.png") == 0, "%s",
+                     bc->kind == MR_DOC_TEXTURE ? bc->file : "not a map");
+        MR_CHECK(sr->kind == MR_DOC_TEXTURE && strcmp(sr->file, "out/doc_T_specular_roughness.png") == 0);
+        MR_CHECK(bm->kind == MR_DOC_CONSTANT && bm->constant[0] == 0); // tied to metallic 0
+        MR_CHECK(r->map_count == 3 && r->maps[2].param == -1);
+        // The scale is folded in: the converted base colour of the scaled texels is darker in red than green's 0.9
+        // would make it, and the (0.8, 0.2, 0.2) texels' red stays above their green.
+        if (r->map_count == 3) {
+            const mr_image *img = r->maps[0].image;
+            MR_CHECK_MSG(img->pixels[0] < img->pixels[1] && img->pixels[2 * 3] > img->pixels[2 * 3 + 1],
+                         "%g %g %g / %g %g", img->pixels[0], img->pixels[1], img->pixels[2], img->pixels[6],
+                         img->pixels[7]);
+        }
+        MR_CHECK_OK(mr_doc_gltf_write(NULL, r, mr_test_tmp_path("out/doc.mtlx")));
+        FILE *f = fopen(mr_test_tmp_path("out/doc_T_base_color.png"), "rb");
+        MR_CHECK(f != NULL);
+        if (f) fclose(f);
+        mr_doc_gltf_result_free(r);
+    }
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(every_parameter_maps_to_a_declared_input), MR_TEST_ENTRY(mtlx_writes_declared_inputs_only),
              MR_TEST_ENTRY(usda_writes_declared_inputs_only), MR_TEST_ENTRY(the_colour_space_rule),
              MR_TEST_ENTRY(usda_specular_color_only_in_the_specular_workflow),
              MR_TEST_ENTRY(bad_values_are_refused), MR_TEST_ENTRY(the_write_is_atomic),
-             MR_TEST_ENTRY(uniform_materials_are_remapped_and_converge), MR_TEST_ENTRY(mtlx_round_trip),
+             MR_TEST_ENTRY(uniform_materials_are_remapped_and_converge), MR_TEST_ENTRY(the_route_decision),
+             MR_TEST_ENTRY(a_textured_material_converts_by_the_direct_route), MR_TEST_ENTRY(mtlx_round_trip),
              MR_TEST_ENTRY(mtlx_reads_usd_preview_and_top_level_images), MR_TEST_ENTRY(mtlx_reads_materialx_examples),
-             MR_TEST_ENTRY(mtlx_refusals_name_file_line_material_and_node), MR_TEST_ENTRY(mtlx_convert_routes))
+             MR_TEST_ENTRY(mtlx_refusals_name_file_line_material_and_node), MR_TEST_ENTRY(mtlx_convert_routes),
+             MR_TEST_ENTRY(mtlx_textured_material_converts_by_the_direct_route))

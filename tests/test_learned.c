@@ -594,9 +594,12 @@ MR_TEST(check_against_the_remaps) {
  * the holds 7 of 40 random ones converged and 11 were local minima, and learn's check failed on every output), and
  * learn writes exactly base_color, base_metalness and specular_roughness. Its check (SVR, 12 held-out rows): the
  * renders stay within MR_LEARNED_MAX_DSSIM of the remaps' (measured p90 0.0046), base_color and specular_roughness
- * within 10 % (p90 5.6 % and 4.2 %); base_metalness is the one output that may miss 10 % (measured p90 17 %): where
- * the Ward specular is near a dielectric's 0.04, a little metal with a slightly darker base colour renders the same,
- * so the remaps themselves scatter there. The verdict asserted is that one: nothing else fails. */
+ * within 10 % (p90 5.6 % and 4.2 %); base_metalness misses 10 % (measured p90 17 %), and the verdict asserted is
+ * that one: FAILED, on base_metalness alone. Why (issue 28): the remaps are smooth, but base_metalness is the one knob
+ * that raises F0 above the dielectric's 0.04 (specular_ior held at 1.5), so it is 0 below a Ward specular of about
+ * 0.04 and rises steeply above (0.51 at specular 0.11 over diffuse 0.1): a kink that this grid's four specular
+ * levels straddle, and held-out nodes are interpolated across it. With eight specular and five diffuse levels (200
+ * rows) the same learn passes (base_metalness p90 6.6 %, docs/learn.md). Ward has no metalness to tie. */
 MR_TEST(ward_to_openpbr_learns_with_the_default_holds) {
     const mr_brdf_model *ward = mr_brdf_find("ward"), *op = mr_brdf_find("openpbr");
     mr_sweep_spec spec;
@@ -636,14 +639,76 @@ MR_TEST(ward_to_openpbr_learns_with_the_default_holds) {
     for (int j = 0; j < t->output_count; j++) {
         const int metalness = t->outputs[j].param == mr_brdf_param_index(op, "base_metalness");
         printf("      %-20s relative error p90 %.3g%s\n", mr_learned_slot_name(op, &t->outputs[j], name, sizeof name),
-               t->check.relative_p90[j], metalness ? " (may exceed the bound: see above)" : "");
-        if (!metalness)
-            MR_CHECK_MSG(t->check.relative_p90[j] <= MR_LEARNED_MAX_RELATIVE_ERROR, "%s: p90 %g", name,
-                         t->check.relative_p90[j]);
+               t->check.relative_p90[j], metalness ? " (exceeds the bound: see above)" : "");
+        MR_CHECK_MSG((t->check.relative_p90[j] <= MR_LEARNED_MAX_RELATIVE_ERROR) == !metalness, "%s: p90 %g", name,
+                     t->check.relative_p90[j]);
     }
+    MR_CHECK(!t->check.passed);
     printf("      check %s, dSSIM p90 %.3g\n", t->check.passed ? "passed" : "failed (base_metalness only)",
            t->check.dssim_p90);
     mr_learned_free(t);
+}
+
+/* gltf -> openpbr with the default tie (issue 28; docs/remap.md, "Ties"): base_metalness held at each row's metallic
+ * (the fit scene cannot tell metalness from base colour at high roughness: untied, roughness 0.9, metallic 1, base
+ * colour 0.9 remaps to base_metalness 0.48, base colour 0.48). The sweep's header records the tie, learn carries it
+ * (factor 1, not an output) and the transform passes its check (measured on this 5 x 4 x 4 grid: base_color 9 in 10
+ * within 6.5 %, specular_roughness 3.3 %, dSSIM p90 0.0024). Untied, the same grid's transform fails on
+ * base_metalness (measured p90 34 %): the verdict asserted both ways. */
+MR_TEST(gltf_to_openpbr_passes_its_check_with_the_default_tie) {
+    const mr_brdf_model *gltf = mr_brdf_find("gltf"), *op = mr_brdf_find("openpbr");
+    const int metalness = mr_brdf_param_index(op, "base_metalness");
+    for (int tied = 1; tied >= 0; tied--) {
+        mr_sweep_spec spec;
+        mr_sweep_spec_init(&spec, gltf, op);
+        spec.sampling = MR_SWEEP_GRID;
+        static const char *const axes[] = {"roughness=0.1:0.9:5", "metallic=0:1:4", "base_color=0.05:0.9:4"};
+        for (int k = 0; k < 3; k++) MR_CHECK_OK(mr_sweep_parse_axis(gltf, axes[k], &spec.axes[k]));
+        spec.axis_count = 3;
+        spec.scene.size = 32;
+        if (tied) spec.remap.ties = mr_brdf_default_ties(gltf, op);
+        MR_CHECK(!tied || spec.remap.ties.tied == 1u << metalness);
+        const char *path = mr_test_tmp_path("gltf_openpbr.csv");
+        unlink(path);
+        mr_sweep_options so = {0};
+        so.threads = 2;
+        mr_sweep_summary summary;
+        MR_CHECK_OK(mr_sweep_run(&spec, path, &so, &summary));
+        char *text = mr_test_read_file(path, NULL);
+        MR_CHECK_MSG(text && (strstr(text, " tied=base_metalness:metallic\n") != NULL) == tied, "tied %d", tied);
+        free(text);
+        mr_sweep_table tab;
+        MR_CHECK_OK(mr_sweep_table_load(&path, 1, NULL, &tab));
+        MR_CHECK(tab.target_ties.tied == spec.remap.ties.tied);
+        mr_learn_options o = {0};
+        o.method = MR_LEARN_SVR;
+        o.threads = 1;
+        mr_learned *t = NULL;
+        MR_CHECK_OK(mr_learn(&tab, &o, &t));
+        mr_sweep_table_free(&tab);
+        unlink(path);
+        if (t == NULL) return;
+        int output = -1, carried = 0;
+        for (int j = 0; j < t->output_count; j++)
+            if (t->outputs[j].param == metalness) output = j;
+        for (int c = 0; c < t->carry_count; c++)
+            carried |= t->carries[c].target_param == metalness &&
+                       t->carries[c].source_param == mr_brdf_param_index(gltf, "metallic") &&
+                       t->carries[c].factor[0] == 1.0;
+        printf("      %s: check %s, dSSIM p90 %.3g", tied ? "tied" : "untied", t->check.passed ? "passed" : "failed",
+               t->check.dssim_p90);
+        if (output >= 0) printf(", base_metalness p90 %.3g", t->check.relative_p90[output]);
+        printf("\n");
+        if (tied) {
+            MR_CHECK_MSG(output < 0 && carried, "base_metalness an output %d, carried %d", output, carried);
+            MR_CHECK(t->check.done && t->check.passed);
+        } else {
+            MR_CHECK(output >= 0 && !carried);
+            MR_CHECK(t->check.done && !t->check.passed);
+            MR_CHECK(output >= 0 && t->check.relative_p90[output] > MR_LEARNED_MAX_RELATIVE_ERROR);
+        }
+        mr_learned_free(t);
+    }
 }
 
 /* mr_learned_write_with_plots: the transform and its cross sections as one set. The rows file holds every row at the
@@ -828,6 +893,7 @@ MR_TEST(slot_names_carry_the_channel) {
 }
 
 MR_TEST_MAIN(MR_TEST_ENTRY(slot_names_carry_the_channel), MR_TEST_ENTRY(ward_to_openpbr_learns_with_the_default_holds),
+             MR_TEST_ENTRY(gltf_to_openpbr_passes_its_check_with_the_default_tie),
              MR_TEST_ENTRY(parametric_recovers_known_mapping), MR_TEST_ENTRY(carry_by_lobe_ratio),
              MR_TEST_ENTRY(solver_residue_not_learned), MR_TEST_ENTRY(float_map_at_bound_not_clamped),
              MR_TEST_ENTRY(round_trip_every_method), MR_TEST_ENTRY(corrupted_files_refused),

@@ -207,6 +207,38 @@ mr_hold_reason mr_brdf_hold_reason(const mr_brdf_model *model, unsigned held, in
 size_t mr_brdf_format_holds(const mr_brdf_model *model, const double *values, unsigned held, const char *held_label,
                             char *buf, size_t size);
 
+/* Ties: target parameters held at the value of a source parameter (per material, row or texel) instead of fitted,
+ * where a fit scene cannot separate what the source states (a metalness against the base colour at high roughness:
+ * gltf -> openpbr at roughness 0.9, metallic 1, base colour 0.9 remaps to metalness 0.48, base colour 0.48 with SSIM
+ * 0.996; docs/remap.md, "Ties"). Bit p of `tied`: target parameter p takes source parameter source[p] (the same
+ * channel count). Zeroed = no ties. */
+typedef struct mr_brdf_ties {
+    unsigned tied;
+    signed char source[32];
+} mr_brdf_ties;
+
+/* The documented default ties of a pair: a target metalness (a scalar named metallic, metalness or base_metalness)
+ * takes a source metalness of those names when both models have one and they differ (gltf -> openpbr:
+ * base_metalness=metallic; -> standard-surface: metalness=metallic; -> blender-principled, usd-preview,
+ * cycles-principled: metallic=metallic). None for a source without a metalness (Ward, GGX, Phong ...). */
+mr_brdf_ties mr_brdf_default_ties(const mr_brdf_model *source, const mr_brdf_model *target);
+
+/* Parse a tie list "TARGET=SOURCE[,TARGET=SOURCE...]" (a target parameter, a source parameter of the same channel
+ * count; switches refused) or "none" into *out (replacing it). MR_ERR_INVALID_ARG naming the item: an unknown name
+ * (the valid ones listed), a channel mismatch, an empty item, a parameter beyond the 32 a mask holds. */
+mr_status mr_brdf_parse_ties(const mr_brdf_model *source, const mr_brdf_model *target, const char *text,
+                             mr_brdf_ties *out);
+
+/* The ties as "a=b, c=d" into buf (always terminated; as snprintf: returns the length needed); "" for none. */
+size_t mr_brdf_format_ties(const mr_brdf_model *source, const mr_brdf_model *target, const mr_brdf_ties *ties,
+                           char *buf, size_t size);
+
+/* Apply ties: target_values[tied parameter] = source_values[its source parameter] (clamped into the target
+ * parameter's range), and the tied bits or'ed into *held (may be NULL). A parameter *held already holds (the
+ * caller's hold) keeps its value: a hold wins over a tie. */
+void mr_brdf_apply_ties(const mr_brdf_model *source, const double *source_values, const mr_brdf_model *target,
+                        const mr_brdf_ties *ties, double *target_values, unsigned *held);
+
 /* Convenience: prepare + eval of the full f_r (diffuse + specular) into rgb[3]. */
 void mr_brdf_eval_full(const mr_brdf_model *model, const double *values, const double wi[3],
                        const double wo[3], double rgb[3]);

@@ -7,6 +7,8 @@
 #include "brdf.h"
 
 #include <errno.h>
+#include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -284,4 +286,99 @@ void mr_brdf_eval_full(const mr_brdf_model *model, const double *values, const d
     model->prepare(model, values, state.bytes);
     model->eval(state.bytes, wi, wo, diffuse, specular);
     for (int c = 0; c < 3; c++) rgb[c] = diffuse[c] + specular[c];
+}
+
+/* ---- ties ------------------------------------------------------------------------------------------------------ */
+
+static int metalness_param(const mr_brdf_model *m) {
+    static const char *const names[] = {"metallic", "metalness", "base_metalness"};
+    for (int k = 0; k < 3; k++) {
+        const int p = mr_brdf_param_index(m, names[k]);
+        if (p >= 0 && p < 32 && m->params[p].channels == 1 && m->params[p].role != MR_PARAM_SWITCH) return p;
+    }
+    return -1;
+}
+
+mr_brdf_ties mr_brdf_default_ties(const mr_brdf_model *source, const mr_brdf_model *target) {
+    mr_brdf_ties ties;
+    memset(&ties, 0, sizeof ties);
+    if (source == NULL || target == NULL || source == target) return ties;
+    const int s = metalness_param(source), t = metalness_param(target);
+    if (s >= 0 && t >= 0) {
+        ties.tied = 1u << t;
+        ties.source[t] = (signed char)s;
+    }
+    return ties;
+}
+
+mr_status mr_brdf_parse_ties(const mr_brdf_model *source, const mr_brdf_model *target, const char *text,
+                             mr_brdf_ties *out) {
+    if (source == NULL || target == NULL || text == NULL || out == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "tie list: NULL argument");
+    mr_brdf_ties ties;
+    memset(&ties, 0, sizeof ties);
+    if (strcmp(text, "none") != 0) {
+        const char *item = text;
+        for (;;) {
+            const char *end = strchr(item, ',');
+            size_t len = end ? (size_t)(end - item) : strlen(item);
+            char buf[128];
+            if (len == 0 || len >= sizeof buf)
+                return mr_fail(MR_ERR_INVALID_ARG, "tie list '%s': an empty or overlong item", text);
+            memcpy(buf, item, len);
+            buf[len] = '\0';
+            char *eq = strchr(buf, '=');
+            if (eq == NULL)
+                return mr_fail(MR_ERR_INVALID_ARG, "tie list '%s': '%s' is not TARGET=SOURCE (a parameter of '%s' "
+                               "held at one of '%s')", text, buf, target->name, source->name);
+            *eq = '\0';
+            const int t = mr_brdf_param_index(target, buf), s = mr_brdf_param_index(source, eq + 1);
+            if (t < 0 || t >= 32 || target->params[t].role == MR_PARAM_SWITCH)
+                return mr_fail(MR_ERR_INVALID_ARG, "tie list '%s': '%s' is not a parameter of '%s' a fit can tie",
+                               text, buf, target->name);
+            if (s < 0 || source->params[s].role == MR_PARAM_SWITCH)
+                return mr_fail(MR_ERR_INVALID_ARG, "tie list '%s': '%s' is not a parameter of '%s'", text, eq + 1,
+                               source->name);
+            if (source->params[s].channels != target->params[t].channels)
+                return mr_fail(MR_ERR_INVALID_ARG, "tie list '%s': %s has %d channel(s), %s %d", text, buf,
+                               target->params[t].channels, eq + 1, source->params[s].channels);
+            ties.tied |= 1u << t;
+            ties.source[t] = (signed char)s;
+            if (end == NULL) break;
+            item = end + 1;
+        }
+    }
+    *out = ties;
+    return MR_OK;
+}
+
+size_t mr_brdf_format_ties(const mr_brdf_model *source, const mr_brdf_model *target, const mr_brdf_ties *ties,
+                           char *buf, size_t size) {
+    size_t need = 0;
+    if (buf != NULL && size > 0) buf[0] = '\0';
+    if (source == NULL || target == NULL || ties == NULL) return 0;
+    for (int p = 0; p < target->param_count && p < 32; p++) {
+        if (!((ties->tied >> p) & 1u)) continue;
+        char item[160];
+        snprintf(item, sizeof item, "%s%s=%s", need ? ", " : "", target->params[p].name,
+                 source->params[ties->source[p]].name);
+        const size_t len = strlen(item);
+        if (buf != NULL && need + len < size) memcpy(buf + need, item, len + 1);
+        need += len;
+    }
+    return need;
+}
+
+void mr_brdf_apply_ties(const mr_brdf_model *source, const double *source_values, const mr_brdf_model *target,
+                        const mr_brdf_ties *ties, double *target_values, unsigned *held) {
+    if (source == NULL || source_values == NULL || target == NULL || ties == NULL || target_values == NULL) return;
+    const unsigned caller = held ? *held : 0u;
+    for (int p = 0; p < target->param_count && p < 32; p++) {
+        if (!((ties->tied >> p) & 1u) || ((caller >> p) & 1u)) continue; // a caller's hold wins over a tie
+        const mr_brdf_param *q = &target->params[p];
+        const double *from = source_values + mr_brdf_param_offset(source, ties->source[p]);
+        double *to = target_values + mr_brdf_param_offset(target, p);
+        for (int c = 0; c < q->channels; c++) to[c] = fmin(q->max_value, fmax(q->min_value, from[c]));
+        if (held) *held |= 1u << p;
+    }
 }

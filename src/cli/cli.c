@@ -47,6 +47,41 @@ int cli_parse_held(const char *command, const mr_brdf_model *model, const char *
     return cli_usage_error(command, "--hold: %s", mr_last_error()) == 0;
 }
 
+int cli_parse_ties(const char *command, const mr_brdf_model *source, const mr_brdf_model *target, const char *list,
+                   unsigned held, mr_brdf_ties *ties) {
+    if (list == NULL)
+        *ties = mr_brdf_default_ties(source, target);
+    else if (mr_brdf_parse_ties(source, target, list, ties) != MR_OK)
+        return cli_usage_error(command, "--tie: %s", mr_last_error()) == 0;
+    ties->tied &= ~held;
+    return 1;
+}
+
+void cli_print_ties(FILE *out, const char *prefix, const mr_brdf_model *source, const mr_brdf_model *target,
+                    const mr_brdf_ties *ties, int given) {
+    char line[1024];
+    if (mr_brdf_format_ties(source, target, ties, line, sizeof line) == 0) return;
+    if (given)
+        fprintf(out, "%stied: %s (--tie)\n", prefix ? prefix : "", line);
+    else
+        fprintf(out, "%stied: %s (default for %s -> %s)\n", prefix ? prefix : "", line, source->name, target->name);
+}
+
+void cli_print_ties_json(FILE *out, const mr_brdf_model *source, const mr_brdf_model *target,
+                         const mr_brdf_ties *ties, int given) {
+    fprintf(out, "[");
+    for (int p = 0, first = 1; p < target->param_count && p < 32; p++) {
+        if (!((ties->tied >> p) & 1u)) continue;
+        fprintf(out, "%s{\"name\": ", first ? "" : ", ");
+        cli_json_string(out, target->params[p].name);
+        fprintf(out, ", \"source\": ");
+        cli_json_string(out, source->params[ties->source[p]].name);
+        fprintf(out, ", \"by\": \"%s\"}", given ? "--tie" : "default");
+        first = 0;
+    }
+    fprintf(out, "]");
+}
+
 void cli_print_holds(FILE *out, const char *prefix, const mr_brdf_model *model, const double *values, unsigned held) {
     char line[2048];
     if (mr_brdf_format_holds(model, values, held, "--hold", line, sizeof line) == 0) return;

@@ -100,6 +100,18 @@ void cli_print_holds(FILE *out, const char *prefix, const mr_brdf_model *model, 
 /* The same as a JSON array (no key): [{"name": N, "value": V or [R, G, B], "by": "default" or "--hold"}, ...]. */
 void cli_print_holds_json(FILE *out, const mr_brdf_model *model, const double *values, unsigned held);
 
+/* The ties of a fit (brdf.h): `list` (--tie TARGET=SOURCE,... or "none") parsed into *ties, or, when list is NULL,
+ * the pair's defaults (mr_brdf_default_ties); parameters the caller holds (`held`, --hold) are not tied (a hold
+ * wins). Returns 1, or prints a usage error naming the item and returns 0. */
+int cli_parse_ties(const char *command, const mr_brdf_model *source, const mr_brdf_model *target, const char *list,
+                   unsigned held, mr_brdf_ties *ties);
+/* "PREFIXtied: base_metalness=metallic (default for gltf -> openpbr)" ("(--tie)" when given); nothing for none. */
+void cli_print_ties(FILE *out, const char *prefix, const mr_brdf_model *source, const mr_brdf_model *target,
+                    const mr_brdf_ties *ties, int given);
+/* The same as a JSON array: [{"name": T, "source": S, "by": "default" or "--tie"}, ...]. */
+void cli_print_ties_json(FILE *out, const mr_brdf_model *source, const mr_brdf_model *target,
+                         const mr_brdf_ties *ties, int given);
+
 /* Write s as a JSON string literal (quotes and escapes included). */
 void cli_json_string(FILE *out, const char *s);
 

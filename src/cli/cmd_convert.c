@@ -51,6 +51,9 @@ static void print_help(void) {
         "  --hold NAME[=VALUE][,...]  --direct: hold these target parameters at VALUE (or their defaults)\n"
         "                      instead of fitting them, as 'matremap remap --hold'; the target model's default\n"
         "                      holds are held too, and a 'held:' line lists every hold used\n"
+        "  --tie TARGET=SOURCE[,...]|none  --direct: hold target parameters at each texel's source value; by\n"
+        "                      default a metalness the source states (gltf -> openpbr: base_metalness=metallic);\n"
+        "                      a 'tied:' line says which (docs/remap.md, \"Ties\")\n"
         "\n");
     printf(
         "Outputs: PREFIX_<param>.exr (linear float; --format png: 8-bit by the same rule, colour parameters\n"
@@ -132,7 +135,7 @@ static void print_note(int hop, const char *note, void *user) {
 
 int cmd_convert(int argc, char **argv) {
     const char *from = NULL, *to = NULL, *prefix = NULL, *format = "exr", *dir = NULL, *via_list = NULL;
-    const char *hold_list = NULL;
+    const char *hold_list = NULL, *tie_list = NULL;
     const char *assignments[CLI_MAX_ASSIGNMENTS], *transform_paths[MR_LEARNED_MAX_HOPS];
     char *owned[CLI_MAX_ASSIGNMENTS];
     int assignment_count = 0, transform_count = 0, json = 0, threads = 0, direct = 0;
@@ -177,6 +180,9 @@ int cmd_convert(int argc, char **argv) {
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--tolerance", &v)) != 0) {
             if (r < 0 || !cli_parse_double(COMMAND, "--tolerance", v, MR_DIRECT_MIN_TOLERANCE, 1.0, &dopts.tolerance))
                 return CLI_EXIT_USAGE;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--tie", &v)) != 0) {
+            if (r < 0) return CLI_EXIT_USAGE;
+            tie_list = v;
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--hold", &v)) != 0) {
             if (r < 0) return CLI_EXIT_USAGE;
             hold_list = v;
@@ -215,6 +221,10 @@ int cmd_convert(int argc, char **argv) {
     double target_values[MR_BRDF_MAX_VALUES];
     mr_brdf_default_values(target, target_values);
     if (hold_list != NULL && !cli_parse_held(COMMAND, target, hold_list, target_values, &dopts.remap.held))
+        return CLI_EXIT_USAGE;
+    if (!direct && tie_list != NULL)
+        return cli_usage_error(COMMAND, "--tie goes with --direct (a learned transform ties what its sweep tied)");
+    if (direct && !cli_parse_ties(COMMAND, source, target, tie_list, dopts.remap.held, &dopts.remap.ties))
         return CLI_EXIT_USAGE;
     if (direct) dopts.remap.target_values = target_values;
 
@@ -341,8 +351,10 @@ int cmd_convert(int argc, char **argv) {
                 ds->unique, r.direct_tolerance, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->renders,
                 ds->outcomes[MR_FIT_CONVERGED], ds->outcomes[MR_FIT_UNDER_RESOLVED], ds->outcomes[MR_FIT_AT_BOUND],
                 ds->outcomes[MR_FIT_UNREACHABLE], ds->outcomes[MR_FIT_LOCAL_MINIMUM]);
-    if (ds != NULL && !json)
+    if (ds != NULL && !json) {
         cli_print_holds(stderr, "matremap convert: --direct: ", target, target_values, dopts.remap.held);
+        cli_print_ties(stderr, "matremap convert: --direct: ", source, target, &dopts.remap.ties, tie_list != NULL);
+    }
     mr_image *const *out = r.converted;
     const int any_map = r.material->map_count > 0;
     if (json) {
@@ -356,7 +368,9 @@ int cmd_convert(int argc, char **argv) {
         for (int o = 0; ds != NULL && o < MR_FIT_OUTCOME_COUNT; o++)
             printf("%s\"%s\": %zu", o ? ", " : "", mr_fit_outcome_name((mr_fit_outcome)o), ds->outcomes[o]);
         if (ds != NULL) {
-            printf("}, \"held\": ");
+            printf("}, \"tied\": ");
+            cli_print_ties_json(stdout, source, target, &dopts.remap.ties, tie_list != NULL);
+            printf(", \"held\": ");
             cli_print_holds_json(stdout, target, target_values, dopts.remap.held);
             printf("}, ");
         }

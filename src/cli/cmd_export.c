@@ -7,12 +7,14 @@
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "cli.h"
 #include "matremap.h"
 
 static void print_help(void) {
-    printf("usage: matremap export INPUT -o OUT.mtlx|OUT.usda|OUT.gltf|OUT.glb [--to MODEL] [--threads N] [--json]\n"
+    printf("usage: matremap export INPUT -o OUT.mtlx|OUT.usda|OUT.gltf|OUT.glb [--to MODEL] [options]\n"
            "\n"
            "Writes the materials of INPUT, a glTF asset (.gltf, .glb) or a MaterialX document (.mtlx), as a material\n"
            "document or a glTF asset. OUT's extension chooses the format:\n"
@@ -36,34 +38,66 @@ static void print_help(void) {
            "How each material is converted (one line each is printed, with its route):\n"
            "  the same model: copy  every value, map and extra input unchanged (exact)\n"
            "  uniform (no maps), another model: remap  the values fitted by a remap in the fit scene (as\n"
-           "          `matremap remap --from MODEL ... --to MODEL`), the outcome and SSIM printed\n"
+           "          `matremap remap --from MODEL ... --to MODEL`, with --hold and the ties), the outcome and SSIM\n"
+           "          printed\n"
            "  textured, gltf <-> usd-preview: maps  base colour -> diffuseColor/base_color (sRGB), metallic and\n"
            "          roughness (linear; a glTF metallic-roughness texture's B and G), factors as scales\n"
-           "  textured, any other pair (e.g. to openpbr or standard-surface): refused (exit 2, naming the material):\n"
-           "          no texture route to those models yet; use --to usd-preview, --to gltf, or `convert --direct`\n"
+           "  textured, any other pair (e.g. to openpbr or standard-surface): direct  the maps (a .mtlx's read\n"
+           "          from its files, scales folded in) converted as `matremap convert --direct` does (every\n"
+           "          distinct texel, quantised to --tolerance, remapped; the target's default holds and --hold\n"
+           "          held, --tie tied), or learned  through the transforms of --transforms (as `convert\n"
+           "          --transforms`); the texels, distinct values, texels not converged (or extrapolated) and the\n"
+           "          time printed. A parameter whose converted map holds one value is written as a constant,\n"
+           "          every other as OUT_<material>_<parameter>.png (8-bit: sRGB for colours, linear otherwise),\n"
+           "          with the flag picture OUT_<material>_flags.png (red: not converged or extrapolated; green:\n"
+           "          clamped output).\n"
+           "          Not into a .gltf/.glb output (a .mtlx's textured materials of another model: exit 2)\n"
            "The images a glTF asset's maps use are written beside OUT, named after it: OUT_image<K>.png|jpg; a\n"
            ".mtlx's maps stay where they are (named relative to OUT), or are copied beside a glTF OUT as\n"
            "OUT_<name>. Normal, occlusion, emission and alpha maps are not written yet. docs/documents.md says\n"
            "what is exact and what not.\n"
-           "\n"
-           "options:\n"
+           "\n");
+    printf("options:\n"
            "  -o OUT                the output (.mtlx, .usda, .gltf or .glb); never one of the input's files\n"
            "  --to MODEL            openpbr (.mtlx default), standard-surface, gltf (.gltf/.glb: the only one),\n"
            "                        usd-preview (.usda default)\n"
-           "  --threads N           threads of the remaps (0 = automatic, the default)\n"
+           "  --direct              textured materials by the direct remap (the default without --transforms)\n"
+           "  --transforms PATH     textured materials through learned transforms: PATH a .mrt file or a folder of\n"
+           "                        them (repeatable); the chain from the material's model to MODEL is found as\n"
+           "                        convert finds it\n"
+           "  --tolerance T         direct: the quantisation step (default 6/255 = 0.0235, convert's: colours\n"
+           "                        in sRGB-encoded units, 43 levels per channel; roughness in ln units, 2.4 %%\n"
+           "                        relative; metallic 0.024 absolute); 12/255 takes a third of the time, 1/255\n"
+           "                        keeps 8-bit maps exact (a 2048x2048 set: ~1.5 min on 2 cores by default)\n"
+           "  --hold NAME[=VALUE][,...]  remap and direct: hold these target parameters at VALUE (or their\n"
+           "                        defaults), as 'matremap remap --hold'; the target's default holds are held too,\n"
+           "                        and a 'held:' line lists them\n"
+           "  --tie TARGET=SOURCE[,...]|none  remap and direct from a glTF asset: hold target parameters at the\n"
+           "                        glTF material's (or texel's) value; default (a .mtlx's materials too, which take\n"
+           "                        only --tie none): the metalness the source states (openpbr:\n"
+           "                        base_metalness=metallic), which the fit scene cannot tell from the base colour\n"
+           "                        at high roughness; a 'tied:' line\n"
+           "  --cache FILE          direct: answers kept across runs (as convert --cache)\n"
+           "  --size N              the fit scene's side of remaps and direct remaps (default 64)\n"
+           "  --threads N           threads (0 = automatic, the default)\n"
            "  --json                a JSON summary on stdout\n"
            "\n"
            "examples:\n"
            "  matremap export WaterBottle.gltf -o bottle.usda\n"
            "  matremap export Duck.gltf -o duck.mtlx --to standard-surface\n"
-           "  matremap export standard_surface_gold.mtlx -o gold.mtlx          # to open_pbr_surface by a remap\n"
-           "  matremap export bottle.mtlx -o bottle.usda                      # gltf_pbr maps to UsdPreviewSurface\n"
+           "  matremap export WaterBottle.gltf -o bottle.mtlx              # openpbr, maps by direct remaps\n"
+           "  matremap export standard_surface_gold.mtlx -o gold.mtlx      # to open_pbr_surface by a remap\n"
+           "  matremap export bottle.mtlx -o bottle.usda                   # gltf_pbr maps to UsdPreviewSurface\n"
            "Exit status: 0 written; 1 usage; 2 bad input or a refused material (nothing written); 3 internal error.\n");
 }
 
+#define MAX_TRANSFORM_PATHS 64
+
 typedef struct options {
-    const char *input, *output, *to;
-    int threads, json;
+    const char *input, *output, *to, *hold, *cache, *tie;
+    const char *transforms[MAX_TRANSFORM_PATHS];
+    int transform_count, direct, size, threads, json;
+    double tolerance;
 } options;
 
 static int parse(int argc, char **argv, options *o) {
@@ -78,6 +112,28 @@ static int parse(int argc, char **argv, options *o) {
             o->to = value;
         } else if ((taken = cli_take_option("export", argc, argv, &i, "--threads", &value))) {
             if (taken < 0 || !cli_parse_int("export", "--threads", value, 0, 1024, &o->threads)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("export", argc, argv, &i, "--transforms", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (o->transform_count == MAX_TRANSFORM_PATHS)
+                return cli_usage_error("export", "--transforms: more than %d given", MAX_TRANSFORM_PATHS);
+            o->transforms[o->transform_count++] = value;
+        } else if ((taken = cli_take_option("export", argc, argv, &i, "--tolerance", &value))) {
+            if (taken < 0 || !cli_parse_double("export", "--tolerance", value, MR_DIRECT_MIN_TOLERANCE, 1.0,
+                                               &o->tolerance))
+                return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("export", argc, argv, &i, "--hold", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            o->hold = value;
+        } else if ((taken = cli_take_option("export", argc, argv, &i, "--tie", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            o->tie = value;
+        } else if ((taken = cli_take_option("export", argc, argv, &i, "--cache", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            o->cache = value;
+        } else if ((taken = cli_take_option("export", argc, argv, &i, "--size", &value))) {
+            if (taken < 0 || !cli_parse_int("export", "--size", value, 8, 4096, &o->size)) return CLI_EXIT_USAGE;
+        } else if (strcmp(argv[i], "--direct") == 0) {
+            o->direct = 1;
         } else if (strcmp(argv[i], "--json") == 0) {
             o->json = 1;
         } else if (argv[i][0] == '-') {
@@ -103,12 +159,53 @@ static int parse(int argc, char **argv, options *o) {
         return cli_usage_error("export", "--to %s: a glTF output (-o '%s') holds gltf materials only (--to gltf); "
                                ".mtlx takes openpbr, standard-surface, gltf; .usda takes usd-preview", o->to,
                                o->output);
+    if (o->direct && o->transform_count > 0)
+        return cli_usage_error("export", "give --direct or --transforms, not both");
+    if (o->transform_count > 0 && (o->tolerance != 0.0 || o->cache != NULL))
+        return cli_usage_error("export", "--tolerance and --cache go with the direct route, not --transforms");
+    if (mr_doc_format_from_path(o->input) == MR_DOC_FORMAT_MTLX) {
+        if (o->tie != NULL && strcmp(o->tie, "none") != 0)
+            return cli_usage_error("export", "--tie %s: a .mtlx input takes --tie none or the default ties of each "
+                                   "material's model (a 'tied:' line says them), not a list", o->tie);
+    }
     return CLI_EXIT_OK;
 }
 
-/* One line per material (or the --json summary), the images and OUT. */
+/* The direct route's progress line on a terminal, as convert draws it. */
+typedef struct progress_state {
+    int draw;
+    double started;
+    int drawn;
+} progress_state;
+
+static void draw_progress(int material, const mr_direct_progress *p, void *user) {
+    progress_state *s = user;
+    if (!s->draw) return;
+    fprintf(stderr, "\rmatremap export: material %d: %zu/%zu distinct values (%zu from the cache)  %.0f s", material,
+            p->done, p->total, p->cache_hits, cli_now() - s->started);
+    fflush(stderr);
+    s->drawn = 1;
+}
+
+#define MAX_TIE_SOURCES 16
+
+/* The holds and ties of the fits (remap, direct), said when a material was fitted: the ties per source model (a
+ * glTF asset: gltf, as --tie gave them; a .mtlx: each remapped material's model, its default ties). */
+typedef struct fits_said {
+    const double *target_values;
+    unsigned held;
+    int source_count;
+    const mr_brdf_model *sources[MAX_TIE_SOURCES];
+    mr_brdf_ties ties[MAX_TIE_SOURCES];
+    int tie_given;
+} fits_said;
+
+/* One line per material (or the --json summary), the holds and ties, the images, maps and OUT. */
 static void print_result(const options *o, const char *format, const mr_brdf_model *target,
-                         const mr_doc_gltf_result *result) {
+                         const mr_doc_gltf_result *result, const fits_said *f) {
+    int fitted = 0; // a material remapped or converted: the holds are said
+    for (int k = 0; k < result->material_count; k++)
+        fitted |= result->materials[k].route == MR_DOC_ROUTE_REMAP || result->materials[k].route == MR_DOC_ROUTE_DIRECT;
     if (!o->json) {
         for (int k = 0; k < result->material_count; k++) {
             const mr_doc_gltf_material *m = &result->materials[k];
@@ -116,10 +213,23 @@ static void print_result(const options *o, const char *format, const mr_brdf_mod
             if (m->route == MR_DOC_ROUTE_REMAP)
                 printf(" (%s, SSIM %.4f, relative RMSE %.4f)", mr_fit_outcome_name((mr_fit_outcome)m->outcome),
                        m->ssim, m->relative_rmse);
+            if (m->route == MR_DOC_ROUTE_DIRECT)
+                printf(" (%dx%d = %zu texels, %zu distinct values at tolerance %.4g: %zu converged; %zu texels not "
+                       "converged, %zu clamped, %zu flagged; %.1f s)", m->width, m->height, m->texels, m->unique,
+                       m->tolerance, m->outcomes[MR_FIT_CONVERGED], m->unconverged, m->clamped, m->flagged,
+                       m->seconds);
+            if (m->route == MR_DOC_ROUTE_LEARNED)
+                printf(" (%d transform%s, %dx%d = %zu texels: %zu extrapolated, %zu by a transform that failed its "
+                       "check, %zu clamped, %zu flagged; %.1f s)", m->hops, m->hops == 1 ? "" : "s", m->width,
+                       m->height, m->texels, m->unconverged, m->failed_check, m->clamped, m->flagged, m->seconds);
             if (m->not_carried[0]) printf("; not carried: %s", m->not_carried);
             printf("\n");
         }
+        if (fitted) cli_print_holds(stdout, "", target, f->target_values, f->held);
+        for (int i = 0; fitted && i < f->source_count; i++)
+            cli_print_ties(stdout, "", f->sources[i], target, &f->ties[i], f->tie_given);
         for (int i = 0; i < result->image_count; i++) printf("wrote %s\n", result->images[i].path);
+        for (int i = 0; i < result->map_count; i++) printf("wrote %s\n", result->maps[i].path);
         printf("wrote %s (%s, %d material%s)\n", o->output, target->name, result->material_count,
                result->material_count == 1 ? "" : "s");
         return;
@@ -137,6 +247,17 @@ static void print_result(const options *o, const char *format, const mr_brdf_mod
         if (m->route == MR_DOC_ROUTE_REMAP)
             printf(", \"outcome\": \"%s\", \"ssim\": %.6f, \"relative_rmse\": %.6f",
                    mr_fit_outcome_name((mr_fit_outcome)m->outcome), m->ssim, m->relative_rmse);
+        if (m->route == MR_DOC_ROUTE_DIRECT || m->route == MR_DOC_ROUTE_LEARNED)
+            printf(", \"width\": %d, \"height\": %d, \"texels\": %zu, \"unconverged_or_extrapolated\": %zu, "
+                   "\"failed_check\": %zu, \"clamped\": %zu, \"flagged\": %zu, \"seconds\": %.3f", m->width,
+                   m->height, m->texels, m->unconverged, m->failed_check, m->clamped, m->flagged, m->seconds);
+        if (m->route == MR_DOC_ROUTE_LEARNED) printf(", \"hops\": %d", m->hops);
+        if (m->route == MR_DOC_ROUTE_DIRECT) {
+            printf(", \"unique\": %zu, \"tolerance\": %.9g, \"outcomes\": {", m->unique, m->tolerance);
+            for (int i = 0; i < MR_FIT_OUTCOME_COUNT; i++)
+                printf("%s\"%s\": %zu", i ? ", " : "", mr_fit_outcome_name((mr_fit_outcome)i), m->outcomes[i]);
+            printf("}");
+        }
         printf(", \"not_carried\": [");
         // not_carried is "a, b, c": printed as a JSON list of names
         const char *s = m->not_carried;
@@ -157,11 +278,50 @@ static void print_result(const options *o, const char *format, const mr_brdf_mod
         printf("%s", i ? ", " : "");
         cli_json_string(stdout, result->images[i].path);
     }
-    printf("]}\n");
+    printf("], \"maps\": [");
+    for (int i = 0; i < result->map_count; i++) {
+        printf("%s", i ? ", " : "");
+        cli_json_string(stdout, result->maps[i].path);
+    }
+    printf("]");
+    if (fitted) {
+        // One source model (a glTF asset, or a .mtlx of one model): its ties as a list; several: a list per model.
+        printf(", \"tied\": ");
+        if (f->source_count == 1) {
+            cli_print_ties_json(stdout, f->sources[0], target, &f->ties[0], f->tie_given);
+        } else {
+            printf("{");
+            for (int i = 0; i < f->source_count; i++) {
+                printf("%s\"%s\": ", i ? ", " : "", f->sources[i]->name);
+                cli_print_ties_json(stdout, f->sources[i], target, &f->ties[i], f->tie_given);
+            }
+            printf("}");
+        }
+        printf(", \"held\": ");
+        cli_print_holds_json(stdout, target, f->target_values, f->held);
+    }
+    printf("}\n");
 }
 
-/* A MaterialX document's materials converted and written (OUT: .mtlx or .usda). */
-static int export_mtlx(const options *o, const mr_brdf_model *target, mr_doc_format format) {
+/* The document and the maps it names as inputs of the plan. */
+static void plan_document(mr_output_plan *io, const char *input, const char *label, const mr_doc *in) {
+    mr_output_plan_input(io, input, label);
+    for (int k = 0; k < mr_doc_material_count(in); k++) {
+        const mr_doc_material *m = mr_doc_material_get(in, k);
+        for (int p = 0; p < m->model->param_count; p++)
+            if (m->values[p].kind == MR_DOC_TEXTURE && m->values[p].file[0] != '/') {
+                char path[8192];
+                const char *slash = strrchr(input, '/');
+                snprintf(path, sizeof path, "%.*s%s", slash ? (int)(slash - input + 1) : 0, input, m->values[p].file);
+                mr_output_plan_input(io, path, "a map of the document");
+            }
+    }
+}
+
+/* A MaterialX document's materials converted and written (OUT: .mtlx, .usda, .gltf or .glb), converted maps
+ * beside OUT. */
+static int export_mtlx(const options *o, const mr_brdf_model *target, mr_doc_format format,
+                       const double *target_values, unsigned held, const mr_learned_set *transforms) {
     mr_doc *in = NULL;
     mr_status st = mr_doc_read_mtlx(o->input, &in);
     if (st != MR_OK) return cli_fail("export", st);
@@ -169,32 +329,84 @@ static int export_mtlx(const options *o, const mr_brdf_model *target, mr_doc_for
     snprintf(label, sizeof label, "MaterialX '%s'", o->input);
     // Nothing written over a file read: OUT against the document and the maps it names.
     mr_output_plan io = {0};
-    mr_output_plan_input(&io, o->input, label);
-    for (int k = 0; k < mr_doc_material_count(in); k++) {
-        const mr_doc_material *m = mr_doc_material_get(in, k);
-        for (int p = 0; p < m->model->param_count; p++)
-            if (m->values[p].kind == MR_DOC_TEXTURE && m->values[p].file[0] != '/') {
-                char path[8192];
-                const char *slash = strrchr(o->input, '/');
-                snprintf(path, sizeof path, "%.*s%s", slash ? (int)(slash - o->input + 1) : 0, o->input,
-                         m->values[p].file);
-                mr_output_plan_input(&io, path, "a map of the document");
-            }
-    }
+    plan_document(&io, o->input, label, in);
     mr_output_plan_output(&io, o->output, NULL);
+    for (int k = 0; transforms != NULL && k < transforms->count; k++)
+        mr_output_plan_inputf(&io, transforms->paths[k], "transform %s", transforms->paths[k]);
+    if (o->cache != NULL) mr_output_plan_output(&io, o->cache, "--cache");
     int code = cli_plan_check("export", &io);
     mr_output_plan_free(&io);
     if (code != CLI_EXIT_OK) {
         mr_doc_free(in);
         return code;
     }
+    for (int k = 0; cli_is_gltf_path(o->output) && k < mr_doc_material_count(in); k++) {
+        // Converted maps cannot go into a glTF output: said before the work.
+        const mr_doc_material *m = mr_doc_material_get(in, k);
+        int textured = 0;
+        for (int p = 0; p < m->model->param_count; p++) textured |= m->values[p].kind == MR_DOC_TEXTURE;
+        mr_doc_route route = MR_DOC_ROUTE_COPY;
+        if (mr_doc_choose_route(m->model, target, textured, transforms != NULL, &route) == MR_OK &&
+            (route == MR_DOC_ROUTE_DIRECT || route == MR_DOC_ROUTE_LEARNED)) {
+            fprintf(stderr, "matremap export: error: MaterialX '%s': material '%s' (%s) converts its maps to gltf by "
+                    "the %s route, whose maps a glTF output cannot hold yet: write .mtlx or .usda\n", o->input,
+                    m->name, m->model->name, mr_doc_route_name(route));
+            mr_doc_free(in);
+            return CLI_EXIT_BAD_INPUT;
+        }
+    }
     mr_doc_gltf_options opts = {0};
     opts.target = target;
     opts.threads = o->threads;
+    opts.size = o->size;
+    opts.target_values = target_values;
+    opts.held = held;
+    const mr_brdf_ties no_ties = {0};
+    if (o->tie != NULL) opts.ties = &no_ties; // --tie none
+    // OUT without its extension: the prefix converted maps are named after.
+    char prefix[4096];
+    snprintf(prefix, sizeof prefix, "%s", o->output);
+    char *dot = strrchr(prefix, '.');
+    if (dot) *dot = '\0';
+    opts.image_prefix = prefix;
+    opts.document_path = o->input;
+    opts.tolerance = o->tolerance;
+    opts.cache_path = o->cache;
+    opts.transforms = transforms;
+    progress_state progress = {isatty(STDERR_FILENO) && !o->json, cli_now(), 0};
+    opts.progress = draw_progress;
+    opts.progress_user = &progress;
     mr_doc_gltf_result *result = NULL;
     st = mr_doc_convert(in, label, &opts, &result);
-    mr_doc_free(in);
+    if (progress.drawn) fprintf(stderr, "\r\033[K");
+    // The ties the remaps took: the defaults of each remapped material's model (a hold wins).
+    fits_said said = {target_values, held, 0, {NULL}, {{0}}, o->tie != NULL};
+    for (int k = 0; st == MR_OK && k < result->material_count; k++) {
+        const mr_brdf_model *source = mr_doc_material_get(in, k)->model;
+        int known = result->materials[k].route != MR_DOC_ROUTE_REMAP;
+        for (int i = 0; i < said.source_count && !known; i++) known = said.sources[i] == source;
+        if (known || said.source_count == MAX_TIE_SOURCES) continue;
+        said.sources[said.source_count] = source;
+        said.ties[said.source_count] = o->tie != NULL ? no_ties : mr_brdf_default_ties(source, target);
+        said.ties[said.source_count++].tied &= ~held;
+    }
     const char *format_name = mr_doc_format_name(format);
+    if (st == MR_OK && result->map_count > 0) {
+        // Converted maps (never into a glTF output: refused above), never over an input.
+        io = (mr_output_plan){0};
+        plan_document(&io, o->input, label, in);
+        mr_output_plan_output(&io, o->output, NULL);
+        for (int i = 0; i < result->map_count; i++) mr_output_plan_output(&io, result->maps[i].path, NULL);
+        if (o->cache != NULL) mr_output_plan_output(&io, o->cache, "--cache");
+        code = cli_plan_check("export", &io);
+        mr_output_plan_free(&io);
+        if (code != CLI_EXIT_OK) {
+            mr_doc_gltf_result_free(result);
+            mr_doc_free(in);
+            return code;
+        }
+    }
+    mr_doc_free(in);
     if (st == MR_OK && cli_is_gltf_path(o->output)) {
         // A glTF asset of the materials (no meshes), its images the maps' files copied beside OUT, named after it.
         mr_gltf *asset = NULL;
@@ -205,10 +417,10 @@ static int export_mtlx(const options *o, const mr_brdf_model *target, mr_doc_for
         format_name = strcasecmp(strrchr(o->output, '.'), ".glb") == 0 ? "glb" : "gltf";
     } else if (st == MR_OK) {
         st = mr_doc_rebase(result->doc, o->input, o->output);
-        if (st == MR_OK) st = mr_doc_write(result->doc, o->output);
+        if (st == MR_OK) st = mr_doc_gltf_write(NULL, result, o->output); // the converted maps, then OUT
     }
     if (st != MR_OK) code = cli_fail("export", st);
-    if (code == CLI_EXIT_OK) print_result(o, format_name, target, result);
+    if (code == CLI_EXIT_OK) print_result(o, format_name, target, result, &said);
     mr_doc_gltf_result_free(result);
     return code;
 }
@@ -230,11 +442,46 @@ int cmd_export(int argc, char **argv) {
     if (!gltf_out && mr_doc_surface_node(target, format) == NULL)
         return cli_usage_error("export", "--to %s: .%s does not write it (.mtlx: openpbr, standard-surface, gltf; "
                                ".usda: usd-preview; .gltf, .glb: gltf)", o.to, mr_doc_format_name(format));
-    if (mr_doc_format_from_path(o.input) == MR_DOC_FORMAT_MTLX) return export_mtlx(&o, target, format);
+    double target_values[MR_BRDF_MAX_VALUES];
+    unsigned held = 0;
+    mr_brdf_default_values(target, target_values);
+    if (o.hold != NULL && !cli_parse_held("export", target, o.hold, target_values, &held)) return CLI_EXIT_USAGE;
+    const mr_brdf_model *gltf = mr_brdf_find("gltf");
+    mr_brdf_ties ties;
+    if (!cli_parse_ties("export", gltf, target, o.tie, held, &ties)) return CLI_EXIT_USAGE;
+    mr_learned_set transforms = {0};
+    for (int k = 0; k < o.transform_count; k++) {
+        struct stat info;
+        mr_status ts;
+        if (stat(o.transforms[k], &info) == 0 && S_ISDIR(info.st_mode)) {
+            char label[4096 + 20];
+            snprintf(label, sizeof label, "--transforms '%s'", o.transforms[k]);
+            ts = mr_learned_set_add_folder(&transforms, o.transforms[k], label);
+        } else {
+            ts = mr_learned_set_add_file(&transforms, o.transforms[k]);
+        }
+        if (ts != MR_OK) {
+            mr_learned_set_free(&transforms);
+            return cli_fail("export", ts);
+        }
+    }
+    for (int k = 0; k < transforms.count; k++) // a transform that failed its check: said before the work
+        if (transforms.all[k]->check.done && !transforms.all[k]->check.passed)
+            fprintf(stderr, "matremap export: warning: transform %s (%s -> %s) failed its check against the remaps "
+                    "when it was learned (docs/learn.md, \"The check\"); every texel it converts is flagged (red)\n",
+                    transforms.paths[k], transforms.all[k]->source->name, transforms.all[k]->target->name);
+    if (mr_doc_format_from_path(o.input) == MR_DOC_FORMAT_MTLX) {
+        code = export_mtlx(&o, target, format, target_values, held, transforms.count > 0 ? &transforms : NULL);
+        mr_learned_set_free(&transforms);
+        return code;
+    }
 
     mr_gltf *asset = NULL;
     mr_status st = mr_gltf_load(o.input, &asset);
-    if (st != MR_OK) return cli_fail("export", st);
+    if (st != MR_OK) {
+        mr_learned_set_free(&transforms);
+        return cli_fail("export", st);
+    }
     // Nothing written over a file read, checked before any work (the remaps): OUT against the asset and its files;
     // the images beside OUT once the conversion has named them.
     char label[4096 + 8];
@@ -242,10 +489,14 @@ int cmd_export(int argc, char **argv) {
     mr_output_plan io = {0};
     cli_plan_gltf(&io, asset, label);
     mr_output_plan_output(&io, o.output, NULL);
+    for (int k = 0; k < transforms.count; k++) mr_output_plan_inputf(&io, transforms.paths[k], "transform %s",
+                                                                     transforms.paths[k]);
+    if (o.cache != NULL) mr_output_plan_output(&io, o.cache, "--cache");
     code = cli_plan_check("export", &io);
     mr_output_plan_free(&io);
     if (code != CLI_EXIT_OK) {
         mr_gltf_free(asset);
+        mr_learned_set_free(&transforms);
         return code;
     }
 
@@ -258,12 +509,25 @@ int cmd_export(int argc, char **argv) {
     opts.target = target;
     opts.image_prefix = prefix;
     opts.threads = o.threads;
+    opts.size = o.size;
+    opts.target_values = target_values;
+    opts.held = held;
+    opts.ties = &ties;
+    opts.tolerance = o.tolerance;
+    opts.cache_path = o.cache;
+    opts.transforms = transforms.count > 0 ? &transforms : NULL;
+    progress_state progress = {isatty(STDERR_FILENO) && !o.json, cli_now(), 0};
+    opts.progress = draw_progress;
+    opts.progress_user = &progress;
     mr_doc_gltf_result *result = NULL;
     st = mr_doc_from_gltf(asset, &opts, &result);
+    if (progress.drawn) fprintf(stderr, "\r\033[K");
     if (st != MR_OK) {
         mr_gltf_free(asset);
+        mr_learned_set_free(&transforms);
         return cli_fail("export", st);
     }
+    fits_said said = {target_values, held, 1, {gltf}, {ties}, o.tie != NULL};
     if (gltf_out) {
         // glTF to glTF: every material copies (or carries its maps) exactly, so the asset itself is the output,
         // saved with its side files named after OUT (mr_gltf_save_with), never over an input.
@@ -272,9 +536,10 @@ int cmd_export(int argc, char **argv) {
         st = mr_gltf_save_with(asset, o.output, &so);
         if (st != MR_OK) code = cli_fail("export", st);
         const char *name = strcasecmp(strrchr(o.output, '.'), ".glb") == 0 ? "glb" : "gltf";
-        if (code == CLI_EXIT_OK) print_result(&o, name, target, result);
+        if (code == CLI_EXIT_OK) print_result(&o, name, target, result, &said);
         mr_doc_gltf_result_free(result);
         mr_gltf_free(asset);
+        mr_learned_set_free(&transforms);
         return code;
     }
 
@@ -282,14 +547,18 @@ int cmd_export(int argc, char **argv) {
     cli_plan_gltf(&io, asset, label);
     mr_output_plan_output(&io, o.output, NULL);
     for (int i = 0; i < result->image_count; i++) mr_output_plan_output(&io, result->images[i].path, NULL);
+    for (int i = 0; i < result->map_count; i++) mr_output_plan_output(&io, result->maps[i].path, NULL);
+    for (int k = 0; k < transforms.count; k++) mr_output_plan_inputf(&io, transforms.paths[k], "transform %s",
+                                                                     transforms.paths[k]);
     code = cli_plan_check("export", &io);
     mr_output_plan_free(&io);
     if (code == CLI_EXIT_OK) {
         st = mr_doc_gltf_write(asset, result, o.output);
         if (st != MR_OK) code = cli_fail("export", st);
     }
-    if (code == CLI_EXIT_OK) print_result(&o, mr_doc_format_name(format), target, result);
+    if (code == CLI_EXIT_OK) print_result(&o, mr_doc_format_name(format), target, result, &said);
     mr_doc_gltf_result_free(result);
     mr_gltf_free(asset);
+    mr_learned_set_free(&transforms);
     return code;
 }

@@ -160,8 +160,12 @@ static void print_summary(const mr_learned *t, const mr_sweep_table *tab, const 
     }
     for (int i = 0; i < t->carry_count; i++) {
         const mr_learned_carry *c = &t->carries[i];
-        printf("  carry  %-14s = %.6g x source %s (%s)\n", t->target->params[c->target_param].name, c->factor[0],
-               t->source->params[c->source_param].name, c->learned ? "fitted on the rows" : "ratio of the lobes");
+        // A carry of a parameter that is not a Lambertian lobe is a tie (the sweep held it at the source's value).
+        const mr_brdf_param *q = &t->target->params[c->target_param];
+        const int tie = !c->learned && !(q->lobe == MR_LOBE_DIFFUSE && q->role == MR_PARAM_LINEAR);
+        printf("  carry  %-14s = %.6g x source %s (%s)\n", q->name, c->factor[0],
+               t->source->params[c->source_param].name,
+               c->learned ? "fitted on the rows" : tie ? "the sweep's tie" : "ratio of the lobes");
     }
     if (t->method == MR_LEARN_PARAMETRIC) {
         const char *a = t->source->params[t->features[0].param].name;

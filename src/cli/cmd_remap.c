@@ -42,7 +42,11 @@ static void print_help(void) {
            "                                  values) instead of fitting them, e.g. a roughness both models\n"
            "                                  share; the model's own default holds (extension factors, coats,\n"
            "                                  what a fit scene cannot separate: 'matremap models MODEL') are\n"
-           "                                  held too, and the result's 'held:' line lists every hold used\n"
+           "                                  held too, and the result's 'held:' line lists every hold used\n");
+    printf("  --tie TARGET=SOURCE[,...]|none  hold target parameters at the source's value instead of fitting them;\n"
+           "                                  default: a metalness the source states (gltf -> openpbr:\n"
+           "                                  base_metalness=metallic), which the fit scene cannot tell from the base\n"
+           "                                  colour at high roughness; a 'tied:' line says which (docs/remap.md)\n"
            "\n");
     printf("Method:\n"
            "  --method fit        (default) fit the target by images, as above\n"
@@ -51,8 +55,9 @@ static void print_help(void) {
            "                      usd-preview, openpbr -> standard-surface; other pairs are refused. Prints the\n"
            "                      translated values, what the graph does not carry, and the RMSE and SSIM of\n"
            "                      its render against the source's in the fit scene (--size, --light, --images\n"
-           "                      as for a fit; no name=value after --to, --hold, --strategy, --grid-points);\n"
-           "                      a baseline beside the fit (docs/remap.md, docs/evaluation-translations.md)\n"
+           "                      as for a fit; no name=value after --to, --hold, --tie, --strategy,\n"
+           "                      --grid-points); a baseline beside the fit (docs/remap.md,\n"
+           "                      docs/evaluation-translations.md)\n"
            "\n"
            "Options:\n"
            "  --strategy S       auto (default): affine parameters solved exactly, each lobe's roughness\n"
@@ -163,7 +168,7 @@ static int run_materialx(const mr_brdf_model *from, const double *source_values,
 int cmd_remap(int argc, char **argv) {
     const char *from_name = NULL, *to_name = NULL, *images_prefix = NULL;
     const char *image_paths[3] = {NULL, NULL, NULL}; /* full, diffuse, specular */
-    const char *reference_path = NULL, *hold_list = NULL;
+    const char *reference_path = NULL, *hold_list = NULL, *tie_list = NULL;
     double reference_albedo = 0.5;
     const char *from_assignments[MAX_ASSIGNMENTS], *to_assignments[MAX_ASSIGNMENTS];
     int from_count = 0, to_count = 0, json = 0, size = 0, materialx = 0, fit_option = 0;
@@ -216,6 +221,10 @@ int cmd_remap(int argc, char **argv) {
             if (taken < 0 || !cli_parse_int("remap", "--threads", value, 0, 1024, &opts.threads)) return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--size", &value))) {
             if (taken < 0 || !cli_parse_int("remap", "--size", value, 16, 4096, &size)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--tie", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            tie_list = value;
+            fit_option = 1;
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--hold", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             hold_list = value;
@@ -255,7 +264,7 @@ int cmd_remap(int argc, char **argv) {
         return cli_usage_error("remap", "--method materialx translates a model's values: give --from MODEL");
     if (materialx && (fit_option || to_count > 0))
         return cli_usage_error("remap", "--method materialx sets every target parameter from its graph: --hold, "
-                               "--strategy, --grid-points and name=value after --to go with --method fit");
+                               "--tie, --strategy, --grid-points and name=value after --to go with --method fit");
 
     const mr_brdf_model *to = mr_brdf_find(to_name);
     if (to == NULL) return cli_fail("remap", MR_ERR_INVALID_ARG);
@@ -279,6 +288,9 @@ int cmd_remap(int argc, char **argv) {
             mr_status status = mr_brdf_parse_assignment(from, from_assignments[k], source_values);
             if (status != MR_OK) return cli_fail("remap", status);
         }
+        if (!cli_parse_ties("remap", from, to, tie_list, opts.held, &opts.ties)) return CLI_EXIT_USAGE;
+    } else if (tie_list != NULL) {
+        return cli_usage_error("remap", "--tie needs --from MODEL (a tie takes the source's value)");
     }
     if (materialx) return run_materialx(from, source_values, to, size, &scene_opts, images_prefix, json);
 
@@ -354,6 +366,10 @@ int cmd_remap(int argc, char **argv) {
                    result.rmse, result.relative_rmse, result.ssim, result.renders, result.seconds,
                    mr_fit_outcome_name(result.outcome));
             cli_json_string(stdout, result.detail);
+            if (from != NULL) {
+                printf(", \"tied\": ");
+                cli_print_ties_json(stdout, from, to, &opts.ties, tie_list != NULL);
+            }
             printf(", \"held\": ");
             cli_print_holds_json(stdout, to, target_values, opts.held);
             printf("}\n");
@@ -368,6 +384,7 @@ int cmd_remap(int argc, char **argv) {
                    strategy, scene_opts.size, mr_fit_light_name(scene_opts.light));
             if (reference != NULL) printf("irradiance scale applied to the source images: %.6g\n", irradiance_scale);
             cli_print_holds(stdout, NULL, to, target_values, opts.held);
+            if (from != NULL) cli_print_ties(stdout, NULL, from, to, &opts.ties, tie_list != NULL);
         }
     }
     for (int k = 0; k < 3; k++) mr_image_free(images[k]);

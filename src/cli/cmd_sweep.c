@@ -45,6 +45,10 @@ static void print_help(void) {
            "--hold NAME[=VALUE][,...] holds target parameters at VALUE (or those values) instead of fitting them; the\n"
            "target model's default holds are held too, and the summary's 'held:' line lists them all (the header's\n"
            "'# to:' and 'held=' record them, which learn reads).\n"
+           "--tie TARGET=SOURCE[,...]|none holds target parameters at each sample's source value instead of fitting\n"
+           "them; by default a metalness the source states (gltf -> openpbr: base_metalness=metallic), which the fit\n"
+           "scene cannot tell from the base colour at high roughness; 'tied:' says which, the header's 'tied='\n"
+           "records them, and learn carries them as they are (docs/remap.md, \"Ties\").\n"
            "\n");
     printf("Options:\n"
            "  -o, --output FILE     the CSV file (required); it must not exist unless --resume is given\n"
@@ -266,13 +270,13 @@ static int parse_shard(const char *text, long *k, long *n) {
 typedef struct sweep_args {
     mr_sweep_spec spec;
     const char *output;
-    int resume, threads, json;
+    int resume, threads, json, ties_given;
     long shard_index, shard_count;
 } sweep_args;
 
 /* Parse the arguments into *a: CLI_EXIT_OK to run, else the exit code (messages printed). */
 static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
-    const char *from_name = NULL, *to_name = NULL, *hold_list = NULL;
+    const char *from_name = NULL, *to_name = NULL, *hold_list = NULL, *tie_list = NULL;
     const char *from_assignments[MAX_ASSIGNMENTS], *to_assignments[MAX_ASSIGNMENTS];
     const char *grid_axes[MR_SWEEP_MAX_AXES];
     int from_count = 0, to_count = 0, axis_count = 0, random_count = 0, seed_given = 0, region_given = 0;
@@ -308,6 +312,9 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--random", &value))) {
             if (taken < 0 || !cli_parse_int("sweep", "--random", value, 1, (int)MR_SWEEP_MAX_SAMPLES, &random_count))
                 return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--tie", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            tie_list = value;
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--hold", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             hold_list = value;
@@ -392,6 +399,8 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
     spec->remap.strategy = strategy;
     if (hold_list != NULL && !cli_parse_held("sweep", to, hold_list, spec->target_values, &spec->remap.held))
         return CLI_EXIT_USAGE;
+    if (!cli_parse_ties("sweep", from, to, tie_list, spec->remap.held, &spec->remap.ties)) return CLI_EXIT_USAGE;
+    a->ties_given = tie_list != NULL;
     spec->scene = scene;
     if (random_count > 0) {
         spec->sampling = MR_SWEEP_RANDOM;
@@ -541,7 +550,9 @@ int cmd_sweep(int argc, char **argv) {
                summary.seconds, summary.threads, summary.processes, summary.threads_total);
         for (int o = 0; o < MR_FIT_OUTCOME_COUNT; o++)
             printf("%s\"%s\": %ld", o ? ", " : "", mr_fit_outcome_name((mr_fit_outcome)o), summary.outcomes[o]);
-        printf("}, \"held\": ");
+        printf("}, \"tied\": ");
+        cli_print_ties_json(stdout, a.spec.source, a.spec.target, &a.spec.remap.ties, a.ties_given);
+        printf(", \"held\": ");
         cli_print_holds_json(stdout, a.spec.target, a.spec.target_values, a.spec.remap.held);
         printf("}\n");
         return CLI_EXIT_OK;
@@ -573,5 +584,6 @@ int cmd_sweep(int argc, char **argv) {
         }
     fprintf(stderr, "\n");
     cli_print_holds(stderr, "matremap sweep: ", a.spec.target, a.spec.target_values, a.spec.remap.held);
+    cli_print_ties(stderr, "matremap sweep: ", a.spec.source, a.spec.target, &a.spec.remap.ties, a.ties_given);
     return CLI_EXIT_OK;
 }

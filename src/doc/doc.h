@@ -11,8 +11,8 @@
  *
  *   mr_gltf *asset; mr_gltf_load("a.gltf", &asset);                        // a glTF asset converted (gltf/)
  *   mr_doc_gltf_options o = {0};  o.target = mr_brdf_find("usd-preview"); o.image_prefix = "out";
- *   mr_doc_gltf_result *r;  mr_doc_from_gltf(asset, &o, &r);               // remaps, maps carried over
- *   ... check r->images[i].path against the inputs ... mr_doc_gltf_write(asset, r, "out.usda");
+ *   mr_doc_gltf_result *r;  mr_doc_from_gltf(asset, &o, &r);               // remaps, maps carried or converted
+ *   ... check r->images[i].path, r->maps[i].path against the inputs ... mr_doc_gltf_write(asset, r, "out.usda");
  *   mr_doc_gltf_result_free(r);
  *
  * A material is a name, a target BRDF model from the registry (openpbr, standard-surface, gltf: MaterialX;
@@ -34,7 +34,9 @@
 #define MR_DOC_H
 
 #include "../brdf/brdf.h"
+#include "../mr_image.h"
 #include "../mr_status.h"
+#include "../remap/direct.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -161,6 +163,30 @@ mr_status mr_doc_write(const mr_doc *doc, const char *path);
 /* ---- from a glTF asset (gltf_export.c) ---------------------------------------------------------------------- */
 
 struct mr_gltf;
+struct mr_learned_set;
+
+/* How a material was converted. */
+typedef enum mr_doc_route {
+    MR_DOC_ROUTE_COPY = 0, /* glTF to gltf_pbr: the same parameters, exact */
+    MR_DOC_ROUTE_REMAP,    /* uniform factors fitted by mr_remap in the fit scene (remap/remap.h) */
+    MR_DOC_ROUTE_MAPS,     /* textures carried over unchanged (gltf -> usd-preview's metallic workflow, gltf) */
+    MR_DOC_ROUTE_DIRECT,   /* textures converted by the direct remap of every distinct texel (`convert --direct`:
+                              mr_learned_convert_material with hops 0), written as new maps */
+    MR_DOC_ROUTE_LEARNED   /* textures converted through a chain of learned transforms (`convert --transforms`) */
+} mr_doc_route;
+
+/* THE route decision of the document exports (from a glTF asset here, from a MaterialX document too): a material of
+ * model `source` into `target`, `textured` when maps feed it, `have_transforms` when learned transforms were given:
+ *   uniform:  source == target -> COPY, else REMAP;
+ *   textured: source == target, or gltf <-> usd-preview (the same quantities: docs/documents.md) -> MAPS (from
+ *             usd-preview: its metallic workflow without clearcoat, which mr_doc_convert checks);
+ *             any other pair -> LEARNED with transforms, else DIRECT (mr_doc_from_gltf, mr_doc_convert).
+ * MR_ERR_INVALID_ARG for a NULL model or out. */
+mr_status mr_doc_choose_route(const mr_brdf_model *source, const mr_brdf_model *target, int textured,
+                              int have_transforms, mr_doc_route *out);
+
+/* Progress of a material's DIRECT conversion: the material's index and the direct remap's progress. */
+typedef void (*mr_doc_progress_fn)(int material, const mr_direct_progress *progress, void *user);
 
 typedef struct mr_doc_gltf_options {
     const mr_brdf_model *target; /* NULL: openpbr */
@@ -171,14 +197,29 @@ typedef struct mr_doc_gltf_options {
     int threads;                 /* of the remaps: 0 = automatic (render.h) */
     int size;                    /* the remaps' fit scene side: 0 = MR_REMAP_DEFAULT_SIZE, as remap, sweep and
                                     convert --direct fit (remap/remap.h) */
+    const double *target_values; /* REMAP and DIRECT: the target's values held parameters keep (NULL: the
+                                    target's defaults), as mr_remap_options.target_values */
+    unsigned held;               /* REMAP and DIRECT: parameters held beside the target's default holds (bit p:
+                                    parameter p; mr_brdf_parse_holds), as mr_remap_options.held */
+    const mr_brdf_ties *ties;    /* REMAP and DIRECT: target parameters held at the source's values (brdf.h); NULL:
+                                    the pair's defaults, mr_brdf_default_ties (openpbr: base_metalness=metallic) */
+    double tolerance;            /* DIRECT: the quantisation step (remap/direct.h); 0 = MR_DOC_DEFAULT_TOLERANCE */
+    const char *cache_path;      /* DIRECT: the direct remap's cache file (direct.h); NULL = none */
+    const struct mr_learned_set *transforms; /* textured materials go LEARNED through the chain from the source
+                                    model to the target found among them (mr_learned_find_chain); NULL: DIRECT */
+    mr_doc_progress_fn progress; /* DIRECT: optional, as mr_direct_options.progress */
+    void *progress_user;
+    const char *document_path;   /* mr_doc_convert: the document read, against whose folder its relative map files
+                                    are read (DIRECT, LEARNED) and the converted maps named; NULL: the current
+                                    folder */
 } mr_doc_gltf_options;
 
-/* How a material was converted. */
-typedef enum mr_doc_route {
-    MR_DOC_ROUTE_COPY = 0, /* glTF to gltf_pbr: the same parameters, exact */
-    MR_DOC_ROUTE_REMAP,    /* uniform factors fitted by mr_remap in the fit scene (remap/remap.h) */
-    MR_DOC_ROUTE_MAPS      /* textures carried over unchanged (gltf -> usd-preview's metallic workflow, gltf) */
-} mr_doc_route;
+/* The direct route's default quantisation step in export: convert's, MR_DIRECT_DEFAULT_TOLERANCE = 6/255 (colours in
+ * sRGB-encoded units, 43 levels per channel; roughness in ln units, a relative step of 2.4 %; metallic and other
+ * scalars 0.024 absolute). Measured on the shared WaterBottle (2048^2, 4,712 distinct values into openpbr, metalness
+ * tied): 47 s of CPU, 93 s wall on a loaded 2-core machine; sphere SSIM 0.996 to the source (12/255: 1,421 values,
+ * 19 s of CPU, SSIM 0.990-0.992; docs/documents.md). */
+#define MR_DOC_DEFAULT_TOLERANCE MR_DIRECT_DEFAULT_TOLERANCE
 
 typedef struct mr_doc_gltf_material {
     char name[128];      /* the glTF material's name ("" if none) */
@@ -187,9 +228,32 @@ typedef struct mr_doc_gltf_material {
     double ssim;         /* ROUTE_REMAP: the fit's SSIM; 1 otherwise */
     double relative_rmse;
     char detail[192];    /* ROUTE_REMAP: the fit's detail line */
+    /* ROUTE_DIRECT and ROUTE_LEARNED: the conversion's figures (mr_learned_conversion) */
+    int width, height;
+    size_t texels;
+    size_t unique;          /* DIRECT: distinct quantised values remapped */
+    size_t unconverged;     /* DIRECT: texels whose fit did not converge; LEARNED: extrapolated texels */
+    size_t failed_check;    /* LEARNED: texels converted by a transform that failed its check */
+    size_t clamped;         /* clamped outputs or inputs */
+    size_t flagged;         /* any flag (red, green or blue in the flag picture) */
+    size_t outcomes[MR_FIT_OUTCOME_COUNT]; /* DIRECT: distinct values by fit outcome (mr_fit_outcome order) */
+    int hops;               /* LEARNED: transforms in the chain */
+    double tolerance;       /* DIRECT: the quantisation step used */
+    double seconds;         /* the conversion's wall time */
     char not_carried[1024]; /* mr_doc_convert: the source's authored extra inputs (mr_doc_extra) the output does
                                not carry, comma-separated ("" none; cut with "..." when longer) */
 } mr_doc_gltf_material;
+
+/* A converted map the document refers to (DIRECT, LEARNED): written by mr_doc_gltf_write by the one rule of
+ * parameter maps (8-bit PNG; sRGB for MR_PARAM_SRGB_MAP parameters, linear otherwise), or the flag picture. */
+typedef struct mr_doc_gltf_map {
+    int material;       /* its material's index */
+    int param;          /* the target parameter's index; -1: the flag picture (mr_learned_flag_code, linear) */
+    char stem[160];     /* the material's part of the name: its identifier, "_<index>" added when taken */
+    char path[1024];    /* where it is written: mr_img_prefixed_name(prefix, "<stem>_<param>.png") */
+    char file[1024];    /* as the document refers to it */
+    mr_image *image;    /* owned */
+} mr_doc_gltf_map;
 
 typedef struct mr_doc_gltf_image {
     int image;       /* the asset's image index */
@@ -203,22 +267,33 @@ typedef struct mr_doc_gltf_result {
     mr_doc_gltf_material *materials;
     int image_count;
     mr_doc_gltf_image *images;
+    int map_count;
+    mr_doc_gltf_map *maps; /* converted maps, written beside the images */
 } mr_doc_gltf_result;
 
-/* Every material of `asset` converted to the target model into a document (nothing is written yet). Uniform
- * materials (no base colour nor metallic-roughness texture): gltf -> COPY, any other target -> REMAP from the gltf
- * model's values (base colour, metallic, roughness; KHR_materials_specular and _ior when present). Textured
- * materials: gltf and usd-preview (metallic workflow) -> MAPS (base colour map -> base_color / diffuse_color, sRGB;
- * metallic-roughness B -> metallic, G -> roughness; factors as scales); openpbr and standard-surface have no
- * texture route yet: MR_ERR_UNSUPPORTED naming the material and the missing route. Also refused
- * (MR_ERR_UNSUPPORTED): KHR_materials_pbrSpecularGlossiness-only materials' textures, KHR_texture_transform, a
- * texture whose image is missing. An asset without materials: MR_ERR_INVALID_ARG. */
+/* Every material of `asset` converted to the target model into a document (nothing is written yet), by the route
+ * mr_doc_choose_route gives. Uniform materials (no base colour nor metallic-roughness texture): gltf -> COPY, any
+ * other target -> REMAP from the gltf model's values (base colour, metallic, roughness; KHR_materials_specular and
+ * _ior when present). Textured materials: gltf and usd-preview (metallic workflow) -> MAPS (base colour map ->
+ * base_color / diffuse_color, sRGB; metallic-roughness B -> metallic, G -> roughness; factors as scales); openpbr
+ * and standard-surface -> DIRECT (or LEARNED with opts->transforms): the material as mr_gltf_material_brdf reads it
+ * (factors folded into the decoded maps) converted by mr_learned_convert_material (hops 0: the direct remap with
+ * opts' tolerance, holds, scene size and cache; or the chain gltf -> target found among opts->transforms), every
+ * target parameter whose converted map holds one value set as that constant, every other as a new map
+ * (result->maps, written by mr_doc_gltf_write) read through the textures' UV set and wraps, with the flag picture.
+ * Refused (MR_ERR_UNSUPPORTED, naming the material): KHR_materials_pbrSpecularGlossiness-only materials,
+ * KHR_texture_transform, a texture whose image is missing, and for DIRECT/LEARNED maps on different UV sets or wrap
+ * modes (a converted map holds every parameter of a texel); maps of different sizes are the conversion's
+ * MR_ERR_INVALID_ARG; no chain: mr_learned_find_chain's MR_ERR_INVALID_ARG. An asset without materials:
+ * MR_ERR_INVALID_ARG. */
 mr_status mr_doc_from_gltf(const struct mr_gltf *asset, const mr_doc_gltf_options *opts, mr_doc_gltf_result **out);
-/* The result's images written (mr_gltf_image_write_file: atomic, never over an input), then the document
- * (mr_doc_write). On failure the images already written are removed. */
+/* The result's images written (mr_gltf_image_write_file: atomic, never over an input; `asset` may be NULL when the
+ * result has no images, as mr_doc_convert's), then its converted maps
+ * (mr_img_write_set, all or none: 8-bit PNG, sRGB for MR_PARAM_SRGB_MAP parameters, linear otherwise, the flag
+ * picture linear), then the document (mr_doc_write). On failure the images and maps already written are removed. */
 mr_status mr_doc_gltf_write(const struct mr_gltf *asset, const mr_doc_gltf_result *result, const char *path);
 void mr_doc_gltf_result_free(mr_doc_gltf_result *result);
-/* "copy", "remap", "maps". */
+/* "copy", "remap", "maps", "direct", "learned". */
 const char *mr_doc_route_name(mr_doc_route route);
 
 /* ---- from a MaterialX document (mtlx_read.c, doc_convert.c) --------------------------------------------------- */
@@ -241,13 +316,19 @@ mr_status mr_doc_read_mtlx(const char *path, mr_doc **out);
  * document `to` (absolute ones stay). MR_ERR_INVALID_ARG for a file that cannot be named (too long). */
 mr_status mr_doc_rebase(mr_doc *doc, const char *from, const char *to);
 
-/* Every material of `in` converted to opts->target (NULL: openpbr; image_prefix unused) into a new document:
+/* Every material of `in` converted to opts->target (NULL: openpbr) into a new document, by mr_doc_choose_route:
  * the same model -> MR_DOC_ROUTE_COPY (every value, map and extra); a uniform material of another model ->
- * MR_DOC_ROUTE_REMAP (its values, unset ones the model's defaults, fitted by mr_remap as mr_doc_from_gltf does);
- * a textured one -> MR_DOC_ROUTE_MAPS where the parameters are the same quantities (gltf <-> usd-preview's metallic
- * workflow: base colour, metallic, roughness, constant ior), otherwise MR_ERR_UNSUPPORTED naming `label` (how the
- * caller names the input, e.g. "MaterialX 'in.mtlx'"), the material and the missing route. Extras the target does
- * not carry are listed per material (not_carried). The result has no images (the maps keep their files). */
+ * MR_DOC_ROUTE_REMAP (its values, unset ones the model's defaults, fitted by mr_remap as mr_doc_from_gltf does, with
+ * opts' holds and ties); a textured one -> MR_DOC_ROUTE_MAPS where the parameters are the same quantities (gltf <->
+ * usd-preview's metallic workflow: base colour, metallic, roughness, constant ior), otherwise DIRECT (or LEARNED with
+ * opts->transforms) as mr_doc_from_gltf converts a glTF material: the source material built from the document's map
+ * files (relative ones read against opts->document_path's folder, by the one rule of parameter maps, each map's
+ * channel, its scale folded into the texels) and constants, its maps on one UV set with one pair of wraps
+ * (otherwise MR_ERR_UNSUPPORTED) and of one size; the converted maps in result->maps (opts->image_prefix required),
+ * referred to relative to the input document's folder (mr_doc_rebase then names them for the output), written by
+ * mr_doc_gltf_write(NULL, ...). Errors name `label` (how the caller names the input, e.g. "MaterialX 'in.mtlx'"),
+ * the material and the route. Extras the target does not carry are listed per material (not_carried). The result
+ * has no images (the carried maps keep their files). */
 mr_status mr_doc_convert(const mr_doc *in, const char *label, const mr_doc_gltf_options *opts,
                          mr_doc_gltf_result **out);
 

@@ -10,7 +10,9 @@
 #include <unistd.h>
 
 #include "doc/doc_internal.h"
+#include "io/image_io.h"
 #include "mr_internal.h"
+#include "render/render.h"
 
 /* ---- paths ------------------------------------------------------------------------------------------------- */
 
@@ -151,9 +153,10 @@ static int at_value(const mr_doc_material *m, const char *param, double want) {
     return 1;
 }
 
-/* The texture routes between models (doc.h, MR_DOC_ROUTE_MAPS): maps carried unchanged where the parameters are
- * the same quantities. The one place to extend: a route returns MR_OK having filled `to`, MR_ERR_UNSUPPORTED with
- * the reason (why) when the material has something the route cannot carry, and -1 when there is no route. */
+/* The MAPS routes between models (mr_doc_choose_route decides; doc.h): maps carried unchanged where the parameters
+ * are the same quantities. A route returns MR_OK having filled `to`, MR_ERR_UNSUPPORTED with the reason (why) when
+ * the material has something the route cannot carry, and -1 when there is none (mr_doc_choose_route and this
+ * disagree: an internal error). */
 static int texture_route(const mr_doc_material *from, mr_doc_material *to, char *why, size_t size) {
     const char *a = from->model->name, *b = to->model->name;
     mr_status st = MR_OK;
@@ -206,6 +209,103 @@ static int texture_route(const mr_doc_material *from, mr_doc_material *to, char 
     return -1;
 }
 
+/* The folder of the document (NULL: the current folder) as a prefix for its relative files: "" or "DIR/". */
+static void document_folder(const char *document, char *out, size_t size) {
+    const char *slash = document ? strrchr(document, '/') : NULL;
+    snprintf(out, size, "%.*s", slash ? (int)(slash - document + 1) : 0, slash ? document : "");
+}
+
+/* Textured material `src` as a material of its model for the DIRECT and LEARNED routes: its constants (unset ones
+ * the model's defaults) and its maps read from their files (relative to the document's folder) by the one rule of
+ * parameter maps, each map's scale folded into the channels its parameter reads; *uv_set and wrap[] the maps' one
+ * UV set and wraps (MaterialX's default, periodic, when unset). */
+static mr_status document_material(const mr_doc_material *src, const char *document, const char *where,
+                                   mr_material **out, int *uv_set, mr_doc_wrap wrap[2]) {
+    *out = NULL;
+    mr_material *mat = NULL;
+    mr_status st = mr_material_create(src->model, &mat);
+    if (st != MR_OK) return st;
+    packed_values(src, mat->values);
+    char folder[4096];
+    document_folder(document, folder, sizeof folder);
+    const char *first = NULL;
+    for (int p = 0; p < src->model->param_count && st == MR_OK; p++) {
+        const mr_doc_value *v = &src->values[p];
+        const mr_brdf_param *param = &src->model->params[p];
+        if (v->kind != MR_DOC_TEXTURE) continue;
+        mr_doc_wrap w[2] = {v->wrap_s ? v->wrap_s : MR_DOC_WRAP_REPEAT, v->wrap_t ? v->wrap_t : MR_DOC_WRAP_REPEAT};
+        if (first == NULL) {
+            first = param->name;
+            *uv_set = v->uv_set;
+            wrap[0] = w[0];
+            wrap[1] = w[1];
+        } else if (*uv_set != v->uv_set || wrap[0] != w[0] || wrap[1] != w[1]) {
+            st = mr_fail(MR_ERR_UNSUPPORTED, "%s: the maps of %s and %s differ in UV set or wrap mode: a converted "
+                         "map holds every parameter of a texel, so its maps must share both", where, first,
+                         param->name);
+            break;
+        }
+        char path[8192];
+        snprintf(path, sizeof path, "%s%s", v->file[0] == '/' ? "" : folder, v->file);
+        mr_image *image = NULL;
+        if ((st = mr_img_read_param_map(path, param, MR_MAP_AS_PARAMETER, NULL, &image, NULL)) != MR_OK) {
+            st = mr_fail_context(st, "%s: map of %s", where, param->name);
+            break;
+        }
+        const int channel = v->channel < 0 ? 0 : v->channel;
+        const size_t n = (size_t)image->width * (size_t)image->height, stride = (size_t)image->channels;
+        if (param->channels == 3 && image->channels < 3 && (v->scale[1] != v->scale[0] || v->scale[2] != v->scale[0])) {
+            mr_image_free(image);
+            st = mr_fail(MR_ERR_UNSUPPORTED, "%s: a grey map '%s' of %s with a coloured scale", where, v->file,
+                         param->name);
+            break;
+        }
+        for (int c = 0; c < (param->channels == 3 && image->channels >= 3 ? 3 : 1); c++) {
+            const int ch = param->channels == 1 ? channel : c;
+            if (ch < image->channels && v->scale[c] != 1.0)
+                for (size_t i = 0; i < n; i++) image->pixels[i * stride + (size_t)ch] *= (float)v->scale[c];
+        }
+        if ((st = mr_material_add_map(mat, param->name, image, param->channels == 1 ? channel : 0, path, NULL)) !=
+            MR_OK) {
+            mr_image_free(image);
+            st = mr_fail_context(st, "%s", where);
+        }
+    }
+    if (st != MR_OK) {
+        mr_material_free(mat);
+        return st;
+    }
+    *out = mat;
+    return MR_OK;
+}
+
+/* The converted maps of material k named relative to the document's folder (as every map of a read document is,
+ * so that mr_doc_rebase names them for the output). */
+static mr_status name_converted_maps(const mr_doc_gltf_result *r, int k, const char *document, mr_doc_material *m) {
+    char from[4096], at[4096];
+    if (!folder_of(document ? document : "document", from))
+        return mr_fail(MR_ERR_INVALID_ARG, "material document: cannot name the folder of '%s'", document);
+    for (int i = 0; i < r->map_count; i++) {
+        const mr_doc_gltf_map *map = &r->maps[i];
+        if (map->material != k || map->param < 0) continue;
+        if (!folder_of(map->path, at))
+            return mr_fail(MR_ERR_INVALID_ARG, "material document: cannot name the folder of '%s'", map->path);
+        char target[8192], rel[8192];
+        snprintf(target, sizeof target, "%s/%s", at, map->file);
+        if (strlen(target) >= 4096)
+            return mr_fail(MR_ERR_INVALID_ARG, "material document: '%s': path too long", target);
+        normalize(target);
+        relative_path(from, target, rel, sizeof rel);
+        mr_doc_value *v = &m->values[map->param];
+        char *copy = malloc(strlen(rel) + 1);
+        if (copy == NULL) return mr_fail(MR_ERR_NOMEM, "material document: out of memory");
+        memcpy(copy, rel, strlen(rel) + 1);
+        free(v->file);
+        v->file = copy;
+    }
+    return MR_OK;
+}
+
 static void list_extras(const mr_doc_material *m, char *out, size_t size) {
     size_t used = 0;
     out[0] = '\0';
@@ -236,7 +336,7 @@ mr_status mr_doc_convert(const mr_doc *in, const char *label, const mr_doc_gltf_
         return mr_fail(MR_ERR_NOMEM, "%s: out of memory", label);
     }
     r->material_count = count;
-    mr_doc_remapper remapper = {NULL, o.threads, o.size};
+    mr_doc_remapper remapper = mr_doc_remapper_of(&o);
     mr_status st = MR_OK;
     for (int k = 0; k < count && st == MR_OK; k++) {
         const mr_doc_material *src = mr_doc_material_get(in, k);
@@ -255,20 +355,30 @@ mr_status mr_doc_convert(const mr_doc *in, const char *label, const mr_doc_gltf_
             continue;
         }
         list_extras(src, info->not_carried, sizeof(info->not_carried));
-        if (is_textured(src)) {
+        if ((st = mr_doc_choose_route(src->model, o.target, is_textured(src), o.transforms != NULL,
+                                      &info->route)) != MR_OK)
+            break;
+        if (info->route == MR_DOC_ROUTE_DIRECT || info->route == MR_DOC_ROUTE_LEARNED) {
+            char where[4096 + 400];
+            snprintf(where, sizeof where, "%s: material '%s' (%s) to %s by the %s route", label, src->name,
+                     src->model->name, o.target->name, mr_doc_route_name(info->route));
+            mr_material *source = NULL;
+            int uv_set = 0;
+            mr_doc_wrap wrap[2] = {MR_DOC_WRAP_REPEAT, MR_DOC_WRAP_REPEAT};
+            if ((st = document_material(src, o.document_path, where, &source, &uv_set, wrap)) != MR_OK) break;
+            if ((st = mr_doc_convert_textured(&o, r, k, where, src->name, source, uv_set, wrap, m)) != MR_OK) break;
+            st = name_converted_maps(r, k, o.document_path, m);
+            continue;
+        }
+        if (info->route == MR_DOC_ROUTE_MAPS) {
             char why[512] = "";
             int route = texture_route(src, m, why, sizeof why);
-            info->route = MR_DOC_ROUTE_MAPS;
-            if (route == -1)
-                st = mr_fail(MR_ERR_UNSUPPORTED, "%s: material '%s' (%s) is textured: no texture route from %s to %s "
-                             "yet (uniform materials are remapped; textured %s materials export to %s only)", label,
-                             src->name, src->model->name, src->model->name, o.target->name, src->model->name,
-                             strcmp(src->model->name, "gltf") == 0       ? "usd-preview (.usda) or gltf"
-                             : strcmp(src->model->name, "usd-preview") == 0 ? "gltf or usd-preview (.usda)"
-                                                                            : src->model->name);
-            else if (route == MR_ERR_UNSUPPORTED)
+            if (route == MR_ERR_UNSUPPORTED)
                 st = mr_fail(MR_ERR_UNSUPPORTED, "%s: material '%s' (%s) to %s: %s", label, src->name,
                              src->model->name, o.target->name, why);
+            else if (route == -1)
+                st = mr_fail(MR_ERR_UNSUPPORTED, "%s: material '%s': no maps route from %s to %s", label, src->name,
+                             src->model->name, o.target->name);
             else
                 st = (mr_status)route;
             continue;

@@ -458,6 +458,17 @@ static mr_status plan(const mr_sweep_table *tab, mr_learned *t) {
     memcpy(t->base, tab->target_values, (size_t)tab->target_count * sizeof *t->base);
     // carried[tp]: 1 the target parameter is a carry alone; 2 a carry plus a learned residual (an output).
     int carried[MR_BRDF_MAX_VALUES] = {0}, used_source[MR_BRDF_MAX_VALUES] = {0};
+    // Ties (the sweep held these target parameters at a source parameter's value, brdf.h): carried with factor 1,
+    // not learned; the source parameter stays a feature of the regression for the other outputs.
+    for (int tp = 0; tp < tgt->param_count && tp < 32; tp++) {
+        if (!((tab->target_ties.tied >> tp) & 1u)) continue;
+        const int sp = tab->target_ties.source[tp];
+        t->carries[t->carry_count++] = (mr_learned_carry){tp, sp, 0, {1.0, 1.0, 1.0}};
+        carried[tp] = 1;
+        mr_status status = note(t, "target %s is tied to source %s (the sweep's tie): carried as it is",
+                                tgt->params[tp].name, src->params[sp].name);
+        if (status != MR_OK) return status;
+    }
     // Carries: a Lambertian target parameter from a Lambertian source parameter. A source held in the rows is carried
     // by the lobes' ratio, and what the fits still put into the target (a diffuse that stands in for a lobe's tail)
     // is learned on top as an output; a source the rows vary is carried by a fitted slope under the parametric
@@ -465,6 +476,7 @@ static mr_status plan(const mr_sweep_table *tab, mr_learned *t) {
     for (int tp = 0; tp < tgt->param_count; tp++) {
         const mr_brdf_param *q = &tgt->params[tp];
         if (q->lobe != MR_LOBE_DIFFUSE || q->role != MR_PARAM_LINEAR) continue;
+        if (carried[tp]) continue; // tied
         for (int sp = 0; sp < src->param_count; sp++) {
             const mr_brdf_param *p = &src->params[sp];
             if (p->lobe != MR_LOBE_DIFFUSE || p->role != MR_PARAM_LINEAR || p->channels != q->channels) continue;

@@ -338,6 +338,9 @@ typedef struct mr_learned_conversion_spec {
                                             are remapped exactly: MR_DIRECT_MIN_TOLERANCE) */
     const char *const *assignments;      /* the source material as mr_material_from_assignments takes it */
     int assignment_count;
+    struct mr_material *material;        /* or, instead of assignments (count 0), a material of `source` made by
+                                            the caller (a glTF material's, mr_gltf_material_brdf): TAKEN, the
+                                            result owns it from the call on (freed with it, or on failure) */
     const char *const *outputs;          /* NULL: nothing written; else target->param_count + 1 file names: one per
                                             target parameter, then the flag picture. Written only when the material
                                             has maps */

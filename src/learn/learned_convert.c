@@ -183,14 +183,21 @@ void mr_learned_conversion_free(mr_learned_conversion *r) {
 }
 
 mr_status mr_learned_convert_material(const mr_learned_conversion_spec *spec, mr_learned_conversion *r) {
-    if (r == NULL) return mr_fail(MR_ERR_INVALID_ARG, "conversion: NULL result");
+    mr_material *given = spec != NULL ? spec->material : NULL; // taken: freed on every path but success
+    if (r == NULL) {
+        mr_material_free(given);
+        return mr_fail(MR_ERR_INVALID_ARG, "conversion: NULL result");
+    }
     memset(r, 0, sizeof *r);
     r->material_report.failed = -1;
     if (spec == NULL || spec->source == NULL || spec->target == NULL || spec->hops < 0 ||
         spec->hops > MR_LEARNED_MAX_HOPS || (spec->hops > 0 && spec->chain == NULL) ||
-        (spec->assignment_count > 0 && spec->assignments == NULL))
-        return mr_fail(MR_ERR_INVALID_ARG, "conversion: NULL spec, models or chain, or a chain of %d hops",
-                       spec != NULL ? spec->hops : 0);
+        (spec->assignment_count > 0 && spec->assignments == NULL) ||
+        (given != NULL && (spec->assignment_count > 0 || given->model != spec->source))) {
+        mr_material_free(given);
+        return mr_fail(MR_ERR_INVALID_ARG, "conversion: NULL spec, models or chain, a chain of %d hops, or a "
+                       "material given with assignments or of another model", spec != NULL ? spec->hops : 0);
+    }
     const mr_brdf_model *target = spec->target;
     const int direct = spec->hops == 0, out_count = target->param_count;
     int maps_given = 0;
@@ -198,6 +205,7 @@ mr_status mr_learned_convert_material(const mr_learned_conversion_spec *spec, mr
         const char *eq = strchr(spec->assignments[k], '=');
         maps_given |= eq != NULL && eq[1] == '@';
     }
+    if (given != NULL) maps_given = given->map_count > 0;
     mr_direct_options dopts = {0};
     if (spec->direct != NULL) dopts = *spec->direct;
     // Constants alone are one texel: remapped at their exact values, not at a quantised neighbour (which the
@@ -208,11 +216,17 @@ mr_status mr_learned_convert_material(const mr_learned_conversion_spec *spec, mr
     mr_transform_kind *kind = NULL;
     mr_status status = direct ? mr_direct_kind_create(spec->source, target, &dopts, &kind)
                               : mr_learned_kind_create(spec->chain, spec->hops, &kind);
-    if (status != MR_OK) return status;
+    if (status != MR_OK) {
+        mr_material_free(given);
+        return status;
+    }
 
     const double started = mr_now_seconds();
-    status = mr_material_from_assignments(spec->source->name, spec->assignments, spec->assignment_count, NULL,
-                                          &r->material, &r->material_report);
+    if (given != NULL)
+        r->material = given;
+    else
+        status = mr_material_from_assignments(spec->source->name, spec->assignments, spec->assignment_count, NULL,
+                                              &r->material, &r->material_report);
     mr_transform *t = NULL;
     mr_transform_options topts = {0};
     topts.threads = spec->threads;

@@ -87,6 +87,31 @@ static mr_status check_range(const char *path, long line_number, const mr_brdf_m
     return MR_OK;
 }
 
+/* The ties the "# remap:" line's " tied=t:s,..." names (the sweep's ties: target parameters held at a source
+ * parameter's value, brdf.h) into *ties. MR_ERR_FORMAT naming the file for a name the models do not have. */
+static mr_status parse_tied(const char *path, const char *remap_line, const mr_brdf_model *source,
+                            const mr_brdf_model *target, mr_brdf_ties *ties) {
+    memset(ties, 0, sizeof *ties);
+    const char *at = strstr(remap_line, " tied=");
+    if (at == NULL) return MR_OK;
+    at += 6;
+    for (;;) {
+        const size_t length = strcspn(at, ", \r\n");
+        char item[160];
+        snprintf(item, sizeof item, "%.*s", (int)length, at);
+        char *colon = strchr(item, ':');
+        const int t = colon ? (*colon = '\0', mr_brdf_param_index(target, item)) : -1;
+        const int s = colon ? mr_brdf_param_index(source, colon + 1) : -1;
+        if (t < 0 || t >= 32 || s < 0 || target->params[t].channels != source->params[s].channels)
+            return mr_fail(MR_ERR_FORMAT, "%s: the '# remap:' line ties '%.*s', which is not TARGET:SOURCE of '%s' "
+                           "and '%s'", path, (int)length, at, target->name, source->name);
+        ties->tied |= 1u << t;
+        ties->source[t] = (signed char)s;
+        if (at[length] != ',') return MR_OK;
+        at += length + 1;
+    }
+}
+
 /* The target parameters the "# remap:" line's " held=a,b" names (the sweep's --hold; none without the word) into
  * *held. MR_ERR_FORMAT naming the file for a name the target does not have. */
 static mr_status parse_held(const char *path, const char *remap_line, const mr_brdf_model *target, unsigned *held) {
@@ -155,10 +180,13 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
                 break;
             }
             unsigned held = 0;
+            mr_brdf_ties ties;
             status = parse_held(path, remap_line, target, &held);
+            if (status == MR_OK) status = parse_tied(path, remap_line, source, target, &ties);
             if (status != MR_OK) break;
             if (first) {
                 t->target_held = held;
+                t->target_ties = ties;
                 *reference = h;
                 t->source = source;
                 t->target = target;
@@ -177,6 +205,10 @@ static mr_status load_file(const char *path, const mr_sweep_table_options *opts,
                     break;
                 }
                 t->target_held &= held; // held only where every file held it
+                for (int p = 0; p < 32; p++) // tied only where every file tied it alike
+                    if (((t->target_ties.tied >> p) & 1u) &&
+                        (!((ties.tied >> p) & 1u) || ties.source[p] != t->target_ties.source[p]))
+                        t->target_ties.tied &= ~(1u << p);
 
             }
             char *names[MAX_COLUMNS];

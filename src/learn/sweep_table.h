@@ -52,6 +52,8 @@ typedef struct mr_sweep_table {
     unsigned target_held;                     /* bit p: every file's sweep held target parameter p (its "# remap:"
                                                  line's held=, the sweep's --hold) at its "# to:" value; the
                                                  model's default holds (MR_PARAM_FIT_FIXED) are not in it */
+    mr_brdf_ties target_ties;                 /* target parameters every file's sweep tied to a source parameter (its
+                                                 "# remap:" line's tied=; brdf.h): learn carries them (factor 1) */
     char scene[256];                          /* the "# scene:" line's text after "# scene: " */
     size_t n;                                 /* rows kept */
     size_t skipped;                           /* rows left out for their outcome */

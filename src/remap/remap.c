@@ -1094,6 +1094,8 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
         return mr_fail(MR_ERR_INVALID_ARG, "remap: unknown strategy %d", (int)opts.strategy);
     if (opts.threads < 0 || opts.threads > 1024)
         return mr_fail(MR_ERR_INVALID_ARG, "remap: threads %d: expected 0 (the plan's rule) to 1024", opts.threads);
+    if (opts.ties.tied != 0)
+        return mr_fail(MR_ERR_INVALID_ARG, "remap: ties need the source's values (mr_remap), not only its images");
     mr_status status = check_source_image(plan, source->full, "full");
     if (status != MR_OK) return status;
     if (opts.strategy == MR_REMAP_TWO || opts.strategy == MR_REMAP_THREE) {
@@ -1353,9 +1355,21 @@ mr_status mr_remap(const mr_render_plan *plan, const mr_brdf_model *source_model
         status = mr_render_components_into_threads(plan, threads, source_model, source_values, diffuse, specular);
     if (status == MR_OK)
         status = mr_render_into_threads(plan, threads, source_model, source_values, MR_COMPONENT_FULL, full);
+    // Ties: the tied target parameters held at the source's values (brdf.h), for this remap only.
+    mr_remap_options tied = opts ? *opts : mr_remap_options_default();
+    double tied_values[MR_BRDF_MAX_VALUES];
+    if (tied.ties.tied != 0) {
+        if (tied.target_values)
+            memcpy(tied_values, tied.target_values, (size_t)mr_brdf_value_count(target) * sizeof(double));
+        else
+            mr_brdf_default_values(target, tied_values);
+        mr_brdf_apply_ties(source_model, source_values, target, &tied.ties, tied_values, &tied.held);
+        tied.target_values = tied_values;
+        memset(&tied.ties, 0, sizeof tied.ties);
+    }
     if (status == MR_OK) {
         mr_remap_source source = {full, diffuse, specular};
-        status = mr_remap_images(plan, &source, target, opts, out);
+        status = mr_remap_images(plan, &source, target, &tied, out);
         if (status == MR_OK) status = zoom_check(plan, source_model, source_values, full, target, threads, out);
         if (status == MR_OK) out->seconds = now_seconds() - start;
     }

@@ -140,6 +140,9 @@ typedef struct mr_remap_options {
     int threads;                 /* OpenMP threads of the remap's renders: 0 = the plan's rule (render.h,
                                     mr_scene.threads: automatic by default, one thread for the default 64^2
                                     fit scene); n >= 1: n. The result does not depend on it */
+    mr_brdf_ties ties;           /* target parameters held at the source's values (brdf.h; mr_remap only, which
+                                    knows the source's values; mr_remap_images refuses them): zeroed = none. The
+                                    commands fill mr_brdf_default_ties (gltf -> openpbr: base_metalness=metallic) */
     const double *initial_values; /* optional packed target values to start from (a warm start, e.g. a
                                     neighbouring texel's answer: src/remap/direct.h): the fitted parameters start
                                     there (fixed ones, switches and held ones still come from target_values);

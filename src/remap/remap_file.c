@@ -87,8 +87,8 @@ mr_scene mr_remap_file_scene(const mr_fit_scene_options *scene) {
     return mr_scene_fit(&o);
 }
 
-void mr_strbuf_remap_lines(mr_strbuf *sb, const mr_brdf_model *target, const mr_remap_options *r,
-                           const mr_fit_scene_options *scene_options) {
+void mr_strbuf_remap_lines(mr_strbuf *sb, const mr_brdf_model *source, const mr_brdf_model *target,
+                           const mr_remap_options *r, const mr_fit_scene_options *scene_options) {
     const mr_scene scene = mr_remap_file_scene(scene_options);
     mr_strbuf_printf(sb, "# remap: strategy=%s max_evaluations=%d xtol=%.17g grid_points=%d starts=%d seed=%lu",
                      mr_remap_strategy_name(r->strategy), r->max_evaluations, r->xtol, r->grid_points, r->starts,
@@ -97,6 +97,13 @@ void mr_strbuf_remap_lines(mr_strbuf *sb, const mr_brdf_model *target, const mr_
     for (int p = 0, first = 1; p < target->param_count && p < 32; p++)
         if ((r->held >> p) & 1u) {
             mr_strbuf_printf(sb, "%s%s", first ? " held=" : ",", target->params[p].name);
+            first = 0;
+        }
+    // Ties likewise: " tied=base_metalness:metallic" (target:source).
+    for (int p = 0, first = 1; source != NULL && p < target->param_count && p < 32; p++)
+        if (((r->ties.tied & ~r->held) >> p) & 1u) { // a hold wins over a tie
+            mr_strbuf_printf(sb, "%s%s:%s", first ? " tied=" : ",", target->params[p].name,
+                             source->params[r->ties.source[p]].name);
             first = 0;
         }
     mr_strbuf_printf(sb, "\n");

@@ -63,7 +63,7 @@ mr_status mr_sweep_file_header(const mr_sweep_spec *spec, const char *command_li
     mr_strbuf_printf(sb, "\n# to: %s", spec->target->name);
     mr_strbuf_values(sb, spec->target, spec->target_values);
     mr_strbuf_printf(sb, "\n");
-    mr_strbuf_remap_lines(sb, spec->target, &spec->remap, &spec->scene);
+    mr_strbuf_remap_lines(sb, spec->source, spec->target, &spec->remap, &spec->scene);
     if (spec->sampling == MR_SWEEP_GRID) {
         mr_strbuf_printf(sb, "# sampling: grid");
         for (int a = 0; a < spec->axis_count; a++) {
@@ -376,6 +376,23 @@ static int take_remap_setting(const char *key, char *value, mr_sweep_spec *spec)
             ok = p >= 0 && p < 32;
             if (ok)
                 spec->remap.held |= 1u << p;
+        }
+        return ok;
+    }
+    if (strcmp(key, "tied") == 0) { // "target:source,..."
+        int ok = 1;
+        char *save = NULL;
+        for (char *item = strtok_r(value, ",", &save); ok && item != NULL; item = strtok_r(NULL, ",", &save)) {
+            char *colon = strchr(item, ':');
+            ok = colon != NULL;
+            if (!ok) break;
+            *colon = '\0';
+            const int t = mr_brdf_param_index(spec->target, item), s = mr_brdf_param_index(spec->source, colon + 1);
+            ok = t >= 0 && t < 32 && s >= 0 && spec->target->params[t].channels == spec->source->params[s].channels;
+            if (ok) {
+                spec->remap.ties.tied |= 1u << t;
+                spec->remap.ties.source[t] = (signed char)s;
+            }
         }
         return ok;
     }
