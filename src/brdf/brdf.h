@@ -206,6 +206,10 @@ mr_hold_reason mr_brdf_hold_reason(const mr_brdf_model *model, unsigned held, in
  * "" when nothing is held. Returns the length the whole line needs (as snprintf). */
 size_t mr_brdf_format_holds(const mr_brdf_model *model, const double *values, unsigned held, const char *held_label,
                             char *buf, size_t size);
+/* The same, leaving out the parameters of `tied` (a fit's ties, mr_brdf_ties.tied: a tie of a default-held
+ * parameter changes the value it is held at, which the "tied:" line says instead). */
+size_t mr_brdf_format_holds_tied(const mr_brdf_model *model, const double *values, unsigned held, unsigned tied,
+                                 const char *held_label, char *buf, size_t size);
 
 /* Ties: target parameters held at the value of a source parameter (per material, row or texel) instead of fitted,
  * where a fit scene cannot separate what the source states (a metalness against the base colour at high roughness:
@@ -220,7 +224,12 @@ typedef struct mr_brdf_ties {
 /* The documented default ties of a pair: a target metalness (a scalar named metallic, metalness or base_metalness)
  * takes a source metalness of those names when both models have one and they differ (gltf -> openpbr:
  * base_metalness=metallic; -> standard-surface: metalness=metallic; -> blender-principled, usd-preview,
- * cycles-principled: metallic=metallic). None for a source without a metalness (Ward, GGX, Phong ...). */
+ * cycles-principled: metallic=metallic); and a target's dielectric IOR (a scalar named ior or specular_ior) that
+ * the target holds by default (MR_PARAM_FIT_FIXED) takes the source's IOR of those names (standard-surface ->
+ * gltf: ior=specular_ior; openpbr -> standard-surface: specular_ior=specular_ior): held at 1.5 instead, a jade
+ * (2.418) or a ketchup (1.3) has no dielectric F0 to match and the fit bends other parameters (ketchup into gltf:
+ * object SSIM 0.59 against 0.98 tied; docs/evaluation-translations.md). None for a source without a metalness or an
+ * IOR (Ward, GGX, Phong ...). */
 mr_brdf_ties mr_brdf_default_ties(const mr_brdf_model *source, const mr_brdf_model *target);
 
 /* Parse a tie list "TARGET=SOURCE[,TARGET=SOURCE...]" (a target parameter, a source parameter of the same channel

@@ -239,6 +239,11 @@ mr_hold_reason mr_brdf_hold_reason(const mr_brdf_model *model, unsigned held, in
 
 size_t mr_brdf_format_holds(const mr_brdf_model *model, const double *values, unsigned held, const char *held_label,
                             char *buf, size_t size) {
+    return mr_brdf_format_holds_tied(model, values, held, 0u, held_label, buf, size);
+}
+
+size_t mr_brdf_format_holds_tied(const mr_brdf_model *model, const double *values, unsigned held, unsigned tied,
+                                 const char *held_label, char *buf, size_t size) {
     size_t need = 0;
     if (buf != NULL && size > 0) buf[0] = '\0';
     if (model == NULL || values == NULL) return 0;
@@ -258,7 +263,7 @@ size_t mr_brdf_format_holds(const mr_brdf_model *model, const double *values, un
                 if (want == MR_HOLD_CALLER) snprintf(item, sizeof item, " (%s)", held_label ? held_label : "held");
                 else snprintf(item, sizeof item, " (default for %s)", model->name);
             } else {
-                if (mr_brdf_hold_reason(model, held, p) != want) continue;
+                if (mr_brdf_hold_reason(model, held, p) != want || (p < 32 && ((tied >> p) & 1u))) continue;
                 const mr_brdf_param *param = &model->params[p];
                 const double *v = values + mr_brdf_param_offset(model, p);
                 char value[96];
@@ -299,6 +304,16 @@ static int metalness_param(const mr_brdf_model *m) {
     return -1;
 }
 
+/* The dielectric's index of refraction: a scalar named ior or specular_ior; -1 if none. */
+static int ior_param(const mr_brdf_model *m) {
+    static const char *const names[] = {"ior", "specular_ior"};
+    for (int k = 0; k < 2; k++) {
+        const int p = mr_brdf_param_index(m, names[k]);
+        if (p >= 0 && p < 32 && m->params[p].channels == 1 && m->params[p].role != MR_PARAM_SWITCH) return p;
+    }
+    return -1;
+}
+
 mr_brdf_ties mr_brdf_default_ties(const mr_brdf_model *source, const mr_brdf_model *target) {
     mr_brdf_ties ties;
     memset(&ties, 0, sizeof ties);
@@ -307,6 +322,13 @@ mr_brdf_ties mr_brdf_default_ties(const mr_brdf_model *source, const mr_brdf_mod
     if (s >= 0 && t >= 0) {
         ties.tied = 1u << t;
         ties.source[t] = (signed char)s;
+    }
+    // The IOR only where the target holds it by default (MR_PARAM_FIT_FIXED): the tie then changes the value it is
+    // held at (1.5) to the source's, and takes no freedom from a fit that would search it (the paper's models).
+    const int si = ior_param(source), ti = ior_param(target);
+    if (si >= 0 && ti >= 0 && (target->params[ti].flags & MR_PARAM_FIT_FIXED)) {
+        ties.tied |= 1u << ti;
+        ties.source[ti] = (signed char)si;
     }
     return ties;
 }

@@ -83,16 +83,21 @@ void cli_print_ties_json(FILE *out, const mr_brdf_model *source, const mr_brdf_m
 }
 
 void cli_print_holds(FILE *out, const char *prefix, const mr_brdf_model *model, const double *values, unsigned held) {
+    cli_print_holds_tied(out, prefix, model, values, held, 0u);
+}
+
+void cli_print_holds_tied(FILE *out, const char *prefix, const mr_brdf_model *model, const double *values,
+                          unsigned held, unsigned tied) {
     char line[2048];
-    if (mr_brdf_format_holds(model, values, held, "--hold", line, sizeof line) == 0) return;
+    if (mr_brdf_format_holds_tied(model, values, held, tied, "--hold", line, sizeof line) == 0) return;
     fprintf(out, "%sheld: %s\n", prefix ? prefix : "", line);
 }
 
-void cli_print_holds_json(FILE *out, const mr_brdf_model *model, const double *values, unsigned held) {
+void cli_print_holds_json(FILE *out, const mr_brdf_model *model, const double *values, unsigned held, unsigned tied) {
     fprintf(out, "[");
     for (int p = 0, first = 1; p < model->param_count; p++) {
         const mr_hold_reason why = mr_brdf_hold_reason(model, held, p);
-        if (why != MR_HOLD_MODEL && why != MR_HOLD_CALLER) continue;
+        if ((why != MR_HOLD_MODEL && why != MR_HOLD_CALLER) || (p < 32 && ((tied >> p) & 1u))) continue;
         const double *v = values + mr_brdf_param_offset(model, p);
         fprintf(out, "%s{\"name\": ", first ? "" : ", ");
         cli_json_string(out, model->params[p].name);

@@ -96,9 +96,12 @@ int cli_parse_held(const char *command, const mr_brdf_model *model, const char *
 /* The holds a fit of `model` used (mr_brdf_format_holds: the model's default holds and --hold's, with their values):
  * "held: LIST\n" on `out` (prefixed by `prefix`, e.g. "matremap convert: "; NULL: none), nothing when none. */
 void cli_print_holds(FILE *out, const char *prefix, const mr_brdf_model *model, const double *values, unsigned held);
+/* The same leaving out the parameters the fit tied instead (`tied`, mr_brdf_ties.tied; cli_print_ties says them). */
+void cli_print_holds_tied(FILE *out, const char *prefix, const mr_brdf_model *model, const double *values,
+                          unsigned held, unsigned tied);
 
 /* The same as a JSON array (no key): [{"name": N, "value": V or [R, G, B], "by": "default" or "--hold"}, ...]. */
-void cli_print_holds_json(FILE *out, const mr_brdf_model *model, const double *values, unsigned held);
+void cli_print_holds_json(FILE *out, const mr_brdf_model *model, const double *values, unsigned held, unsigned tied);
 
 /* The ties of a fit (brdf.h): `list` (--tie TARGET=SOURCE,... or "none") parsed into *ties, or, when list is NULL,
  * the pair's defaults (mr_brdf_default_ties); parameters the caller holds (`held`, --hold) are not tied (a hold

@@ -352,7 +352,8 @@ int cmd_convert(int argc, char **argv) {
                 ds->outcomes[MR_FIT_CONVERGED], ds->outcomes[MR_FIT_UNDER_RESOLVED], ds->outcomes[MR_FIT_AT_BOUND],
                 ds->outcomes[MR_FIT_UNREACHABLE], ds->outcomes[MR_FIT_LOCAL_MINIMUM]);
     if (ds != NULL && !json) {
-        cli_print_holds(stderr, "matremap convert: --direct: ", target, target_values, dopts.remap.held);
+        cli_print_holds_tied(stderr, "matremap convert: --direct: ", target, target_values, dopts.remap.held,
+                             dopts.remap.ties.tied);
         cli_print_ties(stderr, "matremap convert: --direct: ", source, target, &dopts.remap.ties, tie_list != NULL);
     }
     mr_image *const *out = r.converted;
@@ -371,7 +372,7 @@ int cmd_convert(int argc, char **argv) {
             printf("}, \"tied\": ");
             cli_print_ties_json(stdout, source, target, &dopts.remap.ties, tie_list != NULL);
             printf(", \"held\": ");
-            cli_print_holds_json(stdout, target, target_values, dopts.remap.held);
+            cli_print_holds_json(stdout, target, target_values, dopts.remap.held, dopts.remap.ties.tied);
             printf("}, ");
         }
         printf("\"chain\": [");

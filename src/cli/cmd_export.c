@@ -200,6 +200,13 @@ typedef struct fits_said {
     int tie_given;
 } fits_said;
 
+/* The parameters every source model ties: not held at their defaults anywhere (the "tied:" lines say them). */
+static unsigned tied_by_all(const fits_said *f) {
+    unsigned tied = f->source_count > 0 ? ~0u : 0u;
+    for (int i = 0; i < f->source_count; i++) tied &= f->ties[i].tied;
+    return tied;
+}
+
 /* One line per material (or the --json summary), the holds and ties, the images, maps and OUT. */
 static void print_result(const options *o, const char *format, const mr_brdf_model *target,
                          const mr_doc_gltf_result *result, const fits_said *f) {
@@ -225,7 +232,7 @@ static void print_result(const options *o, const char *format, const mr_brdf_mod
             if (m->not_carried[0]) printf("; not carried: %s", m->not_carried);
             printf("\n");
         }
-        if (fitted) cli_print_holds(stdout, "", target, f->target_values, f->held);
+        if (fitted) cli_print_holds_tied(stdout, "", target, f->target_values, f->held, tied_by_all(f));
         for (int i = 0; fitted && i < f->source_count; i++)
             cli_print_ties(stdout, "", f->sources[i], target, &f->ties[i], f->tie_given);
         for (int i = 0; i < result->image_count; i++) printf("wrote %s\n", result->images[i].path);
@@ -298,7 +305,7 @@ static void print_result(const options *o, const char *format, const mr_brdf_mod
             printf("}");
         }
         printf(", \"held\": ");
-        cli_print_holds_json(stdout, target, f->target_values, f->held);
+        cli_print_holds_json(stdout, target, f->target_values, f->held, tied_by_all(f));
     }
     printf("}\n");
 }

@@ -126,7 +126,7 @@ static void print_summary(const mr_learned *t, const mr_sweep_table *tab, const 
             printf("]");
         }
         printf(", \"held\": "); // the sweep's holds: its header's '# to:' values, held= and the model's defaults
-        cli_print_holds_json(stdout, tab->target, tab->target_fixed, tab->target_held);
+        cli_print_holds_json(stdout, tab->target, tab->target_fixed, tab->target_held, tab->target_ties.tied);
         printf("}\n");
         return;
     }
@@ -194,7 +194,7 @@ static void print_summary(const mr_learned *t, const mr_sweep_table *tab, const 
         if (strncmp(p, "note: ", 6) == 0) printf("  %.*s\n", (int)(e - p), p);
         p = e + 1;
     }
-    cli_print_holds(stdout, "  ", tab->target, tab->target_fixed, tab->target_held);
+    cli_print_holds_tied(stdout, "  ", tab->target, tab->target_fixed, tab->target_held, tab->target_ties.tied);
 }
 
 /* The warning of a transform that failed its check: which bound, by how much, and what to do. */

@@ -371,7 +371,7 @@ int cmd_remap(int argc, char **argv) {
                 cli_print_ties_json(stdout, from, to, &opts.ties, tie_list != NULL);
             }
             printf(", \"held\": ");
-            cli_print_holds_json(stdout, to, target_values, opts.held);
+            cli_print_holds_json(stdout, to, target_values, opts.held, opts.ties.tied);
             printf("}\n");
         } else {
             printf("%s", to->name);
@@ -383,7 +383,7 @@ int cmd_remap(int argc, char **argv) {
                    result.rmse, 100.0 * result.relative_rmse, result.ssim, result.renders, 1e3 * result.seconds,
                    strategy, scene_opts.size, mr_fit_light_name(scene_opts.light));
             if (reference != NULL) printf("irradiance scale applied to the source images: %.6g\n", irradiance_scale);
-            cli_print_holds(stdout, NULL, to, target_values, opts.held);
+            cli_print_holds_tied(stdout, NULL, to, target_values, opts.held, opts.ties.tied);
             if (from != NULL) cli_print_ties(stdout, NULL, from, to, &opts.ties, tie_list != NULL);
         }
     }

@@ -553,7 +553,8 @@ int cmd_sweep(int argc, char **argv) {
         printf("}, \"tied\": ");
         cli_print_ties_json(stdout, a.spec.source, a.spec.target, &a.spec.remap.ties, a.ties_given);
         printf(", \"held\": ");
-        cli_print_holds_json(stdout, a.spec.target, a.spec.target_values, a.spec.remap.held);
+        cli_print_holds_json(stdout, a.spec.target, a.spec.target_values, a.spec.remap.held,
+                             a.spec.remap.ties.tied);
         printf("}\n");
         return CLI_EXIT_OK;
     }
@@ -583,7 +584,8 @@ int cmd_sweep(int argc, char **argv) {
             first = 0;
         }
     fprintf(stderr, "\n");
-    cli_print_holds(stderr, "matremap sweep: ", a.spec.target, a.spec.target_values, a.spec.remap.held);
+    cli_print_holds_tied(stderr, "matremap sweep: ", a.spec.target, a.spec.target_values, a.spec.remap.held,
+                         a.spec.remap.ties.tied);
     cli_print_ties(stderr, "matremap sweep: ", a.spec.source, a.spec.target, &a.spec.remap.ties, a.ties_given);
     return CLI_EXIT_OK;
 }

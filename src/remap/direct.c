@@ -762,6 +762,12 @@ mr_status mr_direct_remap(const mr_brdf_model *source, const mr_brdf_model *targ
         for (size_t i = 0; i < n; i++) {
             const answer *a = &st.answers[uniques.of_texel[i]];
             memcpy(out + i * (size_t)cfg.nt, a->values, (size_t)cfg.nt * sizeof *out);
+            // A tied parameter takes the texel's own source value, not its quantised one: the grid of the
+            // tolerance need not hold the source's values (at 6/255 an IOR of 1.5 becomes 1.5059,
+            // a metallic of 1 rounds to 0.988), and a tie promises the source's value (brdf.h).
+            unsigned caller_held = cfg.remap.held;
+            mr_brdf_apply_ties(source, in + i * (size_t)cfg.ns, target, &cfg.remap.ties, out + i * (size_t)cfg.nt,
+                               &caller_held);
             if (outcomes != NULL) outcomes[i] = a->outcome;
         }
         if (summary != NULL) {
