@@ -1478,7 +1478,54 @@ MR_TEST(ward_remaps_into_the_layered_models_with_their_default_holds) {
     mr_render_plan_free(plan);
 }
 
+/* The default ties (brdf.h): what the source states and the target holds by default or calls its metalness, by
+ * name, the channels agreeing; nothing from a source stating none; the paper's pairs untouched. Then a remap of a
+ * ketchup (IOR 1.3) into gltf keeps its IOR and stays a dielectric, as the evaluation of the translations found it
+ * must (docs/evaluation-translations.md). */
+MR_TEST(default_ties_take_what_the_source_states) {
+    static const struct {
+        const char *from, *to, *ties;
+    } cases[] = {
+        {"standard-surface", "gltf", "metallic=metalness, ior=specular_ior"},
+        {"standard-surface", "usd-preview",
+         "metallic=metalness, clearcoat=coat, clearcoat_roughness=coat_roughness, ior=specular_ior"},
+        {"openpbr", "standard-surface", "metalness=base_metalness, specular_ior=specular_ior, coat=coat_weight, "
+                                        "coat_color=coat_color, coat_roughness=coat_roughness, coat_ior=coat_ior"},
+        {"openpbr", "blender-principled", "metallic=base_metalness, ior=specular_ior, coat_weight=coat_weight, "
+                                          "coat_roughness=coat_roughness, coat_ior=coat_ior, coat_tint=coat_color"},
+        {"gltf", "openpbr", "base_metalness=metallic, specular_ior=ior"},
+        {"ward", "openpbr", ""},
+        {"openpbr", "openpbr", ""},
+        {"ggx", "ward", ""},
+        {"blender-ward", "cycles-principled", ""},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        const mr_brdf_model *from = mr_brdf_find(cases[k].from), *to = mr_brdf_find(cases[k].to);
+        const mr_brdf_ties ties = mr_brdf_default_ties(from, to);
+        char line[512];
+        mr_brdf_format_ties(from, to, &ties, line, sizeof line);
+        MR_CHECK_MSG(strcmp(line, cases[k].ties) == 0, "%s -> %s: '%s'", cases[k].from, cases[k].to, line);
+    }
+    const mr_brdf_model *ss = mr_brdf_find("standard-surface"), *gltf = mr_brdf_find("gltf");
+    double v[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(ss, v);
+    MR_CHECK_OK(mr_brdf_parse_assignment(ss, "base_color=0.164,0.006,0.002", v));
+    MR_CHECK_OK(mr_brdf_parse_assignment(ss, "specular_roughness=0.2", v));
+    MR_CHECK_OK(mr_brdf_parse_assignment(ss, "specular_ior=1.3", v));
+    mr_render_plan *plan = fit_plan(64);
+    mr_remap_options o = options(MR_REMAP_AUTO);
+    o.ties = mr_brdf_default_ties(ss, gltf);
+    mr_remap_result r;
+    MR_CHECK_OK(mr_remap(plan, ss, v, gltf, &o, &r));
+    MR_CHECK(r.values[mr_brdf_param_offset(gltf, mr_brdf_param_index(gltf, "ior"))] == 1.3);
+    MR_CHECK(r.values[mr_brdf_param_offset(gltf, mr_brdf_param_index(gltf, "metallic"))] == 0.0);
+    MR_CHECK_MSG(r.outcome == MR_FIT_CONVERGED && r.ssim > 0.99, "%s, SSIM %.6f", mr_fit_outcome_name(r.outcome),
+                 r.ssim);
+    mr_render_plan_free(plan);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(names_round_trip),
+             MR_TEST_ENTRY(default_ties_take_what_the_source_states),
              MR_TEST_ENTRY(pictures_written_and_readable), MR_TEST_ENTRY(sources_read_and_sized),
              MR_TEST_ENTRY(zeroed_options_are_the_defaults),
              MR_TEST_ENTRY(glossy_sources_keep_their_reflectance_at_the_default_size),

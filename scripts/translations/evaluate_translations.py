@@ -153,8 +153,8 @@ def main():
                 jobs[(name, src, dst, "materialx")] = pool.submit(run, base + ["--method", "materialx"])
                 jobs[(name, src, dst, "fit")] = pool.submit(run, base)
                 ior = source_ior(vals)
-                if ior != 1.5:  # the fit told the source's IOR (a default hold of 1.5 otherwise)
-                    given = ["--hold", "specular_ior=%.9g" % ior] if dst == "standard-surface" else ["ior=%.9g" % ior]
+                if ior != 1.5:  # the fit with the IOR held at 1.5 (a hold wins over the default IOR tie)
+                    given = ["--hold", "%s=1.5" % ("specular_ior" if dst == "standard-surface" else "ior")]
                     cmd = [bin_, "remap", "--from", src] + vals + ["--to", dst] + given + ["--json"]
                     jobs[(name, src, dst, "fit-ior")] = pool.submit(run, cmd)
         results = {k: json.loads(f.result()) for k, f in jobs.items()}
@@ -260,9 +260,10 @@ def write_doc(root, build, mats, rows, exposure, seconds, cpu, only):
                      ", ".join("%s %.4g" % (k, v) for k, v in exposure.items())))
     lines.append("")
     lines.append("Object SSIM against the source's render (1 = identical), per map: the MaterialX graph, the fit "
-                 "(`matremap remap` with the target's default holds), and the fit told the source's IOR (`fit+ior`: "
-                 "`--to gltf ior=N`, `--to usd-preview ior=N`, `--hold specular_ior=N`; `=` where the source's IOR "
-                 "is the default 1.5 and this is the fit). `RGB error`: the object's RMSE of linear RGB relative to the "
+                 "(`matremap remap` as a user runs it: the target's default holds and ties, the IOR tied to the "
+                 "source's), and the fit with the IOR held at 1.5 instead (`fit 1.5`: `--hold ior=1.5`, "
+                 "`--hold specular_ior=1.5`; the default before the IOR tie; `=` where the source's IOR is 1.5 and "
+                 "this is the fit). `RGB error`: the object's RMSE of linear RGB relative to the "
                  "source's mean radiance there (`object_relative_rmse` of `matremap ssim --mask`), mean over both "
                  "maps: SSIM is computed on luma and does not see a change of hue. `fit scene` is the SSIM the command itself prints "
                  "(whole 64² frame, point light); the fit's outcome last.")
@@ -270,8 +271,8 @@ def write_doc(root, build, mats, rows, exposure, seconds, cpu, only):
         lines.append("")
         lines.append("### %s → %s" % (src, dst))
         lines.append("")
-        lines.append("| material | graph studio | graph tabac | fit studio | fit tabac | fit+ior studio | "
-                     "fit+ior tabac | RGB error graph / fit / fit+ior | graph fit scene | fit fit scene | fit outcome |")
+        lines.append("| material | graph studio | graph tabac | fit studio | fit tabac | fit 1.5 studio | "
+                     "fit 1.5 tabac | RGB error graph / fit / fit 1.5 | graph fit scene | fit fit scene | fit outcome |")
         lines.append("|---|---|---|---|---|---|---|---|---|---|---|")
         sel = [r for r in rows if r["from"] == src and r["to"] == dst]
         for r in sel:
@@ -285,7 +286,7 @@ def write_doc(root, build, mats, rows, exposure, seconds, cpu, only):
                 cell(f["studio"], g["studio"]), cell(f["tabac"], g["tabac"]),
                 "=" if same else "%.4f" % fi["studio"], "=" if same else "%.4f" % fi["tabac"],
                 rgb(g), rgb(f), "=" if same else "%.3f" % rgb(fi), g["fit_scene_ssim"], f["fit_scene_ssim"],
-                f["outcome"] + ("" if same else " (+ior: %s)" % fi["outcome"])))
+                f["outcome"] + ("" if same else " (1.5: %s)" % fi["outcome"])))
         n = len(sel)
 
         def mean(method, key):

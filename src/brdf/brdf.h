@@ -221,15 +221,16 @@ typedef struct mr_brdf_ties {
     signed char source[32];
 } mr_brdf_ties;
 
-/* The documented default ties of a pair: a target metalness (a scalar named metallic, metalness or base_metalness)
- * takes a source metalness of those names when both models have one and they differ (gltf -> openpbr:
- * base_metalness=metallic; -> standard-surface: metalness=metallic; -> blender-principled, usd-preview,
- * cycles-principled: metallic=metallic); and a target's dielectric IOR (a scalar named ior or specular_ior) that
- * the target holds by default (MR_PARAM_FIT_FIXED) takes the source's IOR of those names (standard-surface ->
- * gltf: ior=specular_ior; openpbr -> standard-surface: specular_ior=specular_ior): held at 1.5 instead, a jade
- * (2.418) or a ketchup (1.3) has no dielectric F0 to match and the fit bends other parameters (ketchup into gltf:
- * object SSIM 0.59 against 0.98 tied; docs/evaluation-translations.md). None for a source without a metalness or an
- * IOR (Ward, GGX, Phong ...). */
+/* The documented default ties of a pair: what the source states and the target has under another name or the same
+ * (registry.c's table). A target metalness (metallic, metalness, base_metalness) takes the source's, fitted or not
+ * (gltf -> openpbr: base_metalness=metallic; -> standard-surface: metalness=metallic; -> blender-principled,
+ * usd-preview, cycles-principled: metallic=metallic). A target parameter the target holds by default
+ * (MR_PARAM_FIT_FIXED) takes the source's value of the same quantity instead of the held one: the dielectric IOR
+ * (ior, specular_ior), the coat's weight (coat, coat_weight, clearcoat), roughness (coat_roughness,
+ * clearcoat_roughness), IOR (coat_ior) and tint (coat_color, coat_tint). Held at their defaults instead, a jade (IOR
+ * 2.418) or a ketchup (1.3) had no dielectric F0 to match and the fit bent other parameters, and a coated source
+ * lost its coat (docs/evaluation-translations.md). None for a source stating none of these (Ward, GGX, Phong ...).
+ * Same channel counts only. */
 mr_brdf_ties mr_brdf_default_ties(const mr_brdf_model *source, const mr_brdf_model *target);
 
 /* Parse a tie list "TARGET=SOURCE[,TARGET=SOURCE...]" (a target parameter, a source parameter of the same channel

@@ -295,21 +295,26 @@ void mr_brdf_eval_full(const mr_brdf_model *model, const double *values, const d
 
 /* ---- ties ------------------------------------------------------------------------------------------------------ */
 
-static int metalness_param(const mr_brdf_model *m) {
-    static const char *const names[] = {"metallic", "metalness", "base_metalness"};
-    for (int k = 0; k < 3; k++) {
-        const int p = mr_brdf_param_index(m, names[k]);
-        if (p >= 0 && p < 32 && m->params[p].channels == 1 && m->params[p].role != MR_PARAM_SWITCH) return p;
-    }
-    return -1;
-}
+/* Parameters that state one quantity under different names, in the models here (brdf.h, mr_brdf_default_ties).
+ * `fitted_too`: the tie applies to a target parameter the fit would search (the metalness); otherwise only to one
+ * the target holds by default (MR_PARAM_FIT_FIXED), whose held value the tie replaces. */
+static const struct {
+    int fitted_too;
+    const char *names[4];
+} same_quantity[] = {
+    {1, {"metallic", "metalness", "base_metalness", NULL}}, // the metalness
+    {0, {"ior", "specular_ior", NULL, NULL}},               // the dielectric's IOR
+    {0, {"coat", "coat_weight", "clearcoat", NULL}},        // the coat's weight
+    {0, {"coat_roughness", "clearcoat_roughness", NULL, NULL}},
+    {0, {"coat_ior", NULL, NULL, NULL}},
+    {0, {"coat_color", "coat_tint", NULL, NULL}},           // the coat's transmission tint (RGB)
+};
 
-/* The dielectric's index of refraction: a scalar named ior or specular_ior; -1 if none. */
-static int ior_param(const mr_brdf_model *m) {
-    static const char *const names[] = {"ior", "specular_ior"};
-    for (int k = 0; k < 2; k++) {
-        const int p = mr_brdf_param_index(m, names[k]);
-        if (p >= 0 && p < 32 && m->params[p].channels == 1 && m->params[p].role != MR_PARAM_SWITCH) return p;
+/* The first parameter of m named in group g (not a switch, within the 32 a tie mask holds), or -1. */
+static int quantity_param(const mr_brdf_model *m, int g) {
+    for (int k = 0; k < 4 && same_quantity[g].names[k] != NULL; k++) {
+        const int p = mr_brdf_param_index(m, same_quantity[g].names[k]);
+        if (p >= 0 && p < 32 && m->params[p].role != MR_PARAM_SWITCH) return p;
     }
     return -1;
 }
@@ -318,17 +323,12 @@ mr_brdf_ties mr_brdf_default_ties(const mr_brdf_model *source, const mr_brdf_mod
     mr_brdf_ties ties;
     memset(&ties, 0, sizeof ties);
     if (source == NULL || target == NULL || source == target) return ties;
-    const int s = metalness_param(source), t = metalness_param(target);
-    if (s >= 0 && t >= 0) {
-        ties.tied = 1u << t;
+    for (int g = 0; g < (int)(sizeof same_quantity / sizeof same_quantity[0]); g++) {
+        const int s = quantity_param(source, g), t = quantity_param(target, g);
+        if (s < 0 || t < 0 || source->params[s].channels != target->params[t].channels) continue;
+        if (!same_quantity[g].fitted_too && !(target->params[t].flags & MR_PARAM_FIT_FIXED)) continue;
+        ties.tied |= 1u << t;
         ties.source[t] = (signed char)s;
-    }
-    // The IOR only where the target holds it by default (MR_PARAM_FIT_FIXED): the tie then changes the value it is
-    // held at (1.5) to the source's, and takes no freedom from a fit that would search it (the paper's models).
-    const int si = ior_param(source), ti = ior_param(target);
-    if (si >= 0 && ti >= 0 && (target->params[ti].flags & MR_PARAM_FIT_FIXED)) {
-        ties.tied |= 1u << ti;
-        ties.source[ti] = (signed char)si;
     }
     return ties;
 }
