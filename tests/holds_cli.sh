@@ -97,7 +97,7 @@ expect "sweep --hold: a bad name" 1 "sweep: --hold: 'metal' is not a parameter o
 
 # ---- ties (docs/remap.md, "Ties"): a metalness the source states is held at its value ------------------------------
 expect "remap gltf -> openpbr: base_metalness tied to metallic by default, said" 0 \
-    "^tied: base_metalness=metallic, specular_ior=ior \(default for gltf -> openpbr\)" -- "$bin" remap --from gltf \
+    "^tied: base_metalness=metallic, specular_color=specular_color, specular_ior=ior \(default for gltf -> openpbr\)" -- "$bin" remap --from gltf \
     base_color=0.9 metallic=1 roughness=0.9 ior=1.7 --to openpbr --size 16
 check "... the fit keeps the source's metalness and IOR" grep -q "^openpbr .* base_metalness=1 .* specular_ior=1.7 " \
     "$tmp/out"
@@ -107,8 +107,8 @@ expect "remap --tie none: fitted, no tied line" 0 "" -- "$bin" remap --from gltf
 check "... no tied line" bash -c "! grep -q '^tied:' '$tmp/out'"
 expect "remap --hold on the tied parameter: the hold wins, it is not tied" 0 "held: base_metalness=0.25 \(--hold\)" -- \
     "$bin" remap --from gltf metallic=1 roughness=0.5 --to openpbr --size 16 --hold base_metalness=0.25
-check "... only the IOR tied, the held value kept" bash -c \
-    "grep -q '^tied: specular_ior=ior (default' '$tmp/out' && grep -q '^openpbr .* base_metalness=0.25 ' '$tmp/out'"
+check "... only the IOR and specular colour tied, the held value kept" bash -c \
+    "grep -q '^tied: specular_color=specular_color, specular_ior=ior (default' '$tmp/out' && grep -q '^openpbr .* base_metalness=0.25 ' '$tmp/out'"
 expect "remap --tie given, in --json" 0 '"tied": \[\{"name": "metalness", "source": "metallic", "by": "--tie"\}\]' -- \
     "$bin" remap --from gltf metallic=0.5 --to standard-surface --size 16 --tie metalness=metallic --json
 expect "remap ward -> openpbr: Ward has no metalness, nothing tied" 0 '"tied": \[\]' -- \
@@ -120,13 +120,13 @@ expect "--tie: an unknown target parameter" 1 "'metal' is not a parameter of 'op
 expect "--tie without --from" 1 "--tie needs --from MODEL" -- \
     "$bin" remap --from-images "$tmp/none.exr" --to openpbr --tie none
 expect "sweep gltf -> openpbr: the tie said and recorded in the header" 0 \
-    "matremap sweep: tied: base_metalness=metallic, specular_ior=ior \(default for gltf -> openpbr\)" -- \
+    "matremap sweep: tied: base_metalness=metallic, specular_color=specular_color, specular_ior=ior \(default for gltf -> openpbr\)" -- \
     "$bin" sweep --from gltf \
     --to openpbr --grid metallic=0:1:2 --size 16 -o "$tmp/tied.csv"
-check "... the header's remap line: tied=base_metalness:metallic,specular_ior:ior" \
-    grep -q "^# remap: .* tied=base_metalness:metallic,specular_ior:ior$" "$tmp/tied.csv"
+check "... the header's remap line: the ties" \
+    grep -q "^# remap: .* tied=base_metalness:metallic,specular_color:specular_color,specular_ior:ior$" "$tmp/tied.csv"
 expect "convert --direct gltf -> blender-principled: tied, said" 0 \
-    "tied: metallic=metallic, ior=ior \(default for gltf -> blender-principled\)" -- "$bin" convert --from gltf \
+    "tied: metallic=metallic, ior=ior, specular_tint=specular_color \(default for gltf -> blender-principled\)" -- "$bin" convert --from gltf \
     --to blender-principled base_color=0.5 metallic=0.3 roughness=0.6 --direct --size 16
 check "... the converted metallic is the source's" grep -q " metallic=0.3 " "$tmp/out"
 finish

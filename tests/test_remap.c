@@ -1486,14 +1486,16 @@ MR_TEST(default_ties_take_what_the_source_states) {
     static const struct {
         const char *from, *to, *ties;
     } cases[] = {
-        {"standard-surface", "gltf", "metallic=metalness, ior=specular_ior"},
+        {"standard-surface", "gltf", "metallic=metalness, specular_color=specular_color, ior=specular_ior"},
         {"standard-surface", "usd-preview",
          "metallic=metalness, clearcoat=coat, clearcoat_roughness=coat_roughness, ior=specular_ior"},
-        {"openpbr", "standard-surface", "metalness=base_metalness, specular_ior=specular_ior, coat=coat_weight, "
-                                        "coat_color=coat_color, coat_roughness=coat_roughness, coat_ior=coat_ior"},
-        {"openpbr", "blender-principled", "metallic=base_metalness, ior=specular_ior, coat_weight=coat_weight, "
-                                          "coat_roughness=coat_roughness, coat_ior=coat_ior, coat_tint=coat_color"},
-        {"gltf", "openpbr", "base_metalness=metallic, specular_ior=ior"},
+        {"openpbr", "standard-surface",
+         "metalness=base_metalness, specular_color=specular_color, specular_ior=specular_ior, coat=coat_weight, "
+         "coat_color=coat_color, coat_roughness=coat_roughness, coat_ior=coat_ior"},
+        {"openpbr", "blender-principled",
+         "metallic=base_metalness, ior=specular_ior, specular_tint=specular_color, coat_weight=coat_weight, "
+         "coat_roughness=coat_roughness, coat_ior=coat_ior, coat_tint=coat_color"},
+        {"gltf", "openpbr", "base_metalness=metallic, specular_color=specular_color, specular_ior=ior"},
         {"ward", "openpbr", ""},
         {"openpbr", "openpbr", ""},
         {"ggx", "ward", ""},

@@ -227,7 +227,8 @@ typedef struct mr_brdf_ties {
  * usd-preview, cycles-principled: metallic=metallic). A target parameter the target holds by default
  * (MR_PARAM_FIT_FIXED) takes the source's value of the same quantity instead of the held one: the dielectric IOR
  * (ior, specular_ior), the coat's weight (coat, coat_weight, clearcoat), roughness (coat_roughness,
- * clearcoat_roughness), IOR (coat_ior) and tint (coat_color, coat_tint). Held at their defaults instead, a jade (IOR
+ * clearcoat_roughness), IOR (coat_ior) and tint (coat_color, coat_tint), and the specular tint (specular_color,
+ * specular_tint: F0's, and a metal's edge in the layered models). Held at their defaults instead, a jade (IOR
  * 2.418) or a ketchup (1.3) had no dielectric F0 to match and the fit bent other parameters, and a coated source
  * lost its coat (docs/evaluation-translations.md). None for a source stating none of these (Ward, GGX, Phong ...).
  * Same channel counts only. */

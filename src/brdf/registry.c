@@ -308,6 +308,10 @@ static const struct {
     {0, {"coat_roughness", "clearcoat_roughness", NULL, NULL}},
     {0, {"coat_ior", NULL, NULL, NULL}},
     {0, {"coat_color", "coat_tint", NULL, NULL}},           // the coat's transmission tint (RGB)
+    // The specular tint (RGB): F0's for a dielectric, the edge's (F82, Gulbrandsen's g) for a metal in OpenPBR,
+    // Blender 4's Principled and Standard Surface; glTF's KHR_materials_specular colour tints the dielectric's only.
+    // The 2019 Principled's scalar specular_tint (towards the base colour) differs in channels and is left out.
+    {0, {"specular_color", "specular_tint", NULL, NULL}},
 };
 
 /* The first parameter of m named in group g (not a switch, within the 32 a tie mask holds), or -1. */
