@@ -52,7 +52,8 @@ static void print_help(void) {
         "                      instead of fitting them, as 'matremap remap --hold'; the target model's default\n"
         "                      holds are held too, and a 'held:' line lists every hold used\n"
         "  --tie TARGET=SOURCE[,...]|none  --direct: hold target parameters at each texel's source value; by\n"
-        "                      default a metalness the source states (gltf -> openpbr: base_metalness=metallic);\n"
+        "                      default what the source states: a metalness, and the IOR, coat and specular\n"
+        "                      tint the target holds (gltf -> openpbr: base_metalness=metallic, specular_ior=ior);\n"
         "                      a 'tied:' line says which (docs/remap.md, \"Ties\")\n"
         "\n");
     printf(

@@ -44,9 +44,11 @@ static void print_help(void) {
            "                                  what a fit scene cannot separate: 'matremap models MODEL') are\n"
            "                                  held too, and the result's 'held:' line lists every hold used\n");
     printf("  --tie TARGET=SOURCE[,...]|none  hold target parameters at the source's value instead of fitting them;\n"
-           "                                  default: a metalness the source states (gltf -> openpbr:\n"
-           "                                  base_metalness=metallic), which the fit scene cannot tell from the base\n"
-           "                                  colour at high roughness; a 'tied:' line says which (docs/remap.md)\n"
+           "                                  default: what the source states, a metalness (which the fit scene\n"
+           "                                  cannot tell from the base colour at high roughness) and the IOR,\n"
+           "                                  coat and specular tint the target holds (standard-surface -> gltf:\n"
+           "                                  metallic=metalness, specular_color=specular_color, ior=specular_ior);\n"
+           "                                  a 'tied:' line says which (docs/remap.md, \"Ties\")\n"
            "\n");
     printf("Method:\n"
            "  --method fit        (default) fit the target by images, as above\n"

@@ -46,8 +46,9 @@ static void print_help(void) {
            "target model's default holds are held too, and the summary's 'held:' line lists them all (the header's\n"
            "'# to:' and 'held=' record them, which learn reads).\n"
            "--tie TARGET=SOURCE[,...]|none holds target parameters at each sample's source value instead of fitting\n"
-           "them; by default a metalness the source states (gltf -> openpbr: base_metalness=metallic), which the fit\n"
-           "scene cannot tell from the base colour at high roughness; 'tied:' says which, the header's 'tied='\n"
+           "them; by default what the source states: a metalness (gltf -> openpbr: base_metalness=metallic), which\n"
+           "the fit scene cannot tell from the base colour at high roughness, and the IOR, coat and specular tint\n"
+           "the target holds (docs/remap.md, \"Ties\"); 'tied:' says which, the header's 'tied='\n"
            "records them, and learn carries them as they are (docs/remap.md, \"Ties\").\n"
            "\n");
     printf("Options:\n"
