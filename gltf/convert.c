@@ -868,8 +868,9 @@ unsigned mr_gltf_specular_color_solve(const float base[3], float metallic, const
     for (int c = 0; c < 3; c++) {
         const double b = mr_clampd(isfinite(base[c]) ? base[c] : 0.0, 0.0, 1.0);
         const double t = mr_clampd(isfinite(target[c]) ? target[c] : 0.0, 0.0, 1.0);
-        if (m >= 1.0) { // no dielectric part: F0 is the base colour whatever the extension says
-            color[c] = 1.0f;
+        if (m >= 1.0) { // no dielectric part: F0 is the base colour whatever the extension says; the colour a
+                        // dielectric texel would take, so that a texture filtered across metal edges stays smooth
+            color[c] = (float)mr_clampd(t / f0_ior, 0.0, 1.0 / f0_ior);
             if (fabs(b - t) > MR_GLTF_HYBRID_TOLERANCE) flags |= MR_GLTF_F0_METAL;
             continue;
         }

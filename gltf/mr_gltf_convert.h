@@ -114,7 +114,8 @@ enum {
 
 /* The specular colour (linear, before any factor) that makes F0 = target at a texel of core base colour `base` and
  * metallic `metallic` for an engine reading the extensions with specular 1 and `ior` (> 1); returns MR_GLTF_F0_*
- * flags (0: exact). Inputs outside [0, 1] are clamped first; at metallic 1 the colour is 1. */
+ * flags (0: exact). Inputs outside [0, 1] are clamped first; at metallic 1 (no dielectric part) the colour is
+ * the one a dielectric texel would take, target / F0(ior) clamped, so that a filtered texture stays smooth. */
 unsigned mr_gltf_specular_color_solve(const float base[3], float metallic, const float target[3], double ior,
                                       float color[3]);
 
