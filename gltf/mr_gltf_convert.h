@@ -97,9 +97,10 @@ typedef struct mr_gltf_material_report {
 } mr_gltf_material_report;
 
 /* ---- both readings: KHR_materials_specular over a core metal-rough texel ----
- * An engine that reads KHR_materials_specular (and KHR_materials_ior) sees, per the extension's README ("Implementation")
- * and three.js's MeshPhysicalMaterial alike: F0 = mix(min(F0(ior) specularColor, 1) specular, base, metallic),
- * F90 = mix(specular, 1, metallic), diffuse colour base (1 - metallic), F0(ior) = ((ior - 1) / (ior + 1))^2. With the
+ * An engine that reads KHR_materials_specular (and KHR_materials_ior) sees, per the extension's README
+ * ("Implementation") and three.js's MeshPhysicalMaterial alike:
+ * F0 = mix(min(F0(ior) specularColor, 1) specular, base, metallic), F90 = mix(specular, 1, metallic),
+ * diffuse colour base (1 - metallic), F0(ior) = ((ior - 1) / (ior + 1))^2. With the
  * core base and metallic fixed, specular 1 (F90 = 1, as spec-gloss has it) and a specular colour per channel
  * (target - metallic base) / ((1 - metallic) F0(ior)) give F0 = target exactly, where that lies in
  * [0, 1 / F0(ior)]. Outside it the colour is clamped and the texel flagged: */

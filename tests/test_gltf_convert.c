@@ -247,7 +247,8 @@ MR_TEST(convert_file_side_files_after_the_output) {
 }
 
 /* three.js's MeshPhysicalMaterial F0 (lights_physical_fragment: mix(min(pow2((ior - 1) / (ior + 1)) *
- * specularColor, 1) * specularIntensity, diffuseColor, metalness)), written here from its formula, not the library's. */
+ * specularColor, 1) * specularIntensity, diffuseColor, metalness)), written here from its formula, not the
+ * library's. */
 static double three_f0(double base, double metallic, double specular_color, double specular_intensity, double ior) {
     const double r = (ior - 1.0) / (ior + 1.0);
     const double dielectric = fmin(r * r * specular_color, 1.0) * specular_intensity;
@@ -272,7 +273,8 @@ MR_TEST(specular_solve_known_answers) {
     const double iors[2] = {1.5, 1000.0};
     for (int k = 0; k < 2; k++) {
         MR_CHECK(mr_gltf_specular_color_solve(plastic, 0.0f, specular, iors[k], colour) == 0);
-        for (int c = 0; c < 3; c++) MR_CHECK_NEAR(three_f0(plastic[c], 0.0, colour[c], 1.0, iors[k]), specular[c], 1e-6);
+        for (int c = 0; c < 3; c++)
+            MR_CHECK_NEAR(three_f0(plastic[c], 0.0, colour[c], 1.0, iors[k]), specular[c], 1e-6);
     }
     MR_CHECK_NEAR(colour[2], 0.9 / (999.0 * 999.0 / (1001.0 * 1001.0)), 1e-5);
     // Part metal: the dielectric part makes up the rest (up to 0.75 + 0.25 base).
