@@ -91,12 +91,13 @@ for name in ${VIEWERS_ASSETS:-Avocado CesiumMilkTruck Duck FloppyDisk DuckPlasti
     fi
     # Every conversion route converts the authors' materials too (--overwrite-metal-rough); the core routes write
     # the core values alone (--core-only); hybrid is spec2metal's default (mlp + KHR_materials_specular).
-    # hybrid-paper reads the spec-gloss diffuse as paper does (the base colour gltf-transform keeps), hybrid-ior1000
-    # solves the specular colour for ior 1000 (KHR_materials_ior written): the two choices measured.
-    routes=(weighted:gltf weighted:paper mean:gltf mean:paper khronos: mlp: hybrid: hybrid:paper hybrid-ior1000:
+    # The default reads the spec-gloss diffuse as paper does (the base colour gltf-transform keeps); hybrid-gltf reads
+    # it as glTF does, hybrid-ior1000 solves the specular colour for ior 1000 (KHR_materials_ior written): the two
+    # choices measured.
+    routes=(weighted:gltf weighted:paper mean:gltf mean:paper khronos: mlp: hybrid: hybrid:gltf hybrid-ior1000:
             extension: gltf-transform:)
     # DuckPlastic only asks the convention question: mean equals weighted on its grey specular.
-    [ "$name" = DuckPlastic ] && routes=(weighted:gltf weighted:paper khronos: mlp: hybrid: hybrid:paper extension:)
+    [ "$name" = DuckPlastic ] && routes=(weighted:gltf weighted:paper khronos: mlp: hybrid: hybrid:gltf extension:)
     for route in "${routes[@]}"; do
         method=${route%%:*} convention=${route#*:}
         label=$method${convention:+-$convention}

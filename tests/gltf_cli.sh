@@ -238,15 +238,20 @@ check "... the material carries the core textures and the specular colour, specu
 'f_m0_specularColor.png', False, True)"
 expect "FloppyDisk --json: the solve's counts" 0 '"core_only": false, "extension": \{"texels": 4194304, "f0_unmet": ' \
     -- "$bin" gltf spec2metal "$floppy" -o "$tmp/both/j.gltf" --json
+check "... read with the paper convention by default" test "$(summary 'd["convention"]')" = paper
+expect "... the glTF convention when asked" 0 '"method": "mlp", "convention": "gltf"' -- "$bin" gltf spec2metal \
+    "$floppy" -o "$tmp/both/g.gltf" --json --convention gltf
+expect "... and with --core-only" 0 '"method": "mlp", "convention": "gltf"' -- "$bin" gltf spec2metal \
+    "$floppy" -o "$tmp/both/c.gltf" --json --core-only
 check "... per material too" test "$(summary 'sorted(m["extension"])')" = \
     "['diffuse_max_error', 'diffuse_mean_error', 'diffuse_off', 'f0_max_error', 'f0_unmet', 'texels']"
 expect "FloppyDisk --core-only" 0 \
     "^matremap gltf spec2metal: core metal-rough values only \(--core-only\): no KHR_materials_specular$" \
-    -- "$bin" gltf spec2metal "$floppy" -o "$tmp/core/f.gltf" --core-only
+    -- "$bin" gltf spec2metal "$floppy" -o "$tmp/core/f.gltf" --core-only --convention paper
 check "... no specular extension, the same core textures" test \
     "$(gltf "$tmp/core/f.gltf" '("extensions" in m(0), d.get("extensionsUsed", []), sorted(pbr(0)))')" = \
     "(False, [], ['baseColorTexture', 'metallicRoughnessTexture'])"
-check "... base colour = the default's (max error $(maxdiff "$tmp/core/f_m0_basecolor.png" \
+check "... base colour = the default's, which reads the diffuse as paper (max error $(maxdiff "$tmp/core/f_m0_basecolor.png" \
     "$tmp/both/f_m0_basecolor.png"))" test "$(maxdiff "$tmp/core/f_m0_basecolor.png" "$tmp/both/f_m0_basecolor.png")" = 0
 expect "--core-only --json" 0 '"core_only": true, "extension": null' -- "$bin" gltf spec2metal "$duck" \
     -o "$tmp/core/d.gltf" --core-only --json --overwrite-metal-rough

@@ -70,7 +70,9 @@ static void print_help(void) {
            "  --extension-ior X     spec2metal: the ior the specular values are solved for (default 1.5, glTF's\n"
            "                        own, so no KHR_materials_ior is written; another value writes it)\n"
            "  --weights FILE        the network for mlp (default: the shipped one, as 'matremap spec2metal')\n"
-           "  --convention C        gltf (default) or paper: how the spec-gloss diffuse is read (docs/workflow.md)\n"
+           "  --convention C        gltf or paper: how the spec-gloss diffuse is read (docs/workflow.md); default\n"
+           "                        paper for spec2metal's both readings (measured closer in both kinds of\n"
+           "                        engine, docs/gltf.md), gltf with --core-only and for metal2spec\n"
            "  --overwrite-metal-rough  spec2metal: also convert materials that carry metal-rough values of their\n"
            "                        own beside spec-gloss, overwriting them (default: keep them, and say so)\n"
            "  --eps E               spec2metal, weighted/mean/khronos: the off-manifold tolerance, for every value\n"
@@ -103,6 +105,7 @@ static void print_help(void) {
 typedef struct options {
     const char *direction, *input, *output, *method, *weights, *format;
     mr_wf_diffuse convention;
+    int convention_given; /* else paper for spec2metal's both readings, gltf otherwise (docs/gltf.md) */
     double eps;    /* --eps, when eps_given */
     int eps_given; /* else each input's tolerance follows its texture's encoding */
     int threads;   /* --threads: mr_wf_options.threads (0 automatic) */
@@ -169,6 +172,7 @@ static int parse(int argc, char **argv, options *o) {
             o->format = value;
         } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--convention", &value))) {
             if (taken < 0 || !cli_parse_convention("gltf", value, &o->convention)) return CLI_EXIT_USAGE;
+            o->convention_given = 1;
         } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--fallback", &value))) {
             return cli_usage_error("gltf", "--fallback is gone: a material's own metal-rough values are kept by "
                                    "default; --overwrite-metal-rough converts them instead");
@@ -219,6 +223,11 @@ static int parse(int argc, char **argv, options *o) {
                                "extension writes the extension alone (ior 1000)");
     if (o->core_only && o->extension_ior > 0.0)
         return cli_usage_error("gltf", "--extension-ior sets the extension's values; --core-only writes none");
+    // Both readings share one base colour: read as paper reads the diffuse (the base colour the lossless route keeps)
+    // it is measured closer in both kinds of engine (docs/gltf.md, "Both readings"); the core-only output keeps glTF's.
+    if (!o->convention_given && to_metal && !o->core_only && strcmp(o->method, "extension") != 0 &&
+        strcmp(o->method, "khronos") != 0) // khronos has its own reading
+        o->convention = MR_WF_DIFFUSE_PLAIN;
     return CLI_EXIT_OK;
 }
 
@@ -386,7 +395,8 @@ int cmd_gltf(int argc, char **argv) {
         cli_json_string(stdout, o.input);
         printf(", \"output\": ");
         cli_json_string(stdout, o.output);
-        printf(", \"method\": \"%s\", \"seconds\": %.6f, \"tolerance\": ", o.method, seconds);
+        printf(", \"method\": \"%s\", \"convention\": \"%s\", \"seconds\": %.6f, \"tolerance\": ", o.method,
+               o.convention == MR_WF_DIFFUSE_PLAIN ? "paper" : "gltf", seconds);
         if (tolerance)
             printf("\"%s\", \"eps\": %.17g", tolerance, o.eps_given ? o.eps : MR_WF_DEFAULT_EPS);
         else
