@@ -955,10 +955,15 @@ static mr_status add_extension(const conversion *cv, const mr_gltf_material *sg,
         size_t unmet = 0, off = 0;
         double f0_max = 0.0, diffuse_sum = 0.0, diffuse_max = 0.0;
         float top[3] = {0.0f, 0.0f, 0.0f};
+        // Per row sums, added in row order afterwards: the mean does not depend on the thread count.
+        double *row_sums = status == MR_OK ? calloc((size_t)height, sizeof *row_sums) : NULL;
+        if (status == MR_OK && row_sums == NULL)
+            status = mr_fail(MR_ERR_NOMEM, "glTF '%s': material %d '%s': out of memory", mr_gltf_path(cv->asset),
+                             cv->material, cv->name);
         const int threads = mr_auto_threads(to->threads, (long)MR_MIN(n, 1u << 30), MR_WF_PARALLEL_TEXELS);
         if (status == MR_OK) {
 #pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) \
-    reduction(+ : unmet, off, diffuse_sum) reduction(max : f0_max, diffuse_max)
+    reduction(+ : unmet, off) reduction(max : f0_max, diffuse_max)
             for (int y = 0; y < height; y++)
                 for (int x = 0; x < width; x++) {
                     float v[4][3];
@@ -979,7 +984,7 @@ static mr_status add_extension(const conversion *cv, const mr_gltf_material *sg,
                         const double f0 = (1.0 - metallic) * MR_MIN(f0_ior * sc[c], 1.0) + metallic * v[2][c];
                         f0_max = MR_MAX(f0_max, fabs(f0 - v[1][c]));
                         const double e = fabs(v[2][c] * (1.0 - metallic) - v[0][c] * dim);
-                        diffuse_sum += e;
+                        row_sums[y] += e;
                         worst = MR_MAX(worst, e);
                     }
                     diffuse_max = MR_MAX(diffuse_max, worst);
@@ -987,7 +992,9 @@ static mr_status add_extension(const conversion *cv, const mr_gltf_material *sg,
                 }
             for (size_t i = 0; i < n; i++)
                 for (int c = 0; c < 3; c++) top[c] = MR_MAX(top[c], colour[3 * i + c]);
+            for (int y = 0; y < height; y++) diffuse_sum += row_sums[y];
         }
+        free(row_sums);
         for (int k = 0; k < 4; k++) mr_image_free(in[k].image);
         int uniform = 1;
         for (size_t i = 1; status == MR_OK && i < n && uniform; i++)
