@@ -168,7 +168,8 @@ def cmd_pictures(work, out_dir):
             exposure = rows.get((viewer, asset["name"], "studio", ref, ref), {}).get("exposure", 1.0)
             for variant in ROUTES:
                 path = render_path(work, viewer, asset["name"], "studio", variant)
-                text = "%s: spec-gloss" % SHORT[viewer] if variant == "specgloss" else ROUTE_LABEL[variant]
+                text = ("%s: spec-gloss" % SHORT[viewer] if variant == "specgloss"
+                        else ROUTE_LABEL[variant].replace("**", ""))
                 if variant in asset["variants"] and os.path.exists(path):
                     args += [path, "--ch", "R,G,B", "--mulc", "%.6g" % exposure, "--clamp:min=0:max=1",
                              "--resize", "%dx%d" % (cell, cell), "--colorconvert", "linear", "sRGB"]
