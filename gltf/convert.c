@@ -1066,10 +1066,16 @@ static mr_status add_extension(const conversion *cv, const mr_gltf_material *sg,
 }
 
 /* Does a spec-gloss material converted to (or kept as) metal-rough get specular values over its core ones? Not with
- * core_only, not on the extension route (it has its own), not beside a kept spec-gloss extension (the two must not
- * share a material: KHR_materials_specular, "Exclusions"; r says so). */
+ * core_only, not on the extension route (it has its own), not with EXR textures, not beside a kept spec-gloss
+ * extension (the two must not share a material: KHR_materials_specular, "Exclusions"); r says why. */
 static int wants_extension(const conversion *cv, mr_gltf_material_report *r) {
     if (cv->opts->core_only || mr_transform_output_index(cv->kind, "specular_color") >= 0) return 0;
+    if (cv->opts->image_format != NULL && strcmp(cv->opts->image_format, "exr") == 0) {
+        snprintf(r->extension_note, sizeof r->extension_note,
+                 "no KHR_materials_specular with EXR textures (the solve reads the core textures as engines decode "
+                 "8-bit ones)");
+        return 0;
+    }
     if (cv->opts->keep_source) {
         snprintf(r->extension_note, sizeof r->extension_note,
                  "no KHR_materials_specular beside the kept spec-gloss extension (they must not share a material)");

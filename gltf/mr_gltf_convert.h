@@ -62,7 +62,8 @@ typedef struct mr_gltf_convert_options {
     int core_only;                 /* gltf-specgloss -> gltf but the extension route: 1 writes the core metal-rough
                                       values alone; 0 (default) adds KHR_materials_specular values solved per texel
                                       over them (mr_gltf_specular_color_solve), to kept materials too, so that
-                                      engines reading the extension see the spec-gloss F0 ("both readings") */
+                                      engines reading the extension see the spec-gloss F0 ("both readings"); not
+                                      with image_format "exr" or keep_source (the report's extension_note says) */
     double extension_ior;          /* the ior those values are solved for: 0 = 1.5, glTF's default (no
                                       KHR_materials_ior written); any other value in (1, 1e4] is written there */
 } mr_gltf_convert_options;

@@ -260,6 +260,9 @@ expect "Duck, --extension-ior 1000" 0 "KHR_materials_specular over the core valu
 check "... writes KHR_materials_ior 1000 and the Duck's specular 0 as a factor" test \
     "$(gltf "$tmp/ior/d.gltf" '(m(0)["extensions"]["KHR_materials_ior"]["ior"],
     m(0)["extensions"]["KHR_materials_specular"])')" = "(1000.0, {'specularColorFactor': [0.0, 0.0, 0.0]})"
+expect "--format exr: no specular extension, and why" 0 \
+    "^material 0 'blinn3-fx': no KHR_materials_specular with EXR textures \\(the solve reads the core textures as" \
+    -- "$bin" gltf spec2metal "$duck" -o "$tmp/ior/exr.gltf" --format exr --overwrite-metal-rough
 expect "--core-only with --method extension: refused" 1 \
     "--core-only and --extension-ior go with the per-texel methods; --method extension writes the extension alone" \
     -- "$bin" gltf spec2metal "$floppy" -o "$tmp/x.gltf" --method extension --core-only

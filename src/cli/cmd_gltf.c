@@ -226,7 +226,8 @@ static int parse(int argc, char **argv, options *o) {
     // Both readings share one base colour: read as paper reads the diffuse (the base colour the lossless route keeps)
     // it is measured closer in both kinds of engine (docs/gltf.md, "Both readings"); the core-only output keeps glTF's.
     if (!o->convention_given && to_metal && !o->core_only && strcmp(o->method, "extension") != 0 &&
-        strcmp(o->method, "khronos") != 0) // khronos has its own reading
+        strcmp(o->method, "khronos") != 0 && strcmp(o->format, "exr") != 0) // khronos has its own reading; EXR
+                                                                              // textures get no extension
         o->convention = MR_WF_DIFFUSE_PLAIN;
     return CLI_EXIT_OK;
 }
