@@ -92,6 +92,10 @@ typedef struct made {
                                                   (the one texel), and the slots of a uniform texture */
     double alpha;                              /* the alpha of a uniform first texture */
     mr_gltf_material_report report;
+    int extension_done;                        /* the specular extension solved: its texture (-1 none), factor */
+    int extension_texture;
+    double extension_factor[3];
+    mr_gltf_material_report extension;         /* its counts (the extension fields) */
 } made;
 
 /* Two texture references map texels to the surface the same way. */
@@ -854,6 +858,232 @@ static int read_codes(const conversion *cv, const sources *src, mr_io_codes code
     return 1;
 }
 
+/* ---- both readings: KHR_materials_specular over the core values (mr_gltf_convert.h) ------------------------- */
+
+unsigned mr_gltf_specular_color_solve(const float base[3], float metallic, const float target[3], double ior,
+                                      float color[3]) {
+    const double f0_ior = ((ior - 1.0) / (ior + 1.0)) * ((ior - 1.0) / (ior + 1.0));
+    const double m = mr_clampd(isfinite(metallic) ? metallic : 0.0, 0.0, 1.0);
+    unsigned flags = 0;
+    for (int c = 0; c < 3; c++) {
+        const double b = mr_clampd(isfinite(base[c]) ? base[c] : 0.0, 0.0, 1.0);
+        const double t = mr_clampd(isfinite(target[c]) ? target[c] : 0.0, 0.0, 1.0);
+        if (m >= 1.0) { // no dielectric part: F0 is the base colour whatever the extension says; the colour a
+                        // dielectric texel would take, so that a texture filtered across metal edges stays smooth
+            color[c] = (float)mr_clampd(t / f0_ior, 0.0, 1.0 / f0_ior);
+            if (fabs(b - t) > MR_GLTF_HYBRID_TOLERANCE) flags |= MR_GLTF_F0_METAL;
+            continue;
+        }
+        const double wanted = (t - m * b) / ((1.0 - m) * f0_ior), top = 1.0 / f0_ior;
+        const double sc = mr_clampd(wanted, 0.0, top);
+        color[c] = (float)sc;
+        const double f0 = (1.0 - m) * MR_MIN(f0_ior * (double)color[c], 1.0) + m * b;
+        if (fabs(f0 - t) > MR_GLTF_HYBRID_TOLERANCE) flags |= wanted < 0.0 ? MR_GLTF_F0_BELOW : MR_GLTF_F0_ABOVE;
+    }
+    return flags;
+}
+
+/* One texture of the solve: decoded linear values (NULL: none) and the factor that multiplies them. */
+typedef struct solve_input {
+    const mr_gltf_texture_ref *ref;
+    mr_img_encoding encoding;
+    const double *factors; /* 3 */
+    int first;             /* the first channel read (metallic: B, 2) */
+    mr_image *image;
+} solve_input;
+
+/* Add KHR_materials_specular values to material m (its core values final: converted or kept), solved per texel from
+ * the spec-gloss material `sg` it came from. `mk`: the conversion shared by materials with the same sources (its
+ * result reused), or NULL. Fills r's extension fields; a material whose textures map differently gets a note. */
+static mr_status add_extension(const conversion *cv, const mr_gltf_material *sg, mr_gltf_material *m, made *mk,
+                               mr_gltf_material_report *r) {
+    const double ior = cv->opts->extension_ior > 0.0 ? cv->opts->extension_ior : 1.5;
+    const mr_transform_options *to = mr_transform_options_of(cv->opts->transform);
+    // The texture mapping of the new one: the first of the sources' (all must agree, checked below).
+    const mr_gltf_texture_ref *refs[4] = {&sg->diffuse_texture, &sg->specular_glossiness_texture,
+                                          &m->base_color_texture, &m->metallic_roughness_texture};
+    const mr_gltf_texture_ref *mapping = NULL;
+    int like = -1;
+    for (int k = 0; k < 4; k++)
+        if (refs[k]->index >= 0) {
+            if (mapping == NULL) {
+                mapping = refs[k];
+                like = refs[k]->index;
+            } else if (!same_mapping(mapping, refs[k])) {
+                snprintf(r->extension_note, sizeof r->extension_note,
+                         "no KHR_materials_specular: its spec-gloss and core textures map onto the surface "
+                         "differently");
+                return MR_OK;
+            }
+        }
+    if (mk != NULL && mk->extension_done) {
+        r->extension = mk->extension.extension;
+        r->texels = mk->extension.texels;
+        r->f0_unmet = mk->extension.f0_unmet;
+        r->diffuse_off = mk->extension.diffuse_off;
+        r->f0_max_error = mk->extension.f0_max_error;
+        r->diffuse_mean_error = mk->extension.diffuse_mean_error;
+        r->diffuse_max_error = mk->extension.diffuse_max_error;
+    } else {
+        const double metallic_factor[3] = {m->metallic_factor, m->metallic_factor, m->metallic_factor};
+        solve_input in[4] = {
+            {&sg->diffuse_texture, MR_IMG_COLOR, sg->diffuse_factor, 0, NULL},
+            {&sg->specular_glossiness_texture, MR_IMG_COLOR, sg->specular_factor, 0, NULL},
+            {&m->base_color_texture, MR_IMG_COLOR, m->base_color_factor, 0, NULL},
+            {&m->metallic_roughness_texture, MR_IMG_DATA, metallic_factor, 2, NULL},
+        };
+        mr_status status = MR_OK;
+        int width = 1, height = 1;
+        for (int k = 0; k < 4 && status == MR_OK; k++) {
+            if (in[k].ref->index < 0) continue;
+            mr_img_read_options ro = {0};
+            ro.encoding = in[k].encoding;
+            mr_img_stored stored;
+            status = mr_gltf_texture_read(cv->asset, in[k].ref->index, &ro, &in[k].image, &stored);
+            if (status == MR_OK) {
+                width = MR_MAX(width, in[k].image->width);
+                height = MR_MAX(height, in[k].image->height);
+            } else {
+                mr_fail_context(status, "material %d '%s': KHR_materials_specular", cv->material, cv->name);
+            }
+        }
+        const size_t n = (size_t)width * (size_t)height;
+        float *colour = status == MR_OK ? malloc(n * 3 * sizeof *colour) : NULL;
+        if (status == MR_OK && colour == NULL)
+            status = mr_fail(MR_ERR_NOMEM, "glTF '%s': material %d '%s': out of memory for %dx%d texels",
+                             mr_gltf_path(cv->asset), cv->material, cv->name, width, height);
+        size_t unmet = 0, off = 0;
+        double f0_max = 0.0, diffuse_sum = 0.0, diffuse_max = 0.0;
+        float top[3] = {0.0f, 0.0f, 0.0f};
+        // Per row sums, added in row order afterwards: the mean does not depend on the thread count.
+        double *row_sums = status == MR_OK ? calloc((size_t)height, sizeof *row_sums) : NULL;
+        if (status == MR_OK && row_sums == NULL)
+            status = mr_fail(MR_ERR_NOMEM, "glTF '%s': material %d '%s': out of memory", mr_gltf_path(cv->asset),
+                             cv->material, cv->name);
+        const int threads = mr_auto_threads(to->threads, (long)MR_MIN(n, 1u << 30), MR_WF_PARALLEL_TEXELS);
+        if (status == MR_OK) {
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) \
+    reduction(+ : unmet, off) reduction(max : f0_max, diffuse_max)
+            for (int y = 0; y < height; y++)
+                for (int x = 0; x < width; x++) {
+                    float v[4][3];
+                    for (int k = 0; k < 4; k++)
+                        for (int c = 0; c < 3; c++) {
+                            const int channel = in[k].first ? in[k].first : c;
+                            const float t = in[k].image ? sample(in[k].image, channel, x, y, width, height) : 1.0f;
+                            v[k][c] = (float)mr_clampd(t * in[k].factors[c], 0.0, 1.0);
+                        }
+                    float *sc = colour + 3 * ((size_t)y * (size_t)width + (size_t)x);
+                    const float metallic = v[3][0];
+                    const unsigned flags = mr_gltf_specular_color_solve(v[2], metallic, v[1], ior, sc);
+                    unmet += flags != 0;
+                    const double f0_ior = ((ior - 1.0) / (ior + 1.0)) * ((ior - 1.0) / (ior + 1.0));
+                    const double dim = to->plain_diffuse ? 1.0 : 1.0 - MR_MAX(v[1][0], MR_MAX(v[1][1], v[1][2]));
+                    double worst = 0.0;
+                    for (int c = 0; c < 3; c++) {
+                        const double f0 = (1.0 - metallic) * MR_MIN(f0_ior * sc[c], 1.0) + metallic * v[2][c];
+                        f0_max = MR_MAX(f0_max, fabs(f0 - v[1][c]));
+                        const double e = fabs(v[2][c] * (1.0 - metallic) - v[0][c] * dim);
+                        row_sums[y] += e;
+                        worst = MR_MAX(worst, e);
+                    }
+                    diffuse_max = MR_MAX(diffuse_max, worst);
+                    off += worst > MR_GLTF_HYBRID_TOLERANCE;
+                }
+            for (size_t i = 0; i < n; i++)
+                for (int c = 0; c < 3; c++) top[c] = MR_MAX(top[c], colour[3 * i + c]);
+            for (int y = 0; y < height; y++) diffuse_sum += row_sums[y];
+        }
+        free(row_sums);
+        for (int k = 0; k < 4; k++) mr_image_free(in[k].image);
+        int uniform = 1;
+        for (size_t i = 1; status == MR_OK && i < n && uniform; i++)
+            uniform = memcmp(&colour[3 * i], colour, 3 * sizeof *colour) == 0;
+        int texture = -1;
+        double factor[3] = {1.0, 1.0, 1.0};
+        if (status == MR_OK) {
+            for (int c = 0; c < 3; c++) factor[c] = uniform ? colour[c] : top[c];
+            if (!uniform) { // the colour over its largest value per channel, sRGB-encoded as the extension stores it
+                uint8_t *codes = malloc(n * 3);
+                encoded_texture e;
+                memset(&e, 0, sizeof e);
+                const char *prefix = cv->opts->image_prefix ? cv->opts->image_prefix : "converted";
+                snprintf(e.uri, sizeof e.uri, "%s_m%d_specularColor.png", prefix, cv->material);
+                if (codes == NULL) {
+                    status = mr_fail(MR_ERR_NOMEM, "glTF '%s': material %d '%s': out of memory",
+                                     mr_gltf_path(cv->asset), cv->material, cv->name);
+                } else {
+                    mr_srgb8_init();
+                    for (size_t i = 0; i < n; i++)
+                        for (int c = 0; c < 3; c++)
+                            codes[3 * i + c] = mr_srgb8_encode(top[c] > 0.0f ? colour[3 * i + c] / top[c] : 0.0f);
+                    const mr_io_png_settings settings = MR_IO_PNG_DEFAULT;
+                    status = mr_io_png_encode(e.uri, width, height, 3, 8, codes, 1, &settings, &e.bytes, &e.size);
+                    if (status == MR_OK) status = add_texture(cv, &e, like, &texture);
+                }
+                encoded_texture_release(&e);
+                free(codes);
+            }
+        }
+        free(colour);
+        if (status != MR_OK) return status;
+        r->extension = 1;
+        r->texels = n;
+        r->f0_unmet = unmet;
+        r->diffuse_off = off;
+        r->f0_max_error = f0_max;
+        r->diffuse_mean_error = diffuse_sum / (3.0 * (double)n);
+        r->diffuse_max_error = diffuse_max;
+        if (mk != NULL) {
+            mk->extension_done = 1;
+            mk->extension_texture = texture;
+            memcpy(mk->extension_factor, factor, sizeof factor);
+            mk->extension = *r;
+        }
+        if (texture >= 0) {
+            m->specular_color_texture = *mapping;
+            m->specular_color_texture.index = texture;
+        } else {
+            mr_gltf_texture_ref_none(&m->specular_color_texture);
+        }
+        memcpy(m->specular_color_factor, factor, sizeof factor);
+    }
+    if (mk != NULL && mk->extension_done && r->extension) {
+        if (mk->extension_texture >= 0) {
+            m->specular_color_texture = *mapping;
+            m->specular_color_texture.index = mk->extension_texture;
+        } else {
+            mr_gltf_texture_ref_none(&m->specular_color_texture);
+        }
+        memcpy(m->specular_color_factor, mk->extension_factor, sizeof mk->extension_factor);
+    }
+    m->has_specular = 1;
+    m->specular_strength = 1.0;
+    mr_gltf_texture_ref_none(&m->specular_texture);
+    m->has_ior = ior != 1.5;
+    m->ior = ior;
+    return MR_OK;
+}
+
+/* Does a spec-gloss material converted to (or kept as) metal-rough get specular values over its core ones? Not with
+ * core_only, not on the extension route (it has its own), not with EXR textures, not beside a kept spec-gloss
+ * extension (the two must not share a material: KHR_materials_specular, "Exclusions"); r says why. */
+static int wants_extension(const conversion *cv, mr_gltf_material_report *r) {
+    if (cv->opts->core_only || mr_transform_output_index(cv->kind, "specular_color") >= 0) return 0;
+    if (cv->opts->image_format != NULL && strcmp(cv->opts->image_format, "exr") == 0) {
+        snprintf(r->extension_note, sizeof r->extension_note,
+                 "no KHR_materials_specular with EXR textures (the solve reads the core textures as engines decode "
+                 "8-bit ones)");
+        return 0;
+    }
+    if (cv->opts->keep_source) {
+        snprintf(r->extension_note, sizeof r->extension_note,
+                 "no KHR_materials_specular beside the kept spec-gloss extension (they must not share a material)");
+        return 0;
+    }
+    return 1;
+}
+
 /* Convert material cv->material (unless an earlier one with the same sources did: `cache`). */
 static mr_status convert_material(conversion *cv, made *cache, int *cached, mr_gltf_material_report *r) {
     mr_gltf_material m;
@@ -873,10 +1103,12 @@ static mr_status convert_material(conversion *cv, made *cache, int *cached, mr_g
     if (to_metal && !cv->opts->overwrite && core_values(&m, own, sizeof own) > 0) {
         // The artist's own metal-rough version of the material (glTF's recommended fallback beside spec-gloss): kept,
         // not overwritten by a conversion. The extension goes like every converted material's unless keep_source.
+        const mr_gltf_material sg = m;
         m.has_spec_gloss = cv->opts->keep_source;
         r->outcome = MR_GLTF_KEPT;
         snprintf(r->reason, sizeof r->reason, "it has metal-rough values of its own: %s", own);
-        return mr_gltf_set_material(cv->asset, cv->material, &m);
+        if (wants_extension(cv, r)) status = add_extension(cv, &sg, &m, NULL, r);
+        return status == MR_OK ? mr_gltf_set_material(cv->asset, cv->material, &m) : status;
     }
     const double started = mr_now_seconds();
     sources src;
@@ -937,7 +1169,9 @@ static mr_status convert_material(conversion *cv, made *cache, int *cached, mr_g
         mk->report.seconds = mr_now_seconds() - started;
         *r = mk->report;
     }
+    const mr_gltf_material sg = m;
     set_outputs(cv, &src, mk, textured, &m);
+    if (to_metal && wants_extension(cv, r) && (status = add_extension(cv, &sg, &m, mk, r)) != MR_OK) return status;
     // A KHR_materials_specular at its defaults (factor 1, colour 1, no textures) means what the core material means
     // alone: written out, it is an empty object (beside spec-gloss, the validator's MULTIPLE_EXTENSIONS); dropped.
     if (m.has_specular && m.specular_strength == 1.0 && m.specular_color_factor[0] == 1.0 &&
@@ -969,6 +1203,9 @@ mr_status mr_gltf_convert(mr_gltf *asset, const mr_gltf_convert_options *opts, m
     if (opts->image_format != NULL && strcmp(opts->image_format, "png") != 0 && strcmp(opts->image_format, "exr"))
         return mr_fail(MR_ERR_INVALID_ARG, "glTF conversion: image format '%s': expected png or exr",
                        opts->image_format);
+    if (opts->extension_ior != 0.0 && !(opts->extension_ior > 1.0 && opts->extension_ior <= 1e4))
+        return mr_fail(MR_ERR_INVALID_ARG, "glTF conversion: extension ior %g: expected a value in (1, 10000]",
+                       opts->extension_ior);
     mr_gltf_counts counts;
     mr_gltf_get_counts(asset, &counts);
     made *cache = calloc((size_t)MR_MAX(counts.materials, 1), sizeof *cache);
@@ -1051,6 +1288,17 @@ void mr_gltf_convert_totals_of(const mr_gltf_convert_result *result, mr_gltf_con
         const mr_gltf_material_report *r = &result->materials[k];
         out->converted += r->outcome == MR_GLTF_CONVERTED || r->outcome == MR_GLTF_SHARED;
         out->kept += r->outcome == MR_GLTF_KEPT;
+        out->extensions += r->extension;
+        if (r->extension && r->outcome != MR_GLTF_SHARED) { // each solve once, as the textures
+            const double seen = (double)out->total.texels;
+            out->total.diffuse_mean_error = (out->total.diffuse_mean_error * seen +
+                                             r->diffuse_mean_error * (double)r->texels) / (seen + (double)r->texels);
+            out->total.texels += r->texels;
+            out->total.f0_unmet += r->f0_unmet;
+            out->total.diffuse_off += r->diffuse_off;
+            out->total.f0_max_error = MR_MAX(out->total.f0_max_error, r->f0_max_error);
+            out->total.diffuse_max_error = MR_MAX(out->total.diffuse_max_error, r->diffuse_max_error);
+        }
         if (r->outcome != MR_GLTF_CONVERTED) continue; // each conversion once: its textures are written once
         out->texels += r->width > 0 ? (size_t)r->width * (size_t)r->height : 1;
         out->total.flagged += r->flagged;

@@ -59,6 +59,13 @@ typedef struct mr_gltf_convert_options {
     int replace_files;             /* mr_gltf_convert_file: 1 lets a side file of the output replace an existing
                                       file that is not the earlier output's own (mr_gltf_save_options) */
     const char *replace_hint;      /* mr_gltf_convert_file: what allows it, named in the refusal (NULL: the field) */
+    int core_only;                 /* gltf-specgloss -> gltf but the extension route: 1 writes the core metal-rough
+                                      values alone; 0 (default) adds KHR_materials_specular values solved per texel
+                                      over them (mr_gltf_specular_color_solve), to kept materials too, so that
+                                      engines reading the extension see the spec-gloss F0 ("both readings"); not
+                                      with image_format "exr" or keep_source (the report's extension_note says) */
+    double extension_ior;          /* the ior those values are solved for: 0 = 1.5, glTF's default (no
+                                      KHR_materials_ior written); any other value in (1, 1e4] is written there */
 } mr_gltf_convert_options;
 
 typedef enum mr_gltf_convert_outcome {
@@ -77,7 +84,42 @@ typedef struct mr_gltf_material_report {
     size_t flagged;    /* texels with any mr_wf_flag */
     size_t off_manifold, nonfinite, clamped, failed; /* texels with each flag */
     double seconds;
+    /* KHR_materials_specular over the core values (both readings; mr_gltf_convert_options.core_only = 0) */
+    int extension;            /* 1: specular values written */
+    char extension_note[160]; /* why not, when the material qualified but got none ("" otherwise) */
+    size_t texels;            /* texels the solve saw (its grid), 1 for factors only */
+    size_t f0_unmet;          /* texels whose spec-gloss F0 the extension cannot give (MR_GLTF_F0_* flags) */
+    size_t diffuse_off;       /* texels whose core diffuse base (1 - metallic) differs from the spec-gloss diffuse
+                                 (as the convention reads it) by more than MR_GLTF_HYBRID_TOLERANCE in a channel:
+                                 the base colour both readings share cannot be right for both there */
+    double f0_max_error;      /* largest |F0 - specular| left, any channel */
+    double diffuse_mean_error, diffuse_max_error; /* |base (1 - metallic) - diffuse|: mean over texels and
+                                                     channels, largest */
 } mr_gltf_material_report;
+
+/* ---- both readings: KHR_materials_specular over a core metal-rough texel ----
+ * An engine that reads KHR_materials_specular (and KHR_materials_ior) sees, per the extension's README
+ * ("Implementation") and three.js's MeshPhysicalMaterial alike:
+ * F0 = mix(min(F0(ior) specularColor, 1) specular, base, metallic), F90 = mix(specular, 1, metallic),
+ * diffuse colour base (1 - metallic), F0(ior) = ((ior - 1) / (ior + 1))^2. With the
+ * core base and metallic fixed, specular 1 (F90 = 1, as spec-gloss has it) and a specular colour per channel
+ * (target - metallic base) / ((1 - metallic) F0(ior)) give F0 = target exactly, where that lies in
+ * [0, 1 / F0(ior)]. Outside it the colour is clamped and the texel flagged: */
+enum {
+    MR_GLTF_F0_BELOW = 1, /* the metal part alone (metallic x base) reflects more than the target in some channel */
+    MR_GLTF_F0_ABOVE = 2, /* the dielectric part cannot add enough: min(F0(ior) specularColor, 1) caps it */
+    MR_GLTF_F0_METAL = 4  /* metallic 1: F0 is the base colour, which is not the target (no dielectric to set) */
+};
+/* Flags are raised when the F0 left differs from the target by more than this (linear, any channel); the same
+ * bound decides diffuse_off. One 8-bit linear code. */
+#define MR_GLTF_HYBRID_TOLERANCE (1.0 / 255.0)
+
+/* The specular colour (linear, before any factor) that makes F0 = target at a texel of core base colour `base` and
+ * metallic `metallic` for an engine reading the extensions with specular 1 and `ior` (> 1); returns MR_GLTF_F0_*
+ * flags (0: exact). Inputs outside [0, 1] are clamped first; at metallic 1 (no dielectric part) the colour is
+ * the one a dielectric texel would take, target / F0(ior) clamped, so that a filtered texture stays smooth. */
+unsigned mr_gltf_specular_color_solve(const float base[3], float metallic, const float target[3], double ior,
+                                      float color[3]);
 
 /* Convert the asset's materials in place. reports: NULL or one per material (mr_gltf_get_counts). MR_ERR_INVALID_ARG
  * for a missing transform or one between other models, an unknown image format; the texture readers' errors
@@ -112,8 +154,11 @@ typedef struct mr_gltf_convert_totals {
     int kept;                      /* materials kept with metal-rough values of their own (MR_GLTF_KEPT) */
     size_t texels;                 /* texels converted: each conversion once (MR_GLTF_CONVERTED only: materials
                                       sharing its sources wrote no textures of their own), 1 for factors only */
-    mr_gltf_material_report total; /* flagged, off_manifold, nonfinite, clamped, failed summed over the same
-                                      conversions; the other fields zero */
+    mr_gltf_material_report total; /* flagged, off_manifold, nonfinite, clamped, failed, and the extension's
+                                      texels, f0_unmet, diffuse_off summed (f0_max_error, diffuse_max_error the
+                                      largest; diffuse_mean_error over those texels) over the same conversions and
+                                      every kept material that got extension values; the other fields zero */
+    int extensions;                /* materials given KHR_materials_specular values over their core ones */
 } mr_gltf_convert_totals;
 
 /* The totals of `result` (NULL: all zero) into *out. */

@@ -143,7 +143,7 @@ print("%.6f\t%.6f\t%.9f\t%.9f" % (m[0]["seconds"] + m[1]["seconds"], m[2]["secon
         for method in weighted mean; do
             mkdir -p "$out/$name/$method"
             "$bin" gltf spec2metal "$source" -o "$out/$name/$method/out.gltf" --method "$method" \
-                --overwrite-metal-rough >/dev/null # the conversion, not the artists' own metal-rough values
+                --overwrite-metal-rough --core-only >/dev/null # the conversion, not the artists' own values
         done
         for n in "${ns[@]}" "$converged_n"; do
             accuracy_report "$name" "$source" "$n" "$default_size"
@@ -337,7 +337,7 @@ bench_reflection() {
     done
     # The truck: the original against its weighted conversion, as `matremap report` shows them.
     local weighted="$out/truck_weighted.gltf" v
-    "$bin" gltf spec2metal "$truck" -o "$weighted" --method weighted --overwrite-metal-rough >/dev/null
+    "$bin" gltf spec2metal "$truck" -o "$weighted" --method weighted --overwrite-metal-rough --core-only >/dev/null
     "$bin" report -o "$out/truck_ref" --env "$env_map" --env-samples 4096 --env-reflection-samples 1000 "$truck" \
         -- "$weighted" >/dev/null
     {

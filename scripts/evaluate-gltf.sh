@@ -60,9 +60,12 @@ for asset in Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness/Avocado.gl
     for method in mlp weighted mean khronos extension; do
         mkdir -p "$work/$name/$method"
         # --overwrite-metal-rough: the Avocado, the Duck and the truck carry the artists' own metal-rough values
-        # beside spec-gloss, which the command otherwise keeps; the conversion is what is evaluated here.
+        # beside spec-gloss, which the command otherwise keeps; the conversion is what is evaluated here, its core
+        # values alone (--core-only; the default's KHR_materials_specular is measured by make evaluation-viewers).
+        core_only=--core-only
+        [ "$method" = extension ] && core_only=
         seconds[$method]=$(seconds_of "$bin" gltf spec2metal "$source_gltf" -o "$work/$name/$method/out.gltf" \
-            --method "$method" --overwrite-metal-rough)
+            --method "$method" --overwrite-metal-rough $core_only)
         args+=(-- --label "$method" "$work/$name/$method/out.gltf")
     done
     mkdir -p "$work/$name/gltf-transform"

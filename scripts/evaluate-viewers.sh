@@ -3,11 +3,13 @@
 # viewers people use show them (docs/evaluation.md, "What viewers show"):
 #   - Blender Cycles (Debian's Blender 3.4, its own glTF importer; scripts/viewers/blender_render.py),
 #   - three.js r146 in headless Chromium (the last GLTFLoader that reads KHR_materials_pbrSpecularGlossiness, so it
-#     renders the spec-gloss originals too) and the current three.js (metal-rough only) (scripts/viewers/).
+#     renders the spec-gloss originals too) and the current three.js (metal-rough only) (scripts/viewers/), once as
+#     it ships and once with KHR_materials_specular and KHR_materials_ior stripped from the files (a core-only
+#     engine).
 # For every asset (and DuckPlastic, the Duck as a specular-0.04 dielectric, made here) and both HDR maps each viewer
 # renders the spec-gloss original (where it can), the asset's own metal-rough material (where it has one),
-# `matremap gltf spec2metal` with weighted and mean in both conventions, khronos and extension, and gltf-transform's
-# metalrough. Each render is compared with the viewer's reference on
+# `matremap gltf spec2metal` with weighted and mean in both conventions, khronos, mlp (core only), the default (both
+# readings: mlp + KHR_materials_specular) and extension, and gltf-transform's metalrough. Each render is compared with the viewer's reference on
 # the object's pixels (BUILD/tools/object_metrics: SSIM from mr_ssim's map, mean luminance ratio). The tables go
 # into docs/evaluation.md between the eval-viewers markers, one picture per asset into docs/evaluation/, renders
 # and job files into BUILD/evaluation-viewers/.
@@ -80,24 +82,39 @@ for name in ${VIEWERS_ASSETS:-Avocado CesiumMilkTruck Duck FloppyDisk DuckPlasti
     src=${source[$name]}
     line=("$name" "$src" ${view[$name]} specgloss)
     # The asset's own metal-rough material (its core pbrMetallicRoughness beside the extension): the extension
-    # dropped, the rest kept (--fallback keep). FloppyDisk and DuckPlastic have none.
+    # dropped, the rest kept (spec2metal's default for such a material; --core-only: nothing added). FloppyDisk and
+    # DuckPlastic have none.
     if [ "$name" != FloppyDisk ] && [ "$name" != DuckPlastic ]; then
         mkdir -p "$work/$name/authors"
-        "$bin" gltf spec2metal "$src" -o "$work/$name/authors/out.gltf" --fallback keep --method weighted >/dev/null
+        "$bin" gltf spec2metal "$src" -o "$work/$name/authors/out.gltf" --core-only --method weighted >/dev/null
         line+=(authors)
     fi
-    routes=(weighted:gltf weighted:paper mean:gltf mean:paper khronos: extension: gltf-transform:)
+    # Every conversion route converts the authors' materials too (--overwrite-metal-rough); the core routes write
+    # the core values alone (--core-only); hybrid is spec2metal's default (mlp + KHR_materials_specular).
+    # The default reads the spec-gloss diffuse as paper does (the base colour gltf-transform keeps); hybrid-gltf reads
+    # it as glTF does, hybrid-ior1000 solves the specular colour for ior 1000 (KHR_materials_ior written): the two
+    # choices measured.
+    routes=(weighted:gltf weighted:paper mean:gltf mean:paper khronos: mlp: hybrid: hybrid:gltf hybrid-ior1000:
+            extension: gltf-transform:)
     # DuckPlastic only asks the convention question: mean equals weighted on its grey specular.
-    [ "$name" = DuckPlastic ] && routes=(weighted:gltf weighted:paper khronos: extension:)
+    [ "$name" = DuckPlastic ] && routes=(weighted:gltf weighted:paper khronos: mlp: hybrid: hybrid:gltf extension:)
     for route in "${routes[@]}"; do
         method=${route%%:*} convention=${route#*:}
         label=$method${convention:+-$convention}
         mkdir -p "$work/$name/$label"
         if [ "$method" = gltf-transform ]; then
             "$gt/node_modules/.bin/gltf-transform" metalrough "$src" "$work/$name/$label/out.gltf" >/dev/null 2>&1
+        elif [ "$method" = hybrid ] || [ "$method" = hybrid-ior1000 ]; then
+            ior=
+            [ "$method" = hybrid-ior1000 ] && ior="--extension-ior 1000"
+            # shellcheck disable=SC2086
+            "$bin" gltf spec2metal "$src" -o "$work/$name/$label/out.gltf" --overwrite-metal-rough $ior \
+                ${convention:+--convention "$convention"} > "$work/$name/$label/summary.txt"
         else
-            "$bin" gltf spec2metal "$src" -o "$work/$name/$label/out.gltf" --method "$method" \
-                ${convention:+--convention "$convention"} >/dev/null
+            core_only=--core-only
+            [ "$method" = extension ] && core_only=
+            "$bin" gltf spec2metal "$src" -o "$work/$name/$label/out.gltf" --method "$method" $core_only \
+                --overwrite-metal-rough ${convention:+--convention "$convention"} >/dev/null
         fi
         line+=("$label")
     done

@@ -134,7 +134,7 @@ check "kept: the asset's own base colour texture" test \
     "a_Avocado_baseColor.png"
 check "kept: only the spec-gloss textures pruned" test \
     "$(gltf "$tmp/keep/a.gltf" '[d["images"][t["source"]]["uri"] for t in d["textures"]]')" = \
-    "['a_Avocado_baseColor.png', 'a_Avocado_roughnessMetallic.png', 'a_Avocado_normal.png']"
+    "['a_Avocado_baseColor.png', 'a_Avocado_roughnessMetallic.png', 'a_Avocado_normal.png', 'a_m0_specularColor.png']"
 check "kept: the spec-gloss extension is gone" test \
     "$(gltf "$tmp/keep/a.gltf" '(SG in m(0).get("extensions", {}), SG in d.get("extensionsUsed", []))')" = \
     "(False, False)"
@@ -161,22 +161,24 @@ check "... its outcome, no reason, the flags by kind" test \
 # The same maps through `matremap spec2metal` give the same texels (Avocado's material has no factors);
 # --overwrite-metal-rough converts it in spite of its own metal-rough values.
 expect "Avocado, weighted, --overwrite-metal-rough" 0 "1 of 1 materials converted" -- "$bin" gltf spec2metal \
-    "$avocado" -o "$tmp/avocado/avocado.gltf" --method weighted --overwrite-metal-rough
+    "$avocado" -o "$tmp/avocado/avocado.gltf" --method weighted --overwrite-metal-rough --convention gltf
 check "Avocado: the spec-gloss and the replaced core textures pruned" \
     grep -q "^pruned 4 textures, 4 images and 0 samplers" "$tmp/out"
 check "... the remaining textures are the normal map and the new ones" test \
     "$(gltf "$tmp/avocado/avocado.gltf" '[d["images"][t["source"]]["uri"] for t in d["textures"]]')" = \
-    "['avocado_Avocado_normal.png', 'avocado_m0_basecolor.png', 'avocado_m0_metallicRoughness.png']"
+    "['avocado_Avocado_normal.png', 'avocado_m0_basecolor.png', 'avocado_m0_metallicRoughness.png', \
+'avocado_m0_specularColor.png']"
 check "... and the output folder has no dead images" test \
     "$(cd "$tmp/avocado" && echo *.png)" = \
-    "avocado_Avocado_normal.png avocado_m0_basecolor.png avocado_m0_metallicRoughness.png"
+    "avocado_Avocado_normal.png avocado_m0_basecolor.png avocado_m0_metallicRoughness.png \
+avocado_m0_specularColor.png"
 mkdir -p "$tmp/unused"
 expect "Avocado, --keep-unused --json" 0 '"keep_unused": true, "pruned": \{"textures": 0, "images": 0' -- \
     "$bin" gltf spec2metal "$avocado" -o "$tmp/unused/a.gltf" --method mean --keep-unused --json \
     --overwrite-metal-rough
 old_files=$(ls "$tmp/unused" | grep -c '^a_Avocado_.*png')
 check "--keep-unused: the old textures and their 5 files stay" test \
-    "$(gltf "$tmp/unused/a.gltf" 'len(d["textures"]), len(d["images"])') $old_files" = "(7, 7) 5"
+    "$(gltf "$tmp/unused/a.gltf" 'len(d["textures"]), len(d["images"])') $old_files" = "(8, 8) 5"
 expect "the maps through spec2metal" 0 "" -- "$bin" spec2metal --diffuse "$avocado_dir/Avocado_diffuse.png" \
     --specular-glossiness "$avocado_dir/Avocado_specularGlossiness.png" --method weighted --pack -o "$tmp/maps"
 d=$(maxdiff "$tmp/maps_basecolor.png" "$tmp/avocado/avocado_m0_basecolor.png")
@@ -196,7 +198,7 @@ check "--keep-specgloss: its textures stay referenced (only the replaced core on
 # Factor-only materials: the factors spec2metal computes for the same constants. (The truck's materials carry
 # metal-rough values of their own too: kept unless --overwrite-metal-rough.)
 expect "CesiumMilkTruck, weighted" 0 "4 of 4 materials converted" -- "$bin" gltf spec2metal "$truck" \
-    -o "$tmp/truck/truck.gltf" --method weighted --overwrite-metal-rough
+    -o "$tmp/truck/truck.gltf" --method weighted --overwrite-metal-rough --convention gltf
 check "CesiumMilkTruck: the two diffuse textures of its one image pruned" \
     grep -q "^pruned 2 textures, 1 image and 0 samplers" "$tmp/out"
 spec=$(gltf "$truck" '",".join("%.9g" % v for v in ext(1)["specularFactor"])')
@@ -218,6 +220,59 @@ check "... and not packed into the .glb" test "$(python3 -c 'import json, struct
 b = open(sys.argv[1], "rb").read(); n = struct.unpack("<I", b[12:16])[0]; d = json.loads(b[20:20 + n])
 print(len(d["textures"]), len(d["images"]), len(d["bufferViews"]))' "$tmp/duck/duck.glb")" = \
     "2 2 5"
+
+# Both readings, the default: the core metal-rough textures and KHR_materials_specular over them (a specularColor
+# texture, specular 1, no KHR_materials_ior at the default ior 1.5), counted per material and in total (human and
+# JSON); --core-only writes the core values alone; --extension-ior 1000 writes KHR_materials_ior; usage errors.
+mkdir -p "$tmp/both" "$tmp/core" "$tmp/ior"
+expect "FloppyDisk, the default: both readings" 0 \
+    "^material 0 'material_0': KHR_materials_specular over the core values: F0 unmet at [0-9]* of 4194304 texels" \
+    -- "$bin" gltf spec2metal "$floppy" -o "$tmp/both/f.gltf"
+check "... and the total counts them" grep -q \
+    "^matremap gltf spec2metal: 1 material with KHR_materials_specular over the core values: F0 unmet at" "$tmp/out"
+check "... the material carries the core textures and the specular colour, specular 1, ior 1.5" test \
+    "$(gltf "$tmp/both/f.gltf" '(sorted(pbr(0)), sorted(m(0)["extensions"]["KHR_materials_specular"]),
+    uri(m(0)["extensions"]["KHR_materials_specular"]["specularColorTexture"]["index"]),
+    "KHR_materials_ior" in d["extensionsUsed"], "KHR_materials_specular" in d["extensionsUsed"])')" = \
+    "(['baseColorTexture', 'metallicRoughnessTexture'], ['specularColorFactor', 'specularColorTexture'], \
+'f_m0_specularColor.png', False, True)"
+expect "FloppyDisk --json: the solve's counts" 0 '"core_only": false, "extension": \{"texels": 4194304, "f0_unmet": ' \
+    -- "$bin" gltf spec2metal "$floppy" -o "$tmp/both/j.gltf" --json
+check "... per material too" test "$(summary 'sorted(m["extension"])')" = \
+    "['diffuse_max_error', 'diffuse_mean_error', 'diffuse_off', 'f0_max_error', 'f0_unmet', 'texels']"
+check "... read with the paper convention by default" test "$(summary 'd["convention"]')" = paper
+expect "... the glTF convention when asked" 0 '"method": "mlp", "convention": "gltf"' -- "$bin" gltf spec2metal \
+    "$floppy" -o "$tmp/both/g.gltf" --json --convention gltf
+expect "... and with --core-only" 0 '"method": "mlp", "convention": "gltf"' -- "$bin" gltf spec2metal \
+    "$floppy" -o "$tmp/both/c.gltf" --json --core-only
+expect "FloppyDisk --core-only" 0 \
+    "^matremap gltf spec2metal: core metal-rough values only \(--core-only\): no KHR_materials_specular$" \
+    -- "$bin" gltf spec2metal "$floppy" -o "$tmp/core/f.gltf" --core-only --convention paper
+check "... no specular extension, the same core textures" test \
+    "$(gltf "$tmp/core/f.gltf" '("extensions" in m(0), d.get("extensionsUsed", []), sorted(pbr(0)))')" = \
+    "(False, [], ['baseColorTexture', 'metallicRoughnessTexture'])"
+check "... base colour = the default's, which reads the diffuse as paper (max error $(maxdiff "$tmp/core/f_m0_basecolor.png" \
+    "$tmp/both/f_m0_basecolor.png"))" test "$(maxdiff "$tmp/core/f_m0_basecolor.png" "$tmp/both/f_m0_basecolor.png")" = 0
+expect "--core-only --json" 0 '"core_only": true, "extension": null' -- "$bin" gltf spec2metal "$duck" \
+    -o "$tmp/core/d.gltf" --core-only --json --overwrite-metal-rough
+expect "Duck, --extension-ior 1000" 0 "KHR_materials_specular over the core values" -- "$bin" gltf spec2metal \
+    "$duck" -o "$tmp/ior/d.gltf" --extension-ior 1000 --overwrite-metal-rough
+check "... writes KHR_materials_ior 1000 and the Duck's specular 0 as a factor" test \
+    "$(gltf "$tmp/ior/d.gltf" '(m(0)["extensions"]["KHR_materials_ior"]["ior"],
+    m(0)["extensions"]["KHR_materials_specular"])')" = "(1000.0, {'specularColorFactor': [0.0, 0.0, 0.0]})"
+expect "--format exr: no specular extension, and why" 0 \
+    "^material 0 'blinn3-fx': no KHR_materials_specular with EXR textures \\(the solve reads the core textures as" \
+    -- "$bin" gltf spec2metal "$duck" -o "$tmp/ior/exr.gltf" --format exr --overwrite-metal-rough
+expect "--core-only with --method extension: refused" 1 \
+    "--core-only and --extension-ior go with the per-texel methods; --method extension writes the extension alone" \
+    -- "$bin" gltf spec2metal "$floppy" -o "$tmp/x.gltf" --method extension --core-only
+expect "--core-only with --extension-ior: refused" 1 \
+    "--extension-ior sets the extension's values; --core-only writes none" \
+    -- "$bin" gltf spec2metal "$floppy" -o "$tmp/x.gltf" --core-only --extension-ior 2
+expect "--extension-ior 1: refused" 1 "--extension-ior" -- "$bin" gltf spec2metal "$floppy" -o "$tmp/x.gltf" \
+    --extension-ior 1
+expect "metal2spec takes no --core-only" 1 "--core-only and --extension-ior go with spec2metal" -- "$bin" gltf \
+    metal2spec "$bottle" -o "$tmp/x.gltf" --core-only
 
 # The lossless extension route: nothing converted, the spec-gloss textures reused, glossiness as roughness.
 mkdir -p "$tmp/ext"
@@ -253,14 +308,15 @@ check "spec-gloss added, the core material kept as the fallback" test \
 expect "... and back: its metal-rough fallback is kept by default" 0 "0 of 1 materials converted, 1 kept" -- \
     "$bin" gltf spec2metal "$tmp/bottle/bottle.gltf" -o "$tmp/x.gltf" --method weighted
 expect "... and back with weighted, --overwrite-metal-rough" 0 '"converted": \[0\]' -- "$bin" gltf spec2metal \
-    "$tmp/bottle/bottle.gltf" -o "$tmp/back/back.gltf" --method weighted --overwrite-metal-rough --json
+    "$tmp/bottle/bottle.gltf" -o "$tmp/back/back.gltf" --method weighted --overwrite-metal-rough --json \
+    --convention gltf
 # Its textures are 8-bit: each value is known to half a code, and what that explains is not flagged (measured:
 # 722 of 4194304 texels, 0.017 %, near-black slightly metallic texels; at --eps 1e-6, 2930937, 70 %).
 offm=$(summary 'm["flags"]["off_manifold"]')
 check "WaterBottle back: $offm of 4194304 texels off-manifold (< 0.1 %)" test "$offm" -lt 4194
 mkdir -p "$tmp/backe"
 expect "... and with --eps 1e-6" 0 "" -- "$bin" gltf spec2metal "$tmp/bottle/bottle.gltf" -o "$tmp/backe/b.gltf" \
-    --method weighted --overwrite-metal-rough --eps 1e-6 --json
+    --method weighted --overwrite-metal-rough --eps 1e-6 --json --convention gltf
 offe=$(summary 'm["flags"]["off_manifold"]')
 check "WaterBottle back at --eps 1e-6: $offe texels off-manifold (> 50 %)" test "$offe" -gt 2097152
 oiiotool "$(dirname "$bottle")/WaterBottle_occlusionRoughnessMetallic.png" --ch B -o "$tmp/metal_orig.png"
@@ -324,7 +380,8 @@ fi
 # Every output: 0 errors, and (pruned by default) no texture or image the validator finds unused.
 for f in "$tmp/floppy/floppy.gltf" "$tmp/ext/ext.gltf" "$tmp/ext/kept.gltf" "$tmp/avocado/avocado.gltf" \
          "$tmp/keep/a.gltf" "$tmp/sg/a.gltf" "$tmp/truck/truck.gltf" "$tmp/duck/duck.glb" \
-         "$tmp/bottle/bottle.gltf" "$tmp/back/back.gltf" "$tmp/settings/settings.gltf"; do
+         "$tmp/bottle/bottle.gltf" "$tmp/back/back.gltf" "$tmp/settings/settings.gltf" "$tmp/both/f.gltf" \
+         "$tmp/core/f.gltf" "$tmp/ior/d.gltf"; do
     node "$node_dir/gltf_validate.js" --all "$f" >"$tmp/validator.txt" 2>&1
     result=$(head -n 1 "$tmp/validator.txt")
     errors=$(echo "$result" | sed -nE 's/.* errors=([0-9]+) .*/\1/p')

@@ -57,7 +57,7 @@ cp "$duck_dir/DuckCM.png" "$tmp/duck/textures/material_0_normal.png"
 sed -e 's/Duck0\.bin/scene.bin/' -e 's#DuckCM\.png#textures/material_0_normal.png#' "$duck_dir/Duck.gltf" \
     >"$tmp/duck/scene.gltf"
 expect "FloppyDisk into coll/floppy.gltf" 0 "1 of 1 materials converted" -- "$bin" gltf spec2metal \
-    "$tmp/floppy/scene.gltf" -o "$tmp/coll/floppy.gltf" --method weighted
+    "$tmp/floppy/scene.gltf" -o "$tmp/coll/floppy.gltf" --method weighted --core-only
 check "... its side files are named after it" test \
     "$(gltf "$tmp/coll/floppy.gltf" '[b["uri"] for b in d["buffers"]] + [i["uri"] for i in d["images"]]')" = \
     "['floppy.bin', 'textures/floppy_material_0_normal.png', 'floppy_m0_basecolor.png', 'floppy_m0_metallicRoughness.png']"
@@ -106,7 +106,7 @@ fi
 
 # The same command again: it replaces its own side files (the existing output refers to them).
 expect "the same conversion again into coll/floppy.gltf" 0 "1 of 1 materials converted" -- "$bin" gltf spec2metal \
-    "$tmp/floppy/scene.gltf" -o "$tmp/coll/floppy.gltf" --method weighted
+    "$tmp/floppy/scene.gltf" -o "$tmp/coll/floppy.gltf" --method weighted --core-only
 check "... the folder holds the same files" test \
     "$(cd "$tmp/coll" && find . -type f -print | LC_ALL=C sort | grep -v duck | xargs md5sum)" = "$before"
 check "validator after the re-run: coll/floppy.gltf: $(validate "$tmp/coll/floppy.gltf")" \
@@ -149,7 +149,8 @@ check "metal2spec: no KHR_materials_specular (the input has none)" test \
 check "validator: bottle.gltf: $(validate "$tmp/bottle/bottle.gltf"), no MULTIPLE_EXTENSIONS" \
     test "$(grep -c MULTIPLE_EXTENSIONS "$tmp/validator.txt")" = 0
 expect "... and back (spec2metal --overwrite-metal-rough)" 0 "1 of 1 materials converted" -- "$bin" gltf \
-    spec2metal "$tmp/bottle/bottle.gltf" -o "$tmp/back/back.gltf" --method weighted --overwrite-metal-rough
+    spec2metal "$tmp/bottle/bottle.gltf" -o "$tmp/back/back.gltf" --method weighted --overwrite-metal-rough \
+    --core-only
 check "the round trip carries no extension, empty or not" test \
     "$(gltf "$tmp/back/back.gltf" '([m.get("extensions") for m in d["materials"]], d.get("extensionsUsed"))')" = \
     "([None], None)"
@@ -163,7 +164,8 @@ json.dump(d, open(sys.argv[2], "w"), indent=1)
 PY
 cp "$tmp/bottle/"*.png "$tmp/bottle/"*.bin "$tmp/old/"
 expect "spec2metal of an asset holding an empty KHR_materials_specular" 0 "1 of 1 materials converted" -- "$bin" \
-    gltf spec2metal "$tmp/old/bottle.gltf" -o "$tmp/old_back/back.gltf" --method weighted --overwrite-metal-rough
+    gltf spec2metal "$tmp/old/bottle.gltf" -o "$tmp/old_back/back.gltf" --method weighted --overwrite-metal-rough \
+    --core-only
 check "... drops it" test \
     "$(gltf "$tmp/old_back/back.gltf" '([m.get("extensions") for m in d["materials"]], d.get("extensionsUsed"))')" = \
     "([None], None)"

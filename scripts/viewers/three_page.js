@@ -71,6 +71,22 @@ function frame(camera, object, view) {
     camera.updateProjectionMatrix();
 }
 
+// A core-only engine: the glTF's JSON with the material extensions `strip` names removed (from every material and
+// from extensionsUsed/Required) before GLTFLoader parses it, so it reads what an engine without them reads.
+async function loadGltf(url, strip) {
+    const loader = new GLTFLoader();
+    if (strip.length === 0) return loader.loadAsync(url);
+    const json = await (await fetch(url)).json();
+    for (const m of json.materials || []) {
+        if (!m.extensions) continue;
+        for (const e of strip) delete m.extensions[e];
+    }
+    for (const key of ['extensionsUsed', 'extensionsRequired']) {
+        if (json[key]) json[key] = json[key].filter((e) => !strip.includes(e));
+    }
+    return loader.parseAsync(JSON.stringify(json), url.substring(0, url.lastIndexOf('/') + 1));
+}
+
 let renderer = null;
 
 window.renderJob = async (job) => {
@@ -85,7 +101,7 @@ window.renderJob = async (job) => {
     const scene = new THREE.Scene();
     const env = await environment(renderer, job.env, job.envMean);
     scene.environment = env.texture;
-    const gltf = await new GLTFLoader().loadAsync(job.gltf);
+    const gltf = await loadGltf(job.gltf, job.strip || []);
     scene.add(gltf.scene);
     const extensions = new Set();
     scene.traverse((o) => {

@@ -41,6 +41,11 @@ static void print_help(void) {
            "baseColorTexture or metallicRoughnessTexture, or factors other than 1: the artist's own fallback, as\n"
            "in the Avocado) is kept as it is and not converted, and the output says so; its spec-gloss extension\n"
            "goes like the converted ones' (--keep-specgloss keeps it). --overwrite-metal-rough converts it anyway.\n"
+           "Both readings (spec2metal's default): besides the per-texel core values, every converted or kept\n"
+           "material gets KHR_materials_specular values solved texel by texel over them (a specularColor texture,\n"
+           "specular 1), so that engines reading the extension see the spec-gloss F0, and engines without it the\n"
+           "core conversion; where one base colour cannot serve both (its diffuse) the output counts the texels.\n"
+           "--core-only writes the core values alone (docs/gltf.md, \"Both readings\").\n"
            "metal2spec adds the spec-gloss extension to every metal-rough material (Eq. 2), keeping the core\n"
            "material as the fallback.\n"
            "After converting, every texture, image and sampler that nothing in the asset refers to any more is\n"
@@ -60,8 +65,16 @@ static void print_help(void) {
            "  --method M            spec2metal: mlp (default), weighted, mean, khronos, or extension: the lossless\n"
            "                        route of KHR_materials_specular + KHR_materials_ior (ior 1000, textures reused,\n"
            "                        metallic 0; for engines that support both); metal2spec: eq2 (default), khronos\n"
+           "  --core-only           spec2metal: core metal-rough values only, no KHR_materials_specular over them\n"
+           "                        (default: both readings, except with --method extension, --keep-specgloss\n"
+           "                        and --format exr)\n"
+           "  --extension-ior X     spec2metal: the ior the specular values are solved for (default 1.5, glTF's\n"
+           "                        own, so no KHR_materials_ior is written; another value writes it)\n"
            "  --weights FILE        the network for mlp (default: the shipped one, as 'matremap spec2metal')\n"
-           "  --convention C        gltf (default) or paper: how the spec-gloss diffuse is read (docs/workflow.md)\n"
+           "  --convention C        gltf or paper: how the spec-gloss diffuse is read (docs/workflow.md); default\n"
+           "                        paper for spec2metal's both readings (measured closer in both kinds of\n"
+           "                        engine, docs/gltf.md), gltf with --core-only, --format exr and for\n"
+           "                        metal2spec (khronos has its own reading)\n"
            "  --overwrite-metal-rough  spec2metal: also convert materials that carry metal-rough values of their\n"
            "                        own beside spec-gloss, overwriting them (default: keep them, and say so)\n"
            "  --eps E               spec2metal, weighted/mean/khronos: the off-manifold tolerance, for every value\n"
@@ -80,11 +93,12 @@ static void print_help(void) {
            "  --help                this text\n"
            "\n"
            "Prints one line per material (converted: texture size, flagged texels by reason, time; kept or left as it\n"
-           "is: why), a total, the flagged texels of all conversions by reason and what was removed; --json gives\n"
-           "the same, with the lists of converted and kept materials. The reasons are those of 'matremap spec2metal'\n"
-           "and 'metal2spec' (a texel may have several): off-manifold (spec2metal weighted, mean, khronos: no\n"
-           "metal-rough material gives these maps; metal2spec, glTF convention: a diffuse above 1, clamped),\n"
-           "non-finite input, clamped input, method failed.\n"
+           "is: why; then its specular solve: texels whose F0 it cannot give, texels whose core diffuse is off by\n"
+           "more than 1/255), a total, the flagged texels of all conversions by reason and what was removed;\n"
+           "--json gives the same, with the lists of converted and kept materials. The reasons are those of\n"
+           "'matremap spec2metal' and 'metal2spec' (a texel may have several): off-manifold (spec2metal weighted,\n"
+           "mean, khronos: no metal-rough material gives these maps; metal2spec, glTF convention: a diffuse above\n"
+           "1, clamped), non-finite input, clamped input, method failed.\n"
            "\n"
            "Example:\n"
            "  matremap gltf spec2metal FloppyDisk/scene.gltf -o out/floppy.gltf --method weighted\n");
@@ -93,11 +107,14 @@ static void print_help(void) {
 typedef struct options {
     const char *direction, *input, *output, *method, *weights, *format;
     mr_wf_diffuse convention;
+    int convention_given; /* else paper for spec2metal's both readings, gltf otherwise (docs/gltf.md) */
     double eps;    /* --eps, when eps_given */
     int eps_given; /* else each input's tolerance follows its texture's encoding */
     int threads;   /* --threads: mr_wf_options.threads (0 automatic) */
     int overwrite, keep_specgloss, keep_unused, json;
     int replace_files; /* --replace-files: side files may replace existing files that are not the output's own */
+    int core_only;     /* --core-only: no KHR_materials_specular values over the core ones */
+    double extension_ior; /* --extension-ior (0: 1.5) */
 } options;
 
 /* ---- the command -------------------------------------------------------------------------------------------- */
@@ -108,6 +125,21 @@ typedef struct options {
 static void print_reasons(const mr_gltf_material_report *r, int off_computed, const char *off_meaning) {
     if (off_computed) printf("%zu off-manifold%s, ", r->off_manifold, off_meaning);
     printf("%zu non-finite input, %zu clamped input, %zu method failed", r->nonfinite, r->clamped, r->failed);
+}
+
+/* The KHR_materials_specular solve of a material (or the totals): texels whose F0 it cannot give, and texels whose
+ * core diffuse differs from the spec-gloss one (the base colour both readings share). */
+static void print_extension(const mr_gltf_material_report *r) {
+    printf("KHR_materials_specular over the core values: F0 unmet at %zu of %zu texel%s (largest |F0 - specular| "
+           "%.4f), core diffuse off at %zu (mean |base (1 - metallic) - diffuse| %.4f, largest %.4f)", r->f0_unmet,
+           r->texels, r->texels == 1 ? "" : "s", r->f0_max_error, r->diffuse_off, r->diffuse_mean_error,
+           r->diffuse_max_error);
+}
+
+static void print_json_extension(const mr_gltf_material_report *r) {
+    printf("{\"texels\": %zu, \"f0_unmet\": %zu, \"f0_max_error\": %.6g, \"diffuse_off\": %zu, "
+           "\"diffuse_mean_error\": %.6g, \"diffuse_max_error\": %.6g}", r->texels, r->f0_unmet, r->f0_max_error,
+           r->diffuse_off, r->diffuse_mean_error, r->diffuse_max_error);
 }
 
 /* The same as a JSON object; off_manifold null where it is not computed. */
@@ -142,6 +174,7 @@ static int parse(int argc, char **argv, options *o) {
             o->format = value;
         } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--convention", &value))) {
             if (taken < 0 || !cli_parse_convention("gltf", value, &o->convention)) return CLI_EXIT_USAGE;
+            o->convention_given = 1;
         } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--fallback", &value))) {
             return cli_usage_error("gltf", "--fallback is gone: a material's own metal-rough values are kept by "
                                    "default; --overwrite-metal-rough converts them instead");
@@ -150,6 +183,11 @@ static int parse(int argc, char **argv, options *o) {
             o->eps_given = 1;
         } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--threads", &value))) {
             if (taken < 0 || !cli_parse_int("gltf", "--threads", value, 0, 1024, &o->threads)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--extension-ior", &value))) {
+            if (taken < 0 || !cli_parse_double("gltf", "--extension-ior", value, 1.0 + 1e-9, 1e4, &o->extension_ior))
+                return CLI_EXIT_USAGE;
+        } else if (strcmp(argv[i], "--core-only") == 0) {
+            o->core_only = 1;
         } else if (strcmp(argv[i], "--overwrite-metal-rough") == 0) {
             o->overwrite = 1;
         } else if (strcmp(argv[i], "--keep-specgloss") == 0) {
@@ -178,9 +216,21 @@ static int parse(int argc, char **argv, options *o) {
     if (o->output == NULL) return cli_usage_error("gltf", "missing -o OUT (.gltf or .glb)");
     if (o->method == NULL) o->method = to_metal ? "mlp" : "eq2";
     if (o->format == NULL) o->format = "png";
-    if (!to_metal && (o->weights || o->overwrite || o->keep_specgloss || o->eps_given))
-        return cli_usage_error("gltf", "--weights, --eps, --overwrite-metal-rough and --keep-specgloss go with "
-                               "spec2metal");
+    if (!to_metal && (o->weights || o->overwrite || o->keep_specgloss || o->eps_given || o->core_only ||
+                      o->extension_ior > 0.0))
+        return cli_usage_error("gltf", "--weights, --eps, --overwrite-metal-rough, --keep-specgloss, --core-only and "
+                               "--extension-ior go with spec2metal");
+    if (strcmp(o->method, "extension") == 0 && (o->core_only || o->extension_ior > 0.0))
+        return cli_usage_error("gltf", "--core-only and --extension-ior go with the per-texel methods; --method "
+                               "extension writes the extension alone (ior 1000)");
+    if (o->core_only && o->extension_ior > 0.0)
+        return cli_usage_error("gltf", "--extension-ior sets the extension's values; --core-only writes none");
+    // Both readings share one base colour: read as paper reads the diffuse (the base colour the lossless route keeps)
+    // it is measured closer in both kinds of engine (docs/gltf.md, "Both readings"); the core-only output keeps glTF's.
+    if (!o->convention_given && to_metal && !o->core_only && strcmp(o->method, "extension") != 0 &&
+        strcmp(o->method, "khronos") != 0 && strcmp(o->format, "exr") != 0) // khronos has its own reading; EXR
+                                                                              // textures get no extension
+        o->convention = MR_WF_DIFFUSE_PLAIN;
     return CLI_EXIT_OK;
 }
 
@@ -243,6 +293,8 @@ int cmd_gltf(int argc, char **argv) {
         co.keep_unused = o.keep_unused;
         co.replace_files = o.replace_files;
         co.replace_hint = "--replace-files";
+        co.core_only = o.core_only;
+        co.extension_ior = o.extension_ior;
         mr_status status = mr_gltf_convert_file(o.input, o.output, &co, &result);
         if (status != MR_OK) code = cli_fail("gltf", status);
     }
@@ -270,6 +322,11 @@ int cmd_gltf(int argc, char **argv) {
             if (r->outcome == MR_GLTF_KEPT) {
                 printf("kept, not converted: %s; its spec-gloss extension %s; --overwrite-metal-rough converts it "
                        "instead\n", r->reason, o.keep_specgloss ? "kept (--keep-specgloss)" : "removed");
+                if (r->extension) {
+                    printf("material %d '%s': ", k, r->name);
+                    print_extension(r);
+                    printf("\n");
+                }
                 continue;
             }
             if (r->outcome == MR_GLTF_SKIPPED) {
@@ -290,6 +347,13 @@ int cmd_gltf(int argc, char **argv) {
             printf(", %.3f s%s\n", r->seconds,
                    r->outcome == MR_GLTF_SHARED ? " (the same sources as an earlier material: its textures reused)"
                                                 : "");
+            if (r->extension) {
+                printf("material %d '%s': ", k, r->name);
+                print_extension(r);
+                printf("\n");
+            } else if (r->extension_note[0]) {
+                printf("material %d '%s': %s\n", k, r->name, r->extension_note);
+            }
         }
         printf("matremap gltf %s: %d of %d materials converted", o.direction, converted, result.material_count);
         if (kept > 0) printf(", %d kept with metal-rough values of %s own", kept, kept == 1 ? "its" : "their");
@@ -308,6 +372,15 @@ int cmd_gltf(int argc, char **argv) {
             }
             printf("\n");
         }
+        if (totals.extensions > 0) {
+            printf("matremap gltf %s: %d material%s with ", o.direction, totals.extensions,
+                   totals.extensions == 1 ? "" : "s");
+            print_extension(&total);
+            printf("\n");
+        } else if (to_metal && o.core_only) {
+            printf("matremap gltf %s: core metal-rough values only (--core-only): no KHR_materials_specular\n",
+                   o.direction);
+        }
         if (o.keep_unused) {
             printf("unreferenced textures, images and samplers kept (--keep-unused)\n");
         } else {
@@ -325,7 +398,8 @@ int cmd_gltf(int argc, char **argv) {
         cli_json_string(stdout, o.input);
         printf(", \"output\": ");
         cli_json_string(stdout, o.output);
-        printf(", \"method\": \"%s\", \"seconds\": %.6f, \"tolerance\": ", o.method, seconds);
+        printf(", \"method\": \"%s\", \"convention\": \"%s\", \"seconds\": %.6f, \"tolerance\": ", o.method,
+               o.convention == MR_WF_DIFFUSE_PLAIN ? "paper" : "gltf", seconds);
         if (tolerance)
             printf("\"%s\", \"eps\": %.17g", tolerance, o.eps_given ? o.eps : MR_WF_DEFAULT_EPS);
         else
@@ -353,10 +427,20 @@ int cmd_gltf(int argc, char **argv) {
             printf(", \"width\": %d, \"height\": %d, \"flagged\": %zu, \"flags\": ", r->width, r->height,
                    r->flagged);
             print_json_reasons(r, off_computed && (r->outcome == MR_GLTF_CONVERTED || r->outcome == MR_GLTF_SHARED));
+            printf(", \"extension\": ");
+            if (r->extension)
+                print_json_extension(r);
+            else
+                printf("null");
             printf(", \"seconds\": %.6f}", r->seconds);
         }
         printf("], \"texels\": %zu, \"flagged\": %zu, \"flags\": ", texels, total.flagged);
         print_json_reasons(&total, off_computed && converted > 0);
+        printf(", \"core_only\": %s, \"extension\": ", o.core_only ? "true" : "false");
+        if (totals.extensions > 0)
+            print_json_extension(&total);
+        else
+            printf("null");
         printf(", \"keep_unused\": %s, \"pruned\": {\"textures\": %d, \"images\": %d, \"samplers\": %d, "
                "\"uncertain\": %d}}\n", o.keep_unused ? "true" : "false", pruned.textures, pruned.images,
                pruned.samplers, pruned.uncertain);
