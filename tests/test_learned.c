@@ -667,8 +667,8 @@ MR_TEST(gltf_to_openpbr_passes_its_check_with_the_default_tie) {
         spec.axis_count = 3;
         spec.scene.size = 32;
         if (tied) spec.remap.ties = mr_brdf_default_ties(gltf, op);
-        const int ior = mr_brdf_param_index(op, "specular_ior");
-        MR_CHECK(!tied || spec.remap.ties.tied == ((1u << metalness) | (1u << ior)));
+        const int ior = mr_brdf_param_index(op, "specular_ior"), tint = mr_brdf_param_index(op, "specular_color");
+        MR_CHECK(!tied || spec.remap.ties.tied == ((1u << metalness) | (1u << ior) | (1u << tint)));
         const char *path = mr_test_tmp_path("gltf_openpbr.csv");
         unlink(path);
         mr_sweep_options so = {0};
@@ -676,8 +676,8 @@ MR_TEST(gltf_to_openpbr_passes_its_check_with_the_default_tie) {
         mr_sweep_summary summary;
         MR_CHECK_OK(mr_sweep_run(&spec, path, &so, &summary));
         char *text = mr_test_read_file(path, NULL);
-        MR_CHECK_MSG(text && (strstr(text, " tied=base_metalness:metallic,specular_ior:ior\n") != NULL) == tied,
-                     "tied %d", tied);
+        MR_CHECK_MSG(text && (strstr(text, " tied=base_metalness:metallic,specular_color:specular_color,"
+                                           "specular_ior:ior\n") != NULL) == tied, "tied %d", tied);
         free(text);
         mr_sweep_table tab;
         MR_CHECK_OK(mr_sweep_table_load(&path, 1, NULL, &tab));
