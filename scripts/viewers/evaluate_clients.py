@@ -388,7 +388,7 @@ def explanation(case):
     if kind == "gltf-source":
         return "floor: PMREM, multiple scattering on rough metals"
     if m == "WaterBottle":
-        return "images read with v = 0 at the top" if kind == "gltf" else "floor"
+        return "floor" if kind == "usd-preview" else "images read with v = 0 at the top"
     if kind == "gltf":
         return "floor (the same BRDF)"
     if kind == "usd-preview":
