@@ -107,17 +107,22 @@ static void print_values(FILE *out, const mr_brdf_model *model, const double *va
 }
 
 /* --method materialx: MaterialX's translation graph (translate.h) instead of a fit, measured in the fit scene. */
+/* The three pictures of --images PREFIX (source, target, difference) as outputs of the plan; none without it. */
+static void plan_pictures(mr_output_plan *io, const char *images_prefix) {
+    for (int k = 0; images_prefix != NULL && k < 3; k++) {
+        char path[4096];
+        mr_remap_picture_path(images_prefix, k, path, sizeof path); // an overlong prefix: refused by the write
+        mr_output_plan_outputf(io, path, "--images %s", images_prefix);
+    }
+}
+
 static int run_materialx(const mr_brdf_model *from, const double *source_values, const mr_brdf_model *to, int size,
                          mr_fit_scene_options *scene_opts, const char *images_prefix, int json) {
     const mr_translation *t = NULL;
     if (mr_translate_find(from, to, &t) != MR_OK)
         return cli_usage_error("remap", "--method materialx: %s", mr_last_error());
     mr_output_plan io = {0};
-    for (int k = 0; images_prefix != NULL && k < 3; k++) {
-        char path[4096];
-        mr_remap_picture_path(images_prefix, k, path, sizeof path); // an overlong prefix: refused by the write
-        mr_output_plan_outputf(&io, path, "--images %s", images_prefix);
-    }
+    plan_pictures(&io, images_prefix);
     int exit_code = cli_plan_check("remap", &io);
     mr_output_plan_free(&io);
     if (exit_code != CLI_EXIT_OK) return exit_code;
@@ -302,11 +307,7 @@ int cmd_remap(int argc, char **argv) {
     for (int k = 0; k < 3; k++)
         if (image_paths[k]) mr_output_plan_inputf(&io, image_paths[k], "%s %s", image_options[k], image_paths[k]);
     if (reference_path) mr_output_plan_inputf(&io, reference_path, "--match-irradiance %s", reference_path);
-    for (int k = 0; images_prefix != NULL && k < 3; k++) {
-        char path[4096];
-        mr_remap_picture_path(images_prefix, k, path, sizeof path); // an overlong prefix: refused by the write
-        mr_output_plan_outputf(&io, path, "--images %s", images_prefix);
-    }
+    plan_pictures(&io, images_prefix);
     int exit_code = cli_plan_check("remap", &io);
     mr_output_plan_free(&io);
     if (exit_code != CLI_EXIT_OK) return exit_code;
