@@ -107,7 +107,7 @@ static void print_values(FILE *out, const mr_brdf_model *model, const double *va
 }
 
 /* --method materialx: MaterialX's translation graph (translate.h) instead of a fit, measured in the fit scene. */
-/* The three pictures of --images PREFIX (source, target, difference) as outputs of the plan; none without it. */
+/* The three pictures of --images PREFIX (source, target, SSIM map) as outputs of the plan; none without it. */
 static void plan_pictures(mr_output_plan *io, const char *images_prefix) {
     for (int k = 0; images_prefix != NULL && k < 3; k++) {
         char path[4096];
