@@ -31,22 +31,26 @@ SHORT = {"cycles": "Cycles", "three-r146": "three r146", "three": "three current
 THREE_PACKAGE = {"three-r146": "three-r146", "three": "three", "three-core": "three"}
 STRIP = {"three-core": ["KHR_materials_specular", "KHR_materials_ior"]}
 ROUTES = ["specgloss", "authors", "weighted-gltf", "weighted-paper", "mean-gltf", "mean-paper", "khronos",
-          "mlp", "hybrid", "hybrid-gltf", "hybrid-ior1000", "extension", "gltf-transform"]
+          "mlp", "hybrid", "hybrid-gltf", "hybrid-ior1000", "hybrid-mlp", "hybrid-mean", "hybrid-khronos",
+          "extension", "gltf-transform"]
 ROUTE_LABEL = {
     "specgloss": "spec-gloss original", "authors": "asset's own metal-rough", "weighted-gltf": "weighted, gltf",
     "weighted-paper": "weighted, paper", "mean-gltf": "mean, gltf", "mean-paper": "mean, paper",
-    "khronos": "khronos", "mlp": "mlp, core only", "hybrid": "**both readings** (the default: mlp, paper, + specular)",
+    "khronos": "khronos", "mlp": "mlp, core only",
+    "hybrid": "**both readings** (the default: weighted, paper, + specular)",
     "hybrid-gltf": "both readings, gltf convention", "hybrid-ior1000": "both readings, ior 1000",
+    "hybrid-mlp": "both readings over mlp (paper)", "hybrid-mean": "both readings over mean (paper)",
+    "hybrid-khronos": "both readings over khronos",
     "extension": "extension", "gltf-transform": "gltf-transform",
 }
 # The core conversions (no material extension): what a core-only engine is offered at best.
 CORE_ROUTES = ["authors", "weighted-gltf", "weighted-paper", "mean-gltf", "mean-paper", "khronos", "mlp"]
 # What the core-only viewer renders: its reference, the core conversions are the same files as in three.js
 # (current), so only the routes that carry extensions and mlp beside them.
-CORE_VIEWER_ROUTES = ["authors", "khronos", "mlp", "hybrid", "hybrid-gltf", "hybrid-ior1000", "extension",
-                      "gltf-transform"]
+CORE_VIEWER_ROUTES = ["authors", "khronos", "mlp", "hybrid", "hybrid-gltf", "hybrid-ior1000", "hybrid-mlp",
+                      "hybrid-mean", "hybrid-khronos", "extension", "gltf-transform"]
 # The default and its variants, each against its targets.
-BOTH = ["hybrid", "hybrid-gltf", "hybrid-ior1000"]
+BOTH = ["hybrid", "hybrid-gltf", "hybrid-ior1000", "hybrid-mlp", "hybrid-mean", "hybrid-khronos"]
 
 
 def read_variants(work):
