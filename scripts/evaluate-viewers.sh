@@ -9,8 +9,9 @@
 # For every asset (and DuckPlastic, the Duck as a specular-0.04 dielectric, made here) and both HDR maps each viewer
 # renders the spec-gloss original (where it can), the asset's own metal-rough material (where it has one),
 # `matremap gltf spec2metal` with weighted and mean in both conventions, khronos, mlp (core only), the default (both
-# readings: mlp + KHR_materials_specular) and extension, and gltf-transform's metalrough. Each render is compared with the viewer's reference on
-# the object's pixels (BUILD/tools/object_metrics: SSIM from mr_ssim's map, mean luminance ratio). The tables go
+# readings: weighted + KHR_materials_specular) and its variants (other core methods, the gltf convention, ior 1000),
+# extension, and gltf-transform's metalrough. Each render is compared with the viewer's reference on the object's
+# pixels (BUILD/tools/object_metrics: SSIM from mr_ssim's map, mean luminance ratio). The tables go
 # into docs/evaluation.md between the eval-viewers markers, one picture per asset into docs/evaluation/, renders
 # and job files into BUILD/evaluation-viewers/.
 # Installs what it needs: Blender and Chromium (scripts/install-deps.sh --bench), the pinned npm packages
@@ -18,7 +19,8 @@
 # Usage: scripts/evaluate-viewers.sh [BUILD]. Environment: VIEWERS_SIZE (three.js, default 384),
 # VIEWERS_CYCLES_SIZE (default 256), VIEWERS_CYCLES_SAMPLES (default 128), VIEWERS_THREADS (Cycles, default 2),
 # VIEWERS_ASSETS (a subset of "Avocado CesiumMilkTruck Duck FloppyDisk DuckPlastic", for trying things out),
-# MR_SHARED.
+# VIEWERS_SKIP_CYCLES=1 (three.js only, Blender not run: its rows are "-"; the tables stay in BUILD, docs/ is left as
+# it is: for trying things out), MR_SHARED.
 set -euo pipefail
 build=${1:-build}
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -90,25 +92,28 @@ for name in ${VIEWERS_ASSETS:-Avocado CesiumMilkTruck Duck FloppyDisk DuckPlasti
         line+=(authors)
     fi
     # Every conversion route converts the authors' materials too (--overwrite-metal-rough); the core routes write
-    # the core values alone (--core-only); hybrid is spec2metal's default (mlp + KHR_materials_specular).
+    # the core values alone (--core-only); hybrid is spec2metal's default (weighted + KHR_materials_specular).
     # The default reads the spec-gloss diffuse as paper does (the base colour gltf-transform keeps); hybrid-gltf reads
     # it as glTF does, hybrid-ior1000 solves the specular colour for ior 1000 (KHR_materials_ior written): the two
-    # choices measured.
+    # choices measured. hybrid-mlp, -mean, -khronos: both readings over another core method than the default's
+    # weighted (--method M), the choice of the default's core method measured.
     routes=(weighted:gltf weighted:paper mean:gltf mean:paper khronos: mlp: hybrid: hybrid:gltf hybrid-ior1000:
-            extension: gltf-transform:)
+            hybrid-mlp: hybrid-mean: hybrid-khronos: extension: gltf-transform:)
     # DuckPlastic only asks the convention question: mean equals weighted on its grey specular.
-    [ "$name" = DuckPlastic ] && routes=(weighted:gltf weighted:paper khronos: mlp: hybrid: hybrid:gltf extension:)
+    [ "$name" = DuckPlastic ] && routes=(weighted:gltf weighted:paper khronos: mlp: hybrid: hybrid:gltf
+                                         hybrid-mlp: hybrid-khronos: extension:)
     for route in "${routes[@]}"; do
         method=${route%%:*} convention=${route#*:}
         label=$method${convention:+-$convention}
         mkdir -p "$work/$name/$label"
         if [ "$method" = gltf-transform ]; then
             "$gt/node_modules/.bin/gltf-transform" metalrough "$src" "$work/$name/$label/out.gltf" >/dev/null 2>&1
-        elif [ "$method" = hybrid ] || [ "$method" = hybrid-ior1000 ]; then
-            ior=
+        elif [ "${method%%-*}" = hybrid ]; then
+            ior= core=
             [ "$method" = hybrid-ior1000 ] && ior="--extension-ior 1000"
+            case $method in hybrid-mlp|hybrid-mean|hybrid-khronos) core="--method ${method#hybrid-}" ;; esac
             # shellcheck disable=SC2086
-            "$bin" gltf spec2metal "$src" -o "$work/$name/$label/out.gltf" --overwrite-metal-rough $ior \
+            "$bin" gltf spec2metal "$src" -o "$work/$name/$label/out.gltf" --overwrite-metal-rough $ior $core \
                 ${convention:+--convention "$convention"} > "$work/$name/$label/summary.txt"
         else
             core_only=--core-only
@@ -129,10 +134,16 @@ python3 "$viewers/evaluate_viewers.py" jobs "$work" "$assets/hdri" "$chromium_bi
 # shellcheck source=scripts/lib/timing.sh
 . "$root/scripts/lib/timing.sh"
 # Wall-clock and CPU seconds of each viewer's whole run (the machine is shared: CPU time is the work done).
-cycles_times=$(times_of "$work/cycles.log" nice -n 10 blender -b --factory-startup --python-exit-code 3 \
-    --python "$viewers/blender_render.py" -- "$work/cycles-jobs.json") \
-    || { echo "evaluation-viewers: Blender failed, see $work/cycles.log" >&2; exit 3; }
-grep '^{' "$work/cycles.log" > "$work/cycles-done.jsonl"
+if [ "${VIEWERS_SKIP_CYCLES:-0}" = 1 ]; then
+    cycles_times="0 0"
+    : > "$work/cycles-done.jsonl"
+    echo "evaluation-viewers: VIEWERS_SKIP_CYCLES=1: no Cycles renders" >&2
+else
+    cycles_times=$(times_of "$work/cycles.log" nice -n 10 blender -b --factory-startup --python-exit-code 3 \
+        --python "$viewers/blender_render.py" -- "$work/cycles-jobs.json") \
+        || { echo "evaluation-viewers: Blender failed, see $work/cycles.log" >&2; exit 3; }
+    grep '^{' "$work/cycles.log" > "$work/cycles-done.jsonl"
+fi
 echo "evaluation-viewers: Cycles renders: wall, CPU s $cycles_times" >&2
 three_times=$(times_of "$work/three.log" nice -n 10 node "$viewers/three_render.mjs" "$work/three-jobs.json") \
     || { echo "evaluation-viewers: three.js failed, see $work/three.log" >&2; exit 3; }
@@ -140,13 +151,15 @@ grep '^{' "$work/three.log" > "$work/three-done.jsonl"
 echo "evaluation-viewers: three.js renders: wall, CPU s $three_times" >&2
 
 python3 "$viewers/evaluate_viewers.py" metrics "$work" "$metrics" > "$work/metrics.jsonl"
-python3 "$viewers/evaluate_viewers.py" pictures "$work" "$root/docs/evaluation"
+[ "${VIEWERS_SKIP_CYCLES:-0}" = 1 ] || python3 "$viewers/evaluate_viewers.py" pictures "$work" "$root/docs/evaluation"
 python3 "$viewers/evaluate_viewers.py" table "$work" "$(date -u +%Y-%m-%d)" "$("$bin" --version | cut -d' ' -f2)" \
     "$(blender --version 2>/dev/null | head -n 1)" "$cycles_times" "$three_times" "$(($(date +%s) - t_start))" \
     > "$work/table.md"
 cat "$work/table.md"
 # shellcheck source=scripts/lib/doc_section.sh
 . "$root/scripts/lib/doc_section.sh"
-if replace_doc_section "$root/docs/evaluation.md" eval-viewers "$work/table.md"; then
+if [ "${VIEWERS_SKIP_CYCLES:-0}" = 1 ]; then
+    echo "evaluation-viewers: VIEWERS_SKIP_CYCLES=1: tables in $work/table.md only, docs/evaluation.md left as it is"
+elif replace_doc_section "$root/docs/evaluation.md" eval-viewers "$work/table.md"; then
     echo "evaluation-viewers: tables written into docs/evaluation.md, pictures into docs/evaluation/viewers_*.png"
 fi

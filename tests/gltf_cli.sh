@@ -60,7 +60,7 @@ expect "metal2spec takes no --overwrite-metal-rough" 1 "go with spec2metal" -- "
 expect "metal2spec takes no --eps" 1 "go with spec2metal" -- "$bin" gltf metal2spec "$bottle" -o "$tmp/x.gltf" \
     --eps 0.01
 expect "--eps with mlp: refused" 1 "--eps applies to the analytic methods" -- "$bin" gltf spec2metal "$floppy" \
-    -o "$tmp/x.gltf" --eps 0.01
+    -o "$tmp/x.gltf" --eps 0.01 --method mlp
 expect "--eps out of range" 1 "--eps" -- "$bin" gltf spec2metal "$floppy" -o "$tmp/x.gltf" --method weighted --eps 2
 expect "--fallback is gone, and says what replaced it" 1 "--overwrite-metal-rough" -- "$bin" gltf spec2metal \
     "$floppy" -o "$tmp/x.gltf" --fallback replace
@@ -212,7 +212,7 @@ check "the glass's factors are spec2metal's ($got vs $expected)" awk -v a="$got"
     n = split(a, x, ","); if (n != 5 || split(b, y, ",") != 5) exit 1
     for (i = 1; i <= n; i++) { e = x[i] - y[i]; if (e < 0) e = -e; if (e > 1e-5) exit 1 } }'
 expect "Duck, the network" 0 "1 of 1 materials converted with mlp" -- "$bin" gltf spec2metal "$duck" \
-    -o "$tmp/duck/duck.glb" --overwrite-metal-rough
+    -o "$tmp/duck/duck.glb" --overwrite-metal-rough --method mlp
 check "a .glb output" test "$(head -c 4 "$tmp/duck/duck.glb")" = glTF
 check "Duck: its diffuse texture pruned" grep -q "^pruned 1 texture, 1 image and 0 samplers" "$tmp/out"
 # 2 new textures; 3 views of the Duck's own and one per new image.
@@ -241,13 +241,16 @@ expect "FloppyDisk --json: the solve's counts" 0 '"core_only": false, "extension
 check "... per material too" test "$(summary 'sorted(m["extension"])')" = \
     "['diffuse_max_error', 'diffuse_mean_error', 'diffuse_off', 'f0_max_error', 'f0_unmet', 'texels']"
 check "... read with the paper convention by default" test "$(summary 'd["convention"]')" = paper
-expect "... the glTF convention when asked" 0 '"method": "mlp", "convention": "gltf"' -- "$bin" gltf spec2metal \
+check "... over the weighted core conversion by default" test "$(summary 'd["method"]')" = weighted
+expect "... the glTF convention when asked" 0 '"method": "weighted", "convention": "gltf"' -- "$bin" gltf spec2metal \
     "$floppy" -o "$tmp/both/g.gltf" --json --convention gltf
+expect "... mlp with --weights" 0 '"method": "mlp", "convention": "paper"' -- "$bin" gltf spec2metal \
+    "$floppy" -o "$tmp/both/w.gltf" --json --weights "$root/data/spec2metal.mlp"
 expect "... and with --core-only" 0 '"method": "mlp", "convention": "gltf"' -- "$bin" gltf spec2metal \
     "$floppy" -o "$tmp/both/c.gltf" --json --core-only
 expect "FloppyDisk --core-only" 0 \
     "^matremap gltf spec2metal: core metal-rough values only \(--core-only\): no KHR_materials_specular$" \
-    -- "$bin" gltf spec2metal "$floppy" -o "$tmp/core/f.gltf" --core-only --convention paper
+    -- "$bin" gltf spec2metal "$floppy" -o "$tmp/core/f.gltf" --core-only --convention paper --method weighted
 check "... no specular extension, the same core textures" test \
     "$(gltf "$tmp/core/f.gltf" '("extensions" in m(0), d.get("extensionsUsed", []), sorted(pbr(0)))')" = \
     "(False, [], ['baseColorTexture', 'metallicRoughnessTexture'])"

@@ -41,10 +41,11 @@ static void print_help(void) {
            "baseColorTexture or metallicRoughnessTexture, or factors other than 1: the artist's own fallback, as\n"
            "in the Avocado) is kept as it is and not converted, and the output says so; its spec-gloss extension\n"
            "goes like the converted ones' (--keep-specgloss keeps it). --overwrite-metal-rough converts it anyway.\n"
-           "Both readings (spec2metal's default): besides the per-texel core values, every converted or kept\n"
-           "material gets KHR_materials_specular values solved texel by texel over them (a specularColor texture,\n"
-           "specular 1), so that engines reading the extension see the spec-gloss F0, and engines without it the\n"
-           "core conversion; where one base colour cannot serve both (its diffuse) the output counts the texels.\n"
+           "Both readings (spec2metal's default): besides the per-texel core values (--method weighted unless\n"
+           "told otherwise), every converted or kept material gets KHR_materials_specular values solved texel by\n"
+           "texel over them (a specularColor texture, specular 1), so that engines reading the extension see the\n"
+           "spec-gloss F0, and engines without it the core conversion; where one base colour cannot serve both\n"
+           "(its diffuse) the output counts the texels.\n"
            "--core-only writes the core values alone (docs/gltf.md, \"Both readings\").\n"
            "metal2spec adds the spec-gloss extension to every metal-rough material (Eq. 2), keeping the core\n"
            "material as the fallback.\n"
@@ -62,9 +63,11 @@ static void print_help(void) {
            "\n");
     printf("Options:\n"
            "  -o, --output OUT      the converted asset (.gltf with its files beside it, or .glb); never an input\n"
-           "  --method M            spec2metal: mlp (default), weighted, mean, khronos, or extension: the lossless\n"
-           "                        route of KHR_materials_specular + KHR_materials_ior (ior 1000, textures reused,\n"
-           "                        metallic 0; for engines that support both); metal2spec: eq2 (default), khronos\n"
+           "  --method M            spec2metal: weighted, mlp, mean, khronos, or extension: the lossless route of\n"
+           "                        KHR_materials_specular + KHR_materials_ior (ior 1000, textures reused, metallic\n"
+           "                        0; for engines that support both); default weighted for both readings (measured\n"
+           "                        closest in both kinds of engine, docs/gltf.md), mlp with --core-only, --format\n"
+           "                        exr or --weights; metal2spec: eq2 (default), khronos\n"
            "  --core-only           spec2metal: core metal-rough values only, no KHR_materials_specular over them\n"
            "                        (default: both readings, except with --method extension, --keep-specgloss\n"
            "                        and --format exr)\n"
@@ -214,8 +217,13 @@ static int parse(int argc, char **argv, options *o) {
         return cli_usage_error("gltf", "'%s': expected spec2metal or metal2spec", o->direction);
     if (o->input == NULL) return cli_usage_error("gltf", "missing the input asset (.gltf or .glb)");
     if (o->output == NULL) return cli_usage_error("gltf", "missing -o OUT (.gltf or .glb)");
-    if (o->method == NULL) o->method = to_metal ? "mlp" : "eq2";
     if (o->format == NULL) o->format = "png";
+    // spec2metal's default core method: weighted under both readings (measured ahead of mlp in the engines with and
+    // without KHR_materials_specular, docs/evaluation.md "Both readings"); mlp for the core values alone (--core-only,
+    // --format exr) and with --weights.
+    if (o->method == NULL)
+        o->method = !to_metal ? "eq2" : o->core_only || o->weights || strcmp(o->format, "exr") == 0 ? "mlp"
+                                                                                                  : "weighted";
     if (!to_metal && (o->weights || o->overwrite || o->keep_specgloss || o->eps_given || o->core_only ||
                       o->extension_ior > 0.0))
         return cli_usage_error("gltf", "--weights, --eps, --overwrite-metal-rough, --keep-specgloss, --core-only and "
