@@ -83,6 +83,24 @@ static void relative_path(const char *folder, const char *target, char *out, siz
         used += (size_t)snprintf(out + used, size - used, "%s%s", t[i], i + 1 < nt ? "/" : "");
 }
 
+/* v->file replaced by `file` (under folder `at`, absolute and normal) named relative to folder `to`. MR_ERR_INVALID_ARG
+ * (`what` naming the map) when the joined path does not fit; MR_ERR_NOMEM. */
+static mr_status set_relative_file(mr_doc_value *v, const char *at, const char *file, const char *to,
+                                   const char *what) {
+    char target[8192], rel[8192];
+    snprintf(target, sizeof target, "%s/%s", at, file);
+    if (strlen(target) >= 4096) return mr_fail(MR_ERR_INVALID_ARG, "material document: %s: path too long", what);
+    normalize(target);
+    relative_path(to, target, rel, sizeof rel);
+    const size_t len = strlen(rel) + 1;
+    char *copy = malloc(len);
+    if (copy == NULL) return mr_fail(MR_ERR_NOMEM, "material document: out of memory");
+    memcpy(copy, rel, len);
+    free(v->file);
+    v->file = copy;
+    return MR_OK;
+}
+
 mr_status mr_doc_rebase(mr_doc *doc, const char *from, const char *to) {
     if (doc == NULL || from == NULL || to == NULL) return mr_fail(MR_ERR_INVALID_ARG, "material document: rebase");
     char a[4096], b[4096];
@@ -93,19 +111,10 @@ mr_status mr_doc_rebase(mr_doc *doc, const char *from, const char *to) {
         for (int p = 0; p < m->model->param_count; p++) {
             mr_doc_value *v = &m->values[p];
             if (v->kind != MR_DOC_TEXTURE || v->file[0] == '/') continue;
-            char target[8192];
-            snprintf(target, sizeof target, "%s/%s", a, v->file);
-            if (strlen(target) >= 4096)
-                return mr_fail(MR_ERR_INVALID_ARG, "material document: map '%s' of material '%s': path too long",
-                               v->file, m->name);
-            normalize(target);
-            char rel[8192];
-            relative_path(b, target, rel, sizeof rel);
-            char *copy = malloc(strlen(rel) + 1);
-            if (copy == NULL) return mr_fail(MR_ERR_NOMEM, "material document: out of memory");
-            memcpy(copy, rel, strlen(rel) + 1);
-            free(v->file);
-            v->file = copy;
+            char what[640];
+            snprintf(what, sizeof what, "map '%s' of material '%s'", v->file, m->name);
+            mr_status st = set_relative_file(v, a, v->file, b, what);
+            if (st != MR_OK) return st;
         }
     }
     return MR_OK;
@@ -292,18 +301,10 @@ static mr_status name_converted_maps(const mr_doc_gltf_result *r, int k, const c
         if (map->material != k || map->param < 0) continue;
         if (!folder_of(map->path, at))
             return mr_fail(MR_ERR_INVALID_ARG, "material document: cannot name the folder of '%s'", map->path);
-        char target[8192], rel[8192];
-        snprintf(target, sizeof target, "%s/%s", at, map->file);
-        if (strlen(target) >= 4096)
-            return mr_fail(MR_ERR_INVALID_ARG, "material document: '%s': path too long", target);
-        normalize(target);
-        relative_path(from, target, rel, sizeof rel);
-        mr_doc_value *v = &m->values[map->param];
-        char *copy = malloc(strlen(rel) + 1);
-        if (copy == NULL) return mr_fail(MR_ERR_NOMEM, "material document: out of memory");
-        memcpy(copy, rel, strlen(rel) + 1);
-        free(v->file);
-        v->file = copy;
+        char what[8200];
+        snprintf(what, sizeof what, "'%s/%s'", at, map->file);
+        mr_status st = set_relative_file(&m->values[map->param], at, map->file, from, what);
+        if (st != MR_OK) return st;
     }
     return MR_OK;
 }
