@@ -599,6 +599,12 @@ MR_TEST(mtlx_refusals_name_file_line_material_and_node) {
         {"  <open_pbr_surface name=\"SR\" type=\"surfaceshader\">\n"
          "    <input name=\"base_color\" type=\"color3\" value=\"1, 0\" />\n  </open_pbr_surface>\n",
          MR_ERR_FORMAT, "line 4: material 'M': input 'base_color': \"1, 0\" is no color3 value"},
+        {"  <open_pbr_surface name=\"SR\" type=\"surfaceshader\">\n"
+         "    <input name=\"base_color\" type=\"color3\" value=\"1, nan, 0\" />\n  </open_pbr_surface>\n",
+         MR_ERR_FORMAT, "line 4: material 'M': input 'base_color': \"1, nan, 0\" is no color3 value"},
+        {"  <open_pbr_surface name=\"SR\" type=\"surfaceshader\">\n"
+         "    <input name=\"specular_roughness\" type=\"float\" value=\"1e999\" />\n  </open_pbr_surface>\n",
+         MR_ERR_FORMAT, "line 4: material 'M': input 'specular_roughness': \"1e999\" is no float value"},
         {"  <standard_surface name=\"SR\" type=\"surfaceshader\">\n"
          "    <input name=\"base\" type=\"float\" interfacename=\"b\" />\n  </standard_surface>\n",
          MR_ERR_UNSUPPORTED, "line 4: material 'M': attribute interfacename=\"b\" of <input name=\"base\"> is not "
