@@ -5,8 +5,9 @@
 # maps, and keeps its white specularColor (the metallic workflow's layer writes none: three.js would apply it);
 # MaterialXLoader and USDLoader in headless Chromium (scripts/viewers/client_render.mjs, 32 x 32) render an
 # open_pbr_surface and a UsdPreviewSurface material, the MaterialX log holding no error and only the two documented
-# ignored inputs. Needs the npm packages of scripts/viewers (npm ci, as make evaluation-clients runs it) and
-# Chromium; without them it says so and checks nothing (no network here). Ends with "N passed, N failed".
+# ignored inputs. Needs the npm packages of scripts/viewers (installed here with npm ci when missing, as
+# gltf_outputs.sh and make evaluation-clients do) and, for the renders, Chromium; without the packages (npm ci
+# failing) it says so and checks nothing. Ends with "N passed, N failed".
 set -u
 root=$(cd "$(dirname "$0")/.." && pwd)
 build="${MR_BUILD:-$root/build}"
@@ -15,8 +16,13 @@ shared="${MR_SHARED:-$root/../shared}/assets"
 viewers="$root/scripts/viewers"
 source "$(dirname "$0")/lib/cli_harness.sh"
 
+# The pinned npm packages, installed as gltf_outputs.sh installs them (npm ci: the lock file's versions).
 if [ ! -f "$viewers/node_modules/three/examples/jsm/loaders/USDLoader.js" ]; then
-    echo "   skipped: $viewers/node_modules is not installed (npm ci there, or make evaluation-clients)"
+    (cd "$viewers" && npm ci --no-audit --no-fund --loglevel=error) >"$tmp/npm.log" 2>&1 ||
+        echo "      npm ci failed: $(tail -n 3 "$tmp/npm.log" | tr '\n' ' ')"
+fi
+if [ ! -f "$viewers/node_modules/three/examples/jsm/loaders/USDLoader.js" ]; then
+    echo "   skipped: $viewers/node_modules could not be installed (npm ci there, or make evaluation-clients)"
     finish
 fi
 cat >"$tmp/uniform.gltf" <<'EOF'
