@@ -524,18 +524,16 @@ int cmd_sweep(int argc, char **argv) {
     mr_sweep_summary summary;
     mr_status status = mr_sweep_run(&a.spec, output, &opts, &summary);
     free(command);
-    char message[1024];
-    snprintf(message, sizeof message, "%s", mr_last_error());
+    if (bar.drawn && status != MR_OK) fprintf(stderr, "\n");
+    // Rank 0 reports for the run (the other ranks' failures reach it as messages), and before MPI ends: a rank
+    // that leaves with a non-zero code makes mpirun kill the others, and MPI's finalize holds every rank until all
+    // reach it, so the message is out before any rank can leave.
+    if (mpi_rank == 0 && status != MR_OK)
+        fprintf(stderr, "matremap sweep: error: %s\n", mr_last_error()[0] ? mr_last_error() : mr_status_str(status));
     if (under_mpi)
         mr_sweep_mpi_finish(&comm);
-    if (bar.drawn && status != MR_OK) fprintf(stderr, "\n");
-    // Rank 0 reports for the run (the other ranks' failures reach it as messages).
-    if (mpi_rank != 0)
+    if (mpi_rank != 0 || status != MR_OK)
         return cli_exit_code(status);
-    if (status != MR_OK) {
-        fprintf(stderr, "matremap sweep: error: %s\n", message[0] ? message : mr_status_str(status));
-        return cli_exit_code(status);
-    }
 
     if (a.json) {
         printf("{\"command\": \"sweep\", \"output\": ");

@@ -177,6 +177,9 @@ EXPORT int mr_mpi_module_finalize(void) {
     free(sends);
     sends = NULL;
     send_capacity = 0;
+    // Every rank waits here for all: rank 0 reports before it comes, and a rank that then leaves with an error
+    // makes mpirun kill the rest (MPI_Finalize need not synchronise by itself).
+    MPI_Barrier(MPI_COMM_WORLD);
     int fin = MPI_Finalize();
     if (rc != 0)
         return rc;
