@@ -39,6 +39,7 @@
 #include "mr_image.h"
 #include "brdf/brdf.h"
 #include "render/render.h"
+#include "render/renderer.h"
 #include "io/image_io.h"
 #include "io/output_plan.h"
 #include "io/obj_load.h"

@@ -149,6 +149,35 @@ int cli_material_load(const char *command, const char *model_name, const char *c
  * "matremap render: note: base_color=@nan.exr: 3 texels not finite, read as 0; 2 negative, clamped to 0". */
 void cli_material_note_invalid_texels(const char *command, const mr_material *material);
 
+/* ---- renderers on either side of a remap (cli_renderer.c) ---- */
+
+/* --from-renderer NAME, --to-renderer NAME, --samples N of remap, sweep and report, and what they opened. */
+typedef struct cli_renderers {
+    const char *names[2];     /* source, target: NULL = builtin */
+    int samples;              /* 0: the renderers' defaults */
+    mr_renderer *opened[2];   /* NULL: built-in */
+    char versions[2][128];    /* "blender 3.4.1" once started */
+} cli_renderers;
+
+/* The options above' help lines, for a command's --help. */
+void cli_renderers_help(FILE *out);
+/* Take argv[*i] if it is one of the options: 1 taken, -1 after a usage error, 0 another argument. */
+int cli_take_renderer_option(const char *command, int argc, char **argv, int *i, cli_renderers *r);
+/* Check that each side's renderer renders its model by values (source NULL: a material of the renderer's own),
+ * then open and start the external ones (`processes` each, 0 = the thread rule): CLI_EXIT_OK or the exit code
+ * after the message (a missing Blender: exit 3 naming the package). */
+int cli_open_renderers(const char *command, cli_renderers *r, const mr_brdf_model *source,
+                       const mr_brdf_model *target, int processes);
+void cli_close_renderers(cli_renderers *r);
+/* "renderers: source blender 3.4.1 (256 samples, N renders), target builtin\n"; JSON: the object's text. */
+void cli_print_renderers(FILE *out, const cli_renderers *r);
+void cli_print_renderers_json(FILE *out, const cli_renderers *r);
+/* 'NODE.SOCKET=v' or 'NODE.SOCKET=r,g,b' set on a renderer's own material (the path may hold spaces and dots: split
+ * at the last '='): CLI_EXIT_OK, or the exit code after the message. */
+int cli_set_material_input(const char *command, mr_external_material *material, const char *assignment);
+/* The material's inputs as a JSON object {"PATH": value or [r, g, b], ...}. */
+void cli_print_material_inputs_json(FILE *out, const mr_external_material *material);
+
 int cmd_models(int argc, char **argv);
 int cmd_render(int argc, char **argv);
 int cmd_ssim(int argc, char **argv);

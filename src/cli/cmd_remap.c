@@ -2,6 +2,7 @@
  * cmd_remap.c — `matremap remap`: fit a target model to a built-in source material, or to renders of the fit
  * scene made by any renderer (remap.h has the method and the outcome definitions).
  */
+#include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
@@ -27,6 +28,10 @@ static void print_help(void) {
            "\n"
            "Source:\n"
            "  --from MODEL [name=value ...]   a built-in model; unnamed parameters keep their defaults\n"
+           "  --from blender:FILE.blend:MATERIAL ['NODE.SOCKET=value' ...]\n"
+           "                                  a material of a .blend file rendered by Blender (any node tree);\n"
+           "                                  its unlinked float and colour inputs can be set (r,g,b for a colour);\n"
+           "                                  the inputs it exposes are listed by --list-inputs\n"
            "  --from-images FULL              renders of the fit scene by another renderer (linear EXR/HDR, square,\n"
            "                                  top row up; docs/cycles-peer.md explains how to make them)\n"
            "  --diffuse FILE, --specular FILE its diffuse-only and specular-only renders (for --strategy two/three)\n"
@@ -74,16 +79,21 @@ static void print_help(void) {
            "                     default size, where a team costs more than it saves; copies run side by side)\n"
            "  --images PREFIX    also write PREFIX_source.png, PREFIX_target.png and PREFIX_ssim.png (no '_'\n"
            "                     after a PREFIX ending in '/', '_', '-' or '.': --images out/ writes out/source.png)\n"
+           "  --list-inputs      with --from blender:FILE.blend:MATERIAL: list the material's inputs and stop\n"
            "  --json             machine-readable result on stdout\n"
            "  --help             this text\n"
-           "\n"
+           "\n",
+           MR_REMAP_DEFAULT_SIZE);
+    cli_renderers_help(stdout);
+    printf("\n"
            "Examples:\n"
            "  matremap remap --from as f0=0.9 alpha=0.05 --to ward\n"
            "  matremap remap --from ggx-plastic ior=1.3 diffuse=0.5 alpha=0.1 --to ward --strategy single --json\n"
            "  matremap remap --from-images cycles.exr --match-irradiance cycles_lambert.exr --to ggx\n"
            "  matremap remap --from standard-surface metalness=1 base_color=0.944,0.776,0.373 --to gltf \\\n"
-           "      --method materialx\n",
-           MR_REMAP_DEFAULT_SIZE);
+           "      --method materialx\n"
+           "  matremap remap --from blender:data/blender/node_materials.blend:DiffuseGlossyAdd --to gltf\n"
+           "  matremap remap --from gltf base_color=0.8,0.1,0.1 roughness=0.3 --to gltf --to-renderer three\n");
 }
 
 /* Print the packed values of `model` as name=value words (RGB as r,g,b), the form other commands accept. */
@@ -172,13 +182,61 @@ static int run_materialx(const mr_brdf_model *from, const double *source_values,
     return CLI_EXIT_OK;
 }
 
+/* --list-inputs: a .blend material's inputs, their ranges and values. */
+static int list_material_inputs(const char *reference, cli_renderers *renderers, int json) {
+    int exit_code = cli_open_renderers("remap", renderers, NULL, NULL, 1);
+    if (exit_code != CLI_EXIT_OK) return exit_code;
+    mr_external_material *material = NULL;
+    mr_status status = mr_renderer_describe(renderers->opened[0], reference, &material);
+    if (status != MR_OK) {
+        exit_code = cli_fail("remap", status);
+    } else if (json) {
+        printf("{\"material\": ");
+        cli_json_string(stdout, reference);
+        printf(", \"renderer\": ");
+        cli_json_string(stdout, renderers->versions[0]);
+        printf(", \"inputs\": [");
+        for (int k = 0; k < mr_external_material_param_count(material); k++) {
+            int channels = 0;
+            double lo, hi, v[3];
+            const char *path = mr_external_material_param(material, k, &channels, &lo, &hi, v);
+            printf("%s{\"path\": ", k ? ", " : "");
+            cli_json_string(stdout, path);
+            printf(", \"kind\": \"%s\", \"min\": %.17g, \"max\": %.17g, \"value\": ",
+                   channels == 3 ? "color" : "float", lo, hi);
+            if (channels == 3)
+                printf("[%.17g, %.17g, %.17g]}", v[0], v[1], v[2]);
+            else
+                printf("%.17g}", v[0]);
+        }
+        printf("]}\n");
+    } else {
+        printf("%s (%s): %d input%s\n", reference, renderers->versions[0], mr_external_material_param_count(material),
+               mr_external_material_param_count(material) == 1 ? "" : "s");
+        for (int k = 0; k < mr_external_material_param_count(material); k++) {
+            int channels = 0;
+            double lo, hi, v[3];
+            const char *path = mr_external_material_param(material, k, &channels, &lo, &hi, v);
+            if (channels == 3)
+                printf("  '%s=%g,%g,%g'  colour\n", path, v[0], v[1], v[2]);
+            else
+                printf("  '%s=%g'  [%g, %g]\n", path, v[0], lo, hi);
+        }
+    }
+    mr_external_material_free(material);
+    cli_close_renderers(renderers);
+    return exit_code;
+}
+
 int cmd_remap(int argc, char **argv) {
     const char *from_name = NULL, *to_name = NULL, *images_prefix = NULL;
     const char *image_paths[3] = {NULL, NULL, NULL}; /* full, diffuse, specular */
     const char *reference_path = NULL, *hold_list = NULL, *tie_list = NULL;
     double reference_albedo = 0.5;
     const char *from_assignments[MAX_ASSIGNMENTS], *to_assignments[MAX_ASSIGNMENTS];
-    int from_count = 0, to_count = 0, json = 0, size = 0, materialx = 0, fit_option = 0;
+    int from_count = 0, to_count = 0, json = 0, size = 0, materialx = 0, fit_option = 0, list_inputs = 0;
+    cli_renderers renderers;
+    memset(&renderers, 0, sizeof renderers);
     mr_fit_scene_options scene_opts = {0};
     mr_remap_options opts = mr_remap_options_default();
     enum { NONE, FROM, TO } collecting = NONE;
@@ -247,6 +305,10 @@ int cmd_remap(int argc, char **argv) {
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--images", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             images_prefix = value;
+        } else if ((taken = cli_take_renderer_option("remap", argc, argv, &i, &renderers))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+        } else if (strcmp(argv[i], "--list-inputs") == 0) {
+            list_inputs = 1;
         } else if (strcmp(argv[i], "--json") == 0) {
             json = 1;
         } else if (argv[i][0] == '-') {
@@ -260,6 +322,18 @@ int cmd_remap(int argc, char **argv) {
                                    "as name=value)", argv[i]);
         }
     }
+    // --from blender:FILE.blend:MATERIAL: a material of Blender's own, rendered by Blender.
+    const char *external = NULL;
+    if (from_name != NULL && strncmp(from_name, "blender:", 8) == 0) {
+        external = from_name + 8;
+        if (renderers.names[0] != NULL && strcmp(renderers.names[0], "blender") != 0)
+            return cli_usage_error("remap", "--from %s is rendered by blender, not --from-renderer %s", from_name,
+                                   renderers.names[0]);
+        renderers.names[0] = "blender";
+    }
+    if (list_inputs && external == NULL)
+        return cli_usage_error("remap", "--list-inputs goes with --from blender:FILE.blend:MATERIAL");
+    if (list_inputs) return list_material_inputs(external, &renderers, json);
     if (to_name == NULL) return cli_usage_error("remap", "missing --to MODEL");
     if ((from_name == NULL) == (image_paths[0] == NULL))
         return cli_usage_error("remap", "give exactly one source: --from MODEL or --from-images FULL.exr");
@@ -269,6 +343,9 @@ int cmd_remap(int argc, char **argv) {
         return cli_usage_error("remap", "give both --diffuse and --specular, or neither");
     if (materialx && from_name == NULL)
         return cli_usage_error("remap", "--method materialx translates a model's values: give --from MODEL");
+    if (materialx && (renderers.names[0] || renderers.names[1]))
+        return cli_usage_error("remap", "--method materialx is a closed-form translation measured by the built-in "
+                               "renderer: --from-renderer and --to-renderer go with --method fit");
     if (materialx && (fit_option || to_count > 0))
         return cli_usage_error("remap", "--method materialx sets every target parameter from its graph: --hold, "
                                "--tie, --strategy, --grid-points and name=value after --to go with --method fit");
@@ -287,7 +364,11 @@ int cmd_remap(int argc, char **argv) {
 
     const mr_brdf_model *from = NULL;
     double source_values[MR_BRDF_MAX_VALUES];
-    if (from_name != NULL) {
+    if (external != NULL) {
+        if (tie_list != NULL)
+            return cli_usage_error("remap", "--tie needs --from MODEL (a material of Blender's own has no model "
+                                   "values to tie to)");
+    } else if (from_name != NULL) {
         from = mr_brdf_find(from_name);
         if (from == NULL) return cli_fail("remap", MR_ERR_INVALID_ARG);
         mr_brdf_default_values(from, source_values);
@@ -311,6 +392,22 @@ int cmd_remap(int argc, char **argv) {
     int exit_code = cli_plan_check("remap", &io);
     mr_output_plan_free(&io);
     if (exit_code != CLI_EXIT_OK) return exit_code;
+    // The renderers start before any work, so a missing one fails at once.
+    if ((exit_code = cli_open_renderers("remap", &renderers, from, to, 1)) != CLI_EXIT_OK) return exit_code;
+    opts.source_renderer = renderers.opened[0];
+    opts.target_renderer = renderers.opened[1];
+    mr_external_material *material = NULL;
+    if (external != NULL) {
+        mr_status status = mr_renderer_describe(renderers.opened[0], external, &material);
+        if (status != MR_OK) exit_code = cli_fail("remap", status);
+        for (int k = 0; exit_code == CLI_EXIT_OK && k < from_count; k++)
+            exit_code = cli_set_material_input("remap", material, from_assignments[k]);
+        if (exit_code != CLI_EXIT_OK) {
+            mr_external_material_free(material);
+            cli_close_renderers(&renderers);
+            return exit_code;
+        }
+    }
 
     // Source images (black-box renders) decide the scene size; they must all agree and be square.
     mr_image *images[3] = {NULL, NULL, NULL}, *reference = NULL;
@@ -328,6 +425,13 @@ int cmd_remap(int argc, char **argv) {
             status = mr_irradiance_scale(plan, reference, reference_albedo, &irradiance_scale);
             for (int k = 0; k < 3 && status == MR_OK; k++) mr_image_scale(images[k], irradiance_scale);
         }
+        if (status == MR_OK && material != NULL) { // a material of Blender's own: its renders are the source
+            for (int k = 0; k < 3 && status == MR_OK; k++)
+                status = mr_image_create(scene_opts.size, scene_opts.size, 3, &images[k]);
+            if (status == MR_OK)
+                status = mr_renderer_render_external(renderers.opened[0], plan, material, images[0], images[1],
+                                                     images[2]);
+        }
         if (status == MR_OK) {
             if (from != NULL) {
                 status = mr_remap(plan, from, source_values, to, &opts, &result);
@@ -337,9 +441,17 @@ int cmd_remap(int argc, char **argv) {
             }
         }
         if (status == MR_OK && images_prefix != NULL) {
-            mr_image *source_image = images[0];
-            if (source_image == NULL) status = mr_render(plan, from, source_values, MR_COMPONENT_FULL, &images[0]);
-            if (status == MR_OK) status = mr_remap_write_pictures(images_prefix, plan, images[0], to, result.values);
+            if (images[0] == NULL) { // a model source: rendered again, by its renderer
+                status = mr_image_create(scene_opts.size, scene_opts.size, 3, &images[0]);
+                if (status == MR_OK)
+                    status = mr_renderer_is_builtin(opts.source_renderer)
+                                 ? mr_render_into(plan, from, source_values, MR_COMPONENT_FULL, images[0])
+                                 : mr_renderer_render(opts.source_renderer, plan, from, source_values, images[0],
+                                                      NULL, NULL);
+            }
+            if (status == MR_OK)
+                status = mr_remap_write_pictures_by(images_prefix, plan, images[0], opts.target_renderer, to,
+                                                    result.values);
         }
         if (status != MR_OK) exit_code = cli_fail("remap", status);
     }
@@ -356,6 +468,12 @@ int cmd_remap(int argc, char **argv) {
                 printf(", \"values\": {");
                 print_values(stdout, from, source_values, 1);
                 printf("}}");
+            } else if (material != NULL) {
+                printf("{\"material\": ");
+                cli_json_string(stdout, external);
+                printf(", \"inputs\": ");
+                cli_print_material_inputs_json(stdout, material);
+                printf("}");
             } else {
                 printf("{\"images\": ");
                 cli_json_string(stdout, image_paths[0]);
@@ -375,6 +493,8 @@ int cmd_remap(int argc, char **argv) {
             }
             printf(", \"held\": ");
             cli_print_holds_json(stdout, to, target_values, opts.held, opts.ties.tied);
+            printf(", \"renderers\": ");
+            cli_print_renderers_json(stdout, &renderers);
             printf("}\n");
         } else {
             printf("%s", to->name);
@@ -388,8 +508,11 @@ int cmd_remap(int argc, char **argv) {
             if (reference != NULL) printf("irradiance scale applied to the source images: %.6g\n", irradiance_scale);
             cli_print_holds_tied(stdout, NULL, to, target_values, opts.held, opts.ties.tied);
             if (from != NULL) cli_print_ties(stdout, NULL, from, to, &opts.ties, tie_list != NULL);
+            if (renderers.opened[0] != NULL || renderers.opened[1] != NULL) cli_print_renderers(stdout, &renderers);
         }
     }
+    mr_external_material_free(material);
+    cli_close_renderers(&renderers);
     for (int k = 0; k < 3; k++) mr_image_free(images[k]);
     mr_image_free(reference);
     mr_render_plan_free(plan);

@@ -85,12 +85,20 @@ static void print_help(void) {
            "                        centres only, aliased edges); other pixels always take one ray\n"
            "  --threads N           OpenMP threads (default 0: automatic, a team only for renders of 32768 or\n"
            "                        more shading samples, e.g. 512^2; 64^2 renders on one thread)\n"
-           "  --bits B              8 or 16 for PNG/TIFF, 16 (half) or 32 for EXR (default: 8, 32)\n"
+           "  --bits B              8 or 16 for PNG/TIFF, 16 (half) or 32 for EXR (default: 8, 32)\n",
+           MR_ENV_DEFAULT_SAMPLES, MR_ENV_MAX_REFLECTION_SAMPLES);
+    printf(
            "  --mask FILE           also write the object's coverage: one channel, the fraction of each pixel\n"
            "                        the sphere covers (1 inside, 0 outside, k/N^2 on the silhouette with\n"
            "                        --edge-samples N), lit or not, the same for every material; linear in every\n"
            "                        format (EXR keeps it exact). 'matremap ssim A B --mask FILE' compares renders\n"
            "                        over it (docs/metrics.md)\n"
+           "  --renderer R          builtin (default), blender or three: render the fit scene with a real renderer\n"
+           "                        (a uniform material of a model it renders by values, or with blender a\n"
+           "                        material of a .blend file: MODEL = blender:FILE.blend:MATERIAL, its inputs as\n"
+           "                        'NODE.SOCKET=value'); no maps, --env, --mesh or glTF asset (docs/renderers.md)\n"
+           "  --samples N           the real renderer's samples per pixel (blender default %d; three: an s x s\n"
+           "                        sub-pixel grid, s = floor(sqrt(N)), default %d)\n"
            "  --json                what was done as one JSON object on stdout (outputs, size, pixels, samples,\n"
            "                        timings) instead of the 'wrote' line on stderr\n"
            "  --help                this text\n"
@@ -102,10 +110,113 @@ static void print_help(void) {
            "      --env-rotation 90 -o y.png\n"
            "  matremap render ward alpha=@rough.exr specular=@spec.png --mesh matsphere.obj --camera paper \\\n"
            "      --env tabac_plant_vogl.hdr --env-rotation 45 -o z.exr\n"
-           "  matremap render WaterBottle.gltf --env studio.hdr --size 256 -o bottle.png\n",
-           MR_ENV_DEFAULT_SAMPLES, MR_ENV_MAX_REFLECTION_SAMPLES);
+           "  matremap render WaterBottle.gltf --env studio.hdr --size 256 -o bottle.png\n"
+           "  matremap render cycles-principled base_color=0.8,0.2,0.1 --renderer blender --size 256 -o cycles.exr\n"
+           "  matremap render blender:data/blender/node_materials.blend:DiffuseGlossyAdd --renderer blender -o n.exr\n",
+           MR_RENDERER_DEFAULT_SAMPLES_BLENDER, MR_RENDERER_DEFAULT_SAMPLES_THREE);
 }
 
+
+/* --renderer R: the fit scene rendered by an external renderer (renderer.h). */
+static int render_by(const char *name, int samples, const char *model_name, int external,
+                     const char *const *assignments, int assignment_count, const mr_fit_scene_options *scene_opts,
+                     int edge_samples, mr_component component, double exposure, const char *output,
+                     const char *mask_path, const mr_img_write_options *write_opts, int json) {
+    mr_output_plan io = {0};
+    if (external) {
+        char file[4096];
+        const char *colon = strrchr(model_name, ':');
+        snprintf(file, sizeof file, "%.*s", colon ? (int)(colon - model_name) : (int)strlen(model_name), model_name);
+        mr_output_plan_inputf(&io, file, "%s", model_name);
+    }
+    mr_output_plan_output(&io, output, NULL);
+    if (mask_path != NULL) mr_output_plan_output(&io, mask_path, "--mask");
+    int code = cli_plan_check("render", &io);
+    mr_output_plan_free(&io);
+    if (code != CLI_EXIT_OK) return code;
+    mr_material *material = NULL;
+    if (!external) {
+        code = cli_material_load("render", model_name, assignments, assignment_count, &material);
+        if (code != CLI_EXIT_OK) return code;
+    }
+    cli_renderers renderers;
+    memset(&renderers, 0, sizeof renderers);
+    renderers.names[0] = name;
+    renderers.samples = samples;
+    code = cli_open_renderers("render", &renderers, material ? material->model : NULL, NULL, 1);
+    if (code != CLI_EXIT_OK) {
+        mr_material_free(material);
+        return code;
+    }
+    mr_external_material *own = NULL;
+    mr_status status = MR_OK;
+    if (external) {
+        status = mr_renderer_describe(renderers.opened[0], model_name, &own);
+        if (status != MR_OK) code = cli_fail("render", status);
+        for (int k = 0; code == CLI_EXIT_OK && k < assignment_count; k++)
+            code = cli_set_material_input("render", own, assignments[k]);
+    }
+    double start = cli_now();
+    mr_scene scene = mr_scene_fit(scene_opts);
+    scene.edge_samples = edge_samples;
+    mr_render_plan *plan = NULL;
+    mr_image *image = NULL;
+    if (code == CLI_EXIT_OK) {
+        status = mr_render_plan_create(&scene, &plan);
+        if (status == MR_OK) status = mr_image_create(scene.width, scene.height, 3, &image);
+        mr_image *parts[3] = {NULL, NULL, NULL};
+        parts[component] = image;
+        if (status == MR_OK && own != NULL)
+            status = mr_renderer_render_external(renderers.opened[0], plan, own, parts[0], parts[1], parts[2]);
+        else if (status == MR_OK)
+            status = mr_renderer_render(renderers.opened[0], plan, material->model, material->values, parts[0],
+                                        parts[1], parts[2]);
+        if (status == MR_OK && exposure != 1.0) mr_image_scale(image, exposure);
+        if (status == MR_OK) status = mr_img_write(output, image, write_opts);
+        if (status == MR_OK && mask_path != NULL) {
+            mr_image *mask = NULL;
+            mr_img_write_options mask_opts = {0};
+            mask_opts.encoding = MR_IMG_DATA;
+            status = mr_render_plan_coverage_mask(plan, &mask);
+            if (status == MR_OK) status = mr_img_write(mask_path, mask, &mask_opts);
+            mr_image_free(mask);
+        }
+        if (status != MR_OK) code = cli_fail("render", status);
+    }
+    const double seconds = cli_now() - start;
+    if (code == CLI_EXIT_OK && json) {
+        printf("{\"command\": \"render\", \"model\": ");
+        cli_json_string(stdout, external ? "blender material" : material->model->name);
+        printf(", \"material\": ");
+        if (own != NULL) {
+            cli_json_string(stdout, model_name);
+            printf(", \"inputs\": ");
+            cli_print_material_inputs_json(stdout, own);
+        } else {
+            printf("null");
+        }
+        printf(", \"outputs\": [");
+        cli_json_string(stdout, output);
+        if (mask_path != NULL) {
+            printf(", ");
+            cli_json_string(stdout, mask_path);
+        }
+        printf("], \"component\": \"%s\", \"width\": %d, \"height\": %d, \"renderers\": ",
+               mr_component_name(component), scene.width, scene.height);
+        cli_print_renderers_json(stdout, &renderers);
+        printf(", \"seconds\": {\"render\": %.6f}}\n", seconds);
+    } else if (code == CLI_EXIT_OK) {
+        fprintf(stderr, "matremap render: wrote %s (%s, %dx%d, %s, %s in %.1f ms)\n", output,
+                mr_component_name(component), scene.width, scene.height, external ? model_name : material->model->name,
+                renderers.versions[0], 1e3 * seconds);
+    }
+    mr_image_free(image);
+    mr_render_plan_free(plan);
+    mr_external_material_free(own);
+    mr_material_free(material);
+    cli_close_renderers(&renderers);
+    return code;
+}
 
 int cmd_render(int argc, char **argv) {
     const char *model_name = NULL, *output = NULL, *env_path = NULL, *mask_path = NULL, *mesh_path = NULL;
@@ -120,6 +231,8 @@ int cmd_render(int argc, char **argv) {
     mr_img_write_options write_opts = {0};
     const char *assignments[CLI_MAX_ASSIGNMENTS];
     int assignment_count = 0;
+    const char *renderer_name = NULL;
+    int samples = 0;
 
     for (int i = 1; i < argc; i++) {
         const char *value = NULL;
@@ -168,6 +281,12 @@ int cmd_render(int argc, char **argv) {
             if (taken < 0 || !cli_parse_direction("render", "--camera-direction", value, direction))
                 return CLI_EXIT_USAGE;
             has_direction = 1;
+        } else if ((taken = cli_take_option("render", argc, argv, &i, "--renderer", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (mr_renderer_check(value, NULL) != MR_OK) return cli_usage_error("render", "%s", mr_last_error());
+            renderer_name = value;
+        } else if ((taken = cli_take_option("render", argc, argv, &i, "--samples", &value))) {
+            if (taken < 0 || !cli_parse_int("render", "--samples", value, 1, 1 << 20, &samples)) return CLI_EXIT_USAGE;
         } else if (strcmp(argv[i], "--json") == 0) {
             json = 1;
         } else if ((taken = cli_take_option("render", argc, argv, &i, "--camera", &value))) {
@@ -209,6 +328,23 @@ int cmd_render(int argc, char **argv) {
     if (env_option && env_path == NULL)
         return cli_usage_error("render", "--env-rotation, --env-samples, --env-reflection-samples and --env-scale need "
                                "--env FILE");
+    const int external = strncmp(model_name, "blender:", 8) == 0;
+    if (external && renderer_name == NULL) renderer_name = "blender";
+    if (renderer_name != NULL && strcmp(renderer_name, "builtin") != 0) {
+        if (env_path != NULL || mesh_path != NULL || paper || has_direction || cli_is_gltf_path(model_name))
+            return cli_usage_error("render", "--renderer %s renders the fit scene's sphere under its point light: "
+                                   "no --env, --mesh, --camera or glTF asset", renderer_name);
+        if (external && strcmp(renderer_name, "blender") != 0)
+            return cli_usage_error("render", "'%s' is a material of Blender's: --renderer blender", model_name);
+        for (int k = 0; k < assignment_count; k++)
+            if (strchr(assignments[k], '@') != NULL)
+                return cli_usage_error("render", "'%s': --renderer %s renders uniform materials (no maps)",
+                                       assignments[k], renderer_name);
+        scene_opts.size = scene_opts.size > 0 ? scene_opts.size : 512;
+        return render_by(renderer_name, samples, model_name + (external ? 8 : 0), external, assignments,
+                         assignment_count, &scene_opts, edge_samples, component, exposure, output, mask_path,
+                         &write_opts, json);
+    }
     const int gltf = cli_is_gltf_path(model_name);
     if (gltf && assignment_count > 0)
         return cli_usage_error("render", "'%s': a glTF asset takes no name=value parameters (its materials are its "

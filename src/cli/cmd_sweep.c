@@ -69,6 +69,11 @@ static void print_help(void) {
            "  --json                the run's summary as one JSON object on stdout (instead of the summary line):\n"
            "                        output, samples, computed, already_done, seconds, threads, outcomes\n"
            "  --help                this text\n"
+           "\n",
+           MR_REMAP_DEFAULT_SIZE);
+    cli_renderers_help(stdout);
+    printf("                        (each worker thread gets its own renderer process; a process that dies is\n"
+           "                        restarted and its sample rendered again: nothing is lost)\n"
            "\n"
            "The file starts with '# ' lines describing the run (tool version, models and values, remap options,\n"
            "scene, sampling, sample count, command line), then the column names. Rows are appended as samples\n"
@@ -76,8 +81,7 @@ static void print_help(void) {
            "--resume picks up from there. When the last sample is in, the file is rewritten sorted by index, so a\n"
            "finished file is the same whether or not it was interrupted, and for any --threads (the seconds\n"
            "column aside). A progress bar is drawn when stderr is a terminal; a summary line ends every run.\n"
-           "\n",
-           MR_REMAP_DEFAULT_SIZE);
+           "\n");
     printf("Several processes: 'mpirun -np N matremap sweep ...' (Open MPI; as root add --allow-run-as-root, and\n"
            "--oversubscribe for more ranks than cores) splits the missing samples round-robin between the ranks;\n"
            "rank 0 writes every row into FILE as above, so the file is the one a single process writes (the\n"
@@ -285,6 +289,8 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
     unsigned long long seed = 1;
     mr_fit_scene_options scene = {0};
     mr_remap_strategy strategy = MR_REMAP_AUTO;
+    cli_renderers renderers;
+    memset(&renderers, 0, sizeof renderers);
     enum { NONE, FROM, TO } collecting = NONE;
     memset(a, 0, sizeof *a);
     *help = 0;
@@ -333,6 +339,8 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
             a->output = value;
         } else if (strcmp(argv[i], "--resume") == 0) {
             a->resume = 1;
+        } else if ((taken = cli_take_renderer_option("sweep", argc, argv, &i, &renderers))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
         } else if (strcmp(argv[i], "--json") == 0) {
             a->json = 1;
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--strategy", &value))) {
@@ -403,6 +411,15 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
     if (!cli_parse_ties("sweep", from, to, tie_list, spec->remap.held, &spec->remap.ties)) return CLI_EXIT_USAGE;
     a->ties_given = tie_list != NULL;
     spec->scene = scene;
+    for (int k = 0; k < 2; k++) {
+        static const char *const options[2] = {"--from-renderer", "--to-renderer"};
+        const mr_brdf_model *side = k == 0 ? from : to;
+        if (renderers.names[k] != NULL && mr_renderer_check(renderers.names[k], side) != MR_OK)
+            return cli_usage_error("sweep", "%s %s: %s", options[k], renderers.names[k], mr_last_error());
+    }
+    snprintf(spec->renderers.source, sizeof spec->renderers.source, "%s", renderers.names[0] ? renderers.names[0] : "");
+    snprintf(spec->renderers.target, sizeof spec->renderers.target, "%s", renderers.names[1] ? renderers.names[1] : "");
+    spec->renderers.samples = renderers.samples;
     if (random_count > 0) {
         spec->sampling = MR_SWEEP_RANDOM;
         spec->random_count = random_count;
@@ -554,7 +571,10 @@ int cmd_sweep(int argc, char **argv) {
         printf(", \"held\": ");
         cli_print_holds_json(stdout, a.spec.target, a.spec.target_values, a.spec.remap.held,
                              a.spec.remap.ties.tied);
-        printf("}\n");
+        printf(", \"renderers\": {\"source\": \"%s\", \"target\": \"%s\", \"samples\": %d, \"renders\": %ld, "
+               "\"process_starts\": %ld}}\n", a.spec.renderers.source[0] ? a.spec.renderers.source : "builtin",
+               a.spec.renderers.target[0] ? a.spec.renderers.target : "builtin", a.spec.renderers.samples,
+               summary.renderer_renders, summary.renderer_starts);
         return CLI_EXIT_OK;
     }
     char what[64] = "";
@@ -583,6 +603,12 @@ int cmd_sweep(int argc, char **argv) {
             first = 0;
         }
     fprintf(stderr, "\n");
+    if (mr_remap_renderers_external(&a.spec.renderers))
+        fprintf(stderr, "matremap sweep: renderers: source %s, target %s: %ld renders, %ld process%s started%s\n",
+                a.spec.renderers.source[0] ? a.spec.renderers.source : "builtin",
+                a.spec.renderers.target[0] ? a.spec.renderers.target : "builtin", summary.renderer_renders,
+                summary.renderer_starts, summary.renderer_starts == 1 ? "" : "es",
+                summary.renderer_starts > summary.threads ? " (restarts after a crash included)" : "");
     cli_print_holds_tied(stderr, "matremap sweep: ", a.spec.target, a.spec.target_values, a.spec.remap.held,
                          a.spec.remap.ties.tied);
     cli_print_ties(stderr, "matremap sweep: ", a.spec.source, a.spec.target, &a.spec.remap.ties, a.ties_given);

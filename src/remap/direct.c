@@ -238,7 +238,7 @@ static mr_status build_header(const run_config *cfg, mr_strbuf *sb) {
                      cfg->target->name);
     mr_strbuf_values(sb, cfg->target, cfg->target_values);
     mr_strbuf_printf(sb, "\n");
-    mr_strbuf_remap_lines(sb, cfg->source, cfg->target, &cfg->remap, &cfg->scene);
+    mr_strbuf_remap_lines(sb, cfg->source, cfg->target, &cfg->remap, &cfg->scene, NULL);
     mr_strbuf_printf(sb, "# direct: tolerance=%.17g start=%s\n", cfg->tolerance, cfg->cold ? "cold" : "warm");
     // The columns: a source column list without its leading comma.
     mr_strbuf columns = {0};

@@ -69,11 +69,22 @@ mr_status mr_remap_picture_path(const char *prefix, int k, char *out, size_t siz
 
 mr_status mr_remap_write_pictures(const char *prefix, const mr_render_plan *plan, const mr_image *source,
                                   const mr_brdf_model *target, const double *values) {
+    return mr_remap_write_pictures_by(prefix, plan, source, NULL, target, values);
+}
+
+mr_status mr_remap_write_pictures_by(const char *prefix, const mr_render_plan *plan, const mr_image *source,
+                                     mr_renderer *renderer, const mr_brdf_model *target, const double *values) {
     if (prefix == NULL || plan == NULL || source == NULL || target == NULL || values == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "remap pictures: NULL argument");
     mr_image *target_image = NULL, *map = NULL, *picture = NULL;
     double ssim;
-    mr_status status = mr_render(plan, target, values, MR_COMPONENT_FULL, &target_image);
+    mr_status status;
+    if (mr_renderer_is_builtin(renderer)) {
+        status = mr_render(plan, target, values, MR_COMPONENT_FULL, &target_image);
+    } else {
+        status = mr_image_create(source->width, source->height, 3, &target_image);
+        if (status == MR_OK) status = mr_renderer_render(renderer, plan, target, values, target_image, NULL, NULL);
+    }
     if (status == MR_OK) status = mr_ssim(source, target_image, NULL, &ssim, &map);
     if (status == MR_OK) status = mr_ssim_map_visualise(map, 0.0, &picture);
     // The three belong together: written all or none.

@@ -161,6 +161,7 @@ typedef struct fit_context {
     mr_status failure;               /* set when a render fails inside an nlopt callback */
     nlopt_opt running;
     int warm;                        /* AUTO/JOINT from opts.initial_values: one local refinement, no grid */
+    int external;                    /* opts.target_renderer is an external renderer: every render goes to it */
 } fit_context;
 
 static double to_value(const fitted_slot *s, double u) {
@@ -211,8 +212,24 @@ static double image_energy(const fit_context *ctx, const mr_image *image) {
     return sum;
 }
 
+/* The target's components by the fit's renderer: the built-in one in process; an external one without component
+ * renders leaves them to the built-in model (remap.h, target_renderer). */
+static mr_status render_components(const fit_context *ctx, const double *values, mr_image *diffuse,
+                                   mr_image *specular) {
+    if (ctx->external && mr_renderer_has_components(ctx->opts.target_renderer))
+        return mr_renderer_render(ctx->opts.target_renderer, ctx->plan, ctx->model, values, NULL, diffuse, specular);
+    return mr_render_components_into_threads(ctx->plan, ctx->opts.threads, ctx->model, values, diffuse, specular);
+}
+
 static int render_values(fit_context *ctx, const double *values, mr_component component, mr_image *into) {
-    mr_status status = mr_render_into_threads(ctx->plan, ctx->opts.threads, ctx->model, values, component, into);
+    mr_status status;
+    if (ctx->external)
+        status = mr_renderer_render(ctx->opts.target_renderer, ctx->plan, ctx->model, values,
+                                    component == MR_COMPONENT_FULL ? into : NULL,
+                                    component == MR_COMPONENT_DIFFUSE ? into : NULL,
+                                    component == MR_COMPONENT_SPECULAR ? into : NULL);
+    else
+        status = mr_render_into_threads(ctx->plan, ctx->opts.threads, ctx->model, values, component, into);
     ctx->renders++;
     if (status != MR_OK) {
         ctx->failure = status;
@@ -258,13 +275,11 @@ static void box_least_squares(int k, const double *G, const double *h, const dou
 #define SPLIT_PROBE 0.25
 static int split_basis(fit_context *ctx, const double *zero, const double *one) {
     if (!ctx->homogeneous) {
-        if (mr_render_components_into_threads(ctx->plan, ctx->opts.threads, ctx->model, zero, ctx->lobe_images[0],
-                                              ctx->lobe_images[1]) != MR_OK)
+        if (render_components(ctx, zero, ctx->lobe_images[0], ctx->lobe_images[1]) != MR_OK)
             return render_values(ctx, zero, MR_COMPONENT_FULL, ctx->basis[0]); // records the failure
         ctx->renders++;
     }
-    if (mr_render_components_into_threads(ctx->plan, ctx->opts.threads, ctx->model, one, ctx->lobe_images[2],
-                                          ctx->lobe_images[3]) != MR_OK)
+    if (render_components(ctx, one, ctx->lobe_images[2], ctx->lobe_images[3]) != MR_OK)
         return render_values(ctx, one, MR_COMPONENT_FULL, ctx->basis[0]);
     ctx->renders++;
     return 1;
@@ -581,6 +596,7 @@ static void auto_fit(fit_context *ctx, candidate *best, int *ambiguous) {
 static int lobe_staged_fit(fit_context *ctx, const mr_remap_source *source, double source_energy, candidate *best,
                            int *ambiguous) {
     if (source->diffuse == NULL || source->specular == NULL || ctx->nonlinear_count == 0) return 0;
+    if (ctx->external && !mr_renderer_has_components(ctx->opts.target_renderer)) return 0;
     for (int i = 0; i < ctx->nonlinear_count; i++) {
         mr_param_lobe lobe = ctx->model->params[ctx->nonlinear[i].param].lobe;
         if (lobe != MR_LOBE_DIFFUSE && lobe != MR_LOBE_SPECULAR) return 0;
@@ -1021,8 +1037,7 @@ static int check_resolution(fit_context *ctx, double source_rms, const mr_image 
     if (status == MR_OK) status = mr_image_create(scene->width, scene->height, 3, &specular);
     if (status == MR_OK) status = mr_image_create(scene->width, scene->height, 3, &scratch);
     if (status == MR_OK)
-        status = mr_render_components_into_threads(ctx->plan, ctx->opts.threads, ctx->model, out->values, diffuse,
-                                                   specular);
+        status = render_components(ctx, out->values, diffuse, specular);
     ctx->renders++;
     if (status != MR_OK) {
         ctx->failure = status;
@@ -1096,8 +1111,32 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
         return mr_fail(MR_ERR_INVALID_ARG, "remap: threads %d: expected 0 (the plan's rule) to 1024", opts.threads);
     if (opts.ties.tied != 0)
         return mr_fail(MR_ERR_INVALID_ARG, "remap: ties need the source's values (mr_remap), not only its images");
+    const int external = !mr_renderer_is_builtin(opts.target_renderer);
+    if (external && !mr_renderer_supports(opts.target_renderer, target))
+        return mr_fail(MR_ERR_UNSUPPORTED, "remap: renderer '%s' does not render model '%s' by values",
+                       mr_renderer_name(opts.target_renderer), target->name);
+    if (external && !mr_renderer_has_components(opts.target_renderer) &&
+        (opts.strategy == MR_REMAP_TWO || opts.strategy == MR_REMAP_THREE))
+        return mr_fail(MR_ERR_UNSUPPORTED, "remap: the %s strategy fits the target's diffuse and specular renders, "
+                       "which renderer '%s' does not separate (use auto, joint or single)",
+                       mr_remap_strategy_name(opts.strategy), mr_renderer_name(opts.target_renderer));
     mr_status status = check_source_image(plan, source->full, "full");
     if (status != MR_OK) return status;
+    // An external target renderer: the built-in model fits first, in process, and its answer starts the fit
+    // through the renderer, which then only corrects where the two differ (remap.h, target_renderer): a few dozen
+    // external renders instead of a global search's hundreds.
+    double surrogate_values[MAX_SLOTS];
+    if (external && opts.initial_values == NULL &&
+        (opts.strategy == MR_REMAP_AUTO || opts.strategy == MR_REMAP_JOINT)) {
+        mr_remap_options inner = opts;
+        inner.target_renderer = NULL;
+        mr_remap_result surrogate;
+        status = mr_remap_images(plan, source, target, &inner, &surrogate);
+        if (status != MR_OK) return mr_fail_context(status, "remap: the built-in model's fit that starts the fit "
+                                                    "through renderer '%s'", mr_renderer_name(opts.target_renderer));
+        memcpy(surrogate_values, surrogate.values, sizeof surrogate_values);
+        opts.initial_values = surrogate_values;
+    }
     if (opts.strategy == MR_REMAP_TWO || opts.strategy == MR_REMAP_THREE) {
         if (source->diffuse == NULL || source->specular == NULL)
             return mr_fail(MR_ERR_INVALID_ARG, "remap: the %s strategy needs the source's diffuse-only and "
@@ -1111,6 +1150,7 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     ctx.plan = plan;
     ctx.model = target;
     ctx.opts = opts;
+    ctx.external = external;
     ctx.value_count = mr_brdf_value_count(target);
     ctx.goal = source->full;
     ctx.failure = MR_OK;
@@ -1153,7 +1193,8 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
                                              target->params[i].max_value);
     }
     ctx.warm = opts.initial_values != NULL && (opts.strategy == MR_REMAP_AUTO || opts.strategy == MR_REMAP_JOINT);
-    ctx.split_lobes = lobes_split(target, ctx.linear_params, ctx.linear_param_count);
+    ctx.split_lobes = lobes_split(target, ctx.linear_params, ctx.linear_param_count) &&
+                      (!external || mr_renderer_has_components(opts.target_renderer));
     ctx.homogeneous = ctx.split_lobes && black_without_linear(target, opts.held, ctx.base, is_linear);
     for (int i = 0; status == MR_OK && ctx.split_lobes && i < 4; i++)
         status = mr_image_create(scene->width, scene->height, 3, &ctx.lobe_images[i]);
@@ -1308,10 +1349,21 @@ static double covered_relative_rmse(const mr_render_plan *plan, const mr_image *
            fmax(sqrt(covered_mean_square(plan, source, NULL)), RELATIVE_RMS_FLOOR);
 }
 
+/* The full render of a material by `renderer` (NULL or built-in: in process, with `threads`). */
+static mr_status render_full(mr_renderer *renderer, const mr_render_plan *plan, int threads,
+                             const mr_brdf_model *model, const double *values, mr_image *into) {
+    if (mr_renderer_is_builtin(renderer))
+        return mr_render_into_threads(plan, threads, model, values, MR_COMPONENT_FULL, into);
+    return mr_renderer_render(renderer, plan, model, values, into, NULL, NULL);
+}
+
 /* The closer look of remap.h (UNDER_RESOLVED, model sources): a CONVERGED fit of a source that is not black
- * (`full`, its render in the fit scene) rendered with the source ZOOM times closer to the highlight. */
+ * (`full`, its render in the fit scene) rendered with the source ZOOM times closer to the highlight, each side by
+ * its own renderer (opts). */
 static mr_status zoom_check(const mr_render_plan *plan, const mr_brdf_model *source_model, const double *source_values,
-                            const mr_image *full, const mr_brdf_model *target, int threads, mr_remap_result *out) {
+                            const mr_image *full, const mr_brdf_model *target, const mr_remap_options *opts,
+                            mr_remap_result *out) {
+    const int threads = opts->threads;
     if (out->outcome != MR_FIT_CONVERGED) return MR_OK;
     const mr_scene *scene = mr_render_plan_scene(plan);
     if (sqrt(covered_mean_square(plan, full, NULL)) < RELATIVE_RMS_FLOOR) return MR_OK; // black: nothing to look at
@@ -1323,8 +1375,8 @@ static mr_status zoom_check(const mr_render_plan *plan, const mr_brdf_model *sou
     status = mr_image_create(zoomed->width, zoomed->height, 3, &source);
     if (status == MR_OK) status = mr_image_create(zoomed->width, zoomed->height, 3, &fit);
     if (status == MR_OK)
-        status = mr_render_into_threads(closer, threads, source_model, source_values, MR_COMPONENT_FULL, source);
-    if (status == MR_OK) status = mr_render_into_threads(closer, threads, target, out->values, MR_COMPONENT_FULL, fit);
+        status = render_full(opts->source_renderer, closer, threads, source_model, source_values, source);
+    if (status == MR_OK) status = render_full(opts->target_renderer, closer, threads, target, out->values, fit);
     if (status == MR_OK) {
         const double closer_rmse = covered_relative_rmse(closer, fit, source);
         if (closer_rmse > ZOOM_RELATIVE_RMSE && closer_rmse > ZOOM_GAIN * fmax(out->relative_rmse, 0.01)) {
@@ -1351,10 +1403,16 @@ mr_status mr_remap(const mr_render_plan *plan, const mr_brdf_model *source_model
     if (status == MR_OK) status = mr_image_create(scene->width, scene->height, 3, &diffuse);
     if (status == MR_OK) status = mr_image_create(scene->width, scene->height, 3, &specular);
     const int threads = opts ? opts->threads : 0;
-    if (status == MR_OK)
+    mr_renderer *source_renderer = opts ? opts->source_renderer : NULL;
+    const int components = mr_renderer_has_components(source_renderer);
+    if (status == MR_OK && mr_renderer_is_builtin(source_renderer)) {
         status = mr_render_components_into_threads(plan, threads, source_model, source_values, diffuse, specular);
-    if (status == MR_OK)
-        status = mr_render_into_threads(plan, threads, source_model, source_values, MR_COMPONENT_FULL, full);
+        if (status == MR_OK)
+            status = mr_render_into_threads(plan, threads, source_model, source_values, MR_COMPONENT_FULL, full);
+    } else if (status == MR_OK) {
+        status = mr_renderer_render(source_renderer, plan, source_model, source_values, full,
+                                    components ? diffuse : NULL, components ? specular : NULL);
+    }
     // Ties: the tied target parameters held at the source's values (brdf.h), for this remap only.
     mr_remap_options tied = opts ? *opts : mr_remap_options_default();
     double tied_values[MR_BRDF_MAX_VALUES];
@@ -1368,9 +1426,9 @@ mr_status mr_remap(const mr_render_plan *plan, const mr_brdf_model *source_model
         memset(&tied.ties, 0, sizeof tied.ties);
     }
     if (status == MR_OK) {
-        mr_remap_source source = {full, diffuse, specular};
+        mr_remap_source source = {full, components ? diffuse : NULL, components ? specular : NULL};
         status = mr_remap_images(plan, &source, target, &tied, out);
-        if (status == MR_OK) status = zoom_check(plan, source_model, source_values, full, target, threads, out);
+        if (status == MR_OK) status = zoom_check(plan, source_model, source_values, full, target, &tied, out);
         if (status == MR_OK) out->seconds = now_seconds() - start;
     }
     mr_image_free(full);

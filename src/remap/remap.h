@@ -81,6 +81,7 @@
 #include "../mr_image.h"
 #include "../mr_status.h"
 #include "../render/render.h"
+#include "../render/renderer.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -151,7 +152,33 @@ typedef struct mr_remap_options {
                                     MR_REMAP_WARM_STEP) from them, lobe by lobe for AUTO as usual, so the fit
                                     finds the minimum of the start's basin, and no second minimum to call the
                                     fit ambiguous (LOCAL_MINIMUM by ambiguity is not reported). NULL: none */
+    mr_renderer *target_renderer; /* who renders the target during the fit (renderer.h): NULL or the built-in one =
+                                    the plan, in process, as described above; an external renderer (blender,
+                                    three) renders every target render of the fit in the plan's scene, so the
+                                    values fitted are the ones that renderer needs. It must render the target
+                                    by values (mr_renderer_supports). AUTO and JOINT without initial_values
+                                    fit the built-in model first, in process, and start from its answer as
+                                    from initial_values (one local refinement through the renderer, which
+                                    corrects where the two differ); `renders` counts the renderer's renders
+                                    only. One without component renders (three)
+                                    fits AUTO against the full render only (no lobe-by-lobe stage), refuses
+                                    TWO and THREE, and takes the lobes' energies of the resolution check from
+                                    the built-in model. NULL: built-in */
+    mr_renderer *source_renderer; /* mr_remap only: who renders the source (its full render and, when it has
+                                    them, its components; the closer look of UNDER_RESOLVED too): NULL =
+                                    built-in */
 } mr_remap_options;
+
+/* Which renderer renders each side of remaps that files record (sweeps: the sweep file's "# remap:" line) by name,
+ * and the external renderers' samples (mr_renderer_options.samples). Zeroed: both built-in. */
+typedef struct mr_remap_renderers {
+    char source[16]; /* "" or "builtin", "blender", "three" (renderer.h) */
+    char target[16];
+    int samples;     /* 0: each renderer's default */
+} mr_remap_renderers;
+
+/* 1 if either side names an external renderer. */
+int mr_remap_renderers_external(const mr_remap_renderers *renderers);
 
 /* The first steps of a warm-started AUTO/JOINT fit (mr_remap_options.initial_values), in normalised
  * coordinates (a parameter's range as [0, 1], log-spaced for roughness): 0.005 is a factor 1.05 in a GGX alpha
@@ -232,6 +259,9 @@ mr_status mr_remap_picture_path(const char *prefix, int k, char *out, size_t siz
  * mr_img_write_set's (naming the file); nothing is written on failure. */
 mr_status mr_remap_write_pictures(const char *prefix, const mr_render_plan *plan, const mr_image *source,
                                   const mr_brdf_model *target, const double *values);
+/* The same with the target rendered by `renderer` (NULL: built-in), as the fit saw it. */
+mr_status mr_remap_write_pictures_by(const char *prefix, const mr_render_plan *plan, const mr_image *source,
+                                     mr_renderer *renderer, const mr_brdf_model *target, const double *values);
 
 #ifdef __cplusplus
 }

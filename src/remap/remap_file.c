@@ -87,8 +87,17 @@ mr_scene mr_remap_file_scene(const mr_fit_scene_options *scene) {
     return mr_scene_fit(&o);
 }
 
+int mr_remap_renderers_external(const mr_remap_renderers *renderers) {
+    if (renderers == NULL) return 0;
+    const char *names[2] = {renderers->source, renderers->target};
+    for (int k = 0; k < 2; k++)
+        if (names[k][0] != '\0' && strcmp(names[k], "builtin") != 0) return 1;
+    return 0;
+}
+
 void mr_strbuf_remap_lines(mr_strbuf *sb, const mr_brdf_model *source, const mr_brdf_model *target,
-                           const mr_remap_options *r, const mr_fit_scene_options *scene_options) {
+                           const mr_remap_options *r, const mr_fit_scene_options *scene_options,
+                           const mr_remap_renderers *renderers) {
     const mr_scene scene = mr_remap_file_scene(scene_options);
     mr_strbuf_printf(sb, "# remap: strategy=%s max_evaluations=%d xtol=%.17g grid_points=%d starts=%d seed=%lu",
                      mr_remap_strategy_name(r->strategy), r->max_evaluations, r->xtol, r->grid_points, r->starts,
@@ -106,6 +115,9 @@ void mr_strbuf_remap_lines(mr_strbuf *sb, const mr_brdf_model *source, const mr_
                              source->params[r->ties.source[p]].name);
             first = 0;
         }
+    if (mr_remap_renderers_external(renderers))
+        mr_strbuf_printf(sb, " renderers=%s,%s samples=%d", renderers->source[0] ? renderers->source : "builtin",
+                         renderers->target[0] ? renderers->target : "builtin", renderers->samples);
     mr_strbuf_printf(sb, "\n");
     // highlight_samples: rows fitted before the pixels about the highlight were integrated (issue 13) are not
     // comparable with today's, so a file written then does not resume now (its header differs)

@@ -47,11 +47,15 @@ void mr_strbuf_columns(mr_strbuf *sb, const mr_brdf_model *m, const char *prefix
 mr_scene mr_remap_file_scene(const mr_fit_scene_options *scene);
 
 /* The two header lines that say how a file's remaps into `target` ran:
- *   "# remap: strategy=auto max_evaluations=400 xtol=... grid_points=0 starts=8 seed=1[ held=a,b][ tied=t:s,...]\n"
+ *   "# remap: strategy=auto max_evaluations=400 xtol=... grid_points=0 starts=8 seed=1[ held=a,b][ tied=t:s,...]
+ *    [ renderers=SOURCE,TARGET samples=N]\n"
  *   "# scene: fit size=64 light=45 intensity=10 edge_samples=4 highlight_samples=integrated\n"
- * The remap options are written as given (sweeps store them defaulted). */
+ * The remap options are written as given (sweeps store them defaulted). `renderers` (NULL, or both names
+ * "builtin": no words, as files written before renderers) names who rendered each side and the external
+ * renderers' sample count. */
 void mr_strbuf_remap_lines(mr_strbuf *sb, const mr_brdf_model *source, const mr_brdf_model *target,
-                           const mr_remap_options *remap, const mr_fit_scene_options *scene);
+                           const mr_remap_options *remap, const mr_fit_scene_options *scene,
+                           const mr_remap_renderers *renderers);
 
 /* Range checks of the remap options and fit scene a file's remaps use; MR_ERR_INVALID_ARG "<what>: ..." naming the
  * field. */

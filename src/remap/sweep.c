@@ -265,6 +265,12 @@ mr_status mr_sweep_check(const mr_sweep_spec *spec) {
     if (m->param_count < (int)(sizeof spec->held * CHAR_BIT) && (spec->held >> m->param_count) != 0)
         return mr_fail(MR_ERR_INVALID_ARG, "sweep: held marks parameters that model '%s' does not have", m->name);
     status = mr_remap_file_check_options("sweep", &spec->remap, &spec->scene);
+    if (status == MR_OK && spec->renderers.source[0]) status = mr_renderer_check(spec->renderers.source, m);
+    if (status == MR_OK && spec->renderers.target[0])
+        status = mr_renderer_check(spec->renderers.target, spec->target);
+    if (status == MR_OK && spec->renderers.samples < 0)
+        status = mr_fail(MR_ERR_INVALID_ARG, "sweep: renderer samples %d: expected 0 (default) or more",
+                         spec->renderers.samples);
     if (status != MR_OK) return status;
     if (spec->remap.initial_values != NULL) // every sample would start there, and the header would not say so
         return mr_fail(MR_ERR_INVALID_ARG, "sweep: remap.initial_values must be NULL (a sweep starts no fit warm)");
@@ -595,6 +601,7 @@ typedef struct run_state {
     int rank, size;
     sweep_file *file; /* rank 0 */
     const mr_render_plan *plan;
+    mr_renderer *renderers[2]; /* the sources' and the targets' renderers: NULL = built-in */
     long run_total, run_done; /* rank 0: the whole run's rows (every rank's); other ranks: their own */
     long outcomes[MR_FIT_OUTCOME_COUNT];
     const long *pending;       /* the samples this rank computes */
@@ -774,6 +781,8 @@ static void run_sample(run_state *st, long index) {
     sample_unchecked(spec, index, row.source);
     mr_remap_options o = spec->remap;
     o.target_values = spec->target_values;
+    o.source_renderer = st->renderers[0];
+    o.target_renderer = st->renderers[1];
     mr_remap_result r;
     mr_status status = mr_remap(st->plan, spec->source, row.source, spec->target, &o, &r);
     char line[MR_SWEEP_MAX_LINE];
@@ -1062,6 +1071,16 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
             mr_scene scene = mr_remap_file_scene(&spec->scene);
             status = mr_render_plan_create(&scene, &plan);
         }
+        // External renderers: one process per worker thread, started by the first render that needs it.
+        const char *names[2] = {spec->renderers.source, spec->renderers.target};
+        for (int k = 0; k < 2 && status == MR_OK && share > 0; k++) {
+            if (names[k][0] == '\0' || strcmp(names[k], "builtin") == 0) continue;
+            mr_renderer_options ro = {0};
+            ro.samples = spec->renderers.samples;
+            ro.processes = threads;
+            status = mr_renderer_open(names[k], &ro, &st->renderers[k]);
+            if (status == MR_OK) status = mr_renderer_start(st->renderers[k], NULL, 0);
+        }
     }
     st->plan = plan;
     st->run_total = rank == 0 ? todo_count : share;
@@ -1105,6 +1124,12 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
     }
     if (f.fd >= 0) close(f.fd); /* releases the lock, after the rename */
     mr_render_plan_free(plan);
+    long renderer_renders = 0, renderer_starts = 0;
+    for (int k = 0; k < 2; k++) {
+        renderer_renders += mr_renderer_render_count(st->renderers[k]);
+        renderer_starts += mr_renderer_process_starts(st->renderers[k]);
+        mr_renderer_free(st->renderers[k]);
+    }
     free(pending);
     free(todo);
     free(f.state);
@@ -1123,6 +1148,8 @@ mr_status mr_sweep_run(const mr_sweep_spec *spec, const char *path, const mr_swe
         out->processes = size;
         out->threads_total = rank == 0 ? st->threads_total : threads;
         out->seconds = mr_now_seconds() - start;
+        out->renderer_renders = renderer_renders;
+        out->renderer_starts = renderer_starts;
     }
     free(st);
     return status;

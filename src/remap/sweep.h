@@ -155,6 +155,9 @@ typedef struct mr_sweep_spec {
     long random_count;                        /* RANDOM: number of samples */
     unsigned long long seed;                  /* RANDOM */
     mr_sweep_region region;                   /* RANDOM: default TEXTURE */
+    mr_remap_renderers renderers;             /* who renders the sources and the targets' fits (zeroed: the
+                                                 built-in renderer both sides); each worker thread of a run gets
+                                                 its own process of an external one (renderer.h) */
 } mr_sweep_spec;
 
 /* The fit scene of a sweep file's "# scene:" line (its text after "# scene: ", e.g. "fit size=64 light=45
@@ -274,6 +277,8 @@ typedef struct mr_sweep_summary {
     int processes;                           /* ranks that computed (1 without a comm) */
     long threads_total;                      /* threads used by all ranks together */
     double seconds;                          /* wall time of this call */
+    long renderer_renders;                   /* renders by external renderers (spec->renderers), this process */
+    long renderer_starts;                    /* their processes started, restarts after a crash included */
 } mr_sweep_summary;
 
 /* Check a parsed row against `spec`: every value finite (relative_rmse may be +inf: a black source), source

@@ -63,7 +63,7 @@ mr_status mr_sweep_file_header(const mr_sweep_spec *spec, const char *command_li
     mr_strbuf_printf(sb, "\n# to: %s", spec->target->name);
     mr_strbuf_values(sb, spec->target, spec->target_values);
     mr_strbuf_printf(sb, "\n");
-    mr_strbuf_remap_lines(sb, spec->source, spec->target, &spec->remap, &spec->scene);
+    mr_strbuf_remap_lines(sb, spec->source, spec->target, &spec->remap, &spec->scene, &spec->renderers);
     if (spec->sampling == MR_SWEEP_GRID) {
         mr_strbuf_printf(sb, "# sampling: grid");
         for (int a = 0; a < spec->axis_count; a++) {
@@ -396,9 +396,22 @@ static int take_remap_setting(const char *key, char *value, mr_sweep_spec *spec)
         }
         return ok;
     }
+    if (strcmp(key, "renderers") == 0) { // "source,target"
+        char *comma = strchr(value, ',');
+        if (comma == NULL || (size_t)(comma - value) >= sizeof spec->renderers.source ||
+            strlen(comma + 1) >= sizeof spec->renderers.target)
+            return 0;
+        *comma = '\0';
+        snprintf(spec->renderers.source, sizeof spec->renderers.source, "%s", value);
+        snprintf(spec->renderers.target, sizeof spec->renderers.target, "%s", comma + 1);
+        return mr_renderer_check(spec->renderers.source, spec->source) == MR_OK &&
+               mr_renderer_check(spec->renderers.target, spec->target) == MR_OK;
+    }
     if (!parse_whole_long(value, &v) || v > INT_MAX)
         return 0;
-    if (strcmp(key, "max_evaluations") == 0)
+    if (strcmp(key, "samples") == 0)
+        spec->renderers.samples = (int)v;
+    else if (strcmp(key, "max_evaluations") == 0)
         spec->remap.max_evaluations = (int)v;
     else if (strcmp(key, "grid_points") == 0)
         spec->remap.grid_points = (int)v;
