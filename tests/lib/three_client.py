@@ -4,7 +4,9 @@ reports. Run with /usr/bin/python3 (numpy).
 
   three_client.py compare MATREMAP WORK SIZE SAMPLES MODEL name=v[,v,v] ...
       renders MODEL in the fit scene with the server and with `matremap render`, prints
-      "rel_rmse R max_alpha_diff A lit N" (relative RMSE over the pixels both cover fully or partly).
+      "rel_rmse R max_alpha_diff A lit N" (relative RMSE over the pixels either covers).
+  three_client.py session MATREMAP WORK
+      tests/three_server.sh's checks, one "ok    NAME" or "FAIL  NAME" line each.
 """
 import json
 import os
@@ -100,8 +102,112 @@ def compare(three_rgba, ref_rgb, ref_alpha):
     return rel, float(np.max(np.abs(three_rgba[:, :, 3] - ref_alpha))), int(covered.sum())
 
 
+# Tolerances of the session, measured (docs/renderers.md): lambert at 64^2 with 4 x 4 sub-pixels differs from
+# `matremap render --edge-samples 4` by a relative RMSE of 0.0018 (interior pixels average 16 sub-pixel positions
+# where matremap shades the centre; the tessellated silhouette), and its alpha from matremap's coverage by at most
+# one sub-pixel of 16 (0.0625); a smooth-enough dielectric gltf (roughness 0.5) by 0.0031.
+LAMBERT_REL_RMSE = 0.005
+GLTF_DIELECTRIC_REL_RMSE = 0.01
+
+
+def session(matremap, work):
+    results = []
+
+    def check(name, ok):
+        results.append(ok)
+        print(f"{'ok   ' if ok else 'FAIL '} {name}", flush=True)
+
+    log = open(os.path.join(work, "server.log"), "w")
+    server = Server(stderr=log)
+    check(f"ready line: {server.ready}", server.ready.startswith("@matremap ready three 0.187.0 ")
+          and set(server.ready.split()[4:]) == {"components=full", "models=gltf,lambert"})
+
+    # lambert against matremap's renderer, and alpha against its coverage mask (the same 4 x 4 sub-pixels).
+    lam = render_request(1, 64, 16, "lambert", {"albedo": [0.8, 0.2, 0.1]}, os.path.join(work, "lambert"))
+    answer = server.request(**lam)
+    check(f"lambert render answered: {answer}", answer.startswith("@matremap ok 1 "))
+    three = read_f32(os.path.join(work, "lambert.full.f32"), 64)
+    ref, cover = matremap_render(matremap, work, 64, 4, "lambert", ["albedo=0.8,0.2,0.1"], "lambert_ref")
+    rel, dalpha, _ = compare(three, ref, cover)
+    check(f"lambert matches matremap render (relative RMSE {rel:.4f} < {LAMBERT_REL_RMSE})", rel < LAMBERT_REL_RMSE)
+    alpha = three[:, :, 3]
+    check(f"alpha is matremap's coverage within one sub-pixel of 16 (max difference {dalpha:.4f})",
+          dalpha <= 1 / 16 + 1e-6)
+    check("alpha is k/16: 1 inside, 0 in the corners, partial only on the silhouette",
+          np.allclose(alpha * 16, np.round(alpha * 16), atol=1e-5) and alpha[32, 32] == 1 and alpha[0, 0] == 0
+          and 0 < np.count_nonzero((alpha > 0) & (alpha < 1)) < 400)
+    check("RGB is zero where alpha is", bool(np.all(three[:, :, :3][alpha == 0] == 0)))
+
+    # gltf: deterministic (the same request twice, another in between), and close to matremap for a dielectric.
+    values = {"base_color": [0.8, 0.2, 0.1], "metallic": 0, "roughness": 0.5}
+    outs = []
+    for rid, v in ((2, values), (3, dict(values, metallic=1, roughness=0.2)), (4, values)):
+        out = os.path.join(work, f"gltf{rid}")
+        answer = server.request(**render_request(rid, 64, 16, "gltf", v, out))
+        check(f"gltf render {rid} answered: {answer}", answer.startswith(f"@matremap ok {rid} "))
+        outs.append(open(out + ".full.f32", "rb").read())
+    check("gltf: the same request twice gives the same bytes", outs[0] == outs[2] and outs[0] != outs[1])
+    ref, cover = matremap_render(matremap, work, 64, 4, "gltf", ["base_color=0.8,0.2,0.1", "metallic=0",
+                                                                  "roughness=0.5"], "gltf_ref")
+    rel, _, _ = compare(read_f32(os.path.join(work, "gltf2.full.f32"), 64), ref, cover)
+    check(f"gltf dielectric (roughness 0.5) near matremap's gltf (relative RMSE {rel:.4f} < "
+          f"{GLTF_DIELECTRIC_REL_RMSE})", rel < GLTF_DIELECTRIC_REL_RMSE)
+
+    # Errors: one line naming the value, and the server keeps serving.
+    def request_text(rid, **changes):
+        r = render_request(rid, 16, 1, "gltf", {}, os.path.join(work, f"e{rid}"))
+        r.update(changes)
+        return json.dumps(r)
+
+    errors = [
+        (request_text(10, material={"model": "phong", "values": {}}),
+         '@matremap error 10 unknown model "phong" (three renders: gltf, lambert)'),
+        (request_text(11, material={"model": "gltf", "values": {"shine": 1}}),
+         "@matremap error 11 model gltf has no parameter 'shine' (it has: base_color, metallic, roughness, "
+         "specular, specular_color, ior)"),
+        (request_text(12, material={"model": "gltf", "values": {"base_color": [0.1, 0.2]}}),
+         "@matremap error 12 gltf base_color takes 1 or 3 values, not 2"),
+        (request_text(13, material={"model": "gltf", "values": {"metallic": [0, 1, 0]}}),
+         "@matremap error 13 gltf metallic takes 1 value, not 3"),
+        (request_text(14, lights=[{"position": ["X", 0, 3], "intensity": 10}]).replace('"X"', "1e999"),
+         "@matremap error 14 lights[0].position must be 3 finite numbers, not [Infinity,0,3]"),
+        (request_text(21, material={"model": "gltf", "values": {"roughness": "X"}}).replace('"X"', "-1e999"),
+         "@matremap error 21 gltf roughness must be a finite number, not -Infinity"),
+        (request_text(15, material={"model": "gltf", "values": {"roughness": "0.5"}}),
+         '@matremap error 15 gltf roughness must be a finite number, not "0.5"'),
+        (request_text(16, components=["full", "diffuse"]),
+         '@matremap error 16 component "diffuse" is not supported by three (components=full)'),
+        (request_text(17, material={"model": "gltf", "values": {"roughness": 2}}),
+         "@matremap error 17 gltf roughness 2 is outside [0.01, 1]"),
+        ('{"op": "render", "id": 18, "size": ', None),
+        (json.dumps({"op": "describe", "id": 19}), '@matremap error 19 unknown op "describe" (three answers: '
+                                                    'render, quit)'),
+    ]
+    for text, expected in errors:
+        answer = server.send(text)
+        if expected is None:
+            ok = answer.startswith("@matremap error -1 malformed JSON request: ")
+        else:
+            ok = answer == expected
+        check(f"error answered: {answer}", ok)
+    wrote = [f for f in os.listdir(work) if f.startswith("e1")]
+    check("no output written for a refused request", wrote == [])
+    answer = server.request(**render_request(20, 16, 1, "lambert", {}, os.path.join(work, "after")))
+    check(f"still serving after the errors: {answer}", answer.startswith("@matremap ok 20 "))
+    code = server.close()
+    check(f"stdin at EOF: exit {code}", code == 0)
+    server = Server(stderr=log)
+    server.proc.stdin.write('{"op": "quit"}\n')
+    server.proc.stdin.flush()
+    code = server.proc.wait(30)
+    check(f'{{"op": "quit"}}: exit {code}', code == 0)
+    return all(results)
+
+
 def main(argv):
-    if argv[0] != "compare":
+    if argv[:1] == ["session"]:
+        sys.exit(0 if session(argv[1], argv[2]) else 1)
+    if argv[:1] != ["compare"]:
         sys.exit(__doc__)
     matremap, work, size, samples, model, params = argv[1], argv[2], int(argv[3]), int(argv[4]), argv[5], argv[6:]
     server = Server()

@@ -29,17 +29,20 @@ function say(line) {
 class RequestError extends Error {}
 const fail = (message) => { throw new RequestError(message); };
 const finite = (x) => typeof x === 'number' && Number.isFinite(x);
+// A value as the request had it (JSON.parse reads 1e999 as Infinity, which JSON.stringify would print as null).
+const show = (value) => JSON.stringify(value, (k, x) => (typeof x === 'number' && !Number.isFinite(x) ? `${x}` : x))
+    .replace(/"(-?Infinity|NaN)"/g, '$1');
 
 function vector(value, name, length = 3) {
     if (!Array.isArray(value) || value.length !== length || !value.every(finite)) {
-        fail(`${name} must be ${length} finite numbers, not ${JSON.stringify(value)}`);
+        fail(`${name} must be ${length} finite numbers, not ${show(value)}`);
     }
     return value;
 }
 
 function number(value, name, min, max, { integer = false, open = false } = {}) {
     if (!finite(value) || (integer && !Number.isInteger(value))) {
-        fail(`${name} must be a finite ${integer ? 'integer' : 'number'}, not ${JSON.stringify(value)}`);
+        fail(`${name} must be a finite ${integer ? 'integer' : 'number'}, not ${show(value)}`);
     }
     if (value < min || value > max || (open && (value === min || value === max))) {
         fail(`${name} ${value} is outside ${open ? '(' : '['}${min}, ${max}${open ? ')' : ']'}`);
