@@ -33,7 +33,7 @@ const materials = {
 const sphere = new THREE.Mesh(new THREE.SphereGeometry(1, WIDTH_SEGMENTS, HEIGHT_SEGMENTS), materials.gltf);
 scene.add(sphere);
 const lights = [];
-const targets = new Map(); // "WxH" -> render target, kept between requests
+const targets = new Map(); // "WxH" -> render target, kept between requests (up to 8)
 
 function linear(color, rgb) {
     return color.setRGB(rgb[0], rgb[1], rgb[2], THREE.LinearSRGBColorSpace);
@@ -89,6 +89,10 @@ function setCamera(c, sph) {
 function target(width, height) {
     const key = `${width}x${height}`;
     if (!targets.has(key)) {
+        if (targets.size >= 8) { // a server that sees many sizes keeps the last few targets, not all
+            for (const t of targets.values()) t.dispose();
+            targets.clear();
+        }
         targets.set(key, new THREE.WebGLRenderTarget(width, height, { type: targetType, depthBuffer: true }));
     }
     return targets.get(key);

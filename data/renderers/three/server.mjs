@@ -143,6 +143,13 @@ async function main() {
     page.on('pageerror', (e) => process.stderr.write(`three: page error: ${e.message}\n`));
     await page.goto(`http://127.0.0.1:${host.port}/`);
     await page.waitForFunction(() => window.serverReady === true, null, { timeout: 60000 });
+    // Compile both materials' programs (one point light, the usual scene) before saying ready.
+    for (const model of Object.keys(MODELS)) {
+        await page.evaluate((j) => window.renderRequest(j), renderJob({
+            size: 4, samples: 1, camera: { position: [0, 0, 4], target: [0, 0, 0], up: [0, 1, 0], fov_y: 35 },
+            lights: [{ position: [3, 0, 3], intensity: 1 }], material: { model }, output: '/warm-up',
+        }).job);
+    }
     const info = await page.evaluate(() => window.rendererInfo);
     process.stderr.write(`three: r${info.revision} in ${browser.version()}, render targets ${info.targetType}, ` +
                          `max texture ${info.maxTextureSize}; ready in ${((performance.now() - started) / 1000)
