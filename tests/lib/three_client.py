@@ -5,6 +5,8 @@ reports. Run with /usr/bin/python3 (numpy).
   three_client.py compare MATREMAP WORK SIZE SAMPLES MODEL name=v[,v,v] ...
       renders MODEL in the fit scene with the server and with `matremap render`, prints
       "rel_rmse R max_alpha_diff A lit N" (relative RMSE over the pixels either covers).
+  three_client.py bench SIZE [REPEATS]
+      seconds to the ready line, then per request (median over REPEATS after a first) for s = 1, 4, 8.
   three_client.py session MATREMAP WORK
       tests/three_server.sh's checks, one "ok    NAME" or "FAIL  NAME" line each.
 """
@@ -204,7 +206,35 @@ def session(matremap, work):
     return all(results)
 
 
+def bench(size, repeats, work):
+    import statistics
+    import time
+    t0 = time.time()
+    server = Server(stderr=subprocess.DEVNULL)
+    print(f"ready in {time.time() - t0:.2f} s")
+    rid = 0
+    for samples in (1, 16, 64):
+        for model, values in (("gltf", {"base_color": [0.8, 0.2, 0.1], "metallic": 0}), ("lambert", {})):
+            walls = []
+            for k in range(repeats + 1):
+                rid += 1
+                if model == "gltf":
+                    values["roughness"] = 0.3 + 0.05 * k
+                t = time.time()
+                answer = server.request(**render_request(rid, size, samples, model, values, os.path.join(work, "b")))
+                walls.append(time.time() - t)
+                if not answer.startswith("@matremap ok"):
+                    sys.exit(answer)
+            print(f"{size}^2 s={min(8, int(samples ** 0.5))} {model}: first {walls[0]:.4f} s, "
+                  f"then median {statistics.median(walls[1:]):.4f} s")
+    server.close()
+
+
 def main(argv):
+    if argv[:1] == ["bench"]:
+        import tempfile
+        with tempfile.TemporaryDirectory() as work:
+            return bench(int(argv[1]), int(argv[2]) if len(argv) > 2 else 10, work)
     if argv[:1] == ["session"]:
         sys.exit(0 if session(argv[1], argv[2]) else 1)
     if argv[:1] != ["compare"]:
