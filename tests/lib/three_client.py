@@ -181,6 +181,8 @@ def session(matremap, work):
          '@matremap error 16 component "diffuse" is not supported by three (components=full)'),
         (request_text(17, material={"model": "gltf", "values": {"roughness": 2}}),
          "@matremap error 17 gltf roughness 2 is outside [0.01, 1]"),
+        (request_text(22, camera={"position": [0, 0, 4], "target": [0, 0, 0], "up": [0, 0, 1], "fov_y": 35}),
+         "@matremap error 22 camera: position equals target, or up is parallel to the view direction"),
         ('{"op": "render", "id": 18, "size": ', None),
         (json.dumps({"op": "describe", "id": 19}), '@matremap error 19 unknown op "describe" (three answers: '
                                                     'render, quit)'),
@@ -192,7 +194,7 @@ def session(matremap, work):
         else:
             ok = answer == expected
         check(f"error answered: {answer}", ok)
-    wrote = [f for f in os.listdir(work) if f.startswith("e1")]
+    wrote = [f for f in os.listdir(work) if f.startswith("e")]
     check("no output written for a refused request", wrote == [])
     answer = server.request(**render_request(20, 16, 1, "lambert", {}, os.path.join(work, "after")))
     check(f"still serving after the errors: {answer}", answer.startswith("@matremap ok 20 "))

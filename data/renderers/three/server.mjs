@@ -26,6 +26,7 @@ function say(line) {
     process.stdout.write(`@matremap ${line}\n`);
 }
 
+const limits = { maxTextureSize: 4096 }; // the page's, once it is loaded
 class RequestError extends Error {}
 const fail = (message) => { throw new RequestError(message); };
 const finite = (x) => typeof x === 'number' && Number.isFinite(x);
@@ -81,15 +82,22 @@ function materialValues(material) {
 
 // The page's job for a render request, every field checked; the output files to write.
 function renderJob(r) {
-    const size = number(r.size, 'size', 1, 8192, { integer: true });
+    const size = number(r.size, 'size', 1, 16384, { integer: true });
     const samples = number(r.samples ?? 1, 'samples', 1, 1 << 20, { integer: true });
     const supersample = Math.min(8, Math.max(1, Math.floor(Math.sqrt(samples))));
-    if (size * supersample > 16384) fail(`size ${size} x ${supersample} sub-pixels exceeds 16384`);
+    if (size * supersample > limits.maxTextureSize) {
+        fail(`size ${size} x ${supersample} sub-pixels exceeds the ${limits.maxTextureSize}-pixel render target limit`);
+    }
     const c = r.camera ?? fail('camera is missing');
     const camera = {
         position: vector(c.position, 'camera.position'), target: vector(c.target, 'camera.target'),
         up: vector(c.up ?? [0, 1, 0], 'camera.up'), fov_y: number(c.fov_y, 'camera.fov_y', 0, 180, { open: true }),
     };
+    const view = camera.target.map((t, k) => t - camera.position[k]);
+    const cross = [1, 2, 0].map((i, k) => view[i] * camera.up[(k + 2) % 3] - view[(k + 2) % 3] * camera.up[i]);
+    if (Math.hypot(...cross) <= 1e-9 * Math.hypot(...view) * Math.hypot(...camera.up)) {
+        fail('camera: position equals target, or up is parallel to the view direction');
+    }
     const s = r.sphere ?? { center: [0, 0, 0], radius: 1 };
     const sphere = { center: vector(s.center, 'sphere.center'),
                      radius: number(s.radius, 'sphere.radius', 0, Infinity, { open: true }) };
@@ -151,6 +159,7 @@ async function main() {
         }).job);
     }
     const info = await page.evaluate(() => window.rendererInfo);
+    limits.maxTextureSize = info.maxTextureSize;
     process.stderr.write(`three: r${info.revision} in ${browser.version()}, render targets ${info.targetType}, ` +
                          `max texture ${info.maxTextureSize}; ready in ${((performance.now() - started) / 1000)
                              .toFixed(2)} s\n`);
