@@ -38,11 +38,20 @@ for p in "${packages[@]}"; do
         missing+=("$p")
     fi
 done
-[ ${#missing[@]} -eq 0 ] && exit 0
+if [ ${#missing[@]} -gt 0 ]; then
+    sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo="sudo"
+    echo "install-deps: installing ${missing[*]}" >&2
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get update -qq
+    $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
+fi
 
-sudo=""
-[ "$(id -u)" -eq 0 ] || sudo="sudo"
-echo "install-deps: installing ${missing[*]}" >&2
-export DEBIAN_FRONTEND=noninteractive
-$sudo apt-get update -qq
-$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2
+# The three.js renderer server's npm packages (data/renderers/three: three, playwright-core, pinned by its
+# package-lock.json), installed once: nothing to do, and nothing said, when they are there.
+three="$(cd "$(dirname "$0")/.." && pwd)/data/renderers/three"
+if [ ! -f "$three/node_modules/three/package.json" ] || [ ! -f "$three/node_modules/playwright-core/package.json" ]
+then
+    echo "install-deps: npm ci in $three" >&2
+    (cd "$three" && npm ci --no-audit --no-fund --loglevel=error) >&2
+fi

@@ -28,6 +28,7 @@ import { MaterialXLoader } from 'three/addons/loaders/MaterialXLoader.js';
 import { USDLoader } from 'three/addons/loaders/USDLoader.js';
 import { HDRLoader } from 'three/addons/loaders/HDRLoader.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { boxFilter, toBase64 } from 'matremap/readback.js';
 
 function meanLuminance(data, width, height) {
     let sum = 0, weights = 0;
@@ -184,26 +185,9 @@ window.renderClientJob = async (job) => {
         o.material.dispose();
     });
     // Box filter ss x ss blocks; the WebGL2 backend's row 0 is the bottom row, the output's is the top.
-    const out = new Float32Array(size * size * 4);
-    const norm = 1 / (ss * ss);
-    for (let y = 0; y < size; y++) {
-        for (let x = 0; x < size; x++) {
-            const o = 4 * ((job.flipRows ? size - 1 - y : y) * size + x);
-            for (let dy = 0; dy < ss; dy++) {
-                for (let dx = 0; dx < ss; dx++) {
-                    const i = 4 * ((y * ss + dy) * big + x * ss + dx);
-                    for (let c = 0; c < 4; c++) out[o + c] += pixels[i + c] * norm;
-                }
-            }
-        }
-    }
-    const bytes = new Uint8Array(out.buffer);
-    let binary = '';
-    for (let i = 0; i < bytes.length; i += 0x8000) {
-        binary += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
-    }
+    const out = boxFilter(pixels, size, ss, { flip: !!job.flipRows });
     return {
-        pixels: btoa(binary), revision: THREE.REVISION, report, envScale: env.scale, backend:
+        pixels: toBase64(out), revision: THREE.REVISION, report, envScale: env.scale, backend:
         renderer.backend.isWebGLBackend ? 'WebGL2' : 'WebGPU', seconds: (performance.now() - started) / 1000,
     };
 };

@@ -1,16 +1,16 @@
-// What three_render.mjs (make evaluation-viewers) and client_render.mjs (make evaluation-clients) share: a local
-// HTTP server for one page and the files its jobs name, headless Chromium, and the float EXR a render is saved as.
+// What three_render.mjs (make evaluation-viewers) and client_render.mjs (make evaluation-clients) share: the page
+// host and Chromium of data/renderers/three/page_host.mjs (serving this folder's pages and packages), and the float
+// EXR a render is saved as.
 import { chromium } from 'playwright-core';
-import { createServer } from 'node:http';
-import { readFile, writeFile, rename } from 'node:fs/promises';
-import { dirname, extname, join, resolve } from 'node:path';
+import { writeFile, rename } from 'node:fs/promises';
+import { dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
+import * as host from '../../data/renderers/three/page_host.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
-const types = { '.js': 'text/javascript', '.mjs': 'text/javascript', '.html': 'text/html', '.json': 'application/json',
-                '.gltf': 'model/gltf+json', '.glb': 'model/gltf-binary', '.bin': 'application/octet-stream',
-                '.mtlx': 'application/xml', '.usda': 'text/plain', '.png': 'image/png', '.jpg': 'image/jpeg',
-                '.jpeg': 'image/jpeg', '.hdr': 'application/octet-stream' };
+
+export const serve = (options) => host.serve({ root: here, ...options });
+export const launch = (executablePath) => host.launch(chromium, executablePath);
 
 // One uncompressed scanline EXR, channels A, B, G, R (sorted by name, as OpenEXR stores them), FLOAT.
 function exr(width, height, rgba) {
@@ -63,54 +63,6 @@ function exr(width, height, rgba) {
         }
     }
     return Buffer.concat([header, offsets, lines]);
-}
-
-/* Serves, on 127.0.0.1 at a free port: "/" (the page: `importmap(searchParams)` as its import map, then the module
- * `page`, a file of this folder), `/<page>`, `/modules/<package>/...` for the node_modules packages named in
- * `packages`, and `/files/<absolute path>` for files inside the folders of `files` (nothing else: 404).
- * Returns { port, close }. */
-export async function serve({ page, packages, files, importmap }) {
-    const modules = resolve(here, 'node_modules');
-    const allowed = new Set(files.map((p) => dirname(resolve(p))));
-    const server = createServer(async (req, res) => {
-        try {
-            const url = new URL(req.url, 'http://x');
-            const path = decodeURIComponent(url.pathname);
-            let file = null;
-            if (path === '/' || path === '/index.html') {
-                res.writeHead(200, { 'content-type': 'text/html' });
-                res.end(`<!doctype html><html><body><script type="importmap">` +
-                        `${JSON.stringify({ imports: importmap(url.searchParams) })}</script>` +
-                        `<script type="module" src="/${page}"></script></body></html>`);
-                return;
-            }
-            if (path === `/${page}`) file = join(here, page);
-            else if (packages.some((p) => path.startsWith(`/modules/${p}/`))) file = join(modules, path.slice(9));
-            else if (path.startsWith('/files/')) {
-                file = resolve(path.slice('/files'.length));
-                let ok = false;
-                for (const a of allowed) if (file.startsWith(a + '/')) ok = true;
-                if (!ok) file = null;
-            }
-            if (!file || file.includes('..')) { res.writeHead(404); res.end(); return; }
-            const body = await readFile(file);
-            res.writeHead(200, { 'content-type': types[extname(file).toLowerCase()] || 'application/octet-stream' });
-            res.end(body);
-        } catch (e) {
-            res.writeHead(404);
-            res.end(String(e));
-        }
-    });
-    await new Promise((ok) => server.listen(0, '127.0.0.1', ok));
-    return { port: server.address().port, close: () => server.close() };
-}
-
-/* Debian's Chromium, headless, with the software WebGL the renders need. */
-export function launch(executablePath) {
-    return chromium.launch({
-        executablePath: executablePath || '/usr/lib/chromium/chromium',
-        args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist'],
-    });
 }
 
 /* A page's render (base64 of size x size linear RGBA floats) written to `out` as a float EXR, atomically. */

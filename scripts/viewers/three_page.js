@@ -7,6 +7,7 @@
 // per pixel (each itself 4x MSAA).
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { boxFilter, toBase64 } from 'matremap/readback.js';
 
 const revision = parseInt(THREE.REVISION, 10);
 
@@ -132,26 +133,9 @@ window.renderJob = async (job) => {
         }
     });
     // Box filter ss x ss blocks; WebGL's row 0 is the bottom row, the output's is the top.
-    const out = new Float32Array(size * size * 4);
-    const norm = 1 / (ss * ss);
-    for (let y = 0; y < size; y++) {
-        for (let x = 0; x < size; x++) {
-            const o = 4 * ((size - 1 - y) * size + x);
-            for (let dy = 0; dy < ss; dy++) {
-                for (let dx = 0; dx < ss; dx++) {
-                    const i = 4 * ((y * ss + dy) * big + x * ss + dx);
-                    for (let c = 0; c < 4; c++) out[o + c] += pixels[i + c] * norm;
-                }
-            }
-        }
-    }
-    const bytes = new Uint8Array(out.buffer);
-    let binary = '';
-    for (let i = 0; i < bytes.length; i += 0x8000) {
-        binary += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
-    }
+    const out = boxFilter(pixels, size, ss);
     return {
-        pixels: btoa(binary), revision: THREE.REVISION, materials: [...extensions], envScale: env.scale,
+        pixels: toBase64(out), revision: THREE.REVISION, materials: [...extensions], envScale: env.scale,
         seconds: (performance.now() - started) / 1000,
     };
 };
