@@ -1254,7 +1254,11 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     }
     double actual = sse_against(&ctx, ctx.scratch, source->full);
     long fit_renders = ctx.renders;
-    double departure = affine_departure(&ctx, result.values, ctx.scratch);
+    // An external renderer is only nearly affine in the linear parameters (three.js's multiple-scattering boost of a
+    // metal's F0): its images were fitted directly where the projection's prediction missed (above), so neither
+    // the departure nor the rescaled optimum says the target cannot reach the source; the residual does.
+    double departure = external ? 0.0 : affine_departure(&ctx, result.values, ctx.scratch);
+    if (external) rescaled_optimum = 0;
     if (isnan(departure)) {
         status = ctx.failure;
         free_context(&ctx);
@@ -1365,6 +1369,9 @@ static mr_status zoom_check(const mr_render_plan *plan, const mr_brdf_model *sou
                             mr_remap_result *out) {
     const int threads = opts->threads;
     if (out->outcome != MR_FIT_CONVERGED) return MR_OK;
+    // The closer view compares a lobe with itself; two renderers differ there for their own reasons (three.js widens
+    // a highlight by the screen-space change of the normal), so it is the built-in renderer's alone.
+    if (!mr_renderer_is_builtin(opts->source_renderer) || !mr_renderer_is_builtin(opts->target_renderer)) return MR_OK;
     const mr_scene *scene = mr_render_plan_scene(plan);
     if (sqrt(covered_mean_square(plan, full, NULL)) < RELATIVE_RMS_FLOOR) return MR_OK; // black: nothing to look at
     const mr_render_plan *closer = NULL; // kept by `plan`: built by the first remap that asks

@@ -160,7 +160,10 @@ typedef struct mr_remap_options {
                                     fit the built-in model first, in process, and start from its answer as
                                     from initial_values (one local refinement through the renderer, which
                                     corrects where the two differ); `renders` counts the renderer's renders
-                                    only. One without component renders (three)
+                                    only. Its images are taken as they are: the affine-departure test of
+                                    UNREACHABLE and the closer look of UNDER_RESOLVED are the built-in
+                                    renderer's only (three.js is not quite affine in a metal's F0). One
+                                    without component renders (three)
                                     fits AUTO against the full render only (no lobe-by-lobe stage), refuses
                                     TWO and THREE, and takes the lobes' energies of the resolution check from
                                     the built-in model. NULL: built-in */
