@@ -144,13 +144,13 @@ class BlendMaterial:
             raise RequestError("no material '%s' in '%s' (it has: %s)"
                                % (name, path, ", ".join(present) if present else "no materials"))
         self.material = data_to.materials[0]
-        self.material.use_fake_user = True
-        where = "material '%s' in '%s'" % (name, path)
-        if not self.material.use_nodes or self.material.node_tree is None:
-            raise RequestError("%s does not use nodes" % where)
-        out = output_node(self.material)
+        self.where = "material '%s' in '%s'" % (name, path)
+        out = output_node(self.material) if self.material.use_nodes and self.material.node_tree else None
         if out is None:
-            raise RequestError("%s has no Material Output node" % where)
+            problem = "has no Material Output node" if self.material.use_nodes else "does not use nodes"
+            bpy.data.materials.remove(self.material)   # not kept: a later request loads the file again
+            raise RequestError("%s %s" % (self.where, problem))
+        self.material.use_fake_user = True
         self.params = self.exposed(out)     # path -> (socket, kind, min, max)
         self.file_values = {path: self.read(p[0]) for path, p in self.params.items()}
 
@@ -191,8 +191,8 @@ class BlendMaterial:
         values = dict(self.file_values)
         for path, given in as_object(inputs, "inputs").items():
             if path not in self.params:
-                raise RequestError("no input '%s' in material '%s' (its inputs: %s)"
-                                   % (path, self.material.name, ", ".join(self.params) or "none"))
+                raise RequestError("no input '%s' in %s (its inputs: %s)"
+                                   % (path, self.where, ", ".join(self.params) or "none"))
             kind = self.params[path][1]
             values[path] = as_numbers(given, path, 1 if kind == "float" else 3)
         for path, vals in values.items():
@@ -200,8 +200,8 @@ class BlendMaterial:
             if sock.type == "VALUE":
                 if sock.default_value != vals[0]:
                     sock.default_value = vals[0]
-            else:
-                blender_scene.set_color(sock, vals)
+            elif tuple(sock.default_value[:3]) != tuple(vals):
+                sock.default_value = tuple(vals) + (sock.default_value[3],)   # the file's alpha kept
 
 
 # ---------------------------------------------------------------------------------------------

@@ -202,11 +202,13 @@ errors = [
      r"error \d+ no such \.blend file '%s'" % re.escape(missing)),
     ("unknown material", {"op": "describe", "material": {"blend": blend, "name": "Nope"}},
      r"error \d+ no material 'Nope' in '%s' \(it has: (?=.*NoOutput)(?=.*TinyMat).*\)" % re.escape(blend)),
+    ("material without nodes", {"op": "describe", "material": {"blend": blend, "name": "Other"}},
+     r"error \d+ material 'Other' in '%s' does not use nodes" % re.escape(blend)),
     ("material without an output", {"op": "describe", "material": {"blend": blend, "name": "NoOutput"}},
      r"error \d+ material 'NoOutput' in '%s' has no Material Output node" % re.escape(blend)),
     ("unknown input path", scene(material=dict(tiny, inputs={"Glossy BSDF.Colour": [1, 1, 1]})),
-     r"error \d+ no input 'Glossy BSDF\.Colour' in material 'TinyMat.*' \(its inputs: Diffuse BSDF\.Color, "
-     r"Diffuse BSDF\.Roughness, Glossy BSDF\.Color, Glossy BSDF\.Roughness\)"),
+     r"error \d+ no input 'Glossy BSDF\.Colour' in material 'TinyMat' in '%s' \(its inputs: Diffuse BSDF\.Color, "
+     r"Diffuse BSDF\.Roughness, Glossy BSDF\.Color, Glossy BSDF\.Roughness\)" % re.escape(blend)),
     ("wrong value count (.blend input)", scene(material=dict(tiny, inputs={"Glossy BSDF.Color": [1, 1]})),
      r"error \d+ 'Glossy BSDF\.Color' takes 3 values, got 2"),
     ("wrong value count (model)", scene(material={"model": "lambert", "values": {"albedo": [1, 1]}}),
@@ -241,6 +243,16 @@ if p and full is not None:
     check("... is the first render again (fixed seed)", np.array_equal(read_rgba(p, "full", SIZE), full))
 status = server.close()
 check("EOF on stdin: the server exits with status 0", status == 0, status)
+quitter = RendererServer([blender, "-b", "--factory-startup", "--python-exit-code", "3", "--python", script, "--"],
+                         os.path.join(tmp, "quit.log"))
+quitter.proc.stdin.write(b'{"op": "quit"}\n')
+quitter.proc.stdin.flush()
+try:
+    status = quitter.proc.wait(30)
+except subprocess.TimeoutExpired:
+    quitter.proc.kill()
+    status = None
+check('{"op": "quit"}: the server exits with status 0', status == 0, status)
 check("nothing but the outputs was written (no temporary EXR left)",
       all(re.fullmatch(r"r\d+\.(full|diffuse|specular)\.f32", f) for f in os.listdir(out_dir)),
       sorted(os.listdir(out_dir)))
