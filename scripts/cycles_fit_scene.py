@@ -46,6 +46,7 @@ import bpy
 T_SCRIPT_START = time.time()
 
 # The scene's pieces are shared with the renderer server (data/renderers/blender_scene.py).
+sys.dont_write_bytecode = True   # no __pycache__ beside the sources (or in an installed tree)
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "renderers"))
 import blender_scene  # noqa: E402
 

@@ -29,6 +29,7 @@ import traceback
 import bpy
 import numpy as np
 
+sys.dont_write_bytecode = True   # no __pycache__ beside the sources (or in an installed tree)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import blender_scene  # noqa: E402
 

@@ -10,6 +10,7 @@ import sys
 
 import numpy as np
 
+sys.dont_write_bytecode = True   # no __pycache__ beside the sources (or in an installed tree)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from renderer_client import RendererServer, read_rgba, sphere_coverage, write_pfm  # noqa: E402
 
