@@ -42,6 +42,7 @@ MODELS = {
 }
 # Component -> the passes whose product it is (None: the Combined pass itself).
 PASSES = {"full": None, "diffuse": ("DiffDir", "DiffCol"), "specular": ("GlossDir", "GlossCol")}
+MIN_SIZE = 4        # Blender renders at least 4 x 4 pixels (a smaller resolution is raised to 4)
 MAX_SIZE = 16384
 
 
@@ -50,16 +51,13 @@ class RequestError(Exception):
 
 
 def fmt_float(v):
-    """The shortest text that reads back as the same float32 (0.8, not 0.800000011920929)."""
+    """The shortest text that reads back as the same float32 (0.8, not 0.800000011920929; 180, not 1.8e+02)."""
     v = float(v)
     if not math.isfinite(v):
         return repr(v)
-    f32 = np.float32(v)
-    for digits in range(1, 10):
-        text = "%.*g" % (digits, v)
-        if np.float32(float(text)) == f32:
-            return text
-    return "%.9g" % v
+    if v == 0.0 or 1e-4 <= abs(v) < 1e7:
+        return np.format_float_positional(np.float32(v), unique=True, trim="-")
+    return np.format_float_scientific(np.float32(v), unique=True, trim="-")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -375,7 +373,7 @@ class Server:
         return self.principled
 
     def render(self, req):
-        size = as_int(field(req, "size"), "size", 1, MAX_SIZE)
+        size = as_int(field(req, "size"), "size", MIN_SIZE, MAX_SIZE)
         samples = as_int(field(req, "samples"), "samples", 1, 1 << 24)
         seed = as_int(req.get("seed", 0), "seed", 0, (1 << 31) - 1)
         threads = as_int(req.get("threads", 0), "threads", 0, 1024)
