@@ -18,7 +18,7 @@ import time
 sys.dont_write_bytecode = True
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(root, "tests", "lib"))
-from renderer_client import RendererServer  # noqa: E402
+from renderer_client import RendererServer, fit_scene_request  # noqa: E402
 
 
 def main():
@@ -45,15 +45,9 @@ def main():
             walls, own = [], []
             for k in range(a.repeats):
                 rid += 1
-                req = {"op": "render", "id": rid, "size": a.size, "samples": spp, "seed": 0, "threads": a.threads,
-                       "camera": {"position": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 35.0},
-                       "sphere": {"center": [0, 0, 0], "radius": 1.0},
-                       "lights": [{"position": [2.1213203435596424, 0, 2.1213203435596424],
-                                   "intensity": [10, 10, 10]}],
-                       "material": {"model": "cycles-principled",
-                                    "values": {"base_color": [0.8, 0.2, 0.1], "metallic": 0.05 * k,
-                                               "roughness": 0.2 + 0.05 * k}},
-                       "components": ["full", "diffuse", "specular"], "output": os.path.join(tmp, "r")}
+                req = fit_scene_request(id=rid, size=a.size, samples=spp, threads=a.threads,
+                                        output=os.path.join(tmp, "r"))
+                req["material"]["values"].update(metallic=0.05 * k, roughness=0.2 + 0.05 * k)
                 t = time.monotonic()
                 _, final = server.request(req)
                 walls.append(time.monotonic() - t)

@@ -12,7 +12,7 @@ import numpy as np
 
 sys.dont_write_bytecode = True   # no __pycache__ beside the sources (or in an installed tree)
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from renderer_client import RendererServer, read_rgba, sphere_coverage, write_pfm  # noqa: E402
+from renderer_client import RendererServer, fit_scene_request, read_rgba, sphere_coverage, write_pfm  # noqa: E402
 
 matremap, blender, script, tmp, blend = sys.argv[1:6]
 SIZE = 64
@@ -31,22 +31,13 @@ def check(name, ok, why=""):
 
 
 def scene(**kw):
-    req = {"op": "render", "id": 0, "size": SIZE, "samples": 64, "seed": 0, "threads": 1,
-           "camera": {"position": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 35.0},
-           "sphere": {"center": [0, 0, 0], "radius": 1.0},
-           "lights": [{"position": [2.1213203435596424, 0, 2.1213203435596424], "intensity": [10, 10, 10]}],
-           "material": {"model": "cycles-principled",
-                        "values": {"base_color": [0.8, 0.2, 0.1], "metallic": 0, "specular": 0.5,
-                                   "specular_tint": 0, "roughness": 0.4}},
-           "components": ["full", "diffuse", "specular"]}
-    req.update(kw)
-    return req
+    return fit_scene_request(size=SIZE, **kw)
 
 
 out_dir = os.path.join(tmp, "renders")
 os.mkdir(out_dir)
-server = RendererServer([blender, "-b", "--factory-startup", "--python-exit-code", "3", "--python", script, "--"],
-                        os.path.join(tmp, "server.log"))
+COMMAND = [blender, "-b", "--factory-startup", "--python-exit-code", "3", "--python", script, "--"]
+server = RendererServer(COMMAND, os.path.join(tmp, "server.log"))
 check("ready line names blender, its version and the caps",
       re.fullmatch(r"ready blender \d+\.\d+\.\d+ components=full,diffuse,specular "
                    r"models=cycles-principled,lambert materials=blend", server.ready), server.ready)
@@ -244,8 +235,7 @@ if p and full is not None:
     check("... is the first render again (fixed seed)", np.array_equal(read_rgba(p, "full", SIZE), full))
 status = server.close()
 check("EOF on stdin: the server exits with status 0", status == 0, status)
-quitter = RendererServer([blender, "-b", "--factory-startup", "--python-exit-code", "3", "--python", script, "--"],
-                         os.path.join(tmp, "quit.log"))
+quitter = RendererServer(COMMAND, os.path.join(tmp, "quit.log"))
 quitter.proc.stdin.write(b'{"op": "quit"}\n')
 quitter.proc.stdin.flush()
 try:

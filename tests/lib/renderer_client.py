@@ -13,6 +13,21 @@ import numpy as np
 PREFIX = "@matremap "
 
 
+def fit_scene_request(**fields):
+    """An op-render request of matremap's fit scene (camera at (0, 0, 4), 35 degrees; unit sphere; 10 W/sr at 45
+    degrees; a cycles-principled material; every component), 64^2 at 64 spp, one thread; `fields` replace any."""
+    req = {"op": "render", "id": 0, "size": 64, "samples": 64, "seed": 0, "threads": 1,
+           "camera": {"position": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 35.0},
+           "sphere": {"center": [0, 0, 0], "radius": 1.0},
+           "lights": [{"position": [2.1213203435596424, 0, 2.1213203435596424], "intensity": [10, 10, 10]}],
+           "material": {"model": "cycles-principled",
+                        "values": {"base_color": [0.8, 0.2, 0.1], "metallic": 0, "specular": 0.5,
+                                   "specular_tint": 0, "roughness": 0.4}},
+           "components": ["full", "diffuse", "specular"]}
+    req.update(fields)
+    return req
+
+
 class ServerError(Exception):
     pass
 
