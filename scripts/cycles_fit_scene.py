@@ -7,6 +7,9 @@ Run inside Blender (3.4; also meant to work with later 3.x):
         --base-color 0.8,0.2,0.1 --metallic 0 --specular 0.5 --roughness 0.4 \
         --specular-tint 0 --distribution GGX --component full -o out.exr
 
+The scene is built from data/renderers/blender_scene.py, which the renderer server
+(data/renderers/blender_server.py) builds its scene from too.
+
 The fit scene (matremap's definition; see docs/cycles-peer.md):
   * right-handed world, +y up (Blender's axes used as they are: the camera looks along -z);
   * unit sphere at the origin: by default a Geometry Nodes point of radius 1, which Cycles (3.1+)
