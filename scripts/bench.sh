@@ -961,7 +961,7 @@ half-metal 0.5,0.6,0.2 0.5 0.5 0.4 0.5
 MATERIALS
 else
     echo
-    echo "(Blender not installed: the Cycles peer was skipped; scripts/install-deps.sh --bench installs it)"
+    echo "(Blender not installed: the Cycles peer was skipped; scripts/install-deps.sh installs it)"
     echo "Cycles peer skipped: Blender was not installed in this run." >> "$report"
 fi
 

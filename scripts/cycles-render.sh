@@ -11,7 +11,7 @@ set -euo pipefail
 
 blender="${BLENDER:-blender}"
 if ! command -v "$blender" >/dev/null 2>&1; then
-    echo "cycles-render: '$blender' not found; install with scripts/install-deps.sh --bench" >&2
+    echo "cycles-render: '$blender' not found; install with scripts/install-deps.sh" >&2
     exit 127
 fi
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"

@@ -7,6 +7,9 @@ Run inside Blender (3.4; also meant to work with later 3.x):
         --base-color 0.8,0.2,0.1 --metallic 0 --specular 0.5 --roughness 0.4 \
         --specular-tint 0 --distribution GGX --component full -o out.exr
 
+The scene is built from data/renderers/blender_scene.py, which the renderer server
+(data/renderers/blender_server.py) builds its scene from too.
+
 The fit scene (matremap's definition; see docs/cycles-peer.md):
   * right-handed world, +y up (Blender's axes used as they are: the camera looks along -z);
   * unit sphere at the origin: by default a Geometry Nodes point of radius 1, which Cycles (3.1+)
@@ -45,14 +48,19 @@ import bpy
 
 T_SCRIPT_START = time.time()
 
+# The scene's pieces are shared with the renderer server (data/renderers/blender_scene.py).
+sys.dont_write_bytecode = True   # no __pycache__ beside the sources (or in an installed tree)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "renderers"))
+import blender_scene  # noqa: E402
+
+ICO_SUBDIVISIONS = blender_scene.ICO_SUBDIVISIONS
+
 # Radiant intensity of the fit-scene light, W/sr, and Cycles' conversion (measured in Blender
 # 3.4.1: a point light of Power P watts and radius 0 has I = P / (4 pi) W/sr).
 FIT_INTENSITY = 10.0
-WATTS_PER_W_SR = 4.0 * math.pi
 LIGHT_DISTANCE = 3.0
 CAMERA_Z = 4.0
 FOV_DEG = 35.0
-ICO_SUBDIVISIONS = 7
 
 
 def process_start_time():
@@ -157,185 +165,42 @@ def light_position(which):
     return (LIGHT_DISTANCE * s, 0.0, LIGHT_DISTANCE * s)
 
 
-def clear_scene():
-    for ob in list(bpy.data.objects):
-        bpy.data.objects.remove(ob, do_unlink=True)
-    for coll in (bpy.data.meshes, bpy.data.lights, bpy.data.cameras, bpy.data.materials):
-        for block in list(coll):
-            coll.remove(block)
-
-
-def make_sphere(scene, geometry, material):
-    """The unit sphere: a smooth-shaded icosphere mesh, or (geometry == "points") one point of radius 1
-    made by a Geometry Nodes modifier, which Cycles (3.1+) renders as an exact ray-traced sphere."""
-    import bmesh
-    mesh = bpy.data.meshes.new("FitSphere")
-    if geometry == "icosphere":
-        bm = bmesh.new()
-        # Blender 3.0+ takes `radius` (2.8x called it `diameter` but meant the radius).
-        try:
-            bmesh.ops.create_icosphere(bm, subdivisions=ICO_SUBDIVISIONS, radius=1.0)
-        except TypeError:
-            bmesh.ops.create_icosphere(bm, subdivisions=ICO_SUBDIVISIONS, diameter=1.0)
-        bm.to_mesh(mesh)
-        bm.free()
-        mesh.polygons.foreach_set("use_smooth", [True] * len(mesh.polygons))
-        mesh.update()
-    mesh.materials.append(material)
-    ob = bpy.data.objects.new("FitSphere", mesh)
-    scene.collection.objects.link(ob)
-    if geometry == "points":
-        ng = bpy.data.node_groups.new("FitSpherePoint", "GeometryNodeTree")
-        if hasattr(ng, "interface"):  # Blender 4.x
-            ng.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
-        else:
-            ng.outputs.new("NodeSocketGeometry", "Geometry")
-        out = ng.nodes.new("NodeGroupOutput")
-        pts = ng.nodes.new("GeometryNodePoints")
-        pts.inputs["Count"].default_value = 1
-        pts.inputs["Position"].default_value = (0.0, 0.0, 0.0)
-        pts.inputs["Radius"].default_value = 1.0
-        setmat = ng.nodes.new("GeometryNodeSetMaterial")
-        setmat.inputs["Material"].default_value = material
-        ng.links.new(pts.outputs["Geometry"], setmat.inputs["Geometry"])
-        ng.links.new(setmat.outputs["Geometry"], out.inputs[0])
-        mod = ob.modifiers.new("FitSpherePoint", "NODES")
-        mod.node_group = ng
-    return ob
-
-
 def make_material(args):
-    mat = bpy.data.materials.new("FitMaterial")
-    mat.use_nodes = True
-    nt = mat.node_tree
-    for n in list(nt.nodes):
-        nt.nodes.remove(n)
-    out = nt.nodes.new("ShaderNodeOutputMaterial")
-    rgba = list(args.base_color) + [1.0]
     if args.material == "diffuse":
-        bsdf = nt.nodes.new("ShaderNodeBsdfDiffuse")
-        bsdf.inputs["Color"].default_value = rgba
-        bsdf.inputs["Roughness"].default_value = 0.0  # 0 = Lambert (>0 is Oren-Nayar)
+        mat, bsdf = blender_scene.make_lambert_material("FitMaterial")
+        blender_scene.set_color(bsdf.inputs["Color"], args.base_color)
     elif args.material == "glossy":
-        # The Glossy BSDF has no Fresnel: f = colour D G/(4 cos cos), alpha = Roughness^2 (Cycles squares it).
-        bsdf = nt.nodes.new("ShaderNodeBsdfGlossy")
-        bsdf.distribution = args.distribution
-        bsdf.inputs["Color"].default_value = rgba
+        mat, bsdf = blender_scene.make_glossy_material("FitMaterial", args.distribution)
+        blender_scene.set_color(bsdf.inputs["Color"], args.base_color)
         bsdf.inputs["Roughness"].default_value = args.roughness
     else:
-        bsdf = nt.nodes.new("ShaderNodeBsdfPrincipled")
+        mat, bsdf = blender_scene.make_principled_material("FitMaterial")
         bsdf.distribution = args.distribution
-        bsdf.inputs["Base Color"].default_value = rgba
-        bsdf.inputs["Metallic"].default_value = args.metallic
-        bsdf.inputs["Specular"].default_value = args.specular
-        bsdf.inputs["Specular Tint"].default_value = args.specular_tint
-        bsdf.inputs["Roughness"].default_value = args.roughness
-        bsdf.inputs["Emission"].default_value = (0.0, 0.0, 0.0, 1.0)
-    nt.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+        blender_scene.set_principled(bsdf, args.base_color, args.metallic, args.specular, args.specular_tint,
+                                     args.roughness)
     return mat
 
 
 def build_scene(args):
     scene = bpy.context.scene
-    clear_scene()
+    blender_scene.clear_scene()
+    blender_scene.make_black_world(scene)
+    sphere = blender_scene.Sphere(scene, args.geometry, make_material(args)).object
+    blender_scene.make_camera(scene, (0.0, 0.0, CAMERA_Z), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), FOV_DEG)
+    blender_scene.make_point_light(scene, "FitLight", light_position(args.light), [FIT_INTENSITY] * 3,
+                                           args.light_power)
+    power = args.light_power if args.light_power is not None else FIT_INTENSITY * blender_scene.WATTS_PER_W_SR
+    blender_scene.configure_render(scene, args.size, args.samples, args.seed, args.threads, False)
 
-    # World: black, strength 0.
-    world = bpy.data.worlds.new("FitWorld")
-    world.use_nodes = True
-    bg = world.node_tree.nodes.get("Background")
-    if bg is not None:
-        bg.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-        bg.inputs["Strength"].default_value = 0.0
-    world.color = (0.0, 0.0, 0.0)
-    scene.world = world
-
-    sphere = make_sphere(scene, args.geometry, make_material(args))
-
-    cam_data = bpy.data.cameras.new("FitCamera")
-    cam_data.type = "PERSP"
-    cam_data.sensor_fit = "VERTICAL"
-    cam_data.lens_unit = "FOV"
-    cam_data.angle_y = math.radians(FOV_DEG)
-    cam_data.clip_start = 0.01
-    cam_data.clip_end = 100.0
-    cam = bpy.data.objects.new("FitCamera", cam_data)
-    cam.location = (0.0, 0.0, CAMERA_Z)
-    cam.rotation_euler = (0.0, 0.0, 0.0)  # Blender cameras look along local -z with +y up.
-    scene.collection.objects.link(cam)
-    scene.camera = cam
-
-    power = args.light_power if args.light_power is not None else FIT_INTENSITY * WATTS_PER_W_SR
-    light_data = bpy.data.lights.new("FitLight", type="POINT")
-    light_data.energy = power
-    light_data.color = (1.0, 1.0, 1.0)
-    light_data.shadow_soft_size = 0.0
-    light = bpy.data.objects.new("FitLight", light_data)
-    light.location = light_position(args.light)
-    scene.collection.objects.link(light)
-
-    # Render settings.
     r = scene.render
-    r.engine = "CYCLES"
-    r.resolution_x = args.size
-    r.resolution_y = args.size
-    r.resolution_percentage = 100
-    r.pixel_aspect_x = 1.0
-    r.pixel_aspect_y = 1.0
-    r.use_border = False
-    r.film_transparent = False
-    r.use_file_extension = False
     r.use_persistent_data = False
-    r.dither_intensity = 0.0
-    if args.threads > 0:
-        r.threads_mode = "FIXED"
-        r.threads = args.threads
-    else:
-        r.threads_mode = "AUTO"
     im = r.image_settings
     im.file_format = "OPEN_EXR"
     im.color_mode = "RGB"
     im.color_depth = "32"
     im.exr_codec = "ZIP"
 
-    vs = scene.view_settings
-    vs.view_transform = "Standard"
-    vs.look = "None"
-    vs.exposure = 0.0
-    vs.gamma = 1.0
-    vs.use_curve_mapping = False
-
-    c = scene.cycles
-    c.device = "CPU"
-    c.feature_set = "SUPPORTED"
-    c.samples = args.samples
-    c.use_adaptive_sampling = False
-    c.use_denoising = False
-    c.seed = args.seed
-    c.use_animated_seed = False
-    c.sample_clamp_direct = 0.0
-    c.sample_clamp_indirect = 0.0
-    c.light_sampling_threshold = 0.0
-    c.pixel_filter_type = "BOX"
-    c.filter_width = 1.0  # box over exactly one pixel
-    c.blur_glossy = 0.0
-    c.caustics_reflective = False
-    c.caustics_refractive = False
-    c.film_exposure = 1.0
-    # Direct light only: bounces count the indirect ones, so 0 still gives the light at the
-    # first hit (a convex sphere under a black world has no indirect light anyway).
-    c.max_bounces = 0
-    c.diffuse_bounces = 0
-    c.glossy_bounces = 0
-    c.transmission_bounces = 0
-    c.volume_bounces = 0
-    c.transparent_max_bounces = 0
-    if hasattr(c, "use_guiding"):
-        c.use_guiding = False
-
     vl = scene.view_layers[0]
-    vl.use_pass_combined = True
-    scene.use_nodes = False
-    r.use_compositing = False
     if args.component != "full":
         kind = "diffuse" if args.component == "diffuse" else "glossy"
         setattr(vl, "use_pass_%s_direct" % kind, True)

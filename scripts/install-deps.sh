@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs every Debian package matremap needs, and nothing that is already there.
 # Idempotent: a second run does no network work. Usage: scripts/install-deps.sh [--bench]
-#   --bench  also install the peers the benchmarks time against (Blender for Cycles, hyperfine).
+#   --bench  also install what only the benchmarks use (hyperfine).
 set -euo pipefail
 
 packages=(
@@ -23,13 +23,14 @@ packages=(
     chromium           # tests/report_cli.sh opens a report page headless and checks its screenshot
     clang libclang-rt-14-dev libomp-14-dev  # make fuzz: libFuzzer targets with ASan+UBSan (clang's OpenMP runtime)
     openmpi-bin libopenmpi-dev  # optional: `mpirun -np N matremap sweep` (the MPI module; tests/sweep_mpi.sh)
+    blender            # Cycles: the renderer server (data/renderers/blender_server.py, tests/blender_server.sh)
 )
 # node + npm run the independent SSIM implementation (ssim.js) and the Khronos glTF validator in the tests;
 # the machine may already have a node of its own outside Debian's packages, which is fine.
 command -v node >/dev/null 2>&1 || packages+=(nodejs)
 command -v npm  >/dev/null 2>&1 || packages+=(npm)
 if [ "${1:-}" = "--bench" ]; then
-    packages+=(blender python3-numpy hyperfine)
+    packages+=(python3-numpy hyperfine)
 fi
 
 missing=()
