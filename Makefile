@@ -336,6 +336,14 @@ install: all
 	for l in $(notdir $(TOOL_LINKS)); do ln -sfn matremap $(DESTDIR)$(PREFIX)/bin/$$l; done
 	install -d $(DESTDIR)$(PREFIX)/share/matremap
 	install -m 644 data/spec2metal.mlp $(DESTDIR)$(PREFIX)/share/matremap/
+	install -d $(DESTDIR)$(PREFIX)/share/matremap/renderers/three
+	install -m 644 data/renderers/blender_server.py data/renderers/blender_scene.py \
+	    $(DESTDIR)$(PREFIX)/share/matremap/renderers/
+	install -m 644 data/renderers/three/*.mjs data/renderers/three/*.js data/renderers/three/package*.json \
+	    $(DESTDIR)$(PREFIX)/share/matremap/renderers/three/
+	# three.js's npm packages go along when scripts/install-deps.sh installed them; else `npm ci` there later
+	if [ -d data/renderers/three/node_modules ]; then \
+	    cp -r data/renderers/three/node_modules $(DESTDIR)$(PREFIX)/share/matremap/renderers/three/; fi
 	install -m 644 $(LIB) $(DESTDIR)$(PREFIX)/lib/
 	install -d $(DESTDIR)$(MODULE_DIR)
 	install -m 755 $(MODULE) $(MPI_MODULE) $(DESTDIR)$(MODULE_DIR)/

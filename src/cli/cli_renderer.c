@@ -88,9 +88,11 @@ void cli_print_renderers(FILE *out, const cli_renderers *r) {
     for (int k = 0; k < 2; k++) {
         fprintf(out, "%s %s %s", k ? "," : "", sides[k], r->versions[k][0] ? r->versions[k] : "builtin");
         if (r->opened[k] != NULL)
-            fprintf(out, " (%d samples, %ld renders, %ld process start%s)", side_samples(r, k),
-                    mr_renderer_render_count(r->opened[k]), mr_renderer_process_starts(r->opened[k]),
-                    mr_renderer_process_starts(r->opened[k]) == 1 ? "" : "s");
+        {
+            const long renders = mr_renderer_render_count(r->opened[k]), starts = mr_renderer_process_starts(r->opened[k]);
+            fprintf(out, " (%d samples, %ld render%s, %ld process start%s)", side_samples(r, k), renders,
+                    renders == 1 ? "" : "s", starts, starts == 1 ? "" : "s");
+        }
         if (k == 1 && r->opened[1] != NULL && r->opened[1] == r->opened[0]) fprintf(out, " (the same process)");
     }
     fprintf(out, "\n");
