@@ -133,7 +133,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h sr
 
 .PHONY: all check asan fuzz fuzz-targets faults demo bench \
         analyses paper evaluation evaluation-gltf evaluation-hardcases evaluation-svbrdf \
-        evaluation-viewers evaluation-clients evaluation-translations dataset train objectives deps install clean tables
+        evaluation-viewers evaluation-clients evaluation-translations evaluation-renderer-fits dataset train objectives deps install clean tables
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
 all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE) $(MPI_MODULE)
@@ -310,6 +310,11 @@ evaluation-clients: all $(OBJECT_METRICS) $(DOC_WRITE)
 # MaterialX's translation graphs beside the image-fitted remap (docs/evaluation-translations.md; ~5 min on 2 cores).
 evaluation-translations: all
 	scripts/evaluate-translations.sh $(BUILD)
+
+# Fits through real renderers (Blender, three.js) beside fits through the built-in model, Cycles' noise floor, a
+# sweep through Blender on MPI ranks: tables for docs/performance.md (docs/renderers.md).
+evaluation-renderer-fits: all
+	scripts/evaluate-renderer-fits.sh $(BUILD)
 
 # The specular -> metallic dataset (image-objective labels, a few minutes on 2 cores) and the network trained on
 # it (docs/training.md). `make train` reproduces data/spec2metal.mlp bit for bit.

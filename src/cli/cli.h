@@ -155,6 +155,7 @@ void cli_material_note_invalid_texels(const char *command, const mr_material *ma
 typedef struct cli_renderers {
     const char *names[2];     /* source, target: NULL = builtin */
     int samples;              /* 0: the renderers' defaults */
+    unsigned long seed;       /* the path tracers' seed: 0 */
     mr_renderer *opened[2];   /* NULL: built-in */
     char versions[2][128];    /* "blender 3.4.1" once started */
 } cli_renderers;

@@ -59,6 +59,7 @@ int cli_open_renderers(const char *command, cli_renderers *r, const mr_brdf_mode
         }
         mr_renderer_options ro = {0};
         ro.samples = r->samples;
+        ro.seed = r->seed;
         ro.processes = processes;
         mr_status status = mr_renderer_open(r->names[k], &ro, &r->opened[k]);
         if (status == MR_OK) status = mr_renderer_start(r->opened[k], r->versions[k], sizeof r->versions[k]);

@@ -99,6 +99,8 @@ static void print_help(void) {
            "                        'NODE.SOCKET=value'); no maps, --env, --mesh or glTF asset (docs/renderers.md)\n"
            "  --samples N           the real renderer's samples per pixel (blender default %d; three: an s x s\n"
            "                        sub-pixel grid, s = floor(sqrt(N)), default %d)\n"
+           "  --seed S              the real renderer's sampling seed (Blender; default 0): two seeds apart show\n"
+           "                        its noise\n"
            "  --json                what was done as one JSON object on stdout (outputs, size, pixels, samples,\n"
            "                        timings) instead of the 'wrote' line on stderr\n"
            "  --help                this text\n"
@@ -118,7 +120,7 @@ static void print_help(void) {
 
 
 /* --renderer R: the fit scene rendered by an external renderer (renderer.h). */
-static int render_by(const char *name, int samples, const char *model_name, int external,
+static int render_by(const char *name, int samples, int seed, const char *model_name, int external,
                      const char *const *assignments, int assignment_count, const mr_fit_scene_options *scene_opts,
                      int edge_samples, mr_component component, double exposure, const char *output,
                      const char *mask_path, const mr_img_write_options *write_opts, int json) {
@@ -143,6 +145,7 @@ static int render_by(const char *name, int samples, const char *model_name, int 
     memset(&renderers, 0, sizeof renderers);
     renderers.names[0] = name;
     renderers.samples = samples;
+    renderers.seed = (unsigned long)seed;
     code = cli_open_renderers("render", &renderers, material ? material->model : NULL, NULL, 1);
     if (code != CLI_EXIT_OK) {
         mr_material_free(material);
@@ -232,7 +235,7 @@ int cmd_render(int argc, char **argv) {
     const char *assignments[CLI_MAX_ASSIGNMENTS];
     int assignment_count = 0;
     const char *renderer_name = NULL;
-    int samples = 0;
+    int samples = 0, seed = 0;
 
     for (int i = 1; i < argc; i++) {
         const char *value = NULL;
@@ -287,6 +290,8 @@ int cmd_render(int argc, char **argv) {
             renderer_name = value;
         } else if ((taken = cli_take_option("render", argc, argv, &i, "--samples", &value))) {
             if (taken < 0 || !cli_parse_int("render", "--samples", value, 1, 1 << 20, &samples)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("render", argc, argv, &i, "--seed", &value))) {
+            if (taken < 0 || !cli_parse_int("render", "--seed", value, 0, 1 << 30, &seed)) return CLI_EXIT_USAGE;
         } else if (strcmp(argv[i], "--json") == 0) {
             json = 1;
         } else if ((taken = cli_take_option("render", argc, argv, &i, "--camera", &value))) {
@@ -341,7 +346,7 @@ int cmd_render(int argc, char **argv) {
                 return cli_usage_error("render", "'%s': --renderer %s renders uniform materials (no maps)",
                                        assignments[k], renderer_name);
         scene_opts.size = scene_opts.size > 0 ? scene_opts.size : 512;
-        return render_by(renderer_name, samples, model_name + (external ? 8 : 0), external, assignments,
+        return render_by(renderer_name, samples, seed, model_name + (external ? 8 : 0), external, assignments,
                          assignment_count, &scene_opts, edge_samples, component, exposure, output, mask_path,
                          &write_opts, json);
     }

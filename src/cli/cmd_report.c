@@ -65,6 +65,11 @@ static void print_help(void) {
            "                       object pixels in the first view to a mean luminance of 0.18)\n"
            "  --title TEXT         the page's title\n"
            "  --label TEXT         (inside a material's group) its name in the report (default: the model)\n"
+           "  --renderer R         (inside a material's group) who renders it: builtin (default), blender\n"
+           "                       (cycles-principled, lambert, or MODEL = blender:FILE.blend:MATERIAL with\n"
+           "                       'NODE.SOCKET=value' inputs) or three (gltf, lambert): a uniform material in the\n"
+           "                       fit scene, no --env or --mesh (docs/renderers.md)\n"
+           "  --samples N          the real renderers' samples per pixel (default: theirs)\n"
            "  --json               the figures as one JSON object on stdout instead of the table: the folder, its\n"
            "                       page and summary.json, views, exposure, each material's mean figures and seconds\n"
            "  --help               this text\n"
@@ -83,6 +88,7 @@ static void print_help(void) {
 /* One material's group on the command line. */
 typedef struct group {
     const char *label;
+    const char *renderer; /* --renderer inside the group: NULL = builtin */
     const char *model_name;
     const char *assignments[MAX_ARGS];
     int count;
@@ -93,6 +99,7 @@ typedef struct options {
     const char *mesh_path; /* --mesh */
     int paper_camera;      /* --camera paper */
     int json;              /* --json */
+    int samples;           /* --samples */
     mr_report_options report; /* zero: the library's defaults */
 } options;
 
@@ -113,6 +120,13 @@ static int parse(int argc, char **argv, options *o, group *groups, int *group_co
         if ((taken = cli_take_option("report", argc, argv, &i, "--label", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             g->label = value;
+        } else if ((taken = cli_take_option("report", argc, argv, &i, "--renderer", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (mr_renderer_check(value, NULL) != MR_OK) return cli_usage_error("report", "%s", mr_last_error());
+            g->renderer = value;
+        } else if ((taken = cli_take_option("report", argc, argv, &i, "--samples", &value))) {
+            if (taken < 0 || !cli_parse_int("report", "--samples", value, 1, 1 << 20, &o->samples))
+                return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("report", argc, argv, &i, "--output", &value)) ||
                    (taken = cli_take_option("report", argc, argv, &i, "-o", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
@@ -206,6 +220,23 @@ static void describe(const group *g, char *out, size_t size) {
     size_t used = (size_t)snprintf(out, size, "%s", g->model_name);
     for (int k = 0; k < g->count && used < size; k++)
         used += (size_t)snprintf(out + used, size - used, " %s", g->assignments[k]);
+}
+
+/* The renderer `name` for a group (renderers[0] blender's, [1] three's, opened once for every group that names it),
+ * after checking that it renders `material`'s model (NULL: a material of its own). An exit code. */
+static int report_renderer(const char *command, cli_renderers renderers[2], const char *name, int samples,
+                           const mr_material *material, mr_renderer **out) {
+    cli_renderers *r = &renderers[strcmp(name, "blender") == 0 ? 0 : 1];
+    if (material != NULL && mr_renderer_check(name, material->model) != MR_OK)
+        return cli_usage_error(command, "--renderer %s: %s", name, mr_last_error());
+    if (r->opened[0] == NULL) {
+        r->names[0] = name;
+        r->samples = samples;
+        int code = cli_open_renderers(command, r, NULL, NULL, 1);
+        if (code != CLI_EXIT_OK) return code;
+    }
+    *out = r->opened[0];
+    return CLI_EXIT_OK;
 }
 
 /* mr_report_options.progress on a terminal: "view 2/4" rewritten in place; *user (int) notes that a line was
@@ -315,19 +346,41 @@ int cmd_report(int argc, char **argv) {
     }
     mr_material *materials[MAX_MATERIALS] = {NULL};
     mr_gltf_scene *scenes[MAX_MATERIALS] = {NULL};
+    mr_external_material *owns[MAX_MATERIALS] = {NULL};
+    cli_renderers renderers[2]; // blender's, three's: one each for every group that names it
+    memset(renderers, 0, sizeof renderers);
     static char descriptions[MAX_MATERIALS][2048];
     mr_report_input inputs[MAX_MATERIALS];
     for (int k = 0; k < count && code == CLI_EXIT_OK; k++) {
         const group *g = &groups[k];
+        const int own = strncmp(g->model_name, "blender:", 8) == 0;
+        const char *renderer_name = own && g->renderer == NULL ? "blender" : g->renderer;
+        mr_renderer *renderer = NULL;
         if (gltf_entries > 0) { // the asset's files noted as inputs on the way
             code = cli_gltf_scene_load("report", g->model_name, &io, &scenes[k]);
-        } else {
+        } else if (!own) {
             code = cli_material_load("report", g->model_name, g->assignments, g->count, &materials[k]);
             cli_material_note_invalid_texels("report", materials[k]);
             describe(g, descriptions[k], sizeof descriptions[k]);
         }
+        if (code == CLI_EXIT_OK && renderer_name != NULL && strcmp(renderer_name, "builtin") != 0) {
+            code = report_renderer("report", renderers, renderer_name, o.samples, materials[k], &renderer);
+            if (code == CLI_EXIT_OK && own) {
+                mr_status status = mr_renderer_describe(renderer, g->model_name + 8, &owns[k]);
+                if (status != MR_OK) code = cli_fail("report", status);
+                for (int a = 0; code == CLI_EXIT_OK && a < g->count; a++)
+                    code = cli_set_material_input("report", owns[k], g->assignments[a]);
+            }
+            if (code == CLI_EXIT_OK) {
+                describe(g, descriptions[k], sizeof descriptions[k]);
+                size_t used = strlen(descriptions[k]);
+                snprintf(descriptions[k] + used, sizeof descriptions[k] - used, " (rendered by %s)",
+                         renderer == renderers[0].opened[0] ? renderers[0].versions[0] : renderers[1].versions[0]);
+            }
+        }
         // A scene's description (its triangles and materials) is made by the library.
-        inputs[k] = (mr_report_input){g->label, gltf_entries > 0 ? NULL : descriptions[k], materials[k], scenes[k]};
+        inputs[k] = (mr_report_input){g->label, gltf_entries > 0 ? NULL : descriptions[k], materials[k], scenes[k],
+                                      renderer, owns[k]};
     }
     if (code == CLI_EXIT_OK) code = cli_plan_check("report", &io); // with the assets' buffers and images
     mr_output_plan_free(&io);
@@ -351,7 +404,10 @@ int cmd_report(int argc, char **argv) {
     for (int k = 0; k < count; k++) {
         mr_material_free(materials[k]);
         mr_gltf_scene_free(scenes[k]);
+        mr_external_material_free(owns[k]);
     }
+    cli_close_renderers(&renderers[0]);
+    cli_close_renderers(&renderers[1]);
     mr_obj_mesh_free(obj);
     return code;
 }

@@ -16,6 +16,7 @@
 #include "../mr_internal.h"
 #include "gltf/mr_gltf_scene.h"
 #include "metrics/metrics.h"
+#include "render/renderer.h"
 #include "report.h"
 
 /* A generated description is cut here: the page shows it in one table cell. */
@@ -159,11 +160,23 @@ static mr_status check_inputs(const mr_report_input *inputs, int count, int *sce
         return mr_fail(MR_ERR_INVALID_ARG, "report: %d inputs: expected at least the reference", count);
     for (int k = 0; k < count; k++) {
         const mr_report_input *in = &inputs[k];
-        if ((in->material == NULL) == (in->scene == NULL))
-            return mr_fail(MR_ERR_INVALID_ARG, "report input %d: expected a material or a glTF scene (%s)", k,
-                           in->material == NULL ? "it has neither" : "it has both");
+        const int kinds = (in->material != NULL) + (in->scene != NULL) + (in->external != NULL);
+        if (kinds != 1)
+            return mr_fail(MR_ERR_INVALID_ARG, "report input %d: expected a material, a glTF scene or a renderer's "
+                           "material (%s)", k, kinds == 0 ? "it has none" : "it has more than one");
+        const int external = !mr_renderer_is_builtin(in->renderer);
+        if (in->external != NULL && !external)
+            return mr_fail(MR_ERR_INVALID_ARG, "report input %d: material '%s' needs its renderer", k,
+                           mr_external_material_reference(in->external));
+        if (external && in->scene != NULL)
+            return mr_fail(MR_ERR_UNSUPPORTED, "report input %d: renderer '%s' renders materials on the fit scene's "
+                           "sphere, not glTF scenes", k, mr_renderer_name(in->renderer));
+        if (external && in->material != NULL && in->material->map_count > 0)
+            return mr_fail(MR_ERR_UNSUPPORTED, "report input %d: renderer '%s' renders uniform materials, not maps",
+                           k, mr_renderer_name(in->renderer));
         if (in->material != NULL && in->material->model == NULL)
             return mr_fail(MR_ERR_INVALID_ARG, "report input %d: its material has no model", k);
+        if (in->scene == NULL && in->material == NULL) continue; // a renderer's own: a material on the sphere
         if ((in->scene != NULL) != (inputs[0].scene != NULL))
             return mr_fail(MR_ERR_INVALID_ARG, "report input %d is a %s and input 0 a %s: give materials or glTF "
                            "scenes, not both", k, in->scene ? "glTF scene" : "material",
@@ -534,6 +547,13 @@ static mr_status render_view(const settings *st, const char *dir, const mr_repor
         if (scenes) {
             const mr_gltf_scene *s = inputs[k].scene;
             status = mr_render_materials(plan, s->bindings, s->material_count, MR_COMPONENT_FULL, &image);
+        } else if (!mr_renderer_is_builtin(inputs[k].renderer)) {
+            const mr_material *m = inputs[k].material;
+            status = mr_image_create(scene.width, scene.height, 3, &image);
+            if (status == MR_OK && m != NULL)
+                status = mr_renderer_render(inputs[k].renderer, plan, m->model, m->values, image, NULL, NULL);
+            else if (status == MR_OK)
+                status = mr_renderer_render_external(inputs[k].renderer, plan, inputs[k].external, image, NULL, NULL);
         } else {
             const mr_material *m = inputs[k].material;
             status = mr_render_textured(plan, m->model, m->values, &m->textures, MR_COMPONENT_FULL, &image);
@@ -567,7 +587,7 @@ static mr_status render_view(const settings *st, const char *dir, const mr_repor
  * emissive maps; at most MR_REPORT_MAX_THUMBNAILS per material. */
 static mr_status write_thumbnails(const char *dir, const mr_report_input *in, int k, entry *e) {
     const mr_gltf_scene *s = in->scene;
-    const int slots = s != NULL ? s->material_count : 1;
+    const int slots = s != NULL ? s->material_count : in->material != NULL ? 1 : 0; // a renderer's own: none
     e->thumb_count = 0;
     for (int slot = 0; slot < slots; slot++) {
         const mr_material *m = s != NULL ? s->materials[slot].brdf : in->material;
@@ -729,6 +749,11 @@ mr_status mr_report_make(const mr_report_input *inputs, int count, const char *d
     settings st = {0};
     mr_status status = check_inputs(inputs, count, &scenes);
     if (status == MR_OK) status = resolve_options(opts, scenes, &st);
+    for (int k = 0; status == MR_OK && k < count; k++)
+        if (!mr_renderer_is_builtin(inputs[k].renderer) && (opts->env != NULL || opts->env_path != NULL || st.mesh))
+            status = mr_fail(MR_ERR_UNSUPPORTED, "report input %d: renderer '%s' renders the fit scene (its point "
+                             "light and sphere), not an environment map or a mesh", k,
+                             mr_renderer_name(inputs[k].renderer));
     if (status != MR_OK) return status;
     mr_image *env = NULL; // read here when only its path is given
     if (st.env == NULL && opts->env_path != NULL) {
@@ -752,9 +777,15 @@ mr_status mr_report_make(const mr_report_input *inputs, int count, const char *d
     for (int k = 0; status == MR_OK && k < count; k++) {
         const mr_report_input *in = &inputs[k];
         entry *e = &entries[k];
-        e->label = in->label ? in->label : in->scene ? in->scene->path : in->material->model->name;
+        e->label = in->label      ? in->label
+                   : in->scene    ? in->scene->path
+                   : in->material ? in->material->model->name
+                                  : mr_external_material_reference(in->external);
         if (in->description != NULL)
             snprintf(e->description, sizeof e->description, "%s", in->description);
+        else if (in->external != NULL)
+            snprintf(e->description, sizeof e->description, "%s rendered by %s",
+                     mr_external_material_reference(in->external), mr_renderer_name(in->renderer));
         else if (in->scene != NULL)
             describe_scene(in->scene, e->description, sizeof e->description);
         else

@@ -151,6 +151,11 @@ typedef struct mr_report_input {
                                            a scene's path, triangle count and materials with their models */
     const struct mr_material *material; /* rendered on the sphere */
     const struct mr_gltf_scene *scene;  /* rendered as its mesh */
+    struct mr_renderer *renderer;       /* materials only: who renders it (render/renderer.h): NULL = the built-in
+                                           renderer; an external one (blender, three) renders the fit scene (no
+                                           environment map, no mesh) and a uniform material (no maps) */
+    const struct mr_external_material *external; /* instead of `material`: a renderer's own material (a .blend
+                                           file's), rendered by `renderer`; no thumbnails */
 } mr_report_input;
 
 /* How to make the report. Zero-initialise for the defaults (opts may also be NULL). */
