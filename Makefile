@@ -122,7 +122,7 @@ FUZZ_OBJ    := $(patsubst %,$(BUILD)/obj/tests/fuzz/fuzz_%.o,$(FUZZ_NAMES) suppo
 CLI_LIB_OBJ := $(filter-out $(BUILD)/obj/src/cli/main.o,$(CLI_OBJ))
 BENCHES   := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
 
-PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h src/brdf/brdf.h src/render/render.h \
+PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h src/brdf/brdf.h src/render/render.h src/render/renderer.h \
                   src/io/image_io.h src/io/obj_load.h src/metrics/metrics.h src/remap/remap.h src/remap/direct.h \
                   src/remap/sweep.h src/workflow/workflow.h src/workflow/dataset.h src/workflow/labels.h \
                   src/workflow/pairs.h src/learn/learned_plots.h src/io/output_plan.h \

@@ -23,7 +23,7 @@ expect "remap --json: the holds with their values and why" 0 \
     -- "$bin" remap --from ward diffuse=0.5 specular=0.05 alpha=0.1 --to openpbr --size 16 --hold base_metalness=0 --json
 expect "remap: a model without holds prints none" 0 "" -- "$bin" remap --from ward --to ward --size 16
 check "... no held line" bash -c "! grep -q '^held:' '$tmp/out'"
-expect "remap --json: no holds, an empty list" 0 '"held": \[\]\}' -- "$bin" remap --from ward --to ward --size 16 --json
+expect "remap --json: no holds, an empty list" 0 '"held": \[\][,}]' -- "$bin" remap --from ward --to ward --size 16 --json
 
 # Bad lists: a usage error naming the parameter and the value.
 expect "--hold: an unknown parameter, the valid ones listed" 1 \

@@ -80,7 +80,8 @@ void cli_close_renderers(cli_renderers *r) {
 
 static int side_samples(const cli_renderers *r, int k) {
     if (r->samples > 0) return r->samples;
-    return strcmp(r->names[k], "blender") == 0 ? MR_RENDERER_DEFAULT_SAMPLES_BLENDER : MR_RENDERER_DEFAULT_SAMPLES_THREE;
+    if (strcmp(r->names[k], "blender") == 0) return MR_RENDERER_DEFAULT_SAMPLES_BLENDER;
+    return MR_RENDERER_DEFAULT_SAMPLES_THREE;
 }
 
 void cli_print_renderers(FILE *out, const cli_renderers *r) {
@@ -90,7 +91,8 @@ void cli_print_renderers(FILE *out, const cli_renderers *r) {
         fprintf(out, "%s %s %s", k ? "," : "", sides[k], r->versions[k][0] ? r->versions[k] : "builtin");
         if (r->opened[k] != NULL)
         {
-            const long renders = mr_renderer_render_count(r->opened[k]), starts = mr_renderer_process_starts(r->opened[k]);
+            const long renders = mr_renderer_render_count(r->opened[k]);
+            const long starts = mr_renderer_process_starts(r->opened[k]);
             fprintf(out, " (%d samples, %ld render%s, %ld process start%s)", side_samples(r, k), renders,
                     renders == 1 ? "" : "s", starts, starts == 1 ? "" : "s");
         }

@@ -124,8 +124,8 @@ int mr_external_material_param_count(const mr_external_material *material);
  * for k out of range. */
 const char *mr_external_material_param(const mr_external_material *material, int k, int *channels, double *min_value,
                                        double *max_value, double *values);
-/* Set parameter `path` to values[0..count) (count 1, or 3 for a colour; one value sets a colour grey). MR_ERR_INVALID_ARG
- * for an unknown path (listing the known ones), a wrong count, a value that is not finite. */
+/* Set parameter `path` to values[0..count) (count 1, or 3 for a colour; one value sets a colour grey).
+ * MR_ERR_INVALID_ARG for an unknown path (listing the known ones), a wrong count, a value that is not finite. */
 mr_status mr_external_material_set(mr_external_material *material, const char *path, const double *values,
                                    int count);
 

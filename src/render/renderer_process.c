@@ -259,7 +259,8 @@ static mr_status start_server(external_pool *pool, server *s, int index) {
     int argc = 0;
     argv[argc++] = pool->program;
     for (int i = 0; pool->kind->arguments[i] != NULL; i++)
-        argv[argc++] = strcmp(pool->kind->arguments[i], "SCRIPT") == 0 ? pool->script : (char *)pool->kind->arguments[i];
+        argv[argc++] = strcmp(pool->kind->arguments[i], "SCRIPT") == 0 ? pool->script
+                                                                        : (char *)pool->kind->arguments[i];
     argv[argc] = NULL;
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
@@ -333,7 +334,8 @@ static int exchange(external_pool *pool, server *s, long id, const request *r, p
             mr_fail(MR_ERR_EXTERNAL, "renderer '%s': %s", pool->kind->name, line + skip);
             return 0;
         }
-        if (sscanf(line, "param %ld %n", &answer_id, &skip) == 1 && answer_id == id && on_param) on_param(user, line + skip);
+        if (sscanf(line, "param %ld %n", &answer_id, &skip) == 1 && answer_id == id && on_param)
+            on_param(user, line + skip);
     }
     char tail[600];
     log_tail(s->log_path, tail, sizeof tail);
