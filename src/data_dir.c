@@ -24,7 +24,7 @@ mr_status mr_data_path(const char *file, char *out, size_t size) {
         return mr_fail(MR_ERR_INVALID_ARG, "data file: NULL or empty argument");
     // The same places as the OpenImageIO module (src/io/oiio_module.c): beside the executable first, so a build
     // tree and a relocated install find their own files, then the install directory fixed at build time.
-    char tried[3][PATH_MAX + 64];
+    char tried[4][PATH_MAX + 64];
     int count = 0;
     char exe[PATH_MAX];
     ssize_t length = readlink("/proc/self/exe", exe, sizeof exe - 1);
@@ -32,7 +32,9 @@ mr_status mr_data_path(const char *file, char *out, size_t size) {
         exe[length] = '\0';
         if (cut_last(exe) && cut_last(exe)) { // exe is now the executable's directory's parent
             snprintf(tried[count++], sizeof tried[0], "%s/share/matremap/%s", exe, file); // PREFIX/bin -> share
-            if (cut_last(exe)) snprintf(tried[count++], sizeof tried[0], "%s/data/%s", exe, file); // build/bin
+            // The source tree's data/ above build/bin, or above build/asan/bin (make asan's build).
+            for (int up = 0; up < 2 && cut_last(exe); up++)
+                snprintf(tried[count++], sizeof tried[0], "%s/data/%s", exe, file);
         }
     }
     snprintf(tried[count++], sizeof tried[0], "%s/%s", MR_DATA_DIR, file);
@@ -42,7 +44,7 @@ mr_status mr_data_path(const char *file, char *out, size_t size) {
             memcpy(out, tried[k], strlen(tried[k]) + 1);
             return MR_OK;
         }
-    char list[3 * (PATH_MAX + 64) + 8] = "";
+    char list[4 * (PATH_MAX + 64) + 8] = "";
     for (int k = 0; k < count; k++) snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", k ? ", " : "",
                                              tried[k]);
     return mr_fail(MR_ERR_IO, "data file '%s' not found (tried %s)", file, list);

@@ -88,7 +88,7 @@ import json, sys; c = json.load(open(sys.argv[1]))["values"]["base_color"]; sys.
     fi
 
     # A sweep through Blender, its Blender processes killed twice mid-run: every row of an undisturbed run.
-    args=(--from cycles-principled --to gltf --random 16 --seed 5 --from-renderer blender --samples 16 --threads 2)
+    args=(--from cycles-principled --to gltf --random 16 --seed 5 --from-renderer blender --threads 2)
     expect "a sweep with Blender rendering its sources" 0 "" -- "$bin" sweep "${args[@]}" -o "$tmp/ref.csv"
     "$bin" sweep "${args[@]}" -o "$tmp/killed.csv" --json >"$tmp/killed.json" 2>"$tmp/killed.err" &
     sweep=$!
