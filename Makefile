@@ -21,6 +21,8 @@
 #                   in headless Chromium beside matremap's own renders (docs/evaluation-clients.md)
 #   make evaluation-translations   MaterialX's translation graphs beside the image-fitted remap, rendered under
 #                   both HDR maps (docs/evaluation-translations.md)
+#   make evaluation-renderers   node materials of data/blender/node_materials.blend baked to glTF by Blender's
+#                   exporter and by matremap, rendered back in Cycles and three.js (docs/evaluation-renderers.md)
 #   make dataset    the specular -> metallic training set (build/dataset); make train: data/spec2metal.mlp;
 #                   make objectives: which label objective agrees with object SSIM (docs/training.md)
 #   make faults     allocation and I/O fault injection (build/faults, ASan + UBSan + LSan): the N-th allocation,
@@ -310,6 +312,11 @@ evaluation-clients: all $(OBJECT_METRICS) $(DOC_WRITE)
 # MaterialX's translation graphs beside the image-fitted remap (docs/evaluation-translations.md; ~5 min on 2 cores).
 evaluation-translations: all
 	scripts/evaluate-translations.sh $(BUILD)
+
+# Node materials baked to glTF: Blender's exporter vs matremap, rendered back (docs/evaluation-renderers.md; ~1 min).
+.PHONY: evaluation-renderers
+evaluation-renderers: all
+	scripts/evaluate-renderers.sh $(BUILD)
 
 # The specular -> metallic dataset (image-objective labels, a few minutes on 2 cores) and the network trained on
 # it (docs/training.md). `make train` reproduces data/spec2metal.mlp bit for bit.
