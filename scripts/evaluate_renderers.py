@@ -382,8 +382,9 @@ def write_doc(names, exported, baked, bakes, rows, route, three, times):
     L.append("`%s` (made by `blender -b --factory-startup --python scripts/blender/make_node_materials.py -- -o %s`)"
              " holds uniform node materials that glTF metal-rough cannot state directly: Diffuse and Glossy BSDFs "
              "added or mixed, a Layer Weight-driven mix, a Fresnel-less tinted Glossy metal, a Principled BSDF whose "
-             "base colour comes through a ColorRamp (the script's docstring lists every value). Each is baked to "
-             "glTF metal-rough:" % (BLEND_REL, BLEND_REL))
+             "base colour comes through a ColorRamp (the script's docstring lists every value), and a control, "
+             "ControlPrincipled, a plain Principled BSDF the exporter does state (it checks the export, import and "
+             "render path itself). Each is baked to glTF metal-rough:" % (BLEND_REL, BLEND_REL))
     L.append("")
     L.append("- **Blender exporter**: %s's bundled glTF exporter (io_scene_gltf2, `bpy.ops.export_scene.gltf`) "
              "on a UV sphere (scripts/blender/export_gltf.py); the values are what it wrote, with glTF 2.0's "

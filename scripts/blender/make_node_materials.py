@@ -20,6 +20,9 @@ Materials (colours are linear RGB):
   RampPrincipled       a Principled BSDF (roughness 0.35, metallic 0) whose Base Color comes from a ColorRamp
                        (black -> orange (1.0, 0.35, 0.02) at positions 0 and 1, linear) reading a Value node 0.6:
                        uniform (0.6, 0.21, 0.012), but through nodes the exporter does not evaluate.
+And one control that the exporter does state (it checks the export -> import -> render path itself):
+  ControlPrincipled    a plain Principled BSDF, base colour (0.55, 0.35, 0.12), metallic 0, specular 0.5 (glTF's
+                       ior 1.5), roughness 0.3, GGX.
 """
 
 import os
@@ -133,6 +136,14 @@ def ramp_principled():
     nt.links.new(p.outputs["BSDF"], out.inputs["Surface"])
 
 
+def control_principled():
+    mat, nt, out = new_material("ControlPrincipled")
+    p = node(nt, "ShaderNodeBsdfPrincipled", "Principled BSDF", -100, 0, Base_Color=(0.55, 0.35, 0.12),
+             Metallic=0.0, Specular=0.5, Roughness=0.3)
+    p.distribution = "GGX"
+    nt.links.new(p.outputs["BSDF"], out.inputs["Surface"])
+
+
 def main():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     if len(argv) != 2 or argv[0] != "-o":
@@ -152,6 +163,7 @@ def main():
     tinted_glossy_metal()
     constant_mix_glossy()
     ramp_principled()
+    control_principled()
     tmp = "%s.tmp-%d.blend" % (out[:-6], os.getpid())
     bpy.ops.wm.save_as_mainfile(filepath=tmp, compress=True, copy=True)
     os.replace(tmp, out)
