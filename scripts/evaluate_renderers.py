@@ -46,6 +46,10 @@ THREE_SAMPLES = int(os.environ.get("RENDERERS_THREE_SAMPLES", "16"))
 STANDIN_SIZE, STANDIN_SAMPLES = 64, 512
 BLENDER = os.environ.get("MATREMAP_BLENDER", "blender")
 NODE = os.environ.get("MATREMAP_NODE", "node")
+# Diagnostic remaps (values and fit residual only, not rendered back): the Glossy lobe's reflectance held as glTF's
+# dielectric f0 through KHR_materials_specular (specular_color = reflectance / 0.04) instead of the default hold 1.
+DIAGNOSTIC_HOLDS = {"ConstantMixGlossy": ["specular_color=7.5"],   # 0.3 x white Glossy, no Fresnel
+                    "DiffuseGlossyAdd": ["specular_color=2"]}       # a 0.08 grey Glossy added
 # The fit scene of protocol v1 (notes: the library's fit scene, light at 45 degrees).
 S45 = 2.1213203435596424
 FIT_SCENE = {"camera": {"position": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 35.0},
@@ -91,22 +95,22 @@ def remap_route():
     return "blender" if "blender:" in help_text() else "standin"
 
 
-def remap_step(name, d, route, to_renderer=None):
+def remap_step(name, d, route, to_renderer=None, target_args=()):
     """THE remap of node material NAME to glTF metal-rough. Returns (values, command line, result JSON).
 
     route 'blender': `matremap remap --from blender:BLEND:NAME --to gltf [--to-renderer R] --json` (the source
-    rendered by Blender through data/renderers/blender_server.py).
+    rendered by Blender through data/renderers/blender_server.py). TARGET_ARGS (name=value) follow `--to gltf`.
     route 'standin' (until that exists): the Cycles render d/source64.exr of the node material (made beforehand by
     render_back.py at 64^2, STANDIN_SAMPLES samples) fitted by `matremap remap --from-images`."""
     if route == "blender":
-        cmd = [BIN, "remap", "--from", "blender:%s:%s" % (BLEND_REL, name), "--to", "gltf"]
+        cmd = [BIN, "remap", "--from", "blender:%s:%s" % (BLEND_REL, name), "--to", "gltf"] + list(target_args)
         if to_renderer:
             cmd += ["--to-renderer", to_renderer]
         cmd += ["--json"]
         out = run(cmd, cwd=ROOT)
     else:
         src = os.path.join(d, "source64.exr")
-        cmd = [BIN, "remap", "--from-images", src, "--to", "gltf", "--json"]
+        cmd = [BIN, "remap", "--from-images", src, "--to", "gltf"] + list(target_args) + ["--json"]
         out = run(cmd, cwd=ROOT)
         cmd[3] = os.path.relpath(src, ROOT)
     res = json.loads(out)
@@ -303,6 +307,11 @@ def main():
             g = os.path.join(d, key + ".gltf")
             write_gltf_with(exported[n]["gltf"], g, values, n)
             baked[n][key] = {"values": values, "cmd": cmdline, "result": res, "seconds": time.time() - t1, "gltf": g}
+    diagnostics = {}
+    for n, args in DIAGNOSTIC_HOLDS.items():
+        if n in names:
+            values, cmdline, res = remap_step(n, os.path.join(WORK, n), route, None, args)
+            diagnostics[n] = {"values": values, "cmd": cmdline, "result": res, "holds": args}
     times["remap"] = time.time() - t
 
     # 3. Cycles render-back at SIZE^2: the original (two seeds) and every bake through Blender's glTF importer.
@@ -330,6 +339,10 @@ def main():
                 v = {k: vals[k] for k in ("base_color", "metallic", "roughness", "specular", "specular_color", "ior")}
                 px, _sec = three.render(v, os.path.join(d, key + "-three"), SIZE)
                 write_pfm(os.path.join(d, key + "-three.pfm"), px[:, :, :3])
+        for n in sorted(diagnostics):
+            d = os.path.join(WORK, n)
+            px, _sec = three.render(diagnostics[n]["values"], os.path.join(d, "diagnostic-three"), SIZE)
+            write_pfm(os.path.join(d, "diagnostic-three.pfm"), px[:, :, :3])
         three.close()
     times["three"] = time.time() - t
 
@@ -357,9 +370,11 @@ def main():
         contact_sheet(tiles, os.path.join(IMAGES, n + ".png"))
         r["ratio"] = ratio
         rows[n] = r
+        if n in diagnostics and not three.why:
+            diagnostics[n]["three"] = ssim(orig, os.path.join(d, "diagnostic-three.pfm"), mask)
     times["total"] = time.time() - t0
 
-    write_doc(names, exported, baked, bakes, rows, route, three, times)
+    write_doc(names, exported, baked, bakes, rows, route, three, times, diagnostics)
     with open(os.path.join(WORK, "results.json"), "w") as f:
         json.dump({"route": route, "values": {n: {k: baked[n][k]["values"] for k, _ in bakes} for n in names},
                    "metrics": rows, "times": times}, f, indent=1)
@@ -372,7 +387,7 @@ def blender_version():
     return out.splitlines()[0].strip() if out else "?"
 
 
-def write_doc(names, exported, baked, bakes, rows, route, three, times):
+def write_doc(names, exported, baked, bakes, rows, route, three, times, diagnostics):
     L = []
     L.append("# Node materials baked to glTF: Blender's exporter and matremap, rendered back")
     L.append("")
@@ -449,6 +464,25 @@ def write_doc(names, exported, baked, bakes, rows, route, three, times):
     for n in names:
         L.append("| %s | %s |" % (n, " | ".join("%.2f, %.2f, %.2f" % tuple(rows[n]["ratio"][k]) for k, _t in cols[1:])))
     L.append("")
+    if diagnostics:
+        L.append("Where the source's specular is a Fresnel-less lobe stronger than glTF's 4 %% dielectric "
+                 "reflectance, the default fit (KHR_materials_specular's specular_color held at 1) buys the missing "
+                 "reflection with metallic, which tints it with the base colour: the unequal ratios above. Holding "
+                 "specular_color at the lobe's reflectance / 0.04 instead (what glTF with KHR_materials_specular can "
+                 "state; not rendered back in Cycles here%s):" % ("" if three.why else ", rendered back in three.js"))
+        L.append("")
+        L.append("| material | hold | values | fit's relative RMSE (default hold) |%s" % (
+            "" if three.why else " three.js object SSIM / relative RMSE (default hold) |"))
+        L.append("|---|---|---|---|%s" % ("" if three.why else "---|"))
+        for n in sorted(diagnostics):
+            g = diagnostics[n]
+            extra = ""
+            if not three.why:
+                extra = " %.4f / %.3f (%.4f / %.3f) |" % (g["three"] + rows[n]["matremap-three"])
+            L.append("| %s | `%s` | %s | %.4f (%.4f) |%s" % (
+                n, " ".join(g["holds"]), fmt_vals(g["values"]), g["result"].get("relative_rmse", float("nan")),
+                baked[n]["matremap"]["result"].get("relative_rmse", float("nan")), extra))
+        L.append("")
     L.append("## Pictures")
     L.append("")
     L.append("Each sheet (sRGB, exposure 1): the original node material in Cycles, then every bake's glTF through "
@@ -467,6 +501,8 @@ def write_doc(names, exported, baked, bakes, rows, route, three, times):
     for n in names:
         for key, _title in bakes[1:]:
             L.append(baked[n][key]["cmd"].replace(rel, "build/evaluation-renderers"))
+    for n in sorted(diagnostics):
+        L.append(diagnostics[n]["cmd"].replace(rel, "build/evaluation-renderers"))
     L.append("```")
     L.append("")
     L.append("Wall time on this machine (%d Cycles threads): Blender's exporter %.1f s, stand-in source renders "
