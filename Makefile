@@ -21,6 +21,8 @@
 #                   in headless Chromium beside matremap's own renders (docs/evaluation-clients.md)
 #   make evaluation-translations   MaterialX's translation graphs beside the image-fitted remap, rendered under
 #                   both HDR maps (docs/evaluation-translations.md)
+#   make evaluation-renderers   node materials of data/blender/node_materials.blend baked to glTF by Blender's
+#                   exporter and by matremap, rendered back in Cycles and three.js (docs/evaluation-renderers.md)
 #   make dataset    the specular -> metallic training set (build/dataset); make train: data/spec2metal.mlp;
 #                   make objectives: which label objective agrees with object SSIM (docs/training.md)
 #   make faults     allocation and I/O fault injection (build/faults, ASan + UBSan + LSan): the N-th allocation,
@@ -133,7 +135,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h sr
 
 .PHONY: all check asan fuzz fuzz-targets faults demo bench \
         analyses paper evaluation evaluation-gltf evaluation-hardcases evaluation-svbrdf \
-        evaluation-viewers evaluation-clients evaluation-translations evaluation-renderer-fits dataset train objectives deps install clean tables
+        evaluation-viewers evaluation-clients evaluation-translations evaluation-renderer-fits evaluation-renderers dataset train objectives deps install clean tables
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
 all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE) $(MPI_MODULE)
@@ -315,6 +317,10 @@ evaluation-translations: all
 # sweep through Blender on MPI ranks: tables for docs/performance.md (docs/renderers.md).
 evaluation-renderer-fits: all
 	scripts/evaluate-renderer-fits.sh $(BUILD)
+
+# Node materials baked to glTF: Blender's exporter vs matremap, rendered back (docs/evaluation-renderers.md; ~1 min).
+evaluation-renderers: all
+	scripts/evaluate-renderers.sh $(BUILD)
 
 # The specular -> metallic dataset (image-objective labels, a few minutes on 2 cores) and the network trained on
 # it (docs/training.md). `make train` reproduces data/spec2metal.mlp bit for bit.
