@@ -69,9 +69,20 @@ EOF
         expect "a .blend material remapped to glTF" 0 "" -- \
             "$bin" remap --from "blender:$blend:DiffuseGlossyAdd" --to gltf --json
         cp "$tmp/out" "$tmp/node.json"
-        check "... converged or at a bound, within 10 % relative RMSE" /usr/bin/python3 -c '
+        check "... converged (within 25 %: core glTF's 4 % dielectric cannot show its 8 % glossy lobe)" \
+            /usr/bin/python3 -c '
 import json, sys; d = json.load(open(sys.argv[1]))
-sys.exit(0 if d["outcome"] in ("converged", "at-bound") and d["relative_rmse"] < 0.10 else 1)' "$tmp/node.json"
+sys.exit(0 if d["outcome"] == "converged" and d["relative_rmse"] < 0.25 else 1)' "$tmp/node.json"
+        expect "... with KHR_materials_specular's colour freed and metallic held at 0" 0 "" -- \
+            "$bin" remap --from "blender:$blend:DiffuseGlossyAdd" --to gltf --free specular_color --hold metallic=0 --json
+        check "... within 2 %, the glossy colour 0.08 as specular_color 2 (0.08 / 0.04) and its roughness 0.25" \
+            /usr/bin/python3 -c '
+import json, sys; d = json.load(open(sys.argv[1])); v = d["values"]
+ok = d["outcome"] == "converged" and d["relative_rmse"] < 0.02 and d["freed"] == ["specular_color"]
+sys.exit(0 if ok and all(abs(c - 2) < 0.1 for c in v["specular_color"]) and abs(v["roughness"] - 0.25) < 0.01 else 1)' \
+            "$tmp/out"
+        expect "--free of a parameter the model fits already: exit 1" 1 "'gltf' fits roughness already" -- \
+            "$bin" remap --from ggx --to gltf --free roughness
         check "... its inputs in the JSON" grep -q '"inputs": {.*"Diffuse BSDF.Color"' "$tmp/node.json"
         expect "... an input set on the command line" 0 "" -- \
             "$bin" remap --from "blender:$blend:DiffuseGlossyAdd" 'Diffuse BSDF.Color=0.05,0.1,0.7' --to gltf --json

@@ -47,7 +47,11 @@ static void print_help(void) {
            "                                  values) instead of fitting them, e.g. a roughness both models\n"
            "                                  share; the model's own default holds (extension factors, coats,\n"
            "                                  what a fit scene cannot separate: 'matremap models MODEL') are\n"
-           "                                  held too, and the result's 'held:' line lists every hold used\n");
+           "                                  held too, and the result's 'held:' line lists every hold used\n"
+           "  --free NAME[,...]               fit these parameters although the target holds them by default, e.g.\n"
+           "                                  --to gltf --free specular_color: KHR_materials_specular's colour\n"
+           "                                  factor for a highlight brighter than a 4 %% dielectric's (engines\n"
+           "                                  without the extension show the core values only)\n");
     printf("  --tie TARGET=SOURCE[,...]|none  hold target parameters at the source's value instead of fitting them;\n"
            "                                  default: what the source states, a metalness (which the fit scene\n"
            "                                  cannot tell from the base colour at high roughness) and the IOR,\n"
@@ -182,6 +186,24 @@ static int run_materialx(const mr_brdf_model *from, const double *source_values,
     return CLI_EXIT_OK;
 }
 
+/* --free NAME[,...]: parameters `model` holds by default, fitted; an exit code. */
+static int parse_freed(const mr_brdf_model *model, const char *list, unsigned *freed) {
+    char copy[1024];
+    if (strlen(list) >= sizeof copy) return cli_usage_error("remap", "--free: list too long");
+    memcpy(copy, list, strlen(list) + 1);
+    char *save = NULL;
+    for (char *name = strtok_r(copy, ",", &save); name != NULL; name = strtok_r(NULL, ",", &save)) {
+        const int p = mr_brdf_param_index(model, name);
+        if (p < 0 || p >= 32) return cli_usage_error("remap", "--free %s: '%s' has no parameter '%s'", list, model->name,
+                                                     name);
+        if (!(model->params[p].flags & MR_PARAM_FIT_FIXED))
+            return cli_usage_error("remap", "--free %s: '%s' fits %s already ('matremap models %s' lists what it holds)",
+                                   list, model->name, name, model->name);
+        *freed |= 1u << p;
+    }
+    return CLI_EXIT_OK;
+}
+
 /* --list-inputs: a .blend material's inputs, their ranges and values. */
 static int list_material_inputs(const char *reference, cli_renderers *renderers, int json) {
     int exit_code = cli_open_renderers("remap", renderers, NULL, NULL, 1);
@@ -231,7 +253,7 @@ static int list_material_inputs(const char *reference, cli_renderers *renderers,
 int cmd_remap(int argc, char **argv) {
     const char *from_name = NULL, *to_name = NULL, *images_prefix = NULL;
     const char *image_paths[3] = {NULL, NULL, NULL}; /* full, diffuse, specular */
-    const char *reference_path = NULL, *hold_list = NULL, *tie_list = NULL;
+    const char *reference_path = NULL, *hold_list = NULL, *tie_list = NULL, *free_list = NULL;
     double reference_albedo = 0.5;
     const char *from_assignments[MAX_ASSIGNMENTS], *to_assignments[MAX_ASSIGNMENTS];
     int from_count = 0, to_count = 0, json = 0, size = 0, materialx = 0, fit_option = 0, list_inputs = 0;
@@ -293,6 +315,10 @@ int cmd_remap(int argc, char **argv) {
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--hold", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             hold_list = value;
+            fit_option = 1;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--free", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            free_list = value;
             fit_option = 1;
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--grid-points", &value))) {
             if (taken < 0 || !cli_parse_int("remap", "--grid-points", value, 2, 64, &opts.grid_points))
@@ -361,6 +387,10 @@ int cmd_remap(int argc, char **argv) {
     opts.target_values = target_values;
     if (hold_list != NULL && !cli_parse_held("remap", to, hold_list, target_values, &opts.held))
         return CLI_EXIT_USAGE;
+    if (free_list != NULL) {
+        int freed_code = parse_freed(to, free_list, &opts.freed);
+        if (freed_code != CLI_EXIT_OK) return freed_code;
+    }
 
     const mr_brdf_model *from = NULL;
     double source_values[MR_BRDF_MAX_VALUES];
@@ -492,7 +522,15 @@ int cmd_remap(int argc, char **argv) {
                 cli_print_ties_json(stdout, from, to, &opts.ties, tie_list != NULL);
             }
             printf(", \"held\": ");
-            cli_print_holds_json(stdout, to, target_values, opts.held, opts.ties.tied);
+            cli_print_holds_json(stdout, to, target_values, opts.held, opts.ties.tied | opts.freed);
+            printf(", \"freed\": [");
+            for (int p = 0, first = 1; p < to->param_count && p < 32; p++)
+                if ((opts.freed >> p) & 1u) {
+                    printf("%s", first ? "" : ", ");
+                    cli_json_string(stdout, to->params[p].name);
+                    first = 0;
+                }
+            printf("]");
             printf(", \"renderers\": ");
             cli_print_renderers_json(stdout, &renderers);
             printf("}\n");
@@ -506,7 +544,14 @@ int cmd_remap(int argc, char **argv) {
                    result.rmse, 100.0 * result.relative_rmse, result.ssim, result.renders, 1e3 * result.seconds,
                    strategy, scene_opts.size, mr_fit_light_name(scene_opts.light));
             if (reference != NULL) printf("irradiance scale applied to the source images: %.6g\n", irradiance_scale);
-            cli_print_holds_tied(stdout, NULL, to, target_values, opts.held, opts.ties.tied);
+            cli_print_holds_tied(stdout, NULL, to, target_values, opts.held, opts.ties.tied | opts.freed);
+            for (int p = 0, first = 1; p < to->param_count && p < 32; p++)
+                if ((opts.freed >> p) & 1u) {
+                    printf("%s%s", first ? "freed (fitted although the model holds it by default): " : ", ",
+                           to->params[p].name);
+                    first = 0;
+                    if (p == to->param_count - 1 || (opts.freed >> (p + 1)) == 0) printf("\n");
+                }
             if (from != NULL) cli_print_ties(stdout, NULL, from, to, &opts.ties, tie_list != NULL);
             if (renderers.opened[0] != NULL || renderers.opened[1] != NULL) cli_print_renderers(stdout, &renderers);
         }

@@ -755,10 +755,21 @@ static int close_enough(double a, double b, double scale) { return fabs(a - b) <
  * parameter (fixed ones and switches at `base`). The candidate parameter spans its whole range; the already
  * linear ones are drawn from the lowest 5 % of theirs, where no clamp or energy trimming engages: what is
  * checked is the formula, not its safety nets. */
-/* True if parameter i is not fitted: a switch, a parameter the descriptor holds (MR_PARAM_FIT_FIXED), or one the
- * caller holds (bit i of mr_remap_options.held): brdf.h's one rule, which the commands print. */
-static int held_fixed(const mr_brdf_model *m, unsigned held, int i) {
-    return mr_brdf_hold_reason(m, held, i) != MR_HOLD_FITTED;
+/* Bit i set: parameter i is not fitted: a switch, a parameter the descriptor holds (MR_PARAM_FIT_FIXED) unless the
+ * caller frees it (mr_remap_options.freed), or one the caller holds (mr_remap_options.held): brdf.h's one rule,
+ * which the commands print. The functions below take this mask where they say `held`. */
+static unsigned fixed_mask(const mr_brdf_model *m, unsigned held, unsigned freed) {
+    unsigned mask = 0;
+    for (int i = 0; i < m->param_count && i < 32; i++) {
+        const mr_hold_reason why = mr_brdf_hold_reason(m, held, i);
+        if (why != MR_HOLD_FITTED && !(why == MR_HOLD_MODEL && ((freed >> i) & 1u))) mask |= 1u << i;
+    }
+    return mask;
+}
+
+static int held_fixed(const mr_brdf_model *m, unsigned fixed, int i) {
+    (void)m;
+    return i < 32 && ((fixed >> i) & 1u);
 }
 
 static int jointly_affine(const mr_brdf_model *m, unsigned held, const double *base, const unsigned char *is_linear,
@@ -1111,6 +1122,11 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
         return mr_fail(MR_ERR_INVALID_ARG, "remap: threads %d: expected 0 (the plan's rule) to 1024", opts.threads);
     if (opts.ties.tied != 0)
         return mr_fail(MR_ERR_INVALID_ARG, "remap: ties need the source's values (mr_remap), not only its images");
+    for (int i = 0; i < 32; i++)
+        if (((opts.freed >> i) & 1u) && (i >= target->param_count || !(target->params[i].flags & MR_PARAM_FIT_FIXED)))
+            return mr_fail(MR_ERR_INVALID_ARG, "remap: %s%s is not one of the parameters '%s' holds by default, so "
+                           "there is nothing to free", i < target->param_count ? "parameter " : "bit ",
+                           i < target->param_count ? target->params[i].name : "beyond the model's", target->name);
     const int external = !mr_renderer_is_builtin(opts.target_renderer);
     if (external && !mr_renderer_supports(opts.target_renderer, target))
         return mr_fail(MR_ERR_UNSUPPORTED, "remap: renderer '%s' does not render model '%s' by values",
@@ -1159,10 +1175,11 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     else
         mr_brdf_default_values(target, ctx.base);
     unsigned char is_linear[MAX_SLOTS];
-    choose_linear_parameters(target, opts.held, ctx.base, is_linear);
+    const unsigned fixed = fixed_mask(target, opts.held, opts.freed);
+    choose_linear_parameters(target, fixed, ctx.base, is_linear);
     for (int i = 0; i < target->param_count; i++) {
         const mr_brdf_param *p = &target->params[i];
-        if (held_fixed(target, opts.held, i)) continue;
+        if (held_fixed(target, fixed, i)) continue;
         int offset = mr_brdf_param_offset(target, i);
         if (!is_linear[i]) {
             for (int c = 0; c < p->channels; c++)
@@ -1186,7 +1203,7 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
         status = mr_image_create(scene->width, scene->height, 3, &ctx.basis[i]);
     // A warm start: the fitted parameters start from opts.initial_values (remap.h).
     for (int i = 0; opts.initial_values != NULL && i < target->param_count; i++) {
-        if (held_fixed(target, opts.held, i)) continue;
+        if (held_fixed(target, fixed, i)) continue;
         const int offset = mr_brdf_param_offset(target, i);
         for (int c = 0; c < target->params[i].channels; c++)
             ctx.base[offset + c] = mr_clampd(opts.initial_values[offset + c], target->params[i].min_value,
@@ -1195,7 +1212,7 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     ctx.warm = opts.initial_values != NULL && (opts.strategy == MR_REMAP_AUTO || opts.strategy == MR_REMAP_JOINT);
     ctx.split_lobes = lobes_split(target, ctx.linear_params, ctx.linear_param_count) &&
                       (!external || mr_renderer_has_components(opts.target_renderer));
-    ctx.homogeneous = ctx.split_lobes && black_without_linear(target, opts.held, ctx.base, is_linear);
+    ctx.homogeneous = ctx.split_lobes && black_without_linear(target, fixed, ctx.base, is_linear);
     for (int i = 0; status == MR_OK && ctx.split_lobes && i < 4; i++)
         status = mr_image_create(scene->width, scene->height, 3, &ctx.lobe_images[i]);
     if (status != MR_OK) {

@@ -152,6 +152,10 @@ typedef struct mr_remap_options {
                                     MR_REMAP_WARM_STEP) from them, lobe by lobe for AUTO as usual, so the fit
                                     finds the minimum of the start's basin, and no second minimum to call the
                                     fit ambiguous (LOCAL_MINIMUM by ambiguity is not reported). NULL: none */
+    unsigned freed;              /* bit p set: the target's parameter p is fitted although the model holds it by
+                                    default (MR_PARAM_FIT_FIXED: glTF's KHR_materials_specular factors and IOR, a
+                                    coat), e.g. a glTF whose white highlight outshines a 4 % dielectric; a hold
+                                    or a tie still wins; bits of parameters not held by default are refused: 0 */
     mr_renderer *target_renderer; /* who renders the target during the fit (renderer.h): NULL or the built-in one =
                                     the plan, in process, as described above; an external renderer (blender,
                                     three) renders every target render of the fit in the plan's scene, so the
