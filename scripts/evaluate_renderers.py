@@ -46,10 +46,11 @@ THREE_SAMPLES = int(os.environ.get("RENDERERS_THREE_SAMPLES", "16"))
 STANDIN_SIZE, STANDIN_SAMPLES = 64, 512
 BLENDER = os.environ.get("MATREMAP_BLENDER", "blender")
 NODE = os.environ.get("MATREMAP_NODE", "node")
-# Diagnostic remaps (values and fit residual only, not rendered back): the Glossy lobe's reflectance held as glTF's
-# dielectric f0 through KHR_materials_specular (specular_color = reflectance / 0.04) instead of the default hold 1.
-DIAGNOSTIC_HOLDS = {"ConstantMixGlossy": ["specular_color=7.5"],   # 0.3 x white Glossy, no Fresnel
-                    "DiffuseGlossyAdd": ["specular_color=2"]}       # a 0.08 grey Glossy added
+# Remaps with KHR_materials_specular's colour fitted (`--free specular_color`, metallic held at 0: a dielectric whose
+# Fresnel-less Glossy lobe outshines glTF's 4 % dielectric): expected specular_color = the lobe's reflectance / 0.04.
+FREED = ["--free", "specular_color", "--hold", "metallic=0"]
+DIAGNOSTIC_HOLDS = {"ConstantMixGlossy": FREED,   # 0.3 x white Glossy, no Fresnel: 7.5 expected
+                    "DiffuseGlossyAdd": FREED}    # a 0.08 grey Glossy added: 2 expected
 # The fit scene of protocol v1 (notes: the library's fit scene, light at 45 degrees).
 S45 = 2.1213203435596424
 FIT_SCENE = {"camera": {"position": [0, 0, 4], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y": 35.0},
@@ -467,11 +468,13 @@ def write_doc(names, exported, baked, bakes, rows, route, three, times, diagnost
     if diagnostics:
         L.append("Where the source's specular is a Fresnel-less lobe stronger than glTF's 4 %% dielectric "
                  "reflectance, the default fit (KHR_materials_specular's specular_color held at 1) buys the missing "
-                 "reflection with metallic, which tints it with the base colour: the unequal ratios above. Holding "
-                 "specular_color at the lobe's reflectance / 0.04 instead (what glTF with KHR_materials_specular can "
-                 "state; not rendered back in Cycles here%s):" % ("" if three.why else ", rendered back in three.js"))
+                 "reflection with metallic, which tints it with the base colour: the unequal ratios above. Freeing "
+                 "KHR_materials_specular's colour factor (`--free specular_color`, metallic held at 0) lets the fit "
+                 "find the lobe's reflectance / 0.04 itself (7.5 and 2 expected; engines without the extension show "
+                 "the core values only; not rendered back in Cycles here%s):" % (
+                     "" if three.why else ", rendered back in three.js"))
         L.append("")
-        L.append("| material | hold | values | fit's relative RMSE (default hold) |%s" % (
+        L.append("| material | options | values | fit's relative RMSE (default hold) |%s" % (
             "" if three.why else " three.js object SSIM / relative RMSE (default hold) |"))
         L.append("|---|---|---|---|%s" % ("" if three.why else "---|"))
         for n in sorted(diagnostics):
