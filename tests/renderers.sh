@@ -98,6 +98,17 @@ import json, sys; c = json.load(open(sys.argv[1]))["values"]["base_color"]; sys.
             "$bin" remap --from "blender:$blend:DiffuseGlossyAdd" 'Nope.Fac=1' --to gltf
     fi
 
+    # A see-through material: refused by name, not blamed on the framing.
+    "${MATREMAP_BLENDER:-blender}" -b --factory-startup --python-expr "
+import bpy
+m = bpy.data.materials.new('Glass30'); m.use_nodes = True; m.use_fake_user = True; nt = m.node_tree
+d = nt.nodes['Principled BSDF']; t = nt.nodes.new('ShaderNodeBsdfTransparent'); x = nt.nodes.new('ShaderNodeMixShader')
+x.inputs[0].default_value = 0.3; nt.links.new(d.outputs[0], x.inputs[1]); nt.links.new(t.outputs[0], x.inputs[2])
+nt.links.new(x.outputs[0], nt.nodes['Material Output'].inputs['Surface'])
+bpy.ops.wm.save_as_mainfile(filepath='$tmp/glass.blend')" >/dev/null 2>&1
+    expect "a material that is not opaque: exit 2, saying so" 2 "the material is not opaque: its alpha inside the sphere is 0\.7" \
+        -- "$bin" remap --from "blender:$tmp/glass.blend:Glass30" --to gltf
+
     # A sweep through Blender, its Blender processes killed twice mid-run: every row of an undisturbed run.
     args=(--from cycles-principled --to gltf --random 16 --seed 5 --from-renderer blender --threads 2)
     expect "a sweep with Blender rendering its sources" 0 "" -- "$bin" sweep "${args[@]}" -o "$tmp/ref.csv"

@@ -242,7 +242,10 @@ static int list_material_inputs(const char *reference, cli_renderers *renderers,
             if (channels == 3)
                 printf("  '%s=%g,%g,%g'  colour\n", path, v[0], v[1], v[2]);
             else
-                printf("  '%s=%g'  [%g, %g]\n", path, v[0], lo, hi);
+                if (lo < -1e30 && hi > 1e30)
+                    printf("  '%s=%g'  any number\n", path, v[0]);
+                else
+                    printf("  '%s=%g'  [%g, %g]\n", path, v[0], lo, hi);
         }
     }
     mr_external_material_free(material);

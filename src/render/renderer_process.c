@@ -550,7 +550,8 @@ static mr_status read_component(external_pool *pool, const mr_render_plan *plan,
                          pool->kind->name, path, extra ? "more than" : "", got, scene->width, scene->height,
                          pixels * 4);
     const float *coverage = mr_render_plan_coverage(plan);
-    double coverage_difference = 0.0;
+    double coverage_difference = 0.0, interior_alpha = 0.0;
+    size_t interior = 0;
     for (size_t p = 0; status == MR_OK && p < pixels; p++) {
         const float *v = rgba + p * 4;
         for (int c = 0; c < 4; c++)
@@ -562,10 +563,20 @@ static mr_status read_component(external_pool *pool, const mr_render_plan *plan,
             }
         const float alpha = fminf(fmaxf(v[3], 0.0f), 1.0f);
         coverage_difference += fabs((double)alpha - (double)coverage[p]);
+        if (coverage[p] >= 1.0f) {
+            interior_alpha += alpha;
+            interior++;
+        }
         for (int c = 0; c < 3; c++)
             into->pixels[p * 3 + c] = fmaxf(v[c], 0.0f) + (1.0f - alpha) * (float)scene->background[c];
     }
     free(rgba);
+    // A see-through material (a Transparent or Holdout shader) lowers the alpha inside the sphere: say so, rather
+    // than blame the framing.
+    if (status == MR_OK && interior > 0 && interior_alpha < (1.0 - COVERAGE_TOLERANCE) * (double)interior)
+        status = mr_fail(MR_ERR_INVALID_ARG, "renderer '%s': the material is not opaque: its alpha inside the sphere "
+                         "is %.3f on average, not 1 (a Transparent or Holdout shader?); fits take opaque materials",
+                         pool->kind->name, interior_alpha / (double)interior);
     if (status == MR_OK && coverage_difference > COVERAGE_TOLERANCE * (double)pixels)
         status = mr_fail(MR_ERR_EXTERNAL, "renderer '%s' frames the scene differently: its coverage differs from the "
                          "fit scene's by %.3f per pixel on average (at most %.2f expected)", pool->kind->name,
