@@ -119,6 +119,28 @@ static void print_help(void) {
 }
 
 
+/* --mask FILE: the plan's coverage, one linear channel (a fraction, not a colour). */
+static mr_status write_mask(const mr_render_plan *plan, const char *mask_path) {
+    mr_image *mask = NULL;
+    mr_img_write_options mask_opts = {0};
+    mask_opts.encoding = MR_IMG_DATA;
+    mr_status status = mr_render_plan_coverage_mask(plan, &mask);
+    if (status == MR_OK) status = mr_img_write(mask_path, mask, &mask_opts);
+    mr_image_free(mask);
+    return status;
+}
+
+/* ', "outputs": [OUT, MASK]' of --json. */
+static void print_outputs_json(const char *output, const char *mask_path) {
+    printf(", \"outputs\": [");
+    cli_json_string(stdout, output);
+    if (mask_path != NULL) {
+        printf(", ");
+        cli_json_string(stdout, mask_path);
+    }
+    printf("]");
+}
+
 /* --renderer R: the fit scene rendered by an external renderer (renderer.h). */
 static int render_by(const char *name, int samples, int seed, const char *model_name, int external,
                      const char *const *assignments, int assignment_count, const mr_fit_scene_options *scene_opts,
@@ -176,14 +198,7 @@ static int render_by(const char *name, int samples, int seed, const char *model_
                                         parts[1], parts[2]);
         if (status == MR_OK && exposure != 1.0) mr_image_scale(image, exposure);
         if (status == MR_OK) status = mr_img_write(output, image, write_opts);
-        if (status == MR_OK && mask_path != NULL) {
-            mr_image *mask = NULL;
-            mr_img_write_options mask_opts = {0};
-            mask_opts.encoding = MR_IMG_DATA;
-            status = mr_render_plan_coverage_mask(plan, &mask);
-            if (status == MR_OK) status = mr_img_write(mask_path, mask, &mask_opts);
-            mr_image_free(mask);
-        }
+        if (status == MR_OK && mask_path != NULL) status = write_mask(plan, mask_path);
         if (status != MR_OK) code = cli_fail("render", status);
     }
     const double seconds = cli_now() - start;
@@ -198,13 +213,8 @@ static int render_by(const char *name, int samples, int seed, const char *model_
         } else {
             printf("null");
         }
-        printf(", \"outputs\": [");
-        cli_json_string(stdout, output);
-        if (mask_path != NULL) {
-            printf(", ");
-            cli_json_string(stdout, mask_path);
-        }
-        printf("], \"component\": \"%s\", \"width\": %d, \"height\": %d, \"renderers\": ",
+        print_outputs_json(output, mask_path);
+        printf(", \"component\": \"%s\", \"width\": %d, \"height\": %d, \"renderers\": ",
                mr_component_name(component), scene.width, scene.height);
         cli_print_renderers_json(stdout, &renderers);
         printf(", \"seconds\": {\"render\": %.6f}}\n", seconds);
@@ -445,14 +455,7 @@ int cmd_render(int argc, char **argv) {
         if (status == MR_OK && exposure != 1.0) mr_image_scale(image, exposure);
         double render_seconds = cli_now() - start - plan_seconds;
         if (status == MR_OK) status = mr_img_write(output, image, &write_opts);
-        if (status == MR_OK && mask_path != NULL) {
-            mr_image *mask = NULL;
-            mr_img_write_options mask_opts = {0};
-            mask_opts.encoding = MR_IMG_DATA; // a fraction, not a colour
-            status = mr_render_plan_coverage_mask(plan, &mask);
-            if (status == MR_OK) status = mr_img_write(mask_path, mask, &mask_opts);
-            mr_image_free(mask);
-        }
+        if (status == MR_OK && mask_path != NULL) status = write_mask(plan, mask_path);
         const mr_mesh *mesh = obj != NULL ? &obj->mesh : asset != NULL ? &asset->mesh : NULL;
         if (status != MR_OK) {
             code = cli_fail("render", status);
@@ -469,13 +472,8 @@ int cmd_render(int argc, char **argv) {
                 cli_json_string(stdout, mesh_path);
             else
                 printf("null");
-            printf(", \"outputs\": [");
-            cli_json_string(stdout, output);
-            if (mask_path != NULL) {
-                printf(", ");
-                cli_json_string(stdout, mask_path);
-            }
-            printf("], \"component\": \"%s\", \"width\": %d, \"height\": %d, \"lit_pixels\": %d, "
+            print_outputs_json(output, mask_path);
+            printf(", \"component\": \"%s\", \"width\": %d, \"height\": %d, \"lit_pixels\": %d, "
                    "\"shading_samples\": %ld, \"shadow_rays\": %ld, \"triangles\": %d, \"materials\": %d, ",
                    mr_component_name(component), scene.width, scene.height, mr_render_plan_lit_pixel_count(plan),
                    mr_render_plan_sample_count(plan), mr_render_plan_shadow_ray_count(plan),

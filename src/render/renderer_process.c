@@ -546,8 +546,8 @@ static mr_status read_component(external_pool *pool, const mr_render_plan *plan,
     if (rgba == NULL) return mr_fail(MR_ERR_NOMEM, "renderer: out of memory");
     mr_status status = MR_OK;
     if (got != pixels * 4 || extra)
-        status = mr_fail(MR_ERR_EXTERNAL, "renderer '%s': '%s' holds %s %zu floats: expected %dx%dx4 = %zu",
-                         pool->kind->name, path, extra ? "more than" : "", got, scene->width, scene->height,
+        status = mr_fail(MR_ERR_EXTERNAL, "renderer '%s': '%s' holds %s%zu floats: expected %dx%dx4 = %zu",
+                         pool->kind->name, path, extra ? "more than " : "", got, scene->width, scene->height,
                          pixels * 4);
     const float *coverage = mr_render_plan_coverage(plan);
     double coverage_difference = 0.0, interior_alpha = 0.0;
