@@ -270,8 +270,9 @@ static char *report_file(const char *dir, const char *name) {
 MR_TEST(material_against_itself_is_ssim_one_and_another_is_below) {
     mr_material *a = ggx(0.2), *same = ggx(0.2), *rougher = ggx(0.4);
     MR_CHECK(a != NULL && same != NULL && rougher != NULL);
-    mr_report_input in[3] = {{NULL, NULL, a, NULL}, {"same", "ggx alpha=0.2", same, NULL}, {"rougher", NULL,
-                                                                                              rougher, NULL}};
+    mr_report_input in[3] = {{NULL, NULL, a, NULL, NULL, NULL},
+                             {"same", "ggx alpha=0.2", same, NULL, NULL, NULL},
+                             {"rougher", NULL, rougher, NULL, NULL, NULL}};
     mr_report_options o = {0};
     o.size = 48;
     o.title = "roughness";
@@ -328,7 +329,7 @@ MR_TEST(environment_views_maps_and_progress) {
     for (size_t i = 0; i < mr_image_value_count(albedo); i++) albedo->pixels[i] = (float)(i % 5) / 5.0f;
     MR_CHECK_OK(mr_material_add_map(textured, "base_color", albedo, 0, "albedo.png", NULL));
     albedo = NULL; // the material's now
-    mr_report_input in[2] = {{NULL, NULL, plain, NULL}, {"textured", NULL, textured, NULL}};
+    mr_report_input in[2] = {{NULL, NULL, plain, NULL, NULL, NULL}, {"textured", NULL, textured, NULL, NULL, NULL}};
     mr_report_options o = {0};
     o.size = 32;
     o.env = env;
@@ -382,7 +383,7 @@ MR_TEST(gltf_scene_against_itself_is_ssim_one) {
     MR_CHECK_OK(mr_gltf_scene_load(asset_path(AVOCADO), NULL, &a));
     MR_CHECK_OK(mr_gltf_scene_load(asset_path(AVOCADO), NULL, &b));
     if (a == NULL || b == NULL) goto done;
-    mr_report_input in[2] = {{"original", NULL, NULL, a}, {"again", NULL, NULL, b}};
+    mr_report_input in[2] = {{"original", NULL, NULL, a, NULL, NULL}, {"again", NULL, NULL, b, NULL, NULL}};
     mr_report_options o = {0};
     o.size = 48;
     const char *dir = mr_test_tmp_path("avocado");
@@ -406,7 +407,9 @@ done:
 MR_TEST(a_report_replaces_its_folder_as_a_whole_or_not_at_all) {
     mr_material *a = ggx(0.2), *b = ggx(0.4), *c = ggx(0.6);
     if (a == NULL || b == NULL || c == NULL) goto done;
-    mr_report_input three[3] = {{NULL, NULL, a, NULL}, {NULL, NULL, b, NULL}, {NULL, NULL, c, NULL}};
+    mr_report_input three[3] = {{NULL, NULL, a, NULL, NULL, NULL},
+                                {NULL, NULL, b, NULL, NULL, NULL},
+                                {NULL, NULL, c, NULL, NULL, NULL}};
     mr_report_options o = {0};
     o.size = 32;
     const char *dir = mr_test_tmp_path("replaced");
@@ -465,7 +468,7 @@ MR_TEST(bad_inputs_and_options_are_named_and_write_nothing) {
     MR_CHECK_OK(mr_gltf_scene_load(asset_path(AVOCADO), NULL, &s));
     if (m == NULL || s == NULL) goto done;
     const char *dir = mr_test_tmp_path("refused");
-    mr_report_input one[1] = {{NULL, NULL, m, NULL}};
+    mr_report_input one[1] = {{NULL, NULL, m, NULL, NULL, NULL}};
     mr_report_result *r = NULL;
     mr_report_options o = {0};
     o.size = -5;
@@ -489,9 +492,9 @@ MR_TEST(bad_inputs_and_options_are_named_and_write_nothing) {
     MR_CHECK(mr_report_make(one, 1, dir, &o, &r) == MR_ERR_INVALID_ARG && contains(mr_last_error(), "spheres"));
     o.has_camera_direction = 0;
     MR_CHECK(mr_report_make(one, 0, dir, &o, &r) == MR_ERR_INVALID_ARG && contains(mr_last_error(), "0 inputs"));
-    mr_report_input mixed[2] = {{NULL, NULL, m, NULL}, {NULL, NULL, NULL, s}};
+    mr_report_input mixed[2] = {{NULL, NULL, m, NULL, NULL, NULL}, {NULL, NULL, NULL, s, NULL, NULL}};
     MR_CHECK(mr_report_make(mixed, 2, dir, &o, &r) == MR_ERR_INVALID_ARG && contains(mr_last_error(), "input 1"));
-    mr_report_input neither[2] = {{NULL, NULL, m, NULL}, {"nothing", NULL, NULL, NULL}};
+    mr_report_input neither[2] = {{NULL, NULL, m, NULL, NULL, NULL}, {"nothing", NULL, NULL, NULL, NULL, NULL}};
     MR_CHECK(mr_report_make(neither, 2, dir, &o, &r) == MR_ERR_INVALID_ARG && contains(mr_last_error(), "input 1"));
     MR_CHECK(r == NULL && !file_exists(dir));
     // A folder that is a file.
@@ -535,7 +538,9 @@ MR_TEST(materials_on_an_obj_mesh_under_a_turning_map) {
     for (int y = 0; y < 16; y++) // a bright patch on one side, so that turning the map changes the picture
         for (int x = 0; x < 32; x++)
             for (int c = 0; c < 3; c++) mr_image_at(env, x, y)[c] = (x >= 4 && x < 10 && y < 8) ? 20.0f : 0.2f;
-    mr_report_input in[3] = {{"source", NULL, a, NULL}, {"same", NULL, same, NULL}, {"other", NULL, other, NULL}};
+    mr_report_input in[3] = {{"source", NULL, a, NULL, NULL, NULL},
+                             {"same", NULL, same, NULL, NULL, NULL},
+                             {"other", NULL, other, NULL, NULL, NULL}};
     const mr_camera paper = mr_camera_paper();
     mr_report_options o = {0};
     o.size = 32;
@@ -594,7 +599,7 @@ MR_TEST(mesh_options_are_refused_by_name) {
     if (obj == NULL || env == NULL || m == NULL || s == NULL) goto done;
     for (size_t i = 0; i < mr_image_value_count(env); i++) env->pixels[i] = 1.0f;
     const char *dir = mr_test_tmp_path("mesh_refused");
-    mr_report_input one[1] = {{NULL, NULL, m, NULL}}, scene[1] = {{NULL, NULL, NULL, s}};
+    mr_report_input one[1] = {{NULL, NULL, m, NULL, NULL, NULL}}, scene[1] = {{NULL, NULL, NULL, s, NULL, NULL}};
     const mr_camera paper = mr_camera_paper();
     mr_report_options o = {0};
     o.size = 32;
