@@ -194,11 +194,11 @@ static int parse_freed(const mr_brdf_model *model, const char *list, unsigned *f
     char *save = NULL;
     for (char *name = strtok_r(copy, ",", &save); name != NULL; name = strtok_r(NULL, ",", &save)) {
         const int p = mr_brdf_param_index(model, name);
-        if (p < 0 || p >= 32) return cli_usage_error("remap", "--free %s: '%s' has no parameter '%s'", list, model->name,
-                                                     name);
+        if (p < 0 || p >= 32)
+            return cli_usage_error("remap", "--free %s: '%s' has no parameter '%s'", list, model->name, name);
         if (!(model->params[p].flags & MR_PARAM_FIT_FIXED))
-            return cli_usage_error("remap", "--free %s: '%s' fits %s already ('matremap models %s' lists what it holds)",
-                                   list, model->name, name, model->name);
+            return cli_usage_error("remap", "--free %s: '%s' fits %s already ('matremap models %s' lists what it "
+                                   "holds)", list, model->name, name, model->name);
         *freed |= 1u << p;
     }
     return CLI_EXIT_OK;
