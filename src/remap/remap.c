@@ -1370,17 +1370,9 @@ static double covered_relative_rmse(const mr_render_plan *plan, const mr_image *
            fmax(sqrt(covered_mean_square(plan, source, NULL)), RELATIVE_RMS_FLOOR);
 }
 
-/* The full render of a material by `renderer` (NULL or built-in: in process, with `threads`). */
-static mr_status render_full(mr_renderer *renderer, const mr_render_plan *plan, int threads,
-                             const mr_brdf_model *model, const double *values, mr_image *into) {
-    if (mr_renderer_is_builtin(renderer))
-        return mr_render_into_threads(plan, threads, model, values, MR_COMPONENT_FULL, into);
-    return mr_renderer_render(renderer, plan, model, values, into, NULL, NULL);
-}
-
 /* The closer look of remap.h (UNDER_RESOLVED, model sources): a CONVERGED fit of a source that is not black
- * (`full`, its render in the fit scene) rendered with the source ZOOM times closer to the highlight, each side by
- * its own renderer (opts). */
+ * (`full`, its render in the fit scene) rendered with the source ZOOM times closer to the highlight; the built-in
+ * renderer's check only (opts: both renderers built-in). */
 static mr_status zoom_check(const mr_render_plan *plan, const mr_brdf_model *source_model, const double *source_values,
                             const mr_image *full, const mr_brdf_model *target, const mr_remap_options *opts,
                             mr_remap_result *out) {
@@ -1399,8 +1391,8 @@ static mr_status zoom_check(const mr_render_plan *plan, const mr_brdf_model *sou
     status = mr_image_create(zoomed->width, zoomed->height, 3, &source);
     if (status == MR_OK) status = mr_image_create(zoomed->width, zoomed->height, 3, &fit);
     if (status == MR_OK)
-        status = render_full(opts->source_renderer, closer, threads, source_model, source_values, source);
-    if (status == MR_OK) status = render_full(opts->target_renderer, closer, threads, target, out->values, fit);
+        status = mr_render_into_threads(closer, threads, source_model, source_values, MR_COMPONENT_FULL, source);
+    if (status == MR_OK) status = mr_render_into_threads(closer, threads, target, out->values, MR_COMPONENT_FULL, fit);
     if (status == MR_OK) {
         const double closer_rmse = covered_relative_rmse(closer, fit, source);
         if (closer_rmse > ZOOM_RELATIVE_RMSE && closer_rmse > ZOOM_GAIN * fmax(out->relative_rmse, 0.01)) {
