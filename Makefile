@@ -110,6 +110,10 @@ BENCH_SRC   := $(wildcard tests/bench_*.c)
 LIB_OBJ   := $(LIB_C_SRC:%.c=$(BUILD)/obj/%.o) $(LIB_CXX_SRC:%.cpp=$(BUILD)/obj/%.o)
 CLI_OBJ   := $(CLI_SRC:%.c=$(BUILD)/obj/%.o)
 LIB       := $(BUILD)/libmatremap.a
+SHLIB_SONAME := libmatremap.so.0
+SHLIB     := $(BUILD)/lib/libmatremap.so.0.1.0
+SHLIB_LINKS := $(BUILD)/lib/$(SHLIB_SONAME) $(BUILD)/lib/libmatremap.so
+SHLIB_OBJ := $(LIB_C_SRC:%.c=$(BUILD)/shobj/%.o) $(LIB_CXX_SRC:%.cpp=$(BUILD)/shobj/%.o)
 TOOLS     := $(BUILD)/bin/matremap
 # spec2metal and metal2spec are matremap under another name (main.c dispatches on the program's name).
 TOOL_LINKS := $(BUILD)/bin/spec2metal $(BUILD)/bin/metal2spec
@@ -138,7 +142,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h sr
         evaluation-viewers evaluation-clients evaluation-translations evaluation-renderer-fits evaluation-renderers dataset train objectives deps install clean tables
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
-all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE) $(MPI_MODULE)
+all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE) $(MPI_MODULE) $(SHLIB_LINKS)
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
@@ -171,6 +175,26 @@ $(BUILD)/lib/matremap/libmatremap-mpi.so: $(MPI_SRC)
 	    $(shell $(PKG_CONFIG) --cflags mpi-c 2>/dev/null) $(LDFLAGS) -Wl,-z,defs $< \
 	    $(shell $(PKG_CONFIG) --libs mpi-c 2>/dev/null) -o $@
 
+# The shared library (docs/python.md): the library's objects again, position-independent, in their own object
+# directory (build/shobj; the static library stays as it is), linked with every dependency (-z defs: nothing left
+# unresolved) and exporting only mr_* (src/libmatremap.map). It finds its modules in matremap/ beside itself and its
+# data in ../share/matremap (src/data_dir.c), so build/lib works as PREFIX/lib does.
+$(BUILD)/shobj/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -fPIC -MMD -MP -c $< -o $@
+
+$(BUILD)/shobj/%.o: %.cpp
+	@mkdir -p $(dir $@)
+	$(CXX) $(ALL_CXXFLAGS) -fPIC -MMD -MP -c $< -o $@
+
+$(SHLIB): $(SHLIB_OBJ) src/libmatremap.map
+	@mkdir -p $(dir $@)
+	$(LINK) -shared $(ALL_LDFLAGS) -Wl,-soname,$(SHLIB_SONAME) -Wl,--version-script=src/libmatremap.map \
+	    -Wl,-z,defs $(SHLIB_OBJ) $(ALL_LDLIBS) -o $@
+
+$(BUILD)/lib/$(SHLIB_SONAME) $(BUILD)/lib/libmatremap.so: $(SHLIB)
+	ln -sfn $(notdir $(SHLIB)) $@
+
 # The module and data directories are compiled into oiio_module.o and cmd_workflow.o (the network); this stamp
 # changes (and so rebuilds them) when PREFIX does, e.g. for `make install PREFIX=...` after a plain `make`.
 $(BUILD)/module_dir.stamp: FORCE
@@ -178,6 +202,8 @@ $(BUILD)/module_dir.stamp: FORCE
 	@echo '$(MODULE_DIR) $(DATA_DIR)' | cmp -s - $@ || echo '$(MODULE_DIR) $(DATA_DIR)' > $@
 $(BUILD)/obj/src/io/oiio_module.o $(BUILD)/obj/src/cli/cmd_workflow.o $(BUILD)/obj/src/remap/sweep_mpi.o: \
     $(BUILD)/module_dir.stamp
+$(BUILD)/shobj/src/io/oiio_module.o $(BUILD)/shobj/src/remap/sweep_mpi.o $(BUILD)/shobj/src/data_dir.o \
+    $(BUILD)/obj/src/data_dir.o: $(BUILD)/module_dir.stamp
 .PHONY: FORCE
 FORCE:
 
@@ -375,4 +401,4 @@ tables:
 	$(BUILD)/gen-ggx-albedo > src/brdf/ggx_albedo_tables.h.tmp
 	mv src/brdf/ggx_albedo_tables.h.tmp src/brdf/ggx_albedo_tables.h
 
--include $(shell find $(BUILD)/obj $(BUILD)/pic -name '*.d' 2>/dev/null)
+-include $(shell find $(BUILD)/obj $(BUILD)/pic $(BUILD)/shobj -name '*.d' 2>/dev/null)

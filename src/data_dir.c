@@ -1,5 +1,9 @@
 /* data_dir.c — where the library finds its installed data files (mr_core.h, mr_data_path) and its modules
- * (mr_internal.h, mr_module_beside_executable). */
+ * (mr_internal.h, mr_module_beside_executable): beside the executable, and beside the library itself when it is the
+ * shared libmatremap.so (a program without matremap's executable, e.g. Python: dladdr on a function of ours names
+ * the file it lives in; in a static link that is the executable again). */
+#define _GNU_SOURCE 1 /* dladdr */
+#include <dlfcn.h>
 #include <limits.h>
 #include <stdio.h>
 #include <string.h>
@@ -19,12 +23,30 @@ static int cut_last(char *path) {
     return 1;
 }
 
+/* The directory of the file holding this code (libmatremap.so's, or the executable's in a static link) in out; 0 when
+ * dladdr cannot tell or it is the executable's (which the callers try first). */
+static const char library_anchor = 0; // an object of ours: ISO C has no function-to-object pointer cast
+
+static int library_dir(char *out, size_t size) {
+    Dl_info info;
+    if (dladdr(&library_anchor, &info) == 0 || info.dli_fname == NULL || info.dli_fname[0] != '/') return 0;
+    char exe[PATH_MAX];
+    ssize_t length = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    if (length > 0) {
+        exe[length] = '\0';
+        if (strcmp(exe, info.dli_fname) == 0) return 0;
+    }
+    if (strlen(info.dli_fname) >= size) return 0;
+    memcpy(out, info.dli_fname, strlen(info.dli_fname) + 1);
+    return cut_last(out);
+}
+
 mr_status mr_data_path(const char *file, char *out, size_t size) {
     if (file == NULL || file[0] == '\0' || out == NULL || size == 0)
         return mr_fail(MR_ERR_INVALID_ARG, "data file: NULL or empty argument");
     // The same places as the OpenImageIO module (src/io/oiio_module.c): beside the executable first, so a build
     // tree and a relocated install find their own files, then the install directory fixed at build time.
-    char tried[4][PATH_MAX + 64];
+    char tried[7][PATH_MAX + 64];
     int count = 0;
     char exe[PATH_MAX];
     ssize_t length = readlink("/proc/self/exe", exe, sizeof exe - 1);
@@ -37,6 +59,14 @@ mr_status mr_data_path(const char *file, char *out, size_t size) {
                 snprintf(tried[count++], sizeof tried[0], "%s/data/%s", exe, file);
         }
     }
+    // The shared library: PREFIX/lib -> PREFIX/share/matremap; the build tree's build/lib -> build/share/matremap,
+    // and the source tree's data/ above build/lib (or build/asan/lib).
+    char lib[PATH_MAX];
+    if (library_dir(lib, sizeof lib) && cut_last(lib)) {
+        snprintf(tried[count++], sizeof tried[0], "%s/share/matremap/%s", lib, file);
+        for (int up = 0; up < 2 && cut_last(lib); up++)
+            snprintf(tried[count++], sizeof tried[0], "%s/data/%s", lib, file);
+    }
     snprintf(tried[count++], sizeof tried[0], "%s/%s", MR_DATA_DIR, file);
     for (int k = 0; k < count; k++)
         if (access(tried[k], R_OK) == 0) {
@@ -44,7 +74,7 @@ mr_status mr_data_path(const char *file, char *out, size_t size) {
             memcpy(out, tried[k], strlen(tried[k]) + 1);
             return MR_OK;
         }
-    char list[4 * (PATH_MAX + 64) + 8] = "";
+    char list[7 * (PATH_MAX + 64) + 8] = "";
     for (int k = 0; k < count; k++) snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", k ? ", " : "",
                                              tried[k]);
     return mr_fail(MR_ERR_IO, "data file '%s' not found (tried %s)", file, list);
@@ -53,9 +83,14 @@ mr_status mr_data_path(const char *file, char *out, size_t size) {
 int mr_module_beside_executable(const char *file, char *out, size_t size) {
     char exe[PATH_MAX];
     ssize_t length = readlink("/proc/self/exe", exe, sizeof exe - 1);
-    if (length <= 0) return 0;
-    exe[length] = '\0';
-    if (!cut_last(exe)) return 0;
-    int n = snprintf(out, size, "%s/../lib/matremap/%s", exe, file);
+    if (length > 0) {
+        exe[length] = '\0';
+        int n = cut_last(exe) ? snprintf(out, size, "%s/../lib/matremap/%s", exe, file) : -1;
+        if (n > 0 && (size_t)n < size && access(out, F_OK) == 0) return 1;
+    }
+    // The shared library: its modules in the matremap/ folder beside it (PREFIX/lib/matremap, build/lib/matremap).
+    char lib[PATH_MAX];
+    if (!library_dir(lib, sizeof lib)) return 0;
+    int n = snprintf(out, size, "%s/matremap/%s", lib, file);
     return n > 0 && (size_t)n < size && access(out, F_OK) == 0;
 }
