@@ -127,10 +127,11 @@ mr_status mr_api_render(const char *model, const char *const *assignments, int c
     if (status != MR_OK) return status;
     mr_image *env = NULL;
     if (env_path != NULL) {
+        char label[4200];
+        snprintf(label, sizeof label, "image '%s'", env_path); // named by its file, as the command names it
         status = mr_img_read(env_path, NULL, &env);
-        if (status == MR_OK) status = mr_image_check_radiance(env, NULL);
+        if (status == MR_OK) status = mr_image_check_radiance(env, label);
         if (status != MR_OK) {
-            if (env != NULL) mr_fail(status, "image '%s': %s", env_path, mr_last_error());
             mr_image_free(env);
             mr_material_free(material);
             return status;
