@@ -24,6 +24,7 @@ packages=(
     clang libclang-rt-14-dev libomp-14-dev  # make fuzz: libFuzzer targets with ASan+UBSan (clang's OpenMP runtime)
     openmpi-bin libopenmpi-dev  # optional: `mpirun -np N matremap sweep` (the MPI module; tests/sweep_mpi.sh)
     blender            # Cycles: the renderer server (data/renderers/blender_server.py, tests/blender_server.sh)
+    python3-pytest     # the Python package's suite (tests/python.sh runs tests/python/test_*.py)
 )
 # node + npm run the independent SSIM implementation (ssim.js) and the Khronos glTF validator in the tests;
 # the machine may already have a node of its own outside Debian's packages, which is fine.
