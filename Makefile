@@ -29,7 +29,8 @@
 #                   write or rename fails, for every N, over the main commands (scripts/faults.sh; docs/reliability.md);
 #                   FAULT_STEP=k tries every k-th N only
 #   make deps       installs the Debian packages the project needs (scripts/install-deps.sh)
-#   make install PREFIX=/usr/local   tools, static library, public headers, matremap.pc and the network
+#   make install PREFIX=/usr/local   tools, static and shared library, public headers, matremap.pc, the network and
+#                   the Python package (docs/python.md)
 
 PREFIX   ?= /usr/local
 BUILD    ?= build
@@ -76,6 +77,10 @@ DEP_LIBS   := -Wl,--as-needed $(shell $(PKG_CONFIG) --libs nlopt OpenEXR tinyglt
                                     expat 2>/dev/null) -lsvm -lm
 
 MODULE_DIR := $(PREFIX)/lib/matremap
+# Where make install puts the Python package: Debian's site directory for PREFIX (PREFIX/lib/python3.X/dist-packages,
+# on sys.path for /usr/local), or PYTHON_SITE=... (then on PYTHONPATH).
+PYTHON_SITE ?= $(PREFIX)/lib/python$(shell /usr/bin/python3 -c 'import sys; print("%d.%d" % sys.version_info[:2])' \
+                                      2>/dev/null)/dist-packages
 DATA_DIR   := $(PREFIX)/share/matremap
 MR_CPPFLAGS := -D_POSIX_C_SOURCE=200809L -Isrc -I. $(DEP_CFLAGS) -DMR_MODULE_DIR='"$(MODULE_DIR)"' \
                -DMR_DATA_DIR='"$(DATA_DIR)"'
@@ -135,7 +140,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h sr
                   src/transform/transform.h src/report/report.h nn/mlp.h \
                   src/learn/parametric.h src/learn/svr.h src/learn/sweep_table.h src/learn/learned.h \
                   gltf/mr_gltf.h gltf/mr_gltf_convert.h gltf/mr_gltf_scene.h src/doc/doc.h \
-                  src/remap/translate.h
+                  src/remap/translate.h src/api/api.h
 
 .PHONY: all check asan fuzz fuzz-targets faults demo bench \
         analyses paper evaluation evaluation-gltf evaluation-hardcases evaluation-svbrdf \
@@ -382,6 +387,14 @@ install: all
 	if [ -d data/renderers/three/node_modules ]; then \
 	    cp -r data/renderers/three/node_modules $(DESTDIR)$(PREFIX)/share/matremap/renderers/three/; fi
 	install -m 644 $(LIB) $(DESTDIR)$(PREFIX)/lib/
+	install -m 755 $(SHLIB) $(DESTDIR)$(PREFIX)/lib/
+	ln -sfn $(notdir $(SHLIB)) $(DESTDIR)$(PREFIX)/lib/$(SHLIB_SONAME)
+	ln -sfn $(notdir $(SHLIB)) $(DESTDIR)$(PREFIX)/lib/libmatremap.so
+	# The Python package (docs/python.md), told where the library is by _config.py
+	install -d $(DESTDIR)$(PYTHON_SITE)/matremap
+	install -m 644 python/matremap/__init__.py python/matremap/__main__.py python/matremap/_native.py \
+	    $(DESTDIR)$(PYTHON_SITE)/matremap/
+	printf '"""Written by make install."""\nLIBDIR = "%s"\n' '$(PREFIX)/lib' > $(DESTDIR)$(PYTHON_SITE)/matremap/_config.py
 	install -d $(DESTDIR)$(MODULE_DIR)
 	install -m 755 $(MODULE) $(MPI_MODULE) $(DESTDIR)$(MODULE_DIR)/
 	for h in $(PUBLIC_HEADERS); do \

@@ -64,5 +64,6 @@
 #include "gltf/mr_gltf_scene.h"
 #include "doc/doc.h"
 #include "remap/translate.h"
+#include "api/api.h"
 
 #endif /* MATREMAP_H */

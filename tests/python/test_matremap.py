@@ -215,3 +215,13 @@ def test_python_m_matremap_runs_the_cli():
     run = subprocess.run([sys.executable, "-m", "matremap", "render", "nosuch", "-o", "x.exr"], env=env,
                          stderr=subprocess.PIPE, universal_newlines=True)
     assert run.returncode == 2 and "unknown BRDF model 'nosuch'" in run.stderr
+
+
+def test_modules_and_data_are_found_beside_the_library(tmp_path):
+    # No matremap executable in this process: the OpenImageIO module (TIFF) and the network (mlp) are found from
+    # libmatremap.so's own place (build/lib/matremap, build/share/matremap).
+    a = np.random.default_rng(1).random((5, 7, 3), dtype=np.float32)
+    matremap.write_image(str(tmp_path / "a.tif"), a, encoding="data", bits=16)
+    assert np.abs(matremap.read_image(str(tmp_path / "a.tif"), encoding="data") - a).max() <= 0.5 / 65535 + 1e-7
+    out = matremap.spec2metal(np.full((1, 1, 3), 0.5, np.float32), 0.04, 0.5, method="mlp")
+    assert 0 <= out["metallic"][0, 0] < 0.01
