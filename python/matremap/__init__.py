@@ -8,6 +8,7 @@ arrays raise ValueError naming the argument. Long calls release the GIL and take
 import ctypes
 import json
 import math
+import os
 
 import numpy as np
 
@@ -15,7 +16,7 @@ from . import _native
 from ._native import Image as _Image, lib as _lib
 
 __all__ = ["Error", "Result", "version", "models", "render", "remap", "transform", "spec2metal", "metal2spec",
-           "ssim", "ssim_map", "read_image", "write_image", "srgb_to_linear", "linear_to_srgb", "library_path"]
+           "convert_gltf", "ssim", "ssim_map", "read_image", "write_image", "srgb_to_linear", "linear_to_srgb", "library_path"]
 
 library_path = _native.path
 
@@ -273,6 +274,19 @@ def metal2spec(base_color, metallic, roughness, method="eq2", threads=0, f0=None
     "glossiness"}; the methods of `matremap metal2spec` (eq2, khronos)."""
     return transform("gltf", "gltf-specgloss", method, threads=threads, f0=f0, base_color=base_color,
                      metallic=metallic, roughness=roughness)
+
+
+def convert_gltf(src, dst, direction="spec2metal", method=None, threads=0, overwrite=False):
+    """Convert a glTF asset's materials as `matremap gltf DIRECTION SRC -o DST` does (.gltf with its files beside it,
+    or .glb; never over an input): {"input", "output", "direction", "method", "materials": [{"name", "outcome",
+    "reason", "width", "height", "flagged", "off_manifold", "nonfinite", "clamped", "failed", "seconds",
+    "extension"}]}. method None: the command's default (weighted for spec2metal, eq2 for metal2spec); overwrite:
+    convert spec-gloss materials that carry metal-rough values of their own (--overwrite-metal-rough)."""
+    folder = os.path.dirname(os.fspath(dst))
+    if folder and not os.path.isdir(folder):
+        os.makedirs(folder)  # as the command: the output's missing folders made
+    return _json_call(_lib.mr_api_gltf_convert, _b(os.fspath(src)), _b(os.fspath(dst)), _b(direction), _b(method),
+                      1 if overwrite else 0, _threads(threads))
 
 
 # ---- metrics --------------------------------------------------------------------------------------------------

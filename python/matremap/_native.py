@@ -83,6 +83,7 @@ _decl = {
     "mr_api_transform_describe": (_c.c_int, [_str, _str, _str, _c.POINTER(_c.c_void_p)]),
     "mr_api_transform_convert": (_c.c_int, [_str, _str, _str, _c.c_double, _c.c_int, _c.POINTER(_img),
                                             _c.POINTER(_img)]),
+    "mr_api_gltf_convert": (_c.c_int, [_str, _str, _str, _str, _c.c_int, _c.c_int, _c.POINTER(_c.c_void_p)]),
     "mr_ssim": (_c.c_int, [_img, _img, _c.POINTER(SsimOptions), _c.POINTER(_c.c_double), _c.POINTER(_img)]),
     "mr_image_free": (None, [_img]),
     "mr_img_read": (_c.c_int, [_str, _c.POINTER(ReadOptions), _c.POINTER(_img)]),

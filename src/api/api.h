@@ -47,6 +47,14 @@ mr_status mr_api_transform_describe(const char *source, const char *target, cons
 mr_status mr_api_transform_convert(const char *source, const char *target, const char *method, double dielectric_f0,
                                    int threads, const mr_image *const *in, mr_image *const *out);
 
+/* `matremap gltf DIRECTION INPUT -o OUTPUT [--method M] [--overwrite-metal-rough] [--threads T] --json` with the command's defaults (direction
+ * "spec2metal" or "metal2spec"; method NULL: weighted for spec2metal, read under both readings, eq2 for metal2spec;
+ * PNG textures): mr_gltf_convert_file, then {"input", "output", "direction", "method", "materials": [{"name",
+ * "outcome", "reason", "width", "height", "flagged", "off_manifold", "nonfinite", "clamped", "failed", "seconds",
+ * "extension"}], "pruned": {...}} in *json_out (mr_api_free). */
+mr_status mr_api_gltf_convert(const char *input, const char *output, const char *direction, const char *method,
+                              int overwrite, int threads, char **json_out);
+
 #ifdef __cplusplus
 }
 #endif

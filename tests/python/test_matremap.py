@@ -225,3 +225,17 @@ def test_modules_and_data_are_found_beside_the_library(tmp_path):
     assert np.abs(matremap.read_image(str(tmp_path / "a.tif"), encoding="data") - a).max() <= 0.5 / 65535 + 1e-7
     out = matremap.spec2metal(np.full((1, 1, 3), 0.5, np.float32), 0.04, 0.5, method="mlp")
     assert 0 <= out["metallic"][0, 0] < 0.01
+
+
+def test_convert_gltf_writes_the_cli_files(tmp_path):
+    duck = os.path.join(SHARED, "assets", "specgloss", "Duck-pbrSpecularGlossiness", "glTF-pbrSpecularGlossiness",
+                        "Duck.gltf")
+    summary = matremap.convert_gltf(duck, tmp_path / "py" / "duck.gltf", overwrite=True)
+    assert summary["method"] == "weighted" and [m["outcome"] for m in summary["materials"]] == ["converted"]
+    cli("gltf", "spec2metal", duck, "-o", tmp_path / "cli" / "duck.gltf", "--overwrite-metal-rough")
+    files = sorted(os.listdir(tmp_path / "cli"))
+    assert sorted(os.listdir(tmp_path / "py")) == files and "duck_m0_basecolor.png" in files
+    for name in files:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    with pytest.raises(matremap.Error, match="'.*nosuch.gltf'"):
+        matremap.convert_gltf(tmp_path / "nosuch.gltf", tmp_path / "x.gltf")
