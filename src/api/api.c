@@ -373,8 +373,8 @@ mr_status mr_api_gltf_convert(const char *input, const char *output, const char 
         fprintf(j.out, ", \"outcome\": \"%s\", \"reason\": ", outcome_name(r->outcome));
         json_string(j.out, r->reason);
         fprintf(j.out, ", \"width\": %d, \"height\": %d, \"flagged\": %zu, \"off_manifold\": %zu, "
-                "\"nonfinite\": %zu, \"clamped\": %zu, \"failed\": %zu, \"seconds\": %.6f, \"extension\": %s}", r->width, r->height,
-                r->flagged, r->off_manifold, r->nonfinite, r->clamped, r->failed, r->seconds,
+                "\"nonfinite\": %zu, \"clamped\": %zu, \"failed\": %zu, \"seconds\": %.6f, \"extension\": %s}",
+                r->width, r->height, r->flagged, r->off_manifold, r->nonfinite, r->clamped, r->failed, r->seconds,
                 r->extension ? "true" : "false");
     }
     fprintf(j.out, "]}");

@@ -29,8 +29,9 @@ mr_status mr_api_render(const char *model, const char *const *assignments, int c
                         const char *env_path, const char *component, int threads, mr_image *out);
 
 /* `matremap remap --from FROM A... --to TO B... --json` with --size, --light, --strategy, --hold, --tie, --free and
- * --threads (NULL or 0: the command's defaults; lists as the options take them, "alpha,ior" or "alpha=0.2"): the fit's JSON object (its "values", "outcome", "detail", "rmse", "relative_rmse",
- * "ssim", "renders", "seconds", "strategy", "size", "light") in *json_out (mr_api_free). */
+ * --threads (NULL or 0: the command's defaults; lists as the options take them, "alpha,ior" or "alpha=0.2"): the
+ * fit's JSON object (its "values", "outcome", "detail", "rmse", "relative_rmse", "ssim", "renders", "seconds",
+ * "strategy", "size", "light") in *json_out (mr_api_free). */
 mr_status mr_api_remap(const char *from, const char *const *from_assignments, int from_count, const char *to,
                        const char *const *to_assignments, int to_count, int size, const char *light,
                        const char *strategy, const char *hold_list, const char *tie_list, const char *free_list,
@@ -47,11 +48,11 @@ mr_status mr_api_transform_describe(const char *source, const char *target, cons
 mr_status mr_api_transform_convert(const char *source, const char *target, const char *method, double dielectric_f0,
                                    int threads, const mr_image *const *in, mr_image *const *out);
 
-/* `matremap gltf DIRECTION INPUT -o OUTPUT [--method M] [--overwrite-metal-rough] [--threads T] --json` with the command's defaults (direction
- * "spec2metal" or "metal2spec"; method NULL: weighted for spec2metal, read under both readings, eq2 for metal2spec;
- * PNG textures): mr_gltf_convert_file, then {"input", "output", "direction", "method", "materials": [{"name",
- * "outcome", "reason", "width", "height", "flagged", "off_manifold", "nonfinite", "clamped", "failed", "seconds",
- * "extension"}], "pruned": {...}} in *json_out (mr_api_free). */
+/* `matremap gltf DIRECTION INPUT -o OUTPUT [--method M] [--overwrite-metal-rough] [--threads T] --json` with the
+ * command's defaults (direction "spec2metal" or "metal2spec"; method NULL: weighted for spec2metal, read under both
+ * readings, eq2 for metal2spec; PNG textures): mr_gltf_convert_file, then {"input", "output", "direction", "method",
+ * "materials": [{"name", "outcome", "reason", "width", "height", "flagged", "off_manifold", "nonfinite", "clamped",
+ * "failed", "seconds", "extension"}]} in *json_out (mr_api_free). */
 mr_status mr_api_gltf_convert(const char *input, const char *output, const char *direction, const char *method,
                               int overwrite, int threads, char **json_out);
 
