@@ -15,7 +15,7 @@ import numpy as np
 from . import _native
 from ._native import Image as _Image, lib as _lib
 
-__all__ = ["Error", "Result", "version", "models", "render", "remap", "transform", "spec2metal", "metal2spec",
+__all__ = ["Error", "Result", "Transform", "version", "models", "render", "remap", "transform", "spec2metal", "metal2spec",
            "convert_gltf", "ssim", "ssim_map", "read_image", "write_image", "srgb_to_linear", "linear_to_srgb", "library_path"]
 
 library_path = _native.path
@@ -287,6 +287,80 @@ def convert_gltf(src, dst, direction="spec2metal", method=None, threads=0, overw
         os.makedirs(folder)  # as the command: the output's missing folders made
     return _json_call(_lib.mr_api_gltf_convert, _b(os.fspath(src)), _b(os.fspath(dst)), _b(direction), _b(method),
                       1 if overwrite else 0, _threads(threads))
+
+
+class Transform(object):
+    """A learned transform (`matremap learn`'s .mrt file): Transform.load(path); t.source, t.target (model names);
+    t.apply(**maps) converts texel by texel as `matremap convert --transform` does."""
+
+    def __init__(self, handle, path):
+        self._handle = handle
+        self.path = path
+        head = ctypes.cast(handle, ctypes.POINTER(_native.LearnedHead)).contents
+        self.source = head.source[0].decode()
+        self.target = head.target[0].decode()
+
+    @classmethod
+    def load(cls, path):
+        handle = ctypes.c_void_p()
+        _check(_lib.mr_learned_read(_b(os.fspath(path)), ctypes.byref(handle)))
+        return cls(handle, os.fspath(path))
+
+    def __del__(self):
+        if getattr(self, "_handle", None) is not None and _lib is not None:
+            _lib.mr_learned_free(self._handle)
+            self._handle = None
+
+    def apply(self, flags=False, **maps):
+        """Source parameters by name: (H, W) arrays for scalars, (H, W, 3) or grey (H, W) for colours, numbers or
+        (r, g, b) broadcast; the rest keep the model's defaults. Returns {target parameter: (H, W) or (H, W, 3)
+        float32} (and the MR_WF_* flag bits per texel, (H, W) uint32, as a second value with flags=True)."""
+        table = {m["name"]: m["params"] for m in models()}
+        src, dst = table[self.source], table[self.target]
+        names = [p["name"] for p in src]
+        unknown = [k for k in maps if k not in names]
+        if unknown:
+            raise ValueError("%s: not a parameter of %s (%s)" % (unknown[0], self.source, ", ".join(names)))
+        shape = None
+        arrays = {}
+        for p in src:
+            v = maps.get(p["name"])
+            if isinstance(v, np.ndarray) and v.ndim >= 2:
+                a = _as_image_array(v, p["name"], (1, 3) if p["channels"] == 3 else (1,))
+                if shape is not None and a.shape[:2] != shape:
+                    raise ValueError("%s: shape %s differs from the other maps' %s" % (p["name"], a.shape[:2], shape))
+                shape = a.shape[:2]
+                arrays[p["name"]] = a
+        shape = shape or (1, 1)
+        n = shape[0] * shape[1]
+        width = sum(p["channels"] for p in src)
+        rows = np.empty((n, width), dtype=np.float64)
+        offset = 0
+        for p in src:
+            c = p["channels"]
+            if p["name"] in arrays:
+                rows[:, offset:offset + c] = arrays[p["name"]].reshape(n, -1)
+            else:
+                v = p["default"] if p["name"] not in maps else maps[p["name"]]
+                v = np.asarray(v, dtype=np.float64).ravel()
+                if v.size not in ((1, c) if c == 3 else (1,)) or not np.isfinite(v).all():
+                    raise ValueError("%s: expected an array or a finite number%s" % (p["name"],
+                                                                                     " or (r, g, b)" if c == 3 else ""))
+                rows[:, offset:offset + c] = v.astype(np.float32)  # a constant is a float map's value, as in convert
+            offset += c
+        out_width = sum(p["channels"] for p in dst)
+        out = np.empty((n, out_width), dtype=np.float64)
+        bits = np.zeros(n, dtype=np.uint32)
+        _check(_lib.mr_learned_apply_batch(self._handle, n, rows.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+                                           out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
+                                           bits.ctypes.data_as(ctypes.POINTER(ctypes.c_uint))))
+        result, offset = {}, 0
+        for p in dst:
+            c = p["channels"]
+            a = out[:, offset:offset + c].astype(np.float32).reshape(shape + (c,))
+            result[p["name"]] = a[:, :, 0] if c == 1 else a
+            offset += c
+        return (result, bits.reshape(shape)) if flags else result
 
 
 # ---- metrics --------------------------------------------------------------------------------------------------

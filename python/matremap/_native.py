@@ -29,6 +29,12 @@ class WriteOptions(ctypes.Structure):
     _fields_ = [("encoding", ctypes.c_int), ("bits", ctypes.c_int), ("jpeg_quality", ctypes.c_int)]
 
 
+class LearnedHead(ctypes.Structure):
+    """The first fields of struct mr_learned (src/learn/learned.h): its source and target models, whose first
+    field is the name (struct mr_brdf_model, src/brdf/brdf.h)."""
+    _fields_ = [("source", ctypes.POINTER(ctypes.c_char_p)), ("target", ctypes.POINTER(ctypes.c_char_p))]
+
+
 def _candidates():
     """Where the library is looked for, in order (docs/python.md, "Install")."""
     found = []
@@ -84,6 +90,10 @@ _decl = {
     "mr_api_transform_convert": (_c.c_int, [_str, _str, _str, _c.c_double, _c.c_int, _c.POINTER(_img),
                                             _c.POINTER(_img)]),
     "mr_api_gltf_convert": (_c.c_int, [_str, _str, _str, _str, _c.c_int, _c.c_int, _c.POINTER(_c.c_void_p)]),
+    "mr_learned_read": (_c.c_int, [_str, _c.POINTER(_c.c_void_p)]),
+    "mr_learned_free": (None, [_c.c_void_p]),
+    "mr_learned_apply_batch": (_c.c_int, [_c.c_void_p, _c.c_size_t, _c.POINTER(_c.c_double),
+                                          _c.POINTER(_c.c_double), _c.POINTER(_c.c_uint)]),
     "mr_ssim": (_c.c_int, [_img, _img, _c.POINTER(SsimOptions), _c.POINTER(_c.c_double), _c.POINTER(_img)]),
     "mr_image_free": (None, [_img]),
     "mr_img_read": (_c.c_int, [_str, _c.POINTER(ReadOptions), _c.POINTER(_img)]),

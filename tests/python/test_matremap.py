@@ -239,3 +239,24 @@ def test_convert_gltf_writes_the_cli_files(tmp_path):
         assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
     with pytest.raises(matremap.Error, match="'.*nosuch.gltf'"):
         matremap.convert_gltf(tmp_path / "nosuch.gltf", tmp_path / "x.gltf")
+
+
+def test_learned_transform_equals_matremap_convert(tmp_path):
+    cli("sweep", "--from", "ward", "diffuse=0", "--to", "ggx", "diffuse=0", "--grid",
+        "alpha=0.03:0.4:4:log", "specular=0.03:0.25:3", "--size", "16", "--threads", "2", "-o", tmp_path / "wg.csv")
+    cli("learn", tmp_path / "wg.csv", "-o", tmp_path / "wg.mrt")
+    t = matremap.Transform.load(tmp_path / "wg.mrt")
+    assert (t.source, t.target) == ("ward", "ggx")
+    alpha = np.linspace(0.03, 0.4, 48, dtype=np.float32).reshape(6, 8)
+    matremap.write_image(str(tmp_path / "rough.exr"), alpha)
+    cli("convert", "--from", "ward", "--to", "ggx", "alpha=@%s" % (tmp_path / "rough.exr"), "specular=0.1",
+        "--transform", tmp_path / "wg.mrt", "-o", str(tmp_path / "cv" / "g_"))
+    ours, flags = t.apply(alpha=alpha, specular=0.1, flags=True)
+    assert flags.shape == (6, 8)
+    for name in ("alpha", "f0", "diffuse"):
+        theirs = matremap.read_image(str(tmp_path / "cv" / ("g_%s.exr" % name)))
+        assert np.array_equal(ours[name], theirs[:, :, 0] if ours[name].ndim == 2 else theirs), name
+    with pytest.raises(matremap.Error, match="nosuch.mrt"):
+        matremap.Transform.load(tmp_path / "nosuch.mrt")
+    with pytest.raises(ValueError, match="^f0: not a parameter of ward"):
+        t.apply(f0=0.1)
