@@ -15,7 +15,7 @@ import numpy as np
 from . import _native
 from ._native import Image as _Image, lib as _lib
 
-__all__ = ["Error", "Result", "Transform", "version", "models", "render", "remap", "transform", "spec2metal", "metal2spec",
+__all__ = ["Error", "Result", "Transform", "report", "version", "models", "render", "remap", "transform", "spec2metal", "metal2spec",
            "convert_gltf", "ssim", "ssim_map", "read_image", "write_image", "srgb_to_linear", "linear_to_srgb", "library_path"]
 
 library_path = _native.path
@@ -361,6 +361,34 @@ class Transform(object):
             result[p["name"]] = a[:, :, 0] if c == 1 else a
             offset += c
         return (result, bits.reshape(shape)) if flags else result
+
+
+def report(inputs, output_dir, size=0, env=None, rotations=0, threads=0, title=None, labels=None):
+    """`matremap report`: each input, a (model, params) pair, a dict {"model", "params"[, "label"]} or a glTF asset's
+    path, rendered and compared with the first; writes output_dir/index.html, its pictures and summary.json (the
+    folder is made if missing) and returns summary.json's contents. size, rotations, threads 0: the defaults."""
+    texts, names = [], []
+    for k, item in enumerate(inputs):
+        label = labels[k] if labels is not None else None
+        if isinstance(item, (str, os.PathLike)):
+            texts.append(os.fspath(item))
+        elif isinstance(item, dict):
+            texts.append("\n".join([item["model"]] + _assignments(item.get("params"), "inputs[%d]" % k)))
+            label = item.get("label", label)
+        else:
+            model, params = item
+            texts.append("\n".join([model] + _assignments(params, "inputs[%d]" % k)))
+        names.append(label)
+    if not texts:
+        raise ValueError("inputs: expected at least one material or asset")
+    output_dir = os.fspath(output_dir)
+    if not os.path.isdir(output_dir):
+        os.makedirs(output_dir)
+    label_array = (ctypes.c_char_p * len(names))(*[_b(n) for n in names])
+    _check(_lib.mr_api_report(_strings(texts), label_array, len(texts), _b(output_dir), int(size), _b(env),
+                              int(rotations), _threads(threads), _b(title)))
+    with open(os.path.join(output_dir, "summary.json")) as f:
+        return json.load(f)
 
 
 # ---- metrics --------------------------------------------------------------------------------------------------

@@ -94,6 +94,7 @@ _decl = {
     "mr_learned_free": (None, [_c.c_void_p]),
     "mr_learned_apply_batch": (_c.c_int, [_c.c_void_p, _c.c_size_t, _c.POINTER(_c.c_double),
                                           _c.POINTER(_c.c_double), _c.POINTER(_c.c_uint)]),
+    "mr_api_report": (_c.c_int, [_strs, _strs, _c.c_int, _str, _c.c_int, _str, _c.c_int, _c.c_int, _str]),
     "mr_ssim": (_c.c_int, [_img, _img, _c.POINTER(SsimOptions), _c.POINTER(_c.c_double), _c.POINTER(_img)]),
     "mr_image_free": (None, [_img]),
     "mr_img_read": (_c.c_int, [_str, _c.POINTER(ReadOptions), _c.POINTER(_img)]),

@@ -7,7 +7,10 @@
 #include "mr_internal.h"
 #include "api/api.h"
 #include "brdf/brdf.h"
+#include "gltf/mr_gltf.h"
 #include "gltf/mr_gltf_convert.h"
+#include "gltf/mr_gltf_scene.h"
+#include "report/report.h"
 #include "workflow/workflow.h"
 #include "io/image_io.h"
 #include "remap/remap.h"
@@ -380,4 +383,85 @@ mr_status mr_api_gltf_convert(const char *input, const char *output, const char 
     fprintf(j.out, "]}");
     mr_gltf_convert_result_free(&result);
     return json_close(&j, MR_OK, json_out);
+}
+
+static int is_gltf_path(const char *text) {
+    size_t n = strlen(text);
+    return strchr(text, '\n') == NULL && ((n > 5 && strcmp(text + n - 5, ".gltf") == 0) ||
+                                          (n > 4 && strcmp(text + n - 4, ".glb") == 0));
+}
+
+/* One report input from its text: a material (model and assignments, one a line) or a glTF asset's scene. */
+static mr_status report_input(const char *text, mr_material **material, mr_gltf_scene **scene) {
+    if (is_gltf_path(text)) {
+        mr_gltf *asset = NULL;
+        mr_status status = mr_gltf_load(text, &asset);
+        if (status == MR_OK) status = mr_gltf_scene_from_asset(asset, NULL, scene);
+        mr_gltf_free(asset);
+        return status;
+    }
+    char *copy = strdup(text);
+    if (copy == NULL) return mr_fail(MR_ERR_NOMEM, "report: out of memory");
+    const char *words[256];
+    int count = 0;
+    char *save = NULL;
+    for (char *w = strtok_r(copy, "\n", &save); w != NULL; w = strtok_r(NULL, "\n", &save)) {
+        if (count == 256) {
+            free(copy);
+            return mr_fail(MR_ERR_INVALID_ARG, "report: more than 255 parameter assignments");
+        }
+        words[count++] = w;
+    }
+    mr_status status = count == 0 ? mr_fail(MR_ERR_INVALID_ARG, "report: an empty input")
+                                  : mr_material_from_assignments(words[0], words + 1, count - 1, NULL, material, NULL);
+    free(copy);
+    return status;
+}
+
+mr_status mr_api_report(const char *const *inputs, const char *const *labels, int count, const char *dir, int size,
+                        const char *env_path, int rotations, int threads, const char *title) {
+    if (inputs == NULL || dir == NULL || count < 1 || count > 1024)
+        return mr_fail(MR_ERR_INVALID_ARG, "report: expected 1 .. 1024 inputs and a folder");
+    mr_report_input *in = calloc((size_t)count, sizeof *in);
+    mr_material **materials = calloc((size_t)count, sizeof *materials);
+    mr_gltf_scene **scenes = calloc((size_t)count, sizeof *scenes);
+    char **descriptions = calloc((size_t)count, sizeof *descriptions);
+    mr_status status = in && materials && scenes && descriptions ? MR_OK
+                                                                 : mr_fail(MR_ERR_NOMEM, "report: out of memory");
+    for (int k = 0; status == MR_OK && k < count; k++) {
+        if (inputs[k] == NULL) {
+            status = mr_fail(MR_ERR_INVALID_ARG, "report: input %d is NULL", k);
+            break;
+        }
+        status = report_input(inputs[k], &materials[k], &scenes[k]);
+        in[k].label = labels != NULL ? labels[k] : NULL;
+        in[k].material = materials[k];
+        in[k].scene = scenes[k];
+        if (status == MR_OK && materials[k] != NULL) { // described as the command describes it: its words
+            descriptions[k] = strdup(inputs[k]);
+            if (descriptions[k] == NULL) status = mr_fail(MR_ERR_NOMEM, "report: out of memory");
+            for (char *c = descriptions[k]; c != NULL && *c; c++)
+                if (*c == '\n') *c = ' ';
+            in[k].description = descriptions[k];
+        }
+    }
+    if (status == MR_OK) {
+        mr_report_options opts = {0};
+        opts.size = size;
+        opts.env_path = env_path;
+        opts.rotations = rotations;
+        opts.threads = threads;
+        opts.title = title;
+        status = mr_report_make(in, count, dir, &opts, NULL);
+    }
+    for (int k = 0; k < count && materials && scenes && descriptions; k++) {
+        mr_material_free(materials[k]);
+        mr_gltf_scene_free(scenes[k]);
+        free(descriptions[k]);
+    }
+    free(descriptions);
+    free(in);
+    free(materials);
+    free(scenes);
+    return status;
 }

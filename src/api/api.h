@@ -56,6 +56,13 @@ mr_status mr_api_transform_convert(const char *source, const char *target, const
 mr_status mr_api_gltf_convert(const char *input, const char *output, const char *direction, const char *method,
                               int overwrite, int threads, char **json_out);
 
+/* `matremap report -o DIR [--size N] [--env FILE] [--rotations R] [--threads T] [--title T] INPUT -- INPUT ...`:
+ * inputs[k] is a material, its model and assignments separated by newlines ("ggx\nalpha=0.2\nf0=@f0.png"), or a glTF
+ * asset's path (.gltf, .glb); labels[k] (labels or its entries NULL: the default) names it on the page. Writes DIR's
+ * index.html, pictures and summary.json (mr_report_make; DIR must exist). size, rotations, threads 0: defaults. */
+mr_status mr_api_report(const char *const *inputs, const char *const *labels, int count, const char *dir, int size,
+                        const char *env_path, int rotations, int threads, const char *title);
+
 #ifdef __cplusplus
 }
 #endif

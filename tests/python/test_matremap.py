@@ -260,3 +260,19 @@ def test_learned_transform_equals_matremap_convert(tmp_path):
         matremap.Transform.load(tmp_path / "nosuch.mrt")
     with pytest.raises(ValueError, match="^f0: not a parameter of ward"):
         t.apply(f0=0.1)
+
+
+def test_report_equals_matremap_report(tmp_path):
+    ours = matremap.report([("ggx", {"alpha": 0.2}), {"model": "ward", "params": {"alpha": 0.25}}], tmp_path / "py",
+                           size=64)
+    cli("report", "-o", tmp_path / "cli", "--size", "64", "ggx", "alpha=0.2", "--", "ward", "alpha=0.25")
+    with open(str(tmp_path / "cli" / "summary.json")) as f:
+        theirs = json.load(f)
+    for m in ours["materials"] + theirs["materials"]:
+        m.pop("seconds")
+    assert ours == theirs and ours["materials"][1]["description"] == "ward alpha=0.25"
+    for name in sorted(os.listdir(tmp_path / "cli")):
+        if name.endswith(".png"):
+            assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    with pytest.raises(matremap.Error, match="unknown BRDF model 'nosuch'"):
+        matremap.report([("nosuch", {})], tmp_path / "bad")
