@@ -61,4 +61,16 @@ expect "... and converts the Duck with weighted" 0 "^material 0 'blinn3-fx': con
 check "... writing the asset and its new textures" test -s "$tmp/duck/duck.gltf" -a -s "$tmp/duck/duck_m0_basecolor.png"
 expect "... and names a method it does not know" 1 "unknown \\(valid: weighted, mlp, mean, khronos, extension\\)" -- \
     "$tmp/convert_asset" "$duck" "$tmp/duck/x.gltf" nope
+
+# The Python package (docs/python.md), installed beside the library it loads (not under a sanitizer: an
+# AddressSanitizer library cannot load into an uninstrumented Python).
+site=$(find "$dest" -type d -name matremap -path '*-packages/*' | head -n 1)
+check "the Python package is installed" test -f "$site/__init__.py" -a -f "$site/_config.py"
+case "${MAKEFLAGS:-}" in
+*fsanitize=*) ;;
+*) expect "... imports outside the tree and loads the installed libmatremap.so.0" 0 \
+       "^$dest/.*/lib/libmatremap\.so\.0 0\.1\.0 \(8, 8, 3\)$" -- bash -c "cd '$tmp' && env -u MATREMAP_LIBRARY \
+       PYTHONPATH='$(dirname "$site")' /usr/bin/python3 -c 'import matremap; print(matremap.library_path, \
+       matremap.version(), matremap.render(\"ggx\", size=8).shape)'" ;;
+esac
 finish
