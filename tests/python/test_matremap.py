@@ -276,3 +276,13 @@ def test_report_equals_matremap_report(tmp_path):
             assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
     with pytest.raises(matremap.Error, match="unknown BRDF model 'nosuch'"):
         matremap.report([("nosuch", {})], tmp_path / "bad")
+
+
+@pytest.mark.skipif(not os.path.exists("/usr/bin/blender"), reason="no Blender (scripts/install-deps.sh installs it)")
+def test_imports_in_blenders_python():
+    code = ("import sys; sys.path.insert(0, %r); import matremap; "
+            "print('MATREMAP', matremap.version(), matremap.render('ggx', size=8, alpha=0.2).shape)"
+            % os.path.join(ROOT, "python"))
+    run = subprocess.run(["/usr/bin/blender", "-b", "--factory-startup", "--python-expr", code],
+                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
+    assert "MATREMAP %s (8, 8, 3)" % matremap.version() in run.stdout, run.stdout[-2000:]
