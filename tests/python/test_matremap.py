@@ -286,3 +286,15 @@ def test_imports_in_blenders_python():
     run = subprocess.run(["/usr/bin/blender", "-b", "--factory-startup", "--python-expr", code],
                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
     assert "MATREMAP %s (8, 8, 3)" % matremap.version() in run.stdout, run.stdout[-2000:]
+
+
+def test_the_shared_library_exports_only_mr_symbols():
+    lib = os.path.join(BUILD, "lib", "libmatremap.so.0")
+    names = [line.split()[-1] for line in subprocess.run(["nm", "-D", "--defined-only", lib], stdout=subprocess.PIPE,
+                                                         universal_newlines=True, check=True).stdout.splitlines()]
+    assert [n for n in names if not n.startswith("mr_")] == ["MATREMAP_0"]  # the version script's node
+    assert {"mr_render", "mr_remap", "mr_api_render", "mr_last_error"} <= set(names) and len(names) > 500
+    dynamic = subprocess.run(["readelf", "-d", lib], stdout=subprocess.PIPE, universal_newlines=True).stdout
+    assert "Library soname: [libmatremap.so.0]" in dynamic
+    assert os.readlink(lib) == "libmatremap.so.0.1.0" and os.readlink(os.path.join(BUILD, "lib", "libmatremap.so")) \
+        == "libmatremap.so.0.1.0"
