@@ -290,8 +290,9 @@ def test_imports_in_blenders_python():
 
 def test_the_shared_library_exports_only_mr_symbols():
     lib = os.path.join(BUILD, "lib", "libmatremap.so.0")
-    names = [line.split()[-1].split("@")[0] for line in subprocess.run(["nm", "-D", "--defined-only", lib], stdout=subprocess.PIPE,
-                                                         universal_newlines=True, check=True).stdout.splitlines()]
+    listing = subprocess.run(["nm", "-D", "--defined-only", lib], stdout=subprocess.PIPE, universal_newlines=True,
+                             check=True).stdout
+    names = [line.split()[-1].split("@")[0] for line in listing.splitlines()]  # mr_x@@MATREMAP_0 -> mr_x
     assert [n for n in names if not n.startswith("mr_")] == ["MATREMAP_0"]  # the version script's node
     assert {"mr_render", "mr_remap", "mr_api_render", "mr_last_error"} <= set(names) and len(names) > 500
     dynamic = subprocess.run(["readelf", "-d", lib], stdout=subprocess.PIPE, universal_newlines=True).stdout
