@@ -15,8 +15,9 @@ import numpy as np
 from . import _native
 from ._native import Image as _Image, lib as _lib
 
-__all__ = ["Error", "Result", "Transform", "report", "version", "models", "render", "remap", "transform", "spec2metal", "metal2spec",
-           "convert_gltf", "ssim", "ssim_map", "read_image", "write_image", "srgb_to_linear", "linear_to_srgb", "library_path"]
+__all__ = ["Error", "Result", "Transform", "report", "version", "models", "render", "remap", "transform",
+           "spec2metal", "metal2spec", "convert_gltf", "ssim", "ssim_map", "read_image", "write_image",
+           "srgb_to_linear", "linear_to_srgb", "library_path"]
 
 library_path = _native.path
 

@@ -46,7 +46,8 @@ def _candidates():
     if os.path.isfile(os.path.join(tree, "Makefile")) and os.path.isdir(os.path.join(tree, "src")):
         build = os.environ.get("MATREMAP_BUILD", os.path.join(tree, "build"))
         found.append(os.path.join(build, "lib", _SONAME))
-    # An installed package: the prefix `make install` wrote into _config.py, then PREFIX/lib/pythonX.Y/... -> PREFIX/lib.
+    # An installed package: the prefix `make install` wrote into _config.py, then PREFIX/lib/pythonX.Y/... ->
+    # PREFIX/lib.
     try:
         from . import _config
         found.append(os.path.join(_config.LIBDIR, _SONAME))
