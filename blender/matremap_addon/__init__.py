@@ -212,6 +212,9 @@ class MATREMAP_OT_remap_principled(bpy.types.Operator):
             return {"CANCELLED"}
         model = self.model
         flags, lines = [], [package.where() or ""]
+        if N.is_v2(node):
+            flags.append("Blender 4.x's Principled BSDF (v2) is not matremap's cycles-principled (Blender 3.x's v1): "
+                         "the values are carried over by name")
         try:
             info = _model_info(mr, model)
             if self.direction == "TO":

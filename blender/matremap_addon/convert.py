@@ -109,6 +109,18 @@ def store_image(img, save_dir):
     return "packed"
 
 
+TOL = 2.0 / 255.0  # linear reflectance a texel may miss by in the round trip before it is flagged
+
+
+def round_trip(mr, base, metal, rough, dif, spec):
+    """How many texels metal2spec of the result misses (diffuse or specular by more than TOL), and the worst miss:
+    the texels (zero or coloured dielectric specular, say) the metal-rough model cannot hold."""
+    back = mr.metal2spec(np.ascontiguousarray(base), np.ascontiguousarray(metal), np.ascontiguousarray(rough))
+    err = np.maximum(np.abs(back["diffuse"][:, :, :3] - dif).max(axis=2),
+                     np.abs(back["specular"][:, :, :3] - spec).max(axis=2))
+    return int(np.count_nonzero(err > TOL)), float(err.max())
+
+
 def summarize(name, a):
     a = np.asarray(a)
     return "%s %.3f..%.3f (mean %.3f)" % (name, float(a.min()), float(a.max()), float(a.mean()))
@@ -145,6 +157,16 @@ def convert_material(mr, mat, method, mode, suffix, save_dir, log):
     rough = np.asarray(res["roughness"], dtype=np.float32).reshape(h, w)
     log.append("  spec2metal %s on %dx%d: %s; %s; %s" % (method, w, h, summarize("base colour", base),
                                                          summarize("metallic", metal), summarize("roughness", rough)))
+    clipped = int(np.count_nonzero(np.asarray(res["base_color"])[:, :, :3] > 1.0))
+    if clipped:
+        notes.append("%s: %d base colour values above 1 clipped" % (mat.name, clipped))
+    off, worst = round_trip(mr, base, metal, rough, dif, spec)
+    if off:
+        notes.append("%s: %d of %d texels (%.1f%%) not reproduced by metal-rough: converting back misses their "
+                     "diffuse or specular by more than %.3g (at most %.3g)" % (mat.name, off, w * h,
+                                                                              100.0 * off / (w * h), TOL, worst))
+    log.append("  round trip (metal2spec of the result): %d texels off by more than %.3g, worst %.3g"
+               % (off, TOL, worst))
     for key, val in res.items():  # whatever else the library says (flags, counts)
         if key in ("base_color", "metallic", "roughness"):
             continue

@@ -210,7 +210,8 @@ class SpecGloss:
             self.glossiness = Const(1.0 - float(rough.default_value))
         else:
             node = rough.links[0].from_node
-            if node.type != "INVERT" or node.inputs["Fac"].is_linked or abs(node.inputs["Fac"].default_value - 1) > 1e-6:
+            fac = node.inputs["Fac"] if node.type == "INVERT" else None
+            if fac is None or fac.is_linked or abs(fac.default_value - 1) > 1e-6:
                 raise Unsupported("the Glossy BSDF's roughness comes from '%s' (%s), not the importer's "
                                   "Invert (Gloss to Rough)" % (node.name, node.type))
             g = trace(node.inputs["Color"])

@@ -20,7 +20,8 @@ if not hasattr(numpy, "bool"):  # Blender 3.4's glTF importer still uses numpy.b
 
 ZIP, ASSET, OUT, MATREMAP = sys.argv[sys.argv.index("--") + 1:][:4]
 SIZE, SAMPLES = 128, 32
-SSIM_MIN = float(os.environ.get("MR_ADDON_SSIM_MIN", "0.90"))   # measured: see docs/blender-addon.md
+# Avocado, mlp, 128x128, 32 samples: 0.989 measured (the flat grey control: 0.672); docs/blender-addon.md
+SSIM_MIN = float(os.environ.get("MR_ADDON_SSIM_MIN", "0.95"))
 passed = failed = 0
 T0 = time.time()
 
@@ -144,7 +145,8 @@ check(coverage > 0.05, "the asset covers %.0f%% of the frame" % (100 * coverage)
 
 # --- operator (a) ---------------------------------------------------------------------------------------------
 t = time.time()
-res = bpy.ops.matremap.convert_specgloss(scope="ALL", method="mlp", mode="NEW", suffix="_metalrough")
+METHOD = os.environ.get("MR_ADDON_METHOD", "mlp")
+res = bpy.ops.matremap.convert_specgloss(scope="ALL", method=METHOD, mode="NEW", suffix="_metalrough")
 t_convert = time.time() - t
 print("convert_specgloss: %s in %.1f s: %s" % (res, t_convert, scene.matremap.last_report))
 check(res == {"FINISHED"}, "convert_specgloss finishes")
@@ -153,6 +155,10 @@ check(report is not None and "_metalrough" in report.as_string(), "the report te
 for name in sorted(old_mats):
     new = bpy.data.materials.get(name + "_metalrough")
     if not check(new is not None, "%s -> %s_metalrough exists" % (name, name)):
+        continue
+    if not any(n.type == "TEX_IMAGE" for n in bpy.data.materials[name].node_tree.nodes):
+        p = new.node_tree.nodes.get("matremap Principled")
+        check(p is not None and not p.inputs["Base Color"].is_linked, "%s: constants, no images" % name)
         continue
     check(all(new in [s.material for s in o.material_slots] for o in meshes if name in o.data.materials),
           "%s_metalrough takes the object's slot" % name)
@@ -174,8 +180,9 @@ for name in sorted(old_mats):
     mrn = link_from(sep_r.inputs[0]) if sep_r else None
     check(mrn is not None and mrn.type == "TEX_IMAGE" and mrn.image.name == name + "_metalrough_metallicRoughness"
           and mrn.image.colorspace_settings.name == "Non-Color", "... of the Non-Color metallicRoughness image")
-    nm = link_from(p.inputs["Normal"])
-    check(nm is not None and nm.type == "NORMAL_MAP", "the normal map kept")
+    if any(n.type == "NORMAL_MAP" for n in bpy.data.materials[name].node_tree.nodes):
+        nm = link_from(p.inputs["Normal"])
+        check(nm is not None and nm.type == "NORMAL_MAP", "the normal map kept")
     if mrn is not None:  # the image holds the roughness the operator reported
         w, h = mrn.image.size
         px = numpy.empty(w * h * 4, dtype=numpy.float32)
@@ -232,7 +239,28 @@ err = max(max(abs(a - b) for a, b in zip(back_bc, orig["Base Color"])), abs(back
           abs(back_r - orig["Roughness"]))
 print("  back: base (%.4f, %.4f, %.4f) metallic %.4f roughness %.4f: max error %.4f"
       % (back_bc + (back_m, back_r, err)))
-check(res == {"FINISHED"} and err < 0.05, "Principled -> gltf -> Principled within 0.05 (max error %.4f)" % err)
-res = bpy.ops.matremap.remap_principled(model="no-such-model-x", direction="TO") \
-    if False else None  # an enum refuses unknown names before the operator runs
+check(res == {"FINISHED"} and err < 0.02, "Principled -> gltf -> Principled within 0.02 (max error %.4f)" % err)
+
+# --- operator (a) in place, on the active object only: the Duck (specularFactor 0: no metal-rough texel holds it) --
+duck = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(ASSET))),
+                    "Duck-pbrSpecularGlossiness", "glTF-pbrSpecularGlossiness", "Duck.gltf")
+if os.path.isfile(duck):
+    before_objs = set(bpy.data.objects)
+    bpy.ops.import_scene.gltf(filepath=duck)
+    dob = next(o for o in bpy.data.objects if o not in before_objs and o.type == "MESH")
+    dmat = dob.active_material
+    dname = dmat.name
+    bpy.context.view_layer.objects.active = dob
+    res = bpy.ops.matremap.convert_specgloss(scope="ACTIVE", method="weighted", mode="REPLACE")
+    print("convert_specgloss (Duck, replace): %s: %s" % (res, scene.matremap.last_report))
+    nodes = dmat.node_tree.nodes
+    check(res == {"FINISHED"} and dob.active_material == dmat and dmat.name == dname
+          and nodes.get("matremap Principled") is not None
+          and not any(n.type in ("BSDF_DIFFUSE", "BSDF_GLOSSY") for n in nodes),
+          "REPLACE rewrites the active material '%s' in place" % dname)
+    check("not reproduced by metal-rough" in scene.matremap.last_report,
+          "the Duck's zero specular is flagged (metal-rough keeps F0 >= 0.04)")
+    check(bpy.data.materials.get(name + "_metalrough") is not None, "the Avocado's material untouched by ACTIVE")
+else:
+    print("Duck asset missing: the REPLACE check skipped")
 finish()
