@@ -76,6 +76,8 @@ def source_array(mr, src, w, h, channels, notes):
         out = out * np.asarray(f if isinstance(f, tuple) else (f, f, f), dtype=np.float32)
     else:
         out = out * (sum(f) / 3.0 if isinstance(f, tuple) else f)
+    if getattr(src, "invert", False):
+        out = 1.0 - out
     return np.ascontiguousarray(np.clip(out, 0.0, 1.0), dtype=np.float32)
 
 
@@ -134,7 +136,7 @@ def convert_material(mr, mat, method, mode, suffix, save_dir, log):
         raise Flagged("; ".join(notes) if notes else "%s: no Diffuse + Glossy BSDF pair (not a spec-gloss "
                       "material from the glTF importer)" % mat.name)
     if len(groups) > 1:
-        notes.append("%d Diffuse + Glossy pairs: only '%s' converted" % (len(groups), groups[0].add.name))
+        notes.append("%d spec-gloss shaders: only '%s' converted" % (len(groups), groups[0].shader.name))
     g = groups[0]
     log.append("  diffuse: %s" % g.diffuse.describe())
     log.append("  specular: %s" % g.specular.describe())
@@ -189,17 +191,29 @@ def convert_material(mr, mat, method, mode, suffix, save_dir, log):
     else:
         target = mat
     tree = target.node_tree
-    add = tree.nodes[g.add.name]
-    dif_bsdf, glo_bsdf = tree.nodes[g.diffuse_bsdf.name], tree.nodes[g.glossy_bsdf.name]
-    old_upstream = [n.name for n in N.upstream(add)]
-    p = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    if g.kind == "add":  # Diffuse + Glossy -> Add Shader: a new Principled takes the Add Shader's place
+        add = tree.nodes[g.add.name]
+        old_upstream = [n.name for n in N.upstream(add)]
+        remove = [add.name, g.diffuse_bsdf.name, g.glossy_bsdf.name]
+        glo_bsdf = tree.nodes[g.glossy_bsdf.name]
+        p = tree.nodes.new("ShaderNodeBsdfPrincipled")
+        p.location = (add.location.x - 60, add.location.y)
+        for link in list(add.outputs[0].links):
+            tree.links.new(p.outputs[0], link.to_socket)
+        normal = glo_bsdf.inputs["Normal"]
+        if normal.is_linked:
+            tree.links.new(normal.links[0].from_socket, p.inputs["Normal"])
+    else:  # 4.1+'s Principled with IOR 1000: this Principled, its colour, tint and roughness inputs rewired
+        p = tree.nodes[g.shader.name]
+        old_upstream, remove = [], []
+        for name in g.inputs():
+            sock = p.inputs.get(name)
+            for link in list(sock.links) if sock is not None else ():
+                old_upstream += [link.from_node.name] + [n.name for n in N.upstream(link.from_node)]
+                tree.links.remove(link)
+        if p.inputs.get("IOR") is not None:
+            p.inputs["IOR"].default_value = 1.5
     p.name = p.label = "matremap Principled"
-    p.location = (add.location.x - 60, add.location.y)
-    for link in list(add.outputs[0].links):
-        tree.links.new(p.outputs[0], link.to_socket)
-    normal = glo_bsdf.inputs["Normal"]
-    if normal.is_linked:
-        tree.links.new(normal.links[0].from_socket, p.inputs["Normal"])
     N.set_glTF_specular(p)
     images = []
     if not texs:
@@ -248,8 +262,8 @@ def convert_material(mr, mat, method, mode, suffix, save_dir, log):
         if vec is not None:
             tree.links.new(vec, bc.inputs["Vector"])
             tree.links.new(vec, mrn.inputs["Vector"])
-    for n in (add, dif_bsdf, glo_bsdf):
-        tree.nodes.remove(n)
+    for name in remove:
+        tree.nodes.remove(tree.nodes[name])
     N.remove_dangling(tree, old_upstream)
     if mode == "NEW":
         for ob in bpy.data.objects:

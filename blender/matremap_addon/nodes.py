@@ -118,18 +118,19 @@ class Const:
 
 
 class Tex:
-    def __init__(self, node, channel, factor):
+    def __init__(self, node, channel, factor, invert=False):
         self.node = node          # the Image Texture node
         self.channel = channel    # "Color" or "Alpha"
         self.factor = factor      # a float or an RGB tuple the texel is multiplied by
+        self.invert = invert      # the value is 1 - texel x factor (a roughness map read as glossiness)
 
     def describe(self):
         img = self.node.image
         f = self.factor
         fs = "" if f in (1.0, (1.0, 1.0, 1.0)) else " x %s" % (("%.4g" % f) if isinstance(f, float)
                                                                   else "(%s)" % ", ".join("%.4g" % v for v in f))
-        return "%s of %s (%dx%d, %s)%s" % (self.channel.lower(), img.name, img.size[0], img.size[1],
-                                           img.colorspace_settings.name, fs)
+        return "%s%s of %s (%dx%d, %s)%s" % ("1 - " if self.invert else "", self.channel.lower(), img.name,
+                                             img.size[0], img.size[1], img.colorspace_settings.name, fs)
 
 
 class Unsupported(Exception):
@@ -198,11 +199,49 @@ def trace(sock):
         raise Unsupported("'%s' (%s) drives %s" % (node.name, node.type, sock.name))
 
 
+class SpecGlossPrincipled:
+    """Blender 4.1+'s importer (glTF-Blender-IO #2127): one Principled BSDF v2 with IOR 1000 (so F0 = Specular
+    Tint), Base Color <- diffuse, Specular Tint <- specular, Roughness <- the alpha of a copy of the specGloss
+    texture holding 1 - glossiness x factor (or the constant 1 - glossinessFactor)."""
+    kind = "principled"
+
+    def __init__(self, node):
+        self.shader = node
+        self.diffuse = trace(node.inputs["Base Color"])
+        self.specular = trace(node.inputs["Specular Tint"])
+        if isinstance(self.specular, Const) and not isinstance(self.specular.value, tuple):
+            self.specular = Const((self.specular.value,) * 3)
+        r = trace(node.inputs["Roughness"])
+        if isinstance(r, Const):
+            self.glossiness = Const(1.0 - (sum(r.value) / 3.0 if isinstance(r.value, tuple) else r.value))
+        else:
+            r.invert = True
+            if isinstance(r.factor, tuple):
+                r.factor = sum(r.factor) / 3.0
+            self.glossiness = r
+
+    def textures(self):
+        return [s for s in (self.diffuse, self.specular, self.glossiness) if isinstance(s, Tex)]
+
+    def inputs(self):
+        return ("Base Color", "Specular Tint", "Roughness", "Metallic")
+
+
+def is_specgloss_principled(node):
+    """The 4.1+ importer's mark: IOR >= 100 (1000 there) with Specular Tint a link or a colour."""
+    ior, tint = node.inputs.get("IOR"), node.inputs.get("Specular Tint")
+    if ior is None or tint is None or ior.is_linked or ior.default_value < 100:
+        return False
+    return tint.is_linked or tint.type == "RGBA"
+
+
 class SpecGloss:
     """One spec-gloss shading group of a material: the Add Shader of a Diffuse and a Glossy BSDF."""
+    kind = "add"
 
     def __init__(self, add, diffuse, glossy):
         self.add, self.diffuse_bsdf, self.glossy_bsdf = add, diffuse, glossy
+        self.shader = add
         self.diffuse = trace(diffuse.inputs["Color"])
         self.specular = trace(glossy.inputs["Color"])
         rough = glossy.inputs["Roughness"]
@@ -231,6 +270,13 @@ def find_specgloss(mat):
     if mat is None or not mat.use_nodes or mat.node_tree is None:
         return groups, notes
     for node in mat.node_tree.nodes:
+        if node.type == "BSDF_PRINCIPLED" and is_specgloss_principled(node):
+            try:
+                groups.append(SpecGlossPrincipled(node))
+            except Unsupported as exc:
+                notes.append("%s: not the glTF importer's spec-gloss Principled (IOR %g): %s"
+                             % (mat.name, node.inputs["IOR"].default_value, exc))
+            continue
         if node.type not in ("ADD_SHADER", "MIX_SHADER"):
             continue
         srcs = [i.links[0].from_node for i in node.inputs if i.is_linked and i.type == "SHADER"]

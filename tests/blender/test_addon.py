@@ -263,4 +263,51 @@ if os.path.isfile(duck):
     check(bpy.data.materials.get(name + "_metalrough") is not None, "the Avocado's material untouched by ACTIVE")
 else:
     print("Duck asset missing: the REPLACE check skipped")
+
+# --- Blender 4.1+'s importer tree (glTF-Blender-IO #2127), rebuilt by hand from the Avocado's images: ----------
+# a Principled with IOR 1000, Specular Tint <- specGloss colour, Roughness <- alpha of a copy holding 1 - gloss.
+# Same texels in, so the same images must come out as from the 3.4 tree.
+dimg, simg = (next(i for i in bpy.data.images if i.name.startswith(n)) for n in ("Avocado_diffuse",
+                                                                                  "Avocado_specularGlossiness"))
+rimg = simg.copy()
+px = numpy.empty(rimg.size[0] * rimg.size[1] * 4, dtype=numpy.float32)
+rimg.pixels.foreach_get(px)
+px = px.reshape(-1, 4)
+px[:, 3] = 1.0 - px[:, 3]
+rimg.pixels.foreach_set(px.ravel())
+v2 = bpy.data.materials.new("SpecGlossV2")
+v2.use_nodes = True
+t2 = v2.node_tree
+p2 = next(n for n in t2.nodes if n.type == "BSDF_PRINCIPLED")
+p2.inputs["IOR"].default_value = 1000.0
+for img, out, to in ((dimg, "Color", "Base Color"), (simg, "Color", "Specular Tint"), (rimg, "Alpha", "Roughness")):
+    tn = t2.nodes.new("ShaderNodeTexImage")
+    tn.image = img
+    t2.links.new(tn.outputs[out], p2.inputs[to])
+vob = bpy.data.objects.new("V2", bpy.data.meshes.new("V2"))
+scene.collection.objects.link(vob)
+vob.data.materials.append(v2)
+bpy.context.view_layer.objects.active = vob
+res = bpy.ops.matremap.convert_specgloss(scope="ACTIVE", method=METHOD, mode="NEW")
+print("convert_specgloss (4.1+ tree): %s: %s" % (res, scene.matremap.last_report))
+n2 = bpy.data.materials.get("SpecGlossV2_metalrough")
+ok = res == {"FINISHED"} and n2 is not None
+if ok:
+    q = n2.node_tree.nodes.get("matremap Principled")
+    ok = (q is not None and abs(q.inputs["IOR"].default_value - 1.5) < 1e-6 and not q.inputs["Specular Tint"].is_linked
+          and link_from(q.inputs["Base Color"]).image.name == "SpecGlossV2_metalrough_baseColor"
+          and link_from(link_from(q.inputs["Roughness"]).inputs[0]).image.name
+          == "SpecGlossV2_metalrough_metallicRoughness"
+          and len(n2.node_tree.nodes) == 5)  # the output, the Principled, 2 images, Separate: the old ones gone
+check(ok, "the 4.1+ importer's spec-gloss Principled is converted in place of its inputs (IOR 1.5, tint unlinked)")
+for suffix in ("_baseColor", "_metallicRoughness"):
+    a, b = bpy.data.images.get(name + "_metalrough" + suffix), bpy.data.images.get("SpecGlossV2_metalrough" + suffix)
+    if a is None or b is None:
+        check(False, "images %s to compare" % suffix)
+        continue
+    pa, pb = (numpy.empty(i.size[0] * i.size[1] * 4, dtype=numpy.float32) for i in (a, b))
+    a.pixels.foreach_get(pa)
+    b.pixels.foreach_get(pb)
+    d = float(numpy.abs(pa - pb).max())
+    check(d <= 1.5 / 255, "%s from the 4.1+ tree = from the 3.4 tree (max difference %.4f)" % (suffix, d))
 finish()
