@@ -50,6 +50,8 @@ def load(library=""):
     """The matremap module, or None with error() saying why. LIBRARY (the preference) wins over the rest."""
     if _state["module"] is not None:
         return _state["module"]
+    if _state["error"] is not None:  # failed already: panels redraw often; reset() (the preference) tries again
+        return None
     previous = os.environ.get("MATREMAP_LIBRARY")
     if library:
         os.environ["MATREMAP_LIBRARY"] = bpy_abspath(library)
