@@ -243,8 +243,10 @@ class MATREMAP_OT_remap_principled(bpy.types.Operator):
                         d = p["default"]
                         params[p["name"]] = (tuple(d) if isinstance(d, (list, tuple)) else (d,) * 3) \
                             if p["channels"] == 3 else float(d[0] if isinstance(d, (list, tuple)) else d)
-                        flags.append("%s not stored on the material ('%s'): the model's default %s used"
-                                     % (p["name"], key, _fmt(params[p["name"]])))
+                        v = params[p["name"]]
+                        mat[key] = list(v) if isinstance(v, tuple) else v  # now on the panel, to edit
+                        flags.append("%s not stored on the material ('%s'): the model's default %s used "
+                                     "(and stored)" % (p["name"], key, _fmt(v)))
                 res = mr.remap(model, params, SELF_MODEL, size=self.size)
                 for name, v in res.values.items():
                     if name in N.PRINCIPLED_INPUTS:

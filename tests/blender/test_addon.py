@@ -240,6 +240,12 @@ err = max(max(abs(a - b) for a, b in zip(back_bc, orig["Base Color"])), abs(back
 print("  back: base (%.4f, %.4f, %.4f) metallic %.4f roughness %.4f: max error %.4f"
       % (back_bc + (back_m, back_r, err)))
 check(res == {"FINISHED"} and err < 0.02, "Principled -> gltf -> Principled within 0.02 (max error %.4f)" % err)
+bpy.context.view_layer.objects.active = ob
+res = bpy.ops.matremap.remap_principled(model="ward", direction="FROM", size=32)
+print("remap FROM ward: %s: %s" % (res, scene.matremap.last_report))
+check(res == {"FINISHED"} and "the model's default" in scene.matremap.last_report
+      and tuple(p.inputs["Base Color"].default_value)[:3] != back_bc,
+      "ward (its defaults, flagged as such) -> Principled sets the Principled")
 
 # --- operator (a) in place, on the active object only: the Duck (specularFactor 0: no metal-rough texel holds it) --
 duck = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(ASSET))),
@@ -310,4 +316,27 @@ for suffix in ("_baseColor", "_metallicRoughness"):
     b.pixels.foreach_get(pb)
     d = float(numpy.abs(pa - pb).max())
     check(d <= 1.5 / 255, "%s from the 4.1+ tree = from the 3.4 tree (max difference %.4f)" % (suffix, d))
+
+# --- the panel draws (a stand-in layout takes every call) and the model chooser lists matremap's models ---------
+class AnyLayout:
+    def __getattr__(self, name):
+        return self
+
+    def __call__(self, *args, **kwargs):
+        return self
+
+    def __setattr__(self, name, value):
+        pass
+
+
+try:
+    matremap_addon.MATERIAL_PT_matremap.draw(type("P", (), {"layout": AnyLayout()})(), bpy.context)
+    drew = True
+except Exception as exc:
+    drew = False
+    print("panel draw: %s" % exc)
+check(drew, "the panel draws")
+names = [i[0] for i in matremap_addon.model_items(None, bpy.context)]
+check("gltf" in names and "ward" in names and "cycles-principled" not in names,
+      "the model chooser lists matremap.models() (%d: %s ...)" % (len(names), ", ".join(names[:4])))
 finish()
