@@ -257,13 +257,18 @@ if os.path.isfile(duck):
     dmat = dob.active_material
     dname = dmat.name
     bpy.context.view_layer.objects.active = dob
-    res = bpy.ops.matremap.convert_specgloss(scope="ACTIVE", method="weighted", mode="REPLACE")
+    tex_dir = os.path.join(OUT, "textures")
+    res = bpy.ops.matremap.convert_specgloss(scope="ACTIVE", method="weighted", mode="REPLACE", save_dir=tex_dir)
     print("convert_specgloss (Duck, replace): %s: %s" % (res, scene.matremap.last_report))
     nodes = dmat.node_tree.nodes
     check(res == {"FINISHED"} and dob.active_material == dmat and dmat.name == dname
           and nodes.get("matremap Principled") is not None
           and not any(n.type in ("BSDF_DIFFUSE", "BSDF_GLOSSY") for n in nodes),
           "REPLACE rewrites the active material '%s' in place" % dname)
+    saved = sorted(os.listdir(tex_dir)) if os.path.isdir(tex_dir) else []
+    check(saved == ["%s_baseColor.png" % dname, "%s_metallicRoughness.png" % dname]
+          and bpy.data.images[dname + "_baseColor"].packed_file is None,
+          "Save textures to: the PNGs written there, not packed (%s)" % ", ".join(saved))
     check("not reproduced by metal-rough" in scene.matremap.last_report,
           "the Duck's zero specular is flagged (metal-rough keeps F0 >= 0.04)")
     check(bpy.data.materials.get(name + "_metalrough") is not None, "the Avocado's material untouched by ACTIVE")
