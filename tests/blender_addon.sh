@@ -15,7 +15,7 @@ command -v blender >/dev/null 2>&1 || skip "no blender on PATH (scripts/install-
 [ -f "$asset" ] || skip "no shared asset $asset"
 [ -f "$lib" ] || skip "no $lib (the shared library: make)"
 [ -f "$zip" ] || skip "no $zip (make builds it)"
-python3 -m zipfile -l "$zip" | grep -q '_vendor/matremap/__init__.py' || \
+python3 -m zipfile -l "$zip" 2>/dev/null | grep -q '_vendor/matremap/__init__.py' || \
     skip "$zip bundles no matremap package (python/matremap missing when it was built)"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
