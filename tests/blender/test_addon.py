@@ -283,8 +283,8 @@ else:
 # --- Blender 4.1+'s importer tree (glTF-Blender-IO #2127), rebuilt by hand from the Avocado's images: ----------
 # a Principled with IOR 1000, Specular Tint <- specGloss colour, Roughness <- alpha of a copy holding 1 - gloss.
 # Same texels in, so the same images must come out as from the 3.4 tree.
-dimg, simg = (next((i for i in bpy.data.images if i.name.startswith(n)), None) for n in ("Avocado_diffuse",
-                                                                                           "Avocado_specularGlossiness"))
+dimg, simg = (next((i for i in bpy.data.images if i.name.startswith(n)), None)
+              for n in ("Avocado_diffuse", "Avocado_specularGlossiness"))
 if dimg is None or simg is None:
     print("not the Avocado: the 4.1+ tree check skipped")
     finish()
