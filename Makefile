@@ -415,3 +415,18 @@ tables:
 	mv src/brdf/ggx_albedo_tables.h.tmp src/brdf/ggx_albedo_tables.h
 
 -include $(shell find $(BUILD)/obj $(BUILD)/pic $(BUILD)/shobj -name '*.d' 2>/dev/null)
+
+# The Blender add-on (docs/blender-addon.md): blender/matremap_addon/ zipped with the Python package (python/matremap,
+# or ADDON_PY=DIR) bundled in its _vendor/ folder and, as the last place it looks for libmatremap.so.0, this build
+# tree's library path (_build.py). Install the zip in Blender: Preferences > Add-ons > Install.
+ADDON_ZIP := $(BUILD)/matremap_blender_addon.zip
+ADDON_PY  ?= python/matremap
+all: $(ADDON_ZIP)
+$(ADDON_ZIP): $(wildcard blender/matremap_addon/*.py) $(wildcard $(ADDON_PY)/*.py)
+	rm -rf $(BUILD)/blender-addon && mkdir -p $(BUILD)/blender-addon/matremap_addon/_vendor
+	cp blender/matremap_addon/*.py $(BUILD)/blender-addon/matremap_addon/
+	if [ -d $(ADDON_PY) ]; then cp -r $(ADDON_PY) $(BUILD)/blender-addon/matremap_addon/_vendor/matremap; \
+	    find $(BUILD)/blender-addon -name __pycache__ -prune -exec rm -rf {} +; fi
+	echo 'LIBRARY = "$(abspath $(BUILD))/lib/libmatremap.so.0"' > $(BUILD)/blender-addon/matremap_addon/_build.py
+	cd $(BUILD)/blender-addon && python3 -m zipfile -c $(abspath $@).tmp matremap_addon
+	mv $@.tmp $@
