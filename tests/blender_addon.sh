@@ -14,6 +14,8 @@ skip() { echo "blender_addon: skipped: $1"; echo "0 passed, 0 failed"; exit 0; }
 command -v blender >/dev/null 2>&1 || skip "no blender on PATH (scripts/install-deps.sh installs it)"
 [ -f "$asset" ] || skip "no shared asset $asset"
 [ -f "$lib" ] || skip "no $lib (the shared library: make)"
+# A sanitizer build's library cannot load into Blender (its runtime must come first); make check runs this test.
+nm -D "$lib" 2>/dev/null | grep -q ' U __asan_init' && skip "$lib is built with AddressSanitizer (make check runs this)"
 [ -f "$zip" ] || skip "no $zip (make builds it)"
 python3 -m zipfile -l "$zip" 2>/dev/null | grep -q '_vendor/matremap/__init__.py' || \
     skip "$zip bundles no matremap package (python/matremap missing when it was built)"
