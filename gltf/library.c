@@ -281,7 +281,7 @@ void mr_gltf_library_list_free(char **assets, int count, char *root) {
     free(root);
 }
 
-/* ---- JSON helpers ------------------------------------------------------------------------------------------------- */
+/* ---- JSON helpers ------------------------------------------------------------------------------------------------ */
 
 typedef struct buf {
     char *s;
@@ -534,8 +534,9 @@ static char *entry_line(const mr_gltf_library_item *it, const char *settings, co
     bputn(&b, ", \"overview\": ", 14);
     bjson(&b, overview);
     const mr_gltf_convert_totals *t = &it->totals;
-    bprintf(&b, ", \"converted\": %d, \"kept\": %d, \"texels\": %zu, \"flagged\": %zu, \"flags\": {\"off_manifold\": %zu, "
-            "\"nonfinite_input\": %zu, \"clamped_input\": %zu, \"method_failed\": %zu}, \"extensions\": %d",
+    bprintf(&b, ", \"converted\": %d, \"kept\": %d, \"texels\": %zu, \"flagged\": %zu, "
+            "\"flags\": {\"off_manifold\": %zu, \"nonfinite_input\": %zu, \"clamped_input\": %zu, "
+            "\"method_failed\": %zu}, \"extensions\": %d",
             t->converted, t->kept, t->texels, t->total.flagged, t->total.off_manifold, t->total.nonfinite,
             t->total.clamped, t->total.failed, t->extensions);
     if (res) {
@@ -662,8 +663,8 @@ static void one_asset(run *r, int i) {
             overview_of(&cres, &it->totals, overview, sizeof overview);
             const char *rel = relative(r->root, it->input);
             size_t n = strlen(rel) + 32;
-            before = malloc(n);
-            after = malloc(n);
+            before = r->o->no_renders ? NULL : malloc(n);
+            after = r->o->no_renders ? NULL : malloc(n);
             if (before && after) {
                 snprintf(before, n, "thumbnails/%s.before.png", rel);
                 snprintf(after, n, "thumbnails/%s.after.png", rel);
@@ -787,7 +788,8 @@ static mr_status write_outputs(const run *r, const char *summary_path, const cha
         if (r->entries[i].line) all[n++] = &r->entries[i];
     for (int i = 0; i < r->prev->count; i++) {
         int here = 0;
-        for (int j = 0; j < r->res->count && !here; j++) here = strcmp(r->prev->e[i].input, r->res->items[j].input) == 0;
+        for (int j = 0; j < r->res->count && !here; j++)
+            here = strcmp(r->prev->e[i].input, r->res->items[j].input) == 0;
         if (!here) all[n++] = &r->prev->e[i];
     }
     qsort(all, (size_t)n, sizeof *all, cmp_worst);
@@ -860,7 +862,7 @@ static mr_status write_outputs(const run *r, const char *summary_path, const cha
     return s;
 }
 
-/* ---- the call ------------------------------------------------------------------------------------------------------ */
+/* ---- the call ---------------------------------------------------------------------------------------------------- */
 
 void mr_gltf_library_result_free(mr_gltf_library_result *result) {
     if (!result) return;

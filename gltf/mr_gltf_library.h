@@ -33,7 +33,9 @@
  * The object SSIM: both the input (spec-gloss as an engine supporting the extension shows it) and the output
  * (mr_gltf_scene_load) rendered at thumbnail_size with the camera and light `matremap render ASSET` places
  * (mr_gltf_scene_frame, the fit scene's light), compared over the object's coverage (mr_ssim with the plan's mask).
- * A render that fails leaves the asset converted with SSIM null and the reason in "render_error".
+ * A render that fails leaves the asset converted with SSIM null and the reason in "render_error"; no_renders skips
+ * them (the renders decode every texture again, in and out: on 2048² assets they cost about what the conversion
+ * does, docs/performance.md).
  *
  * Threads: assets run side by side on a team of mr_auto_threads(threads, assets, 2) threads, never more than the
  * assets to convert; with one asset the conversion's own threads (the transform's option) do the work. Results do
@@ -74,6 +76,7 @@ typedef struct mr_gltf_library_options {
     int resume;             /* 1: skip assets an earlier run converted with the same settings and input */
     int shard_index, shard_count; /* shard_count 0 or 1: every asset */
     int thumbnail_size;     /* square renders for index.html and the SSIM: 0 = 128; 0 < size < 32 refused */
+    int no_renders;         /* 1: no thumbnails and no SSIM (null in summary.json; index.html lists the assets) */
     void (*progress)(void *user, const mr_gltf_library_progress *p); /* may be NULL */
     void *progress_user;
     const volatile int *cancel; /* may be NULL; non-zero stops before the next asset */

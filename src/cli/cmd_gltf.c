@@ -123,7 +123,7 @@ typedef struct options {
     const char **inputs;  /* every input (files, folders, globs); input = inputs[0] */
     int input_count;
     int library;          /* many assets into a folder (mr_gltf_convert_library) */
-    int resume, shard_given, shard_index, shard_count;
+    int resume, shard_given, shard_index, shard_count, no_renders;
 } options;
 
 /* ---- the command -------------------------------------------------------------------------------------------- */
@@ -211,6 +211,8 @@ static int parse(int argc, char **argv, options *o) {
             o->json = 1;
         } else if (strcmp(argv[i], "--resume") == 0) {
             o->resume = 1;
+        } else if (strcmp(argv[i], "--no-renders") == 0) {
+            o->no_renders = 1;
         } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--shard", &value))) {
             if (taken < 0 || !parse_shard(value, &o->shard_index, &o->shard_count)) return CLI_EXIT_USAGE;
             o->shard_given = 1;
@@ -235,9 +237,9 @@ static int parse(int argc, char **argv, options *o) {
                  (stat(o->input, &st) == 0 ? S_ISDIR(st.st_mode) : strpbrk(o->input, "*?[") != NULL);
     if (o->library && cli_is_gltf_path(o->output))
         return cli_usage_error("gltf", "-o '%s': many assets go into a folder (-o DIR), not one asset", o->output);
-    if (!o->library && (o->resume || o->shard_given))
-        return cli_usage_error("gltf", "--resume and --shard go with many assets (a folder, several files or a glob "
-                               "into -o DIR)");
+    if (!o->library && (o->resume || o->shard_given || o->no_renders))
+        return cli_usage_error("gltf", "--resume, --shard and --no-renders go with many assets (a folder, several "
+                               "files or a glob into -o DIR)");
     if (o->library && o->replace_files)
         return cli_usage_error("gltf", "--replace-files goes with one asset");
     if (o->format == NULL) o->format = "png";
@@ -332,6 +334,7 @@ static int run_library(const options *o, const mr_transform *transform) {
     lo.settings = settings;
     lo.threads = o->threads;
     lo.resume = o->resume;
+    lo.no_renders = o->no_renders;
     lo.shard_index = o->shard_index;
     lo.shard_count = o->shard_count;
     library_progress lp = {isatty(STDERR_FILENO) && !o->json};
