@@ -731,7 +731,7 @@ bench_library() {
     fi
     runs=3
     [ "$quick" = "--quick" ] && runs=1
-    local ours=() ours_mb=() one=() one_mb=() peer=() peer_mb=() s mb
+    local ours=() ours_mb=() one=() one_mb=() bare=() bare_mb=() peer=() peer_mb=() s mb
     for run in $(seq "$runs"); do
         rm -rf "$work/library/ours"
         read -r s mb < <(peak_time "$bin" gltf spec2metal "$lib" -o "$work/library/ours")
@@ -739,13 +739,17 @@ bench_library() {
         rm -rf "$work/library/one"
         read -r s mb < <(peak_time "$bin" gltf spec2metal "$lib" -o "$work/library/one" --threads 1)
         one+=("$s") one_mb+=("$mb")
+        rm -rf "$work/library/bare"
+        read -r s mb < <(peak_time "$bin" gltf spec2metal "$lib" -o "$work/library/bare" --no-renders)
+        bare+=("$s") bare_mb+=("$mb")
         rm -rf "$work/library/theirs"
         read -r s mb < <(peak_time bash -c 'cd "$1" && find . -name "*.gltf" -o -name "*.glb" | sort | while read -r a; do
                 mkdir -p "$2/$(dirname "$a")" && "$3" metalrough "$a" "$2/$a" || exit 1; done' _ "$lib" \
             "$work/library/theirs" "$gt/node_modules/.bin/gltf-transform")
         peer+=("$s") peer_mb+=("$mb")
     done
-    local o_s o_mb n_s n_mb p_s p_mb
+    local o_s o_mb n_s n_mb b_s b_mb p_s p_mb
+    b_s=$(printf '%s\n' "${bare[@]}" | median) b_mb=$(printf '%s\n' "${bare_mb[@]}" | median)
     o_s=$(printf '%s\n' "${ours[@]}" | median) o_mb=$(printf '%s\n' "${ours_mb[@]}" | median)
     n_s=$(printf '%s\n' "${one[@]}" | median) n_mb=$(printf '%s\n' "${one_mb[@]}" | median)
     p_s=$(printf '%s\n' "${peer[@]}" | median) p_mb=$(printf '%s\n' "${peer_mb[@]}" | median)
@@ -759,6 +763,7 @@ bench_library() {
         echo "|---|---:|---:|---:|---:|"
         awk -v n="$assets" -v s="$o_s" -v mb="$o_mb" 'BEGIN {printf "| matremap gltf spec2metal DIR -o OUT (threads 0: automatic) | %d | %.2f | %.1f | %.0f |\n", n, s, 60 * n / s, mb}'
         awk -v n="$assets" -v s="$n_s" -v mb="$n_mb" 'BEGIN {printf "| matremap gltf spec2metal DIR -o OUT --threads 1 | %d | %.2f | %.1f | %.0f |\n", n, s, 60 * n / s, mb}'
+        awk -v n="$assets" -v s="$b_s" -v mb="$b_mb" 'BEGIN {printf "| matremap gltf spec2metal DIR -o OUT --no-renders | %d | %.2f | %.1f | %.0f |\n", n, s, 60 * n / s, mb}'
         awk -v n="$assets" -v s="$p_s" -v mb="$p_mb" 'BEGIN {printf "| for a in DIR/*/*.gltf: gltf-transform metalrough | %d | %.2f | %.1f | %.0f |\n", n, s, 60 * n / s, mb}'
         sed -n '2,$p' "$lib/SOURCE.txt"
     } | tee "$lib_report"

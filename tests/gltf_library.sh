@@ -97,6 +97,11 @@ expect "two files into a folder" 0 "2 assets: 2 converted" -- "$bin" gltf spec2m
 check "two files: mirrored below their common folder" test -f "$tmp/two/duck/Duck.gltf" -a \
     -f "$tmp/two/nested/truck/CesiumMilkTruck.gltf"
 
+expect "--no-renders" 0 "2 assets: 2 converted" -- "$bin" gltf spec2metal "$lib/duck/Duck.gltf" \
+    "$lib/nested/truck/CesiumMilkTruck.gltf" -o "$tmp/bare" --no-renders
+check "--no-renders: no thumbnails, SSIM null" test ! -e "$tmp/bare/thumbnails" -a \
+    "$(summary "$tmp/bare/summary.json" 'all(x["object_ssim"] is None for x in it)')" = True
+
 # Refusals.
 refuses "an output folder inside an input folder" "lies inside the input folder" "$lib" -- \
     "$bin" gltf spec2metal "$lib" -o "$lib/converted"

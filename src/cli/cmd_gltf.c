@@ -34,6 +34,7 @@
 static void print_help(void) {
     printf("Usage: matremap gltf spec2metal IN.gltf|IN.glb -o OUT.gltf|OUT.glb [options]\n"
            "       matremap gltf metal2spec IN.gltf|IN.glb -o OUT.gltf|OUT.glb [options]\n"
+           "       matremap gltf spec2metal|metal2spec FOLDER|GLOB|ASSET... -o DIR [--resume] [--shard K/N] [options]\n"
            "\n"
            "spec2metal converts every KHR_materials_pbrSpecularGlossiness material of a glTF asset to core\n"
            "metallic-roughness: factors times textures, texel by texel, with the converters of 'matremap\n"
@@ -95,7 +96,20 @@ static void print_help(void) {
            "  --replace-files       let OUT's side files replace existing files that are not an earlier OUT's own\n"
            "                        (another asset's, say; inputs never)\n"
            "  --json                a JSON summary on stdout\n"
-           "  --help                this text\n"
+           "  --help                this text\n");
+    printf("\n"
+           "Many assets (several inputs, a folder, a glob, or -o naming a folder): folders are searched recursively\n"
+           "for .gltf and .glb, a quoted glob is expanded here; the assets convert side by side within --threads\n"
+           "(0: one per core when there are two assets or more) into DIR (made if missing), mirroring their paths\n"
+           "below their common folder; a progress bar on a terminal (assets done/total, texels per second, time\n"
+           "left), one line per finished asset otherwise. A failed asset is named with its reason and the others go\n"
+           "on (exit 2 at the end). DIR gets summary.json (every asset: input, output, status, error, materials,\n"
+           "flags, object SSIM, seconds) and index.html (before/after thumbnails, worst first). DIR may not lie in\n"
+           "an input folder.\n"
+           "  --resume              skip assets an earlier run into DIR converted with the same settings from the\n"
+           "                        same files (summary.json records both)\n"
+           "  --shard K/N           convert only the assets at sorted index i with i %% N == K (job arrays)\n"
+           "  --no-renders          no thumbnails and no object SSIM (faster: the renders decode every texture)\n"
            "\n"
            "Prints one line per material (converted: texture size, flagged texels by reason, time; kept or left as it\n"
            "is: why; then its specular solve: texels whose F0 it cannot give, texels whose core diffuse is off by\n"
@@ -105,8 +119,9 @@ static void print_help(void) {
            "mean, khronos: no metal-rough material gives these maps; metal2spec, glTF convention: a diffuse above\n"
            "1, clamped), non-finite input, clamped input, method failed.\n"
            "\n"
-           "Example:\n"
-           "  matremap gltf spec2metal FloppyDisk/scene.gltf -o out/floppy.gltf --method weighted\n");
+           "Examples:\n"
+           "  matremap gltf spec2metal FloppyDisk/scene.gltf -o out/floppy.gltf --method weighted\n"
+           "  matremap gltf spec2metal assets/ -o converted/ --resume\n");
 }
 
 typedef struct options {
