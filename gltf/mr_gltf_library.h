@@ -49,6 +49,7 @@
 #ifndef MR_GLTF_LIBRARY_H
 #define MR_GLTF_LIBRARY_H
 
+#include <signal.h>
 #include <stddef.h>
 
 #include "gltf/mr_gltf_convert.h"
@@ -79,7 +80,8 @@ typedef struct mr_gltf_library_options {
     int no_renders;         /* 1: no thumbnails and no SSIM (null in summary.json; index.html lists the assets) */
     void (*progress)(void *user, const mr_gltf_library_progress *p); /* may be NULL */
     void *progress_user;
-    const volatile int *cancel; /* may be NULL; non-zero stops before the next asset */
+    const volatile sig_atomic_t *cancel; /* may be NULL; non-zero stops before the next asset (a signal handler
+                                            may set it: `matremap gltf` does on SIGINT and SIGTERM) */
 } mr_gltf_library_options;
 
 /* One asset of a run. */

@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <signal.h>
 #include <sys/stat.h>
 
 #include "cli.h"
@@ -105,7 +106,8 @@ static void print_help(void) {
            "left), one line per finished asset otherwise. A failed asset is named with its reason and the others go\n"
            "on (exit 2 at the end). DIR gets summary.json (every asset: input, output, status, error, materials,\n"
            "flags, object SSIM, seconds) and index.html (before/after thumbnails, worst first). DIR may not lie in\n"
-           "an input folder.\n"
+           "an input folder. SIGINT or SIGTERM lets the assets under way finish, records the rest as cancelled in\n"
+           "summary.json and exits 3 (--resume goes on from there).\n"
            "  --resume              skip assets an earlier run into DIR converted with the same settings from the\n"
            "                        same files (summary.json records both)\n"
            "  --shard K/N           convert only the assets at sorted index i with i %% N == K (job arrays)\n"
@@ -304,6 +306,13 @@ static int parse_shard(const char *text, int *k, int *n) {
 
 /* ---- many assets: mr_gltf_convert_library ------------------------------------------------------------------- */
 
+/* SIGINT or SIGTERM during a library run: the assets under way finish, the rest are recorded "cancelled". */
+static volatile sig_atomic_t library_cancel = 0;
+static void on_signal(int sig) {
+    (void)sig;
+    library_cancel = 1;
+}
+
 typedef struct library_progress {
     int tty;
 } library_progress;
@@ -355,8 +364,17 @@ static int run_library(const options *o, const mr_transform *transform) {
     library_progress lp = {isatty(STDERR_FILENO) && !o->json};
     lo.progress = o->json ? NULL : on_asset;
     lo.progress_user = &lp;
+    lo.cancel = &library_cancel;
+    struct sigaction sa, old_int, old_term;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int);
+    sigaction(SIGTERM, &sa, &old_term);
     mr_gltf_library_result r;
     mr_status status = mr_gltf_convert_library(o->inputs, o->input_count, o->output, &lo, &r);
+    sigaction(SIGINT, &old_int, NULL);
+    sigaction(SIGTERM, &old_term, NULL);
     if (status != MR_OK && r.items == NULL) return cli_fail("gltf", status);
     int code = status != MR_OK ? cli_fail("gltf", status) : CLI_EXIT_OK;
     for (int i = 0; i < r.count; i++)
@@ -379,10 +397,12 @@ static int run_library(const options *o, const mr_transform *transform) {
             }
         printf("]}\n");
     } else {
-        printf("matremap gltf %s: %d asset%s: %d converted, %d resumed, %d failed in %.2f s (%.1f assets/min); "
-               "wrote %s/summary.json and %s/index.html\n", o->direction, r.count, r.count == 1 ? "" : "s",
-               r.converted, r.resumed, r.failed, r.seconds, r.seconds > 0 ? 60.0 * r.count / r.seconds : 0.0,
-               o->output, o->output);
+        const int finished = r.count - r.cancelled;
+        printf("matremap gltf %s: %d asset%s: %d converted, %d resumed, %d failed", o->direction, r.count,
+               r.count == 1 ? "" : "s", r.converted, r.resumed, r.failed);
+        if (r.cancelled > 0) printf(", %d cancelled", r.cancelled);
+        printf(" in %.2f s (%.1f assets/min); wrote %s/summary.json and %s/index.html\n", r.seconds,
+               r.seconds > 0 ? 60.0 * finished / r.seconds : 0.0, o->output, o->output);
     }
     if (code == CLI_EXIT_OK && r.failed > 0) code = CLI_EXIT_BAD_INPUT;
     mr_gltf_library_result_free(&r);
