@@ -459,10 +459,13 @@ static mr_status thumbnails(const char *before_asset, const char *after_asset, i
     mr_gltf_scene *a = NULL, *b = NULL;
     mr_image *ia = NULL, *ib = NULL, *mask = NULL;
     mr_camera camera;
+    // One scene at a time (each holds its decoded textures): before, then after with the same camera.
     mr_status s = mr_gltf_scene_load(before_asset, NULL, &a);
-    if (s == MR_OK) s = mr_gltf_scene_load(after_asset, NULL, &b);
     if (s == MR_OK) s = mr_gltf_scene_frame(a, NULL, size, size, &camera);
     if (s == MR_OK) s = render_scene(a, &camera, size, threads, &ia, &mask);
+    mr_gltf_scene_free(a);
+    a = NULL;
+    if (s == MR_OK) s = mr_gltf_scene_load(after_asset, NULL, &b);
     if (s == MR_OK) s = render_scene(b, &camera, size, threads, &ib, NULL);
     if (s == MR_OK) s = make_folders(before_png, 0);
     if (s == MR_OK) s = mr_img_write(before_png, ia, NULL);

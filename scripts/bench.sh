@@ -702,13 +702,14 @@ PY
 # bare git directory; "shared", the default, takes ../shared/assets/specgloss) against a shell loop over
 # gltf-transform metalrough, in the same run: assets per minute (wall clock) and peak resident memory of the largest
 # process (/usr/bin/time -v), medians of RUNS. Ours includes the thumbnails, object SSIM and index.html.
-peak_time() { # CMD... -> "WALL PEAK_MB" (status in $peak_status)
+peak_time() { # CMD... -> "WALL PEAK_MB CPU" (CPU: user + system seconds, children included)
     local t0 t1 log
     log=$(mktemp)
     t0=$(date +%s.%N)
-    /usr/bin/time -v -o "$log" "$@" >/dev/null 2>&1 && peak_status=0 || peak_status=$?
+    /usr/bin/time -v -o "$log" "$@" >/dev/null 2>&1 || true
     t1=$(date +%s.%N)
-    awk -v a="$t0" -v b="$t1" '/Maximum resident set size/ {kb = $NF} END {printf "%.4f %.1f\n", b - a, kb / 1024}' "$log"
+    awk -v a="$t0" -v b="$t1" '/Maximum resident set size/ {kb = $NF} /User time|System time/ {cpu += $NF}
+        END {printf "%.4f %.1f %.3f\n", b - a, kb / 1024, cpu}' "$log"
     rm -f "$log"
 }
 
@@ -729,42 +730,43 @@ bench_library() {
         echo "library comparison skipped: gltf-transform or assets missing in this run." | tee "$lib_report"
         return
     fi
-    runs=3
+    runs=5
     [ "$quick" = "--quick" ] && runs=1
-    local ours=() ours_mb=() one=() one_mb=() bare=() bare_mb=() peer=() peer_mb=() s mb
+    local rows=() cmd name s mb cpu
+    local -A walls=() mbs=() cpus=()
+    local names=("matremap gltf spec2metal DIR -o OUT (threads 0: automatic)" \
+        "matremap gltf spec2metal DIR -o OUT --threads 1" "matremap gltf spec2metal DIR -o OUT --no-renders" \
+        "for a in DIR/*/*.gltf: gltf-transform metalrough")
     for run in $(seq "$runs"); do
-        rm -rf "$work/library/ours"
-        read -r s mb < <(peak_time "$bin" gltf spec2metal "$lib" -o "$work/library/ours")
-        ours+=("$s") ours_mb+=("$mb")
-        rm -rf "$work/library/one"
-        read -r s mb < <(peak_time "$bin" gltf spec2metal "$lib" -o "$work/library/one" --threads 1)
-        one+=("$s") one_mb+=("$mb")
-        rm -rf "$work/library/bare"
-        read -r s mb < <(peak_time "$bin" gltf spec2metal "$lib" -o "$work/library/bare" --no-renders)
-        bare+=("$s") bare_mb+=("$mb")
-        rm -rf "$work/library/theirs"
-        read -r s mb < <(peak_time bash -c 'cd "$1" && find . -name "*.gltf" -o -name "*.glb" | sort | while read -r a; do
-                mkdir -p "$2/$(dirname "$a")" && "$3" metalrough "$a" "$2/$a" || exit 1; done' _ "$lib" \
-            "$work/library/theirs" "$gt/node_modules/.bin/gltf-transform")
-        peer+=("$s") peer_mb+=("$mb")
+        for k in 0 1 2 3; do
+            rm -rf "$work/library/out$k"
+            case $k in
+                0) cmd=("$bin" gltf spec2metal "$lib" -o "$work/library/out0") ;;
+                1) cmd=("$bin" gltf spec2metal "$lib" -o "$work/library/out1" --threads 1) ;;
+                2) cmd=("$bin" gltf spec2metal "$lib" -o "$work/library/out2" --no-renders) ;;
+                3) cmd=(bash -c 'cd "$1" && find . -name "*.gltf" -o -name "*.glb" | sort | while read -r a; do
+                       mkdir -p "$2/$(dirname "$a")" && "$3" metalrough "$a" "$2/$a" || exit 1; done' _ "$lib" \
+                       "$work/library/out3" "$gt/node_modules/.bin/gltf-transform") ;;
+            esac
+            read -r s mb cpu < <(peak_time "${cmd[@]}")
+            walls[$k]+="$s " mbs[$k]+="$mb " cpus[$k]+="$cpu "
+        done
     done
-    local o_s o_mb n_s n_mb b_s b_mb p_s p_mb
-    b_s=$(printf '%s\n' "${bare[@]}" | median) b_mb=$(printf '%s\n' "${bare_mb[@]}" | median)
-    o_s=$(printf '%s\n' "${ours[@]}" | median) o_mb=$(printf '%s\n' "${ours_mb[@]}" | median)
-    n_s=$(printf '%s\n' "${one[@]}" | median) n_mb=$(printf '%s\n' "${one_mb[@]}" | median)
-    p_s=$(printf '%s\n' "${peer[@]}" | median) p_mb=$(printf '%s\n' "${peer_mb[@]}" | median)
     {
-        echo "Measured by \`make bench BENCH_ARGS=\"--only library\"\` on $(date -u +%Y-%m-%d), $(nproc) cores; library:"
-        echo "$(head -n 1 "$lib/SOURCE.txt")."
-        echo "Whole commands, wall clock and peak resident memory of the largest process (/usr/bin/time -v), medians of"
-        echo "$runs runs; gltf-transform $("$gt/node_modules/.bin/gltf-transform" --version 2>/dev/null | tail -n 1) (node $(node --version))."
+        echo "Measured by \`make bench BENCH_ARGS=\"--only library\"\` on $(date -u +%Y-%m-%d), $(nproc) cores (load average"
+        echo "$(cut -d' ' -f1 /proc/loadavg) at the end: other jobs shared the machine); library: $(head -n 1 "$lib/SOURCE.txt")."
+        echo "Whole commands, wall clock, CPU seconds (user + system) and peak resident memory of the largest process"
+        echo "(/usr/bin/time -v), medians of $runs runs, interleaved; gltf-transform $("$gt/node_modules/.bin/gltf-transform" --version 2>/dev/null | tail -n 1) (node $(node --version))."
         echo
-        echo "| command | assets | s | assets per minute | peak MB |"
-        echo "|---|---:|---:|---:|---:|"
-        awk -v n="$assets" -v s="$o_s" -v mb="$o_mb" 'BEGIN {printf "| matremap gltf spec2metal DIR -o OUT (threads 0: automatic) | %d | %.2f | %.1f | %.0f |\n", n, s, 60 * n / s, mb}'
-        awk -v n="$assets" -v s="$n_s" -v mb="$n_mb" 'BEGIN {printf "| matremap gltf spec2metal DIR -o OUT --threads 1 | %d | %.2f | %.1f | %.0f |\n", n, s, 60 * n / s, mb}'
-        awk -v n="$assets" -v s="$b_s" -v mb="$b_mb" 'BEGIN {printf "| matremap gltf spec2metal DIR -o OUT --no-renders | %d | %.2f | %.1f | %.0f |\n", n, s, 60 * n / s, mb}'
-        awk -v n="$assets" -v s="$p_s" -v mb="$p_mb" 'BEGIN {printf "| for a in DIR/*/*.gltf: gltf-transform metalrough | %d | %.2f | %.1f | %.0f |\n", n, s, 60 * n / s, mb}'
+        echo "| command | assets | wall s | assets per minute | CPU s | peak MB |"
+        echo "|---|---:|---:|---:|---:|---:|"
+        for k in 0 1 2 3; do
+            s=$(tr ' ' '\n' <<<"${walls[$k]}" | grep . | median)
+            mb=$(tr ' ' '\n' <<<"${mbs[$k]}" | grep . | median)
+            cpu=$(tr ' ' '\n' <<<"${cpus[$k]}" | grep . | median)
+            awk -v name="${names[$k]}" -v n="$assets" -v s="$s" -v mb="$mb" -v cpu="$cpu" \
+                'BEGIN {printf "| %s | %d | %.2f | %.1f | %.2f | %.0f |\n", name, n, s, 60 * n / s, cpu, mb}'
+        done
         sed -n '2,$p' "$lib/SOURCE.txt"
     } | tee "$lib_report"
 }
