@@ -647,6 +647,13 @@ static void one_asset(run *r, int i) {
                 return;
             }
         }
+        // An existing output is replaced only when an earlier run into this folder wrote it (summary.json says).
+        const entry *own = find_earlier(r->prev, it->input);
+        char *own_output = own ? json_get_string(own->line, "output") : NULL;
+        if (s == MR_OK && stat(it->output, &st) == 0 && (!own_output || strcmp(own_output, it->output) != 0))
+            s = mr_fail(MR_ERR_INVALID_ARG, "output '%s' exists and no earlier library run into '%s' wrote it; "
+                        "refusing to replace it", it->output, r->out_dir);
+        free(own_output);
         if (s == MR_OK) s = make_folders(it->output, 0);
         if (s == MR_OK) {
             mr_gltf_convert_options co = r->o->convert;

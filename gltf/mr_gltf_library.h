@@ -22,7 +22,8 @@
  * and DIR/index.html. DIR is made if missing. Refused before any work (MR_ERR_INVALID_ARG): DIR inside an input
  * folder (or the root), an existing summary.json or index.html that is not an earlier run's own (its first line
  * names this writer). Every file is written atomically (mr_core.h); an asset's conversion never replaces its
- * inputs nor another asset's files (mr_gltf_convert_file's rules).
+ * inputs nor another asset's files (mr_gltf_convert_file's rules), and an asset whose output exists fails unless
+ * DIR/summary.json records an earlier run writing that output from that input.
  *
  * Shards: with shard_count N > 1 only the assets at sorted index k with k % N == shard_index are converted (the
  * sweep's rule). Resume: with `resume`, an asset whose entry in an earlier DIR/summary.json has status

@@ -102,6 +102,11 @@ expect "--no-renders" 0 "2 assets: 2 converted" -- "$bin" gltf spec2metal "$lib/
 check "--no-renders: no thumbnails, SSIM null" test ! -e "$tmp/bare/thumbnails" -a \
     "$(summary "$tmp/bare/summary.json" 'all(x["object_ssim"] is None for x in it)')" = True
 
+"$bin" gltf spec2metal "$lib/duck/Duck.gltf" "$lib/nested/truck/CesiumMilkTruck.gltf" -o "$tmp/t1" --no-renders \
+    --threads 1 >/dev/null 2>&1
+check "--threads 1 writes the same assets as the automatic team" \
+    diff -r -q -x summary.json -x index.html "$tmp/bare" "$tmp/t1"
+
 # Refusals.
 refuses "an output folder inside an input folder" "lies inside the input folder" "$lib" -- \
     "$bin" gltf spec2metal "$lib" -o "$lib/converted"
@@ -109,6 +114,12 @@ mkdir -p "$tmp/theirs"
 echo '{"not": "ours"}' >"$tmp/theirs/summary.json"
 refuses "a summary.json this command did not write" "not written by a library conversion" "$tmp/theirs" -- \
     "$bin" gltf spec2metal "$lib/duck" -o "$tmp/theirs"
+mkdir -p "$tmp/pre/duck" && echo '{}' >"$tmp/pre/duck/Duck.gltf"
+expect "an existing output this command did not write: that asset fails" 2 \
+    "Duck.gltf' exists and no earlier library run into .* wrote it; refusing to replace it" -- \
+    "$bin" gltf spec2metal "$lib/duck" "$lib/nested/truck" -o "$tmp/pre"
+check "... left as it was, the other asset converted" test "$(cat "$tmp/pre/duck/Duck.gltf")" = '{}' -a \
+    -f "$tmp/pre/nested/truck/CesiumMilkTruck.gltf"
 expect "--resume with one asset: a usage error" 1 "go with many assets" -- \
     "$bin" gltf spec2metal "$lib/duck/Duck.gltf" -o "$tmp/x.gltf" --resume
 expect "--shard out of range" 1 "expected K/N" -- "$bin" gltf spec2metal "$lib" -o "$tmp/y" --shard 2/2
