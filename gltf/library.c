@@ -173,8 +173,19 @@ static mr_status walk(const char *dir, strlist *out, int depth) {
 
 static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
 
+/* `path` without trailing slashes ("/" stays); owned. */
+static char *trimmed(const char *path) {
+    char *p = dup_str(path);
+    if (!p) return NULL;
+    size_t n = strlen(p);
+    while (n > 1 && p[n - 1] == '/') p[--n] = '\0';
+    return p;
+}
+
+static mr_status list_one(const char *input, strlist *out, strlist *folders);
+
 /* One input: a file, a folder, or a glob; folders found go into *folders (may be NULL). */
-static mr_status list_one(const char *input, strlist *out, strlist *folders) {
+static mr_status list_one_trimmed(const char *input, strlist *out, strlist *folders) {
     struct stat st;
     if (stat(input, &st) == 0) {
         if (S_ISDIR(st.st_mode)) {
@@ -211,6 +222,14 @@ static mr_status list_one(const char *input, strlist *out, strlist *folders) {
         return s;
     }
     return mr_fail(MR_ERR_IO, "asset '%s': %s", input, strerror(errno));
+}
+
+static mr_status list_one(const char *input, strlist *out, strlist *folders) {
+    char *t = trimmed(input);
+    if (!t) return mr_fail(MR_ERR_NOMEM, "out of memory listing the assets");
+    mr_status s = list_one_trimmed(t, out, folders);
+    free(t);
+    return s;
 }
 
 /* The deepest folder holding every path ("." when they are relative and share none). */
@@ -902,7 +921,9 @@ mr_status mr_gltf_convert_library(const char *const *inputs, int input_count, co
                        opts->shard_count);
     if (opts->thumbnail_size != 0 && (opts->thumbnail_size < 32 || opts->thumbnail_size > 4096))
         return mr_fail(MR_ERR_INVALID_ARG, "thumbnail size %d: expected 32 to 4096", opts->thumbnail_size);
-    char **assets = NULL, *root = NULL;
+    char **assets = NULL, *root = NULL, *out_trimmed = trimmed(out_dir);
+    if (!out_trimmed) return mr_fail(MR_ERR_NOMEM, "out of memory");
+    out_dir = out_trimmed;
     int count = 0;
     strlist folders = {0};
     mr_status s = list_all(inputs, input_count, &assets, &count, &root, &folders);
@@ -1003,6 +1024,7 @@ mr_status mr_gltf_convert_library(const char *const *inputs, int input_count, co
     free(summary_path);
     free(index_path);
     mr_gltf_library_list_free(assets, count, root);
+    free(out_trimmed);
     if (result) *result = res;
     else mr_gltf_library_result_free(&res);
     return s;

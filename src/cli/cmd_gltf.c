@@ -401,8 +401,10 @@ static int run_library(const options *o, const mr_transform *transform) {
         printf("matremap gltf %s: %d asset%s: %d converted, %d resumed, %d failed", o->direction, r.count,
                r.count == 1 ? "" : "s", r.converted, r.resumed, r.failed);
         if (r.cancelled > 0) printf(", %d cancelled", r.cancelled);
-        printf(" in %.2f s (%.1f assets/min); wrote %s/summary.json and %s/index.html\n", r.seconds,
-               r.seconds > 0 ? 60.0 * finished / r.seconds : 0.0, o->output, o->output);
+        const size_t len = strlen(o->output);
+        const char *sep = len > 0 && o->output[len - 1] == '/' ? "" : "/";
+        printf(" in %.2f s (%.1f assets/min); wrote %s%ssummary.json and %s%sindex.html\n", r.seconds,
+               r.seconds > 0 ? 60.0 * finished / r.seconds : 0.0, o->output, sep, o->output, sep);
     }
     if (code == CLI_EXIT_OK && r.failed > 0) code = CLI_EXIT_BAD_INPUT;
     mr_gltf_library_result_free(&r);
