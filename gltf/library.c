@@ -377,6 +377,16 @@ static void bhtml(buf *b, const char *s) {
     }
 }
 
+/* A relative path as a URL path: bytes other than letters, digits and / . _ - ~ percent-encoded. */
+static void burl(buf *b, const char *s) {
+    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+        if ((*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || (*p >= '0' && *p <= '9') || strchr("/._-~", *p))
+            bputn(b, (const char *)p, 1);
+        else
+            bprintf(b, "%%%02X", *p);
+    }
+}
+
 /* The string value of "key" in a one-line JSON object written by this file (NULL if absent); owned. */
 static char *json_get_string(const char *line, const char *key) {
     char pat[64];
@@ -857,13 +867,13 @@ static mr_status write_outputs(const run *r, const char *summary_path, const cha
         bprintf(&h, "<br>%s</td><td>", e->status);
         if (b) {
             bputn(&h, "<img src=\"", 10);
-            bhtml(&h, b);
+            burl(&h, b);
             bputn(&h, "\">", 2);
         }
         bputn(&h, "</td><td>", 9);
         if (a) {
             bputn(&h, "<img src=\"", 10);
-            bhtml(&h, a);
+            burl(&h, a);
             bputn(&h, "\">", 2);
         }
         bputn(&h, "</td><td>", 9);

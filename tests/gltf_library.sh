@@ -14,9 +14,9 @@ source "$(dirname "$0")/lib/cli_harness.sh"
 
 sg="$shared/specgloss"
 lib="$tmp/lib"
-mkdir -p "$lib/nested/deeper" "$lib/broken"
+mkdir -p "$lib/nested/deep er" "$lib/broken"
 cp -r "$sg/Duck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness" "$lib/duck"
-cp -r "$sg/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness" "$lib/nested/deeper/avocado"
+cp -r "$sg/Avocado-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness" "$lib/nested/deep er/avocado"
 cp -r "$sg/CesiumMilkTruck-pbrSpecularGlossiness/glTF-pbrSpecularGlossiness" "$lib/nested/truck"
 head -c 300 "$lib/duck/Duck.gltf" >"$lib/broken/truncated.gltf"
 cp -r "$lib/duck" "$lib/broken/missing"
@@ -35,13 +35,13 @@ check "the asset with a missing texture named with its reason" \
     grep -qE "broken/missing/Duck.gltf failed: .*DuckCM.png" "$tmp/err"
 check "one plain line per finished asset" test "$(grep -c '^\[[0-9]/5\]' "$tmp/out")" = 5
 check "the total line" grep -q "5 assets: 3 converted, 0 resumed, 2 failed" "$tmp/out"
-check "nested folders mirrored" test -f "$tmp/o/nested/deeper/avocado/Avocado.gltf" -a \
+check "nested folders mirrored" test -f "$tmp/o/nested/deep er/avocado/Avocado.gltf" -a \
     -f "$tmp/o/nested/truck/CesiumMilkTruck.gltf" -a -f "$tmp/o/duck/Duck.gltf"
 check "nothing written for the broken assets" test ! -e "$tmp/o/broken/truncated.gltf" -a \
     ! -e "$tmp/o/broken/missing/Duck.gltf"
 
 # Each converted asset equals what the one-asset command writes (the same file names: side files named after OUT).
-for a in duck/Duck.gltf nested/deeper/avocado/Avocado.gltf nested/truck/CesiumMilkTruck.gltf; do
+for a in duck/Duck.gltf "nested/deep er/avocado/Avocado.gltf" nested/truck/CesiumMilkTruck.gltf; do
     "$bin" gltf spec2metal "$lib/$a" -o "$tmp/single/$a" >/dev/null 2>&1
     same=yes
     for f in "$tmp/single/$(dirname "$a")"/*; do
