@@ -1014,7 +1014,8 @@ mr_status mr_gltf_convert_library(const char *const *inputs, int input_count, co
                 else if (strcmp(it->status, "resumed") == 0) res.resumed++;
                 else if (strcmp(it->status, "failed") == 0) res.failed++;
                 else res.cancelled++;
-                res.texels += it->totals.texels;
+                // Texels converted, or solved for the extension alone (kept materials): the larger count.
+                res.texels += it->totals.texels > it->totals.total.texels ? it->totals.texels : it->totals.total.texels;
                 if (opts->progress) {
                     mr_gltf_library_progress p = {r.done, total, res.failed, it->input, it->status, it->error,
                                                   it->seconds, now_seconds() - r.started, res.texels};

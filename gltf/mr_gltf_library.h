@@ -39,7 +39,8 @@
  * does, docs/performance.md).
  *
  * Threads: assets run side by side on a team of mr_auto_threads(threads, assets, 2) threads, never more than the
- * assets to convert; with one asset the conversion's own threads (the transform's option) do the work. Results do
+ * assets to convert (their conversions' own parallel regions then run on one thread each: OpenMP's default of one
+ * active level); with one asset the conversion's own threads (the transform's option) do the work. Results do
  * not depend on the team (each asset's conversion is the single-asset one). The progress callback is called after
  * each asset (under a lock, from any thread of the team); the cancel flag is read before each asset starts: the
  * rest are recorded "cancelled" and the call returns MR_ERR_CANCELLED after writing the summary.
@@ -68,7 +69,8 @@ typedef struct mr_gltf_library_progress {
     const char *error;       /* its message when failed, "" otherwise */
     double asset_seconds;    /* its conversion time */
     double seconds;          /* since the call began */
-    size_t texels;           /* texels converted so far (mr_gltf_convert_totals.texels summed) */
+    size_t texels;           /* texels so far: per asset mr_gltf_convert_totals.texels, or its extension's texels
+                                (total.texels) when larger (materials kept but given KHR_materials_specular) */
 } mr_gltf_library_progress;
 
 typedef struct mr_gltf_library_options {
