@@ -139,7 +139,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h sr
                   src/workflow/pairs.h src/learn/learned_plots.h src/io/output_plan.h \
                   src/transform/transform.h src/report/report.h nn/mlp.h \
                   src/learn/parametric.h src/learn/svr.h src/learn/sweep_table.h src/learn/learned.h \
-                  gltf/mr_gltf.h gltf/mr_gltf_convert.h gltf/mr_gltf_scene.h src/doc/doc.h \
+                  gltf/mr_gltf.h gltf/mr_gltf_convert.h gltf/mr_gltf_scene.h gltf/mr_gltf_library.h src/doc/doc.h \
                   src/remap/translate.h src/api/api.h
 
 .PHONY: all check asan fuzz fuzz-targets faults demo bench \

@@ -4,7 +4,7 @@
 # docs/rendering.md (bench:envlight, bench:mesh, bench:reflection). Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
-# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|png|gltf|remap|remap-processes|direct|learn|mpi]
+# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|png|gltf|library|remap|remap-processes|direct|learn|mpi]
 #   --only NAME runs one section and rewrites only its markers (the full run takes long; sections written as
 #   functions below can be run alone). From make: make bench BENCH_ARGS="--only report-accuracy".
 set -euo pipefail
@@ -697,6 +697,80 @@ PY
     fi
 }
 
+# Whole libraries (docs/performance.md, bench:library): `matremap gltf spec2metal DIR -o OUT` over the spec-gloss
+# variants of glTF-Sample-Models (laid out by scripts/gltf-library.sh from MR_GLTF_SAMPLE_MODELS: a checkout or a
+# bare git directory; "shared", the default, takes ../shared/assets/specgloss) against a shell loop over
+# gltf-transform metalrough, in the same run: assets per minute (wall clock) and peak resident memory of the largest
+# process (/usr/bin/time -v), medians of RUNS. Ours includes the thumbnails, object SSIM and index.html.
+peak_time() { # CMD... -> "WALL PEAK_MB CPU" (CPU: user + system seconds, children included)
+    local t0 t1 log
+    log=$(mktemp)
+    t0=$(date +%s.%N)
+    /usr/bin/time -v -o "$log" "$@" >/dev/null 2>&1 || true
+    t1=$(date +%s.%N)
+    awk -v a="$t0" -v b="$t1" '/Maximum resident set size/ {kb = $NF} /User time|System time/ {cpu += $NF}
+        END {printf "%.4f %.1f %.3f\n", b - a, kb / 1024, cpu}' "$log"
+    rm -f "$log"
+}
+
+bench_library() {
+    echo
+    echo "== glTF libraries: matremap gltf spec2metal DIR -o OUT against a shell loop over gltf-transform metalrough"
+    gt="$root/scripts/gltf-transform"
+    lib_report="$work/library.md"
+    if [ ! -x "$gt/node_modules/.bin/gltf-transform" ]; then
+        (cd "$gt" && npm ci --no-audit --no-fund --loglevel=error) >"$work/gltf-transform-npm.log" 2>&1 || true
+    fi
+    local lib="$work/library/in" src=${MR_GLTF_SAMPLE_MODELS:-shared}
+    rm -rf "$work/library" && mkdir -p "$work/library"
+    MR_SHARED="$shared" "$root/scripts/gltf-library.sh" "$src" "$lib" >/dev/null
+    local assets
+    assets=$(find "$lib" -name '*.gltf' -o -name '*.glb' | wc -l)
+    if [ ! -x "$gt/node_modules/.bin/gltf-transform" ] || [ "$assets" = 0 ]; then
+        echo "library comparison skipped: gltf-transform or assets missing in this run." | tee "$lib_report"
+        return
+    fi
+    runs=5
+    [ "$quick" = "--quick" ] && runs=1
+    local rows=() cmd name s mb cpu
+    local -A walls=() mbs=() cpus=()
+    local names=("matremap gltf spec2metal DIR -o OUT (threads 0: automatic)" \
+        "matremap gltf spec2metal DIR -o OUT --threads 1" "matremap gltf spec2metal DIR -o OUT --no-renders" \
+        "for a in DIR/*/*.gltf: gltf-transform metalrough")
+    for run in $(seq "$runs"); do
+        for k in 0 1 2 3; do
+            rm -rf "$work/library/out$k"
+            case $k in
+                0) cmd=("$bin" gltf spec2metal "$lib" -o "$work/library/out0") ;;
+                1) cmd=("$bin" gltf spec2metal "$lib" -o "$work/library/out1" --threads 1) ;;
+                2) cmd=("$bin" gltf spec2metal "$lib" -o "$work/library/out2" --no-renders) ;;
+                3) cmd=(bash -c 'cd "$1" && find . -name "*.gltf" -o -name "*.glb" | sort | while read -r a; do
+                       mkdir -p "$2/$(dirname "$a")" && "$3" metalrough "$a" "$2/$a" || exit 1; done' _ "$lib" \
+                       "$work/library/out3" "$gt/node_modules/.bin/gltf-transform") ;;
+            esac
+            read -r s mb cpu < <(peak_time "${cmd[@]}")
+            walls[$k]+="$s " mbs[$k]+="$mb " cpus[$k]+="$cpu "
+        done
+    done
+    {
+        echo "Measured by \`make bench BENCH_ARGS=\"--only library\"\` on $(date -u +%Y-%m-%d), $(nproc) cores (load average"
+        echo "$(cut -d' ' -f1 /proc/loadavg) at the end: other jobs shared the machine); library: $(head -n 1 "$lib/SOURCE.txt")."
+        echo "Whole commands, wall clock, CPU seconds (user + system) and peak resident memory of the largest process"
+        echo "(/usr/bin/time -v), medians of $runs runs, interleaved; gltf-transform $("$gt/node_modules/.bin/gltf-transform" --version 2>/dev/null | tail -n 1) (node $(node --version))."
+        echo
+        echo "| command | assets | wall s | assets per minute | CPU s | peak MB |"
+        echo "|---|---:|---:|---:|---:|---:|"
+        for k in 0 1 2 3; do
+            s=$(tr ' ' '\n' <<<"${walls[$k]}" | grep . | median)
+            mb=$(tr ' ' '\n' <<<"${mbs[$k]}" | grep . | median)
+            cpu=$(tr ' ' '\n' <<<"${cpus[$k]}" | grep . | median)
+            awk -v name="${names[$k]}" -v n="$assets" -v s="$s" -v mb="$mb" -v cpu="$cpu" \
+                'BEGIN {printf "| %s | %d | %.2f | %.1f | %.2f | %.0f |\n", name, n, s, 60 * n / s, cpu, mb}'
+        done
+        sed -n '2,$p' "$lib/SOURCE.txt"
+    } | tee "$lib_report"
+}
+
 # Sweeps across processes (docs/performance.md, bench:mpi): one random sweep (ggx -> ward-balanced, default fit
 # scene) as one process with 1 thread, mpirun -np 1 and -np 2 with 1 thread per rank, and one process with 2
 # threads; whole commands (MPI's start included), wall and CPU seconds, medians of RUNS; the files checked to hold the
@@ -808,6 +882,10 @@ if [ -n "$only" ]; then
             bench_gltf
             replace_section gltf "$work/gltf.md"
             ;;
+        library)
+            bench_library
+            replace_section library "$work/library.md"
+            ;;
         reflection) bench_reflection ;;
         remap)
             bench_remap_table
@@ -841,7 +919,7 @@ if [ -n "$only" ]; then
             replace_section workflow "$work/workflow.md"
             replace_section workflow-e2e "$work/e2e.md"
             ;;
-        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, png, gltf, remap, remap-processes, direct, learn, mpi)" >&2; exit 1 ;;
+        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, png, gltf, library, remap, remap-processes, direct, learn, mpi)" >&2; exit 1 ;;
     esac
     exit 0
 fi

@@ -62,6 +62,7 @@
 #include "gltf/mr_gltf.h"
 #include "gltf/mr_gltf_convert.h"
 #include "gltf/mr_gltf_scene.h"
+#include "gltf/mr_gltf_library.h"
 #include "doc/doc.h"
 #include "remap/translate.h"
 #include "api/api.h"

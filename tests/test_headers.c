@@ -19,6 +19,7 @@
 #include "nn/mlp.h"
 #include "gltf/mr_gltf.h"
 #include "gltf/mr_gltf_scene.h"
+#include "gltf/mr_gltf_library.h"
 #include "doc/doc.h"
 #include "mr_core.h"
 #include "matremap.h"

@@ -24,14 +24,18 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <signal.h>
+#include <sys/stat.h>
 
 #include "cli.h"
 #include "gltf/mr_gltf.h"
+#include "gltf/mr_gltf_library.h"
 
 
 static void print_help(void) {
     printf("Usage: matremap gltf spec2metal IN.gltf|IN.glb -o OUT.gltf|OUT.glb [options]\n"
            "       matremap gltf metal2spec IN.gltf|IN.glb -o OUT.gltf|OUT.glb [options]\n"
+           "       matremap gltf spec2metal|metal2spec FOLDER|GLOB|ASSET... -o DIR [--resume] [--shard K/N] [options]\n"
            "\n"
            "spec2metal converts every KHR_materials_pbrSpecularGlossiness material of a glTF asset to core\n"
            "metallic-roughness: factors times textures, texel by texel, with the converters of 'matremap\n"
@@ -93,7 +97,21 @@ static void print_help(void) {
            "  --replace-files       let OUT's side files replace existing files that are not an earlier OUT's own\n"
            "                        (another asset's, say; inputs never)\n"
            "  --json                a JSON summary on stdout\n"
-           "  --help                this text\n"
+           "  --help                this text\n");
+    printf("\n"
+           "Many assets (several inputs, a folder, a glob, or -o naming a folder): folders are searched recursively\n"
+           "for .gltf and .glb, a quoted glob is expanded here; the assets convert side by side within --threads\n"
+           "(0: one per core when there are two assets or more) into DIR (made if missing), mirroring their paths\n"
+           "below their common folder; a progress bar on a terminal (assets done/total, texels per second, time\n"
+           "left), one line per finished asset otherwise. A failed asset is named with its reason and the others go\n"
+           "on (exit 2 at the end). DIR gets summary.json (every asset: input, output, status, error, materials,\n"
+           "flags, object SSIM, seconds) and index.html (before/after thumbnails, worst first). DIR may not lie in\n"
+           "an input folder. SIGINT or SIGTERM lets the assets under way finish, records the rest as cancelled in\n"
+           "summary.json and exits 3 (--resume goes on from there).\n"
+           "  --resume              skip assets an earlier run into DIR converted with the same settings from the\n"
+           "                        same files (summary.json records both)\n"
+           "  --shard K/N           convert only the assets at sorted index i with i %% N == K (job arrays)\n"
+           "  --no-renders          no thumbnails and no object SSIM (faster: the renders decode every texture)\n"
            "\n"
            "Prints one line per material (converted: texture size, flagged texels by reason, time; kept or left as it\n"
            "is: why; then its specular solve: texels whose F0 it cannot give, texels whose core diffuse is off by\n"
@@ -103,8 +121,9 @@ static void print_help(void) {
            "mean, khronos: no metal-rough material gives these maps; metal2spec, glTF convention: a diffuse above\n"
            "1, clamped), non-finite input, clamped input, method failed.\n"
            "\n"
-           "Example:\n"
-           "  matremap gltf spec2metal FloppyDisk/scene.gltf -o out/floppy.gltf --method weighted\n");
+           "Examples:\n"
+           "  matremap gltf spec2metal FloppyDisk/scene.gltf -o out/floppy.gltf --method weighted\n"
+           "  matremap gltf spec2metal assets/ -o converted/ --resume\n");
 }
 
 typedef struct options {
@@ -118,6 +137,10 @@ typedef struct options {
     int replace_files; /* --replace-files: side files may replace existing files that are not the output's own */
     int core_only;     /* --core-only: no KHR_materials_specular values over the core ones */
     double extension_ior; /* --extension-ior (0: 1.5) */
+    const char **inputs;  /* every input (files, folders, globs); input = inputs[0] */
+    int input_count;
+    int library;          /* many assets into a folder (mr_gltf_convert_library) */
+    int resume, shard_given, shard_index, shard_count, no_renders;
 } options;
 
 /* ---- the command -------------------------------------------------------------------------------------------- */
@@ -155,6 +178,8 @@ static void print_json_reasons(const mr_gltf_material_report *r, int off_compute
     printf(", \"nonfinite_input\": %zu, \"clamped_input\": %zu, \"method_failed\": %zu}", r->nonfinite, r->clamped,
            r->failed);
 }
+
+static int parse_shard(const char *text, int *k, int *n);
 
 static int parse(int argc, char **argv, options *o) {
     for (int i = 1; i < argc; i++) {
@@ -201,14 +226,20 @@ static int parse(int argc, char **argv, options *o) {
             o->replace_files = 1;
         } else if (strcmp(argv[i], "--json") == 0) {
             o->json = 1;
+        } else if (strcmp(argv[i], "--resume") == 0) {
+            o->resume = 1;
+        } else if (strcmp(argv[i], "--no-renders") == 0) {
+            o->no_renders = 1;
+        } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--shard", &value))) {
+            if (taken < 0 || !parse_shard(value, &o->shard_index, &o->shard_count)) return CLI_EXIT_USAGE;
+            o->shard_given = 1;
         } else if (argv[i][0] == '-') {
             return cli_usage_error("gltf", "unknown option '%s'", argv[i]);
         } else if (o->direction == NULL) {
             o->direction = argv[i];
-        } else if (o->input == NULL) {
-            o->input = argv[i];
         } else {
-            return cli_usage_error("gltf", "unexpected argument '%s' (one input asset)", argv[i]);
+            if (o->input == NULL) o->input = argv[i];
+            o->inputs[o->input_count++] = argv[i];
         }
     }
     if (o->direction == NULL) return cli_usage_error("gltf", "missing spec2metal or metal2spec");
@@ -216,7 +247,18 @@ static int parse(int argc, char **argv, options *o) {
     if (!to_metal && strcmp(o->direction, "metal2spec") != 0)
         return cli_usage_error("gltf", "'%s': expected spec2metal or metal2spec", o->direction);
     if (o->input == NULL) return cli_usage_error("gltf", "missing the input asset (.gltf or .glb)");
-    if (o->output == NULL) return cli_usage_error("gltf", "missing -o OUT (.gltf or .glb)");
+    if (o->output == NULL) return cli_usage_error("gltf", "missing -o OUT (.gltf or .glb, or a folder)");
+    // Many assets (several inputs, a folder, a glob, or a folder as OUT) go to the library call.
+    struct stat st;
+    o->library = o->input_count > 1 || !cli_is_gltf_path(o->output) ||
+                 (stat(o->input, &st) == 0 ? S_ISDIR(st.st_mode) : strpbrk(o->input, "*?[") != NULL);
+    if (o->library && cli_is_gltf_path(o->output))
+        return cli_usage_error("gltf", "-o '%s': many assets go into a folder (-o DIR), not one asset", o->output);
+    if (!o->library && (o->resume || o->shard_given || o->no_renders))
+        return cli_usage_error("gltf", "--resume, --shard and --no-renders go with many assets (a folder, several "
+                               "files or a glob into -o DIR)");
+    if (o->library && o->replace_files)
+        return cli_usage_error("gltf", "--replace-files goes with one asset");
     if (o->format == NULL) o->format = "png";
     // spec2metal's default core method: weighted under both readings (measured ahead of mlp in the engines with and
     // without KHR_materials_specular, docs/evaluation.md "Both readings"); mlp for the core values alone (--core-only,
@@ -242,27 +284,153 @@ static int parse(int argc, char **argv, options *o) {
     return CLI_EXIT_OK;
 }
 
-int cmd_gltf(int argc, char **argv) {
-    for (int i = 1; i < argc; i++)
-        if (cli_is_help(argv[i])) {
-            print_help();
-            return CLI_EXIT_OK;
-        }
+/* --shard K/N: 0 <= K < N (as 'matremap sweep --shard'). */
+static int parse_shard(const char *text, int *k, int *n) {
+    char *end = NULL;
+    errno = 0;
+    long a = strtol(text, &end, 10), b = -1;
+    int ok = text[0] >= '0' && text[0] <= '9' && *end == '/' && errno != ERANGE;
+    if (ok) {
+        const char *rest = end + 1;
+        b = strtol(rest, &end, 10);
+        ok = rest[0] >= '0' && rest[0] <= '9' && *end == '\0' && errno != ERANGE && b >= 1 && a < b && b <= 1000000;
+    }
+    if (!ok) {
+        cli_usage_error("gltf", "--shard '%s': expected K/N with integers 0 <= K < N (shard K of N)", text);
+        return 0;
+    }
+    *k = (int)a;
+    *n = (int)b;
+    return 1;
+}
+
+/* ---- many assets: mr_gltf_convert_library ------------------------------------------------------------------- */
+
+/* SIGINT or SIGTERM during a library run: the assets under way finish, the rest are recorded "cancelled". */
+static volatile sig_atomic_t library_cancel = 0;
+static void on_signal(int sig) {
+    (void)sig;
+    library_cancel = 1;
+}
+
+typedef struct library_progress {
+    int tty;
+} library_progress;
+
+static void on_asset(void *user, const mr_gltf_library_progress *p) {
+    const library_progress *lp = user;
+    if (lp->tty) {
+        const int width = 30, filled = p->total > 0 ? width * p->done / p->total : width;
+        const double rate = p->seconds > 0.0 ? (double)p->texels / p->seconds : 0.0;
+        const double left = p->done > 0 ? p->seconds / p->done * (p->total - p->done) : 0.0;
+        fprintf(stderr, "\r\033[K[%.*s%.*s] %d/%d assets, %.2f Mtexel/s, %d:%02d left", filled,
+                "##############################", width - filled, "..............................", p->done,
+                p->total, rate / 1e6, (int)left / 60, (int)left % 60);
+        if (p->failed > 0) fprintf(stderr, ", %d failed", p->failed);
+        if (strcmp(p->status, "failed") == 0) fprintf(stderr, "\r\033[Kfailed: %s: %s\n", p->asset, p->error);
+        if (p->done == p->total) fprintf(stderr, "\n");
+        fflush(stderr);
+    } else if (strcmp(p->status, "failed") == 0) {
+        printf("[%d/%d] failed: %s: %s\n", p->done, p->total, p->asset, p->error);
+        fflush(stdout);
+    } else {
+        printf("[%d/%d] %s: %s (%.2f s)\n", p->done, p->total, p->status, p->asset, p->asset_seconds);
+        fflush(stdout);
+    }
+}
+
+static int run_library(const options *o, const mr_transform *transform) {
+    char settings[512];
+    snprintf(settings, sizeof settings, "%s method=%s convention=%s eps=%s%.17g format=%s overwrite=%d keep=%d "
+             "unused=%d core_only=%d ior=%.17g weights=%s", o->direction, o->method,
+             o->convention == MR_WF_DIFFUSE_PLAIN ? "paper" : "gltf", o->eps_given ? "" : "encoding:", o->eps,
+             o->format, o->overwrite, o->keep_specgloss, o->keep_unused, o->core_only, o->extension_ior,
+             o->weights ? o->weights : "shipped");
+    mr_gltf_library_options lo = {0};
+    lo.convert.transform = transform;
+    lo.convert.image_format = o->format;
+    lo.convert.overwrite = o->overwrite;
+    lo.convert.keep_source = o->keep_specgloss;
+    lo.convert.exact_inputs = o->eps_given;
+    lo.convert.keep_unused = o->keep_unused;
+    lo.convert.core_only = o->core_only;
+    lo.convert.extension_ior = o->extension_ior;
+    lo.settings = settings;
+    lo.threads = o->threads;
+    lo.resume = o->resume;
+    lo.no_renders = o->no_renders;
+    lo.shard_index = o->shard_index;
+    lo.shard_count = o->shard_count;
+    library_progress lp = {isatty(STDERR_FILENO) && !o->json};
+    lo.progress = o->json ? NULL : on_asset;
+    lo.progress_user = &lp;
+    lo.cancel = &library_cancel;
+    struct sigaction sa, old_int, old_term;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int);
+    sigaction(SIGTERM, &sa, &old_term);
+    mr_gltf_library_result r;
+    mr_status status = mr_gltf_convert_library(o->inputs, o->input_count, o->output, &lo, &r);
+    sigaction(SIGINT, &old_int, NULL);
+    sigaction(SIGTERM, &old_term, NULL);
+    if (status != MR_OK && r.items == NULL) return cli_fail("gltf", status);
+    int code = status != MR_OK ? cli_fail("gltf", status) : CLI_EXIT_OK;
+    for (int i = 0; i < r.count; i++)
+        if (strcmp(r.items[i].status, "failed") == 0)
+            fprintf(stderr, "matremap gltf: %s failed: %s\n", r.items[i].input, r.items[i].error);
+    if (o->json) {
+        printf("{\"command\": \"gltf %s\", \"output\": ", o->direction);
+        cli_json_string(stdout, o->output);
+        printf(", \"assets\": %d, \"converted\": %d, \"resumed\": %d, \"failed\": %d, \"cancelled\": %d, "
+               "\"texels\": %zu, \"seconds\": %.6f, \"failures\": [", r.count, r.converted, r.resumed, r.failed,
+               r.cancelled, r.texels, r.seconds);
+        for (int i = 0, first = 1; i < r.count; i++)
+            if (strcmp(r.items[i].status, "failed") == 0) {
+                printf("%s{\"input\": ", first ? "" : ", ");
+                cli_json_string(stdout, r.items[i].input);
+                printf(", \"error\": ");
+                cli_json_string(stdout, r.items[i].error);
+                printf("}");
+                first = 0;
+            }
+        printf("]}\n");
+    } else {
+        const int finished = r.count - r.cancelled;
+        printf("matremap gltf %s: %d asset%s: %d converted, %d resumed, %d failed", o->direction, r.count,
+               r.count == 1 ? "" : "s", r.converted, r.resumed, r.failed);
+        if (r.cancelled > 0) printf(", %d cancelled", r.cancelled);
+        const size_t len = strlen(o->output);
+        const char *sep = len > 0 && o->output[len - 1] == '/' ? "" : "/";
+        printf(" in %.2f s (%.1f assets/min); wrote %s%ssummary.json and %s%sindex.html\n", r.seconds,
+               r.seconds > 0 ? 60.0 * finished / r.seconds : 0.0, o->output, sep, o->output, sep);
+    }
+    if (code == CLI_EXIT_OK && r.failed > 0) code = CLI_EXIT_BAD_INPUT;
+    mr_gltf_library_result_free(&r);
+    return code;
+}
+
+static int gltf_main(int argc, char **argv, const char **inputs) {
     options o;
     memset(&o, 0, sizeof o);
+    o.inputs = inputs;
     o.convention = MR_WF_DIFFUSE_SPECGLOSS;
     int code = parse(argc, argv, &o);
     if (code != CLI_EXIT_OK) return code;
     int to_metal = strcmp(o.direction, "spec2metal") == 0;
     // Nothing written over a file read: OUT against IN and --weights here; the asset's buffers and images, and the
     // files written beside OUT, the library keeps apart (mr_gltf_save: never over a file the asset was read from).
-    mr_output_plan io = {0};
-    mr_output_plan_inputf(&io, o.input, "asset %s", o.input);
-    if (o.weights != NULL) mr_output_plan_inputf(&io, o.weights, "--weights %s", o.weights);
-    mr_output_plan_output(&io, o.output, NULL);
-    code = cli_plan_check("gltf", &io);
-    mr_output_plan_free(&io);
-    if (code != CLI_EXIT_OK) return code;
+    // Many assets: the library call checks its folder against the inputs.
+    if (!o.library) {
+        mr_output_plan io = {0};
+        mr_output_plan_inputf(&io, o.input, "asset %s", o.input);
+        if (o.weights != NULL) mr_output_plan_inputf(&io, o.weights, "--weights %s", o.weights);
+        mr_output_plan_output(&io, o.output, NULL);
+        code = cli_plan_check("gltf", &io);
+        mr_output_plan_free(&io);
+        if (code != CLI_EXIT_OK) return code;
+    }
 
     // The transform: the method's descriptor for this pair of glTF models.
     const mr_transform_kind *kind = to_metal ? mr_transform_find("gltf-specgloss", "gltf", o.method)
@@ -291,6 +459,12 @@ int cmd_gltf(int argc, char **argv) {
     const char *net_path = o.weights ? o.weights : transform ? mr_transform_network_path(transform) : "";
     double started = cli_now();
     mr_gltf_convert_result result = {0, NULL, {0, 0, 0, 0}};
+    if (code == CLI_EXIT_OK && o.library) {
+        code = run_library(&o, transform);
+        mr_transform_free(transform);
+        mr_mlp_free(net);
+        return code;
+    }
     if (code == CLI_EXIT_OK) {
         mr_gltf_convert_options co = {0};
         co.transform = transform;
@@ -456,5 +630,21 @@ int cmd_gltf(int argc, char **argv) {
     mr_gltf_convert_result_free(&result);
     mr_transform_free(transform);
     mr_mlp_free(net);
+    return code;
+}
+
+int cmd_gltf(int argc, char **argv) {
+    for (int i = 1; i < argc; i++)
+        if (cli_is_help(argv[i])) {
+            print_help();
+            return CLI_EXIT_OK;
+        }
+    const char **inputs = calloc((size_t)argc + 1, sizeof *inputs);
+    if (inputs == NULL) {
+        fprintf(stderr, "matremap gltf: out of memory\n");
+        return CLI_EXIT_INTERNAL;
+    }
+    int code = gltf_main(argc, argv, inputs);
+    free(inputs);
     return code;
 }
