@@ -1,8 +1,7 @@
 /*
  * cmd_export.c — `matremap export INPUT -o OUT.mtlx|OUT.usda|OUT.gltf|OUT.glb [--to MODEL]`: a glTF asset's or a
- * MaterialX document's materials written as a MaterialX or USD document (src/doc/doc.h: mr_doc_from_gltf, then
- * mr_doc_gltf_write; mr_doc_read_mtlx, mr_doc_convert, mr_doc_rebase, mr_doc_write), or a glTF asset saved as
- * .gltf/.glb (gltf/mr_gltf.h: mr_gltf_save_with).
+ * MaterialX document's materials written as a MaterialX or USD document, or as a glTF asset, by one library call
+ * (src/doc/doc.h: mr_doc_export_file); here the options, the progress line and one line per material.
  */
 #include <stdio.h>
 #include <string.h>
@@ -311,128 +310,6 @@ static void print_result(const options *o, const char *format, const mr_brdf_mod
     printf("}\n");
 }
 
-/* The document and the maps it names as inputs of the plan. */
-static void plan_document(mr_output_plan *io, const char *input, const char *label, const mr_doc *in) {
-    mr_output_plan_input(io, input, label);
-    for (int k = 0; k < mr_doc_material_count(in); k++) {
-        const mr_doc_material *m = mr_doc_material_get(in, k);
-        for (int p = 0; p < m->model->param_count; p++)
-            if (m->values[p].kind == MR_DOC_TEXTURE && m->values[p].file[0] != '/') {
-                char path[8192];
-                const char *slash = strrchr(input, '/');
-                snprintf(path, sizeof path, "%.*s%s", slash ? (int)(slash - input + 1) : 0, input, m->values[p].file);
-                mr_output_plan_input(io, path, "a map of the document");
-            }
-    }
-}
-
-/* A MaterialX document's materials converted and written (OUT: .mtlx, .usda, .gltf or .glb), converted maps
- * beside OUT. */
-static int export_mtlx(const options *o, const mr_brdf_model *target, mr_doc_format format,
-                       const double *target_values, unsigned held, const mr_learned_set *transforms) {
-    mr_doc *in = NULL;
-    mr_status st = mr_doc_read_mtlx(o->input, &in);
-    if (st != MR_OK) return cli_fail("export", st);
-    char label[4096 + 16];
-    snprintf(label, sizeof label, "MaterialX '%s'", o->input);
-    // Nothing written over a file read: OUT against the document and the maps it names.
-    mr_output_plan io = {0};
-    plan_document(&io, o->input, label, in);
-    mr_output_plan_output(&io, o->output, NULL);
-    for (int k = 0; transforms != NULL && k < transforms->count; k++)
-        mr_output_plan_inputf(&io, transforms->paths[k], "transform %s", transforms->paths[k]);
-    if (o->cache != NULL) mr_output_plan_output(&io, o->cache, "--cache");
-    int code = cli_plan_check("export", &io);
-    mr_output_plan_free(&io);
-    if (code != CLI_EXIT_OK) {
-        mr_doc_free(in);
-        return code;
-    }
-    for (int k = 0; cli_is_gltf_path(o->output) && k < mr_doc_material_count(in); k++) {
-        // Converted maps cannot go into a glTF output: said before the work.
-        const mr_doc_material *m = mr_doc_material_get(in, k);
-        int textured = 0;
-        for (int p = 0; p < m->model->param_count; p++) textured |= m->values[p].kind == MR_DOC_TEXTURE;
-        mr_doc_route route = MR_DOC_ROUTE_COPY;
-        if (mr_doc_choose_route(m->model, target, textured, transforms != NULL, &route) == MR_OK &&
-            (route == MR_DOC_ROUTE_DIRECT || route == MR_DOC_ROUTE_LEARNED)) {
-            fprintf(stderr, "matremap export: error: MaterialX '%s': material '%s' (%s) converts its maps to gltf by "
-                    "the %s route, whose maps a glTF output cannot hold yet: write .mtlx or .usda\n", o->input,
-                    m->name, m->model->name, mr_doc_route_name(route));
-            mr_doc_free(in);
-            return CLI_EXIT_BAD_INPUT;
-        }
-    }
-    mr_doc_gltf_options opts = {0};
-    opts.target = target;
-    opts.threads = o->threads;
-    opts.size = o->size;
-    opts.target_values = target_values;
-    opts.held = held;
-    const mr_brdf_ties no_ties = {0};
-    if (o->tie != NULL) opts.ties = &no_ties; // --tie none
-    // OUT without its extension: the prefix converted maps are named after.
-    char prefix[4096];
-    snprintf(prefix, sizeof prefix, "%s", o->output);
-    char *dot = strrchr(prefix, '.');
-    if (dot) *dot = '\0';
-    opts.image_prefix = prefix;
-    opts.document_path = o->input;
-    opts.tolerance = o->tolerance;
-    opts.cache_path = o->cache;
-    opts.transforms = transforms;
-    progress_state progress = {isatty(STDERR_FILENO) && !o->json, cli_now(), 0};
-    opts.progress = draw_progress;
-    opts.progress_user = &progress;
-    mr_doc_gltf_result *result = NULL;
-    st = mr_doc_convert(in, label, &opts, &result);
-    if (progress.drawn) fprintf(stderr, "\r\033[K");
-    // The ties the remaps took: the defaults of each remapped material's model (a hold wins).
-    fits_said said = {target_values, held, 0, {NULL}, {{0}}, o->tie != NULL};
-    for (int k = 0; st == MR_OK && k < result->material_count; k++) {
-        const mr_brdf_model *source = mr_doc_material_get(in, k)->model;
-        int known = result->materials[k].route != MR_DOC_ROUTE_REMAP;
-        for (int i = 0; i < said.source_count && !known; i++) known = said.sources[i] == source;
-        if (known || said.source_count == MAX_TIE_SOURCES) continue;
-        said.sources[said.source_count] = source;
-        said.ties[said.source_count] = o->tie != NULL ? no_ties : mr_brdf_default_ties(source, target);
-        said.ties[said.source_count++].tied &= ~held;
-    }
-    const char *format_name = mr_doc_format_name(format);
-    if (st == MR_OK && result->map_count > 0) {
-        // Converted maps (never into a glTF output: refused above), never over an input.
-        io = (mr_output_plan){0};
-        plan_document(&io, o->input, label, in);
-        mr_output_plan_output(&io, o->output, NULL);
-        for (int i = 0; i < result->map_count; i++) mr_output_plan_output(&io, result->maps[i].path, NULL);
-        if (o->cache != NULL) mr_output_plan_output(&io, o->cache, "--cache");
-        code = cli_plan_check("export", &io);
-        mr_output_plan_free(&io);
-        if (code != CLI_EXIT_OK) {
-            mr_doc_gltf_result_free(result);
-            mr_doc_free(in);
-            return code;
-        }
-    }
-    mr_doc_free(in);
-    if (st == MR_OK && cli_is_gltf_path(o->output)) {
-        // A glTF asset of the materials (no meshes), its images the maps' files copied beside OUT, named after it.
-        mr_gltf *asset = NULL;
-        st = mr_doc_to_gltf(result->doc, o->input, label, &asset);
-        mr_gltf_save_options so = {1, 0, NULL};
-        if (st == MR_OK) st = mr_gltf_save_with(asset, o->output, &so);
-        mr_gltf_free(asset);
-        format_name = strcasecmp(strrchr(o->output, '.'), ".glb") == 0 ? "glb" : "gltf";
-    } else if (st == MR_OK) {
-        st = mr_doc_rebase(result->doc, o->input, o->output);
-        if (st == MR_OK) st = mr_doc_gltf_write(NULL, result, o->output); // the converted maps, then OUT
-    }
-    if (st != MR_OK) code = cli_fail("export", st);
-    if (code == CLI_EXIT_OK) print_result(o, format_name, target, result, &said);
-    mr_doc_gltf_result_free(result);
-    return code;
-}
-
 int cmd_export(int argc, char **argv) {
     for (int i = 1; i < argc; i++)
         if (cli_is_help(argv[i])) {
@@ -478,95 +355,38 @@ int cmd_export(int argc, char **argv) {
             fprintf(stderr, "matremap export: warning: transform %s (%s -> %s) failed its check against the remaps "
                     "when it was learned (docs/learn.md, \"The check\"); every texel it converts is flagged (red)\n",
                     transforms.paths[k], transforms.all[k]->source->name, transforms.all[k]->target->name);
-    if (mr_doc_format_from_path(o.input) == MR_DOC_FORMAT_MTLX) {
-        code = export_mtlx(&o, target, format, target_values, held, transforms.count > 0 ? &transforms : NULL);
-        mr_learned_set_free(&transforms);
-        return code;
-    }
-
-    mr_gltf *asset = NULL;
-    mr_status st = mr_gltf_load(o.input, &asset);
-    if (st != MR_OK) {
-        mr_learned_set_free(&transforms);
-        return cli_fail("export", st);
-    }
-    // Nothing written over a file read, checked before any work (the remaps): OUT against the asset and its files;
-    // the images beside OUT once the conversion has named them.
-    char label[4096 + 8];
-    snprintf(label, sizeof label, "asset %s", o.input);
-    mr_output_plan io = {0};
-    cli_plan_gltf(&io, asset, label);
-    mr_output_plan_output(&io, o.output, NULL);
-    for (int k = 0; k < transforms.count; k++) mr_output_plan_inputf(&io, transforms.paths[k], "transform %s",
-                                                                     transforms.paths[k]);
-    if (o.cache != NULL) mr_output_plan_output(&io, o.cache, "--cache");
-    code = cli_plan_check("export", &io);
-    mr_output_plan_free(&io);
-    if (code != CLI_EXIT_OK) {
-        mr_gltf_free(asset);
-        mr_learned_set_free(&transforms);
-        return code;
-    }
-
-    // OUT without its extension: the prefix the images beside it are named after.
-    char prefix[4096];
-    snprintf(prefix, sizeof prefix, "%s", o.output);
-    char *dot = strrchr(prefix, '.');
-    if (dot) *dot = '\0';
-    mr_doc_gltf_options opts = {0};
-    opts.target = target;
-    opts.image_prefix = prefix;
-    opts.threads = o.threads;
-    opts.size = o.size;
-    opts.target_values = target_values;
-    opts.held = held;
-    opts.ties = &ties;
-    opts.tolerance = o.tolerance;
-    opts.cache_path = o.cache;
-    opts.transforms = transforms.count > 0 ? &transforms : NULL;
+    // One call does the work (doc/doc.h: mr_doc_export_file); here the options, the progress line and the result.
+    mr_doc_export_options eo = {0};
+    eo.target = target;
+    eo.target_values = target_values;
+    eo.held = held;
+    const mr_brdf_ties no_ties = {0};
+    if (mr_doc_format_from_path(o.input) == MR_DOC_FORMAT_MTLX)
+        eo.ties = o.tie != NULL ? &no_ties : NULL; // --tie none, or each model's defaults
+    else
+        eo.ties = &ties;
+    eo.threads = o.threads;
+    eo.size = o.size;
+    eo.tolerance = o.tolerance;
+    eo.cache_path = o.cache;
+    eo.transforms = transforms.count > 0 ? &transforms : NULL;
     progress_state progress = {isatty(STDERR_FILENO) && !o.json, cli_now(), 0};
-    opts.progress = draw_progress;
-    opts.progress_user = &progress;
-    mr_doc_gltf_result *result = NULL;
-    st = mr_doc_from_gltf(asset, &opts, &result);
+    eo.progress = draw_progress;
+    eo.progress_user = &progress;
+    mr_doc_export_report report;
+    mr_status st = mr_doc_export_file(o.input, o.output, &eo, &report);
     if (progress.drawn) fprintf(stderr, "\r\033[K");
     if (st != MR_OK) {
-        mr_gltf_free(asset);
-        mr_learned_set_free(&transforms);
-        return cli_fail("export", st);
+        code = cli_fail("export", st);
+    } else {
+        fits_said said = {target_values, held, report.source_count, {NULL}, {{0}}, o.tie != NULL};
+        for (int i = 0; i < report.source_count && i < MAX_TIE_SOURCES; i++) {
+            said.sources[i] = report.sources[i];
+            said.ties[i] = report.ties[i];
+        }
+        print_result(&o, report.format, target, report.result, &said);
     }
-    fits_said said = {target_values, held, 1, {gltf}, {ties}, o.tie != NULL};
-    if (gltf_out) {
-        // glTF to glTF: every material copies (or carries its maps) exactly, so the asset itself is the output,
-        // saved with its side files named after OUT (mr_gltf_save_with), never over an input.
-        mr_gltf_save_options so = {1, 0, NULL};
-        result->image_count = 0; // the asset's own images go with it
-        st = mr_gltf_save_with(asset, o.output, &so);
-        if (st != MR_OK) code = cli_fail("export", st);
-        const char *name = strcasecmp(strrchr(o.output, '.'), ".glb") == 0 ? "glb" : "gltf";
-        if (code == CLI_EXIT_OK) print_result(&o, name, target, result, &said);
-        mr_doc_gltf_result_free(result);
-        mr_gltf_free(asset);
-        mr_learned_set_free(&transforms);
-        return code;
-    }
-
-    io = (mr_output_plan){0};
-    cli_plan_gltf(&io, asset, label);
-    mr_output_plan_output(&io, o.output, NULL);
-    for (int i = 0; i < result->image_count; i++) mr_output_plan_output(&io, result->images[i].path, NULL);
-    for (int i = 0; i < result->map_count; i++) mr_output_plan_output(&io, result->maps[i].path, NULL);
-    for (int k = 0; k < transforms.count; k++) mr_output_plan_inputf(&io, transforms.paths[k], "transform %s",
-                                                                     transforms.paths[k]);
-    code = cli_plan_check("export", &io);
-    mr_output_plan_free(&io);
-    if (code == CLI_EXIT_OK) {
-        st = mr_doc_gltf_write(asset, result, o.output);
-        if (st != MR_OK) code = cli_fail("export", st);
-    }
-    if (code == CLI_EXIT_OK) print_result(&o, mr_doc_format_name(format), target, result, &said);
-    mr_doc_gltf_result_free(result);
-    mr_gltf_free(asset);
+    mr_doc_export_report_free(&report);
     mr_learned_set_free(&transforms);
     return code;
 }

@@ -343,6 +343,56 @@ mr_status mr_doc_convert(const mr_doc *in, const char *label, const mr_doc_gltf_
  * from A, an ior map, a file that is not PNG or JPEG. The caller frees the asset (mr_gltf_free). */
 mr_status mr_doc_to_gltf(const mr_doc *doc, const char *doc_path, const char *label, struct mr_gltf **out);
 
+/* ---- one asset exported to one file (export.c) -------------------------------------------------------------- */
+
+/* What `matremap export IN -o OUT` does, in one call (zeroed = the defaults said per field). */
+typedef struct mr_doc_export_options {
+    const mr_brdf_model *target; /* NULL: OUT's default, mr_doc_export_default_target */
+    const double *target_values; /* as mr_doc_gltf_options (NULL: the target's defaults) */
+    unsigned held;               /* as mr_doc_gltf_options */
+    const mr_brdf_ties *ties;    /* NULL: each source model's default ties less `held`; given: these (a glTF input:
+                                    gltf's ties, e.g. mr_brdf_parse_ties; a .mtlx: applied to every model, so only
+                                    "none", a zeroed struct, is meaningful) */
+    int threads, size;           /* as mr_doc_gltf_options */
+    double tolerance;            /* DIRECT: 0 = MR_DOC_DEFAULT_TOLERANCE */
+    const char *cache_path;      /* DIRECT: NULL = none */
+    const struct mr_learned_set *transforms; /* NULL: DIRECT for textured materials of another model */
+    mr_doc_progress_fn progress; /* DIRECT: optional */
+    void *progress_user;
+} mr_doc_export_options;
+
+#define MR_DOC_EXPORT_MAX_SOURCES 16
+
+/* What an export did, for the caller to say: per material its route and figures, the images and maps written
+ * (result), the format written, the target, and the ties the fits took per source model. */
+typedef struct mr_doc_export_report {
+    mr_doc_gltf_result *result;  /* owned (its doc the converted document); NULL when the export failed */
+    const mr_brdf_model *target;
+    char format[8];              /* "mtlx", "usda", "gltf" or "glb" */
+    int source_count;            /* source models the ties are said for (a glTF input: 1, gltf; a .mtlx: each
+                                    model with a REMAP material) */
+    const mr_brdf_model *sources[MR_DOC_EXPORT_MAX_SOURCES];
+    mr_brdf_ties ties[MR_DOC_EXPORT_MAX_SOURCES];
+} mr_doc_export_report;
+
+/* `input` (a glTF asset .gltf/.glb, or a MaterialX document .mtlx) exported to `output`, whose extension chooses
+ * the format: .mtlx or .usda (mr_doc_from_gltf or mr_doc_read_mtlx + mr_doc_convert, then mr_doc_gltf_write: the
+ * images beside OUT named OUT_image<K>, converted maps OUT_<material>_<param>.png; a .mtlx's maps rebased), .gltf or
+ * .glb (a glTF input: the asset itself saved with side files named after OUT; a .mtlx: mr_doc_to_gltf; DIRECT or
+ * LEARNED materials refused, MR_ERR_UNSUPPORTED, before any work). Nothing is written over a file read
+ * (io/output_plan.h: OUT, the images, maps and the cache against the input's files, the maps a document names and
+ * the transforms), checked before the work and again once the outputs are named; folders made for OUT are removed
+ * again on failure. MR_ERR_INVALID_ARG: an input or output extension not listed, a target OUT's format does not
+ * write. Otherwise the errors of the calls named, with their messages. *report is zeroed first and filled on
+ * success (mr_doc_export_report_free). Nothing is printed. */
+mr_status mr_doc_export_file(const char *input, const char *output, const mr_doc_export_options *opts,
+                             mr_doc_export_report *report);
+void mr_doc_export_report_free(mr_doc_export_report *report);
+/* OUT's default model: .mtlx openpbr, .usda usd-preview, .gltf/.glb gltf; NULL for another extension. */
+const mr_brdf_model *mr_doc_export_default_target(const char *output);
+/* 1 when `path`'s extension is one export writes (.mtlx, .usda, .gltf, .glb). */
+int mr_doc_export_output_ok(const char *path);
+
 #ifdef __cplusplus
 }
 #endif
