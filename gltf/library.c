@@ -445,11 +445,17 @@ static uint64_t fnv_file(const char *path, uint64_t h, int *ok) {
 
 /* FNV-1a 64 over every file the asset was read from, in the order read (and each name). */
 static mr_status fingerprint(const char *path, char out[17]) {
+    uint64_t h = 1469598103934665603ULL;
+    int ok = 1;
+    if (!is_asset_name(path)) { // another job's input (e.g. a .mtlx): its one file
+        for (const char *c = path; *c; c++) h = (h ^ (unsigned char)*c) * 1099511628211ULL;
+        h = fnv_file(path, h, &ok);
+        snprintf(out, 17, "%016llx", (unsigned long long)h);
+        return ok ? MR_OK : mr_fail(MR_ERR_IO, "'%s': cannot read it: %s", path, strerror(errno));
+    }
     mr_gltf *asset = NULL;
     mr_status s = mr_gltf_load(path, &asset);
     if (s != MR_OK) return s;
-    uint64_t h = 1469598103934665603ULL;
-    int ok = 1;
     for (int k = 0; ok; k++) {
         const char *file = mr_gltf_source_file(asset, k);
         if (!file) break;
@@ -540,7 +546,7 @@ static const char *outcome_name(mr_gltf_convert_outcome o) {
 /* The summary line of one asset. */
 static char *entry_line(const mr_gltf_library_item *it, const char *settings, const char *fp, const char *rel_before,
                         const char *rel_after, const char *render_error, const mr_gltf_convert_result *res,
-                        const char *overview) {
+                        const char *overview, const char *job_json) {
     buf b = {0};
     bputn(&b, "{\"input\": ", 10);
     bjson(&b, it->input);
@@ -571,7 +577,10 @@ static char *entry_line(const mr_gltf_library_item *it, const char *settings, co
             "\"method_failed\": %zu}, \"extensions\": %d",
             t->converted, t->kept, t->texels, t->total.flagged, t->total.off_manifold, t->total.nonfinite,
             t->total.clamped, t->total.failed, t->extensions);
-    if (res) {
+    if (job_json) {
+        bputn(&b, ", ", 2);
+        bputn(&b, job_json, strlen(job_json));
+    } else if (res) {
         bprintf(&b, ", \"pruned\": {\"textures\": %d, \"images\": %d, \"samplers\": %d, \"uncertain\": %d}",
                 res->pruned.textures, res->pruned.images, res->pruned.samplers, res->pruned.uncertain);
         bputn(&b, ", \"materials\": [", 16);
@@ -652,7 +661,9 @@ static void one_asset(run *r, int i) {
     char *before = NULL, *after = NULL, *render_error = NULL;
     mr_gltf_convert_result cres = {0, NULL, {0, 0, 0, 0}};
     char overview[2048] = "";
-    int have_result = 0;
+    int have_result = 0, render_after = 1;
+    mr_gltf_library_job_result jres;
+    memset(&jres, 0, sizeof jres);
     it->ssim = NAN;
     if (r->o->cancel && *r->o->cancel) {
         snprintf(it->status, sizeof it->status, "cancelled");
@@ -684,7 +695,16 @@ static void one_asset(run *r, int i) {
                         "refusing to replace it", it->output, r->out_dir);
         free(own_output);
         if (s == MR_OK) s = make_folders(it->output, 0);
-        if (s == MR_OK) {
+        if (s == MR_OK && r->o->job) {
+            s = r->o->job->run(r->o->job->user, it->input, it->output, r->inner_threads, &jres);
+            if (s == MR_OK) {
+                it->material_count = jres.material_count;
+                it->totals.texels = jres.texels;
+                render_after = jres.render_after;
+                snprintf(it->status, sizeof it->status, "converted");
+                snprintf(overview, sizeof overview, "%s", jres.overview);
+            }
+        } else if (s == MR_OK) {
             mr_gltf_convert_options co = r->o->convert;
             co.progress = NULL;
             co.progress_user = NULL;
@@ -695,15 +715,17 @@ static void one_asset(run *r, int i) {
             snprintf(it->status, sizeof it->status, "failed");
             snprintf(it->error, sizeof it->error, "%s", mr_last_error());
         } else {
-            have_result = 1;
-            snprintf(it->status, sizeof it->status, "converted");
-            mr_gltf_convert_totals_of(&cres, &it->totals);
-            it->material_count = cres.material_count;
-            overview_of(&cres, &it->totals, overview, sizeof overview);
+            if (!r->o->job) {
+                have_result = 1;
+                snprintf(it->status, sizeof it->status, "converted");
+                mr_gltf_convert_totals_of(&cres, &it->totals);
+                it->material_count = cres.material_count;
+                overview_of(&cres, &it->totals, overview, sizeof overview);
+            }
             const char *rel = relative(r->root, it->input);
             size_t n = strlen(rel) + 32;
-            before = r->o->no_renders ? NULL : malloc(n);
-            after = r->o->no_renders ? NULL : malloc(n);
+            before = r->o->no_renders || !render_after ? NULL : malloc(n);
+            after = r->o->no_renders || !render_after ? NULL : malloc(n);
             if (before && after) {
                 snprintf(before, n, "thumbnails/%s.before.png", rel);
                 snprintf(after, n, "thumbnails/%s.after.png", rel);
@@ -727,7 +749,9 @@ static void one_asset(run *r, int i) {
     en->input = dup_str(it->input);
     en->status = dup_str(it->status);
     en->ssim = it->ssim;
-    en->line = entry_line(it, r->settings, fp, before, after, render_error, have_result ? &cres : NULL, overview);
+    en->line = entry_line(it, r->settings, fp, before, after, render_error, have_result ? &cres : NULL, overview,
+                          r->o->job ? (jres.json ? jres.json : "\"materials\": []") : NULL);
+    free(jres.json);
     free(before);
     free(after);
     free(render_error);
@@ -984,6 +1008,18 @@ mr_status mr_gltf_convert_library(const char *const *inputs, int input_count, co
             mr_gltf_library_item *it = &res.items[res.count++];
             it->input = dup_str(assets[i]);
             it->output = join(out_dir, relative(root, assets[i]));
+            if (it->output && opts->job && opts->job->extension) {
+                // The job's outputs: the input's extension replaced (a.glb -> a.mtlx).
+                char *dot = strrchr(it->output, '.'), *slash = strrchr(it->output, '/');
+                size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - it->output) : strlen(it->output);
+                char *named = malloc(stem + strlen(opts->job->extension) + 1);
+                if (named) {
+                    memcpy(named, it->output, stem);
+                    strcpy(named + stem, opts->job->extension);
+                }
+                free(it->output);
+                it->output = named;
+            }
             it->ssim = NAN;
             if (!it->input || !it->output) s = mr_fail(MR_ERR_NOMEM, "out of memory");
         }

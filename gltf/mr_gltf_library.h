@@ -44,6 +44,9 @@
  * not depend on the team (each asset's conversion is the single-asset one). The progress callback is called after
  * each asset (under a lock, from any thread of the team); the cancel flag is read before each asset starts: the
  * rest are recorded "cancelled" and the call returns MR_ERR_CANCELLED after writing the summary.
+ * Jobs: with opts->job each asset is job->run's instead of a conversion (the output named with job->extension),
+ * the rest as above; a fingerprint of an asset that is not .gltf/.glb is of its one file. Statuses stay
+ * "converted" (the job done), "resumed", "failed", "cancelled".
  * Errors: an asset's failure is recorded (its status "failed", the library's message) and the others go on; the
  * call itself fails only for bad arguments, the refusals above, and writing the summary or the index. Nothing is
  * printed.
@@ -73,6 +76,30 @@ typedef struct mr_gltf_library_progress {
                                 (total.texels) when larger (materials kept but given KHR_materials_specular) */
 } mr_gltf_library_progress;
 
+/* What a job (mr_gltf_library_options.job) tells the loop about one asset it did. */
+typedef struct mr_gltf_library_job_result {
+    int material_count;
+    size_t texels;          /* texels the job converted (progress and the result's total) */
+    int render_after;       /* 1: the output is a glTF asset, rendered as "after" against the input (thumbnails,
+                               object SSIM); 0: no renders for this asset (summary.json: null, "render_error"
+                               null) */
+    char overview[2048];    /* what index.html shows of its materials */
+    char *json;             /* malloc'ed (the loop frees it): JSON members appended to the asset's summary line in
+                               place of the conversion's "pruned" and "materials", e.g. "\"materials\": [...]";
+                               NULL: "\"materials\": []" */
+} mr_gltf_library_job_result;
+
+/* Another per-asset job than the conversion, run with the loop's listing, threads, progress, cancel, resume,
+ * shards, summary.json and index.html (e.g. doc/doc.h's mr_doc_export_library: an export per asset). */
+typedef struct mr_gltf_library_job {
+    /* The job for one asset: write `output` from `input` (never over an input: the job's own checks), with at most
+     * `threads` threads (the loop's rule above: 1 when assets run side by side); *out zeroed by the loop. Its
+     * failure status and mr_last_error() are recorded as the asset's. Called from any thread of the team. */
+    mr_status (*run)(void *user, const char *input, const char *output, int threads, mr_gltf_library_job_result *out);
+    void *user;
+    const char *extension;  /* the outputs' extension, e.g. ".mtlx" (the input's replaced); NULL: the input's */
+} mr_gltf_library_job;
+
 typedef struct mr_gltf_library_options {
     mr_gltf_convert_options convert; /* each asset's conversion (its progress fields and image_prefix are unused) */
     const char *settings;   /* what the conversion was told, recorded for resume ("" when NULL) */
@@ -83,6 +110,8 @@ typedef struct mr_gltf_library_options {
     int no_renders;         /* 1: no thumbnails and no SSIM (null in summary.json; index.html lists the assets) */
     void (*progress)(void *user, const mr_gltf_library_progress *p); /* may be NULL */
     void *progress_user;
+    const mr_gltf_library_job *job; /* NULL: each asset converted by mr_gltf_convert_file (`convert`); given:
+                                       job->run instead (`convert` unused), its results in the summary */
     const volatile sig_atomic_t *cancel; /* may be NULL; non-zero stops before the next asset (a signal handler
                                             may set it: `matremap gltf` does on SIGINT and SIGTERM) */
 } mr_gltf_library_options;

@@ -3,9 +3,11 @@
  * MaterialX document's materials written as a MaterialX or USD document, or as a glTF asset, by one library call
  * (src/doc/doc.h: mr_doc_export_file); here the options, the progress line and one line per material.
  */
+#include <errno.h>
+#include <signal.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -14,6 +16,8 @@
 
 static void print_help(void) {
     printf("usage: matremap export INPUT -o OUT.mtlx|OUT.usda|OUT.gltf|OUT.glb [--to MODEL] [options]\n"
+           "       matremap export FOLDER|GLOB|ASSET... -o DIR --format mtlx|usda|gltf|glb [--resume] [--shard K/N]\n"
+           "                       [options]\n"
            "\n"
            "Writes the materials of INPUT, a glTF asset (.gltf, .glb) or a MaterialX document (.mtlx), as a material\n"
            "document or a glTF asset. OUT's extension chooses the format:\n"
@@ -56,6 +60,20 @@ static void print_help(void) {
            "OUT_<name>. Normal, occlusion, emission and alpha maps are not written yet. docs/documents.md says\n"
            "what is exact and what not.\n"
            "\n");
+    printf("Many assets (several inputs, a folder walked for .gltf/.glb, a quoted glob, or --format) go into -o DIR\n"
+           "(made if missing, never inside an input folder), each exported as one asset is to DIR/<its path below\n"
+           "the inputs' common root> with the extension of --format, side by side on --threads (each asset's own\n"
+           "work then on one thread): one line per asset, then a total; DIR/summary.json (per asset its status,\n"
+           "materials with routes and figures, images and maps) and DIR/index.html. A .gltf/.glb output is rendered\n"
+           "against its input (thumbnails and object SSIM, as 'matremap gltf' does); .mtlx and .usda outputs hold no\n"
+           "geometry and are not rendered. An asset that fails is named and the others go on (exit 2). SIGINT or\n"
+           "SIGTERM lets the assets under way finish and records the rest as cancelled (exit 3; --resume goes on).\n"
+           "  --format F            mtlx, usda, gltf or glb: the outputs' format (many assets)\n"
+           "  --resume              skip assets an earlier run into DIR exported with the same options from the\n"
+           "                        same input files (summary.json's fingerprints)\n"
+           "  --shard K/N           export only the assets at sorted index i with i %% N == K (job arrays)\n"
+           "  --no-renders          no thumbnails and no object SSIM for glTF outputs\n"
+           "\n");
     printf("options:\n"
            "  -o OUT                the output (.mtlx, .usda, .gltf or .glb); never one of the input's files\n"
            "  --to MODEL            openpbr (.mtlx default), standard-surface, gltf (.gltf/.glb: the only one),\n"
@@ -94,11 +112,34 @@ static void print_help(void) {
 #define MAX_TRANSFORM_PATHS 64
 
 typedef struct options {
-    const char *input, *output, *to, *hold, *cache, *tie;
+    const char *input, *output, *to, *hold, *cache, *tie, *format;
+    const char **inputs; /* [input_count]: argv's inputs (many assets) */
+    int input_count, library, resume, shard_given, shard_index, shard_count, no_renders;
     const char *transforms[MAX_TRANSFORM_PATHS];
     int transform_count, direct, size, threads, json;
     double tolerance;
+    char probe[32]; /* many assets: "asset.<format>" */
 } options;
+
+/* --shard K/N: 0 <= K < N (as 'matremap gltf --shard'). */
+static int parse_shard(const char *text, int *k, int *n) {
+    char *end = NULL;
+    errno = 0;
+    long a = strtol(text, &end, 10), b = -1;
+    int ok = text[0] >= '0' && text[0] <= '9' && *end == '/' && errno != ERANGE;
+    if (ok) {
+        const char *rest = end + 1;
+        b = strtol(rest, &end, 10);
+        ok = rest[0] >= '0' && rest[0] <= '9' && *end == '\0' && errno != ERANGE && b >= 1 && a < b && b <= 1000000;
+    }
+    if (!ok) {
+        cli_usage_error("export", "--shard '%s': expected K/N with integers 0 <= K < N (shard K of N)", text);
+        return 0;
+    }
+    *k = (int)a;
+    *n = (int)b;
+    return 1;
+}
 
 static int parse(int argc, char **argv, options *o) {
     for (int i = 1; i < argc; i++) {
@@ -132,25 +173,60 @@ static int parse(int argc, char **argv, options *o) {
             o->cache = value;
         } else if ((taken = cli_take_option("export", argc, argv, &i, "--size", &value))) {
             if (taken < 0 || !cli_parse_int("export", "--size", value, 8, 4096, &o->size)) return CLI_EXIT_USAGE;
+        } else if ((taken = cli_take_option("export", argc, argv, &i, "--format", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            o->format = value;
+        } else if ((taken = cli_take_option("export", argc, argv, &i, "--shard", &value))) {
+            if (taken < 0 || !parse_shard(value, &o->shard_index, &o->shard_count)) return CLI_EXIT_USAGE;
+            o->shard_given = 1;
+        } else if (strcmp(argv[i], "--resume") == 0) {
+            o->resume = 1;
+        } else if (strcmp(argv[i], "--no-renders") == 0) {
+            o->no_renders = 1;
         } else if (strcmp(argv[i], "--direct") == 0) {
             o->direct = 1;
         } else if (strcmp(argv[i], "--json") == 0) {
             o->json = 1;
         } else if (argv[i][0] == '-') {
             return cli_usage_error("export", "unknown option '%s'", argv[i]);
-        } else if (o->input == NULL) {
-            o->input = argv[i];
         } else {
-            return cli_usage_error("export", "unexpected argument '%s' (one input asset)", argv[i]);
+            if (o->input == NULL) o->input = argv[i];
+            o->inputs[o->input_count++] = argv[i];
         }
     }
     if (o->input == NULL) return cli_usage_error("export", "missing the input (.gltf, .glb or .mtlx)");
-    if (!cli_is_gltf_path(o->input) && mr_doc_format_from_path(o->input) != MR_DOC_FORMAT_MTLX)
+    // Many assets (several inputs, a folder, a glob, or --format) go into a folder, each by the one-asset export.
+    struct stat st;
+    o->library = o->input_count > 1 || o->format != NULL ||
+                 (stat(o->input, &st) == 0 ? S_ISDIR(st.st_mode) : strpbrk(o->input, "*?[") != NULL);
+    if (!o->library && (o->resume || o->shard_given || o->no_renders))
+        return cli_usage_error("export", "--resume, --shard and --no-renders go with many assets (a folder, several "
+                               "files or a glob into -o DIR --format F)");
+    if (!o->library && !cli_is_gltf_path(o->input) && mr_doc_format_from_path(o->input) != MR_DOC_FORMAT_MTLX)
         return cli_usage_error("export", "'%s': the input is a glTF asset (.gltf or .glb) or a MaterialX document "
                                "(.mtlx)", o->input);
     if (o->output == NULL) return cli_usage_error("export", "missing -o OUT (.mtlx, .usda, .gltf or .glb)");
-    mr_doc_format format = mr_doc_format_from_path(o->output);
-    int gltf_out = cli_is_gltf_path(o->output);
+    if (o->library) {
+        if (o->format == NULL)
+            return cli_usage_error("export", "many assets go into a folder: give -o DIR --format mtlx|usda|gltf|glb");
+        if (strcmp(o->format, "mtlx") != 0 && strcmp(o->format, "usda") != 0 && strcmp(o->format, "gltf") != 0 &&
+            strcmp(o->format, "glb") != 0)
+            return cli_usage_error("export", "--format '%s': expected mtlx, usda, gltf or glb", o->format);
+        if (mr_doc_export_output_ok(o->output))
+            return cli_usage_error("export", "-o '%s': many assets go into a folder (-o DIR), not one file",
+                                   o->output);
+        if (o->tie != NULL && strcmp(o->tie, "none") != 0) {
+            for (int k = 0; k < o->input_count; k++)
+                if (mr_doc_format_from_path(o->inputs[k]) == MR_DOC_FORMAT_MTLX)
+                    return cli_usage_error("export", "--tie %s: a .mtlx input ('%s') takes --tie none or the default "
+                                           "ties of each material's model, not a list", o->tie, o->inputs[k]);
+        }
+        // The checks below on the format a one-asset OUT would have.
+        snprintf(o->probe, sizeof o->probe, "asset.%s", o->format);
+    }
+    const char *out = o->library ? o->probe : o->output; // the file (one asset's) whose extension says the format
+    mr_doc_format format = mr_doc_format_from_path(out);
+    int gltf_out = cli_is_gltf_path(out);
     if (format == MR_DOC_FORMAT_UNKNOWN && !gltf_out)
         return cli_usage_error("export", "-o '%s': the extension chooses the format: .mtlx, .usda, .gltf or .glb",
                                o->output);
@@ -163,7 +239,7 @@ static int parse(int argc, char **argv, options *o) {
         return cli_usage_error("export", "give --direct or --transforms, not both");
     if (o->transform_count > 0 && (o->tolerance != 0.0 || o->cache != NULL))
         return cli_usage_error("export", "--tolerance and --cache go with the direct route, not --transforms");
-    if (mr_doc_format_from_path(o->input) == MR_DOC_FORMAT_MTLX) {
+    if (!o->library && mr_doc_format_from_path(o->input) == MR_DOC_FORMAT_MTLX) {
         if (o->tie != NULL && strcmp(o->tie, "none") != 0)
             return cli_usage_error("export", "--tie %s: a .mtlx input takes --tie none or the default ties of each "
                                    "material's model (a 'tied:' line says them), not a list", o->tie);
@@ -310,6 +386,9 @@ static void print_result(const options *o, const char *format, const mr_brdf_mod
     printf("}\n");
 }
 
+static int export_main(options *op);
+static int run_library(const options *o, const mr_doc_export_options *each);
+
 int cmd_export(int argc, char **argv) {
     for (int i = 1; i < argc; i++)
         if (cli_is_help(argv[i])) {
@@ -318,10 +397,21 @@ int cmd_export(int argc, char **argv) {
         }
     options o;
     memset(&o, 0, sizeof o);
+    const char **inputs = calloc((size_t)argc, sizeof *inputs);
+    if (inputs == NULL) return cli_fail("export", MR_ERR_NOMEM);
+    o.inputs = inputs;
     int code = parse(argc, argv, &o);
-    if (code != CLI_EXIT_OK) return code;
-    mr_doc_format format = mr_doc_format_from_path(o.output);
-    int gltf_out = cli_is_gltf_path(o.output);
+    if (code == CLI_EXIT_OK) code = export_main(&o);
+    free(inputs);
+    return code;
+}
+
+static int export_main(options *op) {
+    options o = *op;
+    int code = CLI_EXIT_OK;
+    const char *out = o.library ? o.probe : o.output;
+    mr_doc_format format = mr_doc_format_from_path(out);
+    int gltf_out = cli_is_gltf_path(out);
     const mr_brdf_model *target = mr_brdf_find(o.to);
     if (target == NULL) return cli_usage_error("export", "--to '%s': %s", o.to, mr_last_error());
     if (!gltf_out && mr_doc_surface_node(target, format) == NULL)
@@ -361,7 +451,9 @@ int cmd_export(int argc, char **argv) {
     eo.target_values = target_values;
     eo.held = held;
     const mr_brdf_ties no_ties = {0};
-    if (mr_doc_format_from_path(o.input) == MR_DOC_FORMAT_MTLX)
+    if (o.library)
+        eo.ties = o.tie != NULL ? &ties : NULL; // given (a .mtlx input: none), or each model's defaults less holds
+    else if (mr_doc_format_from_path(o.input) == MR_DOC_FORMAT_MTLX)
         eo.ties = o.tie != NULL ? &no_ties : NULL; // --tie none, or each model's defaults
     else
         eo.ties = &ties;
@@ -373,6 +465,12 @@ int cmd_export(int argc, char **argv) {
     progress_state progress = {isatty(STDERR_FILENO) && !o.json, cli_now(), 0};
     eo.progress = draw_progress;
     eo.progress_user = &progress;
+    if (o.library) {
+        eo.progress = NULL;
+        code = run_library(&o, &eo);
+        mr_learned_set_free(&transforms);
+        return code;
+    }
     mr_doc_export_report report;
     mr_status st = mr_doc_export_file(o.input, o.output, &eo, &report);
     if (progress.drawn) fprintf(stderr, "\r\033[K");
@@ -388,5 +486,104 @@ int cmd_export(int argc, char **argv) {
     }
     mr_doc_export_report_free(&report);
     mr_learned_set_free(&transforms);
+    return code;
+}
+
+/* ---- many assets: mr_doc_export_library ----------------------------------------------------------------------- */
+
+/* SIGINT or SIGTERM during a library run: the assets under way finish, the rest are recorded "cancelled". */
+static volatile sig_atomic_t library_cancel = 0;
+static void on_signal(int sig) {
+    (void)sig;
+    library_cancel = 1;
+}
+
+/* One line per asset (as 'matremap gltf' prints them); on a terminal a bar on stderr. */
+static void on_asset(void *user, const mr_gltf_library_progress *p) {
+    const int *tty = user;
+    if (*tty) {
+        const int width = 30, filled = p->total > 0 ? width * p->done / p->total : width;
+        const double left = p->done > 0 ? p->seconds / p->done * (p->total - p->done) : 0.0;
+        fprintf(stderr, "\r\033[K[%.*s%.*s] %d/%d assets, %d:%02d left", filled, "##############################",
+                width - filled, "..............................", p->done, p->total, (int)left / 60, (int)left % 60);
+        if (p->failed > 0) fprintf(stderr, ", %d failed", p->failed);
+        if (strcmp(p->status, "failed") == 0) fprintf(stderr, "\r\033[Kfailed: %s: %s\n", p->asset, p->error);
+        if (p->done == p->total) fprintf(stderr, "\n");
+        fflush(stderr);
+    } else if (strcmp(p->status, "failed") == 0) {
+        printf("[%d/%d] failed: %s: %s\n", p->done, p->total, p->asset, p->error);
+        fflush(stdout);
+    } else {
+        printf("[%d/%d] %s: %s (%.2f s)\n", p->done, p->total, strcmp(p->status, "converted") == 0 ? "exported"
+               : p->status, p->asset, p->asset_seconds);
+        fflush(stdout);
+    }
+}
+
+static int run_library(const options *o, const mr_doc_export_options *each) {
+    // What the export was told, recorded for --resume (an asset is exported again when any of it changes).
+    char settings[8192];
+    size_t used = (size_t)snprintf(settings, sizeof settings, "export format=%s to=%s hold=%s tie=%s direct=%d "
+                                   "tolerance=%.17g size=%d cache=%s transforms=", o->format, o->to,
+                                   o->hold ? o->hold : "", o->tie ? o->tie : "default", o->direct, o->tolerance,
+                                   o->size, o->cache ? o->cache : "");
+    for (int k = 0; k < o->transform_count && used < sizeof settings; k++)
+        used += (size_t)snprintf(settings + used, sizeof settings - used, "%s%s", k ? "," : "", o->transforms[k]);
+    mr_gltf_library_options lo = {0};
+    lo.settings = settings;
+    lo.threads = o->threads;
+    lo.resume = o->resume;
+    lo.no_renders = o->no_renders;
+    lo.shard_index = o->shard_index;
+    lo.shard_count = o->shard_count;
+    int tty = isatty(STDERR_FILENO) && !o->json;
+    lo.progress = o->json ? NULL : on_asset;
+    lo.progress_user = &tty;
+    lo.cancel = &library_cancel;
+    struct sigaction sa, old_int, old_term;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int);
+    sigaction(SIGTERM, &sa, &old_term);
+    char extension[16];
+    snprintf(extension, sizeof extension, ".%s", o->format);
+    mr_gltf_library_result r;
+    mr_status status = mr_doc_export_library(o->inputs, o->input_count, o->output, each, extension, &lo, &r);
+    sigaction(SIGINT, &old_int, NULL);
+    sigaction(SIGTERM, &old_term, NULL);
+    if (status != MR_OK && r.items == NULL) return cli_fail("export", status);
+    int code = status != MR_OK ? cli_fail("export", status) : CLI_EXIT_OK;
+    for (int i = 0; i < r.count; i++)
+        if (strcmp(r.items[i].status, "failed") == 0)
+            fprintf(stderr, "matremap export: %s failed: %s\n", r.items[i].input, r.items[i].error);
+    if (o->json) {
+        printf("{\"command\": \"export\", \"format\": \"%s\", \"target\": \"%s\", \"output\": ", o->format, o->to);
+        cli_json_string(stdout, o->output);
+        printf(", \"assets\": %d, \"exported\": %d, \"resumed\": %d, \"failed\": %d, \"cancelled\": %d, "
+               "\"texels\": %zu, \"seconds\": %.6f, \"failures\": [", r.count, r.converted, r.resumed, r.failed,
+               r.cancelled, r.texels, r.seconds);
+        for (int i = 0, first = 1; i < r.count; i++)
+            if (strcmp(r.items[i].status, "failed") == 0) {
+                printf("%s{\"input\": ", first ? "" : ", ");
+                cli_json_string(stdout, r.items[i].input);
+                printf(", \"error\": ");
+                cli_json_string(stdout, r.items[i].error);
+                printf("}");
+                first = 0;
+            }
+        printf("]}\n");
+    } else {
+        const int finished = r.count - r.cancelled;
+        printf("matremap export: %d asset%s: %d exported, %d resumed, %d failed", r.count, r.count == 1 ? "" : "s",
+               r.converted, r.resumed, r.failed);
+        if (r.cancelled > 0) printf(", %d cancelled", r.cancelled);
+        const size_t len = strlen(o->output);
+        const char *sep = len > 0 && o->output[len - 1] == '/' ? "" : "/";
+        printf(" in %.2f s (%.1f assets/min); wrote %s%ssummary.json and %s%sindex.html\n", r.seconds,
+               r.seconds > 0 ? 60.0 * finished / r.seconds : 0.0, o->output, sep, o->output, sep);
+    }
+    if (code == CLI_EXIT_OK && r.failed > 0) code = CLI_EXIT_BAD_INPUT;
+    mr_gltf_library_result_free(&r);
     return code;
 }

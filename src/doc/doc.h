@@ -393,6 +393,24 @@ const mr_brdf_model *mr_doc_export_default_target(const char *output);
 /* 1 when `path`'s extension is one export writes (.mtlx, .usda, .gltf, .glb). */
 int mr_doc_export_output_ok(const char *path);
 
+/* ---- many assets exported in one call (export_library.c) ------------------------------------------------------ */
+
+struct mr_gltf_library_options;
+struct mr_gltf_library_result;
+
+/* The assets inputs[input_count] (gltf/mr_gltf_library.h's listing: files, folders walked for .gltf/.glb, globs)
+ * each exported by mr_doc_export_file with `each` (its threads and progress set by the loop) to OUT_DIR/<its path
+ * below the common root> with the extension replaced by `extension` (".mtlx", ".usda", ".gltf" or ".glb"), by
+ * mr_gltf_convert_library's loop with `library`'s threads, progress, cancel, resume (library->settings: what the
+ * export was told), shards and thumbnails (its convert and job unused): summary.json (per asset the format, target,
+ * materials with their routes and figures, images and maps) and index.html. The after-render (thumbnails, object
+ * SSIM) is of a glTF output only (.gltf/.glb: the exported asset against the input); a .mtlx or .usda output holds
+ * no geometry and is not rendered (null). A failed asset is recorded and the others go on (result->failed).
+ * MR_ERR_INVALID_ARG: another extension; otherwise mr_gltf_convert_library's errors. */
+mr_status mr_doc_export_library(const char *const *inputs, int input_count, const char *out_dir,
+                                const mr_doc_export_options *each, const char *extension,
+                                const struct mr_gltf_library_options *library, struct mr_gltf_library_result *result);
+
 #ifdef __cplusplus
 }
 #endif

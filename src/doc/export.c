@@ -178,13 +178,16 @@ static mr_status export_gltf(const char *input, const char *output, const mr_doc
     if (dot) *dot = '\0';
     mr_doc_gltf_options c;
     conversion_options(o, target, prefix, &c);
+    // The ties: those given, or gltf's default ties to the target less the holds.
+    const mr_brdf_model *gltf = mr_brdf_find("gltf");
+    mr_brdf_ties ties = o->ties != NULL ? *o->ties : mr_brdf_default_ties(gltf, target);
+    if (o->ties == NULL) ties.tied &= ~o->held;
+    c.ties = &ties;
     if (st == MR_OK) st = mr_doc_from_gltf(asset, &c, &report->result);
     if (st == MR_OK) {
-        const mr_brdf_model *gltf = mr_brdf_find("gltf");
         report->source_count = 1;
         report->sources[0] = gltf;
-        report->ties[0] = o->ties != NULL ? *o->ties : mr_brdf_default_ties(gltf, target);
-        if (o->ties == NULL) report->ties[0].tied &= ~o->held;
+        report->ties[0] = ties;
     }
     if (st == MR_OK && is_gltf_path(output)) {
         // glTF to glTF: every material copies (or carries its maps) exactly, so the asset itself is the output,
