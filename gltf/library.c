@@ -1035,7 +1035,7 @@ mr_status mr_gltf_convert_library(const char *const *inputs, int input_count, co
         r.res = &res;
         r.entries = entries;
         r.started = now_seconds();
-        int team = mr_auto_threads(opts->threads, res.count, 2);
+        int team = opts->serial ? 1 : mr_auto_threads(opts->threads, res.count, 2);
         if (team > res.count) team = res.count > 0 ? res.count : 1;
         r.inner_threads = team > 1 ? 1 : opts->threads;
         const int total = res.count;

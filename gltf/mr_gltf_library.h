@@ -104,6 +104,7 @@ typedef struct mr_gltf_library_options {
     mr_gltf_convert_options convert; /* each asset's conversion (its progress fields and image_prefix are unused) */
     const char *settings;   /* what the conversion was told, recorded for resume ("" when NULL) */
     int threads;            /* assets side by side: 0 automatic (rule above), n >= 1 at most n */
+    int serial;             /* 1: one asset at a time, each with `threads` (e.g. jobs sharing a locked file) */
     int resume;             /* 1: skip assets an earlier run converted with the same settings and input */
     int shard_index, shard_count; /* shard_count 0 or 1: every asset */
     int thumbnail_size;     /* square renders for index.html and the SSIM: 0 = 128; 0 < size < 32 refused */

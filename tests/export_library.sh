@@ -86,6 +86,28 @@ check "--shard 0/2 + 1/2 = the whole" test "$whole" = "$union"
 expect "two files and a quoted glob, --json" 0 '"assets": 3, "exported": 3' -- "$bin" export "$lib/duck/Duck.gltf" \
     "$lib/metal rough/bottle/WaterBottle.gltf" "$lib/metal rough/settings/*.gltf" -o "$tmp/j" --format usda --json
 
+# The direct route with a --cache over two small textured assets (6 x 6 maps): the assets run one at a time (the
+# cache's lock), the second finds every answer of the first in the cache; each output equals the one-asset export.
+mkdir -p "$tmp/tex/a" "$tmp/tex/b"
+oiiotool --pattern fill:topleft=0.6,0.3,0.1:topright=0.1,0.4,0.6:bottomleft=0.3,0.3,0.3:bottomright=0.7,0.7,0.2 \
+    6x6 3 -d uint8 -o "$tmp/tex/a/base.png" >/dev/null 2>&1
+oiiotool --pattern fill:topleft=0,0.2,0:topright=0,0.8,0:bottomleft=0,0.4,1:bottomright=0,0.6,1 6x6 3 -d uint8 \
+    -o "$tmp/tex/a/mr.png" >/dev/null 2>&1
+cat >"$tmp/tex/a/tex.gltf" <<'JSON'
+{"asset": {"version": "2.0"}, "images": [{"uri": "base.png"}, {"uri": "mr.png"}],
+ "textures": [{"source": 0}, {"source": 1}],
+ "materials": [{"name": "Tex", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
+   "metallicRoughnessTexture": {"index": 1}}}]}
+JSON
+cp "$tmp/tex/a/"* "$tmp/tex/b/"
+expect "two textured assets to openpbr by the direct route, one --cache" 0 "2 assets: 2 exported" -- \
+    "$bin" export "$tmp/tex/a" "$tmp/tex/b" -o "$tmp/tex/o" --format mtlx --size 16 --cache "$tmp/c.cache"
+check "... the summary says the direct route" test "$(summary "$tmp/tex/o/summary.json" \
+    'all(x["materials"][0]["route"] == "direct" and x["materials"][0]["texels"] == 36 for x in it)')" = True
+check "... the cache holds the distinct values once (36 answers)" test "$(grep -vc '^#' "$tmp/c.cache")" = 37
+"$bin" export "$tmp/tex/a/tex.gltf" -o "$tmp/tex/single/a/tex.mtlx" --size 16 >/dev/null 2>&1
+check "... the first asset's files equal the one-asset export's" diff -r -q "$tmp/tex/single/a" "$tmp/tex/o/a"
+
 # Usage errors.
 expect "many assets without --format" 1 "give -o DIR --format" -- "$bin" export "$lib" -o "$tmp/x"
 expect "--format of another kind" 1 "expected mtlx, usda, gltf or glb" -- "$bin" export "$lib" -o "$tmp/x" --format obj

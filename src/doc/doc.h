@@ -402,7 +402,8 @@ struct mr_gltf_library_result;
  * each exported by mr_doc_export_file with `each` (its threads and progress set by the loop) to OUT_DIR/<its path
  * below the common root> with the extension replaced by `extension` (".mtlx", ".usda", ".gltf" or ".glb"), by
  * mr_gltf_convert_library's loop with `library`'s threads, progress, cancel, resume (library->settings: what the
- * export was told), shards and thumbnails (its convert and job unused): summary.json (per asset the format, target,
+ * export was told), shards and thumbnails (its convert and job unused; with each->cache_path the assets run one at
+ * a time, `serial`: the cache takes one user at a time): summary.json (per asset the format, target,
  * materials with their routes and figures, images and maps) and index.html. The after-render (thumbnails, object
  * SSIM) is of a glTF output only (.gltf/.glb: the exported asset against the input); a .mtlx or .usda output holds
  * no geometry and is not rendered (null). A failed asset is recorded and the others go on (result->failed).

@@ -158,5 +158,7 @@ mr_status mr_doc_export_library(const char *const *inputs, int input_count, cons
     mr_gltf_library_job job = {export_one, &state, extension};
     mr_gltf_library_options o = *library;
     o.job = &job;
+    // The direct remap's cache takes one user at a time (an advisory lock, remap/direct.h): assets one by one.
+    if (state.each->cache_path != NULL) o.serial = 1;
     return mr_gltf_convert_library(inputs, input_count, out_dir, &o, result);
 }
