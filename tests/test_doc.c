@@ -793,6 +793,43 @@ MR_TEST(mtlx_textured_material_converts_by_the_direct_route) {
     }
 }
 
+/* mr_doc_export_file: one asset to one file in one call; the report says what was done; refusals name the file and
+ * write nothing. */
+static void export_file_in_one_call(void) {
+    char in[1024], out[1024], bad[1024];
+    snprintf(in, sizeof in, "%s", mr_test_tmp_path("one_call.gltf"));
+    snprintf(out, sizeof out, "%s", mr_test_tmp_path("one_call_out/doc.mtlx"));
+    snprintf(bad, sizeof bad, "%s", mr_test_tmp_path("one_call_out/doc.obj"));
+    FILE *f = fopen(in, "w");
+    MR_CHECK(f != NULL);
+    if (!f) return;
+    fputs("{\"asset\": {\"version\": \"2.0\"}, \"materials\": [{\"name\": \"Gold\", \"pbrMetallicRoughness\": "
+          "{\"baseColorFactor\": [1.0, 0.77, 0.34, 1], \"metallicFactor\": 1.0, \"roughnessFactor\": 0.3}}]}\n", f);
+    fclose(f);
+    mr_doc_export_options o = {0};
+    o.target = mr_brdf_find("gltf");
+    mr_doc_export_report rep;
+    MR_CHECK_OK(mr_doc_export_file(in, out, &o, &rep));
+    MR_CHECK(rep.result != NULL && rep.result->material_count == 1 && strcmp(rep.format, "mtlx") == 0);
+    MR_CHECK(rep.result != NULL && rep.result->materials[0].route == MR_DOC_ROUTE_COPY);
+    MR_CHECK(rep.target == o.target && rep.source_count == 1 && strcmp(rep.sources[0]->name, "gltf") == 0);
+    struct stat st;
+    MR_CHECK(stat(out, &st) == 0 && st.st_size > 0);
+    mr_doc_export_report_free(&rep);
+    MR_CHECK(rep.result == NULL);
+    // Refused: another extension; a model the format does not write; the output over the input.
+    MR_CHECK(mr_doc_export_file(in, bad, NULL, &rep) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "doc.obj") != NULL && rep.result == NULL);
+    o.target = mr_brdf_find("openpbr");
+    snprintf(bad, sizeof bad, "%s", mr_test_tmp_path("one_call_out/doc.glb"));
+    MR_CHECK(mr_doc_export_file(in, bad, &o, &rep) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "openpbr") != NULL && stat(bad, &st) != 0);
+    MR_CHECK(mr_doc_export_file(in, in, NULL, &rep) != MR_OK);
+    MR_CHECK(strstr(mr_last_error(), "one_call.gltf") != NULL);
+    MR_CHECK(mr_doc_export_default_target("x.usda") == mr_brdf_find("usd-preview"));
+    MR_CHECK(mr_doc_export_default_target("x.obj") == NULL && !mr_doc_export_output_ok("x.obj"));
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(every_parameter_maps_to_a_declared_input), MR_TEST_ENTRY(mtlx_writes_declared_inputs_only),
              MR_TEST_ENTRY(usda_writes_declared_inputs_only), MR_TEST_ENTRY(the_colour_space_rule),
              MR_TEST_ENTRY(usda_specular_color_only_in_the_specular_workflow),
@@ -801,4 +838,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(every_parameter_maps_to_a_declared_input), MR_TEST_EN
              MR_TEST_ENTRY(a_textured_material_converts_by_the_direct_route), MR_TEST_ENTRY(mtlx_round_trip),
              MR_TEST_ENTRY(mtlx_reads_usd_preview_and_top_level_images), MR_TEST_ENTRY(mtlx_reads_materialx_examples),
              MR_TEST_ENTRY(mtlx_refusals_name_file_line_material_and_node), MR_TEST_ENTRY(mtlx_convert_routes),
-             MR_TEST_ENTRY(mtlx_textured_material_converts_by_the_direct_route))
+             MR_TEST_ENTRY(mtlx_textured_material_converts_by_the_direct_route),
+             MR_TEST_ENTRY(export_file_in_one_call))

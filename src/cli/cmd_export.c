@@ -1,7 +1,8 @@
 /*
  * cmd_export.c — `matremap export INPUT -o OUT.mtlx|OUT.usda|OUT.gltf|OUT.glb [--to MODEL]`: a glTF asset's or a
  * MaterialX document's materials written as a MaterialX or USD document, or as a glTF asset, by one library call
- * (src/doc/doc.h: mr_doc_export_file); here the options, the progress line and one line per material.
+ * (src/doc/doc.h: mr_doc_export_file); here the options, the progress line and one line per material. Many assets
+ * (`export FOLDER|GLOB|ASSET... -o DIR --format F`): mr_doc_export_library, one line per asset and a total.
  */
 #include <errno.h>
 #include <signal.h>
