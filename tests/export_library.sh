@@ -108,6 +108,15 @@ check "... the cache holds the distinct values once (36 answers)" test "$(grep -
 "$bin" export "$tmp/tex/a/tex.gltf" -o "$tmp/tex/single/a/tex.mtlx" --size 16 >/dev/null 2>&1
 check "... the first asset's files equal the one-asset export's" diff -r -q "$tmp/tex/single/a" "$tmp/tex/o/a"
 
+# A MaterialX document among the inputs: exported too (fingerprint: its one file), not rendered into a .glb.
+gold="$root/tests/data/materialx/standard_surface_gold.mtlx"
+expect "a .mtlx and a glTF asset into .glb" 0 "2 assets: 2 exported" -- \
+    "$bin" export "$gold" "$lib/duck/Duck.gltf" -o "$tmp/mx" --format glb
+check "... the document's output not rendered, the asset's rendered" test "$(summary "$tmp/mx/summary.json" \
+    'sorted((x["input"].endswith(".mtlx"), x["object_ssim"] is None) for x in it)')" = "[(False, False), (True, True)]"
+expect "... --resume: both resumed" 0 "2 assets: 0 exported, 2 resumed" -- \
+    "$bin" export "$gold" "$lib/duck/Duck.gltf" -o "$tmp/mx" --format glb --resume
+
 # Usage errors.
 expect "many assets without --format" 1 "give -o DIR --format" -- "$bin" export "$lib" -o "$tmp/x"
 expect "--format of another kind" 1 "expected mtlx, usda, gltf or glb" -- "$bin" export "$lib" -o "$tmp/x" --format obj

@@ -123,7 +123,9 @@ static mr_status export_one(void *user, const char *input, const char *output, i
     if (st != MR_OK) return st;
     const mr_doc_gltf_result *r = rep.result;
     out->material_count = r->material_count;
-    out->render_after = strcmp(rep.format, "gltf") == 0 || strcmp(rep.format, "glb") == 0;
+    // A glTF output of a glTF input is rendered against it; a document (in or out) has no geometry to render.
+    out->render_after = (strcmp(rep.format, "gltf") == 0 || strcmp(rep.format, "glb") == 0) &&
+                        mr_doc_format_from_path(input) != MR_DOC_FORMAT_MTLX;
     size_t used = (size_t)snprintf(out->overview, sizeof out->overview, "%d material%s to %s (%s)",
                                    r->material_count, r->material_count == 1 ? "" : "s", rep.target->name, rep.format);
     for (int k = 0; k < r->material_count; k++) {
