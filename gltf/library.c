@@ -937,6 +937,12 @@ void mr_gltf_library_result_free(mr_gltf_library_result *result) {
     memset(result, 0, sizeof *result);
 }
 
+static int cmp_output(const void *pa, const void *pb) {
+    const mr_gltf_library_item *a = *(const mr_gltf_library_item *const *)pa;
+    const mr_gltf_library_item *b = *(const mr_gltf_library_item *const *)pb;
+    return strcmp(a->output, b->output);
+}
+
 /* Whether `inner` is `outer` or lies below it (absolute paths). */
 static int lies_in(const char *inner, const char *outer) {
     size_t n = strlen(outer);
@@ -1023,6 +1029,18 @@ mr_status mr_gltf_convert_library(const char *const *inputs, int input_count, co
             it->ssim = NAN;
             if (!it->input || !it->output) s = mr_fail(MR_ERR_NOMEM, "out of memory");
         }
+    }
+    if (s == MR_OK && opts->job && opts->job->extension && res.count > 1) {
+        // Two inputs one output (a.gltf and a.glb -> a.mtlx): refused before any work, naming both.
+        mr_gltf_library_item **by_output = malloc((size_t)res.count * sizeof *by_output);
+        if (!by_output) s = mr_fail(MR_ERR_NOMEM, "out of memory");
+        for (int i = 0; s == MR_OK && i < res.count; i++) by_output[i] = &res.items[i];
+        if (s == MR_OK) qsort(by_output, (size_t)res.count, sizeof *by_output, cmp_output);
+        for (int i = 1; s == MR_OK && i < res.count; i++)
+            if (strcmp(by_output[i - 1]->output, by_output[i]->output) == 0)
+                s = mr_fail(MR_ERR_INVALID_ARG, "'%s' and '%s' would both be written to '%s'; refusing the run (export "
+                            "one of them apart)", by_output[i - 1]->input, by_output[i]->input, by_output[i]->output);
+        free(by_output);
     }
     if (s == MR_OK) {
         run r = {0};

@@ -45,7 +45,8 @@
  * each asset (under a lock, from any thread of the team); the cancel flag is read before each asset starts: the
  * rest are recorded "cancelled" and the call returns MR_ERR_CANCELLED after writing the summary.
  * Jobs: with opts->job each asset is job->run's instead of a conversion (the output named with job->extension),
- * the rest as above; a fingerprint of an asset that is not .gltf/.glb is of its one file. Statuses stay
+ * the rest as above (two inputs that would be written to one output, a.gltf and a.glb, refused before any work:
+ * MR_ERR_INVALID_ARG naming both); a fingerprint of an asset that is not .gltf/.glb is of its one file. Statuses stay
  * "converted" (the job done), "resumed", "failed", "cancelled".
  * Errors: an asset's failure is recorded (its status "failed", the library's message) and the others go on; the
  * call itself fails only for bad arguments, the refusals above, and writing the summary or the index. Nothing is

@@ -125,6 +125,10 @@ expect "--resume with one asset" 1 "go with many assets" -- "$bin" export "$lib/
     --resume
 expect "--to a .glb cannot hold" 1 "holds gltf materials only" -- "$bin" export "$lib" -o "$tmp/x" --format glb \
     --to openpbr
+mkdir -p "$tmp/two"
+cp "$lib/duck/"* "$tmp/two/" && "$bin" gltf spec2metal "$tmp/two/Duck.gltf" -o "$tmp/two/Duck.glb" >/dev/null 2>&1
+refuses "Duck.gltf and Duck.glb into one Duck.usda" "would both be written to .*Duck.usda" "$tmp/two" -- \
+    "$bin" export "$tmp/two" -o "$tmp/twoout" --format usda
 refuses "an output folder inside an input folder" "lies inside the input folder" "$lib" -- \
     "$bin" export "$lib" -o "$lib/out" --format usda
 finish

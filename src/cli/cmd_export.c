@@ -69,6 +69,7 @@ static void print_help(void) {
            "against its input (thumbnails and object SSIM, as 'matremap gltf' does); .mtlx and .usda outputs hold no\n"
            "geometry and are not rendered. An asset that fails is named and the others go on (exit 2). SIGINT or\n"
            "SIGTERM lets the assets under way finish and records the rest as cancelled (exit 3; --resume goes on).\n"
+           "With --cache the assets run one at a time (the cache file takes one user at a time).\n"
            "  --format F            mtlx, usda, gltf or glb: the outputs' format (many assets)\n"
            "  --resume              skip assets an earlier run into DIR exported with the same options from the\n"
            "                        same input files (summary.json's fingerprints)\n"
