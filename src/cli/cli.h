@@ -7,6 +7,7 @@
 #ifndef MR_CLI_H
 #define MR_CLI_H
 
+#include <signal.h>
 #include <stdio.h>
 
 #include "matremap.h"
@@ -178,6 +179,25 @@ void cli_print_renderers_json(FILE *out, const cli_renderers *r);
 int cli_set_material_input(const char *command, mr_external_material *material, const char *assignment);
 /* The material's inputs as a JSON object {"PATH": value or [r, g, b], ...}. */
 void cli_print_material_inputs_json(FILE *out, const mr_external_material *material);
+
+/* ---- many items (cli_library.c) ---- */
+
+/* --shard K/N (0 <= K < N <= max) into *k, *n; 0 after a usage error naming `command`. */
+int cli_parse_shard(const char *command, const char *text, long max, long *k, long *n);
+
+/* How a many-asset run shows its progress (mr_gltf_library_options.progress = cli_library_progress, progress_user =
+ * a cli_library_view): on a terminal a bar on stderr (assets done/total, texels per second, time left), otherwise a
+ * line per finished asset on stdout, a converted one named with done_word ("exported"; NULL: its status). */
+typedef struct cli_library_view {
+    int tty;
+    const char *done_word;
+} cli_library_view;
+void cli_library_progress(void *user, const mr_gltf_library_progress *p);
+
+/* SIGINT and SIGTERM set the returned flag (mr_gltf_library_options.cancel) until cli_library_cancel_end restores
+ * the handlers saved in old[2]. */
+volatile sig_atomic_t *cli_library_cancel_begin(struct sigaction old[2]);
+void cli_library_cancel_end(const struct sigaction old[2]);
 
 int cmd_models(int argc, char **argv);
 int cmd_render(int argc, char **argv);

@@ -123,25 +123,6 @@ typedef struct options {
     char probe[32]; /* many assets: "asset.<format>" */
 } options;
 
-/* --shard K/N: 0 <= K < N (as 'matremap gltf --shard'). */
-static int parse_shard(const char *text, int *k, int *n) {
-    char *end = NULL;
-    errno = 0;
-    long a = strtol(text, &end, 10), b = -1;
-    int ok = text[0] >= '0' && text[0] <= '9' && *end == '/' && errno != ERANGE;
-    if (ok) {
-        const char *rest = end + 1;
-        b = strtol(rest, &end, 10);
-        ok = rest[0] >= '0' && rest[0] <= '9' && *end == '\0' && errno != ERANGE && b >= 1 && a < b && b <= 1000000;
-    }
-    if (!ok) {
-        cli_usage_error("export", "--shard '%s': expected K/N with integers 0 <= K < N (shard K of N)", text);
-        return 0;
-    }
-    *k = (int)a;
-    *n = (int)b;
-    return 1;
-}
 
 static int parse(int argc, char **argv, options *o) {
     for (int i = 1; i < argc; i++) {
@@ -179,7 +160,10 @@ static int parse(int argc, char **argv, options *o) {
             if (taken < 0) return CLI_EXIT_USAGE;
             o->format = value;
         } else if ((taken = cli_take_option("export", argc, argv, &i, "--shard", &value))) {
-            if (taken < 0 || !parse_shard(value, &o->shard_index, &o->shard_count)) return CLI_EXIT_USAGE;
+            long k = 0, n = 0;
+            if (taken < 0 || !cli_parse_shard("export", value, 1000000, &k, &n)) return CLI_EXIT_USAGE;
+            o->shard_index = (int)k;
+            o->shard_count = (int)n;
             o->shard_given = 1;
         } else if (strcmp(argv[i], "--resume") == 0) {
             o->resume = 1;
@@ -493,35 +477,6 @@ static int export_main(options *op) {
 
 /* ---- many assets: mr_doc_export_library ----------------------------------------------------------------------- */
 
-/* SIGINT or SIGTERM during a library run: the assets under way finish, the rest are recorded "cancelled". */
-static volatile sig_atomic_t library_cancel = 0;
-static void on_signal(int sig) {
-    (void)sig;
-    library_cancel = 1;
-}
-
-/* One line per asset (as 'matremap gltf' prints them); on a terminal a bar on stderr. */
-static void on_asset(void *user, const mr_gltf_library_progress *p) {
-    const int *tty = user;
-    if (*tty) {
-        const int width = 30, filled = p->total > 0 ? width * p->done / p->total : width;
-        const double left = p->done > 0 ? p->seconds / p->done * (p->total - p->done) : 0.0;
-        fprintf(stderr, "\r\033[K[%.*s%.*s] %d/%d assets, %d:%02d left", filled, "##############################",
-                width - filled, "..............................", p->done, p->total, (int)left / 60, (int)left % 60);
-        if (p->failed > 0) fprintf(stderr, ", %d failed", p->failed);
-        if (strcmp(p->status, "failed") == 0) fprintf(stderr, "\r\033[Kfailed: %s: %s\n", p->asset, p->error);
-        if (p->done == p->total) fprintf(stderr, "\n");
-        fflush(stderr);
-    } else if (strcmp(p->status, "failed") == 0) {
-        printf("[%d/%d] failed: %s: %s\n", p->done, p->total, p->asset, p->error);
-        fflush(stdout);
-    } else {
-        printf("[%d/%d] %s: %s (%.2f s)\n", p->done, p->total, strcmp(p->status, "converted") == 0 ? "exported"
-               : p->status, p->asset, p->asset_seconds);
-        fflush(stdout);
-    }
-}
-
 static int run_library(const options *o, const mr_doc_export_options *each) {
     // What the export was told, recorded for --resume (an asset is exported again when any of it changes).
     char settings[8192];
@@ -538,22 +493,16 @@ static int run_library(const options *o, const mr_doc_export_options *each) {
     lo.no_renders = o->no_renders;
     lo.shard_index = o->shard_index;
     lo.shard_count = o->shard_count;
-    int tty = isatty(STDERR_FILENO) && !o->json;
-    lo.progress = o->json ? NULL : on_asset;
-    lo.progress_user = &tty;
-    lo.cancel = &library_cancel;
-    struct sigaction sa, old_int, old_term;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, &old_int);
-    sigaction(SIGTERM, &sa, &old_term);
+    cli_library_view view = {isatty(STDERR_FILENO) && !o->json, "exported"};
+    lo.progress = o->json ? NULL : cli_library_progress;
+    lo.progress_user = &view;
+    struct sigaction old[2];
+    lo.cancel = cli_library_cancel_begin(old);
     char extension[16];
     snprintf(extension, sizeof extension, ".%s", o->format);
     mr_gltf_library_result r;
     mr_status status = mr_doc_export_library(o->inputs, o->input_count, o->output, each, extension, &lo, &r);
-    sigaction(SIGINT, &old_int, NULL);
-    sigaction(SIGTERM, &old_term, NULL);
+    cli_library_cancel_end(old);
     if (status != MR_OK && r.items == NULL) return cli_fail("export", status);
     int code = status != MR_OK ? cli_fail("export", status) : CLI_EXIT_OK;
     for (int i = 0; i < r.count; i++)

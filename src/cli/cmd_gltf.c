@@ -179,7 +179,6 @@ static void print_json_reasons(const mr_gltf_material_report *r, int off_compute
            r->failed);
 }
 
-static int parse_shard(const char *text, int *k, int *n);
 
 static int parse(int argc, char **argv, options *o) {
     for (int i = 1; i < argc; i++) {
@@ -231,7 +230,10 @@ static int parse(int argc, char **argv, options *o) {
         } else if (strcmp(argv[i], "--no-renders") == 0) {
             o->no_renders = 1;
         } else if ((taken = cli_take_option("gltf", argc, argv, &i, "--shard", &value))) {
-            if (taken < 0 || !parse_shard(value, &o->shard_index, &o->shard_count)) return CLI_EXIT_USAGE;
+            long k = 0, n = 0;
+            if (taken < 0 || !cli_parse_shard("gltf", value, 1000000, &k, &n)) return CLI_EXIT_USAGE;
+            o->shard_index = (int)k;
+            o->shard_count = (int)n;
             o->shard_given = 1;
         } else if (argv[i][0] == '-') {
             return cli_usage_error("gltf", "unknown option '%s'", argv[i]);
@@ -284,60 +286,8 @@ static int parse(int argc, char **argv, options *o) {
     return CLI_EXIT_OK;
 }
 
-/* --shard K/N: 0 <= K < N (as 'matremap sweep --shard'). */
-static int parse_shard(const char *text, int *k, int *n) {
-    char *end = NULL;
-    errno = 0;
-    long a = strtol(text, &end, 10), b = -1;
-    int ok = text[0] >= '0' && text[0] <= '9' && *end == '/' && errno != ERANGE;
-    if (ok) {
-        const char *rest = end + 1;
-        b = strtol(rest, &end, 10);
-        ok = rest[0] >= '0' && rest[0] <= '9' && *end == '\0' && errno != ERANGE && b >= 1 && a < b && b <= 1000000;
-    }
-    if (!ok) {
-        cli_usage_error("gltf", "--shard '%s': expected K/N with integers 0 <= K < N (shard K of N)", text);
-        return 0;
-    }
-    *k = (int)a;
-    *n = (int)b;
-    return 1;
-}
 
 /* ---- many assets: mr_gltf_convert_library ------------------------------------------------------------------- */
-
-/* SIGINT or SIGTERM during a library run: the assets under way finish, the rest are recorded "cancelled". */
-static volatile sig_atomic_t library_cancel = 0;
-static void on_signal(int sig) {
-    (void)sig;
-    library_cancel = 1;
-}
-
-typedef struct library_progress {
-    int tty;
-} library_progress;
-
-static void on_asset(void *user, const mr_gltf_library_progress *p) {
-    const library_progress *lp = user;
-    if (lp->tty) {
-        const int width = 30, filled = p->total > 0 ? width * p->done / p->total : width;
-        const double rate = p->seconds > 0.0 ? (double)p->texels / p->seconds : 0.0;
-        const double left = p->done > 0 ? p->seconds / p->done * (p->total - p->done) : 0.0;
-        fprintf(stderr, "\r\033[K[%.*s%.*s] %d/%d assets, %.2f Mtexel/s, %d:%02d left", filled,
-                "##############################", width - filled, "..............................", p->done,
-                p->total, rate / 1e6, (int)left / 60, (int)left % 60);
-        if (p->failed > 0) fprintf(stderr, ", %d failed", p->failed);
-        if (strcmp(p->status, "failed") == 0) fprintf(stderr, "\r\033[Kfailed: %s: %s\n", p->asset, p->error);
-        if (p->done == p->total) fprintf(stderr, "\n");
-        fflush(stderr);
-    } else if (strcmp(p->status, "failed") == 0) {
-        printf("[%d/%d] failed: %s: %s\n", p->done, p->total, p->asset, p->error);
-        fflush(stdout);
-    } else {
-        printf("[%d/%d] %s: %s (%.2f s)\n", p->done, p->total, p->status, p->asset, p->asset_seconds);
-        fflush(stdout);
-    }
-}
 
 static int run_library(const options *o, const mr_transform *transform) {
     char settings[512];
@@ -361,20 +311,14 @@ static int run_library(const options *o, const mr_transform *transform) {
     lo.no_renders = o->no_renders;
     lo.shard_index = o->shard_index;
     lo.shard_count = o->shard_count;
-    library_progress lp = {isatty(STDERR_FILENO) && !o->json};
-    lo.progress = o->json ? NULL : on_asset;
-    lo.progress_user = &lp;
-    lo.cancel = &library_cancel;
-    struct sigaction sa, old_int, old_term;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, &old_int);
-    sigaction(SIGTERM, &sa, &old_term);
+    cli_library_view view = {isatty(STDERR_FILENO) && !o->json, NULL};
+    lo.progress = o->json ? NULL : cli_library_progress;
+    lo.progress_user = &view;
+    struct sigaction old[2];
+    lo.cancel = cli_library_cancel_begin(old);
     mr_gltf_library_result r;
     mr_status status = mr_gltf_convert_library(o->inputs, o->input_count, o->output, &lo, &r);
-    sigaction(SIGINT, &old_int, NULL);
-    sigaction(SIGTERM, &old_term, NULL);
+    cli_library_cancel_end(old);
     if (status != MR_OK && r.items == NULL) return cli_fail("gltf", status);
     int code = status != MR_OK ? cli_fail("gltf", status) : CLI_EXIT_OK;
     for (int i = 0; i < r.count; i++)

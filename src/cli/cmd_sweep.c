@@ -250,26 +250,6 @@ static int parse_seed(const char *text, unsigned long long *out) {
     return 1;
 }
 
-/* --shard K/N: 0 <= K < N. */
-static int parse_shard(const char *text, long *k, long *n) {
-    char *end = NULL;
-    errno = 0;
-    long a = strtol(text, &end, 10), b = -1;
-    int ok = text[0] >= '0' && text[0] <= '9' && *end == '/' && errno != ERANGE;
-    if (ok) {
-        const char *rest = end + 1;
-        b = strtol(rest, &end, 10);
-        ok = rest[0] >= '0' && rest[0] <= '9' && *end == '\0' && errno != ERANGE && b >= 1 && a < b &&
-             b <= MR_SWEEP_MAX_SAMPLES;
-    }
-    if (!ok) {
-        cli_usage_error("sweep", "--shard '%s': expected K/N with integers 0 <= K < N (shard K of N)", text);
-        return 0;
-    }
-    *k = a;
-    *n = b;
-    return 1;
-}
 
 /* What the command line asks for. */
 typedef struct sweep_args {
@@ -357,7 +337,7 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
             if (taken < 0 || !cli_parse_int("sweep", "--threads", value, 0, 1024, &a->threads))
                 return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--shard", &value))) {
-            if (taken < 0 || !parse_shard(value, &a->shard_index, &a->shard_count))
+            if (taken < 0 || !cli_parse_shard("sweep", value, MR_SWEEP_MAX_SAMPLES, &a->shard_index, &a->shard_count))
                 return CLI_EXIT_USAGE;
         } else if (argv[i][0] == '-') {
             return cli_usage_error("sweep", "unknown option '%s'", argv[i]);
