@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "c_locale.h"
 #include "mr_internal.h"
 #include "api/api.h"
 #include "brdf/brdf.h"
@@ -34,22 +35,29 @@ static void json_string(FILE *out, const char *text) {
     fputc('"', out);
 }
 
-/* A text stream for a JSON answer; *json_out set by json_close. */
+/* A text stream for a JSON answer, its numbers in the C locale whatever the host's (Blender's Python may set one
+ * with a decimal comma); *json_out set by json_close. */
 typedef struct json_text {
     FILE *out;
     char *text;
     size_t size;
+    mr_c_numeric locale;
 } json_text;
 
 static mr_status json_open(json_text *j) {
     memset(j, 0, sizeof *j);
+    mr_status status = mr_c_numeric_enter(&j->locale, "JSON text");
+    if (status != MR_OK) return status;
     j->out = open_memstream(&j->text, &j->size);
-    return j->out != NULL ? MR_OK : mr_fail(MR_ERR_NOMEM, "JSON text: out of memory");
+    if (j->out != NULL) return MR_OK;
+    mr_c_numeric_leave(&j->locale);
+    return mr_fail(MR_ERR_NOMEM, "JSON text: out of memory");
 }
 
 static mr_status json_close(json_text *j, mr_status status, char **json_out) {
     int bad = ferror(j->out);
     fclose(j->out);
+    mr_c_numeric_leave(&j->locale);
     if (status == MR_OK && bad) status = mr_fail(MR_ERR_NOMEM, "JSON text: out of memory");
     if (status == MR_OK)
         *json_out = j->text;
