@@ -198,6 +198,11 @@ void cli_library_progress(void *user, const mr_gltf_library_progress *p);
  * the handlers saved in old[2]. */
 volatile sig_atomic_t *cli_library_cancel_begin(struct sigaction old[2]);
 void cli_library_cancel_end(const struct sigaction old[2]);
+/* The end of a many-asset run: the failed assets named on stderr ("matremap COMMAND: ASSET failed: why"), then
+ * one JSON object ({JSON_HEAD, "output": ..., "assets": N, "DONE_WORD": N, ...}) or the summary line ("matremap
+ * LABEL: N assets: N DONE_WORD, ..."); frees *r. The exit code: the library's failure, else 2 when an asset failed. */
+int cli_library_report(const char *command, const char *label, const char *json_head, const char *done_word,
+                       const char *output, int json, mr_status status, mr_gltf_library_result *r);
 
 int cmd_models(int argc, char **argv);
 int cmd_render(int argc, char **argv);

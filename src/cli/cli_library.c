@@ -74,3 +74,41 @@ void cli_library_cancel_end(const struct sigaction old[2]) {
     sigaction(SIGINT, &old[0], NULL);
     sigaction(SIGTERM, &old[1], NULL);
 }
+
+int cli_library_report(const char *command, const char *label, const char *json_head, const char *done_word,
+                       const char *output, int json, mr_status status, mr_gltf_library_result *r) {
+    if (status != MR_OK && r->items == NULL) return cli_fail(command, status);
+    int code = status != MR_OK ? cli_fail(command, status) : CLI_EXIT_OK;
+    for (int i = 0; i < r->count; i++)
+        if (strcmp(r->items[i].status, "failed") == 0)
+            fprintf(stderr, "matremap %s: %s failed: %s\n", command, r->items[i].input, r->items[i].error);
+    if (json) {
+        printf("{%s, \"output\": ", json_head);
+        cli_json_string(stdout, output);
+        printf(", \"assets\": %d, \"%s\": %d, \"resumed\": %d, \"failed\": %d, \"cancelled\": %d, "
+               "\"texels\": %zu, \"seconds\": %.6f, \"failures\": [", r->count, done_word, r->converted, r->resumed,
+               r->failed, r->cancelled, r->texels, r->seconds);
+        for (int i = 0, first = 1; i < r->count; i++)
+            if (strcmp(r->items[i].status, "failed") == 0) {
+                printf("%s{\"input\": ", first ? "" : ", ");
+                cli_json_string(stdout, r->items[i].input);
+                printf(", \"error\": ");
+                cli_json_string(stdout, r->items[i].error);
+                printf("}");
+                first = 0;
+            }
+        printf("]}\n");
+    } else {
+        const int finished = r->count - r->cancelled;
+        printf("matremap %s: %d asset%s: %d %s, %d resumed, %d failed", label, r->count, r->count == 1 ? "" : "s",
+               r->converted, done_word, r->resumed, r->failed);
+        if (r->cancelled > 0) printf(", %d cancelled", r->cancelled);
+        const size_t len = strlen(output);
+        const char *sep = len > 0 && output[len - 1] == '/' ? "" : "/";
+        printf(" in %.2f s (%.1f assets/min); wrote %s%ssummary.json and %s%sindex.html\n", r->seconds,
+               r->seconds > 0 ? 60.0 * finished / r->seconds : 0.0, output, sep, output, sep);
+    }
+    if (code == CLI_EXIT_OK && r->failed > 0) code = CLI_EXIT_BAD_INPUT;
+    mr_gltf_library_result_free(r);
+    return code;
+}

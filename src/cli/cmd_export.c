@@ -503,38 +503,7 @@ static int run_library(const options *o, const mr_doc_export_options *each) {
     mr_gltf_library_result r;
     mr_status status = mr_doc_export_library(o->inputs, o->input_count, o->output, each, extension, &lo, &r);
     cli_library_cancel_end(old);
-    if (status != MR_OK && r.items == NULL) return cli_fail("export", status);
-    int code = status != MR_OK ? cli_fail("export", status) : CLI_EXIT_OK;
-    for (int i = 0; i < r.count; i++)
-        if (strcmp(r.items[i].status, "failed") == 0)
-            fprintf(stderr, "matremap export: %s failed: %s\n", r.items[i].input, r.items[i].error);
-    if (o->json) {
-        printf("{\"command\": \"export\", \"format\": \"%s\", \"target\": \"%s\", \"output\": ", o->format, o->to);
-        cli_json_string(stdout, o->output);
-        printf(", \"assets\": %d, \"exported\": %d, \"resumed\": %d, \"failed\": %d, \"cancelled\": %d, "
-               "\"texels\": %zu, \"seconds\": %.6f, \"failures\": [", r.count, r.converted, r.resumed, r.failed,
-               r.cancelled, r.texels, r.seconds);
-        for (int i = 0, first = 1; i < r.count; i++)
-            if (strcmp(r.items[i].status, "failed") == 0) {
-                printf("%s{\"input\": ", first ? "" : ", ");
-                cli_json_string(stdout, r.items[i].input);
-                printf(", \"error\": ");
-                cli_json_string(stdout, r.items[i].error);
-                printf("}");
-                first = 0;
-            }
-        printf("]}\n");
-    } else {
-        const int finished = r.count - r.cancelled;
-        printf("matremap export: %d asset%s: %d exported, %d resumed, %d failed", r.count, r.count == 1 ? "" : "s",
-               r.converted, r.resumed, r.failed);
-        if (r.cancelled > 0) printf(", %d cancelled", r.cancelled);
-        const size_t len = strlen(o->output);
-        const char *sep = len > 0 && o->output[len - 1] == '/' ? "" : "/";
-        printf(" in %.2f s (%.1f assets/min); wrote %s%ssummary.json and %s%sindex.html\n", r.seconds,
-               r.seconds > 0 ? 60.0 * finished / r.seconds : 0.0, o->output, sep, o->output, sep);
-    }
-    if (code == CLI_EXIT_OK && r.failed > 0) code = CLI_EXIT_BAD_INPUT;
-    mr_gltf_library_result_free(&r);
-    return code;
+    char head[256];
+    snprintf(head, sizeof head, "\"command\": \"export\", \"format\": \"%s\", \"target\": \"%s\"", o->format, o->to);
+    return cli_library_report("export", "export", head, "exported", o->output, o->json, status, &r);
 }

@@ -76,9 +76,12 @@ static void plan_common(mr_output_plan *io, const char *output, const mr_doc_exp
     if (o->cache_path != NULL) mr_output_plan_output(io, o->cache_path, "--cache");
 }
 
-/* The conversion's options from the export's; prefix: OUT without its extension. */
-static void conversion_options(const mr_doc_export_options *o, const mr_brdf_model *target, const char *prefix,
-                               mr_doc_gltf_options *c) {
+/* The conversion's options from the export's, its maps' prefix (OUT without its extension) into prefix[4096]. */
+static void conversion_options(const mr_doc_export_options *o, const mr_brdf_model *target, const char *output,
+                               char prefix[4096], mr_doc_gltf_options *c) {
+    snprintf(prefix, 4096, "%s", output);
+    char *dot = strrchr(prefix, '.');
+    if (dot) *dot = '\0';
     memset(c, 0, sizeof *c);
     c->target = target;
     c->image_prefix = prefix;
@@ -122,11 +125,8 @@ static mr_status export_mtlx(const char *input, const char *output, const mr_doc
         return st;
     }
     char prefix[4096];
-    snprintf(prefix, sizeof prefix, "%s", output);
-    char *dot = strrchr(prefix, '.');
-    if (dot) *dot = '\0';
     mr_doc_gltf_options c;
-    conversion_options(o, target, prefix, &c);
+    conversion_options(o, target, output, prefix, &c);
     c.document_path = input;
     st = mr_doc_convert(in, label, &c, &report->result);
     // The ties the remaps took: the defaults of each remapped material's model (a hold wins), or those given.
@@ -173,11 +173,8 @@ static mr_status export_gltf(const char *input, const char *output, const mr_doc
     plan_common(io, output, o);
     st = mr_output_plan_check(io);
     char prefix[4096];
-    snprintf(prefix, sizeof prefix, "%s", output);
-    char *dot = strrchr(prefix, '.');
-    if (dot) *dot = '\0';
     mr_doc_gltf_options c;
-    conversion_options(o, target, prefix, &c);
+    conversion_options(o, target, output, prefix, &c);
     // The ties: those given, or gltf's default ties to the target less the holds.
     const mr_brdf_model *gltf = mr_brdf_find("gltf");
     mr_brdf_ties ties = o->ties != NULL ? *o->ties : mr_brdf_default_ties(gltf, target);

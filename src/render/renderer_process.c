@@ -528,7 +528,7 @@ static mr_status append_scene(external_pool *pool, request *r, const mr_render_p
 }
 
 /* Read OUTPUT.<component>.f32 (RGBA float32, rows from the top) into `into` (RGB, the plan's size) over the
- * plan's background, check its coverage against the plan's, and remove the file. */
+ * plan's background and check its coverage against the plan's (render_request removes the file). */
 static mr_status read_component(external_pool *pool, const mr_render_plan *plan, const char *output,
                                 const char *component, mr_image *into) {
     const mr_scene *scene = mr_render_plan_scene(plan);
@@ -542,7 +542,6 @@ static mr_status read_component(external_pool *pool, const mr_render_plan *plan,
     size_t got = rgba ? fread(rgba, sizeof *rgba, pixels * 4, f) : 0;
     int extra = rgba ? fgetc(f) != EOF : 0;
     fclose(f);
-    unlink(path);
     if (rgba == NULL) return mr_fail(MR_ERR_NOMEM, "renderer: out of memory");
     mr_status status = MR_OK;
     if (got != pixels * 4 || extra)
@@ -635,7 +634,7 @@ static mr_status render_request(external_pool *pool, const mr_render_plan *plan,
         if (status == MR_OK) status = read_component(pool, plan, output, files[k], images[k]);
         char path[PATH_MAX + 64];
         snprintf(path, sizeof path, "%s.%s.f32", output, files[k]);
-        unlink(path); // after a failure too
+        unlink(path); // read or not
     }
     if (status == MR_OK) {
         pthread_mutex_lock(&pool->lock);
@@ -648,7 +647,6 @@ static mr_status render_request(external_pool *pool, const mr_render_plan *plan,
 mr_status mr_external_pool_render(external_pool *pool, const mr_render_plan *plan, const mr_brdf_model *model,
                                   const double *values, mr_image *const images[3]) {
     double clamped[MR_BRDF_MAX_VALUES];
-    const int count = mr_brdf_value_count(model);
     for (int i = 0; i < model->param_count; i++) {
         const mr_brdf_param *p = &model->params[i];
         const int offset = mr_brdf_param_offset(model, i);
@@ -660,7 +658,6 @@ mr_status mr_external_pool_render(external_pool *pool, const mr_render_plan *pla
             clamped[offset + c] = mr_clampd(v, p->min_value, p->max_value);
         }
     }
-    (void)count;
     request material = {0};
     mr_c_numeric numeric;
     mr_status status = mr_c_numeric_enter(&numeric, "renderer request");
