@@ -459,13 +459,10 @@ int cmd_remap(int argc, char **argv) {
             for (int k = 0; k < 3 && status == MR_OK; k++) mr_image_scale(images[k], irradiance_scale);
         }
         if (status == MR_OK && material != NULL) { // a material of Blender's own: its renders are the source
-            for (int k = 0; k < 3 && status == MR_OK; k++)
-                status = mr_image_create(scene_opts.size, scene_opts.size, 3, &images[k]);
+            status = mr_image_create(scene_opts.size, scene_opts.size, 3, &images[0]); // kept for --images
             if (status == MR_OK)
-                status = mr_renderer_render_external(renderers.opened[0], plan, material, images[0], images[1],
-                                                     images[2]);
-        }
-        if (status == MR_OK) {
+                status = mr_remap_external(plan, renderers.opened[0], material, to, &opts, &result, images[0]);
+        } else if (status == MR_OK) {
             if (from != NULL) {
                 status = mr_remap(plan, from, source_values, to, &opts, &result);
             } else {

@@ -1453,6 +1453,34 @@ mr_status mr_remap(const mr_render_plan *plan, const mr_brdf_model *source_model
     return status;
 }
 
+mr_status mr_remap_external(const mr_render_plan *plan, mr_renderer *renderer, const mr_external_material *material,
+                            const mr_brdf_model *target, const mr_remap_options *opts, mr_remap_result *out,
+                            mr_image *full) {
+    if (plan == NULL || renderer == NULL || material == NULL || target == NULL || out == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "remap: NULL plan, renderer, material, target or result");
+    const mr_scene *scene = mr_render_plan_scene(plan);
+    const int components = mr_renderer_has_components(renderer);
+    mr_image *images[3] = {NULL, NULL, NULL};
+    mr_status status = MR_OK;
+    for (int k = 0; k < 3 && status == MR_OK; k++)
+        if (k == 0 || components) status = mr_image_create(scene->width, scene->height, 3, &images[k]);
+    if (status == MR_OK)
+        status = mr_renderer_render_external(renderer, plan, material, images[0], images[1], images[2]);
+    if (status == MR_OK) {
+        mr_remap_source source = {images[0], images[1], images[2]};
+        status = mr_remap_images(plan, &source, target, opts, out);
+    }
+    if (status == MR_OK && full != NULL) {
+        if (full->width != scene->width || full->height != scene->height || full->channels != 3)
+            status = mr_fail(MR_ERR_INVALID_ARG, "remap: the full render's image is %dx%dx%d, the scene %dx%dx3",
+                             full->width, full->height, full->channels, scene->width, scene->height);
+        else
+            memcpy(full->pixels, images[0]->pixels, (size_t)scene->width * (size_t)scene->height * 3 * sizeof(float));
+    }
+    for (int k = 0; k < 3; k++) mr_image_free(images[k]);
+    return status;
+}
+
 mr_status mr_irradiance_scale(const mr_render_plan *plan, const mr_image *reference, double albedo,
                               double *scale) {
     if (plan == NULL || reference == NULL || scale == NULL)

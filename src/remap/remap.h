@@ -226,6 +226,15 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
 mr_status mr_remap(const mr_render_plan *plan, const mr_brdf_model *source_model, const double *source_values,
                    const mr_brdf_model *target, const mr_remap_options *opts, mr_remap_result *out);
 
+/* A renderer's own material as the source (renderer.h: a .blend material from mr_renderer_describe): its full
+ * render of the plan's scene and, when the renderer gives them, its diffuse and specular parts, fitted as
+ * mr_remap_images fits images (opts->source_renderer is not used; `renderer` renders). `full` (optional, 3-channel,
+ * the plan's size) receives the source's full render, e.g. for mr_remap_write_pictures_by. Errors: the renderer's
+ * and mr_remap_images'. */
+mr_status mr_remap_external(const mr_render_plan *plan, mr_renderer *renderer, const mr_external_material *material,
+                            const mr_brdf_model *target, const mr_remap_options *opts, mr_remap_result *out,
+                            mr_image *full);
+
 /* Irradiance matching (paper section 4): renders by another renderer use its own light units. Given that
  * renderer's diffuse-only render of a Lambertian sphere of albedo `albedo` in the fit scene (`reference`),
  * *scale is the factor that brings its images to matremap's units: the ratio of matremap's Lambert render to
