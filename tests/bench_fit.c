@@ -1,0 +1,238 @@
+/*
+ * bench_fit.c — the fit engine's speed and its answers, pair by pair (make bench; docs/performance.md, "The fit
+ * engine").
+ *
+ * For seeded random source materials per model pair, remaps each at the default 64^2 fit scene (AUTO, defaults,
+ * one thread, the plan built once and reused, as a sweep runs them) and prints per pair the median and p90 time of
+ * the whole mr_remap call, the median renders and the outcomes. With --save FILE it writes every remap's answer
+ * (outcome, relative RMSE, renders, ms, fitted values); with --against FILE it compares this build's answers with
+ * such a file, material by material: the largest |Δ relative RMSE|, the outcomes that changed, and the median
+ * ratios of renders and time. That is how a change of the engine shows "the same answers in fewer renders".
+ * Asserts nothing (the timed figures live here, not in tests).
+ *
+ * Usage: bench_fit [--quick] [--pairs a,b,...] [--save FILE] [--against FILE]
+ *   --quick   8 materials per pair (4 for the slow ones)
+ *   --pairs   only these pair names (as printed: "ward>ggx", "ggx>ward", ...)
+ */
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bench_util.h"
+#include "matremap.h"
+#include "remap/remap.h"
+
+#define MAX_MATERIALS 50
+#define FIT_SIZE 64
+
+/* A source model, how its random materials are drawn, a target, and how many materials. */
+typedef struct pair {
+    const char *name;     /* "source>target", with a suffix for a variant */
+    const char *source, *target;
+    const char *draw;     /* ward | microfacet | glossy | gltf */
+    int materials;
+} pair;
+
+static const pair pairs[] = {
+    {"ward>ggx", "ward", "ggx", "ward", 50},
+    {"ggx>ward", "ggx", "ward", "microfacet", 50},
+    {"as>ward", "as", "ward", "microfacet", 50},
+    {"ggx>ward(glossy)", "ggx", "ward", "glossy", 30},
+    {"ward>gltf", "ward", "gltf", "ward", 50},
+    {"gltf>ward", "gltf", "ward", "gltf", 50},
+    {"ggx>ggx-metallic", "ggx", "ggx-metallic", "microfacet", 30},
+    {"ward>blender-ward", "ward", "blender-ward", "ward", 30},
+    {"gltf>cycles-principled", "gltf", "cycles-principled", "gltf", 16},
+    {"gltf>usd-preview", "gltf", "usd-preview", "gltf", 16},
+    {"gltf>standard-surface", "gltf", "standard-surface", "gltf", 8},
+    {"gltf>openpbr", "gltf", "openpbr", "gltf", 8},
+    {"gltf>blender-principled", "gltf", "blender-principled", "gltf", 8},
+};
+#define PAIR_COUNT ((int)(sizeof pairs / sizeof pairs[0]))
+
+/* splitmix64 per pair: the same materials in every run and every build. */
+static double uniform(unsigned long long *state, double lo, double hi) {
+    unsigned long long z = (*state += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    z ^= z >> 31;
+    return lo + (hi - lo) * (double)(z >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static double log_uniform(unsigned long long *state, double lo, double hi) {
+    return exp(uniform(state, log(lo), log(hi)));
+}
+
+static void set(const mr_brdf_model *m, double *values, const char *name, int channel, double v) {
+    int index = mr_brdf_param_index(m, name);
+    if (index < 0) {
+        fprintf(stderr, "bench_fit: %s has no parameter %s\n", m->name, name);
+        exit(3);
+    }
+    values[mr_brdf_param_offset(m, index) + channel] = v;
+}
+
+/* The ranges of bench_remap.c (docs/performance.md, "Uniform remaps"), by the pair's `draw`. */
+static void random_material(const pair *p, const mr_brdf_model *m, unsigned long long *state, double *values) {
+    mr_brdf_default_values(m, values);
+    if (strcmp(p->draw, "ward") == 0) {
+        for (int c = 0; c < 3; c++) set(m, values, "diffuse", c, uniform(state, 0.05, 0.6));
+        for (int c = 0; c < 3; c++) set(m, values, "specular", c, uniform(state, 0.02, 0.35));
+        set(m, values, "alpha", 0, log_uniform(state, 0.03, 0.5));
+    } else if (strcmp(p->draw, "gltf") == 0) {
+        for (int c = 0; c < 3; c++) set(m, values, "base_color", c, uniform(state, 0.05, 0.95));
+        set(m, values, "metallic", 0, uniform(state, 0.0, 1.0));
+        set(m, values, "roughness", 0, uniform(state, 0.15, 0.9));
+    } else if (strcmp(p->draw, "glossy") == 0) {
+        for (int c = 0; c < 3; c++) set(m, values, "diffuse", c, uniform(state, 0.0, 0.1));
+        for (int c = 0; c < 3; c++) set(m, values, "f0", c, uniform(state, 0.02, 0.3));
+        set(m, values, "alpha", 0, log_uniform(state, 1e-4, 0.03));
+    } else {
+        for (int c = 0; c < 3; c++) set(m, values, "diffuse", c, uniform(state, 0.05, 0.6));
+        for (int c = 0; c < 3; c++) set(m, values, "f0", c, uniform(state, 0.02, 0.3));
+        set(m, values, "alpha", 0, log_uniform(state, 0.03, 0.5));
+    }
+}
+
+/* One remap's answer. */
+typedef struct answer {
+    double ms, rel, values[MR_BRDF_MAX_VALUES];
+    long renders;
+    int outcome, value_count;
+} answer;
+
+static double quantile(double *v, int n, double q) {
+    qsort(v, (size_t)n, sizeof v[0], bench_compare_doubles);
+    int rank = (int)ceil(q * n) - 1;
+    return v[rank < 0 ? 0 : rank >= n ? n - 1 : rank];
+}
+
+static int wanted(const char *list, const char *name) {
+    if (list == NULL) return 1;
+    size_t n = strlen(name);
+    for (const char *at = list; (at = strstr(at, name)) != NULL; at += n)
+        if ((at == list || at[-1] == ',') && (at[n] == ',' || at[n] == '\0')) return 1;
+    return 0;
+}
+
+/* Read a --save file into reference[pair][material]; returns 0 on a malformed file. */
+static int read_reference(const char *path, answer reference[PAIR_COUNT][MAX_MATERIALS],
+                          int have[PAIR_COUNT][MAX_MATERIALS]) {
+    FILE *f = fopen(path, "r");
+    if (f == NULL) return 0;
+    char name[64];
+    int material;
+    answer a;
+    while (fscanf(f, "%63s %d %d %lf %ld %lf %d", name, &material, &a.outcome, &a.rel, &a.renders, &a.ms,
+                  &a.value_count) == 7) {
+        if (a.value_count > MR_BRDF_MAX_VALUES || material < 0 || material >= MAX_MATERIALS) break;
+        for (int v = 0; v < a.value_count; v++)
+            if (fscanf(f, "%lf", &a.values[v]) != 1) return fclose(f), 0;
+        for (int p = 0; p < PAIR_COUNT; p++)
+            if (strcmp(pairs[p].name, name) == 0) {
+                reference[p][material] = a;
+                have[p][material] = 1;
+            }
+    }
+    fclose(f);
+    return 1;
+}
+
+int main(int argc, char **argv) {
+    int quick = 0;
+    const char *save = NULL, *against = NULL, *only = NULL;
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--quick") == 0) quick = 1;
+        else if (strcmp(argv[i], "--save") == 0 && i + 1 < argc) save = argv[++i];
+        else if (strcmp(argv[i], "--against") == 0 && i + 1 < argc) against = argv[++i];
+        else if (strcmp(argv[i], "--pairs") == 0 && i + 1 < argc) only = argv[++i];
+        else {
+            fprintf(stderr, "usage: bench_fit [--quick] [--pairs a,b,...] [--save FILE] [--against FILE]\n");
+            return 1;
+        }
+    }
+    static answer reference[PAIR_COUNT][MAX_MATERIALS];
+    static int have[PAIR_COUNT][MAX_MATERIALS];
+    if (against && !read_reference(against, reference, have)) {
+        fprintf(stderr, "bench_fit: cannot read the reference answers %s\n", against);
+        return 3;
+    }
+    FILE *out = NULL;
+    if (save && (out = fopen(save, "w")) == NULL) {
+        fprintf(stderr, "bench_fit: cannot write %s\n", save);
+        return 3;
+    }
+    omp_set_num_threads(1); // one core per remap, as a sweep runs them
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){FIT_SIZE, MR_FIT_LIGHT_45, 0});
+    mr_render_plan *plan = NULL;
+    if (mr_render_plan_create(&scene, &plan) != MR_OK) {
+        fprintf(stderr, "bench_fit: %s\n", mr_last_error());
+        return 3;
+    }
+    printf("| pair | materials | median ms | p90 ms | median renders | outcomes |%s\n",
+           against ? " vs reference: max abs Δ rel. RMSE | outcomes changed | renders ratio | time ratio |" : "");
+    printf("|---|---:|---:|---:|---:|---|%s\n", against ? "---:|---:|---:|---:|" : "");
+    for (int p = 0; p < PAIR_COUNT; p++) {
+        if (!wanted(only, pairs[p].name)) continue;
+        const mr_brdf_model *source = mr_brdf_find(pairs[p].source), *target = mr_brdf_find(pairs[p].target);
+        if (source == NULL || target == NULL) {
+            fprintf(stderr, "bench_fit: %s\n", mr_last_error());
+            return 3;
+        }
+        int n = pairs[p].materials;
+        if (quick) n = n >= 16 ? 8 : 4;
+        unsigned long long state = 0x31ULL + (unsigned long long)p;
+        double ms[MAX_MATERIALS], renders[MAX_MATERIALS], render_ratio[MAX_MATERIALS], time_ratio[MAX_MATERIALS];
+        int counts[MR_FIT_OUTCOME_COUNT] = {0}, changed = 0, compared = 0;
+        double worst = 0.0;
+        for (int i = 0; i < n; i++) {
+            double values[MR_BRDF_MAX_VALUES];
+            random_material(&pairs[p], source, &state, values);
+            mr_remap_options o = mr_remap_options_default();
+            mr_remap_result r;
+            double t0 = bench_now();
+            if (mr_remap(plan, source, values, target, &o, &r) != MR_OK) {
+                fprintf(stderr, "bench_fit: %s #%d: %s\n", pairs[p].name, i, mr_last_error());
+                return 3;
+            }
+            ms[i] = 1e3 * (bench_now() - t0);
+            renders[i] = (double)r.renders;
+            counts[r.outcome]++;
+            if (out) {
+                int k = mr_brdf_value_count(target);
+                fprintf(out, "%s %d %d %.17g %ld %.6g %d", pairs[p].name, i, (int)r.outcome, r.relative_rmse,
+                        r.renders, ms[i], k);
+                for (int v = 0; v < k; v++) fprintf(out, " %.17g", r.values[v]);
+                fprintf(out, "\n");
+            }
+            if (against && have[p][i]) {
+                const answer *a = &reference[p][i];
+                worst = fmax(worst, fabs(a->rel - r.relative_rmse));
+                changed += a->outcome != (int)r.outcome;
+                if (a->outcome != (int)r.outcome || fabs(a->rel - r.relative_rmse) > 1e-4)
+                    fprintf(stderr, "bench_fit: %s #%d: %s rel %.6f (reference %s rel %.6f), renders %ld (%ld)\n",
+                            pairs[p].name, i, mr_fit_outcome_name(r.outcome), r.relative_rmse,
+                            mr_fit_outcome_name((mr_fit_outcome)a->outcome), a->rel, r.renders, a->renders);
+                render_ratio[compared] = a->renders > 0 ? (double)r.renders / (double)a->renders : 1.0;
+                time_ratio[compared] = a->ms > 0 ? ms[i] / a->ms : 1.0;
+                compared++;
+            }
+        }
+        double median_renders = quantile(renders, n, 0.5);
+        printf("| %s | %d | %.2f | %.2f | %.0f | %d / %d / %d / %d / %d |", pairs[p].name, n, quantile(ms, n, 0.5),
+               quantile(ms, n, 0.9), median_renders, counts[MR_FIT_CONVERGED], counts[MR_FIT_AT_BOUND],
+               counts[MR_FIT_UNREACHABLE], counts[MR_FIT_LOCAL_MINIMUM], counts[MR_FIT_UNDER_RESOLVED]);
+        if (against && compared > 0)
+            printf(" %.2g | %d | %.2f | %.2f |", worst, changed, quantile(render_ratio, compared, 0.5),
+                   quantile(time_ratio, compared, 0.5));
+        else if (against)
+            printf(" - | - | - | - |");
+        printf("\n");
+        fflush(stdout);
+    }
+    if (out) fclose(out);
+    mr_render_plan_free(plan);
+    return 0;
+}
