@@ -10,9 +10,12 @@
  * ratios of renders and time. That is how a change of the engine shows "the same answers in fewer renders".
  * Asserts nothing (the timed figures live here, not in tests).
  *
- * Usage: bench_fit [--quick] [--pairs a,b,...] [--save FILE] [--against FILE]
+ * Usage: bench_fit [--quick] [--pairs a,b,...] [--local auto|gradient|bobyqa] [--material N] [--save FILE]
+ *                  [--against FILE]
  *   --quick   8 materials per pair (4 for the slow ones)
  *   --pairs   only these pair names (as printed: "ward>ggx", "ggx>ward", ...)
+ *   --local   the fits' local method (mr_remap_options.local_method; default auto)
+ *   --material N  only material N of each pair (to look at one fit; its source values go to stderr)
  */
 #include <math.h>
 #include <omp.h>
@@ -143,13 +146,23 @@ static int read_reference(const char *path, answer reference[PAIR_COUNT][MAX_MAT
 int main(int argc, char **argv) {
     int quick = 0;
     const char *save = NULL, *against = NULL, *only = NULL;
+    mr_local_method local = MR_LOCAL_AUTO;
+    int material = -1;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--quick") == 0) quick = 1;
         else if (strcmp(argv[i], "--save") == 0 && i + 1 < argc) save = argv[++i];
         else if (strcmp(argv[i], "--against") == 0 && i + 1 < argc) against = argv[++i];
         else if (strcmp(argv[i], "--pairs") == 0 && i + 1 < argc) only = argv[++i];
+        else if (strcmp(argv[i], "--material") == 0 && i + 1 < argc) material = atoi(argv[++i]);
+        else if (strcmp(argv[i], "--local") == 0 && i + 1 < argc) {
+            if (mr_local_method_from_name(argv[++i], &local) != MR_OK) {
+                fprintf(stderr, "bench_fit: %s\n", mr_last_error());
+                return 1;
+            }
+        }
         else {
-            fprintf(stderr, "usage: bench_fit [--quick] [--pairs a,b,...] [--save FILE] [--against FILE]\n");
+            fprintf(stderr, "usage: bench_fit [--quick] [--pairs a,b,...] [--local auto|gradient|bobyqa] "
+                            "[--material N] [--save FILE] [--against FILE]\n");
             return 1;
         }
     }
@@ -190,7 +203,17 @@ int main(int argc, char **argv) {
         for (int i = 0; i < n; i++) {
             double values[MR_BRDF_MAX_VALUES];
             random_material(&pairs[p], source, &state, values);
+            if (material >= 0 && i != material) {
+                ms[i] = renders[i] = 0.0;
+                continue;
+            }
+            if (material >= 0) {
+                fprintf(stderr, "bench_fit: %s #%d source", pairs[p].name, i);
+                for (int v = 0; v < mr_brdf_value_count(source); v++) fprintf(stderr, " %.9g", values[v]);
+                fprintf(stderr, "\n");
+            }
             mr_remap_options o = mr_remap_options_default();
+            o.local_method = local;
             mr_remap_result r;
             double t0 = bench_now();
             if (mr_remap(plan, source, values, target, &o, &r) != MR_OK) {
@@ -219,6 +242,11 @@ int main(int argc, char **argv) {
                 time_ratio[compared] = a->ms > 0 ? ms[i] / a->ms : 1.0;
                 compared++;
             }
+        }
+        if (material >= 0) { // one material: its own figures
+            n = 1;
+            ms[0] = ms[material < pairs[p].materials ? material : 0];
+            renders[0] = renders[material < pairs[p].materials ? material : 0];
         }
         double median_renders = quantile(renders, n, 0.5);
         printf("| %s | %d | %.2f | %.2f | %.0f | %d / %d / %d / %d / %d |", pairs[p].name, n, quantile(ms, n, 0.5),

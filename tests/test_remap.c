@@ -397,6 +397,76 @@ MR_TEST(every_strategy_returns_a_finite_result) {
     mr_render_plan_free(plan);
 }
 
+/* The local stage by derivatives (Levenberg-Marquardt, remap.h mr_local_method) finds what the derivative-free
+ * BOBYQA finds, in fewer renders, and the result says which ran; where no derivatives exist it is refused. */
+MR_TEST(gradient_and_derivative_free_local_stages_agree) {
+    static const struct {
+        const char *source, *assignments, *target;
+    } cases[] = {
+        {"ward", "alpha=0.2 diffuse=0.4,0.3,0.2 specular=0.2", "ggx"},
+        {"ggx", "alpha=0.15 f0=0.05 diffuse=0.5,0.3,0.1", "ward"},
+        {"ward", "alpha=0.1 diffuse=0.2,0.3,0.5 specular=0.1", "gltf"},
+        {"gltf", "base_color=0.6,0.4,0.2 metallic=0.3 roughness=0.4", "cycles-principled"},
+        {"as", "f0=0.9 alpha=0.05", "ggx-metallic"},
+    };
+    mr_render_plan *plan = fit_plan(32);
+    long gradient_renders = 0, bobyqa_renders = 0;
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        mr_remap_options o = mr_remap_options_default();
+        mr_remap_result by_gradient, by_bobyqa;
+        MR_CHECK_OK(remap(plan, cases[k].source, cases[k].assignments, cases[k].target, &o, &by_gradient));
+        o.local_method = MR_LOCAL_BOBYQA;
+        MR_CHECK_OK(remap(plan, cases[k].source, cases[k].assignments, cases[k].target, &o, &by_bobyqa));
+        MR_CHECK_MSG(by_gradient.local_method == MR_LOCAL_GRADIENT && by_bobyqa.local_method == MR_LOCAL_BOBYQA,
+                     "%s -> %s: local methods %s and %s", cases[k].source, cases[k].target,
+                     mr_local_method_name(by_gradient.local_method), mr_local_method_name(by_bobyqa.local_method));
+        MR_CHECK_MSG(fabs(by_gradient.relative_rmse - by_bobyqa.relative_rmse) <= 1e-4 &&
+                         by_gradient.outcome == by_bobyqa.outcome,
+                     "%s -> %s: gradient %s rel. RMSE %.6f, bobyqa %s %.6f", cases[k].source, cases[k].target,
+                     mr_fit_outcome_name(by_gradient.outcome), by_gradient.relative_rmse,
+                     mr_fit_outcome_name(by_bobyqa.outcome), by_bobyqa.relative_rmse);
+        gradient_renders += by_gradient.renders;
+        bobyqa_renders += by_bobyqa.renders;
+    }
+    MR_CHECK_MSG(gradient_renders < bobyqa_renders, "%ld renders by gradient, %ld by BOBYQA", gradient_renders,
+                 bobyqa_renders);
+    // The paper's local strategies keep BOBYQA unless asked; asked, they step by derivatives.
+    mr_remap_options o = options(MR_REMAP_SINGLE);
+    mr_remap_result r;
+    MR_CHECK_OK(remap(plan, "ggx", "alpha=0.2 f0=0.04 diffuse=0.5", "ward", &o, &r));
+    MR_CHECK(r.local_method == MR_LOCAL_BOBYQA);
+    o.local_method = MR_LOCAL_GRADIENT;
+    MR_CHECK_OK(remap(plan, "ggx", "alpha=0.2 f0=0.04 diffuse=0.5", "ward", &o, &r));
+    MR_CHECK(r.local_method == MR_LOCAL_GRADIENT);
+    // No derivatives of environment-lit renders: gradient is refused, auto falls back to BOBYQA.
+    mr_image *map = NULL;
+    MR_CHECK_OK(mr_image_create(8, 4, 3, &map));
+    for (int i = 0; i < 8 * 4 * 3; i++) map->pixels[i] = 0.5f;
+    mr_fit_scene_options fo = {0};
+    fo.size = 16;
+    mr_scene scene = mr_scene_fit(&fo);
+    scene.lights[0] = mr_light_environment(map, 1.0, 0.0, 16);
+    mr_render_plan *lit = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &lit));
+    o = mr_remap_options_default();
+    o.local_method = MR_LOCAL_GRADIENT;
+    MR_CHECK(remap(lit, "ggx", "alpha=0.2 f0=0.04 diffuse=0.5", "ward", &o, &r) == MR_ERR_UNSUPPORTED);
+    MR_CHECK(strstr(mr_last_error(), "a plan lit by point lights only") != NULL);
+    o.local_method = MR_LOCAL_AUTO;
+    MR_CHECK_OK(remap(lit, "ggx", "alpha=0.2 f0=0.04 diffuse=0.5", "ward", &o, &r));
+    MR_CHECK(r.local_method == MR_LOCAL_BOBYQA);
+    o.local_method = (mr_local_method)9;
+    MR_CHECK(remap(plan, "ggx", "alpha=0.2", "ward", &o, &r) == MR_ERR_INVALID_ARG);
+    mr_local_method parsed;
+    MR_CHECK(mr_local_method_from_name("newton", &parsed) == MR_ERR_INVALID_ARG);
+    MR_CHECK(strstr(mr_last_error(), "valid: auto, gradient, bobyqa") != NULL);
+    MR_CHECK_OK(mr_local_method_from_name("gradient", &parsed));
+    MR_CHECK(parsed == MR_LOCAL_GRADIENT && strcmp(mr_local_method_name(parsed), "gradient") == 0);
+    mr_render_plan_free(lit);
+    mr_image_free(map);
+    mr_render_plan_free(plan);
+}
+
 MR_TEST(two_and_three_need_the_component_images) {
     mr_render_plan *plan = fit_plan(32);
     const mr_brdf_model *ggx = mr_brdf_find("ggx"), *ward = mr_brdf_find("ward");
@@ -1558,4 +1628,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(names_round_trip),
              MR_TEST_ENTRY(usd_preview_round_trips),
              MR_TEST_ENTRY(standard_surface_remaps_to_and_from_gltf_and_cycles),
              MR_TEST_ENTRY(hold_lists_set_and_hold_and_name_their_errors),
-             MR_TEST_ENTRY(ward_remaps_into_the_layered_models_with_their_default_holds))
+             MR_TEST_ENTRY(ward_remaps_into_the_layered_models_with_their_default_holds),
+             MR_TEST_ENTRY(gradient_and_derivative_free_local_stages_agree))

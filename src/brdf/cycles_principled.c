@@ -181,14 +181,17 @@ static void cp_eval_grad(const mr_brdf_model *model, const double *values, const
     double dFr_ds;
     mr_fresnel_dielectric(g.dot_h, cp_ior(s_eff), &dFr_ds);
     dFr_ds *= dior_ds;
-    double dFH_ds = (FH_raw > 0.0 && FH_raw < 1.0) ? (dFr_ds - (1.0 - FH) * 0.08) / (1.0 - F0) : 0.0;
+    // At a clamp's edge the derivative is the one-sided one into the range the parameters reach: FH_raw >= 0 and
+    // raw >= 0 always, so at 0 (a dielectric with specular 0, a black base at metallic 0) the slope is the side
+    // above it, which a fit stepping away from its bound needs (a slope of 0 there would pin it to the bound).
+    double dFH_ds = (FH_raw >= 0.0 && FH_raw < 1.0) ? (dFr_ds - (1.0 - FH) * 0.08) / (1.0 - F0) : 0.0;
 
     double lum = 0.0;
     for (int c = 0; c < 3; c++) lum += cp_lum_weight[c] * base[c];
     for (int c = 0; c < 3; c++) {
         double cspec0 = mr_clampd(raw[c], 0.0, 1.0);
         double F = cspec0 * (1.0 - FH) + FH;
-        int unsaturated = raw[c] > 0.0 && raw[c] < 1.0; /* saturate() passes the derivative */
+        int unsaturated = raw[c] >= 0.0 && raw[c] < 1.0; /* saturate() passes the derivative (above) */
         double k = unsaturated ? (1.0 - FH) * dg : 0.0;  /* d specular_c / d raw_c */
         double tint = lum > 0.0 ? base[c] / lum : 1.0;
         /* raw_c = 0.08 s ((1 - t) + tint_c t)(1 - m) + base_c m */

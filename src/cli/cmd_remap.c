@@ -75,9 +75,13 @@ static void print_help(void) {
            "                     searched globally against that lobe's render (smooth across materials);\n"
            "                     joint: the same search against the full render only (lowest L2 error);\n"
            "                     single, two, three: the paper's local fits from the defaults\n"
+           "  --local M          the local stage: auto (default: gradient for auto and joint where the\n"
+           "                     target model has analytic derivatives, bobyqa for the paper's strategies),\n"
+           "                     gradient (Levenberg-Marquardt on the image residual with the model's\n"
+           "                     derivatives) or bobyqa (derivative-free, the engine before 0.2)\n"
            "  --size N           fit-scene side in pixels (default %d; with --from-images: the images' size)\n"
-           "  --grid-points N    auto/joint: global grid points per nonlinear parameter (default 32 for one,\n"
-           "                     12 for two, 6 for three; more is slower and misses fewer narrow minima)\n"
+           "  --grid-points N    auto/joint: global grid points per nonlinear parameter (default 16 for one,\n"
+           "                     8 for two, 6 for three; more is slower and misses fewer narrow minima)\n"
            "  --light L          45 (default) or frontal\n"
            "  --threads N        OpenMP threads of the fit's renders (default 0: automatic, one thread at the\n"
            "                     default size, where a team costs more than it saves; copies run side by side)\n"
@@ -302,6 +306,11 @@ int cmd_remap(int argc, char **argv) {
             if (mr_remap_strategy_from_name(value, &opts.strategy) != MR_OK)
                 return cli_usage_error("remap", "%s", mr_last_error());
             fit_option = 1;
+        } else if ((taken = cli_take_option("remap", argc, argv, &i, "--local", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (mr_local_method_from_name(value, &opts.local_method) != MR_OK)
+                return cli_usage_error("remap", "--local: %s", mr_last_error());
+            fit_option = 1;
         } else if ((taken = cli_take_option("remap", argc, argv, &i, "--method", &value))) {
             if (taken < 0) return CLI_EXIT_USAGE;
             if (strcmp(value, "fit") != 0 && strcmp(value, "materialx") != 0)
@@ -509,8 +518,9 @@ int cmd_remap(int argc, char **argv) {
                 cli_json_string(stdout, image_paths[0]);
                 printf(", \"irradiance_scale\": %.17g}", irradiance_scale);
             }
-            printf(", \"strategy\": \"%s\", \"size\": %d, \"light\": \"%s\", \"values\": {", strategy,
-                   scene_opts.size, mr_fit_light_name(scene_opts.light));
+            printf(", \"strategy\": \"%s\", \"local_method\": \"%s\", \"size\": %d, \"light\": \"%s\", \"values\": {",
+                   strategy, mr_local_method_name(result.local_method), scene_opts.size,
+                   mr_fit_light_name(scene_opts.light));
             print_values(stdout, to, result.values, 1);
             printf("}, \"rmse\": %.17g, \"relative_rmse\": %.17g, \"ssim\": %.17g, \"renders\": %ld, "
                    "\"seconds\": %.6f, \"outcome\": \"%s\", \"detail\": ",
@@ -540,9 +550,10 @@ int cmd_remap(int argc, char **argv) {
             printf("\n");
             printf("outcome: %s (%s)\n", mr_fit_outcome_name(result.outcome), result.detail);
             printf("RMSE %.6g (%.3g %% of the source's RMS radiance), SSIM %.6f, %ld renders, %.1f ms, strategy %s, "
-                   "fit scene %d², light %s\n",
+                   "local %s, fit scene %d², light %s\n",
                    result.rmse, 100.0 * result.relative_rmse, result.ssim, result.renders, 1e3 * result.seconds,
-                   strategy, scene_opts.size, mr_fit_light_name(scene_opts.light));
+                   strategy, mr_local_method_name(result.local_method), scene_opts.size,
+                   mr_fit_light_name(scene_opts.light));
             if (reference != NULL) printf("irradiance scale applied to the source images: %.6g\n", irradiance_scale);
             cli_print_holds_tied(stdout, NULL, to, target_values, opts.held, opts.ties.tied | opts.freed);
             for (int p = 0, first = 1; p < to->param_count && p < 32; p++)

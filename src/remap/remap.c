@@ -22,6 +22,7 @@
 #include "../metrics/metrics.h"
 #include "../mr_internal.h"
 #include "../render/render.h"
+#include "levenberg.h"
 
 #define MAX_SLOTS MR_BRDF_MAX_VALUES
 #define DEFAULT_MAX_EVALUATIONS 400
@@ -69,6 +70,7 @@
 #define ZOOM_GAIN 3.0
 
 static const char *const strategy_names[MR_REMAP_STRATEGY_COUNT] = {"auto", "single", "two", "three", "joint"};
+static const char *const local_method_names[MR_LOCAL_METHOD_COUNT] = {"auto", "gradient", "bobyqa"};
 static const char *const outcome_names[MR_FIT_OUTCOME_COUNT] = {"converged", "at-bound", "unreachable",
                                                                 "local-minimum", "under-resolved"};
 
@@ -88,6 +90,20 @@ mr_status mr_remap_strategy_from_name(const char *name, mr_remap_strategy *out) 
 
 const char *mr_fit_outcome_name(mr_fit_outcome outcome) {
     return (unsigned)outcome < MR_FIT_OUTCOME_COUNT ? outcome_names[outcome] : NULL;
+}
+
+const char *mr_local_method_name(mr_local_method method) {
+    return (unsigned)method < MR_LOCAL_METHOD_COUNT ? local_method_names[method] : NULL;
+}
+
+mr_status mr_local_method_from_name(const char *name, mr_local_method *out) {
+    for (int i = 0; name != NULL && i < MR_LOCAL_METHOD_COUNT; i++)
+        if (strcmp(name, local_method_names[i]) == 0) {
+            *out = (mr_local_method)i;
+            return MR_OK;
+        }
+    return mr_fail(MR_ERR_INVALID_ARG, "unknown local method '%s' (valid: auto, gradient, bobyqa)",
+                   name ? name : "(null)");
 }
 
 mr_status mr_fit_outcome_from_name(const char *name, mr_fit_outcome *out) {
@@ -161,6 +177,12 @@ typedef struct fit_context {
     mr_status failure;               /* set when a render fails inside an nlopt callback */
     nlopt_opt running;
     int warm;                        /* AUTO/JOINT from opts.initial_values: one local refinement, no grid */
+    int gradient;                    /* local fits by Levenberg-Marquardt with derivatives (mr_local_method) */
+    mr_image *derivatives[2 * MAX_SLOTS]; /* gradient fits: d render / d fitted slot, one image per slot */
+    /* The last projection's columns and Gram matrix (project), for the gradient fit's Gauss-Newton matrix */
+    int column_count;
+    int column_image[MAX_SLOTS], column_channel[MAX_SLOTS];
+    double gram[MAX_SLOTS * MAX_SLOTS];
     int external;                    /* opts.target_renderer is an external renderer: every render goes to it */
 } fit_context;
 
@@ -359,8 +381,10 @@ static double project(fit_context *ctx) {
     // Columns: one per linear slot. An RGB parameter's channel c drives image channel c only (the roles
     // test_brdf checks), so its column is its basis image restricted to that channel.
     const int k = ctx->linear_count;
-    double G[MAX_SLOTS * MAX_SLOTS] = {0}, h[MAX_SLOTS] = {0}, lo[MAX_SLOTS], hi[MAX_SLOTS], b[MAX_SLOTS];
-    int column_image[MAX_SLOTS], column_channel[MAX_SLOTS];
+    double *G = ctx->gram, h[MAX_SLOTS] = {0}, lo[MAX_SLOTS], hi[MAX_SLOTS], b[MAX_SLOTS];
+    int *column_image = ctx->column_image, *column_channel = ctx->column_channel;
+    memset(G, 0, sizeof ctx->gram);
+    ctx->column_count = k;
     for (int j = 0, p = 0; p < ctx->linear_param_count; p++) {
         int channels = ctx->model->params[ctx->linear_params[p]].channels;
         for (int c = 0; c < channels; c++, j++) {
@@ -423,6 +447,168 @@ static double direct_objective(unsigned n, const double *u, double *grad, void *
     for (unsigned i = 0; i < n; i++) values[ctx->vary[i]->slot] = to_value(ctx->vary[i], u[i]);
     if (!render_values(ctx, values, ctx->component, ctx->scratch)) return HUGE_VAL;
     return sse_against(ctx, ctx->scratch, ctx->goal);
+}
+
+/* ---- gradient-based local fits (mr_local_method, levenberg.h) --------------------------------------------- */
+
+/* The relative rounding of a sum of squares of float image differences, below which a gradient fit's steps cannot
+ * be judged (levenberg.h, noise): a float carries 24 bits (6e-8). */
+#define FLOAT_IMAGE_NOISE 1e-7
+
+/* d value / d u of a fitted slot at u (to_value's derivative). */
+static double value_per_unit(const fitted_slot *s, double u) {
+    if (s->log_scale) return to_value(s, u) * (log(s->hi) - log(s->lo));
+    return s->hi - s->lo;
+}
+
+/* Render the derivative images of `count` slots at ctx->base (the component `component`); 0 on a failure. */
+static int render_derivatives(fit_context *ctx, const fitted_slot *const *slots, int count, mr_component component) {
+    int packed[2 * MAX_SLOTS];
+    mr_status status = MR_OK;
+    const mr_scene *scene = mr_render_plan_scene(ctx->plan);
+    for (int i = 0; i < count; i++) {
+        packed[i] = slots[i]->slot;
+        if (ctx->derivatives[i] == NULL && status == MR_OK) // made on first use: a fit that never steps needs none
+            status = mr_image_create(scene->width, scene->height, 3, &ctx->derivatives[i]);
+    }
+    if (status != MR_OK) {
+        ctx->failure = status;
+        return 0;
+    }
+    status = mr_render_derivatives_into(ctx->plan, ctx->opts.threads, ctx->model, ctx->base, component,
+                                                  packed, count, ctx->derivatives);
+    ctx->renders++;
+    if (status != MR_OK) ctx->failure = status;
+    return status == MR_OK;
+}
+
+/* The projected objective as levenberg.h wants it: NAN after a failed render. */
+static double projected_value(void *data, const double *u) {
+    fit_context *ctx = data;
+    double sse = projected_objective((unsigned)ctx->nonlinear_count, u, NULL, ctx);
+    return ctx->failure != MR_OK ? NAN : sse;
+}
+
+/* The gradient and Gauss-Newton matrix of the projected objective at the point project() last solved (ctx->base
+ * holds its nonlinear values and their linear solution b). With R(theta, b) the render the projection predicts:
+ *   - gradient: dF/dtheta = -2 sum r . dR/dtheta at fixed b, exact at the solution b(theta) (its own derivative
+ *     drops out: b minimises F, within its bounds; Golub and Pereyra 1973);
+ *   - Gauss-Newton matrix: J^T J with J = -(I - P) dR/dtheta, P the projection onto the solved columns that are
+ *     not on a bound (Kaufman 1975), i.e. D^T D - T G^-1 T^T with T = D^T A, G = A^T A (the projection's Gram).
+ * One derivative render (every nonlinear slot at once) and one pass over the covered pixels. */
+static int projected_linearise(void *data, const double *u, double *gradient, double *gauss_newton) {
+    fit_context *ctx = data;
+    const int n = ctx->nonlinear_count, P = ctx->linear_param_count, k = ctx->column_count;
+    const fitted_slot *slots[MAX_SLOTS];
+    for (int a = 0; a < n; a++) slots[a] = &ctx->nonlinear[a];
+    if (!render_derivatives(ctx, slots, n, ctx->projection_component)) return 0;
+    unsigned char diffuse_param[MAX_SLOTS];
+    for (int p = 0; p < P; p++) diffuse_param[p] = ctx->model->params[ctx->linear_params[p]].lobe == MR_LOBE_DIFFUSE;
+    double b[MAX_SLOTS];
+    for (int j = 0; j < k; j++) b[j] = ctx->base[ctx->linear[j].slot];
+    double g[MAX_SLOTS] = {0}, DtD[MAX_SLOTS][MAX_SLOTS] = {{0}}, T[MAX_SLOTS][MAX_SLOTS] = {{0}};
+    const float *goal = ctx->goal->pixels;
+    for (int i = 0; i < ctx->pixel_count; i++) {
+        const size_t at = (size_t)ctx->pixels[i] * 3;
+        for (int c = 0; c < 3; c++) {
+            float r[MAX_SLOTS], r0;
+            if (ctx->split_lobes) {
+                r0 = split_value(ctx, diffuse_param, P, at + c, r);
+            } else {
+                r0 = ctx->basis[0]->pixels[at + c];
+                for (int p = 0; p < P; p++) r[p] = ctx->basis[p + 1]->pixels[at + c];
+            }
+            double column[MAX_SLOTS], prediction = r0;
+            for (int j = 0; j < k; j++) {
+                const int image = ctx->column_image[j] - 1, channel = ctx->column_channel[j];
+                column[j] = channel < 0 || channel == c ? (double)r[image] - (double)r0 : 0.0;
+                prediction += b[j] * column[j];
+            }
+            const double residual = (double)goal[at + c] - prediction;
+            double d[MAX_SLOTS];
+            for (int a = 0; a < n; a++) {
+                d[a] = ctx->derivatives[a]->pixels[at + c];
+                g[a] -= 2.0 * residual * d[a];
+                for (int bb = 0; bb <= a; bb++) DtD[a][bb] += d[a] * d[bb];
+                for (int j = 0; j < k; j++) T[a][j] += column[j] * d[a];
+            }
+        }
+    }
+    // The columns the projection moves freely: inside their bounds and seen by the images.
+    int free_columns[MAX_SLOTS], f = 0;
+    for (int j = 0; j < k; j++)
+        if (ctx->gram[j * k + j] > 0.0 && b[j] > ctx->linear[j].lo && b[j] < ctx->linear[j].hi) free_columns[f++] = j;
+    double G[MAX_SLOTS * MAX_SLOTS], X[MAX_SLOTS * MAX_SLOTS];
+    for (int x = 0; x < f; x++) {
+        for (int y = 0; y < f; y++) G[x * f + y] = ctx->gram[free_columns[x] * k + free_columns[y]];
+        for (int a = 0; a < n; a++) X[x * n + a] = T[a][free_columns[x]];
+    }
+    const int projected = f > 0 && mr_lm_spd_solve(f, G, n, X); // X = G^-1 T^T
+    for (int a = 0; a < n; a++) {
+        const double sa = value_per_unit(&ctx->nonlinear[a], u[a]);
+        gradient[a] = g[a] * sa;
+        for (int bb = 0; bb <= a; bb++) {
+            double m = DtD[a][bb];
+            for (int x = 0; projected && x < f; x++) m -= T[a][free_columns[x]] * X[x * n + bb];
+            const double scaled = m * sa * value_per_unit(&ctx->nonlinear[bb], u[bb]);
+            gauss_newton[a * n + bb] = gauss_newton[bb * n + a] = scaled;
+        }
+    }
+    return 1;
+}
+
+/* The direct objective as levenberg.h wants it: NAN after a failed render. Leaves the render in ctx->scratch. */
+static double direct_value(void *data, const double *u) {
+    fit_context *ctx = data;
+    double sse = direct_objective((unsigned)ctx->vary_count, u, NULL, ctx);
+    return ctx->failure != MR_OK ? NAN : sse;
+}
+
+/* The gradient and Gauss-Newton matrix of the direct objective at the point direct_value last rendered: J = -dR/du
+ * for every varied slot, one derivative render (at those values) and one pass over the covered pixels. */
+static int direct_linearise(void *data, const double *u, double *gradient, double *gauss_newton) {
+    fit_context *ctx = data;
+    const int n = ctx->vary_count;
+    double saved[MAX_SLOTS];
+    memcpy(saved, ctx->base, sizeof saved);
+    for (int a = 0; a < n; a++) ctx->base[ctx->vary[a]->slot] = to_value(ctx->vary[a], u[a]);
+    const int rendered = render_derivatives(ctx, ctx->vary, n, ctx->component);
+    memcpy(ctx->base, saved, sizeof saved);
+    if (!rendered) return 0;
+    double g[2 * MAX_SLOTS] = {0}, M[2 * MAX_SLOTS][2 * MAX_SLOTS] = {{0}};
+    for (int i = 0; i < ctx->pixel_count; i++) {
+        const size_t at = (size_t)ctx->pixels[i] * 3;
+        for (int c = 0; c < 3; c++) {
+            const double residual = (double)ctx->goal->pixels[at + c] - (double)ctx->scratch->pixels[at + c];
+            double d[2 * MAX_SLOTS];
+            for (int a = 0; a < n; a++) {
+                d[a] = ctx->derivatives[a]->pixels[at + c];
+                g[a] -= 2.0 * residual * d[a];
+                for (int bb = 0; bb <= a; bb++) M[a][bb] += d[a] * d[bb];
+            }
+        }
+    }
+    for (int a = 0; a < n; a++) {
+        const double sa = value_per_unit(ctx->vary[a], u[a]);
+        gradient[a] = g[a] * sa;
+        for (int bb = 0; bb <= a; bb++)
+            gauss_newton[a * n + bb] = gauss_newton[bb * n + a] = M[a][bb] * sa * value_per_unit(ctx->vary[bb], u[bb]);
+    }
+    return 1;
+}
+
+/* Levenberg-Marquardt from u (in/out) on the projected (projected = 1) or direct objective; the minimum, or NAN
+ * after a failed render. *at_point: 1 when the last evaluation was at the returned u (ctx->base holds its linear
+ * solution, for the projected objective). */
+static double gradient_fit(fit_context *ctx, int projected, double *u, int *at_point) {
+    const int n = projected ? ctx->nonlinear_count : ctx->vary_count;
+    // F sums float images in double: its last ~7 digits are the images' rounding (FLOAT_IMAGE_NOISE).
+    mr_lm_problem problem = {n, ctx, projected ? projected_value : direct_value,
+                             projected ? projected_linearise : direct_linearise, FLOAT_IMAGE_NOISE};
+    mr_lm_result result = mr_lm_minimise(&problem, ctx->opts.xtol, ctx->opts.max_evaluations, u);
+    *at_point = result.at_last_value;
+    if (ctx->failure != MR_OK) return NAN;
+    return result.minimum;
 }
 
 /* Local bounded minimisation with BOBYQA from u (in/out), first steps steps[i] (normalised units); returns the
@@ -566,10 +752,12 @@ static void auto_fit(fit_context *ctx, candidate *best, int *ambiguous) {
         memcpy(r->u, starts[s].u, sizeof r->u);
         double steps[MAX_SLOTS];
         for (int i = 0; i < d; i++) steps[i] = step;
-        r->sse = local_fit(ctx, (unsigned)d, projected_objective, r->u, steps);
+        int at_point = 0;
+        r->sse = ctx->gradient ? gradient_fit(ctx, 1, r->u, &at_point)
+                               : local_fit(ctx, (unsigned)d, projected_objective, r->u, steps);
         if (isnan(r->sse)) break;
         // Re-project at the returned point so base holds exactly its linear solution.
-        r->sse = projected_objective((unsigned)d, r->u, NULL, ctx);
+        if (!at_point) r->sse = projected_objective((unsigned)d, r->u, NULL, ctx);
         memcpy(r->values, ctx->base, sizeof r->values);
         refined_count++;
     }
@@ -725,7 +913,9 @@ static double direct_stage(fit_context *ctx, unsigned lobes, int exact_lobe, con
         // trimming, where the objective is flat in the reflectances' common scale and BOBYQA stalls.
         steps[i] = v->log_scale ? 0.1 : 0.1 * fmin(1.0, 1.0 / (v->hi - v->lo));
     }
-    double minimum = local_fit(ctx, (unsigned)ctx->vary_count, direct_objective, u, steps);
+    int at_point;
+    double minimum = ctx->gradient ? gradient_fit(ctx, 0, u, &at_point)
+                                   : local_fit(ctx, (unsigned)ctx->vary_count, direct_objective, u, steps);
     if (isnan(minimum)) return NAN;
     for (int i = 0; i < ctx->vary_count; i++) ctx->base[ctx->vary[i]->slot] = to_value(ctx->vary[i], u[i]);
     return minimum;
@@ -914,6 +1104,7 @@ static void free_context(fit_context *ctx) {
     mr_image_free(ctx->scratch);
     for (int i = 0; i <= MAX_SLOTS; i++) mr_image_free(ctx->basis[i]);
     for (int i = 0; i < 4; i++) mr_image_free(ctx->lobe_images[i]);
+    for (int i = 0; i < 2 * MAX_SLOTS; i++) mr_image_free(ctx->derivatives[i]);
     free((void *)ctx->pixels);
 }
 
@@ -1118,6 +1309,8 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     if (opts.seed == 0) opts.seed = DEFAULT_SEED; // so that a zeroed struct is the defaults, as everywhere
     if ((unsigned)opts.strategy >= MR_REMAP_STRATEGY_COUNT)
         return mr_fail(MR_ERR_INVALID_ARG, "remap: unknown strategy %d", (int)opts.strategy);
+    if ((unsigned)opts.local_method >= MR_LOCAL_METHOD_COUNT)
+        return mr_fail(MR_ERR_INVALID_ARG, "remap: unknown local method %d", (int)opts.local_method);
     if (opts.threads < 0 || opts.threads > 1024)
         return mr_fail(MR_ERR_INVALID_ARG, "remap: threads %d: expected 0 (the plan's rule) to 1024", opts.threads);
     if (opts.ties.tied != 0)
@@ -1210,6 +1403,18 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
                                              target->params[i].max_value);
     }
     ctx.warm = opts.initial_values != NULL && (opts.strategy == MR_REMAP_AUTO || opts.strategy == MR_REMAP_JOINT);
+    // The local stage (mr_local_method): by derivatives wherever the target's renders have them.
+    // The paper's local strategies keep the paper's derivative-free search unless asked (their traps are what they
+    // reproduce: docs/paper-reproduction.md).
+    const int paper_strategy = opts.strategy != MR_REMAP_AUTO && opts.strategy != MR_REMAP_JOINT;
+    ctx.gradient = opts.local_method != MR_LOCAL_BOBYQA && !(paper_strategy && opts.local_method == MR_LOCAL_AUTO) &&
+                   !external && target->eval_grad != NULL && mr_render_plan_point_lit_only(plan) &&
+                   mr_render_plan_material_count(plan) == 1;
+    if (status == MR_OK && opts.local_method == MR_LOCAL_GRADIENT && !ctx.gradient)
+        status = mr_fail(MR_ERR_UNSUPPORTED, "remap: the gradient local method needs %s",
+                         target->eval_grad == NULL ? "a target model with analytic derivatives"
+                         : external ? "the built-in renderer (an external one gives no derivatives)"
+                                    : "a plan lit by point lights only, with one material");
     ctx.split_lobes = lobes_split(target, ctx.linear_params, ctx.linear_param_count) &&
                       (!external || mr_renderer_has_components(opts.target_renderer));
     ctx.homogeneous = ctx.split_lobes && black_without_linear(target, fixed, ctx.base, is_linear);
@@ -1332,6 +1537,7 @@ mr_status mr_remap_images(const mr_render_plan *plan, const mr_remap_source *sou
     // black to the eye), which keeps the ratio finite and a black fit's float-rounding residue negligible.
     result.relative_rmse = fit_rms / fmax(source_rms, RELATIVE_RMS_FLOOR);
     result.renders = fit_renders;
+    result.local_method = ctx.gradient ? MR_LOCAL_GRADIENT : MR_LOCAL_BOBYQA;
     classify(&ctx, departure / sqrt(energy_scale), rescaled_optimum, ambiguous, projected_gain, &result);
     // The verdict render again (the checks above reused the scratch image), for the resolution check.
     if (!render_values(&ctx, result.values, MR_COMPONENT_FULL, ctx.scratch) ||

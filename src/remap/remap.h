@@ -124,6 +124,30 @@ const char *mr_fit_outcome_name(mr_fit_outcome outcome);
  * sweep files take outcomes through this, so that every reader knows every outcome the writer may use. */
 mr_status mr_fit_outcome_from_name(const char *name, mr_fit_outcome *out);
 
+/* The local stage of a fit: after AUTO's global grid (or from a warm start), and the SINGLE/TWO/THREE strategies'
+ * whole fit, a local minimisation in the normalised coordinates.
+ *   - MR_LOCAL_GRADIENT: bounded Levenberg-Marquardt (levenberg.h) on the image residual with the model's analytic
+ *     derivatives (brdf.h, eval_grad) rendered per pixel (render.h, mr_render_derivatives_into); for AUTO/JOINT's
+ *     variable projection, the reduced residual with Kaufman's Gauss-Newton matrix. A few steps, each one render
+ *     of the value and one of the derivatives, where BOBYQA spends one render per trial point.
+ *   - MR_LOCAL_BOBYQA: Powell's derivative-free BOBYQA (nlopt), the engine before issue 31.
+ *   - MR_LOCAL_AUTO (0): gradient for AUTO and JOINT where it can (the target model has eval_grad, its renders are
+ *     the built-in renderer's, the plan is lit by point lights only), else BOBYQA; the paper's local strategies
+ *     (SINGLE, TWO, THREE) keep BOBYQA, whose traps they reproduce (docs/paper-reproduction.md).
+ * A gradient method asked for where it cannot run is refused (MR_ERR_UNSUPPORTED, saying why).
+ * Both find the same minima on the bench pairs (docs/performance.md, "The fit engine"). */
+typedef enum mr_local_method {
+    MR_LOCAL_AUTO = 0,
+    MR_LOCAL_GRADIENT,
+    MR_LOCAL_BOBYQA,
+    MR_LOCAL_METHOD_COUNT
+} mr_local_method;
+
+/* "auto", "gradient", "bobyqa"; NULL outside the enum. */
+const char *mr_local_method_name(mr_local_method method);
+/* The method called `name`; MR_ERR_INVALID_ARG listing the valid names otherwise. */
+mr_status mr_local_method_from_name(const char *name, mr_local_method *out);
+
 typedef struct mr_remap_options {
     mr_remap_strategy strategy;  /* MR_REMAP_AUTO */
     int max_evaluations;         /* renders per local fit: 400 */
@@ -174,6 +198,7 @@ typedef struct mr_remap_options {
     mr_renderer *source_renderer; /* mr_remap only: who renders the source (its full render and, when it has
                                     them, its components; the closer look of UNDER_RESOLVED too): NULL =
                                     built-in */
+    mr_local_method local_method; /* how local fits step (mr_local_method): MR_LOCAL_AUTO */
 } mr_remap_options;
 
 /* Which renderer renders each side of remaps that files record (sweeps: the sweep file's "# remap:" line) by name,
@@ -213,6 +238,7 @@ typedef struct mr_remap_result {
     double seconds;                    /* wall time of the remap */
     mr_fit_outcome outcome;
     char detail[192];                  /* one line: why the outcome is what it is */
+    mr_local_method local_method;      /* the local stage the fit ran: MR_LOCAL_GRADIENT or MR_LOCAL_BOBYQA */
 } mr_remap_result;
 
 /* Fit `target` to the source images. opts may be NULL (defaults). Fails (MR_ERR_INVALID_ARG) on images of the

@@ -1208,3 +1208,65 @@ mr_status mr_render(const mr_render_plan *plan, const mr_brdf_model *model, cons
                     mr_component component, mr_image **out) {
     return mr_render_textured(plan, model, values, NULL, component, out);
 }
+
+/* ---- parameter derivatives of a render (render.h, mr_render_derivatives_into) ---------------------------- */
+
+int mr_render_plan_point_lit_only(const mr_render_plan *plan) {
+    return plan != NULL && plan->hits[plan->hit_count].env_begin == 0 &&
+           plan->hits[plan->hit_count].reflection_begin == 0;
+}
+
+mr_status mr_render_derivatives_into(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
+                                     const double *values, mr_component component, const int *slots, int count,
+                                     mr_image *const *images) {
+    if (plan == NULL || model == NULL || values == NULL || slots == NULL || images == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "render derivatives: NULL plan, model, values, slots or images");
+    if (model->eval_grad == NULL)
+        return mr_fail(MR_ERR_UNSUPPORTED, "render derivatives: model '%s' has no analytic derivatives", model->name);
+    if (!mr_render_plan_point_lit_only(plan))
+        return mr_fail(MR_ERR_UNSUPPORTED, "render derivatives: the plan has environment samples (point lights only)");
+    if (mr_render_plan_material_count(plan) != 1)
+        return mr_fail(MR_ERR_UNSUPPORTED, "render derivatives: the plan's mesh has several materials");
+    if ((unsigned)component > MR_COMPONENT_SPECULAR)
+        return mr_fail(MR_ERR_INVALID_ARG, "render derivatives: unknown component %d", (int)component);
+    const int value_count = mr_brdf_value_count(model);
+    if (count < 1 || count > MR_BRDF_MAX_VALUES)
+        return mr_fail(MR_ERR_INVALID_ARG, "render derivatives: %d slots (1 to %d)", count, MR_BRDF_MAX_VALUES);
+    for (int k = 0; k < count; k++) {
+        if (slots[k] < 0 || slots[k] >= value_count)
+            return mr_fail(MR_ERR_INVALID_ARG, "render derivatives: slot %d outside model '%s' (%d values)", slots[k],
+                           model->name, value_count);
+        if (images[k] == NULL) return mr_fail(MR_ERR_INVALID_ARG, "render derivatives: NULL image %d", k);
+        mr_status status = check_target(plan, images[k], "derivative");
+        if (status != MR_OK) return status;
+        memset(images[k]->pixels, 0, (size_t)plan->scene.width * plan->scene.height * 3 * sizeof(float));
+    }
+    const int lit = plan->lit_pixels;
+    if (threads <= 0) threads = plan->render_threads;
+    // Each lit pixel sums its samples in plan order, as render_core does: the images do not depend on the thread
+    // count. The background and the emission do not depend on any parameter.
+#pragma omp parallel for schedule(dynamic, 64) num_threads(threads) if (threads > 1)
+    for (int i = 0; i < lit; i++) {
+        double sum[MR_BRDF_MAX_VALUES][3] = {{0.0}};
+        double d_diffuse[MR_BRDF_MAX_VALUES * 3], d_specular[MR_BRDF_MAX_VALUES * 3];
+        for (int h = plan->hit_begin[i]; h < plan->hit_begin[i + 1]; h++) {
+            const plan_hit *hit = &plan->hits[h];
+            for (int s = hit->point_begin; s < hit[1].point_begin; s++) {
+                const point_sample *sample = &plan->point_samples[s];
+                model->eval_grad(model, values, hit->view, sample->light, d_diffuse, d_specular);
+                for (int k = 0; k < count; k++)
+                    for (int c = 0; c < 3; c++) {
+                        const int at = slots[k] * 3 + c;
+                        double d = component == MR_COMPONENT_DIFFUSE    ? d_diffuse[at]
+                                   : component == MR_COMPONENT_SPECULAR ? d_specular[at]
+                                                                        : d_diffuse[at] + d_specular[at];
+                        sum[k][c] += d * sample->weight[c];
+                    }
+            }
+        }
+        const size_t pixel = (size_t)plan->lit_pixel_index[i];
+        for (int k = 0; k < count; k++)
+            for (int c = 0; c < 3; c++) images[k]->pixels[pixel * 3 + c] = (float)sum[k][c];
+    }
+    return MR_OK;
+}

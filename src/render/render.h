@@ -436,6 +436,21 @@ mr_status mr_render_into_threads(const mr_render_plan *plan, int threads, const 
 mr_status mr_render_components_into_threads(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
                                             const double *values, mr_image *diffuse, mr_image *specular);
 
+/* The derivatives of a render with respect to parameter values (the gradient-based local fits of remap.c):
+ * images[k] receives d(render of `component`)/d values[slots[k]] at `values`, from the model's analytic eval_grad
+ * (brdf.h), summed over each lit pixel's samples in plan order like a render (so the images do not depend on
+ * `threads`; 0 = the plan's rule); 0 where the object is not lit. The background and emission depend on no
+ * parameter. Slots are packed value indices (brdf.h), 1 to MR_BRDF_MAX_VALUES of them, images 3-channel and the
+ * plan's size. MR_ERR_UNSUPPORTED for a model without eval_grad, a plan with environment or reflection samples
+ * (point lights only: mr_render_plan_point_lit_only) or a mesh with several materials; MR_ERR_INVALID_ARG for
+ * NULL arguments, a slot outside the model or an image of the wrong size. */
+mr_status mr_render_derivatives_into(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
+                                     const double *values, mr_component component, const int *slots, int count,
+                                     mr_image *const *images);
+
+/* Nonzero when the plan lights its object by point lights only (no environment or reflection samples). */
+int mr_render_plan_point_lit_only(const mr_render_plan *plan);
+
 /* The plan of `plan`'s scene looking at the first point light's highlight on the sphere `zoom` times closer (the
  * same camera position, turned towards the highlight, its field of view `zoom` times narrower, the same image
  * size), built on the first call and kept by `plan` (freed with it; safe to call from several threads at once), so
