@@ -2,7 +2,8 @@
  * remap.c — uniform image-based remapping (contract and strategies in remap.h).
  *
  * The fit works in normalised coordinates u in [0,1] per fitted scalar (log-spaced where the descriptor flags
- * MR_PARAM_LOG_SCALE), as nlopt's documentation recommends for derivative-free local methods. Two objective
+ * MR_PARAM_LOG_SCALE), as nlopt's documentation recommends for derivative-free local methods; the gradient local
+ * stage (levenberg.h) steps in the same coordinates, with the chain rule through to_value. Two objective
  * forms share the context below:
  *   - direct: render the target with every fitted value and sum squared differences (the paper's strategies);
  *   - projected (AUTO): render the basis images of the affine parameters for the current nonlinear values,

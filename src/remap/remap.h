@@ -172,8 +172,8 @@ typedef struct mr_remap_options {
                                     neighbouring texel's answer: src/remap/direct.h): the fitted parameters start
                                     there (fixed ones, switches and held ones still come from target_values);
                                     for AUTO and JOINT it also replaces the global grid search of the nonlinear
-                                    parameters (and the multi-start) by one local refinement (BOBYQA, first steps
-                                    MR_REMAP_WARM_STEP) from them, lobe by lobe for AUTO as usual, so the fit
+                                    parameters (and the multi-start) by one local refinement (local_method; BOBYQA's
+                                    first steps MR_REMAP_WARM_STEP) from them, lobe by lobe for AUTO, so the fit
                                     finds the minimum of the start's basin, and no second minimum to call the
                                     fit ambiguous (LOCAL_MINIMUM by ambiguity is not reported). NULL: none */
     unsigned freed;              /* bit p set: the target's parameter p is fitted although the model holds it by
