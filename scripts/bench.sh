@@ -4,7 +4,7 @@
 # docs/rendering.md (bench:envlight, bench:mesh, bench:reflection). Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
-# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|png|gltf|library|remap|remap-processes|direct|learn|mpi]
+# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|png|gltf|library|remap|fit-engine|remap-processes|direct|learn|mpi]
 #   --only NAME runs one section and rewrites only its markers (the full run takes long; sections written as
 #   functions below can be run alone). From make: make bench BENCH_ARGS="--only report-accuracy".
 set -euo pipefail
@@ -382,6 +382,33 @@ bench_remap_table() {
         echo
         cat "$work/remap_table.md"
     } > "$work/remap.md"
+}
+
+# The fit engine (docs/performance.md, bench:fit-engine): the bench pairs at 64^2 with the default engine against
+# the derivative-free local stage in the same run, and what accuracy costs in time per fit size x local method
+# (tests/bench_fit.c).
+bench_fit_engine() {
+    echo
+    echo "== the fit engine: 13 model pairs at 64², and fit size x local method (tests/bench_fit.c)"
+    local fit="$root/$build/tests/bench_fit"
+    "$fit" $quick --local bobyqa --save "$work/fit_bobyqa.txt" > "$work/fit_bobyqa.md"
+    "$fit" $quick --against "$work/fit_bobyqa.txt" | tee "$work/fit_pairs.md"
+    "$fit" $quick --table | tee "$work/fit_table.md"
+    {
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), one thread of $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'), matremap $("$bin" --version | cut -d' ' -f2)."
+        echo
+        echo "**The bench pairs at 64²** (the default engine; the reference columns compare it, material by material,"
+        echo "with the derivative-free local stage, \`--local bobyqa\`, run just before on the same materials):"
+        echo
+        cat "$work/fit_pairs.md"
+        echo
+        echo "**Fit size × local method** (materials: the pair's first 8, 4 for the layered targets). *floor ms*:"
+        echo "median renders × the median time of one full render of the target at that size, measured in the same"
+        echo "run: what the fit would cost if it did nothing but render. ΔSSIM@512: the fits rendered at 512² beside"
+        echo "the source, |SSIM − SSIM of the gradient fit at 128²| per material, mean (max)."
+        echo
+        cat "$work/fit_table.md"
+    } > "$work/fit_engine.md"
 }
 
 # The direct remap of real texture sets (docs/performance.md, bench:direct): distinct values against the
@@ -905,6 +932,10 @@ if [ -n "$only" ]; then
             bench_mpi
             replace_section mpi "$work/mpi.md"
             ;;
+        fit-engine)
+            bench_fit_engine
+            replace_section fit-engine "$work/fit_engine.md"
+            ;;
         remap-processes)
             bench_remap_processes
             replace_section remap-processes "$work/remap_processes.md"
@@ -919,7 +950,7 @@ if [ -n "$only" ]; then
             replace_section workflow "$work/workflow.md"
             replace_section workflow-e2e "$work/e2e.md"
             ;;
-        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, png, gltf, library, remap, remap-processes, direct, learn, mpi)" >&2; exit 1 ;;
+        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, png, gltf, library, remap, fit-engine, remap-processes, direct, learn, mpi)" >&2; exit 1 ;;
     esac
     exit 0
 fi
@@ -934,6 +965,7 @@ echo "== image metrics (tests/bench_metrics.c)"
 
 echo
 bench_remap_table
+bench_fit_engine
 bench_remap_processes
 bench_direct
 bench_learn
@@ -1055,6 +1087,7 @@ if [ -f "$perf" ]; then
     replace_section render "$report"
     replace_section metrics "$work/metrics_table.md"
     replace_section remap "$work/remap.md"
+    replace_section fit-engine "$work/fit_engine.md"
     replace_section remap-processes "$work/remap_processes.md"
     replace_section direct "$work/direct.md"
     replace_section learn "$work/learn.md"

@@ -10,12 +10,15 @@
  * ratios of renders and time. That is how a change of the engine shows "the same answers in fewer renders".
  * Asserts nothing (the timed figures live here, not in tests).
  *
- * Usage: bench_fit [--quick] [--pairs a,b,...] [--local auto|gradient|bobyqa] [--material N] [--save FILE]
+ * Usage: bench_fit [--quick] [--pairs a,b,...] [--local auto|gradient|bobyqa] [--material N] [--table] [--save FILE]
  *                  [--against FILE]
  *   --quick   8 materials per pair (4 for the slow ones)
  *   --pairs   only these pair names (as printed: "ward>ggx", "ggx>ward", ...)
  *   --local   the fits' local method (mr_remap_options.local_method; default auto)
  *   --material N  only material N of each pair (to look at one fit; its source values go to stderr)
+ *   --table   instead: what accuracy costs in time, per pair, fit size (32, 64, 128) and local method (gradient,
+ *             bobyqa): median renders and ms, the floor (renders x the measured time of one render of the target at
+ *             that size), and the fits judged at 512^2 (mean |ΔSSIM| against the gradient fit at 128^2)
  */
 #include <math.h>
 #include <omp.h>
@@ -143,13 +146,127 @@ static int read_reference(const char *path, answer reference[PAIR_COUNT][MAX_MAT
     return 1;
 }
 
+/* ---- --table: fit size x local method ---------------------------------------------------------------------- */
+
+#define TABLE_SIZES 3
+#define TABLE_METHODS 2
+static const int table_sizes[TABLE_SIZES] = {32, 64, 128};
+static const mr_local_method table_methods[TABLE_METHODS] = {MR_LOCAL_GRADIENT, MR_LOCAL_BOBYQA};
+
+static mr_render_plan *plan_of_size(int size) {
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){size, MR_FIT_LIGHT_45, 0});
+    mr_render_plan *plan = NULL;
+    if (mr_render_plan_create(&scene, &plan) != MR_OK) {
+        fprintf(stderr, "bench_fit: %s\n", mr_last_error());
+        exit(3);
+    }
+    return plan;
+}
+
+/* Median ms of one full render of `model` at its defaults (the floor's unit). */
+static double render_ms(const mr_render_plan *plan, const mr_brdf_model *model, mr_image *scratch) {
+    double values[MR_BRDF_MAX_VALUES], t[15];
+    mr_brdf_default_values(model, values);
+    for (int k = 0; k < 15; k++) {
+        double t0 = bench_now();
+        if (mr_render_into(plan, model, values, MR_COMPONENT_FULL, scratch) != MR_OK) exit(3);
+        t[k] = 1e3 * (bench_now() - t0);
+    }
+    return quantile(t, 15, 0.5);
+}
+
+/* SSIM at 512^2 of the target's values against the source's 512^2 render. */
+static double ssim_512(const mr_render_plan *plan512, const mr_brdf_model *target, const double *values,
+                       const mr_image *source512, mr_image *scratch512) {
+    double ssim;
+    if (mr_render_into(plan512, target, values, MR_COMPONENT_FULL, scratch512) != MR_OK ||
+        mr_ssim(scratch512, source512, NULL, &ssim, NULL) != MR_OK) {
+        fprintf(stderr, "bench_fit: %s\n", mr_last_error());
+        exit(3);
+    }
+    return ssim;
+}
+
+static int run_table(int quick, const char *only) {
+    mr_render_plan *plans[TABLE_SIZES], *plan512 = plan_of_size(512);
+    mr_image *scratch[TABLE_SIZES], *source512 = NULL, *scratch512 = NULL;
+    for (int z = 0; z < TABLE_SIZES; z++) {
+        plans[z] = plan_of_size(table_sizes[z]);
+        if (mr_image_create(table_sizes[z], table_sizes[z], 3, &scratch[z]) != MR_OK) return 3;
+    }
+    if (mr_image_create(512, 512, 3, &source512) != MR_OK || mr_image_create(512, 512, 3, &scratch512) != MR_OK)
+        return 3;
+    printf("| pair | size | local | materials | median renders | median ms | floor ms | mean ΔSSIM@512 (max) | "
+           "outcomes |\n|---|---:|---|---:|---:|---:|---:|---:|---|\n");
+    for (int p = 0; p < PAIR_COUNT; p++) {
+        if (!wanted(only, pairs[p].name)) continue;
+        const mr_brdf_model *source = mr_brdf_find(pairs[p].source), *target = mr_brdf_find(pairs[p].target);
+        if (source == NULL || target == NULL) return 3;
+        const int n = quick ? 2 : (pairs[p].materials >= 16 ? 8 : 4);
+        static double ms[TABLE_SIZES][TABLE_METHODS][MAX_MATERIALS], renders[TABLE_SIZES][TABLE_METHODS][MAX_MATERIALS];
+        static double ssim[TABLE_SIZES][TABLE_METHODS][MAX_MATERIALS];
+        static int outcomes[TABLE_SIZES][TABLE_METHODS][MR_FIT_OUTCOME_COUNT];
+        memset(outcomes, 0, sizeof outcomes);
+        unsigned long long state = 0x31ULL + (unsigned long long)p; // the same materials as the pair's first ones
+        for (int i = 0; i < n; i++) {
+            double values[MR_BRDF_MAX_VALUES];
+            random_material(&pairs[p], source, &state, values);
+            if (mr_render_into(plan512, source, values, MR_COMPONENT_FULL, source512) != MR_OK) return 3;
+            for (int z = 0; z < TABLE_SIZES; z++)
+                for (int k = 0; k < TABLE_METHODS; k++) {
+                    mr_remap_options o = mr_remap_options_default();
+                    o.local_method = table_methods[k];
+                    mr_remap_result r;
+                    double t0 = bench_now();
+                    if (mr_remap(plans[z], source, values, target, &o, &r) != MR_OK) {
+                        fprintf(stderr, "bench_fit: %s #%d: %s\n", pairs[p].name, i, mr_last_error());
+                        return 3;
+                    }
+                    ms[z][k][i] = 1e3 * (bench_now() - t0);
+                    renders[z][k][i] = (double)r.renders;
+                    outcomes[z][k][r.outcome]++;
+                    ssim[z][k][i] = ssim_512(plan512, target, r.values, source512, scratch512);
+                }
+        }
+        for (int z = 0; z < TABLE_SIZES; z++) {
+            const double one_render = render_ms(plans[z], target, scratch[z]);
+            for (int k = 0; k < TABLE_METHODS; k++) {
+                double mean = 0.0, worst = 0.0, r[MAX_MATERIALS], t[MAX_MATERIALS];
+                for (int i = 0; i < n; i++) {
+                    double d = fabs(ssim[z][k][i] - ssim[TABLE_SIZES - 1][0][i]);
+                    mean += d / n;
+                    worst = fmax(worst, d);
+                    r[i] = renders[z][k][i];
+                    t[i] = ms[z][k][i];
+                }
+                const double median_renders = quantile(r, n, 0.5);
+                const int *c = outcomes[z][k];
+                printf("| %s | %d² | %s | %d | %.0f | %.2f | %.2f | %.5f (%.5f) | %d / %d / %d / %d / %d |\n",
+                       pairs[p].name, table_sizes[z], mr_local_method_name(table_methods[k]), n, median_renders,
+                       quantile(t, n, 0.5), median_renders * one_render, mean, worst, c[MR_FIT_CONVERGED],
+                       c[MR_FIT_AT_BOUND], c[MR_FIT_UNREACHABLE], c[MR_FIT_LOCAL_MINIMUM], c[MR_FIT_UNDER_RESOLVED]);
+            }
+        }
+        fflush(stdout);
+    }
+    for (int z = 0; z < TABLE_SIZES; z++) {
+        mr_render_plan_free(plans[z]);
+        mr_image_free(scratch[z]);
+    }
+    mr_render_plan_free(plan512);
+    mr_image_free(source512);
+    mr_image_free(scratch512);
+    return 0;
+}
+
 int main(int argc, char **argv) {
     int quick = 0;
     const char *save = NULL, *against = NULL, *only = NULL;
     mr_local_method local = MR_LOCAL_AUTO;
-    int material = -1;
+    int material = -1, table = 0;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--quick") == 0) quick = 1;
+        else if (strcmp(argv[i], "--table") == 0) table = 1;
         else if (strcmp(argv[i], "--save") == 0 && i + 1 < argc) save = argv[++i];
         else if (strcmp(argv[i], "--against") == 0 && i + 1 < argc) against = argv[++i];
         else if (strcmp(argv[i], "--pairs") == 0 && i + 1 < argc) only = argv[++i];
@@ -162,9 +279,13 @@ int main(int argc, char **argv) {
         }
         else {
             fprintf(stderr, "usage: bench_fit [--quick] [--pairs a,b,...] [--local auto|gradient|bobyqa] "
-                            "[--material N] [--save FILE] [--against FILE]\n");
+                            "[--material N] [--table] [--save FILE] [--against FILE]\n");
             return 1;
         }
+    }
+    if (table) {
+        omp_set_num_threads(1);
+        return run_table(quick, only);
     }
     static answer reference[PAIR_COUNT][MAX_MATERIALS];
     static int have[PAIR_COUNT][MAX_MATERIALS];
