@@ -474,6 +474,13 @@ double mr_ggx_albedo_one(double mu, double r);
  * the interpolated table): per parameter set, not per eval. */
 double mr_ggx_albedo_one_avg(double r);
 
+/* The same three with their derivatives (eval_grad of the layered models): the derivative of the interpolation in r
+ * and eps (mu is geometry), one-sided at cell boundaries, 0 where a coordinate is clamped or at r = 0.01, eps = 0
+ * (layering.c says why). The values equal the functions' above bit for bit. */
+double mr_ggx_albedo_dielectric_grad(double mu, double r, double eps, double *dE_dr, double *dE_deps);
+double mr_ggx_albedo_one_grad(double mu, double r, double *dE_dr);
+double mr_ggx_albedo_one_avg_grad(double r, double *dE_dr);
+
 /* The hemispherical average of the exact dielectric Fresnel, F_avg(eta) = 2 integral_0^1 F(mu, eta) mu dmu, eta >= 1
  * (Simpson's rule, 64 intervals; F is smooth on [0, 1] for eta >= 1, the error is below 1e-7). Per parameter set. */
 static inline double mr_fresnel_dielectric_avg(double eta) {
@@ -482,6 +489,18 @@ static inline double mr_fresnel_dielectric_avg(double eta) {
         double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0);
         sum += w * 2.0 * mu * mr_fresnel_dielectric(MR_MAX(mu, 1e-9), eta, NULL);
     }
+    return sum / (3.0 * 64.0);
+}
+
+/* mr_fresnel_dielectric_avg with its derivative d F_avg/d eta (the same Simpson sum of dF/deta), the same value. */
+static inline double mr_fresnel_dielectric_avg_grad(double eta, double *dF_deta) {
+    double sum = 0.0, dsum = 0.0;
+    for (int i = 0; i <= 64; i++) {
+        double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0), d;
+        sum += w * 2.0 * mu * mr_fresnel_dielectric(MR_MAX(mu, 1e-9), eta, &d);
+        dsum += w * 2.0 * mu * d;
+    }
+    *dF_deta = dsum / (3.0 * 64.0);
     return sum / (3.0 * 64.0);
 }
 

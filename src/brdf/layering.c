@@ -76,3 +76,64 @@ double mr_ggx_albedo_one_avg(double r) {
     }
     return sum / (3.0 * 64.0);
 }
+
+/* ---- derivatives of the interpolation (eval_grad of the layered models) ----
+ * The interpolation is piecewise multilinear in the node coordinates t; within a cell its derivative in t is the
+ * difference of the neighbouring nodes, and t depends smoothly on r and eps: d t_r/dr = 1/(1.98 t_r),
+ * d t_eta/d eta = 1/(4 t_eta), d eta/d eps = 2/(1 - eps)^2. At a cell boundary this is the derivative of the cell
+ * alb_cell chose (the upper one), one-sided; where a coordinate is clamped (r below 0.01, eps outside [0, 0.5]) or
+ * at t = 0 (r = 0.01, eps = 0: sqrt's infinite slope, with the clamped side beyond) it is 0. The values returned are
+ * computed by the same operations as the functions above, so they equal them bit for bit. */
+
+/* d frac / d t of alb_cell: n - 1 inside (0, 1], 0 where t is clamped or 0 */
+static double alb_dfrac_dt(double t, int n) { return t > 0.0 && t <= 1.0 ? n - 1 : 0.0; }
+
+static int alb_cell_r_grad(double r, int n, double *frac, double *dfrac_dr) {
+    double t = sqrt(MR_MAX(r - 0.01, 0.0) / 0.99);
+    *dfrac_dr = t > 0.0 ? alb_dfrac_dt(t, n) / (1.98 * t) : 0.0;
+    return alb_cell(t, n, frac);
+}
+
+static int alb_cell_eps_grad(double eps, double *frac, double *dfrac_deps) {
+    double e = mr_clampd(eps, 0.0, 0.5), eta = (1.0 + e) / (1.0 - e), t = sqrt((eta - 1.0) / 2.0);
+    double deta = eps >= 0.0 && eps <= 0.5 ? 2.0 / ((1.0 - e) * (1.0 - e)) : 0.0;
+    *dfrac_deps = t > 0.0 ? alb_dfrac_dt(t, MR_GGX_ALB_N_ETA) * deta / (4.0 * t) : 0.0;
+    return alb_cell(t, MR_GGX_ALB_N_ETA, frac);
+}
+
+double mr_ggx_albedo_dielectric_grad(double mu, double r, double eps, double *dE_dr, double *dE_deps) {
+    double a, b, c, db, dc;
+    int it = alb_cell(sqrt(mr_clampd(mu, 0.0, 1.0)), MR_GGX_ALB_N_MU, &a);
+    int ir = alb_cell_r_grad(r, MR_GGX_ALB_N_R, &b, &db), ie = alb_cell_eps_grad(eps, &c, &dc);
+    double v[2], dv_db[2];
+    for (int e = 0; e < 2; e++) {
+        const float(*t)[MR_GGX_ALB_N_MU] = mr_ggx_alb_dielectric[ie + e];
+        double lo = alb_lerp(t[ir][it], t[ir][it + 1], a), hi = alb_lerp(t[ir + 1][it], t[ir + 1][it + 1], a);
+        v[e] = alb_lerp(lo, hi, b);
+        dv_db[e] = hi - lo;
+    }
+    *dE_dr = alb_lerp(dv_db[0], dv_db[1], c) * db;
+    *dE_deps = (v[1] - v[0]) * dc;
+    return alb_lerp(v[0], v[1], c);
+}
+
+double mr_ggx_albedo_one_grad(double mu, double r, double *dE_dr) {
+    double a, b, db;
+    int it = alb_cell(sqrt(mr_clampd(mu, 0.0, 1.0)), MR_GGX_ALB_N_MU, &a);
+    int ir = alb_cell_r_grad(r, MR_GGX_ALB_ONE_N_R, &b, &db);
+    const float(*t)[MR_GGX_ALB_N_MU] = mr_ggx_alb_one;
+    double lo = alb_lerp(t[ir][it], t[ir][it + 1], a), hi = alb_lerp(t[ir + 1][it], t[ir + 1][it + 1], a);
+    *dE_dr = (hi - lo) * db;
+    return alb_lerp(lo, hi, b);
+}
+
+double mr_ggx_albedo_one_avg_grad(double r, double *dE_dr) {
+    double sum = 0.0, dsum = 0.0;
+    for (int i = 0; i <= 64; i++) {
+        double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0), d;
+        sum += w * 2.0 * mu * mr_ggx_albedo_one_grad(mu, r, &d);
+        dsum += w * 2.0 * mu * d;
+    }
+    *dE_dr = dsum / (3.0 * 64.0);
+    return sum / (3.0 * 64.0);
+}
