@@ -1973,18 +1973,22 @@ MR_TEST(known_standard_surface) {
     eval_parts(m, v, wo, wi, d2, s2);
     MR_CHECK_MSG(!close_rel(d[0], d2[0], 1e-3), "defaults: diffuse %.9g vs %.9g", d[0], d2[0]);
 
-    /* the precomputed curve (mr_ggx_albedo_curve, what prepare stores) is the shared table's trilinear lookup
-     * (mr_ggx_albedo_dielectric, what openpbr and blender-principled call), up to the curve's float rounding */
+    /* the slice prepare stores (mr_ggx_albedo_slice_init) finishes at eval to the shared table's trilinear lookup
+     * (mr_ggx_albedo_dielectric, what openpbr and blender-principled call) bit for bit, and the derivatives' lookup
+     * (mr_ggx_albedo_dielectric_grad) gives the same value */
     uint64_t arng = 5;
-    double curve_worst = 0.0;
+    int slice_differs = 0;
     for (int k = 0; k < 300; k++) {
-        double r = 0.01 + 0.99 * rnd(&arng), eta = 1.0 + 2.0 * rnd(&arng), mu = rnd(&arng);
-        float curve[MR_GGX_ALBEDO_CURVE_N];
-        mr_ggx_albedo_curve(r, (eta - 1.0) / (eta + 1.0), curve);
-        curve_worst = fmax(curve_worst, fabs(mr_ggx_albedo_curve_at(curve, mu) -
-                                             mr_ggx_albedo_dielectric(mu, r, (eta - 1.0) / (eta + 1.0))));
+        double r = 0.01 + 0.99 * rnd(&arng), eta = 1.0 + 2.0 * rnd(&arng), mu = rnd(&arng), dr, deps;
+        double eps = (eta - 1.0) / (eta + 1.0), direct = mr_ggx_albedo_dielectric(mu, r, eps);
+        mr_ggx_albedo_slice slice;
+        mr_ggx_albedo_slice_init(r, eps, &slice);
+        if (mr_ggx_albedo_slice_at(&slice, mu) != direct || mr_ggx_albedo_dielectric_grad(mu, r, eps, &dr, &deps) !=
+                                                                  direct)
+            slice_differs++;
     }
-    MR_CHECK_MSG(curve_worst <= 1e-6, "albedo curve vs trilinear lookup: %.3g", curve_worst);
+    MR_CHECK_MSG(slice_differs == 0, "albedo slice or gradient lookup vs trilinear lookup: %d of 300 differ",
+                 slice_differs);
 
     /* White furnace, base_color 1 (base 1): a dielectric over Lambert reflects E_s + (1 - E_s) = 1 exactly, so
      * |albedo - 1| is the albedo table's error (plus the quadrature's, ~1e-3 towards grazing). Over ior x

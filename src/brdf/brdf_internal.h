@@ -455,19 +455,15 @@ static inline double mr_eon_albedo_on(const mr_eon *e, double mu, double sin2) {
  * (all clamped). Trilinear in (sqrt(mu), sqrt((r - 0.01)/0.99), sqrt((eta - 1)/2)) on the generated table
  * (ggx_albedo_tables.h, whose header states the interpolation error). The one table of all layered models. */
 double mr_ggx_albedo_dielectric(double mu, double r, double eps);
-/* The same table sliced at (r, eps) for a model that precomputes in prepare: curve[i] is E at the table's i-th mu
- * node (mu = (i/(N - 1))^2; node 0 is computed at mu = 1e-4), bilinear in (r, eta) as above;
- * mr_ggx_albedo_curve_at interpolates it linearly in sqrt(mu), so the pair gives mr_ggx_albedo_dielectric(mu, r,
- * eps) up to the curve's float rounding (known_standard_surface checks it). */
-#define MR_GGX_ALBEDO_CURVE_N 41
-void mr_ggx_albedo_curve(double r, double eps, float curve[MR_GGX_ALBEDO_CURVE_N]);
-static inline double mr_ggx_albedo_curve_at(const float curve[MR_GGX_ALBEDO_CURVE_N], double mu) {
-    double x = mu > 0.0 ? sqrt(MR_MIN(mu, 1.0)) * (MR_GGX_ALBEDO_CURVE_N - 1) : 0.0;
-    int i = (int)x;
-    if (i > MR_GGX_ALBEDO_CURVE_N - 2) i = MR_GGX_ALBEDO_CURVE_N - 2;
-    double u = x - i;
-    return (1.0 - u) * curve[i] + u * curve[i + 1];
-}
+/* The same lookup split for a model that precomputes in prepare: the (r, eps) cell and fractions once per parameter
+ * set (slice_init), the mu coordinate per eval (slice_at). slice_at(slice_init(r, eps), mu) is
+ * mr_ggx_albedo_dielectric(mu, r, eps) bit for bit (it is how that function computes). */
+typedef struct mr_ggx_albedo_slice {
+    int ir, ie;   /* r and eta cells */
+    double b, c;  /* fractions in them */
+} mr_ggx_albedo_slice;
+void mr_ggx_albedo_slice_init(double r, double eps, mr_ggx_albedo_slice *slice);
+double mr_ggx_albedo_slice_at(const mr_ggx_albedo_slice *slice, double mu);
 /* The same with F = 1: the lobe's own single-scattering albedo (bilinear in (sqrt(mu), sqrt((r - 0.01)/0.99))). */
 double mr_ggx_albedo_one(double mu, double r);
 /* Its cosine-weighted hemispherical average E_avg(r) = 2 integral_0^1 E(mu) mu dmu (Simpson's rule, 64 intervals, on

@@ -17,8 +17,6 @@
 #include "brdf_internal.h"
 #include "ggx_albedo_tables.h"
 
-_Static_assert(MR_GGX_ALB_N_MU == MR_GGX_ALBEDO_CURVE_N, "brdf_internal.h's curve length is the table's mu nodes");
-
 /* Cell index and fraction of t in [0, 1] (clamped; NaN -> 0) on n nodes. */
 static int alb_cell(double t, int n, double *frac) {
     double x = t > 0.0 ? MR_MIN(t, 1.0) * (n - 1) : 0.0;
@@ -39,25 +37,26 @@ static int alb_cell_eps(double eps, double *frac) {
     return alb_cell(sqrt((eta - 1.0) / 2.0), MR_GGX_ALB_N_ETA, frac);
 }
 
-void mr_ggx_albedo_curve(double r, double eps, float curve[MR_GGX_ALBEDO_CURVE_N]) {
-    double b, c;
-    int ir = alb_cell_r(r, MR_GGX_ALB_N_R, &b), ie = alb_cell_eps(eps, &c);
-    const float(*t0)[MR_GGX_ALB_N_MU] = mr_ggx_alb_dielectric[ie];
-    const float(*t1)[MR_GGX_ALB_N_MU] = mr_ggx_alb_dielectric[ie + 1];
-    for (int i = 0; i < MR_GGX_ALB_N_MU; i++)
-        curve[i] = (float)alb_lerp(alb_lerp(t0[ir][i], t0[ir + 1][i], b), alb_lerp(t1[ir][i], t1[ir + 1][i], b), c);
+void mr_ggx_albedo_slice_init(double r, double eps, mr_ggx_albedo_slice *slice) {
+    slice->ir = alb_cell_r(r, MR_GGX_ALB_N_R, &slice->b);
+    slice->ie = alb_cell_eps(eps, &slice->c);
+}
+
+double mr_ggx_albedo_slice_at(const mr_ggx_albedo_slice *slice, double mu) {
+    double a, b = slice->b;
+    int it = alb_cell(sqrt(mr_clampd(mu, 0.0, 1.0)), MR_GGX_ALB_N_MU, &a), ir = slice->ir;
+    double v[2];
+    for (int e = 0; e < 2; e++) {
+        const float(*t)[MR_GGX_ALB_N_MU] = mr_ggx_alb_dielectric[slice->ie + e];
+        v[e] = alb_lerp(alb_lerp(t[ir][it], t[ir][it + 1], a), alb_lerp(t[ir + 1][it], t[ir + 1][it + 1], a), b);
+    }
+    return alb_lerp(v[0], v[1], slice->c);
 }
 
 double mr_ggx_albedo_dielectric(double mu, double r, double eps) {
-    double a, b, c;
-    int it = alb_cell(sqrt(mr_clampd(mu, 0.0, 1.0)), MR_GGX_ALB_N_MU, &a);
-    int ir = alb_cell_r(r, MR_GGX_ALB_N_R, &b), ie = alb_cell_eps(eps, &c);
-    double v[2];
-    for (int e = 0; e < 2; e++) {
-        const float(*t)[MR_GGX_ALB_N_MU] = mr_ggx_alb_dielectric[ie + e];
-        v[e] = alb_lerp(alb_lerp(t[ir][it], t[ir][it + 1], a), alb_lerp(t[ir + 1][it], t[ir + 1][it + 1], a), b);
-    }
-    return alb_lerp(v[0], v[1], c);
+    mr_ggx_albedo_slice slice;
+    mr_ggx_albedo_slice_init(r, eps, &slice);
+    return mr_ggx_albedo_slice_at(&slice, mu);
 }
 
 double mr_ggx_albedo_one(double mu, double r) {
