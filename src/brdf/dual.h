@@ -14,9 +14,9 @@
  * One derivative slot per packed value: MR_DUAL_N >= the largest value count of a model using it (static asserts in
  * each model). Operations are static inline on values; GCC keeps them in registers and vectorises the slot loops.
  *
- * Non-differentiable points: min, max and clamps pass the derivative of the branch they select (at a tie, the
- * first argument's; a clamp keeps its argument's derivative when it is exactly at the bound), i.e. the one-sided
- * derivative from the inside of the range. sqrt and log at 0 give derivative 0 (the callers only reach them where
+ * Non-differentiable points: min, max and clamps pass the derivative of the branch they select (at a tie of min or
+ * max, the derivative from the left, slot by slot; a clamp keeps its argument's derivative when it is exactly at the
+ * bound), i.e. a one-sided derivative, from the inside of the range where the value sits at a bound. sqrt and log at 0 give derivative 0 (the callers only reach them where
  * the other side is clamped away). Pure functions: thread-safe.
  */
 #ifndef MR_BRDF_DUAL_H
@@ -98,8 +98,19 @@ static inline mr_dual mr_dual_lerp(mr_dual a, mr_dual b, mr_dual t) {
 }
 
 /* MR_MIN, MR_MAX and mr_clampd with the selected branch's derivative (see the top of the file). */
-static inline mr_dual mr_dual_min(mr_dual a, mr_dual b) { return a.v < b.v ? a : b; }
-static inline mr_dual mr_dual_max(mr_dual a, mr_dual b) { return a.v > b.v ? a : b; }
+/* At a tie of two duals, each slot takes the derivative from the left (the value's decreasing side): for max the
+ * smaller of the two slopes, for min the larger. A grey colour's channels tie in a max over channels
+ * (blender-principled's estimate), at its default 1, the top of its range, where only that side exists. */
+static inline mr_dual mr_dual_max(mr_dual a, mr_dual b) {
+    if (a.v != b.v) return a.v > b.v ? a : b;
+    for (int j = 0; j < MR_DUAL_N; j++) a.d[j] = MR_MIN(a.d[j], b.d[j]);
+    return a;
+}
+static inline mr_dual mr_dual_min(mr_dual a, mr_dual b) {
+    if (a.v != b.v) return a.v < b.v ? a : b;
+    for (int j = 0; j < MR_DUAL_N; j++) a.d[j] = MR_MAX(a.d[j], b.d[j]);
+    return a;
+}
 static inline mr_dual mr_dual_minc(mr_dual a, double k) { return a.v < k ? a : mr_dual_const(k); }
 static inline mr_dual mr_dual_maxc(mr_dual a, double k) { return a.v > k ? a : mr_dual_const(k); }
 /* at the bounds themselves the argument's derivative is kept: the one-sided derivative from inside */
