@@ -236,15 +236,15 @@ static void bp_eval(const void *state_bytes, const double wi[3], const double wo
 }
 
 /* bp_darkening and bp_estimate_s in dual numbers */
-static mr_dual bp_dual_darkening(mr_dual E, mr_dual E_avg, mr_dual fss) {
-    mr_dual fms = mr_dual_div(mr_dual_mul(fss, E_avg), mr_dual_rsubc(1.0, mr_dual_mul(fss, mr_dual_rsubc(1.0, E_avg))));
-    return mr_dual_add(E, mr_dual_mul(fms, mr_dual_rsubc(1.0, E)));
+static mr_dual bp_dual_darkening(mr_dual_tape *tp, mr_dual E, mr_dual E_avg, mr_dual fss) {
+    mr_dual fms = mr_dual_div(tp, mr_dual_mul(tp, fss, E_avg), mr_dual_rsubc(tp, 1.0, mr_dual_mul(tp, fss, mr_dual_rsubc(tp, 1.0, E_avg))));
+    return mr_dual_add(tp, E, mr_dual_mul(tp, fms, mr_dual_rsubc(tp, 1.0, E)));
 }
 
-static mr_dual bp_dual_estimate_s(double mu, mr_dual r, mr_dual eps, mr_dual f0) {
-    mr_dual E = mr_dual_maxc(mr_dual_albedo_one(mu, r), 1e-6);
-    mr_dual num = mr_dual_sub(mr_dual_albedo_dielectric(mu, r, eps), mr_dual_mul(f0, E));
-    return mr_dual_clampc(mr_dual_div(num, mr_dual_mul(mr_dual_rsubc(1.0, f0), E)), 0.0, 1.0);
+static mr_dual bp_dual_estimate_s(mr_dual_tape *tp, double mu, mr_dual r, mr_dual eps, mr_dual f0) {
+    mr_dual E = mr_dual_maxc(mr_dual_albedo_one(tp, mu, r), 1e-6);
+    mr_dual num = mr_dual_sub(tp, mr_dual_albedo_dielectric(tp, mu, r, eps), mr_dual_mul(tp, f0, E));
+    return mr_dual_clampc(mr_dual_div(tp, num, mr_dual_mul(tp, mr_dual_rsubc(tp, 1.0, f0), E)), 0.0, 1.0);
 }
 
 /* d f_r / d values[j]: bp_prepare and bp_eval transcribed in dual numbers (dual.h), operation for operation, so the
@@ -257,85 +257,88 @@ static void bp_eval_grad(const mr_brdf_model *model, const double *values, const
     double v[MR_BRDF_MAX_VALUES];
     if (!mr_brdf_grad_begin(model, values, wi, wo, d_diffuse, d_specular, &g, v)) return;
     int count = mr_brdf_value_count(model);
+    mr_dual_tape tape;
+    mr_dual_tape_init(&tape);
+    mr_dual_tape *tp = &tape;
     mr_dual x[MR_DUAL_N];
     for (int j = 0; j < count; j++) x[j] = mr_dual_var(v[j], j);
     x[BP_MULTISCATTER] = mr_dual_const(v[BP_MULTISCATTER]);
     const mr_dual one = mr_dual_const(1.0);
 
     /* bp_prepare */
-    mr_dual r = mr_dual_maxc(x[BP_ROUGHNESS], BP_ROUGHNESS_MIN), alpha = mr_dual_sq(r), metallic = x[BP_METALLIC];
+    mr_dual r = mr_dual_maxc(x[BP_ROUGHNESS], BP_ROUGHNESS_MIN), alpha = mr_dual_sq(tp, r), metallic = x[BP_METALLIC];
     int multiscatter = v[BP_MULTISCATTER] >= 0.5;
-    mr_dual E_avg = mr_dual_albedo_one_avg(r);
-    mr_dual ior = x[BP_IOR], f0_ior = mr_dual_div(mr_dual_addc(ior, -1.0), mr_dual_addc(ior, 1.0));
-    mr_dual f0 = mr_dual_minc(mr_dual_mul(mr_dual_scale(mr_dual_sq(f0_ior), 2.0), x[BP_LEVEL]), 0.99);
-    mr_dual sqrt_f0 = mr_dual_sqrt(f0);
-    mr_dual eta = mr_dual_div(mr_dual_addc(sqrt_f0, 1.0), mr_dual_rsubc(1.0, sqrt_f0));
+    mr_dual E_avg = mr_dual_albedo_one_avg(tp, r);
+    mr_dual ior = x[BP_IOR], f0_ior = mr_dual_div(tp, mr_dual_addc(tp, ior, -1.0), mr_dual_addc(tp, ior, 1.0));
+    mr_dual f0 = mr_dual_minc(mr_dual_mul(tp, mr_dual_scale(tp, mr_dual_sq(tp, f0_ior), 2.0), x[BP_LEVEL]), 0.99);
+    mr_dual sqrt_f0 = mr_dual_sqrt(tp, f0);
+    mr_dual eta = mr_dual_div(tp, mr_dual_addc(tp, sqrt_f0, 1.0), mr_dual_rsubc(tp, 1.0, sqrt_f0));
     int spec_on = f0.v > 0.0;
-    mr_dual s_avg = spec_on ? mr_dual_clampc(mr_dual_div(mr_dual_sub(mr_dual_fresnel_dielectric_avg(eta), f0),
-                                                         mr_dual_rsubc(1.0, f0)), 0.0, 1.0)
+    mr_dual s_avg = spec_on ? mr_dual_clampc(mr_dual_div(tp, mr_dual_sub(tp, mr_dual_fresnel_dielectric_avg(tp, eta), f0),
+                                                         mr_dual_rsubc(tp, 1.0, f0)), 0.0, 1.0)
                             : mr_dual_const(0.0);
     mr_dual rho[3], b[3], fss_m[3], f0s[3], fss_s[3];
     for (int c = 0; c < 3; c++) {
         rho[c] = x[BP_BASE + c];
-        b[c] = mr_dual_f82_coeff(rho[c], x[BP_TINT + c]);
-        fss_m[c] = mr_dual_sub(mr_dual_lerp(rho[c], one, mr_dual_const(1.0 / 21.0)), mr_dual_scale(b[c], 1.0 / 126.0));
-        f0s[c] = mr_dual_clampc(mr_dual_mul(f0, x[BP_TINT + c]), 0.0, 1.0);
-        fss_s[c] = mr_dual_lerp(f0s[c], one, s_avg);
+        b[c] = mr_dual_f82_coeff(tp, rho[c], x[BP_TINT + c]);
+        fss_m[c] = mr_dual_sub(tp, mr_dual_lerp(tp, rho[c], one, mr_dual_const(1.0 / 21.0)), mr_dual_scale(tp, b[c], 1.0 / 126.0));
+        f0s[c] = mr_dual_clampc(mr_dual_mul(tp, f0, x[BP_TINT + c]), 0.0, 1.0);
+        fss_s[c] = mr_dual_lerp(tp, f0s[c], one, s_avg);
     }
     mr_dual C = x[BP_COAT_WEIGHT];
-    mr_dual r_c = mr_dual_maxc(x[BP_COAT_ROUGHNESS], BP_ROUGHNESS_MIN), alpha_c = mr_dual_sq(r_c);
+    mr_dual r_c = mr_dual_maxc(x[BP_COAT_ROUGHNESS], BP_ROUGHNESS_MIN), alpha_c = mr_dual_sq(tp, r_c);
     mr_dual eta_c = x[BP_COAT_IOR];
-    mr_dual f0_c = mr_dual_sq(mr_dual_div(mr_dual_addc(eta_c, -1.0), mr_dual_addc(eta_c, 1.0)));
-    mr_dual fss_c = eta_c.v > 1.0 ? mr_dual_fresnel_dielectric_avg(eta_c) : mr_dual_const(0.0);
-    mr_dual E_avg_c = mr_dual_albedo_one_avg(r_c);
-    mr_dual inv_eta_c2 = mr_dual_recip(mr_dual_sq(eta_c));
+    mr_dual f0_c = mr_dual_sq(tp, mr_dual_div(tp, mr_dual_addc(tp, eta_c, -1.0), mr_dual_addc(tp, eta_c, 1.0)));
+    mr_dual fss_c = eta_c.v > 1.0 ? mr_dual_fresnel_dielectric_avg(tp, eta_c) : mr_dual_const(0.0);
+    mr_dual E_avg_c = mr_dual_albedo_one_avg(tp, r_c);
+    mr_dual inv_eta_c2 = mr_dual_recip(tp, mr_dual_sq(tp, eta_c));
 
     /* bp_eval: the coat, at coat_weight 0 too (see above) */
     double mu_v = MR_MIN(g.cos_i, 1.0);
     mr_dual w[3], spec[3];
     {
-        mr_dual E_c = mr_dual_maxc(mr_dual_albedo_one(mu_v, r_c), 1e-6);
-        mr_dual dark = bp_dual_darkening(E_c, E_avg_c, fss_c), scale = mr_dual_div(dark, E_c);
-        mr_dual F = eta_c.v > 1.0 ? mr_dual_fresnel_dielectric(g.dot_h, eta_c) : mr_dual_const(0.0);
-        mr_dual lobe = mr_dual_mul(mr_dual_mul(mr_dual_mul(C, F), mr_dual_ggx_dv(alpha_c, &g)), scale);
-        mr_dual est = eta_c.v > 1.0 ? mr_dual_lerp(f0_c, one, bp_dual_estimate_s(mu_v, r_c, mr_dual_sqrt(f0_c), f0_c))
+        mr_dual E_c = mr_dual_maxc(mr_dual_albedo_one(tp, mu_v, r_c), 1e-6);
+        mr_dual dark = bp_dual_darkening(tp, E_c, E_avg_c, fss_c), scale = mr_dual_div(tp, dark, E_c);
+        mr_dual F = eta_c.v > 1.0 ? mr_dual_fresnel_dielectric(tp, g.dot_h, eta_c) : mr_dual_const(0.0);
+        mr_dual lobe = mr_dual_mul(tp, mr_dual_mul(tp, mr_dual_mul(tp, C, F), mr_dual_ggx_dv(tp, alpha_c, &g)), scale);
+        mr_dual est = eta_c.v > 1.0 ? mr_dual_lerp(tp, f0_c, one, bp_dual_estimate_s(tp, mu_v, r_c, mr_dual_sqrt(tp, f0_c), f0_c))
                                     : mr_dual_const(0.0);
-        mr_dual keep = mr_dual_clampc(mr_dual_rsubc(1.0, mr_dual_mul(mr_dual_mul(C, dark), est)), 0.0, 1.0);
-        mr_dual cos_t = mr_dual_sqrt(mr_dual_maxc(mr_dual_rsubc(1.0, mr_dual_scale(inv_eta_c2, g.sin2_i)), 0.0));
-        mr_dual depth = mr_dual_recip(mr_dual_maxc(cos_t, MR_BRDF_COS_MIN));
+        mr_dual keep = mr_dual_clampc(mr_dual_rsubc(tp, 1.0, mr_dual_mul(tp, mr_dual_mul(tp, C, dark), est)), 0.0, 1.0);
+        mr_dual cos_t = mr_dual_sqrt(tp, mr_dual_maxc(mr_dual_rsubc(tp, 1.0, mr_dual_scale(tp, inv_eta_c2, g.sin2_i)), 0.0));
+        mr_dual depth = mr_dual_recip(tp, mr_dual_maxc(cos_t, MR_BRDF_COS_MIN));
         for (int c = 0; c < 3; c++) {
             spec[c] = lobe;
-            mr_dual T = v[BP_COAT_TINT + c] > 0.0 ? mr_dual_exp(mr_dual_mul(mr_dual_log(x[BP_COAT_TINT + c]), depth))
+            mr_dual T = v[BP_COAT_TINT + c] > 0.0 ? mr_dual_exp(tp, mr_dual_mul(tp, mr_dual_log(tp, x[BP_COAT_TINT + c]), depth))
                                                    : mr_dual_const(0.0);
-            w[c] = mr_dual_mul(keep, mr_dual_lerp(one, T, C));
+            w[c] = mr_dual_mul(tp, keep, mr_dual_lerp(tp, one, T, C));
         }
     }
 
-    mr_dual DV = mr_dual_ggx_dv(alpha, &g);
-    mr_dual E = mr_dual_maxc(mr_dual_albedo_one(mu_v, r), 1e-6);
+    mr_dual DV = mr_dual_ggx_dv(tp, alpha, &g);
+    mr_dual E = mr_dual_maxc(mr_dual_albedo_one(tp, mu_v, r), 1e-6);
     /* the metal, at metallic 0 too */
     for (int c = 0; c < 3; c++) {
-        mr_dual scale = multiscatter ? mr_dual_div(bp_dual_darkening(E, E_avg, fss_m[c]), E) : one;
-        mr_dual metal = mr_dual_mul(mr_dual_mul(mr_dual_f82_tint(g.dot_h, rho[c], b[c]), DV), scale);
-        spec[c] = mr_dual_add(spec[c], mr_dual_mul(mr_dual_mul(metallic, w[c]), metal));
-        w[c] = mr_dual_mul(w[c], mr_dual_rsubc(1.0, metallic));
+        mr_dual scale = multiscatter ? mr_dual_div(tp, bp_dual_darkening(tp, E, E_avg, fss_m[c]), E) : one;
+        mr_dual metal = mr_dual_mul(tp, mr_dual_mul(tp, mr_dual_f82_tint(tp, g.dot_h, rho[c], b[c]), DV), scale);
+        spec[c] = mr_dual_add(tp, spec[c], mr_dual_mul(tp, mr_dual_mul(tp, metallic, w[c]), metal));
+        w[c] = mr_dual_mul(tp, w[c], mr_dual_rsubc(tp, 1.0, metallic));
     }
     if (spec_on) {
-        mr_dual F = mr_dual_fresnel_dielectric(g.dot_h, eta);
-        mr_dual sF = mr_dual_clampc(mr_dual_div(mr_dual_sub(F, f0), mr_dual_rsubc(1.0, f0)), 0.0, 1.0);
-        mr_dual s_est = bp_dual_estimate_s(mu_v, r, sqrt_f0, f0), est_max = mr_dual_const(0.0);
+        mr_dual F = mr_dual_fresnel_dielectric(tp, g.dot_h, eta);
+        mr_dual sF = mr_dual_clampc(mr_dual_div(tp, mr_dual_sub(tp, F, f0), mr_dual_rsubc(tp, 1.0, f0)), 0.0, 1.0);
+        mr_dual s_est = bp_dual_estimate_s(tp, mu_v, r, sqrt_f0, f0), est_max = mr_dual_const(0.0);
         for (int c = 0; c < 3; c++) {
-            mr_dual dark = multiscatter ? bp_dual_darkening(E, E_avg, fss_s[c]) : one;
-            mr_dual scale = multiscatter ? mr_dual_div(dark, E) : one;
-            mr_dual lobe = mr_dual_mul(mr_dual_mul(mr_dual_lerp(f0s[c], one, sF), DV), scale);
-            spec[c] = mr_dual_add(spec[c], mr_dual_mul(w[c], lobe));
-            est_max = mr_dual_max(est_max, mr_dual_mul(dark, mr_dual_lerp(f0s[c], one, s_est)));
+            mr_dual dark = multiscatter ? bp_dual_darkening(tp, E, E_avg, fss_s[c]) : one;
+            mr_dual scale = multiscatter ? mr_dual_div(tp, dark, E) : one;
+            mr_dual lobe = mr_dual_mul(tp, mr_dual_mul(tp, mr_dual_lerp(tp, f0s[c], one, sF), DV), scale);
+            spec[c] = mr_dual_add(tp, spec[c], mr_dual_mul(tp, w[c], lobe));
+            est_max = mr_dual_max(tp, est_max, mr_dual_mul(tp, dark, mr_dual_lerp(tp, f0s[c], one, s_est)));
         }
-        mr_dual keep = mr_dual_clampc(mr_dual_rsubc(1.0, est_max), 0.0, 1.0);
-        for (int c = 0; c < 3; c++) w[c] = mr_dual_mul(w[c], keep);
+        mr_dual keep = mr_dual_clampc(mr_dual_rsubc(tp, 1.0, est_max), 0.0, 1.0);
+        for (int c = 0; c < 3; c++) w[c] = mr_dual_mul(tp, w[c], keep);
     }
     mr_dual diffuse[3];
-    for (int c = 0; c < 3; c++) diffuse[c] = mr_dual_scale(mr_dual_mul(w[c], rho[c]), MR_INV_PI);
+    for (int c = 0; c < 3; c++) diffuse[c] = mr_dual_scale(tp, mr_dual_mul(tp, w[c], rho[c]), MR_INV_PI);
     mr_dual_store_grad(diffuse, spec, count, d_diffuse, d_specular);
 }
 

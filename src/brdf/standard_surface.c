@@ -213,18 +213,18 @@ static void ss_eval(const void *state_bytes, const double wi[3], const double wo
 }
 
 /* mr_artistic_ior (brdf_internal.h, Gulbrandsen 2014) in dual numbers: n and k of reflectivity r and edge tint g. */
-static void ss_dual_artistic_ior(mr_dual r, mr_dual g, mr_dual *n, mr_dual *k) {
+static void ss_dual_artistic_ior(mr_dual_tape *tp, mr_dual r, mr_dual g, mr_dual *n, mr_dual *k) {
     r = mr_dual_clampc(r, 0.0, MR_ARTISTIC_R_MAX);
     g = mr_dual_clampc(g, 0.0, 1.0);
-    mr_dual sr = mr_dual_sqrt(r);
-    mr_dual n_min = mr_dual_div(mr_dual_rsubc(1.0, r), mr_dual_addc(r, 1.0));
-    mr_dual n_max = mr_dual_div(mr_dual_addc(sr, 1.0), mr_dual_rsubc(1.0, sr));
-    mr_dual eta = mr_dual_add(mr_dual_mul(g, n_min), mr_dual_mul(mr_dual_rsubc(1.0, g), n_max));
-    mr_dual k2 = mr_dual_div(mr_dual_sub(mr_dual_mul(mr_dual_sq(mr_dual_addc(eta, 1.0)), r),
-                                         mr_dual_sq(mr_dual_addc(eta, -1.0))),
-                             mr_dual_rsubc(1.0, r));
+    mr_dual sr = mr_dual_sqrt(tp, r);
+    mr_dual n_min = mr_dual_div(tp, mr_dual_rsubc(tp, 1.0, r), mr_dual_addc(tp, r, 1.0));
+    mr_dual n_max = mr_dual_div(tp, mr_dual_addc(tp, sr, 1.0), mr_dual_rsubc(tp, 1.0, sr));
+    mr_dual eta = mr_dual_add(tp, mr_dual_mul(tp, g, n_min), mr_dual_mul(tp, mr_dual_rsubc(tp, 1.0, g), n_max));
+    mr_dual k2 = mr_dual_div(tp, mr_dual_sub(tp, mr_dual_mul(tp, mr_dual_sq(tp, mr_dual_addc(tp, eta, 1.0)), r),
+                                         mr_dual_sq(tp, mr_dual_addc(tp, eta, -1.0))),
+                             mr_dual_rsubc(tp, 1.0, r));
     *n = eta;
-    *k = mr_dual_sqrt(mr_dual_maxc(k2, 0.0));
+    *k = mr_dual_sqrt(tp, mr_dual_maxc(k2, 0.0));
 }
 
 /* d f_r / d values[j]: ss_prepare and ss_eval transcribed in dual numbers (dual.h), operation for operation, so the
@@ -237,55 +237,58 @@ static void ss_eval_grad(const mr_brdf_model *model, const double *values, const
     double v[MR_BRDF_MAX_VALUES];
     if (!mr_brdf_grad_begin(model, values, wi, wo, d_diffuse, d_specular, &g, v)) return;
     int count = mr_brdf_value_count(model);
+    mr_dual_tape tape;
+    mr_dual_tape_init(&tape);
+    mr_dual_tape *tp = &tape;
     mr_dual x[MR_DUAL_N];
     for (int j = 0; j < count; j++) x[j] = mr_dual_var(v[j], j);
 
     /* ss_prepare */
     mr_dual coat = x[SS_COAT], rough_c = x[SS_COAT_ROUGHNESS], metalness = x[SS_METALNESS];
-    mr_dual affect = mr_dual_mul(mr_dual_mul(coat, x[SS_COAT_AFFECT_ROUGHNESS]), rough_c);
+    mr_dual affect = mr_dual_mul(tp, mr_dual_mul(tp, coat, x[SS_COAT_AFFECT_ROUGHNESS]), rough_c);
     mr_dual rough_s = x[SS_SPECULAR_ROUGHNESS];
-    rough_s = mr_dual_add(rough_s, mr_dual_mul(mr_dual_rsubc(1.0, rough_s), affect));
-    mr_dual alpha_s = mr_dual_sq(rough_s), alpha_c = mr_dual_sq(rough_c);
+    rough_s = mr_dual_add(tp, rough_s, mr_dual_mul(tp, mr_dual_rsubc(tp, 1.0, rough_s), affect));
+    mr_dual alpha_s = mr_dual_sq(tp, rough_s), alpha_c = mr_dual_sq(tp, rough_c);
     mr_dual eta_s = x[SS_SPECULAR_IOR], eta_c = x[SS_COAT_IOR];
-    mr_dual gamma = mr_dual_addc(mr_dual_mul(coat, x[SS_COAT_AFFECT_COLOR]), 1.0);
-    mr_dual sigma2 = mr_dual_sq(x[SS_DIFFUSE_ROUGHNESS]);
-    mr_dual on_a = mr_dual_rsubc(1.0, mr_dual_scale(mr_dual_div(sigma2, mr_dual_addc(sigma2, 0.33)), 0.5));
-    mr_dual on_b = mr_dual_scale(mr_dual_div(sigma2, mr_dual_addc(sigma2, 0.09)), 0.45);
+    mr_dual gamma = mr_dual_addc(tp, mr_dual_mul(tp, coat, x[SS_COAT_AFFECT_COLOR]), 1.0);
+    mr_dual sigma2 = mr_dual_sq(tp, x[SS_DIFFUSE_ROUGHNESS]);
+    mr_dual on_a = mr_dual_rsubc(tp, 1.0, mr_dual_scale(tp, mr_dual_div(tp, sigma2, mr_dual_addc(tp, sigma2, 0.33)), 0.5));
+    mr_dual on_b = mr_dual_scale(tp, mr_dual_div(tp, sigma2, mr_dual_addc(tp, sigma2, 0.09)), 0.45);
     mr_dual diffuse_over_pi[3], spec_w[3], coat_tint[3], metal_n[3], metal_k[3];
     for (int c = 0; c < 3; c++) {
         mr_dual bc = x[SS_BASE_COLOR + c];
         /* bc^gamma: d/dbc = gamma bc^(gamma - 1), d/dgamma = bc^gamma ln(bc); at bc = 0, 1 for gamma = 1, else 0 */
         double p = gamma.v == 1.0 ? bc.v : pow(bc.v, gamma.v);
         double dp_dbc = bc.v > 0.0 ? gamma.v * pow(bc.v, gamma.v - 1.0) : (gamma.v == 1.0 ? 1.0 : 0.0);
-        mr_dual bc_diffuse = mr_dual_chain2(p, dp_dbc, bc, bc.v > 0.0 ? p * log(bc.v) : 0.0, gamma);
-        diffuse_over_pi[c] = mr_dual_scale(mr_dual_mul(x[SS_BASE], bc_diffuse), MR_INV_PI);
-        spec_w[c] = mr_dual_mul(x[SS_SPECULAR], x[SS_SPECULAR_COLOR + c]);
-        coat_tint[c] = mr_dual_mul(coat, x[SS_COAT_COLOR + c]);
-        ss_dual_artistic_ior(mr_dual_mul(x[SS_BASE], bc), spec_w[c], &metal_n[c], &metal_k[c]);
+        mr_dual bc_diffuse = mr_dual_chain2(tp, p, dp_dbc, bc, bc.v > 0.0 ? p * log(bc.v) : 0.0, gamma);
+        diffuse_over_pi[c] = mr_dual_scale(tp, mr_dual_mul(tp, x[SS_BASE], bc_diffuse), MR_INV_PI);
+        spec_w[c] = mr_dual_mul(tp, x[SS_SPECULAR], x[SS_SPECULAR_COLOR + c]);
+        coat_tint[c] = mr_dual_mul(tp, coat, x[SS_COAT_COLOR + c]);
+        ss_dual_artistic_ior(tp, mr_dual_mul(tp, x[SS_BASE], bc), spec_w[c], &metal_n[c], &metal_k[c]);
     }
-    mr_dual eps_s = mr_dual_div(mr_dual_addc(eta_s, -1.0), mr_dual_addc(eta_s, 1.0));
-    mr_dual eps_c = mr_dual_div(mr_dual_addc(eta_c, -1.0), mr_dual_addc(eta_c, 1.0));
+    mr_dual eps_s = mr_dual_div(tp, mr_dual_addc(tp, eta_s, -1.0), mr_dual_addc(tp, eta_s, 1.0));
+    mr_dual eps_c = mr_dual_div(tp, mr_dual_addc(tp, eta_c, -1.0), mr_dual_addc(tp, eta_c, 1.0));
 
     /* ss_eval */
-    mr_dual e_c = mr_dual_albedo_dielectric(g.cos_i, rough_c, eps_c);
-    mr_dual e_s = mr_dual_albedo_dielectric(g.cos_i, rough_s, eps_s);
+    mr_dual e_c = mr_dual_albedo_dielectric(tp, g.cos_i, rough_c, eps_c);
+    mr_dual e_s = mr_dual_albedo_dielectric(tp, g.cos_i, rough_s, eps_s);
     double s = wi[0] * wo[0] + wi[1] * wo[1] + wi[2] * wo[2] - g.cos_i * g.cos_o;
-    mr_dual on = mr_dual_add(on_a, mr_dual_scale(on_b, s > 0.0 ? s / MR_MAX(g.cos_i, g.cos_o) : 0.0));
-    mr_dual dv = mr_dual_ggx_dv(alpha_s, &g);
-    mr_dual f_d = mr_dual_fresnel_dielectric(g.dot_h, eta_s);
-    mr_dual coat_lobe = mr_dual_mul(mr_dual_mul(coat, mr_dual_fresnel_dielectric(g.dot_h, eta_c)),
-                                    mr_dual_ggx_dv(alpha_c, &g));
+    mr_dual on = mr_dual_add(tp, on_a, mr_dual_scale(tp, on_b, s > 0.0 ? s / MR_MAX(g.cos_i, g.cos_o) : 0.0));
+    mr_dual dv = mr_dual_ggx_dv(tp, alpha_s, &g);
+    mr_dual f_d = mr_dual_fresnel_dielectric(tp, g.dot_h, eta_s);
+    mr_dual coat_lobe = mr_dual_mul(tp, mr_dual_mul(tp, coat, mr_dual_fresnel_dielectric(tp, g.dot_h, eta_c)),
+                                    mr_dual_ggx_dv(tp, alpha_c, &g));
     mr_dual diffuse[3], specular[3];
     for (int c = 0; c < 3; c++) {
-        mr_dual below = mr_dual_add(mr_dual_rsubc(1.0, coat), mr_dual_mul(coat_tint[c], mr_dual_rsubc(1.0, e_c)));
-        mr_dual weight = mr_dual_mul(mr_dual_mul(below, mr_dual_rsubc(1.0, metalness)),
-                                     mr_dual_rsubc(1.0, mr_dual_mul(spec_w[c], e_s)));
-        diffuse[c] = mr_dual_mul(mr_dual_mul(weight, diffuse_over_pi[c]), on);
+        mr_dual below = mr_dual_add(tp, mr_dual_rsubc(tp, 1.0, coat), mr_dual_mul(tp, coat_tint[c], mr_dual_rsubc(tp, 1.0, e_c)));
+        mr_dual weight = mr_dual_mul(tp, mr_dual_mul(tp, below, mr_dual_rsubc(tp, 1.0, metalness)),
+                                     mr_dual_rsubc(tp, 1.0, mr_dual_mul(tp, spec_w[c], e_s)));
+        diffuse[c] = mr_dual_mul(tp, mr_dual_mul(tp, weight, diffuse_over_pi[c]), on);
         double dn, dk;
         double F_c = mr_fresnel_conductor(g.dot_h, metal_n[c].v, metal_k[c].v, &dn, &dk);
-        mr_dual metal = mr_dual_mul(metalness, mr_dual_chain2(F_c, dn, metal_n[c], dk, metal_k[c]));
-        mr_dual dielectric = mr_dual_mul(mr_dual_mul(mr_dual_rsubc(1.0, metalness), spec_w[c]), f_d);
-        specular[c] = mr_dual_add(coat_lobe, mr_dual_mul(mr_dual_mul(below, mr_dual_add(metal, dielectric)), dv));
+        mr_dual metal = mr_dual_mul(tp, metalness, mr_dual_chain2(tp, F_c, dn, metal_n[c], dk, metal_k[c]));
+        mr_dual dielectric = mr_dual_mul(tp, mr_dual_mul(tp, mr_dual_rsubc(tp, 1.0, metalness), spec_w[c]), f_d);
+        specular[c] = mr_dual_add(tp, coat_lobe, mr_dual_mul(tp, mr_dual_mul(tp, below, mr_dual_add(tp, metal, dielectric)), dv));
     }
     mr_dual_store_grad(diffuse, specular, count, d_diffuse, d_specular);
 }
