@@ -37,20 +37,14 @@ static int alb_cell_eps(double eps, double *frac) {
     return alb_cell(sqrt((eta - 1.0) / 2.0), MR_GGX_ALB_N_ETA, frac);
 }
 
-void mr_ggx_albedo_slice_init(double r, double eps, mr_ggx_albedo_slice *slice) {
-    slice->ir = alb_cell_r(r, MR_GGX_ALB_N_R, &slice->b);
-    slice->ie = alb_cell_eps(eps, &slice->c);
-}
+_Static_assert(MR_GGX_ALB_N_MU == MR_GGX_ALBEDO_SLICE_N_MU, "brdf_internal.h's slice reads the table's mu nodes");
 
-double mr_ggx_albedo_slice_at(const mr_ggx_albedo_slice *slice, double mu) {
-    double a, b = slice->b;
-    int it = alb_cell(sqrt(mr_clampd(mu, 0.0, 1.0)), MR_GGX_ALB_N_MU, &a), ir = slice->ir;
-    double v[2];
+void mr_ggx_albedo_slice_init(double r, double eps, mr_ggx_albedo_slice *slice) {
+    int ir = alb_cell_r(r, MR_GGX_ALB_N_R, &slice->b), ie = alb_cell_eps(eps, &slice->c);
     for (int e = 0; e < 2; e++) {
-        const float(*t)[MR_GGX_ALB_N_MU] = mr_ggx_alb_dielectric[slice->ie + e];
-        v[e] = alb_lerp(alb_lerp(t[ir][it], t[ir][it + 1], a), alb_lerp(t[ir + 1][it], t[ir + 1][it + 1], a), b);
+        slice->row[2 * e] = mr_ggx_alb_dielectric[ie + e][ir];
+        slice->row[2 * e + 1] = mr_ggx_alb_dielectric[ie + e][ir + 1];
     }
-    return alb_lerp(v[0], v[1], slice->c);
 }
 
 double mr_ggx_albedo_dielectric(double mu, double r, double eps) {
