@@ -755,7 +755,7 @@ MR_TEST(gradient_at_defaults_matches_one_sided_differences) {
                 if (p->role == MR_PARAM_SWITCH) continue;
                 double unit = (p->flags & MR_PARAM_LOG_SCALE) ? v[j] : p->max_value - p->min_value;
                 double h = 1e-5 * unit;
-                int fwd_ok = v[j] < p->max_value, bwd_ok = v[j] > p->min_value;
+                int fwd_ok = v[j]<p->max_value, bwd_ok = v[j]> p->min_value;
                 double fa[6], fa2[6], fb[6], fb2[6];
                 eval6(m, v, j, fwd_ok ? v[j] + h : v[j], wi, wo, fa);
                 eval6(m, v, j, fwd_ok ? v[j] + 0.5 * h : v[j], wi, wo, fa2);
@@ -777,7 +777,8 @@ MR_TEST(gradient_at_defaults_matches_one_sided_differences) {
                     }
                     int ok;
                     if (fwd_smooth && bwd_smooth && fabs(fwd - bwd) <= 1e-3 * fmax(fabs(fwd), fabs(bwd)) + floor_abs) {
-                        double c1 = (fa[o] - fb[o]) / (2.0 * h), c2 = (fa2[o] - fb2[o]) / h, central = (4.0 * c2 - c1) / 3.0;
+                        double c1 = (fa[o] - fb[o]) / (2.0 * h), c2 = (fa2[o] - fb2[o]) / h,
+                               central = (4.0 * c2 - c1) / 3.0;
                         ok = fabs(an - central) <= 1e-4 * fmax(fabs(an), fabs(central)) + 100.0 * floor_abs;
                     } else {
                         /* at an end of the range, or a corner at the value: the analytic one is a one-sided one */
@@ -788,18 +789,19 @@ MR_TEST(gradient_at_defaults_matches_one_sided_differences) {
                     }
                     if (!ok) {
                         if (bad < 5)
-                            fprintf(stderr, "    %s defaults: d%s[%d]/d%s(slot %d) analytic %.10g, forward %.10g, "
-                                            "backward %.10g (f %.6g)\n",
-                                    m->name, o < 3 ? "diffuse" : "specular", o % 3, p->name, j, an,
-                                    fwd_ok ? fwd : NAN, bwd_ok ? bwd : NAN, f[o]);
+                            fprintf(stderr,
+                                    "    %s defaults: d%s[%d]/d%s(slot %d) analytic %.10g, forward %.10g, "
+                                    "backward %.10g (f %.6g)\n",
+                                    m->name, o < 3 ? "diffuse" : "specular", o % 3, p->name, j, an, fwd_ok ? fwd : NAN,
+                                    bwd_ok ? bwd : NAN, f[o]);
                         bad++;
                     }
                 }
             }
         }
         if (corners || kinks)
-            printf("      %-20s at the defaults: %d entries one-sided at a corner, %d skipped at kinks, of %d\n", m->name,
-                   corners, kinks, checks);
+            printf("      %-20s at the defaults: %d entries one-sided at a corner, %d skipped at kinks, of %d\n",
+                   m->name, corners, kinks, checks);
         MR_CHECK_MSG(bad == 0, "%s: %d of %d gradient entries at the defaults disagree", m->name, bad, checks);
         MR_CHECK_MSG(kinks * 20 <= checks, "%s: %d of %d checks at the defaults skipped as kinks", m->name, kinks,
                      checks);
@@ -847,8 +849,8 @@ MR_TEST(gradient_is_the_secant_where_affine) {
                         double secant = (hi[o] - lo[o]) / (p->max_value - p->min_value);
                         double an = o < 3 ? gd[j * 3 + o] : gs[j * 3 + o - 3];
                         double scale = (fabs(hi[o]) + fabs(lo[o])) / (p->max_value - p->min_value);
-                        MR_CHECK_MSG(fabs(an - secant) <= 1e-9 * scale + 1e-300, "%s: d f[%d]/d %s[%d] %.12g, secant %.12g",
-                                     m->name, o, p->name, c, an, secant);
+                        MR_CHECK_MSG(fabs(an - secant) <= 1e-9 * scale + 1e-300,
+                                     "%s: d f[%d]/d %s[%d] %.12g, secant %.12g", m->name, o, p->name, c, an, secant);
                         checked++;
                     }
                 }
@@ -881,9 +883,10 @@ MR_TEST(gradient_is_the_secant_where_affine) {
                     double secant = (hi[o] - lo[o]) / (p->max_value - p->min_value);
                     double an = o < 3 ? gd[j * 3 + o] : gs[j * 3 + o - 3];
                     double scale = (fabs(hi[o]) + fabs(lo[o])) / (p->max_value - p->min_value);
-                    MR_CHECK_MSG(fabs(an - secant) <= 1e-9 * scale + 1e-300, "%s (%s...): d f[%d]/d %s[%d] %.12g, "
-                                 "secant %.12g", m->name, cases[n].settings[0] ? cases[n].settings[0] : "",
-                                 o, p->name, c, an, secant);
+                    MR_CHECK_MSG(fabs(an - secant) <= 1e-9 * scale + 1e-300,
+                                 "%s (%s...): d f[%d]/d %s[%d] %.12g, "
+                                 "secant %.12g",
+                                 m->name, cases[n].settings[0] ? cases[n].settings[0] : "", o, p->name, c, an, secant);
                     checked++;
                 }
             }

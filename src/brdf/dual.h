@@ -16,8 +16,9 @@
  *
  * Non-differentiable points: min, max and clamps pass the derivative of the branch they select (at a tie of min or
  * max, the derivative from the left, slot by slot; a clamp keeps its argument's derivative when it is exactly at the
- * bound), i.e. a one-sided derivative, from the inside of the range where the value sits at a bound. sqrt and log at 0 give derivative 0 (the callers only reach them where
- * the other side is clamped away). Pure functions: thread-safe.
+ * bound), i.e. a one-sided derivative, from the inside of the range where the value sits at a bound. sqrt and log
+ * at 0 give derivative 0 (the callers only reach them where the other side is clamped away). Pure functions:
+ * thread-safe.
  */
 #ifndef MR_BRDF_DUAL_H
 #define MR_BRDF_DUAL_H

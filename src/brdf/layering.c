@@ -13,6 +13,12 @@
  * (measured by the generator; the header repeats it): for ior 1.05-3, 0.00095 up to 80 degrees, 0.0055 up to 88,
  * 0.039 beyond; for ior 1-3, 0.0024, 0.052 and 0.41 (ior near 1: Fresnel's knee near grazing); E_1, 0.00034, 0.0015
  * and 0.045. Pure functions of constant data: thread-safe.
+ * The same lookups with their derivatives in r and eps (mr_ggx_albedo_*_grad, for the models' eval_grad): the
+ * derivative of the interpolation itself, exact within a cell, one-sided on a cell boundary (the upper cell's; a
+ * node is a corner of the interpolated albedo), 0 where a coordinate is clamped. A model that prepares may keep the
+ * (r, eps) cell in its state (mr_ggx_albedo_slice) and finish the lookup per eval, in double: standard-surface's
+ * float curves of the (r, eta)-interpolated albedo made f a staircase of 1e-7 steps in specular_ior and roughness,
+ * which central differences resolve.
  */
 #include "brdf_internal.h"
 #include "ggx_albedo_tables.h"
@@ -61,11 +67,15 @@ double mr_ggx_albedo_one(double mu, double r) {
     return alb_lerp(alb_lerp(t[ir][it], t[ir][it + 1], a), alb_lerp(t[ir + 1][it], t[ir + 1][it + 1], a), b);
 }
 
+/* The r cell is the same for every mu: found once (the sum is the one of 65 mr_ggx_albedo_one calls, bit for bit) */
 double mr_ggx_albedo_one_avg(double r) {
-    double sum = 0.0;
+    double b, sum = 0.0;
+    int ir = alb_cell_r(r, MR_GGX_ALB_ONE_N_R, &b);
+    const float *lo = mr_ggx_alb_one[ir], *hi = mr_ggx_alb_one[ir + 1];
     for (int i = 0; i <= 64; i++) {
-        double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0);
-        sum += w * 2.0 * mu * mr_ggx_albedo_one(mu, r);
+        double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0), a;
+        int it = alb_cell(sqrt(mr_clampd(mu, 0.0, 1.0)), MR_GGX_ALB_N_MU, &a);
+        sum += w * 2.0 * mu * alb_lerp(alb_lerp(lo[it], lo[it + 1], a), alb_lerp(hi[it], hi[it + 1], a), b);
     }
     return sum / (3.0 * 64.0);
 }
@@ -121,12 +131,16 @@ double mr_ggx_albedo_one_grad(double mu, double r, double *dE_dr) {
 }
 
 double mr_ggx_albedo_one_avg_grad(double r, double *dE_dr) {
-    double sum = 0.0, dsum = 0.0;
+    double b, db, sum = 0.0, dsum = 0.0;
+    int ir = alb_cell_r_grad(r, MR_GGX_ALB_ONE_N_R, &b, &db);
+    const float *lo = mr_ggx_alb_one[ir], *hi = mr_ggx_alb_one[ir + 1];
     for (int i = 0; i <= 64; i++) {
-        double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0), d;
-        sum += w * 2.0 * mu * mr_ggx_albedo_one_grad(mu, r, &d);
-        dsum += w * 2.0 * mu * d;
+        double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0), a;
+        int it = alb_cell(sqrt(mr_clampd(mu, 0.0, 1.0)), MR_GGX_ALB_N_MU, &a);
+        double l = alb_lerp(lo[it], lo[it + 1], a), h = alb_lerp(hi[it], hi[it + 1], a);
+        sum += w * 2.0 * mu * alb_lerp(l, h, b);
+        dsum += w * 2.0 * mu * (h - l);
     }
-    *dE_dr = dsum / (3.0 * 64.0);
+    *dE_dr = dsum * db / (3.0 * 64.0);
     return sum / (3.0 * 64.0);
 }

@@ -86,8 +86,10 @@
  * GGX loses energy at high roughness, as in the reference graph without its energy compensation.
  * Derivatives: analytic, every slot (ss_eval_grad): prepare and eval transcribed in forward-mode dual numbers (dual.h),
  * through Gulbrandsen's n, k and the exact conductor Fresnel's derivatives, and the albedo table's interpolation
- * differentiated cell by cell (layering.c; one-sided at cell boundaries). At coat 0, metalness 0 and coat_affect_color
- * 0 (defaults) the derivatives are the one-sided ones from inside the range.
+ * differentiated cell by cell (layering.c; one-sided at cell boundaries: specular_ior 1.5 is the node eta = 1.5). At
+ * coat 0, metalness 0 and coat_affect_color 0 (defaults) the derivatives are the one-sided ones from inside the range.
+ * Cost (tests/bench_brdf_grad.c, one thread): about 2.1 us per eval_grad, 30 times an eval with a prepared state
+ * (70 ns) and 14 times a prepare + eval (155 ns).
  */
 #include "brdf_internal.h"
 #include "dual.h"
@@ -220,7 +222,8 @@ static void ss_dual_artistic_ior(mr_dual_tape *tp, mr_dual r, mr_dual g, mr_dual
     mr_dual n_min = mr_dual_div(tp, mr_dual_rsubc(tp, 1.0, r), mr_dual_addc(tp, r, 1.0));
     mr_dual n_max = mr_dual_div(tp, mr_dual_addc(tp, sr, 1.0), mr_dual_rsubc(tp, 1.0, sr));
     mr_dual eta = mr_dual_add(tp, mr_dual_mul(tp, g, n_min), mr_dual_mul(tp, mr_dual_rsubc(tp, 1.0, g), n_max));
-    mr_dual k2 = mr_dual_div(tp, mr_dual_sub(tp, mr_dual_mul(tp, mr_dual_sq(tp, mr_dual_addc(tp, eta, 1.0)), r),
+    mr_dual k2 = mr_dual_div(tp,
+                             mr_dual_sub(tp, mr_dual_mul(tp, mr_dual_sq(tp, mr_dual_addc(tp, eta, 1.0)), r),
                                          mr_dual_sq(tp, mr_dual_addc(tp, eta, -1.0))),
                              mr_dual_rsubc(tp, 1.0, r));
     *n = eta;
@@ -252,7 +255,8 @@ static void ss_eval_grad(const mr_brdf_model *model, const double *values, const
     mr_dual eta_s = x[SS_SPECULAR_IOR], eta_c = x[SS_COAT_IOR];
     mr_dual gamma = mr_dual_addc(tp, mr_dual_mul(tp, coat, x[SS_COAT_AFFECT_COLOR]), 1.0);
     mr_dual sigma2 = mr_dual_sq(tp, x[SS_DIFFUSE_ROUGHNESS]);
-    mr_dual on_a = mr_dual_rsubc(tp, 1.0, mr_dual_scale(tp, mr_dual_div(tp, sigma2, mr_dual_addc(tp, sigma2, 0.33)), 0.5));
+    mr_dual on_a =
+        mr_dual_rsubc(tp, 1.0, mr_dual_scale(tp, mr_dual_div(tp, sigma2, mr_dual_addc(tp, sigma2, 0.33)), 0.5));
     mr_dual on_b = mr_dual_scale(tp, mr_dual_div(tp, sigma2, mr_dual_addc(tp, sigma2, 0.09)), 0.45);
     mr_dual diffuse_over_pi[3], spec_w[3], coat_tint[3], metal_n[3], metal_k[3];
     for (int c = 0; c < 3; c++) {
@@ -280,7 +284,8 @@ static void ss_eval_grad(const mr_brdf_model *model, const double *values, const
                                     mr_dual_ggx_dv(tp, alpha_c, &g));
     mr_dual diffuse[3], specular[3];
     for (int c = 0; c < 3; c++) {
-        mr_dual below = mr_dual_add(tp, mr_dual_rsubc(tp, 1.0, coat), mr_dual_mul(tp, coat_tint[c], mr_dual_rsubc(tp, 1.0, e_c)));
+        mr_dual below =
+            mr_dual_add(tp, mr_dual_rsubc(tp, 1.0, coat), mr_dual_mul(tp, coat_tint[c], mr_dual_rsubc(tp, 1.0, e_c)));
         mr_dual weight = mr_dual_mul(tp, mr_dual_mul(tp, below, mr_dual_rsubc(tp, 1.0, metalness)),
                                      mr_dual_rsubc(tp, 1.0, mr_dual_mul(tp, spec_w[c], e_s)));
         diffuse[c] = mr_dual_mul(tp, mr_dual_mul(tp, weight, diffuse_over_pi[c]), on);
@@ -288,7 +293,8 @@ static void ss_eval_grad(const mr_brdf_model *model, const double *values, const
         double F_c = mr_fresnel_conductor(g.dot_h, metal_n[c].v, metal_k[c].v, &dn, &dk);
         mr_dual metal = mr_dual_mul(tp, metalness, mr_dual_chain2(tp, F_c, dn, metal_n[c], dk, metal_k[c]));
         mr_dual dielectric = mr_dual_mul(tp, mr_dual_mul(tp, mr_dual_rsubc(tp, 1.0, metalness), spec_w[c]), f_d);
-        specular[c] = mr_dual_add(tp, coat_lobe, mr_dual_mul(tp, mr_dual_mul(tp, below, mr_dual_add(tp, metal, dielectric)), dv));
+        specular[c] =
+            mr_dual_add(tp, coat_lobe, mr_dual_mul(tp, mr_dual_mul(tp, below, mr_dual_add(tp, metal, dielectric)), dv));
     }
     mr_dual_store_grad(diffuse, specular, count, d_diffuse, d_specular);
 }

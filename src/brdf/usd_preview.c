@@ -86,7 +86,9 @@
  * shading's (Storm's), not defects here; the specular lobe alone (F = 1) stays below 1 (0.89 at 40 degrees,
  * roughness 0.5: single-scattering GGX loses energy).
  * Derivatives: analytic, by hand (usd_eval_grad below: the model is a few affine and product terms), every slot;
- * the switch's 0. At clearcoat 0 the one-sided derivative in clearcoat is the coat lobe.
+ * the switch's 0. At clearcoat 0 the one-sided derivative in clearcoat is the coat lobe. Cost
+ * (tests/bench_brdf_grad.c): about 50 ns per eval_grad, 3 to 4 times an eval with a prepared state, 1.3 to 1.5 times
+ * a prepare + eval.
  */
 #include "brdf_internal.h"
 
