@@ -808,6 +808,45 @@ MR_TEST(gradient_at_defaults_matches_one_sided_differences) {
     }
 }
 
+/* eval_grad is finite wherever eval is: every slot at its minimum, its maximum or between (switches either way),
+ * directions down to grazing (z = 1e-9) and straight up. The square roots, logarithms and table coordinates whose
+ * slopes are infinite at an end of their range (r = 0.01, eps = 0, a colour of 0) must give the documented one-sided
+ * 0 there, not Inf or NaN. */
+MR_TEST(gradient_is_finite_at_the_ends_of_the_ranges) {
+    uint64_t rng = 12;
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        if (!m->eval_grad) continue;
+        int n = mr_brdf_value_count(m), bad = 0;
+        for (int k = 0; k < 400; k++) {
+            double v[MR_BRDF_MAX_VALUES] = {0}, wi[3], wo[3], gd[MR_BRDF_MAX_VALUES * 3], gs[MR_BRDF_MAX_VALUES * 3];
+            random_values(m, &rng, 0.0, v);
+            for (int i = 0, slot = 0; i < m->param_count; i++)
+                for (int c = 0; c < m->params[i].channels; c++, slot++) {
+                    double u = rnd(&rng);
+                    if (u < 0.35) v[slot] = m->params[i].min_value;
+                    else if (u < 0.7) v[slot] = m->params[i].max_value;
+                }
+            random_dir(&rng, 0.0, wi);
+            random_dir(&rng, 0.0, wo);
+            if (k % 4 == 1) dir_from_angles(PI / 2 - 1e-9, 0.3, wi);
+            if (k % 4 == 2) dir_from_angles(0.0, 0.0, wo);
+            if (k % 4 == 3) {
+                dir_from_angles(0.0, 0.0, wi);
+                dir_from_angles(0.0, 0.0, wo);
+            }
+            m->eval_grad(m, v, wi, wo, gd, gs);
+            for (int j = 0; j < n * 3; j++)
+                if (!isfinite(gd[j]) || !isfinite(gs[j])) {
+                    if (bad < 3)
+                        fprintf(stderr, "    %s: d f/d slot %d not finite (%g, %g)\n", m->name, j / 3, gd[j], gs[j]);
+                    bad++;
+                }
+        }
+        MR_CHECK_MSG(bad == 0, "%s: %d gradient entries not finite", m->name, bad);
+    }
+}
+
 /* Where f is affine in one value, its derivative is the secant over the whole range: d f/d v_j = (f(v_j = max) -
  * f(v_j = min))/(max - min), exactly (to rounding). Every LINEAR or AFFINE parameter (switches off, where roles hold,
  * as roles_are_truthful), and the layered models' parameters that are affine in a region their roles cannot state:
@@ -2214,7 +2253,8 @@ MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(map_en
              MR_TEST_ENTRY(white_furnace_quadrature_is_accurate), MR_TEST_ENTRY(white_furnace_energy_bound),
              MR_TEST_ENTRY(gradient_matches_central_differences),
              MR_TEST_ENTRY(gradient_at_defaults_matches_one_sided_differences),
-             MR_TEST_ENTRY(gradient_is_the_secant_where_affine), MR_TEST_ENTRY(roles_are_truthful),
+             MR_TEST_ENTRY(gradient_is_the_secant_where_affine),
+             MR_TEST_ENTRY(gradient_is_finite_at_the_ends_of_the_ranges), MR_TEST_ENTRY(roles_are_truthful),
              MR_TEST_ENTRY(linear_and_affine_parameters_are_jointly_affine), MR_TEST_ENTRY(lobes_are_truthful),
              MR_TEST_ENTRY(known_lambert), MR_TEST_ENTRY(known_microfacet_normal_incidence),
              MR_TEST_ENTRY(known_microfacet_off_normal), MR_TEST_ENTRY(known_conductor_fresnel),
