@@ -8,11 +8,12 @@
  * dual number, eval_grad is the model's prepare + eval transcribed once, operation for operation, and each
  * operation carries d(value)/d(values[j]) for every packed slot j at once. This is analytic differentiation (the
  * exact derivative of the computed function, to rounding), not finite differences. The models' own eval stays in
- * plain doubles: the transcriptions are checked against central differences of eval, and their values against eval
- * (tests/test_brdf.c, gradient_matches_central_differences and dual_values_match_eval).
+ * plain doubles: the transcriptions are checked against central differences of eval at random points and one-sided
+ * ones at the defaults (tests/test_brdf.c, gradient_matches_central_differences and
+ * gradient_at_defaults_matches_one_sided_differences), which a transcription that strayed from eval fails.
  *
  * One derivative slot per packed value: MR_DUAL_N >= the largest value count of a model using it (static asserts in
- * each model). Operations are static inline on values; GCC keeps them in registers and vectorises the slot loops.
+ * each model). The small operations are static inline; the loops over the slots are out of line in dual.c.
  *
  * Non-differentiable points: min, max and clamps pass the derivative of the branch they select (at a tie of min or
  * max, the derivative from the left, slot by slot; a clamp keeps its argument's derivative when it is exactly at the
@@ -25,15 +26,15 @@
 
 #include "brdf_internal.h"
 
+/* Derivative slots: the largest value count among the models that use this (standard-surface's 20). */
 #define MR_DUAL_N 20
 
-/* Derivative slots: the largest value count among the models that use this (standard-surface's 20). */
 /* The derivative rows live on a tape (a bump allocator on the caller's stack, one per eval_grad call); a dual is its
  * value and a pointer to its row, 16 bytes, which the x86-64 and AArch64 calling conventions pass and return in
  * registers. Holding the 20 derivatives in the dual itself (168 bytes) was measured at 10-14 us per openpbr eval_grad:
  * every operation copied three of them, and inlined, 250 operations made 86 KB of code. A constant has no row
  * (d == NULL), so operations with constants skip its slots. */
-#define MR_DUAL_ROWS 384 /* rows per tape (61 KB of stack): openpbr, the largest, takes 213; see dual.c */
+#define MR_DUAL_ROWS 384 /* rows per tape (61 KB of the caller's stack); the layered models take 170-215, dual.c */
 
 typedef struct mr_dual {
     double v;         /* value */
