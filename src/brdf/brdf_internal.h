@@ -458,8 +458,9 @@ double mr_ggx_albedo_dielectric(double mu, double r, double eps);
 /* The same lookup split for a model that precomputes in prepare: the (r, eps) cell and fractions once per parameter
  * set (slice_init, which keeps pointers to the four table rows around them), the mu coordinate per eval (slice_at,
  * inline: 8 loads and 7 lerps). slice_at(slice_init(r, eps), mu) is mr_ggx_albedo_dielectric(mu, r, eps) bit for bit
- * (it is how that function computes). Measured against the 41-node float curve it replaces in standard-surface: eval
- * 43 -> 46 ns without a coat (tests/bench_brdf_grad.c has the eval column). */
+ * (it is how that function computes). Against the 41-node float curve it replaces in standard-surface (2 loads, 1
+ * lerp), one eval costs 42 -> 50 ns without a coat and 55 -> 68 with one (one thread, 4096 direction pairs, best of
+ * 15 runs); the curve's float rounding made f a staircase in roughness and ior (layering.c). */
 #define MR_GGX_ALBEDO_SLICE_N_MU 41
 typedef struct mr_ggx_albedo_slice {
     const float *row[4]; /* E at the mu nodes: (eta cell, r cell), (eta, r + 1), (eta + 1, r), (eta + 1, r + 1) */
