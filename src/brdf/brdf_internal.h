@@ -459,7 +459,7 @@ double mr_ggx_albedo_dielectric(double mu, double r, double eps);
  * set (slice_init, which keeps pointers to the four table rows around them), the mu coordinate per eval (slice_at,
  * inline: 8 loads and 7 lerps). slice_at(slice_init(r, eps), mu) is mr_ggx_albedo_dielectric(mu, r, eps) bit for bit
  * (it is how that function computes). Against the 41-node float curve it replaces in standard-surface (2 loads, 1
- * lerp), one eval costs 42 -> 50 ns without a coat and 55 -> 68 with one (one thread, 4096 direction pairs, best of
+ * lerp), one eval costs 43 -> 51 ns without a coat and 56 -> 69 with one (one thread, 4096 direction pairs, best of
  * 15 runs); the curve's float rounding made f a staircase in roughness and ior (layering.c). */
 #define MR_GGX_ALBEDO_SLICE_N_MU 41
 typedef struct mr_ggx_albedo_slice {
