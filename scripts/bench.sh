@@ -4,7 +4,7 @@
 # docs/rendering.md (bench:envlight, bench:mesh, bench:reflection). Asserts nothing. Peers are measured in the same run: Blender Cycles
 # renders the same fit scene with the Principled BSDF at 16 spp (scripts/cycles_fit_scene.py), and the ratio to
 # our render time is printed.
-# Usage: scripts/bench.sh BUILD [--quick] [--only report-accuracy|reflection|workflow|png|gltf|library|remap|fit-engine|remap-processes|direct|learn|mpi]
+# Usage: scripts/bench.sh BUILD [--quick] [--only brdf-grad|report-accuracy|reflection|workflow|png|gltf|library|remap|fit-engine|remap-processes|direct|learn|mpi]
 #   --only NAME runs one section and rewrites only its markers (the full run takes long; sections written as
 #   functions below can be run alone). From make: make bench BENCH_ARGS="--only report-accuracy".
 set -euo pipefail
@@ -902,8 +902,24 @@ bench_mpi() {
     cat "$out"
 }
 
+# What the analytic parameter derivatives cost against the evaluation, per model (docs/performance.md,
+# bench:brdf-grad): tests/bench_brdf_grad.c, one thread.
+bench_brdf_grad() {
+    echo
+    echo "== parameter derivatives: eval_grad against eval, per model, one thread (tests/bench_brdf_grad.c)"
+    {
+        echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'))."
+        echo
+        "$root/$build/tests/bench_brdf_grad" $quick
+    } | tee "$work/brdf_grad.md"
+}
+
 if [ -n "$only" ]; then
     case $only in
+        brdf-grad)
+            bench_brdf_grad
+            replace_section brdf-grad "$work/brdf_grad.md"
+            ;;
         report-accuracy) bench_report_accuracy ;;
         gltf)
             bench_gltf
@@ -950,7 +966,7 @@ if [ -n "$only" ]; then
             replace_section workflow "$work/workflow.md"
             replace_section workflow-e2e "$work/e2e.md"
             ;;
-        *) echo "bench.sh: --only: unknown section '$only' (sections: report-accuracy, reflection, workflow, png, gltf, library, remap, fit-engine, remap-processes, direct, learn, mpi)" >&2; exit 1 ;;
+        *) echo "bench.sh: --only: unknown section '$only' (sections: brdf-grad, report-accuracy, reflection, workflow, png, gltf, library, remap, fit-engine, remap-processes, direct, learn, mpi)" >&2; exit 1 ;;
     esac
     exit 0
 fi
@@ -962,6 +978,8 @@ echo "== fit-scene render time per model (tests/bench_render.c)"
 echo
 echo "== image metrics (tests/bench_metrics.c)"
 "$root/$build/tests/bench_metrics" | tee "$work/metrics_table.md"
+
+bench_brdf_grad
 
 echo
 bench_remap_table
@@ -1096,6 +1114,7 @@ if [ -f "$perf" ]; then
     replace_section workflow-e2e "$work/e2e.md"
     replace_section gltf "$work/gltf.md"
     replace_section png "$work/png.md"
+    replace_section brdf-grad "$work/brdf_grad.md"
 fi
 replace_section envlight "$work/envlight.md" "$root/docs/rendering.md"
 replace_section mesh "$work/mesh.md" "$root/docs/rendering.md"

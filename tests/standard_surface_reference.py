@@ -7,8 +7,8 @@ Cook-Torrance g-form, the conductor Fresnel with complex arithmetic (cos_t = sqr
 height-correlated G2 from the Lambdas, GGX D in its (alpha^2 - 1) cos^2 + 1 form, Oren-Nayar from the angles.
 Shared by definition: Gulbrandsen's (r, g) -> (n, k) map (one formula) and the directional albedo table of all
 layered models, src/brdf/ggx_albedo_tables.h (mr_ggx_alb_dielectric), with the interpolation the model file and
-brdf_internal.h document (linear in sqrt(mu), sqrt((r - 0.01)/0.99), sqrt((eta - 1)/2); the (r, eta) blend
-rounded to float as the model stores it).
+brdf_internal.h document (linear in sqrt(mu), sqrt((r - 0.01)/0.99), sqrt((eta - 1)/2), in double: until issue 31
+the model stored the (r, eta) blend as float curves, and this script rounded it likewise).
 
 Usage: standard_surface_reference.py ROOT DRIVER   (DRIVER: tests/lib/brdf_eval.c built against the library)
 Prints ok/FAIL lines and "N passed, N failed"; exit status 1 on any failure. Tolerance: 1e-6 relative.
@@ -77,7 +77,7 @@ def albedo(table, mu, r, eta):
     jr, fr = cell(math.sqrt(max(r - 0.01, 0.0) / 0.99), n_r)
     je, fe = cell(math.sqrt(max(eta - 1.0, 0.0) / 2.0), n_eta)
     curve = ((1 - fe) * ((1 - fr) * table[je, jr] + fr * table[je, jr + 1]) +
-             fe * ((1 - fr) * table[je + 1, jr] + fr * table[je + 1, jr + 1])).astype(np.float32).astype(np.float64)
+             fe * ((1 - fr) * table[je + 1, jr] + fr * table[je + 1, jr + 1]))
     i, u = cell(math.sqrt(min(mu, 1.0)), n_mu)
     return (1 - u) * curve[i] + u * curve[i + 1]
 

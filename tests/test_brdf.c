@@ -666,10 +666,9 @@ MR_TEST(gradient_matches_central_differences) {
     uint64_t rng = 5;
     for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
         const mr_brdf_model *m = *mp;
-        if (!m->eval_grad) {
-            printf("      %-20s no analytic gradient\n", m->name);
-            continue;
-        }
+        /* every model gives its derivatives (issue 31): the fit's local stage relies on them */
+        MR_CHECK_MSG(m->eval_grad != NULL, "%s: no eval_grad (analytic parameter derivatives)", m->name);
+        if (!m->eval_grad) continue;
         int n = mr_brdf_value_count(m), checks = 0, kinks = 0, bad = 0;
         /* slot -> parameter */
         int param_of[MR_BRDF_MAX_VALUES];
@@ -725,6 +724,214 @@ MR_TEST(gradient_matches_central_differences) {
         MR_CHECK_MSG(bad == 0, "%s: %d of %d gradient entries disagree", m->name, bad, checks);
         MR_CHECK_MSG(kinks * 20 <= checks, "%s: %d of %d checks skipped as kinks", m->name, kinks, checks);
     }
+}
+
+/* The derivatives at each model's defaults, where fits hold most parameters and several sit at an end of their
+ * range (a coat weight, metalness or diffuse roughness of 0, a tint of 1) or on a node of the albedo table (ior 1.5
+ * is the node eta = 1 + 2 (12/24)^2, where the interpolated albedo has a corner): compared there with one-sided
+ * differences from inside the range (forward at the minimum, backward at the maximum), each with a Richardson step.
+ * Inside the range, where the forward and backward derivatives agree, with the central difference as above; where
+ * they do not (a corner at the value itself), the analytic derivative must be one of the two (the documented
+ * one-sided derivative). So held parameters have the derivatives a fit leaving them needs. */
+MR_TEST(gradient_at_defaults_matches_one_sided_differences) {
+    uint64_t rng = 9;
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        if (!m->eval_grad) continue; /* gradient_matches_central_differences fails it */
+        int n = mr_brdf_value_count(m), checks = 0, kinks = 0, corners = 0, bad = 0;
+        int param_of[MR_BRDF_MAX_VALUES];
+        for (int i = 0, slot = 0; i < m->param_count; i++)
+            for (int c = 0; c < m->params[i].channels; c++) param_of[slot++] = i;
+        double v[MR_BRDF_MAX_VALUES] = {0};
+        mr_brdf_default_values(m, v);
+        for (int k = 0; k < 20; k++) {
+            double wi[3], wo[3], gd[MR_BRDF_MAX_VALUES * 3], gs[MR_BRDF_MAX_VALUES * 3], f[6];
+            random_dir(&rng, 0.1, wi);
+            random_dir(&rng, 0.1, wo);
+            m->eval_grad(m, v, wi, wo, gd, gs);
+            eval6(m, v, 0, v[0], wi, wo, f);
+            for (int j = 0; j < n; j++) {
+                const mr_brdf_param *p = &m->params[param_of[j]];
+                if (p->role == MR_PARAM_SWITCH) continue;
+                double unit = (p->flags & MR_PARAM_LOG_SCALE) ? v[j] : p->max_value - p->min_value;
+                double h = 1e-5 * unit;
+                int fwd_ok = v[j]<p->max_value, bwd_ok = v[j]> p->min_value;
+                double fa[6], fa2[6], fb[6], fb2[6];
+                eval6(m, v, j, fwd_ok ? v[j] + h : v[j], wi, wo, fa);
+                eval6(m, v, j, fwd_ok ? v[j] + 0.5 * h : v[j], wi, wo, fa2);
+                eval6(m, v, j, bwd_ok ? v[j] - h : v[j], wi, wo, fb);
+                eval6(m, v, j, bwd_ok ? v[j] - 0.5 * h : v[j], wi, wo, fb2);
+                for (int o = 0; o < 6; o++) {
+                    double an = o < 3 ? gd[j * 3 + o] : gs[j * 3 + (o - 3)];
+                    double natural = (fabs(f[o]) + fabs(fa[o]) + fabs(fb[o])) / unit;
+                    double floor_abs = 1e-9 * natural + 1e-250;
+                    /* one-sided differences and their Richardson steps (error O(h^2)) */
+                    double df1 = (fa[o] - f[o]) / h, df2 = (fa2[o] - f[o]) / (0.5 * h), fwd = 2.0 * df2 - df1;
+                    double db1 = (f[o] - fb[o]) / h, db2 = (f[o] - fb2[o]) / (0.5 * h), bwd = 2.0 * db2 - db1;
+                    int fwd_smooth = fwd_ok && fabs(df1 - df2) <= 2e-3 * fmax(fabs(df1), fabs(df2)) + floor_abs;
+                    int bwd_smooth = bwd_ok && fabs(db1 - db2) <= 2e-3 * fmax(fabs(db1), fabs(db2)) + floor_abs;
+                    checks++;
+                    if (!fwd_smooth && !bwd_smooth) { /* a kink within h of the value, not at it */
+                        kinks++;
+                        continue;
+                    }
+                    int ok;
+                    if (fwd_smooth && bwd_smooth && fabs(fwd - bwd) <= 1e-3 * fmax(fabs(fwd), fabs(bwd)) + floor_abs) {
+                        double c1 = (fa[o] - fb[o]) / (2.0 * h), c2 = (fa2[o] - fb2[o]) / h,
+                               central = (4.0 * c2 - c1) / 3.0;
+                        ok = fabs(an - central) <= 1e-4 * fmax(fabs(an), fabs(central)) + 100.0 * floor_abs;
+                    } else {
+                        /* at an end of the range, or a corner at the value: the analytic one is a one-sided one */
+                        int corner = fwd_smooth && bwd_smooth;
+                        corners += corner;
+                        ok = (fwd_smooth && fabs(an - fwd) <= 1e-4 * fmax(fabs(an), fabs(fwd)) + 100.0 * floor_abs) ||
+                             (bwd_smooth && fabs(an - bwd) <= 1e-4 * fmax(fabs(an), fabs(bwd)) + 100.0 * floor_abs);
+                    }
+                    if (!ok) {
+                        if (bad < 5)
+                            fprintf(stderr,
+                                    "    %s defaults: d%s[%d]/d%s(slot %d) analytic %.10g, forward %.10g, "
+                                    "backward %.10g (f %.6g)\n",
+                                    m->name, o < 3 ? "diffuse" : "specular", o % 3, p->name, j, an, fwd_ok ? fwd : NAN,
+                                    bwd_ok ? bwd : NAN, f[o]);
+                        bad++;
+                    }
+                }
+            }
+        }
+        if (corners || kinks)
+            printf("      %-20s at the defaults: %d entries one-sided at a corner, %d skipped at kinks, of %d\n",
+                   m->name, corners, kinks, checks);
+        MR_CHECK_MSG(bad == 0, "%s: %d of %d gradient entries at the defaults disagree", m->name, bad, checks);
+        MR_CHECK_MSG(kinks * 20 <= checks, "%s: %d of %d checks at the defaults skipped as kinks", m->name, kinks,
+                     checks);
+    }
+}
+
+/* eval_grad is finite wherever eval is: every slot at its minimum, its maximum or between (switches either way),
+ * directions down to grazing (z = 1e-9) and straight up. The square roots, logarithms and table coordinates whose
+ * slopes are infinite at an end of their range (r = 0.01, eps = 0, a colour of 0) must give the documented one-sided
+ * 0 there, not Inf or NaN. */
+MR_TEST(gradient_is_finite_at_the_ends_of_the_ranges) {
+    uint64_t rng = 12;
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        if (!m->eval_grad) continue;
+        int n = mr_brdf_value_count(m), bad = 0;
+        for (int k = 0; k < 400; k++) {
+            double v[MR_BRDF_MAX_VALUES] = {0}, wi[3], wo[3], gd[MR_BRDF_MAX_VALUES * 3], gs[MR_BRDF_MAX_VALUES * 3];
+            random_values(m, &rng, 0.0, v);
+            for (int i = 0, slot = 0; i < m->param_count; i++)
+                for (int c = 0; c < m->params[i].channels; c++, slot++) {
+                    double u = rnd(&rng);
+                    if (u < 0.35) v[slot] = m->params[i].min_value;
+                    else if (u < 0.7) v[slot] = m->params[i].max_value;
+                }
+            random_dir(&rng, 0.0, wi);
+            random_dir(&rng, 0.0, wo);
+            if (k % 4 == 1) dir_from_angles(PI / 2 - 1e-9, 0.3, wi);
+            if (k % 4 == 2) dir_from_angles(0.0, 0.0, wo);
+            if (k % 4 == 3) {
+                dir_from_angles(0.0, 0.0, wi);
+                dir_from_angles(0.0, 0.0, wo);
+            }
+            m->eval_grad(m, v, wi, wo, gd, gs);
+            for (int j = 0; j < n * 3; j++)
+                if (!isfinite(gd[j]) || !isfinite(gs[j])) {
+                    if (bad < 3)
+                        fprintf(stderr, "    %s: d f/d slot %d not finite (%g, %g)\n", m->name, j / 3, gd[j], gs[j]);
+                    bad++;
+                }
+        }
+        MR_CHECK_MSG(bad == 0, "%s: %d gradient entries not finite", m->name, bad);
+    }
+}
+
+/* Where f is affine in one value, its derivative is the secant over the whole range: d f/d v_j = (f(v_j = max) -
+ * f(v_j = min))/(max - min), exactly (to rounding). Every LINEAR or AFFINE parameter (switches off, where roles hold,
+ * as roles_are_truthful), and the layered models' parameters that are affine in a region their roles cannot state:
+ * base colours with no metal, no coat and a Lambert diffuse, and metalness where nothing couples it (no coat). */
+MR_TEST(gradient_is_the_secant_where_affine) {
+    typedef struct affine_case {
+        const char *model, *param, *settings[4];
+    } affine_case;
+    static const affine_case cases[] = {
+        {"openpbr", "base_color", {"base_metalness=0", "coat_weight=0", "base_diffuse_roughness=0", NULL}},
+        {"openpbr", "base_metalness", {"coat_weight=0", NULL}},
+        {"blender-principled", "base_color", {"metallic=0", "coat_weight=0", NULL}},
+        {"blender-principled", "metallic", {NULL}},
+        {"standard-surface", "base_color", {"metalness=0", "coat=0", NULL}},
+        {"usd-preview", "diffuse_color", {"use_specular_workflow=1", NULL}},
+    };
+    uint64_t rng = 10;
+    int checked = 0;
+    /* the generic part: every LINEAR/AFFINE parameter of every model */
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        if (!m->eval_grad) continue;
+        for (int i = 0; i < m->param_count; i++) {
+            const mr_brdf_param *p = &m->params[i];
+            if (p->role != MR_PARAM_LINEAR && p->role != MR_PARAM_AFFINE) continue;
+            for (int k = 0; k < 10; k++) {
+                double v[MR_BRDF_MAX_VALUES] = {0}, wi[3], wo[3];
+                random_values(m, &rng, 0.0, v);
+                switches_off(m, v);
+                random_dir(&rng, 0.05, wi);
+                random_dir(&rng, 0.05, wo);
+                for (int c = 0; c < p->channels; c++) {
+                    int j = mr_brdf_param_offset(m, i) + c;
+                    double gd[MR_BRDF_MAX_VALUES * 3], gs[MR_BRDF_MAX_VALUES * 3], hi[6], lo[6];
+                    m->eval_grad(m, v, wi, wo, gd, gs);
+                    eval6(m, v, j, p->max_value, wi, wo, hi);
+                    eval6(m, v, j, p->min_value, wi, wo, lo);
+                    for (int o = 0; o < 6; o++) {
+                        double secant = (hi[o] - lo[o]) / (p->max_value - p->min_value);
+                        double an = o < 3 ? gd[j * 3 + o] : gs[j * 3 + o - 3];
+                        double scale = (fabs(hi[o]) + fabs(lo[o])) / (p->max_value - p->min_value);
+                        MR_CHECK_MSG(fabs(an - secant) <= 1e-9 * scale + 1e-300,
+                                     "%s: d f[%d]/d %s[%d] %.12g, secant %.12g", m->name, o, p->name, c, an, secant);
+                        checked++;
+                    }
+                }
+            }
+        }
+    }
+    /* the layered models' affine regions */
+    for (size_t n = 0; n < sizeof cases / sizeof cases[0]; n++) {
+        const mr_brdf_model *m = model_named(cases[n].model);
+        if (!m || !m->eval_grad) continue;
+        int i = mr_brdf_param_index(m, cases[n].param);
+        MR_CHECK_MSG(i >= 0, "%s has no %s", m->name, cases[n].param);
+        if (i < 0) continue;
+        const mr_brdf_param *p = &m->params[i];
+        for (int k = 0; k < 10; k++) {
+            double v[MR_BRDF_MAX_VALUES] = {0}, wi[3], wo[3];
+            random_values(m, &rng, 0.0, v);
+            for (int s = 0; cases[n].settings[s]; s++)
+                MR_CHECK(mr_brdf_parse_assignment(m, cases[n].settings[s], v) == MR_OK);
+            random_dir(&rng, 0.05, wi);
+            random_dir(&rng, 0.05, wo);
+            double gd[MR_BRDF_MAX_VALUES * 3], gs[MR_BRDF_MAX_VALUES * 3];
+            m->eval_grad(m, v, wi, wo, gd, gs);
+            for (int c = 0; c < p->channels; c++) {
+                int j = mr_brdf_param_offset(m, i) + c;
+                double hi[6], lo[6];
+                eval6(m, v, j, p->max_value, wi, wo, hi);
+                eval6(m, v, j, p->min_value, wi, wo, lo);
+                for (int o = 0; o < 6; o++) {
+                    double secant = (hi[o] - lo[o]) / (p->max_value - p->min_value);
+                    double an = o < 3 ? gd[j * 3 + o] : gs[j * 3 + o - 3];
+                    double scale = (fabs(hi[o]) + fabs(lo[o])) / (p->max_value - p->min_value);
+                    MR_CHECK_MSG(fabs(an - secant) <= 1e-9 * scale + 1e-300,
+                                 "%s (%s...): d f[%d]/d %s[%d] %.12g, "
+                                 "secant %.12g",
+                                 m->name, cases[n].settings[0] ? cases[n].settings[0] : "", o, p->name, c, an, secant);
+                    checked++;
+                }
+            }
+        }
+    }
+    printf("      %d derivatives equal to the secant over the range\n", checked);
 }
 
 /* ---------------------------------------------------------------------------------------------------------- */
@@ -1973,18 +2180,22 @@ MR_TEST(known_standard_surface) {
     eval_parts(m, v, wo, wi, d2, s2);
     MR_CHECK_MSG(!close_rel(d[0], d2[0], 1e-3), "defaults: diffuse %.9g vs %.9g", d[0], d2[0]);
 
-    /* the precomputed curve (mr_ggx_albedo_curve, what prepare stores) is the shared table's trilinear lookup
-     * (mr_ggx_albedo_dielectric, what openpbr and blender-principled call), up to the curve's float rounding */
+    /* the slice prepare stores (mr_ggx_albedo_slice_init) finishes at eval to the shared table's trilinear lookup
+     * (mr_ggx_albedo_dielectric, what openpbr and blender-principled call) bit for bit, and the derivatives' lookup
+     * (mr_ggx_albedo_dielectric_grad) gives the same value */
     uint64_t arng = 5;
-    double curve_worst = 0.0;
+    int slice_differs = 0;
     for (int k = 0; k < 300; k++) {
-        double r = 0.01 + 0.99 * rnd(&arng), eta = 1.0 + 2.0 * rnd(&arng), mu = rnd(&arng);
-        float curve[MR_GGX_ALBEDO_CURVE_N];
-        mr_ggx_albedo_curve(r, (eta - 1.0) / (eta + 1.0), curve);
-        curve_worst = fmax(curve_worst, fabs(mr_ggx_albedo_curve_at(curve, mu) -
-                                             mr_ggx_albedo_dielectric(mu, r, (eta - 1.0) / (eta + 1.0))));
+        double r = 0.01 + 0.99 * rnd(&arng), eta = 1.0 + 2.0 * rnd(&arng), mu = rnd(&arng), dr, deps;
+        double eps = (eta - 1.0) / (eta + 1.0), direct = mr_ggx_albedo_dielectric(mu, r, eps);
+        mr_ggx_albedo_slice slice;
+        mr_ggx_albedo_slice_init(r, eps, &slice);
+        if (mr_ggx_albedo_slice_at(&slice, mu) != direct || mr_ggx_albedo_dielectric_grad(mu, r, eps, &dr, &deps) !=
+                                                                  direct)
+            slice_differs++;
     }
-    MR_CHECK_MSG(curve_worst <= 1e-6, "albedo curve vs trilinear lookup: %.3g", curve_worst);
+    MR_CHECK_MSG(slice_differs == 0, "albedo slice or gradient lookup vs trilinear lookup: %d of 300 differ",
+                 slice_differs);
 
     /* White furnace, base_color 1 (base 1): a dielectric over Lambert reflects E_s + (1 - E_s) = 1 exactly, so
      * |albedo - 1| is the albedo table's error (plus the quadrature's, ~1e-3 towards grazing). Over ior x
@@ -2040,7 +2251,10 @@ MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(map_en
              MR_TEST_ENTRY(random_values_are_finite_and_nonnegative), MR_TEST_ENTRY(reciprocity),
              MR_TEST_ENTRY(below_horizon_is_exactly_zero), MR_TEST_ENTRY(robust_at_bounds_grazing_and_nonfinite_inputs),
              MR_TEST_ENTRY(white_furnace_quadrature_is_accurate), MR_TEST_ENTRY(white_furnace_energy_bound),
-             MR_TEST_ENTRY(gradient_matches_central_differences), MR_TEST_ENTRY(roles_are_truthful),
+             MR_TEST_ENTRY(gradient_matches_central_differences),
+             MR_TEST_ENTRY(gradient_at_defaults_matches_one_sided_differences),
+             MR_TEST_ENTRY(gradient_is_the_secant_where_affine),
+             MR_TEST_ENTRY(gradient_is_finite_at_the_ends_of_the_ranges), MR_TEST_ENTRY(roles_are_truthful),
              MR_TEST_ENTRY(linear_and_affine_parameters_are_jointly_affine), MR_TEST_ENTRY(lobes_are_truthful),
              MR_TEST_ENTRY(known_lambert), MR_TEST_ENTRY(known_microfacet_normal_incidence),
              MR_TEST_ENTRY(known_microfacet_off_normal), MR_TEST_ENTRY(known_conductor_fresnel),

@@ -455,24 +455,43 @@ static inline double mr_eon_albedo_on(const mr_eon *e, double mu, double sin2) {
  * (all clamped). Trilinear in (sqrt(mu), sqrt((r - 0.01)/0.99), sqrt((eta - 1)/2)) on the generated table
  * (ggx_albedo_tables.h, whose header states the interpolation error). The one table of all layered models. */
 double mr_ggx_albedo_dielectric(double mu, double r, double eps);
-/* The same table sliced at (r, eps) for a model that precomputes in prepare: curve[i] is E at the table's i-th mu
- * node (mu = (i/(N - 1))^2; node 0 is computed at mu = 1e-4), bilinear in (r, eta) as above;
- * mr_ggx_albedo_curve_at interpolates it linearly in sqrt(mu), so the pair gives mr_ggx_albedo_dielectric(mu, r,
- * eps) up to the curve's float rounding (known_standard_surface checks it). */
-#define MR_GGX_ALBEDO_CURVE_N 41
-void mr_ggx_albedo_curve(double r, double eps, float curve[MR_GGX_ALBEDO_CURVE_N]);
-static inline double mr_ggx_albedo_curve_at(const float curve[MR_GGX_ALBEDO_CURVE_N], double mu) {
-    double x = mu > 0.0 ? sqrt(MR_MIN(mu, 1.0)) * (MR_GGX_ALBEDO_CURVE_N - 1) : 0.0;
+/* The same lookup split for a model that precomputes in prepare: the (r, eps) cell and fractions once per parameter
+ * set (slice_init, which keeps pointers to the four table rows around them), the mu coordinate per eval (slice_at,
+ * inline: 8 loads and 7 lerps). slice_at(slice_init(r, eps), mu) is mr_ggx_albedo_dielectric(mu, r, eps) bit for bit
+ * (it is how that function computes). Against the 41-node float curve it replaces in standard-surface (2 loads, 1
+ * lerp), one eval costs 43 -> 51 ns without a coat and 56 -> 69 with one (one thread, 4096 direction pairs, best of
+ * 15 runs); the curve's float rounding made f a staircase in roughness and ior (layering.c). */
+#define MR_GGX_ALBEDO_SLICE_N_MU 41
+typedef struct mr_ggx_albedo_slice {
+    const float *row[4]; /* E at the mu nodes: (eta cell, r cell), (eta, r + 1), (eta + 1, r), (eta + 1, r + 1) */
+    double b, c;         /* fractions in the r and eta cells */
+} mr_ggx_albedo_slice;
+void mr_ggx_albedo_slice_init(double r, double eps, mr_ggx_albedo_slice *slice);
+static inline double mr_ggx_albedo_slice_at(const mr_ggx_albedo_slice *slice, double mu) {
+    /* layering.c's alb_cell on the mu axis, and its lerps in the same order */
+    double t = sqrt(mr_clampd(mu, 0.0, 1.0)), x = t > 0.0 ? MR_MIN(t, 1.0) * (MR_GGX_ALBEDO_SLICE_N_MU - 1) : 0.0;
     int i = (int)x;
-    if (i > MR_GGX_ALBEDO_CURVE_N - 2) i = MR_GGX_ALBEDO_CURVE_N - 2;
-    double u = x - i;
-    return (1.0 - u) * curve[i] + u * curve[i + 1];
+    if (i > MR_GGX_ALBEDO_SLICE_N_MU - 2) i = MR_GGX_ALBEDO_SLICE_N_MU - 2;
+    double a = x - i, b = slice->b, v[2];
+    for (int e = 0; e < 2; e++) {
+        const float *lo = slice->row[2 * e], *hi = slice->row[2 * e + 1];
+        double l = lo[i] + (lo[i + 1] - lo[i]) * a, h = hi[i] + (hi[i + 1] - hi[i]) * a;
+        v[e] = l + (h - l) * b;
+    }
+    return v[0] + (v[1] - v[0]) * slice->c;
 }
 /* The same with F = 1: the lobe's own single-scattering albedo (bilinear in (sqrt(mu), sqrt((r - 0.01)/0.99))). */
 double mr_ggx_albedo_one(double mu, double r);
 /* Its cosine-weighted hemispherical average E_avg(r) = 2 integral_0^1 E(mu) mu dmu (Simpson's rule, 64 intervals, on
  * the interpolated table): per parameter set, not per eval. */
 double mr_ggx_albedo_one_avg(double r);
+
+/* The same three with their derivatives (eval_grad of the layered models): the derivative of the interpolation in r
+ * and eps (mu is geometry), one-sided at cell boundaries, 0 where a coordinate is clamped or at r = 0.01, eps = 0
+ * (layering.c says why). The values equal the functions' above bit for bit. */
+double mr_ggx_albedo_dielectric_grad(double mu, double r, double eps, double *dE_dr, double *dE_deps);
+double mr_ggx_albedo_one_grad(double mu, double r, double *dE_dr);
+double mr_ggx_albedo_one_avg_grad(double r, double *dE_dr);
 
 /* The hemispherical average of the exact dielectric Fresnel, F_avg(eta) = 2 integral_0^1 F(mu, eta) mu dmu, eta >= 1
  * (Simpson's rule, 64 intervals; F is smooth on [0, 1] for eta >= 1, the error is below 1e-7). Per parameter set. */
@@ -482,6 +501,18 @@ static inline double mr_fresnel_dielectric_avg(double eta) {
         double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0);
         sum += w * 2.0 * mu * mr_fresnel_dielectric(MR_MAX(mu, 1e-9), eta, NULL);
     }
+    return sum / (3.0 * 64.0);
+}
+
+/* mr_fresnel_dielectric_avg with its derivative d F_avg/d eta (the same Simpson sum of dF/deta), the same value. */
+static inline double mr_fresnel_dielectric_avg_grad(double eta, double *dF_deta) {
+    double sum = 0.0, dsum = 0.0;
+    for (int i = 0; i <= 64; i++) {
+        double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0), d;
+        sum += w * 2.0 * mu * mr_fresnel_dielectric(MR_MAX(mu, 1e-9), eta, &d);
+        dsum += w * 2.0 * mu * d;
+    }
+    *dF_deta = dsum / (3.0 * 64.0);
     return sum / (3.0 * 64.0);
 }
 

@@ -13,11 +13,15 @@
  * (measured by the generator; the header repeats it): for ior 1.05-3, 0.00095 up to 80 degrees, 0.0055 up to 88,
  * 0.039 beyond; for ior 1-3, 0.0024, 0.052 and 0.41 (ior near 1: Fresnel's knee near grazing); E_1, 0.00034, 0.0015
  * and 0.045. Pure functions of constant data: thread-safe.
+ * The same lookups with their derivatives in r and eps (mr_ggx_albedo_*_grad, for the models' eval_grad): the
+ * derivative of the interpolation itself, exact within a cell, one-sided on a cell boundary (the upper cell's; a
+ * node is a corner of the interpolated albedo), 0 where a coordinate is clamped. A model that prepares may keep the
+ * (r, eps) cell in its state (mr_ggx_albedo_slice) and finish the lookup per eval, in double: standard-surface's
+ * float curves of the (r, eta)-interpolated albedo made f a staircase of 1e-7 steps in specular_ior and roughness,
+ * which central differences resolve.
  */
 #include "brdf_internal.h"
 #include "ggx_albedo_tables.h"
-
-_Static_assert(MR_GGX_ALB_N_MU == MR_GGX_ALBEDO_CURVE_N, "brdf_internal.h's curve length is the table's mu nodes");
 
 /* Cell index and fraction of t in [0, 1] (clamped; NaN -> 0) on n nodes. */
 static int alb_cell(double t, int n, double *frac) {
@@ -39,25 +43,20 @@ static int alb_cell_eps(double eps, double *frac) {
     return alb_cell(sqrt((eta - 1.0) / 2.0), MR_GGX_ALB_N_ETA, frac);
 }
 
-void mr_ggx_albedo_curve(double r, double eps, float curve[MR_GGX_ALBEDO_CURVE_N]) {
-    double b, c;
-    int ir = alb_cell_r(r, MR_GGX_ALB_N_R, &b), ie = alb_cell_eps(eps, &c);
-    const float(*t0)[MR_GGX_ALB_N_MU] = mr_ggx_alb_dielectric[ie];
-    const float(*t1)[MR_GGX_ALB_N_MU] = mr_ggx_alb_dielectric[ie + 1];
-    for (int i = 0; i < MR_GGX_ALB_N_MU; i++)
-        curve[i] = (float)alb_lerp(alb_lerp(t0[ir][i], t0[ir + 1][i], b), alb_lerp(t1[ir][i], t1[ir + 1][i], b), c);
+_Static_assert(MR_GGX_ALB_N_MU == MR_GGX_ALBEDO_SLICE_N_MU, "brdf_internal.h's slice reads the table's mu nodes");
+
+void mr_ggx_albedo_slice_init(double r, double eps, mr_ggx_albedo_slice *slice) {
+    int ir = alb_cell_r(r, MR_GGX_ALB_N_R, &slice->b), ie = alb_cell_eps(eps, &slice->c);
+    for (int e = 0; e < 2; e++) {
+        slice->row[2 * e] = mr_ggx_alb_dielectric[ie + e][ir];
+        slice->row[2 * e + 1] = mr_ggx_alb_dielectric[ie + e][ir + 1];
+    }
 }
 
 double mr_ggx_albedo_dielectric(double mu, double r, double eps) {
-    double a, b, c;
-    int it = alb_cell(sqrt(mr_clampd(mu, 0.0, 1.0)), MR_GGX_ALB_N_MU, &a);
-    int ir = alb_cell_r(r, MR_GGX_ALB_N_R, &b), ie = alb_cell_eps(eps, &c);
-    double v[2];
-    for (int e = 0; e < 2; e++) {
-        const float(*t)[MR_GGX_ALB_N_MU] = mr_ggx_alb_dielectric[ie + e];
-        v[e] = alb_lerp(alb_lerp(t[ir][it], t[ir][it + 1], a), alb_lerp(t[ir + 1][it], t[ir + 1][it + 1], a), b);
-    }
-    return alb_lerp(v[0], v[1], c);
+    mr_ggx_albedo_slice slice;
+    mr_ggx_albedo_slice_init(r, eps, &slice);
+    return mr_ggx_albedo_slice_at(&slice, mu);
 }
 
 double mr_ggx_albedo_one(double mu, double r) {
@@ -68,11 +67,80 @@ double mr_ggx_albedo_one(double mu, double r) {
     return alb_lerp(alb_lerp(t[ir][it], t[ir][it + 1], a), alb_lerp(t[ir + 1][it], t[ir + 1][it + 1], a), b);
 }
 
+/* The r cell is the same for every mu: found once (the sum is the one of 65 mr_ggx_albedo_one calls, bit for bit) */
 double mr_ggx_albedo_one_avg(double r) {
-    double sum = 0.0;
+    double b, sum = 0.0;
+    int ir = alb_cell_r(r, MR_GGX_ALB_ONE_N_R, &b);
+    const float *lo = mr_ggx_alb_one[ir], *hi = mr_ggx_alb_one[ir + 1];
     for (int i = 0; i <= 64; i++) {
-        double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0);
-        sum += w * 2.0 * mu * mr_ggx_albedo_one(mu, r);
+        double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0), a;
+        int it = alb_cell(sqrt(mr_clampd(mu, 0.0, 1.0)), MR_GGX_ALB_N_MU, &a);
+        sum += w * 2.0 * mu * alb_lerp(alb_lerp(lo[it], lo[it + 1], a), alb_lerp(hi[it], hi[it + 1], a), b);
     }
+    return sum / (3.0 * 64.0);
+}
+
+/* ---- derivatives of the interpolation (eval_grad of the layered models) ----
+ * The interpolation is piecewise multilinear in the node coordinates t; within a cell its derivative in t is the
+ * difference of the neighbouring nodes, and t depends smoothly on r and eps: d t_r/dr = 1/(1.98 t_r),
+ * d t_eta/d eta = 1/(4 t_eta), d eta/d eps = 2/(1 - eps)^2. At a cell boundary this is the derivative of the cell
+ * alb_cell chose (the upper one), one-sided; where a coordinate is clamped (r below 0.01, eps outside [0, 0.5]) or
+ * at t = 0 (r = 0.01, eps = 0: sqrt's infinite slope, with the clamped side beyond) it is 0. The values returned are
+ * computed by the same operations as the functions above, so they equal them bit for bit. */
+
+/* d frac / d t of alb_cell: n - 1 inside (0, 1], 0 where t is clamped or 0 */
+static double alb_dfrac_dt(double t, int n) { return t > 0.0 && t <= 1.0 ? n - 1 : 0.0; }
+
+static int alb_cell_r_grad(double r, int n, double *frac, double *dfrac_dr) {
+    double t = sqrt(MR_MAX(r - 0.01, 0.0) / 0.99);
+    *dfrac_dr = t > 0.0 ? alb_dfrac_dt(t, n) / (1.98 * t) : 0.0;
+    return alb_cell(t, n, frac);
+}
+
+static int alb_cell_eps_grad(double eps, double *frac, double *dfrac_deps) {
+    double e = mr_clampd(eps, 0.0, 0.5), eta = (1.0 + e) / (1.0 - e), t = sqrt((eta - 1.0) / 2.0);
+    double deta = eps >= 0.0 && eps <= 0.5 ? 2.0 / ((1.0 - e) * (1.0 - e)) : 0.0;
+    *dfrac_deps = t > 0.0 ? alb_dfrac_dt(t, MR_GGX_ALB_N_ETA) * deta / (4.0 * t) : 0.0;
+    return alb_cell(t, MR_GGX_ALB_N_ETA, frac);
+}
+
+double mr_ggx_albedo_dielectric_grad(double mu, double r, double eps, double *dE_dr, double *dE_deps) {
+    double a, b, c, db, dc;
+    int it = alb_cell(sqrt(mr_clampd(mu, 0.0, 1.0)), MR_GGX_ALB_N_MU, &a);
+    int ir = alb_cell_r_grad(r, MR_GGX_ALB_N_R, &b, &db), ie = alb_cell_eps_grad(eps, &c, &dc);
+    double v[2], dv_db[2];
+    for (int e = 0; e < 2; e++) {
+        const float(*t)[MR_GGX_ALB_N_MU] = mr_ggx_alb_dielectric[ie + e];
+        double lo = alb_lerp(t[ir][it], t[ir][it + 1], a), hi = alb_lerp(t[ir + 1][it], t[ir + 1][it + 1], a);
+        v[e] = alb_lerp(lo, hi, b);
+        dv_db[e] = hi - lo;
+    }
+    *dE_dr = alb_lerp(dv_db[0], dv_db[1], c) * db;
+    *dE_deps = (v[1] - v[0]) * dc;
+    return alb_lerp(v[0], v[1], c);
+}
+
+double mr_ggx_albedo_one_grad(double mu, double r, double *dE_dr) {
+    double a, b, db;
+    int it = alb_cell(sqrt(mr_clampd(mu, 0.0, 1.0)), MR_GGX_ALB_N_MU, &a);
+    int ir = alb_cell_r_grad(r, MR_GGX_ALB_ONE_N_R, &b, &db);
+    const float(*t)[MR_GGX_ALB_N_MU] = mr_ggx_alb_one;
+    double lo = alb_lerp(t[ir][it], t[ir][it + 1], a), hi = alb_lerp(t[ir + 1][it], t[ir + 1][it + 1], a);
+    *dE_dr = (hi - lo) * db;
+    return alb_lerp(lo, hi, b);
+}
+
+double mr_ggx_albedo_one_avg_grad(double r, double *dE_dr) {
+    double b, db, sum = 0.0, dsum = 0.0;
+    int ir = alb_cell_r_grad(r, MR_GGX_ALB_ONE_N_R, &b, &db);
+    const float *lo = mr_ggx_alb_one[ir], *hi = mr_ggx_alb_one[ir + 1];
+    for (int i = 0; i <= 64; i++) {
+        double mu = i / 64.0, w = (i == 0 || i == 64) ? 1.0 : (i % 2 ? 4.0 : 2.0), a;
+        int it = alb_cell(sqrt(mr_clampd(mu, 0.0, 1.0)), MR_GGX_ALB_N_MU, &a);
+        double l = alb_lerp(lo[it], lo[it + 1], a), h = alb_lerp(hi[it], hi[it + 1], a);
+        sum += w * 2.0 * mu * alb_lerp(l, h, b);
+        dsum += w * 2.0 * mu * (h - l);
+    }
+    *dE_dr = dsum * db / (3.0 * 64.0);
     return sum / (3.0 * 64.0);
 }

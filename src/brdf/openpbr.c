@@ -78,7 +78,10 @@
  *   that is reached by base_metalness, not by a weaker F0 (give --hold specular_weight=W to choose one).
  *
  * Every parameter is NONLINEAR: the albedo-scaling and darkening factors, EON's multiple scattering, the
- * F82 clamp and Turquin's factor couple them (specular_color would be affine without the clamp of F82).
+ * F82 clamp and Turquin's factor couple them (specular_color would be affine without the clamp of F82). One is
+ * affine alone, coat_darkening (the darkening factor lerp(1, Delta, C coat_darkening) is all it enters), and
+ * base_metalness is affine while coat_weight or coat_darkening is 0; their roles stay NONLINEAR, as the fit's
+ * answers were measured with them.
  * Split: diffuse part = the EON lobe with all its factors; specular part = metal, dielectric and coat lobes.
  *
  * Out of scope (what a fit scene cannot see, or a surface BRDF cannot hold): transmission, subsurface, fuzz,
@@ -86,11 +89,22 @@
  * normal and tangent inputs. The reciprocal (Kelemen) form of the glossy-diffuse layer the specification also
  * allows is not implemented.
  *
+ * Derivatives: analytic, every slot (op_eval_grad): op_prepare and op_eval transcribed in forward-mode dual numbers
+ *   (dual.h: each operation carries d/d values[j] for all 19 slots; the exact derivative of what eval computes, to
+ *   rounding), through the GGX lobe's and the dielectric Fresnel's alpha and eta derivatives (brdf_internal.h) and
+ *   the albedo tables' interpolation, differentiated cell by cell (layering.c). One-sided where f has a corner: at a
+ *   table node (specular_ior 1.5 with specular_weight 1 is the node eta = 1.5: the upper cell's slope), at F82's
+ *   clamp, and at coat_weight 0 and base_diffuse_roughness 0, the defaults, where the coat and EON's multiple
+ *   scattering are evaluated anyway so that the derivative is the one from inside the range (tests/test_brdf.c,
+ *   gradient_at_defaults_matches_one_sided_differences). Cost (tests/bench_brdf_grad.c, one thread): about 2.4 us
+ *   per eval_grad, 18 times an eval with a prepared state (130 ns) and 12 times a prepare + eval (200 ns).
+ *
  * Source: AcademySoftwareFoundation/OpenPBR index.html, v1.1.1 (sections named above); reference/
  * open_pbr_surface.mtlx read for orientation only.
  * Energy: conserving (the white furnace is checked); not reciprocal (albedo scaling at the view direction).
  */
 #include "brdf_internal.h"
+#include "dual.h"
 
 /* Slots of the packed value vector. */
 enum {
@@ -268,6 +282,131 @@ static void op_eval(const void *state_bytes, const double wi[3], const double wo
     }
 }
 
+/* d f_r / d values[j]: op_prepare and op_eval transcribed in dual numbers (dual.h), operation for operation, so the
+ * value part is eval's to rounding. Differences from eval's branches, all where eval's value is unchanged: the coat
+ * is evaluated at coat_weight 0 too (its terms are then 0 or 1, and their derivatives give the one-sided derivative
+ * in coat_weight a fit starting from no coat needs), and EON's multiple-scattering term at sigma 0 (likewise). */
+static void op_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3], const double wo[3],
+                         double *d_diffuse, double *d_specular) {
+    mr_brdf_geom g;
+    double v[MR_BRDF_MAX_VALUES];
+    if (!mr_brdf_grad_begin(model, values, wi, wo, d_diffuse, d_specular, &g, v)) return;
+    int count = mr_brdf_value_count(model);
+    mr_dual_tape tape;
+    mr_dual_tape_init(&tape);
+    mr_dual_tape *tp = &tape;
+    mr_dual x[MR_DUAL_N];
+    for (int j = 0; j < count; j++) x[j] = mr_dual_var(v[j], j);
+    const mr_dual one = mr_dual_const(1.0);
+
+    /* op_prepare */
+    mr_dual w = x[OP_BASE_WEIGHT], M = x[OP_METALNESS], xi = x[OP_SPECULAR_WEIGHT];
+    mr_dual rs = mr_dual_maxc(x[OP_SPECULAR_ROUGHNESS], OP_ROUGHNESS_MIN), nb = x[OP_SPECULAR_IOR];
+    mr_dual C = x[OP_COAT_WEIGHT], rc = x[OP_COAT_ROUGHNESS], nc = x[OP_COAT_IOR];
+    mr_dual rs2 = mr_dual_sq(tp, rs), rc2 = mr_dual_sq(tp, rc);
+    mr_dual r4 = mr_dual_add(tp, mr_dual_sq(tp, rs2), mr_dual_scale(tp, mr_dual_sq(tp, rc2), 2.0));
+    mr_dual r_base = mr_dual_lerp(tp, rs, mr_dual_powc(tp, mr_dual_minc(r4, 1.0), 0.25), C);
+    mr_dual alpha = mr_dual_sq(tp, r_base);
+    mr_dual eta_bc = nc.v > nb.v ? mr_dual_div(tp, nc, nb) : mr_dual_div(tp, nb, nc);
+    mr_dual eta_s = mr_dual_lerp(tp, nb, eta_bc, C);
+    mr_dual Fs = mr_dual_sq(tp, mr_dual_div(tp, mr_dual_addc(tp, eta_s, -1.0), mr_dual_addc(tp, eta_s, 1.0)));
+    mr_dual xi_s = Fs.v > 0.0 ? mr_dual_min(tp, xi, mr_dual_recip(tp, Fs)) : xi;
+    mr_dual xi_Fs = mr_dual_mul(tp, xi_s, Fs);
+    mr_dual eps = mr_dual_sqrt(tp, xi_Fs);
+    mr_dual eta = mr_dual_div(tp, mr_dual_addc(tp, eps, 1.0), mr_dual_rsubc(tp, 1.0, eps));
+    mr_dual rho[3], sc[3], f0[3], f82_b[3], turquin_f0[3], comp[3];
+    for (int c = 0; c < 3; c++) {
+        rho[c] = x[OP_BASE_COLOR + c];
+        sc[c] = x[OP_SPECULAR_COLOR + c];
+        f0[c] = mr_dual_mul(tp, w, rho[c]);
+        f82_b[c] = mr_dual_f82_coeff(tp, f0[c], sc[c]);
+        turquin_f0[c] = mr_dual_mul(tp, xi, f0[c]);
+    }
+    /* mr_eon_prepare */
+    mr_dual sigma = x[OP_DIFFUSE_ROUGHNESS];
+    mr_dual eon_A = mr_dual_recip(tp, mr_dual_addc(tp, mr_dual_scale(tp, sigma, MR_EON_C1), 1.0));
+    mr_dual eon_B = mr_dual_mul(tp, sigma, eon_A), sigma_A = eon_B;
+    mr_dual e_avg = mr_dual_add(tp, eon_A, mr_dual_scale(tp, eon_B, MR_EON_G_AVG));
+    mr_dual one_minus_avg = mr_dual_scale(tp, sigma_A, MR_EON_C1 - MR_EON_G_AVG);
+    for (int c = 0; c < 3; c++) {
+        mr_dual rho_ms = mr_dual_div(tp, mr_dual_mul(tp, mr_dual_sq(tp, rho[c]), e_avg),
+                                     mr_dual_rsubc(tp, 1.0, mr_dual_mul(tp, rho[c], one_minus_avg)));
+        comp[c] = mr_dual_scale(tp, rho_ms, MR_INV_PI / (MR_EON_C1 - MR_EON_G_AVG));
+    }
+    mr_dual r_coat = mr_dual_maxc(rc, OP_ROUGHNESS_MIN), alpha_c = mr_dual_sq(tp, r_coat);
+    mr_dual eps_c = mr_dual_div(tp, mr_dual_addc(tp, nc, -1.0), mr_dual_addc(tp, nc, 1.0));
+    mr_dual inv_eta_c2 = mr_dual_recip(tp, mr_dual_sq(tp, nc));
+    mr_dual darkening_weight = mr_dual_mul(tp, C, x[OP_COAT_DARKENING]);
+    double fa_num = 10893.0 * nc.v - 1438.2, fa_den = -774.4 * nc.v * nc.v + 10212.0 * nc.v + 1.0;
+    double fa_raw = log(fa_num / fa_den);
+    mr_dual fresnel_avg =
+        fa_raw >= 0.0 && fa_raw <= 1.0
+            ? mr_dual_chain(tp, fa_raw, 10893.0 / fa_num - (-2.0 * 774.4 * nc.v + 10212.0) / fa_den, nc)
+            : mr_dual_const(mr_clampd(fa_raw, 0.0, 1.0));
+    mr_dual K_r = mr_dual_rsubc(tp, 1.0, mr_dual_mul(tp, mr_dual_rsubc(tp, 1.0, fresnel_avg), inv_eta_c2));
+    mr_dual r_b = mr_dual_lerp(tp, mr_dual_lerp(tp, one, rs, mr_dual_clampc(xi_Fs, 0.0, 1.0)), rs, M);
+    mr_dual E_spec_normal = mr_dual_albedo_dielectric(tp, 1.0, r_base, eps);
+    mr_dual E_b[3];
+    for (int c = 0; c < 3; c++) {
+        mr_dual E_d = mr_dual_add(tp, E_spec_normal, mr_dual_mul(tp, mr_dual_rsubc(tp, 1.0, E_spec_normal), f0[c]));
+        E_b[c] = mr_dual_lerp(tp, E_d, mr_dual_mul(tp, xi, f0[c]), M);
+    }
+
+    /* op_eval */
+    double mu_v = MR_MIN(g.cos_i, 1.0);
+    mr_dual DV = mr_dual_ggx_dv(tp, alpha, &g);
+    mr_dual F_d = eps.v > 0.0 ? mr_dual_fresnel_dielectric(tp, g.dot_h, eta) : mr_dual_const(0.0);
+    mr_dual E_spec = mr_dual_albedo_dielectric(tp, mu_v, r_base, eps);
+    double wi_dot_wo = wi[0] * wo[0] + wi[1] * wo[1] + wi[2] * wo[2];
+    double s = wi_dot_wo - g.cos_i * g.cos_o;
+    double s_over_t = s > 0.0 ? s / MR_MAX(g.cos_i, g.cos_o) : s;
+    mr_dual on = mr_dual_scale(tp, mr_dual_add(tp, eon_A, mr_dual_scale(tp, eon_B, s_over_t)), MR_INV_PI);
+    mr_dual ms = mr_dual_scale(tp, sigma_A,
+                               (MR_EON_C1 - mr_eon_g(g.cos_i, g.sin2_i)) * (MR_EON_C1 - mr_eon_g(g.cos_o, g.sin2_o)));
+    mr_dual diff_weight =
+        mr_dual_mul(tp, mr_dual_mul(tp, mr_dual_rsubc(tp, 1.0, M), mr_dual_rsubc(tp, 1.0, E_spec)), w);
+    mr_dual E_1 = mr_dual_maxc(mr_dual_albedo_one(tp, mu_v, r_base), 1e-6);
+    mr_dual E_1_ratio = mr_dual_div(tp, mr_dual_rsubc(tp, 1.0, E_1), E_1);
+    mr_dual diff_base[3], spec_base[3];
+    for (int c = 0; c < 3; c++) {
+        mr_dual on_c = mr_dual_add(tp, mr_dual_mul(tp, rho[c], on), mr_dual_mul(tp, comp[c], ms));
+        diff_base[c] = mr_dual_mul(tp, diff_weight, on_c);
+        mr_dual turquin = mr_dual_addc(tp, mr_dual_mul(tp, turquin_f0[c], E_1_ratio), 1.0);
+        mr_dual metal = mr_dual_mul(tp, mr_dual_mul(tp, xi, mr_dual_f82_tint(tp, g.dot_h, f0[c], f82_b[c])), turquin);
+        mr_dual dielectric = mr_dual_mul(tp, mr_dual_mul(tp, mr_dual_rsubc(tp, 1.0, M), sc[c]), F_d);
+        spec_base[c] = mr_dual_mul(tp, mr_dual_add(tp, dielectric, mr_dual_mul(tp, M, metal)), DV);
+    }
+
+    /* the coat, at coat_weight 0 too (see above) */
+    mr_dual coat_lobe = eps_c.v > 0.0 ? mr_dual_mul(tp, mr_dual_mul(tp, C, mr_dual_fresnel_dielectric(tp, g.dot_h, nc)),
+                                                    mr_dual_ggx_dv(tp, alpha_c, &g))
+                                      : mr_dual_const(0.0);
+    mr_dual E_coat = mr_dual_albedo_dielectric(tp, mu_v, r_coat, eps_c);
+    mr_dual mu_ti = mr_dual_maxc(
+        mr_dual_sqrt(tp, mr_dual_maxc(mr_dual_rsubc(tp, 1.0, mr_dual_scale(tp, inv_eta_c2, g.sin2_i)), 0.0)),
+        MR_BRDF_COS_MIN);
+    mr_dual mu_to = mr_dual_maxc(
+        mr_dual_sqrt(tp, mr_dual_maxc(mr_dual_rsubc(tp, 1.0, mr_dual_scale(tp, inv_eta_c2, g.sin2_o)), 0.0)),
+        MR_BRDF_COS_MIN);
+    mr_dual path = mr_dual_scale(tp, mr_dual_add(tp, mr_dual_recip(tp, mu_ti), mr_dual_recip(tp, mu_to)), 0.5);
+    mr_dual K = mr_dual_lerp(tp, mr_dual_fresnel_dielectric(tp, mu_v, nc), K_r, r_b);
+    mr_dual diffuse[3], specular[3];
+    for (int c = 0; c < 3; c++) {
+        double cc = v[OP_COAT_COLOR + c];
+        mr_dual T = cc > 0.0 ? mr_dual_exp(tp, mr_dual_mul(tp, mr_dual_log(tp, x[OP_COAT_COLOR + c]), path))
+                             : mr_dual_const(0.0);
+        mr_dual den = mr_dual_rsubc(tp, 1.0, mr_dual_mul(tp, E_b[c], K));
+        mr_dual delta = den.v > 1e-300 ? mr_dual_div(tp, mr_dual_rsubc(tp, 1.0, K), den) : one;
+        mr_dual scale = mr_dual_mul(tp, mr_dual_lerp(tp, one, mr_dual_mul(tp, T, mr_dual_rsubc(tp, 1.0, E_coat)), C),
+                                    mr_dual_lerp(tp, one, delta, darkening_weight));
+        diffuse[c] = mr_dual_mul(tp, scale, diff_base[c]);
+        specular[c] = mr_dual_add(tp, mr_dual_mul(tp, scale, spec_base[c]), coat_lobe);
+    }
+    mr_dual_store_grad(diffuse, specular, count, d_diffuse, d_specular);
+}
+
+_Static_assert(19 <= MR_DUAL_N, "openpbr's 19 packed values need as many dual slots");
+
 const mr_brdf_model mr_brdf_openpbr = {
     .name = "openpbr",
     .summary = "OpenPBR Surface 1.1: coat over F82-tint metal / GGX dielectric over EON diffuse, albedo-scaled",
@@ -278,5 +417,5 @@ const mr_brdf_model mr_brdf_openpbr = {
     .config = NULL,
     .prepare = op_prepare,
     .eval = op_eval,
-    .eval_grad = NULL,
+    .eval_grad = op_eval_grad,
 };

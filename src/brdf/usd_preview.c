@@ -85,7 +85,10 @@
  * (white, ior 1, both lobes smooth, clearcoat 1: three mirror-like terms of F = w each). These are the reference
  * shading's (Storm's), not defects here; the specular lobe alone (F = 1) stays below 1 (0.89 at 40 degrees,
  * roughness 0.5: single-scattering GGX loses energy).
- * Gradient: none (eval_grad NULL); the optimiser differentiates numerically.
+ * Derivatives: analytic, by hand (usd_eval_grad below: the model is a few affine and product terms), every slot;
+ * the switch's 0. At clearcoat 0 the one-sided derivative in clearcoat is the coat lobe. Cost
+ * (tests/bench_brdf_grad.c): about 50 ns per eval_grad, 3 to 4 times an eval with a prepared state, 1.3 to 1.5 times
+ * a prepare + eval.
  */
 #include "brdf_internal.h"
 
@@ -175,6 +178,56 @@ static void usd_eval(const void *state_bytes, const double wi[3], const double w
     }
 }
 
+/* d f_r / d values[j], by hand: with w the Schlick weight, S = D V(alpha), S_c = D V(alpha_c), R2 the ior's F0,
+ *   metallic workflow:  F_c = k_c P,  k_c = 1 - m + m d_c,  P = ((1 - m) R2 + m)(1 - w) + w,  W = 1 - m
+ *   specular workflow:  F_c = s_c (1 - w) + w,  W = 1
+ *   diffuse_c = W (1 - F_c) d_c/pi,  specular_c = F_c S + cc (R2 (1 - w) + w) S_c
+ * so, e.g., dF_c/dm = (d_c - 1) P + k_c (1 - R2)(1 - w) and dR2/dior = 2 R (-2/(1 + ior)^2), R = (1 - ior)/(1 + ior).
+ * The coat's terms are taken at clearcoat 0 too (its value there is 0; d/dclearcoat is the coat lobe). */
+static void usd_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3], const double wo[3],
+                          double *d_diffuse, double *d_specular) {
+    mr_brdf_geom g;
+    double v[MR_BRDF_MAX_VALUES];
+    if (!mr_brdf_grad_begin(model, values, wi, wo, d_diffuse, d_specular, &g, v)) return;
+    double ior = v[USD_IOR], r = (1.0 - ior) / (1.0 + ior), r2 = r * r;
+    double dr2 = 2.0 * r * (-2.0 / ((1.0 + ior) * (1.0 + ior)));
+    double m = v[USD_METALLIC], rough = v[USD_ROUGHNESS], coat_rough = v[USD_CLEARCOAT_ROUGHNESS];
+    double coat = v[USD_CLEARCOAT];
+    int specular_workflow = v[USD_SPEC_WORKFLOW] >= 0.5;
+    double w = mr_schlick_weight(g.dot_h);
+    double dS, dS_c;
+    double S = mr_ggx_dv_correlated(rough * rough, &g, &dS);
+    double S_c = mr_ggx_dv_correlated(coat_rough * coat_rough, &g, &dS_c);
+    double coat_F = r2 + (1.0 - r2) * w;
+    for (int c = 0; c < 3; c++) {
+        double d = v[USD_DIFFUSE + c], F, dF_dd, dF_dm = 0.0, dF_dior = 0.0, W = 1.0;
+        if (specular_workflow) {
+            double sc = v[USD_SPECULAR_COLOR + c];
+            F = sc + (1.0 - sc) * w;
+            dF_dd = 0.0;
+            d_diffuse[(USD_SPECULAR_COLOR + c) * 3 + c] = -(1.0 - w) * d * MR_INV_PI;
+            d_specular[(USD_SPECULAR_COLOR + c) * 3 + c] = (1.0 - w) * S;
+        } else {
+            double k = (1.0 - m) + m * d, P = ((1.0 - m) * r2 + m) * (1.0 - w) + w;
+            F = k * P;
+            dF_dd = m * P;
+            dF_dm = (d - 1.0) * P + k * (1.0 - r2) * (1.0 - w);
+            dF_dior = k * (1.0 - m) * (1.0 - w) * dr2;
+            W = 1.0 - m;
+            /* W = 1 - m: the diffuse's own metallic term */
+            d_diffuse[USD_METALLIC * 3 + c] = (-(1.0 - F) * d - W * dF_dm * d) * MR_INV_PI;
+            d_specular[USD_METALLIC * 3 + c] = dF_dm * S;
+        }
+        d_diffuse[(USD_DIFFUSE + c) * 3 + c] = W * ((1.0 - F) - dF_dd * d) * MR_INV_PI;
+        d_specular[(USD_DIFFUSE + c) * 3 + c] = dF_dd * S;
+        d_specular[USD_ROUGHNESS * 3 + c] = F * dS * 2.0 * rough;
+        d_specular[USD_CLEARCOAT * 3 + c] = coat_F * S_c;
+        d_specular[USD_CLEARCOAT_ROUGHNESS * 3 + c] = coat * coat_F * dS_c * 2.0 * coat_rough;
+        d_diffuse[USD_IOR * 3 + c] = -W * dF_dior * d * MR_INV_PI;
+        d_specular[USD_IOR * 3 + c] = dF_dior * S + coat * (1.0 - w) * dr2 * S_c;
+    }
+}
+
 const mr_brdf_model mr_brdf_usd_preview = {
     .name = "usd-preview",
     .summary = "OpenUSD UsdPreviewSurface 2.5, metallic and specular workflows + clearcoat (GGX, Schlick)",
@@ -186,5 +239,5 @@ const mr_brdf_model mr_brdf_usd_preview = {
     .config = NULL,
     .prepare = usd_prepare,
     .eval = usd_eval,
-    .eval_grad = NULL,
+    .eval_grad = usd_eval_grad,
 };
