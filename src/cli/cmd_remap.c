@@ -78,7 +78,7 @@ static void print_help(void) {
            "  --local M          the local stage: auto (default: gradient for auto and joint where the\n"
            "                     target model has analytic derivatives, bobyqa for the paper's strategies),\n"
            "                     gradient (Levenberg-Marquardt on the image residual with the model's\n"
-           "                     derivatives) or bobyqa (derivative-free, the engine before 0.2)\n"
+           "                     derivatives) or bobyqa (derivative-free, one render per trial)\n"
            "  --size N           fit-scene side in pixels (default %d; with --from-images: the images' size)\n"
            "  --grid-points N    auto/joint: global grid points per nonlinear parameter (default 16 for one,\n"
            "                     8 for two, 6 for three; more is slower and misses fewer narrow minima)\n"

@@ -57,6 +57,8 @@ static void print_help(void) {
            "                        sampling, strategy, scene), a torn last line is removed, and only the\n"
            "                        missing samples run; a missing FILE is started afresh\n"
            "  --strategy S          auto (default), joint, single, two or three (see 'matremap remap --help')\n"
+           "  --local M             the fits' local stage: auto (default), gradient or bobyqa (see 'matremap\n"
+           "                        remap --help')\n"
            "  --size N              fit-scene side in pixels (default %d)\n"
            "  --light L             45 (default) or frontal\n"
            "  --threads T           samples at once in this process (default 0: automatic, all cores; under\n"
@@ -269,6 +271,7 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
     unsigned long long seed = 1;
     mr_fit_scene_options scene = {0};
     mr_remap_strategy strategy = MR_REMAP_AUTO;
+    mr_local_method local_method = MR_LOCAL_AUTO;
     cli_renderers renderers;
     memset(&renderers, 0, sizeof renderers);
     enum { NONE, FROM, TO } collecting = NONE;
@@ -327,6 +330,10 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
             if (taken < 0) return CLI_EXIT_USAGE;
             if (mr_remap_strategy_from_name(value, &strategy) != MR_OK)
                 return cli_usage_error("sweep", "%s", mr_last_error());
+        } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--local", &value))) {
+            if (taken < 0) return CLI_EXIT_USAGE;
+            if (mr_local_method_from_name(value, &local_method) != MR_OK)
+                return cli_usage_error("sweep", "--local: %s", mr_last_error());
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--size", &value))) {
             if (taken < 0 || !cli_parse_int("sweep", "--size", value, 16, 4096, &scene.size)) return CLI_EXIT_USAGE;
         } else if ((taken = cli_take_option("sweep", argc, argv, &i, "--light", &value))) {
@@ -386,6 +393,7 @@ static int parse_args(int argc, char **argv, sweep_args *a, int *help) {
         if (status != MR_OK) return cli_fail("sweep", status);
     }
     spec->remap.strategy = strategy;
+    spec->remap.local_method = local_method;
     if (hold_list != NULL && !cli_parse_held("sweep", to, hold_list, spec->target_values, &spec->remap.held))
         return CLI_EXIT_USAGE;
     if (!cli_parse_ties("sweep", from, to, tie_list, spec->remap.held, &spec->remap.ties)) return CLI_EXIT_USAGE;

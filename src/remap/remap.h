@@ -154,7 +154,10 @@ typedef struct mr_remap_options {
     double xtol;                 /* relative step tolerance of local fits, in normalised coordinates: 1e-6 */
     int grid_points;             /* AUTO's global grid per nonlinear dimension: 16 (1-D), 8 (2-D), 6 (3-D)
                                     if 0 (docs/performance.md: finer grids found the same fits) */
-    int starts;                  /* AUTO with > 2 nonlinear parameters: multi-start count: 8 */
+    int starts;                  /* AUTO/JOINT with more than 3 nonlinear parameters: multi-start count: 8 (a
+                                    gradient local stage starts from twice as many: each of its local fits sees
+                                    less of the range than a BOBYQA fit's first steps, for a fraction of the
+                                    renders; docs/remap.md) */
     unsigned long seed;          /* seeds the multi-start points: 1 (0 = 1: a zeroed struct is the defaults) */
     const double *target_values; /* optional packed target values: the values of fixed parameters and
                                     switches (NULL: the target's defaults) */

@@ -99,9 +99,11 @@ void mr_strbuf_remap_lines(mr_strbuf *sb, const mr_brdf_model *source, const mr_
                            const mr_remap_options *r, const mr_fit_scene_options *scene_options,
                            const mr_remap_renderers *renderers) {
     const mr_scene scene = mr_remap_file_scene(scene_options);
-    mr_strbuf_printf(sb, "# remap: strategy=%s max_evaluations=%d xtol=%.17g grid_points=%d starts=%d seed=%lu",
+    // local=: rows fitted before the gradient local stage (issue 31) came from BOBYQA alone; a file written then
+    // has no local= and so does not resume now (its header differs)
+    mr_strbuf_printf(sb, "# remap: strategy=%s max_evaluations=%d xtol=%.17g grid_points=%d starts=%d seed=%lu local=%s",
                      mr_remap_strategy_name(r->strategy), r->max_evaluations, r->xtol, r->grid_points, r->starts,
-                     r->seed);
+                     r->seed, mr_local_method_name(r->local_method));
     // Held target parameters are named only when there are some, so files written before --hold still resume.
     for (int p = 0, first = 1; p < target->param_count && p < 32; p++)
         if ((r->held >> p) & 1u) {
@@ -131,6 +133,9 @@ mr_status mr_remap_file_check_options(const char *what, const mr_remap_options *
     if (mr_remap_strategy_name(r->strategy) == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "%s: remap strategy %d is not one of auto, single, two, three, joint",
                        what, (int)r->strategy);
+    if (mr_local_method_name(r->local_method) == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "%s: local method %d is not one of auto, gradient, bobyqa", what,
+                       (int)r->local_method);
     if (r->max_evaluations < 1 || !(r->xtol >= 0.0 && isfinite(r->xtol)) || r->grid_points < 0 || r->starts < 0)
         return mr_fail(MR_ERR_INVALID_ARG,
                        "%s: remap options out of range (max_evaluations %d >= 1, xtol %g >= 0, grid_points %d "

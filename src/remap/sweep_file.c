@@ -368,6 +368,7 @@ static int take_remap_setting(const char *key, char *value, mr_sweep_spec *spec)
         return mr_remap_strategy_from_name(value, &spec->remap.strategy) == MR_OK;
     if (strcmp(key, "xtol") == 0)
         return mr_csv_parse_double(value, strlen(value), &spec->remap.xtol);
+    if (strcmp(key, "local") == 0) return mr_local_method_from_name(value, &spec->remap.local_method) == MR_OK;
     if (strcmp(key, "held") == 0) {
         int ok = 1;
         char *save = NULL;
