@@ -187,6 +187,7 @@ MR_TEST(spd_solver_solves_and_refuses) {
 }
 
 MR_TEST_MAIN(MR_TEST_ENTRY(a_linear_problem_is_solved_in_a_few_steps),
-             MR_TEST_ENTRY(a_minimum_outside_the_box_ends_on_its_bounds), MR_TEST_ENTRY(rosenbrock_valley_to_its_corner),
+             MR_TEST_ENTRY(a_minimum_outside_the_box_ends_on_its_bounds),
+             MR_TEST_ENTRY(rosenbrock_valley_to_its_corner),
              MR_TEST_ENTRY(large_residuals_converge_superlinearly), MR_TEST_ENTRY(a_failed_evaluation_ends_with_nan),
              MR_TEST_ENTRY(bounded_work_and_clamped_starts), MR_TEST_ENTRY(spd_solver_solves_and_refuses))

@@ -5,8 +5,6 @@
 
 #include <math.h>
 #include <string.h>
-#include <stdio.h>
-#include <stdlib.h>
 #include <stdlib.h>
 
 /* lambda scales the diagonal of M (Marquardt's scaling: invariant to each coordinate's units). It starts small, as
@@ -121,7 +119,7 @@ mr_lm_result mr_lm_minimise(const mr_lm_problem *problem, double xtol, int max_v
             free_index[m++] = i;
             largest = fmax(largest, M[i * n + i]);
         }
-        if (m == 0) { if (getenv("MR_DEBUG_LM")) fprintf(stderr, "  no free coordinate\n"); break; } // every coordinate on a bound it is pushed against: a minimum in the box
+        if (m == 0) break; // every coordinate on a bound it is pushed against: a minimum in the box
         double A[MR_LM_MAX_DIMENSION * MR_LM_MAX_DIMENSION], step[MR_LM_MAX_DIMENSION];
         for (int a = 0; a < m; a++) {
             for (int b = 0; b < m; b++) {
@@ -148,7 +146,7 @@ mr_lm_result mr_lm_minimise(const mr_lm_problem *problem, double xtol, int max_v
             trial[i] = clamp_unit(u[i] + shorten * step[a]);
             moved = fmax(moved, fabs(trial[i] - u[i]));
         }
-        if (moved <= xtol) { if (getenv("MR_DEBUG_LM")) fprintf(stderr, "  moved %.3g: stop\n", moved); break; } // converged: no coordinate would move by more than the tolerance
+        if (moved <= xtol) break; // converged: no coordinate would move by more than the tolerance
         const double promised = promised_decrease(n, M, S, gradient, u, trial);
         if (!(promised > 0.0)) {
             // The model promises no decrease for its own step: the secant term made it indefinite (it is then

@@ -13,7 +13,8 @@
  *
  * It stops when a step would move no coordinate by more than xtol (the same normalised tolerance the derivative-free
  * BOBYQA stage uses), when a step promises or gains no more than F's rounding (`noise`), when lambda grows past any
- * useful step, or after max_values evaluations of F. Deterministic: the same calls in the same order for the same inputs.
+ * useful step, or after max_values evaluations of F. Deterministic: the same calls in the same order for the same
+ * inputs.
  */
 #ifndef MR_LEVENBERG_H
 #define MR_LEVENBERG_H

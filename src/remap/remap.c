@@ -606,10 +606,8 @@ static double gradient_fit(fit_context *ctx, int projected, double *u, int *at_p
     // F sums float images in double: its last ~7 digits are the images' rounding (FLOAT_IMAGE_NOISE).
     mr_lm_problem problem = {n, ctx, projected ? projected_value : direct_value,
                              projected ? projected_linearise : direct_linearise, FLOAT_IMAGE_NOISE};
-    if (getenv("MR_DEBUG_LM")) { fprintf(stderr, "gradient fit from"); for (int i = 0; i < n; i++) fprintf(stderr, " %.4f", u[i]); fprintf(stderr, "\n"); }
     mr_lm_result result = mr_lm_minimise(&problem, ctx->opts.xtol, ctx->opts.max_evaluations, u);
     *at_point = result.at_last_value;
-    if (getenv("MR_DEBUG_LM")) { fprintf(stderr, "  -> F %.10g at", result.minimum); for (int i = 0; i < n; i++) fprintf(stderr, " %.6f", u[i]); fprintf(stderr, " (%d values)\n", result.values); }
     if (ctx->failure != MR_OK) return NAN;
     return result.minimum;
 }

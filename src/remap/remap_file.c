@@ -101,7 +101,8 @@ void mr_strbuf_remap_lines(mr_strbuf *sb, const mr_brdf_model *source, const mr_
     const mr_scene scene = mr_remap_file_scene(scene_options);
     // local=: rows fitted before the gradient local stage (issue 31) came from BOBYQA alone; a file written then
     // has no local= and so does not resume now (its header differs)
-    mr_strbuf_printf(sb, "# remap: strategy=%s max_evaluations=%d xtol=%.17g grid_points=%d starts=%d seed=%lu local=%s",
+    mr_strbuf_printf(sb,
+                     "# remap: strategy=%s max_evaluations=%d xtol=%.17g grid_points=%d starts=%d seed=%lu local=%s",
                      mr_remap_strategy_name(r->strategy), r->max_evaluations, r->xtol, r->grid_points, r->starts,
                      r->seed, mr_local_method_name(r->local_method));
     // Held target parameters are named only when there are some, so files written before --hold still resume.
