@@ -74,6 +74,44 @@ static void digest(const char *name, const mr_scene *scene, int all_models) {
     mr_render_plan_free(plan);
 }
 
+/* An equirectangular sky with some structure and a bright spot, for the environment-lit digests. */
+static mr_image *sky_map(void) {
+    mr_image *map = NULL;
+    if (mr_image_create(32, 16, 3, &map) != MR_OK) exit(3);
+    for (int j = 0; j < 16; j++)
+        for (int i = 0; i < 32; i++)
+            for (int c = 0; c < 3; c++)
+                map->pixels[(j * 32 + i) * 3 + c] =
+                    (float)(0.2 + 0.8 * fabs(sin(0.3 * i + 0.7 * j + c)) + (i == 20 && j == 5 ? 40.0 : 0.0));
+    return map;
+}
+
+/* A bumpy height field over [-1, 1]^2 facing the camera (+z), with UVs: it shadows itself. */
+enum { FIELD = 12 };
+static float field_positions[(FIELD + 1) * (FIELD + 1) * 3], field_uvs[(FIELD + 1) * (FIELD + 1) * 2];
+static uint32_t field_indices[FIELD * FIELD * 6];
+static mr_mesh bumpy_field(void) {
+    for (int j = 0; j <= FIELD; j++)
+        for (int i = 0; i <= FIELD; i++) {
+            const int v = j * (FIELD + 1) + i;
+            const double x = 2.0 * i / FIELD - 1.0, y = 2.0 * j / FIELD - 1.0;
+            field_positions[3 * v] = (float)x;
+            field_positions[3 * v + 1] = (float)y;
+            field_positions[3 * v + 2] = (float)(0.4 * sin(5.0 * x) * cos(4.0 * y));
+            field_uvs[2 * v] = (float)i / FIELD;
+            field_uvs[2 * v + 1] = (float)j / FIELD;
+        }
+    int t = 0;
+    for (int j = 0; j < FIELD; j++)
+        for (int i = 0; i < FIELD; i++) {
+            const uint32_t a = (uint32_t)(j * (FIELD + 1) + i), b = a + 1, c = a + FIELD + 1, d = c + 1;
+            const uint32_t quad[6] = {a, b, d, a, d, c};
+            for (int k = 0; k < 6; k++) field_indices[t++] = quad[k];
+        }
+    return (mr_mesh){.vertex_count = (FIELD + 1) * (FIELD + 1), .positions = field_positions, .uvs = field_uvs,
+                     .triangle_count = 2 * FIELD * FIELD, .indices = field_indices, .double_sided = 1};
+}
+
 int main(int argc, char **argv) {
     const int quick = argc > 1 && strcmp(argv[1], "--quick") == 0;
     const int digests = argc > 1 && strcmp(argv[1], "--digest") == 0;
@@ -104,6 +142,22 @@ int main(int argc, char **argv) {
         digest("fit 512 45", &fit512, 0);
         fit512.threads = 2; // traced by a team, in bands
         digest("fit 512 45, two threads", &fit512, 0);
+        // An environment light (with reflection samples) beside the point light, on the sphere and on a mesh
+        // that shadows itself; one thread and two.
+        mr_image *sky = sky_map();
+        mr_scene lit = fit64;
+        lit.lights[lit.light_count++] = mr_light_environment(sky, 0.5, 30.0, 128);
+        lit.lights[1].reflection_samples = 8;
+        digest("fit 64 45 + environment", &lit, 1);
+        const mr_mesh field = bumpy_field();
+        mr_scene mesh = lit;
+        mesh.shape.type = MR_SHAPE_MESH;
+        mesh.shape.mesh = &field;
+        digest("mesh 64 45 + environment", &mesh, 1);
+        mesh.width = mesh.height = 160;
+        mesh.threads = 2;
+        digest("mesh 160 45 + environment, two threads", &mesh, 0);
+        mr_image_free(sky);
         return 0;
     }
     const int reps = quick ? 5 : 31;

@@ -65,12 +65,18 @@ typedef struct plan_hit {
     size_t env_begin;  /* its environment samples: env_samples[env_begin .. next hit's env_begin - 1] */
     size_t reflection_begin; /* its reflection samples: reflection_samples[reflection_begin .. next hit's - 1] */
     double emission[3]; /* emitted radiance x share (full renders add it) */
-    double tangent[3], bitangent[3], normal[3]; /* the shading frame, world space */
     double uv[2], uv1[2];
-    double share;      /* the hit's share of its pixel: 1, or 1/n^2 for a silhouette sub-pixel ray */
-    double env_share;  /* share x the surface's ambient occlusion: what environment samples are weighted by */
-    struct reflection_frame mirror; /* with reflection samples: the hit's mirror direction and lobe frame */
+    double env_share;  /* the hit's share of its pixel (1, or 1/n^2 for a silhouette sub-pixel ray) x the
+                          surface's ambient occlusion: what environment samples are weighted by */
 } plan_hit;
+
+/* What environment samples need of a hit besides its plan_hit, kept apart (and only by plans with an environment
+ * light) so that a point-light plan's hits are 40 % of the size: fewer pages to fault in, fewer cache lines to
+ * read per render. */
+typedef struct hit_frame {
+    double tangent[3], bitangent[3], normal[3]; /* the shading frame, world space */
+    struct reflection_frame mirror; /* with reflection samples: the hit's mirror direction and lobe frame */
+} hit_frame;
 
 /* A direction drawn around a hit's mirror direction: radiance += f_r(view, light) * weight * cos * env_share. */
 typedef struct reflection_sample {
@@ -88,6 +94,7 @@ struct mr_render_plan {
     int *hit_begin;       /* [lit_pixels + 1]: hits of lit pixel i are hits[hit_begin[i] .. hit_begin[i+1]-1] */
     int hit_count;
     plan_hit *hits;       /* [hit_count + 1]: the last one only holds the end offsets of the sample arrays */
+    hit_frame *frames;    /* [hit_count + 1] with an environment light, else NULL */
     point_sample *point_samples;
     uint16_t *env_samples; /* direction indices into env */
     reflection_sample *reflection_samples;
@@ -329,6 +336,8 @@ typedef struct row_result {
     int emits;        /* some hit has emission */
     plan_hit *hits;
     size_t hit_count, hit_capacity;
+    hit_frame *frames;  /* with an environment light: each hit's frame */
+    size_t frame_capacity;
     point_sample *points;
     size_t point_count, point_capacity;
     uint16_t *env;
@@ -341,6 +350,7 @@ typedef struct row_result {
 static void row_result_free(row_result *row) {
     free(row->pixels);
     free(row->hit_counts);
+    free(row->frames);
     free(row->hits);
     free(row->points);
     free(row->env);
@@ -474,23 +484,27 @@ static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world
         row->reflection_count == reflections_before && !emits)
         return 1;
     if (!reserve((void **)&row->hits, &row->hit_capacity, row->hit_count + 1, sizeof *row->hits)) return 0;
-    plan_hit *kept = &row->hits[row->hit_count++];
-    for (int k = 0; k < 3; k++) {
-        kept->view[k] = hit->view_local[k];
-        kept->tangent[k] = hit->tangent[k];
-        kept->bitangent[k] = hit->bitangent[k];
-        kept->normal[k] = hit->normal[k];
+    if (env->count > 0) {
+        if (!reserve((void **)&row->frames, &row->frame_capacity, row->hit_count + 1, sizeof *row->frames))
+            return 0;
+        hit_frame *frame = &row->frames[row->hit_count];
+        for (int k = 0; k < 3; k++) {
+            frame->tangent[k] = hit->tangent[k];
+            frame->bitangent[k] = hit->bitangent[k];
+            frame->normal[k] = hit->normal[k];
+        }
+        frame->mirror = mirror;
     }
+    plan_hit *kept = &row->hits[row->hit_count++];
+    for (int k = 0; k < 3; k++) kept->view[k] = hit->view_local[k];
     kept->uv[0] = hit->uv[0];
     kept->uv[1] = hit->uv[1];
     kept->uv1[0] = hit->uv1[0];
     kept->uv1[1] = hit->uv1[1];
-    kept->share = share;
     kept->env_share = share * hit->occlusion;
     for (int c = 0; c < 3; c++) kept->emission[c] = emits ? hit->emission[c] * share : 0.0;
     if (kept->emission[0] != 0.0 || kept->emission[1] != 0.0 || kept->emission[2] != 0.0) row->emits = 1;
     kept->material = hit->material;
-    kept->mirror = mirror;
     kept->point_begin = (int)points_before; // row-relative; the plan's concatenation checks the total
     kept->env_begin = env_before;
     kept->reflection_begin = reflections_before;
@@ -705,6 +719,8 @@ static int concatenate_bands(row_result *bands, int band_count, mr_render_plan *
         row_result *band = &bands[0];
         if (!reserve((void **)&band->hits, &band->hit_capacity, hits + 1, sizeof *band->hits)) return 0;
         plan->hits = fit_buffer(band->hits, hits, sizeof *band->hits);
+        if (band->frames != NULL) plan->frames = fit_buffer(band->frames, hits, sizeof *band->frames);
+        band->frames = NULL;
         plan->point_samples = fit_buffer(band->points, points, sizeof *band->points);
         plan->env_samples = fit_buffer(band->env, envs, sizeof *band->env);
         plan->reflection_samples = fit_buffer(band->reflections, reflections, sizeof *band->reflections);
@@ -731,6 +747,7 @@ static int concatenate_bands(row_result *bands, int band_count, mr_render_plan *
         plan->point_samples = malloc((points + 1) * sizeof *plan->point_samples);
         plan->env_samples = malloc((envs + 1) * sizeof *plan->env_samples);
         plan->reflection_samples = malloc((reflections + 1) * sizeof *plan->reflection_samples);
+        if (plan->env.count > 0 && (plan->frames = malloc((hits + 1) * sizeof *plan->frames)) == NULL) return 0;
         if (plan->lit_pixel_index == NULL || plan->hits == NULL || plan->point_samples == NULL ||
             plan->env_samples == NULL || plan->reflection_samples == NULL)
             return 0;
@@ -743,6 +760,8 @@ static int concatenate_bands(row_result *bands, int band_count, mr_render_plan *
             if (band->reflection_count > 0)
                 memcpy(plan->reflection_samples + next_reflection, band->reflections,
                        band->reflection_count * sizeof *band->reflections);
+            if (plan->frames != NULL && band->hit_count > 0)
+                memcpy(plan->frames + next_hit, band->frames, band->hit_count * sizeof *band->frames);
             for (size_t h = 0; h < band->hit_count; h++) {
                 plan_hit *hit = &plan->hits[next_hit + (int)h];
                 *hit = band->hits[h];
@@ -778,6 +797,7 @@ void mr_render_plan_free(mr_render_plan *plan) {
     free(plan->lit_pixel_index);
     free(plan->hit_begin);
     free(plan->hits);
+    free(plan->frames);
     free(plan->point_samples);
     free(plan->env_samples);
     free(plan->reflection_samples);
@@ -910,7 +930,7 @@ size_t mr_render_plan_bytes(const mr_render_plan *plan) {
     size_t pixels = (size_t)plan->scene.width * (size_t)plan->scene.height;
     size_t lit = (size_t)plan->lit_pixels, hits = (size_t)plan->hit_count;
     return sizeof *plan + pixels * sizeof *plan->coverage + (lit + 1) * (sizeof *plan->lit_pixel_index +
-           sizeof *plan->hit_begin) + (hits + 1) * sizeof *plan->hits +
+           sizeof *plan->hit_begin) + (hits + 1) * (sizeof *plan->hits + (plan->frames ? sizeof *plan->frames : 0)) +
            ((size_t)plan->hits[hits].point_begin + 1) * sizeof *plan->point_samples +
            (plan->hits[hits].env_begin + 1) * sizeof *plan->env_samples +
            (plan->hits[hits].reflection_begin + 1) * sizeof *plan->reflection_samples +
@@ -1123,12 +1143,14 @@ static mr_status render_core(const mr_render_plan *plan, int threads, const mr_m
             for (size_t e = hit->env_begin; e < hit[1].env_begin; e++) {
                 const int k = plan->env_samples[e];
                 const double *d = plan->env.direction[k];
-                double light[3] = {vec3_dot(hit->tangent, d), vec3_dot(hit->bitangent, d), vec3_dot(hit->normal, d)};
+                const hit_frame *frame = &plan->frames[h]; // a hit with environment samples has its frame
+                double light[3] = {vec3_dot(frame->tangent, d), vec3_dot(frame->bitangent, d),
+                                   vec3_dot(frame->normal, d)};
                 double cos_share = light[2] * hit->env_share;
                 // With reflection samples: the balance heuristic's share of the pattern, N p / (N p + M q).
                 if (plan->env.mis_npdf != NULL && plan->env.mis_npdf[k] > 0.0) {
                     const double npdf = plan->env.mis_npdf[k];
-                    cos_share *= npdf / (npdf + reflection_density(&plan->env, &hit->mirror, d));
+                    cos_share *= npdf / (npdf + reflection_density(&plan->env, &frame->mirror, d));
                 }
                 double weight[3];
                 for (int c = 0; c < 3; c++) weight[c] = plan->env.weight[k][c] * cos_share;
