@@ -140,10 +140,6 @@ static void camera_ray(const camera_frame *cf, double px, double py, double dir[
     vec3_normalize(dir);
 }
 
-/* Rows per band when a plan is traced by a team (bands are handed out one at a time, so small ones balance the
- * threads; each band's arrays are copied into the plan's once). */
-#define PLAN_BAND_ROWS 4
-
 /* A mesh material's surface maps, prepared for lookups during the plan's creation. */
 typedef struct surface_sampler {
     const mr_surface *surface;
@@ -322,18 +318,15 @@ static int shadowed(const mesh_world *mesh, const hit_record *hit, const double 
 }
 
 
-/* ---- stage 2 over a band of rows of hits, and the plan ------------------------------------------------------ */
+/* ---- stage 2 over a row of hits, and the plan ---------------------------------------------------------------- */
 
-/* What a band of image rows contributes to the plan; bands are traced in parallel and concatenated in order.
- * Sample offsets inside the band's hits are relative to the band until the concatenation (a plan traced as one
- * band, on one thread, takes the band's arrays as its own). */
+/* What one image row contributes to the plan; rows are traced in parallel and concatenated in order. Sample
+ * offsets inside the row's hits are relative to the row until the concatenation. */
 typedef struct row_result {
     int object_pixels;
     int lit;
     int *pixels;      /* [lit] image pixel of each lit pixel */
     int *hit_counts;  /* [lit] hits of each lit pixel */
-    size_t pixel_capacity, count_capacity;
-    int emits;        /* some hit has emission */
     plan_hit *hits;
     size_t hit_count, hit_capacity;
     hit_frame *frames;  /* with an environment light: each hit's frame */
@@ -503,7 +496,6 @@ static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world
     kept->uv1[1] = hit->uv1[1];
     kept->env_share = share * hit->occlusion;
     for (int c = 0; c < 3; c++) kept->emission[c] = emits ? hit->emission[c] * share : 0.0;
-    if (kept->emission[0] != 0.0 || kept->emission[1] != 0.0 || kept->emission[2] != 0.0) row->emits = 1;
     kept->material = hit->material;
     kept->point_begin = (int)points_before; // row-relative; the plan's concatenation checks the total
     kept->env_begin = env_before;
@@ -610,8 +602,8 @@ static void find_highlights(const mr_scene *scene, tracer *tr) {
     tr->highlight_count = kept;
 }
 
-/* Close pixel `pixel` of a band: `covered`, the share of it the object covers (at most 1, up to rounding), and its
- * hits, those the band gained since `first`, which make it a lit pixel. */
+/* Close pixel `pixel` of a row: `covered`, the share of it the object covers (at most 1, up to rounding), and its
+ * hits, those the row gained since `first`, which make it a lit pixel. */
 static void finish_pixel(row_result *row, float *coverage, int pixel, double covered, size_t first) {
     coverage[pixel] = (float)MR_MIN(covered, 1.0);
     if (covered > 0.0) row->object_pixels++;
@@ -625,18 +617,20 @@ static void finish_pixel(row_result *row, float *coverage, int pixel, double cov
 /* Trace row y: pixels well inside or outside the silhouette (all four corners and the centre agree) get one
  * primary ray through their centre; pixels on the silhouette get n x n rays on a regular sub-pixel grid, each
  * weighted 1/n^2, so they are box-filtered like a path tracer's pixels instead of aliased (docs/design.md
- * principle 2: the extra rays go only where the image has an edge). The row's lit pixels and hits are appended
- * to `row`, the band it belongs to; `samples` has room for mr_highlight_max_samples (NULL without highlights).
- * Returns 0 on allocation failure. */
+ * principle 2: the extra rays go only where the image has an edge). Returns 0 on allocation failure. */
 static int trace_row(const tracer *tr, const env_table *env, const unsigned char *corner_hit, int edge_n, int y,
-                     float *coverage, highlight_sample *samples, row_result *row) {
+                     float *coverage, row_result *row) {
     const mr_scene *scene = tr->scene;
     const mesh_world *occluder = scene->shape.type == MR_SHAPE_MESH && !tr->mesh->convex ? tr->mesh : NULL;
     const int width = scene->width;
-    const size_t lit_room = (size_t)row->lit + (size_t)width;
-    if (!reserve((void **)&row->pixels, &row->pixel_capacity, lit_room, sizeof *row->pixels) ||
-        !reserve((void **)&row->hit_counts, &row->count_capacity, lit_room, sizeof *row->hit_counts))
-        return 0;
+    row->pixels = malloc((size_t)width * sizeof *row->pixels);
+    row->hit_counts = malloc((size_t)width * sizeof *row->hit_counts);
+    if (row->pixels == NULL || row->hit_counts == NULL) return 0;
+    highlight_sample *samples = NULL;
+    if (tr->highlight_count > 0) {
+        samples = malloc((size_t)mr_highlight_max_samples(tr->highlight_count) * sizeof *samples);
+        if (samples == NULL) return 0;
+    }
     for (int x = 0; x < width; x++) {
         const int pixel = y * width + x;
         const int sample_count =
@@ -648,7 +642,10 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
             for (int k = 0; k < sample_count; k++) {
                 if (!trace_primary(tr, samples[k].x, samples[k].y, &hit)) continue;
                 covered += samples[k].weight;
-                if (!add_hit(scene, env, occluder, &hit, samples[k].weight, row)) return 0;
+                if (!add_hit(scene, env, occluder, &hit, samples[k].weight, row)) {
+                    free(samples);
+                    return 0;
+                }
             }
             finish_pixel(row, coverage, pixel, covered, first);
             continue;
@@ -667,126 +664,14 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
                 if (n > 1 && !trace_primary(tr, x + (i + 0.5) / n, y + (j + 0.5) / n, &hit)) continue;
                 if (n == 1 && !centre) continue;
                 hits++;
-                if (!add_hit(scene, env, occluder, &hit, weight, row)) return 0;
+                if (!add_hit(scene, env, occluder, &hit, weight, row)) {
+                    free(samples);
+                    return 0;
+                }
             }
         finish_pixel(row, coverage, pixel, hits * weight, first);
     }
-    return 1;
-}
-
-/* Trace rows y0 .. y1 - 1 into `band`. Returns 0 on allocation failure. */
-static int trace_band(const tracer *tr, const env_table *env, const unsigned char *corner_hit, int edge_n, int y0,
-                      int y1, float *coverage, row_result *band) {
-    highlight_sample *samples = NULL;
-    if (tr->highlight_count > 0) {
-        samples = malloc((size_t)mr_highlight_max_samples(tr->highlight_count) * sizeof *samples);
-        if (samples == NULL) return 0;
-    }
-    int ok = 1;
-    for (int y = y0; y < y1 && ok; y++) ok = trace_row(tr, env, corner_hit, edge_n, y, coverage, samples, band);
     free(samples);
-    return ok;
-}
-
-/* Shrink *buffer to `count` elements of `size` bytes and one more (the plan's arrays end with a sentinel or
- * need not be empty); keeps it as it is if realloc fails. */
-static void *fit_buffer(void *buffer, size_t count, size_t size) {
-    void *fitted = realloc(buffer, (count + 1) * size);
-    return fitted != NULL ? fitted : buffer;
-}
-
-/* The plan's hits, samples and lit pixels: the bands' in order, their sample offsets made plan-wide. One band's
- * arrays become the plan's (no copy: a plan's pages are touched once). Returns 0 on allocation failure (what
- * the plan took is freed with it). */
-static int concatenate_bands(row_result *bands, int band_count, mr_render_plan *plan) {
-    size_t lit = 0, hits = 0, points = 0, envs = 0, reflections = 0;
-    for (int b = 0; b < band_count; b++) {
-        lit += (size_t)bands[b].lit;
-        hits += bands[b].hit_count;
-        points += bands[b].point_count;
-        envs += bands[b].env_count;
-        reflections += bands[b].reflection_count;
-        plan->object_pixels += bands[b].object_pixels;
-        plan->shadow_rays += bands[b].shadow_rays;
-        plan->emits |= bands[b].emits;
-    }
-    if (hits >= (size_t)INT_MAX || points > (size_t)INT_MAX) return 0;
-    plan->hit_begin = malloc((lit + 1) * sizeof *plan->hit_begin);
-    if (plan->hit_begin == NULL) return 0;
-    int next_lit = 0, next_hit = 0;
-    size_t next_point = 0, next_env = 0, next_reflection = 0;
-    if (band_count == 1) {
-        row_result *band = &bands[0];
-        if (!reserve((void **)&band->hits, &band->hit_capacity, hits + 1, sizeof *band->hits)) return 0;
-        plan->hits = fit_buffer(band->hits, hits, sizeof *band->hits);
-        if (band->frames != NULL) plan->frames = fit_buffer(band->frames, hits, sizeof *band->frames);
-        band->frames = NULL;
-        plan->point_samples = fit_buffer(band->points, points, sizeof *band->points);
-        plan->env_samples = fit_buffer(band->env, envs, sizeof *band->env);
-        plan->reflection_samples = fit_buffer(band->reflections, reflections, sizeof *band->reflections);
-        plan->lit_pixel_index = fit_buffer(band->pixels, lit, sizeof *band->pixels);
-        band->hits = NULL;
-        band->points = NULL;
-        band->env = NULL;
-        band->reflections = NULL;
-        band->pixels = NULL;
-        if (plan->point_samples == NULL || plan->env_samples == NULL || plan->reflection_samples == NULL ||
-            plan->lit_pixel_index == NULL)
-            return 0;
-        for (int i = 0; i < band->lit; i++) {
-            plan->hit_begin[i] = next_hit;
-            next_hit += band->hit_counts[i];
-        }
-        next_lit = band->lit;
-        next_point = points;
-        next_env = envs;
-        next_reflection = reflections;
-    } else {
-        plan->lit_pixel_index = malloc((lit + 1) * sizeof *plan->lit_pixel_index);
-        plan->hits = malloc((hits + 1) * sizeof *plan->hits);
-        plan->point_samples = malloc((points + 1) * sizeof *plan->point_samples);
-        plan->env_samples = malloc((envs + 1) * sizeof *plan->env_samples);
-        plan->reflection_samples = malloc((reflections + 1) * sizeof *plan->reflection_samples);
-        if (plan->env.count > 0 && (plan->frames = malloc((hits + 1) * sizeof *plan->frames)) == NULL) return 0;
-        if (plan->lit_pixel_index == NULL || plan->hits == NULL || plan->point_samples == NULL ||
-            plan->env_samples == NULL || plan->reflection_samples == NULL)
-            return 0;
-        for (int b = 0; b < band_count; b++) {
-            const row_result *band = &bands[b];
-            if (band->point_count > 0)
-                memcpy(plan->point_samples + next_point, band->points, band->point_count * sizeof *band->points);
-            if (band->env_count > 0)
-                memcpy(plan->env_samples + next_env, band->env, band->env_count * sizeof *band->env);
-            if (band->reflection_count > 0)
-                memcpy(plan->reflection_samples + next_reflection, band->reflections,
-                       band->reflection_count * sizeof *band->reflections);
-            if (plan->frames != NULL && band->hit_count > 0)
-                memcpy(plan->frames + next_hit, band->frames, band->hit_count * sizeof *band->frames);
-            for (size_t h = 0; h < band->hit_count; h++) {
-                plan_hit *hit = &plan->hits[next_hit + (int)h];
-                *hit = band->hits[h];
-                hit->point_begin += (int)next_point;
-                hit->env_begin += next_env;
-                hit->reflection_begin += next_reflection;
-            }
-            for (int i = 0; i < band->lit; i++) {
-                plan->lit_pixel_index[next_lit] = band->pixels[i];
-                plan->hit_begin[next_lit] = next_hit;
-                next_hit += band->hit_counts[i];
-                next_lit++;
-            }
-            next_point += band->point_count;
-            next_env += band->env_count;
-            next_reflection += band->reflection_count;
-        }
-    }
-    plan->hit_begin[next_lit] = next_hit;
-    memset(&plan->hits[next_hit], 0, sizeof plan->hits[next_hit]);
-    plan->hits[next_hit].point_begin = (int)next_point;
-    plan->hits[next_hit].env_begin = next_env;
-    plan->hits[next_hit].reflection_begin = next_reflection;
-    plan->hit_count = next_hit;
-    plan->lit_pixels = next_lit;
     return 1;
 }
 
@@ -868,20 +753,75 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
             corner_hit[(size_t)y * (size_t)(width + 1) + (size_t)x] =
                 (unsigned char)trace_primary(&tr, x, y, NULL);
 
-    // Rows are traced in bands, a band on one thread, and the bands concatenated in image order: the plan, and so
-    // every render, is the same for any thread count. On one thread the whole image is one band.
-    const int band_rows = plan_threads > 1 ? PLAN_BAND_ROWS : height;
-    const int band_count = (height + band_rows - 1) / band_rows;
-#pragma omp parallel for schedule(dynamic, 1) reduction(| : failed) num_threads(plan_threads) if (plan_threads > 1)
-    for (int b = 0; b < band_count; b++)
-        if (!trace_band(&tr, &plan->env, corner_hit, edge_n, b * band_rows, MR_MIN(height, (b + 1) * band_rows),
-                        plan->coverage, &rows[b]))
+#pragma omp parallel for schedule(dynamic, 4) reduction(| : failed) num_threads(plan_threads) if (plan_threads > 1)
+    for (int y = 0; y < height; y++)
+        if (!trace_row(&tr, &plan->env, corner_hit, edge_n, y, plan->coverage, &rows[y]))
             failed = 1;
-    if (failed || !concatenate_bands(rows, band_count, plan)) goto oom;
+    if (failed) goto oom;
+
+    // Concatenate the rows in image order: the plan, and so every render, is the same for any thread count.
+    size_t lit = 0, hits = 0, points = 0, envs = 0, reflections = 0;
+    for (int y = 0; y < height; y++) {
+        lit += (size_t)rows[y].lit;
+        hits += rows[y].hit_count;
+        points += rows[y].point_count;
+        envs += rows[y].env_count;
+        reflections += rows[y].reflection_count;
+        plan->object_pixels += rows[y].object_pixels;
+        plan->shadow_rays += rows[y].shadow_rays;
+    }
+    if (hits >= (size_t)INT_MAX || points > (size_t)INT_MAX) goto oom;
+    plan->lit_pixel_index = malloc((lit + 1) * sizeof *plan->lit_pixel_index);
+    plan->hit_begin = malloc((lit + 1) * sizeof *plan->hit_begin);
+    plan->hits = malloc((hits + 1) * sizeof *plan->hits);
+    plan->point_samples = malloc((points + 1) * sizeof *plan->point_samples);
+    plan->env_samples = malloc((envs + 1) * sizeof *plan->env_samples);
+    plan->reflection_samples = malloc((reflections + 1) * sizeof *plan->reflection_samples);
+    if (plan->env.count > 0 && (plan->frames = malloc((hits + 1) * sizeof *plan->frames)) == NULL) goto oom;
+    if (plan->lit_pixel_index == NULL || plan->hit_begin == NULL || plan->hits == NULL ||
+        plan->point_samples == NULL || plan->env_samples == NULL || plan->reflection_samples == NULL)
+        goto oom;
+    int next_lit = 0, next_hit = 0;
+    size_t next_point = 0, next_env = 0, next_reflection = 0;
+    for (int y = 0; y < height; y++) {
+        const row_result *row = &rows[y];
+        if (row->point_count > 0)
+            memcpy(plan->point_samples + next_point, row->points, row->point_count * sizeof *row->points);
+        if (row->env_count > 0) memcpy(plan->env_samples + next_env, row->env, row->env_count * sizeof *row->env);
+        if (row->reflection_count > 0)
+            memcpy(plan->reflection_samples + next_reflection, row->reflections,
+                   row->reflection_count * sizeof *row->reflections);
+        if (plan->frames != NULL && row->hit_count > 0)
+            memcpy(plan->frames + next_hit, row->frames, row->hit_count * sizeof *row->frames);
+        for (size_t h = 0; h < row->hit_count; h++) {
+            plan_hit *hit = &plan->hits[next_hit + (int)h];
+            *hit = row->hits[h];
+            hit->point_begin += (int)next_point;
+            hit->env_begin += next_env;
+            hit->reflection_begin += next_reflection;
+            if (hit->emission[0] != 0.0 || hit->emission[1] != 0.0 || hit->emission[2] != 0.0) plan->emits = 1;
+        }
+        for (int i = 0; i < row->lit; i++) {
+            plan->lit_pixel_index[next_lit] = row->pixels[i];
+            plan->hit_begin[next_lit] = next_hit;
+            next_hit += row->hit_counts[i];
+            next_lit++;
+        }
+        next_point += row->point_count;
+        next_env += row->env_count;
+        next_reflection += row->reflection_count;
+    }
+    plan->hit_begin[next_lit] = next_hit;
+    memset(&plan->hits[next_hit], 0, sizeof plan->hits[next_hit]);
+    plan->hits[next_hit].point_begin = (int)next_point;
+    plan->hits[next_hit].env_begin = next_env;
+    plan->hits[next_hit].reflection_begin = next_reflection;
+    plan->hit_count = next_hit;
     // The maps were borrowed for the reflection samples' weights; the plan keeps no reference to them.
     free(plan->env.sources);
     plan->env.sources = NULL;
     plan->env.source_count = 0;
+    plan->lit_pixels = next_lit;
     plan->render_threads =
         mr_auto_threads(scene->threads, mr_render_plan_sample_count(plan), MR_RENDER_PARALLEL_SAMPLES);
     for (int y = 0; y < height; y++) row_result_free(&rows[y]);
