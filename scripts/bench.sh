@@ -487,7 +487,9 @@ PY
 # Remaps as users run them (docs/performance.md, bench:remap-processes): whole `matremap remap` processes at the
 # default size, alone and two started together, with the default (automatic) threads, with --threads 2 (a team for
 # every render, as before issue 13), and with OMP_NUM_THREADS=1 (the old workaround). Median of 21 runs each; the
-# pair's figure is each process's own wall time.
+# pair's figure is each process's own wall time. MR_BENCH_PEER=PATH (optional) measures another build's matremap in
+# the same run, in the default row's way, named by MR_BENCH_PEER_LABEL (e.g. the commit before a change, built in a
+# scratch worktree). Then what building the remap's plans costs (tests/bench_plan: the 64² plan, its closer look, 512²).
 bench_remap_processes() {
     echo
     echo "== remap processes: alone and two side by side (whole processes, default size)"
@@ -520,6 +522,19 @@ bench_remap_processes() {
         a=$(OMP_NUM_THREADS=1 alone "${cmd[@]}"); t=$(OMP_NUM_THREADS=1 together "${cmd[@]}")
         printf '| OMP_NUM_THREADS=1 | %.1f | %.1f | %.2f× |\n' "$(awk -v x="$a" 'BEGIN {print x / 1000}')" \
             "$(awk -v x="$t" 'BEGIN {print x / 1000}')" "$(awk -v a="$a" -v t="$t" 'BEGIN {print t / a}')"
+        if [ -n "${MR_BENCH_PEER:-}" ]; then
+            local peer_cmd=("$MR_BENCH_PEER" "${cmd[@]:1}")
+            a=$(alone "${peer_cmd[@]}"); t=$(together "${peer_cmd[@]}")
+            printf '| automatic, peer: %s | %.1f | %.1f | %.2f× |\n' "${MR_BENCH_PEER_LABEL:-$MR_BENCH_PEER}" \
+                "$(awk -v x="$a" 'BEGIN {print x / 1000}')" "$(awk -v x="$t" 'BEGIN {print x / 1000}')" \
+                "$(awk -v a="$a" -v t="$t" 'BEGIN {print t / a}')"
+        fi
+        if [ -x "$root/$build/tests/bench_plan" ]; then
+            echo
+            echo "What building the plans costs, one thread, in-process (\`$build/tests/bench_plan\`; a remap builds the first two):"
+            echo
+            "$root/$build/tests/bench_plan" $quick
+        fi
     } | tee "$out"
 }
 
