@@ -57,7 +57,7 @@ typedef struct highlight_disc_pixels {
 
 /* The discs' samples of every pixel, made once for a render plan: mr_highlight_quadrature_pixel gives what
  * mr_highlight_pixel_samples gives, bit for bit, but each ring sector is placed (and cut up where it straddles
- * pixels) once instead of once for every pixel the disc meets, which was most of a 64^2 plan's cost. Read-only
+ * pixels) once instead of once for every pixel the disc meets (that was a third of a 64^2 plan's cost). Read-only
  * once built: the plan's rows share it. */
 typedef struct highlight_quadrature {
     highlight_disc discs[HIGHLIGHT_MAX_DISCS];
