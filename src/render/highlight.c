@@ -91,15 +91,24 @@ double mr_highlight_disc_rect_area(double cx, double cy, double r, double x0, do
     return MR_MAX(area, 0.0);
 }
 
+/* An angle bounding ring sectors, with its cosine and sine: taken once for the two sectors it bounds. */
+typedef struct sector_angle {
+    double phi, cos_phi, sin_phi;
+} sector_angle;
+
+static sector_angle angle_at(double phi) { return (sector_angle){phi, cos(phi), sin(phi)}; }
+
 /* The bounding box {x0, y0, x1, y1} of the ring sector [ra, rb] x [phi0, phi1] of the disc: its four corners and
  * the outer arc's extremes where it crosses an axis. */
-static void sector_box(const highlight_disc *disc, double ra, double rb, double phi0, double phi1, double box[4]) {
+static void sector_box(const highlight_disc *disc, double ra, double rb, const sector_angle *phi0,
+                       const sector_angle *phi1, double box[4]) {
     box[0] = box[1] = INFINITY;
     box[2] = box[3] = -INFINITY;
-    const double phis[2] = {phi0, phi1}, rs[2] = {ra, rb};
+    const sector_angle *phis[2] = {phi0, phi1};
+    const double rs[2] = {ra, rb};
     for (int a = 0; a < 2; a++)
         for (int b = 0; b < 2; b++) {
-            const double px = disc->cx + rs[b] * cos(phis[a]), py = disc->cy + rs[b] * sin(phis[a]);
+            const double px = disc->cx + rs[b] * phis[a]->cos_phi, py = disc->cy + rs[b] * phis[a]->sin_phi;
             box[0] = MR_MIN(box[0], px);
             box[1] = MR_MIN(box[1], py);
             box[2] = MR_MAX(box[2], px);
@@ -107,7 +116,7 @@ static void sector_box(const highlight_disc *disc, double ra, double rb, double 
         }
     for (int q = 0; q <= 4; q++) { // axis directions 0, pi/2, pi, 3pi/2, 2pi inside the arc
         const double axis = 0.5 * MR_PI * q;
-        if (axis <= phi0 || axis >= phi1) continue;
+        if (axis <= phi0->phi || axis >= phi1->phi) continue;
         const double px = disc->cx + rb * cos(axis), py = disc->cy + rb * sin(axis);
         box[0] = MR_MIN(box[0], px);
         box[1] = MR_MIN(box[1], py);
@@ -132,17 +141,23 @@ typedef struct sector_part {
  * the order their shares are summed: by ln r, then by angle. */
 static void sector_parts(const highlight_disc *disc, const double *radii, int k, double ratio, double step, int j,
                          sector_part parts[SPLIT * SPLIT]) {
+    // The parts' angles are the same at every radius: their sines and cosines are taken once.
+    double cos_phi[SPLIT], sin_phi[SPLIT];
+    for (int b = 0; b < SPLIT; b++) {
+        const double phi = step * (j + (b + 0.5) / SPLIT);
+        cos_phi[b] = cos(phi);
+        sin_phi[b] = sin(phi);
+    }
+    const double half = 0.5 * step / SPLIT, sin_half = sin(half);
     double ra = radii[k];
     for (int a = 0; a < SPLIT; a++, ra *= ratio) {
-        const double rb = a == SPLIT - 1 ? radii[k + 1] : ra * ratio, half = 0.5 * step / SPLIT;
+        const double rb = a == SPLIT - 1 ? radii[k + 1] : ra * ratio;
         const double part = 0.5 * (rb * rb - ra * ra) * (step / SPLIT);
         // the part's centroid: the sectors' samples sit at the centroid of what they cover, so a shading that
         // varies linearly across the pixel is integrated exactly
-        const double rc = 2.0 / 3.0 * (rb * rb * rb - ra * ra * ra) / (rb * rb - ra * ra) * sin(half) / half;
-        for (int b = 0; b < SPLIT; b++) {
-            const double phi = step * (j + (b + 0.5) / SPLIT);
-            parts[a * SPLIT + b] = (sector_part){disc->cx + rc * cos(phi), disc->cy + rc * sin(phi), part};
-        }
+        const double rc = 2.0 / 3.0 * (rb * rb * rb - ra * ra * ra) / (rb * rb - ra * ra) * sin_half / half;
+        for (int b = 0; b < SPLIT; b++)
+            parts[a * SPLIT + b] = (sector_part){disc->cx + rc * cos_phi[b], disc->cy + rc * sin_phi[b], part};
     }
 }
 
@@ -200,10 +215,12 @@ static int disc_samples(const highlight_disc *disc, int x, int y, highlight_samp
         const double ratio = pow(radii[k + 1] / radii[k], 1.0 / SPLIT);
         const int angles = ring_angles(radii[k + 1]);
         const double step = 2.0 * MR_PI / angles;
-        for (int j = 0; j < angles; j++) {
+        sector_angle from = angle_at(step * 0), to;
+        for (int j = 0; j < angles; j++, from = to) {
+            to = angle_at(step * (j + 1));
             // Most sectors lie in one pixel: their bounding box decides without cutting them up.
             double box[4];
-            sector_box(disc, radii[k], radii[k + 1], step * j, step * (j + 1), box);
+            sector_box(disc, radii[k], radii[k + 1], &from, &to, box);
             if (box_misses(box, x, y)) continue; // elsewhere
             if (box_within(box, x, y)) {
                 out[n++] = whole_sector_sample(disc, radii[k], radii[k + 1], step, j);
@@ -259,9 +276,11 @@ static int build_disc_pixels(const highlight_disc *disc, highlight_disc_pixels *
         const double ratio = pow(radii[k + 1] / radii[k], 1.0 / SPLIT);
         const int angles = ring_angles(radii[k + 1]);
         const double step = 2.0 * MR_PI / angles;
-        for (int j = 0; j < angles && ok; j++) {
+        sector_angle from = angle_at(step * 0), to;
+        for (int j = 0; j < angles && ok; j++, from = to) {
+            to = angle_at(step * (j + 1));
             double box[4];
-            sector_box(disc, radii[k], radii[k + 1], step * j, step * (j + 1), box);
+            sector_box(disc, radii[k], radii[k + 1], &from, &to, box);
             int cut = 0; // the parts are made when the first pixel needs them
             sector_part parts[SPLIT * SPLIT];
             for (int p = 0; p < pixels; p++) {
