@@ -514,7 +514,10 @@ PY
 # Remaps as users run them (docs/performance.md, bench:remap-processes): whole `matremap remap` processes at the
 # default size, alone and two started together, with the default (automatic) threads, with --threads 2 (a team for
 # every render, as before issue 13), and with OMP_NUM_THREADS=1 (the old workaround). Median of 21 runs each; the
-# pair's figure is each process's own wall time.
+# pair's figure is each process's own wall time. MR_BENCH_PEER=PATH (optional) measures another build's matremap in
+# the same run, named by MR_BENCH_PEER_LABEL (e.g. the commit before a change, built in a scratch worktree): the
+# default row and the peer's are then measured in turns, run by run, so that both see the same load. Then what
+# building the remap's plans costs (tests/bench_plan: the 64² plan, its closer look, 512²).
 bench_remap_processes() {
     echo
     echo "== remap processes: alone and two side by side (whole processes, default size)"
@@ -530,6 +533,27 @@ bench_remap_processes() {
             cat "$work/pair_a" "$work/pair_b"
         done | median
     }
+    local peer_cmd=("${MR_BENCH_PEER:-}" "${cmd[@]:1}")
+    in_turns() { # alone|together: our command and the peer's in turns; prints both medians, ours first
+        local mode=$1 k
+        : >"$work/turns_ours"
+        : >"$work/turns_peer"
+        for _ in $(seq "$runs"); do
+            for k in ours peer; do
+                local c=("${cmd[@]}")
+                [ "$k" = peer ] && c=("${peer_cmd[@]}")
+                if [ "$mode" = alone ]; then
+                    one_ms "${c[@]}" >>"$work/turns_$k"
+                else
+                    one_ms "${c[@]}" >"$work/pair_a" &
+                    one_ms "${c[@]}" >"$work/pair_b"
+                    wait
+                    cat "$work/pair_a" "$work/pair_b" >>"$work/turns_$k"
+                fi
+            done
+        done
+        echo "$(median <"$work/turns_ours") $(median <"$work/turns_peer")"
+    }
     {
         echo "Measured by \`make bench\` on $(date -u +%Y-%m-%d), $(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), load $(cut -d' ' -f1 /proc/loadavg) at the start:"
         echo "\`${cmd[*]#"$root/"}\` (64², the 45° light), median of $runs whole processes (process start, plan, fit and"
@@ -537,8 +561,13 @@ bench_remap_processes() {
         echo
         echo "| threads | alone (ms) | two together, each (ms) | together / alone |"
         echo "|---|---:|---:|---:|"
-        local a t
-        a=$(alone "${cmd[@]}"); t=$(together "${cmd[@]}")
+        local a t peer_a peer_t
+        if [ -n "${MR_BENCH_PEER:-}" ]; then
+            read -r a peer_a <<<"$(in_turns alone)"
+            read -r t peer_t <<<"$(in_turns together)"
+        else
+            a=$(alone "${cmd[@]}"); t=$(together "${cmd[@]}")
+        fi
         printf '| automatic (default) | %.1f | %.1f | %.2f× |\n' "$(awk -v x="$a" 'BEGIN {print x / 1000}')" \
             "$(awk -v x="$t" 'BEGIN {print x / 1000}')" "$(awk -v a="$a" -v t="$t" 'BEGIN {print t / a}')"
         a=$(alone "${cmd[@]}" --threads 2); t=$(together "${cmd[@]}" --threads 2)
@@ -547,6 +576,19 @@ bench_remap_processes() {
         a=$(OMP_NUM_THREADS=1 alone "${cmd[@]}"); t=$(OMP_NUM_THREADS=1 together "${cmd[@]}")
         printf '| OMP_NUM_THREADS=1 | %.1f | %.1f | %.2f× |\n' "$(awk -v x="$a" 'BEGIN {print x / 1000}')" \
             "$(awk -v x="$t" 'BEGIN {print x / 1000}')" "$(awk -v a="$a" -v t="$t" 'BEGIN {print t / a}')"
+        if [ -n "${MR_BENCH_PEER:-}" ]; then
+            printf '| automatic, peer: %s (in turns with the first row) | %.1f | %.1f | %.2f× |\n' \
+                "${MR_BENCH_PEER_LABEL:-$MR_BENCH_PEER}" "$(awk -v x="$peer_a" 'BEGIN {print x / 1000}')" \
+                "$(awk -v x="$peer_t" 'BEGIN {print x / 1000}')" \
+                "$(awk -v a="$peer_a" -v t="$peer_t" 'BEGIN {print t / a}')"
+        fi
+        if [ -x "$root/$build/tests/bench_plan" ]; then
+            echo
+            echo "What building the plans costs, one thread, in-process (\`$build/tests/bench_plan\`; a remap builds"
+            echo "the first two):"
+            echo
+            "$root/$build/tests/bench_plan" $quick
+        fi
     } | tee "$out"
 }
 

@@ -1392,6 +1392,49 @@ MR_TEST(highlight_quadrature_shares_each_pixel_exactly) {
     free(samples);
 }
 
+MR_TEST(highlight_quadrature_made_once_matches_pixel_by_pixel) {
+    // The plan's quadrature (every pixel's samples made at once) against the definition, pixel by pixel: the same
+    // samples in the same order, bit for bit, for one or two discs anywhere, centres on pixel edges and corners,
+    // shrunk discs, and the pixels around and beyond them.
+    uint64_t rng = 11;
+    highlight_sample *expected = malloc((size_t)mr_highlight_max_samples(2) * sizeof *expected);
+    highlight_sample *got = malloc((size_t)mr_highlight_max_samples(2) * sizeof *got);
+    long pixels_checked = 0;
+    for (int k = 0; k < 60 && expected != NULL && got != NULL; k++) {
+        const double snap = k % 3 == 0 ? 0.5 : 1.0; // every third layout: centres on pixel edges or corners
+        highlight_disc discs[2] = {{10.0 + snap * floor(6.0 * test_random(&rng)) / 2.0,
+                                    10.0 + snap * floor(6.0 * test_random(&rng)) / 2.0, HIGHLIGHT_RADIUS},
+                                   {10.0 + 4.0 * test_random(&rng), 16.0 + test_random(&rng), HIGHLIGHT_RADIUS}};
+        if (k % 3 != 0) {
+            discs[0].cx = 10.0 + 3.0 * test_random(&rng);
+            discs[0].cy = 10.0 + 3.0 * test_random(&rng);
+        }
+        const int count = 1 + k % 2;
+        if (count == 2) { // as find_highlights shrinks them: half the distance between them, at most
+            const double half = 0.5 * hypot(discs[0].cx - discs[1].cx, discs[0].cy - discs[1].cy);
+            discs[0].radius = discs[1].radius = fmin(HIGHLIGHT_RADIUS, half);
+        }
+        highlight_quadrature q;
+        MR_CHECK(mr_highlight_quadrature_build(discs, count, &q));
+        for (int y = 6; y < 21; y++)
+            for (int x = 6; x < 18; x++) {
+                const int n = mr_highlight_pixel_samples(discs, count, x, y, expected);
+                const int m = mr_highlight_quadrature_pixel(&q, x, y, got);
+                int same = n == m;
+                for (int i = 0; same && i < n; i++)
+                    same = memcmp(&expected[i], &got[i], sizeof got[i]) == 0;
+                MR_CHECK_MSG(same, "discs (%g, %g, %g) (%g, %g, %g) x %d, pixel (%d, %d): %d samples, quadrature %d",
+                             discs[0].cx, discs[0].cy, discs[0].radius, discs[1].cx, discs[1].cy, discs[1].radius,
+                             count, x, y, n, m);
+                pixels_checked += n > 0;
+            }
+        mr_highlight_quadrature_free(&q);
+    }
+    MR_CHECK(pixels_checked > 1000);
+    free(expected);
+    free(got);
+}
+
 /* The sum of a render's first channel over the image, times 4096 / pixels: the light a 64^2 image holds, the
  * same at any size when every pixel holds its area's mean radiance. */
 static double image_light(const mr_image *img) {
@@ -1561,6 +1604,7 @@ MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
              MR_TEST_ENTRY(texels_that_are_no_values_are_read_as_documented),
              MR_TEST_ENTRY(closer_look_plan_is_built_once_and_shared),
              MR_TEST_ENTRY(highlight_quadrature_shares_each_pixel_exactly),
+             MR_TEST_ENTRY(highlight_quadrature_made_once_matches_pixel_by_pixel),
              MR_TEST_ENTRY(narrow_highlights_keep_their_energy),
              MR_TEST_ENTRY(threads_follow_the_scene_and_the_work),
              MR_TEST_ENTRY(edge_filtering_measures_the_silhouette),

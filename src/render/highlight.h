@@ -48,6 +48,32 @@ int mr_highlight_pixel_samples(const highlight_disc *discs, int count, int x, in
 /* An upper bound of mr_highlight_pixel_samples' count for `count` discs. */
 int mr_highlight_max_samples(int count);
 
+/* One disc's samples for every pixel of its window, the pixels its bounding square meets. */
+typedef struct highlight_disc_pixels {
+    int x0, y0, nx, ny;        /* the window: pixels x0 .. x0 + nx - 1, y0 .. y0 + ny - 1 */
+    int *begin;                /* [nx ny + 1]: pixel (x0 + i, y0 + j)'s samples: samples[begin[j nx + i] .. next - 1] */
+    highlight_sample *samples;
+} highlight_disc_pixels;
+
+/* The discs' samples of every pixel, made once for a render plan: mr_highlight_quadrature_pixel gives what
+ * mr_highlight_pixel_samples gives, bit for bit, but each ring sector is placed (and cut up where it straddles
+ * pixels) once instead of once for every pixel the disc meets (that was a third of a 64^2 plan's cost). Read-only
+ * once built: the plan's rows share it. */
+typedef struct highlight_quadrature {
+    highlight_disc discs[HIGHLIGHT_MAX_DISCS];
+    int count;
+    highlight_disc_pixels pixels[HIGHLIGHT_MAX_DISCS];
+} highlight_quadrature;
+
+/* Make the quadrature of `count` (at most HIGHLIGHT_MAX_DISCS) discs that do not overlap each other. Returns 1,
+ * or 0 on allocation failure (then *q holds nothing to free). */
+int mr_highlight_quadrature_build(const highlight_disc *discs, int count, highlight_quadrature *q);
+
+/* mr_highlight_pixel_samples of the quadrature's discs. */
+int mr_highlight_quadrature_pixel(const highlight_quadrature *q, int x, int y, highlight_sample *out);
+
+void mr_highlight_quadrature_free(highlight_quadrature *q);
+
 /* The area of the disc (cx, cy, r) inside the rectangle [x0, x1] x [y0, y1], in closed form. */
 double mr_highlight_disc_rect_area(double cx, double cy, double r, double x0, double y0, double x1, double y1);
 

@@ -65,12 +65,18 @@ typedef struct plan_hit {
     size_t env_begin;  /* its environment samples: env_samples[env_begin .. next hit's env_begin - 1] */
     size_t reflection_begin; /* its reflection samples: reflection_samples[reflection_begin .. next hit's - 1] */
     double emission[3]; /* emitted radiance x share (full renders add it) */
-    double tangent[3], bitangent[3], normal[3]; /* the shading frame, world space */
     double uv[2], uv1[2];
-    double share;      /* the hit's share of its pixel: 1, or 1/n^2 for a silhouette sub-pixel ray */
-    double env_share;  /* share x the surface's ambient occlusion: what environment samples are weighted by */
-    struct reflection_frame mirror; /* with reflection samples: the hit's mirror direction and lobe frame */
+    double env_share;  /* the hit's share of its pixel (1, or 1/n^2 for a silhouette sub-pixel ray) x the
+                          surface's ambient occlusion: what environment samples are weighted by */
 } plan_hit;
+
+/* What environment samples need of a hit besides its plan_hit, kept apart (and only by plans with an environment
+ * light) so that a point-light plan's hits are 40 % of the size: fewer pages to fault in, fewer cache lines to
+ * read per render. */
+typedef struct hit_frame {
+    double tangent[3], bitangent[3], normal[3]; /* the shading frame, world space */
+    struct reflection_frame mirror; /* with reflection samples: the hit's mirror direction and lobe frame */
+} hit_frame;
 
 /* A direction drawn around a hit's mirror direction: radiance += f_r(view, light) * weight * cos * env_share. */
 typedef struct reflection_sample {
@@ -88,6 +94,7 @@ struct mr_render_plan {
     int *hit_begin;       /* [lit_pixels + 1]: hits of lit pixel i are hits[hit_begin[i] .. hit_begin[i+1]-1] */
     int hit_count;
     plan_hit *hits;       /* [hit_count + 1]: the last one only holds the end offsets of the sample arrays */
+    hit_frame *frames;    /* [hit_count + 1] with an environment light, else NULL */
     point_sample *point_samples;
     uint16_t *env_samples; /* direction indices into env */
     reflection_sample *reflection_samples;
@@ -148,6 +155,7 @@ typedef struct tracer {
     const surface_sampler *surfaces;
     int highlight_count;                              /* discs around point-light highlights (spheres only) */
     highlight_disc highlights[HIGHLIGHT_MAX_DISCS];
+    highlight_quadrature quadrature;                  /* their pixels' samples, made once per plan */
 } tracer;
 
 static void to_local(const hit_record *hit, const double world[3], double local[3]) {
@@ -321,6 +329,8 @@ typedef struct row_result {
     int *hit_counts;  /* [lit] hits of each lit pixel */
     plan_hit *hits;
     size_t hit_count, hit_capacity;
+    hit_frame *frames;  /* with an environment light: each hit's frame */
+    size_t frame_capacity;
     point_sample *points;
     size_t point_count, point_capacity;
     uint16_t *env;
@@ -333,6 +343,7 @@ typedef struct row_result {
 static void row_result_free(row_result *row) {
     free(row->pixels);
     free(row->hit_counts);
+    free(row->frames);
     free(row->hits);
     free(row->points);
     free(row->env);
@@ -466,22 +477,26 @@ static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world
         row->reflection_count == reflections_before && !emits)
         return 1;
     if (!reserve((void **)&row->hits, &row->hit_capacity, row->hit_count + 1, sizeof *row->hits)) return 0;
-    plan_hit *kept = &row->hits[row->hit_count++];
-    for (int k = 0; k < 3; k++) {
-        kept->view[k] = hit->view_local[k];
-        kept->tangent[k] = hit->tangent[k];
-        kept->bitangent[k] = hit->bitangent[k];
-        kept->normal[k] = hit->normal[k];
+    if (env->count > 0) {
+        if (!reserve((void **)&row->frames, &row->frame_capacity, row->hit_count + 1, sizeof *row->frames))
+            return 0;
+        hit_frame *frame = &row->frames[row->hit_count];
+        for (int k = 0; k < 3; k++) {
+            frame->tangent[k] = hit->tangent[k];
+            frame->bitangent[k] = hit->bitangent[k];
+            frame->normal[k] = hit->normal[k];
+        }
+        frame->mirror = mirror;
     }
+    plan_hit *kept = &row->hits[row->hit_count++];
+    for (int k = 0; k < 3; k++) kept->view[k] = hit->view_local[k];
     kept->uv[0] = hit->uv[0];
     kept->uv[1] = hit->uv[1];
     kept->uv1[0] = hit->uv1[0];
     kept->uv1[1] = hit->uv1[1];
-    kept->share = share;
     kept->env_share = share * hit->occlusion;
     for (int c = 0; c < 3; c++) kept->emission[c] = emits ? hit->emission[c] * share : 0.0;
     kept->material = hit->material;
-    kept->mirror = mirror;
     kept->point_begin = (int)points_before; // row-relative; the plan's concatenation checks the total
     kept->env_begin = env_before;
     kept->reflection_begin = reflections_before;
@@ -619,7 +634,7 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
     for (int x = 0; x < width; x++) {
         const int pixel = y * width + x;
         const int sample_count =
-            samples ? mr_highlight_pixel_samples(tr->highlights, tr->highlight_count, x, y, samples) : -1;
+            samples ? mr_highlight_quadrature_pixel(&tr->quadrature, x, y, samples) : -1;
         if (sample_count >= 0) { // around a highlight: the quadrature of highlight.h instead of the centre
             size_t first = row->hit_count;
             double covered = 0.0;
@@ -667,6 +682,7 @@ void mr_render_plan_free(mr_render_plan *plan) {
     free(plan->lit_pixel_index);
     free(plan->hit_begin);
     free(plan->hits);
+    free(plan->frames);
     free(plan->point_samples);
     free(plan->env_samples);
     free(plan->reflection_samples);
@@ -693,6 +709,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     row_result *rows = calloc((size_t)height, sizeof *rows);
     int failed = 0;
     if (plan == NULL || corner_hit == NULL || rows == NULL) goto oom;
+    if (!mr_highlight_quadrature_build(tr.highlights, tr.highlight_count, &tr.quadrature)) goto oom;
     atomic_init(&plan->zoomed, NULL);
     plan->scene = *scene;
     plan->coverage = calloc((size_t)width * (size_t)height, sizeof *plan->coverage);
@@ -760,6 +777,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     plan->point_samples = malloc((points + 1) * sizeof *plan->point_samples);
     plan->env_samples = malloc((envs + 1) * sizeof *plan->env_samples);
     plan->reflection_samples = malloc((reflections + 1) * sizeof *plan->reflection_samples);
+    if (plan->env.count > 0 && (plan->frames = malloc((hits + 1) * sizeof *plan->frames)) == NULL) goto oom;
     if (plan->lit_pixel_index == NULL || plan->hit_begin == NULL || plan->hits == NULL ||
         plan->point_samples == NULL || plan->env_samples == NULL || plan->reflection_samples == NULL)
         goto oom;
@@ -773,6 +791,8 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
         if (row->reflection_count > 0)
             memcpy(plan->reflection_samples + next_reflection, row->reflections,
                    row->reflection_count * sizeof *row->reflections);
+        if (plan->frames != NULL && row->hit_count > 0)
+            memcpy(plan->frames + next_hit, row->frames, row->hit_count * sizeof *row->frames);
         for (size_t h = 0; h < row->hit_count; h++) {
             plan_hit *hit = &plan->hits[next_hit + (int)h];
             *hit = row->hits[h];
@@ -808,6 +828,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     free(rows);
     free(corner_hit);
     free(surfaces);
+    mr_highlight_quadrature_free(&tr.quadrature);
     *out = plan;
     return MR_OK;
 
@@ -819,6 +840,7 @@ fail:
     free(rows);
     free(corner_hit);
     free(surfaces);
+    mr_highlight_quadrature_free(&tr.quadrature);
     mr_render_plan_free(plan);
     return status;
 }
@@ -848,7 +870,7 @@ size_t mr_render_plan_bytes(const mr_render_plan *plan) {
     size_t pixels = (size_t)plan->scene.width * (size_t)plan->scene.height;
     size_t lit = (size_t)plan->lit_pixels, hits = (size_t)plan->hit_count;
     return sizeof *plan + pixels * sizeof *plan->coverage + (lit + 1) * (sizeof *plan->lit_pixel_index +
-           sizeof *plan->hit_begin) + (hits + 1) * sizeof *plan->hits +
+           sizeof *plan->hit_begin) + (hits + 1) * (sizeof *plan->hits + (plan->frames ? sizeof *plan->frames : 0)) +
            ((size_t)plan->hits[hits].point_begin + 1) * sizeof *plan->point_samples +
            (plan->hits[hits].env_begin + 1) * sizeof *plan->env_samples +
            (plan->hits[hits].reflection_begin + 1) * sizeof *plan->reflection_samples +
@@ -1061,12 +1083,14 @@ static mr_status render_core(const mr_render_plan *plan, int threads, const mr_m
             for (size_t e = hit->env_begin; e < hit[1].env_begin; e++) {
                 const int k = plan->env_samples[e];
                 const double *d = plan->env.direction[k];
-                double light[3] = {vec3_dot(hit->tangent, d), vec3_dot(hit->bitangent, d), vec3_dot(hit->normal, d)};
+                const hit_frame *frame = &plan->frames[h]; // a hit with environment samples has its frame
+                double light[3] = {vec3_dot(frame->tangent, d), vec3_dot(frame->bitangent, d),
+                                   vec3_dot(frame->normal, d)};
                 double cos_share = light[2] * hit->env_share;
                 // With reflection samples: the balance heuristic's share of the pattern, N p / (N p + M q).
                 if (plan->env.mis_npdf != NULL && plan->env.mis_npdf[k] > 0.0) {
                     const double npdf = plan->env.mis_npdf[k];
-                    cos_share *= npdf / (npdf + reflection_density(&plan->env, &hit->mirror, d));
+                    cos_share *= npdf / (npdf + reflection_density(&plan->env, &frame->mirror, d));
                 }
                 double weight[3];
                 for (int c = 0; c < 3; c++) weight[c] = plan->env.weight[k][c] * cos_share;
