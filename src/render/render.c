@@ -100,6 +100,9 @@ struct mr_render_plan {
      * first, installed with a compare-and-swap (a thread that loses frees its copy), freed with this plan. */
     _Atomic(struct mr_render_plan *) zoomed;
     double zoom;           /* of a plan made by mr_render_plan_zoomed: its zoom factor */
+    /* The point samples as structure of arrays for batched renders (point_soa below): built on first use like
+     * `zoomed`, freed with this plan. */
+    _Atomic(struct point_soa *) point_soa;
 };
 
 
@@ -660,9 +663,23 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
     return 1;
 }
 
+/* The plan's point samples in plan order as structure of arrays, what a batched render reads: sample s is lit from
+ * light[.][s] with weight[.][s] and seen from view[.][s] (its hit's view, repeated for each of the hit's samples). */
+typedef struct point_soa {
+    double *view[3], *light[3], *weight[3]; /* x, y, z (view, light) and R, G, B (weight) arrays */
+    double *block;                          /* the one allocation all nine arrays live in */
+} point_soa;
+
+static void point_soa_free(point_soa *soa) {
+    if (soa == NULL) return;
+    free(soa->block);
+    free(soa);
+}
+
 void mr_render_plan_free(mr_render_plan *plan) {
     if (plan == NULL) return;
     mr_render_plan_free(atomic_load(&plan->zoomed));
+    point_soa_free(atomic_load(&plan->point_soa));
     free(plan->coverage);
     free(plan->lit_pixel_index);
     free(plan->hit_begin);
@@ -694,6 +711,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     int failed = 0;
     if (plan == NULL || corner_hit == NULL || rows == NULL) goto oom;
     atomic_init(&plan->zoomed, NULL);
+    atomic_init(&plan->point_soa, NULL);
     plan->scene = *scene;
     plan->coverage = calloc((size_t)width * (size_t)height, sizeof *plan->coverage);
     if (plan->coverage == NULL) goto oom;
@@ -854,7 +872,8 @@ size_t mr_render_plan_bytes(const mr_render_plan *plan) {
            (plan->hits[hits].reflection_begin + 1) * sizeof *plan->reflection_samples +
            (size_t)plan->env.count * (sizeof *plan->env.direction + sizeof *plan->env.weight +
                                       (plan->env.mis_npdf ? sizeof *plan->env.mis_npdf : 0)) +
-           mr_mesh_world_bytes(&plan->mesh) + (zoomed ? mr_render_plan_bytes(zoomed) : 0);
+           mr_mesh_world_bytes(&plan->mesh) + (zoomed ? mr_render_plan_bytes(zoomed) : 0) +
+           (atomic_load(&plan->point_soa) ? 9 * (size_t)plan->hits[hits].point_begin * sizeof(double) : 0);
 }
 
 mr_status mr_render_plan_zoomed(const mr_render_plan *plan, double zoom, const mr_render_plan **out) {
@@ -1003,8 +1022,109 @@ static mr_status material_state_init(const mr_material_binding *material, int in
 /* Every render: `full` alone, or either or both of `diffuse` and `specular`, with one material for every hit
  * (count 1) or materials[hit's material]. Each lit pixel sums its hits' samples in plan order (the same for any
  * thread count); a textured material prepares the BRDF state per hit. */
+/* The plan's point samples as structure of arrays (point_soa), built by the first render that asks (any thread;
+ * the first to finish installs its copy with a compare-and-swap, a loser frees its own). NULL when out of memory:
+ * the caller then takes the per-sample loop, which needs nothing more. */
+static const point_soa *plan_point_soa(const mr_render_plan *plan) {
+    // The plan is const to its users; this cache slot changes, atomically (as `zoomed`, mr_render_plan_zoomed).
+    _Atomic(point_soa *) *slot = &((mr_render_plan *)plan)->point_soa;
+    point_soa *made = atomic_load_explicit(slot, memory_order_acquire);
+    if (made != NULL) return made;
+    const size_t count = (size_t)plan->hits[plan->hit_count].point_begin;
+    made = calloc(1, sizeof *made);
+    double *block = made ? malloc((9 * count + 1) * sizeof *block) : NULL;
+    if (block == NULL) {
+        free(made);
+        return NULL;
+    }
+    made->block = block;
+    for (int k = 0; k < 3; k++) {
+        made->view[k] = block + (size_t)k * count;
+        made->light[k] = block + (size_t)(3 + k) * count;
+        made->weight[k] = block + (size_t)(6 + k) * count;
+    }
+    for (int h = 0; h < plan->hit_count; h++) {
+        const plan_hit *hit = &plan->hits[h];
+        for (int s = hit->point_begin; s < hit[1].point_begin; s++)
+            for (int k = 0; k < 3; k++) {
+                made->view[k][s] = hit->view[k];
+                made->light[k][s] = plan->point_samples[s].light[k];
+                made->weight[k][s] = plan->point_samples[s].weight[k];
+            }
+    }
+    point_soa *expected = NULL;
+    if (!atomic_compare_exchange_strong_explicit(slot, &expected, made, memory_order_acq_rel, memory_order_acquire)) {
+        point_soa_free(made); // another thread installed its copy first
+        made = expected;
+    }
+    return made;
+}
+
+/* Lit pixels per task of a batched render, and point samples per evaluated batch. The pixels are cut into fixed
+ * blocks and each block into batches from its first sample on, whatever the thread count, so every image is the
+ * same for any number of threads (and a pair's value does not depend on its batch anyway: brdf.h). */
+#define RENDER_BATCH_PIXELS 64
+#define RENDER_BATCH_SAMPLES 256
+
+/* render_core for one uniform material over point samples only: the model's eval_batch over each block's samples
+ * in batches, then each lit pixel sums its hits' samples in plan order with the per-sample loop's arithmetic. */
+static void render_batched(const mr_render_plan *plan, const point_soa *soa, int threads, const mr_brdf_model *model,
+                           const void *state, int vector, mr_image *full, mr_image *diffuse, mr_image *specular) {
+    const int lit = plan->lit_pixels, blocks = (lit + RENDER_BATCH_PIXELS - 1) / RENDER_BATCH_PIXELS;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1)
+    for (int b = 0; b < blocks; b++) {
+        double fd[3][RENDER_BATCH_SAMPLES], fs[3][RENDER_BATCH_SAMPLES];
+        const int first = b * RENDER_BATCH_PIXELS, end = MR_MIN(lit, first + RENDER_BATCH_PIXELS);
+        const int samples_end = plan->hits[plan->hit_begin[end]].point_begin;
+        int batch_begin = plan->hits[plan->hit_begin[first]].point_begin, batch_end = batch_begin;
+        for (int i = first; i < end; i++) {
+            double sum_f[3] = {0.0, 0.0, 0.0}, sum_d[3] = {0.0, 0.0, 0.0}, sum_s[3] = {0.0, 0.0, 0.0};
+            for (int h = plan->hit_begin[i]; h < plan->hit_begin[i + 1]; h++) {
+                const plan_hit *hit = &plan->hits[h];
+                for (int s = hit->point_begin; s < hit[1].point_begin; s++) {
+                    if (s >= batch_end) {
+                        batch_begin = s;
+                        batch_end = MR_MIN(samples_end, s + RENDER_BATCH_SAMPLES);
+                        const mr_brdf_batch batch = {
+                            batch_end - batch_begin,
+                            {soa->view[0] + s, soa->view[1] + s, soa->view[2] + s},
+                            {soa->light[0] + s, soa->light[1] + s, soa->light[2] + s},
+                            {fd[0], fd[1], fd[2]},
+                            {fs[0], fs[1], fs[2]},
+                        };
+                        mr_brdf_eval_batch(model, state, &batch, vector);
+                    }
+                    const int j = s - batch_begin;
+                    // accumulate()'s arithmetic, in the same order.
+                    for (int c = 0; c < 3; c++) {
+                        const double weight = soa->weight[c][s];
+                        if (full) {
+                            sum_f[c] += (fd[c][j] + fs[c][j]) * weight;
+                        } else {
+                            if (diffuse) sum_d[c] += fd[c][j] * weight;
+                            if (specular) sum_s[c] += fs[c][j] * weight;
+                        }
+                    }
+                }
+                if (full && plan->emits)
+                    for (int c = 0; c < 3; c++) sum_f[c] += hit->emission[c];
+            }
+            size_t pixel = (size_t)plan->lit_pixel_index[i];
+            if (full) {
+                double uncovered = 1.0 - plan->coverage[pixel];
+                for (int c = 0; c < 3; c++)
+                    full->pixels[pixel * 3 + c] = (float)(sum_f[c] + plan->scene.background[c] * uncovered);
+            }
+            for (int c = 0; c < 3; c++) {
+                if (diffuse) diffuse->pixels[pixel * 3 + c] = (float)sum_d[c];
+                if (specular) specular->pixels[pixel * 3 + c] = (float)sum_s[c];
+            }
+        }
+    }
+}
+
 static mr_status render_core(const mr_render_plan *plan, int threads, const mr_material_binding *materials,
-                             int count, mr_image *full, mr_image *diffuse, mr_image *specular) {
+                             int count, mr_image *full, mr_image *diffuse, mr_image *specular, mr_render_path path) {
     mr_status status = check_target(plan, full, "output");
     if (status == MR_OK) status = check_target(plan, diffuse, "diffuse");
     if (status == MR_OK) status = check_target(plan, specular, "specular");
@@ -1031,10 +1151,26 @@ static mr_status render_core(const mr_render_plan *plan, int threads, const mr_m
     if (diffuse) fill_unlit(plan, diffuse, 0);
     if (specular) fill_unlit(plan, specular, 0);
 
+    if (threads <= 0) threads = plan->render_threads;
+    // One material without maps over point samples alone (the fit scene, every render of the optimiser's loop):
+    // batched, the model's eval_batch over the samples as structure of arrays.
+    const size_t env_samples = plan->hits[plan->hit_count].env_begin;
+    const size_t reflection_samples = plan->hits[plan->hit_count].reflection_begin;
+    if (path != MR_RENDER_PATH_PER_SAMPLE && used == 1 && states[0].binding_count == 0 && env_samples == 0 &&
+        reflection_samples == 0) {
+        const point_soa *soa = plan_point_soa(plan);
+        if (soa != NULL) {
+            const int vector = path == MR_RENDER_PATH_AUTO ? mr_brdf_batch_vector_default()
+                                                           : path == MR_RENDER_PATH_BATCH_VECTOR;
+            render_batched(plan, soa, threads, states[0].model, states[0].shared.bytes, vector, full, diffuse,
+                           specular);
+            return MR_OK;
+        }
+    }
+
     const int lit = plan->lit_pixels;
     // Pixels cost from one BRDF evaluation (a point light) to N * edge_samples^2 (an environment on the
     // silhouette): small dynamic chunks keep both threads busy. The order inside a pixel is fixed.
-    if (threads <= 0) threads = plan->render_threads;
 #pragma omp parallel for schedule(dynamic, 64) num_threads(threads) if (threads > 1)
     for (int i = 0; i < lit; i++) {
         double sum_f[3] = {0.0, 0.0, 0.0}, sum_d[3] = {0.0, 0.0, 0.0}, sum_s[3] = {0.0, 0.0, 0.0};
@@ -1102,7 +1238,7 @@ static mr_status render_one(const mr_render_plan *plan, int threads, const mr_br
                             const double *values, const mr_param_textures *textures, mr_image *full,
                             mr_image *diffuse, mr_image *specular) {
     mr_material_binding material = {model, values, textures};
-    return render_core(plan, threads, &material, 1, full, diffuse, specular);
+    return render_core(plan, threads, &material, 1, full, diffuse, specular, MR_RENDER_PATH_AUTO);
 }
 
 int mr_render_plan_material_count(const mr_render_plan *plan) {
@@ -1114,9 +1250,9 @@ mr_status mr_render_materials_into(const mr_render_plan *plan, const mr_material
     if (plan == NULL || materials == NULL || image == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan, materials or image");
     switch (component) {
-    case MR_COMPONENT_FULL: return render_core(plan, 0, materials, count, image, NULL, NULL);
-    case MR_COMPONENT_DIFFUSE: return render_core(plan, 0, materials, count, NULL, image, NULL);
-    case MR_COMPONENT_SPECULAR: return render_core(plan, 0, materials, count, NULL, NULL, image);
+    case MR_COMPONENT_FULL: return render_core(plan, 0, materials, count, image, NULL, NULL, MR_RENDER_PATH_AUTO);
+    case MR_COMPONENT_DIFFUSE: return render_core(plan, 0, materials, count, NULL, image, NULL, MR_RENDER_PATH_AUTO);
+    case MR_COMPONENT_SPECULAR: return render_core(plan, 0, materials, count, NULL, NULL, image, MR_RENDER_PATH_AUTO);
     default: return mr_fail(MR_ERR_INVALID_ARG, "render: unknown component %d", (int)component);
     }
 }
@@ -1207,4 +1343,17 @@ mr_status mr_render_textured(const mr_render_plan *plan, const mr_brdf_model *mo
 mr_status mr_render(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
                     mr_component component, mr_image **out) {
     return mr_render_textured(plan, model, values, NULL, component, out);
+}
+
+mr_status mr_render_into_path(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
+                              const double *values, mr_component component, mr_image *image, mr_render_path path) {
+    if (plan == NULL || model == NULL || values == NULL || image == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan, model, values or image");
+    mr_material_binding material = {model, values, NULL};
+    switch (component) {
+    case MR_COMPONENT_FULL: return render_core(plan, threads, &material, 1, image, NULL, NULL, path);
+    case MR_COMPONENT_DIFFUSE: return render_core(plan, threads, &material, 1, NULL, image, NULL, path);
+    case MR_COMPONENT_SPECULAR: return render_core(plan, threads, &material, 1, NULL, NULL, image, path);
+    default: return mr_fail(MR_ERR_INVALID_ARG, "render: unknown component %d", (int)component);
+    }
 }
