@@ -234,21 +234,8 @@ static void mf_eval(const void *state_bytes, const double wi[3], const double wo
     }
 }
 
-/* mr_mf_D's value for a constant distribution, with mr_batch_exp / mr_batch_pow for libm's exp / pow. */
-MR_BATCH_INLINE double mf_batch_D(const mr_mf_dist dist, double alpha, const mr_brdf_geom *g, const int fused) {
-    const double a2 = alpha * alpha, c2 = g->cos_h * g->cos_h;
-    if (dist == MR_MF_BECKMANN) return mr_batch_exp(-g->tan2_h / a2, fused) / (MR_PI * a2 * c2 * c2);
-    if (dist == MR_MF_GGX) {
-        const double root = a2 * c2 + g->sin2_h;
-        return a2 / (MR_PI * root * root);
-    }
-    const double n = 2.0 / a2 - 2.0;
-    const double p = n > 0.0 ? mr_batch_pow(g->cos_h, n, fused) : 1.0;
-    return (MR_MAX(n, 0.0) + 2.0) * (0.5 * MR_INV_PI) * p;
-}
-
 /* eval over a batch for one distribution and Fresnel mode (constants in each call below, so each of the twelve
- * loops is specialised): mf_eval's operations, mr_mf_dg with mf_batch_D. */
+ * loops is specialised): mf_eval's operations, mr_batch_mf_dg for mr_mf_dg. */
 MR_BATCH_INLINE void mf_batch_loop(const mf_state *state, const mr_brdf_batch *batch, const mr_mf_dist dist,
                                    const mf_fresnel fresnel, const int fused) {
     const double alpha = state->alpha, ior = state->ior;
@@ -265,11 +252,7 @@ MR_BATCH_INLINE void mf_batch_loop(const mf_state *state, const mr_brdf_batch *b
         if (fresnel == MF_PLASTIC)
             transmit = (1.0 - mr_fresnel_dielectric(g.cos_i, ior, NULL)) *
                        (1.0 - mr_fresnel_dielectric(g.cos_o, ior, NULL));
-        const double D = mf_batch_D(dist, alpha, &g, fused);
-        const double Gi = mr_mf_G1(dist, alpha, g.cos_i, g.sin2_i, NULL);
-        const double Go = mr_mf_G1(dist, alpha, g.cos_o, g.sin2_o, NULL);
-        const double inv = 1.0 / (4.0 * g.cos_i * g.cos_o);
-        const double dg = (lit & (D * g.cos_h >= 1e-20)) ? D * Gi * Go * inv : 0.0;
+        const double dg = lit ? mr_batch_mf_dg(dist, alpha, &g, 1, fused) : 0.0;
         double f0 = r0, f1 = r1, f2 = r2; /* per channel: the factor of dg */
         if (fresnel == MF_SCHLICK) {
             const double w = mr_schlick_weight(g.dot_h);
