@@ -668,11 +668,14 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
 typedef struct point_soa {
     double *view[3], *light[3], *weight[3]; /* x, y, z (view, light) and R, G, B (weight) arrays */
     double *block;                          /* the one allocation all nine arrays live in */
+    int *pixel_begin; /* [lit_pixels + 1]: lit pixel i's samples are [pixel_begin[i], pixel_begin[i + 1]) (its hits'
+                         samples follow each other in plan order, so a render need not walk the hits) */
 } point_soa;
 
 static void point_soa_free(point_soa *soa) {
     if (soa == NULL) return;
     free(soa->block);
+    free(soa->pixel_begin);
     free(soa);
 }
 
@@ -873,7 +876,8 @@ size_t mr_render_plan_bytes(const mr_render_plan *plan) {
            (size_t)plan->env.count * (sizeof *plan->env.direction + sizeof *plan->env.weight +
                                       (plan->env.mis_npdf ? sizeof *plan->env.mis_npdf : 0)) +
            mr_mesh_world_bytes(&plan->mesh) + (zoomed ? mr_render_plan_bytes(zoomed) : 0) +
-           (atomic_load(&plan->point_soa) ? 9 * (size_t)plan->hits[hits].point_begin * sizeof(double) : 0);
+           (atomic_load(&plan->point_soa) ? 9 * (size_t)plan->hits[hits].point_begin * sizeof(double) +
+                                                (lit + 1) * sizeof(int) : 0);
 }
 
 mr_status mr_render_plan_zoomed(const mr_render_plan *plan, double zoom, const mr_render_plan **out) {
@@ -1033,11 +1037,15 @@ static const point_soa *plan_point_soa(const mr_render_plan *plan) {
     const size_t count = (size_t)plan->hits[plan->hit_count].point_begin;
     made = calloc(1, sizeof *made);
     double *block = made ? malloc((9 * count + 1) * sizeof *block) : NULL;
-    if (block == NULL) {
+    int *pixel_begin = block ? malloc(((size_t)plan->lit_pixels + 1) * sizeof *pixel_begin) : NULL;
+    if (pixel_begin == NULL) {
+        free(block);
         free(made);
         return NULL;
     }
     made->block = block;
+    made->pixel_begin = pixel_begin;
+    for (int i = 0; i <= plan->lit_pixels; i++) pixel_begin[i] = plan->hits[plan->hit_begin[i]].point_begin;
     for (int k = 0; k < 3; k++) {
         made->view[k] = block + (size_t)k * count;
         made->light[k] = block + (size_t)(3 + k) * count;
@@ -1066,60 +1074,100 @@ static const point_soa *plan_point_soa(const mr_render_plan *plan) {
 #define RENDER_BATCH_PIXELS 64
 #define RENDER_BATCH_SAMPLES 256
 
-/* render_core for one uniform material over point samples only: the model's eval_batch over each block's samples
- * in batches, then each lit pixel sums its hits' samples in plan order with the per-sample loop's arithmetic. */
+/* One block of lit pixels [first, end) of a batched render, for the parts asked for (constants in each call of
+ * render_batched, so that the sums stay in registers): the model's eval_batch over the block's samples in batches,
+ * then each lit pixel sums its samples in plan order with accumulate()'s arithmetic (and, where the surface emits,
+ * each hit's emission after its samples, as the per-sample loop does). */
+static inline __attribute__((always_inline)) void render_block(const mr_render_plan *plan, const point_soa *soa,
+                                                               const mr_brdf_model *model, const void *state,
+                                                               int vector, int first, int end, mr_image *full,
+                                                               mr_image *diffuse, mr_image *specular,
+                                                               const int want_full, const int want_diffuse,
+                                                               const int want_specular) {
+    double fd[3][RENDER_BATCH_SAMPLES], fs[3][RENDER_BATCH_SAMPLES];
+    const double *const w0 = soa->weight[0], *const w1 = soa->weight[1], *const w2 = soa->weight[2];
+    const int samples_end = soa->pixel_begin[end];
+    int batch_begin = soa->pixel_begin[first], batch_end = batch_begin;
+    for (int i = first; i < end; i++) {
+        double f0 = 0.0, f1 = 0.0, f2 = 0.0, d0 = 0.0, d1 = 0.0, d2 = 0.0, s0 = 0.0, s1 = 0.0, s2 = 0.0;
+        // Without emission a pixel's samples are one range; with it, hit by hit, each hit's emission after.
+        const int hit_first = plan->emits ? plan->hit_begin[i] : 0;
+        const int hit_end = plan->emits ? plan->hit_begin[i + 1] : 1;
+        for (int h = hit_first; h < hit_end; h++) {
+            const int s_first = plan->emits ? plan->hits[h].point_begin : soa->pixel_begin[i];
+            const int s_end = plan->emits ? plan->hits[h + 1].point_begin : soa->pixel_begin[i + 1];
+            for (int s = s_first; s < s_end; s++) {
+                if (s >= batch_end) {
+                    batch_begin = s;
+                    batch_end = MR_MIN(samples_end, s + RENDER_BATCH_SAMPLES);
+                    const mr_brdf_batch batch = {
+                        batch_end - batch_begin,
+                        {soa->view[0] + s, soa->view[1] + s, soa->view[2] + s},
+                        {soa->light[0] + s, soa->light[1] + s, soa->light[2] + s},
+                        {fd[0], fd[1], fd[2]},
+                        {fs[0], fs[1], fs[2]},
+                    };
+                    mr_brdf_eval_batch(model, state, &batch, vector);
+                }
+                const int j = s - batch_begin;
+                if (want_full) {
+                    f0 += (fd[0][j] + fs[0][j]) * w0[s];
+                    f1 += (fd[1][j] + fs[1][j]) * w1[s];
+                    f2 += (fd[2][j] + fs[2][j]) * w2[s];
+                }
+                if (want_diffuse) {
+                    d0 += fd[0][j] * w0[s];
+                    d1 += fd[1][j] * w1[s];
+                    d2 += fd[2][j] * w2[s];
+                }
+                if (want_specular) {
+                    s0 += fs[0][j] * w0[s];
+                    s1 += fs[1][j] * w1[s];
+                    s2 += fs[2][j] * w2[s];
+                }
+            }
+            if (want_full && plan->emits) {
+                f0 += plan->hits[h].emission[0];
+                f1 += plan->hits[h].emission[1];
+                f2 += plan->hits[h].emission[2];
+            }
+        }
+        const size_t pixel = (size_t)plan->lit_pixel_index[i];
+        if (want_full) {
+            const double uncovered = 1.0 - plan->coverage[pixel];
+            const double *bg = plan->scene.background;
+            full->pixels[pixel * 3 + 0] = (float)(f0 + bg[0] * uncovered);
+            full->pixels[pixel * 3 + 1] = (float)(f1 + bg[1] * uncovered);
+            full->pixels[pixel * 3 + 2] = (float)(f2 + bg[2] * uncovered);
+        }
+        if (want_diffuse) {
+            diffuse->pixels[pixel * 3 + 0] = (float)d0;
+            diffuse->pixels[pixel * 3 + 1] = (float)d1;
+            diffuse->pixels[pixel * 3 + 2] = (float)d2;
+        }
+        if (want_specular) {
+            specular->pixels[pixel * 3 + 0] = (float)s0;
+            specular->pixels[pixel * 3 + 1] = (float)s1;
+            specular->pixels[pixel * 3 + 2] = (float)s2;
+        }
+    }
+}
+
+/* render_core for one uniform material over point samples only, in fixed blocks of lit pixels (render_block). */
 static void render_batched(const mr_render_plan *plan, const point_soa *soa, int threads, const mr_brdf_model *model,
                            const void *state, int vector, mr_image *full, mr_image *diffuse, mr_image *specular) {
     const int lit = plan->lit_pixels, blocks = (lit + RENDER_BATCH_PIXELS - 1) / RENDER_BATCH_PIXELS;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1)
     for (int b = 0; b < blocks; b++) {
-        double fd[3][RENDER_BATCH_SAMPLES], fs[3][RENDER_BATCH_SAMPLES];
         const int first = b * RENDER_BATCH_PIXELS, end = MR_MIN(lit, first + RENDER_BATCH_PIXELS);
-        const int samples_end = plan->hits[plan->hit_begin[end]].point_begin;
-        int batch_begin = plan->hits[plan->hit_begin[first]].point_begin, batch_end = batch_begin;
-        for (int i = first; i < end; i++) {
-            double sum_f[3] = {0.0, 0.0, 0.0}, sum_d[3] = {0.0, 0.0, 0.0}, sum_s[3] = {0.0, 0.0, 0.0};
-            for (int h = plan->hit_begin[i]; h < plan->hit_begin[i + 1]; h++) {
-                const plan_hit *hit = &plan->hits[h];
-                for (int s = hit->point_begin; s < hit[1].point_begin; s++) {
-                    if (s >= batch_end) {
-                        batch_begin = s;
-                        batch_end = MR_MIN(samples_end, s + RENDER_BATCH_SAMPLES);
-                        const mr_brdf_batch batch = {
-                            batch_end - batch_begin,
-                            {soa->view[0] + s, soa->view[1] + s, soa->view[2] + s},
-                            {soa->light[0] + s, soa->light[1] + s, soa->light[2] + s},
-                            {fd[0], fd[1], fd[2]},
-                            {fs[0], fs[1], fs[2]},
-                        };
-                        mr_brdf_eval_batch(model, state, &batch, vector);
-                    }
-                    const int j = s - batch_begin;
-                    // accumulate()'s arithmetic, in the same order.
-                    for (int c = 0; c < 3; c++) {
-                        const double weight = soa->weight[c][s];
-                        if (full) {
-                            sum_f[c] += (fd[c][j] + fs[c][j]) * weight;
-                        } else {
-                            if (diffuse) sum_d[c] += fd[c][j] * weight;
-                            if (specular) sum_s[c] += fs[c][j] * weight;
-                        }
-                    }
-                }
-                if (full && plan->emits)
-                    for (int c = 0; c < 3; c++) sum_f[c] += hit->emission[c];
-            }
-            size_t pixel = (size_t)plan->lit_pixel_index[i];
-            if (full) {
-                double uncovered = 1.0 - plan->coverage[pixel];
-                for (int c = 0; c < 3; c++)
-                    full->pixels[pixel * 3 + c] = (float)(sum_f[c] + plan->scene.background[c] * uncovered);
-            }
-            for (int c = 0; c < 3; c++) {
-                if (diffuse) diffuse->pixels[pixel * 3 + c] = (float)sum_d[c];
-                if (specular) specular->pixels[pixel * 3 + c] = (float)sum_s[c];
-            }
-        }
+        if (full)
+            render_block(plan, soa, model, state, vector, first, end, full, NULL, NULL, 1, 0, 0);
+        else if (diffuse && specular)
+            render_block(plan, soa, model, state, vector, first, end, NULL, diffuse, specular, 0, 1, 1);
+        else if (diffuse)
+            render_block(plan, soa, model, state, vector, first, end, NULL, diffuse, NULL, 0, 1, 0);
+        else
+            render_block(plan, soa, model, state, vector, first, end, NULL, NULL, specular, 0, 0, 1);
     }
 }
 
