@@ -17,6 +17,7 @@
  * for any thread count.
  */
 #include <limits.h>
+#include <omp.h>
 #include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -1153,6 +1154,174 @@ static inline __attribute__((always_inline)) void render_block(const mr_render_p
     }
 }
 
+/* A batch gathered from the hits (environment and reflection samples have no stored light direction or weight: the
+ * plan keeps a direction index, or float ones, per sample): each sample's view, light and weight, computed as the
+ * per-sample loop computes them, and the model's value. */
+typedef struct gathered_batch {
+    double view[3][RENDER_BATCH_SAMPLES], light[3][RENDER_BATCH_SAMPLES], weight[3][RENDER_BATCH_SAMPLES];
+    double fd[3][RENDER_BATCH_SAMPLES], fs[3][RENDER_BATCH_SAMPLES];
+} gathered_batch;
+
+/* Where a walk over a block's samples stands: hit h, its point samples (stage 0), environment samples (1) or
+ * reflection samples (2), sample k of that stage's array. */
+typedef struct sample_position {
+    int h, stage;
+    size_t k;
+} sample_position;
+
+/* Fills `out` with the samples from `at` on, in plan order, up to RENDER_BATCH_SAMPLES or hit `hit_end`, and
+ * evaluates them; returns how many. The light and weight of each are the per-sample loop's (render_core), operation
+ * for operation. */
+static int gather_batch(const mr_render_plan *plan, sample_position at, int hit_end, const mr_brdf_model *model,
+                        const void *state, int vector, gathered_batch *out) {
+    int n = 0;
+    for (int h = at.h; h < hit_end && n < RENDER_BATCH_SAMPLES; h++) {
+        const plan_hit *hit = &plan->hits[h];
+        const int stage_first = h == at.h ? at.stage : 0;
+        for (int stage = stage_first; stage < 3 && n < RENDER_BATCH_SAMPLES; stage++) {
+            size_t begin = stage == 0 ? (size_t)hit->point_begin : stage == 1 ? hit->env_begin : hit->reflection_begin;
+            const size_t end = stage == 0 ? (size_t)hit[1].point_begin
+                                          : stage == 1 ? hit[1].env_begin : hit[1].reflection_begin;
+            if (h == at.h && stage == at.stage) begin = at.k;
+            for (size_t e = begin; e < end && n < RENDER_BATCH_SAMPLES; e++, n++) {
+                double light[3], weight[3];
+                if (stage == 0) {
+                    const point_sample *sample = &plan->point_samples[e];
+                    for (int c = 0; c < 3; c++) {
+                        light[c] = sample->light[c];
+                        weight[c] = sample->weight[c];
+                    }
+                } else if (stage == 1) {
+                    const int k = plan->env_samples[e];
+                    const double *d = plan->env.direction[k];
+                    light[0] = vec3_dot(hit->tangent, d);
+                    light[1] = vec3_dot(hit->bitangent, d);
+                    light[2] = vec3_dot(hit->normal, d);
+                    double cos_share = light[2] * hit->env_share;
+                    if (plan->env.mis_npdf != NULL && plan->env.mis_npdf[k] > 0.0) {
+                        const double npdf = plan->env.mis_npdf[k];
+                        cos_share *= npdf / (npdf + reflection_density(&plan->env, &hit->mirror, d));
+                    }
+                    for (int c = 0; c < 3; c++) weight[c] = plan->env.weight[k][c] * cos_share;
+                } else {
+                    const reflection_sample *sample = &plan->reflection_samples[e];
+                    for (int c = 0; c < 3; c++) light[c] = sample->light[c];
+                    const double cos_share = light[2] * hit->env_share;
+                    for (int c = 0; c < 3; c++) weight[c] = sample->weight[c] * cos_share;
+                }
+                for (int c = 0; c < 3; c++) {
+                    out->view[c][n] = hit->view[c];
+                    out->light[c][n] = light[c];
+                    out->weight[c][n] = weight[c];
+                }
+            }
+        }
+    }
+    const mr_brdf_batch batch = {n,
+                                 {out->view[0], out->view[1], out->view[2]},
+                                 {out->light[0], out->light[1], out->light[2]},
+                                 {out->fd[0], out->fd[1], out->fd[2]},
+                                 {out->fs[0], out->fs[1], out->fs[2]}};
+    mr_brdf_eval_batch(model, state, &batch, vector);
+    return n;
+}
+
+/* render_block for plans with environment or reflection samples: the block's samples gathered batch by batch in
+ * plan order (gather_batch), each lit pixel summing its hits' point, environment and reflection samples and then
+ * the hit's emission, in the per-sample loop's order and arithmetic. */
+static inline __attribute__((always_inline)) void render_block_gathered(const mr_render_plan *plan,
+                                                                        const mr_brdf_model *model,
+                                                                        const void *state, int vector, int first,
+                                                                        int end, gathered_batch *buf,
+                                                                        mr_image *full, mr_image *diffuse,
+                                                                        mr_image *specular, const int want_full,
+                                                                        const int want_diffuse,
+                                                                        const int want_specular) {
+    const int hit_end = plan->hit_begin[end];
+    int n = 0, j = 0;
+    for (int i = first; i < end; i++) {
+        double f0 = 0.0, f1 = 0.0, f2 = 0.0, d0 = 0.0, d1 = 0.0, d2 = 0.0, s0 = 0.0, s1 = 0.0, s2 = 0.0;
+        for (int h = plan->hit_begin[i]; h < plan->hit_begin[i + 1]; h++) {
+            const plan_hit *hit = &plan->hits[h];
+            for (int stage = 0; stage < 3; stage++) {
+                const size_t begin = stage == 0 ? (size_t)hit->point_begin
+                                                : stage == 1 ? hit->env_begin : hit->reflection_begin;
+                const size_t stop = stage == 0 ? (size_t)hit[1].point_begin
+                                               : stage == 1 ? hit[1].env_begin : hit[1].reflection_begin;
+                for (size_t e = begin; e < stop; e++, j++) {
+                    if (j == n) {
+                        n = gather_batch(plan, (sample_position){h, stage, e}, hit_end, model, state, vector, buf);
+                        j = 0;
+                    }
+                    if (want_full) {
+                        f0 += (buf->fd[0][j] + buf->fs[0][j]) * buf->weight[0][j];
+                        f1 += (buf->fd[1][j] + buf->fs[1][j]) * buf->weight[1][j];
+                        f2 += (buf->fd[2][j] + buf->fs[2][j]) * buf->weight[2][j];
+                    }
+                    if (want_diffuse) {
+                        d0 += buf->fd[0][j] * buf->weight[0][j];
+                        d1 += buf->fd[1][j] * buf->weight[1][j];
+                        d2 += buf->fd[2][j] * buf->weight[2][j];
+                    }
+                    if (want_specular) {
+                        s0 += buf->fs[0][j] * buf->weight[0][j];
+                        s1 += buf->fs[1][j] * buf->weight[1][j];
+                        s2 += buf->fs[2][j] * buf->weight[2][j];
+                    }
+                }
+            }
+            if (want_full && plan->emits) {
+                f0 += hit->emission[0];
+                f1 += hit->emission[1];
+                f2 += hit->emission[2];
+            }
+        }
+        const size_t pixel = (size_t)plan->lit_pixel_index[i];
+        if (want_full) {
+            const double uncovered = 1.0 - plan->coverage[pixel];
+            const double *bg = plan->scene.background;
+            full->pixels[pixel * 3 + 0] = (float)(f0 + bg[0] * uncovered);
+            full->pixels[pixel * 3 + 1] = (float)(f1 + bg[1] * uncovered);
+            full->pixels[pixel * 3 + 2] = (float)(f2 + bg[2] * uncovered);
+        }
+        if (want_diffuse) {
+            diffuse->pixels[pixel * 3 + 0] = (float)d0;
+            diffuse->pixels[pixel * 3 + 1] = (float)d1;
+            diffuse->pixels[pixel * 3 + 2] = (float)d2;
+        }
+        if (want_specular) {
+            specular->pixels[pixel * 3 + 0] = (float)s0;
+            specular->pixels[pixel * 3 + 1] = (float)s1;
+            specular->pixels[pixel * 3 + 2] = (float)s2;
+        }
+    }
+}
+
+/* render_core for one material without maps over a plan with environment or reflection samples, in fixed blocks of
+ * lit pixels (render_block_gathered). Returns 0 when out of memory for the batch buffers (nothing rendered). */
+static int render_gathered(const mr_render_plan *plan, int threads, const mr_brdf_model *model, const void *state,
+                           int vector, mr_image *full, mr_image *diffuse, mr_image *specular) {
+    const int lit = plan->lit_pixels, blocks = (lit + RENDER_BATCH_PIXELS - 1) / RENDER_BATCH_PIXELS;
+    const int team = threads > 1 ? threads : 1;
+    gathered_batch *buffers = malloc((size_t)team * sizeof *buffers); // 60 kB each: too much for a thread's stack
+    if (buffers == NULL) return 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1)
+    for (int b = 0; b < blocks; b++) {
+        gathered_batch *buf = &buffers[team > 1 ? omp_get_thread_num() : 0];
+        const int first = b * RENDER_BATCH_PIXELS, end = MR_MIN(lit, first + RENDER_BATCH_PIXELS);
+        if (full)
+            render_block_gathered(plan, model, state, vector, first, end, buf, full, NULL, NULL, 1, 0, 0);
+        else if (diffuse && specular)
+            render_block_gathered(plan, model, state, vector, first, end, buf, NULL, diffuse, specular, 0, 1, 1);
+        else if (diffuse)
+            render_block_gathered(plan, model, state, vector, first, end, buf, NULL, diffuse, NULL, 0, 1, 0);
+        else
+            render_block_gathered(plan, model, state, vector, first, end, buf, NULL, NULL, specular, 0, 0, 1);
+    }
+    free(buffers);
+    return 1;
+}
+
 /* render_core for one uniform material over point samples only, in fixed blocks of lit pixels (render_block). */
 static void render_batched(const mr_render_plan *plan, const point_soa *soa, int threads, const mr_brdf_model *model,
                            const void *state, int vector, mr_image *full, mr_image *diffuse, mr_image *specular) {
@@ -1204,16 +1373,19 @@ static mr_status render_core(const mr_render_plan *plan, int threads, const mr_m
     // batched, the model's eval_batch over the samples as structure of arrays.
     const size_t env_samples = plan->hits[plan->hit_count].env_begin;
     const size_t reflection_samples = plan->hits[plan->hit_count].reflection_begin;
-    if (path != MR_RENDER_PATH_PER_SAMPLE && used == 1 && states[0].binding_count == 0 && env_samples == 0 &&
-        reflection_samples == 0) {
-        const point_soa *soa = plan_point_soa(plan);
+    // With environment or reflection samples, batches are gathered from the hits as the render goes.
+    if (path != MR_RENDER_PATH_PER_SAMPLE && used == 1 && states[0].binding_count == 0) {
+        const int vector = path == MR_RENDER_PATH_AUTO ? mr_brdf_batch_vector_default()
+                                                       : path == MR_RENDER_PATH_BATCH_VECTOR;
+        const point_soa *soa = env_samples == 0 && reflection_samples == 0 ? plan_point_soa(plan) : NULL;
         if (soa != NULL) {
-            const int vector = path == MR_RENDER_PATH_AUTO ? mr_brdf_batch_vector_default()
-                                                           : path == MR_RENDER_PATH_BATCH_VECTOR;
             render_batched(plan, soa, threads, states[0].model, states[0].shared.bytes, vector, full, diffuse,
                            specular);
             return MR_OK;
         }
+        if ((env_samples > 0 || reflection_samples > 0) &&
+            render_gathered(plan, threads, states[0].model, states[0].shared.bytes, vector, full, diffuse, specular))
+            return MR_OK;
     }
 
     const int lit = plan->lit_pixels;
