@@ -1024,9 +1024,6 @@ static mr_status material_state_init(const mr_material_binding *material, int in
     return MR_OK;
 }
 
-/* Every render: `full` alone, or either or both of `diffuse` and `specular`, with one material for every hit
- * (count 1) or materials[hit's material]. Each lit pixel sums its hits' samples in plan order (the same for any
- * thread count); a textured material prepares the BRDF state per hit. */
 /* The plan's point samples as structure of arrays (point_soa), built by the first render that asks (any thread;
  * the first to finish installs its copy with a compare-and-swap, a loser frees its own). NULL when out of memory:
  * the caller then takes the per-sample loop, which needs nothing more. */
@@ -1340,6 +1337,10 @@ static void render_batched(const mr_render_plan *plan, const point_soa *soa, int
     }
 }
 
+/* Every render: `full` alone, or either or both of `diffuse` and `specular`, with one material for every hit
+ * (count 1) or materials[hit's material]. Each lit pixel sums its hits' samples in plan order (the same for any
+ * thread count); a textured material prepares the BRDF state per hit. One material without maps is evaluated in
+ * batches (render_batched, render_gathered) unless `path` asks for the per-sample loop (render_internal.h). */
 static mr_status render_core(const mr_render_plan *plan, int threads, const mr_material_binding *materials,
                              int count, mr_image *full, mr_image *diffuse, mr_image *specular, mr_render_path path) {
     mr_status status = check_target(plan, full, "output");
