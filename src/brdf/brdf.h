@@ -138,16 +138,6 @@ struct mr_brdf_model {
     void (*eval)(const void *state, const double wi[3], const double wo[3], double diffuse[3],
                  double specular[3]);
 
-    /* Optional (NULL: mr_brdf_eval_batch loops over eval): eval over a batch of direction pairs at once, for the
-     * render loop (render.c evaluates a uniform material's point samples in chunks). Contract: each output equals
-     * what eval writes for that pair within MR_BRDF_BATCH_RTOL relative to the pair's largest value (both parts,
-     * all channels) or MR_BRDF_BATCH_ATOL absolute (tests/test_batch.c checks it for every model and both
-     * instruction sets); the result of a pair depends on that pair and `vector` alone, never on n or its position
-     * in the batch (so renders stay the same for any thread count and chunking). `vector` nonzero asks for the
-     * AVX2/FMA kernel, which is used only where the CPU has both (mr_brdf_batch_cpu_vector); zero asks for the
-     * portable one. Kernels may not call eval's libm exp/pow: they use brdf_batch.h's vector-friendly ones. */
-    void (*eval_batch)(const void *state, const mr_brdf_batch *batch, int vector);
-
     /* Optional (NULL if absent): d f_r / d values[j] for every packed slot j, at the given (unclamped but
      * in-bounds) values. d_diffuse and d_specular each hold value_count*3 doubles, laid out
      * [j*3 + channel]. Switch parameters have derivative 0. */
@@ -159,6 +149,15 @@ struct mr_brdf_model {
      * in some channel with trim on). Texture maps hold values where it does not: random sweeps draw there
      * (remap/sweep.h, the TEXTURE region) and learned transforms leave such rows out (learn/sweep_table.h). */
     int (*rescales)(const mr_brdf_model *model, const double *values);
+    /* Optional (NULL: mr_brdf_eval_batch loops over eval): eval over a batch of direction pairs at once, for the
+     * render loop (render.c evaluates a material without maps over its samples in batches). Contract: each output
+     * equals what eval writes for that pair within MR_BRDF_BATCH_RTOL relative to the pair's largest value (both
+     * parts, all channels) or MR_BRDF_BATCH_ATOL absolute (tests/test_batch.c checks it for every model and both
+     * instruction sets); the result of a pair depends on that pair and `vector` alone, never on n or its position
+     * in the batch (so renders stay the same for any thread count and chunking). `vector` nonzero asks for the
+     * AVX2/FMA kernel, which is used only where the CPU has both (mr_brdf_batch_cpu_vector); zero asks for the
+     * portable one. Kernels use brdf_batch.h's exp/log/pow, not libm's (a call would stop the vectorisation). */
+    void (*eval_batch)(const void *state, const mr_brdf_batch *batch, int vector);
 };
 
 /* A prepared state on the stack: `mr_brdf_state st; model->prepare(model, values, st.bytes);` */
