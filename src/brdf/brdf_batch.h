@@ -3,10 +3,11 @@
  *
  * A kernel is a plain loop over the batch's structure-of-arrays, marked `#pragma omp simd`, whose body is the
  * model's eval written without branches (selects instead) and without libm's exp/pow (mr_batch_exp, mr_batch_pow
- * below). MR_BATCH_KERNEL compiles the same loop twice: once for AVX2 + FMA (4 doubles a lane group) and once for
- * the baseline instruction set (SSE2 on x86-64, 2 doubles), and picks one at run time. The Makefile builds src/brdf
- * with -fno-math-errno (sqrt is an instruction, not a call that may set errno) and -fno-trapping-math (a branch on a
- * comparison may become a select); neither changes any value.
+ * below). MR_BATCH_KERNEL compiles the same loop twice: once for AVX2 + FMA (4 doubles a vector) and once for the
+ * baseline instruction set (SSE2 on x86-64: 2 doubles where GCC vectorises the loop for it, which it does not do for
+ * every kernel), and picks one at run time. The Makefile builds src/brdf with -fno-math-errno (sqrt is an
+ * instruction, not a call that may set errno) and -fno-trapping-math (a branch on a comparison may become a select);
+ * neither changes any value.
  *
  * Precision: double throughout, as eval. The geometry (mr_batch_geom) repeats mr_brdf_geom_init's operations in
  * the same order, and kernels reuse brdf_internal.h's branch-free helpers (G1, Fresnel), so a kernel differs from
