@@ -1072,10 +1072,33 @@ static const point_soa *plan_point_soa(const mr_render_plan *plan) {
 #define RENDER_BATCH_PIXELS 64
 #define RENDER_BATCH_SAMPLES 256
 
+/* A batch's values times their samples' weights, in place, before the pixels sum them: (fd + fs) w into fd for a full
+ * render, fd w and fs w for the parts. The same products the per-sample loop adds (accumulate), in a loop the
+ * compiler vectorises; the pixels' sums are then plain additions in plan order. */
+static inline __attribute__((always_inline)) void weigh_batch(double fd[3][RENDER_BATCH_SAMPLES],
+                                                              double fs[3][RENDER_BATCH_SAMPLES],
+                                                              const double *const weight[3], int n,
+                                                              const int want_full) {
+    for (int c = 0; c < 3; c++) {
+        double *restrict d = fd[c], *restrict f = fs[c];
+        const double *restrict w = weight[c];
+        if (want_full) {
+#pragma omp simd
+            for (int j = 0; j < n; j++) d[j] = (d[j] + f[j]) * w[j];
+        } else {
+#pragma omp simd
+            for (int j = 0; j < n; j++) {
+                d[j] *= w[j];
+                f[j] *= w[j];
+            }
+        }
+    }
+}
+
 /* One block of lit pixels [first, end) of a batched render, for the parts asked for (constants in each call of
  * render_batched, so that the sums stay in registers): the model's eval_batch over the block's samples in batches,
- * then each lit pixel sums its samples in plan order with accumulate()'s arithmetic (and, where the surface emits,
- * each hit's emission after its samples, as the per-sample loop does). */
+ * weighed (weigh_batch), then each lit pixel sums its samples in plan order, which is accumulate()'s arithmetic
+ * (and, where the surface emits, each hit's emission after its samples, as the per-sample loop does). */
 static inline __attribute__((always_inline)) void render_block(const mr_render_plan *plan, const point_soa *soa,
                                                                const mr_brdf_model *model, const void *state,
                                                                int vector, int first, int end, mr_image *full,
@@ -1083,7 +1106,6 @@ static inline __attribute__((always_inline)) void render_block(const mr_render_p
                                                                const int want_full, const int want_diffuse,
                                                                const int want_specular) {
     double fd[3][RENDER_BATCH_SAMPLES], fs[3][RENDER_BATCH_SAMPLES];
-    const double *const w0 = soa->weight[0], *const w1 = soa->weight[1], *const w2 = soa->weight[2];
     const int samples_end = soa->pixel_begin[end];
     int batch_begin = soa->pixel_begin[first], batch_end = batch_begin;
     for (int i = first; i < end; i++) {
@@ -1106,22 +1128,24 @@ static inline __attribute__((always_inline)) void render_block(const mr_render_p
                         {fs[0], fs[1], fs[2]},
                     };
                     mr_brdf_eval_batch(model, state, &batch, vector);
+                    const double *const weight[3] = {soa->weight[0] + s, soa->weight[1] + s, soa->weight[2] + s};
+                    weigh_batch(fd, fs, weight, batch.n, want_full);
                 }
                 const int j = s - batch_begin;
                 if (want_full) {
-                    f0 += (fd[0][j] + fs[0][j]) * w0[s];
-                    f1 += (fd[1][j] + fs[1][j]) * w1[s];
-                    f2 += (fd[2][j] + fs[2][j]) * w2[s];
+                    f0 += fd[0][j];
+                    f1 += fd[1][j];
+                    f2 += fd[2][j];
                 }
                 if (want_diffuse) {
-                    d0 += fd[0][j] * w0[s];
-                    d1 += fd[1][j] * w1[s];
-                    d2 += fd[2][j] * w2[s];
+                    d0 += fd[0][j];
+                    d1 += fd[1][j];
+                    d2 += fd[2][j];
                 }
                 if (want_specular) {
-                    s0 += fs[0][j] * w0[s];
-                    s1 += fs[1][j] * w1[s];
-                    s2 += fs[2][j] * w2[s];
+                    s0 += fs[0][j];
+                    s1 += fs[1][j];
+                    s2 += fs[2][j];
                 }
             }
             if (want_full && plan->emits) {
@@ -1224,8 +1248,8 @@ static int gather_batch(const mr_render_plan *plan, sample_position at, int hit_
 }
 
 /* render_block for plans with environment or reflection samples: the block's samples gathered batch by batch in
- * plan order (gather_batch), each lit pixel summing its hits' point, environment and reflection samples and then
- * the hit's emission, in the per-sample loop's order and arithmetic. */
+ * plan order (gather_batch) and weighed (weigh_batch), each lit pixel summing its hits' point, environment and
+ * reflection samples and then the hit's emission, in the per-sample loop's order and arithmetic. */
 static inline __attribute__((always_inline)) void render_block_gathered(const mr_render_plan *plan,
                                                                         const mr_brdf_model *model,
                                                                         const void *state, int vector, int first,
@@ -1248,22 +1272,24 @@ static inline __attribute__((always_inline)) void render_block_gathered(const mr
                 for (size_t e = begin; e < stop; e++, j++) {
                     if (j == n) {
                         n = gather_batch(plan, (sample_position){h, stage, e}, hit_end, model, state, vector, buf);
+                        const double *const weight[3] = {buf->weight[0], buf->weight[1], buf->weight[2]};
+                        weigh_batch(buf->fd, buf->fs, weight, n, want_full);
                         j = 0;
                     }
                     if (want_full) {
-                        f0 += (buf->fd[0][j] + buf->fs[0][j]) * buf->weight[0][j];
-                        f1 += (buf->fd[1][j] + buf->fs[1][j]) * buf->weight[1][j];
-                        f2 += (buf->fd[2][j] + buf->fs[2][j]) * buf->weight[2][j];
+                        f0 += buf->fd[0][j];
+                        f1 += buf->fd[1][j];
+                        f2 += buf->fd[2][j];
                     }
                     if (want_diffuse) {
-                        d0 += buf->fd[0][j] * buf->weight[0][j];
-                        d1 += buf->fd[1][j] * buf->weight[1][j];
-                        d2 += buf->fd[2][j] * buf->weight[2][j];
+                        d0 += buf->fd[0][j];
+                        d1 += buf->fd[1][j];
+                        d2 += buf->fd[2][j];
                     }
                     if (want_specular) {
-                        s0 += buf->fs[0][j] * buf->weight[0][j];
-                        s1 += buf->fs[1][j] * buf->weight[1][j];
-                        s2 += buf->fs[2][j] * buf->weight[2][j];
+                        s0 += buf->fs[0][j];
+                        s1 += buf->fs[1][j];
+                        s2 += buf->fs[2][j];
                     }
                 }
             }
