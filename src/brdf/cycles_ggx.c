@@ -125,7 +125,7 @@ MR_BATCH_INLINE void cg_batch_loop(const cg_state *state, const mr_brdf_batch *b
     for (int i = 0; i < n_; i++) {
         mr_brdf_geom g;
         const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
-        const double lobe = correlated ? mr_batch_ggx_dv_correlated(alpha, &g, fused)
+        const double lobe = correlated ? mr_batch_ggx_dv_correlated(alpha, &g)
                                        : mr_batch_mf_dg(MR_MF_GGX, alpha, &g, 0, fused);
         const double dg = lit ? lobe : 0.0;
         const double w = mr_schlick_weight(g.dot_h);

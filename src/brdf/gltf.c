@@ -120,6 +120,7 @@ static void gltf_eval(const void *state_bytes, const double wi[3], const double 
 
 /* eval over a batch (brdf.h eval_batch): gltf_eval's operations. */
 MR_BATCH_INLINE void gltf_batch_body(const void *state_bytes, const mr_brdf_batch *batch, const int fused) {
+    (void)fused; // no exp or pow here
     const gltf_state *state = state_bytes;
     const double alpha = state->alpha, m = state->metallic, spec = state->specular;
     const double b0 = state->base[0], b1 = state->base[1], b2 = state->base[2];
@@ -135,7 +136,7 @@ MR_BATCH_INLINE void gltf_batch_body(const void *state_bytes, const mr_brdf_batc
         Fmax = MR_MAX(Fmax, F0);
         Fmax = MR_MAX(Fmax, F1);
         Fmax = MR_MAX(Fmax, F2);
-        const double S = lit ? mr_batch_ggx_dv_correlated(alpha, &g, fused) : 0.0;
+        const double S = lit ? mr_batch_ggx_dv_correlated(alpha, &g) : 0.0;
         d0_[i] = lit ? (1.0 - m) * (1.0 - Fmax) * b0 * MR_INV_PI : 0.0;
         d1_[i] = lit ? (1.0 - m) * (1.0 - Fmax) * b1 * MR_INV_PI : 0.0;
         d2_[i] = lit ? (1.0 - m) * (1.0 - Fmax) * b2 * MR_INV_PI : 0.0;
