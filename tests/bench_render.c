@@ -50,6 +50,8 @@ static double time_render(const mr_render_plan *plan, int threads, const mr_brdf
  * fit scene) and 512^2, along the per-sample loop (one eval call per sample, as before batches), the batched loop
  * with the portable kernels (what MATREMAP_SIMD=scalar or a CPU without AVX2 gets) and with the AVX2/FMA ones. CPU
  * time of the one thread, so that a busy machine's other processes do not enter the comparison. */
+static int env_batch_table(int min_reps, double min_seconds);
+
 static int batch_table(int min_reps, double min_seconds) {
     const int sizes[] = {64, 512};
     mr_render_plan *plans[2] = {NULL, NULL};
@@ -87,6 +89,43 @@ static int batch_table(int min_reps, double min_seconds) {
     }
     mr_render_plan_free(plans[0]);
     mr_render_plan_free(plans[1]);
+    return env_batch_table(min_reps, min_seconds);
+}
+
+/* The same comparison under environment light (batches gathered from the hits, render.c render_gathered): the fit
+ * scene's sphere at 128^2 lit by a synthetic 64x32 map with the default sampling, a few models. */
+static int env_batch_table(int min_reps, double min_seconds) {
+    mr_image *map = NULL;
+    if (mr_image_create(64, 32, 3, &map) != MR_OK) return 3;
+    for (size_t i = 0; i < (size_t)64 * 32 * 3; i++) map->pixels[i] = (float)(0.2 + (double)(i % 7) * 0.1);
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){128, MR_FIT_LIGHT_45, 0});
+    scene.lights[0] = mr_light_environment(map, 1.0, 0.0, 0);
+    mr_render_plan *plan = NULL;
+    if (mr_render_plan_create(&scene, &plan) != MR_OK) {
+        fprintf(stderr, "bench_render: %s\n", mr_last_error());
+        mr_image_free(map);
+        return 3;
+    }
+    mr_image *image = NULL;
+    if (mr_image_create(128, 128, 3, &image) != MR_OK) return 3;
+    printf("\nThe same under environment light (128², a 64x32 map, default sampling: %ld samples), median CPU ms per\n"
+           "render, one thread.\n\n| model | per-sample | portable | AVX2 | speed-up |\n|---|---:|---:|---:|---:|\n",
+           mr_render_plan_sample_count(plan));
+    const char *names[] = {"ward", "ggx", "gltf", "cycles-principled"};
+    const mr_render_path paths[3] = {MR_RENDER_PATH_PER_SAMPLE, MR_RENDER_PATH_BATCH_PORTABLE,
+                                     MR_RENDER_PATH_BATCH_VECTOR};
+    for (size_t m = 0; m < sizeof names / sizeof names[0]; m++) {
+        const mr_brdf_model *model = mr_brdf_find(names[m]);
+        double values[MR_BRDF_MAX_VALUES], ms[3];
+        mr_brdf_default_values(model, values);
+        for (int p = 0; p < 3; p++)
+            ms[p] = time_render_path(plan, 1, model, values, image, min_reps, min_seconds, paths[p], thread_cpu_now);
+        printf("| %s | %.2f | %.2f | %.2f | %.2f |\n", names[m], ms[0], ms[1], ms[2], ms[0] / ms[2]);
+        fflush(stdout);
+    }
+    mr_image_free(image);
+    mr_render_plan_free(plan);
+    mr_image_free(map);
     return 0;
 }
 
