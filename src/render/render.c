@@ -1072,6 +1072,11 @@ static const point_soa *plan_point_soa(const mr_render_plan *plan) {
 #define RENDER_BATCH_PIXELS 64
 #define RENDER_BATCH_SAMPLES 256
 
+/* The most point samples a plan lays out as structure of arrays (about 76 bytes each, 300 MB at the limit; the fit
+ * scene has 0.11 M at 512^2); larger plans, rendered once or twice rather than in an optimiser's loop, gather their
+ * batches from the hits instead (render_gathered) and keep no copy. */
+#define RENDER_SOA_MAX_SAMPLES (1 << 22)
+
 /* A batch's values times their samples' weights, in place, before the pixels sum them: (fd + fs) w into fd for a full
  * render, fd w and fs w for the parts. The same products the per-sample loop adds (accumulate), in a loop the
  * compiler vectorises; the pixels' sums are then plain additions in plan order. */
@@ -1320,8 +1325,9 @@ static inline __attribute__((always_inline)) void render_block_gathered(const mr
     }
 }
 
-/* render_core for one material without maps over a plan with environment or reflection samples, in fixed blocks of
- * lit pixels (render_block_gathered). Returns 0 when out of memory for the batch buffers (nothing rendered). */
+/* render_core for one material without maps over a plan with environment or reflection samples (or too many point
+ * samples for point_soa), in fixed blocks of lit pixels (render_block_gathered). Returns 0 when out of memory for the
+ * batch buffers (nothing rendered). */
 static int render_gathered(const mr_render_plan *plan, int threads, const mr_brdf_model *model, const void *state,
                            int vector, mr_image *full, mr_image *diffuse, mr_image *specular) {
     const int lit = plan->lit_pixels, blocks = (lit + RENDER_BATCH_PIXELS - 1) / RENDER_BATCH_PIXELS;
@@ -1400,18 +1406,21 @@ static mr_status render_core(const mr_render_plan *plan, int threads, const mr_m
     // batched, the model's eval_batch over the samples as structure of arrays.
     const size_t env_samples = plan->hits[plan->hit_count].env_begin;
     const size_t reflection_samples = plan->hits[plan->hit_count].reflection_begin;
-    // With environment or reflection samples, batches are gathered from the hits as the render goes.
+    // With environment or reflection samples, or more point samples than RENDER_SOA_MAX_SAMPLES, batches are
+    // gathered from the hits as the render goes.
     if (path != MR_RENDER_PATH_PER_SAMPLE && used == 1 && states[0].binding_count == 0) {
         const int vector = path == MR_RENDER_PATH_AUTO ? mr_brdf_batch_vector_default()
                                                        : path == MR_RENDER_PATH_BATCH_VECTOR;
-        const point_soa *soa = env_samples == 0 && reflection_samples == 0 ? plan_point_soa(plan) : NULL;
+        const int points = plan->hits[plan->hit_count].point_begin;
+        const point_soa *soa = env_samples == 0 && reflection_samples == 0 && points <= RENDER_SOA_MAX_SAMPLES
+                                   ? plan_point_soa(plan)
+                                   : NULL;
         if (soa != NULL) {
             render_batched(plan, soa, threads, states[0].model, states[0].shared.bytes, vector, full, diffuse,
                            specular);
             return MR_OK;
         }
-        if ((env_samples > 0 || reflection_samples > 0) &&
-            render_gathered(plan, threads, states[0].model, states[0].shared.bytes, vector, full, diffuse, specular))
+        if (render_gathered(plan, threads, states[0].model, states[0].shared.bytes, vector, full, diffuse, specular))
             return MR_OK;
     }
 
