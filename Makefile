@@ -145,6 +145,10 @@ PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h sr
 .PHONY: all check asan fuzz fuzz-targets faults demo bench \
         analyses paper evaluation evaluation-gltf evaluation-hardcases evaluation-svbrdf \
         evaluation-viewers evaluation-clients evaluation-translations evaluation-renderer-fits evaluation-renderers dataset train objectives deps install clean tables
+# The batched BRDF kernels of src/brdf are plain loops GCC vectorises (brdf_batch.h): -fno-math-errno makes sqrt one
+# instruction and -fno-trapping-math lets a branch become a select. Neither changes a value (unlike -ffast-math);
+# docs/performance.md, "Vectorised lobes".
+$(BUILD)/obj/src/brdf/%.o $(BUILD)/pic/src/brdf/%.o $(BUILD)/shobj/src/brdf/%.o: MR_CFLAGS += -fno-math-errno -fno-trapping-math
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
 all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE) $(MPI_MODULE) $(SHLIB_LINKS)

@@ -1085,7 +1085,7 @@ if command -v blender >/dev/null 2>&1; then
         done
         c_ms=$(printf '%s\n' "${cycles_ms[@]}" | median)
         c_total=$(printf '%s\n' "${cycles_total[@]}" | median)
-        ours_ms=$(grep '^| cycles-principled ' "$work/render_table.md" | awk -F'|' -v col=$([ "$size" = 256 ] && echo 4 || echo 6) '{gsub(/ /, "", $col); print $col}')
+        ours_ms=$(grep -m1 '^| cycles-principled ' "$work/render_table.md" | awk -F'|' -v col=$([ "$size" = 256 ] && echo 4 || echo 6) '{gsub(/ /, "", $col); print $col}')
         ours_total=()
         for run in 1 2 3; do
             t0=$(date +%s.%N)

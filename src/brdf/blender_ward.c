@@ -32,7 +32,7 @@
  * grazing for rms >= 0.4).
  * Gradient: analytic for every parameter.
  */
-#include "brdf_internal.h"
+#include "brdf_batch.h"
 
 /* Slots of the packed value vector. */
 enum { BW_DIFFUSE = 0, BW_SPECULAR = 3, BW_RMS = 6 };
@@ -93,6 +93,32 @@ static void blender_ward_eval(const void *state_bytes, const double wi[3], const
     }
 }
 
+/* eval over a batch (brdf.h eval_batch): blender_ward_lobe's operations with mr_batch_exp for exp. */
+MR_BATCH_INLINE void blender_ward_batch_body(const void *state_bytes, const mr_brdf_batch *batch, const int fused) {
+    const blender_ward_state *state = state_bytes;
+    const double alpha = state->alpha, a2 = alpha * alpha;
+    const double d0 = state->diffuse[0], d1 = state->diffuse[1], d2 = state->diffuse[2];
+    const double r0 = state->specular[0], r1 = state->specular[1], r2 = state->specular[2];
+    MR_BATCH_ARRAYS(batch);
+#pragma omp simd
+    for (int i = 0; i < n_; i++) {
+        mr_brdf_geom g;
+        const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
+        const double nh = g.cos_h > 0.0 ? g.cos_h : 0.001;
+        const double tan2 = MR_MAX(1.0 - nh * nh, 0.0) / (nh * nh);
+        const double lobe = mr_batch_exp(-tan2 / a2, fused) / (4.0 * MR_PI * a2 * sqrt(g.cos_o * g.cos_i));
+        const double S = lit ? lobe : 0.0;
+        d0_[i] = lit ? d0 : 0.0;
+        d1_[i] = lit ? d1 : 0.0;
+        d2_[i] = lit ? d2 : 0.0;
+        s0_[i] = r0 * S;
+        s1_[i] = r1 * S;
+        s2_[i] = r2 * S;
+    }
+}
+
+MR_BATCH_KERNEL(blender_ward_eval_batch, blender_ward_batch_body)
+
 static void blender_ward_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3],
                                    const double wo[3], double *d_diffuse, double *d_specular) {
     mr_brdf_geom g;
@@ -117,5 +143,6 @@ const mr_brdf_model mr_brdf_blender_ward = {
     .config = NULL,
     .prepare = blender_ward_prepare,
     .eval = blender_ward_eval,
+    .eval_batch = blender_ward_eval_batch,
     .eval_grad = blender_ward_eval_grad,
 };

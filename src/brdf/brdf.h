@@ -105,6 +105,19 @@ enum {
     MR_BRDF_NON_RECIPROCAL = 4
 };
 
+/* A batch of direction pairs for eval_batch, in structure-of-arrays layout: pair i is
+ * wi = (wi[0][i], wi[1][i], wi[2][i]) and wo likewise, unit vectors in the local frame (the render passes its view
+ * direction as wi, as eval(view, light)). The kernel writes f_r's parts per channel into diffuse[c][i] and
+ * specular[c][i], c = 0, 1, 2: all six arrays must be given (n doubles each; a caller that needs one part passes
+ * scratch for the other). Outputs must not overlap the inputs. */
+typedef struct mr_brdf_batch {
+    int n;               /* pairs, >= 0 */
+    const double *wi[3]; /* x, y, z arrays of the first directions */
+    const double *wo[3]; /* x, y, z arrays of the second directions */
+    double *diffuse[3];  /* R, G, B arrays of the diffuse part (out) */
+    double *specular[3]; /* R, G, B arrays of the specular part (out) */
+} mr_brdf_batch;
+
 typedef struct mr_brdf_model mr_brdf_model;
 
 struct mr_brdf_model {
@@ -136,6 +149,15 @@ struct mr_brdf_model {
      * in some channel with trim on). Texture maps hold values where it does not: random sweeps draw there
      * (remap/sweep.h, the TEXTURE region) and learned transforms leave such rows out (learn/sweep_table.h). */
     int (*rescales)(const mr_brdf_model *model, const double *values);
+    /* Optional (NULL: mr_brdf_eval_batch loops over eval): eval over a batch of direction pairs at once, for the
+     * render loop (render.c evaluates a material without maps over its samples in batches). Contract: each output
+     * equals what eval writes for that pair within MR_BRDF_BATCH_RTOL relative to the pair's largest value (both
+     * parts, all channels) or MR_BRDF_BATCH_ATOL absolute (tests/test_batch.c checks it for every model and both
+     * instruction sets); the result of a pair depends on that pair and `vector` alone, never on n or its position
+     * in the batch (so renders stay the same for any thread count and chunking). `vector` nonzero asks for the
+     * AVX2/FMA kernel, which is used only where the CPU has both (mr_brdf_batch_cpu_vector); zero asks for the
+     * portable one. Kernels use brdf_batch.h's exp/log/pow, not libm's (a call would stop the vectorisation). */
+    void (*eval_batch)(const void *state, const mr_brdf_batch *batch, int vector);
 };
 
 /* A prepared state on the stack: `mr_brdf_state st; model->prepare(model, values, st.bytes);` */
@@ -249,6 +271,24 @@ size_t mr_brdf_format_ties(const mr_brdf_model *source, const mr_brdf_model *tar
  * caller's hold) keeps its value: a hold wins over a tie. */
 void mr_brdf_apply_ties(const mr_brdf_model *source, const double *source_values, const mr_brdf_model *target,
                         const mr_brdf_ties *ties, double *target_values, unsigned *held);
+
+/* ---- batches (brdf_batch.c; the eval_batch contract above) ---- */
+
+/* Tolerances of eval_batch against eval: relative to the pair's largest output, or absolute (the absolute bound
+ * covers Mitsuba's cut-offs, D cos_h < 1e-20 and Ward's S <= 1e-10, which a last-bit difference can move across). */
+#define MR_BRDF_BATCH_RTOL 1e-12
+#define MR_BRDF_BATCH_ATOL 1e-9
+
+/* f_r over a batch: model->eval_batch(state, batch, vector), or a loop over model->eval when the model has none. */
+void mr_brdf_eval_batch(const mr_brdf_model *model, const void *state, const mr_brdf_batch *batch, int vector);
+
+/* Whether this CPU runs the AVX2/FMA kernels (checked once, thread-safely; 0 off x86). */
+int mr_brdf_batch_cpu_vector(void);
+
+/* The `vector` a render passes by default: mr_brdf_batch_cpu_vector(), unless the environment variable
+ * MATREMAP_SIMD is "scalar" (then 0: the portable kernels, for tests and comparisons; docs/performance.md). Read
+ * once per process, thread-safely. */
+int mr_brdf_batch_vector_default(void);
 
 /* Convenience: prepare + eval of the full f_r (diffuse + specular) into rgb[3]. */
 void mr_brdf_eval_full(const mr_brdf_model *model, const double *values, const double wi[3],

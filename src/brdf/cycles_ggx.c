@@ -55,7 +55,7 @@
  * albedos add up to at most 1 (the diffuse is not dimmed by the Fresnel term).
  * Gradient: analytic for every parameter (roughness through alpha = roughness^2, D and G).
  */
-#include "brdf_internal.h"
+#include "brdf_batch.h"
 
 /* Slots of the packed value vector. */
 enum { CG_ROUGHNESS = 0, CG_F0 = 1, CG_DIFFUSE = 4, CG_CORRELATED = 7 };
@@ -114,6 +114,40 @@ static void cg_eval(const void *state_bytes, const double wi[3], const double wo
     }
 }
 
+/* eval over a batch for either G (a constant in each call below): cg_eval's operations. */
+MR_BATCH_INLINE void cg_batch_loop(const cg_state *state, const mr_brdf_batch *batch, const int correlated,
+                                   const int fused) {
+    const double alpha = state->alpha;
+    const double d0 = state->diffuse_over_pi[0], d1 = state->diffuse_over_pi[1], d2 = state->diffuse_over_pi[2];
+    const double f0 = state->f0[0], f1 = state->f0[1], f2 = state->f0[2];
+    MR_BATCH_ARRAYS(batch);
+#pragma omp simd
+    for (int i = 0; i < n_; i++) {
+        mr_brdf_geom g;
+        const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
+        const double lobe = correlated ? mr_batch_ggx_dv_correlated(alpha, &g)
+                                       : mr_batch_mf_dg(MR_MF_GGX, alpha, &g, 0, fused);
+        const double dg = lit ? lobe : 0.0;
+        const double w = mr_schlick_weight(g.dot_h);
+        d0_[i] = lit ? d0 : 0.0;
+        d1_[i] = lit ? d1 : 0.0;
+        d2_[i] = lit ? d2 : 0.0;
+        s0_[i] = (f0 + (1.0 - f0) * w) * dg;
+        s1_[i] = (f1 + (1.0 - f1) * w) * dg;
+        s2_[i] = (f2 + (1.0 - f2) * w) * dg;
+    }
+}
+
+MR_BATCH_INLINE void cg_batch_body(const void *state_bytes, const mr_brdf_batch *batch, const int fused) {
+    const cg_state *state = state_bytes;
+    if (state->correlated)
+        cg_batch_loop(state, batch, 1, fused);
+    else
+        cg_batch_loop(state, batch, 0, fused);
+}
+
+MR_BATCH_KERNEL(cg_eval_batch, cg_batch_body)
+
 static void cg_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3],
                          const double wo[3], double *d_diffuse, double *d_specular) {
     mr_brdf_geom g;
@@ -141,5 +175,6 @@ const mr_brdf_model mr_brdf_cycles_ggx = {
     .config = NULL,
     .prepare = cg_prepare,
     .eval = cg_eval,
+    .eval_batch = cg_eval_batch,
     .eval_grad = cg_eval_grad,
 };

@@ -54,7 +54,7 @@
  * Cycles' model, not a bug here.
  * Gradient: analytic for every parameter (one-sided where cspec0 saturates, where FH clamps, and at lum = 0).
  */
-#include "brdf_internal.h"
+#include "brdf_batch.h"
 
 /* Slots of the packed value vector. */
 enum { CP_BASE = 0, CP_METALLIC = 3, CP_SPECULAR = 4, CP_SPECULAR_TINT = 5, CP_ROUGHNESS = 6 };
@@ -149,6 +149,36 @@ static void cp_eval(const void *state_bytes, const double wi[3], const double wo
     }
 }
 
+/* eval over a batch (brdf.h eval_batch): cp_eval's operations (cp_burley and cp_fh are small enough to inline). */
+MR_BATCH_INLINE void cp_batch_body(const void *state_bytes, const mr_brdf_batch *batch, const int fused) {
+    const cp_state *state = state_bytes;
+    const double alpha = state->alpha, roughness = state->roughness, ior = state->ior, F0 = state->F0;
+    const double d0 = state->diffuse_over_pi[0], d1 = state->diffuse_over_pi[1], d2 = state->diffuse_over_pi[2];
+    const double c0 = state->cspec0[0], c1 = state->cspec0[1], c2 = state->cspec0[2];
+    MR_BATCH_ARRAYS(batch);
+#pragma omp simd
+    for (int i = 0; i < n_; i++) {
+        mr_brdf_geom g;
+        const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
+        // cp_burley
+        const double FL = mr_schlick_weight(MR_MIN(g.cos_i, 1.0)), FV = mr_schlick_weight(MR_MIN(g.cos_o, 1.0));
+        const double LH2 = 0.5 * g.h_len2, RR = roughness * LH2;
+        const double B = (1.0 - 0.5 * FV) * (1.0 - 0.5 * FL) + RR * (FL + FV + FL * FV * (RR - 1.0));
+        const double dg = lit ? mr_batch_mf_dg(MR_MF_GGX, alpha, &g, 0, fused) : 0.0;
+        // cp_fh
+        const double Fr = mr_fresnel_dielectric(g.dot_h, ior, NULL);
+        const double FH = mr_clampd((Fr - F0) / (1.0 - F0), 0.0, 1.0);
+        d0_[i] = lit ? d0 * B : 0.0;
+        d1_[i] = lit ? d1 * B : 0.0;
+        d2_[i] = lit ? d2 * B : 0.0;
+        s0_[i] = (c0 * (1.0 - FH) + FH) * dg;
+        s1_[i] = (c1 * (1.0 - FH) + FH) * dg;
+        s2_[i] = (c2 * (1.0 - FH) + FH) * dg;
+    }
+}
+
+MR_BATCH_KERNEL(cp_eval_batch, cp_batch_body)
+
 static void cp_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3],
                          const double wo[3], double *d_diffuse, double *d_specular) {
     mr_brdf_geom g;
@@ -217,5 +247,6 @@ const mr_brdf_model mr_brdf_cycles_principled = {
     .config = NULL,
     .prepare = cp_prepare,
     .eval = cp_eval,
+    .eval_batch = cp_eval_batch,
     .eval_grad = cp_eval_grad,
 };

@@ -25,7 +25,7 @@
  * is not dimmed by the Fresnel term), so the model carries MR_BRDF_INDEPENDENT_LOBES like `ggx`.
  * Gradient: analytic for every parameter.
  */
-#include "brdf_internal.h"
+#include "brdf_batch.h"
 
 enum { GM_ALBEDO = 0, GM_METALLIC = 3, GM_ALPHA = 4, GM_F0D = 5 };
 
@@ -76,6 +76,30 @@ static void gm_eval(const void *state_bytes, const double wi[3], const double wo
     }
 }
 
+/* eval over a batch (brdf.h eval_batch): gm_eval's operations. */
+MR_BATCH_INLINE void gm_batch_body(const void *state_bytes, const mr_brdf_batch *batch, const int fused) {
+    const gm_state *state = state_bytes;
+    const double alpha = state->alpha;
+    const double d0 = state->diffuse_over_pi[0], d1 = state->diffuse_over_pi[1], d2 = state->diffuse_over_pi[2];
+    const double f0 = state->f0[0], f1 = state->f0[1], f2 = state->f0[2];
+    MR_BATCH_ARRAYS(batch);
+#pragma omp simd
+    for (int i = 0; i < n_; i++) {
+        mr_brdf_geom g;
+        const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
+        const double dg = lit ? mr_batch_mf_dg(MR_MF_GGX, alpha, &g, 1, fused) : 0.0;
+        const double w = mr_schlick_weight(g.dot_h);
+        d0_[i] = lit ? d0 : 0.0;
+        d1_[i] = lit ? d1 : 0.0;
+        d2_[i] = lit ? d2 : 0.0;
+        s0_[i] = (f0 + (1.0 - f0) * w) * dg;
+        s1_[i] = (f1 + (1.0 - f1) * w) * dg;
+        s2_[i] = (f2 + (1.0 - f2) * w) * dg;
+    }
+}
+
+MR_BATCH_KERNEL(gm_eval_batch, gm_batch_body)
+
 static void gm_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3], const double wo[3],
                          double *d_diffuse, double *d_specular) {
     mr_brdf_geom g;
@@ -108,5 +132,6 @@ const mr_brdf_model mr_brdf_ggx_metallic = {
     .config = NULL,
     .prepare = gm_prepare,
     .eval = gm_eval,
+    .eval_batch = gm_eval_batch,
     .eval_grad = gm_eval_grad,
 };

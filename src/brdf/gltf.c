@@ -46,7 +46,7 @@
  * Gradient: analytic for every parameter (one-sided where specular_color x f0 reaches 1 or two channels tie for
  * max F).
  */
-#include "brdf_internal.h"
+#include "brdf_batch.h"
 
 /* Slots of the packed value vector. */
 enum { GLTF_BASE = 0, GLTF_METALLIC = 3, GLTF_ROUGHNESS = 4, GLTF_SPECULAR = 5, GLTF_SPECULAR_COLOR = 6,
@@ -118,6 +118,36 @@ static void gltf_eval(const void *state_bytes, const double wi[3], const double 
     }
 }
 
+/* eval over a batch (brdf.h eval_batch): gltf_eval's operations. */
+MR_BATCH_INLINE void gltf_batch_body(const void *state_bytes, const mr_brdf_batch *batch, const int fused) {
+    (void)fused; // no exp or pow here
+    const gltf_state *state = state_bytes;
+    const double alpha = state->alpha, m = state->metallic, spec = state->specular;
+    const double b0 = state->base[0], b1 = state->base[1], b2 = state->base[2];
+    const double f0 = state->f0[0], f1 = state->f0[1], f2 = state->f0[2];
+    MR_BATCH_ARRAYS(batch);
+#pragma omp simd
+    for (int i = 0; i < n_; i++) {
+        mr_brdf_geom g;
+        const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
+        const double w = mr_schlick_weight(g.dot_h);
+        const double F0 = f0 + (spec - f0) * w, F1 = f1 + (spec - f1) * w, F2 = f2 + (spec - f2) * w;
+        double Fmax = 0.0;
+        Fmax = MR_MAX(Fmax, F0);
+        Fmax = MR_MAX(Fmax, F1);
+        Fmax = MR_MAX(Fmax, F2);
+        const double S = lit ? mr_batch_ggx_dv_correlated(alpha, &g) : 0.0;
+        d0_[i] = lit ? (1.0 - m) * (1.0 - Fmax) * b0 * MR_INV_PI : 0.0;
+        d1_[i] = lit ? (1.0 - m) * (1.0 - Fmax) * b1 * MR_INV_PI : 0.0;
+        d2_[i] = lit ? (1.0 - m) * (1.0 - Fmax) * b2 * MR_INV_PI : 0.0;
+        s0_[i] = ((1.0 - m) * F0 + m * (b0 + (1.0 - b0) * w)) * S;
+        s1_[i] = ((1.0 - m) * F1 + m * (b1 + (1.0 - b1) * w)) * S;
+        s2_[i] = ((1.0 - m) * F2 + m * (b2 + (1.0 - b2) * w)) * S;
+    }
+}
+
+MR_BATCH_KERNEL(gltf_eval_batch, gltf_batch_body)
+
 static void gltf_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3],
                            const double wo[3], double *d_diffuse, double *d_specular) {
     mr_brdf_geom g;
@@ -181,5 +211,6 @@ const mr_brdf_model mr_brdf_gltf = {
     .config = NULL,
     .prepare = gltf_prepare,
     .eval = gltf_eval,
+    .eval_batch = gltf_eval_batch,
     .eval_grad = gltf_eval_grad,
 };

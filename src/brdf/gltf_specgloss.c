@@ -25,7 +25,7 @@
  * Gradient: analytic for every parameter (one-sided where two specular channels tie for the maximum, and 0 in
  * the flat glossiness > 0.99 band).
  */
-#include "brdf_internal.h"
+#include "brdf_batch.h"
 
 /* Slots of the packed value vector. */
 enum { SG_DIFFUSE = 0, SG_SPECULAR = 3, SG_GLOSSINESS = 6 };
@@ -89,6 +89,32 @@ static void specgloss_eval(const void *state_bytes, const double wi[3], const do
     }
 }
 
+/* eval over a batch (brdf.h eval_batch): specgloss_eval's operations. */
+MR_BATCH_INLINE void specgloss_batch_body(const void *state_bytes, const mr_brdf_batch *batch, const int fused) {
+    (void)fused; // no exp or pow here
+    const specgloss_state *state = state_bytes;
+    const double alpha = state->alpha;
+    const double c0 = state->c_diff_over_pi[0], c1 = state->c_diff_over_pi[1], c2 = state->c_diff_over_pi[2];
+    const double f0 = state->f0[0], f1 = state->f0[1], f2 = state->f0[2];
+    MR_BATCH_ARRAYS(batch);
+#pragma omp simd
+    for (int i = 0; i < n_; i++) {
+        mr_brdf_geom g;
+        const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
+        const double w = mr_schlick_weight(g.dot_h);
+        const double S = lit ? mr_batch_ggx_dv_correlated(alpha, &g) : 0.0;
+        const double F0 = f0 + (1.0 - f0) * w, F1 = f1 + (1.0 - f1) * w, F2 = f2 + (1.0 - f2) * w;
+        d0_[i] = lit ? (1.0 - F0) * c0 : 0.0;
+        d1_[i] = lit ? (1.0 - F1) * c1 : 0.0;
+        d2_[i] = lit ? (1.0 - F2) * c2 : 0.0;
+        s0_[i] = F0 * S;
+        s1_[i] = F1 * S;
+        s2_[i] = F2 * S;
+    }
+}
+
+MR_BATCH_KERNEL(specgloss_eval_batch, specgloss_batch_body)
+
 static void specgloss_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3],
                                 const double wo[3], double *d_diffuse, double *d_specular) {
     mr_brdf_geom g;
@@ -126,5 +152,6 @@ const mr_brdf_model mr_brdf_gltf_specgloss = {
     .config = NULL,
     .prepare = specgloss_prepare,
     .eval = specgloss_eval,
+    .eval_batch = specgloss_eval_batch,
     .eval_grad = specgloss_eval_grad,
 };

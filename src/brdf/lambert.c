@@ -7,8 +7,7 @@
  * Source: Mitsuba 0.6 src/bsdfs/diffuse.cpp (eval() there includes cos(theta_o); ours does not, see brdf.h).
  * Energy: the white-furnace albedo is exactly `albedo` for every incident direction.
  */
-#include "../mr_internal.h"
-#include "brdf.h"
+#include "brdf_batch.h"
 
 typedef struct lambert_state {
     double albedo_over_pi[3];
@@ -35,6 +34,25 @@ static void lambert_eval(const void *state_bytes, const double wi[3], const doub
     }
 }
 
+/* eval over a batch (brdf.h eval_batch). */
+MR_BATCH_INLINE void lambert_batch_body(const void *state_bytes, const mr_brdf_batch *batch, const int fused) {
+    (void)fused;
+    const lambert_state *state = state_bytes;
+    const double a0 = state->albedo_over_pi[0], a1 = state->albedo_over_pi[1], a2 = state->albedo_over_pi[2];
+    MR_BATCH_ARRAYS(batch);
+    (void)ix_, (void)iy_, (void)ox_, (void)oy_;
+#pragma omp simd
+    for (int i = 0; i < n_; i++) {
+        const int lit = (iz_[i] > 0.0) & (oz_[i] > 0.0);
+        d0_[i] = lit ? a0 : 0.0;
+        d1_[i] = lit ? a1 : 0.0;
+        d2_[i] = lit ? a2 : 0.0;
+        s0_[i] = s1_[i] = s2_[i] = 0.0;
+    }
+}
+
+MR_BATCH_KERNEL(lambert_eval_batch, lambert_batch_body)
+
 static void lambert_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3],
                               const double wo[3], double *d_diffuse, double *d_specular) {
     (void)model;
@@ -57,5 +75,6 @@ const mr_brdf_model mr_brdf_lambert = {
     .config = NULL,
     .prepare = lambert_prepare,
     .eval = lambert_eval,
+    .eval_batch = lambert_eval_batch,
     .eval_grad = lambert_eval_grad,
 };

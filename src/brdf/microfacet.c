@@ -75,7 +75,7 @@
  * and at Mitsuba's D cut-off; where the conductor Fresnel has a square-root branch point (k = 0 and
  * eta <= sin(theta)) the infinite derivative is reported as 0.
  */
-#include "brdf_internal.h"
+#include "brdf_batch.h"
 
 typedef enum mf_fresnel { MF_SCHLICK = 0, MF_NONE, MF_CONDUCTOR, MF_PLASTIC } mf_fresnel;
 
@@ -234,6 +234,70 @@ static void mf_eval(const void *state_bytes, const double wi[3], const double wo
     }
 }
 
+/* eval over a batch for one distribution and Fresnel mode (constants in each call below, so each of the twelve
+ * loops is specialised): mf_eval's operations, mr_batch_mf_dg for mr_mf_dg. */
+MR_BATCH_INLINE void mf_batch_loop(const mf_state *state, const mr_brdf_batch *batch, const mr_mf_dist dist,
+                                   const mf_fresnel fresnel, const int fused) {
+    const double alpha = state->alpha, ior = state->ior;
+    const double d0 = state->diffuse_over_pi[0], d1 = state->diffuse_over_pi[1], d2 = state->diffuse_over_pi[2];
+    const double r0 = state->spec[0], r1 = state->spec[1], r2 = state->spec[2];
+    const double e0 = state->eta[0], e1 = state->eta[1], e2 = state->eta[2];
+    const double k0 = state->k[0], k1 = state->k[1], k2 = state->k[2];
+    MR_BATCH_ARRAYS(batch);
+#pragma omp simd
+    for (int i = 0; i < n_; i++) {
+        mr_brdf_geom g;
+        const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
+        double transmit = 1.0;
+        if (fresnel == MF_PLASTIC)
+            transmit = (1.0 - mr_fresnel_dielectric(g.cos_i, ior, NULL)) *
+                       (1.0 - mr_fresnel_dielectric(g.cos_o, ior, NULL));
+        const double dg = lit ? mr_batch_mf_dg(dist, alpha, &g, 1, fused) : 0.0;
+        double f0 = r0, f1 = r1, f2 = r2; /* per channel: the factor of dg */
+        if (fresnel == MF_SCHLICK) {
+            const double w = mr_schlick_weight(g.dot_h);
+            f0 = r0 + (1.0 - r0) * w;
+            f1 = r1 + (1.0 - r1) * w;
+            f2 = r2 + (1.0 - r2) * w;
+        } else if (fresnel == MF_CONDUCTOR) {
+            f0 = r0 * mr_batch_fresnel_conductor(g.dot_h, e0, k0);
+            f1 = r1 * mr_batch_fresnel_conductor(g.dot_h, e1, k1);
+            f2 = r2 * mr_batch_fresnel_conductor(g.dot_h, e2, k2);
+        } else if (fresnel == MF_PLASTIC) {
+            const double F = mr_fresnel_dielectric(g.dot_h, ior, NULL);
+            f0 = r0 * F;
+            f1 = r1 * F;
+            f2 = r2 * F;
+        }
+        // mf_eval: (F0 + (1 - F0) w) dg, rho_s dg, rho_s F_cond dg (0 where dg is), rho_s F dg.
+        s0_[i] = f0 * dg;
+        s1_[i] = f1 * dg;
+        s2_[i] = f2 * dg;
+        d0_[i] = lit ? d0 * transmit : 0.0;
+        d1_[i] = lit ? d1 * transmit : 0.0;
+        d2_[i] = lit ? d2 * transmit : 0.0;
+    }
+}
+
+#define MF_BATCH_CASES(dist)                                                                                     \
+    switch (state->fresnel) {                                                                                    \
+    case MF_SCHLICK: mf_batch_loop(state, batch, dist, MF_SCHLICK, fused); break;                                \
+    case MF_NONE: mf_batch_loop(state, batch, dist, MF_NONE, fused); break;                                      \
+    case MF_CONDUCTOR: mf_batch_loop(state, batch, dist, MF_CONDUCTOR, fused); break;                            \
+    default: mf_batch_loop(state, batch, dist, MF_PLASTIC, fused); break;                                        \
+    }
+
+MR_BATCH_INLINE void mf_batch_body(const void *state_bytes, const mr_brdf_batch *batch, const int fused) {
+    const mf_state *state = state_bytes;
+    switch (state->dist) {
+    case MR_MF_GGX: MF_BATCH_CASES(MR_MF_GGX) break;
+    case MR_MF_BECKMANN: MF_BATCH_CASES(MR_MF_BECKMANN) break;
+    default: MF_BATCH_CASES(MR_MF_EPHONG) break;
+    }
+}
+
+MR_BATCH_KERNEL(mf_eval_batch, mf_batch_body)
+
 static void mf_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3],
                          const double wo[3], double *d_diffuse, double *d_specular) {
     const mf_config *config = model->config;
@@ -310,6 +374,7 @@ static const mf_config mf_configs[MR_MF_DIST_COUNT][4] = {
         .config = &mf_configs[dist][fresnel],                                                            \
         .prepare = mf_prepare,                                                                           \
         .eval = mf_eval,                                                                                 \
+        .eval_batch = mf_eval_batch,                                                                     \
         .eval_grad = mf_eval_grad,                                                                       \
     }
 

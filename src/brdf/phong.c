@@ -26,7 +26,7 @@
  * Gradient: analytic for every parameter, including through trimming (one-sided where m = 1 or where two
  * channels tie for m).
  */
-#include "brdf_internal.h"
+#include "brdf_batch.h"
 
 /* Slots of the packed value vector. */
 enum { PHONG_DIFFUSE = 0, PHONG_SPECULAR = 3, PHONG_EXPONENT = 6, PHONG_TRIM = 7 };
@@ -91,6 +91,34 @@ static void phong_eval(const void *state_bytes, const double wi[3], const double
     }
 }
 
+/* eval over a batch (brdf.h eval_batch): phong_lobe's operations with mr_batch_pow for pow. The base of the power
+ * is kept at least 1e-300 (mr_batch_log takes normal numbers); below it pow's value is 0 or, for n = 0, 1 either
+ * way. */
+MR_BATCH_INLINE void phong_batch_body(const void *state_bytes, const mr_brdf_batch *batch, const int fused) {
+    const phong_state *state = state_bytes;
+    const double n = state->exponent;
+    const double d0 = state->diffuse_over_pi[0], d1 = state->diffuse_over_pi[1], d2 = state->diffuse_over_pi[2];
+    const double r0 = state->specular[0], r1 = state->specular[1], r2 = state->specular[2];
+    MR_BATCH_ARRAYS(batch);
+#pragma omp simd
+    for (int i = 0; i < n_; i++) {
+        mr_brdf_geom g;
+        const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
+        const double cos_r = g.cos_i * g.cos_o - ix_[i] * ox_[i] - iy_[i] * oy_[i];
+        const double base = cos_r > 1e-300 ? MR_MIN(cos_r, 1.0) : 1e-300;
+        const double lobe = (n + 2.0) * (0.5 * MR_INV_PI) * mr_batch_pow(base, n, fused);
+        const double S = (lit & (cos_r > 0.0)) ? lobe : 0.0;
+        d0_[i] = lit ? d0 : 0.0;
+        d1_[i] = lit ? d1 : 0.0;
+        d2_[i] = lit ? d2 : 0.0;
+        s0_[i] = r0 * S;
+        s1_[i] = r1 * S;
+        s2_[i] = r2 * S;
+    }
+}
+
+MR_BATCH_KERNEL(phong_eval_batch, phong_batch_body)
+
 static void phong_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3],
                             const double wo[3], double *d_diffuse, double *d_specular) {
     mr_brdf_geom g;
@@ -119,6 +147,7 @@ const mr_brdf_model mr_brdf_phong = {
     .config = NULL,
     .prepare = phong_prepare,
     .eval = phong_eval,
+    .eval_batch = phong_eval_batch,
     .eval_grad = phong_eval_grad,
     .rescales = phong_rescales,
 };

@@ -46,7 +46,7 @@
  * Gradient: analytic for every parameter, including through trimming (one-sided where m = 1 or where two
  * channels tie for m).
  */
-#include "brdf_internal.h"
+#include "brdf_batch.h"
 
 typedef enum ward_variant { WARD_ORIGINAL = 0, WARD_DUER, WARD_BALANCED } ward_variant;
 
@@ -134,6 +134,50 @@ static void ward_eval(const void *state_bytes, const double wi[3], const double 
     }
 }
 
+/* eval over a batch for one variant (a constant in each call below, so each loop is specialised): ward_lobe's
+ * operations with mr_batch_exp for exp. */
+MR_BATCH_INLINE void ward_batch_loop(const ward_state *state, const mr_brdf_batch *batch, const ward_variant variant,
+                                     const int fused) {
+    const double alpha = state->alpha, a2 = alpha * alpha;
+    const double d0 = state->diffuse_over_pi[0], d1 = state->diffuse_over_pi[1], d2 = state->diffuse_over_pi[2];
+    const double r0 = state->specular[0], r1 = state->specular[1], r2 = state->specular[2];
+    MR_BATCH_ARRAYS(batch);
+#pragma omp simd
+    for (int i = 0; i < n_; i++) {
+        mr_brdf_geom g;
+        const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
+        double norm;
+        if (variant == WARD_ORIGINAL) {
+            norm = 1.0 / (4.0 * MR_PI * a2 * sqrt(g.cos_i * g.cos_o));
+        } else if (variant == WARD_DUER) {
+            norm = 1.0 / (4.0 * MR_PI * a2 * g.cos_i * g.cos_o);
+        } else {
+            const double hz2 = g.hz * g.hz;
+            norm = g.h_len2 / (MR_PI * a2 * hz2 * hz2);
+        }
+        const double exponent = -g.tan2_h / a2;
+        const double lobe = norm * mr_batch_exp(exponent, fused);
+        const double S = (lit & (exponent > -700.0) & (lobe > 1e-10)) ? lobe : 0.0;
+        d0_[i] = lit ? d0 : 0.0;
+        d1_[i] = lit ? d1 : 0.0;
+        d2_[i] = lit ? d2 : 0.0;
+        s0_[i] = r0 * S;
+        s1_[i] = r1 * S;
+        s2_[i] = r2 * S;
+    }
+}
+
+MR_BATCH_INLINE void ward_batch_body(const void *state_bytes, const mr_brdf_batch *batch, const int fused) {
+    const ward_state *state = state_bytes;
+    switch (state->variant) {
+    case WARD_ORIGINAL: ward_batch_loop(state, batch, WARD_ORIGINAL, fused); break;
+    case WARD_DUER: ward_batch_loop(state, batch, WARD_DUER, fused); break;
+    default: ward_batch_loop(state, batch, WARD_BALANCED, fused); break;
+    }
+}
+
+MR_BATCH_KERNEL(ward_eval_batch, ward_batch_body)
+
 static void ward_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3],
                            const double wo[3], double *d_diffuse, double *d_specular) {
     mr_brdf_geom g;
@@ -163,6 +207,7 @@ static int ward_rescales(const mr_brdf_model *model, const double *values) {
         .config = &ward_configs[index],                                                                  \
         .prepare = ward_prepare,                                                                         \
         .eval = ward_eval,                                                                               \
+        .eval_batch = ward_eval_batch,                                                                   \
         .eval_grad = ward_eval_grad,                                                                     \
         .rescales = ward_rescales,                                                                       \
     }

@@ -17,6 +17,7 @@
  * for any thread count.
  */
 #include <limits.h>
+#include <omp.h>
 #include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -107,6 +108,9 @@ struct mr_render_plan {
      * first, installed with a compare-and-swap (a thread that loses frees its copy), freed with this plan. */
     _Atomic(struct mr_render_plan *) zoomed;
     double zoom;           /* of a plan made by mr_render_plan_zoomed: its zoom factor */
+    /* The point samples as structure of arrays for batched renders (point_soa below): built on first use like
+     * `zoomed`, freed with this plan. */
+    _Atomic(struct point_soa *) point_soa;
 };
 
 
@@ -675,9 +679,26 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
     return 1;
 }
 
+/* The plan's point samples in plan order as structure of arrays, what a batched render reads: sample s is lit from
+ * light[.][s] with weight[.][s] and seen from view[.][s] (its hit's view, repeated for each of the hit's samples). */
+typedef struct point_soa {
+    double *view[3], *light[3], *weight[3]; /* x, y, z (view, light) and R, G, B (weight) arrays */
+    double *block;                          /* the one allocation all nine arrays live in */
+    int *pixel_begin; /* [lit_pixels + 1]: lit pixel i's samples are [pixel_begin[i], pixel_begin[i + 1]) (its hits'
+                         samples follow each other in plan order, so a render need not walk the hits) */
+} point_soa;
+
+static void point_soa_free(point_soa *soa) {
+    if (soa == NULL) return;
+    free(soa->block);
+    free(soa->pixel_begin);
+    free(soa);
+}
+
 void mr_render_plan_free(mr_render_plan *plan) {
     if (plan == NULL) return;
     mr_render_plan_free(atomic_load(&plan->zoomed));
+    point_soa_free(atomic_load(&plan->point_soa));
     free(plan->coverage);
     free(plan->lit_pixel_index);
     free(plan->hit_begin);
@@ -711,6 +732,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     if (plan == NULL || corner_hit == NULL || rows == NULL) goto oom;
     if (!mr_highlight_quadrature_build(tr.highlights, tr.highlight_count, &tr.quadrature)) goto oom;
     atomic_init(&plan->zoomed, NULL);
+    atomic_init(&plan->point_soa, NULL);
     plan->scene = *scene;
     plan->coverage = calloc((size_t)width * (size_t)height, sizeof *plan->coverage);
     if (plan->coverage == NULL) goto oom;
@@ -876,7 +898,9 @@ size_t mr_render_plan_bytes(const mr_render_plan *plan) {
            (plan->hits[hits].reflection_begin + 1) * sizeof *plan->reflection_samples +
            (size_t)plan->env.count * (sizeof *plan->env.direction + sizeof *plan->env.weight +
                                       (plan->env.mis_npdf ? sizeof *plan->env.mis_npdf : 0)) +
-           mr_mesh_world_bytes(&plan->mesh) + (zoomed ? mr_render_plan_bytes(zoomed) : 0);
+           mr_mesh_world_bytes(&plan->mesh) + (zoomed ? mr_render_plan_bytes(zoomed) : 0) +
+           (atomic_load(&plan->point_soa) ? 9 * (size_t)plan->hits[hits].point_begin * sizeof(double) +
+                                                (lit + 1) * sizeof(int) : 0);
 }
 
 mr_status mr_render_plan_zoomed(const mr_render_plan *plan, double zoom, const mr_render_plan **out) {
@@ -1022,11 +1046,357 @@ static mr_status material_state_init(const mr_material_binding *material, int in
     return MR_OK;
 }
 
+/* The plan's point samples as structure of arrays (point_soa), built by the first render that asks (any thread;
+ * the first to finish installs its copy with a compare-and-swap, a loser frees its own). NULL when out of memory:
+ * the caller then takes the per-sample loop, which needs nothing more. */
+static const point_soa *plan_point_soa(const mr_render_plan *plan) {
+    // The plan is const to its users; this cache slot changes, atomically (as `zoomed`, mr_render_plan_zoomed).
+    _Atomic(point_soa *) *slot = &((mr_render_plan *)plan)->point_soa;
+    point_soa *made = atomic_load_explicit(slot, memory_order_acquire);
+    if (made != NULL) return made;
+    const size_t count = (size_t)plan->hits[plan->hit_count].point_begin;
+    made = calloc(1, sizeof *made);
+    double *block = made ? malloc((9 * count + 1) * sizeof *block) : NULL;
+    int *pixel_begin = block ? malloc(((size_t)plan->lit_pixels + 1) * sizeof *pixel_begin) : NULL;
+    if (pixel_begin == NULL) {
+        free(block);
+        free(made);
+        return NULL;
+    }
+    made->block = block;
+    made->pixel_begin = pixel_begin;
+    for (int i = 0; i <= plan->lit_pixels; i++) pixel_begin[i] = plan->hits[plan->hit_begin[i]].point_begin;
+    for (int k = 0; k < 3; k++) {
+        made->view[k] = block + (size_t)k * count;
+        made->light[k] = block + (size_t)(3 + k) * count;
+        made->weight[k] = block + (size_t)(6 + k) * count;
+    }
+    for (int h = 0; h < plan->hit_count; h++) {
+        const plan_hit *hit = &plan->hits[h];
+        for (int s = hit->point_begin; s < hit[1].point_begin; s++)
+            for (int k = 0; k < 3; k++) {
+                made->view[k][s] = hit->view[k];
+                made->light[k][s] = plan->point_samples[s].light[k];
+                made->weight[k][s] = plan->point_samples[s].weight[k];
+            }
+    }
+    point_soa *expected = NULL;
+    if (!atomic_compare_exchange_strong_explicit(slot, &expected, made, memory_order_acq_rel, memory_order_acquire)) {
+        point_soa_free(made); // another thread installed its copy first
+        made = expected;
+    }
+    return made;
+}
+
+/* Lit pixels per task of a batched render, and point samples per evaluated batch. The pixels are cut into fixed
+ * blocks and each block into batches from its first sample on, whatever the thread count, so every image is the
+ * same for any number of threads (and a pair's value does not depend on its batch anyway: brdf.h). */
+#define RENDER_BATCH_PIXELS 64
+#define RENDER_BATCH_SAMPLES 256
+
+/* The most point samples a plan lays out as structure of arrays (about 76 bytes each, 300 MB at the limit; the fit
+ * scene has 0.11 M at 512^2); larger plans, rendered once or twice rather than in an optimiser's loop, gather their
+ * batches from the hits instead (render_gathered) and keep no copy. */
+#define RENDER_SOA_MAX_SAMPLES (1 << 22)
+
+/* A batch's values times their samples' weights, in place, before the pixels sum them: (fd + fs) w into fd for a full
+ * render, fd w and fs w for the parts. The same products the per-sample loop adds (accumulate), in a loop the
+ * compiler vectorises; the pixels' sums are then plain additions in plan order. */
+static inline __attribute__((always_inline)) void weigh_batch(double fd[3][RENDER_BATCH_SAMPLES],
+                                                              double fs[3][RENDER_BATCH_SAMPLES],
+                                                              const double *const weight[3], int n,
+                                                              const int want_full) {
+    for (int c = 0; c < 3; c++) {
+        double *restrict d = fd[c], *restrict f = fs[c];
+        const double *restrict w = weight[c];
+        if (want_full) {
+#pragma omp simd
+            for (int j = 0; j < n; j++) d[j] = (d[j] + f[j]) * w[j];
+        } else {
+#pragma omp simd
+            for (int j = 0; j < n; j++) {
+                d[j] *= w[j];
+                f[j] *= w[j];
+            }
+        }
+    }
+}
+
+/* One block of lit pixels [first, end) of a batched render, for the parts asked for (constants in each call of
+ * render_batched, so that the sums stay in registers): the model's eval_batch over the block's samples in batches,
+ * weighed (weigh_batch), then each lit pixel sums its samples in plan order, which is accumulate()'s arithmetic
+ * (and, where the surface emits, each hit's emission after its samples, as the per-sample loop does). */
+static inline __attribute__((always_inline)) void render_block(const mr_render_plan *plan, const point_soa *soa,
+                                                               const mr_brdf_model *model, const void *state,
+                                                               int vector, int first, int end, mr_image *full,
+                                                               mr_image *diffuse, mr_image *specular,
+                                                               const int want_full, const int want_diffuse,
+                                                               const int want_specular) {
+    double fd[3][RENDER_BATCH_SAMPLES], fs[3][RENDER_BATCH_SAMPLES];
+    const int samples_end = soa->pixel_begin[end];
+    int batch_begin = soa->pixel_begin[first], batch_end = batch_begin;
+    for (int i = first; i < end; i++) {
+        double f0 = 0.0, f1 = 0.0, f2 = 0.0, d0 = 0.0, d1 = 0.0, d2 = 0.0, s0 = 0.0, s1 = 0.0, s2 = 0.0;
+        // Without emission a pixel's samples are one range; with it, hit by hit, each hit's emission after.
+        const int hit_first = plan->emits ? plan->hit_begin[i] : 0;
+        const int hit_end = plan->emits ? plan->hit_begin[i + 1] : 1;
+        for (int h = hit_first; h < hit_end; h++) {
+            const int s_first = plan->emits ? plan->hits[h].point_begin : soa->pixel_begin[i];
+            const int s_end = plan->emits ? plan->hits[h + 1].point_begin : soa->pixel_begin[i + 1];
+            for (int s = s_first; s < s_end; s++) {
+                if (s >= batch_end) {
+                    batch_begin = s;
+                    batch_end = MR_MIN(samples_end, s + RENDER_BATCH_SAMPLES);
+                    const mr_brdf_batch batch = {
+                        batch_end - batch_begin,
+                        {soa->view[0] + s, soa->view[1] + s, soa->view[2] + s},
+                        {soa->light[0] + s, soa->light[1] + s, soa->light[2] + s},
+                        {fd[0], fd[1], fd[2]},
+                        {fs[0], fs[1], fs[2]},
+                    };
+                    mr_brdf_eval_batch(model, state, &batch, vector);
+                    const double *const weight[3] = {soa->weight[0] + s, soa->weight[1] + s, soa->weight[2] + s};
+                    weigh_batch(fd, fs, weight, batch.n, want_full);
+                }
+                const int j = s - batch_begin;
+                if (want_full) {
+                    f0 += fd[0][j];
+                    f1 += fd[1][j];
+                    f2 += fd[2][j];
+                }
+                if (want_diffuse) {
+                    d0 += fd[0][j];
+                    d1 += fd[1][j];
+                    d2 += fd[2][j];
+                }
+                if (want_specular) {
+                    s0 += fs[0][j];
+                    s1 += fs[1][j];
+                    s2 += fs[2][j];
+                }
+            }
+            if (want_full && plan->emits) {
+                f0 += plan->hits[h].emission[0];
+                f1 += plan->hits[h].emission[1];
+                f2 += plan->hits[h].emission[2];
+            }
+        }
+        const size_t pixel = (size_t)plan->lit_pixel_index[i];
+        if (want_full) {
+            const double uncovered = 1.0 - plan->coverage[pixel];
+            const double *bg = plan->scene.background;
+            full->pixels[pixel * 3 + 0] = (float)(f0 + bg[0] * uncovered);
+            full->pixels[pixel * 3 + 1] = (float)(f1 + bg[1] * uncovered);
+            full->pixels[pixel * 3 + 2] = (float)(f2 + bg[2] * uncovered);
+        }
+        if (want_diffuse) {
+            diffuse->pixels[pixel * 3 + 0] = (float)d0;
+            diffuse->pixels[pixel * 3 + 1] = (float)d1;
+            diffuse->pixels[pixel * 3 + 2] = (float)d2;
+        }
+        if (want_specular) {
+            specular->pixels[pixel * 3 + 0] = (float)s0;
+            specular->pixels[pixel * 3 + 1] = (float)s1;
+            specular->pixels[pixel * 3 + 2] = (float)s2;
+        }
+    }
+}
+
+/* A batch gathered from the hits (environment and reflection samples have no stored light direction or weight: the
+ * plan keeps a direction index, or float ones, per sample): each sample's view, light and weight, computed as the
+ * per-sample loop computes them, and the model's value. */
+typedef struct gathered_batch {
+    double view[3][RENDER_BATCH_SAMPLES], light[3][RENDER_BATCH_SAMPLES], weight[3][RENDER_BATCH_SAMPLES];
+    double fd[3][RENDER_BATCH_SAMPLES], fs[3][RENDER_BATCH_SAMPLES];
+} gathered_batch;
+
+/* Where a walk over a block's samples stands: hit h, its point samples (stage 0), environment samples (1) or
+ * reflection samples (2), sample k of that stage's array. */
+typedef struct sample_position {
+    int h, stage;
+    size_t k;
+} sample_position;
+
+/* Fills `out` with the samples from `at` on, in plan order, up to RENDER_BATCH_SAMPLES or hit `hit_end`, and
+ * evaluates them; returns how many. The light and weight of each are the per-sample loop's (render_core), operation
+ * for operation. */
+static int gather_batch(const mr_render_plan *plan, sample_position at, int hit_end, const mr_brdf_model *model,
+                        const void *state, int vector, gathered_batch *out) {
+    int n = 0;
+    for (int h = at.h; h < hit_end && n < RENDER_BATCH_SAMPLES; h++) {
+        const plan_hit *hit = &plan->hits[h];
+        const int stage_first = h == at.h ? at.stage : 0;
+        for (int stage = stage_first; stage < 3 && n < RENDER_BATCH_SAMPLES; stage++) {
+            size_t begin = stage == 0 ? (size_t)hit->point_begin : stage == 1 ? hit->env_begin : hit->reflection_begin;
+            const size_t end = stage == 0 ? (size_t)hit[1].point_begin
+                                          : stage == 1 ? hit[1].env_begin : hit[1].reflection_begin;
+            if (h == at.h && stage == at.stage) begin = at.k;
+            for (size_t e = begin; e < end && n < RENDER_BATCH_SAMPLES; e++, n++) {
+                double light[3], weight[3];
+                if (stage == 0) {
+                    const point_sample *sample = &plan->point_samples[e];
+                    for (int c = 0; c < 3; c++) {
+                        light[c] = sample->light[c];
+                        weight[c] = sample->weight[c];
+                    }
+                } else if (stage == 1) {
+                    const int k = plan->env_samples[e];
+                    const double *d = plan->env.direction[k];
+                    light[0] = vec3_dot(hit->tangent, d);
+                    light[1] = vec3_dot(hit->bitangent, d);
+                    light[2] = vec3_dot(hit->normal, d);
+                    double cos_share = light[2] * hit->env_share;
+                    if (plan->env.mis_npdf != NULL && plan->env.mis_npdf[k] > 0.0) {
+                        const double npdf = plan->env.mis_npdf[k];
+                        cos_share *= npdf / (npdf + reflection_density(&plan->env, &hit->mirror, d));
+                    }
+                    for (int c = 0; c < 3; c++) weight[c] = plan->env.weight[k][c] * cos_share;
+                } else {
+                    const reflection_sample *sample = &plan->reflection_samples[e];
+                    for (int c = 0; c < 3; c++) light[c] = sample->light[c];
+                    const double cos_share = light[2] * hit->env_share;
+                    for (int c = 0; c < 3; c++) weight[c] = sample->weight[c] * cos_share;
+                }
+                for (int c = 0; c < 3; c++) {
+                    out->view[c][n] = hit->view[c];
+                    out->light[c][n] = light[c];
+                    out->weight[c][n] = weight[c];
+                }
+            }
+        }
+    }
+    const mr_brdf_batch batch = {n,
+                                 {out->view[0], out->view[1], out->view[2]},
+                                 {out->light[0], out->light[1], out->light[2]},
+                                 {out->fd[0], out->fd[1], out->fd[2]},
+                                 {out->fs[0], out->fs[1], out->fs[2]}};
+    mr_brdf_eval_batch(model, state, &batch, vector);
+    return n;
+}
+
+/* render_block for plans with environment or reflection samples: the block's samples gathered batch by batch in
+ * plan order (gather_batch) and weighed (weigh_batch), each lit pixel summing its hits' point, environment and
+ * reflection samples and then the hit's emission, in the per-sample loop's order and arithmetic. */
+static inline __attribute__((always_inline)) void render_block_gathered(const mr_render_plan *plan,
+                                                                        const mr_brdf_model *model,
+                                                                        const void *state, int vector, int first,
+                                                                        int end, gathered_batch *buf,
+                                                                        mr_image *full, mr_image *diffuse,
+                                                                        mr_image *specular, const int want_full,
+                                                                        const int want_diffuse,
+                                                                        const int want_specular) {
+    const int hit_end = plan->hit_begin[end];
+    int n = 0, j = 0;
+    for (int i = first; i < end; i++) {
+        double f0 = 0.0, f1 = 0.0, f2 = 0.0, d0 = 0.0, d1 = 0.0, d2 = 0.0, s0 = 0.0, s1 = 0.0, s2 = 0.0;
+        for (int h = plan->hit_begin[i]; h < plan->hit_begin[i + 1]; h++) {
+            const plan_hit *hit = &plan->hits[h];
+            for (int stage = 0; stage < 3; stage++) {
+                const size_t begin = stage == 0 ? (size_t)hit->point_begin
+                                                : stage == 1 ? hit->env_begin : hit->reflection_begin;
+                const size_t stop = stage == 0 ? (size_t)hit[1].point_begin
+                                               : stage == 1 ? hit[1].env_begin : hit[1].reflection_begin;
+                for (size_t e = begin; e < stop; e++, j++) {
+                    if (j == n) {
+                        n = gather_batch(plan, (sample_position){h, stage, e}, hit_end, model, state, vector, buf);
+                        const double *const weight[3] = {buf->weight[0], buf->weight[1], buf->weight[2]};
+                        weigh_batch(buf->fd, buf->fs, weight, n, want_full);
+                        j = 0;
+                    }
+                    if (want_full) {
+                        f0 += buf->fd[0][j];
+                        f1 += buf->fd[1][j];
+                        f2 += buf->fd[2][j];
+                    }
+                    if (want_diffuse) {
+                        d0 += buf->fd[0][j];
+                        d1 += buf->fd[1][j];
+                        d2 += buf->fd[2][j];
+                    }
+                    if (want_specular) {
+                        s0 += buf->fs[0][j];
+                        s1 += buf->fs[1][j];
+                        s2 += buf->fs[2][j];
+                    }
+                }
+            }
+            if (want_full && plan->emits) {
+                f0 += hit->emission[0];
+                f1 += hit->emission[1];
+                f2 += hit->emission[2];
+            }
+        }
+        const size_t pixel = (size_t)plan->lit_pixel_index[i];
+        if (want_full) {
+            const double uncovered = 1.0 - plan->coverage[pixel];
+            const double *bg = plan->scene.background;
+            full->pixels[pixel * 3 + 0] = (float)(f0 + bg[0] * uncovered);
+            full->pixels[pixel * 3 + 1] = (float)(f1 + bg[1] * uncovered);
+            full->pixels[pixel * 3 + 2] = (float)(f2 + bg[2] * uncovered);
+        }
+        if (want_diffuse) {
+            diffuse->pixels[pixel * 3 + 0] = (float)d0;
+            diffuse->pixels[pixel * 3 + 1] = (float)d1;
+            diffuse->pixels[pixel * 3 + 2] = (float)d2;
+        }
+        if (want_specular) {
+            specular->pixels[pixel * 3 + 0] = (float)s0;
+            specular->pixels[pixel * 3 + 1] = (float)s1;
+            specular->pixels[pixel * 3 + 2] = (float)s2;
+        }
+    }
+}
+
+/* render_core for one material without maps over a plan with environment or reflection samples (or too many point
+ * samples for point_soa), in fixed blocks of lit pixels (render_block_gathered). Returns 0 when out of memory for the
+ * batch buffers (nothing rendered). */
+static int render_gathered(const mr_render_plan *plan, int threads, const mr_brdf_model *model, const void *state,
+                           int vector, mr_image *full, mr_image *diffuse, mr_image *specular) {
+    const int lit = plan->lit_pixels, blocks = (lit + RENDER_BATCH_PIXELS - 1) / RENDER_BATCH_PIXELS;
+    const int team = threads > 1 ? threads : 1;
+    gathered_batch *buffers = malloc((size_t)team * sizeof *buffers); // 60 kB each: too much for a thread's stack
+    if (buffers == NULL) return 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1)
+    for (int b = 0; b < blocks; b++) {
+        gathered_batch *buf = &buffers[team > 1 ? omp_get_thread_num() : 0];
+        const int first = b * RENDER_BATCH_PIXELS, end = MR_MIN(lit, first + RENDER_BATCH_PIXELS);
+        if (full)
+            render_block_gathered(plan, model, state, vector, first, end, buf, full, NULL, NULL, 1, 0, 0);
+        else if (diffuse && specular)
+            render_block_gathered(plan, model, state, vector, first, end, buf, NULL, diffuse, specular, 0, 1, 1);
+        else if (diffuse)
+            render_block_gathered(plan, model, state, vector, first, end, buf, NULL, diffuse, NULL, 0, 1, 0);
+        else
+            render_block_gathered(plan, model, state, vector, first, end, buf, NULL, NULL, specular, 0, 0, 1);
+    }
+    free(buffers);
+    return 1;
+}
+
+/* render_core for one uniform material over point samples only, in fixed blocks of lit pixels (render_block). */
+static void render_batched(const mr_render_plan *plan, const point_soa *soa, int threads, const mr_brdf_model *model,
+                           const void *state, int vector, mr_image *full, mr_image *diffuse, mr_image *specular) {
+    const int lit = plan->lit_pixels, blocks = (lit + RENDER_BATCH_PIXELS - 1) / RENDER_BATCH_PIXELS;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1)
+    for (int b = 0; b < blocks; b++) {
+        const int first = b * RENDER_BATCH_PIXELS, end = MR_MIN(lit, first + RENDER_BATCH_PIXELS);
+        if (full)
+            render_block(plan, soa, model, state, vector, first, end, full, NULL, NULL, 1, 0, 0);
+        else if (diffuse && specular)
+            render_block(plan, soa, model, state, vector, first, end, NULL, diffuse, specular, 0, 1, 1);
+        else if (diffuse)
+            render_block(plan, soa, model, state, vector, first, end, NULL, diffuse, NULL, 0, 1, 0);
+        else
+            render_block(plan, soa, model, state, vector, first, end, NULL, NULL, specular, 0, 0, 1);
+    }
+}
+
 /* Every render: `full` alone, or either or both of `diffuse` and `specular`, with one material for every hit
  * (count 1) or materials[hit's material]. Each lit pixel sums its hits' samples in plan order (the same for any
- * thread count); a textured material prepares the BRDF state per hit. */
+ * thread count); a textured material prepares the BRDF state per hit. One material without maps is evaluated in
+ * batches (render_batched, render_gathered) unless `path` asks for the per-sample loop (render_internal.h). */
 static mr_status render_core(const mr_render_plan *plan, int threads, const mr_material_binding *materials,
-                             int count, mr_image *full, mr_image *diffuse, mr_image *specular) {
+                             int count, mr_image *full, mr_image *diffuse, mr_image *specular, mr_render_path path) {
     mr_status status = check_target(plan, full, "output");
     if (status == MR_OK) status = check_target(plan, diffuse, "diffuse");
     if (status == MR_OK) status = check_target(plan, specular, "specular");
@@ -1053,10 +1423,32 @@ static mr_status render_core(const mr_render_plan *plan, int threads, const mr_m
     if (diffuse) fill_unlit(plan, diffuse, 0);
     if (specular) fill_unlit(plan, specular, 0);
 
+    if (threads <= 0) threads = plan->render_threads;
+    // One material without maps over point samples alone (the fit scene, every render of the optimiser's loop):
+    // batched, the model's eval_batch over the samples as structure of arrays.
+    const size_t env_samples = plan->hits[plan->hit_count].env_begin;
+    const size_t reflection_samples = plan->hits[plan->hit_count].reflection_begin;
+    // With environment or reflection samples, or more point samples than RENDER_SOA_MAX_SAMPLES, batches are
+    // gathered from the hits as the render goes.
+    if (path != MR_RENDER_PATH_PER_SAMPLE && used == 1 && states[0].binding_count == 0) {
+        const int vector = path == MR_RENDER_PATH_AUTO ? mr_brdf_batch_vector_default()
+                                                       : path == MR_RENDER_PATH_BATCH_VECTOR;
+        const int points = plan->hits[plan->hit_count].point_begin;
+        const point_soa *soa = env_samples == 0 && reflection_samples == 0 && points <= RENDER_SOA_MAX_SAMPLES
+                                   ? plan_point_soa(plan)
+                                   : NULL;
+        if (soa != NULL) {
+            render_batched(plan, soa, threads, states[0].model, states[0].shared.bytes, vector, full, diffuse,
+                           specular);
+            return MR_OK;
+        }
+        if (render_gathered(plan, threads, states[0].model, states[0].shared.bytes, vector, full, diffuse, specular))
+            return MR_OK;
+    }
+
     const int lit = plan->lit_pixels;
     // Pixels cost from one BRDF evaluation (a point light) to N * edge_samples^2 (an environment on the
     // silhouette): small dynamic chunks keep both threads busy. The order inside a pixel is fixed.
-    if (threads <= 0) threads = plan->render_threads;
 #pragma omp parallel for schedule(dynamic, 64) num_threads(threads) if (threads > 1)
     for (int i = 0; i < lit; i++) {
         double sum_f[3] = {0.0, 0.0, 0.0}, sum_d[3] = {0.0, 0.0, 0.0}, sum_s[3] = {0.0, 0.0, 0.0};
@@ -1126,7 +1518,7 @@ static mr_status render_one(const mr_render_plan *plan, int threads, const mr_br
                             const double *values, const mr_param_textures *textures, mr_image *full,
                             mr_image *diffuse, mr_image *specular) {
     mr_material_binding material = {model, values, textures};
-    return render_core(plan, threads, &material, 1, full, diffuse, specular);
+    return render_core(plan, threads, &material, 1, full, diffuse, specular, MR_RENDER_PATH_AUTO);
 }
 
 int mr_render_plan_material_count(const mr_render_plan *plan) {
@@ -1138,9 +1530,9 @@ mr_status mr_render_materials_into(const mr_render_plan *plan, const mr_material
     if (plan == NULL || materials == NULL || image == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan, materials or image");
     switch (component) {
-    case MR_COMPONENT_FULL: return render_core(plan, 0, materials, count, image, NULL, NULL);
-    case MR_COMPONENT_DIFFUSE: return render_core(plan, 0, materials, count, NULL, image, NULL);
-    case MR_COMPONENT_SPECULAR: return render_core(plan, 0, materials, count, NULL, NULL, image);
+    case MR_COMPONENT_FULL: return render_core(plan, 0, materials, count, image, NULL, NULL, MR_RENDER_PATH_AUTO);
+    case MR_COMPONENT_DIFFUSE: return render_core(plan, 0, materials, count, NULL, image, NULL, MR_RENDER_PATH_AUTO);
+    case MR_COMPONENT_SPECULAR: return render_core(plan, 0, materials, count, NULL, NULL, image, MR_RENDER_PATH_AUTO);
     default: return mr_fail(MR_ERR_INVALID_ARG, "render: unknown component %d", (int)component);
     }
 }
@@ -1231,6 +1623,19 @@ mr_status mr_render_textured(const mr_render_plan *plan, const mr_brdf_model *mo
 mr_status mr_render(const mr_render_plan *plan, const mr_brdf_model *model, const double *values,
                     mr_component component, mr_image **out) {
     return mr_render_textured(plan, model, values, NULL, component, out);
+}
+
+mr_status mr_render_into_path(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
+                              const double *values, mr_component component, mr_image *image, mr_render_path path) {
+    if (plan == NULL || model == NULL || values == NULL || image == NULL)
+        return mr_fail(MR_ERR_INVALID_ARG, "render: NULL plan, model, values or image");
+    mr_material_binding material = {model, values, NULL};
+    switch (component) {
+    case MR_COMPONENT_FULL: return render_core(plan, threads, &material, 1, image, NULL, NULL, path);
+    case MR_COMPONENT_DIFFUSE: return render_core(plan, threads, &material, 1, NULL, image, NULL, path);
+    case MR_COMPONENT_SPECULAR: return render_core(plan, threads, &material, 1, NULL, NULL, image, path);
+    default: return mr_fail(MR_ERR_INVALID_ARG, "render: unknown component %d", (int)component);
+    }
 }
 
 /* ---- parameter derivatives of a render (render.h, mr_render_derivatives_into) ---------------------------- */

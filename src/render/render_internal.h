@@ -14,4 +14,21 @@
  * highlight is seen (mr_render_plan_zoomed builds its plan from this scene). */
 int mr_scene_zoom_on_highlight(const mr_scene *scene, double zoom, mr_scene *out);
 
+/* How a render evaluates its material (render.c, render_core). AUTO, what every public call uses: batched where
+ * the render allows it (one material without maps, point samples only: the fit scene), with the AVX2/FMA kernels
+ * unless the CPU lacks them or MATREMAP_SIMD=scalar (mr_brdf_batch_vector_default); otherwise one eval per sample.
+ * The others force a path, for tests and benchmarks: PER_SAMPLE the per-sample loop (as before batches), the
+ * BATCH_ ones the batched loop with the portable or the AVX2/FMA kernels (the latter only where the CPU has them;
+ * renders the batched loop cannot do take the per-sample one). */
+typedef enum mr_render_path {
+    MR_RENDER_PATH_AUTO = 0,
+    MR_RENDER_PATH_PER_SAMPLE,
+    MR_RENDER_PATH_BATCH_PORTABLE,
+    MR_RENDER_PATH_BATCH_VECTOR
+} mr_render_path;
+
+/* mr_render_into_threads (render.h) along the given path. */
+mr_status mr_render_into_path(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
+                              const double *values, mr_component component, mr_image *image, mr_render_path path);
+
 #endif /* MR_RENDER_INTERNAL_H */

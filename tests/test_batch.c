@@ -1,0 +1,307 @@
+/*
+ * test_batch.c — batched BRDF evaluation (brdf.h eval_batch, brdf_batch.h) and the batched render (render.c).
+ *
+ * Every registered model's batch, with the AVX2/FMA kernels and with the portable ones, equals its eval within the
+ * contract's tolerance (MR_BRDF_BATCH_RTOL relative to the pair's largest output, or MR_BRDF_BATCH_ATOL) over random
+ * parameter values (tiny roughness, zero reflectances and the range ends among them) and random direction pairs
+ * (grazing ones, and some below the horizon); a pair's value does not depend on its place in the batch; the vector
+ * exp/log/pow stay within their stated ulp bounds; batched renders equal the per-sample loop within 1e-6 relative
+ * (float images of values that differ by ~1e-13), under a point light and under an environment with reflection
+ * samples, and are bit-identical on 1 and 2 threads (at 512^2 under the point light).
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "brdf/brdf_batch.h"
+#include "harness.h"
+#include "matremap.h"
+#include "render/render_internal.h"
+#include "render_support.h"
+
+#define PAIRS 301 /* odd: the kernels' remainder loops run too */
+
+/* A random unit vector; one in four grazing (z from 1e-13 to 1e-3), one in sixteen below the horizon. */
+static void random_direction(uint64_t *rng, double w[3]) {
+    const double u = test_random(rng), kind = test_random(rng);
+    double z = 2.0 * test_random(rng) - 1.0;
+    if (kind < 0.25)
+        z = pow(10.0, -13.0 + 10.0 * test_random(rng));
+    else if (kind < 0.9375)
+        z = fabs(z);
+    const double r = sqrt(fmax(0.0, 1.0 - z * z)), phi = 2.0 * MR_PI * u;
+    w[0] = r * cos(phi);
+    w[1] = r * sin(phi);
+    w[2] = z;
+}
+
+/* Random packed values for `model`: draw 0 the defaults, 1 every parameter at its minimum (tiny roughness, zero
+ * reflectances), 2 at its maximum, else uniform (log-uniform for log-scale parameters), a reflectance zero now and
+ * then. */
+static void random_values(const mr_brdf_model *model, uint64_t *rng, int draw, double *values) {
+    mr_brdf_default_values(model, values);
+    int slot = 0;
+    for (int p = 0; p < model->param_count; p++) {
+        const mr_brdf_param *param = &model->params[p];
+        for (int c = 0; c < param->channels; c++, slot++) {
+            const double lo = param->min_value, hi = param->max_value, u = test_random(rng);
+            if (draw == 0) continue;
+            if (draw == 1) {
+                values[slot] = lo;
+            } else if (draw == 2) {
+                values[slot] = hi;
+            } else if (param->role == MR_PARAM_SWITCH) {
+                values[slot] = u < 0.5 ? lo : hi;
+            } else if ((param->flags & MR_PARAM_LOG_SCALE) && lo > 0.0) {
+                values[slot] = lo * pow(hi / lo, u);
+            } else {
+                values[slot] = test_random(rng) < 0.1 ? lo : lo + (hi - lo) * u;
+            }
+        }
+    }
+}
+
+/* Largest |batch - eval| over the pairs, as a multiple of the contract's bound (<= 1 passes). */
+static double worst_ratio(const mr_brdf_model *model, const void *state, const mr_brdf_batch *b, int *worst_pair) {
+    double worst = 0.0;
+    for (int i = 0; i < b->n; i++) {
+        const double wi[3] = {b->wi[0][i], b->wi[1][i], b->wi[2][i]};
+        const double wo[3] = {b->wo[0][i], b->wo[1][i], b->wo[2][i]};
+        double fd[3], fs[3];
+        model->eval(state, wi, wo, fd, fs);
+        double scale = 0.0;
+        for (int c = 0; c < 3; c++) scale = fmax(scale, fmax(fabs(fd[c]), fabs(fs[c])));
+        const double bound = fmax(MR_BRDF_BATCH_RTOL * scale, MR_BRDF_BATCH_ATOL);
+        for (int c = 0; c < 3; c++) {
+            const double ed = fabs(b->diffuse[c][i] - fd[c]) / bound, es = fabs(b->specular[c][i] - fs[c]) / bound;
+            const double e = isfinite(b->diffuse[c][i]) && isfinite(b->specular[c][i]) ? fmax(ed, es) : INFINITY;
+            if (e > worst) {
+                worst = e;
+                *worst_pair = i;
+            }
+        }
+    }
+    return worst;
+}
+
+/* Every model, both kernels, against eval; and the place of a pair in its batch changes nothing. */
+MR_TEST(batch_equals_eval_for_every_model) {
+    static double in[6][PAIRS + 1], out[2][6][PAIRS + 1], shifted[6][PAIRS + 1];
+    uint64_t rng = 0x5eed0031u;
+    const mr_brdf_model *const *models = mr_brdf_models();
+    for (int m = 0; models[m] != NULL; m++) {
+        const mr_brdf_model *model = models[m];
+        double overall = 0.0;
+        for (int draw = 0; draw < 12; draw++) {
+            double values[MR_BRDF_MAX_VALUES];
+            random_values(model, &rng, draw, values);
+            mr_brdf_state st;
+            model->prepare(model, values, st.bytes);
+            for (int i = 0; i < PAIRS; i++) {
+                double wi[3], wo[3];
+                random_direction(&rng, wi);
+                random_direction(&rng, wo);
+                if (i % 7 == 3) memcpy(wo, wi, sizeof wo); // the highlight's centre: h = n for wi = wo mirrored
+                if (i % 7 == 3) wo[0] = -wo[0], wo[1] = -wo[1];
+                for (int k = 0; k < 3; k++) {
+                    in[k][i + 1] = wi[k];
+                    in[3 + k][i + 1] = wo[k];
+                }
+            }
+            for (int vector = 0; vector < 2; vector++) {
+                double (*o)[PAIRS + 1] = out[vector];
+                const mr_brdf_batch b = {PAIRS, {in[0] + 1, in[1] + 1, in[2] + 1}, {in[3] + 1, in[4] + 1, in[5] + 1},
+                                         {o[0], o[1], o[2]}, {o[3], o[4], o[5]}};
+                mr_brdf_eval_batch(model, st.bytes, &b, vector);
+                int pair = 0;
+                const double ratio = worst_ratio(model, st.bytes, &b, &pair);
+                overall = fmax(overall, ratio);
+                MR_CHECK_MSG(ratio <= 1.0, "%s (%s kernel, draw %d): pair %d off by %.3g of the tolerance",
+                             model->name, vector ? "AVX2/FMA" : "portable", draw, pair, ratio);
+                // The same pairs one place later in a batch one longer: the same bits.
+                const mr_brdf_batch later = {PAIRS, {in[0], in[1], in[2]}, {in[3], in[4], in[5]},
+                                             {shifted[0], shifted[1], shifted[2]},
+                                             {shifted[3], shifted[4], shifted[5]}};
+                for (int k = 0; k < 6; k++) in[k][0] = in[k][1];
+                mr_brdf_batch longer = later;
+                longer.n = PAIRS + 1;
+                mr_brdf_eval_batch(model, st.bytes, &longer, vector);
+                int same = 1;
+                for (int k = 0; k < 6; k++) same &= memcmp(shifted[k] + 1, o[k], PAIRS * sizeof(double)) == 0;
+                MR_CHECK_MSG(same, "%s (%s kernel): a pair's value depends on its place in the batch", model->name,
+                             vector ? "AVX2/FMA" : "portable");
+            }
+        }
+        if (getenv("MR_TEST_VERBOSE")) printf("    %-22s worst |batch - eval| = %.3g of the tolerance\n", model->name,
+                                               overall);
+    }
+}
+
+/* Distance in units in the last place between two positive finite doubles. */
+static double ulps(double a, double b) {
+    if (a == b) return 0.0;
+    const double spacing = nextafter(fmax(a, b), INFINITY) - fmax(a, b);
+    return fabs(a - b) / spacing;
+}
+
+/* mr_batch_exp and mr_batch_log within 2 ulp of libm (itself within 1 ulp of the true value: the bound stated is 2
+ * of the true value, checked here with 1 more for libm's own error), with and without fused multiply-adds; the
+ * documented ends; pow within (2 + 6 |y ln x|) + 1 ulp. */
+MR_TEST(vector_exp_log_pow_within_their_bounds) {
+    double worst_exp = 0.0, worst_log = 0.0, worst_pow = 0.0;
+    uint64_t rng = 77;
+    for (int fused = 0; fused < 2; fused++) {
+        for (int i = 0; i <= 200000; i++) {
+            const double x = -708.0 + 1417.0 * i / 200000.0 + 1e-3 * test_random(&rng);
+            if (x > 709.0) continue;
+            worst_exp = fmax(worst_exp, ulps(mr_batch_exp(x, fused), exp(x)));
+            const double small = 0.5 * test_random(&rng); // where most of the lobes' arguments are
+            worst_exp = fmax(worst_exp, ulps(mr_batch_exp(-small, fused), exp(-small)));
+        }
+        for (int i = 0; i < 200000; i++) {
+            const double x = pow(10.0, -300.0 + 600.0 * test_random(&rng));
+            const double near_one = 1.0 + (test_random(&rng) - 0.5) * 1e-3;
+            worst_log = fmax(worst_log, ulps(fabs(mr_batch_log(x, fused)), fabs(log(x))));
+            if (near_one != 1.0)
+                worst_log = fmax(worst_log, ulps(fabs(mr_batch_log(near_one, fused)), fabs(log(near_one))));
+            const double c = fmax(test_random(&rng), 1e-12), y = pow(10.0, 5.0 * test_random(&rng));
+            const double expected = pow(c, y);
+            if (expected > 1e-300)
+                worst_pow = fmax(worst_pow, ulps(mr_batch_pow(c, y, fused), expected) / (3.0 + 6.0 * fabs(y * log(c))));
+        }
+        MR_CHECK(mr_batch_exp(0.0, fused) == 1.0);
+        MR_CHECK(mr_batch_exp(-708.5, fused) == 0.0);
+        MR_CHECK(isinf(mr_batch_exp(709.5, fused)));
+        MR_CHECK(isnan(mr_batch_exp(NAN, fused)));
+        MR_CHECK(mr_batch_log(1.0, fused) == 0.0);
+        MR_CHECK(mr_batch_pow(1.0, 12345.0, fused) == 1.0);
+        MR_CHECK(mr_batch_pow(0.3, 0.0, fused) == 1.0);
+    }
+    MR_CHECK_MSG(worst_exp <= 3.0, "exp: %.3g ulp from libm", worst_exp);
+    MR_CHECK_MSG(worst_log <= 3.0, "log: %.3g ulp from libm", worst_log);
+    MR_CHECK_MSG(worst_pow <= 1.0, "pow: %.3g of the bound", worst_pow);
+    if (getenv("MR_TEST_VERBOSE"))
+        printf("    exp %.3g ulp, log %.3g ulp from libm; pow %.3g of its bound\n", worst_exp, worst_log, worst_pow);
+}
+
+/* Largest |a - b| / max(|a|, |b|, 1e-30) over the images' values. */
+static double image_rel_diff(const mr_image *a, const mr_image *b) {
+    double worst = 0.0;
+    const size_t n = (size_t)a->width * (size_t)a->height * (size_t)a->channels;
+    for (size_t i = 0; i < n; i++) {
+        const double x = a->pixels[i], y = b->pixels[i];
+        worst = fmax(worst, fabs(x - y) / fmax(fmax(fabs(x), fabs(y)), 1e-30));
+    }
+    return worst;
+}
+
+/* The fit scene rendered per sample and batched (both kernels, every component) for a few models: the same image
+ * within 1e-6 relative (the BRDF values agree to ~1e-13; the image is float, so a value may round to its
+ * neighbour: 6e-8). */
+MR_TEST(batched_render_equals_per_sample_render) {
+    const char *names[] = {"ward", "ggx", "as-conductor", "beckmann-plastic", "gltf", "cycles-principled", "phong",
+                           "openpbr"};
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){64, MR_FIT_LIGHT_45, 0});
+    mr_render_plan *plan = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    mr_image *reference = NULL, *batched = NULL;
+    MR_CHECK_OK(mr_image_create(64, 64, 3, &reference));
+    MR_CHECK_OK(mr_image_create(64, 64, 3, &batched));
+    uint64_t rng = 31;
+    for (size_t m = 0; plan && reference && batched && m < sizeof names / sizeof names[0]; m++) {
+        const mr_brdf_model *model = mr_brdf_find(names[m]);
+        MR_CHECK(model != NULL);
+        if (model == NULL) continue;
+        double values[MR_BRDF_MAX_VALUES];
+        random_values(model, &rng, 3, values);
+        for (int component = MR_COMPONENT_FULL; component <= MR_COMPONENT_SPECULAR; component++) {
+            MR_CHECK_OK(mr_render_into_path(plan, 1, model, values, (mr_component)component, reference,
+                                            MR_RENDER_PATH_PER_SAMPLE));
+            for (int path = MR_RENDER_PATH_BATCH_PORTABLE; path <= MR_RENDER_PATH_BATCH_VECTOR; path++) {
+                MR_CHECK_OK(mr_render_into_path(plan, 1, model, values, (mr_component)component, batched,
+                                                (mr_render_path)path));
+                const double diff = image_rel_diff(reference, batched);
+                MR_CHECK_MSG(diff <= 1e-6, "%s component %d path %d: %.3g relative", names[m], component, path,
+                             diff);
+            }
+        }
+    }
+    mr_image_free(reference);
+    mr_image_free(batched);
+    mr_render_plan_free(plan);
+}
+
+/* Under an environment with reflection samples beside the point light (batches gathered from the hits): batched
+ * renders equal the per-sample loop within 1e-6 relative, and 1 and 2 threads give the same bits. */
+MR_TEST(batched_environment_render_equals_per_sample_render) {
+    const char *names[] = {"ward-balanced", "as-plastic", "gltf", "cycles-ggx", "openpbr"};
+    mr_image *map = linear_map(32, 16);
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){96, MR_FIT_LIGHT_45, 0});
+    scene.lights[1] = mr_light_environment(map, 1.0, 30.0, 64);
+    scene.lights[1].reflection_samples = 16;
+    scene.light_count = 2;
+    scene.threads = 2;
+    mr_render_plan *plan = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    mr_image *reference = NULL, *batched = NULL, *two = NULL;
+    MR_CHECK_OK(mr_image_create(96, 96, 3, &reference));
+    MR_CHECK_OK(mr_image_create(96, 96, 3, &batched));
+    MR_CHECK_OK(mr_image_create(96, 96, 3, &two));
+    uint64_t rng = 5;
+    for (size_t m = 0; plan && reference && batched && two && m < sizeof names / sizeof names[0]; m++) {
+        const mr_brdf_model *model = mr_brdf_find(names[m]);
+        double values[MR_BRDF_MAX_VALUES];
+        random_values(model, &rng, 3, values);
+        for (int component = MR_COMPONENT_FULL; component <= MR_COMPONENT_SPECULAR; component++) {
+            MR_CHECK_OK(mr_render_into_path(plan, 1, model, values, (mr_component)component, reference,
+                                            MR_RENDER_PATH_PER_SAMPLE));
+            for (int path = MR_RENDER_PATH_BATCH_PORTABLE; path <= MR_RENDER_PATH_BATCH_VECTOR; path++) {
+                MR_CHECK_OK(mr_render_into_path(plan, 1, model, values, (mr_component)component, batched,
+                                                (mr_render_path)path));
+                const double diff = image_rel_diff(reference, batched);
+                MR_CHECK_MSG(diff <= 1e-6, "%s component %d path %d: %.3g relative", names[m], component, path,
+                             diff);
+                MR_CHECK_OK(mr_render_into_path(plan, 2, model, values, (mr_component)component, two,
+                                                (mr_render_path)path));
+                MR_CHECK_MSG(same_pixels(batched, two), "%s path %d: 1 and 2 threads differ", names[m], path);
+            }
+        }
+    }
+    mr_image_free(reference);
+    mr_image_free(batched);
+    mr_image_free(two);
+    mr_image_free(map);
+    mr_render_plan_free(plan);
+}
+
+/* At 512^2 (blocks of pixels run on different threads), batched renders on 1 and 2 threads are bit-identical. */
+MR_TEST(batched_render_same_bits_on_one_and_two_threads) {
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){512, MR_FIT_LIGHT_FRONTAL, 0});
+    scene.threads = 2;
+    mr_render_plan *plan = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    mr_image *one = NULL, *two = NULL;
+    MR_CHECK_OK(mr_image_create(512, 512, 3, &one));
+    MR_CHECK_OK(mr_image_create(512, 512, 3, &two));
+    const char *names[] = {"ward", "ggx", "gltf"};
+    for (size_t m = 0; plan && one && two && m < sizeof names / sizeof names[0]; m++) {
+        const mr_brdf_model *model = mr_brdf_find(names[m]);
+        double values[MR_BRDF_MAX_VALUES];
+        mr_brdf_default_values(model, values);
+        for (int path = MR_RENDER_PATH_AUTO; path <= MR_RENDER_PATH_BATCH_VECTOR; path++) {
+            if (path == MR_RENDER_PATH_PER_SAMPLE) continue;
+            MR_CHECK_OK(mr_render_into_path(plan, 1, model, values, MR_COMPONENT_FULL, one, (mr_render_path)path));
+            MR_CHECK_OK(mr_render_into_path(plan, 2, model, values, MR_COMPONENT_FULL, two, (mr_render_path)path));
+            MR_CHECK_MSG(same_pixels(one, two), "%s path %d: 1 and 2 threads differ", names[m], path);
+        }
+    }
+    mr_image_free(one);
+    mr_image_free(two);
+    mr_render_plan_free(plan);
+}
+
+MR_TEST_MAIN(MR_TEST_ENTRY(batch_equals_eval_for_every_model), MR_TEST_ENTRY(vector_exp_log_pow_within_their_bounds),
+             MR_TEST_ENTRY(batched_render_equals_per_sample_render),
+             MR_TEST_ENTRY(batched_environment_render_equals_per_sample_render),
+             MR_TEST_ENTRY(batched_render_same_bits_on_one_and_two_threads))
