@@ -987,6 +987,24 @@ static void fill_unlit(const mr_render_plan *plan, mr_image *image, int with_bac
     }
 }
 
+/* Environment sample e of hit h as the renders use it: its direction in the hit's shading frame and its weight, the
+ * map's radiance x cos x the hit's share (x ambient occlusion), and with reflection samples the balance heuristic's
+ * share of the pattern, N p / (N p + M q). A hit with environment samples has its frame (plan->frames). */
+static inline void env_sample_of_hit(const mr_render_plan *plan, int h, size_t e, double light[3], double weight[3]) {
+    const int k = plan->env_samples[e];
+    const double *d = plan->env.direction[k];
+    const hit_frame *frame = &plan->frames[h];
+    light[0] = vec3_dot(frame->tangent, d);
+    light[1] = vec3_dot(frame->bitangent, d);
+    light[2] = vec3_dot(frame->normal, d);
+    double cos_share = light[2] * plan->hits[h].env_share;
+    if (plan->env.mis_npdf != NULL && plan->env.mis_npdf[k] > 0.0) {
+        const double npdf = plan->env.mis_npdf[k];
+        cos_share *= npdf / (npdf + reflection_density(&plan->env, &frame->mirror, d));
+    }
+    for (int c = 0; c < 3; c++) weight[c] = plan->env.weight[k][c] * cos_share;
+}
+
 /* One sample's contribution: into sum_full (full renders, f_d + f_s summed first) or into sum_d / sum_s (the
  * components that are asked for). */
 static inline void accumulate(const mr_brdf_model *model, const void *state, const double view[3],
@@ -1240,17 +1258,7 @@ static int gather_batch(const mr_render_plan *plan, sample_position at, int hit_
                         weight[c] = sample->weight[c];
                     }
                 } else if (stage == 1) {
-                    const int k = plan->env_samples[e];
-                    const double *d = plan->env.direction[k];
-                    light[0] = vec3_dot(hit->tangent, d);
-                    light[1] = vec3_dot(hit->bitangent, d);
-                    light[2] = vec3_dot(hit->normal, d);
-                    double cos_share = light[2] * hit->env_share;
-                    if (plan->env.mis_npdf != NULL && plan->env.mis_npdf[k] > 0.0) {
-                        const double npdf = plan->env.mis_npdf[k];
-                        cos_share *= npdf / (npdf + reflection_density(&plan->env, &hit->mirror, d));
-                    }
-                    for (int c = 0; c < 3; c++) weight[c] = plan->env.weight[k][c] * cos_share;
+                    env_sample_of_hit(plan, h, e, light, weight);
                 } else {
                     const reflection_sample *sample = &plan->reflection_samples[e];
                     for (int c = 0; c < 3; c++) light[c] = sample->light[c];
@@ -1473,19 +1481,8 @@ static mr_status render_core(const mr_render_plan *plan, int threads, const mr_m
                 accumulate(model, state, hit->view, sample->light, sample->weight, acc_f, acc_d, acc_s);
             }
             for (size_t e = hit->env_begin; e < hit[1].env_begin; e++) {
-                const int k = plan->env_samples[e];
-                const double *d = plan->env.direction[k];
-                const hit_frame *frame = &plan->frames[h]; // a hit with environment samples has its frame
-                double light[3] = {vec3_dot(frame->tangent, d), vec3_dot(frame->bitangent, d),
-                                   vec3_dot(frame->normal, d)};
-                double cos_share = light[2] * hit->env_share;
-                // With reflection samples: the balance heuristic's share of the pattern, N p / (N p + M q).
-                if (plan->env.mis_npdf != NULL && plan->env.mis_npdf[k] > 0.0) {
-                    const double npdf = plan->env.mis_npdf[k];
-                    cos_share *= npdf / (npdf + reflection_density(&plan->env, &frame->mirror, d));
-                }
-                double weight[3];
-                for (int c = 0; c < 3; c++) weight[c] = plan->env.weight[k][c] * cos_share;
+                double light[3], weight[3];
+                env_sample_of_hit(plan, h, e, light, weight);
                 accumulate(model, state, hit->view, light, weight, acc_f, acc_d, acc_s);
             }
             for (size_t e = hit->reflection_begin; e < hit[1].reflection_begin; e++) {
