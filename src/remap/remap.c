@@ -497,17 +497,15 @@ static double projected_value(void *data, const double *u) {
  *   - Gauss-Newton matrix: J^T J with J = -(I - P) dR/dtheta, P the projection onto the solved columns that are
  *     not on a bound (Kaufman 1975), i.e. D^T D - T G^-1 T^T with T = D^T A, G = A^T A (the projection's Gram).
  * One derivative render (every nonlinear slot at once) and one pass over the covered pixels. */
-static int projected_linearise(void *data, const double *u, double *gradient, double *gauss_newton) {
-    fit_context *ctx = data;
-    const int n = ctx->nonlinear_count, P = ctx->linear_param_count, k = ctx->column_count;
-    const fitted_slot *slots[MAX_SLOTS];
-    for (int a = 0; a < n; a++) slots[a] = &ctx->nonlinear[a];
-    if (!render_derivatives(ctx, slots, n, ctx->projection_component)) return 0;
+/* projected_linearise's sums over the covered pixels, per image channel c, basis render p < P and derivative image
+ * a < n (constant counts let the compiler keep them in registers, as projection_sums): g[a] = -2 sum r D_a,
+ * DtD[a][b] = sum D_a D_b (b <= a), T[c][a][p] = sum over channel c of d_p D_a, with d_p = R_p - R0 and the residual
+ * r = goal - R0 - sum_p w[c][p] d_p (w[c][p]: the solved value of parameter p's column in channel c). */
+static MR_ALWAYS_INLINE void linearise_sums(const fit_context *ctx, const int P, const int n,
+                                            double w[3][MAX_SLOTS], double *g, double DtD[][MAX_SLOTS],
+                                            double T[3][MAX_SLOTS][MAX_SLOTS]) {
     unsigned char diffuse_param[MAX_SLOTS];
     for (int p = 0; p < P; p++) diffuse_param[p] = ctx->model->params[ctx->linear_params[p]].lobe == MR_LOBE_DIFFUSE;
-    double b[MAX_SLOTS];
-    for (int j = 0; j < k; j++) b[j] = ctx->base[ctx->linear[j].slot];
-    double g[MAX_SLOTS] = {0}, DtD[MAX_SLOTS][MAX_SLOTS] = {{0}}, T[MAX_SLOTS][MAX_SLOTS] = {{0}};
     const float *goal = ctx->goal->pixels;
     for (int i = 0; i < ctx->pixel_count; i++) {
         const size_t at = (size_t)ctx->pixels[i] * 3;
@@ -519,22 +517,45 @@ static int projected_linearise(void *data, const double *u, double *gradient, do
                 r0 = ctx->basis[0]->pixels[at + c];
                 for (int p = 0; p < P; p++) r[p] = ctx->basis[p + 1]->pixels[at + c];
             }
-            double column[MAX_SLOTS], prediction = r0;
-            for (int j = 0; j < k; j++) {
-                const int image = ctx->column_image[j] - 1, channel = ctx->column_channel[j];
-                column[j] = channel < 0 || channel == c ? (double)r[image] - (double)r0 : 0.0;
-                prediction += b[j] * column[j];
+            double column[MAX_SLOTS], residual = (double)goal[at + c] - (double)r0;
+            for (int p = 0; p < P; p++) {
+                column[p] = (double)r[p] - (double)r0;
+                residual -= w[c][p] * column[p];
             }
-            const double residual = (double)goal[at + c] - prediction;
             double d[MAX_SLOTS];
             for (int a = 0; a < n; a++) {
                 d[a] = ctx->derivatives[a]->pixels[at + c];
                 g[a] -= 2.0 * residual * d[a];
                 for (int bb = 0; bb <= a; bb++) DtD[a][bb] += d[a] * d[bb];
-                for (int j = 0; j < k; j++) T[a][j] += column[j] * d[a];
+                for (int p = 0; p < P; p++) T[c][a][p] += column[p] * d[a];
             }
         }
     }
+}
+
+static int projected_linearise(void *data, const double *u, double *gradient, double *gauss_newton) {
+    fit_context *ctx = data;
+    const int n = ctx->nonlinear_count, P = ctx->linear_param_count, k = ctx->column_count;
+    const fitted_slot *slots[MAX_SLOTS];
+    for (int a = 0; a < n; a++) slots[a] = &ctx->nonlinear[a];
+    if (!render_derivatives(ctx, slots, n, ctx->projection_component)) return 0;
+    // A column is parameter p's basis render in one channel (an RGB parameter) or in all three (a scalar one).
+    double b[MAX_SLOTS], w[3][MAX_SLOTS] = {{0}};
+    for (int j = 0; j < k; j++) {
+        b[j] = ctx->base[ctx->linear[j].slot];
+        for (int c = 0; c < 3; c++)
+            if (ctx->column_channel[j] < 0 || ctx->column_channel[j] == c) w[c][ctx->column_image[j] - 1] = b[j];
+    }
+    double g[MAX_SLOTS] = {0}, DtD[MAX_SLOTS][MAX_SLOTS] = {{0}}, Tc[3][MAX_SLOTS][MAX_SLOTS] = {{{0}}};
+    if (P == 1 && n == 1) linearise_sums(ctx, 1, 1, w, g, DtD, Tc);
+    else if (P == 2 && n == 1) linearise_sums(ctx, 2, 1, w, g, DtD, Tc);
+    else if (P == 2 && n == 2) linearise_sums(ctx, 2, 2, w, g, DtD, Tc);
+    else linearise_sums(ctx, P, n, w, g, DtD, Tc);
+    double T[MAX_SLOTS][MAX_SLOTS] = {{0}}; // T[a][j] = sum over column j's channels of Tc
+    for (int j = 0; j < k; j++)
+        for (int c = 0; c < 3; c++)
+            if (ctx->column_channel[j] < 0 || ctx->column_channel[j] == c)
+                for (int a = 0; a < n; a++) T[a][j] += Tc[c][a][ctx->column_image[j] - 1];
     // The columns the projection moves freely: inside their bounds and seen by the images.
     int free_columns[MAX_SLOTS], f = 0;
     for (int j = 0; j < k; j++)
