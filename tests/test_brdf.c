@@ -936,8 +936,9 @@ MR_TEST(gradient_is_the_secant_where_affine) {
 }
 
 /* A prepared derivative state (brdf.h, grad_ops) gives eval_grad's numbers for the slots it was prepared for: for
- * random subsets of the slots in random order (1 to all of them), at random values (ends of the ranges included)
- * and at the defaults, over random direction pairs (some below the horizon), every entry equal as doubles (==: the
+ * random subsets of the slots in random order (1 to all of them), at random values (ends of the ranges included),
+ * at the defaults, with the parameters fits hold at their defaults and with a slot at 0 (the terms a prepared state
+ * skips when a slot it leaves out is a constant 0: dual.h, mr_dual_is_const_zero), over random direction pairs (some below the horizon), every entry equal as doubles (==: the
  * same operations in the same order; only the sign of a zero may differ, where the full eval_grad adds a zero
  * column's product), or both NaN. */
 MR_TEST(prepared_gradient_equals_eval_grad_for_any_slots) {
@@ -959,6 +960,17 @@ MR_TEST(prepared_gradient_equals_eval_grad_for_any_slots) {
                 mr_brdf_default_values(m, v);
             else
                 random_values(m, &rng, trial % 4 == 0 ? 0.0 : 0.03, v);
+            if (trial % 3 == 2) { /* as a fit holds them: the parameters it does not fit at their defaults (a coat
+                                     weight of 0, whose terms a prepared state then skips), the others random */
+                double d[MR_BRDF_MAX_VALUES];
+                mr_brdf_default_values(m, d);
+                for (int i = 0; i < m->param_count; i++)
+                    if (m->params[i].flags & MR_PARAM_FIT_FIXED)
+                        for (int c = 0; c < m->params[i].channels; c++)
+                            v[mr_brdf_param_offset(m, i) + c] = d[mr_brdf_param_offset(m, i) + c];
+            }
+            if (trial % 5 == 4) /* a metalness (or any slot) held at 0, as a tie from a dielectric source gives */
+                v[(int)(rnd(&rng) * n)] = 0.0;
             /* a random subset in random order: shuffle all slots, keep the first k */
             int slots[MR_BRDF_MAX_VALUES], k = trial == 1 ? n : 1 + (int)(rnd(&rng) * n);
             for (int j = 0; j < n; j++) slots[j] = j;

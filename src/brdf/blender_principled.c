@@ -335,7 +335,9 @@ static void bp_grad_eval_duals(const bp_grad_prep *p, mr_dual_tape *tp, const mr
     /* bp_eval: the coat, at coat_weight 0 too (see above) */
     double mu_v = MR_MIN(g.cos_i, 1.0);
     mr_dual w[3];
-    {
+    if (mr_dual_is_const_zero(C)) { /* a prepared state holding coat_weight at 0: no coat (mr_dual_is_const_zero) */
+        for (int c = 0; c < 3; c++) w[c] = one, spec[c] = mr_dual_const(0.0);
+    } else {
         mr_dual E_c = mr_dual_maxc(mr_dual_albedo_one(tp, mu_v, r_c), 1e-6);
         mr_dual dark = bp_dual_darkening(tp, E_c, E_avg_c, fss_c), scale = mr_dual_div(tp, dark, E_c);
         mr_dual F = eta_c.v > 1.0 ? mr_dual_fresnel_dielectric(tp, g.dot_h, eta_c) : mr_dual_const(0.0);
@@ -358,8 +360,8 @@ static void bp_grad_eval_duals(const bp_grad_prep *p, mr_dual_tape *tp, const mr
 
     mr_dual DV = mr_dual_ggx_dv(tp, alpha, &g);
     mr_dual E = mr_dual_maxc(mr_dual_albedo_one(tp, mu_v, r), 1e-6);
-    /* the metal, at metallic 0 too */
-    for (int c = 0; c < 3; c++) {
+    /* the metal, at metallic 0 too, unless a prepared state holds it at a constant 0 */
+    for (int c = 0; c < 3 && !mr_dual_is_const_zero(metallic); c++) {
         mr_dual scale = multiscatter ? mr_dual_div(tp, bp_dual_darkening(tp, E, E_avg, fss_m[c]), E) : one;
         mr_dual metal = mr_dual_mul(tp, mr_dual_mul(tp, mr_dual_f82_tint(tp, g.dot_h, rho[c], b[c]), DV), scale);
         spec[c] = mr_dual_add(tp, spec[c], mr_dual_mul(tp, mr_dual_mul(tp, metallic, w[c]), metal));

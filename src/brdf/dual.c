@@ -19,17 +19,23 @@ static const double unit_rows[MR_DUAL_N][MR_DUAL_N] = {
 };
 _Static_assert(MR_DUAL_N == 20, "unit_rows spells out 20 rows");
 
-/* The rows' loops over a tape's `n` columns, with restrict parameters so that GCC vectorises them at -O2 (restrict
- * locals did not suffice). */
+/* The rows' loops over a tape's columns in groups of 4 (its width is a multiple of 4: mr_dual_tape_init), with
+ * restrict parameters so that GCC vectorises them at -O2 (restrict locals did not suffice). Whole groups, not a
+ * loop to the width with a remainder: at the 4-8 columns of a prepared state the remainder's bookkeeping cost as much
+ * as the arithmetic. */
+_Static_assert(MR_DUAL_N % 4 == 0, "tape widths are rounded up to whole groups of 4 within MR_DUAL_N");
 static void row_scale(double *restrict r, int n, double a, const double *restrict x) {
-    for (int j = 0; j < n; j++) r[j] = a * x[j];
+    for (int j = 0; j < n; j += 4)
+        for (int i = 0; i < 4; i++) r[j + i] = a * x[j + i];
 }
 static void row_axpby(double *restrict r, int n, double a, const double *restrict x, double b,
                       const double *restrict y) {
-    for (int j = 0; j < n; j++) r[j] = a * x[j] + b * y[j];
+    for (int j = 0; j < n; j += 4)
+        for (int i = 0; i < 4; i++) r[j + i] = a * x[j + i] + b * y[j + i];
 }
 static void row_add_scaled(double *restrict r, int n, double a, const double *restrict x) {
-    for (int j = 0; j < n; j++) r[j] += a * x[j];
+    for (int j = 0; j < n; j += 4)
+        for (int i = 0; i < 4; i++) r[j + i] += a * x[j + i];
 }
 
 mr_dual mr_dual_var(double v, int column) {
@@ -64,33 +70,24 @@ static double *tape_row(mr_dual_tape *t) {
     return t->buf + (t->capacity - t->width);
 }
 
-mr_dual mr_dual_chain(mr_dual_tape *t, double value, double slope, mr_dual a) {
-    mr_dual r = {value, NULL};
-    if (!a.d) return r;
+const double *mr_dual_row1(mr_dual_tape *t, double slope, const double *x) {
     double *row = tape_row(t);
-    row_scale(row, t->width, slope, a.d);
-    r.d = row;
-    return r;
+    row_scale(row, t->width, slope, x);
+    return row;
 }
 
-mr_dual mr_dual_chain2(mr_dual_tape *t, double value, double da, mr_dual a, double db, mr_dual b) {
-    if (!b.d) return mr_dual_chain(t, value, da, a);
-    if (!a.d) return mr_dual_chain(t, value, db, b);
+const double *mr_dual_row2(mr_dual_tape *t, double da, const double *x, double db, const double *y) {
     double *row = tape_row(t);
-    row_axpby(row, t->width, da, a.d, db, b.d);
-    mr_dual r = {value, row};
-    return r;
+    row_axpby(row, t->width, da, x, db, y);
+    return row;
 }
 
-mr_dual mr_dual_chain3(mr_dual_tape *t, double value, double da, mr_dual a, double db, mr_dual b, double dc,
-                       mr_dual c) {
-    if (!c.d) return mr_dual_chain2(t, value, da, a, db, b);
-    mr_dual ab = mr_dual_chain2(t, 0.0, da, a, db, b);
-    if (!ab.d) return mr_dual_chain(t, value, dc, c);
-    double *row = (double *)ab.d; /* the row chain2 just took from this tape */
-    row_add_scaled(row, t->width, dc, c.d);
-    mr_dual r = {value, row};
-    return r;
+const double *mr_dual_row3(mr_dual_tape *t, double da, const double *x, double db, const double *y, double dc,
+                           const double *z) {
+    double *row = tape_row(t);
+    row_axpby(row, t->width, da, x, db, y);
+    row_add_scaled(row, t->width, dc, z);
+    return row;
 }
 
 /* the left derivatives at a tie: slot by slot, the smaller slope for max, the larger for min */

@@ -53,7 +53,7 @@ typedef struct mr_dual {
 
 typedef struct mr_dual_tape {
     int used;      /* doubles taken */
-    int width;     /* columns per row, 1 to MR_DUAL_N */
+    int width;     /* columns per row, a multiple of 4 up to MR_DUAL_N */
     int capacity;  /* doubles in buf */
     double *buf;
 } mr_dual_tape;
@@ -61,7 +61,7 @@ typedef struct mr_dual_tape {
 /* A tape of `width` columns over buf[capacity] (the caller's storage, which must outlive the rows). */
 static inline void mr_dual_tape_init(mr_dual_tape *t, double *buf, int capacity, int width) {
     t->used = 0;
-    t->width = width;
+    t->width = (width + 3) & ~3; /* whole groups of 4 (dual.c's loops); the columns beyond `width` are never read */
     t->capacity = capacity;
     t->buf = buf;
 }
@@ -71,6 +71,12 @@ static inline mr_dual mr_dual_const(double v) {
     return r;
 }
 
+/* A constant 0: a prepared state's slot left out of its columns at 0 (a coat weight or metalness a fit holds at 0).
+ * The layered models skip the terms it switches off, as their eval does: those terms are then exact 0s and 1s whose
+ * derivatives are 0 in every column, so skipping them changes no derivative beyond the sign of a zero (the full-width
+ * eval_grad, where every slot is a variable, never skips). */
+static inline int mr_dual_is_const_zero(mr_dual a) { return a.d == NULL && a.v == 0.0; }
+
 /* The independent variable of column `column` (its row is a constant unit vector, not on the tape). */
 mr_dual mr_dual_var(double v, int column);
 
@@ -78,12 +84,34 @@ mr_dual mr_dual_var(double v, int column);
  * MR_DUAL_N); otherwise slots[c] (distinct, < count) in column c for c < k and every other slot a constant. */
 void mr_dual_vars(const double *v, int count, const int *slots, int k, mr_dual *x);
 
+/* The rows' arithmetic, out of line (dual.c): a new row slope x, da x + db y, or (da x + db y) + dc z. */
+const double *mr_dual_row1(mr_dual_tape *t, double slope, const double *x);
+const double *mr_dual_row2(mr_dual_tape *t, double da, const double *x, double db, const double *y);
+const double *mr_dual_row3(mr_dual_tape *t, double da, const double *x, double db, const double *y, double dc,
+                           const double *z);
+
 /* f(a) given f(a.v) = value and f'(a.v) = slope: the chain rule, the one primitive the others use; and f(a, b),
- * f(a, b, c) given their partial derivatives (dual.c). */
-mr_dual mr_dual_chain(mr_dual_tape *t, double value, double slope, mr_dual a);
-mr_dual mr_dual_chain2(mr_dual_tape *t, double value, double da, mr_dual a, double db, mr_dual b);
-mr_dual mr_dual_chain3(mr_dual_tape *t, double value, double da, mr_dual a, double db, mr_dual b, double dc,
-                       mr_dual c);
+ * f(a, b, c) given their partial derivatives. Inline only to the point of skipping constants' rows without a call
+ * (a prepared state's columns leave most of a model's terms constant); each row's loop is one call into dual.c. An
+ * argument that is a constant contributes nothing, exactly as a row of zeros would to the sign of a zero. */
+static inline mr_dual mr_dual_chain(mr_dual_tape *t, double value, double slope, mr_dual a) {
+    mr_dual r = {value, a.d ? mr_dual_row1(t, slope, a.d) : NULL};
+    return r;
+}
+static inline mr_dual mr_dual_chain2(mr_dual_tape *t, double value, double da, mr_dual a, double db, mr_dual b) {
+    if (!b.d) return mr_dual_chain(t, value, da, a);
+    if (!a.d) return mr_dual_chain(t, value, db, b);
+    mr_dual r = {value, mr_dual_row2(t, da, a.d, db, b.d)};
+    return r;
+}
+static inline mr_dual mr_dual_chain3(mr_dual_tape *t, double value, double da, mr_dual a, double db, mr_dual b,
+                                     double dc, mr_dual c) {
+    if (!c.d) return mr_dual_chain2(t, value, da, a, db, b);
+    if (!a.d) return mr_dual_chain2(t, value, db, b, dc, c);
+    if (!b.d) return mr_dual_chain2(t, value, da, a, dc, c);
+    mr_dual r = {value, mr_dual_row3(t, da, a.d, db, b.d, dc, c.d)};
+    return r;
+}
 /* At a tie of two duals, each slot takes the derivative from the left (the value's decreasing side): for max the
  * smaller of the two slopes, for min the larger. A grey colour's channels tie in a max over channels
  * (blender-principled's estimate), at its default 1, the top of its range, where only that side exists. */

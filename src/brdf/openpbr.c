@@ -390,19 +390,32 @@ static void op_grad_eval_duals(const op_grad_prep *p, mr_dual_tape *tp, const mr
                                (MR_EON_C1 - mr_eon_g(g.cos_i, g.sin2_i)) * (MR_EON_C1 - mr_eon_g(g.cos_o, g.sin2_o)));
     mr_dual diff_weight =
         mr_dual_mul(tp, mr_dual_mul(tp, mr_dual_rsubc(tp, 1.0, M), mr_dual_rsubc(tp, 1.0, E_spec)), w);
-    mr_dual E_1 = mr_dual_maxc(mr_dual_albedo_one(tp, mu_v, r_base), 1e-6);
-    mr_dual E_1_ratio = mr_dual_div(tp, mr_dual_rsubc(tp, 1.0, E_1), E_1);
+    /* the metal, unless a prepared state holds base_metalness at a constant 0 (mr_dual_is_const_zero) */
+    const int metal_on = !mr_dual_is_const_zero(M);
+    mr_dual E_1_ratio = one;
+    if (metal_on) {
+        mr_dual E_1 = mr_dual_maxc(mr_dual_albedo_one(tp, mu_v, r_base), 1e-6);
+        E_1_ratio = mr_dual_div(tp, mr_dual_rsubc(tp, 1.0, E_1), E_1);
+    }
     mr_dual diff_base[3], spec_base[3];
     for (int c = 0; c < 3; c++) {
         mr_dual on_c = mr_dual_add(tp, mr_dual_mul(tp, rho[c], on), mr_dual_mul(tp, comp[c], ms));
         diff_base[c] = mr_dual_mul(tp, diff_weight, on_c);
+        mr_dual dielectric = mr_dual_mul(tp, mr_dual_mul(tp, mr_dual_rsubc(tp, 1.0, M), sc[c]), F_d);
+        if (!metal_on) {
+            spec_base[c] = mr_dual_mul(tp, dielectric, DV);
+            continue;
+        }
         mr_dual turquin = mr_dual_addc(tp, mr_dual_mul(tp, turquin_f0[c], E_1_ratio), 1.0);
         mr_dual metal = mr_dual_mul(tp, mr_dual_mul(tp, xi, mr_dual_f82_tint(tp, g.dot_h, f0[c], f82_b[c])), turquin);
-        mr_dual dielectric = mr_dual_mul(tp, mr_dual_mul(tp, mr_dual_rsubc(tp, 1.0, M), sc[c]), F_d);
         spec_base[c] = mr_dual_mul(tp, mr_dual_add(tp, dielectric, mr_dual_mul(tp, M, metal)), DV);
     }
 
-    /* the coat, at coat_weight 0 too (see above) */
+    /* the coat, at coat_weight 0 too (see above), unless a prepared state holds it at a constant 0 */
+    if (mr_dual_is_const_zero(C)) {
+        for (int c = 0; c < 3; c++) diffuse[c] = diff_base[c], specular[c] = spec_base[c];
+        return;
+    }
     mr_dual coat_lobe = eps_c.v > 0.0 ? mr_dual_mul(tp, mr_dual_mul(tp, C, mr_dual_fresnel_dielectric(tp, g.dot_h, nc)),
                                                     mr_dual_ggx_dv(tp, alpha_c, &g))
                                       : mr_dual_const(0.0);

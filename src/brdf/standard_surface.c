@@ -294,26 +294,33 @@ static void ss_grad_eval_duals(const ss_grad_prep *p, mr_dual_tape *tp, const mr
     mr_dual on_b = p->on_b, eps_s = p->eps_s, eps_c = p->eps_c;
     const mr_dual *diffuse_over_pi = p->diffuse_over_pi, *spec_w = p->spec_w, *coat_tint = p->coat_tint;
     const mr_dual *metal_n = p->metal_n, *metal_k = p->metal_k;
-    mr_dual e_c = mr_dual_albedo_dielectric(tp, g.cos_i, rough_c, eps_c);
+    /* a prepared state holding coat or metalness at a constant 0 skips that lobe (mr_dual_is_const_zero) */
+    const int coat_on = !mr_dual_is_const_zero(coat), metal_on = !mr_dual_is_const_zero(metalness);
+    mr_dual e_c = coat_on ? mr_dual_albedo_dielectric(tp, g.cos_i, rough_c, eps_c) : mr_dual_const(0.0);
     mr_dual e_s = mr_dual_albedo_dielectric(tp, g.cos_i, rough_s, eps_s);
     double s = wi[0] * wo[0] + wi[1] * wo[1] + wi[2] * wo[2] - g.cos_i * g.cos_o;
     mr_dual on = mr_dual_add(tp, on_a, mr_dual_scale(tp, on_b, s > 0.0 ? s / MR_MAX(g.cos_i, g.cos_o) : 0.0));
     mr_dual dv = mr_dual_ggx_dv(tp, alpha_s, &g);
     mr_dual f_d = mr_dual_fresnel_dielectric(tp, g.dot_h, eta_s);
-    mr_dual coat_lobe = mr_dual_mul(tp, mr_dual_mul(tp, coat, mr_dual_fresnel_dielectric(tp, g.dot_h, eta_c)),
-                                    mr_dual_ggx_dv(tp, alpha_c, &g));
+    mr_dual coat_lobe = coat_on ? mr_dual_mul(tp, mr_dual_mul(tp, coat, mr_dual_fresnel_dielectric(tp, g.dot_h, eta_c)),
+                                              mr_dual_ggx_dv(tp, alpha_c, &g))
+                                : mr_dual_const(0.0);
     for (int c = 0; c < 3; c++) {
-        mr_dual below =
-            mr_dual_add(tp, mr_dual_rsubc(tp, 1.0, coat), mr_dual_mul(tp, coat_tint[c], mr_dual_rsubc(tp, 1.0, e_c)));
+        mr_dual below = coat_on ? mr_dual_add(tp, mr_dual_rsubc(tp, 1.0, coat),
+                                              mr_dual_mul(tp, coat_tint[c], mr_dual_rsubc(tp, 1.0, e_c)))
+                                : mr_dual_const(1.0);
         mr_dual weight = mr_dual_mul(tp, mr_dual_mul(tp, below, mr_dual_rsubc(tp, 1.0, metalness)),
                                      mr_dual_rsubc(tp, 1.0, mr_dual_mul(tp, spec_w[c], e_s)));
         diffuse[c] = mr_dual_mul(tp, mr_dual_mul(tp, weight, diffuse_over_pi[c]), on);
-        double dn, dk;
-        double F_c = mr_fresnel_conductor(g.dot_h, metal_n[c].v, metal_k[c].v, &dn, &dk);
-        mr_dual metal = mr_dual_mul(tp, metalness, mr_dual_chain2(tp, F_c, dn, metal_n[c], dk, metal_k[c]));
         mr_dual dielectric = mr_dual_mul(tp, mr_dual_mul(tp, mr_dual_rsubc(tp, 1.0, metalness), spec_w[c]), f_d);
-        specular[c] =
-            mr_dual_add(tp, coat_lobe, mr_dual_mul(tp, mr_dual_mul(tp, below, mr_dual_add(tp, metal, dielectric)), dv));
+        mr_dual base = dielectric;
+        if (metal_on) {
+            double dn, dk;
+            double F_c = mr_fresnel_conductor(g.dot_h, metal_n[c].v, metal_k[c].v, &dn, &dk);
+            mr_dual metal = mr_dual_mul(tp, metalness, mr_dual_chain2(tp, F_c, dn, metal_n[c], dk, metal_k[c]));
+            base = mr_dual_add(tp, metal, dielectric);
+        }
+        specular[c] = mr_dual_add(tp, coat_lobe, mr_dual_mul(tp, mr_dual_mul(tp, below, base), dv));
     }
 }
 
