@@ -938,9 +938,9 @@ MR_TEST(gradient_is_the_secant_where_affine) {
 /* A prepared derivative state (brdf.h, grad_ops) gives eval_grad's numbers for the slots it was prepared for: for
  * random subsets of the slots in random order (1 to all of them), at random values (ends of the ranges included),
  * at the defaults, with the parameters fits hold at their defaults and with a slot at 0 (the terms a prepared state
- * skips when a slot it leaves out is a constant 0: dual.h, mr_dual_is_const_zero), over random direction pairs (some below the horizon), every entry equal as doubles (==: the
- * same operations in the same order; only the sign of a zero may differ, where the full eval_grad adds a zero
- * column's product), or both NaN. */
+ * skips when a slot it leaves out is a constant 0: dual.h, mr_dual_is_const_zero), over random direction pairs
+ * (some below the horizon): every entry equal as doubles (==: the same operations in the same order; only the sign
+ * of a zero may differ, where the full eval_grad adds a zero column's product), or both NaN. */
 MR_TEST(prepared_gradient_equals_eval_grad_for_any_slots) {
     uint64_t rng = 31;
     int models = 0;
