@@ -17,6 +17,7 @@
 
 #include "brdf/brdf.h"
 #include "brdf/brdf_internal.h" /* the GGX albedo table lookups of known_openpbr and known_standard_surface */
+#include "brdf/dual.h"          /* the prepared derivative state of the layered models */
 #include "harness.h"
 #include "io/image_io.h"
 
@@ -981,6 +982,11 @@ MR_TEST(prepared_gradient_equals_eval_grad_for_any_slots) {
             }
             if (k > n) k = n;
             m->grad_ops->prepare(m, v, slots, k, state);
+            if (m->grad_ops->state_bytes == sizeof(mr_dual_grad_state)) { /* the layered models' dual tape: room left */
+                const mr_dual_tape *tape = &((const mr_dual_grad_state *)state)->tape;
+                MR_CHECK_MSG(tape->used + tape->width <= tape->capacity, "%s: prepared tape full (%d of %d)", m->name,
+                             tape->used, tape->capacity);
+            }
             for (int pair = 0; pair < 25; pair++) {
                 double wi[3], wo[3];
                 random_dir(&rng, 0.02, wi);
