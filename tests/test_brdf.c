@@ -11,11 +11,13 @@
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
 #include "brdf/brdf.h"
 #include "brdf/brdf_internal.h" /* the GGX albedo table lookups of known_openpbr and known_standard_surface */
+#include "brdf/dual.h"          /* the prepared derivative state of the layered models */
 #include "harness.h"
 #include "io/image_io.h"
 
@@ -932,6 +934,85 @@ MR_TEST(gradient_is_the_secant_where_affine) {
         }
     }
     printf("      %d derivatives equal to the secant over the range\n", checked);
+}
+
+/* A prepared derivative state (brdf.h, grad_ops) gives eval_grad's numbers for the slots it was prepared for: for
+ * random subsets of the slots in random order (1 to all of them), at random values (ends of the ranges included),
+ * at the defaults, with the parameters fits hold at their defaults and with a slot at 0 (the terms a prepared state
+ * skips when a slot it leaves out is a constant 0: dual.h, mr_dual_is_const_zero), over random direction pairs
+ * (some below the horizon): every entry equal as doubles (==: the same operations in the same order; only the sign
+ * of a zero may differ, where the full eval_grad adds a zero column's product), or both NaN. */
+MR_TEST(prepared_gradient_equals_eval_grad_for_any_slots) {
+    uint64_t rng = 31;
+    int models = 0;
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        if (!m->grad_ops) continue;
+        MR_CHECK_MSG(m->eval_grad != NULL, "%s: grad_ops without eval_grad", m->name);
+        if (!m->eval_grad) continue;
+        models++;
+        int n = mr_brdf_value_count(m), checked = 0, bad = 0;
+        void *state = malloc(m->grad_ops->state_bytes);
+        MR_CHECK(state != NULL);
+        if (!state) continue;
+        for (int trial = 0; trial < 40; trial++) {
+            double v[MR_BRDF_MAX_VALUES] = {0};
+            if (trial == 0)
+                mr_brdf_default_values(m, v);
+            else
+                random_values(m, &rng, trial % 4 == 0 ? 0.0 : 0.03, v);
+            if (trial % 3 == 2) { /* as a fit holds them: the parameters it does not fit at their defaults (a coat
+                                     weight of 0, whose terms a prepared state then skips), the others random */
+                double d[MR_BRDF_MAX_VALUES];
+                mr_brdf_default_values(m, d);
+                for (int i = 0; i < m->param_count; i++)
+                    if (m->params[i].flags & MR_PARAM_FIT_FIXED)
+                        for (int c = 0; c < m->params[i].channels; c++)
+                            v[mr_brdf_param_offset(m, i) + c] = d[mr_brdf_param_offset(m, i) + c];
+            }
+            if (trial % 5 == 4) /* a metalness (or any slot) held at 0, as a tie from a dielectric source gives */
+                v[(int)(rnd(&rng) * n)] = 0.0;
+            /* a random subset in random order: shuffle all slots, keep the first k */
+            int slots[MR_BRDF_MAX_VALUES], k = trial == 1 ? n : 1 + (int)(rnd(&rng) * n);
+            for (int j = 0; j < n; j++) slots[j] = j;
+            for (int j = n - 1; j > 0; j--) {
+                int o = (int)(rnd(&rng) * (j + 1)), t = slots[j];
+                slots[j] = slots[o];
+                slots[o] = t;
+            }
+            if (k > n) k = n;
+            m->grad_ops->prepare(m, v, slots, k, state);
+            if (m->grad_ops->state_bytes == sizeof(mr_dual_grad_state)) { /* the layered models' dual tape: room left */
+                const mr_dual_tape *tape = &((const mr_dual_grad_state *)state)->tape;
+                MR_CHECK_MSG(tape->used + tape->width <= tape->capacity, "%s: prepared tape full (%d of %d)", m->name,
+                             tape->used, tape->capacity);
+            }
+            for (int pair = 0; pair < 25; pair++) {
+                double wi[3], wo[3];
+                random_dir(&rng, 0.02, wi);
+                random_dir(&rng, 0.02, wo);
+                if (pair % 8 == 7) wo[2] = -wo[2]; /* below the horizon: all 0 */
+                double gd[MR_BRDF_MAX_VALUES * 3], gs[MR_BRDF_MAX_VALUES * 3];
+                double pd[MR_BRDF_MAX_VALUES * 3], ps[MR_BRDF_MAX_VALUES * 3];
+                m->eval_grad(m, v, wi, wo, gd, gs);
+                m->grad_ops->eval(state, wi, wo, pd, ps);
+                for (int c = 0; c < k; c++)
+                    for (int ch = 0; ch < 3; ch++) {
+                        double a = gd[slots[c] * 3 + ch], b = pd[c * 3 + ch];
+                        double a2 = gs[slots[c] * 3 + ch], b2 = ps[c * 3 + ch];
+                        int same = (a == b || (isnan(a) && isnan(b))) && (a2 == b2 || (isnan(a2) && isnan(b2)));
+                        if (!same && bad++ < 5)
+                            fprintf(stderr, "    %s: slot %d (column %d of %d) channel %d: eval_grad %.17g %.17g, "
+                                    "prepared %.17g %.17g\n", m->name, slots[c], c, k, ch, a, a2, b, b2);
+                        checked += 2;
+                    }
+            }
+        }
+        free(state);
+        printf("      %-20s %d prepared derivatives equal to eval_grad's\n", m->name, checked - 2 * bad);
+        MR_CHECK_MSG(bad == 0, "%s: %d of %d prepared derivatives differ from eval_grad's", m->name, bad, checked / 2);
+    }
+    MR_CHECK(models >= 3); /* openpbr, blender-principled, standard-surface */
 }
 
 /* ---------------------------------------------------------------------------------------------------------- */
@@ -2254,6 +2335,7 @@ MR_TEST_MAIN(MR_TEST_ENTRY(registry_tables_are_consistent), MR_TEST_ENTRY(map_en
              MR_TEST_ENTRY(gradient_matches_central_differences),
              MR_TEST_ENTRY(gradient_at_defaults_matches_one_sided_differences),
              MR_TEST_ENTRY(gradient_is_the_secant_where_affine),
+             MR_TEST_ENTRY(prepared_gradient_equals_eval_grad_for_any_slots),
              MR_TEST_ENTRY(gradient_is_finite_at_the_ends_of_the_ranges), MR_TEST_ENTRY(roles_are_truthful),
              MR_TEST_ENTRY(linear_and_affine_parameters_are_jointly_affine), MR_TEST_ENTRY(lobes_are_truthful),
              MR_TEST_ENTRY(known_lambert), MR_TEST_ENTRY(known_microfacet_normal_incidence),

@@ -1,7 +1,8 @@
 /*
  * test_render_derivatives.c — the parameter derivatives of a render (render.h, mr_render_derivatives_into), which
  * the fits' gradient local stage steps by: against central differences of renders, for every model with analytic
- * derivatives, per component; the same images for any thread count; refusals.
+ * derivatives, per component; the same images for any thread count, and through prepared derivatives (grad_ops)
+ * as through eval_grad; refusals.
  */
 #include <math.h>
 #include <string.h>
@@ -113,6 +114,65 @@ MR_TEST(derivative_images_do_not_depend_on_the_thread_count) {
     mr_render_plan_free(plan);
 }
 
+/* A model with prepared derivatives (brdf.h, grad_ops) renders through them; a slot list with a repeat takes the
+ * per-sample eval_grad instead (render.c). Both must give the same images: equal floats (==, so a zero's sign may
+ * differ) for three slots, at interior values and with the parameters fits hold at their defaults (coat weight 0,
+ * whose terms the prepared path skips), on 1 and 2 threads; the prepared images bit for bit the same on both. */
+MR_TEST(prepared_derivatives_render_the_same_images_as_eval_grad) {
+    mr_render_plan *plan = fit_plan(32);
+    mr_image *fast[3], *full[4], *one_thread[3];
+    for (int k = 0; k < 4; k++) {
+        if (k < 3) MR_CHECK_OK(mr_image_create(32, 32, 3, &fast[k]));
+        if (k < 3) MR_CHECK_OK(mr_image_create(32, 32, 3, &one_thread[k]));
+        MR_CHECK_OK(mr_image_create(32, 32, 3, &full[k]));
+    }
+    int models = 0;
+    for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
+        const mr_brdf_model *m = *mp;
+        if (m->grad_ops == NULL) continue;
+        models++;
+        for (int setting = 0; setting < 2; setting++) {
+            double values[MR_BRDF_MAX_VALUES], defaults[MR_BRDF_MAX_VALUES];
+            interior_values(m, values);
+            mr_brdf_default_values(m, defaults);
+            int slots[4], k = 0;
+            for (int p = 0, slot = 0; p < m->param_count; p++)
+                for (int c = 0; c < m->params[p].channels; c++, slot++) {
+                    const int held = (m->params[p].flags & MR_PARAM_FIT_FIXED) != 0;
+                    if (setting == 1 && held) values[slot] = defaults[slot];
+                    if (!held && m->params[p].role != MR_PARAM_SWITCH && k < 3 && (c == 0 || setting == 0))
+                        slots[k++] = slot;
+                }
+            MR_CHECK(k == 3);
+            slots[3] = slots[0];
+            for (int threads = 1; threads <= 2; threads++) {
+                MR_CHECK_OK(mr_render_derivatives_into(plan, threads, m, values, MR_COMPONENT_FULL, slots, 3, fast));
+                MR_CHECK_OK(mr_render_derivatives_into(plan, threads, m, values, MR_COMPONENT_FULL, slots, 4, full));
+                int differ = 0;
+                for (int j = 0; j < 3; j++)
+                    for (int i = 0; i < 32 * 32 * 3; i++) differ += fast[j]->pixels[i] != full[j]->pixels[i];
+                MR_CHECK_MSG(differ == 0, "%s (setting %d, %d threads): %d pixels differ between grad_ops and "
+                             "eval_grad", m->name, setting, threads, differ);
+                // and bit for bit the same images on 1 and 2 threads
+                const size_t bytes = 32 * 32 * 3 * sizeof(float);
+                for (int j = 0; j < 3; j++)
+                    if (threads == 1)
+                        memcpy(one_thread[j]->pixels, fast[j]->pixels, bytes);
+                    else
+                        MR_CHECK_MSG(memcmp(one_thread[j]->pixels, fast[j]->pixels, bytes) == 0,
+                                     "%s (setting %d): image %d differs between 1 and 2 threads", m->name, setting, j);
+            }
+        }
+    }
+    MR_CHECK(models >= 3);
+    for (int k = 0; k < 4; k++) {
+        if (k < 3) mr_image_free(fast[k]);
+        if (k < 3) mr_image_free(one_thread[k]);
+        mr_image_free(full[k]);
+    }
+    mr_render_plan_free(plan);
+}
+
 MR_TEST(what_cannot_be_differentiated_is_refused) {
     mr_render_plan *plan = fit_plan(16);
     mr_image *d = NULL, *wrong = NULL;
@@ -153,4 +213,5 @@ MR_TEST(what_cannot_be_differentiated_is_refused) {
 
 MR_TEST_MAIN(MR_TEST_ENTRY(derivatives_match_central_differences_for_every_model),
              MR_TEST_ENTRY(derivative_images_do_not_depend_on_the_thread_count),
+             MR_TEST_ENTRY(prepared_derivatives_render_the_same_images_as_eval_grad),
              MR_TEST_ENTRY(what_cannot_be_differentiated_is_refused))

@@ -77,7 +77,11 @@
  *   and the metal are evaluated at coat_weight 0 and metallic 0 too (their terms are 0 there), so that the
  *   derivatives there are the ones from inside the range. Cost (tests/bench_brdf_grad.c, one thread): about 7.7 us
  *   per eval_grad, twice a prepare + eval (3.4 us, most of it the four 65-point averages, which eval_grad needs with
- *   their derivatives) and 50 times an eval with a prepared state (150 ns).
+ *   their derivatives) and 50 times an eval with a prepared state (150 ns). Prepared derivatives (bp_grad_ops,
+ *   brdf.h grad_ops: bp_prepare's half, with those averages, once per parameter set, for the slots a caller asks
+ *   for only; the coat and the metal skipped where their weight is a constant 0 outside those slots): for the 5
+ *   slots a fit solves, 0.40-0.47 us per evaluation, 1.9-3.9 us to prepare, the same numbers as eval_grad's
+ *   (tests/test_brdf.c, prepared_gradient_equals_eval_grad_for_any_slots).
  */
 #include "brdf_internal.h"
 #include "dual.h"
@@ -262,22 +266,26 @@ static mr_dual bp_dual_estimate_s(mr_dual_tape *tp, double mu, mr_dual r, mr_dua
 /* d f_r / d values[j]: bp_prepare and bp_eval transcribed in dual numbers (dual.h), operation for operation, so the
  * value part is eval's to rounding. Differences from eval's branches, all where eval's value is unchanged: the coat
  * is evaluated at coat_weight 0 and the metal at metallic 0 (their terms are then 0 or 1, and their derivatives give
- * the one-sided derivatives a fit starting there needs). The multiscatter switch's derivative is 0. */
-static void bp_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3], const double wo[3],
-                         double *d_diffuse, double *d_specular) {
-    mr_brdf_geom g;
-    double v[MR_BRDF_MAX_VALUES];
-    if (!mr_brdf_grad_begin(model, values, wi, wo, d_diffuse, d_specular, &g, v)) return;
-    int count = mr_brdf_value_count(model);
-    mr_dual_tape tape;
-    mr_dual_tape_init(&tape);
-    mr_dual_tape *tp = &tape;
-    mr_dual x[MR_DUAL_N];
-    for (int j = 0; j < count; j++) x[j] = mr_dual_var(v[j], j);
-    x[BP_MULTISCATTER] = mr_dual_const(v[BP_MULTISCATTER]);
-    const mr_dual one = mr_dual_const(1.0);
+ * the one-sided derivatives a fit starting there needs). The multiscatter switch's derivative is 0.
+ * Two halves: bp_grad_prepare_duals (bp_prepare's part, no direction) and bp_grad_eval_duals (bp_eval's), so that a
+ * prepared derivative state (bp_grad_ops, brdf.h) does the first once per parameter set; eval_grad runs both. */
 
-    /* bp_prepare */
+/* What bp_grad_eval_duals takes from bp_grad_prepare_duals: the clamped values, their duals and bp_prepare's. */
+typedef struct bp_grad_prep {
+    double v[MR_BRDF_MAX_VALUES];
+    mr_dual x[MR_DUAL_N];
+    int multiscatter, spec_on;
+    mr_dual r, alpha, metallic, E_avg, f0, sqrt_f0, eta, C, r_c, alpha_c, eta_c, f0_c, fss_c, E_avg_c, inv_eta_c2;
+    mr_dual rho[3], b[3], fss_m[3], f0s[3], fss_s[3];
+} bp_grad_prep;
+
+_Static_assert(sizeof(bp_grad_prep) <= MR_DUAL_PREP_BYTES, "bp_grad_prep must fit in a mr_dual_grad_state");
+
+/* bp_prepare in duals: p->v and p->x given (x[BP_MULTISCATTER] a constant) */
+static void bp_grad_prepare_duals(mr_dual_tape *tp, bp_grad_prep *p) {
+    const double *v = p->v;
+    const mr_dual *x = p->x;
+    const mr_dual one = mr_dual_const(1.0);
     mr_dual r = mr_dual_maxc(x[BP_ROUGHNESS], BP_ROUGHNESS_MIN), alpha = mr_dual_sq(tp, r), metallic = x[BP_METALLIC];
     int multiscatter = v[BP_MULTISCATTER] >= 0.5;
     mr_dual E_avg = mr_dual_albedo_one_avg(tp, r);
@@ -308,10 +316,32 @@ static void bp_eval_grad(const mr_brdf_model *model, const double *values, const
     mr_dual E_avg_c = mr_dual_albedo_one_avg(tp, r_c);
     mr_dual inv_eta_c2 = mr_dual_recip(tp, mr_dual_sq(tp, eta_c));
 
+    p->multiscatter = multiscatter, p->spec_on = spec_on;
+    p->r = r, p->alpha = alpha, p->metallic = metallic, p->E_avg = E_avg, p->f0 = f0, p->sqrt_f0 = sqrt_f0;
+    p->eta = eta, p->C = C, p->r_c = r_c, p->alpha_c = alpha_c, p->eta_c = eta_c, p->f0_c = f0_c, p->fss_c = fss_c;
+    p->E_avg_c = E_avg_c, p->inv_eta_c2 = inv_eta_c2;
+    for (int c = 0; c < 3; c++)
+        p->rho[c] = rho[c], p->b[c] = b[c], p->fss_m[c] = fss_m[c], p->f0s[c] = f0s[c], p->fss_s[c] = fss_s[c];
+}
+
+/* bp_eval in duals at the geometry g of (wi, wo) */
+static void bp_grad_eval_duals(const bp_grad_prep *p, mr_dual_tape *tp, const mr_brdf_geom *gp, mr_dual diffuse[3],
+                               mr_dual spec[3]) {
+    const mr_brdf_geom g = *gp;
+    const double *v = p->v;
+    const mr_dual *x = p->x;
+    const mr_dual one = mr_dual_const(1.0);
+    int multiscatter = p->multiscatter, spec_on = p->spec_on;
+    mr_dual r = p->r, alpha = p->alpha, metallic = p->metallic, E_avg = p->E_avg, f0 = p->f0, sqrt_f0 = p->sqrt_f0;
+    mr_dual eta = p->eta, C = p->C, r_c = p->r_c, alpha_c = p->alpha_c, eta_c = p->eta_c, f0_c = p->f0_c;
+    mr_dual fss_c = p->fss_c, E_avg_c = p->E_avg_c, inv_eta_c2 = p->inv_eta_c2;
+    const mr_dual *rho = p->rho, *b = p->b, *fss_m = p->fss_m, *f0s = p->f0s, *fss_s = p->fss_s;
     /* bp_eval: the coat, at coat_weight 0 too (see above) */
     double mu_v = MR_MIN(g.cos_i, 1.0);
-    mr_dual w[3], spec[3];
-    {
+    mr_dual w[3];
+    if (mr_dual_is_const_zero(C)) { /* a prepared state holding coat_weight at 0: no coat (mr_dual_is_const_zero) */
+        for (int c = 0; c < 3; c++) w[c] = one, spec[c] = mr_dual_const(0.0);
+    } else {
         mr_dual E_c = mr_dual_maxc(mr_dual_albedo_one(tp, mu_v, r_c), 1e-6);
         mr_dual dark = bp_dual_darkening(tp, E_c, E_avg_c, fss_c), scale = mr_dual_div(tp, dark, E_c);
         mr_dual F = eta_c.v > 1.0 ? mr_dual_fresnel_dielectric(tp, g.dot_h, eta_c) : mr_dual_const(0.0);
@@ -334,8 +364,8 @@ static void bp_eval_grad(const mr_brdf_model *model, const double *values, const
 
     mr_dual DV = mr_dual_ggx_dv(tp, alpha, &g);
     mr_dual E = mr_dual_maxc(mr_dual_albedo_one(tp, mu_v, r), 1e-6);
-    /* the metal, at metallic 0 too */
-    for (int c = 0; c < 3; c++) {
+    /* the metal, at metallic 0 too, unless a prepared state holds it at a constant 0 */
+    for (int c = 0; c < 3 && !mr_dual_is_const_zero(metallic); c++) {
         mr_dual scale = multiscatter ? mr_dual_div(tp, bp_dual_darkening(tp, E, E_avg, fss_m[c]), E) : one;
         mr_dual metal = mr_dual_mul(tp, mr_dual_mul(tp, mr_dual_f82_tint(tp, g.dot_h, rho[c], b[c]), DV), scale);
         spec[c] = mr_dual_add(tp, spec[c], mr_dual_mul(tp, mr_dual_mul(tp, metallic, w[c]), metal));
@@ -355,10 +385,49 @@ static void bp_eval_grad(const mr_brdf_model *model, const double *values, const
         mr_dual keep = mr_dual_clampc(mr_dual_rsubc(tp, 1.0, est_max), 0.0, 1.0);
         for (int c = 0; c < 3; c++) w[c] = mr_dual_mul(tp, w[c], keep);
     }
-    mr_dual diffuse[3];
     for (int c = 0; c < 3; c++) diffuse[c] = mr_dual_scale(tp, mr_dual_mul(tp, w[c], rho[c]), MR_INV_PI);
+}
+
+static void bp_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3], const double wo[3],
+                         double *d_diffuse, double *d_specular) {
+    mr_brdf_geom g;
+    bp_grad_prep p;
+    if (!mr_brdf_grad_begin(model, values, wi, wo, d_diffuse, d_specular, &g, p.v)) return;
+    int count = mr_brdf_value_count(model);
+    double scratch[MR_DUAL_SCRATCH];
+    mr_dual_tape tape;
+    mr_dual_tape_init(&tape, scratch, MR_DUAL_SCRATCH, MR_DUAL_N);
+    mr_dual_vars(p.v, count, NULL, 0, p.x);
+    p.x[BP_MULTISCATTER] = mr_dual_const(p.v[BP_MULTISCATTER]);
+    bp_grad_prepare_duals(&tape, &p);
+    mr_dual diffuse[3], spec[3];
+    bp_grad_eval_duals(&p, &tape, &g, diffuse, spec);
     mr_dual_store_grad(diffuse, spec, count, d_diffuse, d_specular);
 }
+
+static void bp_grad_prepare(const mr_brdf_model *model, const double *values, const int *slots, int count,
+                            void *state) {
+    mr_dual_grad_state *st = state;
+    bp_grad_prep *p = (bp_grad_prep *)st->prep.bytes;
+    mr_dual_grad_state_begin(model, values, slots, count, st, p->v, p->x);
+    p->x[BP_MULTISCATTER] = mr_dual_const(p->v[BP_MULTISCATTER]);
+    bp_grad_prepare_duals(&st->tape, p);
+}
+
+static void bp_grad_eval(const void *state, const double wi[3], const double wo[3], double *d_diffuse,
+                         double *d_specular) {
+    const mr_dual_grad_state *st = state;
+    mr_brdf_geom g;
+    if (!mr_dual_grad_eval_begin(st, wi, wo, d_diffuse, d_specular, &g)) return;
+    double scratch[MR_DUAL_SCRATCH];
+    mr_dual_tape tape;
+    mr_dual_tape_init(&tape, scratch, MR_DUAL_SCRATCH, st->count);
+    mr_dual diffuse[3], spec[3];
+    bp_grad_eval_duals((const bp_grad_prep *)st->prep.bytes, &tape, &g, diffuse, spec);
+    mr_dual_store_grad(diffuse, spec, st->count, d_diffuse, d_specular);
+}
+
+static const mr_brdf_grad_ops bp_grad_ops = {sizeof(mr_dual_grad_state), bp_grad_prepare, bp_grad_eval};
 
 _Static_assert(17 <= MR_DUAL_N, "blender-principled's 17 packed values need as many dual slots");
 
@@ -373,4 +442,5 @@ const mr_brdf_model mr_brdf_blender_principled = {
     .prepare = bp_prepare,
     .eval = bp_eval,
     .eval_grad = bp_eval_grad,
+    .grad_ops = &bp_grad_ops,
 };

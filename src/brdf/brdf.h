@@ -120,6 +120,23 @@ typedef struct mr_brdf_batch {
 
 typedef struct mr_brdf_model mr_brdf_model;
 
+/* Prepared derivatives (mr_brdf_model.grad_ops; optional): eval_grad split for a caller that needs d f_r at many
+ * direction pairs for one parameter vector and only some slots (a derivative render, render.h; the fits' local stage
+ * asks for its 2-5 fitted slots of up to 20). `prepare` does the value-only part of eval_grad (the model's prepare,
+ * in derivative form) once, for the slots asked for only; `eval` the direction-dependent rest per pair, carrying
+ * those slots' derivatives alone. Models without it (NULL) are differentiated by eval_grad per pair. */
+typedef struct mr_brdf_grad_ops {
+    size_t state_bytes; /* bytes of a prepared derivative state, allocated by the caller (aligned as malloc's) */
+    /* Prepare `state` for values[] (as eval_grad takes them) and `count` DISTINCT packed slots slots[0..count),
+     * 1 <= count <= the value count. The state may point into itself: use it where it was prepared, never a copy.
+     * Never fails. */
+    void (*prepare)(const mr_brdf_model *model, const double *values, const int *slots, int count, void *state);
+    /* d f_r / d values[slots[k]] at (wi, wo) into d_diffuse[k*3 + c] and d_specular[k*3 + c], k < count: the same
+     * numbers as eval_grad's [slots[k]*3 + c] (tests/test_brdf.c checks them equal as doubles). Reads the state
+     * only: any number of threads may evaluate one prepared state at once. */
+    void (*eval)(const void *state, const double wi[3], const double wo[3], double *d_diffuse, double *d_specular);
+} mr_brdf_grad_ops;
+
 struct mr_brdf_model {
     const char *name;    /* unique, lowercase: "ggx", "ward-duer" */
     const char *summary; /* one line for `matremap models` */
@@ -143,6 +160,9 @@ struct mr_brdf_model {
      * [j*3 + channel]. Switch parameters have derivative 0. */
     void (*eval_grad)(const mr_brdf_model *model, const double *values, const double wi[3],
                       const double wo[3], double *d_diffuse, double *d_specular);
+
+    /* Optional (NULL if absent; only with eval_grad): eval_grad prepared once per parameter set, for chosen slots. */
+    const mr_brdf_grad_ops *grad_ops;
 
     /* Optional (NULL: never): nonzero when the model rescales its LINEAR parameters at these packed values, so
      * that f_r is not linear in them there (Mitsuba's energy trimming, brdf_internal.h: diffuse + specular > 1

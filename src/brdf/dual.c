@@ -1,8 +1,8 @@
 /*
  * dual.c — the primitives of dual.h's forward-mode dual numbers: the chain rule onto a tape row. Out of line on
- * purpose: each is a short loop over MR_DUAL_N slots, called from a few hundred places per eval_grad; inlined, the
- * layered models' eval_grad grew to 86 KB of code and ran slower than with these calls. Pure functions of their
- * arguments and the caller's tape: thread-safe.
+ * purpose: each is a short loop over a tape's columns (MR_DUAL_N or fewer), called from a few hundred places per
+ * eval_grad; inlined, the layered models' eval_grad grew to 86 KB of code and ran slower than with these calls. Pure
+ * functions of their arguments and the caller's tape: thread-safe.
  */
 #include "dual.h"
 
@@ -19,63 +19,81 @@ static const double unit_rows[MR_DUAL_N][MR_DUAL_N] = {
 };
 _Static_assert(MR_DUAL_N == 20, "unit_rows spells out 20 rows");
 
-/* The rows' loops, with restrict parameters so that GCC vectorises them at -O2 (restrict locals did not suffice). */
-static void row_scale(double *restrict r, double a, const double *restrict x) {
-    for (int j = 0; j < MR_DUAL_N; j++) r[j] = a * x[j];
+/* The rows' loops over a tape's columns in groups of 4 (its width is a multiple of 4: mr_dual_tape_init), with
+ * restrict parameters so that GCC vectorises them at -O2 (restrict locals did not suffice). Whole groups, not a
+ * loop to the width with a remainder: at the 4-8 columns of a prepared state the remainder's bookkeeping cost as much
+ * as the arithmetic. */
+_Static_assert(MR_DUAL_N % 4 == 0, "tape widths are rounded up to whole groups of 4 within MR_DUAL_N");
+static void row_scale(double *restrict r, int n, double a, const double *restrict x) {
+    for (int j = 0; j < n; j += 4)
+        for (int i = 0; i < 4; i++) r[j + i] = a * x[j + i];
 }
-static void row_axpby(double *restrict r, double a, const double *restrict x, double b, const double *restrict y) {
-    for (int j = 0; j < MR_DUAL_N; j++) r[j] = a * x[j] + b * y[j];
+static void row_axpby(double *restrict r, int n, double a, const double *restrict x, double b,
+                      const double *restrict y) {
+    for (int j = 0; j < n; j += 4)
+        for (int i = 0; i < 4; i++) r[j + i] = a * x[j + i] + b * y[j + i];
 }
-static void row_add_scaled(double *restrict r, double a, const double *restrict x) {
-    for (int j = 0; j < MR_DUAL_N; j++) r[j] += a * x[j];
+static void row_add_scaled(double *restrict r, int n, double a, const double *restrict x) {
+    for (int j = 0; j < n; j += 4)
+        for (int i = 0; i < 4; i++) r[j + i] += a * x[j + i];
 }
 
-mr_dual mr_dual_var(double v, int slot) {
-    mr_dual r = {v, unit_rows[slot]};
+mr_dual mr_dual_var(double v, int column) {
+    mr_dual r = {v, unit_rows[column]};
     return r;
 }
 
-/* The next free row. The number of rows an eval_grad takes is fixed by its code (no loop depends on data), far below
- * MR_DUAL_ROWS; should a change of a model ever exceed it, the last row is reused: memory stays safe and the
- * derivative test (tests/test_brdf.c) fails on the wrong derivatives instead. */
+void mr_dual_vars(const double *v, int count, const int *slots, int k, mr_dual *x) {
+    for (int j = 0; j < count; j++) x[j] = slots ? mr_dual_const(v[j]) : mr_dual_var(v[j], j);
+    if (slots)
+        for (int c = 0; c < k; c++) x[slots[c]] = mr_dual_var(v[slots[c]], c);
+}
+
+void mr_dual_grad_state_begin(const mr_brdf_model *model, const double *values, const int *slots, int count,
+                              mr_dual_grad_state *st, double *v, mr_dual *x) {
+    mr_brdf_clamp_values(model, values, v);
+    st->count = count;
+    for (int c = 0; c < count; c++) st->slots[c] = slots[c];
+    mr_dual_tape_init(&st->tape, st->rows, MR_DUAL_PREP_ROWS * MR_DUAL_N, count);
+    mr_dual_vars(v, mr_brdf_value_count(model), slots, count, x);
+}
+
+/* The next free row. The number of rows an evaluation takes is fixed by its code (no loop depends on data), far below
+ * a tape's capacity; should a change of a model ever exceed it, the last row is reused: memory stays safe and the
+ * derivative tests (tests/test_brdf.c) fail on the wrong derivatives instead. */
 static double *tape_row(mr_dual_tape *t) {
-    if (t->used < MR_DUAL_ROWS) return t->rows[t->used++];
-    return t->rows[MR_DUAL_ROWS - 1];
+    if (t->used + t->width <= t->capacity) {
+        double *row = t->buf + t->used;
+        t->used += t->width;
+        return row;
+    }
+    return t->buf + (t->capacity - t->width);
 }
 
-mr_dual mr_dual_chain(mr_dual_tape *t, double value, double slope, mr_dual a) {
-    mr_dual r = {value, NULL};
-    if (!a.d) return r;
+const double *mr_dual_row1(mr_dual_tape *t, double slope, const double *x) {
     double *row = tape_row(t);
-    row_scale(row, slope, a.d);
-    r.d = row;
-    return r;
+    row_scale(row, t->width, slope, x);
+    return row;
 }
 
-mr_dual mr_dual_chain2(mr_dual_tape *t, double value, double da, mr_dual a, double db, mr_dual b) {
-    if (!b.d) return mr_dual_chain(t, value, da, a);
-    if (!a.d) return mr_dual_chain(t, value, db, b);
+const double *mr_dual_row2(mr_dual_tape *t, double da, const double *x, double db, const double *y) {
     double *row = tape_row(t);
-    row_axpby(row, da, a.d, db, b.d);
-    mr_dual r = {value, row};
-    return r;
+    row_axpby(row, t->width, da, x, db, y);
+    return row;
 }
 
-mr_dual mr_dual_chain3(mr_dual_tape *t, double value, double da, mr_dual a, double db, mr_dual b, double dc,
-                       mr_dual c) {
-    if (!c.d) return mr_dual_chain2(t, value, da, a, db, b);
-    mr_dual ab = mr_dual_chain2(t, 0.0, da, a, db, b);
-    if (!ab.d) return mr_dual_chain(t, value, dc, c);
-    double *row = (double *)ab.d; /* the row chain2 just took from this tape */
-    row_add_scaled(row, dc, c.d);
-    mr_dual r = {value, row};
-    return r;
+const double *mr_dual_row3(mr_dual_tape *t, double da, const double *x, double db, const double *y, double dc,
+                           const double *z) {
+    double *row = tape_row(t);
+    row_axpby(row, t->width, da, x, db, y);
+    row_add_scaled(row, t->width, dc, z);
+    return row;
 }
 
 /* the left derivatives at a tie: slot by slot, the smaller slope for max, the larger for min */
 static mr_dual tie(mr_dual_tape *t, mr_dual a, mr_dual b, int take_max) {
     double *row = tape_row(t);
-    for (int j = 0; j < MR_DUAL_N; j++) {
+    for (int j = 0; j < t->width; j++) {
         double x = a.d ? a.d[j] : 0.0, y = b.d ? b.d[j] : 0.0;
         row[j] = take_max ? MR_MAX(x, y) : MR_MIN(x, y);
     }

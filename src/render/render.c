@@ -1669,6 +1669,21 @@ mr_status mr_render_derivatives_into(const mr_render_plan *plan, int threads, co
     }
     const int lit = plan->lit_pixels;
     if (threads <= 0) threads = plan->render_threads;
+    // A model with prepared derivatives (brdf.h, grad_ops) differentiates the value-only part once here, for the
+    // slots asked for only; each sample then carries `count` derivatives instead of all the model's. Repeated slots
+    // (no caller of the library passes them) take eval_grad's path.
+    const mr_brdf_grad_ops *ops = model->grad_ops;
+    for (int k = 0; k < count && ops != NULL; k++)
+        for (int l = 0; l < k; l++)
+            if (slots[l] == slots[k]) ops = NULL;
+    void *grad_state = NULL;
+    if (ops != NULL) {
+        grad_state = malloc(ops->state_bytes);
+        if (grad_state == NULL)
+            return mr_fail(MR_ERR_NOMEM, "render derivatives: %zu bytes for model '%s'", ops->state_bytes,
+                           model->name);
+        ops->prepare(model, values, slots, count, grad_state);
+    }
     // Each lit pixel sums its samples in plan order, as render_core does: the images do not depend on the thread
     // count. The background and the emission do not depend on any parameter.
 #pragma omp parallel for schedule(dynamic, 64) num_threads(threads) if (threads > 1)
@@ -1679,10 +1694,13 @@ mr_status mr_render_derivatives_into(const mr_render_plan *plan, int threads, co
             const plan_hit *hit = &plan->hits[h];
             for (int s = hit->point_begin; s < hit[1].point_begin; s++) {
                 const point_sample *sample = &plan->point_samples[s];
-                model->eval_grad(model, values, hit->view, sample->light, d_diffuse, d_specular);
+                if (ops != NULL)
+                    ops->eval(grad_state, hit->view, sample->light, d_diffuse, d_specular);
+                else
+                    model->eval_grad(model, values, hit->view, sample->light, d_diffuse, d_specular);
                 for (int k = 0; k < count; k++)
                     for (int c = 0; c < 3; c++) {
-                        const int at = slots[k] * 3 + c;
+                        const int at = (ops != NULL ? k : slots[k]) * 3 + c;
                         double d = component == MR_COMPONENT_DIFFUSE    ? d_diffuse[at]
                                    : component == MR_COMPONENT_SPECULAR ? d_specular[at]
                                                                         : d_diffuse[at] + d_specular[at];
@@ -1694,5 +1712,6 @@ mr_status mr_render_derivatives_into(const mr_render_plan *plan, int threads, co
         for (int k = 0; k < count; k++)
             for (int c = 0; c < 3; c++) images[k]->pixels[pixel * 3 + c] = (float)sum[k][c];
     }
+    free(grad_state);
     return MR_OK;
 }

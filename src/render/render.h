@@ -443,7 +443,10 @@ mr_status mr_render_components_into_threads(const mr_render_plan *plan, int thre
  * parameter. Slots are packed value indices (brdf.h), 1 to MR_BRDF_MAX_VALUES of them, images 3-channel and the
  * plan's size. MR_ERR_UNSUPPORTED for a model without eval_grad, a plan with environment or reflection samples
  * (point lights only: mr_render_plan_point_lit_only) or a mesh with several materials; MR_ERR_INVALID_ARG for
- * NULL arguments, a slot outside the model or an image of the wrong size. */
+ * NULL arguments, a slot outside the model or an image of the wrong size. A model with prepared derivatives
+ * (brdf.h, grad_ops) is differentiated through them, once per call for the slots asked for (distinct slots; a list
+ * with a repeat takes eval_grad per sample): the same images, at a fraction of the cost. MR_ERR_NOMEM if its state
+ * (about 28 KB) cannot be allocated. */
 mr_status mr_render_derivatives_into(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
                                      const double *values, mr_component component, const int *slots, int count,
                                      mr_image *const *images);
