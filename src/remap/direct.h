@@ -35,17 +35,41 @@
  *   - warm-started: the same call with remap.initial_values set to an already solved, nearby unique value's
  *     answer (remap.h: for AUTO and JOINT one local refinement from there instead of the global grid search)
  *     and remap.xtol raised to MR_DIRECT_WARM_XTOL.
- *     The unique values are sorted along a Morton (Z-order) curve through their quantised coordinates and cut
- *     into chains of opts->chain_length (default MR_DIRECT_DEFAULT_CHAIN); in each chain, in order, a value
- *     starts from the answer of the nearest value of its chain already answered with outcome CONVERGED
- *     (Euclidean distance in quantisation steps; the earliest in the chain on a tie; a cache hit counts as
- *     answered); a value with no such neighbour (the first of a chain) gets a full remap. The guard: a
- *     warm-started answer is kept only if its outcome is MR_FIT_CONVERGED and its relative RMSE is at most
- *     MR_DIRECT_GUARD_GAIN times its seed's plus MR_DIRECT_GUARD_FLOOR (neighbours fit about equally well; a
- *     warm start that fell into another basin does not). Otherwise the value gets a full remap, whose outcome
+ *     The unique values are sorted along a Morton (Z-order) curve through their quantised coordinates (with
+ *     shared shapes, below: through the shape slots first, then through the others among values equal in
+ *     those, so that a shape's siblings lie side by side) and cut into chains of opts->chain_length (default
+ *     MR_DIRECT_DEFAULT_CHAIN); in each chain, in order, a value starts from the answer of its shape sibling
+ *     (below) if it has one, else of the nearest value of its chain already answered with a seedable outcome,
+ *     CONVERGED or UNDER_RESOLVED (Euclidean distance in quantisation steps; the earliest in the chain on a tie;
+ *     a cache hit counts as answered); a value with no such neighbour (the first of a chain) gets a full remap.
+ *     The guard: a warm-started answer is kept only if its outcome is seedable and its relative RMSE is at
+ *     most MR_DIRECT_GUARD_GAIN times its seed's plus MR_DIRECT_GUARD_FLOOR (neighbours fit about equally well;
+ *     a warm start that fell into another basin does not). Otherwise the value gets a full remap, whose outcome
  *     stands (a fallback). A warm-started answer is the full remap's minimum when both find the same basin, up
  *     to the local fit's tolerance: on the shared texture sets within 1e-4 (largest parameter difference, alpha
  *     relative, reflectances absolute; tests/bench_direct.c), checked within 2e-3 by tests/test_direct.c.
+ *     UNDER_RESOLVED answers seed and are kept too: the lobe is narrower than the pixels, but the image error
+ *     still has a minimum in the roughness, which the warm refinement finds as the full remap's grid does (on
+ *     the FloppyDisk set within 2e-3 of it, median 1e-5, their renders within 3e-5 relative RMSE, the same
+ *     outcome; tests/test_direct.c); refusing them cost a full remap for every glossy texel of a chain before
+ *     its first converged one (1,500 of the set's 1,900 full remaps at 6/255).
+ *   - Shared shapes (opts->fit_every_shape = 0, the default): AUTO fits the shape (the nonlinear parameters) of
+ *     a lobe against the source's render of that lobe alone and only then solves the linear parameters against
+ *     the full render (remap.h). So when every fitted nonlinear target parameter shapes the specular lobe
+ *     (GGX's, Ward's, Phong's roughness; the strategy AUTO, built-in renderers, warm starts on), two texels
+ *     whose sources render the same specular lobe, bit for bit, get the same shape from the same start: a
+ *     Ward texel's shape depends on its specular colour and alpha, not on its diffuse colour. Not on the colour
+ *     alone would be wrong: GGX's Schlick term makes its lobe affine, not linear, in F0, so the best alpha for
+ *     s * L(alpha) depends on s. A value's shape sibling is the earliest value of its chain already answered
+ *     with a seedable outcome whose quantised source values are equal in every slot not confined to the
+ *     diffuse lobe (the shape slots) and whose source specular render (the fit scene's, one component render
+ *     per value that has a candidate, hashed: FNV-1a 64 of its bits) is identical; the value then starts from
+ *     the sibling's answer with its shape kept: remap.max_evaluations = 1 for it, so the local refinement
+ *     evaluates the start only, and the linear parameters and every verdict (outcome, resolution, the closer
+ *     look) are the value's own, as in any remap. Under the guard as any warm start (counted in `warm`, and in
+ *     `shared_shapes`). Its answer is what the warm refinement from the sibling's answer converges to, up to the
+ *     refinement's own tolerance (xtol MR_DIRECT_WARM_XTOL). On FloppyDisk at 6/255, 14,000 of 19,400 values
+ *     share a shape, and a remap takes 13 counted renders instead of 24.
  *     What a warm start cannot report: an AUTO fit's ambiguity (two minima within 1 %: LOCAL_MINIMUM) needs the
  *     global grid, so a kept warm answer is CONVERGED where a full remap might have said LOCAL_MINIMUM.
  *     opts->cold = 1 gives every unique value a full remap (slower; no warm start at all).
@@ -144,6 +168,7 @@ typedef struct mr_direct_options {
                                     than such chains) */
     int chain_length;            /* unique values per chain, >= 1; 0 = MR_DIRECT_DEFAULT_CHAIN */
     int cold;                    /* 1: no warm starts, a full remap for every unique value */
+    int fit_every_shape;         /* 1: no shared shapes (header comment): every warm start refines its shape */
     const char *cache_path;      /* optional cache file (header comment); NULL = none */
     mr_direct_progress_fn progress; /* optional */
     void *progress_user;
@@ -160,6 +185,8 @@ typedef struct mr_direct_summary {
     size_t fallbacks;                        /* warm starts the guard refused (their value then had a full
                                                 remap: counted in `full` too) */
     size_t remaps;                           /* remaps run: full + warm + fallbacks */
+    size_t shared_shapes;                    /* of the warm ones, started from a shape sibling's answer with its
+                                                shape kept (header comment, "Shared shapes") */
     size_t outcomes[MR_FIT_OUTCOME_COUNT];   /* unique values by the outcome of their answer (hits included) */
     long renders;                            /* target renders of the remaps run (mr_remap_result.renders) */
     int threads;                             /* threads used (0: nothing was remapped) */
