@@ -663,8 +663,8 @@ static void run_item(void *ctx, long item) {
  * shape the specular lobe, so that AUTO fits them, lobe by lobe, against the source's specular render alone. */
 static int shapes_shareable(const run_config *cfg) {
     const mr_remap_options *r = &cfg->remap;
-    if (cfg->cold || cfg->fit_every_shape || r->strategy != MR_REMAP_AUTO || !mr_renderer_is_builtin(r->target_renderer) ||
-        !mr_renderer_is_builtin(r->source_renderer))
+    if (cfg->cold || cfg->fit_every_shape || r->strategy != MR_REMAP_AUTO ||
+        !mr_renderer_is_builtin(r->target_renderer) || !mr_renderer_is_builtin(r->source_renderer))
         return 0;
     int fitted = 0;
     for (int i = 0; i < cfg->target->param_count; i++) {
@@ -808,7 +808,8 @@ mr_status mr_direct_remap(const mr_brdf_model *source, const mr_brdf_model *targ
         st.answers = calloc(count, sizeof *st.answers);
         st.shape_hash = cfg.share_shapes ? calloc(count, sizeof *st.shape_hash) : NULL;
         order = morton_order(uniques.k, count, cfg.ns, cfg.share_shapes ? cfg.shape_slot : NULL);
-        if (st.answers == NULL || order == NULL || (cfg.share_shapes && st.shape_hash == NULL)) status = mr_fail(MR_ERR_NOMEM, "direct remap: out of memory");
+        if (st.answers == NULL || order == NULL || (cfg.share_shapes && st.shape_hash == NULL))
+            status = mr_fail(MR_ERR_NOMEM, "direct remap: out of memory");
     }
     if (status == MR_OK && cache.path != NULL) {
         mr_c_numeric cn;
