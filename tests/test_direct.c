@@ -579,6 +579,43 @@ MR_TEST(shapes_are_shared_only_between_identical_specular_renders) {
     (void)ng;
 }
 
+MR_TEST(roughness_has_its_own_step_when_given) {
+    const mr_brdf_model *ggx = model("ggx");
+    const int nv = mr_brdf_value_count(ggx);
+    double v[MR_BRDF_MAX_VALUES], q[MR_BRDF_MAX_VALUES], same[MR_BRDF_MAX_VALUES];
+    const double t = 1.0 / 255.0, tr = 4.0 / 255.0;
+    mr_brdf_default_values(ggx, v);
+    set(ggx, v, "alpha", (double[]){0.1234});
+    set(ggx, v, "f0", (double[]){0.04, 0.5, 0.9});
+    MR_CHECK_OK(mr_direct_quantise_steps(ggx, t, tr, v, q));
+    MR_CHECK(q[0] == exp(tr * nearbyint(log(0.1234) / tr))); // alpha in ln steps of t_r
+    for (int c = 0; c < 3; c++) MR_CHECK_NEAR(q[1 + c], srgb_decode(t * nearbyint(srgb_encode(v[1 + c]) / t)), 1e-15);
+    MR_CHECK_OK(mr_direct_quantise_steps(ggx, t, tr, q, same)); // a fixed point
+    MR_CHECK(memcmp(q, same, (size_t)nv * sizeof *q) == 0);
+    MR_CHECK_OK(mr_direct_quantise_steps(ggx, t, 0.0, v, q)); // 0: t
+    MR_CHECK_OK(mr_direct_quantise(ggx, t, v, same));
+    MR_CHECK(memcmp(q, same, (size_t)nv * sizeof *q) == 0);
+    MR_CHECK(mr_direct_quantise_steps(ggx, t, 2.0, v, q) == MR_ERR_INVALID_ARG &&
+             strstr(mr_last_error(), "roughness tolerance 2") != NULL);
+    // The remap: the cache header says the step only when it is not t (older caches keep matching).
+    fixture *f = fixture_new();
+    const char *path = mr_test_tmp_path("roughness_step.cache");
+    f->o.cache_path = path;
+    f->o.roughness_tolerance = tr;
+    MR_CHECK_OK(mr_direct_remap(f->ggx, f->ward, f->in, 6, &f->o, f->a, f->oa, &f->sa));
+    size_t size = 0;
+    char *text = mr_test_read_file(path, &size);
+    MR_CHECK(text != NULL && strstr(text, "\n# direct: tolerance=0.0078431372549019607 roughness_tolerance="
+                                          "0.015686274509803921 start=warm\n") != NULL);
+    free(text);
+    // The same file with the step of t: another configuration, refused.
+    f->o.roughness_tolerance = 0.0;
+    MR_CHECK(mr_direct_remap(f->ggx, f->ward, f->in, 6, &f->o, f->a, f->oa, &f->sa) == MR_ERR_INVALID_ARG);
+    f->o.roughness_tolerance = -1.0;
+    f->o.cache_path = NULL;
+    MR_CHECK(mr_direct_remap(f->ggx, f->ward, f->in, 6, &f->o, f->a, f->oa, &f->sa) == MR_ERR_INVALID_ARG);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(quantisation_is_the_documented_one), MR_TEST_ENTRY(duplicated_texels_share_one_answer),
              MR_TEST_ENTRY(cold_answers_are_mr_remap_of_the_quantised_value_bit_for_bit),
              MR_TEST_ENTRY(warm_answers_stay_within_the_stated_tolerance_of_full_remaps),
@@ -588,4 +625,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(quantisation_is_the_documented_one), MR_TEST_ENTRY(du
              MR_TEST_ENTRY(foreign_corrupt_and_locked_caches_are_refused_untouched),
              MR_TEST_ENTRY(bad_input_is_refused_or_clamped_as_documented),
              MR_TEST_ENTRY(shared_shapes_keep_the_answers_and_outcomes_of_full_remaps),
-             MR_TEST_ENTRY(shapes_are_shared_only_between_identical_specular_renders))
+             MR_TEST_ENTRY(shapes_are_shared_only_between_identical_specular_renders),
+             MR_TEST_ENTRY(roughness_has_its_own_step_when_given))

@@ -18,7 +18,8 @@ static void print_help(void) {
     printf(
         "Usage: matremap convert --from MODEL --to MODEL NAME=FILE|VALUE ...\n"
         "                        (--transform T.mrt [--transform T2.mrt ...] | --transforms DIR [--via MODEL,...] |\n"
-        "                         --direct [--tolerance T] [--cache FILE] [--size N] [--light 45|frontal]\n"
+        "                         --direct [--tolerance T] [--roughness-tolerance T] [--cache FILE] [--size N]\n"
+        "                                  [--light 45|frontal]\n"
         "                                  [--hold NAME[=VALUE],...])\n"
         "                        -o PREFIX [options]\n"
         "\n"
@@ -45,6 +46,9 @@ static void print_help(void) {
         "  --tolerance T       --direct: quantisation step, colours in sRGB-encoded units, roughness in ln units\n"
         "                      (default 6/255 = 0.0235 with maps; 1/255 keeps 8-bit maps exact and costs more;\n"
         "                      constants alone are remapped at their exact values: 1e-9)\n"
+        "  --roughness-tolerance T  --direct: the step of roughness-like parameters alone, in ln units (default:\n"
+        "                      --tolerance). --tolerance 0.003922 --roughness-tolerance 0.01569 (1/255, 4/255)\n"
+        "                      keeps 8-bit colour maps exact and errs under 1 %% image RMSE (docs/performance.md)\n"
         "  --cache FILE        --direct: answers kept across runs (created if missing; refused if it was made\n"
         "                      for other models, options or scene)\n"
         "  --size N, --light L --direct: the fit scene (default 64, 45; as 'matremap remap')\n"
@@ -181,6 +185,10 @@ int cmd_convert(int argc, char **argv) {
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--tolerance", &v)) != 0) {
             if (r < 0 || !cli_parse_double(COMMAND, "--tolerance", v, MR_DIRECT_MIN_TOLERANCE, 1.0, &dopts.tolerance))
                 return CLI_EXIT_USAGE;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--roughness-tolerance", &v)) != 0) {
+            if (r < 0 || !cli_parse_double(COMMAND, "--roughness-tolerance", v, MR_DIRECT_MIN_TOLERANCE, 1.0,
+                                           &dopts.roughness_tolerance))
+                return CLI_EXIT_USAGE;
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--tie", &v)) != 0) {
             if (r < 0) return CLI_EXIT_USAGE;
             tie_list = v;
@@ -211,8 +219,10 @@ int cmd_convert(int argc, char **argv) {
     if (from == NULL || to == NULL) return cli_usage_error(COMMAND, "give --from MODEL and --to MODEL");
     if ((transform_count > 0) + (dir != NULL) + direct != 1)
         return cli_usage_error(COMMAND, "give one of --transform T.mrt (repeatable), --transforms DIR or --direct");
-    if (!direct && (dopts.tolerance != 0.0 || dopts.cache_path || dopts.scene.size || dopts.scene.light))
-        return cli_usage_error(COMMAND, "--tolerance, --cache, --size and --light go with --direct");
+    if (!direct && (dopts.tolerance != 0.0 || dopts.roughness_tolerance != 0.0 || dopts.cache_path ||
+                    dopts.scene.size || dopts.scene.light))
+        return cli_usage_error(COMMAND, "--tolerance, --roughness-tolerance, --cache, --size and --light go with "
+                               "--direct");
     if (!direct && hold_list != NULL)
         return cli_usage_error(COMMAND, "--hold goes with --direct (a learned transform holds what its sweep held)");
     if (via_list != NULL && dir == NULL) return cli_usage_error(COMMAND, "--via needs --transforms DIR");

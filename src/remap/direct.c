@@ -51,13 +51,15 @@ static slot_scale scale_of(const mr_brdf_param *p) {
 }
 
 /* Quantise one vector (direct.h): q[] the quantised values, k[] (may be NULL) their integer coordinates (steps of
- * t), *clamped (may be NULL) set to 1 if a value was outside its range. Returns the packed slot of the first value
- * that is not finite, or -1. */
-static int quantise_vector(const mr_brdf_model *m, double t, const double *in, double *q, int64_t *k, int *clamped) {
+ * t, of t_log for log-scale slots), *clamped (may be NULL) set to 1 if a value was outside its range. Returns the
+ * packed slot of the first value that is not finite, or -1. */
+static int quantise_vector(const mr_brdf_model *m, double t_all, double t_log, const double *in, double *q, int64_t *k,
+                           int *clamped) {
     int slot = 0;
     for (int i = 0; i < m->param_count; i++) {
         const mr_brdf_param *p = &m->params[i];
         const slot_scale scale = scale_of(p);
+        const double t = scale == SCALE_LOG ? t_log : t_all;
         for (int c = 0; c < p->channels; c++, slot++) {
             const double raw = in[slot];
             if (!isfinite(raw)) return slot;
@@ -107,13 +109,28 @@ static mr_status check_tolerance(double *t) {
     return MR_OK;
 }
 
+/* The roughness step (direct.h, mr_direct_options.roughness_tolerance): 0 = the step t itself. */
+static mr_status check_roughness_tolerance(double t, double *t_log) {
+    if (*t_log == 0.0) *t_log = t;
+    if (!(*t_log >= MIN_TOLERANCE && *t_log <= MAX_TOLERANCE))
+        return mr_fail(MR_ERR_INVALID_ARG, "direct remap: roughness tolerance %g: expected a step in [%g, %g] (0: the "
+                       "tolerance)", *t_log, MIN_TOLERANCE, MAX_TOLERANCE);
+    return MR_OK;
+}
+
 mr_status mr_direct_quantise(const mr_brdf_model *source, double tolerance, const double *in, double *q) {
+    return mr_direct_quantise_steps(source, tolerance, 0.0, in, q);
+}
+
+mr_status mr_direct_quantise_steps(const mr_brdf_model *source, double tolerance, double roughness_tolerance,
+                                   const double *in, double *q) {
     if (source == NULL || in == NULL || q == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "direct remap: NULL model, values or output");
     mr_status status = check_tolerance(&tolerance);
+    if (status == MR_OK) status = check_roughness_tolerance(tolerance, &roughness_tolerance);
     if (status != MR_OK) return status;
     double out[MR_BRDF_MAX_VALUES];
-    const int bad = quantise_vector(source, tolerance, in, out, NULL, NULL);
+    const int bad = quantise_vector(source, tolerance, roughness_tolerance, in, out, NULL, NULL);
     if (bad >= 0) {
         char name[64];
         return mr_fail(MR_ERR_INVALID_ARG, "direct remap: %s = %g: expected a finite value",
@@ -225,7 +242,7 @@ typedef struct cache_file {
 typedef struct run_config {
     const mr_brdf_model *source, *target;
     int ns, nt;
-    double tolerance;
+    double tolerance, roughness_tolerance;
     mr_remap_options remap;                   /* defaulted; target_values points at target_values below */
     double target_values[MR_BRDF_MAX_VALUES];
     mr_fit_scene_options scene;
@@ -242,7 +259,11 @@ static mr_status build_header(const run_config *cfg, mr_strbuf *sb) {
     mr_strbuf_values(sb, cfg->target, cfg->target_values);
     mr_strbuf_printf(sb, "\n");
     mr_strbuf_remap_lines(sb, cfg->source, cfg->target, &cfg->remap, &cfg->scene, NULL);
-    mr_strbuf_printf(sb, "# direct: tolerance=%.17g start=%s\n", cfg->tolerance, cfg->cold ? "cold" : "warm");
+    mr_strbuf_printf(sb, "# direct: tolerance=%.17g", cfg->tolerance);
+    // Written only when it differs, so that caches made before the option existed still match.
+    if (cfg->roughness_tolerance != cfg->tolerance)
+        mr_strbuf_printf(sb, " roughness_tolerance=%.17g", cfg->roughness_tolerance);
+    mr_strbuf_printf(sb, " start=%s\n", cfg->cold ? "cold" : "warm");
     // The columns: a source column list without its leading comma.
     mr_strbuf columns = {0};
     mr_strbuf_columns(&columns, cfg->source, "");
@@ -303,7 +324,7 @@ static mr_status parse_line(const run_config *cfg, const char *line, size_t leng
     }
     if (at != SIZE_MAX) return mr_fail(MR_ERR_FORMAT, "the line has more than %d columns", columns);
     double again[MR_BRDF_MAX_VALUES];
-    quantise_vector(cfg->source, cfg->tolerance, q, again, NULL, NULL);
+    quantise_vector(cfg->source, cfg->tolerance, cfg->roughness_tolerance, q, again, NULL, NULL);
     if (memcmp(again, q, (size_t)cfg->ns * sizeof *q) != 0)
         return mr_fail(MR_ERR_FORMAT, "its source values are not a quantised value of tolerance %.17g (was the file "
                        "edited?)", cfg->tolerance);
@@ -688,7 +709,9 @@ static mr_status configure(const mr_brdf_model *source, const mr_brdf_model *tar
     if (cfg->ns > MR_BRDF_MAX_VALUES || cfg->nt > MR_BRDF_MAX_VALUES)
         return mr_fail(MR_ERR_INVALID_ARG, "direct remap: a model has more than %d values", MR_BRDF_MAX_VALUES);
     cfg->tolerance = opts->tolerance;
+    cfg->roughness_tolerance = opts->roughness_tolerance;
     mr_status status = check_tolerance(&cfg->tolerance);
+    if (status == MR_OK) status = check_roughness_tolerance(cfg->tolerance, &cfg->roughness_tolerance);
     if (status != MR_OK) return status;
     if (opts->threads < 0 || opts->chain_length < 0)
         return mr_fail(MR_ERR_INVALID_ARG, "direct remap: threads %d and chain_length %d: expected >= 0 (0: default)",
@@ -744,7 +767,8 @@ static mr_status deduplicate(const run_config *cfg, const double *in, size_t n, 
         double q[MR_BRDF_MAX_VALUES];
         int64_t k[MR_BRDF_MAX_VALUES];
         int clamped = 0, failed = 0;
-        const int bad = quantise_vector(cfg->source, cfg->tolerance, in + i * (size_t)ns, q, k, &clamped);
+        const int bad =
+            quantise_vector(cfg->source, cfg->tolerance, cfg->roughness_tolerance, in + i * (size_t)ns, q, k, &clamped);
         if (bad >= 0) {
             char name[64];
             return mr_fail(MR_ERR_INVALID_ARG, "direct remap: texel %zu: %s = %g: expected a finite value", i,
