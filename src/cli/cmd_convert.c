@@ -357,9 +357,10 @@ int cmd_convert(int argc, char **argv) {
     if (ds != NULL && !json)
         fprintf(stderr,
                 "matremap convert: --direct: %zu distinct values (tolerance %.4g): %zu from the cache, %zu full "
-                "remaps, %zu warm-started (%zu fell back to full), %ld renders; outcomes: %zu converged, %zu "
-                "under-resolved, %zu at-bound, %zu unreachable, %zu local-minimum\n",
-                ds->unique, r.direct_tolerance, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->renders,
+                "remaps, %zu warm-started (%zu fell back to full, %zu shared a shape), %ld renders; outcomes: %zu "
+                "converged, %zu under-resolved, %zu at-bound, %zu unreachable, %zu local-minimum\n",
+                ds->unique, r.direct_tolerance, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->shared_shapes,
+                ds->renders,
                 ds->outcomes[MR_FIT_CONVERGED], ds->outcomes[MR_FIT_UNDER_RESOLVED], ds->outcomes[MR_FIT_AT_BOUND],
                 ds->outcomes[MR_FIT_UNREACHABLE], ds->outcomes[MR_FIT_LOCAL_MINIMUM]);
     if (ds != NULL && !json) {
@@ -374,8 +375,9 @@ int cmd_convert(int argc, char **argv) {
                direct ? "direct" : "learned");
         if (ds != NULL)
             printf("\"direct\": {\"unique\": %zu, \"cache_hits\": %zu, \"full\": %zu, \"warm\": %zu, "
-                   "\"fallbacks\": %zu, \"renders\": %ld, \"converged\": %zu, \"outcomes\": {",
-                   ds->unique, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->renders,
+                   "\"fallbacks\": %zu, \"shared_shapes\": %zu, \"renders\": %ld, \"converged\": %zu, "
+                   "\"outcomes\": {",
+                   ds->unique, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->shared_shapes, ds->renders,
                    ds->outcomes[MR_FIT_CONVERGED]);
         for (int o = 0; ds != NULL && o < MR_FIT_OUTCOME_COUNT; o++)
             printf("%s\"%s\": %zu", o ? ", " : "", mr_fit_outcome_name((mr_fit_outcome)o), ds->outcomes[o]);
