@@ -504,11 +504,18 @@ static double distance2(const int64_t *a, const int64_t *b, int width) {
     return sum;
 }
 
-/* Whether an answer may seed a warm start, and a warm answer with this outcome be kept (direct.h): a converged fit,
- * or an under-resolved one, whose refinement from a neighbour finds the full remap's minimum as well (the lobe is
- * narrower than the pixels, but its error still has a minimum; tests/test_direct.c). */
+/* Whether an answer may seed a warm start (direct.h): a converged fit, or an under-resolved one, whose refinement
+ * from a neighbour finds the full remap's minimum as well (the lobe is narrower than the pixels, but its error
+ * still has a minimum; tests/test_direct.c). */
 static int seedable(mr_fit_outcome outcome) {
     return outcome == MR_FIT_CONVERGED || outcome == MR_FIT_UNDER_RESOLVED;
+}
+
+/* Whether the guard keeps a warm answer's outcome (direct.h): CONVERGED, or UNDER_RESOLVED from an under-resolved
+ * seed. Turning under-resolved from a converged seed is the edge of a glossy region, where the verdict sits on its
+ * threshold: that value gets its full remap's verdict, as before. */
+static int outcome_kept(mr_fit_outcome outcome, const answer *seed) {
+    return outcome == MR_FIT_CONVERGED || (outcome == MR_FIT_UNDER_RESOLVED && seed->outcome == outcome);
 }
 
 /* Remap unique value u: in full (seed NULL), warm-started from seed, or (shared) from a shape sibling's answer
@@ -551,7 +558,7 @@ static void answer_value(run_state *st, size_t position, size_t u, const answer 
     int fallback = 0;
     mr_status status = remap_one(st, u, seed, shared, &a, &renders);
     if (status == MR_OK && seed != NULL &&
-        !(seedable(a.outcome) &&
+        !(outcome_kept(a.outcome, seed) &&
           a.relative_rmse <= MR_DIRECT_GUARD_GAIN * seed->relative_rmse + MR_DIRECT_GUARD_FLOOR)) {
         fallback = 1; // the guard (direct.h): redo it in full
         shared = 0;

@@ -47,17 +47,21 @@
  *     (below) if it has one, else of the nearest value of its chain already answered with a seedable outcome,
  *     CONVERGED or UNDER_RESOLVED (Euclidean distance in quantisation steps; the earliest in the chain on a tie;
  *     a cache hit counts as answered); a value with no such neighbour (the first of a chain) gets a full remap.
- *     The guard: a warm-started answer is kept only if its outcome is seedable and its relative RMSE is at
- *     most MR_DIRECT_GUARD_GAIN times its seed's plus MR_DIRECT_GUARD_FLOOR (neighbours fit about equally well;
- *     a warm start that fell into another basin does not). Otherwise the value gets a full remap, whose outcome
+ *     The guard: a warm-started answer is kept only if its outcome is CONVERGED, or UNDER_RESOLVED with an
+ *     under-resolved seed, and its relative RMSE is at most MR_DIRECT_GUARD_GAIN times its seed's plus
+ *     MR_DIRECT_GUARD_FLOOR (neighbours fit about equally well; a warm start that fell into another basin does
+ *     not). Otherwise the value gets a full remap, whose outcome
  *     stands (a fallback). A warm-started answer is the full remap's minimum when both find the same basin, up
  *     to the local fit's tolerance: on the shared texture sets within 1e-4 (largest parameter difference, alpha
  *     relative, reflectances absolute; tests/bench_direct.c), checked within 2e-3 by tests/test_direct.c.
  *     UNDER_RESOLVED answers seed and are kept too: the lobe is narrower than the pixels, but the image error
  *     still has a minimum in the roughness, which the warm refinement finds as the full remap's grid does (on
- *     the FloppyDisk set within 2e-3 of it, median 1e-5, their renders within 3e-5 relative RMSE, the same
- *     outcome; tests/test_direct.c); refusing them cost a full remap for every glossy texel of a chain before
- *     its first converged one (1,500 of the set's 1,900 full remaps at 6/255).
+ *     the FloppyDisk set at 6/255 within 6e-3 of the earlier answers, median 1e-5, their renders within 3e-5
+ *     relative RMSE, no outcome changed; tests/test_direct.c); refusing them cost a full remap for every glossy
+ *     texel of a chain before its first converged one (1,400 of the set's 1,900 full remaps). A warm answer
+ *     that turns under-resolved from a converged seed still falls back: at the edge of a glossy region the
+ *     verdict sits on its threshold (one value of the set flipped to under-resolved, which its full remap
+ *     calls converged, when those were kept).
  *   - Shared shapes (opts->fit_every_shape = 0, the default): AUTO fits the shape (the nonlinear parameters) of
  *     a lobe against the source's render of that lobe alone and only then solves the linear parameters against
  *     the full render (remap.h). So when every fitted nonlinear target parameter shapes the specular lobe
