@@ -138,11 +138,12 @@ extern "C" {
 
 /* The default quantisation step t (see the header comment for what it means per parameter), chosen from the
  * figures of tests/bench_direct.c (docs/performance.md, "Direct remaps"): the finest step with which both 1024^2
- * texture sets of the shared assets (Avocado, FloppyDisk, read as Ward and remapped into GGX) remap in at most
- * 60 s on 2 cores: FloppyDisk has 21,000 distinct values at 6/255 (33,000 at 4/255, 56,000 at 2/255) and a value
- * costs 5.5-6 ms of CPU (125 s of CPU for the set, measured on a shared machine). What the step costs in accuracy:
- * the answers' renders differ from those of the exact texels' remaps by ~3 % relative RMSE (median; at most 9 %),
- * a third of what a Ward -> GGX fit leaves itself (~9 %). */
+ * texture sets of the shared assets (Avocado, FloppyDisk, read as Ward and remapped into GGX) remapped in at most
+ * 60 s on 2 cores when it was chosen: FloppyDisk has 19,000-21,000 distinct values at 6/255 (33,000 at 4/255,
+ * 56,000-64,000 at 2/255), and with shared shapes a value costs about 2 ms of CPU (38 s of CPU for the set, 19 s on
+ * 2 idle cores). What the step costs in accuracy: the answers' renders differ from those of the exact texels'
+ * remaps by 3-4 % relative RMSE (median; up to 20 % on a dark texel), a third of what a Ward -> GGX fit leaves
+ * itself (~9 %); under 1 % needs colours at 1/255 (roughness_tolerance: roughness may stay at 4/255). */
 #define MR_DIRECT_DEFAULT_TOLERANCE (6.0 / 255.0)
 #define MR_DIRECT_MIN_TOLERANCE 1e-9 /* the smallest quantisation step: exact values for any input */
 /* Unique values per chain (the header comment): the first of each gets a full remap, the others warm starts. */
