@@ -57,10 +57,10 @@
  *     UNDER_RESOLVED answers seed and are kept too: the lobe is narrower than the pixels, but the image error
  *     still has a minimum in the roughness, which the warm refinement finds as the full remap's grid does (on
  *     the FloppyDisk set at 6/255 within 1e-2 of the earlier answers, alpha relative, median 1e-5, their renders
- *     within 3e-5 relative RMSE, no outcome changed; tests/test_direct.c); refusing them cost a full remap for every glossy
- *     texel of a chain before its first converged one (1,400 of the set's 1,900 full remaps). A warm answer
- *     that turns under-resolved from a converged seed still falls back: at the edge of a glossy region the
- *     verdict sits on its threshold (one value of the set flipped to under-resolved, which its full remap
+ *     within 3e-5 relative RMSE, no outcome changed; tests/test_direct.c); refusing them cost a full remap for
+ *     every glossy texel of a chain before its first converged one (1,400 of the set's 1,900 full remaps). A warm
+ *     answer that turns under-resolved from a converged seed still falls back: at the edge of a glossy region
+ *     the verdict sits on its threshold (one value of the set flipped to under-resolved, which its full remap
  *     calls converged, when those were kept).
  *   - Shared shapes (opts->fit_every_shape = 0, the default): AUTO fits the shape (the nonlinear parameters) of
  *     a lobe against the source's render of that lobe alone and only then solves the linear parameters against
