@@ -15,13 +15,15 @@
  *   1. distinct values per set and quantisation step t, for the Ward reading (alpha quantised in log space) and
  *      for the same texels as glTF spec-gloss (glossiness quantised linearly);
  *   2. the direct remap of each whole set at the default step on 2 threads: unique values, full / warm /
- *      fallback counts, wall time and CPU time (the machine may be shared: CPU time / 2 is what 2 idle cores
- *      would take), outcomes;
+ *      fallback / shared-shape counts, wall time and CPU time (the machine may be shared: CPU time / 2 is what 2
+ *      idle cores would take), outcomes; and the same with every shape fitted (fit_every_shape: no shared
+ *      shapes), the answers' largest difference from the default run's;
  *   3. accuracy on seeded random texels of each set: the direct answer d against the full remap e of the exact
  *      (unquantised) texel and the full remap c of its quantised value: d - c is what the warm start adds,
  *      c - e what quantisation adds. Each as the largest parameter difference (reflectances absolute, alpha
  *      relative) and as the render difference (relative RMSE of the two answers' renders in the fit scene);
- *   4. the quantisation error c - e and the projected time against the step t.
+ *   4. the quantisation error c - e and the projected time against the step t, and for colours at 1/255 with
+ *      roughness at 4/255 (roughness_tolerance).
  * Usage: bench_direct SPECGLOSS_DIR [--quick] (--quick: a 256^2 centre crop of each set, fewer samples).
  */
 #include <math.h>
@@ -36,8 +38,9 @@
 #include "io/io_internal.h"
 #include "matremap.h"
 
-#define STEP_COUNT 6
-static const int steps[STEP_COUNT] = {1, 2, 3, 4, 6, 8}; /* t = steps[i] / 255 */
+#define STEP_COUNT 7
+/* t = steps[i] / 255, roughness at roughness_steps[i] / 255 */
+static const int steps[STEP_COUNT] = {1, 1, 2, 3, 4, 6, 8}, roughness_steps[STEP_COUNT] = {1, 4, 2, 3, 4, 6, 8};
 #define MAX_SAMPLES 200
 
 typedef struct texture_set {
@@ -146,11 +149,11 @@ static size_t row_bytes; /* count_unique's comparator: the width of a row */
 static int compare_rows(const void *a, const void *b) { return memcmp(a, b, row_bytes); }
 
 /* Distinct quantised vectors among n texels of m at step t (what mr_direct_remap's summary calls `unique`). */
-static size_t count_unique(const mr_brdf_model *m, const double *v, size_t n, double t) {
+static size_t count_unique(const mr_brdf_model *m, const double *v, size_t n, double t, double t_r) {
     const int nv = mr_brdf_value_count(m);
     double *q = malloc(n * (size_t)nv * sizeof *q);
     for (size_t i = 0; i < n; i++)
-        if (mr_direct_quantise(m, t, v + i * (size_t)nv, q + i * (size_t)nv) != MR_OK) fail("quantise");
+        if (mr_direct_quantise_steps(m, t, t_r, v + i * (size_t)nv, q + i * (size_t)nv) != MR_OK) fail("quantise");
     row_bytes = (size_t)nv * sizeof *q;
     qsort(q, n, row_bytes, compare_rows);
     size_t unique = n > 0;
@@ -174,6 +177,8 @@ static void difference(const mr_render_plan *plan, const mr_brdf_model *m, const
             *params = fmax(*params, d);
         }
     }
+    *image = 0.0;
+    if (plan == NULL) return; // parameters only
     mr_image *ra = NULL, *rb = NULL;
     if (mr_render(plan, m, a, MR_COMPONENT_FULL, &ra) != MR_OK) fail("render");
     if (mr_render(plan, m, b, MR_COMPONENT_FULL, &rb) != MR_OK) fail("render");
@@ -215,8 +220,9 @@ static uint64_t next_random(uint64_t *state) {
 
 typedef struct set_result {
     size_t texels, unique[STEP_COUNT], unique_specgloss[STEP_COUNT];
-    mr_direct_summary run;
-    double wall, cpu;
+    mr_direct_summary run, own;
+    double wall, cpu, own_wall, own_cpu;
+    double own_difference[2]; /* largest parameter difference over texels converged in both runs, and the rest */
     /* per sample: d-c, c-e, d-e as (params, image) */
     double warm_params[MAX_SAMPLES], warm_image[MAX_SAMPLES], quant_params[MAX_SAMPLES], quant_image[MAX_SAMPLES];
     double total_params[MAX_SAMPLES], total_image[MAX_SAMPLES];
@@ -230,7 +236,7 @@ int main(int argc, char **argv) {
         return 1;
     }
     const int quick = argc > 2 && strcmp(argv[2], "--quick") == 0;
-    const int side = quick ? 256 : 1024, samples = quick ? 40 : MAX_SAMPLES, step_samples = quick ? 20 : 60;
+    const int side = quick ? 256 : 1024, samples = quick ? 40 : MAX_SAMPLES, step_samples = quick ? 20 : 120;
     const mr_brdf_model *ward = mr_brdf_find("ward"), *ggx = mr_brdf_find("ggx");
     const mr_brdf_model *sg = mr_brdf_find("gltf-specgloss");
     if (ward == NULL || ggx == NULL || sg == NULL) return 3;
@@ -247,8 +253,8 @@ int main(int argc, char **argv) {
         r->texels = n;
         double *texels = ward_texels(ward, sg, codes, n), *as_sg = specgloss_texels(sg, codes, n);
         for (int k = 0; k < STEP_COUNT; k++) {
-            r->unique[k] = count_unique(ward, texels, n, steps[k] / 255.0);
-            r->unique_specgloss[k] = count_unique(sg, as_sg, n, steps[k] / 255.0);
+            r->unique[k] = count_unique(ward, texels, n, steps[k] / 255.0, roughness_steps[k] / 255.0);
+            r->unique_specgloss[k] = count_unique(sg, as_sg, n, steps[k] / 255.0, roughness_steps[k] / 255.0);
         }
         // The whole set, default options, 2 threads.
         double *out = malloc(n * (size_t)ng * sizeof *out);
@@ -258,9 +264,28 @@ int main(int argc, char **argv) {
         o.progress = progress;
         progress_start = bench_now();
         const double wall0 = bench_now(), cpu0 = cpu_now();
-        if (mr_direct_remap(ward, ggx, texels, n, &o, out, NULL, &r->run) != MR_OK) fail("direct remap");
+        mr_fit_outcome *outcomes = malloc(n * sizeof *outcomes), *own_outcomes = malloc(n * sizeof *own_outcomes);
+        if (mr_direct_remap(ward, ggx, texels, n, &o, out, outcomes, &r->run) != MR_OK) fail("direct remap");
         r->wall = bench_now() - wall0;
         r->cpu = cpu_now() - cpu0;
+        // Every shape fitted (no shared shapes): what sharing saves, and how far its answers move.
+        double *own = malloc(n * (size_t)ng * sizeof *own);
+        o.fit_every_shape = 1;
+        progress_start = bench_now();
+        const double own_wall0 = bench_now(), own_cpu0 = cpu_now();
+        if (mr_direct_remap(ward, ggx, texels, n, &o, own, own_outcomes, &r->own) != MR_OK) fail("direct remap");
+        r->own_wall = bench_now() - own_wall0;
+        r->own_cpu = cpu_now() - own_cpu0;
+        r->own_difference[0] = r->own_difference[1] = 0.0;
+        for (size_t i = 0; i < n; i++) {
+            double params, image;
+            difference(NULL, ggx, out + i * (size_t)ng, own + i * (size_t)ng, &params, &image);
+            const int converged = outcomes[i] == MR_FIT_CONVERGED && own_outcomes[i] == MR_FIT_CONVERGED;
+            r->own_difference[!converged] = fmax(r->own_difference[!converged], params);
+        }
+        free(own);
+        free(outcomes);
+        free(own_outcomes);
         // Accuracy on seeded random texels; their remaps on 2 threads, one each.
         uint64_t state = 0xd1ec7ULL + (uint64_t)s;
         size_t picked[MAX_SAMPLES];
@@ -285,7 +310,8 @@ int main(int argc, char **argv) {
             for (int i = 0; i < step_samples; i++) {
                 const double *x = texels + picked[i] * (size_t)nw;
                 double q[MR_BRDF_MAX_VALUES], c[MR_BRDF_MAX_VALUES], e[MR_BRDF_MAX_VALUES];
-                if (mr_direct_quantise(ward, steps[k] / 255.0, x, q) != MR_OK) fail("quantise");
+                if (mr_direct_quantise_steps(ward, steps[k] / 255.0, roughness_steps[k] / 255.0, x, q) != MR_OK)
+                    fail("quantise");
                 remap_or_fail(plan, ward, q, ggx, c);
                 remap_or_fail(plan, ward, x, ggx, e);
                 difference(plan, ggx, c, e, &r->step_params[k][i], &r->step_image[k][i]);
@@ -304,7 +330,11 @@ int main(int argc, char **argv) {
            side, quick ? " (a centre crop: --quick)" : "", MR_REMAP_DEFAULT_SIZE);
     printf("**Distinct values against the step t** (the Ward reading; in brackets the same texels read as glTF "
            "spec-gloss, whose glossiness is quantised linearly)\n\n| set | texels |");
-    for (int k = 0; k < STEP_COUNT; k++) printf(" t = %d/255 |", steps[k]);
+    for (int k = 0; k < STEP_COUNT; k++)
+        if (steps[k] == roughness_steps[k])
+            printf(" t = %d/255 |", steps[k]);
+        else
+            printf(" t = %d/255, roughness %d/255 |", steps[k], roughness_steps[k]);
     printf("\n|---|---:|");
     for (int k = 0; k < STEP_COUNT; k++) printf("---:|");
     printf("\n");
@@ -318,18 +348,27 @@ int main(int argc, char **argv) {
            "is the time on 2 idle cores (this machine may be shared); outcomes of the unique values: converged / "
            "at-bound / unreachable / local-minimum / under-resolved.\n\n",
            MR_DIRECT_DEFAULT_TOLERANCE, MR_DIRECT_DEFAULT_TOLERANCE * 255.0, MR_DIRECT_DEFAULT_CHAIN);
-    printf("| set | texels | unique | full | warm | fallbacks | renders / remap | wall s | CPU s | CPU s / 2 | "
-           "ms CPU / unique | outcomes |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
-    for (int s = 0; s < SET_COUNT; s++) {
-        const set_result *r = &results[s];
-        const mr_direct_summary *m = &r->run;
-        printf("| %s | %zu | %zu | %zu | %zu | %zu | %.1f | %.1f | %.1f | %.1f | %.2f | "
-               "%zu / %zu / %zu / %zu / %zu |\n",
-               sets[s].name, m->texels, m->unique, m->full, m->warm, m->fallbacks,
-               m->remaps ? (double)m->renders / (double)m->remaps : 0.0, r->wall, r->cpu, r->cpu / 2.0,
-               m->unique ? 1e3 * r->cpu / (double)m->unique : 0.0, m->outcomes[0], m->outcomes[1], m->outcomes[2],
-               m->outcomes[3], m->outcomes[4]);
-    }
+    printf("| set | shapes | texels | unique | full | warm | fallbacks | shared shapes | renders / remap | wall s | "
+           "CPU s | CPU s / 2 | ms CPU / unique | outcomes |\n"
+           "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+    for (int s = 0; s < SET_COUNT; s++)
+        for (int own = 0; own < 2; own++) {
+            const set_result *r = &results[s];
+            const mr_direct_summary *m = own ? &r->own : &r->run;
+            const double cpu = own ? r->own_cpu : r->cpu, wall = own ? r->own_wall : r->wall;
+            printf("| %s | %s | %zu | %zu | %zu | %zu | %zu | %zu | %.1f | %.1f | %.1f | %.1f | %.2f | "
+                   "%zu / %zu / %zu / %zu / %zu |\n",
+                   sets[s].name, own ? "each fitted" : "shared", m->texels, m->unique, m->full, m->warm,
+                   m->fallbacks, m->shared_shapes, m->remaps ? (double)m->renders / (double)m->remaps : 0.0, wall,
+                   cpu, cpu / 2.0, m->unique ? 1e3 * cpu / (double)m->unique : 0.0, m->outcomes[0], m->outcomes[1],
+                   m->outcomes[2], m->outcomes[3], m->outcomes[4]);
+        }
+    printf("\nShared shapes against every shape fitted: the answers' largest parameter difference (F0 and diffuse "
+           "absolute, alpha relative) over the texels converged in both runs, and over the others (under-resolved: "
+           "a lobe narrower than the pixels, whose alpha the image barely fixes):");
+    for (int s = 0; s < SET_COUNT; s++)
+        printf(" %s %.2g, %.2g%s", sets[s].name, results[s].own_difference[0], results[s].own_difference[1],
+               s + 1 < SET_COUNT ? ";" : ".\n");
     printf("\n**Accuracy on sampled texels** (%d seeded random texels per set): d the direct answer, c the full remap "
            "of the texel's quantised value, e the full remap of the exact texel. *params*: the largest parameter "
            "difference (F0 and diffuse absolute, alpha relative); *image*: the relative RMSE of the two answers' "
@@ -348,20 +387,24 @@ int main(int argc, char **argv) {
         printf("\n");
     }
     printf("\n**The step t: quantisation error and projected time** (quantisation error c - e over %d sampled texels "
-           "per set, image relative RMSE median / max; time projected from the measured CPU ms per unique value at "
-           "the default step, on 2 cores)\n\n| t |",
+           "per set, image relative RMSE median / 90th percentile / max; time projected from the measured CPU ms per "
+           "unique value at the default step, on 2 cores)\n\n| t |",
            step_samples);
     for (int s = 0; s < SET_COUNT; s++) printf(" %s: c - e image | params | projected s |", sets[s].name);
     printf("\n|---|");
     for (int s = 0; s < SET_COUNT; s++) printf("---|---|---:|");
     printf("\n");
     for (int k = 0; k < STEP_COUNT; k++) {
-        printf("| %d/255 |", steps[k]);
+        if (steps[k] == roughness_steps[k])
+            printf("| %d/255 |", steps[k]);
+        else
+            printf("| %d/255, roughness %d/255 |", steps[k], roughness_steps[k]);
         for (int s = 0; s < SET_COUNT; s++) {
             set_result *r = &results[s];
             const double per_unique = r->run.unique ? r->cpu / (double)r->run.unique : 0.0;
-            printf(" %.2g / %.2g | %.2g / %.2g | %.0f |", quantile(r->step_image[k], r->step_samples, 0.5),
-                   quantile(r->step_image[k], r->step_samples, 1.0), quantile(r->step_params[k], r->step_samples, 0.5),
+            printf(" %.2g / %.2g / %.2g | %.2g / %.2g | %.0f |", quantile(r->step_image[k], r->step_samples, 0.5),
+                   quantile(r->step_image[k], r->step_samples, 0.9), quantile(r->step_image[k], r->step_samples, 1.0),
+                   quantile(r->step_params[k], r->step_samples, 0.5),
                    quantile(r->step_params[k], r->step_samples, 1.0), per_unique * (double)r->unique[k] / 2.0);
         }
         printf("\n");

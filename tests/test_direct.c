@@ -202,13 +202,16 @@ MR_TEST(cold_answers_are_mr_remap_of_the_quantised_value_bit_for_bit) {
 }
 
 MR_TEST(warm_answers_stay_within_the_stated_tolerance_of_full_remaps) {
-    // At 32^2 the texture's two smallest roughnesses are under-resolved: warm starts from their converged
-    // neighbours are refused by the guard and redone in full (fallbacks), with the full remap's outcome.
+    // At 32^2 the texture's two smallest roughnesses are under-resolved: they are warm-started and kept like
+    // converged ones (direct.h), with the full remap's outcome and answers as close to it.
     fixture *f = fixture_new();
     const mr_direct_summary *s = &f->sa;
     MR_CHECK_OK(mr_direct_remap(f->ggx, f->ward, f->in, TEXELS, &f->o, f->a, f->oa, &f->sa));
     MR_CHECK_MSG(s->warm >= s->unique / 2, "only %zu of %zu values were warm-started", s->warm, s->unique);
-    MR_CHECK(s->full >= 1 && s->fallbacks >= 1);
+    MR_CHECK(s->full >= 1 && s->outcomes[MR_FIT_UNDER_RESOLVED] >= 2);
+    MR_CHECK_MSG(s->full + s->fallbacks < 1 + s->outcomes[MR_FIT_UNDER_RESOLVED],
+                 "%zu full remaps and %zu fallbacks for %zu under-resolved values: they were not kept warm", s->full,
+                 s->fallbacks, s->outcomes[MR_FIT_UNDER_RESOLVED]);
     f->o.cold = 1;
     MR_CHECK_OK(mr_direct_remap(f->ggx, f->ward, f->in, TEXELS, &f->o, f->b, f->ob, NULL));
     double worst = 0.0;
@@ -475,6 +478,144 @@ MR_TEST(bad_input_is_refused_or_clamped_as_documented) {
     MR_CHECK(strstr(mr_last_error(), "diffuse = 3") != NULL);
 }
 
+
+/* A Ward texture whose texels share specular lobes (direct.h, "Shared shapes"): SHAPES specular colour and alpha
+ * pairs, each under DIFFUSES diffuse colours (none of them trimmed: diffuse + specular < 0.99). */
+#define SHAPES 4
+#define DIFFUSES 6
+static void ward_texture(const mr_brdf_model *ward, double *values) {
+    const int nv = mr_brdf_value_count(ward);
+    for (int i = 0; i < SHAPES * DIFFUSES; i++) {
+        double *v = values + (size_t)i * (size_t)nv;
+        const int shape = i % SHAPES, d = i / SHAPES;
+        mr_brdf_default_values(ward, v); // trimming on
+        set(ward, v, "alpha", (double[]){0.08 * pow(1.6, shape)});
+        set(ward, v, "specular", (double[]){0.04 + 0.03 * shape, 0.05, 0.06});
+        set(ward, v, "diffuse", (double[]){0.1 + 0.1 * d, 0.3, 0.5 - 0.05 * d});
+        double q[MR_BRDF_MAX_VALUES];
+        MR_CHECK_OK(mr_direct_quantise(ward, STEP, v, q));
+        memcpy(v, q, (size_t)nv * sizeof *v);
+    }
+}
+
+MR_TEST(shared_shapes_keep_the_answers_and_outcomes_of_full_remaps) {
+    const mr_brdf_model *ward = model("ward"), *ggx = model("ggx");
+    const int nw = mr_brdf_value_count(ward), ng = mr_brdf_value_count(ggx), n = SHAPES * DIFFUSES;
+    static double in[SHAPES * DIFFUSES * MR_BRDF_MAX_VALUES], shared[SHAPES * DIFFUSES * MR_BRDF_MAX_VALUES],
+        own[SHAPES * DIFFUSES * MR_BRDF_MAX_VALUES], cold[SHAPES * DIFFUSES * MR_BRDF_MAX_VALUES],
+        two[SHAPES * DIFFUSES * MR_BRDF_MAX_VALUES];
+    mr_fit_outcome o_shared[SHAPES * DIFFUSES], o_own[SHAPES * DIFFUSES], o_cold[SHAPES * DIFFUSES],
+        o_two[SHAPES * DIFFUSES];
+    ward_texture(ward, in);
+    mr_direct_options o = options();
+    mr_direct_summary s_shared, s_own, s_two;
+    MR_CHECK_OK(mr_direct_remap(ward, ggx, in, (size_t)n, &o, shared, o_shared, &s_shared));
+    // Every value but the first of each shape shares it (one chain holds them all).
+    MR_CHECK_MSG(s_shared.shared_shapes == (size_t)(n - SHAPES), "%zu of %d values shared a shape",
+                 s_shared.shared_shapes, n);
+    o.fit_every_shape = 1;
+    MR_CHECK_OK(mr_direct_remap(ward, ggx, in, (size_t)n, &o, own, o_own, &s_own));
+    MR_CHECK(s_own.shared_shapes == 0 && s_shared.renders < s_own.renders);
+    o.fit_every_shape = 0;
+    o.cold = 1;
+    MR_CHECK_OK(mr_direct_remap(ward, ggx, in, (size_t)n, &o, cold, o_cold, NULL));
+    const int alpha = mr_brdf_param_offset(ggx, mr_brdf_param_index(ggx, "alpha"));
+    double worst = 0.0, worst_own = 0.0;
+    for (int i = 0; i < n; i++) {
+        const size_t at = (size_t)i * (size_t)ng;
+        worst = fmax(worst, largest_difference(ggx, shared + at, cold + at));
+        worst_own = fmax(worst_own, largest_difference(ggx, own + at, cold + at));
+        MR_CHECK_MSG(o_shared[i] == o_cold[i] && o_own[i] == o_cold[i], "texel %d: outcomes %s (shared) %s (own) "
+                     "%s (full)", i, mr_fit_outcome_name(o_shared[i]), mr_fit_outcome_name(o_own[i]),
+                     mr_fit_outcome_name(o_cold[i]));
+        // The shape is the sibling's: the same alpha (up to the normalised coordinates' rounding) for every
+        // diffuse colour.
+        const size_t first = (size_t)(i % SHAPES) * (size_t)ng;
+        MR_CHECK_NEAR(shared[at + (size_t)alpha] / shared[first + (size_t)alpha], 1.0, 1e-12);
+    }
+    MR_CHECK_MSG(worst <= WARM_TOLERANCE, "shared shapes differ from full remaps by up to %g", worst);
+    printf("    shared shapes: %zu of %zu values, %ld renders (%ld without); largest difference from full remaps "
+           "%.2g (%.2g without)\n", s_shared.shared_shapes, s_shared.unique, s_shared.renders, s_own.renders, worst,
+           worst_own);
+    // The same bits for 1 and 2 threads (chains of 5).
+    o.cold = 0;
+    o.chain_length = 5;
+    MR_CHECK_OK(mr_direct_remap(ward, ggx, in, (size_t)n, &o, shared, o_shared, &s_shared));
+    o.threads = 2;
+    MR_CHECK_OK(mr_direct_remap(ward, ggx, in, (size_t)n, &o, two, o_two, &s_two));
+    MR_CHECK(memcmp(shared, two, (size_t)n * (size_t)ng * sizeof *two) == 0);
+    MR_CHECK(memcmp(o_shared, o_two, sizeof o_two) == 0 && s_shared.shared_shapes == s_two.shared_shapes);
+    MR_CHECK(s_shared.shared_shapes > 0 && s_shared.renders == s_two.renders && s_two.threads == 2);
+    (void)nw;
+}
+
+MR_TEST(shapes_are_shared_only_between_identical_specular_renders) {
+    // Three Ward texels with one specular colour and alpha: diffuse 0.2 and 0.3 render the same specular lobe;
+    // diffuse 0.8 engages Mitsuba's trimming (diffuse + specular > 0.99), which scales it: no sibling.
+    const mr_brdf_model *ward = model("ward"), *ggx = model("ggx");
+    const int nw = mr_brdf_value_count(ward), ng = mr_brdf_value_count(ggx);
+    double in[3 * MR_BRDF_MAX_VALUES], out[3 * MR_BRDF_MAX_VALUES];
+    const double diffuse[3] = {0.2, 0.8, 0.3};
+    for (int i = 0; i < 3; i++) {
+        double *v = in + (size_t)i * (size_t)nw;
+        mr_brdf_default_values(ward, v);
+        set(ward, v, "alpha", (double[]){0.2});
+        set(ward, v, "specular", (double[]){0.3, 0.3, 0.3});
+        set(ward, v, "diffuse", (double[]){diffuse[i], diffuse[i], diffuse[i]});
+    }
+    mr_direct_options o = options();
+    mr_direct_summary s;
+    MR_CHECK_OK(mr_direct_remap(ward, ggx, in, 3, &o, out, NULL, &s));
+    MR_CHECK_MSG(s.unique == 3 && s.shared_shapes == 1, "%zu of %zu values shared a shape", s.shared_shapes,
+                 s.unique);
+    // Not where AUTO does not fit the specular lobe's shape alone: strategy joint; a held alpha (no shape).
+    o.remap.strategy = MR_REMAP_JOINT;
+    MR_CHECK_OK(mr_direct_remap(ward, ggx, in, 3, &o, out, NULL, &s));
+    MR_CHECK(s.shared_shapes == 0);
+    o.remap.strategy = MR_REMAP_AUTO;
+    o.remap.held = 1u << mr_brdf_param_index(ggx, "alpha");
+    MR_CHECK_OK(mr_direct_remap(ward, ggx, in, 3, &o, out, NULL, &s));
+    MR_CHECK(s.shared_shapes == 0);
+    (void)ng;
+}
+
+MR_TEST(roughness_has_its_own_step_when_given) {
+    const mr_brdf_model *ggx = model("ggx");
+    const int nv = mr_brdf_value_count(ggx);
+    double v[MR_BRDF_MAX_VALUES], q[MR_BRDF_MAX_VALUES], same[MR_BRDF_MAX_VALUES];
+    const double t = 1.0 / 255.0, tr = 4.0 / 255.0;
+    mr_brdf_default_values(ggx, v);
+    set(ggx, v, "alpha", (double[]){0.1234});
+    set(ggx, v, "f0", (double[]){0.04, 0.5, 0.9});
+    MR_CHECK_OK(mr_direct_quantise_steps(ggx, t, tr, v, q));
+    MR_CHECK(q[0] == exp(tr * nearbyint(log(0.1234) / tr))); // alpha in ln steps of t_r
+    for (int c = 0; c < 3; c++) MR_CHECK_NEAR(q[1 + c], srgb_decode(t * nearbyint(srgb_encode(v[1 + c]) / t)), 1e-15);
+    MR_CHECK_OK(mr_direct_quantise_steps(ggx, t, tr, q, same)); // a fixed point
+    MR_CHECK(memcmp(q, same, (size_t)nv * sizeof *q) == 0);
+    MR_CHECK_OK(mr_direct_quantise_steps(ggx, t, 0.0, v, q)); // 0: t
+    MR_CHECK_OK(mr_direct_quantise(ggx, t, v, same));
+    MR_CHECK(memcmp(q, same, (size_t)nv * sizeof *q) == 0);
+    MR_CHECK(mr_direct_quantise_steps(ggx, t, 2.0, v, q) == MR_ERR_INVALID_ARG &&
+             strstr(mr_last_error(), "roughness tolerance 2") != NULL);
+    // The remap: the cache header says the step only when it is not t (older caches keep matching).
+    fixture *f = fixture_new();
+    const char *path = mr_test_tmp_path("roughness_step.cache");
+    f->o.cache_path = path;
+    f->o.roughness_tolerance = tr;
+    MR_CHECK_OK(mr_direct_remap(f->ggx, f->ward, f->in, 6, &f->o, f->a, f->oa, &f->sa));
+    size_t size = 0;
+    char *text = mr_test_read_file(path, &size);
+    MR_CHECK(text != NULL && strstr(text, "\n# direct: tolerance=0.0078431372549019607 roughness_tolerance="
+                                          "0.015686274509803921 start=warm\n") != NULL);
+    free(text);
+    // The same file with the step of t: another configuration, refused.
+    f->o.roughness_tolerance = 0.0;
+    MR_CHECK(mr_direct_remap(f->ggx, f->ward, f->in, 6, &f->o, f->a, f->oa, &f->sa) == MR_ERR_INVALID_ARG);
+    f->o.roughness_tolerance = -1.0;
+    f->o.cache_path = NULL;
+    MR_CHECK(mr_direct_remap(f->ggx, f->ward, f->in, 6, &f->o, f->a, f->oa, &f->sa) == MR_ERR_INVALID_ARG);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(quantisation_is_the_documented_one), MR_TEST_ENTRY(duplicated_texels_share_one_answer),
              MR_TEST_ENTRY(cold_answers_are_mr_remap_of_the_quantised_value_bit_for_bit),
              MR_TEST_ENTRY(warm_answers_stay_within_the_stated_tolerance_of_full_remaps),
@@ -482,4 +623,7 @@ MR_TEST_MAIN(MR_TEST_ENTRY(quantisation_is_the_documented_one), MR_TEST_ENTRY(du
              MR_TEST_ENTRY(one_and_two_threads_give_the_same_bits),
              MR_TEST_ENTRY(the_cache_round_trips_grows_and_survives_a_torn_line),
              MR_TEST_ENTRY(foreign_corrupt_and_locked_caches_are_refused_untouched),
-             MR_TEST_ENTRY(bad_input_is_refused_or_clamped_as_documented))
+             MR_TEST_ENTRY(bad_input_is_refused_or_clamped_as_documented),
+             MR_TEST_ENTRY(shared_shapes_keep_the_answers_and_outcomes_of_full_remaps),
+             MR_TEST_ENTRY(shapes_are_shared_only_between_identical_specular_renders),
+             MR_TEST_ENTRY(roughness_has_its_own_step_when_given))

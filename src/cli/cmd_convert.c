@@ -18,7 +18,8 @@ static void print_help(void) {
     printf(
         "Usage: matremap convert --from MODEL --to MODEL NAME=FILE|VALUE ...\n"
         "                        (--transform T.mrt [--transform T2.mrt ...] | --transforms DIR [--via MODEL,...] |\n"
-        "                         --direct [--tolerance T] [--cache FILE] [--size N] [--light 45|frontal]\n"
+        "                         --direct [--tolerance T] [--roughness-tolerance T] [--cache FILE] [--size N]\n"
+        "                                  [--light 45|frontal]\n"
         "                                  [--hold NAME[=VALUE],...])\n"
         "                        -o PREFIX [options]\n"
         "\n"
@@ -45,6 +46,9 @@ static void print_help(void) {
         "  --tolerance T       --direct: quantisation step, colours in sRGB-encoded units, roughness in ln units\n"
         "                      (default 6/255 = 0.0235 with maps; 1/255 keeps 8-bit maps exact and costs more;\n"
         "                      constants alone are remapped at their exact values: 1e-9)\n"
+        "  --roughness-tolerance T  --direct: the step of roughness-like parameters alone, in ln units (default:\n"
+        "                      --tolerance). --tolerance 0.003922 --roughness-tolerance 0.01569 (1/255, 4/255)\n"
+        "                      keeps 8-bit colour maps exact and errs under 1 %% image RMSE (docs/performance.md)\n"
         "  --cache FILE        --direct: answers kept across runs (created if missing; refused if it was made\n"
         "                      for other models, options or scene)\n"
         "  --size N, --light L --direct: the fit scene (default 64, 45; as 'matremap remap')\n"
@@ -181,6 +185,10 @@ int cmd_convert(int argc, char **argv) {
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--tolerance", &v)) != 0) {
             if (r < 0 || !cli_parse_double(COMMAND, "--tolerance", v, MR_DIRECT_MIN_TOLERANCE, 1.0, &dopts.tolerance))
                 return CLI_EXIT_USAGE;
+        } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--roughness-tolerance", &v)) != 0) {
+            if (r < 0 || !cli_parse_double(COMMAND, "--roughness-tolerance", v, MR_DIRECT_MIN_TOLERANCE, 1.0,
+                                           &dopts.roughness_tolerance))
+                return CLI_EXIT_USAGE;
         } else if ((r = cli_take_option(COMMAND, argc, argv, &i, "--tie", &v)) != 0) {
             if (r < 0) return CLI_EXIT_USAGE;
             tie_list = v;
@@ -211,8 +219,10 @@ int cmd_convert(int argc, char **argv) {
     if (from == NULL || to == NULL) return cli_usage_error(COMMAND, "give --from MODEL and --to MODEL");
     if ((transform_count > 0) + (dir != NULL) + direct != 1)
         return cli_usage_error(COMMAND, "give one of --transform T.mrt (repeatable), --transforms DIR or --direct");
-    if (!direct && (dopts.tolerance != 0.0 || dopts.cache_path || dopts.scene.size || dopts.scene.light))
-        return cli_usage_error(COMMAND, "--tolerance, --cache, --size and --light go with --direct");
+    if (!direct && (dopts.tolerance != 0.0 || dopts.roughness_tolerance != 0.0 || dopts.cache_path ||
+                    dopts.scene.size || dopts.scene.light))
+        return cli_usage_error(COMMAND, "--tolerance, --roughness-tolerance, --cache, --size and --light go with "
+                               "--direct");
     if (!direct && hold_list != NULL)
         return cli_usage_error(COMMAND, "--hold goes with --direct (a learned transform holds what its sweep held)");
     if (via_list != NULL && dir == NULL) return cli_usage_error(COMMAND, "--via needs --transforms DIR");
@@ -347,9 +357,10 @@ int cmd_convert(int argc, char **argv) {
     if (ds != NULL && !json)
         fprintf(stderr,
                 "matremap convert: --direct: %zu distinct values (tolerance %.4g): %zu from the cache, %zu full "
-                "remaps, %zu warm-started (%zu fell back to full), %ld renders; outcomes: %zu converged, %zu "
-                "under-resolved, %zu at-bound, %zu unreachable, %zu local-minimum\n",
-                ds->unique, r.direct_tolerance, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->renders,
+                "remaps, %zu warm-started (%zu fell back to full, %zu shared a shape), %ld renders; outcomes: %zu "
+                "converged, %zu under-resolved, %zu at-bound, %zu unreachable, %zu local-minimum\n",
+                ds->unique, r.direct_tolerance, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->shared_shapes,
+                ds->renders,
                 ds->outcomes[MR_FIT_CONVERGED], ds->outcomes[MR_FIT_UNDER_RESOLVED], ds->outcomes[MR_FIT_AT_BOUND],
                 ds->outcomes[MR_FIT_UNREACHABLE], ds->outcomes[MR_FIT_LOCAL_MINIMUM]);
     if (ds != NULL && !json) {
@@ -364,8 +375,9 @@ int cmd_convert(int argc, char **argv) {
                direct ? "direct" : "learned");
         if (ds != NULL)
             printf("\"direct\": {\"unique\": %zu, \"cache_hits\": %zu, \"full\": %zu, \"warm\": %zu, "
-                   "\"fallbacks\": %zu, \"renders\": %ld, \"converged\": %zu, \"outcomes\": {",
-                   ds->unique, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->renders,
+                   "\"fallbacks\": %zu, \"shared_shapes\": %zu, \"renders\": %ld, \"converged\": %zu, "
+                   "\"outcomes\": {",
+                   ds->unique, ds->cache_hits, ds->full, ds->warm, ds->fallbacks, ds->shared_shapes, ds->renders,
                    ds->outcomes[MR_FIT_CONVERGED]);
         for (int o = 0; ds != NULL && o < MR_FIT_OUTCOME_COUNT; o++)
             printf("%s\"%s\": %zu", o ? ", " : "", mr_fit_outcome_name((mr_fit_outcome)o), ds->outcomes[o]);

@@ -51,13 +51,15 @@ static slot_scale scale_of(const mr_brdf_param *p) {
 }
 
 /* Quantise one vector (direct.h): q[] the quantised values, k[] (may be NULL) their integer coordinates (steps of
- * t), *clamped (may be NULL) set to 1 if a value was outside its range. Returns the packed slot of the first value
- * that is not finite, or -1. */
-static int quantise_vector(const mr_brdf_model *m, double t, const double *in, double *q, int64_t *k, int *clamped) {
+ * t, of t_log for log-scale slots), *clamped (may be NULL) set to 1 if a value was outside its range. Returns the
+ * packed slot of the first value that is not finite, or -1. */
+static int quantise_vector(const mr_brdf_model *m, double t_all, double t_log, const double *in, double *q, int64_t *k,
+                           int *clamped) {
     int slot = 0;
     for (int i = 0; i < m->param_count; i++) {
         const mr_brdf_param *p = &m->params[i];
         const slot_scale scale = scale_of(p);
+        const double t = scale == SCALE_LOG ? t_log : t_all;
         for (int c = 0; c < p->channels; c++, slot++) {
             const double raw = in[slot];
             if (!isfinite(raw)) return slot;
@@ -107,13 +109,28 @@ static mr_status check_tolerance(double *t) {
     return MR_OK;
 }
 
+/* The roughness step (direct.h, mr_direct_options.roughness_tolerance): 0 = the step t itself. */
+static mr_status check_roughness_tolerance(double t, double *t_log) {
+    if (*t_log == 0.0) *t_log = t;
+    if (!(*t_log >= MIN_TOLERANCE && *t_log <= MAX_TOLERANCE))
+        return mr_fail(MR_ERR_INVALID_ARG, "direct remap: roughness tolerance %g: expected a step in [%g, %g] (0: the "
+                       "tolerance)", *t_log, MIN_TOLERANCE, MAX_TOLERANCE);
+    return MR_OK;
+}
+
 mr_status mr_direct_quantise(const mr_brdf_model *source, double tolerance, const double *in, double *q) {
+    return mr_direct_quantise_steps(source, tolerance, 0.0, in, q);
+}
+
+mr_status mr_direct_quantise_steps(const mr_brdf_model *source, double tolerance, double roughness_tolerance,
+                                   const double *in, double *q) {
     if (source == NULL || in == NULL || q == NULL)
         return mr_fail(MR_ERR_INVALID_ARG, "direct remap: NULL model, values or output");
     mr_status status = check_tolerance(&tolerance);
+    if (status == MR_OK) status = check_roughness_tolerance(tolerance, &roughness_tolerance);
     if (status != MR_OK) return status;
     double out[MR_BRDF_MAX_VALUES];
-    const int bad = quantise_vector(source, tolerance, in, out, NULL, NULL);
+    const int bad = quantise_vector(source, tolerance, roughness_tolerance, in, out, NULL, NULL);
     if (bad >= 0) {
         char name[64];
         return mr_fail(MR_ERR_INVALID_ARG, "direct remap: %s = %g: expected a finite value",
@@ -225,12 +242,15 @@ typedef struct cache_file {
 typedef struct run_config {
     const mr_brdf_model *source, *target;
     int ns, nt;
-    double tolerance;
+    double tolerance, roughness_tolerance;
     mr_remap_options remap;                   /* defaulted; target_values points at target_values below */
     double target_values[MR_BRDF_MAX_VALUES];
     mr_fit_scene_options scene;
     int chain_length;
     int cold;
+    int fit_every_shape;
+    int share_shapes;                         /* shared shapes apply (direct.h; shapes_shareable) */
+    unsigned char shape_slot[MR_BRDF_MAX_VALUES]; /* source slots that may shape the specular lobe */
 } run_config;
 
 static mr_status build_header(const run_config *cfg, mr_strbuf *sb) {
@@ -239,7 +259,11 @@ static mr_status build_header(const run_config *cfg, mr_strbuf *sb) {
     mr_strbuf_values(sb, cfg->target, cfg->target_values);
     mr_strbuf_printf(sb, "\n");
     mr_strbuf_remap_lines(sb, cfg->source, cfg->target, &cfg->remap, &cfg->scene, NULL);
-    mr_strbuf_printf(sb, "# direct: tolerance=%.17g start=%s\n", cfg->tolerance, cfg->cold ? "cold" : "warm");
+    mr_strbuf_printf(sb, "# direct: tolerance=%.17g", cfg->tolerance);
+    // Written only when it differs, so that caches made before the option existed still match.
+    if (cfg->roughness_tolerance != cfg->tolerance)
+        mr_strbuf_printf(sb, " roughness_tolerance=%.17g", cfg->roughness_tolerance);
+    mr_strbuf_printf(sb, " start=%s\n", cfg->cold ? "cold" : "warm");
     // The columns: a source column list without its leading comma.
     mr_strbuf columns = {0};
     mr_strbuf_columns(&columns, cfg->source, "");
@@ -300,7 +324,7 @@ static mr_status parse_line(const run_config *cfg, const char *line, size_t leng
     }
     if (at != SIZE_MAX) return mr_fail(MR_ERR_FORMAT, "the line has more than %d columns", columns);
     double again[MR_BRDF_MAX_VALUES];
-    quantise_vector(cfg->source, cfg->tolerance, q, again, NULL, NULL);
+    quantise_vector(cfg->source, cfg->tolerance, cfg->roughness_tolerance, q, again, NULL, NULL);
     if (memcmp(again, q, (size_t)cfg->ns * sizeof *q) != 0)
         return mr_fail(MR_ERR_FORMAT, "its source values are not a quantised value of tolerance %.17g (was the file "
                        "edited?)", cfg->tolerance);
@@ -400,43 +424,49 @@ static mr_status open_cache(const run_config *cfg, cache_file *c) {
 /* ---- the order: Morton codes, chains ---------------------------------------------------------------------- */
 
 typedef struct ordered {
-    uint64_t code;
+    uint64_t code[2]; /* Morton codes: of the first slot group, then of the second */
     size_t unique;
 } ordered;
 
 static int compare_ordered(const void *a, const void *b) {
     const ordered *x = a, *y = b;
-    if (x->code != y->code) return x->code < y->code ? -1 : 1;
+    for (int g = 0; g < 2; g++)
+        if (x->code[g] != y->code[g]) return x->code[g] < y->code[g] ? -1 : 1;
     return (x->unique > y->unique) - (x->unique < y->unique);
 }
 
 /* Sort the unique values along a Morton curve through their integer coordinates k (count x width): each slot that
- * varies is scaled to `bits` bits over its range and the bits interleaved, most significant first. Ties (equal
- * codes) keep the order of first appearance. */
-static ordered *morton_order(const int64_t *k, size_t count, int width) {
+ * varies is scaled to `bits` bits over its range and the bits interleaved, most significant first. With `first`
+ * (may be NULL: one group), the slots it flags are ordered first and the others only among values equal in those
+ * (shared shapes, direct.h: a shape's siblings side by side). Ties (equal codes) keep the order of first
+ * appearance. */
+static ordered *morton_order(const int64_t *k, size_t count, int width, const unsigned char *first) {
     ordered *order = malloc((count ? count : 1) * sizeof *order);
     if (order == NULL) return NULL;
     int64_t lo[MR_BRDF_MAX_VALUES], hi[MR_BRDF_MAX_VALUES];
-    int active[MR_BRDF_MAX_VALUES], active_count = 0;
+    int active[2][MR_BRDF_MAX_VALUES], active_count[2] = {0, 0};
     for (int j = 0; j < width; j++) {
         lo[j] = hi[j] = count ? k[j] : 0;
         for (size_t i = 1; i < count; i++) {
             lo[j] = MR_MIN(lo[j], k[i * (size_t)width + j]);
             hi[j] = MR_MAX(hi[j], k[i * (size_t)width + j]);
         }
-        if (hi[j] > lo[j]) active[active_count++] = j;
+        const int g = first != NULL && !first[j];
+        if (hi[j] > lo[j]) active[g][active_count[g]++] = j;
     }
-    const int bits = active_count ? MR_MIN(21, 63 / active_count) : 0;
-    const double top = (double)((1ULL << bits) - 1);
     for (size_t i = 0; i < count; i++) {
-        uint64_t c[MR_BRDF_MAX_VALUES], code = 0;
-        for (int a = 0; a < active_count; a++) {
-            const int j = active[a];
-            c[a] = (uint64_t)llround(top * (double)(k[i * (size_t)width + j] - lo[j]) / (double)(hi[j] - lo[j]));
+        for (int g = 0; g < 2; g++) {
+            const int bits = active_count[g] ? MR_MIN(21, 63 / active_count[g]) : 0;
+            const double top = (double)((1ULL << bits) - 1);
+            uint64_t c[MR_BRDF_MAX_VALUES], code = 0;
+            for (int a = 0; a < active_count[g]; a++) {
+                const int j = active[g][a];
+                c[a] = (uint64_t)llround(top * (double)(k[i * (size_t)width + j] - lo[j]) / (double)(hi[j] - lo[j]));
+            }
+            for (int b = bits - 1; b >= 0; b--)
+                for (int a = 0; a < active_count[g]; a++) code = (code << 1) | ((c[a] >> b) & 1u);
+            order[i].code[g] = code;
         }
-        for (int b = bits - 1; b >= 0; b--)
-            for (int a = 0; a < active_count; a++) code = (code << 1) | ((c[a] >> b) & 1u);
-        order[i].code = code;
         order[i].unique = i;
     }
     qsort(order, count, sizeof *order, compare_ordered);
@@ -455,8 +485,9 @@ typedef struct run_state {
     const ordered *order;
     const size_t *chains;     /* the chains with a value to remap (indices: chain c is order[c * length ...]) */
     answer *answers;          /* count; how == HOW_NONE until answered */
+    uint64_t *shape_hash;     /* count (with share_shapes): hash of the source's specular render, 0 = not yet */
     cache_file *cache;        /* NULL: none */
-    size_t done, hits, full, warm, fallbacks;
+    size_t done, hits, full, warm, fallbacks, shared;
     long renders;
     int stop;
     mr_status failure;
@@ -473,11 +504,28 @@ static double distance2(const int64_t *a, const int64_t *b, int width) {
     return sum;
 }
 
-static mr_status remap_one(run_state *st, size_t u, const answer *seed, answer *out, long *renders) {
+/* Whether an answer may seed a warm start (direct.h): a converged fit, or an under-resolved one, whose refinement
+ * from a neighbour finds the full remap's minimum as well (the lobe is narrower than the pixels, but its error
+ * still has a minimum; tests/test_direct.c). */
+static int seedable(mr_fit_outcome outcome) {
+    return outcome == MR_FIT_CONVERGED || outcome == MR_FIT_UNDER_RESOLVED;
+}
+
+/* Whether the guard keeps a warm answer's outcome (direct.h): CONVERGED, or UNDER_RESOLVED from an under-resolved
+ * seed. Turning under-resolved from a converged seed is the edge of a glossy region, where the verdict sits on its
+ * threshold: that value gets its full remap's verdict, as before. */
+static int outcome_kept(mr_fit_outcome outcome, const answer *seed) {
+    return outcome == MR_FIT_CONVERGED || (outcome == MR_FIT_UNDER_RESOLVED && seed->outcome == outcome);
+}
+
+/* Remap unique value u: in full (seed NULL), warm-started from seed, or (shared) from a shape sibling's answer
+ * with its shape as found (direct.h, "Shared shapes": one evaluation of the local refinement). */
+static mr_status remap_one(run_state *st, size_t u, const answer *seed, int shared, answer *out, long *renders) {
     const run_config *cfg = st->cfg;
     mr_remap_options o = cfg->remap;
     o.initial_values = seed ? seed->values : NULL;
     if (seed != NULL) o.xtol = fmax(o.xtol, MR_DIRECT_WARM_XTOL);
+    if (seed != NULL && shared) o.max_evaluations = 1;
     mr_remap_result r;
     mr_status status = mr_remap(st->plan, cfg->source, st->q + u * (size_t)cfg->ns, cfg->target, &o, &r);
     if (status != MR_OK) return status;
@@ -489,19 +537,32 @@ static mr_status remap_one(run_state *st, size_t u, const answer *seed, answer *
     return MR_OK;
 }
 
+/* Stop the run for a failure at `position` of the order (the lowest position's message is kept). Inside the
+ * critical section mr_direct_state. */
+static void record_failure(run_state *st, size_t position, mr_status status) {
+#pragma omp atomic write
+    st->stop = 1;
+    if (st->failure == MR_OK || position < st->failure_position) {
+        st->failure = status;
+        st->failure_position = position;
+        snprintf(st->failure_message, sizeof st->failure_message, "%s", mr_last_error());
+    }
+}
+
 /* Answer unique value `u` (at `position` of the order) from `seed` (NULL: a full remap), append it to the cache and
  * report progress. Runs on a worker thread, in the C numeric locale. */
-static void answer_value(run_state *st, size_t position, size_t u, const answer *seed) {
+static void answer_value(run_state *st, size_t position, size_t u, const answer *seed, int shared) {
     const run_config *cfg = st->cfg;
     answer a;
     long renders = 0;
     int fallback = 0;
-    mr_status status = remap_one(st, u, seed, &a, &renders);
+    mr_status status = remap_one(st, u, seed, shared, &a, &renders);
     if (status == MR_OK && seed != NULL &&
-        !(a.outcome == MR_FIT_CONVERGED &&
+        !(outcome_kept(a.outcome, seed) &&
           a.relative_rmse <= MR_DIRECT_GUARD_GAIN * seed->relative_rmse + MR_DIRECT_GUARD_FLOOR)) {
         fallback = 1; // the guard (direct.h): redo it in full
-        status = remap_one(st, u, NULL, &a, &renders);
+        shared = 0;
+        status = remap_one(st, u, NULL, 0, &a, &renders);
     }
     char line[MR_BRDF_MAX_VALUES * 2 * 32 + 128];
     size_t length = 0;
@@ -516,6 +577,7 @@ static void answer_value(run_state *st, size_t position, size_t u, const answer 
             st->done++;
             st->renders += renders;
             st->fallbacks += (size_t)fallback;
+            st->shared += (size_t)shared;
             if (a.how == HOW_WARM)
                 st->warm++;
             else
@@ -526,20 +588,63 @@ static void answer_value(run_state *st, size_t position, size_t u, const answer 
                 st->opts->progress(&p, st->opts->progress_user);
             }
         } else {
-#pragma omp atomic write
-            st->stop = 1;
-            if (st->failure == MR_OK || position < st->failure_position) {
-                st->failure = status;
-                st->failure_position = position;
-                snprintf(st->failure_message, sizeof st->failure_message, "%s", mr_last_error());
-            }
+            record_failure(st, position, status);
         }
     }
+}
+
+/* fail_run outside the critical section. */
+static void fail_run(run_state *st, size_t position, mr_status status) {
+#pragma omp critical(mr_direct_state)
+    record_failure(st, position, status);
+}
+
+/* The hash of unique value u's source render of the specular lobe alone (its bits, FNV-1a 64, never 0), computed
+ * once: shape siblings (direct.h) must have bit-identical ones. 0 if the render failed (*status says why). */
+static uint64_t shape_hash(run_state *st, size_t u, mr_image *images[2], mr_status *status) {
+    if (st->shape_hash[u] != 0) return st->shape_hash[u];
+    const run_config *cfg = st->cfg;
+    const mr_scene *scene = mr_render_plan_scene(st->plan);
+    for (int i = 0; i < 2 && *status == MR_OK; i++)
+        if (images[i] == NULL) *status = mr_image_create(scene->width, scene->height, 3, &images[i]);
+    if (*status == MR_OK)
+        *status = mr_render_components_into_threads(st->plan, 0, cfg->source, st->q + u * (size_t)cfg->ns, images[0],
+                                                    images[1]);
+    if (*status != MR_OK) return 0;
+    uint64_t h = 0xcbf29ce484222325ULL;
+    const unsigned char *bytes = (const unsigned char *)images[1]->pixels;
+    const size_t size = (size_t)scene->width * (size_t)scene->height * 3 * sizeof(float);
+    for (size_t i = 0; i < size; i++) h = (h ^ bytes[i]) * 0x100000001b3ULL;
+    st->shape_hash[u] = h | 1u;
+    return st->shape_hash[u];
+}
+
+/* Unique value u's shape sibling at position p of the chain [begin, end) (direct.h, "Shared shapes"): the
+ * earliest answered value of the chain with a seedable outcome, the same source values in every slot that may
+ * shape the specular lobe and a bit-identical specular render; NULL if none. */
+static const answer *shape_sibling(run_state *st, size_t begin, size_t end, size_t p, mr_image *images[2],
+                                   mr_status *status) {
+    const run_config *cfg = st->cfg;
+    const int ns = cfg->ns;
+    const size_t u = st->order[p].unique;
+    const double *qu = st->q + u * (size_t)ns;
+    for (size_t s = begin; s < end && *status == MR_OK; s++) {
+        const size_t v = st->order[s].unique;
+        if (s == p || st->answers[v].how == HOW_NONE || !seedable(st->answers[v].outcome)) continue;
+        const double *qv = st->q + v * (size_t)ns;
+        int same = 1;
+        for (int j = 0; j < ns && same; j++) same = !cfg->shape_slot[j] || memcmp(&qu[j], &qv[j], sizeof *qu) == 0;
+        if (!same) continue;
+        const uint64_t hu = shape_hash(st, u, images, status), hv = shape_hash(st, v, images, status);
+        if (*status == MR_OK && hu == hv) return &st->answers[v];
+    }
+    return NULL;
 }
 
 /* One chain: positions [begin, end) of the order, in order (direct.h). */
 static void run_chain(run_state *st, size_t begin, size_t end) {
     const int ns = st->cfg->ns;
+    mr_image *images[2] = {NULL, NULL}; /* shape_hash's renders */
     for (size_t p = begin; p < end; p++) {
         int stopping;
 #pragma omp atomic read
@@ -547,21 +652,29 @@ static void run_chain(run_state *st, size_t begin, size_t end) {
         if (stopping) return;
         const size_t u = st->order[p].unique;
         if (st->answers[u].how != HOW_NONE) continue; // a cache hit
-        // The nearest value of the chain already answered and CONVERGED (a warm start from an unresolved or
-        // unreachable fit would only fall back).
-        const answer *seed = NULL;
+        // A shape sibling, else the nearest value of the chain already answered with a seedable outcome (a warm
+        // start from an unreachable or at-bound fit would only fall back).
+        mr_status status = MR_OK;
+        const answer *seed = st->cfg->share_shapes ? shape_sibling(st, begin, end, p, images, &status) : NULL;
+        const int shared = seed != NULL;
+        if (status != MR_OK) {
+            fail_run(st, p, status);
+            break;
+        }
         double best = HUGE_VAL;
-        for (size_t s = begin; s < end && !st->cfg->cold; s++) {
+        for (size_t s = begin; s < end && !st->cfg->cold && !shared; s++) {
             const size_t v = st->order[s].unique;
-            if (s == p || st->answers[v].how == HOW_NONE || st->answers[v].outcome != MR_FIT_CONVERGED) continue;
+            if (s == p || st->answers[v].how == HOW_NONE || !seedable(st->answers[v].outcome)) continue;
             const double d = distance2(st->k + u * (size_t)ns, st->k + v * (size_t)ns, ns);
             if (d < best) {
                 best = d;
                 seed = &st->answers[v];
             }
         }
-        answer_value(st, p, u, seed);
+        answer_value(st, p, u, seed, shared);
     }
+    mr_image_free(images[0]);
+    mr_image_free(images[1]);
 }
 
 /* Chain `item` of st->chains (a worker thread of mr_remap_run_parallel). */
@@ -573,6 +686,26 @@ static void run_item(void *ctx, long item) {
 
 /* ---- the call ------------------------------------------------------------------------------------------------ */
 
+/* Whether shapes may be shared (direct.h, "Shared shapes"): an AUTO fit by the built-in renderers, warm starts on,
+ * whose fitted nonlinear target parameters (declared NONLINEAR, not held, not fixed by the model unless freed) all
+ * shape the specular lobe, so that AUTO fits them, lobe by lobe, against the source's specular render alone. */
+static int shapes_shareable(const run_config *cfg) {
+    const mr_remap_options *r = &cfg->remap;
+    if (cfg->cold || cfg->fit_every_shape || r->strategy != MR_REMAP_AUTO ||
+        !mr_renderer_is_builtin(r->target_renderer) || !mr_renderer_is_builtin(r->source_renderer))
+        return 0;
+    int fitted = 0;
+    for (int i = 0; i < cfg->target->param_count; i++) {
+        const mr_brdf_param *p = &cfg->target->params[i];
+        const unsigned bit = i < 32 ? 1u << i : 0u;
+        const int held = (r->held & bit) || ((p->flags & MR_PARAM_FIT_FIXED) && !(r->freed & bit));
+        if (p->role != MR_PARAM_NONLINEAR || held) continue;
+        if (p->lobe != MR_LOBE_SPECULAR) return 0;
+        fitted++;
+    }
+    return fitted > 0;
+}
+
 static mr_status configure(const mr_brdf_model *source, const mr_brdf_model *target, const mr_direct_options *opts,
                            run_config *cfg) {
     memset(cfg, 0, sizeof *cfg);
@@ -583,13 +716,16 @@ static mr_status configure(const mr_brdf_model *source, const mr_brdf_model *tar
     if (cfg->ns > MR_BRDF_MAX_VALUES || cfg->nt > MR_BRDF_MAX_VALUES)
         return mr_fail(MR_ERR_INVALID_ARG, "direct remap: a model has more than %d values", MR_BRDF_MAX_VALUES);
     cfg->tolerance = opts->tolerance;
+    cfg->roughness_tolerance = opts->roughness_tolerance;
     mr_status status = check_tolerance(&cfg->tolerance);
+    if (status == MR_OK) status = check_roughness_tolerance(cfg->tolerance, &cfg->roughness_tolerance);
     if (status != MR_OK) return status;
     if (opts->threads < 0 || opts->chain_length < 0)
         return mr_fail(MR_ERR_INVALID_ARG, "direct remap: threads %d and chain_length %d: expected >= 0 (0: default)",
                        opts->threads, opts->chain_length);
     cfg->chain_length = opts->chain_length ? opts->chain_length : MR_DIRECT_DEFAULT_CHAIN;
     cfg->cold = opts->cold != 0;
+    cfg->fit_every_shape = opts->fit_every_shape != 0;
     // The remap options as mr_remap reads them, zeros as its defaults, so that {0} and the defaults are one
     // configuration (and one cache header).
     const mr_remap_options d = mr_remap_options_default();
@@ -612,6 +748,10 @@ static mr_status configure(const mr_brdf_model *source, const mr_brdf_model *tar
     r.target_values = cfg->target_values;
     cfg->remap = r;
     cfg->scene = opts->scene;
+    cfg->share_shapes = shapes_shareable(cfg);
+    for (int i = 0, slot = 0; i < source->param_count; slot += source->params[i].channels, i++)
+        for (int c = 0; c < source->params[i].channels; c++)
+            cfg->shape_slot[slot + c] = source->params[i].lobe != MR_LOBE_DIFFUSE;
     return MR_OK;
 }
 
@@ -634,7 +774,8 @@ static mr_status deduplicate(const run_config *cfg, const double *in, size_t n, 
         double q[MR_BRDF_MAX_VALUES];
         int64_t k[MR_BRDF_MAX_VALUES];
         int clamped = 0, failed = 0;
-        const int bad = quantise_vector(cfg->source, cfg->tolerance, in + i * (size_t)ns, q, k, &clamped);
+        const int bad =
+            quantise_vector(cfg->source, cfg->tolerance, cfg->roughness_tolerance, in + i * (size_t)ns, q, k, &clamped);
         if (bad >= 0) {
             char name[64];
             return mr_fail(MR_ERR_INVALID_ARG, "direct remap: texel %zu: %s = %g: expected a finite value", i,
@@ -696,8 +837,10 @@ mr_status mr_direct_remap(const mr_brdf_model *source, const mr_brdf_model *targ
     const size_t count = uniques.table.count;
     if (status == MR_OK) {
         st.answers = calloc(count, sizeof *st.answers);
-        order = morton_order(uniques.k, count, cfg.ns);
-        if (st.answers == NULL || order == NULL) status = mr_fail(MR_ERR_NOMEM, "direct remap: out of memory");
+        st.shape_hash = cfg.share_shapes ? calloc(count, sizeof *st.shape_hash) : NULL;
+        order = morton_order(uniques.k, count, cfg.ns, cfg.share_shapes ? cfg.shape_slot : NULL);
+        if (st.answers == NULL || order == NULL || (cfg.share_shapes && st.shape_hash == NULL))
+            status = mr_fail(MR_ERR_NOMEM, "direct remap: out of memory");
     }
     if (status == MR_OK && cache.path != NULL) {
         mr_c_numeric cn;
@@ -778,6 +921,7 @@ mr_status mr_direct_remap(const mr_brdf_model *source, const mr_brdf_model *targ
             summary->full = st.full;
             summary->warm = st.warm;
             summary->fallbacks = st.fallbacks;
+            summary->shared_shapes = st.shared;
             summary->remaps = st.full + st.warm + st.fallbacks;
             for (size_t u = 0; u < count; u++) summary->outcomes[st.answers[u].outcome]++;
             summary->renders = st.renders;
@@ -793,6 +937,7 @@ mr_status mr_direct_remap(const mr_brdf_model *source, const mr_brdf_model *targ
     free(uniques.k);
     free(uniques.of_texel);
     free(st.answers);
+    free(st.shape_hash);
     free(order);
     free(chains);
     return status;
