@@ -101,11 +101,15 @@ mr_lm_result mr_lm_minimise(const mr_lm_problem *problem, double xtol, int max_v
     for (int i = 0; i < n; i++) u[i] = clamp_unit(u[i]);
     double F = problem->value(problem->data, u);
     result.values = 1;
+    result.at_last_value = 1;
     if (isnan(F)) return result;
+    if (max_values <= 1) { // one evaluation allowed: no step can be tried, so no linearisation is needed
+        result.minimum = F;
+        return result;
+    }
     double gradient[MR_LM_MAX_DIMENSION], M[MR_LM_MAX_DIMENSION * MR_LM_MAX_DIMENSION];
     if (!problem->linearise(problem->data, u, gradient, M)) return result;
     result.linearisations = 1;
-    result.at_last_value = 1;
     double lambda = LAMBDA_START;
     // S: the secant estimate of the residual's own curvature, which Gauss-Newton leaves out (levenberg.h).
     double S[MR_LM_MAX_DIMENSION * MR_LM_MAX_DIMENSION] = {0};
