@@ -58,50 +58,6 @@ static const pair pairs[] = {
 };
 #define PAIR_COUNT ((int)(sizeof pairs / sizeof pairs[0]))
 
-/* splitmix64 per pair: the same materials in every run and every build. */
-static double uniform(unsigned long long *state, double lo, double hi) {
-    unsigned long long z = (*state += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    z ^= z >> 31;
-    return lo + (hi - lo) * (double)(z >> 11) * (1.0 / 9007199254740992.0);
-}
-
-static double log_uniform(unsigned long long *state, double lo, double hi) {
-    return exp(uniform(state, log(lo), log(hi)));
-}
-
-static void set(const mr_brdf_model *m, double *values, const char *name, int channel, double v) {
-    int index = mr_brdf_param_index(m, name);
-    if (index < 0) {
-        fprintf(stderr, "bench_fit: %s has no parameter %s\n", m->name, name);
-        exit(3);
-    }
-    values[mr_brdf_param_offset(m, index) + channel] = v;
-}
-
-/* The ranges of bench_remap.c (docs/performance.md, "Uniform remaps"), by the pair's `draw`. */
-static void random_material(const pair *p, const mr_brdf_model *m, unsigned long long *state, double *values) {
-    mr_brdf_default_values(m, values);
-    if (strcmp(p->draw, "ward") == 0) {
-        for (int c = 0; c < 3; c++) set(m, values, "diffuse", c, uniform(state, 0.05, 0.6));
-        for (int c = 0; c < 3; c++) set(m, values, "specular", c, uniform(state, 0.02, 0.35));
-        set(m, values, "alpha", 0, log_uniform(state, 0.03, 0.5));
-    } else if (strcmp(p->draw, "gltf") == 0) {
-        for (int c = 0; c < 3; c++) set(m, values, "base_color", c, uniform(state, 0.05, 0.95));
-        set(m, values, "metallic", 0, uniform(state, 0.0, 1.0));
-        set(m, values, "roughness", 0, uniform(state, 0.15, 0.9));
-    } else if (strcmp(p->draw, "glossy") == 0) {
-        for (int c = 0; c < 3; c++) set(m, values, "diffuse", c, uniform(state, 0.0, 0.1));
-        for (int c = 0; c < 3; c++) set(m, values, "f0", c, uniform(state, 0.02, 0.3));
-        set(m, values, "alpha", 0, log_uniform(state, 1e-4, 0.03));
-    } else {
-        for (int c = 0; c < 3; c++) set(m, values, "diffuse", c, uniform(state, 0.05, 0.6));
-        for (int c = 0; c < 3; c++) set(m, values, "f0", c, uniform(state, 0.02, 0.3));
-        set(m, values, "alpha", 0, log_uniform(state, 0.03, 0.5));
-    }
-}
-
 /* One remap's answer. */
 typedef struct answer {
     double ms, rel, values[MR_BRDF_MAX_VALUES];
@@ -210,7 +166,7 @@ static int run_table(int quick, const char *only) {
         unsigned long long state = 0x31ULL + (unsigned long long)p; // the same materials as the pair's first ones
         for (int i = 0; i < n; i++) {
             double values[MR_BRDF_MAX_VALUES];
-            random_material(&pairs[p], source, &state, values);
+            bench_random_material(pairs[p].draw, source, &state, values);
             if (mr_render_into(plan512, source, values, MR_COMPONENT_FULL, source512) != MR_OK) return 3;
             for (int z = 0; z < TABLE_SIZES; z++)
                 for (int k = 0; k < TABLE_METHODS; k++) {
@@ -323,7 +279,7 @@ int main(int argc, char **argv) {
         double worst = 0.0;
         for (int i = 0; i < n; i++) {
             double values[MR_BRDF_MAX_VALUES];
-            random_material(&pairs[p], source, &state, values);
+            bench_random_material(pairs[p].draw, source, &state, values);
             if (material >= 0 && i != material) {
                 ms[i] = renders[i] = 0.0;
                 continue;

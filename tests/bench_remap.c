@@ -50,51 +50,16 @@ static pair pairs[] = {
 };
 #define PAIR_COUNT ((int)(sizeof pairs / sizeof pairs[0]))
 
-/* splitmix64, seeded per pair: the same materials in every run and at every size. */
-static double uniform(unsigned long long *state, double lo, double hi) {
-    unsigned long long z = (*state += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    z ^= z >> 31;
-    return lo + (hi - lo) * (double)(z >> 11) * (1.0 / 9007199254740992.0);
-}
-
-static double log_uniform(unsigned long long *state, double lo, double hi) {
-    return exp(uniform(state, log(lo), log(hi)));
-}
-
-static void set(const mr_brdf_model *m, double *values, const char *name, int channel, double v) {
-    int index = mr_brdf_param_index(m, name);
-    if (index < 0) {
-        fprintf(stderr, "bench_remap: %s has no parameter %s\n", m->name, name);
-        exit(3);
-    }
-    values[mr_brdf_param_offset(m, index) + channel] = v;
-}
-
 /* " (glossy)" for the glossy pair's rows, "" for the others. */
 static const char *tag(const pair *p) { return p->glossy ? " (glossy)" : ""; }
 
 /* One random material of the pair's source model, within the ranges its `ranges` line states. */
 static void random_material(const pair *p, const mr_brdf_model *m, unsigned long long *state, double *values) {
-    mr_brdf_default_values(m, values);
-    if (strcmp(p->source, "ward") == 0) {
-        for (int c = 0; c < 3; c++) set(m, values, "diffuse", c, uniform(state, 0.05, 0.6));
-        for (int c = 0; c < 3; c++) set(m, values, "specular", c, uniform(state, 0.02, 0.35));
-        set(m, values, "alpha", 0, log_uniform(state, 0.03, 0.5));
-    } else if (strcmp(p->source, "gltf") == 0) {
-        for (int c = 0; c < 3; c++) set(m, values, "base_color", c, uniform(state, 0.05, 0.95));
-        set(m, values, "metallic", 0, uniform(state, 0.0, 1.0));
-        set(m, values, "roughness", 0, uniform(state, 0.15, 0.9));
-    } else if (p->glossy) { // lobes narrower than a 64^2 pixel: the fit must keep their light
-        for (int c = 0; c < 3; c++) set(m, values, "diffuse", c, uniform(state, 0.0, 0.1));
-        for (int c = 0; c < 3; c++) set(m, values, "f0", c, uniform(state, 0.02, 0.3));
-        set(m, values, "alpha", 0, log_uniform(state, 1e-4, 0.03));
-    } else { // ggx, as: Schlick microfacet + Lambert
-        for (int c = 0; c < 3; c++) set(m, values, "diffuse", c, uniform(state, 0.05, 0.6));
-        for (int c = 0; c < 3; c++) set(m, values, "f0", c, uniform(state, 0.02, 0.3));
-        set(m, values, "alpha", 0, log_uniform(state, 0.03, 0.5));
-    }
+    const char *draw = p->glossy                           ? "glossy"
+                       : strcmp(p->source, "ward") == 0 ? "ward"
+                       : strcmp(p->source, "gltf") == 0 ? "gltf"
+                                                        : "microfacet";
+    bench_random_material(draw, m, state, values);
 }
 
 static mr_render_plan *plan_of(int size, double *ms) {

@@ -341,6 +341,14 @@ static MR_ALWAYS_INLINE float split_value(const fit_context *ctx, const unsigned
     return d0 + s0;
 }
 
+/* R0 and the R_p (into r[p], p < P) at value index `at`: from the split lobe images or from the basis renders. */
+static MR_ALWAYS_INLINE float basis_values(const fit_context *ctx, const unsigned char *diffuse_param, const int P,
+                                           size_t at, float *r) {
+    if (ctx->split_lobes) return split_value(ctx, diffuse_param, P, at, r);
+    for (int p = 0; p < P; p++) r[p] = ctx->basis[p + 1]->pixels[at];
+    return ctx->basis[0]->pixels[at];
+}
+
 /* The projection's sums over the covered pixels, per image channel c and basis render p, q < P (P the linear
  * parameter count): H[c][p] = sum d_p (goal - R0), S[c][p][q] = sum d_p d_q (q <= p) with d_p = R_p - R0, and
  * *constant = sum (goal - R0)^2 over all channels. */
@@ -353,13 +361,8 @@ static MR_ALWAYS_INLINE void projection_sums(const fit_context *ctx, const int P
     for (int i = 0; i < ctx->pixel_count; i++) {
         const size_t at = (size_t)ctx->pixels[i] * 3;
         for (int c = 0; c < 3; c++) {
-            float r[MAX_SLOTS], r0;
-            if (ctx->split_lobes) {
-                r0 = split_value(ctx, diffuse_param, P, at + c, r);
-            } else {
-                r0 = ctx->basis[0]->pixels[at + c];
-                for (int p = 0; p < P; p++) r[p] = ctx->basis[p + 1]->pixels[at + c];
-            }
+            float r[MAX_SLOTS];
+            const float r0 = basis_values(ctx, diffuse_param, P, at + c, r);
             const double base = r0, residual = (double)goal[at + c] - base;
             double d[MAX_SLOTS];
             sum += residual * residual;
@@ -530,13 +533,8 @@ static MR_ALWAYS_INLINE void linearise_sums(const fit_context *ctx, const int P,
     for (int i = 0; i < ctx->pixel_count; i++) {
         const size_t at = (size_t)ctx->pixels[i] * 3;
         for (int c = 0; c < 3; c++) {
-            float r[MAX_SLOTS], r0;
-            if (ctx->split_lobes) {
-                r0 = split_value(ctx, diffuse_param, P, at + c, r);
-            } else {
-                r0 = ctx->basis[0]->pixels[at + c];
-                for (int p = 0; p < P; p++) r[p] = ctx->basis[p + 1]->pixels[at + c];
-            }
+            float r[MAX_SLOTS];
+            const float r0 = basis_values(ctx, diffuse_param, P, at + c, r);
             double column[MAX_SLOTS], residual = (double)goal[at + c] - (double)r0;
             for (int p = 0; p < P; p++) {
                 column[p] = (double)r[p] - (double)r0;

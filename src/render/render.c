@@ -1140,6 +1140,31 @@ static inline __attribute__((always_inline)) void weigh_batch(double fd[3][RENDE
     }
 }
 
+/* A batched render's sums of lit pixel i into the images asked for (NULL: not asked): the full one over the background
+ * share of the pixel the object leaves uncovered, as render_core writes them. */
+static inline void store_lit_pixel(const mr_render_plan *plan, int i, mr_image *full, mr_image *diffuse,
+                                   mr_image *specular, double f0, double f1, double f2, double d0, double d1, double d2,
+                                   double s0, double s1, double s2) {
+    const size_t pixel = (size_t)plan->lit_pixel_index[i];
+    if (full) {
+        const double uncovered = 1.0 - plan->coverage[pixel];
+        const double *bg = plan->scene.background;
+        full->pixels[pixel * 3 + 0] = (float)(f0 + bg[0] * uncovered);
+        full->pixels[pixel * 3 + 1] = (float)(f1 + bg[1] * uncovered);
+        full->pixels[pixel * 3 + 2] = (float)(f2 + bg[2] * uncovered);
+    }
+    if (diffuse) {
+        diffuse->pixels[pixel * 3 + 0] = (float)d0;
+        diffuse->pixels[pixel * 3 + 1] = (float)d1;
+        diffuse->pixels[pixel * 3 + 2] = (float)d2;
+    }
+    if (specular) {
+        specular->pixels[pixel * 3 + 0] = (float)s0;
+        specular->pixels[pixel * 3 + 1] = (float)s1;
+        specular->pixels[pixel * 3 + 2] = (float)s2;
+    }
+}
+
 /* One block of lit pixels [first, end) of a batched render, for the parts asked for (constants in each call of
  * render_batched, so that the sums stay in registers): the model's eval_batch over the block's samples in batches,
  * weighed (weigh_batch), then each lit pixel sums its samples in plan order, which is accumulate()'s arithmetic
@@ -1199,24 +1224,8 @@ static inline __attribute__((always_inline)) void render_block(const mr_render_p
                 f2 += plan->hits[h].emission[2];
             }
         }
-        const size_t pixel = (size_t)plan->lit_pixel_index[i];
-        if (want_full) {
-            const double uncovered = 1.0 - plan->coverage[pixel];
-            const double *bg = plan->scene.background;
-            full->pixels[pixel * 3 + 0] = (float)(f0 + bg[0] * uncovered);
-            full->pixels[pixel * 3 + 1] = (float)(f1 + bg[1] * uncovered);
-            full->pixels[pixel * 3 + 2] = (float)(f2 + bg[2] * uncovered);
-        }
-        if (want_diffuse) {
-            diffuse->pixels[pixel * 3 + 0] = (float)d0;
-            diffuse->pixels[pixel * 3 + 1] = (float)d1;
-            diffuse->pixels[pixel * 3 + 2] = (float)d2;
-        }
-        if (want_specular) {
-            specular->pixels[pixel * 3 + 0] = (float)s0;
-            specular->pixels[pixel * 3 + 1] = (float)s1;
-            specular->pixels[pixel * 3 + 2] = (float)s2;
-        }
+        store_lit_pixel(plan, i, want_full ? full : NULL, want_diffuse ? diffuse : NULL,
+                        want_specular ? specular : NULL, f0, f1, f2, d0, d1, d2, s0, s1, s2);
     }
 }
 
@@ -1334,24 +1343,8 @@ static inline __attribute__((always_inline)) void render_block_gathered(const mr
                 f2 += hit->emission[2];
             }
         }
-        const size_t pixel = (size_t)plan->lit_pixel_index[i];
-        if (want_full) {
-            const double uncovered = 1.0 - plan->coverage[pixel];
-            const double *bg = plan->scene.background;
-            full->pixels[pixel * 3 + 0] = (float)(f0 + bg[0] * uncovered);
-            full->pixels[pixel * 3 + 1] = (float)(f1 + bg[1] * uncovered);
-            full->pixels[pixel * 3 + 2] = (float)(f2 + bg[2] * uncovered);
-        }
-        if (want_diffuse) {
-            diffuse->pixels[pixel * 3 + 0] = (float)d0;
-            diffuse->pixels[pixel * 3 + 1] = (float)d1;
-            diffuse->pixels[pixel * 3 + 2] = (float)d2;
-        }
-        if (want_specular) {
-            specular->pixels[pixel * 3 + 0] = (float)s0;
-            specular->pixels[pixel * 3 + 1] = (float)s1;
-            specular->pixels[pixel * 3 + 2] = (float)s2;
-        }
+        store_lit_pixel(plan, i, want_full ? full : NULL, want_diffuse ? diffuse : NULL,
+                        want_specular ? specular : NULL, f0, f1, f2, d0, d1, d2, s0, s1, s2);
     }
 }
 
@@ -1380,6 +1373,7 @@ static int render_gathered(const mr_render_plan *plan, int threads, const mr_brd
     free(buffers);
     return 1;
 }
+
 
 /* render_core for one uniform material over point samples only, in fixed blocks of lit pixels (render_block). */
 static void render_batched(const mr_render_plan *plan, const point_soa *soa, int threads, const mr_brdf_model *model,
