@@ -12,6 +12,7 @@
 
 #include <limits.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -627,6 +628,166 @@ void mr_wf_residual_targets(const float *x, float *y, size_t n) {
     }
 }
 
+
+/* Row r's anchor one at a time (planes as for mr_wf_residual_anchors). */
+static void anchors_scalar_row(const mr_wf_options *o, const double *planes, size_t stride, size_t r,
+                               mr_wf_residual_anchor *out) {
+    double lobe[3], spec[3];
+    for (int c = 0; c < 3; c++) {
+        lobe[c] = planes[(size_t)c * stride + r];
+        spec[c] = planes[(size_t)(3 + c) * stride + r];
+    }
+    residual_anchor(o, lobe, spec, &out[r]);
+}
+
+/* ---- the anchors of many rows ----------------------------------------------------------------------------------- */
+
+/* The network batch's anchors eight rows at a time with AVX-512 (x86-64 Linux with GCC; elsewhere, or with
+ * MR_WF_SCALAR_ANCHORS set to a non-empty value, one row at a time). A row none of whose channels is ambiguous
+ * (Eq. 3's larger root above F0d + eps in all three: every random or real texel but the darkest) takes the
+ * one-combination path of analytic_spec_to_metal, which the vectors compute with the same double operations in the
+ * same order (no fused multiply-add: ISO C mode; sqrt and division correctly rounded; each comparison written as
+ * its masked blend, so NaN and signed zeros go as in the scalar code), hence the same bits; a lane with an
+ * ambiguous channel is redone by residual_anchor. tests/test_workflow.c checks the two paths bit for bit. */
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 12 && defined(__x86_64__) && defined(__linux__)
+#define MR_WF_ANCHORS_V4 1
+#include <immintrin.h>
+
+/* x >= lo ? (x <= hi ? x : hi) : lo, as mr_clampd. */
+__attribute__((target("avx512f"))) static inline __m512d clamp8(__m512d x, __m512d lo, __m512d hi) {
+    __m512d upper = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(x, hi, _CMP_LE_OQ), hi, x);
+    return _mm512_mask_blend_pd(_mm512_cmp_pd_mask(x, lo, _CMP_GE_OQ), lo, upper);
+}
+
+__attribute__((target("avx512f"))) static inline __m512d abs8(__m512d x) {
+    return _mm512_castsi512_pd(_mm512_and_si512(_mm512_castpd_si512(x), _mm512_set1_epi64(INT64_MAX)));
+}
+
+/* Rows [0, count): lobe and specular channel c of row r at planes[c * stride + r] and planes[(3 + c) * stride + r]. */
+__attribute__((target("avx512f"))) static void anchors_v4(const mr_wf_options *o, const double *planes, size_t stride,
+                                                           size_t count, mr_wf_residual_anchor *out) {
+    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0), half = _mm512_set1_pd(0.5);
+    const __m512d three = _mm512_set1_pd(3.0), f0 = _mm512_set1_pd(o->dielectric_f0);
+    const __m512d four_f0 = _mm512_set1_pd(4.0 * o->dielectric_f0); // eq3's 4.0 * f0 * d is (4.0 * f0) * d
+    const __m512d unambiguous = _mm512_set1_pd(o->dielectric_f0 + o->eps), eps = _mm512_set1_pd(o->eps);
+    const __m512d gate_scale = _mm512_set1_pd(MR_WF_RESIDUAL_GATE);
+    const __m512d chroma_scale = _mm512_set1_pd(MR_WF_RESIDUAL_CHROMA);
+    size_t r = 0;
+    for (; r + 8 <= count; r += 8) {
+        __m512d d[3], s[3], a[3], m[3];
+        __mmask8 plain = 0xff;
+        for (int c = 0; c < 3; c++) { // eq3, one root
+            d[c] = _mm512_loadu_pd(planes + (size_t)c * stride + r);
+            s[c] = _mm512_loadu_pd(planes + (size_t)(3 + c) * stride + r);
+            __m512d sum = _mm512_add_pd(s[c], d[c]);
+            __m512d disc = _mm512_sub_pd(_mm512_mul_pd(sum, sum), _mm512_mul_pd(four_f0, d[c]));
+            disc = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(disc, zero, _CMP_LT_OQ), disc, zero);
+            __m512d big = _mm512_mul_pd(half, _mm512_add_pd(sum, _mm512_sqrt_pd(disc)));
+            __m512d metal = clamp8(_mm512_sub_pd(one, _mm512_div_pd(d[c], big)), zero, one);
+            m[c] = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(big, zero, _CMP_GT_OQ), zero, metal);
+            a[c] = big;
+            plain &= _mm512_cmp_pd_mask(big, unambiguous, _CMP_GT_OQ);
+        }
+        if (plain == 0) {
+            for (int l = 0; l < 8; l++) anchors_scalar_row(o, planes, stride, r + (size_t)l, out);
+            continue;
+        }
+        __m512d weight = _mm512_add_pd(_mm512_add_pd(a[0], a[1]), a[2]);
+        __m512d mm = _mm512_div_pd(_mm512_add_pd(_mm512_add_pd(m[0], m[1]), m[2]), three);
+        if (o->method == MR_WF_WEIGHTED) {
+            __m512d dot = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(a[0], m[0]), _mm512_mul_pd(a[1], m[1])),
+                                        _mm512_mul_pd(a[2], m[2]));
+            mm = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(weight, eps, _CMP_GT_OQ), mm, _mm512_div_pd(dot, weight));
+        }
+        mm = clamp8(mm, zero, one);
+        __m512d k = _mm512_sub_pd(one, mm);
+        __m512d den = _mm512_add_pd(_mm512_mul_pd(k, k), _mm512_mul_pd(mm, mm));
+        __m512d f0k = _mm512_mul_pd(f0, k), rr = zero, dm = zero, sm = zero;
+        __m512d albedo[3];
+        for (int c = 0; c < 3; c++) { // best_albedo, then residual_anchor's Eq. 2 round trip and means
+            __m512d num = _mm512_add_pd(_mm512_mul_pd(k, d[c]), _mm512_mul_pd(mm, _mm512_sub_pd(s[c], f0k)));
+            albedo[c] = clamp8(_mm512_div_pd(num, den), zero, one);
+            __m512d back_d = _mm512_mul_pd(albedo[c], k);
+            __m512d back_s = _mm512_add_pd(_mm512_mul_pd(f0, k), _mm512_mul_pd(mm, albedo[c]));
+            __m512d miss = _mm512_max_pd(abs8(_mm512_sub_pd(back_d, d[c])), abs8(_mm512_sub_pd(back_s, s[c])));
+            rr = _mm512_max_pd(rr, miss); // MR_MAX(a, b) = a > b ? a : b, what vmaxpd computes
+            dm = _mm512_add_pd(dm, _mm512_div_pd(d[c], three));
+            sm = _mm512_add_pd(sm, _mm512_div_pd(s[c], three));
+        }
+        __m512d dc = zero, sc = zero;
+        for (int c = 0; c < 3; c++) {
+            dc = _mm512_max_pd(dc, abs8(_mm512_sub_pd(d[c], dm)));
+            sc = _mm512_max_pd(sc, abs8(_mm512_sub_pd(s[c], sm)));
+        }
+        __m512d spread = _mm512_add_pd(dc, sc);
+        __m512d gate = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(rr, gate_scale, _CMP_LT_OQ), one,
+                                            _mm512_div_pd(rr, gate_scale));
+        __m512d chroma = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(spread, chroma_scale, _CMP_LT_OQ), one,
+                                              _mm512_div_pd(spread, chroma_scale));
+        double lanes[6][8];
+        for (int c = 0; c < 3; c++) _mm512_storeu_pd(lanes[c], albedo[c]);
+        _mm512_storeu_pd(lanes[3], mm);
+        _mm512_storeu_pd(lanes[4], gate);
+        _mm512_storeu_pd(lanes[5], chroma);
+        for (int l = 0; l < 8; l++) {
+            if (!(plain & (1u << l))) {
+                anchors_scalar_row(o, planes, stride, r + (size_t)l, out);
+                continue;
+            }
+            mr_wf_residual_anchor *x = &out[r + (size_t)l];
+            for (int c = 0; c < 3; c++) x->albedo[c] = lanes[c][l];
+            x->metallic = lanes[3][l];
+            x->gate = lanes[4][l];
+            x->chroma = lanes[5][l];
+        }
+    }
+    for (; r < count; r++) anchors_scalar_row(o, planes, stride, r, out);
+}
+#else
+#define MR_WF_ANCHORS_V4 0
+#endif
+
+/* Does this process compute anchors eight at a time? (Once: the CPU and the environment do not change.) */
+static _Atomic int anchors_vector_choice; // 0 unknown, 1 yes, 2 no
+
+static int anchors_vector(void) {
+    int choice = atomic_load(&anchors_vector_choice);
+    if (choice == 0) {
+        const char *scalar = getenv("MR_WF_SCALAR_ANCHORS");
+        choice = 2;
+#if MR_WF_ANCHORS_V4
+        __builtin_cpu_init();
+        if ((scalar == NULL || scalar[0] == '\0') && __builtin_cpu_supports("avx512f")) choice = 1;
+#else
+        (void)scalar;
+#endif
+        atomic_store(&anchors_vector_choice, choice);
+    }
+    return choice == 1;
+}
+
+/* The anchors of rows [0, count) (planes as for anchors_v4), vectorised when `vector` and the CPU allow. */
+static void anchors_of_rows(const mr_wf_options *o, const double *planes, size_t stride, size_t count, int vector,
+                            mr_wf_residual_anchor *out) {
+#if MR_WF_ANCHORS_V4
+    if (vector) {
+        anchors_v4(o, planes, stride, count, out);
+        return;
+    }
+#else
+    (void)vector;
+#endif
+    for (size_t r = 0; r < count; r++) anchors_scalar_row(o, planes, stride, r, out);
+}
+
+int mr_wf_residual_anchors(const double *planes, size_t stride, size_t count, int vector,
+                           mr_wf_residual_anchor *out) {
+    mr_wf_options o = residual_anchor_options();
+    vector = vector && anchors_vector();
+    anchors_of_rows(&o, planes, stride, count, vector, out);
+    return vector;
+}
+
 /* The network batch works on the distinct texels of a block: real textures repeat their values (a 2048^2 8-bit
  * spec-gloss set holds ~5 % distinct (diffuse, specular) pairs: Avocado 4.7 %, FloppyDisk 5.5 %), and a texel's
  * answer is a pure function of its inputs, so each distinct pair is sanitised, anchored and run through the
@@ -637,6 +798,10 @@ typedef struct mlp_block {
     size_t parts;
     float *x, *y;                   /* distinct rows: network inputs (block x 6), outputs (block x 4) */
     mr_wf_residual_anchor *anchors; /* per distinct row (residual form) */
+    double *planes;                 /* the anchors' inputs (residual form): 6 planes of `block` doubles, lobe RGB
+                                       and specular RGB of each distinct row */
+    size_t block;                   /* texels per block */
+    int vector_anchors;             /* anchors eight at a time (anchors_vector) */
     long *slot;                     /* per distinct row: its row among those the network sees, or -1 */
     float *answer;                  /* per distinct row: albedo RGB, metallic, final */
     uint8_t *row_flags;             /* per distinct row */
@@ -651,6 +816,7 @@ static void mlp_block_free(mlp_block *b) {
     free(b->x);
     free(b->y);
     free(b->anchors);
+    free(b->planes);
     free(b->slot);
     free(b->answer);
     free(b->row_flags);
@@ -660,8 +826,10 @@ static void mlp_block_free(mlp_block *b) {
     free(b->distinct);
 }
 
-static mr_status mlp_block_alloc(size_t block, int threads, mlp_block *b) {
+static mr_status mlp_block_alloc(size_t block, int threads, int residual, mlp_block *b) {
     memset(b, 0, sizeof *b);
+    b->block = block;
+    b->vector_anchors = residual && anchors_vector();
     b->parts = (size_t)threads;
     if (b->parts > block / MLP_PARALLEL_ROWS) b->parts = block / MLP_PARALLEL_ROWS; // small batches: fewer threads
     if (b->parts == 0) b->parts = 1;
@@ -671,6 +839,7 @@ static mr_status mlp_block_alloc(size_t block, int threads, mlp_block *b) {
     b->x = malloc(block * 6 * sizeof *b->x);
     b->y = malloc(block * 4 * sizeof *b->y);
     b->anchors = malloc(block * sizeof *b->anchors);
+    b->planes = residual ? malloc(block * 6 * sizeof *b->planes) : NULL;
     b->slot = malloc(block * sizeof *b->slot);
     b->answer = malloc(block * 4 * sizeof *b->answer);
     b->row_flags = malloc(block);
@@ -678,7 +847,7 @@ static mr_status mlp_block_alloc(size_t block, int threads, mlp_block *b) {
     b->row_of = malloc(block * sizeof *b->row_of);
     b->table = malloc(b->parts * b->table_size * sizeof *b->table);
     b->distinct = malloc(b->parts * sizeof *b->distinct);
-    if (!b->x || !b->y || !b->anchors || !b->slot || !b->answer || !b->row_flags || !b->first || !b->row_of ||
+    if (!b->x || !b->y || !b->anchors || (residual && !b->planes) || !b->slot || !b->answer || !b->row_flags || !b->first || !b->row_of ||
         !b->table || !b->distinct) {
         mlp_block_free(b);
         return MR_ERR_NOMEM;
@@ -695,8 +864,8 @@ static inline void texel_key(const mr_wf_spec_input *in, size_t i, uint32_t k[6]
     memcpy(k + 3, in->specular + 3 * i, 3 * sizeof *k);
 }
 
-/* A new distinct row for texel r of the block: sanitised (and dimmed) into x, with its anchor computed from the
- * double values, as the per-texel path computes it, when anchor_options is not NULL. */
+/* A new distinct row for texel r of the block: sanitised (and dimmed) into x, and when anchor_options is not NULL
+ * its double values into the planes its anchor is computed from (mlp_dedupe_part), as the per-texel path does. */
 static void mlp_new_row(const mr_wf_spec_input *in, const mr_wf_options *o, const mr_wf_options *anchor_options,
                         size_t i, mlp_block *b, size_t row) {
     unsigned f = 0;
@@ -711,7 +880,10 @@ static void mlp_new_row(const mr_wf_spec_input *in, const mr_wf_options *o, cons
         b->x[6 * row + 3 + c] = (float)s[c];
     }
     b->row_flags[row] = (uint8_t)f;
-    if (anchor_options) residual_anchor(anchor_options, d, s, &b->anchors[row]);
+    for (int c = 0; anchor_options && c < 3; c++) {
+        b->planes[(size_t)c * b->block + row] = d[c];
+        b->planes[(size_t)(3 + c) * b->block + row] = s[c];
+    }
 }
 
 /* Deduplicates part p of the block starting at texel `start`: its distinct values become rows lo, lo + 1, ... (lo
@@ -747,6 +919,8 @@ static void mlp_dedupe_part(const mr_wf_spec_input *in, const mr_wf_options *o, 
         mlp_new_row(in, o, anchor_options, start + r, b, row);
     }
     b->distinct[p] = rows;
+    if (anchor_options)
+        anchors_of_rows(anchor_options, b->planes + lo, b->block, rows, b->vector_anchors, b->anchors + lo);
 }
 
 mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_input *in, size_t n,
@@ -774,7 +948,7 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_inpu
     size_t block = n < MLP_BLOCK ? n : MLP_BLOCK;
     mlp_block b;
     const int threads = batch_threads(&o, n);
-    if (mlp_block_alloc(block, threads, &b) != MR_OK)
+    if (mlp_block_alloc(block, threads, residual, &b) != MR_OK)
         return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %zu texels", what, block);
     const long parts = (long)b.parts;
     for (size_t start = 0; start < n && status == MR_OK; start += block) {
@@ -824,14 +998,14 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_inpu
                 v4[3] = a->metallic + a->gate * v4[3];
             }
             for (int k = 0; k < 4; k++) {
-                double v = v4[k];
-                if (!isfinite(v) || v < 0.0 || v > 1.0) {
-                    // Outputs slightly outside [0, 1] are the regressor's normal overshoot; only non-finite
-                    // ones mean it failed.
-                    if (!isfinite(v)) f |= MR_WF_METHOD_FAILED;
-                    v = isfinite(v) ? (v < 0.0 ? 0.0 : 1.0) : 0.0;
-                }
-                b.answer[4 * r + k] = (float)v;
+                // Outputs slightly outside [0, 1] are the regressor's normal overshoot, clamped; only non-finite
+                // ones mean it failed (answer 0). Written without branches: which way a random texel's output
+                // falls is a coin toss the branch predictor loses.
+                double v = v4[k], clamped = v < 0.0 ? 0.0 : v;
+                clamped = clamped > 1.0 ? 1.0 : clamped;
+                int finite = isfinite(v) != 0;
+                f |= finite ? 0u : (unsigned)MR_WF_METHOD_FAILED;
+                b.answer[4 * r + k] = finite ? (float)clamped : 0.0f;
             }
             b.row_flags[r] = (uint8_t)f;
         }
