@@ -2,25 +2,37 @@
  * mlp.c — the network object, batched float inference and the double forward/backward pass used by training
  * (contracts in mlp.h and mlp_internal.h).
  *
- * Inference puts rows in the vector lanes. A block of `lanes` rows is normalised and transposed into
- * xt[n_in][lanes]; then for each hidden unit j the pre-activations of the block's rows are summed over the
- * inputs with w1[i][j] broadcast (a vector multiply and add per input), passed through the ReLU and at once
- * added, times w2[k][j], into the accumulators of each output k. Every inner loop runs over the rows of a block,
- * a compile-time constant, so GCC vectorises it completely (no reduction, no remainder: -fopt-info-vec lists
- * them) and each row's arithmetic is the scalar order of mlp.h, the same bits in any lane, block or thread.
- * For the design card's 6 x H x 4 the input and output loops are unrolled with the sizes as constants, so the
- * six inputs and four accumulators stay in registers and the hidden loop does only broadcasts, 10 multiplies
- * and 10 adds per vector of rows.
+ * Inference puts rows in the vector lanes. A block of `lanes` rows is transposed into xt[n_in][lanes] and
+ * normalised there (a vector subtract and divide per input); then for each hidden unit j the pre-activations of the
+ * block's rows are summed over the inputs with w1[i][j] broadcast (a vector multiply-add per input), passed through
+ * the ReLU and at once added, times w2[k][j], into the accumulators of each output k. Every inner loop runs over
+ * the rows of a block, a compile-time constant, so GCC vectorises it completely (no reduction, no remainder) and
+ * each row's arithmetic is the scalar order of mlp.h, the same bits in any lane, block or thread. For the design
+ * card's 6 x H x 4 the input and output loops are unrolled with the sizes as constants, so the six inputs and four
+ * accumulators stay in registers and the hidden loop does only broadcasts and 10 multiply-adds per vector of rows.
  *
- * The library is compiled for baseline x86-64 (SSE2, 16 registers of 4 floats). On x86-64 Linux with GCC the
- * block loop also exists compiled for x86-64-v3 (AVX2: 16 registers of 8 floats) and x86-64-v4 (AVX-512: 32
- * registers of 16 floats), chosen at run time with __builtin_cpu_supports. Each variant has the block size that
- * keeps its inputs, accumulators and hidden values in registers (measured for 6 x 300 x 4 on one core of a
- * Xeon with AVX-512, best of runs on a shared machine: SSE2 8 rows 3.0 M rows/s, 16 rows 1.4 M, 4 rows 2.6 M;
- * AVX2 8 rows 6.2 M, 16 rows 5.3 M; AVX-512 32 rows 9.3 M, 16 rows 7.9 M); on AMD Zen 3 (EPYC, AVX2, no
- * AVX-512) 16 rows win instead (one core, quiet: 8.0-9.2 M rows/s against 6.4-7.2 M for 8 rows), so AMD CPUs get
- * an AVX2 variant of their own. Every variant computes each row in the same order and none uses fused
- * multiply-add (ISO C mode: -ffp-contract=off), so all give identical results.
+ * The kernels (mr_mlp_kernel, mlp.h). The library is compiled for baseline x86-64 (SSE2); on x86-64 Linux with GCC
+ * the block loop also exists compiled for x86-64-v3 (AVX2 + FMA: 16 registers of 8 floats) and x86-64-v4 (AVX-512:
+ * 32 registers of 16 floats), chosen at run time with __builtin_cpu_supports, or forced by MR_MLP_KERNEL.
+ *   - AVX512 and AVX2, the defaults where the CPU has them, fuse each product into its sum (fmaf, which GCC turns
+ *     into vfmadd231ps with the weight broadcast from memory) and read the weights from the network's packed copy
+ *     (struct mr_mlp_packed below: per hidden unit its n_in input weights, bias and n_out output weights, one
+ *     stream; made once when the network is read or trained, checked against the values at each call). A fused
+ *     multiply-add rounds once where the unfused loop rounds twice, so the outputs differ from the unfused ones by
+ *     rounding: for the shipped spec2metal network on 4 M random texels by at most ~1e-6 (bench_workflow
+ *     prints the largest difference); tests/test_nn.c checks every row against Higham's bound (2 gamma_m S, its
+ *     fused_tolerance) and each kernel bit for bit against its scalar reference, so AVX512 and AVX2 agree bit for
+ *     bit.
+ *   - SSE2 (the baseline build; CPUs without FMA) and EXACT (the same unfused loop at the CPU's widest vectors) keep
+ *     the rounding of earlier versions: every product and sum rounded (ISO C mode: -ffp-contract=off), identical
+ *     bits on every CPU.
+ * Block sizes keep a variant's inputs, accumulators and hidden values in registers. Unfused, measured for
+ * 6 x 300 x 4 on one core of a Xeon with AVX-512, best of runs on a shared machine: SSE2 8 rows 3.0 M rows/s, 16 rows
+ * 1.4 M, 4 rows 2.6 M; AVX2 8 rows 6.2 M, 16 rows 5.3 M; AVX-512 32 rows 9.3 M, 16 rows 7.9 M; on AMD Zen 3 (AVX2,
+ * no AVX-512) 16 rows win instead (one core, quiet: 8.0-9.2 M rows/s against 6.4-7.2 M for 8 rows), so AMD CPUs get
+ * an unfused AVX2 variant of their own. Fused, on AMD Zen 5 (EPYC, 2 FMA units of 16 floats at ~4.1 GHz: a peak of
+ * ~131 G FMA/s or ~44 M rows/s per core), per CPU-second of one core on a busy machine: AVX-512 32 rows 33.5 M rows/s
+ * (EXACT 27.1 M), AVX2 16 rows 17.7 M, 8 rows 16.9 M.
  *
  * Training's pass (mr_mlp_sse_grad) keeps the hidden dimension contiguous instead: w1 is [n_in][n_hidden], so
  * the forward sum, the backward products and the weight-gradient updates are all unit-stride loops over j.

@@ -847,8 +847,8 @@ static mr_status mlp_block_alloc(size_t block, int threads, int residual, mlp_bl
     b->row_of = malloc(block * sizeof *b->row_of);
     b->table = malloc(b->parts * b->table_size * sizeof *b->table);
     b->distinct = malloc(b->parts * sizeof *b->distinct);
-    if (!b->x || !b->y || !b->anchors || (residual && !b->planes) || !b->slot || !b->answer || !b->row_flags || !b->first || !b->row_of ||
-        !b->table || !b->distinct) {
+    if (!b->x || !b->y || !b->anchors || (residual && !b->planes) || !b->slot || !b->answer || !b->row_flags ||
+        !b->first || !b->row_of || !b->table || !b->distinct) {
         mlp_block_free(b);
         return MR_ERR_NOMEM;
     }
