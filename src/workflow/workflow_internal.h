@@ -22,10 +22,11 @@ void mr_wf_khronos_metal_to_spec(const double base[3], double metallic, double d
 void mr_wf_khronos_spec_to_metal(const double diffuse[3], const double specular[3], double base[3], double *metallic);
 
 /* The residual anchors (workflow.h, mr_wf_residual_anchor_of) of `count` rows whose lobe and specular channel c are
- * planes[c * stride + r] and planes[(3 + c) * stride + r] (sanitised doubles), into out[0 .. count): eight rows at a
- * time with AVX-512 when `vector` is non-zero, the CPU has it and MR_WF_SCALAR_ANCHORS is unset or empty, else one
- * at a time; the same bits either way (workflow.c). Returns 1 when the vectors ran. For tests. */
-int mr_wf_residual_anchors(const double *planes, size_t stride, size_t count, int vector,
+ * planes[c * stride + r] and planes[(3 + c) * stride + r] (sanitised doubles), into out[0 .. count): at most at
+ * vector level `level` (2: eight rows at a time with AVX-512, 1: four with AVX2, 0: one at a time), as far as the
+ * CPU allows and MR_WF_SCALAR_ANCHORS (set and non-empty: 0) permits; the same bits at every level (workflow.c).
+ * Returns the level used. For tests. */
+int mr_wf_residual_anchors(const double *planes, size_t stride, size_t count, int level,
                            struct mr_wf_residual_anchor *out);
 
 #endif /* MR_WORKFLOW_INTERNAL_H */
