@@ -471,10 +471,10 @@ mr_status mr_mlp_predict_kernel(const mr_mlp *net, const float *in, size_t n, fl
     if ((unsigned)kernel >= MR_MLP_KERNEL_COUNT)
         return mr_fail(MR_ERR_INVALID_ARG, "mlp predict: kernel %d: unknown (0 to %d)", (int)kernel,
                        MR_MLP_KERNEL_COUNT - 1);
+    if (n == 0) return MR_OK;
     if (kernel == MR_MLP_KERNEL_AUTO && (status = mr_mlp_kernel_auto(&kernel)) != MR_OK) return status;
     if (!mr_mlp_kernel_available(kernel))
         return mr_fail(MR_ERR_UNSUPPORTED, "mlp predict: this CPU cannot run the %s kernel", kernel_names[kernel]);
-    if (n == 0) return MR_OK;
     if (in == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "mlp predict: NULL input or output array");
     size_t widest = (size_t)MR_MAX(net->n_in, net->n_out);
     if (n > SIZE_MAX / widest) return mr_fail(MR_ERR_INVALID_ARG, "mlp predict: %zu rows overflow size_t", n);

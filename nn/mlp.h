@@ -183,7 +183,8 @@ mr_status mr_mlp_kernel_auto(mr_mlp_kernel *out);
 int mr_mlp_kernel_available(mr_mlp_kernel kernel);
 
 /* (Re)make the network's packed weights from its current values (after changing them in place; reading and
- * training do it). MR_ERR_INVALID_ARG for a bad network, MR_ERR_NOMEM (the network is unchanged). */
+ * training do it). Not while other threads predict with the network. MR_ERR_INVALID_ARG for a bad network,
+ * MR_ERR_NOMEM (the network is unchanged). */
 mr_status mr_mlp_pack(mr_mlp *net);
 
 /* A network of the given sizes with zero weights and biases, means 0 and standard deviations 1 (it predicts
@@ -209,7 +210,8 @@ mr_status mr_mlp_predict(const mr_mlp *net, const float *in, size_t n, float *ou
 mr_status mr_mlp_predict_threads(const mr_mlp *net, const float *in, size_t n, float *out, int max_team);
 
 /* mr_mlp_predict_threads with a given kernel (AUTO: as mr_mlp_predict). MR_ERR_UNSUPPORTED for a kernel this CPU
- * cannot run (mr_mlp_kernel_available), MR_ERR_INVALID_ARG outside the enum; mr_mlp_kernel_auto's error for AUTO. */
+ * cannot run (mr_mlp_kernel_available), MR_ERR_INVALID_ARG outside the enum; mr_mlp_kernel_auto's error for AUTO
+ * (n = 0 still does nothing and succeeds). */
 mr_status mr_mlp_predict_kernel(const mr_mlp *net, const float *in, size_t n, float *out, int max_team,
                                 mr_mlp_kernel kernel);
 
