@@ -296,27 +296,35 @@ MR_TEST(predict_is_identical_for_1_and_2_threads) {
     mr_mlp_free(net);
 }
 
-/* mlp.h: a NaN input gives NaN in every output of its row and leaves the other rows alone. */
+/* mlp.h: a NaN input gives NaN in every output of its row and leaves the other rows alone, in every kernel. */
 MR_TEST(nan_input_propagates_to_its_row_only) {
     mr_mlp *net = random_net(6, 40, 4, 31);
     const size_t n = 20;
     float *x = random_rows(n, 6, 5);
     float *clean = malloc(n * 4 * sizeof(float)), *y = malloc(n * 4 * sizeof(float));
-    MR_CHECK_OK(mr_mlp_predict(net, x, n, clean));
-    x[7 * 6 + 2] = NAN;
-    x[13 * 6 + 5] = INFINITY;
-    MR_CHECK_OK(mr_mlp_predict(net, x, n, y));
-    for (size_t r = 0; r < n; r++)
-        for (int k = 0; k < 4; k++) {
-            float v = y[r * 4 + (size_t)k];
-            if (r == 7)
-                MR_CHECK_MSG(isnan(v), "row 7 output %d is %g", k, (double)v);
-            else if (r == 13)
-                MR_CHECK_MSG(!isfinite(v), "row 13 output %d is %g", k, (double)v);
-            else
-                MR_CHECK(memcmp(&v, &clean[r * 4 + (size_t)k], sizeof v) == 0);
-        }
+    float *dirty = malloc(n * 6 * sizeof(float));
+    memcpy(dirty, x, n * 6 * sizeof(float));
+    dirty[7 * 6 + 2] = NAN;
+    dirty[13 * 6 + 5] = INFINITY;
+    for (int kernel = MR_MLP_KERNEL_AUTO; kernel < MR_MLP_KERNEL_COUNT; kernel++) {
+        if (!mr_mlp_kernel_available((mr_mlp_kernel)kernel)) continue;
+        MR_CHECK_OK(mr_mlp_predict_kernel(net, x, n, clean, 0, (mr_mlp_kernel)kernel));
+        MR_CHECK_OK(mr_mlp_predict_kernel(net, dirty, n, y, 0, (mr_mlp_kernel)kernel));
+        for (size_t r = 0; r < n; r++)
+            for (int k = 0; k < 4; k++) {
+                float v = y[r * 4 + (size_t)k];
+                if (r == 7)
+                    MR_CHECK_MSG(isnan(v), "%s: row 7 output %d is %g", mr_mlp_kernel_name((mr_mlp_kernel)kernel), k,
+                                 (double)v);
+                else if (r == 13)
+                    MR_CHECK_MSG(!isfinite(v), "%s: row 13 output %d is %g",
+                                 mr_mlp_kernel_name((mr_mlp_kernel)kernel), k, (double)v);
+                else
+                    MR_CHECK(memcmp(&v, &clean[r * 4 + (size_t)k], sizeof v) == 0);
+            }
+    }
     free(x);
+    free(dirty);
     free(clean);
     free(y);
     mr_mlp_free(net);
