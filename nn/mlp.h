@@ -18,10 +18,13 @@
  *   h_j = max(0, b1[j] + w1[0][j] u_0 + w1[1][j] u_1 + ...)            j < n_hidden, the ReLU layer
  *   v_k = b2[k] + w2[k][0] h_0 + w2[k][1] h_1 + ...                      k < n_out, linear
  *   y_k = out_mean[k] + out_std[k] v_k                                   raw output
- * The sums run in the index order shown, one rounding per operation (the library is built in ISO C mode, so
- * no multiply-add is fused): a row's outputs are the same bits whatever the other rows, the thread count, the
- * CPU's vector width or the code path (on x86-64, mr_mlp_predict has AVX-512, AVX2 and SSE2 variants chosen at
- * run time). Outputs are raw: nothing is clamped (a metallic of 1.02 stays 1.02; the caller clamps).
+ * The sums run in the index order shown. How each product is added depends on the inference kernel
+ * (mr_mlp_kernel, chosen at run time): the AVX-512 and AVX2 kernels fuse every product into its sum (one rounding
+ * per multiply-add, FMA), the SSE2 and EXACT kernels round each product and each sum (the library is built in ISO
+ * C mode, so nothing else fuses). For a given kernel a row's outputs are the same bits whatever the other rows or
+ * the thread count; the fused and unfused kernels differ by rounding only (nn/mlp.c, "Fused multiply-adds": the
+ * bound tests/test_nn.c checks). Outputs are raw: nothing is clamped (a metallic of 1.02 stays 1.02; the caller
+ * clamps).
  * Training minimises the mean squared error of v against the normalised targets (y - out_mean) / out_std, so
  * all outputs weigh the same whatever their units.
  *
@@ -76,6 +79,9 @@
  * Ownership. One owner, one free: a network returned through `mr_mlp **out` belongs to the caller and is
  * released, with everything it points to, by mr_mlp_free() (NULL-safe). Its values may be changed in place;
  * its pointers and sizes may not. The library keeps no pointer to caller arrays after a call returns.
+ * The network also owns its weights in the layout the inference kernels read (`packed`), made when it is read or
+ * trained; a prediction checks that they still match the values (a 15 KB comparison for 6 x 300 x 4) and, after
+ * the values were changed in place, packs them for that call instead (mr_mlp_pack makes them current again).
  *
  * The weight file (mr_mlp_write / mr_mlp_read), versions 1 and 2. Text, '\n' line ends, ASCII, one key per line
  * followed by its values separated by single spaces, every number a C99 hexadecimal float ("%a" of the float:
@@ -150,7 +156,36 @@ typedef struct mr_mlp {
     char kind[MR_MLP_KIND_MAX]; /* "" (plain) or a word naming how the application reads the outputs (e.g.
                                    "spec2metal-residual", src/workflow/workflow.h): letters, digits, '.', '_',
                                    '-'; saved in the file (version 2). The network itself ignores it */
+    struct mr_mlp_packed *packed; /* the kernels' copy of the weights (header comment, "Ownership"); NULL = none */
 } mr_mlp;
+
+/* The inference kernels (nn/mlp.c). AUTO: the environment variable MR_MLP_KERNEL if set (one of the names
+ * below; meant for tests and benchmarks), else the fastest this CPU runs: AVX512 on x86-64-v4, AVX2 on x86-64-v3,
+ * SSE2 otherwise. AVX512 and AVX2 fuse multiply-adds; SSE2 is the portable unfused loop; EXACT is the unfused
+ * loop at this CPU's widest vectors (the kernel of earlier versions: SSE2's bits, faster). */
+typedef enum mr_mlp_kernel {
+    MR_MLP_KERNEL_AUTO = 0,
+    MR_MLP_KERNEL_SSE2,   /* "sse2" */
+    MR_MLP_KERNEL_EXACT,  /* "exact" */
+    MR_MLP_KERNEL_AVX2,   /* "avx2": AVX2 + FMA */
+    MR_MLP_KERNEL_AVX512, /* "avx512": AVX-512F */
+    MR_MLP_KERNEL_COUNT
+} mr_mlp_kernel;
+
+/* "auto", "sse2", "exact", "avx2", "avx512"; NULL outside the enum. */
+const char *mr_mlp_kernel_name(mr_mlp_kernel kernel);
+
+/* The kernel AUTO stands for in this process (MR_MLP_KERNEL, else the CPU's; computed once). MR_ERR_INVALID_ARG
+ * naming the variable's value when it is not a kernel name or names one this CPU cannot run. */
+mr_status mr_mlp_kernel_auto(mr_mlp_kernel *out);
+
+/* 1 when this build and CPU run `kernel` (AUTO, SSE2 and EXACT always), else 0. */
+int mr_mlp_kernel_available(mr_mlp_kernel kernel);
+
+/* (Re)make the network's packed weights from its current values (after changing them in place; reading and
+ * training do it). Not while other threads predict with the network. MR_ERR_INVALID_ARG for a bad network,
+ * MR_ERR_NOMEM (the network is unchanged). */
+mr_status mr_mlp_pack(mr_mlp *net);
 
 /* A network of the given sizes with zero weights and biases, means 0 and standard deviations 1 (it predicts
  * zeros). MR_ERR_INVALID_ARG for sizes outside the limits, MR_ERR_NOMEM. On success *out is the caller's
@@ -173,6 +208,12 @@ mr_status mr_mlp_predict(const mr_mlp *net, const float *in, size_t n, float *ou
 /* mr_mlp_predict on at most max_team threads (0 = automatic, mr_auto_threads: omp_get_max_threads()), still one
  * per 256 rows at most. */
 mr_status mr_mlp_predict_threads(const mr_mlp *net, const float *in, size_t n, float *out, int max_team);
+
+/* mr_mlp_predict_threads with a given kernel (AUTO: as mr_mlp_predict). MR_ERR_UNSUPPORTED for a kernel this CPU
+ * cannot run (mr_mlp_kernel_available), MR_ERR_INVALID_ARG outside the enum; mr_mlp_kernel_auto's error for AUTO
+ * (n = 0 still does nothing and succeeds). */
+mr_status mr_mlp_predict_kernel(const mr_mlp *net, const float *in, size_t n, float *out, int max_team,
+                                mr_mlp_kernel kernel);
 
 /* The loss of `net` on n rows (x: n x n_in raw inputs, y: n x n_out raw targets): the mean over rows and
  * outputs of ((prediction - y) / out_std)^2, accumulated in double in row order (the same for any thread

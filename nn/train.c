@@ -304,6 +304,11 @@ static mr_status make_network(const trainer *t, mr_mlp **out) {
         net->data[q] = (float)t->best[q];
     }
     memcpy(net->in_mean, t->in_mean, 2 * ((size_t)t->d.n_in + (size_t)t->d.n_out) * sizeof(float));
+    status = mr_mlp_pack(net); // the inference kernels' layout, once (mlp.h, "Ownership")
+    if (status != MR_OK) {
+        mr_mlp_free(net);
+        return status;
+    }
     *out = net;
     return MR_OK;
 }

@@ -329,6 +329,7 @@ static mr_status parse_net(parser *ps, mr_mlp **out) {
         ps->text.line++;
         status = bad(ps, "unexpected content after 'end'");
     }
+    if (status == MR_OK) status = mr_mlp_pack(net); // the inference kernels' layout, once (mlp.h, "Ownership")
     if (status != MR_OK) {
         mr_mlp_free(net);
         return status;

@@ -7,7 +7,10 @@
  *    and F0 uniform in [0, 1] per channel: every texel distinct and off the manifold, the network's worst case),
  *    and each --texture's real spec-gloss maps (read as glTF spec-gloss: the diffuse dimmed by 1 - max specular),
  *    which repeat their values as real textures do. --peer: a second network (the first one shipped) measured
- *    beside the default on the same texels.
+ *    beside the default on the same texels. Under the random texels: the network's prediction alone, each of its
+ *    kernels on 2 threads (EXACT, the unfused kernel of earlier versions, is the peer of the fused ones), their
+ *    largest difference, and the floor: its FMAs per texel at this machine's FMA peak, measured by independent FMA
+ *    chains on 1 and 2 cores (per second of CPU time: a core's peak whatever else the machine runs).
  * 2. Accuracy: on the held-out pairs of `make dataset` (test-pairs.csv) every method's answer and the labels
  *    themselves, rendered on a sphere under both shared HDR maps (held out of training) at glossiness 0.3, 0.6
  *    and 0.9: object SSIM against the spec-gloss texel (mr_wf_label_ssim), mean and worst, and the RMSE of
@@ -25,6 +28,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "bench_util.h"
 #include "matremap.h"
@@ -209,6 +213,113 @@ static accuracy judge(const mr_wf_label_scene *eval, const mr_mlp *net, mr_wf_me
     return a;
 }
 
+/* This machine's fused multiply-adds per second on `threads` threads, measured: 16 independent chains of vector FMAs
+ * per thread, unrolled so that they stay in registers (enough to cover the latency of every FMA unit), best of 5.
+ * *lanes gets the floats per vector. */
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#define PEAK_ITERATIONS 20000000L
+__attribute__((target("avx512f"))) static double fma_chains_avx512(void) {
+    __m512 acc[16], a = _mm512_set1_ps(0.999999f), b = _mm512_set1_ps(1e-7f);
+    for (int q = 0; q < 16; q++) acc[q] = _mm512_set1_ps((float)q);
+    for (long it = 0; it < PEAK_ITERATIONS; it++)
+        _Pragma("GCC unroll 16") for (int q = 0; q < 16; q++) acc[q] = _mm512_fmadd_ps(acc[q], a, b);
+    float sum = 0.0f, lane[16];
+    for (int q = 0; q < 16; q++) {
+        _mm512_storeu_ps(lane, acc[q]);
+        sum += lane[0];
+    }
+    return sum; // keeps the chains alive
+}
+
+__attribute__((target("avx2,fma"))) static double fma_chains_avx2(void) {
+    __m256 acc[16], a = _mm256_set1_ps(0.999999f), b = _mm256_set1_ps(1e-7f);
+    for (int q = 0; q < 16; q++) acc[q] = _mm256_set1_ps((float)q);
+    for (long it = 0; it < PEAK_ITERATIONS; it++)
+        _Pragma("GCC unroll 16") for (int q = 0; q < 16; q++) acc[q] = _mm256_fmadd_ps(acc[q], a, b);
+    float sum = 0.0f, lane[8];
+    for (int q = 0; q < 16; q++) {
+        _mm256_storeu_ps(lane, acc[q]);
+        sum += lane[0];
+    }
+    return sum;
+}
+
+/* Each thread's chains timed by its own CPU clock: the rate of a core while it runs them, whatever else the machine
+ * runs (a shared machine's wall clock would measure its other jobs); the cores' rates added. */
+static double peak_fmas(int threads, int *lanes) {
+    __builtin_cpu_init();
+    int wide = __builtin_cpu_supports("avx512f");
+    if (!wide && !__builtin_cpu_supports("fma")) return NAN;
+    *lanes = wide ? 16 : 8;
+    double best = 0.0, sink = 0.0;
+    for (int run = 0; run < 5; run++) {
+        double total = 0.0;
+#pragma omp parallel num_threads(threads) reduction(+ : sink, total)
+        {
+            struct timespec t0, t1;
+            clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t0);
+            sink += wide ? fma_chains_avx512() : fma_chains_avx2();
+            clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t1);
+            double seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+            total += 16.0 * *lanes * PEAK_ITERATIONS / seconds;
+        }
+        best = fmax(best, total);
+    }
+    if (sink == 12345.0) fprintf(stderr, "(sink)\n");
+    return best;
+}
+#else
+static double peak_fmas(int threads, int *lanes) {
+    (void)threads;
+    *lanes = 0;
+    return NAN;
+}
+#endif
+
+/* The network's kernels on the same rows (2 threads), the previous one (EXACT: unfused, the kernel before the fused
+ * ones) as the peer, and the physical floor: the network's FMAs per row at this machine's measured peak. */
+static void network_floor(const mr_mlp *net, const float *rows, size_t n, float *y, double batch_rate) {
+    double rate[MR_MLP_KERNEL_COUNT] = {0};
+    mr_mlp_kernel chosen = MR_MLP_KERNEL_AUTO;
+    if (mr_mlp_kernel_auto(&chosen) != MR_OK) return;
+    printf("\nThe network's kernels alone (mr_mlp_predict_kernel, 2 threads, M rows/s, best of 3; the batch uses %s):",
+           mr_mlp_kernel_name(chosen));
+    for (int k = MR_MLP_KERNEL_SSE2; k < MR_MLP_KERNEL_COUNT; k++) {
+        if (!mr_mlp_kernel_available((mr_mlp_kernel)k)) continue;
+        double best = HUGE_VAL;
+        for (int run = 0; run < 3; run++) {
+            double t0 = bench_now();
+            if (mr_mlp_predict_kernel(net, rows, n, y, 2, (mr_mlp_kernel)k) != MR_OK) break;
+            best = fmin(best, bench_now() - t0);
+        }
+        rate[k] = (double)n / best;
+        printf(" %s %.1f%s", mr_mlp_kernel_name((mr_mlp_kernel)k), rate[k] / 1e6,
+               k == MR_MLP_KERNEL_EXACT ? " (the previous kernel)" : "");
+    }
+    printf("; %s over exact: %.2f×.", mr_mlp_kernel_name(chosen), rate[chosen] / rate[MR_MLP_KERNEL_EXACT]);
+    float *other = malloc(n * (size_t)net->n_out * sizeof *other);
+    if (other != NULL && mr_mlp_predict_kernel(net, rows, n, y, 2, chosen) == MR_OK &&
+        mr_mlp_predict_kernel(net, rows, n, other, 2, MR_MLP_KERNEL_EXACT) == MR_OK) {
+        double worst = 0.0;
+        for (size_t q = 0; q < n * (size_t)net->n_out; q++) worst = fmax(worst, fabs((double)y[q] - other[q]));
+        printf(" Largest |%s - exact| over the %zu x %d outputs: %.2g.", mr_mlp_kernel_name(chosen), n, net->n_out,
+               worst);
+    }
+    free(other);
+    printf("\n");
+    int lanes = 0;
+    double one = peak_fmas(1, &lanes), two = peak_fmas(2, &lanes);
+    double fmas = (double)net->n_hidden * (net->n_in + net->n_out);
+    if (isnan(one)) return;
+    printf("\nThe floor: %.0f FMAs per texel (%d x %d + %d x %d). This machine's measured peak (16 independent %d-lane "
+           "FMA chains per thread, per second of the thread's CPU time): %.1f G FMA/s on 1 core (lanes x FMA units x "
+           "GHz), %.1f on 2, so at most %.1f M texels/s on 2 cores. The network alone reaches %.0f %% of it, the "
+           "whole batch %.0f %% (wall clock: less on a machine shared with other jobs).\n",
+           fmas, net->n_in, net->n_hidden, net->n_hidden, net->n_out, lanes, one / 1e9, two / 1e9,
+           two / fmas / 1e6, 100.0 * rate[chosen] * fmas / two, 100.0 * batch_rate * fmas / two);
+}
+
 int main(int argc, char **argv) {
     if (argc < 3) {
         fprintf(stderr, "usage: bench_workflow WEIGHTS DATASET_DIR HDR HDR [--quick] [--peer NAME WEIGHTS] "
@@ -298,6 +409,7 @@ int main(int argc, char **argv) {
             printf("\nThe 6x300x4 network's prediction alone (mr_mlp_predict) on the same rows: %.1f M rows/s on 1 "
                    "thread, %.1f on 2: no texel-by-texel path through it can be faster here.\n",
                    (double)sets[0].n / best[0] / 1e6, (double)sets[0].n / best[1] / 1e6);
+            if (rows && y) network_floor(net, rows, sets[0].n, y, rate[0][1]);
             free(rows);
             free(y);
         }

@@ -66,6 +66,42 @@ static void reference_predict(const mr_mlp *net, const float *x, float *y) {
     for (int k = 0; k < O; k++) y[k] = net->out_mean[k] + net->out_std[k] * y[k];
 }
 
+/* The same network and order with every product added by a fused multiply-add (fmaf: one rounding), as the
+ * AVX2 and AVX-512 kernels compute it (mlp.h). */
+static void reference_predict_fused(const mr_mlp *net, const float *x, float *y) {
+    const int I = net->n_in, H = net->n_hidden, O = net->n_out;
+    float u[64];
+    for (int i = 0; i < I; i++) u[i] = (x[i] - net->in_mean[i]) / net->in_std[i];
+    for (int k = 0; k < O; k++) y[k] = net->b2[k];
+    for (int j = 0; j < H; j++) {
+        float h = net->b1[j];
+        for (int i = 0; i < I; i++) h = fmaf(net->w1[i * H + j], u[i], h);
+        h = h < 0.0f ? 0.0f : h;
+        for (int k = 0; k < O; k++) y[k] = fmaf(net->w2[k * H + j], h, y[k]);
+    }
+    for (int k = 0; k < O; k++) y[k] = net->out_mean[k] + net->out_std[k] * y[k];
+}
+
+/* How far a fused and an unfused evaluation of a row's output k may be apart: each is within gamma_m S of the exact
+ * value (Higham, "Accuracy and Stability of Numerical Algorithms", 2nd ed., section 3.1: a sum of m products
+ * evaluated in any order, fused or not, with unit roundoff u = 2^-24, gamma_m = m u / (1 - m u)), where
+ * S = |out_mean| + out_std (|b2| + sum_j |w2_kj| (|b1_j| + sum_i |w1_ij u_i|)) bounds the terms' magnitudes and
+ * m = n_in + n_hidden + 4 counts the roundings along the longest path (layer 1, layer 2, the two of the output's
+ * scale and shift, and the normalisation's). So the two are within 2 gamma_m S. */
+static double fused_tolerance(const mr_mlp *net, const float *x, int k) {
+    const int I = net->n_in, H = net->n_hidden;
+    double u[64], s = fabs((double)net->b2[k]);
+    for (int i = 0; i < I; i++) u[i] = ((double)x[i] - net->in_mean[i]) / net->in_std[i];
+    for (int j = 0; j < H; j++) {
+        double a = fabs((double)net->b1[j]);
+        for (int i = 0; i < I; i++) a += fabs((double)net->w1[i * H + j] * u[i]);
+        s += fabs((double)net->w2[k * H + j]) * a;
+    }
+    s = fabs((double)net->out_mean[k]) + (double)net->out_std[k] * s;
+    const double m = I + H + 4, unit = 0x1p-24;
+    return 2.0 * (m * unit / (1.0 - m * unit)) * s;
+}
+
 /* A scratch directory for files, removed at exit (each case removes the files it writes). */
 static char scratch_dir[256];
 
@@ -147,33 +183,85 @@ MR_TEST(gradient_matches_central_differences) {
     for (size_t q = 0; q < P; q++) MR_CHECK_NEAR(again[q], 2.0 * grad[q], 1e-12 * fmax(1.0, fabs(grad[q])));
 }
 
-/* mr_mlp_predict gives exactly the scalar reference's bits, for a block size that does not divide the row
- * count, a hidden width that is not a multiple of any vector width, and the design card's 6 x H x 4 (the
- * specialised path) as well as another shape (the general one). */
+/* Every kernel this CPU runs gives exactly its scalar reference's bits (SSE2 and EXACT the unfused order of mlp.h,
+ * AVX2 and AVX-512 the fused one), for a block size that does not divide the row count, a hidden width that is not
+ * a multiple of any vector width, and the design card's 6 x H x 4 (the specialised path) as well as another shape
+ * (the general one); so the fused kernels agree with each other bit for bit, and with the unfused ones within
+ * fused_tolerance. Inputs include values far outside the training range (+-1e3, 0, subnormal). */
 MR_TEST(predict_matches_scalar_reference) {
     const int shapes[3][3] = {{6, 37, 4}, {6, 300, 4}, {5, 23, 3}};
     for (int s = 0; s < 3; s++) {
         const int I = shapes[s][0], H = shapes[s][1], O = shapes[s][2];
         mr_mlp *net = random_net(I, H, O, 11 + (uint64_t)s);
+        if (s == 1) MR_CHECK_OK(mr_mlp_pack(net)); // one shape from packed weights, the others packed per call
         const size_t n = 37;
         float *x = random_rows(n, I, 3);
+        const float extremes[4] = {1e3f, -1e3f, 0.0f, 0x1p-140f};
+        for (int q = 0; q < 4; q++) x[(size_t)(30 + q) * (size_t)I + (size_t)(q % I)] = extremes[q];
         float *y = malloc(n * (size_t)O * sizeof(float));
-        MR_CHECK_OK(mr_mlp_predict(net, x, n, y));
-        int mismatches = 0;
-        for (size_t r = 0; r < n; r++) {
-            float ref[8];
-            reference_predict(net, x + r * (size_t)I, ref);
-            if (memcmp(ref, y + r * (size_t)O, (size_t)O * sizeof(float)) != 0) mismatches++;
+        double worst = 0.0; // the largest fused - unfused difference, in units of its tolerance
+        for (int kernel = MR_MLP_KERNEL_SSE2; kernel < MR_MLP_KERNEL_COUNT; kernel++) {
+            if (!mr_mlp_kernel_available((mr_mlp_kernel)kernel)) continue;
+            const int fused = kernel == MR_MLP_KERNEL_AVX2 || kernel == MR_MLP_KERNEL_AVX512;
+            MR_CHECK_OK(mr_mlp_predict_kernel(net, x, n, y, 0, (mr_mlp_kernel)kernel));
+            int mismatches = 0;
+            for (size_t r = 0; r < n; r++) {
+                float ref[8], other[8];
+                (fused ? reference_predict_fused : reference_predict)(net, x + r * (size_t)I, ref);
+                if (memcmp(ref, y + r * (size_t)O, (size_t)O * sizeof(float)) != 0) mismatches++;
+                (fused ? reference_predict : reference_predict_fused)(net, x + r * (size_t)I, other);
+                for (int k = 0; k < O; k++) {
+                    double tol = fused_tolerance(net, x + r * (size_t)I, k);
+                    double diff = fabs((double)ref[k] - (double)other[k]);
+                    MR_CHECK_MSG(diff <= tol, "%dx%dx%d row %zu output %d: fused and unfused differ by %g (bound %g)",
+                                 I, H, O, r, k, diff, tol);
+                    worst = fmax(worst, diff / tol);
+                }
+            }
+            MR_CHECK_MSG(mismatches == 0, "%dx%dx%d, %s kernel: %d of %zu rows differ from the reference", I, H, O,
+                         mr_mlp_kernel_name((mr_mlp_kernel)kernel), mismatches, n);
+            // One row alone gives the same bits as inside a batch.
+            float one[8];
+            MR_CHECK_OK(mr_mlp_predict_kernel(net, x + 20 * (size_t)I, 1, one, 0, (mr_mlp_kernel)kernel));
+            MR_CHECK(memcmp(one, y + 20 * (size_t)O, (size_t)O * sizeof(float)) == 0);
         }
-        MR_CHECK_MSG(mismatches == 0, "%dx%dx%d: %d of %zu rows differ from the reference", I, H, O, mismatches, n);
-        // One row alone gives the same bits as inside a batch.
-        float one[8];
-        MR_CHECK_OK(mr_mlp_predict(net, x + 20 * (size_t)I, 1, one));
-        MR_CHECK(memcmp(one, y + 20 * (size_t)O, (size_t)O * sizeof(float)) == 0);
+        MR_CHECK(worst > 0.0 && worst < 0.05); // they do differ, by far less than the bound
         free(x);
         free(y);
         mr_mlp_free(net);
     }
+}
+
+/* The packed weights follow the values: a network changed in place after mr_mlp_pack predicts with its new values,
+ * and mr_mlp_pack makes the packed copy current again (same bits either way). */
+MR_TEST(predict_follows_values_changed_in_place) {
+    mr_mlp *net = random_net(6, 64, 4, 17);
+    MR_CHECK_OK(mr_mlp_pack(net));
+    const size_t n = 50;
+    float *x = random_rows(n, 6, 18), *y = malloc(n * 4 * sizeof(float)), *z = malloc(n * 4 * sizeof(float));
+    net->w2[3 * 64 + 5] += 0.5f;
+    net->in_std[2] *= 2.0f;
+    MR_CHECK_OK(mr_mlp_predict(net, x, n, y));
+    MR_CHECK_OK(mr_mlp_pack(net));
+    MR_CHECK_OK(mr_mlp_predict(net, x, n, z));
+    MR_CHECK(memcmp(y, z, n * 4 * sizeof(float)) == 0);
+    mr_mlp_kernel kernel = MR_MLP_KERNEL_AUTO;
+    MR_CHECK_OK(mr_mlp_kernel_auto(&kernel));
+    const int fused = kernel == MR_MLP_KERNEL_AVX2 || kernel == MR_MLP_KERNEL_AVX512;
+    for (size_t r = 0; r < n; r++) {
+        float ref[4];
+        (fused ? reference_predict_fused : reference_predict)(net, x + r * 6, ref);
+        MR_CHECK(memcmp(ref, y + r * 4, sizeof ref) == 0);
+    }
+    // The kernel names and the override (MR_MLP_KERNEL, read once per process).
+    const char *forced = getenv("MR_MLP_KERNEL");
+    if (forced != NULL && forced[0] != '\0') MR_CHECK(strcmp(mr_mlp_kernel_name(kernel), forced) == 0);
+    MR_CHECK(mr_mlp_kernel_name(MR_MLP_KERNEL_COUNT) == NULL && strcmp(mr_mlp_kernel_name(0), "auto") == 0);
+    MR_CHECK(mr_mlp_predict_kernel(net, x, n, y, 0, MR_MLP_KERNEL_COUNT) == MR_ERR_INVALID_ARG);
+    free(x);
+    free(y);
+    free(z);
+    mr_mlp_free(net);
 }
 
 MR_TEST(predict_is_identical_for_1_and_2_threads) {
@@ -182,6 +270,13 @@ MR_TEST(predict_is_identical_for_1_and_2_threads) {
     float *x = random_rows(n, 6, 4);
     float *y1 = malloc(n * 4 * sizeof(float)), *y2 = malloc(n * 4 * sizeof(float));
     int saved = omp_get_max_threads();
+    for (int kernel = MR_MLP_KERNEL_AUTO; kernel < MR_MLP_KERNEL_COUNT; kernel++) {
+        if (!mr_mlp_kernel_available((mr_mlp_kernel)kernel)) continue;
+        MR_CHECK_OK(mr_mlp_predict_kernel(net, x, n, y1, 1, (mr_mlp_kernel)kernel));
+        MR_CHECK_OK(mr_mlp_predict_kernel(net, x, n, y2, 2, (mr_mlp_kernel)kernel));
+        MR_CHECK_MSG(memcmp(y1, y2, n * 4 * sizeof(float)) == 0, "%s kernel",
+                     mr_mlp_kernel_name((mr_mlp_kernel)kernel));
+    }
     omp_set_num_threads(1);
     MR_CHECK_OK(mr_mlp_predict(net, x, n, y1));
     omp_set_num_threads(2);
@@ -201,27 +296,35 @@ MR_TEST(predict_is_identical_for_1_and_2_threads) {
     mr_mlp_free(net);
 }
 
-/* mlp.h: a NaN input gives NaN in every output of its row and leaves the other rows alone. */
+/* mlp.h: a NaN input gives NaN in every output of its row and leaves the other rows alone, in every kernel. */
 MR_TEST(nan_input_propagates_to_its_row_only) {
     mr_mlp *net = random_net(6, 40, 4, 31);
     const size_t n = 20;
     float *x = random_rows(n, 6, 5);
     float *clean = malloc(n * 4 * sizeof(float)), *y = malloc(n * 4 * sizeof(float));
-    MR_CHECK_OK(mr_mlp_predict(net, x, n, clean));
-    x[7 * 6 + 2] = NAN;
-    x[13 * 6 + 5] = INFINITY;
-    MR_CHECK_OK(mr_mlp_predict(net, x, n, y));
-    for (size_t r = 0; r < n; r++)
-        for (int k = 0; k < 4; k++) {
-            float v = y[r * 4 + (size_t)k];
-            if (r == 7)
-                MR_CHECK_MSG(isnan(v), "row 7 output %d is %g", k, (double)v);
-            else if (r == 13)
-                MR_CHECK_MSG(!isfinite(v), "row 13 output %d is %g", k, (double)v);
-            else
-                MR_CHECK(memcmp(&v, &clean[r * 4 + (size_t)k], sizeof v) == 0);
-        }
+    float *dirty = malloc(n * 6 * sizeof(float));
+    memcpy(dirty, x, n * 6 * sizeof(float));
+    dirty[7 * 6 + 2] = NAN;
+    dirty[13 * 6 + 5] = INFINITY;
+    for (int kernel = MR_MLP_KERNEL_AUTO; kernel < MR_MLP_KERNEL_COUNT; kernel++) {
+        if (!mr_mlp_kernel_available((mr_mlp_kernel)kernel)) continue;
+        MR_CHECK_OK(mr_mlp_predict_kernel(net, x, n, clean, 0, (mr_mlp_kernel)kernel));
+        MR_CHECK_OK(mr_mlp_predict_kernel(net, dirty, n, y, 0, (mr_mlp_kernel)kernel));
+        for (size_t r = 0; r < n; r++)
+            for (int k = 0; k < 4; k++) {
+                float v = y[r * 4 + (size_t)k];
+                if (r == 7)
+                    MR_CHECK_MSG(isnan(v), "%s: row 7 output %d is %g", mr_mlp_kernel_name((mr_mlp_kernel)kernel), k,
+                                 (double)v);
+                else if (r == 13)
+                    MR_CHECK_MSG(!isfinite(v), "%s: row 13 output %d is %g",
+                                 mr_mlp_kernel_name((mr_mlp_kernel)kernel), k, (double)v);
+                else
+                    MR_CHECK(memcmp(&v, &clean[r * 4 + (size_t)k], sizeof v) == 0);
+            }
+    }
     free(x);
+    free(dirty);
     free(clean);
     free(y);
     mr_mlp_free(net);
@@ -718,6 +821,7 @@ MR_TEST(network_written_with_its_loss_curve) {
 }
 
 MR_TEST_MAIN(MR_TEST_ENTRY(gradient_matches_central_differences), MR_TEST_ENTRY(predict_matches_scalar_reference),
+             MR_TEST_ENTRY(predict_follows_values_changed_in_place),
              MR_TEST_ENTRY(predict_is_identical_for_1_and_2_threads),
              MR_TEST_ENTRY(nan_input_propagates_to_its_row_only),
              MR_TEST_ENTRY(weight_file_round_trips_bit_exactly), MR_TEST_ENTRY(bad_weight_files_are_rejected),

@@ -16,6 +16,7 @@
 #include "harness.h"
 #include "matremap.h"
 #include "workflow/workflow.h"
+#include "workflow/workflow_internal.h"
 #include "nn/mlp.h"
 
 /* A batch's read-only input view of maps (workflow.h, mr_wf_spec_input / mr_wf_metal_input). */
@@ -1087,7 +1088,7 @@ MR_TEST(mlp_batch_of_repeated_values_equals_texel_by_texel) {
     palette[5][3] = -0.25f;
     palette[6][3] = palette[6][4] = palette[6][5] = 0.04f;
     for (size_t i = 0; i < N; i++) {
-        // 65536..100000 (the second block's first part, whatever the thread count): distinct values, where the
+        // 65536..100000 (the third chunk of 32768 texels, whatever the thread count): distinct values, where the
         // lookups stop; elsewhere the palette
         int distinct = i >= 65536 && i < 100000;
         int k = (int)(uniform(&rng) * PALETTE);
@@ -1134,6 +1135,59 @@ MR_TEST(mlp_batch_of_repeated_values_equals_texel_by_texel) {
         omp_set_num_threads(saved);
         mr_mlp_free(net);
     }
+}
+
+/* The network batch's anchors eight at a time (AVX-512) and four at a time (AVX2) give the bits of one at a time,
+ * on random rows and on the hard ones: black, white, -0, channels at and around F0d and below it (ambiguous: those
+ * lanes go scalar inside the vector pass), grey and saturated, points on the Eq. 2 manifold, and a count that leaves
+ * a remainder. */
+MR_TEST(vector_anchors_equal_scalar_anchors) {
+    enum { N = 4099 };
+    static double planes[6 * N];
+    static mr_wf_residual_anchor vec[N], one[N];
+    static const double hard[] = {0.0, -0.0, 1.0, 0.04, 0.039, 0.041, 0.02, 1e-300, 0.5, 0.999999};
+    const int hard_count = (int)(sizeof hard / sizeof hard[0]);
+    uint64_t rng = 99;
+    for (size_t r = 0; r < N; r++) {
+        int kind = (int)(uniform(&rng) * 4);
+        for (int c = 0; c < 6; c++) {
+            double v = uniform(&rng);
+            if (kind == 1) v = hard[(int)(uniform(&rng) * hard_count)];
+            if (kind == 2) v *= 0.05; // dark: often ambiguous
+            planes[(size_t)c * N + r] = v;
+        }
+        if (kind == 3) { // on the manifold: Eq. 2 of a random (albedo, metallic)
+            double m = uniform(&rng);
+            for (int c = 0; c < 3; c++) {
+                double albedo = uniform(&rng);
+                planes[(size_t)c * N + r] = albedo * (1.0 - m);
+                planes[(size_t)(3 + c) * N + r] = MR_WF_F0_GLTF * (1.0 - m) + m * albedo;
+            }
+        }
+    }
+    MR_CHECK(mr_wf_residual_anchors(planes, N, N, 0, one) == 0);
+    int best = 0;
+    for (int level = 1; level <= 2; level++) {
+        memset(vec, 0, sizeof vec);
+        int used = mr_wf_residual_anchors(planes, N, N, level, vec);
+        best = used > best ? used : best;
+        MR_CHECK_MSG(memcmp(vec, one, sizeof vec) == 0, "vector level %d (used %d) differs from the scalar anchors",
+                     level, used);
+    }
+    // The anchors are mr_wf_residual_anchor_of's.
+    for (size_t r = 0; r < N; r += 97) {
+        double lobe[3], spec[3];
+        for (int c = 0; c < 3; c++) {
+            lobe[c] = planes[(size_t)c * N + r];
+            spec[c] = planes[(size_t)(3 + c) * N + r];
+        }
+        mr_wf_residual_anchor a;
+        mr_wf_residual_anchor_of(lobe, spec, &a);
+        MR_CHECK(memcmp(&a, &one[r], sizeof a) == 0);
+    }
+    __builtin_cpu_init();
+    if (getenv("MR_WF_SCALAR_ANCHORS") == NULL)
+        MR_CHECK(best == (__builtin_cpu_supports("avx512f") ? 2 : __builtin_cpu_supports("avx2") ? 1 : 0));
 }
 
 /* ---- quantised inputs: tolerances (workflow.h, "Tolerances") --------------------------------------------------- */
@@ -1347,7 +1401,7 @@ MR_TEST(zeroed_options_are_the_defaults) {
     MR_CHECK(strcmp(mr_wf_method_name(zeroed.method), "weighted") == 0);
 }
 
-MR_TEST_MAIN(MR_TEST_ENTRY(method_names_round_trip),
+MR_TEST_MAIN(MR_TEST_ENTRY(method_names_round_trip), MR_TEST_ENTRY(vector_anchors_equal_scalar_anchors),
              MR_TEST_ENTRY(default_options_are_the_documented_ones),
              MR_TEST_ENTRY(equation_2_known_answers),
              MR_TEST_ENTRY(round_trip_is_exact_for_mean_and_weighted),

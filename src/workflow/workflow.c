@@ -12,6 +12,7 @@
 
 #include <limits.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -575,9 +576,8 @@ mr_status mr_wf_spec_to_metal_batch(const mr_wf_spec_input *in, size_t n, const 
 
 /* ---- the learned method (nn/mlp.h) ---------------------------------------------------------------------------- */
 
-#define MLP_BLOCK 65536 /* texels per network call: 2.6 MB of inputs and outputs */
-#define MLP_DEDUPE_PROBE 4096 /* texels of a part looked up before deciding whether looking up pays */
-#define MLP_PARALLEL_ROWS 2048 /* fewer distinct rows than this: one thread (a team costs more than they do) */
+#define MLP_CHUNK 32768 /* texels a thread converts at a time (its scratch: ~6 MB) */
+#define MLP_DEDUPE_PROBE 4096 /* texels of a chunk looked up before deciding whether looking up pays */
 
 /* The anchor with W's options given (the batch builds them once; mr_wf_options_default is not free). */
 static void residual_anchor(const mr_wf_options *o, const double lobe[3], const double specular[3],
@@ -627,67 +627,324 @@ void mr_wf_residual_targets(const float *x, float *y, size_t n) {
     }
 }
 
+
+/* Row r's anchor one at a time (planes as for mr_wf_residual_anchors). */
+static void anchors_scalar_row(const mr_wf_options *o, const double *planes, size_t stride, size_t r,
+                               mr_wf_residual_anchor *out) {
+    double lobe[3], spec[3];
+    for (int c = 0; c < 3; c++) {
+        lobe[c] = planes[(size_t)c * stride + r];
+        spec[c] = planes[(size_t)(3 + c) * stride + r];
+    }
+    residual_anchor(o, lobe, spec, &out[r]);
+}
+
+/* ---- the anchors of many rows ----------------------------------------------------------------------------------- */
+
+/* The network batch's anchors eight rows at a time with AVX-512, four with AVX2 (x86-64 Linux with GCC, chosen at
+ * run time; elsewhere, or with MR_WF_SCALAR_ANCHORS set to a non-empty value, one row at a time). A row none of whose
+ * channels is ambiguous
+ * (Eq. 3's larger root above F0d + eps in all three: every random or real texel but the darkest) takes the
+ * one-combination path of analytic_spec_to_metal, which the vectors compute with the same double operations in the
+ * same order (no fused multiply-add: ISO C mode; sqrt and division correctly rounded; each comparison written as
+ * its masked blend, so NaN and signed zeros go as in the scalar code), hence the same bits; a lane with an
+ * ambiguous channel is redone by residual_anchor. tests/test_workflow.c checks the two paths bit for bit. */
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 12 && defined(__x86_64__) && defined(__linux__)
+#define MR_WF_ANCHORS_V4 1
+#include <immintrin.h>
+
+/* x >= lo ? (x <= hi ? x : hi) : lo, as mr_clampd. */
+__attribute__((target("avx512f"))) static inline __m512d clamp8(__m512d x, __m512d lo, __m512d hi) {
+    __m512d upper = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(x, hi, _CMP_LE_OQ), hi, x);
+    return _mm512_mask_blend_pd(_mm512_cmp_pd_mask(x, lo, _CMP_GE_OQ), lo, upper);
+}
+
+__attribute__((target("avx512f"))) static inline __m512d abs8(__m512d x) {
+    return _mm512_castsi512_pd(_mm512_and_si512(_mm512_castpd_si512(x), _mm512_set1_epi64(INT64_MAX)));
+}
+
+/* Rows [0, count): lobe and specular channel c of row r at planes[c * stride + r] and planes[(3 + c) * stride + r]. */
+__attribute__((target("avx512f"))) static void anchors_v4(const mr_wf_options *o, const double *planes, size_t stride,
+                                                           size_t count, mr_wf_residual_anchor *out) {
+    const __m512d zero = _mm512_setzero_pd(), one = _mm512_set1_pd(1.0), half = _mm512_set1_pd(0.5);
+    const __m512d three = _mm512_set1_pd(3.0), f0 = _mm512_set1_pd(o->dielectric_f0);
+    const __m512d four_f0 = _mm512_set1_pd(4.0 * o->dielectric_f0); // eq3's 4.0 * f0 * d is (4.0 * f0) * d
+    const __m512d unambiguous = _mm512_set1_pd(o->dielectric_f0 + o->eps), eps = _mm512_set1_pd(o->eps);
+    const __m512d gate_scale = _mm512_set1_pd(MR_WF_RESIDUAL_GATE);
+    const __m512d chroma_scale = _mm512_set1_pd(MR_WF_RESIDUAL_CHROMA);
+    size_t r = 0;
+    for (; r + 8 <= count; r += 8) {
+        __m512d d[3], s[3], a[3], m[3];
+        __mmask8 plain = 0xff;
+        for (int c = 0; c < 3; c++) { // eq3, one root
+            d[c] = _mm512_loadu_pd(planes + (size_t)c * stride + r);
+            s[c] = _mm512_loadu_pd(planes + (size_t)(3 + c) * stride + r);
+            __m512d sum = _mm512_add_pd(s[c], d[c]);
+            __m512d disc = _mm512_sub_pd(_mm512_mul_pd(sum, sum), _mm512_mul_pd(four_f0, d[c]));
+            disc = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(disc, zero, _CMP_LT_OQ), disc, zero);
+            __m512d big = _mm512_mul_pd(half, _mm512_add_pd(sum, _mm512_sqrt_pd(disc)));
+            __m512d metal = clamp8(_mm512_sub_pd(one, _mm512_div_pd(d[c], big)), zero, one);
+            m[c] = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(big, zero, _CMP_GT_OQ), zero, metal);
+            a[c] = big;
+            plain &= _mm512_cmp_pd_mask(big, unambiguous, _CMP_GT_OQ);
+        }
+        if (plain == 0) {
+            for (int l = 0; l < 8; l++) anchors_scalar_row(o, planes, stride, r + (size_t)l, out);
+            continue;
+        }
+        __m512d weight = _mm512_add_pd(_mm512_add_pd(a[0], a[1]), a[2]);
+        __m512d mm = _mm512_div_pd(_mm512_add_pd(_mm512_add_pd(m[0], m[1]), m[2]), three);
+        if (o->method == MR_WF_WEIGHTED) {
+            __m512d dot = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(a[0], m[0]), _mm512_mul_pd(a[1], m[1])),
+                                        _mm512_mul_pd(a[2], m[2]));
+            mm = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(weight, eps, _CMP_GT_OQ), mm, _mm512_div_pd(dot, weight));
+        }
+        mm = clamp8(mm, zero, one);
+        __m512d k = _mm512_sub_pd(one, mm);
+        __m512d den = _mm512_add_pd(_mm512_mul_pd(k, k), _mm512_mul_pd(mm, mm));
+        __m512d f0k = _mm512_mul_pd(f0, k), rr = zero, dm = zero, sm = zero;
+        __m512d albedo[3];
+        for (int c = 0; c < 3; c++) { // best_albedo, then residual_anchor's Eq. 2 round trip and means
+            __m512d num = _mm512_add_pd(_mm512_mul_pd(k, d[c]), _mm512_mul_pd(mm, _mm512_sub_pd(s[c], f0k)));
+            albedo[c] = clamp8(_mm512_div_pd(num, den), zero, one);
+            __m512d back_d = _mm512_mul_pd(albedo[c], k);
+            __m512d back_s = _mm512_add_pd(_mm512_mul_pd(f0, k), _mm512_mul_pd(mm, albedo[c]));
+            __m512d miss = _mm512_max_pd(abs8(_mm512_sub_pd(back_d, d[c])), abs8(_mm512_sub_pd(back_s, s[c])));
+            rr = _mm512_max_pd(rr, miss); // MR_MAX(a, b) = a > b ? a : b, what vmaxpd computes
+            dm = _mm512_add_pd(dm, _mm512_div_pd(d[c], three));
+            sm = _mm512_add_pd(sm, _mm512_div_pd(s[c], three));
+        }
+        __m512d dc = zero, sc = zero;
+        for (int c = 0; c < 3; c++) {
+            dc = _mm512_max_pd(dc, abs8(_mm512_sub_pd(d[c], dm)));
+            sc = _mm512_max_pd(sc, abs8(_mm512_sub_pd(s[c], sm)));
+        }
+        __m512d spread = _mm512_add_pd(dc, sc);
+        __m512d gate = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(rr, gate_scale, _CMP_LT_OQ), one,
+                                            _mm512_div_pd(rr, gate_scale));
+        __m512d chroma = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(spread, chroma_scale, _CMP_LT_OQ), one,
+                                              _mm512_div_pd(spread, chroma_scale));
+        double lanes[6][8];
+        for (int c = 0; c < 3; c++) _mm512_storeu_pd(lanes[c], albedo[c]);
+        _mm512_storeu_pd(lanes[3], mm);
+        _mm512_storeu_pd(lanes[4], gate);
+        _mm512_storeu_pd(lanes[5], chroma);
+        for (int l = 0; l < 8; l++) {
+            if (!(plain & (1u << l))) {
+                anchors_scalar_row(o, planes, stride, r + (size_t)l, out);
+                continue;
+            }
+            mr_wf_residual_anchor *x = &out[r + (size_t)l];
+            for (int c = 0; c < 3; c++) x->albedo[c] = lanes[c][l];
+            x->metallic = lanes[3][l];
+            x->gate = lanes[4][l];
+            x->chroma = lanes[5][l];
+        }
+    }
+    for (; r < count; r++) anchors_scalar_row(o, planes, stride, r, out);
+}
+
+/* The same with AVX2, four rows at a time: each masked blend of anchors_v4 is a blendv on a comparison's mask. */
+__attribute__((target("avx2"))) static inline __m256d clamp4(__m256d x, __m256d lo, __m256d hi) {
+    __m256d upper = _mm256_blendv_pd(hi, x, _mm256_cmp_pd(x, hi, _CMP_LE_OQ));
+    return _mm256_blendv_pd(lo, upper, _mm256_cmp_pd(x, lo, _CMP_GE_OQ));
+}
+
+__attribute__((target("avx2"))) static inline __m256d abs4(__m256d x) {
+    return _mm256_and_pd(x, _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX)));
+}
+
+__attribute__((target("avx2"))) static void anchors_v3(const mr_wf_options *o, const double *planes, size_t stride,
+                                                       size_t count, mr_wf_residual_anchor *out) {
+    const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0), half = _mm256_set1_pd(0.5);
+    const __m256d three = _mm256_set1_pd(3.0), f0 = _mm256_set1_pd(o->dielectric_f0);
+    const __m256d four_f0 = _mm256_set1_pd(4.0 * o->dielectric_f0);
+    const __m256d unambiguous = _mm256_set1_pd(o->dielectric_f0 + o->eps), eps = _mm256_set1_pd(o->eps);
+    const __m256d gate_scale = _mm256_set1_pd(MR_WF_RESIDUAL_GATE);
+    const __m256d chroma_scale = _mm256_set1_pd(MR_WF_RESIDUAL_CHROMA);
+    size_t r = 0;
+    for (; r + 4 <= count; r += 4) {
+        __m256d d[3], s[3], a[3], m[3];
+        int plain = 0xf;
+        for (int c = 0; c < 3; c++) {
+            d[c] = _mm256_loadu_pd(planes + (size_t)c * stride + r);
+            s[c] = _mm256_loadu_pd(planes + (size_t)(3 + c) * stride + r);
+            __m256d sum = _mm256_add_pd(s[c], d[c]);
+            __m256d disc = _mm256_sub_pd(_mm256_mul_pd(sum, sum), _mm256_mul_pd(four_f0, d[c]));
+            disc = _mm256_blendv_pd(disc, zero, _mm256_cmp_pd(disc, zero, _CMP_LT_OQ));
+            __m256d big = _mm256_mul_pd(half, _mm256_add_pd(sum, _mm256_sqrt_pd(disc)));
+            __m256d metal = clamp4(_mm256_sub_pd(one, _mm256_div_pd(d[c], big)), zero, one);
+            m[c] = _mm256_blendv_pd(zero, metal, _mm256_cmp_pd(big, zero, _CMP_GT_OQ));
+            a[c] = big;
+            plain &= _mm256_movemask_pd(_mm256_cmp_pd(big, unambiguous, _CMP_GT_OQ));
+        }
+        if (plain == 0) {
+            for (int l = 0; l < 4; l++) anchors_scalar_row(o, planes, stride, r + (size_t)l, out);
+            continue;
+        }
+        __m256d weight = _mm256_add_pd(_mm256_add_pd(a[0], a[1]), a[2]);
+        __m256d mm = _mm256_div_pd(_mm256_add_pd(_mm256_add_pd(m[0], m[1]), m[2]), three);
+        if (o->method == MR_WF_WEIGHTED) {
+            __m256d dot = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(a[0], m[0]), _mm256_mul_pd(a[1], m[1])),
+                                        _mm256_mul_pd(a[2], m[2]));
+            mm = _mm256_blendv_pd(mm, _mm256_div_pd(dot, weight), _mm256_cmp_pd(weight, eps, _CMP_GT_OQ));
+        }
+        mm = clamp4(mm, zero, one);
+        __m256d k = _mm256_sub_pd(one, mm);
+        __m256d den = _mm256_add_pd(_mm256_mul_pd(k, k), _mm256_mul_pd(mm, mm));
+        __m256d f0k = _mm256_mul_pd(f0, k), rr = zero, dm = zero, sm = zero;
+        __m256d albedo[3];
+        for (int c = 0; c < 3; c++) {
+            __m256d num = _mm256_add_pd(_mm256_mul_pd(k, d[c]), _mm256_mul_pd(mm, _mm256_sub_pd(s[c], f0k)));
+            albedo[c] = clamp4(_mm256_div_pd(num, den), zero, one);
+            __m256d back_d = _mm256_mul_pd(albedo[c], k);
+            __m256d back_s = _mm256_add_pd(_mm256_mul_pd(f0, k), _mm256_mul_pd(mm, albedo[c]));
+            __m256d miss = _mm256_max_pd(abs4(_mm256_sub_pd(back_d, d[c])), abs4(_mm256_sub_pd(back_s, s[c])));
+            rr = _mm256_max_pd(rr, miss);
+            dm = _mm256_add_pd(dm, _mm256_div_pd(d[c], three));
+            sm = _mm256_add_pd(sm, _mm256_div_pd(s[c], three));
+        }
+        __m256d dc = zero, sc = zero;
+        for (int c = 0; c < 3; c++) {
+            dc = _mm256_max_pd(dc, abs4(_mm256_sub_pd(d[c], dm)));
+            sc = _mm256_max_pd(sc, abs4(_mm256_sub_pd(s[c], sm)));
+        }
+        __m256d spread = _mm256_add_pd(dc, sc);
+        __m256d gate = _mm256_blendv_pd(one, _mm256_div_pd(rr, gate_scale), _mm256_cmp_pd(rr, gate_scale, _CMP_LT_OQ));
+        __m256d chroma = _mm256_blendv_pd(one, _mm256_div_pd(spread, chroma_scale),
+                                          _mm256_cmp_pd(spread, chroma_scale, _CMP_LT_OQ));
+        double lanes[6][4];
+        for (int c = 0; c < 3; c++) _mm256_storeu_pd(lanes[c], albedo[c]);
+        _mm256_storeu_pd(lanes[3], mm);
+        _mm256_storeu_pd(lanes[4], gate);
+        _mm256_storeu_pd(lanes[5], chroma);
+        for (int l = 0; l < 4; l++) {
+            if (!(plain & (1 << l))) {
+                anchors_scalar_row(o, planes, stride, r + (size_t)l, out);
+                continue;
+            }
+            mr_wf_residual_anchor *x = &out[r + (size_t)l];
+            for (int c = 0; c < 3; c++) x->albedo[c] = lanes[c][l];
+            x->metallic = lanes[3][l];
+            x->gate = lanes[4][l];
+            x->chroma = lanes[5][l];
+        }
+    }
+    for (; r < count; r++) anchors_scalar_row(o, planes, stride, r, out);
+}
+#else
+#define MR_WF_ANCHORS_V4 0
+#endif
+
+/* How this process computes anchors: 2 eight at a time (AVX-512F), 1 four at a time (AVX2), 0 one at a time (no
+ * vectors, or MR_WF_SCALAR_ANCHORS set). Once: the CPU and the environment do not change. */
+static _Atomic int anchors_vector_choice; // the level + 1; 0 unknown
+
+static int anchors_vector(void) {
+    int choice = atomic_load(&anchors_vector_choice);
+    if (choice == 0) {
+        const char *scalar = getenv("MR_WF_SCALAR_ANCHORS");
+        choice = 1;
+#if MR_WF_ANCHORS_V4
+        __builtin_cpu_init();
+        if (scalar == NULL || scalar[0] == '\0')
+            choice = __builtin_cpu_supports("avx512f") ? 3 : __builtin_cpu_supports("avx2") ? 2 : 1;
+#else
+        (void)scalar;
+#endif
+        atomic_store(&anchors_vector_choice, choice);
+    }
+    return choice - 1;
+}
+
+/* The anchors of rows [0, count) (planes as for anchors_v4) at vector level `level` (anchors_vector's). */
+static void anchors_of_rows(const mr_wf_options *o, const double *planes, size_t stride, size_t count, int level,
+                            mr_wf_residual_anchor *out) {
+#if MR_WF_ANCHORS_V4
+    if (level >= 2) {
+        anchors_v4(o, planes, stride, count, out);
+        return;
+    }
+    if (level == 1) {
+        anchors_v3(o, planes, stride, count, out);
+        return;
+    }
+#else
+    (void)level;
+#endif
+    for (size_t r = 0; r < count; r++) anchors_scalar_row(o, planes, stride, r, out);
+}
+
+int mr_wf_residual_anchors(const double *planes, size_t stride, size_t count, int level,
+                           mr_wf_residual_anchor *out) {
+    mr_wf_options o = residual_anchor_options();
+    int best = anchors_vector();
+    level = level < 0 ? 0 : level > best ? best : level;
+    anchors_of_rows(&o, planes, stride, count, level, out);
+    return level;
+}
+
 /* The network batch works on the distinct texels of a block: real textures repeat their values (a 2048^2 8-bit
  * spec-gloss set holds ~5 % distinct (diffuse, specular) pairs: Avocado 4.7 %, FloppyDisk 5.5 %), and a texel's
  * answer is a pure function of its inputs, so each distinct pair is sanitised, anchored and run through the
  * network once and its answer copied to every texel that holds it: the same bits as converting every texel.
- * A block is split into `parts` contiguous ranges, each deduplicated on its own (one thread per part, no locks;
- * a value repeated across parts is computed once per part), by the bit patterns of the six input floats. */
+ * A batch is cut into chunks of MLP_CHUNK texels, each deduplicated on its own by the bit patterns of the six
+ * input floats (a value repeated across chunks is computed once per chunk) and converted whole by one thread, in
+ * its own scratch: */
 typedef struct mlp_block {
-    size_t parts;
     float *x, *y;                   /* distinct rows: network inputs (block x 6), outputs (block x 4) */
     mr_wf_residual_anchor *anchors; /* per distinct row (residual form) */
+    double *planes;                 /* the anchors' inputs (residual form): 6 planes of `block` doubles, lobe RGB
+                                       and specular RGB of each distinct row */
+    size_t block;                   /* texels per chunk */
+    int vector_anchors;             /* the anchors' vector level (anchors_vector) */
     long *slot;                     /* per distinct row: its row among those the network sees, or -1 */
     float *answer;                  /* per distinct row: albedo RGB, metallic, final */
     uint8_t *row_flags;             /* per distinct row */
-    uint32_t *first;                /* per distinct row, at the part's rows: its first texel, block-relative */
-    uint32_t *row_of;               /* per texel: its distinct row, counted from its part's first row */
-    uint32_t *table;                /* parts x table_size hash slots: part-local row + 1, 0 empty */
-    size_t table_size;              /* a power of two >= twice a part's texels */
-    size_t *distinct;               /* per part: its number of distinct rows, then their first row in x */
+    uint32_t *first;                /* per distinct row: its first texel, chunk-relative */
+    uint32_t *row_of;               /* per texel: its distinct row */
+    uint32_t *table;                /* table_size hash slots: row + 1, 0 empty */
+    size_t table_size;              /* a power of two >= twice the chunk's texels */
+    size_t distinct;                /* distinct rows of the chunk */
 } mlp_block;
 
 static void mlp_block_free(mlp_block *b) {
     free(b->x);
     free(b->y);
     free(b->anchors);
+    free(b->planes);
     free(b->slot);
     free(b->answer);
     free(b->row_flags);
     free(b->first);
     free(b->row_of);
     free(b->table);
-    free(b->distinct);
+    memset(b, 0, sizeof *b); // freed twice (a failed mlp_block_alloc, then the batch's own free) is harmless
 }
 
-static mr_status mlp_block_alloc(size_t block, int threads, mlp_block *b) {
+static mr_status mlp_block_alloc(size_t block, int residual, mlp_block *b) {
     memset(b, 0, sizeof *b);
-    b->parts = (size_t)threads;
-    if (b->parts > block / MLP_PARALLEL_ROWS) b->parts = block / MLP_PARALLEL_ROWS; // small batches: fewer threads
-    if (b->parts == 0) b->parts = 1;
-    size_t part_max = (block + b->parts - 1) / b->parts;
-    for (b->table_size = 16; b->table_size < 2 * part_max; b->table_size *= 2) {
+    b->block = block;
+    b->vector_anchors = residual ? anchors_vector() : 0;
+    for (b->table_size = 16; b->table_size < 2 * block; b->table_size *= 2) {
     }
     b->x = malloc(block * 6 * sizeof *b->x);
     b->y = malloc(block * 4 * sizeof *b->y);
     b->anchors = malloc(block * sizeof *b->anchors);
+    b->planes = residual ? malloc(block * 6 * sizeof *b->planes) : NULL;
     b->slot = malloc(block * sizeof *b->slot);
     b->answer = malloc(block * 4 * sizeof *b->answer);
     b->row_flags = malloc(block);
     b->first = malloc(block * sizeof *b->first);
     b->row_of = malloc(block * sizeof *b->row_of);
-    b->table = malloc(b->parts * b->table_size * sizeof *b->table);
-    b->distinct = malloc(b->parts * sizeof *b->distinct);
-    if (!b->x || !b->y || !b->anchors || !b->slot || !b->answer || !b->row_flags || !b->first || !b->row_of ||
-        !b->table || !b->distinct) {
+    b->table = malloc(b->table_size * sizeof *b->table);
+    if (!b->x || !b->y || !b->anchors || (residual && !b->planes) || !b->slot || !b->answer || !b->row_flags ||
+        !b->first || !b->row_of || !b->table) {
         mlp_block_free(b);
         return MR_ERR_NOMEM;
     }
     return MR_OK;
 }
-
-/* Part p of a block of `count` texels: [count p / parts, count (p + 1) / parts). */
-static size_t part_start(size_t count, size_t parts, size_t p) { return count * p / parts; }
 
 /* The six input floats of texel i, as bits (two texels with equal bits get equal answers). */
 static inline void texel_key(const mr_wf_spec_input *in, size_t i, uint32_t k[6]) {
@@ -695,8 +952,8 @@ static inline void texel_key(const mr_wf_spec_input *in, size_t i, uint32_t k[6]
     memcpy(k + 3, in->specular + 3 * i, 3 * sizeof *k);
 }
 
-/* A new distinct row for texel r of the block: sanitised (and dimmed) into x, with its anchor computed from the
- * double values, as the per-texel path computes it, when anchor_options is not NULL. */
+/* A new distinct row for texel i: sanitised (and dimmed) into x, and when anchor_options is not NULL its double
+ * values into the planes its anchor is computed from (mlp_dedupe), as the per-texel path does. */
 static void mlp_new_row(const mr_wf_spec_input *in, const mr_wf_options *o, const mr_wf_options *anchor_options,
                         size_t i, mlp_block *b, size_t row) {
     unsigned f = 0;
@@ -711,42 +968,102 @@ static void mlp_new_row(const mr_wf_spec_input *in, const mr_wf_options *o, cons
         b->x[6 * row + 3 + c] = (float)s[c];
     }
     b->row_flags[row] = (uint8_t)f;
-    if (anchor_options) residual_anchor(anchor_options, d, s, &b->anchors[row]);
+    for (int c = 0; anchor_options && c < 3; c++) {
+        b->planes[(size_t)c * b->block + row] = d[c];
+        b->planes[(size_t)(3 + c) * b->block + row] = s[c];
+    }
 }
 
-/* Deduplicates part p of the block starting at texel `start`: its distinct values become rows lo, lo + 1, ... (lo
- * the part's first texel), every texel's part-local row goes to row_of. A part whose first MLP_DEDUPE_PROBE
- * texels are mostly distinct (noise, float data) stops looking values up: hashing would only cost. */
-static void mlp_dedupe_part(const mr_wf_spec_input *in, const mr_wf_options *o, const mr_wf_options *anchor_options,
-                            size_t start, size_t count, mlp_block *b, size_t p) {
-    size_t lo = part_start(count, b->parts, p), hi = part_start(count, b->parts, p + 1);
-    uint32_t *table = b->table + p * b->table_size;
+/* Deduplicates the chunk of `count` texels starting at texel `start`: its distinct values become rows 0, 1, ...,
+ * every texel's row goes to row_of, and (residual form) the rows' anchors are computed. A chunk whose first
+ * MLP_DEDUPE_PROBE texels are mostly distinct (noise, float data) stops looking values up: hashing would only cost. */
+static void mlp_dedupe(const mr_wf_spec_input *in, const mr_wf_options *o, const mr_wf_options *anchor_options,
+                       size_t start, size_t count, mlp_block *b) {
+    uint32_t *table = b->table;
     memset(table, 0, b->table_size * sizeof *table);
     size_t mask = b->table_size - 1, rows = 0;
     int hashing = 1;
-    for (size_t r = lo; r < hi; r++) {
-        if (r - lo == MLP_DEDUPE_PROBE && 4 * rows > 3 * MLP_DEDUPE_PROBE) hashing = 0;
+    for (size_t r = 0; r < count; r++) {
+        if (r == MLP_DEDUPE_PROBE && 4 * rows > 3 * MLP_DEDUPE_PROBE) hashing = 0;
         uint32_t key[6], other[6];
         size_t h = 0;
         if (hashing) {
             texel_key(in, start + r, key);
             for (h = mr_hash_words(key, 6) & mask; table[h] != 0; h = (h + 1) & mask) {
-                size_t row = lo + table[h] - 1;
-                texel_key(in, start + b->first[row], other);
+                texel_key(in, start + b->first[table[h] - 1], other);
                 if (memcmp(key, other, sizeof key) == 0) break;
             }
-            if (table[h] != 0) { // seen before in this part
+            if (table[h] != 0) { // seen before in this chunk
                 b->row_of[r] = table[h] - 1;
                 continue;
             }
         }
-        size_t row = lo + rows++;
-        if (hashing) table[h] = (uint32_t)(row - lo + 1);
+        size_t row = rows++;
+        if (hashing) table[h] = (uint32_t)(row + 1);
         b->first[row] = (uint32_t)r;
-        b->row_of[r] = (uint32_t)(row - lo);
+        b->row_of[r] = (uint32_t)row;
         mlp_new_row(in, o, anchor_options, start + r, b, row);
     }
-    b->distinct[p] = rows;
+    b->distinct = rows;
+    if (anchor_options) anchors_of_rows(anchor_options, b->planes, b->block, rows, b->vector_anchors, b->anchors);
+}
+
+/* Texels [start, start + count) of the batch, on the calling thread: their distinct values (all of the chunk's
+ * inputs are read before any of its outputs is written: in-place conversion stays correct), the network on those
+ * whose gate is open (residual form; the others' answer is the anchor, whatever the network says), each distinct
+ * value's answer, and every texel's. MR_OK or the network's error. */
+static mr_status mlp_convert_chunk(const mr_mlp *net, mr_mlp_kernel kernel, const mr_wf_spec_input *in,
+                                   const mr_wf_options *o, const mr_wf_options *anchor_options, size_t start,
+                                   size_t count, const mr_wf_metal_maps *out, uint8_t *flags, mlp_block *b) {
+    const int residual = anchor_options != NULL;
+    mlp_dedupe(in, o, anchor_options, start, count, b);
+    const size_t rows = b->distinct;
+    size_t seen = rows;
+    if (residual) {
+        seen = 0;
+        for (size_t r = 0; r < rows; r++) {
+            b->slot[r] = b->anchors[r].gate > 0.0 ? (long)seen : -1;
+            if (b->anchors[r].gate > 0.0 && seen++ != r) memcpy(b->x + 6 * (seen - 1), b->x + 6 * r, 6 * sizeof *b->x);
+        }
+    }
+    mr_status status = seen > 0 ? mr_mlp_predict_kernel(net, b->x, seen, b->y, 1, kernel) : MR_OK;
+    if (status != MR_OK) return status;
+    for (size_t r = 0; r < rows; r++) {
+        unsigned f = b->row_flags[r];
+        double v4[4] = {0.0, 0.0, 0.0, 0.0};
+        if (!residual || b->slot[r] >= 0) {
+            size_t row = residual ? (size_t)b->slot[r] : r;
+            for (int k = 0; k < 4; k++) v4[k] = b->y[4 * row + k];
+        }
+        if (residual) { // the correction to W, gated and made neutral (workflow.h)
+            const mr_wf_residual_anchor *a = &b->anchors[r];
+            double mean = (v4[0] + v4[1] + v4[2]) / 3.0;
+            for (int c = 0; c < 3; c++) v4[c] = a->albedo[c] + a->gate * (mean + a->chroma * (v4[c] - mean));
+            v4[3] = a->metallic + a->gate * v4[3];
+        }
+        for (int k = 0; k < 4; k++) {
+            // Outputs slightly outside [0, 1] are the regressor's normal overshoot, clamped; only non-finite ones
+            // mean it failed (answer 0). Written as selects the compiler turns into min/max rather than branches:
+            // which way a random texel's output falls is a coin toss the branch predictor loses.
+            double v = v4[k], clamped = v < 0.0 ? 0.0 : v;
+            clamped = clamped > 1.0 ? 1.0 : clamped;
+            int finite = isfinite(v) != 0;
+            f |= finite ? 0u : (unsigned)MR_WF_METHOD_FAILED;
+            b->answer[4 * r + k] = finite ? (float)clamped : 0.0f;
+        }
+        b->row_flags[r] = (uint8_t)f;
+    }
+    for (size_t r = 0; r < count; r++) { // every texel gets its row's answer (and its own roughness)
+        size_t i = start + r, row = b->row_of[r];
+        unsigned f = b->row_flags[row];
+        // roughness read before any write: metallic may be the very array roughness came in
+        float roughness = out->roughness ? (float)sanitise_roughness(in->roughness[i], &f) : 0.0f;
+        for (int c = 0; c < 3; c++) out->albedo[3 * i + c] = b->answer[4 * row + c];
+        out->metallic[i] = b->answer[4 * row + 3];
+        if (out->roughness) out->roughness[i] = roughness;
+        if (flags) flags[i] = (uint8_t)f;
+    }
+    return MR_OK;
 }
 
 mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_input *in, size_t n,
@@ -770,89 +1087,45 @@ mr_status mr_wf_spec_to_metal_mlp_batch(const mr_mlp *net, const mr_wf_spec_inpu
         return mr_fail(MR_ERR_INVALID_ARG, "%s: the network's kind '%s' is not a spec -> metal form this build knows "
                        "(plain or " MR_WF_MLP_RESIDUAL_KIND ")", what, net->kind);
     if (n == 0) return MR_OK;
+    // The kernel, resolved here so that a bad MR_MLP_KERNEL fails on the calling thread with its message.
+    mr_mlp_kernel kernel = MR_MLP_KERNEL_AUTO;
+    status = mr_mlp_kernel_auto(&kernel);
+    if (status != MR_OK) return status;
     const mr_wf_options anchor_options = residual_anchor_options();
-    size_t block = n < MLP_BLOCK ? n : MLP_BLOCK;
-    mlp_block b;
-    const int threads = batch_threads(&o, n);
-    if (mlp_block_alloc(block, threads, &b) != MR_OK)
-        return mr_fail(MR_ERR_NOMEM, "%s: out of memory for %zu texels", what, block);
-    const long parts = (long)b.parts;
-    for (size_t start = 0; start < n && status == MR_OK; start += block) {
-        size_t count = n - start < block ? n - start : block;
-        // 1. The distinct values of each part (all of the block's inputs are read here, before any output is
-        //    written: in-place conversion stays correct).
-#pragma omp parallel for schedule(static, 1) num_threads(parts) if (parts > 1)
-        for (long p = 0; p < parts; p++)
-            mlp_dedupe_part(in, &o, residual ? &anchor_options : NULL, start, count, &b, (size_t)p);
-        // 2. The parts' rows made contiguous; distinct[p] becomes the part's offset.
-        size_t rows = 0;
-        for (size_t p = 0; p < b.parts; p++) {
-            size_t lo = part_start(count, b.parts, p), k = b.distinct[p];
-            if (rows != lo) {
-                memmove(b.x + 6 * rows, b.x + 6 * lo, k * 6 * sizeof *b.x);
-                memmove(b.row_flags + rows, b.row_flags + lo, k);
-                if (residual) memmove(b.anchors + rows, b.anchors + lo, k * sizeof *b.anchors);
-            }
-            b.distinct[p] = rows;
-            rows += k;
+    const size_t chunk = n < MLP_CHUNK ? n : MLP_CHUNK, chunks = (n + chunk - 1) / chunk;
+    int threads = batch_threads(&o, n);
+    if ((size_t)threads > chunks) threads = (int)chunks;
+    // One team for the whole batch, no barrier inside it: each thread converts whole chunks on its own (a thread
+    // that the system deschedules holds up no other). A failing chunk (out of memory) stops the others at their
+    // next chunk; its status and message (thread-local: mr_last_error) are carried to the calling thread.
+    mr_status failed = MR_OK;
+    char message[256] = "";
+#pragma omp parallel num_threads(threads) if (threads > 1)
+    {
+        mlp_block b;
+        mr_status mine = mlp_block_alloc(chunk, residual, &b);
+        if (mine != MR_OK) mr_fail(MR_ERR_NOMEM, "%s: out of memory for %zu texels", what, chunk);
+#pragma omp for schedule(dynamic, 1)
+        for (size_t c = 0; c < chunks; c++) {
+            mr_status stop;
+#pragma omp atomic read
+            stop = failed;
+            if (mine != MR_OK || stop != MR_OK) continue;
+            size_t start = c * chunk, count = n - start < chunk ? n - start : chunk;
+            mine = mlp_convert_chunk(net, kernel, in, &o, residual ? &anchor_options : NULL, start, count, out,
+                                     flags, &b);
         }
-        // 3. The network on the distinct rows (residual form: only where the gate is open; the others' answer is
-        //    the anchor, whatever the network says).
-        size_t seen = rows;
-        if (residual) {
-            seen = 0;
-            for (size_t r = 0; r < rows; r++) {
-                b.slot[r] = b.anchors[r].gate > 0.0 ? (long)seen : -1;
-                if (b.anchors[r].gate > 0.0 && seen++ != r) memcpy(b.x + 6 * (seen - 1), b.x + 6 * r, 6 * sizeof *b.x);
+        if (mine != MR_OK) {
+#pragma omp critical(mr_wf_mlp_batch_error)
+            if (failed == MR_OK) {
+                snprintf(message, sizeof message, "%s", mr_last_error());
+#pragma omp atomic write
+                failed = mine;
             }
         }
-        status = seen > 0 ? mr_mlp_predict_threads(net, b.x, seen, b.y, threads) : MR_OK;
-        if (status != MR_OK) break;
-        // 4. Each distinct row's answer.
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1 && rows >= MLP_PARALLEL_ROWS)
-        for (size_t r = 0; r < rows; r++) {
-            unsigned f = b.row_flags[r];
-            double v4[4] = {0.0, 0.0, 0.0, 0.0};
-            if (!residual || b.slot[r] >= 0) {
-                size_t row = residual ? (size_t)b.slot[r] : r;
-                for (int k = 0; k < 4; k++) v4[k] = b.y[4 * row + k];
-            }
-            if (residual) { // the correction to W, gated and made neutral (workflow.h)
-                const mr_wf_residual_anchor *a = &b.anchors[r];
-                double mean = (v4[0] + v4[1] + v4[2]) / 3.0;
-                for (int c = 0; c < 3; c++) v4[c] = a->albedo[c] + a->gate * (mean + a->chroma * (v4[c] - mean));
-                v4[3] = a->metallic + a->gate * v4[3];
-            }
-            for (int k = 0; k < 4; k++) {
-                double v = v4[k];
-                if (!isfinite(v) || v < 0.0 || v > 1.0) {
-                    // Outputs slightly outside [0, 1] are the regressor's normal overshoot; only non-finite
-                    // ones mean it failed.
-                    if (!isfinite(v)) f |= MR_WF_METHOD_FAILED;
-                    v = isfinite(v) ? (v < 0.0 ? 0.0 : 1.0) : 0.0;
-                }
-                b.answer[4 * r + k] = (float)v;
-            }
-            b.row_flags[r] = (uint8_t)f;
-        }
-        // 5. Every texel gets its row's answer (and its own roughness).
-#pragma omp parallel for schedule(static, 1) num_threads(parts) if (parts > 1)
-        for (long p = 0; p < parts; p++) {
-            size_t lo = part_start(count, b.parts, (size_t)p), hi = part_start(count, b.parts, (size_t)p + 1);
-            for (size_t r = lo; r < hi; r++) {
-                size_t i = start + r, row = b.distinct[p] + b.row_of[r];
-                unsigned f = b.row_flags[row];
-                // roughness read before any write: metallic may be the very array roughness came in
-                float roughness = out->roughness ? (float)sanitise_roughness(in->roughness[i], &f) : 0.0f;
-                for (int c = 0; c < 3; c++) out->albedo[3 * i + c] = b.answer[4 * row + c];
-                out->metallic[i] = b.answer[4 * row + 3];
-                if (out->roughness) out->roughness[i] = roughness;
-                if (flags) flags[i] = (uint8_t)f;
-            }
-        }
+        mlp_block_free(&b);
     }
-    mlp_block_free(&b);
-    return status;
+    return failed == MR_OK ? MR_OK : mr_fail(failed, "%s", message);
 }
 
 mr_wf_quantisation mr_wf_quantisation_of(const mr_img_stored *stored, const double *scale) {

@@ -311,13 +311,15 @@ void mr_wf_residual_targets(const float *x, float *y, size_t n);
 /* Specular -> metallic by a trained network (nn/mlp.h: 6 inputs diffuse RGB + specular RGB, 4 outputs albedo RGB
  * + metallic, e.g. data/spec2metal.mlp; read as the residual form above when its kind says so), batched: inputs
  * are sanitised like the other methods' (clamped to [0, 1], non-finite read as 0, flagged), the network runs in
- * blocks (its own OpenMP rows; in the residual form only on texels whose gate is open), outputs are clamped to
+ * chunks of texels (in the residual form only on texels whose gate is open), outputs are clamped to
  * [0, 1] (a non-finite output becomes 0 and sets MR_WF_METHOD_FAILED). OFF_MANIFOLD is not computed (a
  * regressor never reproduces its input exactly). opts: only eps and the roughness pairing matter; may be NULL.
- * Each distinct input value (the bits of its six floats) of a block of texels is converted once and its answer
- * copied to the texels that repeat it (real 8-bit texture sets hold ~5 % distinct values); the answers are the
- * bits of converting every texel alone. Threads: at most OpenMP's count, one per 2048 texels.
- * MR_ERR_INVALID_ARG for a network of another shape; MR_ERR_NOMEM. Deterministic for any thread count. */
+ * Each distinct input value (the bits of its six floats) of a chunk of 32768 texels is converted once and its
+ * answer copied to the texels that repeat it (real 8-bit texture sets hold ~5 % distinct values); the answers are
+ * the bits of converting every texel alone. Threads: the automatic rule (opts->threads, MR_WF_PARALLEL_TEXELS), at
+ * most one per chunk; each thread converts whole chunks (one team per call, no barrier inside it).
+ * MR_ERR_INVALID_ARG for a network of another shape or a bad MR_MLP_KERNEL (nn/mlp.h); MR_ERR_NOMEM.
+ * Deterministic for any thread count. */
 mr_status mr_wf_spec_to_metal_mlp_batch(const struct mr_mlp *net, const mr_wf_spec_input *in, size_t n,
                                         const mr_wf_options *opts, const mr_wf_metal_maps *out, uint8_t *flags);
 
