@@ -12,6 +12,7 @@
 #define MR_BRDF_INTERNAL_H
 
 #include <math.h>
+#include <string.h>
 
 #include "../mr_internal.h"
 #include "brdf.h"
@@ -85,6 +86,46 @@ static inline int mr_brdf_grad_begin(const mr_brdf_model *model, const double *v
     if (!mr_brdf_geom_init(wi, wo, g)) return 0;
     mr_brdf_clamp_values(model, values, v);
     return 1;
+}
+
+/* ---- prepared derivatives of the hand-written models (brdf.h, grad_ops) ---- */
+
+/* Their prepared state: the values as given and clamped, the slots asked for, and whether that is the lobe's shape
+ * parameter alone (`shape_slot`), which the fits' projection asks for at every step and a model's grad_ops eval
+ * computes by itself; any other set of slots is taken from eval_grad (mr_brdf_grad_slots_eval), so the numbers are
+ * eval_grad's either way (tests/test_brdf.c checks them equal). */
+typedef struct mr_brdf_grad_slots {
+    const mr_brdf_model *model;
+    double values[MR_BRDF_MAX_VALUES]; /* as given */
+    double v[MR_BRDF_MAX_VALUES];      /* clamped, as eval_grad clamps them */
+    int slots[MR_BRDF_MAX_VALUES];
+    int count;
+    int shape_only;                    /* count == 1 and slots[0] == the shape slot */
+    double scale;                      /* a model's own prepared factor (Ward: Mitsuba's trimming scale) */
+} mr_brdf_grad_slots;
+
+static inline void mr_brdf_grad_slots_prepare(const mr_brdf_model *model, const double *values, const int *slots,
+                                              int count, int shape_slot, mr_brdf_grad_slots *state) {
+    const int n = mr_brdf_value_count(model);
+    state->model = model;
+    memcpy(state->values, values, (size_t)n * sizeof *values);
+    mr_brdf_clamp_values(model, values, state->v);
+    memcpy(state->slots, slots, (size_t)count * sizeof *slots);
+    state->count = count;
+    state->shape_only = count == 1 && slots[0] == shape_slot;
+    state->scale = 1.0;
+}
+
+/* Any set of slots: eval_grad's numbers, copied out for the slots asked for. */
+static inline void mr_brdf_grad_slots_eval(const mr_brdf_grad_slots *state, const double wi[3], const double wo[3],
+                                           double *d_diffuse, double *d_specular) {
+    double all_d[MR_BRDF_MAX_VALUES * 3], all_s[MR_BRDF_MAX_VALUES * 3];
+    state->model->eval_grad(state->model, state->values, wi, wo, all_d, all_s);
+    for (int k = 0; k < state->count; k++)
+        for (int c = 0; c < 3; c++) {
+            d_diffuse[k * 3 + c] = all_d[state->slots[k] * 3 + c];
+            d_specular[k * 3 + c] = all_s[state->slots[k] * 3 + c];
+        }
 }
 
 /* ---- Mitsuba 0.6 energy trimming (src/librender/bsdf.cpp ensureEnergyConservation; brdf-reference 2.1) ---- */

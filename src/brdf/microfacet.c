@@ -356,6 +356,48 @@ static void mf_eval_grad(const mr_brdf_model *model, const double *values, const
     }
 }
 
+/* Prepared derivatives (brdf.h, grad_ops): alpha alone, which the fits' projection asks for, computed here with
+ * mf_eval_grad's own calls and expressions (rho F d_dg; the diffuse lobe does not depend on alpha); any other slots
+ * by mf_eval_grad itself. */
+static void mf_grad_prepare(const mr_brdf_model *model, const double *values, const int *slots, int count,
+                            void *state) {
+    mr_brdf_grad_slots_prepare(model, values, slots, count, MF_ALPHA, state);
+}
+
+static void mf_grad_eval(const void *state, const double wi[3], const double wo[3], double *d_diffuse,
+                         double *d_specular) {
+    const mr_brdf_grad_slots *st = state;
+    if (!st->shape_only) {
+        mr_brdf_grad_slots_eval(st, wi, wo, d_diffuse, d_specular);
+        return;
+    }
+    const mf_config *config = st->model->config;
+    const double *v = st->v;
+    for (int c = 0; c < 3; c++) d_diffuse[c] = d_specular[c] = 0.0;
+    mr_brdf_geom g;
+    if (!mr_brdf_geom_init(wi, wo, &g)) return;
+    const int spec = mf_spec_slot(config->fresnel);
+    double d_dg;
+    mr_mf_dg(config->dist, v[MF_ALPHA], &g, 1, &d_dg);
+    for (int c = 0; c < 3; c++) {
+        double rho = v[spec + c], F = 1.0, unused, unused2;
+        switch (config->fresnel) {
+        case MF_SCHLICK:
+            F = rho + (1.0 - rho) * mr_schlick_weight(g.dot_h);
+            rho = 1.0;
+            break;
+        case MF_NONE: break;
+        case MF_CONDUCTOR:
+            F = mr_fresnel_conductor(g.dot_h, v[MF_COND_ETA + c], v[MF_COND_K + c], &unused, &unused2);
+            break;
+        default: F = mr_fresnel_dielectric(g.dot_h, v[MF_PLASTIC_IOR], &unused); break;
+        }
+        d_specular[c] = rho * F * d_dg;
+    }
+}
+
+static const mr_brdf_grad_ops mf_grad_ops = {sizeof(mr_brdf_grad_slots), mf_grad_prepare, mf_grad_eval};
+
 static const mf_config mf_configs[MR_MF_DIST_COUNT][4] = {
     {{MR_MF_BECKMANN, MF_SCHLICK}, {MR_MF_BECKMANN, MF_NONE}, {MR_MF_BECKMANN, MF_CONDUCTOR},
      {MR_MF_BECKMANN, MF_PLASTIC}},
@@ -376,6 +418,7 @@ static const mf_config mf_configs[MR_MF_DIST_COUNT][4] = {
         .eval = mf_eval,                                                                                 \
         .eval_batch = mf_eval_batch,                                                                     \
         .eval_grad = mf_eval_grad,                                                                       \
+        .grad_ops = &mf_grad_ops,                                                                        \
     }
 
 #define MF_SRC_PBR "Mitsuba 0.6 microfacet.h + the authors' pbr.cpp (Schlick F0)"

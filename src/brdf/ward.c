@@ -191,6 +191,34 @@ static void ward_eval_grad(const mr_brdf_model *model, const double *values, con
     for (int c = 0; c < 3; c++) d_specular[WARD_ALPHA * 3 + c] = trim.scale * rho_s[c] * dS;
 }
 
+/* Prepared derivatives (brdf.h, grad_ops): alpha alone, which the fits' projection asks for, computed here as
+ * ward_eval_grad computes it (trim.scale rho_s dS); any other slots by ward_eval_grad itself. */
+static void ward_grad_prepare(const mr_brdf_model *model, const double *values, const int *slots, int count,
+                              void *state) {
+    mr_brdf_grad_slots *st = state;
+    mr_brdf_grad_slots_prepare(model, values, slots, count, WARD_ALPHA, st);
+    st->scale = mr_brdf_trim_compute(st->v + WARD_DIFFUSE, st->v + WARD_SPECULAR, st->v[WARD_TRIM] >= 0.5).scale;
+}
+
+static void ward_grad_eval(const void *state, const double wi[3], const double wo[3], double *d_diffuse,
+                           double *d_specular) {
+    const mr_brdf_grad_slots *st = state;
+    if (!st->shape_only) {
+        mr_brdf_grad_slots_eval(st, wi, wo, d_diffuse, d_specular);
+        return;
+    }
+    const ward_variant variant = ((const ward_config *)st->model->config)->variant;
+    mr_brdf_geom g;
+    double dS = 0.0;
+    if (mr_brdf_geom_init(wi, wo, &g)) ward_lobe(variant, st->v[WARD_ALPHA], &g, &dS);
+    for (int c = 0; c < 3; c++) {
+        d_diffuse[c] = 0.0;
+        d_specular[c] = st->scale * st->v[WARD_SPECULAR + c] * dS;
+    }
+}
+
+static const mr_brdf_grad_ops ward_grad_ops = {sizeof(mr_brdf_grad_slots), ward_grad_prepare, ward_grad_eval};
+
 /* Mitsuba trims at these values (brdf.h, rescales). */
 static int ward_rescales(const mr_brdf_model *model, const double *values) {
     return mr_brdf_trim_engaged(model, values, WARD_DIFFUSE, WARD_SPECULAR, WARD_TRIM);
@@ -209,6 +237,7 @@ static int ward_rescales(const mr_brdf_model *model, const double *values) {
         .eval = ward_eval,                                                                               \
         .eval_batch = ward_eval_batch,                                                                   \
         .eval_grad = ward_eval_grad,                                                                     \
+        .grad_ops = &ward_grad_ops,                                                                      \
         .rescales = ward_rescales,                                                                       \
     }
 
