@@ -356,29 +356,31 @@ static MR_ALWAYS_INLINE void projection_sums(const fit_context *ctx, const int P
                                              double H[3][MAX_SLOTS], double S[3][MAX_SLOTS][MAX_SLOTS]) {
     unsigned char diffuse_param[MAX_SLOTS];
     for (int p = 0; p < P; p++) diffuse_param[p] = ctx->model->params[ctx->linear_params[p]].lobe == MR_LOBE_DIFFUSE;
-    double sum = 0.0, h[3][MAX_SLOTS] = {{0}}, g[3][MAX_SLOTS][MAX_SLOTS] = {{{0}}};
     const float *goal = ctx->goal->pixels;
-    for (int i = 0; i < ctx->pixel_count; i++) {
-        const size_t at = (size_t)ctx->pixels[i] * 3;
-        for (int c = 0; c < 3; c++) {
+    double sum[3];
+    // Channel by channel, each sum over the pixels in their order: the sums stay in registers (per pixel and
+    // channel, indexed by the channel, they went through memory: a fifth of a remap).
+    for (int c = 0; c < 3; c++) {
+        double total = 0.0, h[MAX_SLOTS] = {0}, g[MAX_SLOTS][MAX_SLOTS] = {{0}};
+        for (int i = 0; i < ctx->pixel_count; i++) {
+            const size_t at = (size_t)ctx->pixels[i] * 3 + (size_t)c;
             float r[MAX_SLOTS];
-            const float r0 = basis_values(ctx, diffuse_param, P, at + c, r);
-            const double base = r0, residual = (double)goal[at + c] - base;
-            double d[MAX_SLOTS];
-            sum += residual * residual;
+            const float r0 = basis_values(ctx, diffuse_param, P, at, r);
+            const double base = r0, residual = (double)goal[at] - base;
+            total += residual * residual;
             for (int p = 0; p < P; p++) {
-                d[p] = (double)r[p] - base;
-                h[c][p] += d[p] * residual;
-                for (int q = 0; q <= p; q++) g[c][p][q] += d[p] * d[q];
+                const double d = (double)r[p] - base;
+                h[p] += d * residual;
+                for (int q = 0; q <= p; q++) g[p][q] += d * ((double)r[q] - base);
             }
         }
-    }
-    *constant = sum;
-    for (int c = 0; c < 3; c++)
+        sum[c] = total;
         for (int p = 0; p < P; p++) {
-            H[c][p] = h[c][p];
-            for (int q = 0; q <= p; q++) S[c][p][q] = g[c][p][q];
+            H[c][p] = h[p];
+            for (int q = 0; q <= p; q++) S[c][p][q] = g[p][q];
         }
+    }
+    *constant = sum[0] + sum[1] + sum[2];
 }
 
 static double project(fit_context *ctx) {
@@ -530,23 +532,29 @@ static MR_ALWAYS_INLINE void linearise_sums(const fit_context *ctx, const int P,
     unsigned char diffuse_param[MAX_SLOTS];
     for (int p = 0; p < P; p++) diffuse_param[p] = ctx->model->params[ctx->linear_params[p]].lobe == MR_LOBE_DIFFUSE;
     const float *goal = ctx->goal->pixels;
-    for (int i = 0; i < ctx->pixel_count; i++) {
-        const size_t at = (size_t)ctx->pixels[i] * 3;
-        for (int c = 0; c < 3; c++) {
+    for (int c = 0; c < 3; c++) { // channel by channel, as projection_sums: the sums stay in registers
+        double gc[MAX_SLOTS] = {0}, Dc[MAX_SLOTS][MAX_SLOTS] = {{0}}, Tc[MAX_SLOTS][MAX_SLOTS] = {{0}};
+        for (int i = 0; i < ctx->pixel_count; i++) {
+            const size_t at = (size_t)ctx->pixels[i] * 3 + (size_t)c;
             float r[MAX_SLOTS];
-            const float r0 = basis_values(ctx, diffuse_param, P, at + c, r);
-            double column[MAX_SLOTS], residual = (double)goal[at + c] - (double)r0;
+            const float r0 = basis_values(ctx, diffuse_param, P, at, r);
+            double column[MAX_SLOTS], residual = (double)goal[at] - (double)r0;
             for (int p = 0; p < P; p++) {
                 column[p] = (double)r[p] - (double)r0;
                 residual -= w[c][p] * column[p];
             }
             double d[MAX_SLOTS];
             for (int a = 0; a < n; a++) {
-                d[a] = ctx->derivatives[a]->pixels[at + c];
-                g[a] -= 2.0 * residual * d[a];
-                for (int bb = 0; bb <= a; bb++) DtD[a][bb] += d[a] * d[bb];
-                for (int p = 0; p < P; p++) T[c][a][p] += column[p] * d[a];
+                d[a] = ctx->derivatives[a]->pixels[at];
+                gc[a] -= 2.0 * residual * d[a];
+                for (int bb = 0; bb <= a; bb++) Dc[a][bb] += d[a] * d[bb];
+                for (int p = 0; p < P; p++) Tc[a][p] += column[p] * d[a];
             }
+        }
+        for (int a = 0; a < n; a++) {
+            g[a] += gc[a];
+            for (int bb = 0; bb <= a; bb++) DtD[a][bb] += Dc[a][bb];
+            for (int p = 0; p < P; p++) T[c][a][p] = Tc[a][p];
         }
     }
 }
