@@ -133,6 +133,32 @@ static void blender_ward_eval_grad(const mr_brdf_model *model, const double *val
     }
 }
 
+/* Prepared derivatives (brdf.h, grad_ops): the rms slope alone, which the fits' projection asks for, as
+ * blender_ward_eval_grad computes it; any other slots by blender_ward_eval_grad itself. */
+static void blender_ward_grad_prepare(const mr_brdf_model *model, const double *values, const int *slots, int count,
+                                      void *state) {
+    mr_brdf_grad_slots_prepare(model, values, slots, count, BW_RMS, state);
+}
+
+static void blender_ward_grad_eval(const void *state, const double wi[3], const double wo[3], double *d_diffuse,
+                                   double *d_specular) {
+    const mr_brdf_grad_slots *st = state;
+    if (!st->shape_only) {
+        mr_brdf_grad_slots_eval(st, wi, wo, d_diffuse, d_specular);
+        return;
+    }
+    mr_brdf_geom g;
+    double dS = 0.0;
+    if (mr_brdf_geom_init(wi, wo, &g)) blender_ward_lobe(MR_MAX(st->v[BW_RMS], BW_ALPHA_MIN), &g, &dS);
+    for (int c = 0; c < 3; c++) {
+        d_diffuse[c] = 0.0;
+        d_specular[c] = st->v[BW_SPECULAR + c] * dS;
+    }
+}
+
+static const mr_brdf_grad_ops blender_ward_grad_ops = {sizeof(mr_brdf_grad_slots), blender_ward_grad_prepare,
+                                                       blender_ward_grad_eval};
+
 const mr_brdf_model mr_brdf_blender_ward = {
     .name = "blender-ward",
     .summary = "Blender Internal 2.7x WardIso specular + Lambert diffuse (no 1/pi)",
@@ -145,4 +171,5 @@ const mr_brdf_model mr_brdf_blender_ward = {
     .eval = blender_ward_eval,
     .eval_batch = blender_ward_eval_batch,
     .eval_grad = blender_ward_eval_grad,
+    .grad_ops = &blender_ward_grad_ops,
 };
