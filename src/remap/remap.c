@@ -501,8 +501,8 @@ static int render_derivatives(fit_context *ctx, const fitted_slot *const *slots,
         ctx->failure = status;
         return 0;
     }
-    status = mr_render_derivatives_into(ctx->plan, ctx->opts.threads, ctx->model, ctx->base, component,
-                                                  packed, count, ctx->derivatives);
+    status = mr_render_derivatives_into(ctx->plan, ctx->opts.threads, ctx->model, ctx->base, component, packed, count,
+                                        ctx->derivatives);
     ctx->renders++;
     if (status != MR_OK) ctx->failure = status;
     return status == MR_OK;
@@ -515,13 +515,6 @@ static double projected_value(void *data, const double *u) {
     return ctx->failure != MR_OK ? NAN : sse;
 }
 
-/* The gradient and Gauss-Newton matrix of the projected objective at the point project() last solved (ctx->base
- * holds its nonlinear values and their linear solution b). With R(theta, b) the render the projection predicts:
- *   - gradient: dF/dtheta = -2 sum r . dR/dtheta at fixed b, exact at the solution b(theta) (its own derivative
- *     drops out: b minimises F, within its bounds; Golub and Pereyra 1973);
- *   - Gauss-Newton matrix: J^T J with J = -(I - P) dR/dtheta, P the projection onto the solved columns that are
- *     not on a bound (Kaufman 1975), i.e. D^T D - T G^-1 T^T with T = D^T A, G = A^T A (the projection's Gram).
- * One derivative render (every nonlinear slot at once) and one pass over the covered pixels. */
 /* projected_linearise's sums over the covered pixels, per image channel c, basis render p < P and derivative image
  * a < n (constant counts let the compiler keep them in registers, as projection_sums): g[a] = -2 sum r D_a,
  * DtD[a][b] = sum D_a D_b (b <= a), T[c][a][p] = sum over channel c of d_p D_a, with d_p = R_p - R0 and the residual
@@ -559,6 +552,13 @@ static MR_ALWAYS_INLINE void linearise_sums(const fit_context *ctx, const int P,
     }
 }
 
+/* The gradient and Gauss-Newton matrix of the projected objective at the point project() last solved (ctx->base
+ * holds its nonlinear values and their linear solution b). With R(theta, b) the render the projection predicts:
+ *   - gradient: dF/dtheta = -2 sum r . dR/dtheta at fixed b, exact at the solution b(theta) (its own derivative
+ *     drops out: b minimises F, within its bounds; Golub and Pereyra 1973);
+ *   - Gauss-Newton matrix: J^T J with J = -(I - P) dR/dtheta, P the projection onto the solved columns that are
+ *     not on a bound (Kaufman 1975), i.e. D^T D - T G^-1 T^T with T = D^T A, G = A^T A (the projection's Gram).
+ * One derivative render (every nonlinear slot at once) and one pass over the covered pixels. */
 static int projected_linearise(void *data, const double *u, double *gradient, double *gauss_newton) {
     fit_context *ctx = data;
     const int n = ctx->nonlinear_count, P = ctx->linear_param_count, k = ctx->column_count;
