@@ -5,7 +5,6 @@
 
 #include <math.h>
 #include <string.h>
-#include <stdlib.h>
 
 /* lambda scales the diagonal of M (Marquardt's scaling: invariant to each coordinate's units). It starts small, as
  * the fits start near a minimum (a grid point's basin, a warm start), shrinks by LAMBDA_DOWN after a kept step and

@@ -9,7 +9,10 @@
  * the projected Gauss-Newton step of Bertsekas, SIAM J. Control 20(2), 1982), clamps u + d into the box, and is
  * kept if F decreases (then lambda shrinks, and the next step is nearly Gauss-Newton: quadratic convergence for
  * small residuals) or refused (lambda grows: a shorter step towards steepest descent). Moré's safeguards in short
- * (Moré, "The Levenberg-Marquardt algorithm: implementation and theory", 1978).
+ * (Moré, "The Levenberg-Marquardt algorithm: implementation and theory", 1978), with three additions the image fits
+ * need: a symmetric rank-one secant estimate of the residual's own curvature added to M (large residuals, where
+ * Gauss-Newton alone converges linearly: a Ward lobe fitted to a GGX one), steps of at most a quarter of the box,
+ * and one retry of a refused step at the minimum of the parabola along it.
  *
  * It stops when a step would move no coordinate by more than xtol (the same normalised tolerance the derivative-free
  * BOBYQA stage uses), when a step promises or gains no more than F's rounding (`noise`), when lambda grows past any
