@@ -1,6 +1,6 @@
 /*
- * render_support.h — what test_render.c and test_mesh.c share: environment maps made for the tests and image
- * comparison, deterministic random numbers. Included by test files only (static inline: each test binary gets its
+ * render_support.h — what the render and fit tests share: environment maps made for the tests, the fit scene's plan
+ * (point-lit, or lit by a constant environment), image comparison, deterministic random numbers. Included by test files only (static inline: each test binary gets its
  * own copy).
  */
 #ifndef MR_TEST_RENDER_SUPPORT_H
@@ -22,6 +22,30 @@ static inline mr_image *constant_map(int width, int height, int channels, float 
     if (map == NULL) return NULL;
     for (size_t i = 0; i < mr_image_value_count(map); i++) map->pixels[i] = value;
     return map;
+}
+
+/* The default fit scene's plan at `size` (its renders on one thread by the automatic rule). */
+static inline mr_render_plan *fit_scene_plan(int size) {
+    mr_fit_scene_options o = {0};
+    o.size = size;
+    mr_scene scene = mr_scene_fit(&o);
+    mr_render_plan *plan = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    return plan;
+}
+
+/* The fit scene at `size` with its point light replaced by a constant environment of radiance 0.5 (16 samples):
+ * a plan that is not point-lit. */
+static inline mr_render_plan *environment_fit_plan(int size) {
+    mr_image *map = constant_map(8, 4, 3, 0.5f);
+    mr_fit_scene_options o = {0};
+    o.size = size;
+    mr_scene scene = mr_scene_fit(&o);
+    scene.lights[0] = mr_light_environment(map, 1.0, 0.0, 16);
+    mr_render_plan *plan = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    mr_image_free(map); // the plan keeps what it needs of the map
+    return plan;
 }
 
 static inline int same_pixels(const mr_image *a, const mr_image *b) {

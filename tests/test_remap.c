@@ -12,19 +12,10 @@
 #include <sys/stat.h>
 
 #include "harness.h"
+#include "render_support.h"
 #include "matremap.h"
 #include "remap/remap.h"
 
-/* A fit-scene plan (its renders run on one thread by the automatic rule: the remap engine's own choice, no
- * workaround here; the thread-count test asks for counts of its own). */
-static mr_render_plan *fit_plan(int size) {
-    mr_fit_scene_options o = {0};
-    o.size = size;
-    mr_scene scene = mr_scene_fit(&o);
-    mr_render_plan *plan = NULL;
-    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
-    return plan;
-}
 
 /* values[] of `model`: its defaults with the space-separated "name=value" assignments applied. */
 static void material(const mr_brdf_model *model, const char *assignments, double *values) {
@@ -175,7 +166,7 @@ MR_TEST(default_options_are_the_documented_ones) {
     MR_CHECK(o.seed == 1);
     MR_CHECK(o.target_values == NULL);
     // NULL options mean the defaults: the same result as passing them.
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     mr_remap_result a, b;
     MR_CHECK_OK(remap(plan, "ggx", "alpha=0.3 f0=0.05 diffuse=0.4", "ward", NULL, &a));
     MR_CHECK_OK(remap(plan, "ggx", "alpha=0.3 f0=0.05 diffuse=0.4", "ward", &o, &b));
@@ -206,7 +197,7 @@ MR_TEST(self_remap_recovers_the_source_parameters) {
         {"gltf", "base_color=0.9,0.6,0.3 metallic=1 roughness=0.3"},
         {"lambert", "albedo=0.3,0.5,0.7"},
     };
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     mr_remap_options o = options(MR_REMAP_AUTO);
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         const mr_brdf_model *m = mr_brdf_find(cases[k].model);
@@ -258,7 +249,7 @@ MR_TEST(layered_models_remap_to_and_from_gltf_and_cycles_principled) {
         {"blender-principled", "base_color=0.6,0.4,0.2 roughness=0.4", "cycles-principled", 0.99},
         {"blender-principled", "base_color=0.9,0.6,0.3 metallic=1 roughness=0.5", "openpbr", 0.99},
     };
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     mr_remap_options o = options(MR_REMAP_AUTO);
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         mr_remap_result r;
@@ -291,7 +282,7 @@ MR_TEST(metallic_to_specular_matches_the_analytic_conversion) {
         {{0.6, 0.4, 0.2}, 0.5, 0.35},
         {{0.9, 0.7, 0.4}, 1.0, 0.4},
     };
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     const mr_brdf_model *gltf = mr_brdf_find("gltf"), *sg = mr_brdf_find("gltf-specgloss");
     mr_remap_options o = options(MR_REMAP_AUTO);
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
@@ -329,7 +320,7 @@ MR_TEST(metallic_to_specular_matches_the_analytic_conversion) {
  * albedo and metallic it came from (the paper's Eq. 3). */
 MR_TEST(metallic_workflow_round_trip_follows_equation_2) {
     static const double pairs[][2] = {{0.2, 0.0}, {0.8, 0.25}, {0.5, 0.5}, {0.3, 0.75}, {0.9, 1.0}};
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     const mr_brdf_model *gm = mr_brdf_find("ggx-metallic"), *ggx = mr_brdf_find("ggx");
     MR_CHECK(gm != NULL);
     if (gm == NULL) {
@@ -380,7 +371,7 @@ MR_TEST(every_strategy_returns_a_finite_result) {
         {"gltf", "base_color=0.6,0.4,0.2 metallic=0.3 roughness=0.4", "usd-preview"},
         {"gltf", "base_color=0.6,0.4,0.2 metallic=0.3 roughness=0.4", "standard-surface"},
     };
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++)
         for (int s = 0; s < MR_REMAP_STRATEGY_COUNT; s++) {
             mr_remap_options o = options((mr_remap_strategy)s);
@@ -409,7 +400,7 @@ MR_TEST(gradient_and_derivative_free_local_stages_agree) {
         {"gltf", "base_color=0.6,0.4,0.2 metallic=0.3 roughness=0.4", "cycles-principled"},
         {"as", "f0=0.9 alpha=0.05", "ggx-metallic"},
     };
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     long gradient_renders = 0, bobyqa_renders = 0;
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         mr_remap_options o = mr_remap_options_default();
@@ -439,15 +430,7 @@ MR_TEST(gradient_and_derivative_free_local_stages_agree) {
     MR_CHECK_OK(remap(plan, "ggx", "alpha=0.2 f0=0.04 diffuse=0.5", "ward", &o, &r));
     MR_CHECK(r.local_method == MR_LOCAL_GRADIENT);
     // No derivatives of environment-lit renders: gradient is refused, auto falls back to BOBYQA.
-    mr_image *map = NULL;
-    MR_CHECK_OK(mr_image_create(8, 4, 3, &map));
-    for (int i = 0; i < 8 * 4 * 3; i++) map->pixels[i] = 0.5f;
-    mr_fit_scene_options fo = {0};
-    fo.size = 16;
-    mr_scene scene = mr_scene_fit(&fo);
-    scene.lights[0] = mr_light_environment(map, 1.0, 0.0, 16);
-    mr_render_plan *lit = NULL;
-    MR_CHECK_OK(mr_render_plan_create(&scene, &lit));
+    mr_render_plan *lit = environment_fit_plan(16);
     o = mr_remap_options_default();
     o.local_method = MR_LOCAL_GRADIENT;
     MR_CHECK(remap(lit, "ggx", "alpha=0.2 f0=0.04 diffuse=0.5", "ward", &o, &r) == MR_ERR_UNSUPPORTED);
@@ -463,12 +446,11 @@ MR_TEST(gradient_and_derivative_free_local_stages_agree) {
     MR_CHECK_OK(mr_local_method_from_name("gradient", &parsed));
     MR_CHECK(parsed == MR_LOCAL_GRADIENT && strcmp(mr_local_method_name(parsed), "gradient") == 0);
     mr_render_plan_free(lit);
-    mr_image_free(map);
     mr_render_plan_free(plan);
 }
 
 MR_TEST(two_and_three_need_the_component_images) {
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     const mr_brdf_model *ggx = mr_brdf_find("ggx"), *ward = mr_brdf_find("ward");
     double values[MR_BRDF_MAX_VALUES];
     material(ggx, "alpha=0.2 f0=0.04 diffuse=0.5", values);
@@ -524,7 +506,7 @@ MR_TEST(joint_is_never_worse_than_single_and_auto_stays_close) {
         {"as", "alpha=0.1 diffuse=0.5 f0=0.08", "ward"},
         {"as-plastic", "alpha=0.1 diffuse=0.2 ior=1.5", "phong"},
     };
-    mr_render_plan *plan = fit_plan(64);
+    mr_render_plan *plan = fit_scene_plan(64);
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         mr_remap_options a = options(MR_REMAP_AUTO), j = options(MR_REMAP_JOINT), s = options(MR_REMAP_SINGLE);
         mr_remap_result ra, rj, rs;
@@ -552,7 +534,7 @@ MR_TEST(joint_is_never_worse_than_single_and_auto_stays_close) {
  * stops at a broad lobe (measured: relative RMSE 0.14 against 0.0003 for the global search), which the engine
  * reports as a local minimum. From the target's defaults the same fit converges. */
 MR_TEST(a_trapped_single_stage_fit_is_reported_as_a_local_minimum) {
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     const mr_brdf_model *target = mr_brdf_find("ward-balanced");
     double trapping[MR_BRDF_MAX_VALUES], untrimmed[MR_BRDF_MAX_VALUES];
     target_with(target, "trim=0 alpha=1 specular=0", trapping);
@@ -592,7 +574,7 @@ MR_TEST(local_minimum_verdicts_are_backed_by_a_better_fit) {
         {"ggx", "alpha=0.2 f0=1", "ward"},
         {"as-plastic", "alpha=0.1 diffuse=0.2 ior=1.5", "phong"},
     };
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     int unbacked = 0;
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         mr_remap_options a = options(MR_REMAP_AUTO);
@@ -657,7 +639,7 @@ MR_TEST(hard_sources_end_well_defined_under_every_strategy) {
         {"gltf", "base_color=1 metallic=0.5 roughness=0.3", "gltf-specgloss", MR_FIT_AT_BOUND,
          OUT(MR_FIT_AT_BOUND) | OUT(MR_FIT_LOCAL_MINIMUM)},
     };
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++)
         for (int s = 0; s < MR_REMAP_STRATEGY_COUNT; s++) {
             mr_remap_options o = options((mr_remap_strategy)s);
@@ -677,7 +659,7 @@ MR_TEST(hard_sources_end_well_defined_under_every_strategy) {
 }
 
 MR_TEST(roughness_at_its_bounds) {
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     mr_remap_options o = options(MR_REMAP_AUTO);
     const mr_brdf_model *ggx = mr_brdf_find("ggx");
     mr_remap_result r;
@@ -702,7 +684,7 @@ MR_TEST(roughness_at_its_bounds) {
 }
 
 MR_TEST(fresnel_at_zero_and_one) {
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     mr_remap_options o = options(MR_REMAP_AUTO);
     const mr_brdf_model *ggx = mr_brdf_find("ggx"), *ward = mr_brdf_find("ward");
     mr_remap_result r;
@@ -726,7 +708,7 @@ MR_TEST(fresnel_at_zero_and_one) {
 MR_TEST(plastic_ior_towards_one) {
     // At IOR 1 the coating vanishes: no specular reflection, the diffuse base shows unattenuated. The remap must
     // find a pure diffuse material (and may leave the roughness of an absent lobe anywhere).
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     mr_remap_options o = options(MR_REMAP_AUTO);
     const mr_brdf_model *ggx = mr_brdf_find("ggx"), *ward = mr_brdf_find("ward");
     const char *iors[] = {"ior=1 diffuse=0.5", "ior=1.0001 diffuse=0.5"};
@@ -760,7 +742,7 @@ MR_TEST(plastic_ior_towards_one) {
 #define BLACK_RMSE 1e-4
 
 MR_TEST(all_black_sources) {
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     const mr_brdf_model *targets[] = {mr_brdf_find("ggx"), mr_brdf_find("ward")};
     // Through mr_remap (lambert albedo 0) and through mr_remap_images (all-zero images, every strategy).
     mr_image *zero = NULL;
@@ -905,7 +887,7 @@ MR_TEST(glossy_sources_keep_their_reflectance_at_the_default_size) {
 }
 
 MR_TEST(outcomes_say_what_the_scene_shows) {
-    mr_render_plan *plan = fit_plan(MR_REMAP_DEFAULT_SIZE);
+    mr_render_plan *plan = fit_scene_plan(MR_REMAP_DEFAULT_SIZE);
     mr_remap_options o = options(MR_REMAP_AUTO);
     mr_remap_result r;
     const mr_brdf_model *principled = mr_brdf_find("cycles-principled"), *ward = mr_brdf_find("ward");
@@ -948,7 +930,7 @@ MR_TEST(outcomes_say_what_the_scene_shows) {
 }
 
 MR_TEST(unreachable_sources_say_why) {
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     const mr_brdf_model *ward = mr_brdf_find("ward"), *ggx = mr_brdf_find("ggx");
     mr_remap_options o = options(MR_REMAP_AUTO);
     mr_remap_result r;
@@ -988,7 +970,7 @@ MR_TEST(unreachable_sources_say_why) {
  * converged, alpha near the source's 0.1 once the highlight shows. */
 MR_TEST(auto_is_smooth_across_a_dielectric_ior_sweep) {
     enum { STEPS = 16 };
-    mr_render_plan *plan = fit_plan(64);
+    mr_render_plan *plan = fit_scene_plan(64);
     const mr_brdf_model *ward = mr_brdf_find("ward");
     mr_remap_options o = options(MR_REMAP_AUTO);
     double specular[STEPS], steps[STEPS - 1];
@@ -1025,7 +1007,7 @@ MR_TEST(auto_is_smooth_across_a_dielectric_ior_sweep) {
  * specular = 1 (a value pinned by Ward's limit, not by the source). That is unreachable, not converged; the
  * round trip back to AS would otherwise come back 4.7 % low (docs/analyses.md, section 2). */
 MR_TEST(fits_pinned_at_the_trimming_edge_are_unreachable) {
-    mr_render_plan *plan = fit_plan(64);
+    mr_render_plan *plan = fit_scene_plan(64);
     const mr_brdf_model *ward = mr_brdf_find("ward");
     mr_remap_options o = options(MR_REMAP_AUTO);
     mr_remap_result r;
@@ -1051,7 +1033,7 @@ MR_TEST(fits_pinned_at_the_trimming_edge_are_unreachable) {
 /* ---- errors -------------------------------------------------------------------------------------------------- */
 
 MR_TEST(bad_source_images_are_rejected_with_their_sizes_and_pixels) {
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     const mr_brdf_model *ward = mr_brdf_find("ward");
     mr_image *good = NULL, *narrow = NULL, *grey = NULL, *bad = NULL;
     MR_CHECK_OK(mr_image_create(32, 32, 3, &good));
@@ -1097,7 +1079,7 @@ MR_TEST(bad_source_images_are_rejected_with_their_sizes_and_pixels) {
 }
 
 MR_TEST(null_arguments_and_bad_options_are_rejected) {
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     const mr_brdf_model *ggx = mr_brdf_find("ggx"), *ward = mr_brdf_find("ward");
     double values[MR_BRDF_MAX_VALUES];
     mr_brdf_default_values(ggx, values);
@@ -1145,7 +1127,7 @@ MR_TEST(null_arguments_and_bad_options_are_rejected) {
 MR_TEST(work_is_bounded_by_the_options) {
     // A tiny budget still ends with a usable, well-defined fit, within the bound, for every strategy; and the
     // grid and start count are honoured (fewer grid points, fewer renders).
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     const char *targets[] = {"ward", "gltf", "gltf-specgloss", "cycles-principled", "standard-surface"};
     for (int t = 0; t < (int)(sizeof targets / sizeof targets[0]); t++)
         for (int s = 0; s < MR_REMAP_STRATEGY_COUNT; s++) {
@@ -1180,7 +1162,7 @@ MR_TEST(results_are_identical_for_one_and_two_threads) {
         {"as-plastic", "alpha=0.1 ior=1.34 diffuse=0.5", "ward", MR_REMAP_SINGLE},
         {"as-plastic", "alpha=0.1 ior=1.34 diffuse=0.5", "ward", MR_REMAP_THREE},
     };
-    mr_render_plan *plan = fit_plan(48);
+    mr_render_plan *plan = fit_scene_plan(48);
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         mr_remap_options o = options(cases[k].strategy);
         o.max_evaluations = 60; // bit-identity does not need a finished fit; two threads are slow on a busy machine
@@ -1200,7 +1182,7 @@ MR_TEST(results_are_identical_for_one_and_two_threads) {
 }
 
 MR_TEST(fixed_parameters_and_switches_keep_their_given_values) {
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     const mr_brdf_model *gltf = mr_brdf_find("gltf");
     double given[MR_BRDF_MAX_VALUES];
     target_with(gltf, "ior=1.4 specular=0.8 specular_color=1,0.9,0.8", given);
@@ -1238,7 +1220,7 @@ MR_TEST(zeroed_options_are_the_defaults) {
 /* A remap's files: renders read as RGB radiance (a negative value refused, naming the file), and the pictures of
  * --images (source, target, SSIM map) written as a set under the prefix and readable, the source's as it was. */
 MR_TEST(pictures_written_and_readable) {
-    mr_render_plan *plan = fit_plan(16);
+    mr_render_plan *plan = fit_scene_plan(16);
     const mr_brdf_model *ggx = mr_brdf_find("ggx");
     if (plan == NULL || ggx == NULL) return;
     double source_values[MR_BRDF_MAX_VALUES], target_values[MR_BRDF_MAX_VALUES];
@@ -1339,7 +1321,7 @@ MR_TEST(usd_preview_round_trips) {
         {"cycles-principled", "base_color=0.6,0.4,0.2 metallic=0.3 roughness=0.4", "usd-preview", 0.2},
         {"usd-preview", "diffuse_color=0.5,0.3,0.2 metallic=0.2 roughness=0.5", "cycles-principled", 0.1},
     };
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         const mr_brdf_model *s = mr_brdf_find(cases[k].source), *t = mr_brdf_find(cases[k].target);
         MR_CHECK(s != NULL && t != NULL);
@@ -1395,7 +1377,7 @@ MR_TEST(standard_surface_remaps_to_and_from_gltf_and_cycles) {
         {"standard-surface", "base_color=0.9,0.6,0.3 metalness=1 specular_roughness=0.3", "gltf"},
         {"standard-surface", "base_color=0.3,0.5,0.7 specular_roughness=0.5 metalness=0.3", "cycles-principled"},
     };
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     mr_remap_options o = options(MR_REMAP_AUTO);
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         mr_remap_result r;
@@ -1509,7 +1491,7 @@ MR_TEST(ward_remaps_into_the_layered_models_with_their_default_holds) {
                                             "diffuse=0.7 specular=0.02 alpha=0.5",
                                             "diffuse=0.1,0.3,0.6 specular=0.15 alpha=0.2"};
     static const char *const targets[] = {"openpbr", "blender-principled", "standard-surface"};
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     for (size_t t = 0; t < sizeof targets / sizeof targets[0]; t++) {
         const mr_brdf_model *m = mr_brdf_find(targets[t]);
         double given[MR_BRDF_MAX_VALUES];
@@ -1584,7 +1566,7 @@ MR_TEST(default_ties_take_what_the_source_states) {
     MR_CHECK_OK(mr_brdf_parse_assignment(ss, "base_color=0.164,0.006,0.002", v));
     MR_CHECK_OK(mr_brdf_parse_assignment(ss, "specular_roughness=0.2", v));
     MR_CHECK_OK(mr_brdf_parse_assignment(ss, "specular_ior=1.3", v));
-    mr_render_plan *plan = fit_plan(64);
+    mr_render_plan *plan = fit_scene_plan(64);
     mr_remap_options o = options(MR_REMAP_AUTO);
     o.ties = mr_brdf_default_ties(ss, gltf);
     mr_remap_result r;

@@ -10,15 +10,7 @@
 #include "harness.h"
 #include "matremap.h"
 #include "render/render.h"
-
-static mr_render_plan *fit_plan(int size) {
-    mr_fit_scene_options o = {0};
-    o.size = size;
-    mr_scene scene = mr_scene_fit(&o);
-    mr_render_plan *plan = NULL;
-    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
-    return plan;
-}
+#include "render_support.h"
 
 /* Values inside every parameter's range, away from the bounds where clamps put kinks: 30 % .. 70 % of the range
  * (geometric for log-scale parameters), varied per slot so that channels differ. */
@@ -37,7 +29,7 @@ static void interior_values(const mr_brdf_model *m, double *values) {
 }
 
 MR_TEST(derivatives_match_central_differences_for_every_model) {
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     mr_image *d = NULL, *plus = NULL, *minus = NULL;
     MR_CHECK_OK(mr_image_create(32, 32, 3, &d));
     MR_CHECK_OK(mr_image_create(32, 32, 3, &plus));
@@ -94,7 +86,7 @@ MR_TEST(derivatives_match_central_differences_for_every_model) {
 }
 
 MR_TEST(derivative_images_do_not_depend_on_the_thread_count) {
-    mr_render_plan *plan = fit_plan(128);
+    mr_render_plan *plan = fit_scene_plan(128);
     const mr_brdf_model *m = mr_brdf_find("gltf");
     double values[MR_BRDF_MAX_VALUES];
     interior_values(m, values);
@@ -119,7 +111,7 @@ MR_TEST(derivative_images_do_not_depend_on_the_thread_count) {
  * differ) for three slots, at interior values and with the parameters fits hold at their defaults (coat weight 0,
  * whose terms the prepared path skips), on 1 and 2 threads; the prepared images bit for bit the same on both. */
 MR_TEST(prepared_derivatives_render_the_same_images_as_eval_grad) {
-    mr_render_plan *plan = fit_plan(32);
+    mr_render_plan *plan = fit_scene_plan(32);
     mr_image *fast[3], *full[4], *one_thread[3];
     for (int k = 0; k < 4; k++) {
         if (k < 3) MR_CHECK_OK(mr_image_create(32, 32, 3, &fast[k]));
@@ -174,7 +166,7 @@ MR_TEST(prepared_derivatives_render_the_same_images_as_eval_grad) {
 }
 
 MR_TEST(what_cannot_be_differentiated_is_refused) {
-    mr_render_plan *plan = fit_plan(16);
+    mr_render_plan *plan = fit_scene_plan(16);
     mr_image *d = NULL, *wrong = NULL;
     MR_CHECK_OK(mr_image_create(16, 16, 3, &d));
     MR_CHECK_OK(mr_image_create(8, 8, 3, &wrong));
@@ -191,21 +183,12 @@ MR_TEST(what_cannot_be_differentiated_is_refused) {
     MR_CHECK(mr_render_derivatives_into(plan, 1, ward, values, (mr_component)7, &slot, 1, &d) == MR_ERR_INVALID_ARG);
     MR_CHECK(mr_render_plan_point_lit_only(plan));
     // An environment light: its samples are not differentiated (the fits' scenes are point-lit).
-    mr_image *map = NULL;
-    MR_CHECK_OK(mr_image_create(8, 4, 3, &map));
-    for (int i = 0; i < 8 * 4 * 3; i++) map->pixels[i] = 0.5f;
-    mr_fit_scene_options o = {0};
-    o.size = 16;
-    mr_scene scene = mr_scene_fit(&o);
-    scene.lights[0] = mr_light_environment(map, 1.0, 0.0, 16);
-    mr_render_plan *lit = NULL;
-    MR_CHECK_OK(mr_render_plan_create(&scene, &lit));
+    mr_render_plan *lit = environment_fit_plan(16);
     MR_CHECK(!mr_render_plan_point_lit_only(lit));
     MR_CHECK(mr_render_derivatives_into(lit, 1, ward, values, MR_COMPONENT_FULL, &slot, 1, &d) ==
              MR_ERR_UNSUPPORTED);
     MR_CHECK(strstr(mr_last_error(), "point lights only") != NULL);
     mr_render_plan_free(lit);
-    mr_image_free(map);
     mr_image_free(d);
     mr_image_free(wrong);
     mr_render_plan_free(plan);
