@@ -1,7 +1,7 @@
 /*
  * render_support.h — what the render and fit tests share: environment maps made for the tests, the fit scene's plan
- * (point-lit, or lit by a constant environment), image comparison, deterministic random numbers. Included by test files only (static inline: each test binary gets its
- * own copy).
+ * (point-lit, or lit by a constant environment), image comparison, deterministic random numbers. Included by test
+ * files only (static inline: each test binary gets its own copy).
  */
 #ifndef MR_TEST_RENDER_SUPPORT_H
 #define MR_TEST_RENDER_SUPPORT_H
