@@ -388,23 +388,6 @@ static void bp_grad_eval_duals(const bp_grad_prep *p, mr_dual_tape *tp, const mr
     for (int c = 0; c < 3; c++) diffuse[c] = mr_dual_scale(tp, mr_dual_mul(tp, w[c], rho[c]), MR_INV_PI);
 }
 
-static void bp_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3], const double wo[3],
-                         double *d_diffuse, double *d_specular) {
-    mr_brdf_geom g;
-    bp_grad_prep p;
-    if (!mr_brdf_grad_begin(model, values, wi, wo, d_diffuse, d_specular, &g, p.v)) return;
-    int count = mr_brdf_value_count(model);
-    double scratch[MR_DUAL_SCRATCH];
-    mr_dual_tape tape;
-    mr_dual_tape_init(&tape, scratch, MR_DUAL_SCRATCH, MR_DUAL_N);
-    mr_dual_vars(p.v, count, NULL, 0, p.x);
-    p.x[BP_MULTISCATTER] = mr_dual_const(p.v[BP_MULTISCATTER]);
-    bp_grad_prepare_duals(&tape, &p);
-    mr_dual diffuse[3], spec[3];
-    bp_grad_eval_duals(&p, &tape, &g, diffuse, spec);
-    mr_dual_store_grad(diffuse, spec, count, d_diffuse, d_specular);
-}
-
 static void bp_grad_prepare(const mr_brdf_model *model, const double *values, const int *slots, int count,
                             void *state) {
     mr_dual_grad_state *st = state;
@@ -428,6 +411,12 @@ static void bp_grad_eval(const void *state, const double wi[3], const double wo[
 }
 
 static const mr_brdf_grad_ops bp_grad_ops = {sizeof(mr_dual_grad_state), bp_grad_prepare, bp_grad_eval};
+
+/* eval_grad: every slot, through the prepared path (dual.h, mr_dual_eval_grad). */
+static void bp_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3], const double wo[3],
+                         double *d_diffuse, double *d_specular) {
+    mr_dual_eval_grad(&bp_grad_ops, model, values, wi, wo, d_diffuse, d_specular);
+}
 
 _Static_assert(17 <= MR_DUAL_N, "blender-principled's 17 packed values need as many dual slots");
 

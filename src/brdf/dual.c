@@ -58,6 +58,16 @@ void mr_dual_grad_state_begin(const mr_brdf_model *model, const double *values, 
     mr_dual_vars(v, mr_brdf_value_count(model), slots, count, x);
 }
 
+void mr_dual_eval_grad(const mr_brdf_grad_ops *ops, const mr_brdf_model *model, const double *values,
+                       const double wi[3], const double wo[3], double *d_diffuse, double *d_specular) {
+    const int count = mr_brdf_value_count(model);
+    int slots[MR_DUAL_N];
+    for (int j = 0; j < count; j++) slots[j] = j;
+    mr_dual_grad_state state;
+    ops->prepare(model, values, slots, count, &state);
+    ops->eval(&state, wi, wo, d_diffuse, d_specular);
+}
+
 /* The next free row. The number of rows an evaluation takes is fixed by its code (no loop depends on data), far below
  * a tape's capacity; should a change of a model ever exceed it, the last row is reused: memory stays safe and the
  * derivative tests (tests/test_brdf.c) fail on the wrong derivatives instead. */

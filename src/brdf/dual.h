@@ -267,6 +267,12 @@ typedef struct mr_dual_grad_state {
 void mr_dual_grad_state_begin(const mr_brdf_model *model, const double *values, const int *slots, int count,
                               mr_dual_grad_state *st, double *v, mr_dual *x);
 
+/* A layered model's eval_grad: its grad_ops prepared for every slot in order and evaluated at (wi, wo), the state on
+ * the stack (the derivatives of the slots asked for do not depend on which others are asked: test_brdf checks every
+ * subset against this). */
+void mr_dual_eval_grad(const mr_brdf_grad_ops *ops, const mr_brdf_model *model, const double *values,
+                       const double wi[3], const double wo[3], double *d_diffuse, double *d_specular);
+
 /* Common start of a layered model's grad_ops.eval: zeroes the state's count*3 outputs and fills g; 0 below the
  * horizon (the derivatives are then 0, as eval_grad's). */
 static inline int mr_dual_grad_eval_begin(const mr_dual_grad_state *st, const double wi[3], const double wo[3],

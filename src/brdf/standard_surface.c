@@ -327,22 +327,6 @@ static void ss_grad_eval_duals(const ss_grad_prep *p, mr_dual_tape *tp, const mr
     }
 }
 
-static void ss_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3], const double wo[3],
-                         double *d_diffuse, double *d_specular) {
-    mr_brdf_geom g;
-    ss_grad_prep p;
-    if (!mr_brdf_grad_begin(model, values, wi, wo, d_diffuse, d_specular, &g, p.v)) return;
-    int count = mr_brdf_value_count(model);
-    double scratch[MR_DUAL_SCRATCH];
-    mr_dual_tape tape;
-    mr_dual_tape_init(&tape, scratch, MR_DUAL_SCRATCH, MR_DUAL_N);
-    mr_dual_vars(p.v, count, NULL, 0, p.x);
-    ss_grad_prepare_duals(&tape, &p);
-    mr_dual diffuse[3], specular[3];
-    ss_grad_eval_duals(&p, &tape, &g, wi, wo, diffuse, specular);
-    mr_dual_store_grad(diffuse, specular, count, d_diffuse, d_specular);
-}
-
 static void ss_grad_prepare(const mr_brdf_model *model, const double *values, const int *slots, int count,
                             void *state) {
     mr_dual_grad_state *st = state;
@@ -365,6 +349,12 @@ static void ss_grad_eval(const void *state, const double wi[3], const double wo[
 }
 
 static const mr_brdf_grad_ops ss_grad_ops = {sizeof(mr_dual_grad_state), ss_grad_prepare, ss_grad_eval};
+
+/* eval_grad: every slot, through the prepared path (dual.h, mr_dual_eval_grad). */
+static void ss_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3], const double wo[3],
+                         double *d_diffuse, double *d_specular) {
+    mr_dual_eval_grad(&ss_grad_ops, model, values, wi, wo, d_diffuse, d_specular);
+}
 
 _Static_assert(20 <= MR_DUAL_N, "standard-surface's 20 packed values need as many dual slots");
 
