@@ -17,6 +17,14 @@ expect "no source" 1 "exactly one source" -- "$bin" remap --to ggx
 expect "two sources" 1 "exactly one source" -- "$bin" remap --from ggx --from-images a.exr --to ward
 expect "unknown strategy lists valid ones" 1 "valid: auto, single, two, three" -- \
     "$bin" remap --from ggx --to ward --strategy best
+expect "unknown local method lists valid ones" 1 "unknown local method 'newton' \\(valid: auto, gradient, bobyqa\\)" -- \
+    "$bin" remap --from ggx --to ward --local newton
+expect "the local stage the fit ran is reported" 0 '"local_method": "gradient"' -- \
+    "$bin" remap --from ggx alpha=0.2 f0=0.04 diffuse=0.3 --to ward --json
+expect "the paper's strategies keep BOBYQA" 0 "strategy single, local bobyqa" -- \
+    "$bin" remap --from ggx alpha=0.2 f0=0.04 diffuse=0.3 --to ward --strategy single
+expect "bobyqa on request" 0 '"local_method": "bobyqa"' -- \
+    "$bin" remap --from ggx alpha=0.2 f0=0.04 diffuse=0.3 --to ward --local bobyqa --json
 expect "unknown target model" 2 "unknown BRDF model 'wrad'" -- "$bin" remap --from ggx --to wrad
 expect "bad source parameter" 2 "no parameter 'roughness'" -- "$bin" remap --from ggx roughness=0.2 --to ward
 expect "components only with images" 1 "go with --from-images" -- \

@@ -117,6 +117,13 @@ check "--resume with another seed exits 2" [ "$rc" -eq 2 ]
 check "... naming the mismatching line" grep -q "line 6 is '# sampling: random=40 seed=7" "$tmp/seed.err"
 check "... and leaves the file unchanged" cmp -s "$crash" "$tmp/before.csv"
 
+# Another local stage is another sweep (rows fitted by BOBYQA do not continue by gradient steps): refused, untouched.
+"$bin" sweep "${args[@]}" --local bobyqa -o "$crash" --resume 2>"$tmp/local.err"
+rc=$?
+check "--resume with another local method exits 2" [ "$rc" -eq 2 ]
+check "... naming the mismatching line" grep -q "local=auto', this run's is .* local=bobyqa'" "$tmp/local.err"
+check "... and leaves the file unchanged" cmp -s "$crash" "$tmp/before.csv"
+
 # Without --resume an existing file is refused.
 "$bin" sweep "${args[@]}" -o "$crash" 2>"$tmp/exists.err"
 rc=$?
