@@ -73,8 +73,12 @@ DEP_CFLAGS := $(shell $(PKG_CONFIG) --cflags nlopt OpenEXR tinygltf libpng libde
                 2>/dev/null)
 # --as-needed keeps only the libraries the objects use: OpenEXR's .pc lists its C++ libraries as well, of which
 # the library reads and writes through OpenEXRCore alone (each shared library costs start-up time).
-DEP_LIBS   := -Wl,--as-needed $(shell $(PKG_CONFIG) --libs nlopt OpenEXR tinygltf libpng libdeflate tinyobjloader \
-                                    expat 2>/dev/null) -lsvm -lm
+# The C++ libraries (tinygltf, tinyobjloader, libsvm) live in the C++ module (src/cxx_module.c says why): linked
+# into the library only when CXX_MODULE=0, as the fault-injection and fuzzing builds do.
+CXX_MODULE ?= 1
+CXX_DEP_LIBS := $(shell $(PKG_CONFIG) --libs tinygltf tinyobjloader 2>/dev/null) -lsvm
+DEP_LIBS   := -Wl,--as-needed $(shell $(PKG_CONFIG) --libs nlopt OpenEXR libpng libdeflate expat 2>/dev/null) \
+              $(if $(filter 0,$(CXX_MODULE)),$(CXX_DEP_LIBS)) -lm
 
 MODULE_DIR := $(PREFIX)/lib/matremap
 # Where make install puts the Python package: Debian's site directory for PREFIX (PREFIX/lib/python3.X/dist-packages,
@@ -83,7 +87,7 @@ PYTHON_SITE ?= $(PREFIX)/lib/python$(shell /usr/bin/python3 -c 'import sys; prin
                                       2>/dev/null)/dist-packages
 DATA_DIR   := $(PREFIX)/share/matremap
 MR_CPPFLAGS := -D_POSIX_C_SOURCE=200809L -Isrc -I. $(DEP_CFLAGS) -DMR_MODULE_DIR='"$(MODULE_DIR)"' \
-               -DMR_DATA_DIR='"$(DATA_DIR)"'
+               -DMR_DATA_DIR='"$(DATA_DIR)"' -DMR_CXX_MODULE=$(CXX_MODULE)
 MR_CFLAGS   := -std=c11 -pedantic $(WARN) $(SAN) -fopenmp
 MR_CXXFLAGS := -std=c++17 $(WARN) $(SAN) -fopenmp -Isrc -I. $(shell $(PKG_CONFIG) --cflags OpenImageIO 2>/dev/null)
 MR_LDFLAGS  := $(SAN) -fopenmp
@@ -106,8 +110,17 @@ MPI_PC      := $(if $(filter 1,$(MPI)),$(shell $(PKG_CONFIG) --exists mpi-c 2>/d
 MPI_MODULE  := $(if $(MPI_PC),$(BUILD)/lib/matremap/libmatremap-mpi.so)
 MPI_SRC     := src/remap/sweep_mpi_module.c
 
-LIB_C_SRC   := $(filter-out src/cli/% $(MPI_SRC),$(wildcard src/*.c src/*/*.c)) $(wildcard nn/*.c gltf/*.c)
-LIB_CXX_SRC := $(filter-out src/io/image_io_oiio.cpp,$(wildcard src/*/*.cpp)) $(wildcard gltf/*.cpp)
+LIB_C_SRC   := $(filter-out src/cli/% $(MPI_SRC) src/cxx_module_table.c,$(wildcard src/*.c src/*/*.c)) \
+               $(wildcard nn/*.c gltf/*.c)
+# The C++ shims (glTF, OBJ): in the C++ module, or in the library itself when CXX_MODULE=0.
+CXX_SHIM_SRC := $(filter-out src/io/image_io_oiio.cpp,$(wildcard src/*/*.cpp)) $(wildcard gltf/*.cpp)
+LIB_CXX_SRC := $(if $(filter 0,$(CXX_MODULE)),$(CXX_SHIM_SRC))
+# The C++ module: the shims, libsvm's table, and its own copies of the library functions they call (status.c's
+# message is the module's; the forwarders of src/cxx_module.c carry it over).
+CXX_MODULE_LIB := $(if $(filter 0,$(CXX_MODULE)),,$(BUILD)/lib/matremap/libmatremap-cxx.so)
+CXX_MODULE_SRC := $(CXX_SHIM_SRC) src/cxx_module_table.c src/status.c src/io/atomic_file.c src/io/input_file.c \
+                  gltf/material_defaults.c
+CXX_MODULE_OBJ := $(patsubst %,$(BUILD)/pic/%.o,$(basename $(CXX_MODULE_SRC)))
 CLI_SRC     := $(wildcard src/cli/*.c)
 TEST_SRC    := $(wildcard tests/test_*.c)
 BENCH_SRC   := $(wildcard tests/bench_*.c)
@@ -151,7 +164,7 @@ PUBLIC_HEADERS := src/matremap.h src/mr_core.h src/mr_status.h src/mr_image.h sr
 $(BUILD)/obj/src/brdf/%.o $(BUILD)/pic/src/brdf/%.o $(BUILD)/shobj/src/brdf/%.o: MR_CFLAGS += -fno-math-errno -fno-trapping-math
 # Keep test objects between runs (they are intermediate files of the test binaries).
 .SECONDARY:
-all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE) $(MPI_MODULE) $(SHLIB_LINKS)
+all: $(LIB) $(TOOLS) $(TOOL_LINKS) $(NETWORK) $(MODULE) $(CXX_MODULE_LIB) $(MPI_MODULE) $(SHLIB_LINKS)
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
@@ -175,6 +188,10 @@ MODULE_DEFS ?= -Wl,-z,defs
 $(MODULE): $(MODULE_OBJ)
 	@mkdir -p $(dir $@)
 	$(CXX) -shared $(ALL_LDFLAGS) -Wl,-Bsymbolic $(MODULE_DEFS) $^ $(shell $(PKG_CONFIG) --libs OpenImageIO 2>/dev/null) -o $@
+
+$(CXX_MODULE_LIB): $(CXX_MODULE_OBJ)
+	@mkdir -p $(dir $@)
+	$(CXX) -shared $(ALL_LDFLAGS) -Wl,-Bsymbolic $(MODULE_DEFS) $^ $(CXX_DEP_LIBS) -o $@
 
 # The MPI module: plain C against Open MPI's headers and library (what mpicc adds, taken from pkg-config, so that
 # CC and the sanitizers stay the project's).
@@ -209,8 +226,8 @@ $(BUILD)/lib/$(SHLIB_SONAME) $(BUILD)/lib/libmatremap.so: $(SHLIB)
 $(BUILD)/module_dir.stamp: FORCE
 	@mkdir -p $(dir $@)
 	@echo '$(MODULE_DIR) $(DATA_DIR)' | cmp -s - $@ || echo '$(MODULE_DIR) $(DATA_DIR)' > $@
-$(BUILD)/obj/src/io/oiio_module.o $(BUILD)/obj/src/cli/cmd_workflow.o $(BUILD)/obj/src/remap/sweep_mpi.o: \
-    $(BUILD)/module_dir.stamp
+$(BUILD)/obj/src/io/oiio_module.o $(BUILD)/obj/src/cli/cmd_workflow.o $(BUILD)/obj/src/remap/sweep_mpi.o \
+    $(BUILD)/obj/src/cxx_module.o $(BUILD)/shobj/src/cxx_module.o: $(BUILD)/module_dir.stamp
 $(BUILD)/shobj/src/io/oiio_module.o $(BUILD)/shobj/src/remap/sweep_mpi.o $(BUILD)/shobj/src/data_dir.o \
     $(BUILD)/obj/src/data_dir.o: $(BUILD)/module_dir.stamp
 .PHONY: FORCE
@@ -249,6 +266,9 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(LIB)
 	@mkdir -p $(dir $@)
 	$(LINK) $(ALL_LDFLAGS) $< $(LIB) $(ALL_LDLIBS) -o $@
 
+# test_svr checks the SVR trainer's answers against libsvm's own predictions: it calls libsvm itself.
+$(BUILD)/tests/test_svr: ALL_LDLIBS += $(if $(filter 0,$(CXX_MODULE)),,-lsvm)
+
 $(BUILD)/tests/test_fuzz_inputs: $(BUILD)/obj/tests/test_fuzz_inputs.o $(FUZZ_OBJ) $(CLI_LIB_OBJ) $(LIB)
 	@mkdir -p $(dir $@)
 	$(LINK) $(ALL_LDFLAGS) $^ $(ALL_LDLIBS) -o $@
@@ -277,11 +297,11 @@ FUZZ_RUNS    ?= 0
 FUZZ_TARGETS ?=
 FUZZ_FLAGS   := -O1 -g -fno-omit-frame-pointer
 fuzz: all
-	$(MAKE) BUILD=build/fuzz CC=clang CXX=clang++ CFLAGS="$(FUZZ_FLAGS)" CXXFLAGS="$(FUZZ_FLAGS)" MODULE_DEFS= \
+	$(MAKE) BUILD=build/fuzz CC=clang CXX=clang++ CFLAGS="$(FUZZ_FLAGS)" CXXFLAGS="$(FUZZ_FLAGS)" MODULE_DEFS= CXX_MODULE=0 \
 	    SAN="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined" fuzz-targets
 	scripts/fuzz.sh $(BUILD) build/fuzz $(FUZZ_SECONDS) $(FUZZ_RUNS) $(FUZZ_TARGETS)
 
-fuzz-targets: $(FUZZ_NAMES:%=$(BUILD)/bin/fuzz_%) $(MODULE)
+fuzz-targets: $(FUZZ_NAMES:%=$(BUILD)/bin/fuzz_%) $(MODULE) $(CXX_MODULE_LIB)
 
 $(BUILD)/obj/tests/fuzz/libfuzzer_%.o: tests/fuzz/fuzz_%.c
 	@mkdir -p $(dir $@)
@@ -296,7 +316,7 @@ $(BUILD)/bin/fuzz_%: $(BUILD)/obj/tests/fuzz/libfuzzer_%.o $(BUILD)/obj/tests/fu
 FAULT_STEP ?= 1
 FAULT_ONLY ?=
 faults:
-	$(MAKE) BUILD=build/faults FAULTS=1 CFLAGS="-O1 -g -fno-omit-frame-pointer" \
+	$(MAKE) BUILD=build/faults FAULTS=1 CXX_MODULE=0 CFLAGS="-O1 -g -fno-omit-frame-pointer" \
 	    CXXFLAGS="-O1 -g -fno-omit-frame-pointer" SAN="-fsanitize=address,undefined -fno-sanitize-recover=undefined" all
 	scripts/faults.sh build/faults $(FAULT_STEP) $(FAULT_ONLY)
 
@@ -400,10 +420,12 @@ install: all
 	    $(DESTDIR)$(PYTHON_SITE)/matremap/
 	printf '"""Written by make install."""\nLIBDIR = "%s"\n' '$(PREFIX)/lib' > $(DESTDIR)$(PYTHON_SITE)/matremap/_config.py
 	install -d $(DESTDIR)$(MODULE_DIR)
-	install -m 755 $(MODULE) $(MPI_MODULE) $(DESTDIR)$(MODULE_DIR)/
+	install -m 755 $(MODULE) $(CXX_MODULE_LIB) $(MPI_MODULE) $(DESTDIR)$(MODULE_DIR)/
 	for h in $(PUBLIC_HEADERS); do \
 	    d=$(DESTDIR)$(PREFIX)/include/matremap/$$(dirname $${h#src/}); install -d $$d; install -m 644 $$h $$d/; done
 	sed -e 's|@PREFIX@|$(PREFIX)|' -e "s|@VERSION@|$$(sed -n 's/^#define MR_VERSION_STRING \"\(.*\)\"/\1/p' src/mr_core.h)|" \
+	    -e 's|@CXX_REQUIRES@|$(if $(filter 0,$(CXX_MODULE)), tinygltf tinyobjloader)|' \
+	    -e 's|@CXX_LIBS@|$(if $(filter 0,$(CXX_MODULE)), -lstdc++ -lsvm)|' \
 	    scripts/matremap.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/matremap.pc
 
 clean:

@@ -6,11 +6,15 @@
 #include <dlfcn.h>
 #include <limits.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
 #include "mr_internal.h"
 
+#ifndef MR_MODULE_DIR
+#define MR_MODULE_DIR "/usr/local/lib/matremap"
+#endif
 #ifndef MR_DATA_DIR
 #define MR_DATA_DIR "/usr/local/share/matremap"
 #endif
@@ -93,4 +97,42 @@ int mr_module_beside_executable(const char *file, char *out, size_t size) {
     if (!library_dir(lib, sizeof lib)) return 0;
     int n = snprintf(out, size, "%s/matremap/%s", lib, file);
     return n > 0 && (size_t)n < size && access(out, F_OK) == 0;
+}
+
+/* Append `path` followed by `text` to why[size], after "; " when it holds a reason already. */
+static void append_why(char *why, size_t size, const char *text, const char *path) {
+    size_t used = strlen(why);
+    if (used + 1 < size) snprintf(why + used, size - used, "%s%s%s", used ? "; " : "", path, text);
+}
+
+/* dlopen `path` and find `symbol` there; NULL (and why appended) when either fails. */
+static void *open_candidate(const char *path, const char *symbol, void **entry, char *why, size_t size) {
+    void *handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (handle == NULL) {
+        const char *reason = dlerror();
+        append_why(why, size, reason != NULL ? reason : ": cannot be loaded", reason != NULL ? "" : path);
+        return NULL;
+    }
+    *entry = dlsym(handle, symbol);
+    if (*entry == NULL) {
+        append_why(why, size, ": not a matremap module of this kind (no entry point)", path);
+        dlclose(handle);
+        return NULL;
+    }
+    return handle;
+}
+
+void *mr_module_open(const char *file, const char *variable, const char *symbol, void **entry, char *why,
+                     size_t size) {
+    const char *override = getenv(variable);
+    if (override != NULL && override[0] != '\0') return open_candidate(override, symbol, entry, why, size);
+    char candidate[PATH_MAX + 64];
+    void *handle = NULL;
+    if (mr_module_beside_executable(file, candidate, sizeof candidate))
+        handle = open_candidate(candidate, symbol, entry, why, size);
+    if (handle == NULL) {
+        snprintf(candidate, sizeof candidate, "%s/%s", MR_MODULE_DIR, file);
+        handle = open_candidate(candidate, symbol, entry, why, size);
+    }
+    return handle;
 }

@@ -56,6 +56,14 @@ mr_status mr_image_check_values(const mr_image *image, const char *label, int al
  * PREFIX/lib/matremap): its path into out[size] and 1 when that file exists, else 0 (data_dir.c). */
 int mr_module_beside_executable(const char *file, char *out, size_t size);
 
+/* Load the module `file` and find its entry point `symbol`, trying in order: the path in the environment variable
+ * `variable` when it is set (then nothing else: an explicit choice is not second-guessed), the file beside the
+ * executable (mr_module_beside_executable), MR_MODULE_DIR/file (the install directory fixed at build time). Returns
+ * the dlopen handle, *entry set to the symbol's address, or NULL with why each place failed appended to
+ * why[size] ("; " between them). */
+void *mr_module_open(const char *file, const char *variable, const char *symbol, void **entry, char *why,
+                     size_t size);
+
 /* Seconds on the monotonic clock (an arbitrary origin): for durations the library reports. */
 double mr_now_seconds(void);
 

@@ -82,4 +82,19 @@ expect "EXR output does not need the OpenImageIO module" 0 "wrote" -- env MR_OII
 expect "a missing OpenImageIO module is reported" 3 "cannot load the OpenImageIO module.*mod.so" -- \
     env MR_OIIO_MODULE=/nonexistent/mod.so "$bin" ssim "$tmp/x.exr" "$tmp/x.exr"
 
+# So are the C++ libraries (tinygltf, tinyobjloader, libsvm; src/cxx_module.c): a remap never loads them, a glTF
+# command without them is an external failure naming the module, and the tool itself links no C++ runtime (a
+# sanitizer's runtime brings its own: not checked there). Not in a CXX_MODULE=0 build, which links them in.
+if [ -e "$(dirname "$bin")/../lib/matremap/libmatremap-cxx.so" ]; then
+    expect "a remap does not need the C++ module" 0 "outcome: converged" -- env MR_CXX_MODULE=/nonexistent/cxx.so \
+        "$bin" remap --from ggx alpha=0.2 --to ward
+    printf '{"asset": {"version": "2.0"}}\n' > "$tmp/empty.gltf"
+    expect "a missing C++ module is reported" 3 "cannot load matremap's C\+\+ module libmatremap-cxx.so.*cxx.so" -- \
+        env MR_CXX_MODULE=/nonexistent/cxx.so "$bin" gltf spec2metal "$tmp/empty.gltf" -o "$tmp/cxx/out.gltf"
+    check "... and leaves no output" test ! -e "$tmp/cxx/out.gltf"
+    if ! ldd "$bin" | grep -q 'libasan'; then
+        check "the tool links no C++ runtime" sh -c "! ldd '$bin' | grep -q 'libstdc++'"
+    fi
+fi
+
 finish

@@ -555,8 +555,8 @@ int cmd_gltf(int argc, char **argv) {
         }
     const char **inputs = calloc((size_t)argc + 1, sizeof *inputs);
     if (inputs == NULL) {
-        fprintf(stderr, "matremap gltf: out of memory\n");
-        return CLI_EXIT_INTERNAL;
+        mr_clear_error(); // cli_fail says "out of memory"
+        return cli_fail("gltf", MR_ERR_NOMEM);
     }
     int code = gltf_main(argc, argv, inputs);
     free(inputs);

@@ -16,12 +16,9 @@
  * Loading happens once per process (pthread_once); its outcome, success or the reason for failure, is kept.
  */
 #include <dlfcn.h>
-#include <limits.h>
 #include <pthread.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "../mr_internal.h"
 #include "io_internal.h"
@@ -46,44 +43,26 @@ static module_write_fn module_write;
 static module_error_fn module_error;
 static char load_failure[2048]; /* why loading failed; written once inside pthread_once */
 
-static int try_load(const char *path) {
-    void *handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (handle == NULL) {
-        const char *why = dlerror();
-        size_t used = strlen(load_failure);
-        snprintf(load_failure + used, sizeof load_failure - used, "%s%s", used ? "; " : "", why ? why : path);
-        return 0;
-    }
-    // POSIX allows converting dlsym's void * to a function pointer; ISO C does not, hence the memcpy.
-    void *read_sym = dlsym(handle, "mr_oiio_module_read");
+static void load_module(void) {
+    void *read_sym = NULL;
+    void *handle = mr_module_open(MODULE_FILE, "MR_OIIO_MODULE", "mr_oiio_module_read", &read_sym, load_failure,
+                                  sizeof load_failure);
+    if (handle == NULL) return;
     void *read_as_sym = dlsym(handle, "mr_oiio_module_read_as");
     void *read_memory_sym = dlsym(handle, "mr_oiio_module_read_memory");
     void *write_sym = dlsym(handle, "mr_oiio_module_write");
     void *error_sym = dlsym(handle, "mr_oiio_module_last_error");
-    if (read_sym == NULL || read_as_sym == NULL || read_memory_sym == NULL || write_sym == NULL || error_sym == NULL) {
-        size_t used = strlen(load_failure);
-        snprintf(load_failure + used, sizeof load_failure - used, "%s%s: not a matremap image module",
-                 used ? "; " : "", path);
+    if (read_as_sym == NULL || read_memory_sym == NULL || write_sym == NULL || error_sym == NULL) {
+        snprintf(load_failure, sizeof load_failure, "not a matremap image module (an entry point is missing)");
         dlclose(handle);
-        return 0;
+        return;
     }
-    memcpy(&module_read, &read_sym, sizeof read_sym);
+    // POSIX allows converting dlsym's void * to a function pointer; ISO C does not, hence the memcpy.
     memcpy(&module_read_as, &read_as_sym, sizeof read_as_sym);
     memcpy(&module_read_memory, &read_memory_sym, sizeof read_memory_sym);
     memcpy(&module_write, &write_sym, sizeof write_sym);
     memcpy(&module_error, &error_sym, sizeof error_sym);
-    return 1;
-}
-
-static void load_module(void) {
-    const char *override = getenv("MR_OIIO_MODULE");
-    if (override != NULL && override[0] != '\0') {
-        try_load(override); // an explicit choice is not second-guessed by the fallbacks
-        return;
-    }
-    char candidate[PATH_MAX + 64];
-    if (mr_module_beside_executable(MODULE_FILE, candidate, sizeof candidate) && try_load(candidate)) return;
-    try_load(MR_MODULE_DIR "/" MODULE_FILE);
+    memcpy(&module_read, &read_sym, sizeof read_sym); // last: module_read set means loaded
 }
 
 /* `label` names the image the module is loaded for (io_internal.h, "what messages call an image"). */

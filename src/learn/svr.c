@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cxx_module.h"
 #include "mr_internal.h"
 
 #ifdef _OPENMP
@@ -308,6 +309,7 @@ typedef struct trainer {
     int fixed[AXES];           /* 1: the axis is the option's value, not searched */
     double fixed_value[AXES];
     const mr_svr_train_options *opt;
+    const mr_cxx_table *svm;   /* libsvm's functions (cxx_module.h: in the C++ module, loaded on first use) */
     double start;              /* mr_now_seconds() at the call */
 } trainer;
 
@@ -336,7 +338,10 @@ static void libsvm_print(const char *s) {
 /* libsvm's print function is one process-wide pointer: set once, before any of our fits. */
 static pthread_once_t libsvm_print_once = PTHREAD_ONCE_INIT;
 
-static void set_libsvm_print(void) { svm_set_print_string_function(libsvm_print); }
+static void set_libsvm_print(void) {
+    const mr_cxx_table *svm;
+    if (mr_cxx_svm("svr train", &svm) == MR_OK) svm->svm_set_print_string_function(libsvm_print);
+}
 
 /* Mean and population deviation of column `col` of the `stride`-wide rows rows[0 .. count - 1], in row order;
  * deviation 1 for a (near) constant column (svr.h). */
@@ -483,8 +488,8 @@ static struct svm_model *fit(const trainer *t, int k, const double hp[AXES], int
     p.shrinking = 1;
     p.probability = 0;
     fit_iterations = 0;
-    *refused = svm_check_parameter(&prob, &p);
-    return *refused != NULL ? NULL : svm_train(&prob, &p);
+    *refused = t->svm->svm_check_parameter(&prob, &p);
+    return *refused != NULL ? NULL : t->svm->svm_train(&prob, &p);
 }
 
 /* Score a job: fit on `rows`, root mean square error on the validation split (+inf if not finite). */
@@ -501,10 +506,10 @@ static void score(const trainer *t, job *j, int rows) {
     double sse = 0.0;
     for (size_t i = 0; i < t->n_val; i++) {
         const size_t r = t->order[i];
-        const double d = svm_predict(model, t->x_all[r]) - t->v[r * (size_t)t->n_out + (size_t)j->output];
+        const double d = t->svm->svm_predict(model, t->x_all[r]) - t->v[r * (size_t)t->n_out + (size_t)j->output];
         sse += d * d;
     }
-    svm_free_and_destroy_model(&model);
+    t->svm->svm_free_and_destroy_model(&model);
     const double rmse = sqrt(sse / (double)t->n_val);
     if (rmse < INFINITY) j->rmse = rmse; // NaN stays +inf: the worst score
 }
@@ -879,6 +884,8 @@ mr_status mr_svr_train(const double *x, const double *y, size_t n, int n_in, int
 
     trainer t;
     memset(&t, 0, sizeof t);
+    status = mr_cxx_svm("svr train", &t.svm);
+    if (status != MR_OK) return status;
     t.n_in = n_in;
     t.n_out = n_out;
     t.n = n;
@@ -934,7 +941,7 @@ mr_status mr_svr_train(const double *x, const double *y, size_t n, int n_in, int
     if (status == MR_OK) status = copy_models(&t, chosen, grid_rmse, models, &m);
     if (models != NULL)
         for (int k = 0; k < n_out; k++)
-            if (models[k] != NULL) svm_free_and_destroy_model(&models[k]);
+            if (models[k] != NULL) t.svm->svm_free_and_destroy_model(&models[k]);
     if (done != NULL)
         for (int k = 0; k < n_out; k++) {
             free(done[k].t);

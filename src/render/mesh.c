@@ -179,15 +179,6 @@ static void normal_matrix(const double m[16], double out[16]) {
     out[15] = 1.0;
 }
 
-double mr_mesh_corner_angle(const double a[3], const double b[3], const double c[3]) {
-    double u[3], v[3], x[3];
-    vec3_sub(b, a, u);
-    vec3_sub(c, a, v);
-    vec3_cross(u, v, x);
-    double s = vec3_length(x), d = vec3_dot(u, v);
-    return s > 0.0 ? atan2(s, d) : 0.0;
-}
-
 /* Smooth normals: the unit face normals weighted by corner angle, for the vertices with missing[v] set (every
  * vertex when missing is NULL); the others keep theirs. Vertices only in degenerate triangles get +y (no ray
  * ever hits them: a degenerate triangle has no area). */

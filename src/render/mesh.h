@@ -4,13 +4,14 @@
 #ifndef MR_MESH_H
 #define MR_MESH_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 
 #include "render.h"
 
 #ifdef __cplusplus
-extern "C" { /* for mr_mesh_corner_angle, which the OBJ reader (src/io/obj_load.cpp) shares */
+extern "C" {
 #endif
 
 /* A BVH node: an interior node's children are nodes[first] and nodes[first + 1]; a leaf (count > 0) holds
@@ -88,8 +89,14 @@ void mr_mesh_shade(const mesh_world *mesh, const mesh_hit *hit, double normal[3]
                 double bitangent[3], double geometric[3], double uv[2], double uv1[2]);
 
 /* The angle of a triangle's corner at a, between its edges to b and c (0 for a degenerate corner): the weight of
- * a triangle's normal and tangent at that corner, here and in the OBJ reader's smooth normals. */
-double mr_mesh_corner_angle(const double a[3], const double b[3], const double c[3]);
+ * a triangle's normal and tangent at that corner, here and in the OBJ reader's smooth normals (inline: the reader
+ * lives in the C++ module, src/cxx_module.c). */
+static inline double mr_mesh_corner_angle(const double a[3], const double b[3], const double c[3]) {
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const double x[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    const double s = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]), d = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+    return s > 0.0 ? atan2(s, d) : 0.0;
+}
 
 #ifdef __cplusplus
 }
