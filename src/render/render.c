@@ -39,7 +39,8 @@ typedef struct hit_record {
     double tangent[3];
     double bitangent[3];
     double view_local[3]; /* unit direction towards the camera, in the shading frame */
-    double uv[2];         /* sphere texture coordinates or the mesh's TEXCOORD_0 (render.h) */
+    double uv[2];         /* the mesh's TEXCOORD_0 (render.h); unset on a sphere, whose coordinates (sphere_uv)
+                             only the hits a plan keeps need: add_hit computes them */
     double uv1[2];        /* the mesh's TEXCOORD_1; (0, 0) without */
     double geometric[3];  /* meshes: the hit triangle's unit normal (by its winding) */
     int triangle;         /* meshes: the hit triangle; -1 on a sphere */
@@ -287,7 +288,6 @@ static int trace_primary(const tracer *tr, double px, double py, hit_record *hit
     vec3_frame_from_normal(hit->normal, hit->tangent, hit->bitangent);
     double to_camera[3] = {-dir[0], -dir[1], -dir[2]};
     to_local(hit, to_camera, hit->view_local);
-    sphere_uv(hit->normal, hit->uv);
     for (int k = 0; k < 3; k++) hit->geometric[k] = hit->normal[k];
     return 1;
 }
@@ -494,8 +494,12 @@ static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world
     }
     plan_hit *kept = &row->hits[row->hit_count++];
     for (int k = 0; k < 3; k++) kept->view[k] = hit->view_local[k];
-    kept->uv[0] = hit->uv[0];
-    kept->uv[1] = hit->uv[1];
+    if (hit->triangle < 0) { // a sphere: its coordinates are made here, for the hits kept (an atan2 and an acos)
+        sphere_uv(hit->normal, kept->uv);
+    } else {
+        kept->uv[0] = hit->uv[0];
+        kept->uv[1] = hit->uv[1];
+    }
     kept->uv1[0] = hit->uv1[0];
     kept->uv1[1] = hit->uv1[1];
     kept->env_share = share * hit->occlusion;
@@ -657,9 +661,12 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
         const unsigned char *top = corner_hit + (size_t)y * (size_t)(width + 1) + (size_t)x;
         const unsigned char *bottom = top + width + 1;
         hit_record hit;
-        int centre = trace_primary(tr, x + 0.5, y + 0.5, &hit);
-        int corners = top[0] + top[1] + bottom[0] + bottom[1];
-        int n = (corners == 4 * centre) ? 1 : edge_n;
+        const int corners = top[0] + top[1] + bottom[0] + bottom[1];
+        // The centre's hit is used only when all four corners see the object too (n = 1); with corners that
+        // disagree the pixel is on the silhouette whatever the centre sees, and with none it is asked yes or no.
+        const int centre = corners == 4 ? trace_primary(tr, x + 0.5, y + 0.5, &hit)
+                           : corners == 0 ? trace_primary(tr, x + 0.5, y + 0.5, NULL) : 0;
+        const int n = (corners == 4 * centre) ? 1 : edge_n;
         double weight = 1.0 / ((double)n * n);
         size_t first = row->hit_count;
         int hits = 0;
