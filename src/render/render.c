@@ -138,10 +138,18 @@ static void camera_frame_init(const mr_scene *scene, camera_frame *cf) {
 
 /* Unit direction of the ray through image position (px, py), in pixels from the top-left corner of the image
  * ((x + 0.5, y + 0.5) is the centre of pixel (x, y)). */
-static void camera_ray(const camera_frame *cf, double px, double py, double dir[3]) {
-    double u = (2.0 * px / cf->width - 1.0) * cf->tan_half * cf->aspect;
-    double v = (1.0 - 2.0 * py / cf->height) * cf->tan_half;
+static double camera_u(const camera_frame *cf, double px) {
+    return (2.0 * px / cf->width - 1.0) * cf->tan_half * cf->aspect;
+}
+static double camera_v(const camera_frame *cf, double py) { return (1.0 - 2.0 * py / cf->height) * cf->tan_half; }
+
+/* The ray's direction, not normalised, from its image-plane coordinates u = camera_u(px), v = camera_v(py). */
+static void camera_ray_uv(const camera_frame *cf, double u, double v, double dir[3]) {
     for (int k = 0; k < 3; k++) dir[k] = cf->forward[k] + u * cf->right[k] + v * cf->up[k];
+}
+
+static void camera_ray(const camera_frame *cf, double px, double py, double dir[3]) {
+    camera_ray_uv(cf, camera_u(cf, px), camera_v(cf, py), dir);
     vec3_normalize(dir);
 }
 
@@ -161,7 +169,28 @@ typedef struct tracer {
     int highlight_count;                              /* discs around point-light highlights (spheres only) */
     highlight_disc highlights[HIGHLIGHT_MAX_DISCS];
     highlight_quadrature quadrature;                  /* their pixels' samples, made once per plan */
+    /* camera_u of every pixel corner column (x = 0 .. width) and of every pixel centre (x + 0.5): the same values
+     * camera_ray computes, computed once per plan instead of once per ray (a division each) */
+    double *corner_u, *centre_u;
+    /* Spheres: the ray from the camera along d (not normalised) surely misses the sphere if
+     * (d.w)^2 < miss_below |d|^2 or d.w <= 0, w the vector from the camera to the centre (sphere_misses) */
+    double to_centre[3], miss_below;
 } tracer;
+
+/* The angle between the ray and the direction to the sphere's centre exceeds the sphere's angular radius
+ * asin(r / |w|), cos^2 < 1 - r^2/|w|^2, by a margin (a relative 1e-6 on cos^2) that the rounding of the exact
+ * test in intersect_sphere (relative errors near 1e-16) cannot cross: such a ray finds a negative discriminant
+ * there too, so skipping it keeps every answer. Costs no division or square root, which the exact test does. */
+static int sphere_misses(const tracer *tr, const double d[3]) {
+    const double dw = vec3_dot(d, tr->to_centre);
+    return !(dw > 0.0) || dw * dw < tr->miss_below * vec3_dot(d, d);
+}
+
+static void sphere_screen_init(const mr_scene *scene, tracer *tr) {
+    vec3_sub(scene->shape.center, tr->camera.origin, tr->to_centre);
+    const double w2 = vec3_dot(tr->to_centre, tr->to_centre), r = scene->shape.radius;
+    tr->miss_below = (1.0 - 1e-6) * (w2 - r * r);
+}
 
 static void to_local(const hit_record *hit, const double world[3], double local[3]) {
     local[0] = vec3_dot(hit->tangent, world);
@@ -247,13 +276,16 @@ static void apply_surface(const surface_sampler *ss, hit_record *hit, const doub
     for (int c = 0; c < 3; c++) hit->emission[c] = MR_MAX(0.0, surface->emission[c] * texel[c]);
 }
 
-/* Stage 1: the primary ray through image position (px, py). Returns 1 and fills *hit (if not NULL) when it
- * meets the object. The intersector is the place where other shape types (triangle meshes) plug in. */
-static int trace_primary(const tracer *tr, double px, double py, hit_record *hit) {
+/* Stage 1: the primary ray through image-plane coordinates (u, v) (camera_u, camera_v). Returns 1 and fills *hit
+ * (if not NULL) when it meets the object. The intersector is the place where other shape types (triangle meshes)
+ * plug in. */
+static int trace_primary_uv(const tracer *tr, double u, double v, hit_record *hit) {
     const camera_frame *cf = &tr->camera;
     const mesh_world *mesh = tr->mesh;
     double dir[3], t;
-    camera_ray(cf, px, py, dir);
+    camera_ray_uv(cf, u, v, dir);
+    if (tr->scene->shape.type == MR_SHAPE_SPHERE && sphere_misses(tr, dir)) return 0;
+    vec3_normalize(dir);
     if (tr->scene->shape.type == MR_SHAPE_MESH) {
         mesh_hit mh;
         if (!mr_mesh_intersect(mesh, cf->origin, dir, INFINITY, -1, CULL_CAMERA, &mh)) return 0;
@@ -290,6 +322,11 @@ static int trace_primary(const tracer *tr, double px, double py, hit_record *hit
     to_local(hit, to_camera, hit->view_local);
     for (int k = 0; k < 3; k++) hit->geometric[k] = hit->normal[k];
     return 1;
+}
+
+/* trace_primary_uv of the ray through image position (px, py), in pixels from the image's top-left corner. */
+static int trace_primary(const tracer *tr, double px, double py, hit_record *hit) {
+    return trace_primary_uv(tr, camera_u(&tr->camera, px), camera_v(&tr->camera, py), hit);
 }
 
 /* Stage 2 for a point light: the exact contribution I*cos(theta_l)/d^2, no shadow ray (convex object). Returns
@@ -639,6 +676,7 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
         samples = malloc((size_t)mr_highlight_max_samples(tr->highlight_count) * sizeof *samples);
         if (samples == NULL) return 0;
     }
+    const double centre_v = camera_v(&tr->camera, y + 0.5);
     for (int x = 0; x < width; x++) {
         const int pixel = y * width + x;
         const int sample_count =
@@ -664,8 +702,8 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
         const int corners = top[0] + top[1] + bottom[0] + bottom[1];
         // The centre's hit is used only when all four corners see the object too (n = 1); with corners that
         // disagree the pixel is on the silhouette whatever the centre sees, and with none it is asked yes or no.
-        const int centre = corners == 4 ? trace_primary(tr, x + 0.5, y + 0.5, &hit)
-                           : corners == 0 ? trace_primary(tr, x + 0.5, y + 0.5, NULL) : 0;
+        const int centre = corners == 4 ? trace_primary_uv(tr, tr->centre_u[x], centre_v, &hit)
+                           : corners == 0 ? trace_primary_uv(tr, tr->centre_u[x], centre_v, NULL) : 0;
         const int n = (corners == 4 * centre) ? 1 : edge_n;
         double weight = 1.0 / ((double)n * n);
         size_t first = row->hit_count;
@@ -731,12 +769,18 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     tr.scene = scene;
     camera_frame_init(scene, &tr.camera);
     find_highlights(scene, &tr);
+    if (scene->shape.type == MR_SHAPE_SPHERE) sphere_screen_init(scene, &tr);
     surface_sampler *surfaces = NULL;
     mr_render_plan *plan = calloc(1, sizeof *plan);
     unsigned char *corner_hit = malloc((size_t)(width + 1) * (size_t)(height + 1));
     row_result *rows = calloc((size_t)height, sizeof *rows);
+    double *columns_u = malloc((2 * (size_t)width + 1) * sizeof *columns_u);
     int failed = 0;
-    if (plan == NULL || corner_hit == NULL || rows == NULL) goto oom;
+    if (plan == NULL || corner_hit == NULL || rows == NULL || columns_u == NULL) goto oom;
+    tr.corner_u = columns_u;
+    tr.centre_u = columns_u + width + 1;
+    for (int x = 0; x <= width; x++) tr.corner_u[x] = camera_u(&tr.camera, x);
+    for (int x = 0; x < width; x++) tr.centre_u[x] = camera_u(&tr.camera, x + 0.5);
     if (!mr_highlight_quadrature_build(tr.highlights, tr.highlight_count, &tr.quadrature)) goto oom;
     atomic_init(&plan->zoomed, NULL);
     atomic_init(&plan->point_soa, NULL);
@@ -777,10 +821,12 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     const long trace_work = (long)width * height * (scene->shape.type == MR_SHAPE_MESH ? 4 : 1);
     const int plan_threads = mr_auto_threads(scene->threads, trace_work, MR_RENDER_PARALLEL_PIXELS);
 #pragma omp parallel for schedule(static) num_threads(plan_threads) if (plan_threads > 1)
-    for (int y = 0; y <= height; y++)
+    for (int y = 0; y <= height; y++) {
+        const double v = camera_v(&tr.camera, y);
         for (int x = 0; x <= width; x++)
             corner_hit[(size_t)y * (size_t)(width + 1) + (size_t)x] =
-                (unsigned char)trace_primary(&tr, x, y, NULL);
+                (unsigned char)trace_primary_uv(&tr, tr.corner_u[x], v, NULL);
+    }
 
 #pragma omp parallel for schedule(dynamic, 4) reduction(| : failed) num_threads(plan_threads) if (plan_threads > 1)
     for (int y = 0; y < height; y++)
@@ -856,6 +902,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     for (int y = 0; y < height; y++) row_result_free(&rows[y]);
     free(rows);
     free(corner_hit);
+    free(columns_u);
     free(surfaces);
     mr_highlight_quadrature_free(&tr.quadrature);
     *out = plan;
@@ -868,6 +915,7 @@ fail:
         for (int y = 0; y < height; y++) row_result_free(&rows[y]);
     free(rows);
     free(corner_hit);
+    free(columns_u);
     free(surfaces);
     mr_highlight_quadrature_free(&tr.quadrature);
     mr_render_plan_free(plan);
