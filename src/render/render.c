@@ -700,10 +700,12 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
         const unsigned char *bottom = top + width + 1;
         hit_record hit;
         const int corners = top[0] + top[1] + bottom[0] + bottom[1];
-        // The centre's hit is used only when all four corners see the object too (n = 1); with corners that
-        // disagree the pixel is on the silhouette whatever the centre sees, and with none it is asked yes or no.
-        const int centre = corners == 4 ? trace_primary_uv(tr, tr->centre_u[x], centre_v, &hit)
-                           : corners == 0 ? trace_primary_uv(tr, tr->centre_u[x], centre_v, NULL) : 0;
+        // With edge_n > 1 the centre's hit is used only when all four corners see the object too (n = 1); with
+        // corners that disagree the pixel is on the silhouette whatever the centre sees, and with none it is
+        // asked yes or no. With edge_n = 1 the centre is the pixel's one ray in every case.
+        const int centre = corners == 4 || edge_n == 1 ? trace_primary_uv(tr, tr->centre_u[x], centre_v, &hit)
+                           : corners == 0         ? trace_primary_uv(tr, tr->centre_u[x], centre_v, NULL)
+                                                  : 0;
         const int n = (corners == 4 * centre) ? 1 : edge_n;
         double weight = 1.0 / ((double)n * n);
         size_t first = row->hit_count;
