@@ -175,6 +175,7 @@ typedef struct tracer {
     /* Spheres: the ray from the camera along d (not normalised) surely misses the sphere if
      * (d.w)^2 < miss_below |d|^2 or d.w <= 0, w the vector from the camera to the centre (sphere_misses) */
     double to_centre[3], miss_below;
+    int vector_rays; /* spheres on a CPU with AVX2 (and MATREMAP_SIMD not "scalar"): rays four at a time */
 } tracer;
 
 /* The angle between the ray and the direction to the sphere's centre exceeds the sphere's angular radius
@@ -324,9 +325,120 @@ static int trace_primary_uv(const tracer *tr, double u, double v, hit_record *hi
     return 1;
 }
 
-/* trace_primary_uv of the ray through image position (px, py), in pixels from the image's top-left corner. */
-static int trace_primary(const tracer *tr, double px, double py, hit_record *hit) {
-    return trace_primary_uv(tr, camera_u(&tr->camera, px), camera_v(&tr->camera, py), hit);
+
+#if defined(__x86_64__) || defined(__i386__)
+#define MR_RAYS_X86 1
+#include <immintrin.h>
+
+static inline __attribute__((target("avx2"), always_inline)) __m256d dot4(const __m256d a[3], const __m256d b[3]) {
+    return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(a[0], b[0]), _mm256_mul_pd(a[1], b[1])),
+                         _mm256_mul_pd(a[2], b[2]));
+}
+
+/* Normalise the lanes whose length is > 0, as vec3_normalize does each (the same square root and divisions). */
+static inline __attribute__((target("avx2"), always_inline)) void normalize4(__m256d a[3]) {
+    const __m256d len = _mm256_sqrt_pd(dot4(a, a));
+    const __m256d positive = _mm256_cmp_pd(len, _mm256_setzero_pd(), _CMP_GT_OQ);
+    for (int k = 0; k < 3; k++) a[k] = _mm256_blendv_pd(a[k], _mm256_div_pd(a[k], len), positive);
+}
+
+/* trace_primary_uv of four rays on a sphere, lane for lane the same operations in the same order (AVX2 without
+ * FMA: every product and sum rounded as the scalar code, compiled without contraction (ISO C), rounds it; square
+ * roots and divisions are correctly rounded in both), so the same bits: bench_plan --digest checks it against
+ * MATREMAP_SIMD=scalar. found[i] says whether ray i meets the sphere; hits (NULL for yes or no) gets its record. */
+__attribute__((target("avx2"))) static void sphere_rays4(const tracer *tr, const double *u, const double *v,
+                                                         hit_record *hits, int *found) {
+    const camera_frame *cf = &tr->camera;
+    const mr_shape *sphere = &tr->scene->shape;
+    const __m256d U = _mm256_loadu_pd(u), V = _mm256_loadu_pd(v), zero = _mm256_setzero_pd();
+    __m256d d[3], w[3], oc[3];
+    for (int k = 0; k < 3; k++) {
+        const __m256d along_u = _mm256_mul_pd(U, _mm256_set1_pd(cf->right[k]));
+        d[k] = _mm256_add_pd(_mm256_add_pd(_mm256_set1_pd(cf->forward[k]), along_u),
+                             _mm256_mul_pd(V, _mm256_set1_pd(cf->up[k])));
+        w[k] = _mm256_set1_pd(tr->to_centre[k]);
+        oc[k] = _mm256_set1_pd(cf->origin[k] - sphere->center[k]);
+    }
+    // sphere_misses
+    const __m256d dw = dot4(d, w);
+    __m256d missed = _mm256_or_pd(_mm256_cmp_pd(dw, zero, _CMP_NGT_UQ),
+                                  _mm256_cmp_pd(_mm256_mul_pd(dw, dw),
+                                                _mm256_mul_pd(_mm256_set1_pd(tr->miss_below), dot4(d, d)), _CMP_LT_OQ));
+    normalize4(d);
+    // intersect_sphere
+    const double c = (cf->origin[0] - sphere->center[0]) * (cf->origin[0] - sphere->center[0]) +
+                     (cf->origin[1] - sphere->center[1]) * (cf->origin[1] - sphere->center[1]) +
+                     (cf->origin[2] - sphere->center[2]) * (cf->origin[2] - sphere->center[2]) -
+                     sphere->radius * sphere->radius;
+    const __m256d b = dot4(oc, d);
+    const __m256d discriminant = _mm256_sub_pd(_mm256_mul_pd(b, b), _mm256_set1_pd(c));
+    missed = _mm256_or_pd(missed, _mm256_cmp_pd(discriminant, zero, _CMP_LT_OQ));
+    const __m256d t = _mm256_sub_pd(_mm256_sub_pd(zero, b), _mm256_sqrt_pd(discriminant));
+    const __m256d met = _mm256_andnot_pd(missed, _mm256_cmp_pd(t, zero, _CMP_GT_OQ));
+    const int mask = _mm256_movemask_pd(met);
+    for (int i = 0; i < 4; i++) found[i] = (mask >> i) & 1;
+    if (hits == NULL || mask == 0) return;
+    __m256d position[3], n[3], tangent[3], bitangent[3], to_camera[3], view[3];
+    const __m256d sign_bit = _mm256_set1_pd(-0.0);
+    for (int k = 0; k < 3; k++) {
+        position[k] = _mm256_add_pd(_mm256_set1_pd(cf->origin[k]), _mm256_mul_pd(t, d[k]));
+        n[k] = _mm256_div_pd(_mm256_sub_pd(position[k], _mm256_set1_pd(sphere->center[k])),
+                             _mm256_set1_pd(sphere->radius));
+        to_camera[k] = _mm256_xor_pd(d[k], sign_bit);
+    }
+    normalize4(n);
+    // vec3_frame_from_normal
+    const __m256d one = _mm256_set1_pd(1.0);
+    const __m256d sign = _mm256_blendv_pd(_mm256_set1_pd(-1.0), one, _mm256_cmp_pd(n[2], zero, _CMP_GE_OQ));
+    const __m256d a = _mm256_div_pd(_mm256_set1_pd(-1.0), _mm256_add_pd(sign, n[2]));
+    const __m256d cross = _mm256_mul_pd(_mm256_mul_pd(n[0], n[1]), a);
+    tangent[0] = _mm256_add_pd(one, _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(sign, n[0]), n[0]), a));
+    tangent[1] = _mm256_mul_pd(sign, cross);
+    tangent[2] = _mm256_mul_pd(_mm256_xor_pd(sign, sign_bit), n[0]);
+    bitangent[0] = cross;
+    bitangent[1] = _mm256_add_pd(sign, _mm256_mul_pd(_mm256_mul_pd(n[1], n[1]), a));
+    bitangent[2] = _mm256_xor_pd(n[1], sign_bit);
+    view[0] = dot4(tangent, to_camera);
+    view[1] = dot4(bitangent, to_camera);
+    view[2] = dot4(n, to_camera);
+    double lanes[15][4];
+    for (int k = 0; k < 3; k++) {
+        _mm256_storeu_pd(lanes[k], position[k]);
+        _mm256_storeu_pd(lanes[3 + k], n[k]);
+        _mm256_storeu_pd(lanes[6 + k], tangent[k]);
+        _mm256_storeu_pd(lanes[9 + k], bitangent[k]);
+        _mm256_storeu_pd(lanes[12 + k], view[k]);
+    }
+    for (int i = 0; i < 4; i++) {
+        if (!found[i]) continue;
+        hit_record *hit = &hits[i];
+        hit->triangle = -1;
+        hit->material = 0;
+        hit->occlusion = 1.0;
+        hit->uv1[0] = hit->uv1[1] = 0.0;
+        for (int k = 0; k < 3; k++) {
+            hit->emission[k] = 0.0;
+            hit->position[k] = lanes[k][i];
+            hit->normal[k] = hit->geometric[k] = lanes[3 + k][i];
+            hit->tangent[k] = lanes[6 + k][i];
+            hit->bitangent[k] = lanes[9 + k][i];
+            hit->view_local[k] = lanes[12 + k][i];
+        }
+    }
+}
+#else
+#define MR_RAYS_X86 0
+#endif
+
+/* trace_primary_uv of `count` rays (u[i], v[i]): found[i] whether ray i meets the object, hits[i] its record
+ * (hits NULL: yes or no only). Spheres on AVX2, four at a time; the same answers either way. */
+static void trace_rays(const tracer *tr, int count, const double *u, const double *v, hit_record *hits, int *found) {
+    int i = 0;
+#if MR_RAYS_X86
+    if (tr->vector_rays)
+        for (; i + 4 <= count; i += 4) sphere_rays4(tr, u + i, v + i, hits ? hits + i : NULL, found + i);
+#endif
+    for (; i < count; i++) found[i] = trace_primary_uv(tr, u[i], v[i], hits ? &hits[i] : NULL);
 }
 
 /* Stage 2 for a point light: the exact contribution I*cos(theta_l)/d^2, no shadow ray (convex object). Returns
@@ -659,10 +771,43 @@ static void finish_pixel(row_result *row, float *coverage, int pixel, double cov
     }
 }
 
+/* Rays traced together by trace_row: a chunk of a row's pixel centres, or one pixel's sub-pixel rays. */
+#define ROW_RAYS 64
+
+/* Room for a row's rays in flight (trace_row's); one allocation. */
+typedef struct ray_scratch {
+    double *u, *v;
+    int *found;
+    hit_record *hits;
+    highlight_sample *samples; /* a highlight pixel's quadrature (NULL without highlights) */
+    void *block;
+} ray_scratch;
+
+static int ray_scratch_init(const tracer *tr, int edge_n, ray_scratch *rs) {
+    memset(rs, 0, sizeof *rs);
+    const int max_samples = tr->highlight_count > 0 ? mr_highlight_max_samples(tr->highlight_count) : 0;
+    // a chunk's centres, then one pixel's sub-pixel rays or quadrature after them
+    const size_t rays = ROW_RAYS + (size_t)MR_MAX(edge_n * edge_n, max_samples);
+    const size_t hits_bytes = rays * sizeof *rs->hits, uv_bytes = rays * sizeof *rs->u;
+    const size_t samples_bytes = (size_t)max_samples * sizeof *rs->samples;
+    // hit records, then doubles (u, v, samples), then ints: each part's alignment suits the next
+    unsigned char *block = malloc(hits_bytes + 2 * uv_bytes + samples_bytes + rays * sizeof *rs->found);
+    if (block == NULL) return 0;
+    rs->block = block;
+    rs->hits = (hit_record *)block;
+    rs->u = (double *)(block + hits_bytes);
+    rs->v = (double *)(block + hits_bytes + uv_bytes);
+    rs->samples = max_samples > 0 ? (highlight_sample *)(block + hits_bytes + 2 * uv_bytes) : NULL;
+    rs->found = (int *)(block + hits_bytes + 2 * uv_bytes + samples_bytes);
+    return 1;
+}
+
 /* Trace row y: pixels well inside or outside the silhouette (all four corners and the centre agree) get one
  * primary ray through their centre; pixels on the silhouette get n x n rays on a regular sub-pixel grid, each
  * weighted 1/n^2, so they are box-filtered like a path tracer's pixels instead of aliased (docs/design.md
- * principle 2: the extra rays go only where the image has an edge). Returns 0 on allocation failure. */
+ * principle 2: the extra rays go only where the image has an edge). Rays are traced a chunk of pixel centres or
+ * a pixel's sub-pixel rays at a time (trace_rays), their hits added in pixel and ray order. Returns 0 on
+ * allocation failure. */
 static int trace_row(const tracer *tr, const env_table *env, const unsigned char *corner_hit, int edge_n, int y,
                      float *coverage, row_result *row) {
     const mr_scene *scene = tr->scene;
@@ -671,59 +816,98 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
     row->pixels = malloc((size_t)width * sizeof *row->pixels);
     row->hit_counts = malloc((size_t)width * sizeof *row->hit_counts);
     if (row->pixels == NULL || row->hit_counts == NULL) return 0;
-    highlight_sample *samples = NULL;
-    if (tr->highlight_count > 0) {
-        samples = malloc((size_t)mr_highlight_max_samples(tr->highlight_count) * sizeof *samples);
-        if (samples == NULL) return 0;
-    }
+    ray_scratch rs;
+    if (!ray_scratch_init(tr, edge_n, &rs)) return 0;
     const double centre_v = camera_v(&tr->camera, y + 0.5);
-    for (int x = 0; x < width; x++) {
-        const int pixel = y * width + x;
-        const int sample_count =
-            samples ? mr_highlight_quadrature_pixel(&tr->quadrature, x, y, samples) : -1;
-        if (sample_count >= 0) { // around a highlight: the quadrature of highlight.h instead of the centre
-            size_t first = row->hit_count;
-            double covered = 0.0;
-            hit_record hit;
-            for (int k = 0; k < sample_count; k++) {
-                if (!trace_primary(tr, samples[k].x, samples[k].y, &hit)) continue;
-                covered += samples[k].weight;
-                if (!add_hit(scene, env, occluder, &hit, samples[k].weight, row)) {
-                    free(samples);
-                    return 0;
-                }
-            }
-            finish_pixel(row, coverage, pixel, covered, first);
-            continue;
+    const unsigned char *corners_above = corner_hit + (size_t)y * (size_t)(width + 1);
+    const unsigned char *corners_below = corners_above + width + 1;
+    int ok = 1;
+    for (int x0 = 0; x0 < width && ok; x0 += ROW_RAYS) {
+        const int x1 = MR_MIN(width, x0 + ROW_RAYS);
+        // The chunk's centre rays. With edge_n > 1 a centre's hit is used only when all four corners see the
+        // object too (n = 1); with corners that disagree the pixel is on the silhouette whatever the centre
+        // sees, and with none it is asked yes or no. With edge_n = 1 the centre is the pixel's one ray in every
+        // case. Pixels around a highlight take the quadrature of highlight.h instead.
+        int centre[ROW_RAYS], slot[ROW_RAYS], full = 0, asked = 0;
+        for (int x = x0; x < x1; x++) {
+            const int corners = corners_above[x] + corners_above[x + 1] + corners_below[x] + corners_below[x + 1];
+            const int around_highlight =
+                rs.samples != NULL && mr_highlight_touches(tr->quadrature.discs, tr->quadrature.count, x, y);
+            slot[x - x0] = -1;
+            centre[x - x0] = corners; // the corner count, until the centre is known
+            if (around_highlight || (corners > 0 && corners < 4 && edge_n > 1)) continue;
+            if (corners == 4 || edge_n == 1) slot[x - x0] = full++;
         }
-        const unsigned char *top = corner_hit + (size_t)y * (size_t)(width + 1) + (size_t)x;
-        const unsigned char *bottom = top + width + 1;
-        hit_record hit;
-        const int corners = top[0] + top[1] + bottom[0] + bottom[1];
-        // With edge_n > 1 the centre's hit is used only when all four corners see the object too (n = 1); with
-        // corners that disagree the pixel is on the silhouette whatever the centre sees, and with none it is
-        // asked yes or no. With edge_n = 1 the centre is the pixel's one ray in every case.
-        const int centre = corners == 4 || edge_n == 1 ? trace_primary_uv(tr, tr->centre_u[x], centre_v, &hit)
-                           : corners == 0         ? trace_primary_uv(tr, tr->centre_u[x], centre_v, NULL)
-                                                  : 0;
-        const int n = (corners == 4 * centre) ? 1 : edge_n;
-        double weight = 1.0 / ((double)n * n);
-        size_t first = row->hit_count;
-        int hits = 0;
-        for (int j = 0; j < n; j++)
-            for (int i = 0; i < n; i++) {
-                if (n > 1 && !trace_primary(tr, x + (i + 0.5) / n, y + (j + 0.5) / n, &hit)) continue;
-                if (n == 1 && !centre) continue;
-                hits++;
-                if (!add_hit(scene, env, occluder, &hit, weight, row)) {
-                    free(samples);
-                    return 0;
+        for (int x = x0, f = 0; x < x1; x++)
+            if (slot[x - x0] >= 0) {
+                rs.u[f] = tr->centre_u[x];
+                rs.v[f++] = centre_v;
+            }
+        trace_rays(tr, full, rs.u, rs.v, rs.hits, rs.found);
+        int centre_found[ROW_RAYS];
+        for (int x = x0; x < x1; x++) centre_found[x - x0] = slot[x - x0] >= 0 ? rs.found[slot[x - x0]] : 0;
+        // Yes or no: the centres between four corners that miss (edge_n > 1).
+        int asked_pixel[ROW_RAYS];
+        for (int x = x0; x < x1; x++)
+            if (centre[x - x0] == 0 && slot[x - x0] < 0 &&
+                !(rs.samples != NULL && mr_highlight_touches(tr->quadrature.discs, tr->quadrature.count, x, y))) {
+                asked_pixel[asked] = x - x0;
+                rs.u[full + asked] = tr->centre_u[x];
+                rs.v[full + asked++] = centre_v;
+            }
+        trace_rays(tr, asked, rs.u + full, rs.v + full, NULL, rs.found + full);
+        for (int k = 0; k < asked; k++) centre_found[asked_pixel[k]] = rs.found[full + k];
+        hit_record *centre_hits = rs.hits; // kept until the chunk's centre pixels are added
+        for (int x = x0; x < x1 && ok; x++) {
+            const int pixel = y * width + x;
+            const int corners = centre[x - x0];
+            const int sample_count =
+                rs.samples ? mr_highlight_quadrature_pixel(&tr->quadrature, x, y, rs.samples) : -1;
+            if (sample_count >= 0) { // around a highlight
+                // its rays go after the chunk's centre hits, which later pixels of the chunk still need
+                for (int k = 0; k < sample_count; k++) {
+                    rs.u[full + k] = camera_u(&tr->camera, rs.samples[k].x);
+                    rs.v[full + k] = camera_v(&tr->camera, rs.samples[k].y);
+                }
+                trace_rays(tr, sample_count, rs.u + full, rs.v + full, centre_hits + full, rs.found + full);
+                size_t first = row->hit_count;
+                double covered = 0.0;
+                for (int k = 0; k < sample_count && ok; k++) {
+                    if (!rs.found[full + k]) continue;
+                    covered += rs.samples[k].weight;
+                    ok = add_hit(scene, env, occluder, &centre_hits[full + k], rs.samples[k].weight, row);
+                }
+                finish_pixel(row, coverage, pixel, covered, first);
+                continue;
+            }
+            const int seen = centre_found[x - x0];
+            const int n = (corners == 4 * seen) ? 1 : edge_n;
+            const double weight = 1.0 / ((double)n * n);
+            const size_t first = row->hit_count;
+            int hits = 0;
+            if (n == 1) {
+                if (seen) {
+                    hits = 1;
+                    ok = add_hit(scene, env, occluder, &centre_hits[slot[x - x0]], weight, row);
+                }
+            } else {
+                for (int j = 0, r = 0; j < n; j++)
+                    for (int i = 0; i < n; i++, r++) {
+                        rs.u[full + r] = camera_u(&tr->camera, x + (i + 0.5) / n);
+                        rs.v[full + r] = camera_v(&tr->camera, y + (j + 0.5) / n);
+                    }
+                trace_rays(tr, n * n, rs.u + full, rs.v + full, centre_hits + full, rs.found + full);
+                for (int r = 0; r < n * n && ok; r++) {
+                    if (!rs.found[full + r]) continue;
+                    hits++;
+                    ok = add_hit(scene, env, occluder, &centre_hits[full + r], weight, row);
                 }
             }
-        finish_pixel(row, coverage, pixel, hits * weight, first);
+            finish_pixel(row, coverage, pixel, hits * weight, first);
+        }
     }
-    free(samples);
-    return 1;
+    free(rs.block);
+    return ok;
 }
 
 /* The plan's point samples in plan order as structure of arrays, what a batched render reads: sample s is lit from
@@ -771,7 +955,10 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     tr.scene = scene;
     camera_frame_init(scene, &tr.camera);
     find_highlights(scene, &tr);
-    if (scene->shape.type == MR_SHAPE_SPHERE) sphere_screen_init(scene, &tr);
+    if (scene->shape.type == MR_SHAPE_SPHERE) {
+        sphere_screen_init(scene, &tr);
+        tr.vector_rays = MR_RAYS_X86 && mr_brdf_batch_vector_default();
+    }
     surface_sampler *surfaces = NULL;
     mr_render_plan *plan = calloc(1, sizeof *plan);
     unsigned char *corner_hit = malloc((size_t)(width + 1) * (size_t)(height + 1));
@@ -824,10 +1011,15 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     const int plan_threads = mr_auto_threads(scene->threads, trace_work, MR_RENDER_PARALLEL_PIXELS);
 #pragma omp parallel for schedule(static) num_threads(plan_threads) if (plan_threads > 1)
     for (int y = 0; y <= height; y++) {
-        const double v = camera_v(&tr.camera, y);
-        for (int x = 0; x <= width; x++)
-            corner_hit[(size_t)y * (size_t)(width + 1) + (size_t)x] =
-                (unsigned char)trace_primary_uv(&tr, tr.corner_u[x], v, NULL);
+        double v[ROW_RAYS];
+        int found[ROW_RAYS];
+        for (int k = 0; k < ROW_RAYS; k++) v[k] = camera_v(&tr.camera, y);
+        for (int x0 = 0; x0 <= width; x0 += ROW_RAYS) {
+            const int count = MR_MIN(width + 1 - x0, ROW_RAYS);
+            trace_rays(&tr, count, tr.corner_u + x0, v, NULL, found);
+            for (int k = 0; k < count; k++)
+                corner_hit[(size_t)y * (size_t)(width + 1) + (size_t)(x0 + k)] = (unsigned char)found[k];
+        }
     }
 
 #pragma omp parallel for schedule(dynamic, 4) reduction(| : failed) num_threads(plan_threads) if (plan_threads > 1)
