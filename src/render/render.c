@@ -175,7 +175,7 @@ typedef struct tracer {
     /* Spheres: the ray from the camera along d (not normalised) surely misses the sphere if
      * (d.w)^2 < miss_below |d|^2 or d.w <= 0, w the vector from the camera to the centre (sphere_misses) */
     double to_centre[3], miss_below;
-    int vector_rays; /* spheres on a CPU with AVX2 (and MATREMAP_SIMD not "scalar"): rays four at a time */
+    int vector_rays; /* spheres, rays four at a time (mr_plan_rays: AVX2, MATREMAP_SIMD not "scalar") */
 } tracer;
 
 /* The angle between the ray and the direction to the sphere's centre exceeds the sphere's angular radius
@@ -944,6 +944,10 @@ void mr_render_plan_free(mr_render_plan *plan) {
 }
 
 mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
+    return mr_render_plan_create_rays(scene, MR_PLAN_RAYS_AUTO, out);
+}
+
+mr_status mr_render_plan_create_rays(const mr_scene *scene, mr_plan_rays rays, mr_render_plan **out) {
     if (scene == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "render plan: NULL scene or output");
     mr_status status = mr_scene_validate(scene);
     if (status != MR_OK) return status;
@@ -957,7 +961,9 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     find_highlights(scene, &tr);
     if (scene->shape.type == MR_SHAPE_SPHERE) {
         sphere_screen_init(scene, &tr);
-        tr.vector_rays = MR_RAYS_X86 && mr_brdf_batch_vector_default();
+        tr.vector_rays = MR_RAYS_X86 && (rays == MR_PLAN_RAYS_AUTO     ? mr_brdf_batch_vector_default()
+                                         : rays == MR_PLAN_RAYS_VECTOR ? mr_brdf_batch_cpu_vector()
+                                                                       : 0);
     }
     surface_sampler *surfaces = NULL;
     mr_render_plan *plan = calloc(1, sizeof *plan);
