@@ -783,9 +783,22 @@ typedef struct ray_scratch {
     void *block;
 } ray_scratch;
 
+/* The most samples mr_highlight_quadrature_pixel gives any pixel of q: a sample per grid cell at most, and each
+ * disc's samples of the pixel (a bound of the actual quadrature, far below mr_highlight_max_samples'). */
+static int quadrature_max_samples(const highlight_quadrature *q) {
+    int most = HIGHLIGHT_GRID * HIGHLIGHT_GRID;
+    for (int d = 0; d < q->count; d++) {
+        const highlight_disc_pixels *dp = &q->pixels[d];
+        int disc_most = 0;
+        for (int p = 0; p < dp->nx * dp->ny; p++) disc_most = MR_MAX(disc_most, dp->begin[p + 1] - dp->begin[p]);
+        most += disc_most;
+    }
+    return most;
+}
+
 static int ray_scratch_init(const tracer *tr, int edge_n, ray_scratch *rs) {
     memset(rs, 0, sizeof *rs);
-    const int max_samples = tr->highlight_count > 0 ? mr_highlight_max_samples(tr->highlight_count) : 0;
+    const int max_samples = tr->highlight_count > 0 ? quadrature_max_samples(&tr->quadrature) : 0;
     // a chunk's centres, then one pixel's sub-pixel rays or quadrature after them
     const size_t rays = ROW_RAYS + (size_t)MR_MAX(edge_n * edge_n, max_samples);
     const size_t hits_bytes = rays * sizeof *rs->hits, uv_bytes = rays * sizeof *rs->u;
