@@ -834,6 +834,12 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
     const double centre_v = camera_v(&tr->camera, y + 0.5);
     const unsigned char *corners_above = corner_hit + (size_t)y * (size_t)(width + 1);
     const unsigned char *corners_below = corners_above + width + 1;
+    // Can any pixel of the row meet a highlight's disc? Those that do lie in its window (highlight.h).
+    int row_meets_highlight = 0;
+    for (int d = 0; rs.samples != NULL && d < tr->quadrature.count; d++) {
+        const highlight_disc_pixels *dp = &tr->quadrature.pixels[d];
+        row_meets_highlight |= y >= dp->y0 && y < dp->y0 + dp->ny;
+    }
     int ok = 1;
     for (int x0 = 0; x0 < width && ok; x0 += ROW_RAYS) {
         const int x1 = MR_MIN(width, x0 + ROW_RAYS);
@@ -841,14 +847,14 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
         // object too (n = 1); with corners that disagree the pixel is on the silhouette whatever the centre
         // sees, and with none it is asked yes or no. With edge_n = 1 the centre is the pixel's one ray in every
         // case. Pixels around a highlight take the quadrature of highlight.h instead.
-        int centre[ROW_RAYS], slot[ROW_RAYS], full = 0, asked = 0;
+        int centre[ROW_RAYS], slot[ROW_RAYS], around_highlight[ROW_RAYS], full = 0, asked = 0;
         for (int x = x0; x < x1; x++) {
             const int corners = corners_above[x] + corners_above[x + 1] + corners_below[x] + corners_below[x + 1];
-            const int around_highlight =
-                rs.samples != NULL && mr_highlight_touches(tr->quadrature.discs, tr->quadrature.count, x, y);
+            around_highlight[x - x0] =
+                row_meets_highlight && mr_highlight_touches(tr->quadrature.discs, tr->quadrature.count, x, y);
             slot[x - x0] = -1;
             centre[x - x0] = corners; // the corner count, until the centre is known
-            if (around_highlight || (corners > 0 && corners < 4 && edge_n > 1)) continue;
+            if (around_highlight[x - x0] || (corners > 0 && corners < 4 && edge_n > 1)) continue;
             if (corners == 4 || edge_n == 1) slot[x - x0] = full++;
         }
         for (int x = x0, f = 0; x < x1; x++)
@@ -862,8 +868,7 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
         // Yes or no: the centres between four corners that miss (edge_n > 1).
         int asked_pixel[ROW_RAYS];
         for (int x = x0; x < x1; x++)
-            if (centre[x - x0] == 0 && slot[x - x0] < 0 &&
-                !(rs.samples != NULL && mr_highlight_touches(tr->quadrature.discs, tr->quadrature.count, x, y))) {
+            if (centre[x - x0] == 0 && slot[x - x0] < 0 && !around_highlight[x - x0]) {
                 asked_pixel[asked] = x - x0;
                 rs.u[full + asked] = tr->centre_u[x];
                 rs.v[full + asked++] = centre_v;
@@ -875,7 +880,7 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
             const int pixel = y * width + x;
             const int corners = centre[x - x0];
             const int sample_count =
-                rs.samples ? mr_highlight_quadrature_pixel(&tr->quadrature, x, y, rs.samples) : -1;
+                around_highlight[x - x0] ? mr_highlight_quadrature_pixel(&tr->quadrature, x, y, rs.samples) : -1;
             if (sample_count >= 0) { // around a highlight
                 // its rays go after the chunk's centre hits, which later pixels of the chunk still need
                 for (int k = 0; k < sample_count; k++) {
