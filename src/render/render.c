@@ -173,24 +173,29 @@ typedef struct tracer {
      * camera_ray computes, computed once per plan instead of once per ray (a division each) */
     double *corner_u, *centre_u;
     /* Spheres: the ray from the camera along d (not normalised) surely misses the sphere if
-     * (d.w)^2 < miss_below |d|^2 or d.w <= 0, w the vector from the camera to the centre (sphere_misses) */
+     * (d.w)^2 < miss_below |d|^2 or d.w <= 0, w the vector from the camera to the centre (sphere_misses);
+     * screen says whether the test is made */
     double to_centre[3], miss_below;
+    int screen;
     int vector_rays; /* spheres, rays four at a time (mr_plan_rays: AVX2, MATREMAP_SIMD not "scalar") */
 } tracer;
 
-/* The angle between the ray and the direction to the sphere's centre exceeds the sphere's angular radius
- * asin(r / |w|), cos^2 < 1 - r^2/|w|^2, by a margin (a relative 1e-6 on cos^2) that the rounding of the exact
- * test in intersect_sphere (relative errors near 1e-16) cannot cross: such a ray finds a negative discriminant
- * there too, so skipping it keeps every answer. Costs no division or square root, which the exact test does. */
+/* The angle a between the ray and the direction to the sphere's centre exceeds the sphere's angular radius
+ * asin(r / |w|), cos^2 a < 1 - r^2/|w|^2, by a margin (a relative 1e-6 on cos^2): intersect_sphere's
+ * discriminant, r^2 - |w|^2 sin^2 a, is then below -1e-6 (|w|^2 - r^2), and its rounding (a few 1e-16 |w|^2)
+ * cannot lift it to 0 unless the camera grazes the sphere, |w|^2 - r^2 < 1e-6 |w|^2, where no ray is skipped.
+ * So a skipped ray is one the exact test misses too, and every answer is kept. Costs no division or square
+ * root, which the exact test does. */
 static int sphere_misses(const tracer *tr, const double d[3]) {
     const double dw = vec3_dot(d, tr->to_centre);
-    return !(dw > 0.0) || dw * dw < tr->miss_below * vec3_dot(d, d);
+    return tr->screen && (!(dw > 0.0) || dw * dw < tr->miss_below * vec3_dot(d, d));
 }
 
 static void sphere_screen_init(const mr_scene *scene, tracer *tr) {
     vec3_sub(scene->shape.center, tr->camera.origin, tr->to_centre);
     const double w2 = vec3_dot(tr->to_centre, tr->to_centre), r = scene->shape.radius;
     tr->miss_below = (1.0 - 1e-6) * (w2 - r * r);
+    tr->screen = w2 - r * r > 1e-6 * w2;
 }
 
 static void to_local(const hit_record *hit, const double world[3], double local[3]) {
@@ -364,6 +369,7 @@ __attribute__((target("avx2"))) static void sphere_rays4(const tracer *tr, const
     __m256d missed = _mm256_or_pd(_mm256_cmp_pd(dw, zero, _CMP_NGT_UQ),
                                   _mm256_cmp_pd(_mm256_mul_pd(dw, dw),
                                                 _mm256_mul_pd(_mm256_set1_pd(tr->miss_below), dot4(d, d)), _CMP_LT_OQ));
+    if (!tr->screen) missed = zero;
     normalize4(d);
     // intersect_sphere
     const double c = (cf->origin[0] - sphere->center[0]) * (cf->origin[0] - sphere->center[0]) +
