@@ -136,8 +136,8 @@ static void camera_frame_init(const mr_scene *scene, camera_frame *cf) {
     cf->height = scene->height;
 }
 
-/* Unit direction of the ray through image position (px, py), in pixels from the top-left corner of the image
- * ((x + 0.5, y + 0.5) is the centre of pixel (x, y)). */
+/* Image-plane coordinates of image position (px, py), in pixels from the top-left corner of the image
+ * ((x + 0.5, y + 0.5) is the centre of pixel (x, y)): the ray's direction is forward + u right + v up. */
 static double camera_u(const camera_frame *cf, double px) {
     return (2.0 * px / cf->width - 1.0) * cf->tan_half * cf->aspect;
 }
@@ -148,6 +148,7 @@ static void camera_ray_uv(const camera_frame *cf, double u, double v, double dir
     for (int k = 0; k < 3; k++) dir[k] = cf->forward[k] + u * cf->right[k] + v * cf->up[k];
 }
 
+/* Unit direction of the ray through image position (px, py). */
 static void camera_ray(const camera_frame *cf, double px, double py, double dir[3]) {
     camera_ray_uv(cf, camera_u(cf, px), camera_v(cf, py), dir);
     vec3_normalize(dir);
@@ -349,8 +350,9 @@ static inline __attribute__((target("avx2"), always_inline)) void normalize4(__m
 
 /* trace_primary_uv of four rays on a sphere, lane for lane the same operations in the same order (AVX2 without
  * FMA: every product and sum rounded as the scalar code, compiled without contraction (ISO C), rounds it; square
- * roots and divisions are correctly rounded in both), so the same bits: bench_plan --digest checks it against
- * MATREMAP_SIMD=scalar. found[i] says whether ray i meets the sphere; hits (NULL for yes or no) gets its record. */
+ * roots and divisions are correctly rounded in both), so the same bits (test_render's
+ * plan_rays_four_at_a_time_match_one_at_a_time; bench_plan --digest with and without MATREMAP_SIMD=scalar).
+ * found[i] says whether ray i meets the sphere; hits (NULL for yes or no) gets its record. */
 __attribute__((target("avx2"))) static void sphere_rays4(const tracer *tr, const double *u, const double *v,
                                                          hit_record *hits, int *found) {
     const camera_frame *cf = &tr->camera;
