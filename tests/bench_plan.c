@@ -147,8 +147,9 @@ int main(int argc, char **argv) {
     if (digests) {
         mr_scene fit16 = mr_scene_fit(&(mr_fit_scene_options){16, MR_FIT_LIGHT_45, 0});
         mr_scene fit200 = mr_scene_fit(&(mr_fit_scene_options){200, MR_FIT_LIGHT_FRONTAL, 0});
-        mr_scene edges = fit64, centres = fit64;
+        mr_scene edges = fit64, centres = fit64, one_ray = fit64;
         edges.edge_samples = 7;
+        one_ray.edge_samples = 1; // one ray per pixel, the silhouette's too
         centres.highlight_samples = 1;
         digest("fit 64 45", &fit64, 1);
         digest("fit 64 frontal", &frontal64, 1);
@@ -156,6 +157,7 @@ int main(int argc, char **argv) {
         digest("closer 64 frontal", &closer_frontal64, 1);
         digest("fit 16 45", &fit16, 1);
         digest("fit 64 45 edge 7", &edges, 0);
+        digest("fit 64 45 edge 1", &one_ray, 0);
         digest("fit 64 45 centres only", &centres, 0);
         digest("fit 200 frontal", &fit200, 0);
         digest("fit 512 45", &fit512, 0);

@@ -1546,6 +1546,69 @@ MR_TEST(closer_look_plan_is_built_once_and_shared) {
     mr_render_plan_free(plan);
 }
 
+/* A plan's primary rays four at a time (AVX2, render.c sphere_rays4) give the plan of one at a time, bit for bit:
+ * the same coverage, counts and renders (tolerance zero: the lanes do the scalar code's operations, unfused, in its
+ * order), on the fit scene from both lights, its closer look, small and odd sizes (a row's tail traced one at a
+ * time), one edge ray and many, and pixel centres only. Where the CPU lacks AVX2 both plans are the scalar one. */
+MR_TEST(plan_rays_four_at_a_time_match_one_at_a_time) {
+    mr_scene scenes[9];
+    int count = 0;
+    scenes[count++] = mr_scene_fit(&(mr_fit_scene_options){64, MR_FIT_LIGHT_45, 0});
+    scenes[count++] = mr_scene_fit(&(mr_fit_scene_options){64, MR_FIT_LIGHT_FRONTAL, 0});
+    if (mr_scene_zoom_on_highlight(&scenes[0], 8.0, &scenes[count])) count++;
+    scenes[count++] = mr_scene_fit(&(mr_fit_scene_options){16, MR_FIT_LIGHT_45, 0});
+    scenes[count++] = mr_scene_fit(&(mr_fit_scene_options){37, MR_FIT_LIGHT_45, 0});
+    scenes[count] = scenes[0];
+    scenes[count++].edge_samples = 1;
+    scenes[count] = scenes[0];
+    scenes[count++].edge_samples = 7;
+    scenes[count] = scenes[1];
+    scenes[count++].highlight_samples = 1;
+    MR_CHECK(count == 8);
+    const mr_brdf_model *models[3] = {mr_brdf_find("lambert"), mr_brdf_find("ward"), mr_brdf_find("ggx")};
+    for (int s = 0; s < count; s++) {
+        mr_scene *scene = &scenes[s];
+        scene->threads = 1;
+        mr_render_plan *one = NULL, *four = NULL;
+        MR_CHECK_OK(mr_render_plan_create_rays(scene, MR_PLAN_RAYS_SCALAR, &one));
+        MR_CHECK_OK(mr_render_plan_create_rays(scene, MR_PLAN_RAYS_VECTOR, &four));
+        if (one == NULL || four == NULL) {
+            mr_render_plan_free(one);
+            mr_render_plan_free(four);
+            continue;
+        }
+        const size_t pixels = (size_t)scene->width * (size_t)scene->height;
+        MR_CHECK_MSG(mr_render_plan_lit_pixel_count(one) == mr_render_plan_lit_pixel_count(four) &&
+                         mr_render_plan_object_pixel_count(one) == mr_render_plan_object_pixel_count(four) &&
+                         mr_render_plan_sample_count(one) == mr_render_plan_sample_count(four),
+                     "scene %d: lit %d/%d, object %d/%d, samples %ld/%ld", s, mr_render_plan_lit_pixel_count(one),
+                     mr_render_plan_lit_pixel_count(four), mr_render_plan_object_pixel_count(one),
+                     mr_render_plan_object_pixel_count(four), mr_render_plan_sample_count(one),
+                     mr_render_plan_sample_count(four));
+        MR_CHECK_MSG(memcmp(mr_render_plan_coverage(one), mr_render_plan_coverage(four), pixels * sizeof(float)) == 0,
+                     "scene %d: coverage differs", s);
+        for (int m = 0; m < 3; m++) {
+            MR_CHECK(models[m] != NULL);
+            if (models[m] == NULL) continue;
+            double values[MR_BRDF_MAX_VALUES];
+            mr_brdf_default_values(models[m], values);
+            mr_image *a = NULL, *b = NULL;
+            MR_CHECK_OK(mr_image_create(scene->width, scene->height, 3, &a));
+            MR_CHECK_OK(mr_image_create(scene->width, scene->height, 3, &b));
+            if (a != NULL && b != NULL) {
+                MR_CHECK_OK(mr_render_into_threads(one, 1, models[m], values, MR_COMPONENT_FULL, a));
+                MR_CHECK_OK(mr_render_into_threads(four, 1, models[m], values, MR_COMPONENT_FULL, b));
+                MR_CHECK_MSG(memcmp(a->pixels, b->pixels, 3 * pixels * sizeof(float)) == 0,
+                             "scene %d, %s: the renders differ", s, models[m]->name);
+            }
+            mr_image_free(a);
+            mr_image_free(b);
+        }
+        mr_render_plan_free(one);
+        mr_render_plan_free(four);
+    }
+}
+
 /* mr_image_scale (render's --exposure, remap's irradiance scale): every value, alpha included, times the factor
  * and rounded to float once; NULL does nothing. */
 MR_TEST(image_scale_multiplies_every_value_once) {
@@ -1603,6 +1666,7 @@ MR_TEST_MAIN(MR_TEST_ENTRY(lambert_sphere_matches_point_light_formula),
              MR_TEST_ENTRY(image_scale_multiplies_every_value_once),
              MR_TEST_ENTRY(texels_that_are_no_values_are_read_as_documented),
              MR_TEST_ENTRY(closer_look_plan_is_built_once_and_shared),
+             MR_TEST_ENTRY(plan_rays_four_at_a_time_match_one_at_a_time),
              MR_TEST_ENTRY(highlight_quadrature_shares_each_pixel_exactly),
              MR_TEST_ENTRY(highlight_quadrature_made_once_matches_pixel_by_pixel),
              MR_TEST_ENTRY(narrow_highlights_keep_their_energy),

@@ -39,7 +39,8 @@ typedef struct hit_record {
     double tangent[3];
     double bitangent[3];
     double view_local[3]; /* unit direction towards the camera, in the shading frame */
-    double uv[2];         /* sphere texture coordinates or the mesh's TEXCOORD_0 (render.h) */
+    double uv[2];         /* the mesh's TEXCOORD_0 (render.h); unset on a sphere, whose coordinates (sphere_uv)
+                             only the hits a plan keeps need: add_hit computes them */
     double uv1[2];        /* the mesh's TEXCOORD_1; (0, 0) without */
     double geometric[3];  /* meshes: the hit triangle's unit normal (by its winding) */
     int triangle;         /* meshes: the hit triangle; -1 on a sphere */
@@ -135,12 +136,21 @@ static void camera_frame_init(const mr_scene *scene, camera_frame *cf) {
     cf->height = scene->height;
 }
 
-/* Unit direction of the ray through image position (px, py), in pixels from the top-left corner of the image
- * ((x + 0.5, y + 0.5) is the centre of pixel (x, y)). */
-static void camera_ray(const camera_frame *cf, double px, double py, double dir[3]) {
-    double u = (2.0 * px / cf->width - 1.0) * cf->tan_half * cf->aspect;
-    double v = (1.0 - 2.0 * py / cf->height) * cf->tan_half;
+/* Image-plane coordinates of image position (px, py), in pixels from the top-left corner of the image
+ * ((x + 0.5, y + 0.5) is the centre of pixel (x, y)): the ray's direction is forward + u right + v up. */
+static double camera_u(const camera_frame *cf, double px) {
+    return (2.0 * px / cf->width - 1.0) * cf->tan_half * cf->aspect;
+}
+static double camera_v(const camera_frame *cf, double py) { return (1.0 - 2.0 * py / cf->height) * cf->tan_half; }
+
+/* The ray's direction, not normalised, from its image-plane coordinates u = camera_u(px), v = camera_v(py). */
+static void camera_ray_uv(const camera_frame *cf, double u, double v, double dir[3]) {
     for (int k = 0; k < 3; k++) dir[k] = cf->forward[k] + u * cf->right[k] + v * cf->up[k];
+}
+
+/* Unit direction of the ray through image position (px, py). */
+static void camera_ray(const camera_frame *cf, double px, double py, double dir[3]) {
+    camera_ray_uv(cf, camera_u(cf, px), camera_v(cf, py), dir);
     vec3_normalize(dir);
 }
 
@@ -160,7 +170,34 @@ typedef struct tracer {
     int highlight_count;                              /* discs around point-light highlights (spheres only) */
     highlight_disc highlights[HIGHLIGHT_MAX_DISCS];
     highlight_quadrature quadrature;                  /* their pixels' samples, made once per plan */
+    /* camera_u of every pixel corner column (x = 0 .. width) and of every pixel centre (x + 0.5): the same values
+     * camera_ray computes, computed once per plan instead of once per ray (a division each) */
+    double *corner_u, *centre_u;
+    /* Spheres: the ray from the camera along d (not normalised) surely misses the sphere if
+     * (d.w)^2 < miss_below |d|^2 or d.w <= 0, w the vector from the camera to the centre (sphere_misses);
+     * screen says whether the test is made */
+    double to_centre[3], miss_below;
+    int screen;
+    int vector_rays; /* spheres, rays four at a time (mr_plan_rays: AVX2, MATREMAP_SIMD not "scalar") */
 } tracer;
+
+/* The angle a between the ray and the direction to the sphere's centre exceeds the sphere's angular radius
+ * asin(r / |w|), cos^2 a < 1 - r^2/|w|^2, by a margin (a relative 1e-6 on cos^2): intersect_sphere's
+ * discriminant, r^2 - |w|^2 sin^2 a, is then below -1e-6 (|w|^2 - r^2), and its rounding (a few 1e-16 |w|^2)
+ * cannot lift it to 0 unless the camera grazes the sphere, |w|^2 - r^2 < 1e-6 |w|^2, where no ray is skipped.
+ * So a skipped ray is one the exact test misses too, and every answer is kept. Costs no division or square
+ * root, which the exact test does. */
+static int sphere_misses(const tracer *tr, const double d[3]) {
+    const double dw = vec3_dot(d, tr->to_centre);
+    return tr->screen && (!(dw > 0.0) || dw * dw < tr->miss_below * vec3_dot(d, d));
+}
+
+static void sphere_screen_init(const mr_scene *scene, tracer *tr) {
+    vec3_sub(scene->shape.center, tr->camera.origin, tr->to_centre);
+    const double w2 = vec3_dot(tr->to_centre, tr->to_centre), r = scene->shape.radius;
+    tr->miss_below = (1.0 - 1e-6) * (w2 - r * r);
+    tr->screen = w2 - r * r > 1e-6 * w2;
+}
 
 static void to_local(const hit_record *hit, const double world[3], double local[3]) {
     local[0] = vec3_dot(hit->tangent, world);
@@ -246,13 +283,16 @@ static void apply_surface(const surface_sampler *ss, hit_record *hit, const doub
     for (int c = 0; c < 3; c++) hit->emission[c] = MR_MAX(0.0, surface->emission[c] * texel[c]);
 }
 
-/* Stage 1: the primary ray through image position (px, py). Returns 1 and fills *hit (if not NULL) when it
- * meets the object. The intersector is the place where other shape types (triangle meshes) plug in. */
-static int trace_primary(const tracer *tr, double px, double py, hit_record *hit) {
+/* Stage 1: the primary ray through image-plane coordinates (u, v) (camera_u, camera_v). Returns 1 and fills *hit
+ * (if not NULL) when it meets the object. The intersector is the place where other shape types (triangle meshes)
+ * plug in. */
+static int trace_primary_uv(const tracer *tr, double u, double v, hit_record *hit) {
     const camera_frame *cf = &tr->camera;
     const mesh_world *mesh = tr->mesh;
     double dir[3], t;
-    camera_ray(cf, px, py, dir);
+    camera_ray_uv(cf, u, v, dir);
+    if (tr->scene->shape.type == MR_SHAPE_SPHERE && sphere_misses(tr, dir)) return 0;
+    vec3_normalize(dir);
     if (tr->scene->shape.type == MR_SHAPE_MESH) {
         mesh_hit mh;
         if (!mr_mesh_intersect(mesh, cf->origin, dir, INFINITY, -1, CULL_CAMERA, &mh)) return 0;
@@ -287,9 +327,126 @@ static int trace_primary(const tracer *tr, double px, double py, hit_record *hit
     vec3_frame_from_normal(hit->normal, hit->tangent, hit->bitangent);
     double to_camera[3] = {-dir[0], -dir[1], -dir[2]};
     to_local(hit, to_camera, hit->view_local);
-    sphere_uv(hit->normal, hit->uv);
     for (int k = 0; k < 3; k++) hit->geometric[k] = hit->normal[k];
     return 1;
+}
+
+
+#if defined(__x86_64__) || defined(__i386__)
+#define MR_RAYS_X86 1
+#include <immintrin.h>
+
+static inline __attribute__((target("avx2"), always_inline)) __m256d dot4(const __m256d a[3], const __m256d b[3]) {
+    return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(a[0], b[0]), _mm256_mul_pd(a[1], b[1])),
+                         _mm256_mul_pd(a[2], b[2]));
+}
+
+/* Normalise the lanes whose length is > 0, as vec3_normalize does each (the same square root and divisions). */
+static inline __attribute__((target("avx2"), always_inline)) void normalize4(__m256d a[3]) {
+    const __m256d len = _mm256_sqrt_pd(dot4(a, a));
+    const __m256d positive = _mm256_cmp_pd(len, _mm256_setzero_pd(), _CMP_GT_OQ);
+    for (int k = 0; k < 3; k++) a[k] = _mm256_blendv_pd(a[k], _mm256_div_pd(a[k], len), positive);
+}
+
+/* trace_primary_uv of four rays on a sphere, lane for lane the same operations in the same order (AVX2 without
+ * FMA: every product and sum rounded as the scalar code, compiled without contraction (ISO C), rounds it; square
+ * roots and divisions are correctly rounded in both), so the same bits (test_render's
+ * plan_rays_four_at_a_time_match_one_at_a_time; bench_plan --digest with and without MATREMAP_SIMD=scalar).
+ * found[i] says whether ray i meets the sphere; hits (NULL for yes or no) gets its record. */
+__attribute__((target("avx2"))) static void sphere_rays4(const tracer *tr, const double *u, const double *v,
+                                                         hit_record *hits, int *found) {
+    const camera_frame *cf = &tr->camera;
+    const mr_shape *sphere = &tr->scene->shape;
+    const __m256d U = _mm256_loadu_pd(u), V = _mm256_loadu_pd(v), zero = _mm256_setzero_pd();
+    __m256d d[3], w[3], oc[3];
+    for (int k = 0; k < 3; k++) {
+        const __m256d along_u = _mm256_mul_pd(U, _mm256_set1_pd(cf->right[k]));
+        d[k] = _mm256_add_pd(_mm256_add_pd(_mm256_set1_pd(cf->forward[k]), along_u),
+                             _mm256_mul_pd(V, _mm256_set1_pd(cf->up[k])));
+        w[k] = _mm256_set1_pd(tr->to_centre[k]);
+        oc[k] = _mm256_set1_pd(cf->origin[k] - sphere->center[k]);
+    }
+    // sphere_misses
+    const __m256d dw = dot4(d, w);
+    __m256d missed = _mm256_or_pd(_mm256_cmp_pd(dw, zero, _CMP_NGT_UQ),
+                                  _mm256_cmp_pd(_mm256_mul_pd(dw, dw),
+                                                _mm256_mul_pd(_mm256_set1_pd(tr->miss_below), dot4(d, d)), _CMP_LT_OQ));
+    if (!tr->screen) missed = zero;
+    normalize4(d);
+    // intersect_sphere
+    const double c = (cf->origin[0] - sphere->center[0]) * (cf->origin[0] - sphere->center[0]) +
+                     (cf->origin[1] - sphere->center[1]) * (cf->origin[1] - sphere->center[1]) +
+                     (cf->origin[2] - sphere->center[2]) * (cf->origin[2] - sphere->center[2]) -
+                     sphere->radius * sphere->radius;
+    const __m256d b = dot4(oc, d);
+    const __m256d discriminant = _mm256_sub_pd(_mm256_mul_pd(b, b), _mm256_set1_pd(c));
+    missed = _mm256_or_pd(missed, _mm256_cmp_pd(discriminant, zero, _CMP_LT_OQ));
+    const __m256d t = _mm256_sub_pd(_mm256_sub_pd(zero, b), _mm256_sqrt_pd(discriminant));
+    const __m256d met = _mm256_andnot_pd(missed, _mm256_cmp_pd(t, zero, _CMP_GT_OQ));
+    const int mask = _mm256_movemask_pd(met);
+    for (int i = 0; i < 4; i++) found[i] = (mask >> i) & 1;
+    if (hits == NULL || mask == 0) return;
+    __m256d position[3], n[3], tangent[3], bitangent[3], to_camera[3], view[3];
+    const __m256d sign_bit = _mm256_set1_pd(-0.0);
+    for (int k = 0; k < 3; k++) {
+        position[k] = _mm256_add_pd(_mm256_set1_pd(cf->origin[k]), _mm256_mul_pd(t, d[k]));
+        n[k] = _mm256_div_pd(_mm256_sub_pd(position[k], _mm256_set1_pd(sphere->center[k])),
+                             _mm256_set1_pd(sphere->radius));
+        to_camera[k] = _mm256_xor_pd(d[k], sign_bit);
+    }
+    normalize4(n);
+    // vec3_frame_from_normal
+    const __m256d one = _mm256_set1_pd(1.0);
+    const __m256d sign = _mm256_blendv_pd(_mm256_set1_pd(-1.0), one, _mm256_cmp_pd(n[2], zero, _CMP_GE_OQ));
+    const __m256d a = _mm256_div_pd(_mm256_set1_pd(-1.0), _mm256_add_pd(sign, n[2]));
+    const __m256d cross = _mm256_mul_pd(_mm256_mul_pd(n[0], n[1]), a);
+    tangent[0] = _mm256_add_pd(one, _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(sign, n[0]), n[0]), a));
+    tangent[1] = _mm256_mul_pd(sign, cross);
+    tangent[2] = _mm256_mul_pd(_mm256_xor_pd(sign, sign_bit), n[0]);
+    bitangent[0] = cross;
+    bitangent[1] = _mm256_add_pd(sign, _mm256_mul_pd(_mm256_mul_pd(n[1], n[1]), a));
+    bitangent[2] = _mm256_xor_pd(n[1], sign_bit);
+    view[0] = dot4(tangent, to_camera);
+    view[1] = dot4(bitangent, to_camera);
+    view[2] = dot4(n, to_camera);
+    double lanes[15][4];
+    for (int k = 0; k < 3; k++) {
+        _mm256_storeu_pd(lanes[k], position[k]);
+        _mm256_storeu_pd(lanes[3 + k], n[k]);
+        _mm256_storeu_pd(lanes[6 + k], tangent[k]);
+        _mm256_storeu_pd(lanes[9 + k], bitangent[k]);
+        _mm256_storeu_pd(lanes[12 + k], view[k]);
+    }
+    for (int i = 0; i < 4; i++) {
+        if (!found[i]) continue;
+        hit_record *hit = &hits[i];
+        hit->triangle = -1;
+        hit->material = 0;
+        hit->occlusion = 1.0;
+        hit->uv1[0] = hit->uv1[1] = 0.0;
+        for (int k = 0; k < 3; k++) {
+            hit->emission[k] = 0.0;
+            hit->position[k] = lanes[k][i];
+            hit->normal[k] = hit->geometric[k] = lanes[3 + k][i];
+            hit->tangent[k] = lanes[6 + k][i];
+            hit->bitangent[k] = lanes[9 + k][i];
+            hit->view_local[k] = lanes[12 + k][i];
+        }
+    }
+}
+#else
+#define MR_RAYS_X86 0
+#endif
+
+/* trace_primary_uv of `count` rays (u[i], v[i]): found[i] whether ray i meets the object, hits[i] its record
+ * (hits NULL: yes or no only). Spheres on AVX2, four at a time; the same answers either way. */
+static void trace_rays(const tracer *tr, int count, const double *u, const double *v, hit_record *hits, int *found) {
+    int i = 0;
+#if MR_RAYS_X86
+    if (tr->vector_rays)
+        for (; i + 4 <= count; i += 4) sphere_rays4(tr, u + i, v + i, hits ? hits + i : NULL, found + i);
+#endif
+    for (; i < count; i++) found[i] = trace_primary_uv(tr, u[i], v[i], hits ? &hits[i] : NULL);
 }
 
 /* Stage 2 for a point light: the exact contribution I*cos(theta_l)/d^2, no shadow ray (convex object). Returns
@@ -494,8 +651,12 @@ static int add_hit(const mr_scene *scene, const env_table *env, const mesh_world
     }
     plan_hit *kept = &row->hits[row->hit_count++];
     for (int k = 0; k < 3; k++) kept->view[k] = hit->view_local[k];
-    kept->uv[0] = hit->uv[0];
-    kept->uv[1] = hit->uv[1];
+    if (hit->triangle < 0) { // a sphere: its coordinates are made here, for the hits kept (an atan2 and an acos)
+        sphere_uv(hit->normal, kept->uv);
+    } else {
+        kept->uv[0] = hit->uv[0];
+        kept->uv[1] = hit->uv[1];
+    }
     kept->uv1[0] = hit->uv1[0];
     kept->uv1[1] = hit->uv1[1];
     kept->env_share = share * hit->occlusion;
@@ -618,10 +779,56 @@ static void finish_pixel(row_result *row, float *coverage, int pixel, double cov
     }
 }
 
+/* Rays traced together by trace_row: a chunk of a row's pixel centres, or one pixel's sub-pixel rays. */
+#define ROW_RAYS 64
+
+/* Room for a row's rays in flight (trace_row's); one allocation. */
+typedef struct ray_scratch {
+    double *u, *v;
+    int *found;
+    hit_record *hits;
+    highlight_sample *samples; /* a highlight pixel's quadrature (NULL without highlights) */
+    void *block;
+} ray_scratch;
+
+/* The most samples mr_highlight_quadrature_pixel gives any pixel of q: a sample per grid cell at most, and each
+ * disc's samples of the pixel (a bound of the actual quadrature, far below mr_highlight_max_samples'). */
+static int quadrature_max_samples(const highlight_quadrature *q) {
+    int most = HIGHLIGHT_GRID * HIGHLIGHT_GRID;
+    for (int d = 0; d < q->count; d++) {
+        const highlight_disc_pixels *dp = &q->pixels[d];
+        int disc_most = 0;
+        for (int p = 0; p < dp->nx * dp->ny; p++) disc_most = MR_MAX(disc_most, dp->begin[p + 1] - dp->begin[p]);
+        most += disc_most;
+    }
+    return most;
+}
+
+static int ray_scratch_init(const tracer *tr, int edge_n, ray_scratch *rs) {
+    memset(rs, 0, sizeof *rs);
+    const int max_samples = tr->highlight_count > 0 ? quadrature_max_samples(&tr->quadrature) : 0;
+    // a chunk's centres, then one pixel's sub-pixel rays or quadrature after them
+    const size_t rays = ROW_RAYS + (size_t)MR_MAX(edge_n * edge_n, max_samples);
+    const size_t hits_bytes = rays * sizeof *rs->hits, uv_bytes = rays * sizeof *rs->u;
+    const size_t samples_bytes = (size_t)max_samples * sizeof *rs->samples;
+    // hit records, then doubles (u, v, samples), then ints: each part's alignment suits the next
+    unsigned char *block = malloc(hits_bytes + 2 * uv_bytes + samples_bytes + rays * sizeof *rs->found);
+    if (block == NULL) return 0;
+    rs->block = block;
+    rs->hits = (hit_record *)block;
+    rs->u = (double *)(block + hits_bytes);
+    rs->v = (double *)(block + hits_bytes + uv_bytes);
+    rs->samples = max_samples > 0 ? (highlight_sample *)(block + hits_bytes + 2 * uv_bytes) : NULL;
+    rs->found = (int *)(block + hits_bytes + 2 * uv_bytes + samples_bytes);
+    return 1;
+}
+
 /* Trace row y: pixels well inside or outside the silhouette (all four corners and the centre agree) get one
  * primary ray through their centre; pixels on the silhouette get n x n rays on a regular sub-pixel grid, each
  * weighted 1/n^2, so they are box-filtered like a path tracer's pixels instead of aliased (docs/design.md
- * principle 2: the extra rays go only where the image has an edge). Returns 0 on allocation failure. */
+ * principle 2: the extra rays go only where the image has an edge). Rays are traced a chunk of pixel centres or
+ * a pixel's sub-pixel rays at a time (trace_rays), their hits added in pixel and ray order. Returns 0 on
+ * allocation failure. */
 static int trace_row(const tracer *tr, const env_table *env, const unsigned char *corner_hit, int edge_n, int y,
                      float *coverage, row_result *row) {
     const mr_scene *scene = tr->scene;
@@ -630,53 +837,103 @@ static int trace_row(const tracer *tr, const env_table *env, const unsigned char
     row->pixels = malloc((size_t)width * sizeof *row->pixels);
     row->hit_counts = malloc((size_t)width * sizeof *row->hit_counts);
     if (row->pixels == NULL || row->hit_counts == NULL) return 0;
-    highlight_sample *samples = NULL;
-    if (tr->highlight_count > 0) {
-        samples = malloc((size_t)mr_highlight_max_samples(tr->highlight_count) * sizeof *samples);
-        if (samples == NULL) return 0;
+    ray_scratch rs;
+    if (!ray_scratch_init(tr, edge_n, &rs)) return 0;
+    const double centre_v = camera_v(&tr->camera, y + 0.5);
+    const unsigned char *corners_above = corner_hit + (size_t)y * (size_t)(width + 1);
+    const unsigned char *corners_below = corners_above + width + 1;
+    // Can any pixel of the row meet a highlight's disc? Those that do lie in its window (highlight.h).
+    int row_meets_highlight = 0;
+    for (int d = 0; rs.samples != NULL && d < tr->quadrature.count; d++) {
+        const highlight_disc_pixels *dp = &tr->quadrature.pixels[d];
+        row_meets_highlight |= y >= dp->y0 && y < dp->y0 + dp->ny;
     }
-    for (int x = 0; x < width; x++) {
-        const int pixel = y * width + x;
-        const int sample_count =
-            samples ? mr_highlight_quadrature_pixel(&tr->quadrature, x, y, samples) : -1;
-        if (sample_count >= 0) { // around a highlight: the quadrature of highlight.h instead of the centre
-            size_t first = row->hit_count;
-            double covered = 0.0;
-            hit_record hit;
-            for (int k = 0; k < sample_count; k++) {
-                if (!trace_primary(tr, samples[k].x, samples[k].y, &hit)) continue;
-                covered += samples[k].weight;
-                if (!add_hit(scene, env, occluder, &hit, samples[k].weight, row)) {
-                    free(samples);
-                    return 0;
-                }
-            }
-            finish_pixel(row, coverage, pixel, covered, first);
-            continue;
+    int ok = 1;
+    for (int x0 = 0; x0 < width && ok; x0 += ROW_RAYS) {
+        const int x1 = MR_MIN(width, x0 + ROW_RAYS);
+        // The chunk's centre rays. With edge_n > 1 a centre's hit is used only when all four corners see the
+        // object too (n = 1); with corners that disagree the pixel is on the silhouette whatever the centre
+        // sees, and with none it is asked yes or no. With edge_n = 1 the centre is the pixel's one ray in every
+        // case. Pixels around a highlight take the quadrature of highlight.h instead.
+        int centre[ROW_RAYS], slot[ROW_RAYS], around_highlight[ROW_RAYS], full = 0, asked = 0;
+        for (int x = x0; x < x1; x++) {
+            const int corners = corners_above[x] + corners_above[x + 1] + corners_below[x] + corners_below[x + 1];
+            around_highlight[x - x0] =
+                row_meets_highlight && mr_highlight_touches(tr->quadrature.discs, tr->quadrature.count, x, y);
+            slot[x - x0] = -1;
+            centre[x - x0] = corners; // the corner count, until the centre is known
+            if (around_highlight[x - x0] || (corners > 0 && corners < 4 && edge_n > 1)) continue;
+            if (corners == 4 || edge_n == 1) slot[x - x0] = full++;
         }
-        const unsigned char *top = corner_hit + (size_t)y * (size_t)(width + 1) + (size_t)x;
-        const unsigned char *bottom = top + width + 1;
-        hit_record hit;
-        int centre = trace_primary(tr, x + 0.5, y + 0.5, &hit);
-        int corners = top[0] + top[1] + bottom[0] + bottom[1];
-        int n = (corners == 4 * centre) ? 1 : edge_n;
-        double weight = 1.0 / ((double)n * n);
-        size_t first = row->hit_count;
-        int hits = 0;
-        for (int j = 0; j < n; j++)
-            for (int i = 0; i < n; i++) {
-                if (n > 1 && !trace_primary(tr, x + (i + 0.5) / n, y + (j + 0.5) / n, &hit)) continue;
-                if (n == 1 && !centre) continue;
-                hits++;
-                if (!add_hit(scene, env, occluder, &hit, weight, row)) {
-                    free(samples);
-                    return 0;
+        for (int x = x0, f = 0; x < x1; x++)
+            if (slot[x - x0] >= 0) {
+                rs.u[f] = tr->centre_u[x];
+                rs.v[f++] = centre_v;
+            }
+        trace_rays(tr, full, rs.u, rs.v, rs.hits, rs.found);
+        int centre_found[ROW_RAYS];
+        for (int x = x0; x < x1; x++) centre_found[x - x0] = slot[x - x0] >= 0 ? rs.found[slot[x - x0]] : 0;
+        // Yes or no: the centres between four corners that miss (edge_n > 1).
+        int asked_pixel[ROW_RAYS];
+        for (int x = x0; x < x1; x++)
+            if (centre[x - x0] == 0 && slot[x - x0] < 0 && !around_highlight[x - x0]) {
+                asked_pixel[asked] = x - x0;
+                rs.u[full + asked] = tr->centre_u[x];
+                rs.v[full + asked++] = centre_v;
+            }
+        trace_rays(tr, asked, rs.u + full, rs.v + full, NULL, rs.found + full);
+        for (int k = 0; k < asked; k++) centre_found[asked_pixel[k]] = rs.found[full + k];
+        hit_record *centre_hits = rs.hits; // kept until the chunk's centre pixels are added
+        for (int x = x0; x < x1 && ok; x++) {
+            const int pixel = y * width + x;
+            const int corners = centre[x - x0];
+            const int sample_count =
+                around_highlight[x - x0] ? mr_highlight_quadrature_pixel(&tr->quadrature, x, y, rs.samples) : -1;
+            if (sample_count >= 0) { // around a highlight
+                // its rays go after the chunk's centre hits, which later pixels of the chunk still need
+                for (int k = 0; k < sample_count; k++) {
+                    rs.u[full + k] = camera_u(&tr->camera, rs.samples[k].x);
+                    rs.v[full + k] = camera_v(&tr->camera, rs.samples[k].y);
+                }
+                trace_rays(tr, sample_count, rs.u + full, rs.v + full, centre_hits + full, rs.found + full);
+                size_t first = row->hit_count;
+                double covered = 0.0;
+                for (int k = 0; k < sample_count && ok; k++) {
+                    if (!rs.found[full + k]) continue;
+                    covered += rs.samples[k].weight;
+                    ok = add_hit(scene, env, occluder, &centre_hits[full + k], rs.samples[k].weight, row);
+                }
+                finish_pixel(row, coverage, pixel, covered, first);
+                continue;
+            }
+            const int seen = centre_found[x - x0];
+            const int n = (corners == 4 * seen) ? 1 : edge_n;
+            const double weight = 1.0 / ((double)n * n);
+            const size_t first = row->hit_count;
+            int hits = 0;
+            if (n == 1) {
+                if (seen) {
+                    hits = 1;
+                    ok = add_hit(scene, env, occluder, &centre_hits[slot[x - x0]], weight, row);
+                }
+            } else {
+                for (int j = 0, r = 0; j < n; j++)
+                    for (int i = 0; i < n; i++, r++) {
+                        rs.u[full + r] = camera_u(&tr->camera, x + (i + 0.5) / n);
+                        rs.v[full + r] = camera_v(&tr->camera, y + (j + 0.5) / n);
+                    }
+                trace_rays(tr, n * n, rs.u + full, rs.v + full, centre_hits + full, rs.found + full);
+                for (int r = 0; r < n * n && ok; r++) {
+                    if (!rs.found[full + r]) continue;
+                    hits++;
+                    ok = add_hit(scene, env, occluder, &centre_hits[full + r], weight, row);
                 }
             }
-        finish_pixel(row, coverage, pixel, hits * weight, first);
+            finish_pixel(row, coverage, pixel, hits * weight, first);
+        }
     }
-    free(samples);
-    return 1;
+    free(rs.block);
+    return ok;
 }
 
 /* The plan's point samples in plan order as structure of arrays, what a batched render reads: sample s is lit from
@@ -713,6 +970,10 @@ void mr_render_plan_free(mr_render_plan *plan) {
 }
 
 mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
+    return mr_render_plan_create_rays(scene, MR_PLAN_RAYS_AUTO, out);
+}
+
+mr_status mr_render_plan_create_rays(const mr_scene *scene, mr_plan_rays rays, mr_render_plan **out) {
     if (scene == NULL || out == NULL) return mr_fail(MR_ERR_INVALID_ARG, "render plan: NULL scene or output");
     mr_status status = mr_scene_validate(scene);
     if (status != MR_OK) return status;
@@ -724,12 +985,23 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     tr.scene = scene;
     camera_frame_init(scene, &tr.camera);
     find_highlights(scene, &tr);
+    if (scene->shape.type == MR_SHAPE_SPHERE) {
+        sphere_screen_init(scene, &tr);
+        tr.vector_rays = MR_RAYS_X86 && (rays == MR_PLAN_RAYS_AUTO     ? mr_brdf_batch_vector_default()
+                                         : rays == MR_PLAN_RAYS_VECTOR ? mr_brdf_batch_cpu_vector()
+                                                                       : 0);
+    }
     surface_sampler *surfaces = NULL;
     mr_render_plan *plan = calloc(1, sizeof *plan);
     unsigned char *corner_hit = malloc((size_t)(width + 1) * (size_t)(height + 1));
     row_result *rows = calloc((size_t)height, sizeof *rows);
+    double *columns_u = malloc((2 * (size_t)width + 1) * sizeof *columns_u);
     int failed = 0;
-    if (plan == NULL || corner_hit == NULL || rows == NULL) goto oom;
+    if (plan == NULL || corner_hit == NULL || rows == NULL || columns_u == NULL) goto oom;
+    tr.corner_u = columns_u;
+    tr.centre_u = columns_u + width + 1;
+    for (int x = 0; x <= width; x++) tr.corner_u[x] = camera_u(&tr.camera, x);
+    for (int x = 0; x < width; x++) tr.centre_u[x] = camera_u(&tr.camera, x + 0.5);
     if (!mr_highlight_quadrature_build(tr.highlights, tr.highlight_count, &tr.quadrature)) goto oom;
     atomic_init(&plan->zoomed, NULL);
     atomic_init(&plan->point_soa, NULL);
@@ -770,10 +1042,17 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     const long trace_work = (long)width * height * (scene->shape.type == MR_SHAPE_MESH ? 4 : 1);
     const int plan_threads = mr_auto_threads(scene->threads, trace_work, MR_RENDER_PARALLEL_PIXELS);
 #pragma omp parallel for schedule(static) num_threads(plan_threads) if (plan_threads > 1)
-    for (int y = 0; y <= height; y++)
-        for (int x = 0; x <= width; x++)
-            corner_hit[(size_t)y * (size_t)(width + 1) + (size_t)x] =
-                (unsigned char)trace_primary(&tr, x, y, NULL);
+    for (int y = 0; y <= height; y++) {
+        double v[ROW_RAYS];
+        int found[ROW_RAYS];
+        for (int k = 0; k < ROW_RAYS; k++) v[k] = camera_v(&tr.camera, y);
+        for (int x0 = 0; x0 <= width; x0 += ROW_RAYS) {
+            const int count = MR_MIN(width + 1 - x0, ROW_RAYS);
+            trace_rays(&tr, count, tr.corner_u + x0, v, NULL, found);
+            for (int k = 0; k < count; k++)
+                corner_hit[(size_t)y * (size_t)(width + 1) + (size_t)(x0 + k)] = (unsigned char)found[k];
+        }
+    }
 
 #pragma omp parallel for schedule(dynamic, 4) reduction(| : failed) num_threads(plan_threads) if (plan_threads > 1)
     for (int y = 0; y < height; y++)
@@ -849,6 +1128,7 @@ mr_status mr_render_plan_create(const mr_scene *scene, mr_render_plan **out) {
     for (int y = 0; y < height; y++) row_result_free(&rows[y]);
     free(rows);
     free(corner_hit);
+    free(columns_u);
     free(surfaces);
     mr_highlight_quadrature_free(&tr.quadrature);
     *out = plan;
@@ -861,6 +1141,7 @@ fail:
         for (int y = 0; y < height; y++) row_result_free(&rows[y]);
     free(rows);
     free(corner_hit);
+    free(columns_u);
     free(surfaces);
     mr_highlight_quadrature_free(&tr.quadrature);
     mr_render_plan_free(plan);

@@ -31,4 +31,13 @@ typedef enum mr_render_path {
 mr_status mr_render_into_path(const mr_render_plan *plan, int threads, const mr_brdf_model *model,
                               const double *values, mr_component component, mr_image *image, mr_render_path path);
 
+/* How a plan traces its primary rays (render.c, trace_rays). AUTO, what mr_render_plan_create does: a sphere's
+ * four at a time with AVX2 unless the CPU lacks it or MATREMAP_SIMD=scalar (mr_brdf_batch_vector_default), a
+ * mesh's one at a time. SCALAR forces one at a time, VECTOR four at a time on a sphere wherever the CPU allows it;
+ * for tests and benchmarks: the plan is the same, bit for bit, either way. */
+typedef enum mr_plan_rays { MR_PLAN_RAYS_AUTO = 0, MR_PLAN_RAYS_SCALAR, MR_PLAN_RAYS_VECTOR } mr_plan_rays;
+
+/* mr_render_plan_create (render.h) with the given rays. */
+mr_status mr_render_plan_create_rays(const mr_scene *scene, mr_plan_rays rays, mr_render_plan **out);
+
 #endif /* MR_RENDER_INTERNAL_H */
