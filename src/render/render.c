@@ -1955,8 +1955,8 @@ mr_status mr_render_derivatives_into(const mr_render_plan *plan, int threads, co
     if (ops != NULL) {
         grad_state = malloc(ops->state_bytes);
         if (grad_state == NULL)
-            return mr_fail(MR_ERR_NOMEM, "render derivatives: %zu bytes for model '%s'", ops->state_bytes,
-                           model->name);
+            return mr_fail(MR_ERR_NOMEM, "render derivatives of model '%s': out of memory (%zu bytes of state)",
+                           model->name, ops->state_bytes);
         ops->prepare(model, values, slots, count, grad_state);
     }
     // Each lit pixel sums its samples in plan order, as render_core does: the images do not depend on the thread
