@@ -57,7 +57,8 @@ static void load_module(void) {
     atomic_store_explicit(&loaded, table, memory_order_release);
 }
 
-/* The table, loading the module on the first call; MR_ERR_EXTERNAL naming `what` when it cannot be loaded. */
+/* The table, loading the module on the first call; MR_ERR_EXTERNAL naming `what` (glTF, OBJ, svr train: what the
+ * caller was about to read or do) when it cannot be loaded. */
 static mr_status table_for(const char *what, const mr_cxx_table **out) {
     pthread_once(&load_once, load_module);
     *out = atomic_load_explicit(&loaded, memory_order_acquire);
@@ -79,7 +80,7 @@ static mr_status forward_status(const mr_cxx_table *table, mr_status status) {
 #define STATUS_FORWARDER(name, params, args)                                                                       \
     mr_status name params {                                                                                        \
         const mr_cxx_table *table;                                                                                 \
-        mr_status status = table_for(#name, &table);                                                               \
+        mr_status status = table_for(strncmp(#name, "mr_obj", 6) == 0 ? "OBJ" : "glTF", &table);                  \
         return status != MR_OK ? status : forward_status(table, table->name args);                                 \
     }
 MR_CXX_STATUS_CALLS(STATUS_FORWARDER)
