@@ -89,7 +89,8 @@ typedef struct mr_cxx_table {
     MR_CXX_STATUS_CALLS(MR_CXX_POINTER)
     MR_CXX_VALUE_CALLS(MR_CXX_VALUE_POINTER)
     MR_CXX_VOID_CALLS(MR_CXX_VOID_POINTER)
-    void (*mr_gltf_get_counts)(const mr_gltf *asset, mr_gltf_counts *out); /* its forwarder clears *out without a module */
+    /* written by hand: without a module its forwarder still clears *out */
+    void (*mr_gltf_get_counts)(const mr_gltf *asset, mr_gltf_counts *out);
     MR_CXX_SVM_CALLS(MR_CXX_SVM_POINTER)
 } mr_cxx_table;
 
