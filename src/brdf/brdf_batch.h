@@ -244,8 +244,10 @@ MR_BATCH_INLINE double mr_batch_ggx_dv_correlated(double alpha, const mr_brdf_ge
 
 /* ---- single precision (the float kernels; brdf_float.h says how a render chooses them) ----
  *
- * A float kernel reads the batch's doubles, computes in float (8 lanes an AVX2 vector instead of 4) and writes its
- * results back as doubles, so that it plugs into the same batch and render loop. One part stays in double: the sums
+ * A float kernel reads the batch's doubles, computes the direction-dependent factors of f_r in float (8 lanes an
+ * AVX2 vector instead of 4) and writes f_r back as doubles, so that it plugs into the same batch and render loop;
+ * the last products by the per-channel constants are double (converting one factor costs less than converting three
+ * channels: every conversion between the widths is an instruction of its own). One part stays in double: the sums
  * H_x = wi_x + wo_x and H_y, which cancel where the lobe peaks (wi ~ mirror of wo); in float their error would be
  * 2^-24 of |wi_x| instead of 2^-24 of |H_x|, and a narrow lobe's exponent -tan^2(theta_h)/alpha^2 would lose every
  * digit at alpha = 1e-4. Every other intermediate is float and every formula is rewritten to stay inside float's
@@ -327,25 +329,26 @@ MR_BATCH_INLINE float mr_batchf_log1p(float x, const int fused) {
     return mr_batchf_log(u, fused) + (x - (u - 1.0f)) / u;
 }
 
-/* The float geometry of a pair (mr_brdf_geom's fields that the float kernels use, plus hxy2 = H_x^2 + H_y^2). */
+/* The float geometry of a pair (mr_brdf_geom's fields that the float kernels use, hxy2 = H_x^2 + H_y^2 instead of
+ * H_x and H_y). */
 typedef struct mr_batchf_geom_t {
-    float cos_i, cos_o, sin2_i, sin2_o, hx, hy, hz, hxy2, h_len2, cos_h, tan2_h, dot_h;
+    float cos_i, cos_o, sin2_i, sin2_o, hz, hxy2, h_len2, cos_h, tan2_h, dot_h;
 } mr_batchf_geom_t;
 
-/* mr_batch_geom in float, H_x and H_y summed in double (see above); returns whether both directions are above the
+/* mr_batch_geom in float, H_x and H_y summed in double (see above); the squares of the x, y parts are summed in
+ * double too and converted once (no accuracy reason: each conversion of a double vector to float costs as much as
+ * a float operation on 8 lanes, and a kernel here is short). Returns whether both directions are above the
  * horizon. */
 MR_BATCH_INLINE int mr_batchf_geom(double ix, double iy, double iz, double ox, double oy, double oz,
                                    mr_batchf_geom_t *g) {
     const int lit = (iz > 0.0) & (oz > 0.0);
     g->cos_i = (float)(iz > MR_BRDF_COS_MIN ? iz : MR_BRDF_COS_MIN);
     g->cos_o = (float)(oz > MR_BRDF_COS_MIN ? oz : MR_BRDF_COS_MIN);
-    const float fix = (float)ix, fiy = (float)iy, fox = (float)ox, foy = (float)oy;
-    g->sin2_i = fix * fix + fiy * fiy;
-    g->sin2_o = fox * fox + foy * foy;
-    g->hx = (float)(ix + ox);
-    g->hy = (float)(iy + oy);
+    g->sin2_i = (float)(ix * ix + iy * iy);
+    g->sin2_o = (float)(ox * ox + oy * oy);
+    const double hx = ix + ox, hy = iy + oy;
     g->hz = g->cos_i + g->cos_o;
-    g->hxy2 = g->hx * g->hx + g->hy * g->hy;
+    g->hxy2 = (float)(hx * hx + hy * hy);
     g->h_len2 = g->hxy2 + g->hz * g->hz;
     g->cos_h = g->hz / sqrtf(g->h_len2);
     g->tan2_h = g->hxy2 / (g->hz * g->hz);
