@@ -26,6 +26,9 @@
  *             precision
  *   --precision float   the remaps' plan renders with the float kernels (models without one stay double): with
  *             --against, how far a float engine's answers move from the reference
+ *   --kernels instead: ns per direction pair of the batch kernels alone, double against float, portable and
+ *             AVX2/FMA, for the models with a float kernel (batches of 256 fit-scene-like pairs, best of 31 runs),
+ *             and the median ms of one 64^2 fit-scene render (defaults, the AUTO path) in each precision
  */
 #include <math.h>
 #include <omp.h>
@@ -264,6 +267,71 @@ static int run_table(int quick, const char *only) {
     return 0;
 }
 
+/* --kernels: the kernels alone, ns per pair, best of 31 runs of 200 batches of 256 random pairs above the horizon
+ * (cosines 0.2 to 1), the model's default values. */
+static int run_kernels(void) {
+    enum { PAIRS_PER_BATCH = 256, BATCHES = 200, RUNS = 31 };
+    omp_set_num_threads(1); // the renders on one thread, as the table's
+    static double in[6][PAIRS_PER_BATCH], out[6][PAIRS_PER_BATCH];
+    unsigned long long state = 0x6b65726eULL;
+    for (int i = 0; i < PAIRS_PER_BATCH; i++)
+        for (int k = 0; k < 2; k++) {
+            const double z = bench_uniform(&state, 0.2, 1.0), r = sqrt(1.0 - z * z);
+            const double phi = bench_uniform(&state, 0.0, 6.28318530717958648);
+            in[3 * k][i] = r * cos(phi);
+            in[3 * k + 1][i] = r * sin(phi);
+            in[3 * k + 2][i] = z;
+        }
+    const mr_brdf_batch batch = {PAIRS_PER_BATCH, {in[0], in[1], in[2]}, {in[3], in[4], in[5]},
+                                 {out[0], out[1], out[2]}, {out[3], out[4], out[5]}};
+    mr_render_plan *plans[2] = {plan_of_size(FIT_SIZE), plan_of_size(FIT_SIZE)};
+    mr_render_plan_set_float_kernels(plans[1], 1);
+    mr_image *scratch = NULL;
+    if (mr_image_create(FIT_SIZE, FIT_SIZE, 3, &scratch) != MR_OK) return 3;
+    printf("| model | portable double ns | portable float ns | ratio | AVX2 double ns | AVX2 float ns | ratio | "
+           "64² render double ms | 64² render float ms | ratio |\n"
+           "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    const mr_brdf_model *const *models = mr_brdf_models();
+    for (int m = 0; models[m] != NULL; m++) {
+        const mr_brdf_model *model = models[m];
+        const mr_brdf_batch_fn kernels[2] = {model->eval_batch, mr_brdf_float_kernel(model)};
+        if (kernels[0] == NULL || kernels[1] == NULL) continue;
+        double values[MR_BRDF_MAX_VALUES];
+        mr_brdf_default_values(model, values);
+        mr_brdf_state st;
+        model->prepare(model, values, st.bytes);
+        double ns[2][2]; // [vector][precision]
+        for (int vector = 0; vector < 2; vector++)
+            for (int q = 0; q < 2; q++) {
+                double best = INFINITY;
+                for (int run = 0; run < RUNS; run++) {
+                    const double t0 = bench_now();
+                    for (int b = 0; b < BATCHES; b++) kernels[q](st.bytes, &batch, vector);
+                    best = fmin(best, bench_now() - t0);
+                }
+                ns[vector][q] = 1e9 * best / (BATCHES * PAIRS_PER_BATCH);
+            }
+        double render[2];
+        for (int q = 0; q < 2; q++) {
+            double t[51];
+            for (int k = 0; k < 51; k++) {
+                const double t0 = bench_now();
+                if (mr_render_into(plans[q], model, values, MR_COMPONENT_FULL, scratch) != MR_OK) return 3;
+                t[k] = 1e3 * (bench_now() - t0);
+            }
+            render[q] = quantile(t, 51, 0.5);
+        }
+        printf("| %s | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.4f | %.4f | %.2f |\n", model->name, ns[0][0],
+               ns[0][1], ns[0][1] / ns[0][0], ns[1][0], ns[1][1], ns[1][1] / ns[1][0], render[0], render[1],
+               render[1] / render[0]);
+        fflush(stdout);
+    }
+    mr_render_plan_free(plans[0]);
+    mr_render_plan_free(plans[1]);
+    mr_image_free(scratch);
+    return 0;
+}
+
 int main(int argc, char **argv) {
     int quick = 0;
     const char *save = NULL, *against = NULL, *only = NULL;
@@ -272,6 +340,7 @@ int main(int argc, char **argv) {
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--quick") == 0) quick = 1;
         else if (strcmp(argv[i], "--table") == 0) table = 1;
+        else if (strcmp(argv[i], "--kernels") == 0) return run_kernels();
         else if (strcmp(argv[i], "--save") == 0 && i + 1 < argc) save = argv[++i];
         else if (strcmp(argv[i], "--against") == 0 && i + 1 < argc) against = argv[++i];
         else if (strcmp(argv[i], "--pairs") == 0 && i + 1 < argc) only = argv[++i];
@@ -287,7 +356,8 @@ int main(int argc, char **argv) {
         }
         else {
             fprintf(stderr, "usage: bench_fit [--quick] [--pairs a,b,...] [--local auto|gradient|bobyqa] "
-                            "[--material N] [--table] [--save FILE] [--against FILE] [--precision double|float]\n");
+                            "[--material N] [--table] [--kernels] [--save FILE] [--against FILE] "
+                            "[--precision double|float]\n");
             return 1;
         }
     }

@@ -13,7 +13,8 @@
  * the same order, and kernels reuse brdf_internal.h's branch-free helpers (G1, Fresnel), so a kernel differs from
  * eval only through mr_batch_exp / mr_batch_pow (and, in the AVX2 variant, their fused multiply-adds) and GGX's
  * D G written with one division (mr_batch_ggx_dg, mr_batch_ggx_dv_correlated).
- * docs/performance.md ("Vectorised lobes") says why double and not float.
+ * docs/performance.md ("Vectorised lobes", "Double, not float") says why double and not float: the float kernels at
+ * the end of this file (brdf_float.h) exist to measure that choice and are used only where a plan asks for them.
  */
 #ifndef MR_BRDF_BATCH_H
 #define MR_BRDF_BATCH_H
