@@ -245,10 +245,11 @@ MR_BATCH_INLINE double mr_batch_ggx_dv_correlated(double alpha, const mr_brdf_ge
 
 /* ---- single precision (the float kernels; brdf_float.h says how a render chooses them) ----
  *
- * A float kernel reads the batch's doubles, computes the direction-dependent factors of f_r in float (8 lanes an
- * AVX2 vector instead of 4) and writes f_r back as doubles, so that it plugs into the same batch and render loop;
- * the last products by the per-channel constants are double (converting one factor costs less than converting three
- * channels: every conversion between the widths is an instruction of its own). One part stays in double: the sums
+ * A float kernel reads the batch's doubles, computes in float (8 lanes an AVX2 vector instead of 4) and writes f_r
+ * back as doubles, so that it plugs into the same batch and render loop. Every conversion between the widths is an
+ * instruction of its own: Ward converts its one lobe factor and multiplies by the per-channel constants in double;
+ * the microfacet and gltf kernels multiply in float and convert the channels (done the Ward way they measured 15 %
+ * slower for ggx and gltf, faster for ggx-nofresnel only: bench_fit --kernels). One part stays in double: the sums
  * H_x = wi_x + wo_x and H_y, which cancel where the lobe peaks (wi ~ mirror of wo); in float their error would be
  * 2^-24 of |wi_x| instead of 2^-24 of |H_x|, and a narrow lobe's exponent -tan^2(theta_h)/alpha^2 would lose every
  * digit at alpha = 1e-4. Every other intermediate is float and every formula is rewritten to stay inside float's
