@@ -8,6 +8,10 @@
  * exp/log/pow stay within their stated ulp bounds; batched renders equal the per-sample loop within 1e-6 relative
  * (float images of values that differ by ~1e-13), under a point light and under an environment with reflection
  * samples, and are bit-identical on 1 and 2 threads (at 512^2 under the point light).
+ * The float kernels (brdf/brdf_float.h) equal eval within MR_BRDF_FLOAT_RTOL (5e-5) of the pair's largest value or
+ * MR_BRDF_FLOAT_ATOL, finite everywhere, at random and hard inputs; their exp/log/log1p stay within their stated
+ * ulp of libm's expf/logf/log1pf; float renders are bit-identical on 1 and 2 threads, differ from double ones only
+ * for models with a float kernel, and the per-plan switch reaches the plan's closer look.
  */
 #include <math.h>
 #include <stdint.h>
@@ -428,6 +432,48 @@ MR_TEST(float_exp_log_within_their_bounds) {
                worst_log_abs, worst_log1p);
 }
 
+/* The float switch reaches a plan's closer look (mr_render_plan_zoomed), whether that was built before or after it
+ * was set: the closer render of ward differs from the double plan's, and equals it again once switched off. */
+MR_TEST(float_switch_reaches_the_closer_look) {
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){64, MR_FIT_LIGHT_45, 0});
+    mr_render_plan *plan_float = NULL, *plan_double = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan_float));
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan_double));
+    if (plan_float == NULL || plan_double == NULL) return;
+    const mr_render_plan *close_double = NULL, *close_before = NULL;
+    MR_CHECK_OK(mr_render_plan_zoomed(plan_double, 8.0, &close_double));
+    MR_CHECK_OK(mr_render_plan_zoomed(plan_float, 8.0, &close_before)); // built while the plan is double
+    mr_render_plan_set_float_kernels(plan_float, 1);
+    const mr_brdf_model *ward = mr_brdf_find("ward");
+    double values[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(ward, values);
+    mr_image *a = NULL, *b = NULL;
+    MR_CHECK_OK(mr_image_create(64, 64, 3, &a));
+    MR_CHECK_OK(mr_image_create(64, 64, 3, &b));
+    if (close_double && close_before && a && b) {
+        MR_CHECK_OK(mr_render_into_threads(close_double, 1, ward, values, MR_COMPONENT_FULL, a));
+        MR_CHECK_OK(mr_render_into_threads(close_before, 1, ward, values, MR_COMPONENT_FULL, b));
+        MR_CHECK_MSG(!same_pixels(a, b), "the closer look built before the switch still renders in double");
+        mr_render_plan_set_float_kernels(plan_float, 0);
+        MR_CHECK_OK(mr_render_into_threads(close_before, 1, ward, values, MR_COMPONENT_FULL, b));
+        MR_CHECK_MSG(same_pixels(a, b), "switched off, the closer look does not render as the double plan's");
+    }
+    mr_render_plan *plan_late = NULL; // switched on before its closer look is built
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan_late));
+    const mr_render_plan *close_after = NULL;
+    if (plan_late) mr_render_plan_set_float_kernels(plan_late, 1);
+    if (plan_late) MR_CHECK_OK(mr_render_plan_zoomed(plan_late, 8.0, &close_after));
+    if (close_after && close_double && a && b) {
+        MR_CHECK_OK(mr_render_into_threads(close_after, 1, ward, values, MR_COMPONENT_FULL, b));
+        MR_CHECK_MSG(!same_pixels(a, b), "the closer look built after the switch renders in double");
+    }
+    mr_image_free(a);
+    mr_image_free(b);
+    mr_render_plan_free(plan_float);
+    mr_render_plan_free(plan_double);
+    mr_render_plan_free(plan_late);
+}
+
 /* With the float kernels (render_internal.h), batched renders on 1 and 2 threads are bit-identical at 512^2, and
  * models without a float kernel render exactly as in double. */
 MR_TEST(float_render_same_bits_on_one_and_two_threads) {
@@ -470,4 +516,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(batch_equals_eval_for_every_model), MR_TEST_ENTRY(vec
              MR_TEST_ENTRY(batched_environment_render_equals_per_sample_render),
              MR_TEST_ENTRY(batched_render_same_bits_on_one_and_two_threads),
              MR_TEST_ENTRY(float_batch_within_its_tolerance_of_eval), MR_TEST_ENTRY(float_exp_log_within_their_bounds),
-             MR_TEST_ENTRY(float_render_same_bits_on_one_and_two_threads))
+             MR_TEST_ENTRY(float_render_same_bits_on_one_and_two_threads),
+             MR_TEST_ENTRY(float_switch_reaches_the_closer_look))
