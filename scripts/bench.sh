@@ -405,7 +405,10 @@ bench_fit_engine() {
         echo "**Fit size × local method** (materials: the pair's first 8, 4 for the layered targets). *floor ms*:"
         echo "median renders × the median time of one full render of the target at that size, measured in the same"
         echo "run: what the fit would cost if it did nothing but render. ΔSSIM@512: the fits rendered at 512² beside"
-        echo "the source, |SSIM − SSIM of the gradient fit at 128²| per material, mean (max)."
+        echo "the source, |SSIM − SSIM of the gradient fit at 128²| per material, mean (max). *precision*: the"
+        echo "plan's renders in double (the engine) or with the float kernels (src/brdf/brdf_float.h, for targets that"
+        echo "have one; the source is rendered on the same plan, so in float too; derivative renders and the 512²"
+        echo "judge stay double); the second table compares the float fits with the double ones material by material."
         echo
         cat "$work/fit_table.md"
     } > "$work/fit_engine.md"

@@ -8,6 +8,10 @@
  * exp/log/pow stay within their stated ulp bounds; batched renders equal the per-sample loop within 1e-6 relative
  * (float images of values that differ by ~1e-13), under a point light and under an environment with reflection
  * samples, and are bit-identical on 1 and 2 threads (at 512^2 under the point light).
+ * The float kernels (brdf/brdf_float.h) equal eval within MR_BRDF_FLOAT_RTOL (5e-5) of the pair's largest value or
+ * MR_BRDF_FLOAT_ATOL, finite everywhere, at random and hard inputs; their exp/log/log1p stay within their stated
+ * ulp of libm's expf/logf/log1pf; float renders are bit-identical on 1 and 2 threads, differ from double ones only
+ * for models with a float kernel, and the per-plan switch reaches the plan's closer look.
  */
 #include <math.h>
 #include <stdint.h>
@@ -15,6 +19,7 @@
 #include <string.h>
 
 #include "brdf/brdf_batch.h"
+#include "brdf/brdf_float.h"
 #include "harness.h"
 #include "matremap.h"
 #include "render/render_internal.h"
@@ -62,8 +67,10 @@ static void random_values(const mr_brdf_model *model, uint64_t *rng, int draw, d
     }
 }
 
-/* Largest |batch - eval| over the pairs, as a multiple of the contract's bound (<= 1 passes). */
-static double worst_ratio(const mr_brdf_model *model, const void *state, const mr_brdf_batch *b, int *worst_pair) {
+/* Largest |batch - eval| over the pairs, as a multiple of the bound max(rtol * the pair's largest |value|, atol)
+ * (<= 1 passes); infinite where the batch is not finite. */
+static double worst_ratio_within(const mr_brdf_model *model, const void *state, const mr_brdf_batch *b, double rtol,
+                                 double atol, int *worst_pair) {
     double worst = 0.0;
     for (int i = 0; i < b->n; i++) {
         const double wi[3] = {b->wi[0][i], b->wi[1][i], b->wi[2][i]};
@@ -72,7 +79,7 @@ static double worst_ratio(const mr_brdf_model *model, const void *state, const m
         model->eval(state, wi, wo, fd, fs);
         double scale = 0.0;
         for (int c = 0; c < 3; c++) scale = fmax(scale, fmax(fabs(fd[c]), fabs(fs[c])));
-        const double bound = fmax(MR_BRDF_BATCH_RTOL * scale, MR_BRDF_BATCH_ATOL);
+        const double bound = fmax(rtol * scale, atol);
         for (int c = 0; c < 3; c++) {
             const double ed = fabs(b->diffuse[c][i] - fd[c]) / bound, es = fabs(b->specular[c][i] - fs[c]) / bound;
             const double e = isfinite(b->diffuse[c][i]) && isfinite(b->specular[c][i]) ? fmax(ed, es) : INFINITY;
@@ -83,6 +90,11 @@ static double worst_ratio(const mr_brdf_model *model, const void *state, const m
         }
     }
     return worst;
+}
+
+/* worst_ratio_within for the double kernels' contract (brdf.h). */
+static double worst_ratio(const mr_brdf_model *model, const void *state, const mr_brdf_batch *b, int *worst_pair) {
+    return worst_ratio_within(model, state, b, MR_BRDF_BATCH_RTOL, MR_BRDF_BATCH_ATOL, worst_pair);
 }
 
 /* Every model, both kernels, against eval; and the place of a pair in its batch changes nothing. */
@@ -301,7 +313,208 @@ MR_TEST(batched_render_same_bits_on_one_and_two_threads) {
     mr_render_plan_free(plan);
 }
 
+/* Fills in[6][1 + PAIRS] (from index 1) with random direction pairs, every seventh a highlight's centre. */
+static void random_pairs(uint64_t *rng, double in[6][PAIRS + 1]) {
+    for (int i = 0; i < PAIRS; i++) {
+        double wi[3], wo[3];
+        random_direction(rng, wi);
+        random_direction(rng, wo);
+        if (i % 7 == 3) memcpy(wo, wi, sizeof wo); // the highlight's centre: h = n for wi = wo mirrored
+        if (i % 7 == 3) wo[0] = -wo[0], wo[1] = -wo[1];
+        for (int k = 0; k < 3; k++) {
+            in[k][i + 1] = wi[k];
+            in[3 + k][i + 1] = wo[k];
+        }
+    }
+}
+
+/* Every model with a float kernel (brdf_float.h), both instruction sets, against eval within MR_BRDF_FLOAT_RTOL of
+ * the pair's largest value or MR_BRDF_FLOAT_ATOL, finite everywhere; random values plus the hard ones (every
+ * parameter at its minimum: alpha 1e-4, F0 0; at its maximum: alpha 1, F0 1; alpha at each end with the others
+ * random); grazing pairs among the random ones; a pair's value independent of its place in the batch. */
+MR_TEST(float_batch_within_its_tolerance_of_eval) {
+    static double in[6][PAIRS + 1], out[6][PAIRS + 1], shifted[6][PAIRS + 1];
+    uint64_t rng = 0xf10a7031u;
+    const mr_brdf_model *const *models = mr_brdf_models();
+    int with_kernel = 0;
+    for (int m = 0; models[m] != NULL; m++) {
+        const mr_brdf_model *model = models[m];
+        const mr_brdf_batch_fn kernel = mr_brdf_float_kernel(model);
+        if (kernel == NULL) continue;
+        with_kernel++;
+        double overall = 0.0;
+        for (int draw = 0; draw < 24; draw++) {
+            double values[MR_BRDF_MAX_VALUES];
+            random_values(model, &rng, draw < 3 ? draw : 3 + draw % 2, values);
+            const int alpha_slot = mr_brdf_param_offset(model, mr_brdf_param_index(model, "alpha"));
+            const int rough_slot = mr_brdf_param_offset(model, mr_brdf_param_index(model, "roughness"));
+            const int shape = alpha_slot >= 0 ? alpha_slot : rough_slot;
+            if (shape >= 0 && draw >= 20) values[shape] = draw % 2 ? 1e-4 : 1.0; // alpha (or roughness) at its ends
+            if (shape >= 0 && draw >= 20 && rough_slot >= 0) values[shape] = draw % 2 ? 0.0 : 1.0;
+            // At ior = 1 exactly eval's 1 - (1 - c^2) rounds to 0 for cos < 1e-8, giving F = 1 (no light through)
+            // where the true F is 0; the float kernel's cancellation-free form is right there (brdf_batch.h,
+            // mr_batchf_dielectric_transmit), so the reference is taken a hair above, where eval is accurate.
+            const int ior_slot = mr_brdf_param_offset(model, mr_brdf_param_index(model, "ior"));
+            if (ior_slot >= 0 && values[ior_slot] < 1.0 + 1e-6) values[ior_slot] = 1.0 + 1e-6;
+            mr_brdf_state st;
+            model->prepare(model, values, st.bytes);
+            random_pairs(&rng, in);
+            for (int vector = 0; vector < 2; vector++) {
+                const mr_brdf_batch b = {PAIRS, {in[0] + 1, in[1] + 1, in[2] + 1}, {in[3] + 1, in[4] + 1, in[5] + 1},
+                                         {out[0], out[1], out[2]}, {out[3], out[4], out[5]}};
+                mr_brdf_eval_batch_float(model, st.bytes, &b, vector);
+                int pair = 0;
+                const double ratio = worst_ratio_within(model, st.bytes, &b, MR_BRDF_FLOAT_RTOL, MR_BRDF_FLOAT_ATOL,
+                                                        &pair);
+                overall = fmax(overall, ratio);
+                MR_CHECK_MSG(ratio <= 1.0, "%s (float %s kernel, draw %d): pair %d off by %.3g of the tolerance",
+                             model->name, vector ? "AVX2/FMA" : "portable", draw, pair, ratio);
+                for (int k = 0; k < 6; k++) in[k][0] = in[k][1];
+                const mr_brdf_batch longer = {PAIRS + 1, {in[0], in[1], in[2]}, {in[3], in[4], in[5]},
+                                              {shifted[0], shifted[1], shifted[2]},
+                                              {shifted[3], shifted[4], shifted[5]}};
+                kernel(st.bytes, &longer, vector);
+                int same = 1;
+                for (int k = 0; k < 6; k++) same &= memcmp(shifted[k] + 1, out[k], PAIRS * sizeof(double)) == 0;
+                MR_CHECK_MSG(same, "%s (float %s kernel): a pair's value depends on its place in the batch",
+                             model->name, vector ? "AVX2/FMA" : "portable");
+            }
+        }
+        if (getenv("MR_TEST_VERBOSE"))
+            printf("    %-22s worst |float batch - eval| = %.3g of the tolerance\n", model->name, overall);
+    }
+    MR_CHECK_MSG(with_kernel == 16, "%d models with a float kernel, expected 16 (3 Ward, 12 microfacet, gltf)",
+                 with_kernel);
+}
+
+/* Distance in units in the last place between two positive finite floats. */
+static double ulps_float(float a, float b) {
+    if (a == b) return 0.0;
+    const float big = fmaxf(a, b), spacing = nextafterf(big, INFINITY) - big;
+    return fabs((double)a - (double)b) / spacing;
+}
+
+/* mr_batchf_exp within 2 ulp of libm's expf (itself within 1 ulp of the true value: checked with 1 more) over
+ * [-87, 88], mr_batchf_log within 2 ulp (+1) of logf where |log x| >= 0.1 and within 2^-24 absolute elsewhere,
+ * log1p within 4 ulp of log1pf; the documented ends. */
+MR_TEST(float_exp_log_within_their_bounds) {
+    double worst_exp = 0.0, worst_log = 0.0, worst_log_abs = 0.0, worst_log1p = 0.0;
+    uint64_t rng = 31;
+    for (int fused = 0; fused < 2; fused++) {
+        for (int i = 0; i <= 400000; i++) {
+            const float x = (float)(-87.0 + 175.0 * i / 400000.0 + 1e-4 * test_random(&rng));
+            if (x > 88.0f) continue;
+            worst_exp = fmax(worst_exp, ulps_float(mr_batchf_exp(x, fused), expf(x)));
+            const float small = (float)(-0.5 * test_random(&rng));
+            worst_exp = fmax(worst_exp, ulps_float(mr_batchf_exp(small, fused), expf(small)));
+            const float y = (float)pow(10.0, -37.0 + 74.0 * test_random(&rng));
+            const float ly = mr_batchf_log(y, fused), ref = logf(y);
+            if (fabsf(ref) >= 0.1f)
+                worst_log = fmax(worst_log, ulps_float(fabsf(ly), fabsf(ref)));
+            else
+                worst_log_abs = fmax(worst_log_abs, fabs((double)ly - (double)ref));
+            const float t = (float)pow(10.0, -12.0 + 36.0 * test_random(&rng));
+            worst_log1p = fmax(worst_log1p, ulps_float(mr_batchf_log1p(t, fused), log1pf(t)));
+        }
+        MR_CHECK(mr_batchf_exp(0.0f, fused) == 1.0f);
+        MR_CHECK(mr_batchf_exp(-87.5f, fused) == 0.0f);
+        MR_CHECK(isinf(mr_batchf_exp(88.5f, fused)));
+        MR_CHECK(isnan(mr_batchf_exp(NAN, fused)));
+        MR_CHECK(mr_batchf_log(1.0f, fused) == 0.0f);
+        MR_CHECK(mr_batchf_log1p(0.0f, fused) == 0.0f);
+    }
+    MR_CHECK_MSG(worst_exp <= 3.0, "float exp: %.3g ulp from expf", worst_exp);
+    MR_CHECK_MSG(worst_log <= 3.0, "float log: %.3g ulp from logf", worst_log);
+    MR_CHECK_MSG(worst_log_abs <= 0x1p-24, "float log near 1: %.3g from logf", worst_log_abs);
+    MR_CHECK_MSG(worst_log1p <= 4.0, "float log1p: %.3g ulp from log1pf", worst_log1p);
+    if (getenv("MR_TEST_VERBOSE"))
+        printf("    float exp %.3g ulp, log %.3g ulp (%.3g absolute near 1), log1p %.3g ulp\n", worst_exp, worst_log,
+               worst_log_abs, worst_log1p);
+}
+
+/* The float switch reaches a plan's closer look (mr_render_plan_zoomed), whether that was built before or after it
+ * was set: the closer render of ward differs from the double plan's, and equals it again once switched off. */
+MR_TEST(float_switch_reaches_the_closer_look) {
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){64, MR_FIT_LIGHT_45, 0});
+    mr_render_plan *plan_float = NULL, *plan_double = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan_float));
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan_double));
+    if (plan_float == NULL || plan_double == NULL) return;
+    const mr_render_plan *close_double = NULL, *close_before = NULL;
+    MR_CHECK_OK(mr_render_plan_zoomed(plan_double, 8.0, &close_double));
+    MR_CHECK_OK(mr_render_plan_zoomed(plan_float, 8.0, &close_before)); // built while the plan is double
+    mr_render_plan_set_float_kernels(plan_float, 1);
+    const mr_brdf_model *ward = mr_brdf_find("ward");
+    double values[MR_BRDF_MAX_VALUES];
+    mr_brdf_default_values(ward, values);
+    mr_image *a = NULL, *b = NULL;
+    MR_CHECK_OK(mr_image_create(64, 64, 3, &a));
+    MR_CHECK_OK(mr_image_create(64, 64, 3, &b));
+    if (close_double && close_before && a && b) {
+        MR_CHECK_OK(mr_render_into_threads(close_double, 1, ward, values, MR_COMPONENT_FULL, a));
+        MR_CHECK_OK(mr_render_into_threads(close_before, 1, ward, values, MR_COMPONENT_FULL, b));
+        MR_CHECK_MSG(!same_pixels(a, b), "the closer look built before the switch still renders in double");
+        mr_render_plan_set_float_kernels(plan_float, 0);
+        MR_CHECK_OK(mr_render_into_threads(close_before, 1, ward, values, MR_COMPONENT_FULL, b));
+        MR_CHECK_MSG(same_pixels(a, b), "switched off, the closer look does not render as the double plan's");
+    }
+    mr_render_plan *plan_late = NULL; // switched on before its closer look is built
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan_late));
+    const mr_render_plan *close_after = NULL;
+    if (plan_late) mr_render_plan_set_float_kernels(plan_late, 1);
+    if (plan_late) MR_CHECK_OK(mr_render_plan_zoomed(plan_late, 8.0, &close_after));
+    if (close_after && close_double && a && b) {
+        MR_CHECK_OK(mr_render_into_threads(close_after, 1, ward, values, MR_COMPONENT_FULL, b));
+        MR_CHECK_MSG(!same_pixels(a, b), "the closer look built after the switch renders in double");
+    }
+    mr_image_free(a);
+    mr_image_free(b);
+    mr_render_plan_free(plan_float);
+    mr_render_plan_free(plan_double);
+    mr_render_plan_free(plan_late);
+}
+
+/* With the float kernels (render_internal.h), batched renders on 1 and 2 threads are bit-identical at 512^2, and
+ * models without a float kernel render exactly as in double. */
+MR_TEST(float_render_same_bits_on_one_and_two_threads) {
+    mr_scene scene = mr_scene_fit(&(mr_fit_scene_options){512, MR_FIT_LIGHT_FRONTAL, 0});
+    scene.threads = 2;
+    mr_render_plan *plan = NULL, *plan_double = NULL;
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan));
+    MR_CHECK_OK(mr_render_plan_create(&scene, &plan_double));
+    if (plan) mr_render_plan_set_float_kernels(plan, 1);
+    mr_image *one = NULL, *two = NULL;
+    MR_CHECK_OK(mr_image_create(512, 512, 3, &one));
+    MR_CHECK_OK(mr_image_create(512, 512, 3, &two));
+    const char *names[] = {"ward", "ggx", "as", "gltf", "lambert"};
+    for (size_t m = 0; plan && plan_double && one && two && m < sizeof names / sizeof names[0]; m++) {
+        const mr_brdf_model *model = mr_brdf_find(names[m]);
+        double values[MR_BRDF_MAX_VALUES];
+        mr_brdf_default_values(model, values);
+        for (int path = MR_RENDER_PATH_BATCH_PORTABLE; path <= MR_RENDER_PATH_BATCH_VECTOR; path++) {
+            MR_CHECK_OK(mr_render_into_path(plan, 1, model, values, MR_COMPONENT_FULL, one, (mr_render_path)path));
+            MR_CHECK_OK(mr_render_into_path(plan, 2, model, values, MR_COMPONENT_FULL, two, (mr_render_path)path));
+            MR_CHECK_MSG(same_pixels(one, two), "%s float path %d: 1 and 2 threads differ", names[m], path);
+            MR_CHECK_OK(mr_render_into_path(plan_double, 1, model, values, MR_COMPONENT_FULL, two,
+                                            (mr_render_path)path));
+            const int has_float = mr_brdf_float_kernel(model) != NULL;
+            MR_CHECK_MSG(same_pixels(one, two) == !has_float, "%s path %d: float and double renders %s", names[m],
+                         path, has_float ? "identical" : "differ");
+            // The images agree to about float's precision where they are not tiny (per-pixel sums of float values).
+            MR_CHECK_MSG(image_rel_diff(one, two) <= 1e-3, "%s path %d: float render %.3g from double", names[m],
+                         path, image_rel_diff(one, two));
+        }
+    }
+    mr_image_free(one);
+    mr_image_free(two);
+    mr_render_plan_free(plan);
+    mr_render_plan_free(plan_double);
+}
+
 MR_TEST_MAIN(MR_TEST_ENTRY(batch_equals_eval_for_every_model), MR_TEST_ENTRY(vector_exp_log_pow_within_their_bounds),
              MR_TEST_ENTRY(batched_render_equals_per_sample_render),
              MR_TEST_ENTRY(batched_environment_render_equals_per_sample_render),
-             MR_TEST_ENTRY(batched_render_same_bits_on_one_and_two_threads))
+             MR_TEST_ENTRY(batched_render_same_bits_on_one_and_two_threads),
+             MR_TEST_ENTRY(float_batch_within_its_tolerance_of_eval), MR_TEST_ENTRY(float_exp_log_within_their_bounds),
+             MR_TEST_ENTRY(float_render_same_bits_on_one_and_two_threads),
+             MR_TEST_ENTRY(float_switch_reaches_the_closer_look))

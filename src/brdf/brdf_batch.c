@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "brdf_batch.h"
+#include "brdf_float.h"
 
 void mr_brdf_eval_batch(const mr_brdf_model *model, const void *state, const mr_brdf_batch *batch, int vector) {
     if (model->eval_batch != NULL) {
@@ -50,4 +51,19 @@ int mr_brdf_batch_vector_default(void) {
     known = (simd != NULL && strcmp(simd, "scalar") == 0) ? 0 : mr_brdf_batch_cpu_vector();
     atomic_store_explicit(&vector_default, known, memory_order_relaxed);
     return known;
+}
+
+mr_brdf_batch_fn mr_brdf_float_kernel(const mr_brdf_model *model) {
+    mr_brdf_batch_fn kernel = mr_ward_float_kernel(model);
+    if (kernel == NULL) kernel = mr_mf_float_kernel(model);
+    if (kernel == NULL) kernel = mr_gltf_float_kernel(model);
+    return kernel;
+}
+
+void mr_brdf_eval_batch_float(const mr_brdf_model *model, const void *state, const mr_brdf_batch *batch, int vector) {
+    const mr_brdf_batch_fn kernel = mr_brdf_float_kernel(model);
+    if (kernel != NULL)
+        kernel(state, batch, vector);
+    else
+        mr_brdf_eval_batch(model, state, batch, vector);
 }

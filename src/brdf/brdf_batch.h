@@ -13,7 +13,8 @@
  * the same order, and kernels reuse brdf_internal.h's branch-free helpers (G1, Fresnel), so a kernel differs from
  * eval only through mr_batch_exp / mr_batch_pow (and, in the AVX2 variant, their fused multiply-adds) and GGX's
  * D G written with one division (mr_batch_ggx_dg, mr_batch_ggx_dv_correlated).
- * docs/performance.md ("Vectorised lobes") says why double and not float.
+ * docs/performance.md ("Vectorised lobes", "Double, not float") says why double and not float: the float kernels at
+ * the end of this file (brdf_float.h) exist to measure that choice and are used only where a plan asks for them.
  */
 #ifndef MR_BRDF_BATCH_H
 #define MR_BRDF_BATCH_H
@@ -240,5 +241,171 @@ MR_BATCH_INLINE double mr_batch_ggx_dv_correlated(double alpha, const mr_brdf_ge
         body(state, batch, 0);                                                                                   \
     }
 #endif
+
+
+/* ---- single precision (the float kernels; brdf_float.h says how a render chooses them) ----
+ *
+ * A float kernel reads the batch's doubles, computes in float (8 lanes an AVX2 vector instead of 4) and writes f_r
+ * back as doubles, so that it plugs into the same batch and render loop. Every conversion between the widths is an
+ * instruction of its own: Ward converts its one lobe factor and multiplies by the per-channel constants in double;
+ * the microfacet and gltf kernels multiply in float and convert the channels (done the Ward way they measured 15 %
+ * slower for ggx and gltf, faster for ggx-nofresnel only: bench_fit --kernels). One part stays in double: the sums
+ * H_x = wi_x + wo_x and H_y, which cancel where the lobe peaks (wi ~ mirror of wo); in float their error would be
+ * 2^-24 of |wi_x| instead of 2^-24 of |H_x|, and a narrow lobe's exponent -tan^2(theta_h)/alpha^2 would lose every
+ * digit at alpha = 1e-4. Every other intermediate is float and every formula is rewritten to stay inside float's
+ * range (1.2e-38 .. 3.4e38) wherever the double one stays finite (the cosines floored at MR_BRDF_COS_MIN = 1e-12):
+ * 1/cos^4(theta_h) as (1 + tan^2)^2, GGX's |H|^4/root^2 as (|H|^2/root)^2, pow(cos_h, n) as
+ * exp(-n/2 log1p(tan^2)) (cos_h's own rounding, 2^-24, times n = 2e8 at alpha = 1e-4 would be all the answer). */
+
+/* a * b + c in float, fused in the AVX2/FMA variant (mr_batch_madd's contract). */
+MR_BATCH_INLINE float mr_batchf_madd(float a, float b, float c, const int fused) {
+    return fused ? fmaf(a, b, c) : a * b + c;
+}
+
+MR_BATCH_INLINE uint32_t mr_batchf_bits(float x) {
+    uint32_t u;
+    memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+MR_BATCH_INLINE float mr_batchf_float(uint32_t u) {
+    float x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
+
+/* expf without libm: x = k ln2 + r, k = round(x / ln2) by the 1.5 * 2^23 trick, |r| <= ln2/2, ln2 in Cephes'
+ * two-part split (0.693359375 has 9 bits, so k * 0.693359375 is exact); exp(r) = 1 + r + r^2 P(r), P Cephes expf's
+ * degree-5 minimax polynomial (Cephes 2.8 expf.c, relative error 1.7e-7 over |r| <= ln2/2); 2^k added to the
+ * exponent bits. Within 2 ulp of the true value (tests/test_batch.c measures the largest difference from libm's expf
+ * over [-87, 88]). x < -87 gives 0 (the true value is below 1.7e-38, float's normal range ends at 1.2e-38),
+ * x > 88 gives +inf (the true value exceeds 1.6e38), NaN gives NaN. */
+MR_BATCH_INLINE float mr_batchf_exp(float x, const int fused) {
+    const float magic = 0x1.8p23f, log2e = 1.44269504088896341f;
+    const float c1 = 0.693359375f, c2 = -2.12194440e-4f;
+    const float xc = x < -87.0f ? -87.0f : (x > 88.0f ? 88.0f : x);
+    const float t = mr_batchf_madd(xc, log2e, magic, fused);
+    const float k = t - magic;
+    float r = mr_batchf_madd(-k, c1, xc, fused);
+    r = mr_batchf_madd(-k, c2, r, fused);
+    float p = 1.9875691500e-4f;
+    p = mr_batchf_madd(p, r, 1.3981999507e-3f, fused);
+    p = mr_batchf_madd(p, r, 8.3334519073e-3f, fused);
+    p = mr_batchf_madd(p, r, 4.1665795894e-2f, fused);
+    p = mr_batchf_madd(p, r, 1.6666665459e-1f, fused);
+    p = mr_batchf_madd(p, r, 5.0000001201e-1f, fused);
+    const float e = mr_batchf_madd(p * r, r, r, fused) + 1.0f;
+    // e is in [0.70, 1.42] and k in [-126, 127]: the sum of exponents stays a normal number.
+    const float scaled = mr_batchf_float(mr_batchf_bits(e) + ((mr_batchf_bits(t) - mr_batchf_bits(magic)) << 23));
+    const float bounded = x < -87.0f ? 0.0f : (x > 88.0f ? (float)INFINITY : scaled);
+    return x == x ? bounded : x;
+}
+
+/* logf for a normal x > 0: x = 2^e m, m in [sqrt(1/2), sqrt(2)) from the bits, log m = 2 atanh(f),
+ * f = (m - 1)/(m + 1), |f| <= 0.172, by its odd series to f^11 (the next term is below 2^-27 of the sum); e ln2 with
+ * Cephes' split. Within 2 ulp of the true value where |log x| >= 0.1 and within 2^-24 absolute below
+ * (tests/test_batch.c). */
+MR_BATCH_INLINE float mr_batchf_log(float x, const int fused) {
+    const float c1 = 0.693359375f, c2 = -2.12194440e-4f;
+    const uint32_t xb = mr_batchf_bits(x);
+    float e = (float)((int32_t)(xb >> 23) - 127);
+    float m = mr_batchf_float((xb & 0x007fffffu) | 0x3f800000u);
+    const int big = m > 1.41421356f;
+    m = big ? 0.5f * m : m;
+    e = big ? e + 1.0f : e;
+    const float f = (m - 1.0f) / (m + 1.0f), s = f * f;
+    float q = 1.0f / 11.0f;
+    q = mr_batchf_madd(q, s, 1.0f / 9.0f, fused);
+    q = mr_batchf_madd(q, s, 1.0f / 7.0f, fused);
+    q = mr_batchf_madd(q, s, 1.0f / 5.0f, fused);
+    q = mr_batchf_madd(q, s, 1.0f / 3.0f, fused);
+    const float two_f = 2.0f * f;
+    const float log_m = mr_batchf_madd(two_f * s, q, two_f, fused);
+    return mr_batchf_madd(e, c1, mr_batchf_madd(e, c2, log_m, fused), fused);
+}
+
+/* log1p(x) for x >= 0 (tan^2 of an angle): log(u), u = 1 + x rounded, plus the first-order correction for that
+ * rounding, (x - (u - 1))/u (Goldberg 1991, "What every computer scientist should know...", theorem 4's idea). */
+MR_BATCH_INLINE float mr_batchf_log1p(float x, const int fused) {
+    const float u = 1.0f + x;
+    return mr_batchf_log(u, fused) + (x - (u - 1.0f)) / u;
+}
+
+/* The float geometry of a pair (mr_brdf_geom's fields that the float kernels use, hxy2 = H_x^2 + H_y^2 instead of
+ * H_x and H_y). */
+typedef struct mr_batchf_geom_t {
+    float cos_i, cos_o, sin2_i, sin2_o, hz, hxy2, h_len2, cos_h, tan2_h, dot_h;
+} mr_batchf_geom_t;
+
+/* mr_batch_geom in float, H_x and H_y summed in double (see above); the squares of the x, y parts are summed in
+ * double too and converted once (no accuracy reason: each conversion of a double vector to float costs as much as
+ * a float operation on 8 lanes, and a kernel here is short). Returns whether both directions are above the
+ * horizon. */
+MR_BATCH_INLINE int mr_batchf_geom(double ix, double iy, double iz, double ox, double oy, double oz,
+                                   mr_batchf_geom_t *g) {
+    const int lit = (iz > 0.0) & (oz > 0.0);
+    g->cos_i = (float)(iz > MR_BRDF_COS_MIN ? iz : MR_BRDF_COS_MIN);
+    g->cos_o = (float)(oz > MR_BRDF_COS_MIN ? oz : MR_BRDF_COS_MIN);
+    g->sin2_i = (float)(ix * ix + iy * iy);
+    g->sin2_o = (float)(ox * ox + oy * oy);
+    const double hx = ix + ox, hy = iy + oy;
+    g->hz = g->cos_i + g->cos_o;
+    g->hxy2 = (float)(hx * hx + hy * hy);
+    g->h_len2 = g->hxy2 + g->hz * g->hz;
+    g->cos_h = g->hz / sqrtf(g->h_len2);
+    g->tan2_h = g->hxy2 / (g->hz * g->hz);
+    g->dot_h = MR_MIN(0.5f * sqrtf(g->h_len2), 1.0f);
+    return lit;
+}
+
+/* (1 - c)^5 in float. */
+MR_BATCH_INLINE float mr_batchf_schlick_weight(float c) {
+    const float m = 1.0f - c, m2 = m * m;
+    return m2 * m2 * m;
+}
+
+/* mr_fresnel_dielectric's value in float, written without its cancellations (u = eta cos_t, u^2 = eta^2 - 1 + c^2):
+ * c - u = -(eta^2 - 1)/(c + u) and eta^2 c^2 - cos_t^2 = (eta^2 - 1)((eta^2 + 1) c^2 - 1)/eta^2, so
+ *   R_s = -(eta^2 - 1)/(c + u)^2,   R_p = (eta^2 - 1)((eta^2 + 1) c^2 - 1)/(eta^2 (eta c + cos_t)^2).
+ * The same numbers; float's c - u would keep no digit for eta near 1 (F ~ ((eta - 1)/2)^2 tiny, multiplied by a
+ * narrow lobe's large D G), nor float's 1 - (1 - c^2) near grazing incidence. eta^2 - 1 is given as in
+ * mr_batchf_dielectric_transmit. */
+MR_BATCH_INLINE float mr_batchf_fresnel_dielectric(float c, float eta, float eta2_minus_1) {
+    const float eta2 = eta * eta, cos_t = sqrtf(MR_MAX((eta2_minus_1 + c * c) / eta2, 0.0f));
+    const float s = c + eta * cos_t, p = eta * c + cos_t;
+    const float rs = -eta2_minus_1 / (s * s);
+    const float rp = eta2_minus_1 * ((eta2 + 1.0f) * (c * c) - 1.0f) / (eta2 * (p * p));
+    const float F = 0.5f * (rs * rs + rp * rp);
+    return F < 0.0f ? 0.0f : (F > 1.0f ? 1.0f : F);
+}
+
+/* 1 - mr_fresnel_dielectric(cos_i, eta) in float, written without the cancellation of 1 - F (F -> 1 at grazing
+ * incidence, where float's 1 - F would keep no digit): with u = eta cos_t, 1 - R_s^2 = 4 c u/(c + u)^2 and
+ * 1 - R_p^2 = 4 eta c cos_t/(eta c + cos_t)^2, so 1 - F = 2 c (u/(c + u)^2 + eta cos_t/(eta c + cos_t)^2);
+ * cos_t^2 = (eta^2 - 1 + c^2)/eta^2 (no cancellation for eta >= 1; eta^2 - 1 is given, rounded from double, as
+ * float's own would lose its digits for eta near 1). */
+MR_BATCH_INLINE float mr_batchf_dielectric_transmit(float c, float eta, float eta2_minus_1) {
+    const float cos_t = sqrtf(MR_MAX((eta2_minus_1 + c * c) / (eta * eta), 0.0f));
+    const float u = eta * cos_t, s = c + u, p = eta * c + cos_t;
+    const float T = 2.0f * c * (u / (s * s) + u / (p * p));
+    return T < 0.0f ? 0.0f : (T > 1.0f ? 1.0f : T);
+}
+
+/* mr_batch_fresnel_conductor in float (same formula; the 0/0 guard of the R_p ratio at float's scale). */
+MR_BATCH_INLINE float mr_batchf_fresnel_conductor(float c, float eta, float k) {
+    const float c2 = c * c, s2 = MR_MAX(1.0f - c2, 0.0f), s4 = s2 * s2;
+    const float t = eta * eta - k * k - s2;
+    const float A = sqrtf(t * t + 4.0f * eta * eta * k * k);
+    const float a = sqrtf(MR_MAX(0.5f * (A + t), 0.0f));
+    const float P = A + c2, Q = 2.0f * a * c;
+    const float rs = (P - Q) / (P + Q);
+    const float U = A * c2 + s4, W = Q * s2;
+    const float ratio = U + W > 1e-30f ? (U - W) / (U + W) : 1.0f;
+    const float F = 0.5f * (rs + rs * ratio);
+    return F < 0.0f ? 0.0f : (F > 1.0f ? 1.0f : F);
+}
+
+/* The kernel's arrays and the float geometry's loop head are the double kernels' (MR_BATCH_ARRAYS); a float
+ * kernel is defined by MR_BATCH_KERNEL like a double one. */
 
 #endif /* MR_BRDF_BATCH_H */

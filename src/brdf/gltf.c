@@ -47,6 +47,7 @@
  * max F).
  */
 #include "brdf_batch.h"
+#include "brdf_float.h"
 
 /* Slots of the packed value vector. */
 enum { GLTF_BASE = 0, GLTF_METALLIC = 3, GLTF_ROUGHNESS = 4, GLTF_SPECULAR = 5, GLTF_SPECULAR_COLOR = 6,
@@ -147,6 +148,44 @@ MR_BATCH_INLINE void gltf_batch_body(const void *state_bytes, const mr_brdf_batc
 }
 
 MR_BATCH_KERNEL(gltf_eval_batch, gltf_batch_body)
+
+/* gltf_batch_body in float (brdf_float.h): D V as mr_batch_ggx_dv_correlated's, D written as a^2 (|H|^2/root)^2/pi
+ * to stay in float's range (brdf_batch.h, "single precision"). */
+MR_BATCH_INLINE void gltf_batchf_body(const void *state_bytes, const mr_brdf_batch *batch, const int fused) {
+    (void)fused; // no exp or pow here
+    const gltf_state *state = state_bytes;
+    const float alpha = (float)state->alpha, m = (float)state->metallic, spec = (float)state->specular;
+    const float a2 = alpha * alpha, inv_pi = (float)MR_INV_PI;
+    const float b0 = (float)state->base[0], b1 = (float)state->base[1], b2 = (float)state->base[2];
+    const float f0 = (float)state->f0[0], f1 = (float)state->f0[1], f2 = (float)state->f0[2];
+    MR_BATCH_ARRAYS(batch);
+#pragma omp simd
+    for (int i = 0; i < n_; i++) {
+        mr_batchf_geom_t g;
+        const int lit = mr_batchf_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
+        const float w = mr_batchf_schlick_weight(g.dot_h);
+        const float F0 = f0 + (spec - f0) * w, F1 = f1 + (spec - f1) * w, F2 = f2 + (spec - f2) * w;
+        const float Fmax = MR_MAX(MR_MAX(MR_MAX(0.0f, F0), F1), F2);
+        const float nl = g.cos_i, nv = g.cos_o;
+        const float root_l = sqrtf(a2 * (1.0f - nl * nl) + nl * nl);
+        const float root_v = sqrtf(a2 * (1.0f - nv * nv) + nv * nv);
+        const float t = g.h_len2 / (a2 * (g.hz * g.hz) + g.hxy2);
+        const float S = lit ? 0.5f * (a2 * t * t * inv_pi) / (nv * root_l + nl * root_v) : 0.0f;
+        const float diffuse = (1.0f - m) * (1.0f - Fmax) * inv_pi;
+        d0_[i] = lit ? diffuse * b0 : 0.0f;
+        d1_[i] = lit ? diffuse * b1 : 0.0f;
+        d2_[i] = lit ? diffuse * b2 : 0.0f;
+        s0_[i] = ((1.0f - m) * F0 + m * (b0 + (1.0f - b0) * w)) * S;
+        s1_[i] = ((1.0f - m) * F1 + m * (b1 + (1.0f - b1) * w)) * S;
+        s2_[i] = ((1.0f - m) * F2 + m * (b2 + (1.0f - b2) * w)) * S;
+    }
+}
+
+MR_BATCH_KERNEL(gltf_eval_batch_float, gltf_batchf_body)
+
+mr_brdf_batch_fn mr_gltf_float_kernel(const mr_brdf_model *model) {
+    return model->eval == gltf_eval ? gltf_eval_batch_float : NULL;
+}
 
 static void gltf_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3],
                            const double wo[3], double *d_diffuse, double *d_specular) {

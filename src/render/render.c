@@ -30,6 +30,7 @@
 #include "mesh.h"
 #include "render.h"
 #include "render_internal.h"
+#include "../brdf/brdf_float.h"
 #include "texture.h"
 #include "vec3.h"
 
@@ -112,6 +113,7 @@ struct mr_render_plan {
     /* The point samples as structure of arrays for batched renders (point_soa below): built on first use like
      * `zoomed`, freed with this plan. */
     _Atomic(struct point_soa *) point_soa;
+    int float_kernels; /* batched renders in float (render_internal.h, mr_render_plan_set_float_kernels) */
 };
 
 
@@ -1198,6 +1200,7 @@ mr_status mr_render_plan_zoomed(const mr_render_plan *plan, double zoom, const m
         mr_status status = mr_render_plan_create(&scene, &made);
         if (status != MR_OK) return mr_fail_context(status, "render plan: closer look");
         made->zoom = zoom;
+        made->float_kernels = plan->float_kernels;
         mr_render_plan *expected = NULL;
         if (!atomic_compare_exchange_strong_explicit(slot, &expected, made, memory_order_acq_rel,
                                                      memory_order_acquire)) {
@@ -1210,6 +1213,12 @@ mr_status mr_render_plan_zoomed(const mr_render_plan *plan, double zoom, const m
                        zoom, made->zoom);
     *out = made;
     return MR_OK;
+}
+
+void mr_render_plan_set_float_kernels(mr_render_plan *plan, int on) {
+    plan->float_kernels = on != 0;
+    mr_render_plan *zoomed = atomic_load_explicit(&plan->zoomed, memory_order_acquire);
+    if (zoomed != NULL) zoomed->float_kernels = plan->float_kernels;
 }
 
 const float *mr_render_plan_coverage(const mr_render_plan *plan) { return plan->coverage; }
@@ -1446,13 +1455,25 @@ static inline void store_lit_pixel(const mr_render_plan *plan, int i, mr_image *
     }
 }
 
+/* The model's batch: `kernel` (a float kernel, brdf_float.h) when the plan asks for float and the model has one,
+ * else eval_batch in double (kernel NULL). */
+static inline __attribute__((always_inline)) void render_eval_batch(const mr_brdf_model *model, mr_brdf_batch_fn kernel,
+                                                                    const void *state, const mr_brdf_batch *batch,
+                                                                    int vector) {
+    if (kernel != NULL)
+        kernel(state, batch, vector);
+    else
+        mr_brdf_eval_batch(model, state, batch, vector);
+}
+
 /* One block of lit pixels [first, end) of a batched render, for the parts asked for (constants in each call of
  * render_batched, so that the sums stay in registers): the model's eval_batch over the block's samples in batches,
  * weighed (weigh_batch), then each lit pixel sums its samples in plan order, which is accumulate()'s arithmetic
  * (and, where the surface emits, each hit's emission after its samples, as the per-sample loop does). */
 static inline __attribute__((always_inline)) void render_block(const mr_render_plan *plan, const point_soa *soa,
                                                                const mr_brdf_model *model, const void *state,
-                                                               int vector, int first, int end, mr_image *full,
+                                                               mr_brdf_batch_fn kernel, int vector, int first,
+                                                               int end, mr_image *full,
                                                                mr_image *diffuse, mr_image *specular,
                                                                const int want_full, const int want_diffuse,
                                                                const int want_specular) {
@@ -1478,7 +1499,7 @@ static inline __attribute__((always_inline)) void render_block(const mr_render_p
                         {fd[0], fd[1], fd[2]},
                         {fs[0], fs[1], fs[2]},
                     };
-                    mr_brdf_eval_batch(model, state, &batch, vector);
+                    render_eval_batch(model, kernel, state, &batch, vector);
                     const double *const weight[3] = {soa->weight[0] + s, soa->weight[1] + s, soa->weight[2] + s};
                     weigh_batch(fd, fs, weight, batch.n, want_full);
                 }
@@ -1529,7 +1550,7 @@ typedef struct sample_position {
  * evaluates them; returns how many. The light and weight of each are the per-sample loop's (render_core), operation
  * for operation. */
 static int gather_batch(const mr_render_plan *plan, sample_position at, int hit_end, const mr_brdf_model *model,
-                        const void *state, int vector, gathered_batch *out) {
+                        const void *state, mr_brdf_batch_fn kernel, int vector, gathered_batch *out) {
     int n = 0;
     for (int h = at.h; h < hit_end && n < RENDER_BATCH_SAMPLES; h++) {
         const plan_hit *hit = &plan->hits[h];
@@ -1568,7 +1589,7 @@ static int gather_batch(const mr_render_plan *plan, sample_position at, int hit_
                                  {out->light[0], out->light[1], out->light[2]},
                                  {out->fd[0], out->fd[1], out->fd[2]},
                                  {out->fs[0], out->fs[1], out->fs[2]}};
-    mr_brdf_eval_batch(model, state, &batch, vector);
+    render_eval_batch(model, kernel, state, &batch, vector);
     return n;
 }
 
@@ -1577,7 +1598,8 @@ static int gather_batch(const mr_render_plan *plan, sample_position at, int hit_
  * reflection samples and then the hit's emission, in the per-sample loop's order and arithmetic. */
 static inline __attribute__((always_inline)) void render_block_gathered(const mr_render_plan *plan,
                                                                         const mr_brdf_model *model,
-                                                                        const void *state, int vector, int first,
+                                                                        const void *state, mr_brdf_batch_fn kernel,
+                                                                        int vector, int first,
                                                                         int end, gathered_batch *buf,
                                                                         mr_image *full, mr_image *diffuse,
                                                                         mr_image *specular, const int want_full,
@@ -1596,7 +1618,8 @@ static inline __attribute__((always_inline)) void render_block_gathered(const mr
                                                : stage == 1 ? hit[1].env_begin : hit[1].reflection_begin;
                 for (size_t e = begin; e < stop; e++, j++) {
                     if (j == n) {
-                        n = gather_batch(plan, (sample_position){h, stage, e}, hit_end, model, state, vector, buf);
+                        n = gather_batch(plan, (sample_position){h, stage, e}, hit_end, model, state, kernel, vector,
+                                         buf);
                         const double *const weight[3] = {buf->weight[0], buf->weight[1], buf->weight[2]};
                         weigh_batch(buf->fd, buf->fs, weight, n, want_full);
                         j = 0;
@@ -1633,7 +1656,8 @@ static inline __attribute__((always_inline)) void render_block_gathered(const mr
  * samples for point_soa), in fixed blocks of lit pixels (render_block_gathered). Returns 0 when out of memory for the
  * batch buffers (nothing rendered). */
 static int render_gathered(const mr_render_plan *plan, int threads, const mr_brdf_model *model, const void *state,
-                           int vector, mr_image *full, mr_image *diffuse, mr_image *specular) {
+                           mr_brdf_batch_fn kernel, int vector, mr_image *full, mr_image *diffuse,
+                           mr_image *specular) {
     const int lit = plan->lit_pixels, blocks = (lit + RENDER_BATCH_PIXELS - 1) / RENDER_BATCH_PIXELS;
     const int team = threads > 1 ? threads : 1;
     gathered_batch *buffers = malloc((size_t)team * sizeof *buffers); // 60 kB each: too much for a thread's stack
@@ -1643,13 +1667,14 @@ static int render_gathered(const mr_render_plan *plan, int threads, const mr_brd
         gathered_batch *buf = &buffers[team > 1 ? omp_get_thread_num() : 0];
         const int first = b * RENDER_BATCH_PIXELS, end = MR_MIN(lit, first + RENDER_BATCH_PIXELS);
         if (full)
-            render_block_gathered(plan, model, state, vector, first, end, buf, full, NULL, NULL, 1, 0, 0);
+            render_block_gathered(plan, model, state, kernel, vector, first, end, buf, full, NULL, NULL, 1, 0, 0);
         else if (diffuse && specular)
-            render_block_gathered(plan, model, state, vector, first, end, buf, NULL, diffuse, specular, 0, 1, 1);
+            render_block_gathered(plan, model, state, kernel, vector, first, end, buf, NULL, diffuse, specular, 0, 1,
+                                  1);
         else if (diffuse)
-            render_block_gathered(plan, model, state, vector, first, end, buf, NULL, diffuse, NULL, 0, 1, 0);
+            render_block_gathered(plan, model, state, kernel, vector, first, end, buf, NULL, diffuse, NULL, 0, 1, 0);
         else
-            render_block_gathered(plan, model, state, vector, first, end, buf, NULL, NULL, specular, 0, 0, 1);
+            render_block_gathered(plan, model, state, kernel, vector, first, end, buf, NULL, NULL, specular, 0, 0, 1);
     }
     free(buffers);
     return 1;
@@ -1658,19 +1683,20 @@ static int render_gathered(const mr_render_plan *plan, int threads, const mr_brd
 
 /* render_core for one uniform material over point samples only, in fixed blocks of lit pixels (render_block). */
 static void render_batched(const mr_render_plan *plan, const point_soa *soa, int threads, const mr_brdf_model *model,
-                           const void *state, int vector, mr_image *full, mr_image *diffuse, mr_image *specular) {
+                           const void *state, mr_brdf_batch_fn kernel, int vector, mr_image *full, mr_image *diffuse,
+                           mr_image *specular) {
     const int lit = plan->lit_pixels, blocks = (lit + RENDER_BATCH_PIXELS - 1) / RENDER_BATCH_PIXELS;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads > 1)
     for (int b = 0; b < blocks; b++) {
         const int first = b * RENDER_BATCH_PIXELS, end = MR_MIN(lit, first + RENDER_BATCH_PIXELS);
         if (full)
-            render_block(plan, soa, model, state, vector, first, end, full, NULL, NULL, 1, 0, 0);
+            render_block(plan, soa, model, state, kernel, vector, first, end, full, NULL, NULL, 1, 0, 0);
         else if (diffuse && specular)
-            render_block(plan, soa, model, state, vector, first, end, NULL, diffuse, specular, 0, 1, 1);
+            render_block(plan, soa, model, state, kernel, vector, first, end, NULL, diffuse, specular, 0, 1, 1);
         else if (diffuse)
-            render_block(plan, soa, model, state, vector, first, end, NULL, diffuse, NULL, 0, 1, 0);
+            render_block(plan, soa, model, state, kernel, vector, first, end, NULL, diffuse, NULL, 0, 1, 0);
         else
-            render_block(plan, soa, model, state, vector, first, end, NULL, NULL, specular, 0, 0, 1);
+            render_block(plan, soa, model, state, kernel, vector, first, end, NULL, NULL, specular, 0, 0, 1);
     }
 }
 
@@ -1720,12 +1746,14 @@ static mr_status render_core(const mr_render_plan *plan, int threads, const mr_m
         const point_soa *soa = env_samples == 0 && reflection_samples == 0 && points <= RENDER_SOA_MAX_SAMPLES
                                    ? plan_point_soa(plan)
                                    : NULL;
+        const mr_brdf_batch_fn kernel = plan->float_kernels ? mr_brdf_float_kernel(states[0].model) : NULL;
         if (soa != NULL) {
-            render_batched(plan, soa, threads, states[0].model, states[0].shared.bytes, vector, full, diffuse,
+            render_batched(plan, soa, threads, states[0].model, states[0].shared.bytes, kernel, vector, full, diffuse,
                            specular);
             return MR_OK;
         }
-        if (render_gathered(plan, threads, states[0].model, states[0].shared.bytes, vector, full, diffuse, specular))
+        if (render_gathered(plan, threads, states[0].model, states[0].shared.bytes, kernel, vector, full, diffuse,
+                            specular))
             return MR_OK;
     }
 

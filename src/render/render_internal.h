@@ -40,4 +40,12 @@ typedef enum mr_plan_rays { MR_PLAN_RAYS_AUTO = 0, MR_PLAN_RAYS_SCALAR, MR_PLAN_
 /* mr_render_plan_create (render.h) with the given rays. */
 mr_status mr_render_plan_create_rays(const mr_scene *scene, mr_plan_rays rays, mr_render_plan **out);
 
+/* The precision of the batched renders on `plan` (and its closer look, mr_render_plan_zoomed, now or when it is
+ * built): on nonzero, models with a float kernel (brdf/brdf_float.h: the Ward and microfacet families, gltf) are
+ * evaluated in float, the others in double as always; 0, the default of every plan, double everywhere. For
+ * benchmarks and tests measuring what float would change (tests/bench_fit.c --table, docs/performance.md "Double,
+ * not float"); not public API. Renders along the per-sample path and derivative renders stay double. Set it before
+ * rendering, never while another thread renders with the plan. */
+void mr_render_plan_set_float_kernels(mr_render_plan *plan, int on);
+
 #endif /* MR_RENDER_INTERNAL_H */
