@@ -328,25 +328,69 @@ static int split_basis(fit_context *ctx, const double *zero, const double *one) 
     return 1;
 }
 
-/* R0 and the R_p of split_basis at value index `at` (pixel * 3 + channel): R0 returned, R_p into r[p]. */
-static MR_ALWAYS_INLINE float split_value(const fit_context *ctx, const unsigned char *diffuse_param, const int P,
-                                          size_t at, float *r) {
-    float d0 = ctx->homogeneous ? 0.0f : ctx->lobe_images[0]->pixels[at];
-    float s0 = ctx->homogeneous ? 0.0f : ctx->lobe_images[1]->pixels[at];
-    float d1 = d0 + (ctx->lobe_images[2]->pixels[at] - d0) / (float)SPLIT_PROBE;
-    float s1 = s0 + (ctx->lobe_images[3]->pixels[at] - s0) / (float)SPLIT_PROBE;
-    if (ctx->projection_component == MR_COMPONENT_SPECULAR) d0 = d1 = 0.0f;
-    if (ctx->projection_component == MR_COMPONENT_DIFFUSE) s0 = s1 = 0.0f;
-    for (int p = 0; p < P; p++) r[p] = diffuse_param[p] ? d1 + s0 : d0 + s1;
+/* What the projection's pixel loops read (projection_sums, linearise_sums), copied out of the context so that the
+ * compiler keeps it in registers: the goal, R0 and the R_p of the basis renders or the four lobe images of
+ * split_basis, and the derivative images. */
+typedef struct basis_view {
+    const float *goal;
+    const float *basis[MAX_SLOTS + 1];      /* R0, R_1 .. R_P (not split_lobes) */
+    const float *lobe[4];                   /* ctx->lobe_images (split_lobes); [0], [1] NULL when homogeneous */
+    const float *derivative[2 * MAX_SLOTS]; /* ctx->derivatives made so far */
+    int keep_diffuse, keep_specular;        /* the projection component's lobes (split_lobes) */
+    int split;                              /* ctx->split_lobes */
+    unsigned char diffuse_param[MAX_SLOTS];
+} basis_view;
+
+static void basis_view_init(const fit_context *ctx, basis_view *v) {
+    memset(v, 0, sizeof *v);
+    v->goal = ctx->goal->pixels;
+    v->split = ctx->split_lobes;
+    v->keep_diffuse = ctx->projection_component != MR_COMPONENT_SPECULAR;
+    v->keep_specular = ctx->projection_component != MR_COMPONENT_DIFFUSE;
+    for (int p = 0; p < ctx->linear_param_count; p++)
+        v->diffuse_param[p] = ctx->model->params[ctx->linear_params[p]].lobe == MR_LOBE_DIFFUSE;
+    if (ctx->split_lobes)
+        for (int i = 0; i < 4; i++) v->lobe[i] = i < 2 && ctx->homogeneous ? NULL : ctx->lobe_images[i]->pixels;
+    else
+        for (int p = 0; p <= ctx->linear_param_count; p++) v->basis[p] = ctx->basis[p]->pixels;
+    for (int a = 0; a < 2 * MAX_SLOTS; a++)
+        if (ctx->derivatives[a] != NULL) v->derivative[a] = ctx->derivatives[a]->pixels;
+}
+
+/* R0 and the R_p (into r[p], p < P) at value index `at` (pixel * 3 + channel). From split_basis's lobe images: a
+ * parameter confined to one lobe changes only that lobe, so R_p is its lobe at 1 plus the other lobe at 0. */
+static MR_ALWAYS_INLINE float basis_values(const basis_view *v, const int P, size_t at, float *r) {
+    if (!v->split) {
+        for (int p = 0; p < P; p++) r[p] = v->basis[p + 1][at];
+        return v->basis[0][at];
+    }
+    float d0 = v->lobe[0] != NULL ? v->lobe[0][at] : 0.0f;
+    float s0 = v->lobe[1] != NULL ? v->lobe[1][at] : 0.0f;
+    float d1 = d0 + (v->lobe[2][at] - d0) / (float)SPLIT_PROBE;
+    float s1 = s0 + (v->lobe[3][at] - s0) / (float)SPLIT_PROBE;
+    if (!v->keep_diffuse) d0 = d1 = 0.0f;
+    if (!v->keep_specular) s0 = s1 = 0.0f;
+    for (int p = 0; p < P; p++) r[p] = v->diffuse_param[p] ? d1 + s0 : d0 + s1;
     return d0 + s0;
 }
 
-/* R0 and the R_p (into r[p], p < P) at value index `at`: from the split lobe images or from the basis renders. */
-static MR_ALWAYS_INLINE float basis_values(const fit_context *ctx, const unsigned char *diffuse_param, const int P,
-                                           size_t at, float *r) {
-    if (ctx->split_lobes) return split_value(ctx, diffuse_param, P, at, r);
-    for (int p = 0; p < P; p++) r[p] = ctx->basis[p + 1]->pixels[at];
-    return ctx->basis[0]->pixels[at];
+/* One lane of the projection's sums (projection_sums): every quantity summed over the pixels i with i % SUM_LANES
+ * equal to the lane. */
+#define SUM_LANES 4
+typedef struct projection_lane {
+    double total, h[MAX_SLOTS], g[MAX_SLOTS][MAX_SLOTS];
+} projection_lane;
+
+static MR_ALWAYS_INLINE void projection_add(const basis_view *v, const int P, size_t at, projection_lane *lane) {
+    float r[MAX_SLOTS];
+    const float r0 = basis_values(v, P, at, r);
+    const double base = r0, residual = (double)v->goal[at] - base;
+    lane->total += residual * residual;
+    for (int p = 0; p < P; p++) {
+        const double d = (double)r[p] - base;
+        lane->h[p] += d * residual;
+        for (int q = 0; q <= p; q++) lane->g[p][q] += d * ((double)r[q] - base);
+    }
 }
 
 /* The projection's sums over the covered pixels, per image channel c and basis render p, q < P (P the linear
@@ -354,30 +398,26 @@ static MR_ALWAYS_INLINE float basis_values(const fit_context *ctx, const unsigne
  * *constant = sum (goal - R0)^2 over all channels. */
 static MR_ALWAYS_INLINE void projection_sums(const fit_context *ctx, const int P, double *constant,
                                              double H[3][MAX_SLOTS], double S[3][MAX_SLOTS][MAX_SLOTS]) {
-    unsigned char diffuse_param[MAX_SLOTS];
-    for (int p = 0; p < P; p++) diffuse_param[p] = ctx->model->params[ctx->linear_params[p]].lobe == MR_LOBE_DIFFUSE;
-    const float *goal = ctx->goal->pixels;
+    basis_view v;
+    basis_view_init(ctx, &v);
+    const int *pixels = ctx->pixels, n = ctx->pixel_count, whole = n - n % SUM_LANES;
     double sum[3];
-    // Channel by channel, each sum over the pixels in their order: the sums stay in registers (per pixel and
-    // channel, indexed by the channel, they went through memory: a fifth of a remap).
+    // Channel by channel, the sums in registers (per pixel and channel, indexed by the channel, they went through
+    // memory: a fifth of a remap), each in SUM_LANES partial sums added up in a fixed order at the end (one running
+    // sum per quantity made every pixel wait for the previous pixel's additions); the same on every run.
     for (int c = 0; c < 3; c++) {
-        double total = 0.0, h[MAX_SLOTS] = {0}, g[MAX_SLOTS][MAX_SLOTS] = {{0}};
-        for (int i = 0; i < ctx->pixel_count; i++) {
-            const size_t at = (size_t)ctx->pixels[i] * 3 + (size_t)c;
-            float r[MAX_SLOTS];
-            const float r0 = basis_values(ctx, diffuse_param, P, at, r);
-            const double base = r0, residual = (double)goal[at] - base;
-            total += residual * residual;
-            for (int p = 0; p < P; p++) {
-                const double d = (double)r[p] - base;
-                h[p] += d * residual;
-                for (int q = 0; q <= p; q++) g[p][q] += d * ((double)r[q] - base);
-            }
+        projection_lane l0 = {0}, l1 = {0}, l2 = {0}, l3 = {0};
+        for (int i = 0; i < whole; i += SUM_LANES) {
+            projection_add(&v, P, (size_t)pixels[i] * 3 + (size_t)c, &l0);
+            projection_add(&v, P, (size_t)pixels[i + 1] * 3 + (size_t)c, &l1);
+            projection_add(&v, P, (size_t)pixels[i + 2] * 3 + (size_t)c, &l2);
+            projection_add(&v, P, (size_t)pixels[i + 3] * 3 + (size_t)c, &l3);
         }
-        sum[c] = total;
+        for (int i = whole; i < n; i++) projection_add(&v, P, (size_t)pixels[i] * 3 + (size_t)c, &l0);
+        sum[c] = (l0.total + l1.total) + (l2.total + l3.total);
         for (int p = 0; p < P; p++) {
-            H[c][p] = h[p];
-            for (int q = 0; q <= p; q++) S[c][p][q] = g[p][q];
+            H[c][p] = (l0.h[p] + l1.h[p]) + (l2.h[p] + l3.h[p]);
+            for (int q = 0; q <= p; q++) S[c][p][q] = (l0.g[p][q] + l1.g[p][q]) + (l2.g[p][q] + l3.g[p][q]);
         }
     }
     *constant = sum[0] + sum[1] + sum[2];
@@ -522,23 +562,22 @@ static double projected_value(void *data, const double *u) {
 static MR_ALWAYS_INLINE void linearise_sums(const fit_context *ctx, const int P, const int n,
                                             double w[3][MAX_SLOTS], double *g, double DtD[][MAX_SLOTS],
                                             double T[3][MAX_SLOTS][MAX_SLOTS]) {
-    unsigned char diffuse_param[MAX_SLOTS];
-    for (int p = 0; p < P; p++) diffuse_param[p] = ctx->model->params[ctx->linear_params[p]].lobe == MR_LOBE_DIFFUSE;
-    const float *goal = ctx->goal->pixels;
+    basis_view v;
+    basis_view_init(ctx, &v);
     for (int c = 0; c < 3; c++) { // channel by channel, as projection_sums: the sums stay in registers
         double gc[MAX_SLOTS] = {0}, Dc[MAX_SLOTS][MAX_SLOTS] = {{0}}, Tc[MAX_SLOTS][MAX_SLOTS] = {{0}};
         for (int i = 0; i < ctx->pixel_count; i++) {
             const size_t at = (size_t)ctx->pixels[i] * 3 + (size_t)c;
             float r[MAX_SLOTS];
-            const float r0 = basis_values(ctx, diffuse_param, P, at, r);
-            double column[MAX_SLOTS], residual = (double)goal[at] - (double)r0;
+            const float r0 = basis_values(&v, P, at, r);
+            double column[MAX_SLOTS], residual = (double)v.goal[at] - (double)r0;
             for (int p = 0; p < P; p++) {
                 column[p] = (double)r[p] - (double)r0;
                 residual -= w[c][p] * column[p];
             }
             double d[MAX_SLOTS];
             for (int a = 0; a < n; a++) {
-                d[a] = ctx->derivatives[a]->pixels[at];
+                d[a] = v.derivative[a][at];
                 gc[a] -= 2.0 * residual * d[a];
                 for (int bb = 0; bb <= a; bb++) Dc[a][bb] += d[a] * d[bb];
                 for (int p = 0; p < P; p++) Tc[a][p] += column[p] * d[a];
