@@ -12,6 +12,8 @@
  * MR_BRDF_FLOAT_ATOL, finite everywhere, at random and hard inputs; their exp/log/log1p stay within their stated
  * ulp of libm's expf/logf/log1pf; float renders are bit-identical on 1 and 2 threads, differ from double ones only
  * for models with a float kernel, and the per-plan switch reaches the plan's closer look.
+ * The prepared derivatives over a batch (grad_ops eval_batch: the lobe's shape of the Ward and microfacet families)
+ * equal grad_ops eval within the double kernels' contract, with both kernels.
  */
 #include <math.h>
 #include <stdint.h>
@@ -388,6 +390,64 @@ MR_TEST(float_batch_within_its_tolerance_of_eval) {
 }
 
 /* Distance in units in the last place between two positive finite floats. */
+/* Prepared derivatives over a batch (brdf.h grad_ops eval_batch): for every model and every slot its batchable()
+ * accepts, both kernels against grad_ops eval pair by pair, within the double kernels' contract (relative to the
+ * pair's largest derivative); zero diffuse derivatives; finite. And where it accepts: the lobe's shape at least. */
+MR_TEST(batched_derivatives_equal_prepared_ones) {
+    static double in[6][PAIRS + 1], fd[3][PAIRS + 1], fs[3][PAIRS + 1];
+    uint64_t rng = 0x5eed0d1fu;
+    const mr_brdf_model *const *models = mr_brdf_models();
+    int batched_models = 0;
+    for (int m = 0; models[m] != NULL; m++) {
+        const mr_brdf_model *model = models[m];
+        const mr_brdf_grad_ops *ops = model->grad_ops;
+        if (ops == NULL || ops->batchable == NULL) continue;
+        MR_CHECK(ops->eval_batch != NULL);
+        void *state = malloc(ops->state_bytes);
+        MR_CHECK(state != NULL);
+        int batchable_slots = 0;
+        double worst = 0.0;
+        for (int slot = 0; slot < mr_brdf_value_count(model); slot++)
+            for (int draw = 0; draw < 6; draw++) {
+                double values[MR_BRDF_MAX_VALUES];
+                random_values(model, &rng, draw, values);
+                ops->prepare(model, values, &slot, 1, state);
+                if (!ops->batchable(state)) break;
+                batchable_slots += draw == 0;
+                random_pairs(&rng, in);
+                for (int vector = 0; vector < 2; vector++) {
+                    // random_pairs fills [1, PAIRS]
+                    const mr_brdf_batch b = {PAIRS,
+                                             {in[0] + 1, in[1] + 1, in[2] + 1},
+                                             {in[3] + 1, in[4] + 1, in[5] + 1},
+                                             {fd[0], fd[1], fd[2]},
+                                             {fs[0], fs[1], fs[2]}};
+                    ops->eval_batch(state, &b, vector);
+                    for (int i = 0; i < PAIRS; i++) {
+                        const double wi[3] = {b.wi[0][i], b.wi[1][i], b.wi[2][i]};
+                        const double wo[3] = {b.wo[0][i], b.wo[1][i], b.wo[2][i]};
+                        double dd[3], ds[3], scale = 0.0;
+                        ops->eval(state, wi, wo, dd, ds);
+                        for (int c = 0; c < 3; c++) scale = fmax(scale, fmax(fabs(dd[c]), fabs(ds[c])));
+                        const double bound = fmax(MR_BRDF_BATCH_RTOL * scale, MR_BRDF_BATCH_ATOL);
+                        for (int c = 0; c < 3; c++) {
+                            MR_CHECK(isfinite(fs[c][i]) && fd[c][i] == 0.0 && dd[c] == 0.0);
+                            worst = fmax(worst, fabs(fs[c][i] - ds[c]) / bound);
+                        }
+                    }
+                }
+            }
+        free(state);
+        if (getenv("MR_TEST_VERBOSE"))
+            printf("    %-22s %d batched slot(s), worst |batch - eval| = %.3g of the tolerance\n", model->name,
+                   batchable_slots, worst);
+        MR_CHECK(batchable_slots >= 1);
+        MR_CHECK(worst <= 1.0);
+        batched_models++;
+    }
+    MR_CHECK(batched_models >= 15); // the Ward family and the twelve microfacet members
+}
+
 static double ulps_float(float a, float b) {
     if (a == b) return 0.0;
     const float big = fmaxf(a, b), spacing = nextafterf(big, INFINITY) - big;
@@ -517,4 +577,5 @@ MR_TEST_MAIN(MR_TEST_ENTRY(batch_equals_eval_for_every_model), MR_TEST_ENTRY(vec
              MR_TEST_ENTRY(batched_render_same_bits_on_one_and_two_threads),
              MR_TEST_ENTRY(float_batch_within_its_tolerance_of_eval), MR_TEST_ENTRY(float_exp_log_within_their_bounds),
              MR_TEST_ENTRY(float_render_same_bits_on_one_and_two_threads),
-             MR_TEST_ENTRY(float_switch_reaches_the_closer_look))
+             MR_TEST_ENTRY(float_switch_reaches_the_closer_look),
+             MR_TEST_ENTRY(batched_derivatives_equal_prepared_ones))

@@ -410,7 +410,7 @@ static void bp_grad_eval(const void *state, const double wi[3], const double wo[
     mr_dual_store_grad(diffuse, spec, st->count, d_diffuse, d_specular);
 }
 
-static const mr_brdf_grad_ops bp_grad_ops = {sizeof(mr_dual_grad_state), bp_grad_prepare, bp_grad_eval};
+static const mr_brdf_grad_ops bp_grad_ops = {sizeof(mr_dual_grad_state), bp_grad_prepare, bp_grad_eval, NULL, NULL};
 
 /* eval_grad: every slot, through the prepared path (dual.h, mr_dual_eval_grad). */
 static void bp_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3], const double wo[3],

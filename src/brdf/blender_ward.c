@@ -157,7 +157,7 @@ static void blender_ward_grad_eval(const void *state, const double wi[3], const 
 }
 
 static const mr_brdf_grad_ops blender_ward_grad_ops = {sizeof(mr_brdf_grad_slots), blender_ward_grad_prepare,
-                                                       blender_ward_grad_eval};
+                                                       blender_ward_grad_eval, NULL, NULL};
 
 const mr_brdf_model mr_brdf_blender_ward = {
     .name = "blender-ward",

@@ -135,6 +135,13 @@ typedef struct mr_brdf_grad_ops {
      * numbers as eval_grad's [slots[k]*3 + c] (tests/test_brdf.c checks them equal as doubles). Reads the state
      * only: any number of threads may evaluate one prepared state at once. */
     void (*eval)(const void *state, const double wi[3], const double wo[3], double *d_diffuse, double *d_specular);
+    /* Optional (NULL: none): nonzero when the prepared state has a batched form, eval_batch below: one slot that
+     * leaves the diffuse part unchanged (the lobe's shape, which the fits' projection asks for at every step). */
+    int (*batchable)(const void *state);
+    /* Optional, with batchable: eval over a batch (eval_batch's contract and arrays) for a state batchable accepts,
+     * d f_r / d values[slot] into batch->specular (batch->diffuse: zeros); the same numbers as eval within
+     * eval_batch's tolerance (MR_BRDF_BATCH_RTOL, _ATOL; tests/test_batch.c). */
+    void (*eval_batch)(const void *state, const mr_brdf_batch *batch, int vector);
 } mr_brdf_grad_ops;
 
 struct mr_brdf_model {

@@ -510,7 +510,64 @@ static void mf_grad_eval(const void *state, const double wi[3], const double wo[
     }
 }
 
-static const mr_brdf_grad_ops mf_grad_ops = {sizeof(mr_brdf_grad_slots), mf_grad_prepare, mf_grad_eval};
+/* mf_grad_eval's alpha derivative over a batch (grad_ops eval_batch): its operations lane by lane, mr_mf_dg with
+ * its derivative and the Fresnel factor per channel, so the same numbers (zeros where the pair is not lit). */
+MR_BATCH_INLINE void mf_grad_batch_loop(const mr_brdf_grad_slots *st, const mr_brdf_batch *batch,
+                                        const mr_mf_dist dist, const mf_fresnel fresnel) {
+    const double *v = st->v, alpha = v[MF_ALPHA];
+    const int spec = mf_spec_slot(fresnel);
+    MR_BATCH_ARRAYS(batch);
+#pragma omp simd
+    for (int i = 0; i < n_; i++) {
+        mr_brdf_geom g;
+        const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
+        double d_dg = 0.0, d[3];
+        if (lit) mr_mf_dg(dist, alpha, &g, 1, &d_dg);
+        for (int c = 0; c < 3; c++) {
+            double rho = v[spec + c], F = 1.0, unused, unused2;
+            if (fresnel == MF_SCHLICK) {
+                F = rho + (1.0 - rho) * mr_schlick_weight(g.dot_h);
+                rho = 1.0;
+            } else if (fresnel == MF_CONDUCTOR) {
+                F = mr_fresnel_conductor(g.dot_h, v[MF_COND_ETA + c], v[MF_COND_K + c], &unused, &unused2);
+            } else if (fresnel == MF_PLASTIC) {
+                F = mr_fresnel_dielectric(g.dot_h, v[MF_PLASTIC_IOR], &unused);
+            }
+            d[c] = lit ? rho * F * d_dg : 0.0;
+        }
+        d0_[i] = d1_[i] = d2_[i] = 0.0;
+        s0_[i] = d[0];
+        s1_[i] = d[1];
+        s2_[i] = d[2];
+    }
+}
+
+#define MF_GRAD_BATCH_CASES(dist)                                                                                \
+    switch (config->fresnel) {                                                                                   \
+    case MF_SCHLICK: mf_grad_batch_loop(st, batch, dist, MF_SCHLICK); break;                                     \
+    case MF_NONE: mf_grad_batch_loop(st, batch, dist, MF_NONE); break;                                           \
+    case MF_CONDUCTOR: mf_grad_batch_loop(st, batch, dist, MF_CONDUCTOR); break;                                 \
+    default: mf_grad_batch_loop(st, batch, dist, MF_PLASTIC); break;                                             \
+    }
+
+MR_BATCH_INLINE void mf_grad_batch_body(const void *state, const mr_brdf_batch *batch, const int fused) {
+    (void)fused; // mr_mf_dg's own operations, unfused, in both variants
+    const mr_brdf_grad_slots *st = state;
+    const mf_config *config = st->model->config;
+    switch (config->dist) {
+    case MR_MF_GGX: MF_GRAD_BATCH_CASES(MR_MF_GGX) break;
+    case MR_MF_BECKMANN: MF_GRAD_BATCH_CASES(MR_MF_BECKMANN) break;
+    default: MF_GRAD_BATCH_CASES(MR_MF_EPHONG) break;
+    }
+}
+
+MR_BATCH_KERNEL(mf_grad_eval_batch, mf_grad_batch_body)
+
+/* alpha alone: the slot whose derivative leaves the diffuse part unchanged. */
+static int mf_grad_batchable(const void *state) { return ((const mr_brdf_grad_slots *)state)->shape_only; }
+
+static const mr_brdf_grad_ops mf_grad_ops = {sizeof(mr_brdf_grad_slots), mf_grad_prepare, mf_grad_eval,
+                                             mf_grad_batchable, mf_grad_eval_batch};
 
 static const mf_config mf_configs[MR_MF_DIST_COUNT][4] = {
     {{MR_MF_BECKMANN, MF_SCHLICK}, {MR_MF_BECKMANN, MF_NONE}, {MR_MF_BECKMANN, MF_CONDUCTOR},

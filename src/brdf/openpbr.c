@@ -466,7 +466,7 @@ static void op_grad_eval(const void *state, const double wi[3], const double wo[
     mr_dual_store_grad(diffuse, specular, st->count, d_diffuse, d_specular);
 }
 
-static const mr_brdf_grad_ops op_grad_ops = {sizeof(mr_dual_grad_state), op_grad_prepare, op_grad_eval};
+static const mr_brdf_grad_ops op_grad_ops = {sizeof(mr_dual_grad_state), op_grad_prepare, op_grad_eval, NULL, NULL};
 
 /* eval_grad: every slot, through the prepared path (dual.h, mr_dual_eval_grad). */
 static void op_eval_grad(const mr_brdf_model *model, const double *values, const double wi[3], const double wo[3],

@@ -271,7 +271,54 @@ static void ward_grad_eval(const void *state, const double wi[3], const double w
     }
 }
 
-static const mr_brdf_grad_ops ward_grad_ops = {sizeof(mr_brdf_grad_slots), ward_grad_prepare, ward_grad_eval};
+/* ward_grad_eval's alpha derivative over a batch (grad_ops eval_batch): ward_batch_loop's lobe S, then dS as
+ * ward_lobe writes it, S (2 tan^2/alpha^3 - 2/alpha), kept only where S is (no 0 times a garbage lane's inf). */
+MR_BATCH_INLINE void ward_grad_batch_loop(const mr_brdf_grad_slots *st, const mr_brdf_batch *batch,
+                                          const ward_variant variant, const int fused) {
+    const double alpha = st->v[WARD_ALPHA], a2 = alpha * alpha;
+    const double r0 = st->scale * st->v[WARD_SPECULAR], r1 = st->scale * st->v[WARD_SPECULAR + 1];
+    const double r2 = st->scale * st->v[WARD_SPECULAR + 2];
+    MR_BATCH_ARRAYS(batch);
+#pragma omp simd
+    for (int i = 0; i < n_; i++) {
+        mr_brdf_geom g;
+        const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
+        double norm;
+        if (variant == WARD_ORIGINAL) {
+            norm = 1.0 / (4.0 * MR_PI * a2 * sqrt(g.cos_i * g.cos_o));
+        } else if (variant == WARD_DUER) {
+            norm = 1.0 / (4.0 * MR_PI * a2 * g.cos_i * g.cos_o);
+        } else {
+            const double hz2 = g.hz * g.hz;
+            norm = g.h_len2 / (MR_PI * a2 * hz2 * hz2);
+        }
+        const double exponent = -g.tan2_h / a2;
+        const double lobe = norm * mr_batch_exp(exponent, fused);
+        const int kept = lit & (exponent > -700.0) & (lobe > 1e-10);
+        const double dS = kept ? lobe * (2.0 * g.tan2_h / (a2 * alpha) - 2.0 / alpha) : 0.0;
+        d0_[i] = d1_[i] = d2_[i] = 0.0;
+        s0_[i] = r0 * dS;
+        s1_[i] = r1 * dS;
+        s2_[i] = r2 * dS;
+    }
+}
+
+MR_BATCH_INLINE void ward_grad_batch_body(const void *state, const mr_brdf_batch *batch, const int fused) {
+    const mr_brdf_grad_slots *st = state;
+    switch (((const ward_config *)st->model->config)->variant) {
+    case WARD_ORIGINAL: ward_grad_batch_loop(st, batch, WARD_ORIGINAL, fused); break;
+    case WARD_DUER: ward_grad_batch_loop(st, batch, WARD_DUER, fused); break;
+    default: ward_grad_batch_loop(st, batch, WARD_BALANCED, fused); break;
+    }
+}
+
+MR_BATCH_KERNEL(ward_grad_eval_batch, ward_grad_batch_body)
+
+/* alpha alone: the slot whose derivative leaves the diffuse part unchanged. */
+static int ward_grad_batchable(const void *state) { return ((const mr_brdf_grad_slots *)state)->shape_only; }
+
+static const mr_brdf_grad_ops ward_grad_ops = {sizeof(mr_brdf_grad_slots), ward_grad_prepare, ward_grad_eval,
+                                               ward_grad_batchable, ward_grad_eval_batch};
 
 /* Mitsuba trims at these values (brdf.h, rescales). */
 static int ward_rescales(const mr_brdf_model *model, const double *values) {

@@ -1986,6 +1986,20 @@ mr_status mr_render_derivatives_into(const mr_render_plan *plan, int threads, co
             return mr_fail(MR_ERR_NOMEM, "render derivatives of model '%s': out of memory (%zu bytes of state)",
                            model->name, ops->state_bytes);
         ops->prepare(model, values, slots, count, grad_state);
+        // The lobe's shape alone (what the fits ask for at every step) in batches, as a render of the specular part
+        // with the derivative for f_r: the same sums in the same order (render_block), from the batched kernel's
+        // numbers. Its diffuse part is zero, so the full image is the specular one and the diffuse one stays zero.
+        const int points = plan->hits[plan->hit_count].point_begin;
+        const point_soa *soa = ops->batchable != NULL && ops->batchable(grad_state) && points <= RENDER_SOA_MAX_SAMPLES
+                                   ? plan_point_soa(plan)
+                                   : NULL;
+        if (soa != NULL) {
+            if (component != MR_COMPONENT_DIFFUSE)
+                render_batched(plan, soa, threads, model, grad_state, ops->eval_batch,
+                               mr_brdf_batch_vector_default(), NULL, NULL, images[0]);
+            free(grad_state);
+            return MR_OK;
+        }
     }
     // Each lit pixel sums its samples in plan order, as render_core does: the images do not depend on the thread
     // count. The background and the emission do not depend on any parameter.
