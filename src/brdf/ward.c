@@ -135,6 +135,24 @@ static void ward_eval(const void *state_bytes, const double wi[3], const double 
     }
 }
 
+/* ward_lobe's S for one lane of a batch, mr_batch_exp for exp: 0 where the pair is not lit or Mitsuba's cut-off
+ * zeroes it (so S > 0 says the lobe is kept). */
+MR_BATCH_INLINE double ward_batch_lobe(const ward_variant variant, double a2, const mr_brdf_geom *g, int lit,
+                                       const int fused) {
+    double norm;
+    if (variant == WARD_ORIGINAL) {
+        norm = 1.0 / (4.0 * MR_PI * a2 * sqrt(g->cos_i * g->cos_o));
+    } else if (variant == WARD_DUER) {
+        norm = 1.0 / (4.0 * MR_PI * a2 * g->cos_i * g->cos_o);
+    } else {
+        const double hz2 = g->hz * g->hz;
+        norm = g->h_len2 / (MR_PI * a2 * hz2 * hz2);
+    }
+    const double exponent = -g->tan2_h / a2;
+    const double lobe = norm * mr_batch_exp(exponent, fused);
+    return (lit & (exponent > -700.0) & (lobe > 1e-10)) ? lobe : 0.0;
+}
+
 /* eval over a batch for one variant (a constant in each call below, so each loop is specialised): ward_lobe's
  * operations with mr_batch_exp for exp. */
 MR_BATCH_INLINE void ward_batch_loop(const ward_state *state, const mr_brdf_batch *batch, const ward_variant variant,
@@ -147,18 +165,7 @@ MR_BATCH_INLINE void ward_batch_loop(const ward_state *state, const mr_brdf_batc
     for (int i = 0; i < n_; i++) {
         mr_brdf_geom g;
         const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
-        double norm;
-        if (variant == WARD_ORIGINAL) {
-            norm = 1.0 / (4.0 * MR_PI * a2 * sqrt(g.cos_i * g.cos_o));
-        } else if (variant == WARD_DUER) {
-            norm = 1.0 / (4.0 * MR_PI * a2 * g.cos_i * g.cos_o);
-        } else {
-            const double hz2 = g.hz * g.hz;
-            norm = g.h_len2 / (MR_PI * a2 * hz2 * hz2);
-        }
-        const double exponent = -g.tan2_h / a2;
-        const double lobe = norm * mr_batch_exp(exponent, fused);
-        const double S = (lit & (exponent > -700.0) & (lobe > 1e-10)) ? lobe : 0.0;
+        const double S = ward_batch_lobe(variant, a2, &g, lit, fused);
         d0_[i] = lit ? d0 : 0.0;
         d1_[i] = lit ? d1 : 0.0;
         d2_[i] = lit ? d2 : 0.0;
@@ -271,8 +278,8 @@ static void ward_grad_eval(const void *state, const double wi[3], const double w
     }
 }
 
-/* ward_grad_eval's alpha derivative over a batch (grad_ops eval_batch): ward_batch_loop's lobe S, then dS as
- * ward_lobe writes it, S (2 tan^2/alpha^3 - 2/alpha), kept only where S is (no 0 times a garbage lane's inf). */
+/* ward_grad_eval's alpha derivative over a batch (grad_ops eval_batch): ward_batch_lobe's S, then dS as ward_lobe
+ * writes it, S (2 tan^2/alpha^3 - 2/alpha), only where S is kept (no 0 times a garbage lane's inf). */
 MR_BATCH_INLINE void ward_grad_batch_loop(const mr_brdf_grad_slots *st, const mr_brdf_batch *batch,
                                           const ward_variant variant, const int fused) {
     const double alpha = st->v[WARD_ALPHA], a2 = alpha * alpha;
@@ -283,19 +290,8 @@ MR_BATCH_INLINE void ward_grad_batch_loop(const mr_brdf_grad_slots *st, const mr
     for (int i = 0; i < n_; i++) {
         mr_brdf_geom g;
         const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
-        double norm;
-        if (variant == WARD_ORIGINAL) {
-            norm = 1.0 / (4.0 * MR_PI * a2 * sqrt(g.cos_i * g.cos_o));
-        } else if (variant == WARD_DUER) {
-            norm = 1.0 / (4.0 * MR_PI * a2 * g.cos_i * g.cos_o);
-        } else {
-            const double hz2 = g.hz * g.hz;
-            norm = g.h_len2 / (MR_PI * a2 * hz2 * hz2);
-        }
-        const double exponent = -g.tan2_h / a2;
-        const double lobe = norm * mr_batch_exp(exponent, fused);
-        const int kept = lit & (exponent > -700.0) & (lobe > 1e-10);
-        const double dS = kept ? lobe * (2.0 * g.tan2_h / (a2 * alpha) - 2.0 / alpha) : 0.0;
+        const double S = ward_batch_lobe(variant, a2, &g, lit, fused);
+        const double dS = S > 0.0 ? S * (2.0 * g.tan2_h / (a2 * alpha) - 2.0 / alpha) : 0.0;
         d0_[i] = d1_[i] = d2_[i] = 0.0;
         s0_[i] = r0 * dS;
         s1_[i] = r1 * dS;
