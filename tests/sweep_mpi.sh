@@ -30,8 +30,8 @@ export LSAN_OPTIONS="${LSAN_OPTIONS:+$LSAN_OPTIONS:}suppressions=$tmp/lsan.supp:
 mpi=("${launcher[@]}" -np 2)
 echo "   $(mpirun --version 2>/dev/null | head -n 1)"
 
-args=(--from ggx --to ward-balanced --random 40 --seed 7 --size 96)
-total=40
+args=(--from ggx --to ward-balanced --random 60 --seed 7 --size 192)
+total=60
 rows() { grep -v '^#' "$1" | tail -n +2; }
 # Complete lines but the command line, without the seconds column.
 values() { head -n "$(wc -l <"$1")" "$1" | grep -v '^# command:' | sed '/^#/!s/,[^,]*$//'; }
