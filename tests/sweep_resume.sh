@@ -22,7 +22,8 @@ seed=${MR_TEST_SEED:-$$}
 RANDOM=$seed
 echo "   kill delays drawn with MR_TEST_SEED=$seed"
 
-# 40 samples at 96^2 take ~2 s on 2 threads (~8 s under ASan): long enough for kills to land mid-run.
+# 40 samples at 96^2: ~0.1 s on 2 threads since issue 31's engine (~2 s before it; more under ASan); the kill delays
+# below scale with the reference's time, so they land mid-run at any speed.
 args=(--from ggx --to ward-balanced --random 40 --seed 7 --size 96 --threads 2)
 total=40
 
@@ -46,7 +47,7 @@ check "uninterrupted sweep succeeds" [ "$rc" -eq 0 ]
 check "reference has $total rows" [ "$(rows "$tmp/ref.csv" | wc -l)" -eq "$total" ]
 
 # The same sweep, killed with SIGKILL after a random delay, then resumed and killed again, four times. The
-# delays are 2.5-25 % of the reference's wall time (0.05-0.5 s for the ~2 s optimised build), so the kills land
+# delays are 2.5-25 % of the reference's wall time (a few ms for the optimised build), so the kills land
 # at random points of the run whatever the build's speed, and the four together rarely finish the sweep.
 crash="$tmp/crash.csv"
 landed=0
