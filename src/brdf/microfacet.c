@@ -470,6 +470,27 @@ static void mf_eval_grad(const mr_brdf_model *model, const double *values, const
     }
 }
 
+/* d f_r / d alpha at a lit pair's geometry into d[3], as mf_eval_grad computes it: rho F d_dg per channel (the
+ * diffuse lobe does not depend on alpha; Schlick's rho is inside its F). Shared by grad_ops eval and eval_batch. */
+MR_BATCH_INLINE void mf_shape_derivative(const mr_mf_dist dist, const mf_fresnel fresnel, const double *v,
+                                         const mr_brdf_geom *g, double d[3]) {
+    const int spec = mf_spec_slot(fresnel);
+    double d_dg;
+    mr_mf_dg(dist, v[MF_ALPHA], g, 1, &d_dg);
+    for (int c = 0; c < 3; c++) {
+        double rho = v[spec + c], F = 1.0, unused, unused2;
+        if (fresnel == MF_SCHLICK) {
+            F = rho + (1.0 - rho) * mr_schlick_weight(g->dot_h);
+            rho = 1.0;
+        } else if (fresnel == MF_CONDUCTOR) {
+            F = mr_fresnel_conductor(g->dot_h, v[MF_COND_ETA + c], v[MF_COND_K + c], &unused, &unused2);
+        } else if (fresnel == MF_PLASTIC) {
+            F = mr_fresnel_dielectric(g->dot_h, v[MF_PLASTIC_IOR], &unused);
+        }
+        d[c] = rho * F * d_dg;
+    }
+}
+
 /* Prepared derivatives (brdf.h, grad_ops): alpha alone, which the fits' projection asks for, computed here with
  * mf_eval_grad's own calls and expressions (rho F d_dg; the diffuse lobe does not depend on alpha); any other slots
  * by mf_eval_grad itself. */
@@ -486,55 +507,22 @@ static void mf_grad_eval(const void *state, const double wi[3], const double wo[
         return;
     }
     const mf_config *config = st->model->config;
-    const double *v = st->v;
     for (int c = 0; c < 3; c++) d_diffuse[c] = d_specular[c] = 0.0;
     mr_brdf_geom g;
-    if (!mr_brdf_geom_init(wi, wo, &g)) return;
-    const int spec = mf_spec_slot(config->fresnel);
-    double d_dg;
-    mr_mf_dg(config->dist, v[MF_ALPHA], &g, 1, &d_dg);
-    for (int c = 0; c < 3; c++) {
-        double rho = v[spec + c], F = 1.0, unused, unused2;
-        switch (config->fresnel) {
-        case MF_SCHLICK:
-            F = rho + (1.0 - rho) * mr_schlick_weight(g.dot_h);
-            rho = 1.0;
-            break;
-        case MF_NONE: break;
-        case MF_CONDUCTOR:
-            F = mr_fresnel_conductor(g.dot_h, v[MF_COND_ETA + c], v[MF_COND_K + c], &unused, &unused2);
-            break;
-        default: F = mr_fresnel_dielectric(g.dot_h, v[MF_PLASTIC_IOR], &unused); break;
-        }
-        d_specular[c] = rho * F * d_dg;
-    }
+    if (mr_brdf_geom_init(wi, wo, &g)) mf_shape_derivative(config->dist, config->fresnel, st->v, &g, d_specular);
 }
 
-/* mf_grad_eval's alpha derivative over a batch (grad_ops eval_batch): its operations lane by lane, mr_mf_dg with
- * its derivative and the Fresnel factor per channel, so the same numbers (zeros where the pair is not lit). */
+/* mf_grad_eval's alpha derivative over a batch (grad_ops eval_batch): mf_shape_derivative lane by lane, so the same
+ * numbers (zeros where the pair is not lit). */
 MR_BATCH_INLINE void mf_grad_batch_loop(const mr_brdf_grad_slots *st, const mr_brdf_batch *batch,
                                         const mr_mf_dist dist, const mf_fresnel fresnel) {
-    const double *v = st->v, alpha = v[MF_ALPHA];
-    const int spec = mf_spec_slot(fresnel);
     MR_BATCH_ARRAYS(batch);
 #pragma omp simd
     for (int i = 0; i < n_; i++) {
         mr_brdf_geom g;
-        const int lit = mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g);
-        double d_dg = 0.0, d[3];
-        if (lit) mr_mf_dg(dist, alpha, &g, 1, &d_dg);
-        for (int c = 0; c < 3; c++) {
-            double rho = v[spec + c], F = 1.0, unused, unused2;
-            if (fresnel == MF_SCHLICK) {
-                F = rho + (1.0 - rho) * mr_schlick_weight(g.dot_h);
-                rho = 1.0;
-            } else if (fresnel == MF_CONDUCTOR) {
-                F = mr_fresnel_conductor(g.dot_h, v[MF_COND_ETA + c], v[MF_COND_K + c], &unused, &unused2);
-            } else if (fresnel == MF_PLASTIC) {
-                F = mr_fresnel_dielectric(g.dot_h, v[MF_PLASTIC_IOR], &unused);
-            }
-            d[c] = lit ? rho * F * d_dg : 0.0;
-        }
+        double d[3] = {0.0, 0.0, 0.0};
+        if (mr_batch_geom(ix_[i], iy_[i], iz_[i], ox_[i], oy_[i], oz_[i], &g))
+            mf_shape_derivative(dist, fresnel, st->v, &g, d);
         d0_[i] = d1_[i] = d2_[i] = 0.0;
         s0_[i] = d[0];
         s1_[i] = d[1];
