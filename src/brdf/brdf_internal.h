@@ -116,6 +116,12 @@ static inline void mr_brdf_grad_slots_prepare(const mr_brdf_model *model, const 
     state->scale = 1.0;
 }
 
+/* grad_ops batchable (brdf.h) for these states: the shape slot alone, whose derivative leaves the diffuse part
+ * unchanged; a model with a batched shape derivative points its grad_ops at this. */
+static inline int mr_brdf_grad_slots_batchable(const void *state) {
+    return ((const mr_brdf_grad_slots *)state)->shape_only;
+}
+
 /* Any set of slots: eval_grad's numbers, copied out for the slots asked for. */
 static inline void mr_brdf_grad_slots_eval(const mr_brdf_grad_slots *state, const double wi[3], const double wo[3],
                                            double *d_diffuse, double *d_specular) {

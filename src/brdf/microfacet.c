@@ -551,11 +551,8 @@ MR_BATCH_INLINE void mf_grad_batch_body(const void *state, const mr_brdf_batch *
 
 MR_BATCH_KERNEL(mf_grad_eval_batch, mf_grad_batch_body)
 
-/* alpha alone: the slot whose derivative leaves the diffuse part unchanged. */
-static int mf_grad_batchable(const void *state) { return ((const mr_brdf_grad_slots *)state)->shape_only; }
-
 static const mr_brdf_grad_ops mf_grad_ops = {sizeof(mr_brdf_grad_slots), mf_grad_prepare, mf_grad_eval,
-                                             mf_grad_batchable, mf_grad_eval_batch};
+                                             mr_brdf_grad_slots_batchable, mf_grad_eval_batch};
 
 static const mf_config mf_configs[MR_MF_DIST_COUNT][4] = {
     {{MR_MF_BECKMANN, MF_SCHLICK}, {MR_MF_BECKMANN, MF_NONE}, {MR_MF_BECKMANN, MF_CONDUCTOR},

@@ -310,11 +310,8 @@ MR_BATCH_INLINE void ward_grad_batch_body(const void *state, const mr_brdf_batch
 
 MR_BATCH_KERNEL(ward_grad_eval_batch, ward_grad_batch_body)
 
-/* alpha alone: the slot whose derivative leaves the diffuse part unchanged. */
-static int ward_grad_batchable(const void *state) { return ((const mr_brdf_grad_slots *)state)->shape_only; }
-
 static const mr_brdf_grad_ops ward_grad_ops = {sizeof(mr_brdf_grad_slots), ward_grad_prepare, ward_grad_eval,
-                                               ward_grad_batchable, ward_grad_eval_batch};
+                                               mr_brdf_grad_slots_batchable, ward_grad_eval_batch};
 
 /* Mitsuba trims at these values (brdf.h, rescales). */
 static int ward_rescales(const mr_brdf_model *model, const double *values) {
