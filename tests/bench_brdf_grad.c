@@ -95,6 +95,14 @@ static double time_mode(const mr_brdf_model *m, const double *values, int mode, 
     return bench_median(samples, RUNS);
 }
 
+/* Whether model m is among the names argv[first_model..argc) (every model when there are none). */
+static int model_wanted(const mr_brdf_model *m, int argc, char **argv, int first_model) {
+    if (argc <= first_model) return 1;
+    for (int a = first_model; a < argc; a++)
+        if (strcmp(argv[a], m->name) == 0) return 1;
+    return 0;
+}
+
 /* Median ms of one render (slot_count 0) or derivative render of slots[0..slot_count) on 1 thread. */
 static double time_render(const mr_render_plan *plan, const mr_brdf_model *m, const double *values, const int *slots,
                           int slot_count, mr_image *const *images) {
@@ -124,11 +132,7 @@ static void render_table(int argc, char **argv, int first_model) {
            "derivative render ms (eval_grad, k+1) | /render |\n|---|---:|---:|---:|---:|---:|---:|\n");
     for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
         const mr_brdf_model *m = *mp;
-        if (argc > first_model) {
-            int wanted = 0;
-            for (int a = first_model; a < argc; a++) wanted |= strcmp(argv[a], m->name) == 0;
-            if (!wanted) continue;
-        }
+        if (!model_wanted(m, argc, argv, first_model)) continue;
         if (!m->eval_grad) continue;
         double values[MR_BRDF_MAX_VALUES];
         mr_brdf_default_values(m, values);
@@ -167,11 +171,7 @@ int main(int argc, char **argv) {
     printf("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for (const mr_brdf_model *const *mp = mr_brdf_models(); *mp; mp++) {
         const mr_brdf_model *m = *mp;
-        if (argc > first_model) {
-            int wanted = 0;
-            for (int a = first_model; a < argc; a++) wanted |= strcmp(argv[a], m->name) == 0;
-            if (!wanted) continue;
-        }
+        if (!model_wanted(m, argc, argv, first_model)) continue;
         if (!m->eval_grad) {
             printf("| %s | - | - | - | none | - | - | - | - | - |\n", m->name);
             continue;

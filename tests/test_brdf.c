@@ -849,6 +849,30 @@ MR_TEST(gradient_is_finite_at_the_ends_of_the_ranges) {
     }
 }
 
+/* eval_grad's derivatives gd, gs (at v, wi, wo) in every channel of parameter p (its first slot `offset`) against
+ * the secant over p's whole range, within 1e-9 of the secant's scale; `context` names the setting in messages.
+ * Returns the entries checked. */
+static int secants_match(const mr_brdf_model *m, const double *v, const mr_brdf_param *p, int offset,
+                         const double wi[3], const double wo[3], const double *gd, const double *gs,
+                         const char *context) {
+    int checked = 0;
+    for (int c = 0; c < p->channels; c++) {
+        const int j = offset + c;
+        double hi[6], lo[6];
+        eval6(m, v, j, p->max_value, wi, wo, hi);
+        eval6(m, v, j, p->min_value, wi, wo, lo);
+        for (int o = 0; o < 6; o++) {
+            double secant = (hi[o] - lo[o]) / (p->max_value - p->min_value);
+            double an = o < 3 ? gd[j * 3 + o] : gs[j * 3 + o - 3];
+            double scale = (fabs(hi[o]) + fabs(lo[o])) / (p->max_value - p->min_value);
+            MR_CHECK_MSG(fabs(an - secant) <= 1e-9 * scale + 1e-300, "%s (%s): d f[%d]/d %s[%d] %.12g, secant %.12g",
+                         m->name, context, o, p->name, c, an, secant);
+            checked++;
+        }
+    }
+    return checked;
+}
+
 /* Where f is affine in one value, its derivative is the secant over the whole range: d f/d v_j = (f(v_j = max) -
  * f(v_j = min))/(max - min), exactly (to rounding). Every LINEAR or AFFINE parameter (switches off, where roles hold,
  * as roles_are_truthful), and the layered models' parameters that are affine in a region their roles cannot state:
@@ -880,21 +904,9 @@ MR_TEST(gradient_is_the_secant_where_affine) {
                 switches_off(m, v);
                 random_dir(&rng, 0.05, wi);
                 random_dir(&rng, 0.05, wo);
-                for (int c = 0; c < p->channels; c++) {
-                    int j = mr_brdf_param_offset(m, i) + c;
-                    double gd[MR_BRDF_MAX_VALUES * 3], gs[MR_BRDF_MAX_VALUES * 3], hi[6], lo[6];
-                    m->eval_grad(m, v, wi, wo, gd, gs);
-                    eval6(m, v, j, p->max_value, wi, wo, hi);
-                    eval6(m, v, j, p->min_value, wi, wo, lo);
-                    for (int o = 0; o < 6; o++) {
-                        double secant = (hi[o] - lo[o]) / (p->max_value - p->min_value);
-                        double an = o < 3 ? gd[j * 3 + o] : gs[j * 3 + o - 3];
-                        double scale = (fabs(hi[o]) + fabs(lo[o])) / (p->max_value - p->min_value);
-                        MR_CHECK_MSG(fabs(an - secant) <= 1e-9 * scale + 1e-300,
-                                     "%s: d f[%d]/d %s[%d] %.12g, secant %.12g", m->name, o, p->name, c, an, secant);
-                        checked++;
-                    }
-                }
+                double gd[MR_BRDF_MAX_VALUES * 3], gs[MR_BRDF_MAX_VALUES * 3];
+                m->eval_grad(m, v, wi, wo, gd, gs);
+                checked += secants_match(m, v, p, mr_brdf_param_offset(m, i), wi, wo, gd, gs, "");
             }
         }
     }
@@ -915,22 +927,8 @@ MR_TEST(gradient_is_the_secant_where_affine) {
             random_dir(&rng, 0.05, wo);
             double gd[MR_BRDF_MAX_VALUES * 3], gs[MR_BRDF_MAX_VALUES * 3];
             m->eval_grad(m, v, wi, wo, gd, gs);
-            for (int c = 0; c < p->channels; c++) {
-                int j = mr_brdf_param_offset(m, i) + c;
-                double hi[6], lo[6];
-                eval6(m, v, j, p->max_value, wi, wo, hi);
-                eval6(m, v, j, p->min_value, wi, wo, lo);
-                for (int o = 0; o < 6; o++) {
-                    double secant = (hi[o] - lo[o]) / (p->max_value - p->min_value);
-                    double an = o < 3 ? gd[j * 3 + o] : gs[j * 3 + o - 3];
-                    double scale = (fabs(hi[o]) + fabs(lo[o])) / (p->max_value - p->min_value);
-                    MR_CHECK_MSG(fabs(an - secant) <= 1e-9 * scale + 1e-300,
-                                 "%s (%s...): d f[%d]/d %s[%d] %.12g, "
-                                 "secant %.12g",
-                                 m->name, cases[n].settings[0] ? cases[n].settings[0] : "", o, p->name, c, an, secant);
-                    checked++;
-                }
-            }
+            checked += secants_match(m, v, p, mr_brdf_param_offset(m, i), wi, wo, gd, gs,
+                                     cases[n].settings[0] ? cases[n].settings[0] : "");
         }
     }
     printf("      %d derivatives equal to the secant over the range\n", checked);
