@@ -27,7 +27,6 @@
 
 #if MR_CXX_MODULE
 
-#include <dlfcn.h>
 #include <pthread.h>
 #include <stdio.h>
 
@@ -41,20 +40,21 @@ static pthread_once_t load_once = PTHREAD_ONCE_INIT;
 static _Atomic(const mr_cxx_table *) loaded; /* set (release) once the module's table is checked */
 static char load_failure[2048];              /* why loading failed; written once inside pthread_once */
 
+/* mr_module_spec's check: the table of this build's interface (a module of another build is refused). */
+static const char *check_table(void *const *entries, char *reason, size_t size) {
+    const mr_cxx_table *table = entries[0]; // the symbol is the table itself, an object
+    if (table->abi == MR_CXX_MODULE_ABI && table->size == sizeof *table) return NULL;
+    snprintf(reason, size, "a module of another build (interface %d, %zu bytes; this matremap needs %d, %zu bytes)",
+             table->abi, table->size, MR_CXX_MODULE_ABI, sizeof *table);
+    return reason;
+}
+
 static void load_module(void) {
-    void *entry = NULL;
-    void *handle = mr_module_open(MODULE_FILE, "MR_CXX_MODULE", MR_CXX_TABLE_SYMBOL, &entry, load_failure,
-                                  sizeof load_failure);
-    if (handle == NULL) return;
-    const mr_cxx_table *table = (const mr_cxx_table *)entry; // the symbol is the table itself, an object
-    if (table->abi != MR_CXX_MODULE_ABI || table->size != sizeof *table) {
-        snprintf(load_failure, sizeof load_failure,
-                 "a module of another build (interface %d, %zu bytes; this matremap needs %d, %zu bytes)", table->abi,
-                 table->size, MR_CXX_MODULE_ABI, sizeof *table);
-        dlclose(handle);
-        return;
-    }
-    atomic_store_explicit(&loaded, table, memory_order_release);
+    static const char *const symbols[] = {MR_CXX_TABLE_SYMBOL};
+    static const mr_module_spec spec = {MODULE_FILE, "MR_CXX_MODULE", "C++", symbols, 1, check_table};
+    void *entries[1];
+    if (mr_module_open(&spec, entries, load_failure, sizeof load_failure) != NULL)
+        atomic_store_explicit(&loaded, (const mr_cxx_table *)entries[0], memory_order_release);
 }
 
 /* The table, loading the module on the first call; MR_ERR_EXTERNAL naming `what` (glTF, OBJ, svr train: what the

@@ -99,40 +99,50 @@ int mr_module_beside_executable(const char *file, char *out, size_t size) {
     return n > 0 && (size_t)n < size && access(out, F_OK) == 0;
 }
 
-/* Append `path` followed by `text` to why[size], after "; " when it holds a reason already. */
-static void append_why(char *why, size_t size, const char *text, const char *path) {
+/* Append "PATH: TEXT" to why[size], after "; " when it holds a reason already. */
+static void append_why(char *why, size_t size, const char *path, const char *text) {
     size_t used = strlen(why);
-    if (used + 1 < size) snprintf(why + used, size - used, "%s%s%s", used ? "; " : "", path, text);
+    if (used + 1 < size) snprintf(why + used, size - used, "%s%s: %s", used ? "; " : "", path, text);
 }
 
-/* dlopen `path` and find `symbol` there; NULL (and why appended) when either fails. */
-static void *open_candidate(const char *path, const char *symbol, void **entry, char *why, size_t size) {
+/* The candidate at `path`: its handle with every symbol in entries[], or NULL (and why appended). */
+static void *open_candidate(const mr_module_spec *spec, const char *path, void **entries, char *why, size_t size) {
     void *handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
     if (handle == NULL) {
-        const char *reason = dlerror();
-        append_why(why, size, reason != NULL ? reason : ": cannot be loaded", reason != NULL ? "" : path);
+        const char *reason = dlerror(); // names the path itself
+        size_t used = strlen(why);
+        if (used + 1 < size)
+            snprintf(why + used, size - used, "%s%s", used ? "; " : "", reason != NULL ? reason : path);
         return NULL;
     }
-    *entry = dlsym(handle, symbol);
-    if (*entry == NULL) {
-        append_why(why, size, ": not a matremap module of this kind (no entry point)", path);
+    char reason[512];
+    for (int k = 0; k < spec->symbol_count; k++) {
+        entries[k] = dlsym(handle, spec->symbols[k]);
+        if (entries[k] == NULL) {
+            snprintf(reason, sizeof reason, "not a matremap %s module (no %s)", spec->kind, spec->symbols[k]);
+            append_why(why, size, path, reason);
+            dlclose(handle);
+            return NULL;
+        }
+    }
+    if (spec->check != NULL && spec->check(entries, reason, sizeof reason) != NULL) {
+        append_why(why, size, path, reason);
         dlclose(handle);
         return NULL;
     }
     return handle;
 }
 
-void *mr_module_open(const char *file, const char *variable, const char *symbol, void **entry, char *why,
-                     size_t size) {
-    const char *override = getenv(variable);
-    if (override != NULL && override[0] != '\0') return open_candidate(override, symbol, entry, why, size);
+void *mr_module_open(const mr_module_spec *spec, void **entries, char *why, size_t size) {
+    const char *override = getenv(spec->variable);
+    if (override != NULL && override[0] != '\0') return open_candidate(spec, override, entries, why, size);
     char candidate[PATH_MAX + 64];
     void *handle = NULL;
-    if (mr_module_beside_executable(file, candidate, sizeof candidate))
-        handle = open_candidate(candidate, symbol, entry, why, size);
+    if (mr_module_beside_executable(spec->file, candidate, sizeof candidate))
+        handle = open_candidate(spec, candidate, entries, why, size);
     if (handle == NULL) {
-        snprintf(candidate, sizeof candidate, "%s/%s", MR_MODULE_DIR, file);
-        handle = open_candidate(candidate, symbol, entry, why, size);
+        snprintf(candidate, sizeof candidate, "%s/%s", MR_MODULE_DIR, spec->file);
+        handle = open_candidate(spec, candidate, entries, why, size);
     }
     return handle;
 }

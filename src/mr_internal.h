@@ -56,13 +56,23 @@ mr_status mr_image_check_values(const mr_image *image, const char *label, int al
  * PREFIX/lib/matremap): its path into out[size] and 1 when that file exists, else 0 (data_dir.c). */
 int mr_module_beside_executable(const char *file, char *out, size_t size);
 
-/* Load the module `file` and find its entry point `symbol`, trying in order: the path in the environment variable
- * `variable` when it is set (then nothing else: an explicit choice is not second-guessed), the file beside the
- * executable (mr_module_beside_executable), MR_MODULE_DIR/file (the install directory fixed at build time). Returns
- * the dlopen handle, *entry set to the symbol's address, or NULL with why each place failed appended to
- * why[size] ("; " between them). */
-void *mr_module_open(const char *file, const char *variable, const char *symbol, void **entry, char *why,
-                     size_t size);
+/* What a module loader asks of mr_module_open: the file, the environment variable naming another path, the symbols
+ * a candidate must have (all of them), what to call it in messages ("image" says "not a matremap image module"),
+ * and optionally a check of a candidate whose symbols were found: NULL when it serves, else why not (e.g. an
+ * interface version of another build), written into reason[size]. */
+typedef struct mr_module_spec {
+    const char *file, *variable, *kind;
+    const char *const *symbols;
+    int symbol_count;
+    const char *(*check)(void *const *entries, char *reason, size_t size);
+} mr_module_spec;
+
+/* Load the module `spec` describes, trying in order: the path in spec->variable when it is set (then nothing else:
+ * an explicit choice is not second-guessed), the file beside the executable (mr_module_beside_executable),
+ * MR_MODULE_DIR/file (the install directory fixed at build time); a candidate serves when it loads, has every symbol
+ * and passes the check. Returns its dlopen handle with entries[k] the address of symbols[k], or NULL with why each
+ * candidate failed, naming its path, appended to why[size] ("; " between them). */
+void *mr_module_open(const mr_module_spec *spec, void **entries, char *why, size_t size);
 
 /* Seconds on the monotonic clock (an arbitrary origin): for durations the library reports. */
 double mr_now_seconds(void);

@@ -92,6 +92,14 @@ if [ -e "$(dirname "$bin")/../lib/matremap/libmatremap-cxx.so" ]; then
     expect "a missing C++ module is reported" 3 "cannot load matremap's C\+\+ module libmatremap-cxx.so.*cxx.so" -- \
         env MR_CXX_MODULE=/nonexistent/cxx.so "$bin" gltf spec2metal "$tmp/empty.gltf" -o "$tmp/cxx/out.gltf"
     check "... and leaves no output" test ! -e "$tmp/cxx/out.gltf"
+    modules="$(cd "$(dirname "$bin")/../lib/matremap" && pwd)"
+    expect "a module of another kind in its place is named, with what it lacks" 3 \
+        "libmatremap-oiio.so: not a matremap C\+\+ module \(no mr_cxx_module_table\)" -- \
+        env MR_CXX_MODULE="$modules/libmatremap-oiio.so" "$bin" gltf spec2metal "$tmp/empty.gltf" -o "$tmp/cxx/out.gltf"
+    expect "... and so for the OpenImageIO module" 3 \
+        "libmatremap-cxx.so: not a matremap image module \(no mr_oiio_module_read\)" -- \
+        env MR_OIIO_MODULE="$modules/libmatremap-cxx.so" "$bin" ssim "$tmp/x.exr" "$tmp/s.png"
+    check "... and leaves no output" test ! -e "$tmp/cxx/out.gltf"
     if ! ldd "$bin" | grep -q 'libasan'; then
         check "the tool links no C++ runtime" sh -c "! ldd '$bin' | grep -q 'libstdc++'"
     fi

@@ -15,7 +15,6 @@
  *      that link libmatremap.a).
  * Loading happens once per process (pthread_once); its outcome, success or the reason for failure, is kept.
  */
-#include <dlfcn.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <string.h>
@@ -44,25 +43,18 @@ static module_error_fn module_error;
 static char load_failure[2048]; /* why loading failed; written once inside pthread_once */
 
 static void load_module(void) {
-    void *read_sym = NULL;
-    void *handle = mr_module_open(MODULE_FILE, "MR_OIIO_MODULE", "mr_oiio_module_read", &read_sym, load_failure,
-                                  sizeof load_failure);
-    if (handle == NULL) return;
-    void *read_as_sym = dlsym(handle, "mr_oiio_module_read_as");
-    void *read_memory_sym = dlsym(handle, "mr_oiio_module_read_memory");
-    void *write_sym = dlsym(handle, "mr_oiio_module_write");
-    void *error_sym = dlsym(handle, "mr_oiio_module_last_error");
-    if (read_as_sym == NULL || read_memory_sym == NULL || write_sym == NULL || error_sym == NULL) {
-        snprintf(load_failure, sizeof load_failure, "not a matremap image module (an entry point is missing)");
-        dlclose(handle);
-        return;
-    }
+    static const char *const symbols[] = {"mr_oiio_module_read", "mr_oiio_module_read_as",
+                                          "mr_oiio_module_read_memory", "mr_oiio_module_write",
+                                          "mr_oiio_module_last_error"};
+    static const mr_module_spec spec = {MODULE_FILE, "MR_OIIO_MODULE", "image", symbols, 5, NULL};
+    void *entries[5];
+    if (mr_module_open(&spec, entries, load_failure, sizeof load_failure) == NULL) return;
     // POSIX allows converting dlsym's void * to a function pointer; ISO C does not, hence the memcpy.
-    memcpy(&module_read_as, &read_as_sym, sizeof read_as_sym);
-    memcpy(&module_read_memory, &read_memory_sym, sizeof read_memory_sym);
-    memcpy(&module_write, &write_sym, sizeof write_sym);
-    memcpy(&module_error, &error_sym, sizeof error_sym);
-    memcpy(&module_read, &read_sym, sizeof read_sym); // last: module_read set means loaded
+    memcpy(&module_read_as, &entries[1], sizeof entries[1]);
+    memcpy(&module_read_memory, &entries[2], sizeof entries[2]);
+    memcpy(&module_write, &entries[3], sizeof entries[3]);
+    memcpy(&module_error, &entries[4], sizeof entries[4]);
+    memcpy(&module_read, &entries[0], sizeof entries[0]); // last: module_read set means loaded
 }
 
 /* `label` names the image the module is loaded for (io_internal.h, "what messages call an image"). */

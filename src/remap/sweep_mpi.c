@@ -11,7 +11,6 @@
  *   2. <directory of the running executable>/../lib/matremap/libmatremap-mpi.so (build tree and install tree);
  *   3. MR_MODULE_DIR/libmatremap-mpi.so.
  */
-#include <dlfcn.h>
 #include <omp.h>
 #include <limits.h>
 #include <stdio.h>
@@ -63,29 +62,24 @@ int mr_sweep_mpi_launched(int *size, int *rank, const char **variable) {
     return 0;
 }
 
-/* dlopen + dlsym of every function; appends why it failed to why[]. */
-static int try_load(const char *path, char *why, size_t size) {
-    void *handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (handle == NULL) {
-        const char *e = dlerror();
-        size_t used = strlen(why);
-        snprintf(why + used, size - used, "%s%s", used ? "; " : "", e ? e : path);
-        return 0;
-    }
+/* mr_module_spec's check: the interface of this build (entries[0] is mr_mpi_module_abi). */
+static const char *check_abi(void *const *entries, char *reason, size_t size) {
+    int (*abi)(void);
+    memcpy(&abi, &entries[0], sizeof entries[0]);
+    if (abi() == MODULE_ABI) return NULL;
+    snprintf(reason, size, "module interface %d, this matremap needs %d (a module of another build)", abi(),
+             MODULE_ABI);
+    return reason;
+}
+
+/* The module's functions into `module`; 0 with why it could not be loaded in why[]. */
+static int load_module(char *why, size_t size) {
     static const char *const names[] = {"mr_mpi_module_abi",       "mr_mpi_module_error",   "mr_mpi_module_init",
                                         "mr_mpi_module_broadcast", "mr_mpi_module_send",    "mr_mpi_module_receive",
                                         "mr_mpi_module_flush",     "mr_mpi_module_finalize"};
+    static const mr_module_spec spec = {MODULE_FILE, "MR_MPI_MODULE", "MPI", names, 8, check_abi};
     void *syms[8];
-    for (int i = 0; i < 8; i++) {
-        syms[i] = dlsym(handle, names[i]);
-        if (syms[i] == NULL) {
-            size_t used = strlen(why);
-            snprintf(why + used, size - used, "%s%s: not a matremap MPI module (no %s)", used ? "; " : "", path,
-                     names[i]);
-            dlclose(handle);
-            return 0;
-        }
-    }
+    if (mr_module_open(&spec, syms, why, size) == NULL) return 0;
     // POSIX allows converting dlsym's void * to a function pointer; ISO C does not, hence the memcpy.
     mpi_module m;
     memcpy(&m.abi, &syms[0], sizeof syms[0]);
@@ -96,27 +90,8 @@ static int try_load(const char *path, char *why, size_t size) {
     memcpy(&m.receive, &syms[5], sizeof syms[5]);
     memcpy(&m.flush, &syms[6], sizeof syms[6]);
     memcpy(&m.finalize, &syms[7], sizeof syms[7]);
-    if (m.abi() != MODULE_ABI) {
-        size_t used = strlen(why);
-        snprintf(why + used, size - used,
-                 "%s%s: module interface %d, this matremap needs %d (a module of another "
-                 "build)",
-                 used ? "; " : "", path, m.abi(), MODULE_ABI);
-        dlclose(handle);
-        return 0;
-    }
     module = m;
     return 1;
-}
-
-static int load_module(char *why, size_t size) {
-    const char *override = getenv("MR_MPI_MODULE");
-    if (override != NULL && override[0] != '\0')
-        return try_load(override, why, size);
-    char candidate[PATH_MAX + 64];
-    if (mr_module_beside_executable(MODULE_FILE, candidate, sizeof candidate) && try_load(candidate, why, size))
-        return 1;
-    return try_load(MR_MODULE_DIR "/" MODULE_FILE, why, size);
 }
 
 /* mr_sweep_comm's functions over the module. */
